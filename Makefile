@@ -1,0 +1,116 @@
+# crowdbake - build, test, demo.
+#
+#   make          build/crowdbake, build/libcrowdbake.a and the sample models
+#   make demo     bake the bundled samples
+#   make check    the test suite, normal and AddressSanitizer + UBSan builds
+#   make bench    benchmarks (not part of check)
+#   make deps     install the Debian packages the build needs (as root; prints the command otherwise)
+
+.SUFFIXES:
+.DELETE_ON_ERROR:
+SHELL := /bin/bash
+
+DEB_PACKAGES := pkg-config nlohmann-json3-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
+                libopenexr-dev libzstd-dev libcmocka-dev libtomlplusplus-dev
+PKGS := tinygltf nlohmann_json draco OpenEXR libzstd tomlplusplus
+
+BUILD   ?= build
+CC      ?= cc
+CXX     ?= c++
+WERROR  := $(if $(CI),-Werror,)
+OPT     ?= -O2
+WARN    := -Wall -Wextra $(WERROR)
+SAN     ?=
+# Everything below needs pkg-config, which `make deps` brings.
+PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
+PKG_LIBS   = $(shell pkg-config --libs draco OpenEXR libzstd tomlplusplus 2>/dev/null) -lmeshoptimizer -lpthread -lm
+
+CFLAGS   := -std=c11 $(OPT) -g $(WARN) -D_POSIX_C_SOURCE=200809L $(SAN)
+CXXFLAGS := -std=c++17 $(OPT) -g $(WARN) $(SAN)
+
+LIB_C   := $(wildcard src/*.c) $(wildcard formats/*.c)
+LIB_CXX := $(wildcard formats/*.cpp)
+CLI_C   := $(wildcard cli/*.c)
+TESTS   := $(patsubst tests/%.c,%,$(wildcard tests/test_*.c))
+
+LIB_OBJ := $(LIB_C:%.c=$(BUILD)/obj/%.o) $(LIB_CXX:%.cpp=$(BUILD)/obj/%.o)
+CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
+
+SAMPLES := quadruped fish bird
+SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb)
+
+.PHONY: all deps demo check test test-asan bench clean samples
+all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(SAMPLE_GLB)
+
+# ---- dependencies --------------------------------------------------------------------
+DEPS_STAMP := $(BUILD)/.deps-ok
+deps: $(DEPS_STAMP)
+$(DEPS_STAMP): Makefile
+	@missing=$$(for p in $(DEB_PACKAGES); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q 'install ok installed' || echo $$p; done); \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    echo "crowdbake: installing $$missing"; \
+	    export DEBIAN_FRONTEND=noninteractive; \
+	    apt-get install -y --no-install-recommends $$missing >/dev/null 2>&1 || \
+	      { apt-get update -qq && apt-get install -y --no-install-recommends $$missing; } || exit 1; \
+	  else \
+	    echo "crowdbake: missing packages; run: sudo apt-get install -y $$missing" >&2; exit 1; \
+	  fi; \
+	fi
+	@mkdir -p $(@D) && touch $@
+
+# ---- the library and the command ------------------------------------------------------
+$(BUILD)/obj/%.o: %.c $(DEPS_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -MMD -MP -c $< -o $@
+
+$(BUILD)/obj/%.o: %.cpp $(DEPS_STAMP)
+	@mkdir -p $(@D)
+	$(CXX) $(CXXFLAGS) $(PKG_CFLAGS) -MMD -MP -c $< -o $@
+
+$(BUILD)/libcrowdbake.a: $(LIB_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+$(BUILD)/crowdbake: $(CLI_OBJ) $(BUILD)/libcrowdbake.a
+	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(BUILD)/libcrowdbake.a $(PKG_LIBS)
+
+# ---- samples: the project's own rigged animals ----------------------------------------
+$(BUILD)/gen_samples: samples/gen/gen_samples.c $(wildcard samples/gen/*.h) $(DEPS_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -o $@ samples/gen/gen_samples.c -lm
+
+$(SAMPLE_GLB) &: $(BUILD)/gen_samples
+	@mkdir -p $(BUILD)/samples
+	$(BUILD)/gen_samples $(BUILD)/samples
+samples: $(SAMPLE_GLB)
+
+demo: all
+	@mkdir -p $(BUILD)/demo
+	@for s in $(SAMPLES); do $(BUILD)/crowdbake info $(BUILD)/samples/$$s.glb || exit 1; done
+	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.pal --format pal,exr || exit 1; done
+
+# ---- tests ----------------------------------------------------------------------------
+TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
+$(BUILD)/tests/%: tests/%.c tests/testutil.h $(BUILD)/libcrowdbake.a
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(shell pkg-config --cflags cmocka 2>/dev/null) -c $< -o $@.o
+	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
+
+test: all $(TEST_BINS)
+	@cd $(CURDIR) && status=0; for t in $(TEST_BINS); do \
+	  CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples $$t || status=1; done; exit $$status
+
+test-asan:
+	$(MAKE) --no-print-directory BUILD=build/asan OPT=-O1 \
+	  SAN="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all" test
+
+check: deps
+	$(MAKE) --no-print-directory test
+	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 $(MAKE) --no-print-directory test-asan
+	@echo "crowdbake: all tests passed (normal and ASan+UBSan builds)"
+
+clean:
+	rm -rf build
+
+-include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)

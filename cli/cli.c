@@ -1,0 +1,123 @@
+/* cli.c - option parsing and the helpers every subcommand shares. */
+#include "cli.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int cli_report(const cb_error *err)
+{
+    fprintf(stderr, "crowdbake: %s\n", err->message);
+    return err->status ? (int)err->status : CB_ERR_INTERNAL;
+}
+
+int cli_usage_error(const char *command, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "crowdbake %s: ", command);
+    vfprintf(stderr, fmt, ap);
+    fprintf(stderr, " (see 'crowdbake %s --help')\n", command);
+    va_end(ap);
+    return CB_ERR_USAGE;
+}
+
+static const cli_option *find_option(const cli_option *options, size_t count, const char *name, size_t len)
+{
+    for (size_t i = 0; i < count; ++i)
+        if (strlen(options[i].name) == len && strncmp(options[i].name, name, len) == 0) return &options[i];
+    return NULL;
+}
+
+int cli_parse(int argc, char **argv, const cli_option *options, size_t option_count, const char **positional,
+              size_t min_positional, size_t max_positional, bool *help)
+{
+    size_t npos = 0;
+    *help = false;
+    bool only_positional = false;
+    for (int i = 1; i < argc; ++i) {
+        const char *arg = argv[i];
+        if (!only_positional && (strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0)) {
+            *help = true;
+            return 0;
+        }
+        if (!only_positional && strcmp(arg, "--") == 0) {
+            only_positional = true;
+            continue;
+        }
+        if (!only_positional && arg[0] == '-' && arg[1] != '\0') {
+            const char *eq = strchr(arg, '=');
+            size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
+            const cli_option *opt = find_option(options, option_count, arg, len);
+            if (!opt) return cli_usage_error(argv[0], "unknown option '%.*s'", (int)len, arg);
+            if (!opt->metavar) {
+                if (eq) return cli_usage_error(argv[0], "option %s takes no value", opt->name);
+                *opt->flag = true;
+                continue;
+            }
+            if (eq) {
+                *opt->value = eq + 1;
+            } else {
+                if (i + 1 >= argc) return cli_usage_error(argv[0], "option %s needs a value (%s)", opt->name, opt->metavar);
+                *opt->value = argv[++i];
+            }
+            continue;
+        }
+        if (npos >= max_positional) return cli_usage_error(argv[0], "unexpected argument '%s'", arg);
+        positional[npos++] = arg;
+    }
+    if (npos < min_positional) return cli_usage_error(argv[0], "missing argument");
+    return 0;
+}
+
+bool cli_parse_double(const char *text, double *out)
+{
+    char *end;
+    double v = strtod(text, &end);
+    if (end == text || *end) return false;
+    *out = v;
+    return true;
+}
+
+bool cli_parse_u32(const char *text, unsigned *out)
+{
+    char *end;
+    if (text[0] == '-') return false;
+    unsigned long v = strtoul(text, &end, 10);
+    if (end == text || *end || v > 0xffffffffUL) return false;
+    *out = (unsigned)v;
+    return true;
+}
+
+cb_model *cli_load_model(const char *path, cb_error *err)
+{
+    cb_limits limits = cb_default_limits();
+    return cb_gltf_load(path, &limits, err);
+}
+
+int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err)
+{
+    if (model->skin_count == 0)
+        return cb_fail(err, CB_ERR_INPUT, "%s: has no skin, so there are no joints to bake (export the armature with the mesh)",
+                       model->source),
+               -1;
+    if (skin_option) {
+        int s = cb_model_find_skin(model, skin_option);
+        if (s < 0)
+            cb_fail(err, CB_ERR_USAGE, "%s: has no skin '%s' (it has %u; see 'crowdbake info')", model->source, skin_option,
+                    model->skin_count);
+        return s;
+    }
+    if (model->skin_count > 1) {
+        /* Prefer the only skin that a mesh uses. */
+        int used = -1, uses = 0;
+        for (uint32_t s = 0; s < model->skin_count; ++s)
+            if (cb_model_skin_vertex_count(model, (int32_t)s) > 0) used = (int)s, ++uses;
+        if (uses == 1) return used;
+        cb_fail(err, CB_ERR_USAGE, "%s: has %u skins; choose one with --skin NAME|INDEX (see 'crowdbake info')",
+                model->source, model->skin_count);
+        return -1;
+    }
+    return 0;
+}

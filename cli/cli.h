@@ -1,0 +1,52 @@
+/* cli.h - shared pieces of the crowdbake command: option parsing, loading, messages. */
+#ifndef CB_CLI_H
+#define CB_CLI_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "../formats/gltf_load.h"
+
+typedef struct cli_option {
+    const char *name;     /* "--fps" */
+    const char *metavar;  /* NULL for a flag */
+    const char **value;   /* where a value option stores its argument */
+    bool *flag;           /* where a flag stores true */
+} cli_option;
+
+typedef struct cli_command {
+    const char *name;
+    const char *summary;
+    const char *usage; /* full --help text */
+    int (*run)(int argc, char **argv);
+} cli_command;
+
+/* Parses argv[1..] (argv[0] is the command name). Positionals fill `positional` in order.
+ * Returns 0, or CB_ERR_USAGE after printing why; sets *help for -h/--help. */
+int cli_parse(int argc, char **argv, const cli_option *options, size_t option_count, const char **positional,
+              size_t min_positional, size_t max_positional, bool *help);
+
+/* Prints "crowdbake: MESSAGE" to stderr and returns the error's status. */
+int cli_report(const cb_error *err);
+int cli_usage_error(const char *command, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+bool cli_parse_double(const char *text, double *out);
+bool cli_parse_u32(const char *text, unsigned *out);
+
+/* Loads a model, with the limits options a command may carry. */
+cb_model *cli_load_model(const char *path, cb_error *err);
+/* The skin a command works on: --skin NAME|INDEX, or the only one; an error otherwise. */
+int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err);
+
+int cmd_info(int argc, char **argv);
+int cmd_sample(int argc, char **argv);
+int cmd_bake(int argc, char **argv);
+int cmd_inspect(int argc, char **argv);
+
+extern const char cmd_info_usage[], cmd_sample_usage[], cmd_bake_usage[], cmd_inspect_usage[];
+
+#endif

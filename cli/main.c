@@ -1,0 +1,41 @@
+/* main.c - the crowdbake command: dispatches to a subcommand. */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+
+static const cli_command commands[] = {
+    {"info", "what a model holds: skins, joints, meshes, clips", cmd_info_usage, cmd_info},
+    {"sample", "the joint matrices of each baked frame, as JSON", cmd_sample_usage, cmd_sample},
+    {"bake", "bake a model's clips into a bone-matrix palette (.pal / .exr)", cmd_bake_usage, cmd_bake},
+    {"inspect", "the header and clip table of a palette; decode a frame", cmd_inspect_usage, cmd_inspect},
+};
+
+static void print_help(FILE *out)
+{
+    fprintf(out,
+            "crowdbake %s - bake skinned glTF animation into GPU bone-matrix palettes for crowds\n\n"
+            "usage: crowdbake COMMAND [options]\n\ncommands:\n",
+            CROWDBAKE_VERSION);
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i)
+        fprintf(out, "  %-9s %s\n", commands[i].name, commands[i].summary);
+    fprintf(out, "\n'crowdbake COMMAND --help' describes a command.\n"
+                 "exit codes: 0 ok, 1 internal error, 2 usage, 3 over budget, 4 invalid input, 5 I/O error,\n"
+                 "            6 verification failed\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "help") == 0) {
+        print_help(argc < 2 ? stderr : stdout);
+        return argc < 2 ? CB_ERR_USAGE : 0;
+    }
+    if (strcmp(argv[1], "--version") == 0) {
+        printf("crowdbake %s\n", CROWDBAKE_VERSION);
+        return 0;
+    }
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i)
+        if (strcmp(argv[1], commands[i].name) == 0) return commands[i].run(argc - 1, argv + 1);
+    fprintf(stderr, "crowdbake: unknown command '%s' (see 'crowdbake --help')\n", argv[1]);
+    return CB_ERR_USAGE;
+}

@@ -1,0 +1,784 @@
+// gltf_load.cpp - the tinygltf adapter: parses with tinygltf (Draco enabled), decodes
+// EXT_meshopt_compression with libmeshoptimizer, reads every accessor with bounds checks,
+// and hands the core a cb_model of plain C structs.
+#define TINYGLTF_IMPLEMENTATION
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#define TINYGLTF_ENABLE_DRACO
+#include <tiny_gltf.h>
+
+#include <meshoptimizer.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <sys/stat.h>
+#include <vector>
+
+#include "gltf_load.h"
+
+namespace {
+
+const char kFallbackScheme[] = "crowdbake-meshopt-fallback-";
+
+struct Context {
+    cb_model *model;
+    const tinygltf::Model *gltf;
+    cb_limits limits;
+    cb_error *err;
+    const char *name;
+};
+
+std::string first_line(const std::string &s)
+{
+    size_t start = s.find_first_not_of(" \n\r\t");
+    if (start == std::string::npos) return "";
+    size_t end = s.find('\n', start);
+    return s.substr(start, end == std::string::npos ? std::string::npos : end - start);
+}
+
+bool read_file(const std::string &path, uint64_t max_bytes, std::vector<unsigned char> *out, std::string *why)
+{
+    FILE *f = std::fopen(path.c_str(), "rb");
+    if (!f) {
+        *why = std::strerror(errno);
+        return false;
+    }
+    struct stat st;
+    if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
+        std::fclose(f);
+        *why = "not a regular file";
+        return false;
+    }
+    if ((uint64_t)st.st_size > max_bytes) {
+        std::fclose(f);
+        *why = "larger than the " + std::to_string(max_bytes) + "-byte limit (--max-file-size)";
+        return false;
+    }
+    out->resize((size_t)st.st_size);
+    size_t got = out->empty() ? 0 : std::fread(out->data(), 1, out->size(), f);
+    std::fclose(f);
+    if (got != out->size()) {
+        *why = "short read";
+        return false;
+    }
+    return true;
+}
+
+// ---- file-system callbacks: bounded reads, no shell expansion, meshopt fallback buffers ----
+
+struct FsState {
+    uint64_t max_bytes;
+};
+
+bool fs_exists(const std::string &path, void *)
+{
+    if (path.find(kFallbackScheme) != std::string::npos) return true;
+    struct stat st;
+    return stat(path.c_str(), &st) == 0;
+}
+
+std::string fs_expand(const std::string &path, void *) { return path; }
+
+bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
+{
+    const FsState *fs = static_cast<const FsState *>(user);
+    size_t marker = path.find(kFallbackScheme);
+    if (marker != std::string::npos) {
+        // A meshopt fallback buffer: zeros now, filled by decoding the compressed views.
+        unsigned long long bytes = std::strtoull(path.c_str() + marker + sizeof kFallbackScheme - 1, nullptr, 10);
+        if (bytes == 0 || bytes > fs->max_bytes) {
+            *err = "meshopt fallback buffer of " + std::to_string(bytes) + " bytes is empty or over the size limit";
+            return false;
+        }
+        out->assign((size_t)bytes, 0);
+        return true;
+    }
+    return read_file(path, fs->max_bytes, out, err);
+}
+
+bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *)
+{
+    *err = "crowdbake never writes through the glTF loader";
+    return false;
+}
+
+bool skip_image(tinygltf::Image *, const int, std::string *, std::string *, int, int, const unsigned char *, int, void *)
+{
+    return true; // images are never decoded
+}
+
+// ---- container checks: clearer messages than the parser gives, before it runs ----
+
+uint32_t le32(const unsigned char *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
+
+bool is_glb(const unsigned char *data, size_t size) { return size >= 4 && std::memcmp(data, "glTF", 4) == 0; }
+
+bool check_glb(const unsigned char *data, size_t size, const char *name, cb_error *err)
+{
+    if (size < 20) {
+        cb_fail(err, CB_ERR_INPUT, "%s: truncated GLB: %zu bytes, shorter than its 20-byte header", name, size);
+        return false;
+    }
+    uint32_t version = le32(data + 4), length = le32(data + 8);
+    if (version != 2) {
+        cb_fail(err, CB_ERR_INPUT, "%s: GLB version %u; only glTF 2.0 is supported (re-export as glTF 2.0)", name, version);
+        return false;
+    }
+    if (length > size) {
+        cb_fail(err, CB_ERR_INPUT, "%s: truncated GLB: header says %u bytes, file has %zu", name, length, size);
+        return false;
+    }
+    size_t offset = 12;
+    for (int chunk = 0; offset < length; ++chunk) {
+        if (length - offset < 8) {
+            cb_fail(err, CB_ERR_INPUT, "%s: GLB chunk %d header at byte %zu runs past the end of the file", name, chunk, offset);
+            return false;
+        }
+        uint32_t chunk_length = le32(data + offset), type = le32(data + offset + 4);
+        if (chunk == 0 && type != 0x4E4F534Au) {
+            cb_fail(err, CB_ERR_INPUT, "%s: the first GLB chunk is not JSON (type 0x%08x)", name, type);
+            return false;
+        }
+        if (chunk_length > length - offset - 8) {
+            cb_fail(err, CB_ERR_INPUT, "%s: GLB chunk %d claims %u bytes, past the end of the file at byte %u", name, chunk,
+                    chunk_length, length);
+            return false;
+        }
+        offset += 8 + (size_t)chunk_length;
+    }
+    return true;
+}
+
+// EXT_meshopt_compression puts compressed bytes in one buffer and leaves the "fallback"
+// buffer without data, which tinygltf refuses. Give such buffers a URI our file-system
+// callback answers with zeros; decode_meshopt() fills them after parsing.
+bool patch_meshopt_json(std::string *json)
+{
+    if (json->find("EXT_meshopt_compression") == std::string::npos) return false;
+    nlohmann::json j = nlohmann::json::parse(*json, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("buffers") || !j["buffers"].is_array()) return false;
+    bool patched = false;
+    for (auto &b : j["buffers"]) {
+        if (!b.is_object() || b.contains("uri") || !b.contains("byteLength") || !b["byteLength"].is_number_unsigned())
+            continue;
+        auto ext = b.find("extensions");
+        if (ext == b.end() || !ext->is_object() || !ext->contains("EXT_meshopt_compression")) continue;
+        b["uri"] = std::string(kFallbackScheme) + std::to_string(b["byteLength"].get<uint64_t>());
+        patched = true;
+    }
+    if (patched) *json = j.dump();
+    return patched;
+}
+
+std::vector<unsigned char> rebuild_glb(const std::string &json, const unsigned char *bin, uint32_t bin_length)
+{
+    std::string padded = json;
+    while (padded.size() % 4) padded.push_back(' ');
+    std::vector<unsigned char> out;
+    auto put32 = [&out](uint32_t v) {
+        for (int i = 0; i < 4; ++i) out.push_back((unsigned char)(v >> (8 * i)));
+    };
+    uint32_t total = 12 + 8 + (uint32_t)padded.size() + (bin ? 8 + bin_length : 0);
+    out.insert(out.end(), {'g', 'l', 'T', 'F'});
+    put32(2);
+    put32(total);
+    put32((uint32_t)padded.size());
+    put32(0x4E4F534Au);
+    out.insert(out.end(), padded.begin(), padded.end());
+    if (bin) {
+        put32(bin_length);
+        put32(0x004E4942u);
+        out.insert(out.end(), bin, bin + bin_length);
+    }
+    return out;
+}
+
+bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
+                         const cb_limits &limits, tinygltf::Model *gltf, cb_error *err)
+{
+    FsState fs_state{limits.max_file_bytes};
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(skip_image, nullptr);
+    loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &fs_state});
+    std::string tg_err, tg_warn;
+    bool ok;
+    if (is_glb(data, size)) {
+        if (!check_glb(data, size, name, err)) return false;
+        uint32_t json_length = le32(data + 12);
+        std::string json((const char *)data + 20, json_length);
+        if (patch_meshopt_json(&json)) {
+            size_t bin_at = 20 + (size_t)json_length;
+            bool has_bin = bin_at + 8 <= le32(data + 8) && le32(data + bin_at + 4) == 0x004E4942u;
+            std::vector<unsigned char> glb =
+                rebuild_glb(json, has_bin ? data + bin_at + 8 : nullptr, has_bin ? le32(data + bin_at) : 0);
+            ok = loader.LoadBinaryFromMemory(gltf, &tg_err, &tg_warn, glb.data(), (unsigned)glb.size(), base_dir);
+        } else {
+            ok = loader.LoadBinaryFromMemory(gltf, &tg_err, &tg_warn, data, (unsigned)size, base_dir);
+        }
+    } else {
+        std::string json((const char *)data, size);
+        patch_meshopt_json(&json);
+        ok = loader.LoadASCIIFromString(gltf, &tg_err, &tg_warn, json.c_str(), (unsigned)json.size(), base_dir);
+    }
+    if (!ok) {
+        std::string why = first_line(tg_err);
+        cb_fail(err, CB_ERR_INPUT, "%s: not a valid glTF 2.0 file: %s", name, why.empty() ? "parse failed" : why.c_str());
+    }
+    return ok;
+}
+
+// ---- extensions ----
+
+bool extension_supported(const std::string &ext)
+{
+    static const char *const geometry[] = {"KHR_draco_mesh_compression", "KHR_mesh_quantization",
+                                           "EXT_meshopt_compression", "KHR_meshopt_compression"};
+    for (const char *g : geometry)
+        if (ext == g) return true;
+    // Materials, textures and lights do not change joint matrices or skinned positions.
+    return ext.rfind("KHR_materials_", 0) == 0 || ext.rfind("KHR_texture_", 0) == 0 ||
+           ext.rfind("EXT_texture_", 0) == 0 || ext == "KHR_lights_punctual";
+}
+
+bool check_required_extensions(const Context &c)
+{
+    for (const std::string &ext : c.gltf->extensionsRequired)
+        if (!extension_supported(ext)) {
+            cb_fail(c.err, CB_ERR_INPUT,
+                    "%s: requires extension %s, which crowdbake does not support (re-export without it)", c.name,
+                    ext.c_str());
+            return false;
+        }
+    return true;
+}
+
+int meshopt_decode_view(unsigned char *dst, size_t count, size_t stride, const unsigned char *src, size_t src_size,
+                        const std::string &mode, const std::string &filter)
+{
+    int rc;
+    if (mode == "ATTRIBUTES")
+        rc = meshopt_decodeVertexBuffer(dst, count, stride, src, src_size);
+    else if (mode == "TRIANGLES")
+        rc = meshopt_decodeIndexBuffer(dst, count, stride, src, src_size);
+    else if (mode == "INDICES")
+        rc = meshopt_decodeIndexSequence(dst, count, stride, src, src_size);
+    else
+        return -100;
+    if (rc != 0) return rc;
+    if (filter == "OCTAHEDRAL")
+        meshopt_decodeFilterOct(dst, count, stride);
+    else if (filter == "QUATERNION")
+        meshopt_decodeFilterQuat(dst, count, stride);
+    else if (filter == "EXPONENTIAL")
+        meshopt_decodeFilterExp(dst, count, stride);
+    else if (!filter.empty() && filter != "NONE")
+        return -101;
+    return 0;
+}
+
+bool decode_meshopt(Context &c, tinygltf::Model *gltf)
+{
+    for (size_t v = 0; v < gltf->bufferViews.size(); ++v) {
+        tinygltf::BufferView &view = gltf->bufferViews[v];
+        auto it = view.extensions.find("EXT_meshopt_compression");
+        if (it == view.extensions.end()) it = view.extensions.find("KHR_meshopt_compression");
+        if (it == view.extensions.end()) continue;
+        const tinygltf::Value &e = it->second;
+        auto num = [&e](const char *key) -> double {
+            return e.Has(key) && e.Get(key).IsNumber() ? e.Get(key).GetNumberAsDouble() : -1.0;
+        };
+        auto str = [&e](const char *key) -> std::string {
+            return e.Has(key) && e.Get(key).IsString() ? e.Get(key).Get<std::string>() : std::string();
+        };
+        double src_buffer = num("buffer"), src_offset = e.Has("byteOffset") ? num("byteOffset") : 0.0;
+        double src_length = num("byteLength"), stride = num("byteStride"), count = num("count");
+        bool ok = src_buffer >= 0 && src_buffer < (double)gltf->buffers.size() && src_offset >= 0 && src_length >= 0 &&
+                  stride > 0 && stride <= 256 && count >= 0 && count <= (double)c.limits.max_accessor_count;
+        const tinygltf::Buffer *src = ok ? &gltf->buffers[(size_t)src_buffer] : nullptr;
+        ok = ok && src_offset + src_length <= (double)src->data.size();
+        ok = ok && view.buffer >= 0 && view.buffer < (int)gltf->buffers.size();
+        tinygltf::Buffer *dst = ok ? &gltf->buffers[(size_t)view.buffer] : nullptr;
+        ok = ok && count * stride <= (double)view.byteLength &&
+             (double)view.byteOffset + (double)view.byteLength <= (double)dst->data.size();
+        if (!ok) {
+            cb_fail(c.err, CB_ERR_INPUT, "%s: bufferView %zu has an EXT_meshopt_compression block with sizes or offsets out of range",
+                    c.name, v);
+            return false;
+        }
+        int rc = meshopt_decode_view(dst->data.data() + view.byteOffset, (size_t)count, (size_t)stride,
+                                     src->data.data() + (size_t)src_offset, (size_t)src_length, str("mode"), str("filter"));
+        if (rc != 0) {
+            cb_fail(c.err, CB_ERR_INPUT, "%s: bufferView %zu: EXT_meshopt_compression data does not decode (%s, error %d)",
+                    c.name, v, str("mode").c_str(), rc);
+            return false;
+        }
+    }
+    return true;
+}
+
+// ---- accessors ----
+
+int component_size(int type)
+{
+    switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_INT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+    default: return 0;
+    }
+}
+
+int type_components(int type)
+{
+    switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    case TINYGLTF_TYPE_MAT4: return 16;
+    default: return 0;
+    }
+}
+
+double read_component(const unsigned char *p, int type, bool normalized)
+{
+    switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+        int8_t v;
+        std::memcpy(&v, p, 1);
+        return normalized ? std::fmax(v / 127.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[0] / 255.0 : p[0];
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+        int16_t v;
+        std::memcpy(&v, p, 2);
+        return normalized ? std::fmax(v / 32767.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        uint16_t v;
+        std::memcpy(&v, p, 2);
+        return normalized ? v / 65535.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+        uint32_t v;
+        std::memcpy(&v, p, 4);
+        return v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_INT: {
+        int32_t v;
+        std::memcpy(&v, p, 4);
+        return v;
+    }
+    default: {
+        float v;
+        std::memcpy(&v, p, 4);
+        return v;
+    }
+    }
+}
+
+// A view of `count` elements of `elem_size` bytes `stride` apart, checked against its buffer.
+bool view_span(const Context &c, int view_index, size_t offset, size_t count, size_t elem_size, size_t stride,
+               const char *what, const unsigned char **out)
+{
+    const tinygltf::Model &g = *c.gltf;
+    if (view_index < 0 || view_index >= (int)g.bufferViews.size()) {
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses bufferView %d, which does not exist", c.name, what, view_index);
+        return false;
+    }
+    const tinygltf::BufferView &view = g.bufferViews[(size_t)view_index];
+    if (view.buffer < 0 || view.buffer >= (int)g.buffers.size()) {
+        cb_fail(c.err, CB_ERR_INPUT, "%s: bufferView %d uses buffer %d, which does not exist", c.name, view_index, view.buffer);
+        return false;
+    }
+    const tinygltf::Buffer &buf = g.buffers[(size_t)view.buffer];
+    if (view.byteOffset > buf.data.size() || view.byteLength > buf.data.size() - view.byteOffset) {
+        cb_fail(c.err, CB_ERR_INPUT, "%s: bufferView %d spans bytes %zu..%zu, past the end of buffer %d (%zu bytes)", c.name,
+                view_index, view.byteOffset, view.byteOffset + view.byteLength, view.buffer, buf.data.size());
+        return false;
+    }
+    // (count - 1) * stride + elem_size bytes from offset must fit in the view.
+    if (count > 0) {
+        unsigned long long need = (unsigned long long)(count - 1) * stride + elem_size;
+        if (offset > view.byteLength || need > view.byteLength - offset) {
+            cb_fail(c.err, CB_ERR_INPUT, "%s: %s reads %llu bytes from byte %zu of bufferView %d, which has %zu", c.name, what,
+                    need, offset, view_index, view.byteLength);
+            return false;
+        }
+    }
+    *out = buf.data.data() + view.byteOffset + offset;
+    return true;
+}
+
+// Reads an accessor into doubles, `comps` per element, applying sparse substitution.
+bool read_accessor(const Context &c, int index, int want_comps, const char *what, std::vector<double> *out, size_t *count_out)
+{
+    const tinygltf::Model &g = *c.gltf;
+    if (index < 0 || index >= (int)g.accessors.size()) {
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses accessor %d, which does not exist", c.name, what, index);
+        return false;
+    }
+    const tinygltf::Accessor &a = g.accessors[(size_t)index];
+    int comps = type_components(a.type), csize = component_size(a.componentType);
+    if (comps != want_comps || csize == 0) {
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d has %d components of type %d, expected %d", c.name, what, index,
+                comps, a.componentType, want_comps);
+        return false;
+    }
+    if (a.count > c.limits.max_accessor_count) {
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d claims %zu elements, over the limit of %llu (--max-accessor-count)",
+                c.name, what, index, a.count, (unsigned long long)c.limits.max_accessor_count);
+        return false;
+    }
+    size_t elem = (size_t)comps * csize;
+    const unsigned char *p = nullptr;
+    size_t stride = elem;
+    if (a.bufferView >= 0 && a.count > 0) {
+        // Bounds first, so a bogus count never drives an allocation.
+        if ((size_t)a.bufferView < g.bufferViews.size() && g.bufferViews[(size_t)a.bufferView].byteStride)
+            stride = g.bufferViews[(size_t)a.bufferView].byteStride;
+        if (stride < elem) {
+            cb_fail(c.err, CB_ERR_INPUT, "%s: %s: bufferView %d has byteStride %zu, smaller than its %zu-byte elements", c.name,
+                    what, a.bufferView, stride, elem);
+            return false;
+        }
+        if (!view_span(c, a.bufferView, a.byteOffset, a.count, elem, stride, what, &p)) return false;
+    }
+    out->assign(a.count * comps, 0.0);
+    if (p) {
+        for (size_t i = 0; i < a.count; ++i)
+            for (int k = 0; k < comps; ++k) (*out)[i * comps + k] = read_component(p + i * stride + k * csize, a.componentType, a.normalized);
+    }
+    if (a.sparse.isSparse && a.sparse.count > 0) {
+        size_t n = (size_t)a.sparse.count;
+        int isize = component_size(a.sparse.indices.componentType);
+        const unsigned char *ip, *vp;
+        if (n > a.count || isize == 0 || a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0 ||
+            !view_span(c, a.sparse.indices.bufferView, (size_t)a.sparse.indices.byteOffset, n, isize, isize, what, &ip) ||
+            !view_span(c, a.sparse.values.bufferView, (size_t)a.sparse.values.byteOffset, n, elem, elem, what, &vp)) {
+            cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d has an invalid sparse block", c.name, what, index);
+            return false;
+        }
+        for (size_t i = 0; i < n; ++i) {
+            double target = read_component(ip + i * isize, a.sparse.indices.componentType, false);
+            if (target < 0 || target >= (double)a.count) {
+                cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d sparse index %.0f is past its %zu elements", c.name, what,
+                        index, target, a.count);
+                return false;
+            }
+            for (int k = 0; k < comps; ++k)
+                (*out)[(size_t)target * comps + k] = read_component(vp + i * elem + k * csize, a.componentType, a.normalized);
+        }
+    }
+    *count_out = a.count;
+    return true;
+}
+
+template <typename T> T *copy_to_arena(cb_model *m, const std::vector<double> &v)
+{
+    T *p = static_cast<T *>(cb_model_alloc(m, v.size(), sizeof(T)));
+    if (p)
+        for (size_t i = 0; i < v.size(); ++i) p[i] = (T)v[i];
+    return p;
+}
+
+// ---- conversion to the core's structs ----
+
+const char *name_or(cb_model *m, const std::string &name, const char *prefix, size_t index)
+{
+    if (!name.empty()) return cb_model_strdup(m, name.c_str());
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%s_%zu", prefix, index);
+    return cb_model_strdup(m, buf);
+}
+
+bool convert_nodes(Context &c)
+{
+    const auto &nodes = c.gltf->nodes;
+    cb_model *m = c.model;
+    m->node_count = (uint32_t)nodes.size();
+    m->nodes = static_cast<cb_node *>(cb_model_alloc(m, nodes.size(), sizeof(cb_node)));
+    for (size_t i = 0; i < nodes.size(); ++i) m->nodes[i].parent = -1;
+    for (size_t i = 0; i < nodes.size(); ++i) {
+        const tinygltf::Node &src = nodes[i];
+        cb_node *n = &m->nodes[i];
+        n->name = name_or(m, src.name, "node", i);
+        for (int child : src.children) {
+            if (child < 0 || child >= (int)nodes.size()) {
+                cb_fail(c.err, CB_ERR_INPUT, "%s: node %zu (%s) lists child %d, which does not exist", c.name, i, n->name, child);
+                return false;
+            }
+            if (m->nodes[child].parent != -1 || (size_t)child == i) {
+                cb_fail(c.err, CB_ERR_INPUT, "%s: node %d has two parents (%d and %zu); glTF nodes form a tree", c.name, child,
+                        m->nodes[child].parent, i);
+                return false;
+            }
+            m->nodes[child].parent = (int32_t)i;
+        }
+        n->rotation[3] = 1;
+        n->scale[0] = n->scale[1] = n->scale[2] = 1;
+        if (src.matrix.size() == 16) {
+            n->has_matrix = true;
+            for (int k = 0; k < 16; ++k) n->matrix[k] = src.matrix[k];
+            continue; // the core derives TRS from the matrix
+        }
+        if (src.translation.size() == 3)
+            for (int k = 0; k < 3; ++k) n->translation[k] = src.translation[k];
+        if (src.scale.size() == 3)
+            for (int k = 0; k < 3; ++k) n->scale[k] = src.scale[k];
+        if (src.rotation.size() == 4)
+            for (int k = 0; k < 4; ++k) n->rotation[k] = src.rotation[k]; // normalized by the core
+    }
+    return true;
+}
+
+bool convert_skins(Context &c)
+{
+    const auto &skins = c.gltf->skins;
+    cb_model *m = c.model;
+    m->skin_count = (uint32_t)skins.size();
+    m->skins = static_cast<cb_skin *>(cb_model_alloc(m, skins.size(), sizeof(cb_skin)));
+    for (size_t s = 0; s < skins.size(); ++s) {
+        const tinygltf::Skin &src = skins[s];
+        cb_skin *skin = &m->skins[s];
+        skin->name = name_or(m, src.name, "skin", s);
+        skin->skeleton = src.skeleton;
+        if (src.joints.size() > c.limits.max_joints) {
+            cb_fail(c.err, CB_ERR_INPUT, "%s: skin %zu (%s) has %zu joints, over the limit of %u (--max-joints)", c.name, s,
+                    skin->name, src.joints.size(), c.limits.max_joints);
+            return false;
+        }
+        skin->joint_count = (uint32_t)src.joints.size();
+        skin->joints = static_cast<int32_t *>(cb_model_alloc(m, src.joints.size(), sizeof(int32_t)));
+        skin->inverse_bind = static_cast<double *>(cb_model_alloc(m, src.joints.size() * 16, sizeof(double)));
+        if (!skin->joints || !skin->inverse_bind) return false;
+        for (size_t j = 0; j < src.joints.size(); ++j) {
+            skin->joints[j] = src.joints[j];
+            for (int k = 0; k < 16; ++k) skin->inverse_bind[j * 16 + k] = k % 5 == 0 ? 1.0 : 0.0; // identity
+        }
+        if (src.inverseBindMatrices >= 0) {
+            std::vector<double> ibm;
+            size_t count;
+            std::string what = "skin " + std::to_string(s) + " inverseBindMatrices";
+            if (!read_accessor(c, src.inverseBindMatrices, 16, what.c_str(), &ibm, &count)) return false;
+            if (count < src.joints.size()) {
+                cb_fail(c.err, CB_ERR_INPUT, "%s: skin %zu (%s) has %zu inverse bind matrices for %zu joints", c.name, s,
+                        skin->name, count, src.joints.size());
+                return false;
+            }
+            std::memcpy(skin->inverse_bind, ibm.data(), src.joints.size() * 16 * sizeof(double));
+        }
+    }
+    return true;
+}
+
+bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive &p, std::vector<cb_primitive> *out)
+{
+    auto pos = p.attributes.find("POSITION"), jnt = p.attributes.find("JOINTS_0"), wgt = p.attributes.find("WEIGHTS_0");
+    if (pos == p.attributes.end() || jnt == p.attributes.end() || wgt == p.attributes.end()) return true; // not skinned
+    const tinygltf::Node &node = c.gltf->nodes[node_index];
+    std::string where = "mesh node " + std::to_string(node_index) + " (" + node.name + ")";
+    std::vector<double> positions, joints, weights, normals, indices;
+    size_t n, nj, nw, nn, ni;
+    if (!read_accessor(c, pos->second, 3, (where + " POSITION").c_str(), &positions, &n) ||
+        !read_accessor(c, jnt->second, 4, (where + " JOINTS_0").c_str(), &joints, &nj) ||
+        !read_accessor(c, wgt->second, 4, (where + " WEIGHTS_0").c_str(), &weights, &nw))
+        return false;
+    if (nj != n || nw != n) {
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s has %zu positions but %zu joints and %zu weights", c.name, where.c_str(), n, nj, nw);
+        return false;
+    }
+    for (double j : joints)
+        if (j < 0 || j > 65535) {
+            cb_fail(c.err, CB_ERR_INPUT, "%s: %s has joint index %.0f outside 0..65535", c.name, where.c_str(), j);
+            return false;
+        }
+    cb_primitive prim{};
+    prim.node = (int32_t)node_index;
+    prim.skin = node.skin;
+    prim.vertex_count = (uint32_t)n;
+    auto nrm = p.attributes.find("NORMAL");
+    if (nrm != p.attributes.end()) {
+        if (!read_accessor(c, nrm->second, 3, (where + " NORMAL").c_str(), &normals, &nn)) return false;
+        if (nn == n) prim.normals = copy_to_arena<float>(c.model, normals);
+    }
+    if (p.indices >= 0) {
+        if (!read_accessor(c, p.indices, 1, (where + " indices").c_str(), &indices, &ni)) return false;
+        prim.index_count = (uint32_t)ni;
+        prim.indices = copy_to_arena<uint32_t>(c.model, indices);
+    }
+    prim.positions = copy_to_arena<float>(c.model, positions);
+    prim.joints = copy_to_arena<uint16_t>(c.model, joints);
+    prim.weights = copy_to_arena<float>(c.model, weights);
+    out->push_back(prim);
+    return true;
+}
+
+bool convert_meshes(Context &c)
+{
+    const tinygltf::Model &g = *c.gltf;
+    std::vector<cb_primitive> prims;
+    for (size_t i = 0; i < g.nodes.size(); ++i) {
+        const tinygltf::Node &node = g.nodes[i];
+        if (node.mesh < 0 || node.skin < 0) continue;
+        if (node.mesh >= (int)g.meshes.size() || node.skin >= (int)g.skins.size()) {
+            cb_fail(c.err, CB_ERR_INPUT, "%s: node %zu uses mesh %d / skin %d, which do not exist", c.name, i, node.mesh, node.skin);
+            return false;
+        }
+        for (const tinygltf::Primitive &p : g.meshes[(size_t)node.mesh].primitives)
+            if (!convert_primitive(c, i, p, &prims)) return false;
+    }
+    cb_model *m = c.model;
+    m->primitive_count = (uint32_t)prims.size();
+    m->primitives = static_cast<cb_primitive *>(cb_model_alloc(m, prims.size(), sizeof(cb_primitive)));
+    std::copy(prims.begin(), prims.end(), m->primitives);
+    return true;
+}
+
+bool parse_interpolation(const std::string &s, cb_interp *out)
+{
+    if (s.empty() || s == "LINEAR") *out = CB_INTERP_LINEAR;
+    else if (s == "STEP") *out = CB_INTERP_STEP;
+    else if (s == "CUBICSPLINE") *out = CB_INTERP_CUBICSPLINE;
+    else return false;
+    return true;
+}
+
+bool convert_channel(Context &c, size_t a, size_t ci, const tinygltf::Animation &src, std::vector<cb_channel> *out)
+{
+    const tinygltf::AnimationChannel &ch = src.channels[ci];
+    const std::string &path = ch.target_path;
+    std::string where = "clip '" + std::string(c.model->animations[a].name) + "' channel " + std::to_string(ci);
+    if (path == "weights") {
+        c.model->ignored_morph_channels++;
+        return true;
+    }
+    cb_channel dst{};
+    if (path == "translation") dst.path = CB_PATH_TRANSLATION;
+    else if (path == "rotation") dst.path = CB_PATH_ROTATION;
+    else if (path == "scale") dst.path = CB_PATH_SCALE;
+    else {
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s animates '%s'; glTF 2.0 allows translation, rotation, scale and weights", c.name,
+                where.c_str(), path.c_str());
+        return false;
+    }
+    if (ch.target_node < 0) return true; // targets something else (an extension); not a joint
+    if (ch.sampler < 0 || ch.sampler >= (int)src.samplers.size()) {
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses sampler %d, which does not exist", c.name, where.c_str(), ch.sampler);
+        return false;
+    }
+    const tinygltf::AnimationSampler &s = src.samplers[(size_t)ch.sampler];
+    if (!parse_interpolation(s.interpolation, &dst.interp)) {
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s has interpolation '%s'; use LINEAR, STEP or CUBICSPLINE", c.name, where.c_str(),
+                s.interpolation.c_str());
+        return false;
+    }
+    dst.node = ch.target_node;
+    int comps = dst.path == CB_PATH_ROTATION ? 4 : 3;
+    std::vector<double> times, values;
+    size_t nt, nv;
+    if (!read_accessor(c, s.input, 1, (where + " key times").c_str(), &times, &nt) ||
+        !read_accessor(c, s.output, comps, (where + " values").c_str(), &values, &nv))
+        return false;
+    size_t per_key = dst.interp == CB_INTERP_CUBICSPLINE ? 3 : 1;
+    if (nv != nt * per_key) {
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s has %zu key times but %zu values (expected %zu)", c.name, where.c_str(), nt, nv,
+                nt * per_key);
+        return false;
+    }
+    dst.key_count = (uint32_t)nt;
+    dst.times = copy_to_arena<float>(c.model, times);
+    dst.values = copy_to_arena<float>(c.model, values);
+    out->push_back(dst);
+    return true;
+}
+
+bool convert_animations(Context &c)
+{
+    const auto &anims = c.gltf->animations;
+    cb_model *m = c.model;
+    m->animation_count = (uint32_t)anims.size();
+    m->animations = static_cast<cb_animation *>(cb_model_alloc(m, anims.size(), sizeof(cb_animation)));
+    for (size_t a = 0; a < anims.size(); ++a) {
+        cb_animation *dst = &m->animations[a];
+        dst->name = name_or(m, anims[a].name, "animation", a);
+        std::vector<cb_channel> channels;
+        for (size_t ci = 0; ci < anims[a].channels.size(); ++ci)
+            if (!convert_channel(c, a, ci, anims[a], &channels)) return false;
+        dst->channel_count = (uint32_t)channels.size();
+        dst->channels = static_cast<cb_channel *>(cb_model_alloc(m, channels.size(), sizeof(cb_channel)));
+        std::copy(channels.begin(), channels.end(), dst->channels);
+    }
+    return true;
+}
+
+cb_model *load(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
+               const cb_limits *limits, cb_error *err)
+{
+    Context c{};
+    c.limits = limits ? *limits : cb_default_limits();
+    c.err = err;
+    c.name = name;
+    tinygltf::Model gltf;
+    if (!parse_with_tinygltf(data, size, name, base_dir, c.limits, &gltf, err)) return nullptr;
+    c.gltf = &gltf;
+    if (!check_required_extensions(c) || !decode_meshopt(c, &gltf)) return nullptr;
+    c.model = cb_model_create(name);
+    if (!c.model) {
+        cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory", name);
+        return nullptr;
+    }
+    if (!convert_nodes(c) || !convert_skins(c) || !convert_meshes(c) || !convert_animations(c) ||
+        cb_model_validate(c.model, &c.limits, err) != CB_OK) {
+        cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory while loading", name);
+        cb_model_free(c.model);
+        return nullptr;
+    }
+    return c.model;
+}
+
+} // namespace
+
+extern "C" cb_model *cb_gltf_load_memory(const unsigned char *data, size_t size, const char *name, const char *base_dir,
+                                         const cb_limits *limits, cb_error *err)
+{
+    try {
+        return load(data, size, name, base_dir ? base_dir : "/nonexistent-crowdbake-dir", limits, err);
+    } catch (const std::bad_alloc &) {
+        cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory while loading", name);
+    } catch (const std::exception &e) {
+        cb_fail(err, CB_ERR_INPUT, "%s: not a valid glTF file: %s", name, e.what());
+    }
+    return nullptr;
+}
+
+extern "C" cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_error *err)
+{
+    cb_limits l = limits ? *limits : cb_default_limits();
+    std::vector<unsigned char> bytes;
+    std::string why;
+    try {
+        if (!read_file(path, l.max_file_bytes, &bytes, &why)) {
+            cb_fail(err, CB_ERR_IO, "%s: cannot read: %s", path, why.c_str());
+            return nullptr;
+        }
+    } catch (const std::bad_alloc &) {
+        cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory reading the file", path);
+        return nullptr;
+    }
+    if (bytes.empty()) {
+        cb_fail(err, CB_ERR_INPUT, "%s: the file is empty", path);
+        return nullptr;
+    }
+    std::string dir = path;
+    size_t slash = dir.find_last_of('/');
+    dir = slash == std::string::npos ? "." : dir.substr(0, slash);
+    return cb_gltf_load_memory(bytes.data(), bytes.size(), path, dir.c_str(), &l, err);
+}

@@ -1,0 +1,27 @@
+/* gltf_load.h - loads a .glb or .gltf file into a cb_model (C API over a C++ adapter).
+ *
+ * Handles KHR_draco_mesh_compression, KHR_mesh_quantization, EXT_meshopt_compression,
+ * sparse accessors, embedded data URIs and external buffers. Images are never decoded.
+ * The returned model is validated (cb_model_validate) and owned by the caller.
+ */
+#ifndef CB_GLTF_LOAD_H
+#define CB_GLTF_LOAD_H
+
+#include "../src/crowdbake.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* NULL on failure, with err filled ("FILE: what is wrong"). limits may be NULL. */
+cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_error *err);
+/* Same, from bytes in memory (a GLB, or glTF JSON with embedded data); base_dir resolves
+ * external URIs (NULL forbids them). Used by the fuzzers. */
+cb_model *cb_gltf_load_memory(const unsigned char *data, size_t size, const char *name, const char *base_dir,
+                              const cb_limits *limits, cb_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

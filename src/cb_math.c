@@ -1,0 +1,199 @@
+/* cb_math.c - see cb_math.h. */
+#include "cb_math.h"
+
+#include <math.h>
+#include <string.h>
+
+void cb_mat4_identity(double out[16])
+{
+    memset(out, 0, 16 * sizeof(double));
+    out[0] = out[5] = out[10] = out[15] = 1.0;
+}
+
+void cb_mat4_mul(double out[16], const double a[16], const double b[16])
+{
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r)
+            out[c * 4 + r] = a[0 * 4 + r] * b[c * 4 + 0] + a[1 * 4 + r] * b[c * 4 + 1] +
+                             a[2 * 4 + r] * b[c * 4 + 2] + a[3 * 4 + r] * b[c * 4 + 3];
+}
+
+void cb_mat4_mul_affine(double out[16], const double a[16], const double b[16])
+{
+    for (int c = 0; c < 4; ++c) {
+        for (int r = 0; r < 3; ++r)
+            out[c * 4 + r] = a[r] * b[c * 4] + a[4 + r] * b[c * 4 + 1] + a[8 + r] * b[c * 4 + 2];
+        out[c * 4 + 3] = 0.0;
+    }
+    out[12] += a[12];
+    out[13] += a[13];
+    out[14] += a[14];
+    out[15] = 1.0;
+}
+
+void cb_mat4_from_trs(double m[16], cb_vec3 t, cb_quat q, cb_vec3 s)
+{
+    double x = q.x, y = q.y, z = q.z, w = q.w;
+    double xx = x * x, yy = y * y, zz = z * z;
+    double xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
+    m[0] = (1 - 2 * (yy + zz)) * s.x;
+    m[1] = (2 * (xy + wz)) * s.x;
+    m[2] = (2 * (xz - wy)) * s.x;
+    m[3] = 0;
+    m[4] = (2 * (xy - wz)) * s.y;
+    m[5] = (1 - 2 * (xx + zz)) * s.y;
+    m[6] = (2 * (yz + wx)) * s.y;
+    m[7] = 0;
+    m[8] = (2 * (xz + wy)) * s.z;
+    m[9] = (2 * (yz - wx)) * s.z;
+    m[10] = (1 - 2 * (xx + yy)) * s.z;
+    m[11] = 0;
+    m[12] = t.x;
+    m[13] = t.y;
+    m[14] = t.z;
+    m[15] = 1;
+}
+
+cb_vec3 cb_mat4_transform_point(const double m[16], cb_vec3 p)
+{
+    cb_vec3 r = {m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12], m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13],
+                 m[2] * p.x + m[6] * p.y + m[10] * p.z + m[14]};
+    return r;
+}
+
+cb_vec3 cb_mat4_transform_dir(const double m[16], cb_vec3 d)
+{
+    cb_vec3 r = {m[0] * d.x + m[4] * d.y + m[8] * d.z, m[1] * d.x + m[5] * d.y + m[9] * d.z,
+                 m[2] * d.x + m[6] * d.y + m[10] * d.z};
+    return r;
+}
+
+double cb_mat4_determinant3(const double m[16])
+{
+    return m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) +
+           m[8] * (m[1] * m[6] - m[5] * m[2]);
+}
+
+double cb_vec3_length(cb_vec3 a) { return sqrt(cb_vec3_dot(a, a)); }
+
+bool cb_mat4_decompose(const double m[16], cb_vec3 *t, cb_quat *r, cb_vec3 *s, double tolerance)
+{
+    cb_vec3 c0 = {m[0], m[1], m[2]}, c1 = {m[4], m[5], m[6]}, c2 = {m[8], m[9], m[10]};
+    cb_vec3 scale = {cb_vec3_length(c0), cb_vec3_length(c1), cb_vec3_length(c2)};
+    if (cb_mat4_determinant3(m) < 0) scale.x = -scale.x; /* one axis carries the mirror */
+    t->x = m[12];
+    t->y = m[13];
+    t->z = m[14];
+    *s = scale;
+    if (scale.x == 0 || scale.y == 0 || scale.z == 0) {
+        r->x = r->y = r->z = 0;
+        r->w = 1;
+        return false;
+    }
+    double rot[16];
+    memcpy(rot, m, sizeof rot);
+    for (int i = 0; i < 3; ++i) {
+        rot[0 + i] /= scale.x;
+        rot[4 + i] /= scale.y;
+        rot[8 + i] /= scale.z;
+    }
+    *r = cb_quat_from_mat4(rot);
+    /* Shear shows up as non-orthogonal columns. */
+    cb_vec3 r0 = {rot[0], rot[1], rot[2]}, r1 = {rot[4], rot[5], rot[6]}, r2 = {rot[8], rot[9], rot[10]};
+    return fabs(cb_vec3_dot(r0, r1)) <= tolerance && fabs(cb_vec3_dot(r0, r2)) <= tolerance &&
+           fabs(cb_vec3_dot(r1, r2)) <= tolerance;
+}
+
+cb_quat cb_quat_normalize(cb_quat q)
+{
+    double len = sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+    if (len == 0) {
+        cb_quat id = {0, 0, 0, 1};
+        return id;
+    }
+    cb_quat r = {q.x / len, q.y / len, q.z / len, q.w / len};
+    return r;
+}
+
+cb_quat cb_quat_mul(cb_quat a, cb_quat b)
+{
+    cb_quat r = {a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y, a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
+                 a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w, a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z};
+    return r;
+}
+
+cb_quat cb_quat_conjugate(cb_quat q)
+{
+    cb_quat r = {-q.x, -q.y, -q.z, q.w};
+    return r;
+}
+
+double cb_quat_dot(cb_quat a, cb_quat b) { return a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w; }
+
+cb_quat cb_quat_slerp(cb_quat a, cb_quat b, double t)
+{
+    double d = cb_quat_dot(a, b);
+    if (d < 0) { /* shorter arc */
+        d = -d;
+        b.x = -b.x;
+        b.y = -b.y;
+        b.z = -b.z;
+        b.w = -b.w;
+    }
+    double wa, wb;
+    double angle = acos(d > 1.0 ? 1.0 : d);
+    if (angle < 1e-6) {
+        wa = 1 - t;
+        wb = t;
+    } else {
+        double sin_angle = sin(angle);
+        wa = sin((1 - t) * angle) / sin_angle;
+        wb = sin(t * angle) / sin_angle;
+    }
+    cb_quat r = {wa * a.x + wb * b.x, wa * a.y + wb * b.y, wa * a.z + wb * b.z, wa * a.w + wb * b.w};
+    return cb_quat_normalize(r);
+}
+
+cb_vec3 cb_quat_rotate(cb_quat q, cb_vec3 v)
+{
+    /* v + 2w(u x v) + 2 u x (u x v), u = q.xyz */
+    cb_vec3 u = {q.x, q.y, q.z};
+    cb_vec3 uv = {u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+    cb_vec3 uuv = {u.y * uv.z - u.z * uv.y, u.z * uv.x - u.x * uv.z, u.x * uv.y - u.y * uv.x};
+    cb_vec3 r = {v.x + 2 * (q.w * uv.x + uuv.x), v.y + 2 * (q.w * uv.y + uuv.y), v.z + 2 * (q.w * uv.z + uuv.z)};
+    return r;
+}
+
+cb_quat cb_quat_from_mat4(const double m[16])
+{
+    /* Shepperd's method: pick the largest diagonal term for stability. */
+    double m00 = m[0], m11 = m[5], m22 = m[10];
+    double trace = m00 + m11 + m22;
+    cb_quat q;
+    if (trace > 0) {
+        double s = sqrt(trace + 1.0) * 2;
+        q.w = 0.25 * s;
+        q.x = (m[6] - m[9]) / s;
+        q.y = (m[8] - m[2]) / s;
+        q.z = (m[1] - m[4]) / s;
+    } else if (m00 > m11 && m00 > m22) {
+        double s = sqrt(1.0 + m00 - m11 - m22) * 2;
+        q.w = (m[6] - m[9]) / s;
+        q.x = 0.25 * s;
+        q.y = (m[4] + m[1]) / s;
+        q.z = (m[8] + m[2]) / s;
+    } else if (m11 > m22) {
+        double s = sqrt(1.0 + m11 - m00 - m22) * 2;
+        q.w = (m[8] - m[2]) / s;
+        q.x = (m[4] + m[1]) / s;
+        q.y = 0.25 * s;
+        q.z = (m[9] + m[6]) / s;
+    } else {
+        double s = sqrt(1.0 + m22 - m00 - m11) * 2;
+        q.w = (m[1] - m[4]) / s;
+        q.x = (m[8] + m[2]) / s;
+        q.y = (m[9] + m[6]) / s;
+        q.z = 0.25 * s;
+    }
+    return cb_quat_normalize(q);
+}

@@ -1,0 +1,200 @@
+/* crowdbake.h - the core library: a skinned, animated model as plain C structs, glTF 2.0
+ * animation sampling, clip framing and root motion.
+ *
+ * The core never reads or writes a file. formats/ fills a cb_model (gltf_load.h), the core
+ * samples it, and formats/ writes the result. Every cb_model allocation lives in the model's
+ * arena and is released by cb_model_free().
+ */
+#ifndef CROWDBAKE_H
+#define CROWDBAKE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define CROWDBAKE_VERSION "0.1.0"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- errors --------------------------------------------------------------------------- */
+
+/* Process exit codes; documented in README.md. */
+typedef enum cb_status {
+    CB_OK = 0,
+    CB_ERR_INTERNAL = 1, /* a bug or an allocation failure */
+    CB_ERR_USAGE = 2,    /* bad command line */
+    CB_ERR_BUDGET = 3,   /* the roster exceeds its VRAM budget (report) */
+    CB_ERR_INPUT = 4,    /* an input file is invalid or unsupported */
+    CB_ERR_IO = 5,       /* a file could not be read or written */
+    CB_ERR_VERIFY = 6    /* a verification threshold was exceeded */
+} cb_status;
+
+typedef struct cb_error {
+    cb_status status;
+    char message[512];
+} cb_error;
+
+/* Records the first error only; later ones are dropped so the root cause is reported. */
+cb_status cb_fail(cb_error *err, cb_status status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* ---- limits --------------------------------------------------------------------------- */
+
+typedef struct cb_limits {
+    uint32_t max_joints;         /* joints in one skin */
+    uint32_t max_frames;         /* frames in one clip at the chosen fps */
+    uint64_t max_accessor_count; /* elements in one accessor */
+    uint64_t max_file_bytes;     /* one input file (model, external buffer) */
+} cb_limits;
+
+cb_limits cb_default_limits(void);
+
+/* ---- the model ------------------------------------------------------------------------ */
+
+typedef struct cb_arena cb_arena;
+
+typedef struct cb_node {
+    const char *name;   /* never NULL; "node_N" when the file has none */
+    int32_t parent;     /* -1 for a root */
+    double translation[3];
+    double rotation[4]; /* x, y, z, w; normalized */
+    double scale[3];
+    double matrix[16];  /* valid when has_matrix; then TRS above is its decomposition */
+    bool has_matrix;
+} cb_node;
+
+typedef struct cb_skin {
+    const char *name;
+    uint32_t joint_count;
+    int32_t *joints;       /* node indices */
+    double *inverse_bind;  /* 16 per joint, column-major; identity when the file has none */
+    int32_t skeleton;      /* node index or -1 */
+} cb_skin;
+
+typedef struct cb_primitive {
+    int32_t node;          /* the mesh node that uses it */
+    int32_t skin;          /* index into cb_model.skins */
+    uint32_t vertex_count;
+    float *positions;      /* 3 per vertex, dequantized */
+    float *normals;        /* 3 per vertex or NULL */
+    uint16_t *joints;      /* 4 per vertex: indices into the skin's joints */
+    float *weights;        /* 4 per vertex, as stored (not renormalized) */
+    uint32_t index_count;
+    uint32_t *indices;     /* index_count, or NULL for non-indexed */
+} cb_primitive;
+
+typedef enum cb_path { CB_PATH_TRANSLATION, CB_PATH_ROTATION, CB_PATH_SCALE } cb_path;
+typedef enum cb_interp { CB_INTERP_LINEAR, CB_INTERP_STEP, CB_INTERP_CUBICSPLINE } cb_interp;
+
+typedef struct cb_channel {
+    int32_t node;
+    cb_path path;
+    cb_interp interp;
+    uint32_t key_count;
+    float *times;   /* key_count, strictly increasing */
+    float *values;  /* key_count * components, times 3 for CUBICSPLINE (in-tangent, value, out-tangent) */
+} cb_channel;
+
+typedef struct cb_animation {
+    const char *name;   /* never NULL; "animation_N" when the file has none */
+    uint32_t channel_count;
+    cb_channel *channels;
+    double t0, t1;      /* first and last key over all channels */
+} cb_animation;
+
+typedef struct cb_model {
+    cb_arena *arena;
+    const char *source;   /* the file it came from, for messages */
+    uint32_t node_count;
+    cb_node *nodes;
+    uint32_t skin_count;
+    cb_skin *skins;
+    uint32_t primitive_count;
+    cb_primitive *primitives;
+    uint32_t animation_count;
+    cb_animation *animations;
+    uint32_t ignored_morph_channels; /* weights channels dropped at load */
+} cb_model;
+
+/* An empty model with its own arena; NULL when out of memory. */
+cb_model *cb_model_create(const char *source);
+void cb_model_free(cb_model *model);
+/* Zeroed memory owned by the model; NULL when out of memory. */
+void *cb_model_alloc(cb_model *model, size_t count, size_t size);
+const char *cb_model_strdup(cb_model *model, const char *s);
+
+/* Checks what the core relies on: parents form a forest without cycles, joint and node
+ * indices are in range, key times strictly increase, no value is NaN or infinite, skins
+ * have joints, clips have channels. Rotation keys are normalized here. */
+cb_status cb_model_validate(cb_model *model, const cb_limits *limits, cb_error *err);
+
+/* Index of the skin named or numbered `name`, or -1. */
+int32_t cb_model_find_skin(const cb_model *model, const char *name);
+int32_t cb_model_find_animation(const cb_model *model, const char *name);
+/* Vertices of the primitives that use `skin`. */
+uint64_t cb_model_skin_vertex_count(const cb_model *model, int32_t skin);
+
+/* ---- sampling ------------------------------------------------------------------------- */
+
+/* Per-skin sampling state: evaluation order and scratch space. Not thread-safe; make one
+ * per thread. */
+typedef struct cb_sampler cb_sampler;
+
+cb_sampler *cb_sampler_create(const cb_model *model, int32_t skin, cb_error *err);
+void cb_sampler_free(cb_sampler *sampler);
+const cb_model *cb_sampler_model(const cb_sampler *sampler);
+int32_t cb_sampler_skin(const cb_sampler *sampler);
+
+/* Joint matrices (16 doubles each, column-major, skin joint order) of `animation` at time t.
+ * animation < 0 gives the rest pose. Times outside the clip clamp to its ends. */
+void cb_sample_joint_matrices(cb_sampler *sampler, int32_t animation, double t, double *out);
+/* Global (scene-space) matrices of every node at time t; out holds 16 * node_count. */
+const double *cb_sample_globals(cb_sampler *sampler, int32_t animation, double t);
+
+/* Evaluates one channel at time t into out (3 or 4 components). Exposed for tests. */
+void cb_channel_eval(const cb_channel *channel, double t, double out[4]);
+
+/* ---- clip framing --------------------------------------------------------------------- */
+
+typedef enum cb_root_motion { CB_ROOT_MOTION_KEEP, CB_ROOT_MOTION_IN_PLACE } cb_root_motion;
+
+typedef struct cb_clip_info {
+    int32_t animation;
+    double t0, t1, duration;
+    bool loops;              /* first and last pose equal (root travel excluded) */
+    uint32_t steps;          /* N = max(1, round(duration * fps)) */
+    uint32_t frames;         /* rows baked: N for loops, N + 1 for one-shots */
+    double effective_fps;    /* N / duration; the requested fps for a zero-length clip */
+    double root_displacement[3]; /* root joint travel from t0 to t1, scene units */
+    double root_velocity[3];     /* average velocity (displacement / duration); y is kept */
+    double ground_speed;         /* |velocity.xz| */
+} cb_clip_info;
+
+/* Frame count rule: N = max(1, round(D * fps)); loops bake N rows, one-shots N + 1. */
+uint32_t cb_clip_step_count(double duration, double fps);
+/* Time of row i: t0 + i * D / N. */
+double cb_clip_frame_time(const cb_clip_info *clip, uint32_t frame);
+
+/* Measures a clip: duration, loop test, root motion and framing at `fps`. loop_override is
+ * -1 (decide from the poses), 0 or 1. */
+cb_status cb_clip_analyze(cb_sampler *sampler, int32_t animation, double fps, int loop_override,
+                          const cb_limits *limits, cb_clip_info *out, cb_error *err);
+
+/* Joint matrices of a framed clip's row, with root motion removed when asked: in-place
+ * subtracts the root's average horizontal travel, velocity.xz * (t - t0), from every joint. */
+void cb_clip_frame_matrices(cb_sampler *sampler, const cb_clip_info *clip, uint32_t frame,
+                            cb_root_motion root_motion, double *out);
+
+/* The skin's root joint (the top-most joint), as an index into its joints. */
+uint32_t cb_skin_root_joint(const cb_model *model, int32_t skin);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,322 @@
+/* model.c - cb_model ownership (an arena per model), validation and lookups. */
+#include "cb_math.h"
+#include "crowdbake.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+cb_status cb_fail(cb_error *err, cb_status status, const char *fmt, ...)
+{
+    if (err && err->status == CB_OK) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err->message, sizeof err->message, fmt, ap);
+        va_end(ap);
+        err->status = status;
+    }
+    return status;
+}
+
+cb_limits cb_default_limits(void)
+{
+    cb_limits l;
+    l.max_joints = 4096;
+    l.max_frames = 1u << 20;
+    l.max_accessor_count = 1u << 24;
+    l.max_file_bytes = (uint64_t)2 << 30;
+    return l;
+}
+
+/* ---- arena: one owner for everything a model holds ---- */
+
+typedef struct cb_arena_block {
+    struct cb_arena_block *next;
+    size_t used, size;
+    max_align_t data[];
+} cb_arena_block;
+
+struct cb_arena {
+    cb_arena_block *head;
+};
+
+static void *arena_alloc(cb_arena *arena, size_t bytes)
+{
+    const size_t align = sizeof(max_align_t);
+    bytes = (bytes + align - 1) / align * align;
+    cb_arena_block *b = arena->head;
+    if (!b || b->size - b->used < bytes) {
+        size_t size = bytes > 65536 ? bytes : 65536;
+        b = calloc(1, sizeof *b + size);
+        if (!b) return NULL;
+        b->size = size;
+        b->next = arena->head;
+        arena->head = b;
+    }
+    void *p = (char *)b->data + b->used;
+    b->used += bytes;
+    return p; /* calloc'd and never reused, so already zero */
+}
+
+cb_model *cb_model_create(const char *source)
+{
+    cb_model *m = calloc(1, sizeof *m);
+    if (!m) return NULL;
+    m->arena = calloc(1, sizeof *m->arena);
+    if (!m->arena) {
+        free(m);
+        return NULL;
+    }
+    m->source = cb_model_strdup(m, source ? source : "<memory>");
+    return m;
+}
+
+void cb_model_free(cb_model *model)
+{
+    if (!model) return;
+    cb_arena_block *b = model->arena->head;
+    while (b) {
+        cb_arena_block *next = b->next;
+        free(b);
+        b = next;
+    }
+    free(model->arena);
+    free(model);
+}
+
+void *cb_model_alloc(cb_model *model, size_t count, size_t size)
+{
+    if (size && count > SIZE_MAX / size) return NULL;
+    size_t bytes = count * size;
+    return arena_alloc(model->arena, bytes ? bytes : 1);
+}
+
+const char *cb_model_strdup(cb_model *model, const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *p = cb_model_alloc(model, n, 1);
+    if (p) memcpy(p, s, n);
+    return p;
+}
+
+/* ---- validation ---- */
+
+static const char *path_name(cb_path p)
+{
+    return p == CB_PATH_TRANSLATION ? "translation" : p == CB_PATH_ROTATION ? "rotation" : "scale";
+}
+
+static int path_components(cb_path p) { return p == CB_PATH_ROTATION ? 4 : 3; }
+
+/* Gives every node a TRS: matrix nodes are decomposed (an animation channel may replace
+ * parts of it), rotations are normalized. */
+static void normalize_node_transforms(cb_model *m)
+{
+    for (uint32_t i = 0; i < m->node_count; ++i) {
+        cb_node *n = &m->nodes[i];
+        if (n->has_matrix) {
+            cb_vec3 t, s;
+            cb_quat r;
+            cb_mat4_decompose(n->matrix, &t, &r, &s, 1e-4);
+            double trs[10] = {t.x, t.y, t.z, r.x, r.y, r.z, r.w, s.x, s.y, s.z};
+            memcpy(n->translation, trs, sizeof n->translation);
+            memcpy(n->rotation, trs + 3, sizeof n->rotation);
+            memcpy(n->scale, trs + 7, sizeof n->scale);
+        } else if (isfinite(n->rotation[0] + n->rotation[1] + n->rotation[2] + n->rotation[3])) {
+            cb_quat q = cb_quat_normalize((cb_quat){n->rotation[0], n->rotation[1], n->rotation[2], n->rotation[3]});
+            n->rotation[0] = q.x, n->rotation[1] = q.y, n->rotation[2] = q.z, n->rotation[3] = q.w;
+        }
+    }
+}
+
+static cb_status validate_nodes(cb_model *m, cb_error *err)
+{
+    for (uint32_t i = 0; i < m->node_count; ++i) {
+        const cb_node *n = &m->nodes[i];
+        if (n->parent < -1 || n->parent >= (int32_t)m->node_count)
+            return cb_fail(err, CB_ERR_INPUT, "%s: node %u (%s) has parent %d out of range", m->source, i, n->name,
+                           n->parent);
+        for (int k = 0; k < 3; ++k)
+            if (!isfinite(n->translation[k]) || !isfinite(n->scale[k]))
+                return cb_fail(err, CB_ERR_INPUT, "%s: node %u (%s) has a NaN or infinite transform", m->source, i,
+                               n->name);
+        for (int k = 0; k < 4; ++k)
+            if (!isfinite(n->rotation[k]))
+                return cb_fail(err, CB_ERR_INPUT, "%s: node %u (%s) has a NaN or infinite rotation", m->source, i,
+                               n->name);
+        for (int k = 0; k < 16 && n->has_matrix; ++k)
+            if (!isfinite(n->matrix[k]))
+                return cb_fail(err, CB_ERR_INPUT, "%s: node %u (%s) has a NaN or infinite matrix", m->source, i, n->name);
+        /* Walking up at most node_count steps finds a root unless there is a cycle. */
+        int32_t p = n->parent;
+        for (uint32_t steps = 0; p >= 0; ++steps) {
+            if (steps >= m->node_count)
+                return cb_fail(err, CB_ERR_INPUT, "%s: node %u (%s) is part of a cycle in the node hierarchy",
+                               m->source, i, n->name);
+            p = m->nodes[p].parent;
+        }
+    }
+    return CB_OK;
+}
+
+static cb_status validate_skins(const cb_model *m, const cb_limits *limits, cb_error *err)
+{
+    for (uint32_t s = 0; s < m->skin_count; ++s) {
+        const cb_skin *skin = &m->skins[s];
+        if (skin->joint_count == 0)
+            return cb_fail(err, CB_ERR_INPUT, "%s: skin %u (%s) has no joints", m->source, s, skin->name);
+        if (skin->joint_count > limits->max_joints)
+            return cb_fail(err, CB_ERR_INPUT, "%s: skin %u (%s) has %u joints, over the limit of %u (--max-joints)",
+                           m->source, s, skin->name, skin->joint_count, limits->max_joints);
+        int32_t common_root = -1;
+        for (uint32_t j = 0; j < skin->joint_count; ++j) {
+            if (skin->joints[j] < 0 || skin->joints[j] >= (int32_t)m->node_count)
+                return cb_fail(err, CB_ERR_INPUT, "%s: skin %u (%s) joint %u names node %d, which does not exist",
+                               m->source, s, skin->name, j, skin->joints[j]);
+            for (int k = 0; k < 16; ++k)
+                if (!isfinite(skin->inverse_bind[j * 16 + k]))
+                    return cb_fail(err, CB_ERR_INPUT, "%s: skin %u (%s) inverse bind matrix %u is NaN or infinite",
+                                   m->source, s, skin->name, j);
+            int32_t root = skin->joints[j];
+            while (m->nodes[root].parent >= 0) root = m->nodes[root].parent;
+            if (common_root >= 0 && root != common_root)
+                return cb_fail(err, CB_ERR_INPUT,
+                               "%s: skin %u (%s) joints have no common root: joint %u (%s) is under node %d (%s), joint 0 "
+                               "under node %d (%s); parent all joints to one armature",
+                               m->source, s, skin->name, j, m->nodes[skin->joints[j]].name, root, m->nodes[root].name,
+                               common_root, m->nodes[common_root].name);
+            common_root = root;
+        }
+    }
+    return CB_OK;
+}
+
+static cb_status validate_primitives(const cb_model *m, cb_error *err)
+{
+    for (uint32_t p = 0; p < m->primitive_count; ++p) {
+        const cb_primitive *prim = &m->primitives[p];
+        if (prim->skin < 0 || prim->skin >= (int32_t)m->skin_count)
+            return cb_fail(err, CB_ERR_INPUT, "%s: skinned primitive %u uses skin %d, which does not exist",
+                           m->source, p, prim->skin);
+        uint32_t joint_count = m->skins[prim->skin].joint_count;
+        for (uint64_t i = 0; i < (uint64_t)prim->vertex_count * 4; ++i) {
+            if (prim->weights[i] != 0 && prim->joints[i] >= joint_count)
+                return cb_fail(err, CB_ERR_INPUT,
+                               "%s: vertex %llu of mesh node %d uses joint %u, but its skin has %u joints",
+                               m->source, (unsigned long long)(i / 4), prim->node, prim->joints[i], joint_count);
+            if (!isfinite(prim->weights[i]))
+                return cb_fail(err, CB_ERR_INPUT, "%s: vertex %llu of mesh node %d has a NaN or infinite weight",
+                               m->source, (unsigned long long)(i / 4), prim->node);
+        }
+        for (uint64_t i = 0; i < (uint64_t)prim->vertex_count * 3; ++i)
+            if (!isfinite(prim->positions[i]))
+                return cb_fail(err, CB_ERR_INPUT, "%s: vertex %llu of mesh node %d has a NaN or infinite position",
+                               m->source, (unsigned long long)(i / 3), prim->node);
+        for (uint32_t i = 0; i < prim->index_count; ++i)
+            if (prim->indices[i] >= prim->vertex_count)
+                return cb_fail(err, CB_ERR_INPUT, "%s: index %u of mesh node %d is %u, past its %u vertices",
+                               m->source, i, prim->node, prim->indices[i], prim->vertex_count);
+    }
+    return CB_OK;
+}
+
+static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, cb_error *err)
+{
+    const cb_animation *anim = &m->animations[a];
+    cb_channel *ch = &anim->channels[c];
+    if (ch->node < 0 || ch->node >= (int32_t)m->node_count)
+        return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u targets node %d, which does not exist", m->source,
+                       anim->name, c, ch->node);
+    if (ch->key_count == 0)
+        return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u (%s of %s) has no keys", m->source, anim->name, c,
+                       path_name(ch->path), m->nodes[ch->node].name);
+    for (uint32_t k = 0; k < ch->key_count; ++k) {
+        if (!isfinite(ch->times[k]))
+            return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u key %u has a NaN or infinite time", m->source,
+                           anim->name, c, k);
+        if (k > 0 && !(ch->times[k] > ch->times[k - 1]))
+            return cb_fail(err, CB_ERR_INPUT,
+                           "%s: clip '%s' channel %u (%s of %s): key times are not increasing at key %u (%g after %g)",
+                           m->source, anim->name, c, path_name(ch->path), m->nodes[ch->node].name, k,
+                           (double)ch->times[k], (double)ch->times[k - 1]);
+    }
+    int comps = path_components(ch->path);
+    int per_key = comps * (ch->interp == CB_INTERP_CUBICSPLINE ? 3 : 1);
+    for (uint64_t i = 0; i < (uint64_t)ch->key_count * per_key; ++i)
+        if (!isfinite(ch->values[i]))
+            return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u (%s of %s) key %llu has a NaN or infinite value",
+                           m->source, anim->name, c, path_name(ch->path), m->nodes[ch->node].name,
+                           (unsigned long long)(i / per_key));
+    if (ch->path == CB_PATH_ROTATION) {
+        /* Real exporters write keys of length 0.9998; glTF wants unit quaternions. Tangents
+         * of cubic splines are not rotations and stay as they are. */
+        int value_slot = ch->interp == CB_INTERP_CUBICSPLINE ? 1 : 0;
+        for (uint32_t k = 0; k < ch->key_count; ++k) {
+            float *q = ch->values + (size_t)k * per_key + value_slot * 4;
+            double len = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
+            if (len < 1e-12)
+                return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u (rotation of %s) key %u is a zero quaternion",
+                               m->source, anim->name, c, m->nodes[ch->node].name, k);
+            for (int i = 0; i < 4; ++i) q[i] = (float)(q[i] / len);
+        }
+    }
+    return CB_OK;
+}
+
+static cb_status validate_animations(cb_model *m, cb_error *err)
+{
+    for (uint32_t a = 0; a < m->animation_count; ++a) {
+        cb_animation *anim = &m->animations[a];
+        if (anim->channel_count == 0)
+            return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' has no channels (remove it or give it keys)", m->source,
+                           anim->name);
+        anim->t0 = INFINITY;
+        anim->t1 = -INFINITY;
+        for (uint32_t c = 0; c < anim->channel_count; ++c) {
+            if (validate_channel(m, a, c, err)) return err->status;
+            const cb_channel *ch = &anim->channels[c];
+            if (ch->times[0] < anim->t0) anim->t0 = ch->times[0];
+            if (ch->times[ch->key_count - 1] > anim->t1) anim->t1 = ch->times[ch->key_count - 1];
+        }
+    }
+    return CB_OK;
+}
+
+cb_status cb_model_validate(cb_model *model, const cb_limits *limits, cb_error *err)
+{
+    cb_limits defaults = cb_default_limits();
+    if (!limits) limits = &defaults;
+    if (validate_nodes(model, err)) return err->status;
+    normalize_node_transforms(model);
+    if (validate_skins(model, limits, err) || validate_primitives(model, err) ||
+        validate_animations(model, err))
+        return err->status;
+    return CB_OK;
+}
+
+int32_t cb_model_find_skin(const cb_model *model, const char *name)
+{
+    for (uint32_t i = 0; i < model->skin_count; ++i)
+        if (strcmp(model->skins[i].name, name) == 0) return (int32_t)i;
+    char *end;
+    long idx = strtol(name, &end, 10);
+    if (*name && !*end && idx >= 0 && idx < (long)model->skin_count) return (int32_t)idx;
+    return -1;
+}
+
+int32_t cb_model_find_animation(const cb_model *model, const char *name)
+{
+    for (uint32_t i = 0; i < model->animation_count; ++i)
+        if (strcmp(model->animations[i].name, name) == 0) return (int32_t)i;
+    return -1;
+}
+
+uint64_t cb_model_skin_vertex_count(const cb_model *model, int32_t skin)
+{
+    uint64_t n = 0;
+    for (uint32_t p = 0; p < model->primitive_count; ++p)
+        if (model->primitives[p].skin == skin) n += model->primitives[p].vertex_count;
+    return n;
+}

@@ -1,0 +1,220 @@
+/* sample.c - glTF 2.0 animation sampling: channel interpolation, the node hierarchy and
+ * joint matrices. */
+#include "cb_math.h"
+#include "crowdbake.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Key times are float32 in files: a STEP key this close to the sample time counts as reached. */
+#define CB_STEP_EPSILON 1e-6
+
+struct cb_sampler {
+    const cb_model *model;
+    int32_t skin;
+    uint32_t *order;     /* node indices, parents before children */
+    double *local_trs;   /* 10 per node: t[3], r[4], s[3] */
+    bool *animated;      /* per node, set while evaluating one clip */
+    double *globals;     /* 16 per node */
+};
+
+/* Index of the last key with times[k] <= t (0 when t is before the first key). */
+static uint32_t find_key(const cb_channel *ch, double t)
+{
+    uint32_t lo = 0, hi = ch->key_count - 1;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo + 1) / 2;
+        if (ch->times[mid] <= t)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    return lo;
+}
+
+static void load_key(const cb_channel *ch, uint32_t k, int slot, int comps, double out[4])
+{
+    int stride = comps * (ch->interp == CB_INTERP_CUBICSPLINE ? 3 : 1);
+    const float *v = ch->values + (size_t)k * stride + slot * comps;
+    for (int i = 0; i < comps; ++i) out[i] = v[i];
+}
+
+static void eval_cubic(const cb_channel *ch, uint32_t k, double s, double dt, int comps, double out[4])
+{
+    double p0[4], b0[4], p1[4], a1[4];
+    load_key(ch, k, 1, comps, p0);
+    load_key(ch, k, 2, comps, b0);     /* out-tangent of key k */
+    load_key(ch, k + 1, 1, comps, p1);
+    load_key(ch, k + 1, 0, comps, a1); /* in-tangent of key k + 1 */
+    double s2 = s * s, s3 = s2 * s;
+    double h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + s, h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
+    for (int i = 0; i < comps; ++i) out[i] = h00 * p0[i] + h10 * dt * b0[i] + h01 * p1[i] + h11 * dt * a1[i];
+}
+
+void cb_channel_eval(const cb_channel *ch, double t, double out[4])
+{
+    int comps = ch->path == CB_PATH_ROTATION ? 4 : 3;
+    int value_slot = ch->interp == CB_INTERP_CUBICSPLINE ? 1 : 0;
+    uint32_t last = ch->key_count - 1;
+    if (ch->interp == CB_INTERP_STEP) {
+        load_key(ch, find_key(ch, t + CB_STEP_EPSILON), 0, comps, out);
+        return;
+    }
+    if (t <= ch->times[0] || last == 0) {
+        load_key(ch, 0, value_slot, comps, out);
+        return;
+    }
+    if (t >= ch->times[last]) {
+        load_key(ch, last, value_slot, comps, out);
+        return;
+    }
+    uint32_t k = find_key(ch, t);
+    double t_k = ch->times[k], dt = (double)ch->times[k + 1] - t_k;
+    double s = (t - t_k) / dt;
+    if (ch->interp == CB_INTERP_CUBICSPLINE) {
+        eval_cubic(ch, k, s, dt, comps, out);
+        if (comps == 4) {
+            cb_quat q = cb_quat_normalize((cb_quat){out[0], out[1], out[2], out[3]});
+            out[0] = q.x, out[1] = q.y, out[2] = q.z, out[3] = q.w;
+        }
+        return;
+    }
+    double a[4], b[4];
+    load_key(ch, k, 0, comps, a);
+    load_key(ch, k + 1, 0, comps, b);
+    if (comps == 4) {
+        cb_quat q = cb_quat_slerp((cb_quat){a[0], a[1], a[2], a[3]}, (cb_quat){b[0], b[1], b[2], b[3]}, s);
+        out[0] = q.x, out[1] = q.y, out[2] = q.z, out[3] = q.w;
+    } else {
+        for (int i = 0; i < 3; ++i) out[i] = a[i] + (b[i] - a[i]) * s;
+    }
+}
+
+/* ---- the sampler ---- */
+
+static uint32_t node_depth(const cb_model *m, uint32_t n)
+{
+    uint32_t d = 0;
+    for (int32_t p = m->nodes[n].parent; p >= 0; p = m->nodes[p].parent) ++d;
+    return d;
+}
+
+cb_sampler *cb_sampler_create(const cb_model *model, int32_t skin, cb_error *err)
+{
+    if (skin < 0 || skin >= (int32_t)model->skin_count) {
+        cb_fail(err, CB_ERR_INPUT, "%s: has no skin %d (it has %u)", model->source, skin, model->skin_count);
+        return NULL;
+    }
+    uint32_t n = model->node_count;
+    cb_sampler *s = calloc(1, sizeof *s);
+    uint32_t *depth = calloc(n ? n : 1, sizeof *depth);
+    if (s) {
+        s->order = calloc(n ? n : 1, sizeof *s->order);
+        s->local_trs = calloc(n ? (size_t)n * 10 : 1, sizeof *s->local_trs);
+        s->animated = calloc(n ? n : 1, sizeof *s->animated);
+        s->globals = calloc(n ? (size_t)n * 16 : 1, sizeof *s->globals);
+    }
+    if (!s || !depth || !s->order || !s->local_trs || !s->animated || !s->globals) {
+        free(depth);
+        cb_sampler_free(s);
+        cb_fail(err, CB_ERR_INTERNAL, "out of memory creating a sampler for %s", model->source);
+        return NULL;
+    }
+    s->model = model;
+    s->skin = skin;
+    /* Order by depth (a stable counting sort) so parents are evaluated first. */
+    uint32_t max_depth = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        depth[i] = node_depth(model, i);
+        if (depth[i] > max_depth) max_depth = depth[i];
+    }
+    uint32_t filled = 0;
+    for (uint32_t d = 0; d <= max_depth && filled < n; ++d)
+        for (uint32_t i = 0; i < n; ++i)
+            if (depth[i] == d) s->order[filled++] = i;
+    free(depth);
+    return s;
+}
+
+void cb_sampler_free(cb_sampler *s)
+{
+    if (!s) return;
+    free(s->order);
+    free(s->local_trs);
+    free(s->animated);
+    free(s->globals);
+    free(s);
+}
+
+const cb_model *cb_sampler_model(const cb_sampler *s) { return s->model; }
+int32_t cb_sampler_skin(const cb_sampler *s) { return s->skin; }
+
+static void local_matrix(const cb_sampler *s, uint32_t node, double out[16])
+{
+    const cb_node *n = &s->model->nodes[node];
+    if (n->has_matrix && !s->animated[node]) {
+        memcpy(out, n->matrix, sizeof n->matrix);
+        return;
+    }
+    const double *trs = s->local_trs + (size_t)node * 10;
+    cb_mat4_from_trs(out, (cb_vec3){trs[0], trs[1], trs[2]}, (cb_quat){trs[3], trs[4], trs[5], trs[6]},
+                     (cb_vec3){trs[7], trs[8], trs[9]});
+}
+
+const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
+{
+    const cb_model *m = s->model;
+    for (uint32_t i = 0; i < m->node_count; ++i) {
+        double *trs = s->local_trs + (size_t)i * 10;
+        memcpy(trs, m->nodes[i].translation, 3 * sizeof(double));
+        memcpy(trs + 3, m->nodes[i].rotation, 4 * sizeof(double));
+        memcpy(trs + 7, m->nodes[i].scale, 3 * sizeof(double));
+        s->animated[i] = false;
+    }
+    if (animation >= 0 && animation < (int32_t)m->animation_count) {
+        const cb_animation *anim = &m->animations[animation];
+        for (uint32_t c = 0; c < anim->channel_count; ++c) {
+            const cb_channel *ch = &anim->channels[c];
+            double v[4];
+            cb_channel_eval(ch, t, v);
+            double *trs = s->local_trs + (size_t)ch->node * 10;
+            int offset = ch->path == CB_PATH_TRANSLATION ? 0 : ch->path == CB_PATH_ROTATION ? 3 : 7;
+            memcpy(trs + offset, v, (ch->path == CB_PATH_ROTATION ? 4 : 3) * sizeof(double));
+            s->animated[ch->node] = true;
+        }
+    }
+    for (uint32_t k = 0; k < m->node_count; ++k) {
+        uint32_t i = s->order[k];
+        double local[16];
+        local_matrix(s, i, local);
+        int32_t p = m->nodes[i].parent;
+        if (p < 0)
+            memcpy(s->globals + (size_t)i * 16, local, sizeof local);
+        else
+            cb_mat4_mul(s->globals + (size_t)i * 16, s->globals + (size_t)p * 16, local);
+    }
+    return s->globals;
+}
+
+void cb_sample_joint_matrices(cb_sampler *s, int32_t animation, double t, double *out)
+{
+    const double *globals = cb_sample_globals(s, animation, t);
+    const cb_skin *skin = &s->model->skins[s->skin];
+    for (uint32_t j = 0; j < skin->joint_count; ++j)
+        cb_mat4_mul(out + (size_t)j * 16, globals + (size_t)skin->joints[j] * 16, skin->inverse_bind + (size_t)j * 16);
+}
+
+uint32_t cb_skin_root_joint(const cb_model *model, int32_t skin_index)
+{
+    const cb_skin *skin = &model->skins[skin_index];
+    uint32_t best = 0, best_depth = UINT32_MAX;
+    for (uint32_t j = 0; j < skin->joint_count; ++j) {
+        uint32_t d = node_depth(model, (uint32_t)skin->joints[j]);
+        if (d < best_depth) {
+            best_depth = d;
+            best = j;
+        }
+    }
+    return best;
+}
