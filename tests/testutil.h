@@ -1,0 +1,78 @@
+/* testutil.h - shared helpers for the cmocka tests. Tests run from the repository root. */
+#ifndef CB_TESTUTIL_H
+#define CB_TESTUTIL_H
+
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../formats/gltf_load.h"
+
+/* ../shared beside the checkout, or $CROWDBAKE_SHARED. */
+static inline const char *shared_dir(void)
+{
+    const char *env = getenv("CROWDBAKE_SHARED");
+    return env ? env : "../shared";
+}
+
+static inline void shared_path(char *out, size_t size, const char *rel)
+{
+    int n = snprintf(out, size, "%s/%s", shared_dir(), rel);
+    if (n < 0 || (size_t)n >= size) fail_msg("path too long: %s", rel);
+}
+
+static inline const char *samples_dir(void)
+{
+    const char *env = getenv("SAMPLES");
+    return env ? env : "build/samples";
+}
+
+static inline const char *crowdbake_exe(void)
+{
+    const char *env = getenv("CROWDBAKE");
+    return env ? env : "build/crowdbake";
+}
+
+/* Loads a model or fails the test with the loader's message. */
+static inline cb_model *load_or_fail(const char *path)
+{
+    cb_error err = {0};
+    cb_model *m = cb_gltf_load(path, NULL, &err);
+    if (!m) fail_msg("cannot load %s: %s", path, err.message);
+    return m;
+}
+
+static inline cb_model *load_shared(const char *rel)
+{
+    char path[1024];
+    shared_path(path, sizeof path, rel);
+    return load_or_fail(path);
+}
+
+/* Runs a shell command; returns its exit status (or -1). Output goes to `out` if given. */
+static inline int run_command(const char *cmd, char *out, size_t out_size)
+{
+    FILE *p = popen(cmd, "r");
+    if (!p) return -1;
+    size_t used = 0;
+    char buf[4096];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, p)) > 0) {
+        if (out && used + 1 < out_size) {
+            size_t take = n < out_size - used - 1 ? n : out_size - used - 1;
+            memcpy(out + used, buf, take);
+            used += take;
+        }
+    }
+    if (out && out_size) out[used] = '\0';
+    int status = pclose(p);
+    return status >= 0 && (status & 0x7f) == 0 ? (status >> 8) & 0xff : -1;
+}
+
+#endif
