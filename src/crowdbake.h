@@ -193,6 +193,16 @@ void cb_clip_frame_matrices(cb_sampler *sampler, const cb_clip_info *clip, uint3
 /* The skin's root joint (the top-most joint), as an index into its joints. */
 uint32_t cb_skin_root_joint(const cb_model *model, int32_t skin);
 
+/* ---- skinning ------------------------------------------------------------------------- */
+
+/* Linear blend skinning in double precision: out[3 * v] = sum_i w_i * M_{j_i} * p_v, with
+ * the weights as stored (glTF requires them to sum to 1). joint_mats: 16 per skin joint. */
+void cb_skin_positions(const cb_primitive *prim, const double *joint_mats, double *out);
+
+/* Axis-aligned bounds of the skin's meshes in the rest pose (skinned with the rest-pose joint
+ * matrices): min[3], max[3]. Returns the height (max.y - min.y). */
+double cb_skin_rest_bounds(cb_sampler *sampler, double min[3], double max[3]);
+
 #ifdef __cplusplus
 }
 #endif

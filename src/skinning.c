@@ -1,0 +1,48 @@
+/* skinning.c - exact (double precision) linear blend skinning: the ground truth that
+ * palette encodings and runtimes are measured against. */
+#include <math.h>
+#include <stdlib.h>
+
+#include "crowdbake.h"
+
+void cb_skin_positions(const cb_primitive *prim, const double *joint_mats, double *out)
+{
+    for (uint32_t v = 0; v < prim->vertex_count; ++v) {
+        const float *p = prim->positions + (size_t)v * 3;
+        double x = p[0], y = p[1], z = p[2], r[3] = {0, 0, 0};
+        for (int i = 0; i < 4; ++i) {
+            double w = prim->weights[(size_t)v * 4 + i];
+            if (w == 0) continue;
+            const double *m = joint_mats + (size_t)prim->joints[(size_t)v * 4 + i] * 16;
+            r[0] += w * (m[0] * x + m[4] * y + m[8] * z + m[12]);
+            r[1] += w * (m[1] * x + m[5] * y + m[9] * z + m[13]);
+            r[2] += w * (m[2] * x + m[6] * y + m[10] * z + m[14]);
+        }
+        out[(size_t)v * 3] = r[0], out[(size_t)v * 3 + 1] = r[1], out[(size_t)v * 3 + 2] = r[2];
+    }
+}
+
+double cb_skin_rest_bounds(cb_sampler *sampler, double min[3], double max[3])
+{
+    const cb_model *m = cb_sampler_model(sampler);
+    int32_t skin = cb_sampler_skin(sampler);
+    for (int k = 0; k < 3; ++k) min[k] = INFINITY, max[k] = -INFINITY;
+    double *mats = malloc((size_t)m->skins[skin].joint_count * 16 * sizeof(double));
+    if (!mats) return 0;
+    cb_sample_joint_matrices(sampler, -1, 0, mats);
+    for (uint32_t p = 0; p < m->primitive_count; ++p) {
+        const cb_primitive *prim = &m->primitives[p];
+        if (prim->skin != skin) continue;
+        double *pos = malloc((size_t)prim->vertex_count * 3 * sizeof(double));
+        if (!pos) break;
+        cb_skin_positions(prim, mats, pos);
+        for (uint32_t v = 0; v < prim->vertex_count; ++v)
+            for (int k = 0; k < 3; ++k) {
+                min[k] = fmin(min[k], pos[(size_t)v * 3 + k]);
+                max[k] = fmax(max[k], pos[(size_t)v * 3 + k]);
+            }
+        free(pos);
+    }
+    free(mats);
+    return isfinite(max[1] - min[1]) ? max[1] - min[1] : 0;
+}

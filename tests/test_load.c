@@ -1,0 +1,164 @@
+/* test_load.c - every model in ../shared/assets loads (or fails clearly), and the re-encoded
+ * Fox variants skin to the same positions as Fox.glb within their quantization error. */
+#include "testutil.h"
+
+#include <math.h>
+
+static const char *const loadable[] = {
+    "assets/fox-bevy/Fox.glb",
+    "assets/derived-fox/Fox.draco.glb",
+    "assets/derived-fox/Fox.meshopt.glb",
+    "assets/derived-fox/Fox.quantized.glb",
+    "assets/derived-fox/separate/Fox.gltf",
+    "assets/riggedfigure-raylib/rigged_figure.glb",
+    "assets/simpleskin-bevy/SimpleSkin.gltf",
+    "assets/simpleskin-luanti/gltf_simple_skin.gltf",
+    "assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf",
+    "assets/spider-animated-luanti/gltf_spider_animated.gltf",
+    "assets/derived-spider-luanti/gltf_spider_animated.draco.glb",
+    "assets/derived-spider-luanti/gltf_spider_animated.meshopt.glb",
+    "assets/derived-spider-luanti/gltf_spider_animated.quantized.glb",
+    "assets/derived-spider-luanti/separate/gltf_spider_animated.gltf",
+    "assets/robot-quaternius-raylib/robot.glb",
+    "assets/multitrack-luanti/gltf_multi_track_1.glb",
+    "assets/assimp-animation-interpolation/animation_interpolation_linear.gltf",
+    "assets/assimp-animation-interpolation/animation_interpolation_step.gltf",
+    "assets/assimp-animation-interpolation/animation_interpolation_cubic.gltf",
+};
+
+/* Facts from ../shared/assets/MANIFEST.md (extracted there with glTF-Transform). */
+static void test_every_asset_loads_with_the_manifest_facts(void **state)
+{
+    (void)state;
+    for (size_t i = 0; i < sizeof loadable / sizeof loadable[0]; ++i) {
+        cb_model *m = load_shared(loadable[i]);
+        assert_true(m->node_count > 0);
+        cb_model_free(m);
+    }
+    struct { const char *path; uint32_t joints; uint64_t vertices; uint32_t clips; } facts[] = {
+        {"assets/fox-bevy/Fox.glb", 24, 1728, 3},
+        {"assets/derived-fox/Fox.draco.glb", 24, 434, 3},
+        {"assets/derived-fox/Fox.meshopt.glb", 24, 1728, 3},
+        {"assets/riggedfigure-raylib/rigged_figure.glb", 19, 370, 1},
+        {"assets/spider-animated-luanti/gltf_spider_animated.gltf", 57, 1000, 1},
+        {"assets/robot-quaternius-raylib/robot.glb", 43, 7218, 14},
+        {"assets/multitrack-luanti/gltf_multi_track_1.glb", 3, 72, 2},
+    };
+    for (size_t i = 0; i < sizeof facts / sizeof facts[0]; ++i) {
+        cb_model *m = load_shared(facts[i].path);
+        assert_int_equal(m->skins[0].joint_count, facts[i].joints);
+        assert_int_equal(cb_model_skin_vertex_count(m, 0), facts[i].vertices);
+        assert_int_equal(m->animation_count, facts[i].clips);
+        cb_model_free(m);
+    }
+    /* The spider clip starts after 0 (MANIFEST: 0.0417-5 s). */
+    cb_model *spider = load_shared("assets/spider-animated-luanti/gltf_spider_animated.gltf");
+    assert_float_equal(spider->animations[0].t0, 0.0417, 1e-4);
+    assert_float_equal(spider->animations[0].t1, 5.0, 1e-6);
+    cb_model_free(spider);
+}
+
+static void expect_load_error(const char *rel, const char *needle)
+{
+    char path[1024];
+    shared_path(path, sizeof path, rel);
+    cb_error err = {0};
+    cb_model *m = cb_gltf_load(path, NULL, &err);
+    assert_null(m);
+    assert_int_equal(err.status, CB_ERR_INPUT);
+    if (!strstr(err.message, needle) || !strstr(err.message, path))
+        fail_msg("%s: message '%s' lacks '%s' or the file name", rel, err.message, needle);
+    assert_null(strchr(err.message, '\n')); /* one line */
+}
+
+static void test_invalid_magnum_files_fail_clearly(void **state)
+{
+    (void)state;
+    expect_load_error("assets/magnum-animation/animation.glb", "has no channels");
+    expect_load_error("assets/magnum-skin/skin.glb", "no common root");
+}
+
+/* Skinned positions of every vertex of `m` at time t of clip `clip`, 3 doubles each. */
+static double *skinned(cb_model *m, int clip, double t, uint64_t *count)
+{
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    assert_non_null(s);
+    double *mats = malloc(m->skins[0].joint_count * 16 * sizeof(double));
+    cb_sample_joint_matrices(s, clip, t, mats);
+    *count = cb_model_skin_vertex_count(m, 0);
+    double *out = malloc(*count * 3 * sizeof(double)), *at = out;
+    for (uint32_t p = 0; p < m->primitive_count; ++p) {
+        cb_skin_positions(&m->primitives[p], mats, at);
+        at += m->primitives[p].vertex_count * 3;
+    }
+    free(mats);
+    cb_sampler_free(s);
+    return out;
+}
+
+static double dist3(const double *a, const double *b)
+{
+    return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+/* Worst distance between a variant's skinned vertices and Fox.glb's, matching each variant
+ * vertex to the original vertex nearest in the rest pose (Draco re-indexes). */
+static double variant_error(const char *rel)
+{
+    cb_model *fox = load_shared("assets/fox-bevy/Fox.glb"), *var = load_shared(rel);
+    uint64_t nf, nv;
+    double *rest_f = skinned(fox, -1, 0, &nf), *rest_v = skinned(var, -1, 0, &nv);
+    uint64_t *match = malloc(nv * sizeof *match);
+    for (uint64_t i = 0; i < nv; ++i) {
+        double best = INFINITY;
+        for (uint64_t k = 0; k < nf; ++k) {
+            double d = dist3(rest_v + i * 3, rest_f + k * 3);
+            if (d < best) best = d, match[i] = k;
+        }
+    }
+    double worst = 0;
+    for (int clip = -1; clip < 3; ++clip)
+        for (double t = 0; t <= 0.7; t += 0.1) {
+            double *a = skinned(fox, clip, t, &nf), *b = skinned(var, clip, t, &nv);
+            for (uint64_t i = 0; i < nv; ++i) worst = fmax(worst, dist3(b + i * 3, a + match[i] * 3));
+            free(a);
+            free(b);
+        }
+    free(match);
+    free(rest_f);
+    free(rest_v);
+    cb_model_free(fox);
+    cb_model_free(var);
+    return worst;
+}
+
+static void test_fox_variants_skin_like_the_original(void **state)
+{
+    (void)state;
+    /* Fox is about 180 units long. The quantized and meshopt files store weights in 8 bits:
+     * a weight off by up to 0.5/255 moves a vertex by that share of the distance between its
+     * joints' transforms of it (up to ~30 units here), ~0.06. meshopt adds 16-bit rotation
+     * keys and 14-bit positions (~0.01); Draco quantizes positions to 14 bits and weights. */
+    struct { const char *path; double tolerance; } v[] = {
+        {"assets/derived-fox/separate/Fox.gltf", 1e-9},
+        {"assets/derived-fox/Fox.quantized.glb", 0.065},
+        {"assets/derived-fox/Fox.meshopt.glb", 0.08},
+        {"assets/derived-fox/Fox.draco.glb", 0.02},
+    };
+    for (size_t i = 0; i < sizeof v / sizeof v[0]; ++i) {
+        double e = variant_error(v[i].path);
+        printf("  %-40s worst skinned-vertex difference %.4g (allowed %.3g)\n", v[i].path, e, v[i].tolerance);
+        if (!(e <= v[i].tolerance)) fail_msg("%s differs from Fox.glb by %g", v[i].path, e);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_every_asset_loads_with_the_manifest_facts),
+        cmocka_unit_test(test_invalid_magnum_files_fail_clearly),
+        cmocka_unit_test(test_fox_variants_skin_like_the_original),
+    };
+    return cmocka_run_group_tests_name("load", tests, NULL, NULL);
+}
