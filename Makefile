@@ -86,9 +86,7 @@ $(SAMPLE_GLB) &: $(BUILD)/gen_samples
 samples: $(SAMPLE_GLB)
 
 demo: all
-	@mkdir -p $(BUILD)/demo
 	@for s in $(SAMPLES); do $(BUILD)/crowdbake info $(BUILD)/samples/$$s.glb || exit 1; done
-	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.pal --format pal,exr || exit 1; done
 
 # ---- tests ----------------------------------------------------------------------------
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <strings.h>
 #include <sys/stat.h>
 #include <vector>
 
@@ -205,6 +206,14 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
     loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &fs_state});
     std::string tg_err, tg_warn;
     bool ok;
+    size_t name_len = std::strlen(name);
+    bool glb_name = name_len >= 4 && strcasecmp(name + name_len - 4, ".glb") == 0;
+    if (glb_name && !is_glb(data, size)) {
+        char magic[5] = {0};
+        for (size_t i = 0; i < 4 && i < size; ++i) magic[i] = (data[i] >= 32 && data[i] < 127) ? (char)data[i] : '?';
+        cb_fail(err, CB_ERR_INPUT, "%s: not a GLB file: wrong magic '%s' (expected 'glTF')", name, magic);
+        return false;
+    }
     if (is_glb(data, size)) {
         if (!check_glb(data, size, name, err)) return false;
         uint32_t json_length = le32(data + 12);
