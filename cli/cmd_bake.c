@@ -1,7 +1,230 @@
-/* cmd_bake.c - placeholder until the palette writer lands. */
+/* cmd_bake.c - `crowdbake bake MODEL -o OUT.pal|OUT.exr`: the main job. */
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "../formats/crowdbake_pal.h"
+#include "../formats/exr_io.h"
+#include "../formats/json_writer.h"
+#include "../formats/pal_write.h"
 #include "cli.h"
-const char cmd_bake_usage[] = "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr\n";
-int cmd_bake(int argc, char **argv) { (void)argc; (void)argv; fputs("crowdbake bake: not built yet\n", stderr); return 1; }
-const char cmd_inspect_usage[] = "usage: crowdbake inspect FILE\n";
-int cmd_inspect(int argc, char **argv) { (void)argc; (void)argv; return 1; }
+
+const char cmd_bake_usage[] =
+    "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr [options]\n\n"
+    "Bakes every clip of the model's skin into a bone-matrix palette.\n\n"
+    "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md) or .exr (OpenEXR)\n"
+    "  --format pal,exr           write these formats (OUT's extension is replaced per format)\n"
+    "  --fps N                    baked frames per second (default 30)\n"
+    "  --layout mat4|affine|qpos  texels per bone: 4, 3 or 2 (default qpos; affine when the rig has\n"
+    "                             non-uniform scale or shear, which qpos cannot hold)\n"
+    "  --precision float|half|u16 RGBA32F, RGBA16F or RGBA16UI (default u16 for .pal, float for .exr)\n"
+    "  --max-texture-size N       never emit a dimension above N (default 16384); rows wrap into\n"
+    "                             side-by-side column blocks\n"
+    "  --root-motion keep|in-place  in-place removes the root's average horizontal travel\n"
+    "  --skin NAME|INDEX          the skin to bake when the file has several\n"
+    "  --speed-reference M_PER_S  ground speed at playback rate 1, stored in the header\n"
+    "  --zstd                     compress the .pal payload (readers decompress once)\n"
+    "  --exr-compression none|rle|zips|zip|piz  (default none; lossless only)\n"
+    "  --json                     a machine-readable summary on stdout\n"
+    "  -q, --quiet                no summary lines\n";
+
+typedef struct bake_args {
+    const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
+        *exr_compression;
+    bool zstd, json, quiet, quiet_long;
+} bake_args;
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* OUT with its extension replaced by ext. */
+static void output_path(const char *out, const char *ext, char *buf, size_t size)
+{
+    const char *dot = strrchr(out, '.'), *slash = strrchr(out, '/');
+    size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - out) : strlen(out);
+    snprintf(buf, size, "%.*s.%s", (int)stem, out, ext);
+}
+
+static bool ends_with(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    return n >= k && strcmp(s + n - k, suffix) == 0;
+}
+
+/* XXH64 of the crowdbake version, the options that shape the output, and the model bytes. */
+static uint64_t input_hash(const char *model_path, const cb_bake_options *o, int skin, bool zstd, int exr_compression)
+{
+    cbpal_xxh64_state s;
+    cbpal_xxh64_init(&s);
+    char opts[256];
+    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d\n",
+                     CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
+                     o->max_texture_size, (int)o->root_motion, skin, zstd, exr_compression);
+    cbpal_xxh64_update(&s, opts, (size_t)n);
+    FILE *f = fopen(model_path, "rb");
+    if (f) {
+        char buf[65536];
+        size_t got;
+        while ((got = fread(buf, 1, sizeof buf, f)) > 0) cbpal_xxh64_update(&s, buf, got);
+        fclose(f);
+    }
+    return cbpal_xxh64_digest(&s);
+}
+
+static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, bool want_pal)
+{
+    *o = cb_default_bake_options();
+    if (a->fps && (!cli_parse_double(a->fps, &o->fps) || !(o->fps > 0) || o->fps > 1000))
+        return cli_usage_error("bake", "--fps wants a number between 0 and 1000, got '%s'", a->fps);
+    if (a->layout && !cb_layout_parse(a->layout, &o->layout))
+        return cli_usage_error("bake", "--layout is mat4, affine or qpos, got '%s'", a->layout);
+    if (!a->precision && want_exr) o->precision = CB_PRECISION_FLOAT; /* half misses 0.5 mm/m on the samples */
+    if (a->precision && !cb_precision_parse(a->precision, &o->precision))
+        return cli_usage_error("bake", "--precision is float, half or u16, got '%s'", a->precision);
+    if (o->precision == CB_PRECISION_U16 && want_exr)
+        return cli_usage_error("bake", "EXR holds half or float texels; use --precision half|float%s",
+                               want_pal ? " (or write only the .pal)" : "");
+    unsigned max;
+    if (a->max_size) {
+        if (!cli_parse_u32(a->max_size, &max) || max < 1)
+            return cli_usage_error("bake", "--max-texture-size wants a positive integer");
+        o->max_texture_size = max;
+    }
+    if (a->root_motion) {
+        if (strcmp(a->root_motion, "in-place") == 0) o->root_motion = CB_ROOT_MOTION_IN_PLACE;
+        else if (strcmp(a->root_motion, "keep") != 0) return cli_usage_error("bake", "--root-motion is keep or in-place");
+    }
+    return 0;
+}
+
+static void print_summary(const char *path, const char *format, size_t bytes, const cb_palette *p, double seconds)
+{
+    double per_m = p->model_height > 0 ? p->max_error / p->model_height * 1000 : 0;
+    printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bones, %u clips, %u frames, %s/%s, max error %.3g units "
+           "(%.3g mm per m of height), %.0f ms\n",
+           path, bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count, p->clip_count,
+           p->rows, cb_layout_name(p->layout), cb_precision_name(p->precision), p->max_error, per_m, seconds * 1000);
+    (void)format;
+}
+
+static void json_output(cb_json *j, const char *path, const char *format, size_t bytes, const cb_palette *p, double seconds)
+{
+    cb_json_object(j, NULL);
+    cb_json_string(j, "path", path);
+    cb_json_string(j, "format", format);
+    cb_json_int(j, "bytes", (long long)bytes);
+    cb_json_int(j, "width", p->width);
+    cb_json_int(j, "height", p->height);
+    cb_json_int(j, "blocks", p->blocks);
+    cb_json_int(j, "bones", p->bone_count);
+    cb_json_int(j, "clips", p->clip_count);
+    cb_json_int(j, "frames", p->rows);
+    cb_json_string(j, "layout", cb_layout_name(p->layout));
+    cb_json_string(j, "precision", cb_precision_name(p->precision));
+    cb_json_number(j, "max_error", p->max_error);
+    cb_json_number(j, "model_height", p->model_height);
+    cb_json_number(j, "max_error_mm_per_m", p->model_height > 0 ? p->max_error / p->model_height * 1000 : 0);
+    cb_json_number(j, "seconds", seconds);
+    cb_json_end(j);
+}
+
+/* Bakes with the chosen layout; when the layout was not chosen and qpos cannot hold the rig,
+ * falls back to affine and says so. */
+static cb_status bake_palette(cb_sampler *s, cb_bake_options *o, bool layout_chosen, bool quiet, cb_palette *p, cb_error *err)
+{
+    cb_status rc = cb_palette_bake(s, o, NULL, p, err);
+    if (rc == CB_ERR_INPUT && !layout_chosen && o->layout == CB_LAYOUT_QPOS && strstr(err->message, "qpos layout")) {
+        if (!quiet) fprintf(stderr, "crowdbake: note: %s; baking with the affine layout instead\n", err->message);
+        memset(err, 0, sizeof *err);
+        o->layout = CB_LAYOUT_AFFINE;
+        rc = cb_palette_bake(s, o, NULL, p, err);
+    }
+    return rc;
+}
+
+int cmd_bake(int argc, char **argv)
+{
+    bake_args a = {0};
+    bool help;
+    const cli_option options[] = {
+        {"-o", "FILE", &a.output, NULL},           {"--output", "FILE", &a.output, NULL},
+        {"--format", "pal,exr", &a.format, NULL},  {"--fps", "N", &a.fps, NULL},
+        {"--layout", "LAYOUT", &a.layout, NULL},   {"--precision", "PRECISION", &a.precision, NULL},
+        {"--max-texture-size", "N", &a.max_size, NULL}, {"--root-motion", "keep|in-place", &a.root_motion, NULL},
+        {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "M_PER_S", &a.speed_ref, NULL},
+        {"--exr-compression", "NAME", &a.exr_compression, NULL}, {"--zstd", NULL, NULL, &a.zstd},
+        {"--json", NULL, NULL, &a.json},           {"-q", NULL, NULL, &a.quiet},
+        {"--quiet", NULL, NULL, &a.quiet_long}};
+    int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
+    if (help) return fputs(cmd_bake_usage, stdout), 0;
+    if (rc) return rc;
+    a.quiet |= a.quiet_long;
+    if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
+    bool want_pal = false, want_exr = false;
+    const char *formats = a.format ? a.format : ends_with(a.output, ".exr") ? "exr" : "pal";
+    want_pal = strstr(formats, "pal") != NULL;
+    want_exr = strstr(formats, "exr") != NULL;
+    if (!want_pal && !want_exr) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    int exr_compression = 0;
+    if (a.exr_compression && !cb_exr_compression_parse(a.exr_compression, &exr_compression))
+        return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
+    double speed_ref = 0;
+    if (a.speed_ref && (!cli_parse_double(a.speed_ref, &speed_ref) || speed_ref < 0))
+        return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
+    cb_bake_options o;
+    if ((rc = parse_options(&a, &o, want_exr, want_pal))) return rc;
+
+    double t0 = now_seconds();
+    cb_error err = {0};
+    cb_model *m = cli_load_model(a.model, &err);
+    if (!m) return cli_report(&err);
+    int skin = cli_pick_skin(m, a.skin, &err);
+    cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, &err) : NULL;
+    cb_palette p = {0};
+    if (s) bake_palette(s, &o, a.layout != NULL, a.quiet || a.json, &p, &err);
+    cb_json j;
+    if (a.json && !err.status) {
+        cb_json_init(&j, stdout);
+        cb_json_object(&j, NULL);
+        cb_json_string(&j, "model", a.model);
+        cb_json_array(&j, "outputs");
+    }
+    uint64_t hash = err.status ? 0 : input_hash(a.model, &o, skin, a.zstd, exr_compression);
+    for (int f = 0; f < 2 && !err.status; ++f) {
+        if ((f == 0 && !want_pal) || (f == 1 && !want_exr)) continue;
+        char path[4096];
+        if (a.format) output_path(a.output, f == 0 ? "pal" : "exr", path, sizeof path);
+        else snprintf(path, sizeof path, "%s", a.output);
+        if (f == 0) {
+            cb_pal_write_options po = {a.zstd, 0, hash, (float)speed_ref, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
+            cb_pal_write(path, &p, m, skin, &po, &err);
+        } else {
+            cb_exr_write(path, &p, m, skin, exr_compression, hash, (float)speed_ref, &err);
+        }
+        if (err.status) break;
+        FILE *fp = fopen(path, "rb");
+        size_t bytes = 0;
+        if (fp) fseek(fp, 0, SEEK_END), bytes = (size_t)ftell(fp), fclose(fp);
+        double seconds = now_seconds() - t0;
+        if (a.json) json_output(&j, path, f == 0 ? "pal" : "exr", bytes, &p, seconds);
+        else if (!a.quiet) print_summary(path, f == 0 ? "pal" : "exr", bytes, &p, seconds);
+    }
+    if (a.json && !err.status) {
+        cb_json_end(&j);
+        cb_json_end(&j);
+    }
+    if (!err.status && p.quat_hemisphere_breaks && !a.quiet && !a.json)
+        fprintf(stderr, "crowdbake: note: %u bone(s) turn a full circle over a loop, so their last and first rows lie in "
+                        "opposite quaternion hemispheres; the shipped shaders flip before blending\n",
+                p.quat_hemisphere_breaks);
+    cb_palette_free(&p);
+    cb_sampler_free(s);
+    cb_model_free(m);
+    return err.status ? cli_report(&err) : 0;
+}

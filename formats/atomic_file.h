@@ -1,0 +1,21 @@
+/* atomic_file.h - write a file so that readers see the old file or the complete new one,
+ * never a partial one: a temporary file beside the target, fsync'ed and renamed over it. */
+#ifndef CB_ATOMIC_FILE_H
+#define CB_ATOMIC_FILE_H
+
+#include "../src/crowdbake.h"
+
+typedef struct cb_atomic_file {
+    int fd;
+    char *path;     /* the target */
+    char *tmp_path; /* .NAME.tmp.XXXXXX in the same directory */
+} cb_atomic_file;
+
+cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err);
+cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_error *err);
+/* Flushes, renames over the target and releases f. On failure the target is untouched. */
+cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err);
+/* Removes the temporary file and releases f. Safe after a failed open or commit. */
+void cb_atomic_abort(cb_atomic_file *f);
+
+#endif

@@ -1,0 +1,231 @@
+/* exr_io.c - see exr_io.h. */
+#include "exr_io.h"
+
+#include <openexr.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+static const char *const compressions[] = {"none", "rle", "zips", "zip", "piz"};
+
+bool cb_exr_compression_parse(const char *text, int *out)
+{
+    for (int i = 0; i < 5; ++i)
+        if (strcmp(text, compressions[i]) == 0) return *out = i, true;
+    return false;
+}
+
+/* OpenEXR reports through a callback; keep the first message for our one-line error. */
+static void remember_error(exr_const_context_t ctxt, exr_result_t code, const char *msg)
+{
+    void *user = NULL;
+    exr_get_user_data(ctxt, &user);
+    char *buf = user;
+    if (buf && !buf[0]) snprintf(buf, 256, "%s (%s)", msg ? msg : "", exr_get_default_error_message(code));
+}
+
+static int component_of(const char *channel)
+{
+    return channel[0] == 'R' ? 0 : channel[0] == 'G' ? 1 : channel[0] == 'B' ? 2 : 3;
+}
+
+static exr_result_t set_metadata(exr_context_t c, int part, const cb_palette *p, const cb_model *m, int32_t skin,
+                                 uint64_t input_hash, float speed_reference)
+{
+    char key[96], hash[32];
+    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)input_hash);
+    exr_result_t rc = EXR_ERR_SUCCESS;
+    rc |= exr_attr_set_string(c, part, "crowdbake.generator", "crowdbake " CROWDBAKE_VERSION);
+    rc |= exr_attr_set_string(c, part, "crowdbake.layout", cb_layout_name(p->layout));
+    rc |= exr_attr_set_string(c, part, "crowdbake.precision", cb_precision_name(p->precision));
+    rc |= exr_attr_set_string(c, part, "crowdbake.inputHash", hash);
+    rc |= exr_attr_set_int(c, part, "crowdbake.bones", (int32_t)p->bone_count);
+    rc |= exr_attr_set_int(c, part, "crowdbake.texelsPerBone", (int32_t)p->texels_per_bone);
+    rc |= exr_attr_set_int(c, part, "crowdbake.rows", (int32_t)p->rows);
+    rc |= exr_attr_set_int(c, part, "crowdbake.rowsPerBlock", (int32_t)p->height);
+    rc |= exr_attr_set_int(c, part, "crowdbake.blocks", (int32_t)p->blocks);
+    rc |= exr_attr_set_int(c, part, "crowdbake.clips", (int32_t)p->clip_count);
+    rc |= exr_attr_set_float(c, part, "crowdbake.fps", (float)p->fps);
+    rc |= exr_attr_set_float(c, part, "crowdbake.speedReference", speed_reference);
+    rc |= exr_attr_set_float(c, part, "crowdbake.maxError", (float)p->max_error);
+    rc |= exr_attr_set_float_vector(c, part, "crowdbake.bindPositions", (int32_t)p->bone_count * 3, p->bind_positions);
+    const cb_skin *sk = &m->skins[skin];
+    const char **names = malloc(sizeof(char *) * sk->joint_count);
+    if (!names) return EXR_ERR_OUT_OF_MEMORY;
+    for (uint32_t j = 0; j < sk->joint_count; ++j) names[j] = m->nodes[sk->joints[j]].name;
+    rc |= exr_attr_set_string_vector(c, part, "crowdbake.boneNames", (int32_t)sk->joint_count, names);
+    free(names);
+    for (uint32_t i = 0; i < p->clip_count; ++i) {
+        const cb_palette_clip *cl = &p->clips[i];
+        exr_attr_v3f_t v = {{{cl->root_velocity[0], cl->root_velocity[1], cl->root_velocity[2]}}};
+        exr_attr_v3f_t lo = {{{cl->bounds_min[0], cl->bounds_min[1], cl->bounds_min[2]}}};
+        exr_attr_v3f_t hi = {{{cl->bounds_max[0], cl->bounds_max[1], cl->bounds_max[2]}}};
+#define KEY(field) (snprintf(key, sizeof key, "crowdbake.clip%u." field, i), key)
+        rc |= exr_attr_set_string(c, part, KEY("name"), cl->name);
+        rc |= exr_attr_set_int(c, part, KEY("firstRow"), (int32_t)cl->first_row);
+        rc |= exr_attr_set_int(c, part, KEY("frames"), (int32_t)cl->frames);
+        rc |= exr_attr_set_int(c, part, KEY("loops"), cl->loops);
+        rc |= exr_attr_set_float(c, part, KEY("fps"), (float)cl->fps);
+        rc |= exr_attr_set_float(c, part, KEY("duration"), (float)cl->duration);
+        rc |= exr_attr_set_v3f(c, part, KEY("rootVelocity"), &v);
+        rc |= exr_attr_set_v3f(c, part, KEY("boundsMin"), &lo);
+        rc |= exr_attr_set_v3f(c, part, KEY("boundsMax"), &hi);
+#undef KEY
+    }
+    return rc;
+}
+
+static exr_result_t write_scanlines(exr_context_t c, int part, const cb_palette *p)
+{
+    int32_t per_chunk = 1;
+    exr_result_t rc = exr_get_scanlines_per_chunk(c, part, &per_chunk);
+    uint32_t tb = cb_precision_texel_bytes(p->precision), comp_bytes = tb / 4;
+    exr_encode_pipeline_t enc;
+    memset(&enc, 0, sizeof enc);
+    bool started = false;
+    for (int32_t y = 0; rc == EXR_ERR_SUCCESS && y < (int32_t)p->height; y += per_chunk) {
+        exr_chunk_info_t cinfo;
+        rc = exr_write_scanline_chunk_info(c, part, y, &cinfo);
+        if (rc) break;
+        rc = started ? exr_encoding_update(c, part, &cinfo, &enc) : exr_encoding_initialize(c, part, &cinfo, &enc);
+        if (rc) break;
+        for (int16_t k = 0; k < enc.channel_count; ++k) {
+            exr_coding_channel_info_t *ch = &enc.channels[k];
+            ch->encode_from_ptr = (const uint8_t *)p->texels + ((size_t)y * p->width) * tb +
+                                  (size_t)component_of(ch->channel_name) * comp_bytes;
+            ch->user_pixel_stride = (int32_t)tb;
+            ch->user_line_stride = (int32_t)(p->width * tb);
+            ch->user_bytes_per_element = (int16_t)comp_bytes;
+            ch->user_data_type = p->precision == CB_PRECISION_FLOAT ? EXR_PIXEL_FLOAT : EXR_PIXEL_HALF;
+        }
+        if (!started) rc = exr_encoding_choose_default_routines(c, part, &enc);
+        started = true;
+        if (!rc) rc = exr_encoding_run(c, part, &enc);
+    }
+    if (started) exr_encoding_destroy(c, &enc);
+    return rc;
+}
+
+cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *m, int32_t skin, int compression,
+                       uint64_t input_hash, float speed_reference, cb_error *err)
+{
+    if (p->precision == CB_PRECISION_U16)
+        return cb_fail(err, CB_ERR_USAGE, "%s: EXR stores half or float texels; use --precision half|float, or write a .pal "
+                       "for u16", path);
+    if (p->width > INT32_MAX || p->height > INT32_MAX) return cb_fail(err, CB_ERR_INPUT, "%s: palette too large", path);
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", path);
+    char *slash = strrchr(dir, '/');
+    if (slash) *slash = '\0';
+    struct stat st;
+    if (slash && (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)))
+        return cb_fail(err, CB_ERR_IO, "%s: cannot write: directory %s does not exist (create it first)", path, dir);
+    char message[256] = "";
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = remember_error;
+    init.user_data = message;
+    exr_context_t c = NULL;
+    int part = 0;
+    /* OpenEXR writes a temporary file and renames it on success: old file or new, never half. */
+    exr_result_t rc = exr_start_write(&c, path, EXR_INTERMEDIATE_TEMP_FILE, &init);
+    if (!rc) rc = exr_add_part(c, "palette", EXR_STORAGE_SCANLINE, &part);
+    if (!rc) rc = exr_initialize_required_attr_simple(c, part, (int32_t)p->width, (int32_t)p->height, (exr_compression_t)compression);
+    exr_pixel_type_t type = p->precision == CB_PRECISION_FLOAT ? EXR_PIXEL_FLOAT : EXR_PIXEL_HALF;
+    const char *channels[4] = {"A", "B", "G", "R"};
+    for (int i = 0; i < 4 && !rc; ++i) rc = exr_add_channel(c, part, channels[i], type, EXR_PERCEPTUALLY_LINEAR, 1, 1);
+    if (!rc) rc = set_metadata(c, part, p, m, skin, input_hash, speed_reference);
+    if (!rc) rc = exr_write_header(c);
+    if (!rc) rc = write_scanlines(c, part, p);
+    exr_result_t fin = c ? exr_finish(&c) : EXR_ERR_SUCCESS;
+    if (rc || fin)
+        return cb_fail(err, CB_ERR_IO, "%s: OpenEXR could not write the file: %s", path,
+                       message[0] ? message : exr_get_default_error_message(rc ? rc : fin));
+    return CB_OK;
+}
+
+/* ---- reading ---- */
+
+static exr_result_t read_scanlines(exr_context_t c, int part, cb_exr_image *img)
+{
+    int32_t per_chunk = 1;
+    exr_result_t rc = exr_get_scanlines_per_chunk(c, part, &per_chunk);
+    uint32_t tb = cb_precision_texel_bytes(img->precision), comp_bytes = tb / 4;
+    exr_decode_pipeline_t dec;
+    memset(&dec, 0, sizeof dec);
+    bool started = false;
+    for (int32_t y = 0; rc == EXR_ERR_SUCCESS && y < (int32_t)img->height; y += per_chunk) {
+        exr_chunk_info_t cinfo;
+        rc = exr_read_scanline_chunk_info(c, part, y, &cinfo);
+        if (rc) break;
+        rc = started ? exr_decoding_update(c, part, &cinfo, &dec) : exr_decoding_initialize(c, part, &cinfo, &dec);
+        if (rc) break;
+        for (int16_t k = 0; k < dec.channel_count; ++k) {
+            exr_coding_channel_info_t *ch = &dec.channels[k];
+            ch->decode_to_ptr = (uint8_t *)img->texels + ((size_t)(cinfo.start_y) * img->width) * tb +
+                                (size_t)component_of(ch->channel_name) * comp_bytes;
+            ch->user_pixel_stride = (int32_t)tb;
+            ch->user_line_stride = (int32_t)(img->width * tb);
+            ch->user_bytes_per_element = (int16_t)comp_bytes;
+            ch->user_data_type = img->precision == CB_PRECISION_FLOAT ? EXR_PIXEL_FLOAT : EXR_PIXEL_HALF;
+        }
+        if (!started) rc = exr_decoding_choose_default_routines(c, part, &dec);
+        started = true;
+        if (!rc) rc = exr_decoding_run(c, part, &dec);
+    }
+    if (started) exr_decoding_destroy(c, &dec);
+    return rc;
+}
+
+cb_status cb_exr_read(const char *path, cb_exr_image *img, cb_error *err)
+{
+    memset(img, 0, sizeof *img);
+    char message[256] = "";
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = remember_error;
+    init.user_data = message;
+    exr_context_t c = NULL;
+    exr_result_t rc = exr_start_read(&c, path, &init);
+    exr_attr_box2i_t dw;
+    const exr_attr_chlist_t *chans = NULL;
+    if (!rc) rc = exr_get_data_window(c, 0, &dw);
+    if (!rc) rc = exr_get_channels(c, 0, &chans);
+    if (!rc && (chans->num_channels != 4 || dw.min.x != 0 || dw.min.y != 0)) {
+        cb_fail(err, CB_ERR_INPUT, "%s: not a crowdbake palette (expects 4 channels RGBA from 0,0)", path);
+        exr_finish(&c);
+        return CB_ERR_INPUT;
+    }
+    if (!rc) {
+        img->width = (uint32_t)(dw.max.x + 1);
+        img->height = (uint32_t)(dw.max.y + 1);
+        img->precision = chans->entries[0].pixel_type == EXR_PIXEL_FLOAT ? CB_PRECISION_FLOAT : CB_PRECISION_HALF;
+        img->texel_bytes = (size_t)img->width * img->height * cb_precision_texel_bytes(img->precision);
+        img->texels = malloc(img->texel_bytes ? img->texel_bytes : 1);
+        if (!img->texels) rc = EXR_ERR_OUT_OF_MEMORY;
+    }
+    if (!rc) rc = read_scanlines(c, 0, img);
+    if (!rc) {
+        const char *layout = NULL;
+        int32_t len = 0;
+        if (exr_attr_get_string(c, 0, "crowdbake.layout", &len, &layout) == EXR_ERR_SUCCESS && layout)
+            snprintf(img->layout, sizeof img->layout, "%.*s", (int)len, layout);
+        exr_attr_get_int(c, 0, "crowdbake.bones", &img->bones);
+        exr_attr_get_int(c, 0, "crowdbake.rows", &img->rows);
+        exr_attr_get_int(c, 0, "crowdbake.blocks", &img->blocks);
+        exr_attr_get_int(c, 0, "crowdbake.rowsPerBlock", &img->rows_per_block);
+        exr_attr_get_int(c, 0, "crowdbake.clips", &img->clips);
+    }
+    if (c) exr_finish(&c);
+    if (rc) {
+        cb_exr_image_free(img);
+        return cb_fail(err, CB_ERR_INPUT, "%s: OpenEXR cannot read it: %s", path,
+                       message[0] ? message : exr_get_default_error_message(rc));
+    }
+    return CB_OK;
+}
+
+void cb_exr_image_free(cb_exr_image *img)
+{
+    free(img->texels);
+    img->texels = NULL;
+}

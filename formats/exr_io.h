@@ -1,0 +1,28 @@
+/* exr_io.h - palettes as OpenEXR images through OpenEXR's C API (OpenEXRCore): RGBA half or
+ * float scanlines, width x height exactly as in the .pal, metadata as typed header
+ * attributes prefixed "crowdbake.". */
+#ifndef CB_EXR_IO_H
+#define CB_EXR_IO_H
+
+#include "../src/palette.h"
+
+/* Lossless compressions only: the texels must read back bit-identical. */
+bool cb_exr_compression_parse(const char *text, int *out);
+
+cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin, int compression,
+                       uint64_t input_hash, float speed_reference, cb_error *err);
+
+typedef struct cb_exr_image {
+    uint32_t width, height;
+    cb_precision precision;   /* half or float */
+    void *texels;             /* RGBA interleaved, like the .pal payload; malloc'ed */
+    size_t texel_bytes;
+    char layout[16];
+    int32_t bones, rows, blocks, rows_per_block, clips;
+} cb_exr_image;
+
+/* Reads the texels back through OpenEXR, and the main crowdbake attributes. */
+cb_status cb_exr_read(const char *path, cb_exr_image *out, cb_error *err);
+void cb_exr_image_free(cb_exr_image *img);
+
+#endif

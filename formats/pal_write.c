@@ -1,0 +1,146 @@
+/* pal_write.c - see pal_write.h and docs/pal-format.md. */
+#include "pal_write.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <zstd.h>
+
+#include "atomic_file.h"
+#include "crowdbake_pal.h"
+
+static void put32(unsigned char *d, uint32_t v)
+{
+    for (int i = 0; i < 4; ++i) d[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void put64(unsigned char *d, uint64_t v)
+{
+    for (int i = 0; i < 8; ++i) d[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void putf(unsigned char *d, float f)
+{
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    put32(d, v);
+}
+
+/* Index in the skin of the nearest ancestor that is also a joint, or -1. */
+static int32_t joint_parent(const cb_model *m, const cb_skin *skin, uint32_t j)
+{
+    for (int32_t n = m->nodes[skin->joints[j]].parent; n >= 0; n = m->nodes[n].parent)
+        for (uint32_t k = 0; k < skin->joint_count; ++k)
+            if (skin->joints[k] == n) return (int32_t)k;
+    return -1;
+}
+
+typedef struct layout_plan {
+    uint64_t clips, bones, strings, strings_size, payload, payload_size;
+} layout_plan;
+
+static size_t strings_size(const cb_palette *p, const cb_model *m, const cb_skin *skin)
+{
+    size_t n = 0;
+    for (uint32_t c = 0; c < p->clip_count; ++c) n += strlen(p->clips[c].name) + 1;
+    for (uint32_t j = 0; j < skin->joint_count; ++j) n += strlen(m->nodes[skin->joints[j]].name) + 1;
+    return n;
+}
+
+static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_write_options *opt, const layout_plan *lp)
+{
+    static const unsigned char magic[8] = {'C', 'B', 'P', 'A', 'L', '\r', '\n', 0x1a};
+    memcpy(d, magic, 8);
+    uint32_t flags = (opt->zstd ? CBPAL_FLAG_ZSTD : 0) | (opt->in_place ? CBPAL_FLAG_IN_PLACE : 0);
+    uint32_t u[14] = {CBPAL_VERSION, flags, CBPAL_HEADER_SIZE, (uint32_t)p->layout, (uint32_t)p->precision,
+                      p->texels_per_bone, p->bone_count, p->row_texels, p->rows, p->width, p->height, p->blocks,
+                      cb_precision_texel_bytes(p->precision), p->clip_count};
+    for (int i = 0; i < 14; ++i) put32(d + 8 + 4 * i, u[i]);
+    putf(d + 64, (float)p->fps);
+    putf(d + 68, opt->speed_reference);
+    putf(d + 72, p->linear_range);
+    for (int k = 0; k < 3; ++k) putf(d + 76 + 4 * k, p->bounds_min[k]), putf(d + 88 + 4 * k, p->bounds_max[k]);
+    putf(d + 100, (float)p->max_error);
+    putf(d + 104, (float)p->model_height);
+    uint64_t w[9] = {opt->input_hash, lp->clips, lp->bones, lp->strings, lp->strings_size, lp->payload, lp->payload_size,
+                     (uint64_t)p->texel_bytes, 0 /* checksum, filled last */};
+    for (int i = 0; i < 9; ++i) put64(d + 112 + 8 * i, w[i]);
+}
+
+static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *m, const cb_skin *skin, const layout_plan *lp)
+{
+    uint32_t s = 0;
+    char *strings = (char *)d + lp->strings;
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        const cb_palette_clip *clip = &p->clips[c];
+        unsigned char *e = d + lp->clips + (uint64_t)c * CBPAL_CLIP_SIZE;
+        uint32_t len = (uint32_t)strlen(clip->name);
+        memcpy(strings + s, clip->name, len + 1);
+        put32(e, s), put32(e + 4, len);
+        s += len + 1;
+        put32(e + 8, clip->first_row), put32(e + 12, clip->frames);
+        putf(e + 16, (float)clip->fps), putf(e + 20, (float)clip->duration), putf(e + 24, (float)clip->start);
+        put32(e + 28, clip->loops ? CBPAL_CLIP_LOOPS : 0);
+        for (int k = 0; k < 3; ++k) {
+            putf(e + 32 + 4 * k, clip->root_velocity[k]);
+            putf(e + 44 + 4 * k, clip->bounds_min[k]);
+            putf(e + 56 + 4 * k, clip->bounds_max[k]);
+        }
+    }
+    for (uint32_t j = 0; j < skin->joint_count; ++j) {
+        unsigned char *e = d + lp->bones + (uint64_t)j * CBPAL_BONE_SIZE;
+        const char *name = m->nodes[skin->joints[j]].name;
+        uint32_t len = (uint32_t)strlen(name);
+        memcpy(strings + s, name, len + 1);
+        put32(e, s), put32(e + 4, len);
+        s += len + 1;
+        put32(e + 8, (uint32_t)joint_parent(m, skin, j));
+        for (int k = 0; k < 3; ++k) putf(e + 16 + 4 * k, p->bind_positions[j * 3 + k]);
+    }
+}
+
+cb_status cb_pal_encode(const cb_palette *p, const cb_model *m, int32_t skin_index, const cb_pal_write_options *opt,
+                        unsigned char **out, size_t *size, cb_error *err)
+{
+    const cb_skin *skin = &m->skins[skin_index];
+    layout_plan lp;
+    lp.clips = CBPAL_HEADER_SIZE;
+    lp.bones = lp.clips + (uint64_t)p->clip_count * CBPAL_CLIP_SIZE;
+    lp.strings = lp.bones + (uint64_t)p->bone_count * CBPAL_BONE_SIZE;
+    lp.strings_size = strings_size(p, m, skin);
+    lp.payload = (lp.strings + lp.strings_size + CBPAL_PAYLOAD_ALIGN - 1) / CBPAL_PAYLOAD_ALIGN * CBPAL_PAYLOAD_ALIGN;
+    size_t bound = opt->zstd ? ZSTD_compressBound(p->texel_bytes) : p->texel_bytes;
+    unsigned char *d = calloc(lp.payload + bound, 1);
+    if (!d) return cb_fail(err, CB_ERR_INTERNAL, "out of memory encoding a %zu-byte palette", p->texel_bytes);
+    if (opt->zstd) {
+        size_t n = ZSTD_compress(d + lp.payload, bound, p->texels, p->texel_bytes, opt->zstd_level ? opt->zstd_level : 9);
+        if (ZSTD_isError(n)) {
+            free(d);
+            return cb_fail(err, CB_ERR_INTERNAL, "zstd compression failed: %s", ZSTD_getErrorName(n));
+        }
+        lp.payload_size = n;
+    } else {
+        memcpy(d + lp.payload, p->texels, p->texel_bytes);
+        lp.payload_size = p->texel_bytes;
+    }
+    write_header(d, p, opt, &lp);
+    write_tables(d, p, m, skin, &lp);
+    put64(d + CBPAL_CHECKSUM_OFFSET, cbpal_xxh64(d, (size_t)(lp.payload + lp.payload_size))); /* field was 0 */
+    *out = d;
+    *size = (size_t)(lp.payload + lp.payload_size);
+    return CB_OK;
+}
+
+cb_status cb_pal_write(const char *path, const cb_palette *p, const cb_model *m, int32_t skin,
+                       const cb_pal_write_options *opt, cb_error *err)
+{
+    unsigned char *data;
+    size_t size;
+    if (cb_pal_encode(p, m, skin, opt, &data, &size, err)) return err->status;
+    cb_atomic_file f;
+    cb_status rc = cb_atomic_open(&f, path, err);
+    if (!rc) rc = cb_atomic_write(&f, data, size, err);
+    if (!rc) rc = cb_atomic_commit(&f, err);
+    else cb_atomic_abort(&f);
+    free(data);
+    return rc;
+}

@@ -1,0 +1,21 @@
+/* pal_write.h - writes a cb_palette as a .pal file (docs/pal-format.md), atomically. */
+#ifndef CB_PAL_WRITE_H
+#define CB_PAL_WRITE_H
+
+#include "../src/palette.h"
+
+typedef struct cb_pal_write_options {
+    bool zstd;              /* compress the payload */
+    int zstd_level;
+    uint64_t input_hash;    /* of everything that produced the palette */
+    float speed_reference;  /* m/s at playback rate 1, or 0 */
+    bool in_place;          /* root motion was removed */
+} cb_pal_write_options;
+
+/* The whole file in memory (header, tables, payload); *out is malloc'ed. */
+cb_status cb_pal_encode(const cb_palette *p, const cb_model *model, int32_t skin, const cb_pal_write_options *opt,
+                        unsigned char **out, size_t *size, cb_error *err);
+cb_status cb_pal_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
+                       const cb_pal_write_options *opt, cb_error *err);
+
+#endif

@@ -1,0 +1,489 @@
+/* palette.c - baking clips into a bone-matrix palette: framing every clip, encoding each
+ * joint matrix in the chosen layout and precision, and measuring the error that costs. */
+#include "palette.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cb_math.h"
+
+/* Canonical floats per bone and row before the final encoding: the upper 3x4 of the matrix
+ * by rows (mat4, affine), or quaternion, position and scale (qpos). */
+#define CANON 12
+#define QPOS_TOLERANCE 1e-4 /* relative: scale differences and shear qpos may drop */
+
+static const char *const layout_names[] = {"mat4", "affine", "qpos"};
+static const char *const precision_names[] = {"float", "half", "u16"};
+
+const char *cb_layout_name(cb_layout l) { return (unsigned)l < 3 ? layout_names[l] : "?"; }
+const char *cb_precision_name(cb_precision p) { return (unsigned)p < 3 ? precision_names[p] : "?"; }
+
+bool cb_layout_parse(const char *text, cb_layout *out)
+{
+    for (int i = 0; i < 3; ++i)
+        if (strcmp(text, layout_names[i]) == 0) return *out = (cb_layout)i, true;
+    return false;
+}
+
+bool cb_precision_parse(const char *text, cb_precision *out)
+{
+    for (int i = 0; i < 3; ++i)
+        if (strcmp(text, precision_names[i]) == 0) return *out = (cb_precision)i, true;
+    return false;
+}
+
+uint32_t cb_layout_texels_per_bone(cb_layout l) { return l == CB_LAYOUT_MAT4 ? 4 : l == CB_LAYOUT_AFFINE ? 3 : 2; }
+uint32_t cb_precision_texel_bytes(cb_precision p) { return p == CB_PRECISION_FLOAT ? 16 : 8; }
+
+cb_bake_options cb_default_bake_options(void)
+{
+    cb_bake_options o;
+    o.fps = 30;
+    o.layout = CB_LAYOUT_QPOS;
+    o.precision = CB_PRECISION_U16;
+    o.max_texture_size = 16384;
+    o.root_motion = CB_ROOT_MOTION_KEEP;
+    o.limits = cb_default_limits();
+    return o;
+}
+
+void cb_palette_free(cb_palette *p)
+{
+    if (!p) return;
+    free(p->clips);
+    free(p->bind_positions);
+    free(p->texels);
+    memset(p, 0, sizeof *p);
+}
+
+void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint32_t *x, uint32_t *y)
+{
+    *x = (row / p->height) * p->row_texels + bone * p->texels_per_bone;
+    *y = row % p->height;
+}
+
+/* ---- geometry of the texture ---- */
+
+static cb_status plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err)
+{
+    if (max_size < 1) return cb_fail(err, CB_ERR_USAGE, "--max-texture-size must be at least 1");
+    if (p->row_texels > max_size)
+        return cb_fail(err, CB_ERR_INPUT,
+                       "%s: %u bones x %u texels = %u texels per row, wider than --max-texture-size %u; use a layout "
+                       "with fewer texels per bone (qpos: 2) or a larger limit",
+                       source, p->bone_count, p->texels_per_bone, p->row_texels, max_size);
+    uint32_t max_blocks = max_size / p->row_texels;
+    uint64_t blocks = (p->rows + (uint64_t)max_size - 1) / max_size;
+    if (blocks > max_blocks)
+        return cb_fail(err, CB_ERR_INPUT,
+                       "%s: %u baked rows do not fit a %ux%u texture even wrapped into %u columns of %u rows; lower "
+                       "--fps, bake fewer clips, or raise --max-texture-size",
+                       source, p->rows, max_size, max_size, max_blocks, max_size);
+    p->blocks = (uint32_t)blocks;
+    p->height = (uint32_t)((p->rows + blocks - 1) / blocks); /* balanced blocks: the least padding */
+    p->width = p->blocks * p->row_texels;
+    return CB_OK;
+}
+
+/* ---- pass 1: sample every row into canonical floats ---- */
+
+static cb_status qpos_canon(const double m[16], float out[8], const cb_model *model, const cb_skin *skin, uint32_t bone,
+                            const char *clip, uint32_t frame, cb_quat *prev, cb_error *err)
+{
+    cb_vec3 c[3] = {{m[0], m[1], m[2]}, {m[4], m[5], m[6]}, {m[8], m[9], m[10]}};
+    double l[3] = {cb_vec3_length(c[0]), cb_vec3_length(c[1]), cb_vec3_length(c[2])};
+    double s = (l[0] + l[1] + l[2]) / 3;
+    const char *why = NULL;
+    if (cb_mat4_determinant3(m) <= 0)
+        why = "a negative (mirroring) scale";
+    else if (fabs(l[0] - s) > QPOS_TOLERANCE * s || fabs(l[1] - s) > QPOS_TOLERANCE * s || fabs(l[2] - s) > QPOS_TOLERANCE * s)
+        why = "a non-uniform scale";
+    else if (fabs(cb_vec3_dot(c[0], c[1])) > QPOS_TOLERANCE * s * s || fabs(cb_vec3_dot(c[0], c[2])) > QPOS_TOLERANCE * s * s ||
+             fabs(cb_vec3_dot(c[1], c[2])) > QPOS_TOLERANCE * s * s)
+        why = "shear";
+    if (why)
+        return cb_fail(err, CB_ERR_INPUT,
+                       "%s: joint '%s' has %s (axis scales %.7g, %.7g, %.7g) at frame %u of clip '%s', which the qpos "
+                       "layout cannot represent; use --layout affine or --layout mat4",
+                       model->source, model->nodes[skin->joints[bone]].name, why, l[0], l[1], l[2], frame, clip);
+    double r[16];
+    memcpy(r, m, sizeof r);
+    for (int i = 0; i < 12; ++i) r[i] /= s;
+    cb_quat q = cb_quat_from_mat4(r);
+    if (prev) {
+        if (cb_quat_dot(q, *prev) < 0) q = (cb_quat){-q.x, -q.y, -q.z, -q.w};
+    } else if (q.w < 0) {
+        q = (cb_quat){-q.x, -q.y, -q.z, -q.w};
+    }
+    out[0] = (float)q.x, out[1] = (float)q.y, out[2] = (float)q.z, out[3] = (float)q.w;
+    out[7] = (float)s;
+    return CB_OK;
+}
+
+typedef struct bake_state {
+    cb_palette *p;
+    cb_sampler *sampler;
+    const cb_bake_options *opt;
+    const cb_clip_info *infos;
+    float *canon;   /* rows * bones * CANON */
+    double *mats;   /* bones * 16 scratch */
+    cb_quat *prev;  /* bones: the previous row's quaternion (qpos) */
+} bake_state;
+
+static cb_status sample_rows(bake_state *st, cb_error *err)
+{
+    cb_palette *p = st->p;
+    const cb_model *m = cb_sampler_model(st->sampler);
+    const cb_skin *skin = &m->skins[cb_sampler_skin(st->sampler)];
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        const cb_clip_info *info = &st->infos[c];
+        for (uint32_t f = 0; f < info->frames; ++f) {
+            cb_clip_frame_matrices(st->sampler, info, f, st->opt->root_motion, st->mats);
+            float *row = st->canon + (size_t)(p->clips[c].first_row + f) * p->bone_count * CANON;
+            for (uint32_t j = 0; j < p->bone_count; ++j) {
+                const double *M = st->mats + (size_t)j * 16;
+                float *out = row + (size_t)j * CANON;
+                if (p->layout != CB_LAYOUT_QPOS) {
+                    for (int r = 0; r < 3; ++r)
+                        for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
+                    continue;
+                }
+                if (qpos_canon(M, out, m, skin, j, p->clips[c].name, f, f ? &st->prev[j] : NULL, err)) return err->status;
+                st->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
+                /* p = M * b: where the joint's bind position goes. */
+                const float *b = p->bind_positions + (size_t)j * 3;
+                cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
+                out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
+            }
+        }
+        if (p->layout == CB_LAYOUT_QPOS && info->loops && info->frames > 1) {
+            /* The wrap from the last row to the first: a full turn over the loop ends on -q. */
+            const float *first = st->canon + (size_t)p->clips[c].first_row * p->bone_count * CANON;
+            const float *last = first + (size_t)(info->frames - 1) * p->bone_count * CANON;
+            for (uint32_t j = 0; j < p->bone_count; ++j) {
+                const float *a = first + (size_t)j * CANON, *b = last + (size_t)j * CANON;
+                if (a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0) p->quat_hemisphere_breaks++;
+            }
+        }
+    }
+    return CB_OK;
+}
+
+/* ---- pass 2: encode ---- */
+
+static uint16_t snorm16(float v)
+{
+    float c = v > 1 ? 1 : v < -1 ? -1 : v;
+    return (uint16_t)(int16_t)lrintf(c * 32767.0f);
+}
+
+static float snorm16_decode(uint16_t u)
+{
+    float v = (float)(int16_t)u / 32767.0f;
+    return v < -1 ? -1 : v;
+}
+
+static uint16_t unorm16(float v, float lo, float hi)
+{
+    if (!(hi > lo)) return 0;
+    float t = (v - lo) / (hi - lo);
+    t = t > 1 ? 1 : t < 0 ? 0 : t;
+    return (uint16_t)lrintf(t * 65535.0f);
+}
+
+static float unorm16_decode(uint16_t u, float lo, float hi) { return hi > lo ? lo + (hi - lo) * (u / 65535.0f) : lo; }
+
+static void measure_ranges(cb_palette *p, const float *canon)
+{
+    for (int k = 0; k < 3; ++k) p->bounds_min[k] = INFINITY, p->bounds_max[k] = -INFINITY;
+    p->linear_range = 0;
+    size_t n = (size_t)p->rows * p->bone_count;
+    for (size_t i = 0; i < n; ++i) {
+        const float *v = canon + i * CANON;
+        for (int k = 0; k < 3; ++k) {
+            float t = p->layout == CB_LAYOUT_QPOS ? v[4 + k] : v[k * 4 + 3];
+            p->bounds_min[k] = fminf(p->bounds_min[k], t);
+            p->bounds_max[k] = fmaxf(p->bounds_max[k], t);
+        }
+        if (p->layout == CB_LAYOUT_QPOS) {
+            p->linear_range = fmaxf(p->linear_range, v[7]);
+        } else {
+            for (int r = 0; r < 3; ++r)
+                for (int k = 0; k < 3; ++k) p->linear_range = fmaxf(p->linear_range, fabsf(v[r * 4 + k]));
+        }
+    }
+    if (n == 0)
+        for (int k = 0; k < 3; ++k) p->bounds_min[k] = p->bounds_max[k] = 0;
+}
+
+/* The 4 * texels_per_bone values of one bone, in texel order, as floats. */
+static void texel_values(const cb_palette *p, const float *v, float out[16])
+{
+    switch (p->layout) {
+    case CB_LAYOUT_MAT4: /* texel k = column k */
+        for (int k = 0; k < 4; ++k) {
+            for (int r = 0; r < 3; ++r) out[k * 4 + r] = v[r * 4 + k];
+            out[k * 4 + 3] = k == 3 ? 1.0f : 0.0f;
+        }
+        break;
+    case CB_LAYOUT_AFFINE: /* texel k = row k */
+        memcpy(out, v, 12 * sizeof(float));
+        break;
+    case CB_LAYOUT_QPOS:
+        memcpy(out, v, 8 * sizeof(float));
+        break;
+    }
+}
+
+/* Which kind of u16 quantization each of a bone's values gets: 0 snorm over linear_range,
+ * 1..3 unorm over the box axis (k - 1), 4 snorm as is (quaternions), 5 unorm over
+ * [0, linear_range] (qpos scale), 6 a constant (mat4's last row). */
+static int u16_kind(cb_layout layout, int i)
+{
+    if (layout == CB_LAYOUT_QPOS) return i < 4 ? 4 : i < 7 ? 1 + (i - 4) : 5;
+    if (layout == CB_LAYOUT_AFFINE) return i % 4 == 3 ? 1 + i / 4 : 0;
+    if (i % 4 == 3) return 6;                 /* mat4: w of each column */
+    return i >= 12 ? 1 + (i - 12) : 0;        /* column 3 is the translation */
+}
+
+static uint16_t encode_u16(const cb_palette *p, int kind, float v)
+{
+    switch (kind) {
+    case 0: return snorm16(p->linear_range > 0 ? v / p->linear_range : 0);
+    case 4: return snorm16(v);
+    case 5: return unorm16(v, 0, p->linear_range);
+    case 6: return v != 0 ? 65535 : 0;
+    default: return unorm16(v, p->bounds_min[kind - 1], p->bounds_max[kind - 1]);
+    }
+}
+
+static float decode_u16(const cb_palette *p, int kind, uint16_t u)
+{
+    switch (kind) {
+    case 0: return snorm16_decode(u) * p->linear_range;
+    case 4: return snorm16_decode(u);
+    case 5: return unorm16_decode(u, 0, p->linear_range);
+    case 6: return u ? 1.0f : 0.0f;
+    default: return unorm16_decode(u, p->bounds_min[kind - 1], p->bounds_max[kind - 1]);
+    }
+}
+
+static void store_le16(unsigned char *d, uint16_t v) { d[0] = (unsigned char)v, d[1] = (unsigned char)(v >> 8); }
+static uint16_t load_le16(const unsigned char *d) { return (uint16_t)(d[0] | d[1] << 8); }
+
+static void store_le32f(unsigned char *d, float f)
+{
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    for (int i = 0; i < 4; ++i) d[i] = (unsigned char)(v >> (8 * i));
+}
+
+static float load_le32f(const unsigned char *d)
+{
+    uint32_t v = (uint32_t)d[0] | (uint32_t)d[1] << 8 | (uint32_t)d[2] << 16 | (uint32_t)d[3] << 24;
+    float f;
+    memcpy(&f, &v, 4);
+    return f;
+}
+
+static void encode_all(cb_palette *p, const float *canon)
+{
+    uint32_t tb = cb_precision_texel_bytes(p->precision), nvalues = p->texels_per_bone * 4;
+    for (uint32_t r = 0; r < p->rows; ++r)
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            float vals[16];
+            texel_values(p, canon + ((size_t)r * p->bone_count + j) * CANON, vals);
+            uint32_t x, y;
+            cb_palette_texel_xy(p, r, j, &x, &y);
+            unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x) * tb;
+            for (uint32_t i = 0; i < nvalues; ++i) {
+                if (p->precision == CB_PRECISION_FLOAT)
+                    store_le32f(d + i * 4, vals[i]);
+                else if (p->precision == CB_PRECISION_HALF)
+                    store_le16(d + i * 2, cb_float_to_half(vals[i]));
+                else
+                    store_le16(d + i * 2, encode_u16(p, u16_kind(p->layout, (int)i), vals[i]));
+            }
+        }
+}
+
+void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
+{
+    uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
+    cb_palette_texel_xy(p, row, bone, &x, &y);
+    const unsigned char *d = (const unsigned char *)texels + ((size_t)y * p->width + x) * tb;
+    float v[16];
+    for (uint32_t i = 0; i < p->texels_per_bone * 4; ++i) {
+        if (p->precision == CB_PRECISION_FLOAT)
+            v[i] = load_le32f(d + i * 4);
+        else if (p->precision == CB_PRECISION_HALF)
+            v[i] = cb_half_to_float(load_le16(d + i * 2));
+        else
+            v[i] = decode_u16(p, u16_kind(p->layout, (int)i), load_le16(d + i * 2));
+    }
+    cb_mat4_identity(out);
+    if (p->layout == CB_LAYOUT_MAT4) {
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 3; ++r) out[c * 4 + r] = v[c * 4 + r];
+    } else if (p->layout == CB_LAYOUT_AFFINE) {
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) out[c * 4 + r] = v[r * 4 + c];
+    } else {
+        /* v' = p + s * rotate(q, v - b)  =>  A = s R(q), t = p - A b */
+        cb_quat q = cb_quat_normalize((cb_quat){v[0], v[1], v[2], v[3]});
+        double s = v[7];
+        cb_vec3 one = {s, s, s};
+        cb_mat4_from_trs(out, (cb_vec3){0, 0, 0}, q, one);
+        const float *b = p->bind_positions + (size_t)bone * 3;
+        cb_vec3 ab = cb_mat4_transform_dir(out, (cb_vec3){b[0], b[1], b[2]});
+        out[12] = v[4] - ab.x, out[13] = v[5] - ab.y, out[14] = v[6] - ab.z;
+    }
+}
+
+/* ---- pass 3: the error against exact skinning, and per-clip bounds ---- */
+
+static void measure_error(bake_state *st)
+{
+    cb_palette *p = st->p;
+    const cb_model *m = cb_sampler_model(st->sampler);
+    int32_t skin = cb_sampler_skin(st->sampler);
+    uint64_t verts = cb_model_skin_vertex_count(m, skin);
+    double *decoded = malloc((size_t)p->bone_count * 16 * sizeof(double));
+    double *exact_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
+    double *dec_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
+    p->max_error = 0;
+    if (!decoded || !exact_pos || !dec_pos) goto done;
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        cb_palette_clip *clip = &p->clips[c];
+        for (int k = 0; k < 3; ++k) clip->bounds_min[k] = INFINITY, clip->bounds_max[k] = -INFINITY;
+        for (uint32_t f = 0; f < clip->frames; ++f) {
+            cb_clip_frame_matrices(st->sampler, &st->infos[c], f, st->opt->root_motion, st->mats);
+            for (uint32_t j = 0; j < p->bone_count; ++j)
+                cb_palette_decode(p, p->texels, clip->first_row + f, j, decoded + (size_t)j * 16);
+            double *e = exact_pos, *d = dec_pos;
+            for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
+                const cb_primitive *prim = &m->primitives[pi];
+                if (prim->skin != skin) continue;
+                cb_skin_positions(prim, st->mats, e);
+                cb_skin_positions(prim, decoded, d);
+                e += (size_t)prim->vertex_count * 3, d += (size_t)prim->vertex_count * 3;
+            }
+            for (uint64_t v = 0; v < verts; ++v) {
+                const double *a = exact_pos + v * 3, *b = dec_pos + v * 3;
+                double dist = sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+                if (dist > p->max_error) p->max_error = dist;
+                for (int k = 0; k < 3; ++k) {
+                    clip->bounds_min[k] = fminf(clip->bounds_min[k], (float)a[k]);
+                    clip->bounds_max[k] = fmaxf(clip->bounds_max[k], (float)a[k]);
+                }
+            }
+        }
+        if (!verts)
+            for (int k = 0; k < 3; ++k) clip->bounds_min[k] = clip->bounds_max[k] = 0;
+    }
+done:
+    free(decoded);
+    free(exact_pos);
+    free(dec_pos);
+}
+
+/* ---- the bake ---- */
+
+static cb_status frame_clips(bake_state *st, const int *clip_loops, cb_clip_info **infos_out, cb_error *err)
+{
+    cb_palette *p = st->p;
+    const cb_model *m = cb_sampler_model(st->sampler);
+    cb_clip_info *infos = calloc(m->animation_count ? m->animation_count : 1, sizeof *infos);
+    p->clips = calloc(m->animation_count ? m->animation_count : 1, sizeof *p->clips);
+    *infos_out = infos;
+    if (!infos || !p->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    uint64_t rows = 0;
+    for (uint32_t a = 0; a < m->animation_count; ++a) {
+        if (cb_clip_analyze(st->sampler, (int32_t)a, st->opt->fps, clip_loops ? clip_loops[a] : -1, &st->opt->limits,
+                            &infos[a], err))
+            return err->status;
+        cb_palette_clip *c = &p->clips[a];
+        c->name = m->animations[a].name;
+        c->first_row = (uint32_t)rows;
+        c->frames = infos[a].frames;
+        c->fps = infos[a].effective_fps;
+        c->duration = infos[a].duration;
+        c->start = infos[a].t0;
+        c->loops = infos[a].loops;
+        for (int k = 0; k < 3; ++k)
+            c->root_velocity[k] = (float)(st->opt->root_motion == CB_ROOT_MOTION_IN_PLACE ? infos[a].root_velocity[k] : 0);
+        rows += infos[a].frames;
+        if (rows > st->opt->limits.max_frames)
+            return cb_fail(err, CB_ERR_INPUT, "%s: %llu baked rows over all clips, over the limit of %u (--max-frames)",
+                           m->source, (unsigned long long)rows, st->opt->limits.max_frames);
+    }
+    p->clip_count = m->animation_count;
+    p->rows = (uint32_t)rows;
+    return CB_OK;
+}
+
+static void bind_positions(cb_palette *p, const cb_skin *skin)
+{
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        /* The joint's bind-pose position is the translation of inverse(IBM). */
+        const double *ibm = skin->inverse_bind + (size_t)j * 16;
+        double det = cb_mat4_determinant3(ibm);
+        cb_vec3 b = {0, 0, 0};
+        if (fabs(det) > 1e-300) {
+            /* Solve A b = -t with Cramer's rule. */
+            double t[3] = {-ibm[12], -ibm[13], -ibm[14]}, col[16];
+            double *res[3] = {&b.x, &b.y, &b.z};
+            for (int k = 0; k < 3; ++k) {
+                memcpy(col, ibm, sizeof col);
+                col[k * 4 + 0] = t[0], col[k * 4 + 1] = t[1], col[k * 4 + 2] = t[2];
+                *res[k] = cb_mat4_determinant3(col) / det;
+            }
+        }
+        p->bind_positions[j * 3] = (float)b.x, p->bind_positions[j * 3 + 1] = (float)b.y;
+        p->bind_positions[j * 3 + 2] = (float)b.z;
+    }
+}
+
+cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const int *clip_loops, cb_palette *p,
+                          cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(sampler);
+    const cb_skin *skin = &m->skins[cb_sampler_skin(sampler)];
+    memset(p, 0, sizeof *p);
+    p->layout = opt->layout;
+    p->precision = opt->precision;
+    p->fps = opt->fps;
+    p->bone_count = skin->joint_count;
+    p->texels_per_bone = cb_layout_texels_per_bone(opt->layout);
+    p->row_texels = p->bone_count * p->texels_per_bone;
+    if (m->animation_count == 0)
+        return cb_fail(err, CB_ERR_INPUT, "%s: has no animations to bake (export the clips with the model)", m->source);
+    bake_state st = {p, sampler, opt, NULL, NULL, NULL, NULL};
+    cb_clip_info *infos = NULL;
+    if (frame_clips(&st, clip_loops, &infos, err) || plan_texture(p, opt->max_texture_size, m->source, err)) goto fail;
+    st.infos = infos;
+    p->texel_bytes = (size_t)p->width * p->height * cb_precision_texel_bytes(p->precision);
+    p->texels = calloc(p->texel_bytes ? p->texel_bytes : 1, 1);
+    p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
+    st.canon = malloc((size_t)p->rows * p->bone_count * CANON * sizeof(float));
+    st.mats = malloc((size_t)p->bone_count * 16 * sizeof(double));
+    st.prev = malloc((size_t)p->bone_count * sizeof(cb_quat));
+    if (!p->texels || !p->bind_positions || !st.canon || !st.mats || !st.prev) {
+        cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
+        goto fail;
+    }
+    bind_positions(p, skin);
+    if (sample_rows(&st, err)) goto fail;
+    measure_ranges(p, st.canon);
+    encode_all(p, st.canon);
+    double lo[3], hi[3];
+    p->model_height = cb_skin_rest_bounds(sampler, lo, hi);
+    measure_error(&st);
+    free(st.canon), free(st.mats), free(st.prev), free(infos);
+    return CB_OK;
+fail:
+    free(st.canon), free(st.mats), free(st.prev), free(infos);
+    cb_palette_free(p);
+    return err->status;
+}

@@ -1,0 +1,87 @@
+/* palette.h - bone-matrix palettes: the baked rows of every clip of one skin, encoded in one
+ * of three layouts and three precisions, wrapped to fit a texture-size limit.
+ *
+ * Texel (x, y) of the texture holds RGBA. Baked row r lives in block b = r / height at
+ * y = r % height; bone j's texel k of that row is at x = b * row_texels + j * texels_per_bone + k.
+ */
+#ifndef CB_PALETTE_H
+#define CB_PALETTE_H
+
+#include "crowdbake.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum cb_layout { CB_LAYOUT_MAT4 = 0, CB_LAYOUT_AFFINE = 1, CB_LAYOUT_QPOS = 2 } cb_layout;
+typedef enum cb_precision { CB_PRECISION_FLOAT = 0, CB_PRECISION_HALF = 1, CB_PRECISION_U16 = 2 } cb_precision;
+
+const char *cb_layout_name(cb_layout layout);
+const char *cb_precision_name(cb_precision precision);
+bool cb_layout_parse(const char *text, cb_layout *out);
+bool cb_precision_parse(const char *text, cb_precision *out);
+uint32_t cb_layout_texels_per_bone(cb_layout layout);
+uint32_t cb_precision_texel_bytes(cb_precision precision); /* 16, 8, 8 */
+
+typedef struct cb_bake_options {
+    double fps;
+    cb_layout layout;
+    cb_precision precision;
+    uint32_t max_texture_size;
+    cb_root_motion root_motion;
+    cb_limits limits;
+} cb_bake_options;
+
+cb_bake_options cb_default_bake_options(void);
+
+typedef struct cb_palette_clip {
+    const char *name;        /* owned by the model the palette was baked from */
+    uint32_t first_row, frames;
+    double fps, duration, start;
+    bool loops;
+    float root_velocity[3];
+    float bounds_min[3], bounds_max[3]; /* the skinned mesh over the clip, model units */
+} cb_palette_clip;
+
+typedef struct cb_palette {
+    cb_layout layout;
+    cb_precision precision;
+    uint32_t bone_count, texels_per_bone, row_texels;
+    uint32_t rows;                  /* baked frames over all clips */
+    uint32_t width, height, blocks; /* texture size: blocks of `height` rows side by side */
+    double fps;
+    uint32_t clip_count;
+    cb_palette_clip *clips;
+    float *bind_positions;          /* 3 per bone: the joints' bind-pose positions (qpos pivots) */
+    float bounds_min[3], bounds_max[3]; /* u16: the box positions are quantized in */
+    float linear_range;             /* u16: |3x3 terms| (mat4, affine) or scale (qpos) stay below this */
+    uint32_t quat_hemisphere_breaks; /* loops whose rotation ends on -q of its start (a full turn) */
+    void *texels;                   /* width * height * texel bytes, little-endian */
+    size_t texel_bytes;
+    double model_height;            /* rest-pose height of the skinned meshes */
+    double max_error;               /* worst vertex displacement vs exact skinning, model units */
+} cb_palette;
+
+/* Samples every clip of the sampler's skin and encodes it. clip_loops may be NULL (decide
+ * from the poses) or give -1/0/1 per animation. The palette references clip names in the
+ * model, so free it before the model. */
+cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *options, const int *clip_loops,
+                          cb_palette *out, cb_error *err);
+void cb_palette_free(cb_palette *palette);
+
+/* Texel coordinates of a bone's first texel in a baked row. */
+void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint32_t *x, uint32_t *y);
+
+/* Decodes one bone of one row back to a 4x4 column-major matrix. texels points at the
+ * palette's texel data (as in cb_palette, or mapped from a file). */
+void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16]);
+
+/* ---- conversions ---- */
+uint16_t cb_float_to_half(float f);
+float cb_half_to_float(uint16_t h);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
