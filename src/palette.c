@@ -172,27 +172,28 @@ static cb_status sample_rows(bake_state *st, cb_error *err)
 
 /* ---- pass 2: encode ---- */
 
-static uint16_t snorm16(float v)
+/* Quantization arithmetic runs in double so it adds nothing to the half-step of the format. */
+static uint16_t snorm16(double v)
 {
-    float c = v > 1 ? 1 : v < -1 ? -1 : v;
-    return (uint16_t)(int16_t)lrintf(c * 32767.0f);
+    double c = v > 1 ? 1 : v < -1 ? -1 : v;
+    return (uint16_t)(int16_t)lrint(c * 32767.0);
 }
 
-static float snorm16_decode(uint16_t u)
+static double snorm16_decode(uint16_t u)
 {
-    float v = (float)(int16_t)u / 32767.0f;
+    double v = (int16_t)u / 32767.0;
     return v < -1 ? -1 : v;
 }
 
-static uint16_t unorm16(float v, float lo, float hi)
+static uint16_t unorm16(double v, double lo, double hi)
 {
     if (!(hi > lo)) return 0;
-    float t = (v - lo) / (hi - lo);
+    double t = (v - lo) / (hi - lo);
     t = t > 1 ? 1 : t < 0 ? 0 : t;
-    return (uint16_t)lrintf(t * 65535.0f);
+    return (uint16_t)lrint(t * 65535.0);
 }
 
-static float unorm16_decode(uint16_t u, float lo, float hi) { return hi > lo ? lo + (hi - lo) * (u / 65535.0f) : lo; }
+static double unorm16_decode(uint16_t u, double lo, double hi) { return hi > lo ? lo + (hi - lo) * (u / 65535.0) : lo; }
 
 static void measure_ranges(cb_palette *p, const float *canon)
 {
@@ -247,10 +248,10 @@ static int u16_kind(cb_layout layout, int i)
     return i >= 12 ? 1 + (i - 12) : 0;        /* column 3 is the translation */
 }
 
-static uint16_t encode_u16(const cb_palette *p, int kind, float v)
+static uint16_t encode_u16(const cb_palette *p, int kind, double v)
 {
     switch (kind) {
-    case 0: return snorm16(p->linear_range > 0 ? v / p->linear_range : 0);
+    case 0: return snorm16(p->linear_range > 0 ? v / (double)p->linear_range : 0);
     case 4: return snorm16(v);
     case 5: return unorm16(v, 0, p->linear_range);
     case 6: return v != 0 ? 65535 : 0;
@@ -258,13 +259,13 @@ static uint16_t encode_u16(const cb_palette *p, int kind, float v)
     }
 }
 
-static float decode_u16(const cb_palette *p, int kind, uint16_t u)
+static double decode_u16(const cb_palette *p, int kind, uint16_t u)
 {
     switch (kind) {
     case 0: return snorm16_decode(u) * p->linear_range;
     case 4: return snorm16_decode(u);
     case 5: return unorm16_decode(u, 0, p->linear_range);
-    case 6: return u ? 1.0f : 0.0f;
+    case 6: return u ? 1.0 : 0.0;
     default: return unorm16_decode(u, p->bounds_min[kind - 1], p->bounds_max[kind - 1]);
     }
 }
@@ -313,7 +314,7 @@ void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, ui
     uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
     cb_palette_texel_xy(p, row, bone, &x, &y);
     const unsigned char *d = (const unsigned char *)texels + ((size_t)y * p->width + x) * tb;
-    float v[16];
+    double v[16];
     for (uint32_t i = 0; i < p->texels_per_bone * 4; ++i) {
         if (p->precision == CB_PRECISION_FLOAT)
             v[i] = load_le32f(d + i * 4);
