@@ -86,7 +86,11 @@ $(SAMPLE_GLB) &: $(BUILD)/gen_samples
 samples: $(SAMPLE_GLB)
 
 demo: all
-	@for s in $(SAMPLES); do $(BUILD)/crowdbake info $(BUILD)/samples/$$s.glb || exit 1; done
+	@mkdir -p $(BUILD)/demo
+	@for s in $(SAMPLES); do $(BUILD)/crowdbake info $(BUILD)/samples/$$s.glb || exit 1; echo; done
+	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.pal || exit 1; done
+	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.exr || exit 1; done
+	@$(BUILD)/crowdbake inspect $(BUILD)/demo/quadruped.pal
 
 # ---- tests ----------------------------------------------------------------------------
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
@@ -94,6 +98,13 @@ $(BUILD)/tests/%: tests/%.c tests/testutil.h $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(shell pkg-config --cflags cmocka 2>/dev/null) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
+
+# The reader header alone, strict C99, as an engine would compile it: no libcrowdbake.
+$(BUILD)/tests/standalone_pal_reader: tests/standalone_pal_reader.c formats/crowdbake_pal.h $(DEPS_STAMP)
+	@mkdir -p $(@D)
+	$(CC) -std=c99 -pedantic $(OPT) -g $(WARN) $(SAN) $(shell pkg-config --cflags cmocka 2>/dev/null) $< -o $@ \
+	  $(shell pkg-config --libs cmocka libzstd 2>/dev/null)
+TEST_BINS += $(BUILD)/tests/standalone_pal_reader
 
 test: all $(TEST_BINS)
 	@cd $(CURDIR) && status=0; for t in $(TEST_BINS); do \

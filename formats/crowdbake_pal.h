@@ -267,7 +267,8 @@ static int cbpal__check_string(const cbpal_header *h, const unsigned char *d, ui
 static int cbpal__validate(const unsigned char *d, size_t size, cbpal_header *h, char *err, size_t es)
 {
     static const unsigned char magic[8] = {'C', 'B', 'P', 'A', 'L', '\r', '\n', 0x1a};
-    if (size < 12 || memcmp(d, magic, 8) != 0) return cbpal__fail(err, es, "not a crowdbake palette (wrong magic)");
+    if (size < 8 || memcmp(d, magic, 8) != 0) return cbpal__fail(err, es, "not a crowdbake palette (wrong magic)");
+    if (size < 12) return cbpal__fail(err, es, "truncated: %zu bytes, shorter than the header", size);
     uint32_t version = cbpal__u32(d + 8);
     if (version > CBPAL_VERSION)
         return cbpal__fail(err, es, "palette format version %u is newer than this reader (version %u); update the reader",

@@ -1,0 +1,269 @@
+/* test_pal_file.c - the .pal and .exr files: byte-identical bakes, every kind of corruption
+ * rejected by the reader and by `crowdbake inspect`, EXR texels identical to the .pal's. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "../formats/crowdbake_pal.h"
+#include "../formats/exr_io.h"
+
+#define TMP "build/tmp-tests"
+
+static unsigned char *read_all(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) fail_msg("cannot open %s", path);
+    fseek(f, 0, SEEK_END);
+    *size = (size_t)ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *d = malloc(*size ? *size : 1);
+    assert_int_equal(fread(d, 1, *size, f), *size);
+    fclose(f);
+    return d;
+}
+
+static void write_all(const char *path, const unsigned char *d, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(d, 1, size, f), size);
+    fclose(f);
+}
+
+static void bake(const char *model, const char *out, const char *extra)
+{
+    char cmd[2048], log[4096];
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s -q %s 2>&1", crowdbake_exe(), model, out, extra);
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s failed: %s", cmd, log);
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    mkdir("build", 0777);
+    mkdir(TMP, 0777);
+    return 0;
+}
+
+static void test_byte_identical_bakes(void **state)
+{
+    (void)state;
+    char fox[1024];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    const char *variants[] = {"", "--layout mat4 --precision half", "--zstd", "--precision float --format pal,exr"};
+    for (int i = 0; i < 4; ++i) {
+        bake(fox, TMP "/a.pal", variants[i]);
+        bake(fox, TMP "/b.pal", variants[i]);
+        size_t na, nb;
+        unsigned char *a = read_all(TMP "/a.pal", &na), *b = read_all(TMP "/b.pal", &nb);
+        assert_int_equal(na, nb);
+        assert_memory_equal(a, b, na);
+        free(a), free(b);
+        if (strstr(variants[i], "exr")) {
+            a = read_all(TMP "/a.exr", &na), b = read_all(TMP "/b.exr", &nb);
+            assert_int_equal(na, nb);
+            assert_memory_equal(a, b, na);
+            free(a), free(b);
+        }
+    }
+}
+
+static void test_exr_reads_back_bit_identical_and_opens_in_openexr_tools(void **state)
+{
+    (void)state;
+    char fox[1024], cmd[2048], out[8192];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    const char *precisions[] = {"--precision half", "--precision float", "--precision half --exr-compression zip"};
+    for (int i = 0; i < 3; ++i) {
+        char extra[256];
+        snprintf(extra, sizeof extra, "%s --format pal,exr --max-texture-size 100", precisions[i]); /* wraps */
+        bake(fox, TMP "/fox.pal", extra);
+        cbpal_file pal;
+        char err[256];
+        assert_int_equal(cbpal_open(TMP "/fox.pal", CBPAL_VERIFY_CHECKSUM, &pal, err, sizeof err), 0);
+        cb_exr_image img;
+        cb_error e = {0};
+        if (cb_exr_read(TMP "/fox.exr", &img, &e)) fail_msg("%s", e.message);
+        assert_true(pal.header.blocks > 1);
+        assert_int_equal(img.width, pal.header.width);
+        assert_int_equal(img.height, pal.header.height);
+        assert_int_equal(img.texel_bytes, pal.texels_size);
+        assert_memory_equal(img.texels, pal.texels, pal.texels_size);
+        assert_int_equal(img.bones, (int)pal.header.bone_count);
+        assert_int_equal(img.blocks, (int)pal.header.blocks);
+        cb_exr_image_free(&img);
+        cbpal_close(&pal);
+    }
+    snprintf(cmd, sizeof cmd, "exrheader %s/fox.exr 2>&1", TMP);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    assert_non_null(strstr(out, "crowdbake.bones"));
+    assert_non_null(strstr(out, "crowdbake.clip0.name"));
+    assert_non_null(strstr(out, "zip"));
+    snprintf(cmd, sizeof cmd, "exrinfo %s/fox.exr 2>&1", TMP);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+}
+
+static void test_u16_is_refused_for_exr(void **state)
+{
+    (void)state;
+    char fox[1024], cmd[2048], out[1024];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s/x.exr --precision u16 2>&1", crowdbake_exe(), fox, TMP);
+    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_USAGE);
+    assert_non_null(strstr(out, "half or float"));
+}
+
+/* The reader's message for a damaged copy of `good`, or NULL when it opens. */
+static const char *reader_error(const unsigned char *d, size_t size, char *err, size_t err_size)
+{
+    cbpal_file f;
+    if (cbpal_open_memory(d, size, CBPAL_VERIFY_CHECKSUM, &f, err, err_size) == 0) {
+        cbpal_close(&f);
+        return NULL;
+    }
+    return err;
+}
+
+static void expect_rejected(const unsigned char *d, size_t size, const char *needle, const char *what)
+{
+    char err[256];
+    const char *msg = reader_error(d, size, err, sizeof err);
+    if (!msg) fail_msg("%s: the reader accepted it", what);
+    if (!strstr(msg, needle)) fail_msg("%s: message '%s' lacks '%s'", what, msg, needle);
+    /* crowdbake inspect says the same, with the file name, and exits 4 */
+    write_all(TMP "/bad.pal", d, size);
+    char cmd[1024], out[1024];
+    snprintf(cmd, sizeof cmd, "%s inspect %s/bad.pal 2>&1", crowdbake_exe(), TMP);
+    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
+    if (!strstr(out, needle) || !strstr(out, "bad.pal")) fail_msg("%s: inspect said '%s'", what, out);
+}
+
+static uint64_t rd64(const unsigned char *d) { uint64_t v; memcpy(&v, d, 8); return v; }
+static void wr64(unsigned char *d, uint64_t v) { memcpy(d, &v, 8); }
+static void wr32(unsigned char *d, uint32_t v) { memcpy(d, &v, 4); }
+
+static void test_corruption_is_rejected(void **state)
+{
+    (void)state;
+    char fox[1024];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    bake(fox, TMP "/good.pal", "");
+    size_t size;
+    unsigned char *good = read_all(TMP "/good.pal", &size), *d = malloc(size);
+    char err[256];
+    assert_null(reader_error(good, size, err, sizeof err));
+    uint64_t clips = rd64(good + 120), bones = rd64(good + 128), strings = rd64(good + 136), payload = rd64(good + 152);
+
+    /* A flipped bit in each region: the checksum catches what validation cannot. */
+    uint64_t regions[][2] = {{64, 0x01}, {clips + 20, 0x10}, {bones + 16, 0x01}, {strings + 1, 0x02}, {payload + 100, 0x40}};
+    const char *names[] = {"header", "clip table", "bone table", "strings", "payload"};
+    for (int i = 0; i < 5; ++i) {
+        memcpy(d, good, size);
+        d[regions[i][0]] ^= (unsigned char)regions[i][1];
+        expect_rejected(d, size, "checksum mismatch", names[i]);
+    }
+    /* Truncation at every table boundary, and mid-payload. */
+    uint64_t cuts[] = {0, 8, 100, 256, clips, clips + 40, bones, strings, payload, payload + 1, size - 1};
+    for (size_t i = 0; i < sizeof cuts / sizeof cuts[0]; ++i) {
+        char what[64];
+        snprintf(what, sizeof what, "truncated at %llu", (unsigned long long)cuts[i]);
+        const char *needle = cuts[i] < 8 ? "wrong magic" : cuts[i] < 256 ? "truncated" : cuts[i] <= clips + 40 ? "clip table"
+                           : cuts[i] <= bones ? "bone table" : cuts[i] <= strings ? "string table" : "payload";
+        expect_rejected(good, (size_t)cuts[i], needle, what);
+    }
+    /* A bogus offset and a future version, each with its own message. */
+    memcpy(d, good, size);
+    wr64(d + 152, payload + 4096 * 1000);
+    expect_rejected(d, size, "payload", "bogus payload offset");
+    memcpy(d, good, size);
+    wr64(d + 120, (uint64_t)1 << 40);
+    expect_rejected(d, size, "clip table", "bogus clip offset");
+    memcpy(d, good, size);
+    wr32(d + 8, 2);
+    expect_rejected(d, size, "newer than this reader", "future version");
+    memcpy(d, good, size);
+    wr32(d + 40, 1u << 30); /* rows */
+    expect_rejected(d, size, "inconsistent texture geometry", "bogus rows");
+    free(good), free(d);
+}
+
+static void test_zstd_payload_reads_back_identical(void **state)
+{
+    (void)state;
+    char fox[1024];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    bake(fox, TMP "/plain.pal", "");
+    bake(fox, TMP "/packed.pal", "--zstd");
+    cbpal_file a, b;
+    char err[256];
+    assert_int_equal(cbpal_open(TMP "/plain.pal", CBPAL_VERIFY_CHECKSUM, &a, err, sizeof err), 0);
+    assert_int_equal(cbpal_open(TMP "/packed.pal", CBPAL_VERIFY_CHECKSUM, &b, err, sizeof err), 0);
+    assert_true(b.header.flags & CBPAL_FLAG_ZSTD);
+    assert_true(b.header.payload_size < a.header.payload_size);
+    assert_int_equal(a.texels_size, b.texels_size);
+    assert_memory_equal(a.texels, b.texels, a.texels_size);
+    printf("  Fox payload %llu bytes, zstd %llu bytes\n", (unsigned long long)a.header.payload_size,
+           (unsigned long long)b.header.payload_size);
+    cbpal_close(&a), cbpal_close(&b);
+}
+
+static void test_inspect_frame_matches_sample(void **state)
+{
+    (void)state;
+    char fox[1024], cmd[4096], out[256];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    bake(fox, TMP "/f.pal", "--layout mat4 --precision float");
+    snprintf(cmd, sizeof cmd,
+             "%s inspect %s/f.pal --clip Walk --frame 7 > %s/inspect.json && "
+             "%s sample %s --fps 30 --clip Walk --frame 7 --json > %s/sample.json && python3 -c \"import json; "
+             "a = json.load(open('%s/inspect.json'))['joints']; b = json.load(open('%s/sample.json'))['clips'][0]['samples'][0]['joints']; "
+             "print(len(a), len(b), max(abs(x - y) for m, n in zip(a, b) for x, y in zip(m, n)))\"",
+             crowdbake_exe(), TMP, TMP, crowdbake_exe(), fox, TMP, TMP, TMP);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    int na = 0, nb = 0;
+    double worst = 1;
+    assert_int_equal(sscanf(out, "%d %d %lf", &na, &nb, &worst), 3);
+    assert_int_equal(na, 24);
+    assert_int_equal(nb, 24);
+    assert_true(worst < 1e-4); /* float32 storage of matrices whose terms reach ~100 */
+}
+
+static void test_failed_bake_leaves_no_file_and_keeps_the_old_one(void **state)
+{
+    (void)state;
+    char fox[1024], spider[1024], cmd[2048], out[1024];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    shared_path(spider, sizeof spider, "assets/spider-animated-luanti/gltf_spider_animated.gltf");
+    bake(fox, TMP "/keep.pal", "");
+    size_t n0, n1;
+    unsigned char *before = read_all(TMP "/keep.pal", &n0);
+    /* qpos chosen explicitly cannot hold the spider: the bake fails after loading. */
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s/keep.pal --layout qpos 2>&1", crowdbake_exe(), spider, TMP);
+    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
+    unsigned char *after = read_all(TMP "/keep.pal", &n1);
+    assert_int_equal(n0, n1);
+    assert_memory_equal(before, after, n0);
+    free(before), free(after);
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s/missing-dir/x.pal 2>&1", crowdbake_exe(), fox, TMP);
+    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_IO);
+    assert_non_null(strstr(out, "does not exist"));
+    snprintf(cmd, sizeof cmd, "ls -a %s | grep -c '\\.tmp\\.' ", TMP);
+    run_command(cmd, out, sizeof out);
+    assert_int_equal(atoi(out), 0); /* no temporary left behind */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_byte_identical_bakes),
+        cmocka_unit_test(test_exr_reads_back_bit_identical_and_opens_in_openexr_tools),
+        cmocka_unit_test(test_u16_is_refused_for_exr),
+        cmocka_unit_test(test_corruption_is_rejected),
+        cmocka_unit_test(test_zstd_payload_reads_back_identical),
+        cmocka_unit_test(test_inspect_frame_matches_sample),
+        cmocka_unit_test(test_failed_bake_leaves_no_file_and_keeps_the_old_one),
+    };
+    return cmocka_run_group_tests_name("pal-file", tests, setup, NULL);
+}
