@@ -219,6 +219,9 @@ int cmd_bake(int argc, char **argv)
         cb_json_end(&j);
         cb_json_end(&j);
     }
+    if (!err.status && m->ignored_morph_channels && !a.quiet && !a.json)
+        fprintf(stderr, "crowdbake: note: %u morph-weight channel(s) ignored: palettes carry joints only\n",
+                m->ignored_morph_channels);
     if (!err.status && p.quat_hemisphere_breaks && !a.quiet && !a.json)
         fprintf(stderr, "crowdbake: note: %u bone(s) turn a full circle over a loop, so their last and first rows lie in "
                         "opposite quaternion hemispheres; the shipped shaders flip before blending\n",
