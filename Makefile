@@ -39,7 +39,7 @@ CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb)
 
-.PHONY: all deps demo check test test-asan bench clean samples
+.PHONY: all deps demo check test test-asan bench bench-smoke clean samples
 all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(SAMPLE_GLB)
 
 # ---- dependencies --------------------------------------------------------------------
@@ -114,8 +114,20 @@ test-asan:
 	$(MAKE) --no-print-directory BUILD=build/asan OPT=-O1 \
 	  SAN="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all" test
 
+# ---- benchmarks (not part of check; only a smoke run is) -------------------------------
+$(BUILD)/bench_core: bench/bench_core.c $(BUILD)/libcrowdbake.a
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
+	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
+
+bench: all $(BUILD)/bench_core
+	python3 bench/run.py
+
+bench-smoke: all $(BUILD)/bench_core
+	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
+
 check: deps
 	$(MAKE) --no-print-directory test
+	$(MAKE) --no-print-directory bench-smoke
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 $(MAKE) --no-print-directory test-asan
 	@echo "crowdbake: all tests passed (normal and ASan+UBSan builds)"
 

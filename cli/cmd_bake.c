@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "../formats/crowdbake_pal.h"
 #include "../formats/exr_io.h"
@@ -27,12 +28,14 @@ const char cmd_bake_usage[] =
     "  --speed-reference M_PER_S  ground speed at playback rate 1, stored in the header\n"
     "  --zstd                     compress the .pal payload (readers decompress once)\n"
     "  --exr-compression none|rle|zips|zip|piz  (default none; lossless only)\n"
+    "  -j, --threads N            sample clips on N threads (default: the number of cores); the\n"
+    "                             output is byte-identical for any N\n"
     "  --json                     a machine-readable summary on stdout\n"
     "  -q, --quiet                no summary lines\n";
 
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
-        *exr_compression;
+        *exr_compression, *threads;
     bool zstd, json, quiet, quiet_long;
 } bake_args;
 
@@ -96,6 +99,9 @@ static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, 
             return cli_usage_error("bake", "--max-texture-size wants a positive integer");
         o->max_texture_size = max;
     }
+    o->threads = (uint32_t)sysconf(_SC_NPROCESSORS_ONLN);
+    if (a->threads && (!cli_parse_u32(a->threads, &o->threads) || o->threads < 1 || o->threads > 64))
+        return cli_usage_error("bake", "--threads wants 1..64");
     if (a->root_motion) {
         if (strcmp(a->root_motion, "in-place") == 0) o->root_motion = CB_ROOT_MOTION_IN_PLACE;
         else if (strcmp(a->root_motion, "keep") != 0) return cli_usage_error("bake", "--root-motion is keep or in-place");
@@ -113,7 +119,12 @@ static void print_summary(const char *path, const char *format, size_t bytes, co
     (void)format;
 }
 
-static void json_output(cb_json *j, const char *path, const char *format, size_t bytes, const cb_palette *p, double seconds)
+typedef struct phase_times {
+    double load, write;
+} phase_times;
+
+static void json_output(cb_json *j, const char *path, const char *format, size_t bytes, const cb_palette *p, double seconds,
+                        const phase_times *pt)
 {
     cb_json_object(j, NULL);
     cb_json_string(j, "path", path);
@@ -130,7 +141,15 @@ static void json_output(cb_json *j, const char *path, const char *format, size_t
     cb_json_number(j, "max_error", p->max_error);
     cb_json_number(j, "model_height", p->model_height);
     cb_json_number(j, "max_error_mm_per_m", p->model_height > 0 ? p->max_error / p->model_height * 1000 : 0);
+    cb_json_int(j, "error_rows_measured", p->error_rows_measured);
     cb_json_number(j, "seconds", seconds);
+    cb_json_object(j, "phases");
+    cb_json_number(j, "load", pt->load);
+    cb_json_number(j, "sample", p->seconds_sample);
+    cb_json_number(j, "encode", p->seconds_encode);
+    cb_json_number(j, "measure", p->seconds_measure);
+    cb_json_number(j, "write", pt->write);
+    cb_json_end(j);
     cb_json_end(j);
 }
 
@@ -160,6 +179,7 @@ int cmd_bake(int argc, char **argv)
         {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "M_PER_S", &a.speed_ref, NULL},
         {"--exr-compression", "NAME", &a.exr_compression, NULL}, {"--zstd", NULL, NULL, &a.zstd},
         {"--json", NULL, NULL, &a.json},           {"-q", NULL, NULL, &a.quiet},
+        {"-j", "N", &a.threads, NULL},             {"--threads", "N", &a.threads, NULL},
         {"--quiet", NULL, NULL, &a.quiet_long}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
     if (help) return fputs(cmd_bake_usage, stdout), 0;
@@ -184,6 +204,7 @@ int cmd_bake(int argc, char **argv)
     cb_error err = {0};
     cb_model *m = cli_load_model(a.model, &err);
     if (!m) return cli_report(&err);
+    phase_times pt = {now_seconds() - t0, 0};
     int skin = cli_pick_skin(m, a.skin, &err);
     cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, &err) : NULL;
     cb_palette p = {0};
@@ -201,6 +222,7 @@ int cmd_bake(int argc, char **argv)
         char path[4096];
         if (a.format) output_path(a.output, f == 0 ? "pal" : "exr", path, sizeof path);
         else snprintf(path, sizeof path, "%s", a.output);
+        double tw = now_seconds();
         if (f == 0) {
             cb_pal_write_options po = {a.zstd, 0, hash, (float)speed_ref, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
             cb_pal_write(path, &p, m, skin, &po, &err);
@@ -208,11 +230,12 @@ int cmd_bake(int argc, char **argv)
             cb_exr_write(path, &p, m, skin, exr_compression, hash, (float)speed_ref, &err);
         }
         if (err.status) break;
+        pt.write = now_seconds() - tw;
         FILE *fp = fopen(path, "rb");
         size_t bytes = 0;
         if (fp) fseek(fp, 0, SEEK_END), bytes = (size_t)ftell(fp), fclose(fp);
         double seconds = now_seconds() - t0;
-        if (a.json) json_output(&j, path, f == 0 ? "pal" : "exr", bytes, &p, seconds);
+        if (a.json) json_output(&j, path, f == 0 ? "pal" : "exr", bytes, &p, seconds, &pt);
         else if (!a.quiet) print_summary(path, f == 0 ? "pal" : "exr", bytes, &p, seconds);
     }
     if (a.json && !err.status) {

@@ -132,9 +132,15 @@ uint64_t cbpal_xxh64(const void *data, size_t size);
 static uint64_t cbpal__rotl(uint64_t x, int r) { return (x << r) | (x >> (64 - r)); }
 static uint64_t cbpal__u64(const unsigned char *p)
 {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    uint64_t v; /* one unaligned load on little-endian hosts */
+    memcpy(&v, p, 8);
+    return v;
+#else
     uint64_t v = 0;
     for (int i = 7; i >= 0; --i) v = (v << 8) | p[i];
     return v;
+#endif
 }
 static uint32_t cbpal__u32(const unsigned char *p)
 {

@@ -106,12 +106,13 @@ bool cb_mat4_decompose(const double m[16], cb_vec3 *t, cb_quat *r, cb_vec3 *s, d
 
 cb_quat cb_quat_normalize(cb_quat q)
 {
-    double len = sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-    if (len == 0) {
+    double len2 = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w;
+    if (len2 == 0) {
         cb_quat id = {0, 0, 0, 1};
         return id;
     }
-    cb_quat r = {q.x / len, q.y / len, q.z / len, q.w / len};
+    double inv = 1 / sqrt(len2);
+    cb_quat r = {q.x * inv, q.y * inv, q.z * inv, q.w * inv};
     return r;
 }
 
@@ -130,6 +131,21 @@ cb_quat cb_quat_conjugate(cb_quat q)
 
 double cb_quat_dot(cb_quat a, cb_quat b) { return a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w; }
 
+/* sin(x) for 0 <= x < 0.21 by its Taylor series to x^7: the next term is below 2e-12, far
+ * under float32 key precision; libm's sin costs several times more. */
+static double small_sin(double x)
+{
+    double x2 = x * x;
+    return x * (1 - x2 * (1.0 / 6) * (1 - x2 * (1.0 / 20) * (1 - x2 * (1.0 / 42))));
+}
+
+/* asin(x) for 0 <= x < 0.1 by its series to x^9 (next term below 3e-13). */
+static double small_asin(double x)
+{
+    double x2 = x * x;
+    return x * (1 + x2 * (1.0 / 6 + x2 * (3.0 / 40 + x2 * (15.0 / 336 + x2 * (105.0 / 3456)))));
+}
+
 cb_quat cb_quat_slerp(cb_quat a, cb_quat b, double t)
 {
     double d = cb_quat_dot(a, b);
@@ -141,14 +157,21 @@ cb_quat cb_quat_slerp(cb_quat a, cb_quat b, double t)
         b.w = -b.w;
     }
     double wa, wb;
-    double angle = acos(d > 1.0 ? 1.0 : d);
+    /* The angle from its sine (|a - b| = 2 sin(angle / 2)) is accurate where acos(d) is not. */
+    double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, dw = a.w - b.w;
+    double half_chord = 0.5 * sqrt(dx * dx + dy * dy + dz * dz + dw * dw);
+    double angle = half_chord < 0.1 ? 2 * small_asin(half_chord) : acos(d > 1.0 ? 1.0 : d);
     if (angle < 1e-6) {
         wa = 1 - t;
         wb = t;
+    } else if (half_chord < 0.1) { /* angle < 0.2003 */
+        double inv = 1 / small_sin(angle);
+        wa = small_sin((1 - t) * angle) * inv;
+        wb = small_sin(t * angle) * inv;
     } else {
-        double sin_angle = sin(angle);
-        wa = sin((1 - t) * angle) / sin_angle;
-        wb = sin(t * angle) / sin_angle;
+        double inv = 1 / sin(angle);
+        wa = sin((1 - t) * angle) * inv;
+        wb = sin(t * angle) * inv;
     }
     cb_quat r = {wa * a.x + wb * b.x, wa * a.y + wb * b.y, wa * a.z + wb * b.z, wa * a.w + wb * b.w};
     return cb_quat_normalize(r);

@@ -8,6 +8,9 @@
 
 #include "cb_math.h"
 
+#include <threads.h>
+#include <time.h>
+
 /* Canonical floats per bone and row before the final encoding: the upper 3x4 of the matrix
  * by rows (mat4, affine), or quaternion, position and scale (qpos). */
 #define CANON 12
@@ -45,6 +48,7 @@ cb_bake_options cb_default_bake_options(void)
     o.max_texture_size = 16384;
     o.root_motion = CB_ROOT_MOTION_KEEP;
     o.limits = cb_default_limits();
+    o.threads = 1;
     return o;
 }
 
@@ -121,53 +125,135 @@ static cb_status qpos_canon(const double m[16], float out[8], const cb_model *mo
     return CB_OK;
 }
 
+/* Per-thread scratch: each worker samples its own clips with its own sampler. */
+typedef struct worker {
+    cb_sampler *sampler;
+    double *mats;   /* bones * 16 */
+    cb_quat *prev;  /* bones: the previous row's quaternion (qpos) */
+} worker;
+
 typedef struct bake_state {
     cb_palette *p;
-    cb_sampler *sampler;
+    const cb_model *model;
+    int32_t skin;
     const cb_bake_options *opt;
     const cb_clip_info *infos;
-    float *canon;   /* rows * bones * CANON */
-    double *mats;   /* bones * 16 scratch */
-    cb_quat *prev;  /* bones: the previous row's quaternion (qpos) */
+    float *canon;          /* rows * bones * CANON */
+    const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 */
+    uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
+    cb_error *errors;      /* clips: the first error of each */
+    uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
+    double *clip_error;    /* clips: worst vertex error measured */
 } bake_state;
 
-static cb_status sample_rows(bake_state *st, cb_error *err)
+/* Grows a clip's bounds by the sphere a joint's vertices can reach: a vertex weighted to joint
+ * j lies within |A_j| * r_j of M_j b_j, so the union over joints bounds the skinned mesh. */
+static void grow_bounds(cb_palette_clip *clip, const double *M, const float *b, double r)
+{
+    if (r < 0) return;
+    cb_vec3 c = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
+    double norm = 0; /* Frobenius norm of the 3x3: at least its largest stretch */
+    for (int k = 0; k < 12; ++k)
+        if (k % 4 != 3) norm += M[k] * M[k];
+    double reach = r * sqrt(norm), cc[3] = {c.x, c.y, c.z};
+    for (int k = 0; k < 3; ++k) {
+        clip->bounds_min[k] = fminf(clip->bounds_min[k], (float)(cc[k] - reach));
+        clip->bounds_max[k] = fmaxf(clip->bounds_max[k], (float)(cc[k] + reach));
+    }
+}
+
+static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *err)
 {
     cb_palette *p = st->p;
-    const cb_model *m = cb_sampler_model(st->sampler);
-    const cb_skin *skin = &m->skins[cb_sampler_skin(st->sampler)];
-    for (uint32_t c = 0; c < p->clip_count; ++c) {
-        const cb_clip_info *info = &st->infos[c];
-        for (uint32_t f = 0; f < info->frames; ++f) {
-            cb_clip_frame_matrices(st->sampler, info, f, st->opt->root_motion, st->mats);
-            float *row = st->canon + (size_t)(p->clips[c].first_row + f) * p->bone_count * CANON;
-            for (uint32_t j = 0; j < p->bone_count; ++j) {
-                const double *M = st->mats + (size_t)j * 16;
-                float *out = row + (size_t)j * CANON;
-                if (p->layout != CB_LAYOUT_QPOS) {
-                    for (int r = 0; r < 3; ++r)
-                        for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
-                    continue;
-                }
-                if (qpos_canon(M, out, m, skin, j, p->clips[c].name, f, f ? &st->prev[j] : NULL, err)) return err->status;
-                st->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
-                /* p = M * b: where the joint's bind position goes. */
-                const float *b = p->bind_positions + (size_t)j * 3;
-                cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
-                out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
+    const cb_skin *skin = &st->model->skins[st->skin];
+    const cb_clip_info *info = &st->infos[c];
+    cb_palette_clip *clip = &p->clips[c];
+    for (int k = 0; k < 3; ++k) clip->bounds_min[k] = INFINITY, clip->bounds_max[k] = -INFINITY;
+    for (uint32_t f = 0; f < info->frames; ++f) {
+        cb_clip_frame_matrices(w->sampler, info, f, st->opt->root_motion, w->mats);
+        float *row = st->canon + (size_t)(clip->first_row + f) * p->bone_count * CANON;
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            const double *M = w->mats + (size_t)j * 16;
+            const float *b = p->bind_positions + (size_t)j * 3;
+            float *out = row + (size_t)j * CANON;
+            grow_bounds(clip, M, b, st->radius[j]);
+            if (p->layout != CB_LAYOUT_QPOS) {
+                for (int r = 0; r < 3; ++r)
+                    for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
+                continue;
             }
+            if (qpos_canon(M, out, st->model, skin, j, clip->name, f, f ? &w->prev[j] : NULL, err)) return err->status;
+            w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
+            cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* p = M b */
+            out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
         }
-        if (p->layout == CB_LAYOUT_QPOS && info->loops && info->frames > 1) {
-            /* The wrap from the last row to the first: a full turn over the loop ends on -q. */
-            const float *first = st->canon + (size_t)p->clips[c].first_row * p->bone_count * CANON;
-            const float *last = first + (size_t)(info->frames - 1) * p->bone_count * CANON;
-            for (uint32_t j = 0; j < p->bone_count; ++j) {
-                const float *a = first + (size_t)j * CANON, *b = last + (size_t)j * CANON;
-                if (a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0) p->quat_hemisphere_breaks++;
-            }
+    }
+    if (!(clip->bounds_min[0] <= clip->bounds_max[0])) /* no skinned vertex */
+        for (int k = 0; k < 3; ++k) clip->bounds_min[k] = clip->bounds_max[k] = 0;
+    if (p->layout == CB_LAYOUT_QPOS && info->loops && info->frames > 1) {
+        /* The wrap from the last row to the first: a full turn over the loop ends on -q. */
+        const float *first = st->canon + (size_t)clip->first_row * p->bone_count * CANON;
+        const float *last = first + (size_t)(info->frames - 1) * p->bone_count * CANON;
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            const float *qa = first + (size_t)j * CANON, *qb = last + (size_t)j * CANON;
+            if (qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3] < 0) st->breaks[c]++;
         }
     }
     return CB_OK;
+}
+
+/* ---- running clips on several threads ---- */
+
+typedef struct job {
+    bake_state *st;
+    uint32_t first, stride;
+    void (*run)(bake_state *st, worker *w, uint32_t clip);
+} job;
+
+static int job_main(void *arg)
+{
+    job *jb = arg;
+    bake_state *st = jb->st;
+    worker w = {0};
+    cb_error *err0 = &st->errors[jb->first < st->p->clip_count ? jb->first : 0];
+    w.sampler = cb_sampler_create(st->model, st->skin, err0);
+    w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
+    w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
+    if (!w.sampler || !w.mats || !w.prev) {
+        cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
+    } else {
+        for (uint32_t c = jb->first; c < st->p->clip_count; c += jb->stride) jb->run(st, &w, c);
+    }
+    cb_sampler_free(w.sampler);
+    free(w.mats);
+    free(w.prev);
+    return 0;
+}
+
+/* Runs `run` for every clip, clip c on thread c % threads. Each clip writes only its own rows
+ * and slots, so the result does not depend on the thread count. */
+static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, uint32_t))
+{
+    uint32_t threads = st->opt->threads ? st->opt->threads : 1;
+    if (threads > st->p->clip_count) threads = st->p->clip_count ? st->p->clip_count : 1;
+    if (threads > 64) threads = 64;
+    job jobs[64];
+    thrd_t ids[64];
+    bool started[64] = {false};
+    for (uint32_t t = 0; t < threads; ++t) {
+        jobs[t] = (job){st, t, threads, run};
+        started[t] = t > 0 && thrd_create(&ids[t], job_main, &jobs[t]) == thrd_success;
+    }
+    job_main(&jobs[0]);
+    for (uint32_t t = 1; t < threads; ++t) {
+        if (started[t]) thrd_join(ids[t], NULL);
+        else job_main(&jobs[t]); /* no thread: do its share here */
+    }
+}
+
+static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
+{
+    if (st->errors[c].status == CB_OK) sample_clip(st, w, c, &st->errors[c]);
 }
 
 /* ---- pass 2: encode ---- */
@@ -342,66 +428,81 @@ void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, ui
     }
 }
 
-/* ---- pass 3: the error against exact skinning, and per-clip bounds ---- */
+/* ---- pass 3: the error against exact skinning ---- */
 
-static void measure_error(bake_state *st)
+static void measure_clip(bake_state *st, worker *w, uint32_t c)
 {
     cb_palette *p = st->p;
-    const cb_model *m = cb_sampler_model(st->sampler);
-    int32_t skin = cb_sampler_skin(st->sampler);
-    uint64_t verts = cb_model_skin_vertex_count(m, skin);
+    const cb_model *m = st->model;
+    const cb_palette_clip *clip = &p->clips[c];
+    uint64_t verts = cb_model_skin_vertex_count(m, st->skin);
     double *decoded = malloc((size_t)p->bone_count * 16 * sizeof(double));
     double *exact_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
     double *dec_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
-    p->max_error = 0;
-    if (!decoded || !exact_pos || !dec_pos) goto done;
-    for (uint32_t c = 0; c < p->clip_count; ++c) {
-        cb_palette_clip *clip = &p->clips[c];
-        for (int k = 0; k < 3; ++k) clip->bounds_min[k] = INFINITY, clip->bounds_max[k] = -INFINITY;
-        for (uint32_t f = 0; f < clip->frames; ++f) {
-            cb_clip_frame_matrices(st->sampler, &st->infos[c], f, st->opt->root_motion, st->mats);
-            for (uint32_t j = 0; j < p->bone_count; ++j)
-                cb_palette_decode(p, p->texels, clip->first_row + f, j, decoded + (size_t)j * 16);
-            double *e = exact_pos, *d = dec_pos;
-            for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
-                const cb_primitive *prim = &m->primitives[pi];
-                if (prim->skin != skin) continue;
-                cb_skin_positions(prim, st->mats, e);
-                cb_skin_positions(prim, decoded, d);
-                e += (size_t)prim->vertex_count * 3, d += (size_t)prim->vertex_count * 3;
-            }
-            for (uint64_t v = 0; v < verts; ++v) {
-                const double *a = exact_pos + v * 3, *b = dec_pos + v * 3;
-                double dist = sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
-                if (dist > p->max_error) p->max_error = dist;
-                for (int k = 0; k < 3; ++k) {
-                    clip->bounds_min[k] = fminf(clip->bounds_min[k], (float)a[k]);
-                    clip->bounds_max[k] = fmaxf(clip->bounds_max[k], (float)a[k]);
-                }
-            }
+    st->clip_error[c] = 0;
+    for (uint32_t f = 0; decoded && exact_pos && dec_pos && verts && f < clip->frames; ++f) {
+        if (f % st->error_stride && f + 1 != clip->frames) continue;
+        cb_clip_frame_matrices(w->sampler, &st->infos[c], f, st->opt->root_motion, w->mats);
+        for (uint32_t j = 0; j < p->bone_count; ++j)
+            cb_palette_decode(p, p->texels, clip->first_row + f, j, decoded + (size_t)j * 16);
+        double *e = exact_pos, *d = dec_pos;
+        for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
+            const cb_primitive *prim = &m->primitives[pi];
+            if (prim->skin != st->skin) continue;
+            cb_skin_positions(prim, w->mats, e);
+            cb_skin_positions(prim, decoded, d);
+            e += (size_t)prim->vertex_count * 3, d += (size_t)prim->vertex_count * 3;
         }
-        if (!verts)
-            for (int k = 0; k < 3; ++k) clip->bounds_min[k] = clip->bounds_max[k] = 0;
+        double worst = 0;
+        for (uint64_t i = 0; i < verts * 3; i += 3) {
+            double dx = exact_pos[i] - dec_pos[i], dy = exact_pos[i + 1] - dec_pos[i + 1], dz = exact_pos[i + 2] - dec_pos[i + 2];
+            double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 > worst) worst = d2;
+        }
+        if (sqrt(worst) > st->clip_error[c]) st->clip_error[c] = sqrt(worst);
     }
-done:
     free(decoded);
     free(exact_pos);
     free(dec_pos);
 }
 
+/* Bind-space distance from each joint's bind position to the farthest vertex it moves;
+ * -1 for joints that move none. Returns false when no vertex is skinned. */
+static bool joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, double *radius)
+{
+    bool any = false;
+    for (uint32_t j = 0; j < p->bone_count; ++j) radius[j] = -1;
+    for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
+        const cb_primitive *prim = &m->primitives[pi];
+        if (prim->skin != skin) continue;
+        for (uint32_t v = 0; v < prim->vertex_count; ++v)
+            for (int i = 0; i < 4; ++i) {
+                if (prim->weights[(size_t)v * 4 + i] == 0) continue;
+                uint16_t j = prim->joints[(size_t)v * 4 + i];
+                const float *b = p->bind_positions + (size_t)j * 3, *x = prim->positions + (size_t)v * 3;
+                double d = sqrt((double)(x[0] - b[0]) * (x[0] - b[0]) + (double)(x[1] - b[1]) * (x[1] - b[1]) +
+                                (double)(x[2] - b[2]) * (x[2] - b[2]));
+                if (d > radius[j]) radius[j] = d;
+                any = true;
+            }
+    }
+    return any;
+}
+
 /* ---- the bake ---- */
 
-static cb_status frame_clips(bake_state *st, const int *clip_loops, cb_clip_info **infos_out, cb_error *err)
+static cb_status frame_clips(bake_state *st, cb_sampler *sampler, const int *clip_loops, cb_clip_info **infos_out,
+                             cb_error *err)
 {
     cb_palette *p = st->p;
-    const cb_model *m = cb_sampler_model(st->sampler);
+    const cb_model *m = st->model;
     cb_clip_info *infos = calloc(m->animation_count ? m->animation_count : 1, sizeof *infos);
     p->clips = calloc(m->animation_count ? m->animation_count : 1, sizeof *p->clips);
     *infos_out = infos;
     if (!infos || !p->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     uint64_t rows = 0;
     for (uint32_t a = 0; a < m->animation_count; ++a) {
-        if (cb_clip_analyze(st->sampler, (int32_t)a, st->opt->fps, clip_loops ? clip_loops[a] : -1, &st->opt->limits,
+        if (cb_clip_analyze(sampler, (int32_t)a, st->opt->fps, clip_loops ? clip_loops[a] : -1, &st->opt->limits,
                             &infos[a], err))
             return err->status;
         cb_palette_clip *c = &p->clips[a];
@@ -446,11 +547,30 @@ static void bind_positions(cb_palette *p, const cb_skin *skin)
     }
 }
 
+static double seconds_now(void)
+{
+    struct timespec ts;
+    timespec_get(&ts, TIME_UTC);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* The first error in clip order, so the message does not depend on the thread count. */
+static cb_status first_clip_error(const bake_state *st, cb_error *err)
+{
+    for (uint32_t c = 0; c < st->p->clip_count; ++c)
+        if (st->errors[c].status) {
+            *err = st->errors[c];
+            return err->status;
+        }
+    return CB_OK;
+}
+
 cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const int *clip_loops, cb_palette *p,
                           cb_error *err)
 {
     const cb_model *m = cb_sampler_model(sampler);
-    const cb_skin *skin = &m->skins[cb_sampler_skin(sampler)];
+    int32_t skin_index = cb_sampler_skin(sampler);
+    const cb_skin *skin = &m->skins[skin_index];
     memset(p, 0, sizeof *p);
     p->layout = opt->layout;
     p->precision = opt->precision;
@@ -460,31 +580,56 @@ cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const
     p->row_texels = p->bone_count * p->texels_per_bone;
     if (m->animation_count == 0)
         return cb_fail(err, CB_ERR_INPUT, "%s: has no animations to bake (export the clips with the model)", m->source);
-    bake_state st = {p, sampler, opt, NULL, NULL, NULL, NULL};
+    double t0 = seconds_now();
+    bake_state st = {0};
+    st.p = p, st.model = m, st.skin = skin_index, st.opt = opt;
     cb_clip_info *infos = NULL;
-    if (frame_clips(&st, clip_loops, &infos, err) || plan_texture(p, opt->max_texture_size, m->source, err)) goto fail;
+    double *radius = NULL;
+    if (frame_clips(&st, sampler, clip_loops, &infos, err) || plan_texture(p, opt->max_texture_size, m->source, err))
+        goto fail;
     st.infos = infos;
     p->texel_bytes = (size_t)p->width * p->height * cb_precision_texel_bytes(p->precision);
     p->texels = calloc(p->texel_bytes ? p->texel_bytes : 1, 1);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
     st.canon = malloc((size_t)p->rows * p->bone_count * CANON * sizeof(float));
-    st.mats = malloc((size_t)p->bone_count * 16 * sizeof(double));
-    st.prev = malloc((size_t)p->bone_count * sizeof(cb_quat));
-    if (!p->texels || !p->bind_positions || !st.canon || !st.mats || !st.prev) {
+    radius = malloc((size_t)p->bone_count * sizeof(double));
+    st.breaks = calloc(p->clip_count, sizeof *st.breaks);
+    st.errors = calloc(p->clip_count, sizeof *st.errors);
+    st.clip_error = calloc(p->clip_count, sizeof *st.clip_error);
+    if (!p->texels || !p->bind_positions || !st.canon || !radius || !st.breaks || !st.errors || !st.clip_error) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
     }
     bind_positions(p, skin);
-    if (sample_rows(&st, err)) goto fail;
+    bool skinned = joint_reach(p, m, skin_index, radius);
+    st.radius = radius;
+    for_each_clip(&st, sample_clip_job);
+    if (first_clip_error(&st, err)) goto fail;
+    for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
+    double t1 = seconds_now();
     measure_ranges(p, st.canon);
     encode_all(p, st.canon);
-    double lo[3], hi[3];
+    double t2 = seconds_now(), lo[3], hi[3];
     p->model_height = cb_skin_rest_bounds(sampler, lo, hi);
-    measure_error(&st);
-    free(st.canon), free(st.mats), free(st.prev), free(infos);
+    /* Exact skinning of every vertex at every row costs rows x vertices; past ~4M vertex-rows
+     * an even subset of rows (always each clip's last) measures the error. */
+    uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);
+    st.error_stride = work > CB_ERROR_BUDGET ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
+    p->error_rows_measured = 0;
+    if (skinned) {
+        for_each_clip(&st, measure_clip);
+        for (uint32_t c = 0; c < p->clip_count; ++c) {
+            p->max_error = fmax(p->max_error, st.clip_error[c]);
+            p->error_rows_measured += (p->clips[c].frames + st.error_stride - 1) / st.error_stride +
+                                      ((p->clips[c].frames - 1) % st.error_stride != 0);
+        }
+    }
+    double t3 = seconds_now();
+    p->seconds_sample = t1 - t0, p->seconds_encode = t2 - t1, p->seconds_measure = t3 - t2;
+    free(st.canon), free(radius), free(st.breaks), free(st.errors), free(st.clip_error), free(infos);
     return CB_OK;
 fail:
-    free(st.canon), free(st.mats), free(st.prev), free(infos);
+    free(st.canon), free(radius), free(st.breaks), free(st.errors), free(st.clip_error), free(infos);
     cb_palette_free(p);
     return err->status;
 }

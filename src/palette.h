@@ -30,7 +30,11 @@ typedef struct cb_bake_options {
     uint32_t max_texture_size;
     cb_root_motion root_motion;
     cb_limits limits;
+    uint32_t threads; /* clips sampled in parallel; the output does not depend on it */
 } cb_bake_options;
+
+/* Vertex-rows of exact skinning spent measuring a bake's error (see cb_palette.max_error). */
+#define CB_ERROR_BUDGET (4u << 20)
 
 cb_bake_options cb_default_bake_options(void);
 
@@ -40,7 +44,7 @@ typedef struct cb_palette_clip {
     double fps, duration, start;
     bool loops;
     float root_velocity[3];
-    float bounds_min[3], bounds_max[3]; /* the skinned mesh over the clip, model units */
+    float bounds_min[3], bounds_max[3]; /* encloses the skinned mesh over the clip (conservative), model units */
 } cb_palette_clip;
 
 typedef struct cb_palette {
@@ -60,6 +64,8 @@ typedef struct cb_palette {
     size_t texel_bytes;
     double model_height;            /* rest-pose height of the skinned meshes */
     double max_error;               /* worst vertex displacement vs exact skinning, model units */
+    uint32_t error_rows_measured;   /* rows the error was measured at: all, or an even subset */
+    double seconds_sample, seconds_encode, seconds_measure;
 } cb_palette;
 
 /* Samples every clip of the sampler's skin and encodes it. clip_loops may be NULL (decide

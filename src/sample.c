@@ -17,12 +17,19 @@ struct cb_sampler {
     double *local_trs;   /* 10 per node: t[3], r[4], s[3] */
     bool *animated;      /* per node, set while evaluating one clip */
     double *globals;     /* 16 per node */
+    bool affine_ibm;     /* every inverse bind matrix ends in 0 0 0 1: cheaper products */
+    uint32_t *cursor;    /* per channel of every clip: the key interval of the last sample */
+    uint32_t *cursor_base; /* per clip: its channels' first cursor */
 };
 
-/* Index of the last key with times[k] <= t (0 when t is before the first key). */
-static uint32_t find_key(const cb_channel *ch, double t)
+/* Index of the last key with times[k] <= t (0 when t is before the first key). `hint` holds the
+ * previous answer: frames are sampled in order, so the answer is usually it or the next key. */
+static uint32_t find_key(const cb_channel *ch, double t, uint32_t *hint)
 {
-    uint32_t lo = 0, hi = ch->key_count - 1;
+    uint32_t last = ch->key_count - 1, h = *hint;
+    for (uint32_t k = h; k <= h + 1 && k <= last; ++k)
+        if (ch->times[k] <= t && (k == last || t < ch->times[k + 1])) return *hint = k;
+    uint32_t lo = 0, hi = last;
     while (lo < hi) {
         uint32_t mid = lo + (hi - lo + 1) / 2;
         if (ch->times[mid] <= t)
@@ -30,7 +37,7 @@ static uint32_t find_key(const cb_channel *ch, double t)
         else
             hi = mid - 1;
     }
-    return lo;
+    return *hint = lo;
 }
 
 static void load_key(const cb_channel *ch, uint32_t k, int slot, int comps, double out[4])
@@ -52,13 +59,13 @@ static void eval_cubic(const cb_channel *ch, uint32_t k, double s, double dt, in
     for (int i = 0; i < comps; ++i) out[i] = h00 * p0[i] + h10 * dt * b0[i] + h01 * p1[i] + h11 * dt * a1[i];
 }
 
-void cb_channel_eval(const cb_channel *ch, double t, double out[4])
+static void channel_eval(const cb_channel *ch, double t, double out[4], uint32_t *hint)
 {
     int comps = ch->path == CB_PATH_ROTATION ? 4 : 3;
     int value_slot = ch->interp == CB_INTERP_CUBICSPLINE ? 1 : 0;
     uint32_t last = ch->key_count - 1;
     if (ch->interp == CB_INTERP_STEP) {
-        load_key(ch, find_key(ch, t + CB_STEP_EPSILON), 0, comps, out);
+        load_key(ch, find_key(ch, t + CB_STEP_EPSILON, hint), 0, comps, out);
         return;
     }
     if (t <= ch->times[0] || last == 0) {
@@ -69,7 +76,7 @@ void cb_channel_eval(const cb_channel *ch, double t, double out[4])
         load_key(ch, last, value_slot, comps, out);
         return;
     }
-    uint32_t k = find_key(ch, t);
+    uint32_t k = find_key(ch, t, hint);
     double t_k = ch->times[k], dt = (double)ch->times[k + 1] - t_k;
     double s = (t - t_k) / dt;
     if (ch->interp == CB_INTERP_CUBICSPLINE) {
@@ -89,6 +96,12 @@ void cb_channel_eval(const cb_channel *ch, double t, double out[4])
     } else {
         for (int i = 0; i < 3; ++i) out[i] = a[i] + (b[i] - a[i]) * s;
     }
+}
+
+void cb_channel_eval(const cb_channel *ch, double t, double out[4])
+{
+    uint32_t hint = 0;
+    channel_eval(ch, t, out, &hint);
 }
 
 /* ---- the sampler ---- */
@@ -123,6 +136,25 @@ cb_sampler *cb_sampler_create(const cb_model *model, int32_t skin, cb_error *err
     }
     s->model = model;
     s->skin = skin;
+    s->affine_ibm = true;
+    const cb_skin *sk = &model->skins[skin];
+    for (uint32_t j = 0; j < sk->joint_count; ++j) {
+        const double *m = sk->inverse_bind + (size_t)j * 16;
+        if (m[3] != 0 || m[7] != 0 || m[11] != 0 || m[15] != 1) s->affine_ibm = false;
+    }
+    uint32_t channels = 0;
+    s->cursor_base = calloc(model->animation_count + 1, sizeof *s->cursor_base);
+    for (uint32_t a = 0; s->cursor_base && a < model->animation_count; ++a) {
+        s->cursor_base[a] = channels;
+        channels += model->animations[a].channel_count;
+    }
+    s->cursor = calloc(channels + 1, sizeof *s->cursor);
+    if (!s->cursor_base || !s->cursor) {
+        free(depth);
+        cb_sampler_free(s);
+        cb_fail(err, CB_ERR_INTERNAL, "out of memory creating a sampler for %s", model->source);
+        return NULL;
+    }
     /* Order by depth (a stable counting sort) so parents are evaluated first. */
     uint32_t max_depth = 0;
     for (uint32_t i = 0; i < n; ++i) {
@@ -144,6 +176,8 @@ void cb_sampler_free(cb_sampler *s)
     free(s->local_trs);
     free(s->animated);
     free(s->globals);
+    free(s->cursor);
+    free(s->cursor_base);
     free(s);
 }
 
@@ -177,7 +211,7 @@ const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
             const cb_channel *ch = &anim->channels[c];
             double v[4];
-            cb_channel_eval(ch, t, v);
+            channel_eval(ch, t, v, &s->cursor[s->cursor_base[animation] + c]);
             double *trs = s->local_trs + (size_t)ch->node * 10;
             int offset = ch->path == CB_PATH_TRANSLATION ? 0 : ch->path == CB_PATH_ROTATION ? 3 : 7;
             memcpy(trs + offset, v, (ch->path == CB_PATH_ROTATION ? 4 : 3) * sizeof(double));
@@ -192,7 +226,7 @@ const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
         if (p < 0)
             memcpy(s->globals + (size_t)i * 16, local, sizeof local);
         else
-            cb_mat4_mul(s->globals + (size_t)i * 16, s->globals + (size_t)p * 16, local);
+            cb_mat4_mul_affine(s->globals + (size_t)i * 16, s->globals + (size_t)p * 16, local);
     }
     return s->globals;
 }
@@ -201,8 +235,13 @@ void cb_sample_joint_matrices(cb_sampler *s, int32_t animation, double t, double
 {
     const double *globals = cb_sample_globals(s, animation, t);
     const cb_skin *skin = &s->model->skins[s->skin];
-    for (uint32_t j = 0; j < skin->joint_count; ++j)
-        cb_mat4_mul(out + (size_t)j * 16, globals + (size_t)skin->joints[j] * 16, skin->inverse_bind + (size_t)j * 16);
+    for (uint32_t j = 0; j < skin->joint_count; ++j) {
+        const double *ibm = skin->inverse_bind + (size_t)j * 16;
+        if (s->affine_ibm)
+            cb_mat4_mul_affine(out + (size_t)j * 16, globals + (size_t)skin->joints[j] * 16, ibm);
+        else
+            cb_mat4_mul(out + (size_t)j * 16, globals + (size_t)skin->joints[j] * 16, ibm);
+    }
 }
 
 uint32_t cb_skin_root_joint(const cb_model *model, int32_t skin_index)

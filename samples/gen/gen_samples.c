@@ -17,8 +17,8 @@
 #include <string.h>
 
 #define PI 3.14159265358979323846
-#define MAX_JOINTS 64
-#define MAX_CLIPS 8
+#define MAX_JOINTS 512
+#define MAX_CLIPS 128
 #define KEY_RATE 24.0 /* keys per second written for every animated channel */
 
 typedef enum role {
@@ -270,6 +270,54 @@ static void build_bird(animal *a)
     a->clip_count = 2;
     a->speed[0] = 5.0;
     a->speed[1] = 7.0;
+}
+
+/* A benchmark creature: a spine with limbs hanging off it, `joints` in all, `clips` clips of
+ * `seconds` each, every joint rotating on every clip (the worst case for a sampler). */
+static void bench_pose(const animal *a, int c, int ji, double t, double e[3], double tr[3])
+{
+    const joint *j = &a->joints[ji];
+    double w = 2 * PI * t / a->clips[c].duration, ph = 0.37 * c + 0.11 * ji;
+    tr[0] = j->pos[0], tr[1] = j->pos[1], tr[2] = j->pos[2];
+    if (j->role == R_ROOT) {
+        e[0] = e[1] = e[2] = 0;
+        tr[2] = a->speed[c] * t;
+        return;
+    }
+    e[0] = 0.3 * sin(w * (1 + c % 3) + ph);
+    e[1] = 0.2 * sin(2 * w + ph);
+    e[2] = 0.1 * sin(3 * w + 0.5 * ph);
+}
+
+static void build_bench(animal *a, int joints, int clips, double seconds, double key_rate)
+{
+    memset(a, 0, sizeof *a);
+    a->name = "bench";
+    a->pose = bench_pose;
+    (void)key_rate;
+    int root = add(a, "root", -1, 0, 0, 0, 0.02, R_ROOT, 0, 0);
+    int spine_len = joints / 10, prev = root;
+    int spine[MAX_JOINTS];
+    for (int i = 0; i < spine_len && a->joint_count < joints; ++i) {
+        char n[32];
+        snprintf(n, sizeof n, "spine%d", i);
+        prev = spine[i] = add(a, n, prev, 0, i ? 0 : 1.0, i ? 0.08 : 0, 0.1, R_SPINE, 0, i);
+    }
+    for (int limb = 0; a->joint_count < joints; ++limb) {
+        int parent = spine[(limb * 7) % spine_len], side = limb % 2 ? 1 : -1;
+        for (int i = 0; i < 20 && a->joint_count < joints; ++i) {
+            char n[32];
+            snprintf(n, sizeof n, "limb%d_%d", limb, i);
+            parent = add(a, n, parent, i ? 0 : side * 0.06, -0.05, 0.01, 0.04, R_UPPER, side, i);
+        }
+    }
+    a->clip_count = clips;
+    for (int c = 0; c < clips; ++c) {
+        static char names[MAX_CLIPS][16];
+        snprintf(names[c], sizeof names[c], "clip%02d", c);
+        a->clips[c] = (clip){names[c], seconds, 1};
+        a->speed[c] = 1.0 + 0.1 * c;
+    }
 }
 
 /* ---- math --------------------------------------------------------------------------------- */
@@ -566,11 +614,26 @@ static void write_animal(const animal *a, const char *dir)
 
 int main(int argc, char **argv)
 {
+    static animal a;
+    if (argc == 6 && strcmp(argv[1], "--bench") == 0) {
+        /* gen_samples --bench OUT_DIR JOINTS CLIPS SECONDS: a rig for `make bench` */
+        int joints = atoi(argv[3]), clips = atoi(argv[4]);
+        double seconds = atof(argv[5]);
+        if (joints < 20 || joints > MAX_JOINTS || clips < 1 || clips > MAX_CLIPS || !(seconds > 0)) {
+            fprintf(stderr, "gen_samples --bench: 20..%d joints, 1..%d clips, seconds > 0\n", MAX_JOINTS, MAX_CLIPS);
+            return 2;
+        }
+        build_bench(&a, joints, clips, seconds, KEY_RATE);
+        char name[64];
+        snprintf(name, sizeof name, "bench_j%d_c%d_s%g", joints, clips, seconds);
+        a.name = name;
+        write_animal(&a, argv[2]);
+        return 0;
+    }
     if (argc != 2) {
-        fprintf(stderr, "usage: gen_samples OUT_DIR\n");
+        fprintf(stderr, "usage: gen_samples OUT_DIR | gen_samples --bench OUT_DIR JOINTS CLIPS SECONDS\n");
         return 2;
     }
-    static animal a;
     build_quadruped(&a);
     write_animal(&a, argv[1]);
     build_fish(&a);
