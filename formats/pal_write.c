@@ -98,8 +98,11 @@ static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *
     }
 }
 
-cb_status cb_pal_encode(const cb_palette *p, const cb_model *m, int32_t skin_index, const cb_pal_write_options *opt,
-                        unsigned char **out, size_t *size, cb_error *err)
+/* Header and tables (zero-padded to the payload offset) and the payload to write after them:
+ * the palette's own texels, or a compressed copy in *owned. */
+static cb_status build(const cb_palette *p, const cb_model *m, int32_t skin_index, const cb_pal_write_options *opt,
+                       unsigned char **meta_out, size_t *meta_size, const void **payload, size_t *payload_size,
+                       unsigned char **owned, cb_error *err)
 {
     const cb_skin *skin = &m->skins[skin_index];
     layout_plan lp;
@@ -108,39 +111,53 @@ cb_status cb_pal_encode(const cb_palette *p, const cb_model *m, int32_t skin_ind
     lp.strings = lp.bones + (uint64_t)p->bone_count * CBPAL_BONE_SIZE;
     lp.strings_size = strings_size(p, m, skin);
     lp.payload = (lp.strings + lp.strings_size + CBPAL_PAYLOAD_ALIGN - 1) / CBPAL_PAYLOAD_ALIGN * CBPAL_PAYLOAD_ALIGN;
-    size_t bound = opt->zstd ? ZSTD_compressBound(p->texel_bytes) : p->texel_bytes;
-    unsigned char *d = calloc(lp.payload + bound, 1);
-    if (!d) return cb_fail(err, CB_ERR_INTERNAL, "out of memory encoding a %zu-byte palette", p->texel_bytes);
+    *owned = NULL;
+    *payload = p->texels;
+    lp.payload_size = p->texel_bytes;
     if (opt->zstd) {
-        size_t n = ZSTD_compress(d + lp.payload, bound, p->texels, p->texel_bytes, opt->zstd_level ? opt->zstd_level : 9);
+        size_t bound = ZSTD_compressBound(p->texel_bytes);
+        *owned = malloc(bound ? bound : 1);
+        if (!*owned) return cb_fail(err, CB_ERR_INTERNAL, "out of memory compressing a %zu-byte palette", p->texel_bytes);
+        size_t n = ZSTD_compress(*owned, bound, p->texels, p->texel_bytes, opt->zstd_level ? opt->zstd_level : 9);
         if (ZSTD_isError(n)) {
-            free(d);
+            free(*owned), *owned = NULL;
             return cb_fail(err, CB_ERR_INTERNAL, "zstd compression failed: %s", ZSTD_getErrorName(n));
         }
+        *payload = *owned;
         lp.payload_size = n;
-    } else {
-        memcpy(d + lp.payload, p->texels, p->texel_bytes);
-        lp.payload_size = p->texel_bytes;
+    }
+    unsigned char *d = calloc((size_t)lp.payload, 1);
+    if (!d) {
+        free(*owned), *owned = NULL;
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
     write_header(d, p, opt, &lp);
     write_tables(d, p, m, skin, &lp);
-    put64(d + CBPAL_CHECKSUM_OFFSET, cbpal_xxh64(d, (size_t)(lp.payload + lp.payload_size))); /* field was 0 */
-    *out = d;
-    *size = (size_t)(lp.payload + lp.payload_size);
+    cbpal_xxh64_state h; /* the checksum field is still 0 here, as the format requires */
+    cbpal_xxh64_init(&h);
+    cbpal_xxh64_update(&h, d, (size_t)lp.payload);
+    cbpal_xxh64_update(&h, *payload, (size_t)lp.payload_size);
+    put64(d + CBPAL_CHECKSUM_OFFSET, cbpal_xxh64_digest(&h));
+    *meta_out = d;
+    *meta_size = (size_t)lp.payload;
+    *payload_size = (size_t)lp.payload_size;
     return CB_OK;
 }
 
 cb_status cb_pal_write(const char *path, const cb_palette *p, const cb_model *m, int32_t skin,
                        const cb_pal_write_options *opt, cb_error *err)
 {
-    unsigned char *data;
-    size_t size;
-    if (cb_pal_encode(p, m, skin, opt, &data, &size, err)) return err->status;
+    unsigned char *meta = NULL, *owned = NULL;
+    const void *payload = NULL;
+    size_t meta_size = 0, payload_size = 0;
+    if (build(p, m, skin, opt, &meta, &meta_size, &payload, &payload_size, &owned, err)) return err->status;
     cb_atomic_file f;
     cb_status rc = cb_atomic_open(&f, path, err);
-    if (!rc) rc = cb_atomic_write(&f, data, size, err);
+    if (!rc) rc = cb_atomic_write(&f, meta, meta_size, err);
+    if (!rc) rc = cb_atomic_write(&f, payload, payload_size, err);
     if (!rc) rc = cb_atomic_commit(&f, err);
     else cb_atomic_abort(&f);
-    free(data);
+    free(meta);
+    free(owned);
     return rc;
 }

@@ -12,9 +12,6 @@ typedef struct cb_pal_write_options {
     bool in_place;          /* root motion was removed */
 } cb_pal_write_options;
 
-/* The whole file in memory (header, tables, payload); *out is malloc'ed. */
-cb_status cb_pal_encode(const cb_palette *p, const cb_model *model, int32_t skin, const cb_pal_write_options *opt,
-                        unsigned char **out, size_t *size, cb_error *err);
 cb_status cb_pal_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
                        const cb_pal_write_options *opt, cb_error *err);
 

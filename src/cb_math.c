@@ -54,19 +54,7 @@ void cb_mat4_from_trs(double m[16], cb_vec3 t, cb_quat q, cb_vec3 s)
     m[15] = 1;
 }
 
-cb_vec3 cb_mat4_transform_point(const double m[16], cb_vec3 p)
-{
-    cb_vec3 r = {m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12], m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13],
-                 m[2] * p.x + m[6] * p.y + m[10] * p.z + m[14]};
-    return r;
-}
 
-cb_vec3 cb_mat4_transform_dir(const double m[16], cb_vec3 d)
-{
-    cb_vec3 r = {m[0] * d.x + m[4] * d.y + m[8] * d.z, m[1] * d.x + m[5] * d.y + m[9] * d.z,
-                 m[2] * d.x + m[6] * d.y + m[10] * d.z};
-    return r;
-}
 
 double cb_mat4_determinant3(const double m[16])
 {
@@ -74,7 +62,6 @@ double cb_mat4_determinant3(const double m[16])
            m[8] * (m[1] * m[6] - m[5] * m[2]);
 }
 
-double cb_vec3_length(cb_vec3 a) { return sqrt(cb_vec3_dot(a, a)); }
 
 bool cb_mat4_decompose(const double m[16], cb_vec3 *t, cb_quat *r, cb_vec3 *s, double tolerance)
 {
@@ -129,7 +116,6 @@ cb_quat cb_quat_conjugate(cb_quat q)
     return r;
 }
 
-double cb_quat_dot(cb_quat a, cb_quat b) { return a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w; }
 
 /* sin(x) for 0 <= x < 0.21 by its Taylor series to x^7: the next term is below 2e-12, far
  * under float32 key precision; libm's sin costs several times more. */

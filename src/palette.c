@@ -256,27 +256,21 @@ static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
     if (st->errors[c].status == CB_OK) sample_clip(st, w, c, &st->errors[c]);
 }
 
+static void encode_rows(cb_palette *p, const float *canon, uint32_t first, uint32_t count);
+
+static void encode_clip_job(bake_state *st, worker *w, uint32_t c)
+{
+    (void)w;
+    encode_rows(st->p, st->canon, st->p->clips[c].first_row, st->p->clips[c].frames);
+}
+
 /* ---- pass 2: encode ---- */
 
 /* Quantization arithmetic runs in double so it adds nothing to the half-step of the format. */
-static uint16_t snorm16(double v)
-{
-    double c = v > 1 ? 1 : v < -1 ? -1 : v;
-    return (uint16_t)(int16_t)lrint(c * 32767.0);
-}
-
 static double snorm16_decode(uint16_t u)
 {
     double v = (int16_t)u / 32767.0;
     return v < -1 ? -1 : v;
-}
-
-static uint16_t unorm16(double v, double lo, double hi)
-{
-    if (!(hi > lo)) return 0;
-    double t = (v - lo) / (hi - lo);
-    t = t > 1 ? 1 : t < 0 ? 0 : t;
-    return (uint16_t)lrint(t * 65535.0);
 }
 
 static double unorm16_decode(uint16_t u, double lo, double hi) { return hi > lo ? lo + (hi - lo) * (u / 65535.0) : lo; }
@@ -334,17 +328,6 @@ static int u16_kind(cb_layout layout, int i)
     return i >= 12 ? 1 + (i - 12) : 0;        /* column 3 is the translation */
 }
 
-static uint16_t encode_u16(const cb_palette *p, int kind, double v)
-{
-    switch (kind) {
-    case 0: return snorm16(p->linear_range > 0 ? v / (double)p->linear_range : 0);
-    case 4: return snorm16(v);
-    case 5: return unorm16(v, 0, p->linear_range);
-    case 6: return v != 0 ? 65535 : 0;
-    default: return unorm16(v, p->bounds_min[kind - 1], p->bounds_max[kind - 1]);
-    }
-}
-
 static double decode_u16(const cb_palette *p, int kind, uint16_t u)
 {
     switch (kind) {
@@ -374,25 +357,58 @@ static float load_le32f(const unsigned char *d)
     return f;
 }
 
-static void encode_all(cb_palette *p, const float *canon)
+/* How each of a bone's values is quantized to u16: x = (v - offset) * scale, clamped to
+ * [lo, hi], times `steps`, rounded; snorm values are stored as two's complement. */
+typedef struct u16_slot {
+    double offset, scale, lo, hi, steps;
+} u16_slot;
+
+static void u16_slots(const cb_palette *p, u16_slot slots[16])
+{
+    for (int i = 0; i < 16; ++i) {
+        u16_slot *q = &slots[i];
+        int kind = u16_kind(p->layout, i);
+        double range = kind == 0 || kind == 5 ? p->linear_range : kind >= 1 && kind <= 3
+                       ? (double)p->bounds_max[kind - 1] - p->bounds_min[kind - 1] : 1;
+        bool snorm = kind == 0 || kind == 4;
+        q->offset = kind >= 1 && kind <= 3 ? p->bounds_min[kind - 1] : 0;
+        q->scale = range > 0 ? 1 / range : 0;
+        q->lo = snorm ? -1 : 0;
+        q->hi = 1;
+        q->steps = snorm ? 32767 : 65535;
+        if (kind == 6) q->offset = 0, q->scale = 1, q->lo = 0; /* mat4's constant 0/1 row */
+    }
+}
+
+static uint16_t quantize(const u16_slot *q, double v)
+{
+    double x = (v - q->offset) * q->scale;
+    x = x < q->lo ? q->lo : x > q->hi ? q->hi : x;
+    long n = lrint(x * q->steps);
+    return (uint16_t)(int16_t)n; /* snorm: two's complement; unorm: 0..65535 fits */
+}
+
+static void encode_rows(cb_palette *p, const float *canon, uint32_t first, uint32_t count)
 {
     uint32_t tb = cb_precision_texel_bytes(p->precision), nvalues = p->texels_per_bone * 4;
-    for (uint32_t r = 0; r < p->rows; ++r)
-        for (uint32_t j = 0; j < p->bone_count; ++j) {
+    u16_slot slots[16];
+    u16_slots(p, slots);
+    for (uint32_t r = first; r < first + count; ++r) {
+        uint32_t x0, y;
+        cb_palette_texel_xy(p, r, 0, &x0, &y);
+        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * tb;
+        const float *row = canon + (size_t)r * p->bone_count * CANON;
+        for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
             float vals[16];
-            texel_values(p, canon + ((size_t)r * p->bone_count + j) * CANON, vals);
-            uint32_t x, y;
-            cb_palette_texel_xy(p, r, j, &x, &y);
-            unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x) * tb;
-            for (uint32_t i = 0; i < nvalues; ++i) {
-                if (p->precision == CB_PRECISION_FLOAT)
-                    store_le32f(d + i * 4, vals[i]);
-                else if (p->precision == CB_PRECISION_HALF)
-                    store_le16(d + i * 2, cb_float_to_half(vals[i]));
-                else
-                    store_le16(d + i * 2, encode_u16(p, u16_kind(p->layout, (int)i), vals[i]));
-            }
+            texel_values(p, row + (size_t)j * CANON, vals);
+            if (p->precision == CB_PRECISION_FLOAT)
+                for (uint32_t i = 0; i < nvalues; ++i) store_le32f(d + i * 4, vals[i]);
+            else if (p->precision == CB_PRECISION_HALF)
+                for (uint32_t i = 0; i < nvalues; ++i) store_le16(d + i * 2, cb_float_to_half(vals[i]));
+            else
+                for (uint32_t i = 0; i < nvalues; ++i) store_le16(d + i * 2, quantize(&slots[i], vals[i]));
         }
+    }
 }
 
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
@@ -608,7 +624,7 @@ cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
     double t1 = seconds_now();
     measure_ranges(p, st.canon);
-    encode_all(p, st.canon);
+    for_each_clip(&st, encode_clip_job);
     double t2 = seconds_now(), lo[3], hi[3];
     p->model_height = cb_skin_rest_bounds(sampler, lo, hi);
     /* Exact skinning of every vertex at every row costs rows x vertices; past ~4M vertex-rows
