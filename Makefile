@@ -37,7 +37,7 @@ LIB_OBJ := $(LIB_C:%.c=$(BUILD)/obj/%.o) $(LIB_CXX:%.cpp=$(BUILD)/obj/%.o)
 CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
 
 SAMPLES := quadruped fish bird
-SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb)
+SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
 .PHONY: all deps demo check test test-asan bench bench-smoke clean samples
 all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(SAMPLE_GLB)
@@ -91,6 +91,8 @@ demo: all
 	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.pal || exit 1; done
 	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.exr || exit 1; done
 	@$(BUILD)/crowdbake inspect $(BUILD)/demo/quadruped.pal
+	@echo
+	$(BUILD)/crowdbake bake samples/catalog.toml
 
 # ---- tests ----------------------------------------------------------------------------
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)

@@ -13,8 +13,11 @@
 #include "cli.h"
 
 const char cmd_bake_usage[] =
-    "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr [options]\n\n"
-    "Bakes every clip of the model's skin into a bone-matrix palette.\n\n"
+    "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr [options]\n"
+    "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--json] [-q]\n\n"
+    "Bakes every clip of the model's skin into a bone-matrix palette; or every animal type of a\n"
+    "catalog (see catalog.example.toml) into palettes and a roster manifest, re-baking only what\n"
+    "changed (--force: everything), N types at a time (default: the number of cores).\n\n"
     "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md) or .exr (OpenEXR)\n"
     "  --format pal,exr           write these formats (OUT's extension is replaced per format)\n"
     "  --fps N                    baked frames per second (default 30)\n"
@@ -35,8 +38,8 @@ const char cmd_bake_usage[] =
 
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
-        *exr_compression, *threads;
-    bool zstd, json, quiet, quiet_long;
+        *exr_compression, *threads, *depfile, *manifest;
+    bool zstd, json, quiet, quiet_long, force;
 } bake_args;
 
 static double now_seconds(void)
@@ -157,12 +160,12 @@ static void json_output(cb_json *j, const char *path, const char *format, size_t
  * falls back to affine and says so. */
 static cb_status bake_palette(cb_sampler *s, cb_bake_options *o, bool layout_chosen, bool quiet, cb_palette *p, cb_error *err)
 {
-    cb_status rc = cb_palette_bake(s, o, NULL, p, err);
+    cb_status rc = cb_palette_bake(s, o, NULL, 0, p, err);
     if (rc == CB_ERR_INPUT && !layout_chosen && o->layout == CB_LAYOUT_QPOS && strstr(err->message, "qpos layout")) {
         if (!quiet) fprintf(stderr, "crowdbake: note: %s; baking with the affine layout instead\n", err->message);
         memset(err, 0, sizeof *err);
         o->layout = CB_LAYOUT_AFFINE;
-        rc = cb_palette_bake(s, o, NULL, p, err);
+        rc = cb_palette_bake(s, o, NULL, 0, p, err);
     }
     return rc;
 }
@@ -180,11 +183,20 @@ int cmd_bake(int argc, char **argv)
         {"--exr-compression", "NAME", &a.exr_compression, NULL}, {"--zstd", NULL, NULL, &a.zstd},
         {"--json", NULL, NULL, &a.json},           {"-q", NULL, NULL, &a.quiet},
         {"-j", "N", &a.threads, NULL},             {"--threads", "N", &a.threads, NULL},
+        {"--force", NULL, NULL, &a.force},         {"--depfile", "FILE", &a.depfile, NULL},
+        {"--manifest", "FILE", &a.manifest, NULL},
         {"--quiet", NULL, NULL, &a.quiet_long}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
     if (help) return fputs(cmd_bake_usage, stdout), 0;
     if (rc) return rc;
     a.quiet |= a.quiet_long;
+    if (ends_with(a.model, ".toml")) {
+        unsigned jobs = (unsigned)sysconf(_SC_NPROCESSORS_ONLN);
+        if (a.threads && (!cli_parse_u32(a.threads, &jobs) || jobs < 1 || jobs > 64))
+            return cli_usage_error("bake", "-j wants 1..64");
+        if (a.output) return cli_usage_error("bake", "a catalog writes to its [bake] out_dir; -o is for single models");
+        return cmd_bake_catalog(a.model, jobs, a.force, a.quiet, a.json, a.depfile, a.manifest);
+    }
     if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
     bool want_pal = false, want_exr = false;
     const char *formats = a.format ? a.format : ends_with(a.output, ".exr") ? "exr" : "pal";

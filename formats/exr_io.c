@@ -214,6 +214,13 @@ cb_status cb_exr_read(const char *path, cb_exr_image *img, cb_error *err)
         exr_attr_get_int(c, 0, "crowdbake.blocks", &img->blocks);
         exr_attr_get_int(c, 0, "crowdbake.rowsPerBlock", &img->rows_per_block);
         exr_attr_get_int(c, 0, "crowdbake.clips", &img->clips);
+        const char *hash = NULL;
+        if (exr_attr_get_string(c, 0, "crowdbake.inputHash", &len, &hash) == EXR_ERR_SUCCESS && hash && len == 16) {
+            char hex[17];
+            memcpy(hex, hash, 16);
+            hex[16] = '\0';
+            img->input_hash = strtoull(hex, NULL, 16);
+        }
     }
     if (c) exr_finish(&c);
     if (rc) {

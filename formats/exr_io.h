@@ -19,6 +19,7 @@ typedef struct cb_exr_image {
     size_t texel_bytes;
     char layout[16];
     int32_t bones, rows, blocks, rows_per_block, clips;
+    uint64_t input_hash;
 } cb_exr_image;
 
 /* Reads the texels back through OpenEXR, and the main crowdbake attributes. */

@@ -54,9 +54,17 @@ typedef struct cb_limits {
 
 cb_limits cb_default_limits(void);
 
-/* ---- the model ------------------------------------------------------------------------ */
+/* ---- arenas: one owner for many small allocations ------------------------------------- */
 
 typedef struct cb_arena cb_arena;
+
+cb_arena *cb_arena_create(void);
+void cb_arena_free(cb_arena *arena);
+/* Zeroed memory that lives until cb_arena_free; NULL when out of memory. */
+void *cb_arena_alloc(cb_arena *arena, size_t count, size_t size);
+const char *cb_arena_strdup(cb_arena *arena, const char *s);
+
+/* ---- the model ------------------------------------------------------------------------ */
 
 typedef struct cb_node {
     const char *name;   /* never NULL; "node_N" when the file has none */

@@ -60,11 +60,40 @@ static void *arena_alloc(cb_arena *arena, size_t bytes)
     return p; /* calloc'd and never reused, so already zero */
 }
 
+cb_arena *cb_arena_create(void) { return calloc(1, sizeof(cb_arena)); }
+
+void cb_arena_free(cb_arena *arena)
+{
+    if (!arena) return;
+    cb_arena_block *b = arena->head;
+    while (b) {
+        cb_arena_block *next = b->next;
+        free(b);
+        b = next;
+    }
+    free(arena);
+}
+
+void *cb_arena_alloc(cb_arena *arena, size_t count, size_t size)
+{
+    if (size && count > SIZE_MAX / size) return NULL;
+    size_t bytes = count * size;
+    return arena_alloc(arena, bytes ? bytes : 1);
+}
+
+const char *cb_arena_strdup(cb_arena *arena, const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *p = cb_arena_alloc(arena, n, 1);
+    if (p) memcpy(p, s, n);
+    return p;
+}
+
 cb_model *cb_model_create(const char *source)
 {
     cb_model *m = calloc(1, sizeof *m);
     if (!m) return NULL;
-    m->arena = calloc(1, sizeof *m->arena);
+    m->arena = cb_arena_create();
     if (!m->arena) {
         free(m);
         return NULL;
@@ -76,30 +105,13 @@ cb_model *cb_model_create(const char *source)
 void cb_model_free(cb_model *model)
 {
     if (!model) return;
-    cb_arena_block *b = model->arena->head;
-    while (b) {
-        cb_arena_block *next = b->next;
-        free(b);
-        b = next;
-    }
-    free(model->arena);
+    cb_arena_free(model->arena);
     free(model);
 }
 
-void *cb_model_alloc(cb_model *model, size_t count, size_t size)
-{
-    if (size && count > SIZE_MAX / size) return NULL;
-    size_t bytes = count * size;
-    return arena_alloc(model->arena, bytes ? bytes : 1);
-}
+void *cb_model_alloc(cb_model *model, size_t count, size_t size) { return cb_arena_alloc(model->arena, count, size); }
 
-const char *cb_model_strdup(cb_model *model, const char *s)
-{
-    size_t n = strlen(s) + 1;
-    char *p = cb_model_alloc(model, n, 1);
-    if (p) memcpy(p, s, n);
-    return p;
-}
+const char *cb_model_strdup(cb_model *model, const char *s) { return cb_arena_strdup(model->arena, s); }
 
 /* ---- validation ---- */
 

@@ -507,36 +507,37 @@ static bool joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, do
 
 /* ---- the bake ---- */
 
-static cb_status frame_clips(bake_state *st, cb_sampler *sampler, const int *clip_loops, cb_clip_info **infos_out,
-                             cb_error *err)
+static cb_status frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
+                             cb_clip_info **infos_out, cb_error *err)
 {
     cb_palette *p = st->p;
     const cb_model *m = st->model;
-    cb_clip_info *infos = calloc(m->animation_count ? m->animation_count : 1, sizeof *infos);
-    p->clips = calloc(m->animation_count ? m->animation_count : 1, sizeof *p->clips);
+    if (!plan) count = m->animation_count;
+    cb_clip_info *infos = calloc(count ? count : 1, sizeof *infos);
+    p->clips = calloc(count ? count : 1, sizeof *p->clips);
     *infos_out = infos;
     if (!infos || !p->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     uint64_t rows = 0;
-    for (uint32_t a = 0; a < m->animation_count; ++a) {
-        if (cb_clip_analyze(sampler, (int32_t)a, st->opt->fps, clip_loops ? clip_loops[a] : -1, &st->opt->limits,
-                            &infos[a], err))
-            return err->status;
-        cb_palette_clip *c = &p->clips[a];
-        c->name = m->animations[a].name;
+    for (uint32_t i = 0; i < count; ++i) {
+        cb_clip_plan one = plan ? plan[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0};
+        double fps = one.fps > 0 ? one.fps : st->opt->fps;
+        if (cb_clip_analyze(sampler, one.animation, fps, one.loop, &st->opt->limits, &infos[i], err)) return err->status;
+        cb_palette_clip *c = &p->clips[i];
+        c->name = one.name ? one.name : m->animations[one.animation].name;
         c->first_row = (uint32_t)rows;
-        c->frames = infos[a].frames;
-        c->fps = infos[a].effective_fps;
-        c->duration = infos[a].duration;
-        c->start = infos[a].t0;
-        c->loops = infos[a].loops;
+        c->frames = infos[i].frames;
+        c->fps = infos[i].effective_fps;
+        c->duration = infos[i].duration;
+        c->start = infos[i].t0;
+        c->loops = infos[i].loops;
         for (int k = 0; k < 3; ++k)
-            c->root_velocity[k] = (float)(st->opt->root_motion == CB_ROOT_MOTION_IN_PLACE ? infos[a].root_velocity[k] : 0);
-        rows += infos[a].frames;
+            c->root_velocity[k] = (float)(st->opt->root_motion == CB_ROOT_MOTION_IN_PLACE ? infos[i].root_velocity[k] : 0);
+        rows += infos[i].frames;
         if (rows > st->opt->limits.max_frames)
             return cb_fail(err, CB_ERR_INPUT, "%s: %llu baked rows over all clips, over the limit of %u (--max-frames)",
                            m->source, (unsigned long long)rows, st->opt->limits.max_frames);
     }
-    p->clip_count = m->animation_count;
+    p->clip_count = count;
     p->rows = (uint32_t)rows;
     return CB_OK;
 }
@@ -581,8 +582,8 @@ static cb_status first_clip_error(const bake_state *st, cb_error *err)
     return CB_OK;
 }
 
-cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const int *clip_loops, cb_palette *p,
-                          cb_error *err)
+cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                          uint32_t plan_count, cb_palette *p, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(sampler);
     int32_t skin_index = cb_sampler_skin(sampler);
@@ -594,14 +595,14 @@ cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const
     p->bone_count = skin->joint_count;
     p->texels_per_bone = cb_layout_texels_per_bone(opt->layout);
     p->row_texels = p->bone_count * p->texels_per_bone;
-    if (m->animation_count == 0)
+    if (m->animation_count == 0 || (plan && plan_count == 0))
         return cb_fail(err, CB_ERR_INPUT, "%s: has no animations to bake (export the clips with the model)", m->source);
     double t0 = seconds_now();
     bake_state st = {0};
     st.p = p, st.model = m, st.skin = skin_index, st.opt = opt;
     cb_clip_info *infos = NULL;
     double *radius = NULL;
-    if (frame_clips(&st, sampler, clip_loops, &infos, err) || plan_texture(p, opt->max_texture_size, m->source, err))
+    if (frame_clips(&st, sampler, plan, plan_count, &infos, err) || plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;
     st.infos = infos;
     p->texel_bytes = (size_t)p->width * p->height * cb_precision_texel_bytes(p->precision);

@@ -68,11 +68,19 @@ typedef struct cb_palette {
     double seconds_sample, seconds_encode, seconds_measure;
 } cb_palette;
 
-/* Samples every clip of the sampler's skin and encodes it. clip_loops may be NULL (decide
- * from the poses) or give -1/0/1 per animation. The palette references clip names in the
- * model, so free it before the model. */
-cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *options, const int *clip_loops,
-                          cb_palette *out, cb_error *err);
+/* Which clips a palette holds, in row order. */
+typedef struct cb_clip_plan {
+    int32_t animation;  /* index into the model's animations */
+    const char *name;   /* the name in the palette (a rename), or NULL for the clip's own */
+    int loop;           /* -1 decide from the poses, 0 one-shot, 1 loop */
+    double fps;         /* 0: the bake's fps */
+} cb_clip_plan;
+
+/* Samples the planned clips (every clip, in file order, when plan is NULL) of the sampler's
+ * skin and encodes them. The palette references names in the model and the plan: free it
+ * before them. */
+cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *options, const cb_clip_plan *plan,
+                          uint32_t plan_count, cb_palette *out, cb_error *err);
 void cb_palette_free(cb_palette *palette);
 
 /* Texel coordinates of a bone's first texel in a baked row. */

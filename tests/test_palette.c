@@ -69,7 +69,7 @@ static bool check_round_trip(cb_model *m, cb_layout layout, cb_precision precisi
     cb_bake_options o = cb_default_bake_options();
     o.layout = layout, o.precision = precision, o.max_texture_size = max_size;
     cb_palette p;
-    if (cb_palette_bake(s, &o, NULL, &p, &err) != CB_OK) {
+    if (cb_palette_bake(s, &o, NULL, 0, &p, &err) != CB_OK) {
         cb_sampler_free(s);
         if (layout == CB_LAYOUT_QPOS && strstr(err.message, "qpos layout cannot represent")) return false;
         fail_msg("%s %s/%s: %s", m->source, cb_layout_name(layout), cb_precision_name(precision), err.message);
@@ -153,12 +153,12 @@ static void test_wrapping_keeps_every_texel_addressable(void **state)
     cb_bake_options o = cb_default_bake_options();
     o.layout = CB_LAYOUT_MAT4, o.precision = CB_PRECISION_FLOAT;
     cb_palette flat, wrapped;
-    assert_int_equal(cb_palette_bake(s, &o, NULL, &flat, &err), CB_OK);
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &flat, &err), CB_OK);
     assert_int_equal(flat.blocks, 1);
     o.max_texture_size = 512; /* 43 bones x 4 texels = 172 per row: 2 blocks fit in 512 */
     double ratio = 0;
     assert_true(check_round_trip(m, o.layout, o.precision, 512, &ratio));
-    assert_int_equal(cb_palette_bake(s, &o, NULL, &wrapped, &err), CB_OK);
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &wrapped, &err), CB_OK);
     printf("  robot: %u rows -> %ux%u in %u blocks of %u rows\n", flat.rows, wrapped.width, wrapped.height,
            wrapped.blocks, wrapped.height);
     assert_true(wrapped.blocks == 2 && wrapped.width <= 512 && wrapped.height <= 512);
@@ -172,7 +172,7 @@ static void test_wrapping_keeps_every_texel_addressable(void **state)
         }
     o.max_texture_size = 128; /* narrower than one row */
     cb_palette none;
-    assert_int_equal(cb_palette_bake(s, &o, NULL, &none, &err), CB_ERR_INPUT);
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &none, &err), CB_ERR_INPUT);
     assert_non_null(strstr(err.message, "wider than --max-texture-size 128"));
     cb_palette_free(&flat);
     cb_palette_free(&wrapped);
@@ -188,7 +188,7 @@ static void test_qpos_refuses_non_uniform_scale_naming_joint_and_frame(void **st
     cb_sampler *s = cb_sampler_create(m, 0, &err);
     cb_bake_options o = cb_default_bake_options();
     cb_palette p;
-    assert_int_equal(cb_palette_bake(s, &o, NULL, &p, &err), CB_ERR_INPUT);
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &p, &err), CB_ERR_INPUT);
     assert_non_null(strstr(err.message, "joint '"));
     assert_non_null(strstr(err.message, "at frame "));
     assert_non_null(strstr(err.message, "use --layout affine"));
@@ -208,7 +208,7 @@ static void test_qpos_rows_stay_in_one_hemisphere(void **state)
         cb_bake_options o = cb_default_bake_options();
         o.precision = CB_PRECISION_FLOAT;
         cb_palette p;
-        assert_int_equal(cb_palette_bake(s, &o, NULL, &p, &err), CB_OK);
+        assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &p, &err), CB_OK);
         uint32_t wrap_breaks = 0;
         for (uint32_t c = 0; c < p.clip_count; ++c)
             for (uint32_t f = 0; f < p.clips[c].frames; ++f) {

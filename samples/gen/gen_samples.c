@@ -2,7 +2,8 @@
  *
  *   quadruped.glb  41 joints; idle, walk, run (a diagonal-pair gait with root travel), eat, death
  *   fish.glb       13 joints; swim (a travelling wave along the spine)
- *   bird.glb       18 joints; flap, glide
+ *   bird.glb       19 joints; flap, glide
+ *   quadruped_lod1.glb  the quadruped without ears, jaw, toes and tail tip (a LOD of its rig)
  *
  * Meters, +Y up, facing +Z. Every bone is a box skinned to its joint, its far end blended
  * with the child joint so bends look smooth. Standalone C11: no crowdbake code, no libraries.
@@ -11,6 +12,7 @@
  */
 #include <math.h>
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -318,6 +320,27 @@ static void build_bench(animal *a, int joints, int clips, double seconds, double
         a->clips[c] = (clip){names[c], seconds, 1};
         a->speed[c] = 1.0 + 0.1 * c;
     }
+}
+
+/* A level of detail of an animal: the same rig with some end joints dropped (their parents
+ * stay), so every kept joint has the same bind pose. */
+static void drop_joints(animal *a, const char *name, bool (*drop)(const joint *j))
+{
+    int map[MAX_JOINTS], kept = 0;
+    for (int j = 0; j < a->joint_count; ++j) map[j] = drop(&a->joints[j]) ? -1 : kept++;
+    for (int j = 0, k = 0; j < a->joint_count; ++j) {
+        if (map[j] < 0) continue;
+        a->joints[k] = a->joints[j];
+        a->joints[k].parent = a->joints[j].parent >= 0 ? map[a->joints[j].parent] : -1;
+        ++k;
+    }
+    a->joint_count = kept;
+    a->name = name;
+}
+
+static bool lod1_drops(const joint *j)
+{
+    return j->role == R_EAR || j->role == R_JAW || j->role == R_TOE || (j->role == R_TAIL && j->chain >= 4);
 }
 
 /* ---- math --------------------------------------------------------------------------------- */
@@ -635,6 +658,8 @@ int main(int argc, char **argv)
         return 2;
     }
     build_quadruped(&a);
+    write_animal(&a, argv[1]);
+    drop_joints(&a, "quadruped_lod1", lod1_drops);
     write_animal(&a, argv[1]);
     build_fish(&a);
     write_animal(&a, argv[1]);

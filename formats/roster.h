@@ -1,0 +1,70 @@
+/* roster.h - bakes a whole catalog: one palette per animal type (shared between types whose
+ * rigs and clips are identical), a roster manifest, a depfile; incremental and parallel. */
+#ifndef CB_ROSTER_H
+#define CB_ROSTER_H
+
+#include <stdio.h>
+
+#include "../src/catalog.h"
+
+typedef struct cb_roster_options {
+    uint32_t jobs;          /* types baked at once */
+    bool force;             /* re-bake what is up to date */
+    FILE *log;              /* one line per type, or NULL */
+    bool tty;               /* log is a terminal: show progress */
+    const char *manifest;   /* roster.json path; NULL: OUT_DIR/roster.json */
+    const char *depfile;    /* Make/Ninja depfile, or NULL */
+} cb_roster_options;
+
+typedef enum cb_type_outcome { CB_TYPE_BAKED, CB_TYPE_UP_TO_DATE, CB_TYPE_SHARED, CB_TYPE_FAILED } cb_type_outcome;
+
+typedef struct cb_roster_clip {
+    char name[128];
+    uint32_t first_row, frames;
+    double fps, duration, ground_speed;
+    bool loops;
+    const char *speed_method;
+} cb_roster_clip;
+
+typedef struct cb_roster_lod {
+    const char *path;
+    uint32_t joint_count;
+    uint32_t *remap;          /* joint_count entries */
+    uint64_t vertices, indices;
+} cb_roster_lod;
+
+typedef struct cb_roster_type {
+    const cb_catalog_animal *animal;
+    cb_type_outcome outcome;
+    cb_error error;
+    uint32_t owner;           /* the type whose palette file this type uses */
+    uint64_t key;             /* content hash of rig, clips and settings: equal keys share */
+    char pal_path[1024], exr_path[1024];
+    uint32_t bones, rows, width, height, blocks;
+    cb_layout layout;
+    cb_precision precision;
+    uint64_t vertices, indices, palette_bytes; /* palette_bytes: the texture as uploaded */
+    uint64_t pal_file_bytes, exr_file_bytes;
+    double max_error, model_height, speed_reference, seconds;
+    uint32_t clip_count;
+    cb_roster_clip *clips;
+    int *state_clip;          /* per catalog state: index into clips */
+    uint32_t lod_count;
+    cb_roster_lod *lods;
+} cb_roster_type;
+
+typedef struct cb_roster {
+    const cb_catalog *catalog;
+    uint32_t type_count;
+    cb_roster_type *types;
+    uint32_t baked, up_to_date, shared, failed;
+    char manifest_path[1024];
+    bool manifest_written;
+} cb_roster;
+
+/* Bakes every type; failures are recorded per type and the others still bake. Returns the
+ * status of the first failure (by name), or CB_OK. */
+cb_status cb_roster_bake(const cb_catalog *catalog, const cb_roster_options *options, cb_roster *out, cb_error *err);
+void cb_roster_free(cb_roster *roster);
+
+#endif

@@ -1,0 +1,105 @@
+/* catalog.h - an animal catalog (a roster of animal types to bake) as plain structs, and the
+ * roster logic that needs no file: state keywords, ground speed, LOD joint remapping.
+ * formats/catalog_toml.cpp fills a cb_catalog from TOML; formats/roster.c bakes it. */
+#ifndef CB_CATALOG_H
+#define CB_CATALOG_H
+
+#include "palette.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum { CB_FORMAT_PAL = 1u, CB_FORMAT_EXR = 2u };
+
+typedef struct cb_source_pos {
+    uint32_t line, column; /* 1-based; 0 when unknown */
+} cb_source_pos;
+
+typedef struct cb_bake_settings {
+    double fps;
+    cb_layout layout;
+    cb_precision precision;
+    unsigned formats;            /* CB_FORMAT_* */
+    const char *out_dir;         /* resolved against the catalog's directory */
+    uint32_t max_texture_size;
+    cb_root_motion root_motion;
+    bool layout_set, precision_set; /* chosen explicitly (else: defaults, with fallbacks) */
+} cb_bake_settings;
+
+typedef struct cb_catalog_clip {
+    const char *source; /* the clip's name in the model */
+    const char *name;   /* its name in the palette */
+    int loop;           /* -1 from the poses, 0, 1 */
+    double fps;         /* 0: the animal's fps */
+    cb_source_pos pos;
+} cb_catalog_clip;
+
+typedef struct cb_catalog_state {
+    const char *name;
+    const char **keywords;
+    uint32_t keyword_count;
+    cb_source_pos pos;
+} cb_catalog_state;
+
+typedef struct cb_catalog_animal {
+    const char *name;
+    cb_source_pos pos;
+    const char *model; /* resolved path */
+    cb_source_pos model_pos;
+    const char **lods;
+    cb_source_pos *lod_pos;
+    uint32_t lod_count;
+    cb_catalog_clip *clips; /* NULL: every clip of the model */
+    uint32_t clip_count;
+    cb_catalog_state *states;
+    uint32_t state_count;
+    const char *default_state;
+    double speed_reference; /* m/s (model units/s); with speed_auto, measured */
+    bool speed_auto;
+    cb_source_pos speed_pos;
+    cb_bake_settings bake;
+    const char *canonical;  /* the resolved entry as text: part of the input hash */
+} cb_catalog_animal;
+
+typedef struct cb_budget {
+    bool set;
+    const char *target;        /* a built-in profile or one defined in the catalog */
+    uint64_t vram_bytes;
+    double crowd_share;        /* the share of vram crowds may use, 0..1 */
+    uint32_t max_texture_size; /* the target's limit */
+    uint32_t max_bones;        /* the runtime shader's limit */
+    cb_source_pos pos;
+} cb_budget;
+
+typedef struct cb_catalog {
+    cb_arena *arena;
+    const char *path, *dir;
+    cb_bake_settings defaults;
+    cb_budget budget;
+    cb_catalog_animal *animals; /* sorted by name */
+    uint32_t animal_count;
+} cb_catalog;
+
+void cb_catalog_free(cb_catalog *catalog);
+
+/* Index of the first clip whose name contains a keyword, trying keywords in order
+ * (case-insensitive), or -1. */
+int cb_match_state(const char *const *clip_names, uint32_t clip_count, const char *const *keywords,
+                   uint32_t keyword_count);
+
+/* Ground speed of a clip in model units per second: the root's horizontal travel when it
+ * moves, else (in-place clips) the speed of the planted feet relative to the root. *method
+ * says which. 0 when neither moves. */
+double cb_measure_ground_speed(cb_sampler *sampler, const cb_clip_info *clip, const char **method);
+
+/* For a LOD skin: remap[i] = the main skin's joint with the LOD joint i's name. Fails, naming
+ * the first mismatch, when a name is missing or its bind pose (inverse bind matrix) differs. */
+cb_status cb_lod_remap(const cb_model *main, int32_t main_skin, const cb_model *lod, int32_t lod_skin, uint32_t *remap,
+                       cb_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

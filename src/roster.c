@@ -1,0 +1,138 @@
+/* roster.c - roster logic on plain structs: see catalog.h. */
+#include <ctype.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "catalog.h"
+
+void cb_catalog_free(cb_catalog *c)
+{
+    if (!c) return;
+    cb_arena_free(c->arena);
+    memset(c, 0, sizeof *c);
+}
+
+static bool contains_nocase(const char *hay, const char *needle)
+{
+    size_t n = strlen(needle);
+    if (n == 0) return false;
+    for (; *hay; ++hay) {
+        size_t i = 0;
+        while (i < n && hay[i] && tolower((unsigned char)hay[i]) == tolower((unsigned char)needle[i])) ++i;
+        if (i == n) return true;
+    }
+    return false;
+}
+
+int cb_match_state(const char *const *clips, uint32_t clip_count, const char *const *keywords, uint32_t keyword_count)
+{
+    for (uint32_t k = 0; k < keyword_count; ++k)
+        for (uint32_t c = 0; c < clip_count; ++c)
+            if (contains_nocase(clips[c], keywords[k])) return (int)c;
+    return -1;
+}
+
+/* ---- ground speed ---- */
+
+static bool is_leaf(const cb_model *m, const cb_skin *skin, uint32_t j)
+{
+    for (uint32_t k = 0; k < skin->joint_count; ++k)
+        for (int32_t p = m->nodes[skin->joints[k]].parent; p >= 0; p = m->nodes[p].parent)
+            if (p == skin->joints[j]) return false;
+    return true;
+}
+
+/* Mean horizontal speed, relative to the root, of one foot while it is down (in the lowest
+ * tenth of its height range): a planted foot slides back at the ground speed. */
+static double stance_speed(cb_sampler *s, const cb_clip_info *clip, uint32_t foot, uint32_t root, uint32_t samples)
+{
+    const cb_model *m = cb_sampler_model(s);
+    const cb_skin *skin = &m->skins[cb_sampler_skin(s)];
+    double *h = malloc(samples * sizeof(double)), *x = malloc(samples * sizeof(double)), *z = malloc(samples * sizeof(double));
+    if (!h || !x || !z) {
+        free(h), free(x), free(z);
+        return 0;
+    }
+    double lo = INFINITY, hi = -INFINITY, dt = clip->duration / samples;
+    for (uint32_t i = 0; i < samples; ++i) {
+        const double *g = cb_sample_globals(s, clip->animation, clip->t0 + i * dt);
+        const double *f = g + (size_t)skin->joints[foot] * 16, *r = g + (size_t)skin->joints[root] * 16;
+        h[i] = f[13], x[i] = f[12] - r[12], z[i] = f[14] - r[14];
+        lo = fmin(lo, h[i]), hi = fmax(hi, h[i]);
+    }
+    double band = lo + 0.1 * (hi - lo), dist = 0, time = 0;
+    for (uint32_t i = 0; i + 1 < samples; ++i)
+        if (h[i] <= band && h[i + 1] <= band) {
+            dist += hypot(x[i + 1] - x[i], z[i + 1] - z[i]);
+            time += dt;
+        }
+    free(h), free(x), free(z);
+    return time > 0 && hi > lo ? dist / time : 0;
+}
+
+static int compare_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+double cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, const char **method)
+{
+    *method = "none";
+    if (clip->duration <= 0) return 0;
+    const cb_model *m = cb_sampler_model(s);
+    const cb_skin *skin = &m->skins[cb_sampler_skin(s)];
+    /* Root travel counts when it is more than a percent of the skeleton per second. */
+    const double *g = cb_sample_globals(s, -1, 0);
+    double lo = INFINITY, hi = -INFINITY;
+    for (uint32_t j = 0; j < skin->joint_count; ++j) {
+        double y = g[(size_t)skin->joints[j] * 16 + 13];
+        lo = fmin(lo, y), hi = fmax(hi, y);
+    }
+    double size = hi - lo > 0 ? hi - lo : 1;
+    if (clip->ground_speed > 0.01 * size) {
+        *method = "root motion";
+        return clip->ground_speed;
+    }
+    /* Feet: leaf joints in the lowest 15 % of the rest pose. */
+    uint32_t root = cb_skin_root_joint(m, cb_sampler_skin(s)), feet = 0;
+    double speeds[64];
+    for (uint32_t j = 0; j < skin->joint_count && feet < 64; ++j) {
+        double y = g[(size_t)skin->joints[j] * 16 + 13];
+        if (y > lo + 0.15 * size || !is_leaf(m, skin, j)) continue;
+        double v = stance_speed(s, clip, j, root, 240);
+        if (v > 0) speeds[feet++] = v;
+    }
+    if (feet == 0) return 0;
+    qsort(speeds, feet, sizeof speeds[0], compare_double);
+    *method = "planted feet";
+    return speeds[feet / 2];
+}
+
+/* ---- LODs ---- */
+
+cb_status cb_lod_remap(const cb_model *main, int32_t main_skin, const cb_model *lod, int32_t lod_skin, uint32_t *remap,
+                       cb_error *err)
+{
+    const cb_skin *a = &main->skins[main_skin], *b = &lod->skins[lod_skin];
+    for (uint32_t i = 0; i < b->joint_count; ++i) {
+        const char *name = lod->nodes[b->joints[i]].name;
+        uint32_t k = 0;
+        while (k < a->joint_count && strcmp(main->nodes[a->joints[k]].name, name) != 0) ++k;
+        if (k == a->joint_count)
+            return cb_fail(err, CB_ERR_INPUT, "%s: LOD joint '%s' is not a joint of %s; a LOD must use the same rig", lod->source,
+                           name, main->source);
+        const double *x = a->inverse_bind + (size_t)k * 16, *y = b->inverse_bind + (size_t)i * 16;
+        double scale = 1;
+        for (int e = 0; e < 16; ++e) scale = fmax(scale, fabs(x[e]));
+        for (int e = 0; e < 16; ++e)
+            if (fabs(x[e] - y[e]) > 1e-4 * scale)
+                return cb_fail(err, CB_ERR_INPUT,
+                               "%s: LOD joint '%s' has another bind pose than in %s (inverse bind matrix element %d: %g vs "
+                               "%g); re-export the LOD from the same rig",
+                               lod->source, name, main->source, e, y[e], x[e]);
+        remap[i] = k;
+    }
+    return CB_OK;
+}
