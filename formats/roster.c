@@ -92,6 +92,28 @@ static uint64_t content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
     return cbpal_xxh64_digest(&h);
 }
 
+static void hash_file(cbpal_xxh64_state *h, const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return;
+    char buf[65536];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, f)) > 0) cbpal_xxh64_update(h, buf, n);
+    fclose(f);
+}
+
+/* What the files record: everything that produced them, so any change re-bakes. */
+static uint64_t input_hash(const cb_catalog_animal *an, uint64_t key)
+{
+    cbpal_xxh64_state h;
+    cbpal_xxh64_init(&h);
+    cbpal_xxh64_update(&h, &key, sizeof key);
+    hash_str(&h, an->canonical);
+    hash_file(&h, an->model);
+    for (uint32_t i = 0; i < an->lod_count; ++i) hash_file(&h, an->lods[i]);
+    return cbpal_xxh64_digest(&h);
+}
+
 /* ---- pass 1: prepare a type ---- */
 
 static int pick_skin(const cb_model *m)
@@ -257,6 +279,7 @@ static void prepare_type(roster_run *run, uint32_t i)
         return;
     speed_reference(an, t);
     t->key = content_key(w->model, w->skin, w->plan, t->clip_count, &an->bake);
+    t->input_hash = input_hash(an, t->key);
 }
 
 /* ---- pass 3: bake an owner ---- */
@@ -280,7 +303,7 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
     if (formats & CB_FORMAT_PAL) {
         cbpal_file f;
         if (cbpal_open(t->pal_path, 0, &f, msg, sizeof msg) != 0) return false;
-        bool same = f.header.input_hash == t->key && f.header.rows == t->rows;
+        bool same = f.header.input_hash == t->input_hash && f.header.rows == t->rows;
         if (same) {
             t->width = f.header.width, t->height = f.header.height, t->blocks = f.header.blocks;
             t->layout = (cb_layout)f.header.layout, t->precision = (cb_precision)f.header.precision;
@@ -294,7 +317,7 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
         cb_exr_image img;
         cb_error e = {0};
         if (cb_exr_read(t->exr_path, &img, &e)) return false;
-        bool same = img.input_hash == t->key && (uint32_t)img.rows == t->rows;
+        bool same = img.input_hash == t->input_hash && (uint32_t)img.rows == t->rows;
         if (same && !(formats & CB_FORMAT_PAL)) {
             t->width = img.width, t->height = img.height, t->blocks = (uint32_t)img.blocks;
             cb_layout_parse(img.layout, &t->layout);
@@ -332,11 +355,11 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
     if (stat(an->bake.out_dir, &st) != 0 && mkdir(an->bake.out_dir, 0777) != 0 && errno != EEXIST)
         cb_fail(err, CB_ERR_IO, "%s: cannot create the output directory: %s", an->bake.out_dir, strerror(errno));
     if (!err->status && (an->bake.formats & CB_FORMAT_PAL)) {
-        cb_pal_write_options po = {false, 0, t->key, (float)t->speed_reference, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
+        cb_pal_write_options po = {false, 0, t->input_hash, (float)t->speed_reference, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
         cb_pal_write(t->pal_path, &p, w->model, w->skin, &po, err);
     }
     if (!err->status && (an->bake.formats & CB_FORMAT_EXR))
-        cb_exr_write(t->exr_path, &p, w->model, w->skin, 0, t->key, (float)t->speed_reference, err);
+        cb_exr_write(t->exr_path, &p, w->model, w->skin, 0, t->input_hash, (float)t->speed_reference, err);
     t->width = p.width, t->height = p.height, t->blocks = p.blocks;
     t->layout = p.layout, t->precision = p.precision;
     t->max_error = p.max_error;

@@ -39,6 +39,7 @@ typedef struct cb_roster_type {
     cb_error error;
     uint32_t owner;           /* the type whose palette file this type uses */
     uint64_t key;             /* content hash of rig, clips and settings: equal keys share */
+    uint64_t input_hash;      /* key + model and LOD bytes + the resolved entry: recorded in the files */
     char pal_path[1024], exr_path[1024];
     uint32_t bones, rows, width, height, blocks;
     cb_layout layout;

@@ -45,7 +45,8 @@ static bool is_leaf(const cb_model *m, const cb_skin *skin, uint32_t j)
 
 /* Mean horizontal speed, relative to the root, of one foot while it is down (in the lowest
  * tenth of its height range): a planted foot slides back at the ground speed. */
-static double stance_speed(cb_sampler *s, const cb_clip_info *clip, uint32_t foot, uint32_t root, uint32_t samples)
+static double stance_speed(cb_sampler *s, const cb_clip_info *clip, uint32_t foot, uint32_t root, uint32_t samples,
+                           double size)
 {
     const cb_model *m = cb_sampler_model(s);
     const cb_skin *skin = &m->skins[cb_sampler_skin(s)];
@@ -60,6 +61,11 @@ static double stance_speed(cb_sampler *s, const cb_clip_info *clip, uint32_t foo
         const double *f = g + (size_t)skin->joints[foot] * 16, *r = g + (size_t)skin->joints[root] * 16;
         h[i] = f[13], x[i] = f[12] - r[12], z[i] = f[14] - r[14];
         lo = fmin(lo, h[i]), hi = fmax(hi, h[i]);
+    }
+    /* A foot that never lifts is not stepping: its sway is not travel. */
+    if (hi - lo < 0.02 * size) {
+        free(h), free(x), free(z);
+        return 0;
     }
     double band = lo + 0.1 * (hi - lo), dist = 0, time = 0;
     for (uint32_t i = 0; i + 1 < samples; ++i)
@@ -101,11 +107,12 @@ double cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, const ch
     for (uint32_t j = 0; j < skin->joint_count && feet < 64; ++j) {
         double y = g[(size_t)skin->joints[j] * 16 + 13];
         if (y > lo + 0.15 * size || !is_leaf(m, skin, j)) continue;
-        double v = stance_speed(s, clip, j, root, 240);
+        double v = stance_speed(s, clip, j, root, 240, size);
         if (v > 0) speeds[feet++] = v;
     }
     if (feet == 0) return 0;
     qsort(speeds, feet, sizeof speeds[0], compare_double);
+    if (speeds[feet / 2] <= 0.1 * size) return 0; /* shuffling on the spot is not travel */
     *method = "planted feet";
     return speeds[feet / 2];
 }

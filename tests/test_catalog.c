@@ -1,0 +1,357 @@
+/* test_catalog.c - the animal catalog: validation messages with line numbers, state keywords,
+ * speed references, the manifest against its schema, shared rigs, LOD remapping, incremental
+ * and parallel bakes, the depfile, and a failing type that does not stop the others. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <limits.h>
+#include <math.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "../formats/catalog_toml.h"
+#include "../formats/roster.h"
+
+#define TMP "build/tmp-tests/catalog"
+
+static char samples_abs[512];
+
+static int setup(void **state)
+{
+    (void)state;
+    char full[PATH_MAX];
+    if (!realpath(samples_dir(), full) || strlen(full) >= sizeof samples_abs) return -1;
+    memcpy(samples_abs, full, strlen(full) + 1);
+    return system("rm -rf " TMP " && mkdir -p " TMP);
+}
+
+static void write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+}
+
+/* A catalog over the samples; `extra` is appended verbatim. Returns its path. */
+static const char *catalog(const char *name, const char *out_dir, const char *extra)
+{
+    static char path[PATH_MAX];
+    static char text[16384];
+    snprintf(text, sizeof text,
+             "[bake]\nout_dir = \"%s\"\n\n"
+             "[animal.goat]\nmodel = \"%s/quadruped.glb\"\nlods = [\"%s/quadruped_lod1.glb\"]\n"
+             "states = { idle = [\"idle\"], wander = [\"walk\"], flee = [\"gallop\", \"run\"] }\ndefault_state = \"wander\"\n\n"
+             "[animal.sheep]\nmodel = \"%s/quadruped.glb\"\nstates = { idle = [\"idle\"] }\n\n"
+             "[animal.fish]\nmodel = \"%s/fish.glb\"\nstates = { swim = [\"SWIM\"] }\n%s",
+             out_dir, samples_abs, samples_abs, samples_abs, samples_abs, extra);
+    snprintf(path, sizeof path, TMP "/%s.toml", name);
+    write_text(path, text);
+    return path;
+}
+
+static void expect_catalog_error(const char *text, const char *needle, unsigned line)
+{
+    char path[] = TMP "/bad.toml";
+    write_text(path, text);
+    cb_catalog cat;
+    cb_error err = {0};
+    if (cb_catalog_load(path, &cat, &err) == CB_OK) {
+        cb_catalog_free(&cat);
+        fail_msg("accepted a catalog that should fail with '%s'", needle);
+    }
+    assert_int_equal(err.status, CB_ERR_INPUT);
+    char where[64];
+    snprintf(where, sizeof where, "bad.toml:%u:", line);
+    if (!strstr(err.message, needle) || !strstr(err.message, where))
+        fail_msg("message '%s' lacks '%s' or '%s'", err.message, needle, where);
+}
+
+static void test_validation_errors_name_line_and_fix(void **state)
+{
+    (void)state;
+    char model[640], text[2048];
+    snprintf(model, sizeof model, "model = \"%s/fish.glb\"", samples_abs);
+    snprintf(text, sizeof text, "[animal.fish]\n%s\nspeed_refrence = 2\n", model);
+    expect_catalog_error(text, "unknown key 'speed_refrence'; did you mean 'speed_reference'?", 3);
+    snprintf(text, sizeof text, "[bak]\nfps = 30\n[animal.fish]\n%s\n", model);
+    expect_catalog_error(text, "unknown key 'bak'; did you mean 'bake'?", 1);
+    snprintf(text, sizeof text, "[animal.fish]\n%s\nfps = \"fast\"\n", model);
+    expect_catalog_error(text, "fps must be a number, got a string", 3);
+    expect_catalog_error("[animal.fish]\nmodel = \"nope/missing.glb\"\n", "does not exist", 2);
+    snprintf(text, sizeof text, "[animal.fish]\n%s\nstates = { swim = [\"swim\"] }\ndefault_state = \"fly\"\n", model);
+    expect_catalog_error(text, "default_state 'fly' is not one of its states (swim)", 4);
+    snprintf(text, sizeof text, "[animal.fish]\n%s\n\n[animal.fish]\n%s\n", model, model);
+    expect_catalog_error(text, "fish", 4); /* TOML: a table defined twice */
+    snprintf(text, sizeof text, "[animal.Fish]\n%s\n[animal.fish]\n%s\n", model, model);
+    expect_catalog_error(text, "differ only in case", 3);
+    snprintf(text, sizeof text, "[animal.fish]\n%s\nclips = [\"swim\", { source = \"swim\" }]\n", model);
+    expect_catalog_error(text, "two clips are named 'swim'", 3);
+    expect_catalog_error("[animal.fish\nmodel = 1\n", "", 1); /* TOML syntax */
+    snprintf(text, sizeof text, "[budget]\nvram = \"lots\"\n[animal.fish]\n%s\n", model);
+    expect_catalog_error(text, "vram must be a size", 2);
+}
+
+/* Errors only the models can reveal come from the bake, still with the catalog's position. */
+static void test_state_and_clip_errors_list_what_exists(void **state)
+{
+    (void)state;
+    const char *path = catalog("states", TMP "/out-states",
+                               "\n[animal.bird]\nmodel = \"" "BIRD" "\"\n");
+    (void)path;
+    char text[2048];
+    snprintf(text, sizeof text,
+             "[bake]\nout_dir = \"out-err\"\n[animal.bird]\nmodel = \"%s/bird.glb\"\nstates = { fly = [\"flap\"], flee = "
+             "[\"gallop\", \"sprint\"] }\n[animal.fish]\nmodel = \"%s/fish.glb\"\nclips = [\"swim\", \"jump\"]\n",
+             samples_abs, samples_abs);
+    write_text(TMP "/errors.toml", text);
+    cb_catalog cat;
+    cb_error err = {0};
+    assert_int_equal(cb_catalog_load(TMP "/errors.toml", &cat, &err), CB_OK);
+    cb_roster r;
+    cb_roster_options opt = {0};
+    opt.jobs = 2;
+    assert_int_equal(cb_roster_bake(&cat, &opt, &r, &err), CB_ERR_INPUT);
+    assert_int_equal(r.failed, 2);
+    const char *bird = r.types[0].error.message, *fish = r.types[1].error.message;
+    if (!strstr(bird, "errors.toml:5:") || !strstr(bird, "state 'flee' matches no clip") || !strstr(bird, "flap, glide"))
+        fail_msg("bird: %s", bird);
+    if (!strstr(fish, "errors.toml:8:") || !strstr(fish, "has no clip 'jump'; its clips are: swim")) fail_msg("fish: %s", fish);
+    cb_roster_free(&r);
+    cb_catalog_free(&cat);
+}
+
+static void test_state_keyword_matching(void **state)
+{
+    (void)state;
+    const char *clips[] = {"Idle_Breathe", "Walk", "Run_Fast", "Gallop", "Attack_Bite"};
+    const char *flee[] = {"run", "gallop"}, *attack[] = {"attack", "bite"}, *none[] = {"swim"}, *later[] = {"fly", "GALLOP"};
+    assert_int_equal(cb_match_state(clips, 5, flee, 2), 2);   /* keywords in order: run first */
+    assert_int_equal(cb_match_state(clips, 5, attack, 2), 4);
+    assert_int_equal(cb_match_state(clips, 5, none, 1), -1);
+    assert_int_equal(cb_match_state(clips, 5, later, 2), 3); /* case-insensitive, second keyword */
+}
+
+static double clip_speed(const char *model_path, const char *clip_name, const char **method)
+{
+    cb_model *m = load_or_fail(model_path);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_clip_info info;
+    assert_int_equal(cb_clip_analyze(s, cb_model_find_animation(m, clip_name), 30, -1, NULL, &info, &err), CB_OK);
+    double v = cb_measure_ground_speed(s, &info, method);
+    cb_sampler_free(s);
+    cb_model_free(m);
+    return v;
+}
+
+static void test_speed_reference_auto(void **state)
+{
+    (void)state;
+    char q[600], fox[1024];
+    snprintf(q, sizeof q, "%s/quadruped.glb", samples_abs);
+    const char *method;
+    /* The generator moves the root at 1.2 and 4.0 m/s: the root-motion measurement must say so. */
+    assert_float_equal(clip_speed(q, "walk", &method), 1.2, 1e-6);
+    assert_string_equal(method, "root motion");
+    assert_float_equal(clip_speed(q, "run", &method), 4.0, 1e-6);
+    assert_float_equal(clip_speed(q, "idle", &method), 0, 0);
+    /* Fox walks and runs in place: the speed comes from its planted feet. */
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    double walk = clip_speed(fox, "Walk", &method);
+    assert_string_equal(method, "planted feet");
+    double run = clip_speed(fox, "Run", &method);
+    printf("  Fox: Walk %.1f units/s, Run %.1f units/s (planted feet)\n", walk, run);
+    assert_true(walk > 0 && run > 1.5 * walk);
+    assert_float_equal(clip_speed(fox, "Survey", &method), 0, 1e-9); /* standing still */
+}
+
+static int run_cli(const char *args, char *out, size_t size)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "%s %s 2>&1", crowdbake_exe(), args);
+    return run_command(cmd, out, size);
+}
+
+static void test_manifest_sharing_and_lods(void **state)
+{
+    (void)state;
+    static char out[65536];
+    char args[2048];
+    const char *path = catalog("roster", "out-roster", "");
+    snprintf(args, sizeof args, "bake %s -q", path);
+    assert_int_equal(run_cli(args, out, sizeof out), 0);
+    /* The manifest against its schema (ajv, draft 2020-12). */
+    assert_int_equal(run_command("cd tests/validator && { [ -d node_modules/ajv ] || npm ci --no-audit --no-fund >/dev/null 2>&1; }",
+                                 NULL, 0), 0);
+    assert_int_equal(run_command("node tests/validator/validate_schema.mjs docs/roster.schema.json " TMP
+                                 "/out-roster/roster.json 2>&1", out, sizeof out), 0);
+    /* goat and sheep share one palette: only goat.pal exists. */
+    struct stat st;
+    assert_int_equal(stat(TMP "/out-roster/goat.pal", &st), 0);
+    assert_int_not_equal(stat(TMP "/out-roster/sheep.pal", &st), 0);
+    snprintf(args, sizeof args, "python3 -c \"import json; t = json.load(open('%s/out-roster/roster.json'))['types']; "
+             "print(t['sheep']['shares_palette_of'], t['sheep']['palette'], t['goat']['states']['flee']['clip'], "
+             "t['fish']['states']['swim']['instance']['phase'], json.dumps(t['goat']['lods'][0]['joint_remap']))\"", TMP);
+    assert_int_equal(run_command(args, out, sizeof out), 0);
+    char owner[64], pal[64], flee[64], phase[64];
+    assert_int_equal(sscanf(out, "%63s %63s %63s %63s", owner, pal, flee, phase), 4);
+    assert_string_equal(owner, "goat");
+    assert_string_equal(pal, "goat.pal");
+    assert_string_equal(flee, "run"); /* "gallop" matches nothing, "run" does */
+    assert_string_equal(phase, "golden_ratio");
+    /* The LOD remap, checked against the joint names of both files. */
+    char q[600], l[600];
+    snprintf(q, sizeof q, "%s/quadruped.glb", samples_abs);
+    snprintf(l, sizeof l, "%s/quadruped_lod1.glb", samples_abs);
+    cb_model *main = load_or_fail(q), *lod = load_or_fail(l);
+    const char *p = strchr(out, '[');
+    assert_non_null(p);
+    for (uint32_t j = 0; j < lod->skins[0].joint_count; ++j) {
+        unsigned k = (unsigned)strtoul(p + 1, (char **)&p, 10);
+        assert_string_equal(lod->nodes[lod->skins[0].joints[j]].name, main->nodes[main->skins[0].joints[k]].name);
+    }
+    assert_true(lod->skins[0].joint_count < main->skins[0].joint_count);
+    cb_model_free(main);
+    cb_model_free(lod);
+}
+
+static void test_incompatible_lod_names_the_joint(void **state)
+{
+    (void)state;
+    char text[2048];
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"out-lod\"\n[animal.goat]\nmodel = \"%s/quadruped.glb\"\n"
+             "lods = [\"%s/fish.glb\"]\n", samples_abs, samples_abs);
+    write_text(TMP "/lod.toml", text);
+    char out[4096];
+    assert_int_equal(run_cli("bake " TMP "/lod.toml -q", out, sizeof out), CB_ERR_INPUT);
+    /* The fish's first joints are "root" (same bind pose) then "spine0" (another one). */
+    if (!strstr(out, "lod.toml:5:") || !strstr(out, "LOD joint 'spine0' has another bind pose")) fail_msg("%s", out);
+}
+
+static long long mtime_ns(const char *path)
+{
+    struct stat st;
+    if (stat(path, &st) != 0) return -1;
+    return (long long)st.st_mtim.tv_sec * 1000000000LL + st.st_mtim.tv_nsec;
+}
+
+static void test_incremental_second_run_rewrites_nothing(void **state)
+{
+    (void)state;
+    static char out[65536];
+    /* fish2 uses its own copy of the fish model, so changing it touches one type only. */
+    char extra[1024], cmd[2048];
+    snprintf(cmd, sizeof cmd, "cp %s/fish.glb " TMP "/fish-copy.glb", samples_abs);
+    assert_int_equal(system(cmd), 0);
+    snprintf(extra, sizeof extra, "\n[animal.fish2]\nmodel = \"fish-copy.glb\"\nfps = 20\n"); /* not shared with fish */
+    const char *path = catalog("incr", "out-incr", extra);
+    char args[2048];
+    snprintf(args, sizeof args, "bake %s --json", path);
+    assert_int_equal(run_cli(args, out, sizeof out), 0);
+    const char *files[] = {TMP "/out-incr/goat.pal", TMP "/out-incr/fish.pal", TMP "/out-incr/fish2.pal", TMP "/out-incr/roster.json"};
+    long long before[4];
+    for (int i = 0; i < 4; ++i) assert_true((before[i] = mtime_ns(files[i])) > 0);
+    usleep(20000);
+    assert_int_equal(run_cli(args, out, sizeof out), 0);
+    assert_non_null(strstr(out, "\"baked\": 0"));
+    assert_non_null(strstr(out, "\"up_to_date\": 3"));
+    for (int i = 0; i < 4; ++i) assert_true(mtime_ns(files[i]) == before[i]);
+    /* A different model in fish2's file: only fish2 is baked again. */
+    snprintf(cmd, sizeof cmd, "cp %s/bird.glb " TMP "/fish-copy.glb", samples_abs);
+    assert_int_equal(system(cmd), 0);
+    assert_int_equal(run_cli(args, out, sizeof out), 0);
+    assert_non_null(strstr(out, "\"baked\": 1"));
+    assert_non_null(strstr(out, "\"name\": \"fish2\",\n      \"outcome\": \"baked\""));
+    assert_true(mtime_ns(files[0]) == before[0] && mtime_ns(files[1]) == before[1]);
+    assert_true(mtime_ns(files[2]) != before[2]);
+    /* --force bakes everything again. */
+    snprintf(args, sizeof args, "bake %s --json --force", path);
+    assert_int_equal(run_cli(args, out, sizeof out), 0);
+    assert_non_null(strstr(out, "\"baked\": 3"));
+}
+
+static void test_parallel_bake_is_byte_identical(void **state)
+{
+    (void)state;
+    char out[8192], args[2048];
+    const char *a = catalog("par1", "out-j1", "\n[animal.bird]\nmodel = \"BIRDPATH\"\n");
+    (void)a;
+    char bird[700];
+    snprintf(bird, sizeof bird, "\n[animal.bird]\nmodel = \"%s/bird.glb\"\nfps = 24\n", samples_abs);
+    char p1[1024], p4[1024];
+    snprintf(p1, sizeof p1, "%s", catalog("par1", "out-j1", bird));
+    snprintf(p4, sizeof p4, "%s", catalog("par4", "out-j4", bird));
+    snprintf(args, sizeof args, "bake %s -j 1 -q --force", p1);
+    assert_int_equal(run_cli(args, out, sizeof out), 0);
+    snprintf(args, sizeof args, "bake %s -j 4 -q --force", p4);
+    assert_int_equal(run_cli(args, out, sizeof out), 0);
+    const char *names[] = {"goat.pal", "fish.pal", "bird.pal"};
+    for (int i = 0; i < 3; ++i) {
+        char cmd[1024];
+        snprintf(cmd, sizeof cmd, "cmp " TMP "/out-j1/%s " TMP "/out-j4/%s", names[i], names[i]);
+        assert_int_equal(system(cmd), 0);
+    }
+    /* The manifests differ only in the catalog's name. */
+    assert_int_equal(system("grep -v catalog " TMP "/out-j1/roster.json > " TMP "/m1 && grep -v catalog " TMP
+                            "/out-j4/roster.json > " TMP "/m4 && cmp " TMP "/m1 " TMP "/m4"), 0);
+}
+
+static void test_depfile_lists_every_input_of_every_output(void **state)
+{
+    (void)state;
+    char out[8192], args[2048];
+    const char *path = catalog("dep", "out-dep", "");
+    snprintf(args, sizeof args, "bake %s -q --depfile " TMP "/out-dep.d", path);
+    assert_int_equal(run_cli(args, out, sizeof out), 0);
+    FILE *f = fopen(TMP "/out-dep.d", "r");
+    assert_non_null(f);
+    static char dep[16384];
+    size_t n = fread(dep, 1, sizeof dep - 1, f);
+    dep[n] = '\0';
+    fclose(f);
+    /* goat.pal depends on the catalog, the quadruped (goat and sheep), and the goat's LOD. */
+    static char expect[4096];
+    snprintf(expect, sizeof expect, TMP "/out-dep/goat.pal: " TMP "/dep.toml \\\n  %s/quadruped.glb \\\n  %s/quadruped_lod1.glb \\\n  %s/quadruped.glb\n",
+             samples_abs, samples_abs, samples_abs);
+    if (!strstr(dep, expect)) fail_msg("depfile:\n%s\nlacks:\n%s", dep, expect);
+    snprintf(expect, sizeof expect, TMP "/out-dep/fish.pal: " TMP "/dep.toml \\\n  %s/fish.glb\n", samples_abs);
+    assert_non_null(strstr(dep, expect));
+    assert_non_null(strstr(dep, TMP "/out-dep/roster.json: " TMP "/dep.toml"));
+    assert_null(strstr(dep, "sheep.pal")); /* sheep writes no file of its own */
+}
+
+static void test_a_failing_type_does_not_stop_the_others(void **state)
+{
+    (void)state;
+    char out[8192], args[2048], cmd[1024];
+    snprintf(cmd, sizeof cmd, "head -c 1000 %s/bird.glb > " TMP "/broken.glb", samples_abs);
+    assert_int_equal(system(cmd), 0);
+    const char *path = catalog("fail", "out-fail", "\n[animal.broken]\nmodel = \"broken.glb\"\n");
+    snprintf(args, sizeof args, "bake %s", path);
+    assert_int_equal(run_cli(args, out, sizeof out), CB_ERR_INPUT);
+    if (!strstr(out, "broken           FAILED: ") || !strstr(out, "truncated GLB") || !strstr(out, "2 baked"))
+        fail_msg("%s", out);
+    struct stat st;
+    assert_int_equal(stat(TMP "/out-fail/goat.pal", &st), 0);
+    assert_int_equal(stat(TMP "/out-fail/fish.pal", &st), 0);
+    assert_int_not_equal(stat(TMP "/out-fail/broken.pal", &st), 0);
+    assert_int_equal(system("ls -a " TMP "/out-fail | grep -q '\\.tmp\\.'"), 256); /* no temporaries left */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_validation_errors_name_line_and_fix),
+        cmocka_unit_test(test_state_and_clip_errors_list_what_exists),
+        cmocka_unit_test(test_state_keyword_matching),
+        cmocka_unit_test(test_speed_reference_auto),
+        cmocka_unit_test(test_manifest_sharing_and_lods),
+        cmocka_unit_test(test_incompatible_lod_names_the_joint),
+        cmocka_unit_test(test_incremental_second_run_rewrites_nothing),
+        cmocka_unit_test(test_parallel_bake_is_byte_identical),
+        cmocka_unit_test(test_depfile_lists_every_input_of_every_output),
+        cmocka_unit_test(test_a_failing_type_does_not_stop_the_others),
+    };
+    return cmocka_run_group_tests_name("catalog", tests, setup, NULL);
+}
