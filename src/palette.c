@@ -2,6 +2,8 @@
  * joint matrix in the chosen layout and precision, and measuring the error that costs. */
 #include "palette.h"
 
+#include "budget.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -77,16 +79,13 @@ static cb_status plan_texture(cb_palette *p, uint32_t max_size, const char *sour
                        "%s: %u bones x %u texels = %u texels per row, wider than --max-texture-size %u; use a layout "
                        "with fewer texels per bone (qpos: 2) or a larger limit",
                        source, p->bone_count, p->texels_per_bone, p->row_texels, max_size);
-    uint32_t max_blocks = max_size / p->row_texels;
-    uint64_t blocks = (p->rows + (uint64_t)max_size - 1) / max_size;
-    if (blocks > max_blocks)
+    cb_texture_geometry g;
+    if (!cb_wrap_rows(p->row_texels, p->rows, max_size, &g))
         return cb_fail(err, CB_ERR_INPUT,
                        "%s: %u baked rows do not fit a %ux%u texture even wrapped into %u columns of %u rows; lower "
                        "--fps, bake fewer clips, or raise --max-texture-size",
-                       source, p->rows, max_size, max_size, max_blocks, max_size);
-    p->blocks = (uint32_t)blocks;
-    p->height = (uint32_t)((p->rows + blocks - 1) / blocks); /* balanced blocks: the least padding */
-    p->width = p->blocks * p->row_texels;
+                       source, p->rows, max_size, max_size, max_size / p->row_texels, max_size);
+    p->blocks = g.blocks, p->height = g.height, p->width = g.width;
     return CB_OK;
 }
 

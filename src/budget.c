@@ -1,0 +1,61 @@
+/* budget.c - see budget.h. */
+#include "budget.h"
+
+#include <strings.h>
+
+bool cb_wrap_rows(uint32_t row_texels, uint64_t rows, uint32_t max, cb_texture_geometry *out)
+{
+    out->width = out->height = out->blocks = 0;
+    if (max < 1 || row_texels < 1 || rows < 1 || row_texels > max) return false;
+    uint64_t blocks = (rows + max - 1) / max;
+    if (blocks > max / row_texels) return false;
+    out->blocks = (uint32_t)blocks;
+    out->height = (uint32_t)((rows + blocks - 1) / blocks); /* balanced blocks: the least padding */
+    out->width = out->blocks * row_texels;
+    return true;
+}
+
+uint64_t cb_palette_texture_bytes(uint32_t bones, uint32_t rows, cb_layout layout, cb_precision precision, uint32_t max,
+                                  cb_texture_geometry *g)
+{
+    if (!cb_wrap_rows(bones * cb_layout_texels_per_bone(layout), rows, max, g)) return 0;
+    return (uint64_t)g->width * g->height * cb_precision_texel_bytes(precision);
+}
+
+const cb_vat_encoding cb_vat_encodings[CB_VAT_ENCODINGS] = {
+    {"position RGBA16F + normal RGBA8", 8, 4},
+    {"position + normal RGBA16F", 8, 8},
+    {"position + normal RGBA32F", 16, 16},
+};
+
+uint64_t cb_vat_bytes(uint64_t vertices, uint32_t frames, const cb_vat_encoding *enc, uint32_t max, cb_texture_geometry *g,
+                      bool *fits)
+{
+    *fits = false;
+    g->width = g->height = g->blocks = 0;
+    if (vertices == 0 || frames == 0 || max == 0) return 0;
+    uint32_t width = vertices < max ? (uint32_t)vertices : max;
+    uint64_t rows_per_frame = (vertices + width - 1) / width;
+    *fits = cb_wrap_rows(width, rows_per_frame * frames, max, g);
+    if (!*fits) return 0;
+    return (uint64_t)g->width * g->height * (enc->position_bytes + enc->normal_bytes);
+}
+
+uint64_t cb_mesh_bytes(uint64_t vertices, uint64_t indices) { return vertices * 48 + indices * (vertices > 65535 ? 4 : 2); }
+
+/* Sources in docs/budget.md. */
+const cb_target_profile cb_profiles[] = {
+    {"Steam Deck", 1ull << 30, 16384, "Valve: 1 GiB UMA frame buffer by default; Vulkan maxImageDimension2D 16384 (RADV)"},
+    {"Desktop 4 GiB", 4ull << 30, 16384, "a 4 GiB discrete GPU; Direct3D 11 feature level 11_0 guarantees 16384"},
+    {"Desktop 8 GiB", 8ull << 30, 16384, "an 8 GiB discrete GPU; Direct3D 11 feature level 11_0 guarantees 16384"},
+    {"Mobile GLES 3.0", 512ull << 20, 2048, "OpenGL ES 3.0 guarantees MAX_TEXTURE_SIZE >= 2048; 512 MiB is a planning figure"},
+    {"WebGL 2", 512ull << 20, 4096, "WebGL 2 devices commonly report 4096 or more (2048 guaranteed); 512 MiB planning figure"},
+};
+const uint32_t cb_profile_count = sizeof cb_profiles / sizeof cb_profiles[0];
+
+const cb_target_profile *cb_find_profile(const char *name)
+{
+    for (uint32_t i = 0; name && i < cb_profile_count; ++i)
+        if (strcasecmp(cb_profiles[i].name, name) == 0) return &cb_profiles[i];
+    return NULL;
+}

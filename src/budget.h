@@ -1,0 +1,61 @@
+/* budget.h - the arithmetic of GPU memory: texture geometry with wrapping, palette and
+ * vertex-animation-texture (VAT) sizes, mesh buffers, and target profiles. docs/budget.md
+ * gives every formula and the source of every profile. */
+#ifndef CB_BUDGET_H
+#define CB_BUDGET_H
+
+#include "palette.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cb_texture_geometry {
+    uint32_t width, height, blocks; /* blocks of `height` rows side by side */
+} cb_texture_geometry;
+
+/* Lays `rows` rows of `row_texels` texels into a texture no dimension of which exceeds `max`:
+ * blocks = ceil(rows / max), height = ceil(rows / blocks), width = blocks * row_texels.
+ * False when even that does not fit. */
+bool cb_wrap_rows(uint32_t row_texels, uint64_t rows, uint32_t max, cb_texture_geometry *out);
+
+/* Texture bytes of a palette: wrapped geometry x texel bytes. 0 when it does not fit. */
+uint64_t cb_palette_texture_bytes(uint32_t bones, uint32_t rows, cb_layout layout, cb_precision precision, uint32_t max,
+                                  cb_texture_geometry *geometry);
+
+/* A VAT stores every vertex of every frame. A frame of V vertices takes ceil(V / w) texture
+ * rows of w = min(V, max) texels, then rows wrap like a palette's. Two textures (positions,
+ * normals) of that geometry. */
+typedef struct cb_vat_encoding {
+    const char *name;
+    uint32_t position_bytes, normal_bytes; /* per texel */
+} cb_vat_encoding;
+
+enum { CB_VAT_ENCODINGS = 3 };
+extern const cb_vat_encoding cb_vat_encodings[CB_VAT_ENCODINGS];
+
+/* Bytes of both textures, or 0 and *fits = false when they exceed max. */
+uint64_t cb_vat_bytes(uint64_t vertices, uint32_t frames, const cb_vat_encoding *enc, uint32_t max, cb_texture_geometry *g,
+                      bool *fits);
+
+/* The skinned mesh's own buffers: 48 bytes a vertex (position and normal float3, joints u16x4,
+ * weights float4) and 2-byte indices (4 past 65,535 vertices). */
+uint64_t cb_mesh_bytes(uint64_t vertices, uint64_t indices);
+
+typedef struct cb_target_profile {
+    const char *name;
+    uint64_t vram_bytes;
+    uint32_t max_texture_size;
+    const char *source;
+} cb_target_profile;
+
+/* A built-in profile by name (case-insensitive), or NULL. */
+const cb_target_profile *cb_find_profile(const char *name);
+extern const cb_target_profile cb_profiles[];
+extern const uint32_t cb_profile_count;
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
