@@ -5,6 +5,7 @@
 
 #include "../formats/catalog_toml.h"
 #include "../formats/json_writer.h"
+#include "../formats/report.h"
 #include "../formats/roster.h"
 #include "cli.h"
 
@@ -60,9 +61,16 @@ int cmd_bake_catalog(const char *path, uint32_t jobs, bool force, bool quiet, bo
                         jobs == 1 ? "" : "s");
     cb_status rc = cb_roster_bake(&cat, &opt, &r, &err);
     if (json) print_json(&r);
-    else if (!quiet)
+    else if (!quiet) {
         printf("crowdbake: %u baked, %u up to date, %u sharing a palette, %u failed; manifest %s%s\n", r.baked, r.up_to_date,
                r.shared, r.failed, r.manifest_path, r.manifest_written ? "" : " (unchanged)");
+        cb_report rep;
+        cb_error rerr = {0};
+        if (!cb_report_build(&cat, &r, &rep, &rerr)) {
+            cb_report_paragraph(stdout, &rep);
+            cb_report_free(&rep);
+        }
+    }
     if (rc && r.failed > 1) /* every failure was listed; the exit message names the first */
         fprintf(stderr, "crowdbake: %u animal types failed\n", r.failed);
     cb_roster_free(&r);

@@ -76,15 +76,22 @@ static exr_result_t set_metadata(exr_context_t c, int part, const cb_palette *p,
     return rc;
 }
 
-static exr_result_t write_scanlines(exr_context_t c, int part, const cb_palette *p)
+/* Where each EXR channel's values come from: interleaved pixels in memory. */
+typedef struct channel_source {
+    const char *name;
+    const uint8_t *base; /* pixel (0, 0) */
+    int32_t pixel_stride, line_stride;
+    int16_t bytes;       /* per value: 2 half, 4 float */
+} channel_source;
+
+static exr_result_t write_scanlines(exr_context_t c, int part, uint32_t height, const channel_source *src, int n)
 {
     int32_t per_chunk = 1;
     exr_result_t rc = exr_get_scanlines_per_chunk(c, part, &per_chunk);
-    uint32_t tb = cb_precision_texel_bytes(p->precision), comp_bytes = tb / 4;
     exr_encode_pipeline_t enc;
     memset(&enc, 0, sizeof enc);
     bool started = false;
-    for (int32_t y = 0; rc == EXR_ERR_SUCCESS && y < (int32_t)p->height; y += per_chunk) {
+    for (int32_t y = 0; rc == EXR_ERR_SUCCESS && y < (int32_t)height; y += per_chunk) {
         exr_chunk_info_t cinfo;
         rc = exr_write_scanline_chunk_info(c, part, y, &cinfo);
         if (rc) break;
@@ -92,12 +99,15 @@ static exr_result_t write_scanlines(exr_context_t c, int part, const cb_palette 
         if (rc) break;
         for (int16_t k = 0; k < enc.channel_count; ++k) {
             exr_coding_channel_info_t *ch = &enc.channels[k];
-            ch->encode_from_ptr = (const uint8_t *)p->texels + ((size_t)y * p->width) * tb +
-                                  (size_t)component_of(ch->channel_name) * comp_bytes;
-            ch->user_pixel_stride = (int32_t)tb;
-            ch->user_line_stride = (int32_t)(p->width * tb);
-            ch->user_bytes_per_element = (int16_t)comp_bytes;
-            ch->user_data_type = p->precision == CB_PRECISION_FLOAT ? EXR_PIXEL_FLOAT : EXR_PIXEL_HALF;
+            const channel_source *s = NULL;
+            for (int i = 0; i < n && !s; ++i)
+                if (strcmp(src[i].name, ch->channel_name) == 0) s = &src[i];
+            if (!s) return EXR_ERR_INVALID_ARGUMENT;
+            ch->encode_from_ptr = s->base + (size_t)y * s->line_stride;
+            ch->user_pixel_stride = s->pixel_stride;
+            ch->user_line_stride = s->line_stride;
+            ch->user_bytes_per_element = s->bytes;
+            ch->user_data_type = s->bytes == 4 ? EXR_PIXEL_FLOAT : EXR_PIXEL_HALF;
         }
         if (!started) rc = exr_encoding_choose_default_routines(c, part, &enc);
         started = true;
@@ -107,13 +117,26 @@ static exr_result_t write_scanlines(exr_context_t c, int part, const cb_palette 
     return rc;
 }
 
-cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *m, int32_t skin, int compression,
-                       uint64_t input_hash, float speed_reference, cb_error *err)
+/* Opens `path` for writing (OpenEXR renames a temporary file over it on success), adds one
+ * scanline part of width x height and the given channels. */
+static exr_result_t start_image(const char *path, char *message, uint32_t width, uint32_t height, int compression,
+                                const channel_source *src, int n, exr_context_t *c)
 {
-    if (p->precision == CB_PRECISION_U16)
-        return cb_fail(err, CB_ERR_USAGE, "%s: EXR stores half or float texels; use --precision half|float, or write a .pal "
-                       "for u16", path);
-    if (p->width > INT32_MAX || p->height > INT32_MAX) return cb_fail(err, CB_ERR_INPUT, "%s: palette too large", path);
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = remember_error;
+    init.user_data = message;
+    int part = 0;
+    exr_result_t rc = exr_start_write(c, path, EXR_INTERMEDIATE_TEMP_FILE, &init);
+    if (!rc) rc = exr_add_part(*c, "palette", EXR_STORAGE_SCANLINE, &part);
+    if (!rc) rc = exr_initialize_required_attr_simple(*c, part, (int32_t)width, (int32_t)height, (exr_compression_t)compression);
+    for (int i = 0; i < n && !rc; ++i)
+        rc = exr_add_channel(*c, part, src[i].name, src[i].bytes == 4 ? EXR_PIXEL_FLOAT : EXR_PIXEL_HALF,
+                             EXR_PERCEPTUALLY_LINEAR, 1, 1);
+    return rc;
+}
+
+static cb_status check_dir(const char *path, cb_error *err)
+{
     char dir[4096];
     snprintf(dir, sizeof dir, "%s", path);
     char *slash = strrchr(dir, '/');
@@ -121,27 +144,62 @@ cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *m,
     struct stat st;
     if (slash && (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)))
         return cb_fail(err, CB_ERR_IO, "%s: cannot write: directory %s does not exist (create it first)", path, dir);
-    char message[256] = "";
-    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
-    init.error_handler_fn = remember_error;
-    init.user_data = message;
-    exr_context_t c = NULL;
-    int part = 0;
-    /* OpenEXR writes a temporary file and renames it on success: old file or new, never half. */
-    exr_result_t rc = exr_start_write(&c, path, EXR_INTERMEDIATE_TEMP_FILE, &init);
-    if (!rc) rc = exr_add_part(c, "palette", EXR_STORAGE_SCANLINE, &part);
-    if (!rc) rc = exr_initialize_required_attr_simple(c, part, (int32_t)p->width, (int32_t)p->height, (exr_compression_t)compression);
-    exr_pixel_type_t type = p->precision == CB_PRECISION_FLOAT ? EXR_PIXEL_FLOAT : EXR_PIXEL_HALF;
-    const char *channels[4] = {"A", "B", "G", "R"};
-    for (int i = 0; i < 4 && !rc; ++i) rc = exr_add_channel(c, part, channels[i], type, EXR_PERCEPTUALLY_LINEAR, 1, 1);
-    if (!rc) rc = set_metadata(c, part, p, m, skin, input_hash, speed_reference);
-    if (!rc) rc = exr_write_header(c);
-    if (!rc) rc = write_scanlines(c, part, p);
+    return CB_OK;
+}
+
+static cb_status finish_image(const char *path, const char *message, exr_result_t rc, exr_context_t c, cb_error *err)
+{
     exr_result_t fin = c ? exr_finish(&c) : EXR_ERR_SUCCESS;
     if (rc || fin)
         return cb_fail(err, CB_ERR_IO, "%s: OpenEXR could not write the file: %s", path,
                        message[0] ? message : exr_get_default_error_message(rc ? rc : fin));
     return CB_OK;
+}
+
+cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *m, int32_t skin, int compression,
+                       uint64_t input_hash, float speed_reference, cb_error *err)
+{
+    if (p->precision == CB_PRECISION_U16)
+        return cb_fail(err, CB_ERR_USAGE, "%s: EXR stores half or float texels; use --precision half|float, or write a .pal "
+                       "for u16", path);
+    if (p->width > INT32_MAX || p->height > INT32_MAX) return cb_fail(err, CB_ERR_INPUT, "%s: palette too large", path);
+    if (check_dir(path, err)) return err->status;
+    int16_t bytes = p->precision == CB_PRECISION_FLOAT ? 4 : 2;
+    int32_t stride = 4 * bytes, line = (int32_t)(p->width * 4 * bytes);
+    const uint8_t *t = p->texels;
+    channel_source src[4] = {{"A", t + 3 * bytes, stride, line, bytes}, {"B", t + 2 * bytes, stride, line, bytes},
+                             {"G", t + bytes, stride, line, bytes}, {"R", t, stride, line, bytes}};
+    char message[256] = "";
+    exr_context_t c = NULL;
+    exr_result_t rc = start_image(path, message, p->width, p->height, compression, src, 4, &c);
+    if (!rc) rc = set_metadata(c, 0, p, m, skin, input_hash, speed_reference);
+    if (!rc) rc = exr_write_header(c);
+    if (!rc) rc = write_scanlines(c, 0, p->height, src, 4);
+    return finish_image(path, message, rc, c, err);
+}
+
+cb_status cb_exr_write_vat(const char *path, const cb_vat *vat, int compression, cb_error *err)
+{
+    if (check_dir(path, err)) return err->status;
+    int32_t line = (int32_t)(vat->geometry.width * 8);
+    const uint8_t *pp = (const uint8_t *)vat->positions, *nn = (const uint8_t *)vat->normals;
+    channel_source src[8] = {{"normal.A", nn + 6, 8, line, 2},   {"normal.B", nn + 4, 8, line, 2},
+                             {"normal.G", nn + 2, 8, line, 2},   {"normal.R", nn, 8, line, 2},
+                             {"position.A", pp + 6, 8, line, 2}, {"position.B", pp + 4, 8, line, 2},
+                             {"position.G", pp + 2, 8, line, 2}, {"position.R", pp, 8, line, 2}};
+    char message[256] = "";
+    exr_context_t c = NULL;
+    exr_result_t rc = start_image(path, message, vat->geometry.width, vat->geometry.height, compression, src, 8, &c);
+    rc |= rc ? 0 : exr_attr_set_string(c, 0, "crowdbake.generator", "crowdbake " CROWDBAKE_VERSION " vat");
+    rc |= rc ? 0 : exr_attr_set_int(c, 0, "crowdbake.vertices", (int32_t)vat->vertices);
+    rc |= rc ? 0 : exr_attr_set_int(c, 0, "crowdbake.frames", (int32_t)vat->frames);
+    rc |= rc ? 0 : exr_attr_set_int(c, 0, "crowdbake.rowsPerFrame", (int32_t)vat->rows_per_frame);
+    rc |= rc ? 0 : exr_attr_set_int(c, 0, "crowdbake.frameWidth", (int32_t)vat->frame_width);
+    rc |= rc ? 0 : exr_attr_set_int(c, 0, "crowdbake.blocks", (int32_t)vat->geometry.blocks);
+    rc |= rc ? 0 : exr_attr_set_float(c, 0, "crowdbake.maxError", (float)vat->max_error);
+    if (!rc) rc = exr_write_header(c);
+    if (!rc) rc = write_scanlines(c, 0, vat->geometry.height, src, 8);
+    return finish_image(path, message, rc, c, err);
 }
 
 /* ---- reading ---- */

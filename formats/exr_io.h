@@ -5,12 +5,16 @@
 #define CB_EXR_IO_H
 
 #include "../src/palette.h"
+#include "../src/vat.h"
 
 /* Lossless compressions only: the texels must read back bit-identical. */
 bool cb_exr_compression_parse(const char *text, int *out);
 
 cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin, int compression,
                        uint64_t input_hash, float speed_reference, cb_error *err);
+
+/* A VAT: channels position.RGBA and normal.RGBA, half floats, one frame per row block. */
+cb_status cb_exr_write_vat(const char *path, const cb_vat *vat, int compression, cb_error *err);
 
 typedef struct cb_exr_image {
     uint32_t width, height;

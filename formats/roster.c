@@ -19,6 +19,7 @@
 #include "gltf_load.h"
 #include "json_writer.h"
 #include "pal_write.h"
+#include "../src/vat.h"
 
 typedef struct type_work {
     cb_model *model;
@@ -248,6 +249,21 @@ static cb_status check_lods(const cb_catalog *cat, const cb_catalog_animal *an, 
     return CB_OK;
 }
 
+/* The error a VAT of the same frames would have: half-float positions against exact skinning. */
+static void measure_vat(const cb_catalog_animal *an, type_work *w, cb_roster_type *t)
+{
+    cb_bake_options o = cb_default_bake_options();
+    o.fps = an->bake.fps;
+    o.root_motion = an->bake.root_motion;
+    o.max_texture_size = 1u << 30; /* only measured: no texture is made */
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(w->model, w->skin, &err);
+    cb_vat vat = {0};
+    if (s && !cb_vat_bake(s, &o, w->plan, t->clip_count, false, &vat, &err)) t->vat_error = vat.max_error;
+    cb_vat_free(&vat);
+    cb_sampler_free(s);
+}
+
 static void prepare_type(roster_run *run, uint32_t i)
 {
     const cb_catalog_animal *an = &run->cat->animals[i];
@@ -280,6 +296,7 @@ static void prepare_type(roster_run *run, uint32_t i)
     speed_reference(an, t);
     t->key = content_key(w->model, w->skin, w->plan, t->clip_count, &an->bake);
     t->input_hash = input_hash(an, t->key);
+    if (run->opt->measure_vat) measure_vat(an, w, t);
 }
 
 /* ---- pass 3: bake an owner ---- */

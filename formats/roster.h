@@ -14,6 +14,7 @@ typedef struct cb_roster_options {
     bool tty;               /* log is a terminal: show progress */
     const char *manifest;   /* roster.json path; NULL: OUT_DIR/roster.json */
     const char *depfile;    /* Make/Ninja depfile, or NULL */
+    bool measure_vat;       /* also measure each type's VAT error (half-float positions) for the report */
 } cb_roster_options;
 
 typedef enum cb_type_outcome { CB_TYPE_BAKED, CB_TYPE_UP_TO_DATE, CB_TYPE_SHARED, CB_TYPE_FAILED } cb_type_outcome;
@@ -47,6 +48,7 @@ typedef struct cb_roster_type {
     uint64_t vertices, indices, palette_bytes; /* palette_bytes: the texture as uploaded */
     uint64_t pal_file_bytes, exr_file_bytes;
     double max_error, model_height, speed_reference, seconds;
+    double vat_error;         /* with measure_vat */
     uint32_t clip_count;
     cb_roster_clip *clips;
     int *state_clip;          /* per catalog state: index into clips */

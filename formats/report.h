@@ -1,0 +1,57 @@
+/* report.h - the VAT comparison and VRAM budget report of a baked roster: exact bytes from the
+ * palettes as written, every encoding side by side, VAT sizes and errors, mesh buffers, limits,
+ * and the roster's total against its budget. Terminal, Markdown, JSON and HTML (with an SVG chart). */
+#ifndef CB_REPORT_H
+#define CB_REPORT_H
+
+#include <stdio.h>
+
+#include "../src/budget.h"
+#include "roster.h"
+
+typedef struct cb_report_type {
+    const char *name;
+    const char *shares;                 /* the owner's name when the palette is shared */
+    uint32_t bones, frames;
+    uint64_t vertices, indices;
+    cb_layout layout;
+    cb_precision precision;
+    uint32_t width, height, blocks;     /* the palette as written */
+    uint64_t palette_bytes;             /* its texture bytes (counted once per file in totals) */
+    uint64_t encoding_bytes[3][3];      /* [layout][precision] at the target's texture limit; 0: does not fit */
+    uint64_t vat_bytes[CB_VAT_ENCODINGS];
+    bool vat_fits;                      /* at the target's texture limit */
+    cb_texture_geometry vat_geometry;
+    uint64_t mesh_bytes;
+    double palette_error, vat_error, model_height; /* model units */
+    bool palette_over_limit, bones_over_limit;
+} cb_report_type;
+
+typedef struct cb_report {
+    uint32_t type_count;
+    cb_report_type *types;
+    bool has_budget;
+    char target[128];
+    const char *profile_source;
+    uint64_t vram_bytes, budget_bytes;  /* budget = vram x crowd_share */
+    double crowd_share;
+    uint32_t max_texture_size, max_bones;
+    uint64_t palettes_total, meshes_total, total, vat_total[CB_VAT_ENCODINGS];
+    bool over_budget;
+    uint32_t warnings;
+} cb_report;
+
+cb_status cb_report_build(const cb_catalog *catalog, const cb_roster *roster, cb_report *out, cb_error *err);
+void cb_report_free(cb_report *report);
+
+void cb_report_text(FILE *out, const cb_report *r);
+void cb_report_markdown(FILE *out, const cb_report *r);
+void cb_report_json(FILE *out, const cb_report *r);
+/* A self-contained page (no network): tables and an SVG chart with a bar per type and the budget line. */
+void cb_report_html(FILE *out, const cb_report *r);
+/* One paragraph: what the catalog bake ends with. */
+void cb_report_paragraph(FILE *out, const cb_report *r);
+/* "1.6 MiB" */
+void cb_human_bytes(uint64_t bytes, char *buf, size_t size);
+
+#endif
