@@ -11,7 +11,7 @@
 SHELL := /bin/bash
 
 DEB_PACKAGES := pkg-config nlohmann-json3-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
-                libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev
+                libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium
 PKGS := tinygltf nlohmann_json draco OpenEXR libzstd tomlplusplus
 
 BUILD   ?= build

@@ -1,0 +1,84 @@
+#!/usr/bin/env python3
+"""check_report.py CROWDBAKE REPORT.json MAX_TEXTURE FPS NAME=MODEL[@OWNER] ...
+
+Recomputes a `crowdbake report --json` from the formulas of docs/budget.md, written again here
+from that document, with the facts `crowdbake info --json` gives for each model (bones,
+vertices, indices, frames per clip). Every number must match byte for byte. Prints what it
+checked; exits 1 on the first mismatch."""
+import json, math, subprocess, sys
+
+exe, report_path, max_tex, fps = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+types = {}
+for arg in sys.argv[5:]:
+    name, rest = arg.split('=', 1)
+    model, _, owner = rest.partition('@')
+    types[name] = (model, owner or None)
+report = json.load(open(report_path))
+checks = 0
+
+
+def expect(what, got, want):
+    global checks
+    if got != want:
+        sys.exit('MISMATCH %s: report %r, formula %r' % (what, got, want))
+    checks += 1
+
+
+def wrap(row_texels, rows, m):
+    if row_texels > m or rows < 1:
+        return None
+    blocks = -(-rows // m)
+    if blocks > m // row_texels:
+        return None
+    return blocks * row_texels, -(-rows // blocks), blocks
+
+
+TEXELS = {'mat4': 4, 'affine': 3, 'qpos': 2}
+BYTES = {'float': 16, 'half': 8, 'u16': 8}
+VAT = {'position RGBA16F + normal RGBA8': 12, 'position + normal RGBA16F': 16, 'position + normal RGBA32F': 32}
+totals = {'palettes': 0, 'meshes': 0, 'vat': {k: 0 for k in VAT}}
+by_name = {t['name']: t for t in report['types']}
+for name, (model, owner) in sorted(types.items()):
+    info = json.loads(subprocess.run([exe, 'info', model, '--json', '--fps', fps], capture_output=True, check=True).stdout)
+    skin = info['baked_skin']
+    bones = info['skins'][skin]['joints']
+    prims = [p for p in info['mesh_primitives'] if p['skin'] == skin]
+    vertices = sum(p['vertices'] for p in prims)
+    indices = sum(p['indices'] for p in prims)
+    frames = sum(c['frames'] for c in info['clips'])
+    t = by_name[name]
+    expect(name + ' bones', t['bones'], bones)
+    expect(name + ' vertices', t['vertices'], vertices)
+    expect(name + ' indices', t['indices'], indices)
+    expect(name + ' frames', t['frames'], frames)
+    for key, b in t['encodings'].items():
+        layout, precision = key.split('/')
+        g = wrap(bones * TEXELS[layout], frames, max_tex)
+        expect(name + ' ' + key, b, g[0] * g[1] * BYTES[precision] if g else 0)
+    pal = t['palette']
+    g = wrap(bones * TEXELS[pal['layout']], frames, 16384)  # as baked, at the catalog's default limit
+    expect(name + ' palette geometry', (pal['width'], pal['height'], pal['blocks']), g)
+    expect(name + ' palette bytes', pal['bytes'], g[0] * g[1] * BYTES[pal['precision']])
+    w = min(vertices, max_tex)
+    vg = wrap(w, frames * -(-vertices // w), max_tex)
+    expect(name + ' vat fits', t['vat']['fits_texture_limit'], vg is not None)
+    for enc, per in VAT.items():
+        want = vg[0] * vg[1] * per if vg else vertices * frames * per
+        expect(name + ' vat ' + enc, t['vat'][enc], want)
+        totals['vat'][enc] += want
+    mesh = 48 * vertices + indices * (4 if vertices > 65535 else 2)
+    expect(name + ' mesh bytes', t['mesh_bytes'], mesh)
+    totals['meshes'] += mesh
+    if owner:
+        expect(name + ' shares', t.get('shares_palette_of'), owner)
+    else:
+        totals['palettes'] += pal['bytes']
+expect('totals palettes', report['totals']['palettes'], totals['palettes'])
+expect('totals meshes', report['totals']['meshes'], totals['meshes'])
+expect('totals roster', report['totals']['roster'], totals['palettes'] + totals['meshes'])
+expect('totals vat', report['totals']['vat'], totals['vat'])
+if 'budget' in report:
+    b = report['budget']
+    expect('budget bytes', b['budget_bytes'], round(b['vram_bytes'] * b['crowd_share']))
+    expect('over budget', report['totals']['over_budget'], totals['palettes'] + totals['meshes'] > b['budget_bytes'])
+print('%d numbers match the formulas' % checks)
