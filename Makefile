@@ -39,7 +39,7 @@ CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: all deps demo check test test-asan bench bench-smoke clean samples
+.PHONY: all deps demo check test test-asan bench bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds
 all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(SAMPLE_GLB)
 
 # ---- dependencies --------------------------------------------------------------------
@@ -108,9 +108,56 @@ $(BUILD)/tests/standalone_pal_reader: tests/standalone_pal_reader.c formats/crow
 	  $(shell pkg-config --libs cmocka libzstd 2>/dev/null)
 TEST_BINS += $(BUILD)/tests/standalone_pal_reader
 
+# Fuzz targets, replayed over their regression inputs (and the samples) by every test run.
+FUZZ_TARGETS := gltf pal exr catalog
+REPLAY_BINS = $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%)
+$(BUILD)/tests/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c $(BUILD)/libcrowdbake.a
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c tests/fuzz/fuzz_$*.c -o $@.fuzz.o
+	$(CC) $(CFLAGS) -c tests/fuzz/replay.c -o $@.main.o
+	$(CXX) $(SAN) -o $@ $@.fuzz.o $@.main.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
+replay: all $(REPLAY_BINS)
+	@status=0; \
+	printf 'replay gltf     '; $(BUILD)/tests/replay_gltf tests/fuzz/regressions/gltf $(BUILD)/samples || status=1; \
+	printf 'replay pal      '; $(BUILD)/tests/replay_pal tests/fuzz/regressions/pal || status=1; \
+	printf 'replay exr      '; $(BUILD)/tests/replay_exr tests/fuzz/regressions/exr || status=1; \
+	printf 'replay catalog  '; $(BUILD)/tests/replay_catalog tests/fuzz/regressions/catalog catalog.example.toml \
+	  samples/catalog.toml || status=1; \
+	exit $$status
+
+# libFuzzer runs under ASan + UBSan (clang): make fuzz FUZZ_SECONDS=600 [FUZZ_TARGETS=gltf]
+FUZZ_SECONDS ?= 60
+FUZZ_BUILD := build/fuzz
+FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all
+fuzz-build: deps
+	@dpkg-query -W -f='$${Status}' libclang-rt-14-dev 2>/dev/null | grep -q 'install ok installed' || \
+	  { [ "$$(id -u)" = 0 ] && apt-get install -y --no-install-recommends libclang-rt-14-dev >/dev/null; }
+	$(MAKE) --no-print-directory BUILD=$(FUZZ_BUILD) CC=clang CXX=clang++ OPT="-O1 -g" \
+	  SAN="$(FUZZ_SAN) -fsanitize=fuzzer-no-link" $(FUZZ_BUILD)/libcrowdbake.a $(FUZZ_BUILD)/samples/quadruped.glb
+	@for t in $(FUZZ_TARGETS); do \
+	  clang $(CFLAGS) -O1 -g $(FUZZ_SAN) -fsanitize=fuzzer $(PKG_CFLAGS) -c tests/fuzz/fuzz_$$t.c -o $(FUZZ_BUILD)/fuzz_$$t.o && \
+	  clang++ $(FUZZ_SAN) -fsanitize=fuzzer -o $(FUZZ_BUILD)/fuzz_$$t $(FUZZ_BUILD)/fuzz_$$t.o $(FUZZ_BUILD)/libcrowdbake.a \
+	    $(PKG_LIBS) || exit 1; done
+
+# Seed corpora: the shared assets, the samples and bakes of them, the catalogs.
+fuzz-seeds: fuzz-build all
+	@mkdir -p $(FUZZ_BUILD)/corpus/{gltf,pal,exr,catalog}
+	@find ../shared/assets -name '*.gl[bt]*' -size -400k -exec cp {} $(FUZZ_BUILD)/corpus/gltf/ \; 2>/dev/null; true
+	@cp $(BUILD)/samples/*.glb $(FUZZ_BUILD)/corpus/gltf/
+	@for s in fish bird; do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(FUZZ_BUILD)/corpus/pal/$$s.pal -q; \
+	  $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(FUZZ_BUILD)/corpus/pal/$$s-z.pal -q --zstd --layout mat4; \
+	  $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(FUZZ_BUILD)/corpus/exr/$$s.exr -q --precision half; done
+	@cp catalog.example.toml samples/catalog.toml tests/fuzz/regressions/catalog/* $(FUZZ_BUILD)/corpus/catalog/ 2>/dev/null; true
+
+fuzz: fuzz-seeds
+	@for t in $(FUZZ_TARGETS); do echo "fuzz $$t for $(FUZZ_SECONDS) s"; \
+	  (cd $(FUZZ_BUILD) && ./fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 -max_len=400000 \
+	    -artifact_prefix=artifacts-$$t- corpus/$$t 2>&1 | tail -3) || exit 1; done
+
 test: all $(TEST_BINS)
 	@cd $(CURDIR) && status=0; for t in $(TEST_BINS); do \
-	  CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples $$t || status=1; done; exit $$status
+	  CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples $$t || status=1; done; \
+	  $(MAKE) --no-print-directory replay || status=1; exit $$status
 
 test-asan:
 	$(MAKE) --no-print-directory BUILD=build/asan OPT=-O1 \

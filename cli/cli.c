@@ -90,11 +90,62 @@ bool cli_parse_u32(const char *text, unsigned *out)
     return true;
 }
 
-cb_model *cli_load_model(const char *path, cb_error *err)
+const char cli_limits_usage[] =
+    "\nresource limits (bad or hostile input fails fast; raise them for real assets that need more):\n"
+    "  --max-joints N            joints in one skin (default 4096)\n"
+    "  --max-frames N            baked frames (default 1048576)\n"
+    "  --max-accessor-count N    elements in one glTF accessor (default 16777216)\n"
+    "  --max-file-size SIZE      one input file (default 2G)\n"
+    "  --max-palette-size SIZE   one palette texture (default 1G)\n";
+
+static bool parse_size(const char *text, uint64_t *out)
 {
-    cb_limits limits = cb_default_limits();
-    return cb_gltf_load(path, &limits, err);
+    char *end;
+    double v = strtod(text, &end);
+    double mult = *end == 'K' || *end == 'k' ? 1024.0 : *end == 'M' || *end == 'm' ? 1048576.0
+                : *end == 'G' || *end == 'g' ? 1073741824.0 : 1.0;
+    if (mult > 1) ++end;
+    if (end == text || *end || !(v >= 0) || v * mult > 1e18) return false;
+    *out = (uint64_t)(v * mult);
+    return true;
 }
+
+int cli_take_limits(int *argc, char **argv, cb_limits *limits)
+{
+    static const char *const names[] = {"--max-joints", "--max-frames", "--max-accessor-count", "--max-file-size",
+                                        "--max-palette-size"};
+    *limits = cb_default_limits();
+    int kept = 1;
+    for (int i = 1; i < *argc; ++i) {
+        int which = -1;
+        const char *value = NULL;
+        for (int k = 0; k < 5 && which < 0; ++k) {
+            size_t n = strlen(names[k]);
+            if (strncmp(argv[i], names[k], n) != 0) continue;
+            if (argv[i][n] == '=') which = k, value = argv[i] + n + 1;
+            else if (!argv[i][n]) which = k, value = i + 1 < *argc ? argv[++i] : NULL;
+        }
+        if (which < 0) {
+            argv[kept++] = argv[i];
+            continue;
+        }
+        uint64_t v;
+        unsigned u;
+        bool ok = value && (which >= 3 ? parse_size(value, &v) : cli_parse_u32(value, &u));
+        if (!ok || (which < 3 && u == 0) || (which >= 3 && v == 0))
+            return cli_usage_error(argv[0], "%s wants a positive %s", names[which], which >= 3 ? "size (e.g. 512M)" : "integer");
+        if (which == 0) limits->max_joints = u;
+        if (which == 1) limits->max_frames = u;
+        if (which == 2) limits->max_accessor_count = u;
+        if (which == 3) limits->max_file_bytes = v;
+        if (which == 4) limits->max_palette_bytes = v;
+    }
+    *argc = kept;
+    argv[kept] = NULL;
+    return 0;
+}
+
+cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *err) { return cb_gltf_load(path, limits, err); }
 
 int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err)
 {

@@ -37,8 +37,14 @@ int cli_usage_error(const char *command, const char *fmt, ...)
 bool cli_parse_double(const char *text, double *out);
 bool cli_parse_u32(const char *text, unsigned *out);
 
-/* Loads a model, with the limits options a command may carry. */
-cb_model *cli_load_model(const char *path, cb_error *err);
+/* Takes the resource-limit options (--max-joints N, --max-frames N, --max-accessor-count N,
+ * --max-file-size SIZE, --max-palette-size SIZE; SIZE like 512M or 2G) out of argv, whichever
+ * command they come with. Returns 0 or CB_ERR_USAGE after printing why. */
+int cli_take_limits(int *argc, char **argv, cb_limits *limits);
+extern const char cli_limits_usage[];
+
+/* Loads a model within `limits`. */
+cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *err);
 /* The skin a command works on: --skin NAME|INDEX, or the only one; an error otherwise. */
 int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err);
 

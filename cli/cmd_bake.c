@@ -172,6 +172,8 @@ static cb_status bake_palette(cb_sampler *s, cb_bake_options *o, bool layout_cho
 
 int cmd_bake(int argc, char **argv)
 {
+    cb_limits limits;
+    if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
     bake_args a = {0};
     bool help;
     const cli_option options[] = {
@@ -187,7 +189,7 @@ int cmd_bake(int argc, char **argv)
         {"--manifest", "FILE", &a.manifest, NULL},
         {"--quiet", NULL, NULL, &a.quiet_long}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
-    if (help) return fputs(cmd_bake_usage, stdout), 0;
+    if (help) return fputs(cmd_bake_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     a.quiet |= a.quiet_long;
     if (ends_with(a.model, ".toml")) {
@@ -211,10 +213,11 @@ int cmd_bake(int argc, char **argv)
         return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
     cb_bake_options o;
     if ((rc = parse_options(&a, &o, want_exr, want_pal))) return rc;
+    o.limits = limits;
 
     double t0 = now_seconds();
     cb_error err = {0};
-    cb_model *m = cli_load_model(a.model, &err);
+    cb_model *m = cli_load_model(a.model, &o.limits, &err);
     if (!m) return cli_report(&err);
     phase_times pt = {now_seconds() - t0, 0};
     int skin = cli_pick_skin(m, a.skin, &err);

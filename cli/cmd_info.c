@@ -30,7 +30,7 @@ static void interp_list(unsigned mask, char *out, size_t size)
         }
 }
 
-static int gather_clips(const cb_model *m, int skin, double fps, clip_facts *facts, cb_error *err)
+static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits *limits, clip_facts *facts, cb_error *err)
 {
     cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, err) : NULL;
     if (skin >= 0 && !s) return err->status;
@@ -41,7 +41,7 @@ static int gather_clips(const cb_model *m, int skin, double fps, clip_facts *fac
             facts[a].interp_mask |= 1u << anim->channels[c].interp;
         }
         if (s) {
-            if (cb_clip_analyze(s, (int32_t)a, fps, -1, NULL, &facts[a].info, err)) break;
+            if (cb_clip_analyze(s, (int32_t)a, fps, -1, limits, &facts[a].info, err)) break;
             facts[a].analyzed = true;
         }
     }
@@ -162,17 +162,19 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, dou
 
 int cmd_info(int argc, char **argv)
 {
+    cb_limits limits;
+    if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
     const char *path = NULL, *fps_text = "30", *skin_name = NULL;
     bool json = false, help;
     const cli_option options[] = {
         {"--json", NULL, NULL, &json}, {"--fps", "N", &fps_text, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL}};
     int rc = cli_parse(argc, argv, options, 3, &path, 1, 1, &help);
-    if (help) return fputs(cmd_info_usage, stdout), 0;
+    if (help) return fputs(cmd_info_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     double fps;
     if (!cli_parse_double(fps_text, &fps) || !(fps > 0)) return cli_usage_error("info", "--fps wants a positive number");
     cb_error err = {0};
-    cb_model *m = cli_load_model(path, &err);
+    cb_model *m = cli_load_model(path, &limits, &err);
     if (!m) return cli_report(&err);
     /* info describes every skin; clips are analysed with the one a bake would use. */
     int skin = -1;
@@ -184,7 +186,7 @@ int cmd_info(int argc, char **argv)
     }
     clip_facts *facts = calloc(m->animation_count + 1, sizeof *facts);
     if (!facts) cb_fail(&err, CB_ERR_INTERNAL, "out of memory");
-    if (!err.status) gather_clips(m, skin, fps, facts, &err);
+    if (!err.status) gather_clips(m, skin, fps, &limits, facts, &err);
     if (!err.status) (json ? print_json : print_text)(m, skin, facts, fps);
     free(facts);
     cb_model_free(m);

@@ -44,13 +44,15 @@ static void write_clip(cb_json *j, cb_sampler *s, const cb_model *m, const cb_cl
 
 int cmd_sample(int argc, char **argv)
 {
+    cb_limits limits;
+    if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
     const char *path = NULL, *fps_text = NULL, *clip_name = NULL, *frame_text = NULL, *skin_name = NULL, *rm_text = "keep";
     bool json = false, help;
     const cli_option options[] = {{"--json", NULL, NULL, &json},          {"--fps", "N", &fps_text, NULL},
                                   {"--clip", "NAME", &clip_name, NULL},   {"--frame", "I", &frame_text, NULL},
                                   {"--skin", "NAME|INDEX", &skin_name, NULL}, {"--root-motion", "keep|in-place", &rm_text, NULL}};
     int rc = cli_parse(argc, argv, options, 6, &path, 1, 1, &help);
-    if (help) return fputs(cmd_sample_usage, stdout), 0;
+    if (help) return fputs(cmd_sample_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     double fps;
     unsigned frame = 0;
@@ -64,7 +66,7 @@ int cmd_sample(int argc, char **argv)
     else return cli_usage_error("sample", "--root-motion is keep or in-place");
 
     cb_error err = {0};
-    cb_model *m = cli_load_model(path, &err);
+    cb_model *m = cli_load_model(path, &limits, &err);
     if (!m) return cli_report(&err);
     int skin = cli_pick_skin(m, skin_name, &err);
     int clip_index = -1;
@@ -85,7 +87,7 @@ int cmd_sample(int argc, char **argv)
         for (uint32_t a = 0; a < m->animation_count && !err.status; ++a) {
             if (clip_index >= 0 && (uint32_t)clip_index != a) continue;
             cb_clip_info clip;
-            if (cb_clip_analyze(s, (int32_t)a, fps, -1, NULL, &clip, &err)) break;
+            if (cb_clip_analyze(s, (int32_t)a, fps, -1, &limits, &clip, &err)) break;
             if (frame_text && frame >= clip.frames) {
                 cb_fail(&err, CB_ERR_USAGE, "clip '%s' has %u frames at %g fps; --frame %u is past its end",
                         m->animations[a].name, clip.frames, fps, frame);

@@ -18,6 +18,8 @@ const char cmd_vat_usage[] =
 
 int cmd_vat(int argc, char **argv)
 {
+    cb_limits limits;
+    if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
     const char *path = NULL, *out = NULL, *fps = NULL, *max = NULL, *rm = NULL, *skin_name = NULL, *comp = NULL;
     bool json = false, help;
     const cli_option options[] = {{"-o", "FILE", &out, NULL},          {"--output", "FILE", &out, NULL},
@@ -25,10 +27,11 @@ int cmd_vat(int argc, char **argv)
                                   {"--root-motion", "MODE", &rm, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL},
                                   {"--exr-compression", "NAME", &comp, NULL}, {"--json", NULL, NULL, &json}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &path, 1, 1, &help);
-    if (help) return fputs(cmd_vat_usage, stdout), 0;
+    if (help) return fputs(cmd_vat_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     if (!out) return cli_usage_error("vat", "-o OUT.exr is required");
     cb_bake_options o = cb_default_bake_options();
+    o.limits = limits;
     unsigned max_size = o.max_texture_size;
     int compression = 0;
     if (fps && (!cli_parse_double(fps, &o.fps) || !(o.fps > 0) || o.fps > 1000)) return cli_usage_error("vat", "--fps wants 0..1000");
@@ -38,7 +41,7 @@ int cmd_vat(int argc, char **argv)
     else if (rm && strcmp(rm, "keep") != 0) return cli_usage_error("vat", "--root-motion is keep or in-place");
     if (comp && !cb_exr_compression_parse(comp, &compression)) return cli_usage_error("vat", "--exr-compression: lossless only");
     cb_error err = {0};
-    cb_model *m = cli_load_model(path, &err);
+    cb_model *m = cli_load_model(path, &limits, &err);
     if (!m) return cli_report(&err);
     int skin = cli_pick_skin(m, skin_name, &err);
     cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, &err) : NULL;

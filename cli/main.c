@@ -2,6 +2,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "../formats/atomic_file.h"
 #include "cli.h"
 
 static const cli_command commands[] = {
@@ -36,6 +37,7 @@ int main(int argc, char **argv)
         printf("crowdbake %s\n", CROWDBAKE_VERSION);
         return 0;
     }
+    cb_atomic_cleanup_on_signals(); /* an interrupted bake leaves no partial file */
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i)
         if (strcmp(argv[1], commands[i].name) == 0) return commands[i].run(argc - 1, argv + 1);
     fprintf(stderr, "crowdbake: unknown command '%s' (see 'crowdbake --help')\n", argv[1]);

@@ -4,11 +4,66 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+
+/* ---- temporaries to remove when the process is interrupted ----
+ * A signal handler can reach nothing but globals, so this is crowdbake's one piece of global
+ * mutable state: a fixed table of the temporary files being written, filled and emptied
+ * lock-free, read by the handler with async-signal-safe calls only. */
+enum { TEMP_SLOTS = 64, TEMP_PATH = 4096 };
+static char temp_paths[TEMP_SLOTS][TEMP_PATH];
+static atomic_int temp_state[TEMP_SLOTS]; /* 0 free, 1 claimed, 2 holds a path */
+
+static int register_temp(const char *path)
+{
+    if (strlen(path) >= TEMP_PATH) return -1;
+    for (int i = 0; i < TEMP_SLOTS; ++i) {
+        int expected = 0;
+        if (atomic_compare_exchange_strong(&temp_state[i], &expected, 1)) {
+            memcpy(temp_paths[i], path, strlen(path) + 1);
+            atomic_store(&temp_state[i], 2);
+            return i;
+        }
+    }
+    return -1; /* untracked: it is still removed on every failure other than a signal */
+}
+
+static void unregister_temp(int slot)
+{
+    if (slot >= 0) atomic_store(&temp_state[slot], 0);
+}
+
+static void write_stderr(const char *s) { (void)!write(2, s, strlen(s)); }
+
+static void on_signal(int sig)
+{
+    int removed = 0;
+    for (int i = 0; i < TEMP_SLOTS; ++i)
+        if (atomic_load(&temp_state[i]) == 2 && unlink(temp_paths[i]) == 0) ++removed;
+    write_stderr(sig == SIGINT ? "crowdbake: interrupted (SIGINT)" : sig == SIGTERM ? "crowdbake: terminated (SIGTERM)"
+                                                                                  : "crowdbake: hung up (SIGHUP)");
+    write_stderr(removed ? "; removed the partial output; the previous files are unchanged\n"
+                         : "; no output was being written; the previous files are unchanged\n");
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+void cb_atomic_cleanup_on_signals(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGHUP, &sa, NULL);
+}
 
 static char *dir_of(const char *path)
 {
@@ -22,6 +77,7 @@ cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err)
 {
     memset(f, 0, sizeof *f);
     f->fd = -1;
+    f->slot = -1;
     char *dir = dir_of(path);
     const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
     size_t n = strlen(path) + 32;
@@ -41,6 +97,14 @@ cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err)
         return CB_ERR_IO;
     }
     free(dir);
+    /* Replacing by rename would turn a device, a FIFO or a directory into a plain file. */
+    if (lstat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+        cb_fail(err, CB_ERR_IO, "%s: exists and is not a regular file; crowdbake replaces outputs atomically, so give it "
+                "a file path", path);
+        free(f->tmp_path), f->tmp_path = NULL;
+        cb_atomic_abort(f);
+        return CB_ERR_IO;
+    }
     f->fd = mkostemp(f->tmp_path, O_CLOEXEC);
     if (f->fd < 0) {
         int e = errno;
@@ -49,6 +113,7 @@ cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err)
         cb_atomic_abort(f);
         return CB_ERR_IO;
     }
+    f->slot = register_temp(f->tmp_path);
     /* mkstemp makes 0600; give the file the mode a plain create would. */
     mode_t mask = umask(0);
     umask(mask);
@@ -73,7 +138,8 @@ cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_e
 
 cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err)
 {
-    if (fsync(f->fd) != 0 && errno != EINVAL) {
+    if (f->fd < 0) f->fd = open(f->tmp_path, O_RDONLY | O_CLOEXEC); /* written by another library */
+    if (f->fd < 0 || (fsync(f->fd) != 0 && errno != EINVAL)) {
         cb_fail(err, CB_ERR_IO, "%s: write failed: %s; the previous file, if any, is unchanged", f->path, strerror(errno));
         cb_atomic_abort(f);
         return CB_ERR_IO;
@@ -86,6 +152,7 @@ cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err)
         return CB_ERR_IO;
     }
     free(f->tmp_path), f->tmp_path = NULL;
+    unregister_temp(f->slot), f->slot = -1;
     cb_atomic_abort(f); /* releases the rest */
     return CB_OK;
 }
@@ -94,6 +161,8 @@ void cb_atomic_abort(cb_atomic_file *f)
 {
     if (f->fd >= 0) close(f->fd);
     if (f->tmp_path) unlink(f->tmp_path);
+    unregister_temp(f->slot);
+    f->slot = -1;
     free(f->tmp_path);
     free(f->path);
     f->fd = -1;

@@ -9,11 +9,17 @@ typedef struct cb_atomic_file {
     int fd;
     char *path;     /* the target */
     char *tmp_path; /* .NAME.tmp.XXXXXX in the same directory */
+    int slot;       /* in the table the signal handlers clean up */
 } cb_atomic_file;
+
+/* Installs SIGINT, SIGTERM and SIGHUP handlers that remove every temporary file being written,
+ * say so, and end the process by the same signal. For programs; libraries leave signals alone. */
+void cb_atomic_cleanup_on_signals(void);
 
 cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err);
 cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_error *err);
-/* Flushes, renames over the target and releases f. On failure the target is untouched. */
+/* Flushes, renames over the target and releases f. On failure the target is untouched. A
+ * library may write tmp_path itself (close fd first; set it to -1). */
 cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err);
 /* Removes the temporary file and releases f. Safe after a failed open or commit. */
 void cb_atomic_abort(cb_atomic_file *f);

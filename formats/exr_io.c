@@ -2,6 +2,9 @@
 #include "exr_io.h"
 
 #include <openexr.h>
+#include <unistd.h>
+
+#include "atomic_file.h"
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -126,7 +129,7 @@ static exr_result_t start_image(const char *path, char *message, uint32_t width,
     init.error_handler_fn = remember_error;
     init.user_data = message;
     int part = 0;
-    exr_result_t rc = exr_start_write(c, path, EXR_INTERMEDIATE_TEMP_FILE, &init);
+    exr_result_t rc = exr_start_write(c, path, EXR_WRITE_FILE_DIRECTLY, &init); /* path: our temporary */
     if (!rc) rc = exr_add_part(*c, "palette", EXR_STORAGE_SCANLINE, &part);
     if (!rc) rc = exr_initialize_required_attr_simple(*c, part, (int32_t)width, (int32_t)height, (exr_compression_t)compression);
     for (int i = 0; i < n && !rc; ++i)
@@ -135,24 +138,24 @@ static exr_result_t start_image(const char *path, char *message, uint32_t width,
     return rc;
 }
 
-static cb_status check_dir(const char *path, cb_error *err)
-{
-    char dir[4096];
-    snprintf(dir, sizeof dir, "%s", path);
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    struct stat st;
-    if (slash && (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)))
-        return cb_fail(err, CB_ERR_IO, "%s: cannot write: directory %s does not exist (create it first)", path, dir);
-    return CB_OK;
-}
-
-static cb_status finish_image(const char *path, const char *message, exr_result_t rc, exr_context_t c, cb_error *err)
+/* OpenEXR writes the atomic file's temporary; it replaces `path` only when all went well. */
+static cb_status finish_image(const char *path, const char *message, exr_result_t rc, exr_context_t c, cb_atomic_file *af,
+                              cb_error *err)
 {
     exr_result_t fin = c ? exr_finish(&c) : EXR_ERR_SUCCESS;
-    if (rc || fin)
+    if (rc || fin) {
+        cb_atomic_abort(af);
         return cb_fail(err, CB_ERR_IO, "%s: OpenEXR could not write the file: %s", path,
                        message[0] ? message : exr_get_default_error_message(rc ? rc : fin));
+    }
+    return cb_atomic_commit(af, err);
+}
+
+static cb_status open_temp(const char *path, cb_atomic_file *af, cb_error *err)
+{
+    if (cb_atomic_open(af, path, err)) return err->status;
+    close(af->fd);
+    af->fd = -1;
     return CB_OK;
 }
 
@@ -163,7 +166,6 @@ cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *m,
         return cb_fail(err, CB_ERR_USAGE, "%s: EXR stores half or float texels; use --precision half|float, or write a .pal "
                        "for u16", path);
     if (p->width > INT32_MAX || p->height > INT32_MAX) return cb_fail(err, CB_ERR_INPUT, "%s: palette too large", path);
-    if (check_dir(path, err)) return err->status;
     int16_t bytes = p->precision == CB_PRECISION_FLOAT ? 4 : 2;
     int32_t stride = 4 * bytes, line = (int32_t)(p->width * 4 * bytes);
     const uint8_t *t = p->texels;
@@ -171,16 +173,17 @@ cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *m,
                              {"G", t + bytes, stride, line, bytes}, {"R", t, stride, line, bytes}};
     char message[256] = "";
     exr_context_t c = NULL;
-    exr_result_t rc = start_image(path, message, p->width, p->height, compression, src, 4, &c);
+    cb_atomic_file af;
+    if (open_temp(path, &af, err)) return err->status;
+    exr_result_t rc = start_image(af.tmp_path, message, p->width, p->height, compression, src, 4, &c);
     if (!rc) rc = set_metadata(c, 0, p, m, skin, input_hash, speed_reference);
     if (!rc) rc = exr_write_header(c);
     if (!rc) rc = write_scanlines(c, 0, p->height, src, 4);
-    return finish_image(path, message, rc, c, err);
+    return finish_image(path, message, rc, c, &af, err);
 }
 
 cb_status cb_exr_write_vat(const char *path, const cb_vat *vat, int compression, cb_error *err)
 {
-    if (check_dir(path, err)) return err->status;
     int32_t line = (int32_t)(vat->geometry.width * 8);
     const uint8_t *pp = (const uint8_t *)vat->positions, *nn = (const uint8_t *)vat->normals;
     channel_source src[8] = {{"normal.A", nn + 6, 8, line, 2},   {"normal.B", nn + 4, 8, line, 2},
@@ -189,7 +192,9 @@ cb_status cb_exr_write_vat(const char *path, const cb_vat *vat, int compression,
                              {"position.G", pp + 2, 8, line, 2}, {"position.R", pp, 8, line, 2}};
     char message[256] = "";
     exr_context_t c = NULL;
-    exr_result_t rc = start_image(path, message, vat->geometry.width, vat->geometry.height, compression, src, 8, &c);
+    cb_atomic_file af;
+    if (open_temp(path, &af, err)) return err->status;
+    exr_result_t rc = start_image(af.tmp_path, message, vat->geometry.width, vat->geometry.height, compression, src, 8, &c);
     rc |= rc ? 0 : exr_attr_set_string(c, 0, "crowdbake.generator", "crowdbake " CROWDBAKE_VERSION " vat");
     rc |= rc ? 0 : exr_attr_set_int(c, 0, "crowdbake.vertices", (int32_t)vat->vertices);
     rc |= rc ? 0 : exr_attr_set_int(c, 0, "crowdbake.frames", (int32_t)vat->frames);
@@ -199,7 +204,7 @@ cb_status cb_exr_write_vat(const char *path, const cb_vat *vat, int compression,
     rc |= rc ? 0 : exr_attr_set_float(c, 0, "crowdbake.maxError", (float)vat->max_error);
     if (!rc) rc = exr_write_header(c);
     if (!rc) rc = write_scanlines(c, 0, vat->geometry.height, src, 8);
-    return finish_image(path, message, rc, c, err);
+    return finish_image(path, message, rc, c, &af, err);
 }
 
 /* ---- reading ---- */
@@ -235,6 +240,31 @@ static exr_result_t read_scanlines(exr_context_t c, int part, cb_exr_image *img)
     return rc;
 }
 
+/* A palette: channels A, B, G, R of one type, unsampled, a data window from 0,0 of sane size.
+ * Checked before anything is allocated: the header can claim any size. */
+static bool palette_shaped(const char *path, const exr_attr_box2i_t *dw, const exr_attr_chlist_t *chans, cb_error *err)
+{
+    bool ok = chans->num_channels == 4 && dw->min.x == 0 && dw->min.y == 0;
+    for (int i = 0; ok && i < 4; ++i) {
+        const exr_attr_chlist_entry_t *e = &chans->entries[i];
+        ok = e->name.length == 1 && e->name.str[0] == "ABGR"[i] && e->pixel_type == chans->entries[0].pixel_type &&
+             (e->pixel_type == EXR_PIXEL_HALF || e->pixel_type == EXR_PIXEL_FLOAT) && e->x_sampling == 1 && e->y_sampling == 1;
+    }
+    if (!ok) {
+        cb_fail(err, CB_ERR_INPUT, "%s: not a crowdbake palette (expects half or float channels A, B, G, R from 0,0)", path);
+        return false;
+    }
+    struct stat st;
+    uint64_t w = (uint64_t)dw->max.x + 1, h = (uint64_t)dw->max.y + 1, file = stat(path, &st) == 0 ? (uint64_t)st.st_size : 0;
+    uint64_t bytes = w * h * (chans->entries[0].pixel_type == EXR_PIXEL_FLOAT ? 16 : 8);
+    if (dw->max.x < 0 || dw->max.y < 0 || w > 65536 || h > 65536 || bytes > (1ull << 30) || bytes > 4096 * file) {
+        cb_fail(err, CB_ERR_INPUT, "%s: claims %llux%llu texels, more than the file can hold or a palette can be", path,
+                (unsigned long long)w, (unsigned long long)h);
+        return false;
+    }
+    return true;
+}
+
 cb_status cb_exr_read(const char *path, cb_exr_image *img, cb_error *err)
 {
     memset(img, 0, sizeof *img);
@@ -248,8 +278,7 @@ cb_status cb_exr_read(const char *path, cb_exr_image *img, cb_error *err)
     const exr_attr_chlist_t *chans = NULL;
     if (!rc) rc = exr_get_data_window(c, 0, &dw);
     if (!rc) rc = exr_get_channels(c, 0, &chans);
-    if (!rc && (chans->num_channels != 4 || dw.min.x != 0 || dw.min.y != 0)) {
-        cb_fail(err, CB_ERR_INPUT, "%s: not a crowdbake palette (expects 4 channels RGBA from 0,0)", path);
+    if (!rc && !palette_shaped(path, &dw, chans, err)) {
         exr_finish(&c);
         return CB_ERR_INPUT;
     }

@@ -10,6 +10,7 @@
 
 #include <meshoptimizer.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -548,6 +549,32 @@ bool convert_nodes(Context &c)
     return true;
 }
 
+// glTF wants every joint in the scene that is rendered; a joint elsewhere would be animated
+// in a hierarchy the runtime never sees.
+bool check_joints_in_scene(Context &c)
+{
+    const tinygltf::Model &g = *c.gltf;
+    if (g.scenes.empty()) return true;
+    int scene = g.defaultScene >= 0 && g.defaultScene < (int)g.scenes.size() ? g.defaultScene : 0;
+    const std::vector<int> &roots = g.scenes[(size_t)scene].nodes;
+    for (uint32_t s = 0; s < c.model->skin_count; ++s) {
+        const cb_skin *skin = &c.model->skins[s];
+        for (uint32_t j = 0; j < skin->joint_count; ++j) {
+            int32_t n = skin->joints[j];
+            if (n < 0 || n >= (int32_t)c.model->node_count) continue; // reported by validation
+            uint32_t steps = 0;
+            while (c.model->nodes[n].parent >= 0 && steps++ < c.model->node_count) n = c.model->nodes[n].parent;
+            if (std::find(roots.begin(), roots.end(), n) == roots.end()) {
+                cb_fail(c.err, CB_ERR_INPUT, "%s: skin %u joint %u (%s) is not in scene %d: its root node %d (%s) is not one "
+                        "of the scene's nodes; add it to the scene", c.name, s, j, c.model->nodes[skin->joints[j]].name,
+                        scene, n, c.model->nodes[n].name);
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
 bool convert_skins(Context &c)
 {
     const auto &skins = c.gltf->skins;
@@ -744,7 +771,7 @@ cb_model *load(const unsigned char *data, size_t size, const char *name, const s
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory", name);
         return nullptr;
     }
-    if (!convert_nodes(c) || !convert_skins(c) || !convert_meshes(c) || !convert_animations(c) ||
+    if (!convert_nodes(c) || !convert_skins(c) || !check_joints_in_scene(c) || !convert_meshes(c) || !convert_animations(c) ||
         cb_model_validate(c.model, &c.limits, err) != CB_OK) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory while loading", name);
         cb_model_free(c.model);

@@ -50,6 +50,7 @@ typedef struct cb_limits {
     uint32_t max_frames;         /* frames in one clip at the chosen fps */
     uint64_t max_accessor_count; /* elements in one accessor */
     uint64_t max_file_bytes;     /* one input file (model, external buffer) */
+    uint64_t max_palette_bytes;  /* one palette's texture */
 } cb_limits;
 
 cb_limits cb_default_limits(void);

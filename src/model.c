@@ -27,6 +27,7 @@ cb_limits cb_default_limits(void)
     l.max_frames = 1u << 20;
     l.max_accessor_count = 1u << 24;
     l.max_file_bytes = (uint64_t)2 << 30;
+    l.max_palette_bytes = (uint64_t)1 << 30;
     return l;
 }
 

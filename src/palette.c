@@ -605,6 +605,12 @@ cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const
         goto fail;
     st.infos = infos;
     p->texel_bytes = (size_t)p->width * p->height * cb_precision_texel_bytes(p->precision);
+    if (p->texel_bytes > opt->limits.max_palette_bytes) {
+        cb_fail(err, CB_ERR_INPUT, "%s: the palette would be %zu bytes (%ux%u texels), over the limit of %llu "
+                "(--max-palette-size); lower --fps, bake fewer clips or use a smaller encoding",
+                m->source, p->texel_bytes, p->width, p->height, (unsigned long long)opt->limits.max_palette_bytes);
+        goto fail;
+    }
     p->texels = calloc(p->texel_bytes ? p->texel_bytes : 1, 1);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
     st.canon = malloc((size_t)p->rows * p->bone_count * CANON * sizeof(float));

@@ -1,0 +1,29 @@
+/* fuzz_pal.c - libFuzzer target: the .pal reader header on arbitrary bytes, with and without
+ * checksum verification, then every table entry and the texels it hands out. */
+#include <stdint.h>
+
+#include "../../formats/crowdbake_pal.h" /* the implementation is in libcrowdbake, with zstd */
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    for (unsigned flags = 0; flags <= CBPAL_VERIFY_CHECKSUM; ++flags) {
+        cbpal_file f;
+        char err[256];
+        if (cbpal_open_memory(data, size, flags, &f, err, sizeof err) != 0) continue;
+        volatile unsigned sink = 0;
+        for (uint32_t i = 0; i < f.header.clip_count; ++i) {
+            cbpal_clip c;
+            cbpal_get_clip(&f, i, &c);
+            sink += (unsigned char)c.name[0] + c.frames;
+        }
+        for (uint32_t i = 0; i < f.header.bone_count; ++i) {
+            cbpal_bone b;
+            cbpal_get_bone(&f, i, &b);
+            sink += (unsigned char)b.name[0];
+        }
+        if (f.texels_size) sink += ((const unsigned char *)f.texels)[0] + ((const unsigned char *)f.texels)[f.texels_size - 1];
+        (void)sink;
+        cbpal_close(&f);
+    }
+    return 0;
+}
