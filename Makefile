@@ -11,8 +11,9 @@
 SHELL := /bin/bash
 
 DEB_PACKAGES := pkg-config nlohmann-json3-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
-                libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium
-PKGS := tinygltf nlohmann_json draco OpenEXR libzstd tomlplusplus
+                libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
+                libosmesa6-dev libpng-dev
+PKGS := tinygltf nlohmann_json draco OpenEXR libzstd tomlplusplus osmesa libpng
 
 BUILD   ?= build
 CC      ?= cc
@@ -23,7 +24,7 @@ WARN    := -Wall -Wextra $(WERROR)
 SAN     ?=
 # Everything below needs pkg-config, which `make deps` brings.
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
-PKG_LIBS   = $(shell pkg-config --libs draco OpenEXR libzstd tomlplusplus 2>/dev/null) -lmeshoptimizer -lpthread -lm
+PKG_LIBS   = $(shell pkg-config --libs draco OpenEXR libzstd tomlplusplus osmesa libpng 2>/dev/null) -lmeshoptimizer -lpthread -lm
 
 CFLAGS   := -std=c11 $(OPT) -g $(WARN) -D_POSIX_C_SOURCE=200809L $(SAN)
 CXXFLAGS := -std=c++17 $(OPT) -g $(WARN) $(SAN)

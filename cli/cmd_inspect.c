@@ -7,6 +7,7 @@
 #include "../formats/crowdbake_pal.h"
 #include "../formats/exr_io.h"
 #include "../formats/json_writer.h"
+#include "../formats/pal_view.h"
 #include "../src/palette.h"
 #include "cli.h"
 
@@ -15,31 +16,6 @@ const char cmd_inspect_usage[] =
     "Validates a palette (sizes, offsets and the checksum) and prints its header and clip table;\n"
     "with --clip and --frame, decodes that frame back to 4x4 joint matrices (column-major), to\n"
     "compare with 'crowdbake sample'.\n";
-
-/* A cb_palette view of a mapped .pal, enough for cb_palette_decode. */
-static void palette_view(const cbpal_file *f, cb_palette *p)
-{
-    const cbpal_header *h = &f->header;
-    memset(p, 0, sizeof *p);
-    p->layout = (cb_layout)h->layout;
-    p->precision = (cb_precision)h->precision;
-    p->bone_count = h->bone_count;
-    p->texels_per_bone = h->texels_per_bone;
-    p->row_texels = h->row_texels;
-    p->rows = h->rows;
-    p->width = h->width;
-    p->height = h->height;
-    p->blocks = h->blocks;
-    p->linear_range = h->linear_range;
-    memcpy(p->bounds_min, h->bounds_min, sizeof p->bounds_min);
-    memcpy(p->bounds_max, h->bounds_max, sizeof p->bounds_max);
-    p->bind_positions = malloc(sizeof(float) * 3 * h->bone_count);
-    for (uint32_t j = 0; p->bind_positions && j < h->bone_count; ++j) {
-        cbpal_bone b;
-        cbpal_get_bone(f, j, &b);
-        memcpy(p->bind_positions + 3 * j, b.bind_position, sizeof b.bind_position);
-    }
-}
 
 static const char *layout_str(uint32_t l) { return cb_layout_name((cb_layout)l); }
 static const char *precision_str(uint32_t p) { return cb_precision_name((cb_precision)p); }
@@ -198,10 +174,11 @@ int cmd_inspect(int argc, char **argv)
     }
     if (!err.status) {
         cb_palette view;
-        palette_view(&f, &view);
-        if (json || clip >= 0) print_pal_json(path, &f, &view, clip, (long)frame);
-        else print_pal_text(path, &f);
-        free(view.bind_positions);
+        if (!cb_palette_view(&f, &view, &err)) {
+            if (json || clip >= 0) print_pal_json(path, &f, &view, clip, (long)frame);
+            else print_pal_text(path, &f);
+            cb_palette_view_free(&view);
+        }
     }
     cbpal_close(&f);
     return err.status ? cli_report(&err) : 0;

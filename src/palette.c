@@ -410,12 +410,11 @@ static void encode_rows(cb_palette *p, const float *canon, uint32_t first, uint3
     }
 }
 
-void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
+void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16])
 {
     uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
     cb_palette_texel_xy(p, row, bone, &x, &y);
     const unsigned char *d = (const unsigned char *)texels + ((size_t)y * p->width + x) * tb;
-    double v[16];
     for (uint32_t i = 0; i < p->texels_per_bone * 4; ++i) {
         if (p->precision == CB_PRECISION_FLOAT)
             v[i] = load_le32f(d + i * 4);
@@ -424,6 +423,17 @@ void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, ui
         else
             v[i] = decode_u16(p, u16_kind(p->layout, (int)i), load_le16(d + i * 2));
     }
+}
+
+void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
+{
+    double v[16];
+    cb_palette_decode_values(p, texels, row, bone, v);
+    cb_palette_values_to_matrix(p, bone, v, out);
+}
+
+void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const double v[16], double out[16])
+{
     cb_mat4_identity(out);
     if (p->layout == CB_LAYOUT_MAT4) {
         for (int c = 0; c < 4; ++c)

@@ -89,6 +89,10 @@ void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint3
 /* Decodes one bone of one row back to a 4x4 column-major matrix. texels points at the
  * palette's texel data (as in cb_palette, or mapped from a file). */
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16]);
+/* The bone's 4 x texels_per_bone values as a shader reads them (u16 already scaled). */
+void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16]);
+/* Those values (or a blend of two rows of them) as a 4x4 matrix. */
+void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const double v[16], double out[16]);
 
 /* ---- conversions ---- */
 uint16_t cb_float_to_half(float f);

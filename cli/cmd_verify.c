@@ -1,0 +1,115 @@
+/* cmd_verify.c - `crowdbake verify MODEL PALETTE`: skins the model with the palette exactly as
+ * the shipped shaders do and compares with exact skinning from the glTF. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../formats/json_writer.h"
+#include "../formats/pal_view.h"
+#include "../src/runtime.h"
+#include "cli.h"
+
+const char cmd_verify_usage[] =
+    "usage: crowdbake verify MODEL PALETTE.pal [--max-error MM_PER_M] [--random N] [--skin NAME|INDEX] [--json]\n\n"
+    "Skins the model's mesh from the palette the way the runtime shaders do (two adjacent rows\n"
+    "blended, up to 4 weighted bones, loops wrap, one-shots clamp) and compares it with exact float64\n"
+    "skinning from the glTF: at every baked frame (the encoding's error), at every mid-frame and at N\n"
+    "random times (default 64; the blending's error). Reports per clip the max and mean vertex error\n"
+    "in model units and in mm per metre of model height, and the worst vertex and time. Exits 6 when\n"
+    "an error exceeds --max-error (mm per metre of height).\n";
+
+static double mm(double e, double h) { return h > 0 ? e / h * 1000 : 0; }
+
+int cmd_verify(int argc, char **argv)
+{
+    cb_limits limits;
+    if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
+    const char *pos[2] = {0}, *max_text = NULL, *random_text = NULL, *skin_name = NULL;
+    bool json = false, help;
+    const cli_option options[] = {{"--max-error", "MM_PER_M", &max_text, NULL}, {"--random", "N", &random_text, NULL},
+                                  {"--skin", "NAME|INDEX", &skin_name, NULL}, {"--json", NULL, NULL, &json}};
+    int rc = cli_parse(argc, argv, options, 4, pos, 2, 2, &help);
+    if (help) return fputs(cmd_verify_usage, stdout), fputs(cli_limits_usage, stdout), 0;
+    if (rc) return rc;
+    double max_error = -1;
+    unsigned random_times = 64;
+    if (max_text && (!cli_parse_double(max_text, &max_error) || max_error < 0)) return cli_usage_error("verify", "--max-error wants mm per metre");
+    if (random_text && !cli_parse_u32(random_text, &random_times)) return cli_usage_error("verify", "--random wants a count");
+    cb_error err = {0};
+    cbpal_file f;
+    char msg[512];
+    if (cbpal_open(pos[1], CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg)) return cb_fail(&err, CB_ERR_INPUT, "%s", msg), cli_report(&err);
+    cb_model *m = cli_load_model(pos[0], &limits, &err);
+    int skin = m ? cli_pick_skin(m, skin_name, &err) : -1;
+    cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, &err) : NULL;
+    cb_palette p;
+    bool have_view = s && !cb_palette_view(&f, &p, &err);
+    double worst = 0, height = 0;
+    cb_json j;
+    if (have_view) {
+        double lo[3], hi[3];
+        height = cb_skin_rest_bounds(s, lo, hi);
+        if (json) {
+            cb_json_init(&j, stdout);
+            cb_json_object(&j, NULL);
+            cb_json_string(&j, "model", pos[0]);
+            cb_json_string(&j, "palette", pos[1]);
+            cb_json_number(&j, "model_height", height);
+            cb_json_array(&j, "clips");
+        } else {
+            printf("%s with %s (%s/%s, model height %.4g):\n  %-20s %12s %12s %12s %12s %9s %9s  %s\n", pos[1], pos[0],
+                   cb_layout_name(p.layout), cb_precision_name(p.precision), height, "clip", "frames max", "frames mean",
+                   "between max", "between mean", "mm/m", "mm/m", "worst vertex @ time");
+        }
+    }
+    for (uint32_t c = 0; have_view && c < p.clip_count && !err.status; ++c) {
+        int32_t a = cb_model_find_animation(m, p.clips[c].name);
+        if (a < 0) {
+            cb_fail(&err, CB_ERR_INPUT, "%s: has no clip '%s' that %s holds; verify the model the palette was baked from",
+                    pos[0], p.clips[c].name, pos[1]);
+            break;
+        }
+        cb_clip_error e;
+        if (cb_verify_clip(s, &p, f.texels, c, a, random_times, &e, &err)) break;
+        worst = e.quant_max > worst ? e.quant_max : worst;
+        worst = e.interp_max > worst ? e.interp_max : worst;
+        if (json) {
+            cb_json_object(&j, NULL);
+            cb_json_string(&j, "name", p.clips[c].name);
+            cb_json_number(&j, "frames_max", e.quant_max);
+            cb_json_number(&j, "frames_mean", e.quant_mean);
+            cb_json_number(&j, "between_max", e.interp_max);
+            cb_json_number(&j, "between_mean", e.interp_mean);
+            cb_json_number(&j, "frames_max_mm_per_m", mm(e.quant_max, height));
+            cb_json_number(&j, "between_max_mm_per_m", mm(e.interp_max, height));
+            cb_json_int(&j, "worst_vertex", (long long)e.worst_vertex);
+            cb_json_number(&j, "worst_time", e.worst_time);
+            cb_json_end(&j);
+        } else {
+            printf("  %-20s %12.4g %12.4g %12.4g %12.4g %9.3f %9.3f  %llu @ %.3f s\n", p.clips[c].name, e.quant_max,
+                   e.quant_mean, e.interp_max, e.interp_mean, mm(e.quant_max, height), mm(e.interp_max, height),
+                   (unsigned long long)e.worst_vertex, e.worst_time);
+        }
+    }
+    if (have_view && !err.status) {
+        if (json) {
+            cb_json_end(&j);
+            cb_json_number(&j, "max_error", worst);
+            cb_json_number(&j, "max_error_mm_per_m", mm(worst, height));
+            cb_json_end(&j);
+        } else {
+            printf("  worst %.4g units = %.3f mm per m of height%s\n", worst, mm(worst, height),
+                   max_error >= 0 ? (mm(worst, height) > max_error ? " — over --max-error" : " — within --max-error") : "");
+        }
+    }
+    if (have_view) cb_palette_view_free(&p);
+    cb_sampler_free(s);
+    cb_model_free(m);
+    cbpal_close(&f);
+    if (err.status) return cli_report(&err);
+    if (max_error >= 0 && mm(worst, height) > max_error) {
+        fprintf(stderr, "crowdbake: %s: worst error %.3f mm/m is over --max-error %g\n", pos[1], mm(worst, height), max_error);
+        return CB_ERR_VERIFY;
+    }
+    return 0;
+}

@@ -1,0 +1,62 @@
+/* pal_view.c - see pal_view.h. */
+#include "pal_view.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+cb_status cb_palette_view(const cbpal_file *f, cb_palette *p, cb_error *err)
+{
+    const cbpal_header *h = &f->header;
+    memset(p, 0, sizeof *p);
+    p->layout = (cb_layout)h->layout;
+    p->precision = (cb_precision)h->precision;
+    p->bone_count = h->bone_count;
+    p->texels_per_bone = h->texels_per_bone;
+    p->row_texels = h->row_texels;
+    p->rows = h->rows;
+    p->width = h->width;
+    p->height = h->height;
+    p->blocks = h->blocks;
+    p->fps = h->fps;
+    p->linear_range = h->linear_range;
+    p->max_error = h->max_error;
+    p->model_height = h->model_height;
+    memcpy(p->bounds_min, h->bounds_min, sizeof p->bounds_min);
+    memcpy(p->bounds_max, h->bounds_max, sizeof p->bounds_max);
+    p->texel_bytes = f->texels_size;
+    p->bind_positions = malloc(sizeof(float) * 3 * h->bone_count);
+    p->clips = calloc(h->clip_count ? h->clip_count : 1, sizeof *p->clips);
+    if (!p->bind_positions || !p->clips) {
+        cb_palette_view_free(p);
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    }
+    for (uint32_t j = 0; j < h->bone_count; ++j) {
+        cbpal_bone b;
+        cbpal_get_bone(f, j, &b);
+        memcpy(p->bind_positions + 3 * j, b.bind_position, sizeof b.bind_position);
+    }
+    p->clip_count = h->clip_count;
+    for (uint32_t i = 0; i < h->clip_count; ++i) {
+        cbpal_clip c;
+        cbpal_get_clip(f, i, &c);
+        cb_palette_clip *d = &p->clips[i];
+        d->name = c.name;
+        d->first_row = c.first_row;
+        d->frames = c.frames;
+        d->fps = c.fps;
+        d->duration = c.duration;
+        d->start = c.start;
+        d->loops = (c.flags & CBPAL_CLIP_LOOPS) != 0;
+        memcpy(d->root_velocity, c.root_velocity, sizeof d->root_velocity);
+        memcpy(d->bounds_min, c.bounds_min, sizeof d->bounds_min);
+        memcpy(d->bounds_max, c.bounds_max, sizeof d->bounds_max);
+    }
+    return CB_OK;
+}
+
+void cb_palette_view_free(cb_palette *p)
+{
+    free(p->bind_positions);
+    free(p->clips);
+    memset(p, 0, sizeof *p);
+}

@@ -1,0 +1,45 @@
+/* runtime.h - what a game's vertex shader computes from a palette, on the CPU: the frame
+ * position of an instance at a time, the blend of two adjacent rows, the skinned mesh. The
+ * shipped shaders (samples/shaders/) do exactly this; verification compares it with exact
+ * skinning from the glTF. */
+#ifndef CB_RUNTIME_H
+#define CB_RUNTIME_H
+
+#include "palette.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The four per-instance numbers. A negative frame_count marks a one-shot of -frame_count rows:
+ * it clamps at its ends instead of wrapping. */
+typedef struct cb_instance {
+    double first_row, frame_count, rate, phase;
+} cb_instance;
+
+/* fpos = time * rate + phase * frames, wrapped (loops) or clamped (one-shots) to the clip; the
+ * two rows blended and the weight of the second. */
+void cb_runtime_frame(const cb_instance *in, double time, uint32_t *row0, uint32_t *row1, double *fr);
+
+/* The bone transforms at `time` (16 doubles per bone): the two rows' values blended - matrices
+ * term by term, qpos quaternions by normalized lerp after a hemisphere flip - then as matrices. */
+void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_instance *in, double time, double *out);
+
+/* Verification of one clip: the runtime's skinned mesh against exact skinning from the model. */
+typedef struct cb_clip_error {
+    double quant_max, quant_mean;   /* at the baked rows: the encoding's error */
+    double interp_max, interp_mean; /* between them (mid-frames and random times): blending's error */
+    uint64_t worst_vertex;
+    double worst_time;              /* clip time of the worst error */
+} cb_clip_error;
+
+/* `animation` is the model's clip baked as palette clip `clip`; random_times are drawn from a
+ * fixed-seed generator, so results repeat. */
+cb_status cb_verify_clip(cb_sampler *sampler, const cb_palette *p, const void *texels, uint32_t clip, int32_t animation,
+                         uint32_t random_times, cb_clip_error *out, cb_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

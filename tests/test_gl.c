@@ -1,0 +1,364 @@
+/* test_gl.c - the shipped GLSL (samples/shaders/crowdbake_palette.glsl) run on a real OpenGL:
+ * Mesa's llvmpipe through OSMesa, no GPU. Transform feedback captures the skinned positions of
+ * many instances at many times; they must match the CPU runtime (src/runtime.c, which verify
+ * compares with exact skinning). Deliberately broken variants - transposed matrices, rows off
+ * by one, a wrong wrap, no hemisphere flip - must fail the same comparison. */
+#define _DEFAULT_SOURCE
+#define GL_GLEXT_PROTOTYPES
+#include "testutil.h"
+
+#include <GL/osmesa.h>
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <math.h>
+
+#include "../src/runtime.h"
+
+static OSMesaContext ctx;
+static unsigned char framebuffer[16 * 16 * 4];
+
+static int setup(void **state)
+{
+    (void)state;
+    const int attrs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_PROFILE, OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
+                         OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+    ctx = OSMesaCreateContextAttribs(attrs, NULL);
+    if (!ctx || !OSMesaMakeCurrent(ctx, framebuffer, GL_UNSIGNED_BYTE, 16, 16)) return -1;
+    printf("  %s on %s\n", (const char *)glGetString(GL_VERSION), (const char *)glGetString(GL_RENDERER));
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    OSMesaDestroyContext(ctx);
+    return 0;
+}
+
+static char *read_text(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *s = malloc((size_t)n + 1);
+    assert_int_equal(fread(s, 1, (size_t)n, f), (size_t)n);
+    s[n] = '\0';
+    fclose(f);
+    return s;
+}
+
+/* Replaces the line containing `marker` (a "cb:" comment of the shipped shader) with `line`. */
+static char *break_shader(const char *src, const char *marker, const char *line)
+{
+    const char *at = strstr(src, marker);
+    assert_non_null(at);
+    const char *start = at, *end = strchr(at, '\n');
+    while (start > src && start[-1] != '\n') --start;
+    size_t n = strlen(src) + strlen(line) + 1;
+    char *out = malloc(n);
+    snprintf(out, n, "%.*s%s%s", (int)(start - src), src, line, end);
+    return out;
+}
+
+static const char *layout_define[] = {"CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS"};
+static const char *precision_define[] = {"CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16"};
+
+static GLuint compile(const cb_palette *p, const char *library, bool es)
+{
+    static char src[1 << 16];
+    snprintf(src, sizeof src,
+             "%s\n#define %s\n#define %s\n%s\n"
+             "in vec3 a_position; in ivec4 a_joints; in vec4 a_weights; in vec4 a_instance; in float a_time;\n"
+             "out vec3 v_skinned;\n"
+             "void main() { v_skinned = cb_skin_position(a_position, a_joints, a_weights, a_instance, a_time); "
+             "gl_Position = vec4(0.0); }\n",
+             es ? "#version 300 es" : "#version 330 core", layout_define[p->layout], precision_define[p->precision], library);
+    const char *fs_src = es ? "#version 300 es\nprecision mediump float;\nout vec4 c; void main() { c = vec4(1.0); }\n"
+                            : "#version 330 core\nout vec4 c; void main() { c = vec4(1.0); }\n";
+    GLuint vs = glCreateShader(GL_VERTEX_SHADER), fs = glCreateShader(GL_FRAGMENT_SHADER), prog = glCreateProgram();
+    const char *s = src;
+    glShaderSource(vs, 1, &s, NULL);
+    glCompileShader(vs);
+    glShaderSource(fs, 1, &fs_src, NULL);
+    glCompileShader(fs);
+    GLint ok;
+    char log[4096];
+    glGetShaderiv(vs, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        glGetShaderInfoLog(vs, sizeof log, NULL, log);
+        fail_msg("%s shader does not compile: %s", es ? "ES 3.00" : "330 core", log);
+    }
+    glAttachShader(prog, vs);
+    glAttachShader(prog, fs);
+    const char *varyings[] = {"v_skinned"};
+    glTransformFeedbackVaryings(prog, 1, varyings, GL_INTERLEAVED_ATTRIBS);
+    glBindAttribLocation(prog, 0, "a_position");
+    glBindAttribLocation(prog, 1, "a_joints");
+    glBindAttribLocation(prog, 2, "a_weights");
+    glBindAttribLocation(prog, 3, "a_instance");
+    glBindAttribLocation(prog, 4, "a_time");
+    glLinkProgram(prog);
+    glGetProgramiv(prog, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        glGetProgramInfoLog(prog, sizeof log, NULL, log);
+        fail_msg("does not link: %s", log);
+    }
+    glDeleteShader(vs);
+    glDeleteShader(fs);
+    return prog;
+}
+
+/* The palette's texels as a texture, optionally with every mat4 bone transposed. */
+static GLuint upload(const cb_palette *p, bool transpose)
+{
+    GLuint tex;
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    const void *data = p->texels;
+    float *t = NULL;
+    if (transpose) { /* the reference runtime's shipped bug: rows stored where columns belong */
+        t = malloc(p->texel_bytes);
+        memcpy(t, p->texels, p->texel_bytes);
+        for (size_t b = 0; b + 16 <= p->texel_bytes / 4; b += 16)
+            for (int r = 0; r < 4; ++r)
+                for (int c = 0; c < 4; ++c) t[b + r * 4 + c] = ((const float *)p->texels)[b + c * 4 + r];
+        data = t;
+    }
+    if (p->precision == CB_PRECISION_FLOAT)
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, (GLsizei)p->width, (GLsizei)p->height, 0, GL_RGBA, GL_FLOAT, data);
+    else if (p->precision == CB_PRECISION_HALF)
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA16F, (GLsizei)p->width, (GLsizei)p->height, 0, GL_RGBA, GL_HALF_FLOAT, data);
+    else
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA16UI, (GLsizei)p->width, (GLsizei)p->height, 0, GL_RGBA_INTEGER,
+                     GL_UNSIGNED_SHORT, data);
+    free(t);
+    assert_int_equal(glGetError(), GL_NO_ERROR);
+    return tex;
+}
+
+static GLuint upload_bind_positions(const cb_palette *p)
+{
+    float *rgba = calloc((size_t)p->bone_count * 4, sizeof(float));
+    for (uint32_t j = 0; j < p->bone_count; ++j) memcpy(rgba + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
+    GLuint tex;
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, (GLsizei)p->bone_count, 1, 0, GL_RGBA, GL_FLOAT, rgba);
+    free(rgba);
+    return tex;
+}
+
+typedef struct sample {
+    cb_instance inst;
+    double time;
+} sample;
+
+/* Skins every vertex of `prim` for every sample on the GPU; returns 3 floats per (sample, vertex). */
+static float *gpu_skin(const cb_palette *p, const cb_primitive *prim, const sample *samples, uint32_t n, GLuint prog,
+                       bool transpose, double row_offset)
+{
+    uint32_t verts = prim->vertex_count, total = verts * n;
+    float *pos = malloc(total * 3 * sizeof(float)), *w = malloc(total * 4 * sizeof(float)), *inst = malloc(total * 4 * sizeof(float)),
+          *time = malloc(total * sizeof(float));
+    int32_t *j = malloc(total * 4 * sizeof(int32_t));
+    for (uint32_t s = 0; s < n; ++s)
+        for (uint32_t v = 0; v < verts; ++v) {
+            uint32_t i = s * verts + v;
+            memcpy(pos + i * 3, prim->positions + v * 3, 3 * sizeof(float));
+            memcpy(w + i * 4, prim->weights + v * 4, 4 * sizeof(float));
+            for (int k = 0; k < 4; ++k) j[i * 4 + k] = prim->joints[v * 4 + k];
+            inst[i * 4] = (float)(samples[s].inst.first_row + row_offset);
+            inst[i * 4 + 1] = (float)samples[s].inst.frame_count;
+            inst[i * 4 + 2] = (float)samples[s].inst.rate;
+            inst[i * 4 + 3] = (float)samples[s].inst.phase;
+            time[i] = (float)samples[s].time;
+        }
+    glActiveTexture(GL_TEXTURE0);
+    GLuint vao, vbo[5], out, palette = upload(p, transpose), bind = 0;
+    glGenVertexArrays(1, &vao);
+    glBindVertexArray(vao);
+    glGenBuffers(5, vbo);
+    const void *data[5] = {pos, j, w, inst, time};
+    const int comps[5] = {3, 4, 4, 4, 1};
+    for (int a = 0; a < 5; ++a) {
+        glBindBuffer(GL_ARRAY_BUFFER, vbo[a]);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)total * comps[a] * 4, data[a], GL_STATIC_DRAW);
+        glEnableVertexAttribArray((GLuint)a);
+        if (a == 1) glVertexAttribIPointer(1, 4, GL_INT, 0, 0);
+        else glVertexAttribPointer((GLuint)a, comps[a], GL_FLOAT, GL_FALSE, 0, 0);
+    }
+    glGenBuffers(1, &out);
+    glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, out);
+    glBufferData(GL_TRANSFORM_FEEDBACK_BUFFER, (GLsizeiptr)total * 12, NULL, GL_STATIC_READ);
+    glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, out);
+    glUseProgram(prog);
+    if (p->layout == CB_LAYOUT_QPOS) {
+        glActiveTexture(GL_TEXTURE1);
+        bind = upload_bind_positions(p); /* uploading binds it to the active unit: 1 */
+        glUniform1i(glGetUniformLocation(prog, "cb_bind_positions"), 1);
+    }
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, palette);
+    glUniform1i(glGetUniformLocation(prog, "cb_palette"), 0);
+    glUniform1i(glGetUniformLocation(prog, "cb_row_texels"), (GLint)p->row_texels);
+    glUniform1i(glGetUniformLocation(prog, "cb_rows_per_block"), (GLint)p->height);
+    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_min"), 1, p->bounds_min);
+    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_max"), 1, p->bounds_max);
+    glUniform1f(glGetUniformLocation(prog, "cb_linear_range"), p->linear_range);
+    glEnable(GL_RASTERIZER_DISCARD);
+    glBeginTransformFeedback(GL_POINTS);
+    glDrawArrays(GL_POINTS, 0, (GLsizei)total);
+    glEndTransformFeedback();
+    glDisable(GL_RASTERIZER_DISCARD);
+    float *result = malloc(total * 12);
+    glGetBufferSubData(GL_TRANSFORM_FEEDBACK_BUFFER, 0, (GLsizeiptr)total * 12, result);
+    assert_int_equal(glGetError(), GL_NO_ERROR);
+    glDeleteBuffers(5, vbo);
+    glDeleteBuffers(1, &out);
+    glDeleteVertexArrays(1, &vao);
+    glDeleteTextures(1, &palette);
+    if (bind) glDeleteTextures(1, &bind);
+    free(pos), free(w), free(inst), free(time), free(j);
+    return result;
+}
+
+/* Largest |GPU - CPU runtime| over every sample and vertex. */
+static double compare(const cb_palette *p, const cb_primitive *prim, const sample *samples, uint32_t n, const float *gpu)
+{
+    double *mats = malloc(p->bone_count * 16 * sizeof(double)), *cpu = malloc(prim->vertex_count * 3 * sizeof(double)), worst = 0;
+    for (uint32_t s = 0; s < n; ++s) {
+        cb_runtime_matrices(p, p->texels, &samples[s].inst, (float)samples[s].time, mats);
+        cb_skin_positions(prim, mats, cpu);
+        for (uint32_t i = 0; i < prim->vertex_count * 3; ++i)
+            worst = fmax(worst, fabs(cpu[i] - gpu[(size_t)s * prim->vertex_count * 3 + i]));
+    }
+    free(mats), free(cpu);
+    return worst;
+}
+
+/* Instances of every clip at many times: mid-frames, the loop seam, random phases. */
+static uint32_t make_samples(const cb_palette *p, sample *out, uint32_t cap)
+{
+    uint32_t n = 0;
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        const cb_palette_clip *cl = &p->clips[c];
+        cb_instance in = {cl->first_row, cl->loops ? cl->frames : -(double)cl->frames, cl->fps, 0};
+        double span = cl->frames / cl->fps;
+        double times[] = {0.3 / cl->fps, 2.5 / cl->fps, span * 0.37, span - 0.4 / cl->fps /* the seam */, span * 1.5};
+        for (int k = 0; k < 5 && n < cap; ++k) out[n++] = (sample){in, times[k]};
+        for (int k = 0; k < 3 && n < cap; ++k) {
+            cb_instance phased = in;
+            phased.phase = fmod((k + 1) * 0.6180339887, 1.0);
+            out[n++] = (sample){phased, 0.77 * (k + 1)};
+        }
+    }
+    return n;
+}
+
+typedef struct fixture {
+    cb_model *model;
+    cb_palette palette;
+} fixture;
+
+static void bake(const char *path, cb_layout l, cb_precision pr, fixture *f)
+{
+    f->model = load_or_fail(path);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(f->model, 0, &err);
+    cb_bake_options o = cb_default_bake_options();
+    o.layout = l, o.precision = pr, o.root_motion = CB_ROOT_MOTION_IN_PLACE;
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &f->palette, &err), CB_OK);
+    cb_sampler_free(s);
+}
+
+static void release(fixture *f)
+{
+    cb_palette_free(&f->palette);
+    cb_model_free(f->model);
+}
+
+static double tolerance(const fixture *f) { return 1e-5 * fmax(1.0, f->palette.model_height); }
+
+static void test_every_layout_and_precision_matches_the_cpu(void **state)
+{
+    (void)state;
+    char *lib = read_text("samples/shaders/crowdbake_palette.glsl"), path[1024];
+    snprintf(path, sizeof path, "%s/quadruped.glb", samples_dir());
+    sample samples[64];
+    for (int l = 0; l < 3; ++l)
+        for (int pr = 0; pr < 3; ++pr) {
+            fixture f;
+            bake(path, (cb_layout)l, (cb_precision)pr, &f);
+            uint32_t n = make_samples(&f.palette, samples, 64);
+            for (int es = 0; es < 2; ++es) {
+                GLuint prog = compile(&f.palette, lib, es);
+                float *gpu = gpu_skin(&f.palette, &f.model->primitives[0], samples, n, prog, false, 0);
+                double worst = compare(&f.palette, &f.model->primitives[0], samples, n, gpu);
+                printf("  %-6s %-5s %-8s %u instances x %u vertices: GPU vs CPU %.2g (tolerance %.2g)\n",
+                       cb_layout_name((cb_layout)l), cb_precision_name((cb_precision)pr), es ? "ES 3.00" : "330 core", n,
+                       f.model->primitives[0].vertex_count, worst, tolerance(&f));
+                assert_true(worst <= tolerance(&f));
+                free(gpu);
+                glDeleteProgram(prog);
+            }
+            release(&f);
+        }
+    free(lib);
+}
+
+static double broken(const char *model, cb_layout l, cb_precision pr, const char *marker, const char *line, bool transpose,
+                     double row_offset)
+{
+    char *lib = read_text("samples/shaders/crowdbake_palette.glsl"), path[1024];
+    if (marker) {
+        char *b = break_shader(lib, marker, line);
+        free(lib);
+        lib = b;
+    }
+    if (strchr(model, '/')) snprintf(path, sizeof path, "%s", model);
+    else snprintf(path, sizeof path, "%s/%s", samples_dir(), model);
+    fixture f;
+    bake(path, l, pr, &f);
+    sample samples[64];
+    uint32_t n = make_samples(&f.palette, samples, 64);
+    GLuint prog = compile(&f.palette, lib, false);
+    float *gpu = gpu_skin(&f.palette, &f.model->primitives[0], samples, n, prog, transpose, row_offset);
+    double worst = compare(&f.palette, &f.model->primitives[0], samples, n, gpu) / tolerance(&f);
+    free(gpu), free(lib);
+    glDeleteProgram(prog);
+    release(&f);
+    return worst;
+}
+
+static void test_broken_variants_are_caught(void **state)
+{
+    (void)state;
+    double transposed = broken("quadruped.glb", CB_LAYOUT_MAT4, CB_PRECISION_FLOAT, NULL, NULL, true, 0);
+    double off_by_one = broken("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16, NULL, NULL, false, 1);
+    double no_wrap = broken("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_HALF, "cb:wrap", "        f1 = f0 + 1.0;", false, 0);
+    char multitrack[1024];
+    shared_path(multitrack, sizeof multitrack, "assets/multitrack-luanti/gltf_multi_track_1.glb");
+    /* multitrack's bones spin a full turn per loop: their last and first rows are -q apart. */
+    double no_flip = broken(multitrack, CB_LAYOUT_QPOS, CB_PRECISION_FLOAT, "cb:hemisphere", "", false, 0);
+    printf("  error / tolerance: transposed %.0f, rows off by one %.0f, no wrap %.0f, no hemisphere flip %.0f\n", transposed,
+           off_by_one, no_wrap, no_flip);
+    assert_true(transposed > 10 && off_by_one > 10 && no_wrap > 10 && no_flip > 10);
+    /* ...and the same multitrack palette with the shipped shader passes. */
+    assert_true(broken(multitrack, CB_LAYOUT_QPOS, CB_PRECISION_FLOAT, NULL, NULL, false, 0) <= 1);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_every_layout_and_precision_matches_the_cpu),
+        cmocka_unit_test(test_broken_variants_are_caught),
+    };
+    return cmocka_run_group_tests_name("gl", tests, setup, teardown);
+}
