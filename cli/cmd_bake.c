@@ -1,5 +1,6 @@
 /* cmd_bake.c - `crowdbake bake MODEL -o OUT.pal|OUT.exr`: the main job. */
 #include <math.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,6 +11,8 @@
 #include "../formats/exr_io.h"
 #include "../formats/json_writer.h"
 #include "../formats/pal_write.h"
+#include "../src/budget.h"
+#include "../src/runtime.h"
 #include "cli.h"
 
 const char cmd_bake_usage[] =
@@ -20,7 +23,9 @@ const char cmd_bake_usage[] =
     "changed (--force: everything), N types at a time (default: the number of cores).\n\n"
     "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md) or .exr (OpenEXR)\n"
     "  --format pal,exr           write these formats (OUT's extension is replaced per format)\n"
-    "  --fps N                    baked frames per second (default 30)\n"
+    "  --fps N|auto               baked frames per second (default 30); auto: per clip, the lowest rate\n"
+    "                             whose error stays under --max-error (mm per metre of model height,\n"
+    "                             default 1) at baked frames and between them, up to --max-fps (60)\n"
     "  --layout mat4|affine|qpos  texels per bone: 4, 3 or 2 (default qpos; affine when the rig has\n"
     "                             non-uniform scale or shear, which qpos cannot hold)\n"
     "  --precision float|half|u16 RGBA32F, RGBA16F or RGBA16UI (default u16 for .pal, float for .exr)\n"
@@ -38,7 +43,7 @@ const char cmd_bake_usage[] =
 
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
-        *exr_compression, *threads, *depfile, *manifest;
+        *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps;
     bool zstd, json, quiet, quiet_long, force;
 } bake_args;
 
@@ -86,7 +91,7 @@ static uint64_t input_hash(const char *model_path, const cb_bake_options *o, int
 static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, bool want_pal)
 {
     *o = cb_default_bake_options();
-    if (a->fps && (!cli_parse_double(a->fps, &o->fps) || !(o->fps > 0) || o->fps > 1000))
+    if (a->fps && strcmp(a->fps, "auto") != 0 && (!cli_parse_double(a->fps, &o->fps) || !(o->fps > 0) || o->fps > 1000))
         return cli_usage_error("bake", "--fps wants a number between 0 and 1000, got '%s'", a->fps);
     if (a->layout && !cb_layout_parse(a->layout, &o->layout))
         return cli_usage_error("bake", "--layout is mat4, affine or qpos, got '%s'", a->layout);
@@ -156,18 +161,62 @@ static void json_output(cb_json *j, const char *path, const char *format, size_t
     cb_json_end(j);
 }
 
-/* Bakes with the chosen layout; when the layout was not chosen and qpos cannot hold the rig,
- * falls back to affine and says so. */
-static cb_status bake_palette(cb_sampler *s, cb_bake_options *o, bool layout_chosen, bool quiet, cb_palette *p, cb_error *err)
+/* --fps auto: a rate per clip, chosen by measured error; prints what it chose and saved. */
+static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, double max_mm, double max_fps, bool quiet,
+                                  cb_error *err)
 {
-    cb_status rc = cb_palette_bake(s, o, NULL, 0, p, err);
-    if (rc == CB_ERR_INPUT && !layout_chosen && o->layout == CB_LAYOUT_QPOS && strstr(err->message, "qpos layout")) {
+    const cb_model *m = cb_sampler_model(s);
+    double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
+    if (!(height > 0)) {
+        cb_fail(err, CB_ERR_INPUT, "%s: has no skinned mesh to measure errors on; give --fps N", m->source);
+        return NULL;
+    }
+    cb_clip_plan *plan = calloc(m->animation_count ? m->animation_count : 1, sizeof *plan);
+    if (!plan) return cb_fail(err, CB_ERR_INTERNAL, "out of memory"), NULL;
+    uint64_t rows_auto = 0, rows_30 = 0;
+    for (uint32_t a = 0; a < m->animation_count && !err->status; ++a) {
+        bool met;
+        double e, fps = cb_choose_clip_fps(s, o, (int32_t)a, max_mm / 1000 * height, max_fps, &met, &e, err);
+        plan[a] = (cb_clip_plan){(int32_t)a, NULL, -1, fps};
+        cb_clip_info at, fixed;
+        if (err->status || cb_clip_analyze(s, (int32_t)a, fps, -1, &o->limits, &at, err) ||
+            cb_clip_analyze(s, (int32_t)a, 30, -1, &o->limits, &fixed, err))
+            break;
+        rows_auto += at.frames, rows_30 += fixed.frames;
+        if (!quiet)
+            printf("  %-24s %3.0f fps: %4u rows, error %.3f mm/m%s\n", m->animations[a].name, fps, at.frames,
+                   e / height * 1000, met ? "" : " (over --max-error even at --max-fps)");
+    }
+    if (!err->status && !quiet) {
+        cb_texture_geometry g;
+        uint32_t bones = m->skins[cb_sampler_skin(s)].joint_count;
+        uint64_t b_auto = cb_palette_texture_bytes(bones, (uint32_t)rows_auto, o->layout, o->precision, o->max_texture_size, &g);
+        uint64_t b_30 = cb_palette_texture_bytes(bones, (uint32_t)rows_30, o->layout, o->precision, o->max_texture_size, &g);
+        printf("  auto fps: %llu rows, %.1f KiB, against %llu rows, %.1f KiB at 30 fps (%.0f%% %s)\n",
+               (unsigned long long)rows_auto, b_auto / 1024.0, (unsigned long long)rows_30, b_30 / 1024.0,
+               b_30 ? fabs(100.0 * (1 - (double)b_auto / b_30)) : 0, b_auto <= b_30 ? "saved" : "more");
+    }
+    if (err->status) free(plan), plan = NULL;
+    return plan;
+}
+
+/* Bakes with the chosen layout; when the layout was not chosen and qpos cannot hold the rig,
+ * falls back to affine and says so. With --fps auto, chooses the rates first. */
+static cb_status bake_palette(cb_sampler *s, cb_bake_options *o, const bake_args *a, double max_mm, double max_fps,
+                              cb_palette *p, cb_error *err)
+{
+    bool quiet = a->quiet || a->json, automatic = a->fps && strcmp(a->fps, "auto") == 0;
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        cb_clip_plan *plan = automatic ? choose_rates(s, o, max_mm, max_fps, quiet, err) : NULL;
+        uint32_t n = plan ? cb_sampler_model(s)->animation_count : 0;
+        cb_status rc = err->status ? err->status : cb_palette_bake(s, o, plan, n, p, err);
+        free(plan);
+        if (rc != CB_ERR_INPUT || a->layout || o->layout != CB_LAYOUT_QPOS || !strstr(err->message, "qpos layout")) return rc;
         if (!quiet) fprintf(stderr, "crowdbake: note: %s; baking with the affine layout instead\n", err->message);
         memset(err, 0, sizeof *err);
         o->layout = CB_LAYOUT_AFFINE;
-        rc = cb_palette_bake(s, o, NULL, 0, p, err);
     }
-    return rc;
+    return err->status;
 }
 
 int cmd_bake(int argc, char **argv)
@@ -186,7 +235,8 @@ int cmd_bake(int argc, char **argv)
         {"--json", NULL, NULL, &a.json},           {"-q", NULL, NULL, &a.quiet},
         {"-j", "N", &a.threads, NULL},             {"--threads", "N", &a.threads, NULL},
         {"--force", NULL, NULL, &a.force},         {"--depfile", "FILE", &a.depfile, NULL},
-        {"--manifest", "FILE", &a.manifest, NULL},
+        {"--manifest", "FILE", &a.manifest, NULL}, {"--max-error", "MM_PER_M", &a.max_error, NULL},
+        {"--max-fps", "N", &a.max_fps, NULL},
         {"--quiet", NULL, NULL, &a.quiet_long}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
     if (help) return fputs(cmd_bake_usage, stdout), fputs(cli_limits_usage, stdout), 0;
@@ -213,6 +263,13 @@ int cmd_bake(int argc, char **argv)
         return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
     cb_bake_options o;
     if ((rc = parse_options(&a, &o, want_exr, want_pal))) return rc;
+    double max_mm = 1, max_fps = 60;
+    if (a.max_error && (!cli_parse_double(a.max_error, &max_mm) || !(max_mm > 0)))
+        return cli_usage_error("bake", "--max-error wants mm per metre of model height");
+    if (a.max_fps && (!cli_parse_double(a.max_fps, &max_fps) || !(max_fps >= 2) || max_fps > 1000))
+        return cli_usage_error("bake", "--max-fps wants 2..1000");
+    if (a.max_error && !(a.fps && strcmp(a.fps, "auto") == 0))
+        return cli_usage_error("bake", "--max-error goes with --fps auto");
     o.limits = limits;
 
     double t0 = now_seconds();
@@ -223,7 +280,7 @@ int cmd_bake(int argc, char **argv)
     int skin = cli_pick_skin(m, a.skin, &err);
     cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, &err) : NULL;
     cb_palette p = {0};
-    if (s) bake_palette(s, &o, a.layout != NULL, a.quiet || a.json, &p, &err);
+    if (s) bake_palette(s, &o, &a, max_mm, max_fps, &p, &err);
     cb_json j;
     if (a.json && !err.status) {
         cb_json_init(&j, stdout);

@@ -43,6 +43,70 @@ void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_insta
     }
 }
 
+/* ---- error-driven frame rate ---- */
+
+static double clip_error_at(cb_sampler *s, const cb_bake_options *o, int32_t animation, double fps, cb_error *err)
+{
+    cb_bake_options one = *o;
+    one.fps = fps;
+    one.threads = 1;
+    cb_clip_plan plan = {animation, NULL, -1, 0};
+    cb_palette p;
+    if (cb_palette_bake(s, &one, &plan, 1, &p, err)) return INFINITY;
+    cb_clip_error e;
+    double worst = INFINITY;
+    if (!cb_verify_clip(s, &p, p.texels, 0, animation, 16, &e, err)) worst = e.quant_max > e.interp_max ? e.quant_max : e.interp_max;
+    cb_palette_free(&p);
+    return worst;
+}
+
+static int compare_rates(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Common rates, plus the clip's own key rate and its multiples and fractions: rows that land on
+ * keys blend what the keys interpolate. */
+static size_t candidate_rates(const cb_animation *anim, double *out)
+{
+    static const double common[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120};
+    size_t n = 0;
+    for (size_t i = 0; i < sizeof common / sizeof common[0]; ++i) out[n++] = common[i];
+    double min_dt = INFINITY;
+    for (uint32_t c = 0; c < anim->channel_count; ++c)
+        for (uint32_t k = 1; k < anim->channels[c].key_count; ++k) {
+            double dt = (double)anim->channels[c].times[k] - anim->channels[c].times[k - 1];
+            if (dt > 1e-4 && dt < min_dt) min_dt = dt;
+        }
+    if (isfinite(min_dt)) {
+        static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
+        for (size_t i = 0; i < 6; ++i) out[n++] = round(factors[i] / min_dt * 1000) / 1000;
+    }
+    qsort(out, n, sizeof *out, compare_rates);
+    return n;
+}
+
+double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, int32_t animation, double max_error, double max_fps,
+                          bool *met, double *error, cb_error *err)
+{
+    double candidates[32];
+    size_t count = candidate_rates(&cb_sampler_model(s)->animations[animation], candidates);
+    *met = false;
+    for (size_t i = 0; i < count && candidates[i] <= max_fps; ++i) {
+        if (i > 0 && candidates[i] == candidates[i - 1]) continue;
+        *error = clip_error_at(s, o, animation, candidates[i], err);
+        if (err->status) return max_fps;
+        if (*error <= max_error) {
+            *met = true;
+            return candidates[i];
+        }
+    }
+    *error = clip_error_at(s, o, animation, max_fps, err);
+    *met = *error <= max_error;
+    return max_fps;
+}
+
 /* ---- verification ---- */
 
 typedef struct verify_ctx {

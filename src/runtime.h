@@ -38,6 +38,13 @@ typedef struct cb_clip_error {
 cb_status cb_verify_clip(cb_sampler *sampler, const cb_palette *p, const void *texels, uint32_t clip, int32_t animation,
                          uint32_t random_times, cb_clip_error *out, cb_error *err);
 
+/* Error-driven frame rate: the lowest of the candidate rates (common rates from 2 fps, and the
+ * clip's key rate with its multiples and fractions, up to max_fps) at which the clip,
+ * baked with `options`, stays within max_error (model units) at baked frames, mid-frames and
+ * random times. Returns max_fps (and *met = false) when none does. */
+double cb_choose_clip_fps(cb_sampler *sampler, const cb_bake_options *options, int32_t animation, double max_error,
+                          double max_fps, bool *met, double *error, cb_error *err);
+
 #ifdef __cplusplus
 }
 #endif
