@@ -133,6 +133,10 @@ bool check_glb(const unsigned char *data, size_t size, const char *name, cb_erro
         cb_fail(err, CB_ERR_INPUT, "%s: truncated GLB: header says %u bytes, file has %zu", name, length, size);
         return false;
     }
+    if (length < 20) { /* the JSON chunk is required */
+        cb_fail(err, CB_ERR_INPUT, "%s: GLB header says %u bytes, too few for the required JSON chunk", name, length);
+        return false;
+    }
     size_t offset = 12;
     for (int chunk = 0; offset < length; ++chunk) {
         if (length - offset < 8) {

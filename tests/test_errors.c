@@ -135,6 +135,9 @@ static void test_wrong_magic_and_version(void **state)
     t = b;
     t.data[4] = 1;
     expect_error(&t, "GLB version 1");
+    t = b; /* found by fuzzing: a header length that leaves no room for the JSON chunk */
+    t.data[8] = 12, t.data[9] = t.data[10] = t.data[11] = 0;
+    expect_error(&t, "too few for the required JSON chunk");
 }
 
 static void test_chunk_length_past_the_end(void **state)
