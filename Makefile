@@ -34,7 +34,7 @@ LIB_CXX := $(wildcard formats/*.cpp)
 CLI_C   := $(wildcard cli/*.c)
 TESTS   := $(patsubst tests/%.c,%,$(wildcard tests/test_*.c))
 
-LIB_OBJ := $(LIB_C:%.c=$(BUILD)/obj/%.o) $(LIB_CXX:%.cpp=$(BUILD)/obj/%.o)
+LIB_OBJ := $(LIB_C:%.c=$(BUILD)/obj/%.o) $(LIB_CXX:%.cpp=$(BUILD)/obj/%.o) $(BUILD)/obj/gen/palette_glsl.o
 CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
 
 SAMPLES := quadruped fish bird
@@ -68,6 +68,15 @@ $(BUILD)/obj/%.o: %.c $(DEPS_STAMP)
 $(BUILD)/obj/%.o: %.cpp $(DEPS_STAMP)
 	@mkdir -p $(@D)
 	$(CXX) $(CXXFLAGS) $(PKG_CFLAGS) -MMD -MP -c $< -o $@
+
+# The shipped GLSL, embedded so `crowdbake preview` renders with exactly what runtimes get.
+$(BUILD)/gen/palette_glsl.c: samples/shaders/crowdbake_palette.glsl
+	@mkdir -p $(@D)
+	python3 -c "import sys; d = open(sys.argv[1], 'rb').read(); print('/* generated from ' + sys.argv[1] + ' */'); \
+	print('const char cb_palette_glsl[] = {' + ','.join(str(b) for b in d) + ',0};')" $< > $@
+$(BUILD)/obj/gen/palette_glsl.o: $(BUILD)/gen/palette_glsl.c
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -c $< -o $@
 
 $(BUILD)/libcrowdbake.a: $(LIB_OBJ)
 	@rm -f $@

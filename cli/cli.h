@@ -54,11 +54,12 @@ int cmd_bake(int argc, char **argv);
 int cmd_inspect(int argc, char **argv);
 int cmd_vat(int argc, char **argv);
 int cmd_verify(int argc, char **argv);
+int cmd_preview(int argc, char **argv);
 int cmd_report(int argc, char **argv);
 int cmd_bake_catalog(const char *path, uint32_t jobs, bool force, bool quiet, bool json, const char *depfile,
                      const char *manifest);
 
 extern const char cmd_info_usage[], cmd_sample_usage[], cmd_bake_usage[], cmd_inspect_usage[], cmd_vat_usage[],
-    cmd_report_usage[], cmd_verify_usage[];
+    cmd_report_usage[], cmd_verify_usage[], cmd_preview_usage[];
 
 #endif

@@ -1,0 +1,272 @@
+/* preview.c - see preview.h. */
+#define GL_GLEXT_PROTOTYPES
+#include "preview.h"
+
+#include <GL/osmesa.h>
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <math.h>
+#include <png.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "../src/runtime.h"
+#include "atomic_file.h"
+
+static const char *const layout_define[] = {"CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS"};
+static const char *const precision_define[] = {"CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16"};
+
+static GLuint shader(GLenum type, const char *src, cb_error *err)
+{
+    GLuint s = glCreateShader(type);
+    glShaderSource(s, 1, &src, NULL);
+    glCompileShader(s);
+    GLint ok;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        char log[1024];
+        glGetShaderInfoLog(s, sizeof log, NULL, log);
+        cb_fail(err, CB_ERR_INTERNAL, "the preview shader does not compile: %.400s", log);
+    }
+    return s;
+}
+
+static GLuint program(const cb_palette *p, cb_error *err)
+{
+    size_t n = strlen(cb_palette_glsl) + 2048;
+    char *vs = malloc(n);
+    if (!vs) return cb_fail(err, CB_ERR_INTERNAL, "out of memory"), 0;
+    snprintf(vs, n,
+             "#version 330 core\n#define %s\n#define %s\n%s\n"
+             "in vec3 a_position; in ivec4 a_joints; in vec4 a_weights;\n"
+             "uniform vec4 u_instance; uniform float u_time; uniform mat4 u_view_projection;\nout vec3 v_world;\n"
+             "void main() {\n  v_world = cb_skin_position(a_position, a_joints, a_weights, u_instance, u_time);\n"
+             "  gl_Position = u_view_projection * vec4(v_world, 1.0);\n}\n",
+             layout_define[p->layout], precision_define[p->precision], cb_palette_glsl);
+    static const char fs[] = "#version 330 core\nin vec3 v_world; out vec4 color;\n"
+                             "void main() {\n  vec3 n = normalize(cross(dFdx(v_world), dFdy(v_world)));\n"
+                             "  float light = 0.35 + 0.65 * abs(dot(n, normalize(vec3(0.4, 0.8, 0.45))));\n"
+                             "  color = vec4(vec3(0.85, 0.62, 0.38) * light, 1.0);\n}\n";
+    GLuint v = shader(GL_VERTEX_SHADER, vs, err), f = shader(GL_FRAGMENT_SHADER, fs, err), prog = glCreateProgram();
+    free(vs);
+    glAttachShader(prog, v);
+    glAttachShader(prog, f);
+    glBindAttribLocation(prog, 0, "a_position");
+    glBindAttribLocation(prog, 1, "a_joints");
+    glBindAttribLocation(prog, 2, "a_weights");
+    glLinkProgram(prog);
+    glDeleteShader(v);
+    glDeleteShader(f);
+    return prog;
+}
+
+static GLuint texture(GLenum internal, GLsizei w, GLsizei h, GLenum format, GLenum type, const void *data)
+{
+    GLuint t;
+    glGenTextures(1, &t);
+    glBindTexture(GL_TEXTURE_2D, t);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, (GLint)internal, w, h, 0, format, type, data);
+    return t;
+}
+
+static void bind_palette(const cb_palette *p, const void *texels, GLuint prog, GLuint *tex)
+{
+    glActiveTexture(GL_TEXTURE1);
+    float *bind = calloc((size_t)p->bone_count * 4, sizeof(float));
+    for (uint32_t j = 0; bind && j < p->bone_count; ++j) memcpy(bind + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
+    tex[1] = texture(GL_RGBA32F, (GLsizei)p->bone_count, 1, GL_RGBA, GL_FLOAT, bind);
+    free(bind);
+    glActiveTexture(GL_TEXTURE0);
+    if (p->precision == CB_PRECISION_FLOAT)
+        tex[0] = texture(GL_RGBA32F, (GLsizei)p->width, (GLsizei)p->height, GL_RGBA, GL_FLOAT, texels);
+    else if (p->precision == CB_PRECISION_HALF)
+        tex[0] = texture(GL_RGBA16F, (GLsizei)p->width, (GLsizei)p->height, GL_RGBA, GL_HALF_FLOAT, texels);
+    else
+        tex[0] = texture(GL_RGBA16UI, (GLsizei)p->width, (GLsizei)p->height, GL_RGBA_INTEGER, GL_UNSIGNED_SHORT, texels);
+    glUseProgram(prog);
+    glUniform1i(glGetUniformLocation(prog, "cb_palette"), 0);
+    glUniform1i(glGetUniformLocation(prog, "cb_bind_positions"), 1);
+    glUniform1i(glGetUniformLocation(prog, "cb_row_texels"), (GLint)p->row_texels);
+    glUniform1i(glGetUniformLocation(prog, "cb_rows_per_block"), (GLint)p->height);
+    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_min"), 1, p->bounds_min);
+    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_max"), 1, p->bounds_max);
+    glUniform1f(glGetUniformLocation(prog, "cb_linear_range"), p->linear_range);
+}
+
+/* One VAO per primitive of the skin: positions, joints, weights and indices. */
+static uint32_t upload_mesh(const cb_model *m, int32_t skin, GLuint *vaos, GLsizei *counts, bool *indexed, uint32_t cap)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < m->primitive_count && n < cap; ++i) {
+        const cb_primitive *prim = &m->primitives[i];
+        if (prim->skin != skin) continue;
+        GLuint vbo[4];
+        glGenVertexArrays(1, &vaos[n]);
+        glBindVertexArray(vaos[n]);
+        glGenBuffers(4, vbo);
+        int32_t *joints = malloc((size_t)prim->vertex_count * 4 * sizeof(int32_t));
+        for (uint32_t k = 0; joints && k < prim->vertex_count * 4; ++k) joints[k] = prim->joints[k];
+        glBindBuffer(GL_ARRAY_BUFFER, vbo[0]);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)prim->vertex_count * 12, prim->positions, GL_STATIC_DRAW);
+        glEnableVertexAttribArray(0);
+        glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, 0);
+        glBindBuffer(GL_ARRAY_BUFFER, vbo[1]);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)prim->vertex_count * 16, joints, GL_STATIC_DRAW);
+        glEnableVertexAttribArray(1);
+        glVertexAttribIPointer(1, 4, GL_INT, 0, 0);
+        glBindBuffer(GL_ARRAY_BUFFER, vbo[2]);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)prim->vertex_count * 16, prim->weights, GL_STATIC_DRAW);
+        glEnableVertexAttribArray(2);
+        glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, 0, 0);
+        free(joints);
+        indexed[n] = prim->indices != NULL;
+        counts[n] = (GLsizei)(indexed[n] ? prim->index_count : prim->vertex_count);
+        if (indexed[n]) {
+            glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, vbo[3]);
+            glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)prim->index_count * 4, prim->indices, GL_STATIC_DRAW);
+        }
+        ++n;
+    }
+    return n;
+}
+
+/* Center and radius of the skinned mesh at one time, skinned on the CPU the way the shader
+ * does (src/runtime.c), so each cell is framed on the animal even when it travels. */
+static void frame_bounds(const cb_palette *p, const void *texels, const cb_model *m, int32_t skin, const cb_instance *in,
+                         double t, double center[3], double *radius)
+{
+    double *mats = malloc((size_t)p->bone_count * 16 * sizeof(double)), lo[3] = {INFINITY, INFINITY, INFINITY},
+           hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    if (!mats) return;
+    cb_runtime_matrices(p, texels, in, t, mats);
+    for (uint32_t i = 0; i < m->primitive_count; ++i) {
+        const cb_primitive *prim = &m->primitives[i];
+        double *pos = prim->skin == skin ? malloc((size_t)prim->vertex_count * 3 * sizeof(double)) : NULL;
+        if (!pos) continue;
+        cb_skin_positions(prim, mats, pos);
+        for (uint32_t v = 0; v < prim->vertex_count * 3; ++v)
+            lo[v % 3] = fmin(lo[v % 3], pos[v]), hi[v % 3] = fmax(hi[v % 3], pos[v]);
+        free(pos);
+    }
+    free(mats);
+    *radius = 0;
+    for (int k = 0; k < 3; ++k) center[k] = 0.5 * (lo[k] + hi[k]), *radius += 0.25 * (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    *radius = isfinite(*radius) ? sqrt(*radius) : 1;
+}
+
+/* An orthographic three-quarter view of a sphere: column-major view-projection. */
+static void camera(const double c[3], double r, float out[16])
+{
+    double d[3] = {0.75, 0.35, 0.56}, len = sqrt(0.75 * 0.75 + 0.35 * 0.35 + 0.56 * 0.56);
+    for (int k = 0; k < 3; ++k) d[k] /= len;
+    r = r * 1.05 + 1e-6;
+    double up[3] = {0, 1, 0}, x[3] = {up[1] * d[2] - up[2] * d[1], up[2] * d[0] - up[0] * d[2], up[0] * d[1] - up[1] * d[0]};
+    double xl = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    for (int k = 0; k < 3; ++k) x[k] /= xl;
+    double y[3] = {d[1] * x[2] - d[2] * x[1], d[2] * x[0] - d[0] * x[2], d[0] * x[1] - d[1] * x[0]};
+    /* rows of the view: x, y, d (looking along -d), scaled into [-1, 1] by the radius */
+    for (int k = 0; k < 3; ++k) {
+        out[k * 4 + 0] = (float)(x[k] / r);
+        out[k * 4 + 1] = (float)(y[k] / r);
+        out[k * 4 + 2] = (float)(-d[k] / r);
+        out[k * 4 + 3] = 0;
+    }
+    double cx = x[0] * c[0] + x[1] * c[1] + x[2] * c[2], cy = y[0] * c[0] + y[1] * c[1] + y[2] * c[2];
+    double cz = d[0] * c[0] + d[1] * c[1] + d[2] * c[2];
+    out[12] = (float)(-cx / r), out[13] = (float)(-cy / r), out[14] = (float)(cz / r), out[15] = 1;
+}
+
+static cb_status write_png(const char *path, const unsigned char *rgba, uint32_t w, uint32_t h, cb_error *err)
+{
+    cb_atomic_file af;
+    if (cb_atomic_open(&af, path, err)) return err->status;
+    FILE *f = fdopen(af.fd, "wb");
+    png_structp png = f ? png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL) : NULL;
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    if (!info || setjmp(png_jmpbuf(png))) {
+        if (png) png_destroy_write_struct(&png, &info);
+        if (f) fclose(f), af.fd = -1;
+        cb_atomic_abort(&af);
+        return cb_fail(err, CB_ERR_IO, "%s: cannot write the PNG", path);
+    }
+    png_init_io(png, f);
+    png_set_IHDR(png, info, w, h, 8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+                 PNG_FILTER_TYPE_DEFAULT);
+    png_write_info(png, info);
+    for (uint32_t y = 0; y < h; ++y) png_write_row(png, (png_const_bytep)(rgba + (size_t)(h - 1 - y) * w * 4)); /* GL is bottom-up */
+    png_write_end(png, info);
+    png_destroy_write_struct(&png, &info);
+    if (fflush(f) != 0) {
+        fclose(f), af.fd = -1;
+        cb_atomic_abort(&af);
+        return cb_fail(err, CB_ERR_IO, "%s: cannot write the PNG", path);
+    }
+    af.fd = dup(fileno(f));
+    fclose(f);
+    return cb_atomic_commit(&af, err);
+}
+
+cb_status cb_preview_write(const cb_palette *p, const void *texels, const cb_model *m, int32_t skin,
+                           const cb_preview_options *opt, const char *png_path, cb_error *err)
+{
+    uint32_t cols = opt->columns, cell = opt->cell, w = cols * cell, h = p->clip_count * cell;
+    if (!cols || !cell || w > 8192 || h > 8192)
+        return cb_fail(err, CB_ERR_USAGE, "a contact sheet of %ux%u pixels is out of range (1..8192)", w, h);
+    const int attrs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
+                         OSMESA_CONTEXT_MAJOR_VERSION, 3, OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+    OSMesaContext ctx = OSMesaCreateContextAttribs(attrs, NULL);
+    unsigned char *pixels = malloc((size_t)w * h * 4);
+    if (!ctx || !pixels || !OSMesaMakeCurrent(ctx, pixels, GL_UNSIGNED_BYTE, (GLsizei)w, (GLsizei)h)) {
+        free(pixels);
+        if (ctx) OSMesaDestroyContext(ctx);
+        return cb_fail(err, CB_ERR_INTERNAL, "no OpenGL 3.3 context from OSMesa (Mesa's libosmesa6)");
+    }
+    GLuint prog = program(p, err), tex[2] = {0, 0}, vaos[64];
+    GLsizei counts[64];
+    bool indexed[64];
+    if (!err->status) {
+        bind_palette(p, texels, prog, tex);
+        uint32_t prims = upload_mesh(m, skin, vaos, counts, indexed, 64);
+        glEnable(GL_DEPTH_TEST);
+        glClearColor(0.93f, 0.93f, 0.9f, 1);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        double *centers = malloc((size_t)cols * 3 * sizeof(double));
+        for (uint32_t c = 0; centers && c < p->clip_count; ++c) {
+            const cb_palette_clip *clip = &p->clips[c];
+            cb_instance in = {clip->first_row, clip->loops ? clip->frames : -(double)clip->frames, clip->fps, 0};
+            float inst[4] = {(float)in.first_row, (float)in.frame_count, (float)in.rate, 0};
+            glUniform4fv(glGetUniformLocation(prog, "u_instance"), 1, inst);
+            double span = clip->loops ? clip->frames / clip->fps : (clip->frames - 1) / clip->fps, radius = 0;
+            for (uint32_t k = 0; k < cols; ++k) { /* one scale for the row, a center per frame */
+                double t = clip->loops ? span * k / cols : cols > 1 ? span * k / (cols - 1) : 0, r = 0;
+                frame_bounds(p, texels, m, skin, &in, t, centers + k * 3, &r);
+                radius = fmax(radius, r);
+            }
+            for (uint32_t k = 0; k < cols; ++k) {
+                double t = clip->loops ? span * k / cols : cols > 1 ? span * k / (cols - 1) : 0;
+                float vp[16];
+                camera(centers + k * 3, radius, vp);
+                glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, vp);
+                glUniform1f(glGetUniformLocation(prog, "u_time"), (float)t);
+                glViewport((GLint)(k * cell), (GLint)((p->clip_count - 1 - c) * cell), (GLsizei)cell, (GLsizei)cell);
+                for (uint32_t i = 0; i < prims; ++i) {
+                    glBindVertexArray(vaos[i]);
+                    if (indexed[i]) glDrawElements(GL_TRIANGLES, counts[i], GL_UNSIGNED_INT, 0);
+                    else glDrawArrays(GL_TRIANGLES, 0, counts[i]);
+                }
+            }
+        }
+        free(centers);
+        glFinish();
+        if (glGetError() != GL_NO_ERROR) cb_fail(err, CB_ERR_INTERNAL, "OpenGL failed while rendering the preview");
+    }
+    if (!err->status) write_png(png_path, pixels, w, h, err);
+    OSMesaDestroyContext(ctx);
+    free(pixels);
+    return err->status;
+}

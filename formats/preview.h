@@ -1,0 +1,20 @@
+/* preview.h - a contact sheet of a palette: a row per clip, frames across, the model's mesh
+ * skinned on OpenGL (Mesa's OSMesa, no GPU or display) by the shipped GLSL, shaded simply. */
+#ifndef CB_PREVIEW_H
+#define CB_PREVIEW_H
+
+#include "../src/palette.h"
+
+typedef struct cb_preview_options {
+    uint32_t columns;   /* frames per clip */
+    uint32_t cell;      /* pixels per frame, square */
+} cb_preview_options;
+
+/* Renders and writes a PNG (atomically). texels: the palette's payload. */
+cb_status cb_preview_write(const cb_palette *p, const void *texels, const cb_model *model, int32_t skin,
+                           const cb_preview_options *opt, const char *png_path, cb_error *err);
+
+/* The shipped samples/shaders/crowdbake_palette.glsl, embedded at build time. */
+extern const char cb_palette_glsl[];
+
+#endif

@@ -1,0 +1,153 @@
+/* test_verify.c - verification thresholds and the preview sheets. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <math.h>
+#include <png.h>
+#include <sys/stat.h>
+
+#include "../formats/preview.h"
+#include "../src/runtime.h"
+
+/* Bakes `path` and verifies every clip in process. */
+static void verify_model(const char *path, cb_layout l, cb_precision pr, double fps, double *quant, double *interp,
+                         double *bake_error, double *height, bool transpose)
+{
+    cb_model *m = load_or_fail(path);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_bake_options o = cb_default_bake_options();
+    o.layout = l, o.precision = pr, o.fps = fps, o.root_motion = CB_ROOT_MOTION_IN_PLACE;
+    cb_palette p;
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &p, &err), CB_OK);
+    if (transpose) /* the reference runtime's shipped bug, in a float mat4 palette */
+        for (size_t b = 0; b + 16 <= p.texel_bytes / 4; b += 16)
+            for (int r = 0; r < 4; ++r)
+                for (int c = r + 1; c < 4; ++c) {
+                    float *t = (float *)p.texels, x = t[b + r * 4 + c];
+                    t[b + r * 4 + c] = t[b + c * 4 + r], t[b + c * 4 + r] = x;
+                }
+    *quant = *interp = 0;
+    for (uint32_t c = 0; c < p.clip_count; ++c) {
+        cb_clip_error e;
+        assert_int_equal(cb_verify_clip(s, &p, p.texels, c, (int32_t)c, 32, &e, &err), CB_OK);
+        *quant = fmax(*quant, e.quant_max);
+        *interp = fmax(*interp, e.interp_max);
+    }
+    *bake_error = p.max_error;
+    *height = p.model_height;
+    cb_palette_free(&p);
+    cb_sampler_free(s);
+    cb_model_free(m);
+}
+
+static void test_verify_agrees_with_the_bake_and_converges(void **state)
+{
+    (void)state;
+    char paths[4][1024];
+    snprintf(paths[0], sizeof paths[0], "%s/quadruped.glb", samples_dir());
+    snprintf(paths[1], sizeof paths[1], "%s/fish.glb", samples_dir());
+    snprintf(paths[2], sizeof paths[2], "%s/bird.glb", samples_dir());
+    shared_path(paths[3], sizeof paths[3], "assets/fox-bevy/Fox.glb");
+    for (int i = 0; i < 4; ++i)
+        for (int l = 0; l < 3; ++l)
+            for (int pr = 0; pr < 3; ++pr) {
+                double q, in30, in120, bake, h, q2, b2;
+                verify_model(paths[i], (cb_layout)l, (cb_precision)pr, 30, &q, &in30, &bake, &h, false);
+                verify_model(paths[i], (cb_layout)l, (cb_precision)pr, 120, &q2, &in120, &b2, &h, false);
+                /* At the baked rows the runtime reads exactly what the bake measured. */
+                if (fabs(q - bake) > 1e-6 * fmax(1, h)) fail_msg("%s: verify %g, bake %g", paths[i], q, bake);
+                /* Between rows, a finer bake interpolates better. */
+                assert_true(in120 < in30);
+                if (pr == CB_PRECISION_FLOAT)
+                    printf("  %-40s %-6s: at frames %.4f mm/m; between them %.2f mm/m at 30 fps, %.2f at 120 fps\n",
+                           strrchr(paths[i], '/') + 1, cb_layout_name((cb_layout)l), q / h * 1000, in30 / h * 1000,
+                           in120 / h * 1000);
+            }
+}
+
+static void test_verify_catches_a_transposed_palette(void **state)
+{
+    (void)state;
+    char path[1024];
+    snprintf(path, sizeof path, "%s/quadruped.glb", samples_dir());
+    double q, in, bake, h;
+    verify_model(path, CB_LAYOUT_MAT4, CB_PRECISION_FLOAT, 30, &q, &in, &bake, &h, true);
+    printf("  transposed mat4: %.0f mm/m at the baked frames\n", q / h * 1000);
+    assert_true(q / h * 1000 > 100); /* the crumpled herd */
+}
+
+static void test_verify_exit_code(void **state)
+{
+    (void)state;
+    char cmd[4096], out[8192], fox[1024];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    snprintf(cmd, sizeof cmd, "mkdir -p build/tmp-tests && %s bake %s -o build/tmp-tests/v.pal -q && %s verify %s "
+             "build/tmp-tests/v.pal --max-error 0.01 2>&1", crowdbake_exe(), fox, crowdbake_exe(), fox);
+    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_VERIFY);
+    assert_non_null(strstr(out, "over --max-error"));
+    snprintf(cmd, sizeof cmd, "%s verify %s build/tmp-tests/v.pal --max-error 100 --json 2>&1", crowdbake_exe(), fox);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    assert_non_null(strstr(out, "\"between_max_mm_per_m\""));
+    char q[1024];
+    snprintf(q, sizeof q, "%s/quadruped.glb", samples_dir());
+    snprintf(cmd, sizeof cmd, "%s verify %s build/tmp-tests/v.pal 2>&1", crowdbake_exe(), q);
+    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT); /* not its palette */
+}
+
+/* Share of non-background pixels in each cell of a sheet. */
+static void check_sheet(const char *png, uint32_t rows, uint32_t cols, uint32_t cell)
+{
+    png_image img;
+    memset(&img, 0, sizeof img);
+    img.version = PNG_IMAGE_VERSION;
+    assert_true(png_image_begin_read_from_file(&img, png));
+    img.format = PNG_FORMAT_RGBA;
+    assert_int_equal(img.width, cols * cell);
+    assert_int_equal(img.height, rows * cell);
+    unsigned char *px = malloc(PNG_IMAGE_SIZE(img));
+    assert_true(png_image_finish_read(&img, NULL, px, 0, NULL));
+    for (uint32_t r = 0; r < rows; ++r)
+        for (uint32_t c = 0; c < cols; ++c) {
+            uint32_t drawn = 0;
+            for (uint32_t y = r * cell; y < (r + 1) * cell; ++y)
+                for (uint32_t x = c * cell; x < (c + 1) * cell; ++x) {
+                    const unsigned char *p = px + ((size_t)y * img.width + x) * 4;
+                    drawn += abs(p[0] - 237) + abs(p[1] - 237) + abs(p[2] - 230) > 30;
+                }
+            if (drawn < cell * cell / 200) fail_msg("%s: cell %u,%u is empty", png, r, c);
+        }
+    free(px);
+}
+
+static void test_preview_sheets_of_the_samples(void **state)
+{
+    (void)state;
+    const char *names[] = {"quadruped", "fish", "bird"};
+    const uint32_t clips[] = {5, 1, 2};
+    mkdir("build", 0777);
+    mkdir("build/previews", 0777); /* CI keeps these as artifacts */
+    for (int i = 0; i < 3; ++i) {
+        char cmd[4096], out[2048];
+        snprintf(cmd, sizeof cmd, "%s bake %s/%s.glb -o build/previews/%s.pal -q && %s preview build/previews/%s.pal "
+                 "%s/%s.glb -o build/previews/%s.png --columns 6 --cell 96 2>&1",
+                 crowdbake_exe(), samples_dir(), names[i], names[i], crowdbake_exe(), names[i], samples_dir(), names[i],
+                 names[i]);
+        assert_int_equal(run_command(cmd, out, sizeof out), 0);
+        char png[256];
+        snprintf(png, sizeof png, "build/previews/%s.png", names[i]);
+        check_sheet(png, clips[i], 6, 96);
+        printf("  %s", out);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_verify_agrees_with_the_bake_and_converges),
+        cmocka_unit_test(test_verify_catches_a_transposed_palette),
+        cmocka_unit_test(test_verify_exit_code),
+        cmocka_unit_test(test_preview_sheets_of_the_samples),
+    };
+    return cmocka_run_group_tests_name("verify", tests, NULL, NULL);
+}
