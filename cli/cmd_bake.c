@@ -314,6 +314,15 @@ int cmd_bake(int argc, char **argv)
         cb_json_end(&j);
         cb_json_end(&j);
     }
+    for (uint32_t c = 0; !err.status && !a.quiet && !a.json && o.root_motion == CB_ROOT_MOTION_KEEP && c < p.clip_count; ++c) {
+        cb_clip_info info;
+        cb_error ignored = {0};
+        if (p.clips[c].loops && !cb_clip_analyze(s, cb_model_find_animation(m, p.clips[c].name), o.fps, 1, &o.limits, &info, &ignored) &&
+            info.ground_speed > 0)
+            fprintf(stderr, "crowdbake: note: clip '%s' loops and travels %.3g units/s: blending its last row into its first "
+                    "pulls the body back; for crowds moved by the game, bake with --root-motion in-place\n",
+                    p.clips[c].name, info.ground_speed);
+    }
     if (!err.status && m->ignored_morph_channels && !a.quiet && !a.json)
         fprintf(stderr, "crowdbake: note: %u morph-weight channel(s) ignored: palettes carry joints only\n",
                 m->ignored_morph_channels);

@@ -485,7 +485,7 @@ static void write_state(cb_json *j, const cb_roster_type *t, const cb_catalog_st
     /* The four numbers of the per-instance data, exactly as the shader wants them. */
     cb_json_object(j, "instance");
     cb_json_int(j, "first_row", c->first_row);
-    cb_json_int(j, "frame_count", c->frames);
+    cb_json_int(j, "frame_count", c->loops ? (long long)c->frames : -(long long)c->frames); /* < 0: one-shot, clamps */
     cb_json_number(j, "rate", c->fps);
     cb_json_number(j, "rate_per_speed", moves && speed > 0 ? c->fps / speed : 0);
     cb_json_string(j, "phase", c->loops ? "golden_ratio" : "zero");
