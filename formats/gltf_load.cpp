@@ -179,6 +179,44 @@ bool patch_meshopt_json(std::string *json)
     return patched;
 }
 
+// tinygltf's Draco decoder indexes the extension's bufferView, that view's buffer and the
+// primitive's accessors without checking them (a fuzzer found it): check them first.
+bool check_draco_references(const std::string &json, const char *name, cb_error *err)
+{
+    if (json.find("KHR_draco_mesh_compression") == std::string::npos) return true;
+    nlohmann::json j = nlohmann::json::parse(json, nullptr, false);
+    if (j.is_discarded() || !j.is_object()) return true; // tinygltf reports the syntax error
+    auto count = [&j](const char *key) -> size_t { return j.contains(key) && j[key].is_array() ? j[key].size() : 0; };
+    auto index = [](const nlohmann::json &v, size_t n) { return v.is_number_integer() && v.get<int64_t>() >= 0 && (size_t)v.get<int64_t>() < n; };
+    size_t views = count("bufferViews"), buffers = count("buffers"), accessors = count("accessors");
+    if (!j.contains("meshes") || !j["meshes"].is_array()) return true;
+    for (size_t m = 0; m < j["meshes"].size(); ++m) {
+        const nlohmann::json &mesh = j["meshes"][m];
+        if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array()) continue;
+        for (size_t p = 0; p < mesh["primitives"].size(); ++p) {
+            const nlohmann::json &prim = mesh["primitives"][p];
+            if (!prim.is_object() || !prim.contains("extensions") || !prim["extensions"].is_object() ||
+                !prim["extensions"].contains("KHR_draco_mesh_compression"))
+                continue;
+            const nlohmann::json &ext = prim["extensions"]["KHR_draco_mesh_compression"];
+            bool ok = ext.is_object() && ext.contains("bufferView") && index(ext["bufferView"], views);
+            if (ok) {
+                const nlohmann::json &view = j["bufferViews"][ext["bufferView"].get<size_t>()];
+                ok = view.is_object() && view.contains("buffer") && index(view["buffer"], buffers);
+            }
+            if (ok && prim.contains("indices")) ok = index(prim["indices"], accessors);
+            if (ok && prim.contains("attributes") && prim["attributes"].is_object())
+                for (auto &a : prim["attributes"].items()) ok = ok && index(a.value(), accessors);
+            if (!ok) {
+                cb_fail(err, CB_ERR_INPUT, "%s: mesh %zu primitive %zu: its KHR_draco_mesh_compression data or accessors "
+                        "refer to a bufferView, buffer or accessor that does not exist", name, m, p);
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
 std::vector<unsigned char> rebuild_glb(const std::string &json, const unsigned char *bin, uint32_t bin_length)
 {
     std::string padded = json;
@@ -223,6 +261,7 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
         if (!check_glb(data, size, name, err)) return false;
         uint32_t json_length = le32(data + 12);
         std::string json((const char *)data + 20, json_length);
+        if (!check_draco_references(json, name, err)) return false;
         if (patch_meshopt_json(&json)) {
             size_t bin_at = 20 + (size_t)json_length;
             bool has_bin = bin_at + 8 <= le32(data + 8) && le32(data + bin_at + 4) == 0x004E4942u;
@@ -234,6 +273,7 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
         }
     } else {
         std::string json((const char *)data, size);
+        if (!check_draco_references(json, name, err)) return false;
         patch_meshopt_json(&json);
         ok = loader.LoadASCIIFromString(gltf, &tg_err, &tg_warn, json.c_str(), (unsigned)json.size(), base_dir);
     }
