@@ -187,7 +187,8 @@ bench-smoke: all $(BUILD)/bench_core
 check: deps
 	$(MAKE) --no-print-directory test
 	$(MAKE) --no-print-directory bench-smoke
-	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 $(MAKE) --no-print-directory test-asan
+	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
+	  $(MAKE) --no-print-directory test-asan
 	@echo "crowdbake: all tests passed (normal and ASan+UBSan builds)"
 
 clean:

@@ -18,20 +18,29 @@
  * lock-free, read by the handler with async-signal-safe calls only. */
 enum { TEMP_SLOTS = 64, TEMP_PATH = 4096 };
 static char temp_paths[TEMP_SLOTS][TEMP_PATH];
-static atomic_int temp_state[TEMP_SLOTS]; /* 0 free, 1 claimed, 2 holds a path */
+static atomic_int temp_state[TEMP_SLOTS]; /* 0 free, 1 being named, 2 named */
 
-static int register_temp(const char *path)
+/* Creates the temporary file from `template` (ending in XXXXXX) inside a claimed slot, so the
+ * name mkostemp chooses is visible to the handler before the file can exist. */
+static int create_registered(char *template, int *slot)
 {
-    if (strlen(path) >= TEMP_PATH) return -1;
-    for (int i = 0; i < TEMP_SLOTS; ++i) {
+    *slot = -1;
+    size_t n = strlen(template) + 1;
+    for (int i = 0; i < TEMP_SLOTS && n <= TEMP_PATH; ++i) {
         int expected = 0;
-        if (atomic_compare_exchange_strong(&temp_state[i], &expected, 1)) {
-            memcpy(temp_paths[i], path, strlen(path) + 1);
-            atomic_store(&temp_state[i], 2);
-            return i;
+        if (!atomic_compare_exchange_strong(&temp_state[i], &expected, 1)) continue;
+        memcpy(temp_paths[i], template, n);
+        int fd = mkostemp(temp_paths[i], O_CLOEXEC);
+        memcpy(template, temp_paths[i], n);
+        if (fd < 0) {
+            atomic_store(&temp_state[i], 0);
+            return -1;
         }
+        atomic_store(&temp_state[i], 2);
+        *slot = i;
+        return fd;
     }
-    return -1; /* untracked: it is still removed on every failure other than a signal */
+    return mkostemp(template, O_CLOEXEC); /* untracked: still removed on every failure but a signal */
 }
 
 static void unregister_temp(int slot)
@@ -44,12 +53,14 @@ static void write_stderr(const char *s) { (void)!write(2, s, strlen(s)); }
 static void on_signal(int sig)
 {
     int removed = 0;
-    for (int i = 0; i < TEMP_SLOTS; ++i)
-        if (atomic_load(&temp_state[i]) == 2 && unlink(temp_paths[i]) == 0) ++removed;
+    for (int i = 0; i < TEMP_SLOTS; ++i) {
+        /* a slot being named holds either the template (no such file) or the created name */
+        if (atomic_load(&temp_state[i]) != 0 && unlink(temp_paths[i]) == 0) ++removed;
+    }
     write_stderr(sig == SIGINT ? "crowdbake: interrupted (SIGINT)" : sig == SIGTERM ? "crowdbake: terminated (SIGTERM)"
                                                                                   : "crowdbake: hung up (SIGHUP)");
     write_stderr(removed ? "; removed the partial output; the previous files are unchanged\n"
-                         : "; no output was being written; the previous files are unchanged\n");
+                         : "; no partial output was left (each file is the previous one or complete)\n");
     signal(sig, SIG_DFL);
     raise(sig);
 }
@@ -105,7 +116,7 @@ cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err)
         cb_atomic_abort(f);
         return CB_ERR_IO;
     }
-    f->fd = mkostemp(f->tmp_path, O_CLOEXEC);
+    f->fd = create_registered(f->tmp_path, &f->slot);
     if (f->fd < 0) {
         int e = errno;
         free(f->tmp_path), f->tmp_path = NULL; /* nothing was created */
@@ -113,7 +124,6 @@ cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err)
         cb_atomic_abort(f);
         return CB_ERR_IO;
     }
-    f->slot = register_temp(f->tmp_path);
     /* mkstemp makes 0600; give the file the mode a plain create would. */
     mode_t mask = umask(0);
     umask(mask);
