@@ -200,23 +200,18 @@ static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, doubl
     return plan;
 }
 
-/* Bakes with the chosen layout; when the layout was not chosen and qpos cannot hold the rig,
- * falls back to affine and says so. With --fps auto, chooses the rates first. */
+/* Bakes, with --fps auto choosing the rates first; says when qpos fell back to affine. */
 static cb_status bake_palette(cb_sampler *s, cb_bake_options *o, const bake_args *a, double max_mm, double max_fps,
                               cb_palette *p, cb_error *err)
 {
     bool quiet = a->quiet || a->json, automatic = a->fps && strcmp(a->fps, "auto") == 0;
-    for (int attempt = 0; attempt < 2; ++attempt) {
-        cb_clip_plan *plan = automatic ? choose_rates(s, o, max_mm, max_fps, quiet, err) : NULL;
-        uint32_t n = plan ? cb_sampler_model(s)->animation_count : 0;
-        cb_status rc = err->status ? err->status : cb_palette_bake(s, o, plan, n, p, err);
-        free(plan);
-        if (rc != CB_ERR_INPUT || a->layout || o->layout != CB_LAYOUT_QPOS || !strstr(err->message, "qpos layout")) return rc;
-        if (!quiet) fprintf(stderr, "crowdbake: note: %s; baking with the affine layout instead\n", err->message);
-        memset(err, 0, sizeof *err);
-        o->layout = CB_LAYOUT_AFFINE;
-    }
-    return err->status;
+    o->affine_fallback = a->layout == NULL;
+    cb_clip_plan *plan = automatic ? choose_rates(s, o, max_mm, max_fps, quiet, err) : NULL;
+    uint32_t n = plan ? cb_sampler_model(s)->animation_count : 0;
+    cb_status rc = err->status ? err->status : cb_palette_bake(s, o, plan, n, p, err);
+    free(plan);
+    if (!rc && p->fallback_note[0] && !quiet) fprintf(stderr, "crowdbake: note: %s\n", p->fallback_note);
+    return rc;
 }
 
 int cmd_bake(int argc, char **argv)

@@ -357,15 +357,11 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
     o.max_texture_size = an->bake.max_texture_size;
     o.root_motion = an->bake.root_motion;
     o.threads = run->threads_per_bake;
+    o.affine_fallback = !an->bake.layout_set;
     cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
     if (!s) return err->status;
     cb_palette p;
     cb_status rc = cb_palette_bake(s, &o, w->plan, t->clip_count, &p, err);
-    if (rc == CB_ERR_INPUT && !an->bake.layout_set && o.layout == CB_LAYOUT_QPOS && strstr(err->message, "qpos layout")) {
-        memset(err, 0, sizeof *err); /* a rig qpos cannot hold: affine, as for a single bake */
-        o.layout = CB_LAYOUT_AFFINE;
-        rc = cb_palette_bake(s, &o, w->plan, t->clip_count, &p, err);
-    }
     cb_sampler_free(s);
     if (rc) return rc;
     struct stat st;

@@ -5,6 +5,7 @@
 #include "budget.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -51,6 +52,7 @@ cb_bake_options cb_default_bake_options(void)
     o.root_motion = CB_ROOT_MOTION_KEEP;
     o.limits = cb_default_limits();
     o.threads = 1;
+    o.affine_fallback = false;
     return o;
 }
 
@@ -591,8 +593,27 @@ static cb_status first_clip_error(const bake_state *st, cb_error *err)
     return CB_OK;
 }
 
+static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                           uint32_t plan_count, cb_palette *p, cb_error *err);
+
 cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
                           uint32_t plan_count, cb_palette *p, cb_error *err)
+{
+    cb_error first = {0};
+    cb_status rc = bake_once(sampler, opt, plan, plan_count, p, &first);
+    if (rc == CB_ERR_INPUT && opt->affine_fallback && opt->layout == CB_LAYOUT_QPOS && strstr(first.message, "qpos layout")) {
+        cb_bake_options affine = *opt; /* a rig qpos cannot hold: the next smallest layout */
+        affine.layout = CB_LAYOUT_AFFINE;
+        rc = bake_once(sampler, &affine, plan, plan_count, p, err);
+        if (!rc) snprintf(p->fallback_note, sizeof p->fallback_note, "%.460s; baked with affine instead", first.message);
+        return rc;
+    }
+    if (rc) *err = err->status ? *err : first;
+    return rc;
+}
+
+static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                           uint32_t plan_count, cb_palette *p, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(sampler);
     int32_t skin_index = cb_sampler_skin(sampler);

@@ -31,6 +31,7 @@ typedef struct cb_bake_options {
     cb_root_motion root_motion;
     cb_limits limits;
     uint32_t threads; /* clips sampled in parallel; the output does not depend on it */
+    bool affine_fallback; /* qpos was not chosen explicitly: bake affine when qpos cannot hold the rig */
 } cb_bake_options;
 
 /* Vertex-rows of exact skinning spent measuring a bake's error (see cb_palette.max_error). */
@@ -65,6 +66,7 @@ typedef struct cb_palette {
     double model_height;            /* rest-pose height of the skinned meshes */
     double max_error;               /* worst vertex displacement vs exact skinning, model units */
     uint32_t error_rows_measured;   /* rows the error was measured at: all, or an even subset */
+    char fallback_note[512];        /* why qpos fell back to affine, or empty */
     double seconds_sample, seconds_encode, seconds_measure;
 } cb_palette;
 
