@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <type_traits>
 #include <strings.h>
 #include <sys/stat.h>
 #include <vector>
@@ -472,7 +473,10 @@ bool view_span(const Context &c, int view_index, size_t offset, size_t count, si
 }
 
 // Reads an accessor into doubles, `comps` per element, applying sparse substitution.
-bool read_accessor(const Context &c, int index, int want_comps, const char *what, std::vector<double> *out, size_t *count_out)
+// Reads an accessor straight into an array of the model's arena, `comps` values per element,
+// applying normalization and sparse substitution. Tightly packed floats are one memcpy.
+template <typename T>
+bool read_accessor(const Context &c, int index, int want_comps, const char *what, T **out, size_t *count_out)
 {
     const tinygltf::Model &g = *c.gltf;
     if (index < 0 || index >= (int)g.accessors.size()) {
@@ -505,10 +509,16 @@ bool read_accessor(const Context &c, int index, int want_comps, const char *what
         }
         if (!view_span(c, a.bufferView, a.byteOffset, a.count, elem, stride, what, &p)) return false;
     }
-    out->assign(a.count * comps, 0.0);
-    if (p) {
+    T *dst = static_cast<T *>(cb_model_alloc(c.model, a.count * (size_t)comps, sizeof(T))); /* zeroed */
+    if (!dst) {
+        cb_fail(c.err, CB_ERR_INTERNAL, "%s: out of memory reading %s", c.name, what);
+        return false;
+    }
+    if (p && std::is_same<T, float>::value && a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT && stride == elem) {
+        std::memcpy(dst, p, a.count * elem);
+    } else if (p) {
         for (size_t i = 0; i < a.count; ++i)
-            for (int k = 0; k < comps; ++k) (*out)[i * comps + k] = read_component(p + i * stride + k * csize, a.componentType, a.normalized);
+            for (int k = 0; k < comps; ++k) dst[i * comps + k] = (T)read_component(p + i * stride + k * csize, a.componentType, a.normalized);
     }
     if (a.sparse.isSparse && a.sparse.count > 0) {
         size_t n = (size_t)a.sparse.count;
@@ -528,19 +538,12 @@ bool read_accessor(const Context &c, int index, int want_comps, const char *what
                 return false;
             }
             for (int k = 0; k < comps; ++k)
-                (*out)[(size_t)target * comps + k] = read_component(vp + i * elem + k * csize, a.componentType, a.normalized);
+                dst[(size_t)target * comps + k] = (T)read_component(vp + i * elem + k * csize, a.componentType, a.normalized);
         }
     }
+    *out = dst;
     *count_out = a.count;
     return true;
-}
-
-template <typename T> T *copy_to_arena(cb_model *m, const std::vector<double> &v)
-{
-    T *p = static_cast<T *>(cb_model_alloc(m, v.size(), sizeof(T)));
-    if (p)
-        for (size_t i = 0; i < v.size(); ++i) p[i] = (T)v[i];
-    return p;
 }
 
 // ---- conversion to the core's structs ----
@@ -644,7 +647,7 @@ bool convert_skins(Context &c)
             for (int k = 0; k < 16; ++k) skin->inverse_bind[j * 16 + k] = k % 5 == 0 ? 1.0 : 0.0; // identity
         }
         if (src.inverseBindMatrices >= 0) {
-            std::vector<double> ibm;
+            double *ibm;
             size_t count;
             std::string what = "skin " + std::to_string(s) + " inverseBindMatrices";
             if (!read_accessor(c, src.inverseBindMatrices, 16, what.c_str(), &ibm, &count)) return false;
@@ -653,7 +656,7 @@ bool convert_skins(Context &c)
                         skin->name, count, src.joints.size());
                 return false;
             }
-            std::memcpy(skin->inverse_bind, ibm.data(), src.joints.size() * 16 * sizeof(double));
+            std::memcpy(skin->inverse_bind, ibm, src.joints.size() * 16 * sizeof(double));
         }
     }
     return true;
@@ -665,7 +668,9 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
     if (pos == p.attributes.end() || jnt == p.attributes.end() || wgt == p.attributes.end()) return true; // not skinned
     const tinygltf::Node &node = c.gltf->nodes[node_index];
     std::string where = "mesh node " + std::to_string(node_index) + " (" + node.name + ")";
-    std::vector<double> positions, joints, weights, normals, indices;
+    float *positions, *weights, *normals;
+    double *joints;
+    uint32_t *indices;
     size_t n, nj, nw, nn, ni;
     if (!read_accessor(c, pos->second, 3, (where + " POSITION").c_str(), &positions, &n) ||
         !read_accessor(c, jnt->second, 4, (where + " JOINTS_0").c_str(), &joints, &nj) ||
@@ -675,11 +680,15 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s has %zu positions but %zu joints and %zu weights", c.name, where.c_str(), n, nj, nw);
         return false;
     }
-    for (double j : joints)
-        if (j < 0 || j > 65535) {
-            cb_fail(c.err, CB_ERR_INPUT, "%s: %s has joint index %.0f outside 0..65535", c.name, where.c_str(), j);
+    uint16_t *joints16 = static_cast<uint16_t *>(cb_model_alloc(c.model, n * 4, sizeof(uint16_t)));
+    if (!joints16) return false;
+    for (size_t i = 0; i < n * 4; ++i) {
+        if (joints[i] < 0 || joints[i] > 65535) {
+            cb_fail(c.err, CB_ERR_INPUT, "%s: %s has joint index %.0f outside 0..65535", c.name, where.c_str(), joints[i]);
             return false;
         }
+        joints16[i] = (uint16_t)joints[i];
+    }
     cb_primitive prim{};
     prim.node = (int32_t)node_index;
     prim.skin = node.skin;
@@ -687,16 +696,16 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
     auto nrm = p.attributes.find("NORMAL");
     if (nrm != p.attributes.end()) {
         if (!read_accessor(c, nrm->second, 3, (where + " NORMAL").c_str(), &normals, &nn)) return false;
-        if (nn == n) prim.normals = copy_to_arena<float>(c.model, normals);
+        if (nn == n) prim.normals = normals;
     }
     if (p.indices >= 0) {
         if (!read_accessor(c, p.indices, 1, (where + " indices").c_str(), &indices, &ni)) return false;
         prim.index_count = (uint32_t)ni;
-        prim.indices = copy_to_arena<uint32_t>(c.model, indices);
+        prim.indices = indices;
     }
-    prim.positions = copy_to_arena<float>(c.model, positions);
-    prim.joints = copy_to_arena<uint16_t>(c.model, joints);
-    prim.weights = copy_to_arena<float>(c.model, weights);
+    prim.positions = positions;
+    prim.joints = joints16;
+    prim.weights = weights;
     out->push_back(prim);
     return true;
 }
@@ -762,7 +771,7 @@ bool convert_channel(Context &c, size_t a, size_t ci, const tinygltf::Animation 
     }
     dst.node = ch.target_node;
     int comps = dst.path == CB_PATH_ROTATION ? 4 : 3;
-    std::vector<double> times, values;
+    float *times, *values;
     size_t nt, nv;
     if (!read_accessor(c, s.input, 1, (where + " key times").c_str(), &times, &nt) ||
         !read_accessor(c, s.output, comps, (where + " values").c_str(), &values, &nv))
@@ -774,8 +783,8 @@ bool convert_channel(Context &c, size_t a, size_t ci, const tinygltf::Animation 
         return false;
     }
     dst.key_count = (uint32_t)nt;
-    dst.times = copy_to_arena<float>(c.model, times);
-    dst.values = copy_to_arena<float>(c.model, values);
+    dst.times = times;
+    dst.values = values;
     out->push_back(dst);
     return true;
 }
