@@ -68,8 +68,8 @@ static bool ends_with(const char *s, const char *suffix)
     return n >= k && strcmp(s + n - k, suffix) == 0;
 }
 
-/* XXH64 of the crowdbake version, the options that shape the output, and the model bytes. */
-static uint64_t input_hash(const char *model_path, const cb_bake_options *o, int skin, bool zstd, int exr_compression)
+/* XXH64 of the crowdbake version, the options that shape the output, and the model's source bytes. */
+static uint64_t input_hash(const cb_model *m, const cb_bake_options *o, int skin, bool zstd, int exr_compression)
 {
     cbpal_xxh64_state s;
     cbpal_xxh64_init(&s);
@@ -78,13 +78,7 @@ static uint64_t input_hash(const char *model_path, const cb_bake_options *o, int
                      CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
                      o->max_texture_size, (int)o->root_motion, skin, zstd, exr_compression);
     cbpal_xxh64_update(&s, opts, (size_t)n);
-    FILE *f = fopen(model_path, "rb");
-    if (f) {
-        char buf[65536];
-        size_t got;
-        while ((got = fread(buf, 1, sizeof buf, f)) > 0) cbpal_xxh64_update(&s, buf, got);
-        fclose(f);
-    }
+    cbpal_xxh64_update(&s, &m->source_hash, sizeof m->source_hash);
     return cbpal_xxh64_digest(&s);
 }
 
@@ -117,14 +111,13 @@ static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, 
     return 0;
 }
 
-static void print_summary(const char *path, const char *format, size_t bytes, const cb_palette *p, double seconds)
+static void print_summary(const char *path, size_t bytes, const cb_palette *p, double seconds)
 {
     double per_m = p->model_height > 0 ? p->max_error / p->model_height * 1000 : 0;
     printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bones, %u clips, %u frames, %s/%s, max error %.3g units "
            "(%.3g mm per m of height), %.0f ms\n",
            path, bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count, p->clip_count,
            p->rows, cb_layout_name(p->layout), cb_precision_name(p->precision), p->max_error, per_m, seconds * 1000);
-    (void)format;
 }
 
 typedef struct phase_times {
@@ -283,7 +276,7 @@ int cmd_bake(int argc, char **argv)
         cb_json_string(&j, "model", a.model);
         cb_json_array(&j, "outputs");
     }
-    uint64_t hash = err.status ? 0 : input_hash(a.model, &o, skin, a.zstd, exr_compression);
+    uint64_t hash = err.status ? 0 : input_hash(m, &o, skin, a.zstd, exr_compression);
     for (int f = 0; f < 2 && !err.status; ++f) {
         if ((f == 0 && !want_pal) || (f == 1 && !want_exr)) continue;
         char path[4096];
@@ -303,7 +296,7 @@ int cmd_bake(int argc, char **argv)
         if (fp) fseek(fp, 0, SEEK_END), bytes = (size_t)ftell(fp), fclose(fp);
         double seconds = now_seconds() - t0;
         if (a.json) json_output(&j, path, f == 0 ? "pal" : "exr", bytes, &p, seconds, &pt);
-        else if (!a.quiet) print_summary(path, f == 0 ? "pal" : "exr", bytes, &p, seconds);
+        else if (!a.quiet) print_summary(path, bytes, &p, seconds);
     }
     if (a.json && !err.status) {
         cb_json_end(&j);

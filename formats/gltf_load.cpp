@@ -20,6 +20,7 @@
 #include <sys/stat.h>
 #include <vector>
 
+#include "crowdbake_pal.h"
 #include "gltf_load.h"
 
 namespace {
@@ -74,6 +75,8 @@ bool read_file(const std::string &path, uint64_t max_bytes, std::vector<unsigned
 
 struct FsState {
     uint64_t max_bytes;
+    cbpal_xxh64_state *source_hash; // every external file read goes into the model's source hash
+    std::vector<std::string> files;  // and into its list of external files, for depfiles
 };
 
 bool fs_exists(const std::string &path, void *)
@@ -87,7 +90,7 @@ std::string fs_expand(const std::string &path, void *) { return path; }
 
 bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
 {
-    const FsState *fs = static_cast<const FsState *>(user);
+    FsState *fs = static_cast<FsState *>(user);
     size_t marker = path.find(kFallbackScheme);
     if (marker != std::string::npos) {
         // A meshopt fallback buffer: zeros now, filled by decoding the compressed views.
@@ -99,7 +102,10 @@ bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::strin
         out->assign((size_t)bytes, 0);
         return true;
     }
-    return read_file(path, fs->max_bytes, out, err);
+    if (!read_file(path, fs->max_bytes, out, err)) return false;
+    cbpal_xxh64_update(fs->source_hash, out->data(), out->size());
+    fs->files.push_back(path);
+    return true;
 }
 
 bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *)
@@ -242,12 +248,11 @@ std::vector<unsigned char> rebuild_glb(const std::string &json, const unsigned c
 }
 
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
-                         const cb_limits &limits, tinygltf::Model *gltf, cb_error *err)
+                         FsState *fs_state, tinygltf::Model *gltf, cb_error *err)
 {
-    FsState fs_state{limits.max_file_bytes};
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, nullptr);
-    loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &fs_state});
+    loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, fs_state});
     std::string tg_err, tg_warn;
     bool ok;
     size_t name_len = std::strlen(name);
@@ -808,6 +813,17 @@ bool convert_animations(Context &c)
     return true;
 }
 
+bool record_sources(cb_model *m, cbpal_xxh64_state *hash, const std::vector<std::string> &files)
+{
+    m->source_hash = cbpal_xxh64_digest(hash);
+    m->external_file_count = (uint32_t)files.size();
+    m->external_files = static_cast<const char **>(cb_model_alloc(m, files.size() ? files.size() : 1, sizeof(char *)));
+    if (!m->external_files) return false;
+    for (size_t i = 0; i < files.size(); ++i)
+        if (!(m->external_files[i] = cb_model_strdup(m, files[i].c_str()))) return false;
+    return true;
+}
+
 cb_model *load(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
                const cb_limits *limits, cb_error *err)
 {
@@ -816,7 +832,11 @@ cb_model *load(const unsigned char *data, size_t size, const char *name, const s
     c.err = err;
     c.name = name;
     tinygltf::Model gltf;
-    if (!parse_with_tinygltf(data, size, name, base_dir, c.limits, &gltf, err)) return nullptr;
+    cbpal_xxh64_state source_hash;
+    cbpal_xxh64_init(&source_hash);
+    cbpal_xxh64_update(&source_hash, data, size);
+    FsState fs{c.limits.max_file_bytes, &source_hash, {}};
+    if (!parse_with_tinygltf(data, size, name, base_dir, &fs, &gltf, err)) return nullptr;
     c.gltf = &gltf;
     if (!check_required_extensions(c) || !decode_meshopt(c, &gltf)) return nullptr;
     c.model = cb_model_create(name);
@@ -825,7 +845,7 @@ cb_model *load(const unsigned char *data, size_t size, const char *name, const s
         return nullptr;
     }
     if (!convert_nodes(c) || !convert_skins(c) || !check_joints_in_scene(c) || !convert_meshes(c) || !convert_animations(c) ||
-        cb_model_validate(c.model, &c.limits, err) != CB_OK) {
+        cb_model_validate(c.model, &c.limits, err) != CB_OK || !record_sources(c.model, &source_hash, fs.files)) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory while loading", name);
         cb_model_free(c.model);
         return nullptr;

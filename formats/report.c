@@ -64,13 +64,9 @@ static void fill_type(const cb_roster *roster, uint32_t i, const cb_report *r, c
             t->encoding_bytes[l][p] = cb_palette_texture_bytes(t->bones, t->frames, (cb_layout)l, (cb_precision)p,
                                                                r->max_texture_size, &g);
         }
-    for (int e = 0; e < CB_VAT_ENCODINGS; ++e) {
-        bool fits;
-        t->vat_bytes[e] = cb_vat_bytes(t->vertices, t->frames, &cb_vat_encodings[e], r->max_texture_size, &t->vat_geometry, &fits);
-        t->vat_fits = fits;
-        if (!fits) /* no texture of the target holds it: count what it would store */
-            t->vat_bytes[e] = t->vertices * t->frames * (cb_vat_encodings[e].position_bytes + cb_vat_encodings[e].normal_bytes);
-    }
+    t->vat_fits = cb_vat_geometry(t->vertices, t->frames, r->max_texture_size, &t->vat_geometry);
+    for (int e = 0; e < CB_VAT_ENCODINGS; ++e)
+        t->vat_bytes[e] = cb_vat_bytes(t->vertices, t->frames, &cb_vat_encodings[e], &t->vat_geometry);
     t->mesh_bytes = cb_mesh_bytes(t->vertices, t->indices);
     t->palette_error = owner->max_error;
     t->vat_error = rt->vat_error;

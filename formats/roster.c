@@ -93,25 +93,31 @@ static uint64_t content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
     return cbpal_xxh64_digest(&h);
 }
 
-static void hash_file(cbpal_xxh64_state *h, const char *path)
+/* Appends a loaded model's files to the type's inputs (for the depfile). */
+static cb_status add_inputs(cb_roster_type *t, const char *path, const cb_model *m, cb_error *err)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return;
-    char buf[65536];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, f)) > 0) cbpal_xxh64_update(h, buf, n);
-    fclose(f);
+    char **grown = realloc(t->inputs, (t->input_count + 1 + m->external_file_count) * sizeof *grown);
+    if (!grown) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    t->inputs = grown;
+    for (uint32_t i = 0; i <= m->external_file_count; ++i) {
+        if (!(t->inputs[t->input_count] = strdup(i ? m->external_files[i - 1] : path)))
+            return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+        ++t->input_count;
+    }
+    return CB_OK;
 }
 
-/* What the files record: everything that produced them, so any change re-bakes. */
-static uint64_t input_hash(const cb_catalog_animal *an, uint64_t key)
+/* What the files record: everything that produced them, so any change re-bakes. The loader
+ * hashed the model and LOD bytes as it read them. */
+static uint64_t input_hash(const cb_catalog_animal *an, const type_work *w, uint64_t key)
 {
     cbpal_xxh64_state h;
     cbpal_xxh64_init(&h);
     cbpal_xxh64_update(&h, &key, sizeof key);
     hash_str(&h, an->canonical);
-    hash_file(&h, an->model);
-    for (uint32_t i = 0; i < an->lod_count; ++i) hash_file(&h, an->lods[i]);
+    cbpal_xxh64_update(&h, &w->model->source_hash, sizeof w->model->source_hash);
+    for (uint32_t i = 0; i < an->lod_count; ++i)
+        cbpal_xxh64_update(&h, &w->lod_models[i]->source_hash, sizeof w->lod_models[i]->source_hash);
     return cbpal_xxh64_digest(&h);
 }
 
@@ -295,7 +301,10 @@ static void prepare_type(roster_run *run, uint32_t i)
         return;
     speed_reference(an, t);
     t->key = content_key(w->model, w->skin, w->plan, t->clip_count, &an->bake);
-    t->input_hash = input_hash(an, t->key);
+    t->input_hash = input_hash(an, w, t->key);
+    if (add_inputs(t, an->model, w->model, err)) return;
+    for (uint32_t l = 0; l < an->lod_count; ++l)
+        if (add_inputs(t, an->lods[l], w->lod_models[l], err)) return;
     if (run->opt->measure_vat) measure_vat(an, w, t);
 }
 
@@ -629,6 +638,11 @@ static void depfile_path(FILE *f, const char *p)
     }
 }
 
+static void depfile_inputs(FILE *f, const cb_roster_type *t)
+{
+    for (uint32_t i = 0; i < t->input_count; ++i) fputs(" \\\n  ", f), depfile_path(f, t->inputs[i]);
+}
+
 /* One rule per output: Make and Ninja both read it. */
 static cb_status write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, cb_error *err)
 {
@@ -645,22 +659,14 @@ static cb_status write_depfile(const cb_catalog *cat, const cb_roster *r, const 
             fputs(":", f);
             fputc(' ', f), depfile_path(f, cat->path);
             for (uint32_t k = 0; k < r->type_count; ++k) /* every type sharing this palette */
-                if (r->types[k].owner == i) {
-                    fputs(" \\\n  ", f), depfile_path(f, r->types[k].animal->model);
-                    for (uint32_t l = 0; l < r->types[k].animal->lod_count; ++l)
-                        fputs(" \\\n  ", f), depfile_path(f, r->types[k].animal->lods[l]);
-                }
+                if (r->types[k].owner == i) depfile_inputs(f, &r->types[k]);
             fputc('\n', f);
         }
     }
     depfile_path(f, r->manifest_path);
     fputs(":", f);
     fputc(' ', f), depfile_path(f, cat->path);
-    for (uint32_t i = 0; i < r->type_count; ++i) {
-        fputs(" \\\n  ", f), depfile_path(f, r->types[i].animal->model);
-        for (uint32_t l = 0; l < r->types[i].animal->lod_count; ++l)
-            fputs(" \\\n  ", f), depfile_path(f, r->types[i].animal->lods[l]);
-    }
+    for (uint32_t i = 0; i < r->type_count; ++i) depfile_inputs(f, &r->types[i]);
     fputc('\n', f);
     fclose(f);
     bool written;
@@ -744,6 +750,8 @@ void cb_roster_free(cb_roster *r)
         free(r->types[i].state_clip);
         for (uint32_t l = 0; l < r->types[i].lod_count; ++l) free(r->types[i].lods[l].remap);
         free(r->types[i].lods);
+        for (uint32_t k = 0; k < r->types[i].input_count; ++k) free(r->types[i].inputs[k]);
+        free(r->types[i].inputs);
     }
     free(r->types);
     memset(r, 0, sizeof *r);

@@ -54,6 +54,8 @@ typedef struct cb_roster_type {
     int *state_clip;          /* per catalog state: index into clips */
     uint32_t lod_count;
     cb_roster_lod *lods;
+    uint32_t input_count;
+    char **inputs;            /* every file read for it: model, LODs, their external buffers */
 } cb_roster_type;
 
 typedef struct cb_roster {

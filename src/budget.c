@@ -28,17 +28,19 @@ const cb_vat_encoding cb_vat_encodings[CB_VAT_ENCODINGS] = {
     {"position + normal RGBA32F", 16, 16},
 };
 
-uint64_t cb_vat_bytes(uint64_t vertices, uint32_t frames, const cb_vat_encoding *enc, uint32_t max, cb_texture_geometry *g,
-                      bool *fits)
+bool cb_vat_geometry(uint64_t vertices, uint32_t frames, uint32_t max, cb_texture_geometry *g)
 {
-    *fits = false;
     g->width = g->height = g->blocks = 0;
-    if (vertices == 0 || frames == 0 || max == 0) return 0;
+    if (vertices == 0 || frames == 0 || max == 0) return false;
     uint32_t width = vertices < max ? (uint32_t)vertices : max;
     uint64_t rows_per_frame = (vertices + width - 1) / width;
-    *fits = cb_wrap_rows(width, rows_per_frame * frames, max, g);
-    if (!*fits) return 0;
-    return (uint64_t)g->width * g->height * (enc->position_bytes + enc->normal_bytes);
+    return cb_wrap_rows(width, rows_per_frame * frames, max, g);
+}
+
+uint64_t cb_vat_bytes(uint64_t vertices, uint32_t frames, const cb_vat_encoding *enc, const cb_texture_geometry *g)
+{
+    uint64_t texels = g->width ? (uint64_t)g->width * g->height : vertices * frames;
+    return texels * (enc->position_bytes + enc->normal_bytes);
 }
 
 uint64_t cb_mesh_bytes(uint64_t vertices, uint64_t indices) { return vertices * 48 + indices * (vertices > 65535 ? 4 : 2); }

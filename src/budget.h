@@ -34,9 +34,11 @@ typedef struct cb_vat_encoding {
 enum { CB_VAT_ENCODINGS = 3 };
 extern const cb_vat_encoding cb_vat_encodings[CB_VAT_ENCODINGS];
 
-/* Bytes of both textures, or 0 and *fits = false when they exceed max. */
-uint64_t cb_vat_bytes(uint64_t vertices, uint32_t frames, const cb_vat_encoding *enc, uint32_t max, cb_texture_geometry *g,
-                      bool *fits);
+/* Where both textures lie; false, with g empty, when no texture of max texels holds them. */
+bool cb_vat_geometry(uint64_t vertices, uint32_t frames, uint32_t max, cb_texture_geometry *g);
+/* Bytes of both textures laid out as g; when g is empty (they did not fit), the bytes the
+ * frames would store unwrapped, so a report can still compare. */
+uint64_t cb_vat_bytes(uint64_t vertices, uint32_t frames, const cb_vat_encoding *enc, const cb_texture_geometry *g);
 
 /* The skinned mesh's own buffers: 48 bytes a vertex (position and normal float3, joints u16x4,
  * weights float4) and 2-byte indices (4 past 65,535 vertices). */

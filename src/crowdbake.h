@@ -128,6 +128,9 @@ typedef struct cb_model {
     uint32_t animation_count;
     cb_animation *animations;
     uint32_t ignored_morph_channels; /* weights channels dropped at load */
+    uint64_t source_hash; /* set by the loader: a hash of every byte it read (file and external buffers) */
+    uint32_t external_file_count;
+    const char **external_files; /* what the file referenced and the loader read (buffers, images) */
 } cb_model;
 
 /* An empty model with its own arena; NULL when out of memory. */

@@ -68,9 +68,7 @@ cb_status cb_vat_bake(cb_sampler *s, const cb_bake_options *o, const cb_clip_pla
     cb_clip_info *infos = NULL;
     double *mats = NULL, lo[3], hi[3];
     if (frame_plan(s, o, plan, plan_count, &infos, &vat->frames, err)) goto done;
-    bool fits;
-    cb_vat_bytes(vat->vertices, vat->frames, &cb_vat_encodings[1], o->max_texture_size, &vat->geometry, &fits);
-    if (!fits) {
+    if (!cb_vat_geometry(vat->vertices, vat->frames, o->max_texture_size, &vat->geometry)) {
         cb_fail(err, CB_ERR_INPUT, "%s: a VAT of %llu vertices x %u frames exceeds a %u-texel texture even wrapped",
                 m->source, (unsigned long long)vat->vertices, vat->frames, o->max_texture_size);
         goto done;

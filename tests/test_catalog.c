@@ -96,9 +96,6 @@ static void test_validation_errors_name_line_and_fix(void **state)
 static void test_state_and_clip_errors_list_what_exists(void **state)
 {
     (void)state;
-    const char *path = catalog("states", TMP "/out-states",
-                               "\n[animal.bird]\nmodel = \"" "BIRD" "\"\n");
-    (void)path;
     char text[2048];
     snprintf(text, sizeof text,
              "[bake]\nout_dir = \"out-err\"\n[animal.bird]\nmodel = \"%s/bird.glb\"\nstates = { fly = [\"flap\"], flee = "
@@ -275,8 +272,6 @@ static void test_parallel_bake_is_byte_identical(void **state)
 {
     (void)state;
     char out[8192], args[2048];
-    const char *a = catalog("par1", "out-j1", "\n[animal.bird]\nmodel = \"BIRDPATH\"\n");
-    (void)a;
     char bird[700];
     snprintf(bird, sizeof bird, "\n[animal.bird]\nmodel = \"%s/bird.glb\"\nfps = 24\n", samples_abs);
     char p1[1024], p4[1024];
@@ -300,8 +295,11 @@ static void test_parallel_bake_is_byte_identical(void **state)
 static void test_depfile_lists_every_input_of_every_output(void **state)
 {
     (void)state;
-    char out[8192], args[2048];
-    const char *path = catalog("dep", "out-dep", "");
+    char out[8192], args[2048], fox[PATH_MAX], extra[PATH_MAX + 64];
+    shared_path(args, sizeof args, "assets/derived-fox/separate");
+    assert_non_null(realpath(args, fox));
+    snprintf(extra, sizeof extra, "\n[animal.fox]\nmodel = \"%s/Fox.gltf\"\n", fox);
+    const char *path = catalog("dep", "out-dep", extra);
     snprintf(args, sizeof args, "bake %s -q --depfile " TMP "/out-dep.d", path);
     assert_int_equal(run_cli(args, out, sizeof out), 0);
     FILE *f = fopen(TMP "/out-dep.d", "r");
@@ -311,12 +309,16 @@ static void test_depfile_lists_every_input_of_every_output(void **state)
     dep[n] = '\0';
     fclose(f);
     /* goat.pal depends on the catalog, the quadruped (goat and sheep), and the goat's LOD. */
-    static char expect[4096];
+    static char expect[16384];
     snprintf(expect, sizeof expect, TMP "/out-dep/goat.pal: " TMP "/dep.toml \\\n  %s/quadruped.glb \\\n  %s/quadruped_lod1.glb \\\n  %s/quadruped.glb\n",
              samples_abs, samples_abs, samples_abs);
     if (!strstr(dep, expect)) fail_msg("depfile:\n%s\nlacks:\n%s", dep, expect);
     snprintf(expect, sizeof expect, TMP "/out-dep/fish.pal: " TMP "/dep.toml \\\n  %s/fish.glb\n", samples_abs);
     assert_non_null(strstr(dep, expect));
+    /* A .gltf's external buffer is an input too (editing Fox.bin must re-bake); its image,
+     * never read, is not. */
+    snprintf(expect, sizeof expect, TMP "/out-dep/fox.pal: " TMP "/dep.toml \\\n  %s/Fox.gltf \\\n  %s/Fox.bin\n", fox, fox);
+    if (!strstr(dep, expect)) fail_msg("depfile:\n%s\nlacks:\n%s", dep, expect);
     assert_non_null(strstr(dep, TMP "/out-dep/roster.json: " TMP "/dep.toml"));
     assert_null(strstr(dep, "sheep.pal")); /* sheep writes no file of its own */
 }
