@@ -24,10 +24,13 @@ WARN    := -Wall -Wextra $(WERROR)
 SAN     ?=
 # Everything below needs pkg-config, which `make deps` brings.
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
-PKG_LIBS   = $(shell pkg-config --libs draco OpenEXR libzstd tomlplusplus osmesa libpng 2>/dev/null) -lmeshoptimizer -lpthread -lm
+PKG_LIBS   = $(shell pkg-config --libs draco OpenEXR libzstd tomlplusplus libpng 2>/dev/null) -lmeshoptimizer -lpthread -lm -ldl
+# Tests drive OpenGL themselves; crowdbake opens OSMesa only for `preview` (formats/preview.c).
+GL_LIBS    = $(shell pkg-config --libs osmesa 2>/dev/null)
 
-CFLAGS   := -std=c11 $(OPT) -g $(WARN) -D_POSIX_C_SOURCE=200809L $(SAN)
-CXXFLAGS := -std=c++17 $(OPT) -g $(WARN) $(SAN)
+# -fno-math-errno: sqrt and lrint become single instructions (nothing reads errno from libm).
+CFLAGS   := -std=c11 $(OPT) -fno-math-errno -g $(WARN) -D_POSIX_C_SOURCE=200809L $(SAN)
+CXXFLAGS := -std=c++17 $(OPT) -fno-math-errno -g $(WARN) $(SAN)
 
 LIB_C   := $(wildcard src/*.c) $(wildcard formats/*.c)
 LIB_CXX := $(wildcard formats/*.cpp)
@@ -109,7 +112,7 @@ TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
 $(BUILD)/tests/%: tests/%.c tests/testutil.h $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(shell pkg-config --cflags cmocka 2>/dev/null) -c $< -o $@.o
-	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
+	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
 
 # The reader header alone, strict C99, as an engine would compile it: no libcrowdbake.
 $(BUILD)/tests/standalone_pal_reader: tests/standalone_pal_reader.c formats/crowdbake_pal.h $(DEPS_STAMP)

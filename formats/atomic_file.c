@@ -149,7 +149,11 @@ cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_e
 cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err)
 {
     if (f->fd < 0) f->fd = open(f->tmp_path, O_RDONLY | O_CLOEXEC); /* written by another library */
-    if (f->fd < 0 || (fsync(f->fd) != 0 && errno != EINVAL)) {
+    /* No fsync: rename makes the replacement atomic for every reader and for crashes of this
+     * process; flushing to the disk (tens of ms for a large palette, the slowest step of a bake)
+     * only matters on power loss, and then the .pal checksum, which the incremental check
+     * verifies, makes the next run bake again. Compilers and build tools make the same choice. */
+    if (f->fd < 0) {
         cb_fail(err, CB_ERR_IO, "%s: write failed: %s; the previous file, if any, is unchanged", f->path, strerror(errno));
         cb_atomic_abort(f);
         return CB_ERR_IO;

@@ -1,5 +1,5 @@
 /* atomic_file.h - write a file so that readers see the old file or the complete new one,
- * never a partial one: a temporary file beside the target, fsync'ed and renamed over it. */
+ * never a partial one: a temporary file beside the target, renamed over it when complete. */
 #ifndef CB_ATOMIC_FILE_H
 #define CB_ATOMIC_FILE_H
 

@@ -14,8 +14,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <strings.h>
 #include <sys/stat.h>
 #include <vector>
@@ -43,7 +45,19 @@ std::string first_line(const std::string &s)
     return s.substr(start, end == std::string::npos ? std::string::npos : end - start);
 }
 
-bool read_file(const std::string &path, uint64_t max_bytes, std::vector<unsigned char> *out, std::string *why)
+// An allocator whose resize() leaves bytes uninitialized: the model file is read over them at
+// once, and zeroing tens of megabytes first costs as much as the read.
+template <class T> struct uninitialized_allocator : std::allocator<T> {
+    template <class U> struct rebind { using other = uninitialized_allocator<U>; };
+    template <class U> void construct(U *p) noexcept { ::new (static_cast<void *>(p)) U; }
+    template <class U, class... Args> void construct(U *p, Args &&...args)
+    {
+        ::new (static_cast<void *>(p)) U(std::forward<Args>(args)...);
+    }
+};
+using file_bytes = std::vector<unsigned char, uninitialized_allocator<unsigned char>>;
+
+template <class Bytes> bool read_file(const std::string &path, uint64_t max_bytes, Bytes *out, std::string *why)
 {
     FILE *f = std::fopen(path.c_str(), "rb");
     if (!f) {
@@ -871,7 +885,7 @@ extern "C" cb_model *cb_gltf_load_memory(const unsigned char *data, size_t size,
 extern "C" cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_error *err)
 {
     cb_limits l = limits ? *limits : cb_default_limits();
-    std::vector<unsigned char> bytes;
+    file_bytes bytes;
     std::string why;
     try {
         if (!read_file(path, l.max_file_bytes, &bytes, &why)) {

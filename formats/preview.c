@@ -1,10 +1,11 @@
 /* preview.c - see preview.h. */
-#define GL_GLEXT_PROTOTYPES
+#define GL_GLEXT_PROTOTYPES /* for the prototypes gl_api takes its types from; nothing links them */
 #include "preview.h"
 
 #include <GL/osmesa.h>
 #include <GL/gl.h>
 #include <GL/glext.h>
+#include <dlfcn.h>
 #include <math.h>
 #include <png.h>
 #include <stdio.h>
@@ -15,25 +16,107 @@
 #include "../src/runtime.h"
 #include "atomic_file.h"
 
+/* OpenGL through Mesa's OSMesa, opened when a preview is drawn: linking it would load Mesa and
+ * LLVM (~20 ms of dynamic linking) into every crowdbake run. */
+#define CB_GL_FUNCTIONS(X) \
+    X(ActiveTexture) \
+    X(AttachShader) \
+    X(BindAttribLocation) \
+    X(BindBuffer) \
+    X(BindTexture) \
+    X(BindVertexArray) \
+    X(BufferData) \
+    X(Clear) \
+    X(ClearColor) \
+    X(CompileShader) \
+    X(CreateProgram) \
+    X(CreateShader) \
+    X(DeleteShader) \
+    X(DrawArrays) \
+    X(DrawElements) \
+    X(Enable) \
+    X(EnableVertexAttribArray) \
+    X(Finish) \
+    X(GenBuffers) \
+    X(GenTextures) \
+    X(GenVertexArrays) \
+    X(GetError) \
+    X(GetShaderInfoLog) \
+    X(GetShaderiv) \
+    X(GetUniformLocation) \
+    X(LinkProgram) \
+    X(PixelStorei) \
+    X(ShaderSource) \
+    X(TexImage2D) \
+    X(TexParameteri) \
+    X(Uniform1f) \
+    X(Uniform1i) \
+    X(Uniform3fv) \
+    X(Uniform4fv) \
+    X(UniformMatrix4fv) \
+    X(UseProgram) \
+    X(VertexAttribIPointer) \
+    X(VertexAttribPointer) \
+    X(Viewport)
+
+typedef struct gl_api {
+    void *library;
+    __typeof__(&OSMesaCreateContextAttribs) CreateContextAttribs;
+    __typeof__(&OSMesaMakeCurrent) MakeCurrent;
+    __typeof__(&OSMesaDestroyContext) DestroyContext;
+    __typeof__(&OSMesaGetProcAddress) GetProcAddress;
+#define CB_GL_MEMBER(name) __typeof__(&gl##name) name;
+    CB_GL_FUNCTIONS(CB_GL_MEMBER)
+#undef CB_GL_MEMBER
+} gl_api;
+
+/* Resolves every entry point or none; `what` names the first one missing. */
+static bool gl_open(gl_api *gl, const char **what)
+{
+    memset(gl, 0, sizeof *gl);
+    *what = "libOSMesa.so.8";
+    /* NODELETE: Mesa does not expect to be unloaded, and its few bytes kept past
+     * OSMesaDestroyContext stay attributable to it (tests/lsan.supp). */
+    gl->library = dlopen("libOSMesa.so.8", RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
+    if (!gl->library) return false;
+#define CB_GL_SYMBOL(member, symbol) \
+    if (!(*(void **)&gl->member = dlsym(gl->library, symbol))) return *what = symbol, false;
+    CB_GL_SYMBOL(CreateContextAttribs, "OSMesaCreateContextAttribs")
+    CB_GL_SYMBOL(MakeCurrent, "OSMesaMakeCurrent")
+    CB_GL_SYMBOL(DestroyContext, "OSMesaDestroyContext")
+    CB_GL_SYMBOL(GetProcAddress, "OSMesaGetProcAddress")
+#define CB_GL_PROC(name) \
+    if (!(*(void **)&gl->name = (void *)gl->GetProcAddress("gl" #name))) return *what = "gl" #name, false;
+    CB_GL_FUNCTIONS(CB_GL_PROC)
+#undef CB_GL_PROC
+#undef CB_GL_SYMBOL
+    return true;
+}
+
+static void gl_close(gl_api *gl)
+{
+    if (gl->library) dlclose(gl->library);
+}
+
 static const char *const layout_define[] = {"CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS"};
 static const char *const precision_define[] = {"CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16"};
 
-static GLuint shader(GLenum type, const char *src, cb_error *err)
+static GLuint shader(const gl_api *gl, GLenum type, const char *src, cb_error *err)
 {
-    GLuint s = glCreateShader(type);
-    glShaderSource(s, 1, &src, NULL);
-    glCompileShader(s);
+    GLuint s = gl->CreateShader(type);
+    gl->ShaderSource(s, 1, &src, NULL);
+    gl->CompileShader(s);
     GLint ok;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    gl->GetShaderiv(s, GL_COMPILE_STATUS, &ok);
     if (!ok) {
         char log[1024];
-        glGetShaderInfoLog(s, sizeof log, NULL, log);
+        gl->GetShaderInfoLog(s, sizeof log, NULL, log);
         cb_fail(err, CB_ERR_INTERNAL, "the preview shader does not compile: %.400s", log);
     }
     return s;
 }
 
-static GLuint program(const cb_palette *p, cb_error *err)
+static GLuint program(const gl_api *gl, const cb_palette *p, cb_error *err)
 {
     size_t n = strlen(cb_palette_glsl) + 2048;
     char *vs = malloc(n);
@@ -49,86 +132,86 @@ static GLuint program(const cb_palette *p, cb_error *err)
                              "void main() {\n  vec3 n = normalize(cross(dFdx(v_world), dFdy(v_world)));\n"
                              "  float light = 0.35 + 0.65 * abs(dot(n, normalize(vec3(0.4, 0.8, 0.45))));\n"
                              "  color = vec4(vec3(0.85, 0.62, 0.38) * light, 1.0);\n}\n";
-    GLuint v = shader(GL_VERTEX_SHADER, vs, err), f = shader(GL_FRAGMENT_SHADER, fs, err), prog = glCreateProgram();
+    GLuint v = shader(gl, GL_VERTEX_SHADER, vs, err), f = shader(gl, GL_FRAGMENT_SHADER, fs, err), prog = gl->CreateProgram();
     free(vs);
-    glAttachShader(prog, v);
-    glAttachShader(prog, f);
-    glBindAttribLocation(prog, 0, "a_position");
-    glBindAttribLocation(prog, 1, "a_joints");
-    glBindAttribLocation(prog, 2, "a_weights");
-    glLinkProgram(prog);
-    glDeleteShader(v);
-    glDeleteShader(f);
+    gl->AttachShader(prog, v);
+    gl->AttachShader(prog, f);
+    gl->BindAttribLocation(prog, 0, "a_position");
+    gl->BindAttribLocation(prog, 1, "a_joints");
+    gl->BindAttribLocation(prog, 2, "a_weights");
+    gl->LinkProgram(prog);
+    gl->DeleteShader(v);
+    gl->DeleteShader(f);
     return prog;
 }
 
-static GLuint texture(GLenum internal, GLsizei w, GLsizei h, GLenum format, GLenum type, const void *data)
+static GLuint texture(const gl_api *gl, GLenum internal, GLsizei w, GLsizei h, GLenum format, GLenum type, const void *data)
 {
     GLuint t;
-    glGenTextures(1, &t);
-    glBindTexture(GL_TEXTURE_2D, t);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage2D(GL_TEXTURE_2D, 0, (GLint)internal, w, h, 0, format, type, data);
+    gl->GenTextures(1, &t);
+    gl->BindTexture(GL_TEXTURE_2D, t);
+    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gl->TexImage2D(GL_TEXTURE_2D, 0, (GLint)internal, w, h, 0, format, type, data);
     return t;
 }
 
-static void bind_palette(const cb_palette *p, const void *texels, GLuint prog, GLuint *tex)
+static void bind_palette(const gl_api *gl, const cb_palette *p, const void *texels, GLuint prog, GLuint *tex)
 {
-    glActiveTexture(GL_TEXTURE1);
+    gl->ActiveTexture(GL_TEXTURE1);
     float *bind = calloc((size_t)p->bone_count * 4, sizeof(float));
     for (uint32_t j = 0; bind && j < p->bone_count; ++j) memcpy(bind + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
-    tex[1] = texture(GL_RGBA32F, (GLsizei)p->bone_count, 1, GL_RGBA, GL_FLOAT, bind);
+    tex[1] = texture(gl, GL_RGBA32F, (GLsizei)p->bone_count, 1, GL_RGBA, GL_FLOAT, bind);
     free(bind);
-    glActiveTexture(GL_TEXTURE0);
+    gl->ActiveTexture(GL_TEXTURE0);
     if (p->precision == CB_PRECISION_FLOAT)
-        tex[0] = texture(GL_RGBA32F, (GLsizei)p->width, (GLsizei)p->height, GL_RGBA, GL_FLOAT, texels);
+        tex[0] = texture(gl, GL_RGBA32F, (GLsizei)p->width, (GLsizei)p->height, GL_RGBA, GL_FLOAT, texels);
     else if (p->precision == CB_PRECISION_HALF)
-        tex[0] = texture(GL_RGBA16F, (GLsizei)p->width, (GLsizei)p->height, GL_RGBA, GL_HALF_FLOAT, texels);
+        tex[0] = texture(gl, GL_RGBA16F, (GLsizei)p->width, (GLsizei)p->height, GL_RGBA, GL_HALF_FLOAT, texels);
     else
-        tex[0] = texture(GL_RGBA16UI, (GLsizei)p->width, (GLsizei)p->height, GL_RGBA_INTEGER, GL_UNSIGNED_SHORT, texels);
-    glUseProgram(prog);
-    glUniform1i(glGetUniformLocation(prog, "cb_palette"), 0);
-    glUniform1i(glGetUniformLocation(prog, "cb_bind_positions"), 1);
-    glUniform1i(glGetUniformLocation(prog, "cb_row_texels"), (GLint)p->row_texels);
-    glUniform1i(glGetUniformLocation(prog, "cb_rows_per_block"), (GLint)p->height);
-    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_min"), 1, p->bounds_min);
-    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_max"), 1, p->bounds_max);
-    glUniform1f(glGetUniformLocation(prog, "cb_linear_range"), p->linear_range);
+        tex[0] = texture(gl, GL_RGBA16UI, (GLsizei)p->width, (GLsizei)p->height, GL_RGBA_INTEGER, GL_UNSIGNED_SHORT, texels);
+    gl->UseProgram(prog);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "cb_palette"), 0);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "cb_bind_positions"), 1);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "cb_row_texels"), (GLint)p->row_texels);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "cb_rows_per_block"), (GLint)p->height);
+    gl->Uniform3fv(gl->GetUniformLocation(prog, "cb_bounds_min"), 1, p->bounds_min);
+    gl->Uniform3fv(gl->GetUniformLocation(prog, "cb_bounds_max"), 1, p->bounds_max);
+    gl->Uniform1f(gl->GetUniformLocation(prog, "cb_linear_range"), p->linear_range);
 }
 
 /* One VAO per primitive of the skin: positions, joints, weights and indices. */
-static uint32_t upload_mesh(const cb_model *m, int32_t skin, GLuint *vaos, GLsizei *counts, bool *indexed, uint32_t cap)
+static uint32_t upload_mesh(const gl_api *gl, const cb_model *m, int32_t skin, GLuint *vaos, GLsizei *counts, bool *indexed, uint32_t cap)
 {
     uint32_t n = 0;
     for (uint32_t i = 0; i < m->primitive_count && n < cap; ++i) {
         const cb_primitive *prim = &m->primitives[i];
         if (prim->skin != skin) continue;
         GLuint vbo[4];
-        glGenVertexArrays(1, &vaos[n]);
-        glBindVertexArray(vaos[n]);
-        glGenBuffers(4, vbo);
+        gl->GenVertexArrays(1, &vaos[n]);
+        gl->BindVertexArray(vaos[n]);
+        gl->GenBuffers(4, vbo);
         int32_t *joints = malloc((size_t)prim->vertex_count * 4 * sizeof(int32_t));
         for (uint32_t k = 0; joints && k < prim->vertex_count * 4; ++k) joints[k] = prim->joints[k];
-        glBindBuffer(GL_ARRAY_BUFFER, vbo[0]);
-        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)prim->vertex_count * 12, prim->positions, GL_STATIC_DRAW);
-        glEnableVertexAttribArray(0);
-        glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, 0);
-        glBindBuffer(GL_ARRAY_BUFFER, vbo[1]);
-        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)prim->vertex_count * 16, joints, GL_STATIC_DRAW);
-        glEnableVertexAttribArray(1);
-        glVertexAttribIPointer(1, 4, GL_INT, 0, 0);
-        glBindBuffer(GL_ARRAY_BUFFER, vbo[2]);
-        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)prim->vertex_count * 16, prim->weights, GL_STATIC_DRAW);
-        glEnableVertexAttribArray(2);
-        glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, 0, 0);
+        gl->BindBuffer(GL_ARRAY_BUFFER, vbo[0]);
+        gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)prim->vertex_count * 12, prim->positions, GL_STATIC_DRAW);
+        gl->EnableVertexAttribArray(0);
+        gl->VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, 0);
+        gl->BindBuffer(GL_ARRAY_BUFFER, vbo[1]);
+        gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)prim->vertex_count * 16, joints, GL_STATIC_DRAW);
+        gl->EnableVertexAttribArray(1);
+        gl->VertexAttribIPointer(1, 4, GL_INT, 0, 0);
+        gl->BindBuffer(GL_ARRAY_BUFFER, vbo[2]);
+        gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)prim->vertex_count * 16, prim->weights, GL_STATIC_DRAW);
+        gl->EnableVertexAttribArray(2);
+        gl->VertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, 0, 0);
         free(joints);
         indexed[n] = prim->indices != NULL;
         counts[n] = (GLsizei)(indexed[n] ? prim->index_count : prim->vertex_count);
         if (indexed[n]) {
-            glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, vbo[3]);
-            glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)prim->index_count * 4, prim->indices, GL_STATIC_DRAW);
+            gl->BindBuffer(GL_ELEMENT_ARRAY_BUFFER, vbo[3]);
+            gl->BufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)prim->index_count * 4, prim->indices, GL_STATIC_DRAW);
         }
         ++n;
     }
@@ -219,28 +302,35 @@ cb_status cb_preview_write(const cb_palette *p, const void *texels, const cb_mod
         return cb_fail(err, CB_ERR_USAGE, "a contact sheet of %ux%u pixels is out of range (1..8192)", w, h);
     const int attrs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
                          OSMESA_CONTEXT_MAJOR_VERSION, 3, OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
-    OSMesaContext ctx = OSMesaCreateContextAttribs(attrs, NULL);
+    gl_api api, *gl = &api;
+    const char *missing;
+    if (!gl_open(gl, &missing)) {
+        gl_close(gl);
+        return cb_fail(err, CB_ERR_INTERNAL, "preview needs Mesa's OSMesa: %s not found (install libosmesa6)", missing);
+    }
+    OSMesaContext ctx = gl->CreateContextAttribs(attrs, NULL);
     unsigned char *pixels = malloc((size_t)w * h * 4);
-    if (!ctx || !pixels || !OSMesaMakeCurrent(ctx, pixels, GL_UNSIGNED_BYTE, (GLsizei)w, (GLsizei)h)) {
+    if (!ctx || !pixels || !gl->MakeCurrent(ctx, pixels, GL_UNSIGNED_BYTE, (GLsizei)w, (GLsizei)h)) {
         free(pixels);
-        if (ctx) OSMesaDestroyContext(ctx);
+        if (ctx) gl->DestroyContext(ctx);
+        gl_close(gl);
         return cb_fail(err, CB_ERR_INTERNAL, "no OpenGL 3.3 context from OSMesa (Mesa's libosmesa6)");
     }
-    GLuint prog = program(p, err), tex[2] = {0, 0}, vaos[64];
+    GLuint prog = program(gl, p, err), tex[2] = {0, 0}, vaos[64];
     GLsizei counts[64];
     bool indexed[64];
     if (!err->status) {
-        bind_palette(p, texels, prog, tex);
-        uint32_t prims = upload_mesh(m, skin, vaos, counts, indexed, 64);
-        glEnable(GL_DEPTH_TEST);
-        glClearColor(0.93f, 0.93f, 0.9f, 1);
-        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        bind_palette(gl, p, texels, prog, tex);
+        uint32_t prims = upload_mesh(gl, m, skin, vaos, counts, indexed, 64);
+        gl->Enable(GL_DEPTH_TEST);
+        gl->ClearColor(0.93f, 0.93f, 0.9f, 1);
+        gl->Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
         double *centers = malloc((size_t)cols * 3 * sizeof(double));
         for (uint32_t c = 0; centers && c < p->clip_count; ++c) {
             const cb_palette_clip *clip = &p->clips[c];
             cb_instance in = {clip->first_row, clip->loops ? clip->frames : -(double)clip->frames, clip->fps, 0};
             float inst[4] = {(float)in.first_row, (float)in.frame_count, (float)in.rate, 0};
-            glUniform4fv(glGetUniformLocation(prog, "u_instance"), 1, inst);
+            gl->Uniform4fv(gl->GetUniformLocation(prog, "u_instance"), 1, inst);
             double span = clip->loops ? clip->frames / clip->fps : (clip->frames - 1) / clip->fps, radius = 0;
             for (uint32_t k = 0; k < cols; ++k) { /* one scale for the row, a center per frame */
                 double t = clip->loops ? span * k / cols : cols > 1 ? span * k / (cols - 1) : 0, r = 0;
@@ -251,22 +341,23 @@ cb_status cb_preview_write(const cb_palette *p, const void *texels, const cb_mod
                 double t = clip->loops ? span * k / cols : cols > 1 ? span * k / (cols - 1) : 0;
                 float vp[16];
                 camera(centers + k * 3, radius, vp);
-                glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, vp);
-                glUniform1f(glGetUniformLocation(prog, "u_time"), (float)t);
-                glViewport((GLint)(k * cell), (GLint)((p->clip_count - 1 - c) * cell), (GLsizei)cell, (GLsizei)cell);
+                gl->UniformMatrix4fv(gl->GetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, vp);
+                gl->Uniform1f(gl->GetUniformLocation(prog, "u_time"), (float)t);
+                gl->Viewport((GLint)(k * cell), (GLint)((p->clip_count - 1 - c) * cell), (GLsizei)cell, (GLsizei)cell);
                 for (uint32_t i = 0; i < prims; ++i) {
-                    glBindVertexArray(vaos[i]);
-                    if (indexed[i]) glDrawElements(GL_TRIANGLES, counts[i], GL_UNSIGNED_INT, 0);
-                    else glDrawArrays(GL_TRIANGLES, 0, counts[i]);
+                    gl->BindVertexArray(vaos[i]);
+                    if (indexed[i]) gl->DrawElements(GL_TRIANGLES, counts[i], GL_UNSIGNED_INT, 0);
+                    else gl->DrawArrays(GL_TRIANGLES, 0, counts[i]);
                 }
             }
         }
         free(centers);
-        glFinish();
-        if (glGetError() != GL_NO_ERROR) cb_fail(err, CB_ERR_INTERNAL, "OpenGL failed while rendering the preview");
+        gl->Finish();
+        if (gl->GetError() != GL_NO_ERROR) cb_fail(err, CB_ERR_INTERNAL, "OpenGL failed while rendering the preview");
     }
     if (!err->status) write_png(png_path, pixels, w, h, err);
-    OSMesaDestroyContext(ctx);
+    gl->DestroyContext(ctx);
+    gl_close(gl);
     free(pixels);
     return err->status;
 }

@@ -328,7 +328,8 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
     char msg[256];
     if (formats & CB_FORMAT_PAL) {
         cbpal_file f;
-        if (cbpal_open(t->pal_path, 0, &f, msg, sizeof msg) != 0) return false;
+        /* Verified (memory speed): a file torn by a power loss is baked again, not trusted. */
+        if (cbpal_open(t->pal_path, CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg) != 0) return false;
         bool same = f.header.input_hash == t->input_hash && f.header.rows == t->rows;
         if (same) {
             t->width = f.header.width, t->height = f.header.height, t->blocks = f.header.blocks;

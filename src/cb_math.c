@@ -180,28 +180,28 @@ cb_quat cb_quat_from_mat4(const double m[16])
     double trace = m00 + m11 + m22;
     cb_quat q;
     if (trace > 0) {
-        double s = sqrt(trace + 1.0) * 2;
+        double s = sqrt(trace + 1.0) * 2, inv = 1 / s;
         q.w = 0.25 * s;
-        q.x = (m[6] - m[9]) / s;
-        q.y = (m[8] - m[2]) / s;
-        q.z = (m[1] - m[4]) / s;
+        q.x = (m[6] - m[9]) * inv;
+        q.y = (m[8] - m[2]) * inv;
+        q.z = (m[1] - m[4]) * inv;
     } else if (m00 > m11 && m00 > m22) {
-        double s = sqrt(1.0 + m00 - m11 - m22) * 2;
-        q.w = (m[6] - m[9]) / s;
+        double s = sqrt(1.0 + m00 - m11 - m22) * 2, inv = 1 / s;
+        q.w = (m[6] - m[9]) * inv;
         q.x = 0.25 * s;
-        q.y = (m[4] + m[1]) / s;
-        q.z = (m[8] + m[2]) / s;
+        q.y = (m[4] + m[1]) * inv;
+        q.z = (m[8] + m[2]) * inv;
     } else if (m11 > m22) {
-        double s = sqrt(1.0 + m11 - m00 - m22) * 2;
-        q.w = (m[8] - m[2]) / s;
-        q.x = (m[4] + m[1]) / s;
+        double s = sqrt(1.0 + m11 - m00 - m22) * 2, inv = 1 / s;
+        q.w = (m[8] - m[2]) * inv;
+        q.x = (m[4] + m[1]) * inv;
         q.y = 0.25 * s;
-        q.z = (m[9] + m[6]) / s;
+        q.z = (m[9] + m[6]) * inv;
     } else {
-        double s = sqrt(1.0 + m22 - m00 - m11) * 2;
-        q.w = (m[1] - m[4]) / s;
-        q.x = (m[8] + m[2]) / s;
-        q.y = (m[9] + m[6]) / s;
+        double s = sqrt(1.0 + m22 - m00 - m11) * 2, inv = 1 / s;
+        q.w = (m[1] - m[4]) * inv;
+        q.x = (m[8] + m[2]) * inv;
+        q.y = (m[9] + m[6]) * inv;
         q.z = 0.25 * s;
     }
     return cb_quat_normalize(q);

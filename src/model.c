@@ -235,6 +235,19 @@ static cb_status validate_primitives(const cb_model *m, cb_error *err)
     return CB_OK;
 }
 
+/* True when no value is a NaN or an infinity (all exponent bits set). Branch-free, so the
+ * compiler vectorizes it: animation data is most of a large file. */
+static bool all_finite(const float *v, uint64_t n)
+{
+    uint32_t bad = 0;
+    for (uint64_t i = 0; i < n; ++i) {
+        uint32_t bits;
+        memcpy(&bits, &v[i], 4);
+        bad |= (bits & 0x7f800000u) == 0x7f800000u;
+    }
+    return !bad;
+}
+
 static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, cb_error *err)
 {
     const cb_animation *anim = &m->animations[a];
@@ -257,7 +270,8 @@ static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, cb_
     }
     int comps = path_components(ch->path);
     int per_key = comps * (ch->interp == CB_INTERP_CUBICSPLINE ? 3 : 1);
-    for (uint64_t i = 0; i < (uint64_t)ch->key_count * per_key; ++i)
+    uint64_t value_count = (uint64_t)ch->key_count * per_key;
+    for (uint64_t i = all_finite(ch->values, value_count) ? value_count : 0; i < value_count; ++i)
         if (!isfinite(ch->values[i]))
             return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u (%s of %s) key %llu has a NaN or infinite value",
                            m->source, anim->name, c, path_name(ch->path), m->nodes[ch->node].name,
@@ -272,7 +286,8 @@ static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, cb_
             if (len < 1e-12)
                 return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u (rotation of %s) key %u is a zero quaternion",
                                m->source, anim->name, c, m->nodes[ch->node].name, k);
-            for (int i = 0; i < 4; ++i) q[i] = (float)(q[i] / len);
+            double inv = 1 / len;
+            for (int i = 0; i < 4; ++i) q[i] = (float)(q[i] * inv);
         }
     }
     return CB_OK;

@@ -16,7 +16,8 @@
 
 /* Canonical floats per bone and row before the final encoding: the upper 3x4 of the matrix
  * by rows (mat4, affine), or quaternion, position and scale (qpos). */
-#define CANON 12
+/* Floats per bone per row before encoding: the texels' values (qpos uses 8 of them). */
+#define CANON(layout) ((layout) == CB_LAYOUT_QPOS ? 8u : 12u)
 #define QPOS_TOLERANCE 1e-4 /* relative: scale differences and shear qpos may drop */
 
 static const char *const layout_names[] = {"mat4", "affine", "qpos"};
@@ -112,9 +113,9 @@ static cb_status qpos_canon(const double m[16], float out[8], const cb_model *mo
                        "%s: joint '%s' has %s (axis scales %.7g, %.7g, %.7g) at frame %u of clip '%s', which the qpos "
                        "layout cannot represent; use --layout affine or --layout mat4",
                        model->source, model->nodes[skin->joints[bone]].name, why, l[0], l[1], l[2], frame, clip);
-    double r[16];
+    double r[16], inv = 1 / s;
     memcpy(r, m, sizeof r);
-    for (int i = 0; i < 12; ++i) r[i] /= s;
+    for (int i = 0; i < 12; ++i) r[i] *= inv;
     cb_quat q = cb_quat_from_mat4(r);
     if (prev) {
         if (cb_quat_dot(q, *prev) < 0) q = (cb_quat){-q.x, -q.y, -q.z, -q.w};
@@ -124,6 +125,51 @@ static cb_status qpos_canon(const double m[16], float out[8], const cb_model *mo
     out[0] = (float)q.x, out[1] = (float)q.y, out[2] = (float)q.z, out[3] = (float)q.w;
     out[7] = (float)s;
     return CB_OK;
+}
+
+/* What u16 quantization needs of the values: the box of the translations (or positions) and
+ * the largest linear term (or qpos scale). Kept per clip while sampling, merged after. */
+typedef struct value_range {
+    float lo[3], hi[3], linear;
+} value_range;
+
+static void range_reset(value_range *r)
+{
+    for (int k = 0; k < 3; ++k) r->lo[k] = INFINITY, r->hi[k] = -INFINITY;
+    r->linear = 0;
+}
+
+/* Compares, not fminf/fmaxf: the values are finite and the compares inline. */
+static void range_grow(value_range *r, cb_layout layout, const float *v)
+{
+    for (int k = 0; k < 3; ++k) {
+        float t = layout == CB_LAYOUT_QPOS ? v[4 + k] : v[k * 4 + 3];
+        if (t < r->lo[k]) r->lo[k] = t;
+        if (t > r->hi[k]) r->hi[k] = t;
+    }
+    if (layout == CB_LAYOUT_QPOS) {
+        if (v[7] > r->linear) r->linear = v[7];
+        return;
+    }
+    for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k)
+            if (fabsf(v[i * 4 + k]) > r->linear) r->linear = fabsf(v[i * 4 + k]);
+}
+
+static void merge_ranges(cb_palette *p, const value_range *clips)
+{
+    value_range all;
+    range_reset(&all);
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        for (int k = 0; k < 3; ++k) {
+            if (clips[c].lo[k] < all.lo[k]) all.lo[k] = clips[c].lo[k];
+            if (clips[c].hi[k] > all.hi[k]) all.hi[k] = clips[c].hi[k];
+        }
+        if (clips[c].linear > all.linear) all.linear = clips[c].linear;
+    }
+    bool empty = !(all.lo[0] <= all.hi[0]);
+    for (int k = 0; k < 3; ++k) p->bounds_min[k] = empty ? 0 : all.lo[k], p->bounds_max[k] = empty ? 0 : all.hi[k];
+    p->linear_range = all.linear;
 }
 
 /* Per-thread scratch: each worker samples its own clips with its own sampler. */
@@ -139,12 +185,13 @@ typedef struct bake_state {
     int32_t skin;
     const cb_bake_options *opt;
     const cb_clip_info *infos;
-    float *canon;          /* rows * bones * CANON */
+    float *canon;          /* rows * bones * CANON(layout) */
     const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 */
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
     cb_error *errors;      /* clips: the first error of each */
     uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
     double *clip_error;    /* clips: worst vertex error measured */
+    value_range *ranges;   /* clips: the values' ranges */
 } bake_state;
 
 /* Grows a clip's bounds by the sphere a joint's vertices can reach: a vertex weighted to joint
@@ -157,9 +204,10 @@ static void grow_bounds(cb_palette_clip *clip, const double *M, const float *b, 
     for (int k = 0; k < 12; ++k)
         if (k % 4 != 3) norm += M[k] * M[k];
     double reach = r * sqrt(norm), cc[3] = {c.x, c.y, c.z};
-    for (int k = 0; k < 3; ++k) {
-        clip->bounds_min[k] = fminf(clip->bounds_min[k], (float)(cc[k] - reach));
-        clip->bounds_max[k] = fmaxf(clip->bounds_max[k], (float)(cc[k] + reach));
+    for (int k = 0; k < 3; ++k) { /* compares, not fminf: no NaN reaches here and they inline */
+        float lo = (float)(cc[k] - reach), hi = (float)(cc[k] + reach);
+        if (lo < clip->bounds_min[k]) clip->bounds_min[k] = lo;
+        if (hi > clip->bounds_max[k]) clip->bounds_max[k] = hi;
     }
 }
 
@@ -170,33 +218,37 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
     const cb_clip_info *info = &st->infos[c];
     cb_palette_clip *clip = &p->clips[c];
     for (int k = 0; k < 3; ++k) clip->bounds_min[k] = INFINITY, clip->bounds_max[k] = -INFINITY;
+    value_range *range = &st->ranges[c];
+    range_reset(range);
     for (uint32_t f = 0; f < info->frames; ++f) {
         cb_clip_frame_matrices(w->sampler, info, f, st->opt->root_motion, w->mats);
-        float *row = st->canon + (size_t)(clip->first_row + f) * p->bone_count * CANON;
+        float *row = st->canon + (size_t)(clip->first_row + f) * p->bone_count * CANON(p->layout);
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             const double *M = w->mats + (size_t)j * 16;
             const float *b = p->bind_positions + (size_t)j * 3;
-            float *out = row + (size_t)j * CANON;
+            float *out = row + (size_t)j * CANON(p->layout);
             grow_bounds(clip, M, b, st->radius[j]);
             if (p->layout != CB_LAYOUT_QPOS) {
                 for (int r = 0; r < 3; ++r)
                     for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
+                range_grow(range, p->layout, out);
                 continue;
             }
             if (qpos_canon(M, out, st->model, skin, j, clip->name, f, f ? &w->prev[j] : NULL, err)) return err->status;
             w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
             cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* p = M b */
             out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
+            range_grow(range, p->layout, out);
         }
     }
     if (!(clip->bounds_min[0] <= clip->bounds_max[0])) /* no skinned vertex */
         for (int k = 0; k < 3; ++k) clip->bounds_min[k] = clip->bounds_max[k] = 0;
     if (p->layout == CB_LAYOUT_QPOS && info->loops && info->frames > 1) {
         /* The wrap from the last row to the first: a full turn over the loop ends on -q. */
-        const float *first = st->canon + (size_t)clip->first_row * p->bone_count * CANON;
-        const float *last = first + (size_t)(info->frames - 1) * p->bone_count * CANON;
+        const float *first = st->canon + (size_t)clip->first_row * p->bone_count * CANON(p->layout);
+        const float *last = first + (size_t)(info->frames - 1) * p->bone_count * CANON(p->layout);
         for (uint32_t j = 0; j < p->bone_count; ++j) {
-            const float *qa = first + (size_t)j * CANON, *qb = last + (size_t)j * CANON;
+            const float *qa = first + (size_t)j * CANON(p->layout), *qb = last + (size_t)j * CANON(p->layout);
             if (qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3] < 0) st->breaks[c]++;
         }
     }
@@ -276,28 +328,6 @@ static double snorm16_decode(uint16_t u)
 
 static double unorm16_decode(uint16_t u, double lo, double hi) { return hi > lo ? lo + (hi - lo) * (u / 65535.0) : lo; }
 
-static void measure_ranges(cb_palette *p, const float *canon)
-{
-    for (int k = 0; k < 3; ++k) p->bounds_min[k] = INFINITY, p->bounds_max[k] = -INFINITY;
-    p->linear_range = 0;
-    size_t n = (size_t)p->rows * p->bone_count;
-    for (size_t i = 0; i < n; ++i) {
-        const float *v = canon + i * CANON;
-        for (int k = 0; k < 3; ++k) {
-            float t = p->layout == CB_LAYOUT_QPOS ? v[4 + k] : v[k * 4 + 3];
-            p->bounds_min[k] = fminf(p->bounds_min[k], t);
-            p->bounds_max[k] = fmaxf(p->bounds_max[k], t);
-        }
-        if (p->layout == CB_LAYOUT_QPOS) {
-            p->linear_range = fmaxf(p->linear_range, v[7]);
-        } else {
-            for (int r = 0; r < 3; ++r)
-                for (int k = 0; k < 3; ++k) p->linear_range = fmaxf(p->linear_range, fabsf(v[r * 4 + k]));
-        }
-    }
-    if (n == 0)
-        for (int k = 0; k < 3; ++k) p->bounds_min[k] = p->bounds_max[k] = 0;
-}
 
 /* The 4 * texels_per_bone values of one bone, in texel order, as floats. */
 static void texel_values(const cb_palette *p, const float *v, float out[16])
@@ -398,10 +428,10 @@ static void encode_rows(cb_palette *p, const float *canon, uint32_t first, uint3
         uint32_t x0, y;
         cb_palette_texel_xy(p, r, 0, &x0, &y);
         unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * tb;
-        const float *row = canon + (size_t)r * p->bone_count * CANON;
+        const float *row = canon + (size_t)r * p->bone_count * CANON(p->layout);
         for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
             float vals[16];
-            texel_values(p, row + (size_t)j * CANON, vals);
+            texel_values(p, row + (size_t)j * CANON(p->layout), vals);
             if (p->precision == CB_PRECISION_FLOAT)
                 for (uint32_t i = 0; i < nvalues; ++i) store_le32f(d + i * 4, vals[i]);
             else if (p->precision == CB_PRECISION_HALF)
@@ -457,40 +487,39 @@ void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const doubl
 
 /* ---- pass 3: the error against exact skinning ---- */
 
+/* Skinning is linear in the matrices, so one skinning with (exact - decoded) gives each
+ * vertex's error directly: half the work of skinning twice, and no cancellation. */
 static void measure_clip(bake_state *st, worker *w, uint32_t c)
 {
     cb_palette *p = st->p;
     const cb_model *m = st->model;
     const cb_palette_clip *clip = &p->clips[c];
     uint64_t verts = cb_model_skin_vertex_count(m, st->skin);
-    double *decoded = malloc((size_t)p->bone_count * 16 * sizeof(double));
-    double *exact_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
-    double *dec_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
+    double *diff = malloc((size_t)p->bone_count * 16 * sizeof(double));
+    double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
     st->clip_error[c] = 0;
-    for (uint32_t f = 0; decoded && exact_pos && dec_pos && verts && f < clip->frames; ++f) {
+    for (uint32_t f = 0; diff && err_pos && verts && f < clip->frames; ++f) {
         if (f % st->error_stride && f + 1 != clip->frames) continue;
         cb_clip_frame_matrices(w->sampler, &st->infos[c], f, st->opt->root_motion, w->mats);
-        for (uint32_t j = 0; j < p->bone_count; ++j)
-            cb_palette_decode(p, p->texels, clip->first_row + f, j, decoded + (size_t)j * 16);
-        double *e = exact_pos, *d = dec_pos;
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            double *d = diff + (size_t)j * 16;
+            cb_palette_decode(p, p->texels, clip->first_row + f, j, d);
+            for (int k = 0; k < 16; ++k) d[k] = w->mats[(size_t)j * 16 + k] - d[k];
+        }
+        double worst = 0;
         for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
             const cb_primitive *prim = &m->primitives[pi];
             if (prim->skin != st->skin) continue;
-            cb_skin_positions(prim, w->mats, e);
-            cb_skin_positions(prim, decoded, d);
-            e += (size_t)prim->vertex_count * 3, d += (size_t)prim->vertex_count * 3;
-        }
-        double worst = 0;
-        for (uint64_t i = 0; i < verts * 3; i += 3) {
-            double dx = exact_pos[i] - dec_pos[i], dy = exact_pos[i + 1] - dec_pos[i + 1], dz = exact_pos[i + 2] - dec_pos[i + 2];
-            double d2 = dx * dx + dy * dy + dz * dz;
-            if (d2 > worst) worst = d2;
+            cb_skin_positions(prim, diff, err_pos);
+            for (uint64_t i = 0; i < (uint64_t)prim->vertex_count * 3; i += 3) {
+                double d2 = err_pos[i] * err_pos[i] + err_pos[i + 1] * err_pos[i + 1] + err_pos[i + 2] * err_pos[i + 2];
+                if (d2 > worst) worst = d2;
+            }
         }
         if (sqrt(worst) > st->clip_error[c]) st->clip_error[c] = sqrt(worst);
     }
-    free(decoded);
-    free(exact_pos);
-    free(dec_pos);
+    free(diff);
+    free(err_pos);
 }
 
 /* Bind-space distance from each joint's bind position to the farthest vertex it moves;
@@ -644,12 +673,14 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     }
     p->texels = calloc(p->texel_bytes ? p->texel_bytes : 1, 1);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
-    st.canon = malloc((size_t)p->rows * p->bone_count * CANON * sizeof(float));
+    st.canon = malloc((size_t)p->rows * p->bone_count * CANON(p->layout) * sizeof(float));
     radius = malloc((size_t)p->bone_count * sizeof(double));
     st.breaks = calloc(p->clip_count, sizeof *st.breaks);
     st.errors = calloc(p->clip_count, sizeof *st.errors);
     st.clip_error = calloc(p->clip_count, sizeof *st.clip_error);
-    if (!p->texels || !p->bind_positions || !st.canon || !radius || !st.breaks || !st.errors || !st.clip_error) {
+    st.ranges = calloc(p->clip_count, sizeof *st.ranges);
+    if (!p->texels || !p->bind_positions || !st.canon || !radius || !st.breaks || !st.errors || !st.clip_error ||
+        !st.ranges) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
     }
@@ -660,7 +691,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
     double t1 = seconds_now();
-    measure_ranges(p, st.canon);
+    merge_ranges(p, st.ranges);
     for_each_clip(&st, encode_clip_job);
     double t2 = seconds_now(), lo[3], hi[3];
     p->model_height = cb_skin_rest_bounds(sampler, lo, hi);
@@ -679,10 +710,10 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     }
     double t3 = seconds_now();
     p->seconds_sample = t1 - t0, p->seconds_encode = t2 - t1, p->seconds_measure = t3 - t2;
-    free(st.canon), free(radius), free(st.breaks), free(st.errors), free(st.clip_error), free(infos);
+    free(st.canon), free(radius), free(st.breaks), free(st.errors), free(st.clip_error), free(st.ranges), free(infos);
     return CB_OK;
 fail:
-    free(st.canon), free(radius), free(st.breaks), free(st.errors), free(st.clip_error), free(infos);
+    free(st.canon), free(radius), free(st.breaks), free(st.errors), free(st.clip_error), free(st.ranges), free(infos);
     cb_palette_free(p);
     return err->status;
 }

@@ -121,11 +121,12 @@ static void interrupt(const char *signal, const char *out_path, const char *mode
 static void test_interrupted_mid_write(void **state)
 {
     (void)state;
-    /* A rig big enough that writing its palette takes a while: generated like the bench's. */
-    assert_int_equal(system("build/gen_samples --bench " TMP " 200 4 10 >/dev/null"), 0);
-    interrupt("SIGINT", TMP "/big.pal", TMP "/bench_j200_c4_s10.glb");
-    interrupt("SIGTERM", TMP "/big.pal", TMP "/bench_j200_c4_s10.glb");
-    interrupt("SIGTERM", TMP "/big.exr", TMP "/bench_j200_c4_s10.glb");
+    /* A rig big enough that writing its palette takes a while (15 MB; the poller must see the
+     * temporary): generated like the bench's. */
+    assert_int_equal(system("build/gen_samples --bench " TMP " 200 16 10 >/dev/null"), 0);
+    interrupt("SIGINT", TMP "/big.pal", TMP "/bench_j200_c16_s10.glb");
+    interrupt("SIGTERM", TMP "/big.pal", TMP "/bench_j200_c16_s10.glb");
+    interrupt("SIGTERM", TMP "/big.exr", TMP "/bench_j200_c16_s10.glb");
 }
 
 static void test_two_bakes_racing_for_one_output(void **state)

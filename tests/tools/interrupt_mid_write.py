@@ -17,6 +17,6 @@ while p.poll() is None and time.time() < deadline:
         os.kill(p.pid, sig)
         os.kill(p.pid, signal.SIGCONT)
         break
-    time.sleep(0.0005)
+    time.sleep(0.0001)
 _, err = p.communicate()
 print('status %d caught %s message %s' % (p.returncode, caught, err.decode().strip()))
