@@ -195,11 +195,10 @@ typedef struct bake_state {
 } bake_state;
 
 /* Grows a clip's bounds by the sphere a joint's vertices can reach: a vertex weighted to joint
- * j lies within |A_j| * r_j of M_j b_j, so the union over joints bounds the skinned mesh. */
-static void grow_bounds(cb_palette_clip *clip, const double *M, const float *b, double r)
+ * j lies within |A_j| * r_j of c = M_j b_j, so the union over joints bounds the skinned mesh. */
+static void grow_bounds(cb_palette_clip *clip, const double *M, cb_vec3 c, double r)
 {
     if (r < 0) return;
-    cb_vec3 c = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
     double norm = 0; /* Frobenius norm of the 3x3: at least its largest stretch */
     for (int k = 0; k < 12; ++k)
         if (k % 4 != 3) norm += M[k] * M[k];
@@ -227,7 +226,8 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
             const double *M = w->mats + (size_t)j * 16;
             const float *b = p->bind_positions + (size_t)j * 3;
             float *out = row + (size_t)j * CANON(p->layout);
-            grow_bounds(clip, M, b, st->radius[j]);
+            cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* the joint now: M b */
+            grow_bounds(clip, M, pos, st->radius[j]);
             if (p->layout != CB_LAYOUT_QPOS) {
                 for (int r = 0; r < 3; ++r)
                     for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
@@ -236,7 +236,6 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
             }
             if (qpos_canon(M, out, st->model, skin, j, clip->name, f, f ? &w->prev[j] : NULL, err)) return err->status;
             w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
-            cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* p = M b */
             out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
             range_grow(range, p->layout, out);
         }
