@@ -18,22 +18,30 @@ static double now(void)
     return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
-/* Samples every frame of every clip (30 fps, crowdbake's framing) on one thread. */
-static double sample_all(cb_model *m, uint64_t *matrices)
+/* Samples every frame of every clip (30 fps, crowdbake's framing) on one thread, as 4x4
+ * matrices or, for similarity rigs, as the similarities the qpos bake samples. */
+static double sample_all(cb_model *m, bool similarities, uint64_t *matrices)
 {
     cb_error err = {0};
     cb_sampler *s = cb_sampler_create(m, 0, &err);
-    double *mats = malloc((size_t)m->skins[0].joint_count * 16 * sizeof(double));
+    uint32_t joints = m->skins[0].joint_count;
+    double *mats = malloc((size_t)joints * 16 * sizeof(double));
+    cb_similarity *sims = malloc((size_t)joints * sizeof *sims);
     *matrices = 0;
     double t0 = now();
     for (uint32_t a = 0; a < m->animation_count; ++a) {
         cb_clip_info info;
         cb_clip_analyze(s, (int32_t)a, 30, -1, NULL, &info, &err);
-        for (uint32_t f = 0; f < info.frames; ++f) cb_clip_frame_matrices(s, &info, f, CB_ROOT_MOTION_KEEP, mats);
-        *matrices += (uint64_t)info.frames * m->skins[0].joint_count;
+        for (uint32_t f = 0; f < info.frames; ++f)
+            if (similarities)
+                cb_clip_frame_similarities(s, &info, f, CB_ROOT_MOTION_KEEP, sims);
+            else
+                cb_clip_frame_matrices(s, &info, f, CB_ROOT_MOTION_KEEP, mats);
+        *matrices += (uint64_t)info.frames * joints;
     }
     double t = now() - t0;
     free(mats);
+    free(sims);
     cb_sampler_free(s);
     return t;
 }
@@ -56,8 +64,15 @@ int main(int argc, char **argv)
     if (!m) return fprintf(stderr, "%s\n", err.message), 1;
     uint64_t matrices = 0;
     double runs[7];
-    for (int i = 0; i < 7; ++i) runs[i] = sample_all(m, &matrices);
-    double sample_s = median(runs, 7);
+    for (int i = 0; i < 7; ++i) runs[i] = sample_all(m, false, &matrices);
+    double sample_s = median(runs, 7), similarity_s = 0;
+    cb_sampler *probe = cb_sampler_create(m, 0, &err);
+    bool similar = probe && cb_sampler_is_similarity(probe);
+    cb_sampler_free(probe);
+    if (similar) {
+        for (int i = 0; i < 7; ++i) runs[i] = sample_all(m, true, &matrices);
+        similarity_s = median(runs, 7);
+    }
 
     char msg[256];
     cbpal_file f;
@@ -81,6 +96,7 @@ int main(int argc, char **argv)
            "\"pal_bytes\": %zu, \"pal_open_us\": %.2f, \"pal_verify_gb_per_s\": %.2f",
            argv[1], sample_s, (unsigned long long)matrices, matrices / sample_s, size, median(open_us, 101),
            size / median(verify_s, 7) / 1e9);
+    if (similar) printf(", \"similarity_matrices_per_second\": %.0f", matrices / similarity_s);
     if (argc > 3) {
         double exr_s[5];
         for (int i = 0; i < 5; ++i) {

@@ -147,8 +147,11 @@ def print_table(report):
     if report.get('exponent') is not None:
         print('\ncost ~ (joints x frames)^%.2f over the size series' % report['exponent'])
     for name, core in report.get('core', {}).items():
-        print('%s: single-thread sampling %.2f M matrices/s; .pal open %.1f us (%d bytes), checksum %.1f GB/s%s' % (
-            name, core['matrices_per_second'] / 1e6, core['pal_open_us'], core['pal_bytes'], core['pal_verify_gb_per_s'],
+        similar = core.get('similarity_matrices_per_second')
+        print('%s: single-thread sampling %.2f M matrices/s as 4x4%s; .pal open %.1f us (%d bytes), checksum %.1f GB/s%s' % (
+            name, core['matrices_per_second'] / 1e6,
+            ', %.2f M/s as similarities (the qpos path)' % (similar / 1e6) if similar else '',
+            core['pal_open_us'], core['pal_bytes'], core['pal_verify_gb_per_s'],
             ', same palette from EXR via OpenEXR %.1f ms' % (core['exr_read_us'] / 1000) if 'exr_read_us' in core else ''))
 
 

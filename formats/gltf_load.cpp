@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -29,9 +30,18 @@ namespace {
 
 const char kFallbackScheme[] = "crowdbake-meshopt-fallback-";
 
+using Bytes = std::vector<unsigned char>;
+
+struct Span {
+    unsigned char *data;
+    size_t size;
+};
+
 struct Context {
     cb_model *model;
     const tinygltf::Model *gltf;
+    std::vector<Span> buffers;   // the bytes of each buffer, which the model owns
+    std::vector<bool> copy;      // per accessor: read into a copy even when its floats could be used in place
     cb_limits limits;
     cb_error *err;
     const char *name;
@@ -45,17 +55,29 @@ std::string first_line(const std::string &s)
     return s.substr(start, end == std::string::npos ? std::string::npos : end - start);
 }
 
-// An allocator whose resize() leaves bytes uninitialized: the model file is read over them at
-// once, and zeroing tens of megabytes first costs as much as the read.
-template <class T> struct uninitialized_allocator : std::allocator<T> {
-    template <class U> struct rebind { using other = uninitialized_allocator<U>; };
+// The model file's bytes: resize() leaves them uninitialized (the file is read over them at
+// once, and zeroing tens of megabytes first costs as much as the read), on huge pages where
+// the OS has them (cb_alloc_large).
+template <class T> struct file_allocator {
+    using value_type = T;
+    file_allocator() = default;
+    template <class U> file_allocator(const file_allocator<U> &) {}
+    T *allocate(size_t n)
+    {
+        void *p = n <= SIZE_MAX / sizeof(T) ? cb_alloc_large(n * sizeof(T)) : nullptr;
+        if (!p) throw std::bad_alloc();
+        return static_cast<T *>(p);
+    }
+    void deallocate(T *p, size_t) { std::free(p); }
     template <class U> void construct(U *p) noexcept { ::new (static_cast<void *>(p)) U; }
     template <class U, class... Args> void construct(U *p, Args &&...args)
     {
         ::new (static_cast<void *>(p)) U(std::forward<Args>(args)...);
     }
+    template <class U> bool operator==(const file_allocator<U> &) const { return true; }
+    template <class U> bool operator!=(const file_allocator<U> &) const { return false; }
 };
-using file_bytes = std::vector<unsigned char, uninitialized_allocator<unsigned char>>;
+using file_bytes = std::vector<unsigned char, file_allocator<unsigned char>>;
 
 template <class Bytes> bool read_file(const std::string &path, uint64_t max_bytes, Bytes *out, std::string *why)
 {
@@ -261,8 +283,122 @@ std::vector<unsigned char> rebuild_glb(const std::string &json, const unsigned c
     return out;
 }
 
+// ---- a GLB's BIN chunk read in place ----
+//
+// tinygltf zeroes a buffer the size of the BIN chunk and copies the chunk into it: tens of
+// megabytes for a big rig. When the first buffer is the BIN chunk and tinygltf itself never
+// reads it (no Draco, no meshopt), it is given a JSON whose first buffer is 1 byte long and
+// the accessors read the chunk where it lies in the file's bytes.
+
+// A minimal JSON walker: it only has to find one number; tinygltf parses and checks the
+// whole document afterwards.
+struct JsonWalk {
+    const char *p, *end;
+    void space()
+    {
+        while (p < end && (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r')) ++p;
+    }
+    bool eat(char ch)
+    {
+        space();
+        if (p >= end || *p != ch) return false;
+        ++p;
+        return true;
+    }
+    bool string(std::string *out) // its raw bytes: escapes are not decoded
+    {
+        space();
+        if (p >= end || *p != '"') return false;
+        const char *begin = ++p;
+        while (p < end && *p != '"') p += *p == '\\' ? 2 : 1;
+        if (p >= end) return false;
+        if (out) out->assign(begin, p);
+        ++p;
+        return true;
+    }
+    bool skip_value()
+    {
+        space();
+        if (p >= end) return false;
+        if (*p == '"') return string(nullptr);
+        if (*p != '{' && *p != '[') {
+            while (p < end && *p != ',' && *p != '}' && *p != ']') ++p;
+            return true;
+        }
+        int depth = 0;
+        do {
+            if (*p == '"') {
+                if (!string(nullptr)) return false;
+                continue;
+            }
+            depth += *p == '{' || *p == '[' ? 1 : *p == '}' || *p == ']' ? -1 : 0;
+            ++p;
+        } while (p < end && depth > 0);
+        return depth == 0;
+    }
+};
+
+// Where the digits of buffers[0].byteLength lie in a GLB's JSON, when that buffer has no uri
+// (so it is the BIN chunk), and their value.
+bool find_bin_byte_length(const std::string &json, size_t *at, size_t *digits, uint64_t *value)
+{
+    JsonWalk w{json.data(), json.data() + json.size()};
+    if (!w.eat('{')) return false;
+    do {
+        std::string key;
+        if (!w.string(&key) || !w.eat(':')) return false;
+        if (key != "buffers") continue;
+        if (!w.eat('[') || !w.eat('{')) return false;
+        bool found = false, uri = false;
+        do {
+            std::string member;
+            if (!w.string(&member) || !w.eat(':')) return false;
+            w.space();
+            uri = uri || member == "uri";
+            if (member != "byteLength") {
+                if (!w.skip_value()) return false;
+                continue;
+            }
+            const char *begin = w.p;
+            while (w.p < w.end && *w.p >= '0' && *w.p <= '9') ++w.p;
+            if (w.p == begin || w.p - begin > 15) return false;
+            *at = (size_t)(begin - json.data()), *digits = (size_t)(w.p - begin);
+            *value = std::strtoull(begin, nullptr, 10);
+            found = true;
+        } while (w.eat(','));
+        return found && !uri && w.eat('}');
+    } while (w.skip_value() && w.eat(','));
+    return false;
+}
+
+std::vector<unsigned char> rebuild_glb(const std::string &json, const unsigned char *bin, uint32_t bin_length);
+
+// The GLB to give tinygltf with the BIN chunk left out, and where the chunk lies; false when
+// the file needs tinygltf to read it.
+bool glb_without_bin(const unsigned char *data, const std::string &json, std::vector<unsigned char> *glb, size_t *bin_at,
+                     size_t *bin_length)
+{
+    size_t at, digits, json_end = 20 + json.size();
+    uint64_t length;
+    if (json.find("KHR_draco_mesh_compression") != std::string::npos || json_end + 8 > le32(data + 8) ||
+        le32(data + json_end + 4) != 0x004E4942u || !find_bin_byte_length(json, &at, &digits, &length) ||
+        length > le32(data + json_end))
+        return false;
+    std::string patched = json;
+    patched.replace(at, digits, "1" + std::string(digits - 1, ' '));
+    static const unsigned char one_word[4] = {0, 0, 0, 0};
+    *glb = rebuild_glb(patched, one_word, sizeof one_word);
+    *bin_at = json_end + 8;
+    *bin_length = (size_t)length;
+    return true;
+}
+
+struct BinInPlace {
+    size_t at, length; // length 0: tinygltf read the BIN chunk itself
+};
+
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
-                         FsState *fs_state, tinygltf::Model *gltf, cb_error *err)
+                         FsState *fs_state, tinygltf::Model *gltf, BinInPlace *in_place, cb_error *err)
 {
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, nullptr);
@@ -289,7 +425,19 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
                 rebuild_glb(json, has_bin ? data + bin_at + 8 : nullptr, has_bin ? le32(data + bin_at) : 0);
             ok = loader.LoadBinaryFromMemory(gltf, &tg_err, &tg_warn, glb.data(), (unsigned)glb.size(), base_dir);
         } else {
-            ok = loader.LoadBinaryFromMemory(gltf, &tg_err, &tg_warn, data, (unsigned)size, base_dir);
+            std::vector<unsigned char> glb;
+            cbpal_xxh64_state hash = *fs_state->source_hash; // as before the first try, if it has to be undone
+            size_t files = fs_state->files.size();
+            ok = in_place && glb_without_bin(data, json, &glb, &in_place->at, &in_place->length) &&
+                 loader.LoadBinaryFromMemory(gltf, &tg_err, &tg_warn, glb.data(), (unsigned)glb.size(), base_dir);
+            if (!ok) { // the plain way; its messages are the ones to report
+                if (in_place) in_place->length = 0;
+                *fs_state->source_hash = hash;
+                fs_state->files.resize(files);
+                *gltf = tinygltf::Model();
+                tg_err.clear();
+                ok = loader.LoadBinaryFromMemory(gltf, &tg_err, &tg_warn, data, (unsigned)size, base_dir);
+            }
         }
     } else {
         std::string json((const char *)data, size);
@@ -472,10 +620,10 @@ bool view_span(const Context &c, int view_index, size_t offset, size_t count, si
         cb_fail(c.err, CB_ERR_INPUT, "%s: bufferView %d uses buffer %d, which does not exist", c.name, view_index, view.buffer);
         return false;
     }
-    const tinygltf::Buffer &buf = g.buffers[(size_t)view.buffer];
-    if (view.byteOffset > buf.data.size() || view.byteLength > buf.data.size() - view.byteOffset) {
+    const Span &buf = c.buffers[(size_t)view.buffer];
+    if (view.byteOffset > buf.size || view.byteLength > buf.size - view.byteOffset) {
         cb_fail(c.err, CB_ERR_INPUT, "%s: bufferView %d spans bytes %zu..%zu, past the end of buffer %d (%zu bytes)", c.name,
-                view_index, view.byteOffset, view.byteOffset + view.byteLength, view.buffer, buf.data.size());
+                view_index, view.byteOffset, view.byteOffset + view.byteLength, view.buffer, buf.size);
         return false;
     }
     // (count - 1) * stride + elem_size bytes from offset must fit in the view.
@@ -487,13 +635,13 @@ bool view_span(const Context &c, int view_index, size_t offset, size_t count, si
             return false;
         }
     }
-    *out = buf.data.data() + view.byteOffset + offset;
+    *out = buf.data + view.byteOffset + offset;
     return true;
 }
 
-// Reads an accessor into doubles, `comps` per element, applying sparse substitution.
-// Reads an accessor straight into an array of the model's arena, `comps` values per element,
-// applying normalization and sparse substitution. Tightly packed floats are one memcpy.
+// Reads an accessor into an array of `comps` values per element, applying normalization and
+// sparse substitution. Tightly packed, aligned floats are used where they lie in the file's
+// buffers (which the model owns); anything else is converted into the model's arena.
 template <typename T>
 bool read_accessor(const Context &c, int index, int want_comps, const char *what, T **out, size_t *count_out)
 {
@@ -527,6 +675,13 @@ bool read_accessor(const Context &c, int index, int want_comps, const char *what
             return false;
         }
         if (!view_span(c, a.bufferView, a.byteOffset, a.count, elem, stride, what, &p)) return false;
+    }
+    bool packed_floats = p && std::is_same<T, float>::value && a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT &&
+                         stride == elem && !a.sparse.isSparse;
+    if (packed_floats && !c.copy[(size_t)index] && reinterpret_cast<uintptr_t>(p) % alignof(T) == 0) {
+        *out = reinterpret_cast<T *>(const_cast<unsigned char *>(p)); // the model owns the buffer; validation may write
+        *count_out = a.count;
+        return true;
     }
     T *dst = static_cast<T *>(cb_model_alloc(c.model, a.count * (size_t)comps, sizeof(T))); /* zeroed */
     if (!dst) {
@@ -827,6 +982,99 @@ bool convert_animations(Context &c)
     return true;
 }
 
+// ---- buffers: owned by the model, read in place ----
+
+// The bytes an accessor reads (its sparse blocks included), for finding overlaps.
+struct ByteRange {
+    int buffer;
+    size_t begin, end, accessor;
+};
+
+void add_span(const tinygltf::Model &g, int view_index, size_t offset, size_t bytes, size_t accessor, std::vector<ByteRange> *out)
+{
+    if (view_index < 0 || (size_t)view_index >= g.bufferViews.size() || bytes == 0) return;
+    const tinygltf::BufferView &v = g.bufferViews[(size_t)view_index];
+    size_t begin = v.byteOffset + offset; // bounds are checked when read; here only overlap matters
+    out->push_back(ByteRange{v.buffer, begin, begin + std::min(bytes, v.byteLength), accessor});
+}
+
+// cb_model_validate normalizes rotation keys where they lie. Read in place, that write must
+// not reach bytes that another channel or accessor reads, so such rotation keys are copied:
+// those used by several channels and those whose bytes overlap another accessor's.
+std::vector<bool> accessors_to_copy(const tinygltf::Model &g)
+{
+    size_t n = g.accessors.size();
+    std::vector<unsigned> rotation_uses(n);
+    for (const auto &anim : g.animations)
+        for (const auto &ch : anim.channels)
+            if (ch.target_path == "rotation" && ch.sampler >= 0 && (size_t)ch.sampler < anim.samplers.size()) {
+                int out = anim.samplers[(size_t)ch.sampler].output;
+                if (out >= 0 && (size_t)out < n) rotation_uses[(size_t)out]++;
+            }
+    std::vector<bool> copy(n);
+    std::vector<ByteRange> spans;
+    for (size_t i = 0; i < n; ++i) {
+        const tinygltf::Accessor &a = g.accessors[i];
+        copy[i] = rotation_uses[i] > 1;
+        size_t elem = (size_t)type_components(a.type) * component_size(a.componentType);
+        size_t stride = elem;
+        if (a.bufferView >= 0 && (size_t)a.bufferView < g.bufferViews.size() && g.bufferViews[(size_t)a.bufferView].byteStride)
+            stride = g.bufferViews[(size_t)a.bufferView].byteStride;
+        if (a.count > 0 && a.count <= SIZE_MAX / (stride + 1))
+            add_span(g, a.bufferView, a.byteOffset, (a.count - 1) * stride + elem, i, &spans);
+        if (a.sparse.isSparse && a.sparse.count > 0) {
+            size_t sparse = (size_t)a.sparse.count;
+            if (a.sparse.indices.byteOffset >= 0)
+                add_span(g, a.sparse.indices.bufferView, (size_t)a.sparse.indices.byteOffset,
+                         sparse * component_size(a.sparse.indices.componentType), i, &spans);
+            if (a.sparse.values.byteOffset >= 0)
+                add_span(g, a.sparse.values.bufferView, (size_t)a.sparse.values.byteOffset, sparse * elem, i, &spans);
+        }
+    }
+    std::sort(spans.begin(), spans.end(),
+              [](const ByteRange &x, const ByteRange &y) { return x.buffer != y.buffer ? x.buffer < y.buffer : x.begin < y.begin; });
+    std::vector<ByteRange> open; // earlier spans of this buffer that reach past the current one's start
+    for (const ByteRange &s : spans) {
+        open.erase(std::remove_if(open.begin(), open.end(),
+                                  [&s](const ByteRange &o) { return o.buffer != s.buffer || o.end <= s.begin; }),
+                   open.end());
+        for (const ByteRange &o : open)
+            if (o.accessor != s.accessor && (rotation_uses[o.accessor] || rotation_uses[s.accessor]))
+                copy[o.accessor] = copy[s.accessor] = true;
+        open.push_back(s);
+    }
+    return copy;
+}
+
+// What the model keeps of the file: tinygltf's buffers, and the file's own bytes when the BIN
+// chunk is read where it lies.
+struct OwnedBytes {
+    std::vector<Bytes> buffers;
+    file_bytes file;
+};
+
+// Hands the buffers' bytes to the model, so accessors can be read in place.
+bool adopt_buffers(Context &c, tinygltf::Model *gltf, file_bytes *file, const BinInPlace &bin)
+{
+    std::unique_ptr<OwnedBytes> owned(new OwnedBytes());
+    owned->buffers.reserve(gltf->buffers.size());
+    for (tinygltf::Buffer &b : gltf->buffers) {
+        owned->buffers.push_back(std::move(b.data));
+        c.buffers.push_back(Span{owned->buffers.back().data(), owned->buffers.back().size()});
+    }
+    if (bin.length && !c.buffers.empty()) {
+        owned->file = std::move(*file);
+        c.buffers[0] = Span{owned->file.data() + bin.at, bin.length};
+    }
+    if (!cb_arena_adopt(c.model->arena, owned.get(), [](void *p) { delete static_cast<OwnedBytes *>(p); })) {
+        cb_fail(c.err, CB_ERR_INTERNAL, "%s: out of memory", c.name);
+        return false;
+    }
+    owned.release(); // the model's now
+    c.copy = accessors_to_copy(*gltf);
+    return true;
+}
+
 bool record_sources(cb_model *m, cbpal_xxh64_state *hash, const std::vector<std::string> &files)
 {
     m->source_hash = cbpal_xxh64_digest(hash);
@@ -838,7 +1086,8 @@ bool record_sources(cb_model *m, cbpal_xxh64_state *hash, const std::vector<std:
     return true;
 }
 
-cb_model *load(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
+// `file`, when given, holds `data` and may be taken by the model (the BIN chunk read in place).
+cb_model *load(const unsigned char *data, size_t size, file_bytes *file, const char *name, const std::string &base_dir,
                const cb_limits *limits, cb_error *err)
 {
     Context c{};
@@ -850,12 +1099,17 @@ cb_model *load(const unsigned char *data, size_t size, const char *name, const s
     cbpal_xxh64_init(&source_hash);
     cbpal_xxh64_update(&source_hash, data, size);
     FsState fs{c.limits.max_file_bytes, &source_hash, {}};
-    if (!parse_with_tinygltf(data, size, name, base_dir, &fs, &gltf, err)) return nullptr;
+    BinInPlace bin{0, 0};
+    if (!parse_with_tinygltf(data, size, name, base_dir, &fs, &gltf, file ? &bin : nullptr, err)) return nullptr;
     c.gltf = &gltf;
     if (!check_required_extensions(c) || !decode_meshopt(c, &gltf)) return nullptr;
     c.model = cb_model_create(name);
     if (!c.model) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory", name);
+        return nullptr;
+    }
+    if (!adopt_buffers(c, &gltf, file, bin)) {
+        cb_model_free(c.model);
         return nullptr;
     }
     if (!convert_nodes(c) || !convert_skins(c) || !check_joints_in_scene(c) || !convert_meshes(c) || !convert_animations(c) ||
@@ -867,19 +1121,26 @@ cb_model *load(const unsigned char *data, size_t size, const char *name, const s
     return c.model;
 }
 
-} // namespace
 
-extern "C" cb_model *cb_gltf_load_memory(const unsigned char *data, size_t size, const char *name, const char *base_dir,
-                                         const cb_limits *limits, cb_error *err)
+cb_model *load_guarded(const unsigned char *data, size_t size, file_bytes *file, const char *name, const char *base_dir,
+                       const cb_limits *limits, cb_error *err)
 {
     try {
-        return load(data, size, name, base_dir ? base_dir : "/nonexistent-crowdbake-dir", limits, err);
+        return load(data, size, file, name, base_dir ? base_dir : "/nonexistent-crowdbake-dir", limits, err);
     } catch (const std::bad_alloc &) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory while loading", name);
     } catch (const std::exception &e) {
         cb_fail(err, CB_ERR_INPUT, "%s: not a valid glTF file: %s", name, e.what());
     }
     return nullptr;
+}
+
+} // namespace
+
+extern "C" cb_model *cb_gltf_load_memory(const unsigned char *data, size_t size, const char *name, const char *base_dir,
+                                         const cb_limits *limits, cb_error *err)
+{
+    return load_guarded(data, size, nullptr, name, base_dir, limits, err);
 }
 
 extern "C" cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_error *err)
@@ -903,5 +1164,5 @@ extern "C" cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_
     std::string dir = path;
     size_t slash = dir.find_last_of('/');
     dir = slash == std::string::npos ? "." : dir.substr(0, slash);
-    return cb_gltf_load_memory(bytes.data(), bytes.size(), path, dir.c_str(), &l, err);
+    return load_guarded(bytes.data(), bytes.size(), &bytes, path, dir.c_str(), &l, err);
 }

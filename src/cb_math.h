@@ -36,13 +36,80 @@ static inline cb_vec3 cb_mat4_transform_dir(const double m[16], cb_vec3 d)
 bool cb_mat4_decompose(const double m[16], cb_vec3 *t, cb_quat *r, cb_vec3 *s, double tolerance);
 double cb_mat4_determinant3(const double m[16]);
 
-cb_quat cb_quat_normalize(cb_quat q);
-cb_quat cb_quat_mul(cb_quat a, cb_quat b);
-cb_quat cb_quat_conjugate(cb_quat q);
+/* a * b: rotation by b, then by a. Inline: the similarity sampler's inner loop. */
+static inline cb_quat cb_quat_mul(cb_quat a, cb_quat b)
+{
+    cb_quat r = {a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y, a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
+                 a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w, a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z};
+    return r;
+}
 static inline double cb_quat_dot(cb_quat a, cb_quat b) { return a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w; }
-/* Spherical interpolation along the shorter arc; plain lerp for angles below 1e-6 rad. */
-cb_quat cb_quat_slerp(cb_quat a, cb_quat b, double t);
-cb_vec3 cb_quat_rotate(cb_quat q, cb_vec3 v);
+
+static inline cb_quat cb_quat_normalize(cb_quat q)
+{
+    double len2 = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w;
+    if (len2 == 0) {
+        cb_quat id = {0, 0, 0, 1};
+        return id;
+    }
+    double inv = 1 / sqrt(len2);
+    cb_quat r = {q.x * inv, q.y * inv, q.z * inv, q.w * inv};
+    return r;
+}
+
+/* sin(x) for 0 <= x < 0.21 by its Taylor series to x^7: the next term is below 2e-12, far
+ * under float32 key precision; libm's sin costs several times more. */
+static inline double cb_small_sin(double x)
+{
+    double x2 = x * x;
+    return x * (1 - x2 * (1.0 / 6) * (1 - x2 * (1.0 / 20) * (1 - x2 * (1.0 / 42))));
+}
+
+/* asin(x) for 0 <= x < 0.1 by its series to x^9 (next term below 3e-13). */
+static inline double cb_small_asin(double x)
+{
+    double x2 = x * x;
+    return x * (1 + x2 * (1.0 / 6 + x2 * (3.0 / 40 + x2 * (15.0 / 336 + x2 * (105.0 / 3456)))));
+}
+
+/* Spherical interpolation along the shorter arc; plain lerp for angles below 1e-6 rad. Inline,
+ * with what it calls: the sampler's inner loop, a chain of sqrt and division latencies that
+ * the compiler interleaves across joints only when it sees them. */
+static inline cb_quat cb_quat_slerp(cb_quat a, cb_quat b, double t)
+{
+    double d = cb_quat_dot(a, b);
+    double sign = copysign(1.0, d); /* the shorter arc; branch-free, as the sign is unpredictable */
+    d *= sign;
+    b.x *= sign, b.y *= sign, b.z *= sign, b.w *= sign;
+    double wa, wb;
+    /* The angle from its sine (|a - b| = 2 sin(angle / 2)) is accurate where acos(d) is not. */
+    double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, dw = a.w - b.w;
+    double half_chord = 0.5 * sqrt(dx * dx + dy * dy + dz * dz + dw * dw);
+    double angle = half_chord < 0.1 ? 2 * cb_small_asin(half_chord) : acos(d > 1.0 ? 1.0 : d);
+    /* The weights sin((1 - t) angle) / sin(angle) and sin(t angle) / sin(angle) without their
+     * common divisor: the result is normalized below anyway. */
+    if (angle < 1e-6) {
+        wa = 1 - t;
+        wb = t;
+    } else if (half_chord < 0.1) { /* angle < 0.2003 */
+        wa = cb_small_sin((1 - t) * angle);
+        wb = cb_small_sin(t * angle);
+    } else {
+        wa = sin((1 - t) * angle);
+        wb = sin(t * angle);
+    }
+    cb_quat r = {wa * a.x + wb * b.x, wa * a.y + wb * b.y, wa * a.z + wb * b.z, wa * a.w + wb * b.w};
+    return cb_quat_normalize(r);
+}
+
+/* v rotated by the unit quaternion q: v + 2w(u x v) + 2 u x (u x v), u = q.xyz. */
+static inline cb_vec3 cb_quat_rotate(cb_quat q, cb_vec3 v)
+{
+    cb_vec3 uv = {q.y * v.z - q.z * v.y, q.z * v.x - q.x * v.z, q.x * v.y - q.y * v.x};
+    cb_vec3 uuv = {q.y * uv.z - q.z * uv.y, q.z * uv.x - q.x * uv.z, q.x * uv.y - q.y * uv.x};
+    cb_vec3 r = {v.x + 2 * (q.w * uv.x + uuv.x), v.y + 2 * (q.w * uv.y + uuv.y), v.z + 2 * (q.w * uv.z + uuv.z)};
+    return r;
+}
 /* Rotation quaternion of an orthonormal, right-handed 3x3 (upper-left of m). */
 cb_quat cb_quat_from_mat4(const double m[16]);
 

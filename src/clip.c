@@ -121,3 +121,17 @@ void cb_clip_frame_matrices(cb_sampler *s, const cb_clip_info *clip, uint32_t fr
         out[(size_t)j * 16 + 14] -= dz;
     }
 }
+
+void cb_clip_frame_similarities(cb_sampler *s, const cb_clip_info *clip, uint32_t frame, cb_root_motion root_motion,
+                                cb_similarity *out)
+{
+    const cb_model *m = cb_sampler_model(s);
+    double t = cb_clip_frame_time(clip, frame);
+    cb_sample_joint_similarities(s, clip->animation, t, out);
+    if (root_motion != CB_ROOT_MOTION_IN_PLACE) return;
+    double dx = clip->root_velocity[0] * (t - clip->t0), dz = clip->root_velocity[2] * (t - clip->t0);
+    for (uint32_t j = 0; j < m->skins[cb_sampler_skin(s)].joint_count; ++j) {
+        out[j].translation[0] -= dx;
+        out[j].translation[2] -= dz;
+    }
+}

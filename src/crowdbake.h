@@ -64,6 +64,12 @@ void cb_arena_free(cb_arena *arena);
 /* Zeroed memory that lives until cb_arena_free; NULL when out of memory. */
 void *cb_arena_alloc(cb_arena *arena, size_t count, size_t size);
 const char *cb_arena_strdup(cb_arena *arena, const char *s);
+/* Makes the arena the owner of memory allocated elsewhere: release(ptr) runs when the arena
+ * is freed. Returns false when out of memory (then the caller still owns ptr). */
+bool cb_arena_adopt(cb_arena *arena, void *ptr, void (*release)(void *));
+
+/* Memory for buffers of megabytes, on huge pages where the OS has them; release with free(). */
+void *cb_alloc_large(size_t bytes);
 
 /* ---- the model ------------------------------------------------------------------------ */
 
@@ -168,6 +174,23 @@ void cb_sample_joint_matrices(cb_sampler *sampler, int32_t animation, double t, 
 /* Global (scene-space) matrices of every node at time t; out holds 16 * node_count. */
 const double *cb_sample_globals(cb_sampler *sampler, int32_t animation, double t);
 
+/* A joint matrix that is a similarity: x -> translation + scale * rotate(rotation, x). */
+typedef struct cb_similarity {
+    double rotation[4]; /* x, y, z, w; unit */
+    double translation[3];
+    double scale;       /* uniform, positive */
+} cb_similarity;
+
+/* Whether every transform from the skin's joints up to the scene root, every inverse bind
+ * matrix and every scale key is a similarity (rotation, uniform positive scale, translation;
+ * within 1e-6 relative). Then cb_sample_joint_similarities gives the joint matrices without
+ * building, multiplying and decomposing 4x4 matrices: what the qpos layout stores, and the
+ * qpos bake's sampling takes half the time. */
+bool cb_sampler_is_similarity(const cb_sampler *sampler);
+/* The joint matrices of cb_sample_joint_matrices as similarities (equal within the 1e-6
+ * tolerance). Only for samplers where cb_sampler_is_similarity is true. */
+void cb_sample_joint_similarities(cb_sampler *sampler, int32_t animation, double t, cb_similarity *out);
+
 /* Evaluates one channel at time t into out (3 or 4 components). Exposed for tests. */
 void cb_channel_eval(const cb_channel *channel, double t, double out[4]);
 
@@ -201,6 +224,9 @@ cb_status cb_clip_analyze(cb_sampler *sampler, int32_t animation, double fps, in
  * subtracts the root's average horizontal travel, velocity.xz * (t - t0), from every joint. */
 void cb_clip_frame_matrices(cb_sampler *sampler, const cb_clip_info *clip, uint32_t frame,
                             cb_root_motion root_motion, double *out);
+/* The same as similarities, for samplers where cb_sampler_is_similarity is true. */
+void cb_clip_frame_similarities(cb_sampler *sampler, const cb_clip_info *clip, uint32_t frame,
+                                cb_root_motion root_motion, cb_similarity *out);
 
 /* The skin's root joint (the top-most joint), as an index into its joints. */
 uint32_t cb_skin_root_joint(const cb_model *model, int32_t skin);

@@ -39,8 +39,15 @@ typedef struct cb_arena_block {
     max_align_t data[];
 } cb_arena_block;
 
+typedef struct cb_arena_adopted {
+    struct cb_arena_adopted *next;
+    void *ptr;
+    void (*release)(void *);
+} cb_arena_adopted;
+
 struct cb_arena {
     cb_arena_block *head;
+    cb_arena_adopted *adopted;
 };
 
 static void *arena_alloc(cb_arena *arena, size_t bytes)
@@ -63,9 +70,19 @@ static void *arena_alloc(cb_arena *arena, size_t bytes)
 
 cb_arena *cb_arena_create(void) { return calloc(1, sizeof(cb_arena)); }
 
+bool cb_arena_adopt(cb_arena *arena, void *ptr, void (*release)(void *))
+{
+    cb_arena_adopted *a = cb_arena_alloc(arena, 1, sizeof *a);
+    if (!a) return false;
+    *a = (cb_arena_adopted){arena->adopted, ptr, release};
+    arena->adopted = a;
+    return true;
+}
+
 void cb_arena_free(cb_arena *arena)
 {
     if (!arena) return;
+    for (cb_arena_adopted *a = arena->adopted; a; a = a->next) a->release(a->ptr);
     cb_arena_block *b = arena->head;
     while (b) {
         cb_arena_block *next = b->next;
@@ -277,16 +294,18 @@ static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, cb_
                            m->source, anim->name, c, path_name(ch->path), m->nodes[ch->node].name,
                            (unsigned long long)(i / per_key));
     if (ch->path == CB_PATH_ROTATION) {
-        /* Real exporters write keys of length 0.9998; glTF wants unit quaternions. Tangents
-         * of cubic splines are not rotations and stay as they are. */
+        /* Real exporters write keys of length 0.9998; glTF wants unit quaternions. Keys that
+         * are unit to float precision are left as they are (most are, and the keys may lie in
+         * the file's buffer). Tangents of cubic splines are not rotations and stay too. */
         int value_slot = ch->interp == CB_INTERP_CUBICSPLINE ? 1 : 0;
         for (uint32_t k = 0; k < ch->key_count; ++k) {
             float *q = ch->values + (size_t)k * per_key + value_slot * 4;
-            double len = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
-            if (len < 1e-12)
+            double len2 = (double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3];
+            if (fabs(len2 - 1) <= 0x1p-22) continue; /* float rounding of a unit quaternion */
+            if (len2 < 1e-24)
                 return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u (rotation of %s) key %u is a zero quaternion",
                                m->source, anim->name, c, m->nodes[ch->node].name, k);
-            double inv = 1 / len;
+            double inv = 1 / sqrt(len2);
             for (int i = 0; i < 4; ++i) q[i] = (float)(q[i] * inv);
         }
     }

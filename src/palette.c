@@ -175,8 +175,9 @@ static void merge_ranges(cb_palette *p, const value_range *clips)
 /* Per-thread scratch: each worker samples its own clips with its own sampler. */
 typedef struct worker {
     cb_sampler *sampler;
-    double *mats;   /* bones * 16 */
-    cb_quat *prev;  /* bones: the previous row's quaternion (qpos) */
+    double *mats;        /* bones * 16 */
+    cb_similarity *sims; /* bones: the joint transforms, for qpos rows of similarity rigs */
+    cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
 } worker;
 
 typedef struct bake_state {
@@ -196,13 +197,9 @@ typedef struct bake_state {
 
 /* Grows a clip's bounds by the sphere a joint's vertices can reach: a vertex weighted to joint
  * j lies within |A_j| * r_j of c = M_j b_j, so the union over joints bounds the skinned mesh. */
-static void grow_bounds(cb_palette_clip *clip, const double *M, cb_vec3 c, double r)
+static void grow_bounds(cb_palette_clip *clip, cb_vec3 c, double reach)
 {
-    if (r < 0) return;
-    double norm = 0; /* Frobenius norm of the 3x3: at least its largest stretch */
-    for (int k = 0; k < 12; ++k)
-        if (k % 4 != 3) norm += M[k] * M[k];
-    double reach = r * sqrt(norm), cc[3] = {c.x, c.y, c.z};
+    double cc[3] = {c.x, c.y, c.z};
     for (int k = 0; k < 3; ++k) { /* compares, not fminf: no NaN reaches here and they inline */
         float lo = (float)(cc[k] - reach), hi = (float)(cc[k] + reach);
         if (lo < clip->bounds_min[k]) clip->bounds_min[k] = lo;
@@ -210,35 +207,80 @@ static void grow_bounds(cb_palette_clip *clip, const double *M, cb_vec3 c, doubl
     }
 }
 
+/* |A| for the reach: the Frobenius norm of the 3x3, at least its largest stretch. */
+static double frobenius3(const double *M)
+{
+    double norm = 0;
+    for (int k = 0; k < 12; ++k)
+        if (k % 4 != 3) norm += M[k] * M[k];
+    return sqrt(norm);
+}
+
+/* One row from joint matrices: any layout; qpos checks each matrix is a similarity. */
+static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row, cb_error *err)
+{
+    cb_palette *p = st->p;
+    cb_palette_clip *clip = &p->clips[c];
+    cb_clip_frame_matrices(w->sampler, &st->infos[c], f, st->opt->root_motion, w->mats);
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        const double *M = w->mats + (size_t)j * 16;
+        const float *b = p->bind_positions + (size_t)j * 3;
+        float *out = row + (size_t)j * CANON(p->layout);
+        cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* the joint now: M b */
+        if (st->radius[j] >= 0) grow_bounds(clip, pos, st->radius[j] * frobenius3(M));
+        if (p->layout != CB_LAYOUT_QPOS) {
+            for (int r = 0; r < 3; ++r)
+                for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
+            range_grow(&st->ranges[c], p->layout, out);
+            continue;
+        }
+        if (qpos_canon(M, out, st->model, &st->model->skins[st->skin], j, clip->name, f, f ? &w->prev[j] : NULL, err))
+            return err->status;
+        w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
+        out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
+        range_grow(&st->ranges[c], p->layout, out);
+    }
+    return CB_OK;
+}
+
+/* One qpos row from joint similarities: what qpos stores, with no matrix to build, check or
+ * decompose. */
+static void similarity_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row)
+{
+    cb_palette *p = st->p;
+    cb_palette_clip *clip = &p->clips[c];
+    cb_clip_frame_similarities(w->sampler, &st->infos[c], f, st->opt->root_motion, w->sims);
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        const cb_similarity *J = &w->sims[j];
+        const float *b = p->bind_positions + (size_t)j * 3;
+        float *out = row + (size_t)j * 8;
+        cb_quat q = {J->rotation[0], J->rotation[1], J->rotation[2], J->rotation[3]};
+        cb_vec3 rb = cb_quat_rotate(q, (cb_vec3){b[0], b[1], b[2]});
+        cb_vec3 pos = {J->translation[0] + J->scale * rb.x, J->translation[1] + J->scale * rb.y,
+                       J->translation[2] + J->scale * rb.z};
+        if (st->radius[j] >= 0) grow_bounds(clip, pos, st->radius[j] * J->scale * sqrt(3.0)); /* |s R| = sqrt(3) s */
+        if (f ? cb_quat_dot(q, w->prev[j]) < 0 : q.w < 0) q = (cb_quat){-q.x, -q.y, -q.z, -q.w};
+        out[0] = (float)q.x, out[1] = (float)q.y, out[2] = (float)q.z, out[3] = (float)q.w;
+        out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z, out[7] = (float)J->scale;
+        w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
+        range_grow(&st->ranges[c], p->layout, out);
+    }
+}
+
 static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *err)
 {
     cb_palette *p = st->p;
-    const cb_skin *skin = &st->model->skins[st->skin];
     const cb_clip_info *info = &st->infos[c];
     cb_palette_clip *clip = &p->clips[c];
     for (int k = 0; k < 3; ++k) clip->bounds_min[k] = INFINITY, clip->bounds_max[k] = -INFINITY;
-    value_range *range = &st->ranges[c];
-    range_reset(range);
+    range_reset(&st->ranges[c]);
+    bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
     for (uint32_t f = 0; f < info->frames; ++f) {
-        cb_clip_frame_matrices(w->sampler, info, f, st->opt->root_motion, w->mats);
         float *row = st->canon + (size_t)(clip->first_row + f) * p->bone_count * CANON(p->layout);
-        for (uint32_t j = 0; j < p->bone_count; ++j) {
-            const double *M = w->mats + (size_t)j * 16;
-            const float *b = p->bind_positions + (size_t)j * 3;
-            float *out = row + (size_t)j * CANON(p->layout);
-            cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* the joint now: M b */
-            grow_bounds(clip, M, pos, st->radius[j]);
-            if (p->layout != CB_LAYOUT_QPOS) {
-                for (int r = 0; r < 3; ++r)
-                    for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
-                range_grow(range, p->layout, out);
-                continue;
-            }
-            if (qpos_canon(M, out, st->model, skin, j, clip->name, f, f ? &w->prev[j] : NULL, err)) return err->status;
-            w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
-            out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
-            range_grow(range, p->layout, out);
-        }
+        if (similar)
+            similarity_row(st, w, c, f, row);
+        else if (matrix_row(st, w, c, f, row, err))
+            return err->status;
     }
     if (!(clip->bounds_min[0] <= clip->bounds_max[0])) /* no skinned vertex */
         for (int k = 0; k < 3; ++k) clip->bounds_min[k] = clip->bounds_max[k] = 0;
@@ -270,14 +312,16 @@ static int job_main(void *arg)
     cb_error *err0 = &st->errors[jb->first < st->p->clip_count ? jb->first : 0];
     w.sampler = cb_sampler_create(st->model, st->skin, err0);
     w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
+    w.sims = malloc((size_t)st->p->bone_count * sizeof(cb_similarity));
     w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
-    if (!w.sampler || !w.mats || !w.prev) {
+    if (!w.sampler || !w.mats || !w.sims || !w.prev) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
         for (uint32_t c = jb->first; c < st->p->clip_count; c += jb->stride) jb->run(st, &w, c);
     }
     cb_sampler_free(w.sampler);
     free(w.mats);
+    free(w.sims);
     free(w.prev);
     return 0;
 }
@@ -670,9 +714,9 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
                 m->source, p->texel_bytes, p->width, p->height, (unsigned long long)opt->limits.max_palette_bytes);
         goto fail;
     }
-    p->texels = calloc(p->texel_bytes ? p->texel_bytes : 1, 1);
+    p->texels = cb_alloc_large(p->texel_bytes);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
-    st.canon = malloc((size_t)p->rows * p->bone_count * CANON(p->layout) * sizeof(float));
+    st.canon = cb_alloc_large((size_t)p->rows * p->bone_count * CANON(p->layout) * sizeof(float));
     radius = malloc((size_t)p->bone_count * sizeof(double));
     st.breaks = calloc(p->clip_count, sizeof *st.breaks);
     st.errors = calloc(p->clip_count, sizeof *st.errors);
@@ -683,6 +727,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
     }
+    memset(p->texels, 0, p->texel_bytes); /* the blocks' padding rows stay zero */
     bind_positions(p, skin);
     bool skinned = joint_reach(p, m, skin_index, radius);
     st.radius = radius;

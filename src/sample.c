@@ -20,6 +20,15 @@ struct cb_sampler {
     bool affine_ibm;     /* every inverse bind matrix ends in 0 0 0 1: cheaper products */
     uint32_t *cursor;    /* per channel of every clip: the key interval of the last sample */
     uint32_t *cursor_base; /* per clip: its channels' first cursor */
+    /* The similarity path (cb_sampler_is_similarity) visits only the joints and their ancestors. */
+    bool similar;
+    bool *relevant;              /* per node: a joint or an ancestor of one */
+    uint32_t relevant_count;
+    uint32_t *relevant_order;    /* the relevant nodes, parents first */
+    cb_similarity *sim_rest;     /* per node: its rest transform */
+    cb_similarity *sim_local;    /* per node: at the time sampled */
+    cb_similarity *sim_global;   /* per node */
+    cb_similarity *sim_ibm;      /* per joint: its inverse bind matrix */
 };
 
 /* Index of the last key with times[k] <= t (0 when t is before the first key). `hint` holds the
@@ -87,14 +96,12 @@ static void channel_eval(const cb_channel *ch, double t, double out[4], uint32_t
         }
         return;
     }
-    double a[4], b[4];
-    load_key(ch, k, 0, comps, a);
-    load_key(ch, k + 1, 0, comps, b);
+    const float *a = ch->values + (size_t)k * comps, *b = a + comps;
     if (comps == 4) {
         cb_quat q = cb_quat_slerp((cb_quat){a[0], a[1], a[2], a[3]}, (cb_quat){b[0], b[1], b[2], b[3]}, s);
         out[0] = q.x, out[1] = q.y, out[2] = q.z, out[3] = q.w;
     } else {
-        for (int i = 0; i < 3; ++i) out[i] = a[i] + (b[i] - a[i]) * s;
+        for (int i = 0; i < 3; ++i) out[i] = a[i] + ((double)b[i] - a[i]) * s;
     }
 }
 
@@ -104,14 +111,153 @@ void cb_channel_eval(const cb_channel *ch, double t, double out[4])
     channel_eval(ch, t, out, &hint);
 }
 
-/* ---- the sampler ---- */
-
 static uint32_t node_depth(const cb_model *m, uint32_t n)
 {
     uint32_t d = 0;
     for (int32_t p = m->nodes[n].parent; p >= 0; p = m->nodes[p].parent) ++d;
     return d;
 }
+
+/* ---- similarities: rigs of rotations, uniform scales and translations ---- */
+
+/* Relative: float32 inverse bind matrices of real rigs deviate by ~1e-7 from similarities. */
+#define CB_SIMILARITY_TOLERANCE 1e-6
+
+/* The uniform scale of (x, y, z), when they agree within the tolerance and are positive. */
+static bool uniform_scale(double x, double y, double z, double *out)
+{
+    double s = (x + y + z) / 3, tol = CB_SIMILARITY_TOLERANCE * s;
+    *out = s;
+    return s > 0 && fabs(x - s) <= tol && fabs(y - s) <= tol && fabs(z - s) <= tol;
+}
+
+/* The similarity an affine matrix is, when it is one: equal, orthogonal columns, no mirror. */
+static bool similarity_from_matrix(const double m[16], cb_similarity *out)
+{
+    if (m[3] != 0 || m[7] != 0 || m[11] != 0 || m[15] != 1) return false;
+    cb_vec3 c[3] = {{m[0], m[1], m[2]}, {m[4], m[5], m[6]}, {m[8], m[9], m[10]}};
+    double s;
+    if (!uniform_scale(cb_vec3_length(c[0]), cb_vec3_length(c[1]), cb_vec3_length(c[2]), &s) ||
+        cb_mat4_determinant3(m) <= 0)
+        return false;
+    double tol = CB_SIMILARITY_TOLERANCE * s * s;
+    if (fabs(cb_vec3_dot(c[0], c[1])) > tol || fabs(cb_vec3_dot(c[0], c[2])) > tol || fabs(cb_vec3_dot(c[1], c[2])) > tol)
+        return false;
+    double r[16];
+    for (int i = 0; i < 16; ++i) r[i] = m[i] / s;
+    cb_quat q = cb_quat_from_mat4(r);
+    *out = (cb_similarity){{q.x, q.y, q.z, q.w}, {m[12], m[13], m[14]}, s};
+    return true;
+}
+
+static bool node_similarity(const cb_node *n, cb_similarity *out)
+{
+    if (n->has_matrix) return similarity_from_matrix(n->matrix, out);
+    memcpy(out->rotation, n->rotation, sizeof out->rotation);
+    memcpy(out->translation, n->translation, sizeof out->translation);
+    return uniform_scale(n->scale[0], n->scale[1], n->scale[2], &out->scale);
+}
+
+/* Scale keys a similarity can follow: uniform and positive, and not a spline, which can
+ * overshoot through zero between positive keys. */
+static bool scale_channel_similar(const cb_channel *ch)
+{
+    if (ch->interp == CB_INTERP_CUBICSPLINE) return false;
+    double s;
+    for (uint32_t k = 0; k < ch->key_count; ++k)
+        if (!uniform_scale(ch->values[k * 3], ch->values[k * 3 + 1], ch->values[k * 3 + 2], &s)) return false;
+    return true;
+}
+
+static bool rig_is_similar(const cb_sampler *s)
+{
+    const cb_model *m = s->model;
+    const cb_skin *sk = &m->skins[s->skin];
+    for (uint32_t k = 0; k < s->relevant_count; ++k) {
+        uint32_t i = s->relevant_order[k];
+        if (!node_similarity(&m->nodes[i], &s->sim_rest[i])) return false;
+    }
+    for (uint32_t j = 0; j < sk->joint_count; ++j)
+        if (!similarity_from_matrix(sk->inverse_bind + (size_t)j * 16, &s->sim_ibm[j])) return false;
+    for (uint32_t a = 0; a < m->animation_count; ++a)
+        for (uint32_t c = 0; c < m->animations[a].channel_count; ++c) {
+            const cb_channel *ch = &m->animations[a].channels[c];
+            if (s->relevant[ch->node] && ch->path == CB_PATH_SCALE && !scale_channel_similar(ch)) return false;
+        }
+    return true;
+}
+
+/* Returns false only when out of memory. */
+static bool prepare_similarity(cb_sampler *s)
+{
+    const cb_model *m = s->model;
+    const cb_skin *sk = &m->skins[s->skin];
+    size_t n = m->node_count ? m->node_count : 1;
+    s->relevant = calloc(n, sizeof *s->relevant);
+    s->relevant_order = calloc(n, sizeof *s->relevant_order);
+    s->sim_rest = calloc(n, sizeof *s->sim_rest);
+    s->sim_local = calloc(n, sizeof *s->sim_local);
+    s->sim_global = calloc(n, sizeof *s->sim_global);
+    s->sim_ibm = calloc(sk->joint_count ? sk->joint_count : 1, sizeof *s->sim_ibm);
+    if (!s->relevant || !s->relevant_order || !s->sim_rest || !s->sim_local || !s->sim_global || !s->sim_ibm)
+        return false;
+    for (uint32_t j = 0; j < sk->joint_count; ++j)
+        for (int32_t p = sk->joints[j]; p >= 0 && !s->relevant[p]; p = m->nodes[p].parent) s->relevant[p] = true;
+    for (uint32_t k = 0; k < m->node_count; ++k)
+        if (s->relevant[s->order[k]]) s->relevant_order[s->relevant_count++] = s->order[k];
+    s->similar = rig_is_similar(s);
+    return true;
+}
+
+/* out = a after b: x -> a(b(x)). */
+static inline void similarity_compose(cb_similarity *out, const cb_similarity *a, const cb_similarity *b)
+{
+    cb_quat qa = {a->rotation[0], a->rotation[1], a->rotation[2], a->rotation[3]};
+    cb_quat qb = {b->rotation[0], b->rotation[1], b->rotation[2], b->rotation[3]};
+    cb_quat q = cb_quat_mul(qa, qb);
+    cb_vec3 t = cb_quat_rotate(qa, (cb_vec3){b->translation[0], b->translation[1], b->translation[2]});
+    *out = (cb_similarity){{q.x, q.y, q.z, q.w},
+                           {a->translation[0] + a->scale * t.x, a->translation[1] + a->scale * t.y,
+                            a->translation[2] + a->scale * t.z},
+                           a->scale * b->scale};
+}
+
+bool cb_sampler_is_similarity(const cb_sampler *s) { return s->similar; }
+
+void cb_sample_joint_similarities(cb_sampler *s, int32_t animation, double t, cb_similarity *out)
+{
+    const cb_model *m = s->model;
+    memcpy(s->sim_local, s->sim_rest, m->node_count * sizeof *s->sim_local);
+    if (animation >= 0 && animation < (int32_t)m->animation_count) {
+        const cb_animation *anim = &m->animations[animation];
+        for (uint32_t c = 0; c < anim->channel_count; ++c) {
+            const cb_channel *ch = &anim->channels[c];
+            if (!s->relevant[ch->node]) continue;
+            double v[4];
+            channel_eval(ch, t, v, &s->cursor[s->cursor_base[animation] + c]);
+            cb_similarity *local = &s->sim_local[ch->node];
+            if (ch->path == CB_PATH_TRANSLATION)
+                memcpy(local->translation, v, sizeof local->translation);
+            else if (ch->path == CB_PATH_ROTATION)
+                memcpy(local->rotation, v, sizeof local->rotation);
+            else
+                local->scale = (v[0] + v[1] + v[2]) / 3;
+        }
+    }
+    for (uint32_t k = 0; k < s->relevant_count; ++k) {
+        uint32_t i = s->relevant_order[k];
+        int32_t p = m->nodes[i].parent;
+        if (p < 0)
+            s->sim_global[i] = s->sim_local[i];
+        else
+            similarity_compose(&s->sim_global[i], &s->sim_global[p], &s->sim_local[i]);
+    }
+    const cb_skin *skin = &m->skins[s->skin];
+    for (uint32_t j = 0; j < skin->joint_count; ++j)
+        similarity_compose(&out[j], &s->sim_global[skin->joints[j]], &s->sim_ibm[j]);
+}
+
+/* ---- the sampler ---- */
 
 cb_sampler *cb_sampler_create(const cb_model *model, int32_t skin, cb_error *err)
 {
@@ -166,12 +312,23 @@ cb_sampler *cb_sampler_create(const cb_model *model, int32_t skin, cb_error *err
         for (uint32_t i = 0; i < n; ++i)
             if (depth[i] == d) s->order[filled++] = i;
     free(depth);
+    if (!prepare_similarity(s)) {
+        cb_sampler_free(s);
+        cb_fail(err, CB_ERR_INTERNAL, "out of memory creating a sampler for %s", model->source);
+        return NULL;
+    }
     return s;
 }
 
 void cb_sampler_free(cb_sampler *s)
 {
     if (!s) return;
+    free(s->relevant);
+    free(s->relevant_order);
+    free(s->sim_rest);
+    free(s->sim_local);
+    free(s->sim_global);
+    free(s->sim_ibm);
     free(s->order);
     free(s->local_trs);
     free(s->animated);

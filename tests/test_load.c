@@ -182,6 +182,133 @@ static void test_source_hash_covers_external_buffers(void **state)
     cb_model_free(after);
 }
 
+/* The same file loaded from memory: cb_gltf_load_memory copies what it reads, where
+ * cb_gltf_load reads a GLB's BIN chunk in place, in the file's own bytes. */
+static cb_model *load_copied(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *bytes = malloc((size_t)size);
+    assert_int_equal(fread(bytes, 1, (size_t)size, f), (size_t)size);
+    fclose(f);
+    char dir[1024];
+    snprintf(dir, sizeof dir, "%s", path);
+    *strrchr(dir, '/') = 0;
+    cb_error err = {0};
+    cb_model *m = cb_gltf_load_memory(bytes, (size_t)size, path, dir, NULL, &err);
+    free(bytes);
+    if (!m) fail_msg("%s", err.message);
+    return m;
+}
+
+#define SAME_ARRAY(a, b, n, what) \
+    if (((a) == NULL) != ((b) == NULL) || ((a) && memcmp((a), (b), (n) * sizeof *(a)))) fail_msg("%s: %s differ", path, what)
+
+static void expect_same_models(const char *path, const cb_model *a, const cb_model *b)
+{
+    assert_int_equal(a->node_count, b->node_count);
+    for (uint32_t i = 0; i < a->node_count; ++i) {
+        SAME_ARRAY(a->nodes[i].translation, b->nodes[i].translation, 3, "node translations");
+        SAME_ARRAY(a->nodes[i].rotation, b->nodes[i].rotation, 4, "node rotations");
+    }
+    assert_int_equal(a->skin_count, b->skin_count);
+    for (uint32_t i = 0; i < a->skin_count; ++i)
+        SAME_ARRAY(a->skins[i].inverse_bind, b->skins[i].inverse_bind, a->skins[i].joint_count * 16u, "inverse binds");
+    assert_int_equal(a->primitive_count, b->primitive_count);
+    for (uint32_t i = 0; i < a->primitive_count; ++i) {
+        const cb_primitive *p = &a->primitives[i], *q = &b->primitives[i];
+        assert_int_equal(p->vertex_count, q->vertex_count);
+        SAME_ARRAY(p->positions, q->positions, p->vertex_count * 3u, "positions");
+        SAME_ARRAY(p->normals, q->normals, p->vertex_count * 3u, "normals");
+        SAME_ARRAY(p->joints, q->joints, p->vertex_count * 4u, "joints");
+        SAME_ARRAY(p->weights, q->weights, p->vertex_count * 4u, "weights");
+    }
+    assert_int_equal(a->animation_count, b->animation_count);
+    for (uint32_t i = 0; i < a->animation_count; ++i) {
+        assert_int_equal(a->animations[i].channel_count, b->animations[i].channel_count);
+        for (uint32_t c = 0; c < a->animations[i].channel_count; ++c) {
+            const cb_channel *x = &a->animations[i].channels[c], *y = &b->animations[i].channels[c];
+            assert_int_equal(x->key_count, y->key_count);
+            size_t values = (size_t)x->key_count * (x->path == CB_PATH_ROTATION ? 4 : 3) *
+                            (x->interp == CB_INTERP_CUBICSPLINE ? 3 : 1);
+            SAME_ARRAY(x->times, y->times, x->key_count, "key times");
+            SAME_ARRAY(x->values, y->values, values, "key values");
+        }
+    }
+}
+
+static void test_in_place_and_copied_loads_agree(void **state)
+{
+    (void)state;
+    char path[1024];
+    for (size_t i = 0; i < sizeof loadable / sizeof loadable[0]; ++i) {
+        shared_path(path, sizeof path, loadable[i]);
+        cb_model *a = load_or_fail(path), *b = load_copied(path);
+        expect_same_models(path, a, b);
+        cb_model_free(a);
+        cb_model_free(b);
+    }
+    static const char *const samples[] = {"quadruped", "fish", "bird"};
+    for (size_t i = 0; i < 3; ++i) {
+        snprintf(path, sizeof path, "%s/%s.glb", samples_dir(), samples[i]);
+        cb_model *a = load_or_fail(path), *b = load_copied(path);
+        expect_same_models(path, a, b);
+        cb_model_free(a);
+        cb_model_free(b);
+    }
+}
+
+static void put_le32(unsigned char *d, uint32_t v)
+{
+    for (int i = 0; i < 4; ++i) d[i] = (unsigned char)(v >> (8 * i));
+}
+
+/* Rotation keys are normalized where they lie. Here the bytes of a rotation accessor (keys of
+ * length 2) are also a translation accessor's: normalizing them in place would move the
+ * translation, so the loader must have copied them. */
+static void test_normalizing_rotation_keys_never_touches_shared_bytes(void **state)
+{
+    (void)state;
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
+        "\"nodes\":[{\"name\":\"a\",\"children\":[1]},{\"name\":\"b\"}],"
+        "\"buffers\":[{\"byteLength\":40}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,\"byteLength\":8},"
+        "{\"buffer\":0,\"byteOffset\":8,\"byteLength\":32}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":2,\"type\":\"SCALAR\",\"min\":[0],\"max\":[1]},"
+        "{\"bufferView\":1,\"componentType\":5126,\"count\":2,\"type\":\"VEC4\"},"
+        "{\"bufferView\":1,\"componentType\":5126,\"count\":2,\"type\":\"VEC3\"}],"
+        "\"animations\":[{\"name\":\"clip\",\"samplers\":[{\"input\":0,\"output\":1},{\"input\":0,\"output\":2}],"
+        "\"channels\":[{\"sampler\":0,\"target\":{\"node\":0,\"path\":\"rotation\"}},"
+        "{\"sampler\":1,\"target\":{\"node\":1,\"path\":\"translation\"}}]}]}";
+    const float bin[10] = {0, 1, 0, 0, 0, 2, 0, 0, 0, 2};
+    size_t json_len = (strlen(json) + 3) / 4 * 4, total = 12 + 8 + json_len + 8 + sizeof bin;
+    unsigned char *glb = calloc(1, total);
+    memcpy(glb, "glTF", 4);
+    put_le32(glb + 4, 2), put_le32(glb + 8, (uint32_t)total);
+    put_le32(glb + 12, (uint32_t)json_len), put_le32(glb + 16, 0x4E4F534Au);
+    memset(glb + 20, ' ', json_len);
+    memcpy(glb + 20, json, strlen(json));
+    put_le32(glb + 20 + json_len, sizeof bin), put_le32(glb + 24 + json_len, 0x004E4942u);
+    memcpy(glb + 28 + json_len, bin, sizeof bin); /* little-endian host, as everywhere we build */
+    assert_int_equal(system("mkdir -p build/tmp-load"), 0);
+    FILE *f = fopen("build/tmp-load/shared-bytes.glb", "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(glb, 1, total, f), total);
+    fclose(f);
+    free(glb);
+    cb_model *m = load_or_fail("build/tmp-load/shared-bytes.glb");
+    const cb_channel *rot = &m->animations[0].channels[0], *move = &m->animations[0].channels[1];
+    assert_int_equal(rot->path, CB_PATH_ROTATION);
+    assert_float_equal(rot->values[3], 1.0, 0); /* (0, 0, 0, 2) normalized */
+    assert_float_equal(rot->values[7], 1.0, 0);
+    assert_float_equal(move->values[3], 2.0, 0); /* the second translation key, (2, 0, 0), as stored */
+    cb_model_free(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -189,6 +316,8 @@ int main(void)
         cmocka_unit_test(test_invalid_magnum_files_fail_clearly),
         cmocka_unit_test(test_fox_variants_skin_like_the_original),
         cmocka_unit_test(test_source_hash_covers_external_buffers),
+        cmocka_unit_test(test_in_place_and_copied_loads_agree),
+        cmocka_unit_test(test_normalizing_rotation_keys_never_touches_shared_bytes),
     };
     return cmocka_run_group_tests_name("load", tests, NULL, NULL);
 }

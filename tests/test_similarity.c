@@ -1,0 +1,210 @@
+/* test_similarity.c - the similarity sampler (qpos bakes of rigs made of rotations, uniform
+ * scales and translations) against the 4x4 matrix sampler it replaces: which rigs it takes,
+ * and that it gives the same joint matrices on real assets and on rigs built here. */
+#include "testutil.h"
+
+#include <math.h>
+
+#include "../src/cb_math.h"
+
+static void similarity_matrix(const cb_similarity *s, double out[16])
+{
+    cb_quat q = {s->rotation[0], s->rotation[1], s->rotation[2], s->rotation[3]};
+    cb_mat4_from_trs(out, (cb_vec3){s->translation[0], s->translation[1], s->translation[2]}, q,
+                     (cb_vec3){s->scale, s->scale, s->scale});
+}
+
+/* The largest difference between the two samplers over every row of every clip at 30 fps,
+ * relative to the size of the numbers compared: the joint's scale for its 3x3, the skeleton's
+ * reach for the translations. */
+static double worst_difference(cb_model *m)
+{
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    assert_non_null(s);
+    uint32_t joints = m->skins[0].joint_count;
+    double *mats = malloc(joints * 16 * sizeof(double)), worst = 0;
+    cb_similarity *sims = malloc(joints * sizeof *sims);
+    for (uint32_t a = 0; a < m->animation_count; ++a) {
+        cb_clip_info info;
+        assert_int_equal(cb_clip_analyze(s, (int32_t)a, 30, -1, NULL, &info, &err), CB_OK);
+        for (uint32_t f = 0; f < info.frames; ++f) {
+            cb_clip_frame_matrices(s, &info, f, CB_ROOT_MOTION_IN_PLACE, mats);
+            cb_clip_frame_similarities(s, &info, f, CB_ROOT_MOTION_IN_PLACE, sims);
+            double reach = 1;
+            for (uint32_t j = 0; j < joints; ++j)
+                for (int k = 12; k < 15; ++k) reach = fmax(reach, fabs(mats[j * 16 + k]));
+            for (uint32_t j = 0; j < joints; ++j) {
+                double m2[16];
+                similarity_matrix(&sims[j], m2);
+                const double *mj = mats + j * 16;
+                double scale = fmax(1, sqrt(mj[0] * mj[0] + mj[1] * mj[1] + mj[2] * mj[2]));
+                for (int k = 0; k < 16; ++k) {
+                    double d = fabs(m2[k] - mj[k]) / (k >= 12 && k < 15 ? reach : scale);
+                    if (d > worst) worst = d;
+                }
+            }
+        }
+    }
+    free(mats);
+    free(sims);
+    cb_sampler_free(s);
+    return worst;
+}
+
+static bool is_similarity(cb_model *m)
+{
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    assert_non_null(s);
+    bool similar = cb_sampler_is_similarity(s);
+    cb_sampler_free(s);
+    return similar;
+}
+
+/* Which assets qualify is a fact of their files: the robot's and the spider's scale keys
+ * differ per axis; the rigged figure's differ only by float rounding (1.0 against
+ * 0.99999994). Float32 inverse bind matrices deviate from similarities by ~1e-7, so the two
+ * samplers agree to a few 1e-7. */
+static void test_real_assets_sample_the_same_both_ways(void **state)
+{
+    (void)state;
+    struct { const char *path; bool similar; } assets[] = {
+        {"assets/fox-bevy/Fox.glb", true},
+        {"assets/derived-fox/Fox.meshopt.glb", true},
+        {"assets/simpleskin-bevy/SimpleSkin.gltf", true},
+        {"assets/multitrack-luanti/gltf_multi_track_1.glb", true},
+        {"assets/robot-quaternius-raylib/robot.glb", false},
+        {"assets/spider-animated-luanti/gltf_spider_animated.gltf", false},
+        {"assets/riggedfigure-raylib/rigged_figure.glb", true}, /* scale keys equal to float rounding */
+    };
+    for (size_t i = 0; i < sizeof assets / sizeof assets[0]; ++i) {
+        cb_model *m = load_shared(assets[i].path);
+        bool similar = is_similarity(m);
+        if (similar != assets[i].similar) fail_msg("%s: similarity rig %d, expected %d", assets[i].path, similar, assets[i].similar);
+        if (similar) {
+            double d = worst_difference(m);
+            printf("  %-72s worst difference %.2g\n", assets[i].path, d);
+            if (!(d < 2e-6)) fail_msg("%s: the similarity sampler differs by %g", assets[i].path, d);
+        }
+        cb_model_free(m);
+    }
+    static const char *const samples[] = {"quadruped", "fish", "bird"};
+    for (size_t i = 0; i < 3; ++i) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s.glb", samples_dir(), samples[i]);
+        cb_model *m = load_or_fail(path);
+        assert_true(is_similarity(m));
+        double d = worst_difference(m);
+        if (!(d < 2e-6)) fail_msg("%s: the similarity sampler differs by %g", path, d);
+        cb_model_free(m);
+    }
+}
+
+/* A rig built here: an armature node (rotated, scaled by 2, or a matrix) over a two-joint
+ * chain whose second joint is rotated, moved and scaled by keys. */
+typedef struct rig_spec {
+    float scale_keys[2][3];
+    cb_interp scale_interp;
+    bool armature_matrix; /* the armature as a matrix instead of TRS */
+    double armature_shear;
+    double ibm_shear;
+} rig_spec;
+
+static cb_model *build_rig(const rig_spec *r)
+{
+    cb_model *m = cb_model_create("test-rig");
+    m->node_count = 3;
+    m->nodes = cb_model_alloc(m, 3, sizeof(cb_node));
+    const double half = sqrt(0.5);
+    for (int i = 0; i < 3; ++i) {
+        cb_node *n = &m->nodes[i];
+        n->name = i == 0 ? "armature" : i == 1 ? "hip" : "knee";
+        n->parent = i - 1;
+        n->rotation[3] = 1;
+        n->scale[0] = n->scale[1] = n->scale[2] = 1;
+        n->translation[1] = i;
+    }
+    cb_node *arm = &m->nodes[0];
+    arm->rotation[0] = half, arm->rotation[3] = half; /* 90 degrees about x */
+    arm->scale[0] = arm->scale[1] = arm->scale[2] = 2;
+    if (r->armature_matrix) {
+        cb_mat4_from_trs(arm->matrix, (cb_vec3){0, 0, 0}, (cb_quat){half, 0, 0, half}, (cb_vec3){2, 2, 2});
+        arm->matrix[4] += r->armature_shear;
+        arm->has_matrix = true;
+    }
+    m->skin_count = 1;
+    m->skins = cb_model_alloc(m, 1, sizeof(cb_skin));
+    cb_skin *sk = &m->skins[0];
+    sk->name = "skin";
+    sk->joint_count = 2;
+    sk->joints = cb_model_alloc(m, 2, sizeof(int32_t));
+    sk->joints[0] = 1, sk->joints[1] = 2;
+    sk->inverse_bind = cb_model_alloc(m, 32, sizeof(double));
+    sk->skeleton = -1;
+    for (int j = 0; j < 2; ++j) {
+        double *ibm = sk->inverse_bind + j * 16;
+        cb_mat4_from_trs(ibm, (cb_vec3){0, -1.0 - j, 0}, (cb_quat){0, 0, 0, 1}, (cb_vec3){0.5, 0.5, 0.5});
+        ibm[1] += r->ibm_shear;
+    }
+    static float times[2] = {0, 1};
+    static float rotations[8] = {0, 0, 0, 1, 0, 1, 0, 0}; /* exact unit keys: a half turn about y */
+    static float moves[6] = {0, 1, 0, 0.5f, 1, 0};
+    m->animation_count = 1;
+    m->animations = cb_model_alloc(m, 1, sizeof(cb_animation));
+    cb_animation *a = &m->animations[0];
+    a->name = "walk";
+    a->t0 = 0, a->t1 = 1;
+    a->channel_count = 3;
+    a->channels = cb_model_alloc(m, 3, sizeof(cb_channel));
+    float *scales = cb_model_alloc(m, 18, sizeof(float)); /* room for spline tangents */
+    int per_key = r->scale_interp == CB_INTERP_CUBICSPLINE ? 3 : 1;
+    for (int k = 0; k < 2; ++k)
+        for (int s = 0; s < per_key; ++s)
+            memcpy(scales + (k * per_key + s) * 3, r->scale_keys[k], 3 * sizeof(float));
+    a->channels[0] = (cb_channel){1, CB_PATH_ROTATION, CB_INTERP_LINEAR, 2, times, rotations};
+    a->channels[1] = (cb_channel){2, CB_PATH_TRANSLATION, CB_INTERP_LINEAR, 2, times, moves};
+    a->channels[2] = (cb_channel){2, CB_PATH_SCALE, r->scale_interp, 2, times, scales};
+    return m;
+}
+
+static void test_built_rigs_take_the_path_they_should(void **state)
+{
+    (void)state;
+    rig_spec uniform = {{{1, 1, 1}, {1.5f, 1.5f, 1.5f}}, CB_INTERP_LINEAR, false, 0, 0};
+    cb_model *m = build_rig(&uniform);
+    assert_true(is_similarity(m));
+    double d = worst_difference(m);
+    printf("  built rig: worst difference %.2g\n", d);
+    assert_true(d < 1e-12);
+    cb_model_free(m);
+
+    rig_spec as_matrix = uniform;
+    as_matrix.armature_matrix = true;
+    m = build_rig(&as_matrix);
+    assert_true(is_similarity(m));
+    assert_true(worst_difference(m) < 1e-12);
+    cb_model_free(m);
+
+    /* Each of these is something a similarity cannot hold: the matrix sampler takes them. */
+    rig_spec refused[5] = {uniform, uniform, uniform, uniform, uniform};
+    refused[0].scale_keys[1][2] = 1.6f;                 /* non-uniform scale key */
+    refused[1].scale_interp = CB_INTERP_CUBICSPLINE;    /* a spline can pass through zero */
+    refused[2].scale_keys[1][0] = refused[2].scale_keys[1][1] = refused[2].scale_keys[1][2] = -1; /* mirror */
+    refused[3].armature_matrix = true, refused[3].armature_shear = 0.01; /* shear in a node matrix */
+    refused[4].ibm_shear = 1e-4;                        /* shear in an inverse bind matrix */
+    for (int i = 0; i < 5; ++i) {
+        m = build_rig(&refused[i]);
+        if (is_similarity(m)) fail_msg("built rig %d was taken as a similarity rig", i);
+        cb_model_free(m);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_real_assets_sample_the_same_both_ways),
+        cmocka_unit_test(test_built_rigs_take_the_path_they_should),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
