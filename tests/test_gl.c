@@ -35,20 +35,6 @@ static int teardown(void **state)
     return 0;
 }
 
-static char *read_text(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *s = malloc((size_t)n + 1);
-    assert_int_equal(fread(s, 1, (size_t)n, f), (size_t)n);
-    s[n] = '\0';
-    fclose(f);
-    return s;
-}
-
 /* Replaces the line containing `marker` (a "cb:" comment of the shipped shader) with `line`. */
 static char *break_shader(const char *src, const char *marker, const char *line)
 {
@@ -289,7 +275,7 @@ static double tolerance(const fixture *f) { return 1e-5 * fmax(1.0, f->palette.m
 static void test_every_layout_and_precision_matches_the_cpu(void **state)
 {
     (void)state;
-    char *lib = read_text("samples/shaders/crowdbake_palette.glsl"), path[1024];
+    char *lib = read_whole_file("samples/shaders/crowdbake_palette.glsl", NULL), path[1024];
     snprintf(path, sizeof path, "%s/quadruped.glb", samples_dir());
     sample samples[64];
     for (int l = 0; l < 3; ++l)
@@ -316,7 +302,7 @@ static void test_every_layout_and_precision_matches_the_cpu(void **state)
 static double broken(const char *model, cb_layout l, cb_precision pr, const char *marker, const char *line, bool transpose,
                      double row_offset)
 {
-    char *lib = read_text("samples/shaders/crowdbake_palette.glsl"), path[1024];
+    char *lib = read_whole_file("samples/shaders/crowdbake_palette.glsl", NULL), path[1024];
     if (marker) {
         char *b = break_shader(lib, marker, line);
         free(lib);

@@ -186,19 +186,13 @@ static void test_source_hash_covers_external_buffers(void **state)
  * cb_gltf_load reads a GLB's BIN chunk in place, in the file's own bytes. */
 static cb_model *load_copied(const char *path)
 {
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *bytes = malloc((size_t)size);
-    assert_int_equal(fread(bytes, 1, (size_t)size, f), (size_t)size);
-    fclose(f);
+    size_t size;
+    char *bytes = read_whole_file(path, &size);
     char dir[1024];
     snprintf(dir, sizeof dir, "%s", path);
     *strrchr(dir, '/') = 0;
     cb_error err = {0};
-    cb_model *m = cb_gltf_load_memory(bytes, (size_t)size, path, dir, NULL, &err);
+    cb_model *m = cb_gltf_load_memory((const unsigned char *)bytes, size, path, dir, NULL, &err);
     free(bytes);
     if (!m) fail_msg("%s", err.message);
     return m;

@@ -40,6 +40,22 @@ static inline const char *crowdbake_exe(void)
 }
 
 /* Loads a model or fails the test with the loader's message. */
+/* A whole file, NUL-terminated (so text can be used as a string); *size gets its length. */
+static inline char *read_whole_file(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *s = malloc((size_t)n + 1);
+    assert_int_equal(fread(s, 1, (size_t)n, f), (size_t)n);
+    s[n] = '\0';
+    fclose(f);
+    if (size) *size = (size_t)n;
+    return s;
+}
+
 static inline cb_model *load_or_fail(const char *path)
 {
     cb_error err = {0};
