@@ -371,8 +371,6 @@ bool find_bin_byte_length(const std::string &json, size_t *at, size_t *digits, u
     return false;
 }
 
-std::vector<unsigned char> rebuild_glb(const std::string &json, const unsigned char *bin, uint32_t bin_length);
-
 // The GLB to give tinygltf with the BIN chunk left out, and where the chunk lies; false when
 // the file needs tinygltf to read it.
 bool glb_without_bin(const unsigned char *data, const std::string &json, std::vector<unsigned char> *glb, size_t *bin_at,

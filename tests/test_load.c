@@ -4,34 +4,12 @@
 
 #include <math.h>
 
-static const char *const loadable[] = {
-    "assets/fox-bevy/Fox.glb",
-    "assets/derived-fox/Fox.draco.glb",
-    "assets/derived-fox/Fox.meshopt.glb",
-    "assets/derived-fox/Fox.quantized.glb",
-    "assets/derived-fox/separate/Fox.gltf",
-    "assets/riggedfigure-raylib/rigged_figure.glb",
-    "assets/simpleskin-bevy/SimpleSkin.gltf",
-    "assets/simpleskin-luanti/gltf_simple_skin.gltf",
-    "assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf",
-    "assets/spider-animated-luanti/gltf_spider_animated.gltf",
-    "assets/derived-spider-luanti/gltf_spider_animated.draco.glb",
-    "assets/derived-spider-luanti/gltf_spider_animated.meshopt.glb",
-    "assets/derived-spider-luanti/gltf_spider_animated.quantized.glb",
-    "assets/derived-spider-luanti/separate/gltf_spider_animated.gltf",
-    "assets/robot-quaternius-raylib/robot.glb",
-    "assets/multitrack-luanti/gltf_multi_track_1.glb",
-    "assets/assimp-animation-interpolation/animation_interpolation_linear.gltf",
-    "assets/assimp-animation-interpolation/animation_interpolation_step.gltf",
-    "assets/assimp-animation-interpolation/animation_interpolation_cubic.gltf",
-};
-
 /* Facts from ../shared/assets/MANIFEST.md (extracted there with glTF-Transform). */
 static void test_every_asset_loads_with_the_manifest_facts(void **state)
 {
     (void)state;
-    for (size_t i = 0; i < sizeof loadable / sizeof loadable[0]; ++i) {
-        cb_model *m = load_shared(loadable[i]);
+    for (size_t i = 0; i < COUNT_OF(shared_models); ++i) {
+        cb_model *m = load_shared(shared_models[i]);
         assert_true(m->node_count > 0);
         cb_model_free(m);
     }
@@ -238,16 +216,15 @@ static void test_in_place_and_copied_loads_agree(void **state)
 {
     (void)state;
     char path[1024];
-    for (size_t i = 0; i < sizeof loadable / sizeof loadable[0]; ++i) {
-        shared_path(path, sizeof path, loadable[i]);
+    for (size_t i = 0; i < COUNT_OF(shared_models); ++i) {
+        shared_path(path, sizeof path, shared_models[i]);
         cb_model *a = load_or_fail(path), *b = load_copied(path);
         expect_same_models(path, a, b);
         cb_model_free(a);
         cb_model_free(b);
     }
-    static const char *const samples[] = {"quadruped", "fish", "bird"};
-    for (size_t i = 0; i < 3; ++i) {
-        snprintf(path, sizeof path, "%s/%s.glb", samples_dir(), samples[i]);
+    for (size_t i = 0; i < COUNT_OF(sample_names); ++i) {
+        sample_path(path, sizeof path, sample_names[i]);
         cb_model *a = load_or_fail(path), *b = load_copied(path);
         expect_same_models(path, a, b);
         cb_model_free(a);

@@ -78,7 +78,7 @@ static void test_real_assets_sample_the_same_both_ways(void **state)
         {"assets/spider-animated-luanti/gltf_spider_animated.gltf", false},
         {"assets/riggedfigure-raylib/rigged_figure.glb", true}, /* scale keys equal to float rounding */
     };
-    for (size_t i = 0; i < sizeof assets / sizeof assets[0]; ++i) {
+    for (size_t i = 0; i < COUNT_OF(assets); ++i) {
         cb_model *m = load_shared(assets[i].path);
         bool similar = is_similarity(m);
         if (similar != assets[i].similar) fail_msg("%s: similarity rig %d, expected %d", assets[i].path, similar, assets[i].similar);
@@ -89,10 +89,9 @@ static void test_real_assets_sample_the_same_both_ways(void **state)
         }
         cb_model_free(m);
     }
-    static const char *const samples[] = {"quadruped", "fish", "bird"};
-    for (size_t i = 0; i < 3; ++i) {
+    for (size_t i = 0; i < COUNT_OF(sample_names); ++i) {
         char path[1024];
-        snprintf(path, sizeof path, "%s/%s.glb", samples_dir(), samples[i]);
+        sample_path(path, sizeof path, sample_names[i]);
         cb_model *m = load_or_fail(path);
         assert_true(is_similarity(m));
         double d = worst_difference(m);

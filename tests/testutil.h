@@ -72,6 +72,39 @@ static inline cb_model *load_shared(const char *rel)
 }
 
 /* Runs a shell command; returns its exit status (or -1). Output goes to `out` if given. */
+#define COUNT_OF(a) (sizeof(a) / sizeof((a)[0]))
+
+/* Every model of ../shared/assets that loads (MANIFEST.md); the assimp ones have no skin. */
+static const char *const shared_models[] = {
+    "assets/fox-bevy/Fox.glb",
+    "assets/derived-fox/Fox.draco.glb",
+    "assets/derived-fox/Fox.meshopt.glb",
+    "assets/derived-fox/Fox.quantized.glb",
+    "assets/derived-fox/separate/Fox.gltf",
+    "assets/riggedfigure-raylib/rigged_figure.glb",
+    "assets/simpleskin-bevy/SimpleSkin.gltf",
+    "assets/simpleskin-luanti/gltf_simple_skin.gltf",
+    "assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf",
+    "assets/spider-animated-luanti/gltf_spider_animated.gltf",
+    "assets/derived-spider-luanti/gltf_spider_animated.draco.glb",
+    "assets/derived-spider-luanti/gltf_spider_animated.meshopt.glb",
+    "assets/derived-spider-luanti/gltf_spider_animated.quantized.glb",
+    "assets/derived-spider-luanti/separate/gltf_spider_animated.gltf",
+    "assets/robot-quaternius-raylib/robot.glb",
+    "assets/multitrack-luanti/gltf_multi_track_1.glb",
+    "assets/assimp-animation-interpolation/animation_interpolation_linear.gltf",
+    "assets/assimp-animation-interpolation/animation_interpolation_step.gltf",
+    "assets/assimp-animation-interpolation/animation_interpolation_cubic.gltf",
+};
+
+/* The project's own sample animals, build/samples/NAME.glb. */
+static const char *const sample_names[] = {"quadruped", "fish", "bird"};
+
+static inline void sample_path(char *out, size_t size, const char *name)
+{
+    snprintf(out, size, "%s/%s.glb", samples_dir(), name);
+}
+
 static inline int run_command(const char *cmd, char *out, size_t out_size)
 {
     FILE *p = popen(cmd, "r");
