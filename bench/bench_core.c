@@ -26,17 +26,19 @@ static double sample_all(cb_model *m, bool similarities, uint64_t *matrices)
     cb_sampler *s = cb_sampler_create(m, 0, &err);
     uint32_t joints = m->skins[0].joint_count;
     double *mats = malloc((size_t)joints * 16 * sizeof(double));
-    cb_similarity *sims = malloc((size_t)joints * sizeof *sims);
+    cb_similarity *sims = malloc((size_t)joints * CB_SAMPLE_BATCH * sizeof *sims);
     *matrices = 0;
     double t0 = now();
     for (uint32_t a = 0; a < m->animation_count; ++a) {
         cb_clip_info info;
         cb_clip_analyze(s, (int32_t)a, 30, -1, NULL, &info, &err);
-        for (uint32_t f = 0; f < info.frames; ++f)
-            if (similarities)
-                cb_clip_frame_similarities(s, &info, f, CB_ROOT_MOTION_KEEP, sims);
-            else
-                cb_clip_frame_matrices(s, &info, f, CB_ROOT_MOTION_KEEP, mats);
+        for (uint32_t f = 0; similarities && f < info.frames; f += CB_SAMPLE_BATCH) {
+            uint32_t frames[CB_SAMPLE_BATCH], count = 0;
+            while (count < CB_SAMPLE_BATCH && f + count < info.frames) frames[count] = f + count, ++count;
+            cb_clip_frame_similarities(s, &info, frames, count, CB_ROOT_MOTION_KEEP, sims);
+        }
+        for (uint32_t f = 0; !similarities && f < info.frames; ++f)
+            cb_clip_frame_matrices(s, &info, f, CB_ROOT_MOTION_KEEP, mats);
         *matrices += (uint64_t)info.frames * joints;
     }
     double t = now() - t0;

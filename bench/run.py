@@ -63,24 +63,28 @@ def gen_rig(joints, clips, seconds):
 
 
 def bench_input(name, path, repeat):
+    """crowdbake and the peer in turns, so a change in the machine's load hits both alike. Each
+    bake writes a new .pal: the previous one is removed first, outside the timing (replacing a
+    just-written 29 MB palette adds the file system's cost of freeing it, ~20 ms here)."""
     out_pal = os.path.join(BUILD, 'bench', name + '.pal')
     walls, rss, phases = [], [], []
+    peer_walls, peer_load, peer_sample, peer_matrices = [], [], [], 0
     for _ in range(repeat):
+        if os.path.exists(out_pal):
+            os.remove(out_pal)
         wall, peak, out = run_rss([EXE, 'bake', path, '-o', out_pal, '--json'])
         walls.append(wall)
         rss.append(peak)
         phases.append(json.loads(out)['outputs'][0])
-    last = phases[-1]
-    matrices = last['frames'] * last['bones']
-    sample = [p['phases']['sample'] for p in phases]
-    peer_walls, peer_load, peer_sample, peer_matrices = [], [], [], 0
-    for _ in range(repeat):
         wall, out = run(['node', os.path.join(ROOT, 'bench', 'peer.mjs'), path, '30'])
         r = json.loads(out)
         peer_walls.append(wall)
         peer_load.append(r['load'])
         peer_sample.append(r['sample'])
         peer_matrices = r['matrices']
+    last = phases[-1]
+    matrices = last['frames'] * last['bones']
+    sample = [p['phases']['sample'] for p in phases]
     result = {
         'input': name, 'input_bytes': os.path.getsize(path), 'output_bytes': os.path.getsize(out_pal),
         'bones': last['bones'], 'frames': last['frames'], 'matrices': matrices,

@@ -9,6 +9,19 @@
 #include <math.h>
 #include <stdbool.h>
 
+/* Hot loops written to vectorize are compiled twice, for AVX2 and for the x86-64 baseline
+ * (SSE2), and the loader picks one for the CPU. Both run the same IEEE operations in the same
+ * order (no FMA: contraction is off and AVX2 does not imply FMA), so the output is the same
+ * bits on every machine. CB_CLONE_INLINE makes a helper part of each copy. GCC only: clang 14
+ * gives the dispatcher another name than the one callers link to. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
+#define CB_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
+#define CB_CLONE_INLINE inline __attribute__((always_inline))
+#else
+#define CB_TARGET_CLONES
+#define CB_CLONE_INLINE inline
+#endif
+
 typedef struct { double x, y, z; } cb_vec3;
 typedef struct { double x, y, z, w; } cb_quat;
 

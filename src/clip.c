@@ -122,16 +122,19 @@ void cb_clip_frame_matrices(cb_sampler *s, const cb_clip_info *clip, uint32_t fr
     }
 }
 
-void cb_clip_frame_similarities(cb_sampler *s, const cb_clip_info *clip, uint32_t frame, cb_root_motion root_motion,
-                                cb_similarity *out)
+void cb_clip_frame_similarities(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
+                                cb_root_motion root_motion, cb_similarity *out)
 {
-    const cb_model *m = cb_sampler_model(s);
-    double t = cb_clip_frame_time(clip, frame);
-    cb_sample_joint_similarities(s, clip->animation, t, out);
+    uint32_t joints = cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count;
+    double times[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < count; ++i) times[i] = cb_clip_frame_time(clip, frames[i]);
+    cb_sample_joint_similarities_batch(s, clip->animation, times, count, out);
     if (root_motion != CB_ROOT_MOTION_IN_PLACE) return;
-    double dx = clip->root_velocity[0] * (t - clip->t0), dz = clip->root_velocity[2] * (t - clip->t0);
-    for (uint32_t j = 0; j < m->skins[cb_sampler_skin(s)].joint_count; ++j) {
-        out[j].translation[0] -= dx;
-        out[j].translation[2] -= dz;
+    for (uint32_t i = 0; i < count; ++i) {
+        double dx = clip->root_velocity[0] * (times[i] - clip->t0), dz = clip->root_velocity[2] * (times[i] - clip->t0);
+        for (uint32_t j = 0; j < joints; ++j) {
+            out[i * joints + j].translation[0] -= dx;
+            out[i * joints + j].translation[2] -= dz;
+        }
     }
 }

@@ -256,13 +256,22 @@ static cb_status validate_primitives(const cb_model *m, cb_error *err)
  * compiler vectorizes it: animation data is most of a large file. */
 static bool all_finite(const float *v, uint64_t n)
 {
-    uint32_t bad = 0;
-    for (uint64_t i = 0; i < n; ++i) {
-        uint32_t bits;
-        memcpy(&bits, &v[i], 4);
-        bad |= (bits & 0x7f800000u) == 0x7f800000u;
+    /* NaN and infinity have every exponent bit set. Four lanes at a time, branch-free, so the
+     * compiler keeps them in one vector register: this reads every key of every clip. */
+    const uint32_t exponent = 0x7f800000u;
+    uint32_t bad[4] = {0, 0, 0, 0};
+    uint64_t i = 0;
+    for (; i + 4 <= n; i += 4) {
+        uint32_t bits[4];
+        memcpy(bits, v + i, sizeof bits);
+        for (int k = 0; k < 4; ++k) bad[k] |= (bits[k] & exponent) == exponent ? ~0u : 0u;
     }
-    return !bad;
+    for (; i < n; ++i) {
+        uint32_t bits;
+        memcpy(&bits, v + i, sizeof bits);
+        bad[0] |= (bits & exponent) == exponent;
+    }
+    return !(bad[0] | bad[1] | bad[2] | bad[3]);
 }
 
 static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, cb_error *err)

@@ -140,7 +140,7 @@ static void range_reset(value_range *r)
 }
 
 /* Compares, not fminf/fmaxf: the values are finite and the compares inline. */
-static void range_grow(value_range *r, cb_layout layout, const float *v)
+static inline void range_grow(value_range *r, cb_layout layout, const float *v)
 {
     for (int k = 0; k < 3; ++k) {
         float t = layout == CB_LAYOUT_QPOS ? v[4 + k] : v[k * 4 + 3];
@@ -176,8 +176,9 @@ static void merge_ranges(cb_palette *p, const value_range *clips)
 typedef struct worker {
     cb_sampler *sampler;
     double *mats;        /* bones * 16 */
-    cb_similarity *sims; /* bones: the joint transforms, for qpos rows of similarity rigs */
+    cb_similarity *sims; /* CB_SAMPLE_BATCH rows of bones: the joints, for qpos rows of similarity rigs */
     cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
+    float *rows;         /* the rows of one clip, when clips are encoded as they are sampled */
 } worker;
 
 typedef struct bake_state {
@@ -186,24 +187,39 @@ typedef struct bake_state {
     int32_t skin;
     const cb_bake_options *opt;
     const cb_clip_info *infos;
-    float *canon;          /* rows * bones * CANON(layout) */
+    /* Each worker samples a clip's rows into its own buffer and encodes them from there. Only
+     * u16 has to wait for the ranges of every clip: it keeps what it has not yet encoded of
+     * every row here (kept_floats per bone), and encodes that after the last clip. */
+    float *kept;
+    uint32_t max_clip_frames;
     const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 */
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
     cb_error *errors;      /* clips: the first error of each */
     uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
     double *clip_error;    /* clips: worst vertex error measured */
     value_range *ranges;   /* clips: the values' ranges */
+    double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
 } bake_state;
+
+/* What u16 keeps of a bone's row until every clip is sampled: qpos's position and scale (its
+ * quaternion is snorm, which needs no range, and is encoded at once), or all 12 values. */
+static uint32_t kept_floats(cb_layout layout) { return layout == CB_LAYOUT_QPOS ? 4 : 12; }
+
+/* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
+ * end gives the floats that rounding every candidate would (rounding is monotonic). */
+typedef struct extent {
+    double lo[3], hi[3];
+} extent;
 
 /* Grows a clip's bounds by the sphere a joint's vertices can reach: a vertex weighted to joint
  * j lies within |A_j| * r_j of c = M_j b_j, so the union over joints bounds the skinned mesh. */
-static void grow_bounds(cb_palette_clip *clip, cb_vec3 c, double reach)
+static inline void grow_bounds(extent *e, cb_vec3 c, double reach)
 {
     double cc[3] = {c.x, c.y, c.z};
-    for (int k = 0; k < 3; ++k) { /* compares, not fminf: no NaN reaches here and they inline */
-        float lo = (float)(cc[k] - reach), hi = (float)(cc[k] + reach);
-        if (lo < clip->bounds_min[k]) clip->bounds_min[k] = lo;
-        if (hi > clip->bounds_max[k]) clip->bounds_max[k] = hi;
+    for (int k = 0; k < 3; ++k) { /* compares, not fmin: no NaN reaches here and they inline */
+        double lo = cc[k] - reach, hi = cc[k] + reach;
+        e->lo[k] = lo < e->lo[k] ? lo : e->lo[k];
+        e->hi[k] = hi > e->hi[k] ? hi : e->hi[k];
     }
 }
 
@@ -217,7 +233,8 @@ static double frobenius3(const double *M)
 }
 
 /* One row from joint matrices: any layout; qpos checks each matrix is a similarity. */
-static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row, cb_error *err)
+static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row, extent *bounds,
+                            cb_error *err)
 {
     cb_palette *p = st->p;
     cb_palette_clip *clip = &p->clips[c];
@@ -227,7 +244,7 @@ static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, f
         const float *b = p->bind_positions + (size_t)j * 3;
         float *out = row + (size_t)j * CANON(p->layout);
         cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* the joint now: M b */
-        if (st->radius[j] >= 0) grow_bounds(clip, pos, st->radius[j] * frobenius3(M));
+        if (st->radius[j] >= 0) grow_bounds(bounds, pos, st->radius[j] * frobenius3(M));
         if (p->layout != CB_LAYOUT_QPOS) {
             for (int r = 0; r < 3; ++r)
                 for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
@@ -245,26 +262,29 @@ static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, f
 
 /* One qpos row from joint similarities: what qpos stores, with no matrix to build, check or
  * decompose. */
-static void similarity_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row)
+static void similarity_row(bake_state *st, worker *w, uint32_t c, uint32_t f, const cb_similarity *sims, float *row,
+                           extent *clip_bounds)
 {
     cb_palette *p = st->p;
-    cb_palette_clip *clip = &p->clips[c];
-    cb_clip_frame_similarities(w->sampler, &st->infos[c], f, st->opt->root_motion, w->sims);
+    extent bounds = *clip_bounds;         /* locals, which the compiler keeps in registers */
+    value_range range = st->ranges[c];
     for (uint32_t j = 0; j < p->bone_count; ++j) {
-        const cb_similarity *J = &w->sims[j];
+        const cb_similarity *J = &sims[j];
         const float *b = p->bind_positions + (size_t)j * 3;
         float *out = row + (size_t)j * 8;
         cb_quat q = {J->rotation[0], J->rotation[1], J->rotation[2], J->rotation[3]};
         cb_vec3 rb = cb_quat_rotate(q, (cb_vec3){b[0], b[1], b[2]});
         cb_vec3 pos = {J->translation[0] + J->scale * rb.x, J->translation[1] + J->scale * rb.y,
                        J->translation[2] + J->scale * rb.z};
-        if (st->radius[j] >= 0) grow_bounds(clip, pos, st->radius[j] * J->scale * sqrt(3.0)); /* |s R| = sqrt(3) s */
+        if (st->radius[j] >= 0) grow_bounds(&bounds, pos, st->radius[j] * J->scale * sqrt(3.0)); /* |s R| = sqrt(3) s */
         if (f ? cb_quat_dot(q, w->prev[j]) < 0 : q.w < 0) q = (cb_quat){-q.x, -q.y, -q.z, -q.w};
         out[0] = (float)q.x, out[1] = (float)q.y, out[2] = (float)q.z, out[3] = (float)q.w;
         out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z, out[7] = (float)J->scale;
         w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
-        range_grow(&st->ranges[c], p->layout, out);
+        range_grow(&range, CB_LAYOUT_QPOS, out);
     }
+    *clip_bounds = bounds;
+    st->ranges[c] = range;
 }
 
 static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *err)
@@ -272,21 +292,28 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
     cb_palette *p = st->p;
     const cb_clip_info *info = &st->infos[c];
     cb_palette_clip *clip = &p->clips[c];
-    for (int k = 0; k < 3; ++k) clip->bounds_min[k] = INFINITY, clip->bounds_max[k] = -INFINITY;
+    extent bounds = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
     range_reset(&st->ranges[c]);
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
-    for (uint32_t f = 0; f < info->frames; ++f) {
-        float *row = st->canon + (size_t)(clip->first_row + f) * p->bone_count * CANON(p->layout);
-        if (similar)
-            similarity_row(st, w, c, f, row);
-        else if (matrix_row(st, w, c, f, row, err))
-            return err->status;
+    float *rows = w->rows;
+    size_t row_floats = (size_t)p->bone_count * CANON(p->layout);
+    for (uint32_t f = 0; similar && f < info->frames; f += CB_SAMPLE_BATCH) {
+        uint32_t frames[CB_SAMPLE_BATCH], count = 0;
+        while (count < CB_SAMPLE_BATCH && f + count < info->frames) frames[count] = f + count, ++count;
+        cb_clip_frame_similarities(w->sampler, info, frames, count, st->opt->root_motion, w->sims);
+        for (uint32_t i = 0; i < count; ++i)
+            similarity_row(st, w, c, f + i, w->sims + (size_t)i * p->bone_count, rows + (f + i) * row_floats, &bounds);
     }
-    if (!(clip->bounds_min[0] <= clip->bounds_max[0])) /* no skinned vertex */
-        for (int k = 0; k < 3; ++k) clip->bounds_min[k] = clip->bounds_max[k] = 0;
+    for (uint32_t f = 0; !similar && f < info->frames; ++f)
+        if (matrix_row(st, w, c, f, rows + f * row_floats, &bounds, err)) return err->status;
+    bool empty = !(bounds.lo[0] <= bounds.hi[0]); /* no skinned vertex */
+    for (int k = 0; k < 3; ++k) {
+        clip->bounds_min[k] = empty ? 0 : (float)bounds.lo[k];
+        clip->bounds_max[k] = empty ? 0 : (float)bounds.hi[k];
+    }
     if (p->layout == CB_LAYOUT_QPOS && info->loops && info->frames > 1) {
         /* The wrap from the last row to the first: a full turn over the loop ends on -q. */
-        const float *first = st->canon + (size_t)clip->first_row * p->bone_count * CANON(p->layout);
+        const float *first = rows;
         const float *last = first + (size_t)(info->frames - 1) * p->bone_count * CANON(p->layout);
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             const float *qa = first + (size_t)j * CANON(p->layout), *qb = last + (size_t)j * CANON(p->layout);
@@ -312,9 +339,10 @@ static int job_main(void *arg)
     cb_error *err0 = &st->errors[jb->first < st->p->clip_count ? jb->first : 0];
     w.sampler = cb_sampler_create(st->model, st->skin, err0);
     w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
-    w.sims = malloc((size_t)st->p->bone_count * sizeof(cb_similarity));
+    w.sims = malloc((size_t)st->p->bone_count * CB_SAMPLE_BATCH * sizeof(cb_similarity));
     w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
-    if (!w.sampler || !w.mats || !w.sims || !w.prev) {
+    w.rows = malloc((size_t)st->max_clip_frames * st->p->bone_count * CANON(st->p->layout) * sizeof(float));
+    if (!w.sampler || !w.mats || !w.sims || !w.prev || !w.rows) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
         for (uint32_t c = jb->first; c < st->p->clip_count; c += jb->stride) jb->run(st, &w, c);
@@ -323,16 +351,22 @@ static int job_main(void *arg)
     free(w.mats);
     free(w.sims);
     free(w.prev);
+    free(w.rows);
     return 0;
+}
+
+static uint32_t threads_used(const bake_state *st)
+{
+    uint32_t threads = st->opt->threads ? st->opt->threads : 1;
+    if (threads > st->p->clip_count) threads = st->p->clip_count ? st->p->clip_count : 1;
+    return threads > 64 ? 64 : threads;
 }
 
 /* Runs `run` for every clip, clip c on thread c % threads. Each clip writes only its own rows
  * and slots, so the result does not depend on the thread count. */
 static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, uint32_t))
 {
-    uint32_t threads = st->opt->threads ? st->opt->threads : 1;
-    if (threads > st->p->clip_count) threads = st->p->clip_count ? st->p->clip_count : 1;
-    if (threads > 64) threads = 64;
+    uint32_t threads = threads_used(st);
     job jobs[64];
     thrd_t ids[64];
     bool started[64] = {false};
@@ -347,17 +381,49 @@ static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, ui
     }
 }
 
-static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
+static double seconds_now(void)
 {
-    if (st->errors[c].status == CB_OK) sample_clip(st, w, c, &st->errors[c]);
+    struct timespec ts;
+    timespec_get(&ts, TIME_UTC);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
-static void encode_rows(cb_palette *p, const float *canon, uint32_t first, uint32_t count);
+static void encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
+static void encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
+                            uint32_t count);
 
-static void encode_clip_job(bake_state *st, worker *w, uint32_t c)
+/* Encodes a clip as soon as it is sampled, from rows still in cache: all of it, or for u16
+ * what needs no range, keeping the rest for encode_kept_job. */
+static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
+{
+    if (st->errors[c].status || sample_clip(st, w, c, &st->errors[c])) return;
+    cb_palette *p = st->p;
+    const cb_palette_clip *clip = &p->clips[c];
+    double start = seconds_now();
+    size_t bones = (size_t)clip->frames * p->bone_count, kept = kept_floats(p->layout);
+    if (p->precision != CB_PRECISION_U16) {
+        encode_rows(p, w->rows, clip->first_row, clip->frames);
+    } else if (p->layout == CB_LAYOUT_QPOS) {
+        float *keep = st->kept + (size_t)clip->first_row * p->bone_count * kept;
+        encode_qpos_u16(p, w->rows, 8, 0, clip->first_row, clip->frames);
+        for (size_t b = 0; b < bones; ++b) memcpy(keep + b * 4, w->rows + b * 8 + 4, 4 * sizeof(float));
+    } else {
+        memcpy(st->kept + (size_t)clip->first_row * p->bone_count * kept, w->rows, bones * kept * sizeof(float));
+    }
+    st->encode_seconds[c] = seconds_now() - start;
+}
+
+/* u16, once the ranges of every clip are known: the values a clip kept. */
+static void encode_kept_job(bake_state *st, worker *w, uint32_t c)
 {
     (void)w;
-    encode_rows(st->p, st->canon, st->p->clips[c].first_row, st->p->clips[c].frames);
+    cb_palette *p = st->p;
+    const cb_palette_clip *clip = &p->clips[c];
+    const float *kept = st->kept + (size_t)clip->first_row * p->bone_count * kept_floats(p->layout);
+    if (p->layout == CB_LAYOUT_QPOS)
+        encode_qpos_u16(p, kept, 4, 4, clip->first_row, clip->frames);
+    else
+        encode_rows(p, kept, clip->first_row, clip->frames);
 }
 
 /* ---- pass 2: encode ---- */
@@ -454,15 +520,17 @@ static void u16_slots(const cb_palette *p, u16_slot slots[16])
     }
 }
 
-static uint16_t quantize(const u16_slot *q, double v)
+static inline uint16_t quantize(const u16_slot *q, double v)
 {
     double x = (v - q->offset) * q->scale;
-    x = x < q->lo ? q->lo : x > q->hi ? q->hi : x;
+    x = x < q->lo ? q->lo : x; /* two selects, not nested ones: they compile to max and min, */
+    x = x > q->hi ? q->hi : x; /* where the nested ones branch (and mispredict) */
     long n = lrint(x * q->steps);
     return (uint16_t)(int16_t)n; /* snorm: two's complement; unorm: 0..65535 fits */
 }
 
-static void encode_rows(cb_palette *p, const float *canon, uint32_t first, uint32_t count)
+/* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
+static void encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count)
 {
     uint32_t tb = cb_precision_texel_bytes(p->precision), nvalues = p->texels_per_bone * 4;
     u16_slot slots[16];
@@ -471,7 +539,7 @@ static void encode_rows(cb_palette *p, const float *canon, uint32_t first, uint3
         uint32_t x0, y;
         cb_palette_texel_xy(p, r, 0, &x0, &y);
         unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * tb;
-        const float *row = canon + (size_t)r * p->bone_count * CANON(p->layout);
+        const float *row = rows + (size_t)(r - first) * p->bone_count * CANON(p->layout);
         for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
             float vals[16];
             texel_values(p, row + (size_t)j * CANON(p->layout), vals);
@@ -482,6 +550,24 @@ static void encode_rows(cb_palette *p, const float *canon, uint32_t first, uint3
             else
                 for (uint32_t i = 0; i < nvalues; ++i) store_le16(d + i * 2, quantize(&slots[i], vals[i]));
         }
+    }
+}
+
+/* Encodes qpos values v0..v0 + 3 (the quaternion, or position and scale) of `count` rows as
+ * u16; `rows` holds `stride` floats per bone, starting with value v0. (qpos texel order is its
+ * canonical order.) */
+static void encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
+                            uint32_t count)
+{
+    u16_slot slots[16];
+    u16_slots(p, slots);
+    for (uint32_t r = first; r < first + count; ++r) {
+        uint32_t x0, y;
+        cb_palette_texel_xy(p, r, 0, &x0, &y);
+        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8 + v0 * 2; /* RGBA16 */
+        const float *row = rows + (size_t)(r - first) * p->bone_count * stride;
+        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16)
+            for (uint32_t i = 0; i < 4; ++i) store_le16(d + i * 2, quantize(&slots[v0 + i], row[j * stride + i]));
     }
 }
 
@@ -530,36 +616,54 @@ void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const doubl
 
 /* ---- pass 3: the error against exact skinning ---- */
 
-/* Skinning is linear in the matrices, so one skinning with (exact - decoded) gives each
- * vertex's error directly: half the work of skinning twice, and no cancellation. */
-static void measure_clip(bake_state *st, worker *w, uint32_t c)
+/* The worst vertex error of the given rows of clip c. Skinning is linear in the matrices, so
+ * one skinning with (exact - decoded) gives each vertex's error directly: half the work of
+ * skinning twice, and no cancellation. Rows baked from similarities are measured against
+ * those, sampled together like the bake did. */
+static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
+                           double *diff, double *err_pos)
 {
     cb_palette *p = st->p;
     const cb_model *m = st->model;
-    const cb_palette_clip *clip = &p->clips[c];
-    uint64_t verts = cb_model_skin_vertex_count(m, st->skin);
-    double *diff = malloc((size_t)p->bone_count * 16 * sizeof(double));
-    double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
-    st->clip_error[c] = 0;
-    for (uint32_t f = 0; diff && err_pos && verts && f < clip->frames; ++f) {
-        if (f % st->error_stride && f + 1 != clip->frames) continue;
-        cb_clip_frame_matrices(w->sampler, &st->infos[c], f, st->opt->root_motion, w->mats);
+    bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
+    if (similar) cb_clip_frame_similarities(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, w->sims);
+    double worst = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        if (!similar) cb_clip_frame_matrices(w->sampler, &st->infos[c], frames[i], st->opt->root_motion, w->mats);
         for (uint32_t j = 0; j < p->bone_count; ++j) {
-            double *d = diff + (size_t)j * 16;
-            cb_palette_decode(p, p->texels, clip->first_row + f, j, d);
-            for (int k = 0; k < 16; ++k) d[k] = w->mats[(size_t)j * 16 + k] - d[k];
+            double *d = diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
+            if (similar) cb_similarity_matrix(&w->sims[(size_t)i * p->bone_count + j], exact);
+            cb_palette_decode(p, p->texels, p->clips[c].first_row + frames[i], j, d);
+            for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
         }
-        double worst = 0;
         for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
             const cb_primitive *prim = &m->primitives[pi];
             if (prim->skin != st->skin) continue;
             cb_skin_positions(prim, diff, err_pos);
-            for (uint64_t i = 0; i < (uint64_t)prim->vertex_count * 3; i += 3) {
-                double d2 = err_pos[i] * err_pos[i] + err_pos[i + 1] * err_pos[i + 1] + err_pos[i + 2] * err_pos[i + 2];
-                if (d2 > worst) worst = d2;
+            for (uint64_t v = 0; v < (uint64_t)prim->vertex_count * 3; v += 3) {
+                double d2 = err_pos[v] * err_pos[v] + err_pos[v + 1] * err_pos[v + 1] + err_pos[v + 2] * err_pos[v + 2];
+                worst = d2 > worst ? d2 : worst;
             }
         }
-        if (sqrt(worst) > st->clip_error[c]) st->clip_error[c] = sqrt(worst);
+    }
+    return sqrt(worst);
+}
+
+/* The worst vertex error of clip c over every error_stride-th row and the last. */
+static void measure_clip(bake_state *st, worker *w, uint32_t c)
+{
+    const cb_palette *p = st->p;
+    uint32_t frames = p->clips[c].frames, batch[CB_SAMPLE_BATCH], count = 0;
+    uint64_t verts = cb_model_skin_vertex_count(st->model, st->skin);
+    double *diff = malloc((size_t)p->bone_count * 16 * sizeof(double));
+    double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
+    st->clip_error[c] = 0;
+    for (uint32_t f = 0; diff && err_pos && verts && f < frames; ++f) {
+        if (f % st->error_stride && f + 1 != frames) continue;
+        batch[count++] = f;
+        if (count < CB_SAMPLE_BATCH && f + 1 != frames) continue;
+        st->clip_error[c] = fmax(st->clip_error[c], measure_rows(st, w, c, batch, count, diff, err_pos));
+        count = 0;
     }
     free(diff);
     free(err_pos);
@@ -647,11 +751,23 @@ static void bind_positions(cb_palette *p, const cb_skin *skin)
     }
 }
 
-static double seconds_now(void)
+static void free_bake_state(bake_state *st)
 {
-    struct timespec ts;
-    timespec_get(&ts, TIME_UTC);
-    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+    free(st->kept), free(st->breaks), free(st->errors), free(st->clip_error), free(st->ranges);
+    free(st->encode_seconds);
+}
+
+/* The texels no row covers, which stay zero: in the last block the rows past the last baked
+ * one. (Every row's texels are written by the encoder.) */
+static void zero_padding(cb_palette *p)
+{
+    size_t tb = cb_precision_texel_bytes(p->precision);
+    unsigned char *texels = p->texels;
+    for (uint32_t y = 0; y < p->height; ++y) {
+        uint32_t blocks_here = p->rows / p->height + (y < p->rows % p->height);
+        size_t x0 = (size_t)blocks_here * p->row_texels;
+        if (x0 < p->width) memset(texels + ((size_t)y * p->width + x0) * tb, 0, (p->width - x0) * tb);
+    }
 }
 
 /* The first error in clip order, so the message does not depend on the thread count. */
@@ -716,28 +832,37 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     }
     p->texels = cb_alloc_large(p->texel_bytes);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
-    st.canon = cb_alloc_large((size_t)p->rows * p->bone_count * CANON(p->layout) * sizeof(float));
+    if (p->precision == CB_PRECISION_U16)
+        st.kept = cb_alloc_large((size_t)p->rows * p->bone_count * kept_floats(p->layout) * sizeof(float));
+    for (uint32_t c = 0; c < p->clip_count; ++c)
+        if (p->clips[c].frames > st.max_clip_frames) st.max_clip_frames = p->clips[c].frames;
     radius = malloc((size_t)p->bone_count * sizeof(double));
     st.breaks = calloc(p->clip_count, sizeof *st.breaks);
     st.errors = calloc(p->clip_count, sizeof *st.errors);
     st.clip_error = calloc(p->clip_count, sizeof *st.clip_error);
     st.ranges = calloc(p->clip_count, sizeof *st.ranges);
-    if (!p->texels || !p->bind_positions || !st.canon || !radius || !st.breaks || !st.errors || !st.clip_error ||
-        !st.ranges) {
+    st.encode_seconds = calloc(p->clip_count, sizeof *st.encode_seconds);
+    if (!p->texels || !p->bind_positions || (p->precision == CB_PRECISION_U16 && !st.kept) || !radius ||
+        !st.breaks || !st.errors || !st.clip_error || !st.ranges || !st.encode_seconds) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
     }
-    memset(p->texels, 0, p->texel_bytes); /* the blocks' padding rows stay zero */
+    zero_padding(p);
     bind_positions(p, skin);
     bool skinned = joint_reach(p, m, skin_index, radius);
     st.radius = radius;
     for_each_clip(&st, sample_clip_job);
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
-    double t1 = seconds_now();
     merge_ranges(p, st.ranges);
-    for_each_clip(&st, encode_clip_job);
+    double t1 = seconds_now();
+    if (st.kept) for_each_clip(&st, encode_kept_job);
     double t2 = seconds_now(), lo[3], hi[3];
+    /* Clips encoded as they were sampled: their encoding time, spread over the threads, moves
+     * from the sampling phase to the encoding phase. */
+    double encoded_while_sampling = 0;
+    for (uint32_t c = 0; c < p->clip_count; ++c) encoded_while_sampling += st.encode_seconds[c];
+    encoded_while_sampling /= threads_used(&st);
     p->model_height = cb_skin_rest_bounds(sampler, lo, hi);
     /* Exact skinning of every vertex at every row costs rows x vertices; past ~4M vertex-rows
      * an even subset of rows (always each clip's last) measures the error. */
@@ -753,11 +878,15 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
         }
     }
     double t3 = seconds_now();
-    p->seconds_sample = t1 - t0, p->seconds_encode = t2 - t1, p->seconds_measure = t3 - t2;
-    free(st.canon), free(radius), free(st.breaks), free(st.errors), free(st.clip_error), free(st.ranges), free(infos);
+    p->seconds_sample = t1 - t0 - encoded_while_sampling;
+    p->seconds_encode = t2 - t1 + encoded_while_sampling;
+    p->seconds_measure = t3 - t2;
+    free_bake_state(&st);
+    free(radius), free(infos);
     return CB_OK;
 fail:
-    free(st.canon), free(radius), free(st.breaks), free(st.errors), free(st.clip_error), free(st.ranges), free(infos);
+    free_bake_state(&st);
+    free(radius), free(infos);
     cb_palette_free(p);
     return err->status;
 }

@@ -280,6 +280,29 @@ static void test_normalizing_rotation_keys_never_touches_shared_bytes(void **sta
     cb_model_free(m);
 }
 
+/* glTF numbers are decimals: the loader must give the doubles strtod gives (correctly rounded),
+ * or node transforms written with 17 digits bake differently from file to file. These five
+ * come from the spider asset; a JSON parser's fast path is an ulp off on each. */
+static void test_json_numbers_are_correctly_rounded(void **state)
+{
+    (void)state;
+    const char *numbers[6] = {"-0.23922589421272278", "8.097286041675034e-08", "0.9999997615814209",
+                              "1.3833086898173974e-09", "-2.0781445141115906e-16", "1"};
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
+             "\"nodes\":[{\"translation\":[%s,%s,%s],\"scale\":[%s,%s,%s]}]}",
+             numbers[0], numbers[1], numbers[2], numbers[3], numbers[4], numbers[5]);
+    cb_error err = {0};
+    cb_model *m = cb_gltf_load_memory((const unsigned char *)json, strlen(json), "numbers.gltf", NULL, NULL, &err);
+    assert_non_null(m);
+    for (int k = 0; k < 3; ++k) {
+        assert_true(m->nodes[0].translation[k] == strtod(numbers[k], NULL));
+        assert_true(m->nodes[0].scale[k] == strtod(numbers[3 + k], NULL));
+    }
+    cb_model_free(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -289,6 +312,7 @@ int main(void)
         cmocka_unit_test(test_source_hash_covers_external_buffers),
         cmocka_unit_test(test_in_place_and_copied_loads_agree),
         cmocka_unit_test(test_normalizing_rotation_keys_never_touches_shared_bytes),
+        cmocka_unit_test(test_json_numbers_are_correctly_rounded),
     };
     return cmocka_run_group_tests_name("load", tests, NULL, NULL);
 }

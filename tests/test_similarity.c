@@ -7,16 +7,9 @@
 
 #include "../src/cb_math.h"
 
-static void similarity_matrix(const cb_similarity *s, double out[16])
-{
-    cb_quat q = {s->rotation[0], s->rotation[1], s->rotation[2], s->rotation[3]};
-    cb_mat4_from_trs(out, (cb_vec3){s->translation[0], s->translation[1], s->translation[2]}, q,
-                     (cb_vec3){s->scale, s->scale, s->scale});
-}
-
 /* The largest difference between the two samplers over every row of every clip at 30 fps,
  * relative to the size of the numbers compared: the joint's scale for its 3x3, the skeleton's
- * reach for the translations. */
+ * reach for the translations. The similarities are sampled in batches, as the bake does. */
 static double worst_difference(cb_model *m)
 {
     cb_error err = {0};
@@ -24,19 +17,25 @@ static double worst_difference(cb_model *m)
     assert_non_null(s);
     uint32_t joints = m->skins[0].joint_count;
     double *mats = malloc(joints * 16 * sizeof(double)), worst = 0;
-    cb_similarity *sims = malloc(joints * sizeof *sims);
+    cb_similarity *sims = malloc(joints * CB_SAMPLE_BATCH * sizeof *sims);
     for (uint32_t a = 0; a < m->animation_count; ++a) {
         cb_clip_info info;
         assert_int_equal(cb_clip_analyze(s, (int32_t)a, 30, -1, NULL, &info, &err), CB_OK);
+        uint32_t batch[CB_SAMPLE_BATCH], count = 0;
         for (uint32_t f = 0; f < info.frames; ++f) {
+            if (count == 0) {
+                while (count < CB_SAMPLE_BATCH && f + count < info.frames) batch[count] = f + count, ++count;
+                cb_clip_frame_similarities(s, &info, batch, count, CB_ROOT_MOTION_IN_PLACE, sims);
+            }
+            const cb_similarity *row = sims + (size_t)(f - batch[0]) * joints;
+            if (f == batch[count - 1]) count = 0;
             cb_clip_frame_matrices(s, &info, f, CB_ROOT_MOTION_IN_PLACE, mats);
-            cb_clip_frame_similarities(s, &info, f, CB_ROOT_MOTION_IN_PLACE, sims);
             double reach = 1;
             for (uint32_t j = 0; j < joints; ++j)
                 for (int k = 12; k < 15; ++k) reach = fmax(reach, fabs(mats[j * 16 + k]));
             for (uint32_t j = 0; j < joints; ++j) {
                 double m2[16];
-                similarity_matrix(&sims[j], m2);
+                cb_similarity_matrix(&row[j], m2);
                 const double *mj = mats + j * 16;
                 double scale = fmax(1, sqrt(mj[0] * mj[0] + mj[1] * mj[1] + mj[2] * mj[2]));
                 for (int k = 0; k < 16; ++k) {
@@ -199,11 +198,75 @@ static void test_built_rigs_take_the_path_they_should(void **state)
     }
 }
 
+/* Several times per call run each step over all of them (vectorized, with the keys before the
+ * first, after the last, at wide angles and at equal keys redone one by one): every batch must
+ * give the bits one time per call gives, whatever its length and wherever it starts. */
+static void expect_batches_match_single_times(const char *what, cb_model *m)
+{
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    assert_non_null(s);
+    uint32_t joints = m->skins[0].joint_count;
+    cb_similarity *batch = malloc(joints * CB_SAMPLE_BATCH * sizeof *batch), *one = malloc(joints * sizeof *one);
+    uint32_t compared = 0;
+    for (uint32_t a = 0; a < m->animation_count; ++a) {
+        const cb_animation *anim = &m->animations[a];
+        /* 0.5 s before the clip to 0.5 s after it, in uneven steps; batches of 1..16 times */
+        double span = anim->t1 - anim->t0 + 1, times[CB_SAMPLE_BATCH];
+        uint32_t steps = 97, length = 1;
+        for (uint32_t i = 0; i < steps; i += length, length = length % CB_SAMPLE_BATCH + 1) {
+            uint32_t count = i + length <= steps ? length : steps - i;
+            for (uint32_t k = 0; k < count; ++k) {
+                double u = (double)(i + k) / (steps - 1);
+                times[k] = anim->t0 - 0.5 + span * (u + 0.003 * sin(7 * u) * (u > 0 && u < 1));
+            }
+            cb_sample_joint_similarities_batch(s, (int32_t)a, times, count, batch);
+            for (uint32_t k = 0; k < count; ++k) {
+                cb_sample_joint_similarities(s, (int32_t)a, times[k], one);
+                if (memcmp(one, batch + (size_t)k * joints, joints * sizeof *one) != 0)
+                    fail_msg("%s: clip %u at t = %.9g: lane %u of a batch of %u differs from one time alone", what, a,
+                             times[k], k, count);
+                ++compared;
+            }
+        }
+    }
+    printf("  %-72s %u times match bit for bit\n", what, compared);
+    free(batch);
+    free(one);
+    cb_sampler_free(s);
+}
+
+static void test_batches_give_the_bits_of_single_times(void **state)
+{
+    (void)state;
+    const char *assets[] = {"assets/fox-bevy/Fox.glb", "assets/simpleskin-bevy/SimpleSkin.gltf",
+                            "assets/multitrack-luanti/gltf_multi_track_1.glb",
+                            "assets/riggedfigure-raylib/rigged_figure.glb"};
+    for (size_t i = 0; i < COUNT_OF(assets); ++i) {
+        cb_model *m = load_shared(assets[i]);
+        expect_batches_match_single_times(assets[i], m);
+        cb_model_free(m);
+    }
+    for (size_t i = 0; i < COUNT_OF(sample_names); ++i) {
+        char path[1024];
+        sample_path(path, sizeof path, sample_names[i]);
+        cb_model *m = load_or_fail(path);
+        expect_batches_match_single_times(path, m);
+        cb_model_free(m);
+    }
+    /* a half turn between two keys: every time between them takes the wide-angle branch */
+    rig_spec uniform = {{{1, 1, 1}, {1.5f, 1.5f, 1.5f}}, CB_INTERP_LINEAR, false, 0, 0};
+    cb_model *m = build_rig(&uniform);
+    expect_batches_match_single_times("built rig", m);
+    cb_model_free(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_real_assets_sample_the_same_both_ways),
         cmocka_unit_test(test_built_rigs_take_the_path_they_should),
+        cmocka_unit_test(test_batches_give_the_bits_of_single_times),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
