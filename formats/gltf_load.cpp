@@ -31,10 +31,13 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <utility>
+#include <fcntl.h>
 #include <strings.h>
 #include <sys/stat.h>
+#include <unistd.h>
 #include <vector>
 
 #include "crowdbake_pal.h"
@@ -174,6 +177,93 @@ bool skip_image(tinygltf::Image *, const int, std::string *, std::string *, int,
 uint32_t le32(const unsigned char *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
 
 bool is_glb(const unsigned char *data, size_t size) { return size >= 4 && std::memcmp(data, "glTF", 4) == 0; }
+
+// ---- a big GLB read on two threads ----
+//
+// A GLB whose BIN chunk tinygltf never reads (no Draco, no meshopt, no external files) is read
+// in two parts: its header, JSON chunk and BIN chunk header at once, and the BIN chunk on a
+// second thread, which also hashes the file, while tinygltf parses the JSON. For a large rig
+// the read (and the page faults of its buffer) then costs no wall time.
+struct TailRead {
+    std::thread thread;
+    size_t head = 0;           // bytes read before the thread started; 0: no thread
+    bool ok = false;           // the thread read every byte
+    cbpal_xxh64_state hash{};  // of the whole file, once ok
+    void wait()
+    {
+        if (thread.joinable()) thread.join();
+    }
+    ~TailRead() { wait(); }
+};
+
+bool read_all(int fd, unsigned char *to, size_t size, off_t offset)
+{
+    while (size > 0) {
+        ssize_t n = pread(fd, to, size, offset);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) return false;
+        to += n, size -= (size_t)n, offset += n;
+    }
+    return true;
+}
+
+// The bytes before the BIN chunk's data, when the file is a GLB worth splitting: exactly a JSON
+// and a BIN chunk, ending at the end of the file, and a JSON that needs no other file or buffer.
+size_t split_point(const unsigned char *head, size_t got, size_t size)
+{
+    if (got < 20 || std::memcmp(head, "glTF", 4) != 0 || le32(head + 8) != size || le32(head + 16) != 0x4E4F534Au)
+        return 0;
+    size_t json_end = 20 + (size_t)le32(head + 12);
+    if (json_end + 8 > got || le32(head + json_end + 4) != 0x004E4942u || json_end + 8 + le32(head + json_end) != size)
+        return 0;
+    for (const char *needs : {"\"uri\"", "KHR_draco_mesh_compression", "EXT_meshopt_compression"})
+        if (memmem(head + 20, json_end - 20, needs, std::strlen(needs))) return 0;
+    return json_end + 8;
+}
+
+// Reads `path` into *out; a big GLB's BIN chunk on tail->thread (see TailRead).
+bool read_model_file(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail, std::string *why)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    struct stat st;
+    if (fd < 0 || fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        *why = fd < 0 ? std::strerror(errno) : "not a regular file";
+        if (fd >= 0) close(fd);
+        return false;
+    }
+    if ((uint64_t)st.st_size > max_bytes) {
+        close(fd);
+        *why = "larger than the " + std::to_string(max_bytes) + "-byte limit (--max-file-size)";
+        return false;
+    }
+    size_t size = (size_t)st.st_size, got = size < (4u << 20) ? size : 20; /* small files at once */
+    out->resize(size);
+    unsigned char *data = out->data();
+    bool ok = read_all(fd, data, got, 0);
+    if (ok && got < size && std::memcmp(data, "glTF", 4) == 0) { /* up to the BIN chunk's data */
+        size_t want = 20 + (size_t)le32(data + 12) + 8;
+        if (want < size) ok = read_all(fd, data + got, want - got, (off_t)got), got = want;
+    }
+    size_t head = ok && got < size ? split_point(data, got, size) : 0;
+    if (ok && head) {
+        try {
+            tail->head = head;
+            tail->thread = std::thread([fd, data, head, size, tail] {
+                tail->ok = read_all(fd, data + head, size - head, (off_t)head);
+                cbpal_xxh64_init(&tail->hash);
+                cbpal_xxh64_update(&tail->hash, data, size);
+                close(fd);
+            });
+            return true;
+        } catch (const std::system_error &) {
+            tail->head = 0; /* no thread: read it here */
+        }
+    }
+    ok = ok && read_all(fd, data + got, size - got, (off_t)got);
+    close(fd);
+    if (!ok) *why = "short read";
+    return ok;
+}
 
 bool check_glb(const unsigned char *data, size_t size, const char *name, cb_error *err)
 {
@@ -409,8 +499,10 @@ struct BinInPlace {
     size_t at, length; // length 0: tinygltf read the BIN chunk itself
 };
 
+// With `tail` reading the BIN chunk still, only the bytes before it are read until the plain
+// parse needs them all.
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
-                         FsState *fs_state, tinygltf::Model *gltf, BinInPlace *in_place, cb_error *err)
+                         FsState *fs_state, tinygltf::Model *gltf, BinInPlace *in_place, TailRead *tail, cb_error *err)
 {
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, nullptr);
@@ -443,6 +535,11 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
             ok = in_place && glb_without_bin(data, json, &glb, &in_place->at, &in_place->length) &&
                  loader.LoadBinaryFromMemory(gltf, &tg_err, &tg_warn, glb.data(), (unsigned)glb.size(), base_dir);
             if (!ok) { // the plain way; its messages are the ones to report
+                if (tail) tail->wait();
+                if (tail && !tail->ok) {
+                    cb_fail(err, CB_ERR_IO, "%s: cannot read: short read", name);
+                    return false;
+                }
                 if (in_place) in_place->length = 0;
                 *fs_state->source_hash = hash;
                 fs_state->files.resize(files);
@@ -1098,9 +1195,10 @@ bool record_sources(cb_model *m, cbpal_xxh64_state *hash, const std::vector<std:
     return true;
 }
 
-// `file`, when given, holds `data` and may be taken by the model (the BIN chunk read in place).
-cb_model *load(const unsigned char *data, size_t size, file_bytes *file, const char *name, const std::string &base_dir,
-               const cb_limits *limits, cb_error *err)
+// `file`, when given, holds `data` and may be taken by the model (the BIN chunk read in place);
+// `tail`, when given, may still be reading it.
+cb_model *load(const unsigned char *data, size_t size, file_bytes *file, TailRead *tail, const char *name,
+               const std::string &base_dir, const cb_limits *limits, cb_error *err)
 {
     Context c{};
     c.limits = limits ? *limits : cb_default_limits();
@@ -1109,10 +1207,17 @@ cb_model *load(const unsigned char *data, size_t size, file_bytes *file, const c
     tinygltf::Model gltf;
     cbpal_xxh64_state source_hash;
     cbpal_xxh64_init(&source_hash);
-    cbpal_xxh64_update(&source_hash, data, size);
+    if (!tail) cbpal_xxh64_update(&source_hash, data, size); /* else the tail's thread hashes the file */
     FsState fs{c.limits.max_file_bytes, &source_hash, {}};
     BinInPlace bin{0, 0};
-    if (!parse_with_tinygltf(data, size, name, base_dir, &fs, &gltf, file ? &bin : nullptr, err)) return nullptr;
+    bool parsed = parse_with_tinygltf(data, size, name, base_dir, &fs, &gltf, file ? &bin : nullptr, tail, err);
+    if (tail) {
+        tail->wait();
+        if (parsed && !tail->ok) cb_fail(err, CB_ERR_IO, "%s: cannot read: short read", name);
+        parsed = parsed && tail->ok;
+        source_hash = tail->hash; /* no other file was read: the split needs a JSON without uris */
+    }
+    if (!parsed) return nullptr;
     c.gltf = &gltf;
     if (!check_required_extensions(c) || !decode_meshopt(c, &gltf)) return nullptr;
     c.model = cb_model_create(name);
@@ -1134,11 +1239,11 @@ cb_model *load(const unsigned char *data, size_t size, file_bytes *file, const c
 }
 
 
-cb_model *load_guarded(const unsigned char *data, size_t size, file_bytes *file, const char *name, const char *base_dir,
-                       const cb_limits *limits, cb_error *err)
+cb_model *load_guarded(const unsigned char *data, size_t size, file_bytes *file, TailRead *tail, const char *name,
+                       const char *base_dir, const cb_limits *limits, cb_error *err)
 {
     try {
-        return load(data, size, file, name, base_dir ? base_dir : "/nonexistent-crowdbake-dir", limits, err);
+        return load(data, size, file, tail, name, base_dir ? base_dir : "/nonexistent-crowdbake-dir", limits, err);
     } catch (const std::bad_alloc &) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory while loading", name);
     } catch (const std::exception &e) {
@@ -1152,16 +1257,17 @@ cb_model *load_guarded(const unsigned char *data, size_t size, file_bytes *file,
 extern "C" cb_model *cb_gltf_load_memory(const unsigned char *data, size_t size, const char *name, const char *base_dir,
                                          const cb_limits *limits, cb_error *err)
 {
-    return load_guarded(data, size, nullptr, name, base_dir, limits, err);
+    return load_guarded(data, size, nullptr, nullptr, name, base_dir, limits, err);
 }
 
 extern "C" cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_error *err)
 {
     cb_limits l = limits ? *limits : cb_default_limits();
     file_bytes bytes;
+    TailRead tail; /* after `bytes`, so it is joined before they are freed */
     std::string why;
     try {
-        if (!read_file(path, l.max_file_bytes, &bytes, &why)) {
+        if (!read_model_file(path, l.max_file_bytes, &bytes, &tail, &why)) {
             cb_fail(err, CB_ERR_IO, "%s: cannot read: %s", path, why.c_str());
             return nullptr;
         }
@@ -1176,5 +1282,5 @@ extern "C" cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_
     std::string dir = path;
     size_t slash = dir.find_last_of('/');
     dir = slash == std::string::npos ? "." : dir.substr(0, slash);
-    return load_guarded(bytes.data(), bytes.size(), &bytes, path, dir.c_str(), &l, err);
+    return load_guarded(bytes.data(), bytes.size(), &bytes, tail.head ? &tail : nullptr, path, dir.c_str(), &l, err);
 }

@@ -232,6 +232,37 @@ static void test_in_place_and_copied_loads_agree(void **state)
     }
 }
 
+/* A GLB of several megabytes is read on two threads (its BIN chunk while the JSON is parsed):
+ * the model and its source hash must be those of the file read at once. Cut short, the file
+ * is refused with the truncation named. */
+static void test_big_glb_read_on_two_threads_loads_the_same(void **state)
+{
+    (void)state;
+    char gen[1100], cmd[1200];
+    snprintf(gen, sizeof gen, "%s", crowdbake_exe());
+    *strrchr(gen, '/') = 0;
+    snprintf(cmd, sizeof cmd, "mkdir -p build/tmp-load && %s/gen_samples --bench build/tmp-load 200 6 10 >/dev/null", gen);
+    assert_int_equal(system(cmd), 0);
+    const char *path = "build/tmp-load/bench_j200_c6_s10.glb";
+    size_t size;
+    char *bytes = read_whole_file(path, &size);
+    assert_true(size > (8u << 20) / 2); /* over the 4 MB under which a file is read at once */
+    cb_model *a = load_or_fail(path), *b = load_copied(path);
+    expect_same_models(path, a, b);
+    assert_true(a->source_hash == b->source_hash);
+    cb_model_free(a);
+    cb_model_free(b);
+
+    FILE *f = fopen("build/tmp-load/cut.glb", "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(bytes, 1, size - 4096, f), size - 4096);
+    fclose(f);
+    free(bytes);
+    cb_error err = {0};
+    assert_null(cb_gltf_load("build/tmp-load/cut.glb", NULL, &err));
+    assert_non_null(strstr(err.message, "truncated GLB"));
+}
+
 static void put_le32(unsigned char *d, uint32_t v)
 {
     for (int i = 0; i < 4; ++i) d[i] = (unsigned char)(v >> (8 * i));
@@ -313,6 +344,7 @@ int main(void)
         cmocka_unit_test(test_in_place_and_copied_loads_agree),
         cmocka_unit_test(test_normalizing_rotation_keys_never_touches_shared_bytes),
         cmocka_unit_test(test_json_numbers_are_correctly_rounded),
+        cmocka_unit_test(test_big_glb_read_on_two_threads_loads_the_same),
     };
     return cmocka_run_group_tests_name("load", tests, NULL, NULL);
 }
