@@ -215,12 +215,26 @@ typedef struct extent {
  * j lies within |A_j| * r_j of c = M_j b_j, so the union over joints bounds the skinned mesh. */
 static inline void grow_bounds(extent *e, cb_vec3 c, double reach)
 {
-    double cc[3] = {c.x, c.y, c.z};
-    for (int k = 0; k < 3; ++k) { /* compares, not fmin: no NaN reaches here and they inline */
-        double lo = cc[k] - reach, hi = cc[k] + reach;
-        e->lo[k] = lo < e->lo[k] ? lo : e->lo[k];
-        e->hi[k] = hi > e->hi[k] ? hi : e->hi[k];
-    }
+    /* Compares, not fmin: no NaN reaches here. Written out per axis, so that a local extent
+     * stays in registers (a loop here is not unrolled at -O2 and keeps it in memory). */
+    e->lo[0] = c.x - reach < e->lo[0] ? c.x - reach : e->lo[0];
+    e->lo[1] = c.y - reach < e->lo[1] ? c.y - reach : e->lo[1];
+    e->lo[2] = c.z - reach < e->lo[2] ? c.z - reach : e->lo[2];
+    e->hi[0] = c.x + reach > e->hi[0] ? c.x + reach : e->hi[0];
+    e->hi[1] = c.y + reach > e->hi[1] ? c.y + reach : e->hi[1];
+    e->hi[2] = c.z + reach > e->hi[2] ? c.z + reach : e->hi[2];
+}
+
+/* range_grow for a qpos bone's values, written out like grow_bounds. */
+static inline void range_grow_qpos(value_range *r, const float *v)
+{
+    r->lo[0] = v[4] < r->lo[0] ? v[4] : r->lo[0];
+    r->lo[1] = v[5] < r->lo[1] ? v[5] : r->lo[1];
+    r->lo[2] = v[6] < r->lo[2] ? v[6] : r->lo[2];
+    r->hi[0] = v[4] > r->hi[0] ? v[4] : r->hi[0];
+    r->hi[1] = v[5] > r->hi[1] ? v[5] : r->hi[1];
+    r->hi[2] = v[6] > r->hi[2] ? v[6] : r->hi[2];
+    r->linear = v[7] > r->linear ? v[7] : r->linear;
 }
 
 /* |A| for the reach: the Frobenius norm of the 3x3, at least its largest stretch. */
@@ -281,7 +295,7 @@ static void similarity_row(bake_state *st, worker *w, uint32_t c, uint32_t f, co
         out[0] = (float)q.x, out[1] = (float)q.y, out[2] = (float)q.z, out[3] = (float)q.w;
         out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z, out[7] = (float)J->scale;
         w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
-        range_grow(&range, CB_LAYOUT_QPOS, out);
+        range_grow_qpos(&range, out);
     }
     *clip_bounds = bounds;
     st->ranges[c] = range;

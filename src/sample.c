@@ -35,7 +35,7 @@ struct cb_sampler {
 
 /* Index of the last key with times[k] <= t (0 when t is before the first key). `hint` holds the
  * previous answer: frames are sampled in order, so the answer is usually it or the next key. */
-static uint32_t find_key(const cb_channel *ch, double t, uint32_t *hint)
+static inline uint32_t find_key(const cb_channel *ch, double t, uint32_t *hint)
 {
     uint32_t last = ch->key_count - 1, h = *hint;
     for (uint32_t k = h; k <= h + 1 && k <= last; ++k)
@@ -237,9 +237,8 @@ static CB_CLONE_INLINE void slerp_lanes(const double (*restrict a)[B], const dou
         double dx = a[0][i] - bx, dy = a[1][i] - by, dz = a[2][i] - bz, dw = a[3][i] - bw;
         double half_chord = 0.5 * sqrt(dx * dx + dy * dy + dz * dz + dw * dw);
         double angle = 2 * cb_small_asin(half_chord);
-        /* Below 1e-6 rad the weights are lerp's. A blend by 1 or 0, not a branch: the
-         * compiler does not speculate float arithmetic in a branch (it could trap), and would
-         * not vectorize the loop. For these finite, non-negative weights it is exact. */
+        /* Below 1e-6 rad the weights are lerp's: a blend by 1 or 0, not a branch, so that the
+         * loop vectorizes. For these finite, non-negative weights it is exact. */
         double tiny = angle < 1e-6 ? 1.0 : 0.0;
         double wa = tiny * (1 - t[i]) + (1 - tiny) * cb_small_sin((1 - t[i]) * angle);
         double wb = tiny * t[i] + (1 - tiny) * cb_small_sin(t[i] * angle);
@@ -327,21 +326,23 @@ static CB_CLONE_INLINE void compose_lanes(const lane_set *restrict parent, lane_
     }
 }
 
-/* out[i * stride] = node after ibm, for the first `count` lanes. */
+/* out[i * stride] = node after ibm, for the first `count` lanes. Composed in every lane (which
+ * vectorizes), then stored. */
 static CB_CLONE_INLINE void joint_lanes(const lane_set *node, const cb_similarity *ibm, uint32_t count, size_t stride,
                                         cb_similarity *out)
 {
     const double(*n)[B] = *node;
     const double b[8] = {ibm->rotation[0],    ibm->rotation[1],    ibm->rotation[2],    ibm->rotation[3],
                          ibm->translation[0], ibm->translation[1], ibm->translation[2], ibm->scale};
-    for (uint32_t i = 0; i < count; ++i) {
-        double a[8] = {n[0][i], n[1][i], n[2][i], n[3][i], n[4][i], n[5][i], n[6][i], n[7][i]}, r[8];
-        compose8(a, b, r);
-        cb_similarity *o = &out[i * stride];
-        memcpy(o->rotation, r, sizeof o->rotation);
-        memcpy(o->translation, r + 4, sizeof o->translation);
-        o->scale = r[7];
+    double r[8][B];
+    for (int i = 0; i < B; ++i) {
+        double a[8] = {n[0][i], n[1][i], n[2][i], n[3][i], n[4][i], n[5][i], n[6][i], n[7][i]}, ri[8];
+        compose8(a, b, ri);
+        r[0][i] = ri[0], r[1][i] = ri[1], r[2][i] = ri[2], r[3][i] = ri[3];
+        r[4][i] = ri[4], r[5][i] = ri[5], r[6][i] = ri[6], r[7][i] = ri[7];
     }
+    for (uint32_t i = 0; i < count; ++i)
+        out[i * stride] = (cb_similarity){{r[0][i], r[1][i], r[2][i], r[3][i]}, {r[4][i], r[5][i], r[6][i]}, r[7][i]};
 }
 
 CB_TARGET_CLONES
