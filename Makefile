@@ -10,10 +10,10 @@
 .DELETE_ON_ERROR:
 SHELL := /bin/bash
 
-DEB_PACKAGES := pkg-config nlohmann-json3-dev rapidjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
+DEB_PACKAGES := pkg-config rapidjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev
-PKGS := tinygltf nlohmann_json RapidJSON draco OpenEXR libzstd tomlplusplus osmesa libpng
+PKGS := tinygltf RapidJSON draco OpenEXR libzstd tomlplusplus osmesa libpng
 
 BUILD   ?= build
 CC      ?= cc

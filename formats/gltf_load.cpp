@@ -22,7 +22,6 @@
 #include <tiny_gltf.h>
 
 #include <meshoptimizer.h>
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -305,24 +304,46 @@ bool check_glb(const unsigned char *data, size_t size, const char *name, cb_erro
     return true;
 }
 
+// The JSON checks and patches below parse with tinygltf's own parser and flags, so that they
+// and tinygltf agree on what the file says.
+const rapidjson::Value *member(const rapidjson::Value &v, const char *key)
+{
+    if (!v.IsObject()) return nullptr;
+    auto it = v.FindMember(key);
+    return it == v.MemberEnd() ? nullptr : &it->value;
+}
+
+size_t array_size(const rapidjson::Value &v, const char *key)
+{
+    const rapidjson::Value *a = member(v, key);
+    return a && a->IsArray() ? a->Size() : 0;
+}
+
 // EXT_meshopt_compression puts compressed bytes in one buffer and leaves the "fallback"
 // buffer without data, which tinygltf refuses. Give such buffers a URI our file-system
 // callback answers with zeros; decode_meshopt() fills them after parsing.
 bool patch_meshopt_json(std::string *json)
 {
     if (json->find("EXT_meshopt_compression") == std::string::npos) return false;
-    nlohmann::json j = nlohmann::json::parse(*json, nullptr, false);
-    if (j.is_discarded() || !j.is_object() || !j.contains("buffers") || !j["buffers"].is_array()) return false;
+    rapidjson::Document j;
+    j.Parse(json->data(), json->size());
+    if (j.HasParseError() || !array_size(j, "buffers")) return false;
     bool patched = false;
-    for (auto &b : j["buffers"]) {
-        if (!b.is_object() || b.contains("uri") || !b.contains("byteLength") || !b["byteLength"].is_number_unsigned())
+    for (rapidjson::Value &b : j.FindMember("buffers")->value.GetArray()) {
+        const rapidjson::Value *length = member(b, "byteLength"), *ext = member(b, "extensions");
+        if (member(b, "uri") || !length || !length->IsUint64() || !ext || !member(*ext, "EXT_meshopt_compression"))
             continue;
-        auto ext = b.find("extensions");
-        if (ext == b.end() || !ext->is_object() || !ext->contains("EXT_meshopt_compression")) continue;
-        b["uri"] = std::string(kFallbackScheme) + std::to_string(b["byteLength"].get<uint64_t>());
+        std::string uri = std::string(kFallbackScheme) + std::to_string(length->GetUint64());
+        b.AddMember("uri", rapidjson::Value(uri.c_str(), (rapidjson::SizeType)uri.size(), j.GetAllocator()),
+                    j.GetAllocator());
         patched = true;
     }
-    if (patched) *json = j.dump();
+    if (patched) {
+        rapidjson::StringBuffer out;
+        rapidjson::Writer<rapidjson::StringBuffer> writer(out);
+        j.Accept(writer);
+        json->assign(out.GetString(), out.GetSize());
+    }
     return patched;
 }
 
@@ -331,29 +352,25 @@ bool patch_meshopt_json(std::string *json)
 bool check_draco_references(const std::string &json, const char *name, cb_error *err)
 {
     if (json.find("KHR_draco_mesh_compression") == std::string::npos) return true;
-    nlohmann::json j = nlohmann::json::parse(json, nullptr, false);
-    if (j.is_discarded() || !j.is_object()) return true; // tinygltf reports the syntax error
-    auto count = [&j](const char *key) -> size_t { return j.contains(key) && j[key].is_array() ? j[key].size() : 0; };
-    auto index = [](const nlohmann::json &v, size_t n) { return v.is_number_integer() && v.get<int64_t>() >= 0 && (size_t)v.get<int64_t>() < n; };
-    size_t views = count("bufferViews"), buffers = count("buffers"), accessors = count("accessors");
-    if (!j.contains("meshes") || !j["meshes"].is_array()) return true;
-    for (size_t m = 0; m < j["meshes"].size(); ++m) {
-        const nlohmann::json &mesh = j["meshes"][m];
-        if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array()) continue;
-        for (size_t p = 0; p < mesh["primitives"].size(); ++p) {
-            const nlohmann::json &prim = mesh["primitives"][p];
-            if (!prim.is_object() || !prim.contains("extensions") || !prim["extensions"].is_object() ||
-                !prim["extensions"].contains("KHR_draco_mesh_compression"))
-                continue;
-            const nlohmann::json &ext = prim["extensions"]["KHR_draco_mesh_compression"];
-            bool ok = ext.is_object() && ext.contains("bufferView") && index(ext["bufferView"], views);
-            if (ok) {
-                const nlohmann::json &view = j["bufferViews"][ext["bufferView"].get<size_t>()];
-                ok = view.is_object() && view.contains("buffer") && index(view["buffer"], buffers);
-            }
-            if (ok && prim.contains("indices")) ok = index(prim["indices"], accessors);
-            if (ok && prim.contains("attributes") && prim["attributes"].is_object())
-                for (auto &a : prim["attributes"].items()) ok = ok && index(a.value(), accessors);
+    rapidjson::Document j;
+    j.Parse(json.data(), json.size());
+    if (j.HasParseError() || !j.IsObject()) return true; // tinygltf reports the syntax error
+    auto index = [](const rapidjson::Value *v, size_t n) { return v && v->IsUint64() && v->GetUint64() < n; };
+    size_t views = array_size(j, "bufferViews"), buffers = array_size(j, "buffers"), accessors = array_size(j, "accessors");
+    for (size_t m = 0; m < array_size(j, "meshes"); ++m) {
+        const rapidjson::Value &mesh = j.FindMember("meshes")->value[(rapidjson::SizeType)m];
+        for (size_t p = 0; p < array_size(mesh, "primitives"); ++p) {
+            const rapidjson::Value &prim = mesh.FindMember("primitives")->value[(rapidjson::SizeType)p];
+            const rapidjson::Value *extensions = member(prim, "extensions");
+            const rapidjson::Value *ext = extensions ? member(*extensions, "KHR_draco_mesh_compression") : nullptr;
+            if (!ext) continue;
+            const rapidjson::Value *view = member(*ext, "bufferView");
+            bool ok = index(view, views);
+            if (ok) ok = index(member(j.FindMember("bufferViews")->value[(rapidjson::SizeType)view->GetUint64()], "buffer"), buffers);
+            if (ok && member(prim, "indices")) ok = index(member(prim, "indices"), accessors);
+            const rapidjson::Value *attributes = member(prim, "attributes");
+            if (ok && attributes && attributes->IsObject())
+                for (auto &a : attributes->GetObject()) ok = ok && index(&a.value, accessors);
             if (!ok) {
                 cb_fail(err, CB_ERR_INPUT, "%s: mesh %zu primitive %zu: its KHR_draco_mesh_compression data or accessors "
                         "refer to a bufferView, buffer or accessor that does not exist", name, m, p);

@@ -126,15 +126,18 @@ void cb_clip_frame_similarities(cb_sampler *s, const cb_clip_info *clip, const u
                                 cb_root_motion root_motion, cb_similarity *out)
 {
     uint32_t joints = cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count;
-    double times[CB_SAMPLE_BATCH];
-    for (uint32_t i = 0; i < count; ++i) times[i] = cb_clip_frame_time(clip, frames[i]);
-    cb_sample_joint_similarities_batch(s, clip->animation, times, count, out);
-    if (root_motion != CB_ROOT_MOTION_IN_PLACE) return;
-    for (uint32_t i = 0; i < count; ++i) {
-        double dx = clip->root_velocity[0] * (times[i] - clip->t0), dz = clip->root_velocity[2] * (times[i] - clip->t0);
-        for (uint32_t j = 0; j < joints; ++j) {
-            out[i * joints + j].translation[0] -= dx;
-            out[i * joints + j].translation[2] -= dz;
+    for (uint32_t first = 0; first < count; first += CB_SAMPLE_BATCH) {
+        uint32_t n = count - first < CB_SAMPLE_BATCH ? count - first : CB_SAMPLE_BATCH;
+        double times[CB_SAMPLE_BATCH];
+        for (uint32_t i = 0; i < n; ++i) times[i] = cb_clip_frame_time(clip, frames[first + i]);
+        cb_similarity *rows = out + (size_t)first * joints;
+        cb_sample_joint_similarities_batch(s, clip->animation, times, n, rows);
+        for (uint32_t i = 0; root_motion == CB_ROOT_MOTION_IN_PLACE && i < n; ++i) {
+            double dx = clip->root_velocity[0] * (times[i] - clip->t0), dz = clip->root_velocity[2] * (times[i] - clip->t0);
+            for (uint32_t j = 0; j < joints; ++j) {
+                rows[(size_t)i * joints + j].translation[0] -= dx;
+                rows[(size_t)i * joints + j].translation[2] -= dz;
+            }
         }
     }
 }

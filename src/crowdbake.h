@@ -190,9 +190,9 @@ bool cb_sampler_is_similarity(const cb_sampler *sampler);
 /* The joint matrices of cb_sample_joint_matrices as similarities (equal within the 1e-6
  * tolerance). Only for samplers where cb_sampler_is_similarity is true. */
 void cb_sample_joint_similarities(cb_sampler *sampler, int32_t animation, double t, cb_similarity *out);
-/* The same at `count` (1..CB_SAMPLE_BATCH) increasing times at once, bit for bit: out[i *
- * joints + j] is joint j at times[i]. Several times per call let the sampler run each step
- * over all of them, which vectorizes: about twice the throughput of one time per call. */
+/* The same at `count` increasing times at once, bit for bit: out[i * joints + j] is joint j at
+ * times[i]. The sampler runs each step over CB_SAMPLE_BATCH times at a time, which vectorizes:
+ * several times the throughput of one time per call. */
 #define CB_SAMPLE_BATCH 16
 void cb_sample_joint_similarities_batch(cb_sampler *sampler, int32_t animation, const double *times, uint32_t count,
                                         cb_similarity *out);
@@ -231,7 +231,7 @@ cb_status cb_clip_analyze(cb_sampler *sampler, int32_t animation, double fps, in
 void cb_clip_frame_matrices(cb_sampler *sampler, const cb_clip_info *clip, uint32_t frame,
                             cb_root_motion root_motion, double *out);
 /* The same as similarities, for samplers where cb_sampler_is_similarity is true, at `count`
- * (1..CB_SAMPLE_BATCH) increasing frames: out[i * joints + j] is joint j at frames[i]. */
+ * increasing frames: out[i * joints + j] is joint j at frames[i]. */
 void cb_clip_frame_similarities(cb_sampler *sampler, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
                                 cb_root_motion root_motion, cb_similarity *out);
 /* A similarity as a 4x4 matrix. */

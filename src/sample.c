@@ -345,9 +345,9 @@ static CB_CLONE_INLINE void joint_lanes(const lane_set *node, const cb_similarit
         out[i * stride] = (cb_similarity){{r[0][i], r[1][i], r[2][i], r[3][i]}, {r[4][i], r[5][i], r[6][i]}, r[7][i]};
 }
 
+/* One batch: 1..B times. */
 CB_TARGET_CLONES
-void cb_sample_joint_similarities_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
-                                        cb_similarity *out)
+static void sample_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count, cb_similarity *out)
 {
     const cb_model *m = s->model;
     lane_set *lanes = (lane_set *)s->lanes;
@@ -375,6 +375,14 @@ void cb_sample_joint_similarities_batch(cb_sampler *s, int32_t animation, const 
     const cb_skin *skin = &m->skins[s->skin];
     for (uint32_t j = 0; j < skin->joint_count; ++j)
         joint_lanes(&lanes[s->slot[skin->joints[j]]], &s->sim_ibm[j], count, skin->joint_count, out + j);
+}
+
+void cb_sample_joint_similarities_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
+                                        cb_similarity *out)
+{
+    size_t joints = s->model->skins[s->skin].joint_count;
+    for (uint32_t first = 0; first < count; first += B)
+        sample_batch(s, animation, times + first, count - first < B ? count - first : B, out + first * joints);
 }
 #undef B
 
