@@ -327,10 +327,9 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
     }
     if (p->layout == CB_LAYOUT_QPOS && info->loops && info->frames > 1) {
         /* The wrap from the last row to the first: a full turn over the loop ends on -q. */
-        const float *first = rows;
-        const float *last = first + (size_t)(info->frames - 1) * p->bone_count * CANON(p->layout);
+        const float *last = rows + (info->frames - 1) * row_floats;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
-            const float *qa = first + (size_t)j * CANON(p->layout), *qb = last + (size_t)j * CANON(p->layout);
+            const float *qa = rows + (size_t)j * CANON(p->layout), *qb = last + (size_t)j * CANON(p->layout);
             if (qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3] < 0) st->breaks[c]++;
         }
     }

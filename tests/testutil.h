@@ -39,7 +39,6 @@ static inline const char *crowdbake_exe(void)
     return env ? env : "build/crowdbake";
 }
 
-/* Loads a model or fails the test with the loader's message. */
 /* A whole file, NUL-terminated (so text can be used as a string); *size gets its length. */
 static inline char *read_whole_file(const char *path, size_t *size)
 {
@@ -56,6 +55,7 @@ static inline char *read_whole_file(const char *path, size_t *size)
     return s;
 }
 
+/* Loads a model or fails the test with the loader's message. */
 static inline cb_model *load_or_fail(const char *path)
 {
     cb_error err = {0};
