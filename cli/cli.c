@@ -172,3 +172,26 @@ int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err)
     }
     return 0;
 }
+
+int cli_open_baked(const char *palette_path, const char *model_path, const cb_limits *limits, const char *skin_option,
+                   cbpal_file *file, cb_palette *view, cb_model **model, cb_error *err)
+{
+    char msg[512];
+    if (cbpal_open(palette_path, CBPAL_VERIFY_CHECKSUM, file, msg, sizeof msg))
+        return cb_fail(err, CB_ERR_INPUT, "%s", msg), -1;
+    *model = cli_load_model(model_path, limits, err);
+    int skin = *model ? cli_pick_skin(*model, skin_option, err) : -1;
+    if (skin >= 0 && cb_palette_view(file, view, err)) skin = -1;
+    else if (skin >= 0 && (*model)->skins[skin].joint_count != view->bone_count) {
+        cb_fail(err, CB_ERR_INPUT, "%s: its skin has %u joints, %s has %u bones: not its palette", model_path,
+                (*model)->skins[skin].joint_count, palette_path, view->bone_count);
+        cb_palette_view_free(view);
+        skin = -1;
+    }
+    if (skin < 0) {
+        cb_model_free(*model);
+        *model = NULL;
+        cbpal_close(file);
+    }
+    return skin;
+}

@@ -6,6 +6,7 @@
 #include <stddef.h>
 
 #include "../formats/gltf_load.h"
+#include "../formats/pal_view.h"
 
 typedef struct cli_option {
     const char *name;     /* "--fps" */
@@ -47,6 +48,12 @@ extern const char cli_limits_usage[];
 cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *err);
 /* The skin a command works on: --skin NAME|INDEX, or the only one; an error otherwise. */
 int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err);
+/* A palette and the model it was baked from, as `preview` and `verify` take them: the .pal
+ * opened with its checksum verified and viewed, the model loaded and its skin picked, their
+ * bone counts compared. Returns the skin, or -1 with *err set and nothing left open; else
+ * the caller frees the view and the model and closes the file. */
+int cli_open_baked(const char *palette_path, const char *model_path, const cb_limits *limits, const char *skin_option,
+                   cbpal_file *file, cb_palette *view, cb_model **model, cb_error *err);
 
 int cmd_info(int argc, char **argv);
 int cmd_sample(int argc, char **argv);

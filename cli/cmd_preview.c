@@ -28,22 +28,17 @@ int cmd_preview(int argc, char **argv)
     if (cell && (!cli_parse_u32(cell, &opt.cell) || opt.cell < 16)) return cli_usage_error("preview", "--cell wants 16 pixels or more");
     cb_error err = {0};
     cbpal_file f;
-    char msg[512];
-    if (cbpal_open(pos[0], CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg)) return cb_fail(&err, CB_ERR_INPUT, "%s", msg), cli_report(&err);
-    cb_model *m = cli_load_model(pos[1], &limits, &err);
-    int skin = m ? cli_pick_skin(m, skin_name, &err) : -1;
     cb_palette p;
-    if (skin >= 0 && !cb_palette_view(&f, &p, &err)) {
-        if (m->skins[skin].joint_count != p.bone_count)
-            cb_fail(&err, CB_ERR_INPUT, "%s: its skin has %u joints, %s has %u bones: not its palette", pos[1],
-                    m->skins[skin].joint_count, pos[0], p.bone_count);
-        else if (!cb_preview_write(&p, f.texels, m, skin, &opt, out, &err))
-            printf("%s: %u clips x %u frames (%ux%u pixels):", out, p.clip_count, opt.columns, opt.columns * opt.cell,
-                   p.clip_count * opt.cell);
-        for (uint32_t c = 0; !err.status && c < p.clip_count; ++c) printf(" %s%s", c ? "/ " : "", p.clips[c].name);
-        if (!err.status) printf(" (rows, top to bottom)\n");
-        cb_palette_view_free(&p);
+    cb_model *m;
+    int skin = cli_open_baked(pos[0], pos[1], &limits, skin_name, &f, &p, &m, &err);
+    if (skin < 0) return cli_report(&err);
+    if (!cb_preview_write(&p, f.texels, m, skin, &opt, out, &err)) {
+        printf("%s: %u clips x %u frames (%ux%u pixels):", out, p.clip_count, opt.columns, opt.columns * opt.cell,
+               p.clip_count * opt.cell);
+        for (uint32_t c = 0; c < p.clip_count; ++c) printf(" %s%s", c ? "/ " : "", p.clips[c].name);
+        printf(" (rows, top to bottom)\n");
     }
+    cb_palette_view_free(&p);
     cb_model_free(m);
     cbpal_close(&f);
     return err.status ? cli_report(&err) : 0;

@@ -37,32 +37,32 @@ int cmd_verify(int argc, char **argv)
     if (random_text && !cli_parse_u32(random_text, &random_times)) return cli_usage_error("verify", "--random wants a count");
     cb_error err = {0};
     cbpal_file f;
-    char msg[512];
-    if (cbpal_open(pos[1], CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg)) return cb_fail(&err, CB_ERR_INPUT, "%s", msg), cli_report(&err);
-    cb_model *m = cli_load_model(pos[0], &limits, &err);
-    int skin = m ? cli_pick_skin(m, skin_name, &err) : -1;
-    cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, &err) : NULL;
     cb_palette p;
-    bool have_view = s && !cb_palette_view(&f, &p, &err);
-    double worst = 0, height = 0;
-    cb_json j;
-    if (have_view) {
-        double lo[3], hi[3];
-        height = cb_skin_rest_bounds(s, lo, hi);
-        if (json) {
-            cb_json_init(&j, stdout);
-            cb_json_object(&j, NULL);
-            cb_json_string(&j, "model", pos[0]);
-            cb_json_string(&j, "palette", pos[1]);
-            cb_json_number(&j, "model_height", height);
-            cb_json_array(&j, "clips");
-        } else {
-            printf("%s with %s (%s/%s, model height %.4g):\n  %-20s %12s %12s %12s %12s %9s %9s  %s\n", pos[1], pos[0],
-                   cb_layout_name(p.layout), cb_precision_name(p.precision), height, "clip", "frames max", "frames mean",
-                   "between max", "between mean", "mm/m", "mm/m", "worst vertex @ time");
-        }
+    cb_model *m;
+    int skin = cli_open_baked(pos[1], pos[0], &limits, skin_name, &f, &p, &m, &err);
+    if (skin < 0) return cli_report(&err);
+    cb_sampler *s = cb_sampler_create(m, skin, &err);
+    if (!s) {
+        cb_palette_view_free(&p);
+        cb_model_free(m);
+        cbpal_close(&f);
+        return cli_report(&err);
     }
-    for (uint32_t c = 0; have_view && c < p.clip_count && !err.status; ++c) {
+    double lo[3], hi[3], worst = 0, height = cb_skin_rest_bounds(s, lo, hi);
+    cb_json j;
+    if (json) {
+        cb_json_init(&j, stdout);
+        cb_json_object(&j, NULL);
+        cb_json_string(&j, "model", pos[0]);
+        cb_json_string(&j, "palette", pos[1]);
+        cb_json_number(&j, "model_height", height);
+        cb_json_array(&j, "clips");
+    } else {
+        printf("%s with %s (%s/%s, model height %.4g):\n  %-20s %12s %12s %12s %12s %9s %9s  %s\n", pos[1], pos[0],
+               cb_layout_name(p.layout), cb_precision_name(p.precision), height, "clip", "frames max", "frames mean",
+               "between max", "between mean", "mm/m", "mm/m", "worst vertex @ time");
+    }
+    for (uint32_t c = 0; c < p.clip_count && !err.status; ++c) {
         int32_t a = cb_model_find_animation(m, p.clips[c].name);
         if (a < 0) {
             cb_fail(&err, CB_ERR_INPUT, "%s: has no clip '%s' that %s holds; verify the model the palette was baked from",
@@ -91,7 +91,7 @@ int cmd_verify(int argc, char **argv)
                    (unsigned long long)e.worst_vertex, e.worst_time);
         }
     }
-    if (have_view && !err.status) {
+    if (!err.status) {
         if (json) {
             cb_json_end(&j);
             cb_json_number(&j, "max_error", worst);
@@ -102,7 +102,7 @@ int cmd_verify(int argc, char **argv)
                    max_error >= 0 ? (mm(worst, height) > max_error ? " — over --max-error" : " — within --max-error") : "");
         }
     }
-    if (have_view) cb_palette_view_free(&p);
+    cb_palette_view_free(&p);
     cb_sampler_free(s);
     cb_model_free(m);
     cbpal_close(&f);

@@ -95,84 +95,7 @@ template <class T> struct file_allocator {
 };
 using file_bytes = std::vector<unsigned char, file_allocator<unsigned char>>;
 
-template <class Bytes> bool read_file(const std::string &path, uint64_t max_bytes, Bytes *out, std::string *why)
-{
-    FILE *f = std::fopen(path.c_str(), "rb");
-    if (!f) {
-        *why = std::strerror(errno);
-        return false;
-    }
-    struct stat st;
-    if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
-        std::fclose(f);
-        *why = "not a regular file";
-        return false;
-    }
-    if ((uint64_t)st.st_size > max_bytes) {
-        std::fclose(f);
-        *why = "larger than the " + std::to_string(max_bytes) + "-byte limit (--max-file-size)";
-        return false;
-    }
-    out->resize((size_t)st.st_size);
-    size_t got = out->empty() ? 0 : std::fread(out->data(), 1, out->size(), f);
-    std::fclose(f);
-    if (got != out->size()) {
-        *why = "short read";
-        return false;
-    }
-    return true;
-}
-
-// ---- file-system callbacks: bounded reads, no shell expansion, meshopt fallback buffers ----
-
-struct FsState {
-    uint64_t max_bytes;
-    cbpal_xxh64_state *source_hash; // every external file read goes into the model's source hash
-    std::vector<std::string> files;  // and into its list of external files, for depfiles
-};
-
-bool fs_exists(const std::string &path, void *)
-{
-    if (path.find(kFallbackScheme) != std::string::npos) return true;
-    struct stat st;
-    return stat(path.c_str(), &st) == 0;
-}
-
-std::string fs_expand(const std::string &path, void *) { return path; }
-
-bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
-{
-    FsState *fs = static_cast<FsState *>(user);
-    size_t marker = path.find(kFallbackScheme);
-    if (marker != std::string::npos) {
-        // A meshopt fallback buffer: zeros now, filled by decoding the compressed views.
-        unsigned long long bytes = std::strtoull(path.c_str() + marker + sizeof kFallbackScheme - 1, nullptr, 10);
-        if (bytes == 0 || bytes > fs->max_bytes) {
-            *err = "meshopt fallback buffer of " + std::to_string(bytes) + " bytes is empty or over the size limit";
-            return false;
-        }
-        out->assign((size_t)bytes, 0);
-        return true;
-    }
-    if (!read_file(path, fs->max_bytes, out, err)) return false;
-    cbpal_xxh64_update(fs->source_hash, out->data(), out->size());
-    fs->files.push_back(path);
-    return true;
-}
-
-bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *)
-{
-    *err = "crowdbake never writes through the glTF loader";
-    return false;
-}
-
-bool skip_image(tinygltf::Image *, const int, std::string *, std::string *, int, int, const unsigned char *, int, void *)
-{
-    return true; // images are never decoded
-}
-
-// ---- container checks: clearer messages than the parser gives, before it runs ----
-
+// Little-endian fields of a GLB header or chunk.
 uint32_t le32(const unsigned char *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
 
 bool is_glb(const unsigned char *data, size_t size) { return size >= 4 && std::memcmp(data, "glTF", 4) == 0; }
@@ -220,8 +143,9 @@ size_t split_point(const unsigned char *head, size_t got, size_t size)
     return json_end + 8;
 }
 
-// Reads `path` into *out; a big GLB's BIN chunk on tail->thread (see TailRead).
-bool read_model_file(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail, std::string *why)
+// Reads `path` into *out, bounded by max_bytes. With `tail`, a big GLB's BIN chunk is read on
+// tail->thread (see TailRead).
+template <class Bytes> bool read_file(const char *path, uint64_t max_bytes, Bytes *out, TailRead *tail, std::string *why)
 {
     int fd = open(path, O_RDONLY | O_CLOEXEC);
     struct stat st;
@@ -243,7 +167,7 @@ bool read_model_file(const char *path, uint64_t max_bytes, file_bytes *out, Tail
         size_t want = 20 + (size_t)le32(data + 12) + 8;
         if (want < size) ok = read_all(fd, data + got, want - got, (off_t)got), got = want;
     }
-    size_t head = ok && got < size ? split_point(data, got, size) : 0;
+    size_t head = tail && ok && got < size ? split_point(data, got, size) : 0;
     if (ok && head) {
         try {
             tail->head = head;
@@ -263,6 +187,56 @@ bool read_model_file(const char *path, uint64_t max_bytes, file_bytes *out, Tail
     if (!ok) *why = "short read";
     return ok;
 }
+
+// ---- file-system callbacks: bounded reads, no shell expansion, meshopt fallback buffers ----
+
+struct FsState {
+    uint64_t max_bytes;
+    cbpal_xxh64_state *source_hash; // every external file read goes into the model's source hash
+    std::vector<std::string> files;  // and into its list of external files, for depfiles
+};
+
+bool fs_exists(const std::string &path, void *)
+{
+    if (path.find(kFallbackScheme) != std::string::npos) return true;
+    struct stat st;
+    return stat(path.c_str(), &st) == 0;
+}
+
+std::string fs_expand(const std::string &path, void *) { return path; }
+
+bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
+{
+    FsState *fs = static_cast<FsState *>(user);
+    size_t marker = path.find(kFallbackScheme);
+    if (marker != std::string::npos) {
+        // A meshopt fallback buffer: zeros now, filled by decoding the compressed views.
+        unsigned long long bytes = std::strtoull(path.c_str() + marker + sizeof kFallbackScheme - 1, nullptr, 10);
+        if (bytes == 0 || bytes > fs->max_bytes) {
+            *err = "meshopt fallback buffer of " + std::to_string(bytes) + " bytes is empty or over the size limit";
+            return false;
+        }
+        out->assign((size_t)bytes, 0);
+        return true;
+    }
+    if (!read_file(path.c_str(), fs->max_bytes, out, nullptr, err)) return false;
+    cbpal_xxh64_update(fs->source_hash, out->data(), out->size());
+    fs->files.push_back(path);
+    return true;
+}
+
+bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *)
+{
+    *err = "crowdbake never writes through the glTF loader";
+    return false;
+}
+
+bool skip_image(tinygltf::Image *, const int, std::string *, std::string *, int, int, const unsigned char *, int, void *)
+{
+    return true; // images are never decoded
+}
+
+// ---- container checks: clearer messages than the parser gives, before it runs ----
 
 bool check_glb(const unsigned char *data, size_t size, const char *name, cb_error *err)
 {
@@ -1284,7 +1258,7 @@ extern "C" cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_
     TailRead tail; /* after `bytes`, so it is joined before they are freed */
     std::string why;
     try {
-        if (!read_model_file(path, l.max_file_bytes, &bytes, &tail, &why)) {
+        if (!read_file(path, l.max_file_bytes, &bytes, &tail, &why)) {
             cb_fail(err, CB_ERR_IO, "%s: cannot read: %s", path, why.c_str());
             return nullptr;
         }

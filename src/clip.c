@@ -107,6 +107,14 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
     return CB_OK;
 }
 
+/* The root's average horizontal travel from the clip's start to time t, which in-place bakes
+ * take off every joint. */
+static void root_travel(const cb_clip_info *clip, double t, double *dx, double *dz)
+{
+    *dx = clip->root_velocity[0] * (t - clip->t0);
+    *dz = clip->root_velocity[2] * (t - clip->t0);
+}
+
 void cb_clip_frame_matrices(cb_sampler *s, const cb_clip_info *clip, uint32_t frame, cb_root_motion root_motion,
                             double *out)
 {
@@ -115,7 +123,8 @@ void cb_clip_frame_matrices(cb_sampler *s, const cb_clip_info *clip, uint32_t fr
     double t = cb_clip_frame_time(clip, frame);
     cb_sample_joint_matrices(s, clip->animation, t, out);
     if (root_motion != CB_ROOT_MOTION_IN_PLACE) return;
-    double dx = clip->root_velocity[0] * (t - clip->t0), dz = clip->root_velocity[2] * (t - clip->t0);
+    double dx, dz;
+    root_travel(clip, t, &dx, &dz);
     for (uint32_t j = 0; j < m->skins[skin].joint_count; ++j) {
         out[(size_t)j * 16 + 12] -= dx;
         out[(size_t)j * 16 + 14] -= dz;
@@ -133,7 +142,8 @@ void cb_clip_frame_similarities(cb_sampler *s, const cb_clip_info *clip, const u
         cb_similarity *rows = out + (size_t)first * joints;
         cb_sample_joint_similarities_batch(s, clip->animation, times, n, rows);
         for (uint32_t i = 0; root_motion == CB_ROOT_MOTION_IN_PLACE && i < n; ++i) {
-            double dx = clip->root_velocity[0] * (times[i] - clip->t0), dz = clip->root_velocity[2] * (times[i] - clip->t0);
+            double dx, dz;
+            root_travel(clip, times[i], &dx, &dz);
             for (uint32_t j = 0; j < joints; ++j) {
                 rows[(size_t)i * joints + j].translation[0] -= dx;
                 rows[(size_t)i * joints + j].translation[2] -= dz;

@@ -139,17 +139,26 @@ static void range_reset(value_range *r)
     r->linear = 0;
 }
 
-/* Compares, not fminf/fmaxf: the values are finite and the compares inline. */
-static inline void range_grow(value_range *r, cb_layout layout, const float *v)
+/* Compares, not fminf/fmaxf: the values are finite and the compares inline. A qpos bone's
+ * position and scale, written out per axis so a local range stays in registers. */
+static inline void range_grow_qpos(value_range *r, const float *v)
+{
+    r->lo[0] = v[4] < r->lo[0] ? v[4] : r->lo[0];
+    r->lo[1] = v[5] < r->lo[1] ? v[5] : r->lo[1];
+    r->lo[2] = v[6] < r->lo[2] ? v[6] : r->lo[2];
+    r->hi[0] = v[4] > r->hi[0] ? v[4] : r->hi[0];
+    r->hi[1] = v[5] > r->hi[1] ? v[5] : r->hi[1];
+    r->hi[2] = v[6] > r->hi[2] ? v[6] : r->hi[2];
+    r->linear = v[7] > r->linear ? v[7] : r->linear;
+}
+
+/* An affine or mat4 bone's 12 canonical values (3 rows of 4). */
+static inline void range_grow_affine(value_range *r, const float *v)
 {
     for (int k = 0; k < 3; ++k) {
-        float t = layout == CB_LAYOUT_QPOS ? v[4 + k] : v[k * 4 + 3];
+        float t = v[k * 4 + 3];
         if (t < r->lo[k]) r->lo[k] = t;
         if (t > r->hi[k]) r->hi[k] = t;
-    }
-    if (layout == CB_LAYOUT_QPOS) {
-        if (v[7] > r->linear) r->linear = v[7];
-        return;
     }
     for (int i = 0; i < 3; ++i)
         for (int k = 0; k < 3; ++k)
@@ -178,7 +187,7 @@ typedef struct worker {
     double *mats;        /* bones * 16 */
     cb_similarity *sims; /* CB_SAMPLE_BATCH rows of bones: the joints, for qpos rows of similarity rigs */
     cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
-    float *rows;         /* the rows of one clip, when clips are encoded as they are sampled */
+    float *rows;         /* the pre-encoding rows of the clip being sampled (max_clip_frames of them) */
 } worker;
 
 typedef struct bake_state {
@@ -225,18 +234,6 @@ static inline void grow_bounds(extent *e, cb_vec3 c, double reach)
     e->hi[2] = c.z + reach > e->hi[2] ? c.z + reach : e->hi[2];
 }
 
-/* range_grow for a qpos bone's values, written out like grow_bounds. */
-static inline void range_grow_qpos(value_range *r, const float *v)
-{
-    r->lo[0] = v[4] < r->lo[0] ? v[4] : r->lo[0];
-    r->lo[1] = v[5] < r->lo[1] ? v[5] : r->lo[1];
-    r->lo[2] = v[6] < r->lo[2] ? v[6] : r->lo[2];
-    r->hi[0] = v[4] > r->hi[0] ? v[4] : r->hi[0];
-    r->hi[1] = v[5] > r->hi[1] ? v[5] : r->hi[1];
-    r->hi[2] = v[6] > r->hi[2] ? v[6] : r->hi[2];
-    r->linear = v[7] > r->linear ? v[7] : r->linear;
-}
-
 /* |A| for the reach: the Frobenius norm of the 3x3, at least its largest stretch. */
 static double frobenius3(const double *M)
 {
@@ -262,14 +259,14 @@ static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, f
         if (p->layout != CB_LAYOUT_QPOS) {
             for (int r = 0; r < 3; ++r)
                 for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
-            range_grow(&st->ranges[c], p->layout, out);
+            range_grow_affine(&st->ranges[c], out);
             continue;
         }
         if (qpos_canon(M, out, st->model, &st->model->skins[st->skin], j, clip->name, f, f ? &w->prev[j] : NULL, err))
             return err->status;
         w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
         out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
-        range_grow(&st->ranges[c], p->layout, out);
+        range_grow_qpos(&st->ranges[c], out);
     }
     return CB_OK;
 }
@@ -309,8 +306,10 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
     extent bounds = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
     range_reset(&st->ranges[c]);
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
-    float *rows = w->rows;
     size_t row_floats = (size_t)p->bone_count * CANON(p->layout);
+    if (!w->rows && !(w->rows = malloc(st->max_clip_frames * row_floats * sizeof(float)))) /* only sampling needs them */
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
+    float *rows = w->rows;
     for (uint32_t f = 0; similar && f < info->frames; f += CB_SAMPLE_BATCH) {
         uint32_t frames[CB_SAMPLE_BATCH], count = 0;
         while (count < CB_SAMPLE_BATCH && f + count < info->frames) frames[count] = f + count, ++count;
@@ -342,6 +341,7 @@ typedef struct job {
     bake_state *st;
     uint32_t first, stride;
     void (*run)(bake_state *st, worker *w, uint32_t clip);
+    bool samples; /* run uses the worker's sampler and scratch */
 } job;
 
 static int job_main(void *arg)
@@ -350,12 +350,13 @@ static int job_main(void *arg)
     bake_state *st = jb->st;
     worker w = {0};
     cb_error *err0 = &st->errors[jb->first < st->p->clip_count ? jb->first : 0];
-    w.sampler = cb_sampler_create(st->model, st->skin, err0);
-    w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
-    w.sims = malloc((size_t)st->p->bone_count * CB_SAMPLE_BATCH * sizeof(cb_similarity));
-    w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
-    w.rows = malloc((size_t)st->max_clip_frames * st->p->bone_count * CANON(st->p->layout) * sizeof(float));
-    if (!w.sampler || !w.mats || !w.sims || !w.prev || !w.rows) {
+    if (jb->samples) {
+        w.sampler = cb_sampler_create(st->model, st->skin, err0);
+        w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
+        w.sims = malloc((size_t)st->p->bone_count * CB_SAMPLE_BATCH * sizeof(cb_similarity));
+        w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
+    }
+    if (jb->samples && (!w.sampler || !w.mats || !w.sims || !w.prev)) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
         for (uint32_t c = jb->first; c < st->p->clip_count; c += jb->stride) jb->run(st, &w, c);
@@ -377,14 +378,14 @@ static uint32_t threads_used(const bake_state *st)
 
 /* Runs `run` for every clip, clip c on thread c % threads. Each clip writes only its own rows
  * and slots, so the result does not depend on the thread count. */
-static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, uint32_t))
+static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, uint32_t), bool samples)
 {
     uint32_t threads = threads_used(st);
     job jobs[64];
     thrd_t ids[64];
     bool started[64] = {false};
     for (uint32_t t = 0; t < threads; ++t) {
-        jobs[t] = (job){st, t, threads, run};
+        jobs[t] = (job){st, t, threads, run, samples};
         started[t] = t > 0 && thrd_create(&ids[t], job_main, &jobs[t]) == thrd_success;
     }
     job_main(&jobs[0]);
@@ -449,7 +450,6 @@ static double snorm16_decode(uint16_t u)
 }
 
 static double unorm16_decode(uint16_t u, double lo, double hi) { return hi > lo ? lo + (hi - lo) * (u / 65535.0) : lo; }
-
 
 /* The 4 * texels_per_bone values of one bone, in texel order, as floats. */
 static void texel_values(const cb_palette *p, const float *v, float out[16])
@@ -864,12 +864,12 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     bind_positions(p, skin);
     bool skinned = joint_reach(p, m, skin_index, radius);
     st.radius = radius;
-    for_each_clip(&st, sample_clip_job);
+    for_each_clip(&st, sample_clip_job, true);
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
     merge_ranges(p, st.ranges);
     double t1 = seconds_now();
-    if (st.kept) for_each_clip(&st, encode_kept_job);
+    if (st.kept) for_each_clip(&st, encode_kept_job, false);
     double t2 = seconds_now(), lo[3], hi[3];
     /* Clips encoded as they were sampled: their encoding time, spread over the threads, moves
      * from the sampling phase to the encoding phase. */
@@ -883,7 +883,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.error_stride = work > CB_ERROR_BUDGET ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
     p->error_rows_measured = 0;
     if (skinned) {
-        for_each_clip(&st, measure_clip);
+        for_each_clip(&st, measure_clip, true);
         for (uint32_t c = 0; c < p->clip_count; ++c) {
             p->max_error = fmax(p->max_error, st.clip_error[c]);
             p->error_rows_measured += (p->clips[c].frames + st.error_stride - 1) / st.error_stride +
