@@ -60,49 +60,19 @@ static void read_reference(const char *path, ref_file *rf)
     assert_true(rf->model[0] && rf->fps > 0 && rf->count > 0);
 }
 
-/* Rows of the reference that an independent Python evaluator (tests/tools/reference_errata.py)
- * cannot reproduce either: e.g. robot rows with m2 = m8 = -0.37 on an unscaled joint, which
- * no rotation gives. crowdbake must disagree with each of them and match every other row. */
-typedef struct erratum {
-    char file[64];
-    int clip, frame, skin, joint;
-} erratum;
+/* How crowdbake's matrices compare with one reference file. */
+typedef struct comparison {
+    double worst;           /* largest |crowdbake - reference| over every element of every row */
+    size_t bad_rows;        /* rows with an element off by more than the tolerance */
+    const ref_row *at;      /* the row of the worst element, */
+    int element;            /* its index m0..m15 */
+    double crowdbake_value; /* and what crowdbake computed there */
+} comparison;
 
-static erratum *read_errata(size_t *count)
+/* Compares every row; also checks the framing of each row. */
+static comparison compare_rows(const ref_file *rf, cb_model *m, bool apply_mesh_node, double tol)
 {
-    FILE *f = fopen("tests/data/reference_errata.csv", "r");
-    assert_non_null(f);
-    size_t cap = 2048;
-    erratum *list = malloc(cap * sizeof *list);
-    char line[256];
-    *count = 0;
-    while (fgets(line, sizeof line, f)) {
-        if (line[0] == '#') continue;
-        if (*count == cap) list = realloc(list, (cap *= 2) * sizeof *list);
-        erratum *e = &list[*count];
-        if (sscanf(line, "%63[^,],%d,%d,%d,%d", e->file, &e->clip, &e->frame, &e->skin, &e->joint) == 5) ++*count;
-    }
-    fclose(f);
-    return list;
-}
-
-static bool is_erratum(const erratum *list, size_t count, const char *file, const ref_row *r)
-{
-    for (size_t i = 0; i < count; ++i)
-        if (list[i].clip == r->clip && list[i].frame == r->frame && list[i].skin == r->skin &&
-            list[i].joint == r->joint && strcmp(list[i].file, file) == 0)
-            return true;
-    return false;
-}
-
-/* Largest |crowdbake - reference| over every row; also checks the framing of each row.
- * Rows off by more than `tol` are counted in *bad_rows when given. */
-static double compare_rows(const ref_file *rf, cb_model *m, bool apply_mesh_node, double tol, size_t *bad_rows,
-                           const char *file, const erratum *errata, size_t errata_count, size_t *stale_errata)
-{
-    double worst = 0;
-    if (bad_rows) *bad_rows = 0;
-    if (stale_errata) *stale_errata = 0;
+    comparison c = {0};
     cb_sampler *samplers[8] = {0};
     double mats[4096 * 16];
     int cached_clip = -1, cached_frame = -1, cached_skin = -1;
@@ -132,65 +102,68 @@ static double compare_rows(const ref_file *rf, cb_model *m, bool apply_mesh_node
             }
             cached_clip = r->clip, cached_frame = r->frame, cached_skin = r->skin;
         }
-        double row_worst = 0;
+        bool bad = false;
         for (int k = 0; k < 16; ++k) {
-            double d = fabs(mats[(size_t)r->joint * 16 + k] - r->m[k]);
-            if (d > row_worst) row_worst = d;
+            double value = mats[(size_t)r->joint * 16 + k], d = fabs(value - r->m[k]);
+            bad |= d > tol;
+            if (d > c.worst) c = (comparison){d, c.bad_rows, r, k, value};
         }
-        bool listed = errata && is_erratum(errata, errata_count, file, r);
-        if (listed) {
-            if (row_worst <= tol) ++*stale_errata;
-            continue;
-        }
-        if (row_worst > worst) worst = row_worst;
-        if (bad_rows && row_worst > tol) ++*bad_rows;
+        c.bad_rows += bad;
     }
     for (int s = 0; s < 8; ++s) cb_sampler_free(samplers[s]);
-    return worst;
+    return c;
 }
 
 static double compare(const ref_file *rf, cb_model *m, bool apply_mesh_node)
 {
-    return compare_rows(rf, m, apply_mesh_node, 0, NULL, NULL, NULL, 0, NULL);
+    return compare_rows(rf, m, apply_mesh_node, 0).worst;
 }
 
+static int is_csv(const struct dirent *e)
+{
+    size_t len = strlen(e->d_name);
+    return len > 4 && strcmp(e->d_name + len - 4, ".csv") == 0;
+}
 
-
+/* Every row of every file, no exemptions; each file's result is printed before any failure
+ * is reported, so one run shows them all. */
 static void test_every_reference_file_matches(void **state)
 {
     (void)state;
     char dir[1024];
     shared_path(dir, sizeof dir, "reference");
-    DIR *d = opendir(dir);
-    assert_non_null(d);
-    size_t errata_count;
-    erratum *errata = read_errata(&errata_count);
-    int files = 0;
-    struct dirent *e;
-    while ((e = readdir(d))) {
-        size_t len = strlen(e->d_name);
-        if (len < 4 || strcmp(e->d_name + len - 4, ".csv") != 0) continue;
+    struct dirent **names;
+    int files = scandir(dir, &names, is_csv, alphasort); /* sorted: the same report every run */
+    if (files < 0) fail_msg("%s: cannot list the reference files", dir);
+    size_t rows = 0;
+    int failed_files = 0;
+    for (int i = 0; i < files; ++i) {
         char path[2048];
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        snprintf(path, sizeof path, "%s/%s", dir, names[i]->d_name);
         ref_file rf;
         read_reference(path, &rf);
         char model_rel[1024];
         snprintf(model_rel, sizeof model_rel, "assets/%s", rf.model);
         cb_model *m = load_shared(model_rel);
         double tol = 1e-5 * fmax(1.0, rf.largest);
-        size_t bad, stale;
-        double worst = compare_rows(&rf, m, false, tol, &bad, e->d_name, errata, errata_count, &stale);
-        printf("  %-34s %6zu matrices: worst %.3g, tolerance %.3g, %zu over it, %zu stale errata\n", e->d_name, rf.count,
-               worst, tol, bad, stale);
-        if (bad) fail_msg("%s: %zu rows over tolerance %g (worst %g)", e->d_name, bad, tol, worst);
-        if (stale) fail_msg("%s: %zu listed errata now match; regenerate tests/data/reference_errata.csv", e->d_name, stale);
+        comparison c = compare_rows(&rf, m, false, tol);
+        printf("  %-32s %6zu rows compared, worst difference %.3g (tolerance %.3g)%s\n", names[i]->d_name, rf.count,
+               c.worst, tol, c.bad_rows ? "" : ", all match");
+        if (c.bad_rows) {
+            printf("  ERROR: %s: %zu of %zu rows differ by more than %.3g; worst: clip %d frame %d skin %d joint %d "
+                   "m%d = %.12g, crowdbake %.12g\n", names[i]->d_name, c.bad_rows, rf.count, tol, c.at->clip,
+                   c.at->frame, c.at->skin, c.at->joint, c.element, c.at->m[c.element], c.crowdbake_value);
+            ++failed_files;
+        }
+        rows += rf.count;
         cb_model_free(m);
         free(rf.rows);
-        ++files;
+        free(names[i]);
     }
-    closedir(d);
-    free(errata);
-    assert_true(files >= 9);
+    free(names);
+    printf("  %d files, %zu rows compared\n", files, rows);
+    if (failed_files) fail_msg("%d of %d reference files have rows crowdbake does not match", failed_files, files);
+    assert_true(files >= 10);
 }
 
 /* The reference tells the two conventions apart: applying the mesh node's own transform
