@@ -76,6 +76,16 @@ void cb_atomic_cleanup_on_signals(void)
     sigaction(SIGHUP, &sa, NULL);
 }
 
+/* Test hook: CROWDBAKE_TEST_STOP=mid-write stops the process (SIGSTOP) once half of its first
+ * write to a temporary file is done; =before-rename stops it when the temporary is complete but
+ * not yet renamed. A test then signals the stopped process at that exact point instead of racing
+ * a short-lived file (tests/tools/interrupt_mid_write.py). Never set outside tests. */
+static void stop_here_for_tests(const char *point)
+{
+    const char *at = getenv("CROWDBAKE_TEST_STOP");
+    if (at && strcmp(at, point) == 0) raise(SIGSTOP);
+}
+
 static char *dir_of(const char *path)
 {
     const char *slash = strrchr(path, '/');
@@ -134,14 +144,20 @@ cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err)
 cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_error *err)
 {
     const char *p = data;
+    size_t half = f->written == 0 ? size / 2 : 0; /* where the mid-write test stop falls */
     while (size > 0) {
-        ssize_t n = write(f->fd, p, size);
+        if (half && f->written >= half) {
+            stop_here_for_tests("mid-write");
+            half = 0;
+        }
+        ssize_t n = write(f->fd, p, half ? half - f->written : size);
         if (n < 0 && errno == EINTR) continue;
         if (n <= 0)
             return cb_fail(err, CB_ERR_IO, "%s: write failed: %s; the previous file, if any, is unchanged", f->path,
                            n < 0 ? strerror(errno) : "no space");
         p += n;
         size -= (size_t)n;
+        f->written += (size_t)n;
     }
     return CB_OK;
 }
@@ -160,6 +176,7 @@ cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err)
     }
     int rc = close(f->fd);
     f->fd = -1;
+    stop_here_for_tests("before-rename");
     if (rc != 0 || rename(f->tmp_path, f->path) != 0) {
         cb_fail(err, CB_ERR_IO, "%s: cannot replace the file: %s", f->path, strerror(errno));
         cb_atomic_abort(f);

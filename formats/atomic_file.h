@@ -10,6 +10,7 @@ typedef struct cb_atomic_file {
     char *path;     /* the target */
     char *tmp_path; /* .NAME.tmp.XXXXXX in the same directory */
     int slot;       /* in the table the signal handlers clean up */
+    size_t written; /* bytes written so far */
 } cb_atomic_file;
 
 /* Installs SIGINT, SIGTERM and SIGHUP handlers that remove every temporary file being written,
