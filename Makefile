@@ -8,6 +8,7 @@
 
 .SUFFIXES:
 .DELETE_ON_ERROR:
+.SECONDARY: # keep intermediate files (the test programs between their sources and their runs)
 SHELL := /bin/bash
 
 DEB_PACKAGES := pkg-config rapidjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
@@ -47,7 +48,8 @@ CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: all deps demo check test test-asan bench bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds
+.PHONY: all deps demo check check-normal check-asan check-shared test test-asan test-runs readme bench \
+        bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds
 all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(SAMPLE_GLB)
 
 # ---- dependencies --------------------------------------------------------------------
@@ -55,6 +57,7 @@ DEPS_STAMP := $(BUILD)/.deps-ok
 deps: $(DEPS_STAMP)
 $(DEPS_STAMP): Makefile
 	@missing=$$(for p in $(DEB_PACKAGES); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q 'install ok installed' || echo $$p; done); \
+	missing=$$(echo $$missing); \
 	if [ -n "$$missing" ]; then \
 	  if [ "$$(id -u)" = 0 ]; then \
 	    echo "crowdbake: installing $$missing"; \
@@ -62,7 +65,10 @@ $(DEPS_STAMP): Makefile
 	    apt-get install -y --no-install-recommends $$missing >/dev/null 2>&1 || \
 	      { apt-get update -qq && apt-get install -y --no-install-recommends $$missing; } || exit 1; \
 	  else \
-	    echo "crowdbake: missing packages; run: sudo apt-get install -y $$missing" >&2; exit 1; \
+	    echo "crowdbake: these Debian packages are missing; install them as root, then run make again:" >&2; \
+	    if command -v sudo >/dev/null; then echo "sudo apt-get install -y --no-install-recommends $$missing" >&2; \
+	    else echo "su -c 'apt-get install -y --no-install-recommends $$missing'" >&2; fi; \
+	    exit 1; \
 	  fi; \
 	fi
 	@mkdir -p $(@D) && touch $@
@@ -79,7 +85,11 @@ $(BUILD)/obj/%.o: %.cpp $(DEPS_STAMP)
 # Debian's RapidJSON (1.1.0) adds an offset to its parse stack's null pointer before the stack
 # first grows, which clang's UBSan reports on every parse (fixed upstream after 1.1.0). Only
 # the glTF adapter includes RapidJSON; every other check stays on for it.
-$(BUILD)/obj/formats/gltf_load.o: CXXFLAGS += $(if $(SAN),-fno-sanitize=pointer-overflow)
+$(BUILD)/obj/formats/gltf_load.o $(BUILD)/obj/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-fno-sanitize=pointer-overflow)
+# tinygltf's implementation is third-party code that takes 108 s of CPU to compile at -O1 -g
+# under the sanitizers (14 s at -O0, every check still in): the sanitizer build skips its
+# optimizer.
+$(BUILD)/obj/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-O0)
 
 # The shipped GLSL, embedded so `crowdbake preview` renders with exactly what runtimes get.
 $(BUILD)/gen/palette_glsl.c: samples/shaders/crowdbake_palette.glsl
@@ -117,35 +127,96 @@ demo: all
 	$(BUILD)/crowdbake bake samples/catalog.toml
 
 # ---- tests ----------------------------------------------------------------------------
+# Each build's tests write under $(BUILD)/tmp-tests (BUILD_DIR), so the normal and the
+# sanitizer passes run side by side.
+TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(shell pkg-config --cflags cmocka 2>/dev/null)
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
 $(BUILD)/tests/%: tests/%.c tests/testutil.h $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(shell pkg-config --cflags cmocka 2>/dev/null) -c $< -o $@.o
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TEST_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
 
 # The reader header alone, strict C99, as an engine would compile it: no libcrowdbake.
 $(BUILD)/tests/standalone_pal_reader: tests/standalone_pal_reader.c formats/crowdbake_pal.h $(DEPS_STAMP)
 	@mkdir -p $(@D)
-	$(CC) -std=c99 -pedantic $(OPT) -g $(WARN) $(SAN) $(shell pkg-config --cflags cmocka 2>/dev/null) $< -o $@ \
+	$(CC) -std=c99 -pedantic $(OPT) -g $(WARN) $(SAN) $(TEST_CFLAGS) $< -o $@ \
 	  $(shell pkg-config --libs cmocka libzstd 2>/dev/null)
 TEST_BINS += $(BUILD)/tests/standalone_pal_reader
 
 # Fuzz targets, replayed over their regression inputs (and the samples) by every test run.
 FUZZ_TARGETS := gltf pal exr catalog
-REPLAY_BINS = $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%)
 $(BUILD)/tests/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c tests/fuzz/fuzz_$*.c -o $@.fuzz.o
 	$(CC) $(CFLAGS) -c tests/fuzz/replay.c -o $@.main.o
 	$(CXX) $(SAN) -o $@ $@.fuzz.o $@.main.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
-replay: all $(REPLAY_BINS)
-	@status=0; \
-	printf 'replay gltf     '; $(BUILD)/tests/replay_gltf tests/fuzz/regressions/gltf $(BUILD)/samples || status=1; \
-	printf 'replay pal      '; $(BUILD)/tests/replay_pal tests/fuzz/regressions/pal || status=1; \
-	printf 'replay exr      '; $(BUILD)/tests/replay_exr tests/fuzz/regressions/exr || status=1; \
-	printf 'replay catalog  '; $(BUILD)/tests/replay_catalog tests/fuzz/regressions/catalog catalog.example.toml \
-	  samples/catalog.toml || status=1; \
-	exit $$status
+ARGS_replay_gltf    := tests/fuzz/regressions/gltf $(BUILD)/samples
+ARGS_replay_pal     := tests/fuzz/regressions/pal
+ARGS_replay_exr     := tests/fuzz/regressions/exr
+ARGS_replay_catalog := tests/fuzz/regressions/catalog catalog.example.toml samples/catalog.toml
+
+# The npm packages the tests use (the Khronos glTF validator, a JSON schema validator), from the
+# package-lock; installed once here because several test programs use them at the same time.
+NODE_DEPS := tests/validator/node_modules/.package-lock.json
+$(NODE_DEPS): tests/validator/package-lock.json
+	cd tests/validator && npm ci --no-audit --no-fund --loglevel=error
+
+SHARED := $(or $(CROWDBAKE_SHARED),../shared)
+check-shared:
+	@[ -d "$(SHARED)/assets" ] && [ -d "$(SHARED)/reference" ] || { echo "crowdbake: the tests need the shared \
+	third-party models and reference matrices in $(SHARED)/assets and $(SHARED)/reference: clone this repository \
+	beside that folder, or set CROWDBAKE_SHARED=DIR" >&2; exit 1; }
+
+# One test run: its output comes in one piece (make -O) and its outcome goes to
+# $(BUILD)/tests/results: NAME.pending before it runs, NAME.passed or NAME.failed after, so
+# the summary also counts a program that never ran (its build failed) as failed. The .run files
+# are never made, so every `make test` runs everything.
+RESULTS = $(BUILD)/tests/results
+TEST_RUNS = $(TEST_BINS:%=%.run) $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
+# The README's example outputs come from real runs (once: the sanitizer build need not).
+TEST_RUNS += $(if $(SAN),,$(BUILD)/tests/readme_examples.run)
+define record_run
+	@echo "---- $(1) ($(BUILD))"
+	@rm -f $(RESULTS)/$(1).pending; if $(2); then touch $(RESULTS)/$(1).passed; \
+	 else echo "---- FAILED: $(1) ($(BUILD))"; touch $(RESULTS)/$(1).failed; exit 1; fi
+endef
+$(RESULTS)/pending:
+	@mkdir -p $(RESULTS) && for r in $(notdir $(TEST_RUNS:.run=)); do touch $(RESULTS)/$$r.pending; done && touch $@
+$(BUILD)/tests/%.run: $(BUILD)/tests/% all $(NODE_DEPS) | $(RESULTS)/pending
+	$(call record_run,$*,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples $< $(ARGS_$*))
+$(BUILD)/tests/readme_examples.run: all | $(RESULTS)/pending
+	$(call record_run,readme_examples,python3 tests/tools/readme_examples.py --build $(BUILD))
+test-runs: $(TEST_RUNS)
+replay: $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
+readme: all
+	python3 tests/tools/readme_examples.py --write --build $(BUILD)
+
+# Counts the outcomes of one or more builds' runs. Ends with the line CI reads:
+# "tests: N passed, M failed".
+define test_summary
+	@passed=0; failed=0; for b in $(1); do r=$$b/tests/results; \
+	  [ -e $$r/pending ] || { echo "crowdbake: $$b: no test ran (see the build errors above)"; failed=$$((failed + 1)); continue; }; \
+	  p=$$(ls $$r | grep -c '\.passed$$'); f=$$(ls $$r | grep -c '\.\(failed\|pending\)$$'); \
+	  echo "crowdbake: $$b: $$p of $$((p + f)) test runs passed"; \
+	  for x in $$r/*.failed $$r/*.pending; do [ -e "$$x" ] && echo "  failed: $$(basename $$x)"; done; \
+	  passed=$$((passed + p)); failed=$$((failed + f)); done; \
+	echo "tests: $$passed passed, $$failed failed"; [ $$failed = 0 ]
+endef
+# Every core, unless make was already given -j (then its job slots are shared).
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+PARALLEL = -k -O $(if $(findstring jobserver,$(MAKEFLAGS)),,-j$(JOBS))
+SANITIZE := BUILD=build/asan OPT=-O1 SAN="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all"
+ASAN_ENV := ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp
+
+test: deps check-shared $(NODE_DEPS)
+	@rm -rf $(RESULTS)
+	@$(MAKE) --no-print-directory $(PARALLEL) test-runs || true
+	$(call test_summary,$(BUILD))
+
+test-asan: deps check-shared $(NODE_DEPS)
+	@rm -rf build/asan/tests/results
+	@$(ASAN_ENV) $(MAKE) --no-print-directory $(PARALLEL) $(SANITIZE) test-runs || true
+	$(call test_summary,build/asan)
 
 # libFuzzer runs under ASan + UBSan (clang): make fuzz FUZZ_SECONDS=600 [FUZZ_TARGETS=gltf]
 FUZZ_SECONDS ?= 60
@@ -176,15 +247,6 @@ fuzz: fuzz-seeds
 	  (cd $(FUZZ_BUILD) && ./fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 -max_len=400000 \
 	    -artifact_prefix=artifacts-$$t- corpus/$$t 2>&1 | tail -3) || exit 1; done
 
-test: all $(TEST_BINS)
-	@cd $(CURDIR) && status=0; for t in $(TEST_BINS); do \
-	  CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples $$t || status=1; done; \
-	  $(MAKE) --no-print-directory replay || status=1; exit $$status
-
-test-asan:
-	$(MAKE) --no-print-directory BUILD=build/asan OPT=-O1 \
-	  SAN="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all" test
-
 # ---- benchmarks (not part of check; only a smoke run is) -------------------------------
 $(BUILD)/bench_core: bench/bench_core.c $(BUILD)/libcrowdbake.a
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
@@ -196,12 +258,16 @@ bench: all $(BUILD)/bench_core
 bench-smoke: all $(BUILD)/bench_core
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
 
-check: deps
-	$(MAKE) --no-print-directory test
-	$(MAKE) --no-print-directory bench-smoke
-	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
-	  $(MAKE) --no-print-directory test-asan
+# The normal and the sanitizer builds and their tests, side by side on every core.
+check: deps check-shared $(NODE_DEPS)
+	@rm -rf $(BUILD)/tests/results build/asan/tests/results
+	@$(MAKE) --no-print-directory $(PARALLEL) check-normal check-asan || true
+	$(call test_summary,$(BUILD) build/asan)
 	@echo "crowdbake: all tests passed (normal and ASan+UBSan builds)"
+check-normal:
+	@$(MAKE) --no-print-directory test-runs bench-smoke
+check-asan:
+	@$(ASAN_ENV) $(MAKE) --no-print-directory $(SANITIZE) test-runs
 
 clean:
 	rm -rf build

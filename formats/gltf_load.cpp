@@ -1,25 +1,7 @@
 // gltf_load.cpp - the tinygltf adapter: parses with tinygltf (Draco enabled), decodes
 // EXT_meshopt_compression with libmeshoptimizer, reads every accessor with bounds checks,
 // and hands the core a cb_model of plain C structs.
-#define TINYGLTF_IMPLEMENTATION
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_EXTERNAL_IMAGE
-#define TINYGLTF_ENABLE_DRACO
-/* RapidJSON, not nlohmann::json: the JSON of a large rig parses ~5x faster. Its CRT allocator
- * keeps tinygltf free of the global "active document" the pool allocator needs; full
- * precision makes numbers the correctly rounded doubles strtod gives (the default may be an
- * ulp off: node transforms written as decimals would then bake differently). */
-#define RAPIDJSON_PARSE_DEFAULT_FLAGS kParseFullPrecisionFlag
-#define TINYGLTF_USE_RAPIDJSON
-#define TINYGLTF_USE_RAPIDJSON_CRTALLOCATOR
-#define TINYGLTF_NO_INCLUDE_RAPIDJSON
-#include <rapidjson/document.h>
-#include <rapidjson/prettywriter.h>
-#include <rapidjson/rapidjson.h>
-#include <rapidjson/stringbuffer.h>
-#include <rapidjson/writer.h>
-#include <tiny_gltf.h>
+#include "tinygltf_config.h"
 
 #include <meshoptimizer.h>
 

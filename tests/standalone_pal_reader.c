@@ -11,16 +11,21 @@
 #include <stdlib.h>
 #include <string.h>
 
+#ifndef BUILD_DIR
+#define BUILD_DIR "build"
+#endif
+#define TMP BUILD_DIR "/tmp-tests/standalone"
+
 #define CBPAL_WITH_ZSTD
 #define CROWDBAKE_PAL_IMPLEMENTATION
 #include "../formats/crowdbake_pal.h"
 
 static void bake(const char *extra, const char *out)
 {
-    const char *exe = getenv("CROWDBAKE") ? getenv("CROWDBAKE") : "build/crowdbake";
+    const char *exe = getenv("CROWDBAKE") ? getenv("CROWDBAKE") : BUILD_DIR "/crowdbake";
     const char *shared = getenv("CROWDBAKE_SHARED") ? getenv("CROWDBAKE_SHARED") : "../shared";
     char cmd[2048];
-    snprintf(cmd, sizeof cmd, "mkdir -p build/tmp-tests && %s bake %s/assets/fox-bevy/Fox.glb -o %s -q %s", exe, shared, out,
+    snprintf(cmd, sizeof cmd, "mkdir -p " TMP " && %s bake %s/assets/fox-bevy/Fox.glb -o %s -q %s", exe, shared, out,
              extra);
     assert_int_equal(system(cmd), 0);
 }
@@ -28,10 +33,10 @@ static void bake(const char *extra, const char *out)
 static void test_texels_point_into_the_mapping(void **state)
 {
     (void)state;
-    bake("", "build/tmp-tests/standalone.pal");
+    bake("", TMP "/standalone.pal");
     cbpal_file f;
     char err[256];
-    assert_int_equal(cbpal_open("build/tmp-tests/standalone.pal", 0, &f, err, sizeof err), 0);
+    assert_int_equal(cbpal_open(TMP "/standalone.pal", 0, &f, err, sizeof err), 0);
     const unsigned char *t = (const unsigned char *)f.texels;
     assert_true(t >= f.data && t + f.texels_size <= f.data + f.size); /* inside the file: no copy */
     assert_ptr_equal(t, f.data + f.header.payload_offset);
@@ -44,17 +49,17 @@ static void test_texels_point_into_the_mapping(void **state)
     assert_int_equal(c.first_row, 103); /* Survey: round(3.4167 * 30) = 103 looping rows */
     cbpal_close(&f);
     /* Verifying the checksum reads the whole file and agrees. */
-    assert_int_equal(cbpal_open("build/tmp-tests/standalone.pal", CBPAL_VERIFY_CHECKSUM, &f, err, sizeof err), 0);
+    assert_int_equal(cbpal_open(TMP "/standalone.pal", CBPAL_VERIFY_CHECKSUM, &f, err, sizeof err), 0);
     cbpal_close(&f);
 }
 
 static void test_compressed_palette_is_decompressed_once(void **state)
 {
     (void)state;
-    bake("--zstd", "build/tmp-tests/standalone-zstd.pal");
+    bake("--zstd", TMP "/standalone-zstd.pal");
     cbpal_file f;
     char err[256];
-    assert_int_equal(cbpal_open("build/tmp-tests/standalone-zstd.pal", CBPAL_VERIFY_CHECKSUM, &f, err, sizeof err), 0);
+    assert_int_equal(cbpal_open(TMP "/standalone-zstd.pal", CBPAL_VERIFY_CHECKSUM, &f, err, sizeof err), 0);
     assert_non_null(f.owned_);
     assert_ptr_equal(f.texels, f.owned_);
     cbpal_close(&f);

@@ -13,7 +13,7 @@
 #include "../formats/catalog_toml.h"
 #include "../formats/roster.h"
 
-#define TMP "build/tmp-tests/catalog"
+#define TMP TEST_TMP "/catalog"
 
 static char samples_abs[512];
 
@@ -180,8 +180,7 @@ static void test_manifest_sharing_and_lods(void **state)
     snprintf(args, sizeof args, "bake %s -q", path);
     assert_int_equal(run_cli(args, out, sizeof out), 0);
     /* The manifest against its schema (ajv, draft 2020-12). */
-    assert_int_equal(run_command("cd tests/validator && { [ -d node_modules/ajv ] || npm ci --no-audit --no-fund >/dev/null 2>&1; }",
-                                 NULL, 0), 0);
+    require_node_validators();
     assert_int_equal(run_command("node tests/validator/validate_schema.mjs docs/roster.schema.json " TMP
                                  "/out-roster/roster.json 2>&1", out, sizeof out), 0);
     /* goat and sheep share one palette: only goat.pal exists. */

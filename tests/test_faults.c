@@ -9,7 +9,7 @@
 
 #include "../formats/crowdbake_pal.h"
 
-#define TMP "build/tmp-tests/faults"
+#define TMP TEST_TMP "/faults"
 
 static char fish[512], quad[512];
 

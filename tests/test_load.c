@@ -4,6 +4,8 @@
 
 #include <math.h>
 
+#define TMP TEST_TMP "/load"
+
 /* Facts from ../shared/assets/MANIFEST.md (extracted there with glTF-Transform). */
 static void test_every_asset_loads_with_the_manifest_facts(void **state)
 {
@@ -138,21 +140,21 @@ static void test_source_hash_covers_external_buffers(void **state)
     (void)state;
     char src[1024], cmd[2300];
     shared_path(src, sizeof src, "assets/derived-fox/separate");
-    snprintf(cmd, sizeof cmd, "rm -rf build/tmp-load && mkdir -p build/tmp-load && cp %s/* build/tmp-load/", src);
+    snprintf(cmd, sizeof cmd, "rm -rf " TMP " && mkdir -p " TMP " && cp %s/* " TMP "/", src);
     assert_int_equal(system(cmd), 0);
-    cb_model *before = load_or_fail("build/tmp-load/Fox.gltf");
-    cb_model *again = load_or_fail("build/tmp-load/Fox.gltf");
+    cb_model *before = load_or_fail(TMP "/Fox.gltf");
+    cb_model *again = load_or_fail(TMP "/Fox.gltf");
     assert_true(before->source_hash == again->source_hash);
 
     /* Byte 0 of Fox.bin is the low mantissa byte of the first vertex's x: a change no
      * validation notices, so only the hash can tell. */
-    FILE *f = fopen("build/tmp-load/Fox.bin", "r+b");
+    FILE *f = fopen(TMP "/Fox.bin", "r+b");
     assert_non_null(f);
     int byte = fgetc(f);
     fseek(f, 0, SEEK_SET);
     fputc(byte ^ 1, f);
     fclose(f);
-    cb_model *after = load_or_fail("build/tmp-load/Fox.gltf");
+    cb_model *after = load_or_fail(TMP "/Fox.gltf");
     assert_true(after->source_hash != before->source_hash);
     assert_true(after->primitives[0].positions[0] != before->primitives[0].positions[0]);
     cb_model_free(before);
@@ -243,24 +245,24 @@ static void test_in_place_and_copied_loads_agree(void **state)
 static void test_big_glb_read_on_two_threads_loads_the_same(void **state)
 {
     (void)state;
-    char gen[1100], cmd[1200];
+    char gen[1100], cmd[2400];
     snprintf(gen, sizeof gen, "%s", crowdbake_exe());
     *strrchr(gen, '/') = 0;
-    snprintf(cmd, sizeof cmd, "mkdir -p build/tmp-load && %s/gen_samples --bench build/tmp-load 200 6 10 >/dev/null", gen);
+    snprintf(cmd, sizeof cmd, "mkdir -p " TMP " && %s/gen_samples --bench " TMP " 200 6 10 >/dev/null", gen);
     assert_int_equal(system(cmd), 0);
-    const char *path = "build/tmp-load/bench_j200_c6_s10.glb";
+    const char *path = TMP "/bench_j200_c6_s10.glb";
     size_t size;
     char *bytes = read_whole_file(path, &size);
     assert_true(size > (4u << 20)); /* over the 4 MB under which a file is read at once */
     expect_in_place_matches_copied(path);
 
-    FILE *f = fopen("build/tmp-load/cut.glb", "wb");
+    FILE *f = fopen(TMP "/cut.glb", "wb");
     assert_non_null(f);
     assert_int_equal(fwrite(bytes, 1, size - 4096, f), size - 4096);
     fclose(f);
     free(bytes);
     cb_error err = {0};
-    assert_null(cb_gltf_load("build/tmp-load/cut.glb", NULL, &err));
+    assert_null(cb_gltf_load(TMP "/cut.glb", NULL, &err));
     assert_non_null(strstr(err.message, "truncated GLB"));
 }
 
@@ -297,13 +299,13 @@ static void test_normalizing_rotation_keys_never_touches_shared_bytes(void **sta
     memcpy(glb + 20, json, strlen(json));
     put_le32(glb + 20 + json_len, sizeof bin), put_le32(glb + 24 + json_len, 0x004E4942u);
     memcpy(glb + 28 + json_len, bin, sizeof bin); /* little-endian host, as everywhere we build */
-    assert_int_equal(system("mkdir -p build/tmp-load"), 0);
-    FILE *f = fopen("build/tmp-load/shared-bytes.glb", "wb");
+    assert_int_equal(system("mkdir -p " TMP), 0);
+    FILE *f = fopen(TMP "/shared-bytes.glb", "wb");
     assert_non_null(f);
     assert_int_equal(fwrite(glb, 1, total, f), total);
     fclose(f);
     free(glb);
-    cb_model *m = load_or_fail("build/tmp-load/shared-bytes.glb");
+    cb_model *m = load_or_fail(TMP "/shared-bytes.glb");
     const cb_channel *rot = &m->animations[0].channels[0], *move = &m->animations[0].channels[1];
     assert_int_equal(rot->path, CB_PATH_ROTATION);
     assert_float_equal(rot->values[3], 1.0, 0); /* (0, 0, 0, 2) normalized */

@@ -9,7 +9,7 @@
 #include "../formats/crowdbake_pal.h"
 #include "../formats/exr_io.h"
 
-#define TMP "build/tmp-tests"
+#define TMP TEST_TMP "/pal_file"
 
 static unsigned char *read_all(const char *path, size_t *size)
 {
@@ -42,9 +42,7 @@ static void bake(const char *model, const char *out, const char *extra)
 static int setup(void **state)
 {
     (void)state;
-    mkdir("build", 0777);
-    mkdir(TMP, 0777);
-    return 0;
+    return system("mkdir -p " TMP);
 }
 
 static void test_byte_identical_bakes(void **state)

@@ -9,6 +9,9 @@
 #include "../formats/preview.h"
 #include "../src/runtime.h"
 
+#define TMP TEST_TMP "/verify"
+#define PREVIEWS BUILD_DIR "/previews"
+
 /* Bakes `path` and verifies every clip in process. */
 static void verify_model(const char *path, cb_layout l, cb_precision pr, double fps, double *quant, double *interp,
                          double *bake_error, double *height, bool transpose)
@@ -82,16 +85,16 @@ static void test_verify_exit_code(void **state)
     (void)state;
     char cmd[4096], out[8192], fox[1024];
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
-    snprintf(cmd, sizeof cmd, "mkdir -p build/tmp-tests && %s bake %s -o build/tmp-tests/v.pal -q && %s verify %s "
-             "build/tmp-tests/v.pal --max-error 0.01 2>&1", crowdbake_exe(), fox, crowdbake_exe(), fox);
+    snprintf(cmd, sizeof cmd, "mkdir -p " TMP " && %s bake %s -o " TMP "/v.pal -q && %s verify %s " TMP "/v.pal "
+             "--max-error 0.01 2>&1", crowdbake_exe(), fox, crowdbake_exe(), fox);
     assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_VERIFY);
     assert_non_null(strstr(out, "over --max-error"));
-    snprintf(cmd, sizeof cmd, "%s verify %s build/tmp-tests/v.pal --max-error 100 --json 2>&1", crowdbake_exe(), fox);
+    snprintf(cmd, sizeof cmd, "%s verify %s " TMP "/v.pal --max-error 100 --json 2>&1", crowdbake_exe(), fox);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     assert_non_null(strstr(out, "\"between_max_mm_per_m\""));
     char q[1024];
     snprintf(q, sizeof q, "%s/quadruped.glb", samples_dir());
-    snprintf(cmd, sizeof cmd, "%s verify %s build/tmp-tests/v.pal 2>&1", crowdbake_exe(), q);
+    snprintf(cmd, sizeof cmd, "%s verify %s " TMP "/v.pal 2>&1", crowdbake_exe(), q);
     assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT); /* not its palette */
 }
 
@@ -125,17 +128,16 @@ static void test_preview_sheets_of_the_samples(void **state)
     (void)state;
     const char *names[] = {"quadruped", "fish", "bird"};
     const uint32_t clips[] = {5, 1, 2};
-    mkdir("build", 0777);
-    mkdir("build/previews", 0777); /* CI keeps these as artifacts */
+    mkdir(PREVIEWS, 0777); /* CI keeps these as artifacts */
     for (int i = 0; i < 3; ++i) {
         char cmd[4096], out[2048];
-        snprintf(cmd, sizeof cmd, "%s bake %s/%s.glb -o build/previews/%s.pal -q && %s preview build/previews/%s.pal "
-                 "%s/%s.glb -o build/previews/%s.png --columns 6 --cell 96 2>&1",
+        snprintf(cmd, sizeof cmd, "%s bake %s/%s.glb -o " PREVIEWS "/%s.pal -q && %s preview " PREVIEWS "/%s.pal "
+                 "%s/%s.glb -o " PREVIEWS "/%s.png --columns 6 --cell 96 2>&1",
                  crowdbake_exe(), samples_dir(), names[i], names[i], crowdbake_exe(), names[i], samples_dir(), names[i],
                  names[i]);
         assert_int_equal(run_command(cmd, out, sizeof out), 0);
         char png[256];
-        snprintf(png, sizeof png, "build/previews/%s.png", names[i]);
+        snprintf(png, sizeof png, PREVIEWS "/%s.png", names[i]);
         check_sheet(png, clips[i], 6, 96);
         printf("  %s", out);
     }

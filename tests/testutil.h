@@ -14,6 +14,13 @@
 
 #include "../formats/gltf_load.h"
 
+/* The build being tested (the Makefile passes its BUILD): each build's tests write their files
+ * under TEST_TMP, so the normal and the sanitizer passes can run side by side. */
+#ifndef BUILD_DIR
+#define BUILD_DIR "build"
+#endif
+#define TEST_TMP BUILD_DIR "/tmp-tests"
+
 /* ../shared beside the checkout, or $CROWDBAKE_SHARED. */
 static inline const char *shared_dir(void)
 {
@@ -25,18 +32,22 @@ static inline void shared_path(char *out, size_t size, const char *rel)
 {
     int n = snprintf(out, size, "%s/%s", shared_dir(), rel);
     if (n < 0 || (size_t)n >= size) fail_msg("path too long: %s", rel);
+    FILE *f = fopen(shared_dir(), "r");
+    if (!f) fail_msg("%s: no such directory; the tests need the shared third-party assets and reference matrices "
+                     "there (clone the repository beside them, or set CROWDBAKE_SHARED=DIR)", shared_dir());
+    fclose(f);
 }
 
 static inline const char *samples_dir(void)
 {
     const char *env = getenv("SAMPLES");
-    return env ? env : "build/samples";
+    return env ? env : BUILD_DIR "/samples";
 }
 
 static inline const char *crowdbake_exe(void)
 {
     const char *env = getenv("CROWDBAKE");
-    return env ? env : "build/crowdbake";
+    return env ? env : BUILD_DIR "/crowdbake";
 }
 
 /* A whole file, NUL-terminated (so text can be used as a string); *size gets its length. */
@@ -122,6 +133,15 @@ static inline int run_command(const char *cmd, char *out, size_t out_size)
     if (out && out_size) out[used] = '\0';
     int status = pclose(p);
     return status >= 0 && (status & 0x7f) == 0 ? (status >> 8) & 0xff : -1;
+}
+
+/* The npm packages of tests/validator (the Khronos glTF validator, ajv), which `make test`
+ * installs from their package-lock before any test runs. */
+static inline void require_node_validators(void)
+{
+    FILE *f = fopen("tests/validator/node_modules/.package-lock.json", "r");
+    if (!f) fail_msg("tests/validator: npm packages not installed (make test installs them; or: cd tests/validator && npm ci)");
+    fclose(f);
 }
 
 #endif

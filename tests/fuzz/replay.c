@@ -1,6 +1,6 @@
 /* replay.c - runs a fuzz target's LLVMFuzzerTestOneInput over files and directories without
  * libFuzzer, so `make check` replays every regression input under the normal and sanitizer
- * builds. Prints the cmocka-style summary line. */
+ * builds. Prints the cmocka-style summary line; a missing input or no input at all fails. */
 #define _DEFAULT_SOURCE
 #include <dirent.h>
 #include <stdint.h>
@@ -31,7 +31,11 @@ int main(int argc, char **argv)
     int files = 0, failed = 0;
     for (int i = 1; i < argc; ++i) {
         struct stat st;
-        if (stat(argv[i], &st) != 0) continue;
+        if (stat(argv[i], &st) != 0) { /* a missing input folder would silently check nothing */
+            fprintf(stderr, "replay: %s: no such file or directory\n", argv[i]);
+            ++failed;
+            continue;
+        }
         if (!S_ISDIR(st.st_mode)) {
             failed += replay_file(argv[i]), ++files;
             continue;
@@ -46,6 +50,10 @@ int main(int argc, char **argv)
         }
         if (d) closedir(d);
     }
-    printf("%d passed, %d failed\n", files - failed, failed);
+    if (files == 0) {
+        fprintf(stderr, "replay: no inputs: a replay that checks nothing is a failure\n");
+        ++failed;
+    }
+    printf("%d passed, %d failed\n", files - failed > 0 ? files - failed : 0, failed);
     return failed != 0;
 }
