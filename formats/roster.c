@@ -6,6 +6,7 @@
 #include "roster.h"
 
 #include <errno.h>
+#include <fcntl.h> /* AT_FDCWD */
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -93,13 +94,16 @@ static uint64_t content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
     return cbpal_xxh64_digest(&h);
 }
 
-/* Appends a loaded model's files to the type's inputs (for the depfile). */
+/* Appends a model's files to the type's inputs (for the depfile): its path even when it failed
+ * to load (m NULL), so that fixing it makes the build out of date; its external files when it
+ * loaded. */
 static cb_status add_inputs(cb_roster_type *t, const char *path, const cb_model *m, cb_error *err)
 {
-    char **grown = realloc(t->inputs, (t->input_count + 1 + m->external_file_count) * sizeof *grown);
+    uint32_t externals = m ? m->external_file_count : 0;
+    char **grown = realloc(t->inputs, (t->input_count + 1 + externals) * sizeof *grown);
     if (!grown) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     t->inputs = grown;
-    for (uint32_t i = 0; i <= m->external_file_count; ++i) {
+    for (uint32_t i = 0; i <= externals; ++i) {
         if (!(t->inputs[t->input_count] = strdup(i ? m->external_files[i - 1] : path)))
             return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
         ++t->input_count;
@@ -236,6 +240,7 @@ static cb_status check_lods(const cb_catalog *cat, const cb_catalog_animal *an, 
     for (uint32_t i = 0; i < an->lod_count; ++i) {
         cb_error inner = {0};
         cb_model *lod = w->lod_models[i] = cb_gltf_load(an->lods[i], NULL, &inner);
+        if (add_inputs(t, an->lods[i], lod, err)) return err->status;
         int skin = lod ? pick_skin(lod) : -1;
         if (lod && skin < 0) cb_fail(&inner, CB_ERR_INPUT, "%s: has no skin", an->lods[i]);
         cb_roster_lod *l = &t->lods[i];
@@ -270,6 +275,12 @@ static void measure_vat(const cb_catalog_animal *an, type_work *w, cb_roster_typ
     cb_sampler_free(s);
 }
 
+static void output_paths(const cb_catalog_animal *an, cb_roster_type *t)
+{
+    snprintf(t->pal_path, sizeof t->pal_path, "%s/%s.pal", an->bake.out_dir, an->name);
+    snprintf(t->exr_path, sizeof t->exr_path, "%s/%s.exr", an->bake.out_dir, an->name);
+}
+
 static void prepare_type(roster_run *run, uint32_t i)
 {
     const cb_catalog_animal *an = &run->cat->animals[i];
@@ -280,7 +291,9 @@ static void prepare_type(roster_run *run, uint32_t i)
     t->owner = i;
     char where[1100];
     cb_error inner = {0};
+    output_paths(an, t);
     w->model = cb_gltf_load(an->model, NULL, &inner);
+    if (add_inputs(t, an->model, w->model, err)) return;
     if (!w->model) {
         cb_fail(err, inner.status, "%s: [animal.%s] %s", at(run->cat, an->model_pos, where, sizeof where), an->name,
                 inner.message);
@@ -297,24 +310,18 @@ static void prepare_type(roster_run *run, uint32_t i)
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
     if (plan_clips(run->cat, an, w, t, err) || analyze_clips(an, w, t, err) || match_states(run->cat, an, t, err) ||
-        check_lods(run->cat, an, w, t, err))
+        check_lods(run->cat, an, w, t, err)) {
+        for (uint32_t l = 0; !w->lod_models && l < an->lod_count; ++l) /* failed before loading them */
+            if (add_inputs(t, an->lods[l], NULL, err)) break;
         return;
+    }
     speed_reference(an, t);
     t->key = content_key(w->model, w->skin, w->plan, t->clip_count, &an->bake);
     t->input_hash = input_hash(an, w, t->key);
-    if (add_inputs(t, an->model, w->model, err)) return;
-    for (uint32_t l = 0; l < an->lod_count; ++l)
-        if (add_inputs(t, an->lods[l], w->lod_models[l], err)) return;
     if (run->opt->measure_vat) measure_vat(an, w, t);
 }
 
 /* ---- pass 3: bake an owner ---- */
-
-static void output_paths(const cb_catalog_animal *an, cb_roster_type *t)
-{
-    snprintf(t->pal_path, sizeof t->pal_path, "%s/%s.pal", an->bake.out_dir, an->name);
-    snprintf(t->exr_path, sizeof t->exr_path, "%s/%s.exr", an->bake.out_dir, an->name);
-}
 
 static uint64_t file_size(const char *path)
 {
@@ -357,6 +364,26 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
     return true;
 }
 
+/* mkdir -p: the output directory and any missing parents. */
+static cb_status make_directories(const char *dir, cb_error *err)
+{
+    char path[4096];
+    if (snprintf(path, sizeof path, "%s", dir) >= (int)sizeof path)
+        return cb_fail(err, CB_ERR_IO, "%s: output directory path too long", dir);
+    for (char *p = path + 1;; ++p) {
+        if (*p != '/' && *p != '\0') continue;
+        char end = *p;
+        *p = '\0';
+        struct stat st;
+        if (stat(path, &st) != 0 && mkdir(path, 0777) != 0 && errno != EEXIST)
+            return cb_fail(err, CB_ERR_IO, "%s: cannot create the output directory %s: %s (check the path and its "
+                           "permissions)", dir, path, strerror(errno));
+        if (stat(path, &st) == 0 && !S_ISDIR(st.st_mode))
+            return cb_fail(err, CB_ERR_IO, "%s: cannot create the output directory: %s is a file", dir, path);
+        if (!(*p = end)) return CB_OK;
+    }
+}
+
 static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
 {
     cb_bake_options o = cb_default_bake_options();
@@ -374,9 +401,7 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
     cb_status rc = cb_palette_bake(s, &o, w->plan, t->clip_count, &p, err);
     cb_sampler_free(s);
     if (rc) return rc;
-    struct stat st;
-    if (stat(an->bake.out_dir, &st) != 0 && mkdir(an->bake.out_dir, 0777) != 0 && errno != EEXIST)
-        cb_fail(err, CB_ERR_IO, "%s: cannot create the output directory: %s", an->bake.out_dir, strerror(errno));
+    make_directories(an->bake.out_dir, err);
     if (!err->status && (an->bake.formats & CB_FORMAT_PAL)) {
         cb_pal_write_options po = {false, 0, t->input_hash, (float)t->speed_reference, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
         cb_pal_write(t->pal_path, &p, w->model, w->skin, &po, err);
@@ -429,7 +454,6 @@ static void bake_type(roster_run *run, uint32_t i)
     } else if (t->owner != i) {
         return; /* shared types are settled once their owner is */
     } else {
-        output_paths(an, t);
         if (!run->opt->force && up_to_date(t, an->bake.formats)) t->outcome = CB_TYPE_UP_TO_DATE;
         else t->outcome = bake_files(run, an, &run->work[i], t, &t->error) ? CB_TYPE_FAILED : CB_TYPE_BAKED;
         t->pal_file_bytes = file_size(t->pal_path);
@@ -623,6 +647,20 @@ static cb_status write_manifest(const cb_catalog *cat, cb_roster *r, const char 
     for (uint32_t i = 0; i < r->type_count; ++i)
         if (r->types[i].outcome != CB_TYPE_FAILED) write_type(&j, r, &r->types[i], dir);
     cb_json_end(&j);
+    /* Failed types are named, not dropped: a loader sees that the roster is incomplete. */
+    if (r->failed) {
+        cb_json_object(&j, "failed");
+        for (uint32_t i = 0; i < r->type_count; ++i) {
+            const cb_roster_type *t = &r->types[i];
+            if (t->outcome != CB_TYPE_FAILED) continue;
+            cb_json_object(&j, t->animal->name);
+            relative_path(dir, t->animal->model, rel, sizeof rel);
+            cb_json_string(&j, "model", rel);
+            cb_json_string(&j, "error", t->error.message);
+            cb_json_end(&j);
+        }
+        cb_json_end(&j);
+    }
     cb_json_end(&j);
     fclose(mem);
     cb_status rc = write_if_changed(path, buf, size, &r->manifest_written, err);
@@ -644,6 +682,15 @@ static void depfile_inputs(FILE *f, const cb_roster_type *t)
     for (uint32_t i = 0; i < t->input_count; ++i) fputs(" \\\n  ", f), depfile_path(f, t->inputs[i]);
 }
 
+/* Whether input k of type i was already listed by an earlier input or type. */
+static bool listed_before(const cb_roster *r, uint32_t i, uint32_t k)
+{
+    for (uint32_t a = 0; a <= i; ++a)
+        for (uint32_t b = 0; b < (a == i ? k : r->types[a].input_count); ++b)
+            if (strcmp(r->types[a].inputs[b], r->types[i].inputs[k]) == 0) return true;
+    return false;
+}
+
 /* One rule per output: Make and Ninja both read it. */
 static cb_status write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, cb_error *err)
 {
@@ -653,7 +700,7 @@ static cb_status write_depfile(const cb_catalog *cat, const cb_roster *r, const 
     if (!f) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_roster_type *t = &r->types[i];
-        if (t->owner != i || t->outcome == CB_TYPE_FAILED) continue;
+        if (t->owner != i) continue; /* failed types too: their inputs keep the build out of date */
         for (int fmt = 0; fmt < 2; ++fmt) {
             if (!(t->animal->bake.formats & (fmt ? CB_FORMAT_EXR : CB_FORMAT_PAL))) continue;
             depfile_path(f, fmt ? t->exr_path : t->pal_path);
@@ -669,11 +716,60 @@ static cb_status write_depfile(const cb_catalog *cat, const cb_roster *r, const 
     fputc(' ', f), depfile_path(f, cat->path);
     for (uint32_t i = 0; i < r->type_count; ++i) depfile_inputs(f, &r->types[i]);
     fputc('\n', f);
+    /* An empty rule per input (as gcc -MP writes): a deleted or renamed model makes Make run the
+     * bake, which names the problem, instead of stopping at "no rule to make target". */
+    for (uint32_t i = 0; i < r->type_count; ++i)
+        for (uint32_t k = 0; k < r->types[i].input_count; ++k)
+            if (!listed_before(r, i, k)) fputc('\n', f), depfile_path(f, r->types[i].inputs[k]), fputs(":\n", f);
     fclose(f);
     bool written;
     cb_status rc = write_if_changed(path, buf, size, &written, err);
     free(buf);
     return rc;
+}
+
+static cb_status make_parent_directories(const char *file, cb_error *err)
+{
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", file);
+    char *slash = strrchr(dir, '/');
+    if (!slash) return CB_OK;
+    *slash = '\0';
+    return dir[0] ? make_directories(dir, err) : CB_OK;
+}
+
+static bool newer_than(const struct stat *a, const struct stat *b)
+{
+    return a->st_mtim.tv_sec > b->st_mtim.tv_sec ||
+           (a->st_mtim.tv_sec == b->st_mtim.tv_sec && a->st_mtim.tv_nsec > b->st_mtim.tv_nsec);
+}
+
+/* Make and Ninja decide from modification times, so the manifest's must tell the truth. After
+ * a failure it is set to the epoch (as are a failed type's old palettes): older than every
+ * input, so the next build runs the bake again, however often it is run, until the inputs are
+ * fixed. After a success it is never older than an input, even when its contents did not
+ * change (else Make would run the bake on every build). */
+static void settle_times(const cb_roster *r)
+{
+    static const struct timespec epoch[2] = {{0, 0}, {0, 0}};
+    if (r->failed) {
+        utimensat(AT_FDCWD, r->manifest_path, epoch, 0);
+        for (uint32_t i = 0; i < r->type_count; ++i)
+            if (r->types[i].outcome == CB_TYPE_FAILED && r->types[i].owner == i) {
+                struct stat st;
+                /* only regular files: a bake refuses to replace anything else, and so does this */
+                if (stat(r->types[i].pal_path, &st) == 0 && S_ISREG(st.st_mode)) utimensat(AT_FDCWD, r->types[i].pal_path, epoch, 0);
+                if (stat(r->types[i].exr_path, &st) == 0 && S_ISREG(st.st_mode)) utimensat(AT_FDCWD, r->types[i].exr_path, epoch, 0);
+            }
+        return;
+    }
+    struct stat manifest, in;
+    if (stat(r->manifest_path, &manifest) != 0) return;
+    bool stale = stat(r->catalog->path, &in) == 0 && newer_than(&in, &manifest);
+    for (uint32_t i = 0; i < r->type_count && !stale; ++i)
+        for (uint32_t k = 0; k < r->types[i].input_count && !stale; ++k)
+            stale = stat(r->types[i].inputs[k], &in) == 0 && newer_than(&in, &manifest);
+    if (stale) utimensat(AT_FDCWD, r->manifest_path, NULL, 0);
 }
 
 /* ---- the whole bake ---- */
@@ -727,10 +823,10 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     if (opt->log && opt->tty) fputs("\r\033[K", opt->log);
     if (opt->manifest) snprintf(r->manifest_path, sizeof r->manifest_path, "%s", opt->manifest);
     else snprintf(r->manifest_path, sizeof r->manifest_path, "%s/roster.json", cat->defaults.out_dir);
-    struct stat st;
-    if (stat(cat->defaults.out_dir, &st) != 0) mkdir(cat->defaults.out_dir, 0777);
-    cb_status rc = write_manifest(cat, r, r->manifest_path, err);
-    if (!rc && opt->depfile) rc = write_depfile(cat, r, opt->depfile, err);
+    cb_status rc = make_parent_directories(r->manifest_path, err);
+    if (!rc) rc = write_manifest(cat, r, r->manifest_path, err);
+    if (!rc && opt->depfile && !(rc = make_parent_directories(opt->depfile, err))) rc = write_depfile(cat, r, opt->depfile, err);
+    if (!rc) settle_times(r);
     for (uint32_t i = 0; i < r->type_count && !rc; ++i)
         if (r->types[i].outcome == CB_TYPE_FAILED) rc = cb_fail(err, r->types[i].error.status, "%s", r->types[i].error.message);
     for (uint32_t i = 0; i < r->type_count; ++i) {
