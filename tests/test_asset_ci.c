@@ -200,6 +200,30 @@ static void test_default_output_folder_is_created(void **state)
     assert_int_equal(stat(TMP "/fresh/deps/d/roster.d", &st), 0);
 }
 
+/* A report over a roster whose type failed gives no budget verdict, whatever the budget. */
+static void test_report_with_a_failed_type_passes_no_budget(void **state)
+{
+    (void)state;
+    static char out[16384];
+    assert_int_equal(system("rm -rf " TMP "/report && mkdir -p " TMP "/report"), 0);
+    write_text(TMP "/report/broken.glb", "not a model\n");
+    write_text(TMP "/report/catalog.toml", "[budget]\ntarget = \"Steam Deck\"\n\n[animal.eel]\nmodel = \"broken.glb\"\n");
+    char cmd[PATH_MAX + 128];
+    snprintf(cmd, sizeof cmd, "cd " TMP "/report && %s report catalog.toml --json --no-fail 2>/dev/null", exe);
+    int rc = run_command(cmd, out, sizeof out);
+    assert_int_equal(rc, 4); /* the model's error, --no-fail or not */
+    if (!strstr(out, "\"over_budget\": null") || !strstr(out, "\"failed_types\": 1")) fail_msg("%s", out);
+    write_text(TMP "/report/report.json", out);
+    assert_int_equal(run_command("cd tests/validator && { [ -d node_modules/ajv ] || npm ci --no-audit --no-fund "
+                                 ">/dev/null 2>&1; }", NULL, 0), 0);
+    if (run_command("node tests/validator/validate_schema.mjs docs/report.schema.json " TMP "/report/report.json 2>&1", out,
+                    sizeof out) != 0)
+        fail_msg("%s", out);
+    snprintf(cmd, sizeof cmd, "%s report catalog.toml 2>&1", exe);
+    assert_int_equal(run_in(TMP "/report", cmd, out, sizeof out), 4);
+    if (!strstr(out, "Roster: INCOMPLETE, 1 animal type failed to bake") || strstr(out, "% of the")) fail_msg("%s", out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -207,6 +231,7 @@ int main(void)
         cmocka_unit_test(test_make_with_delete_on_error),
         cmocka_unit_test(test_ninja_stays_red_until_the_model_is_fixed),
         cmocka_unit_test(test_default_output_folder_is_created),
+        cmocka_unit_test(test_report_with_a_failed_type_passes_no_budget),
     };
     return cmocka_run_group_tests_name("asset_ci", tests, setup, NULL);
 }
