@@ -7,6 +7,7 @@
 
 #include "../formats/gltf_load.h"
 #include "../formats/pal_view.h"
+#include "../src/catalog.h"
 
 typedef struct cli_option {
     const char *name;     /* "--fps" */
@@ -63,8 +64,17 @@ int cmd_vat(int argc, char **argv);
 int cmd_verify(int argc, char **argv);
 int cmd_preview(int argc, char **argv);
 int cmd_report(int argc, char **argv);
-int cmd_bake_catalog(const char *path, uint32_t jobs, bool force, bool quiet, bool json, const char *depfile,
-                     const char *manifest);
+/* `crowdbake bake CATALOG.toml`, once cmd_bake has read its options. */
+typedef struct cli_catalog_bake {
+    const char *path;
+    uint32_t jobs;
+    bool force, quiet, json;
+    const char *depfile, *manifest;
+    const cb_limits *limits;
+    const cb_bake_settings *overrides; /* the command line's bake options, `override_fields` of them set */
+    unsigned override_fields;          /* CB_BAKE_* */
+} cli_catalog_bake;
+int cmd_bake_catalog(const cli_catalog_bake *options);
 
 extern const char cmd_info_usage[], cmd_sample_usage[], cmd_bake_usage[], cmd_inspect_usage[], cmd_vat_usage[],
     cmd_report_usage[], cmd_verify_usage[], cmd_preview_usage[];

@@ -17,10 +17,14 @@
 
 const char cmd_bake_usage[] =
     "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr [options]\n"
-    "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--json] [-q]\n\n"
+    "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--json] [-q]\n"
+    "                      [--fps N] [--layout L] [--precision P] [--format F] [--zstd] [--max-texture-size N]\n"
+    "                      [--root-motion R] [--exr-compression C]\n\n"
     "Bakes every clip of the model's skin into a bone-matrix palette; or every animal type of a\n"
     "catalog (see catalog.example.toml) into palettes and a roster manifest, re-baking only what\n"
-    "changed (--force: everything), N types at a time (default: the number of cores).\n\n"
+    "changed (--force: everything), N types at a time (default: the number of cores). With a\n"
+    "catalog, the bake options given replace its [bake] and [animal] values for this run (a clip's\n"
+    "own fps still applies) and count in what is up to date; --depfile writes a Make/Ninja depfile.\n\n"
     "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md) or .exr (OpenEXR)\n"
     "  --format pal,exr           write these formats (OUT's extension is replaced per format)\n"
     "  --fps N|auto               baked frames per second (default 30); auto: per clip, the lowest rate\n"
@@ -109,6 +113,49 @@ static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, 
         else if (strcmp(a->root_motion, "keep") != 0) return cli_usage_error("bake", "--root-motion is keep or in-place");
     }
     return 0;
+}
+
+static bool parse_formats(const char *text, bool *pal, bool *exr)
+{
+    *pal = strcmp(text, "pal") == 0 || strcmp(text, "pal,exr") == 0 || strcmp(text, "exr,pal") == 0;
+    *exr = strcmp(text, "exr") == 0 || strcmp(text, "pal,exr") == 0 || strcmp(text, "exr,pal") == 0;
+    return *pal || *exr;
+}
+
+/* A catalog: the bake options given override its [bake] and [animal] settings for this run
+ * (and count in what is up to date); options that only mean something for one model are
+ * refused, never ignored. */
+static int bake_catalog(const bake_args *a, const cb_limits *limits)
+{
+    unsigned jobs = (unsigned)sysconf(_SC_NPROCESSORS_ONLN);
+    if (a->threads && (!cli_parse_u32(a->threads, &jobs) || jobs < 1 || jobs > 64))
+        return cli_usage_error("bake", "-j wants 1..64");
+    if (a->output) return cli_usage_error("bake", "a catalog writes to its [bake] out_dir; -o is for single models");
+    if (a->skin) return cli_usage_error("bake", "--skin is for single models (a catalog bakes each model's skinned mesh)");
+    if (a->speed_ref) return cli_usage_error("bake", "--speed-reference is for single models; a catalog sets speed_reference per animal");
+    if ((a->fps && strcmp(a->fps, "auto") == 0) || a->max_error || a->max_fps)
+        return cli_usage_error("bake", "--fps auto, --max-error and --max-fps are for single models; a catalog sets fps per "
+                               "animal or clip");
+    cb_bake_settings over = {0};
+    unsigned fields = 0;
+    bool pal = false, exr = false;
+    if (a->format && !parse_formats(a->format, &pal, &exr)) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    if (a->format) over.formats = (pal ? CB_FORMAT_PAL : 0u) | (exr ? CB_FORMAT_EXR : 0u), fields |= CB_BAKE_FORMATS;
+    if (a->zstd && a->format && !pal)
+        return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+    if (a->zstd) over.zstd = true, fields |= CB_BAKE_ZSTD;
+    if (a->exr_compression && !cb_exr_compression_parse(a->exr_compression, &over.exr_compression))
+        return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
+    if (a->exr_compression) fields |= CB_BAKE_EXR_COMPRESSION;
+    cb_bake_options o;
+    int rc = parse_options(a, &o, false, true); /* the same checks and values as for one model */
+    if (rc) return rc;
+    over.fps = o.fps, over.layout = o.layout, over.precision = o.precision;
+    over.max_texture_size = o.max_texture_size, over.root_motion = o.root_motion;
+    fields |= (a->fps ? CB_BAKE_FPS : 0u) | (a->layout ? CB_BAKE_LAYOUT : 0u) | (a->precision ? CB_BAKE_PRECISION : 0u) |
+              (a->max_size ? CB_BAKE_MAX_TEXTURE_SIZE : 0u) | (a->root_motion ? CB_BAKE_ROOT_MOTION : 0u);
+    cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, limits, &over, fields};
+    return cmd_bake_catalog(&cb);
 }
 
 static void print_summary(const char *path, size_t bytes, const cb_palette *p, double seconds)
@@ -230,22 +277,18 @@ int cmd_bake(int argc, char **argv)
     if (help) return fputs(cmd_bake_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     a.quiet |= a.quiet_long;
-    if (ends_with(a.model, ".toml")) {
-        unsigned jobs = (unsigned)sysconf(_SC_NPROCESSORS_ONLN);
-        if (a.threads && (!cli_parse_u32(a.threads, &jobs) || jobs < 1 || jobs > 64))
-            return cli_usage_error("bake", "-j wants 1..64");
-        if (a.output) return cli_usage_error("bake", "a catalog writes to its [bake] out_dir; -o is for single models");
-        return cmd_bake_catalog(a.model, jobs, a.force, a.quiet, a.json, a.depfile, a.manifest);
-    }
+    if (ends_with(a.model, ".toml")) return bake_catalog(&a, &limits);
     if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
+    if (a.depfile || a.manifest || a.force)
+        return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
+                               a.depfile ? "--depfile" : a.manifest ? "--manifest" : "--force");
     bool want_pal = false, want_exr = false;
     const char *formats = a.format ? a.format : ends_with(a.output, ".exr") ? "exr" : "pal";
-    want_pal = strstr(formats, "pal") != NULL;
-    want_exr = strstr(formats, "exr") != NULL;
-    if (!want_pal && !want_exr) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    if (!parse_formats(formats, &want_pal, &want_exr)) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
     int exr_compression = 0;
     if (a.exr_compression && !cb_exr_compression_parse(a.exr_compression, &exr_compression))
         return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
+    if (a.zstd && !want_pal) return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
     double speed_ref = 0;
     if (a.speed_ref && (!cli_parse_double(a.speed_ref, &speed_ref) || speed_ref < 0))
         return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");

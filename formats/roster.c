@@ -62,8 +62,8 @@ static uint64_t content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
     cbpal_xxh64_state h;
     cbpal_xxh64_init(&h);
     hash_str(&h, "crowdbake " CROWDBAKE_VERSION);
-    double settings[6] = {b->fps, b->layout + 10.0 * b->layout_set, b->precision + 10.0 * b->precision_set,
-                          b->max_texture_size, b->root_motion, b->formats};
+    double settings[8] = {b->fps, b->layout + 10.0 * b->layout_set, b->precision + 10.0 * b->precision_set,
+                          b->max_texture_size, b->root_motion, b->formats, b->zstd, b->exr_compression};
     cbpal_xxh64_update(&h, settings, sizeof settings);
     for (uint32_t i = 0; i < m->node_count; ++i) {
         const cb_node *node = &m->nodes[i];
@@ -164,7 +164,8 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
     return CB_OK;
 }
 
-static cb_status analyze_clips(const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
+static cb_status analyze_clips(const cb_catalog_animal *an, const cb_limits *limits, type_work *w, cb_roster_type *t,
+                               cb_error *err)
 {
     cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
     if (!s) return err->status;
@@ -172,7 +173,7 @@ static cb_status analyze_clips(const cb_catalog_animal *an, type_work *w, cb_ros
     for (uint32_t i = 0; i < t->clip_count && !err->status; ++i) {
         cb_clip_info info;
         double fps = w->plan[i].fps > 0 ? w->plan[i].fps : an->bake.fps;
-        if (cb_clip_analyze(s, w->plan[i].animation, fps, w->plan[i].loop, NULL, &info, err)) break;
+        if (cb_clip_analyze(s, w->plan[i].animation, fps, w->plan[i].loop, limits, &info, err)) break;
         cb_roster_clip *c = &t->clips[i];
         snprintf(c->name, sizeof c->name, "%s", w->plan[i].name);
         c->first_row = row;
@@ -230,7 +231,8 @@ static void speed_reference(const cb_catalog_animal *an, cb_roster_type *t)
     for (uint32_t i = 0; i < t->clip_count && t->speed_reference == 0; ++i) t->speed_reference = t->clips[i].ground_speed;
 }
 
-static cb_status check_lods(const cb_catalog *cat, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
+static cb_status check_lods(const roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t,
+                            cb_error *err)
 {
     t->lod_count = an->lod_count;
     t->lods = calloc(an->lod_count ? an->lod_count : 1, sizeof *t->lods);
@@ -239,7 +241,7 @@ static cb_status check_lods(const cb_catalog *cat, const cb_catalog_animal *an, 
     char where[1100];
     for (uint32_t i = 0; i < an->lod_count; ++i) {
         cb_error inner = {0};
-        cb_model *lod = w->lod_models[i] = cb_gltf_load(an->lods[i], NULL, &inner);
+        cb_model *lod = w->lod_models[i] = cb_gltf_load(an->lods[i], run->opt->limits, &inner);
         if (add_inputs(t, an->lods[i], lod, err)) return err->status;
         int skin = lod ? pick_skin(lod) : -1;
         if (lod && skin < 0) cb_fail(&inner, CB_ERR_INPUT, "%s: has no skin", an->lods[i]);
@@ -254,7 +256,7 @@ static cb_status check_lods(const cb_catalog *cat, const cb_catalog_animal *an, 
             else cb_lod_remap(w->model, w->skin, lod, skin, l->remap, &inner);
         }
         if (inner.status)
-            return cb_fail(err, inner.status, "%s: [animal.%s] LOD %u: %s", at(cat, an->lod_pos[i], where, sizeof where),
+            return cb_fail(err, inner.status, "%s: [animal.%s] LOD %u: %s", at(run->cat, an->lod_pos[i], where, sizeof where),
                            an->name, i, inner.message);
     }
     return CB_OK;
@@ -292,7 +294,7 @@ static void prepare_type(roster_run *run, uint32_t i)
     char where[1100];
     cb_error inner = {0};
     output_paths(an, t);
-    w->model = cb_gltf_load(an->model, NULL, &inner);
+    w->model = cb_gltf_load(an->model, run->opt->limits, &inner);
     if (add_inputs(t, an->model, w->model, err)) return;
     if (!w->model) {
         cb_fail(err, inner.status, "%s: [animal.%s] %s", at(run->cat, an->model_pos, where, sizeof where), an->name,
@@ -309,8 +311,8 @@ static void prepare_type(roster_run *run, uint32_t i)
     t->vertices = cb_model_skin_vertex_count(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
-    if (plan_clips(run->cat, an, w, t, err) || analyze_clips(an, w, t, err) || match_states(run->cat, an, t, err) ||
-        check_lods(run->cat, an, w, t, err)) {
+    if (plan_clips(run->cat, an, w, t, err) || analyze_clips(an, run->opt->limits, w, t, err) || match_states(run->cat, an, t, err) ||
+        check_lods(run, an, w, t, err)) {
         for (uint32_t l = 0; !w->lod_models && l < an->lod_count; ++l) /* failed before loading them */
             if (add_inputs(t, an->lods[l], NULL, err)) break;
         return;
@@ -387,6 +389,7 @@ static cb_status make_directories(const char *dir, cb_error *err)
 static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
 {
     cb_bake_options o = cb_default_bake_options();
+    if (run->opt->limits) o.limits = *run->opt->limits;
     o.fps = an->bake.fps;
     o.layout = an->bake.layout;
     o.precision = an->bake.precision;
@@ -403,11 +406,11 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
     if (rc) return rc;
     make_directories(an->bake.out_dir, err);
     if (!err->status && (an->bake.formats & CB_FORMAT_PAL)) {
-        cb_pal_write_options po = {false, 0, t->input_hash, (float)t->speed_reference, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
+        cb_pal_write_options po = {an->bake.zstd, 0, t->input_hash, (float)t->speed_reference, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
         cb_pal_write(t->pal_path, &p, w->model, w->skin, &po, err);
     }
     if (!err->status && (an->bake.formats & CB_FORMAT_EXR))
-        cb_exr_write(t->exr_path, &p, w->model, w->skin, 0, t->input_hash, (float)t->speed_reference, err);
+        cb_exr_write(t->exr_path, &p, w->model, w->skin, an->bake.exr_compression, t->input_hash, (float)t->speed_reference, err);
     t->width = p.width, t->height = p.height, t->blocks = p.blocks;
     t->layout = p.layout, t->precision = p.precision;
     t->max_error = p.max_error;

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "../formats/crowdbake_pal.h"
+#include "../formats/exr_io.h"
 
 #define TMP "build/tmp-tests/asset_ci"
 
@@ -224,6 +225,91 @@ static void test_report_with_a_failed_type_passes_no_budget(void **state)
     if (!strstr(out, "Roster: INCOMPLETE, 1 animal type failed to bake") || strstr(out, "% of the")) fail_msg("%s", out);
 }
 
+static void expect_refused(const char *args, const char *needle)
+{
+    char cmd[PATH_MAX + 256], out[4096];
+    snprintf(cmd, sizeof cmd, "%s bake %s", exe, args);
+    int rc = run_in(TMP "/flags", cmd, out, sizeof out);
+    if (rc != 2 || !strstr(out, needle)) fail_msg("'%s': exit %d, expected 2 and '%s':\n%s", args, rc, needle, out);
+}
+
+/* The command line's bake options apply to every type of a catalog, count in what is up to
+ * date, and those that mean nothing for a catalog are refused. */
+static void test_catalog_applies_bake_flags(void **state)
+{
+    (void)state;
+    static char out[16384];
+    char cmd[PATH_MAX + 256], text[PATH_MAX + 64];
+    assert_int_equal(system("rm -rf " TMP "/flags && mkdir -p " TMP "/flags/build/roster"), 0);
+    snprintf(text, sizeof text, "[animal.fish]\nmodel = \"%s\"\n", fish);
+    write_text(TMP "/flags/catalog.toml", text);
+    const char *flags = "--layout mat4 --precision float --zstd --format pal,exr --fps 24 --root-motion in-place "
+                        "--exr-compression zip";
+    snprintf(cmd, sizeof cmd, "%s bake catalog.toml %s --json", exe, flags);
+    assert_int_equal(run_in(TMP "/flags", cmd, out, sizeof out), 0);
+    assert_non_null(strstr(out, "\"baked\": 1"));
+    cbpal_file f;
+    char msg[256];
+    assert_int_equal(cbpal_open(TMP "/flags/build/roster/fish.pal", CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg), 0);
+    assert_int_equal(f.header.layout, CB_LAYOUT_MAT4);
+    assert_int_equal(f.header.precision, CB_PRECISION_FLOAT);
+    assert_int_equal(f.header.flags, CBPAL_FLAG_ZSTD | CBPAL_FLAG_IN_PLACE);
+    assert_int_equal(f.header.rows, 24); /* the fish's 1 s swim loop at 24 fps */
+    cbpal_close(&f);
+    cb_exr_image img;
+    cb_error err = {0};
+    assert_int_equal(cb_exr_read(TMP "/flags/build/roster/fish.exr", &img, &err), CB_OK);
+    assert_int_equal(img.precision, CB_PRECISION_FLOAT);
+    assert_string_equal(img.layout, "mat4");
+    assert_int_equal(img.rows, 24);
+    cb_exr_image_free(&img);
+    /* Same options: up to date. Without them: the catalog's own settings, baked again. */
+    assert_int_equal(run_in(TMP "/flags", cmd, out, sizeof out), 0);
+    if (!strstr(out, "\"up_to_date\": 1")) fail_msg("%s", out);
+    snprintf(cmd, sizeof cmd, "%s bake catalog.toml --json", exe);
+    assert_int_equal(run_in(TMP "/flags", cmd, out, sizeof out), 0);
+    if (!strstr(out, "\"baked\": 1")) fail_msg("%s", out);
+    assert_int_equal(cbpal_open(TMP "/flags/build/roster/fish.pal", CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg), 0);
+    assert_int_equal(f.header.layout, CB_LAYOUT_QPOS);
+    assert_int_equal(f.header.precision, CB_PRECISION_U16);
+    assert_int_equal(f.header.rows, 30);
+    assert_int_equal(f.header.blocks, 1);
+    cbpal_close(&f);
+    /* 60 rows of 26 texels under a 56-texel limit: two blocks of 30. */
+    snprintf(cmd, sizeof cmd, "%s bake catalog.toml --fps 60 --max-texture-size 56 -q", exe);
+    assert_int_equal(run_in(TMP "/flags", cmd, out, sizeof out), 0);
+    assert_int_equal(cbpal_open(TMP "/flags/build/roster/fish.pal", CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg), 0);
+    assert_int_equal(f.header.rows, 60);
+    assert_int_equal(f.header.blocks, 2);
+    assert_int_equal(f.header.height, 30);
+    cbpal_close(&f);
+    expect_refused("catalog.toml --skin 0", "--skin is for single models");
+    expect_refused("catalog.toml --speed-reference 2", "--speed-reference is for single models");
+    expect_refused("catalog.toml --fps auto", "--fps auto, --max-error and --max-fps are for single models");
+    expect_refused("catalog.toml --format exr --zstd", "--zstd compresses .pal payloads");
+    expect_refused("catalog.toml --format exr --precision u16", "[animal.fish] would write u16 texels to EXR");
+    expect_refused("catalog.toml --layout mat5", "--layout is mat4, affine or qpos");
+    expect_refused("catalog.toml -o x.pal", "-o is for single models");
+    /* And the catalog's options given to a single bake. */
+    snprintf(cmd, sizeof cmd, "%s -o x.pal --depfile x.d", fish);
+    expect_refused(cmd, "--depfile is for catalogs");
+    snprintf(cmd, sizeof cmd, "%s -o x.exr --zstd", fish);
+    expect_refused(cmd, "--zstd compresses .pal payloads");
+}
+
+/* Resource limits given with a catalog bound its bakes as they bound a single one. */
+static void test_catalog_applies_limits(void **state)
+{
+    (void)state;
+    char cmd[PATH_MAX + 256], text[PATH_MAX + 64], out[4096];
+    assert_int_equal(system("rm -rf " TMP "/limits && mkdir -p " TMP "/limits/build/roster"), 0);
+    snprintf(text, sizeof text, "[animal.fish]\nmodel = \"%s\"\n", fish);
+    write_text(TMP "/limits/catalog.toml", text);
+    snprintf(cmd, sizeof cmd, "%s bake catalog.toml -q --max-joints 4", exe);
+    int rc = run_in(TMP "/limits", cmd, out, sizeof out);
+    if (rc != 4 || !strstr(out, "--max-joints")) fail_msg("exit %d: %s", rc, out); /* the fish has 13 joints */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -232,6 +318,8 @@ int main(void)
         cmocka_unit_test(test_ninja_stays_red_until_the_model_is_fixed),
         cmocka_unit_test(test_default_output_folder_is_created),
         cmocka_unit_test(test_report_with_a_failed_type_passes_no_budget),
+        cmocka_unit_test(test_catalog_applies_bake_flags),
+        cmocka_unit_test(test_catalog_applies_limits),
     };
     return cmocka_run_group_tests_name("asset_ci", tests, setup, NULL);
 }
