@@ -6,6 +6,7 @@
 #include <stddef.h>
 
 #include "../formats/gltf_load.h"
+#include "../formats/json_writer.h"
 #include "../formats/pal_view.h"
 #include "../src/catalog.h"
 
@@ -55,6 +56,18 @@ int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err)
  * the caller frees the view and the model and closes the file. */
 int cli_open_baked(const char *palette_path, const char *model_path, const cb_limits *limits, const char *skin_option,
                    cbpal_file *file, cb_palette *view, cb_model **model, cb_error *err);
+
+/* --clip A,B (only these, in this order; a clip skipped at load is then an error with its
+ * reason) and --exclude-clip A,B (every clip but these). *plan is NULL (every clip) when
+ * neither is given; else malloc'ed, *count entries. Names that are not clips are errors. */
+cb_status cli_select_clips(const cb_model *model, const char *clips, const char *excluded, cb_clip_plan **plan,
+                           uint32_t *count, cb_error *err);
+/* Whether a comma-separated list (as --clip takes) holds the name. */
+bool cli_list_has(const char *list, const char *name);
+/* "crowdbake: warning: ..." on stderr, one line each (notes too unless !notes, for -q); or a
+ * "warnings" array of {kind, message}. */
+void cli_print_warnings(const cb_warnings *warnings, bool notes);
+void cli_json_warnings(cb_json *json, const cb_warnings *warnings);
 
 int cmd_info(int argc, char **argv);
 int cmd_sample(int argc, char **argv);

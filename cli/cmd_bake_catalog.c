@@ -37,6 +37,7 @@ static void print_json(const cb_roster *r)
         } else {
             cb_json_string(&j, "error", t->error.message);
         }
+        cli_json_warnings(&j, &t->warnings);
         cb_json_end(&j);
     }
     cb_json_end(&j);
@@ -67,6 +68,8 @@ int cmd_bake_catalog(const cli_catalog_bake *o)
     if (opt.log) printf("crowdbake: baking %u animal types from %s on %u thread%s\n", cat.animal_count, path, jobs,
                         jobs == 1 ? "" : "s");
     cb_status rc = cb_roster_bake(&cat, &opt, &r, &err);
+    for (uint32_t i = 0; quiet && !json && i < r.type_count; ++i) /* the log showed none of them */
+        cli_print_warnings(&r.types[i].warnings, false);
     if (json) print_json(&r);
     else if (!quiet) {
         printf("crowdbake: %u baked, %u up to date, %u sharing a palette, %u failed; manifest %s%s\n", r.baked, r.up_to_date,

@@ -151,6 +151,10 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
         }
         const cb_catalog_clip *c = &an->clips[i];
         int32_t a = cb_model_find_animation(m, c->source);
+        const struct cb_skipped_clip *skip = a < 0 ? cb_model_find_skipped_clip(m, c->source) : NULL;
+        if (skip) /* asked for by name: an error, not a warning */
+            return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s", at(cat, c->pos, where, sizeof where), an->name,
+                           skip->reason);
         if (a < 0) {
             char list[512] = "";
             for (uint32_t k = 0; k < m->animation_count; ++k)
@@ -307,6 +311,7 @@ static void prepare_type(roster_run *run, uint32_t i)
                 an->name, an->model);
         return;
     }
+    cb_model_warnings(w->model, !an->clips, &t->warnings);
     t->bones = w->model->skins[w->skin].joint_count;
     t->vertices = cb_model_skin_vertex_count(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
@@ -415,6 +420,7 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
     t->layout = p.layout, t->precision = p.precision;
     t->max_error = p.max_error;
     t->palette_bytes = p.texel_bytes;
+    if (p.fallback_note[0]) cb_warn(&t->warnings, "note", "%s", p.fallback_note);
     cb_palette_free(&p);
     return err->status;
 }
@@ -440,6 +446,8 @@ static void log_type(roster_run *run, const cb_roster_type *t)
         break;
     case CB_TYPE_FAILED: fprintf(f, "%s  %-16s FAILED: %s\n", clear, t->animal->name, t->error.message); break;
     }
+    for (uint32_t i = 0; i < t->warnings.count; ++i)
+        fprintf(f, "  %-16s %s: %s\n", "", t->warnings.items[i].kind, t->warnings.items[i].message);
     if (run->opt->tty)
         fprintf(f, "  [%u/%u done, %.1f s]", run->r->baked + run->r->up_to_date + run->r->shared + run->r->failed,
                 run->r->type_count, now_seconds() - run->start);
@@ -852,6 +860,7 @@ void cb_roster_free(cb_roster *r)
         free(r->types[i].lods);
         for (uint32_t k = 0; k < r->types[i].input_count; ++k) free(r->types[i].inputs[k]);
         free(r->types[i].inputs);
+        cb_warnings_free(&r->types[i].warnings);
     }
     free(r->types);
     memset(r, 0, sizeof *r);

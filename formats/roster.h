@@ -57,6 +57,7 @@ typedef struct cb_roster_type {
     cb_roster_lod *lods;
     uint32_t input_count;
     char **inputs;            /* every file read for it: model, LODs, their external buffers */
+    cb_warnings warnings;     /* clips skipped at load, the layout's fallback, ... */
 } cb_roster_type;
 
 typedef struct cb_roster {
