@@ -62,6 +62,9 @@ int cli_open_baked(const char *palette_path, const char *model_path, const cb_li
  * neither is given; else malloc'ed, *count entries. Names that are not clips are errors. */
 cb_status cli_select_clips(const cb_model *model, const char *clips, const char *excluded, cb_clip_plan **plan,
                            uint32_t *count, cb_error *err);
+/* Calls fn for each name of a comma-separated list (as --clip takes); stops at, and returns,
+ * the first failure. */
+cb_status cli_for_each_name(const char *list, cb_status (*fn)(const char *name, void *ctx), void *ctx);
 /* Whether a comma-separated list (as --clip takes) holds the name. */
 bool cli_list_has(const char *list, const char *name);
 /* "crowdbake: warning: ..." on stderr, one line each (notes too unless !notes, for -q); or a

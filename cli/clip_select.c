@@ -5,8 +5,7 @@
 
 #include "cli.h"
 
-/* Calls fn for each name of a comma-separated list; stops at the first failure. */
-static cb_status each_name(const char *list, cb_status (*fn)(const char *name, void *ctx), void *ctx)
+cb_status cli_for_each_name(const char *list, cb_status (*fn)(const char *name, void *ctx), void *ctx)
 {
     char name[256];
     for (const char *p = list; p && *p;) {
@@ -75,8 +74,9 @@ cb_status cli_select_clips(const cb_model *m, const char *clips, const char *exc
     selection s = {m, calloc(m->animation_count + 1, sizeof(bool)), calloc(m->animation_count + 1, sizeof(cb_clip_plan)),
                    0, clips ? "--clip" : "--exclude-clip", err};
     if (!s.chosen || !s.plan) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    else if (clips) each_name(clips, include, &s);
-    else if (!each_name(excluded, exclude, &s))
+    else if (clips && excluded) cb_fail(err, CB_ERR_USAGE, "give --clip or --exclude-clip, not both");
+    else if (clips) cli_for_each_name(clips, include, &s);
+    else if (!cli_for_each_name(excluded, exclude, &s))
         for (uint32_t a = 0; a < m->animation_count; ++a)
             if (!s.chosen[a]) s.plan[s.count++] = (cb_clip_plan){(int32_t)a, NULL, -1, 0};
     if (!err->status && s.count == 0)

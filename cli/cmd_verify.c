@@ -22,21 +22,28 @@ const char cmd_verify_usage[] =
 
 static double mm(double e, double h) { return h > 0 ? e / h * 1000 : 0; }
 
-/* A name of --clip/--exclude-clip that is not one of the palette's clips is an error. */
-static cb_status unknown_clip(const cb_palette *p, const char *palette, const char *list, const char *option, cb_error *err)
+typedef struct clip_check {
+    const cb_palette *p;
+    const char *palette, *option;
+    cb_error *err;
+} clip_check;
+
+static cb_status palette_has_clip(const char *name, void *ctx)
 {
-    char name[256];
-    for (const char *at = list; at && *at;) {
-        const char *comma = strchr(at, ',');
-        size_t n = comma ? (size_t)(comma - at) : strlen(at);
-        snprintf(name, sizeof name, "%.*s", (int)(n < sizeof name ? n : sizeof name - 1), at);
-        bool found = false;
-        for (uint32_t c = 0; c < p->clip_count && !found; ++c) found = strcmp(p->clips[c].name, name) == 0;
-        if (!found) return cb_fail(err, CB_ERR_USAGE, "%s: %s %s: the palette has no such clip (see 'crowdbake inspect')",
-                                   palette, option, name);
-        at = comma ? comma + 1 : at + n;
-    }
-    return CB_OK;
+    const clip_check *c = ctx;
+    for (uint32_t i = 0; i < c->p->clip_count; ++i)
+        if (strcmp(c->p->clips[i].name, name) == 0) return CB_OK;
+    return cb_fail(c->err, CB_ERR_USAGE, "%s: %s %s: the palette has no such clip (see 'crowdbake inspect')", c->palette,
+                   c->option, name);
+}
+
+/* --clip and --exclude-clip name the palette's clips; both at once is an error. */
+static cb_status check_clip_options(const cb_palette *p, const char *palette, const char *clips, const char *excluded,
+                                    cb_error *err)
+{
+    if (clips && excluded) return cb_fail(err, CB_ERR_USAGE, "give --clip or --exclude-clip, not both");
+    clip_check c = {p, palette, clips ? "--clip" : "--exclude-clip", err};
+    return cli_for_each_name(clips ? clips : excluded, palette_has_clip, &c);
 }
 
 int cmd_verify(int argc, char **argv)
@@ -61,8 +68,7 @@ int cmd_verify(int argc, char **argv)
     cb_model *m;
     int skin = cli_open_baked(pos[1], pos[0], &limits, skin_name, &f, &p, &m, &err);
     if (skin < 0) return cli_report(&err);
-    cb_sampler *s = unknown_clip(&p, pos[1], clips ? clips : excluded, clips ? "--clip" : "--exclude-clip", &err)
-                        ? NULL : cb_sampler_create(m, skin, &err);
+    cb_sampler *s = check_clip_options(&p, pos[1], clips, excluded, &err) ? NULL : cb_sampler_create(m, skin, &err);
     if (!s) {
         cb_palette_view_free(&p);
         cb_model_free(m);

@@ -110,6 +110,8 @@ static void test_clip_selection(void **state)
            "Survey, Walk, Run");
     expect("bake Fox-broken.gltf -o x.pal --exclude-clip Jump", 2, "--exclude-clip Jump: the model has no such clip");
     expect("bake Fox-broken.gltf -o x.pal --exclude-clip Survey,Walk,Run", 2, "no clip left to bake");
+    expect("bake Fox-broken.gltf -o x.pal --clip Walk --exclude-clip Run", 2, "give --clip or --exclude-clip, not both");
+    expect("verify Fox-broken.gltf all.pal --clip Walk --exclude-clip Run", 2, "give --clip or --exclude-clip, not both");
     /* In the order given: Run's 35 rows then Walk's 21; the broken clip not mentioned. */
     assert_int_equal(cli("bake Fox-broken.gltf -o sel.pal --clip Run,Walk --json", true, out, sizeof out), 0);
     if (strstr(out, "Broken") || !strstr(out, "\"warnings\": []")) fail_msg("%s", out);
