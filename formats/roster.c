@@ -287,6 +287,13 @@ static void output_paths(const cb_catalog_animal *an, cb_roster_type *t)
     snprintf(t->exr_path, sizeof t->exr_path, "%s/%s.exr", an->bake.out_dir, an->name);
 }
 
+/* A type that failed before its LODs were loaded still lists them: they are its inputs. */
+static void list_unloaded_lods(const cb_catalog_animal *an, const type_work *w, cb_roster_type *t)
+{
+    for (uint32_t l = 0; !w->lod_models && l < an->lod_count; ++l)
+        if (add_inputs(t, an->lods[l], NULL, &t->error)) break;
+}
+
 static void prepare_type(roster_run *run, uint32_t i)
 {
     const cb_catalog_animal *an = &run->cat->animals[i];
@@ -303,12 +310,14 @@ static void prepare_type(roster_run *run, uint32_t i)
     if (!w->model) {
         cb_fail(err, inner.status, "%s: [animal.%s] %s", at(run->cat, an->model_pos, where, sizeof where), an->name,
                 inner.message);
+        list_unloaded_lods(an, w, t);
         return;
     }
     w->skin = pick_skin(w->model);
     if (w->skin < 0) {
         cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s has no skin to bake", at(run->cat, an->model_pos, where, sizeof where),
                 an->name, an->model);
+        list_unloaded_lods(an, w, t);
         return;
     }
     cb_model_warnings(w->model, !an->clips, &t->warnings);
@@ -316,10 +325,9 @@ static void prepare_type(roster_run *run, uint32_t i)
     t->vertices = cb_model_skin_vertex_count(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
-    if (plan_clips(run->cat, an, w, t, err) || analyze_clips(an, run->opt->limits, w, t, err) || match_states(run->cat, an, t, err) ||
-        check_lods(run, an, w, t, err)) {
-        for (uint32_t l = 0; !w->lod_models && l < an->lod_count; ++l) /* failed before loading them */
-            if (add_inputs(t, an->lods[l], NULL, err)) break;
+    if (plan_clips(run->cat, an, w, t, err) || analyze_clips(an, run->opt->limits, w, t, err) ||
+        match_states(run->cat, an, t, err) || check_lods(run, an, w, t, err)) {
+        list_unloaded_lods(an, w, t);
         return;
     }
     speed_reference(an, t);

@@ -124,6 +124,14 @@ static void build_cycle(const char *dir, const char *tool)
         snprintf(cmd, sizeof cmd, "node tests/validator/validate_schema.mjs docs/roster.schema.json %s 2>&1", path);
         if (run_command(cmd, out, sizeof out) != 0) fail_msg("%s", out);
     }
+    /* The depfile keeps the failed type's output and model, which did not even load. */
+    snprintf(path, sizeof path, "%s/build/roster.d", dir);
+    if (strcmp(tool, "make") == 0) {
+        char *deps = read_whole_file(path, NULL);
+        if (!strstr(deps, "build/roster/eel.pal: catalog.toml \\\n  eel.glb\n") || !strstr(deps, "\neel.glb:\n"))
+            fail_msg("depfile after a failed type:\n%s", deps);
+        free(deps);
+    }
     fix_model(dir);
     build_expect(dir, tool, true, true);
     build_expect(dir, tool, true, false);
