@@ -13,7 +13,7 @@ SHELL := /bin/bash
 
 DEB_PACKAGES := pkg-config rapidjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
-                libosmesa6-dev libpng-dev
+                libosmesa6-dev libpng-dev ninja-build
 PKGS := tinygltf RapidJSON draco OpenEXR libzstd tomlplusplus osmesa libpng
 
 BUILD   ?= build

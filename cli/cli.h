@@ -6,7 +6,9 @@
 #include <stddef.h>
 
 #include "../formats/gltf_load.h"
+#include "../formats/json_writer.h"
 #include "../formats/pal_view.h"
+#include "../src/catalog.h"
 
 typedef struct cli_option {
     const char *name;     /* "--fps" */
@@ -55,6 +57,21 @@ int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err)
 int cli_open_baked(const char *palette_path, const char *model_path, const cb_limits *limits, const char *skin_option,
                    cbpal_file *file, cb_palette *view, cb_model **model, cb_error *err);
 
+/* --clip A,B (only these, in this order; a clip skipped at load is then an error with its
+ * reason) and --exclude-clip A,B (every clip but these). *plan is NULL (every clip) when
+ * neither is given; else malloc'ed, *count entries. Names that are not clips are errors. */
+cb_status cli_select_clips(const cb_model *model, const char *clips, const char *excluded, cb_clip_plan **plan,
+                           uint32_t *count, cb_error *err);
+/* Calls fn for each name of a comma-separated list (as --clip takes); stops at, and returns,
+ * the first failure. */
+cb_status cli_for_each_name(const char *list, cb_status (*fn)(const char *name, void *ctx), void *ctx);
+/* Whether a comma-separated list (as --clip takes) holds the name. */
+bool cli_list_has(const char *list, const char *name);
+/* "crowdbake: warning: ..." on stderr, one line each (notes too unless !notes, for -q); or a
+ * "warnings" array of {kind, message}. */
+void cli_print_warnings(const cb_warnings *warnings, bool notes);
+void cli_json_warnings(cb_json *json, const cb_warnings *warnings);
+
 int cmd_info(int argc, char **argv);
 int cmd_sample(int argc, char **argv);
 int cmd_bake(int argc, char **argv);
@@ -63,8 +80,17 @@ int cmd_vat(int argc, char **argv);
 int cmd_verify(int argc, char **argv);
 int cmd_preview(int argc, char **argv);
 int cmd_report(int argc, char **argv);
-int cmd_bake_catalog(const char *path, uint32_t jobs, bool force, bool quiet, bool json, const char *depfile,
-                     const char *manifest);
+/* `crowdbake bake CATALOG.toml`, once cmd_bake has read its options. */
+typedef struct cli_catalog_bake {
+    const char *path;
+    uint32_t jobs;
+    bool force, quiet, json;
+    const char *depfile, *manifest;
+    const cb_limits *limits;
+    const cb_bake_settings *overrides; /* the command line's bake options, `override_fields` of them set */
+    unsigned override_fields;          /* CB_BAKE_* */
+} cli_catalog_bake;
+int cmd_bake_catalog(const cli_catalog_bake *options);
 
 extern const char cmd_info_usage[], cmd_sample_usage[], cmd_bake_usage[], cmd_inspect_usage[], cmd_vat_usage[],
     cmd_report_usage[], cmd_verify_usage[], cmd_preview_usage[];

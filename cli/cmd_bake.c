@@ -17,10 +17,14 @@
 
 const char cmd_bake_usage[] =
     "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr [options]\n"
-    "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--json] [-q]\n\n"
+    "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--json] [-q]\n"
+    "                      [--fps N] [--layout L] [--precision P] [--format F] [--zstd] [--max-texture-size N]\n"
+    "                      [--root-motion R] [--exr-compression C]\n\n"
     "Bakes every clip of the model's skin into a bone-matrix palette; or every animal type of a\n"
     "catalog (see catalog.example.toml) into palettes and a roster manifest, re-baking only what\n"
-    "changed (--force: everything), N types at a time (default: the number of cores).\n\n"
+    "changed (--force: everything), N types at a time (default: the number of cores). With a\n"
+    "catalog, the bake options given replace its [bake] and [animal] values for this run (a clip's\n"
+    "own fps still applies) and count in what is up to date; --depfile writes a Make/Ninja depfile.\n\n"
     "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md) or .exr (OpenEXR)\n"
     "  --format pal,exr           write these formats (OUT's extension is replaced per format)\n"
     "  --fps N|auto               baked frames per second (default 30); auto: per clip, the lowest rate\n"
@@ -33,17 +37,21 @@ const char cmd_bake_usage[] =
     "                             side-by-side column blocks\n"
     "  --root-motion keep|in-place  in-place removes the root's average horizontal travel\n"
     "  --skin NAME|INDEX          the skin to bake when the file has several\n"
+    "  --clip A,B                 only these clips, in this order (default: every clip; a clip that\n"
+    "                             cannot be sampled, e.g. one without keys, is skipped with a warning\n"
+    "                             unless named here, which makes it an error)\n"
+    "  --exclude-clip A,B         every clip but these\n"
     "  --speed-reference M_PER_S  ground speed at playback rate 1, stored in the header\n"
     "  --zstd                     compress the .pal payload (readers decompress once)\n"
     "  --exr-compression none|rle|zips|zip|piz  (default none; lossless only)\n"
     "  -j, --threads N            sample clips on N threads (default: the number of cores); the\n"
     "                             output is byte-identical for any N\n"
-    "  --json                     a machine-readable summary on stdout\n"
+    "  --json                     a machine-readable summary on stdout, warnings included\n"
     "  -q, --quiet                no summary lines\n";
 
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
-        *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps;
+        *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded;
     bool zstd, json, quiet, quiet_long, force;
 } bake_args;
 
@@ -111,6 +119,51 @@ static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, 
     return 0;
 }
 
+static bool parse_formats(const char *text, bool *pal, bool *exr)
+{
+    *pal = strcmp(text, "pal") == 0 || strcmp(text, "pal,exr") == 0 || strcmp(text, "exr,pal") == 0;
+    *exr = strcmp(text, "exr") == 0 || strcmp(text, "pal,exr") == 0 || strcmp(text, "exr,pal") == 0;
+    return *pal || *exr;
+}
+
+/* A catalog: the bake options given override its [bake] and [animal] settings for this run
+ * (and count in what is up to date); options that only mean something for one model are
+ * refused, never ignored. */
+static int bake_catalog(const bake_args *a, const cb_limits *limits)
+{
+    unsigned jobs = (unsigned)sysconf(_SC_NPROCESSORS_ONLN);
+    if (a->threads && (!cli_parse_u32(a->threads, &jobs) || jobs < 1 || jobs > 64))
+        return cli_usage_error("bake", "-j wants 1..64");
+    if (a->output) return cli_usage_error("bake", "a catalog writes to its [bake] out_dir; -o is for single models");
+    if (a->skin) return cli_usage_error("bake", "--skin is for single models (a catalog bakes each model's skinned mesh)");
+    if (a->speed_ref) return cli_usage_error("bake", "--speed-reference is for single models; a catalog sets speed_reference per animal");
+    if (a->clips || a->excluded)
+        return cli_usage_error("bake", "--clip and --exclude-clip are for single models; a catalog lists clips per animal");
+    if ((a->fps && strcmp(a->fps, "auto") == 0) || a->max_error || a->max_fps)
+        return cli_usage_error("bake", "--fps auto, --max-error and --max-fps are for single models; a catalog sets fps per "
+                               "animal or clip");
+    cb_bake_settings over = {0};
+    unsigned fields = 0;
+    bool pal = false, exr = false;
+    if (a->format && !parse_formats(a->format, &pal, &exr)) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    if (a->format) over.formats = (pal ? CB_FORMAT_PAL : 0u) | (exr ? CB_FORMAT_EXR : 0u), fields |= CB_BAKE_FORMATS;
+    if (a->zstd && a->format && !pal)
+        return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+    if (a->zstd) over.zstd = true, fields |= CB_BAKE_ZSTD;
+    if (a->exr_compression && !cb_exr_compression_parse(a->exr_compression, &over.exr_compression))
+        return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
+    if (a->exr_compression) fields |= CB_BAKE_EXR_COMPRESSION;
+    cb_bake_options o;
+    int rc = parse_options(a, &o, false, true); /* the same checks and values as for one model */
+    if (rc) return rc;
+    over.fps = o.fps, over.layout = o.layout, over.precision = o.precision;
+    over.max_texture_size = o.max_texture_size, over.root_motion = o.root_motion;
+    fields |= (a->fps ? CB_BAKE_FPS : 0u) | (a->layout ? CB_BAKE_LAYOUT : 0u) | (a->precision ? CB_BAKE_PRECISION : 0u) |
+              (a->max_size ? CB_BAKE_MAX_TEXTURE_SIZE : 0u) | (a->root_motion ? CB_BAKE_ROOT_MOTION : 0u);
+    cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, limits, &over, fields};
+    return cmd_bake_catalog(&cb);
+}
+
 static void print_summary(const char *path, size_t bytes, const cb_palette *p, double seconds)
 {
     double per_m = p->model_height > 0 ? p->max_error / p->model_height * 1000 : 0;
@@ -155,8 +208,8 @@ static void json_output(cb_json *j, const char *path, const char *format, size_t
 }
 
 /* --fps auto: a rate per clip, chosen by measured error; prints what it chose and saved. */
-static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, double max_mm, double max_fps, bool quiet,
-                                  cb_error *err)
+static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *selection,
+                                  uint32_t selected, double max_mm, double max_fps, bool quiet, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
     double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
@@ -164,13 +217,15 @@ static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, doubl
         cb_fail(err, CB_ERR_INPUT, "%s: has no skinned mesh to measure errors on; give --fps N", m->source);
         return NULL;
     }
-    cb_clip_plan *plan = calloc(m->animation_count ? m->animation_count : 1, sizeof *plan);
+    uint32_t n = selection ? selected : m->animation_count;
+    cb_clip_plan *plan = calloc(n ? n : 1, sizeof *plan);
     if (!plan) return cb_fail(err, CB_ERR_INTERNAL, "out of memory"), NULL;
     uint64_t rows_auto = 0, rows_30 = 0;
-    for (uint32_t a = 0; a < m->animation_count && !err->status; ++a) {
+    for (uint32_t i = 0; i < n && !err->status; ++i) {
+        uint32_t a = selection ? (uint32_t)selection[i].animation : i;
         bool met;
         double e, fps = cb_choose_clip_fps(s, o, (int32_t)a, max_mm / 1000 * height, max_fps, &met, &e, err);
-        plan[a] = (cb_clip_plan){(int32_t)a, NULL, -1, fps};
+        plan[i] = (cb_clip_plan){(int32_t)a, NULL, -1, fps};
         cb_clip_info at, fixed;
         if (err->status || cb_clip_analyze(s, (int32_t)a, fps, -1, &o->limits, &at, err) ||
             cb_clip_analyze(s, (int32_t)a, 30, -1, &o->limits, &fixed, err))
@@ -193,18 +248,40 @@ static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, doubl
     return plan;
 }
 
-/* Bakes, with --fps auto choosing the rates first; says when qpos fell back to affine. */
-static cb_status bake_palette(cb_sampler *s, cb_bake_options *o, const bake_args *a, double max_mm, double max_fps,
-                              cb_palette *p, cb_error *err)
+/* Bakes the selected clips (NULL: every clip), with --fps auto choosing the rates first. */
+static cb_status bake_palette(cb_sampler *s, cb_bake_options *o, const bake_args *a, const cb_clip_plan *selection,
+                              uint32_t selected, double max_mm, double max_fps, cb_palette *p, cb_error *err)
 {
     bool quiet = a->quiet || a->json, automatic = a->fps && strcmp(a->fps, "auto") == 0;
     o->affine_fallback = a->layout == NULL;
-    cb_clip_plan *plan = automatic ? choose_rates(s, o, max_mm, max_fps, quiet, err) : NULL;
-    uint32_t n = plan ? cb_sampler_model(s)->animation_count : 0;
-    cb_status rc = err->status ? err->status : cb_palette_bake(s, o, plan, n, p, err);
+    cb_clip_plan *plan = automatic ? choose_rates(s, o, selection, selected, max_mm, max_fps, quiet, err) : NULL;
+    uint32_t n = plan || selection ? (selection ? selected : cb_sampler_model(s)->animation_count) : 0;
+    cb_status rc = err->status ? err->status : cb_palette_bake(s, o, plan ? plan : selection, n, p, err);
     free(plan);
-    if (!rc && p->fallback_note[0] && !quiet) fprintf(stderr, "crowdbake: note: %s\n", p->fallback_note);
     return rc;
+}
+
+/* What the user should know about a bake: clips skipped at load, ignored channels, the
+ * layout's fallback, loops that travel, quaternion flips. */
+static void bake_warnings(cb_sampler *s, const cb_bake_options *o, const bake_args *a, const cb_palette *p,
+                          cb_warnings *w)
+{
+    const cb_model *m = cb_sampler_model(s);
+    cb_model_warnings(m, a->clips == NULL, w);
+    if (p->fallback_note[0]) cb_warn(w, "note", "%s", p->fallback_note);
+    for (uint32_t c = 0; o->root_motion == CB_ROOT_MOTION_KEEP && c < p->clip_count; ++c) {
+        cb_clip_info info;
+        cb_error ignored = {0};
+        if (p->clips[c].loops &&
+            !cb_clip_analyze(s, cb_model_find_animation(m, p->clips[c].name), o->fps, 1, &o->limits, &info, &ignored) &&
+            info.ground_speed > 0)
+            cb_warn(w, "note", "clip '%s' loops and travels %.3g units/s: blending its last row into its first pulls the "
+                    "body back; for crowds moved by the game, bake with --root-motion in-place", p->clips[c].name,
+                    info.ground_speed);
+    }
+    if (p->quat_hemisphere_breaks)
+        cb_warn(w, "note", "%u bone(s) turn a full circle over a loop, so their last and first rows lie in opposite "
+                "quaternion hemispheres; the shipped shaders flip before blending", p->quat_hemisphere_breaks);
 }
 
 int cmd_bake(int argc, char **argv)
@@ -224,28 +301,25 @@ int cmd_bake(int argc, char **argv)
         {"-j", "N", &a.threads, NULL},             {"--threads", "N", &a.threads, NULL},
         {"--force", NULL, NULL, &a.force},         {"--depfile", "FILE", &a.depfile, NULL},
         {"--manifest", "FILE", &a.manifest, NULL}, {"--max-error", "MM_PER_M", &a.max_error, NULL},
-        {"--max-fps", "N", &a.max_fps, NULL},
+        {"--max-fps", "N", &a.max_fps, NULL},      {"--clip", "A,B", &a.clips, NULL},
+        {"--exclude-clip", "A,B", &a.excluded, NULL},
         {"--quiet", NULL, NULL, &a.quiet_long}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
     if (help) return fputs(cmd_bake_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     a.quiet |= a.quiet_long;
-    if (ends_with(a.model, ".toml")) {
-        unsigned jobs = (unsigned)sysconf(_SC_NPROCESSORS_ONLN);
-        if (a.threads && (!cli_parse_u32(a.threads, &jobs) || jobs < 1 || jobs > 64))
-            return cli_usage_error("bake", "-j wants 1..64");
-        if (a.output) return cli_usage_error("bake", "a catalog writes to its [bake] out_dir; -o is for single models");
-        return cmd_bake_catalog(a.model, jobs, a.force, a.quiet, a.json, a.depfile, a.manifest);
-    }
+    if (ends_with(a.model, ".toml")) return bake_catalog(&a, &limits);
     if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
+    if (a.depfile || a.manifest || a.force)
+        return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
+                               a.depfile ? "--depfile" : a.manifest ? "--manifest" : "--force");
     bool want_pal = false, want_exr = false;
     const char *formats = a.format ? a.format : ends_with(a.output, ".exr") ? "exr" : "pal";
-    want_pal = strstr(formats, "pal") != NULL;
-    want_exr = strstr(formats, "exr") != NULL;
-    if (!want_pal && !want_exr) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    if (!parse_formats(formats, &want_pal, &want_exr)) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
     int exr_compression = 0;
     if (a.exr_compression && !cb_exr_compression_parse(a.exr_compression, &exr_compression))
         return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
+    if (a.zstd && !want_pal) return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
     double speed_ref = 0;
     if (a.speed_ref && (!cli_parse_double(a.speed_ref, &speed_ref) || speed_ref < 0))
         return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
@@ -268,7 +342,12 @@ int cmd_bake(int argc, char **argv)
     int skin = cli_pick_skin(m, a.skin, &err);
     cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, &err) : NULL;
     cb_palette p = {0};
-    if (s) bake_palette(s, &o, &a, max_mm, max_fps, &p, &err);
+    cb_clip_plan *selection = NULL;
+    uint32_t selected = 0;
+    if (s && !cli_select_clips(m, a.clips, a.excluded, &selection, &selected, &err))
+        bake_palette(s, &o, &a, selection, selected, max_mm, max_fps, &p, &err);
+    cb_warnings warnings = {0};
+    if (!err.status) bake_warnings(s, &o, &a, &p, &warnings);
     cb_json j;
     if (a.json && !err.status) {
         cb_json_init(&j, stdout);
@@ -300,24 +379,13 @@ int cmd_bake(int argc, char **argv)
     }
     if (a.json && !err.status) {
         cb_json_end(&j);
+        cli_json_warnings(&j, &warnings);
         cb_json_end(&j);
+    } else if (!err.status) {
+        cli_print_warnings(&warnings, !a.quiet);
     }
-    for (uint32_t c = 0; !err.status && !a.quiet && !a.json && o.root_motion == CB_ROOT_MOTION_KEEP && c < p.clip_count; ++c) {
-        cb_clip_info info;
-        cb_error ignored = {0};
-        if (p.clips[c].loops && !cb_clip_analyze(s, cb_model_find_animation(m, p.clips[c].name), o.fps, 1, &o.limits, &info, &ignored) &&
-            info.ground_speed > 0)
-            fprintf(stderr, "crowdbake: note: clip '%s' loops and travels %.3g units/s: blending its last row into its first "
-                    "pulls the body back; for crowds moved by the game, bake with --root-motion in-place\n",
-                    p.clips[c].name, info.ground_speed);
-    }
-    if (!err.status && m->ignored_morph_channels && !a.quiet && !a.json)
-        fprintf(stderr, "crowdbake: note: %u morph-weight channel(s) ignored: palettes carry joints only\n",
-                m->ignored_morph_channels);
-    if (!err.status && p.quat_hemisphere_breaks && !a.quiet && !a.json)
-        fprintf(stderr, "crowdbake: note: %u bone(s) turn a full circle over a loop, so their last and first rows lie in "
-                        "opposite quaternion hemispheres; the shipped shaders flip before blending\n",
-                p.quat_hemisphere_breaks);
+    cb_warnings_free(&warnings);
+    free(selection);
     cb_palette_free(&p);
     cb_sampler_free(s);
     cb_model_free(m);

@@ -37,29 +37,39 @@ static void print_json(const cb_roster *r)
         } else {
             cb_json_string(&j, "error", t->error.message);
         }
+        cli_json_warnings(&j, &t->warnings);
         cb_json_end(&j);
     }
     cb_json_end(&j);
     cb_json_end(&j);
 }
 
-int cmd_bake_catalog(const char *path, uint32_t jobs, bool force, bool quiet, bool json, const char *depfile,
-                     const char *manifest)
+int cmd_bake_catalog(const cli_catalog_bake *o)
 {
+    const char *path = o->path;
+    uint32_t jobs = o->jobs;
+    bool quiet = o->quiet, json = o->json;
     cb_error err = {0};
     cb_catalog cat;
     if (cb_catalog_load(path, &cat, &err)) return cli_report(&err);
+    if (cb_catalog_override_bake(&cat, o->overrides, o->override_fields, &err)) {
+        cb_catalog_free(&cat);
+        return cli_report(&err);
+    }
     cb_roster_options opt = {0};
     opt.jobs = jobs;
-    opt.force = force;
+    opt.force = o->force;
     opt.log = quiet || json ? NULL : stdout;
     opt.tty = opt.log && isatty(fileno(stdout));
-    opt.depfile = depfile;
-    opt.manifest = manifest;
+    opt.depfile = o->depfile;
+    opt.manifest = o->manifest;
+    opt.limits = o->limits;
     cb_roster r;
     if (opt.log) printf("crowdbake: baking %u animal types from %s on %u thread%s\n", cat.animal_count, path, jobs,
                         jobs == 1 ? "" : "s");
     cb_status rc = cb_roster_bake(&cat, &opt, &r, &err);
+    for (uint32_t i = 0; quiet && !json && i < r.type_count; ++i) /* the log showed none of them */
+        cli_print_warnings(&r.types[i].warnings, false);
     if (json) print_json(&r);
     else if (!quiet) {
         printf("crowdbake: %u baked, %u up to date, %u sharing a palette, %u failed; manifest %s%s\n", r.baked, r.up_to_date,

@@ -157,6 +157,18 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, dou
         cb_json_end(&j);
     }
     cb_json_end(&j);
+    cb_json_array(&j, "skipped_clips");
+    for (uint32_t i = 0; i < m->skipped_clip_count; ++i) {
+        cb_json_object(&j, NULL);
+        cb_json_string(&j, "name", m->skipped_clips[i].name);
+        cb_json_string(&j, "reason", m->skipped_clips[i].reason);
+        cb_json_end(&j);
+    }
+    cb_json_end(&j);
+    cb_warnings warnings = {0};
+    cb_model_warnings(m, true, &warnings);
+    cli_json_warnings(&j, &warnings);
+    cb_warnings_free(&warnings);
     cb_json_end(&j);
 }
 
@@ -188,6 +200,12 @@ int cmd_info(int argc, char **argv)
     if (!facts) cb_fail(&err, CB_ERR_INTERNAL, "out of memory");
     if (!err.status) gather_clips(m, skin, fps, &limits, facts, &err);
     if (!err.status) (json ? print_json : print_text)(m, skin, facts, fps);
+    if (!err.status && !json) { /* what a bake would leave out */
+        cb_warnings warnings = {0};
+        cb_model_warnings(m, true, &warnings);
+        cli_print_warnings(&warnings, false);
+        cb_warnings_free(&warnings);
+    }
     free(facts);
     cb_model_free(m);
     return err.status ? cli_report(&err) : 0;

@@ -1,6 +1,7 @@
 /* cmd_vat.c - `crowdbake vat MODEL -o OUT.exr`: a real vertex animation texture of the same
  * frames a palette bakes, to compare both methods side by side. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "../formats/exr_io.h"
@@ -9,23 +10,27 @@
 
 const char cmd_vat_usage[] =
     "usage: crowdbake vat MODEL -o OUT.exr [--fps N] [--max-texture-size N] [--root-motion keep|in-place]\n"
-    "                     [--skin NAME|INDEX] [--exr-compression none|rle|zips|zip|piz] [--json]\n\n"
+    "                     [--skin NAME|INDEX] [--exr-compression none|rle|zips|zip|piz] [--json]\n"
+    "                     [--clip A,B | --exclude-clip A,B]\n\n"
     "Bakes a vertex animation texture: every skinned vertex of every frame (framed like the palette's\n"
     "rows), positions and normals as RGBA16F layers position.* and normal.* of one EXR, a frame per\n"
     "texture row (a frame of more vertices than the limit takes several rows; rows wrap into column\n"
     "blocks). Prints its size and the error half-float positions cause, next to the size of the\n"
-    "default palette of the same frames.\n";
+    "default palette of the same frames. --clip and --exclude-clip select clips as for 'bake'; a clip\n"
+    "that cannot be sampled is skipped with a warning unless --clip names it.\n";
 
 int cmd_vat(int argc, char **argv)
 {
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
-    const char *path = NULL, *out = NULL, *fps = NULL, *max = NULL, *rm = NULL, *skin_name = NULL, *comp = NULL;
+    const char *path = NULL, *out = NULL, *fps = NULL, *max = NULL, *rm = NULL, *skin_name = NULL, *comp = NULL,
+               *clips = NULL, *excluded = NULL;
     bool json = false, help;
     const cli_option options[] = {{"-o", "FILE", &out, NULL},          {"--output", "FILE", &out, NULL},
                                   {"--fps", "N", &fps, NULL},          {"--max-texture-size", "N", &max, NULL},
                                   {"--root-motion", "MODE", &rm, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL},
-                                  {"--exr-compression", "NAME", &comp, NULL}, {"--json", NULL, NULL, &json}};
+                                  {"--exr-compression", "NAME", &comp, NULL}, {"--json", NULL, NULL, &json},
+                                  {"--clip", "A,B", &clips, NULL},     {"--exclude-clip", "A,B", &excluded, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &path, 1, 1, &help);
     if (help) return fputs(cmd_vat_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
@@ -46,7 +51,14 @@ int cmd_vat(int argc, char **argv)
     int skin = cli_pick_skin(m, skin_name, &err);
     cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, &err) : NULL;
     cb_vat vat = {0};
-    if (s && !cb_vat_bake(s, &o, NULL, 0, true, &vat, &err)) cb_exr_write_vat(out, &vat, compression, &err);
+    cb_clip_plan *plan = NULL;
+    uint32_t planned = 0;
+    if (s && !cli_select_clips(m, clips, excluded, &plan, &planned, &err) &&
+        !cb_vat_bake(s, &o, plan, planned, true, &vat, &err))
+        cb_exr_write_vat(out, &vat, compression, &err);
+    free(plan);
+    cb_warnings warnings = {0};
+    if (!err.status) cb_model_warnings(m, clips == NULL, &warnings);
     if (!err.status) {
         uint64_t bytes = (uint64_t)vat.geometry.width * vat.geometry.height * 16;
         cb_texture_geometry g;
@@ -67,6 +79,7 @@ int cmd_vat(int argc, char **argv)
             cb_json_number(&j, "max_error", vat.max_error);
             cb_json_number(&j, "max_error_mm_per_m", per_m);
             cb_json_int(&j, "palette_qpos_u16_bytes", (long long)pal);
+            cli_json_warnings(&j, &warnings);
             cb_json_end(&j);
         } else {
             printf("%s: %llu vertices x %u frames, %ux%u texels (%u block%s), %.1f KiB of RGBA16F positions + normals, "
@@ -74,8 +87,10 @@ int cmd_vat(int argc, char **argv)
                    out, (unsigned long long)vat.vertices, vat.frames, vat.geometry.width, vat.geometry.height,
                    vat.geometry.blocks, vat.geometry.blocks == 1 ? "" : "s", bytes / 1024.0, vat.max_error, per_m,
                    pal / 1024.0, pal ? (double)bytes / pal : 0);
+            cli_print_warnings(&warnings, true);
         }
     }
+    cb_warnings_free(&warnings);
     cb_vat_free(&vat);
     cb_sampler_free(s);
     cb_model_free(m);

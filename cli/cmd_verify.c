@@ -10,25 +10,52 @@
 #include "cli.h"
 
 const char cmd_verify_usage[] =
-    "usage: crowdbake verify MODEL PALETTE.pal [--max-error MM_PER_M] [--random N] [--skin NAME|INDEX] [--json]\n\n"
+    "usage: crowdbake verify MODEL PALETTE.pal [--max-error MM_PER_M] [--random N] [--skin NAME|INDEX] [--json]\n"
+    "                        [--clip A,B | --exclude-clip A,B]\n\n"
     "Skins the model's mesh from the palette the way the runtime shaders do (two adjacent rows\n"
     "blended, up to 4 weighted bones, loops wrap, one-shots clamp) and compares it with exact float64\n"
     "skinning from the glTF: at every baked frame (the encoding's error), at every mid-frame and at N\n"
     "random times (default 64; the blending's error). Reports per clip the max and mean vertex error\n"
     "in model units and in mm per metre of model height, and the worst vertex and time. Exits 6 when\n"
-    "an error exceeds --max-error (mm per metre of height).\n";
+    "an error exceeds --max-error (mm per metre of height). --clip verifies only the palette's clips\n"
+    "named, --exclude-clip all but those.\n";
 
 static double mm(double e, double h) { return h > 0 ? e / h * 1000 : 0; }
+
+typedef struct clip_check {
+    const cb_palette *p;
+    const char *palette, *option;
+    cb_error *err;
+} clip_check;
+
+static cb_status palette_has_clip(const char *name, void *ctx)
+{
+    const clip_check *c = ctx;
+    for (uint32_t i = 0; i < c->p->clip_count; ++i)
+        if (strcmp(c->p->clips[i].name, name) == 0) return CB_OK;
+    return cb_fail(c->err, CB_ERR_USAGE, "%s: %s %s: the palette has no such clip (see 'crowdbake inspect')", c->palette,
+                   c->option, name);
+}
+
+/* --clip and --exclude-clip name the palette's clips; both at once is an error. */
+static cb_status check_clip_options(const cb_palette *p, const char *palette, const char *clips, const char *excluded,
+                                    cb_error *err)
+{
+    if (clips && excluded) return cb_fail(err, CB_ERR_USAGE, "give --clip or --exclude-clip, not both");
+    clip_check c = {p, palette, clips ? "--clip" : "--exclude-clip", err};
+    return cli_for_each_name(clips ? clips : excluded, palette_has_clip, &c);
+}
 
 int cmd_verify(int argc, char **argv)
 {
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
-    const char *pos[2] = {0}, *max_text = NULL, *random_text = NULL, *skin_name = NULL;
+    const char *pos[2] = {0}, *max_text = NULL, *random_text = NULL, *skin_name = NULL, *clips = NULL, *excluded = NULL;
     bool json = false, help;
     const cli_option options[] = {{"--max-error", "MM_PER_M", &max_text, NULL}, {"--random", "N", &random_text, NULL},
-                                  {"--skin", "NAME|INDEX", &skin_name, NULL}, {"--json", NULL, NULL, &json}};
-    int rc = cli_parse(argc, argv, options, 4, pos, 2, 2, &help);
+                                  {"--skin", "NAME|INDEX", &skin_name, NULL}, {"--json", NULL, NULL, &json},
+                                  {"--clip", "A,B", &clips, NULL}, {"--exclude-clip", "A,B", &excluded, NULL}};
+    int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], pos, 2, 2, &help);
     if (help) return fputs(cmd_verify_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     double max_error = -1;
@@ -41,7 +68,7 @@ int cmd_verify(int argc, char **argv)
     cb_model *m;
     int skin = cli_open_baked(pos[1], pos[0], &limits, skin_name, &f, &p, &m, &err);
     if (skin < 0) return cli_report(&err);
-    cb_sampler *s = cb_sampler_create(m, skin, &err);
+    cb_sampler *s = check_clip_options(&p, pos[1], clips, excluded, &err) ? NULL : cb_sampler_create(m, skin, &err);
     if (!s) {
         cb_palette_view_free(&p);
         cb_model_free(m);
@@ -63,6 +90,7 @@ int cmd_verify(int argc, char **argv)
                "between max", "between mean", "mm/m", "mm/m", "worst vertex @ time");
     }
     for (uint32_t c = 0; c < p.clip_count && !err.status; ++c) {
+        if ((clips && !cli_list_has(clips, p.clips[c].name)) || cli_list_has(excluded, p.clips[c].name)) continue;
         int32_t a = cb_model_find_animation(m, p.clips[c].name);
         if (a < 0) {
             cb_fail(&err, CB_ERR_INPUT, "%s: has no clip '%s' that %s holds; verify the model the palette was baked from",

@@ -82,7 +82,10 @@ cb_status cb_report_build(const cb_catalog *cat, const cb_roster *roster, cb_rep
     r->types = calloc(roster->type_count ? roster->type_count : 1, sizeof *r->types);
     if (!r->types) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     for (uint32_t i = 0; i < roster->type_count; ++i) {
-        if (roster->types[i].outcome == CB_TYPE_FAILED) continue;
+        if (roster->types[i].outcome == CB_TYPE_FAILED) {
+            r->failed_types++;
+            continue;
+        }
         cb_report_type *t = &r->types[r->type_count++];
         fill_type(roster, i, r, t);
         if (!t->shares) r->palettes_total += t->palette_bytes; /* a shared palette is one texture */
@@ -122,6 +125,12 @@ static void budget_line(FILE *f, const cb_report *r, const char *bold)
     char total[32], budget[32], vram[32], vat[32];
     cb_human_bytes(r->total, total, sizeof total);
     cb_human_bytes(r->vat_total[0] + r->meshes_total, vat, sizeof vat);
+    if (r->failed_types) { /* a roster missing types passes no budget */
+        fprintf(f, "%sRoster: INCOMPLETE, %u animal type%s failed to bake; the %s counted leave %s out, so the budget "
+                "is not checked.%s\n", bold, r->failed_types, r->failed_types == 1 ? "" : "s", total,
+                r->failed_types == 1 ? "it" : "them", bold);
+        return;
+    }
     if (!r->has_budget) {
         fprintf(f, "Roster: %s of palettes and meshes (as VAT: %s); no [budget] in the catalog.\n", total, vat);
         return;
@@ -274,8 +283,10 @@ void cb_report_json(FILE *f, const cb_report *r)
     cb_json_object(&j, "vat");
     for (int e = 0; e < CB_VAT_ENCODINGS; ++e) cb_json_int(&j, cb_vat_encodings[e].name, (long long)r->vat_total[e]);
     cb_json_end(&j);
-    cb_json_bool(&j, "over_budget", r->over_budget);
+    if (r->failed_types) cb_json_null(&j, "over_budget"); /* unknown: the totals miss failed types */
+    else cb_json_bool(&j, "over_budget", r->over_budget);
     cb_json_int(&j, "warnings", r->warnings);
+    cb_json_int(&j, "failed_types", r->failed_types);
     cb_json_end(&j);
     cb_json_end(&j);
 }

@@ -37,8 +37,9 @@ typedef struct cb_report {
     double crowd_share;
     uint32_t max_texture_size, max_bones;
     uint64_t palettes_total, meshes_total, total, vat_total[CB_VAT_ENCODINGS];
-    bool over_budget;
+    bool over_budget;                   /* false too when failed_types > 0: then the verdict is unknown */
     uint32_t warnings;
+    uint32_t failed_types;              /* types that did not bake: the totals leave them out */
 } cb_report;
 
 cb_status cb_report_build(const cb_catalog *catalog, const cb_roster *roster, cb_report *out, cb_error *err);

@@ -6,6 +6,7 @@
 #include "roster.h"
 
 #include <errno.h>
+#include <fcntl.h> /* AT_FDCWD */
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -61,8 +62,8 @@ static uint64_t content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
     cbpal_xxh64_state h;
     cbpal_xxh64_init(&h);
     hash_str(&h, "crowdbake " CROWDBAKE_VERSION);
-    double settings[6] = {b->fps, b->layout + 10.0 * b->layout_set, b->precision + 10.0 * b->precision_set,
-                          b->max_texture_size, b->root_motion, b->formats};
+    double settings[8] = {b->fps, b->layout + 10.0 * b->layout_set, b->precision + 10.0 * b->precision_set,
+                          b->max_texture_size, b->root_motion, b->formats, b->zstd, b->exr_compression};
     cbpal_xxh64_update(&h, settings, sizeof settings);
     for (uint32_t i = 0; i < m->node_count; ++i) {
         const cb_node *node = &m->nodes[i];
@@ -93,13 +94,16 @@ static uint64_t content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
     return cbpal_xxh64_digest(&h);
 }
 
-/* Appends a loaded model's files to the type's inputs (for the depfile). */
+/* Appends a model's files to the type's inputs (for the depfile): its path even when it failed
+ * to load (m NULL), so that fixing it makes the build out of date; its external files when it
+ * loaded. */
 static cb_status add_inputs(cb_roster_type *t, const char *path, const cb_model *m, cb_error *err)
 {
-    char **grown = realloc(t->inputs, (t->input_count + 1 + m->external_file_count) * sizeof *grown);
+    uint32_t externals = m ? m->external_file_count : 0;
+    char **grown = realloc(t->inputs, (t->input_count + 1 + externals) * sizeof *grown);
     if (!grown) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     t->inputs = grown;
-    for (uint32_t i = 0; i <= m->external_file_count; ++i) {
+    for (uint32_t i = 0; i <= externals; ++i) {
         if (!(t->inputs[t->input_count] = strdup(i ? m->external_files[i - 1] : path)))
             return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
         ++t->input_count;
@@ -147,6 +151,10 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
         }
         const cb_catalog_clip *c = &an->clips[i];
         int32_t a = cb_model_find_animation(m, c->source);
+        const struct cb_skipped_clip *skip = a < 0 ? cb_model_find_skipped_clip(m, c->source) : NULL;
+        if (skip) /* asked for by name: an error, not a warning */
+            return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s", at(cat, c->pos, where, sizeof where), an->name,
+                           skip->reason);
         if (a < 0) {
             char list[512] = "";
             for (uint32_t k = 0; k < m->animation_count; ++k)
@@ -160,7 +168,8 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
     return CB_OK;
 }
 
-static cb_status analyze_clips(const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
+static cb_status analyze_clips(const cb_catalog_animal *an, const cb_limits *limits, type_work *w, cb_roster_type *t,
+                               cb_error *err)
 {
     cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
     if (!s) return err->status;
@@ -168,7 +177,7 @@ static cb_status analyze_clips(const cb_catalog_animal *an, type_work *w, cb_ros
     for (uint32_t i = 0; i < t->clip_count && !err->status; ++i) {
         cb_clip_info info;
         double fps = w->plan[i].fps > 0 ? w->plan[i].fps : an->bake.fps;
-        if (cb_clip_analyze(s, w->plan[i].animation, fps, w->plan[i].loop, NULL, &info, err)) break;
+        if (cb_clip_analyze(s, w->plan[i].animation, fps, w->plan[i].loop, limits, &info, err)) break;
         cb_roster_clip *c = &t->clips[i];
         snprintf(c->name, sizeof c->name, "%s", w->plan[i].name);
         c->first_row = row;
@@ -226,7 +235,8 @@ static void speed_reference(const cb_catalog_animal *an, cb_roster_type *t)
     for (uint32_t i = 0; i < t->clip_count && t->speed_reference == 0; ++i) t->speed_reference = t->clips[i].ground_speed;
 }
 
-static cb_status check_lods(const cb_catalog *cat, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
+static cb_status check_lods(const roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t,
+                            cb_error *err)
 {
     t->lod_count = an->lod_count;
     t->lods = calloc(an->lod_count ? an->lod_count : 1, sizeof *t->lods);
@@ -235,7 +245,8 @@ static cb_status check_lods(const cb_catalog *cat, const cb_catalog_animal *an, 
     char where[1100];
     for (uint32_t i = 0; i < an->lod_count; ++i) {
         cb_error inner = {0};
-        cb_model *lod = w->lod_models[i] = cb_gltf_load(an->lods[i], NULL, &inner);
+        cb_model *lod = w->lod_models[i] = cb_gltf_load(an->lods[i], run->opt->limits, &inner);
+        if (add_inputs(t, an->lods[i], lod, err)) return err->status;
         int skin = lod ? pick_skin(lod) : -1;
         if (lod && skin < 0) cb_fail(&inner, CB_ERR_INPUT, "%s: has no skin", an->lods[i]);
         cb_roster_lod *l = &t->lods[i];
@@ -249,7 +260,7 @@ static cb_status check_lods(const cb_catalog *cat, const cb_catalog_animal *an, 
             else cb_lod_remap(w->model, w->skin, lod, skin, l->remap, &inner);
         }
         if (inner.status)
-            return cb_fail(err, inner.status, "%s: [animal.%s] LOD %u: %s", at(cat, an->lod_pos[i], where, sizeof where),
+            return cb_fail(err, inner.status, "%s: [animal.%s] LOD %u: %s", at(run->cat, an->lod_pos[i], where, sizeof where),
                            an->name, i, inner.message);
     }
     return CB_OK;
@@ -270,6 +281,19 @@ static void measure_vat(const cb_catalog_animal *an, type_work *w, cb_roster_typ
     cb_sampler_free(s);
 }
 
+static void output_paths(const cb_catalog_animal *an, cb_roster_type *t)
+{
+    snprintf(t->pal_path, sizeof t->pal_path, "%s/%s.pal", an->bake.out_dir, an->name);
+    snprintf(t->exr_path, sizeof t->exr_path, "%s/%s.exr", an->bake.out_dir, an->name);
+}
+
+/* A type that failed before its LODs were loaded still lists them: they are its inputs. */
+static void list_unloaded_lods(const cb_catalog_animal *an, const type_work *w, cb_roster_type *t)
+{
+    for (uint32_t l = 0; !w->lod_models && l < an->lod_count; ++l)
+        if (add_inputs(t, an->lods[l], NULL, &t->error)) break;
+}
+
 static void prepare_type(roster_run *run, uint32_t i)
 {
     const cb_catalog_animal *an = &run->cat->animals[i];
@@ -280,41 +304,39 @@ static void prepare_type(roster_run *run, uint32_t i)
     t->owner = i;
     char where[1100];
     cb_error inner = {0};
-    w->model = cb_gltf_load(an->model, NULL, &inner);
+    output_paths(an, t);
+    w->model = cb_gltf_load(an->model, run->opt->limits, &inner);
+    if (add_inputs(t, an->model, w->model, err)) return;
     if (!w->model) {
         cb_fail(err, inner.status, "%s: [animal.%s] %s", at(run->cat, an->model_pos, where, sizeof where), an->name,
                 inner.message);
+        list_unloaded_lods(an, w, t);
         return;
     }
     w->skin = pick_skin(w->model);
     if (w->skin < 0) {
         cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s has no skin to bake", at(run->cat, an->model_pos, where, sizeof where),
                 an->name, an->model);
+        list_unloaded_lods(an, w, t);
         return;
     }
+    cb_model_warnings(w->model, !an->clips, &t->warnings);
     t->bones = w->model->skins[w->skin].joint_count;
     t->vertices = cb_model_skin_vertex_count(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
-    if (plan_clips(run->cat, an, w, t, err) || analyze_clips(an, w, t, err) || match_states(run->cat, an, t, err) ||
-        check_lods(run->cat, an, w, t, err))
+    if (plan_clips(run->cat, an, w, t, err) || analyze_clips(an, run->opt->limits, w, t, err) ||
+        match_states(run->cat, an, t, err) || check_lods(run, an, w, t, err)) {
+        list_unloaded_lods(an, w, t);
         return;
+    }
     speed_reference(an, t);
     t->key = content_key(w->model, w->skin, w->plan, t->clip_count, &an->bake);
     t->input_hash = input_hash(an, w, t->key);
-    if (add_inputs(t, an->model, w->model, err)) return;
-    for (uint32_t l = 0; l < an->lod_count; ++l)
-        if (add_inputs(t, an->lods[l], w->lod_models[l], err)) return;
     if (run->opt->measure_vat) measure_vat(an, w, t);
 }
 
 /* ---- pass 3: bake an owner ---- */
-
-static void output_paths(const cb_catalog_animal *an, cb_roster_type *t)
-{
-    snprintf(t->pal_path, sizeof t->pal_path, "%s/%s.pal", an->bake.out_dir, an->name);
-    snprintf(t->exr_path, sizeof t->exr_path, "%s/%s.exr", an->bake.out_dir, an->name);
-}
 
 static uint64_t file_size(const char *path)
 {
@@ -357,9 +379,30 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
     return true;
 }
 
+/* mkdir -p: the output directory and any missing parents. */
+static cb_status make_directories(const char *dir, cb_error *err)
+{
+    char path[4096];
+    if (snprintf(path, sizeof path, "%s", dir) >= (int)sizeof path)
+        return cb_fail(err, CB_ERR_IO, "%s: output directory path too long", dir);
+    for (char *p = path + 1;; ++p) {
+        if (*p != '/' && *p != '\0') continue;
+        char end = *p;
+        *p = '\0';
+        struct stat st;
+        if (stat(path, &st) != 0 && mkdir(path, 0777) != 0 && errno != EEXIST)
+            return cb_fail(err, CB_ERR_IO, "%s: cannot create the output directory %s: %s (check the path and its "
+                           "permissions)", dir, path, strerror(errno));
+        if (stat(path, &st) == 0 && !S_ISDIR(st.st_mode))
+            return cb_fail(err, CB_ERR_IO, "%s: cannot create the output directory: %s is a file", dir, path);
+        if (!(*p = end)) return CB_OK;
+    }
+}
+
 static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
 {
     cb_bake_options o = cb_default_bake_options();
+    if (run->opt->limits) o.limits = *run->opt->limits;
     o.fps = an->bake.fps;
     o.layout = an->bake.layout;
     o.precision = an->bake.precision;
@@ -374,19 +417,18 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
     cb_status rc = cb_palette_bake(s, &o, w->plan, t->clip_count, &p, err);
     cb_sampler_free(s);
     if (rc) return rc;
-    struct stat st;
-    if (stat(an->bake.out_dir, &st) != 0 && mkdir(an->bake.out_dir, 0777) != 0 && errno != EEXIST)
-        cb_fail(err, CB_ERR_IO, "%s: cannot create the output directory: %s", an->bake.out_dir, strerror(errno));
+    make_directories(an->bake.out_dir, err);
     if (!err->status && (an->bake.formats & CB_FORMAT_PAL)) {
-        cb_pal_write_options po = {false, 0, t->input_hash, (float)t->speed_reference, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
+        cb_pal_write_options po = {an->bake.zstd, 0, t->input_hash, (float)t->speed_reference, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
         cb_pal_write(t->pal_path, &p, w->model, w->skin, &po, err);
     }
     if (!err->status && (an->bake.formats & CB_FORMAT_EXR))
-        cb_exr_write(t->exr_path, &p, w->model, w->skin, 0, t->input_hash, (float)t->speed_reference, err);
+        cb_exr_write(t->exr_path, &p, w->model, w->skin, an->bake.exr_compression, t->input_hash, (float)t->speed_reference, err);
     t->width = p.width, t->height = p.height, t->blocks = p.blocks;
     t->layout = p.layout, t->precision = p.precision;
     t->max_error = p.max_error;
     t->palette_bytes = p.texel_bytes;
+    if (p.fallback_note[0]) cb_warn(&t->warnings, "note", "%s", p.fallback_note);
     cb_palette_free(&p);
     return err->status;
 }
@@ -412,6 +454,8 @@ static void log_type(roster_run *run, const cb_roster_type *t)
         break;
     case CB_TYPE_FAILED: fprintf(f, "%s  %-16s FAILED: %s\n", clear, t->animal->name, t->error.message); break;
     }
+    for (uint32_t i = 0; i < t->warnings.count; ++i)
+        fprintf(f, "  %-16s %s: %s\n", "", t->warnings.items[i].kind, t->warnings.items[i].message);
     if (run->opt->tty)
         fprintf(f, "  [%u/%u done, %.1f s]", run->r->baked + run->r->up_to_date + run->r->shared + run->r->failed,
                 run->r->type_count, now_seconds() - run->start);
@@ -429,7 +473,6 @@ static void bake_type(roster_run *run, uint32_t i)
     } else if (t->owner != i) {
         return; /* shared types are settled once their owner is */
     } else {
-        output_paths(an, t);
         if (!run->opt->force && up_to_date(t, an->bake.formats)) t->outcome = CB_TYPE_UP_TO_DATE;
         else t->outcome = bake_files(run, an, &run->work[i], t, &t->error) ? CB_TYPE_FAILED : CB_TYPE_BAKED;
         t->pal_file_bytes = file_size(t->pal_path);
@@ -623,6 +666,20 @@ static cb_status write_manifest(const cb_catalog *cat, cb_roster *r, const char 
     for (uint32_t i = 0; i < r->type_count; ++i)
         if (r->types[i].outcome != CB_TYPE_FAILED) write_type(&j, r, &r->types[i], dir);
     cb_json_end(&j);
+    /* Failed types are named, not dropped: a loader sees that the roster is incomplete. */
+    if (r->failed) {
+        cb_json_object(&j, "failed");
+        for (uint32_t i = 0; i < r->type_count; ++i) {
+            const cb_roster_type *t = &r->types[i];
+            if (t->outcome != CB_TYPE_FAILED) continue;
+            cb_json_object(&j, t->animal->name);
+            relative_path(dir, t->animal->model, rel, sizeof rel);
+            cb_json_string(&j, "model", rel);
+            cb_json_string(&j, "error", t->error.message);
+            cb_json_end(&j);
+        }
+        cb_json_end(&j);
+    }
     cb_json_end(&j);
     fclose(mem);
     cb_status rc = write_if_changed(path, buf, size, &r->manifest_written, err);
@@ -644,6 +701,15 @@ static void depfile_inputs(FILE *f, const cb_roster_type *t)
     for (uint32_t i = 0; i < t->input_count; ++i) fputs(" \\\n  ", f), depfile_path(f, t->inputs[i]);
 }
 
+/* Whether input k of type i was already listed by an earlier input or type. */
+static bool listed_before(const cb_roster *r, uint32_t i, uint32_t k)
+{
+    for (uint32_t a = 0; a <= i; ++a)
+        for (uint32_t b = 0; b < (a == i ? k : r->types[a].input_count); ++b)
+            if (strcmp(r->types[a].inputs[b], r->types[i].inputs[k]) == 0) return true;
+    return false;
+}
+
 /* One rule per output: Make and Ninja both read it. */
 static cb_status write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, cb_error *err)
 {
@@ -653,7 +719,7 @@ static cb_status write_depfile(const cb_catalog *cat, const cb_roster *r, const 
     if (!f) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_roster_type *t = &r->types[i];
-        if (t->owner != i || t->outcome == CB_TYPE_FAILED) continue;
+        if (t->owner != i) continue; /* failed types too: their inputs keep the build out of date */
         for (int fmt = 0; fmt < 2; ++fmt) {
             if (!(t->animal->bake.formats & (fmt ? CB_FORMAT_EXR : CB_FORMAT_PAL))) continue;
             depfile_path(f, fmt ? t->exr_path : t->pal_path);
@@ -669,11 +735,60 @@ static cb_status write_depfile(const cb_catalog *cat, const cb_roster *r, const 
     fputc(' ', f), depfile_path(f, cat->path);
     for (uint32_t i = 0; i < r->type_count; ++i) depfile_inputs(f, &r->types[i]);
     fputc('\n', f);
+    /* An empty rule per input (as gcc -MP writes): a deleted or renamed model makes Make run the
+     * bake, which names the problem, instead of stopping at "no rule to make target". */
+    for (uint32_t i = 0; i < r->type_count; ++i)
+        for (uint32_t k = 0; k < r->types[i].input_count; ++k)
+            if (!listed_before(r, i, k)) fputc('\n', f), depfile_path(f, r->types[i].inputs[k]), fputs(":\n", f);
     fclose(f);
     bool written;
     cb_status rc = write_if_changed(path, buf, size, &written, err);
     free(buf);
     return rc;
+}
+
+static cb_status make_parent_directories(const char *file, cb_error *err)
+{
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", file);
+    char *slash = strrchr(dir, '/');
+    if (!slash) return CB_OK;
+    *slash = '\0';
+    return dir[0] ? make_directories(dir, err) : CB_OK;
+}
+
+static bool newer_than(const struct stat *a, const struct stat *b)
+{
+    return a->st_mtim.tv_sec > b->st_mtim.tv_sec ||
+           (a->st_mtim.tv_sec == b->st_mtim.tv_sec && a->st_mtim.tv_nsec > b->st_mtim.tv_nsec);
+}
+
+/* Make and Ninja decide from modification times, so the manifest's must tell the truth. After
+ * a failure it is set to the epoch (as are a failed type's old palettes): older than every
+ * input, so the next build runs the bake again, however often it is run, until the inputs are
+ * fixed. After a success it is never older than an input, even when its contents did not
+ * change (else Make would run the bake on every build). */
+static void settle_times(const cb_roster *r)
+{
+    static const struct timespec epoch[2] = {{0, 0}, {0, 0}};
+    if (r->failed) {
+        utimensat(AT_FDCWD, r->manifest_path, epoch, 0);
+        for (uint32_t i = 0; i < r->type_count; ++i)
+            if (r->types[i].outcome == CB_TYPE_FAILED && r->types[i].owner == i) {
+                struct stat st;
+                /* only regular files: a bake refuses to replace anything else, and so does this */
+                if (stat(r->types[i].pal_path, &st) == 0 && S_ISREG(st.st_mode)) utimensat(AT_FDCWD, r->types[i].pal_path, epoch, 0);
+                if (stat(r->types[i].exr_path, &st) == 0 && S_ISREG(st.st_mode)) utimensat(AT_FDCWD, r->types[i].exr_path, epoch, 0);
+            }
+        return;
+    }
+    struct stat manifest, in;
+    if (stat(r->manifest_path, &manifest) != 0) return;
+    bool stale = stat(r->catalog->path, &in) == 0 && newer_than(&in, &manifest);
+    for (uint32_t i = 0; i < r->type_count && !stale; ++i)
+        for (uint32_t k = 0; k < r->types[i].input_count && !stale; ++k)
+            stale = stat(r->types[i].inputs[k], &in) == 0 && newer_than(&in, &manifest);
+    if (stale) utimensat(AT_FDCWD, r->manifest_path, NULL, 0);
 }
 
 /* ---- the whole bake ---- */
@@ -727,10 +842,10 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     if (opt->log && opt->tty) fputs("\r\033[K", opt->log);
     if (opt->manifest) snprintf(r->manifest_path, sizeof r->manifest_path, "%s", opt->manifest);
     else snprintf(r->manifest_path, sizeof r->manifest_path, "%s/roster.json", cat->defaults.out_dir);
-    struct stat st;
-    if (stat(cat->defaults.out_dir, &st) != 0) mkdir(cat->defaults.out_dir, 0777);
-    cb_status rc = write_manifest(cat, r, r->manifest_path, err);
-    if (!rc && opt->depfile) rc = write_depfile(cat, r, opt->depfile, err);
+    cb_status rc = make_parent_directories(r->manifest_path, err);
+    if (!rc) rc = write_manifest(cat, r, r->manifest_path, err);
+    if (!rc && opt->depfile && !(rc = make_parent_directories(opt->depfile, err))) rc = write_depfile(cat, r, opt->depfile, err);
+    if (!rc) settle_times(r);
     for (uint32_t i = 0; i < r->type_count && !rc; ++i)
         if (r->types[i].outcome == CB_TYPE_FAILED) rc = cb_fail(err, r->types[i].error.status, "%s", r->types[i].error.message);
     for (uint32_t i = 0; i < r->type_count; ++i) {
@@ -753,6 +868,7 @@ void cb_roster_free(cb_roster *r)
         free(r->types[i].lods);
         for (uint32_t k = 0; k < r->types[i].input_count; ++k) free(r->types[i].inputs[k]);
         free(r->types[i].inputs);
+        cb_warnings_free(&r->types[i].warnings);
     }
     free(r->types);
     memset(r, 0, sizeof *r);

@@ -14,6 +14,7 @@ typedef struct cb_roster_options {
     bool tty;               /* log is a terminal: show progress */
     const char *manifest;   /* roster.json path; NULL: OUT_DIR/roster.json */
     const char *depfile;    /* Make/Ninja depfile, or NULL */
+    const cb_limits *limits; /* for loading and baking; NULL: the defaults */
     bool measure_vat;       /* also measure each type's VAT error (half-float positions) for the report */
 } cb_roster_options;
 
@@ -56,6 +57,7 @@ typedef struct cb_roster_type {
     cb_roster_lod *lods;
     uint32_t input_count;
     char **inputs;            /* every file read for it: model, LODs, their external buffers */
+    cb_warnings warnings;     /* clips skipped at load, the layout's fallback, ... */
 } cb_roster_type;
 
 typedef struct cb_roster {

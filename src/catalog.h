@@ -25,7 +25,16 @@ typedef struct cb_bake_settings {
     uint32_t max_texture_size;
     cb_root_motion root_motion;
     bool layout_set, precision_set; /* chosen explicitly (else: defaults, with fallbacks) */
+    bool zstd;                   /* compress the .pal payload */
+    int exr_compression;         /* formats/exr_io.h's lossless codes; 0: none */
 } cb_bake_settings;
+
+/* Which settings an override carries (the command line's bake options over a catalog). */
+enum {
+    CB_BAKE_FPS = 1u << 0, CB_BAKE_LAYOUT = 1u << 1, CB_BAKE_PRECISION = 1u << 2, CB_BAKE_FORMATS = 1u << 3,
+    CB_BAKE_MAX_TEXTURE_SIZE = 1u << 4, CB_BAKE_ROOT_MOTION = 1u << 5, CB_BAKE_ZSTD = 1u << 6,
+    CB_BAKE_EXR_COMPRESSION = 1u << 7
+};
 
 typedef struct cb_catalog_clip {
     const char *source; /* the clip's name in the model */
@@ -82,6 +91,12 @@ typedef struct cb_catalog {
 } cb_catalog;
 
 void cb_catalog_free(cb_catalog *catalog);
+
+/* Replaces the `fields` (CB_BAKE_*) of the catalog's defaults and of every animal's settings
+ * with those of `values`: options given for one run win over what the catalog says. A clip's
+ * own fps still applies. Fails, naming the animal, when an animal would write u16 texels to
+ * EXR (which holds half or float only). */
+cb_status cb_catalog_override_bake(cb_catalog *catalog, const cb_bake_settings *values, unsigned fields, cb_error *err);
 
 /* Index of the first clip whose name contains a keyword, trying keywords in order
  * (case-insensitive), or -1. */

@@ -134,10 +134,36 @@ typedef struct cb_model {
     uint32_t animation_count;
     cb_animation *animations;
     uint32_t ignored_morph_channels; /* weights channels dropped at load */
+    /* Clips left out at load because they cannot be sampled (no channels, a channel without
+     * keys, NaN keys, ...), so one broken clip does not block a model's others. */
+    uint32_t skipped_clip_count;
+    struct cb_skipped_clip {
+        const char *name;
+        const char *reason; /* the whole one-line message: "FILE: clip 'x' has no channels" */
+    } *skipped_clips;
     uint64_t source_hash; /* set by the loader: a hash of every byte it read (file and external buffers) */
     uint32_t external_file_count;
     const char **external_files; /* what the file referenced and the loader read (buffers, images) */
 } cb_model;
+
+/* Warnings and notes a command shows the user: on stderr, or in its --json output. */
+typedef struct cb_warning {
+    const char *kind; /* "warning" (something was left out or may be wrong) or "note" (worth knowing) */
+    char *message;    /* one line, no "crowdbake:" prefix */
+} cb_warning;
+
+typedef struct cb_warnings {
+    uint32_t count;
+    cb_warning *items; /* owned; cb_warnings_free */
+} cb_warnings;
+
+/* Appends one; when out of memory it is dropped (a warning is never worth failing a bake). */
+void cb_warn(cb_warnings *list, const char *kind, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+void cb_warnings_free(cb_warnings *list);
 
 /* An empty model with its own arena; NULL when out of memory. */
 cb_model *cb_model_create(const char *source);
@@ -148,12 +174,19 @@ const char *cb_model_strdup(cb_model *model, const char *s);
 
 /* Checks what the core relies on: parents form a forest without cycles, joint and node
  * indices are in range, key times strictly increase, no value is NaN or infinite, skins
- * have joints, clips have channels. Rotation keys are normalized here. */
+ * have joints, clips have channels. Rotation keys are normalized here. A clip that breaks a
+ * rule is moved to skipped_clips with the reason, unless every clip does (then the first
+ * reason is the error: nothing in the file could be baked). */
 cb_status cb_model_validate(cb_model *model, const cb_limits *limits, cb_error *err);
 
 /* Index of the skin named or numbered `name`, or -1. */
 int32_t cb_model_find_skin(const cb_model *model, const char *name);
 int32_t cb_model_find_animation(const cb_model *model, const char *name);
+/* What loading left out: skipped clips (when skipped_clips: a command given its clips by name
+ * does not care about others), ignored morph-weight channels. */
+void cb_model_warnings(const cb_model *model, bool skipped_clips, cb_warnings *out);
+/* The skipped clip named `name`, or NULL. */
+const struct cb_skipped_clip *cb_model_find_skipped_clip(const cb_model *model, const char *name);
 /* Vertices of the primitives that use `skin`. */
 uint64_t cb_model_skin_vertex_count(const cb_model *model, int32_t skin);
 

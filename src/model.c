@@ -321,22 +321,45 @@ static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, cb_
     return CB_OK;
 }
 
+static cb_status validate_animation(cb_model *m, uint32_t a, cb_error *err)
+{
+    cb_animation *anim = &m->animations[a];
+    if (anim->channel_count == 0)
+        return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' has no channels (remove it or give it keys)", m->source,
+                       anim->name);
+    anim->t0 = INFINITY;
+    anim->t1 = -INFINITY;
+    for (uint32_t c = 0; c < anim->channel_count; ++c) {
+        if (validate_channel(m, a, c, err)) return err->status;
+        const cb_channel *ch = &anim->channels[c];
+        if (ch->times[0] < anim->t0) anim->t0 = ch->times[0];
+        if (ch->times[ch->key_count - 1] > anim->t1) anim->t1 = ch->times[ch->key_count - 1];
+    }
+    return CB_OK;
+}
+
+/* Keeps the clips that pass; the others go to skipped_clips, in file order. */
 static cb_status validate_animations(cb_model *m, cb_error *err)
 {
+    if (m->animation_count == 0) return CB_OK;
+    m->skipped_clips = cb_model_alloc(m, m->animation_count, sizeof *m->skipped_clips);
+    if (!m->skipped_clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    uint32_t kept = 0;
+    cb_error first = {0};
     for (uint32_t a = 0; a < m->animation_count; ++a) {
-        cb_animation *anim = &m->animations[a];
-        if (anim->channel_count == 0)
-            return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' has no channels (remove it or give it keys)", m->source,
-                           anim->name);
-        anim->t0 = INFINITY;
-        anim->t1 = -INFINITY;
-        for (uint32_t c = 0; c < anim->channel_count; ++c) {
-            if (validate_channel(m, a, c, err)) return err->status;
-            const cb_channel *ch = &anim->channels[c];
-            if (ch->times[0] < anim->t0) anim->t0 = ch->times[0];
-            if (ch->times[ch->key_count - 1] > anim->t1) anim->t1 = ch->times[ch->key_count - 1];
+        cb_error why = {0};
+        if (!validate_animation(m, a, &why)) {
+            m->animations[kept++] = m->animations[a];
+            continue;
         }
+        if (why.status != CB_ERR_INPUT) return *err = why, err->status;
+        if (!first.status) first = why;
+        struct cb_skipped_clip *skip = &m->skipped_clips[m->skipped_clip_count++];
+        skip->name = m->animations[a].name;
+        if (!(skip->reason = cb_model_strdup(m, why.message))) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
+    m->animation_count = kept;
+    if (kept == 0) return *err = first, err->status;
     return CB_OK;
 }
 
@@ -367,6 +390,13 @@ int32_t cb_model_find_animation(const cb_model *model, const char *name)
     for (uint32_t i = 0; i < model->animation_count; ++i)
         if (strcmp(model->animations[i].name, name) == 0) return (int32_t)i;
     return -1;
+}
+
+const struct cb_skipped_clip *cb_model_find_skipped_clip(const cb_model *model, const char *name)
+{
+    for (uint32_t i = 0; i < model->skipped_clip_count; ++i)
+        if (strcmp(model->skipped_clips[i].name, name) == 0) return &model->skipped_clips[i];
+    return NULL;
 }
 
 uint64_t cb_model_skin_vertex_count(const cb_model *model, int32_t skin)

@@ -54,8 +54,35 @@ static void expect_load_error(const char *rel, const char *needle)
 static void test_invalid_magnum_files_fail_clearly(void **state)
 {
     (void)state;
-    expect_load_error("assets/magnum-animation/animation.glb", "has no channels");
     expect_load_error("assets/magnum-skin/skin.glb", "no common root");
+}
+
+/* magnum's animation.glb has two clips that cannot be sampled (MANIFEST.md: "empty" has no
+ * channels, "empty TRS animation" has channels without keys) beside two that can: those two
+ * load, the others are skipped with their reasons instead of blocking the file. */
+static void test_broken_clips_are_skipped_not_fatal(void **state)
+{
+    (void)state;
+    cb_model *m = load_shared("assets/magnum-animation/animation.glb");
+    assert_int_equal(m->animation_count, 2);
+    assert_string_equal(m->animations[0].name, "TRS animation");
+    assert_string_equal(m->animations[1].name, "TRS animation, splines");
+    assert_int_equal(m->skipped_clip_count, 2);
+    assert_string_equal(m->skipped_clips[0].name, "empty");
+    assert_non_null(strstr(m->skipped_clips[0].reason, "clip 'empty' has no channels"));
+    assert_string_equal(m->skipped_clips[1].name, "empty TRS animation");
+    assert_non_null(strstr(m->skipped_clips[1].reason, "channel 0 (rotation of node_0) has no keys"));
+    assert_non_null(cb_model_find_skipped_clip(m, "empty"));
+    assert_null(cb_model_find_skipped_clip(m, "TRS animation"));
+    /* The kept clips span the keys MANIFEST.md lists: 0-3.75 s and 0.5-5 s. */
+    assert_true(m->animations[0].t0 == 0 && m->animations[0].t1 == 3.75);
+    assert_true(m->animations[1].t0 == 0.5 && m->animations[1].t1 == 5);
+    cb_warnings w = {0};
+    cb_model_warnings(m, true, &w);
+    assert_int_equal(w.count, 2);
+    assert_string_equal(w.items[0].kind, "warning");
+    cb_warnings_free(&w);
+    cb_model_free(m);
 }
 
 /* Skinned positions of every vertex of `m` at time t of clip `clip`, 3 doubles each. */
@@ -342,6 +369,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_asset_loads_with_the_manifest_facts),
         cmocka_unit_test(test_invalid_magnum_files_fail_clearly),
+        cmocka_unit_test(test_broken_clips_are_skipped_not_fatal),
         cmocka_unit_test(test_fox_variants_skin_like_the_original),
         cmocka_unit_test(test_source_hash_covers_external_buffers),
         cmocka_unit_test(test_in_place_and_copied_loads_agree),

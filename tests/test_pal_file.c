@@ -104,8 +104,12 @@ static void test_exr_reads_back_bit_identical_and_opens_in_openexr_tools(void **
     assert_non_null(strstr(out, "crowdbake.bones"));
     assert_non_null(strstr(out, "crowdbake.clip0.name"));
     assert_non_null(strstr(out, "zip"));
+    /* Debian's exrinfo (OpenEXR 3.1.5) exits with an arbitrary status after a good read, so its
+     * output is what tells: the file's scanline part and its four channels. */
     snprintf(cmd, sizeof cmd, "exrinfo %s/fox.exr 2>&1", TMP);
-    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    run_command(cmd, out, sizeof out);
+    if (!strstr(out, "type: 'scanlineimage'") || !strstr(out, "channels: 4 channels") || strstr(out, "ERROR"))
+        fail_msg("exrinfo:\n%s", out);
 }
 
 static void test_u16_is_refused_for_exr(void **state)

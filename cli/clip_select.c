@@ -1,0 +1,123 @@
+/* clip_select.c - --clip and --exclude-clip, as bake, vat and verify take them. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+
+cb_status cli_for_each_name(const char *list, cb_status (*fn)(const char *name, void *ctx), void *ctx)
+{
+    char name[256];
+    for (const char *p = list; p && *p;) {
+        const char *comma = strchr(p, ',');
+        size_t n = comma ? (size_t)(comma - p) : strlen(p);
+        snprintf(name, sizeof name, "%.*s", (int)(n < sizeof name ? n : sizeof name - 1), p);
+        cb_status rc = fn(name, ctx);
+        if (rc) return rc;
+        p = comma ? comma + 1 : p + n;
+    }
+    return CB_OK;
+}
+
+typedef struct selection {
+    const cb_model *model;
+    bool *chosen;         /* per animation */
+    cb_clip_plan *plan;
+    uint32_t count;
+    const char *option;
+    cb_error *err;
+} selection;
+
+/* The model's animation named `name`; an error naming why when there is none. */
+static int32_t find_clip(selection *s, const char *name)
+{
+    const cb_model *m = s->model;
+    int32_t a = cb_model_find_animation(m, name);
+    if (a >= 0) return a;
+    const struct cb_skipped_clip *skip = cb_model_find_skipped_clip(m, name);
+    if (skip) return cb_fail(s->err, CB_ERR_INPUT, "%s (%s %s asked for it)", skip->reason, s->option, name), -1;
+    char list[512] = "";
+    for (uint32_t k = 0; k < m->animation_count; ++k)
+        snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", k ? ", " : "", m->animations[k].name);
+    cb_fail(s->err, CB_ERR_USAGE, "%s: %s %s: the model has no such clip; its clips are: %s", m->source, s->option, name,
+            list);
+    return -1;
+}
+
+static cb_status include(const char *name, void *ctx)
+{
+    selection *s = ctx;
+    int32_t a = find_clip(s, name);
+    if (a < 0) return s->err->status;
+    if (s->chosen[a]) return cb_fail(s->err, CB_ERR_USAGE, "%s: --clip names '%s' twice", s->model->source, name);
+    s->chosen[a] = true;
+    s->plan[s->count++] = (cb_clip_plan){a, NULL, -1, 0};
+    return CB_OK;
+}
+
+static cb_status exclude(const char *name, void *ctx)
+{
+    selection *s = ctx;
+    if (cb_model_find_skipped_clip(s->model, name)) return CB_OK; /* left out already */
+    int32_t a = find_clip(s, name);
+    if (a < 0) return s->err->status;
+    s->chosen[a] = true;
+    return CB_OK;
+}
+
+cb_status cli_select_clips(const cb_model *m, const char *clips, const char *excluded, cb_clip_plan **plan,
+                           uint32_t *count, cb_error *err)
+{
+    *plan = NULL;
+    *count = 0;
+    if (!clips && !excluded) return CB_OK;
+    selection s = {m, calloc(m->animation_count + 1, sizeof(bool)), calloc(m->animation_count + 1, sizeof(cb_clip_plan)),
+                   0, clips ? "--clip" : "--exclude-clip", err};
+    if (!s.chosen || !s.plan) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    else if (clips && excluded) cb_fail(err, CB_ERR_USAGE, "give --clip or --exclude-clip, not both");
+    else if (clips) cli_for_each_name(clips, include, &s);
+    else if (!cli_for_each_name(excluded, exclude, &s))
+        for (uint32_t a = 0; a < m->animation_count; ++a)
+            if (!s.chosen[a]) s.plan[s.count++] = (cb_clip_plan){(int32_t)a, NULL, -1, 0};
+    if (!err->status && s.count == 0)
+        cb_fail(err, CB_ERR_USAGE, "%s: no clip left to bake after %s", m->source, s.option);
+    free(s.chosen);
+    if (err->status) {
+        free(s.plan);
+        return err->status;
+    }
+    *plan = s.plan;
+    *count = s.count;
+    return CB_OK;
+}
+
+bool cli_list_has(const char *list, const char *name)
+{
+    size_t n = strlen(name);
+    for (const char *p = list; p && *p;) {
+        const char *comma = strchr(p, ',');
+        size_t len = comma ? (size_t)(comma - p) : strlen(p);
+        if (len == n && strncmp(p, name, n) == 0) return true;
+        p = comma ? comma + 1 : p + len;
+    }
+    return false;
+}
+
+void cli_print_warnings(const cb_warnings *w, bool notes)
+{
+    for (uint32_t i = 0; i < w->count; ++i)
+        if (notes || strcmp(w->items[i].kind, "note") != 0)
+            fprintf(stderr, "crowdbake: %s: %s\n", w->items[i].kind, w->items[i].message);
+}
+
+void cli_json_warnings(cb_json *j, const cb_warnings *w)
+{
+    cb_json_array(j, "warnings");
+    for (uint32_t i = 0; i < w->count; ++i) {
+        cb_json_object(j, NULL);
+        cb_json_string(j, "kind", w->items[i].kind);
+        cb_json_string(j, "message", w->items[i].message);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
+}
