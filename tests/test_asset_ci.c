@@ -13,7 +13,7 @@
 #include "../formats/crowdbake_pal.h"
 #include "../formats/exr_io.h"
 
-#define TMP "build/tmp-tests/asset_ci"
+#define TMP TEST_TMP "/asset_ci"
 
 static char exe[PATH_MAX], fish[PATH_MAX];
 
@@ -119,8 +119,7 @@ static void build_cycle(const char *dir, const char *tool)
         free(json);
         static char out[4096];
         char cmd[PATH_MAX + 128];
-        assert_int_equal(run_command("cd tests/validator && { [ -d node_modules/ajv ] || npm ci --no-audit --no-fund "
-                                     ">/dev/null 2>&1; }", NULL, 0), 0);
+        require_node_validators();
         snprintf(cmd, sizeof cmd, "node tests/validator/validate_schema.mjs docs/roster.schema.json %s 2>&1", path);
         if (run_command(cmd, out, sizeof out) != 0) fail_msg("%s", out);
     }
@@ -223,8 +222,7 @@ static void test_report_with_a_failed_type_passes_no_budget(void **state)
     assert_int_equal(rc, 4); /* the model's error, --no-fail or not */
     if (!strstr(out, "\"over_budget\": null") || !strstr(out, "\"failed_types\": 1")) fail_msg("%s", out);
     write_text(TMP "/report/report.json", out);
-    assert_int_equal(run_command("cd tests/validator && { [ -d node_modules/ajv ] || npm ci --no-audit --no-fund "
-                                 ">/dev/null 2>&1; }", NULL, 0), 0);
+    require_node_validators();
     if (run_command("node tests/validator/validate_schema.mjs docs/report.schema.json " TMP "/report/report.json 2>&1", out,
                     sizeof out) != 0)
         fail_msg("%s", out);

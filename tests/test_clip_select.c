@@ -10,7 +10,7 @@
 
 #include "../formats/crowdbake_pal.h"
 
-#define TMP "build/tmp-tests/clip_select"
+#define TMP TEST_TMP "/clip_select"
 
 static char exe[PATH_MAX], shared[PATH_MAX];
 
@@ -67,8 +67,7 @@ static void validate(const char *schema, const char *json_text)
     assert_non_null(f);
     fputs(json_text, f);
     fclose(f);
-    assert_int_equal(run_command("cd tests/validator && { [ -d node_modules/ajv ] || npm ci --no-audit --no-fund "
-                                 ">/dev/null 2>&1; }", NULL, 0), 0);
+    require_node_validators();
     char cmd[512];
     snprintf(cmd, sizeof cmd, "node tests/validator/validate_schema.mjs %s " TMP "/out.json 2>&1", schema);
     if (run_command(cmd, out, sizeof out) != 0) fail_msg("%s\n%s", out, json_text);
