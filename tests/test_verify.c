@@ -129,9 +129,9 @@ static void test_preview_sheets_of_the_samples(void **state)
     mkdir("build/previews", 0777); /* CI keeps these as artifacts */
     for (int i = 0; i < 3; ++i) {
         char cmd[4096], out[2048];
-        snprintf(cmd, sizeof cmd, "%s bake %s/%s.glb -o build/previews/%s.pal -q && %s preview build/previews/%s.pal "
-                 "%s/%s.glb -o build/previews/%s.png --columns 6 --cell 96 2>&1",
-                 crowdbake_exe(), samples_dir(), names[i], names[i], crowdbake_exe(), names[i], samples_dir(), names[i],
+        snprintf(cmd, sizeof cmd, "%s bake %s/%s.glb -o build/previews/%s.pal -q && %s preview %s/%s.glb "
+                 "build/previews/%s.pal -o build/previews/%s.png --columns 6 --cell 96 2>&1",
+                 crowdbake_exe(), samples_dir(), names[i], names[i], crowdbake_exe(), samples_dir(), names[i], names[i],
                  names[i]);
         assert_int_equal(run_command(cmd, out, sizeof out), 0);
         char png[256];
