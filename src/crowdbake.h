@@ -43,6 +43,13 @@ cb_status cb_fail(cb_error *err, cb_status status, const char *fmt, ...)
 #endif
     ;
 
+/* Edit distance (insertions, deletions, substitutions) between two names. */
+size_t cb_edit_distance(const char *a, const char *b);
+/* The known name within two edits of `name` (the closest, the first on a tie), or NULL.
+ * known[i] lies `stride` bytes after known[i-1], so it reads an array of strings or the name
+ * field of an array of structs alike. */
+const char *cb_closest_name(const char *name, const char *const *known, size_t count, size_t stride);
+
 /* ---- limits --------------------------------------------------------------------------- */
 
 typedef struct cb_limits {
