@@ -57,7 +57,8 @@ int cmd_bake_catalog(const char *path, uint32_t jobs, bool force, bool quiet, bo
     opt.depfile = depfile;
     opt.manifest = manifest;
     cb_roster r;
-    if (opt.log) printf("crowdbake: baking %u animal types from %s on %u thread%s\n", cat.animal_count, path, jobs,
+    if (opt.log) printf("crowdbake: baking %u animal type%s from %s on %u thread%s\n", cat.animal_count,
+                        cat.animal_count == 1 ? "" : "s", path, jobs,
                         jobs == 1 ? "" : "s");
     cb_status rc = cb_roster_bake(&cat, &opt, &r, &err);
     if (json) print_json(&r);
