@@ -30,11 +30,13 @@ static cb_status resolve_budget(const cb_catalog *cat, cb_report *r, cb_error *e
         char list[512] = "";
         for (uint32_t i = 0; i < cb_profile_count; ++i)
             snprintf(list + strlen(list), sizeof list - strlen(list), "%s\"%s\"", i ? ", " : "", cb_profiles[i].name);
+        if (!b->pos.line) /* --target */
+            return cb_fail(err, CB_ERR_USAGE, "--target \"%s\" is not a built-in profile (%s)", b->target, list);
         return cb_fail(err, CB_ERR_INPUT, "%s:%u:%u: [budget] target \"%s\" is not a built-in profile (%s); give its vram",
                        cat->path, b->pos.line, b->pos.column, b->target, list);
     }
     r->has_budget = true;
-    snprintf(r->target, sizeof r->target, "%s", b->target ? b->target : "custom");
+    snprintf(r->target, sizeof r->target, "%s", p ? p->name : b->target ? b->target : "custom");
     r->profile_source = p ? p->source : "defined in the catalog";
     r->vram_bytes = b->vram_bytes ? b->vram_bytes : p->vram_bytes;
     r->crowd_share = b->crowd_share > 0 ? b->crowd_share : 1;
@@ -123,7 +125,8 @@ static void budget_line(FILE *f, const cb_report *r, const char *bold)
     cb_human_bytes(r->total, total, sizeof total);
     cb_human_bytes(r->vat_total[0] + r->meshes_total, vat, sizeof vat);
     if (!r->has_budget) {
-        fprintf(f, "Roster: %s of palettes and meshes (as VAT: %s); no [budget] in the catalog.\n", total, vat);
+        fprintf(f, "Roster: %s of palettes and meshes (as VAT: %s); no budget to check (%s).\n", total, vat,
+                r->single_model ? "give --target NAME" : "add a [budget] to the catalog, or give --target NAME");
         return;
     }
     cb_human_bytes(r->budget_bytes, budget, sizeof budget);
@@ -389,8 +392,8 @@ void cb_report_paragraph(FILE *f, const cb_report *r)
     cb_human_bytes(r->meshes_total, b, sizeof b);
     uint32_t files = 0;
     for (uint32_t i = 0; i < r->type_count; ++i) files += !r->types[i].shares;
-    fprintf(f, "%u types in %u palette%s: %s of palettes + %s of meshes; vertex animation textures of the same frames "
+    fprintf(f, "%u type%s in %u palette%s: %s of palettes + %s of meshes; vertex animation textures of the same frames "
                "would take %.1fx the palettes. ",
-            r->type_count, files, files == 1 ? "" : "s", a, b, ratio(r->vat_total[0], r->palettes_total));
+            r->type_count, r->type_count == 1 ? "" : "s", files, files == 1 ? "" : "s", a, b, ratio(r->vat_total[0], r->palettes_total));
     budget_line(f, r, "");
 }

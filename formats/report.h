@@ -39,6 +39,7 @@ typedef struct cb_report {
     uint64_t palettes_total, meshes_total, total, vat_total[CB_VAT_ENCODINGS];
     bool over_budget;
     uint32_t warnings;
+    bool single_model;                  /* `report MODEL`: the budget comes from --target, not a catalog */
 } cb_report;
 
 cb_status cb_report_build(const cb_catalog *catalog, const cb_roster *roster, cb_report *out, cb_error *err);

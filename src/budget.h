@@ -51,7 +51,7 @@ typedef struct cb_target_profile {
     const char *source;
 } cb_target_profile;
 
-/* A built-in profile by name (case-insensitive), or NULL. */
+/* A built-in profile by name (case-insensitive; '-' and '_' match a space), or NULL. */
 const cb_target_profile *cb_find_profile(const char *name);
 extern const cb_target_profile cb_profiles[];
 extern const uint32_t cb_profile_count;
