@@ -69,7 +69,7 @@ static void fill_type(const cb_roster *roster, uint32_t i, const cb_report *r, c
     t->vat_fits = cb_vat_geometry(t->vertices, t->frames, r->max_texture_size, &t->vat_geometry);
     for (int e = 0; e < CB_VAT_ENCODINGS; ++e)
         t->vat_bytes[e] = cb_vat_bytes(t->vertices, t->frames, &cb_vat_encodings[e], &t->vat_geometry);
-    t->mesh_bytes = cb_mesh_bytes(t->vertices, t->indices);
+    t->mesh_bytes = rt->mesh_bytes;
     t->palette_error = owner->max_error;
     t->vat_error = rt->vat_error;
     t->model_height = rt->model_height;

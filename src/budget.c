@@ -43,8 +43,6 @@ uint64_t cb_vat_bytes(uint64_t vertices, uint32_t frames, const cb_vat_encoding 
     return texels * (enc->position_bytes + enc->normal_bytes);
 }
 
-uint64_t cb_mesh_bytes(uint64_t vertices, uint64_t indices) { return vertices * 48 + indices * (vertices > 65535 ? 4 : 2); }
-
 /* Sources in docs/budget.md. */
 const cb_target_profile cb_profiles[] = {
     {"Steam Deck", 1ull << 30, 16384, "Valve: 1 GiB UMA frame buffer by default; Vulkan maxImageDimension2D 16384 (RADV)"},

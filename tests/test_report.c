@@ -12,7 +12,7 @@
 
 #define TMP "build/tmp-tests/report"
 
-static char samples_abs[512], fox_abs[512];
+static char samples_abs[512], fox_abs[512], foxq_abs[512], foxd_abs[512];
 
 static int setup(void **state)
 {
@@ -23,6 +23,14 @@ static int setup(void **state)
     memcpy(samples_abs, full, strlen(full) + 1);
     if (!realpath(fox, full) || strlen(full) >= sizeof fox_abs) return -1;
     memcpy(fox_abs, full, strlen(full) + 1);
+    /* Fox again with 16- and 8-bit attributes (KHR_mesh_quantization), and Draco-compressed
+     * with indices: the mesh buffers follow each file's own vertex format. */
+    shared_path(fox, sizeof fox, "assets/derived-fox/Fox.quantized.glb");
+    if (!realpath(fox, full) || strlen(full) >= sizeof foxq_abs) return -1;
+    memcpy(foxq_abs, full, strlen(full) + 1);
+    shared_path(fox, sizeof fox, "assets/derived-fox/Fox.draco.glb");
+    if (!realpath(fox, full) || strlen(full) >= sizeof foxd_abs) return -1;
+    memcpy(foxd_abs, full, strlen(full) + 1);
     return system("rm -rf " TMP " && mkdir -p " TMP);
 }
 
@@ -36,8 +44,8 @@ static const char *write_catalog(const char *name, const char *budget)
     fprintf(f, "[bake]\nout_dir = \"out-%s\"\n\n[budget]\n%s\n\n"
                "[animal.fox]\nmodel = \"%s\"\n[animal.goat]\nmodel = \"%s/quadruped.glb\"\n"
                "[animal.sheep]\nmodel = \"%s/quadruped.glb\"\n[animal.fish]\nmodel = \"%s/fish.glb\"\n"
-               "[animal.bird]\nmodel = \"%s/bird.glb\"\n",
-            name, budget, fox_abs, samples_abs, samples_abs, samples_abs, samples_abs);
+               "[animal.bird]\nmodel = \"%s/bird.glb\"\n[animal.foxq]\nmodel = \"%s\"\n[animal.foxd]\nmodel = \"%s\"\n",
+            name, budget, fox_abs, samples_abs, samples_abs, samples_abs, samples_abs, foxq_abs, foxd_abs);
     fclose(f);
     return path;
 }
@@ -50,8 +58,8 @@ static void check_numbers(const char *name, const char *budget, unsigned max_tex
     assert_int_equal(system(cmd), 0);
     snprintf(cmd, sizeof cmd,
              "python3 tests/tools/check_report.py %s " TMP "/%s.json %u 30 fox=%s goat=%s/quadruped.glb "
-             "sheep=%s/quadruped.glb@goat fish=%s/fish.glb bird=%s/bird.glb 2>&1",
-             crowdbake_exe(), name, max_tex, fox_abs, samples_abs, samples_abs, samples_abs, samples_abs);
+             "sheep=%s/quadruped.glb@goat fish=%s/fish.glb bird=%s/bird.glb foxq=%s foxd=%s@fox 2>&1",
+             crowdbake_exe(), name, max_tex, fox_abs, samples_abs, samples_abs, samples_abs, samples_abs, foxq_abs, foxd_abs);
     int rc = run_command(cmd, out, sizeof out);
     printf("  %s: %s", name, out);
     assert_int_equal(rc, 0);
