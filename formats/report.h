@@ -1,6 +1,6 @@
 /* report.h - the VAT comparison and VRAM budget report of a baked roster: exact bytes from the
  * palettes as written, every encoding side by side, VAT sizes and errors, mesh buffers, limits,
- * and the roster's total against its budget. Terminal, Markdown, JSON and HTML (with an SVG chart). */
+ * and the roster's total against its budget. Terminal, Markdown, JSON and an HTML page. */
 #ifndef CB_REPORT_H
 #define CB_REPORT_H
 
@@ -48,7 +48,9 @@ void cb_report_free(cb_report *report);
 void cb_report_text(FILE *out, const cb_report *r);
 void cb_report_markdown(FILE *out, const cb_report *r);
 void cb_report_json(FILE *out, const cb_report *r);
-/* A self-contained page (no network): tables and an SVG chart with a bar per type and the budget line. */
+/* A self-contained page (no network, no script): per type its share of the budget on a log
+ * scale (palette and mesh, and a VAT instead), how many times the budget holds it and what
+ * would shrink it; every encoding; the roster against every built-in target. */
 void cb_report_html(FILE *out, const cb_report *r);
 /* One paragraph: what the catalog bake ends with. */
 void cb_report_paragraph(FILE *out, const cb_report *r);
