@@ -12,8 +12,8 @@ SHELL := /bin/bash
 
 DEB_PACKAGES := pkg-config rapidjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
-                libosmesa6-dev libpng-dev
-PKGS := tinygltf RapidJSON draco OpenEXR libzstd tomlplusplus osmesa libpng
+                libosmesa6-dev libpng-dev libfreetype-dev libfontconfig-dev fonts-dejavu-core
+PKGS := tinygltf RapidJSON draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
 BUILD   ?= build
 CC      ?= cc
