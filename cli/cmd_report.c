@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <unistd.h>
 
 #include "../formats/atomic_file.h"
@@ -107,8 +108,16 @@ int cmd_report(int argc, char **argv)
     cb_error err = {0};
     cb_catalog cat;
     char tmp[4096] = "";
-    bool model = cli_file_kind_of(path) == CLI_FILE_MODEL;
+    const char *ext = strrchr(path, '.');
+    bool model = cli_file_kind_of(path) == CLI_FILE_MODEL || (ext && (strcasecmp(ext, ".glb") == 0 || strcasecmp(ext, ".gltf") == 0));
     if (model) {
+        /* Loaded once up front so a broken model is reported as itself, not as an entry of the
+         * catalog made for it. */
+        cb_limits limits = cb_default_limits();
+        cb_model *m = cli_load_model(path, &limits, &err);
+        if (m && cli_pick_skin(m, NULL, &err) < 0) cb_model_free(m), m = NULL;
+        if (!m) return cli_report(&err);
+        cb_model_free(m);
         const char *dir = getenv("TMPDIR") && *getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
         snprintf(tmp, sizeof tmp, "%s/crowdbake-report-XXXXXX", dir);
         if (!mkdtemp(tmp)) {

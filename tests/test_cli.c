@@ -59,6 +59,15 @@ static void test_report_of_one_model(void **state)
     assert_contains(out, "no budget to check (give --target NAME)");
     assert_int_equal(crowdbake(out, sizeof out, "report %s --target toaster", fox), CB_ERR_USAGE);
     assert_contains(out, "--target \"toaster\" is not a built-in profile");
+    /* A broken model is reported as itself, not as an entry of a catalog, and not as TOML. */
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "head -c 3000 %s > " TMP "/broken.glb && echo hello > " TMP "/text.glb", fox);
+    assert_int_equal(run_command(cmd, NULL, 0), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "report " TMP "/broken.glb"), CB_ERR_INPUT);
+    assert_contains(out, "crowdbake: " TMP "/broken.glb: truncated GLB");
+    assert_true(strstr(out, "[animal") == NULL && strstr(out, "type ") == NULL);
+    assert_int_equal(crowdbake(out, sizeof out, "report " TMP "/text.glb"), CB_ERR_INPUT);
+    assert_contains(out, "text.glb: not a GLB file");
     /* Nothing is left in the temporary folder's place, and nothing beside the model. */
     assert_int_equal(run_command("ls ${TMPDIR:-/tmp} | grep -c crowdbake-report- || true", out, sizeof out), 0);
     assert_int_equal(atoi(out), 0);
