@@ -12,7 +12,7 @@
 #define CB_FT_FUNCTIONS(X) X(FT_Init_FreeType) X(FT_Done_FreeType) X(FT_New_Face) X(FT_Done_Face) X(FT_Set_Pixel_Sizes) X(FT_Load_Char)
 #define CB_FC_FUNCTIONS(X) \
     X(FcInitLoadConfigAndFonts) X(FcConfigDestroy) X(FcNameParse) X(FcConfigSubstitute) X(FcDefaultSubstitute) \
-    X(FcFontMatch) X(FcPatternGetString) X(FcPatternDestroy)
+    X(FcFontMatch) X(FcPatternGetString) X(FcPatternDestroy) X(FcFini)
 
 struct cb_font {
     void *ft_library, *fc_library;
@@ -26,11 +26,13 @@ struct cb_font {
 
 static bool resolve(cb_font *f, const char **missing)
 {
+    /* NODELETE, as for OSMesa: what the libraries keep past their cleanup stays attributable
+     * to them (tests/lsan.supp). */
     *missing = "libfreetype.so.6";
-    f->ft_library = dlopen("libfreetype.so.6", RTLD_NOW | RTLD_LOCAL);
+    f->ft_library = dlopen("libfreetype.so.6", RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
     if (!f->ft_library) return false;
     *missing = "libfontconfig.so.1";
-    f->fc_library = dlopen("libfontconfig.so.1", RTLD_NOW | RTLD_LOCAL);
+    f->fc_library = dlopen("libfontconfig.so.1", RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
     if (!f->fc_library) return false;
 #define CB_FONT_RESOLVE(name, lib) \
     if (!(*(void **)&f->name = dlsym(f->lib, #name))) return *missing = #name, false;
@@ -90,6 +92,7 @@ void cb_font_close(cb_font *f)
     if (!f) return;
     if (f->face) f->FT_Done_Face(f->face);
     if (f->ft) f->FT_Done_FreeType(f->ft);
+    if (f->FcFini) f->FcFini(); /* fontconfig's global caches */
     if (f->fc_library) dlclose(f->fc_library);
     if (f->ft_library) dlclose(f->ft_library);
     free(f);
