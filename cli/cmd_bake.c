@@ -211,14 +211,14 @@ static cb_status bake_palette(cb_sampler *s, cb_bake_options *o, const bake_args
     return rc;
 }
 
-/* --format pal|exr|pal,exr, or OUT's extension; anything else is refused, never guessed. */
+/* --format pal|exr|pal,exr, or OUT's extension; another extension is refused, never guessed. */
 static int parse_formats(const bake_args *a, bool *want_pal, bool *want_exr)
 {
     if (!a->format) {
         const char *dot = strrchr(a->output, '.'), *slash = strrchr(a->output, '/');
         const char *ext = dot && (!slash || dot > slash) ? dot : "";
-        *want_pal = strcmp(ext, ".pal") == 0;
         *want_exr = strcmp(ext, ".exr") == 0;
+        *want_pal = strcmp(ext, ".pal") == 0 || !ext[0]; /* no extension (a device, a pipe): a .pal, as always */
         if (!*want_pal && !*want_exr)
             return cli_usage_error("bake", "%s: unknown output extension '%s'; write OUT.pal or OUT.exr, or give --format "
                                    "pal,exr", a->output, ext);

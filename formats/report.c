@@ -394,8 +394,10 @@ static void html_axis(FILE *f, const log_axis *a)
             double pct = pow(10, e) * 100;
             int decimals = e >= -2 ? 0 : -2 - e; /* 10^e of the budget is 10^(e+2) % */
             snprintf(t, sizeof t, "%.*f%%", decimals, pct);
-        } else {
-            cb_human_bytes((uint64_t)llround(pow(10, e)), t, sizeof t);
+        } else { /* decades of bytes read best in SI units */
+            static const char *const si[] = {"B", "kB", "MB", "GB", "TB"};
+            int u = e < 0 ? 0 : e / 3 > 4 ? 4 : e / 3;
+            snprintf(t, sizeof t, "%.0f %s", pow(10, e - 3 * u), si[u]);
         }
         const char *align = e == a->lo ? "first" : e == a->hi ? "last" : "mid";
         fprintf(f, "<span class=\"tick %s\" style=\"left:%.2f%%\">%s</span>", align, x, t);

@@ -106,8 +106,12 @@ static void test_exr_reads_back_bit_identical_and_opens_in_openexr_tools(void **
     assert_non_null(strstr(out, "crowdbake.bones"));
     assert_non_null(strstr(out, "crowdbake.clip0.name"));
     assert_non_null(strstr(out, "zip"));
+    /* Debian's exrinfo (OpenEXR 3.1) exits with a random status after printing a good file's
+     * summary, so its words are checked, not its exit code. */
     snprintf(cmd, sizeof cmd, "exrinfo %s/fox.exr 2>&1", TMP);
-    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    run_command(cmd, out, sizeof out);
+    assert_non_null(strstr(out, "'R': half samp 1 1"));
+    assert_null(strstr(out, "ERROR"));
 }
 
 static void test_u16_is_refused_for_exr(void **state)

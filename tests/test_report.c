@@ -177,6 +177,8 @@ static void test_html_page_layout_in_chromium(void **state)
     check_page("over", write_small_catalog("over", "layout = \"mat4\"\nprecision = \"float\"",
                                            "target = \"tiny device\"\nvram = \"1 MiB\"\ncrowd_share = 0.5", true),
                524288, true);
+    /* One model, no target: bytes on the log axis, no budget line. */
+    check_page("model", fox_abs, 0, false);
     char *html = read_whole_file(TMP "/over.html", NULL);
     assert_non_null(strstr(html, "qpos/u16 saves"));
     assert_non_null(strstr(html, "half the fps saves"));
