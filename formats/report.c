@@ -489,6 +489,16 @@ static void html_chart(FILE *f, const cb_report *r)
                "VAT (RGBA16F + RGBA8) instead <span class=\"key mesh\"></span>mesh buffers%s</p>\n",
             a.shares ? "Share of the crowd budget (log scale)" : "Bytes per type (log scale)",
             a.shares ? " <span class=\"key budget\"></span>the budget" : "");
+    if (a.shares && r->total < r->budget_bytes) {
+        /* Instances cost their per-instance data only: the shipped shader's vec4 a_instance and a
+         * 3x4 transform. */
+        enum { INSTANCE_BYTES = 16 + 48 };
+        char left[32];
+        cb_human_bytes(r->budget_bytes - r->total, left, sizeof left);
+        fprintf(f, "<p>Instances draw from their type's palette and mesh and add only their own data (%d B: the shader's "
+                   "<code>a_instance</code> and a 3×4 transform): the %s left holds <b>%llu instances</b>.</p>\n",
+                INSTANCE_BYTES, left, (unsigned long long)((r->budget_bytes - r->total) / INSTANCE_BYTES));
+    }
     fputs("<div class=\"chart\"><div class=\"row head\"><span class=\"name\"></span><span class=\"kind\"></span>", f);
     html_axis(f, &a);
     fprintf(f, "<span class=\"fits\" title=\"how many times the budget holds it\">%s</span></div>\n", a.shares ? "fits ×" : "");

@@ -134,7 +134,11 @@ static void check_page(const char *name, const char *catalog, uint64_t budget_by
              "  v = t['vat'][list(t['vat'])[0]] + t['mesh_bytes']\n"
              "  for kind, b in (('palette', p), ('vat', v)):\n"
              "    s = 'data-kind=\\\"%%s\\\" data-type=\\\"%%s\\\" data-bytes=\\\"%%d\\\"' %% (kind, t['name'], b)\n"
-             "    assert s in h, s\n\" 2>&1",
+             "    assert s in h, s\n"
+             /* instances: the budget left over 64 B each (docs/budget.md) */
+             "b = r.get('budget', {}).get('budget_bytes', 0); left = b - r['totals']['roster']\n"
+             "s = '<b>%%d instances</b>' %% (left // 64)\n"
+             "assert (s in h) == (left > 0 and b > 0), s\n\" 2>&1",
              name, name);
     int rc = run_command(cmd, out, sizeof out);
     if (rc) fail_msg("%s: %s", name, out);
