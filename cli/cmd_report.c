@@ -75,6 +75,36 @@ static void remove_folder(const char *dir)
     rmdir(dir);
 }
 
+/* A single model as a catalog baked into a new temporary folder (in tmp). The model is loaded
+ * once up front so a broken one is reported as itself, not as an entry of the catalog made for
+ * it. On failure nothing is left behind. */
+static cb_status open_single_model(const char *path, char *tmp, size_t tmp_size, cb_catalog *cat, cb_error *err)
+{
+    cb_limits limits = cb_default_limits();
+    cb_model *m = cli_load_model(path, &limits, err);
+    if (m && cli_pick_skin(m, NULL, err) < 0) cb_model_free(m), m = NULL;
+    if (!m) return err->status;
+    cb_model_free(m);
+    const char *dir = getenv("TMPDIR") && *getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
+    snprintf(tmp, tmp_size, "%s/crowdbake-report-XXXXXX", dir);
+    if (!mkdtemp(tmp)) return cb_fail(err, CB_ERR_IO, "%s: cannot create a temporary folder for the bake (set TMPDIR)", tmp);
+    if (single_model_catalog(path, tmp, cat, err)) remove_folder(tmp);
+    return err->status;
+}
+
+/* --target: a built-in profile by name replaces the [budget] target; its memory and texture
+ * limit come with it, the catalog's crowd_share and max_bones stay. */
+static void apply_target(cb_catalog *cat, const char *target)
+{
+    cat->budget.set = true;
+    cat->budget.target = target;
+    cat->budget.vram_bytes = 0;
+    cat->budget.max_texture_size = 0;
+    cat->budget.pos = (cb_source_pos){0, 0}; /* no place in the catalog: messages name --target */
+    if (!(cat->budget.crowd_share > 0)) cat->budget.crowd_share = 1;
+    if (!cat->budget.max_bones) cat->budget.max_bones = 256;
+}
+
 static cb_status write_html(const char *path, const cb_report *r, cb_error *err)
 {
     char *buf = NULL;
@@ -110,36 +140,9 @@ int cmd_report(int argc, char **argv)
     char tmp[4096] = "";
     const char *ext = strrchr(path, '.');
     bool model = cli_file_kind_of(path) == CLI_FILE_MODEL || (ext && (strcasecmp(ext, ".glb") == 0 || strcasecmp(ext, ".gltf") == 0));
-    if (model) {
-        /* Loaded once up front so a broken model is reported as itself, not as an entry of the
-         * catalog made for it. */
-        cb_limits limits = cb_default_limits();
-        cb_model *m = cli_load_model(path, &limits, &err);
-        if (m && cli_pick_skin(m, NULL, &err) < 0) cb_model_free(m), m = NULL;
-        if (!m) return cli_report(&err);
-        cb_model_free(m);
-        const char *dir = getenv("TMPDIR") && *getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
-        snprintf(tmp, sizeof tmp, "%s/crowdbake-report-XXXXXX", dir);
-        if (!mkdtemp(tmp)) {
-            fprintf(stderr, "crowdbake: %s: cannot create a temporary folder for the bake (set TMPDIR)\n", tmp);
-            return CB_ERR_IO;
-        }
-        if (single_model_catalog(path, tmp, &cat, &err)) {
-            remove_folder(tmp);
-            return cli_report(&err);
-        }
-    } else if (cb_catalog_load(path, &cat, &err)) {
+    if (model ? open_single_model(path, tmp, sizeof tmp, &cat, &err) : cb_catalog_load(path, &cat, &err))
         return cli_report(&err);
-    }
-    if (target) { /* a built-in profile by name; its memory and texture limit come with it */
-        cat.budget.set = true;
-        cat.budget.target = target;
-        cat.budget.vram_bytes = 0;
-        cat.budget.max_texture_size = 0;
-        cat.budget.pos = (cb_source_pos){0, 0};
-        if (!(cat.budget.crowd_share > 0)) cat.budget.crowd_share = 1;
-        if (!cat.budget.max_bones) cat.budget.max_bones = 256;
-    }
+    if (target) apply_target(&cat, target);
     cb_roster_options opt = {0};
     opt.jobs = jobs;
     opt.measure_vat = true;
