@@ -13,8 +13,8 @@ SHELL := /bin/bash
 
 DEB_PACKAGES := pkg-config rapidjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
-                libosmesa6-dev libpng-dev ninja-build
-PKGS := tinygltf RapidJSON draco OpenEXR libzstd tomlplusplus osmesa libpng
+                libosmesa6-dev libpng-dev ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core
+PKGS := tinygltf RapidJSON draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
 BUILD   ?= build
 CC      ?= cc

@@ -50,7 +50,13 @@ int cli_parse(int argc, char **argv, const cli_option *options, size_t option_co
             const char *eq = strchr(arg, '=');
             size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
             const cli_option *opt = find_option(options, option_count, arg, len);
-            if (!opt) return cli_usage_error(argv[0], "unknown option '%.*s'", (int)len, arg);
+            if (!opt) {
+                char typed[64];
+                snprintf(typed, sizeof typed, "%.*s", (int)len, arg);
+                const char *guess = cb_closest_name(typed, &options[0].name, option_count, sizeof options[0]);
+                if (guess) return cli_usage_error(argv[0], "unknown option '%s'; did you mean '%s'?", typed, guess);
+                return cli_usage_error(argv[0], "unknown option '%s'", typed);
+            }
             if (!opt->metavar) {
                 if (eq) return cli_usage_error(argv[0], "option %s takes no value", opt->name);
                 *opt->flag = true;
@@ -173,25 +179,83 @@ int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err)
     return 0;
 }
 
-int cli_open_baked(const char *palette_path, const char *model_path, const cb_limits *limits, const char *skin_option,
-                   cbpal_file *file, cb_palette *view, cb_model **model, cb_error *err)
+cli_file_kind cli_file_kind_of(const char *path)
 {
+    unsigned char head[8] = {0};
+    FILE *f = fopen(path, "rb");
+    if (!f) return CLI_FILE_MISSING;
+    size_t n = fread(head, 1, sizeof head, f);
+    fclose(f);
+    static const unsigned char exr_magic[4] = {0x76, 0x2f, 0x31, 0x01};
+    if (n >= 8 && memcmp(head, "CBPAL\r\n\x1a", 8) == 0) return CLI_FILE_PAL;
+    if (n >= 4 && memcmp(head, exr_magic, 4) == 0) return CLI_FILE_EXR;
+    if (n >= 4 && memcmp(head, "glTF", 4) == 0) return CLI_FILE_MODEL;
+    size_t i = 0; /* a .gltf is JSON: an object */
+    while (i < n && (head[i] == ' ' || head[i] == '\t' || head[i] == '\r' || head[i] == '\n')) ++i;
+    if (i < n && head[i] == '{') return CLI_FILE_MODEL;
+    if (n >= 3 && memcmp(head, "\xef\xbb\xbf", 3) == 0) return CLI_FILE_MODEL; /* JSON with a byte-order mark */
+    return CLI_FILE_UNKNOWN;
+}
+
+static bool is_palette(cli_file_kind k) { return k == CLI_FILE_PAL || k == CLI_FILE_EXR; }
+
+/* The arguments are MODEL PALETTE: says which one is wrong and how, before anything is read. */
+static cb_status check_kinds(const char *command, const char *model_path, const char *palette_path, cb_error *err)
+{
+    cli_file_kind mk = cli_file_kind_of(model_path), pk = cli_file_kind_of(palette_path);
+    if (mk == CLI_FILE_MISSING || pk == CLI_FILE_MISSING)
+        return cb_fail(err, CB_ERR_IO, "%s: cannot open it", mk == CLI_FILE_MISSING ? model_path : palette_path);
+    if (is_palette(mk) && pk == CLI_FILE_MODEL)
+        return cb_fail(err, CB_ERR_USAGE, "%s is a palette and %s a model: the order is 'crowdbake %s MODEL PALETTE'",
+                       model_path, palette_path, command);
+    if (mk != CLI_FILE_MODEL)
+        return cb_fail(err, CB_ERR_USAGE, "%s: is %s, not a glTF model; 'crowdbake %s MODEL PALETTE' takes the .glb/.gltf "
+                       "first", model_path, is_palette(mk) ? "a palette" : "neither glTF nor a palette", command);
+    if (!is_palette(pk))
+        return cb_fail(err, CB_ERR_USAGE, "%s: is %s, not a palette; 'crowdbake %s MODEL PALETTE' takes the .pal or .exr "
+                       "that 'crowdbake bake' wrote second", palette_path, pk == CLI_FILE_MODEL ? "a glTF model" : "neither a "
+                       "palette nor glTF", command);
+    return CB_OK;
+}
+
+static cb_status open_palette(const char *path, cli_baked *b, cb_error *err)
+{
+    if (cli_file_kind_of(path) == CLI_FILE_EXR) {
+        if (cb_exr_read_palette(path, &b->exr, err)) return err->status;
+        b->is_exr = true;
+        b->view = b->exr.palette;
+        b->texels = b->exr.palette.texels;
+        return CB_OK;
+    }
     char msg[512];
-    if (cbpal_open(palette_path, CBPAL_VERIFY_CHECKSUM, file, msg, sizeof msg))
-        return cb_fail(err, CB_ERR_INPUT, "%s", msg), -1;
-    *model = cli_load_model(model_path, limits, err);
-    int skin = *model ? cli_pick_skin(*model, skin_option, err) : -1;
-    if (skin >= 0 && cb_palette_view(file, view, err)) skin = -1;
-    else if (skin >= 0 && (*model)->skins[skin].joint_count != view->bone_count) {
+    if (cbpal_open(path, CBPAL_VERIFY_CHECKSUM, &b->pal, msg, sizeof msg)) return cb_fail(err, CB_ERR_INPUT, "%s", msg);
+    if (cb_palette_view(&b->pal, &b->view, err)) {
+        cbpal_close(&b->pal);
+        return err->status;
+    }
+    b->texels = b->pal.texels;
+    b->pal_open = true;
+    return CB_OK;
+}
+
+void cli_baked_close(cli_baked *b)
+{
+    if (b->is_exr) cb_exr_palette_free(&b->exr);
+    else if (b->pal_open) cb_palette_view_free(&b->view), cbpal_close(&b->pal);
+    cb_model_free(b->model);
+    memset(b, 0, sizeof *b);
+}
+
+cb_status cli_open_baked(const char *command, const char *model_path, const char *palette_path, const cb_limits *limits,
+                         const char *skin_option, cli_baked *b, cb_error *err)
+{
+    memset(b, 0, sizeof *b);
+    if (check_kinds(command, model_path, palette_path, err) || open_palette(palette_path, b, err)) return err->status;
+    b->model = cli_load_model(model_path, limits, err);
+    b->skin = b->model ? cli_pick_skin(b->model, skin_option, err) : -1;
+    if (b->skin >= 0 && b->model->skins[b->skin].joint_count != b->view.bone_count)
         cb_fail(err, CB_ERR_INPUT, "%s: its skin has %u joints, %s has %u bones: not its palette", model_path,
-                (*model)->skins[skin].joint_count, palette_path, view->bone_count);
-        cb_palette_view_free(view);
-        skin = -1;
-    }
-    if (skin < 0) {
-        cb_model_free(*model);
-        *model = NULL;
-        cbpal_close(file);
-    }
-    return skin;
+                b->model->skins[b->skin].joint_count, palette_path, b->view.bone_count);
+    if (err->status) cli_baked_close(b);
+    return err->status;
 }

@@ -5,6 +5,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "../formats/exr_io.h"
 #include "../formats/gltf_load.h"
 #include "../formats/json_writer.h"
 #include "../formats/pal_view.h"
@@ -50,12 +51,27 @@ extern const char cli_limits_usage[];
 cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *err);
 /* The skin a command works on: --skin NAME|INDEX, or the only one; an error otherwise. */
 int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err);
-/* A palette and the model it was baked from, as `preview` and `verify` take them: the .pal
- * opened with its checksum verified and viewed, the model loaded and its skin picked, their
- * bone counts compared. Returns the skin, or -1 with *err set and nothing left open; else
- * the caller frees the view and the model and closes the file. */
-int cli_open_baked(const char *palette_path, const char *model_path, const cb_limits *limits, const char *skin_option,
-                   cbpal_file *file, cb_palette *view, cb_model **model, cb_error *err);
+/* What a file holds, from its first bytes (not its name). */
+typedef enum cli_file_kind { CLI_FILE_UNKNOWN, CLI_FILE_MODEL, CLI_FILE_PAL, CLI_FILE_EXR, CLI_FILE_MISSING } cli_file_kind;
+cli_file_kind cli_file_kind_of(const char *path);
+
+/* A palette (.pal or .exr) and the model it was baked from, as `verify` and `preview` take them. */
+typedef struct cli_baked {
+    cb_model *model;
+    int skin;
+    cb_palette view;        /* header and clip table; for a .pal, its texels stay in the mapping */
+    const void *texels;     /* the payload the decoders read */
+    cbpal_file pal;         /* a .pal: mapped, checksum verified */
+    cb_exr_palette exr;     /* an .exr: decoded */
+    bool is_exr, pal_open;
+} cli_baked;
+
+/* Opens MODEL PALETTE: checks each is the kind of file it should be (naming the order when
+ * they are swapped), loads and picks the skin, compares bone counts. 0, or the error's status
+ * with *err set and nothing left open; else close with cli_baked_close. */
+cb_status cli_open_baked(const char *command, const char *model_path, const char *palette_path, const cb_limits *limits,
+                         const char *skin_option, cli_baked *out, cb_error *err);
+void cli_baked_close(cli_baked *b);
 
 /* --clip A,B (only these, in this order; a clip skipped at load is then an error with its
  * reason) and --exclude-clip A,B (every clip but these). *plan is NULL (every clip) when

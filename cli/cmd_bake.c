@@ -25,8 +25,10 @@ const char cmd_bake_usage[] =
     "changed (--force: everything), N types at a time (default: the number of cores). With a\n"
     "catalog, the bake options given replace its [bake] and [animal] values for this run (a clip's\n"
     "own fps still applies) and count in what is up to date; --depfile writes a Make/Ninja depfile.\n\n"
-    "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md) or .exr (OpenEXR)\n"
-    "  --format pal,exr           write these formats (OUT's extension is replaced per format)\n"
+    "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md) or .exr (OpenEXR); another\n"
+    "                             extension is refused\n"
+    "  --format pal,exr           write these formats (OUT's extension is replaced per format; each\n"
+    "                             keeps its own default precision unless --precision is given)\n"
     "  --fps N|auto               baked frames per second (default 30); auto: per clip, the lowest rate\n"
     "                             whose error stays under --max-error (mm per metre of model height,\n"
     "                             default 1) at baked frames and between them, up to --max-fps (60)\n"
@@ -90,17 +92,21 @@ static uint64_t input_hash(const cb_model *m, const cb_bake_options *o, int skin
     return cbpal_xxh64_digest(&s);
 }
 
-static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, bool want_pal)
+/* The options of the .pal bake; *exr_precision: the .exr's texels (each format keeps its own
+ * default precision when --precision is not given, so --format pal,exr changes neither file). */
+static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, bool want_pal, cb_precision *exr_precision)
 {
     *o = cb_default_bake_options();
     if (a->fps && strcmp(a->fps, "auto") != 0 && (!cli_parse_double(a->fps, &o->fps) || !(o->fps > 0) || o->fps > 1000))
         return cli_usage_error("bake", "--fps wants a number between 0 and 1000, got '%s'", a->fps);
     if (a->layout && !cb_layout_parse(a->layout, &o->layout))
         return cli_usage_error("bake", "--layout is mat4, affine or qpos, got '%s'", a->layout);
-    if (!a->precision && want_exr) o->precision = CB_PRECISION_FLOAT; /* half misses 0.5 mm/m on the samples */
     if (a->precision && !cb_precision_parse(a->precision, &o->precision))
         return cli_usage_error("bake", "--precision is float, half or u16, got '%s'", a->precision);
-    if (o->precision == CB_PRECISION_U16 && want_exr)
+    /* EXR holds half or float; half misses 0.5 mm/m on the samples, so float unless asked. */
+    *exr_precision = a->precision ? o->precision : CB_PRECISION_FLOAT;
+    if (!want_pal) o->precision = *exr_precision;
+    if (*exr_precision == CB_PRECISION_U16 && want_exr)
         return cli_usage_error("bake", "EXR holds half or float texels; use --precision half|float%s",
                                want_pal ? " (or write only the .pal)" : "");
     unsigned max;
@@ -119,6 +125,7 @@ static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, 
     return 0;
 }
 
+/* --format's words: pal, exr, or both. */
 static bool parse_formats(const char *text, bool *pal, bool *exr)
 {
     *pal = strcmp(text, "pal") == 0 || strcmp(text, "pal,exr") == 0 || strcmp(text, "exr,pal") == 0;
@@ -154,7 +161,8 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
         return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
     if (a->exr_compression) fields |= CB_BAKE_EXR_COMPRESSION;
     cb_bake_options o;
-    int rc = parse_options(a, &o, false, true); /* the same checks and values as for one model */
+    cb_precision exr_precision; /* the catalog's own rules pick each format's precision */
+    int rc = parse_options(a, &o, false, true, &exr_precision); /* the same checks and values as for one model */
     if (rc) return rc;
     over.fps = o.fps, over.layout = o.layout, over.precision = o.precision;
     over.max_texture_size = o.max_texture_size, over.root_motion = o.root_motion;
@@ -167,10 +175,10 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
 static void print_summary(const char *path, size_t bytes, const cb_palette *p, double seconds)
 {
     double per_m = p->model_height > 0 ? p->max_error / p->model_height * 1000 : 0;
-    printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bones, %u clips, %u frames, %s/%s, max error %.3g units "
+    printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bone%s, %u clip%s, %u frame%s, %s/%s, max error %.3g units "
            "(%.3g mm per m of height), %.0f ms\n",
-           path, bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count, p->clip_count,
-           p->rows, cb_layout_name(p->layout), cb_precision_name(p->precision), p->max_error, per_m, seconds * 1000);
+           path, bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count,
+           p->bone_count == 1 ? "" : "s", p->clip_count, p->clip_count == 1 ? "" : "s", p->rows, p->rows == 1 ? "" : "s", cb_layout_name(p->layout), cb_precision_name(p->precision), p->max_error, per_m, seconds * 1000);
 }
 
 typedef struct phase_times {
@@ -250,9 +258,9 @@ static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, const
 
 /* Bakes the selected clips (NULL: every clip), with --fps auto choosing the rates first. */
 static cb_status bake_palette(cb_sampler *s, cb_bake_options *o, const bake_args *a, const cb_clip_plan *selection,
-                              uint32_t selected, double max_mm, double max_fps, cb_palette *p, cb_error *err)
+                              uint32_t selected, double max_mm, double max_fps, bool quiet, cb_palette *p, cb_error *err)
 {
-    bool quiet = a->quiet || a->json, automatic = a->fps && strcmp(a->fps, "auto") == 0;
+    bool automatic = a->fps && strcmp(a->fps, "auto") == 0;
     o->affine_fallback = a->layout == NULL;
     cb_clip_plan *plan = automatic ? choose_rates(s, o, selection, selected, max_mm, max_fps, quiet, err) : NULL;
     uint32_t n = plan || selection ? (selection ? selected : cb_sampler_model(s)->animation_count) : 0;
@@ -282,6 +290,25 @@ static void bake_warnings(cb_sampler *s, const cb_bake_options *o, const bake_ar
     if (p->quat_hemisphere_breaks)
         cb_warn(w, "note", "%u bone(s) turn a full circle over a loop, so their last and first rows lie in opposite "
                 "quaternion hemispheres; the shipped shaders flip before blending", p->quat_hemisphere_breaks);
+}
+
+/* --format, or OUT's extension: .pal, .exr, or none (a device, a pipe: a .pal, as always);
+ * another extension is refused, never guessed. */
+static int output_formats(const bake_args *a, bool *want_pal, bool *want_exr)
+{
+    if (a->format) {
+        if (!parse_formats(a->format, want_pal, want_exr))
+            return cli_usage_error("bake", "--format is pal, exr or pal,exr, got '%s'", a->format);
+        return 0;
+    }
+    const char *dot = strrchr(a->output, '.'), *slash = strrchr(a->output, '/');
+    const char *ext = dot && (!slash || dot > slash) ? dot : "";
+    *want_exr = strcmp(ext, ".exr") == 0;
+    *want_pal = strcmp(ext, ".pal") == 0 || !ext[0];
+    if (!*want_pal && !*want_exr)
+        return cli_usage_error("bake", "%s: unknown output extension '%s'; write OUT.pal or OUT.exr, or give --format "
+                               "pal,exr", a->output, ext);
+    return 0;
 }
 
 int cmd_bake(int argc, char **argv)
@@ -314,8 +341,7 @@ int cmd_bake(int argc, char **argv)
         return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
                                a.depfile ? "--depfile" : a.manifest ? "--manifest" : "--force");
     bool want_pal = false, want_exr = false;
-    const char *formats = a.format ? a.format : ends_with(a.output, ".exr") ? "exr" : "pal";
-    if (!parse_formats(formats, &want_pal, &want_exr)) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    if ((rc = output_formats(&a, &want_pal, &want_exr))) return rc;
     int exr_compression = 0;
     if (a.exr_compression && !cb_exr_compression_parse(a.exr_compression, &exr_compression))
         return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
@@ -324,7 +350,8 @@ int cmd_bake(int argc, char **argv)
     if (a.speed_ref && (!cli_parse_double(a.speed_ref, &speed_ref) || speed_ref < 0))
         return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
     cb_bake_options o;
-    if ((rc = parse_options(&a, &o, want_exr, want_pal))) return rc;
+    cb_precision exr_precision = CB_PRECISION_FLOAT;
+    if ((rc = parse_options(&a, &o, want_exr, want_pal, &exr_precision))) return rc;
     double max_mm = 1, max_fps = 60;
     if (a.max_error && (!cli_parse_double(a.max_error, &max_mm) || !(max_mm > 0)))
         return cli_usage_error("bake", "--max-error wants mm per metre of model height");
@@ -345,7 +372,7 @@ int cmd_bake(int argc, char **argv)
     cb_clip_plan *selection = NULL;
     uint32_t selected = 0;
     if (s && !cli_select_clips(m, a.clips, a.excluded, &selection, &selected, &err))
-        bake_palette(s, &o, &a, selection, selected, max_mm, max_fps, &p, &err);
+        bake_palette(s, &o, &a, selection, selected, max_mm, max_fps, a.quiet || a.json, &p, &err);
     cb_warnings warnings = {0};
     if (!err.status) bake_warnings(s, &o, &a, &p, &warnings);
     cb_json j;
@@ -361,6 +388,12 @@ int cmd_bake(int argc, char **argv)
         char path[4096];
         if (a.format) output_path(a.output, f == 0 ? "pal" : "exr", path, sizeof path);
         else snprintf(path, sizeof path, "%s", a.output);
+        if (f == 1 && o.precision != exr_precision) { /* the .pal's u16 is no EXR */
+            cb_palette_free(&p);
+            o.precision = exr_precision;
+            if (bake_palette(s, &o, &a, selection, selected, max_mm, max_fps, true, &p, &err)) break;
+            hash = input_hash(m, &o, skin, a.zstd, exr_compression);
+        }
         double tw = now_seconds();
         if (f == 0) {
             cb_pal_write_options po = {a.zstd, 0, hash, (float)speed_ref, o.root_motion == CB_ROOT_MOTION_IN_PLACE};

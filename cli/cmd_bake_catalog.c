@@ -65,7 +65,8 @@ int cmd_bake_catalog(const cli_catalog_bake *o)
     opt.manifest = o->manifest;
     opt.limits = o->limits;
     cb_roster r;
-    if (opt.log) printf("crowdbake: baking %u animal types from %s on %u thread%s\n", cat.animal_count, path, jobs,
+    if (opt.log) printf("crowdbake: baking %u animal type%s from %s on %u thread%s\n", cat.animal_count,
+                        cat.animal_count == 1 ? "" : "s", path, jobs,
                         jobs == 1 ? "" : "s");
     cb_status rc = cb_roster_bake(&cat, &opt, &r, &err);
     for (uint32_t i = 0; quiet && !json && i < r.type_count; ++i) /* the log showed none of them */

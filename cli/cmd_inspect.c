@@ -1,5 +1,6 @@
 /* cmd_inspect.c - `crowdbake inspect FILE`: a palette's header and clip table, and one frame
  * decoded back to 4x4 matrices. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -31,12 +32,25 @@ static void print_pal_text(const char *path, const cbpal_file *f)
            h->flags & CBPAL_FLAG_ZSTD ? " (zstd)" : "", h->fps, h->speed_reference, h->max_error, h->model_height);
     printf("  input hash %016llx, checksum %016llx%s\n", (unsigned long long)h->input_hash,
            (unsigned long long)h->checksum, h->flags & CBPAL_FLAG_IN_PLACE ? ", root motion removed" : "");
-    printf("  %-24s %9s %7s %8s %9s %-8s %s\n", "clip", "first row", "frames", "fps", "length s", "loops", "root velocity");
+    bool in_place = (h->flags & CBPAL_FLAG_IN_PLACE) != 0;
+    /* In place, the clip table holds the root's travel that was measured and taken out of the
+     * rows (the game moves the instance by it); kept, the rows carry it and the table has 0. */
+    printf("  %-24s %9s %7s %8s %9s %-8s %s\n", "clip", "first row", "frames", "fps", "length s", "loops",
+           in_place ? "root velocity removed (units/s)" : "root motion");
     for (uint32_t i = 0; i < h->clip_count; ++i) {
         cbpal_clip c;
         cbpal_get_clip(f, i, &c);
-        printf("  %-24s %9u %7u %8.3f %9.4f %-8s (%.4g, %.4g, %.4g)\n", c.name, c.first_row, c.frames, c.fps, c.duration,
-               c.flags & CBPAL_CLIP_LOOPS ? "loop" : "one-shot", c.root_velocity[0], c.root_velocity[1], c.root_velocity[2]);
+        printf("  %-24s %9u %7u %8.3f %9.4f %-8s ", c.name, c.first_row, c.frames, c.fps, c.duration,
+               c.flags & CBPAL_CLIP_LOOPS ? "loop" : "one-shot");
+        if (!in_place) {
+            printf("in the rows\n");
+            continue;
+        }
+        double v[3], scale = 0;
+        for (int k = 0; k < 3; ++k) scale = fmax(scale, fabs(c.root_velocity[k]));
+        for (int k = 0; k < 3; ++k) /* float noise of a measured zero reads as 0 */
+            v[k] = fabs(c.root_velocity[k]) <= 1e-6 * fmax(scale, 1) ? 0 : c.root_velocity[k];
+        printf("(%.4g, %.4g, %.4g), speed %.4g\n", v[0], v[1], v[2], sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
     }
 }
 
@@ -57,6 +71,7 @@ static void print_pal_json(const char *path, const cbpal_file *f, const cb_palet
     cb_json_int(&j, "height", h->height);
     cb_json_int(&j, "blocks", h->blocks);
     cb_json_bool(&j, "zstd", (h->flags & CBPAL_FLAG_ZSTD) != 0);
+    cb_json_string(&j, "root_motion", h->flags & CBPAL_FLAG_IN_PLACE ? "in-place" : "keep");
     cb_json_number(&j, "fps", h->fps);
     cb_json_number(&j, "speed_reference", h->speed_reference);
     cb_json_number(&j, "max_error", h->max_error);

@@ -1,12 +1,13 @@
-/* cmd_preview.c - `crowdbake preview PALETTE MODEL -o sheet.png`: a contact sheet of the bake. */
+/* cmd_preview.c - `crowdbake preview MODEL PALETTE -o sheet.png`: a contact sheet of the bake. */
 #include <stdio.h>
+#include <string.h>
 
 #include "../formats/pal_view.h"
 #include "../formats/preview.h"
 #include "cli.h"
 
 const char cmd_preview_usage[] =
-    "usage: crowdbake preview PALETTE.pal MODEL -o SHEET.png [--columns N] [--cell PIXELS] [--skin NAME|INDEX]\n\n"
+    "usage: crowdbake preview MODEL PALETTE.pal|.exr -o SHEET.png [--columns N] [--cell PIXELS] [--skin NAME|INDEX]\n\n"
     "Renders a contact sheet: a row per clip (in the palette's order), N frames across (default 6),\n"
     "the model's mesh skinned from the palette by the shipped GLSL on Mesa's software OpenGL, flat\n"
     "shaded, framed by each clip's bounds. One look tells whether the bake is right.\n";
@@ -23,23 +24,25 @@ int cmd_preview(int argc, char **argv)
     if (help) return fputs(cmd_preview_usage, stdout), 0;
     if (rc) return rc;
     if (!out) return cli_usage_error("preview", "-o SHEET.png is required");
-    cb_preview_options opt = {6, 160};
+    cb_preview_options opt = {6, 160, NULL};
     if (cols && (!cli_parse_u32(cols, &opt.columns) || !opt.columns)) return cli_usage_error("preview", "--columns wants a count");
     if (cell && (!cli_parse_u32(cell, &opt.cell) || opt.cell < 16)) return cli_usage_error("preview", "--cell wants 16 pixels or more");
     cb_error err = {0};
-    cbpal_file f;
-    cb_palette p;
-    cb_model *m;
-    int skin = cli_open_baked(pos[0], pos[1], &limits, skin_name, &f, &p, &m, &err);
-    if (skin < 0) return cli_report(&err);
-    if (!cb_preview_write(&p, f.texels, m, skin, &opt, out, &err)) {
-        printf("%s: %u clips x %u frames (%ux%u pixels):", out, p.clip_count, opt.columns, opt.columns * opt.cell,
-               p.clip_count * opt.cell);
-        for (uint32_t c = 0; c < p.clip_count; ++c) printf(" %s%s", c ? "/ " : "", p.clips[c].name);
+    cli_baked b;
+    if (cli_open_baked("preview", pos[0], pos[1], &limits, skin_name, &b, &err)) return cli_report(&err);
+    const cb_palette *p = &b.view;
+    char title[512];
+    const char *model_name = strrchr(pos[0], '/') ? strrchr(pos[0], '/') + 1 : pos[0];
+    const char *palette_name = strrchr(pos[1], '/') ? strrchr(pos[1], '/') + 1 : pos[1];
+    snprintf(title, sizeof title, "%s with %s", model_name, palette_name);
+    opt.title = title;
+    if (!cb_preview_write(p, b.texels, b.model, b.skin, &opt, out, &err)) {
+        printf("%s: %u clip%s x %u frame%s (%ux%u pixels):", out, p->clip_count, p->clip_count == 1 ? "" : "s", opt.columns,
+               opt.columns == 1 ? "" : "s", opt.columns * opt.cell,
+               CB_PREVIEW_HEADER + p->clip_count * (CB_PREVIEW_BAND + opt.cell));
+        for (uint32_t c = 0; c < p->clip_count; ++c) printf(" %s%s", c ? "/ " : "", p->clips[c].name);
         printf(" (rows, top to bottom)\n");
     }
-    cb_palette_view_free(&p);
-    cb_model_free(m);
-    cbpal_close(&f);
+    cli_baked_close(&b);
     return err.status ? cli_report(&err) : 0;
 }

@@ -10,7 +10,7 @@
 #include "cli.h"
 
 const char cmd_verify_usage[] =
-    "usage: crowdbake verify MODEL PALETTE.pal [--max-error MM_PER_M] [--random N] [--skin NAME|INDEX] [--json]\n"
+    "usage: crowdbake verify MODEL PALETTE.pal|.exr [--max-error MM_PER_M] [--random N] [--skin NAME|INDEX] [--json]\n"
     "                        [--clip A,B | --exclude-clip A,B]\n\n"
     "Skins the model's mesh from the palette the way the runtime shaders do (two adjacent rows\n"
     "blended, up to 4 weighted bones, loops wrap, one-shots clamp) and compares it with exact float64\n"
@@ -63,16 +63,13 @@ int cmd_verify(int argc, char **argv)
     if (max_text && (!cli_parse_double(max_text, &max_error) || max_error < 0)) return cli_usage_error("verify", "--max-error wants mm per metre");
     if (random_text && !cli_parse_u32(random_text, &random_times)) return cli_usage_error("verify", "--random wants a count");
     cb_error err = {0};
-    cbpal_file f;
-    cb_palette p;
-    cb_model *m;
-    int skin = cli_open_baked(pos[1], pos[0], &limits, skin_name, &f, &p, &m, &err);
-    if (skin < 0) return cli_report(&err);
-    cb_sampler *s = check_clip_options(&p, pos[1], clips, excluded, &err) ? NULL : cb_sampler_create(m, skin, &err);
+    cli_baked b;
+    if (cli_open_baked("verify", pos[0], pos[1], &limits, skin_name, &b, &err)) return cli_report(&err);
+    const cb_palette *pv = &b.view;
+    const cb_model *m = b.model;
+    cb_sampler *s = check_clip_options(pv, pos[1], clips, excluded, &err) ? NULL : cb_sampler_create(m, b.skin, &err);
     if (!s) {
-        cb_palette_view_free(&p);
-        cb_model_free(m);
-        cbpal_close(&f);
+        cli_baked_close(&b);
         return cli_report(&err);
     }
     double lo[3], hi[3], worst = 0, height = cb_skin_rest_bounds(s, lo, hi);
@@ -85,25 +82,25 @@ int cmd_verify(int argc, char **argv)
         cb_json_number(&j, "model_height", height);
         cb_json_array(&j, "clips");
     } else {
-        printf("%s with %s (%s/%s, model height %.4g):\n  %-20s %12s %12s %12s %12s %9s %9s  %s\n", pos[1], pos[0],
-               cb_layout_name(p.layout), cb_precision_name(p.precision), height, "clip", "frames max", "frames mean",
-               "between max", "between mean", "mm/m", "mm/m", "worst vertex @ time");
+        printf("%s with %s (%s/%s, model height %.4g):\n  %-20s %12s %12s %12s %12s %12s %13s  %s\n", pos[1], pos[0],
+               cb_layout_name(pv->layout), cb_precision_name(pv->precision), height, "clip", "frames max", "frames mean",
+               "between max", "between mean", "frames mm/m", "between mm/m", "worst vertex @ time");
     }
-    for (uint32_t c = 0; c < p.clip_count && !err.status; ++c) {
-        if ((clips && !cli_list_has(clips, p.clips[c].name)) || cli_list_has(excluded, p.clips[c].name)) continue;
-        int32_t a = cb_model_find_animation(m, p.clips[c].name);
+    for (uint32_t c = 0; c < pv->clip_count && !err.status; ++c) {
+        if ((clips && !cli_list_has(clips, pv->clips[c].name)) || cli_list_has(excluded, pv->clips[c].name)) continue;
+        int32_t a = cb_model_find_animation(m, pv->clips[c].name);
         if (a < 0) {
             cb_fail(&err, CB_ERR_INPUT, "%s: has no clip '%s' that %s holds; verify the model the palette was baked from",
-                    pos[0], p.clips[c].name, pos[1]);
+                    pos[0], pv->clips[c].name, pos[1]);
             break;
         }
         cb_clip_error e;
-        if (cb_verify_clip(s, &p, f.texels, c, a, random_times, &e, &err)) break;
+        if (cb_verify_clip(s, pv, b.texels, c, a, random_times, &e, &err)) break;
         worst = e.quant_max > worst ? e.quant_max : worst;
         worst = e.interp_max > worst ? e.interp_max : worst;
         if (json) {
             cb_json_object(&j, NULL);
-            cb_json_string(&j, "name", p.clips[c].name);
+            cb_json_string(&j, "name", pv->clips[c].name);
             cb_json_number(&j, "frames_max", e.quant_max);
             cb_json_number(&j, "frames_mean", e.quant_mean);
             cb_json_number(&j, "between_max", e.interp_max);
@@ -114,7 +111,7 @@ int cmd_verify(int argc, char **argv)
             cb_json_number(&j, "worst_time", e.worst_time);
             cb_json_end(&j);
         } else {
-            printf("  %-20s %12.4g %12.4g %12.4g %12.4g %9.3f %9.3f  %llu @ %.3f s\n", p.clips[c].name, e.quant_max,
+            printf("  %-20s %12.4g %12.4g %12.4g %12.4g %12.3f %13.3f  %llu @ %.3f s\n", pv->clips[c].name, e.quant_max,
                    e.quant_mean, e.interp_max, e.interp_mean, mm(e.quant_max, height), mm(e.interp_max, height),
                    (unsigned long long)e.worst_vertex, e.worst_time);
         }
@@ -130,10 +127,8 @@ int cmd_verify(int argc, char **argv)
                    max_error >= 0 ? (mm(worst, height) > max_error ? " — over --max-error" : " — within --max-error") : "");
         }
     }
-    cb_palette_view_free(&p);
     cb_sampler_free(s);
-    cb_model_free(m);
-    cbpal_close(&f);
+    cli_baked_close(&b);
     if (err.status) return cli_report(&err);
     if (max_error >= 0 && mm(worst, height) > max_error) {
         fprintf(stderr, "crowdbake: %s: worst error %.3f mm/m is over --max-error %g\n", pos[1], mm(worst, height), max_error);

@@ -42,6 +42,8 @@ int main(int argc, char **argv)
     cb_atomic_cleanup_on_signals(); /* an interrupted bake leaves no partial file */
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i)
         if (strcmp(argv[1], commands[i].name) == 0) return commands[i].run(argc - 1, argv + 1);
-    fprintf(stderr, "crowdbake: unknown command '%s' (see 'crowdbake --help')\n", argv[1]);
+    const char *guess = cb_closest_name(argv[1], &commands[0].name, sizeof commands / sizeof commands[0], sizeof commands[0]);
+    if (guess) fprintf(stderr, "crowdbake: unknown command '%s'; did you mean '%s'? (see 'crowdbake --help')\n", argv[1], guess);
+    else fprintf(stderr, "crowdbake: unknown command '%s' (see 'crowdbake --help')\n", argv[1]);
     return CB_ERR_USAGE;
 }

@@ -47,21 +47,7 @@ struct Parser {
         return cb_source_pos{(uint32_t)n.source().begin.line, (uint32_t)n.source().begin.column};
     }
 
-    static size_t distance(const std::string &a, const std::string &b)
-    {
-        std::vector<size_t> row(b.size() + 1);
-        for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-        for (size_t i = 1; i <= a.size(); ++i) {
-            size_t prev = row[0];
-            row[0] = i;
-            for (size_t j = 1; j <= b.size(); ++j) {
-                size_t cur = row[j];
-                row[j] = std::min({row[j] + 1, row[j - 1] + 1, prev + (a[i - 1] != b[j - 1])});
-                prev = cur;
-            }
-        }
-        return row[b.size()];
-    }
+    static size_t distance(const std::string &a, const std::string &b) { return cb_edit_distance(a.c_str(), b.c_str()); }
 
     void check_keys(const toml::table &t, const std::vector<std::string> &known, const std::string &where)
     {

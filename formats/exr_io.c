@@ -52,6 +52,7 @@ static exr_result_t set_metadata(exr_context_t c, int part, const cb_palette *p,
     rc |= exr_attr_set_float(c, part, "crowdbake.fps", (float)p->fps);
     rc |= exr_attr_set_float(c, part, "crowdbake.speedReference", speed_reference);
     rc |= exr_attr_set_float(c, part, "crowdbake.maxError", (float)p->max_error);
+    rc |= exr_attr_set_double(c, part, "crowdbake.modelHeight", p->model_height);
     rc |= exr_attr_set_float_vector(c, part, "crowdbake.bindPositions", (int32_t)p->bone_count * 3, p->bind_positions);
     const cb_skin *sk = &m->skins[skin];
     const char **names = malloc(sizeof(char *) * sk->joint_count);
@@ -71,6 +72,7 @@ static exr_result_t set_metadata(exr_context_t c, int part, const cb_palette *p,
         rc |= exr_attr_set_int(c, part, KEY("loops"), cl->loops);
         rc |= exr_attr_set_float(c, part, KEY("fps"), (float)cl->fps);
         rc |= exr_attr_set_float(c, part, KEY("duration"), (float)cl->duration);
+        rc |= exr_attr_set_double(c, part, KEY("start"), cl->start);
         rc |= exr_attr_set_v3f(c, part, KEY("rootVelocity"), &v);
         rc |= exr_attr_set_v3f(c, part, KEY("boundsMin"), &lo);
         rc |= exr_attr_set_v3f(c, part, KEY("boundsMax"), &hi);
@@ -265,7 +267,76 @@ static bool palette_shaped(const char *path, const exr_attr_box2i_t *dw, const e
     return true;
 }
 
-cb_status cb_exr_read(const char *path, cb_exr_image *img, cb_error *err)
+/* The clip table and bones of a palette EXR, from its crowdbake.* attributes, as a view that
+ * skins like the .pal: everything it points to is allocated here. */
+static bool read_palette_attributes(exr_const_context_t c, const char *path, const cb_exr_image *img, cb_exr_palette *out,
+                                    cb_error *err)
+{
+    cb_palette *p = &out->palette;
+    int32_t tpb = 0, n = 0, len = 0;
+    const float *bind = NULL;
+    exr_attr_get_int(c, 0, "crowdbake.texelsPerBone", &tpb);
+    exr_attr_get_float_vector(c, 0, "crowdbake.bindPositions", &n, &bind);
+    if (!cb_layout_parse(img->layout, &p->layout) || tpb != (int32_t)cb_layout_texels_per_bone(p->layout) ||
+        img->bones <= 0 || n != 3 * img->bones || img->clips < 0 || img->rows_per_block <= 0 || img->blocks <= 0 ||
+        (int64_t)img->blocks * tpb * img->bones != (int64_t)img->width || img->rows_per_block != (int32_t)img->height ||
+        img->rows <= 0 || img->rows > img->blocks * img->rows_per_block)
+        return cb_fail(err, CB_ERR_INPUT, "%s: an EXR without a consistent crowdbake palette header (bake it with "
+                       "'crowdbake bake MODEL -o OUT.exr')", path), false;
+    p->precision = img->precision;
+    p->bone_count = (uint32_t)img->bones;
+    p->texels_per_bone = (uint32_t)tpb;
+    p->row_texels = p->bone_count * p->texels_per_bone;
+    p->rows = (uint32_t)img->rows;
+    p->width = img->width, p->height = img->height, p->blocks = (uint32_t)img->blocks;
+    float fps = 0, max_error = 0;
+    exr_attr_get_float(c, 0, "crowdbake.fps", &fps);
+    exr_attr_get_float(c, 0, "crowdbake.maxError", &max_error);
+    exr_attr_get_double(c, 0, "crowdbake.modelHeight", &p->model_height);
+    p->fps = fps, p->max_error = max_error;
+    p->texels = img->texels;
+    p->texel_bytes = img->texel_bytes;
+    p->bind_positions = malloc(sizeof(float) * (size_t)n);
+    p->clips = calloc(img->clips ? (size_t)img->clips : 1, sizeof *p->clips);
+    out->names = calloc((size_t)img->clips + 1, 256);
+    if (!p->bind_positions || !p->clips || !out->names) return cb_fail(err, CB_ERR_INTERNAL, "out of memory"), false;
+    memcpy(p->bind_positions, bind, sizeof(float) * (size_t)n);
+    p->clip_count = (uint32_t)img->clips;
+    for (uint32_t i = 0; i < p->clip_count; ++i) {
+        cb_palette_clip *cl = &p->clips[i];
+        char key[96], *name = out->names + 256 * (size_t)i;
+        const char *text = NULL;
+        int32_t first = -1, frames = 0, loops = 0;
+        float cfps = 0, duration = 0;
+        exr_attr_v3f_t v = {{{0, 0, 0}}}, lo = v, hi = v;
+#define KEY(field) (snprintf(key, sizeof key, "crowdbake.clip%u." field, i), key)
+        if (exr_attr_get_string(c, 0, KEY("name"), &len, &text) == EXR_ERR_SUCCESS && text)
+            snprintf(name, 256, "%.*s", len < 255 ? (int)len : 255, text);
+        exr_attr_get_int(c, 0, KEY("firstRow"), &first);
+        exr_attr_get_int(c, 0, KEY("frames"), &frames);
+        exr_attr_get_int(c, 0, KEY("loops"), &loops);
+        exr_attr_get_float(c, 0, KEY("fps"), &cfps);
+        exr_attr_get_float(c, 0, KEY("duration"), &duration);
+        exr_attr_get_double(c, 0, KEY("start"), &cl->start); /* absent before 0.1.x: clips started at 0 */
+        exr_attr_get_v3f(c, 0, KEY("rootVelocity"), &v);
+        exr_attr_get_v3f(c, 0, KEY("boundsMin"), &lo);
+        exr_attr_get_v3f(c, 0, KEY("boundsMax"), &hi);
+#undef KEY
+        if (first < 0 || frames <= 0 || (int64_t)first + frames > img->rows || !name[0])
+            return cb_fail(err, CB_ERR_INPUT, "%s: clip %u of its crowdbake header is missing or lies outside its %d rows",
+                           path, i, img->rows), false;
+        cl->name = name;
+        cl->first_row = (uint32_t)first, cl->frames = (uint32_t)frames, cl->loops = loops != 0;
+        cl->fps = cfps, cl->duration = duration;
+        memcpy(cl->root_velocity, v.arr, sizeof cl->root_velocity);
+        memcpy(cl->bounds_min, lo.arr, sizeof cl->bounds_min);
+        memcpy(cl->bounds_max, hi.arr, sizeof cl->bounds_max);
+    }
+    return true;
+}
+
+/* Reads the texels and the main attributes; with `palette`, the whole palette view too. */
+static cb_status exr_read(const char *path, cb_exr_image *img, cb_exr_palette *palette, cb_error *err)
 {
     memset(img, 0, sizeof *img);
     char message[256] = "";
@@ -291,6 +362,7 @@ cb_status cb_exr_read(const char *path, cb_exr_image *img, cb_error *err)
         if (!img->texels) rc = EXR_ERR_OUT_OF_MEMORY;
     }
     if (!rc) rc = read_scanlines(c, 0, img);
+    bool consistent = true;
     if (!rc) {
         const char *layout = NULL;
         int32_t len = 0;
@@ -308,14 +380,37 @@ cb_status cb_exr_read(const char *path, cb_exr_image *img, cb_error *err)
             hex[16] = '\0';
             img->input_hash = strtoull(hex, NULL, 16);
         }
+        if (palette) consistent = read_palette_attributes(c, path, img, palette, err);
     }
     if (c) exr_finish(&c);
-    if (rc) {
+    if (rc || !consistent) {
         cb_exr_image_free(img);
+        if (!consistent) return err->status;
         return cb_fail(err, CB_ERR_INPUT, "%s: OpenEXR cannot read it: %s", path,
                        message[0] ? message : exr_get_default_error_message(rc));
     }
     return CB_OK;
+}
+
+cb_status cb_exr_read(const char *path, cb_exr_image *img, cb_error *err) { return exr_read(path, img, NULL, err); }
+
+cb_status cb_exr_read_palette(const char *path, cb_exr_palette *out, cb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    cb_exr_image img;
+    if (exr_read(path, &img, out, err)) {
+        out->palette.texels = NULL; /* freed with the image */
+        cb_exr_palette_free(out);
+        return err->status;
+    }
+    return CB_OK;
+}
+
+void cb_exr_palette_free(cb_exr_palette *p)
+{
+    cb_palette_free(&p->palette);
+    free(p->names);
+    p->names = NULL;
 }
 
 void cb_exr_image_free(cb_exr_image *img)

@@ -30,4 +30,15 @@ typedef struct cb_exr_image {
 cb_status cb_exr_read(const char *path, cb_exr_image *out, cb_error *err);
 void cb_exr_image_free(cb_exr_image *img);
 
+/* A palette EXR as a palette that decodes and skins like the .pal of the same bake: texels,
+ * clip table (names included) and bind positions, all owned here. */
+typedef struct cb_exr_palette {
+    cb_palette palette;
+    char *names; /* the clip names the palette points to */
+} cb_exr_palette;
+
+/* Fails, naming the file, when the crowdbake attributes are missing or disagree with the image. */
+cb_status cb_exr_read_palette(const char *path, cb_exr_palette *out, cb_error *err);
+void cb_exr_palette_free(cb_exr_palette *p);
+
 #endif

@@ -959,6 +959,12 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
         prim.index_count = (uint32_t)ni;
         prim.indices = indices;
     }
+    for (auto &a : p.attributes) { /* every attribute, as the file types it: what a runtime uploads */
+        const tinygltf::Accessor &acc = c.gltf->accessors[(size_t)a.second];
+        uint32_t elem = (uint32_t)(type_components(acc.type) * component_size(acc.componentType));
+        prim.vertex_bytes += (elem + 3) / 4 * 4;
+    }
+    if (p.indices >= 0) prim.index_bytes = component_size(c.gltf->accessors[(size_t)p.indices].componentType) == 4 ? 4 : 2;
     prim.positions = positions;
     prim.joints = joints16;
     prim.weights = weights;

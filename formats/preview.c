@@ -15,6 +15,7 @@
 
 #include "../src/runtime.h"
 #include "atomic_file.h"
+#include "font.h"
 
 /* OpenGL through Mesa's OSMesa, opened when a preview is drawn: linking it would load Mesa and
  * LLVM (~20 ms of dynamic linking) into every crowdbake run. */
@@ -294,10 +295,79 @@ static cb_status write_png(const char *path, const unsigned char *rgba, uint32_t
     return cb_atomic_commit(&af, err);
 }
 
+/* Where a clip's row of cells starts, from the top. */
+static uint32_t row_top(uint32_t clip, uint32_t cell) { return CB_PREVIEW_HEADER + clip * (CB_PREVIEW_BAND + cell) + CB_PREVIEW_BAND; }
+
+/* The time of a clip's k-th cell: loops spread over a cycle, one-shots from first to last row. */
+static double cell_time(const cb_palette_clip *clip, uint32_t k, uint32_t cols)
+{
+    double span = clip->loops ? clip->frames / clip->fps : (clip->frames - 1) / clip->fps;
+    return clip->loops ? span * k / cols : cols > 1 ? span * k / (cols - 1) : 0;
+}
+
+/* "0.0315", "3.66", "1220": three digits, never an exponent. */
+static const char *millimetres(double v, char *buf, size_t size)
+{
+    snprintf(buf, size, v >= 100 ? "%.0f" : "%.3g", v);
+    return buf;
+}
+
+/* The labels, drawn over the rendered sheet: what it is, each clip with its measured error
+ * (at baked rows, and between them where blending adds its own), each cell's clip time. */
+static cb_status draw_labels(cb_canvas *cv, const cb_palette *p, const void *texels, const cb_model *m, int32_t skin,
+                             const cb_preview_options *opt, cb_error *err)
+{
+    static const uint8_t header_bg[3] = {52, 58, 64}, band_bg[3] = {214, 216, 208}, white[3] = {255, 255, 255},
+                         ink[3] = {20, 20, 20}, faint[3] = {90, 90, 90}, warn[3] = {170, 0, 0};
+    cb_font *bold = cb_font_open(14, true, err), *small = bold ? cb_font_open(11, false, err) : NULL;
+    cb_sampler *s = small ? cb_sampler_create(m, skin, err) : NULL;
+    if (!s) {
+        cb_font_close(bold), cb_font_close(small);
+        return err->status;
+    }
+    double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi), mm = height > 0 ? 1000 / height : 0;
+    int w = (int)cv->width;
+    char text[512];
+    cb_canvas_fill(cv, 0, 0, w, CB_PREVIEW_HEADER, header_bg);
+    int header_baseline = (CB_PREVIEW_HEADER + cb_font_ascent(bold) - cb_font_descent(bold)) / 2;
+    char error[32];
+    snprintf(text, sizeof text, "   %s/%s, %u bones, %u rows, baked error %s mm/m", cb_layout_name(p->layout),
+             cb_precision_name(p->precision), p->bone_count, p->rows, millimetres(p->max_error * mm, error, sizeof error));
+    int x = cb_font_draw(bold, cv, 8, header_baseline, w - 4, opt->title ? opt->title : "", white);
+    cb_font_draw(small, cv, x, header_baseline, w - 4, text, white);
+    for (uint32_t c = 0; c < p->clip_count && !err->status; ++c) {
+        const cb_palette_clip *clip = &p->clips[c];
+        int band = (int)(row_top(c, opt->cell) - CB_PREVIEW_BAND), baseline = band + (CB_PREVIEW_BAND + cb_font_ascent(bold)) / 2 - 1;
+        cb_canvas_fill(cv, 0, band, w, CB_PREVIEW_BAND, band_bg);
+        x = cb_font_draw(bold, cv, 8, baseline, w - 4, clip->name, ink);
+        snprintf(text, sizeof text, "   %s, %u rows at %.3g fps, %.3g s", clip->loops ? "loop" : "one-shot", clip->frames,
+                 clip->fps, clip->duration);
+        x = cb_font_draw(small, cv, x, baseline, w - 4, text, faint);
+        int32_t a = cb_model_find_animation(m, clip->name);
+        cb_clip_error e;
+        if (a >= 0 && !cb_verify_clip(s, p, texels, c, a, 0, &e, err)) { /* over 1 mm/m shows in red */
+            snprintf(text, sizeof text, "   error %s mm/m at rows", millimetres(e.quant_max * mm, error, sizeof error));
+            x = cb_font_draw(small, cv, x, baseline, w - 4, text, e.quant_max * mm > 1 ? warn : ink);
+            snprintf(text, sizeof text, ", %s between", millimetres(e.interp_max * mm, error, sizeof error));
+            cb_font_draw(small, cv, x, baseline, w - 4, text, e.interp_max * mm > 1 ? warn : ink);
+        }
+        for (uint32_t k = 0; k < opt->columns; ++k) {
+            snprintf(text, sizeof text, "%.2f s", cell_time(clip, k, opt->columns));
+            int cx = (int)(k * opt->cell);
+            cb_font_draw(small, cv, cx + 4, (int)row_top(c, opt->cell) + 3 + cb_font_ascent(small), cx + (int)opt->cell - 2,
+                         text, faint);
+        }
+    }
+    cb_sampler_free(s);
+    cb_font_close(bold);
+    cb_font_close(small);
+    return err->status;
+}
+
 cb_status cb_preview_write(const cb_palette *p, const void *texels, const cb_model *m, int32_t skin,
                            const cb_preview_options *opt, const char *png_path, cb_error *err)
 {
-    uint32_t cols = opt->columns, cell = opt->cell, w = cols * cell, h = p->clip_count * cell;
+    uint32_t cols = opt->columns, cell = opt->cell, w = cols * cell, h = row_top(p->clip_count, cell) - CB_PREVIEW_BAND;
     if (!cols || !cell || w > 8192 || h > 8192)
         return cb_fail(err, CB_ERR_USAGE, "a contact sheet of %ux%u pixels is out of range (1..8192)", w, h);
     const int attrs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
@@ -331,19 +401,19 @@ cb_status cb_preview_write(const cb_palette *p, const void *texels, const cb_mod
             cb_instance in = {clip->first_row, clip->loops ? clip->frames : -(double)clip->frames, clip->fps, 0};
             float inst[4] = {(float)in.first_row, (float)in.frame_count, (float)in.rate, 0};
             gl->Uniform4fv(gl->GetUniformLocation(prog, "u_instance"), 1, inst);
-            double span = clip->loops ? clip->frames / clip->fps : (clip->frames - 1) / clip->fps, radius = 0;
+            double radius = 0;
             for (uint32_t k = 0; k < cols; ++k) { /* one scale for the row, a center per frame */
-                double t = clip->loops ? span * k / cols : cols > 1 ? span * k / (cols - 1) : 0, r = 0;
-                frame_bounds(p, texels, m, skin, &in, t, centers + k * 3, &r);
+                double r = 0;
+                frame_bounds(p, texels, m, skin, &in, cell_time(clip, k, cols), centers + k * 3, &r);
                 radius = fmax(radius, r);
             }
             for (uint32_t k = 0; k < cols; ++k) {
-                double t = clip->loops ? span * k / cols : cols > 1 ? span * k / (cols - 1) : 0;
+                double t = cell_time(clip, k, cols);
                 float vp[16];
                 camera(centers + k * 3, radius, vp);
                 gl->UniformMatrix4fv(gl->GetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, vp);
                 gl->Uniform1f(gl->GetUniformLocation(prog, "u_time"), (float)t);
-                gl->Viewport((GLint)(k * cell), (GLint)((p->clip_count - 1 - c) * cell), (GLsizei)cell, (GLsizei)cell);
+                gl->Viewport((GLint)(k * cell), (GLint)(h - row_top(c, cell) - cell), (GLsizei)cell, (GLsizei)cell); /* GL: bottom-up */
                 for (uint32_t i = 0; i < prims; ++i) {
                     gl->BindVertexArray(vaos[i]);
                     if (indexed[i]) gl->DrawElements(GL_TRIANGLES, counts[i], GL_UNSIGNED_INT, 0);
@@ -355,6 +425,8 @@ cb_status cb_preview_write(const cb_palette *p, const void *texels, const cb_mod
         gl->Finish();
         if (gl->GetError() != GL_NO_ERROR) cb_fail(err, CB_ERR_INTERNAL, "OpenGL failed while rendering the preview");
     }
+    cb_canvas canvas = {pixels, w, h, true};
+    if (!err->status) draw_labels(&canvas, p, texels, m, skin, opt, err);
     if (!err->status) write_png(png_path, pixels, w, h, err);
     gl->DestroyContext(ctx);
     gl_close(gl);

@@ -1,6 +1,6 @@
 /* report.h - the VAT comparison and VRAM budget report of a baked roster: exact bytes from the
  * palettes as written, every encoding side by side, VAT sizes and errors, mesh buffers, limits,
- * and the roster's total against its budget. Terminal, Markdown, JSON and HTML (with an SVG chart). */
+ * and the roster's total against its budget. Terminal, Markdown, JSON and an HTML page. */
 #ifndef CB_REPORT_H
 #define CB_REPORT_H
 
@@ -40,6 +40,7 @@ typedef struct cb_report {
     bool over_budget;                   /* false too when failed_types > 0: then the verdict is unknown */
     uint32_t warnings;
     uint32_t failed_types;              /* types that did not bake: the totals leave them out */
+    bool single_model;                  /* `report MODEL`: the budget comes from --target, not a catalog */
 } cb_report;
 
 cb_status cb_report_build(const cb_catalog *catalog, const cb_roster *roster, cb_report *out, cb_error *err);
@@ -48,7 +49,9 @@ void cb_report_free(cb_report *report);
 void cb_report_text(FILE *out, const cb_report *r);
 void cb_report_markdown(FILE *out, const cb_report *r);
 void cb_report_json(FILE *out, const cb_report *r);
-/* A self-contained page (no network): tables and an SVG chart with a bar per type and the budget line. */
+/* A self-contained page (no network, no script): per type its share of the budget on a log
+ * scale (palette and mesh, and a VAT instead), how many times the budget holds it and what
+ * would shrink it; every encoding; the roster against every built-in target. */
 void cb_report_html(FILE *out, const cb_report *r);
 /* One paragraph: what the catalog bake ends with. */
 void cb_report_paragraph(FILE *out, const cb_report *r);

@@ -323,6 +323,7 @@ static void prepare_type(roster_run *run, uint32_t i)
     cb_model_warnings(w->model, !an->clips, &t->warnings);
     t->bones = w->model->skins[w->skin].joint_count;
     t->vertices = cb_model_skin_vertex_count(w->model, w->skin);
+    t->mesh_bytes = cb_model_skin_mesh_bytes(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
     if (plan_clips(run->cat, an, w, t, err) || analyze_clips(an, run->opt->limits, w, t, err) ||

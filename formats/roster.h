@@ -47,6 +47,7 @@ typedef struct cb_roster_type {
     cb_layout layout;
     cb_precision precision;
     uint64_t vertices, indices, palette_bytes; /* palette_bytes: the texture as uploaded */
+    uint64_t mesh_bytes;      /* vertex and index buffers in the model's own vertex format */
     uint64_t pal_file_bytes, exr_file_bytes;
     double max_error, model_height, speed_reference, seconds;
     double vat_error;         /* with measure_vat */

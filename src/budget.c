@@ -1,7 +1,7 @@
 /* budget.c - see budget.h. */
 #include "budget.h"
 
-#include <strings.h>
+#include <ctype.h>
 
 bool cb_wrap_rows(uint32_t row_texels, uint64_t rows, uint32_t max, cb_texture_geometry *out)
 {
@@ -43,8 +43,6 @@ uint64_t cb_vat_bytes(uint64_t vertices, uint32_t frames, const cb_vat_encoding 
     return texels * (enc->position_bytes + enc->normal_bytes);
 }
 
-uint64_t cb_mesh_bytes(uint64_t vertices, uint64_t indices) { return vertices * 48 + indices * (vertices > 65535 ? 4 : 2); }
-
 /* Sources in docs/budget.md. */
 const cb_target_profile cb_profiles[] = {
     {"Steam Deck", 1ull << 30, 16384, "Valve: 1 GiB UMA frame buffer by default; Vulkan maxImageDimension2D 16384 (RADV)"},
@@ -55,9 +53,21 @@ const cb_target_profile cb_profiles[] = {
 };
 const uint32_t cb_profile_count = sizeof cb_profiles / sizeof cb_profiles[0];
 
+/* Names compare case-insensitively with spaces, hyphens and underscores alike, so a command
+ * line can say steam-deck for "Steam Deck". */
+static bool same_profile_name(const char *a, const char *b)
+{
+    for (;; ++a, ++b) {
+        char x = *a == '-' || *a == '_' ? ' ' : (char)tolower((unsigned char)*a);
+        char y = *b == '-' || *b == '_' ? ' ' : (char)tolower((unsigned char)*b);
+        if (x != y) return false;
+        if (!x) return true;
+    }
+}
+
 const cb_target_profile *cb_find_profile(const char *name)
 {
     for (uint32_t i = 0; name && i < cb_profile_count; ++i)
-        if (strcasecmp(cb_profiles[i].name, name) == 0) return &cb_profiles[i];
+        if (same_profile_name(cb_profiles[i].name, name)) return &cb_profiles[i];
     return NULL;
 }

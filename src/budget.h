@@ -40,10 +40,6 @@ bool cb_vat_geometry(uint64_t vertices, uint32_t frames, uint32_t max, cb_textur
  * frames would store unwrapped, so a report can still compare. */
 uint64_t cb_vat_bytes(uint64_t vertices, uint32_t frames, const cb_vat_encoding *enc, const cb_texture_geometry *g);
 
-/* The skinned mesh's own buffers: 48 bytes a vertex (position and normal float3, joints u16x4,
- * weights float4) and 2-byte indices (4 past 65,535 vertices). */
-uint64_t cb_mesh_bytes(uint64_t vertices, uint64_t indices);
-
 typedef struct cb_target_profile {
     const char *name;
     uint64_t vram_bytes;
@@ -51,7 +47,7 @@ typedef struct cb_target_profile {
     const char *source;
 } cb_target_profile;
 
-/* A built-in profile by name (case-insensitive), or NULL. */
+/* A built-in profile by name (case-insensitive; '-' and '_' match a space), or NULL. */
 const cb_target_profile *cb_find_profile(const char *name);
 extern const cb_target_profile cb_profiles[];
 extern const uint32_t cb_profile_count;

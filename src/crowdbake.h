@@ -43,6 +43,13 @@ cb_status cb_fail(cb_error *err, cb_status status, const char *fmt, ...)
 #endif
     ;
 
+/* Edit distance (insertions, deletions, substitutions) between two names. */
+size_t cb_edit_distance(const char *a, const char *b);
+/* The known name within two edits of `name` (the closest, the first on a tie), or NULL.
+ * known[i] lies `stride` bytes after known[i-1], so it reads an array of strings or the name
+ * field of an array of structs alike. */
+const char *cb_closest_name(const char *name, const char *const *known, size_t count, size_t stride);
+
 /* ---- limits --------------------------------------------------------------------------- */
 
 typedef struct cb_limits {
@@ -101,6 +108,10 @@ typedef struct cb_primitive {
     float *weights;        /* 4 per vertex, as stored (not renormalized) */
     uint32_t index_count;
     uint32_t *indices;     /* index_count, or NULL for non-indexed */
+    /* What a runtime uploads for it: one vertex of every attribute the file gives the
+     * primitive, each as the file types it (after Draco/meshopt decoding) and padded to 4 bytes
+     * as vertex attributes must be; an index as stored (8-bit indices widen to 16). */
+    uint32_t vertex_bytes, index_bytes;
 } cb_primitive;
 
 typedef enum cb_path { CB_PATH_TRANSLATION, CB_PATH_ROTATION, CB_PATH_SCALE } cb_path;
@@ -189,6 +200,9 @@ void cb_model_warnings(const cb_model *model, bool skipped_clips, cb_warnings *o
 const struct cb_skipped_clip *cb_model_find_skipped_clip(const cb_model *model, const char *name);
 /* Vertices of the primitives that use `skin`. */
 uint64_t cb_model_skin_vertex_count(const cb_model *model, int32_t skin);
+/* Bytes of the vertex and index buffers of the primitives that use `skin`, in their own
+ * vertex formats (cb_primitive.vertex_bytes, index_bytes). */
+uint64_t cb_model_skin_mesh_bytes(const cb_model *model, int32_t skin);
 
 /* ---- sampling ------------------------------------------------------------------------- */
 

@@ -406,3 +406,14 @@ uint64_t cb_model_skin_vertex_count(const cb_model *model, int32_t skin)
         if (model->primitives[p].skin == skin) n += model->primitives[p].vertex_count;
     return n;
 }
+
+uint64_t cb_model_skin_mesh_bytes(const cb_model *model, int32_t skin)
+{
+    uint64_t bytes = 0;
+    for (uint32_t p = 0; p < model->primitive_count; ++p) {
+        const cb_primitive *prim = &model->primitives[p];
+        if (prim->skin == skin)
+            bytes += (uint64_t)prim->vertex_count * prim->vertex_bytes + (uint64_t)prim->index_count * prim->index_bytes;
+    }
+    return bytes;
+}

@@ -12,7 +12,7 @@
 
 #define TMP TEST_TMP "/report"
 
-static char samples_abs[512], fox_abs[512];
+static char samples_abs[512], fox_abs[512], foxq_abs[512], foxd_abs[512];
 
 static int setup(void **state)
 {
@@ -23,6 +23,14 @@ static int setup(void **state)
     memcpy(samples_abs, full, strlen(full) + 1);
     if (!realpath(fox, full) || strlen(full) >= sizeof fox_abs) return -1;
     memcpy(fox_abs, full, strlen(full) + 1);
+    /* Fox again with 16- and 8-bit attributes (KHR_mesh_quantization), and Draco-compressed
+     * with indices: the mesh buffers follow each file's own vertex format. */
+    shared_path(fox, sizeof fox, "assets/derived-fox/Fox.quantized.glb");
+    if (!realpath(fox, full) || strlen(full) >= sizeof foxq_abs) return -1;
+    memcpy(foxq_abs, full, strlen(full) + 1);
+    shared_path(fox, sizeof fox, "assets/derived-fox/Fox.draco.glb");
+    if (!realpath(fox, full) || strlen(full) >= sizeof foxd_abs) return -1;
+    memcpy(foxd_abs, full, strlen(full) + 1);
     return system("rm -rf " TMP " && mkdir -p " TMP);
 }
 
@@ -36,8 +44,8 @@ static const char *write_catalog(const char *name, const char *budget)
     fprintf(f, "[bake]\nout_dir = \"out-%s\"\n\n[budget]\n%s\n\n"
                "[animal.fox]\nmodel = \"%s\"\n[animal.goat]\nmodel = \"%s/quadruped.glb\"\n"
                "[animal.sheep]\nmodel = \"%s/quadruped.glb\"\n[animal.fish]\nmodel = \"%s/fish.glb\"\n"
-               "[animal.bird]\nmodel = \"%s/bird.glb\"\n",
-            name, budget, fox_abs, samples_abs, samples_abs, samples_abs, samples_abs);
+               "[animal.bird]\nmodel = \"%s/bird.glb\"\n[animal.foxq]\nmodel = \"%s\"\n[animal.foxd]\nmodel = \"%s\"\n",
+            name, budget, fox_abs, samples_abs, samples_abs, samples_abs, samples_abs, foxq_abs, foxd_abs);
     fclose(f);
     return path;
 }
@@ -50,8 +58,8 @@ static void check_numbers(const char *name, const char *budget, unsigned max_tex
     assert_int_equal(system(cmd), 0);
     snprintf(cmd, sizeof cmd,
              "python3 tests/tools/check_report.py %s " TMP "/%s.json %u 30 fox=%s goat=%s/quadruped.glb "
-             "sheep=%s/quadruped.glb@goat fish=%s/fish.glb bird=%s/bird.glb 2>&1",
-             crowdbake_exe(), name, max_tex, fox_abs, samples_abs, samples_abs, samples_abs, samples_abs);
+             "sheep=%s/quadruped.glb@goat fish=%s/fish.glb bird=%s/bird.glb foxq=%s foxd=%s@fox 2>&1",
+             crowdbake_exe(), name, max_tex, fox_abs, samples_abs, samples_abs, samples_abs, samples_abs, foxq_abs, foxd_abs);
     int rc = run_command(cmd, out, sizeof out);
     printf("  %s: %s", name, out);
     assert_int_equal(rc, 0);
@@ -88,47 +96,97 @@ static void test_exit_code_gate(void **state)
     assert_non_null(strstr(out, "not a built-in profile"));
 }
 
-static int count(const char *hay, const char *needle)
+/* A catalog of the samples (and Fox) with extra [bake] keys and a [budget]. */
+static const char *write_small_catalog(const char *name, const char *bake, const char *budget, bool all)
 {
-    int n = 0;
-    for (const char *p = hay; (p = strstr(p, needle)); p += strlen(needle)) ++n;
-    return n;
+    static char path[256];
+    snprintf(path, sizeof path, TMP "/%s.toml", name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "[bake]\nout_dir = \"out-%s\"\n%s\n[budget]\n%s\n[animal.fish]\nmodel = \"%s/fish.glb\"\n", name, bake, budget,
+            samples_abs);
+    if (all)
+        fprintf(f, "[animal.goat]\nmodel = \"%s/quadruped.glb\"\n[animal.sheep]\nmodel = \"%s/quadruped.glb\"\n"
+                   "[animal.bird]\nmodel = \"%s/bird.glb\"\n[animal.fox]\nmodel = \"%s\"\n",
+                samples_abs, samples_abs, samples_abs, fox_abs);
+    fclose(f);
+    return path;
 }
 
-static void test_html_chart_renders_in_chromium(void **state)
+#define CHROMIUM "timeout 120 chromium --headless --no-sandbox --disable-gpu --disable-background-networking " \
+                 "--disable-component-update --no-first-run --hide-scrollbars --user-data-dir=" TMP "/chromium "
+
+/* Renders the page at a desktop and a laptop width: tests/tools/report_layout.js checks the
+ * boxes Chromium laid out; screenshots stay in TMP to look at. */
+static void check_page(const char *name, const char *catalog, uint64_t budget_bytes, bool over)
+{
+    char cmd[4096], out[8192];
+    static char dom[1 << 21];
+    snprintf(cmd, sizeof cmd, "%s report %s --no-fail --json --html " TMP "/%s.html > " TMP "/%s.json", crowdbake_exe(),
+             catalog, name, name);
+    assert_int_equal(system(cmd), 0);
+    /* The bars state the bytes of the JSON report: palette (once per file) + mesh; VAT + mesh. */
+    snprintf(cmd, sizeof cmd, "python3 -c \"import json,sys; r = json.load(open('" TMP "/%s.json')); h = open('" TMP
+             "/%s.html').read()\n"
+             "for t in r['types']:\n"
+             "  p = (0 if 'shares_palette_of' in t else t['palette']['bytes']) + t['mesh_bytes']\n"
+             "  v = t['vat'][list(t['vat'])[0]] + t['mesh_bytes']\n"
+             "  for kind, b in (('palette', p), ('vat', v)):\n"
+             "    s = 'data-kind=\\\"%%s\\\" data-type=\\\"%%s\\\" data-bytes=\\\"%%d\\\"' %% (kind, t['name'], b)\n"
+             "    assert s in h, s\n"
+             /* instances: the budget left over 64 B each (docs/budget.md) */
+             "b = r.get('budget', {}).get('budget_bytes', 0); left = b - r['totals']['roster']\n"
+             "s = '<b>%%d instances</b>' %% (left // 64)\n"
+             "assert (s in h) == (left > 0 and b > 0), s\n\" 2>&1",
+             name, name);
+    int rc = run_command(cmd, out, sizeof out);
+    if (rc) fail_msg("%s: %s", name, out);
+    if (budget_bytes) {
+        char needle[64];
+        snprintf(needle, sizeof needle, "data-budget-bytes=\"%llu\"", (unsigned long long)budget_bytes);
+        snprintf(cmd, sizeof cmd, "grep -q '%s' " TMP "/%s.html", needle, name);
+        assert_int_equal(system(cmd), 0);
+    }
+    snprintf(cmd, sizeof cmd, "cat " TMP "/%s.html > " TMP "/%s-checked.html && { echo '<script>'; cat tests/tools/report_layout.js; "
+             "echo '</script>'; } >> " TMP "/%s-checked.html", name, name, name);
+    assert_int_equal(system(cmd), 0);
+    const char *sizes[] = {"1920,1080", "1280,800"};
+    for (int s = 0; s < 2; ++s) {
+        snprintf(cmd, sizeof cmd, CHROMIUM "--window-size=%s --dump-dom file://$(pwd)/" TMP "/%s-checked.html 2>/dev/null",
+                 sizes[s], name);
+        assert_int_equal(run_command(cmd, dom, sizeof dom), 0);
+        const char *result = strstr(dom, "<pre id=\"layout-check\">");
+        if (!result || !strstr(result, "LAYOUT OK")) fail_msg("%s at %s: %s", name, sizes[s], result ? result : "no layout check ran");
+        printf("  %s at %s: %.*s\n", name, sizes[s], (int)strcspn(strstr(result, "LAYOUT"), "\n"), strstr(result, "LAYOUT"));
+        assert_int_equal(strstr(dom, "class=\"summary over\"") != NULL, over);
+        assert_int_equal(strstr(dom, "Over budget by") != NULL, over);
+        snprintf(cmd, sizeof cmd, CHROMIUM "--window-size=%.4s,2400 --screenshot=" TMP "/%s-%.4s.png file://$(pwd)/" TMP
+                 "/%s.html >/dev/null 2>&1", sizes[s], name, sizes[s], name);
+        assert_int_equal(system(cmd), 0);
+    }
+}
+
+static void test_html_page_layout_in_chromium(void **state)
 {
     (void)state;
-    char cmd[2048];
-    static char dom[1 << 20];
-    const char *cat = write_catalog("html", "target = \"Steam Deck\"\nvram = \"4 MiB\"");
-    snprintf(cmd, sizeof cmd, "%s report %s --no-fail --html " TMP "/report.html >/dev/null", crowdbake_exe(), cat);
-    assert_int_equal(system(cmd), 0);
     assert_int_equal(run_command("command -v chromium >/dev/null", NULL, 0), 0);
-    snprintf(cmd, sizeof cmd, "timeout 120 chromium --headless --no-sandbox --disable-gpu --disable-background-networking "
-             "--disable-component-update --no-first-run --user-data-dir=" TMP "/chromium --dump-dom file://$(pwd)/" TMP
-             "/report.html 2>/dev/null");
-    assert_int_equal(run_command(cmd, dom, sizeof dom), 0);
-    /* Chromium parsed the page into a DOM with the chart: a segment per type in each stack. */
-    const char *names[] = {"bird", "fish", "fox", "goat", "sheep"};
-    for (int i = 0; i < 5; ++i) {
-        char needle[128];
-        snprintf(needle, sizeof needle, "data-stack=\"palette\" data-type=\"%s\"", names[i]);
-        assert_int_equal(count(dom, needle), 1);
-        snprintf(needle, sizeof needle, "data-stack=\"vat\" data-type=\"%s\"", names[i]);
-        assert_int_equal(count(dom, needle), 1);
-    }
-    assert_int_equal(count(dom, "class=\"budget\""), 1);
-    assert_non_null(strstr(dom, "budget 4.00 MiB"));
-    /* And it draws it: a screenshot that is not blank. */
-    snprintf(cmd, sizeof cmd, "timeout 120 chromium --headless --no-sandbox --disable-gpu --disable-background-networking "
-             "--disable-component-update --no-first-run --user-data-dir=" TMP "/chromium --window-size=900,700 "
-             "--screenshot=" TMP "/report.png file://$(pwd)/" TMP "/report.html >/dev/null 2>&1");
-    assert_int_equal(system(cmd), 0);
-    FILE *f = fopen(TMP "/report.png", "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    assert_true(ftell(f) > 10000);
-    fclose(f);
+    /* One small type on a console: shares of 0.002%, which a linear chart draws as nothing. */
+    check_page("tiny", write_small_catalog("tiny", "", "target = \"Steam Deck\"\ncrowd_share = 0.25", false),
+               268435456, false);
+    /* The samples and Fox; sheep shares goat's palette. */
+    check_page("samples", write_small_catalog("samples", "", "target = \"Steam Deck\"\ncrowd_share = 0.25", true),
+               268435456, false);
+    /* mat4/float palettes on 512 KiB: over budget, with what would fix it. */
+    check_page("over", write_small_catalog("over", "layout = \"mat4\"\nprecision = \"float\"",
+                                           "target = \"tiny device\"\nvram = \"1 MiB\"\ncrowd_share = 0.5", true),
+               524288, true);
+    /* One model, no target: bytes on the log axis, no budget line. */
+    check_page("model", fox_abs, 0, false);
+    char *html = read_whole_file(TMP "/over.html", NULL);
+    assert_non_null(strstr(html, "qpos/u16 saves"));
+    assert_non_null(strstr(html, "half the fps saves"));
+    assert_non_null(strstr(html, "shares <b>goat</b>"));
+    free(html);
 }
 
 static void test_vat_matches_exact_skinning(void **state)
@@ -193,7 +251,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_numbers_match_the_formulas),
         cmocka_unit_test(test_exit_code_gate),
-        cmocka_unit_test(test_html_chart_renders_in_chromium),
+        cmocka_unit_test(test_html_page_layout_in_chromium),
         cmocka_unit_test(test_vat_matches_exact_skinning),
     };
     return cmocka_run_group_tests_name("report", tests, setup, NULL);

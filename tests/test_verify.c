@@ -98,28 +98,52 @@ static void test_verify_exit_code(void **state)
     assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT); /* not its palette */
 }
 
-/* Share of non-background pixels in each cell of a sheet. */
+static bool ink(const unsigned char *p, const unsigned char bg[3], int threshold)
+{
+    return abs(p[0] - bg[0]) + abs(p[1] - bg[1]) + abs(p[2] - bg[2]) > threshold;
+}
+
+/* A sheet as preview.h lays it out: every cell shows the animal, and the labels are there, where
+ * they should be: the header's text, each clip's band from its left edge across its name and
+ * numbers, and each cell's time in its top-left corner. */
 static void check_sheet(const char *png, uint32_t rows, uint32_t cols, uint32_t cell)
 {
+    static const unsigned char sheet_bg[3] = {237, 237, 230}, band_bg[3] = {214, 216, 208}, header_bg[3] = {52, 58, 64};
     png_image img;
     memset(&img, 0, sizeof img);
     img.version = PNG_IMAGE_VERSION;
     assert_true(png_image_begin_read_from_file(&img, png));
     img.format = PNG_FORMAT_RGBA;
     assert_int_equal(img.width, cols * cell);
-    assert_int_equal(img.height, rows * cell);
+    assert_int_equal(img.height, CB_PREVIEW_HEADER + rows * (CB_PREVIEW_BAND + cell));
     unsigned char *px = malloc(PNG_IMAGE_SIZE(img));
     assert_true(png_image_finish_read(&img, NULL, px, 0, NULL));
-    for (uint32_t r = 0; r < rows; ++r)
+#define PX(x, y) (px + ((size_t)(y) * img.width + (x)) * 4)
+    uint32_t header_ink = 0, header_fill = 0;
+    for (uint32_t y = 0; y < CB_PREVIEW_HEADER; ++y)
+        for (uint32_t x = 0; x < img.width; ++x) header_ink += ink(PX(x, y), header_bg, 120), header_fill += !ink(PX(x, y), header_bg, 10);
+    if (header_fill < img.width * CB_PREVIEW_HEADER / 2 || header_ink < 300)
+        fail_msg("%s: the header has %u background and %u text pixels", png, header_fill, header_ink);
+    for (uint32_t r = 0; r < rows; ++r) {
+        uint32_t top = CB_PREVIEW_HEADER + r * (CB_PREVIEW_BAND + cell) + CB_PREVIEW_BAND, left = img.width, right = 0;
+        for (uint32_t y = top - CB_PREVIEW_BAND; y < top; ++y)
+            for (uint32_t x = 0; x < img.width; ++x)
+                if (ink(PX(x, y), band_bg, 120)) left = x < left ? x : left, right = x > right ? x : right;
+        /* name, loop, rows, fps, length and the errors: most of the band's width */
+        if (left > 12 || right < img.width / 2) fail_msg("%s: clip %u's label spans x %u..%u", png, r, left, right);
         for (uint32_t c = 0; c < cols; ++c) {
-            uint32_t drawn = 0;
-            for (uint32_t y = r * cell; y < (r + 1) * cell; ++y)
+            uint32_t drawn = 0, time_ink = 0;
+            for (uint32_t y = top; y < top + cell; ++y)
                 for (uint32_t x = c * cell; x < (c + 1) * cell; ++x) {
-                    const unsigned char *p = px + ((size_t)y * img.width + x) * 4;
-                    drawn += abs(p[0] - 237) + abs(p[1] - 237) + abs(p[2] - 230) > 30;
+                    bool label = y < top + 16 && x < c * cell + 44;
+                    if (label) time_ink += ink(PX(x, y), sheet_bg, 120);
+                    else drawn += ink(PX(x, y), sheet_bg, 30);
                 }
             if (drawn < cell * cell / 200) fail_msg("%s: cell %u,%u is empty", png, r, c);
+            if (time_ink < 20) fail_msg("%s: cell %u,%u has no time label", png, r, c);
         }
+    }
+#undef PX
     free(px);
 }
 
@@ -131,9 +155,9 @@ static void test_preview_sheets_of_the_samples(void **state)
     mkdir(PREVIEWS, 0777); /* CI keeps these as artifacts */
     for (int i = 0; i < 3; ++i) {
         char cmd[4096], out[2048];
-        snprintf(cmd, sizeof cmd, "%s bake %s/%s.glb -o " PREVIEWS "/%s.pal -q && %s preview " PREVIEWS "/%s.pal "
-                 "%s/%s.glb -o " PREVIEWS "/%s.png --columns 6 --cell 96 2>&1",
-                 crowdbake_exe(), samples_dir(), names[i], names[i], crowdbake_exe(), names[i], samples_dir(), names[i],
+        snprintf(cmd, sizeof cmd, "%s bake %s/%s.glb -o " PREVIEWS "/%s.pal -q && %s preview %s/%s.glb " PREVIEWS
+                 "/%s.pal -o " PREVIEWS "/%s.png --columns 6 --cell 96 2>&1",
+                 crowdbake_exe(), samples_dir(), names[i], names[i], crowdbake_exe(), samples_dir(), names[i], names[i],
                  names[i]);
         assert_int_equal(run_command(cmd, out, sizeof out), 0);
         char png[256];

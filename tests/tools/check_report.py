@@ -5,7 +5,7 @@ Recomputes a `crowdbake report --json` from the formulas of docs/budget.md, writ
 from that document, with the facts `crowdbake info --json` gives for each model (bones,
 vertices, indices, frames per clip). Every number must match byte for byte. Prints what it
 checked; exits 1 on the first mismatch."""
-import json, math, subprocess, sys
+import json, math, struct, subprocess, sys
 
 exe, report_path, max_tex, fps = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 types = {}
@@ -15,6 +15,41 @@ for arg in sys.argv[5:]:
     types[name] = (model, owner or None)
 report = json.load(open(report_path))
 checks = 0
+
+
+def gltf_json(path):
+    data = open(path, 'rb').read()
+    if data[:4] == b'glTF':  # GLB: 12-byte header, then the JSON chunk
+        length, kind = struct.unpack_from('<II', data, 12)
+        assert kind == 0x4E4F534A, path
+        return json.loads(data[20:20 + length])
+    return json.loads(data)
+
+
+COMPONENTS = {'SCALAR': 1, 'VEC2': 2, 'VEC3': 3, 'VEC4': 4, 'MAT2': 4, 'MAT3': 9, 'MAT4': 16}
+COMPONENT_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
+
+
+def mesh_bytes(path, skin):
+    """The skinned primitives' buffers in the file's own vertex format: every attribute as its
+    accessor types it, padded to 4 bytes; indices as stored, 8-bit ones widened to 16."""
+    g = gltf_json(path)
+    acc = g['accessors']
+    total = 0
+    for node in g['nodes']:
+        if node.get('skin') != skin or 'mesh' not in node:
+            continue
+        for prim in g['meshes'][node['mesh']]['primitives']:
+            attrs = prim['attributes']
+            if not all(k in attrs for k in ('POSITION', 'JOINTS_0', 'WEIGHTS_0')):
+                continue
+            vertex = sum(-(-COMPONENTS[acc[i]['type']] * COMPONENT_BYTES[acc[i]['componentType']] // 4) * 4
+                         for i in attrs.values())
+            total += acc[attrs['POSITION']]['count'] * vertex
+            if 'indices' in prim:
+                a = acc[prim['indices']]
+                total += a['count'] * (4 if a['componentType'] == 5125 else 2)
+    return total
 
 
 def expect(what, got, want):
@@ -66,7 +101,7 @@ for name, (model, owner) in sorted(types.items()):
         want = vg[0] * vg[1] * per if vg else vertices * frames * per
         expect(name + ' vat ' + enc, t['vat'][enc], want)
         totals['vat'][enc] += want
-    mesh = 48 * vertices + indices * (4 if vertices > 65535 else 2)
+    mesh = mesh_bytes(model, skin)
     expect(name + ' mesh bytes', t['mesh_bytes'], mesh)
     totals['meshes'] += mesh
     if owner:

@@ -1,0 +1,272 @@
+/* test_cli.c - what an artist with one GLB meets on the command line: a single-model report,
+ * verify and preview reading the .exr that bake writes (MODEL PALETTE, in that order, with
+ * a message naming the order when swapped), --format pal,exr keeping each format's default
+ * precision, unknown output extensions refused, did-you-mean for commands and options,
+ * singular counts, distinct verify column titles, in-place root velocity in inspect, and
+ * catalog.example.toml's stated defaults against the parser's. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <math.h>
+
+#include "../formats/catalog_toml.h"
+#include "../formats/crowdbake_pal.h"
+#include "../formats/exr_io.h"
+#include "../formats/report.h"
+
+#define TMP TEST_TMP "/cli"
+
+static char fox[1024];
+
+static int setup(void **state)
+{
+    (void)state;
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    return system("rm -rf " TMP " && mkdir -p " TMP);
+}
+
+/* Runs `crowdbake ARGS 2>&1`; returns the exit code, the output in out. */
+static int crowdbake(char *out, size_t size, const char *fmt, ...)
+{
+    char args[2048], cmd[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(args, sizeof args, fmt, ap);
+    va_end(ap);
+    snprintf(cmd, sizeof cmd, "%s %s 2>&1", crowdbake_exe(), args);
+    return run_command(cmd, out, size);
+}
+
+static void assert_contains(const char *hay, const char *needle)
+{
+    if (!strstr(hay, needle)) fail_msg("expected \"%s\" in:\n%s", needle, hay);
+}
+
+static void test_report_of_one_model(void **state)
+{
+    (void)state;
+    static char out[1 << 16];
+    /* It used to parse the GLB as TOML ("expected '=', saw '\u0002'"). */
+    assert_int_equal(crowdbake(out, sizeof out, "report %s --target steam-deck --json > " TMP "/fox.json", fox), 0);
+    size_t n;
+    char *json = read_whole_file(TMP "/fox.json", &n);
+    assert_contains(json, "\"target\": \"Steam Deck\"");
+    assert_contains(json, "\"name\": \"Fox\"");
+    /* Fox: 24 bones x 2 texels x 159 rows x 8 bytes (qpos/u16, the default bake). */
+    assert_contains(json, "\"bytes\": 61056");
+    free(json);
+    assert_int_equal(crowdbake(out, sizeof out, "report %s", fox), 0);
+    assert_contains(out, "no budget to check (give --target NAME)");
+    assert_int_equal(crowdbake(out, sizeof out, "report %s --target toaster", fox), CB_ERR_USAGE);
+    assert_contains(out, "--target \"toaster\" is not a built-in profile");
+    /* A broken model is reported as itself, not as an entry of a catalog, and not as TOML. */
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "head -c 3000 %s > " TMP "/broken.glb && echo hello > " TMP "/text.glb", fox);
+    assert_int_equal(run_command(cmd, NULL, 0), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "report " TMP "/broken.glb"), CB_ERR_INPUT);
+    assert_contains(out, "crowdbake: " TMP "/broken.glb: truncated GLB");
+    assert_true(strstr(out, "[animal") == NULL && strstr(out, "type ") == NULL);
+    assert_int_equal(crowdbake(out, sizeof out, "report " TMP "/text.glb"), CB_ERR_INPUT);
+    assert_contains(out, "text.glb: not a GLB file");
+    /* Nothing is left in the temporary folder's place, and nothing beside the model. */
+    assert_int_equal(run_command("ls ${TMPDIR:-/tmp} | grep -c crowdbake-report- || true", out, sizeof out), 0);
+    assert_int_equal(atoi(out), 0);
+}
+
+static void test_verify_and_preview_take_the_exr(void **state)
+{
+    (void)state;
+    static char out[1 << 16];
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/fox.exr -q", fox), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/fox.exr --json > " TMP "/v.json", fox), 0);
+    /* The EXR's float texels verify as the float .pal of the same bake does. */
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/foxf.pal --precision float -q", fox), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/foxf.pal --json > " TMP "/vp.json", fox), 0);
+    char *a = read_whole_file(TMP "/v.json", NULL), *b = read_whole_file(TMP "/vp.json", NULL);
+    assert_string_equal(strstr(a, "\"clips\""), strstr(b, "\"clips\""));
+    free(a), free(b);
+    assert_int_equal(crowdbake(out, sizeof out, "preview %s " TMP "/fox.exr -o " TMP "/sheet.png --cell 64", fox), 0);
+    assert_contains(out, "3 clips x 6 frames");
+    /* Swapped, and the wrong kinds of file: each named, with the order. */
+    assert_int_equal(crowdbake(out, sizeof out, "verify " TMP "/fox.exr %s", fox), CB_ERR_USAGE);
+    assert_contains(out, "is a palette and");
+    assert_contains(out, "the order is 'crowdbake verify MODEL PALETTE'");
+    assert_int_equal(crowdbake(out, sizeof out, "preview %s %s -o " TMP "/x.png", fox, fox), CB_ERR_USAGE);
+    assert_contains(out, "is a glTF model, not a palette");
+    assert_int_equal(crowdbake(out, sizeof out, "verify %s catalog.example.toml", fox), CB_ERR_USAGE);
+    assert_contains(out, "catalog.example.toml: is neither a palette nor glTF, not a palette");
+    /* An EXR that is not a crowdbake palette header. */
+    assert_int_equal(crowdbake(out, sizeof out, "vat %s -o " TMP "/vat.exr", fox), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/vat.exr", fox), CB_ERR_INPUT);
+    assert_contains(out, "vat.exr: not a crowdbake palette");
+}
+
+/* The EXR's clip table reads back as the .pal's. */
+static void test_exr_palette_matches_the_pal(void **state)
+{
+    (void)state;
+    char out[4096];
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/both.pal --format pal,exr --precision half -q "
+                                                "--root-motion in-place", fox), 0);
+    cbpal_file f;
+    char msg[256];
+    assert_int_equal(cbpal_open(TMP "/both.pal", CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg), 0);
+    cb_exr_palette e;
+    cb_error err = {0};
+    assert_int_equal(cb_exr_read_palette(TMP "/both.exr", &e, &err), CB_OK);
+    const cb_palette *p = &e.palette;
+    assert_int_equal(p->layout, (cb_layout)f.header.layout);
+    assert_int_equal(p->precision, CB_PRECISION_HALF);
+    assert_int_equal(p->bone_count, f.header.bone_count);
+    assert_int_equal(p->rows, f.header.rows);
+    assert_int_equal(p->clip_count, f.header.clip_count);
+    assert_true(p->texel_bytes == f.texels_size && memcmp(p->texels, f.texels, f.texels_size) == 0);
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        cbpal_clip pc;
+        cbpal_get_clip(&f, c, &pc);
+        assert_string_equal(p->clips[c].name, pc.name);
+        assert_int_equal(p->clips[c].first_row, pc.first_row);
+        assert_int_equal(p->clips[c].frames, pc.frames);
+        assert_true(p->clips[c].loops == ((pc.flags & CBPAL_CLIP_LOOPS) != 0));
+        assert_true(fabs(p->clips[c].start - pc.start) < 1e-6);
+    }
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        cbpal_bone b;
+        cbpal_get_bone(&f, j, &b);
+        assert_memory_equal(p->bind_positions + 3 * j, b.bind_position, sizeof b.bind_position);
+    }
+    cb_exr_palette_free(&e);
+    cbpal_close(&f);
+}
+
+static void test_format_pal_exr_keeps_each_precision(void **state)
+{
+    (void)state;
+    char out[4096];
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/one.pal -q", fox), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/one.exr -q", fox), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/two.pal --format pal,exr", fox), 0);
+    assert_contains(out, "two.pal: 63.6 KiB");           /* was 123.2 KiB: the EXR's float */
+    assert_contains(out, "qpos/u16");
+    /* Byte for byte the files each single-format bake writes. */
+    assert_int_equal(run_command("cmp " TMP "/one.pal " TMP "/two.pal && cmp " TMP "/one.exr " TMP "/two.exr", NULL, 0), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/fox.png", fox), CB_ERR_USAGE);
+    assert_contains(out, "unknown output extension '.png'");
+    assert_int_equal(run_command("test ! -e " TMP "/fox.png", NULL, 0), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/f --format pal,exrs", fox), CB_ERR_USAGE);
+    assert_contains(out, "--format is pal, exr or pal,exr");
+}
+
+static void test_messages(void **state)
+{
+    (void)state;
+    char out[8192];
+    assert_int_equal(crowdbake(out, sizeof out, "bakee x.glb"), CB_ERR_USAGE);
+    assert_contains(out, "unknown command 'bakee'; did you mean 'bake'?");
+    assert_int_equal(crowdbake(out, sizeof out, "verfy"), CB_ERR_USAGE);
+    assert_contains(out, "did you mean 'verify'?");
+    assert_int_equal(crowdbake(out, sizeof out, "zebra"), CB_ERR_USAGE);
+    assert_true(strstr(out, "did you mean") == NULL);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o x.pal --precison half", fox), CB_ERR_USAGE);
+    assert_contains(out, "did you mean '--precision'?");
+    /* One clip, one type: no "1 clips". */
+    char fish[1024];
+    sample_path(fish, sizeof fish, "fish");
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/fish.pal", fish), 0);
+    assert_contains(out, " 1 clip, ");
+    assert_int_equal(crowdbake(out, sizeof out, "report %s", fish), 0);
+    assert_contains(out, "type ");
+    FILE *f = fopen(TMP "/one.toml", "w");
+    assert_non_null(f);
+    fprintf(f, "[bake]\nout_dir = \"one\"\n[animal.fish]\nmodel = \"%s/%s\"\n", fish[0] == '/' ? "" : "../../..", fish);
+    fclose(f);
+    assert_int_equal(crowdbake(out, sizeof out, "bake " TMP "/one.toml"), 0);
+    assert_contains(out, "baking 1 animal type from");
+    assert_contains(out, "1 type in 1 palette");
+    /* verify: the two mm/m columns say which is which. */
+    assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/fish.pal", fish), 0);
+    assert_contains(out, "frames mm/m");
+    assert_contains(out, "between mm/m");
+}
+
+/* The sample quadruped walks forward at 1.2 units/s and runs at 4 (samples/gen). */
+static void test_inspect_in_place_velocity(void **state)
+{
+    (void)state;
+    static char out[1 << 14];
+    char q[1024];
+    sample_path(q, sizeof q, "quadruped");
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/q.pal --root-motion in-place -q", q), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/q.pal"), 0);
+    assert_contains(out, "root velocity removed (units/s)");
+    assert_contains(out, "(0, 0, 1.2), speed 1.2");
+    assert_contains(out, "(0, 0, 4), speed 4");
+    const char *table = strstr(out, "idle"); /* no float noise (-9.797e-18) as velocities */
+    assert_true(strstr(table, "e-0") == NULL && strstr(table, "e-1") == NULL && strstr(table, "e-2") == NULL);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/qk.pal -q", q), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/qk.pal"), 0);
+    assert_contains(out, "walk");
+    assert_contains(out, "in the rows");
+    assert_true(strstr(out, "(0, 0, 0)") == NULL); /* a kept walk does not claim to stand still */
+}
+
+/* Each [bake] and [budget] value catalog.example.toml shows is what the parser uses when the
+ * key is left out (the file says "every key ... with its default"). */
+static void test_example_catalog_states_the_defaults(void **state)
+{
+    (void)state;
+    size_t size;
+    char *text = read_whole_file("catalog.example.toml", &size);
+    char *stripped = calloc(2 * size + 1, 1); /* room for a '#' a line */
+    /* The same file with every key of [bake] and [budget] commented out, except the target. */
+    const char *section = "";
+    size_t used = 0;
+    for (char *line = text; *line;) {
+        char *end = strchr(line, '\n');
+        size_t len = end ? (size_t)(end - line + 1) : strlen(line);
+        if (line[0] == '[') section = strncmp(line, "[bake]", 6) == 0 ? "bake" : strncmp(line, "[budget]", 8) == 0 ? "budget" : "";
+        bool key = line[0] >= 'a' && line[0] <= 'z';
+        if (*section && key && strncmp(line, "target", 6) != 0) stripped[used++] = '#';
+        memcpy(stripped + used, line, len);
+        used += len;
+        line += len;
+    }
+    cb_catalog shown, defaults;
+    cb_error err = {0};
+    if (cb_catalog_parse(text, size, "catalog.example.toml", &shown, &err)) fail_msg("%s", err.message);
+    if (cb_catalog_parse(stripped, used, "catalog.example.toml", &defaults, &err)) fail_msg("%s", err.message);
+    const cb_bake_settings *a = &shown.defaults, *b = &defaults.defaults;
+    assert_true(a->fps == b->fps);
+    assert_int_equal(a->layout, b->layout);
+    assert_int_equal(a->precision, b->precision);
+    assert_int_equal(a->formats, b->formats);
+    assert_string_equal(a->out_dir, b->out_dir);
+    assert_int_equal(a->max_texture_size, b->max_texture_size);
+    assert_int_equal(a->root_motion, b->root_motion);
+    /* The budget as the report resolves it (profile values included). */
+    cb_roster none = {0};
+    cb_report ra, rb;
+    assert_int_equal(cb_report_build(&shown, &none, &ra, &err), CB_OK);
+    assert_int_equal(cb_report_build(&defaults, &none, &rb, &err), CB_OK);
+    assert_true(ra.crowd_share == rb.crowd_share); /* it said 0.25; the default is 1 */
+    assert_true(ra.vram_bytes == rb.vram_bytes);
+    assert_int_equal(ra.max_texture_size, rb.max_texture_size);
+    assert_int_equal(ra.max_bones, rb.max_bones);
+    cb_report_free(&ra), cb_report_free(&rb);
+    cb_catalog_free(&shown), cb_catalog_free(&defaults);
+    free(stripped), free(text);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_report_of_one_model),
+        cmocka_unit_test(test_verify_and_preview_take_the_exr),
+        cmocka_unit_test(test_exr_palette_matches_the_pal),
+        cmocka_unit_test(test_format_pal_exr_keeps_each_precision),
+        cmocka_unit_test(test_messages),
+        cmocka_unit_test(test_inspect_in_place_velocity),
+        cmocka_unit_test(test_example_catalog_states_the_defaults),
+    };
+    return cmocka_run_group_tests_name("cli", tests, setup, NULL);
+}
