@@ -4,7 +4,8 @@
 //   node tests/godot/run_godot.mjs BAKES_DIR LOG_FILE
 //
 // The shipped samples/godot files, check.gd and every file under BAKES_DIR are put in the engine's
-// file system under /crowdbake; an override.cfg beside the main pack makes check.gd an autoload.
+// file system under /crowdbake; tests/godot/override.cfg, beside the main pack, makes check.gd an
+// autoload (the web export ignores command-line arguments such as --script).
 // Godot reports shader compile errors only in its log (a material with a broken shader still
 // "loads"), so every ERROR line is attributed to the case check.gd announced before it: a case
 // passes when it logged no error and did not fail its own checks; an "expect-error:" or "broken:"
@@ -35,8 +36,8 @@ const files = {
   ...filesUnder(path.join(repo, 'samples', 'godot'), '/crowdbake/godot'),
   ...filesUnder(bakesDir, '/crowdbake/bakes'),
   '/crowdbake/check.gd': path.join(here, 'check.gd'),
+  '/engine/override.cfg': path.join(here, 'override.cfg'),
 };
-const overrideCfg = '[autoload]\nCrowdbakeCheck="*/crowdbake/check.gd"\n';
 
 // The engine, its pack and this page, from localhost (WebAssembly cannot start from file://).
 const page = `<!DOCTYPE html><canvas id="canvas" width="64" height="64"></canvas><script src="/engine/index.js"></script>`;
@@ -44,6 +45,10 @@ const types = { '.js': 'text/javascript', '.wasm': 'application/wasm', '.html': 
 const server = http.createServer((req, res) => {
   const url = new URL(req.url, 'http://localhost').pathname;
   if (url === '/') return res.writeHead(200, { 'Content-Type': 'text/html' }).end(page);
+  if (url.startsWith('/fs/')) { // the files to put in the engine's file system, by their path there
+    const from = files[url.slice(3)];
+    return from ? res.writeHead(200).end(fs.readFileSync(from)) : res.writeHead(404).end();
+  }
   const file = path.join(engineDir, path.basename(url)); // the engine asks for its audio worklets at /
   if (!fs.existsSync(file)) return res.writeHead(404).end();
   res.writeHead(200, { 'Content-Type': types[path.extname(file)] || 'application/octet-stream' });
@@ -56,32 +61,32 @@ const browser = await chromium.launch({
   args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-background-networking',
          '--disable-component-update', '--no-first-run'],
 });
-let code, lines;
+// Godot's log reaches node line by line, so that a crash or a hang still leaves the log up to it.
+const lines = [];
+let code;
 try {
   const tab = await browser.newPage();
-  const pageErrors = [];
-  tab.on('pageerror', (e) => pageErrors.push(e.message));
+  let finish;
+  const ended = new Promise((resolve) => { finish = resolve; });
+  tab.on('crash', () => finish('the browser tab crashed'));
+  tab.on('pageerror', (e) => lines.push(`page error: ${e.message}`));
+  setTimeout(() => finish(`Godot did not exit within ${TIMEOUT_MS / 1000} s`), TIMEOUT_MS).unref();
+  await tab.exposeFunction('cbLog', (line) => lines.push(line));
+  await tab.exposeFunction('cbExit', (status) => { code = status; finish(null); });
   await tab.goto(`http://127.0.0.1:${server.address().port}/`);
-  const contents = Object.fromEntries(Object.entries(files).map(([to, from]) => [to, [...fs.readFileSync(from)]]));
-  contents['/engine/override.cfg'] = [...Buffer.from(overrideCfg)];
-  const run = tab.evaluate(async (contents) => {
-    const log = [];
+  await tab.evaluate(async (paths) => {
     const engine = new Engine({ executable: '/engine/index', canvasResizePolicy: 0, focusCanvas: false,
                                 args: [], fileSizes: {}, emscriptenPoolSize: 0, godotPoolSize: 0 });
-    for (const [to, bytes] of Object.entries(contents)) await engine.preloadFile(new Uint8Array(bytes), to);
-    return new Promise((resolve) => {
-      engine.startGame({
-        canvas: document.getElementById('canvas'),
-        onPrint: (...a) => log.push(a.join(' ')),
-        onPrintError: (...a) => log.push(a.join(' ')),
-        onExit: (status) => resolve({ code: status, lines: log }),
-      }).catch((e) => resolve({ code: -1, lines: log.concat([`engine failed to start: ${e}`]) }));
-    });
-  }, contents);
-  const timeout = new Promise((resolve) => setTimeout(() => resolve(null), TIMEOUT_MS));
-  const result = await Promise.race([run, timeout]);
-  ({ code, lines } = result || { code: -2, lines: [`Godot did not exit within ${TIMEOUT_MS / 1000} s`] });
-  lines = lines.concat(pageErrors.map((e) => `page error: ${e}`));
+    for (const to of paths) await engine.preloadFile(`/fs${to}`, to);
+    engine.startGame({
+      canvas: document.getElementById('canvas'),
+      onPrint: (...a) => window.cbLog(a.join(' ')),
+      onPrintError: (...a) => window.cbLog(a.join(' ')),
+      onExit: (status) => window.cbExit(status),
+    }).catch((e) => { window.cbLog(`page error: engine failed to start: ${e}`); window.cbExit(-1); });
+  }, Object.keys(files));
+  const problem = await ended;
+  if (problem) lines.push(`page error: ${problem}`);
 } finally {
   await browser.close();
   server.close();
