@@ -1,5 +1,5 @@
-# crowdbake_loader.gd - loads crowdbake palettes and the roster manifest into Godot 4 (4.4 or later:
-# Image.FORMAT_RGBA16I, the RGBA16UI texture the default u16 bake needs).
+# crowdbake_loader.gd - loads crowdbake palettes and the roster manifest into Godot 4 (tested with 4.6;
+# needs Image.FORMAT_RGBA16I, the RGBA16UI texture of the default u16 bake).
 #
 #   var loader := CrowdbakeLoader.new()
 #   if not loader.load_roster("res://roster/roster.json"):
