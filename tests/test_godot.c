@@ -3,7 +3,8 @@
  * tests/godot/run_godot.mjs with tests/godot/check.gd inside the engine. Every .gdshader compiles
  * and draws in every layout with u16 and float palettes of a real bake (u16 covering the same pixels
  * as float), the loader parses and loads every layout x precision (zstd too) bit for bit, refuses
- * damaged palettes and mismatched shaders with a message, and fills a herd from a roster manifest.
+ * damaged palettes and mismatched shaders with a message, and fills a herd from a roster manifest (refusing
+ * rows that the Compatibility renderer's half-float instance data cannot address, whose premise it measures).
  * Two deliberately broken shaders (a Godot-language error and a GLSL error only the draw finds)
  * must make Godot log an error, so the log scan is shown to catch both kinds. */
 #define _DEFAULT_SOURCE
@@ -63,10 +64,12 @@ static void test_shipped_files_run_in_godot(void **state)
     assert_int_equal(count(out, "\nok   u16 draws as float: "), 6);
     assert_int_equal(count(out, "\nok   palette "), 8);
     assert_int_equal(count(out, "\nok   expect-error: refuses "), 5);
+    assert_non_null(strstr(out, "ok   expect-error: fill_herd refuses rows the Compatibility renderer cannot address"));
+    assert_non_null(strstr(out, "ok   Compatibility renderer rounds INSTANCE_CUSTOM to half floats"));
     assert_int_equal(count(out, "\nok   broken: "), 2);
     assert_non_null(strstr(out, "ok   loader parses"));
     assert_non_null(strstr(out, "ok   fill_herd from roster.json"));
-    assert_non_null(strstr(out, "godot: 35 cases, 0 failed, exit code 0"));
+    assert_non_null(strstr(out, "godot: 37 cases, 0 failed, exit code 0"));
     /* The log is Godot 4.6's own, on WebGL 2 (the Compatibility renderer). */
     assert_int_equal(run_command("grep -q 'Godot Engine v4.6' " TMP "/godot.log && grep -q 'Compatibility' " TMP "/godot.log",
                                  NULL, 0),

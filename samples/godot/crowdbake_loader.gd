@@ -21,6 +21,9 @@ const TEXEL_BYTES := [16, 8, 8]
 const IMAGE_FORMATS := [Image.FORMAT_RGBAF, Image.FORMAT_RGBAH, Image.FORMAT_RGBA16I]
 const MAGIC_HEX := "434250414c0d0a1a" # "CBPAL\r\n\x1a"
 const HEADER_SIZE := 256
+# The Compatibility renderer (OpenGL, WebGL) stores MultiMesh custom data and colors as half floats
+# (Godot 4.6: custom data 3001 reads 3000 in the shader), which hold integers exactly only up to 2048.
+const COMPATIBILITY_MAX_ROW := 2048
 const BONE_ENTRY_SIZE := 32
 
 var roster: Dictionary = {}
@@ -146,6 +149,10 @@ func fill_herd(node: MultiMeshInstance3D, type: String, state: String, speed: fl
 	if pal.is_empty() or not apply_palette(node.material_override as ShaderMaterial, pal, node.name):
 		return false
 	var inst: Dictionary = t["states"][state]["instance"]
+	if RenderingServer.get_current_rendering_method() == "gl_compatibility" \
+			and (inst["first_row"] > COMPATIBILITY_MAX_ROW or absi(inst["frame_count"]) > COMPATIBILITY_MAX_ROW):
+		return _fail("%s: state '%s' of '%s' starts at palette row %d; the Compatibility renderer keeps instance data as half floats, exact only up to row %d: use Forward+ or Mobile, or give that type fewer clips" %
+				[node.name, state, type, inst["first_row"], COMPATIBILITY_MAX_ROW])
 	var rate: float = inst["rate"] if inst["rate_per_speed"] == 0.0 else inst["rate_per_speed"] * speed
 	var mm := MultiMesh.new()
 	mm.transform_format = MultiMesh.TRANSFORM_3D

@@ -64,6 +64,7 @@ func _run() -> void:
 	await _draw_case("broken: undefined identifier", _variant(shipped.replace("BONE_WEIGHTS, inst", "BONE_WEIGHT, inst"), 2, 1),
 			BAKES + "/qpos-u16.pal")
 	await _check_herd()
+	await _check_custom_data_precision()
 
 # The bakes run_godot.mjs was given, NAME.pal with NAME = LAYOUT-PRECISION[-zstd].
 func _bakes() -> PackedStringArray:
@@ -246,10 +247,47 @@ func _check_herd() -> void:
 	var want: Dictionary = loader.roster["types"]["goat"]["states"]["wander"]["instance"]
 	var got := herd.multimesh.get_instance_custom_data(3)
 	await RenderingServer.frame_post_draw
-	herd.queue_free()
 	var why := ""
 	if herd.multimesh.instance_count != 50:
 		why = "%d instances" % herd.multimesh.instance_count
 	elif got.r != want["first_row"] or got.g != want["frame_count"]:
 		why = "instance 3 has first row %s and %s frames; the manifest says %s and %s" % [got.r, got.g, want["first_row"], want["frame_count"]]
+	_end(name, why)
+	name = "expect-error: fill_herd refuses rows the Compatibility renderer cannot address"
+	_begin(name)
+	loader.roster["types"]["goat"]["states"]["wander"]["instance"]["first_row"] = 3001
+	var refused: bool = not loader.fill_herd(herd, "goat", "wander", 1.4, 5, 10.0) and loader.error.contains("exact only up to row 2048")
+	_end(name, "" if refused else "accepted, or said '%s'" % loader.error)
+	herd.queue_free()
+
+# The premise of that refusal: the renderer this test runs (Compatibility) rounds custom data to
+# half floats, so 3001 reaches the shader as 3000. If a Godot release stores floats, this fails and
+# the loader's limit can go.
+func _check_custom_data_precision() -> void:
+	var name := "Compatibility renderer rounds INSTANCE_CUSTOM to half floats"
+	_begin(name)
+	var shader := Shader.new()
+	shader.code = "shader_type spatial;\nrender_mode unshaded, cull_disabled;\nvarying float row;\n" \
+			+ "void vertex() { row = INSTANCE_CUSTOM.x; }\n" \
+			+ "void fragment() { ALBEDO = vec3(row == 3001.0 ? 1.0 : 0.0, row == 3000.0 ? 1.0 : 0.0, 0.0); }\n"
+	var quad := QuadMesh.new()
+	quad.size = Vector2(4, 4)
+	var mm := MultiMesh.new()
+	mm.transform_format = MultiMesh.TRANSFORM_3D
+	mm.use_custom_data = true
+	mm.mesh = quad
+	mm.instance_count = 1
+	mm.set_instance_transform(0, Transform3D())
+	mm.set_instance_custom_data(0, Color(3001, 0, 0, 0))
+	_herd.multimesh = mm
+	_herd.material_override = ShaderMaterial.new()
+	_herd.material_override.shader = shader
+	await RenderingServer.frame_post_draw
+	await RenderingServer.frame_post_draw
+	var pixel := _viewport.get_texture().get_image().get_pixel(32, 32)
+	var why := ""
+	if RenderingServer.get_current_rendering_method() != "gl_compatibility":
+		why = "renderer is " + RenderingServer.get_current_rendering_method()
+	elif pixel.g < 0.5 or pixel.r > 0.5:
+		why = "custom data 3001 read as %s (red: 3001, green: 3000)" % pixel
 	_end(name, why)
