@@ -2,9 +2,9 @@
 # needs Image.FORMAT_RGBA16I, the RGBA16UI texture of the default u16 bake).
 #
 #   var loader := CrowdbakeLoader.new()
-#   if not loader.load_roster("res://roster/roster.json"):
-#       return   # loader.error says why
-#   loader.fill_herd($Goats, "goat", "wander", 1.4, 200, 30.0)   # a MultiMeshInstance3D
+#   if not loader.load_roster("res://roster/roster.json") \
+#           or not loader.fill_herd($Goats, "goat", "wander", 1.4, 200, 30.0):   # a MultiMeshInstance3D
+#       print(loader.error)   # one line: the file and the fix
 #
 # Every layout and precision loads as baked (docs/pal-format.md): u16 as RGBA16UI, decoded by the
 # shader; half as RGBAH; float as RGBAF; zstd payloads are decompressed here. Each check is a runtime

@@ -1,10 +1,12 @@
 # check.gd - runs inside Godot 4.6's web build (tests/godot/run_godot.mjs loads it as an autoload).
-# It compiles every shipped .gdshader in every layout x precision by drawing a skinned MultiMesh
-# with it, loads the shipped GDScript loader and runs it on real bakes. Each case prints
+# It compiles every shipped .gdshader in every layout, with a u16 and a float palette, by drawing a
+# skinned MultiMesh with it, and loads and runs the shipped GDScript loader on real bakes. Each case
+# prints
 #   crowdbake-check: begin NAME / crowdbake-check: end NAME
 # so the runner can attribute Godot's own error lines (shader compile errors reach only the log) to
 # it; a case also prints "crowdbake-check: fail NAME | WHY" when its own checks fail. Cases named
-# "broken:" use a deliberately broken shader and must make Godot log an error.
+# "broken:" (a deliberately broken shader) and "expect-error:" (a refusal that must be reported
+# with push_error) pass only when Godot logged an error in them.
 extends Node
 
 const ROOT := "/crowdbake"
