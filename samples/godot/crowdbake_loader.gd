@@ -41,7 +41,8 @@ func load_roster(path: String) -> bool:
 		return _fail("%s: cannot read the roster manifest (%s)" % [path, error_string(FileAccess.get_open_error())])
 	var parsed = JSON.parse_string(text)
 	if not (parsed is Dictionary and parsed.get("schema") == "crowdbake-roster/1"):
-		return _fail("%s is not a crowdbake roster (schema crowdbake-roster/1); give the roster.json that `crowdbake bake catalog.toml` wrote" % path)
+		return _fail("%s is not a crowdbake roster (schema crowdbake-roster/1); give the roster.json that " % path
+				+ "`crowdbake bake catalog.toml` wrote")
 	roster = parsed
 	_dir = path.get_base_dir()
 	return true
@@ -63,7 +64,8 @@ func load_palette(path: String) -> Dictionary:
 	var layout := head.decode_u32(20)
 	var precision := head.decode_u32(24)
 	if version != 1 or head.decode_u32(16) != HEADER_SIZE:
-		_fail("%s: palette format version %d is not supported (this loader reads version 1); re-bake with this crowdbake" % [path, version])
+		_fail("%s: palette format version %d is not supported (this loader reads version 1); re-bake with this crowdbake"
+				% [path, version])
 		return {}
 	if layout > 2 or precision > 2:
 		_fail("%s: unknown layout %d or precision %d in the header; the file is damaged, re-bake it" % [path, layout, precision])
@@ -151,8 +153,9 @@ func fill_herd(node: MultiMeshInstance3D, type: String, state: String, speed: fl
 	var inst: Dictionary = t["states"][state]["instance"]
 	if RenderingServer.get_current_rendering_method() == "gl_compatibility" \
 			and (inst["first_row"] > COMPATIBILITY_MAX_ROW or absi(inst["frame_count"]) > COMPATIBILITY_MAX_ROW):
-		return _fail("%s: state '%s' of '%s' starts at palette row %d; the Compatibility renderer keeps instance data as half floats, exact only up to row %d: use Forward+ or Mobile, or give that type fewer clips" %
-				[node.name, state, type, inst["first_row"], COMPATIBILITY_MAX_ROW])
+		return _fail(("%s: state '%s' of '%s' starts at palette row %d; the Compatibility renderer keeps instance data as "
+				+ "half floats, exact only up to row %d: use Forward+ or Mobile, or give that type fewer clips")
+				% [node.name, state, type, inst["first_row"], COMPATIBILITY_MAX_ROW])
 	var rate: float = inst["rate"] if inst["rate_per_speed"] == 0.0 else inst["rate_per_speed"] * speed
 	var mm := MultiMesh.new()
 	mm.transform_format = MultiMesh.TRANSFORM_3D

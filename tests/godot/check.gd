@@ -101,7 +101,8 @@ func _check_palette(bake: String) -> void:
 		var at := 0
 		while at < got.size() and got[at] == expected[at]:
 			at += 1
-		why = "texture bytes differ from the .pal payload at byte %d of %d (%s vs %s)" % [at, got.size(), got.slice(at, at + 8).hex_encode(), expected.slice(at, at + 8).hex_encode()]
+		why = "texture bytes differ from the .pal payload at byte %d of %d (%s vs %s)" % [at, got.size(),
+				got.slice(at, at + 8).hex_encode(), expected.slice(at, at + 8).hex_encode()]
 	_end(name, why)
 
 # The payload of an uncompressed .pal, read here independently of the loader.
@@ -253,12 +254,14 @@ func _check_herd() -> void:
 	if herd.multimesh.instance_count != 50:
 		why = "%d instances" % herd.multimesh.instance_count
 	elif got.r != want["first_row"] or got.g != want["frame_count"]:
-		why = "instance 3 has first row %s and %s frames; the manifest says %s and %s" % [got.r, got.g, want["first_row"], want["frame_count"]]
+		why = "instance 3 has first row %s and %s frames; the manifest says %s and %s" % [got.r, got.g,
+				want["first_row"], want["frame_count"]]
 	_end(name, why)
 	name = "expect-error: fill_herd refuses rows the Compatibility renderer cannot address"
 	_begin(name)
 	loader.roster["types"]["goat"]["states"]["wander"]["instance"]["first_row"] = 3001
-	var refused: bool = not loader.fill_herd(herd, "goat", "wander", 1.4, 5, 10.0) and loader.error.contains("exact only up to row 2048")
+	var refused: bool = not loader.fill_herd(herd, "goat", "wander", 1.4, 5, 10.0) \
+			and loader.error.contains("exact only up to row 2048")
 	_end(name, "" if refused else "accepted, or said '%s'" % loader.error)
 	herd.queue_free()
 
