@@ -111,13 +111,17 @@ static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, 
     return 0;
 }
 
+static double mm_per_m(double error, const cb_palette *p) { return p->model_height > 0 ? error / p->model_height * 1000 : 0; }
+
+/* Both error figures: the encoding's at the baked rows, and what a player sees (the runtime's
+ * blend of two rows, halfway between them), which is usually far larger. */
 static void print_summary(const char *path, size_t bytes, const cb_palette *p, double seconds)
 {
-    double per_m = p->model_height > 0 ? p->max_error / p->model_height * 1000 : 0;
-    printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bones, %u clips, %u frames, %s/%s, max error %.3g units "
-           "(%.3g mm per m of height), %.0f ms\n",
+    printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bones, %u clips, %u frames, %s/%s, encoding error %.3g mm/m "
+           "(at the baked rows), visible error %.3g mm/m (blending rows at runtime), %.0f ms\n",
            path, bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count, p->clip_count,
-           p->rows, cb_layout_name(p->layout), cb_precision_name(p->precision), p->max_error, per_m, seconds * 1000);
+           p->rows, cb_layout_name(p->layout), cb_precision_name(p->precision), mm_per_m(p->max_error, p),
+           mm_per_m(p->visible_error, p), seconds * 1000);
 }
 
 typedef struct phase_times {
@@ -141,7 +145,9 @@ static void json_output(cb_json *j, const char *path, const char *format, size_t
     cb_json_string(j, "precision", cb_precision_name(p->precision));
     cb_json_number(j, "max_error", p->max_error);
     cb_json_number(j, "model_height", p->model_height);
-    cb_json_number(j, "max_error_mm_per_m", p->model_height > 0 ? p->max_error / p->model_height * 1000 : 0);
+    cb_json_number(j, "max_error_mm_per_m", mm_per_m(p->max_error, p));
+    cb_json_number(j, "visible_error", p->visible_error);
+    cb_json_number(j, "visible_error_mm_per_m", mm_per_m(p->visible_error, p));
     cb_json_int(j, "error_rows_measured", p->error_rows_measured);
     cb_json_number(j, "seconds", seconds);
     cb_json_object(j, "phases");

@@ -342,8 +342,12 @@ struct Parser {
         if (auto *sp = t.get("speed_reference")) {
             an->speed_pos = pos(*sp);
             if (sp->is_string()) {
-                if (*sp->value<std::string>() != "auto")
-                    fail(sp->source(), where + " speed_reference must be a speed in m/s or \"auto\"");
+                std::string v = *sp->value<std::string>();
+                bool state = false;
+                for (uint32_t i = 0; i < an->state_count; ++i) state |= v == an->states[i].name;
+                if (v != "auto" && !state)
+                    fail(sp->source(), where + " speed_reference must be a speed in m/s, \"auto\" or the name of a state");
+                if (state) an->speed_state = dup(v);
             } else {
                 an->speed_reference = number(*sp, where + " speed_reference");
                 if (!(an->speed_reference > 0)) fail(sp->source(), where + " speed_reference must be positive");
@@ -371,6 +375,7 @@ struct Parser {
                       (int)b.root_motion, an->speed_reference, an->speed_auto);
         c += buf;
         c += std::string(" default=") + (an->default_state ? an->default_state : "");
+        c += std::string(" speed_state=") + (an->speed_state ? an->speed_state : "");
         an->canonical = dup(c);
     }
 

@@ -48,6 +48,7 @@ typedef struct cbpal_header {
     uint32_t layout, precision, texels_per_bone, bone_count, row_texels;
     uint32_t rows, width, height, blocks, texel_bytes, clip_count;
     float fps, speed_reference, linear_range, bounds_min[3], bounds_max[3], max_error, model_height;
+    float visible_error; /* max_error is at the baked rows; this includes blending two rows (0: not recorded) */
     uint64_t input_hash, clip_table_offset, bone_table_offset, strings_offset, strings_size;
     uint64_t payload_offset, payload_size, payload_raw_size, checksum;
 } cbpal_header;
@@ -260,6 +261,7 @@ static void cbpal__parse_header(const unsigned char *d, cbpal_header *h)
     for (int k = 0; k < 3; ++k) h->bounds_min[k] = cbpal__f32(d + 76 + 4 * k), h->bounds_max[k] = cbpal__f32(d + 88 + 4 * k);
     h->max_error = cbpal__f32(d + 100);
     h->model_height = cbpal__f32(d + 104);
+    h->visible_error = cbpal__f32(d + 108);
     uint64_t *w[] = {&h->input_hash, &h->clip_table_offset, &h->bone_table_offset, &h->strings_offset, &h->strings_size,
                      &h->payload_offset, &h->payload_size, &h->payload_raw_size, &h->checksum};
     for (int i = 0; i < 9; ++i) *w[i] = cbpal__u64(d + 112 + 8 * i);

@@ -52,6 +52,7 @@ static exr_result_t set_metadata(exr_context_t c, int part, const cb_palette *p,
     rc |= exr_attr_set_float(c, part, "crowdbake.fps", (float)p->fps);
     rc |= exr_attr_set_float(c, part, "crowdbake.speedReference", speed_reference);
     rc |= exr_attr_set_float(c, part, "crowdbake.maxError", (float)p->max_error);
+    rc |= exr_attr_set_float(c, part, "crowdbake.visibleError", (float)p->visible_error);
     rc |= exr_attr_set_float_vector(c, part, "crowdbake.bindPositions", (int32_t)p->bone_count * 3, p->bind_positions);
     const cb_skin *sk = &m->skins[skin];
     const char **names = malloc(sizeof(char *) * sk->joint_count);
@@ -301,6 +302,8 @@ cb_status cb_exr_read(const char *path, cb_exr_image *img, cb_error *err)
         exr_attr_get_int(c, 0, "crowdbake.blocks", &img->blocks);
         exr_attr_get_int(c, 0, "crowdbake.rowsPerBlock", &img->rows_per_block);
         exr_attr_get_int(c, 0, "crowdbake.clips", &img->clips);
+        exr_attr_get_float(c, 0, "crowdbake.maxError", &img->max_error);
+        exr_attr_get_float(c, 0, "crowdbake.visibleError", &img->visible_error);
         const char *hash = NULL;
         if (exr_attr_get_string(c, 0, "crowdbake.inputHash", &len, &hash) == EXR_ERR_SUCCESS && hash && len == 16) {
             char hex[17];

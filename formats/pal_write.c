@@ -61,6 +61,7 @@ static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_wri
     for (int k = 0; k < 3; ++k) putf(d + 76 + 4 * k, p->bounds_min[k]), putf(d + 88 + 4 * k, p->bounds_max[k]);
     putf(d + 100, (float)p->max_error);
     putf(d + 104, (float)p->model_height);
+    putf(d + 108, (float)p->visible_error);
     uint64_t w[9] = {opt->input_hash, lp->clips, lp->bones, lp->strings, lp->strings_size, lp->payload, lp->payload_size,
                      (uint64_t)p->texel_bytes, 0 /* checksum, filled last */};
     for (int i = 0; i < 9; ++i) put64(d + 112 + 8 * i, w[i]);

@@ -69,6 +69,7 @@ static void fill_type(const cb_roster *roster, uint32_t i, const cb_report *r, c
         t->vat_bytes[e] = cb_vat_bytes(t->vertices, t->frames, &cb_vat_encodings[e], &t->vat_geometry);
     t->mesh_bytes = cb_mesh_bytes(t->vertices, t->indices);
     t->palette_error = owner->max_error;
+    t->palette_visible_error = owner->visible_error;
     t->vat_error = rt->vat_error;
     t->model_height = rt->model_height;
     t->palette_over_limit = t->width > r->max_texture_size || t->height > r->max_texture_size;
@@ -139,8 +140,8 @@ static void budget_line(FILE *f, const cb_report *r, const char *bold)
 void cb_report_text(FILE *f, const cb_report *r)
 {
     char a[32], b[32], c[32], note[256];
-    fprintf(f, "%-14s %6s %7s %9s %-12s %10s %10s %7s %10s %9s %9s  %s\n", "type", "bones", "frames", "vertices",
-            "palette", "bytes", "VAT 16F+8", "VAT/pal", "mesh", "pal mm/m", "VAT mm/m", "notes");
+    fprintf(f, "%-14s %6s %7s %9s %-12s %10s %10s %7s %10s %9s %9s %9s  %s\n", "type", "bones", "frames", "vertices",
+            "palette", "bytes", "VAT 16F+8", "VAT/pal", "mesh", "enc mm/m", "seen mm/m", "VAT mm/m", "notes");
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_type *t = &r->types[i];
         char enc[32];
@@ -148,9 +149,10 @@ void cb_report_text(FILE *f, const cb_report *r)
         cb_human_bytes(t->palette_bytes, a, sizeof a);
         cb_human_bytes(t->vat_bytes[0], b, sizeof b);
         cb_human_bytes(t->mesh_bytes, c, sizeof c);
-        fprintf(f, "%-14s %6u %7u %9llu %-12s %10s %10s %6.1fx %10s %9.3f %9.3f  %s\n", t->name, t->bones, t->frames,
+        fprintf(f, "%-14s %6u %7u %9llu %-12s %10s %10s %6.1fx %10s %9.3f %9.3f %9.3f  %s\n", t->name, t->bones, t->frames,
                 (unsigned long long)t->vertices, enc, a, b, ratio(t->vat_bytes[0], t->palette_bytes), c,
-                per_m(t->palette_error, t->model_height), per_m(t->vat_error, t->model_height), notes(t, note, sizeof note));
+                per_m(t->palette_error, t->model_height), per_m(t->palette_visible_error, t->model_height),
+                per_m(t->vat_error, t->model_height), notes(t, note, sizeof note));
     }
     fprintf(f, "\nEvery encoding (texture bytes at the %u-texel limit):\n%-14s", r->max_texture_size, "type");
     for (int l = 0; l < 3; ++l)
@@ -188,17 +190,19 @@ void cb_report_markdown(FILE *f, const cb_report *r)
     char a[32], b[32], c[32], note[256];
     fputs("## crowdbake roster report\n\n", f);
     budget_line(f, r, "**");
-    fputs("\n| type | bones | frames | vertices | palette | bytes | VAT RGBA16F+RGBA8 | VAT / palette | mesh | palette error "
-          "mm/m | VAT error mm/m | notes |\n|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|---|\n", f);
+    fputs("\n| type | bones | frames | vertices | palette | bytes | VAT RGBA16F+RGBA8 | VAT / palette | mesh | palette encoding "
+          "error mm/m | palette visible error mm/m | VAT error mm/m | notes |\n|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|---|\n",
+          f);
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_type *t = &r->types[i];
         cb_human_bytes(t->palette_bytes, a, sizeof a);
         cb_human_bytes(t->vat_bytes[0], b, sizeof b);
         cb_human_bytes(t->mesh_bytes, c, sizeof c);
-        fprintf(f, "| %s | %u | %u | %llu | %s/%s | %s | %s | %.1f× | %s | %.3f | %.3f | %s |\n", t->name, t->bones, t->frames,
-                (unsigned long long)t->vertices, cb_layout_name(t->layout), cb_precision_name(t->precision), a, b,
+        fprintf(f, "| %s | %u | %u | %llu | %s/%s | %s | %s | %.1f× | %s | %.3f | %.3f | %.3f | %s |\n", t->name, t->bones,
+                t->frames, (unsigned long long)t->vertices, cb_layout_name(t->layout), cb_precision_name(t->precision), a, b,
                 ratio(t->vat_bytes[0], t->palette_bytes), c, per_m(t->palette_error, t->model_height),
-                per_m(t->vat_error, t->model_height), notes(t, note, sizeof note));
+                per_m(t->palette_visible_error, t->model_height), per_m(t->vat_error, t->model_height),
+                notes(t, note, sizeof note));
     }
     cb_human_bytes(r->palettes_total, a, sizeof a);
     cb_human_bytes(r->meshes_total, b, sizeof b);
@@ -243,6 +247,7 @@ void cb_report_json(FILE *f, const cb_report *r)
         cb_json_int(&j, "blocks", t->blocks);
         cb_json_int(&j, "bytes", (long long)t->palette_bytes);
         cb_json_number(&j, "max_error", t->palette_error);
+        cb_json_number(&j, "visible_error", t->palette_visible_error);
         cb_json_end(&j);
         cb_json_object(&j, "encodings");
         for (int l = 0; l < 3; ++l)
@@ -362,7 +367,7 @@ void cb_report_html(FILE *f, const cb_report *r)
     fputs("</p>\n", f);
     svg_chart(f, r);
     fputs("<table><tr><th>type</th><th>bones</th><th>frames</th><th>vertices</th><th>palette</th><th>bytes</th>"
-          "<th>VAT RGBA16F+RGBA8</th><th>VAT / palette</th><th>mesh</th><th>palette mm/m</th><th>VAT mm/m</th><th>notes</th></tr>\n", f);
+          "<th>VAT RGBA16F+RGBA8</th><th>VAT / palette</th><th>mesh</th><th>palette encoding error mm/m</th><th>palette visible error mm/m</th><th>VAT mm/m</th><th>notes</th></tr>\n", f);
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_type *t = &r->types[i];
         char a[32], b[32], c[32], note[256];
@@ -372,10 +377,10 @@ void cb_report_html(FILE *f, const cb_report *r)
         fputs("<tr><td>", f);
         html_escape(f, t->name);
         fprintf(f, "</td><td>%u</td><td>%u</td><td>%llu</td><td>%s/%s</td><td>%s</td><td>%s</td><td>%.1f×</td><td>%s</td>"
-                   "<td>%.3f</td><td>%.3f</td><td>",
+                   "<td>%.3f</td><td>%.3f</td><td>%.3f</td><td>",
                 t->bones, t->frames, (unsigned long long)t->vertices, cb_layout_name(t->layout), cb_precision_name(t->precision),
                 a, b, ratio(t->vat_bytes[0], t->palette_bytes), c, per_m(t->palette_error, t->model_height),
-                per_m(t->vat_error, t->model_height));
+                per_m(t->palette_visible_error, t->model_height), per_m(t->vat_error, t->model_height));
         html_escape(f, notes(t, note, sizeof note));
         fputs("</td></tr>\n", f);
     }

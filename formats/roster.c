@@ -176,7 +176,7 @@ static cb_status analyze_clips(const cb_catalog_animal *an, type_work *w, cb_ros
         c->fps = info.effective_fps;
         c->duration = info.duration;
         c->loops = info.loops;
-        c->ground_speed = cb_measure_ground_speed(s, &info, &c->speed_method);
+        cb_measure_ground_speed(s, &info, &c->speed);
         row += info.frames;
     }
     t->rows = row;
@@ -211,19 +211,36 @@ static cb_status match_states(const cb_catalog *cat, const cb_catalog_animal *an
     return err->status;
 }
 
-/* The speed at which locomotion plays at rate 1: given, or measured on the default state's
- * clip (or the first state whose clip moves). */
+/* Locomotion: a looping clip that moves. Only these are synced to the animal's speed. */
+static bool is_locomotion(const cb_roster_clip *c) { return c->loops && c->speed.speed > 0; }
+
+/* The speed at which locomotion plays at rate 1: given, or measured on a locomotion loop: the
+ * default state's clip if it is one, else the state the catalog names, else the slowest
+ * locomotion state. t->speed_reference_from says which. */
 static void speed_reference(const cb_catalog_animal *an, cb_roster_type *t)
 {
     t->speed_reference = an->speed_reference;
+    snprintf(t->speed_reference_from, sizeof t->speed_reference_from, "the catalog");
     if (!an->speed_auto) return;
     t->speed_reference = 0;
-    for (uint32_t s = 0; s < an->state_count; ++s)
-        if (strcmp(an->states[s].name, an->default_state) == 0 && t->clips[t->state_clip[s]].ground_speed > 0)
-            t->speed_reference = t->clips[t->state_clip[s]].ground_speed;
-    for (uint32_t s = 0; s < an->state_count && t->speed_reference == 0; ++s)
-        t->speed_reference = t->clips[t->state_clip[s]].ground_speed;
-    for (uint32_t i = 0; i < t->clip_count && t->speed_reference == 0; ++i) t->speed_reference = t->clips[i].ground_speed;
+    snprintf(t->speed_reference_from, sizeof t->speed_reference_from, "none: no state plays a looping clip that moves");
+    int pick = -1;
+    const char *rule = "";
+    for (uint32_t s = 0; s < an->state_count && pick < 0; ++s)
+        if (strcmp(an->states[s].name, an->default_state) == 0 && is_locomotion(&t->clips[t->state_clip[s]]))
+            pick = (int)s, rule = "the default state";
+    for (uint32_t s = 0; s < an->state_count && pick < 0 && an->speed_state; ++s)
+        if (strcmp(an->states[s].name, an->speed_state) == 0 && is_locomotion(&t->clips[t->state_clip[s]]))
+            pick = (int)s, rule = "the catalog's speed_reference state";
+    for (uint32_t s = 0; s < an->state_count && !(pick >= 0 && *rule); ++s) {
+        const cb_roster_clip *c = &t->clips[t->state_clip[s]];
+        if (is_locomotion(c) && (pick < 0 || c->speed.speed < t->clips[t->state_clip[pick]].speed.speed)) pick = (int)s;
+    }
+    if (pick < 0) return;
+    const cb_roster_clip *c = &t->clips[t->state_clip[pick]];
+    t->speed_reference = c->speed.speed;
+    snprintf(t->speed_reference_from, sizeof t->speed_reference_from, "%s '%s' (clip '%s', %s)",
+             *rule ? rule : "the slowest locomotion state", an->states[pick].name, c->name, c->speed.method);
 }
 
 static cb_status check_lods(const cb_catalog *cat, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
@@ -335,6 +352,7 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
             t->width = f.header.width, t->height = f.header.height, t->blocks = f.header.blocks;
             t->layout = (cb_layout)f.header.layout, t->precision = (cb_precision)f.header.precision;
             t->max_error = f.header.max_error;
+            t->visible_error = f.header.visible_error;
             t->palette_bytes = f.header.payload_raw_size;
         }
         cbpal_close(&f);
@@ -350,6 +368,7 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
             cb_layout_parse(img.layout, &t->layout);
             t->precision = img.precision;
             t->palette_bytes = img.texel_bytes;
+            t->max_error = img.max_error, t->visible_error = img.visible_error;
         }
         cb_exr_image_free(&img);
         if (!same) return false;
@@ -385,7 +404,8 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
         cb_exr_write(t->exr_path, &p, w->model, w->skin, 0, t->input_hash, (float)t->speed_reference, err);
     t->width = p.width, t->height = p.height, t->blocks = p.blocks;
     t->layout = p.layout, t->precision = p.precision;
-    t->max_error = p.max_error;
+    t->max_error = (float)p.max_error;
+    t->visible_error = (float)p.visible_error;
     t->palette_bytes = p.texel_bytes;
     cb_palette_free(&p);
     return err->status;
@@ -400,10 +420,11 @@ static void log_type(roster_run *run, const cb_roster_type *t)
     const cb_roster_type *owner = &run->r->types[t->owner];
     switch (t->outcome) {
     case CB_TYPE_BAKED:
-        fprintf(f, "%s  %-16s baked    %s (%.1f KiB, %ux%u, %s/%s, max error %.3g mm/m) in %.0f ms\n", clear, t->animal->name,
-                (t->animal->bake.formats & CB_FORMAT_PAL) ? t->pal_path : t->exr_path, t->palette_bytes / 1024.0, t->width,
-                t->height, cb_layout_name(t->layout), cb_precision_name(t->precision),
-                t->model_height > 0 ? t->max_error / t->model_height * 1000 : 0, t->seconds * 1000);
+        fprintf(f, "%s  %-16s baked    %s (%.1f KiB, %ux%u, %s/%s, encoding error %.3g mm/m, visible %.3g mm/m) in %.0f ms\n",
+                clear, t->animal->name, (t->animal->bake.formats & CB_FORMAT_PAL) ? t->pal_path : t->exr_path,
+                t->palette_bytes / 1024.0, t->width, t->height, cb_layout_name(t->layout), cb_precision_name(t->precision),
+                t->model_height > 0 ? t->max_error / t->model_height * 1000 : 0,
+                t->model_height > 0 ? t->visible_error / t->model_height * 1000 : 0, t->seconds * 1000);
         break;
     case CB_TYPE_UP_TO_DATE: fprintf(f, "%s  %-16s up to date\n", clear, t->animal->name); break;
     case CB_TYPE_SHARED:
@@ -481,8 +502,10 @@ static void run_pass(roster_run *run, void (*fn)(roster_run *, uint32_t))
 static void write_state(cb_json *j, const cb_roster_type *t, const cb_catalog_state *st, int clip)
 {
     const cb_roster_clip *c = &t->clips[clip];
-    bool moves = c->ground_speed > 0;
-    double speed = t->animal->speed_auto ? c->ground_speed : t->speed_reference;
+    /* Only locomotion loops are synced to speed; one-shots and clips that stand still play at
+     * their own rate (a dying animal at speed 0 still dies). */
+    bool synced = is_locomotion(c);
+    double speed = t->animal->speed_auto ? c->speed.speed : t->speed_reference;
     cb_json_object(j, st->name);
     cb_json_string(j, "clip", c->name);
     cb_json_inline_array(j, "keywords");
@@ -493,7 +516,7 @@ static void write_state(cb_json *j, const cb_roster_type *t, const cb_catalog_st
     cb_json_int(j, "first_row", c->first_row);
     cb_json_int(j, "frame_count", c->loops ? (long long)c->frames : -(long long)c->frames); /* < 0: one-shot, clamps */
     cb_json_number(j, "rate", c->fps);
-    cb_json_number(j, "rate_per_speed", moves && speed > 0 ? c->fps / speed : 0);
+    cb_json_number(j, "rate_per_speed", synced && speed > 0 ? c->fps / speed : 0);
     cb_json_string(j, "phase", c->loops ? "golden_ratio" : "zero");
     cb_json_end(j);
     cb_json_end(j);
@@ -543,7 +566,13 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
     cb_json_int(j, "width", owner->width);
     cb_json_int(j, "height", owner->height);
     cb_json_int(j, "blocks", owner->blocks);
+    /* Errors in mm per metre of model height: the encoding's at the baked rows, and what a player
+     * sees (the runtime's blend of two rows). */
+    double per_m = t->model_height > 0 ? 1000 / t->model_height : 0;
+    cb_json_number(j, "encoding_error_mm_per_m", owner->max_error * per_m);
+    cb_json_number(j, "visible_error_mm_per_m", owner->visible_error * per_m);
     cb_json_number(j, "speed_reference", t->speed_reference);
+    cb_json_string(j, "speed_reference_from", t->speed_reference_from);
     cb_json_string(j, "default_state", an->default_state ? an->default_state : "");
     cb_json_array(j, "clips");
     for (uint32_t c = 0; c < t->clip_count; ++c) {
@@ -555,7 +584,10 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
         cb_json_number(j, "fps", cl->fps);
         cb_json_number(j, "duration", cl->duration);
         cb_json_bool(j, "loops", cl->loops);
-        cb_json_number(j, "ground_speed", cl->ground_speed);
+        cb_json_number(j, "ground_speed", cl->speed.speed);
+        cb_json_number(j, "root_speed", cl->speed.root);
+        cb_json_number(j, "feet_speed", cl->speed.feet);
+        cb_json_string(j, "speed_method", cl->speed.method);
         cb_json_end(j);
     }
     cb_json_end(j);
@@ -720,6 +752,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
             memcpy(t->exr_path, o->exr_path, sizeof t->exr_path);
             t->layout = o->layout, t->precision = o->precision, t->palette_bytes = o->palette_bytes;
             t->width = o->width, t->height = o->height, t->blocks = o->blocks, t->max_error = o->max_error;
+            t->visible_error = o->visible_error;
             r->shared++;
         }
         log_type(&run, t);

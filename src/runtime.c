@@ -31,16 +31,7 @@ void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_insta
     uint32_t r0, r1;
     double fr;
     cb_runtime_frame(in, time, &r0, &r1, &fr);
-    uint32_t n = p->texels_per_bone * 4;
-    for (uint32_t j = 0; j < p->bone_count; ++j) {
-        double a[16], b[16], v[16];
-        cb_palette_decode_values(p, texels, r0, j, a);
-        cb_palette_decode_values(p, texels, r1, j, b);
-        if (p->layout == CB_LAYOUT_QPOS && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0)
-            for (int k = 0; k < 4; ++k) b[k] = -b[k]; /* the shorter way between the rows */
-        for (uint32_t k = 0; k < n; ++k) v[k] = a[k] * (1 - fr) + b[k] * fr;
-        cb_palette_values_to_matrix(p, j, v, out + (size_t)j * 16); /* normalizes q for qpos */
-    }
+    for (uint32_t j = 0; j < p->bone_count; ++j) cb_palette_blend(p, texels, r0, r1, fr, j, out + (size_t)j * 16);
 }
 
 /* ---- error-driven frame rate ---- */
@@ -73,13 +64,8 @@ static size_t candidate_rates(const cb_animation *anim, double *out)
     static const double common[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120};
     size_t n = 0;
     for (size_t i = 0; i < sizeof common / sizeof common[0]; ++i) out[n++] = common[i];
-    double min_dt = INFINITY;
-    for (uint32_t c = 0; c < anim->channel_count; ++c)
-        for (uint32_t k = 1; k < anim->channels[c].key_count; ++k) {
-            double dt = (double)anim->channels[c].times[k] - anim->channels[c].times[k - 1];
-            if (dt > 1e-4 && dt < min_dt) min_dt = dt;
-        }
-    if (isfinite(min_dt)) {
+    double min_dt = cb_animation_key_interval(anim);
+    if (min_dt > 0) {
         static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
         for (size_t i = 0; i < 6; ++i) out[n++] = round(factors[i] / min_dt * 1000) / 1000;
     }
@@ -172,6 +158,7 @@ cb_status cb_verify_clip(cb_sampler *s, const cb_palette *p, const void *texels,
     c.run_v = malloc((size_t)(c.verts ? c.verts : 1) * 3 * sizeof(double));
     if (c.exact_m && c.run_m && c.exact_v && c.run_v) {
         const cb_palette_clip *cl = c.clip;
+        cb_sampler_set_period(s, animation, cl->loops ? cl->duration : 0); /* a loop without a closing key wraps */
         uint32_t steps = cl->loops ? cl->frames : cl->frames - 1; /* row intervals */
         double dt = cl->fps > 0 ? 1 / cl->fps : 0, qsum = 0, isum = 0;
         uint64_t v, qn = 0, in = 0;

@@ -131,12 +131,15 @@ static void test_state_keyword_matching(void **state)
 
 static double clip_speed(const char *model_path, const char *clip_name, const char **method)
 {
+    cb_ground_speed gs;
     cb_model *m = load_or_fail(model_path);
     cb_error err = {0};
     cb_sampler *s = cb_sampler_create(m, 0, &err);
     cb_clip_info info;
     assert_int_equal(cb_clip_analyze(s, cb_model_find_animation(m, clip_name), 30, -1, NULL, &info, &err), CB_OK);
-    double v = cb_measure_ground_speed(s, &info, method);
+    cb_measure_ground_speed(s, &info, &gs);
+    *method = gs.method;
+    double v = gs.speed;
     cb_sampler_free(s);
     cb_model_free(m);
     return v;
