@@ -165,26 +165,26 @@ static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, doubl
                                   cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
-    double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
-    if (!(height > 0)) {
-        cb_fail(err, CB_ERR_INPUT, "%s: has no skinned mesh to measure errors on; give --fps N", m->source);
-        return NULL;
+    uint32_t n = m->animation_count;
+    cb_clip_plan *plan = calloc(n ? n : 1, sizeof *plan);
+    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
+    cb_rate_choice *chosen = calloc(n ? n : 1, sizeof *chosen);
+    if (!plan || !goals || !chosen) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    for (uint32_t a = 0; a < n && !err->status; ++a) {
+        plan[a] = (cb_clip_plan){(int32_t)a, NULL, -1, 0};
+        goals[a] = (cb_rate_goal){max_mm, max_fps};
     }
-    cb_clip_plan *plan = calloc(m->animation_count ? m->animation_count : 1, sizeof *plan);
-    if (!plan) return cb_fail(err, CB_ERR_INTERNAL, "out of memory"), NULL;
     uint64_t rows_auto = 0, rows_30 = 0;
-    for (uint32_t a = 0; a < m->animation_count && !err->status; ++a) {
-        bool met;
-        double e, fps = cb_choose_clip_fps(s, o, (int32_t)a, max_mm / 1000 * height, max_fps, &met, &e, err);
-        plan[a] = (cb_clip_plan){(int32_t)a, NULL, -1, fps};
+    if (!err->status) cb_choose_rates(s, o, plan, n, goals, chosen, err);
+    for (uint32_t a = 0; a < n && !err->status; ++a) {
         cb_clip_info at, fixed;
-        if (err->status || cb_clip_analyze(s, (int32_t)a, fps, -1, &o->limits, &at, err) ||
+        if (cb_clip_analyze(s, (int32_t)a, plan[a].fps, -1, &o->limits, &at, err) ||
             cb_clip_analyze(s, (int32_t)a, 30, -1, &o->limits, &fixed, err))
             break;
         rows_auto += at.frames, rows_30 += fixed.frames;
         if (!quiet)
-            printf("  %-24s %3.0f fps: %4u rows, error %.3f mm/m%s\n", m->animations[a].name, fps, at.frames,
-                   e / height * 1000, met ? "" : " (over --max-error even at --max-fps)");
+            printf("  %-24s %3.0f fps: %4u rows, visible error %.3f mm/m%s\n", m->animations[a].name, plan[a].fps, at.frames,
+                   chosen[a].error_mm, chosen[a].met ? "" : " (over --max-error even at --max-fps)");
     }
     if (!err->status && !quiet) {
         cb_texture_geometry g;
@@ -195,6 +195,7 @@ static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, doubl
                (unsigned long long)rows_auto, b_auto / 1024.0, (unsigned long long)rows_30, b_30 / 1024.0,
                b_30 ? fabs(100.0 * (1 - (double)b_auto / b_30)) : 0, b_auto <= b_30 ? "saved" : "more");
     }
+    free(goals), free(chosen);
     if (err->status) free(plan), plan = NULL;
     return plan;
 }

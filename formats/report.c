@@ -207,7 +207,7 @@ void cb_report_markdown(FILE *f, const cb_report *r)
     cb_human_bytes(r->palettes_total, a, sizeof a);
     cb_human_bytes(r->meshes_total, b, sizeof b);
     cb_human_bytes(r->vat_total[0], c, sizeof c);
-    fprintf(f, "| **total** | | | | | **%s** | **%s** | %.1f× | %s | | | |\n", a, c, ratio(r->vat_total[0], r->palettes_total), b);
+    fprintf(f, "| **total** | | | | | **%s** | **%s** | %.1f× | %s | | | | |\n", a, c, ratio(r->vat_total[0], r->palettes_total), b);
 }
 
 /* ---- JSON (docs/report.schema.json) ---- */

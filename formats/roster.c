@@ -19,6 +19,7 @@
 #include "gltf_load.h"
 #include "json_writer.h"
 #include "pal_write.h"
+#include "../src/runtime.h"
 #include "../src/vat.h"
 
 typedef struct type_work {
@@ -272,12 +273,44 @@ static cb_status check_lods(const cb_catalog *cat, const cb_catalog_animal *an, 
     return CB_OK;
 }
 
-/* The error a VAT of the same frames would have: half-float positions against exact skinning. */
-static void measure_vat(const cb_catalog_animal *an, type_work *w, cb_roster_type *t)
+/* The bake options a type's settings give. */
+static cb_bake_options bake_options(const cb_catalog_animal *an)
 {
     cb_bake_options o = cb_default_bake_options();
     o.fps = an->bake.fps;
+    o.layout = an->bake.layout;
+    o.precision = an->bake.precision;
+    if (!an->bake.precision_set && (an->bake.formats & CB_FORMAT_EXR)) o.precision = CB_PRECISION_FLOAT;
+    o.max_texture_size = an->bake.max_texture_size;
     o.root_motion = an->bake.root_motion;
+    o.affine_fallback = !an->bake.layout_set;
+    return o;
+}
+
+/* fps = "auto" (the animal's or a clip's): each such clip's rate, chosen by its visible error. */
+static cb_status choose_rates(const cb_catalog_animal *an, type_work *w, uint32_t n, cb_error *err)
+{
+    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
+    if (!goals) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    bool any = false;
+    for (uint32_t i = 0; i < n; ++i) {
+        const cb_catalog_clip *c = an->clips ? &an->clips[i] : NULL;
+        if (!(c && c->fps_auto >= 0 ? c->fps_auto == 1 : an->bake.fps_auto)) continue;
+        goals[i] = (cb_rate_goal){c && c->max_error_mm > 0 ? c->max_error_mm : an->bake.max_error_mm, an->bake.max_fps};
+        any = true;
+    }
+    cb_sampler *s = any ? cb_sampler_create(w->model, w->skin, err) : NULL;
+    cb_bake_options o = bake_options(an);
+    if (s) cb_choose_rates(s, &o, w->plan, n, goals, NULL, err);
+    cb_sampler_free(s);
+    free(goals);
+    return err->status;
+}
+
+/* The error a VAT of the same frames would have: half-float positions against exact skinning. */
+static void measure_vat(const cb_catalog_animal *an, type_work *w, cb_roster_type *t)
+{
+    cb_bake_options o = bake_options(an);
     o.max_texture_size = 1u << 30; /* only measured: no texture is made */
     cb_error err = {0};
     cb_sampler *s = cb_sampler_create(w->model, w->skin, &err);
@@ -313,7 +346,7 @@ static void prepare_type(roster_run *run, uint32_t i)
     t->vertices = cb_model_skin_vertex_count(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
-    if (plan_clips(run->cat, an, w, t, err) || analyze_clips(an, w, t, err) || match_states(run->cat, an, t, err) ||
+    if (plan_clips(run->cat, an, w, t, err) || choose_rates(an, w, t->clip_count, err) || analyze_clips(an, w, t, err) || match_states(run->cat, an, t, err) ||
         check_lods(run->cat, an, w, t, err))
         return;
     speed_reference(an, t);
@@ -378,15 +411,8 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
 
 static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
 {
-    cb_bake_options o = cb_default_bake_options();
-    o.fps = an->bake.fps;
-    o.layout = an->bake.layout;
-    o.precision = an->bake.precision;
-    if (!an->bake.precision_set && (an->bake.formats & CB_FORMAT_EXR)) o.precision = CB_PRECISION_FLOAT;
-    o.max_texture_size = an->bake.max_texture_size;
-    o.root_motion = an->bake.root_motion;
+    cb_bake_options o = bake_options(an);
     o.threads = run->threads_per_bake;
-    o.affine_fallback = !an->bake.layout_set;
     cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
     if (!s) return err->status;
     cb_palette p;

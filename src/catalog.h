@@ -18,6 +18,9 @@ typedef struct cb_source_pos {
 
 typedef struct cb_bake_settings {
     double fps;
+    bool fps_auto;               /* fps = "auto": per clip, the lowest rate within max_error_mm */
+    double max_error_mm;         /* visible error goal of fps = "auto", mm per metre of model height (default 1) */
+    double max_fps;              /* fps = "auto" goes no higher (default 60) */
     cb_layout layout;
     cb_precision precision;
     unsigned formats;            /* CB_FORMAT_* */
@@ -32,6 +35,8 @@ typedef struct cb_catalog_clip {
     const char *name;   /* its name in the palette */
     int loop;           /* -1 from the poses, 0, 1 */
     double fps;         /* 0: the animal's fps */
+    int fps_auto;       /* -1: as the animal; 0: fixed fps; 1: fps = "auto" */
+    double max_error_mm; /* 0: the animal's */
     cb_source_pos pos;
 } cb_catalog_clip;
 

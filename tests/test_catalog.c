@@ -77,7 +77,7 @@ static void test_validation_errors_name_line_and_fix(void **state)
     snprintf(text, sizeof text, "[bak]\nfps = 30\n[animal.fish]\n%s\n", model);
     expect_catalog_error(text, "unknown key 'bak'; did you mean 'bake'?", 1);
     snprintf(text, sizeof text, "[animal.fish]\n%s\nfps = \"fast\"\n", model);
-    expect_catalog_error(text, "fps must be a number, got a string", 3);
+    expect_catalog_error(text, "fps must be a rate in frames per second or \"auto\"", 3);
     expect_catalog_error("[animal.fish]\nmodel = \"nope/missing.glb\"\n", "does not exist", 2);
     snprintf(text, sizeof text, "[animal.fish]\n%s\nstates = { swim = [\"swim\"] }\ndefault_state = \"fly\"\n", model);
     expect_catalog_error(text, "default_state 'fly' is not one of its states (swim)", 4);

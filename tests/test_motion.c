@@ -354,6 +354,60 @@ static void test_both_error_figures(void **state)
     assert_int_equal(atoi(out), 2);
 }
 
+/* fps = "auto" and max_error in a catalog: [bake] sets it for every clip, a clip can keep a fixed
+ * rate or its own goal. verify (random times as well as mid-frames) confirms the goals. */
+static void test_catalog_fps_auto(void **state)
+{
+    (void)state;
+    char cow[1024], cow_abs[PATH_MAX], text[8192], cmd[4096];
+    static char out[65536];
+    shared_path(cow, sizeof cow, COW);
+    assert_non_null(realpath(cow, cow_abs));
+    snprintf(text, sizeof text,
+             "[bake]\nout_dir = \"out-auto\"\nfps = \"auto\"\nmax_error = 1.0\nmax_fps = 120\n\n[animal.cow]\nmodel = \"%s\"\n"
+             "clips = [\"AnimalArmature|Idle\", \"AnimalArmature|Walk\", { source = \"AnimalArmature|Death\", fps = 30 },\n"
+             "         { source = \"AnimalArmature|Eating\", max_error = 5 }]\n",
+             cow_abs);
+    FILE *fp = fopen(TMP "/auto.toml", "w");
+    assert_non_null(fp);
+    fputs(text, fp);
+    fclose(fp);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/auto.toml -q", crowdbake_exe());
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    cbpal_file f;
+    char msg[256];
+    assert_int_equal(cbpal_open(TMP "/out-auto/cow.pal", 0, &f, msg, sizeof msg), 0);
+    double fps[4];
+    for (uint32_t c = 0; c < 4; ++c) {
+        cbpal_clip clip;
+        cbpal_get_clip(&f, c, &clip);
+        fps[c] = clip.fps;
+        printf("  %s: %.1f fps, %u rows\n", clip.name, clip.fps, clip.frames);
+    }
+    cbpal_close(&f);
+    assert_float_equal(fps[0], 24, 1e-4);  /* Idle: its key rate is enough */
+    assert_true(fps[1] > 30);              /* Walk needs more than 30 fps for 1 mm/m */
+    assert_float_equal(fps[2], 30, 1e-4);  /* Death: fixed */
+    assert_true(fps[3] < fps[1]);          /* Eating: a looser goal, fewer rows */
+    /* verify agrees for the clips with a 1 mm/m goal (it adds random times). */
+    snprintf(cmd, sizeof cmd, "%s verify %s " TMP "/out-auto/cow.pal", crowdbake_exe(), cow);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    double q, b;
+    const char *walk = strstr(out, "AnimalArmature|Walk");
+    assert_non_null(walk);
+    assert_int_equal(sscanf(walk + strlen("AnimalArmature|Walk"), "%*f %*f %*f %*f %lf %lf", &q, &b), 2);
+    assert_true(b <= 1.0 && q < 0.1);
+    /* A bad value names the file, the line and the fix. */
+    fp = fopen(TMP "/bad-auto.toml", "w");
+    assert_non_null(fp);
+    fprintf(fp, "[animal.cow]\nmodel = \"%s\"\nfps = \"fast\"\n", cow_abs);
+    fclose(fp);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/bad-auto.toml 2>&1", crowdbake_exe());
+    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
+    if (!strstr(out, "bad-auto.toml:3:") || !strstr(out, "fps must be a rate in frames per second or \"auto\""))
+        fail_msg("%s", out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -363,6 +417,7 @@ int main(void)
         cmocka_unit_test(test_catalog_states_move_right),
         cmocka_unit_test(test_ground_speed_from_evidence),
         cmocka_unit_test(test_both_error_figures),
+        cmocka_unit_test(test_catalog_fps_auto),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
