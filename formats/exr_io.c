@@ -53,6 +53,7 @@ static exr_result_t set_metadata(exr_context_t c, int part, const cb_palette *p,
     rc |= exr_attr_set_float(c, part, "crowdbake.speedReference", speed_reference);
     rc |= exr_attr_set_float(c, part, "crowdbake.maxError", (float)p->max_error);
     rc |= exr_attr_set_float(c, part, "crowdbake.visibleError", (float)p->visible_error);
+    rc |= exr_attr_set_int(c, part, "crowdbake.positionsRelative", p->positions_relative); /* see docs/pal-format.md */
     rc |= exr_attr_set_float_vector(c, part, "crowdbake.bindPositions", (int32_t)p->bone_count * 3, p->bind_positions);
     const cb_skin *sk = &m->skins[skin];
     const char **names = malloc(sizeof(char *) * sk->joint_count);

@@ -559,6 +559,7 @@ static void encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32
         for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
             float vals[16];
             texel_values(p, row + (size_t)j * CANON(p->layout), vals);
+            for (int k = 0; p->positions_relative && k < 3; ++k) vals[4 + k] -= p->bind_positions[(size_t)j * 3 + k];
             if (p->precision == CB_PRECISION_FLOAT)
                 for (uint32_t i = 0; i < nvalues; ++i) store_le32f(d + i * 4, vals[i]);
             else if (p->precision == CB_PRECISION_HALF)
@@ -600,6 +601,7 @@ void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t 
         else
             v[i] = decode_u16(p, u16_kind(p->layout, (int)i), load_le16(d + i * 2));
     }
+    for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->bind_positions[(size_t)bone * 3 + k];
 }
 
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
@@ -899,6 +901,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     }
     zero_padding(p);
     bind_positions(p, skin);
+    p->positions_relative = p->layout == CB_LAYOUT_QPOS && p->precision == CB_PRECISION_HALF;
     bool skinned = joint_reach(p, m, skin_index, radius);
     st.radius = radius;
     for_each_clip(&st, sample_clip_job, true);

@@ -58,6 +58,8 @@ typedef struct cb_palette {
     uint32_t clip_count;
     cb_palette_clip *clips;
     float *bind_positions;          /* 3 per bone: the joints' bind-pose positions (qpos pivots) */
+    bool positions_relative;        /* qpos/half: the position texel holds p - b, the joint's position less its bind
+                                     * position, which stays small (and precise in half floats) far from the origin */
     float bounds_min[3], bounds_max[3]; /* u16: the box positions are quantized in */
     float linear_range;             /* u16: |3x3 terms| (mat4, affine) or scale (qpos) stay below this */
     uint32_t quat_hemisphere_breaks; /* loops whose rotation ends on -q of its start (a full turn) */
@@ -93,7 +95,8 @@ void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint3
 /* Decodes one bone of one row back to a 4x4 column-major matrix. texels points at the
  * palette's texel data (as in cb_palette, or mapped from a file). */
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16]);
-/* The bone's 4 x texels_per_bone values as a shader reads them (u16 already scaled). */
+/* The bone's 4 x texels_per_bone values as a shader reads them (u16 already scaled; relative
+ * positions with the bind position added back, as the shader does under CB_POSITIONS_RELATIVE). */
 void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16]);
 /* Those values (or a blend of two rows of them) as a 4x4 matrix. */
 void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const double v[16], double out[16]);

@@ -9,6 +9,7 @@
 
 #include "../formats/catalog_toml.h"
 #include "../formats/crowdbake_pal.h"
+#include "../formats/pal_view.h"
 #include "../formats/roster.h"
 #include "../src/catalog.h"
 #include "../src/runtime.h"
@@ -408,6 +409,77 @@ static void test_catalog_fps_auto(void **state)
         fail_msg("%s", out);
 }
 
+/* qpos/half stores each joint's position less its bind position, which stays small (and
+ * precise in half floats) on a model far from the origin: version 2 files, flagged. A version 1
+ * file (absolute positions) still reads back the same matrices. */
+static void test_half_positions_relative_to_bind(void **state)
+{
+    (void)state;
+    char fox[1024], cmd[4096];
+    static char out[65536];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/half.pal --precision half --json", crowdbake_exe(), fox);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    const char *e = strstr(out, "\"max_error_mm_per_m\": ");
+    assert_non_null(e);
+    double mm = atof(e + strlen("\"max_error_mm_per_m\": "));
+    printf("  Fox qpos/half: encoding error %.3f mm/m (absolute positions: 0.491)\n", mm);
+    assert_true(mm < 0.25);
+
+    size_t size;
+    unsigned char *d = (unsigned char *)read_whole_file(TMP "/half.pal", &size);
+    assert_non_null(d);
+    cbpal_file f;
+    char msg[256];
+    assert_int_equal(cbpal_open_memory(d, size, CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg), 0);
+    assert_int_equal(f.header.version, 2);
+    assert_true(f.header.flags & CBPAL_FLAG_POSITIONS_RELATIVE);
+    /* The same palette as version 1 wrote it: absolute positions, no flag, a new checksum. */
+    unsigned char *v1 = malloc(size);
+    memcpy(v1, d, size);
+    const cbpal_header *h = &f.header;
+    for (uint32_t r = 0; r < h->rows; ++r)
+        for (uint32_t j = 0; j < h->bone_count; ++j) {
+            cbpal_bone bone;
+            cbpal_get_bone(&f, j, &bone);
+            uint32_t x, y;
+            cbpal_texel_xy(h, r, j, &x, &y);
+            unsigned char *t = v1 + h->payload_offset + ((size_t)y * h->width + x + 1) * 8; /* texel 1: position */
+            for (int k = 0; k < 3; ++k) {
+                uint16_t half;
+                memcpy(&half, t + 2 * k, 2);
+                half = cb_float_to_half(cb_half_to_float(half) + bone.bind_position[k]);
+                memcpy(t + 2 * k, &half, 2);
+            }
+        }
+    uint32_t one = 1, flags = h->flags & ~(uint32_t)CBPAL_FLAG_POSITIONS_RELATIVE;
+    memcpy(v1 + 8, &one, 4);
+    memcpy(v1 + 12, &flags, 4);
+    memset(v1 + CBPAL_CHECKSUM_OFFSET, 0, 8);
+    uint64_t sum = cbpal_xxh64(v1, h->payload_offset + h->payload_size);
+    memcpy(v1 + CBPAL_CHECKSUM_OFFSET, &sum, 8);
+    cbpal_file g;
+    assert_int_equal(cbpal_open_memory(v1, size, CBPAL_VERIFY_CHECKSUM, &g, msg, sizeof msg), 0);
+    cb_palette a, b;
+    cb_error err = {0};
+    assert_int_equal(cb_palette_view(&f, &a, &err), CB_OK);
+    assert_int_equal(cb_palette_view(&g, &b, &err), CB_OK);
+    assert_true(a.positions_relative && !b.positions_relative);
+    double worst = 0;
+    for (uint32_t r = 0; r < h->rows; r += 7)
+        for (uint32_t j = 0; j < h->bone_count; ++j) {
+            double ma[16], mb[16];
+            cb_palette_decode(&a, f.texels, r, j, ma);
+            cb_palette_decode(&b, g.texels, r, j, mb);
+            for (int k = 12; k < 15; ++k) worst = fmax(worst, fabs(ma[k] - mb[k]));
+        }
+    printf("  version 1 and 2 decode within %.3g units (half steps at the positions: ~0.03)\n", worst);
+    assert_true(worst < 0.1);
+    cb_palette_view_free(&a), cb_palette_view_free(&b);
+    cbpal_close(&f), cbpal_close(&g);
+    free(v1), free(d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -418,6 +490,7 @@ int main(void)
         cmocka_unit_test(test_ground_speed_from_evidence),
         cmocka_unit_test(test_both_error_figures),
         cmocka_unit_test(test_catalog_fps_auto),
+        cmocka_unit_test(test_half_positions_relative_to_bind),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
