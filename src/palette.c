@@ -353,8 +353,10 @@ static int job_main(void *arg)
     cb_error *err0 = &st->errors[jb->first < st->p->clip_count ? jb->first : 0];
     if (jb->samples) {
         w.sampler = cb_sampler_create(st->model, st->skin, err0);
-        for (uint32_t c = 0; w.sampler && c < st->p->clip_count; ++c) /* loops without a closing key wrap */
-            cb_sampler_set_period(w.sampler, st->infos[c].animation, st->infos[c].loops ? st->infos[c].duration : 0);
+        /* Loops without a closing key wrap. (One-shots never sample past their last key: a clip
+         * planned twice, as a loop and as a one-shot, keeps its loop's period.) */
+        for (uint32_t c = 0; w.sampler && c < st->p->clip_count; ++c)
+            if (st->infos[c].loops) cb_sampler_set_period(w.sampler, st->infos[c].animation, st->infos[c].duration);
         w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
         w.sims = malloc((size_t)st->p->bone_count * CB_SAMPLE_BATCH * sizeof(cb_similarity));
         w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
