@@ -172,13 +172,18 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     return cmd_bake_catalog(&cb);
 }
 
+static double mm_per_m(double error, const cb_palette *p) { return p->model_height > 0 ? error / p->model_height * 1000 : 0; }
+
+/* Both error figures: the encoding's at the baked rows, and what a player sees (the runtime's
+ * blend of two rows, halfway between them), which is usually far larger. */
 static void print_summary(const char *path, size_t bytes, const cb_palette *p, double seconds)
 {
-    double per_m = p->model_height > 0 ? p->max_error / p->model_height * 1000 : 0;
-    printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bone%s, %u clip%s, %u frame%s, %s/%s, max error %.3g units "
-           "(%.3g mm per m of height), %.0f ms\n",
+    printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bone%s, %u clip%s, %u frame%s, %s/%s, encoding error %.3g mm/m "
+           "(at the baked rows), visible error %.3g mm/m (blending rows at runtime), %.0f ms\n",
            path, bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count,
-           p->bone_count == 1 ? "" : "s", p->clip_count, p->clip_count == 1 ? "" : "s", p->rows, p->rows == 1 ? "" : "s", cb_layout_name(p->layout), cb_precision_name(p->precision), p->max_error, per_m, seconds * 1000);
+           p->bone_count == 1 ? "" : "s", p->clip_count, p->clip_count == 1 ? "" : "s", p->rows, p->rows == 1 ? "" : "s",
+           cb_layout_name(p->layout), cb_precision_name(p->precision), mm_per_m(p->max_error, p),
+           mm_per_m(p->visible_error, p), seconds * 1000);
 }
 
 typedef struct phase_times {
@@ -202,7 +207,9 @@ static void json_output(cb_json *j, const char *path, const char *format, size_t
     cb_json_string(j, "precision", cb_precision_name(p->precision));
     cb_json_number(j, "max_error", p->max_error);
     cb_json_number(j, "model_height", p->model_height);
-    cb_json_number(j, "max_error_mm_per_m", p->model_height > 0 ? p->max_error / p->model_height * 1000 : 0);
+    cb_json_number(j, "max_error_mm_per_m", mm_per_m(p->max_error, p));
+    cb_json_number(j, "visible_error", p->visible_error);
+    cb_json_number(j, "visible_error_mm_per_m", mm_per_m(p->visible_error, p));
     cb_json_int(j, "error_rows_measured", p->error_rows_measured);
     cb_json_number(j, "seconds", seconds);
     cb_json_object(j, "phases");
@@ -220,28 +227,27 @@ static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, const
                                   uint32_t selected, double max_mm, double max_fps, bool quiet, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
-    double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
-    if (!(height > 0)) {
-        cb_fail(err, CB_ERR_INPUT, "%s: has no skinned mesh to measure errors on; give --fps N", m->source);
-        return NULL;
-    }
     uint32_t n = selection ? selected : m->animation_count;
     cb_clip_plan *plan = calloc(n ? n : 1, sizeof *plan);
-    if (!plan) return cb_fail(err, CB_ERR_INTERNAL, "out of memory"), NULL;
-    uint64_t rows_auto = 0, rows_30 = 0;
+    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
+    cb_rate_choice *chosen = calloc(n ? n : 1, sizeof *chosen);
+    if (!plan || !goals || !chosen) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     for (uint32_t i = 0; i < n && !err->status; ++i) {
-        uint32_t a = selection ? (uint32_t)selection[i].animation : i;
-        bool met;
-        double e, fps = cb_choose_clip_fps(s, o, (int32_t)a, max_mm / 1000 * height, max_fps, &met, &e, err);
-        plan[i] = (cb_clip_plan){(int32_t)a, NULL, -1, fps};
+        plan[i] = (cb_clip_plan){selection ? selection[i].animation : (int32_t)i, NULL, -1, 0};
+        goals[i] = (cb_rate_goal){max_mm, max_fps};
+    }
+    uint64_t rows_auto = 0, rows_30 = 0;
+    if (!err->status) cb_choose_rates(s, o, plan, n, goals, chosen, err);
+    for (uint32_t i = 0; i < n && !err->status; ++i) {
+        int32_t a = plan[i].animation;
         cb_clip_info at, fixed;
-        if (err->status || cb_clip_analyze(s, (int32_t)a, fps, -1, &o->limits, &at, err) ||
-            cb_clip_analyze(s, (int32_t)a, 30, -1, &o->limits, &fixed, err))
+        if (cb_clip_analyze(s, a, plan[i].fps, -1, &o->limits, &at, err) ||
+            cb_clip_analyze(s, a, 30, -1, &o->limits, &fixed, err))
             break;
         rows_auto += at.frames, rows_30 += fixed.frames;
         if (!quiet)
-            printf("  %-24s %3.0f fps: %4u rows, error %.3f mm/m%s\n", m->animations[a].name, fps, at.frames,
-                   e / height * 1000, met ? "" : " (over --max-error even at --max-fps)");
+            printf("  %-24s %3.0f fps: %4u rows, visible error %.3f mm/m%s\n", m->animations[a].name, plan[i].fps, at.frames,
+                   chosen[i].error_mm, chosen[i].met ? "" : " (over --max-error even at --max-fps)");
     }
     if (!err->status && !quiet) {
         cb_texture_geometry g;
@@ -252,6 +258,7 @@ static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, const
                (unsigned long long)rows_auto, b_auto / 1024.0, (unsigned long long)rows_30, b_30 / 1024.0,
                b_30 ? fabs(100.0 * (1 - (double)b_auto / b_30)) : 0, b_auto <= b_30 ? "saved" : "more");
     }
+    free(goals), free(chosen);
     if (err->status) free(plan), plan = NULL;
     return plan;
 }

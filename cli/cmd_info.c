@@ -4,18 +4,21 @@
 #include <string.h>
 
 #include "../formats/json_writer.h"
+#include "../src/catalog.h"
 #include "cli.h"
 
 const char cmd_info_usage[] =
     "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX]\n\n"
     "Skins, joints, skinned mesh nodes and vertex counts, and per clip: start, duration, keys,\n"
-    "interpolation modes, whether it loops, frames at --fps (default 30) and root velocity.\n";
+    "interpolation modes, whether it loops and why, frames at --fps (default 30), root velocity and\n"
+    "ground speed (root travel and planted feet).\n";
 
 typedef struct clip_facts {
     uint64_t keys;
     unsigned interp_mask; /* bit per cb_interp */
     bool analyzed;
     cb_clip_info info;
+    cb_ground_speed speed;
 } clip_facts;
 
 static const char *interp_names[] = {"LINEAR", "STEP", "CUBICSPLINE"};
@@ -43,6 +46,7 @@ static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits
         if (s) {
             if (cb_clip_analyze(s, (int32_t)a, fps, -1, limits, &facts[a].info, err)) break;
             facts[a].analyzed = true;
+            cb_measure_ground_speed(s, &facts[a].info, &facts[a].speed);
         }
     }
     cb_sampler_free(s);
@@ -77,12 +81,16 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
         const clip_facts *f = &facts[a];
         char interp[64];
         interp_list(f->interp_mask, interp, sizeof interp);
-        if (f->analyzed)
+        if (f->analyzed) {
+            char why[160];
+            cb_loop_reason_text(&f->info, why, sizeof why);
             printf("  %-24s %8.4f %9.4f %6llu  %-18s %-8s %7u  (%.4g, %.4g, %.4g) ground %.4g\n", anim->name, anim->t0,
                    anim->t1 - anim->t0, (unsigned long long)f->keys, interp, f->info.loops ? "loop" : "one-shot",
                    f->info.frames, f->info.root_velocity[0], f->info.root_velocity[1], f->info.root_velocity[2],
                    f->info.ground_speed);
-        else
+            printf("  %-24s %s: %s; ground speed %.4g from %s (root %.4g, planted feet %.4g)\n", "",
+                   f->info.loops ? "loops" : "plays once", why, f->speed.speed, f->speed.method, f->speed.root, f->speed.feet);
+        } else
             printf("  %-24s %8.4f %9.4f %6llu  %-18s %-8s %7u  -\n", anim->name, anim->t0, anim->t1 - anim->t0,
                    (unsigned long long)f->keys, interp, "-", cb_clip_step_count(anim->t1 - anim->t0, fps) + 1);
     }
@@ -143,7 +151,11 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, dou
             if (f->interp_mask & (1u << i)) cb_json_string(&j, NULL, interp_names[i]);
         cb_json_end(&j);
         if (f->analyzed) {
+            char why[160];
+            cb_loop_reason_text(&f->info, why, sizeof why);
             cb_json_bool(&j, "loops", f->info.loops);
+            cb_json_string(&j, "loop_reason", why);
+            cb_json_number(&j, "period", f->info.duration);
             cb_json_int(&j, "frames", f->info.frames);
             cb_json_number(&j, "effective_fps", f->info.effective_fps);
             cb_json_inline_array(&j, "root_displacement");
@@ -152,7 +164,10 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, dou
             cb_json_inline_array(&j, "root_velocity");
             for (int k = 0; k < 3; ++k) cb_json_number(&j, NULL, f->info.root_velocity[k]);
             cb_json_end(&j);
-            cb_json_number(&j, "ground_speed", f->info.ground_speed);
+            cb_json_number(&j, "ground_speed", f->speed.speed);
+            cb_json_number(&j, "root_speed", f->speed.root);
+            cb_json_number(&j, "feet_speed", f->speed.feet);
+            cb_json_string(&j, "speed_method", f->speed.method);
         }
         cb_json_end(&j);
     }

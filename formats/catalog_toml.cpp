@@ -127,16 +127,40 @@ struct Parser {
 
     static const std::vector<std::string> &bake_keys()
     {
-        static const std::vector<std::string> k = {"fps", "layout", "precision", "format", "out_dir", "max_texture_size",
-                                                   "root_motion"};
+        static const std::vector<std::string> k = {"fps", "max_error", "max_fps", "layout", "precision", "format", "out_dir",
+                                                   "max_texture_size", "root_motion"};
         return k;
+    }
+
+    /* fps = N or "auto": 1 for "auto" (*out untouched), else 0 with *out set. */
+    int fps(const toml::node &n, double *out, const std::string &what)
+    {
+        if (n.is_string()) {
+            if (*n.value<std::string>() != "auto") fail(n.source(), what + " must be a rate in frames per second or \"auto\"");
+            return 1;
+        }
+        *out = number(n, what);
+        if (!(*out > 0 && *out <= 1000)) fail(n.source(), what + " must be between 0 and 1000");
+        return 0;
+    }
+
+    double max_error(const toml::node &n, const std::string &where)
+    {
+        double v = number(n, where + " max_error");
+        if (!(v > 0)) fail(n.source(), where + " max_error must be a positive error in mm per metre of model height");
+        return v;
     }
 
     void bake_settings(const toml::table &t, cb_bake_settings *b, const std::string &where)
     {
         if (auto *n = t.get("fps")) {
-            b->fps = number(*n, where + " fps");
-            if (!(b->fps > 0 && b->fps <= 1000)) fail(n->source(), where + " fps must be between 0 and 1000");
+            int automatic = fps(*n, &b->fps, where + " fps");
+            b->fps_auto = automatic;
+        }
+        if (auto *n = t.get("max_error")) b->max_error_mm = max_error(*n, where);
+        if (auto *n = t.get("max_fps")) {
+            b->max_fps = number(*n, where + " max_fps");
+            if (!(b->max_fps >= 2 && b->max_fps <= 1000)) fail(n->source(), where + " max_fps must be between 2 and 1000");
         }
         if (auto *n = t.get("layout")) {
             if (!cb_layout_parse(str(*n, where + " layout").c_str(), &b->layout))
@@ -226,6 +250,7 @@ struct Parser {
             const toml::node &n = *a.get(i);
             cb_catalog_clip *c = &an->clips[i];
             c->loop = -1;
+            c->fps_auto = -1;
             c->pos = pos(n);
             if (n.is_string()) {
                 c->source = c->name = dup(*n.value<std::string>());
@@ -233,16 +258,14 @@ struct Parser {
             }
             if (!n.is_table()) fail(n.source(), where + " clips entries are clip names or { source = \"...\", name = \"...\" }");
             const toml::table &t = *n.as_table();
-            check_keys(t, {"source", "name", "loop", "fps"}, where + " clip");
+            check_keys(t, {"source", "name", "loop", "fps", "max_error"}, where + " clip");
             const toml::node *src = t.get("source");
             if (!src) fail(n.source(), where + " clip entry needs source = \"<clip name in the model>\"");
             c->source = dup(str(*src, where + " clip source"));
             c->name = t.get("name") ? dup(str(*t.get("name"), where + " clip name")) : c->source;
             if (auto *l = t.get("loop")) c->loop = boolean(*l, where + " clip loop") ? 1 : 0;
-            if (auto *f = t.get("fps")) {
-                c->fps = number(*f, where + " clip fps");
-                if (!(c->fps > 0 && c->fps <= 1000)) fail(f->source(), where + " clip fps must be between 0 and 1000");
-            }
+            if (auto *f = t.get("fps")) c->fps_auto = fps(*f, &c->fps, where + " clip fps");
+            if (auto *e = t.get("max_error")) c->max_error_mm = max_error(*e, where + " clip");
             for (size_t k = 0; k < i; ++k)
                 if (std::strcmp(an->clips[k].name, c->name) == 0)
                     fail(n.source(), where + " two clips are named '" + c->name + "'; rename one with name = \"...\"");
@@ -328,8 +351,12 @@ struct Parser {
         if (auto *sp = t.get("speed_reference")) {
             an->speed_pos = pos(*sp);
             if (sp->is_string()) {
-                if (*sp->value<std::string>() != "auto")
-                    fail(sp->source(), where + " speed_reference must be a speed in m/s or \"auto\"");
+                std::string v = *sp->value<std::string>();
+                bool state = false;
+                for (uint32_t i = 0; i < an->state_count; ++i) state |= v == an->states[i].name;
+                if (v != "auto" && !state)
+                    fail(sp->source(), where + " speed_reference must be a speed in m/s, \"auto\" or the name of a state");
+                if (state) an->speed_state = dup(v);
             } else {
                 an->speed_reference = number(*sp, where + " speed_reference");
                 if (!(an->speed_reference > 0)) fail(sp->source(), where + " speed_reference must be positive");
@@ -344,7 +371,8 @@ struct Parser {
         std::string c = std::string("model=") + an->model;
         for (uint32_t i = 0; i < an->lod_count; ++i) c += std::string(" lod=") + an->lods[i];
         for (uint32_t i = 0; i < an->clip_count; ++i) {
-            std::snprintf(buf, sizeof buf, " loop=%d fps=%.17g", an->clips[i].loop, an->clips[i].fps);
+            std::snprintf(buf, sizeof buf, " loop=%d fps=%.17g/%d/%.17g", an->clips[i].loop, an->clips[i].fps,
+                          an->clips[i].fps_auto, an->clips[i].max_error_mm);
             c += std::string(" clip=") + an->clips[i].source + ">" + an->clips[i].name + buf;
         }
         for (uint32_t i = 0; i < an->state_count; ++i) {
@@ -356,7 +384,10 @@ struct Parser {
                       b.fps, (int)b.layout, b.layout_set, (int)b.precision, b.precision_set, b.formats, b.max_texture_size,
                       (int)b.root_motion, an->speed_reference, an->speed_auto);
         c += buf;
+        std::snprintf(buf, sizeof buf, " auto=%d/%.17g/%.17g", b.fps_auto, b.max_error_mm, b.max_fps);
+        c += buf;
         c += std::string(" default=") + (an->default_state ? an->default_state : "");
+        c += std::string(" speed_state=") + (an->speed_state ? an->speed_state : "");
         an->canonical = dup(c);
     }
 
@@ -365,6 +396,8 @@ struct Parser {
         check_keys(root, {"bake", "budget", "animal"}, "catalog:");
         cb_bake_settings &d = cat->defaults;
         d.fps = 30;
+        d.max_error_mm = 1;
+        d.max_fps = 60;
         d.layout = CB_LAYOUT_QPOS;
         d.precision = CB_PRECISION_U16;
         d.formats = CB_FORMAT_PAL;

@@ -29,7 +29,7 @@
 extern "C" {
 #endif
 
-#define CBPAL_VERSION 1
+#define CBPAL_VERSION 2 /* newest known; files without relative positions are still written as version 1 */
 #define CBPAL_HEADER_SIZE 256
 #define CBPAL_CLIP_SIZE 80
 #define CBPAL_BONE_SIZE 32
@@ -38,7 +38,10 @@ extern "C" {
 
 enum { CBPAL_LAYOUT_MAT4 = 0, CBPAL_LAYOUT_AFFINE = 1, CBPAL_LAYOUT_QPOS = 2 };
 enum { CBPAL_PRECISION_FLOAT = 0, CBPAL_PRECISION_HALF = 1, CBPAL_PRECISION_U16 = 2 };
-enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u };
+/* CBPAL_FLAG_POSITIONS_RELATIVE (version 2): qpos position texels hold the joint's position less
+ * its bind position (the bone table's bind_position); add it back (CB_POSITIONS_RELATIVE in the
+ * shipped GLSL). */
+enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u };
 enum { CBPAL_CLIP_LOOPS = 1u };
 /* cbpal_open flags */
 enum { CBPAL_VERIFY_CHECKSUM = 1u };
@@ -48,6 +51,7 @@ typedef struct cbpal_header {
     uint32_t layout, precision, texels_per_bone, bone_count, row_texels;
     uint32_t rows, width, height, blocks, texel_bytes, clip_count;
     float fps, speed_reference, linear_range, bounds_min[3], bounds_max[3], max_error, model_height;
+    float visible_error; /* max_error is at the baked rows; this includes blending two rows (0: not recorded) */
     uint64_t input_hash, clip_table_offset, bone_table_offset, strings_offset, strings_size;
     uint64_t payload_offset, payload_size, payload_raw_size, checksum;
 } cbpal_header;
@@ -260,6 +264,7 @@ static void cbpal__parse_header(const unsigned char *d, cbpal_header *h)
     for (int k = 0; k < 3; ++k) h->bounds_min[k] = cbpal__f32(d + 76 + 4 * k), h->bounds_max[k] = cbpal__f32(d + 88 + 4 * k);
     h->max_error = cbpal__f32(d + 100);
     h->model_height = cbpal__f32(d + 104);
+    h->visible_error = cbpal__f32(d + 108);
     uint64_t *w[] = {&h->input_hash, &h->clip_table_offset, &h->bone_table_offset, &h->strings_offset, &h->strings_size,
                      &h->payload_offset, &h->payload_size, &h->payload_raw_size, &h->checksum};
     for (int i = 0; i < 9; ++i) *w[i] = cbpal__u64(d + 112 + 8 * i);
@@ -279,7 +284,7 @@ static int cbpal__validate(const unsigned char *d, size_t size, cbpal_header *h,
     if (version > CBPAL_VERSION)
         return cbpal__fail(err, es, "palette format version %u is newer than this reader (version %u); update the reader",
                            version, CBPAL_VERSION);
-    if (version != CBPAL_VERSION) return cbpal__fail(err, es, "unknown palette format version %u", version);
+    if (version < 1) return cbpal__fail(err, es, "unknown palette format version %u", version);
     if (size < CBPAL_HEADER_SIZE) return cbpal__fail(err, es, "truncated: %zu bytes, shorter than the header", size);
     cbpal__parse_header(d, h);
     if (h->header_size != CBPAL_HEADER_SIZE) return cbpal__fail(err, es, "bad header size %u", h->header_size);

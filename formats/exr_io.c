@@ -53,6 +53,8 @@ static exr_result_t set_metadata(exr_context_t c, int part, const cb_palette *p,
     rc |= exr_attr_set_float(c, part, "crowdbake.speedReference", speed_reference);
     rc |= exr_attr_set_float(c, part, "crowdbake.maxError", (float)p->max_error);
     rc |= exr_attr_set_double(c, part, "crowdbake.modelHeight", p->model_height);
+    rc |= exr_attr_set_float(c, part, "crowdbake.visibleError", (float)p->visible_error);
+    rc |= exr_attr_set_int(c, part, "crowdbake.positionsRelative", p->positions_relative); /* see docs/pal-format.md */
     rc |= exr_attr_set_float_vector(c, part, "crowdbake.bindPositions", (int32_t)p->bone_count * 3, p->bind_positions);
     const cb_skin *sk = &m->skins[skin];
     const char **names = malloc(sizeof(char *) * sk->joint_count);
@@ -289,11 +291,15 @@ static bool read_palette_attributes(exr_const_context_t c, const char *path, con
     p->row_texels = p->bone_count * p->texels_per_bone;
     p->rows = (uint32_t)img->rows;
     p->width = img->width, p->height = img->height, p->blocks = (uint32_t)img->blocks;
-    float fps = 0, max_error = 0;
+    float fps = 0, max_error = 0, visible_error = 0;
+    int32_t relative = 0;
     exr_attr_get_float(c, 0, "crowdbake.fps", &fps);
     exr_attr_get_float(c, 0, "crowdbake.maxError", &max_error);
+    exr_attr_get_float(c, 0, "crowdbake.visibleError", &visible_error);
     exr_attr_get_double(c, 0, "crowdbake.modelHeight", &p->model_height);
-    p->fps = fps, p->max_error = max_error;
+    exr_attr_get_int(c, 0, "crowdbake.positionsRelative", &relative); /* qpos/half: positions less the bind's */
+    p->fps = fps, p->max_error = max_error, p->visible_error = visible_error;
+    p->positions_relative = relative != 0;
     p->texels = img->texels;
     p->texel_bytes = img->texel_bytes;
     p->bind_positions = malloc(sizeof(float) * (size_t)n);
@@ -373,6 +379,8 @@ static cb_status exr_read(const char *path, cb_exr_image *img, cb_exr_palette *p
         exr_attr_get_int(c, 0, "crowdbake.blocks", &img->blocks);
         exr_attr_get_int(c, 0, "crowdbake.rowsPerBlock", &img->rows_per_block);
         exr_attr_get_int(c, 0, "crowdbake.clips", &img->clips);
+        exr_attr_get_float(c, 0, "crowdbake.maxError", &img->max_error);
+        exr_attr_get_float(c, 0, "crowdbake.visibleError", &img->visible_error);
         const char *hash = NULL;
         if (exr_attr_get_string(c, 0, "crowdbake.inputHash", &len, &hash) == EXR_ERR_SUCCESS && hash && len == 16) {
             char hex[17];

@@ -24,6 +24,7 @@ typedef struct cb_exr_image {
     char layout[16];
     int32_t bones, rows, blocks, rows_per_block, clips;
     uint64_t input_hash;
+    float max_error, visible_error; /* the palette's encoding and visible errors (cb_palette), model units */
 } cb_exr_image;
 
 /* Reads the texels back through OpenEXR, and the main crowdbake attributes. */

@@ -10,6 +10,7 @@ cb_status cb_palette_view(const cbpal_file *f, cb_palette *p, cb_error *err)
     memset(p, 0, sizeof *p);
     p->layout = (cb_layout)h->layout;
     p->precision = (cb_precision)h->precision;
+    p->positions_relative = (h->flags & CBPAL_FLAG_POSITIONS_RELATIVE) != 0;
     p->bone_count = h->bone_count;
     p->texels_per_bone = h->texels_per_bone;
     p->row_texels = h->row_texels;

@@ -50,8 +50,11 @@ static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_wri
 {
     static const unsigned char magic[8] = {'C', 'B', 'P', 'A', 'L', '\r', '\n', 0x1a};
     memcpy(d, magic, 8);
-    uint32_t flags = (opt->zstd ? CBPAL_FLAG_ZSTD : 0) | (opt->in_place ? CBPAL_FLAG_IN_PLACE : 0);
-    uint32_t u[14] = {CBPAL_VERSION, flags, CBPAL_HEADER_SIZE, (uint32_t)p->layout, (uint32_t)p->precision,
+    uint32_t flags = (opt->zstd ? CBPAL_FLAG_ZSTD : 0) | (opt->in_place ? CBPAL_FLAG_IN_PLACE : 0) |
+                     (p->positions_relative ? CBPAL_FLAG_POSITIONS_RELATIVE : 0);
+    /* Version 2 only where its meaning differs from 1: readers of version 1 keep reading the rest. */
+    uint32_t version = p->positions_relative ? 2 : 1;
+    uint32_t u[14] = {version, flags, CBPAL_HEADER_SIZE, (uint32_t)p->layout, (uint32_t)p->precision,
                       p->texels_per_bone, p->bone_count, p->row_texels, p->rows, p->width, p->height, p->blocks,
                       cb_precision_texel_bytes(p->precision), p->clip_count};
     for (int i = 0; i < 14; ++i) put32(d + 8 + 4 * i, u[i]);
@@ -61,6 +64,7 @@ static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_wri
     for (int k = 0; k < 3; ++k) putf(d + 76 + 4 * k, p->bounds_min[k]), putf(d + 88 + 4 * k, p->bounds_max[k]);
     putf(d + 100, (float)p->max_error);
     putf(d + 104, (float)p->model_height);
+    putf(d + 108, (float)p->visible_error);
     uint64_t w[9] = {opt->input_hash, lp->clips, lp->bones, lp->strings, lp->strings_size, lp->payload, lp->payload_size,
                      (uint64_t)p->texel_bytes, 0 /* checksum, filled last */};
     for (int i = 0; i < 9; ++i) put64(d + 112 + 8 * i, w[i]);

@@ -123,12 +123,13 @@ static GLuint program(const gl_api *gl, const cb_palette *p, cb_error *err)
     char *vs = malloc(n);
     if (!vs) return cb_fail(err, CB_ERR_INTERNAL, "out of memory"), 0;
     snprintf(vs, n,
-             "#version 330 core\n#define %s\n#define %s\n%s\n"
+             "#version 330 core\n#define %s\n#define %s\n%s%s\n"
              "in vec3 a_position; in ivec4 a_joints; in vec4 a_weights;\n"
              "uniform vec4 u_instance; uniform float u_time; uniform mat4 u_view_projection;\nout vec3 v_world;\n"
              "void main() {\n  v_world = cb_skin_position(a_position, a_joints, a_weights, u_instance, u_time);\n"
              "  gl_Position = u_view_projection * vec4(v_world, 1.0);\n}\n",
-             layout_define[p->layout], precision_define[p->precision], cb_palette_glsl);
+             layout_define[p->layout], precision_define[p->precision],
+             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "", cb_palette_glsl);
     static const char fs[] = "#version 330 core\nin vec3 v_world; out vec4 color;\n"
                              "void main() {\n  vec3 n = normalize(cross(dFdx(v_world), dFdy(v_world)));\n"
                              "  float light = 0.35 + 0.65 * abs(dot(n, normalize(vec3(0.4, 0.8, 0.45))));\n"

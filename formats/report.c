@@ -71,6 +71,7 @@ static void fill_type(const cb_roster *roster, uint32_t i, const cb_report *r, c
         t->vat_bytes[e] = cb_vat_bytes(t->vertices, t->frames, &cb_vat_encodings[e], &t->vat_geometry);
     t->mesh_bytes = rt->mesh_bytes;
     t->palette_error = owner->max_error;
+    t->palette_visible_error = owner->visible_error;
     t->vat_error = rt->vat_error;
     t->model_height = rt->model_height;
     t->palette_over_limit = t->width > r->max_texture_size || t->height > r->max_texture_size;
@@ -161,8 +162,8 @@ static void budget_line(FILE *f, const cb_report *r, const char *bold)
 void cb_report_text(FILE *f, const cb_report *r)
 {
     char a[32], b[32], c[32], note[256];
-    fprintf(f, "%-14s %6s %7s %9s %-12s %10s %10s %7s %10s %9s %9s  %s\n", "type", "bones", "frames", "vertices",
-            "palette", "bytes", "VAT 16F+8", "VAT/pal", "mesh", "pal mm/m", "VAT mm/m", "notes");
+    fprintf(f, "%-14s %6s %7s %9s %-12s %10s %10s %7s %10s %9s %9s %9s  %s\n", "type", "bones", "frames", "vertices",
+            "palette", "bytes", "VAT 16F+8", "VAT/pal", "mesh", "enc mm/m", "seen mm/m", "VAT mm/m", "notes");
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_type *t = &r->types[i];
         char enc[32];
@@ -170,9 +171,10 @@ void cb_report_text(FILE *f, const cb_report *r)
         cb_human_bytes(t->palette_bytes, a, sizeof a);
         cb_human_bytes(t->vat_bytes[0], b, sizeof b);
         cb_human_bytes(t->mesh_bytes, c, sizeof c);
-        fprintf(f, "%-14s %6u %7u %9llu %-12s %10s %10s %6.1fx %10s %9.3f %9.3f  %s\n", t->name, t->bones, t->frames,
+        fprintf(f, "%-14s %6u %7u %9llu %-12s %10s %10s %6.1fx %10s %9.3f %9.3f %9.3f  %s\n", t->name, t->bones, t->frames,
                 (unsigned long long)t->vertices, enc, a, b, ratio(t->vat_bytes[0], t->palette_bytes), c,
-                per_m(t->palette_error, t->model_height), per_m(t->vat_error, t->model_height), notes(t, note, sizeof note));
+                per_m(t->palette_error, t->model_height), per_m(t->palette_visible_error, t->model_height),
+                per_m(t->vat_error, t->model_height), notes(t, note, sizeof note));
     }
     fprintf(f, "\nEvery encoding (texture bytes at the %u-texel limit):\n%-14s", r->max_texture_size, "type");
     for (int l = 0; l < 3; ++l)
@@ -210,22 +212,24 @@ void cb_report_markdown(FILE *f, const cb_report *r)
     char a[32], b[32], c[32], note[256];
     fputs("## crowdbake roster report\n\n", f);
     budget_line(f, r, "**");
-    fputs("\n| type | bones | frames | vertices | palette | bytes | VAT RGBA16F+RGBA8 | VAT / palette | mesh | palette error "
-          "mm/m | VAT error mm/m | notes |\n|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|---|\n", f);
+    fputs("\n| type | bones | frames | vertices | palette | bytes | VAT RGBA16F+RGBA8 | VAT / palette | mesh | palette encoding "
+          "error mm/m | palette visible error mm/m | VAT error mm/m | notes |\n|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|---|\n",
+          f);
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_type *t = &r->types[i];
         cb_human_bytes(t->palette_bytes, a, sizeof a);
         cb_human_bytes(t->vat_bytes[0], b, sizeof b);
         cb_human_bytes(t->mesh_bytes, c, sizeof c);
-        fprintf(f, "| %s | %u | %u | %llu | %s/%s | %s | %s | %.1f× | %s | %.3f | %.3f | %s |\n", t->name, t->bones, t->frames,
-                (unsigned long long)t->vertices, cb_layout_name(t->layout), cb_precision_name(t->precision), a, b,
+        fprintf(f, "| %s | %u | %u | %llu | %s/%s | %s | %s | %.1f× | %s | %.3f | %.3f | %.3f | %s |\n", t->name, t->bones,
+                t->frames, (unsigned long long)t->vertices, cb_layout_name(t->layout), cb_precision_name(t->precision), a, b,
                 ratio(t->vat_bytes[0], t->palette_bytes), c, per_m(t->palette_error, t->model_height),
-                per_m(t->vat_error, t->model_height), notes(t, note, sizeof note));
+                per_m(t->palette_visible_error, t->model_height), per_m(t->vat_error, t->model_height),
+                notes(t, note, sizeof note));
     }
     cb_human_bytes(r->palettes_total, a, sizeof a);
     cb_human_bytes(r->meshes_total, b, sizeof b);
     cb_human_bytes(r->vat_total[0], c, sizeof c);
-    fprintf(f, "| **total** | | | | | **%s** | **%s** | %.1f× | %s | | | |\n", a, c, ratio(r->vat_total[0], r->palettes_total), b);
+    fprintf(f, "| **total** | | | | | **%s** | **%s** | %.1f× | %s | | | | |\n", a, c, ratio(r->vat_total[0], r->palettes_total), b);
 }
 
 /* ---- JSON (docs/report.schema.json) ---- */
@@ -265,6 +269,7 @@ void cb_report_json(FILE *f, const cb_report *r)
         cb_json_int(&j, "blocks", t->blocks);
         cb_json_int(&j, "bytes", (long long)t->palette_bytes);
         cb_json_number(&j, "max_error", t->palette_error);
+        cb_json_number(&j, "visible_error", t->palette_visible_error);
         cb_json_end(&j);
         cb_json_object(&j, "encodings");
         for (int l = 0; l < 3; ++l)
@@ -574,6 +579,11 @@ static void cell_pal_error(FILE *f, const cb_report *r, const cb_report_type *t)
 {
     (void)r, fprintf(f, "%.3f", per_m(t->palette_error, t->model_height));
 }
+static void cell_pal_visible_error(FILE *f, const cb_report *r, const cb_report_type *t)
+{
+    (void)r, fprintf(f, "%.3f", per_m(t->palette_visible_error, t->model_height));
+}
+
 static void cell_vat_error(FILE *f, const cb_report *r, const cb_report_type *t)
 {
     (void)r, fprintf(f, "%.3f", per_m(t->vat_error, t->model_height));
@@ -591,7 +601,8 @@ static const html_column html_columns[] = {
     {"type", cell_name},          {"bones", cell_bones},          {"frames", cell_frames},
     {"vertices", cell_vertices},  {"encoding", cell_encoding},    {"palette", cell_palette},
     {"mesh", cell_mesh},          {"VAT 16F+8", cell_vat},        {"VAT / palette", cell_ratio},
-    {"palette error mm/m", cell_pal_error}, {"VAT error mm/m", cell_vat_error}, {"notes; what would shrink it", cell_fixes},
+    {"palette encoding error mm/m", cell_pal_error}, {"palette visible error mm/m", cell_pal_visible_error},
+    {"VAT error mm/m", cell_vat_error}, {"notes; what would shrink it", cell_fixes},
 };
 
 static void html_table(FILE *f, const cb_report *r)

@@ -23,7 +23,8 @@ typedef struct cb_report_type {
     bool vat_fits;                      /* at the target's texture limit */
     cb_texture_geometry vat_geometry;
     uint64_t mesh_bytes;
-    double palette_error, vat_error, model_height; /* model units */
+    double palette_error, vat_error, model_height; /* model units; palette_error: the encoding's, at the baked rows */
+    double palette_visible_error; /* the palette as the runtime plays it: encoding and the blend of two rows */
     bool palette_over_limit, bones_over_limit;
 } cb_report_type;
 

@@ -20,6 +20,7 @@
 #include "gltf_load.h"
 #include "json_writer.h"
 #include "pal_write.h"
+#include "../src/runtime.h"
 #include "../src/vat.h"
 
 typedef struct type_work {
@@ -185,7 +186,7 @@ static cb_status analyze_clips(const cb_catalog_animal *an, const cb_limits *lim
         c->fps = info.effective_fps;
         c->duration = info.duration;
         c->loops = info.loops;
-        c->ground_speed = cb_measure_ground_speed(s, &info, &c->speed_method);
+        cb_measure_ground_speed(s, &info, &c->speed);
         row += info.frames;
     }
     t->rows = row;
@@ -220,19 +221,36 @@ static cb_status match_states(const cb_catalog *cat, const cb_catalog_animal *an
     return err->status;
 }
 
-/* The speed at which locomotion plays at rate 1: given, or measured on the default state's
- * clip (or the first state whose clip moves). */
+/* Locomotion: a looping clip that moves. Only these are synced to the animal's speed. */
+static bool is_locomotion(const cb_roster_clip *c) { return c->loops && c->speed.speed > 0; }
+
+/* The speed at which locomotion plays at rate 1: given, or measured on a locomotion loop: the
+ * default state's clip if it is one, else the state the catalog names, else the slowest
+ * locomotion state. t->speed_reference_from says which. */
 static void speed_reference(const cb_catalog_animal *an, cb_roster_type *t)
 {
     t->speed_reference = an->speed_reference;
+    snprintf(t->speed_reference_from, sizeof t->speed_reference_from, "the catalog");
     if (!an->speed_auto) return;
     t->speed_reference = 0;
-    for (uint32_t s = 0; s < an->state_count; ++s)
-        if (strcmp(an->states[s].name, an->default_state) == 0 && t->clips[t->state_clip[s]].ground_speed > 0)
-            t->speed_reference = t->clips[t->state_clip[s]].ground_speed;
-    for (uint32_t s = 0; s < an->state_count && t->speed_reference == 0; ++s)
-        t->speed_reference = t->clips[t->state_clip[s]].ground_speed;
-    for (uint32_t i = 0; i < t->clip_count && t->speed_reference == 0; ++i) t->speed_reference = t->clips[i].ground_speed;
+    snprintf(t->speed_reference_from, sizeof t->speed_reference_from, "none: no state plays a looping clip that moves");
+    int pick = -1;
+    const char *rule = "";
+    for (uint32_t s = 0; s < an->state_count && pick < 0; ++s)
+        if (strcmp(an->states[s].name, an->default_state) == 0 && is_locomotion(&t->clips[t->state_clip[s]]))
+            pick = (int)s, rule = "the default state";
+    for (uint32_t s = 0; s < an->state_count && pick < 0 && an->speed_state; ++s)
+        if (strcmp(an->states[s].name, an->speed_state) == 0 && is_locomotion(&t->clips[t->state_clip[s]]))
+            pick = (int)s, rule = "the catalog's speed_reference state";
+    for (uint32_t s = 0; s < an->state_count && !(pick >= 0 && *rule); ++s) {
+        const cb_roster_clip *c = &t->clips[t->state_clip[s]];
+        if (is_locomotion(c) && (pick < 0 || c->speed.speed < t->clips[t->state_clip[pick]].speed.speed)) pick = (int)s;
+    }
+    if (pick < 0) return;
+    const cb_roster_clip *c = &t->clips[t->state_clip[pick]];
+    t->speed_reference = c->speed.speed;
+    snprintf(t->speed_reference_from, sizeof t->speed_reference_from, "%s '%s' (clip '%s', %s)",
+             *rule ? rule : "the slowest locomotion state", an->states[pick].name, c->name, c->speed.method);
 }
 
 static cb_status check_lods(const roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t,
@@ -266,12 +284,45 @@ static cb_status check_lods(const roster_run *run, const cb_catalog_animal *an, 
     return CB_OK;
 }
 
-/* The error a VAT of the same frames would have: half-float positions against exact skinning. */
-static void measure_vat(const cb_catalog_animal *an, type_work *w, cb_roster_type *t)
+/* The bake options a type's settings give. */
+static cb_bake_options bake_options(const cb_catalog_animal *an, const cb_limits *limits)
 {
     cb_bake_options o = cb_default_bake_options();
+    if (limits) o.limits = *limits;
     o.fps = an->bake.fps;
+    o.layout = an->bake.layout;
+    o.precision = an->bake.precision;
+    if (!an->bake.precision_set && (an->bake.formats & CB_FORMAT_EXR)) o.precision = CB_PRECISION_FLOAT;
+    o.max_texture_size = an->bake.max_texture_size;
     o.root_motion = an->bake.root_motion;
+    o.affine_fallback = !an->bake.layout_set;
+    return o;
+}
+
+/* fps = "auto" (the animal's or a clip's): each such clip's rate, chosen by its visible error. */
+static cb_status choose_rates(const cb_catalog_animal *an, const cb_limits *limits, type_work *w, uint32_t n, cb_error *err)
+{
+    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
+    if (!goals) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    bool any = false;
+    for (uint32_t i = 0; i < n; ++i) {
+        const cb_catalog_clip *c = an->clips ? &an->clips[i] : NULL;
+        if (!(c && c->fps_auto >= 0 ? c->fps_auto == 1 : an->bake.fps_auto)) continue;
+        goals[i] = (cb_rate_goal){c && c->max_error_mm > 0 ? c->max_error_mm : an->bake.max_error_mm, an->bake.max_fps};
+        any = true;
+    }
+    cb_sampler *s = any ? cb_sampler_create(w->model, w->skin, err) : NULL;
+    cb_bake_options o = bake_options(an, limits);
+    if (s) cb_choose_rates(s, &o, w->plan, n, goals, NULL, err);
+    cb_sampler_free(s);
+    free(goals);
+    return err->status;
+}
+
+/* The error a VAT of the same frames would have: half-float positions against exact skinning. */
+static void measure_vat(const cb_catalog_animal *an, const cb_limits *limits, type_work *w, cb_roster_type *t)
+{
+    cb_bake_options o = bake_options(an, limits);
     o.max_texture_size = 1u << 30; /* only measured: no texture is made */
     cb_error err = {0};
     cb_sampler *s = cb_sampler_create(w->model, w->skin, &err);
@@ -326,15 +377,16 @@ static void prepare_type(roster_run *run, uint32_t i)
     t->mesh_bytes = cb_model_skin_mesh_bytes(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
-    if (plan_clips(run->cat, an, w, t, err) || analyze_clips(an, run->opt->limits, w, t, err) ||
-        match_states(run->cat, an, t, err) || check_lods(run, an, w, t, err)) {
+    if (plan_clips(run->cat, an, w, t, err) || choose_rates(an, run->opt->limits, w, t->clip_count, err) ||
+        analyze_clips(an, run->opt->limits, w, t, err) || match_states(run->cat, an, t, err) ||
+        check_lods(run, an, w, t, err)) {
         list_unloaded_lods(an, w, t);
         return;
     }
     speed_reference(an, t);
     t->key = content_key(w->model, w->skin, w->plan, t->clip_count, &an->bake);
     t->input_hash = input_hash(an, w, t->key);
-    if (run->opt->measure_vat) measure_vat(an, w, t);
+    if (run->opt->measure_vat) measure_vat(an, run->opt->limits, w, t);
 }
 
 /* ---- pass 3: bake an owner ---- */
@@ -358,6 +410,7 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
             t->width = f.header.width, t->height = f.header.height, t->blocks = f.header.blocks;
             t->layout = (cb_layout)f.header.layout, t->precision = (cb_precision)f.header.precision;
             t->max_error = f.header.max_error;
+            t->visible_error = f.header.visible_error;
             t->palette_bytes = f.header.payload_raw_size;
         }
         cbpal_close(&f);
@@ -373,6 +426,7 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
             cb_layout_parse(img.layout, &t->layout);
             t->precision = img.precision;
             t->palette_bytes = img.texel_bytes;
+            t->max_error = img.max_error, t->visible_error = img.visible_error;
         }
         cb_exr_image_free(&img);
         if (!same) return false;
@@ -402,16 +456,8 @@ static cb_status make_directories(const char *dir, cb_error *err)
 
 static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
 {
-    cb_bake_options o = cb_default_bake_options();
-    if (run->opt->limits) o.limits = *run->opt->limits;
-    o.fps = an->bake.fps;
-    o.layout = an->bake.layout;
-    o.precision = an->bake.precision;
-    if (!an->bake.precision_set && (an->bake.formats & CB_FORMAT_EXR)) o.precision = CB_PRECISION_FLOAT;
-    o.max_texture_size = an->bake.max_texture_size;
-    o.root_motion = an->bake.root_motion;
+    cb_bake_options o = bake_options(an, run->opt->limits);
     o.threads = run->threads_per_bake;
-    o.affine_fallback = !an->bake.layout_set;
     cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
     if (!s) return err->status;
     cb_palette p;
@@ -427,7 +473,8 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
         cb_exr_write(t->exr_path, &p, w->model, w->skin, an->bake.exr_compression, t->input_hash, (float)t->speed_reference, err);
     t->width = p.width, t->height = p.height, t->blocks = p.blocks;
     t->layout = p.layout, t->precision = p.precision;
-    t->max_error = p.max_error;
+    t->max_error = (float)p.max_error;
+    t->visible_error = (float)p.visible_error;
     t->palette_bytes = p.texel_bytes;
     if (p.fallback_note[0]) cb_warn(&t->warnings, "note", "%s", p.fallback_note);
     cb_palette_free(&p);
@@ -443,10 +490,11 @@ static void log_type(roster_run *run, const cb_roster_type *t)
     const cb_roster_type *owner = &run->r->types[t->owner];
     switch (t->outcome) {
     case CB_TYPE_BAKED:
-        fprintf(f, "%s  %-16s baked    %s (%.1f KiB, %ux%u, %s/%s, max error %.3g mm/m) in %.0f ms\n", clear, t->animal->name,
-                (t->animal->bake.formats & CB_FORMAT_PAL) ? t->pal_path : t->exr_path, t->palette_bytes / 1024.0, t->width,
-                t->height, cb_layout_name(t->layout), cb_precision_name(t->precision),
-                t->model_height > 0 ? t->max_error / t->model_height * 1000 : 0, t->seconds * 1000);
+        fprintf(f, "%s  %-16s baked    %s (%.1f KiB, %ux%u, %s/%s, encoding error %.3g mm/m, visible %.3g mm/m) in %.0f ms\n",
+                clear, t->animal->name, (t->animal->bake.formats & CB_FORMAT_PAL) ? t->pal_path : t->exr_path,
+                t->palette_bytes / 1024.0, t->width, t->height, cb_layout_name(t->layout), cb_precision_name(t->precision),
+                t->model_height > 0 ? t->max_error / t->model_height * 1000 : 0,
+                t->model_height > 0 ? t->visible_error / t->model_height * 1000 : 0, t->seconds * 1000);
         break;
     case CB_TYPE_UP_TO_DATE: fprintf(f, "%s  %-16s up to date\n", clear, t->animal->name); break;
     case CB_TYPE_SHARED:
@@ -525,8 +573,10 @@ static void run_pass(roster_run *run, void (*fn)(roster_run *, uint32_t))
 static void write_state(cb_json *j, const cb_roster_type *t, const cb_catalog_state *st, int clip)
 {
     const cb_roster_clip *c = &t->clips[clip];
-    bool moves = c->ground_speed > 0;
-    double speed = t->animal->speed_auto ? c->ground_speed : t->speed_reference;
+    /* Only locomotion loops are synced to speed; one-shots and clips that stand still play at
+     * their own rate (a dying animal at speed 0 still dies). */
+    bool synced = is_locomotion(c);
+    double speed = t->animal->speed_auto ? c->speed.speed : t->speed_reference;
     cb_json_object(j, st->name);
     cb_json_string(j, "clip", c->name);
     cb_json_inline_array(j, "keywords");
@@ -537,7 +587,7 @@ static void write_state(cb_json *j, const cb_roster_type *t, const cb_catalog_st
     cb_json_int(j, "first_row", c->first_row);
     cb_json_int(j, "frame_count", c->loops ? (long long)c->frames : -(long long)c->frames); /* < 0: one-shot, clamps */
     cb_json_number(j, "rate", c->fps);
-    cb_json_number(j, "rate_per_speed", moves && speed > 0 ? c->fps / speed : 0);
+    cb_json_number(j, "rate_per_speed", synced && speed > 0 ? c->fps / speed : 0);
     cb_json_string(j, "phase", c->loops ? "golden_ratio" : "zero");
     cb_json_end(j);
     cb_json_end(j);
@@ -587,7 +637,13 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
     cb_json_int(j, "width", owner->width);
     cb_json_int(j, "height", owner->height);
     cb_json_int(j, "blocks", owner->blocks);
+    /* Errors in mm per metre of model height: the encoding's at the baked rows, and what a player
+     * sees (the runtime's blend of two rows). */
+    double per_m = t->model_height > 0 ? 1000 / t->model_height : 0;
+    cb_json_number(j, "encoding_error_mm_per_m", owner->max_error * per_m);
+    cb_json_number(j, "visible_error_mm_per_m", owner->visible_error * per_m);
     cb_json_number(j, "speed_reference", t->speed_reference);
+    cb_json_string(j, "speed_reference_from", t->speed_reference_from);
     cb_json_string(j, "default_state", an->default_state ? an->default_state : "");
     cb_json_array(j, "clips");
     for (uint32_t c = 0; c < t->clip_count; ++c) {
@@ -599,7 +655,10 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
         cb_json_number(j, "fps", cl->fps);
         cb_json_number(j, "duration", cl->duration);
         cb_json_bool(j, "loops", cl->loops);
-        cb_json_number(j, "ground_speed", cl->ground_speed);
+        cb_json_number(j, "ground_speed", cl->speed.speed);
+        cb_json_number(j, "root_speed", cl->speed.root);
+        cb_json_number(j, "feet_speed", cl->speed.feet);
+        cb_json_string(j, "speed_method", cl->speed.method);
         cb_json_end(j);
     }
     cb_json_end(j);
@@ -836,6 +895,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
             memcpy(t->exr_path, o->exr_path, sizeof t->exr_path);
             t->layout = o->layout, t->precision = o->precision, t->palette_bytes = o->palette_bytes;
             t->width = o->width, t->height = o->height, t->blocks = o->blocks, t->max_error = o->max_error;
+            t->visible_error = o->visible_error;
             r->shared++;
         }
         log_type(&run, t);

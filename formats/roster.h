@@ -23,9 +23,9 @@ typedef enum cb_type_outcome { CB_TYPE_BAKED, CB_TYPE_UP_TO_DATE, CB_TYPE_SHARED
 typedef struct cb_roster_clip {
     char name[128];
     uint32_t first_row, frames;
-    double fps, duration, ground_speed;
+    double fps, duration;
     bool loops;
-    const char *speed_method;
+    cb_ground_speed speed; /* speed.speed is the clip's ground speed */
 } cb_roster_clip;
 
 typedef struct cb_roster_lod {
@@ -49,7 +49,9 @@ typedef struct cb_roster_type {
     uint64_t vertices, indices, palette_bytes; /* palette_bytes: the texture as uploaded */
     uint64_t mesh_bytes;      /* vertex and index buffers in the model's own vertex format */
     uint64_t pal_file_bytes, exr_file_bytes;
-    double max_error, model_height, speed_reference, seconds;
+    float max_error, visible_error; /* see cb_palette; float32 as the files record them, so an up-to-date run reports the same */
+    double model_height, speed_reference, seconds;
+    char speed_reference_from[512]; /* which rule picked speed_reference, in words */
     double vat_error;         /* with measure_vat */
     uint32_t clip_count;
     cb_roster_clip *clips;

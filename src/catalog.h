@@ -18,6 +18,9 @@ typedef struct cb_source_pos {
 
 typedef struct cb_bake_settings {
     double fps;
+    bool fps_auto;               /* fps = "auto": per clip, the lowest rate within max_error_mm */
+    double max_error_mm;         /* visible error goal of fps = "auto", mm per metre of model height (default 1) */
+    double max_fps;              /* fps = "auto" goes no higher (default 60) */
     cb_layout layout;
     cb_precision precision;
     unsigned formats;            /* CB_FORMAT_* */
@@ -41,6 +44,8 @@ typedef struct cb_catalog_clip {
     const char *name;   /* its name in the palette */
     int loop;           /* -1 from the poses, 0, 1 */
     double fps;         /* 0: the animal's fps */
+    int fps_auto;       /* -1: as the animal; 0: fixed fps; 1: fps = "auto" */
+    double max_error_mm; /* 0: the animal's */
     cb_source_pos pos;
 } cb_catalog_clip;
 
@@ -66,6 +71,7 @@ typedef struct cb_catalog_animal {
     const char *default_state;
     double speed_reference; /* m/s (model units/s); with speed_auto, measured */
     bool speed_auto;
+    const char *speed_state; /* speed_reference = "STATE": measure it on that state's clip (unless the default state's is locomotion) */
     cb_source_pos speed_pos;
     cb_bake_settings bake;
     const char *canonical;  /* the resolved entry as text: part of the input hash */
@@ -103,10 +109,17 @@ cb_status cb_catalog_override_bake(cb_catalog *catalog, const cb_bake_settings *
 int cb_match_state(const char *const *clip_names, uint32_t clip_count, const char *const *keywords,
                    uint32_t keyword_count);
 
-/* Ground speed of a clip in model units per second: the root's horizontal travel when it
- * moves, else (in-place clips) the speed of the planted feet relative to the root. *method
- * says which. 0 when neither moves. */
-double cb_measure_ground_speed(cb_sampler *sampler, const cb_clip_info *clip, const char **method);
+/* Ground speed of a clip in model units per second, from two pieces of evidence: the root's
+ * horizontal travel, and the speed at which planted feet slide back relative to the root (a
+ * foot on the ground is still in the world). Root travel when the two agree or no foot steps;
+ * the feet when the root moves far less than they do (the clip walks in place and its root
+ * only drifts). 0 when neither moves. */
+typedef struct cb_ground_speed {
+    double speed;       /* the ground speed: what foot-sync uses */
+    double root, feet;  /* both measurements; feet 0 when no foot steps */
+    const char *method; /* "root motion", "planted feet", "planted feet (the root only drifts)" or "none" */
+} cb_ground_speed;
+void cb_measure_ground_speed(cb_sampler *sampler, const cb_clip_info *clip, cb_ground_speed *out);
 
 /* For a LOD skin: remap[i] = the main skin's joint with the LOD joint i's name. Fails, naming
  * the first mismatch, when a name is missing or its bind pose (inverse bind matrix) differs. */

@@ -3,6 +3,7 @@
 #include "crowdbake.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -44,17 +45,80 @@ static double skeleton_extent(cb_sampler *s, const cb_model *m, int32_t skin)
     return e > 1e-9 ? e : 1.0;
 }
 
-static bool poses_match(const double *a, const double *b, uint32_t joints, cb_vec3 travel, double extent)
+/* How far apart two poses are: the largest difference of any joint matrix's rotation terms,
+ * or of its translation (less `travel`) relative to the skeleton's size. */
+static double pose_distance(const double *a, const double *b, uint32_t joints, cb_vec3 travel, double extent)
 {
+    double worst = 0;
     for (uint32_t j = 0; j < joints; ++j) {
         const double *ma = a + (size_t)j * 16, *mb = b + (size_t)j * 16;
-        for (int k = 0; k < 12; ++k)
-            if (fabs(ma[k] - mb[k]) > CB_LOOP_TOLERANCE) return false;
+        for (int k = 0; k < 12; ++k) worst = fmax(worst, fabs(ma[k] - mb[k]));
         double d[3] = {mb[12] - travel.x - ma[12], mb[13] - travel.y - ma[13], mb[14] - travel.z - ma[14]};
-        for (int k = 0; k < 3; ++k)
-            if (fabs(d[k]) > CB_LOOP_TOLERANCE * extent) return false;
+        for (int k = 0; k < 3; ++k) worst = fmax(worst, fabs(d[k]) / extent);
     }
-    return true;
+    return worst;
+}
+
+double cb_animation_key_interval(const cb_animation *anim)
+{
+    double min_dt = INFINITY;
+    for (uint32_t c = 0; c < anim->channel_count; ++c)
+        for (uint32_t k = 1; k < anim->channels[c].key_count; ++k) {
+            double dt = (double)anim->channels[c].times[k] - anim->channels[c].times[k - 1];
+            if (dt > 1e-4 && dt < min_dt) min_dt = dt;
+        }
+    return isfinite(min_dt) ? min_dt : 0;
+}
+
+/* Loop or one-shot, from the poses. Equal first and last poses close a loop over the key span.
+ * Many exporters (FBX2glTF, anything that bakes keys on [0, D)) leave out the closing key: the
+ * first pose comes round one key step after the last key. Such a clip is a loop over D plus one
+ * key interval when the wrap from its last pose to its first is no bigger than the key steps on
+ * either side of it (the first and the last), so the wrap is as smooth as its neighbours; a clip
+ * that comes to rest, or ends in another pose, has a jump there. Two steps at least: a two-key
+ * clip's only step is its jump. */
+static cb_status judge_loop(cb_sampler *s, cb_clip_info *out, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(s);
+    int32_t skin = cb_sampler_skin(s);
+    uint32_t joints = m->skins[skin].joint_count;
+    double extent = skeleton_extent(s, m, skin), D = out->t1 - out->t0, h = out->key_interval;
+    size_t n = (size_t)joints * 16;
+    double *pose = malloc(4 * n * sizeof(double)); /* at t0, t0 + h, t1 - h, t1 */
+    if (!pose) return cb_fail(err, CB_ERR_INTERNAL, "out of memory analysing clip '%s'", m->animations[out->animation].name);
+    /* Horizontal root travel does not break a loop. */
+    cb_vec3 travel = {out->root_displacement[0], 0, out->root_displacement[2]};
+    cb_sample_joint_matrices(s, out->animation, out->t0, pose);
+    cb_sample_joint_matrices(s, out->animation, out->t1, pose + 3 * n);
+    out->wrap_jump = pose_distance(pose, pose + 3 * n, joints, travel, extent);
+    out->loop_reason = out->wrap_jump <= CB_LOOP_TOLERANCE ? CB_LOOP_CLOSED : CB_LOOP_ENDS_ELSEWHERE;
+    if (out->loop_reason == CB_LOOP_ENDS_ELSEWHERE && h > 0 && D >= 2 * h - 1e-6) {
+        double f = h / D;
+        cb_vec3 step_travel = {travel.x * f, 0, travel.z * f};
+        cb_sample_joint_matrices(s, out->animation, out->t0 + h, pose + n);
+        cb_sample_joint_matrices(s, out->animation, out->t1 - h, pose + 2 * n);
+        out->largest_step = fmax(pose_distance(pose, pose + n, joints, step_travel, extent),
+                                 pose_distance(pose + 2 * n, pose + 3 * n, joints, step_travel, extent));
+        if (out->wrap_jump <= out->largest_step) out->loop_reason = CB_LOOP_OPEN;
+    }
+    free(pose);
+    return CB_OK;
+}
+
+void cb_loop_reason_text(const cb_clip_info *c, char *out, size_t size)
+{
+    switch (c->loop_reason) {
+    case CB_LOOP_SET: snprintf(out, size, "set by the catalog"); break;
+    case CB_LOOP_CLOSED: snprintf(out, size, "last pose = first pose"); break;
+    case CB_LOOP_OPEN:
+        snprintf(out, size, "no closing key: wrap %.3g <= its neighbour steps %.3g, period + %.4gs", c->wrap_jump, c->largest_step,
+                 c->key_interval);
+        break;
+    case CB_LOOP_ENDS_ELSEWHERE:
+        if (c->largest_step > 0) snprintf(out, size, "ends elsewhere: wrap %.3g > its neighbour steps %.3g", c->wrap_jump, c->largest_step);
+        else snprintf(out, size, "ends elsewhere: wrap %.3g", c->wrap_jump);
+        break;
+    }
 }
 
 cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop_override, const cb_limits *limits,
@@ -73,36 +137,38 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
     out->animation = animation;
     out->t0 = anim->t0;
     out->t1 = anim->t1;
-    out->duration = anim->t1 - anim->t0;
-    if (out->duration * fps > (double)limits->max_frames)
-        return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' lasts %gs: %.0f frames at %g fps is over the limit of %u (--max-frames)",
-                       m->source, anim->name, out->duration, out->duration * fps, fps, limits->max_frames);
-    uint32_t steps = cb_clip_step_count(out->duration, fps);
-    out->steps = steps;
-    out->effective_fps = out->duration > 0 ? steps / out->duration : fps;
+    out->key_interval = cb_animation_key_interval(anim);
+    double span = anim->t1 - anim->t0;
 
     uint32_t root = cb_skin_root_joint(m, skin);
     cb_vec3 p0 = root_position(s, m, skin, root, animation, out->t0);
     cb_vec3 p1 = root_position(s, m, skin, root, animation, out->t1);
     cb_vec3 d = cb_vec3_sub(p1, p0);
     out->root_displacement[0] = d.x, out->root_displacement[1] = d.y, out->root_displacement[2] = d.z;
-    if (out->duration > 0) {
-        for (int k = 0; k < 3; ++k) out->root_velocity[k] = out->root_displacement[k] / out->duration;
+    if (span > 0) {
+        for (int k = 0; k < 3; ++k) out->root_velocity[k] = out->root_displacement[k] / span;
         out->ground_speed = hypot(out->root_velocity[0], out->root_velocity[2]);
     }
 
+    out->loop_reason = CB_LOOP_CLOSED; /* a clip of one instant */
+    if (span > 0 && judge_loop(s, out, err)) return err->status;
     if (loop_override >= 0) {
         out->loops = loop_override != 0;
+        if (out->loops != (out->loop_reason == CB_LOOP_CLOSED || out->loop_reason == CB_LOOP_OPEN)) out->loop_reason = CB_LOOP_SET;
     } else {
-        uint32_t joints = m->skins[skin].joint_count;
-        double *a = malloc((size_t)joints * 32 * sizeof(double));
-        if (!a) return cb_fail(err, CB_ERR_INTERNAL, "out of memory analysing clip '%s'", anim->name);
-        cb_sample_joint_matrices(s, animation, out->t0, a);
-        cb_sample_joint_matrices(s, animation, out->t1, a + (size_t)joints * 16);
-        cb_vec3 travel = {d.x, 0, d.z}; /* horizontal root travel does not break a loop */
-        out->loops = poses_match(a, a + (size_t)joints * 16, joints, travel, skeleton_extent(s, m, skin));
-        free(a);
+        out->loops = out->loop_reason == CB_LOOP_CLOSED || out->loop_reason == CB_LOOP_OPEN || span <= 0;
     }
+    /* A loop whose last pose is not its first wraps over one more key interval. */
+    bool open = out->loops && out->loop_reason != CB_LOOP_CLOSED && span > 0;
+    out->duration = span + (open ? out->key_interval : 0);
+    cb_sampler_set_period(s, animation, out->loops ? out->duration : 0);
+
+    if (out->duration * fps > (double)limits->max_frames)
+        return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' lasts %gs: %.0f frames at %g fps is over the limit of %u (--max-frames)",
+                       m->source, anim->name, out->duration, out->duration * fps, fps, limits->max_frames);
+    uint32_t steps = cb_clip_step_count(out->duration, fps);
+    out->steps = steps;
+    out->effective_fps = out->duration > 0 ? steps / out->duration : fps;
     out->frames = out->loops ? steps : steps + 1;
     return CB_OK;
 }

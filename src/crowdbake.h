@@ -215,8 +215,21 @@ void cb_sampler_free(cb_sampler *sampler);
 const cb_model *cb_sampler_model(const cb_sampler *sampler);
 int32_t cb_sampler_skin(const cb_sampler *sampler);
 
+/* A loop without a closing key (cb_clip_analyze): from time `from` (its last key) to `to` (its
+ * start plus its period) every channel returns to its first key. from = to = 0: none. */
+typedef struct cb_wrap {
+    double from, to;
+} cb_wrap;
+
+/* Sets the period of `animation` as a loop: when longer than its key span (a loop whose
+ * exporter left out the closing key), times past the last key interpolate back to the first
+ * key over the rest of the period instead of clamping. 0 (the default): times clamp.
+ * cb_clip_analyze sets it on its sampler; another sampler of the same clips needs it set too. */
+void cb_sampler_set_period(cb_sampler *sampler, int32_t animation, double period);
+
 /* Joint matrices (16 doubles each, column-major, skin joint order) of `animation` at time t.
- * animation < 0 gives the rest pose. Times outside the clip clamp to its ends. */
+ * animation < 0 gives the rest pose. Times outside the clip clamp to its ends (or wrap, see
+ * cb_sampler_set_period). */
 void cb_sample_joint_matrices(cb_sampler *sampler, int32_t animation, double t, double *out);
 /* Global (scene-space) matrices of every node at time t; out holds 16 * node_count. */
 const double *cb_sample_globals(cb_sampler *sampler, int32_t animation, double t);
@@ -251,10 +264,22 @@ void cb_channel_eval(const cb_channel *channel, double t, double out[4]);
 
 typedef enum cb_root_motion { CB_ROOT_MOTION_KEEP, CB_ROOT_MOTION_IN_PLACE } cb_root_motion;
 
+/* Why a clip was judged a loop or a one-shot (cb_clip_info.loop_reason). */
+typedef enum cb_loop_reason {
+    CB_LOOP_SET,          /* the caller said (a catalog's loop = true/false) */
+    CB_LOOP_CLOSED,       /* the last pose is the first: a loop over the key span */
+    CB_LOOP_OPEN,         /* no closing key: the first pose comes round one key step after the last */
+    CB_LOOP_ENDS_ELSEWHERE /* the wrap from the last pose to the first is a jump: a one-shot */
+} cb_loop_reason;
+
 typedef struct cb_clip_info {
     int32_t animation;
-    double t0, t1, duration;
-    bool loops;              /* first and last pose equal (root travel excluded) */
+    double t0, t1;           /* first and last key */
+    double duration;         /* playback length: t1 - t0, plus one key interval for a loop without a closing key */
+    bool loops;
+    cb_loop_reason loop_reason;
+    double key_interval;     /* the clip's key step (the shortest interval between keys), 0 if none */
+    double wrap_jump, largest_step; /* pose distances (cb_pose_distance) of the wrap and of the biggest key step */
     uint32_t steps;          /* N = max(1, round(duration * fps)) */
     uint32_t frames;         /* rows baked: N for loops, N + 1 for one-shots */
     double effective_fps;    /* N / duration; the requested fps for a zero-length clip */
@@ -262,6 +287,13 @@ typedef struct cb_clip_info {
     double root_velocity[3];     /* average velocity (displacement / duration); y is kept */
     double ground_speed;         /* |velocity.xz| */
 } cb_clip_info;
+
+/* Why the clip was judged a loop or not, with the measured numbers, in a few words (for `info`). */
+void cb_loop_reason_text(const cb_clip_info *clip, char *out, size_t size);
+
+/* The shortest interval between keys of any channel of the clip (exporters that bake keys
+ * sample every channel at one rate), ignoring intervals under 0.1 ms; 0 when none. */
+double cb_animation_key_interval(const cb_animation *animation);
 
 /* Frame count rule: N = max(1, round(D * fps)); loops bake N rows, one-shots N + 1. */
 uint32_t cb_clip_step_count(double duration, double fps);

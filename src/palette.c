@@ -206,6 +206,7 @@ typedef struct bake_state {
     cb_error *errors;      /* clips: the first error of each */
     uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
     double *clip_error;    /* clips: worst vertex error measured */
+    double *clip_blend_error; /* clips: worst vertex error halfway between rows, as the runtime blends them */
     value_range *ranges;   /* clips: the values' ranges */
     double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
 } bake_state;
@@ -352,6 +353,10 @@ static int job_main(void *arg)
     cb_error *err0 = &st->errors[jb->first < st->p->clip_count ? jb->first : 0];
     if (jb->samples) {
         w.sampler = cb_sampler_create(st->model, st->skin, err0);
+        /* Loops without a closing key wrap. (One-shots never sample past their last key: a clip
+         * planned twice, as a loop and as a one-shot, keeps its loop's period.) */
+        for (uint32_t c = 0; w.sampler && c < st->p->clip_count; ++c)
+            if (st->infos[c].loops) cb_sampler_set_period(w.sampler, st->infos[c].animation, st->infos[c].duration);
         w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
         w.sims = malloc((size_t)st->p->bone_count * CB_SAMPLE_BATCH * sizeof(cb_similarity));
         w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
@@ -556,6 +561,7 @@ static void encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32
         for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
             float vals[16];
             texel_values(p, row + (size_t)j * CANON(p->layout), vals);
+            for (int k = 0; p->positions_relative && k < 3; ++k) vals[4 + k] -= p->bind_positions[(size_t)j * 3 + k];
             if (p->precision == CB_PRECISION_FLOAT)
                 for (uint32_t i = 0; i < nvalues; ++i) store_le32f(d + i * 4, vals[i]);
             else if (p->precision == CB_PRECISION_HALF)
@@ -597,6 +603,7 @@ void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t 
         else
             v[i] = decode_u16(p, u16_kind(p->layout, (int)i), load_le16(d + i * 2));
     }
+    for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->bind_positions[(size_t)bone * 3 + k];
 }
 
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
@@ -627,6 +634,18 @@ void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const doubl
     }
 }
 
+void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr, uint32_t bone,
+                      double out[16])
+{
+    double a[16], b[16], v[16];
+    cb_palette_decode_values(p, texels, row0, bone, a);
+    cb_palette_decode_values(p, texels, row1, bone, b);
+    if (p->layout == CB_LAYOUT_QPOS && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0)
+        for (int k = 0; k < 4; ++k) b[k] = -b[k]; /* the shorter way between the rows */
+    for (uint32_t k = 0; k < p->texels_per_bone * 4; ++k) v[k] = a[k] * (1 - fr) + b[k] * fr;
+    cb_palette_values_to_matrix(p, bone, v, out); /* normalizes q for qpos */
+}
+
 /* ---- pass 3: the error against exact skinning ---- */
 
 /* The worst vertex error of the given rows of clip c. Skinning is linear in the matrices, so
@@ -634,19 +653,27 @@ void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const doubl
  * skinning twice, and no cancellation. Rows baked from similarities are measured against
  * those, sampled together like the bake did. */
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
-                           double *diff, double *err_pos)
+                           bool between, double *diff, double *err_pos)
 {
     cb_palette *p = st->p;
     const cb_model *m = st->model;
+    const cb_palette_clip *clip = &p->clips[c];
+    /* Halfway between rows f and f + 1 is row 2f + 1 of the clip framed at twice the steps. */
+    cb_clip_info framing = st->infos[c];
+    uint32_t times[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < count; ++i) times[i] = between ? 2 * frames[i] + 1 : frames[i];
+    if (between) framing.steps *= 2;
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
-    if (similar) cb_clip_frame_similarities(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, w->sims);
+    if (similar) cb_clip_frame_similarities(w->sampler, &framing, times, count, st->opt->root_motion, w->sims);
     double worst = 0;
     for (uint32_t i = 0; i < count; ++i) {
-        if (!similar) cb_clip_frame_matrices(w->sampler, &st->infos[c], frames[i], st->opt->root_motion, w->mats);
+        if (!similar) cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
+        uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             double *d = diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
             if (similar) cb_similarity_matrix(&w->sims[(size_t)i * p->bone_count + j], exact);
-            cb_palette_decode(p, p->texels, p->clips[c].first_row + frames[i], j, d);
+            if (between) cb_palette_blend(p, p->texels, row, next, 0.5, j, d);
+            else cb_palette_decode(p, p->texels, row, j, d);
             for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
         }
         for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
@@ -662,21 +689,34 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     return sqrt(worst);
 }
 
-/* The worst vertex error of clip c over every error_stride-th row and the last. */
-static void measure_clip(bake_state *st, worker *w, uint32_t c)
+/* The worst vertex error of clip c over every error_stride-th row and the last (between:
+ * halfway from each of those rows to the next, as the runtime blends them; a one-shot's last
+ * row has no next). */
+static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, bool between, double *diff, double *err_pos)
 {
-    const cb_palette *p = st->p;
-    uint32_t frames = p->clips[c].frames, batch[CB_SAMPLE_BATCH], count = 0;
-    uint64_t verts = cb_model_skin_vertex_count(st->model, st->skin);
-    double *diff = malloc((size_t)p->bone_count * 16 * sizeof(double));
-    double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
-    st->clip_error[c] = 0;
-    for (uint32_t f = 0; diff && err_pos && verts && f < frames; ++f) {
+    const cb_palette_clip *clip = &st->p->clips[c];
+    uint32_t frames = between && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], count = 0;
+    double worst = 0;
+    for (uint32_t f = 0; f < frames; ++f) {
         if (f % st->error_stride && f + 1 != frames) continue;
         batch[count++] = f;
         if (count < CB_SAMPLE_BATCH && f + 1 != frames) continue;
-        st->clip_error[c] = fmax(st->clip_error[c], measure_rows(st, w, c, batch, count, diff, err_pos));
+        worst = fmax(worst, measure_rows(st, w, c, batch, count, between, diff, err_pos));
         count = 0;
+    }
+    return worst;
+}
+
+static void measure_clip(bake_state *st, worker *w, uint32_t c)
+{
+    const cb_palette *p = st->p;
+    uint64_t verts = cb_model_skin_vertex_count(st->model, st->skin);
+    double *diff = malloc((size_t)p->bone_count * 16 * sizeof(double));
+    double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
+    st->clip_error[c] = st->clip_blend_error[c] = 0;
+    if (diff && err_pos && verts) {
+        st->clip_error[c] = measure_clip_rows(st, w, c, false, diff, err_pos);
+        st->clip_blend_error[c] = measure_clip_rows(st, w, c, true, diff, err_pos);
     }
     free(diff);
     free(err_pos);
@@ -766,7 +806,7 @@ static void bind_positions(cb_palette *p, const cb_skin *skin)
 
 static void free_bake_state(bake_state *st)
 {
-    free(st->kept), free(st->breaks), free(st->errors), free(st->clip_error), free(st->ranges);
+    free(st->kept), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
     free(st->encode_seconds);
 }
 
@@ -853,15 +893,17 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.breaks = calloc(p->clip_count, sizeof *st.breaks);
     st.errors = calloc(p->clip_count, sizeof *st.errors);
     st.clip_error = calloc(p->clip_count, sizeof *st.clip_error);
+    st.clip_blend_error = calloc(p->clip_count, sizeof *st.clip_blend_error);
     st.ranges = calloc(p->clip_count, sizeof *st.ranges);
     st.encode_seconds = calloc(p->clip_count, sizeof *st.encode_seconds);
     if (!p->texels || !p->bind_positions || (p->precision == CB_PRECISION_U16 && !st.kept) || !radius ||
-        !st.breaks || !st.errors || !st.clip_error || !st.ranges || !st.encode_seconds) {
+        !st.breaks || !st.errors || !st.clip_error || !st.clip_blend_error || !st.ranges || !st.encode_seconds) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
     }
     zero_padding(p);
     bind_positions(p, skin);
+    p->positions_relative = p->layout == CB_LAYOUT_QPOS && p->precision == CB_PRECISION_HALF;
     bool skinned = joint_reach(p, m, skin_index, radius);
     st.radius = radius;
     for_each_clip(&st, sample_clip_job, true);
@@ -886,6 +928,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
         for_each_clip(&st, measure_clip, true);
         for (uint32_t c = 0; c < p->clip_count; ++c) {
             p->max_error = fmax(p->max_error, st.clip_error[c]);
+            p->visible_error = fmax(p->visible_error, fmax(st.clip_error[c], st.clip_blend_error[c]));
             p->error_rows_measured += (p->clips[c].frames + st.error_stride - 1) / st.error_stride +
                                       ((p->clips[c].frames - 1) % st.error_stride != 0);
         }

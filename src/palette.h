@@ -58,13 +58,17 @@ typedef struct cb_palette {
     uint32_t clip_count;
     cb_palette_clip *clips;
     float *bind_positions;          /* 3 per bone: the joints' bind-pose positions (qpos pivots) */
+    bool positions_relative;        /* qpos/half: the position texel holds p - b, the joint's position less its bind
+                                     * position, which stays small (and precise in half floats) far from the origin */
     float bounds_min[3], bounds_max[3]; /* u16: the box positions are quantized in */
     float linear_range;             /* u16: |3x3 terms| (mat4, affine) or scale (qpos) stay below this */
     uint32_t quat_hemisphere_breaks; /* loops whose rotation ends on -q of its start (a full turn) */
     void *texels;                   /* width * height * texel bytes, little-endian */
     size_t texel_bytes;
     double model_height;            /* rest-pose height of the skinned meshes */
-    double max_error;               /* worst vertex displacement vs exact skinning, model units */
+    double max_error;               /* encoding error: worst vertex displacement vs exact skinning at the baked rows, model units */
+    double visible_error;           /* what a player sees: the worst of max_error and the error of the runtime's blend of
+                                     * two adjacent rows halfway between them (every row interval, wraps included) */
     uint32_t error_rows_measured;   /* rows the error was measured at: all, or an even subset */
     char fallback_note[512];        /* why qpos fell back to affine, or empty */
     double seconds_sample, seconds_encode, seconds_measure;
@@ -91,10 +95,16 @@ void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint3
 /* Decodes one bone of one row back to a 4x4 column-major matrix. texels points at the
  * palette's texel data (as in cb_palette, or mapped from a file). */
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16]);
-/* The bone's 4 x texels_per_bone values as a shader reads them (u16 already scaled). */
+/* The bone's 4 x texels_per_bone values as a shader reads them (u16 already scaled; relative
+ * positions with the bind position added back, as the shader does under CB_POSITIONS_RELATIVE). */
 void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16]);
 /* Those values (or a blend of two rows of them) as a 4x4 matrix. */
 void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const double v[16], double out[16]);
+/* What the shipped shaders compute for a bone between two rows: the rows' values blended by
+ * fr (0: row0, 1: row1) - matrices term by term, qpos quaternions the shorter way round (a
+ * hemisphere flip) and normalized - as a 4x4 matrix. */
+void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr, uint32_t bone,
+                      double out[16]);
 
 /* ---- conversions ---- */
 uint16_t cb_float_to_half(float f);

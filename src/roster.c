@@ -83,13 +83,35 @@ static int compare_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-double cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, const char **method)
+/* Mean stance speed of the feet (leaf joints in the lowest 15 % of the rest pose), their
+ * median; 0 when no foot steps or they only shuffle on the spot. */
+static double feet_speed(cb_sampler *s, const cb_clip_info *clip, double lo, double size)
 {
-    *method = "none";
-    if (clip->duration <= 0) return 0;
     const cb_model *m = cb_sampler_model(s);
     const cb_skin *skin = &m->skins[cb_sampler_skin(s)];
-    /* Root travel counts when it is more than a percent of the skeleton per second. */
+    const double *g = cb_sample_globals(s, -1, 0);
+    uint32_t root = cb_skin_root_joint(m, cb_sampler_skin(s)), feet = 0, candidates[64], n = 0;
+    for (uint32_t j = 0; j < skin->joint_count && n < 64; ++j) {
+        double y = g[(size_t)skin->joints[j] * 16 + 13];
+        if (y <= lo + 0.15 * size && is_leaf(m, skin, j)) candidates[n++] = j;
+    }
+    double speeds[64];
+    for (uint32_t i = 0; i < n; ++i) {
+        double v = stance_speed(s, clip, candidates[i], root, 240, size);
+        if (v > 0) speeds[feet++] = v;
+    }
+    if (feet == 0) return 0;
+    qsort(speeds, feet, sizeof speeds[0], compare_double);
+    return speeds[feet / 2] > 0.1 * size ? speeds[feet / 2] : 0; /* shuffling on the spot is not travel */
+}
+
+void cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, cb_ground_speed *out)
+{
+    memset(out, 0, sizeof *out);
+    out->method = "none";
+    if (clip->duration <= 0) return;
+    const cb_model *m = cb_sampler_model(s);
+    const cb_skin *skin = &m->skins[cb_sampler_skin(s)];
     const double *g = cb_sample_globals(s, -1, 0);
     double lo = INFINITY, hi = -INFINITY;
     for (uint32_t j = 0; j < skin->joint_count; ++j) {
@@ -97,24 +119,20 @@ double cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, const ch
         lo = fmin(lo, y), hi = fmax(hi, y);
     }
     double size = hi - lo > 0 ? hi - lo : 1;
-    if (clip->ground_speed > 0.01 * size) {
-        *method = "root motion";
-        return clip->ground_speed;
+    out->root = clip->ground_speed;
+    out->feet = feet_speed(s, clip, lo, size);
+    /* Root travel counts when it is more than a percent of the skeleton per second. A planted
+     * foot is still in the world, so relative to the root it slides back at the ground speed
+     * whether the root moves or not: where both exist they agree, and a root that moves far
+     * less than the feet only drifts while the clip walks in place. */
+    bool root_moves = out->root > 0.01 * size;
+    if (out->feet > 0 && (!root_moves || out->root < 0.5 * out->feet)) {
+        out->speed = out->feet;
+        out->method = root_moves ? "planted feet (the root only drifts)" : "planted feet";
+    } else if (root_moves) {
+        out->speed = out->root;
+        out->method = "root motion";
     }
-    /* Feet: leaf joints in the lowest 15 % of the rest pose. */
-    uint32_t root = cb_skin_root_joint(m, cb_sampler_skin(s)), feet = 0;
-    double speeds[64];
-    for (uint32_t j = 0; j < skin->joint_count && feet < 64; ++j) {
-        double y = g[(size_t)skin->joints[j] * 16 + 13];
-        if (y > lo + 0.15 * size || !is_leaf(m, skin, j)) continue;
-        double v = stance_speed(s, clip, j, root, 240, size);
-        if (v > 0) speeds[feet++] = v;
-    }
-    if (feet == 0) return 0;
-    qsort(speeds, feet, sizeof speeds[0], compare_double);
-    if (speeds[feet / 2] <= 0.1 * size) return 0; /* shuffling on the spot is not travel */
-    *method = "planted feet";
-    return speeds[feet / 2];
 }
 
 /* ---- LODs ---- */

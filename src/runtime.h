@@ -39,11 +39,27 @@ cb_status cb_verify_clip(cb_sampler *sampler, const cb_palette *p, const void *t
                          uint32_t random_times, cb_clip_error *out, cb_error *err);
 
 /* Error-driven frame rate: the lowest of the candidate rates (common rates from 2 fps, and the
- * clip's key rate with its multiples and fractions, up to max_fps) at which the clip,
- * baked with `options`, stays within max_error (model units) at baked frames, mid-frames and
- * random times. Returns max_fps (and *met = false) when none does. */
-double cb_choose_clip_fps(cb_sampler *sampler, const cb_bake_options *options, int32_t animation, double max_error,
+ * clip's key rate with its multiples and fractions, up to max_fps) at which the clip, baked
+ * alone with `options` and the clip's own loop setting, has a visible error (cb_palette's:
+ * the encoding, and the blend halfway between rows) within max_error (model units). Binary
+ * search: the error falls as the rate rises. Returns max_fps (and *met = false) when none
+ * does; *error is the error at the rate returned. */
+double cb_choose_clip_fps(cb_sampler *sampler, const cb_bake_options *options, const cb_clip_plan *clip, double max_error,
                           double max_fps, bool *met, double *error, cb_error *err);
+
+/* fps = "auto" for a plan: per clip, the visible error to stay under (mm per metre of model
+ * height; 0: keep the plan's fps) and the highest rate allowed (0: 60). */
+typedef struct cb_rate_goal {
+    double max_error_mm, max_fps;
+} cb_rate_goal;
+typedef struct cb_rate_choice {
+    bool met;               /* the error is within the goal */
+    double error, error_mm; /* at the chosen rate: model units, and mm per metre of height */
+} cb_rate_choice;
+/* Sets plan[i].fps for every clip with a goal (cb_choose_clip_fps); out (optional) says what
+ * each choice reached. */
+cb_status cb_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan, uint32_t count,
+                          const cb_rate_goal *goals, cb_rate_choice *out, cb_error *err);
 
 #ifdef __cplusplus
 }

@@ -20,6 +20,7 @@ struct cb_sampler {
     bool affine_ibm;     /* every inverse bind matrix ends in 0 0 0 1: cheaper products */
     uint32_t *cursor;    /* per channel of every clip: the key interval of the last sample */
     uint32_t *cursor_base; /* per clip: its channels' first cursor */
+    cb_wrap *wraps;      /* per clip: where a loop without a closing key comes round (cb_sampler_set_period) */
     /* The similarity path (cb_sampler_is_similarity) visits only the joints and their ancestors. */
     bool similar;
     bool *relevant;              /* per node: a joint or an ancestor of one */
@@ -70,11 +71,35 @@ static void eval_cubic(const cb_channel *ch, uint32_t k, double s, double dt, in
     for (int i = 0; i < comps; ++i) out[i] = h00 * p0[i] + h10 * dt * b0[i] + h01 * p1[i] + h11 * dt * a1[i];
 }
 
-static void channel_eval(const cb_channel *ch, double t, double out[4], uint32_t *hint)
+static void channel_eval(const cb_channel *ch, double t, double out[4], uint32_t *hint, const cb_wrap *wrap);
+
+/* A loop without a closing key, between its last key time and the end of its period: each
+ * channel goes from its value at the last key time back to its first key, as the missing
+ * closing key would make it (linearly; rotations by slerp; STEP holds). */
+static void wrap_eval(const cb_channel *ch, double t, double out[4], uint32_t *hint, const cb_wrap *wrap)
+{
+    int comps = ch->path == CB_PATH_ROTATION ? 4 : 3;
+    double a[4], b[4], s = (t - wrap->from) / (wrap->to - wrap->from);
+    channel_eval(ch, wrap->from, a, hint, NULL);
+    load_key(ch, 0, ch->interp == CB_INTERP_CUBICSPLINE ? 1 : 0, comps, b);
+    if (ch->interp == CB_INTERP_STEP) s = 0;
+    if (comps == 4) {
+        cb_quat q = cb_quat_slerp((cb_quat){a[0], a[1], a[2], a[3]}, (cb_quat){b[0], b[1], b[2], b[3]}, s);
+        out[0] = q.x, out[1] = q.y, out[2] = q.z, out[3] = q.w;
+    } else {
+        for (int i = 0; i < 3; ++i) out[i] = a[i] + (b[i] - a[i]) * s;
+    }
+}
+
+static void channel_eval(const cb_channel *ch, double t, double out[4], uint32_t *hint, const cb_wrap *wrap)
 {
     int comps = ch->path == CB_PATH_ROTATION ? 4 : 3;
     int value_slot = ch->interp == CB_INTERP_CUBICSPLINE ? 1 : 0;
     uint32_t last = ch->key_count - 1;
+    if (wrap && t > wrap->from && wrap->to > wrap->from) {
+        wrap_eval(ch, t, out, hint, wrap);
+        return;
+    }
     if (ch->interp == CB_INTERP_STEP) {
         load_key(ch, find_key(ch, t + CB_STEP_EPSILON, hint), 0, comps, out);
         return;
@@ -110,7 +135,7 @@ static void channel_eval(const cb_channel *ch, double t, double out[4], uint32_t
 void cb_channel_eval(const cb_channel *ch, double t, double out[4])
 {
     uint32_t hint = 0;
-    channel_eval(ch, t, out, &hint);
+    channel_eval(ch, t, out, &hint, NULL);
 }
 
 static uint32_t node_depth(const cb_model *m, uint32_t n)
@@ -252,7 +277,7 @@ static CB_CLONE_INLINE void slerp_lanes(const double (*restrict a)[B], const dou
 
 /* A linear rotation channel at the batch's times into out[4][B]. */
 static CB_CLONE_INLINE void rotation_lanes(const cb_channel *ch, const double *times, uint32_t *hint,
-                                           double (*out)[B])
+                                           const cb_wrap *wrap, double (*out)[B])
 {
     double a[4][B], b[4][B], t[B];
     unsigned char edge[B];
@@ -271,21 +296,22 @@ static CB_CLONE_INLINE void rotation_lanes(const cb_channel *ch, const double *t
     for (int i = 0; i < B; ++i) {
         if (!edge[i] && !redo[i]) continue;
         double v[4];
-        channel_eval(ch, times[i], v, hint); /* before or after the keys, or a wide angle */
+        channel_eval(ch, times[i], v, hint, wrap); /* before or after the keys, or a wide angle */
         for (int c = 0; c < 4; ++c) out[c][i] = v[c];
     }
 }
 
 /* One channel at the batch's times into its node's lanes. */
-static CB_CLONE_INLINE void channel_lanes(const cb_channel *ch, const double *times, uint32_t *hint, lane_set *node)
+static CB_CLONE_INLINE void channel_lanes(const cb_channel *ch, const double *times, uint32_t *hint,
+                                          const cb_wrap *wrap, lane_set *node)
 {
     if (ch->path == CB_PATH_ROTATION && ch->interp == CB_INTERP_LINEAR && ch->key_count > 1) {
-        rotation_lanes(ch, times, hint, *node);
+        rotation_lanes(ch, times, hint, wrap, *node);
         return;
     }
     for (int i = 0; i < B; ++i) {
         double v[4];
-        channel_eval(ch, times[i], v, hint);
+        channel_eval(ch, times[i], v, hint, wrap);
         if (ch->path == CB_PATH_ROTATION)
             for (int c = 0; c < 4; ++c) (*node)[c][i] = v[c];
         else if (ch->path == CB_PATH_TRANSLATION)
@@ -365,7 +391,8 @@ static void sample_batch(cb_sampler *s, int32_t animation, const double *times, 
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
             const cb_channel *ch = &anim->channels[c];
             if (s->relevant[ch->node])
-                channel_lanes(ch, padded, &s->cursor[s->cursor_base[animation] + c], &lanes[s->slot[ch->node]]);
+                channel_lanes(ch, padded, &s->cursor[s->cursor_base[animation] + c], &s->wraps[animation],
+                              &lanes[s->slot[ch->node]]);
         }
     }
     for (uint32_t k = 0; k < s->relevant_count; ++k) {
@@ -436,7 +463,8 @@ cb_sampler *cb_sampler_create(const cb_model *model, int32_t skin, cb_error *err
         channels += model->animations[a].channel_count;
     }
     s->cursor = calloc(channels + 1, sizeof *s->cursor);
-    if (!s->cursor_base || !s->cursor) {
+    s->wraps = calloc(model->animation_count + 1, sizeof *s->wraps);
+    if (!s->cursor_base || !s->cursor || !s->wraps) {
         free(depth);
         cb_sampler_free(s);
         cb_fail(err, CB_ERR_INTERNAL, "out of memory creating a sampler for %s", model->source);
@@ -476,7 +504,17 @@ void cb_sampler_free(cb_sampler *s)
     free(s->globals);
     free(s->cursor);
     free(s->cursor_base);
+    free(s->wraps);
     free(s);
+}
+
+void cb_sampler_set_period(cb_sampler *s, int32_t animation, double period)
+{
+    if (animation < 0 || animation >= (int32_t)s->model->animation_count) return;
+    const cb_animation *a = &s->model->animations[animation];
+    /* Within a microsecond of the key span: a closed loop, whose last key is its first pose. */
+    bool open = period > a->t1 - a->t0 + 1e-6;
+    s->wraps[animation] = open ? (cb_wrap){a->t1, a->t0 + period} : (cb_wrap){0, 0};
 }
 
 const cb_model *cb_sampler_model(const cb_sampler *s) { return s->model; }
@@ -509,7 +547,7 @@ const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
             const cb_channel *ch = &anim->channels[c];
             double v[4];
-            channel_eval(ch, t, v, &s->cursor[s->cursor_base[animation] + c]);
+            channel_eval(ch, t, v, &s->cursor[s->cursor_base[animation] + c], &s->wraps[animation]);
             double *trs = s->local_trs + (size_t)ch->node * 10;
             int offset = ch->path == CB_PATH_TRANSLATION ? 0 : ch->path == CB_PATH_ROTATION ? 3 : 7;
             memcpy(trs + offset, v, (ch->path == CB_PATH_ROTATION ? 4 : 3) * sizeof(double));

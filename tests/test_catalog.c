@@ -78,7 +78,7 @@ static void test_validation_errors_name_line_and_fix(void **state)
     snprintf(text, sizeof text, "[bak]\nfps = 30\n[animal.fish]\n%s\n", model);
     expect_catalog_error(text, "unknown key 'bak'; did you mean 'bake'?", 1);
     snprintf(text, sizeof text, "[animal.fish]\n%s\nfps = \"fast\"\n", model);
-    expect_catalog_error(text, "fps must be a number, got a string", 3);
+    expect_catalog_error(text, "fps must be a rate in frames per second or \"auto\"", 3);
     expect_catalog_error("[animal.fish]\nmodel = \"nope/missing.glb\"\n", "does not exist", 2);
     snprintf(text, sizeof text, "[animal.fish]\n%s\nstates = { swim = [\"swim\"] }\ndefault_state = \"fly\"\n", model);
     expect_catalog_error(text, "default_state 'fly' is not one of its states (swim)", 4);
@@ -132,12 +132,15 @@ static void test_state_keyword_matching(void **state)
 
 static double clip_speed(const char *model_path, const char *clip_name, const char **method)
 {
+    cb_ground_speed gs;
     cb_model *m = load_or_fail(model_path);
     cb_error err = {0};
     cb_sampler *s = cb_sampler_create(m, 0, &err);
     cb_clip_info info;
     assert_int_equal(cb_clip_analyze(s, cb_model_find_animation(m, clip_name), 30, -1, NULL, &info, &err), CB_OK);
-    double v = cb_measure_ground_speed(s, &info, method);
+    cb_measure_ground_speed(s, &info, &gs);
+    *method = gs.method;
+    double v = gs.speed;
     cb_sampler_free(s);
     cb_model_free(m);
     return v;

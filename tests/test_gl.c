@@ -55,12 +55,13 @@ static GLuint compile(const cb_palette *p, const char *library, bool es)
 {
     static char src[1 << 16];
     snprintf(src, sizeof src,
-             "%s\n#define %s\n#define %s\n%s\n"
+             "%s\n#define %s\n#define %s\n%s%s\n"
              "in vec3 a_position; in ivec4 a_joints; in vec4 a_weights; in vec4 a_instance; in float a_time;\n"
              "out vec3 v_skinned;\n"
              "void main() { v_skinned = cb_skin_position(a_position, a_joints, a_weights, a_instance, a_time); "
              "gl_Position = vec4(0.0); }\n",
-             es ? "#version 300 es" : "#version 330 core", layout_define[p->layout], precision_define[p->precision], library);
+             es ? "#version 300 es" : "#version 330 core", layout_define[p->layout], precision_define[p->precision],
+             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "", library);
     const char *fs_src = es ? "#version 300 es\nprecision mediump float;\nout vec4 c; void main() { c = vec4(1.0); }\n"
                             : "#version 330 core\nout vec4 c; void main() { c = vec4(1.0); }\n";
     GLuint vs = glCreateShader(GL_VERTEX_SHADER), fs = glCreateShader(GL_FRAGMENT_SHADER), prog = glCreateProgram();

@@ -188,7 +188,7 @@ static void test_corruption_is_rejected(void **state)
     wr64(d + 120, (uint64_t)1 << 40);
     expect_rejected(d, size, "clip table", "bogus clip offset");
     memcpy(d, good, size);
-    wr32(d + 8, 2);
+    wr32(d + 8, CBPAL_VERSION + 1);
     expect_rejected(d, size, "newer than this reader", "future version");
     memcpy(d, good, size);
     wr32(d + 40, 1u << 30); /* rows */

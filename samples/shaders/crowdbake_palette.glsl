@@ -3,6 +3,7 @@
 //
 //   #define CB_LAYOUT_MAT4 | CB_LAYOUT_AFFINE | CB_LAYOUT_QPOS        (the .pal header's layout)
 //   #define CB_PRECISION_FLOAT | CB_PRECISION_HALF | CB_PRECISION_U16 (its precision)
+//   #define CB_POSITIONS_RELATIVE   when the header's flags have bit 2 (4: a version 2 qpos/half palette)
 //
 // Textures: cb_palette is the .pal payload as is - RGBA32F, RGBA16F, or RGBA16UI (u16, read as
 // usampler2D) - width x height from the header. For qpos, cb_bind_positions is an RGBA32F
@@ -119,6 +120,9 @@ vec3 cb_bone_transform(int row0, int row1, float fr, int bone, vec3 v, float w)
     vec4 q = normalize(mix(q0, q1, fr));
     vec4 ps = mix(cb_texel(row0, bone, 1), cb_texel(row1, bone, 1), fr); // position, scale
     vec3 b = texelFetch(cb_bind_positions, ivec2(bone, 0), 0).xyz;
+#ifdef CB_POSITIONS_RELATIVE
+    ps.xyz += b; // the texel holds the joint's position less its bind position
+#endif
     return w * ps.xyz + ps.w * cb_rotate(q, v - w * b);
 #elif defined(CB_LAYOUT_AFFINE)
     vec4 p = vec4(v, w);
