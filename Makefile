@@ -120,8 +120,8 @@ samples: $(SAMPLE_GLB)
 demo: all
 	@mkdir -p $(BUILD)/demo
 	@for s in $(SAMPLES); do $(BUILD)/crowdbake info $(BUILD)/samples/$$s.glb || exit 1; echo; done
-	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.pal || exit 1; done
-	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.exr || exit 1; done
+	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.pal --format pal,exr \
+	  || exit 1; done
 	@$(BUILD)/crowdbake inspect $(BUILD)/demo/quadruped.pal
 	@echo
 	$(BUILD)/crowdbake bake samples/catalog.toml
