@@ -74,7 +74,10 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
         printf("  warning: %u morph-weight channel%s ignored (palettes carry joints only)\n", m->ignored_morph_channels,
                m->ignored_morph_channels == 1 ? "" : "s");
     if (!m->animation_count) return;
-    printf("  %-24s %8s %9s %6s  %-18s %-8s %7s  %s\n", "clip", "start s", "length s", "keys", "interpolation", "loops",
+    int w = 24; /* the clip column fits the longest name (exporters prefix them: "AnimalArmature|Walk") */
+    for (uint32_t a = 0; a < m->animation_count; ++a)
+        if ((int)strlen(m->animations[a].name) > w) w = (int)strlen(m->animations[a].name);
+    printf("  %-*s %8s %9s %6s  %-18s %-8s %7s  %s\n", w, "clip", "start s", "length s", "keys", "interpolation", "loops",
            "frames", "root velocity (units/s)");
     for (uint32_t a = 0; a < m->animation_count; ++a) {
         const cb_animation *anim = &m->animations[a];
@@ -84,14 +87,14 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
         if (f->analyzed) {
             char why[160];
             cb_loop_reason_text(&f->info, why, sizeof why);
-            printf("  %-24s %8.4f %9.4f %6llu  %-18s %-8s %7u  (%.4g, %.4g, %.4g) ground %.4g\n", anim->name, anim->t0,
+            printf("  %-*s %8.4f %9.4f %6llu  %-18s %-8s %7u  (%.4g, %.4g, %.4g) ground %.4g\n", w, anim->name, anim->t0,
                    anim->t1 - anim->t0, (unsigned long long)f->keys, interp, f->info.loops ? "loop" : "one-shot",
                    f->info.frames, f->info.root_velocity[0], f->info.root_velocity[1], f->info.root_velocity[2],
                    f->info.ground_speed);
-            printf("  %-24s %s: %s; ground speed %.4g from %s (root %.4g, planted feet %.4g)\n", "",
+            printf("  %-*s %s: %s; ground speed %.4g from %s (root %.4g, planted feet %.4g)\n", w, "",
                    f->info.loops ? "loops" : "plays once", why, f->speed.speed, f->speed.method, f->speed.root, f->speed.feet);
         } else
-            printf("  %-24s %8.4f %9.4f %6llu  %-18s %-8s %7u  -\n", anim->name, anim->t0, anim->t1 - anim->t0,
+            printf("  %-*s %8.4f %9.4f %6llu  %-18s %-8s %7u  -\n", w, anim->name, anim->t0, anim->t1 - anim->t0,
                    (unsigned long long)f->keys, interp, "-", cb_clip_step_count(anim->t1 - anim->t0, fps) + 1);
     }
 }

@@ -81,9 +81,13 @@ int cmd_verify(int argc, char **argv)
         cb_json_string(&j, "palette", pos[1]);
         cb_json_number(&j, "model_height", height);
         cb_json_array(&j, "clips");
-    } else {
-        printf("%s with %s (%s/%s, model height %.4g):\n  %-20s %12s %12s %12s %12s %12s %13s  %s\n", pos[1], pos[0],
-               cb_layout_name(pv->layout), cb_precision_name(pv->precision), height, "clip", "frames max", "frames mean",
+    }
+    int name_width = 20; /* the clip column fits the longest name */
+    for (uint32_t c = 0; c < pv->clip_count; ++c)
+        if ((int)strlen(pv->clips[c].name) > name_width) name_width = (int)strlen(pv->clips[c].name);
+    if (!json) {
+        printf("%s with %s (%s/%s, model height %.4g):\n  %-*s %12s %12s %12s %12s %12s %13s  %s\n", pos[1], pos[0],
+               cb_layout_name(pv->layout), cb_precision_name(pv->precision), height, name_width, "clip", "frames max", "frames mean",
                "between max", "between mean", "frames mm/m", "between mm/m", "worst vertex @ time");
     }
     for (uint32_t c = 0; c < pv->clip_count && !err.status; ++c) {
@@ -111,7 +115,7 @@ int cmd_verify(int argc, char **argv)
             cb_json_number(&j, "worst_time", e.worst_time);
             cb_json_end(&j);
         } else {
-            printf("  %-20s %12.4g %12.4g %12.4g %12.4g %12.3f %13.3f  %llu @ %.3f s\n", pv->clips[c].name, e.quant_max,
+            printf("  %-*s %12.4g %12.4g %12.4g %12.4g %12.3f %13.3f  %llu @ %.3f s\n", name_width, pv->clips[c].name, e.quant_max,
                    e.quant_mean, e.interp_max, e.interp_mean, mm(e.quant_max, height), mm(e.interp_max, height),
                    (unsigned long long)e.worst_vertex, e.worst_time);
         }
