@@ -167,7 +167,8 @@ static void test_source_hash_covers_external_buffers(void **state)
     (void)state;
     char src[1024], cmd[2300];
     shared_path(src, sizeof src, "assets/derived-fox/separate");
-    snprintf(cmd, sizeof cmd, "rm -rf " TMP " && mkdir -p " TMP " && cp %s/* " TMP "/", src);
+    /* writable copies: ../shared may be read-only, and a non-root user could not change them */
+    snprintf(cmd, sizeof cmd, "rm -rf " TMP " && mkdir -p " TMP " && cp %s/* " TMP "/ && chmod u+w " TMP "/*", src);
     assert_int_equal(system(cmd), 0);
     cb_model *before = load_or_fail(TMP "/Fox.gltf");
     cb_model *again = load_or_fail(TMP "/Fox.gltf");
