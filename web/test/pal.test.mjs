@@ -182,11 +182,25 @@ const FIELDS = [
     ['payload_offset', 152, 8], ['payload_size', 160, 8], ['payload_raw_size', 168, 8], ['checksum', 176, 8],
 ];
 
-test('single-field corruptions of every header field: refused exactly when the C reader refuses them', () => {
+// The checked fields of the first and last clip and bone table entries (read from the source's header).
+function tableFields(source) {
+    const view = new DataView(source.buffer, source.byteOffset, source.byteLength);
+    const clips = Number(view.getBigUint64(120, true)), bones = Number(view.getBigUint64(128, true));
+    const last = (count, size) => (count - 1) * size;
+    const out = [];
+    for (const [table, base, count, size, fields] of [
+        ['clip', clips, view.getUint32(60, true), 80, [['name', 0], ['name length', 4], ['first_row', 8], ['frames', 12]]],
+        ['bone', bones, view.getUint32(32, true), 32, [['name', 0], ['name length', 4], ['parent', 8]]]])
+        for (const at of [0, last(count, size)])
+            for (const [field, offset] of fields) out.push([`${table} entry at byte ${base + at}: ${field}`, base + at + offset, 4]);
+    return out;
+}
+
+test('single-field corruptions of every header field and table entry: refused exactly when the C reader refuses them', () => {
     const source = readFileSync(path.join(dir, 'quadruped-qpos-u16.pal'));
     const file = path.join(dir, 'corrupt.pal');
     let refusedByBoth = 0;
-    for (const [field, offset, width] of FIELDS) {
+    for (const [field, offset, width] of [...FIELDS, ...tableFields(source)]) {
         const values = width === 8 ? U64 : U32;
         for (const value of values) {
             const bytes = new Uint8Array(source);
@@ -212,6 +226,25 @@ test('single-field corruptions of every header field: refused exactly when the C
         }
     }
     assert.ok(refusedByBoth > 100, `${refusedByBoth} structural corruptions refused`);
+});
+
+test('rows that would fit in fewer column blocks are refused (geometry), as by the C reader', () => {
+    // The wrapped bake (2 blocks of 133 rows for 265 rows) made 265 rows high: one block would hold them all.
+    const source = readFileSync(path.join(dir, 'wrapped.pal'));
+    const h = readPal(source).header;
+    const raw = BigInt(h.width * 265 * h.texel_bytes);
+    const bytes = new Uint8Array(h.payload_offset + Number(raw));
+    bytes.set(source);
+    const view = new DataView(bytes.buffer);
+    view.setUint32(48, 265, true);
+    view.setBigUint64(160, raw, true);
+    view.setBigUint64(168, raw, true);
+    const file = path.join(dir, 'too-many-blocks.pal');
+    writeFileSync(file, bytes);
+    assert.equal(cReaderAccepts(file), false);
+    assert.match(assertRefused(() => readPal(bytes, { name: 'b.pal' }), 'b.pal', 'blocks'), /inconsistent texture geometry/);
+    view.setUint32(52, 1, true); // one block, twice as wide rows: the width check then refuses it
+    assertRefused(() => readPal(bytes, { name: 'b.pal' }), 'b.pal', 'width');
 });
 
 test('anything but bytes is refused with an Error', () => {
