@@ -287,7 +287,7 @@ export function texelIndex(header, row, bone) {
 // Parses a roster manifest (its text, or the object JSON.parse made) and checks what a runtime
 // uses. Returns { generator, catalog, types: { NAME: { palette, palette_exr, shares_palette_of,
 // layout, precision, bones, rows, width, height, blocks, speed_reference, default_state, clips,
-// states: { STATE: { clip, first_row, frame_count, rate, rate_per_speed, phase } } } }, failed }.
+// states: { STATE: { clip, first_row, frame_count, rate, rate_per_speed, phase } }, lods } }, failed }.
 // Paths stay relative to the manifest's directory.
 export function readRoster(json, options = {}) {
     const name = options.name ?? 'roster.json';
@@ -341,7 +341,7 @@ export function readRoster(json, options = {}) {
             blocks: need(t, at, 'blocks', isCount, 'an integer >= 1'),
             speed_reference: need(t, at, 'speed_reference', isNonNegative, 'a number >= 0'),
             default_state: need(t, at, 'default_state', isString, 'a string'),
-            clips: [], states: {},
+            clips: [], states: {}, lods: [],
         };
         if (type.palette === undefined && type.palette_exr === undefined)
             fail(at, 'has neither palette nor palette_exr');
@@ -379,6 +379,12 @@ export function readRoster(json, options = {}) {
                          `${type.rows} rows`);
             type.states[stateName] = state;
         }
+        need(t, at, 'lods', Array.isArray, 'an array').forEach((l, i) => {
+            const w = `${at}.lods[${i}]`;
+            const joint_remap = need(l, w, 'joint_remap', (v) => Array.isArray(v) && v.every((j) => isIndex(j) && j < type.bones),
+                                     `an array of bone indices below ${type.bones}`);
+            type.lods.push({ model: need(l, w, 'model', isString, 'a string'), joint_remap });
+        });
         if (!(type.default_state in type.states))
             fail(`${at}.default_state`, `"${type.default_state}" is not one of the type's states`);
         out.types[typeName] = type;
