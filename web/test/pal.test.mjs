@@ -67,8 +67,12 @@ function checkAgainstC(file, pal, framesPerClip = 2) {
 
 test('XXH64 matches the specification\'s values', () => {
     assert.equal(xxh64(new Uint8Array(0)), 0xef46db3751d8e999n);
+    assert.equal(xxh64(new TextEncoder().encode('a')), 0xd24ec4f1a98c6e5bn);
     assert.equal(xxh64(new TextEncoder().encode('abc')), 0x44bc2cf5ad770999n);
-    // Split anywhere, the same hash: the checksum hashes the file in three parts.
+    // 39 bytes: one 32-byte stripe, then the 4-byte and the 1-byte tail steps (python-xxhash's example).
+    assert.equal(xxh64(new TextEncoder().encode('Nobody inspects the spammish repetition')), 0xfbcea83c8a378bf1n);
+    // Split anywhere, the same hash: the checksum hashes the file in three parts. (Files' checksums
+    // against the C writer's are checked by verifyChecksum in the bake tests below.)
     const bytes = new Uint8Array(100).map((_, i) => (i * 37) & 255);
     const whole = xxh64(bytes);
     for (const cut of [0, 1, 7, 31, 32, 33, 64, 99, 100])
