@@ -297,7 +297,10 @@ function texelView(raw, precision) {
 
 // Parses a .pal held in `data` (ArrayBuffer or Uint8Array; kept, not copied: the texels are a view
 // into it). options: name (for messages), verifyChecksum, decompress, maxDecompressedBytes.
-// Returns { header, clips, bones, texels, texelBytes }.
+// Returns { header, clips, bones, texels, texelBytes }: header has the fields of docs/pal-format.md
+// by name (input_hash and checksum as BigInt) plus layout_name and precision_name; clips and bones
+// what cbpal_get_clip / cbpal_get_bone give (and loops); texelBytes the payload's raw bytes.
+// Beyond the C reader's checks: a zstd payload over options.maxDecompressedBytes (1 GiB) is refused.
 export function readPal(data, options = {}) {
     const name = options.name ?? 'palette';
     const fail = (message) => { throw new Error(`${name}: ${message}`); };
