@@ -13,7 +13,7 @@ SHELL := /bin/bash
 
 DEB_PACKAGES := pkg-config rapidjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
-                libosmesa6-dev libpng-dev ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core
+                libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core
 PKGS := tinygltf RapidJSON draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
 BUILD   ?= build
@@ -175,7 +175,7 @@ check-shared:
 RESULTS = $(BUILD)/tests/results
 TEST_RUNS = $(TEST_BINS:%=%.run) $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
 # The README's example outputs come from real runs (once: the sanitizer build need not).
-TEST_RUNS += $(if $(SAN),,$(BUILD)/tests/readme_examples.run)
+TEST_RUNS += $(if $(SAN),,$(BUILD)/tests/readme_examples.run $(BUILD)/tests/web_reader.run)
 define record_run
 	@echo "---- $(1) ($(BUILD))"
 	@rm -f $(RESULTS)/$(1).pending; if $(2); then touch $(RESULTS)/$(1).passed; \
@@ -187,6 +187,8 @@ $(BUILD)/tests/%.run: $(BUILD)/tests/% all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,$*,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples $< $(ARGS_$*))
 $(BUILD)/tests/readme_examples.run: all | $(RESULTS)/pending
 	$(call record_run,readme_examples,python3 tests/tools/readme_examples.py --build $(BUILD))
+$(BUILD)/tests/web_reader.run: all | $(RESULTS)/pending
+	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test web/test/)
 test-runs: $(TEST_RUNS)
 replay: $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
 readme: all

@@ -1,0 +1,107 @@
+// The roster reader on a real bake of samples/catalog.toml, against the palettes it names, and
+// on broken manifests.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
+import { readFileSync, writeFileSync } from 'node:fs';
+import path from 'node:path';
+import { readPal, readRoster, instanceData } from '../crowdbake_pal.mjs';
+import { CROWDBAKE, SAMPLES, tmpDir } from './support.mjs';
+
+const dir = tmpDir('roster');
+// The sample catalog, writing into this test's folder and naming the models by absolute path.
+const catalog = readFileSync('samples/catalog.toml', 'utf8')
+    .replace('out_dir = "../build/roster"', 'out_dir = "roster"')
+    .replaceAll('"../build/samples/', `"${path.resolve(SAMPLES)}/`);
+writeFileSync(path.join(dir, 'catalog.toml'), catalog);
+execFileSync(CROWDBAKE, ['bake', path.join(dir, 'catalog.toml'), '-q'], { stdio: ['ignore', 'ignore', 'pipe'] });
+const manifestPath = path.join(dir, 'roster', 'roster.json');
+const manifestText = readFileSync(manifestPath, 'utf8');
+
+test('each type\'s palette opens, and its states address the palette\'s clips', () => {
+    const roster = readRoster(manifestText, { name: manifestPath });
+    assert.deepEqual(Object.keys(roster.types).sort(), ['bird', 'fish', 'goat', 'sheep']);
+    assert.equal(roster.types.sheep.shares_palette_of, 'goat');
+    assert.equal(roster.types.sheep.palette, 'goat.pal');
+    assert.equal(roster.types.goat.lods.length, 1);
+    assert.ok(roster.types.goat.lods[0].joint_remap.length > 1);
+    for (const [name, type] of Object.entries(roster.types)) {
+        const file = path.join(path.dirname(manifestPath), type.palette);
+        const pal = readPal(readFileSync(file), { name: file, verifyChecksum: true });
+        for (const k of ['rows', 'width', 'height', 'blocks', 'texels_per_bone']) assert.equal(type[k], pal.header[k], `${name}.${k}`);
+        assert.equal(type.bones, pal.header.bone_count);
+        assert.equal(type.layout, pal.header.layout_name);
+        assert.equal(type.precision, pal.header.precision_name);
+        for (const clip of type.clips) {
+            const c = pal.clips.find((p) => p.name === clip.name);
+            assert.ok(c, `${name}: clip ${clip.name} not in ${type.palette}`);
+            assert.deepEqual([clip.first_row, clip.frame_count, clip.loops], [c.first_row, c.frames, c.loops]);
+            assert.equal(Math.fround(clip.fps), c.fps);
+        }
+        for (const [stateName, state] of Object.entries(type.states)) {
+            const c = pal.clips.find((p) => p.name === state.clip);
+            // docs/roster.md: x = first_row, y = the clip's rows, negative for a one-shot.
+            assert.equal(state.first_row, c.first_row, `${name}.${stateName}`);
+            assert.equal(state.frame_count, c.loops ? c.frames : -c.frames, `${name}.${stateName}`);
+        }
+    }
+});
+
+test('per-instance numbers follow docs/roster.md', () => {
+    const goat = readRoster(JSON.parse(manifestText)).types.goat;
+    const raw = JSON.parse(manifestText).types.goat.states;
+    assert.deepEqual(goat.states.wander, { clip: raw.wander.clip, ...raw.wander.instance });
+    // Locomotion: rate_per_speed x ground speed; phase fract(i x golden ratio).
+    const [x, y, z, w] = instanceData(goat.states.wander, 1.2, 3);
+    assert.deepEqual([x, y], [90, 30]);
+    assert.ok(Math.abs(z - raw.wander.instance.rate_per_speed * 1.2) < 1e-12 && Math.abs(z - 30) < 1e-5);
+    assert.ok(Math.abs(w - 0.8541019661) < 1e-9);
+    // Not synced to speed: rate; a one-shot started at T: -T x rate / frames.
+    assert.equal(instanceData(goat.states.graze, 5, 0)[2], 30);
+    const die = instanceData(goat.states.die, 0, 7, 2);
+    assert.deepEqual(die.slice(0, 3), [219, -31, 20]);
+    assert.ok(Math.abs(die[3] - (-2 * 20) / 31) < 1e-12);
+});
+
+test('broken manifests are refused with the field that is wrong', () => {
+    const good = JSON.parse(manifestText);
+    const cases = [
+        ['{"schema": ', /not JSON/],
+        [[], /top level: expected an object/],
+        [{ ...good, schema: 'crowdbake-roster/2' }, /schema: "crowdbake-roster\/2" is not crowdbake-roster\/1/],
+        [{ ...good, types: 5 }, /top level\.types: expected an object/],
+        [(d) => delete d.types.goat.rows, /types\.goat\.rows: missing/],
+        [(d) => { d.types.fish.bones = 0; }, /types\.fish\.bones: expected an integer >= 1, got 0/],
+        [(d) => { d.types.fish.layout = 'mat3'; }, /types\.fish\.layout: expected one of mat4, affine, qpos/],
+        [(d) => { delete d.types.bird.palette; }, /types\.bird: has neither palette nor palette_exr/],
+        [(d) => { d.types.goat.clips[1].first_row = 10000; }, /types\.goat\.clips\[1\]: rows 10000\.\./],
+        [(d) => { d.types.goat.clips[2] = null; }, /types\.goat\.clips\[2\]: expected an object/],
+        [(d) => { d.types.goat.states.die.clip = 'fly'; }, /types\.goat\.states\.die\.clip: "fly" is not one of/],
+        [(d) => { d.types.goat.states.die.instance.frame_count = 0; }, /states\.die\.instance\.frame_count: expected a non-zero integer/],
+        [(d) => { d.types.goat.states.die.instance.first_row = 240; }, /states\.die\.instance: rows 240\.\.271 outside/],
+        [(d) => { d.types.goat.states.idle.instance.phase = 'random'; }, /states\.idle\.instance\.phase: expected/],
+        [(d) => { d.types.goat.default_state = 'sleep'; }, /types\.goat\.default_state: "sleep" is not one of the type's states/],
+        [(d) => { d.types.goat.lods[0].joint_remap[2] = 41; }, /types\.goat\.lods\[0\]\.joint_remap: expected an array of bone indices below 41/],
+        [(d) => { d.failed = { eel: { model: 'eel.glb' } }; }, /failed\.eel\.error: missing/],
+    ];
+    for (const [mutation, expected] of cases) {
+        let input = mutation;
+        if (typeof mutation === 'function') {
+            input = structuredClone(good);
+            mutation(input);
+        }
+        let error = null;
+        try {
+            readRoster(input, { name: 'r.json' });
+        } catch (e) {
+            error = e;
+        }
+        assert.ok(error, `accepted: ${expected}`);
+        assert.equal(error.constructor, Error);
+        assert.ok(error.message.startsWith('r.json: ') && !error.message.includes('\n'), error.message);
+        assert.match(error.message, expected);
+    }
+    // A failed type is reported, not an error: the others still load.
+    const withFailure = readRoster({ ...good, failed: { eel: { model: 'eel.glb', error: 'not a GLB file' } } });
+    assert.deepEqual(withFailure.failed, { eel: { model: 'eel.glb', error: 'not a GLB file' } });
+});
