@@ -26,14 +26,6 @@ static int setup(void **state)
     return system("rm -rf " TMP " && mkdir -p " TMP);
 }
 
-static void write_text(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
 /* Runs `cmd` in `dir` with stderr folded into out; returns the exit status. The make run by
  * `make test` must not hand its jobserver or flags to the make under test. */
 static int run_in(const char *dir, const char *cmd, char *out, size_t size)

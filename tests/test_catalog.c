@@ -26,14 +26,6 @@ static int setup(void **state)
     return system("rm -rf " TMP " && mkdir -p " TMP);
 }
 
-static void write_text(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
 /* A catalog over the samples; `extra` is appended verbatim. Returns its path. */
 static const char *catalog(const char *name, const char *out_dir, const char *extra)
 {

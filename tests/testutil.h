@@ -66,6 +66,15 @@ static inline char *read_whole_file(const char *path, size_t *size)
     return s;
 }
 
+/* Writes text to a file (a catalog, a Makefile) or fails the test. */
+static inline void write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+}
+
 /* Loads a model or fails the test with the loader's message. */
 static inline cb_model *load_or_fail(const char *path)
 {
