@@ -120,7 +120,7 @@ samples: $(SAMPLE_GLB)
 demo: all
 	@mkdir -p $(BUILD)/demo
 	@for s in $(SAMPLES); do $(BUILD)/crowdbake info $(BUILD)/samples/$$s.glb || exit 1; echo; done
-	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.pal --format pal,exr \
+	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.pal --format pal,exr --root-motion in-place \
 	  || exit 1; done
 	@$(BUILD)/crowdbake inspect $(BUILD)/demo/quadruped.pal
 	@echo
