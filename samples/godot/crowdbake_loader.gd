@@ -63,8 +63,8 @@ func load_palette(path: String) -> Dictionary:
 	var flags := head.decode_u32(12)
 	var layout := head.decode_u32(20)
 	var precision := head.decode_u32(24)
-	if version != 1 or head.decode_u32(16) != HEADER_SIZE:
-		_fail("%s: palette format version %d is not supported (this loader reads version 1); re-bake with this crowdbake"
+	if version < 1 or version > 2 or head.decode_u32(16) != HEADER_SIZE:
+		_fail("%s: palette format version %d is not supported (this loader reads versions 1 and 2); use the loader of the crowdbake that baked it"
 				% [path, version])
 		return {}
 	if layout > 2 or precision > 2:
@@ -108,6 +108,7 @@ func load_palette(path: String) -> Dictionary:
 		"texture": ImageTexture.create_from_image(image),
 		"image": image,
 		"bind_positions": ImageTexture.create_from_image(bind_image),
+		"positions_relative": 1.0 if flags & 4 else 0.0, # version 2 qpos/half: position texels hold p - b
 		"layout": LAYOUTS[layout],
 		"precision": PRECISIONS[precision],
 		"row_texels": row_texels,
@@ -133,7 +134,7 @@ func apply_palette(material: ShaderMaterial, pal: Dictionary, what: String) -> b
 	if _shader_define(code, "CB_LAYOUT") != layout or _shader_define(code, "CB_U16") != u16:
 		return _fail("%s: the palette is %s/%s; set `#define CB_LAYOUT %d` and `#define CB_U16 %d` at the top of %s" %
 				[what, pal["layout"], pal["precision"], layout, u16, material.shader.resource_path])
-	for name in ["bind_positions", "row_texels", "rows_per_block"]:
+	for name in ["bind_positions", "positions_relative", "row_texels", "rows_per_block"]:
 		material.set_shader_parameter(name, pal[name])
 	material.set_shader_parameter("palette", pal["texture"])
 	if u16:

@@ -118,7 +118,7 @@ func _check_refusals() -> void:
 	var cases := {
 		"truncated": [good.slice(0, good.size() - 100), "truncated"],
 		"not a palette": [FileAccess.get_file_as_bytes(SHIPPED + "/crowdbake_loader.gd"), "not a crowdbake palette"],
-		"version 2": [_patched_u32(good, 8, 2), "version 2 is not supported"],
+		"version 3": [_patched_u32(good, 8, 3), "version 3 is not supported"],
 		"payload offset past the end": [_patched_u32(good, 152, 0x7fffffff), "do not add up"],
 	}
 	for what in cases:
@@ -157,20 +157,24 @@ func _variant(code: String, layout: int, u16: int) -> String:
 # wrong u16 decode or upload moves, collapses or loses the triangles.
 func _check_shader(file: String, layout: int) -> void:
 	var source := FileAccess.get_file_as_string(SHIPPED + "/" + file)
-	var masks := []
-	for precision in ["u16", "float"]:
+	var masks := {}
+	# qpos/half is a version 2 palette whose positions are relative to the bind pose: the shader
+	# must add the bind positions back, or the drawing moves.
+	var precisions := ["float", "u16", "half"] if layout == 2 else ["float", "u16"]
+	for precision in precisions:
 		var name := "shader %s %s/%s" % [file, LAYOUTS[layout], precision]
-		masks.append(await _draw_case(name, _variant(source, layout, 1 if precision == "u16" else 0),
-				"%s/%s-%s.pal" % [BAKES, LAYOUTS[layout], precision]))
-	var name := "u16 draws as float: %s %s" % [file, LAYOUTS[layout]]
-	_begin(name)
-	var differ := 0
-	var covered := 0
-	for i in masks[0].size():
-		differ += 1 if masks[0][i] != masks[1][i] else 0
-		covered += masks[1][i]
-	print("crowdbake-check: %d of %d covered pixels differ" % [differ, covered])
-	_end(name, "" if covered > 100 and differ * 50 <= covered else "%d of %d covered pixels differ" % [differ, covered])
+		masks[precision] = await _draw_case(name, _variant(source, layout, 1 if precision == "u16" else 0),
+				"%s/%s-%s.pal" % [BAKES, LAYOUTS[layout], precision])
+	for precision in precisions.slice(1):
+		var name := "%s draws as float: %s %s" % [precision, file, LAYOUTS[layout]]
+		_begin(name)
+		var differ := 0
+		var covered := 0
+		for i in masks["float"].size():
+			differ += 1 if masks[precision][i] != masks["float"][i] else 0
+			covered += masks["float"][i]
+		print("crowdbake-check: %d of %d covered pixels differ" % [differ, covered])
+		_end(name, "" if covered > 100 and differ * 50 <= covered else "%d of %d covered pixels differ" % [differ, covered])
 
 # Draws a small skinned MultiMesh with `code` and the palette `bake` for two frames (Godot parses
 # the shader when its code is set and compiles the GLSL when it first draws); returns the coverage
