@@ -205,9 +205,6 @@ static cb_status check_kinds(const char *command, const char *model_path, const 
     cli_file_kind mk = cli_file_kind_of(model_path), pk = cli_file_kind_of(palette_path);
     if (mk == CLI_FILE_MISSING || pk == CLI_FILE_MISSING)
         return cb_fail(err, CB_ERR_IO, "%s: cannot open it", mk == CLI_FILE_MISSING ? model_path : palette_path);
-    if (is_palette(mk) && pk == CLI_FILE_MODEL)
-        return cb_fail(err, CB_ERR_USAGE, "%s is a palette and %s a model: the order is 'crowdbake %s MODEL PALETTE'",
-                       model_path, palette_path, command);
     if (mk != CLI_FILE_MODEL)
         return cb_fail(err, CB_ERR_USAGE, "%s: is %s, not a glTF model; 'crowdbake %s MODEL PALETTE' takes the .glb/.gltf "
                        "first", model_path, is_palette(mk) ? "a palette" : "neither glTF nor a palette", command);
@@ -250,6 +247,14 @@ cb_status cli_open_baked(const char *command, const char *model_path, const char
                          const char *skin_option, cli_baked *b, cb_error *err)
 {
     memset(b, 0, sizeof *b);
+    if (is_palette(cli_file_kind_of(model_path)) && cli_file_kind_of(palette_path) == CLI_FILE_MODEL) {
+        /* `preview PALETTE MODEL` was the documented order before both commands took MODEL PALETTE:
+         * scripts written for it keep working, with a note. */
+        fprintf(stderr, "crowdbake: note: '%s %s %s' is the old order, still accepted; write 'crowdbake %s MODEL "
+                "PALETTE'\n", command, model_path, palette_path, command);
+        const char *swap = model_path;
+        model_path = palette_path, palette_path = swap;
+    }
     if (check_kinds(command, model_path, palette_path, err) || open_palette(palette_path, b, err)) return err->status;
     b->model = cli_load_model(model_path, limits, err);
     b->skin = b->model ? cli_pick_skin(b->model, skin_option, err) : -1;

@@ -89,10 +89,10 @@ static void test_verify_and_preview_take_the_exr(void **state)
     free(a), free(b);
     assert_int_equal(crowdbake(out, sizeof out, "preview %s " TMP "/fox.exr -o " TMP "/sheet.png --cell 64", fox), 0);
     assert_contains(out, "3 clips x 6 frames");
-    /* Swapped, and the wrong kinds of file: each named, with the order. */
-    assert_int_equal(crowdbake(out, sizeof out, "verify " TMP "/fox.exr %s", fox), CB_ERR_USAGE);
-    assert_contains(out, "is a palette and");
-    assert_contains(out, "the order is 'crowdbake verify MODEL PALETTE'");
+    /* The old order (PALETTE MODEL) still works, with a note; the wrong kinds of file are named. */
+    assert_int_equal(crowdbake(out, sizeof out, "preview " TMP "/fox.exr %s -o " TMP "/old.png --cell 64", fox), 0);
+    assert_contains(out, "is the old order, still accepted; write 'crowdbake preview MODEL PALETTE'");
+    assert_contains(out, "3 clips x 6 frames");
     assert_int_equal(crowdbake(out, sizeof out, "preview %s %s -o " TMP "/x.png", fox, fox), CB_ERR_USAGE);
     assert_contains(out, "is a glTF model, not a palette");
     assert_int_equal(crowdbake(out, sizeof out, "verify %s catalog.example.toml", fox), CB_ERR_USAGE);
