@@ -172,7 +172,6 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     return cmd_bake_catalog(&cb);
 }
 
-static double mm_per_m(double error, const cb_palette *p) { return p->model_height > 0 ? error / p->model_height * 1000 : 0; }
 
 /* Both error figures: the encoding's at the baked rows, and what a player sees (the runtime's
  * blend of two rows, halfway between them), which is usually far larger. */
@@ -182,8 +181,8 @@ static void print_summary(const char *path, size_t bytes, const cb_palette *p, d
            "(at the baked rows), visible error %.3g mm/m (blending rows at runtime), %.0f ms\n",
            path, bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count,
            p->bone_count == 1 ? "" : "s", p->clip_count, p->clip_count == 1 ? "" : "s", p->rows, p->rows == 1 ? "" : "s",
-           cb_layout_name(p->layout), cb_precision_name(p->precision), mm_per_m(p->max_error, p),
-           mm_per_m(p->visible_error, p), seconds * 1000);
+           cb_layout_name(p->layout), cb_precision_name(p->precision), cb_mm_per_m(p->max_error, p->model_height),
+           cb_mm_per_m(p->visible_error, p->model_height), seconds * 1000);
 }
 
 typedef struct phase_times {
@@ -207,9 +206,9 @@ static void json_output(cb_json *j, const char *path, const char *format, size_t
     cb_json_string(j, "precision", cb_precision_name(p->precision));
     cb_json_number(j, "max_error", p->max_error);
     cb_json_number(j, "model_height", p->model_height);
-    cb_json_number(j, "max_error_mm_per_m", mm_per_m(p->max_error, p));
+    cb_json_number(j, "max_error_mm_per_m", cb_mm_per_m(p->max_error, p->model_height));
     cb_json_number(j, "visible_error", p->visible_error);
-    cb_json_number(j, "visible_error_mm_per_m", mm_per_m(p->visible_error, p));
+    cb_json_number(j, "visible_error_mm_per_m", cb_mm_per_m(p->visible_error, p->model_height));
     cb_json_int(j, "error_rows_measured", p->error_rows_measured);
     cb_json_number(j, "seconds", seconds);
     cb_json_object(j, "phases");

@@ -64,7 +64,7 @@ int cmd_vat(int argc, char **argv)
         cb_texture_geometry g;
         uint64_t pal = cb_palette_texture_bytes(m->skins[skin].joint_count, vat.frames, CB_LAYOUT_QPOS, CB_PRECISION_U16,
                                                 o.max_texture_size, &g);
-        double per_m = vat.model_height > 0 ? vat.max_error / vat.model_height * 1000 : 0;
+        double per_m = cb_mm_per_m(vat.max_error, vat.model_height);
         if (json) {
             cb_json j;
             cb_json_init(&j, stdout);

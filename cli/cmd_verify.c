@@ -20,7 +20,6 @@ const char cmd_verify_usage[] =
     "an error exceeds --max-error (mm per metre of height). --clip verifies only the palette's clips\n"
     "named, --exclude-clip all but those.\n";
 
-static double mm(double e, double h) { return h > 0 ? e / h * 1000 : 0; }
 
 typedef struct clip_check {
     const cb_palette *p;
@@ -109,14 +108,14 @@ int cmd_verify(int argc, char **argv)
             cb_json_number(&j, "frames_mean", e.quant_mean);
             cb_json_number(&j, "between_max", e.interp_max);
             cb_json_number(&j, "between_mean", e.interp_mean);
-            cb_json_number(&j, "frames_max_mm_per_m", mm(e.quant_max, height));
-            cb_json_number(&j, "between_max_mm_per_m", mm(e.interp_max, height));
+            cb_json_number(&j, "frames_max_mm_per_m", cb_mm_per_m(e.quant_max, height));
+            cb_json_number(&j, "between_max_mm_per_m", cb_mm_per_m(e.interp_max, height));
             cb_json_int(&j, "worst_vertex", (long long)e.worst_vertex);
             cb_json_number(&j, "worst_time", e.worst_time);
             cb_json_end(&j);
         } else {
             printf("  %-*s %12.4g %12.4g %12.4g %12.4g %12.3f %13.3f  %llu @ %.3f s\n", name_width, pv->clips[c].name, e.quant_max,
-                   e.quant_mean, e.interp_max, e.interp_mean, mm(e.quant_max, height), mm(e.interp_max, height),
+                   e.quant_mean, e.interp_max, e.interp_mean, cb_mm_per_m(e.quant_max, height), cb_mm_per_m(e.interp_max, height),
                    (unsigned long long)e.worst_vertex, e.worst_time);
         }
     }
@@ -124,18 +123,18 @@ int cmd_verify(int argc, char **argv)
         if (json) {
             cb_json_end(&j);
             cb_json_number(&j, "max_error", worst);
-            cb_json_number(&j, "max_error_mm_per_m", mm(worst, height));
+            cb_json_number(&j, "max_error_mm_per_m", cb_mm_per_m(worst, height));
             cb_json_end(&j);
         } else {
-            printf("  worst %.4g units = %.3f mm per m of height%s\n", worst, mm(worst, height),
-                   max_error >= 0 ? (mm(worst, height) > max_error ? " — over --max-error" : " — within --max-error") : "");
+            printf("  worst %.4g units = %.3f mm per m of height%s\n", worst, cb_mm_per_m(worst, height),
+                   max_error >= 0 ? (cb_mm_per_m(worst, height) > max_error ? " — over --max-error" : " — within --max-error") : "");
         }
     }
     cb_sampler_free(s);
     cli_baked_close(&b);
     if (err.status) return cli_report(&err);
-    if (max_error >= 0 && mm(worst, height) > max_error) {
-        fprintf(stderr, "crowdbake: %s: worst error %.3f mm/m is over --max-error %g\n", pos[1], mm(worst, height), max_error);
+    if (max_error >= 0 && cb_mm_per_m(worst, height) > max_error) {
+        fprintf(stderr, "crowdbake: %s: worst error %.3f mm/m is over --max-error %g\n", pos[1], cb_mm_per_m(worst, height), max_error);
         return CB_ERR_VERIFY;
     }
     return 0;

@@ -17,7 +17,6 @@ void cb_human_bytes(uint64_t b, char *buf, size_t size)
     else snprintf(buf, size, v < 10 ? "%.2f %s" : v < 100 ? "%.1f %s" : "%.0f %s", v, units[u]);
 }
 
-static double per_m(double error, double height) { return height > 0 ? error / height * 1000 : 0; }
 
 static cb_status resolve_budget(const cb_catalog *cat, cb_report *r, cb_error *err)
 {
@@ -173,8 +172,8 @@ void cb_report_text(FILE *f, const cb_report *r)
         cb_human_bytes(t->mesh_bytes, c, sizeof c);
         fprintf(f, "%-14s %6u %7u %9llu %-12s %10s %10s %6.1fx %10s %9.3f %9.3f %9.3f  %s\n", t->name, t->bones, t->frames,
                 (unsigned long long)t->vertices, enc, a, b, ratio(t->vat_bytes[0], t->palette_bytes), c,
-                per_m(t->palette_error, t->model_height), per_m(t->palette_visible_error, t->model_height),
-                per_m(t->vat_error, t->model_height), notes(t, note, sizeof note));
+                cb_mm_per_m(t->palette_error, t->model_height), cb_mm_per_m(t->palette_visible_error, t->model_height),
+                cb_mm_per_m(t->vat_error, t->model_height), notes(t, note, sizeof note));
     }
     fprintf(f, "\nEvery encoding (texture bytes at the %u-texel limit):\n%-14s", r->max_texture_size, "type");
     for (int l = 0; l < 3; ++l)
@@ -222,8 +221,8 @@ void cb_report_markdown(FILE *f, const cb_report *r)
         cb_human_bytes(t->mesh_bytes, c, sizeof c);
         fprintf(f, "| %s | %u | %u | %llu | %s/%s | %s | %s | %.1f× | %s | %.3f | %.3f | %.3f | %s |\n", t->name, t->bones,
                 t->frames, (unsigned long long)t->vertices, cb_layout_name(t->layout), cb_precision_name(t->precision), a, b,
-                ratio(t->vat_bytes[0], t->palette_bytes), c, per_m(t->palette_error, t->model_height),
-                per_m(t->palette_visible_error, t->model_height), per_m(t->vat_error, t->model_height),
+                ratio(t->vat_bytes[0], t->palette_bytes), c, cb_mm_per_m(t->palette_error, t->model_height),
+                cb_mm_per_m(t->palette_visible_error, t->model_height), cb_mm_per_m(t->vat_error, t->model_height),
                 notes(t, note, sizeof note));
     }
     cb_human_bytes(r->palettes_total, a, sizeof a);
@@ -577,16 +576,16 @@ static void cell_ratio(FILE *f, const cb_report *r, const cb_report_type *t)
 }
 static void cell_pal_error(FILE *f, const cb_report *r, const cb_report_type *t)
 {
-    (void)r, fprintf(f, "%.3f", per_m(t->palette_error, t->model_height));
+    (void)r, fprintf(f, "%.3f", cb_mm_per_m(t->palette_error, t->model_height));
 }
 static void cell_pal_visible_error(FILE *f, const cb_report *r, const cb_report_type *t)
 {
-    (void)r, fprintf(f, "%.3f", per_m(t->palette_visible_error, t->model_height));
+    (void)r, fprintf(f, "%.3f", cb_mm_per_m(t->palette_visible_error, t->model_height));
 }
 
 static void cell_vat_error(FILE *f, const cb_report *r, const cb_report_type *t)
 {
-    (void)r, fprintf(f, "%.3f", per_m(t->vat_error, t->model_height));
+    (void)r, fprintf(f, "%.3f", cb_mm_per_m(t->vat_error, t->model_height));
 }
 static void cell_fixes(FILE *f, const cb_report *r, const cb_report_type *t)
 {

@@ -493,8 +493,8 @@ static void log_type(roster_run *run, const cb_roster_type *t)
         fprintf(f, "%s  %-16s baked    %s (%.1f KiB, %ux%u, %s/%s, encoding error %.3g mm/m, visible %.3g mm/m) in %.0f ms\n",
                 clear, t->animal->name, (t->animal->bake.formats & CB_FORMAT_PAL) ? t->pal_path : t->exr_path,
                 t->palette_bytes / 1024.0, t->width, t->height, cb_layout_name(t->layout), cb_precision_name(t->precision),
-                t->model_height > 0 ? t->max_error / t->model_height * 1000 : 0,
-                t->model_height > 0 ? t->visible_error / t->model_height * 1000 : 0, t->seconds * 1000);
+                cb_mm_per_m(t->max_error, t->model_height),
+                cb_mm_per_m(t->visible_error, t->model_height), t->seconds * 1000);
         break;
     case CB_TYPE_UP_TO_DATE: fprintf(f, "%s  %-16s up to date\n", clear, t->animal->name); break;
     case CB_TYPE_SHARED:

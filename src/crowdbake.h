@@ -36,6 +36,10 @@ typedef struct cb_error {
     char message[512];
 } cb_error;
 
+/* An error in model units as mm per metre of model height, the unit every error is reported
+ * in so that models of any size compare (0 for a model without height). */
+static inline double cb_mm_per_m(double error, double height) { return height > 0 ? error / height * 1000 : 0; }
+
 /* Records the first error only; later ones are dropped so the root cause is reported. */
 cb_status cb_fail(cb_error *err, cb_status status, const char *fmt, ...)
 #if defined(__GNUC__)

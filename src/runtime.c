@@ -109,7 +109,7 @@ cb_status cb_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan 
         plan[i].fps = cb_choose_clip_fps(s, o, &plan[i], goals[i].max_error_mm / 1000 * height,
                                          goals[i].max_fps > 0 ? goals[i].max_fps : 60, &c.met, &c.error, err);
         if (err->status) return err->status;
-        c.error_mm = c.error / height * 1000;
+        c.error_mm = cb_mm_per_m(c.error, height);
         if (out) out[i] = c;
     }
     return CB_OK;

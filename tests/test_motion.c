@@ -23,6 +23,13 @@ static int setup(void **state)
     return system("rm -rf " TMP " && mkdir -p " TMP);
 }
 
+static cb_model *load_sample(const char *name)
+{
+    char path[600];
+    sample_path(path, sizeof path, name);
+    return load_or_fail(path);
+}
+
 static void analyze(cb_sampler *s, const char *clip, int loop, cb_clip_info *info)
 {
     cb_error err = {0};
@@ -131,9 +138,7 @@ static void test_loop_judgements(void **state)
     cb_sampler_free(s);
     cb_model_free(m);
 
-    char path[600];
-    sample_path(path, sizeof path, "quadruped");
-    m = load_or_fail(path);
+    m = load_sample("quadruped");
     s = cb_sampler_create(m, 0, &err);
     analyze(s, "walk", -1, &info);
     assert_int_equal(info.loop_reason, CB_LOOP_CLOSED);
@@ -189,10 +194,7 @@ static void test_catalog_states_move_right(void **state)
              "states = { idle = [\"Idle\"], wander = [\"Walk\"], flee = [\"Gallop\"], die = [\"Death\"] }\n"
              "default_state = \"idle\"\n",
              cow_abs);
-    FILE *fp = fopen(TMP "/cow.toml", "w");
-    assert_non_null(fp);
-    fputs(text, fp);
-    fclose(fp);
+    write_text(TMP "/cow.toml", text);
     cb_catalog cat;
     cb_error err = {0};
     assert_int_equal(cb_catalog_load(TMP "/cow.toml", &cat, &err), CB_OK);
@@ -279,9 +281,7 @@ static void test_ground_speed_from_evidence(void **state)
     cb_sampler_free(s);
     cb_model_free(m);
 
-    char path[600];
-    sample_path(path, sizeof path, "quadruped");
-    m = load_or_fail(path);
+    m = load_sample("quadruped");
     s = cb_sampler_create(m, 0, &err);
     analyze(s, "walk", -1, &info);
     cb_measure_ground_speed(s, &info, &gs);
@@ -340,10 +340,7 @@ static void test_both_error_figures(void **state)
     char fox_abs[PATH_MAX], text[8192];
     assert_non_null(realpath(fox, fox_abs));
     snprintf(text, sizeof text, "[bake]\nout_dir = \"out-fox\"\n[animal.fox]\nmodel = \"%s\"\n", fox_abs);
-    FILE *fp = fopen(TMP "/fox.toml", "w");
-    assert_non_null(fp);
-    fputs(text, fp);
-    fclose(fp);
+    write_text(TMP "/fox.toml", text);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/fox.toml 2>&1 && %s report " TMP "/fox.toml --markdown", crowdbake_exe(),
              crowdbake_exe());
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
@@ -369,10 +366,7 @@ static void test_catalog_fps_auto(void **state)
              "clips = [\"AnimalArmature|Idle\", \"AnimalArmature|Walk\", { source = \"AnimalArmature|Death\", fps = 30 },\n"
              "         { source = \"AnimalArmature|Eating\", max_error = 5 }]\n",
              cow_abs);
-    FILE *fp = fopen(TMP "/auto.toml", "w");
-    assert_non_null(fp);
-    fputs(text, fp);
-    fclose(fp);
+    write_text(TMP "/auto.toml", text);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/auto.toml -q", crowdbake_exe());
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     cbpal_file f;
@@ -399,10 +393,8 @@ static void test_catalog_fps_auto(void **state)
     assert_int_equal(sscanf(walk + strlen("AnimalArmature|Walk"), "%*f %*f %*f %*f %lf %lf", &q, &b), 2);
     assert_true(b <= 1.0 && q < 0.1);
     /* A bad value names the file, the line and the fix. */
-    fp = fopen(TMP "/bad-auto.toml", "w");
-    assert_non_null(fp);
-    fprintf(fp, "[animal.cow]\nmodel = \"%s\"\nfps = \"fast\"\n", cow_abs);
-    fclose(fp);
+    snprintf(text, sizeof text, "[animal.cow]\nmodel = \"%s\"\nfps = \"fast\"\n", cow_abs);
+    write_text(TMP "/bad-auto.toml", text);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/bad-auto.toml 2>&1", crowdbake_exe());
     assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
     if (!strstr(out, "bad-auto.toml:3:") || !strstr(out, "fps must be a rate in frames per second or \"auto\""))
