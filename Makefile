@@ -48,7 +48,7 @@ CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: all deps demo check check-normal check-asan check-shared test test-asan test-runs readme bench \
+.PHONY: all deps demo check check-normal check-asan check-shared test test-asan test-runs readme bake-hashes bench \
         bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds
 all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(SAMPLE_GLB)
 
@@ -175,7 +175,7 @@ check-shared:
 RESULTS = $(BUILD)/tests/results
 TEST_RUNS = $(TEST_BINS:%=%.run) $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
 # The README's example outputs come from real runs (once: the sanitizer build need not).
-TEST_RUNS += $(if $(SAN),,$(BUILD)/tests/readme_examples.run $(BUILD)/tests/web_reader.run)
+TEST_RUNS += $(if $(SAN),,$(BUILD)/tests/readme_examples.run $(BUILD)/tests/web_reader.run $(BUILD)/tests/bake_hashes.run)
 define record_run
 	@echo "---- $(1) ($(BUILD))"
 	@rm -f $(RESULTS)/$(1).pending; if $(2); then touch $(RESULTS)/$(1).passed; \
@@ -187,6 +187,11 @@ $(BUILD)/tests/%.run: $(BUILD)/tests/% all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,$*,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples $< $(ARGS_$*))
 $(BUILD)/tests/readme_examples.run: all | $(RESULTS)/pending
 	$(call record_run,readme_examples,python3 tests/tools/readme_examples.py --build $(BUILD))
+# Every bake's bytes, pinned (tests/bake_hashes.txt; `make bake-hashes` after a change on purpose).
+$(BUILD)/tests/bake_hashes.run: all | $(RESULTS)/pending
+	$(call record_run,bake_hashes,python3 tests/tools/bake_hashes.py --build $(BUILD) --shared $(SHARED))
+bake-hashes: all
+	python3 tests/tools/bake_hashes.py --write --build $(BUILD) --shared $(SHARED)
 $(BUILD)/tests/web_reader.run: all | $(RESULTS)/pending
 	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test web/test/)
 test-runs: $(TEST_RUNS)

@@ -1,0 +1,125 @@
+#!/usr/bin/env python3
+"""bake_hashes.py [--write] [--build DIR] [--shared DIR]: the bytes every bake writes, pinned.
+
+Bakes every bundled sample and every shared asset in several formats (.pal, .pal with zstd,
+.exr, mat4/half, affine/float, --fps auto on the samples and Fox), `inspect --json` of each
+default .pal, and the sample catalog (palettes, roster.json, depfile, with a --format pal,exr
+override too), then compares the sha256 of every file with tests/bake_hashes.txt. A model that
+does not bake is recorded by its exit code. `make check` runs this (normal build only), so a
+refactoring that changes one output byte fails.
+
+When an output changes ON PURPOSE (a new header field, a better encoder), regenerate the list
+with `make bake-hashes` (this script with --write), read the diff of tests/bake_hashes.txt (only
+the outputs you meant to change should move) and commit it with the change."""
+import hashlib, os, re, shutil, subprocess, sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+LIST = os.path.join(ROOT, 'tests', 'bake_hashes.txt')
+
+# Every model bakes in these; the name is the key in the list.
+VARIANTS = [
+    ('default.pal', ['-o', '{out}.pal']),
+    ('default.exr', ['-o', '{out}.exr']),
+    ('zstd-inplace', ['-o', '{out}.pal', '--format', 'pal,exr', '--zstd', '--root-motion', 'in-place']),
+    ('mat4-half.pal', ['-o', '{out}.pal', '--layout', 'mat4', '--precision', 'half']),
+    ('affine-float.exr', ['-o', '{out}.exr', '--layout', 'affine', '--precision', 'float', '--exr-compression', 'zip']),
+]
+AUTO = ('auto.pal', ['-o', '{out}.pal', '--fps', 'auto', '-q'])
+
+
+def sha(path):
+    with open(path, 'rb') as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+def models(build, shared):
+    found = [os.path.join(build, 'samples', n) for n in sorted(os.listdir(os.path.join(build, 'samples')))
+             if n.endswith('.glb')]
+    for d, _, files in sorted(os.walk(os.path.join(shared, 'assets'))):
+        found += [os.path.join(d, n) for n in sorted(files) if n.endswith(('.glb', '.gltf'))]
+    return found
+
+
+def key_of(model, shared):
+    rel = os.path.relpath(model, os.path.join(shared, 'assets'))
+    return ('shared/' + rel) if not rel.startswith('..') else 'samples/' + os.path.basename(model)
+
+
+def run(cmd, **kw):
+    return subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, **kw)
+
+
+def bake_models(crowdbake, build, shared, tmp, out):
+    for model in models(build, shared):
+        key = key_of(model, shared)
+        variants = VARIANTS + ([AUTO] if key.startswith('samples/') or key.endswith('fox-bevy/Fox.glb') else [])
+        for name, args in variants:
+            d = os.path.join(tmp, key.replace('/', '_'), name)
+            os.makedirs(d)
+            stem = os.path.join(d, 'out')
+            p = run([crowdbake, 'bake', model, '-j', '2'] + [a.format(out=stem) for a in args])
+            if p.returncode:
+                out.append('%s %s exit %d' % (key, name, p.returncode))
+                break  # a model that does not bake fails the same way in every variant
+            for f in sorted(os.listdir(d)):
+                out.append('%s %s %s %s' % (key, name, f, sha(os.path.join(d, f))))
+            if name == 'default.pal':
+                p = run([crowdbake, 'inspect', stem + '.pal', '--json'])
+                out.append('%s %s inspect-json %s' % (key, name, hashlib.sha256(p.stdout).hexdigest()))
+
+
+def bake_catalog(crowdbake, build, tmp, out):
+    samples = os.path.abspath(os.path.join(build, 'samples'))
+    text = open(os.path.join(ROOT, 'samples', 'catalog.toml')).read()
+    text = text.replace('../build/samples', samples).replace('"../build/roster"', '"roster"')
+    for name, extra in (('catalog', []), ('catalog-pal-exr', ['--format', 'pal,exr', '--precision', 'half', '--zstd'])):
+        d = os.path.join(tmp, name)
+        os.makedirs(d)
+        with open(os.path.join(d, 'catalog.toml'), 'w') as f:
+            f.write(text)
+        p = run([crowdbake, 'bake', 'catalog.toml', '-j', '2', '-q', '--depfile', 'roster.d'] + extra, cwd=d)
+        if p.returncode:
+            out.append('%s exit %d' % (name, p.returncode))
+            continue
+        for root, _, files in sorted(os.walk(d)):
+            for f in sorted(files):
+                path = os.path.join(root, f)
+                rel = os.path.relpath(path, d)
+                if rel == 'catalog.toml':
+                    continue
+                data = open(path, 'rb').read().replace(samples.encode(), b'SAMPLES')  # the depfile names them
+                out.append('%s %s %s' % (name, rel, hashlib.sha256(data).hexdigest()))
+
+
+def main():
+    args = sys.argv[1:]
+    build = args[args.index('--build') + 1] if '--build' in args else 'build'
+    shared = args[args.index('--shared') + 1] if '--shared' in args else os.environ.get('CROWDBAKE_SHARED', '../shared')
+    crowdbake = os.path.abspath(os.path.join(build, 'crowdbake'))
+    tmp = os.path.abspath(os.path.join(build, 'tmp-tests', 'bake_hashes'))
+    shutil.rmtree(tmp, ignore_errors=True)
+    os.makedirs(tmp)
+    out = []
+    bake_models(crowdbake, build, shared, tmp, out)
+    bake_catalog(crowdbake, build, tmp, out)
+    text = '\n'.join(out) + '\n'
+    if '--write' in args:
+        with open(LIST, 'w') as f:
+            f.write(text)
+        print('bake_hashes: %d outputs recorded in %s' % (len(out), os.path.relpath(LIST, ROOT)))
+        return 0
+    want = open(LIST).read().splitlines()
+    got = text.splitlines()
+    if got == want:
+        print('bake_hashes: %d outputs byte-identical with tests/bake_hashes.txt' % len(got))
+        return 0
+    import difflib
+    sys.stdout.writelines(l + '\n' for l in difflib.unified_diff(want, got, 'tests/bake_hashes.txt', 'now', lineterm=''))
+    print('bake_hashes: outputs differ from tests/bake_hashes.txt (if on purpose: `make bake-hashes`, check the diff, '
+          'commit it)')
+    return 1
+
+
+if __name__ == '__main__':
+    sys.exit(main())
