@@ -26,7 +26,7 @@ SAN     ?=
 # Everything below needs pkg-config, which `make deps` brings.
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 PKG_LIBS   = $(shell pkg-config --libs draco OpenEXR libzstd tomlplusplus libpng 2>/dev/null) -lmeshoptimizer -lpthread -lm -ldl
-# Tests drive OpenGL themselves; crowdbake opens OSMesa only for `preview` (formats/preview.c).
+# Tests drive OpenGL themselves; crowdbake opens OSMesa only for `preview` (pipeline/preview.c).
 GL_LIBS    = $(shell pkg-config --libs osmesa 2>/dev/null)
 
 # -fno-math-errno: sqrt and lrint become single instructions (nothing reads errno from libm).
@@ -34,10 +34,10 @@ GL_LIBS    = $(shell pkg-config --libs osmesa 2>/dev/null)
 # results become blends and the sampler's loops vectorize (the values are the same).
 # -ffp-contract=off: no fused multiply-adds, so every compiler and CPU gives the same bits.
 FPFLAGS  := -fno-math-errno -fno-trapping-math -ffp-contract=off
-CFLAGS   := -std=c11 $(OPT) $(FPFLAGS) -g $(WARN) -D_POSIX_C_SOURCE=200809L $(SAN)
-CXXFLAGS := -std=c++17 $(OPT) $(FPFLAGS) -g $(WARN) $(SAN)
+CFLAGS   := -std=c11 $(OPT) $(FPFLAGS) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude $(SAN)
+CXXFLAGS := -std=c++17 $(OPT) $(FPFLAGS) -g $(WARN) -Iinclude $(SAN)
 
-LIB_C   := $(wildcard src/*.c) $(wildcard formats/*.c)
+LIB_C   := $(wildcard src/*.c) $(wildcard formats/*.c) $(wildcard pipeline/*.c)
 LIB_CXX := $(wildcard formats/*.cpp)
 CLI_C   := $(wildcard cli/*.c)
 TESTS   := $(patsubst tests/%.c,%,$(wildcard tests/test_*.c))

@@ -8,8 +8,8 @@
 #include <time.h>
 
 #include "../formats/crowdbake_pal.h"
-#include "../formats/exr_io.h"
-#include "../formats/gltf_load.h"
+#include "crowdbake/exr.h"
+#include "crowdbake/gltf.h"
 
 static double now(void)
 {

@@ -5,11 +5,12 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "../formats/exr_io.h"
-#include "../formats/gltf_load.h"
-#include "../formats/json_writer.h"
-#include "../formats/pal_view.h"
-#include "../src/catalog.h"
+#include "crowdbake/exr.h"
+#include "crowdbake/gltf.h"
+#include "crowdbake/json.h"
+#include "../formats/crowdbake_pal.h" /* the runtime reader (installed as crowdbake_pal.h) */
+#include "crowdbake/pal_view.h"
+#include "crowdbake/catalog.h"
 
 typedef struct cli_option {
     const char *name;     /* "--fps" */

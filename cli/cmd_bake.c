@@ -8,11 +8,11 @@
 #include <unistd.h>
 
 #include "../formats/crowdbake_pal.h"
-#include "../formats/exr_io.h"
-#include "../formats/json_writer.h"
-#include "../formats/pal_write.h"
-#include "../src/budget.h"
-#include "../src/runtime.h"
+#include "crowdbake/exr.h"
+#include "crowdbake/json.h"
+#include "crowdbake/pal_write.h"
+#include "crowdbake/budget.h"
+#include "crowdbake/runtime.h"
 #include "cli.h"
 
 const char cmd_bake_usage[] =

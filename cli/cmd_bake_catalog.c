@@ -3,10 +3,10 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "../formats/catalog_toml.h"
-#include "../formats/json_writer.h"
-#include "../formats/report.h"
-#include "../formats/roster.h"
+#include "crowdbake/catalog_toml.h"
+#include "crowdbake/json.h"
+#include "crowdbake/report.h"
+#include "crowdbake/roster.h"
 #include "cli.h"
 
 static const char *outcome_name(cb_type_outcome o)

@@ -3,8 +3,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../formats/json_writer.h"
-#include "../src/catalog.h"
+#include "crowdbake/json.h"
+#include "crowdbake/catalog.h"
 #include "cli.h"
 
 const char cmd_info_usage[] =

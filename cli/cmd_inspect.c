@@ -6,10 +6,10 @@
 #include <string.h>
 
 #include "../formats/crowdbake_pal.h"
-#include "../formats/exr_io.h"
-#include "../formats/json_writer.h"
-#include "../formats/pal_view.h"
-#include "../src/palette.h"
+#include "crowdbake/exr.h"
+#include "crowdbake/json.h"
+#include "crowdbake/pal_view.h"
+#include "crowdbake/palette.h"
 #include "cli.h"
 
 const char cmd_inspect_usage[] =

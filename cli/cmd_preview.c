@@ -2,8 +2,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "../formats/pal_view.h"
-#include "../formats/preview.h"
+#include "crowdbake/pal_view.h"
+#include "crowdbake/preview.h"
 #include "cli.h"
 
 const char cmd_preview_usage[] =

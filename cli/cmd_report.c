@@ -8,9 +8,9 @@
 #include <strings.h>
 #include <unistd.h>
 
-#include "../formats/atomic_file.h"
-#include "../formats/catalog_toml.h"
-#include "../formats/report.h"
+#include "crowdbake/atomic_file.h"
+#include "crowdbake/catalog_toml.h"
+#include "crowdbake/report.h"
 #include "cli.h"
 
 const char cmd_report_usage[] =

@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../formats/json_writer.h"
+#include "crowdbake/json.h"
 #include "cli.h"
 
 const char cmd_sample_usage[] =

@@ -4,8 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../formats/exr_io.h"
-#include "../formats/json_writer.h"
+#include "crowdbake/exr.h"
+#include "crowdbake/json.h"
 #include "cli.h"
 
 const char cmd_vat_usage[] =

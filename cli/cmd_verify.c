@@ -4,9 +4,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../formats/json_writer.h"
-#include "../formats/pal_view.h"
-#include "../src/runtime.h"
+#include "crowdbake/json.h"
+#include "crowdbake/pal_view.h"
+#include "crowdbake/runtime.h"
 #include "cli.h"
 
 const char cmd_verify_usage[] =

@@ -2,7 +2,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "../formats/atomic_file.h"
+#include "crowdbake/atomic_file.h"
 #include "cli.h"
 
 static const cli_command commands[] = {

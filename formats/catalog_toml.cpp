@@ -10,7 +10,7 @@
 #include <toml++/toml.h>
 #include <vector>
 
-#include "catalog_toml.h"
+#include "crowdbake/catalog_toml.h"
 
 namespace {
 

@@ -1,10 +1,10 @@
 /* exr_io.c - see exr_io.h. */
-#include "exr_io.h"
+#include "crowdbake/exr.h"
 
 #include <openexr.h>
 #include <unistd.h>
 
-#include "atomic_file.h"
+#include "crowdbake/atomic_file.h"
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "crowdbake_pal.h"
-#include "gltf_load.h"
+#include "crowdbake/gltf.h"
 
 namespace {
 

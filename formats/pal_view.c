@@ -1,5 +1,6 @@
 /* pal_view.c - see pal_view.h. */
-#include "pal_view.h"
+#include "crowdbake/pal_view.h"
+#include "crowdbake_pal.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -1,11 +1,11 @@
 /* pal_write.c - see pal_write.h and docs/pal-format.md. */
-#include "pal_write.h"
+#include "crowdbake/pal_write.h"
 
 #include <stdlib.h>
 #include <string.h>
 #include <zstd.h>
 
-#include "atomic_file.h"
+#include "crowdbake/atomic_file.h"
 #include "crowdbake_pal.h"
 
 static void put32(unsigned char *d, uint32_t v)

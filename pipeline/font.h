@@ -6,7 +6,7 @@
 
 #include <stdint.h>
 
-#include "../src/crowdbake.h"
+#include "crowdbake/core.h"
 
 typedef struct cb_font cb_font;
 

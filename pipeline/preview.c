@@ -1,6 +1,6 @@
 /* preview.c - see preview.h. */
 #define GL_GLEXT_PROTOTYPES /* for the prototypes gl_api takes its types from; nothing links them */
-#include "preview.h"
+#include "crowdbake/preview.h"
 
 #include <GL/osmesa.h>
 #include <GL/gl.h>
@@ -13,8 +13,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "../src/runtime.h"
-#include "atomic_file.h"
+#include "crowdbake/runtime.h"
+#include "crowdbake/atomic_file.h"
 #include "font.h"
 
 /* OpenGL through Mesa's OSMesa, opened when a preview is drawn: linking it would load Mesa and

@@ -1,11 +1,11 @@
 /* report.c - see report.h and docs/budget.md for every formula. */
-#include "report.h"
+#include "crowdbake/report.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "json_writer.h"
+#include "crowdbake/json.h"
 
 void cb_human_bytes(uint64_t b, char *buf, size_t size)
 {

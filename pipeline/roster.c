@@ -3,7 +3,7 @@
  * share one palette; bake the owners that are out of date in parallel. Then the manifest and
  * the depfile. Nothing that is written depends on the thread count or on timing. */
 #define _GNU_SOURCE /* open_memstream, strcasecmp */
-#include "roster.h"
+#include "crowdbake/roster.h"
 
 #include <errno.h>
 #include <fcntl.h> /* AT_FDCWD */
@@ -14,14 +14,14 @@
 #include <threads.h>
 #include <time.h>
 
-#include "atomic_file.h"
-#include "crowdbake_pal.h"
-#include "exr_io.h"
-#include "gltf_load.h"
-#include "json_writer.h"
-#include "pal_write.h"
-#include "../src/runtime.h"
-#include "../src/vat.h"
+#include "crowdbake/atomic_file.h"
+#include "../formats/crowdbake_pal.h"
+#include "crowdbake/exr.h"
+#include "crowdbake/gltf.h"
+#include "crowdbake/json.h"
+#include "crowdbake/pal_write.h"
+#include "crowdbake/runtime.h"
+#include "crowdbake/vat.h"
 
 typedef struct type_work {
     cb_model *model;

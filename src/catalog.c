@@ -1,5 +1,5 @@
 /* catalog.c - see catalog.h: bake settings given for one run, over a whole catalog. */
-#include "catalog.h"
+#include "crowdbake/catalog.h"
 
 static void override_settings(cb_bake_settings *b, const cb_bake_settings *v, unsigned fields)
 {

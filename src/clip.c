@@ -1,6 +1,6 @@
 /* clip.c - clip framing (how many rows, at which times), loop detection and root motion. */
 #include "cb_math.h"
-#include "crowdbake.h"
+#include "crowdbake/core.h"
 
 #include <math.h>
 #include <stdio.h>

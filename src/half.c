@@ -1,7 +1,7 @@
 /* half.c - IEEE 754 binary16 conversions, round to nearest even. */
 #include <string.h>
 
-#include "palette.h"
+#include "crowdbake/palette.h"
 
 uint16_t cb_float_to_half(float f)
 {

@@ -2,7 +2,7 @@
  * on transparent huge pages where the OS offers them: filling 57 MB takes 14,000 page faults
  * in 4 KB pages and 28 in 2 MB ones, which in a VM is a third of a bake's sampling time. */
 #define _DEFAULT_SOURCE /* madvise, posix_memalign */
-#include "crowdbake.h"
+#include "crowdbake/core.h"
 
 #include <stdlib.h>
 

@@ -1,6 +1,6 @@
 /* model.c - cb_model ownership (an arena per model), validation and lookups. */
 #include "cb_math.h"
-#include "crowdbake.h"
+#include "crowdbake/core.h"
 
 #include <math.h>
 #include <stdarg.h>

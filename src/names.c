@@ -1,5 +1,5 @@
 /* names.c - the closest known name to a mistyped one, for "did you mean" messages. */
-#include "crowdbake.h"
+#include "crowdbake/core.h"
 
 #include <string.h>
 

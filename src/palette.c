@@ -1,8 +1,8 @@
 /* palette.c - baking clips into a bone-matrix palette: framing every clip, encoding each
  * joint matrix in the chosen layout and precision, and measuring the error that costs. */
-#include "palette.h"
+#include "crowdbake/palette.h"
 
-#include "budget.h"
+#include "crowdbake/budget.h"
 
 #include <math.h>
 #include <stdio.h>

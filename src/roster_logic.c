@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "catalog.h"
+#include "crowdbake/catalog.h"
 
 void cb_catalog_free(cb_catalog *c)
 {

@@ -1,5 +1,5 @@
 /* runtime.c - see runtime.h. */
-#include "runtime.h"
+#include "crowdbake/runtime.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,7 +1,7 @@
 /* sample.c - glTF 2.0 animation sampling: channel interpolation, the node hierarchy and
  * joint matrices. */
 #include "cb_math.h"
-#include "crowdbake.h"
+#include "crowdbake/core.h"
 
 #include <math.h>
 #include <stdlib.h>

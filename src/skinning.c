@@ -4,7 +4,7 @@
 #include <stdlib.h>
 
 #include "cb_math.h"
-#include "crowdbake.h"
+#include "crowdbake/core.h"
 
 /* The matrix products run on 4 lanes (the 4th, the matrices' last row, is dropped): one AVX2
  * vector each where the CPU has it, with the scalar code's operations in its order. */

@@ -1,5 +1,5 @@
 /* vat.c - see vat.h. */
-#include "vat.h"
+#include "crowdbake/vat.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -3,7 +3,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "crowdbake.h"
+#include "crowdbake/core.h"
 
 void cb_warn(cb_warnings *list, const char *kind, const char *fmt, ...)
 {

@@ -10,8 +10,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "../formats/catalog_toml.h"
-#include "../formats/roster.h"
+#include "crowdbake/catalog_toml.h"
+#include "crowdbake/roster.h"
 
 #define TMP TEST_TMP "/catalog"
 

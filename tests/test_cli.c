@@ -11,10 +11,10 @@
 
 #include <math.h>
 
-#include "../formats/catalog_toml.h"
+#include "crowdbake/catalog_toml.h"
 #include "../formats/crowdbake_pal.h"
-#include "../formats/exr_io.h"
-#include "../formats/report.h"
+#include "crowdbake/exr.h"
+#include "crowdbake/report.h"
 
 #define TMP TEST_TMP "/cli"
 

@@ -12,7 +12,7 @@
 #include <GL/glext.h>
 #include <math.h>
 
-#include "../src/runtime.h"
+#include "crowdbake/runtime.h"
 
 static OSMesaContext ctx;
 static unsigned char framebuffer[16 * 16 * 4];

@@ -7,12 +7,12 @@
 #include <limits.h>
 #include <math.h>
 
-#include "../formats/catalog_toml.h"
+#include "crowdbake/catalog_toml.h"
 #include "../formats/crowdbake_pal.h"
-#include "../formats/pal_view.h"
-#include "../formats/roster.h"
-#include "../src/catalog.h"
-#include "../src/runtime.h"
+#include "crowdbake/pal_view.h"
+#include "crowdbake/roster.h"
+#include "crowdbake/catalog.h"
+#include "crowdbake/runtime.h"
 
 #define TMP TEST_TMP "/motion"
 #define COW "assets/quaternius-cow/Cow.glb"

@@ -7,7 +7,7 @@
 #include <unistd.h>
 
 #include "../formats/crowdbake_pal.h"
-#include "../formats/exr_io.h"
+#include "crowdbake/exr.h"
 
 #define TMP TEST_TMP "/pal_file"
 

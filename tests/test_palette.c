@@ -4,7 +4,7 @@
 
 #include <math.h>
 
-#include "../src/palette.h"
+#include "crowdbake/palette.h"
 
 /* Largest error the encoding allows in the 3x3 terms and in the translation of one matrix,
  * from the precision's definition (docs/pal-format.md, "Precision"). */

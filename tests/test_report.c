@@ -7,8 +7,8 @@
 #include <limits.h>
 #include <math.h>
 
-#include "../formats/exr_io.h"
-#include "../src/vat.h"
+#include "crowdbake/exr.h"
+#include "crowdbake/vat.h"
 
 #define TMP TEST_TMP "/report"
 

@@ -6,8 +6,8 @@
 #include <png.h>
 #include <sys/stat.h>
 
-#include "../formats/preview.h"
-#include "../src/runtime.h"
+#include "crowdbake/preview.h"
+#include "crowdbake/runtime.h"
 
 #define TMP TEST_TMP "/verify"
 #define PREVIEWS BUILD_DIR "/previews"

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../formats/gltf_load.h"
+#include "crowdbake/gltf.h"
 
 /* The build being tested (the Makefile passes its BUILD): each build's tests write their files
  * under TEST_TMP, so the normal and the sanitizer passes can run side by side. */

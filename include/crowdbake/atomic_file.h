@@ -3,7 +3,7 @@
 #ifndef CB_ATOMIC_FILE_H
 #define CB_ATOMIC_FILE_H
 
-#include "../src/crowdbake.h"
+#include "core.h"
 
 typedef struct cb_atomic_file {
     int fd;

@@ -1,6 +1,6 @@
 /* catalog.h - an animal catalog (a roster of animal types to bake) as plain structs, and the
  * roster logic that needs no file: state keywords, ground speed, LOD joint remapping.
- * formats/catalog_toml.cpp fills a cb_catalog from TOML; formats/roster.c bakes it. */
+ * formats/catalog_toml.cpp fills a cb_catalog from TOML; pipeline/roster.c bakes it. */
 #ifndef CB_CATALOG_H
 #define CB_CATALOG_H
 
@@ -29,7 +29,7 @@ typedef struct cb_bake_settings {
     cb_root_motion root_motion;
     bool layout_set, precision_set; /* chosen explicitly (else: defaults, with fallbacks) */
     bool zstd;                   /* compress the .pal payload */
-    int exr_compression;         /* formats/exr_io.h's lossless codes; 0: none */
+    int exr_compression;         /* exr.h's lossless codes; 0: none */
 } cb_bake_settings;
 
 /* Which settings an override carries (the command line's bake options over a catalog). */

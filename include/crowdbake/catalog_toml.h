@@ -2,7 +2,7 @@
 #ifndef CB_CATALOG_TOML_H
 #define CB_CATALOG_TOML_H
 
-#include "../src/catalog.h"
+#include "catalog.h"
 
 #ifdef __cplusplus
 extern "C" {

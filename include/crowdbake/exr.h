@@ -4,8 +4,8 @@
 #ifndef CB_EXR_IO_H
 #define CB_EXR_IO_H
 
-#include "../src/palette.h"
-#include "../src/vat.h"
+#include "palette.h"
+#include "vat.h"
 
 /* Lossless compressions only: the texels must read back bit-identical. */
 bool cb_exr_compression_parse(const char *text, int *out);

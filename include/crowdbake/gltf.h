@@ -7,7 +7,7 @@
 #ifndef CB_GLTF_LOAD_H
 #define CB_GLTF_LOAD_H
 
-#include "../src/crowdbake.h"
+#include "core.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -2,7 +2,7 @@
 #ifndef CB_PAL_WRITE_H
 #define CB_PAL_WRITE_H
 
-#include "../src/palette.h"
+#include "palette.h"
 
 typedef struct cb_pal_write_options {
     bool zstd;              /* compress the payload */

@@ -7,7 +7,7 @@
 #ifndef CB_PALETTE_H
 #define CB_PALETTE_H
 
-#include "crowdbake.h"
+#include "core.h"
 
 #ifdef __cplusplus
 extern "C" {

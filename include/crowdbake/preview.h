@@ -3,7 +3,7 @@
 #ifndef CB_PREVIEW_H
 #define CB_PREVIEW_H
 
-#include "../src/palette.h"
+#include "palette.h"
 
 typedef struct cb_preview_options {
     uint32_t columns;   /* frames per clip */

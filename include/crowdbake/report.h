@@ -6,7 +6,7 @@
 
 #include <stdio.h>
 
-#include "../src/budget.h"
+#include "budget.h"
 #include "roster.h"
 
 typedef struct cb_report_type {

@@ -5,7 +5,7 @@
 
 #include <stdio.h>
 
-#include "../src/catalog.h"
+#include "catalog.h"
 
 typedef struct cb_roster_options {
     uint32_t jobs;          /* types baked at once */

@@ -6,7 +6,7 @@
 #include <stdio.h>
 #include <unistd.h>
 
-#include "../../formats/exr_io.h"
+#include "crowdbake/exr.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

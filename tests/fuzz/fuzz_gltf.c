@@ -3,8 +3,8 @@
 #include <stdint.h>
 #include <stdlib.h>
 
-#include "../../formats/gltf_load.h"
-#include "../../src/palette.h"
+#include "crowdbake/gltf.h"
+#include "crowdbake/palette.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
