@@ -6,10 +6,25 @@
 #include <stdlib.h>
 #include <string.h>
 
+int cli_exit_code(cb_status status)
+{
+    switch (status) {
+    case CB_OK: return CLI_EXIT_OK;
+    case CB_ERR_SETTINGS: return CLI_EXIT_USAGE;
+    case CB_ERR_BUDGET: return CLI_EXIT_BUDGET;
+    case CB_ERR_INPUT: return CLI_EXIT_INPUT;
+    case CB_ERR_LAYOUT: return CLI_EXIT_INPUT; /* the rig cannot be baked as asked */
+    case CB_ERR_IO: return CLI_EXIT_IO;
+    case CB_ERR_VERIFY: return CLI_EXIT_VERIFY;
+    case CB_ERR_INTERNAL: break;
+    }
+    return CLI_EXIT_INTERNAL;
+}
+
 int cli_report(const cb_error *err)
 {
     fprintf(stderr, "crowdbake: %s\n", err->message);
-    return err->status ? (int)err->status : CB_ERR_INTERNAL;
+    return err->status ? cli_exit_code(err->status) : CLI_EXIT_INTERNAL;
 }
 
 int cli_usage_error(const char *command, const char *fmt, ...)
@@ -20,7 +35,7 @@ int cli_usage_error(const char *command, const char *fmt, ...)
     vfprintf(stderr, fmt, ap);
     fprintf(stderr, " (see 'crowdbake %s --help')\n", command);
     va_end(ap);
-    return CB_ERR_USAGE;
+    return CLI_EXIT_USAGE;
 }
 
 static const cli_option *find_option(const cli_option *options, size_t count, const char *name, size_t len)
@@ -162,7 +177,7 @@ int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err)
     if (skin_option) {
         int s = cb_model_find_skin(model, skin_option);
         if (s < 0)
-            cb_fail(err, CB_ERR_USAGE, "%s: has no skin '%s' (it has %u; see 'crowdbake info')", model->source, skin_option,
+            cb_fail(err, CB_ERR_SETTINGS, "%s: has no skin '%s' (it has %u; see 'crowdbake info')", model->source, skin_option,
                     model->skin_count);
         return s;
     }
@@ -172,7 +187,7 @@ int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err)
         for (uint32_t s = 0; s < model->skin_count; ++s)
             if (cb_model_skin_vertex_count(model, (int32_t)s) > 0) used = (int)s, ++uses;
         if (uses == 1) return used;
-        cb_fail(err, CB_ERR_USAGE, "%s: has %u skins; choose one with --skin NAME|INDEX (see 'crowdbake info')",
+        cb_fail(err, CB_ERR_SETTINGS, "%s: has %u skins; choose one with --skin NAME|INDEX (see 'crowdbake info')",
                 model->source, model->skin_count);
         return -1;
     }
@@ -206,10 +221,10 @@ static cb_status check_kinds(const char *command, const char *model_path, const 
     if (mk == CLI_FILE_MISSING || pk == CLI_FILE_MISSING)
         return cb_fail(err, CB_ERR_IO, "%s: cannot open it", mk == CLI_FILE_MISSING ? model_path : palette_path);
     if (mk != CLI_FILE_MODEL)
-        return cb_fail(err, CB_ERR_USAGE, "%s: is %s, not a glTF model; 'crowdbake %s MODEL PALETTE' takes the .glb/.gltf "
+        return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a glTF model; 'crowdbake %s MODEL PALETTE' takes the .glb/.gltf "
                        "first", model_path, is_palette(mk) ? "a palette" : "neither glTF nor a palette", command);
     if (!is_palette(pk))
-        return cb_fail(err, CB_ERR_USAGE, "%s: is %s, not a palette; 'crowdbake %s MODEL PALETTE' takes the .pal or .exr "
+        return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a palette; 'crowdbake %s MODEL PALETTE' takes the .pal or .exr "
                        "that 'crowdbake bake' wrote second", palette_path, pk == CLI_FILE_MODEL ? "a glTF model" : "neither a "
                        "palette nor glTF", command);
     return CB_OK;

@@ -12,6 +12,19 @@
 #include "crowdbake/pal_view.h"
 #include "crowdbake/catalog.h"
 
+/* The command's exit codes (README "Exit codes"), apart from the library's cb_status. */
+enum {
+    CLI_EXIT_OK = 0,
+    CLI_EXIT_INTERNAL = 1, /* a bug, or out of memory */
+    CLI_EXIT_USAGE = 2,    /* bad command line (or a setting out of range) */
+    CLI_EXIT_BUDGET = 3,   /* the roster exceeds its VRAM budget (report) */
+    CLI_EXIT_INPUT = 4,    /* an input file is invalid or unsupported */
+    CLI_EXIT_IO = 5,       /* a file could not be read or written */
+    CLI_EXIT_VERIFY = 6    /* verification failed */
+};
+/* The exit code of a library status. */
+int cli_exit_code(cb_status status);
+
 typedef struct cli_option {
     const char *name;     /* "--fps" */
     const char *metavar;  /* NULL for a flag */
@@ -27,11 +40,11 @@ typedef struct cli_command {
 } cli_command;
 
 /* Parses argv[1..] (argv[0] is the command name). Positionals fill `positional` in order.
- * Returns 0, or CB_ERR_USAGE after printing why; sets *help for -h/--help. */
+ * Returns 0, or CLI_EXIT_USAGE after printing why; sets *help for -h/--help. */
 int cli_parse(int argc, char **argv, const cli_option *options, size_t option_count, const char **positional,
               size_t min_positional, size_t max_positional, bool *help);
 
-/* Prints "crowdbake: MESSAGE" to stderr and returns the error's status. */
+/* Prints "crowdbake: MESSAGE" to stderr and returns the error's exit code. */
 int cli_report(const cb_error *err);
 int cli_usage_error(const char *command, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -44,7 +57,7 @@ bool cli_parse_u32(const char *text, unsigned *out);
 
 /* Takes the resource-limit options (--max-joints N, --max-frames N, --max-accessor-count N,
  * --max-file-size SIZE, --max-palette-size SIZE; SIZE like 512M or 2G) out of argv, whichever
- * command they come with. Returns 0 or CB_ERR_USAGE after printing why. */
+ * command they come with. Returns 0 or CLI_EXIT_USAGE after printing why. */
 int cli_take_limits(int *argc, char **argv, cb_limits *limits);
 extern const char cli_limits_usage[];
 

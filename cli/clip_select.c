@@ -39,7 +39,7 @@ static int32_t find_clip(selection *s, const char *name)
     char list[512] = "";
     for (uint32_t k = 0; k < m->animation_count; ++k)
         snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", k ? ", " : "", m->animations[k].name);
-    cb_fail(s->err, CB_ERR_USAGE, "%s: %s %s: the model has no such clip; its clips are: %s", m->source, s->option, name,
+    cb_fail(s->err, CB_ERR_SETTINGS, "%s: %s %s: the model has no such clip; its clips are: %s", m->source, s->option, name,
             list);
     return -1;
 }
@@ -49,7 +49,7 @@ static cb_status include(const char *name, void *ctx)
     selection *s = ctx;
     int32_t a = find_clip(s, name);
     if (a < 0) return s->err->status;
-    if (s->chosen[a]) return cb_fail(s->err, CB_ERR_USAGE, "%s: --clip names '%s' twice", s->model->source, name);
+    if (s->chosen[a]) return cb_fail(s->err, CB_ERR_SETTINGS, "%s: --clip names '%s' twice", s->model->source, name);
     s->chosen[a] = true;
     s->plan[s->count++] = (cb_clip_plan){a, NULL, -1, 0};
     return CB_OK;
@@ -74,13 +74,13 @@ cb_status cli_select_clips(const cb_model *m, const char *clips, const char *exc
     selection s = {m, calloc(m->animation_count + 1, sizeof(bool)), calloc(m->animation_count + 1, sizeof(cb_clip_plan)),
                    0, clips ? "--clip" : "--exclude-clip", err};
     if (!s.chosen || !s.plan) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    else if (clips && excluded) cb_fail(err, CB_ERR_USAGE, "give --clip or --exclude-clip, not both");
+    else if (clips && excluded) cb_fail(err, CB_ERR_SETTINGS, "give --clip or --exclude-clip, not both");
     else if (clips) cli_for_each_name(clips, include, &s);
     else if (!cli_for_each_name(excluded, exclude, &s))
         for (uint32_t a = 0; a < m->animation_count; ++a)
             if (!s.chosen[a]) s.plan[s.count++] = (cb_clip_plan){(int32_t)a, NULL, -1, 0};
     if (!err->status && s.count == 0)
-        cb_fail(err, CB_ERR_USAGE, "%s: no clip left to bake after %s", m->source, s.option);
+        cb_fail(err, CB_ERR_SETTINGS, "%s: no clip left to bake after %s", m->source, s.option);
     free(s.chosen);
     if (err->status) {
         free(s.plan);

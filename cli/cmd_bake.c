@@ -7,12 +7,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "../formats/crowdbake_pal.h"
-#include "crowdbake/exr.h"
-#include "crowdbake/json.h"
-#include "crowdbake/pal_write.h"
+#include "crowdbake/bake.h"
 #include "crowdbake/budget.h"
-#include "crowdbake/runtime.h"
 #include "cli.h"
 
 const char cmd_bake_usage[] =
@@ -78,59 +74,51 @@ static bool ends_with(const char *s, const char *suffix)
     return n >= k && strcmp(s + n - k, suffix) == 0;
 }
 
-/* XXH64 of the crowdbake version, the options that shape the output, and the model's source bytes. */
-static uint64_t input_hash(const cb_model *m, const cb_bake_options *o, int skin, bool zstd, int exr_compression)
+/* The bake options given, into the settings a catalog's keys also fill (bake.h); `fields`
+ * says which were given (CB_BAKE_*). Only the command line's words are checked here: what a
+ * setting means is the pipeline's. */
+static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fields)
 {
-    cbpal_xxh64_state s;
-    cbpal_xxh64_init(&s);
-    char opts[256];
-    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d\n",
-                     CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
-                     o->max_texture_size, (int)o->root_motion, skin, zstd, exr_compression);
-    cbpal_xxh64_update(&s, opts, (size_t)n);
-    cbpal_xxh64_update(&s, &m->source_hash, sizeof m->source_hash);
-    return cbpal_xxh64_digest(&s);
-}
-
-/* The options of the .pal bake; *exr_precision: the .exr's texels (each format keeps its own
- * default precision when --precision is not given, so --format pal,exr changes neither file). */
-static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, bool want_pal, cb_precision *exr_precision)
-{
-    *o = cb_default_bake_options();
-    if (a->fps && strcmp(a->fps, "auto") != 0 && (!cli_parse_double(a->fps, &o->fps) || !(o->fps > 0) || o->fps > 1000))
+    *s = cb_default_bake_settings();
+    *fields = 0;
+    if (a->fps && strcmp(a->fps, "auto") == 0) s->fps_auto = true;
+    else if (a->fps && (!cli_parse_double(a->fps, &s->fps) || !cb_fps_valid(s->fps)))
         return cli_usage_error("bake", "--fps wants a number between 0 and 1000, got '%s'", a->fps);
-    if (a->layout && !cb_layout_parse(a->layout, &o->layout))
+    if (a->layout && !cb_layout_parse(a->layout, &s->layout))
         return cli_usage_error("bake", "--layout is mat4, affine or qpos, got '%s'", a->layout);
-    if (a->precision && !cb_precision_parse(a->precision, &o->precision))
+    if (a->precision && !cb_precision_parse(a->precision, &s->precision))
         return cli_usage_error("bake", "--precision is float, half or u16, got '%s'", a->precision);
-    /* EXR holds half or float; half misses 0.5 mm/m on the samples, so float unless asked. */
-    *exr_precision = a->precision ? o->precision : CB_PRECISION_FLOAT;
-    if (!want_pal) o->precision = *exr_precision;
-    if (*exr_precision == CB_PRECISION_U16 && want_exr)
-        return cli_usage_error("bake", "EXR holds half or float texels; use --precision half|float%s",
-                               want_pal ? " (or write only the .pal)" : "");
+    s->layout_set = a->layout != NULL, s->precision_set = a->precision != NULL;
     unsigned max;
     if (a->max_size) {
         if (!cli_parse_u32(a->max_size, &max) || max < 1)
             return cli_usage_error("bake", "--max-texture-size wants a positive integer");
-        o->max_texture_size = max;
+        s->max_texture_size = max;
     }
-    o->threads = (uint32_t)sysconf(_SC_NPROCESSORS_ONLN);
-    if (a->threads && (!cli_parse_u32(a->threads, &o->threads) || o->threads < 1 || o->threads > 64))
-        return cli_usage_error("bake", "--threads wants 1..64");
-    if (a->root_motion) {
-        if (strcmp(a->root_motion, "in-place") == 0) o->root_motion = CB_ROOT_MOTION_IN_PLACE;
-        else if (strcmp(a->root_motion, "keep") != 0) return cli_usage_error("bake", "--root-motion is keep or in-place");
-    }
+    if (a->root_motion && !cb_root_motion_parse(a->root_motion, &s->root_motion))
+        return cli_usage_error("bake", "--root-motion is keep or in-place");
+    if (a->format && !(s->formats = cb_formats_parse(a->format)))
+        return cli_usage_error("bake", "--format is pal, exr or pal,exr, got '%s'", a->format);
+    if (a->exr_compression && !cb_exr_compression_parse(a->exr_compression, &s->exr_compression))
+        return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
+    s->zstd = a->zstd;
+    if (a->max_error && (!cli_parse_double(a->max_error, &s->max_error_mm) || !(s->max_error_mm > 0)))
+        return cli_usage_error("bake", "--max-error wants mm per metre of model height");
+    if (a->max_fps && (!cli_parse_double(a->max_fps, &s->max_fps) || !cb_max_fps_valid(s->max_fps)))
+        return cli_usage_error("bake", "--max-fps wants 2..1000");
+    *fields = (a->fps ? CB_BAKE_FPS : 0u) | (a->layout ? CB_BAKE_LAYOUT : 0u) | (a->precision ? CB_BAKE_PRECISION : 0u) |
+              (a->max_size ? CB_BAKE_MAX_TEXTURE_SIZE : 0u) | (a->root_motion ? CB_BAKE_ROOT_MOTION : 0u) |
+              (a->format ? CB_BAKE_FORMATS : 0u) | (a->zstd ? CB_BAKE_ZSTD : 0u) |
+              (a->exr_compression ? CB_BAKE_EXR_COMPRESSION : 0u);
     return 0;
 }
 
-/* --format's words: pal, exr, or both. */
-static bool parse_formats(const char *text, bool *pal, bool *exr)
+static int parse_threads(const char *text, unsigned *threads, const char *what)
 {
-    *pal = strcmp(text, "pal") == 0 || strcmp(text, "pal,exr") == 0 || strcmp(text, "exr,pal") == 0;
-    *exr = strcmp(text, "exr") == 0 || strcmp(text, "pal,exr") == 0 || strcmp(text, "exr,pal") == 0;
-    return *pal || *exr;
+    *threads = (unsigned)sysconf(_SC_NPROCESSORS_ONLN);
+    if (text && (!cli_parse_u32(text, threads) || *threads < 1 || *threads > 64))
+        return cli_usage_error("bake", "%s wants 1..64", what);
+    return 0;
 }
 
 /* A catalog: the bake options given override its [bake] and [animal] settings for this run
@@ -138,9 +126,8 @@ static bool parse_formats(const char *text, bool *pal, bool *exr)
  * refused, never ignored. */
 static int bake_catalog(const bake_args *a, const cb_limits *limits)
 {
-    unsigned jobs = (unsigned)sysconf(_SC_NPROCESSORS_ONLN);
-    if (a->threads && (!cli_parse_u32(a->threads, &jobs) || jobs < 1 || jobs > 64))
-        return cli_usage_error("bake", "-j wants 1..64");
+    unsigned jobs;
+    if (parse_threads(a->threads, &jobs, "-j")) return CLI_EXIT_USAGE;
     if (a->output) return cli_usage_error("bake", "a catalog writes to its [bake] out_dir; -o is for single models");
     if (a->skin) return cli_usage_error("bake", "--skin is for single models (a catalog bakes each model's skinned mesh)");
     if (a->speed_ref) return cli_usage_error("bake", "--speed-reference is for single models; a catalog sets speed_reference per animal");
@@ -149,53 +136,37 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     if ((a->fps && strcmp(a->fps, "auto") == 0) || a->max_error || a->max_fps)
         return cli_usage_error("bake", "--fps auto, --max-error and --max-fps are for single models; a catalog sets fps per "
                                "animal or clip");
-    cb_bake_settings over = {0};
-    unsigned fields = 0;
-    bool pal = false, exr = false;
-    if (a->format && !parse_formats(a->format, &pal, &exr)) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
-    if (a->format) over.formats = (pal ? CB_FORMAT_PAL : 0u) | (exr ? CB_FORMAT_EXR : 0u), fields |= CB_BAKE_FORMATS;
-    if (a->zstd && a->format && !pal)
+    if (a->format && !cb_formats_parse(a->format)) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    if (a->zstd && a->format && !(cb_formats_parse(a->format) & CB_FORMAT_PAL))
         return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
-    if (a->zstd) over.zstd = true, fields |= CB_BAKE_ZSTD;
-    if (a->exr_compression && !cb_exr_compression_parse(a->exr_compression, &over.exr_compression))
-        return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
-    if (a->exr_compression) fields |= CB_BAKE_EXR_COMPRESSION;
-    cb_bake_options o;
-    cb_precision exr_precision; /* the catalog's own rules pick each format's precision */
-    int rc = parse_options(a, &o, false, true, &exr_precision); /* the same checks and values as for one model */
+    cb_bake_settings over;
+    unsigned fields;
+    int rc = parse_settings(a, &over, &fields);
     if (rc) return rc;
-    over.fps = o.fps, over.layout = o.layout, over.precision = o.precision;
-    over.max_texture_size = o.max_texture_size, over.root_motion = o.root_motion;
-    fields |= (a->fps ? CB_BAKE_FPS : 0u) | (a->layout ? CB_BAKE_LAYOUT : 0u) | (a->precision ? CB_BAKE_PRECISION : 0u) |
-              (a->max_size ? CB_BAKE_MAX_TEXTURE_SIZE : 0u) | (a->root_motion ? CB_BAKE_ROOT_MOTION : 0u);
     cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, limits, &over, fields};
     return cmd_bake_catalog(&cb);
 }
 
-
 /* Both error figures: the encoding's at the baked rows, and what a player sees (the runtime's
  * blend of two rows, halfway between them), which is usually far larger. */
-static void print_summary(const char *path, size_t bytes, const cb_palette *p, double seconds)
+static void print_summary(const cb_bake_output *out, double seconds)
 {
+    const cb_palette *p = &out->palette;
     printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bone%s, %u clip%s, %u frame%s, %s/%s, encoding error %.3g mm/m "
            "(at the baked rows), visible error %.3g mm/m (blending rows at runtime), %.0f ms\n",
-           path, bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count,
+           out->path, out->file_bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count,
            p->bone_count == 1 ? "" : "s", p->clip_count, p->clip_count == 1 ? "" : "s", p->rows, p->rows == 1 ? "" : "s",
            cb_layout_name(p->layout), cb_precision_name(p->precision), cb_mm_per_m(p->max_error, p->model_height),
            cb_mm_per_m(p->visible_error, p->model_height), seconds * 1000);
 }
 
-typedef struct phase_times {
-    double load, write;
-} phase_times;
-
-static void json_output(cb_json *j, const char *path, const char *format, size_t bytes, const cb_palette *p, double seconds,
-                        const phase_times *pt)
+static void json_output(cb_json *j, const cb_bake_output *out, double seconds, double load)
 {
+    const cb_palette *p = &out->palette;
     cb_json_object(j, NULL);
-    cb_json_string(j, "path", path);
-    cb_json_string(j, "format", format);
-    cb_json_int(j, "bytes", (long long)bytes);
+    cb_json_string(j, "path", out->path);
+    cb_json_string(j, "format", out->format == CB_FORMAT_PAL ? "pal" : "exr");
+    cb_json_int(j, "bytes", (long long)out->file_bytes);
     cb_json_int(j, "width", p->width);
     cb_json_int(j, "height", p->height);
     cb_json_int(j, "blocks", p->blocks);
@@ -212,115 +183,104 @@ static void json_output(cb_json *j, const char *path, const char *format, size_t
     cb_json_int(j, "error_rows_measured", p->error_rows_measured);
     cb_json_number(j, "seconds", seconds);
     cb_json_object(j, "phases");
-    cb_json_number(j, "load", pt->load);
+    cb_json_number(j, "load", load);
     cb_json_number(j, "sample", p->seconds_sample);
     cb_json_number(j, "encode", p->seconds_encode);
     cb_json_number(j, "measure", p->seconds_measure);
-    cb_json_number(j, "write", pt->write);
+    cb_json_number(j, "write", out->seconds_write);
     cb_json_end(j);
     cb_json_end(j);
 }
 
-/* --fps auto: a rate per clip, chosen by measured error; prints what it chose and saved. */
-static cb_clip_plan *choose_rates(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *selection,
-                                  uint32_t selected, double max_mm, double max_fps, bool quiet, cb_error *err)
+/* --fps auto: what the plan chose per clip, and what it saved against 30 fps. */
+static cb_status print_rates(const cb_bake_job *job, cb_error *err)
 {
-    const cb_model *m = cb_sampler_model(s);
-    uint32_t n = selection ? selected : m->animation_count;
-    cb_clip_plan *plan = calloc(n ? n : 1, sizeof *plan);
-    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
-    cb_rate_choice *chosen = calloc(n ? n : 1, sizeof *chosen);
-    if (!plan || !goals || !chosen) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    for (uint32_t i = 0; i < n && !err->status; ++i) {
-        plan[i] = (cb_clip_plan){selection ? selection[i].animation : (int32_t)i, NULL, -1, 0};
-        goals[i] = (cb_rate_goal){max_mm, max_fps};
-    }
+    const cb_model *m = job->model;
+    cb_sampler *s = cb_sampler_create(m, job->skin, err);
+    if (!s) return err->status;
+    cb_bake_options o = cb_bake_settings_options(&job->settings, (job->settings.formats & CB_FORMAT_PAL) ? CB_FORMAT_PAL
+                                                 : CB_FORMAT_EXR, &job->limits, 1);
     uint64_t rows_auto = 0, rows_30 = 0;
-    if (!err->status) cb_choose_rates(s, o, plan, n, goals, chosen, err);
-    for (uint32_t i = 0; i < n && !err->status; ++i) {
-        int32_t a = plan[i].animation;
+    for (uint32_t i = 0; i < job->plan_count && !err->status; ++i) {
+        int32_t a = job->plan[i].animation;
         cb_clip_info at, fixed;
-        if (cb_clip_analyze(s, a, plan[i].fps, -1, &o->limits, &at, err) ||
-            cb_clip_analyze(s, a, 30, -1, &o->limits, &fixed, err))
+        if (cb_clip_analyze(s, a, job->plan[i].fps, -1, &o.limits, &at, err) ||
+            cb_clip_analyze(s, a, 30, -1, &o.limits, &fixed, err))
             break;
         rows_auto += at.frames, rows_30 += fixed.frames;
-        if (!quiet)
-            printf("  %-24s %3.0f fps: %4u rows, visible error %.3f mm/m%s\n", m->animations[a].name, plan[i].fps, at.frames,
-                   chosen[i].error_mm, chosen[i].met ? "" : " (over --max-error even at --max-fps)");
+        printf("  %-24s %3.0f fps: %4u rows, visible error %.3f mm/m%s\n", m->animations[a].name, job->plan[i].fps,
+               at.frames, job->rates[i].error_mm, job->rates[i].met ? "" : " (over --max-error even at --max-fps)");
     }
-    if (!err->status && !quiet) {
+    if (!err->status) {
         cb_texture_geometry g;
-        uint32_t bones = m->skins[cb_sampler_skin(s)].joint_count;
-        uint64_t b_auto = cb_palette_texture_bytes(bones, (uint32_t)rows_auto, o->layout, o->precision, o->max_texture_size, &g);
-        uint64_t b_30 = cb_palette_texture_bytes(bones, (uint32_t)rows_30, o->layout, o->precision, o->max_texture_size, &g);
+        uint32_t bones = m->skins[job->skin].joint_count;
+        uint64_t b_auto = cb_palette_texture_bytes(bones, (uint32_t)rows_auto, o.layout, o.precision, o.max_texture_size, &g);
+        uint64_t b_30 = cb_palette_texture_bytes(bones, (uint32_t)rows_30, o.layout, o.precision, o.max_texture_size, &g);
         printf("  auto fps: %llu rows, %.1f KiB, against %llu rows, %.1f KiB at 30 fps (%.0f%% %s)\n",
                (unsigned long long)rows_auto, b_auto / 1024.0, (unsigned long long)rows_30, b_30 / 1024.0,
                b_30 ? fabs(100.0 * (1 - (double)b_auto / b_30)) : 0, b_auto <= b_30 ? "saved" : "more");
     }
-    free(goals), free(chosen);
-    if (err->status) free(plan), plan = NULL;
-    return plan;
-}
-
-/* Bakes the selected clips (NULL: every clip), with --fps auto choosing the rates first. */
-static cb_status bake_palette(cb_sampler *s, cb_bake_options *o, const bake_args *a, const cb_clip_plan *selection,
-                              uint32_t selected, double max_mm, double max_fps, bool quiet, cb_palette *p, cb_error *err)
-{
-    bool automatic = a->fps && strcmp(a->fps, "auto") == 0;
-    o->affine_fallback = a->layout == NULL;
-    cb_clip_plan *plan = automatic ? choose_rates(s, o, selection, selected, max_mm, max_fps, quiet, err) : NULL;
-    uint32_t n = plan || selection ? (selection ? selected : cb_sampler_model(s)->animation_count) : 0;
-    cb_status rc = err->status ? err->status : cb_palette_bake(s, o, plan ? plan : selection, n, p, err);
-    free(plan);
-    return rc;
-}
-
-/* What the user should know about a bake: clips skipped at load, ignored channels, the
- * layout's fallback, loops that travel, quaternion flips. */
-static void bake_warnings(cb_sampler *s, const cb_bake_options *o, const bake_args *a, const cb_palette *p,
-                          cb_warnings *w)
-{
-    const cb_model *m = cb_sampler_model(s);
-    cb_model_warnings(m, a->clips == NULL, w);
-    if (p->fallback_note[0]) cb_warn(w, "note", "%s", p->fallback_note);
-    for (uint32_t c = 0; o->root_motion == CB_ROOT_MOTION_KEEP && c < p->clip_count; ++c) {
-        cb_clip_info info;
-        cb_error ignored = {0};
-        if (p->clips[c].loops &&
-            !cb_clip_analyze(s, cb_model_find_animation(m, p->clips[c].name), o->fps, 1, &o->limits, &info, &ignored) &&
-            info.ground_speed > 0)
-            cb_warn(w, "note", "clip '%s' loops and travels %.3g units/s: blending its last row into its first pulls the "
-                    "body back; for crowds moved by the game, bake with --root-motion in-place", p->clips[c].name,
-                    info.ground_speed);
-    }
-    if (p->quat_hemisphere_breaks)
-        cb_warn(w, "note", "%u bone(s) turn a full circle over a loop, so their last and first rows lie in opposite "
-                "quaternion hemispheres; the shipped shaders flip before blending", p->quat_hemisphere_breaks);
+    cb_sampler_free(s);
+    return err->status;
 }
 
 /* --format, or OUT's extension: .pal, .exr, or none (a device, a pipe: a .pal, as always);
  * another extension is refused, never guessed. */
-static int output_formats(const bake_args *a, bool *want_pal, bool *want_exr)
+static int output_formats(const bake_args *a, unsigned *formats)
 {
-    if (a->format) {
-        if (!parse_formats(a->format, want_pal, want_exr))
-            return cli_usage_error("bake", "--format is pal, exr or pal,exr, got '%s'", a->format);
-        return 0;
-    }
+    if (a->format) return 0; /* parse_settings read it */
     const char *dot = strrchr(a->output, '.'), *slash = strrchr(a->output, '/');
     const char *ext = dot && (!slash || dot > slash) ? dot : "";
-    *want_exr = strcmp(ext, ".exr") == 0;
-    *want_pal = strcmp(ext, ".pal") == 0 || !ext[0];
-    if (!*want_pal && !*want_exr)
+    *formats = strcmp(ext, ".exr") == 0 ? CB_FORMAT_EXR : strcmp(ext, ".pal") == 0 || !ext[0] ? CB_FORMAT_PAL : 0;
+    if (!*formats)
         return cli_usage_error("bake", "%s: unknown output extension '%s'; write OUT.pal or OUT.exr, or give --format "
                                "pal,exr", a->output, ext);
     return 0;
 }
 
+/* Everything the command line decides before the job runs. */
+static int single_model_checks(const bake_args *a, cb_bake_settings *s, unsigned fields)
+{
+    int rc;
+    if ((rc = output_formats(a, &s->formats))) return rc;
+    (void)fields;
+    bool want_pal = s->formats & CB_FORMAT_PAL;
+    if (!cb_bake_settings_writable(s))
+        return cli_usage_error("bake", "EXR holds half or float texels; use --precision half|float%s",
+                               want_pal ? " (or write only the .pal)" : "");
+    if (a->zstd && !want_pal) return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+    if (a->max_error && !s->fps_auto) return cli_usage_error("bake", "--max-error goes with --fps auto");
+    return 0;
+}
+
+/* The bake line or --json, and the warnings: the model's, then the bake's notes. */
+static void report_bake(const bake_args *a, const cb_model *m, const cb_bake_result *r, double t0, double load)
+{
+    cb_warnings warnings = {0};
+    cb_model_warnings(m, a->clips == NULL, &warnings);
+    for (uint32_t i = 0; i < r->notes.count; ++i) cb_warn(&warnings, r->notes.items[i].kind, "%s", r->notes.items[i].message);
+    double seconds = now_seconds() - t0;
+    if (a->json) {
+        cb_json j;
+        cb_json_init(&j, stdout);
+        cb_json_object(&j, NULL);
+        cb_json_string(&j, "model", a->model);
+        cb_json_array(&j, "outputs");
+        for (uint32_t i = 0; i < r->output_count; ++i) json_output(&j, &r->outputs[i], seconds, load);
+        cb_json_end(&j);
+        cli_json_warnings(&j, &warnings);
+        cb_json_end(&j);
+    } else {
+        for (uint32_t i = 0; i < r->output_count && !a->quiet; ++i) print_summary(&r->outputs[i], seconds);
+        cli_print_warnings(&warnings, !a->quiet);
+    }
+    cb_warnings_free(&warnings);
+}
+
 int cmd_bake(int argc, char **argv)
 {
     cb_limits limits;
-    if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
+    if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     bake_args a = {0};
     bool help;
     const cli_option options[] = {
@@ -346,87 +306,39 @@ int cmd_bake(int argc, char **argv)
     if (a.depfile || a.manifest || a.force)
         return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
                                a.depfile ? "--depfile" : a.manifest ? "--manifest" : "--force");
-    bool want_pal = false, want_exr = false;
-    if ((rc = output_formats(&a, &want_pal, &want_exr))) return rc;
-    int exr_compression = 0;
-    if (a.exr_compression && !cb_exr_compression_parse(a.exr_compression, &exr_compression))
-        return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
-    if (a.zstd && !want_pal) return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+    cb_bake_settings settings;
+    unsigned fields, threads;
+    if ((rc = parse_settings(&a, &settings, &fields)) || (rc = single_model_checks(&a, &settings, fields))) return rc;
     double speed_ref = 0;
     if (a.speed_ref && (!cli_parse_double(a.speed_ref, &speed_ref) || speed_ref < 0))
         return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
-    cb_bake_options o;
-    cb_precision exr_precision = CB_PRECISION_FLOAT;
-    if ((rc = parse_options(&a, &o, want_exr, want_pal, &exr_precision))) return rc;
-    double max_mm = 1, max_fps = 60;
-    if (a.max_error && (!cli_parse_double(a.max_error, &max_mm) || !(max_mm > 0)))
-        return cli_usage_error("bake", "--max-error wants mm per metre of model height");
-    if (a.max_fps && (!cli_parse_double(a.max_fps, &max_fps) || !(max_fps >= 2) || max_fps > 1000))
-        return cli_usage_error("bake", "--max-fps wants 2..1000");
-    if (a.max_error && !(a.fps && strcmp(a.fps, "auto") == 0))
-        return cli_usage_error("bake", "--max-error goes with --fps auto");
-    o.limits = limits;
+    if (parse_threads(a.threads, &threads, "--threads")) return CLI_EXIT_USAGE;
 
     double t0 = now_seconds();
     cb_error err = {0};
-    cb_model *m = cli_load_model(a.model, &o.limits, &err);
+    cb_model *m = cli_load_model(a.model, &limits, &err);
     if (!m) return cli_report(&err);
-    phase_times pt = {now_seconds() - t0, 0};
-    int skin = cli_pick_skin(m, a.skin, &err);
-    cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, &err) : NULL;
-    cb_palette p = {0};
+    double load = now_seconds() - t0;
+    char pal_path[4096], exr_path[4096];
+    snprintf(pal_path, sizeof pal_path, "%s", a.output);
+    snprintf(exr_path, sizeof exr_path, "%s", a.output);
+    if (a.format) output_path(a.output, "pal", pal_path, sizeof pal_path), output_path(a.output, "exr", exr_path, sizeof exr_path);
+    cb_bake_job job;
+    memset(&job, 0, sizeof job);
+    job.model = m, job.skin = cli_pick_skin(m, a.skin, &err);
+    job.settings = settings, job.limits = limits, job.threads = threads, job.speed_reference = speed_ref;
+    job.pal_path = pal_path, job.exr_path = exr_path;
     cb_clip_plan *selection = NULL;
-    uint32_t selected = 0;
-    if (s && !cli_select_clips(m, a.clips, a.excluded, &selection, &selected, &err))
-        bake_palette(s, &o, &a, selection, selected, max_mm, max_fps, a.quiet || a.json, &p, &err);
-    cb_warnings warnings = {0};
-    if (!err.status) bake_warnings(s, &o, &a, &p, &warnings);
-    cb_json j;
-    if (a.json && !err.status) {
-        cb_json_init(&j, stdout);
-        cb_json_object(&j, NULL);
-        cb_json_string(&j, "model", a.model);
-        cb_json_array(&j, "outputs");
+    cb_bake_result result = {0};
+    if (job.skin >= 0 && !cli_select_clips(m, a.clips, a.excluded, &selection, &job.clip_count, &err)) {
+        job.clips = selection;
+        if (!cb_bake_job_plan(&job, &err) && settings.fps_auto && !a.quiet && !a.json) print_rates(&job, &err);
+        if (!err.status) cb_bake_job_run(&job, &result, &err);
     }
-    uint64_t hash = err.status ? 0 : input_hash(m, &o, skin, a.zstd, exr_compression);
-    for (int f = 0; f < 2 && !err.status; ++f) {
-        if ((f == 0 && !want_pal) || (f == 1 && !want_exr)) continue;
-        char path[4096];
-        if (a.format) output_path(a.output, f == 0 ? "pal" : "exr", path, sizeof path);
-        else snprintf(path, sizeof path, "%s", a.output);
-        if (f == 1 && o.precision != exr_precision) { /* the .pal's u16 is no EXR */
-            cb_palette_free(&p);
-            o.precision = exr_precision;
-            if (bake_palette(s, &o, &a, selection, selected, max_mm, max_fps, true, &p, &err)) break;
-            hash = input_hash(m, &o, skin, a.zstd, exr_compression);
-        }
-        double tw = now_seconds();
-        if (f == 0) {
-            cb_pal_write_options po = {a.zstd, 0, hash, (float)speed_ref, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
-            cb_pal_write(path, &p, m, skin, &po, &err);
-        } else {
-            cb_exr_write(path, &p, m, skin, exr_compression, hash, (float)speed_ref, &err);
-        }
-        if (err.status) break;
-        pt.write = now_seconds() - tw;
-        FILE *fp = fopen(path, "rb");
-        size_t bytes = 0;
-        if (fp) fseek(fp, 0, SEEK_END), bytes = (size_t)ftell(fp), fclose(fp);
-        double seconds = now_seconds() - t0;
-        if (a.json) json_output(&j, path, f == 0 ? "pal" : "exr", bytes, &p, seconds, &pt);
-        else if (!a.quiet) print_summary(path, bytes, &p, seconds);
-    }
-    if (a.json && !err.status) {
-        cb_json_end(&j);
-        cli_json_warnings(&j, &warnings);
-        cb_json_end(&j);
-    } else if (!err.status) {
-        cli_print_warnings(&warnings, !a.quiet);
-    }
-    cb_warnings_free(&warnings);
+    if (!err.status) report_bake(&a, m, &result, t0, load);
+    cb_bake_result_free(&result);
+    cb_bake_job_free(&job);
     free(selection);
-    cb_palette_free(&p);
-    cb_sampler_free(s);
     cb_model_free(m);
     return err.status ? cli_report(&err) : 0;
 }

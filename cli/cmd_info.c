@@ -193,7 +193,7 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, dou
 int cmd_info(int argc, char **argv)
 {
     cb_limits limits;
-    if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
+    if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     const char *path = NULL, *fps_text = "30", *skin_name = NULL;
     bool json = false, help;
     const cli_option options[] = {

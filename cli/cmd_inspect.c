@@ -71,7 +71,7 @@ static void print_pal_json(const char *path, const cbpal_file *f, const cb_palet
     cb_json_int(&j, "height", h->height);
     cb_json_int(&j, "blocks", h->blocks);
     cb_json_bool(&j, "zstd", (h->flags & CBPAL_FLAG_ZSTD) != 0);
-    cb_json_string(&j, "root_motion", h->flags & CBPAL_FLAG_IN_PLACE ? "in-place" : "keep");
+    cb_json_string(&j, "root_motion", cb_root_motion_name(h->flags & CBPAL_FLAG_IN_PLACE ? CB_ROOT_MOTION_IN_PLACE : CB_ROOT_MOTION_KEEP));
     cb_json_number(&j, "fps", h->fps);
     cb_json_number(&j, "speed_reference", h->speed_reference);
     cb_json_number(&j, "max_error", h->max_error);
@@ -182,9 +182,9 @@ int cmd_inspect(int argc, char **argv)
             if (strcmp(c.name, clip_name) == 0) clip = (int)i;
         }
         cbpal_clip c;
-        if (clip < 0) cb_fail(&err, CB_ERR_USAGE, "%s: has no clip '%s'", path, clip_name);
+        if (clip < 0) cb_fail(&err, CB_ERR_SETTINGS, "%s: has no clip '%s'", path, clip_name);
         else if (!cli_parse_u32(frame_text, &frame) || (cbpal_get_clip(&f, (uint32_t)clip, &c), frame >= c.frames))
-            cb_fail(&err, CB_ERR_USAGE, "%s: clip '%s' has %u frames; --frame %s is not one of them", path, clip_name,
+            cb_fail(&err, CB_ERR_SETTINGS, "%s: clip '%s' has %u frames; --frame %s is not one of them", path, clip_name,
                     c.frames, frame_text);
     }
     if (!err.status) {

@@ -15,7 +15,7 @@ const char cmd_preview_usage[] =
 int cmd_preview(int argc, char **argv)
 {
     cb_limits limits;
-    if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
+    if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     const char *pos[2] = {0}, *out = NULL, *cols = NULL, *cell = NULL, *skin_name = NULL;
     bool help;
     const cli_option options[] = {{"-o", "FILE", &out, NULL}, {"--output", "FILE", &out, NULL}, {"--columns", "N", &cols, NULL},

@@ -162,10 +162,10 @@ int cmd_report(int argc, char **argv)
         else cb_report_text(stdout, &r);
         if (html) write_html(html, &r, &rerr);
     }
-    int status = rerr.status ? cli_report(&rerr) : bake ? (int)bake : 0;
+    int status = rerr.status ? cli_report(&rerr) : bake ? cli_exit_code(bake) : 0;
     if (!status && r.over_budget && !no_fail) {
         fprintf(stderr, "crowdbake: the roster exceeds its budget (%s); exit 3 (use --no-fail to only report)\n", r.target);
-        status = CB_ERR_BUDGET;
+        status = CLI_EXIT_BUDGET;
     }
     if (!rerr.status) cb_report_free(&r);
     cb_roster_free(&roster);

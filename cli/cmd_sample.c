@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "crowdbake/json.h"
+#include "crowdbake/bake.h"
 #include "cli.h"
 
 const char cmd_sample_usage[] =
@@ -45,7 +46,7 @@ static void write_clip(cb_json *j, cb_sampler *s, const cb_model *m, const cb_cl
 int cmd_sample(int argc, char **argv)
 {
     cb_limits limits;
-    if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
+    if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     const char *path = NULL, *fps_text = NULL, *clip_name = NULL, *frame_text = NULL, *skin_name = NULL, *rm_text = "keep";
     bool json = false, help;
     const cli_option options[] = {{"--json", NULL, NULL, &json},          {"--fps", "N", &fps_text, NULL},
@@ -57,13 +58,12 @@ int cmd_sample(int argc, char **argv)
     double fps;
     unsigned frame = 0;
     if (!fps_text) return cli_usage_error("sample", "--fps is required");
-    if (!cli_parse_double(fps_text, &fps) || !(fps > 0)) return cli_usage_error("sample", "--fps wants a positive number");
+    if (!cli_parse_double(fps_text, &fps) || !cb_fps_valid(fps))
+        return cli_usage_error("sample", "--fps wants a number between 0 and 1000");
     if (frame_text && !cli_parse_u32(frame_text, &frame)) return cli_usage_error("sample", "--frame wants a frame index");
     if (!json) return cli_usage_error("sample", "only --json output exists; add --json");
     cb_root_motion rm;
-    if (strcmp(rm_text, "keep") == 0) rm = CB_ROOT_MOTION_KEEP;
-    else if (strcmp(rm_text, "in-place") == 0) rm = CB_ROOT_MOTION_IN_PLACE;
-    else return cli_usage_error("sample", "--root-motion is keep or in-place");
+    if (!cb_root_motion_parse(rm_text, &rm)) return cli_usage_error("sample", "--root-motion is keep or in-place");
 
     cb_error err = {0};
     cb_model *m = cli_load_model(path, &limits, &err);
@@ -71,7 +71,7 @@ int cmd_sample(int argc, char **argv)
     int skin = cli_pick_skin(m, skin_name, &err);
     int clip_index = -1;
     if (!err.status && clip_name && (clip_index = cb_model_find_animation(m, clip_name)) < 0)
-        cb_fail(&err, CB_ERR_USAGE, "%s: has no clip '%s' (see 'crowdbake info')", path, clip_name);
+        cb_fail(&err, CB_ERR_SETTINGS, "%s: has no clip '%s' (see 'crowdbake info')", path, clip_name);
     cb_sampler *s = err.status ? NULL : cb_sampler_create(m, skin, &err);
     double *mats = s ? malloc((size_t)m->skins[skin].joint_count * 16 * sizeof(double)) : NULL;
     if (s && !mats) cb_fail(&err, CB_ERR_INTERNAL, "out of memory");
@@ -89,7 +89,7 @@ int cmd_sample(int argc, char **argv)
             cb_clip_info clip;
             if (cb_clip_analyze(s, (int32_t)a, fps, -1, &limits, &clip, &err)) break;
             if (frame_text && frame >= clip.frames) {
-                cb_fail(&err, CB_ERR_USAGE, "clip '%s' has %u frames at %g fps; --frame %u is past its end",
+                cb_fail(&err, CB_ERR_SETTINGS, "clip '%s' has %u frames at %g fps; --frame %u is past its end",
                         m->animations[a].name, clip.frames, fps, frame);
                 break;
             }

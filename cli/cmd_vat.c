@@ -6,6 +6,7 @@
 
 #include "crowdbake/exr.h"
 #include "crowdbake/json.h"
+#include "crowdbake/bake.h"
 #include "cli.h"
 
 const char cmd_vat_usage[] =
@@ -22,7 +23,7 @@ const char cmd_vat_usage[] =
 int cmd_vat(int argc, char **argv)
 {
     cb_limits limits;
-    if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
+    if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     const char *path = NULL, *out = NULL, *fps = NULL, *max = NULL, *rm = NULL, *skin_name = NULL, *comp = NULL,
                *clips = NULL, *excluded = NULL;
     bool json = false, help;
@@ -39,11 +40,10 @@ int cmd_vat(int argc, char **argv)
     o.limits = limits;
     unsigned max_size = o.max_texture_size;
     int compression = 0;
-    if (fps && (!cli_parse_double(fps, &o.fps) || !(o.fps > 0) || o.fps > 1000)) return cli_usage_error("vat", "--fps wants 0..1000");
+    if (fps && (!cli_parse_double(fps, &o.fps) || !cb_fps_valid(o.fps))) return cli_usage_error("vat", "--fps wants 0..1000");
     if (max && (!cli_parse_u32(max, &max_size) || max_size < 1)) return cli_usage_error("vat", "--max-texture-size wants a positive integer");
     o.max_texture_size = max_size;
-    if (rm && strcmp(rm, "in-place") == 0) o.root_motion = CB_ROOT_MOTION_IN_PLACE;
-    else if (rm && strcmp(rm, "keep") != 0) return cli_usage_error("vat", "--root-motion is keep or in-place");
+    if (rm && !cb_root_motion_parse(rm, &o.root_motion)) return cli_usage_error("vat", "--root-motion is keep or in-place");
     if (comp && !cb_exr_compression_parse(comp, &compression)) return cli_usage_error("vat", "--exr-compression: lossless only");
     cb_error err = {0};
     cb_model *m = cli_load_model(path, &limits, &err);

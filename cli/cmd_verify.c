@@ -32,7 +32,7 @@ static cb_status palette_has_clip(const char *name, void *ctx)
     const clip_check *c = ctx;
     for (uint32_t i = 0; i < c->p->clip_count; ++i)
         if (strcmp(c->p->clips[i].name, name) == 0) return CB_OK;
-    return cb_fail(c->err, CB_ERR_USAGE, "%s: %s %s: the palette has no such clip (see 'crowdbake inspect')", c->palette,
+    return cb_fail(c->err, CB_ERR_SETTINGS, "%s: %s %s: the palette has no such clip (see 'crowdbake inspect')", c->palette,
                    c->option, name);
 }
 
@@ -40,7 +40,7 @@ static cb_status palette_has_clip(const char *name, void *ctx)
 static cb_status check_clip_options(const cb_palette *p, const char *palette, const char *clips, const char *excluded,
                                     cb_error *err)
 {
-    if (clips && excluded) return cb_fail(err, CB_ERR_USAGE, "give --clip or --exclude-clip, not both");
+    if (clips && excluded) return cb_fail(err, CB_ERR_SETTINGS, "give --clip or --exclude-clip, not both");
     clip_check c = {p, palette, clips ? "--clip" : "--exclude-clip", err};
     return cli_for_each_name(clips ? clips : excluded, palette_has_clip, &c);
 }
@@ -48,7 +48,7 @@ static cb_status check_clip_options(const cb_palette *p, const char *palette, co
 int cmd_verify(int argc, char **argv)
 {
     cb_limits limits;
-    if (cli_take_limits(&argc, argv, &limits)) return CB_ERR_USAGE;
+    if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     const char *pos[2] = {0}, *max_text = NULL, *random_text = NULL, *skin_name = NULL, *clips = NULL, *excluded = NULL;
     bool json = false, help;
     const cli_option options[] = {{"--max-error", "MM_PER_M", &max_text, NULL}, {"--random", "N", &random_text, NULL},
@@ -135,7 +135,7 @@ int cmd_verify(int argc, char **argv)
     if (err.status) return cli_report(&err);
     if (max_error >= 0 && cb_mm_per_m(worst, height) > max_error) {
         fprintf(stderr, "crowdbake: %s: worst error %.3f mm/m is over --max-error %g\n", pos[1], cb_mm_per_m(worst, height), max_error);
-        return CB_ERR_VERIFY;
+        return CLI_EXIT_VERIFY;
     }
     return 0;
 }

@@ -33,7 +33,7 @@ int main(int argc, char **argv)
 {
     if (argc < 2 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "help") == 0) {
         print_help(argc < 2 ? stderr : stdout);
-        return argc < 2 ? CB_ERR_USAGE : 0;
+        return argc < 2 ? CLI_EXIT_USAGE : 0;
     }
     if (strcmp(argv[1], "--version") == 0) {
         printf("crowdbake %s\n", CROWDBAKE_VERSION);
@@ -45,5 +45,5 @@ int main(int argc, char **argv)
     const char *guess = cb_closest_name(argv[1], &commands[0].name, sizeof commands / sizeof commands[0], sizeof commands[0]);
     if (guess) fprintf(stderr, "crowdbake: unknown command '%s'; did you mean '%s'? (see 'crowdbake --help')\n", argv[1], guess);
     else fprintf(stderr, "crowdbake: unknown command '%s' (see 'crowdbake --help')\n", argv[1]);
-    return CB_ERR_USAGE;
+    return CLI_EXIT_USAGE;
 }

@@ -140,7 +140,7 @@ struct Parser {
             return 1;
         }
         *out = number(n, what);
-        if (!(*out > 0 && *out <= 1000)) fail(n.source(), what + " must be between 0 and 1000");
+        if (!cb_fps_valid(*out)) fail(n.source(), what + " must be between 0 and 1000");
         return 0;
     }
 
@@ -160,7 +160,7 @@ struct Parser {
         if (auto *n = t.get("max_error")) b->max_error_mm = max_error(*n, where);
         if (auto *n = t.get("max_fps")) {
             b->max_fps = number(*n, where + " max_fps");
-            if (!(b->max_fps >= 2 && b->max_fps <= 1000)) fail(n->source(), where + " max_fps must be between 2 and 1000");
+            if (!cb_max_fps_valid(b->max_fps)) fail(n->source(), where + " max_fps must be between 2 and 1000");
         }
         if (auto *n = t.get("layout")) {
             if (!cb_layout_parse(str(*n, where + " layout").c_str(), &b->layout))
@@ -174,7 +174,7 @@ struct Parser {
         }
         if (auto *n = t.get("format")) {
             std::string f = str(*n, where + " format");
-            b->formats = f == "pal" ? CB_FORMAT_PAL : f == "exr" ? CB_FORMAT_EXR : f == "both" ? CB_FORMAT_PAL | CB_FORMAT_EXR : 0;
+            b->formats = f == "pal" || f == "exr" || f == "both" ? cb_formats_parse(f.c_str()) : 0;
             if (!b->formats) fail(n->source(), where + " format must be \"pal\", \"exr\" or \"both\"");
         }
         if (auto *n = t.get("out_dir")) b->out_dir = dup(resolve(str(*n, where + " out_dir")));
@@ -184,12 +184,10 @@ struct Parser {
             b->max_texture_size = (uint32_t)v;
         }
         if (auto *n = t.get("root_motion")) {
-            std::string r = str(*n, where + " root_motion");
-            if (r == "keep") b->root_motion = CB_ROOT_MOTION_KEEP;
-            else if (r == "in-place") b->root_motion = CB_ROOT_MOTION_IN_PLACE;
-            else fail(n->source(), where + " root_motion must be \"keep\" or \"in-place\"");
+            if (!cb_root_motion_parse(str(*n, where + " root_motion").c_str(), &b->root_motion))
+                fail(n->source(), where + " root_motion must be \"keep\" or \"in-place\"");
         }
-        if ((b->formats & CB_FORMAT_EXR) && b->precision_set && b->precision == CB_PRECISION_U16)
+        if (!cb_bake_settings_writable(b))
             fail(t.source(), where + " precision u16 cannot be written as EXR; use format = \"pal\" or precision half|float");
     }
 
@@ -395,15 +393,8 @@ struct Parser {
     {
         check_keys(root, {"bake", "budget", "animal"}, "catalog:");
         cb_bake_settings &d = cat->defaults;
-        d.fps = 30;
-        d.max_error_mm = 1;
-        d.max_fps = 60;
-        d.layout = CB_LAYOUT_QPOS;
-        d.precision = CB_PRECISION_U16;
-        d.formats = CB_FORMAT_PAL;
+        d = cb_default_bake_settings();
         d.out_dir = dup(resolve("build/roster"));
-        d.max_texture_size = 16384;
-        d.root_motion = CB_ROOT_MOTION_KEEP;
         if (auto *b = root.get("bake")) {
             if (!b->is_table()) fail(b->source(), "[bake] must be a table");
             check_keys(*b->as_table(), bake_keys(), "[bake]");

@@ -370,7 +370,7 @@ cb_status cb_preview_write(const cb_palette *p, const void *texels, const cb_mod
 {
     uint32_t cols = opt->columns, cell = opt->cell, w = cols * cell, h = row_top(p->clip_count, cell) - CB_PREVIEW_BAND;
     if (!cols || !cell || w > 8192 || h > 8192)
-        return cb_fail(err, CB_ERR_USAGE, "a contact sheet of %ux%u pixels is out of range (1..8192)", w, h);
+        return cb_fail(err, CB_ERR_SETTINGS, "a contact sheet of %ux%u pixels is out of range (1..8192)", w, h);
     const int attrs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
                          OSMESA_CONTEXT_MAJOR_VERSION, 3, OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
     gl_api api, *gl = &api;

@@ -30,7 +30,7 @@ static cb_status resolve_budget(const cb_catalog *cat, cb_report *r, cb_error *e
         for (uint32_t i = 0; i < cb_profile_count; ++i)
             snprintf(list + strlen(list), sizeof list - strlen(list), "%s\"%s\"", i ? ", " : "", cb_profiles[i].name);
         if (!b->pos.line) /* --target */
-            return cb_fail(err, CB_ERR_USAGE, "--target \"%s\" is not a built-in profile (%s)", b->target, list);
+            return cb_fail(err, CB_ERR_SETTINGS, "--target \"%s\" is not a built-in profile (%s)", b->target, list);
         return cb_fail(err, CB_ERR_INPUT, "%s:%u:%u: [budget] target \"%s\" is not a built-in profile (%s); give its vram",
                        cat->path, b->pos.line, b->pos.column, b->target, list);
     }

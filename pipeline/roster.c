@@ -16,18 +16,21 @@
 
 #include "crowdbake/atomic_file.h"
 #include "../formats/crowdbake_pal.h"
+#include "crowdbake/bake.h"
 #include "crowdbake/exr.h"
 #include "crowdbake/gltf.h"
 #include "crowdbake/json.h"
-#include "crowdbake/pal_write.h"
 #include "crowdbake/runtime.h"
 #include "crowdbake/vat.h"
 
 typedef struct type_work {
     cb_model *model;
     int32_t skin;
-    cb_clip_plan *plan;
+    cb_clip_plan *plan;       /* the catalog's clips, before their rates are planned */
+    cb_clip_settings *clip_settings;
     cb_model **lod_models;
+    cb_bake_job job;          /* job.plan: the clips with their rates */
+    cb_bake_origin origin;
 } type_work;
 
 typedef struct roster_run {
@@ -112,20 +115,6 @@ static cb_status add_inputs(cb_roster_type *t, const char *path, const cb_model 
     return CB_OK;
 }
 
-/* What the files record: everything that produced them, so any change re-bakes. The loader
- * hashed the model and LOD bytes as it read them. */
-static uint64_t input_hash(const cb_catalog_animal *an, const type_work *w, uint64_t key)
-{
-    cbpal_xxh64_state h;
-    cbpal_xxh64_init(&h);
-    cbpal_xxh64_update(&h, &key, sizeof key);
-    hash_str(&h, an->canonical);
-    cbpal_xxh64_update(&h, &w->model->source_hash, sizeof w->model->source_hash);
-    for (uint32_t i = 0; i < an->lod_count; ++i)
-        cbpal_xxh64_update(&h, &w->lod_models[i]->source_hash, sizeof w->lod_models[i]->source_hash);
-    return cbpal_xxh64_digest(&h);
-}
-
 /* ---- pass 1: prepare a type ---- */
 
 static int pick_skin(const cb_model *m)
@@ -141,11 +130,13 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
     const cb_model *m = w->model;
     uint32_t n = an->clips ? an->clip_count : m->animation_count;
     w->plan = calloc(n ? n : 1, sizeof *w->plan);
+    w->clip_settings = calloc(n ? n : 1, sizeof *w->clip_settings);
     t->clips = calloc(n ? n : 1, sizeof *t->clips);
-    if (!w->plan || !t->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    if (!w->plan || !w->clip_settings || !t->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     char where[1100];
     for (uint32_t i = 0; i < n; ++i) {
         cb_clip_plan *p = &w->plan[i];
+        w->clip_settings[i] = (cb_clip_settings){-1, 0};
         if (!an->clips) {
             *p = (cb_clip_plan){(int32_t)i, m->animations[i].name, -1, 0};
             continue;
@@ -164,6 +155,7 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
                            at(cat, c->pos, where, sizeof where), an->name, m->source, c->source, list);
         }
         *p = (cb_clip_plan){a, c->name, c->loop, c->fps};
+        w->clip_settings[i] = (cb_clip_settings){c->fps_auto, c->max_error_mm};
     }
     t->clip_count = n;
     return CB_OK;
@@ -177,10 +169,10 @@ static cb_status analyze_clips(const cb_catalog_animal *an, const cb_limits *lim
     uint32_t row = 0;
     for (uint32_t i = 0; i < t->clip_count && !err->status; ++i) {
         cb_clip_info info;
-        double fps = w->plan[i].fps > 0 ? w->plan[i].fps : an->bake.fps;
-        if (cb_clip_analyze(s, w->plan[i].animation, fps, w->plan[i].loop, limits, &info, err)) break;
+        const cb_clip_plan *plan = &w->job.plan[i];
+        if (cb_clip_analyze(s, plan->animation, cb_clip_plan_fps(plan, an->bake.fps), plan->loop, limits, &info, err)) break;
         cb_roster_clip *c = &t->clips[i];
-        snprintf(c->name, sizeof c->name, "%s", w->plan[i].name);
+        snprintf(c->name, sizeof c->name, "%s", plan->name);
         c->first_row = row;
         c->frames = info.frames;
         c->fps = info.effective_fps;
@@ -284,50 +276,15 @@ static cb_status check_lods(const roster_run *run, const cb_catalog_animal *an, 
     return CB_OK;
 }
 
-/* The bake options a type's settings give. */
-static cb_bake_options bake_options(const cb_catalog_animal *an, const cb_limits *limits)
-{
-    cb_bake_options o = cb_default_bake_options();
-    if (limits) o.limits = *limits;
-    o.fps = an->bake.fps;
-    o.layout = an->bake.layout;
-    o.precision = an->bake.precision;
-    if (!an->bake.precision_set && (an->bake.formats & CB_FORMAT_EXR)) o.precision = CB_PRECISION_FLOAT;
-    o.max_texture_size = an->bake.max_texture_size;
-    o.root_motion = an->bake.root_motion;
-    o.affine_fallback = !an->bake.layout_set;
-    return o;
-}
-
-/* fps = "auto" (the animal's or a clip's): each such clip's rate, chosen by its visible error. */
-static cb_status choose_rates(const cb_catalog_animal *an, const cb_limits *limits, type_work *w, uint32_t n, cb_error *err)
-{
-    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
-    if (!goals) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    bool any = false;
-    for (uint32_t i = 0; i < n; ++i) {
-        const cb_catalog_clip *c = an->clips ? &an->clips[i] : NULL;
-        if (!(c && c->fps_auto >= 0 ? c->fps_auto == 1 : an->bake.fps_auto)) continue;
-        goals[i] = (cb_rate_goal){c && c->max_error_mm > 0 ? c->max_error_mm : an->bake.max_error_mm, an->bake.max_fps};
-        any = true;
-    }
-    cb_sampler *s = any ? cb_sampler_create(w->model, w->skin, err) : NULL;
-    cb_bake_options o = bake_options(an, limits);
-    if (s) cb_choose_rates(s, &o, w->plan, n, goals, NULL, err);
-    cb_sampler_free(s);
-    free(goals);
-    return err->status;
-}
-
 /* The error a VAT of the same frames would have: half-float positions against exact skinning. */
 static void measure_vat(const cb_catalog_animal *an, const cb_limits *limits, type_work *w, cb_roster_type *t)
 {
-    cb_bake_options o = bake_options(an, limits);
+    cb_bake_options o = cb_bake_settings_options(&an->bake, CB_FORMAT_PAL, limits, 1);
     o.max_texture_size = 1u << 30; /* only measured: no texture is made */
     cb_error err = {0};
     cb_sampler *s = cb_sampler_create(w->model, w->skin, &err);
     cb_vat vat = {0};
-    if (s && !cb_vat_bake(s, &o, w->plan, t->clip_count, false, &vat, &err)) t->vat_error = vat.max_error;
+    if (s && !cb_vat_bake(s, &o, w->job.plan, t->clip_count, false, &vat, &err)) t->vat_error = vat.max_error;
     cb_vat_free(&vat);
     cb_sampler_free(s);
 }
@@ -343,6 +300,21 @@ static void list_unloaded_lods(const cb_catalog_animal *an, const type_work *w, 
 {
     for (uint32_t l = 0; !w->lod_models && l < an->lod_count; ++l)
         if (add_inputs(t, an->lods[l], NULL, &t->error)) break;
+}
+
+/* The type's bake job (bake.h): its clips, settings and outputs; planning it chooses the rates
+ * of clips with fps = "auto". */
+static cb_status plan_job(const roster_run *run, const cb_catalog_animal *an, type_work *w, const cb_roster_type *t,
+                          cb_error *err)
+{
+    cb_bake_job *job = &w->job;
+    memset(job, 0, sizeof *job);
+    job->model = w->model, job->skin = w->skin;
+    job->clips = w->plan, job->clip_count = t->clip_count, job->clip_settings = w->clip_settings;
+    job->settings = an->bake;
+    job->limits = run->opt->limits ? *run->opt->limits : cb_default_limits();
+    job->pal_path = t->pal_path, job->exr_path = t->exr_path;
+    return cb_bake_job_plan(job, err);
 }
 
 static void prepare_type(roster_run *run, uint32_t i)
@@ -377,15 +349,17 @@ static void prepare_type(roster_run *run, uint32_t i)
     t->mesh_bytes = cb_model_skin_mesh_bytes(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
-    if (plan_clips(run->cat, an, w, t, err) || choose_rates(an, run->opt->limits, w, t->clip_count, err) ||
+    if (plan_clips(run->cat, an, w, t, err) || plan_job(run, an, w, t, err) ||
         analyze_clips(an, run->opt->limits, w, t, err) || match_states(run->cat, an, t, err) ||
         check_lods(run, an, w, t, err)) {
         list_unloaded_lods(an, w, t);
         return;
     }
     speed_reference(an, t);
-    t->key = content_key(w->model, w->skin, w->plan, t->clip_count, &an->bake);
-    t->input_hash = input_hash(an, w, t->key);
+    t->key = content_key(w->model, w->skin, w->job.plan, t->clip_count, &an->bake);
+    w->origin = (cb_bake_origin){t->key, an->canonical, (const cb_model *const *)w->lod_models, an->lod_count};
+    w->job.origin = &w->origin;
+    t->input_hash = cb_bake_input_hash(&w->job, NULL);
     if (run->opt->measure_vat) measure_vat(an, run->opt->limits, w, t);
 }
 
@@ -456,28 +430,21 @@ static cb_status make_directories(const char *dir, cb_error *err)
 
 static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
 {
-    cb_bake_options o = bake_options(an, run->opt->limits);
-    o.threads = run->threads_per_bake;
-    cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
-    if (!s) return err->status;
-    cb_palette p;
-    cb_status rc = cb_palette_bake(s, &o, w->plan, t->clip_count, &p, err);
-    cb_sampler_free(s);
-    if (rc) return rc;
-    make_directories(an->bake.out_dir, err);
-    if (!err->status && (an->bake.formats & CB_FORMAT_PAL)) {
-        cb_pal_write_options po = {an->bake.zstd, 0, t->input_hash, (float)t->speed_reference, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
-        cb_pal_write(t->pal_path, &p, w->model, w->skin, &po, err);
+    w->job.threads = run->threads_per_bake;
+    w->job.speed_reference = t->speed_reference;
+    if (make_directories(an->bake.out_dir, err)) return err->status;
+    cb_bake_result r;
+    cb_bake_job_run(&w->job, &r, err);
+    if (r.output_count) {
+        const cb_palette *p = &r.outputs[0].palette;
+        t->width = p->width, t->height = p->height, t->blocks = p->blocks;
+        t->layout = p->layout, t->precision = p->precision;
+        t->max_error = (float)p->max_error;
+        t->visible_error = (float)p->visible_error;
+        t->palette_bytes = p->texel_bytes;
     }
-    if (!err->status && (an->bake.formats & CB_FORMAT_EXR))
-        cb_exr_write(t->exr_path, &p, w->model, w->skin, an->bake.exr_compression, t->input_hash, (float)t->speed_reference, err);
-    t->width = p.width, t->height = p.height, t->blocks = p.blocks;
-    t->layout = p.layout, t->precision = p.precision;
-    t->max_error = (float)p.max_error;
-    t->visible_error = (float)p.visible_error;
-    t->palette_bytes = p.texel_bytes;
-    if (p.fallback_note[0]) cb_warn(&t->warnings, "note", "%s", p.fallback_note);
-    cb_palette_free(&p);
+    for (uint32_t i = 0; i < r.notes.count; ++i) cb_warn(&t->warnings, r.notes.items[i].kind, "%s", r.notes.items[i].message);
+    cb_bake_result_free(&r);
     return err->status;
 }
 
@@ -910,7 +877,9 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     for (uint32_t i = 0; i < r->type_count && !rc; ++i)
         if (r->types[i].outcome == CB_TYPE_FAILED) rc = cb_fail(err, r->types[i].error.status, "%s", r->types[i].error.message);
     for (uint32_t i = 0; i < r->type_count; ++i) {
+        cb_bake_job_free(&run.work[i].job);
         free(run.work[i].plan);
+        free(run.work[i].clip_settings);
         cb_model_free(run.work[i].model);
         for (uint32_t l = 0; l < cat->animals[i].lod_count && run.work[i].lod_models; ++l) cb_model_free(run.work[i].lod_models[l]);
         free(run.work[i].lod_models);

@@ -19,8 +19,8 @@ cb_status cb_catalog_override_bake(cb_catalog *cat, const cb_bake_settings *valu
     for (uint32_t i = 0; i < cat->animal_count; ++i) {
         cb_bake_settings *b = &cat->animals[i].bake;
         override_settings(b, values, fields);
-        if ((b->formats & CB_FORMAT_EXR) && b->precision_set && b->precision == CB_PRECISION_U16)
-            return cb_fail(err, CB_ERR_USAGE, "%s: [animal.%s] would write u16 texels to EXR, which holds half or float "
+        if (!cb_bake_settings_writable(b))
+            return cb_fail(err, CB_ERR_SETTINGS, "%s: [animal.%s] would write u16 texels to EXR, which holds half or float "
                            "only; choose the precision half or float, or the format pal", cat->path, cat->animals[i].name);
     }
     return CB_OK;

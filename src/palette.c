@@ -10,8 +10,7 @@
 #include <string.h>
 
 #include "cb_math.h"
-
-#include <threads.h>
+#include "pool.h"
 #include <time.h>
 
 /* Canonical floats per bone and row before the final encoding: the upper 3x4 of the matrix
@@ -76,7 +75,7 @@ void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint3
 
 static cb_status plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err)
 {
-    if (max_size < 1) return cb_fail(err, CB_ERR_USAGE, "--max-texture-size must be at least 1");
+    if (max_size < 1) return cb_fail(err, CB_ERR_SETTINGS, "--max-texture-size must be at least 1");
     if (p->row_texels > max_size)
         return cb_fail(err, CB_ERR_INPUT,
                        "%s: %u bones x %u texels = %u texels per row, wider than --max-texture-size %u; use a layout "
@@ -109,7 +108,7 @@ static cb_status qpos_canon(const double m[16], float out[8], const cb_model *mo
              fabs(cb_vec3_dot(c[1], c[2])) > QPOS_TOLERANCE * s * s)
         why = "shear";
     if (why)
-        return cb_fail(err, CB_ERR_INPUT,
+        return cb_fail(err, CB_ERR_LAYOUT,
                        "%s: joint '%s' has %s (axis scales %.7g, %.7g, %.7g) at frame %u of clip '%s', which the qpos "
                        "layout cannot represent; use --layout affine or --layout mat4",
                        model->source, model->nodes[skin->joints[bone]].name, why, l[0], l[1], l[2], frame, clip);
@@ -340,17 +339,17 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
 
 typedef struct job {
     bake_state *st;
-    uint32_t first, stride;
     void (*run)(bake_state *st, worker *w, uint32_t clip);
     bool samples; /* run uses the worker's sampler and scratch */
 } job;
 
-static int job_main(void *arg)
+/* One thread's share: clips first, first + stride, ... */
+static void job_main(void *arg, uint32_t first, uint32_t stride)
 {
     job *jb = arg;
     bake_state *st = jb->st;
     worker w = {0};
-    cb_error *err0 = &st->errors[jb->first < st->p->clip_count ? jb->first : 0];
+    cb_error *err0 = &st->errors[first < st->p->clip_count ? first : 0];
     if (jb->samples) {
         w.sampler = cb_sampler_create(st->model, st->skin, err0);
         /* Loops without a closing key wrap. (One-shots never sample past their last key: a clip
@@ -364,14 +363,13 @@ static int job_main(void *arg)
     if (jb->samples && (!w.sampler || !w.mats || !w.sims || !w.prev)) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
-        for (uint32_t c = jb->first; c < st->p->clip_count; c += jb->stride) jb->run(st, &w, c);
+        for (uint32_t c = first; c < st->p->clip_count; c += stride) jb->run(st, &w, c);
     }
     cb_sampler_free(w.sampler);
     free(w.mats);
     free(w.sims);
     free(w.prev);
     free(w.rows);
-    return 0;
 }
 
 static uint32_t threads_used(const bake_state *st)
@@ -385,19 +383,8 @@ static uint32_t threads_used(const bake_state *st)
  * and slots, so the result does not depend on the thread count. */
 static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, uint32_t), bool samples)
 {
-    uint32_t threads = threads_used(st);
-    job jobs[64];
-    thrd_t ids[64];
-    bool started[64] = {false};
-    for (uint32_t t = 0; t < threads; ++t) {
-        jobs[t] = (job){st, t, threads, run, samples};
-        started[t] = t > 0 && thrd_create(&ids[t], job_main, &jobs[t]) == thrd_success;
-    }
-    job_main(&jobs[0]);
-    for (uint32_t t = 1; t < threads; ++t) {
-        if (started[t]) thrd_join(ids[t], NULL);
-        else job_main(&jobs[t]); /* no thread: do its share here */
-    }
+    job jb = {st, run, samples};
+    cb_pool_run(threads_used(st), job_main, &jb);
 }
 
 static double seconds_now(void)
@@ -760,7 +747,7 @@ static cb_status frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip_
     uint64_t rows = 0;
     for (uint32_t i = 0; i < count; ++i) {
         cb_clip_plan one = plan ? plan[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0};
-        double fps = one.fps > 0 ? one.fps : st->opt->fps;
+        double fps = cb_clip_plan_fps(&one, st->opt->fps);
         if (cb_clip_analyze(sampler, one.animation, fps, one.loop, &st->opt->limits, &infos[i], err)) return err->status;
         cb_palette_clip *c = &p->clips[i];
         c->name = one.name ? one.name : m->animations[one.animation].name;
@@ -842,7 +829,7 @@ cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const
 {
     cb_error first = {0};
     cb_status rc = bake_once(sampler, opt, plan, plan_count, p, &first);
-    if (rc == CB_ERR_INPUT && opt->affine_fallback && opt->layout == CB_LAYOUT_QPOS && strstr(first.message, "qpos layout")) {
+    if (rc == CB_ERR_LAYOUT && opt->affine_fallback && opt->layout == CB_LAYOUT_QPOS) {
         cb_bake_options affine = *opt; /* a rig qpos cannot hold: the next smallest layout */
         affine.layout = CB_LAYOUT_AFFINE;
         rc = bake_once(sampler, &affine, plan, plan_count, p, err);

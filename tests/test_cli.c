@@ -59,7 +59,7 @@ static void test_report_of_one_model(void **state)
     free(json);
     assert_int_equal(crowdbake(out, sizeof out, "report %s", fox), 0);
     assert_contains(out, "no budget to check (give --target NAME)");
-    assert_int_equal(crowdbake(out, sizeof out, "report %s --target toaster", fox), CB_ERR_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "report %s --target toaster", fox), EXIT_USAGE);
     assert_contains(out, "--target \"toaster\" is not a built-in profile");
     /* A broken model is reported as itself, not as an entry of a catalog, and not as TOML. */
     char cmd[2048];
@@ -93,9 +93,9 @@ static void test_verify_and_preview_take_the_exr(void **state)
     assert_int_equal(crowdbake(out, sizeof out, "preview " TMP "/fox.exr %s -o " TMP "/old.png --cell 64", fox), 0);
     assert_contains(out, "is the old order, still accepted; write 'crowdbake preview MODEL PALETTE'");
     assert_contains(out, "3 clips x 6 frames");
-    assert_int_equal(crowdbake(out, sizeof out, "preview %s %s -o " TMP "/x.png", fox, fox), CB_ERR_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "preview %s %s -o " TMP "/x.png", fox, fox), EXIT_USAGE);
     assert_contains(out, "is a glTF model, not a palette");
-    assert_int_equal(crowdbake(out, sizeof out, "verify %s catalog.example.toml", fox), CB_ERR_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "verify %s catalog.example.toml", fox), EXIT_USAGE);
     assert_contains(out, "catalog.example.toml: is neither a palette nor glTF, not a palette");
     /* An EXR that is not a crowdbake palette header. */
     assert_int_equal(crowdbake(out, sizeof out, "vat %s -o " TMP "/vat.exr", fox), 0);
@@ -152,10 +152,10 @@ static void test_format_pal_exr_keeps_each_precision(void **state)
     assert_contains(out, "qpos/u16");
     /* Byte for byte the files each single-format bake writes. */
     assert_int_equal(run_command("cmp " TMP "/one.pal " TMP "/two.pal && cmp " TMP "/one.exr " TMP "/two.exr", NULL, 0), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/fox.png", fox), CB_ERR_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/fox.png", fox), EXIT_USAGE);
     assert_contains(out, "unknown output extension '.png'");
     assert_int_equal(run_command("test ! -e " TMP "/fox.png", NULL, 0), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/f --format pal,exrs", fox), CB_ERR_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/f --format pal,exrs", fox), EXIT_USAGE);
     assert_contains(out, "--format is pal, exr or pal,exr");
 }
 
@@ -163,13 +163,13 @@ static void test_messages(void **state)
 {
     (void)state;
     char out[8192];
-    assert_int_equal(crowdbake(out, sizeof out, "bakee x.glb"), CB_ERR_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "bakee x.glb"), EXIT_USAGE);
     assert_contains(out, "unknown command 'bakee'; did you mean 'bake'?");
-    assert_int_equal(crowdbake(out, sizeof out, "verfy"), CB_ERR_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "verfy"), EXIT_USAGE);
     assert_contains(out, "did you mean 'verify'?");
-    assert_int_equal(crowdbake(out, sizeof out, "zebra"), CB_ERR_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "zebra"), EXIT_USAGE);
     assert_true(strstr(out, "did you mean") == NULL);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o x.pal --precison half", fox), CB_ERR_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o x.pal --precison half", fox), EXIT_USAGE);
     assert_contains(out, "did you mean '--precision'?");
     /* One clip, one type: no "1 clips". */
     char fish[1024];

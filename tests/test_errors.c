@@ -253,7 +253,7 @@ static void test_cli_exit_code_and_one_line(void **state)
     snprintf(cmd, sizeof cmd, "%s info /nonexistent/x.glb 2>/dev/null", crowdbake_exe());
     assert_int_equal(run_command(cmd, NULL, 0), CB_ERR_IO);
     snprintf(cmd, sizeof cmd, "%s info --bogus 2>/dev/null", crowdbake_exe());
-    assert_int_equal(run_command(cmd, NULL, 0), CB_ERR_USAGE);
+    assert_int_equal(run_command(cmd, NULL, 0), EXIT_USAGE);
 }
 
 int main(void)

@@ -118,7 +118,7 @@ static void test_u16_is_refused_for_exr(void **state)
     char fox[1024], cmd[2048], out[1024];
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
     snprintf(cmd, sizeof cmd, "%s bake %s -o %s/x.exr --precision u16 2>&1", crowdbake_exe(), fox, TMP);
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_USAGE);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_USAGE);
     assert_non_null(strstr(out, "half or float"));
 }
 

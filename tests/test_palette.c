@@ -171,7 +171,7 @@ static void test_qpos_refuses_non_uniform_scale_naming_joint_and_frame(void **st
     cb_sampler *s = cb_sampler_create(m, 0, &err);
     cb_bake_options o = cb_default_bake_options();
     cb_palette p;
-    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &p, &err), CB_ERR_INPUT);
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &p, &err), CB_ERR_LAYOUT);
     assert_non_null(strstr(err.message, "joint '"));
     assert_non_null(strstr(err.message, "at frame "));
     assert_non_null(strstr(err.message, "use --layout affine"));

@@ -21,6 +21,10 @@
 #endif
 #define TEST_TMP BUILD_DIR "/tmp-tests"
 
+/* The command's exit code for a bad command line (README "Exit codes"; the others equal the
+ * library's cb_status values of the same names). */
+#define EXIT_USAGE 2
+
 /* ../shared beside the checkout, or $CROWDBAKE_SHARED. */
 static inline const char *shared_dir(void)
 {

@@ -4,40 +4,15 @@
 #ifndef CB_CATALOG_H
 #define CB_CATALOG_H
 
-#include "palette.h"
+#include "bake.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-enum { CB_FORMAT_PAL = 1u, CB_FORMAT_EXR = 2u };
-
 typedef struct cb_source_pos {
     uint32_t line, column; /* 1-based; 0 when unknown */
 } cb_source_pos;
-
-typedef struct cb_bake_settings {
-    double fps;
-    bool fps_auto;               /* fps = "auto": per clip, the lowest rate within max_error_mm */
-    double max_error_mm;         /* visible error goal of fps = "auto", mm per metre of model height (default 1) */
-    double max_fps;              /* fps = "auto" goes no higher (default 60) */
-    cb_layout layout;
-    cb_precision precision;
-    unsigned formats;            /* CB_FORMAT_* */
-    const char *out_dir;         /* resolved against the catalog's directory */
-    uint32_t max_texture_size;
-    cb_root_motion root_motion;
-    bool layout_set, precision_set; /* chosen explicitly (else: defaults, with fallbacks) */
-    bool zstd;                   /* compress the .pal payload */
-    int exr_compression;         /* exr.h's lossless codes; 0: none */
-} cb_bake_settings;
-
-/* Which settings an override carries (the command line's bake options over a catalog). */
-enum {
-    CB_BAKE_FPS = 1u << 0, CB_BAKE_LAYOUT = 1u << 1, CB_BAKE_PRECISION = 1u << 2, CB_BAKE_FORMATS = 1u << 3,
-    CB_BAKE_MAX_TEXTURE_SIZE = 1u << 4, CB_BAKE_ROOT_MOTION = 1u << 5, CB_BAKE_ZSTD = 1u << 6,
-    CB_BAKE_EXR_COMPRESSION = 1u << 7
-};
 
 typedef struct cb_catalog_clip {
     const char *source; /* the clip's name in the model */

@@ -13,6 +13,10 @@
 #include <stdint.h>
 
 #define CROWDBAKE_VERSION "0.1.0"
+/* The library's API version: MAJOR changes break callers, MINOR ones add to the API. */
+#define CROWDBAKE_API_VERSION_MAJOR 1
+#define CROWDBAKE_API_VERSION_MINOR 0
+#define CROWDBAKE_API_VERSION (CROWDBAKE_API_VERSION_MAJOR * 100 + CROWDBAKE_API_VERSION_MINOR)
 
 #ifdef __cplusplus
 extern "C" {
@@ -20,15 +24,18 @@ extern "C" {
 
 /* ---- errors --------------------------------------------------------------------------- */
 
-/* Process exit codes; documented in README.md. */
+/* What a library call reports. The command line maps each to its own exit codes
+ * (cli/cli.h); the values are kept apart from them on purpose, so a new status never leaks
+ * out as an exit code by accident. */
 typedef enum cb_status {
     CB_OK = 0,
     CB_ERR_INTERNAL = 1, /* a bug or an allocation failure */
-    CB_ERR_USAGE = 2,    /* bad command line */
+    CB_ERR_SETTINGS = 2, /* a setting out of range, or two that contradict each other */
     CB_ERR_BUDGET = 3,   /* the roster exceeds its VRAM budget (report) */
     CB_ERR_INPUT = 4,    /* an input file is invalid or unsupported */
     CB_ERR_IO = 5,       /* a file could not be read or written */
-    CB_ERR_VERIFY = 6    /* a verification threshold was exceeded */
+    CB_ERR_VERIFY = 6,   /* a verification threshold was exceeded */
+    CB_ERR_LAYOUT = 7    /* the rig needs another layout: qpos cannot hold non-uniform scale or shear */
 } cb_status;
 
 typedef struct cb_error {

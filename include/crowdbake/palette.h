@@ -82,6 +82,9 @@ typedef struct cb_clip_plan {
     double fps;         /* 0: the bake's fps */
 } cb_clip_plan;
 
+/* The rate a planned clip bakes at: its own, else the bake's. */
+static inline double cb_clip_plan_fps(const cb_clip_plan *clip, double fps) { return clip->fps > 0 ? clip->fps : fps; }
+
 /* Samples the planned clips (every clip, in file order, when plan is NULL) of the sampler's
  * skin and encodes them. The palette references names in the model and the plan: free it
  * before them. */

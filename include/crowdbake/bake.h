@@ -1,0 +1,151 @@
+/* bake.h - one bake job: a model's skin, its clips and one set of settings, baked into
+ * palette files. `crowdbake bake MODEL` runs one job; a catalog (roster.h) runs one per animal
+ * type. Every bake decision lives behind this header, once: the defaults, the precision each
+ * file format gets, the qpos -> affine fallback, each clip's rate (the job's, the clip's own, or
+ * chosen by error), the input hash a file records, and the notes a bake gives.
+ *
+ *     cb_bake_job job = {model, skin};
+ *     job.settings = cb_default_bake_settings();
+ *     job.limits = cb_default_limits();
+ *     job.pal_path = "fox.pal";
+ *     cb_bake_result result;
+ *     if (cb_bake_job_run(&job, &result, &err) == CB_OK) ... result.outputs[0].palette ...
+ *     cb_bake_result_free(&result);
+ *     cb_bake_job_free(&job);
+ */
+#ifndef CB_BAKE_H
+#define CB_BAKE_H
+
+#include "runtime.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum { CB_FORMAT_PAL = 1u, CB_FORMAT_EXR = 2u };
+
+/* The rates a setting may take: fps in (0, CB_FPS_LIMIT]; an auto rate's ceiling (max_fps) in
+ * [CB_MAX_FPS_LOWEST, CB_FPS_LIMIT]. */
+#define CB_FPS_LIMIT 1000.0
+#define CB_MAX_FPS_LOWEST 2.0
+
+/* What a bake is asked for: the command line's bake options and a catalog's [bake] and
+ * [animal] keys fill the same struct. */
+typedef struct cb_bake_settings {
+    double fps;
+    bool fps_auto;               /* fps = "auto": per clip, the lowest rate within max_error_mm */
+    double max_error_mm;         /* visible error goal of fps = "auto", mm per metre of model height (default 1) */
+    double max_fps;              /* fps = "auto" goes no higher (default 60) */
+    cb_layout layout;
+    cb_precision precision;
+    unsigned formats;            /* CB_FORMAT_* */
+    const char *out_dir;         /* a catalog's: resolved against the catalog's directory */
+    uint32_t max_texture_size;
+    cb_root_motion root_motion;
+    bool layout_set, precision_set; /* chosen explicitly (else: defaults, with fallbacks) */
+    bool zstd;                   /* compress the .pal payload */
+    int exr_compression;         /* exr.h's lossless codes; 0: none */
+} cb_bake_settings;
+
+/* Which settings an override carries (the command line's bake options over a catalog). */
+enum {
+    CB_BAKE_FPS = 1u << 0, CB_BAKE_LAYOUT = 1u << 1, CB_BAKE_PRECISION = 1u << 2, CB_BAKE_FORMATS = 1u << 3,
+    CB_BAKE_MAX_TEXTURE_SIZE = 1u << 4, CB_BAKE_ROOT_MOTION = 1u << 5, CB_BAKE_ZSTD = 1u << 6,
+    CB_BAKE_EXR_COMPRESSION = 1u << 7
+};
+
+/* 30 fps (auto: within 1 mm/m, up to 60 fps), qpos, u16, a .pal, textures up to 16384 texels
+ * a side, root motion kept, no compression; out_dir NULL. */
+cb_bake_settings cb_default_bake_settings(void);
+
+/* "keep" or "in-place". */
+bool cb_root_motion_parse(const char *text, cb_root_motion *out);
+const char *cb_root_motion_name(cb_root_motion root_motion);
+/* "pal", "exr", "pal,exr", "exr,pal" or "both": CB_FORMAT_* bits, 0 when none of those. */
+unsigned cb_formats_parse(const char *text);
+/* 0 < fps <= CB_FPS_LIMIT; CB_MAX_FPS_LOWEST <= max_fps <= CB_FPS_LIMIT. */
+bool cb_fps_valid(double fps);
+bool cb_max_fps_valid(double max_fps);
+
+/* Whether the settings can be written: EXR holds half or float texels, never u16. */
+bool cb_bake_settings_writable(const cb_bake_settings *settings);
+
+/* The options of the bake for one file format (CB_FORMAT_PAL or CB_FORMAT_EXR): the precision
+ * set, else u16 for .pal and float for .exr (half misses 0.5 mm/m on the samples), so writing
+ * both formats gives the bytes of two single bakes; the affine fallback unless a layout was set. */
+cb_bake_options cb_bake_settings_options(const cb_bake_settings *settings, unsigned format, const cb_limits *limits,
+                                         uint32_t threads);
+
+/* What a catalog's clip entry can say beyond cb_clip_plan. */
+typedef struct cb_clip_settings {
+    int fps_auto;        /* -1: as the job's settings; 0: the plan's fixed fps; 1: chosen by error */
+    double max_error_mm; /* 0: the job's */
+} cb_clip_settings;
+
+/* A catalog type's identity, which its files record instead of the single bake's options: the
+ * content key (rig, planned clips and settings; equal keys share a palette), the resolved
+ * catalog entry and its LOD models' bytes. */
+typedef struct cb_bake_origin {
+    uint64_t content_key;
+    const char *canonical;
+    const cb_model *const *lods;
+    uint32_t lod_count;
+} cb_bake_origin;
+
+typedef struct cb_bake_job {
+    const cb_model *model;
+    int32_t skin;
+    const cb_clip_plan *clips;      /* in row order; NULL: every clip of the model, in file order */
+    uint32_t clip_count;
+    const cb_clip_settings *clip_settings; /* per clip, or NULL */
+    cb_bake_settings settings;
+    cb_limits limits;
+    uint32_t threads;               /* clips sampled in parallel (0: 1); the bytes do not depend on it */
+    double speed_reference;         /* recorded in the files */
+    const char *pal_path, *exr_path; /* the files settings.formats asks for */
+    const cb_bake_origin *origin;   /* a catalog type, or NULL */
+    /* Filled by cb_bake_job_plan (cb_bake_job_run calls it when it was not): the clips with
+     * their rates, and for each clip chosen by error what its rate reached. */
+    cb_clip_plan *plan;
+    uint32_t plan_count;
+    cb_rate_choice *rates;
+    bool planned;
+} cb_bake_job;
+
+/* One file written. */
+typedef struct cb_bake_output {
+    unsigned format;        /* CB_FORMAT_PAL or CB_FORMAT_EXR */
+    const char *path;
+    uint64_t file_bytes;
+    uint64_t input_hash;    /* recorded in the file */
+    cb_palette palette;     /* as baked for this file; its texels are released once written */
+    double seconds_write;
+} cb_bake_output;
+
+typedef struct cb_bake_result {
+    uint32_t output_count;
+    cb_bake_output outputs[2]; /* .pal first */
+    cb_warnings notes;         /* the layout's fallback, loops that travel, quaternion flips */
+} cb_bake_result;
+
+/* Resolves the clips and each one's rate: the clip's fps, else the job's; chosen by visible
+ * error (cb_choose_rates) where the clip or the job says auto, with the options of the first
+ * file the job writes. */
+cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err);
+/* Plans (when not yet), bakes and writes every file of settings.formats (each through a
+ * temporary file and a rename). The result references the model and the plan: free it first. */
+cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err);
+void cb_bake_result_free(cb_bake_result *result);
+void cb_bake_job_free(cb_bake_job *job);
+
+/* What a file records of what produced it: for a single bake, the crowdbake version, the
+ * options that shape the file (`options`) and the model's bytes; for a catalog type
+ * (job->origin), its content key, resolved entry and model and LOD bytes. Same inputs, same
+ * hash: a build step whose hash is unchanged need not run. */
+uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *options);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

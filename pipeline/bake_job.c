@@ -1,0 +1,236 @@
+/* bake_job.c - see bake.h: the one place where a bake's policy is decided. */
+#include "crowdbake/bake.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "../formats/crowdbake_pal.h" /* XXH64 */
+#include "crowdbake/exr.h"
+#include "crowdbake/pal_write.h"
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* ---- settings ---- */
+
+cb_bake_settings cb_default_bake_settings(void)
+{
+    cb_bake_settings s;
+    memset(&s, 0, sizeof s);
+    s.fps = 30;
+    s.max_error_mm = 1;
+    s.max_fps = 60;
+    s.layout = CB_LAYOUT_QPOS;
+    s.precision = CB_PRECISION_U16;
+    s.formats = CB_FORMAT_PAL;
+    s.max_texture_size = 16384;
+    s.root_motion = CB_ROOT_MOTION_KEEP;
+    return s;
+}
+
+bool cb_root_motion_parse(const char *text, cb_root_motion *out)
+{
+    if (strcmp(text, "keep") == 0) return *out = CB_ROOT_MOTION_KEEP, true;
+    if (strcmp(text, "in-place") == 0) return *out = CB_ROOT_MOTION_IN_PLACE, true;
+    return false;
+}
+
+const char *cb_root_motion_name(cb_root_motion root_motion)
+{
+    return root_motion == CB_ROOT_MOTION_IN_PLACE ? "in-place" : "keep";
+}
+
+unsigned cb_formats_parse(const char *text)
+{
+    if (strcmp(text, "pal") == 0) return CB_FORMAT_PAL;
+    if (strcmp(text, "exr") == 0) return CB_FORMAT_EXR;
+    if (strcmp(text, "pal,exr") == 0 || strcmp(text, "exr,pal") == 0 || strcmp(text, "both") == 0)
+        return CB_FORMAT_PAL | CB_FORMAT_EXR;
+    return 0;
+}
+
+bool cb_fps_valid(double fps) { return fps > 0 && fps <= CB_FPS_LIMIT; }
+bool cb_max_fps_valid(double max_fps) { return max_fps >= CB_MAX_FPS_LOWEST && max_fps <= CB_FPS_LIMIT; }
+
+bool cb_bake_settings_writable(const cb_bake_settings *s)
+{
+    return !((s->formats & CB_FORMAT_EXR) && s->precision_set && s->precision == CB_PRECISION_U16);
+}
+
+cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned format, const cb_limits *limits,
+                                         uint32_t threads)
+{
+    cb_bake_options o = cb_default_bake_options();
+    if (limits) o.limits = *limits;
+    o.fps = s->fps;
+    o.layout = s->layout;
+    /* EXR holds half or float; half misses 0.5 mm/m on the samples, so float unless asked. */
+    o.precision = s->precision_set || format != CB_FORMAT_EXR ? s->precision : CB_PRECISION_FLOAT;
+    o.max_texture_size = s->max_texture_size;
+    o.root_motion = s->root_motion;
+    o.threads = threads ? threads : 1;
+    o.affine_fallback = !s->layout_set; /* a rig qpos cannot hold bakes affine, unless a layout was asked for */
+    return o;
+}
+
+/* The first format the job writes: its options choose the rates. */
+static unsigned first_format(const cb_bake_job *job)
+{
+    return (job->settings.formats & CB_FORMAT_PAL) || !job->settings.formats ? CB_FORMAT_PAL : CB_FORMAT_EXR;
+}
+
+/* ---- the input hash ---- */
+
+static void hash_str(cbpal_xxh64_state *h, const char *s) { cbpal_xxh64_update(h, s, strlen(s) + 1); }
+
+uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
+{
+    cbpal_xxh64_state h;
+    cbpal_xxh64_init(&h);
+    const cb_model *m = job->model;
+    if (job->origin) {
+        const cb_bake_origin *g = job->origin;
+        cbpal_xxh64_update(&h, &g->content_key, sizeof g->content_key);
+        hash_str(&h, g->canonical);
+        cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
+        for (uint32_t i = 0; i < g->lod_count; ++i)
+            cbpal_xxh64_update(&h, &g->lods[i]->source_hash, sizeof g->lods[i]->source_hash);
+        return cbpal_xxh64_digest(&h);
+    }
+    char opts[256];
+    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d\n",
+                     CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
+                     o->max_texture_size, (int)o->root_motion, job->skin, job->settings.zstd,
+                     job->settings.exr_compression);
+    cbpal_xxh64_update(&h, opts, (size_t)n);
+    cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
+    return cbpal_xxh64_digest(&h);
+}
+
+/* ---- planning: the clips and their rates ---- */
+
+/* Whether clip i's rate is chosen by error, and its goal. */
+static bool clip_goal(const cb_bake_job *job, uint32_t i, cb_rate_goal *goal)
+{
+    const cb_clip_settings *c = job->clip_settings ? &job->clip_settings[i] : NULL;
+    if (!(c && c->fps_auto >= 0 ? c->fps_auto == 1 : job->settings.fps_auto)) return false;
+    *goal = (cb_rate_goal){c && c->max_error_mm > 0 ? c->max_error_mm : job->settings.max_error_mm, job->settings.max_fps};
+    return true;
+}
+
+cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
+{
+    if (job->planned) return CB_OK;
+    const cb_model *m = job->model;
+    uint32_t n = job->clips ? job->clip_count : m->animation_count;
+    free(job->plan), free(job->rates);
+    job->plan = calloc(n ? n : 1, sizeof *job->plan);
+    job->rates = calloc(n ? n : 1, sizeof *job->rates);
+    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
+    if (!job->plan || !job->rates || !goals) {
+        free(goals);
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    }
+    bool any = false;
+    for (uint32_t i = 0; i < n; ++i) {
+        job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0};
+        any |= clip_goal(job, i, &goals[i]);
+    }
+    job->plan_count = n;
+    if (any) {
+        cb_sampler *s = cb_sampler_create(m, job->skin, err);
+        cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
+        if (s) cb_choose_rates(s, &o, job->plan, n, goals, job->rates, err);
+        cb_sampler_free(s);
+    }
+    free(goals);
+    job->planned = !err->status;
+    return err->status;
+}
+
+/* ---- the bake ---- */
+
+/* What the user should know about a bake: the layout's fallback, loops that travel, quaternion
+ * flips. */
+static void bake_notes(cb_sampler *s, const cb_bake_job *job, const cb_bake_options *o, const cb_palette *p,
+                       cb_warnings *w)
+{
+    if (p->fallback_note[0]) cb_warn(w, "note", "%s", p->fallback_note);
+    for (uint32_t c = 0; o->root_motion == CB_ROOT_MOTION_KEEP && c < p->clip_count; ++c) {
+        cb_clip_info info;
+        cb_error ignored = {0};
+        if (p->clips[c].loops && !cb_clip_analyze(s, job->plan[c].animation, o->fps, 1, &o->limits, &info, &ignored) &&
+            info.ground_speed > 0)
+            cb_warn(w, "note", "clip '%s' loops and travels %.3g units/s: blending its last row into its first pulls the "
+                    "body back; for crowds moved by the game, bake with --root-motion in-place", p->clips[c].name,
+                    info.ground_speed);
+    }
+    if (p->quat_hemisphere_breaks)
+        cb_warn(w, "note", "%u bone(s) turn a full circle over a loop, so their last and first rows lie in opposite "
+                "quaternion hemispheres; the shipped shaders flip before blending", p->quat_hemisphere_breaks);
+}
+
+static cb_status write_output(const cb_bake_job *job, cb_bake_output *out, cb_error *err)
+{
+    double t0 = now_seconds();
+    const cb_palette *p = &out->palette;
+    if (out->format == CB_FORMAT_PAL) {
+        cb_pal_write_options po = {job->settings.zstd, 0, out->input_hash, (float)job->speed_reference,
+                                   job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE};
+        cb_pal_write(out->path, p, job->model, job->skin, &po, err);
+    } else {
+        cb_exr_write(out->path, p, job->model, job->skin, job->settings.exr_compression, out->input_hash,
+                     (float)job->speed_reference, err);
+    }
+    out->seconds_write = now_seconds() - t0;
+    struct stat st;
+    out->file_bytes = !err->status && stat(out->path, &st) == 0 ? (uint64_t)st.st_size : 0;
+    return err->status;
+}
+
+cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (cb_bake_job_plan(job, err)) return err->status;
+    cb_sampler *s = cb_sampler_create(job->model, job->skin, err);
+    if (!s) return err->status;
+    static const unsigned formats[2] = {CB_FORMAT_PAL, CB_FORMAT_EXR};
+    for (int f = 0; f < 2 && !err->status; ++f) {
+        if (!(job->settings.formats & formats[f])) continue;
+        cb_bake_output *o = &out->outputs[out->output_count];
+        o->format = formats[f];
+        o->path = formats[f] == CB_FORMAT_PAL ? job->pal_path : job->exr_path;
+        cb_bake_options opt = cb_bake_settings_options(&job->settings, formats[f], &job->limits, job->threads);
+        if (cb_palette_bake(s, &opt, job->plan, job->plan_count, &o->palette, err)) break;
+        out->output_count++;
+        o->input_hash = cb_bake_input_hash(job, &opt);
+        if (out->output_count == 1) bake_notes(s, job, &opt, &o->palette, &out->notes);
+        write_output(job, o, err);
+        free(o->palette.texels); /* written: only the facts are kept */
+        o->palette.texels = NULL;
+    }
+    cb_sampler_free(s);
+    return err->status;
+}
+
+void cb_bake_result_free(cb_bake_result *r)
+{
+    for (uint32_t i = 0; i < r->output_count; ++i) cb_palette_free(&r->outputs[i].palette);
+    cb_warnings_free(&r->notes);
+    memset(r, 0, sizeof *r);
+}
+
+void cb_bake_job_free(cb_bake_job *job)
+{
+    free(job->plan), free(job->rates);
+    job->plan = NULL, job->rates = NULL;
+    job->plan_count = 0;
+    job->planned = false;
+}
