@@ -3,10 +3,8 @@
  * share one palette; bake the owners that are out of date in parallel. Then the manifest and
  * the depfile. Nothing that is written depends on the thread count or on timing. */
 #define _GNU_SOURCE /* open_memstream, strcasecmp */
-#include "crowdbake/roster.h"
+#include "roster_files.h"
 
-#include <errno.h>
-#include <fcntl.h> /* AT_FDCWD */
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,12 +12,11 @@
 #include <threads.h>
 #include <time.h>
 
-#include "crowdbake/atomic_file.h"
 #include "../formats/crowdbake_pal.h"
 #include "crowdbake/bake.h"
+#include "../src/pool.h"
 #include "crowdbake/exr.h"
 #include "crowdbake/gltf.h"
-#include "crowdbake/json.h"
 #include "crowdbake/runtime.h"
 #include "crowdbake/vat.h"
 
@@ -55,47 +52,6 @@ static const char *at(const cb_catalog *cat, cb_source_pos pos, char *buf, size_
 {
     snprintf(buf, size, "%s:%u:%u", cat->path, pos.line, pos.column);
     return buf;
-}
-
-/* ---- the content hash: rig, planned clips and settings ---- */
-
-static void hash_str(cbpal_xxh64_state *h, const char *s) { cbpal_xxh64_update(h, s, strlen(s) + 1); }
-
-static uint64_t content_key(const cb_model *m, int32_t skin, const cb_clip_plan *plan, uint32_t n, const cb_bake_settings *b)
-{
-    cbpal_xxh64_state h;
-    cbpal_xxh64_init(&h);
-    hash_str(&h, "crowdbake " CROWDBAKE_VERSION);
-    double settings[8] = {b->fps, b->layout + 10.0 * b->layout_set, b->precision + 10.0 * b->precision_set,
-                          b->max_texture_size, b->root_motion, b->formats, b->zstd, b->exr_compression};
-    cbpal_xxh64_update(&h, settings, sizeof settings);
-    for (uint32_t i = 0; i < m->node_count; ++i) {
-        const cb_node *node = &m->nodes[i];
-        hash_str(&h, node->name);
-        cbpal_xxh64_update(&h, &node->parent, sizeof node->parent);
-        cbpal_xxh64_update(&h, node->translation, sizeof node->translation);
-        cbpal_xxh64_update(&h, node->rotation, sizeof node->rotation);
-        cbpal_xxh64_update(&h, node->scale, sizeof node->scale);
-        if (node->has_matrix) cbpal_xxh64_update(&h, node->matrix, sizeof node->matrix);
-    }
-    const cb_skin *sk = &m->skins[skin];
-    cbpal_xxh64_update(&h, sk->joints, sk->joint_count * sizeof(int32_t));
-    cbpal_xxh64_update(&h, sk->inverse_bind, sk->joint_count * 16 * sizeof(double));
-    for (uint32_t i = 0; i < n; ++i) {
-        hash_str(&h, plan[i].name);
-        cbpal_xxh64_update(&h, &plan[i].loop, sizeof plan[i].loop);
-        cbpal_xxh64_update(&h, &plan[i].fps, sizeof plan[i].fps);
-        const cb_animation *a = &m->animations[plan[i].animation];
-        for (uint32_t c = 0; c < a->channel_count; ++c) {
-            const cb_channel *ch = &a->channels[c];
-            int per_key = (ch->path == CB_PATH_ROTATION ? 4 : 3) * (ch->interp == CB_INTERP_CUBICSPLINE ? 3 : 1);
-            int32_t head[4] = {ch->node, (int32_t)ch->path, (int32_t)ch->interp, (int32_t)ch->key_count};
-            cbpal_xxh64_update(&h, head, sizeof head);
-            cbpal_xxh64_update(&h, ch->times, ch->key_count * sizeof(float));
-            cbpal_xxh64_update(&h, ch->values, (size_t)ch->key_count * per_key * sizeof(float));
-        }
-    }
-    return cbpal_xxh64_digest(&h);
 }
 
 /* Appends a model's files to the type's inputs (for the depfile): its path even when it failed
@@ -213,8 +169,6 @@ static cb_status match_states(const cb_catalog *cat, const cb_catalog_animal *an
     return err->status;
 }
 
-/* Locomotion: a looping clip that moves. Only these are synced to the animal's speed. */
-static bool is_locomotion(const cb_roster_clip *c) { return c->loops && c->speed.speed > 0; }
 
 /* The speed at which locomotion plays at rate 1: given, or measured on a locomotion loop: the
  * default state's clip if it is one, else the state the catalog names, else the slowest
@@ -229,14 +183,14 @@ static void speed_reference(const cb_catalog_animal *an, cb_roster_type *t)
     int pick = -1;
     const char *rule = "";
     for (uint32_t s = 0; s < an->state_count && pick < 0; ++s)
-        if (strcmp(an->states[s].name, an->default_state) == 0 && is_locomotion(&t->clips[t->state_clip[s]]))
+        if (strcmp(an->states[s].name, an->default_state) == 0 && roster_is_locomotion(&t->clips[t->state_clip[s]]))
             pick = (int)s, rule = "the default state";
     for (uint32_t s = 0; s < an->state_count && pick < 0 && an->speed_state; ++s)
-        if (strcmp(an->states[s].name, an->speed_state) == 0 && is_locomotion(&t->clips[t->state_clip[s]]))
+        if (strcmp(an->states[s].name, an->speed_state) == 0 && roster_is_locomotion(&t->clips[t->state_clip[s]]))
             pick = (int)s, rule = "the catalog's speed_reference state";
     for (uint32_t s = 0; s < an->state_count && !(pick >= 0 && *rule); ++s) {
         const cb_roster_clip *c = &t->clips[t->state_clip[s]];
-        if (is_locomotion(c) && (pick < 0 || c->speed.speed < t->clips[t->state_clip[pick]].speed.speed)) pick = (int)s;
+        if (roster_is_locomotion(c) && (pick < 0 || c->speed.speed < t->clips[t->state_clip[pick]].speed.speed)) pick = (int)s;
     }
     if (pick < 0) return;
     const cb_roster_clip *c = &t->clips[t->state_clip[pick]];
@@ -356,7 +310,7 @@ static void prepare_type(roster_run *run, uint32_t i)
         return;
     }
     speed_reference(an, t);
-    t->key = content_key(w->model, w->skin, w->job.plan, t->clip_count, &an->bake);
+    t->key = roster_content_key(w->model, w->skin, w->job.plan, t->clip_count, &an->bake);
     w->origin = (cb_bake_origin){t->key, an->canonical, (const cb_model *const *)w->lod_models, an->lod_count};
     w->job.origin = &w->origin;
     t->input_hash = cb_bake_input_hash(&w->job, NULL);
@@ -408,31 +362,11 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
     return true;
 }
 
-/* mkdir -p: the output directory and any missing parents. */
-static cb_status make_directories(const char *dir, cb_error *err)
-{
-    char path[4096];
-    if (snprintf(path, sizeof path, "%s", dir) >= (int)sizeof path)
-        return cb_fail(err, CB_ERR_IO, "%s: output directory path too long", dir);
-    for (char *p = path + 1;; ++p) {
-        if (*p != '/' && *p != '\0') continue;
-        char end = *p;
-        *p = '\0';
-        struct stat st;
-        if (stat(path, &st) != 0 && mkdir(path, 0777) != 0 && errno != EEXIST)
-            return cb_fail(err, CB_ERR_IO, "%s: cannot create the output directory %s: %s (check the path and its "
-                           "permissions)", dir, path, strerror(errno));
-        if (stat(path, &st) == 0 && !S_ISDIR(st.st_mode))
-            return cb_fail(err, CB_ERR_IO, "%s: cannot create the output directory: %s is a file", dir, path);
-        if (!(*p = end)) return CB_OK;
-    }
-}
-
 static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
 {
     w->job.threads = run->threads_per_bake;
     w->job.speed_reference = t->speed_reference;
-    if (make_directories(an->bake.out_dir, err)) return err->status;
+    if (roster_make_directories(an->bake.out_dir, err)) return err->status;
     cb_bake_result r;
     cb_bake_job_run(&w->job, &r, err);
     if (r.output_count) {
@@ -510,12 +444,14 @@ typedef struct pass {
     void (*fn)(roster_run *, uint32_t);
 } pass;
 
-static int pass_main(void *arg)
+/* Each thread takes the next type until none is left (types take very different times). */
+static void pass_share(void *arg, uint32_t thread, uint32_t threads)
 {
+    (void)thread, (void)threads;
     pass *p = arg;
     for (;;) {
         uint32_t i = atomic_fetch_add(&p->run->next, 1);
-        if (i >= p->run->r->type_count) return 0;
+        if (i >= p->run->r->type_count) return;
         p->fn(p->run, i);
     }
 }
@@ -526,296 +462,7 @@ static void run_pass(roster_run *run, void (*fn)(roster_run *, uint32_t))
     pass p = {run, fn};
     uint32_t threads = run->opt->jobs ? run->opt->jobs : 1;
     if (threads > run->r->type_count) threads = run->r->type_count ? run->r->type_count : 1;
-    if (threads > 64) threads = 64;
-    thrd_t ids[64];
-    uint32_t started = 0;
-    for (uint32_t t = 1; t < threads; ++t)
-        if (thrd_create(&ids[started], pass_main, &p) == thrd_success) ++started;
-    pass_main(&p);
-    for (uint32_t t = 0; t < started; ++t) thrd_join(ids[t], NULL);
-}
-
-/* ---- the manifest and the depfile ---- */
-
-static void write_state(cb_json *j, const cb_roster_type *t, const cb_catalog_state *st, int clip)
-{
-    const cb_roster_clip *c = &t->clips[clip];
-    /* Only locomotion loops are synced to speed; one-shots and clips that stand still play at
-     * their own rate (a dying animal at speed 0 still dies). */
-    bool synced = is_locomotion(c);
-    double speed = t->animal->speed_auto ? c->speed.speed : t->speed_reference;
-    cb_json_object(j, st->name);
-    cb_json_string(j, "clip", c->name);
-    cb_json_inline_array(j, "keywords");
-    for (uint32_t k = 0; k < st->keyword_count; ++k) cb_json_string(j, NULL, st->keywords[k]);
-    cb_json_end(j);
-    /* The four numbers of the per-instance data, exactly as the shader wants them. */
-    cb_json_object(j, "instance");
-    cb_json_int(j, "first_row", c->first_row);
-    cb_json_int(j, "frame_count", c->loops ? (long long)c->frames : -(long long)c->frames); /* < 0: one-shot, clamps */
-    cb_json_number(j, "rate", c->fps);
-    cb_json_number(j, "rate_per_speed", synced && speed > 0 ? c->fps / speed : 0);
-    cb_json_string(j, "phase", c->loops ? "golden_ratio" : "zero");
-    cb_json_end(j);
-    cb_json_end(j);
-}
-
-/* `path` relative to directory `dir` (both as the catalog resolved them, or absolute), so a
- * game resolves palette paths against the manifest's own directory. */
-static void relative_path(const char *dir, const char *path, char *out, size_t size)
-{
-    char a[4096], b[4096];
-    if (!realpath(dir, a) || !realpath(path, b)) {
-        snprintf(out, size, "%s", path);
-        return;
-    }
-    size_t common = 0, i = 0;
-    for (; a[i] && a[i] == b[i]; ++i)
-        if (a[i] == '/') common = i;
-    if (!a[i] && b[i] == '/') common = i; /* dir is a prefix of path */
-    out[0] = '\0';
-    for (const char *p = a + common; *p; ++p)
-        if (*p == '/') strncat(out, "../", size - strlen(out) - 1);
-    strncat(out, b + common + 1, size - strlen(out) - 1);
-}
-
-static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, const char *manifest_dir)
-{
-    const cb_roster_type *owner = &r->types[t->owner];
-    const cb_catalog_animal *an = t->animal;
-    char rel[4096];
-    cb_json_object(j, an->name);
-    relative_path(manifest_dir, an->model, rel, sizeof rel);
-    cb_json_string(j, "model", rel);
-    if (owner->animal->bake.formats & CB_FORMAT_PAL) {
-        relative_path(manifest_dir, owner->pal_path, rel, sizeof rel);
-        cb_json_string(j, "palette", rel);
-    }
-    if (owner->animal->bake.formats & CB_FORMAT_EXR) {
-        relative_path(manifest_dir, owner->exr_path, rel, sizeof rel);
-        cb_json_string(j, "palette_exr", rel);
-    }
-    if (t->owner != (uint32_t)(t - r->types)) cb_json_string(j, "shares_palette_of", owner->animal->name);
-    cb_json_string(j, "layout", cb_layout_name(owner->layout));
-    cb_json_string(j, "precision", cb_precision_name(owner->precision));
-    cb_json_int(j, "bones", t->bones);
-    cb_json_int(j, "texels_per_bone", cb_layout_texels_per_bone(owner->layout));
-    cb_json_int(j, "rows", owner->rows);
-    cb_json_int(j, "width", owner->width);
-    cb_json_int(j, "height", owner->height);
-    cb_json_int(j, "blocks", owner->blocks);
-    /* Errors in mm per metre of model height: the encoding's at the baked rows, and what a player
-     * sees (the runtime's blend of two rows). */
-    double per_m = t->model_height > 0 ? 1000 / t->model_height : 0;
-    cb_json_number(j, "encoding_error_mm_per_m", owner->max_error * per_m);
-    cb_json_number(j, "visible_error_mm_per_m", owner->visible_error * per_m);
-    cb_json_number(j, "speed_reference", t->speed_reference);
-    cb_json_string(j, "speed_reference_from", t->speed_reference_from);
-    cb_json_string(j, "default_state", an->default_state ? an->default_state : "");
-    cb_json_array(j, "clips");
-    for (uint32_t c = 0; c < t->clip_count; ++c) {
-        const cb_roster_clip *cl = &t->clips[c];
-        cb_json_object(j, NULL);
-        cb_json_string(j, "name", cl->name);
-        cb_json_int(j, "first_row", cl->first_row);
-        cb_json_int(j, "frame_count", cl->frames);
-        cb_json_number(j, "fps", cl->fps);
-        cb_json_number(j, "duration", cl->duration);
-        cb_json_bool(j, "loops", cl->loops);
-        cb_json_number(j, "ground_speed", cl->speed.speed);
-        cb_json_number(j, "root_speed", cl->speed.root);
-        cb_json_number(j, "feet_speed", cl->speed.feet);
-        cb_json_string(j, "speed_method", cl->speed.method);
-        cb_json_end(j);
-    }
-    cb_json_end(j);
-    cb_json_object(j, "states");
-    for (uint32_t s = 0; s < an->state_count; ++s) write_state(j, t, &an->states[s], t->state_clip[s]);
-    cb_json_end(j);
-    cb_json_array(j, "lods");
-    for (uint32_t l = 0; l < t->lod_count; ++l) {
-        cb_json_object(j, NULL);
-        relative_path(manifest_dir, t->lods[l].path, rel, sizeof rel);
-        cb_json_string(j, "model", rel);
-        cb_json_inline_array(j, "joint_remap");
-        for (uint32_t k = 0; k < t->lods[l].joint_count; ++k) cb_json_int(j, NULL, t->lods[l].remap[k]);
-        cb_json_end(j);
-        cb_json_end(j);
-    }
-    cb_json_end(j);
-    cb_json_end(j);
-}
-
-/* Writes `data` to path unless the file already holds exactly it (mtimes stay put). */
-static cb_status write_if_changed(const char *path, const char *data, size_t size, bool *written, cb_error *err)
-{
-    *written = false;
-    FILE *f = fopen(path, "rb");
-    if (f) {
-        char *old = malloc(size + 1);
-        size_t got = old ? fread(old, 1, size + 1, f) : 0;
-        fclose(f);
-        bool same = old && got == size && memcmp(old, data, size) == 0;
-        free(old);
-        if (same) return CB_OK;
-    }
-    cb_atomic_file af;
-    if (cb_atomic_open(&af, path, err)) return err->status;
-    if (cb_atomic_write(&af, data, size, err)) {
-        cb_atomic_abort(&af);
-        return err->status;
-    }
-    if (cb_atomic_commit(&af, err)) return err->status;
-    *written = true;
-    return CB_OK;
-}
-
-static cb_status write_manifest(const cb_catalog *cat, cb_roster *r, const char *path, cb_error *err)
-{
-    char *buf = NULL;
-    size_t size = 0;
-    FILE *mem = open_memstream(&buf, &size);
-    if (!mem) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    char dir[4096];
-    snprintf(dir, sizeof dir, "%s", path);
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    else snprintf(dir, sizeof dir, ".");
-    cb_json j;
-    cb_json_init(&j, mem);
-    cb_json_object(&j, NULL);
-    cb_json_string(&j, "schema", "crowdbake-roster/1");
-    cb_json_string(&j, "generator", "crowdbake " CROWDBAKE_VERSION);
-    char rel[4096];
-    relative_path(dir, cat->path, rel, sizeof rel);
-    cb_json_string(&j, "catalog", rel);
-    cb_json_object(&j, "types");
-    for (uint32_t i = 0; i < r->type_count; ++i)
-        if (r->types[i].outcome != CB_TYPE_FAILED) write_type(&j, r, &r->types[i], dir);
-    cb_json_end(&j);
-    /* Failed types are named, not dropped: a loader sees that the roster is incomplete. */
-    if (r->failed) {
-        cb_json_object(&j, "failed");
-        for (uint32_t i = 0; i < r->type_count; ++i) {
-            const cb_roster_type *t = &r->types[i];
-            if (t->outcome != CB_TYPE_FAILED) continue;
-            cb_json_object(&j, t->animal->name);
-            relative_path(dir, t->animal->model, rel, sizeof rel);
-            cb_json_string(&j, "model", rel);
-            cb_json_string(&j, "error", t->error.message);
-            cb_json_end(&j);
-        }
-        cb_json_end(&j);
-    }
-    cb_json_end(&j);
-    fclose(mem);
-    cb_status rc = write_if_changed(path, buf, size, &r->manifest_written, err);
-    free(buf);
-    return rc;
-}
-
-static void depfile_path(FILE *f, const char *p)
-{
-    for (; *p; ++p) {
-        if (*p == ' ' || *p == '#' || *p == '\\') fputc('\\', f);
-        if (*p == '$') fputc('$', f);
-        fputc(*p, f);
-    }
-}
-
-static void depfile_inputs(FILE *f, const cb_roster_type *t)
-{
-    for (uint32_t i = 0; i < t->input_count; ++i) fputs(" \\\n  ", f), depfile_path(f, t->inputs[i]);
-}
-
-/* Whether input k of type i was already listed by an earlier input or type. */
-static bool listed_before(const cb_roster *r, uint32_t i, uint32_t k)
-{
-    for (uint32_t a = 0; a <= i; ++a)
-        for (uint32_t b = 0; b < (a == i ? k : r->types[a].input_count); ++b)
-            if (strcmp(r->types[a].inputs[b], r->types[i].inputs[k]) == 0) return true;
-    return false;
-}
-
-/* One rule per output: Make and Ninja both read it. */
-static cb_status write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, cb_error *err)
-{
-    char *buf = NULL;
-    size_t size = 0;
-    FILE *f = open_memstream(&buf, &size);
-    if (!f) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    for (uint32_t i = 0; i < r->type_count; ++i) {
-        const cb_roster_type *t = &r->types[i];
-        if (t->owner != i) continue; /* failed types too: their inputs keep the build out of date */
-        for (int fmt = 0; fmt < 2; ++fmt) {
-            if (!(t->animal->bake.formats & (fmt ? CB_FORMAT_EXR : CB_FORMAT_PAL))) continue;
-            depfile_path(f, fmt ? t->exr_path : t->pal_path);
-            fputs(":", f);
-            fputc(' ', f), depfile_path(f, cat->path);
-            for (uint32_t k = 0; k < r->type_count; ++k) /* every type sharing this palette */
-                if (r->types[k].owner == i) depfile_inputs(f, &r->types[k]);
-            fputc('\n', f);
-        }
-    }
-    depfile_path(f, r->manifest_path);
-    fputs(":", f);
-    fputc(' ', f), depfile_path(f, cat->path);
-    for (uint32_t i = 0; i < r->type_count; ++i) depfile_inputs(f, &r->types[i]);
-    fputc('\n', f);
-    /* An empty rule per input (as gcc -MP writes): a deleted or renamed model makes Make run the
-     * bake, which names the problem, instead of stopping at "no rule to make target". */
-    for (uint32_t i = 0; i < r->type_count; ++i)
-        for (uint32_t k = 0; k < r->types[i].input_count; ++k)
-            if (!listed_before(r, i, k)) fputc('\n', f), depfile_path(f, r->types[i].inputs[k]), fputs(":\n", f);
-    fclose(f);
-    bool written;
-    cb_status rc = write_if_changed(path, buf, size, &written, err);
-    free(buf);
-    return rc;
-}
-
-static cb_status make_parent_directories(const char *file, cb_error *err)
-{
-    char dir[4096];
-    snprintf(dir, sizeof dir, "%s", file);
-    char *slash = strrchr(dir, '/');
-    if (!slash) return CB_OK;
-    *slash = '\0';
-    return dir[0] ? make_directories(dir, err) : CB_OK;
-}
-
-static bool newer_than(const struct stat *a, const struct stat *b)
-{
-    return a->st_mtim.tv_sec > b->st_mtim.tv_sec ||
-           (a->st_mtim.tv_sec == b->st_mtim.tv_sec && a->st_mtim.tv_nsec > b->st_mtim.tv_nsec);
-}
-
-/* Make and Ninja decide from modification times, so the manifest's must tell the truth. After
- * a failure it is set to the epoch (as are a failed type's old palettes): older than every
- * input, so the next build runs the bake again, however often it is run, until the inputs are
- * fixed. After a success it is never older than an input, even when its contents did not
- * change (else Make would run the bake on every build). */
-static void settle_times(const cb_roster *r)
-{
-    static const struct timespec epoch[2] = {{0, 0}, {0, 0}};
-    if (r->failed) {
-        utimensat(AT_FDCWD, r->manifest_path, epoch, 0);
-        for (uint32_t i = 0; i < r->type_count; ++i)
-            if (r->types[i].outcome == CB_TYPE_FAILED && r->types[i].owner == i) {
-                struct stat st;
-                /* only regular files: a bake refuses to replace anything else, and so does this */
-                if (stat(r->types[i].pal_path, &st) == 0 && S_ISREG(st.st_mode)) utimensat(AT_FDCWD, r->types[i].pal_path, epoch, 0);
-                if (stat(r->types[i].exr_path, &st) == 0 && S_ISREG(st.st_mode)) utimensat(AT_FDCWD, r->types[i].exr_path, epoch, 0);
-            }
-        return;
-    }
-    struct stat manifest, in;
-    if (stat(r->manifest_path, &manifest) != 0) return;
-    bool stale = stat(r->catalog->path, &in) == 0 && newer_than(&in, &manifest);
-    for (uint32_t i = 0; i < r->type_count && !stale; ++i)
-        for (uint32_t k = 0; k < r->types[i].input_count && !stale; ++k)
-            stale = stat(r->types[i].inputs[k], &in) == 0 && newer_than(&in, &manifest);
-    if (stale) utimensat(AT_FDCWD, r->manifest_path, NULL, 0);
+    cb_pool_run(threads, pass_share, &p);
 }
 
 /* ---- the whole bake ---- */
@@ -870,10 +517,10 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     if (opt->log && opt->tty) fputs("\r\033[K", opt->log);
     if (opt->manifest) snprintf(r->manifest_path, sizeof r->manifest_path, "%s", opt->manifest);
     else snprintf(r->manifest_path, sizeof r->manifest_path, "%s/roster.json", cat->defaults.out_dir);
-    cb_status rc = make_parent_directories(r->manifest_path, err);
-    if (!rc) rc = write_manifest(cat, r, r->manifest_path, err);
-    if (!rc && opt->depfile && !(rc = make_parent_directories(opt->depfile, err))) rc = write_depfile(cat, r, opt->depfile, err);
-    if (!rc) settle_times(r);
+    cb_status rc = roster_make_parent_directories(r->manifest_path, err);
+    if (!rc) rc = roster_write_manifest(cat, r, r->manifest_path, err);
+    if (!rc && opt->depfile && !(rc = roster_make_parent_directories(opt->depfile, err))) rc = roster_write_depfile(cat, r, opt->depfile, err);
+    if (!rc) roster_settle_times(r);
     for (uint32_t i = 0; i < r->type_count && !rc; ++i)
         if (r->types[i].outcome == CB_TYPE_FAILED) rc = cb_fail(err, r->types[i].error.status, "%s", r->types[i].error.message);
     for (uint32_t i = 0; i < r->type_count; ++i) {

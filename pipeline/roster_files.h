@@ -1,0 +1,25 @@
+/* roster_files.h - the roster bake's pieces beside its passes: the content key, and the files
+ * beside its palettes (private to libcrowdbake). */
+#ifndef CB_ROSTER_FILES_H
+#define CB_ROSTER_FILES_H
+
+#include "crowdbake/roster.h"
+
+/* Locomotion: a looping clip that moves. Only these are synced to the animal's speed. */
+static inline bool roster_is_locomotion(const cb_roster_clip *c) { return c->loops && c->speed.speed > 0; }
+
+/* The content key of a type's rig, planned clips and settings (roster_key.c). */
+uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan *plan, uint32_t n, const cb_bake_settings *b);
+
+/* mkdir -p: a directory and any missing parents; or the folder a file goes in. */
+cb_status roster_make_directories(const char *dir, cb_error *err);
+cb_status roster_make_parent_directories(const char *file, cb_error *err);
+/* roster.json (docs/roster.schema.json), rewritten only when its bytes change (r->manifest_written). */
+cb_status roster_write_manifest(const cb_catalog *cat, cb_roster *r, const char *path, cb_error *err);
+/* One rule per output, Make and Ninja both read it. */
+cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, cb_error *err);
+/* After a failure the manifest and the failed palettes get the epoch (the next build runs
+ * again); after a success the manifest is never older than an input. */
+void roster_settle_times(const cb_roster *r);
+
+#endif
