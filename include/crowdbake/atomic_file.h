@@ -5,6 +5,10 @@
 
 #include "core.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct cb_atomic_file {
     int fd;
     char *path;     /* the target */
@@ -24,5 +28,9 @@ cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_e
 cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err);
 /* Removes the temporary file and releases f. Safe after a failed open or commit. */
 void cb_atomic_abort(cb_atomic_file *f);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -1,4 +1,4 @@
-/* crowdbake.h - the core library: a skinned, animated model as plain C structs, glTF 2.0
+/* core.h - the core library: a skinned, animated model as plain C structs, glTF 2.0
  * animation sampling, clip framing and root motion.
  *
  * The core never reads or writes a file. formats/ fills a cb_model (gltf_load.h), the core

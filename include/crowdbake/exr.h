@@ -1,4 +1,4 @@
-/* exr_io.h - palettes as OpenEXR images through OpenEXR's C API (OpenEXRCore): RGBA half or
+/* exr.h - palettes as OpenEXR images through OpenEXR's C API (OpenEXRCore): RGBA half or
  * float scanlines, width x height exactly as in the .pal, metadata as typed header
  * attributes prefixed "crowdbake.". */
 #ifndef CB_EXR_IO_H
@@ -6,6 +6,10 @@
 
 #include "palette.h"
 #include "vat.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 /* Lossless compressions only: the texels must read back bit-identical. */
 bool cb_exr_compression_parse(const char *text, int *out);
@@ -41,5 +45,9 @@ typedef struct cb_exr_palette {
 /* Fails, naming the file, when the crowdbake attributes are missing or disagree with the image. */
 cb_status cb_exr_read_palette(const char *path, cb_exr_palette *out, cb_error *err);
 void cb_exr_palette_free(cb_exr_palette *p);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

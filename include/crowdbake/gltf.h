@@ -1,4 +1,4 @@
-/* gltf_load.h - loads a .glb or .gltf file into a cb_model (C API over a C++ adapter).
+/* gltf.h - loads a .glb or .gltf file into a cb_model (C API over a C++ adapter).
  *
  * Handles KHR_draco_mesh_compression, KHR_mesh_quantization, EXT_meshopt_compression,
  * sparse accessors, embedded data URIs and external buffers. Images are never decoded.

@@ -1,10 +1,14 @@
-/* json_writer.h - a small streaming JSON writer for machine-readable output.
+/* json.h - a small streaming JSON writer for machine-readable output.
  * Keys are passed with each value; pass NULL inside arrays. Output is deterministic. */
 #ifndef CB_JSON_WRITER_H
 #define CB_JSON_WRITER_H
 
 #include <stdbool.h>
 #include <stdio.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 #define CB_JSON_MAX_DEPTH 32
 
@@ -27,5 +31,9 @@ void cb_json_number(cb_json *j, const char *key, double value); /* NaN and infin
 void cb_json_int(cb_json *j, const char *key, long long value);
 void cb_json_bool(cb_json *j, const char *key, bool value);
 void cb_json_null(cb_json *j, const char *key);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

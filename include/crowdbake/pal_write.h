@@ -4,6 +4,10 @@
 
 #include "palette.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct cb_pal_write_options {
     bool zstd;              /* compress the payload */
     int zstd_level;
@@ -14,5 +18,9 @@ typedef struct cb_pal_write_options {
 
 cb_status cb_pal_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
                        const cb_pal_write_options *opt, cb_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -5,6 +5,10 @@
 
 #include "palette.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct cb_preview_options {
     uint32_t columns;   /* frames per clip */
     uint32_t cell;      /* pixels per frame, square */
@@ -22,5 +26,9 @@ cb_status cb_preview_write(const cb_palette *p, const void *texels, const cb_mod
 
 /* The shipped samples/shaders/crowdbake_palette.glsl, embedded at build time. */
 extern const char cb_palette_glsl[];
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

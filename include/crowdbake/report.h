@@ -9,6 +9,10 @@
 #include "budget.h"
 #include "roster.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct cb_report_type {
     const char *name;
     const char *shares;                 /* the owner's name when the palette is shared */
@@ -58,5 +62,9 @@ void cb_report_html(FILE *out, const cb_report *r);
 void cb_report_paragraph(FILE *out, const cb_report *r);
 /* "1.6 MiB" */
 void cb_human_bytes(uint64_t bytes, char *buf, size_t size);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

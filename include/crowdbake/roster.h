@@ -7,6 +7,10 @@
 
 #include "catalog.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct cb_roster_options {
     uint32_t jobs;          /* types baked at once */
     bool force;             /* re-bake what is up to date */
@@ -76,5 +80,9 @@ typedef struct cb_roster {
  * status of the first failure (by name), or CB_OK. */
 cb_status cb_roster_bake(const cb_catalog *catalog, const cb_roster_options *options, cb_roster *out, cb_error *err);
 void cb_roster_free(cb_roster *roster);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

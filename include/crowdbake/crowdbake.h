@@ -1,0 +1,39 @@
+/* crowdbake.h - the whole public API of libcrowdbake, one include:
+ *
+ *     #include <crowdbake/crowdbake.h>      pkg-config --cflags --libs crowdbake
+ *                                           CMake: find_package(crowdbake), crowdbake::crowdbake
+ *
+ * core.h     a model as plain structs, sampling, clip framing, root motion, errors (cb_status)
+ * palette.h  palettes: layouts, precisions, the bake of planned clips, decoding
+ * runtime.h  what the shipped shaders compute, on the CPU; verification; error-driven rates
+ * bake.h     one bake job (a model into .pal/.exr files): every bake policy, decided once
+ * catalog.h, catalog_toml.h, roster.h, report.h   catalogs of animal types, their roster bake, the budget report
+ * gltf.h, pal_write.h, pal_view.h, exr.h, json.h, atomic_file.h, vat.h, budget.h, preview.h   files and tools
+ *
+ * An engine that only reads palettes needs none of this: crowdbake_pal.h is a dependency-free
+ * C99 reader (installed beside this folder).
+ *
+ * CROWDBAKE_API_VERSION (core.h) is MAJOR * 100 + MINOR: MINOR grows when the API gains
+ * something, MAJOR when a change breaks callers (and the shared library's soname with it). */
+#ifndef CROWDBAKE_CROWDBAKE_H
+#define CROWDBAKE_CROWDBAKE_H
+
+#include "core.h"
+#include "palette.h"
+#include "runtime.h"
+#include "bake.h"
+#include "budget.h"
+#include "vat.h"
+#include "catalog.h"
+#include "catalog_toml.h"
+#include "roster.h"
+#include "report.h"
+#include "gltf.h"
+#include "pal_write.h"
+#include "pal_view.h"
+#include "exr.h"
+#include "json.h"
+#include "atomic_file.h"
+#include "preview.h"
+
+#endif
