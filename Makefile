@@ -5,6 +5,8 @@
 #   make check    the test suite, normal and AddressSanitizer + UBSan builds
 #   make bench    benchmarks (not part of check)
 #   make deps     install the Debian packages the build needs (as root; prints the command otherwise)
+#   make install  PREFIX=/usr/local DESTDIR=: the command, libcrowdbake (static and shared), its headers,
+#                 crowdbake.pc, the CMake package, the man page and the bash/zsh completions
 
 .SUFFIXES:
 .DELETE_ON_ERROR:
@@ -13,7 +15,8 @@ SHELL := /bin/bash
 
 DEB_PACKAGES := pkg-config rapidjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
-                libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core
+                libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
+                cmake groff-base
 PKGS := tinygltf RapidJSON draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
 BUILD   ?= build
@@ -34,8 +37,11 @@ GL_LIBS    = $(shell pkg-config --libs osmesa 2>/dev/null)
 # results become blends and the sampler's loops vectorize (the values are the same).
 # -ffp-contract=off: no fused multiply-adds, so every compiler and CPU gives the same bits.
 FPFLAGS  := -fno-math-errno -fno-trapping-math -ffp-contract=off
-CFLAGS   := -std=c11 $(OPT) $(FPFLAGS) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude $(SAN)
-CXXFLAGS := -std=c++17 $(OPT) $(FPFLAGS) -g $(WARN) -Iinclude $(SAN)
+# -fPIC: the same objects make the static and the shared library (-fno-semantic-interposition
+# keeps calls inside the library as direct, inlinable calls, as without -fPIC).
+PICFLAGS := -fPIC -fno-semantic-interposition
+CFLAGS   := -std=c11 $(OPT) $(FPFLAGS) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude $(PICFLAGS) $(SAN)
+CXXFLAGS := -std=c++17 $(OPT) $(FPFLAGS) -g $(WARN) -Iinclude $(PICFLAGS) $(SAN)
 
 LIB_C   := $(wildcard src/*.c) $(wildcard formats/*.c) $(wildcard pipeline/*.c)
 LIB_CXX := $(wildcard formats/*.cpp)
@@ -48,9 +54,13 @@ CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: all deps demo check check-normal check-asan check-shared test test-asan test-runs readme bake-hashes bench \
+.PHONY: all install deps demo check check-normal check-asan check-shared test test-asan test-runs readme bake-hashes bench \
         bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds
-all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(SAMPLE_GLB)
+VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
+API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
+SONAME    := libcrowdbake.so.$(API_MAJOR)
+
+all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(SAMPLE_GLB)
 
 # ---- dependencies --------------------------------------------------------------------
 DEPS_STAMP := $(BUILD)/.deps-ok
@@ -104,8 +114,41 @@ $(BUILD)/libcrowdbake.a: $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
 
+# The shared library: its dependencies come with it (NEEDED), so a program links -lcrowdbake alone.
+$(BUILD)/$(SONAME): $(LIB_OBJ)
+	$(CXX) $(SAN) -shared -Wl,-soname,$(SONAME) -Wl,--no-undefined -o $@ $^ $(PKG_LIBS)
+
 $(BUILD)/crowdbake: $(CLI_OBJ) $(BUILD)/libcrowdbake.a
 	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(BUILD)/libcrowdbake.a $(PKG_LIBS)
+
+# ---- install --------------------------------------------------------------------------
+PREFIX     ?= /usr/local
+BINDIR     ?= $(PREFIX)/bin
+LIBDIR     ?= $(PREFIX)/lib
+INCLUDEDIR ?= $(PREFIX)/include
+DATADIR    ?= $(PREFIX)/share
+MANDIR     ?= $(DATADIR)/man
+# What the installed package files say: where things are, what the library needs to link statically.
+INSTALL_SED = -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@BINDIR@|$(BINDIR)|g' -e 's|@LIBDIR@|$(LIBDIR)|g' \
+  -e 's|@INCLUDEDIR@|$(INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' -e 's|@SONAME@|$(SONAME)|g' \
+  -e 's|@API_MAJOR@|$(API_MAJOR)|g'
+install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME)
+	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(LIBDIR)/cmake/crowdbake \
+	  $(DESTDIR)$(INCLUDEDIR)/crowdbake $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(DATADIR)/bash-completion/completions \
+	  $(DESTDIR)$(DATADIR)/zsh/site-functions
+	install -m 755 $(BUILD)/crowdbake $(DESTDIR)$(BINDIR)/crowdbake
+	install -m 644 $(BUILD)/libcrowdbake.a $(DESTDIR)$(LIBDIR)/libcrowdbake.a
+	install -m 755 $(BUILD)/$(SONAME) $(DESTDIR)$(LIBDIR)/$(SONAME)
+	ln -sf $(SONAME) $(DESTDIR)$(LIBDIR)/libcrowdbake.so
+	install -m 644 include/crowdbake/*.h $(DESTDIR)$(INCLUDEDIR)/crowdbake/
+	install -m 644 formats/crowdbake_pal.h $(DESTDIR)$(INCLUDEDIR)/crowdbake_pal.h
+	sed $(INSTALL_SED) cmake/crowdbake.pc.in > $(DESTDIR)$(LIBDIR)/pkgconfig/crowdbake.pc
+	sed $(INSTALL_SED) cmake/crowdbakeConfig.cmake.in > $(DESTDIR)$(LIBDIR)/cmake/crowdbake/crowdbakeConfig.cmake
+	sed $(INSTALL_SED) cmake/crowdbakeConfigVersion.cmake.in > $(DESTDIR)$(LIBDIR)/cmake/crowdbake/crowdbakeConfigVersion.cmake
+	install -m 644 cmake/CrowdbakeRoster.cmake $(DESTDIR)$(LIBDIR)/cmake/crowdbake/
+	install -m 644 docs/crowdbake.1 $(DESTDIR)$(MANDIR)/man1/crowdbake.1
+	install -m 644 completions/crowdbake.bash $(DESTDIR)$(DATADIR)/bash-completion/completions/crowdbake
+	install -m 644 completions/_crowdbake $(DESTDIR)$(DATADIR)/zsh/site-functions/_crowdbake
 
 # ---- samples: the project's own rigged animals ----------------------------------------
 $(BUILD)/gen_samples: samples/gen/gen_samples.c $(wildcard samples/gen/*.h) $(DEPS_STAMP)

@@ -116,6 +116,7 @@ typedef struct cli_catalog_bake {
     uint32_t jobs;
     bool force, quiet, json;
     const char *depfile, *manifest;
+    bool depfile_manifest_only;
     const cb_limits *limits;
     const cb_bake_settings *overrides; /* the command line's bake options, `override_fields` of them set */
     unsigned override_fields;          /* CB_BAKE_* */

@@ -13,14 +13,18 @@
 
 const char cmd_bake_usage[] =
     "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr [options]\n"
-    "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--json] [-q]\n"
+    "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--out-dir DIR] [--json]\n"
+    "                      [-q]\n"
     "                      [--fps N] [--layout L] [--precision P] [--format F] [--zstd] [--max-texture-size N]\n"
     "                      [--root-motion R] [--exr-compression C]\n\n"
     "Bakes every clip of the model's skin into a bone-matrix palette; or every animal type of a\n"
     "catalog (see catalog.example.toml) into palettes and a roster manifest, re-baking only what\n"
     "changed (--force: everything), N types at a time (default: the number of cores). With a\n"
     "catalog, the bake options given replace its [bake] and [animal] values for this run (a clip's\n"
-    "own fps still applies) and count in what is up to date; --depfile writes a Make/Ninja depfile.\n\n"
+    "own fps still applies) and count in what is up to date; --depfile writes a Make/Ninja depfile;\n"
+    "--out-dir replaces the catalog's out_dir (a path from the current directory);\n"
+    "--depfile-manifest-only writes the manifest's rule alone, as Ninja's depfile without\n"
+    "deps = gcc (CMake's DEPFILE) wants it.\n\n"
     "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md) or .exr (OpenEXR); another\n"
     "                             extension is refused\n"
     "  --format pal,exr           write these formats (OUT's extension is replaced per format; each\n"
@@ -49,8 +53,8 @@ const char cmd_bake_usage[] =
 
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
-        *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded;
-    bool zstd, json, quiet, quiet_long, force;
+        *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir;
+    bool zstd, json, quiet, quiet_long, force, depfile_manifest;
 } bake_args;
 
 static double now_seconds(void)
@@ -143,7 +147,10 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     unsigned fields;
     int rc = parse_settings(a, &over, &fields);
     if (rc) return rc;
-    cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, limits, &over, fields};
+    if (a->out_dir) over.out_dir = a->out_dir, fields |= CB_BAKE_OUT_DIR;
+    if (a->depfile_manifest && !a->depfile) return cli_usage_error("bake", "--depfile-manifest-only goes with --depfile");
+    cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, a->depfile_manifest,
+                           limits, &over, fields};
     return cmd_bake_catalog(&cb);
 }
 
@@ -295,7 +302,8 @@ int cmd_bake(int argc, char **argv)
         {"--force", NULL, NULL, &a.force},         {"--depfile", "FILE", &a.depfile, NULL},
         {"--manifest", "FILE", &a.manifest, NULL}, {"--max-error", "MM_PER_M", &a.max_error, NULL},
         {"--max-fps", "N", &a.max_fps, NULL},      {"--clip", "A,B", &a.clips, NULL},
-        {"--exclude-clip", "A,B", &a.excluded, NULL},
+        {"--exclude-clip", "A,B", &a.excluded, NULL}, {"--out-dir", "DIR", &a.out_dir, NULL},
+        {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest},
         {"--quiet", NULL, NULL, &a.quiet_long}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
     if (help) return fputs(cmd_bake_usage, stdout), fputs(cli_limits_usage, stdout), 0;
@@ -303,9 +311,9 @@ int cmd_bake(int argc, char **argv)
     a.quiet |= a.quiet_long;
     if (ends_with(a.model, ".toml")) return bake_catalog(&a, &limits);
     if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
-    if (a.depfile || a.manifest || a.force)
+    if (a.depfile || a.manifest || a.force || a.out_dir)
         return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
-                               a.depfile ? "--depfile" : a.manifest ? "--manifest" : "--force");
+                               a.depfile ? "--depfile" : a.manifest ? "--manifest" : a.force ? "--force" : "--out-dir");
     cb_bake_settings settings;
     unsigned fields, threads;
     if ((rc = parse_settings(&a, &settings, &fields)) || (rc = single_model_checks(&a, &settings, fields))) return rc;

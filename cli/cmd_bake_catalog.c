@@ -62,6 +62,7 @@ int cmd_bake_catalog(const cli_catalog_bake *o)
     opt.log = quiet || json ? NULL : stdout;
     opt.tty = opt.log && isatty(fileno(stdout));
     opt.depfile = o->depfile;
+    opt.depfile_manifest_only = o->depfile_manifest_only;
     opt.manifest = o->manifest;
     opt.limits = o->limits;
     cb_roster r;

@@ -235,13 +235,14 @@ static bool listed_before(const cb_roster *r, uint32_t i, uint32_t k)
 }
 
 /* One rule per output: Make and Ninja both read it. */
-cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, cb_error *err)
+cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, bool manifest_only,
+                               cb_error *err)
 {
     char *buf = NULL;
     size_t size = 0;
     FILE *f = open_memstream(&buf, &size);
     if (!f) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    for (uint32_t i = 0; i < r->type_count; ++i) {
+    for (uint32_t i = 0; i < r->type_count && !manifest_only; ++i) {
         const cb_roster_type *t = &r->types[i];
         if (t->owner != i) continue; /* failed types too: their inputs keep the build out of date */
         for (int fmt = 0; fmt < 2; ++fmt) {

@@ -16,8 +16,10 @@ cb_status roster_make_directories(const char *dir, cb_error *err);
 cb_status roster_make_parent_directories(const char *file, cb_error *err);
 /* roster.json (docs/roster.schema.json), rewritten only when its bytes change (r->manifest_written). */
 cb_status roster_write_manifest(const cb_catalog *cat, cb_roster *r, const char *path, cb_error *err);
-/* One rule per output, Make and Ninja both read it. */
-cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, cb_error *err);
+/* One rule per output, Make and Ninja both read it; or (manifest_only) one rule, the manifest's,
+ * as Ninja wants it for a rule with `depfile` but no `deps = gcc` (CMake's DEPFILE). */
+cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, bool manifest_only,
+                               cb_error *err);
 /* After a failure the manifest and the failed palettes get the epoch (the next build runs
  * again); after a success the manifest is never older than an input. */
 void roster_settle_times(const cb_roster *r);

@@ -11,6 +11,7 @@ static void override_settings(cb_bake_settings *b, const cb_bake_settings *v, un
     if (fields & CB_BAKE_ROOT_MOTION) b->root_motion = v->root_motion;
     if (fields & CB_BAKE_ZSTD) b->zstd = v->zstd;
     if (fields & CB_BAKE_EXR_COMPRESSION) b->exr_compression = v->exr_compression;
+    if (fields & CB_BAKE_OUT_DIR) b->out_dir = v->out_dir;
 }
 
 cb_status cb_catalog_override_bake(cb_catalog *cat, const cb_bake_settings *values, unsigned fields, cb_error *err)

@@ -51,7 +51,7 @@ typedef struct cb_bake_settings {
 enum {
     CB_BAKE_FPS = 1u << 0, CB_BAKE_LAYOUT = 1u << 1, CB_BAKE_PRECISION = 1u << 2, CB_BAKE_FORMATS = 1u << 3,
     CB_BAKE_MAX_TEXTURE_SIZE = 1u << 4, CB_BAKE_ROOT_MOTION = 1u << 5, CB_BAKE_ZSTD = 1u << 6,
-    CB_BAKE_EXR_COMPRESSION = 1u << 7
+    CB_BAKE_EXR_COMPRESSION = 1u << 7, CB_BAKE_OUT_DIR = 1u << 8
 };
 
 /* 30 fps (auto: within 1 mm/m, up to 60 fps), qpos, u16, a .pal, textures up to 16384 texels

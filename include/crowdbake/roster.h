@@ -18,6 +18,7 @@ typedef struct cb_roster_options {
     bool tty;               /* log is a terminal: show progress */
     const char *manifest;   /* roster.json path; NULL: OUT_DIR/roster.json */
     const char *depfile;    /* Make/Ninja depfile, or NULL */
+    bool depfile_manifest_only; /* the depfile's one rule is the manifest's (Ninja's `depfile` without `deps = gcc`) */
     const cb_limits *limits; /* for loading and baking; NULL: the defaults */
     bool measure_vat;       /* also measure each type's VAT error (half-float positions) for the report */
 } cb_roster_options;

@@ -1,0 +1,51 @@
+# bash completion for crowdbake (installed as share/bash-completion/completions/crowdbake).
+# Each command's options are those of its --help; tests/test_install.c keeps them in step with
+# the command's own option tables.
+
+_crowdbake_options()
+{
+    local limits="--max-joints --max-frames --max-accessor-count --max-file-size --max-palette-size"
+    case $1 in
+    bake) echo "-o --output --format --fps --layout --precision --max-texture-size --root-motion --skin
+                --speed-reference --exr-compression --zstd --json -q --quiet -j --threads --force --depfile
+                --manifest --out-dir --depfile-manifest-only --max-error --max-fps --clip --exclude-clip $limits" ;;
+    info) echo "--json --fps --skin $limits" ;;
+    sample) echo "--json --fps --clip --frame --skin --root-motion $limits" ;;
+    inspect) echo "--json --clip --frame --no-verify" ;;
+    verify) echo "--json --clip --exclude-clip --max-error --random --skin $limits" ;;
+    preview) echo "-o --output --skin --cell --columns $limits" ;;
+    vat) echo "-o --output --fps --max-texture-size --root-motion --skin --exr-compression --json --clip --exclude-clip $limits" ;;
+    report) echo "--json --markdown --html --no-fail -j --target" ;;
+    esac
+}
+
+_crowdbake()
+{
+    local cur prev words cword
+    if declare -F _init_completion >/dev/null; then
+        _init_completion || return
+    else
+        cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[COMP_CWORD-1]} words=("${COMP_WORDS[@]}") cword=$COMP_CWORD
+    fi
+    local commands="info sample bake inspect verify preview vat report"
+    if [[ $cword -eq 1 ]]; then
+        COMPREPLY=($(compgen -W "$commands --help" -- "$cur"))
+        return
+    fi
+    case $prev in
+    --layout) COMPREPLY=($(compgen -W "mat4 affine qpos" -- "$cur")); return ;;
+    --precision) COMPREPLY=($(compgen -W "float half u16" -- "$cur")); return ;;
+    --format) COMPREPLY=($(compgen -W "pal exr pal,exr" -- "$cur")); return ;;
+    --root-motion) COMPREPLY=($(compgen -W "keep in-place" -- "$cur")); return ;;
+    --exr-compression) COMPREPLY=($(compgen -W "none rle zips zip piz" -- "$cur")); return ;;
+    --fps) COMPREPLY=($(compgen -W "24 30 60 auto" -- "$cur")); return ;;
+    -o|--output|--depfile|--manifest|--html) COMPREPLY=($(compgen -f -- "$cur")); return ;;
+    --out-dir) COMPREPLY=($(compgen -d -- "$cur")); return ;;
+    esac
+    if [[ $cur == -* ]]; then
+        COMPREPLY=($(compgen -W "$(_crowdbake_options "${words[1]}") --help" -- "$cur"))
+    else
+        COMPREPLY=($(compgen -f -X '!*.@(glb|gltf|pal|exr|toml)' -- "$cur") $(compgen -d -- "$cur"))
+    fi
+}
+complete -F _crowdbake crowdbake
