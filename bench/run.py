@@ -83,11 +83,11 @@ def bench_input(name, path, repeat):
         peer_sample.append(r['sample'])
         peer_matrices = r['matrices']
     last = phases[-1]
-    matrices = last['frames'] * last['bones']
+    matrices = last['rows'] * last['bones']
     sample = [p['phases']['sample'] for p in phases]
     result = {
         'input': name, 'input_bytes': os.path.getsize(path), 'output_bytes': os.path.getsize(out_pal),
-        'bones': last['bones'], 'frames': last['frames'], 'matrices': matrices,
+        'bones': last['bones'], 'frames': last['rows'], 'matrices': matrices,
         'crowdbake': {
             'wall': stats(walls), 'peak_rss': max(rss),
             'phases': {k: statistics.median(p['phases'][k] for p in phases) for k in last['phases']},

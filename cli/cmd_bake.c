@@ -159,7 +159,7 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
 static void print_summary(const cb_bake_output *out, double seconds)
 {
     const cb_palette *p = &out->palette;
-    printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bone%s, %u clip%s, %u frame%s, %s/%s, encoding error %.3g mm/m "
+    printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bone%s, %u clip%s, %u row%s, %s/%s, encoding error %.3g mm/m "
            "(at the baked rows), visible error %.3g mm/m (blending rows at runtime), %.0f ms\n",
            out->path, out->file_bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count,
            p->bone_count == 1 ? "" : "s", p->clip_count, p->clip_count == 1 ? "" : "s", p->rows, p->rows == 1 ? "" : "s",
@@ -179,7 +179,7 @@ static void json_output(cb_json *j, const cb_bake_output *out, double seconds, d
     cb_json_int(j, "blocks", p->blocks);
     cb_json_int(j, "bones", p->bone_count);
     cb_json_int(j, "clips", p->clip_count);
-    cb_json_int(j, "frames", p->rows);
+    cb_json_int(j, "rows", p->rows); /* every clip's baked frames, one texture row each */
     cb_json_string(j, "layout", cb_layout_name(p->layout));
     cb_json_string(j, "precision", cb_precision_name(p->precision));
     cb_json_number(j, "max_error", p->max_error);

@@ -71,7 +71,7 @@ int cmd_vat(int argc, char **argv)
             cb_json_object(&j, NULL);
             cb_json_string(&j, "path", out);
             cb_json_int(&j, "vertices", (long long)vat.vertices);
-            cb_json_int(&j, "frames", vat.frames);
+            cb_json_int(&j, "rows", vat.frames);
             cb_json_int(&j, "width", vat.geometry.width);
             cb_json_int(&j, "height", vat.geometry.height);
             cb_json_int(&j, "blocks", vat.geometry.blocks);

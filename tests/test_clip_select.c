@@ -119,9 +119,9 @@ static void test_clip_selection(void **state)
     expect_clips("ex.pal", 2, 56, "Walk");
     /* vat: 21 frames of Walk alone. */
     assert_int_equal(cli("vat Fox-broken.gltf -o walk.exr --clip Walk --json", false, out, sizeof out), 0);
-    if (!strstr(out, "\"frames\": 21") || !strstr(out, "\"warnings\": []")) fail_msg("%s", out);
+    if (!strstr(out, "\"rows\": 21") || !strstr(out, "\"warnings\": []")) fail_msg("%s", out);
     assert_int_equal(cli("vat Fox-broken.gltf -o all.exr --json", false, out, sizeof out), 0);
-    if (!strstr(out, "\"frames\": 159") || !strstr(out, warning)) fail_msg("%s", out);
+    if (!strstr(out, "\"rows\": 159") || !strstr(out, warning)) fail_msg("%s", out);
     /* verify: the palette's clips named, or all but those. */
     assert_int_equal(cli("verify Fox-broken.gltf all.pal --clip Walk --random 2 --json", false, out, sizeof out), 0);
     if (!strstr(out, "\"name\": \"Walk\"") || strstr(out, "\"name\": \"Run\"") || strstr(out, "\"name\": \"Survey\""))
