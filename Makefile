@@ -151,9 +151,9 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME)
 	install -m 644 completions/_crowdbake $(DESTDIR)$(DATADIR)/zsh/site-functions/_crowdbake
 
 # ---- samples: the project's own rigged animals ----------------------------------------
-$(BUILD)/gen_samples: samples/gen/gen_samples.c $(wildcard samples/gen/*.h) $(DEPS_STAMP)
+$(BUILD)/gen_samples: $(wildcard samples/gen/*.c samples/gen/*.h) $(DEPS_STAMP)
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -o $@ samples/gen/gen_samples.c -lm
+	$(CC) $(CFLAGS) -o $@ $(wildcard samples/gen/*.c) -lm
 
 $(SAMPLE_GLB) &: $(BUILD)/gen_samples
 	@mkdir -p $(BUILD)/samples
