@@ -8,15 +8,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-#include "cb_math.h"
-#include "pool.h"
 #include <time.h>
 
-/* Canonical floats per bone and row before the final encoding: the upper 3x4 of the matrix
- * by rows (mat4, affine), or quaternion, position and scale (qpos). */
-/* Floats per bone per row before encoding: the texels' values (qpos uses 8 of them). */
-#define CANON(layout) ((layout) == CB_LAYOUT_QPOS ? 8u : 12u)
+#include "palette_bake.h"
+#include "pool.h"
+
 #define QPOS_TOLERANCE 1e-4 /* relative: scale differences and shear qpos may drop */
 
 static const char *const layout_names[] = {"mat4", "affine", "qpos"};
@@ -125,90 +121,6 @@ static cb_status qpos_canon(const double m[16], float out[8], const cb_model *mo
     out[7] = (float)s;
     return CB_OK;
 }
-
-/* What u16 quantization needs of the values: the box of the translations (or positions) and
- * the largest linear term (or qpos scale). Kept per clip while sampling, merged after. */
-typedef struct value_range {
-    float lo[3], hi[3], linear;
-} value_range;
-
-static void range_reset(value_range *r)
-{
-    for (int k = 0; k < 3; ++k) r->lo[k] = INFINITY, r->hi[k] = -INFINITY;
-    r->linear = 0;
-}
-
-/* Compares, not fminf/fmaxf: the values are finite and the compares inline. A qpos bone's
- * position and scale, written out per axis so a local range stays in registers. */
-static inline void range_grow_qpos(value_range *r, const float *v)
-{
-    r->lo[0] = v[4] < r->lo[0] ? v[4] : r->lo[0];
-    r->lo[1] = v[5] < r->lo[1] ? v[5] : r->lo[1];
-    r->lo[2] = v[6] < r->lo[2] ? v[6] : r->lo[2];
-    r->hi[0] = v[4] > r->hi[0] ? v[4] : r->hi[0];
-    r->hi[1] = v[5] > r->hi[1] ? v[5] : r->hi[1];
-    r->hi[2] = v[6] > r->hi[2] ? v[6] : r->hi[2];
-    r->linear = v[7] > r->linear ? v[7] : r->linear;
-}
-
-/* An affine or mat4 bone's 12 canonical values (3 rows of 4). */
-static inline void range_grow_affine(value_range *r, const float *v)
-{
-    for (int k = 0; k < 3; ++k) {
-        float t = v[k * 4 + 3];
-        if (t < r->lo[k]) r->lo[k] = t;
-        if (t > r->hi[k]) r->hi[k] = t;
-    }
-    for (int i = 0; i < 3; ++i)
-        for (int k = 0; k < 3; ++k)
-            if (fabsf(v[i * 4 + k]) > r->linear) r->linear = fabsf(v[i * 4 + k]);
-}
-
-static void merge_ranges(cb_palette *p, const value_range *clips)
-{
-    value_range all;
-    range_reset(&all);
-    for (uint32_t c = 0; c < p->clip_count; ++c) {
-        for (int k = 0; k < 3; ++k) {
-            if (clips[c].lo[k] < all.lo[k]) all.lo[k] = clips[c].lo[k];
-            if (clips[c].hi[k] > all.hi[k]) all.hi[k] = clips[c].hi[k];
-        }
-        if (clips[c].linear > all.linear) all.linear = clips[c].linear;
-    }
-    bool empty = !(all.lo[0] <= all.hi[0]);
-    for (int k = 0; k < 3; ++k) p->bounds_min[k] = empty ? 0 : all.lo[k], p->bounds_max[k] = empty ? 0 : all.hi[k];
-    p->linear_range = all.linear;
-}
-
-/* Per-thread scratch: each worker samples its own clips with its own sampler. */
-typedef struct worker {
-    cb_sampler *sampler;
-    double *mats;        /* bones * 16 */
-    cb_similarity *sims; /* CB_SAMPLE_BATCH rows of bones: the joints, for qpos rows of similarity rigs */
-    cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
-    float *rows;         /* the pre-encoding rows of the clip being sampled (max_clip_frames of them) */
-} worker;
-
-typedef struct bake_state {
-    cb_palette *p;
-    const cb_model *model;
-    int32_t skin;
-    const cb_bake_options *opt;
-    const cb_clip_info *infos;
-    /* Each worker samples a clip's rows into its own buffer and encodes them from there. Only
-     * u16 has to wait for the ranges of every clip: it keeps what it has not yet encoded of
-     * every row here (kept_floats per bone), and encodes that after the last clip. */
-    float *kept;
-    uint32_t max_clip_frames;
-    const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 */
-    uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
-    cb_error *errors;      /* clips: the first error of each */
-    uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
-    double *clip_error;    /* clips: worst vertex error measured */
-    double *clip_blend_error; /* clips: worst vertex error halfway between rows, as the runtime blends them */
-    value_range *ranges;   /* clips: the values' ranges */
-    double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
-} bake_state;
 
 /* What u16 keeps of a bone's row until every clip is sampled: qpos's position and scale (its
  * quaternion is snorm, which needs no range, and is encoded at once), or all 12 values. */
@@ -394,10 +306,6 @@ static double seconds_now(void)
     return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
-static void encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
-static void encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                            uint32_t count);
-
 /* Encodes a clip as soon as it is sampled, from rows still in cache: all of it, or for u16
  * what needs no range, keeping the rest for encode_kept_job. */
 static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
@@ -408,10 +316,10 @@ static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
     double start = seconds_now();
     size_t bones = (size_t)clip->frames * p->bone_count, kept = kept_floats(p->layout);
     if (p->precision != CB_PRECISION_U16) {
-        encode_rows(p, w->rows, clip->first_row, clip->frames);
+        palette_encode_rows(p, w->rows, clip->first_row, clip->frames);
     } else if (p->layout == CB_LAYOUT_QPOS) {
         float *keep = st->kept + (size_t)clip->first_row * p->bone_count * kept;
-        encode_qpos_u16(p, w->rows, 8, 0, clip->first_row, clip->frames);
+        palette_encode_qpos_u16(p, w->rows, 8, 0, clip->first_row, clip->frames);
         for (size_t b = 0; b < bones; ++b) memcpy(keep + b * 4, w->rows + b * 8 + 4, 4 * sizeof(float));
     } else {
         memcpy(st->kept + (size_t)clip->first_row * p->bone_count * kept, w->rows, bones * kept * sizeof(float));
@@ -427,309 +335,9 @@ static void encode_kept_job(bake_state *st, worker *w, uint32_t c)
     const cb_palette_clip *clip = &p->clips[c];
     const float *kept = st->kept + (size_t)clip->first_row * p->bone_count * kept_floats(p->layout);
     if (p->layout == CB_LAYOUT_QPOS)
-        encode_qpos_u16(p, kept, 4, 4, clip->first_row, clip->frames);
+        palette_encode_qpos_u16(p, kept, 4, 4, clip->first_row, clip->frames);
     else
-        encode_rows(p, kept, clip->first_row, clip->frames);
-}
-
-/* ---- pass 2: encode ---- */
-
-/* Quantization arithmetic runs in double so it adds nothing to the half-step of the format. */
-static double snorm16_decode(uint16_t u)
-{
-    double v = (int16_t)u / 32767.0;
-    return v < -1 ? -1 : v;
-}
-
-static double unorm16_decode(uint16_t u, double lo, double hi) { return hi > lo ? lo + (hi - lo) * (u / 65535.0) : lo; }
-
-/* The 4 * texels_per_bone values of one bone, in texel order, as floats. */
-static void texel_values(const cb_palette *p, const float *v, float out[16])
-{
-    switch (p->layout) {
-    case CB_LAYOUT_MAT4: /* texel k = column k */
-        for (int k = 0; k < 4; ++k) {
-            for (int r = 0; r < 3; ++r) out[k * 4 + r] = v[r * 4 + k];
-            out[k * 4 + 3] = k == 3 ? 1.0f : 0.0f;
-        }
-        break;
-    case CB_LAYOUT_AFFINE: /* texel k = row k */
-        memcpy(out, v, 12 * sizeof(float));
-        break;
-    case CB_LAYOUT_QPOS:
-        memcpy(out, v, 8 * sizeof(float));
-        break;
-    }
-}
-
-/* Which kind of u16 quantization each of a bone's values gets: 0 snorm over linear_range,
- * 1..3 unorm over the box axis (k - 1), 4 snorm as is (quaternions), 5 unorm over
- * [0, linear_range] (qpos scale), 6 a constant (mat4's last row). */
-static int u16_kind(cb_layout layout, int i)
-{
-    if (layout == CB_LAYOUT_QPOS) return i < 4 ? 4 : i < 7 ? 1 + (i - 4) : 5;
-    if (layout == CB_LAYOUT_AFFINE) return i % 4 == 3 ? 1 + i / 4 : 0;
-    if (i % 4 == 3) return 6;                 /* mat4: w of each column */
-    return i >= 12 ? 1 + (i - 12) : 0;        /* column 3 is the translation */
-}
-
-static double decode_u16(const cb_palette *p, int kind, uint16_t u)
-{
-    switch (kind) {
-    case 0: return snorm16_decode(u) * p->linear_range;
-    case 4: return snorm16_decode(u);
-    case 5: return unorm16_decode(u, 0, p->linear_range);
-    case 6: return u ? 1.0 : 0.0;
-    default: return unorm16_decode(u, p->bounds_min[kind - 1], p->bounds_max[kind - 1]);
-    }
-}
-
-static void store_le16(unsigned char *d, uint16_t v) { d[0] = (unsigned char)v, d[1] = (unsigned char)(v >> 8); }
-static uint16_t load_le16(const unsigned char *d) { return (uint16_t)(d[0] | d[1] << 8); }
-
-static void store_le32f(unsigned char *d, float f)
-{
-    uint32_t v;
-    memcpy(&v, &f, 4);
-    for (int i = 0; i < 4; ++i) d[i] = (unsigned char)(v >> (8 * i));
-}
-
-static float load_le32f(const unsigned char *d)
-{
-    uint32_t v = (uint32_t)d[0] | (uint32_t)d[1] << 8 | (uint32_t)d[2] << 16 | (uint32_t)d[3] << 24;
-    float f;
-    memcpy(&f, &v, 4);
-    return f;
-}
-
-/* How each of a bone's values is quantized to u16: x = (v - offset) * scale, clamped to
- * [lo, hi], times `steps`, rounded; snorm values are stored as two's complement. */
-typedef struct u16_slot {
-    double offset, scale, lo, hi, steps;
-} u16_slot;
-
-static void u16_slots(const cb_palette *p, u16_slot slots[16])
-{
-    for (int i = 0; i < 16; ++i) {
-        u16_slot *q = &slots[i];
-        int kind = u16_kind(p->layout, i);
-        double range = kind == 0 || kind == 5 ? p->linear_range : kind >= 1 && kind <= 3
-                       ? (double)p->bounds_max[kind - 1] - p->bounds_min[kind - 1] : 1;
-        bool snorm = kind == 0 || kind == 4;
-        q->offset = kind >= 1 && kind <= 3 ? p->bounds_min[kind - 1] : 0;
-        q->scale = range > 0 ? 1 / range : 0;
-        q->lo = snorm ? -1 : 0;
-        q->hi = 1;
-        q->steps = snorm ? 32767 : 65535;
-        if (kind == 6) q->offset = 0, q->scale = 1, q->lo = 0; /* mat4's constant 0/1 row */
-    }
-}
-
-static inline uint16_t quantize(const u16_slot *q, double v)
-{
-    double x = (v - q->offset) * q->scale;
-    x = x < q->lo ? q->lo : x; /* two selects, not nested ones: they compile to max and min, */
-    x = x > q->hi ? q->hi : x; /* where the nested ones branch (and mispredict) */
-    long n = lrint(x * q->steps);
-    return (uint16_t)(int16_t)n; /* snorm: two's complement; unorm: 0..65535 fits */
-}
-
-/* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
-static void encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count)
-{
-    uint32_t tb = cb_precision_texel_bytes(p->precision), nvalues = p->texels_per_bone * 4;
-    u16_slot slots[16];
-    u16_slots(p, slots);
-    for (uint32_t r = first; r < first + count; ++r) {
-        uint32_t x0, y;
-        cb_palette_texel_xy(p, r, 0, &x0, &y);
-        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * tb;
-        const float *row = rows + (size_t)(r - first) * p->bone_count * CANON(p->layout);
-        for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
-            float vals[16];
-            texel_values(p, row + (size_t)j * CANON(p->layout), vals);
-            for (int k = 0; p->positions_relative && k < 3; ++k) vals[4 + k] -= p->bind_positions[(size_t)j * 3 + k];
-            if (p->precision == CB_PRECISION_FLOAT)
-                for (uint32_t i = 0; i < nvalues; ++i) store_le32f(d + i * 4, vals[i]);
-            else if (p->precision == CB_PRECISION_HALF)
-                for (uint32_t i = 0; i < nvalues; ++i) store_le16(d + i * 2, cb_float_to_half(vals[i]));
-            else
-                for (uint32_t i = 0; i < nvalues; ++i) store_le16(d + i * 2, quantize(&slots[i], vals[i]));
-        }
-    }
-}
-
-/* Encodes qpos values v0..v0 + 3 (the quaternion, or position and scale) of `count` rows as
- * u16; `rows` holds `stride` floats per bone, starting with value v0. (qpos texel order is its
- * canonical order.) */
-static void encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                            uint32_t count)
-{
-    u16_slot slots[16];
-    u16_slots(p, slots);
-    for (uint32_t r = first; r < first + count; ++r) {
-        uint32_t x0, y;
-        cb_palette_texel_xy(p, r, 0, &x0, &y);
-        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8 + v0 * 2; /* RGBA16 */
-        const float *row = rows + (size_t)(r - first) * p->bone_count * stride;
-        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16)
-            for (uint32_t i = 0; i < 4; ++i) store_le16(d + i * 2, quantize(&slots[v0 + i], row[j * stride + i]));
-    }
-}
-
-void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16])
-{
-    uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
-    cb_palette_texel_xy(p, row, bone, &x, &y);
-    const unsigned char *d = (const unsigned char *)texels + ((size_t)y * p->width + x) * tb;
-    for (uint32_t i = 0; i < p->texels_per_bone * 4; ++i) {
-        if (p->precision == CB_PRECISION_FLOAT)
-            v[i] = load_le32f(d + i * 4);
-        else if (p->precision == CB_PRECISION_HALF)
-            v[i] = cb_half_to_float(load_le16(d + i * 2));
-        else
-            v[i] = decode_u16(p, u16_kind(p->layout, (int)i), load_le16(d + i * 2));
-    }
-    for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->bind_positions[(size_t)bone * 3 + k];
-}
-
-void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
-{
-    double v[16];
-    cb_palette_decode_values(p, texels, row, bone, v);
-    cb_palette_values_to_matrix(p, bone, v, out);
-}
-
-void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const double v[16], double out[16])
-{
-    cb_mat4_identity(out);
-    if (p->layout == CB_LAYOUT_MAT4) {
-        for (int c = 0; c < 4; ++c)
-            for (int r = 0; r < 3; ++r) out[c * 4 + r] = v[c * 4 + r];
-    } else if (p->layout == CB_LAYOUT_AFFINE) {
-        for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 4; ++c) out[c * 4 + r] = v[r * 4 + c];
-    } else {
-        /* v' = p + s * rotate(q, v - b)  =>  A = s R(q), t = p - A b */
-        cb_quat q = cb_quat_normalize((cb_quat){v[0], v[1], v[2], v[3]});
-        double s = v[7];
-        cb_vec3 one = {s, s, s};
-        cb_mat4_from_trs(out, (cb_vec3){0, 0, 0}, q, one);
-        const float *b = p->bind_positions + (size_t)bone * 3;
-        cb_vec3 ab = cb_mat4_transform_dir(out, (cb_vec3){b[0], b[1], b[2]});
-        out[12] = v[4] - ab.x, out[13] = v[5] - ab.y, out[14] = v[6] - ab.z;
-    }
-}
-
-void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr, uint32_t bone,
-                      double out[16])
-{
-    double a[16], b[16], v[16];
-    cb_palette_decode_values(p, texels, row0, bone, a);
-    cb_palette_decode_values(p, texels, row1, bone, b);
-    if (p->layout == CB_LAYOUT_QPOS && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0)
-        for (int k = 0; k < 4; ++k) b[k] = -b[k]; /* the shorter way between the rows */
-    for (uint32_t k = 0; k < p->texels_per_bone * 4; ++k) v[k] = a[k] * (1 - fr) + b[k] * fr;
-    cb_palette_values_to_matrix(p, bone, v, out); /* normalizes q for qpos */
-}
-
-/* ---- pass 3: the error against exact skinning ---- */
-
-/* The worst vertex error of the given rows of clip c. Skinning is linear in the matrices, so
- * one skinning with (exact - decoded) gives each vertex's error directly: half the work of
- * skinning twice, and no cancellation. Rows baked from similarities are measured against
- * those, sampled together like the bake did. */
-static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
-                           bool between, double *diff, double *err_pos)
-{
-    cb_palette *p = st->p;
-    const cb_model *m = st->model;
-    const cb_palette_clip *clip = &p->clips[c];
-    /* Halfway between rows f and f + 1 is row 2f + 1 of the clip framed at twice the steps. */
-    cb_clip_info framing = st->infos[c];
-    uint32_t times[CB_SAMPLE_BATCH];
-    for (uint32_t i = 0; i < count; ++i) times[i] = between ? 2 * frames[i] + 1 : frames[i];
-    if (between) framing.steps *= 2;
-    bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
-    if (similar) cb_clip_frame_similarities(w->sampler, &framing, times, count, st->opt->root_motion, w->sims);
-    double worst = 0;
-    for (uint32_t i = 0; i < count; ++i) {
-        if (!similar) cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
-        uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
-        for (uint32_t j = 0; j < p->bone_count; ++j) {
-            double *d = diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
-            if (similar) cb_similarity_matrix(&w->sims[(size_t)i * p->bone_count + j], exact);
-            if (between) cb_palette_blend(p, p->texels, row, next, 0.5, j, d);
-            else cb_palette_decode(p, p->texels, row, j, d);
-            for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
-        }
-        for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
-            const cb_primitive *prim = &m->primitives[pi];
-            if (prim->skin != st->skin) continue;
-            cb_skin_positions(prim, diff, err_pos);
-            for (uint64_t v = 0; v < (uint64_t)prim->vertex_count * 3; v += 3) {
-                double d2 = err_pos[v] * err_pos[v] + err_pos[v + 1] * err_pos[v + 1] + err_pos[v + 2] * err_pos[v + 2];
-                worst = d2 > worst ? d2 : worst;
-            }
-        }
-    }
-    return sqrt(worst);
-}
-
-/* The worst vertex error of clip c over every error_stride-th row and the last (between:
- * halfway from each of those rows to the next, as the runtime blends them; a one-shot's last
- * row has no next). */
-static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, bool between, double *diff, double *err_pos)
-{
-    const cb_palette_clip *clip = &st->p->clips[c];
-    uint32_t frames = between && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], count = 0;
-    double worst = 0;
-    for (uint32_t f = 0; f < frames; ++f) {
-        if (f % st->error_stride && f + 1 != frames) continue;
-        batch[count++] = f;
-        if (count < CB_SAMPLE_BATCH && f + 1 != frames) continue;
-        worst = fmax(worst, measure_rows(st, w, c, batch, count, between, diff, err_pos));
-        count = 0;
-    }
-    return worst;
-}
-
-static void measure_clip(bake_state *st, worker *w, uint32_t c)
-{
-    const cb_palette *p = st->p;
-    uint64_t verts = cb_model_skin_vertex_count(st->model, st->skin);
-    double *diff = malloc((size_t)p->bone_count * 16 * sizeof(double));
-    double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
-    st->clip_error[c] = st->clip_blend_error[c] = 0;
-    if (diff && err_pos && verts) {
-        st->clip_error[c] = measure_clip_rows(st, w, c, false, diff, err_pos);
-        st->clip_blend_error[c] = measure_clip_rows(st, w, c, true, diff, err_pos);
-    }
-    free(diff);
-    free(err_pos);
-}
-
-/* Bind-space distance from each joint's bind position to the farthest vertex it moves;
- * -1 for joints that move none. Returns false when no vertex is skinned. */
-static bool joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, double *radius)
-{
-    bool any = false;
-    for (uint32_t j = 0; j < p->bone_count; ++j) radius[j] = -1;
-    for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
-        const cb_primitive *prim = &m->primitives[pi];
-        if (prim->skin != skin) continue;
-        for (uint32_t v = 0; v < prim->vertex_count; ++v)
-            for (int i = 0; i < 4; ++i) {
-                if (prim->weights[(size_t)v * 4 + i] == 0) continue;
-                uint16_t j = prim->joints[(size_t)v * 4 + i];
-                const float *b = p->bind_positions + (size_t)j * 3, *x = prim->positions + (size_t)v * 3;
-                double d = sqrt((double)(x[0] - b[0]) * (x[0] - b[0]) + (double)(x[1] - b[1]) * (x[1] - b[1]) +
-                                (double)(x[2] - b[2]) * (x[2] - b[2]));
-                if (d > radius[j]) radius[j] = d;
-                any = true;
-            }
-    }
-    return any;
+        palette_encode_rows(p, kept, clip->first_row, clip->frames);
 }
 
 /* ---- the bake ---- */
@@ -891,12 +499,12 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     zero_padding(p);
     bind_positions(p, skin);
     p->positions_relative = p->layout == CB_LAYOUT_QPOS && p->precision == CB_PRECISION_HALF;
-    bool skinned = joint_reach(p, m, skin_index, radius);
+    bool skinned = palette_joint_reach(p, m, skin_index, radius);
     st.radius = radius;
     for_each_clip(&st, sample_clip_job, true);
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
-    merge_ranges(p, st.ranges);
+    palette_merge_ranges(p, st.ranges);
     double t1 = seconds_now();
     if (st.kept) for_each_clip(&st, encode_kept_job, false);
     double t2 = seconds_now(), lo[3], hi[3];
@@ -912,7 +520,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.error_stride = work > CB_ERROR_BUDGET ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
     p->error_rows_measured = 0;
     if (skinned) {
-        for_each_clip(&st, measure_clip, true);
+        for_each_clip(&st, palette_measure_clip, true);
         for (uint32_t c = 0; c < p->clip_count; ++c) {
             p->max_error = fmax(p->max_error, st.clip_error[c]);
             p->visible_error = fmax(p->visible_error, fmax(st.clip_error[c], st.clip_blend_error[c]));

@@ -1,0 +1,101 @@
+/* palette_bake.h - what the palette bake's files share (private to libcrowdbake): the
+ * per-thread scratch and the bake's state, the u16 value ranges, and the passes that live in
+ * files of their own: texel encoding (palette_codec.c) and the error measure (palette_error.c). */
+#ifndef CB_PALETTE_BAKE_H
+#define CB_PALETTE_BAKE_H
+
+#include <math.h>
+
+#include "crowdbake/palette.h"
+#include "cb_math.h"
+
+/* Canonical floats per bone and row before the final encoding: the upper 3x4 of the matrix
+ * by rows (mat4, affine), or quaternion, position and scale (qpos). */
+/* Floats per bone per row before encoding: the texels' values (qpos uses 8 of them). */
+#define CANON(layout) ((layout) == CB_LAYOUT_QPOS ? 8u : 12u)
+
+/* What u16 quantization needs of the values: the box of the translations (or positions) and
+ * the largest linear term (or qpos scale). Kept per clip while sampling, merged after. */
+typedef struct value_range {
+    float lo[3], hi[3], linear;
+} value_range;
+
+static inline void range_reset(value_range *r)
+{
+    for (int k = 0; k < 3; ++k) r->lo[k] = INFINITY, r->hi[k] = -INFINITY;
+    r->linear = 0;
+}
+
+/* Compares, not fminf/fmaxf: the values are finite and the compares inline. A qpos bone's
+ * position and scale, written out per axis so a local range stays in registers. */
+static inline void range_grow_qpos(value_range *r, const float *v)
+{
+    r->lo[0] = v[4] < r->lo[0] ? v[4] : r->lo[0];
+    r->lo[1] = v[5] < r->lo[1] ? v[5] : r->lo[1];
+    r->lo[2] = v[6] < r->lo[2] ? v[6] : r->lo[2];
+    r->hi[0] = v[4] > r->hi[0] ? v[4] : r->hi[0];
+    r->hi[1] = v[5] > r->hi[1] ? v[5] : r->hi[1];
+    r->hi[2] = v[6] > r->hi[2] ? v[6] : r->hi[2];
+    r->linear = v[7] > r->linear ? v[7] : r->linear;
+}
+
+/* An affine or mat4 bone's 12 canonical values (3 rows of 4). */
+static inline void range_grow_affine(value_range *r, const float *v)
+{
+    for (int k = 0; k < 3; ++k) {
+        float t = v[k * 4 + 3];
+        if (t < r->lo[k]) r->lo[k] = t;
+        if (t > r->hi[k]) r->hi[k] = t;
+    }
+    for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k)
+            if (fabsf(v[i * 4 + k]) > r->linear) r->linear = fabsf(v[i * 4 + k]);
+}
+
+/* Per-thread scratch: each worker samples its own clips with its own sampler. */
+typedef struct worker {
+    cb_sampler *sampler;
+    double *mats;        /* bones * 16 */
+    cb_similarity *sims; /* CB_SAMPLE_BATCH rows of bones: the joints, for qpos rows of similarity rigs */
+    cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
+    float *rows;         /* the pre-encoding rows of the clip being sampled (max_clip_frames of them) */
+} worker;
+
+typedef struct bake_state {
+    cb_palette *p;
+    const cb_model *model;
+    int32_t skin;
+    const cb_bake_options *opt;
+    const cb_clip_info *infos;
+    /* Each worker samples a clip's rows into its own buffer and encodes them from there. Only
+     * u16 has to wait for the ranges of every clip: it keeps what it has not yet encoded of
+     * every row here (kept_floats per bone), and encodes that after the last clip. */
+    float *kept;
+    uint32_t max_clip_frames;
+    const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 */
+    uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
+    cb_error *errors;      /* clips: the first error of each */
+    uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
+    double *clip_error;    /* clips: worst vertex error measured */
+    double *clip_blend_error; /* clips: worst vertex error halfway between rows, as the runtime blends them */
+    value_range *ranges;   /* clips: the values' ranges */
+    double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
+} bake_state;
+
+/* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
+void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
+/* u16 qpos: the values v0 .. v0 + 3 of each bone (`stride` floats apart), which need no range
+ * (v0 0: the quaternion) or whose ranges are known (v0 4: position and scale). */
+void palette_encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
+                             uint32_t count);
+/* Sets p->bounds_min/max and linear_range from every clip's range. */
+void palette_merge_ranges(cb_palette *p, const value_range *clips);
+
+/* The worst vertex errors of clip c, at its rows and between them (st->clip_error,
+ * st->clip_blend_error). */
+void palette_measure_clip(bake_state *st, worker *w, uint32_t c);
+/* Bind-space distance from each joint's bind position to the farthest vertex it moves; -1 for
+ * joints that move none. False when no vertex is skinned. */
+bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, double *radius);
+
+#endif

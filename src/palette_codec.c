@@ -1,0 +1,221 @@
+/* palette_codec.c - texels: encoding canonical rows in each layout and precision, decoding
+ * them back as a shader reads them, and the value ranges u16 quantizes in. */
+#include <string.h>
+
+#include "palette_bake.h"
+
+/* Quantization arithmetic runs in double so it adds nothing to the half-step of the format. */
+static double snorm16_decode(uint16_t u)
+{
+    double v = (int16_t)u / 32767.0;
+    return v < -1 ? -1 : v;
+}
+
+static double unorm16_decode(uint16_t u, double lo, double hi) { return hi > lo ? lo + (hi - lo) * (u / 65535.0) : lo; }
+
+/* The 4 * texels_per_bone values of one bone, in texel order, as floats. */
+static void texel_values(const cb_palette *p, const float *v, float out[16])
+{
+    switch (p->layout) {
+    case CB_LAYOUT_MAT4: /* texel k = column k */
+        for (int k = 0; k < 4; ++k) {
+            for (int r = 0; r < 3; ++r) out[k * 4 + r] = v[r * 4 + k];
+            out[k * 4 + 3] = k == 3 ? 1.0f : 0.0f;
+        }
+        break;
+    case CB_LAYOUT_AFFINE: /* texel k = row k */
+        memcpy(out, v, 12 * sizeof(float));
+        break;
+    case CB_LAYOUT_QPOS:
+        memcpy(out, v, 8 * sizeof(float));
+        break;
+    }
+}
+
+/* Which kind of u16 quantization each of a bone's values gets: 0 snorm over linear_range,
+ * 1..3 unorm over the box axis (k - 1), 4 snorm as is (quaternions), 5 unorm over
+ * [0, linear_range] (qpos scale), 6 a constant (mat4's last row). */
+static int u16_kind(cb_layout layout, int i)
+{
+    if (layout == CB_LAYOUT_QPOS) return i < 4 ? 4 : i < 7 ? 1 + (i - 4) : 5;
+    if (layout == CB_LAYOUT_AFFINE) return i % 4 == 3 ? 1 + i / 4 : 0;
+    if (i % 4 == 3) return 6;                 /* mat4: w of each column */
+    return i >= 12 ? 1 + (i - 12) : 0;        /* column 3 is the translation */
+}
+
+static double decode_u16(const cb_palette *p, int kind, uint16_t u)
+{
+    switch (kind) {
+    case 0: return snorm16_decode(u) * p->linear_range;
+    case 4: return snorm16_decode(u);
+    case 5: return unorm16_decode(u, 0, p->linear_range);
+    case 6: return u ? 1.0 : 0.0;
+    default: return unorm16_decode(u, p->bounds_min[kind - 1], p->bounds_max[kind - 1]);
+    }
+}
+
+static void store_le16(unsigned char *d, uint16_t v) { d[0] = (unsigned char)v, d[1] = (unsigned char)(v >> 8); }
+static uint16_t load_le16(const unsigned char *d) { return (uint16_t)(d[0] | d[1] << 8); }
+
+static void store_le32f(unsigned char *d, float f)
+{
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    for (int i = 0; i < 4; ++i) d[i] = (unsigned char)(v >> (8 * i));
+}
+
+static float load_le32f(const unsigned char *d)
+{
+    uint32_t v = (uint32_t)d[0] | (uint32_t)d[1] << 8 | (uint32_t)d[2] << 16 | (uint32_t)d[3] << 24;
+    float f;
+    memcpy(&f, &v, 4);
+    return f;
+}
+
+/* How each of a bone's values is quantized to u16: x = (v - offset) * scale, clamped to
+ * [lo, hi], times `steps`, rounded; snorm values are stored as two's complement. */
+typedef struct u16_slot {
+    double offset, scale, lo, hi, steps;
+} u16_slot;
+
+static void u16_slots(const cb_palette *p, u16_slot slots[16])
+{
+    for (int i = 0; i < 16; ++i) {
+        u16_slot *q = &slots[i];
+        int kind = u16_kind(p->layout, i);
+        double range = kind == 0 || kind == 5 ? p->linear_range : kind >= 1 && kind <= 3
+                       ? (double)p->bounds_max[kind - 1] - p->bounds_min[kind - 1] : 1;
+        bool snorm = kind == 0 || kind == 4;
+        q->offset = kind >= 1 && kind <= 3 ? p->bounds_min[kind - 1] : 0;
+        q->scale = range > 0 ? 1 / range : 0;
+        q->lo = snorm ? -1 : 0;
+        q->hi = 1;
+        q->steps = snorm ? 32767 : 65535;
+        if (kind == 6) q->offset = 0, q->scale = 1, q->lo = 0; /* mat4's constant 0/1 row */
+    }
+}
+
+static inline uint16_t quantize(const u16_slot *q, double v)
+{
+    double x = (v - q->offset) * q->scale;
+    x = x < q->lo ? q->lo : x; /* two selects, not nested ones: they compile to max and min, */
+    x = x > q->hi ? q->hi : x; /* where the nested ones branch (and mispredict) */
+    long n = lrint(x * q->steps);
+    return (uint16_t)(int16_t)n; /* snorm: two's complement; unorm: 0..65535 fits */
+}
+
+/* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
+void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count)
+{
+    uint32_t tb = cb_precision_texel_bytes(p->precision), nvalues = p->texels_per_bone * 4;
+    u16_slot slots[16];
+    u16_slots(p, slots);
+    for (uint32_t r = first; r < first + count; ++r) {
+        uint32_t x0, y;
+        cb_palette_texel_xy(p, r, 0, &x0, &y);
+        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * tb;
+        const float *row = rows + (size_t)(r - first) * p->bone_count * CANON(p->layout);
+        for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
+            float vals[16];
+            texel_values(p, row + (size_t)j * CANON(p->layout), vals);
+            for (int k = 0; p->positions_relative && k < 3; ++k) vals[4 + k] -= p->bind_positions[(size_t)j * 3 + k];
+            if (p->precision == CB_PRECISION_FLOAT)
+                for (uint32_t i = 0; i < nvalues; ++i) store_le32f(d + i * 4, vals[i]);
+            else if (p->precision == CB_PRECISION_HALF)
+                for (uint32_t i = 0; i < nvalues; ++i) store_le16(d + i * 2, cb_float_to_half(vals[i]));
+            else
+                for (uint32_t i = 0; i < nvalues; ++i) store_le16(d + i * 2, quantize(&slots[i], vals[i]));
+        }
+    }
+}
+
+/* Encodes qpos values v0..v0 + 3 (the quaternion, or position and scale) of `count` rows as
+ * u16; `rows` holds `stride` floats per bone, starting with value v0. (qpos texel order is its
+ * canonical order.) */
+void palette_encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
+                            uint32_t count)
+{
+    u16_slot slots[16];
+    u16_slots(p, slots);
+    for (uint32_t r = first; r < first + count; ++r) {
+        uint32_t x0, y;
+        cb_palette_texel_xy(p, r, 0, &x0, &y);
+        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8 + v0 * 2; /* RGBA16 */
+        const float *row = rows + (size_t)(r - first) * p->bone_count * stride;
+        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16)
+            for (uint32_t i = 0; i < 4; ++i) store_le16(d + i * 2, quantize(&slots[v0 + i], row[j * stride + i]));
+    }
+}
+
+void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16])
+{
+    uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
+    cb_palette_texel_xy(p, row, bone, &x, &y);
+    const unsigned char *d = (const unsigned char *)texels + ((size_t)y * p->width + x) * tb;
+    for (uint32_t i = 0; i < p->texels_per_bone * 4; ++i) {
+        if (p->precision == CB_PRECISION_FLOAT)
+            v[i] = load_le32f(d + i * 4);
+        else if (p->precision == CB_PRECISION_HALF)
+            v[i] = cb_half_to_float(load_le16(d + i * 2));
+        else
+            v[i] = decode_u16(p, u16_kind(p->layout, (int)i), load_le16(d + i * 2));
+    }
+    for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->bind_positions[(size_t)bone * 3 + k];
+}
+
+void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
+{
+    double v[16];
+    cb_palette_decode_values(p, texels, row, bone, v);
+    cb_palette_values_to_matrix(p, bone, v, out);
+}
+
+void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const double v[16], double out[16])
+{
+    cb_mat4_identity(out);
+    if (p->layout == CB_LAYOUT_MAT4) {
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 3; ++r) out[c * 4 + r] = v[c * 4 + r];
+    } else if (p->layout == CB_LAYOUT_AFFINE) {
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) out[c * 4 + r] = v[r * 4 + c];
+    } else {
+        /* v' = p + s * rotate(q, v - b)  =>  A = s R(q), t = p - A b */
+        cb_quat q = cb_quat_normalize((cb_quat){v[0], v[1], v[2], v[3]});
+        double s = v[7];
+        cb_vec3 one = {s, s, s};
+        cb_mat4_from_trs(out, (cb_vec3){0, 0, 0}, q, one);
+        const float *b = p->bind_positions + (size_t)bone * 3;
+        cb_vec3 ab = cb_mat4_transform_dir(out, (cb_vec3){b[0], b[1], b[2]});
+        out[12] = v[4] - ab.x, out[13] = v[5] - ab.y, out[14] = v[6] - ab.z;
+    }
+}
+
+void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr, uint32_t bone,
+                      double out[16])
+{
+    double a[16], b[16], v[16];
+    cb_palette_decode_values(p, texels, row0, bone, a);
+    cb_palette_decode_values(p, texels, row1, bone, b);
+    if (p->layout == CB_LAYOUT_QPOS && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0)
+        for (int k = 0; k < 4; ++k) b[k] = -b[k]; /* the shorter way between the rows */
+    for (uint32_t k = 0; k < p->texels_per_bone * 4; ++k) v[k] = a[k] * (1 - fr) + b[k] * fr;
+    cb_palette_values_to_matrix(p, bone, v, out); /* normalizes q for qpos */
+}
+
+void palette_merge_ranges(cb_palette *p, const value_range *clips)
+{
+    value_range all;
+    range_reset(&all);
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        for (int k = 0; k < 3; ++k) {
+            if (clips[c].lo[k] < all.lo[k]) all.lo[k] = clips[c].lo[k];
+            if (clips[c].hi[k] > all.hi[k]) all.hi[k] = clips[c].hi[k];
+        }
+        if (clips[c].linear > all.linear) all.linear = clips[c].linear;
+    }
+    bool empty = !(all.lo[0] <= all.hi[0]);
+    for (int k = 0; k < 3; ++k) p->bounds_min[k] = empty ? 0 : all.lo[k], p->bounds_max[k] = empty ? 0 : all.hi[k];
+    p->linear_range = all.linear;
+}
+

@@ -1,0 +1,103 @@
+/* palette_error.c - a bake's error: every vertex skinned exactly (float64) from the glTF
+ * against the palette as the runtime decodes it, at the baked rows and halfway between them. */
+#include <stdlib.h>
+
+#include "palette_bake.h"
+
+/* The worst vertex error of the given rows of clip c. Skinning is linear in the matrices, so
+ * one skinning with (exact - decoded) gives each vertex's error directly: half the work of
+ * skinning twice, and no cancellation. Rows baked from similarities are measured against
+ * those, sampled together like the bake did. */
+static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
+                           bool between, double *diff, double *err_pos)
+{
+    cb_palette *p = st->p;
+    const cb_model *m = st->model;
+    const cb_palette_clip *clip = &p->clips[c];
+    /* Halfway between rows f and f + 1 is row 2f + 1 of the clip framed at twice the steps. */
+    cb_clip_info framing = st->infos[c];
+    uint32_t times[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < count; ++i) times[i] = between ? 2 * frames[i] + 1 : frames[i];
+    if (between) framing.steps *= 2;
+    bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
+    if (similar) cb_clip_frame_similarities(w->sampler, &framing, times, count, st->opt->root_motion, w->sims);
+    double worst = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        if (!similar) cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
+        uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            double *d = diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
+            if (similar) cb_similarity_matrix(&w->sims[(size_t)i * p->bone_count + j], exact);
+            if (between) cb_palette_blend(p, p->texels, row, next, 0.5, j, d);
+            else cb_palette_decode(p, p->texels, row, j, d);
+            for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
+        }
+        for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
+            const cb_primitive *prim = &m->primitives[pi];
+            if (prim->skin != st->skin) continue;
+            cb_skin_positions(prim, diff, err_pos);
+            for (uint64_t v = 0; v < (uint64_t)prim->vertex_count * 3; v += 3) {
+                double d2 = err_pos[v] * err_pos[v] + err_pos[v + 1] * err_pos[v + 1] + err_pos[v + 2] * err_pos[v + 2];
+                worst = d2 > worst ? d2 : worst;
+            }
+        }
+    }
+    return sqrt(worst);
+}
+
+/* The worst vertex error of clip c over every error_stride-th row and the last (between:
+ * halfway from each of those rows to the next, as the runtime blends them; a one-shot's last
+ * row has no next). */
+static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, bool between, double *diff, double *err_pos)
+{
+    const cb_palette_clip *clip = &st->p->clips[c];
+    uint32_t frames = between && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], count = 0;
+    double worst = 0;
+    for (uint32_t f = 0; f < frames; ++f) {
+        if (f % st->error_stride && f + 1 != frames) continue;
+        batch[count++] = f;
+        if (count < CB_SAMPLE_BATCH && f + 1 != frames) continue;
+        worst = fmax(worst, measure_rows(st, w, c, batch, count, between, diff, err_pos));
+        count = 0;
+    }
+    return worst;
+}
+
+void palette_measure_clip(bake_state *st, worker *w, uint32_t c)
+{
+    const cb_palette *p = st->p;
+    uint64_t verts = cb_model_skin_vertex_count(st->model, st->skin);
+    double *diff = malloc((size_t)p->bone_count * 16 * sizeof(double));
+    double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
+    st->clip_error[c] = st->clip_blend_error[c] = 0;
+    if (diff && err_pos && verts) {
+        st->clip_error[c] = measure_clip_rows(st, w, c, false, diff, err_pos);
+        st->clip_blend_error[c] = measure_clip_rows(st, w, c, true, diff, err_pos);
+    }
+    free(diff);
+    free(err_pos);
+}
+
+/* Bind-space distance from each joint's bind position to the farthest vertex it moves;
+ * -1 for joints that move none. Returns false when no vertex is skinned. */
+bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, double *radius)
+{
+    bool any = false;
+    for (uint32_t j = 0; j < p->bone_count; ++j) radius[j] = -1;
+    for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
+        const cb_primitive *prim = &m->primitives[pi];
+        if (prim->skin != skin) continue;
+        for (uint32_t v = 0; v < prim->vertex_count; ++v)
+            for (int i = 0; i < 4; ++i) {
+                if (prim->weights[(size_t)v * 4 + i] == 0) continue;
+                uint16_t j = prim->joints[(size_t)v * 4 + i];
+                const float *b = p->bind_positions + (size_t)j * 3, *x = prim->positions + (size_t)v * 3;
+                double d = sqrt((double)(x[0] - b[0]) * (x[0] - b[0]) + (double)(x[1] - b[1]) * (x[1] - b[1]) +
+                                (double)(x[2] - b[2]) * (x[2] - b[2]));
+                if (d > radius[j]) radius[j] = d;
+                any = true;
+            }
+    }
+    return any;
+}
+
