@@ -1,0 +1,110 @@
+// gltf_parts.h - what the glTF adapter's files share (private to libcrowdbake):
+// gltf_container.cpp reads the file and hands tinygltf its JSON, gltf_convert.cpp reads the
+// accessors into the core's structs, gltf_load.cpp runs the load.
+#ifndef CB_GLTF_PARTS_H
+#define CB_GLTF_PARTS_H
+
+#include "tinygltf_config.h"
+
+#include <cstdlib>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "crowdbake_pal.h"
+#include "crowdbake/gltf.h"
+
+namespace cbgltf {
+
+inline constexpr const char kFallbackScheme[] = "crowdbake-meshopt-fallback-";
+
+using Bytes = std::vector<unsigned char>;
+
+struct Span {
+    unsigned char *data;
+    size_t size;
+};
+
+struct Context {
+    cb_model *model;
+    const tinygltf::Model *gltf;
+    std::vector<Span> buffers;   // the bytes of each buffer, which the model owns
+    std::vector<bool> copy;      // per accessor: read into a copy even when its floats could be used in place
+    cb_limits limits;
+    cb_error *err;
+    const char *name;
+};
+
+// The model file's bytes: resize() leaves them uninitialized (the file is read over them at
+// once, and zeroing tens of megabytes first costs as much as the read), on huge pages where
+// the OS has them (cb_alloc_large).
+template <class T> struct file_allocator {
+    using value_type = T;
+    file_allocator() = default;
+    template <class U> file_allocator(const file_allocator<U> &) {}
+    T *allocate(size_t n)
+    {
+        void *p = n <= SIZE_MAX / sizeof(T) ? cb_alloc_large(n * sizeof(T)) : nullptr;
+        if (!p) throw std::bad_alloc();
+        return static_cast<T *>(p);
+    }
+    void deallocate(T *p, size_t) { std::free(p); }
+    template <class U> void construct(U *p) noexcept { ::new (static_cast<void *>(p)) U; }
+    template <class U, class... Args> void construct(U *p, Args &&...args)
+    {
+        ::new (static_cast<void *>(p)) U(std::forward<Args>(args)...);
+    }
+    template <class U> bool operator==(const file_allocator<U> &) const { return true; }
+    template <class U> bool operator!=(const file_allocator<U> &) const { return false; }
+};
+using file_bytes = std::vector<unsigned char, file_allocator<unsigned char>>;
+
+// ---- a big GLB read on two threads ----
+//
+// A GLB whose BIN chunk tinygltf never reads (no Draco, no meshopt, no external files) is read
+// in two parts: its header, JSON chunk and BIN chunk header at once, and the BIN chunk on a
+// second thread, which also hashes the file, while tinygltf parses the JSON. For a large rig
+// the read (and the page faults of its buffer) then costs no wall time.
+struct TailRead {
+    std::thread thread;
+    size_t head = 0;           // bytes read before the thread started; 0: no thread
+    bool ok = false;           // the thread read every byte
+    cbpal_xxh64_state hash{};  // of the whole file, once ok
+    void wait()
+    {
+        if (thread.joinable()) thread.join();
+    }
+    ~TailRead() { wait(); }
+};
+
+struct FsState {
+    uint64_t max_bytes;
+    cbpal_xxh64_state *source_hash; // every external file read goes into the model's source hash
+    std::vector<std::string> files;  // and into its list of external files, for depfiles
+};
+
+struct BinInPlace {
+    size_t at, length; // length 0: tinygltf read the BIN chunk itself
+};
+
+// gltf_container.cpp
+// Reads `path` into *out, bounded by max_bytes. With `tail`, a big GLB's BIN chunk is read on
+// tail->thread (see TailRead).
+template <class Buffer> bool read_file(const char *path, uint64_t max_bytes, Buffer *out, TailRead *tail, std::string *why);
+// Parses the file with tinygltf (the GLB's BIN chunk left where it lies when `in_place`).
+bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
+                         FsState *fs_state, tinygltf::Model *gltf, BinInPlace *in_place, TailRead *tail, cb_error *err);
+
+// gltf_convert.cpp
+int component_size(int type);
+int type_components(int type);
+bool convert_nodes(Context &c);
+bool convert_skins(Context &c);
+bool check_joints_in_scene(Context &c);
+bool convert_meshes(Context &c);
+bool convert_animations(Context &c);
+
+} // namespace cbgltf
+
+#endif

@@ -1,0 +1,17 @@
+/* report_parts.h - what the report's renderings share (private to libcrowdbake): report.c
+ * renders the terminal, Markdown and JSON forms, report_html.c the HTML page. */
+#ifndef CB_REPORT_PARTS_H
+#define CB_REPORT_PARTS_H
+
+#include "crowdbake/report.h"
+
+/* The limits a type breaks, "; "-separated, or "". */
+const char *report_limit_warnings(const cb_report_type *t, char *buf, size_t size);
+/* What a type's row says beside its numbers: the palette it shares, the limits it breaks. */
+const char *report_notes(const cb_report_type *t, char *buf, size_t size);
+/* a / b, 0 when b is 0. */
+double report_ratio(uint64_t a, uint64_t b);
+/* The roster's total against its budget, in one sentence; `bold` wraps the verdict. */
+void report_budget_line(FILE *f, const cb_report *r, const char *bold);
+
+#endif
