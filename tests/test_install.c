@@ -254,6 +254,26 @@ static void test_man_page_and_completions(void **state)
     if (strcmp(out, "--root-motion\n") != 0) fail_msg("bash completion of 'bake --roo': %s", out);
 }
 
+/* The command is a client of the public API: its files include only the installed headers
+ * (crowdbake/X.h, the reader crowdbake_pal.h) and its own cli.h; and the public headers include
+ * only each other. */
+static void test_cli_uses_only_the_public_headers(void **state)
+{
+    (void)state;
+    static char out[65536];
+    assert_int_equal(sh(out, sizeof out, "grep -H \"^#include \\\"\" cli/*.c cli/*.h include/crowdbake/*.h"), 0);
+    int lines = 0;
+    for (char *line = strtok(out, "\n"); line; line = strtok(NULL, "\n"), ++lines) {
+        const char *file = line, *inc = strstr(line, "#include \"") + 10;
+        bool cli = strncmp(file, "cli/", 4) == 0;
+        bool ok = cli ? strncmp(inc, "crowdbake/", 10) == 0 || strncmp(inc, "cli.h\"", 6) == 0 ||
+                            strncmp(inc, "../formats/crowdbake_pal.h\"", 27) == 0
+                      : strchr(inc, '/') == NULL || strchr(inc, '/') > strchr(inc, '"');
+        if (!ok) fail_msg("%s: not a public header", line);
+    }
+    assert_true(lines > 30);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -262,6 +282,7 @@ int main(void)
         cmocka_unit_test(test_cmake_program_bakes_fox),
         cmocka_unit_test(test_cmake_roster_rebakes_only_what_changed),
         cmocka_unit_test(test_man_page_and_completions),
+        cmocka_unit_test(test_cli_uses_only_the_public_headers),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
