@@ -1,0 +1,162 @@
+/* test_bake_job.c - the one bake pipeline (include/crowdbake/bake.h): each format's precision,
+ * the qpos -> affine fallback acted on by status code, per-clip rates from one settings struct,
+ * and a catalog type baking to the very texels of `bake MODEL` with the same settings (the two
+ * paths share every decision; only the recorded input hash tells them apart). */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <limits.h>
+
+#include "../formats/crowdbake_pal.h"
+#include "crowdbake/bake.h"
+#include "crowdbake/exr.h"
+
+#define TMP TEST_TMP "/bake_job"
+
+static int setup(void **state)
+{
+    (void)state;
+    return system("rm -rf " TMP " && mkdir -p " TMP);
+}
+
+static cb_bake_job job_for(const cb_model *m)
+{
+    cb_bake_job job;
+    memset(&job, 0, sizeof job);
+    job.model = m, job.skin = 0;
+    job.settings = cb_default_bake_settings();
+    job.limits = cb_default_limits();
+    job.threads = 2;
+    return job;
+}
+
+/* u16 for .pal and float for .exr unless a precision is set; set, it holds for both. */
+static void test_each_format_gets_its_precision(void **state)
+{
+    (void)state;
+    cb_bake_settings s = cb_default_bake_settings();
+    assert_int_equal(cb_bake_settings_options(&s, CB_FORMAT_PAL, NULL, 1).precision, CB_PRECISION_U16);
+    assert_int_equal(cb_bake_settings_options(&s, CB_FORMAT_EXR, NULL, 1).precision, CB_PRECISION_FLOAT);
+    assert_true(cb_bake_settings_options(&s, CB_FORMAT_PAL, NULL, 1).affine_fallback);
+    s.precision = CB_PRECISION_HALF, s.precision_set = true, s.layout = CB_LAYOUT_MAT4, s.layout_set = true;
+    assert_int_equal(cb_bake_settings_options(&s, CB_FORMAT_PAL, NULL, 1).precision, CB_PRECISION_HALF);
+    assert_int_equal(cb_bake_settings_options(&s, CB_FORMAT_EXR, NULL, 1).precision, CB_PRECISION_HALF);
+    assert_false(cb_bake_settings_options(&s, CB_FORMAT_PAL, NULL, 1).affine_fallback);
+    s.precision = CB_PRECISION_U16, s.formats = CB_FORMAT_PAL | CB_FORMAT_EXR;
+    assert_false(cb_bake_settings_writable(&s));
+    assert_int_equal(cb_formats_parse("both"), CB_FORMAT_PAL | CB_FORMAT_EXR);
+    assert_int_equal(cb_formats_parse("exr,pal"), CB_FORMAT_PAL | CB_FORMAT_EXR);
+    assert_int_equal(cb_formats_parse("png"), 0);
+    cb_root_motion rm;
+    assert_true(cb_root_motion_parse("in-place", &rm) && rm == CB_ROOT_MOTION_IN_PLACE);
+    assert_false(cb_root_motion_parse("inplace", &rm));
+    assert_true(cb_fps_valid(1000) && !cb_fps_valid(1000.5) && !cb_fps_valid(0));
+}
+
+/* The spider's non-uniform scale: qpos reports CB_ERR_LAYOUT; a job without a layout set falls
+ * back to affine with a note, one with qpos asked for fails with that status. */
+static void test_fallback_acts_on_the_status(void **state)
+{
+    (void)state;
+    cb_model *m = load_shared("assets/spider-animated-luanti/gltf_spider_animated.gltf");
+    cb_bake_job job = job_for(m);
+    job.pal_path = TMP "/spider.pal";
+    cb_bake_result r;
+    cb_error err = {0};
+    assert_int_equal(cb_bake_job_run(&job, &r, &err), CB_OK);
+    assert_int_equal(r.outputs[0].palette.layout, CB_LAYOUT_AFFINE);
+    assert_int_equal(r.notes.count, 1);
+    assert_non_null(strstr(r.notes.items[0].message, "baked with affine instead"));
+    cb_bake_result_free(&r);
+    cb_bake_job_free(&job);
+    job = job_for(m);
+    job.settings.layout_set = true; /* qpos, asked for */
+    job.pal_path = TMP "/spider-qpos.pal";
+    assert_int_equal(cb_bake_job_run(&job, &r, &err), CB_ERR_LAYOUT);
+    assert_non_null(strstr(err.message, "non-uniform scale"));
+    cb_bake_result_free(&r);
+    cb_bake_job_free(&job);
+    cb_model_free(m);
+}
+
+/* One settings struct: the job's fps = auto chooses every clip's rate except a clip that says
+ * fps_auto = 0, which keeps its own fixed rate. */
+static void test_clip_settings_override_the_job(void **state)
+{
+    (void)state;
+    cb_model *m = load_shared("assets/fox-bevy/Fox.glb");
+    cb_clip_plan clips[3] = {{0, NULL, -1, 0}, {1, NULL, -1, 12}, {2, NULL, -1, 0}};
+    cb_clip_settings per_clip[3] = {{-1, 0}, {0, 0}, {-1, 0}};
+    cb_bake_job job = job_for(m);
+    job.clips = clips, job.clip_count = 3, job.clip_settings = per_clip;
+    job.settings.fps_auto = true;
+    cb_error err = {0};
+    assert_int_equal(cb_bake_job_plan(&job, &err), CB_OK);
+    assert_int_equal(job.plan_count, 3);
+    assert_true(job.plan[1].fps == 12); /* kept: fps_auto = 0 */
+    for (int i = 0; i < 3; i += 2) {    /* chosen: within 1 mm/m, or at the 60 fps ceiling */
+        assert_true(job.plan[i].fps > 0 && job.plan[i].fps <= 60);
+        assert_true(job.rates[i].met ? job.rates[i].error_mm <= 1 : job.plan[i].fps == 60);
+    }
+    assert_true(job.plan[0].fps != 30 || job.plan[2].fps != 30); /* the rates were really chosen */
+    cb_bake_job_free(&job);
+    cb_model_free(m);
+}
+
+/* The payload and every header field but the input hash (and so the checksum). */
+static void assert_same_texels(const char *a, const char *b)
+{
+    cbpal_file fa, fb;
+    char msg[256];
+    if (cbpal_open(a, CBPAL_VERIFY_CHECKSUM, &fa, msg, sizeof msg)) fail_msg("%s", msg);
+    if (cbpal_open(b, CBPAL_VERIFY_CHECKSUM, &fb, msg, sizeof msg)) fail_msg("%s", msg);
+    assert_int_equal(fa.header.layout, fb.header.layout);
+    assert_int_equal(fa.header.precision, fb.header.precision);
+    assert_int_equal(fa.header.rows, fb.header.rows);
+    assert_int_equal(fa.header.width, fb.header.width);
+    assert_true(fa.header.input_hash != fb.header.input_hash); /* each path records its own inputs */
+    assert_int_equal(fa.header.payload_raw_size, fb.header.payload_raw_size);
+    assert_memory_equal(fa.texels, fb.texels, fa.header.payload_raw_size);
+    cbpal_close(&fa);
+    cbpal_close(&fb);
+}
+
+/* `bake MODEL --format pal,exr` and a catalog type with format = "both": the same texels, u16 in
+ * the .pal and float in the .exr, for both. */
+static void test_catalog_and_single_bake_agree(void **state)
+{
+    (void)state;
+    char fish[PATH_MAX], cmd[3 * PATH_MAX];
+    snprintf(cmd, sizeof cmd, "%s/fish.glb", samples_dir());
+    assert_non_null(realpath(cmd, fish));
+    char text[2 * PATH_MAX];
+    snprintf(text, sizeof text,
+             "[bake]\nout_dir = \"roster\"\nformat = \"both\"\nroot_motion = \"in-place\"\n"
+             "[animal.fish]\nmodel = \"%s\"\nstates = { swim = [\"swim\"] }\n", fish);
+    write_text(TMP "/catalog.toml", text);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/catalog.toml -q && %s bake %s -o " TMP "/single.pal --format pal,exr "
+             "--root-motion in-place -q", crowdbake_exe(), crowdbake_exe(), fish);
+    assert_int_equal(system(cmd), 0);
+    assert_same_texels(TMP "/roster/fish.pal", TMP "/single.pal");
+    cb_exr_image a, b;
+    cb_error err = {0};
+    assert_int_equal(cb_exr_read(TMP "/roster/fish.exr", &a, &err), CB_OK);
+    assert_int_equal(cb_exr_read(TMP "/single.exr", &b, &err), CB_OK);
+    assert_int_equal(a.precision, CB_PRECISION_FLOAT);
+    assert_int_equal(a.precision, b.precision);
+    assert_int_equal(a.texel_bytes, b.texel_bytes);
+    assert_memory_equal(a.texels, b.texels, a.texel_bytes);
+    cb_exr_image_free(&a);
+    cb_exr_image_free(&b);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_each_format_gets_its_precision),
+        cmocka_unit_test(test_fallback_acts_on_the_status),
+        cmocka_unit_test(test_clip_settings_override_the_job),
+        cmocka_unit_test(test_catalog_and_single_bake_agree),
+    };
+    return cmocka_run_group_tests(tests, setup, NULL);
+}
