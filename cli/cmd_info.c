@@ -5,6 +5,7 @@
 
 #include "crowdbake/json.h"
 #include "crowdbake/catalog.h"
+#include "crowdbake/bake.h"
 #include "cli.h"
 
 const char cmd_info_usage[] =
@@ -202,7 +203,8 @@ int cmd_info(int argc, char **argv)
     if (help) return fputs(cmd_info_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     double fps;
-    if (!cli_parse_double(fps_text, &fps) || !(fps > 0)) return cli_usage_error("info", "--fps wants a positive number");
+    if (!cli_parse_double(fps_text, &fps) || !cb_fps_valid(fps))
+        return cli_usage_error("info", "--fps wants a number between 0 and 1000");
     cb_error err = {0};
     cb_model *m = cli_load_model(path, &limits, &err);
     if (!m) return cli_report(&err);

@@ -129,8 +129,8 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
     if (!limits) limits = &defaults;
     if (animation < 0 || animation >= (int32_t)m->animation_count)
         return cb_fail(err, CB_ERR_INPUT, "%s: has no clip %d", m->source, animation);
-    if (!(fps > 0) || !isfinite(fps) || fps > 10000)
-        return cb_fail(err, CB_ERR_SETTINGS, "fps must be a number between 0 and 10000, got %g", fps);
+    if (!(fps > 0) || !isfinite(fps) || fps > CB_FPS_LIMIT)
+        return cb_fail(err, CB_ERR_SETTINGS, "fps must be a number between 0 and %g, got %g", CB_FPS_LIMIT, fps);
     const cb_animation *anim = &m->animations[animation];
     int32_t skin = cb_sampler_skin(s);
     memset(out, 0, sizeof *out);

@@ -24,9 +24,8 @@ extern "C" {
 
 enum { CB_FORMAT_PAL = 1u, CB_FORMAT_EXR = 2u };
 
-/* The rates a setting may take: fps in (0, CB_FPS_LIMIT]; an auto rate's ceiling (max_fps) in
- * [CB_MAX_FPS_LOWEST, CB_FPS_LIMIT]. */
-#define CB_FPS_LIMIT 1000.0
+/* The rates a setting may take: fps in (0, CB_FPS_LIMIT] (core.h); an auto rate's ceiling
+ * (max_fps) in [CB_MAX_FPS_LOWEST, CB_FPS_LIMIT]. */
 #define CB_MAX_FPS_LOWEST 2.0
 
 /* What a bake is asked for: the command line's bake options and a catalog's [bake] and

@@ -63,6 +63,9 @@ const char *cb_closest_name(const char *name, const char *const *known, size_t c
 
 /* ---- limits --------------------------------------------------------------------------- */
 
+/* The highest frame rate anything is baked or sampled at. */
+#define CB_FPS_LIMIT 1000.0
+
 typedef struct cb_limits {
     uint32_t max_joints;         /* joints in one skin */
     uint32_t max_frames;         /* frames in one clip at the chosen fps */
