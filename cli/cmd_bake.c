@@ -246,11 +246,10 @@ static int output_formats(const bake_args *a, unsigned *formats)
 }
 
 /* Everything the command line decides before the job runs. */
-static int single_model_checks(const bake_args *a, cb_bake_settings *s, unsigned fields)
+static int single_model_checks(const bake_args *a, cb_bake_settings *s)
 {
     int rc;
     if ((rc = output_formats(a, &s->formats))) return rc;
-    (void)fields;
     bool want_pal = s->formats & CB_FORMAT_PAL;
     if (!cb_bake_settings_writable(s))
         return cli_usage_error("bake", "EXR holds half or float texels; use --precision half|float%s",
@@ -311,12 +310,13 @@ int cmd_bake(int argc, char **argv)
     a.quiet |= a.quiet_long;
     if (ends_with(a.model, ".toml")) return bake_catalog(&a, &limits);
     if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
-    if (a.depfile || a.manifest || a.force || a.out_dir)
+    if (a.depfile || a.depfile_manifest || a.manifest || a.force || a.out_dir)
         return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
-                               a.depfile ? "--depfile" : a.manifest ? "--manifest" : a.force ? "--force" : "--out-dir");
+                               a.depfile ? "--depfile" : a.depfile_manifest ? "--depfile-manifest-only" : a.manifest
+                               ? "--manifest" : a.force ? "--force" : "--out-dir");
     cb_bake_settings settings;
     unsigned fields, threads;
-    if ((rc = parse_settings(&a, &settings, &fields)) || (rc = single_model_checks(&a, &settings, fields))) return rc;
+    if ((rc = parse_settings(&a, &settings, &fields)) || (rc = single_model_checks(&a, &settings))) return rc;
     double speed_ref = 0;
     if (a.speed_ref && (!cli_parse_double(a.speed_ref, &speed_ref) || speed_ref < 0))
         return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
