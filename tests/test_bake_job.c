@@ -6,6 +6,7 @@
 #include "testutil.h"
 
 #include <limits.h>
+#include <sys/wait.h>
 
 #include "../formats/crowdbake_pal.h"
 #include "crowdbake/bake.h"
@@ -150,6 +151,33 @@ static void test_catalog_and_single_bake_agree(void **state)
     cb_exr_image_free(&b);
 }
 
+/* --out-dir moves a catalog's palettes; --depfile-manifest-only writes the manifest's rule
+ * alone (what Ninja's plain `depfile` and CMake's DEPFILE accept); both refused for one model. */
+static void test_catalog_out_dir_and_manifest_depfile(void **state)
+{
+    (void)state;
+    char fish[PATH_MAX], cmd[3 * PATH_MAX], text[2 * PATH_MAX];
+    snprintf(cmd, sizeof cmd, "%s/fish.glb", samples_dir());
+    assert_non_null(realpath(cmd, fish));
+    snprintf(text, sizeof text, "[animal.fish]\nmodel = \"%s\"\nstates = { swim = [\"swim\"] }\n", fish);
+    write_text(TMP "/one.toml", text);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/one.toml -q --out-dir " TMP "/elsewhere --depfile " TMP "/one.d "
+             "--depfile-manifest-only", crowdbake_exe());
+    assert_int_equal(system(cmd), 0);
+    char *deps = read_whole_file(TMP "/one.d", NULL);
+    char want[3 * PATH_MAX];
+    snprintf(want, sizeof want, TMP "/elsewhere/roster.json: " TMP "/one.toml \\\n  %s\n\n%s:\n", fish, fish);
+    if (strcmp(deps, want) != 0) fail_msg("depfile:\n%s\nwanted:\n%s", deps, want);
+    free(deps);
+    FILE *f = fopen(TMP "/elsewhere/fish.pal", "rb");
+    assert_non_null(f);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/x.pal --out-dir " TMP " 2>/dev/null", crowdbake_exe(), fish);
+    assert_int_equal(WEXITSTATUS(system(cmd)), EXIT_USAGE);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/one.toml -q --depfile-manifest-only 2>/dev/null", crowdbake_exe());
+    assert_int_equal(WEXITSTATUS(system(cmd)), EXIT_USAGE);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -157,6 +185,7 @@ int main(void)
         cmocka_unit_test(test_fallback_acts_on_the_status),
         cmocka_unit_test(test_clip_settings_override_the_job),
         cmocka_unit_test(test_catalog_and_single_bake_agree),
+        cmocka_unit_test(test_catalog_out_dir_and_manifest_depfile),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
