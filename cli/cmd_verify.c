@@ -86,8 +86,8 @@ int cmd_verify(int argc, char **argv)
         if ((int)strlen(pv->clips[c].name) > name_width) name_width = (int)strlen(pv->clips[c].name);
     if (!json) {
         printf("%s with %s (%s/%s, model height %.4g):\n  %-*s %12s %12s %12s %12s %12s %13s  %s\n", pos[1], pos[0],
-               cb_layout_name(pv->layout), cb_precision_name(pv->precision), height, name_width, "clip", "frames max", "frames mean",
-               "between max", "between mean", "frames mm/m", "between mm/m", "worst vertex @ time");
+               cb_layout_name(pv->layout), cb_precision_name(pv->precision), height, name_width, "clip", "rows max", "rows mean",
+               "between max", "between mean", "rows mm/m", "between mm/m", "worst vertex @ time");
     }
     for (uint32_t c = 0; c < pv->clip_count && !err.status; ++c) {
         if ((clips && !cli_list_has(clips, pv->clips[c].name)) || cli_list_has(excluded, pv->clips[c].name)) continue;
@@ -104,11 +104,11 @@ int cmd_verify(int argc, char **argv)
         if (json) {
             cb_json_object(&j, NULL);
             cb_json_string(&j, "name", pv->clips[c].name);
-            cb_json_number(&j, "frames_max", e.quant_max);
-            cb_json_number(&j, "frames_mean", e.quant_mean);
+            cb_json_number(&j, "rows_max", e.quant_max);
+            cb_json_number(&j, "rows_mean", e.quant_mean);
             cb_json_number(&j, "between_max", e.interp_max);
             cb_json_number(&j, "between_mean", e.interp_mean);
-            cb_json_number(&j, "frames_max_mm_per_m", cb_mm_per_m(e.quant_max, height));
+            cb_json_number(&j, "rows_max_mm_per_m", cb_mm_per_m(e.quant_max, height));
             cb_json_number(&j, "between_max_mm_per_m", cb_mm_per_m(e.interp_max, height));
             cb_json_int(&j, "worst_vertex", (long long)e.worst_vertex);
             cb_json_number(&j, "worst_time", e.worst_time);

@@ -161,7 +161,7 @@ void report_budget_line(FILE *f, const cb_report *r, const char *bold)
 void cb_report_text(FILE *f, const cb_report *r)
 {
     char a[32], b[32], c[32], note[256];
-    fprintf(f, "%-14s %6s %7s %9s %-12s %10s %10s %7s %10s %9s %9s %9s  %s\n", "type", "bones", "frames", "vertices",
+    fprintf(f, "%-14s %6s %7s %9s %-12s %10s %10s %7s %10s %9s %9s %9s  %s\n", "type", "bones", "rows", "vertices",
             "palette", "bytes", "VAT 16F+8", "VAT/pal", "mesh", "enc mm/m", "seen mm/m", "VAT mm/m", "notes");
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_type *t = &r->types[i];
@@ -211,7 +211,7 @@ void cb_report_markdown(FILE *f, const cb_report *r)
     char a[32], b[32], c[32], note[256];
     fputs("## crowdbake roster report\n\n", f);
     report_budget_line(f, r, "**");
-    fputs("\n| type | bones | frames | vertices | palette | bytes | VAT RGBA16F+RGBA8 | VAT / palette | mesh | palette encoding "
+    fputs("\n| type | bones | rows | vertices | palette | bytes | VAT RGBA16F+RGBA8 | VAT / palette | mesh | palette encoding "
           "error mm/m | palette visible error mm/m | VAT error mm/m | notes |\n|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|---|\n",
           f);
     for (uint32_t i = 0; i < r->type_count; ++i) {
@@ -257,7 +257,7 @@ void cb_report_json(FILE *f, const cb_report *r)
         cb_json_string(&j, "name", t->name);
         if (t->shares) cb_json_string(&j, "shares_palette_of", t->shares);
         cb_json_int(&j, "bones", t->bones);
-        cb_json_int(&j, "frames", t->frames);
+        cb_json_int(&j, "rows", t->frames);
         cb_json_int(&j, "vertices", (long long)t->vertices);
         cb_json_int(&j, "indices", (long long)t->indices);
         cb_json_object(&j, "palette");

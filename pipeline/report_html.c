@@ -294,7 +294,7 @@ static void cell_fixes(FILE *f, const cb_report *r, const cb_report_type *t)
 }
 
 static const html_column html_columns[] = {
-    {"type", cell_name},          {"bones", cell_bones},          {"frames", cell_frames},
+    {"type", cell_name},          {"bones", cell_bones},          {"rows", cell_frames},
     {"vertices", cell_vertices},  {"encoding", cell_encoding},    {"palette", cell_palette},
     {"mesh", cell_mesh},          {"VAT 16F+8", cell_vat},        {"VAT / palette", cell_ratio},
     {"palette encoding error mm/m", cell_pal_error}, {"palette visible error mm/m", cell_pal_visible_error},

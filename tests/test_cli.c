@@ -189,7 +189,7 @@ static void test_messages(void **state)
     assert_contains(out, "1 type in 1 palette");
     /* verify: the two mm/m columns say which is which. */
     assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/fish.pal", fish), 0);
-    assert_contains(out, "frames mm/m");
+    assert_contains(out, "rows mm/m");
     assert_contains(out, "between mm/m");
 }
 

@@ -85,7 +85,7 @@ for name, (model, owner) in sorted(types.items()):
     expect(name + ' bones', t['bones'], bones)
     expect(name + ' vertices', t['vertices'], vertices)
     expect(name + ' indices', t['indices'], indices)
-    expect(name + ' frames', t['frames'], frames)
+    expect(name + ' rows', t['rows'], frames)
     for key, b in t['encodings'].items():
         layout, precision = key.split('/')
         g = wrap(bones * TEXELS[layout], frames, max_tex)
