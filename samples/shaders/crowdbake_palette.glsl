@@ -16,6 +16,14 @@
 //   vec3 p = cb_skin_position(a_position, a_joints, a_weights, inst, time);
 //   vec3 n = cb_skin_normal(a_normal, a_joints, a_weights, inst, time);
 //   vec3 p = cb_skin_position_crossfade(a_position, a_joints, a_weights, from_inst, inst, fade, time);
+//
+// Batches, for runtimes without instancing: `crowdbake mesh --batch K` writes one mesh of K copies
+// whose attribute _INSTANCE_ID (float) is the copy, 0..K-1. With #define CB_BATCH K, the uniform
+// array cb_batch_instances[K] holds each copy's four numbers, and cb_batch_instance picks them:
+//
+//   vec4 inst = cb_batch_instance(a_instance_id);   // then skin as above
+//
+// (GLSL ES 3.00 guarantees 256 vertex uniform vectors: keep K well under that, or batch fewer.)
 
 #ifdef GL_ES
 precision highp float;
@@ -44,6 +52,16 @@ uniform int cb_row_texels;     // header: row_texels (bones x texels per bone)
 uniform int cb_rows_per_block; // header: height
 #ifdef CB_LAYOUT_QPOS
 uniform sampler2D cb_bind_positions;
+#endif
+
+#ifdef CB_BATCH
+uniform vec4 cb_batch_instances[CB_BATCH];
+
+// The per-instance numbers of a batch's copy (its _INSTANCE_ID, exact in a float).
+vec4 cb_batch_instance(float instance_id)
+{
+    return cb_batch_instances[int(instance_id + 0.5)]; // cb:batch-id
+}
 #endif
 
 #ifdef CB_PRECISION_U16
