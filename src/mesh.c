@@ -205,6 +205,19 @@ void cb_mesh_bytes(const cb_mesh *mesh, uint64_t *vertex_bytes, uint64_t *index_
     }
 }
 
+void cb_mesh_batch_bytes(const cb_mesh *mesh, uint32_t copies, uint64_t *vertex_bytes, uint64_t *index_bytes)
+{
+    uint64_t vb, ib;
+    cb_mesh_bytes(mesh, &vb, &ib);
+    *vertex_bytes = *index_bytes = 0;
+    for (uint32_t i = 0; i < mesh->part_count; ++i) {
+        uint64_t n = (uint64_t)mesh->parts[i].vertex_count * copies;
+        *vertex_bytes += 4 * n; /* the instance id */
+        *index_bytes += (uint64_t)mesh->parts[i].index_count * copies * (n <= 65535 ? 2 : 4);
+    }
+    *vertex_bytes += vb * copies;
+}
+
 /* ---- error ---- */
 
 typedef struct measure_state {

@@ -58,6 +58,10 @@ void cb_mesh_free(cb_mesh *mesh);
  * 65536 vertices per part (65535 is primitive restart), else u32. */
 void cb_mesh_bytes(const cb_mesh *mesh, uint64_t *vertex_bytes, uint64_t *index_bytes);
 
+/* The same for `copies` copies of a plain mesh (batch 1) in one batch: every vertex gains the
+ * 4-byte instance id, and the indices widen to u32 once the copies pass 65535 vertices. */
+void cb_mesh_batch_bytes(const cb_mesh *mesh, uint32_t copies, uint64_t *vertex_bytes, uint64_t *index_bytes);
+
 /* Keeps a vertex's `max` largest weights (the first on a tie), largest first, renormalized to
  * sum 1; the other slots get joint 0 and weight 0. */
 void cb_reduce_influences(const uint16_t joints[4], const float weights[4], uint32_t max, uint16_t out_joints[4],

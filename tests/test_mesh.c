@@ -248,12 +248,65 @@ static void test_batch_and_catalog_lod(void **state)
     assert_null(fopen(TMP "/bad.glb", "rb"));
 }
 
+/* The n-th number after `key` in text, from position `from` on. */
+static double number_after(const char *text, const char *key, int n)
+{
+    const char *at = text;
+    for (int i = 0; i <= n; ++i) {
+        at = strstr(at, key);
+        if (!at) fail_msg("no %d-th %s", n, key);
+        at += strlen(key);
+    }
+    return strtod(at, NULL);
+}
+
+/* `report` counts the runtime meshes as `mesh` writes them, the batch and the transitions. */
+static void test_report_counts_runtime_meshes_batches_and_transitions(void **state)
+{
+    (void)state;
+    char model[1024], cmd[4096], info[1 << 16];
+    static char out[1 << 17];
+    shared_path(model, sizeof model, "assets/quaternius-cow/Cow.glb");
+    snprintf(cmd, sizeof cmd, "%s report %s --json --no-fail 2>&1", crowdbake_exe(), model);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    const char *rt = strstr(out, "\"runtime\"");
+    assert_non_null(rt);
+    for (int k = 0; k < 3; ++k) { /* 4, 2, 1 influences: the same numbers as `mesh --quantize` */
+        const unsigned influences[3] = {4, 2, 1}, inf = influences[k];
+        char args[2048];
+        snprintf(args, sizeof args, "%s -o " TMP "/report-%u.glb --max-influences %u --quantize", model, inf, inf);
+        double error = mesh_json(args, "error"), vb = mesh_json(args, "vertex_buffer_bytes");
+        printf("  %u influences: report %.9g, mesh %.9g units; %0.f vertex bytes\n", inf, number_after(rt, "\"error\": ", k),
+               error, vb);
+        assert_int_equal((int)number_after(rt, "\"max_influences\": ", k), (int)inf);
+        assert_true(fabs(number_after(rt, "\"error\": ", k) - error) <= 1e-8 * fmax(1, error));
+        assert_true(number_after(rt, "\"vertex_bytes\": ", k) == vb);
+    }
+    assert_true(number_after(rt, "\"error\": ", 2) > number_after(rt, "\"error\": ", 1));
+    /* 100 copies: what `mesh --batch 100` writes; instancing: one mesh and 16 bytes a copy. */
+    char args[2048];
+    snprintf(args, sizeof args, "%s -o " TMP "/report-batch.glb --batch 100 --quantize", model);
+    double batch = mesh_json(args, "vertex_buffer_bytes") + mesh_json(args, "index_buffer_bytes");
+    double vb = number_after(rt, "\"vertex_bytes\": ", 0), ib = number_after(rt, "\"index_bytes\": ", 0);
+    printf("  batch of 100: report %.0f, mesh --batch 100 %.0f bytes\n", number_after(rt, "\"batched_bytes\": ", 0), batch);
+    assert_true(number_after(rt, "\"batched_bytes\": ", 0) == batch);
+    assert_true(number_after(rt, "\"instanced_bytes\": ", 0) == vb + ib + 1600);
+    /* Transitions: one into each loop from every other loop, 0.5 s at 30 fps = 16 rows of 84 u16 texels. */
+    snprintf(cmd, sizeof cmd, "%s info %s --json 2>&1", crowdbake_exe(), model);
+    assert_int_equal(run_command(cmd, info, sizeof info), 0);
+    int loops = 0;
+    for (const char *p = info; (p = strstr(p, "\"loops\": true")); ++p) ++loops;
+    assert_int_equal((int)number_after(rt, "\"loops\": ", 0), loops);
+    assert_true(number_after(rt, "\"prebaked_transition_bytes\": ", 0) == (double)loops * (loops - 1) * 16 * 84 * 8);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fewer_influences_skin_within_their_stated_error),
         cmocka_unit_test(test_a_lod_is_remapped_to_palette_bones_and_quantized),
         cmocka_unit_test(test_batch_and_catalog_lod),
+        cmocka_unit_test(test_report_counts_runtime_meshes_batches_and_transitions),
     };
     return cmocka_run_group_tests_name("mesh", tests, setup, NULL);
 }
