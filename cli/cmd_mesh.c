@@ -11,16 +11,18 @@
 
 const char cmd_mesh_usage[] =
     "usage: crowdbake mesh MODEL -o OUT.glb [--palette-model MAIN] [--max-influences 1|2|4] [--quantize] [--batch K]\n"
-    "                      [--fps N] [--skin NAME|INDEX] [--json]\n"
+    "                      [--max-quantization-error MM_PER_M] [--fps N] [--skin NAME|INDEX] [--json]\n"
     "       crowdbake mesh CATALOG.toml --type NAME [--lod N] -o OUT.glb [options]\n\n"
     "Writes the skinned mesh as a palette runtime draws it, a .glb validated by the Khronos validator:\n"
     "  JOINTS_0 are palette bones: the mesh's joints remapped by name to the skin the palette is baked\n"
     "  from (--palette-model, or a catalog type's model for its LODs: --lod N, 0 the model itself).\n"
     "  --max-influences N  keep each vertex's N largest weights, renormalized (default 4; a catalog's\n"
     "                      lod_max_influences gives one per LOD)\n"
-    "  --quantize          KHR_mesh_quantization: normals as normalized i8, weights as u8 (summing to 255),\n"
-    "                      texcoords as u16 when within 0..1; positions stay float (the palette's matrices\n"
-    "                      expect bind-space positions, which a dequantization transform would change)\n"
+    "  --quantize          KHR_mesh_quantization: normals as normalized i8, weights as u8 (summing to 255)\n"
+    "                      where that adds at most --max-quantization-error mm/m (default 0.1) to the error\n"
+    "                      of float weights, else u16; texcoords as u16 when within 0..1; positions stay\n"
+    "                      float (the palette's matrices expect bind-space positions, which a\n"
+    "                      dequantization transform would change)\n"
     "  --batch K           K copies in one mesh with a per-copy attribute _INSTANCE_ID (SCALAR FLOAT, 0..K-1),\n"
     "                      for runtimes without instancing (CB_BATCH in samples/shaders/crowdbake_palette.glsl)\n"
     "  --fps N             frame rate the error is measured at (default 30)\n"
@@ -28,7 +30,7 @@ const char cmd_mesh_usage[] =
     "clip (mm per metre of height, worst vertex and clip), and the bytes of the vertex and index buffers.\n";
 
 typedef struct mesh_args {
-    const char *input, *output, *palette_model, *type, *lod, *influences, *batch, *fps, *skin;
+    const char *input, *output, *palette_model, *type, *lod, *influences, *batch, *fps, *skin, *max_quant;
     bool quantize, json;
 } mesh_args;
 
@@ -80,6 +82,7 @@ static void print_result(const mesh_args *a, const cb_mesh *m, const cb_mesh_err
         cb_json_string(&j, "worst_clip", clip);
         cb_json_number(&j, "worst_time", e->worst_time);
         cb_json_int(&j, "frames_measured", e->frames);
+        if (m->quantized) cb_json_int(&j, "weight_bits", m->weight_scale == 255 ? 8 : 16);
         if (m->quantized) cb_json_number(&j, "normal_error_degrees", m->normal_error_deg);
         if (m->quantized) cb_json_number(&j, "texcoord_error", m->texcoord_error);
         cb_json_end(&j);
@@ -88,7 +91,7 @@ static void print_result(const mesh_args *a, const cb_mesh *m, const cb_mesh_err
     printf("%s: %llu vertices%s, %u influence%s%s, vertex buffers %.1f KiB + indices %.1f KiB; extra error vs 4 "
            "influences %.3f mm/m (vertex %llu, '%s' at %.3f s, %u frames at the palette model's clips)",
            a->output, (unsigned long long)verts, m->batch > 1 ? " (batch of copies with _INSTANCE_ID)" : "", m->max_influences,
-           m->max_influences == 1 ? "" : "s", m->quantized ? ", quantized" : "", vb / 1024.0, ib / 1024.0, e->max_mm_per_m,
+           m->max_influences == 1 ? "" : "s", !m->quantized ? "" : m->weight_scale == 255 ? ", quantized (u8 weights)" : ", quantized (u16 weights)", vb / 1024.0, ib / 1024.0, e->max_mm_per_m,
            (unsigned long long)e->worst_vertex, clip, e->worst_time, e->frames);
     bool normals = false;
     for (uint32_t i = 0; i < m->part_count; ++i) normals |= m->parts[i].normals_i8 != NULL;
@@ -97,7 +100,7 @@ static void print_result(const mesh_args *a, const cb_mesh *m, const cb_mesh_err
 }
 
 /* Loads the mesh's model and the palette's, the remap between their skins, and does the job. */
-static int run(mesh_args *a, unsigned influences, unsigned batch, double fps, const cb_limits *limits)
+static int run(mesh_args *a, unsigned influences, unsigned batch, double fps, double max_quant, const cb_limits *limits)
 {
     cb_error err = {0};
     cb_model *pm = NULL, *mm = NULL;
@@ -115,10 +118,9 @@ static int run(mesh_args *a, unsigned influences, unsigned batch, double fps, co
         if (!remap) cb_fail(&err, CB_ERR_INTERNAL, "out of memory");
         if (!remap || cb_lod_remap(pm, ps, mm, ms, remap, &err)) goto done;
     }
-    cb_mesh_options o = {influences, a->quantize, batch, remap, pm->skins[ps].joint_count};
+    cb_mesh_options o = {influences, a->quantize, false, batch, remap, pm->skins[ps].joint_count};
     cb_mesh_error e;
-    if (cb_mesh_build(mm, ms, &o, &mesh, &err) || !(s = cb_sampler_create(pm, ps, &err)) ||
-        cb_mesh_measure(s, mm, ms, &mesh, remap, fps, &e, &err) ||
+    if (!(s = cb_sampler_create(pm, ps, &err)) || cb_mesh_build_measured(s, mm, ms, &o, fps, max_quant, &mesh, &e, &err) ||
         cb_gltf_mesh_write(a->output, &mesh, pm, ps, &e, &err))
         goto done;
     print_result(a, &mesh, &e, pm);
@@ -143,19 +145,22 @@ int cmd_mesh(int argc, char **argv)
         {"--lod", "N", &a.lod, NULL},                {"--max-influences", "N", &a.influences, NULL},
         {"--quantize", NULL, NULL, &a.quantize},     {"--batch", "K", &a.batch, NULL},
         {"--fps", "N", &a.fps, NULL},                {"--skin", "NAME|INDEX", &a.skin, NULL},
-        {"--json", NULL, NULL, &a.json}};
+        {"--json", NULL, NULL, &a.json},             {"--max-quantization-error", "MM_PER_M", &a.max_quant, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.input, 1, 1, &help);
     if (help) return fputs(cmd_mesh_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     if (!a.output) return cli_usage_error("mesh", "-o OUT.glb is required");
     unsigned influences = 4, batch = 1;
-    double fps = 30;
+    double fps = 30, max_quant = 0.1;
     if (a.influences && (!cli_parse_u32(a.influences, &influences) || (influences != 1 && influences != 2 && influences != 4)))
         return cli_usage_error("mesh", "--max-influences is 1, 2 or 4");
     if (a.batch && (!cli_parse_u32(a.batch, &batch) || batch == 0 || batch > 65536))
         return cli_usage_error("mesh", "--batch wants a count of copies from 1 to 65536");
     if (a.fps && (!cli_parse_double(a.fps, &fps) || !(fps > 0) || fps > 1000))
         return cli_usage_error("mesh", "--fps wants a frame rate above 0 (up to 1000)");
+    if (a.max_quant && (!cli_parse_double(a.max_quant, &max_quant) || !(max_quant >= 0)))
+        return cli_usage_error("mesh", "--max-quantization-error wants mm per metre of height (0 or more)");
+    if (a.max_quant && !a.quantize) return cli_usage_error("mesh", "--max-quantization-error goes with --quantize");
     const char *ext = strrchr(a.output, '.');
     if (!ext || strcmp(ext, ".glb") != 0) return cli_usage_error("mesh", "%s: the mesh is written as a .glb; name it OUT.glb", a.output);
     cb_catalog cat = {0};
@@ -166,7 +171,7 @@ int cmd_mesh(int argc, char **argv)
         cb_catalog_free(&cat);
         return rc;
     }
-    rc = run(&a, influences, batch, fps, &limits);
+    rc = run(&a, influences, batch, fps, max_quant, &limits);
     if (catalog) cb_catalog_free(&cat);
     return rc;
 }

@@ -139,10 +139,14 @@ void add_part(Writer &w, const cb_mesh *m, const cb_mesh_part &p, tinygltf::Mesh
     } else {
         prim.attributes["JOINTS_0"] = w.accessor(w.view(p.joints, n, 8, true), n, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, false);
     }
-    if (p.weights_u8)
-        prim.attributes["WEIGHTS_0"] = w.accessor(w.view(p.weights_u8, n, 4, true), n, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_TYPE_VEC4, true);
-    else
+    if (p.weights_q && m->weight_scale == 255) {
+        std::vector<uint8_t> w8(p.weights_q, p.weights_q + n * 4);
+        prim.attributes["WEIGHTS_0"] = w.accessor(w.view(w8.data(), n, 4, true), n, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_TYPE_VEC4, true);
+    } else if (p.weights_q) {
+        prim.attributes["WEIGHTS_0"] = w.accessor(w.view(p.weights_q, n, 8, true), n, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, true);
+    } else {
         prim.attributes["WEIGHTS_0"] = w.accessor(w.view(p.weights, n, 16, true), n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, false);
+    }
     if (p.instance_ids)
         prim.attributes[CB_INSTANCE_ID_ATTRIBUTE] =
             w.accessor(w.view(p.instance_ids, n, 4, true), n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, false);
@@ -170,6 +174,7 @@ tinygltf::Value extras(const cb_mesh *m, const cb_mesh_error *e)
         o["error_frames"] = tinygltf::Value((int)e->frames);
     }
     if (m->quantized) o["normal_error_degrees"] = tinygltf::Value(m->normal_error_deg);
+    if (m->quantized) o["weight_bits"] = tinygltf::Value(m->weight_scale == 255 ? 8 : 16);
     tinygltf::Value::Object root;
     root["crowdbake"] = tinygltf::Value(o);
     return tinygltf::Value(root);

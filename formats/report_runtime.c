@@ -22,14 +22,15 @@ static cb_status measure_mesh(cb_sampler *s, const cb_model *mesh_model, const u
 {
     const cb_model *pm = cb_sampler_model(s);
     int32_t skin = (int32_t)pick_skin(mesh_model);
-    cb_mesh_options o = {influences, true, 1, remap, pm->skins[cb_sampler_skin(s)].joint_count};
+    cb_mesh_options o = {influences, true, false, 1, remap, pm->skins[cb_sampler_skin(s)].joint_count};
     cb_mesh mesh;
     cb_mesh_error e;
-    if (cb_mesh_build(mesh_model, skin, &o, &mesh, err)) return err->status;
-    cb_status rc = cb_mesh_measure(s, mesh_model, skin, &mesh, remap, 30, &e, err);
+    cb_status rc = cb_mesh_build_measured(s, mesh_model, skin, &o, 30, CB_REPORT_MAX_QUANTIZATION_ERROR, &mesh, &e, err);
+    if (rc) return rc;
     memset(out, 0, sizeof *out);
     out->lod = lod, out->influences = influences, out->error = e.max, out->height = e.height;
     out->fetches = influences * texels_per_bone * 2;
+    out->weight_bits = mesh.weight_scale == 255 ? 8 : 16;
     cb_mesh_bytes(&mesh, &out->vertex_bytes, &out->index_bytes);
     out->vertices = cb_model_skin_vertex_count(mesh_model, skin);
     out->source_bytes = cb_model_skin_mesh_bytes(mesh_model, skin);
@@ -64,7 +65,7 @@ cb_status cb_report_runtime_measure(const cb_roster_type *t, const cb_roster_typ
         measure_mesh(s, m, NULL, 0, inf, tpb, &out->meshes[out->mesh_count++], err);
     if (s && !err->status) { /* the batch, priced on the model's own mesh (4 influences, quantized) */
         cb_mesh one;
-        cb_mesh_options o = {4, true, 1, NULL, m->skins[cb_sampler_skin(s)].joint_count};
+        cb_mesh_options o = {4, true, out->meshes[0].weight_bits == 16, 1, NULL, m->skins[cb_sampler_skin(s)].joint_count};
         if (!cb_mesh_build(m, cb_sampler_skin(s), &o, &one, err)) {
             uint64_t vb, ib;
             cb_mesh_batch_bytes(&one, CB_REPORT_BATCH, &vb, &ib);
@@ -102,8 +103,8 @@ static double mm(const cb_report_mesh *m) { return cb_mm_per_m(m->error, m->heig
 
 static void mesh_label(const cb_report_mesh *m, char *buf, size_t size)
 {
-    if (m->lod) snprintf(buf, size, "LOD %u, %u infl.", m->lod, m->influences);
-    else snprintf(buf, size, "model, %u infl.", m->influences);
+    if (m->lod) snprintf(buf, size, "LOD %u, %u infl., w%u", m->lod, m->influences, m->weight_bits);
+    else snprintf(buf, size, "model, %u infl., w%u", m->influences, m->weight_bits);
 }
 
 static bool any_measured(const cb_report *r)
@@ -186,6 +187,7 @@ void cb_report_runtime_json(cb_json *j, const cb_report_runtime *rt)
         cb_json_number(j, "error", m->error);
         cb_json_number(j, "error_mm_per_m", mm(m));
         cb_json_int(j, "texel_fetches_per_vertex", m->fetches);
+        cb_json_int(j, "weight_bits", m->weight_bits);
         cb_json_end(j);
     }
     cb_json_end(j);

@@ -12,6 +12,9 @@
 #define CB_REPORT_STR_(x) #x
 #define CB_REPORT_STR(x) CB_REPORT_STR_(x)
 
+/* mm per metre that u8 weights may add before the mesh takes u16 ones (`mesh`'s default). */
+#define CB_REPORT_MAX_QUANTIZATION_ERROR 0.1
+
 /* Copies in the batch the report prices (the Unity vehicle crowd drew 100 per batch). */
 #define CB_REPORT_BATCH 100
 /* Length of one pre-baked transition clip the report prices against a runtime cross-fade. */
@@ -24,6 +27,7 @@ typedef struct cb_report_mesh {
     uint64_t source_bytes;                        /* the same mesh's buffers in its file's own format */
     double error, height;                         /* extra vertex error vs 4 influences (model units), rest height */
     uint32_t fetches;                             /* palette texel fetches per vertex: influences x texels x 2 rows */
+    uint32_t weight_bits;                         /* 8, or 16 where u8 weights cost over CB_REPORT_MAX_QUANTIZATION_ERROR */
 } cb_report_mesh;
 
 typedef struct cb_report_runtime {

@@ -25,22 +25,22 @@ void cb_reduce_influences(const uint16_t joints[4], const float weights[4], uint
     }
 }
 
-void cb_quantize_weights(const float weights[4], uint8_t out[4])
+void cb_quantize_weights(const float weights[4], uint32_t scale, uint16_t out[4])
 {
     double frac[4];
-    int total = 0;
+    uint32_t total = 0;
     for (int i = 0; i < 4; ++i) {
-        double x = weights[i] > 0 ? weights[i] * 255.0 : 0;
-        out[i] = (uint8_t)fmin(floor(x), 255);
+        double x = weights[i] > 0 ? weights[i] * (double)scale : 0;
+        out[i] = (uint16_t)fmin(floor(x), scale);
         frac[i] = x - out[i];
         total += out[i];
     }
-    /* Round up the largest remainders until the bytes sum to 255 (the first on a tie). Only
-     * slots with a weight may grow, so a dropped influence stays dropped. */
-    while (total < 255) {
+    /* Round up the largest remainders until the integers sum to `scale` (the first on a tie).
+     * Only slots with a weight may grow, so a dropped influence stays dropped. */
+    while (total < scale) {
         int best = -1;
         for (int i = 0; i < 4; ++i)
-            if (weights[i] > 0 && out[i] < 255 && (best < 0 || frac[i] > frac[best])) best = i;
+            if (weights[i] > 0 && out[i] < scale && (best < 0 || frac[i] > frac[best])) best = i;
         if (best < 0) break;
         out[best]++, frac[best] = -1, total++;
     }
@@ -49,7 +49,7 @@ void cb_quantize_weights(const float weights[4], uint8_t out[4])
 static void free_part(cb_mesh_part *p)
 {
     free(p->positions), free(p->normals), free(p->texcoords), free(p->joints), free(p->weights);
-    free(p->weights_u8), free(p->normals_i8), free(p->texcoords_u16), free(p->indices), free(p->instance_ids);
+    free(p->weights_q), free(p->normals_i8), free(p->texcoords_u16), free(p->indices), free(p->instance_ids);
 }
 
 void cb_mesh_free(cb_mesh *mesh)
@@ -123,13 +123,13 @@ static cb_status build_part(const cb_primitive *src, const cb_skin *skin, const 
     if (src->normals) p->normals = malloc(nk * 3 * sizeof(float));
     if (src->texcoords) p->texcoords = malloc(nk * 2 * sizeof(float));
     if (o->quantize) {
-        p->weights_u8 = malloc(nk * 4);
+        p->weights_q = malloc(nk * 4 * sizeof(uint16_t));
         if (src->normals) p->normals_i8 = malloc(nk * 3);
         if (src->texcoords) p->texcoords_u16 = malloc(nk * 2 * sizeof(uint16_t));
     }
     if (k > 1) p->instance_ids = malloc(nk * sizeof(float));
     if (!p->positions || !p->joints || !p->weights || !p->indices || (src->normals && !p->normals) ||
-        (src->texcoords && !p->texcoords) || (o->quantize && (!p->weights_u8 || (src->normals && !p->normals_i8) ||
+        (src->texcoords && !p->texcoords) || (o->quantize && (!p->weights_q || (src->normals && !p->normals_i8) ||
                                                               (src->texcoords && !p->texcoords_u16))) ||
         (k > 1 && !p->instance_ids))
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
@@ -149,9 +149,9 @@ static cb_status build_part(const cb_primitive *src, const cb_skin *skin, const 
         float *ow = p->weights + (size_t)v * 4;
         cb_reduce_influences(bones, src->weights + (size_t)v * 4, o->max_influences, oj, ow);
         if (o->quantize) {
-            uint8_t *q = p->weights_u8 + (size_t)v * 4;
-            cb_quantize_weights(ow, q);
-            for (int i = 0; i < 4; ++i) ow[i] = q[i] / 255.0f, oj[i] = q[i] ? oj[i] : 0;
+            uint16_t *q = p->weights_q + (size_t)v * 4, scale = o->weights_u16 ? 65535 : 255;
+            cb_quantize_weights(ow, scale, q);
+            for (int i = 0; i < 4; ++i) ow[i] = (float)(q[i] / (double)scale), oj[i] = q[i] ? oj[i] : 0;
         }
     }
     for (uint32_t i = 0; i < ic; ++i) p->indices[i] = src->indices ? src->indices[i] : i;
@@ -161,7 +161,7 @@ static cb_status build_part(const cb_primitive *src, const cb_skin *skin, const 
     REPEAT(p->texcoords, 2, n, k);
     REPEAT(p->joints, 4, n, k);
     REPEAT(p->weights, 4, n, k);
-    REPEAT(p->weights_u8, 4, n, k);
+    REPEAT(p->weights_q, 4, n, k);
     REPEAT(p->normals_i8, 3, n, k);
     REPEAT(p->texcoords_u16, 2, n, k);
     for (uint32_t c = 1; c < k; ++c)
@@ -177,6 +177,7 @@ cb_status cb_mesh_build(const cb_model *model, int32_t skin, const cb_mesh_optio
     out->max_influences = o->max_influences;
     out->bone_count = o->bone_count;
     out->quantized = o->quantize;
+    out->weight_scale = o->quantize ? (o->weights_u16 ? 65535 : 255) : 0;
     cb_mesh_options opt = *o;
     opt.batch = out->batch;
     for (uint32_t i = 0; i < model->primitive_count; ++i) out->part_count += model->primitives[i].skin == skin;
@@ -199,7 +200,7 @@ void cb_mesh_bytes(const cb_mesh *mesh, uint64_t *vertex_bytes, uint64_t *index_
     for (uint32_t i = 0; i < mesh->part_count; ++i) {
         const cb_mesh_part *p = &mesh->parts[i];
         uint32_t stride = 12 + (p->normals ? (p->normals_i8 ? 4 : 12) : 0) + (p->texcoords ? (p->texcoords_u16 ? 4 : 8) : 0) +
-                          (mesh->bone_count <= 256 ? 4 : 8) + (p->weights_u8 ? 4 : 16) + (p->instance_ids ? 4 : 0);
+                          (mesh->bone_count <= 256 ? 4 : 8) + (p->weights_q ? (mesh->weight_scale == 255 ? 4 : 8) : 16) + (p->instance_ids ? 4 : 0);
         *vertex_bytes += (uint64_t)stride * p->vertex_count;
         *index_bytes += (uint64_t)p->index_count * (p->vertex_count <= 65535 ? 2 : 4);
     }
@@ -216,6 +217,28 @@ void cb_mesh_batch_bytes(const cb_mesh *mesh, uint32_t copies, uint64_t *vertex_
         *index_bytes += (uint64_t)mesh->parts[i].index_count * copies * (n <= 65535 ? 2 : 4);
     }
     *vertex_bytes += vb * copies;
+}
+
+cb_status cb_mesh_build_measured(cb_sampler *ps, const cb_model *model, int32_t skin, const cb_mesh_options *o, double fps,
+                                 double max_extra_mm, cb_mesh *out, cb_mesh_error *error, cb_error *err)
+{
+    if (cb_mesh_build(model, skin, o, out, err) || cb_mesh_measure(ps, model, skin, out, o->remap, fps, error, err))
+        return err->status;
+    if (!o->quantize || o->weights_u16) return CB_OK;
+    cb_mesh plain;
+    cb_mesh_error plain_error;
+    cb_mesh_options p = *o;
+    p.quantize = false;
+    if (cb_mesh_build(model, skin, &p, &plain, err) || cb_mesh_measure(ps, model, skin, &plain, o->remap, fps, &plain_error, err)) {
+        cb_mesh_free(&plain);
+        return err->status;
+    }
+    cb_mesh_free(&plain);
+    if (error->max_mm_per_m - plain_error.max_mm_per_m <= max_extra_mm) return CB_OK;
+    cb_mesh_free(out); /* u8 weights cost too much here: u16 */
+    p.quantize = true, p.weights_u16 = true;
+    if (cb_mesh_build(model, skin, &p, out, err)) return err->status;
+    return cb_mesh_measure(ps, model, skin, out, o->remap, fps, error, err);
 }
 
 /* ---- error ---- */

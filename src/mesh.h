@@ -13,7 +13,8 @@ extern "C" {
 
 typedef struct cb_mesh_options {
     uint32_t max_influences; /* 1, 2 or 4 */
-    bool quantize;           /* weights as u8, normals as i8, texcoords as u16 where they lie in 0..1 */
+    bool quantize;           /* weights as u8 (or u16), normals as i8, texcoords as u16 where they lie in 0..1 */
+    bool weights_u16;        /* quantize: weights as u16 instead of u8 (cb_mesh_build_measured picks) */
     uint32_t batch;          /* copies in one mesh (1: a plain mesh) */
     const uint32_t *remap;   /* the model skin's joint i is palette bone remap[i]; NULL: the same order */
     uint32_t bone_count;     /* palette bones */
@@ -30,7 +31,7 @@ typedef struct cb_mesh_part {
     float *texcoords;         /* 2 per vertex or NULL */
     uint16_t *joints;         /* 4 per vertex: palette bones, largest weight first; unused slots 0 */
     float *weights;           /* 4 per vertex, summing to 1 (after reduction) */
-    uint8_t *weights_u8;      /* quantize: 4 per vertex, summing to exactly 255 */
+    uint16_t *weights_q;      /* quantize: 4 per vertex, summing to exactly cb_mesh.weight_scale */
     int8_t *normals_i8;       /* quantize: 3 per vertex */
     uint16_t *texcoords_u16;  /* quantize, texcoords within 0..1: 2 per vertex */
     uint32_t *indices;
@@ -42,6 +43,7 @@ typedef struct cb_mesh {
     cb_mesh_part *parts;
     uint32_t batch, max_influences, bone_count;
     bool quantized;
+    uint32_t weight_scale;    /* quantize: 255 (u8 weights) or 65535 (u16) */
     double normal_error_deg;  /* quantize: the largest angle between a normal and its i8 form */
     double texcoord_error;    /* quantize: the largest change of a texcoord (u16 steps) */
 } cb_mesh;
@@ -66,9 +68,9 @@ void cb_mesh_batch_bytes(const cb_mesh *mesh, uint32_t copies, uint64_t *vertex_
  * sum 1; the other slots get joint 0 and weight 0. */
 void cb_reduce_influences(const uint16_t joints[4], const float weights[4], uint32_t max, uint16_t out_joints[4],
                           float out_weights[4]);
-/* Weights summing to 1 as unsigned bytes summing to exactly 255 (largest remainders round up),
- * as glTF's normalized UNSIGNED_BYTE weights must. */
-void cb_quantize_weights(const float weights[4], uint8_t out[4]);
+/* Weights summing to 1 as integers summing to exactly `scale` (255 or 65535; largest remainders
+ * round up), as glTF's normalized UNSIGNED_BYTE / UNSIGNED_SHORT weights must. */
+void cb_quantize_weights(const float weights[4], uint32_t scale, uint16_t out[4]);
 
 /* The extra vertex error of a mesh: its first copy skinned with its joints and weights against
  * the model's own skinning (4 influences, the weights as stored, joints through the remap),
@@ -82,6 +84,12 @@ typedef struct cb_mesh_error {
     double worst_time;       /* clip time */
     uint32_t frames;         /* frames measured */
 } cb_mesh_error;
+
+/* With o->quantize: builds the mesh with u8 weights and keeps them when they add at most
+ * max_extra_mm (mm per metre of height) to the error the same mesh has with float weights;
+ * else rebuilds it with u16 weights. Measures the mesh it returns into *error. */
+cb_status cb_mesh_build_measured(cb_sampler *palette_sampler, const cb_model *model, int32_t skin, const cb_mesh_options *o,
+                                 double fps, double max_extra_mm, cb_mesh *out, cb_mesh_error *error, cb_error *err);
 
 cb_status cb_mesh_measure(cb_sampler *palette_sampler, const cb_model *model, int32_t skin, const cb_mesh *mesh,
                           const uint32_t *remap, double fps, cb_mesh_error *out, cb_error *err);

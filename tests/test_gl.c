@@ -466,7 +466,7 @@ static void batch_vs_instanced(const char *library, double *vs_instanced, double
     bake(path, CB_LAYOUT_QPOS, CB_PRECISION_U16, &f);
     cb_mesh mesh;
     cb_error err = {0};
-    cb_mesh_options o = {4, false, BATCH, NULL, f.palette.bone_count};
+    cb_mesh_options o = {4, false, false, BATCH, NULL, f.palette.bone_count};
     assert_int_equal(cb_mesh_build(f.model, 0, &o, &mesh, &err), CB_OK);
     const cb_mesh_part *part = &mesh.parts[0];
     uint32_t verts = part->vertex_count / BATCH;

@@ -248,6 +248,30 @@ static void test_batch_and_catalog_lod(void **state)
     assert_null(fopen(TMP "/bad.glb", "rb"));
 }
 
+/* --quantize keeps u8 weights only where they add at most --max-quantization-error: Cow at 4
+ * influences loses 1.25 mm/m with u8 weights, so it gets u16 (and 0.004 mm/m) by default. */
+static void test_weights_are_quantized_where_the_error_allows(void **state)
+{
+    (void)state;
+    char model[1024], args[2048];
+    shared_path(model, sizeof model, "assets/quaternius-cow/Cow.glb");
+    snprintf(args, sizeof args, "%s -o " TMP "/cow-q.glb --quantize", model);
+    double bits = mesh_json(args, "weight_bits"), mm = mesh_json(args, "error_mm_per_m");
+    snprintf(args, sizeof args, "%s -o " TMP "/cow-q8.glb --quantize --max-quantization-error 10", model);
+    double bits8 = mesh_json(args, "weight_bits"), mm8 = mesh_json(args, "error_mm_per_m");
+    printf("  Cow, 4 influences: u%.0f weights %.4f mm/m (default), u%.0f weights %.4f mm/m (allowed 10)\n", bits, mm, bits8, mm8);
+    assert_true(bits == 16 && mm < 0.1 && bits8 == 8 && mm8 > 0.1 && mm8 < 10);
+    cb_model *w = load_or_fail(TMP "/cow-q.glb"), *w8 = load_or_fail(TMP "/cow-q8.glb");
+    bool off_u8_grid = false; /* the u16 file's weights are not all multiples of 1/255 */
+    for (uint32_t k = 0; k < w->primitives[0].vertex_count * 4; ++k) {
+        float x = w->primitives[0].weights[k], y = w8->primitives[0].weights[k];
+        off_u8_grid |= fabsf(x * 255 - roundf(x * 255)) > 1e-3f;
+        assert_true(fabsf(x * 65535 - roundf(x * 65535)) < 1e-2f && fabsf(y * 255 - roundf(y * 255)) < 1e-4f);
+    }
+    assert_true(off_u8_grid);
+    cb_model_free(w), cb_model_free(w8);
+}
+
 /* The n-th number after `key` in text, from position `from` on. */
 static double number_after(const char *text, const char *key, int n)
 {
@@ -307,6 +331,7 @@ int main(void)
         cmocka_unit_test(test_a_lod_is_remapped_to_palette_bones_and_quantized),
         cmocka_unit_test(test_batch_and_catalog_lod),
         cmocka_unit_test(test_report_counts_runtime_meshes_batches_and_transitions),
+        cmocka_unit_test(test_weights_are_quantized_where_the_error_allows),
     };
     return cmocka_run_group_tests_name("mesh", tests, setup, NULL);
 }
