@@ -103,8 +103,8 @@ static double mm(const cb_report_mesh *m) { return cb_mm_per_m(m->error, m->heig
 
 static void mesh_label(const cb_report_mesh *m, char *buf, size_t size)
 {
-    if (m->lod) snprintf(buf, size, "LOD %u, %u infl., w%u", m->lod, m->influences, m->weight_bits);
-    else snprintf(buf, size, "model, %u infl., w%u", m->influences, m->weight_bits);
+    if (m->lod) snprintf(buf, size, "LOD %u, %u infl., u%u weights", m->lod, m->influences, m->weight_bits);
+    else snprintf(buf, size, "model, %u infl., u%u weights", m->influences, m->weight_bits);
 }
 
 static bool any_measured(const cb_report *r)
@@ -119,14 +119,14 @@ void cb_report_runtime_text(FILE *f, const cb_report *r)
     char a[32], b[32], c[32], label[64];
     if (!any_measured(r)) return;
     fprintf(f, "\nRuntime meshes (crowdbake mesh --quantize; error: extra vertex error vs 4 influences, at 30 fps):\n"
-               "%-14s %-18s %9s %11s %11s %10s %8s\n", "type", "mesh", "vertices", "buffers", "in file", "error mm/m", "fetches");
+               "%-14s %-28s %9s %11s %11s %10s %8s\n", "type", "mesh", "vertices", "buffers", "in file", "error mm/m", "fetches");
     for (uint32_t i = 0; i < r->type_count; ++i)
         for (uint32_t k = 0; k < r->types[i].runtime.mesh_count; ++k) {
             const cb_report_mesh *m = &r->types[i].runtime.meshes[k];
             mesh_label(m, label, sizeof label);
             cb_human_bytes(m->vertex_bytes + m->index_bytes, a, sizeof a);
             cb_human_bytes(m->source_bytes, b, sizeof b);
-            fprintf(f, "%-14s %-18s %9llu %11s %11s %10.3f %8u\n", r->types[i].name, label, (unsigned long long)m->vertices, a, b,
+            fprintf(f, "%-14s %-28s %9llu %11s %11s %10.3f %8u\n", r->types[i].name, label, (unsigned long long)m->vertices, a, b,
                     mm(m), m->fetches);
         }
     fprintf(f, "\n%-14s %16s %16s %7s %24s %s\n", "type", "batch of " CB_REPORT_STR(CB_REPORT_BATCH), "instanced", "ratio",
@@ -159,14 +159,14 @@ void cb_report_runtime_markdown(FILE *f, const cb_report *r)
                     b, mm(m), m->fetches);
         }
     fputs("\n| type | batch of " CB_REPORT_STR(CB_REPORT_BATCH) " copies | instanced | pre-baked transitions (" CB_REPORT_STR(
-              CB_REPORT_TRANSITION_SECONDS) " s each) | saved by a runtime cross-fade |\n|---|--:|--:|--:|--:|\n", f);
+              CB_REPORT_TRANSITION_SECONDS) " s each) a runtime cross-fade saves |\n|---|--:|--:|--:|\n", f);
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_runtime *rt = &r->types[i].runtime;
         if (!rt->measured) continue;
         cb_human_bytes(rt->batch_bytes, a, sizeof a);
         cb_human_bytes(rt->instanced_bytes, b, sizeof b);
         cb_human_bytes(rt->transition_bytes, c, sizeof c);
-        fprintf(f, "| %s | %s | %s | %s for %u loops | %s |\n", r->types[i].name, a, b, c, rt->loops, c);
+        fprintf(f, "| %s | %s | %s | %s for %u loops |\n", r->types[i].name, a, b, c, rt->loops);
     }
 }
 
