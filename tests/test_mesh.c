@@ -215,8 +215,13 @@ static void test_batch_and_catalog_lod(void **state)
     assert_int_equal(w->primitives[0].index_count, 5 * src->primitives[0].index_count);
     uint32_t n = src->primitives[0].vertex_count;
     assert_memory_equal(w->primitives[0].positions + 4 * n * 3, src->primitives[0].positions, n * 3 * sizeof(float));
-    size_t size;
+    size_t size, size2;
     char *glb = read_whole_file(TMP "/fish-batch.glb", &size);
+    snprintf(cmd, sizeof cmd, "%s mesh %s -o " TMP "/fish-batch2.glb --batch 5 --quantize 2>&1", crowdbake_exe(), model);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    char *again = read_whole_file(TMP "/fish-batch2.glb", &size2); /* deterministic: the same bytes */
+    assert_true(size == size2 && memcmp(glb, again, size) == 0);
+    free(again);
     assert_non_null(memmem(glb, size, "\"_INSTANCE_ID\"", 14));
     assert_non_null(memmem(glb, size, "\"KHR_mesh_quantization\"", 23));
     free(glb);
