@@ -319,7 +319,8 @@ static int output_formats(const bake_args *a, bool *want_pal, bool *want_exr, bo
 {
     if (a->format) {
         if (!parse_formats(a->format, want_pal, want_exr, want_ktx2))
-            return cli_usage_error("bake", "--format is a comma-separated set of pal, exr and ktx2, got '%s'", a->format);
+            return cli_usage_error("bake", "--format is pal, exr or pal,exr (any comma-separated set of pal, exr and ktx2), got '%s'",
+                                   a->format);
         return 0;
     }
     const char *dot = strrchr(a->output, '.'), *slash = strrchr(a->output, '/');

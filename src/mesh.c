@@ -106,13 +106,13 @@ static void quantize_part(cb_mesh_part *p, uint32_t n, cb_mesh *mesh)
                 memcpy((arr) + (size_t)c_ * (n) * (per), (arr), (size_t)(n) * (per) * sizeof *(arr)); \
     } while (0)
 
-static cb_status build_part(const cb_primitive *src, const cb_skin *skin, const cb_mesh_options *o, cb_mesh_part *p,
-                            cb_mesh *mesh, cb_error *err)
+static cb_status build_part(const char *source, const cb_primitive *src, const cb_skin *skin, const cb_mesh_options *o,
+                            cb_mesh_part *p, cb_mesh *mesh, cb_error *err)
 {
     uint32_t n = src->vertex_count, k = o->batch, ic = src->indices ? src->index_count : n;
     if ((uint64_t)n * k > UINT32_MAX || (uint64_t)ic * k > UINT32_MAX)
-        return cb_fail(err, CB_ERR_USAGE, "--batch %u: %u copies of %u vertices overflow 32-bit indices; batch fewer copies",
-                       k, k, n);
+        return cb_fail(err, CB_ERR_USAGE, "%s: --batch %u: %u copies of %u vertices overflow 32-bit indices; batch fewer copies",
+                       source, k, k, n);
     size_t nk = (size_t)n * k;
     p->vertex_count = (uint32_t)nk;
     p->index_count = ic * k;
@@ -141,8 +141,8 @@ static cb_status build_part(const cb_primitive *src, const cb_skin *skin, const 
         for (int i = 0; i < 4; ++i) {
             uint16_t j = src->joints[(size_t)v * 4 + i];
             if (j >= skin->joint_count && src->weights[(size_t)v * 4 + i] != 0)
-                return cb_fail(err, CB_ERR_INPUT, "vertex %u uses joint %u of a skin with %u joints; re-export the mesh", v, j,
-                               skin->joint_count);
+                return cb_fail(err, CB_ERR_INPUT, "%s: vertex %u uses joint %u of a skin with %u joints; re-export the mesh",
+                               source, v, j, skin->joint_count);
             bones[i] = j >= skin->joint_count ? 0 : (uint16_t)(o->remap ? o->remap[j] : j);
         }
         uint16_t *oj = p->joints + (size_t)v * 4;
@@ -183,10 +183,13 @@ cb_status cb_mesh_build(const cb_model *model, int32_t skin, const cb_mesh_optio
     for (uint32_t i = 0; i < model->primitive_count; ++i) out->part_count += model->primitives[i].skin == skin;
     out->parts = calloc(out->part_count ? out->part_count : 1, sizeof *out->parts);
     if (!out->parts) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    if (!out->part_count) return cb_fail(err, CB_ERR_INPUT, "%s: skin %d has no skinned mesh", model->source, skin);
+    if (!out->part_count) {
+        cb_mesh_free(out);
+        return cb_fail(err, CB_ERR_INPUT, "%s: skin %d has no skinned mesh", model->source, skin);
+    }
     for (uint32_t i = 0, p = 0; i < model->primitive_count; ++i) {
         if (model->primitives[i].skin != skin) continue;
-        if (build_part(&model->primitives[i], &model->skins[skin], &opt, &out->parts[p++], out, err)) {
+        if (build_part(model->source, &model->primitives[i], &model->skins[skin], &opt, &out->parts[p++], out, err)) {
             cb_mesh_free(out);
             return err->status;
         }
@@ -222,8 +225,11 @@ void cb_mesh_batch_bytes(const cb_mesh *mesh, uint32_t copies, uint64_t *vertex_
 cb_status cb_mesh_build_measured(cb_sampler *ps, const cb_model *model, int32_t skin, const cb_mesh_options *o, double fps,
                                  double max_extra_mm, cb_mesh *out, cb_mesh_error *error, cb_error *err)
 {
-    if (cb_mesh_build(model, skin, o, out, err) || cb_mesh_measure(ps, model, skin, out, o->remap, fps, error, err))
+    if (cb_mesh_build(model, skin, o, out, err)) return err->status;
+    if (cb_mesh_measure(ps, model, skin, out, o->remap, fps, error, err)) {
+        cb_mesh_free(out);
         return err->status;
+    }
     if (!o->quantize || o->weights_u16) return CB_OK;
     cb_mesh plain;
     cb_mesh_error plain_error;
@@ -231,6 +237,7 @@ cb_status cb_mesh_build_measured(cb_sampler *ps, const cb_model *model, int32_t 
     p.quantize = false;
     if (cb_mesh_build(model, skin, &p, &plain, err) || cb_mesh_measure(ps, model, skin, &plain, o->remap, fps, &plain_error, err)) {
         cb_mesh_free(&plain);
+        cb_mesh_free(out);
         return err->status;
     }
     cb_mesh_free(&plain);
@@ -238,7 +245,8 @@ cb_status cb_mesh_build_measured(cb_sampler *ps, const cb_model *model, int32_t 
     cb_mesh_free(out); /* u8 weights cost too much here: u16 */
     p.quantize = true, p.weights_u16 = true;
     if (cb_mesh_build(model, skin, &p, out, err)) return err->status;
-    return cb_mesh_measure(ps, model, skin, out, o->remap, fps, error, err);
+    if (cb_mesh_measure(ps, model, skin, out, o->remap, fps, error, err)) cb_mesh_free(out);
+    return err->status;
 }
 
 /* ---- error ---- */
