@@ -509,12 +509,55 @@ static void test_a_batch_in_one_draw_equals_instances(void **state)
     free(lib), free(broken_lib);
 }
 
+/* ---- far LODs: CB_INFLUENCES reads only the first bones of a `mesh --max-influences` mesh ---- */
+
+static void test_fewer_influences_read_fewer_bones(void **state)
+{
+    (void)state;
+    char *lib = read_whole_file("samples/shaders/crowdbake_palette.glsl", NULL), path[1024];
+    snprintf(path, sizeof path, "%s/quadruped.glb", samples_dir());
+    fixture f;
+    bake(path, CB_LAYOUT_QPOS, CB_PRECISION_U16, &f);
+    sample samples[64];
+    uint32_t n = make_samples(&f.palette, samples, 64);
+    double tol = tolerance(&f), reduced[3] = {0}, full_mesh_with_one = 0;
+    size_t size = strlen(lib) + 64;
+    char *with = malloc(size);
+    for (uint32_t k = 0; k < 2; ++k) {
+        uint32_t inf = k ? 2 : 1;
+        cb_mesh mesh;
+        cb_error err = {0};
+        cb_mesh_options o = {inf, false, false, 1, NULL, f.palette.bone_count};
+        assert_int_equal(cb_mesh_build(f.model, 0, &o, &mesh, &err), CB_OK);
+        cb_primitive prim = {.vertex_count = mesh.parts[0].vertex_count, .positions = mesh.parts[0].positions,
+                             .joints = mesh.parts[0].joints, .weights = mesh.parts[0].weights};
+        snprintf(with, size, "#define CB_INFLUENCES %u\n%s", inf, lib);
+        GLuint prog = compile(&f.palette, with, true);
+        float *gpu = gpu_skin(&f.palette, &prim, samples, n, prog, false, 0);
+        reduced[k] = compare(&f.palette, &prim, samples, n, gpu);
+        free(gpu);
+        if (inf == 1) { /* broken variant: the model's own 4-influence mesh through the 1-bone shader */
+            gpu = gpu_skin(&f.palette, &f.model->primitives[0], samples, n, prog, false, 0);
+            full_mesh_with_one = compare(&f.palette, &f.model->primitives[0], samples, n, gpu);
+            free(gpu);
+        }
+        glDeleteProgram(prog);
+        cb_mesh_free(&mesh);
+    }
+    printf("  CB_INFLUENCES 1 / 2 on meshes of 1 / 2 influences: GPU vs CPU %.2g / %.2g (tolerance %.2g); a 4-influence "
+           "mesh through CB_INFLUENCES 1: error / tolerance %.0f\n", reduced[0], reduced[1], tol, full_mesh_with_one / tol);
+    assert_true(reduced[0] <= tol && reduced[1] <= tol && full_mesh_with_one > 10 * tol);
+    free(with), free(lib);
+    release(&f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_layout_and_precision_matches_the_cpu),
         cmocka_unit_test(test_broken_variants_are_caught),
         cmocka_unit_test(test_a_batch_in_one_draw_equals_instances),
+        cmocka_unit_test(test_fewer_influences_read_fewer_bones),
     };
     return cmocka_run_group_tests_name("gl", tests, setup, teardown);
 }

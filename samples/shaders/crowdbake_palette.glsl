@@ -4,6 +4,8 @@
 //   #define CB_LAYOUT_MAT4 | CB_LAYOUT_AFFINE | CB_LAYOUT_QPOS        (the .pal header's layout)
 //   #define CB_PRECISION_FLOAT | CB_PRECISION_HALF | CB_PRECISION_U16 (its precision)
 //   #define CB_POSITIONS_RELATIVE   when the header's flags have bit 2 (4: a version 2 qpos/half palette)
+//   #define CB_INFLUENCES 1|2       optional, for a mesh written with `crowdbake mesh --max-influences 1|2`:
+//                                   only that many bones per vertex are read (a far LOD's cheaper shader)
 //
 // Textures: cb_palette is the .pal payload as is - RGBA32F, RGBA16F, or RGBA16UI (u16, read as
 // usampler2D) - width x height from the header. For qpos, cb_bind_positions is an RGBA32F
@@ -30,6 +32,10 @@ precision highp float;
 precision highp int;
 precision highp sampler2D;
 precision highp usampler2D;
+#endif
+
+#ifndef CB_INFLUENCES
+#define CB_INFLUENCES 4
 #endif
 
 #if defined(CB_LAYOUT_MAT4)
@@ -162,7 +168,7 @@ vec3 cb_skin(vec3 v, float w, ivec4 joints, vec4 weights, vec4 inst, float time)
     float fr;
     cb_frame(inst, time, row0, row1, fr);
     vec3 r = vec3(0.0);
-    for (int i = 0; i < 4; ++i)
+    for (int i = 0; i < CB_INFLUENCES; ++i) // cb:influences - crowdbake mesh puts the largest weights first
         if (weights[i] != 0.0) r += weights[i] * cb_bone_transform(row0, row1, fr, joints[i], v, w);
     return r;
 }
