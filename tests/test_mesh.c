@@ -329,6 +329,38 @@ static void test_report_counts_runtime_meshes_batches_and_transitions(void **sta
     assert_true(number_after(rt, "\"prebaked_transition_bytes\": ", 0) == (double)loops * (loops - 1) * 16 * 84 * 8);
 }
 
+/* Bad input: one line naming the file or option and the fix, the exit code, no file written. */
+static void test_bad_input_is_refused_with_the_fix(void **state)
+{
+    (void)state;
+    char fish[1024], fox[1024], cmd[4096], out[4096];
+    sample_path(fish, sizeof fish, "fish");
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    const struct {
+        const char *args, *message;
+        int rc;
+    } cases[] = {
+        {"%s -o " TMP "/bad.obj", "the mesh is written as a .glb; name it OUT.glb", CB_ERR_USAGE},
+        {"%s -o " TMP "/bad.glb --max-influences 3", "--max-influences is 1, 2 or 4", CB_ERR_USAGE},
+        {"%s -o " TMP "/bad.glb --batch 0", "--batch wants a count of copies from 1 to 65536", CB_ERR_USAGE},
+        {"%s -o " TMP "/bad.glb --lod 1", "--type and --lod pick a catalog's type and LOD", CB_ERR_USAGE},
+        {"%s -o " TMP "/bad.glb --max-quantization-error 1", "--max-quantization-error goes with --quantize", CB_ERR_USAGE},
+        {"%s -o " TMP "/bad.glb --palette-model %s", "fish.glb: LOD joint 'root' is not a joint of", CB_ERR_INPUT},
+    };
+    for (size_t i = 0; i < COUNT_OF(cases); ++i) {
+        char args[3072];
+        snprintf(args, sizeof args, cases[i].args, fish, fox);
+        snprintf(cmd, sizeof cmd, "%s mesh %s 2>&1", crowdbake_exe(), args);
+        int rc = run_command(cmd, out, sizeof out);
+        printf("  %d: %s", rc, out);
+        assert_int_equal(rc, cases[i].rc);
+        assert_non_null(strstr(out, cases[i].message));
+        assert_ptr_equal(strchr(out, '\n'), out + strlen(out) - 1); /* one line */
+    }
+    assert_null(fopen(TMP "/bad.glb", "rb"));
+    assert_null(fopen(TMP "/bad.obj", "rb"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -337,6 +369,7 @@ int main(void)
         cmocka_unit_test(test_batch_and_catalog_lod),
         cmocka_unit_test(test_report_counts_runtime_meshes_batches_and_transitions),
         cmocka_unit_test(test_weights_are_quantized_where_the_error_allows),
+        cmocka_unit_test(test_bad_input_is_refused_with_the_fix),
     };
     return cmocka_run_group_tests_name("mesh", tests, setup, NULL);
 }
