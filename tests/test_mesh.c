@@ -109,6 +109,13 @@ static void test_fewer_influences_skin_within_their_stated_error(void **state)
             double stated = mesh_json(args, "error"), height;
             cb_model *w = load_or_fail(out_glb);
             check_influences(w, inf);
+            for (uint32_t p = 0; p < src->primitive_count; ++p) { /* positions and texcoords carried as they are */
+                const cb_primitive *a = &src->primitives[p], *b = &w->primitives[p];
+                assert_memory_equal(a->positions, b->positions, a->vertex_count * 3 * sizeof(float));
+                assert_true(!a->texcoords == !b->texcoords);
+                if (a->texcoords) assert_memory_equal(a->texcoords, b->texcoords, a->vertex_count * 2 * sizeof(float));
+            }
+            if (mi == 1) assert_non_null(w->primitives[0].texcoords); /* Fox has them */
             double measured = reskin_error(src, src, NULL, w, &height);
             printf("  %s, %u influence(s): stated %.6g, re-skinned %.6g units (%.3f mm/m)\n", models[mi], inf, stated, measured,
                    cb_mm_per_m(measured, height));
