@@ -232,6 +232,19 @@ static void test_batch_and_catalog_lod(void **state)
     assert_non_null(memmem(glb, size, "\"_INSTANCE_ID\"", 14));
     assert_non_null(memmem(glb, size, "\"KHR_mesh_quantization\"", 23));
     free(glb);
+    /* The ids as a reader of the .glb sees them: accessor _INSTANCE_ID of the binary chunk, read by Node. */
+    snprintf(cmd, sizeof cmd,
+             "node -e \"const b = require('fs').readFileSync('" TMP "/fish-batch.glb'); const jl = b.readUInt32LE(12);"
+             " const g = JSON.parse(b.subarray(20, 20 + jl)); const bin = 20 + jl + 8;"
+             " const a = g.accessors[g.meshes[0].primitives[0].attributes._INSTANCE_ID], v = g.bufferViews[a.bufferView];"
+             " const f = new Float32Array(b.buffer.slice(b.byteOffset + bin + v.byteOffset, b.byteOffset + bin + v.byteOffset + 4 * a.count));"
+             " let bad = 0; f.forEach((x, i) => { if (x !== Math.floor(i / %u)) bad++; });"
+             " console.log(a.componentType + ' ' + a.type + ' ' + a.count + ' ids, ' + bad + ' wrong');\" 2>&1", n);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    printf("  _INSTANCE_ID: %s", out);
+    char want[128];
+    snprintf(want, sizeof want, "5126 SCALAR %u ids, 0 wrong", 5 * n);
+    assert_non_null(strstr(out, want));
     snprintf(cmd, sizeof cmd, "node tests/validator/validate.mjs " TMP "/fish-batch.glb 2>&1");
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     assert_non_null(strstr(out, "0 errors, 0 warnings"));
