@@ -12,7 +12,7 @@
 #include "cli.h"
 
 const char cmd_bake_usage[] =
-    "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr [options]\n"
+    "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2 [options]\n"
     "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--out-dir DIR] [--json]\n"
     "                      [-q]\n"
     "                      [--fps N] [--layout L] [--precision P] [--format F] [--zstd] [--max-texture-size N]\n"
@@ -25,16 +25,17 @@ const char cmd_bake_usage[] =
     "--out-dir replaces the catalog's out_dir (a path from the current directory);\n"
     "--depfile-manifest-only writes the manifest's rule alone, as Ninja's depfile without\n"
     "deps = gcc (CMake's DEPFILE) wants it.\n\n"
-    "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md) or .exr (OpenEXR); another\n"
-    "                             extension is refused\n"
-    "  --format pal,exr           write these formats (OUT's extension is replaced per format; each\n"
+    "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md), .exr (OpenEXR) or .ktx2\n"
+    "                             (uncompressed KTX2, RGBA16F/RGBA32F); another extension is refused\n"
+    "  --format pal,exr,ktx2      write these formats (OUT's extension is replaced per format; each\n"
     "                             keeps its own default precision unless --precision is given)\n"
     "  --fps N|auto               baked frames per second (default 30); auto: per clip, the lowest rate\n"
     "                             whose error stays under --max-error (mm per metre of model height,\n"
     "                             default 1) at baked frames and between them, up to --max-fps (60)\n"
     "  --layout mat4|affine|qpos  texels per bone: 4, 3 or 2 (default qpos; affine when the rig has\n"
     "                             non-uniform scale or shear, which qpos cannot hold)\n"
-    "  --precision float|half|u16 RGBA32F, RGBA16F or RGBA16UI (default u16 for .pal, float for .exr)\n"
+    "  --precision float|half|u16 RGBA32F, RGBA16F or RGBA16UI (default u16 for .pal, float for .exr\n"
+    "                             and .ktx2, which refuse u16)\n"
     "  --max-texture-size N       never emit a dimension above N (default 16384); rows wrap into\n"
     "                             side-by-side column blocks\n"
     "  --root-motion keep|in-place  in-place removes the root's average horizontal travel\n"
@@ -102,7 +103,8 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
     if (a->root_motion && !cb_root_motion_parse(a->root_motion, &s->root_motion))
         return cli_usage_error("bake", "--root-motion is keep or in-place");
     if (a->format && !(s->formats = cb_formats_parse(a->format)))
-        return cli_usage_error("bake", "--format is pal, exr or pal,exr, got '%s'", a->format);
+        return cli_usage_error("bake", "--format is pal, exr or pal,exr (any comma-separated set of pal, exr and ktx2), "
+                               "got '%s'", a->format);
     if (a->exr_compression && !cb_exr_compression_parse(a->exr_compression, &s->exr_compression))
         return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
     s->zstd = a->zstd;
@@ -140,7 +142,10 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     if ((a->fps && strcmp(a->fps, "auto") == 0) || a->max_error || a->max_fps)
         return cli_usage_error("bake", "--fps auto, --max-error and --max-fps are for single models; a catalog sets fps per "
                                "animal or clip");
-    if (a->format && !cb_formats_parse(a->format)) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    unsigned formats = a->format ? cb_formats_parse(a->format) : 0;
+    if (a->format && !formats) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    /* KTX2 from a catalog would need its manifest and up-to-date check to learn the format. */
+    if (formats & CB_FORMAT_KTX2) return cli_usage_error("bake", "--format ktx2 is for single models for now; a catalog writes pal and exr");
     if (a->zstd && a->format && !(cb_formats_parse(a->format) & CB_FORMAT_PAL))
         return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
     cb_bake_settings over;
@@ -172,7 +177,7 @@ static void json_output(cb_json *j, const cb_bake_output *out, double seconds, d
     const cb_palette *p = &out->palette;
     cb_json_object(j, NULL);
     cb_json_string(j, "path", out->path);
-    cb_json_string(j, "format", out->format == CB_FORMAT_PAL ? "pal" : "exr");
+    cb_json_string(j, "format", out->format == CB_FORMAT_PAL ? "pal" : out->format == CB_FORMAT_EXR ? "exr" : "ktx2");
     cb_json_int(j, "bytes", (long long)out->file_bytes);
     cb_json_int(j, "width", p->width);
     cb_json_int(j, "height", p->height);
@@ -238,10 +243,12 @@ static int output_formats(const bake_args *a, unsigned *formats)
     if (a->format) return 0; /* parse_settings read it */
     const char *dot = strrchr(a->output, '.'), *slash = strrchr(a->output, '/');
     const char *ext = dot && (!slash || dot > slash) ? dot : "";
-    *formats = strcmp(ext, ".exr") == 0 ? CB_FORMAT_EXR : strcmp(ext, ".pal") == 0 || !ext[0] ? CB_FORMAT_PAL : 0;
+    *formats = strcmp(ext, ".exr") == 0    ? CB_FORMAT_EXR
+               : strcmp(ext, ".ktx2") == 0 ? CB_FORMAT_KTX2
+               : strcmp(ext, ".pal") == 0 || !ext[0] ? CB_FORMAT_PAL : 0;
     if (!*formats)
-        return cli_usage_error("bake", "%s: unknown output extension '%s'; write OUT.pal or OUT.exr, or give --format "
-                               "pal,exr", a->output, ext);
+        return cli_usage_error("bake", "%s: unknown output extension '%s'; write OUT.pal, OUT.exr or OUT.ktx2, or give "
+                               "--format pal,exr", a->output, ext);
     return 0;
 }
 
@@ -251,9 +258,13 @@ static int single_model_checks(const bake_args *a, cb_bake_settings *s)
     int rc;
     if ((rc = output_formats(a, &s->formats))) return rc;
     bool want_pal = s->formats & CB_FORMAT_PAL;
-    if (!cb_bake_settings_writable(s))
+    /* KTX2 could hold u16 as RGBA16UI, but three.js's KTX2Loader and most loaders refuse integer formats. */
+    if (!cb_bake_settings_writable(s) && (s->formats & CB_FORMAT_EXR))
         return cli_usage_error("bake", "EXR holds half or float texels; use --precision half|float%s",
                                want_pal ? " (or write only the .pal)" : "");
+    if (!cb_bake_settings_writable(s))
+        return cli_usage_error("bake", "KTX2 palettes hold half or float texels (RGBA16F, RGBA32F; common KTX2 loaders "
+                               "refuse u16's RGBA16UI); use --precision half|float%s", want_pal ? " (or write only the .pal)" : "");
     if (a->zstd && !want_pal) return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
     if (a->max_error && !s->fps_auto) return cli_usage_error("bake", "--max-error goes with --fps auto");
     return 0;
@@ -327,15 +338,19 @@ int cmd_bake(int argc, char **argv)
     cb_model *m = cli_load_model(a.model, &limits, &err);
     if (!m) return cli_report(&err);
     double load = now_seconds() - t0;
-    char pal_path[4096], exr_path[4096];
+    char pal_path[4096], exr_path[4096], ktx2_path[4096];
     snprintf(pal_path, sizeof pal_path, "%s", a.output);
     snprintf(exr_path, sizeof exr_path, "%s", a.output);
-    if (a.format) output_path(a.output, "pal", pal_path, sizeof pal_path), output_path(a.output, "exr", exr_path, sizeof exr_path);
+    snprintf(ktx2_path, sizeof ktx2_path, "%s", a.output);
+    if (a.format) {
+        output_path(a.output, "pal", pal_path, sizeof pal_path), output_path(a.output, "exr", exr_path, sizeof exr_path);
+        output_path(a.output, "ktx2", ktx2_path, sizeof ktx2_path);
+    }
     cb_bake_job job;
     memset(&job, 0, sizeof job);
     job.model = m, job.skin = cli_pick_skin(m, a.skin, &err);
     job.settings = settings, job.limits = limits, job.threads = threads, job.speed_reference = speed_ref;
-    job.pal_path = pal_path, job.exr_path = exr_path;
+    job.pal_path = pal_path, job.exr_path = exr_path, job.ktx2_path = ktx2_path;
     cb_clip_plan *selection = NULL;
     cb_bake_result result = {0};
     if (job.skin >= 0 && !cli_select_clips(m, a.clips, a.excluded, &selection, &job.clip_count, &err)) {

@@ -16,6 +16,8 @@ _crowdbake_options()
     preview) echo "-o --output --skin --cell --columns $limits" ;;
     vat) echo "-o --output --fps --max-texture-size --root-motion --skin --exr-compression --json --clip --exclude-clip $limits" ;;
     report) echo "--json --markdown --html --no-fail -j --target" ;;
+    mesh) echo "-o --output --palette-model --max-influences --quantize --batch --max-quantization-error --fps --skin
+                --json --type --lod $limits" ;;
     esac
 }
 
@@ -27,7 +29,7 @@ _crowdbake()
     else
         cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[COMP_CWORD-1]} words=("${COMP_WORDS[@]}") cword=$COMP_CWORD
     fi
-    local commands="info sample bake inspect verify preview vat report"
+    local commands="info sample bake inspect verify preview vat report mesh"
     if [[ $cword -eq 1 ]]; then
         COMPREPLY=($(compgen -W "$commands --help" -- "$cur"))
         return
@@ -35,7 +37,8 @@ _crowdbake()
     case $prev in
     --layout) COMPREPLY=($(compgen -W "mat4 affine qpos" -- "$cur")); return ;;
     --precision) COMPREPLY=($(compgen -W "float half u16" -- "$cur")); return ;;
-    --format) COMPREPLY=($(compgen -W "pal exr pal,exr" -- "$cur")); return ;;
+    --format) COMPREPLY=($(compgen -W "pal exr ktx2 pal,exr pal,exr,ktx2" -- "$cur")); return ;;
+    --max-influences) COMPREPLY=($(compgen -W "1 2 4" -- "$cur")); return ;;
     --root-motion) COMPREPLY=($(compgen -W "keep in-place" -- "$cur")); return ;;
     --exr-compression) COMPREPLY=($(compgen -W "none rle zips zip piz" -- "$cur")); return ;;
     --fps) COMPREPLY=($(compgen -W "24 30 60 auto" -- "$cur")); return ;;
@@ -45,7 +48,7 @@ _crowdbake()
     if [[ $cur == -* ]]; then
         COMPREPLY=($(compgen -W "$(_crowdbake_options "${words[1]}") --help" -- "$cur"))
     else
-        COMPREPLY=($(compgen -f -X '!*.@(glb|gltf|pal|exr|toml)' -- "$cur") $(compgen -d -- "$cur"))
+        COMPREPLY=($(compgen -f -X '!*.@(glb|gltf|pal|exr|ktx2|toml)' -- "$cur") $(compgen -d -- "$cur"))
     fi
 }
 complete -F _crowdbake crowdbake

@@ -9,6 +9,7 @@
 
 #include "../formats/crowdbake_pal.h" /* XXH64 */
 #include "crowdbake/exr.h"
+#include "crowdbake/ktx2.h"
 #include "crowdbake/pal_write.h"
 
 static double now_seconds(void)
@@ -49,11 +50,19 @@ const char *cb_root_motion_name(cb_root_motion root_motion)
 
 unsigned cb_formats_parse(const char *text)
 {
-    if (strcmp(text, "pal") == 0) return CB_FORMAT_PAL;
-    if (strcmp(text, "exr") == 0) return CB_FORMAT_EXR;
-    if (strcmp(text, "pal,exr") == 0 || strcmp(text, "exr,pal") == 0 || strcmp(text, "both") == 0)
-        return CB_FORMAT_PAL | CB_FORMAT_EXR;
-    return 0;
+    if (strcmp(text, "both") == 0) return CB_FORMAT_PAL | CB_FORMAT_EXR;
+    static const char *const names[3] = {"pal", "exr", "ktx2"};
+    unsigned formats = 0;
+    for (const char *w = text;; ++w) {
+        size_t n = strcspn(w, ",");
+        unsigned bit = 0;
+        for (unsigned k = 0; k < 3; ++k)
+            if (strlen(names[k]) == n && strncmp(w, names[k], n) == 0) bit = 1u << k;
+        if (!bit || (formats & bit)) return 0;
+        formats |= bit;
+        if (!w[n]) return formats;
+        w += n;
+    }
 }
 
 bool cb_fps_valid(double fps) { return fps > 0 && fps <= CB_FPS_LIMIT; }
@@ -61,7 +70,7 @@ bool cb_max_fps_valid(double max_fps) { return max_fps >= CB_MAX_FPS_LOWEST && m
 
 bool cb_bake_settings_writable(const cb_bake_settings *s)
 {
-    return !((s->formats & CB_FORMAT_EXR) && s->precision_set && s->precision == CB_PRECISION_U16);
+    return !((s->formats & (CB_FORMAT_EXR | CB_FORMAT_KTX2)) && s->precision_set && s->precision == CB_PRECISION_U16);
 }
 
 cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned format, const cb_limits *limits,
@@ -71,8 +80,8 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
     if (limits) o.limits = *limits;
     o.fps = s->fps;
     o.layout = s->layout;
-    /* EXR holds half or float; half misses 0.5 mm/m on the samples, so float unless asked. */
-    o.precision = s->precision_set || format != CB_FORMAT_EXR ? s->precision : CB_PRECISION_FLOAT;
+    /* EXR and KTX2 hold half or float; half misses 0.5 mm/m on the samples, so float unless asked. */
+    o.precision = s->precision_set || format == CB_FORMAT_PAL ? s->precision : CB_PRECISION_FLOAT;
     o.max_texture_size = s->max_texture_size;
     o.root_motion = s->root_motion;
     o.threads = threads ? threads : 1;
@@ -83,7 +92,8 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
 /* The first format the job writes: its options choose the rates. */
 static unsigned first_format(const cb_bake_job *job)
 {
-    return (job->settings.formats & CB_FORMAT_PAL) || !job->settings.formats ? CB_FORMAT_PAL : CB_FORMAT_EXR;
+    unsigned f = job->settings.formats;
+    return (f & CB_FORMAT_PAL) || !f ? CB_FORMAT_PAL : (f & CB_FORMAT_EXR) ? CB_FORMAT_EXR : CB_FORMAT_KTX2;
 }
 
 /* ---- the input hash ---- */
@@ -177,17 +187,18 @@ static void bake_notes(cb_sampler *s, const cb_bake_job *job, const cb_bake_opti
                 "quaternion hemispheres; the shipped shaders flip before blending", p->quat_hemisphere_breaks);
 }
 
-static cb_status write_output(const cb_bake_job *job, cb_bake_output *out, cb_error *err)
+static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_bake_output *out, cb_error *err)
 {
     double t0 = now_seconds();
-    const cb_palette *p = &out->palette;
     if (out->format == CB_FORMAT_PAL) {
         cb_pal_write_options po = {job->settings.zstd, 0, out->input_hash, (float)job->speed_reference,
                                    job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE};
         cb_pal_write(out->path, p, job->model, job->skin, &po, err);
-    } else {
+    } else if (out->format == CB_FORMAT_EXR) {
         cb_exr_write(out->path, p, job->model, job->skin, job->settings.exr_compression, out->input_hash,
                      (float)job->speed_reference, err);
+    } else {
+        cb_ktx2_write(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference, err);
     }
     out->seconds_write = now_seconds() - t0;
     struct stat st;
@@ -201,21 +212,29 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     if (cb_bake_job_plan(job, err)) return err->status;
     cb_sampler *s = cb_sampler_create(job->model, job->skin, err);
     if (!s) return err->status;
-    static const unsigned formats[2] = {CB_FORMAT_PAL, CB_FORMAT_EXR};
-    for (int f = 0; f < 2 && !err->status; ++f) {
+    static const unsigned formats[3] = {CB_FORMAT_PAL, CB_FORMAT_EXR, CB_FORMAT_KTX2};
+    const char *paths[3] = {job->pal_path, job->exr_path, job->ktx2_path};
+    cb_palette shared = {0}; /* the last palette baked, written again by a format of the same options */
+    cb_bake_options shared_opt = {0};
+    for (int f = 0; f < 3 && !err->status; ++f) {
         if (!(job->settings.formats & formats[f])) continue;
         cb_bake_output *o = &out->outputs[out->output_count];
         o->format = formats[f];
-        o->path = formats[f] == CB_FORMAT_PAL ? job->pal_path : job->exr_path;
+        o->path = paths[f];
         cb_bake_options opt = cb_bake_settings_options(&job->settings, formats[f], &job->limits, job->threads);
-        if (cb_palette_bake(s, &opt, job->plan, job->plan_count, &o->palette, err)) break;
+        if (!shared.texels || shared_opt.precision != opt.precision) {
+            cb_palette_free(&shared);
+            if (cb_palette_bake(s, &opt, job->plan, job->plan_count, &shared, err)) break;
+            shared_opt = opt;
+        }
+        o->palette = shared; /* its facts; the tables and texels stay with `shared` */
+        o->palette.clips = NULL, o->palette.bind_positions = NULL, o->palette.texels = NULL;
         out->output_count++;
         o->input_hash = cb_bake_input_hash(job, &opt);
-        if (out->output_count == 1) bake_notes(s, job, &opt, &o->palette, &out->notes);
-        write_output(job, o, err);
-        free(o->palette.texels); /* written: only the facts are kept */
-        o->palette.texels = NULL;
+        if (out->output_count == 1) bake_notes(s, job, &opt, &shared, &out->notes);
+        write_output(job, &shared, o, err);
     }
+    cb_palette_free(&shared);
     cb_sampler_free(s);
     return err->status;
 }

@@ -425,5 +425,6 @@ void cb_report_html(FILE *f, const cb_report *r)
     html_table(f, r);
     html_encodings(f, r);
     html_targets(f, r);
+    cb_report_runtime_html(f, r);
     fputs("<p>Formulas and target profiles: docs/budget.md in the crowdbake repository.</p>\n</body></html>\n", f);
 }

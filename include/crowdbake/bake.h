@@ -22,7 +22,7 @@
 extern "C" {
 #endif
 
-enum { CB_FORMAT_PAL = 1u, CB_FORMAT_EXR = 2u };
+enum { CB_FORMAT_PAL = 1u, CB_FORMAT_EXR = 2u, CB_FORMAT_KTX2 = 4u };
 
 /* The rates a setting may take: fps in (0, CB_FPS_LIMIT] (core.h); an auto rate's ceiling
  * (max_fps) in [CB_MAX_FPS_LOWEST, CB_FPS_LIMIT]. */
@@ -60,18 +60,19 @@ cb_bake_settings cb_default_bake_settings(void);
 /* "keep" or "in-place". */
 bool cb_root_motion_parse(const char *text, cb_root_motion *out);
 const char *cb_root_motion_name(cb_root_motion root_motion);
-/* "pal", "exr", "pal,exr", "exr,pal" or "both": CB_FORMAT_* bits, 0 when none of those. */
+/* A comma-separated set of "pal", "exr" and "ktx2" (each once), or "both" (pal and exr):
+ * CB_FORMAT_* bits, 0 when it is none of those. */
 unsigned cb_formats_parse(const char *text);
 /* 0 < fps <= CB_FPS_LIMIT; CB_MAX_FPS_LOWEST <= max_fps <= CB_FPS_LIMIT. */
 bool cb_fps_valid(double fps);
 bool cb_max_fps_valid(double max_fps);
 
-/* Whether the settings can be written: EXR holds half or float texels, never u16. */
+/* Whether the settings can be written: EXR and KTX2 hold half or float texels, never u16. */
 bool cb_bake_settings_writable(const cb_bake_settings *settings);
 
-/* The options of the bake for one file format (CB_FORMAT_PAL or CB_FORMAT_EXR): the precision
- * set, else u16 for .pal and float for .exr (half misses 0.5 mm/m on the samples), so writing
- * both formats gives the bytes of two single bakes; the affine fallback unless a layout was set. */
+/* The options of the bake for one file format (CB_FORMAT_*): the precision set, else u16 for
+ * .pal and float for .exr and .ktx2 (half misses 0.5 mm/m on the samples), so writing several
+ * formats gives the bytes of single bakes; the affine fallback unless a layout was set. */
 cb_bake_options cb_bake_settings_options(const cb_bake_settings *settings, unsigned format, const cb_limits *limits,
                                          uint32_t threads);
 
@@ -101,7 +102,7 @@ typedef struct cb_bake_job {
     cb_limits limits;
     uint32_t threads;               /* clips sampled in parallel (0: 1); the bytes do not depend on it */
     double speed_reference;         /* recorded in the files */
-    const char *pal_path, *exr_path; /* the files settings.formats asks for */
+    const char *pal_path, *exr_path, *ktx2_path; /* the files settings.formats asks for */
     const cb_bake_origin *origin;   /* a catalog type, or NULL */
     /* Filled by cb_bake_job_plan (cb_bake_job_run calls it when it was not): the clips with
      * their rates, and for each clip chosen by error what its rate reached. */
@@ -113,17 +114,18 @@ typedef struct cb_bake_job {
 
 /* One file written. */
 typedef struct cb_bake_output {
-    unsigned format;        /* CB_FORMAT_PAL or CB_FORMAT_EXR */
+    unsigned format;        /* CB_FORMAT_PAL, CB_FORMAT_EXR or CB_FORMAT_KTX2 */
     const char *path;
     uint64_t file_bytes;
     uint64_t input_hash;    /* recorded in the file */
-    cb_palette palette;     /* as baked for this file; its texels are released once written */
+    cb_palette palette;     /* the facts of the palette written (sizes, errors, timings); its tables and
+                             * texels are released once written (clips, bind_positions, texels NULL) */
     double seconds_write;
 } cb_bake_output;
 
 typedef struct cb_bake_result {
     uint32_t output_count;
-    cb_bake_output outputs[2]; /* .pal first */
+    cb_bake_output outputs[3]; /* .pal, .exr, .ktx2, those asked for */
     cb_warnings notes;         /* the layout's fallback, loops that travel, quaternion flips */
 } cb_bake_result;
 

@@ -8,7 +8,8 @@
  * runtime.h  what the shipped shaders compute, on the CPU; verification; error-driven rates
  * bake.h     one bake job (a model into .pal/.exr files): every bake policy, decided once
  * catalog.h, catalog_toml.h, roster.h, report.h   catalogs of animal types, their roster bake, the budget report
- * gltf.h, pal_write.h, pal_view.h, exr.h, json.h, atomic_file.h, vat.h, budget.h, preview.h   files and tools
+ * mesh.h, gltf_mesh_write.h   runtime-ready meshes for a palette (`crowdbake mesh`)
+ * gltf.h, pal_write.h, pal_view.h, exr.h, ktx2.h, json.h, atomic_file.h, vat.h, budget.h, preview.h   files and tools
  *
  * An engine that only reads palettes needs none of this: crowdbake_pal.h is a dependency-free
  * C99 reader (installed beside this folder).
@@ -28,6 +29,10 @@
 #include "catalog_toml.h"
 #include "roster.h"
 #include "report.h"
+#include "report_runtime.h"
+#include "mesh.h"
+#include "gltf_mesh_write.h"
+#include "ktx2.h"
 #include "gltf.h"
 #include "pal_write.h"
 #include "pal_view.h"
