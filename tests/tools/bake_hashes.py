@@ -2,7 +2,7 @@
 """bake_hashes.py [--write] [--build DIR] [--shared DIR]: the bytes every bake writes, pinned.
 
 Bakes every bundled sample and every shared asset in several formats (.pal, .pal with zstd,
-.exr, mat4/half, affine/float, --fps auto on the samples and Fox), `inspect --json` of each
+.exr, mat4/half, affine/float; --fps auto and .pal + .exr + .ktx2 on the samples and Fox), `inspect --json` of each
 default .pal, and the sample catalog (palettes, roster.json, depfile, with a --format pal,exr
 override too), then compares the sha256 of every file with tests/bake_hashes.txt. A model that
 does not bake is recorded by its exit code. `make check` runs this (normal build only), so a
@@ -26,6 +26,7 @@ VARIANTS = [
     ('affine-float.exr', ['-o', '{out}.exr', '--layout', 'affine', '--precision', 'float', '--exr-compression', 'zip']),
 ]
 AUTO = ('auto.pal', ['-o', '{out}.pal', '--fps', 'auto', '-q'])
+KTX2 = ('pal-exr-ktx2', ['-o', '{out}.pal', '--format', 'pal,exr,ktx2', '--precision', 'half'])
 
 
 def sha(path):
@@ -53,7 +54,7 @@ def run(cmd, **kw):
 def bake_models(crowdbake, build, shared, tmp, out):
     for model in models(build, shared):
         key = key_of(model, shared)
-        variants = VARIANTS + ([AUTO] if key.startswith('samples/') or key.endswith('fox-bevy/Fox.glb') else [])
+        variants = VARIANTS + ([AUTO, KTX2] if key.startswith('samples/') or key.endswith('fox-bevy/Fox.glb') else [])
         for name, args in variants:
             d = os.path.join(tmp, key.replace('/', '_'), name)
             os.makedirs(d)
