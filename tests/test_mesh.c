@@ -360,11 +360,11 @@ static void test_bad_input_is_refused_with_the_fix(void **state)
         const char *args, *message;
         int rc;
     } cases[] = {
-        {"%s -o " TMP "/bad.obj", "the mesh is written as a .glb; name it OUT.glb", CB_ERR_USAGE},
-        {"%s -o " TMP "/bad.glb --max-influences 3", "--max-influences is 1, 2 or 4", CB_ERR_USAGE},
-        {"%s -o " TMP "/bad.glb --batch 0", "--batch wants a count of copies from 1 to 65536", CB_ERR_USAGE},
-        {"%s -o " TMP "/bad.glb --lod 1", "--type and --lod pick a catalog's type and LOD", CB_ERR_USAGE},
-        {"%s -o " TMP "/bad.glb --max-quantization-error 1", "--max-quantization-error goes with --quantize", CB_ERR_USAGE},
+        {"%s -o " TMP "/bad.obj", "the mesh is written as a .glb; name it OUT.glb", EXIT_USAGE},
+        {"%s -o " TMP "/bad.glb --max-influences 3", "--max-influences is 1, 2 or 4", EXIT_USAGE},
+        {"%s -o " TMP "/bad.glb --batch 0", "--batch wants a count of copies from 1 to 65536", EXIT_USAGE},
+        {"%s -o " TMP "/bad.glb --lod 1", "--type and --lod pick a catalog's type and LOD", EXIT_USAGE},
+        {"%s -o " TMP "/bad.glb --max-quantization-error 1", "--max-quantization-error goes with --quantize", EXIT_USAGE},
         {"%s -o " TMP "/bad.glb --palette-model %s", "fish.glb: LOD joint 'root' is not a joint of", CB_ERR_INPUT},
     };
     for (size_t i = 0; i < COUNT_OF(cases); ++i) {
