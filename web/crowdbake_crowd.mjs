@@ -136,15 +136,16 @@ function buffer(gl, target, data) {
 export class Crowd {
     // options: pal (readPal), glsl (the library's text), mesh, capacity (instances), color,
     // captureWorld (link v_world for transform feedback: tests read skinned positions back).
-    constructor(gl, { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false }) {
+    constructor(gl, options) {
+        const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false } = options;
         this.gl = gl;
         this.pal = pal;
         this.color = color;
         this.capacity = capacity;
         this.count = 0;
         this.vertexCount = mesh.positions.length / 3;
-        this.program = compileProgram(gl, vertexShaderSource(glsl, pal.header), FRAGMENT, captureWorld ? ['v_world'] : null);
-        this.textures = uploadPalette(gl, pal);
+        this.program = this.makeProgram(glsl, pal.header, FRAGMENT, captureWorld ? ['v_world'] : null);
+        this.textures = this.upload(options);
         this.vao = gl.createVertexArray();
         gl.bindVertexArray(this.vao);
         const attribute = (name, size, data, integer = false) => {
@@ -157,7 +158,8 @@ export class Crowd {
         };
         attribute('a_position', 3, mesh.positions);
         if (mesh.normals) attribute('a_normal', 3, mesh.normals);
-        else gl.vertexAttrib3f(gl.getAttribLocation(this.program, 'a_normal'), 0, 1, 0);
+        else if (gl.getAttribLocation(this.program, 'a_normal') >= 0)
+            gl.vertexAttrib3f(gl.getAttribLocation(this.program, 'a_normal'), 0, 1, 0);
         attribute('a_joints', 4, Int32Array.from(mesh.joints), true);
         attribute('a_weights', 4, mesh.weights);
         this.instances = new Float32Array(capacity * INSTANCE_FLOATS);
@@ -198,17 +200,16 @@ export class Crowd {
         this.count = Math.min(n, this.capacity);
     }
 
-    // Binds the program, textures and uniforms for a draw at `time` seconds.
-    bind(viewProjection, time) {
-        const gl = this.gl, p = this.program, h = this.pal.header;
-        gl.useProgram(p);
-        gl.bindVertexArray(this.vao);
-        if (this.dirty) {
-            gl.bindBuffer(gl.ARRAY_BUFFER, this.instanceBuffer);
-            gl.bufferSubData(gl.ARRAY_BUFFER, 0, this.instances, 0, this.count * INSTANCE_FLOATS);
-            this.dirty = false;
-        }
-        const u = (name) => gl.getUniformLocation(p, name);
+    makeProgram(glsl, header, fragment, varyings) {
+        return compileProgram(this.gl, vertexShaderSource(glsl, header), fragment, varyings);
+    }
+
+    upload(options) {
+        return uploadPalette(this.gl, options.pal);
+    }
+
+    bindTextures(u) {
+        const gl = this.gl, h = this.pal.header;
         gl.activeTexture(gl.TEXTURE0);
         gl.bindTexture(gl.TEXTURE_2D, this.textures.palette);
         gl.uniform1i(u('cb_palette'), 0);
@@ -222,6 +223,20 @@ export class Crowd {
         gl.uniform3fv(u('cb_bounds_min'), h.bounds_min);
         gl.uniform3fv(u('cb_bounds_max'), h.bounds_max);
         gl.uniform1f(u('cb_linear_range'), h.linear_range);
+    }
+
+    // Binds the program, textures and uniforms for a draw at `time` seconds.
+    bind(viewProjection, time) {
+        const gl = this.gl, p = this.program;
+        gl.useProgram(p);
+        gl.bindVertexArray(this.vao);
+        if (this.dirty) {
+            gl.bindBuffer(gl.ARRAY_BUFFER, this.instanceBuffer);
+            gl.bufferSubData(gl.ARRAY_BUFFER, 0, this.instances, 0, this.count * INSTANCE_FLOATS);
+            this.dirty = false;
+        }
+        const u = (name) => gl.getUniformLocation(p, name);
+        this.bindTextures(u);
         gl.uniform1f(u('u_time'), time);
         gl.uniformMatrix4fv(u('u_view_projection'), false, viewProjection);
         gl.uniform3fv(u('u_color'), this.color);
