@@ -85,7 +85,13 @@ static int find_web(view_paths *v)
         exe[n > 0 ? n : 0] = 0;
         char *slash = strrchr(exe, '/');
         if (slash) *slash = 0;
-        snprintf(v->web, sizeof v->web, "%s/../web", exe);
+        /* build/crowdbake, build/asan/crowdbake: the source tree is one or two levels up */
+        char probe[PATH_MAX + 64];
+        for (int up = 1; up <= 3; ++up) {
+            snprintf(v->web, sizeof v->web, "%s/%s", exe, up == 1 ? "../web" : up == 2 ? "../../web" : "../../../web");
+            snprintf(probe, sizeof probe, "%s/viewer.html", v->web);
+            if (!access(probe, R_OK)) break;
+        }
     }
     snprintf(v->shaders, sizeof v->shaders, "%s/../samples/shaders", v->web);
     char probe[PATH_MAX + 128];
