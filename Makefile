@@ -260,10 +260,10 @@ $(BUILD)/bench_core: bench/bench_core.c $(BUILD)/libcrowdbake.a
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 
-bench: all $(BUILD)/bench_core
+bench: all $(BUILD)/bench_core $(NODE_DEPS)
 	python3 bench/run.py
 
-bench-smoke: all $(BUILD)/bench_core
+bench-smoke: all $(BUILD)/bench_core $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
 
 # The normal and the sanitizer builds and their tests, side by side on every core.
