@@ -217,10 +217,51 @@ static void test_runtime_in_chromium_matches_the_cpu(void **state)
     close_baked(&spin);
 }
 
+/* The share of covered pixels where two silhouettes disagree, at the `index`th time of the
+ * three.js check's output, for "herd" or "broken". */
+static double disagreement(const char *out, int index, const char *which)
+{
+    const char *at = strstr(out, "\"results\":[");
+    assert_non_null(at);
+    for (int i = 0; i <= index; ++i) assert_non_null(at = strstr(at + 1, "{\"time\":"));
+    char key[32];
+    snprintf(key, sizeof key, "\"%s\":{", which);
+    assert_non_null(at = strstr(at, key));
+    assert_non_null(at = strstr(at, "\"share\":"));
+    return atof(at + 8);
+}
+
+/* CrowdbakeHerd (three.js InstancedMesh, the shipped GLSL patched in) against three.js's own
+ * SkinnedMesh + AnimationMixer playing the glTF: the Fox walking, silhouettes from one camera. */
+static void test_three_herd_matches_three_skinning(void **state)
+{
+    (void)state;
+    char fox[PATH_MAX], cmd[2 * PATH_MAX + 64];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    assert_int_equal(system("rm -rf " TMP "/three && mkdir -p " TMP "/three"), 0);
+    snprintf(cmd, sizeof cmd, "ln -s \"$(realpath %s)\" " TMP "/three/model.glb", fox);
+    assert_int_equal(system(cmd), 0);
+    /* Root motion kept: three plays the clip with its travel. */
+    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/three/model.pal -q", crowdbake_exe(), fox);
+    assert_int_equal(system(cmd), 0);
+    static char out[1 << 16];
+    int rc = run_command("node tests/browser/three_check.mjs " TMP "/three Walk 0.1,0.37,0.6 2>&1", out, sizeof out);
+    printf("%s", out);
+    assert_int_equal(rc, 0);
+    for (int i = 0; i < 3; ++i) {
+        double herd = disagreement(out, i, "herd"), broken = disagreement(out, i, "broken");
+        printf("  time %d: herd vs three.js skinning %.2f%% of the covered pixels; unpatched herd %.0f%%\n", i, 100 * herd,
+               100 * broken);
+        assert_true(herd < 0.03);
+        assert_true(broken > 0.2);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_runtime_in_chromium_matches_the_cpu),
+        cmocka_unit_test(test_three_herd_matches_three_skinning),
     };
     return cmocka_run_group_tests_name("web", tests, NULL, NULL);
 }
