@@ -161,7 +161,7 @@ async function main() {
         const p = type.crowd.textures.bytes, v = type.vat?.textures.bytes;
         return { frameMs: avg, drawCalls, instances: herd.count, paletteBytes: p, vatBytes: v ?? null,
                  text: `${herd.count} instances, ${drawCalls} draw call${drawCalls === 1 ? '' : 's'} (1 per herd)\n` +
-                       `frame ${avg.toFixed(2)} ms (${avg ? (1000 / avg).toFixed(0) : '-'} fps)\n` +
+                       (avg ? `frame ${avg.toFixed(2)} ms (${(1000 / avg).toFixed(0)} fps)\n` : 'frame time: paused (a test renders chosen times)\n') +
                        `palette ${type.pal.header.layout_name}/${type.pal.header.precision_name} ${kib(p)} VRAM` +
                        (v ? `\nVAT RGBA16F pos+normal ${kib(v)} VRAM (${(v / p).toFixed(1)}x)` : `\n${type.vatNote}`) };
     }

@@ -1,6 +1,6 @@
 // view_check.mjs - `crowdbake view` used as a user would, in headless Chromium.
 //
-//   node tests/browser/view_check.mjs CROWDBAKE INPUT CACHE_DIR SCREENSHOT.png [COUNT]
+//   node tests/browser/view_check.mjs CROWDBAKE INPUT CACHE_DIR SCREENSHOT.png [COUNT [WIDTHxHEIGHT]]
 //
 // Starts `crowdbake view INPUT --cache CACHE_DIR --port 0`, reads the URL it prints, opens the
 // viewer with the clock stopped (?paused), puts the herd in a mix of states, renders two chosen
@@ -11,7 +11,8 @@
 import { spawn } from 'node:child_process';
 import { launchBrowser, openPage } from './driver.mjs';
 
-const [exe, input, cache, shot, count = '1000'] = process.argv.slice(2);
+const [exe, input, cache, shot, count = '1000', size = '960x540'] = process.argv.slice(2);
+const [width, height] = size.split('x').map(Number);
 const view = spawn(exe, ['view', input, '--cache', cache, '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
 let output = '';
 const url = await new Promise((resolve, reject) => {
@@ -27,7 +28,7 @@ const exited = new Promise((resolve) => view.on('exit', (code, signal) => resolv
 const browser = await launchBrowser();
 let result;
 try {
-    const page = await openPage(browser, `${url}?paused&count=${count}`, { width: 960, height: 540 });
+    const page = await openPage(browser, `${url}?paused&count=${count}`, { width, height });
     await page.evaluate(() => window.crowdbakeReady);
     result = await page.evaluate(() => {
         const v = window.crowdbakeViewer, canvas = document.getElementById('view');
