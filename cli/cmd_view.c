@@ -59,6 +59,15 @@ static int mkdirs(const char *path)
     return mkdir(p, 0755) && errno != EEXIST ? -1 : 0;
 }
 
+/* The folder part of `path` ("." for a bare name). */
+static void dir_of(const char *path, char *out, size_t size)
+{
+    snprintf(out, size, "%s", path);
+    char *slash = strrchr(out, '/');
+    if (slash) *slash = 0;
+    else snprintf(out, size, ".");
+}
+
 /* site/NAME -> target, replacing an older link. */
 static int link_into_site(const view_paths *v, const char *name, const char *target)
 {
@@ -208,18 +217,14 @@ static int prepare_catalog(const view_paths *v, const char *catalog_path)
     snprintf(json, sizeof json, "%s/view.json", v->site);
     FILE *f = rc ? NULL : fopen(json, "w");
     if (!rc && !f) rc = fail_io("cannot write", json);
-    snprintf(dir, sizeof dir, "%s", r.manifest_path);
-    if (strrchr(dir, '/')) *strrchr(dir, '/') = 0;
-    else snprintf(dir, sizeof dir, ".");
+    dir_of(r.manifest_path, dir, sizeof dir);
     if (f && (rc = link_into_site(v, "data", dir))) f = (fclose(f), NULL);
     if (f) fprintf(f, "{\"roster\": \"data/%s\", \"types\": [", strrchr(r.manifest_path, '/') ? strrchr(r.manifest_path, '/') + 1 : r.manifest_path);
     for (uint32_t i = 0, n = 0; f && i < r.type_count; ++i) {
         const cb_roster_type *t = &r.types[i];
         if (t->outcome == CB_TYPE_FAILED) continue;
         snprintf(name, sizeof name, "models/%s", t->animal->name);
-        snprintf(dir, sizeof dir, "%s", t->animal->model);
-        if (strrchr(dir, '/')) *strrchr(dir, '/') = 0;
-        else snprintf(dir, sizeof dir, ".");
+        dir_of(t->animal->model, dir, sizeof dir);
         if ((rc = link_into_site(v, name, dir))) break;
         const char *base = strrchr(t->animal->model, '/') ? strrchr(t->animal->model, '/') + 1 : t->animal->model;
         bool vat = bake_vat(v, t);
@@ -237,13 +242,9 @@ static int prepare_catalog(const view_paths *v, const char *catalog_path)
 static int prepare_palette(const view_paths *v, const char *pal, const char *model)
 {
     char dir[PATH_MAX], json[PATH_MAX + 32];
-    snprintf(dir, sizeof dir, "%s", pal);
-    if (strrchr(dir, '/')) *strrchr(dir, '/') = 0;
-    else snprintf(dir, sizeof dir, ".");
+    dir_of(pal, dir, sizeof dir);
     int rc = link_into_site(v, "data", dir);
-    snprintf(dir, sizeof dir, "%s", model);
-    if (strrchr(dir, '/')) *strrchr(dir, '/') = 0;
-    else snprintf(dir, sizeof dir, ".");
+    dir_of(model, dir, sizeof dir);
     if (rc || (rc = link_into_site(v, "models/model", dir))) return rc;
     snprintf(json, sizeof json, "%s/view.json", v->site);
     FILE *f = fopen(json, "w");
