@@ -182,7 +182,7 @@ async function main() {
     // Every instance to `name`; null: a mix of the idle, walking and running states.
     function setState(name) {
         const names = Object.keys(type.states);
-        const pick = names.filter((n) => /^(idle|walk|gallop|run|wander|flee|graze)$/i.test(n));
+        const pick = names.filter((n) => /(^|_)(idle|walk|walking|gallop|run|running|wander|flee|graze)$/i.test(n));
         const pool = pick.length ? pick : names;
         for (let i = 0; i < herd.count; ++i) herd.setState(i, name ?? pool[(i * 7919) % pool.length]);
         for (const b of $('states').children) b.classList.toggle('on', b.textContent === (name ?? 'mixed'));
@@ -190,7 +190,8 @@ async function main() {
 
     $('count').onchange = () => herd.setCount(+$('count').value);
     buildButtons();
-    herd.setCount(+(params.get('count') ?? $('count').value));
+    if (params.get('count')) $('count').value = params.get('count');
+    herd.setCount(+$('count').value);
     const paused = params.has('paused');
     const start = performance.now();
     function frame(now) {
