@@ -5,7 +5,9 @@
  * instanced draw per time; transform feedback reads every instance's skinned vertices back and
  * they must match the CPU runtime (src/runtime.c) within 1e-5 x model height. The broken variants
  * test_gl catches (transposed matrices, rows off by one, no loop wrap, no hemisphere flip) must
- * fail the same comparison here. */
+ * fail the same comparison here. The fuzzers' hostile palettes are read in the same page (fzstd as
+ * the decoder) and every one is refused with a one-line message. CrowdbakeHerd (three.js) is
+ * compared with three.js's own skinning of the glTF. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
@@ -202,6 +204,16 @@ static void test_runtime_in_chromium_matches_the_cpu(void **state)
     int rc = run_command("node tests/browser/skin_check.mjs " TMP " 2>&1", out, sizeof out);
     printf("%s", out);
     assert_int_equal(rc, 0);
+    /* Every hostile palette of tests/fuzz/regressions/pal refused in the page with a message. */
+    char count_cmd[] = "ls tests/fuzz/regressions/pal | wc -l";
+    char listed[32];
+    assert_int_equal(run_command(count_cmd, listed, sizeof listed), 0);
+    int refused = 0;
+    for (const char *p = out; (p = strstr(p, "\nrefused ")); ++p) ++refused;
+    assert_true(atoi(listed) >= 8);
+    assert_int_equal(refused, 2 * atoi(listed)); /* with and without the checksum check */
+    assert_null(strstr(out, "ACCEPTED"));
+    assert_null(strstr(out, "BAD ERROR"));
     for (int i = 0; i < 9; ++i) {
         double units, ratio;
         snprintf(name, sizeof name, "%s-%s", layouts[i / 3], precisions[i % 3]);

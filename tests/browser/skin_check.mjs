@@ -66,6 +66,26 @@ const failures = await withPage({ '/': REPO, '/job/': dir }, '/__blank.html', as
         fs.writeFileSync(path.join(dir, c.out), Buffer.from(new Float32Array(result.values).buffer));
         console.log(`ran  ${c.name}: ${result.values.length / 3} vertices on ${result.format} (${result.renderer})`);
     }
+    // The hostile palettes the fuzzers found, read in the page with the decoder a page would use:
+    // each must be refused with a one-line Error naming the file, the page left working.
+    const hostile = fs.readdirSync(path.join(REPO, 'tests/fuzz/regressions/pal'));
+    const verdicts = await page.evaluate(async (files) => {
+        const { readPal } = await import('/web/crowdbake_pal.mjs');
+        const { decompress } = await import('/web/node_modules/fzstd/esm/index.mjs');
+        const out = [];
+        for (const f of files) for (const verifyChecksum of [true, false]) { // without it, the decoder meets the damage
+            const bytes = new Uint8Array(await (await fetch(`/tests/fuzz/regressions/pal/${f}`)).arrayBuffer());
+            try {
+                readPal(bytes, { name: f, verifyChecksum, decompress: (b, n) => decompress(b, new Uint8Array(n)) });
+                out.push(`ACCEPTED ${f}`);
+            } catch (e) {
+                const clean = e.constructor === Error && e.message.startsWith(`${f}: `) && !e.message.includes('\n');
+                out.push(`${clean ? 'refused' : 'BAD ERROR'} ${e.message}`);
+            }
+        }
+        return out;
+    }, hostile);
+    for (const v of verdicts) console.log(v);
     return page.crowdbakeErrors;
 });
 for (const e of failures) console.log(`FAIL ${e}`);
