@@ -16,6 +16,7 @@ _crowdbake_options()
     preview) echo "-o --output --skin --cell --columns $limits" ;;
     vat) echo "-o --output --fps --max-texture-size --root-motion --skin --exr-compression --json --clip --exclude-clip $limits" ;;
     report) echo "--json --markdown --html --no-fail -j --target" ;;
+    view) echo "--port --open --cache --model" ;;
     mesh) echo "-o --output --palette-model --max-influences --quantize --batch --max-quantization-error --fps --skin
                 --json --type --lod $limits" ;;
     esac
@@ -29,7 +30,7 @@ _crowdbake()
     else
         cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[COMP_CWORD-1]} words=("${COMP_WORDS[@]}") cword=$COMP_CWORD
     fi
-    local commands="info sample bake inspect verify preview vat report mesh"
+    local commands="info sample bake inspect verify preview vat report mesh view"
     if [[ $cword -eq 1 ]]; then
         COMPREPLY=($(compgen -W "$commands --help" -- "$cur"))
         return
@@ -43,7 +44,7 @@ _crowdbake()
     --exr-compression) COMPREPLY=($(compgen -W "none rle zips zip piz" -- "$cur")); return ;;
     --fps) COMPREPLY=($(compgen -W "24 30 60 auto" -- "$cur")); return ;;
     -o|--output|--depfile|--manifest|--html) COMPREPLY=($(compgen -f -- "$cur")); return ;;
-    --out-dir) COMPREPLY=($(compgen -d -- "$cur")); return ;;
+    --out-dir|--cache) COMPREPLY=($(compgen -d -- "$cur")); return ;;
     esac
     if [[ $cur == -* ]]; then
         COMPREPLY=($(compgen -W "$(_crowdbake_options "${words[1]}") --help" -- "$cur"))

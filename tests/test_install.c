@@ -232,7 +232,7 @@ static void test_man_page_and_completions(void **state)
     char *bash = read_whole_file("completions/crowdbake.bash", NULL), *zsh = read_whole_file("completions/_crowdbake", NULL);
     static const char *const sources[] = {"cli/cmd_bake.c", "cli/cmd_info.c", "cli/cmd_inspect.c", "cli/cmd_preview.c",
                                           "cli/cmd_report.c", "cli/cmd_sample.c", "cli/cmd_vat.c", "cli/cmd_verify.c",
-                                          "cli/cmd_mesh.c", "cli/cli.c"};
+                                          "cli/cmd_mesh.c", "cli/cmd_view.c", "cli/cli.c"};
     int options = 0;
     for (size_t i = 0; i < COUNT_OF(sources); ++i) {
         char *src = read_whole_file(sources[i], NULL);
