@@ -41,7 +41,9 @@ enum { CBPAL_PRECISION_FLOAT = 0, CBPAL_PRECISION_HALF = 1, CBPAL_PRECISION_U16 
 /* CBPAL_FLAG_POSITIONS_RELATIVE (version 2): qpos position texels hold the joint's position less
  * its bind position (the bone table's bind_position); add it back (CB_POSITIONS_RELATIVE in the
  * shipped GLSL). */
-enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u };
+/* CBPAL_FLAG_FITTED_ROWS: the rows were fitted to the linear blend between them rather than
+ * sampled (crowdbake bake --fit-rows); read and blend them as always. */
+enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u, CBPAL_FLAG_FITTED_ROWS = 8u };
 enum { CBPAL_CLIP_LOOPS = 1u };
 /* cbpal_open flags */
 enum { CBPAL_VERIFY_CHECKSUM = 1u };

@@ -11,6 +11,7 @@ cb_status cb_palette_view(const cbpal_file *f, cb_palette *p, cb_error *err)
     p->layout = (cb_layout)h->layout;
     p->precision = (cb_precision)h->precision;
     p->positions_relative = (h->flags & CBPAL_FLAG_POSITIONS_RELATIVE) != 0;
+    p->fitted = (h->flags & CBPAL_FLAG_FITTED_ROWS) != 0;
     p->bone_count = h->bone_count;
     p->texels_per_bone = h->texels_per_bone;
     p->row_texels = h->row_texels;

@@ -51,7 +51,8 @@ static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_wri
     static const unsigned char magic[8] = {'C', 'B', 'P', 'A', 'L', '\r', '\n', 0x1a};
     memcpy(d, magic, 8);
     uint32_t flags = (opt->zstd ? CBPAL_FLAG_ZSTD : 0) | (opt->in_place ? CBPAL_FLAG_IN_PLACE : 0) |
-                     (p->positions_relative ? CBPAL_FLAG_POSITIONS_RELATIVE : 0);
+                     (p->positions_relative ? CBPAL_FLAG_POSITIONS_RELATIVE : 0) |
+                     (p->fitted ? CBPAL_FLAG_FITTED_ROWS : 0);
     /* Version 2 only where its meaning differs from 1: readers of version 1 keep reading the rest. */
     uint32_t version = p->positions_relative ? 2 : 1;
     uint32_t u[14] = {version, flags, CBPAL_HEADER_SIZE, (uint32_t)p->layout, (uint32_t)p->precision,

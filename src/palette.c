@@ -54,6 +54,7 @@ cb_bake_options cb_default_bake_options(void)
     o.limits = cb_default_limits();
     o.threads = 1;
     o.affine_fallback = false;
+    o.fit = false;
     return o;
 }
 
@@ -299,6 +300,57 @@ static void similarity_row(bake_state *st, worker *w, uint32_t c, uint32_t f, co
     st->ranges[c] = range;
 }
 
+/* The exact values halfway through each row interval of clip c (the clip framed at twice the
+ * steps, odd frames), into mids; quaternions on the side of the row before. */
+static cb_status sample_mids(bake_state *st, worker *w, uint32_t c, const float *rows, float *mids, cb_error *err)
+{
+    cb_palette *p = st->p;
+    const cb_clip_info *info = &st->infos[c];
+    cb_clip_info framing = *info;
+    framing.steps *= 2;
+    uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
+    for (uint32_t i = 0; i < intervals; ++i) {
+        cb_clip_frame_matrices(w->sampler, &framing, 2 * i + 1, st->opt->root_motion, w->mats);
+        float *out = mids + (size_t)i * p->bone_count * vals;
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            const double *M = w->mats + (size_t)j * 16;
+            float *o = out + (size_t)j * vals;
+            if (p->layout != CB_LAYOUT_QPOS) {
+                for (int r = 0; r < 3; ++r)
+                    for (int k = 0; k < 4; ++k) o[r * 4 + k] = (float)M[k * 4 + r];
+                continue;
+            }
+            const float *prev = rows + ((size_t)i * p->bone_count + j) * vals, *b = p->bind_positions + (size_t)j * 3;
+            cb_quat q = {prev[0], prev[1], prev[2], prev[3]};
+            if (qpos_canon(M, o, st->model, &st->model->skins[st->skin], j, p->clips[c].name, i, &q, err))
+                return err->status;
+            cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
+            o[4] = (float)pos.x, o[5] = (float)pos.y, o[6] = (float)pos.z;
+        }
+    }
+    return CB_OK;
+}
+
+/* --fit: the clip's rows moved to split the linear blend's error between rows and mid-rows. */
+static cb_status fit_clip(bake_state *st, worker *w, uint32_t c, float *rows, cb_error *err)
+{
+    cb_palette *p = st->p;
+    const cb_clip_info *info = &st->infos[c];
+    size_t row_floats = (size_t)p->bone_count * CANON(p->layout);
+    float *mids = malloc((size_t)info->frames * row_floats * sizeof(float));
+    if (!mids) return cb_fail(err, CB_ERR_INTERNAL, "out of memory fitting %s", st->model->source);
+    if (!sample_mids(st, w, c, rows, mids, err)) {
+        cb_fit_rows(rows, mids, info->frames, p->bone_count, CANON(p->layout), info->loops, p->layout == CB_LAYOUT_QPOS);
+        range_reset(&st->ranges[c]); /* the fitted values' range */
+        for (size_t b = 0; b < (size_t)info->frames * p->bone_count; ++b) {
+            if (p->layout == CB_LAYOUT_QPOS) range_grow_qpos(&st->ranges[c], rows + b * 8);
+            else range_grow_affine(&st->ranges[c], rows + b * 12);
+        }
+    }
+    free(mids);
+    return err->status;
+}
+
 static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *err)
 {
     cb_palette *p = st->p;
@@ -320,6 +372,7 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
     }
     for (uint32_t f = 0; !similar && f < info->frames; ++f)
         if (matrix_row(st, w, c, f, rows + f * row_floats, &bounds, err)) return err->status;
+    if (st->opt->fit && fit_clip(st, w, c, rows, err)) return err->status;
     bool empty = !(bounds.lo[0] <= bounds.hi[0]); /* no skinned vertex */
     for (int k = 0; k < 3; ++k) {
         clip->bounds_min[k] = empty ? 0 : (float)bounds.lo[k];
@@ -634,35 +687,25 @@ void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const doubl
     }
 }
 
-void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr, uint32_t bone,
-                      double out[16])
-{
-    double a[16], b[16], v[16];
-    cb_palette_decode_values(p, texels, row0, bone, a);
-    cb_palette_decode_values(p, texels, row1, bone, b);
-    if (p->layout == CB_LAYOUT_QPOS && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0)
-        for (int k = 0; k < 4; ++k) b[k] = -b[k]; /* the shorter way between the rows */
-    for (uint32_t k = 0; k < p->texels_per_bone * 4; ++k) v[k] = a[k] * (1 - fr) + b[k] * fr;
-    cb_palette_values_to_matrix(p, bone, v, out); /* normalizes q for qpos */
-}
-
 /* ---- pass 3: the error against exact skinning ---- */
 
-/* The worst vertex error of the given rows of clip c. Skinning is linear in the matrices, so
- * one skinning with (exact - decoded) gives each vertex's error directly: half the work of
- * skinning twice, and no cancellation. Rows baked from similarities are measured against
- * those, sampled together like the bake did. */
+/* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
+ * the next at fraction sub / parts, blended as the runtime does. Skinning is linear in the
+ * matrices, so one skinning with (exact - decoded) gives each vertex's error directly: half
+ * the work of skinning twice, and no cancellation. Rows baked from similarities are measured
+ * against those, sampled together like the bake did. */
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
-                           bool between, double *diff, double *err_pos)
+                           uint32_t sub, uint32_t parts, double *diff, double *err_pos)
 {
     cb_palette *p = st->p;
     const cb_model *m = st->model;
     const cb_palette_clip *clip = &p->clips[c];
-    /* Halfway between rows f and f + 1 is row 2f + 1 of the clip framed at twice the steps. */
+    /* Fraction sub / parts between rows f and f + 1 is row parts * f + sub of the clip framed at
+     * `parts` times the steps. */
     cb_clip_info framing = st->infos[c];
     uint32_t times[CB_SAMPLE_BATCH];
-    for (uint32_t i = 0; i < count; ++i) times[i] = between ? 2 * frames[i] + 1 : frames[i];
-    if (between) framing.steps *= 2;
+    for (uint32_t i = 0; i < count; ++i) times[i] = parts * frames[i] + sub;
+    framing.steps *= parts;
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
     if (similar) cb_clip_frame_similarities(w->sampler, &framing, times, count, st->opt->root_motion, w->sims);
     double worst = 0;
@@ -672,7 +715,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             double *d = diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
             if (similar) cb_similarity_matrix(&w->sims[(size_t)i * p->bone_count + j], exact);
-            if (between) cb_palette_blend(p, p->texels, row, next, 0.5, j, d);
+            if (sub) cb_palette_blend(p, p->texels, row, next, (double)sub / parts, j, d);
             else cb_palette_decode(p, p->texels, row, j, d);
             for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
         }
@@ -689,19 +732,20 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     return sqrt(worst);
 }
 
-/* The worst vertex error of clip c over every error_stride-th row and the last (between:
- * halfway from each of those rows to the next, as the runtime blends them; a one-shot's last
- * row has no next). */
-static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, bool between, double *diff, double *err_pos)
+/* The worst vertex error of clip c over every error_stride-th row and the last (sub > 0: at
+ * fraction sub / parts from each of those rows to the next, as the runtime blends them; a
+ * one-shot's last row has no next). */
+static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t sub, uint32_t parts, double *diff,
+                                double *err_pos)
 {
     const cb_palette_clip *clip = &st->p->clips[c];
-    uint32_t frames = between && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], count = 0;
+    uint32_t frames = sub && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], count = 0;
     double worst = 0;
     for (uint32_t f = 0; f < frames; ++f) {
         if (f % st->error_stride && f + 1 != frames) continue;
         batch[count++] = f;
         if (count < CB_SAMPLE_BATCH && f + 1 != frames) continue;
-        worst = fmax(worst, measure_rows(st, w, c, batch, count, between, diff, err_pos));
+        worst = fmax(worst, measure_rows(st, w, c, batch, count, sub, parts, diff, err_pos));
         count = 0;
     }
     return worst;
@@ -715,8 +759,12 @@ static void measure_clip(bake_state *st, worker *w, uint32_t c)
     double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
     st->clip_error[c] = st->clip_blend_error[c] = 0;
     if (diff && err_pos && verts) {
-        st->clip_error[c] = measure_clip_rows(st, w, c, false, diff, err_pos);
-        st->clip_blend_error[c] = measure_clip_rows(st, w, c, true, diff, err_pos);
+        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, diff, err_pos);
+        /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err
+         * both ways, so their quarter points are measured too. */
+        uint32_t parts = p->fitted ? 4 : 2;
+        for (uint32_t sub = 1; sub < parts; ++sub)
+            st->clip_blend_error[c] = fmax(st->clip_blend_error[c], measure_clip_rows(st, w, c, sub, parts, diff, err_pos));
     }
     free(diff);
     free(err_pos);
@@ -862,6 +910,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     memset(p, 0, sizeof *p);
     p->layout = opt->layout;
     p->precision = opt->precision;
+    p->fitted = opt->fit;
     p->fps = opt->fps;
     p->bone_count = skin->joint_count;
     p->texels_per_bone = cb_layout_texels_per_bone(opt->layout);
