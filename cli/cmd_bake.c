@@ -171,9 +171,10 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     int rc = parse_options(a, &o, false, true, &exr_precision); /* the same checks and values as for one model */
     if (rc) return rc;
     over.fps = o.fps, over.layout = o.layout, over.precision = o.precision;
-    over.max_texture_size = o.max_texture_size, over.root_motion = o.root_motion;
+    over.max_texture_size = o.max_texture_size, over.root_motion = o.root_motion, over.fit_rows = o.fit;
     fields |= (a->fps ? CB_BAKE_FPS : 0u) | (a->layout ? CB_BAKE_LAYOUT : 0u) | (a->precision ? CB_BAKE_PRECISION : 0u) |
-              (a->max_size ? CB_BAKE_MAX_TEXTURE_SIZE : 0u) | (a->root_motion ? CB_BAKE_ROOT_MOTION : 0u);
+              (a->max_size ? CB_BAKE_MAX_TEXTURE_SIZE : 0u) | (a->root_motion ? CB_BAKE_ROOT_MOTION : 0u) |
+              (a->fit ? CB_BAKE_FIT_ROWS : 0u);
     cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, limits, &over, fields};
     return cmd_bake_catalog(&cb);
 }
@@ -210,6 +211,7 @@ static void json_output(cb_json *j, const char *path, const char *format, size_t
     cb_json_int(j, "frames", p->rows);
     cb_json_string(j, "layout", cb_layout_name(p->layout));
     cb_json_string(j, "precision", cb_precision_name(p->precision));
+    cb_json_bool(j, "fitted_rows", p->fitted);
     cb_json_number(j, "max_error", p->max_error);
     cb_json_number(j, "model_height", p->model_height);
     cb_json_number(j, "max_error_mm_per_m", cb_mm_per_m(p->max_error, p->model_height));
