@@ -63,6 +63,7 @@ void cb_palette_free(cb_palette *p)
     if (!p) return;
     free(p->clips);
     free(p->bind_positions);
+    free(p->position_offsets);
     free(p->texels);
     memset(p, 0, sizeof *p);
 }
@@ -463,6 +464,15 @@ static double seconds_now(void)
 static void encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
 static void encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
                             uint32_t count);
+static void encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
+                             uint32_t count);
+
+/* Values encoding waits for: u16's need the ranges of every clip, qpos/half's positions each
+ * bone's offset (the centre of its positions over every clip). */
+static bool keeps_values(const cb_palette *p)
+{
+    return p->precision == CB_PRECISION_U16 || (p->precision == CB_PRECISION_HALF && p->layout == CB_LAYOUT_QPOS);
+}
 
 /* Encodes a clip as soon as it is sampled, from rows still in cache: all of it, or for u16
  * what needs no range, keeping the rest for encode_kept_job. */
@@ -473,11 +483,12 @@ static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
     const cb_palette_clip *clip = &p->clips[c];
     double start = seconds_now();
     size_t bones = (size_t)clip->frames * p->bone_count, kept = kept_floats(p->layout);
-    if (p->precision != CB_PRECISION_U16) {
+    if (!keeps_values(p)) {
         encode_rows(p, w->rows, clip->first_row, clip->frames);
     } else if (p->layout == CB_LAYOUT_QPOS) {
         float *keep = st->kept + (size_t)clip->first_row * p->bone_count * kept;
-        encode_qpos_u16(p, w->rows, 8, 0, clip->first_row, clip->frames);
+        if (p->precision == CB_PRECISION_U16) encode_qpos_u16(p, w->rows, 8, 0, clip->first_row, clip->frames);
+        else encode_qpos_half(p, w->rows, 8, 0, clip->first_row, clip->frames);
         for (size_t b = 0; b < bones; ++b) memcpy(keep + b * 4, w->rows + b * 8 + 4, 4 * sizeof(float));
     } else {
         memcpy(st->kept + (size_t)clip->first_row * p->bone_count * kept, w->rows, bones * kept * sizeof(float));
@@ -485,14 +496,16 @@ static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
     st->encode_seconds[c] = seconds_now() - start;
 }
 
-/* u16, once the ranges of every clip are known: the values a clip kept. */
+/* u16 and qpos/half, once the ranges and offsets of every clip are known: the values a clip kept. */
 static void encode_kept_job(bake_state *st, worker *w, uint32_t c)
 {
     (void)w;
     cb_palette *p = st->p;
     const cb_palette_clip *clip = &p->clips[c];
     const float *kept = st->kept + (size_t)clip->first_row * p->bone_count * kept_floats(p->layout);
-    if (p->layout == CB_LAYOUT_QPOS)
+    if (p->layout == CB_LAYOUT_QPOS && p->precision == CB_PRECISION_HALF)
+        encode_qpos_half(p, kept, 4, 4, clip->first_row, clip->frames);
+    else if (p->layout == CB_LAYOUT_QPOS)
         encode_qpos_u16(p, kept, 4, 4, clip->first_row, clip->frames);
     else
         encode_rows(p, kept, clip->first_row, clip->frames);
@@ -614,7 +627,7 @@ static void encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32
         for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
             float vals[16];
             texel_values(p, row + (size_t)j * CANON(p->layout), vals);
-            for (int k = 0; p->positions_relative && k < 3; ++k) vals[4 + k] -= p->bind_positions[(size_t)j * 3 + k];
+            for (int k = 0; p->positions_relative && k < 3; ++k) vals[4 + k] -= p->position_offsets[(size_t)j * 3 + k];
             if (p->precision == CB_PRECISION_FLOAT)
                 for (uint32_t i = 0; i < nvalues; ++i) store_le32f(d + i * 4, vals[i]);
             else if (p->precision == CB_PRECISION_HALF)
@@ -643,6 +656,41 @@ static void encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, u
     }
 }
 
+/* Encodes qpos values v0..v0 + 3 of `count` rows as half floats, positions less their bone's
+ * offset; `rows` holds `stride` floats per bone, starting with value v0. */
+static void encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
+                             uint32_t count)
+{
+    for (uint32_t r = first; r < first + count; ++r) {
+        uint32_t x0, y;
+        cb_palette_texel_xy(p, r, 0, &x0, &y);
+        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8 + v0 * 2; /* RGBA16F */
+        const float *row = rows + (size_t)(r - first) * p->bone_count * stride;
+        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16)
+            for (uint32_t i = 0; i < 4; ++i) {
+                float v = row[j * stride + i];
+                if (v0 == 4 && i < 3) v -= p->position_offsets[(size_t)j * 3 + i];
+                store_le16(d + i * 2, cb_float_to_half(v));
+            }
+    }
+}
+
+/* qpos/half: each bone's position offset, the centre of the box of its positions over every
+ * row. A half float's step grows with the value; positions less the centre stay within half
+ * the bone's reach (Cow: 0.60 -> 0.32 mm/m; less its bind position, a body that falls or
+ * travels still lands far from it). */
+static void position_offsets(cb_palette *p, const float *kept)
+{
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (uint32_t r = 0; r < p->rows; ++r) {
+            const float *v = kept + ((size_t)r * p->bone_count + j) * 4;
+            for (int k = 0; k < 3; ++k) lo[k] = v[k] < lo[k] ? v[k] : lo[k], hi[k] = v[k] > hi[k] ? v[k] : hi[k];
+        }
+        for (int k = 0; k < 3; ++k) p->position_offsets[(size_t)j * 3 + k] = p->rows ? (float)(0.5 * (lo[k] + hi[k])) : 0;
+    }
+}
+
 void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16])
 {
     uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
@@ -656,7 +704,7 @@ void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t 
         else
             v[i] = decode_u16(p, u16_kind(p->layout, (int)i), load_le16(d + i * 2));
     }
-    for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->bind_positions[(size_t)bone * 3 + k];
+    for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->position_offsets[(size_t)bone * 3 + k];
 }
 
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
@@ -934,7 +982,8 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     }
     p->texels = cb_alloc_large(p->texel_bytes);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
-    if (p->precision == CB_PRECISION_U16)
+    p->position_offsets = calloc((size_t)p->bone_count * 3, sizeof(float));
+    if (keeps_values(p))
         st.kept = cb_alloc_large((size_t)p->rows * p->bone_count * kept_floats(p->layout) * sizeof(float));
     for (uint32_t c = 0; c < p->clip_count; ++c)
         if (p->clips[c].frames > st.max_clip_frames) st.max_clip_frames = p->clips[c].frames;
@@ -945,7 +994,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.clip_blend_error = calloc(p->clip_count, sizeof *st.clip_blend_error);
     st.ranges = calloc(p->clip_count, sizeof *st.ranges);
     st.encode_seconds = calloc(p->clip_count, sizeof *st.encode_seconds);
-    if (!p->texels || !p->bind_positions || (p->precision == CB_PRECISION_U16 && !st.kept) || !radius ||
+    if (!p->texels || !p->bind_positions || !p->position_offsets || (keeps_values(p) && !st.kept) || !radius ||
         !st.breaks || !st.errors || !st.clip_error || !st.clip_blend_error || !st.ranges || !st.encode_seconds) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
@@ -959,6 +1008,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
     merge_ranges(p, st.ranges);
+    if (p->positions_relative) position_offsets(p, st.kept);
     double t1 = seconds_now();
     if (st.kept) for_each_clip(&st, encode_kept_job, false);
     double t2 = seconds_now(), lo[3], hi[3];

@@ -60,8 +60,10 @@ typedef struct cb_palette {
     uint32_t clip_count;
     cb_palette_clip *clips;
     float *bind_positions;          /* 3 per bone: the joints' bind-pose positions (qpos pivots) */
-    bool positions_relative;        /* qpos/half: the position texel holds p - b, the joint's position less its bind
-                                     * position, which stays small (and precise in half floats) far from the origin */
+    bool positions_relative;        /* qpos/half: the position texel holds p - o, the joint's position less its bone's
+                                     * offset, which stays small (and precise in half floats) far from the origin */
+    float *position_offsets;        /* 3 per bone: o, the centre of the bone's positions over every row (.pal version
+                                     * 3; version 2 files used the bind position); zeros unless positions_relative */
     float bounds_min[3], bounds_max[3]; /* u16: the box positions are quantized in */
     float linear_range;             /* u16: |3x3 terms| (mat4, affine) or scale (qpos) stay below this */
     uint32_t quat_hemisphere_breaks; /* loops whose rotation ends on -q of its start (a full turn) */
