@@ -3,11 +3,13 @@
 //
 //   #define CB_LAYOUT_MAT4 | CB_LAYOUT_AFFINE | CB_LAYOUT_QPOS        (the .pal header's layout)
 //   #define CB_PRECISION_FLOAT | CB_PRECISION_HALF | CB_PRECISION_U16 (its precision)
-//   #define CB_POSITIONS_RELATIVE   when the header's flags have bit 2 (4: a version 2 qpos/half palette)
+//   #define CB_POSITIONS_RELATIVE   when the header's flags have bit 2 (4: a qpos/half palette, version 2 or 3)
 //
 // Textures: cb_palette is the .pal payload as is - RGBA32F, RGBA16F, or RGBA16UI (u16, read as
 // usampler2D) - width x height from the header. For qpos, cb_bind_positions is an RGBA32F
-// texture of one texel per bone (xyz = the bone table's bind position).
+// texture of one texel per bone and two rows: row 0 xyz = the bone table's bind position, row 1
+// xyz = the bone's position offset (cbpal_bone.position_offset: version 3's offset table, the
+// bind position in version 2), which CB_POSITIONS_RELATIVE adds to the position texel.
 //
 // Per-instance data, the roster manifest's four numbers: inst.x first row, inst.y frame count
 // (negative for a one-shot: it clamps instead of wrapping), inst.z rate in rows per second,
@@ -121,7 +123,7 @@ vec3 cb_bone_transform(int row0, int row1, float fr, int bone, vec3 v, float w)
     vec4 ps = mix(cb_texel(row0, bone, 1), cb_texel(row1, bone, 1), fr); // position, scale
     vec3 b = texelFetch(cb_bind_positions, ivec2(bone, 0), 0).xyz;
 #ifdef CB_POSITIONS_RELATIVE
-    ps.xyz += b; // the texel holds the joint's position less its bind position
+    ps.xyz += texelFetch(cb_bind_positions, ivec2(bone, 1), 0).xyz; // cb:offset - the texel holds p less the bone's offset
 #endif
     return w * ps.xyz + ps.w * cb_rotate(q, v - w * b);
 #elif defined(CB_LAYOUT_AFFINE)
