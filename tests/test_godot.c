@@ -25,7 +25,7 @@ static int setup(void **state)
     const char *bakes[][3] = {
         {"qpos", "u16", ""},    {"qpos", "float", ""},   {"affine", "u16", ""}, {"affine", "float", ""},
         {"mat4", "u16", ""},    {"mat4", "float", ""},   {"mat4", "half", ""},  {"mat4", "half", "--zstd"},
-        {"qpos", "half", ""}, /* a version 2 palette: positions relative to the bind pose */
+        {"qpos", "half", ""}, /* a version 3 palette: positions relative to each bone's offset */
     };
     for (size_t i = 0; i < COUNT_OF(bakes); ++i) {
         snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/bakes/%s-%s%s.pal --layout %s --precision %s %s -q",
