@@ -467,11 +467,14 @@ static void encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, u
 static void encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
                              uint32_t count);
 
-/* Values encoding waits for: u16's need the ranges of every clip, qpos/half's positions each
- * bone's offset (the centre of its positions over every clip). */
-static bool keeps_values(const cb_palette *p)
+/* Values encoding waits for: u16's need the ranges of every clip, half's positions each bone's
+ * offset (the centre of its positions over every clip). */
+static bool keeps_values(const cb_palette *p) { return p->precision != CB_PRECISION_FLOAT; }
+
+/* The joint's position p = M b of a kept mat4/affine row (the upper 3x4 by rows), axis r. */
+static double row_position(const float *c, const float *b, int r)
 {
-    return p->precision == CB_PRECISION_U16 || (p->precision == CB_PRECISION_HALF && p->layout == CB_LAYOUT_QPOS);
+    return (double)c[r * 4] * b[0] + (double)c[r * 4 + 1] * b[1] + (double)c[r * 4 + 2] * b[2] + c[r * 4 + 3];
 }
 
 /* Encodes a clip as soon as it is sampled, from rows still in cache: all of it, or for u16
@@ -625,9 +628,15 @@ static void encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32
         unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * tb;
         const float *row = rows + (size_t)(r - first) * p->bone_count * CANON(p->layout);
         for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
-            float vals[16];
-            texel_values(p, row + (size_t)j * CANON(p->layout), vals);
-            for (int k = 0; p->positions_relative && k < 3; ++k) vals[4 + k] -= p->position_offsets[(size_t)j * 3 + k];
+            float vals[16], rel[12];
+            const float *c = row + (size_t)j * CANON(p->layout), *o = p->position_offsets + (size_t)j * 3;
+            if (p->positions_relative && p->layout != CB_LAYOUT_QPOS) { /* the translation: p = M b, less o */
+                memcpy(rel, c, sizeof rel);
+                for (int r = 0; r < 3; ++r) rel[r * 4 + 3] = (float)(row_position(c, p->bind_positions + (size_t)j * 3, r) - o[r]);
+                c = rel;
+            }
+            texel_values(p, c, vals);
+            for (int k = 0; p->positions_relative && p->layout == CB_LAYOUT_QPOS && k < 3; ++k) vals[4 + k] -= o[k];
             if (p->precision == CB_PRECISION_FLOAT)
                 for (uint32_t i = 0; i < nvalues; ++i) store_le32f(d + i * 4, vals[i]);
             else if (p->precision == CB_PRECISION_HALF)
@@ -681,11 +690,15 @@ static void encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, 
  * travels still lands far from it). */
 static void position_offsets(cb_palette *p, const float *kept)
 {
+    uint32_t stride = kept_floats(p->layout);
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
         for (uint32_t r = 0; r < p->rows; ++r) {
-            const float *v = kept + ((size_t)r * p->bone_count + j) * 4;
-            for (int k = 0; k < 3; ++k) lo[k] = v[k] < lo[k] ? v[k] : lo[k], hi[k] = v[k] > hi[k] ? v[k] : hi[k];
+            const float *v = kept + ((size_t)r * p->bone_count + j) * stride;
+            for (int k = 0; k < 3; ++k) {
+                double x = p->layout == CB_LAYOUT_QPOS ? v[k] : row_position(v, p->bind_positions + (size_t)j * 3, k);
+                lo[k] = x < lo[k] ? x : lo[k], hi[k] = x > hi[k] ? x : hi[k];
+            }
         }
         for (int k = 0; k < 3; ++k) p->position_offsets[(size_t)j * 3 + k] = p->rows ? (float)(0.5 * (lo[k] + hi[k])) : 0;
     }
@@ -704,7 +717,9 @@ void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t 
         else
             v[i] = decode_u16(p, u16_kind(p->layout, (int)i), load_le16(d + i * 2));
     }
-    for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->position_offsets[(size_t)bone * 3 + k];
+    /* The position values: qpos's texel 1, mat4's column 3, affine's w of each row. */
+    static const int at[3][3] = {{12, 13, 14}, {3, 7, 11}, {4, 5, 6}};
+    for (int k = 0; p->positions_relative && k < 3; ++k) v[at[p->layout][k]] += p->position_offsets[(size_t)bone * 3 + k];
 }
 
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
@@ -723,7 +738,12 @@ void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const doubl
     } else if (p->layout == CB_LAYOUT_AFFINE) {
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 4; ++c) out[c * 4 + r] = v[r * 4 + c];
-    } else {
+    }
+    if (p->layout != CB_LAYOUT_QPOS && p->positions_relative) { /* the translation holds p = M b: t = p - A b */
+        const float *b = p->bind_positions + (size_t)bone * 3;
+        cb_vec3 ab = cb_mat4_transform_dir(out, (cb_vec3){b[0], b[1], b[2]});
+        out[12] -= ab.x, out[13] -= ab.y, out[14] -= ab.z;
+    } else if (p->layout == CB_LAYOUT_QPOS) {
         /* v' = p + s * rotate(q, v - b)  =>  A = s R(q), t = p - A b */
         cb_quat q = cb_quat_normalize((cb_quat){v[0], v[1], v[2], v[3]});
         double s = v[7];
@@ -1001,7 +1021,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     }
     zero_padding(p);
     bind_positions(p, skin);
-    p->positions_relative = p->layout == CB_LAYOUT_QPOS && p->precision == CB_PRECISION_HALF;
+    p->positions_relative = p->precision == CB_PRECISION_HALF;
     bool skinned = joint_reach(p, m, skin_index, radius);
     st.radius = radius;
     for_each_clip(&st, sample_clip_job, true);
