@@ -189,7 +189,7 @@ static float *gpu_skin(const cb_palette *p, const cb_primitive *prim, const samp
     glBufferData(GL_TRANSFORM_FEEDBACK_BUFFER, (GLsizeiptr)total * 12, NULL, GL_STATIC_READ);
     glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, out);
     glUseProgram(prog);
-    if (p->layout == CB_LAYOUT_QPOS) {
+    if (p->layout == CB_LAYOUT_QPOS || p->positions_relative) {
         glActiveTexture(GL_TEXTURE1);
         bind = upload_bind_positions(p); /* uploading binds it to the active unit: 1 */
         glUniform1i(glGetUniformLocation(prog, "cb_bind_positions"), 1);
@@ -338,10 +338,12 @@ static void test_broken_variants_are_caught(void **state)
     /* multitrack's bones spin a full turn per loop: their last and first rows are -q apart. */
     double no_flip = broken(multitrack, CB_LAYOUT_QPOS, CB_PRECISION_FLOAT, "cb:hemisphere", "", false, 0);
     /* qpos/half adds each bone's position offset back (version 3); version 2's bind position is wrong now. */
-    double bind_offset = broken("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_HALF, "cb:offset", "    ps.xyz += b;", false, 0);
+    double bind_offset = broken("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_HALF, "cb:offset -", "    ps.xyz += b;", false, 0);
+    double matrix_offset = broken("quadruped.glb", CB_LAYOUT_MAT4, CB_PRECISION_HALF, "cb:offset-matrix",
+                                  "    vec3 p = m[3].xyz + b;", false, 0);
     printf("  error / tolerance: transposed %.0f, rows off by one %.0f, no wrap %.0f, no hemisphere flip %.0f, bind position "
-           "as offset %.0f\n", transposed, off_by_one, no_wrap, no_flip, bind_offset);
-    assert_true(transposed > 10 && off_by_one > 10 && no_wrap > 10 && no_flip > 10 && bind_offset > 10);
+           "as offset %.0f (qpos), %.0f (mat4)\n", transposed, off_by_one, no_wrap, no_flip, bind_offset, matrix_offset);
+    assert_true(transposed > 10 && off_by_one > 10 && no_wrap > 10 && no_flip > 10 && bind_offset > 10 && matrix_offset > 10);
     /* ...and the same multitrack palette with the shipped shader passes. */
     assert_true(broken(multitrack, CB_LAYOUT_QPOS, CB_PRECISION_FLOAT, NULL, NULL, false, 0) <= 1);
 }
