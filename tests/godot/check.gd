@@ -158,9 +158,9 @@ func _variant(code: String, layout: int, u16: int) -> String:
 func _check_shader(file: String, layout: int) -> void:
 	var source := FileAccess.get_file_as_string(SHIPPED + "/" + file)
 	var masks := {}
-	# qpos/half is a version 3 palette whose positions are relative to each bone's offset: the
-	# shader must add the offsets back, or the drawing moves.
-	var precisions := ["float", "u16", "half"] if layout == 2 else ["float", "u16"]
+	# Half palettes are version 3, their positions relative to each bone's offset: the shader
+	# must add the offsets back (and skin about the bind positions), or the drawing moves.
+	var precisions := ["float", "u16", "half"]
 	for precision in precisions:
 		var name := "shader %s %s/%s" % [file, LAYOUTS[layout], precision]
 		masks[precision] = await _draw_case(name, _variant(source, layout, 1 if precision == "u16" else 0),
