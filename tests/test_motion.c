@@ -408,12 +408,12 @@ static void test_catalog_fps_auto(void **state)
  * as offsets, version 2: Cow 0.60, the quadruped with its travel 0.74). A version 2 file
  * (relative to the bind positions) and a version 1 file (absolute) still read back the same
  * matrices; a newer version is refused. */
-static double half_error_mm(const char *model, const char *root_motion, const char *out)
+static double half_error_mm(const char *model, const char *layout, const char *root_motion, const char *out)
 {
     char cmd[4096];
     static char text[65536];
-    snprintf(cmd, sizeof cmd, "%s bake %s -o %s --precision half --root-motion %s --json", crowdbake_exe(), model, out,
-             root_motion);
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s --layout %s --precision half --root-motion %s --json", crowdbake_exe(), model,
+             out, layout, root_motion);
     assert_int_equal(run_command(cmd, text, sizeof text), 0);
     const char *e = strstr(text, "\"max_error_mm_per_m\": ");
     assert_non_null(e);
@@ -459,13 +459,15 @@ static void test_half_positions_relative_to_offsets(void **state)
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
     shared_path(cow, sizeof cow, COW);
     sample_path(quadruped, sizeof quadruped, "quadruped");
-    struct { const char *model, *root_motion; double before; } cases[] = {
-        {cow, "keep", 0.603}, {cow, "in-place", 0.615}, {quadruped, "keep", 0.742}, {quadruped, "in-place", 0.404},
-        {fox, "keep", 0.206}};
+    /* Before: qpos relative to the bind positions, mat4 and affine absolute. */
+    struct { const char *model, *layout, *root_motion; double before; } cases[] = {
+        {cow, "qpos", "keep", 0.603},       {cow, "qpos", "in-place", 0.615}, {quadruped, "qpos", "keep", 0.742},
+        {quadruped, "qpos", "in-place", 0.404}, {cow, "mat4", "in-place", 0.77}, {cow, "affine", "keep", 0.678},
+        {quadruped, "mat4", "keep", 0.841}, {fox, "affine", "keep", 0.433},   {fox, "qpos", "keep", 0.206}};
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
-        double mm = half_error_mm(cases[i].model, cases[i].root_motion, TMP "/half.pal");
-        printf("  %s %s qpos/half: encoding error %.3f mm/m (relative to the bind positions: %.3f)\n",
-               strrchr(cases[i].model, '/') + 1, cases[i].root_motion, mm, cases[i].before);
+        double mm = half_error_mm(cases[i].model, cases[i].layout, cases[i].root_motion, TMP "/half.pal");
+        printf("  %s %s %s/half: encoding error %.3f mm/m (before: %.3f)\n", strrchr(cases[i].model, '/') + 1,
+               cases[i].root_motion, cases[i].layout, mm, cases[i].before);
         assert_true(mm < 0.5);
     }
 
