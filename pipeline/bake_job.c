@@ -86,6 +86,7 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
     o.root_motion = s->root_motion;
     o.threads = threads ? threads : 1;
     o.affine_fallback = !s->layout_set; /* a rig qpos cannot hold bakes affine, unless a layout was asked for */
+    o.fit = s->fit_rows;
     return o;
 }
 
@@ -115,10 +116,10 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
         return cbpal_xxh64_digest(&h);
     }
     char opts[256];
-    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d\n",
+    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s\n",
                      CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
                      o->max_texture_size, (int)o->root_motion, job->skin, job->settings.zstd,
-                     job->settings.exr_compression);
+                     job->settings.exr_compression, o->fit ? " fit-rows" : "");
     cbpal_xxh64_update(&h, opts, (size_t)n);
     cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
     return cbpal_xxh64_digest(&h);
@@ -229,6 +230,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         }
         o->palette = shared; /* its facts; the tables and texels stay with `shared` */
         o->palette.clips = NULL, o->palette.bind_positions = NULL, o->palette.texels = NULL;
+        o->palette.position_offsets = NULL;
         out->output_count++;
         o->input_hash = cb_bake_input_hash(job, &opt);
         if (out->output_count == 1) bake_notes(s, job, &opt, &shared, &out->notes);

@@ -15,28 +15,6 @@
 
 #define QPOS_TOLERANCE 1e-4 /* relative: scale differences and shear qpos may drop */
 
-static const char *const layout_names[] = {"mat4", "affine", "qpos"};
-static const char *const precision_names[] = {"float", "half", "u16"};
-
-const char *cb_layout_name(cb_layout l) { return (unsigned)l < 3 ? layout_names[l] : "?"; }
-const char *cb_precision_name(cb_precision p) { return (unsigned)p < 3 ? precision_names[p] : "?"; }
-
-bool cb_layout_parse(const char *text, cb_layout *out)
-{
-    for (int i = 0; i < 3; ++i)
-        if (strcmp(text, layout_names[i]) == 0) return *out = (cb_layout)i, true;
-    return false;
-}
-
-bool cb_precision_parse(const char *text, cb_precision *out)
-{
-    for (int i = 0; i < 3; ++i)
-        if (strcmp(text, precision_names[i]) == 0) return *out = (cb_precision)i, true;
-    return false;
-}
-
-uint32_t cb_layout_texels_per_bone(cb_layout l) { return l == CB_LAYOUT_MAT4 ? 4 : l == CB_LAYOUT_AFFINE ? 3 : 2; }
-uint32_t cb_precision_texel_bytes(cb_precision p) { return p == CB_PRECISION_FLOAT ? 16 : 8; }
 
 cb_bake_options cb_default_bake_options(void)
 {
@@ -49,6 +27,7 @@ cb_bake_options cb_default_bake_options(void)
     o.limits = cb_default_limits();
     o.threads = 1;
     o.affine_fallback = false;
+    o.fit = false;
     return o;
 }
 
@@ -57,6 +36,7 @@ void cb_palette_free(cb_palette *p)
     if (!p) return;
     free(p->clips);
     free(p->bind_positions);
+    free(p->position_offsets);
     free(p->texels);
     memset(p, 0, sizeof *p);
 }
@@ -122,9 +102,6 @@ static cb_status qpos_canon(const double m[16], float out[8], const cb_model *mo
     return CB_OK;
 }
 
-/* What u16 keeps of a bone's row until every clip is sampled: qpos's position and scale (its
- * quaternion is snorm, which needs no range, and is encoded at once), or all 12 values. */
-static uint32_t kept_floats(cb_layout layout) { return layout == CB_LAYOUT_QPOS ? 4 : 12; }
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
  * end gives the floats that rounding every candidate would (rounding is monotonic). */
@@ -210,6 +187,57 @@ static void similarity_row(bake_state *st, worker *w, uint32_t c, uint32_t f, co
     st->ranges[c] = range;
 }
 
+/* The exact values halfway through each row interval of clip c (the clip framed at twice the
+ * steps, odd frames), into mids; quaternions on the side of the row before. */
+static cb_status sample_mids(bake_state *st, worker *w, uint32_t c, const float *rows, float *mids, cb_error *err)
+{
+    cb_palette *p = st->p;
+    const cb_clip_info *info = &st->infos[c];
+    cb_clip_info framing = *info;
+    framing.steps *= 2;
+    uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
+    for (uint32_t i = 0; i < intervals; ++i) {
+        cb_clip_frame_matrices(w->sampler, &framing, 2 * i + 1, st->opt->root_motion, w->mats);
+        float *out = mids + (size_t)i * p->bone_count * vals;
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            const double *M = w->mats + (size_t)j * 16;
+            float *o = out + (size_t)j * vals;
+            if (p->layout != CB_LAYOUT_QPOS) {
+                for (int r = 0; r < 3; ++r)
+                    for (int k = 0; k < 4; ++k) o[r * 4 + k] = (float)M[k * 4 + r];
+                continue;
+            }
+            const float *prev = rows + ((size_t)i * p->bone_count + j) * vals, *b = p->bind_positions + (size_t)j * 3;
+            cb_quat q = {prev[0], prev[1], prev[2], prev[3]};
+            if (qpos_canon(M, o, st->model, &st->model->skins[st->skin], j, p->clips[c].name, i, &q, err))
+                return err->status;
+            cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
+            o[4] = (float)pos.x, o[5] = (float)pos.y, o[6] = (float)pos.z;
+        }
+    }
+    return CB_OK;
+}
+
+/* --fit: the clip's rows moved to split the linear blend's error between rows and mid-rows. */
+static cb_status fit_clip(bake_state *st, worker *w, uint32_t c, float *rows, cb_error *err)
+{
+    cb_palette *p = st->p;
+    const cb_clip_info *info = &st->infos[c];
+    size_t row_floats = (size_t)p->bone_count * CANON(p->layout);
+    float *mids = malloc((size_t)info->frames * row_floats * sizeof(float));
+    if (!mids) return cb_fail(err, CB_ERR_INTERNAL, "out of memory fitting %s", st->model->source);
+    if (!sample_mids(st, w, c, rows, mids, err)) {
+        cb_fit_rows(rows, mids, info->frames, p->bone_count, CANON(p->layout), info->loops, p->layout == CB_LAYOUT_QPOS);
+        range_reset(&st->ranges[c]); /* the fitted values' range */
+        for (size_t b = 0; b < (size_t)info->frames * p->bone_count; ++b) {
+            if (p->layout == CB_LAYOUT_QPOS) range_grow_qpos(&st->ranges[c], rows + b * 8);
+            else range_grow_affine(&st->ranges[c], rows + b * 12);
+        }
+    }
+    free(mids);
+    return err->status;
+}
+
 static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *err)
 {
     cb_palette *p = st->p;
@@ -231,6 +259,7 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
     }
     for (uint32_t f = 0; !similar && f < info->frames; ++f)
         if (matrix_row(st, w, c, f, rows + f * row_floats, &bounds, err)) return err->status;
+    if (st->opt->fit && fit_clip(st, w, c, rows, err)) return err->status;
     bool empty = !(bounds.lo[0] <= bounds.hi[0]); /* no skinned vertex */
     for (int k = 0; k < 3; ++k) {
         clip->bounds_min[k] = empty ? 0 : (float)bounds.lo[k];
@@ -306,6 +335,15 @@ static double seconds_now(void)
     return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
+void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
+void palette_encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
+                            uint32_t count);
+
+/* Values encoding waits for: u16's need the ranges of every clip, half's positions each bone's
+ * offset (the centre of its positions over every clip). */
+static bool keeps_values(const cb_palette *p) { return p->precision != CB_PRECISION_FLOAT; }
+
+
 /* Encodes a clip as soon as it is sampled, from rows still in cache: all of it, or for u16
  * what needs no range, keeping the rest for encode_kept_job. */
 static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
@@ -315,11 +353,12 @@ static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
     const cb_palette_clip *clip = &p->clips[c];
     double start = seconds_now();
     size_t bones = (size_t)clip->frames * p->bone_count, kept = kept_floats(p->layout);
-    if (p->precision != CB_PRECISION_U16) {
+    if (!keeps_values(p)) {
         palette_encode_rows(p, w->rows, clip->first_row, clip->frames);
     } else if (p->layout == CB_LAYOUT_QPOS) {
         float *keep = st->kept + (size_t)clip->first_row * p->bone_count * kept;
-        palette_encode_qpos_u16(p, w->rows, 8, 0, clip->first_row, clip->frames);
+        if (p->precision == CB_PRECISION_U16) palette_encode_qpos_u16(p, w->rows, 8, 0, clip->first_row, clip->frames);
+        else palette_encode_qpos_half(p, w->rows, 8, 0, clip->first_row, clip->frames);
         for (size_t b = 0; b < bones; ++b) memcpy(keep + b * 4, w->rows + b * 8 + 4, 4 * sizeof(float));
     } else {
         memcpy(st->kept + (size_t)clip->first_row * p->bone_count * kept, w->rows, bones * kept * sizeof(float));
@@ -327,14 +366,16 @@ static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
     st->encode_seconds[c] = seconds_now() - start;
 }
 
-/* u16, once the ranges of every clip are known: the values a clip kept. */
+/* u16 and qpos/half, once the ranges and offsets of every clip are known: the values a clip kept. */
 static void encode_kept_job(bake_state *st, worker *w, uint32_t c)
 {
     (void)w;
     cb_palette *p = st->p;
     const cb_palette_clip *clip = &p->clips[c];
     const float *kept = st->kept + (size_t)clip->first_row * p->bone_count * kept_floats(p->layout);
-    if (p->layout == CB_LAYOUT_QPOS)
+    if (p->layout == CB_LAYOUT_QPOS && p->precision == CB_PRECISION_HALF)
+        palette_encode_qpos_half(p, kept, 4, 4, clip->first_row, clip->frames);
+    else if (p->layout == CB_LAYOUT_QPOS)
         palette_encode_qpos_u16(p, kept, 4, 4, clip->first_row, clip->frames);
     else
         palette_encode_rows(p, kept, clip->first_row, clip->frames);
@@ -457,6 +498,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     memset(p, 0, sizeof *p);
     p->layout = opt->layout;
     p->precision = opt->precision;
+    p->fitted = opt->fit;
     p->fps = opt->fps;
     p->bone_count = skin->joint_count;
     p->texels_per_bone = cb_layout_texels_per_bone(opt->layout);
@@ -480,7 +522,8 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     }
     p->texels = cb_alloc_large(p->texel_bytes);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
-    if (p->precision == CB_PRECISION_U16)
+    p->position_offsets = calloc((size_t)p->bone_count * 3, sizeof(float));
+    if (keeps_values(p))
         st.kept = cb_alloc_large((size_t)p->rows * p->bone_count * kept_floats(p->layout) * sizeof(float));
     for (uint32_t c = 0; c < p->clip_count; ++c)
         if (p->clips[c].frames > st.max_clip_frames) st.max_clip_frames = p->clips[c].frames;
@@ -491,20 +534,21 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.clip_blend_error = calloc(p->clip_count, sizeof *st.clip_blend_error);
     st.ranges = calloc(p->clip_count, sizeof *st.ranges);
     st.encode_seconds = calloc(p->clip_count, sizeof *st.encode_seconds);
-    if (!p->texels || !p->bind_positions || (p->precision == CB_PRECISION_U16 && !st.kept) || !radius ||
+    if (!p->texels || !p->bind_positions || !p->position_offsets || (keeps_values(p) && !st.kept) || !radius ||
         !st.breaks || !st.errors || !st.clip_error || !st.clip_blend_error || !st.ranges || !st.encode_seconds) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
     }
     zero_padding(p);
     bind_positions(p, skin);
-    p->positions_relative = p->layout == CB_LAYOUT_QPOS && p->precision == CB_PRECISION_HALF;
+    p->positions_relative = p->precision == CB_PRECISION_HALF;
     bool skinned = palette_joint_reach(p, m, skin_index, radius);
     st.radius = radius;
     for_each_clip(&st, sample_clip_job, true);
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
     palette_merge_ranges(p, st.ranges);
+    if (p->positions_relative) palette_position_offsets(p, st.kept);
     double t1 = seconds_now();
     if (st.kept) for_each_clip(&st, encode_kept_job, false);
     double t2 = seconds_now(), lo[3], hi[3];

@@ -82,12 +82,28 @@ typedef struct bake_state {
     double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
 } bake_state;
 
+/* What u16 and relative half keep of a bone's row until every clip is sampled. */
+/* What u16 keeps of a bone's row until every clip is sampled: qpos's position and scale (its
+ * quaternion is snorm, which needs no range, and is encoded at once), or all 12 values. */
+static inline uint32_t kept_floats(cb_layout layout) { return layout == CB_LAYOUT_QPOS ? 4 : 12; }
+
+/* The joint's position p = M b of a kept mat4/affine row (the upper 3x4 by rows), axis r. */
+static inline double row_position(const float *c, const float *b, int r)
+{
+    return (double)c[r * 4] * b[0] + (double)c[r * 4 + 1] * b[1] + (double)c[r * 4 + 2] * b[2] + c[r * 4 + 3];
+}
+
 /* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
 void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
 /* u16 qpos: the values v0 .. v0 + 3 of each bone (`stride` floats apart), which need no range
  * (v0 0: the quaternion) or whose ranges are known (v0 4: position and scale). */
 void palette_encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
                              uint32_t count);
+/* qpos/half: the values v0 .. v0 + 3 of each bone, positions less the palette's offsets. */
+void palette_encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
+                              uint32_t count);
+/* Relative half palettes: each bone's position offset, the middle of its positions' range. */
+void palette_position_offsets(cb_palette *p, const float *kept);
 /* Sets p->bounds_min/max and linear_range from every clip's range. */
 void palette_merge_ranges(cb_palette *p, const value_range *clips);
 

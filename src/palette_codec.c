@@ -4,6 +4,31 @@
 
 #include "palette_bake.h"
 
+/* ---- names and sizes ---- */
+
+static const char *const layout_names[] = {"mat4", "affine", "qpos"};
+static const char *const precision_names[] = {"float", "half", "u16"};
+
+const char *cb_layout_name(cb_layout l) { return (unsigned)l < 3 ? layout_names[l] : "?"; }
+const char *cb_precision_name(cb_precision p) { return (unsigned)p < 3 ? precision_names[p] : "?"; }
+
+bool cb_layout_parse(const char *text, cb_layout *out)
+{
+    for (int i = 0; i < 3; ++i)
+        if (strcmp(text, layout_names[i]) == 0) return *out = (cb_layout)i, true;
+    return false;
+}
+
+bool cb_precision_parse(const char *text, cb_precision *out)
+{
+    for (int i = 0; i < 3; ++i)
+        if (strcmp(text, precision_names[i]) == 0) return *out = (cb_precision)i, true;
+    return false;
+}
+
+uint32_t cb_layout_texels_per_bone(cb_layout l) { return l == CB_LAYOUT_MAT4 ? 4 : l == CB_LAYOUT_AFFINE ? 3 : 2; }
+uint32_t cb_precision_texel_bytes(cb_precision p) { return p == CB_PRECISION_FLOAT ? 16 : 8; }
+
 /* Quantization arithmetic runs in double so it adds nothing to the half-step of the format. */
 static double snorm16_decode(uint16_t u)
 {
@@ -116,9 +141,15 @@ void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint3
         unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * tb;
         const float *row = rows + (size_t)(r - first) * p->bone_count * CANON(p->layout);
         for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
-            float vals[16];
-            texel_values(p, row + (size_t)j * CANON(p->layout), vals);
-            for (int k = 0; p->positions_relative && k < 3; ++k) vals[4 + k] -= p->bind_positions[(size_t)j * 3 + k];
+            float vals[16], rel[12];
+            const float *c = row + (size_t)j * CANON(p->layout), *o = p->position_offsets + (size_t)j * 3;
+            if (p->positions_relative && p->layout != CB_LAYOUT_QPOS) { /* the translation: p = M b, less o */
+                memcpy(rel, c, sizeof rel);
+                for (int r = 0; r < 3; ++r) rel[r * 4 + 3] = (float)(row_position(c, p->bind_positions + (size_t)j * 3, r) - o[r]);
+                c = rel;
+            }
+            texel_values(p, c, vals);
+            for (int k = 0; p->positions_relative && p->layout == CB_LAYOUT_QPOS && k < 3; ++k) vals[4 + k] -= o[k];
             if (p->precision == CB_PRECISION_FLOAT)
                 for (uint32_t i = 0; i < nvalues; ++i) store_le32f(d + i * 4, vals[i]);
             else if (p->precision == CB_PRECISION_HALF)
@@ -147,6 +178,45 @@ void palette_encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, 
     }
 }
 
+/* Encodes qpos values v0..v0 + 3 of `count` rows as half floats, positions less their bone's
+ * offset; `rows` holds `stride` floats per bone, starting with value v0. */
+void palette_encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
+                             uint32_t count)
+{
+    for (uint32_t r = first; r < first + count; ++r) {
+        uint32_t x0, y;
+        cb_palette_texel_xy(p, r, 0, &x0, &y);
+        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8 + v0 * 2; /* RGBA16F */
+        const float *row = rows + (size_t)(r - first) * p->bone_count * stride;
+        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16)
+            for (uint32_t i = 0; i < 4; ++i) {
+                float v = row[j * stride + i];
+                if (v0 == 4 && i < 3) v -= p->position_offsets[(size_t)j * 3 + i];
+                store_le16(d + i * 2, cb_float_to_half(v));
+            }
+    }
+}
+
+/* qpos/half: each bone's position offset, the centre of the box of its positions over every
+ * row. A half float's step grows with the value; positions less the centre stay within half
+ * the bone's reach (Cow: 0.60 -> 0.32 mm/m; less its bind position, a body that falls or
+ * travels still lands far from it). */
+void palette_position_offsets(cb_palette *p, const float *kept)
+{
+    uint32_t stride = kept_floats(p->layout);
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (uint32_t r = 0; r < p->rows; ++r) {
+            const float *v = kept + ((size_t)r * p->bone_count + j) * stride;
+            for (int k = 0; k < 3; ++k) {
+                double x = p->layout == CB_LAYOUT_QPOS ? v[k] : row_position(v, p->bind_positions + (size_t)j * 3, k);
+                lo[k] = x < lo[k] ? x : lo[k], hi[k] = x > hi[k] ? x : hi[k];
+            }
+        }
+        for (int k = 0; k < 3; ++k) p->position_offsets[(size_t)j * 3 + k] = p->rows ? (float)(0.5 * (lo[k] + hi[k])) : 0;
+    }
+}
+
 void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16])
 {
     uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
@@ -160,7 +230,9 @@ void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t 
         else
             v[i] = decode_u16(p, u16_kind(p->layout, (int)i), load_le16(d + i * 2));
     }
-    for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->bind_positions[(size_t)bone * 3 + k];
+    /* The position values: qpos's texel 1, mat4's column 3, affine's w of each row. */
+    static const int at[3][3] = {{12, 13, 14}, {3, 7, 11}, {4, 5, 6}};
+    for (int k = 0; p->positions_relative && k < 3; ++k) v[at[p->layout][k]] += p->position_offsets[(size_t)bone * 3 + k];
 }
 
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
@@ -179,7 +251,12 @@ void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const doubl
     } else if (p->layout == CB_LAYOUT_AFFINE) {
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 4; ++c) out[c * 4 + r] = v[r * 4 + c];
-    } else {
+    }
+    if (p->layout != CB_LAYOUT_QPOS && p->positions_relative) { /* the translation holds p = M b: t = p - A b */
+        const float *b = p->bind_positions + (size_t)bone * 3;
+        cb_vec3 ab = cb_mat4_transform_dir(out, (cb_vec3){b[0], b[1], b[2]});
+        out[12] -= ab.x, out[13] -= ab.y, out[14] -= ab.z;
+    } else if (p->layout == CB_LAYOUT_QPOS) {
         /* v' = p + s * rotate(q, v - b)  =>  A = s R(q), t = p - A b */
         cb_quat q = cb_quat_normalize((cb_quat){v[0], v[1], v[2], v[3]});
         double s = v[7];
@@ -189,18 +266,6 @@ void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const doubl
         cb_vec3 ab = cb_mat4_transform_dir(out, (cb_vec3){b[0], b[1], b[2]});
         out[12] = v[4] - ab.x, out[13] = v[5] - ab.y, out[14] = v[6] - ab.z;
     }
-}
-
-void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr, uint32_t bone,
-                      double out[16])
-{
-    double a[16], b[16], v[16];
-    cb_palette_decode_values(p, texels, row0, bone, a);
-    cb_palette_decode_values(p, texels, row1, bone, b);
-    if (p->layout == CB_LAYOUT_QPOS && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0)
-        for (int k = 0; k < 4; ++k) b[k] = -b[k]; /* the shorter way between the rows */
-    for (uint32_t k = 0; k < p->texels_per_bone * 4; ++k) v[k] = a[k] * (1 - fr) + b[k] * fr;
-    cb_palette_values_to_matrix(p, bone, v, out); /* normalizes q for qpos */
 }
 
 void palette_merge_ranges(cb_palette *p, const value_range *clips)

@@ -4,21 +4,23 @@
 
 #include "palette_bake.h"
 
-/* The worst vertex error of the given rows of clip c. Skinning is linear in the matrices, so
- * one skinning with (exact - decoded) gives each vertex's error directly: half the work of
- * skinning twice, and no cancellation. Rows baked from similarities are measured against
- * those, sampled together like the bake did. */
+/* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
+ * the next at fraction sub / parts, blended as the runtime does. Skinning is linear in the
+ * matrices, so one skinning with (exact - decoded) gives each vertex's error directly: half
+ * the work of skinning twice, and no cancellation. Rows baked from similarities are measured
+ * against those, sampled together like the bake did. */
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
-                           bool between, double *diff, double *err_pos)
+                           uint32_t sub, uint32_t parts, double *diff, double *err_pos)
 {
     cb_palette *p = st->p;
     const cb_model *m = st->model;
     const cb_palette_clip *clip = &p->clips[c];
-    /* Halfway between rows f and f + 1 is row 2f + 1 of the clip framed at twice the steps. */
+    /* Fraction sub / parts between rows f and f + 1 is row parts * f + sub of the clip framed at
+     * `parts` times the steps. */
     cb_clip_info framing = st->infos[c];
     uint32_t times[CB_SAMPLE_BATCH];
-    for (uint32_t i = 0; i < count; ++i) times[i] = between ? 2 * frames[i] + 1 : frames[i];
-    if (between) framing.steps *= 2;
+    for (uint32_t i = 0; i < count; ++i) times[i] = parts * frames[i] + sub;
+    framing.steps *= parts;
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
     if (similar) cb_clip_frame_similarities(w->sampler, &framing, times, count, st->opt->root_motion, w->sims);
     double worst = 0;
@@ -28,7 +30,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             double *d = diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
             if (similar) cb_similarity_matrix(&w->sims[(size_t)i * p->bone_count + j], exact);
-            if (between) cb_palette_blend(p, p->texels, row, next, 0.5, j, d);
+            if (sub) cb_palette_blend(p, p->texels, row, next, (double)sub / parts, j, d);
             else cb_palette_decode(p, p->texels, row, j, d);
             for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
         }
@@ -45,19 +47,20 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     return sqrt(worst);
 }
 
-/* The worst vertex error of clip c over every error_stride-th row and the last (between:
- * halfway from each of those rows to the next, as the runtime blends them; a one-shot's last
- * row has no next). */
-static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, bool between, double *diff, double *err_pos)
+/* The worst vertex error of clip c over every error_stride-th row and the last (sub > 0: at
+ * fraction sub / parts from each of those rows to the next, as the runtime blends them; a
+ * one-shot's last row has no next). */
+static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t sub, uint32_t parts, double *diff,
+                                double *err_pos)
 {
     const cb_palette_clip *clip = &st->p->clips[c];
-    uint32_t frames = between && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], count = 0;
+    uint32_t frames = sub && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], count = 0;
     double worst = 0;
     for (uint32_t f = 0; f < frames; ++f) {
         if (f % st->error_stride && f + 1 != frames) continue;
         batch[count++] = f;
         if (count < CB_SAMPLE_BATCH && f + 1 != frames) continue;
-        worst = fmax(worst, measure_rows(st, w, c, batch, count, between, diff, err_pos));
+        worst = fmax(worst, measure_rows(st, w, c, batch, count, sub, parts, diff, err_pos));
         count = 0;
     }
     return worst;
@@ -71,8 +74,12 @@ void palette_measure_clip(bake_state *st, worker *w, uint32_t c)
     double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
     st->clip_error[c] = st->clip_blend_error[c] = 0;
     if (diff && err_pos && verts) {
-        st->clip_error[c] = measure_clip_rows(st, w, c, false, diff, err_pos);
-        st->clip_blend_error[c] = measure_clip_rows(st, w, c, true, diff, err_pos);
+        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, diff, err_pos);
+        /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err
+         * both ways, so their quarter points are measured too. */
+        uint32_t parts = p->fitted ? 4 : 2;
+        for (uint32_t sub = 1; sub < parts; ++sub)
+            st->clip_blend_error[c] = fmax(st->clip_blend_error[c], measure_clip_rows(st, w, c, sub, parts, diff, err_pos));
     }
     free(diff);
     free(err_pos);

@@ -44,13 +44,14 @@ typedef struct cb_bake_settings {
     bool layout_set, precision_set; /* chosen explicitly (else: defaults, with fallbacks) */
     bool zstd;                   /* compress the .pal payload */
     int exr_compression;         /* exr.h's lossless codes; 0: none */
+    bool fit_rows;               /* rows fitted to the runtime's linear blend (cb_bake_options.fit) */
 } cb_bake_settings;
 
 /* Which settings an override carries (the command line's bake options over a catalog). */
 enum {
     CB_BAKE_FPS = 1u << 0, CB_BAKE_LAYOUT = 1u << 1, CB_BAKE_PRECISION = 1u << 2, CB_BAKE_FORMATS = 1u << 3,
     CB_BAKE_MAX_TEXTURE_SIZE = 1u << 4, CB_BAKE_ROOT_MOTION = 1u << 5, CB_BAKE_ZSTD = 1u << 6,
-    CB_BAKE_EXR_COMPRESSION = 1u << 7, CB_BAKE_OUT_DIR = 1u << 8
+    CB_BAKE_EXR_COMPRESSION = 1u << 7, CB_BAKE_OUT_DIR = 1u << 8, CB_BAKE_FIT_ROWS = 1u << 9
 };
 
 /* 30 fps (auto: within 1 mm/m, up to 60 fps), qpos, u16, a .pal, textures up to 16384 texels
@@ -119,7 +120,8 @@ typedef struct cb_bake_output {
     uint64_t file_bytes;
     uint64_t input_hash;    /* recorded in the file */
     cb_palette palette;     /* the facts of the palette written (sizes, errors, timings); its tables and
-                             * texels are released once written (clips, bind_positions, texels NULL) */
+                             * texels are released once written (clips, bind_positions, position_offsets,
+                             * texels NULL) */
     double seconds_write;
 } cb_bake_output;
 
