@@ -66,30 +66,33 @@ def bake_models(crowdbake, build, shared, tmp, out):
             for f in sorted(os.listdir(d)):
                 out.append('%s %s %s %s' % (key, name, f, sha(os.path.join(d, f))))
             if name == 'default.pal':
-                p = run([crowdbake, 'inspect', stem + '.pal', '--json'])
+                p = run([crowdbake, 'inspect', 'out.pal', '--json'], cwd=d)  # no absolute path in what is hashed
                 out.append('%s %s inspect-json %s' % (key, name, hashlib.sha256(p.stdout).hexdigest()))
 
 
 def bake_catalog(crowdbake, build, tmp, out):
     samples = os.path.abspath(os.path.join(build, 'samples'))
     text = open(os.path.join(ROOT, 'samples', 'catalog.toml')).read()
-    text = text.replace('../build/samples', samples).replace('"../build/roster"', '"roster"')
+    # The catalog names its models through a link beside it, so that no absolute path (which
+    # differs between checkouts) reaches the outputs.
+    text = text.replace('../build/samples', 'samples').replace('"../build/roster"', '"roster"')
     for name, extra in (('catalog', []), ('catalog-pal-exr', ['--format', 'pal,exr', '--precision', 'half', '--zstd'])):
         d = os.path.join(tmp, name)
         os.makedirs(d)
+        os.symlink(samples, os.path.join(d, 'samples'))
         with open(os.path.join(d, 'catalog.toml'), 'w') as f:
             f.write(text)
         p = run([crowdbake, 'bake', 'catalog.toml', '-j', '2', '-q', '--depfile', 'roster.d'] + extra, cwd=d)
         if p.returncode:
             out.append('%s exit %d' % (name, p.returncode))
             continue
-        for root, _, files in sorted(os.walk(d)):
+        for root, _, files in sorted(os.walk(d)):  # (os.walk does not enter the link)
             for f in sorted(files):
                 path = os.path.join(root, f)
                 rel = os.path.relpath(path, d)
                 if rel == 'catalog.toml':
                     continue
-                data = open(path, 'rb').read().replace(samples.encode(), b'SAMPLES')  # the depfile names them
+                data = open(path, 'rb').read()
                 out.append('%s %s %s' % (name, rel, hashlib.sha256(data).hexdigest()))
 
 
