@@ -20,6 +20,7 @@
 #include "gltf_load.h"
 #include "json_writer.h"
 #include "pal_write.h"
+#include "roster_cache.h"
 #include "../src/runtime.h"
 #include "../src/vat.h"
 
@@ -28,6 +29,8 @@ typedef struct type_work {
     int32_t skin;
     cb_clip_plan *plan;
     cb_model **lod_models;
+    unsigned char *record; /* what preparing found, for the type's record (roster_cache.h) */
+    size_t record_size;
 } type_work;
 
 typedef struct roster_run {
@@ -125,6 +128,8 @@ static uint64_t input_hash(const cb_catalog_animal *an, const type_work *w, uint
         cbpal_xxh64_update(&h, &w->lod_models[i]->source_hash, sizeof w->lod_models[i]->source_hash);
     return cbpal_xxh64_digest(&h);
 }
+
+static cb_status write_if_changed(const char *path, const char *data, size_t size, bool *written, cb_error *err);
 
 /* ---- pass 1: prepare a type ---- */
 
@@ -345,17 +350,15 @@ static void list_unloaded_lods(const cb_catalog_animal *an, const type_work *w, 
         if (add_inputs(t, an->lods[l], NULL, &t->error)) break;
 }
 
-static void prepare_type(roster_run *run, uint32_t i)
+/* Preparing from the model: load, plan, sample what the manifest states, hash. */
+static void prepare_from_model(roster_run *run, uint32_t i)
 {
     const cb_catalog_animal *an = &run->cat->animals[i];
     cb_roster_type *t = &run->r->types[i];
     type_work *w = &run->work[i];
     cb_error *err = &t->error;
-    t->animal = an;
-    t->owner = i;
     char where[1100];
     cb_error inner = {0};
-    output_paths(an, t);
     w->model = cb_gltf_load(an->model, run->opt->limits, &inner);
     if (add_inputs(t, an->model, w->model, err)) return;
     if (!w->model) {
@@ -387,6 +390,26 @@ static void prepare_type(roster_run *run, uint32_t i)
     t->key = content_key(w->model, w->skin, w->plan, t->clip_count, &an->bake);
     t->input_hash = input_hash(an, w, t->key);
     if (run->opt->measure_vat) measure_vat(an, run->opt->limits, w, t);
+    uint64_t key;
+    if (cb_prep_key(an, run->opt->limits, t->inputs, t->input_count, &key))
+        cb_prep_record_encode(t, key, &w->record, &w->record_size);
+}
+
+/* A type's record, when it matches its files, stands in for loading and sampling: an
+ * up-to-date type then costs the hashing of its files and the check of its palette. */
+static void prepare_type(roster_run *run, uint32_t i)
+{
+    const cb_catalog_animal *an = &run->cat->animals[i];
+    cb_roster_type *t = &run->r->types[i];
+    t->animal = an;
+    t->owner = i;
+    output_paths(an, t);
+    char path[1100];
+    cb_prep_record_path(an, path, sizeof path);
+    if (!run->opt->force && !run->opt->measure_vat && cb_prep_record_load(path, an, run->opt->limits, t))
+        t->prepared_from_record = true;
+    else
+        prepare_from_model(run, i);
 }
 
 /* ---- pass 3: bake an owner ---- */
@@ -512,6 +535,19 @@ static void log_type(roster_run *run, const cb_roster_type *t)
     mtx_unlock(&run->log_lock);
 }
 
+/* Saves the record of a type prepared from its model (unless the file holds it already); a
+ * record that cannot be written only costs the next run the preparation. */
+static void write_record(roster_run *run, uint32_t i)
+{
+    type_work *w = &run->work[i];
+    if (!w->record) return;
+    char path[1100];
+    cb_prep_record_path(run->r->types[i].animal, path, sizeof path);
+    cb_error ignored = {0};
+    bool written;
+    write_if_changed(path, (const char *)w->record, w->record_size, &written, &ignored);
+}
+
 static void bake_type(roster_run *run, uint32_t i)
 {
     cb_roster_type *t = &run->r->types[i];
@@ -522,8 +558,17 @@ static void bake_type(roster_run *run, uint32_t i)
     } else if (t->owner != i) {
         return; /* shared types are settled once their owner is */
     } else {
-        if (!run->opt->force && up_to_date(t, an->bake.formats)) t->outcome = CB_TYPE_UP_TO_DATE;
-        else t->outcome = bake_files(run, an, &run->work[i], t, &t->error) ? CB_TYPE_FAILED : CB_TYPE_BAKED;
+        if (!run->opt->force && up_to_date(t, an->bake.formats)) {
+            t->outcome = CB_TYPE_UP_TO_DATE;
+        } else {
+            if (t->prepared_from_record) { /* the palette is not: bake it from the model */
+                cb_prep_clear(t);
+                t->prepared_from_record = false;
+                prepare_from_model(run, i);
+            }
+            t->outcome = t->error.status || bake_files(run, an, &run->work[i], t, &t->error) ? CB_TYPE_FAILED : CB_TYPE_BAKED;
+        }
+        if (t->outcome != CB_TYPE_FAILED) write_record(run, i);
         t->pal_file_bytes = file_size(t->pal_path);
         t->exr_file_bytes = file_size(t->exr_path);
     }
@@ -896,6 +941,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
             t->layout = o->layout, t->precision = o->precision, t->palette_bytes = o->palette_bytes;
             t->width = o->width, t->height = o->height, t->blocks = o->blocks, t->max_error = o->max_error;
             t->visible_error = o->visible_error;
+            write_record(&run, i);
             r->shared++;
         }
         log_type(&run, t);
@@ -914,6 +960,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
         cb_model_free(run.work[i].model);
         for (uint32_t l = 0; l < cat->animals[i].lod_count && run.work[i].lod_models; ++l) cb_model_free(run.work[i].lod_models[l]);
         free(run.work[i].lod_models);
+        free(run.work[i].record);
     }
     free(run.work);
     mtx_destroy(&run.log_lock);
