@@ -3,6 +3,7 @@
 #include "palette.h"
 
 #include "budget.h"
+#include "error_bound.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -54,6 +55,7 @@ cb_bake_options cb_default_bake_options(void)
     o.limits = cb_default_limits();
     o.threads = 1;
     o.affine_fallback = false;
+    o.error_goal = 0;
     return o;
 }
 
@@ -205,6 +207,7 @@ typedef struct bake_state {
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
     cb_error *errors;      /* clips: the first error of each */
     uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
+    double weight_sum;     /* the largest sum of a vertex's |weights| (error_bound.h) */
     double *clip_error;    /* clips: worst vertex error measured */
     double *clip_blend_error; /* clips: worst vertex error halfway between rows, as the runtime blends them */
     value_range *ranges;   /* clips: the values' ranges */
@@ -648,12 +651,13 @@ void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, ui
 
 /* ---- pass 3: the error against exact skinning ---- */
 
-/* The worst vertex error of the given rows of clip c. Skinning is linear in the matrices, so
- * one skinning with (exact - decoded) gives each vertex's error directly: half the work of
- * skinning twice, and no cancellation. Rows baked from similarities are measured against
- * those, sampled together like the bake did. */
+/* The worst vertex error of the given rows of clip c; or, with `bounds`, only each row's
+ * upper bound (error_bound.h). Skinning is linear in the matrices, so one skinning with
+ * (exact - decoded) gives each vertex's error directly: half the work of skinning twice, and
+ * no cancellation. Rows baked from similarities are measured against those, sampled together
+ * like the bake did. */
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
-                           bool between, double *diff, double *err_pos)
+                           bool between, double *diff, double *err_pos, double *bounds)
 {
     cb_palette *p = st->p;
     const cb_model *m = st->model;
@@ -676,6 +680,10 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
             else cb_palette_decode(p, p->texels, row, j, d);
             for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
         }
+        if (bounds) {
+            bounds[i] = cb_row_error_bound(diff, p->bone_count, p->bind_positions, st->radius, st->weight_sum);
+            continue;
+        }
         for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
             const cb_primitive *prim = &m->primitives[pi];
             if (prim->skin != st->skin) continue;
@@ -691,19 +699,33 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
 
 /* The worst vertex error of clip c over every error_stride-th row and the last (between:
  * halfway from each of those rows to the next, as the runtime blends them; a one-shot's last
- * row has no next). */
-static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, bool between, double *diff, double *err_pos)
+ * row has no next). Branch and bound: every row's cheap bound first, then exact skinning in
+ * order of bound, largest first, until no row left can exceed the worst found - the same
+ * maximum as skinning every row, for a fraction of the work. Rows that cannot exceed `floor`
+ * are not measured (0 when none may be skipped): the result is exact when above it. With an
+ * error goal, measuring also stops once the worst exceeds it. */
+static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, bool between, double floor, double *diff,
+                                double *err_pos, cb_bounded_row *rows)
 {
     const cb_palette_clip *clip = &st->p->clips[c];
-    uint32_t frames = between && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], count = 0;
-    double worst = 0;
-    for (uint32_t f = 0; f < frames; ++f) {
-        if (f % st->error_stride && f + 1 != frames) continue;
-        batch[count++] = f;
-        if (count < CB_SAMPLE_BATCH && f + 1 != frames) continue;
-        worst = fmax(worst, measure_rows(st, w, c, batch, count, between, diff, err_pos));
-        count = 0;
+    uint32_t frames = between && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], n = 0;
+    for (uint32_t f = 0; f < frames; ++f)
+        if (f % st->error_stride == 0 || f + 1 == frames) rows[n++].frame = f;
+    double bounds[CB_SAMPLE_BATCH], worst = floor, goal = st->opt->error_goal;
+    for (uint32_t i = 0; i < n; i += CB_SAMPLE_BATCH) {
+        uint32_t count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
+        for (uint32_t k = 0; k < count; ++k) batch[k] = rows[i + k].frame;
+        measure_rows(st, w, c, batch, count, between, diff, err_pos, bounds);
+        for (uint32_t k = 0; k < count; ++k) rows[i + k].bound = bounds[k];
     }
+    cb_sort_bounded_rows(rows, n);
+    /* Batches of 1, 2, 4, ... rows: often the first few rows settle it. */
+    for (uint32_t i = 0, size = 1; i < n && rows[i].bound > worst && !(goal > 0 && worst > goal); size *= 2) {
+        uint32_t count = 0;
+        for (; i < n && count < size && count < CB_SAMPLE_BATCH && rows[i].bound > worst; ++i) batch[count++] = rows[i].frame;
+        worst = fmax(worst, measure_rows(st, w, c, batch, count, between, diff, err_pos, NULL));
+    }
+    if (getenv("CB_DEBUG_MEASURE")) { uint32_t m = 0; for (uint32_t i = 0; i < n; ++i) m += rows[i].bound > worst; fprintf(stderr, "clip %u %s: %u rows, exact %u (+batch), worst %g, top bound %g, median bound %g\n", c, between ? "blend" : "quant", n, m, worst, rows[0].bound, rows[n/2].bound); }
     return worst;
 }
 
@@ -713,13 +735,24 @@ static void measure_clip(bake_state *st, worker *w, uint32_t c)
     uint64_t verts = cb_model_skin_vertex_count(st->model, st->skin);
     double *diff = malloc((size_t)p->bone_count * 16 * sizeof(double));
     double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
+    cb_bounded_row *rows = malloc((size_t)p->clips[c].frames * sizeof *rows);
     st->clip_error[c] = st->clip_blend_error[c] = 0;
-    if (diff && err_pos && verts) {
-        st->clip_error[c] = measure_clip_rows(st, w, c, false, diff, err_pos);
-        st->clip_blend_error[c] = measure_clip_rows(st, w, c, true, diff, err_pos);
+    double goal = st->opt->error_goal;
+    if (diff && err_pos && rows && verts && goal > 0) {
+        /* Only the visible error counts: the blend's (usually the larger) first, then the baked
+         * rows that could exceed it - none, when the blend is past the goal. */
+        double blend = st->clip_blend_error[c] = measure_clip_rows(st, w, c, true, 0, diff, err_pos, rows);
+        double both = blend > goal ? blend : measure_clip_rows(st, w, c, false, blend, diff, err_pos, rows);
+        st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
+    } else if (diff && err_pos && rows && verts) {
+        st->clip_error[c] = measure_clip_rows(st, w, c, false, 0, diff, err_pos, rows);
+        st->clip_blend_error[c] = measure_clip_rows(st, w, c, true, 0, diff, err_pos, rows);
+    } else if (verts) {
+        cb_fail(&st->errors[c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
     }
     free(diff);
     free(err_pos);
+    free(rows);
 }
 
 /* Bind-space distance from each joint's bind position to the farthest vertex it moves;
@@ -924,8 +957,10 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);
     st.error_stride = work > CB_ERROR_BUDGET ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
     p->error_rows_measured = 0;
+    st.weight_sum = cb_skin_max_weight_sum(m, skin_index);
     if (skinned) {
         for_each_clip(&st, measure_clip, true);
+        if (first_clip_error(&st, err)) goto fail;
         for (uint32_t c = 0; c < p->clip_count; ++c) {
             p->max_error = fmax(p->max_error, st.clip_error[c]);
             p->visible_error = fmax(p->visible_error, fmax(st.clip_error[c], st.clip_blend_error[c]));
