@@ -723,6 +723,11 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, bool betw
     for (uint32_t i = 0, size = 1; i < n && rows[i].bound > worst && !(goal > 0 && worst > goal); size *= 2) {
         uint32_t count = 0;
         for (; i < n && count < size && count < CB_SAMPLE_BATCH && rows[i].bound > worst; ++i) batch[count++] = rows[i].frame;
+        for (uint32_t a = 1; a < count; ++a) /* increasing frames, as the batched sampler wants them */
+            for (uint32_t b = a; b > 0 && batch[b - 1] > batch[b]; --b) {
+                uint32_t swap = batch[b];
+                batch[b] = batch[b - 1], batch[b - 1] = swap;
+            }
         worst = fmax(worst, measure_rows(st, w, c, batch, count, between, diff, err_pos, NULL));
     }
     if (getenv("CB_DEBUG_MEASURE")) { uint32_t m = 0; for (uint32_t i = 0; i < n; ++i) m += rows[i].bound > worst; fprintf(stderr, "clip %u %s: %u rows, exact %u (+batch), worst %g, top bound %g, median bound %g\n", c, between ? "blend" : "quant", n, m, worst, rows[0].bound, rows[n/2].bound); }
