@@ -17,6 +17,7 @@
 #include <utility>
 #include <fcntl.h>
 #include <strings.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <vector>
@@ -53,29 +54,52 @@ std::string first_line(const std::string &s)
     return s.substr(start, end == std::string::npos ? std::string::npos : end - start);
 }
 
-// The model file's bytes: resize() leaves them uninitialized (the file is read over them at
-// once, and zeroing tens of megabytes first costs as much as the read), on huge pages where
-// the OS has them (cb_alloc_large).
-template <class T> struct file_allocator {
-    using value_type = T;
-    file_allocator() = default;
-    template <class U> file_allocator(const file_allocator<U> &) {}
-    T *allocate(size_t n)
+// The model file's bytes: read into memory that resize() leaves uninitialized (the file is
+// read over it at once, and zeroing tens of megabytes first costs as much as the read), on huge
+// pages where the OS has them (cb_alloc_large); or a mapping of the file (map_model).
+class file_bytes {
+  public:
+    file_bytes() = default;
+    file_bytes(const file_bytes &) = delete;
+    file_bytes &operator=(const file_bytes &) = delete;
+    file_bytes(file_bytes &&o) noexcept { take(o); }
+    file_bytes &operator=(file_bytes &&o) noexcept
     {
-        void *p = n <= SIZE_MAX / sizeof(T) ? cb_alloc_large(n * sizeof(T)) : nullptr;
-        if (!p) throw std::bad_alloc();
-        return static_cast<T *>(p);
+        if (this != &o) release(), take(o);
+        return *this;
     }
-    void deallocate(T *p, size_t) { std::free(p); }
-    template <class U> void construct(U *p) noexcept { ::new (static_cast<void *>(p)) U; }
-    template <class U, class... Args> void construct(U *p, Args &&...args)
+    ~file_bytes() { release(); }
+    void resize(size_t n)
     {
-        ::new (static_cast<void *>(p)) U(std::forward<Args>(args)...);
+        release();
+        if (n && !(bytes_ = static_cast<unsigned char *>(cb_alloc_large(n)))) throw std::bad_alloc();
+        size_ = n;
     }
-    template <class U> bool operator==(const file_allocator<U> &) const { return true; }
-    template <class U> bool operator!=(const file_allocator<U> &) const { return false; }
+    void adopt_mapping(void *p, size_t n)
+    {
+        release();
+        bytes_ = static_cast<unsigned char *>(p), size_ = n, mapped_ = true;
+    }
+    unsigned char *data() { return bytes_; }
+    size_t size() const { return size_; }
+    bool empty() const { return size_ == 0; }
+
+  private:
+    void release()
+    {
+        if (mapped_) munmap(bytes_, size_);
+        else std::free(bytes_);
+        bytes_ = nullptr, size_ = 0, mapped_ = false;
+    }
+    void take(file_bytes &o)
+    {
+        bytes_ = o.bytes_, size_ = o.size_, mapped_ = o.mapped_;
+        o.bytes_ = nullptr, o.size_ = 0, o.mapped_ = false;
+    }
+    unsigned char *bytes_ = nullptr;
+    size_t size_ = 0;
+    bool mapped_ = false;
 };
-using file_bytes = std::vector<unsigned char, file_allocator<unsigned char>>;
 
 // Little-endian fields of a GLB header or chunk.
 uint32_t le32(const unsigned char *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
@@ -168,6 +192,44 @@ template <class Bytes> bool read_file(const char *path, uint64_t max_bytes, Byte
     close(fd);
     if (!ok) *why = "short read";
     return ok;
+}
+
+// Model files of 1 MiB and more are mapped read-only with MAP_POPULATE rather than read: their
+// pages come from the page cache as they are, where read() into fresh memory zeroes and copies
+// each one (for a large rig most of the load's time, in the kernel). The mapping is private and
+// made writable once populated, so the loader's in-place writes (rotation keys it normalizes)
+// copy only the pages they touch; populating a writable private mapping would copy every page.
+// The hash runs on tail->thread while tinygltf parses, when no other file joins it. False
+// (nothing done) where mapping does not apply; read_file then reads the file and says why not.
+bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return false;
+    struct stat st;
+    bool fits = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size >= (1 << 20) && (uint64_t)st.st_size <= max_bytes;
+    size_t size = fits ? (size_t)st.st_size : 0;
+    void *p = fits ? mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0) : MAP_FAILED;
+    close(fd);
+    if (p == MAP_FAILED) return false;
+    if (mprotect(p, size, PROT_READ | PROT_WRITE) != 0) {
+        munmap(p, size);
+        return false;
+    }
+    out->adopt_mapping(p, size);
+    const unsigned char *data = out->data();
+    if (split_point(data, size, size)) {
+        try {
+            tail->head = size;
+            tail->thread = std::thread([data, size, tail] {
+                cbpal_xxh64_init(&tail->hash);
+                cbpal_xxh64_update(&tail->hash, data, size);
+                tail->ok = true;
+            });
+        } catch (const std::system_error &) {
+            tail->head = 0; /* no thread: load() hashes it */
+        }
+    }
+    return true;
 }
 
 // ---- file-system callbacks: bounded reads, no shell expansion, meshopt fallback buffers ----
@@ -1246,7 +1308,7 @@ extern "C" cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_
     TailRead tail; /* after `bytes`, so it is joined before they are freed */
     std::string why;
     try {
-        if (!read_file(path, l.max_file_bytes, &bytes, &tail, &why)) {
+        if (!map_model(path, l.max_file_bytes, &bytes, &tail) && !read_file(path, l.max_file_bytes, &bytes, &tail, &why)) {
             cb_fail(err, CB_ERR_IO, "%s: cannot read: %s", path, why.c_str());
             return nullptr;
         }
