@@ -305,7 +305,8 @@ static cb_bake_options bake_options(const cb_catalog_animal *an, const cb_limits
 }
 
 /* fps = "auto" (the animal's or a clip's): each such clip's rate, chosen by its visible error. */
-static cb_status choose_rates(const cb_catalog_animal *an, const cb_limits *limits, type_work *w, uint32_t n, cb_error *err)
+static cb_status choose_rates(const cb_catalog_animal *an, const cb_limits *limits, uint32_t threads, type_work *w,
+                              uint32_t n, cb_error *err)
 {
     cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
     if (!goals) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
@@ -318,6 +319,7 @@ static cb_status choose_rates(const cb_catalog_animal *an, const cb_limits *limi
     }
     cb_sampler *s = any ? cb_sampler_create(w->model, w->skin, err) : NULL;
     cb_bake_options o = bake_options(an, limits);
+    o.threads = threads; /* clips searched at once */
     if (s) cb_choose_rates(s, &o, w->plan, n, goals, NULL, err);
     cb_sampler_free(s);
     free(goals);
@@ -380,7 +382,7 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     t->mesh_bytes = cb_model_skin_mesh_bytes(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
-    if (plan_clips(run->cat, an, w, t, err) || choose_rates(an, run->opt->limits, w, t->clip_count, err) ||
+    if (plan_clips(run->cat, an, w, t, err) || choose_rates(an, run->opt->limits, run->threads_per_bake, w, t->clip_count, err) ||
         analyze_clips(an, run->opt->limits, w, t, err) || match_states(run->cat, an, t, err) ||
         check_lods(run, an, w, t, err)) {
         list_unloaded_lods(an, w, t);
