@@ -956,7 +956,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     double encoded_while_sampling = 0;
     for (uint32_t c = 0; c < p->clip_count; ++c) encoded_while_sampling += st.encode_seconds[c];
     encoded_while_sampling /= threads_used(&st);
-    p->model_height = cb_skin_rest_bounds(sampler, lo, hi);
+    p->model_height = opt->error_goal > 0 ? 0 : cb_skin_rest_bounds(sampler, lo, hi); /* a search knows it */
     /* Exact skinning of every vertex at every row costs rows x vertices; past ~4M vertex-rows
      * an even subset of rows (always each clip's last) measures the error. */
     uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);

@@ -34,7 +34,7 @@ typedef struct cb_bake_options {
     bool affine_fallback; /* qpos was not chosen explicitly: bake affine when qpos cannot hold the rig */
     double error_goal;    /* > 0: only the visible error is measured, and only as far as the goal needs (model
                            * units): exact when within it, a lower bound above it; max_error is then a lower
-                           * bound. For searches that ask "within the goal?". 0: both exact. */
+                           * bound and model_height 0. For searches that ask "within the goal?". 0: all exact. */
 } cb_bake_options;
 
 /* Vertex-rows of exact skinning spent measuring a bake's error (see cb_palette.max_error). */
