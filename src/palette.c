@@ -730,7 +730,6 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, bool betw
             }
         worst = fmax(worst, measure_rows(st, w, c, batch, count, between, diff, err_pos, NULL));
     }
-    if (getenv("CB_DEBUG_MEASURE")) { uint32_t m = 0; for (uint32_t i = 0; i < n; ++i) m += rows[i].bound > worst; fprintf(stderr, "clip %u %s: %u rows, exact %u (+batch), worst %g, top bound %g, median bound %g\n", c, between ? "blend" : "quant", n, m, worst, rows[0].bound, rows[n/2].bound); }
     return worst;
 }
 
