@@ -2,7 +2,7 @@
 """crowdbake benchmark: crowdbake against its peer (three.js GLTFLoader + AnimationMixer, bench/peer.mjs)
 measured in the same run on the same inputs.
 
-  python3 bench/run.py [--repeat N] [--json] [--smoke]
+  python3 bench/run.py [--repeat N] [--json] [--smoke] [--instructions]
 
 Inputs: ../shared/assets Fox.glb and robot.glb, and rigs from the sample generator: 200 joints x
 {8, 15, 30, 60} clips x 10 s at 30 fps (the 30-clip rig is 9,000 frames, 1.8 M joint matrices).
@@ -178,6 +178,37 @@ def bench_auto(repeat):
     return {'model': 'Cow.glb', 'fixed': fixed, 'auto': auto}
 
 
+def bench_clips(repeat):
+    """60 against 30 clips of the 200-joint rig, in turns (the series above runs each input's
+    repeats together, so a change in load between two inputs skews their ratio)."""
+    c30, c60 = gen_rig(200, 30, 10), gen_rig(200, 60, 10)
+    out = os.path.join(BUILD, 'bench', 'clips.pal')
+    return paired([EXE, 'bake', c30, '-o', out, '-q'], [EXE, 'bake', c60, '-o', out, '-q'], repeat)
+
+
+def instructions(cmd):
+    """Instructions one run of cmd executes (callgrind; independent of the machine's load)."""
+    out = subprocess.run(['valgrind', '--tool=callgrind', '--callgrind-out-file=/dev/null'] + cmd,
+                         capture_output=True, text=True).stderr
+    refs = [line for line in out.splitlines() if 'refs:' in line]
+    return int(refs[-1].split()[-1].replace(',', '')) if refs else None
+
+
+def bench_instructions():
+    """The same comparisons in instructions, single-threaded: what a busy machine cannot blur."""
+    cow = os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb')
+    out = os.path.join(BUILD, 'bench', 'instr.pal')
+    cat = catalog_32()
+    subprocess.run([EXE, 'bake', cat, '-q'], check=True)
+    return {
+        'cow_fixed': instructions([EXE, 'bake', cow, '-o', out, '-q', '-j', '1']),
+        'cow_auto': instructions([EXE, 'bake', cow, '-o', out, '-q', '-j', '1', '--fps', 'auto']),
+        'rig_30clips': instructions([EXE, 'bake', gen_rig(200, 30, 10), '-o', out, '-q', '-j', '1']),
+        'catalog_noop': instructions([EXE, 'bake', cat, '-q', '-j', '1']),
+        'catalog_cold': instructions([EXE, 'bake', cat, '-q', '-j', '1', '--force']),
+    }
+
+
 def bench_joints(repeat):
     """4x the joints: 512 against 128, 8 clips x 10 s each (crowdbake only; the issue's 800 against
     200, scaled to the generator's limit of 512 joints)."""
@@ -232,7 +263,14 @@ def print_table(report):
         j = x['joints']
         print('%d joints %s ms vs %d joints %s ms (8 clips x 10 s): %.2fx' % (
             j['big'], ms(j['t_big']), j['small'], ms(j['t_small']), j['t_big'] / j['t_small']))
-        print('60 clips vs 30 clips (200 joints): %.2fx' % x['clips_60_vs_30'])
+        print('60 clips vs 30 clips (200 joints, in turns): %s vs %s ms: %.2fx' % (
+            ms(x['clips'][1]), ms(x['clips'][0]), x['clips_60_vs_30']))
+        ins = x.get('instructions')
+        if ins:
+            print('instructions (callgrind, 1 thread): Cow fixed %.0f M, --fps auto %.0f M (%.2fx); 200-joint 30-clip rig %.0f M; '
+                  '32-type catalog cold %.0f M, no-op %.1f M' % (
+                      ins['cow_fixed'] / 1e6, ins['cow_auto'] / 1e6, ins['cow_auto'] / ins['cow_fixed'],
+                      ins['rig_30clips'] / 1e6, ins['catalog_cold'] / 1e6, ins['catalog_noop'] / 1e6))
         print('goals: big rig e2e >= 12x three.js: %.1fx; 60/30 clips <= 2.2x: %.2fx; 4x joints (512/128) <= 4.4x: %.2fx; '
               'no-op 32 types < 50 ms: %s ms; auto <= 3x fixed: %.2fx; Fox e2e >= 6x: %.1fx' % (
                   big['ratios']['end_to_end_vs_peer_load_plus_sample'], x['clips_60_vs_30'], j['t_big'] / j['t_small'],
@@ -253,6 +291,7 @@ def main():
     ap.add_argument('--repeat', type=int, default=5)
     ap.add_argument('--json', action='store_true')
     ap.add_argument('--smoke', action='store_true')
+    ap.add_argument('--instructions', action='store_true', help='also count instructions with valgrind (slow)')
     args = ap.parse_args()
     ensure_peer()
     inputs = []
@@ -285,9 +324,12 @@ def main():
         report['extra'] = {
             'floor': floor_numbers(big[0]), 'floor_input': big_r,
             'catalog': bench_catalog(args.repeat), 'auto': bench_auto(args.repeat), 'joints': bench_joints(args.repeat),
-            'clips_60_vs_30': by_name['rig_200j_60clips']['crowdbake']['wall']['median'] / big_r['crowdbake']['wall']['median'],
+            'clips': bench_clips(args.repeat),
             'fox_e2e': by_name['Fox']['ratios']['end_to_end_vs_peer_load_plus_sample'],
         }
+        report['extra']['clips_60_vs_30'] = report['extra']['clips'][1] / report['extra']['clips'][0]
+        if args.instructions:
+            report['extra']['instructions'] = bench_instructions()
     else:
         report['floor'] = floor_numbers(inputs[0][1])
     if args.json:
