@@ -68,7 +68,7 @@ typedef struct writer {
 
 static void put(writer *w, const void *p, size_t n)
 {
-    if (w->failed) return;
+    if (w->failed || n == 0) return;
     if (w->size + n > w->cap) {
         size_t cap = w->cap ? w->cap * 2 : 4096;
         while (cap < w->size + n) cap *= 2;
@@ -150,6 +150,7 @@ typedef struct reader {
 
 static void get(reader *r, void *out, size_t n)
 {
+    if (n == 0) return;
     if (r->failed || (size_t)(r->end - r->p) < n) {
         r->failed = true;
         memset(out, 0, n);
