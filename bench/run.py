@@ -205,7 +205,6 @@ def bench_instructions():
         'cow_auto': instructions([EXE, 'bake', cow, '-o', out, '-q', '-j', '1', '--fps', 'auto']),
         'rig_30clips': instructions([EXE, 'bake', gen_rig(200, 30, 10), '-o', out, '-q', '-j', '1']),
         'catalog_noop': instructions([EXE, 'bake', cat, '-q', '-j', '1']),
-        'catalog_cold': instructions([EXE, 'bake', cat, '-q', '-j', '1', '--force']),
     }
 
 
@@ -268,9 +267,9 @@ def print_table(report):
         ins = x.get('instructions')
         if ins:
             print('instructions (callgrind, 1 thread): Cow fixed %.0f M, --fps auto %.0f M (%.2fx); 200-joint 30-clip rig %.0f M; '
-                  '32-type catalog cold %.0f M, no-op %.1f M' % (
+                  '32-type catalog no-op %.1f M' % (
                       ins['cow_fixed'] / 1e6, ins['cow_auto'] / 1e6, ins['cow_auto'] / ins['cow_fixed'],
-                      ins['rig_30clips'] / 1e6, ins['catalog_cold'] / 1e6, ins['catalog_noop'] / 1e6))
+                      ins['rig_30clips'] / 1e6, ins['catalog_noop'] / 1e6))
         print('goals: big rig e2e >= 12x three.js: %.1fx; 60/30 clips <= 2.2x: %.2fx; 4x joints (512/128) <= 4.4x: %.2fx; '
               'no-op 32 types < 50 ms: %s ms; auto <= 3x fixed: %.2fx; Fox e2e >= 6x: %.1fx' % (
                   big['ratios']['end_to_end_vs_peer_load_plus_sample'], x['clips_60_vs_30'], j['t_big'] / j['t_small'],
