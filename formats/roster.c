@@ -406,9 +406,9 @@ static void prepare_type(roster_run *run, uint32_t i)
     t->animal = an;
     t->owner = i;
     output_paths(an, t);
-    char path[1100];
-    cb_prep_record_path(an, path, sizeof path);
-    if (!run->opt->force && !run->opt->measure_vat && cb_prep_record_load(path, an, run->opt->limits, t))
+    char path[4096];
+    if (!run->opt->force && !run->opt->measure_vat && cb_prep_record_path(an, path, sizeof path) &&
+        cb_prep_record_load(path, an, run->opt->limits, t))
         t->prepared_from_record = true;
     else
         prepare_from_model(run, i);
@@ -543,11 +543,11 @@ static void write_record(roster_run *run, uint32_t i)
 {
     type_work *w = &run->work[i];
     if (!w->record) return;
-    char path[1100];
-    cb_prep_record_path(run->r->types[i].animal, path, sizeof path);
+    char path[4096];
     cb_error ignored = {0};
     bool written;
-    write_if_changed(path, (const char *)w->record, w->record_size, &written, &ignored);
+    if (cb_prep_record_path(run->r->types[i].animal, path, sizeof path))
+        write_if_changed(path, (const char *)w->record, w->record_size, &written, &ignored);
 }
 
 static void bake_type(roster_run *run, uint32_t i)

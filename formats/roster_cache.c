@@ -11,9 +11,10 @@
 
 static const char magic[8] = "CBPREP1";
 
-void cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
+bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {
-    snprintf(out, size, "%s/.%s.prep", an->bake.out_dir, an->name);
+    int n = snprintf(out, size, "%s/.%s.prep", an->bake.out_dir, an->name);
+    return n > 0 && (size_t)n < size;
 }
 
 /* ---- the key ---- */

@@ -11,8 +11,9 @@
 
 #include "roster.h"
 
-/* OUT_DIR/.NAME.prep: hidden beside the palettes, one per type. */
-void cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size);
+/* OUT_DIR/.NAME.prep: hidden beside the palettes, one per type. False when it does not fit
+ * (then the type has no record). */
+bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size);
 
 /* The key of a type's preparation: false when an input cannot be read. */
 bool cb_prep_key(const cb_catalog_animal *an, const cb_limits *limits, char *const *inputs, uint32_t input_count,
