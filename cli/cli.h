@@ -96,6 +96,7 @@ int cmd_vat(int argc, char **argv);
 int cmd_verify(int argc, char **argv);
 int cmd_preview(int argc, char **argv);
 int cmd_report(int argc, char **argv);
+int cmd_mesh(int argc, char **argv);
 /* `crowdbake bake CATALOG.toml`, once cmd_bake has read its options. */
 typedef struct cli_catalog_bake {
     const char *path;
@@ -109,6 +110,6 @@ typedef struct cli_catalog_bake {
 int cmd_bake_catalog(const cli_catalog_bake *options);
 
 extern const char cmd_info_usage[], cmd_sample_usage[], cmd_bake_usage[], cmd_inspect_usage[], cmd_vat_usage[],
-    cmd_report_usage[], cmd_verify_usage[], cmd_preview_usage[];
+    cmd_report_usage[], cmd_verify_usage[], cmd_preview_usage[], cmd_mesh_usage[];
 
 #endif

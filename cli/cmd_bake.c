@@ -10,13 +10,14 @@
 #include "../formats/crowdbake_pal.h"
 #include "../formats/exr_io.h"
 #include "../formats/json_writer.h"
+#include "../formats/ktx2_write.h"
 #include "../formats/pal_write.h"
 #include "../src/budget.h"
 #include "../src/runtime.h"
 #include "cli.h"
 
 const char cmd_bake_usage[] =
-    "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr [options]\n"
+    "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2 [options]\n"
     "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--json] [-q]\n"
     "                      [--fps N] [--layout L] [--precision P] [--format F] [--zstd] [--max-texture-size N]\n"
     "                      [--root-motion R] [--exr-compression C]\n\n"
@@ -25,16 +26,17 @@ const char cmd_bake_usage[] =
     "changed (--force: everything), N types at a time (default: the number of cores). With a\n"
     "catalog, the bake options given replace its [bake] and [animal] values for this run (a clip's\n"
     "own fps still applies) and count in what is up to date; --depfile writes a Make/Ninja depfile.\n\n"
-    "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md) or .exr (OpenEXR); another\n"
-    "                             extension is refused\n"
-    "  --format pal,exr           write these formats (OUT's extension is replaced per format; each\n"
+    "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md), .exr (OpenEXR) or .ktx2\n"
+    "                             (uncompressed KTX2, RGBA16F/RGBA32F); another extension is refused\n"
+    "  --format pal,exr,ktx2      write these formats (OUT's extension is replaced per format; each\n"
     "                             keeps its own default precision unless --precision is given)\n"
     "  --fps N|auto               baked frames per second (default 30); auto: per clip, the lowest rate\n"
     "                             whose error stays under --max-error (mm per metre of model height,\n"
     "                             default 1) at baked frames and between them, up to --max-fps (60)\n"
     "  --layout mat4|affine|qpos  texels per bone: 4, 3 or 2 (default qpos; affine when the rig has\n"
     "                             non-uniform scale or shear, which qpos cannot hold)\n"
-    "  --precision float|half|u16 RGBA32F, RGBA16F or RGBA16UI (default u16 for .pal, float for .exr)\n"
+    "  --precision float|half|u16 RGBA32F, RGBA16F or RGBA16UI (default u16 for .pal, float for .exr\n"
+    "                             and .ktx2, which refuse u16)\n"
     "  --max-texture-size N       never emit a dimension above N (default 16384); rows wrap into\n"
     "                             side-by-side column blocks\n"
     "  --root-motion keep|in-place  in-place removes the root's average horizontal travel\n"
@@ -94,7 +96,8 @@ static uint64_t input_hash(const cb_model *m, const cb_bake_options *o, int skin
 
 /* The options of the .pal bake; *exr_precision: the .exr's texels (each format keeps its own
  * default precision when --precision is not given, so --format pal,exr changes neither file). */
-static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, bool want_pal, cb_precision *exr_precision)
+static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, bool want_ktx2, bool want_pal,
+                         cb_precision *exr_precision)
 {
     *o = cb_default_bake_options();
     if (a->fps && strcmp(a->fps, "auto") != 0 && (!cli_parse_double(a->fps, &o->fps) || !(o->fps > 0) || o->fps > 1000))
@@ -109,6 +112,10 @@ static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, 
     if (*exr_precision == CB_PRECISION_U16 && want_exr)
         return cli_usage_error("bake", "EXR holds half or float texels; use --precision half|float%s",
                                want_pal ? " (or write only the .pal)" : "");
+    /* KTX2 could hold u16 as RGBA16UI, but three.js's KTX2Loader and most loaders refuse integer formats. */
+    if (*exr_precision == CB_PRECISION_U16 && want_ktx2)
+        return cli_usage_error("bake", "KTX2 palettes hold half or float texels (RGBA16F, RGBA32F; common KTX2 loaders "
+                               "refuse u16's RGBA16UI); use --precision half|float%s", want_pal ? " (or write only the .pal)" : "");
     unsigned max;
     if (a->max_size) {
         if (!cli_parse_u32(a->max_size, &max) || max < 1)
@@ -125,12 +132,19 @@ static int parse_options(const bake_args *a, cb_bake_options *o, bool want_exr, 
     return 0;
 }
 
-/* --format's words: pal, exr, or both. */
-static bool parse_formats(const char *text, bool *pal, bool *exr)
+/* --format's words: a comma-separated set of pal, exr and ktx2. */
+static bool parse_formats(const char *text, bool *pal, bool *exr, bool *ktx2)
 {
-    *pal = strcmp(text, "pal") == 0 || strcmp(text, "pal,exr") == 0 || strcmp(text, "exr,pal") == 0;
-    *exr = strcmp(text, "exr") == 0 || strcmp(text, "pal,exr") == 0 || strcmp(text, "exr,pal") == 0;
-    return *pal || *exr;
+    *pal = *exr = *ktx2 = false;
+    char buf[64];
+    if (strlen(text) >= sizeof buf) return false;
+    snprintf(buf, sizeof buf, "%s", text);
+    for (char *save = NULL, *w = strtok_r(buf, ",", &save); w; w = strtok_r(NULL, ",", &save)) {
+        bool *flag = strcmp(w, "pal") == 0 ? pal : strcmp(w, "exr") == 0 ? exr : strcmp(w, "ktx2") == 0 ? ktx2 : NULL;
+        if (!flag || *flag) return false;
+        *flag = true;
+    }
+    return *pal || *exr || *ktx2;
 }
 
 /* A catalog: the bake options given override its [bake] and [animal] settings for this run
@@ -151,8 +165,9 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
                                "animal or clip");
     cb_bake_settings over = {0};
     unsigned fields = 0;
-    bool pal = false, exr = false;
-    if (a->format && !parse_formats(a->format, &pal, &exr)) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    bool pal = false, exr = false, ktx2 = false;
+    if (a->format && !parse_formats(a->format, &pal, &exr, &ktx2)) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    if (ktx2) return cli_usage_error("bake", "--format ktx2 is for single models for now; a catalog writes pal and exr");
     if (a->format) over.formats = (pal ? CB_FORMAT_PAL : 0u) | (exr ? CB_FORMAT_EXR : 0u), fields |= CB_BAKE_FORMATS;
     if (a->zstd && a->format && !pal)
         return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
@@ -162,7 +177,7 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     if (a->exr_compression) fields |= CB_BAKE_EXR_COMPRESSION;
     cb_bake_options o;
     cb_precision exr_precision; /* the catalog's own rules pick each format's precision */
-    int rc = parse_options(a, &o, false, true, &exr_precision); /* the same checks and values as for one model */
+    int rc = parse_options(a, &o, false, false, true, &exr_precision); /* the same checks and values as for one model */
     if (rc) return rc;
     over.fps = o.fps, over.layout = o.layout, over.precision = o.precision;
     over.max_texture_size = o.max_texture_size, over.root_motion = o.root_motion;
@@ -300,20 +315,22 @@ static void bake_warnings(cb_sampler *s, const cb_bake_options *o, const bake_ar
 
 /* --format, or OUT's extension: .pal, .exr, or none (a device, a pipe: a .pal, as always);
  * another extension is refused, never guessed. */
-static int output_formats(const bake_args *a, bool *want_pal, bool *want_exr)
+static int output_formats(const bake_args *a, bool *want_pal, bool *want_exr, bool *want_ktx2)
 {
     if (a->format) {
-        if (!parse_formats(a->format, want_pal, want_exr))
-            return cli_usage_error("bake", "--format is pal, exr or pal,exr, got '%s'", a->format);
+        if (!parse_formats(a->format, want_pal, want_exr, want_ktx2))
+            return cli_usage_error("bake", "--format is pal, exr or pal,exr (any comma-separated set of pal, exr and ktx2), got '%s'",
+                                   a->format);
         return 0;
     }
     const char *dot = strrchr(a->output, '.'), *slash = strrchr(a->output, '/');
     const char *ext = dot && (!slash || dot > slash) ? dot : "";
     *want_exr = strcmp(ext, ".exr") == 0;
+    *want_ktx2 = strcmp(ext, ".ktx2") == 0;
     *want_pal = strcmp(ext, ".pal") == 0 || !ext[0];
-    if (!*want_pal && !*want_exr)
-        return cli_usage_error("bake", "%s: unknown output extension '%s'; write OUT.pal or OUT.exr, or give --format "
-                               "pal,exr", a->output, ext);
+    if (!*want_pal && !*want_exr && !*want_ktx2)
+        return cli_usage_error("bake", "%s: unknown output extension '%s'; write OUT.pal, OUT.exr or OUT.ktx2, or give "
+                               "--format pal,exr", a->output, ext);
     return 0;
 }
 
@@ -346,8 +363,8 @@ int cmd_bake(int argc, char **argv)
     if (a.depfile || a.manifest || a.force)
         return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
                                a.depfile ? "--depfile" : a.manifest ? "--manifest" : "--force");
-    bool want_pal = false, want_exr = false;
-    if ((rc = output_formats(&a, &want_pal, &want_exr))) return rc;
+    bool want_pal = false, want_exr = false, want_ktx2 = false;
+    if ((rc = output_formats(&a, &want_pal, &want_exr, &want_ktx2))) return rc;
     int exr_compression = 0;
     if (a.exr_compression && !cb_exr_compression_parse(a.exr_compression, &exr_compression))
         return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
@@ -357,7 +374,7 @@ int cmd_bake(int argc, char **argv)
         return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
     cb_bake_options o;
     cb_precision exr_precision = CB_PRECISION_FLOAT;
-    if ((rc = parse_options(&a, &o, want_exr, want_pal, &exr_precision))) return rc;
+    if ((rc = parse_options(&a, &o, want_exr, want_ktx2, want_pal, &exr_precision))) return rc;
     double max_mm = 1, max_fps = 60;
     if (a.max_error && (!cli_parse_double(a.max_error, &max_mm) || !(max_mm > 0)))
         return cli_usage_error("bake", "--max-error wants mm per metre of model height");
@@ -389,12 +406,13 @@ int cmd_bake(int argc, char **argv)
         cb_json_array(&j, "outputs");
     }
     uint64_t hash = err.status ? 0 : input_hash(m, &o, skin, a.zstd, exr_compression);
-    for (int f = 0; f < 2 && !err.status; ++f) {
-        if ((f == 0 && !want_pal) || (f == 1 && !want_exr)) continue;
+    static const char *const format_names[3] = {"pal", "exr", "ktx2"};
+    for (int f = 0; f < 3 && !err.status; ++f) {
+        if ((f == 0 && !want_pal) || (f == 1 && !want_exr) || (f == 2 && !want_ktx2)) continue;
         char path[4096];
-        if (a.format) output_path(a.output, f == 0 ? "pal" : "exr", path, sizeof path);
+        if (a.format) output_path(a.output, format_names[f], path, sizeof path);
         else snprintf(path, sizeof path, "%s", a.output);
-        if (f == 1 && o.precision != exr_precision) { /* the .pal's u16 is no EXR */
+        if (f >= 1 && o.precision != exr_precision) { /* the .pal's u16 is no EXR or KTX2 */
             cb_palette_free(&p);
             o.precision = exr_precision;
             if (bake_palette(s, &o, &a, selection, selected, max_mm, max_fps, true, &p, &err)) break;
@@ -404,8 +422,10 @@ int cmd_bake(int argc, char **argv)
         if (f == 0) {
             cb_pal_write_options po = {a.zstd, 0, hash, (float)speed_ref, o.root_motion == CB_ROOT_MOTION_IN_PLACE};
             cb_pal_write(path, &p, m, skin, &po, &err);
-        } else {
+        } else if (f == 1) {
             cb_exr_write(path, &p, m, skin, exr_compression, hash, (float)speed_ref, &err);
+        } else {
+            cb_ktx2_write(path, &p, m, skin, hash, (float)speed_ref, &err);
         }
         if (err.status) break;
         pt.write = now_seconds() - tw;
@@ -413,7 +433,7 @@ int cmd_bake(int argc, char **argv)
         size_t bytes = 0;
         if (fp) fseek(fp, 0, SEEK_END), bytes = (size_t)ftell(fp), fclose(fp);
         double seconds = now_seconds() - t0;
-        if (a.json) json_output(&j, path, f == 0 ? "pal" : "exr", bytes, &p, seconds, &pt);
+        if (a.json) json_output(&j, path, format_names[f], bytes, &p, seconds, &pt);
         else if (!a.quiet) print_summary(path, bytes, &p, seconds);
     }
     if (a.json && !err.status) {

@@ -19,7 +19,10 @@ const char cmd_report_usage[] =
     "the default settings into a temporary folder), then reports per animal type\n"
     "the exact palette bytes, every layout x precision side by side, vertex-animation-texture bytes\n"
     "for three encodings with their ratio to the palette, the mesh buffers, measured errors, texture\n"
-    "and bone limits, and the roster total against the catalog's [budget] (docs/budget.md).\n"
+    "and bone limits, and the roster total against the catalog's [budget] (docs/budget.md); then per\n"
+    "type its runtime meshes (crowdbake mesh --quantize: the model at 4, 2 and 1 influences and each LOD\n"
+    "at its lod_max_influences, with bytes and extra error), a batch of 100 copies against instancing,\n"
+    "and the bytes pre-baked transitions between loops would take that a runtime cross-fade saves.\n"
     "  --target NAME   the budget's target profile (docs/budget.md): replaces the catalog's\n"
     "                  [budget] target; for a MODEL, the only way to give one\n"
     "Exit code 3 when the roster exceeds its budget, unless --no-fail.\n";
@@ -157,6 +160,7 @@ int cmd_report(int argc, char **argv)
     cb_error rerr = {0};
     if (!cb_report_build(&cat, &roster, &r, &rerr)) {
         r.single_model = model;
+        cb_report_add_runtime(&roster, &r);
         if (json) cb_report_json(stdout, &r);
         else if (markdown) cb_report_markdown(stdout, &r);
         else cb_report_text(stdout, &r);

@@ -12,6 +12,7 @@ static const cli_command commands[] = {
     {"inspect", "the header and clip table of a palette; decode a frame", cmd_inspect_usage, cmd_inspect},
     {"verify", "skin with a palette as the runtime does; compare with the glTF", cmd_verify_usage, cmd_verify},
     {"preview", "a contact sheet PNG of a palette skinning its model", cmd_preview_usage, cmd_preview},
+    {"mesh", "the runtime-ready mesh: palette bones, fewer influences, quantized, batched", cmd_mesh_usage, cmd_mesh},
     {"vat", "bake a vertex animation texture of the same frames, to compare", cmd_vat_usage, cmd_vat},
     {"report", "palette vs VAT bytes and the roster's VRAM budget", cmd_report_usage, cmd_report},
 };

@@ -293,10 +293,27 @@ struct Parser {
         }
     }
 
+    // lod_max_influences = [2, 1]: what `crowdbake mesh --lod N` keeps per vertex for LOD N.
+    void lod_influences(const toml::node &l, cb_catalog_animal *an, const std::string &where)
+    {
+        const toml::array *a = l.as_array();
+        if (!a || a->size() != an->lod_count)
+            fail(l.source(), where + " lod_max_influences must be a list of " + std::to_string(an->lod_count) +
+                                 " numbers (1, 2 or 4), one per LOD in lods");
+        an->lod_max_influences = alloc<uint32_t>(a->size());
+        for (size_t i = 0; i < a->size(); ++i) {
+            auto v = a->get(i)->value<int64_t>();
+            if (!v || (*v != 1 && *v != 2 && *v != 4))
+                fail(a->get(i)->source(), where + " lod_max_influences: each LOD keeps 1, 2 or 4 influences per vertex");
+            an->lod_max_influences[i] = (uint32_t)*v;
+        }
+    }
+
     void animal(const std::string &name, const toml::table &t, const toml::key &key, cb_catalog_animal *an)
     {
         std::string where = "[animal." + name + "]";
-        std::vector<std::string> known = {"model", "lods", "clips", "states", "default_state", "speed_reference"};
+        std::vector<std::string> known = {"model", "lods", "lod_max_influences", "clips", "states", "default_state",
+                                         "speed_reference"};
         known.insert(known.end(), bake_keys().begin(), bake_keys().end());
         check_keys(t, known, where);
         an->name = dup(name);
@@ -325,6 +342,7 @@ struct Parser {
                 an->lod_pos[i] = pos(*a.get(i));
             }
         }
+        if (auto *l = t.get("lod_max_influences")) lod_influences(*l, an, where);
         if (auto *c = t.get("clips")) {
             if (!c->is_array()) fail(c->source(), where + " clips must be a list");
             clips(*c->as_array(), an, where);

@@ -1016,6 +1016,16 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
         if (!read_accessor(c, nrm->second, 3, (where + " NORMAL").c_str(), &normals, &nn)) return false;
         if (nn == n) prim.normals = normals;
     }
+    auto uv = p.attributes.find("TEXCOORD_0");
+    if (uv != p.attributes.end()) { /* only `mesh` carries it: a broken one is left out, never an error */
+        float *texcoords;
+        size_t nt;
+        cb_error uv_err{};
+        Context quiet = c;
+        quiet.err = &uv_err;
+        if (read_accessor(quiet, uv->second, 2, (where + " TEXCOORD_0").c_str(), &texcoords, &nt) && nt == n)
+            prim.texcoords = texcoords;
+    }
     if (p.indices >= 0) {
         if (!read_accessor(c, p.indices, 1, (where + " indices").c_str(), &indices, &ni)) return false;
         prim.index_count = (uint32_t)ni;

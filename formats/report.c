@@ -90,6 +90,7 @@ cb_status cb_report_build(const cb_catalog *cat, const cb_roster *roster, cb_rep
         }
         cb_report_type *t = &r->types[r->type_count++];
         fill_type(roster, i, r, t);
+        t->roster_index = i;
         if (!t->shares) r->palettes_total += t->palette_bytes; /* a shared palette is one texture */
         r->meshes_total += t->mesh_bytes;
         for (int e = 0; e < CB_VAT_ENCODINGS; ++e) r->vat_total[e] += t->vat_bytes[e];
@@ -100,8 +101,18 @@ cb_status cb_report_build(const cb_catalog *cat, const cb_roster *roster, cb_rep
     return CB_OK;
 }
 
+void cb_report_add_runtime(const cb_roster *roster, cb_report *r)
+{
+    for (uint32_t i = 0; i < r->type_count; ++i) {
+        const cb_roster_type *t = &roster->types[r->types[i].roster_index];
+        cb_error inner = {0}; /* the bake succeeded: a model that cannot be measured again only loses that section */
+        cb_report_runtime_measure(t, &roster->types[t->owner], &r->types[i].runtime, &inner);
+    }
+}
+
 void cb_report_free(cb_report *r)
 {
+    for (uint32_t i = 0; i < r->type_count; ++i) cb_report_runtime_free(&r->types[i].runtime);
     free(r->types);
     memset(r, 0, sizeof *r);
 }
@@ -200,6 +211,7 @@ void cb_report_text(FILE *f, const cb_report *r)
         fprintf(f, "%s %s %s (%.1fx)", e ? "," : "", cb_vat_encodings[e].name, c, ratio(r->vat_total[e], r->palettes_total));
     }
     fputs(".\n", f);
+    cb_report_runtime_text(f, r);
     budget_line(f, r, "");
     if (r->warnings) fprintf(f, "%u warning%s (see notes).\n", r->warnings, r->warnings == 1 ? "" : "s");
 }
@@ -229,6 +241,7 @@ void cb_report_markdown(FILE *f, const cb_report *r)
     cb_human_bytes(r->meshes_total, b, sizeof b);
     cb_human_bytes(r->vat_total[0], c, sizeof c);
     fprintf(f, "| **total** | | | | | **%s** | **%s** | %.1f× | %s | | | | |\n", a, c, ratio(r->vat_total[0], r->palettes_total), b);
+    cb_report_runtime_markdown(f, r);
 }
 
 /* ---- JSON (docs/report.schema.json) ---- */
@@ -290,6 +303,7 @@ void cb_report_json(FILE *f, const cb_report *r)
         cb_json_number(&j, "model_height", t->model_height);
         cb_json_bool(&j, "palette_over_texture_limit", t->palette_over_limit);
         cb_json_bool(&j, "bones_over_limit", t->bones_over_limit);
+        cb_report_runtime_json(&j, &t->runtime);
         cb_json_end(&j);
     }
     cb_json_end(&j);
@@ -728,6 +742,7 @@ void cb_report_html(FILE *f, const cb_report *r)
     html_table(f, r);
     html_encodings(f, r);
     html_targets(f, r);
+    cb_report_runtime_html(f, r);
     fputs("<p>Formulas and target profiles: docs/budget.md in the crowdbake repository.</p>\n</body></html>\n", f);
 }
 

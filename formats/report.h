@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #include "../src/budget.h"
+#include "report_runtime.h"
 #include "roster.h"
 
 typedef struct cb_report_type {
@@ -26,6 +27,8 @@ typedef struct cb_report_type {
     double palette_error, vat_error, model_height; /* model units; palette_error: the encoding's, at the baked rows */
     double palette_visible_error; /* the palette as the runtime plays it: encoding and the blend of two rows */
     bool palette_over_limit, bones_over_limit;
+    cb_report_runtime runtime;          /* with cb_report_add_runtime: meshes, batch and transition bytes */
+    uint32_t roster_index;
 } cb_report_type;
 
 typedef struct cb_report {
@@ -46,6 +49,9 @@ typedef struct cb_report {
 
 cb_status cb_report_build(const cb_catalog *catalog, const cb_roster *roster, cb_report *out, cb_error *err);
 void cb_report_free(cb_report *report);
+/* The runtime section (report_runtime.h): re-reads every type's model and LODs and measures
+ * their runtime meshes. `report` adds it; the bake's closing paragraph does not need it. */
+void cb_report_add_runtime(const cb_roster *roster, cb_report *r);
 
 void cb_report_text(FILE *out, const cb_report *r);
 void cb_report_markdown(FILE *out, const cb_report *r);

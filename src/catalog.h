@@ -64,6 +64,7 @@ typedef struct cb_catalog_animal {
     const char **lods;
     cb_source_pos *lod_pos;
     uint32_t lod_count;
+    uint32_t *lod_max_influences; /* lod_count entries (1, 2 or 4) for `crowdbake mesh --lod N`, or NULL */
     cb_catalog_clip *clips; /* NULL: every clip of the model */
     uint32_t clip_count;
     cb_catalog_state *states;

@@ -108,6 +108,7 @@ typedef struct cb_primitive {
     uint32_t vertex_count;
     float *positions;      /* 3 per vertex, dequantized */
     float *normals;        /* 3 per vertex or NULL */
+    float *texcoords;      /* TEXCOORD_0: 2 per vertex or NULL (carried into `crowdbake mesh` output) */
     uint16_t *joints;      /* 4 per vertex: indices into the skin's joints */
     float *weights;        /* 4 per vertex, as stored (not renormalized) */
     uint32_t index_count;

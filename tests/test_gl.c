@@ -12,6 +12,7 @@
 #include <GL/glext.h>
 #include <math.h>
 
+#include "../src/mesh.h"
 #include "../src/runtime.h"
 
 static OSMesaContext ctx;
@@ -51,22 +52,13 @@ static char *break_shader(const char *src, const char *marker, const char *line)
 static const char *layout_define[] = {"CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS"};
 static const char *precision_define[] = {"CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16"};
 
-static GLuint compile(const cb_palette *p, const char *library, bool es)
+/* Compiles and links a vertex shader (with a do-nothing fragment shader) that writes v_skinned. */
+static GLuint link_program(const char *src, bool es)
 {
-    static char src[1 << 16];
-    snprintf(src, sizeof src,
-             "%s\n#define %s\n#define %s\n%s%s\n"
-             "in vec3 a_position; in ivec4 a_joints; in vec4 a_weights; in vec4 a_instance; in float a_time;\n"
-             "out vec3 v_skinned;\n"
-             "void main() { v_skinned = cb_skin_position(a_position, a_joints, a_weights, a_instance, a_time); "
-             "gl_Position = vec4(0.0); }\n",
-             es ? "#version 300 es" : "#version 330 core", layout_define[p->layout], precision_define[p->precision],
-             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "", library);
     const char *fs_src = es ? "#version 300 es\nprecision mediump float;\nout vec4 c; void main() { c = vec4(1.0); }\n"
                             : "#version 330 core\nout vec4 c; void main() { c = vec4(1.0); }\n";
     GLuint vs = glCreateShader(GL_VERTEX_SHADER), fs = glCreateShader(GL_FRAGMENT_SHADER), prog = glCreateProgram();
-    const char *s = src;
-    glShaderSource(vs, 1, &s, NULL);
+    glShaderSource(vs, 1, &src, NULL);
     glCompileShader(vs);
     glShaderSource(fs, 1, &fs_src, NULL);
     glCompileShader(fs);
@@ -86,6 +78,7 @@ static GLuint compile(const cb_palette *p, const char *library, bool es)
     glBindAttribLocation(prog, 2, "a_weights");
     glBindAttribLocation(prog, 3, "a_instance");
     glBindAttribLocation(prog, 4, "a_time");
+    glBindAttribLocation(prog, 5, "a_instance_id");
     glLinkProgram(prog);
     glGetProgramiv(prog, GL_LINK_STATUS, &ok);
     if (!ok) {
@@ -95,6 +88,20 @@ static GLuint compile(const cb_palette *p, const char *library, bool es)
     glDeleteShader(vs);
     glDeleteShader(fs);
     return prog;
+}
+
+static GLuint compile(const cb_palette *p, const char *library, bool es)
+{
+    static char src[1 << 16];
+    snprintf(src, sizeof src,
+             "%s\n#define %s\n#define %s\n%s%s\n"
+             "in vec3 a_position; in ivec4 a_joints; in vec4 a_weights; in vec4 a_instance; in float a_time;\n"
+             "out vec3 v_skinned;\n"
+             "void main() { v_skinned = cb_skin_position(a_position, a_joints, a_weights, a_instance, a_time); "
+             "gl_Position = vec4(0.0); }\n",
+             es ? "#version 300 es" : "#version 330 core", layout_define[p->layout], precision_define[p->precision],
+             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "", library);
+    return link_program(src, es);
 }
 
 /* The palette's texels as a texture, optionally with every mat4 bone transposed. */
@@ -142,6 +149,28 @@ static GLuint upload_bind_positions(const cb_palette *p)
     return tex;
 }
 
+/* Binds the palette texture (and qpos's bind positions) and the header's uniforms to prog;
+ * tex[0], tex[1] (0 when none) are the textures to delete after the draw. */
+static void use_palette(const cb_palette *p, GLuint prog, bool transpose, GLuint tex[2])
+{
+    glActiveTexture(GL_TEXTURE0);
+    tex[0] = upload(p, transpose), tex[1] = 0;
+    glUseProgram(prog);
+    if (p->layout == CB_LAYOUT_QPOS) {
+        glActiveTexture(GL_TEXTURE1);
+        tex[1] = upload_bind_positions(p); /* uploading binds it to the active unit: 1 */
+        glUniform1i(glGetUniformLocation(prog, "cb_bind_positions"), 1);
+    }
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, tex[0]);
+    glUniform1i(glGetUniformLocation(prog, "cb_palette"), 0);
+    glUniform1i(glGetUniformLocation(prog, "cb_row_texels"), (GLint)p->row_texels);
+    glUniform1i(glGetUniformLocation(prog, "cb_rows_per_block"), (GLint)p->height);
+    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_min"), 1, p->bounds_min);
+    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_max"), 1, p->bounds_max);
+    glUniform1f(glGetUniformLocation(prog, "cb_linear_range"), p->linear_range);
+}
+
 typedef struct sample {
     cb_instance inst;
     double time;
@@ -167,8 +196,7 @@ static float *gpu_skin(const cb_palette *p, const cb_primitive *prim, const samp
             inst[i * 4 + 3] = (float)samples[s].inst.phase;
             time[i] = (float)samples[s].time;
         }
-    glActiveTexture(GL_TEXTURE0);
-    GLuint vao, vbo[5], out, palette = upload(p, transpose), bind = 0;
+    GLuint vao, vbo[5], out, tex[2];
     glGenVertexArrays(1, &vao);
     glBindVertexArray(vao);
     glGenBuffers(5, vbo);
@@ -185,20 +213,7 @@ static float *gpu_skin(const cb_palette *p, const cb_primitive *prim, const samp
     glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, out);
     glBufferData(GL_TRANSFORM_FEEDBACK_BUFFER, (GLsizeiptr)total * 12, NULL, GL_STATIC_READ);
     glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, out);
-    glUseProgram(prog);
-    if (p->layout == CB_LAYOUT_QPOS) {
-        glActiveTexture(GL_TEXTURE1);
-        bind = upload_bind_positions(p); /* uploading binds it to the active unit: 1 */
-        glUniform1i(glGetUniformLocation(prog, "cb_bind_positions"), 1);
-    }
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, palette);
-    glUniform1i(glGetUniformLocation(prog, "cb_palette"), 0);
-    glUniform1i(glGetUniformLocation(prog, "cb_row_texels"), (GLint)p->row_texels);
-    glUniform1i(glGetUniformLocation(prog, "cb_rows_per_block"), (GLint)p->height);
-    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_min"), 1, p->bounds_min);
-    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_max"), 1, p->bounds_max);
-    glUniform1f(glGetUniformLocation(prog, "cb_linear_range"), p->linear_range);
+    use_palette(p, prog, transpose, tex);
     glEnable(GL_RASTERIZER_DISCARD);
     glBeginTransformFeedback(GL_POINTS);
     glDrawArrays(GL_POINTS, 0, (GLsizei)total);
@@ -210,8 +225,7 @@ static float *gpu_skin(const cb_palette *p, const cb_primitive *prim, const samp
     glDeleteBuffers(5, vbo);
     glDeleteBuffers(1, &out);
     glDeleteVertexArrays(1, &vao);
-    glDeleteTextures(1, &palette);
-    if (bind) glDeleteTextures(1, &bind);
+    glDeleteTextures(tex[1] ? 2 : 1, tex);
     free(pos), free(w), free(inst), free(time), free(j);
     return result;
 }
@@ -341,11 +355,209 @@ static void test_broken_variants_are_caught(void **state)
     assert_true(broken(multitrack, CB_LAYOUT_QPOS, CB_PRECISION_FLOAT, NULL, NULL, false, 0) <= 1);
 }
 
+/* ---- batches for runtimes without instancing (crowdbake mesh --batch K, CB_BATCH) ---- */
+
+#define BATCH 6
+
+/* Vertex buffers of a mesh part's first `verts` vertices (the joints as ints), attributes 0-2. */
+static void mesh_attributes(const cb_mesh_part *part, uint32_t verts, GLuint vbo[3])
+{
+    int32_t *j = malloc(verts * 4 * sizeof(int32_t));
+    for (uint32_t i = 0; i < verts * 4; ++i) j[i] = part->joints[i];
+    const void *data[3] = {part->positions, j, part->weights};
+    const int comps[3] = {3, 4, 4};
+    glGenBuffers(3, vbo);
+    for (int a = 0; a < 3; ++a) {
+        glBindBuffer(GL_ARRAY_BUFFER, vbo[a]);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)verts * comps[a] * 4, data[a], GL_STATIC_DRAW);
+        glEnableVertexAttribArray((GLuint)a);
+        if (a == 1) glVertexAttribIPointer(1, 4, GL_INT, 0, 0);
+        else glVertexAttribPointer((GLuint)a, comps[a], GL_FLOAT, GL_FALSE, 0, 0);
+    }
+    free(j);
+}
+
+/* Draws with transform feedback on; returns 3 floats per vertex drawn. */
+static float *capture(uint32_t total, void (*draw)(uint32_t), uint32_t arg)
+{
+    GLuint out;
+    glGenBuffers(1, &out);
+    glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, out);
+    glBufferData(GL_TRANSFORM_FEEDBACK_BUFFER, (GLsizeiptr)total * 12, NULL, GL_STATIC_READ);
+    glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, out);
+    glEnable(GL_RASTERIZER_DISCARD);
+    glBeginTransformFeedback(GL_POINTS);
+    draw(arg);
+    glEndTransformFeedback();
+    glDisable(GL_RASTERIZER_DISCARD);
+    float *result = malloc(total * 12);
+    glGetBufferSubData(GL_TRANSFORM_FEEDBACK_BUFFER, 0, (GLsizeiptr)total * 12, result);
+    assert_int_equal(glGetError(), GL_NO_ERROR);
+    glDeleteBuffers(1, &out);
+    return result;
+}
+
+static void draw_instanced(uint32_t verts) { glDrawArraysInstanced(GL_POINTS, 0, (GLsizei)verts, BATCH); }
+static void draw_batch(uint32_t total) { glDrawArrays(GL_POINTS, 0, (GLsizei)total); }
+
+/* BATCH instances of the first copy, one instanced draw: a_instance advances per instance. */
+static float *gpu_instanced(const cb_palette *p, const cb_mesh_part *part, uint32_t verts, const float *inst, float time,
+                            const char *library)
+{
+    GLuint prog = compile(p, library, false), vao, vbo[4], tex[2];
+    glGenVertexArrays(1, &vao);
+    glBindVertexArray(vao);
+    mesh_attributes(part, verts, vbo);
+    glGenBuffers(1, &vbo[3]);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo[3]);
+    glBufferData(GL_ARRAY_BUFFER, BATCH * 16, inst, GL_STATIC_DRAW);
+    glEnableVertexAttribArray(3);
+    glVertexAttribPointer(3, 4, GL_FLOAT, GL_FALSE, 0, 0);
+    glVertexAttribDivisor(3, 1);
+    glDisableVertexAttribArray(4);
+    glVertexAttrib1f(4, time); /* a_time: the same for every vertex */
+    use_palette(p, prog, false, tex);
+    float *out = capture(verts * BATCH, draw_instanced, verts);
+    glDeleteBuffers(4, vbo);
+    glDeleteVertexArrays(1, &vao);
+    glDeleteTextures(tex[1] ? 2 : 1, tex);
+    glDeleteProgram(prog);
+    return out;
+}
+
+/* The batch mesh, one plain draw: each vertex finds its copy's numbers by its _INSTANCE_ID. */
+static float *gpu_batch(const cb_palette *p, const cb_mesh_part *part, const float *inst, float time, const char *library)
+{
+    static char src[1 << 16];
+    snprintf(src, sizeof src,
+             "#version 300 es\n#define %s\n#define %s\n#define CB_BATCH %d\n%s%s\n"
+             "in vec3 a_position; in ivec4 a_joints; in vec4 a_weights; in float a_instance_id; uniform float u_time;\n"
+             "out vec3 v_skinned;\n"
+             "void main() { v_skinned = cb_skin_position(a_position, a_joints, a_weights, cb_batch_instance(a_instance_id), "
+             "u_time); gl_Position = vec4(0.0); }\n",
+             layout_define[p->layout], precision_define[p->precision], BATCH,
+             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "", library);
+    GLuint prog = link_program(src, true), vao, vbo[4], tex[2];
+    glGenVertexArrays(1, &vao);
+    glBindVertexArray(vao);
+    mesh_attributes(part, part->vertex_count, vbo);
+    glGenBuffers(1, &vbo[3]);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo[3]);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)part->vertex_count * 4, part->instance_ids, GL_STATIC_DRAW);
+    glEnableVertexAttribArray(5);
+    glVertexAttribPointer(5, 1, GL_FLOAT, GL_FALSE, 0, 0);
+    use_palette(p, prog, false, tex);
+    glUniform4fv(glGetUniformLocation(prog, "cb_batch_instances"), BATCH, inst);
+    glUniform1f(glGetUniformLocation(prog, "u_time"), time);
+    float *out = capture(part->vertex_count, draw_batch, part->vertex_count);
+    glDeleteBuffers(4, vbo);
+    glDeleteVertexArrays(1, &vao);
+    glDeleteTextures(tex[1] ? 2 : 1, tex);
+    glDeleteProgram(prog);
+    return out;
+}
+
+/* The largest |batch - instanced| over every copy and vertex, and |batch - CPU runtime|. */
+static void batch_vs_instanced(const char *library, double *vs_instanced, double *vs_cpu, double *tol)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/quadruped.glb", samples_dir());
+    fixture f;
+    bake(path, CB_LAYOUT_QPOS, CB_PRECISION_U16, &f);
+    cb_mesh mesh;
+    cb_error err = {0};
+    cb_mesh_options o = {4, false, false, BATCH, NULL, f.palette.bone_count};
+    assert_int_equal(cb_mesh_build(f.model, 0, &o, &mesh, &err), CB_OK);
+    const cb_mesh_part *part = &mesh.parts[0];
+    uint32_t verts = part->vertex_count / BATCH;
+    sample samples[64];
+    make_samples(&f.palette, samples, 64);
+    float inst[BATCH * 4], time = 1.37f;
+    for (int i = 0; i < BATCH; ++i) { /* a different clip, phase and rate per copy */
+        const cb_instance *in = &samples[(i * 7) % 40].inst;
+        float v[4] = {(float)in->first_row, (float)in->frame_count, (float)in->rate, (float)fmod(0.618034 * i, 1.0)};
+        memcpy(inst + i * 4, v, sizeof v);
+    }
+    float *a = gpu_instanced(&f.palette, part, verts, inst, time, library);
+    float *b = gpu_batch(&f.palette, part, inst, time, library);
+    *vs_instanced = 0;
+    for (uint32_t k = 0; k < verts * BATCH * 3; ++k) *vs_instanced = fmax(*vs_instanced, fabs((double)a[k] - b[k]));
+    cb_primitive first = {.vertex_count = verts, .positions = part->positions, .joints = part->joints, .weights = part->weights};
+    sample s[BATCH];
+    for (int i = 0; i < BATCH; ++i) s[i] = (sample){{inst[i * 4], inst[i * 4 + 1], inst[i * 4 + 2], inst[i * 4 + 3]}, time};
+    *vs_cpu = compare(&f.palette, &first, s, BATCH, b);
+    *tol = tolerance(&f);
+    free(a), free(b);
+    cb_mesh_free(&mesh);
+    release(&f);
+}
+
+static void test_a_batch_in_one_draw_equals_instances(void **state)
+{
+    (void)state;
+    char *lib = read_whole_file("samples/shaders/crowdbake_palette.glsl", NULL);
+    double vs_instanced, vs_cpu, tol;
+    batch_vs_instanced(lib, &vs_instanced, &vs_cpu, &tol);
+    printf("  %d copies in one draw: vs %d instances %.2g, vs CPU %.2g (tolerance %.2g)\n", BATCH, BATCH, vs_instanced,
+           vs_cpu, tol);
+    assert_true(vs_instanced <= tol && vs_cpu <= tol);
+    /* Broken variant: every copy reads the first copy's numbers. */
+    char *broken_lib = break_shader(lib, "cb:batch-id", "    return cb_batch_instances[0];");
+    batch_vs_instanced(broken_lib, &vs_instanced, &vs_cpu, &tol);
+    printf("  with the instance id ignored: error / tolerance %.0f\n", vs_instanced / tol);
+    assert_true(vs_instanced > 10 * tol && vs_cpu > 10 * tol);
+    free(lib), free(broken_lib);
+}
+
+/* ---- far LODs: CB_INFLUENCES reads only the first bones of a `mesh --max-influences` mesh ---- */
+
+static void test_fewer_influences_read_fewer_bones(void **state)
+{
+    (void)state;
+    char *lib = read_whole_file("samples/shaders/crowdbake_palette.glsl", NULL), path[1024];
+    snprintf(path, sizeof path, "%s/quadruped.glb", samples_dir());
+    fixture f;
+    bake(path, CB_LAYOUT_QPOS, CB_PRECISION_U16, &f);
+    sample samples[64];
+    uint32_t n = make_samples(&f.palette, samples, 64);
+    double tol = tolerance(&f), reduced[3] = {0}, full_mesh_with_one = 0;
+    size_t size = strlen(lib) + 64;
+    char *with = malloc(size);
+    for (uint32_t k = 0; k < 2; ++k) {
+        uint32_t inf = k ? 2 : 1;
+        cb_mesh mesh;
+        cb_error err = {0};
+        cb_mesh_options o = {inf, false, false, 1, NULL, f.palette.bone_count};
+        assert_int_equal(cb_mesh_build(f.model, 0, &o, &mesh, &err), CB_OK);
+        cb_primitive prim = {.vertex_count = mesh.parts[0].vertex_count, .positions = mesh.parts[0].positions,
+                             .joints = mesh.parts[0].joints, .weights = mesh.parts[0].weights};
+        snprintf(with, size, "#define CB_INFLUENCES %u\n%s", inf, lib);
+        GLuint prog = compile(&f.palette, with, true);
+        float *gpu = gpu_skin(&f.palette, &prim, samples, n, prog, false, 0);
+        reduced[k] = compare(&f.palette, &prim, samples, n, gpu);
+        free(gpu);
+        if (inf == 1) { /* broken variant: the model's own 4-influence mesh through the 1-bone shader */
+            gpu = gpu_skin(&f.palette, &f.model->primitives[0], samples, n, prog, false, 0);
+            full_mesh_with_one = compare(&f.palette, &f.model->primitives[0], samples, n, gpu);
+            free(gpu);
+        }
+        glDeleteProgram(prog);
+        cb_mesh_free(&mesh);
+    }
+    printf("  CB_INFLUENCES 1 / 2 on meshes of 1 / 2 influences: GPU vs CPU %.2g / %.2g (tolerance %.2g); a 4-influence "
+           "mesh through CB_INFLUENCES 1: error / tolerance %.0f\n", reduced[0], reduced[1], tol, full_mesh_with_one / tol);
+    assert_true(reduced[0] <= tol && reduced[1] <= tol && full_mesh_with_one > 10 * tol);
+    free(with), free(lib);
+    release(&f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_layout_and_precision_matches_the_cpu),
         cmocka_unit_test(test_broken_variants_are_caught),
+        cmocka_unit_test(test_a_batch_in_one_draw_equals_instances),
+        cmocka_unit_test(test_fewer_influences_read_fewer_bones),
     };
     return cmocka_run_group_tests_name("gl", tests, setup, teardown);
 }

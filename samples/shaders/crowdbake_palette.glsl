@@ -4,6 +4,8 @@
 //   #define CB_LAYOUT_MAT4 | CB_LAYOUT_AFFINE | CB_LAYOUT_QPOS        (the .pal header's layout)
 //   #define CB_PRECISION_FLOAT | CB_PRECISION_HALF | CB_PRECISION_U16 (its precision)
 //   #define CB_POSITIONS_RELATIVE   when the header's flags have bit 2 (4: a version 2 qpos/half palette)
+//   #define CB_INFLUENCES 1|2       optional, for a mesh written with `crowdbake mesh --max-influences 1|2`:
+//                                   only that many bones per vertex are read (a far LOD's cheaper shader)
 //
 // Textures: cb_palette is the .pal payload as is - RGBA32F, RGBA16F, or RGBA16UI (u16, read as
 // usampler2D) - width x height from the header. For qpos, cb_bind_positions is an RGBA32F
@@ -16,12 +18,24 @@
 //   vec3 p = cb_skin_position(a_position, a_joints, a_weights, inst, time);
 //   vec3 n = cb_skin_normal(a_normal, a_joints, a_weights, inst, time);
 //   vec3 p = cb_skin_position_crossfade(a_position, a_joints, a_weights, from_inst, inst, fade, time);
+//
+// Batches, for runtimes without instancing: `crowdbake mesh --batch K` writes one mesh of K copies
+// whose attribute _INSTANCE_ID (float) is the copy, 0..K-1. With #define CB_BATCH K, the uniform
+// array cb_batch_instances[K] holds each copy's four numbers, and cb_batch_instance picks them:
+//
+//   vec4 inst = cb_batch_instance(a_instance_id);   // then skin as above
+//
+// (GLSL ES 3.00 guarantees 256 vertex uniform vectors: keep K well under that, or batch fewer.)
 
 #ifdef GL_ES
 precision highp float;
 precision highp int;
 precision highp sampler2D;
 precision highp usampler2D;
+#endif
+
+#ifndef CB_INFLUENCES
+#define CB_INFLUENCES 4
 #endif
 
 #if defined(CB_LAYOUT_MAT4)
@@ -44,6 +58,16 @@ uniform int cb_row_texels;     // header: row_texels (bones x texels per bone)
 uniform int cb_rows_per_block; // header: height
 #ifdef CB_LAYOUT_QPOS
 uniform sampler2D cb_bind_positions;
+#endif
+
+#ifdef CB_BATCH
+uniform vec4 cb_batch_instances[CB_BATCH];
+
+// The per-instance numbers of a batch's copy (its _INSTANCE_ID, exact in a float).
+vec4 cb_batch_instance(float instance_id)
+{
+    return cb_batch_instances[int(instance_id + 0.5)]; // cb:batch-id
+}
 #endif
 
 #ifdef CB_PRECISION_U16
@@ -144,7 +168,7 @@ vec3 cb_skin(vec3 v, float w, ivec4 joints, vec4 weights, vec4 inst, float time)
     float fr;
     cb_frame(inst, time, row0, row1, fr);
     vec3 r = vec3(0.0);
-    for (int i = 0; i < 4; ++i)
+    for (int i = 0; i < CB_INFLUENCES; ++i) // cb:influences - crowdbake mesh puts the largest weights first
         if (weights[i] != 0.0) r += weights[i] * cb_bone_transform(row0, row1, fr, joints[i], v, w);
     return r;
 }

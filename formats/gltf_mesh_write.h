@@ -1,0 +1,29 @@
+/* gltf_mesh_write.h - writes a runtime-ready mesh (src/mesh.h) as a .glb through tinygltf's
+ * writer (C API over a C++ adapter), atomically.
+ *
+ * The file holds one skinned mesh whose JOINTS_0 are palette bones, a skin whose joints are
+ * the palette's bones in palette order (flat nodes under one root, each at its bind pose, with
+ * the palette model's inverse bind matrices), so any glTF viewer shows it in its bind pose and
+ * a palette runtime reads joint k as bone k. Quantized attributes use KHR_mesh_quantization
+ * (normals as normalized BYTE); a batch adds `_INSTANCE_ID`, SCALAR FLOAT, the copy 0..K-1 of
+ * each vertex. asset.extras.crowdbake records the options and the measured error. */
+#ifndef CB_GLTF_MESH_WRITE_H
+#define CB_GLTF_MESH_WRITE_H
+
+#include "../src/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The custom attribute of a batch's copy index (glTF wants custom names to start with '_'). */
+#define CB_INSTANCE_ID_ATTRIBUTE "_INSTANCE_ID"
+
+cb_status cb_gltf_mesh_write(const char *path, const cb_mesh *mesh, const cb_model *palette_model, int32_t palette_skin,
+                             const cb_mesh_error *error, cb_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
