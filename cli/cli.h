@@ -93,6 +93,8 @@ int cmd_sample(int argc, char **argv);
 int cmd_bake(int argc, char **argv);
 int cmd_inspect(int argc, char **argv);
 int cmd_vat(int argc, char **argv);
+extern const char cmd_view_usage[];
+int cmd_view(int argc, char **argv);
 int cmd_verify(int argc, char **argv);
 int cmd_preview(int argc, char **argv);
 int cmd_report(int argc, char **argv);

@@ -5,11 +5,11 @@ import assert from 'node:assert/strict';
 import { readFileSync, readdirSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
 import { readPal, xxh64, texelIndex, LAYOUTS, PRECISIONS } from '../crowdbake_pal.mjs';
-import { SAMPLES, FOX, tmpDir, bake, inspect, cReaderAccepts, zstdDecompress, jointMatrix } from './support.mjs';
+import { SAMPLES, FOX, tmpDir, bake, inspect, cReaderAccepts, zstdDecompress, fzstd, jointMatrix } from './support.mjs';
 
 const dir = tmpDir('pal');
 const QUADRUPED = path.join(SAMPLES, 'quadruped.glb');
-const decompress = (bytes) => zstdDecompress(bytes);
+const decompress = fzstd; // the decoder a page would use (npm fzstd)
 
 // Asserts `fn` throws a plain Error with a one-line message starting with the file's name.
 function assertRefused(fn, name, what) {
@@ -118,10 +118,12 @@ test('zstd: refused with the fix without a decoder; with one, the texels of the 
         const pal = readPal(bytes, { name: zstdFile, verifyChecksum: true, decompress });
         assert.ok(pal.header.payload_size < pal.header.payload_raw_size);
         assert.ok(Buffer.from(pal.texelBytes).equals(Buffer.from(plain.texelBytes)));
+        const payload = bytes.subarray(pal.header.payload_offset, pal.header.payload_offset + pal.header.payload_size);
+        assert.ok(Buffer.from(zstdDecompress(payload)).equals(Buffer.from(pal.texelBytes)), 'fzstd agrees with zstd(1)');
         assert.equal(pal.texels.constructor, plain.texels.constructor);
         checkAgainstC(zstdFile, pal, 1);
         // A decompressed size the file did not promise, a decoder that throws, a size over the limit.
-        assertRefused(() => readPal(bytes, { name: 'x.pal', decompress: (b) => decompress(b).subarray(8) }), 'x.pal', 'short');
+        assertRefused(() => readPal(bytes, { name: 'x.pal', decompress: (b, n) => decompress(b, n).subarray(8) }), 'x.pal', 'short');
         assertRefused(() => readPal(bytes, { name: 'x.pal', decompress: () => { throw new TypeError('bad frame'); } }), 'x.pal', 'throws');
         assertRefused(() => readPal(bytes, { name: 'x.pal', decompress, maxDecompressedBytes: 1024 }), 'x.pal', 'limit');
     }

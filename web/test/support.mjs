@@ -3,6 +3,7 @@
 import { execFileSync, spawnSync } from 'node:child_process';
 import { mkdirSync, readFileSync, rmSync } from 'node:fs';
 import path from 'node:path';
+import { decompress as fzstdDecompress } from 'fzstd';
 
 export const CROWDBAKE = process.env.CROWDBAKE ?? 'build/crowdbake';
 export const SAMPLES = process.env.SAMPLES ?? 'build/samples';
@@ -30,7 +31,13 @@ export function cReaderAccepts(file) {
     return spawnSync(CROWDBAKE, ['inspect', file, '--no-verify'], { stdio: 'ignore' }).status === 0;
 }
 
-// The zstd command-line tool as the caller's decoder: the module itself carries none.
+// fzstd (npm, pinned in web/package-lock.json) as the caller's decoder, as a page would pass it:
+// the module itself carries none.
+export function fzstd(bytes, size) {
+    return fzstdDecompress(bytes, new Uint8Array(size));
+}
+
+// The zstd command-line tool: an independent decoder to check fzstd's output against.
 export function zstdDecompress(bytes) {
     return new Uint8Array(execFileSync('zstd', ['-d', '-c', '-q'], { input: bytes, stdio: ['pipe', 'pipe', 'pipe'] }));
 }

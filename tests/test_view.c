@@ -1,0 +1,97 @@
+/* test_view.c - `crowdbake view` as a user runs it, in headless Chromium (tests/browser/view_check.mjs):
+ * on the Cow (../shared, a real third-party animal) it bakes, serves on an ephemeral port, prints the
+ * URL, and the page shows 1,000 cows in a mix of idle, walk and gallop: not blank, in frame, moving
+ * between two times, in one draw call per herd, with no console error; the palette half and the
+ * VAT half (exact skinning, from `crowdbake vat`) cover the same pixels; Ctrl-C stops it with exit
+ * 0. The same run with a deliberately broken shader (texels of a bone swapped) must fail the
+ * palette-vs-VAT comparison, so the comparison is shown to catch a wrong palette. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <limits.h>
+#include <math.h>
+#include <unistd.h>
+
+#define TMP TEST_TMP "/view"
+
+static char out[1 << 16];
+
+/* The number after "KEY": in view_check's JSON line (its first occurrence). */
+static double number(const char *key)
+{
+    char pattern[128];
+    snprintf(pattern, sizeof pattern, "\"%s\":", key);
+    const char *at = strstr(out, pattern);
+    if (!at) fail_msg("no %s in the viewer check's output:\n%s", key, out);
+    at += strlen(pattern);
+    if (*at == '[') ++at;
+    return atof(at);
+}
+
+static int run_view(const char *env, const char *cache, const char *shot)
+{
+    char model[PATH_MAX], cmd[4 * PATH_MAX];
+    shared_path(model, sizeof model, "assets/quaternius-cow/Cow.glb");
+    snprintf(cmd, sizeof cmd, "%s node tests/browser/view_check.mjs %s %s %s %s 1000 2>&1", env, crowdbake_exe(), model, cache,
+             shot);
+    int rc = run_command(cmd, out, sizeof out);
+    printf("%s", out);
+    return rc;
+}
+
+static void test_view_shows_a_moving_herd_of_cows(void **state)
+{
+    (void)state;
+    assert_int_equal(system("rm -rf " TMP " && mkdir -p " TMP), 0);
+    FILE *installed = fopen("web/node_modules/.package-lock.json", "r");
+    if (!installed) fail_msg("web: npm packages not installed (make installs them; or: cd web && npm ci)");
+    fclose(installed);
+    assert_int_equal(run_view("", TMP "/cache", TMP "/viewer.png"), 0);
+    assert_non_null(strstr(out, "\"exit\":{\"code\":0,"));
+    assert_non_null(strstr(out, "crowdbake: viewer stopped"));
+    assert_non_null(strstr(out, "\"printed\":[\"cow              baked"));
+    assert_non_null(strstr(out, "http://127.0.0.1:"));
+    assert_non_null(strstr(out, "\"console_errors\":[]"));
+    assert_non_null(strstr(out, "\"error\":\"\""));
+    assert_non_null(strstr(out, "\"idle\"") && strstr(out, "\"walk\"") && strstr(out, "\"gallop\""));
+    double left = number("coverage_at_1"), changed = number("changed_pixels"), pixels = number("pixels"),
+           mismatch = number("palette_vs_vat_mismatch");
+    printf("  herd covers %.1f%% of the palette half; %.1f%% of the pixels change between t = 1.0 and 1.4 s; palette and VAT "
+           "silhouettes differ on %.2f%% of the covered pixels\n", 100 * left, 100 * changed / pixels, 100 * mismatch);
+    assert_true(left > 0.02 && left < 0.6);          /* not blank, the herd in frame (not one cow filling it) */
+    assert_true(changed > 0.01 * pixels);             /* they move */
+    assert_true(mismatch < 0.02);                     /* the palette draws what exact skinning draws */
+    assert_int_equal((int)number("drawCalls"), 2);   /* one per herd: palette, VAT */
+    assert_int_equal((int)number("instances"), 1000);
+    /* VRAM on screen: the palette and the 118x larger VAT. */
+    assert_true(number("vatBytes") > 50 * number("paletteBytes"));
+}
+
+static void test_a_broken_palette_shader_is_caught(void **state)
+{
+    (void)state;
+    /* A web/ folder whose shader reads a bone's texels in the wrong order (quaternion and
+     * position swapped, for the default qpos layout). */
+    assert_int_equal(system("rm -rf " TMP "/broken && mkdir -p " TMP "/broken/web " TMP "/broken/samples/shaders && "
+                            "for f in web/*; do ln -s \"$PWD/$f\" " TMP "/broken/web/; done && "
+                            "sed 's/CB_TEXELS_PER_BONE + k,/CB_TEXELS_PER_BONE + (k ^ 1),/' samples/shaders/crowdbake_palette.glsl > "
+                            TMP "/broken/samples/shaders/crowdbake_palette.glsl && "
+                            "! cmp -s samples/shaders/crowdbake_palette.glsl " TMP "/broken/samples/shaders/crowdbake_palette.glsl"),
+                     0);
+    char env[2 * PATH_MAX], cwd[PATH_MAX];
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    snprintf(env, sizeof env, "CROWDBAKE_WEB=%s/" TMP "/broken/web", cwd);
+    assert_int_equal(run_view(env, TMP "/cache-broken", TMP "/broken.png"), 0);
+    double mismatch = number("palette_vs_vat_mismatch");
+    printf("  broken shader: palette and VAT silhouettes differ on %.0f%% of the covered pixels\n", 100 * mismatch);
+    assert_true(mismatch > 0.2);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_view_shows_a_moving_herd_of_cows),
+        cmocka_unit_test(test_a_broken_palette_shader_is_caught),
+    };
+    return cmocka_run_group_tests_name("view", tests, NULL, NULL);
+}
