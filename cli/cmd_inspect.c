@@ -30,8 +30,9 @@ static void print_pal_text(const char *path, const cbpal_file *f)
     printf("  payload %llu bytes at offset %llu%s, fps %g, speed reference %g m/s, max error %g (model height %g)\n",
            (unsigned long long)h->payload_size, (unsigned long long)h->payload_offset,
            h->flags & CBPAL_FLAG_ZSTD ? " (zstd)" : "", h->fps, h->speed_reference, h->max_error, h->model_height);
-    printf("  input hash %016llx, checksum %016llx%s\n", (unsigned long long)h->input_hash,
-           (unsigned long long)h->checksum, h->flags & CBPAL_FLAG_IN_PLACE ? ", root motion removed" : "");
+    printf("  input hash %016llx, checksum %016llx%s%s\n", (unsigned long long)h->input_hash,
+           (unsigned long long)h->checksum, h->flags & CBPAL_FLAG_IN_PLACE ? ", root motion removed" : "",
+           h->flags & CBPAL_FLAG_FITTED_ROWS ? ", rows fitted to the linear blend" : "");
     bool in_place = (h->flags & CBPAL_FLAG_IN_PLACE) != 0;
     /* In place, the clip table holds the root's travel that was measured and taken out of the
      * rows (the game moves the instance by it); kept, the rows carry it and the table has 0. */
@@ -72,6 +73,7 @@ static void print_pal_json(const char *path, const cbpal_file *f, const cb_palet
     cb_json_int(&j, "blocks", h->blocks);
     cb_json_bool(&j, "zstd", (h->flags & CBPAL_FLAG_ZSTD) != 0);
     cb_json_string(&j, "root_motion", h->flags & CBPAL_FLAG_IN_PLACE ? "in-place" : "keep");
+    cb_json_bool(&j, "fitted_rows", (h->flags & CBPAL_FLAG_FITTED_ROWS) != 0);
     cb_json_number(&j, "fps", h->fps);
     cb_json_number(&j, "speed_reference", h->speed_reference);
     cb_json_number(&j, "max_error", h->max_error);

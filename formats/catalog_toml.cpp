@@ -128,7 +128,7 @@ struct Parser {
     static const std::vector<std::string> &bake_keys()
     {
         static const std::vector<std::string> k = {"fps", "max_error", "max_fps", "layout", "precision", "format", "out_dir",
-                                                   "max_texture_size", "root_motion"};
+                                                   "max_texture_size", "root_motion", "fit_rows"};
         return k;
     }
 
@@ -189,6 +189,7 @@ struct Parser {
             else if (r == "in-place") b->root_motion = CB_ROOT_MOTION_IN_PLACE;
             else fail(n->source(), where + " root_motion must be \"keep\" or \"in-place\"");
         }
+        if (auto *n = t.get("fit_rows")) b->fit_rows = boolean(*n, where + " fit_rows");
         if ((b->formats & CB_FORMAT_EXR) && b->precision_set && b->precision == CB_PRECISION_U16)
             fail(t.source(), where + " precision u16 cannot be written as EXR; use format = \"pal\" or precision half|float");
     }
@@ -404,6 +405,7 @@ struct Parser {
         c += buf;
         std::snprintf(buf, sizeof buf, " auto=%d/%.17g/%.17g", b.fps_auto, b.max_error_mm, b.max_fps);
         c += buf;
+        if (b.fit_rows) c += " fit_rows";
         c += std::string(" default=") + (an->default_state ? an->default_state : "");
         c += std::string(" speed_state=") + (an->speed_state ? an->speed_state : "");
         an->canonical = dup(c);

@@ -29,7 +29,7 @@
 extern "C" {
 #endif
 
-#define CBPAL_VERSION 2 /* newest known; files without relative positions are still written as version 1 */
+#define CBPAL_VERSION 3 /* newest known; files without relative positions are still written as version 1 */
 #define CBPAL_HEADER_SIZE 256
 #define CBPAL_CLIP_SIZE 80
 #define CBPAL_BONE_SIZE 32
@@ -38,10 +38,13 @@ extern "C" {
 
 enum { CBPAL_LAYOUT_MAT4 = 0, CBPAL_LAYOUT_AFFINE = 1, CBPAL_LAYOUT_QPOS = 2 };
 enum { CBPAL_PRECISION_FLOAT = 0, CBPAL_PRECISION_HALF = 1, CBPAL_PRECISION_U16 = 2 };
-/* CBPAL_FLAG_POSITIONS_RELATIVE (version 2): qpos position texels hold the joint's position less
- * its bind position (the bone table's bind_position); add it back (CB_POSITIONS_RELATIVE in the
- * shipped GLSL). */
-enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u };
+/* CBPAL_FLAG_POSITIONS_RELATIVE (versions 2 and 3): qpos position texels hold the joint's position
+ * less its bone's position offset (cbpal_bone.position_offset: version 3 files store it in their
+ * offset table, version 2 files used the bind position); add it back (CB_POSITIONS_RELATIVE in
+ * the shipped GLSL). */
+/* CBPAL_FLAG_FITTED_ROWS: the rows were fitted to the linear blend between them rather than
+ * sampled (crowdbake bake --fit-rows); read and blend them as always. */
+enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u, CBPAL_FLAG_FITTED_ROWS = 8u };
 enum { CBPAL_CLIP_LOOPS = 1u };
 /* cbpal_open flags */
 enum { CBPAL_VERIFY_CHECKSUM = 1u };
@@ -54,6 +57,7 @@ typedef struct cbpal_header {
     float visible_error; /* max_error is at the baked rows; this includes blending two rows (0: not recorded) */
     uint64_t input_hash, clip_table_offset, bone_table_offset, strings_offset, strings_size;
     uint64_t payload_offset, payload_size, payload_raw_size, checksum;
+    uint64_t offset_table_offset; /* version 3 with relative positions: bone_count x 3 f32 position offsets */
 } cbpal_header;
 
 typedef struct cbpal_clip {
@@ -66,6 +70,7 @@ typedef struct cbpal_bone {
     const char *name;
     int32_t parent;
     float bind_position[3];
+    float position_offset[3]; /* with CBPAL_FLAG_POSITIONS_RELATIVE: added to the position texel; else 0 */
 } cbpal_bone;
 
 typedef struct cbpal_file {
@@ -268,6 +273,7 @@ static void cbpal__parse_header(const unsigned char *d, cbpal_header *h)
     uint64_t *w[] = {&h->input_hash, &h->clip_table_offset, &h->bone_table_offset, &h->strings_offset, &h->strings_size,
                      &h->payload_offset, &h->payload_size, &h->payload_raw_size, &h->checksum};
     for (int i = 0; i < 9; ++i) *w[i] = cbpal__u64(d + 112 + 8 * i);
+    h->offset_table_offset = h->version >= 3 ? cbpal__u64(d + 184) : 0;
 }
 
 static int cbpal__check_string(const cbpal_header *h, const unsigned char *d, uint32_t off, uint32_t len)
@@ -303,6 +309,10 @@ static int cbpal__validate(const unsigned char *d, size_t size, cbpal_header *h,
     if (!cbpal__fits(h->bone_table_offset, h->bone_count, CBPAL_BONE_SIZE, size) || h->bone_table_offset < CBPAL_HEADER_SIZE)
         return cbpal__fail(err, es, "bone table (offset %llu, %u bones) lies outside the file",
                            (unsigned long long)h->bone_table_offset, h->bone_count);
+    if (h->version >= 3 && (h->flags & CBPAL_FLAG_POSITIONS_RELATIVE) &&
+        (!cbpal__fits(h->offset_table_offset, h->bone_count, 12, size) || h->offset_table_offset < CBPAL_HEADER_SIZE))
+        return cbpal__fail(err, es, "position offset table (offset %llu, %u bones) lies outside the file",
+                           (unsigned long long)h->offset_table_offset, h->bone_count);
     if (!cbpal__fits(h->strings_offset, h->strings_size, 1, size) || h->strings_offset < CBPAL_HEADER_SIZE)
         return cbpal__fail(err, es, "string table lies outside the file");
     if (h->payload_offset % CBPAL_PAYLOAD_ALIGN || !cbpal__fits(h->payload_offset, h->payload_size, 1, size) ||
@@ -473,7 +483,13 @@ int cbpal_get_bone(const cbpal_file *f, uint32_t i, cbpal_bone *out)
     const unsigned char *b = f->data + f->header.bone_table_offset + (uint64_t)i * CBPAL_BONE_SIZE;
     out->name = (const char *)f->data + f->header.strings_offset + cbpal__u32(b);
     out->parent = (int32_t)cbpal__u32(b + 8);
-    for (int k = 0; k < 3; ++k) out->bind_position[k] = cbpal__f32(b + 16 + 4 * k);
+    const cbpal_header *h = &f->header;
+    const unsigned char *o = f->data + h->offset_table_offset + (uint64_t)i * 12;
+    for (int k = 0; k < 3; ++k) {
+        out->bind_position[k] = cbpal__f32(b + 16 + 4 * k);
+        out->position_offset[k] = !(h->flags & CBPAL_FLAG_POSITIONS_RELATIVE) ? 0.0f
+                                  : h->version >= 3 ? cbpal__f32(o + 4 * k) : out->bind_position[k];
+    }
     return 0;
 }
 

@@ -56,6 +56,9 @@ static exr_result_t set_metadata(exr_context_t c, int part, const cb_palette *p,
     rc |= exr_attr_set_float(c, part, "crowdbake.visibleError", (float)p->visible_error);
     rc |= exr_attr_set_int(c, part, "crowdbake.positionsRelative", p->positions_relative); /* see docs/pal-format.md */
     rc |= exr_attr_set_float_vector(c, part, "crowdbake.bindPositions", (int32_t)p->bone_count * 3, p->bind_positions);
+    if (p->fitted) rc |= exr_attr_set_int(c, part, "crowdbake.fittedRows", 1); /* --fit-rows, as the .pal's flag bit 3 */
+    if (p->positions_relative) /* what the positions are relative to (an EXR without it: the bind positions) */
+        rc |= exr_attr_set_float_vector(c, part, "crowdbake.positionOffsets", (int32_t)p->bone_count * 3, p->position_offsets);
     const cb_skin *sk = &m->skins[skin];
     const char **names = malloc(sizeof(char *) * sk->joint_count);
     if (!names) return EXR_ERR_OUT_OF_MEMORY;
@@ -292,7 +295,7 @@ static bool read_palette_attributes(exr_const_context_t c, const char *path, con
     p->rows = (uint32_t)img->rows;
     p->width = img->width, p->height = img->height, p->blocks = (uint32_t)img->blocks;
     float fps = 0, max_error = 0, visible_error = 0;
-    int32_t relative = 0;
+    int32_t relative = 0, fitted = 0;
     exr_attr_get_float(c, 0, "crowdbake.fps", &fps);
     exr_attr_get_float(c, 0, "crowdbake.maxError", &max_error);
     exr_attr_get_float(c, 0, "crowdbake.visibleError", &visible_error);
@@ -300,13 +303,22 @@ static bool read_palette_attributes(exr_const_context_t c, const char *path, con
     exr_attr_get_int(c, 0, "crowdbake.positionsRelative", &relative); /* qpos/half: positions less the bind's */
     p->fps = fps, p->max_error = max_error, p->visible_error = visible_error;
     p->positions_relative = relative != 0;
+    exr_attr_get_int(c, 0, "crowdbake.fittedRows", &fitted);
+    p->fitted = fitted != 0;
     p->texels = img->texels;
     p->texel_bytes = img->texel_bytes;
+    int32_t n_offsets = 0;
+    const float *offsets = NULL;
+    exr_attr_get_float_vector(c, 0, "crowdbake.positionOffsets", &n_offsets, &offsets);
+    if (!offsets || n_offsets != n) offsets = bind; /* written before the offsets: relative to the bind positions */
     p->bind_positions = malloc(sizeof(float) * (size_t)n);
+    p->position_offsets = malloc(sizeof(float) * (size_t)n);
     p->clips = calloc(img->clips ? (size_t)img->clips : 1, sizeof *p->clips);
     out->names = calloc((size_t)img->clips + 1, 256);
-    if (!p->bind_positions || !p->clips || !out->names) return cb_fail(err, CB_ERR_INTERNAL, "out of memory"), false;
+    if (!p->bind_positions || !p->position_offsets || !p->clips || !out->names)
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory"), false;
     memcpy(p->bind_positions, bind, sizeof(float) * (size_t)n);
+    memcpy(p->position_offsets, offsets, sizeof(float) * (size_t)n);
     p->clip_count = (uint32_t)img->clips;
     for (uint32_t i = 0; i < p->clip_count; ++i) {
         cb_palette_clip *cl = &p->clips[i];

@@ -93,9 +93,14 @@ static char *palette_json(const cb_palette *p, const cb_model *m, int32_t skin, 
     cb_json_array(&j, "bone_names");
     for (uint32_t b = 0; b < p->bone_count; ++b) cb_json_string(&j, NULL, m->nodes[m->skins[skin].joints[b]].name);
     cb_json_end(&j);
-    if (p->layout == CB_LAYOUT_QPOS) {
+    if (p->layout == CB_LAYOUT_QPOS || p->positions_relative) {
         cb_json_inline_array(&j, "bind_positions");
         for (uint32_t i = 0; i < p->bone_count * 3; ++i) cb_json_number(&j, NULL, p->bind_positions[i]);
+        cb_json_end(&j);
+    }
+    if (p->positions_relative) { /* what the stored positions are relative to (docs/pal-format.md, version 3) */
+        cb_json_inline_array(&j, "position_offsets");
+        for (uint32_t i = 0; i < p->bone_count * 3; ++i) cb_json_number(&j, NULL, p->position_offsets[i]);
         cb_json_end(&j);
     }
     cb_json_number(&j, "model_height", p->model_height);

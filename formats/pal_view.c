@@ -11,6 +11,7 @@ cb_status cb_palette_view(const cbpal_file *f, cb_palette *p, cb_error *err)
     p->layout = (cb_layout)h->layout;
     p->precision = (cb_precision)h->precision;
     p->positions_relative = (h->flags & CBPAL_FLAG_POSITIONS_RELATIVE) != 0;
+    p->fitted = (h->flags & CBPAL_FLAG_FITTED_ROWS) != 0;
     p->bone_count = h->bone_count;
     p->texels_per_bone = h->texels_per_bone;
     p->row_texels = h->row_texels;
@@ -26,8 +27,9 @@ cb_status cb_palette_view(const cbpal_file *f, cb_palette *p, cb_error *err)
     memcpy(p->bounds_max, h->bounds_max, sizeof p->bounds_max);
     p->texel_bytes = f->texels_size;
     p->bind_positions = malloc(sizeof(float) * 3 * h->bone_count);
+    p->position_offsets = malloc(sizeof(float) * 3 * h->bone_count);
     p->clips = calloc(h->clip_count ? h->clip_count : 1, sizeof *p->clips);
-    if (!p->bind_positions || !p->clips) {
+    if (!p->bind_positions || !p->position_offsets || !p->clips) {
         cb_palette_view_free(p);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
@@ -35,6 +37,7 @@ cb_status cb_palette_view(const cbpal_file *f, cb_palette *p, cb_error *err)
         cbpal_bone b;
         cbpal_get_bone(f, j, &b);
         memcpy(p->bind_positions + 3 * j, b.bind_position, sizeof b.bind_position);
+        memcpy(p->position_offsets + 3 * j, b.position_offset, sizeof b.position_offset);
     }
     p->clip_count = h->clip_count;
     for (uint32_t i = 0; i < h->clip_count; ++i) {
@@ -58,6 +61,7 @@ cb_status cb_palette_view(const cbpal_file *f, cb_palette *p, cb_error *err)
 void cb_palette_view_free(cb_palette *p)
 {
     free(p->bind_positions);
+    free(p->position_offsets);
     free(p->clips);
     memset(p, 0, sizeof *p);
 }

@@ -35,7 +35,7 @@ static int32_t joint_parent(const cb_model *m, const cb_skin *skin, uint32_t j)
 }
 
 typedef struct layout_plan {
-    uint64_t clips, bones, strings, strings_size, payload, payload_size;
+    uint64_t clips, bones, offsets, strings, strings_size, payload, payload_size;
 } layout_plan;
 
 static size_t strings_size(const cb_palette *p, const cb_model *m, const cb_skin *skin)
@@ -51,9 +51,10 @@ static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_wri
     static const unsigned char magic[8] = {'C', 'B', 'P', 'A', 'L', '\r', '\n', 0x1a};
     memcpy(d, magic, 8);
     uint32_t flags = (opt->zstd ? CBPAL_FLAG_ZSTD : 0) | (opt->in_place ? CBPAL_FLAG_IN_PLACE : 0) |
-                     (p->positions_relative ? CBPAL_FLAG_POSITIONS_RELATIVE : 0);
+                     (p->positions_relative ? CBPAL_FLAG_POSITIONS_RELATIVE : 0) |
+                     (p->fitted ? CBPAL_FLAG_FITTED_ROWS : 0);
     /* Version 2 only where its meaning differs from 1: readers of version 1 keep reading the rest. */
-    uint32_t version = p->positions_relative ? 2 : 1;
+    uint32_t version = p->positions_relative ? 3 : 1;
     uint32_t u[14] = {version, flags, CBPAL_HEADER_SIZE, (uint32_t)p->layout, (uint32_t)p->precision,
                       p->texels_per_bone, p->bone_count, p->row_texels, p->rows, p->width, p->height, p->blocks,
                       cb_precision_texel_bytes(p->precision), p->clip_count};
@@ -68,6 +69,7 @@ static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_wri
     uint64_t w[9] = {opt->input_hash, lp->clips, lp->bones, lp->strings, lp->strings_size, lp->payload, lp->payload_size,
                      (uint64_t)p->texel_bytes, 0 /* checksum, filled last */};
     for (int i = 0; i < 9; ++i) put64(d + 112 + 8 * i, w[i]);
+    if (p->positions_relative) put64(d + 184, lp->offsets);
 }
 
 static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *m, const cb_skin *skin, const layout_plan *lp)
@@ -99,6 +101,7 @@ static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *
         s += len + 1;
         put32(e + 8, (uint32_t)joint_parent(m, skin, j));
         for (int k = 0; k < 3; ++k) putf(e + 16 + 4 * k, p->bind_positions[j * 3 + k]);
+        for (int k = 0; p->positions_relative && k < 3; ++k) putf(d + lp->offsets + j * 12 + 4 * k, p->position_offsets[j * 3 + k]);
     }
 }
 
@@ -112,7 +115,8 @@ static cb_status build(const cb_palette *p, const cb_model *m, int32_t skin_inde
     layout_plan lp;
     lp.clips = CBPAL_HEADER_SIZE;
     lp.bones = lp.clips + (uint64_t)p->clip_count * CBPAL_CLIP_SIZE;
-    lp.strings = lp.bones + (uint64_t)p->bone_count * CBPAL_BONE_SIZE;
+    lp.offsets = lp.bones + (uint64_t)p->bone_count * CBPAL_BONE_SIZE;
+    lp.strings = lp.offsets + (p->positions_relative ? (uint64_t)p->bone_count * 12 : 0);
     lp.strings_size = strings_size(p, m, skin);
     lp.payload = (lp.strings + lp.strings_size + CBPAL_PAYLOAD_ALIGN - 1) / CBPAL_PAYLOAD_ALIGN * CBPAL_PAYLOAD_ALIGN;
     *owned = NULL;

@@ -162,9 +162,12 @@ static GLuint texture(const gl_api *gl, GLenum internal, GLsizei w, GLsizei h, G
 static void bind_palette(const gl_api *gl, const cb_palette *p, const void *texels, GLuint prog, GLuint *tex)
 {
     gl->ActiveTexture(GL_TEXTURE1);
-    float *bind = calloc((size_t)p->bone_count * 4, sizeof(float));
-    for (uint32_t j = 0; bind && j < p->bone_count; ++j) memcpy(bind + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
-    tex[1] = texture(gl, GL_RGBA32F, (GLsizei)p->bone_count, 1, GL_RGBA, GL_FLOAT, bind);
+    float *bind = calloc((size_t)p->bone_count * 8, sizeof(float)); /* rows: bind positions, position offsets */
+    for (uint32_t j = 0; bind && j < p->bone_count; ++j) {
+        memcpy(bind + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
+        if (p->positions_relative) memcpy(bind + (p->bone_count + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
+    }
+    tex[1] = texture(gl, GL_RGBA32F, (GLsizei)p->bone_count, 2, GL_RGBA, GL_FLOAT, bind);
     free(bind);
     gl->ActiveTexture(GL_TEXTURE0);
     if (p->precision == CB_PRECISION_FLOAT)

@@ -69,6 +69,7 @@ static uint64_t content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
     double settings[8] = {b->fps, b->layout + 10.0 * b->layout_set, b->precision + 10.0 * b->precision_set,
                           b->max_texture_size, b->root_motion, b->formats, b->zstd, b->exr_compression};
     cbpal_xxh64_update(&h, settings, sizeof settings);
+    if (b->fit_rows) hash_str(&h, "fit_rows"); /* (only then: other palettes stay up to date) */
     for (uint32_t i = 0; i < m->node_count; ++i) {
         const cb_node *node = &m->nodes[i];
         hash_str(&h, node->name);
@@ -301,6 +302,7 @@ static cb_bake_options bake_options(const cb_catalog_animal *an, const cb_limits
     o.max_texture_size = an->bake.max_texture_size;
     o.root_motion = an->bake.root_motion;
     o.affine_fallback = !an->bake.layout_set;
+    o.fit = an->bake.fit_rows;
     return o;
 }
 

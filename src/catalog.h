@@ -30,13 +30,14 @@ typedef struct cb_bake_settings {
     bool layout_set, precision_set; /* chosen explicitly (else: defaults, with fallbacks) */
     bool zstd;                   /* compress the .pal payload */
     int exr_compression;         /* formats/exr_io.h's lossless codes; 0: none */
+    bool fit_rows;               /* fit_rows = true: rows fitted to the linear blend (cb_bake_options.fit) */
 } cb_bake_settings;
 
 /* Which settings an override carries (the command line's bake options over a catalog). */
 enum {
     CB_BAKE_FPS = 1u << 0, CB_BAKE_LAYOUT = 1u << 1, CB_BAKE_PRECISION = 1u << 2, CB_BAKE_FORMATS = 1u << 3,
     CB_BAKE_MAX_TEXTURE_SIZE = 1u << 4, CB_BAKE_ROOT_MOTION = 1u << 5, CB_BAKE_ZSTD = 1u << 6,
-    CB_BAKE_EXR_COMPRESSION = 1u << 7
+    CB_BAKE_EXR_COMPRESSION = 1u << 7, CB_BAKE_FIT_ROWS = 1u << 8
 };
 
 typedef struct cb_catalog_clip {

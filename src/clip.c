@@ -173,12 +173,19 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
     return CB_OK;
 }
 
+double cb_root_travel_time(double t, double span, double duration, bool loops)
+{
+    if (!loops || t <= span || !(duration > span)) return t;
+    return span * (duration - t) / (duration - span);
+}
+
 /* The root's average horizontal travel from the clip's start to time t, which in-place bakes
  * take off every joint. */
 static void root_travel(const cb_clip_info *clip, double t, double *dx, double *dz)
 {
-    *dx = clip->root_velocity[0] * (t - clip->t0);
-    *dz = clip->root_velocity[2] * (t - clip->t0);
+    double tau = cb_root_travel_time(t - clip->t0, clip->t1 - clip->t0, clip->duration, clip->loops);
+    *dx = clip->root_velocity[0] * tau;
+    *dz = clip->root_velocity[2] * tau;
 }
 
 void cb_clip_frame_matrices(cb_sampler *s, const cb_clip_info *clip, uint32_t frame, cb_root_motion root_motion,

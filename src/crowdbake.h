@@ -293,6 +293,12 @@ typedef struct cb_clip_info {
     double ground_speed;         /* |velocity.xz| */
 } cb_clip_info;
 
+/* In-place bakes take the root's average horizontal travel, velocity * tau, off every joint at
+ * clip time t (from the clip's start). tau = t over the keys (span); a loop without a closing
+ * key returns to its first pose over its last interval, from span to duration, and so does
+ * the travel taken off (tau falls back to 0): the in-place loop ends where it starts. */
+double cb_root_travel_time(double t, double span, double duration, bool loops);
+
 /* Why the clip was judged a loop or not, with the measured numbers, in a few words (for `info`). */
 void cb_loop_reason_text(const cb_clip_info *clip, char *out, size_t size);
 

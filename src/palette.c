@@ -55,6 +55,7 @@ cb_bake_options cb_default_bake_options(void)
     o.limits = cb_default_limits();
     o.threads = 1;
     o.affine_fallback = false;
+    o.fit = false;
     o.error_goal = 0;
     return o;
 }
@@ -64,6 +65,7 @@ void cb_palette_free(cb_palette *p)
     if (!p) return;
     free(p->clips);
     free(p->bind_positions);
+    free(p->position_offsets);
     free(p->texels);
     memset(p, 0, sizeof *p);
 }
@@ -302,6 +304,57 @@ static void similarity_row(bake_state *st, worker *w, uint32_t c, uint32_t f, co
     st->ranges[c] = range;
 }
 
+/* The exact values halfway through each row interval of clip c (the clip framed at twice the
+ * steps, odd frames), into mids; quaternions on the side of the row before. */
+static cb_status sample_mids(bake_state *st, worker *w, uint32_t c, const float *rows, float *mids, cb_error *err)
+{
+    cb_palette *p = st->p;
+    const cb_clip_info *info = &st->infos[c];
+    cb_clip_info framing = *info;
+    framing.steps *= 2;
+    uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
+    for (uint32_t i = 0; i < intervals; ++i) {
+        cb_clip_frame_matrices(w->sampler, &framing, 2 * i + 1, st->opt->root_motion, w->mats);
+        float *out = mids + (size_t)i * p->bone_count * vals;
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            const double *M = w->mats + (size_t)j * 16;
+            float *o = out + (size_t)j * vals;
+            if (p->layout != CB_LAYOUT_QPOS) {
+                for (int r = 0; r < 3; ++r)
+                    for (int k = 0; k < 4; ++k) o[r * 4 + k] = (float)M[k * 4 + r];
+                continue;
+            }
+            const float *prev = rows + ((size_t)i * p->bone_count + j) * vals, *b = p->bind_positions + (size_t)j * 3;
+            cb_quat q = {prev[0], prev[1], prev[2], prev[3]};
+            if (qpos_canon(M, o, st->model, &st->model->skins[st->skin], j, p->clips[c].name, i, &q, err))
+                return err->status;
+            cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
+            o[4] = (float)pos.x, o[5] = (float)pos.y, o[6] = (float)pos.z;
+        }
+    }
+    return CB_OK;
+}
+
+/* --fit: the clip's rows moved to split the linear blend's error between rows and mid-rows. */
+static cb_status fit_clip(bake_state *st, worker *w, uint32_t c, float *rows, cb_error *err)
+{
+    cb_palette *p = st->p;
+    const cb_clip_info *info = &st->infos[c];
+    size_t row_floats = (size_t)p->bone_count * CANON(p->layout);
+    float *mids = malloc((size_t)info->frames * row_floats * sizeof(float));
+    if (!mids) return cb_fail(err, CB_ERR_INTERNAL, "out of memory fitting %s", st->model->source);
+    if (!sample_mids(st, w, c, rows, mids, err)) {
+        cb_fit_rows(rows, mids, info->frames, p->bone_count, CANON(p->layout), info->loops, p->layout == CB_LAYOUT_QPOS);
+        range_reset(&st->ranges[c]); /* the fitted values' range */
+        for (size_t b = 0; b < (size_t)info->frames * p->bone_count; ++b) {
+            if (p->layout == CB_LAYOUT_QPOS) range_grow_qpos(&st->ranges[c], rows + b * 8);
+            else range_grow_affine(&st->ranges[c], rows + b * 12);
+        }
+    }
+    free(mids);
+    return err->status;
+}
+
 static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *err)
 {
     cb_palette *p = st->p;
@@ -323,6 +376,7 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
     }
     for (uint32_t f = 0; !similar && f < info->frames; ++f)
         if (matrix_row(st, w, c, f, rows + f * row_floats, &bounds, err)) return err->status;
+    if (st->opt->fit && fit_clip(st, w, c, rows, err)) return err->status;
     bool empty = !(bounds.lo[0] <= bounds.hi[0]); /* no skinned vertex */
     for (int k = 0; k < 3; ++k) {
         clip->bounds_min[k] = empty ? 0 : (float)bounds.lo[k];
@@ -413,6 +467,18 @@ static double seconds_now(void)
 static void encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
 static void encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
                             uint32_t count);
+static void encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
+                             uint32_t count);
+
+/* Values encoding waits for: u16's need the ranges of every clip, half's positions each bone's
+ * offset (the centre of its positions over every clip). */
+static bool keeps_values(const cb_palette *p) { return p->precision != CB_PRECISION_FLOAT; }
+
+/* The joint's position p = M b of a kept mat4/affine row (the upper 3x4 by rows), axis r. */
+static double row_position(const float *c, const float *b, int r)
+{
+    return (double)c[r * 4] * b[0] + (double)c[r * 4 + 1] * b[1] + (double)c[r * 4 + 2] * b[2] + c[r * 4 + 3];
+}
 
 /* Encodes a clip as soon as it is sampled, from rows still in cache: all of it, or for u16
  * what needs no range, keeping the rest for encode_kept_job. */
@@ -423,11 +489,12 @@ static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
     const cb_palette_clip *clip = &p->clips[c];
     double start = seconds_now();
     size_t bones = (size_t)clip->frames * p->bone_count, kept = kept_floats(p->layout);
-    if (p->precision != CB_PRECISION_U16) {
+    if (!keeps_values(p)) {
         encode_rows(p, w->rows, clip->first_row, clip->frames);
     } else if (p->layout == CB_LAYOUT_QPOS) {
         float *keep = st->kept + (size_t)clip->first_row * p->bone_count * kept;
-        encode_qpos_u16(p, w->rows, 8, 0, clip->first_row, clip->frames);
+        if (p->precision == CB_PRECISION_U16) encode_qpos_u16(p, w->rows, 8, 0, clip->first_row, clip->frames);
+        else encode_qpos_half(p, w->rows, 8, 0, clip->first_row, clip->frames);
         for (size_t b = 0; b < bones; ++b) memcpy(keep + b * 4, w->rows + b * 8 + 4, 4 * sizeof(float));
     } else {
         memcpy(st->kept + (size_t)clip->first_row * p->bone_count * kept, w->rows, bones * kept * sizeof(float));
@@ -435,14 +502,16 @@ static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
     st->encode_seconds[c] = seconds_now() - start;
 }
 
-/* u16, once the ranges of every clip are known: the values a clip kept. */
+/* u16 and qpos/half, once the ranges and offsets of every clip are known: the values a clip kept. */
 static void encode_kept_job(bake_state *st, worker *w, uint32_t c)
 {
     (void)w;
     cb_palette *p = st->p;
     const cb_palette_clip *clip = &p->clips[c];
     const float *kept = st->kept + (size_t)clip->first_row * p->bone_count * kept_floats(p->layout);
-    if (p->layout == CB_LAYOUT_QPOS)
+    if (p->layout == CB_LAYOUT_QPOS && p->precision == CB_PRECISION_HALF)
+        encode_qpos_half(p, kept, 4, 4, clip->first_row, clip->frames);
+    else if (p->layout == CB_LAYOUT_QPOS)
         encode_qpos_u16(p, kept, 4, 4, clip->first_row, clip->frames);
     else
         encode_rows(p, kept, clip->first_row, clip->frames);
@@ -562,9 +631,15 @@ static void encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32
         unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * tb;
         const float *row = rows + (size_t)(r - first) * p->bone_count * CANON(p->layout);
         for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
-            float vals[16];
-            texel_values(p, row + (size_t)j * CANON(p->layout), vals);
-            for (int k = 0; p->positions_relative && k < 3; ++k) vals[4 + k] -= p->bind_positions[(size_t)j * 3 + k];
+            float vals[16], rel[12];
+            const float *c = row + (size_t)j * CANON(p->layout), *o = p->position_offsets + (size_t)j * 3;
+            if (p->positions_relative && p->layout != CB_LAYOUT_QPOS) { /* the translation: p = M b, less o */
+                memcpy(rel, c, sizeof rel);
+                for (int r = 0; r < 3; ++r) rel[r * 4 + 3] = (float)(row_position(c, p->bind_positions + (size_t)j * 3, r) - o[r]);
+                c = rel;
+            }
+            texel_values(p, c, vals);
+            for (int k = 0; p->positions_relative && p->layout == CB_LAYOUT_QPOS && k < 3; ++k) vals[4 + k] -= o[k];
             if (p->precision == CB_PRECISION_FLOAT)
                 for (uint32_t i = 0; i < nvalues; ++i) store_le32f(d + i * 4, vals[i]);
             else if (p->precision == CB_PRECISION_HALF)
@@ -593,6 +668,45 @@ static void encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, u
     }
 }
 
+/* Encodes qpos values v0..v0 + 3 of `count` rows as half floats, positions less their bone's
+ * offset; `rows` holds `stride` floats per bone, starting with value v0. */
+static void encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
+                             uint32_t count)
+{
+    for (uint32_t r = first; r < first + count; ++r) {
+        uint32_t x0, y;
+        cb_palette_texel_xy(p, r, 0, &x0, &y);
+        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8 + v0 * 2; /* RGBA16F */
+        const float *row = rows + (size_t)(r - first) * p->bone_count * stride;
+        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16)
+            for (uint32_t i = 0; i < 4; ++i) {
+                float v = row[j * stride + i];
+                if (v0 == 4 && i < 3) v -= p->position_offsets[(size_t)j * 3 + i];
+                store_le16(d + i * 2, cb_float_to_half(v));
+            }
+    }
+}
+
+/* qpos/half: each bone's position offset, the centre of the box of its positions over every
+ * row. A half float's step grows with the value; positions less the centre stay within half
+ * the bone's reach (Cow: 0.60 -> 0.32 mm/m; less its bind position, a body that falls or
+ * travels still lands far from it). */
+static void position_offsets(cb_palette *p, const float *kept)
+{
+    uint32_t stride = kept_floats(p->layout);
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (uint32_t r = 0; r < p->rows; ++r) {
+            const float *v = kept + ((size_t)r * p->bone_count + j) * stride;
+            for (int k = 0; k < 3; ++k) {
+                double x = p->layout == CB_LAYOUT_QPOS ? v[k] : row_position(v, p->bind_positions + (size_t)j * 3, k);
+                lo[k] = x < lo[k] ? x : lo[k], hi[k] = x > hi[k] ? x : hi[k];
+            }
+        }
+        for (int k = 0; k < 3; ++k) p->position_offsets[(size_t)j * 3 + k] = p->rows ? (float)(0.5 * (lo[k] + hi[k])) : 0;
+    }
+}
+
 void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16])
 {
     uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
@@ -606,7 +720,9 @@ void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t 
         else
             v[i] = decode_u16(p, u16_kind(p->layout, (int)i), load_le16(d + i * 2));
     }
-    for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->bind_positions[(size_t)bone * 3 + k];
+    /* The position values: qpos's texel 1, mat4's column 3, affine's w of each row. */
+    static const int at[3][3] = {{12, 13, 14}, {3, 7, 11}, {4, 5, 6}};
+    for (int k = 0; p->positions_relative && k < 3; ++k) v[at[p->layout][k]] += p->position_offsets[(size_t)bone * 3 + k];
 }
 
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
@@ -625,7 +741,12 @@ void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const doubl
     } else if (p->layout == CB_LAYOUT_AFFINE) {
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 4; ++c) out[c * 4 + r] = v[r * 4 + c];
-    } else {
+    }
+    if (p->layout != CB_LAYOUT_QPOS && p->positions_relative) { /* the translation holds p = M b: t = p - A b */
+        const float *b = p->bind_positions + (size_t)bone * 3;
+        cb_vec3 ab = cb_mat4_transform_dir(out, (cb_vec3){b[0], b[1], b[2]});
+        out[12] -= ab.x, out[13] -= ab.y, out[14] -= ab.z;
+    } else if (p->layout == CB_LAYOUT_QPOS) {
         /* v' = p + s * rotate(q, v - b)  =>  A = s R(q), t = p - A b */
         cb_quat q = cb_quat_normalize((cb_quat){v[0], v[1], v[2], v[3]});
         double s = v[7];
@@ -637,36 +758,25 @@ void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const doubl
     }
 }
 
-void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr, uint32_t bone,
-                      double out[16])
-{
-    double a[16], b[16], v[16];
-    cb_palette_decode_values(p, texels, row0, bone, a);
-    cb_palette_decode_values(p, texels, row1, bone, b);
-    if (p->layout == CB_LAYOUT_QPOS && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0)
-        for (int k = 0; k < 4; ++k) b[k] = -b[k]; /* the shorter way between the rows */
-    for (uint32_t k = 0; k < p->texels_per_bone * 4; ++k) v[k] = a[k] * (1 - fr) + b[k] * fr;
-    cb_palette_values_to_matrix(p, bone, v, out); /* normalizes q for qpos */
-}
-
 /* ---- pass 3: the error against exact skinning ---- */
 
-/* The worst vertex error of the given rows of clip c; or, with `bounds`, only each row's
- * upper bound (error_bound.h). Skinning is linear in the matrices, so one skinning with
- * (exact - decoded) gives each vertex's error directly: half the work of skinning twice, and
- * no cancellation. Rows baked from similarities are measured against those, sampled together
- * like the bake did. */
+/* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
+ * the next at fraction sub / parts, blended as the runtime does. Skinning is linear in the
+ * matrices, so one skinning with (exact - decoded) gives each vertex's error directly: half
+ * the work of skinning twice, and no cancellation. Rows baked from similarities are measured
+ * against those, sampled together like the bake did. */
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
-                           bool between, double *diff, double *err_pos, double *bounds)
+                           uint32_t sub, uint32_t parts, double *diff, double *err_pos, double *bounds)
 {
     cb_palette *p = st->p;
     const cb_model *m = st->model;
     const cb_palette_clip *clip = &p->clips[c];
-    /* Halfway between rows f and f + 1 is row 2f + 1 of the clip framed at twice the steps. */
+    /* Fraction sub / parts between rows f and f + 1 is row parts * f + sub of the clip framed at
+     * `parts` times the steps. */
     cb_clip_info framing = st->infos[c];
     uint32_t times[CB_SAMPLE_BATCH];
-    for (uint32_t i = 0; i < count; ++i) times[i] = between ? 2 * frames[i] + 1 : frames[i];
-    if (between) framing.steps *= 2;
+    for (uint32_t i = 0; i < count; ++i) times[i] = parts * frames[i] + sub;
+    framing.steps *= parts;
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
     if (similar) cb_clip_frame_similarities(w->sampler, &framing, times, count, st->opt->root_motion, w->sims);
     double worst = 0;
@@ -676,11 +786,11 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             double *d = diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
             if (similar) cb_similarity_matrix(&w->sims[(size_t)i * p->bone_count + j], exact);
-            if (between) cb_palette_blend(p, p->texels, row, next, 0.5, j, d);
+            if (sub) cb_palette_blend(p, p->texels, row, next, (double)sub / parts, j, d);
             else cb_palette_decode(p, p->texels, row, j, d);
             for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
         }
-        if (bounds) {
+        if (bounds) { /* only the row's upper bound (error_bound.h) */
             bounds[i] = cb_row_error_bound(diff, p->bone_count, p->bind_positions, st->radius, st->weight_sum);
             continue;
         }
@@ -697,25 +807,25 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     return sqrt(worst);
 }
 
-/* The worst vertex error of clip c over every error_stride-th row and the last (between:
- * halfway from each of those rows to the next, as the runtime blends them; a one-shot's last
- * row has no next). Branch and bound: every row's cheap bound first, then exact skinning in
- * order of bound, largest first, until no row left can exceed the worst found - the same
- * maximum as skinning every row, for a fraction of the work. Rows that cannot exceed `floor`
- * are not measured (0 when none may be skipped): the result is exact when above it. With an
- * error goal, measuring also stops once the worst exceeds it. */
-static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, bool between, double floor, double *diff,
-                                double *err_pos, cb_bounded_row *rows)
+/* The worst vertex error of clip c over every error_stride-th row and the last (sub > 0: at
+ * fraction sub / parts from each of those rows to the next, as the runtime blends them; a
+ * one-shot's last row has no next). Branch and bound: every row's cheap bound first, then exact
+ * skinning in order of bound, largest first, until no row left can exceed the worst found - the
+ * same maximum as skinning every row, for a fraction of the work. Rows that cannot exceed
+ * `floor` are not measured (0 when none may be skipped): the result is exact when above it.
+ * With an error goal, measuring also stops once the worst exceeds it. */
+static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t sub, uint32_t parts, double floor,
+                                double *diff, double *err_pos, cb_bounded_row *rows)
 {
     const cb_palette_clip *clip = &st->p->clips[c];
-    uint32_t frames = between && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], n = 0;
+    uint32_t frames = sub && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], n = 0;
     for (uint32_t f = 0; f < frames; ++f)
         if (f % st->error_stride == 0 || f + 1 == frames) rows[n++].frame = f;
     double bounds[CB_SAMPLE_BATCH], worst = floor, goal = st->opt->error_goal;
     for (uint32_t i = 0; i < n; i += CB_SAMPLE_BATCH) {
         uint32_t count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
         for (uint32_t k = 0; k < count; ++k) batch[k] = rows[i + k].frame;
-        measure_rows(st, w, c, batch, count, between, diff, err_pos, bounds);
+        measure_rows(st, w, c, batch, count, sub, parts, diff, err_pos, bounds);
         for (uint32_t k = 0; k < count; ++k) rows[i + k].bound = bounds[k];
     }
     cb_sort_bounded_rows(rows, n);
@@ -723,12 +833,12 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, bool betw
     for (uint32_t i = 0, size = 1; i < n && rows[i].bound > worst && !(goal > 0 && worst > goal); size *= 2) {
         uint32_t count = 0;
         for (; i < n && count < size && count < CB_SAMPLE_BATCH && rows[i].bound > worst; ++i) batch[count++] = rows[i].frame;
-        for (uint32_t a = 1; a < count; ++a) /* increasing frames, as the batched sampler wants them */
-            for (uint32_t b = a; b > 0 && batch[b - 1] > batch[b]; --b) {
-                uint32_t swap = batch[b];
-                batch[b] = batch[b - 1], batch[b - 1] = swap;
+        for (uint32_t x = 1; x < count; ++x) /* increasing frames, as the batched sampler wants them */
+            for (uint32_t y = x; y > 0 && batch[y - 1] > batch[y]; --y) {
+                uint32_t swap = batch[y];
+                batch[y] = batch[y - 1], batch[y - 1] = swap;
             }
-        worst = fmax(worst, measure_rows(st, w, c, batch, count, between, diff, err_pos, NULL));
+        worst = fmax(worst, measure_rows(st, w, c, batch, count, sub, parts, diff, err_pos, NULL));
     }
     return worst;
 }
@@ -739,18 +849,23 @@ static void measure_clip(bake_state *st, worker *w, uint32_t c)
     uint64_t verts = cb_model_skin_vertex_count(st->model, st->skin);
     double *diff = malloc((size_t)p->bone_count * 16 * sizeof(double));
     double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
-    cb_bounded_row *rows = malloc((size_t)p->clips[c].frames * sizeof *rows);
     st->clip_error[c] = st->clip_blend_error[c] = 0;
-    double goal = st->opt->error_goal;
-    if (diff && err_pos && rows && verts && goal > 0) {
-        /* Only the visible error counts: the blend's (usually the larger) first, then the baked
-         * rows that could exceed it - none, when the blend is past the goal. */
-        double blend = st->clip_blend_error[c] = measure_clip_rows(st, w, c, true, 0, diff, err_pos, rows);
-        double both = blend > goal ? blend : measure_clip_rows(st, w, c, false, blend, diff, err_pos, rows);
-        st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
-    } else if (diff && err_pos && rows && verts) {
-        st->clip_error[c] = measure_clip_rows(st, w, c, false, 0, diff, err_pos, rows);
-        st->clip_blend_error[c] = measure_clip_rows(st, w, c, true, 0, diff, err_pos, rows);
+    cb_bounded_row *rows = malloc((size_t)p->clips[c].frames * sizeof *rows);
+    /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
+     * ways, so their quarter points are measured too. */
+    uint32_t parts = p->fitted ? 4 : 2;
+    double goal = st->opt->error_goal, blend = 0;
+    if (diff && err_pos && rows && verts) {
+        /* Each fraction's rows only count where they exceed the worst blend so far. */
+        for (uint32_t sub = 1; sub < parts && !(goal > 0 && blend > goal); ++sub)
+            blend = measure_clip_rows(st, w, c, sub, parts, blend, diff, err_pos, rows);
+        st->clip_blend_error[c] = blend;
+        if (goal > 0) { /* only the visible error: the baked rows that could exceed the blend */
+            double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, diff, err_pos, rows);
+            st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
+        } else {
+            st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, diff, err_pos, rows);
+        }
     } else if (verts) {
         cb_fail(&st->errors[c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
     }
@@ -899,6 +1014,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     memset(p, 0, sizeof *p);
     p->layout = opt->layout;
     p->precision = opt->precision;
+    p->fitted = opt->fit;
     p->fps = opt->fps;
     p->bone_count = skin->joint_count;
     p->texels_per_bone = cb_layout_texels_per_bone(opt->layout);
@@ -922,7 +1038,8 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     }
     p->texels = cb_alloc_large(p->texel_bytes);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
-    if (p->precision == CB_PRECISION_U16)
+    p->position_offsets = calloc((size_t)p->bone_count * 3, sizeof(float));
+    if (keeps_values(p))
         st.kept = cb_alloc_large((size_t)p->rows * p->bone_count * kept_floats(p->layout) * sizeof(float));
     for (uint32_t c = 0; c < p->clip_count; ++c)
         if (p->clips[c].frames > st.max_clip_frames) st.max_clip_frames = p->clips[c].frames;
@@ -933,20 +1050,21 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.clip_blend_error = calloc(p->clip_count, sizeof *st.clip_blend_error);
     st.ranges = calloc(p->clip_count, sizeof *st.ranges);
     st.encode_seconds = calloc(p->clip_count, sizeof *st.encode_seconds);
-    if (!p->texels || !p->bind_positions || (p->precision == CB_PRECISION_U16 && !st.kept) || !radius ||
+    if (!p->texels || !p->bind_positions || !p->position_offsets || (keeps_values(p) && !st.kept) || !radius ||
         !st.breaks || !st.errors || !st.clip_error || !st.clip_blend_error || !st.ranges || !st.encode_seconds) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
     }
     zero_padding(p);
     bind_positions(p, skin);
-    p->positions_relative = p->layout == CB_LAYOUT_QPOS && p->precision == CB_PRECISION_HALF;
+    p->positions_relative = p->precision == CB_PRECISION_HALF;
     bool skinned = joint_reach(p, m, skin_index, radius);
     st.radius = radius;
     for_each_clip(&st, sample_clip_job, true);
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
     merge_ranges(p, st.ranges);
+    if (p->positions_relative) position_offsets(p, st.kept);
     double t1 = seconds_now();
     if (st.kept) for_each_clip(&st, encode_kept_job, false);
     double t2 = seconds_now(), lo[3], hi[3];

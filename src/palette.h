@@ -35,6 +35,7 @@ typedef struct cb_bake_options {
     double error_goal;    /* > 0: only the visible error is measured, and only as far as the goal needs (model
                            * units): exact when within it, a lower bound above it; max_error is then a lower
                            * bound and model_height 0. For searches that ask "within the goal?". 0: all exact. */
+    bool fit;             /* rows fitted to the linear blend (src/fit.c), not sampled: half the error between rows */
 } cb_bake_options;
 
 /* Vertex-rows of exact skinning spent measuring a bake's error (see cb_palette.max_error). */
@@ -54,6 +55,7 @@ typedef struct cb_palette_clip {
 typedef struct cb_palette {
     cb_layout layout;
     cb_precision precision;
+    bool fitted;                    /* rows fitted to the runtime's linear blend, not sampled (header flag bit 3) */
     uint32_t bone_count, texels_per_bone, row_texels;
     uint32_t rows;                  /* baked frames over all clips */
     uint32_t width, height, blocks; /* texture size: blocks of `height` rows side by side */
@@ -61,8 +63,10 @@ typedef struct cb_palette {
     uint32_t clip_count;
     cb_palette_clip *clips;
     float *bind_positions;          /* 3 per bone: the joints' bind-pose positions (qpos pivots) */
-    bool positions_relative;        /* qpos/half: the position texel holds p - b, the joint's position less its bind
-                                     * position, which stays small (and precise in half floats) far from the origin */
+    bool positions_relative;        /* qpos/half: the position texel holds p - o, the joint's position less its bone's
+                                     * offset, which stays small (and precise in half floats) far from the origin */
+    float *position_offsets;        /* 3 per bone: o, the centre of the bone's positions over every row (.pal version
+                                     * 3; version 2 files used the bind position); zeros unless positions_relative */
     float bounds_min[3], bounds_max[3]; /* u16: the box positions are quantized in */
     float linear_range;             /* u16: |3x3 terms| (mat4, affine) or scale (qpos) stay below this */
     uint32_t quat_hemisphere_breaks; /* loops whose rotation ends on -q of its start (a full turn) */
@@ -108,6 +112,12 @@ void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const doubl
  * hemisphere flip) and normalized - as a 4x4 matrix. */
 void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr, uint32_t bone,
                       double out[16]);
+
+/* Moves each of `frames` rows (bones x values floats each) outward by half the sagitta of the
+ * linear blend over its intervals: mids holds the exact values halfway through each interval
+ * (frames of them for a loop, whose last interval wraps to row 0; frames - 1 otherwise). qpos
+ * rows (8 values: quaternion, position, scale) keep unit quaternions. */
+void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones, uint32_t values, bool loops, bool qpos);
 
 /* ---- conversions ---- */
 uint16_t cb_float_to_half(float f);

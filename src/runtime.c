@@ -189,9 +189,11 @@ static double compare_at(verify_ctx *c, double t, double *sum, uint64_t *worst_v
     const cb_model *m = cb_sampler_model(c->s);
     int32_t skin = cb_sampler_skin(c->s);
     cb_sample_joint_matrices(c->s, c->animation, c->clip->start + t, c->exact_m);
+    const cb_animation *a = &m->animations[c->animation];
+    double tau = cb_root_travel_time(t, a->t1 - a->t0, c->clip->duration, c->clip->loops);
     for (uint32_t j = 0; j < c->p->bone_count; ++j) { /* in-place bakes removed this travel */
-        c->exact_m[(size_t)j * 16 + 12] -= c->clip->root_velocity[0] * t;
-        c->exact_m[(size_t)j * 16 + 14] -= c->clip->root_velocity[2] * t;
+        c->exact_m[(size_t)j * 16 + 12] -= c->clip->root_velocity[0] * tau;
+        c->exact_m[(size_t)j * 16 + 14] -= c->clip->root_velocity[2] * tau;
     }
     cb_instance in = {c->clip->first_row, c->clip->loops ? c->clip->frames : -(double)c->clip->frames, c->clip->fps, 0};
     cb_runtime_matrices(c->p, c->texels, &in, t, c->run_m);

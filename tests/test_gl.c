@@ -137,14 +137,17 @@ static GLuint upload(const cb_palette *p, bool transpose)
 
 static GLuint upload_bind_positions(const cb_palette *p)
 {
-    float *rgba = calloc((size_t)p->bone_count * 4, sizeof(float));
-    for (uint32_t j = 0; j < p->bone_count; ++j) memcpy(rgba + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
+    float *rgba = calloc((size_t)p->bone_count * 8, sizeof(float)); /* row 0: bind positions; row 1: position offsets */
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        memcpy(rgba + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
+        if (p->positions_relative) memcpy(rgba + (p->bone_count + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
+    }
     GLuint tex;
     glGenTextures(1, &tex);
     glBindTexture(GL_TEXTURE_2D, tex);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, (GLsizei)p->bone_count, 1, 0, GL_RGBA, GL_FLOAT, rgba);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, (GLsizei)p->bone_count, 2, 0, GL_RGBA, GL_FLOAT, rgba);
     free(rgba);
     return tex;
 }
@@ -156,7 +159,7 @@ static void use_palette(const cb_palette *p, GLuint prog, bool transpose, GLuint
     glActiveTexture(GL_TEXTURE0);
     tex[0] = upload(p, transpose), tex[1] = 0;
     glUseProgram(prog);
-    if (p->layout == CB_LAYOUT_QPOS) {
+    if (p->layout == CB_LAYOUT_QPOS || p->positions_relative) {
         glActiveTexture(GL_TEXTURE1);
         tex[1] = upload_bind_positions(p); /* uploading binds it to the active unit: 1 */
         glUniform1i(glGetUniformLocation(prog, "cb_bind_positions"), 1);
@@ -348,9 +351,13 @@ static void test_broken_variants_are_caught(void **state)
     shared_path(multitrack, sizeof multitrack, "assets/multitrack-luanti/gltf_multi_track_1.glb");
     /* multitrack's bones spin a full turn per loop: their last and first rows are -q apart. */
     double no_flip = broken(multitrack, CB_LAYOUT_QPOS, CB_PRECISION_FLOAT, "cb:hemisphere", "", false, 0);
-    printf("  error / tolerance: transposed %.0f, rows off by one %.0f, no wrap %.0f, no hemisphere flip %.0f\n", transposed,
-           off_by_one, no_wrap, no_flip);
-    assert_true(transposed > 10 && off_by_one > 10 && no_wrap > 10 && no_flip > 10);
+    /* qpos/half adds each bone's position offset back (version 3); version 2's bind position is wrong now. */
+    double bind_offset = broken("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_HALF, "cb:offset -", "    ps.xyz += b;", false, 0);
+    double matrix_offset = broken("quadruped.glb", CB_LAYOUT_MAT4, CB_PRECISION_HALF, "cb:offset-matrix",
+                                  "    vec3 p = m[3].xyz + b;", false, 0);
+    printf("  error / tolerance: transposed %.0f, rows off by one %.0f, no wrap %.0f, no hemisphere flip %.0f, bind position "
+           "as offset %.0f (qpos), %.0f (mat4)\n", transposed, off_by_one, no_wrap, no_flip, bind_offset, matrix_offset);
+    assert_true(transposed > 10 && off_by_one > 10 && no_wrap > 10 && no_flip > 10 && bind_offset > 10 && matrix_offset > 10);
     /* ...and the same multitrack palette with the shipped shader passes. */
     assert_true(broken(multitrack, CB_LAYOUT_QPOS, CB_PRECISION_FLOAT, NULL, NULL, false, 0) <= 1);
 }

@@ -25,7 +25,7 @@ static int setup(void **state)
     const char *bakes[][3] = {
         {"qpos", "u16", ""},    {"qpos", "float", ""},   {"affine", "u16", ""}, {"affine", "float", ""},
         {"mat4", "u16", ""},    {"mat4", "float", ""},   {"mat4", "half", ""},  {"mat4", "half", "--zstd"},
-        {"qpos", "half", ""}, /* a version 2 palette: positions relative to the bind pose */
+        {"qpos", "half", ""}, {"affine", "half", ""}, /* version 3: positions relative to each bone's offset */
     };
     for (size_t i = 0; i < COUNT_OF(bakes); ++i) {
         snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/bakes/%s-%s%s.pal --layout %s --precision %s %s -q",
@@ -59,18 +59,18 @@ static void test_shipped_files_run_in_godot(void **state)
     printf("%s", out);
     assert_int_equal(rc, 0);
     /* Every case ran: a run that skipped some cannot pass for a run that checked them. */
-    assert_int_equal(count(out, "\nok   shader crowdbake_crowd.gdshader "), 7);
-    assert_int_equal(count(out, "\nok   shader crowdbake_crowd_crossfade.gdshader "), 7);
+    assert_int_equal(count(out, "\nok   shader crowdbake_crowd.gdshader "), 9);
+    assert_int_equal(count(out, "\nok   shader crowdbake_crowd_crossfade.gdshader "), 9);
     assert_int_equal(count(out, "\nok   u16 draws as float: "), 6);
-    assert_int_equal(count(out, "\nok   half draws as float: "), 2);
-    assert_int_equal(count(out, "\nok   palette "), 9);
+    assert_int_equal(count(out, "\nok   half draws as float: "), 6);
+    assert_int_equal(count(out, "\nok   palette "), 10);
     assert_int_equal(count(out, "\nok   expect-error: refuses "), 5);
     assert_non_null(strstr(out, "ok   expect-error: fill_herd refuses rows the Compatibility renderer cannot address"));
     assert_non_null(strstr(out, "ok   Compatibility renderer rounds INSTANCE_CUSTOM to half floats"));
     assert_int_equal(count(out, "\nok   broken: "), 2);
     assert_non_null(strstr(out, "ok   loader parses"));
     assert_non_null(strstr(out, "ok   fill_herd from roster.json"));
-    assert_non_null(strstr(out, "godot: 42 cases, 0 failed, exit code 0"));
+    assert_non_null(strstr(out, "godot: 51 cases, 0 failed, exit code 0"));
     /* The log is Godot 4.6's own, on WebGL 2 (the Compatibility renderer). */
     assert_int_equal(run_command("grep -q 'Godot Engine v4.6' " TMP "/godot.log && grep -q 'Compatibility' " TMP "/godot.log",
                                  NULL, 0),

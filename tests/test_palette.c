@@ -20,7 +20,13 @@ static void bounds(const cb_palette *p, const double m[16], uint32_t bone, doubl
     const double f32 = 2e-7, h16 = 1.0 / 2048, sn16 = 0.5 / 32767, un16 = 0.5 / 65535;
     if (p->layout != CB_LAYOUT_QPOS) {
         if (p->precision == CB_PRECISION_FLOAT) *lin = f32 * big, *trans = f32 * tmax;
-        if (p->precision == CB_PRECISION_HALF) *lin = h16 * big + 1e-7, *trans = h16 * tmax + 1e-7;
+        if (p->precision == CB_PRECISION_HALF) { /* the translation holds p = A b + t less the offset o */
+            const float *b = p->bind_positions + (size_t)bone * 3, *o = p->position_offsets + (size_t)bone * 3;
+            double rel = 0, blen = fabs(b[0]) + fabs(b[1]) + fabs(b[2]);
+            for (int r = 0; r < 3; ++r)
+                rel = fmax(rel, fabs(m[r] * b[0] + m[4 + r] * b[1] + m[8 + r] * b[2] + m[12 + r] - o[r]));
+            *lin = h16 * big + 1e-7, *trans = h16 * rel + *lin * blen + f32 * (tmax + big * blen) + 1e-7;
+        }
         if (p->precision == CB_PRECISION_U16)
             *lin = (sn16 + f32) * p->linear_range + f32 * big, *trans = (un16 + f32) * box + f32 * tmax;
         return;
@@ -31,7 +37,13 @@ static void bounds(const cb_palette *p, const double m[16], uint32_t bone, doubl
     double blen = fabs(b[0]) + fabs(b[1]) + fabs(b[2]), s = big, dq, dp, ds;
     double plen = tmax + big * blen;
     if (p->precision == CB_PRECISION_FLOAT) dq = f32, dp = f32 * plen, ds = f32 * s;
-    else if (p->precision == CB_PRECISION_HALF) dq = h16, dp = h16 * plen, ds = h16 * s;
+    else if (p->precision == CB_PRECISION_HALF) { /* the position is stored less the bone's offset o */
+        const float *o = p->position_offsets + (size_t)bone * 3;
+        double rel = 0;
+        for (int r = 0; r < 3; ++r)
+            rel = fmax(rel, fabs(m[r] * b[0] + m[4 + r] * b[1] + m[8 + r] * b[2] + m[12 + r] - o[r]));
+        dq = h16, dp = h16 * rel + f32 * plen, ds = h16 * s;
+    }
     else dq = sn16, dp = (un16 + f32) * box + f32 * plen, ds = (un16 + f32) * p->linear_range;
     /* qpos stores a similarity: a rig whose scale is non-uniform by up to the 1e-4 qpos
      * accepts (float noise in exported scales) also loses that much. */

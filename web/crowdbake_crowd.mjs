@@ -46,8 +46,8 @@ function texture(gl, internalFormat, width, height, format, type, data) {
     return t;
 }
 
-// Uploads the palette (and, for qpos, its bind positions as an RGBA32F row). Returns the
-// textures and the bytes they take on the GPU.
+// Uploads the palette (and, for qpos or a half palette, its bind positions and position offsets
+// as two RGBA32F rows). Returns the textures and the bytes they take on the GPU.
 export function uploadPalette(gl, pal) {
     const h = pal.header, f = paletteTextureFormat(gl, h);
     const max = gl.getParameter(gl.MAX_TEXTURE_SIZE);
@@ -55,10 +55,13 @@ export function uploadPalette(gl, pal) {
         throw new Error(`palette ${h.width}x${h.height} exceeds this GPU's ${max}-texel limit; bake with --max-texture-size ${max}`);
     const palette = texture(gl, f.internalFormat, h.width, h.height, f.format, f.type, pal.texels);
     let bind = null, bytes = h.width * h.height * h.texel_bytes;
-    if (h.layout === 2) {
-        const rgba = new Float32Array(h.bone_count * 4);
-        pal.bones.forEach((b, j) => rgba.set(b.bind_position, j * 4));
-        bind = texture(gl, gl.RGBA32F, h.bone_count, 1, gl.RGBA, gl.FLOAT, rgba);
+    if (h.layout === 2 || h.flags & 4) {
+        const rgba = new Float32Array(h.bone_count * 8); // row 0: bind positions; row 1: position offsets
+        pal.bones.forEach((b, j) => {
+            rgba.set(b.bind_position, j * 4);
+            rgba.set(b.position_offset, (h.bone_count + j) * 4);
+        });
+        bind = texture(gl, gl.RGBA32F, h.bone_count, 2, gl.RGBA, gl.FLOAT, rgba);
         bytes += rgba.byteLength;
     }
     return { palette, bind, bytes, format: f.name };

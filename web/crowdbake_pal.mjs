@@ -17,7 +17,7 @@
 // with the npm package fzstd: this module stays dependency-free, and runtimes that never load
 // compressed palettes ship no decoder. Without one, such a file is refused with the fix.
 
-export const PAL_VERSION = 2; // newest known; files without relative positions are written as version 1
+export const PAL_VERSION = 3; // newest known; files without relative positions are written as version 1
 export const HEADER_SIZE = 256;
 export const CLIP_SIZE = 80;
 export const BONE_SIZE = 32;
@@ -28,7 +28,9 @@ export const LAYOUTS = ['mat4', 'affine', 'qpos'];
 export const PRECISIONS = ['float', 'half', 'u16'];
 export const FLAG_ZSTD = 1;
 export const FLAG_IN_PLACE = 2;
-export const FLAG_POSITIONS_RELATIVE = 4; // version 2: qpos positions are stored less the bone's bind position
+// versions 2 and 3: qpos positions are stored less the bone's position_offset (version 3: its offset table; version 2:
+// the bind position)
+export const FLAG_POSITIONS_RELATIVE = 4;
 export const CLIP_LOOPS = 1;
 
 const MAGIC = [0x43, 0x42, 0x50, 0x41, 0x4c, 0x0d, 0x0a, 0x1a]; // "CBPAL\r\n\x1a"
@@ -171,7 +173,7 @@ function parseHeader(view) {
         max_error: f32(100), model_height: f32(104), visible_error: f32(108),
         input_hash: u64(112), clip_table_offset: u64(120), bone_table_offset: u64(128), strings_offset: u64(136),
         strings_size: u64(144), payload_offset: u64(152), payload_size: u64(160), payload_raw_size: u64(168),
-        checksum: u64(176),
+        checksum: u64(176), offset_table_offset: u32(8) >= 3 ? u64(184) : 0n,
     };
 }
 
@@ -213,6 +215,10 @@ function validateHeader(bytes, view, fail) {
     if (!fits(h.bone_table_offset, h.bone_count, BONE_SIZE, n) || h.bone_table_offset < B(HEADER_SIZE))
         fail(`bone table (bone_table_offset ${h.bone_table_offset} at byte 128, ${h.bone_count} bones) ` +
              `lies outside the ${size}-byte file`);
+    if (h.version >= 3 && (h.flags & FLAG_POSITIONS_RELATIVE) &&
+        (!fits(h.offset_table_offset, h.bone_count, 12, n) || h.offset_table_offset < B(HEADER_SIZE)))
+        fail(`position offset table (offset_table_offset ${h.offset_table_offset} at byte 184, ${h.bone_count} bones) ` +
+             `lies outside the ${size}-byte file`);
     if (!fits(h.strings_offset, h.strings_size, 1, n) || h.strings_offset < B(HEADER_SIZE))
         fail(`string table (strings_offset ${h.strings_offset} at byte 136, strings_size ${h.strings_size} at byte 144) ` +
              `lies outside the ${size}-byte file`);
@@ -224,7 +230,7 @@ function validateHeader(bytes, view, fail) {
         fail(`payload_size ${h.payload_size} (byte 160) is not the ${h.payload_raw_size} bytes the texture needs`);
     // Every offset and size now lies inside the file: exact as Numbers.
     for (const k of ['clip_table_offset', 'bone_table_offset', 'strings_offset', 'strings_size', 'payload_offset',
-                     'payload_size'])
+                     'payload_size', 'offset_table_offset'])
         h[k] = Number(h[k]);
     return h;
 }
@@ -257,7 +263,12 @@ function readBones(bytes, view, h, fail) {
         const name = readName(bytes, view, h, b);
         if (name === null || parent < -1 || parent >= h.bone_count)
             fail(`bone ${i} (byte ${b}) has a bad name or parent ${parent}`);
-        bones.push({ name, parent, bind_position: [0, 4, 8].map((o) => view.getFloat32(b + 16 + o, true)) });
+        const bind_position = [0, 4, 8].map((o) => view.getFloat32(b + 16 + o, true));
+        // What CB_POSITIONS_RELATIVE adds to a qpos position texel (0 without the flag).
+        const relative = (h.flags & FLAG_POSITIONS_RELATIVE) !== 0;
+        const position_offset = !relative ? [0, 0, 0] : h.version >= 3
+            ? [0, 4, 8].map((o) => view.getFloat32(h.offset_table_offset + i * 12 + o, true)) : bind_position.slice();
+        bones.push({ name, parent, bind_position, position_offset });
     }
     return bones;
 }

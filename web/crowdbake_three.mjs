@@ -50,7 +50,7 @@ export function meshFromGLTF(gltf) {
 }
 
 // The palette as three.js textures: RGBA32F, RGBA16F or RGBA16UI (usampler2D), and the bind
-// positions of a qpos palette.
+// positions (row 0) and position offsets (row 1, half palettes) the shader reads.
 export function paletteTextures(pal) {
     const h = pal.header;
     const types = [[THREE.RGBAFormat, THREE.FloatType, 'RGBA32F'], [THREE.RGBAFormat, THREE.HalfFloatType, 'RGBA16F'],
@@ -58,9 +58,12 @@ export function paletteTextures(pal) {
     const [format, type, internal] = types[h.precision];
     const palette = new THREE.DataTexture(pal.texels, h.width, h.height, format, type);
     palette.internalFormat = internal;
-    const bindData = new Float32Array(h.bone_count * 4);
-    pal.bones.forEach((b, j) => bindData.set(b.bind_position, j * 4));
-    const bind = new THREE.DataTexture(bindData, h.bone_count, 1, THREE.RGBAFormat, THREE.FloatType);
+    const bindData = new Float32Array(h.bone_count * 8); // row 0: bind positions; row 1: position offsets
+    pal.bones.forEach((b, j) => {
+        bindData.set(b.bind_position, j * 4);
+        bindData.set(b.position_offset, (h.bone_count + j) * 4);
+    });
+    const bind = new THREE.DataTexture(bindData, h.bone_count, 2, THREE.RGBAFormat, THREE.FloatType);
     for (const t of [palette, bind]) {
         t.minFilter = t.magFilter = THREE.NearestFilter;
         t.generateMipmaps = false;

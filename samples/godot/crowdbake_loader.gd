@@ -63,8 +63,8 @@ func load_palette(path: String) -> Dictionary:
 	var flags := head.decode_u32(12)
 	var layout := head.decode_u32(20)
 	var precision := head.decode_u32(24)
-	if version < 1 or version > 2 or head.decode_u32(16) != HEADER_SIZE:
-		_fail("%s: palette format version %d is not supported (this loader reads versions 1 and 2); use the loader of the crowdbake that baked it"
+	if version < 1 or version > 3 or head.decode_u32(16) != HEADER_SIZE:
+		_fail("%s: palette format version %d is not supported (this loader reads versions 1 to 3); use the loader of the crowdbake that baked it"
 				% [path, version])
 		return {}
 	if layout > 2 or precision > 2:
@@ -76,6 +76,8 @@ func load_palette(path: String) -> Dictionary:
 	var height := head.decode_u32(48)
 	var blocks := head.decode_u32(52)
 	var bone_table := head.decode_u64(128)
+	# Version 3 qpos/half: each bone's position offset (what its position texels are relative to).
+	var offset_table := head.decode_u64(184) if version >= 3 and flags & 4 else 0
 	var payload_offset := head.decode_u64(152)
 	var payload_size := head.decode_u64(160)
 	var raw_size := head.decode_u64(168)
@@ -85,6 +87,7 @@ func load_palette(path: String) -> Dictionary:
 			or row_texels != bones * TEXELS_PER_BONE[layout] or width != blocks * row_texels \
 			or head.decode_u32(56) != TEXEL_BYTES[precision] or raw_size != width * height * TEXEL_BYTES[precision] \
 			or bone_table < HEADER_SIZE or bone_table + bones * BONE_ENTRY_SIZE > file_size \
+			or (offset_table != 0 and offset_table + bones * 12 > file_size) or (version >= 3 and flags & 4 and offset_table < HEADER_SIZE) \
 			or payload_offset < HEADER_SIZE or payload_size < 1 or payload_offset + payload_size > file_size \
 			or (flags & 1 == 0 and payload_size != raw_size):
 		_fail("%s: the header's sizes do not add up (or the file is truncated to %d bytes); re-bake it" % [path, file_size])
@@ -97,18 +100,27 @@ func load_palette(path: String) -> Dictionary:
 			_fail("%s: the zstd payload does not decompress to %d bytes; re-bake it" % [path, raw_size])
 			return {}
 	var image := Image.create_from_data(width, height, false, IMAGE_FORMATS[precision], payload)
+	# Row 0: the bind positions (qpos pivots); row 1: the position offsets positions_relative adds
+	# (version 3's table; the bind positions in version 2).
 	var bind := PackedFloat32Array()
 	f.seek(bone_table)
 	var table := f.get_buffer(bones * BONE_ENTRY_SIZE)
 	for i in bones:
 		var at := i * BONE_ENTRY_SIZE
 		bind.append_array([table.decode_float(at + 16), table.decode_float(at + 20), table.decode_float(at + 24), 0.0])
-	var bind_image := Image.create_from_data(bones, 1, false, Image.FORMAT_RGBAF, bind.to_byte_array())
+	if offset_table != 0:
+		f.seek(offset_table)
+		var offsets := f.get_buffer(bones * 12)
+		for i in bones:
+			bind.append_array([offsets.decode_float(i * 12), offsets.decode_float(i * 12 + 4), offsets.decode_float(i * 12 + 8), 0.0])
+	else:
+		bind.append_array(bind.duplicate())
+	var bind_image := Image.create_from_data(bones, 2, false, Image.FORMAT_RGBAF, bind.to_byte_array())
 	return {
 		"texture": ImageTexture.create_from_image(image),
 		"image": image,
 		"bind_positions": ImageTexture.create_from_image(bind_image),
-		"positions_relative": 1.0 if flags & 4 else 0.0, # version 2 qpos/half: position texels hold p - b
+		"positions_relative": 1.0 if flags & 4 else 0.0, # qpos/half: position texels hold p less the offset (row 1)
 		"layout": LAYOUTS[layout],
 		"precision": PRECISIONS[precision],
 		"row_texels": row_texels,

@@ -3,13 +3,17 @@
 //
 //   #define CB_LAYOUT_MAT4 | CB_LAYOUT_AFFINE | CB_LAYOUT_QPOS        (the .pal header's layout)
 //   #define CB_PRECISION_FLOAT | CB_PRECISION_HALF | CB_PRECISION_U16 (its precision)
-//   #define CB_POSITIONS_RELATIVE   when the header's flags have bit 2 (4: a version 2 qpos/half palette)
+//   #define CB_POSITIONS_RELATIVE   when the header's flags have bit 2 (4: a half palette, version 2 or 3)
 //   #define CB_INFLUENCES 1|2       optional, for a mesh written with `crowdbake mesh --max-influences 1|2`:
 //                                   only that many bones per vertex are read (a far LOD's cheaper shader)
 //
 // Textures: cb_palette is the .pal payload as is - RGBA32F, RGBA16F, or RGBA16UI (u16, read as
-// usampler2D) - width x height from the header. For qpos, cb_bind_positions is an RGBA32F
-// texture of one texel per bone (xyz = the bone table's bind position).
+// usampler2D) - width x height from the header. For qpos and CB_POSITIONS_RELATIVE,
+// cb_bind_positions is an RGBA32F texture of one texel per bone and two rows: row 0 xyz = the
+// bone table's bind position, row 1 xyz = the bone's position offset (cbpal_bone.position_offset:
+// version 3's offset table, the bind position in version 2), which CB_POSITIONS_RELATIVE adds to
+// the stored position (qpos texel 1; mat4 and affine: the translation, which then holds the
+// joint's position p = M b, skinned as A (v - b) + p).
 //
 // Per-instance data, the roster manifest's four numbers: inst.x first row, inst.y frame count
 // (negative for a one-shot: it clamps instead of wrapping), inst.z rate in rows per second,
@@ -56,7 +60,7 @@ uniform sampler2D cb_palette;
 #endif
 uniform int cb_row_texels;     // header: row_texels (bones x texels per bone)
 uniform int cb_rows_per_block; // header: height
-#ifdef CB_LAYOUT_QPOS
+#if defined(CB_LAYOUT_QPOS) || defined(CB_POSITIONS_RELATIVE)
 uniform sampler2D cb_bind_positions;
 #endif
 
@@ -145,20 +149,29 @@ vec3 cb_bone_transform(int row0, int row1, float fr, int bone, vec3 v, float w)
     vec4 ps = mix(cb_texel(row0, bone, 1), cb_texel(row1, bone, 1), fr); // position, scale
     vec3 b = texelFetch(cb_bind_positions, ivec2(bone, 0), 0).xyz;
 #ifdef CB_POSITIONS_RELATIVE
-    ps.xyz += b; // the texel holds the joint's position less its bind position
+    ps.xyz += texelFetch(cb_bind_positions, ivec2(bone, 1), 0).xyz; // cb:offset - the texel holds p less the bone's offset
 #endif
     return w * ps.xyz + ps.w * cb_rotate(q, v - w * b);
-#elif defined(CB_LAYOUT_AFFINE)
-    vec4 p = vec4(v, w);
-    return vec3(dot(mix(cb_texel(row0, bone, 0), cb_texel(row1, bone, 0), fr), p),
-                dot(mix(cb_texel(row0, bone, 1), cb_texel(row1, bone, 1), fr), p),
-                dot(mix(cb_texel(row0, bone, 2), cb_texel(row1, bone, 2), fr), p));
+#else
+#if defined(CB_LAYOUT_AFFINE)
+    mat3x4 rows = mat3x4(mix(cb_texel(row0, bone, 0), cb_texel(row1, bone, 0), fr),
+                         mix(cb_texel(row0, bone, 1), cb_texel(row1, bone, 1), fr),
+                         mix(cb_texel(row0, bone, 2), cb_texel(row1, bone, 2), fr)); // texel k = row k
+    mat4 m = transpose(mat4(rows[0], rows[1], rows[2], vec4(0.0, 0.0, 0.0, 1.0)));
 #else
     mat4 m = mat4(mix(cb_texel(row0, bone, 0), cb_texel(row1, bone, 0), fr),
                   mix(cb_texel(row0, bone, 1), cb_texel(row1, bone, 1), fr),
                   mix(cb_texel(row0, bone, 2), cb_texel(row1, bone, 2), fr),
                   mix(cb_texel(row0, bone, 3), cb_texel(row1, bone, 3), fr)); // texel k = column k
+#endif
+#ifdef CB_POSITIONS_RELATIVE
+    // The translation holds the joint's position less the bone's offset: A (v - b) + p.
+    vec3 b = texelFetch(cb_bind_positions, ivec2(bone, 0), 0).xyz;
+    vec3 p = m[3].xyz + texelFetch(cb_bind_positions, ivec2(bone, 1), 0).xyz; // cb:offset-matrix
+    return mat3(m) * (v - w * b) + w * p;
+#else
     return (m * vec4(v, w)).xyz;
+#endif
 #endif
 }
 

@@ -118,7 +118,7 @@ func _check_refusals() -> void:
 	var cases := {
 		"truncated": [good.slice(0, good.size() - 100), "truncated"],
 		"not a palette": [FileAccess.get_file_as_bytes(SHIPPED + "/crowdbake_loader.gd"), "not a crowdbake palette"],
-		"version 3": [_patched_u32(good, 8, 3), "version 3 is not supported"],
+		"version 4": [_patched_u32(good, 8, 4), "version 4 is not supported"],
 		"payload offset past the end": [_patched_u32(good, 152, 0x7fffffff), "do not add up"],
 	}
 	for what in cases:
@@ -158,9 +158,9 @@ func _variant(code: String, layout: int, u16: int) -> String:
 func _check_shader(file: String, layout: int) -> void:
 	var source := FileAccess.get_file_as_string(SHIPPED + "/" + file)
 	var masks := {}
-	# qpos/half is a version 2 palette whose positions are relative to the bind pose: the shader
-	# must add the bind positions back, or the drawing moves.
-	var precisions := ["float", "u16", "half"] if layout == 2 else ["float", "u16"]
+	# Half palettes are version 3, their positions relative to each bone's offset: the shader
+	# must add the offsets back (and skin about the bind positions), or the drawing moves.
+	var precisions := ["float", "u16", "half"]
 	for precision in precisions:
 		var name := "shader %s %s/%s" % [file, LAYOUTS[layout], precision]
 		masks[precision] = await _draw_case(name, _variant(source, layout, 1 if precision == "u16" else 0),

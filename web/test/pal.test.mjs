@@ -96,12 +96,16 @@ for (const layout of LAYOUTS) {
     }
 }
 
-test('Fox (third-party): qpos/half is version 2 with relative positions; mat4/float', () => {
-    for (const [layout, precision, version] of [['qpos', 'half', 2], ['mat4', 'float', 1]]) {
+test('Fox (third-party): qpos/half is version 3 with relative positions and offsets; mat4/float', () => {
+    for (const [layout, precision, version] of [['qpos', 'half', 3], ['mat4', 'float', 1]]) {
         const file = path.join(dir, `fox-${layout}-${precision}.pal`);
         const pal = readPal(bake(FOX, file, ['--layout', layout, '--precision', precision]), { name: file, verifyChecksum: true });
         assert.equal(pal.header.version, version);
-        assert.equal((pal.header.flags & 4) !== 0, version === 2);
+        assert.equal((pal.header.flags & 4) !== 0, version === 3);
+        // Version 3's offsets are each bone's own, not its bind position (which version 2 used).
+        const moved = pal.bones.filter((b) => b.position_offset.some((v, k) => Math.abs(v - b.bind_position[k]) > 1e-3));
+        assert.ok(version === 1 ? pal.bones.every((b) => b.position_offset.every((v) => v === 0))
+            : moved.length > pal.bones.length / 2, `${moved.length} of ${pal.bones.length} offsets differ from the bind`);
         assert.deepEqual(pal.clips.map((c) => c.name), ['Survey', 'Walk', 'Run']);
         checkAgainstC(file, pal);
     }

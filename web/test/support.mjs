@@ -77,13 +77,17 @@ export function jointMatrix(pal, row, bone) {
                 m[c * 4 + k] = h.precision === 2 ? (c < 3 ? snorm(t[c]) * h.linear_range : unorm(t[c], k)) : value(t)[c];
         }
         m[15] = 1;
-    } else { // qpos: v' = p + s * rotate(q, v - b)
+    }
+    if (h.layout !== 2 && h.flags & 4) { // half: the translation holds p - o, the joint's position less the bone's offset
+        const b = pal.bones[bone].bind_position, o = pal.bones[bone].position_offset;
+        for (let r = 0; r < 3; ++r) m[12 + r] += o[r] - (m[r] * b[0] + m[4 + r] * b[1] + m[8 + r] * b[2]);
+    } else if (h.layout === 2) { // qpos: v' = p + s * rotate(q, v - b)
         let q = texel(0), ps = texel(1);
         q = h.precision === 2 ? q.map(snorm) : value(q);
         ps = h.precision === 2 ? [unorm(ps[0], 0), unorm(ps[1], 1), unorm(ps[2], 2), h.linear_range * ps[3] / 65535]
             : value(ps);
-        const b = pal.bones[bone].bind_position;
-        const p = h.flags & 4 ? [ps[0] + b[0], ps[1] + b[1], ps[2] + b[2]] : ps.slice(0, 3);
+        const b = pal.bones[bone].bind_position, o = pal.bones[bone].position_offset; // o: 0 without flag bit 2
+        const p = [ps[0] + o[0], ps[1] + o[1], ps[2] + o[2]];
         const norm = Math.hypot(...q); // stored rounded; a runtime normalizes (as crowdbake inspect does)
         const [qx, qy, qz, qw] = q.map((v) => v / norm), s = ps[3];
         const R = [ // column-major rotation
