@@ -311,10 +311,14 @@ $(BUILD)/bench_core: bench/bench_core.c $(BUILD)/libcrowdbake.a
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 
-bench: all $(BUILD)/bench_core $(NODE_DEPS)
+# The floor: read + RapidJSON parse of the same file, in the same run (bench/bench_floor.cpp).
+$(BUILD)/bench_floor: bench/bench_floor.cpp $(DEPS_STAMP)
+	$(CXX) $(CXXFLAGS) $(PKG_CFLAGS) -o $@ $<
+
+bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(NODE_DEPS)
 	python3 bench/run.py
 
-bench-smoke: all $(BUILD)/bench_core $(NODE_DEPS)
+bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
 
 # The normal and the sanitizer builds and their tests, side by side on every core.

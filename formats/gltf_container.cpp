@@ -14,6 +14,7 @@
 #include <utility>
 #include <fcntl.h>
 #include <strings.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <vector>
@@ -460,6 +461,44 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
 }
 
 // The model file itself is read into huge pages (external buffers into tinygltf's vectors).
+// Model files of 1 MiB and more are mapped read-only with MAP_POPULATE rather than read: their
+// pages come from the page cache as they are, where read() into fresh memory zeroes and copies
+// each one (for a large rig most of the load's time, in the kernel). The mapping is private and
+// made writable once populated, so the loader's in-place writes (rotation keys it normalizes)
+// copy only the pages they touch; populating a writable private mapping would copy every page.
+// The hash runs on tail->thread while tinygltf parses, when no other file joins it. False
+// (nothing done) where mapping does not apply; read_file then reads the file and says why not.
+bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return false;
+    struct stat st;
+    bool fits = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size >= (1 << 20) && (uint64_t)st.st_size <= max_bytes;
+    size_t size = fits ? (size_t)st.st_size : 0;
+    void *p = fits ? mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0) : MAP_FAILED;
+    close(fd);
+    if (p == MAP_FAILED) return false;
+    if (mprotect(p, size, PROT_READ | PROT_WRITE) != 0) {
+        munmap(p, size);
+        return false;
+    }
+    out->adopt_mapping(p, size);
+    const unsigned char *data = out->data();
+    if (split_point(data, size, size)) {
+        try {
+            tail->head = size;
+            tail->thread = std::thread([data, size, tail] {
+                cbpal_xxh64_init(&tail->hash);
+                cbpal_xxh64_update(&tail->hash, data, size);
+                tail->ok = true;
+            });
+        } catch (const std::system_error &) {
+            tail->head = 0; /* no thread: load() hashes it */
+        }
+    }
+    return true;
+}
+
 template bool read_file<file_bytes>(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail, std::string *why);
 
 } // namespace cbgltf

@@ -290,7 +290,7 @@ extern "C" cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_
     TailRead tail; /* after `bytes`, so it is joined before they are freed */
     std::string why;
     try {
-        if (!read_file(path, l.max_file_bytes, &bytes, &tail, &why)) {
+        if (!map_model(path, l.max_file_bytes, &bytes, &tail) && !read_file(path, l.max_file_bytes, &bytes, &tail, &why)) {
             cb_fail(err, CB_ERR_IO, "%s: cannot read: %s", path, why.c_str());
             return nullptr;
         }

@@ -7,10 +7,12 @@
 #include "tinygltf_config.h"
 
 #include <cstdlib>
+#include <new>
 #include <string>
 #include <thread>
 #include <utility>
 #include <vector>
+#include <sys/mman.h>
 
 #include "crowdbake_pal.h"
 #include "crowdbake/gltf.h"
@@ -36,29 +38,52 @@ struct Context {
     const char *name;
 };
 
-// The model file's bytes: resize() leaves them uninitialized (the file is read over them at
-// once, and zeroing tens of megabytes first costs as much as the read), on huge pages where
-// the OS has them (cb_alloc_large).
-template <class T> struct file_allocator {
-    using value_type = T;
-    file_allocator() = default;
-    template <class U> file_allocator(const file_allocator<U> &) {}
-    T *allocate(size_t n)
+// The model file's bytes: read into memory that resize() leaves uninitialized (the file is
+// read over it at once, and zeroing tens of megabytes first costs as much as the read), on huge
+// pages where the OS has them (cb_alloc_large); or a mapping of the file (map_model).
+class file_bytes {
+  public:
+    file_bytes() = default;
+    file_bytes(const file_bytes &) = delete;
+    file_bytes &operator=(const file_bytes &) = delete;
+    file_bytes(file_bytes &&o) noexcept { take(o); }
+    file_bytes &operator=(file_bytes &&o) noexcept
     {
-        void *p = n <= SIZE_MAX / sizeof(T) ? cb_alloc_large(n * sizeof(T)) : nullptr;
-        if (!p) throw std::bad_alloc();
-        return static_cast<T *>(p);
+        if (this != &o) release(), take(o);
+        return *this;
     }
-    void deallocate(T *p, size_t) { std::free(p); }
-    template <class U> void construct(U *p) noexcept { ::new (static_cast<void *>(p)) U; }
-    template <class U, class... Args> void construct(U *p, Args &&...args)
+    ~file_bytes() { release(); }
+    void resize(size_t n)
     {
-        ::new (static_cast<void *>(p)) U(std::forward<Args>(args)...);
+        release();
+        if (n && !(bytes_ = static_cast<unsigned char *>(cb_alloc_large(n)))) throw std::bad_alloc();
+        size_ = n;
     }
-    template <class U> bool operator==(const file_allocator<U> &) const { return true; }
-    template <class U> bool operator!=(const file_allocator<U> &) const { return false; }
+    void adopt_mapping(void *p, size_t n)
+    {
+        release();
+        bytes_ = static_cast<unsigned char *>(p), size_ = n, mapped_ = true;
+    }
+    unsigned char *data() { return bytes_; }
+    size_t size() const { return size_; }
+    bool empty() const { return size_ == 0; }
+
+  private:
+    void release()
+    {
+        if (mapped_) munmap(bytes_, size_);
+        else std::free(bytes_);
+        bytes_ = nullptr, size_ = 0, mapped_ = false;
+    }
+    void take(file_bytes &o)
+    {
+        bytes_ = o.bytes_, size_ = o.size_, mapped_ = o.mapped_;
+        o.bytes_ = nullptr, o.size_ = 0, o.mapped_ = false;
+    }
+    unsigned char *bytes_ = nullptr;
+    size_t size_ = 0;
+    bool mapped_ = false;
 };
-using file_bytes = std::vector<unsigned char, file_allocator<unsigned char>>;
 
 // ---- a big GLB read on two threads ----
 //
@@ -92,6 +117,9 @@ struct BinInPlace {
 // Reads `path` into *out, bounded by max_bytes. With `tail`, a big GLB's BIN chunk is read on
 // tail->thread (see TailRead).
 template <class Buffer> bool read_file(const char *path, uint64_t max_bytes, Buffer *out, TailRead *tail, std::string *why);
+// Maps a model file of 1 MiB and more (see map_model in gltf_container.cpp); false (nothing
+// done) where mapping does not apply, and read_file then reads it.
+bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail);
 // Parses the file with tinygltf (the GLB's BIN chunk left where it lies when `in_place`).
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
                          FsState *fs_state, tinygltf::Model *gltf, BinInPlace *in_place, TailRead *tail, cb_error *err);

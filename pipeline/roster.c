@@ -3,6 +3,7 @@
  * share one palette; bake the owners that are out of date in parallel. Then the manifest and
  * the depfile. Nothing that is written depends on the thread count or on timing. */
 #define _GNU_SOURCE /* open_memstream, strcasecmp */
+#include "roster_cache.h"
 #include "roster_files.h"
 
 #include <stdatomic.h>
@@ -28,6 +29,8 @@ typedef struct type_work {
     cb_model **lod_models;
     cb_bake_job job;          /* job.plan: the clips with their rates */
     cb_bake_origin origin;
+    unsigned char *record;    /* what preparing found, for the type's record (roster_cache.h) */
+    size_t record_size;
 } type_work;
 
 typedef struct roster_run {
@@ -268,20 +271,19 @@ static cb_status plan_job(const roster_run *run, const cb_catalog_animal *an, ty
     job->settings = an->bake;
     job->limits = run->opt->limits ? *run->opt->limits : cb_default_limits();
     job->pal_path = t->pal_path, job->exr_path = t->exr_path;
+    job->threads = run->threads_per_bake; /* clips whose rates are searched at once */
     return cb_bake_job_plan(job, err);
 }
 
-static void prepare_type(roster_run *run, uint32_t i)
+/* Preparing from the model: load, plan, sample what the manifest states, hash. */
+static void prepare_from_model(roster_run *run, uint32_t i)
 {
     const cb_catalog_animal *an = &run->cat->animals[i];
     cb_roster_type *t = &run->r->types[i];
     type_work *w = &run->work[i];
     cb_error *err = &t->error;
-    t->animal = an;
-    t->owner = i;
     char where[1100];
     cb_error inner = {0};
-    output_paths(an, t);
     w->model = cb_gltf_load(an->model, run->opt->limits, &inner);
     if (add_inputs(t, an->model, w->model, err)) return;
     if (!w->model) {
@@ -315,6 +317,26 @@ static void prepare_type(roster_run *run, uint32_t i)
     w->job.origin = &w->origin;
     t->input_hash = cb_bake_input_hash(&w->job, NULL);
     if (run->opt->measure_vat) measure_vat(an, run->opt->limits, w, t);
+    uint64_t key;
+    if (cb_prep_key(an, run->opt->limits, t->inputs, t->input_count, &key))
+        cb_prep_record_encode(t, key, &w->record, &w->record_size);
+}
+
+/* A type's record, when it matches its files, stands in for loading and sampling: an
+ * up-to-date type then costs the hashing of its files and the check of its palette. */
+static void prepare_type(roster_run *run, uint32_t i)
+{
+    const cb_catalog_animal *an = &run->cat->animals[i];
+    cb_roster_type *t = &run->r->types[i];
+    t->animal = an;
+    t->owner = i;
+    output_paths(an, t);
+    char path[4096];
+    if (!run->opt->force && !run->opt->measure_vat && cb_prep_record_path(an, path, sizeof path) &&
+        cb_prep_record_load(path, an, run->opt->limits, t))
+        t->prepared_from_record = true;
+    else
+        prepare_from_model(run, i);
 }
 
 /* ---- pass 3: bake an owner ---- */
@@ -413,6 +435,16 @@ static void log_type(roster_run *run, const cb_roster_type *t)
     mtx_unlock(&run->log_lock);
 }
 
+/* Saves the record of a type prepared from its model (unless the file holds it already); a
+ * record that cannot be written only costs the next run the preparation. */
+static void write_record(roster_run *run, uint32_t i)
+{
+    type_work *w = &run->work[i];
+    char path[4096];
+    if (w->record && cb_prep_record_path(run->r->types[i].animal, path, sizeof path))
+        roster_write_record(path, w->record, w->record_size);
+}
+
 static void bake_type(roster_run *run, uint32_t i)
 {
     cb_roster_type *t = &run->r->types[i];
@@ -423,8 +455,17 @@ static void bake_type(roster_run *run, uint32_t i)
     } else if (t->owner != i) {
         return; /* shared types are settled once their owner is */
     } else {
-        if (!run->opt->force && up_to_date(t, an->bake.formats)) t->outcome = CB_TYPE_UP_TO_DATE;
-        else t->outcome = bake_files(run, an, &run->work[i], t, &t->error) ? CB_TYPE_FAILED : CB_TYPE_BAKED;
+        if (!run->opt->force && up_to_date(t, an->bake.formats)) {
+            t->outcome = CB_TYPE_UP_TO_DATE;
+        } else {
+            if (t->prepared_from_record) { /* the palette is not: bake it from the model */
+                cb_prep_clear(t);
+                t->prepared_from_record = false;
+                prepare_from_model(run, i);
+            }
+            t->outcome = t->error.status || bake_files(run, an, &run->work[i], t, &t->error) ? CB_TYPE_FAILED : CB_TYPE_BAKED;
+        }
+        if (t->outcome != CB_TYPE_FAILED) write_record(run, i);
         t->pal_file_bytes = file_size(t->pal_path);
         t->exr_file_bytes = file_size(t->exr_path);
     }
@@ -510,6 +551,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
             t->layout = o->layout, t->precision = o->precision, t->palette_bytes = o->palette_bytes;
             t->width = o->width, t->height = o->height, t->blocks = o->blocks, t->max_error = o->max_error;
             t->visible_error = o->visible_error;
+            write_record(&run, i);
             r->shared++;
         }
         log_type(&run, t);
@@ -530,6 +572,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
         cb_model_free(run.work[i].model);
         for (uint32_t l = 0; l < cat->animals[i].lod_count && run.work[i].lod_models; ++l) cb_model_free(run.work[i].lod_models[l]);
         free(run.work[i].lod_models);
+        free(run.work[i].record);
     }
     free(run.work);
     mtx_destroy(&run.log_lock);

@@ -167,6 +167,13 @@ static cb_status write_if_changed(const char *path, const char *data, size_t siz
     return CB_OK;
 }
 
+void roster_write_record(const char *path, const unsigned char *data, size_t size)
+{
+    cb_error ignored = {0};
+    bool written;
+    write_if_changed(path, (const char *)data, size, &written, &ignored);
+}
+
 cb_status roster_write_manifest(const cb_catalog *cat, cb_roster *r, const char *path, cb_error *err)
 {
     char *buf = NULL;

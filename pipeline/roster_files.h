@@ -20,6 +20,9 @@ cb_status roster_write_manifest(const cb_catalog *cat, cb_roster *r, const char 
  * as Ninja wants it for a rule with `depfile` but no `deps = gcc` (CMake's DEPFILE). */
 cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, bool manifest_only,
                                cb_error *err);
+/* A type's prep record (roster_cache.h), rewritten only when its bytes change; a failure is
+ * ignored (the next run prepares the type again). */
+void roster_write_record(const char *path, const unsigned char *data, size_t size);
 /* After a failure the manifest and the failed palettes get the epoch (the next build runs
  * again); after a success the manifest is never older than an input. */
 void roster_settle_times(const cb_roster *r);

@@ -3,6 +3,7 @@
 #include "crowdbake/palette.h"
 
 #include "crowdbake/budget.h"
+#include "error_bound.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -27,6 +28,7 @@ cb_bake_options cb_default_bake_options(void)
     o.limits = cb_default_limits();
     o.threads = 1;
     o.affine_fallback = false;
+    o.error_goal = 0;
     o.fit = false;
     return o;
 }
@@ -557,14 +559,16 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     double encoded_while_sampling = 0;
     for (uint32_t c = 0; c < p->clip_count; ++c) encoded_while_sampling += st.encode_seconds[c];
     encoded_while_sampling /= threads_used(&st);
-    p->model_height = cb_skin_rest_bounds(sampler, lo, hi);
+    p->model_height = opt->error_goal > 0 ? 0 : cb_skin_rest_bounds(sampler, lo, hi); /* a search knows it */
     /* Exact skinning of every vertex at every row costs rows x vertices; past ~4M vertex-rows
      * an even subset of rows (always each clip's last) measures the error. */
     uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);
     st.error_stride = work > CB_ERROR_BUDGET ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
     p->error_rows_measured = 0;
+    st.weight_sum = cb_skin_max_weight_sum(m, skin_index);
     if (skinned) {
         for_each_clip(&st, palette_measure_clip, true);
+        if (first_clip_error(&st, err)) goto fail;
         for (uint32_t c = 0; c < p->clip_count; ++c) {
             p->max_error = fmax(p->max_error, st.clip_error[c]);
             p->visible_error = fmax(p->visible_error, fmax(st.clip_error[c], st.clip_blend_error[c]));

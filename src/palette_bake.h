@@ -76,6 +76,7 @@ typedef struct bake_state {
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
     cb_error *errors;      /* clips: the first error of each */
     uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
+    double weight_sum;     /* the largest sum of a vertex's |weights| (error_bound.h) */
     double *clip_error;    /* clips: worst vertex error measured */
     double *clip_blend_error; /* clips: worst vertex error halfway between rows, as the runtime blends them */
     value_range *ranges;   /* clips: the values' ranges */

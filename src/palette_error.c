@@ -2,6 +2,7 @@
  * against the palette as the runtime decodes it, at the baked rows and halfway between them. */
 #include <stdlib.h>
 
+#include "error_bound.h"
 #include "palette_bake.h"
 
 /* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
@@ -10,7 +11,7 @@
  * the work of skinning twice, and no cancellation. Rows baked from similarities are measured
  * against those, sampled together like the bake did. */
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
-                           uint32_t sub, uint32_t parts, double *diff, double *err_pos)
+                           uint32_t sub, uint32_t parts, double *diff, double *err_pos, double *bounds)
 {
     cb_palette *p = st->p;
     const cb_model *m = st->model;
@@ -34,6 +35,10 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
             else cb_palette_decode(p, p->texels, row, j, d);
             for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
         }
+        if (bounds) { /* only the row's upper bound (error_bound.h) */
+            bounds[i] = cb_row_error_bound(diff, p->bone_count, p->bind_positions, st->radius, st->weight_sum);
+            continue;
+        }
         for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
             const cb_primitive *prim = &m->primitives[pi];
             if (prim->skin != st->skin) continue;
@@ -49,19 +54,36 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
 
 /* The worst vertex error of clip c over every error_stride-th row and the last (sub > 0: at
  * fraction sub / parts from each of those rows to the next, as the runtime blends them; a
- * one-shot's last row has no next). */
-static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t sub, uint32_t parts, double *diff,
-                                double *err_pos)
+ * one-shot's last row has no next). Branch and bound: every row's cheap bound first, then exact
+ * skinning in order of bound, largest first, until no row left can exceed the worst found - the
+ * same maximum as skinning every row, for a fraction of the work. Rows that cannot exceed
+ * `floor` are not measured (0 when none may be skipped): the result is exact when above it.
+ * With an error goal, measuring also stops once the worst exceeds it. */
+static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t sub, uint32_t parts, double floor,
+                                double *diff, double *err_pos, cb_bounded_row *rows)
 {
     const cb_palette_clip *clip = &st->p->clips[c];
-    uint32_t frames = sub && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], count = 0;
-    double worst = 0;
-    for (uint32_t f = 0; f < frames; ++f) {
-        if (f % st->error_stride && f + 1 != frames) continue;
-        batch[count++] = f;
-        if (count < CB_SAMPLE_BATCH && f + 1 != frames) continue;
-        worst = fmax(worst, measure_rows(st, w, c, batch, count, sub, parts, diff, err_pos));
-        count = 0;
+    uint32_t frames = sub && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], n = 0;
+    for (uint32_t f = 0; f < frames; ++f)
+        if (f % st->error_stride == 0 || f + 1 == frames) rows[n++].frame = f;
+    double bounds[CB_SAMPLE_BATCH], worst = floor, goal = st->opt->error_goal;
+    for (uint32_t i = 0; i < n; i += CB_SAMPLE_BATCH) {
+        uint32_t count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
+        for (uint32_t k = 0; k < count; ++k) batch[k] = rows[i + k].frame;
+        measure_rows(st, w, c, batch, count, sub, parts, diff, err_pos, bounds);
+        for (uint32_t k = 0; k < count; ++k) rows[i + k].bound = bounds[k];
+    }
+    cb_sort_bounded_rows(rows, n);
+    /* Batches of 1, 2, 4, ... rows: often the first few rows settle it. */
+    for (uint32_t i = 0, size = 1; i < n && rows[i].bound > worst && !(goal > 0 && worst > goal); size *= 2) {
+        uint32_t count = 0;
+        for (; i < n && count < size && count < CB_SAMPLE_BATCH && rows[i].bound > worst; ++i) batch[count++] = rows[i].frame;
+        for (uint32_t x = 1; x < count; ++x) /* increasing frames, as the batched sampler wants them */
+            for (uint32_t y = x; y > 0 && batch[y - 1] > batch[y]; --y) {
+                uint32_t swap = batch[y];
+                batch[y] = batch[y - 1], batch[y - 1] = swap;
+            }
+        worst = fmax(worst, measure_rows(st, w, c, batch, count, sub, parts, diff, err_pos, NULL));
     }
     return worst;
 }
@@ -73,16 +95,28 @@ void palette_measure_clip(bake_state *st, worker *w, uint32_t c)
     double *diff = malloc((size_t)p->bone_count * 16 * sizeof(double));
     double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
     st->clip_error[c] = st->clip_blend_error[c] = 0;
-    if (diff && err_pos && verts) {
-        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, diff, err_pos);
-        /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err
-         * both ways, so their quarter points are measured too. */
-        uint32_t parts = p->fitted ? 4 : 2;
-        for (uint32_t sub = 1; sub < parts; ++sub)
-            st->clip_blend_error[c] = fmax(st->clip_blend_error[c], measure_clip_rows(st, w, c, sub, parts, diff, err_pos));
+    cb_bounded_row *rows = malloc((size_t)p->clips[c].frames * sizeof *rows);
+    /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
+     * ways, so their quarter points are measured too. */
+    uint32_t parts = p->fitted ? 4 : 2;
+    double goal = st->opt->error_goal, blend = 0;
+    if (diff && err_pos && rows && verts) {
+        /* Each fraction's rows only count where they exceed the worst blend so far. */
+        for (uint32_t sub = 1; sub < parts && !(goal > 0 && blend > goal); ++sub)
+            blend = measure_clip_rows(st, w, c, sub, parts, blend, diff, err_pos, rows);
+        st->clip_blend_error[c] = blend;
+        if (goal > 0) { /* only the visible error: the baked rows that could exceed the blend */
+            double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, diff, err_pos, rows);
+            st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
+        } else {
+            st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, diff, err_pos, rows);
+        }
+    } else if (verts) {
+        cb_fail(&st->errors[c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
     }
     free(diff);
     free(err_pos);
+    free(rows);
 }
 
 /* Bind-space distance from each joint's bind position to the farthest vertex it moves;

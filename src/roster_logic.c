@@ -44,36 +44,20 @@ static bool is_leaf(const cb_model *m, const cb_skin *skin, uint32_t j)
 }
 
 /* Mean horizontal speed, relative to the root, of one foot while it is down (in the lowest
- * tenth of its height range): a planted foot slides back at the ground speed. */
-static double stance_speed(cb_sampler *s, const cb_clip_info *clip, uint32_t foot, uint32_t root, uint32_t samples,
-                           double size)
+ * tenth of its height range): a planted foot slides back at the ground speed. h, x, z: the
+ * foot's height and horizontal offset from the root at `samples` times dt apart. */
+static double stance_speed(const double *h, const double *x, const double *z, uint32_t samples, double dt, double size)
 {
-    const cb_model *m = cb_sampler_model(s);
-    const cb_skin *skin = &m->skins[cb_sampler_skin(s)];
-    double *h = malloc(samples * sizeof(double)), *x = malloc(samples * sizeof(double)), *z = malloc(samples * sizeof(double));
-    if (!h || !x || !z) {
-        free(h), free(x), free(z);
-        return 0;
-    }
-    double lo = INFINITY, hi = -INFINITY, dt = clip->duration / samples;
-    for (uint32_t i = 0; i < samples; ++i) {
-        const double *g = cb_sample_globals(s, clip->animation, clip->t0 + i * dt);
-        const double *f = g + (size_t)skin->joints[foot] * 16, *r = g + (size_t)skin->joints[root] * 16;
-        h[i] = f[13], x[i] = f[12] - r[12], z[i] = f[14] - r[14];
-        lo = fmin(lo, h[i]), hi = fmax(hi, h[i]);
-    }
+    double lo = INFINITY, hi = -INFINITY;
+    for (uint32_t i = 0; i < samples; ++i) lo = fmin(lo, h[i]), hi = fmax(hi, h[i]);
     /* A foot that never lifts is not stepping: its sway is not travel. */
-    if (hi - lo < 0.02 * size) {
-        free(h), free(x), free(z);
-        return 0;
-    }
+    if (hi - lo < 0.02 * size) return 0;
     double band = lo + 0.1 * (hi - lo), dist = 0, time = 0;
     for (uint32_t i = 0; i + 1 < samples; ++i)
         if (h[i] <= band && h[i + 1] <= band) {
             dist += hypot(x[i + 1] - x[i], z[i + 1] - z[i]);
             time += dt;
         }
-    free(h), free(x), free(z);
     return time > 0 && hi > lo ? dist / time : 0;
 }
 
@@ -83,23 +67,41 @@ static int compare_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+enum { STANCE_SAMPLES = 240, MAX_FEET = 64 };
+
 /* Mean stance speed of the feet (leaf joints in the lowest 15 % of the rest pose), their
- * median; 0 when no foot steps or they only shuffle on the spot. */
+ * median; 0 when no foot steps or they only shuffle on the spot. Each pose is sampled once
+ * for every foot (a pose per foot and time would repeat the same work for each foot). */
 static double feet_speed(cb_sampler *s, const cb_clip_info *clip, double lo, double size)
 {
     const cb_model *m = cb_sampler_model(s);
     const cb_skin *skin = &m->skins[cb_sampler_skin(s)];
     const double *g = cb_sample_globals(s, -1, 0);
-    uint32_t root = cb_skin_root_joint(m, cb_sampler_skin(s)), feet = 0, candidates[64], n = 0;
-    for (uint32_t j = 0; j < skin->joint_count && n < 64; ++j) {
+    uint32_t root = cb_skin_root_joint(m, cb_sampler_skin(s)), feet = 0, candidates[MAX_FEET], n = 0;
+    for (uint32_t j = 0; j < skin->joint_count && n < MAX_FEET; ++j) {
         double y = g[(size_t)skin->joints[j] * 16 + 13];
         if (y <= lo + 0.15 * size && is_leaf(m, skin, j)) candidates[n++] = j;
     }
-    double speeds[64];
-    for (uint32_t i = 0; i < n; ++i) {
-        double v = stance_speed(s, clip, candidates[i], root, 240, size);
+    if (n == 0) return 0;
+    double *track = malloc((size_t)n * 3 * STANCE_SAMPLES * sizeof(double)); /* per foot: h, x, z */
+    if (!track) return 0;
+    double dt = clip->duration / STANCE_SAMPLES;
+    for (uint32_t i = 0; i < STANCE_SAMPLES; ++i) {
+        g = cb_sample_globals(s, clip->animation, clip->t0 + i * dt);
+        const double *r = g + (size_t)skin->joints[root] * 16;
+        for (uint32_t k = 0; k < n; ++k) {
+            const double *f = g + (size_t)skin->joints[candidates[k]] * 16;
+            double *h = track + (size_t)k * 3 * STANCE_SAMPLES;
+            h[i] = f[13], h[STANCE_SAMPLES + i] = f[12] - r[12], h[2 * STANCE_SAMPLES + i] = f[14] - r[14];
+        }
+    }
+    double speeds[MAX_FEET];
+    for (uint32_t k = 0; k < n; ++k) {
+        const double *h = track + (size_t)k * 3 * STANCE_SAMPLES;
+        double v = stance_speed(h, h + STANCE_SAMPLES, h + 2 * STANCE_SAMPLES, STANCE_SAMPLES, dt, size);
         if (v > 0) speeds[feet++] = v;
     }
+    free(track);
     if (feet == 0) return 0;
     qsort(speeds, feet, sizeof speeds[0], compare_double);
     return speeds[feet / 2] > 0.1 * size ? speeds[feet / 2] : 0; /* shuffling on the spot is not travel */

@@ -2,8 +2,10 @@
 #include "crowdbake/runtime.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <threads.h>
 
 #include "cb_math.h"
 
@@ -37,12 +39,15 @@ void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_insta
 /* ---- error-driven frame rate ---- */
 
 /* The visible error of one clip baked alone at `fps`: the bake measures it (the encoding, and
- * the blend halfway between every two rows). */
-static double clip_error_at(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double fps, cb_error *err)
+ * the blend halfway between every two rows). goal > 0: exact when within it; above it, the
+ * measurement may stop early (any value above the goal decides the search alike). */
+static double clip_error_at(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double fps, double goal,
+                            cb_error *err)
 {
     cb_bake_options one = *o;
     one.fps = fps;
     one.threads = 1;
+    one.error_goal = goal;
     cb_clip_plan plan = *clip;
     plan.fps = fps;
     cb_palette p;
@@ -62,7 +67,7 @@ static double lowest_rate(cb_sampler *s, const cb_bake_options *o, const cb_clip
     size_t lo = 0, hi = n; /* the answer lies in [lo, hi]; hi = n: none */
     while (lo < hi && !err->status) {
         size_t mid = lo + (hi - lo) / 2;
-        double e = clip_error_at(s, o, clip, rates[mid], err);
+        double e = clip_error_at(s, o, clip, rates[mid], max_error, err);
         if (e <= max_error) hi = mid, *error = e;
         else lo = mid + 1;
     }
@@ -90,9 +95,48 @@ double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip
         *error = take_b ? e_aligned : e_common;
         return take_b ? b : a;
     }
-    *error = err->status ? INFINITY : clip_error_at(s, o, clip, max_fps, err);
+    *error = err->status ? INFINITY : clip_error_at(s, o, clip, max_fps, 0, err);
     *met = *error <= max_error;
     return max_fps;
+}
+
+/* Clips are searched independently: options->threads at a time, each thread with its own
+ * sampler (a sampler's scratch is not shared), each clip's answer in its own slot, so the
+ * choices do not depend on the thread count. */
+typedef struct rate_search {
+    const cb_model *model;
+    int32_t skin;
+    const cb_bake_options *o;
+    cb_clip_plan *plan;
+    uint32_t count;
+    const cb_rate_goal *goals;
+    cb_rate_choice *choices;
+    cb_error *errors; /* per clip */
+    double height;
+    atomic_uint next;
+} rate_search;
+
+static int rate_worker(void *arg)
+{
+    rate_search *rs = arg;
+    cb_error fail = {0};
+    cb_sampler *s = cb_sampler_create(rs->model, rs->skin, &fail);
+    for (;;) {
+        uint32_t i = atomic_fetch_add(&rs->next, 1);
+        if (i >= rs->count) break;
+        if (!(rs->goals[i].max_error_mm > 0)) continue;
+        if (!s) {
+            rs->errors[i] = fail;
+            continue;
+        }
+        cb_rate_choice *c = &rs->choices[i];
+        rs->plan[i].fps = cb_choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
+                                             rs->goals[i].max_fps > 0 ? rs->goals[i].max_fps : 60, &c->met, &c->error,
+                                             &rs->errors[i]);
+        c->error_mm = cb_mm_per_m(c->error, rs->height);
+    }
+    cb_sampler_free(s);
+    return 0;
 }
 
 cb_status cb_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
@@ -100,19 +144,31 @@ cb_status cb_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan 
 {
     double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
     const cb_model *m = cb_sampler_model(s);
-    for (uint32_t i = 0; i < count; ++i) {
-        if (!(goals[i].max_error_mm > 0)) continue;
-        if (!(height > 0))
-            return cb_fail(err, CB_ERR_INPUT, "%s: has no skinned mesh to measure errors on; give the clips a fixed fps",
-                           m->source);
-        cb_rate_choice c = {0};
-        plan[i].fps = cb_choose_clip_fps(s, o, &plan[i], goals[i].max_error_mm / 1000 * height,
-                                         goals[i].max_fps > 0 ? goals[i].max_fps : 60, &c.met, &c.error, err);
-        if (err->status) return err->status;
-        c.error_mm = cb_mm_per_m(c.error, height);
-        if (out) out[i] = c;
+    bool any = false;
+    for (uint32_t i = 0; i < count; ++i) any = any || goals[i].max_error_mm > 0;
+    if (!any) return CB_OK;
+    if (!(height > 0))
+        return cb_fail(err, CB_ERR_INPUT, "%s: has no skinned mesh to measure errors on; give the clips a fixed fps",
+                       m->source);
+    rate_search rs = {m, cb_sampler_skin(s), o, plan, count, goals, calloc(count, sizeof(cb_rate_choice)),
+                      calloc(count, sizeof(cb_error)), height, 0};
+    if (!rs.choices || !rs.errors) {
+        free(rs.choices), free(rs.errors);
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory choosing frame rates for %s", m->source);
     }
-    return CB_OK;
+    uint32_t threads = o->threads < 1 ? 1 : o->threads > 64 ? 64 : o->threads, started = 0;
+    if (threads > count) threads = count;
+    thrd_t ids[64];
+    for (uint32_t t = 1; t < threads; ++t)
+        if (thrd_create(&ids[started], rate_worker, &rs) == thrd_success) ++started;
+    rate_worker(&rs);
+    for (uint32_t t = 0; t < started; ++t) thrd_join(ids[t], NULL);
+    for (uint32_t i = 0; i < count && !err->status; ++i) /* the first failure in clip order */
+        if (rs.errors[i].status) *err = rs.errors[i];
+    for (uint32_t i = 0; out && i < count; ++i)
+        if (goals[i].max_error_mm > 0) out[i] = rs.choices[i];
+    free(rs.choices), free(rs.errors);
+    return err->status;
 }
 
 /* ---- verification ---- */

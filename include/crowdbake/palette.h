@@ -32,6 +32,9 @@ typedef struct cb_bake_options {
     cb_limits limits;
     uint32_t threads; /* clips sampled in parallel; the output does not depend on it */
     bool affine_fallback; /* qpos was not chosen explicitly: bake affine when qpos cannot hold the rig */
+    double error_goal;    /* > 0: only the visible error is measured, and only as far as the goal needs (model
+                           * units): exact when within it, a lower bound above it; max_error is then a lower
+                           * bound and model_height 0. For searches that ask "within the goal?". 0: all exact. */
     bool fit;             /* rows fitted to the linear blend (src/fit.c), not sampled: half the error between rows */
 } cb_bake_options;
 

@@ -66,6 +66,7 @@ typedef struct cb_roster_type {
     uint32_t input_count;
     char **inputs;            /* every file read for it: model, LODs, their external buffers */
     cb_warnings warnings;     /* clips skipped at load, the layout's fallback, ... */
+    bool prepared_from_record; /* its record (roster_cache.h) matched its files: nothing was loaded or sampled */
 } cb_roster_type;
 
 typedef struct cb_roster {

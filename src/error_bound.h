@@ -1,0 +1,30 @@
+/* error_bound.h - a cheap upper bound on a row's worst vertex error, so measuring can skip the
+ * rows that cannot change the worst (internal to the bake; see palette_error.c's measurement).
+ *
+ * A vertex skinned with joint differences D_j (exact less decoded, 4x4 column-major) moves by
+ * |sum_i w_i D_ji x| <= W max_j (|D_j b_j| + |A_j|_F r_j), where W is the largest sum of a
+ * vertex's |weights|, b_j the joint's bind position, r_j the farthest vertex it moves from b_j
+ * and A_j the 3x3 part of D_j (its Frobenius norm bounds its stretch). O(bones) per row
+ * against O(vertices) for skinning. */
+#ifndef CB_ERROR_BOUND_H
+#define CB_ERROR_BOUND_H
+
+#include "crowdbake/crowdbake.h"
+
+/* The largest sum of |weights| of a vertex of the skin's primitives (0 when none). */
+double cb_skin_max_weight_sum(const cb_model *model, int32_t skin);
+
+/* The bound for one row: diff holds 16 doubles per bone; radius[j] < 0 for joints that move
+ * no vertex. It exceeds what cb_skin_positions computes from diff, rounding included. */
+double cb_row_error_bound(const double *diff, uint32_t bones, const float *bind, const double *radius, double weight_sum);
+
+/* A row to measure and its bound. */
+typedef struct cb_bounded_row {
+    double bound;
+    uint32_t frame;
+} cb_bounded_row;
+
+/* Sorts rows by bound, largest first (ties by frame), so the worst rows are measured first. */
+void cb_sort_bounded_rows(cb_bounded_row *rows, uint32_t count);
+
+#endif

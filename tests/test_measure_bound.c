@@ -1,0 +1,208 @@
+/* test_measure_bound.c - the bake measures its errors by branch and bound (src/error_bound.h):
+ * the cheap per-row bound really bounds what skinning computes, the maxima equal those of
+ * skinning every row (recomputed here row by row, bit for bit), an error goal only shortens
+ * measurements past it, and fps = "auto" chooses the same rates on any thread count. */
+#include "testutil.h"
+
+#include <math.h>
+
+#include "../src/error_bound.h"
+#include "crowdbake/palette.h"
+#include "crowdbake/runtime.h"
+
+/* Bind-space reach of each joint's vertices, computed here (-1: moves none). */
+static void reach(const cb_model *m, int32_t skin, const cb_palette *p, double *radius)
+{
+    for (uint32_t j = 0; j < p->bone_count; ++j) radius[j] = -1;
+    for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
+        const cb_primitive *prim = &m->primitives[pi];
+        if (prim->skin != skin) continue;
+        for (uint32_t v = 0; v < prim->vertex_count; ++v)
+            for (int i = 0; i < 4; ++i) {
+                if (prim->weights[v * 4 + i] == 0) continue;
+                uint32_t j = prim->joints[v * 4 + i];
+                const float *x = prim->positions + (size_t)v * 3, *b = p->bind_positions + (size_t)j * 3;
+                double d = sqrt((double)(x[0] - b[0]) * (x[0] - b[0]) + (double)(x[1] - b[1]) * (x[1] - b[1]) +
+                                (double)(x[2] - b[2]) * (x[2] - b[2]));
+                if (d > radius[j]) radius[j] = d;
+            }
+    }
+}
+
+/* The worst vertex displacement skinning `diff` gives. */
+static double skinned_worst(const cb_model *m, int32_t skin, const double *diff, double *pos)
+{
+    double worst = 0;
+    for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
+        const cb_primitive *prim = &m->primitives[pi];
+        if (prim->skin != skin) continue;
+        cb_skin_positions(prim, diff, pos);
+        for (uint64_t v = 0; v < (uint64_t)prim->vertex_count * 3; v += 3)
+            worst = fmax(worst, pos[v] * pos[v] + pos[v + 1] * pos[v + 1] + pos[v + 2] * pos[v + 2]);
+    }
+    return sqrt(worst);
+}
+
+static uint64_t rng = 0x2545F4914F6CDD1Dull;
+static double uniform(void) /* -1..1 */
+{
+    rng ^= rng << 13, rng ^= rng >> 7, rng ^= rng << 17;
+    return (double)(rng >> 11) / (double)(1ull << 52) - 1;
+}
+
+static void test_bound_holds_and_is_tight_on_fox(void **state)
+{
+    (void)state;
+    cb_model *m = load_shared("assets/fox-bevy/Fox.glb");
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_bake_options o = cb_default_bake_options();
+    cb_palette p;
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &p, &err), CB_OK);
+    uint32_t bones = p.bone_count;
+    double *radius = malloc(bones * sizeof *radius), *diff = calloc((size_t)bones * 16, sizeof *diff);
+    double *pos = malloc((size_t)cb_model_skin_vertex_count(m, 0) * 3 * sizeof *pos);
+    reach(m, 0, &p, radius);
+    double weights = cb_skin_max_weight_sum(m, 0), loosest = 0;
+    assert_true(weights > 0.99 && weights < 1.01); /* glTF weights sum to 1 */
+    for (int trial = 0; trial < 300; ++trial) {
+        /* What an encoding leaves: per joint a small rotation about its bind position (about
+         * p' = R(p - b) + b, so D = (R - I) and t = -(R - I) b) plus a small translation. */
+        for (uint32_t j = 0; j < bones; ++j) {
+            double *D = diff + (size_t)j * 16, w[3] = {uniform(), uniform(), uniform()}, eps = 1e-3 * uniform();
+            const float *b = p.bind_positions + (size_t)j * 3;
+            memset(D, 0, 16 * sizeof *D);
+            D[1] = eps * w[2], D[2] = -eps * w[1], D[4] = -eps * w[2], D[6] = eps * w[0], D[8] = eps * w[1], D[9] = -eps * w[0];
+            for (int r = 0; r < 3; ++r)
+                D[12 + r] = -(D[r] * b[0] + D[4 + r] * b[1] + D[8 + r] * b[2]) + 1e-4 * uniform();
+        }
+        double bound = cb_row_error_bound(diff, bones, p.bind_positions, radius, weights);
+        double exact = skinned_worst(m, 0, diff, pos);
+        if (!(bound >= exact)) fail_msg("trial %d: bound %.9g under the skinned error %.9g", trial, bound, exact);
+        loosest = fmax(loosest, bound / exact);
+    }
+    /* Loose bounds would prune nothing: within 3x of the truth for these differences. */
+    if (loosest > 3) fail_msg("bound up to %.2fx the skinned error", loosest);
+    free(radius), free(diff), free(pos);
+    cb_palette_free(&p);
+    cb_sampler_free(s);
+    cb_model_free(m);
+}
+
+/* Skins every measured row, as the bake did before branch and bound, and compares bit for bit. */
+static void exhaustive(const cb_model *m, const cb_palette *p, const cb_bake_options *o, double *quant, double *blend)
+{
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    uint32_t bones = p->bone_count;
+    double *exact = malloc((size_t)bones * 16 * sizeof *exact), *diff = malloc((size_t)bones * 16 * sizeof *diff);
+    double *pos = malloc((size_t)cb_model_skin_vertex_count(m, 0) * 3 * sizeof *pos);
+    cb_similarity *sims = malloc(bones * sizeof *sims);
+    bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(s);
+    *quant = *blend = 0;
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        const cb_palette_clip *clip = &p->clips[c];
+        cb_clip_info info;
+        assert_int_equal(cb_clip_analyze(s, (int32_t)c, o->fps, -1, &o->limits, &info, &err), CB_OK);
+        assert_int_equal(info.frames, clip->frames);
+        if (info.loops) cb_sampler_set_period(s, info.animation, info.duration);
+        for (int between = 0; between < 2; ++between) {
+            cb_clip_info framing = info;
+            if (between) framing.steps *= 2;
+            uint32_t rows = between && !clip->loops ? clip->frames - 1 : clip->frames;
+            for (uint32_t f = 0; f < rows; ++f) {
+                uint32_t t = between ? 2 * f + 1 : f;
+                if (similar) cb_clip_frame_similarities(s, &framing, &t, 1, o->root_motion, sims);
+                else cb_clip_frame_matrices(s, &framing, t, o->root_motion, exact);
+                for (uint32_t j = 0; j < bones; ++j) {
+                    double *d = diff + (size_t)j * 16, *e = exact + (size_t)j * 16;
+                    if (similar) cb_similarity_matrix(&sims[j], e);
+                    if (between) cb_palette_blend(p, p->texels, clip->first_row + f, clip->first_row + (f + 1) % clip->frames, 0.5, j, d);
+                    else cb_palette_decode(p, p->texels, clip->first_row + f, j, d);
+                    for (int k = 0; k < 16; ++k) d[k] = e[k] - d[k];
+                }
+                double worst = skinned_worst(m, 0, diff, pos);
+                if (between) *blend = fmax(*blend, worst);
+                else *quant = fmax(*quant, worst);
+            }
+        }
+    }
+    free(exact), free(diff), free(pos), free(sims);
+    cb_sampler_free(s);
+}
+
+static void expect_exhaustive_maxima(const char *rel, cb_layout layout, cb_precision precision)
+{
+    cb_model *m = load_shared(rel);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_bake_options o = cb_default_bake_options();
+    o.layout = layout, o.precision = precision, o.threads = 2;
+    cb_palette p;
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &p, &err), CB_OK);
+    assert_int_equal(p.error_rows_measured, p.rows); /* small models: every row (the budget is not reached) */
+    double quant, blend;
+    exhaustive(m, &p, &o, &quant, &blend);
+    if (!(p.max_error == quant && p.visible_error == fmax(quant, blend)))
+        fail_msg("%s %s/%s: measured %.17g / %.17g, every row skinned %.17g / %.17g", rel, cb_layout_name(layout),
+                 cb_precision_name(precision), p.max_error, p.visible_error, quant, fmax(quant, blend));
+    /* A goal above the visible error: the same visible error. Below it: past it, found early. */
+    double visible = p.visible_error;
+    cb_palette_free(&p);
+    o.error_goal = visible * 1.5;
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &p, &err), CB_OK);
+    assert_true(p.visible_error == visible);
+    cb_palette_free(&p);
+    o.error_goal = visible / 4;
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &p, &err), CB_OK);
+    assert_true(p.visible_error > o.error_goal && p.visible_error <= visible);
+    cb_palette_free(&p);
+    cb_sampler_free(s);
+    cb_model_free(m);
+}
+
+static void test_maxima_equal_every_row_skinned(void **state)
+{
+    (void)state;
+    expect_exhaustive_maxima("assets/fox-bevy/Fox.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16);
+    expect_exhaustive_maxima("assets/fox-bevy/Fox.glb", CB_LAYOUT_MAT4, CB_PRECISION_HALF);
+    expect_exhaustive_maxima("assets/quaternius-cow/Cow.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16);
+    expect_exhaustive_maxima("assets/spider-animated-luanti/gltf_spider_animated.gltf", CB_LAYOUT_AFFINE, CB_PRECISION_U16);
+}
+
+static void test_auto_rates_do_not_depend_on_threads(void **state)
+{
+    (void)state;
+    cb_model *m = load_shared("assets/quaternius-cow/Cow.glb");
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    uint32_t n = m->animation_count;
+    cb_clip_plan plan[2][32];
+    cb_rate_goal goals[32];
+    cb_rate_choice out[2][32];
+    assert_true(n <= 32);
+    for (int run = 0; run < 2; ++run) {
+        cb_bake_options o = cb_default_bake_options();
+        o.threads = run ? 3 : 1;
+        for (uint32_t i = 0; i < n; ++i) plan[run][i] = (cb_clip_plan){(int32_t)i, NULL, -1, 0}, goals[i] = (cb_rate_goal){1, 60};
+        assert_int_equal(cb_choose_rates(s, &o, plan[run], n, goals, out[run], &err), CB_OK);
+    }
+    bool varied = false;
+    for (uint32_t i = 0; i < n; ++i) {
+        assert_true(plan[0][i].fps == plan[1][i].fps && out[0][i].error == out[1][i].error);
+        varied = varied || plan[0][i].fps != plan[0][0].fps;
+    }
+    assert_true(varied); /* the clips need different rates: the search decided something */
+    cb_sampler_free(s);
+    cb_model_free(m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_bound_holds_and_is_tight_on_fox),
+        cmocka_unit_test(test_maxima_equal_every_row_skinned),
+        cmocka_unit_test(test_auto_rates_do_not_depend_on_threads),
+    };
+    return cmocka_run_group_tests_name("measure_bound", tests, NULL, NULL);
+}
