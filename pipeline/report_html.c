@@ -15,7 +15,7 @@
  * length by bytes. Plain HTML and CSS, no script: the browser lays out the text, nothing is
  * placed by guesswork. */
 
-static void html_escape(FILE *f, const char *s)
+void report_html_escape(FILE *f, const char *s)
 {
     for (; *s; ++s) {
         if (*s == '<') fputs("&lt;", f);
@@ -81,7 +81,7 @@ static void html_bar(FILE *f, const cb_report *r, const log_axis *a, const char 
     share_text(r, total, label, sizeof label);
     if (note) snprintf(label + strlen(label), sizeof label - strlen(label), " %s", note);
     fprintf(f, "<div class=\"track\"><div class=\"bar\" data-kind=\"%s\" data-type=\"", kind);
-    html_escape(f, type);
+    report_html_escape(f, type);
     fprintf(f, "\" data-bytes=\"%llu\" style=\"width:%.2f%%\">", (unsigned long long)total, end);
     for (int i = 0; i < n; ++i)
         if (bytes[i])
@@ -90,7 +90,7 @@ static void html_bar(FILE *f, const cb_report *r, const log_axis *a, const char 
     /* The label sits after the bar, or inside its end when the bar nearly fills the track. */
     fprintf(f, "</div><span class=\"value%s\" style=\"%s:%.2f%%\">", end > 70 ? " inside" : "", end > 70 ? "right" : "left",
             end > 70 ? 100 - end : end);
-    html_escape(f, label);
+    report_html_escape(f, label);
     fputs("</span>", f);
     if (a->shares) fprintf(f, "<span class=\"budget-line\" style=\"left:%.2f%%\"></span>", axis_position(a, (uint64_t)a->reference));
     fputs("</div>", f);
@@ -143,7 +143,7 @@ static void html_fixes(FILE *f, const cb_report *r, const cb_report_type *t)
     char a[32], enc[32] = "";
     if (t->shares) {
         fputs("<li>shares <b>", f);
-        html_escape(f, t->shares);
+        report_html_escape(f, t->shares);
         fputs("</b>'s palette: counted once</li>", f);
         return;
     }
@@ -161,7 +161,7 @@ static void html_fixes(FILE *f, const cb_report *r, const cb_report_type *t)
         const cb_report_type *o = &r->types[i];
         if (o != t && !o->shares && o->bones == t->bones && o->frames == t->frames && strcmp(o->name, t->name) < 0) {
             fputs("<li>as large as <b>", f);
-            html_escape(f, o->name);
+            report_html_escape(f, o->name);
             fputs("</b>: the same rig and clips would share its palette</li>", f);
             break;
         }
@@ -222,7 +222,7 @@ static void html_chart(FILE *f, const cb_report *r)
         uint64_t vat[2] = {roster ? r->vat_total[0] : t->vat_bytes[0], pal[1]};
         for (int k = 0; k < 2; ++k) {
             fprintf(f, "<div class=\"row%s%s\"><span class=\"name\">", roster ? " total" : "", k ? " second" : "");
-            if (!k) html_escape(f, name);
+            if (!k) report_html_escape(f, name);
             fprintf(f, "</span><span class=\"kind\">%s</span>", k ? "as VAT" : "palette");
             char note[160] = "";
             if (!k && !roster && t->shares) snprintf(note, sizeof note, "(mesh only: the palette is %s's)", t->shares);
@@ -247,7 +247,7 @@ typedef struct html_column {
     void (*cell)(FILE *f, const cb_report *r, const cb_report_type *t);
 } html_column;
 
-static void cell_name(FILE *f, const cb_report *r, const cb_report_type *t) { (void)r, html_escape(f, t->name); }
+static void cell_name(FILE *f, const cb_report *r, const cb_report_type *t) { (void)r, report_html_escape(f, t->name); }
 static void cell_bones(FILE *f, const cb_report *r, const cb_report_type *t) { (void)r, fprintf(f, "%u", t->bones); }
 static void cell_frames(FILE *f, const cb_report *r, const cb_report_type *t) { (void)r, fprintf(f, "%u", t->frames); }
 static void cell_vertices(FILE *f, const cb_report *r, const cb_report_type *t)
@@ -331,7 +331,7 @@ static void html_encodings(FILE *f, const cb_report *r)
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_type *t = &r->types[i];
         fputs("<tr><td>", f);
-        html_escape(f, t->name);
+        report_html_escape(f, t->name);
         fputs("</td>", f);
         for (int l = 0; l < 3; ++l)
             for (int p = 0; p < 3; ++p) {

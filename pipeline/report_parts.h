@@ -13,5 +13,7 @@ const char *report_notes(const cb_report_type *t, char *buf, size_t size);
 double report_ratio(uint64_t a, uint64_t b);
 /* The roster's total against its budget, in one sentence; `bold` wraps the verdict. */
 void report_budget_line(FILE *f, const cb_report *r, const char *bold);
+/* Writes s with HTML's special characters escaped (report_html.c, report_runtime.c). */
+void report_html_escape(FILE *f, const char *s);
 
 #endif

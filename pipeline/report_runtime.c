@@ -8,6 +8,7 @@
 #include "crowdbake/mesh.h"
 #include "crowdbake/gltf.h"
 #include "crowdbake/report.h"
+#include "report_parts.h"
 
 static uint32_t pick_skin(const cb_model *m)
 {
@@ -205,17 +206,6 @@ void cb_report_runtime_json(cb_json *j, const cb_report_runtime *rt)
     cb_json_end(j);
 }
 
-static void escape(FILE *f, const char *s)
-{
-    for (; *s; ++s) {
-        if (*s == '<') fputs("&lt;", f);
-        else if (*s == '>') fputs("&gt;", f);
-        else if (*s == '&') fputs("&amp;", f);
-        else if (*s == '"') fputs("&quot;", f);
-        else fputc(*s, f);
-    }
-}
-
 void cb_report_runtime_html(FILE *f, const cb_report *r)
 {
     char a[32], b[32], c[32], label[64];
@@ -231,7 +221,7 @@ void cb_report_runtime_html(FILE *f, const cb_report *r)
             cb_human_bytes(m->vertex_bytes + m->index_bytes, a, sizeof a);
             cb_human_bytes(m->source_bytes, b, sizeof b);
             fputs("<tr><td>", f);
-            escape(f, r->types[i].name);
+            report_html_escape(f, r->types[i].name);
             fprintf(f, "</td><td>%s</td><td class=\"n\">%llu</td><td class=\"n\">%s</td><td class=\"n\">%s</td><td class=\"n\">"
                        "%.3f</td><td class=\"n\">%u</td></tr>\n", label, (unsigned long long)m->vertices, a, b, mm(m), m->fetches);
         }
@@ -244,7 +234,7 @@ void cb_report_runtime_html(FILE *f, const cb_report *r)
         cb_human_bytes(rt->instanced_bytes, b, sizeof b);
         cb_human_bytes(rt->transition_bytes, c, sizeof c);
         fputs("<tr><td>", f);
-        escape(f, r->types[i].name);
+        report_html_escape(f, r->types[i].name);
         fprintf(f, "</td><td class=\"n\">%s</td><td class=\"n\">%s</td><td class=\"n\">%s</td><td class=\"n\">%u</td></tr>\n", a,
                 b, c, rt->loops);
     }
