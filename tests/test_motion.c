@@ -612,7 +612,7 @@ static void test_fitted_rows_meet_the_goal(void **state)
     cb_model_free(m);
 
     /* In a catalog: fit_rows = true, flagged in the .pal header; a wrong value names its line. */
-    char cow[1024], cow_abs[PATH_MAX], text[4096], cmd[4096];
+    char cow[1024], cow_abs[PATH_MAX], text[PATH_MAX + 256], cmd[4096];
     static char out[65536];
     shared_path(cow, sizeof cow, COW);
     assert_non_null(realpath(cow, cow_abs));
