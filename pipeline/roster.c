@@ -522,8 +522,8 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
         free(run.work), free(order);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
-    /* Types are the unit of parallel work; a lone type spreads its clips instead. */
-    run.threads_per_bake = cat->animal_count == 1 && opt->jobs ? opt->jobs : 1;
+    /* Types are the unit of parallel work; fewer types than threads spread their clips too. */
+    run.threads_per_bake = cat->animal_count && opt->jobs > cat->animal_count ? opt->jobs / cat->animal_count : 1;
     run_pass(&run, prepare_type, order);
     /* Equal keys share: the first type (by name) owns the palette. */
     for (uint32_t i = 0; i < r->type_count; ++i) {
