@@ -43,7 +43,7 @@ def run(cmd, **kw):
     return wall, out.decode()
 
 
-def run_rss(cmd, faults=None):
+def run_rss(cmd, faults=None, cpu=None):
     start = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
     out = proc.stdout.read()
@@ -53,6 +53,8 @@ def run_rss(cmd, faults=None):
         sys.exit('bench: %s failed' % ' '.join(cmd))
     if faults is not None:
         faults.append(usage.ru_minflt + usage.ru_majflt)
+    if cpu is not None:
+        cpu.append(usage.ru_utime + usage.ru_stime)
     return wall, usage.ru_maxrss * 1024, out.decode()
 
 
@@ -186,9 +188,11 @@ def bench_catalog(repeat, path, types):
     noop = [timed([EXE, 'bake', path, '-q']) for _ in range(repeat)]
     jobs = {}
     for n in sorted({2, os.cpu_count() or 2}):
-        t1, tn = paired([EXE, 'bake', path, '-q', '--force', '-j', '1'], [EXE, 'bake', path, '-q', '--force', '-j', str(n)],
-                        repeat)
-        jobs[n] = {'t1': t1, 'tn': tn, 'efficiency': t1 / (n * tn)}
+        c1, cn = [], []  # CPU seconds (user + sys): threads that add work show here, whatever the load
+        t1, tn = paired(lambda: run_rss([EXE, 'bake', path, '-q', '--force', '-j', '1'], cpu=c1)[0],
+                        lambda: run_rss([EXE, 'bake', path, '-q', '--force', '-j', str(n)], cpu=cn)[0], repeat)
+        jobs[n] = {'t1': t1, 'tn': tn, 'efficiency': t1 / (n * tn),
+                   'cpu_1': statistics.median(c1), 'cpu_n': statistics.median(cn)}
     return {'types': types, 'cold': statistics.median(cold), 'noop': statistics.median(noop), 'jobs': jobs}
 
 
@@ -301,8 +305,9 @@ def print_table(report):
         print('catalog of %d types: cold bake %s ms, no-op rebuild %s ms (%.1f%% of cold)' % (
             c['types'], ms(c['cold']), ms(c['noop']), 100 * c['noop'] / c['cold']))
         for n, e in sorted(c['jobs'].items()):
-            print('catalog cold bake -j 1 %s ms, -j %d %s ms (in turns): speed-up %.2fx, efficiency T1 / (%d x T%d) = %.2f' % (
-                ms(e['t1']), n, ms(e['tn']), e['t1'] / e['tn'], n, n, e['efficiency']))
+            print('catalog cold bake -j 1 %s ms, -j %d %s ms (in turns): speed-up %.2fx, efficiency T1 / (%d x T%d) = %.2f; '
+                  'CPU time -j %d / -j 1 = %.2f' % (ms(e['t1']), n, ms(e['tn']), e['t1'] / e['tn'], n, n, e['efficiency'], n,
+                                                  e['cpu_n'] / e['cpu_1']))
         a = x['auto']
         print('--fps auto on %s: %s ms, fixed 30 fps %s ms: %.2fx' % (a['model'], ms(a['auto']), ms(a['fixed']), a['auto'] / a['fixed']))
         j = x['joints']
