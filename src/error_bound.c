@@ -65,3 +65,36 @@ static int by_bound(const void *pa, const void *pb)
 }
 
 void cb_sort_bounded_rows(cb_bounded_row *rows, uint32_t count) { qsort(rows, count, sizeof *rows, by_bound); }
+
+bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_joint_error *out)
+{
+    for (uint32_t j = 0; j < bones; ++j) {
+        const double *D = diff + (size_t)j * 16;
+        double bx = bind[j * 3], by = bind[j * 3 + 1], bz = bind[j * 3 + 2];
+        double ex = D[0] * bx + D[4] * by + D[8] * bz + D[12];
+        double ey = D[1] * bx + D[5] * by + D[9] * bz + D[13];
+        double ez = D[2] * bx + D[6] * by + D[10] * bz + D[14];
+        double a = stretch(D), t = sqrt(D[12] * D[12] + D[13] * D[13] + D[14] * D[14]);
+        out[j].at_bind = sqrt(ex * ex + ey * ey + ez * ez);
+        out[j].stretch = a;
+        /* As in cb_row_error_bound: 1e-9 of the terms' sizes covers the rounding. */
+        out[j].slack_fixed = 1e-9 * (a * sqrt(bx * bx + by * by + bz * bz) + t);
+        if (!isfinite(out[j].at_bind + out[j].slack_fixed)) return false;
+    }
+    return true;
+}
+
+double cb_group_error_bound(const cb_vertex_groups *g, uint32_t group, const cb_joint_error *joints)
+{
+    const cb_vertex_group *grp = &g->groups[group];
+    double most = 0, sum = 0;
+    for (uint32_t k = 0; k < grp->joint_count; ++k) {
+        const cb_group_joint *gj = &g->joints[grp->joint_first + k];
+        const cb_joint_error *je = &joints[gj->joint];
+        double e = je->at_bind + je->stretch * gj->reach * (1 + 2e-9) + je->slack_fixed;
+        most = e > most ? e : most;
+        sum += gj->weight * e;
+    }
+    double bound = grp->weight_sum * most;
+    return (sum < bound ? sum : bound) * (1 + 1e-9);
+}

@@ -445,7 +445,7 @@ static void bind_positions(cb_palette *p, const cb_skin *skin)
 static void free_bake_state(bake_state *st)
 {
     free(st->kept), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
-    free(st->encode_seconds);
+    free(st->encode_seconds), cb_vertex_groups_free(&st->groups);
 }
 
 /* The texels no row covers, which stay zero: in the last block the rows past the last baked
@@ -565,7 +565,10 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);
     st.error_stride = work > CB_ERROR_BUDGET ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
     p->error_rows_measured = 0;
-    st.weight_sum = cb_skin_max_weight_sum(m, skin_index);
+    if (skinned && !cb_vertex_groups_build(m, skin_index, p->bind_positions, &st.groups)) {
+        cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring the palette's error", m->source);
+        goto fail;
+    }
     if (skinned) {
         for_each_clip(&st, palette_measure_clip, true);
         if (first_clip_error(&st, err)) goto fail;

@@ -8,6 +8,7 @@
 
 #include "crowdbake/palette.h"
 #include "cb_math.h"
+#include "vertex_groups.h"
 
 /* Canonical floats per bone and row before the final encoding: the upper 3x4 of the matrix
  * by rows (mat4, affine), or quaternion, position and scale (qpos). */
@@ -76,7 +77,7 @@ typedef struct bake_state {
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
     cb_error *errors;      /* clips: the first error of each */
     uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
-    double weight_sum;     /* the largest sum of a vertex's |weights| (error_bound.h) */
+    cb_vertex_groups groups; /* the skinned vertices as measuring bounds and skins them */
     double *clip_error;    /* clips: worst vertex error measured */
     double *clip_blend_error; /* clips: worst vertex error halfway between rows, as the runtime blends them */
     value_range *ranges;   /* clips: the values' ranges */

@@ -1,0 +1,153 @@
+/* vertex_groups.c - see vertex_groups.h. */
+#include "vertex_groups.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cb_math.h"
+
+/* A vertex as grouping sorts it: by main joint, then by distance from that joint. */
+typedef struct keyed_vertex {
+    uint32_t joint, vertex;
+    double distance;
+} keyed_vertex;
+
+static int by_joint_then_distance(const void *pa, const void *pb)
+{
+    const keyed_vertex *a = pa, *b = pb;
+    if (a->joint != b->joint) return a->joint < b->joint ? -1 : 1;
+    if (a->distance != b->distance) return a->distance < b->distance ? -1 : 1;
+    return (a->vertex > b->vertex) - (a->vertex < b->vertex);
+}
+
+/* Bind-space distance from joint j's bind position, in double (no float rounding to cover). */
+static double distance_from(const float *x, const float *bind, uint32_t j)
+{
+    const float *b = bind + (size_t)j * 3;
+    double dx = (double)x[0] - b[0], dy = (double)x[1] - b[1], dz = (double)x[2] - b[2];
+    return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/* Adds vertex v's joints to the group's list (joints[first .. *count)). A joint named twice by
+ * one vertex counts with the sum of its |weights|, as skinning applies both. */
+static void add_vertex_joints(const cb_primitive *prim, uint32_t v, const float *bind, cb_group_joint *joints,
+                              uint32_t *count)
+{
+    const uint16_t *jv = prim->joints + (size_t)v * 4;
+    const float *wv = prim->weights + (size_t)v * 4, *x = prim->positions + (size_t)v * 3;
+    for (int i = 0; i < 4; ++i) {
+        if (wv[i] == 0) continue;
+        bool seen = false;
+        for (int e = 0; e < i; ++e) seen |= wv[e] != 0 && jv[e] == jv[i];
+        if (seen) continue;
+        double weight = 0;
+        for (int e = i; e < 4; ++e)
+            if (wv[e] != 0 && jv[e] == jv[i]) weight += fabs((double)wv[e]);
+        uint32_t k = 0;
+        while (k < *count && joints[k].joint != jv[i]) ++k;
+        if (k == *count) joints[(*count)++] = (cb_group_joint){jv[i], 0, 0};
+        joints[k].reach = fmax(joints[k].reach, distance_from(x, bind, jv[i]));
+        joints[k].weight = fmax(joints[k].weight, weight);
+    }
+}
+
+/* The joint with the largest |weight| (the first of equals); false when none is non-zero. */
+static bool main_joint(const cb_primitive *prim, uint32_t v, uint32_t *joint)
+{
+    const float *wv = prim->weights + (size_t)v * 4;
+    int best = -1;
+    for (int i = 0; i < 4; ++i)
+        if (wv[i] != 0 && (best < 0 || fabsf(wv[i]) > fabsf(wv[best]))) best = i;
+    if (best >= 0) *joint = prim->joints[(size_t)v * 4 + best];
+    return best >= 0;
+}
+
+/* Groups one primitive's moved vertices; the arrays have room for all of them. */
+static void group_primitive(const cb_primitive *prim, uint32_t pi, const float *bind, keyed_vertex *keys,
+                            cb_vertex_groups *g, uint32_t *vertex_count, uint32_t *joint_count)
+{
+    uint32_t n = 0;
+    for (uint32_t v = 0; v < prim->vertex_count; ++v) {
+        uint32_t j;
+        if (main_joint(prim, v, &j))
+            keys[n++] = (keyed_vertex){j, v, distance_from(prim->positions + (size_t)v * 3, bind, j)};
+    }
+    qsort(keys, n, sizeof *keys, by_joint_then_distance);
+    for (uint32_t i = 0; i < n;) {
+        cb_vertex_group *grp = &g->groups[g->group_count++];
+        *grp = (cb_vertex_group){pi, *vertex_count, 0, *joint_count, 0, 0};
+        uint32_t joint = keys[i].joint;
+        while (i < n && grp->count < CB_VERTEX_GROUP_SIZE && keys[i].joint == joint) {
+            uint32_t v = keys[i++].vertex;
+            const float *wv = prim->weights + (size_t)v * 4;
+            double sum = fabs((double)wv[0]) + fabs((double)wv[1]) + fabs((double)wv[2]) + fabs((double)wv[3]);
+            grp->weight_sum = fmax(grp->weight_sum, sum);
+            g->vertices[grp->first + grp->count++] = v;
+            add_vertex_joints(prim, v, bind, g->joints + grp->joint_first, &grp->joint_count);
+        }
+        *vertex_count += grp->count;
+        *joint_count += grp->joint_count;
+    }
+}
+
+bool cb_vertex_groups_build(const cb_model *m, int32_t skin, const float *bind, cb_vertex_groups *out)
+{
+    memset(out, 0, sizeof *out);
+    size_t total = 0, largest = 0;
+    for (uint32_t pi = 0; pi < m->primitive_count; ++pi)
+        if (m->primitives[pi].skin == skin) {
+            total += m->primitives[pi].vertex_count;
+            if (m->primitives[pi].vertex_count > largest) largest = m->primitives[pi].vertex_count;
+        }
+    /* At most a group and 4 joints per vertex; trimmed after. */
+    out->groups = malloc((total ? total : 1) * sizeof *out->groups);
+    out->vertices = malloc((total ? total : 1) * sizeof *out->vertices);
+    out->joints = malloc((total ? total : 1) * 4 * sizeof *out->joints);
+    keyed_vertex *keys = malloc((largest ? largest : 1) * sizeof *keys);
+    if (!out->groups || !out->vertices || !out->joints || !keys) {
+        free(keys);
+        cb_vertex_groups_free(out);
+        return false;
+    }
+    uint32_t vertex_count = 0, joint_count = 0;
+    for (uint32_t pi = 0; pi < m->primitive_count; ++pi)
+        if (m->primitives[pi].skin == skin) group_primitive(&m->primitives[pi], pi, bind, keys, out, &vertex_count, &joint_count);
+    free(keys);
+    cb_group_joint *joints = realloc(out->joints, (joint_count ? joint_count : 1) * sizeof *joints);
+    if (joints) out->joints = joints;
+    cb_vertex_group *groups = realloc(out->groups, (out->group_count ? out->group_count : 1) * sizeof *groups);
+    if (groups) out->groups = groups;
+    return true;
+}
+
+void cb_vertex_groups_free(cb_vertex_groups *g)
+{
+    free(g->groups), free(g->vertices), free(g->joints);
+    memset(g, 0, sizeof *g);
+}
+
+/* cb_skin_positions' arithmetic in its order (skinning.c), for a list of vertices, keeping only
+ * the largest squared length. */
+CB_TARGET_CLONES
+double cb_skin_group_worst(const cb_primitive *prim, const uint32_t *vertices, uint32_t count, const double *mats)
+{
+    double worst = 0;
+    for (uint32_t k = 0; k < count; ++k) {
+        uint32_t v = vertices[k];
+        const float *p = prim->positions + (size_t)v * 3;
+        double x = p[0], y = p[1], z = p[2], r[4] = {0, 0, 0, 0};
+        for (int i = 0; i < 4; ++i) {
+            double w = prim->weights[(size_t)v * 4 + i];
+            if (w == 0) continue;
+            const double *m = mats + (size_t)prim->joints[(size_t)v * 4 + i] * 16;
+            r[0] += w * (m[0] * x + m[4] * y + m[8] * z + m[12]);
+            r[1] += w * (m[1] * x + m[5] * y + m[9] * z + m[13]);
+            r[2] += w * (m[2] * x + m[6] * y + m[10] * z + m[14]);
+            r[3] += w * (m[3] * x + m[7] * y + m[11] * z + m[15]);
+        }
+        double d2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+        worst = d2 > worst ? d2 : worst;
+    }
+    return worst;
+}
