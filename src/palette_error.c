@@ -18,7 +18,7 @@ static double row_bound(const bake_state *st, measure_scratch *s)
 {
     if (!cb_joint_errors(s->diff, st->p->bone_count, st->p->bind_positions, s->joints)) return INFINITY;
     double most = 0;
-    for (uint32_t k = 0; k < st->groups.group_count; ++k) most = fmax(most, cb_group_error_bound(&st->groups, k, s->joints));
+    for (uint32_t k = 0; k < st->groups.group_count; ++k) most = fmax(most, cb_group_error_bound(&st->groups, k, s->joints, most));
     return most;
 }
 
@@ -32,7 +32,7 @@ static double skin_row(const bake_state *st, measure_scratch *s, double worst)
     bool finite = cb_joint_errors(s->diff, st->p->bone_count, st->p->bind_positions, s->joints);
     uint32_t top = 0;
     for (uint32_t k = 0; k < g->group_count; ++k) {
-        s->group_bounds[k] = finite ? cb_group_error_bound(g, k, s->joints) : INFINITY;
+        s->group_bounds[k] = finite ? cb_group_error_bound(g, k, s->joints, worst) : INFINITY;
         if (s->group_bounds[k] > s->group_bounds[top]) top = k;
     }
     for (uint32_t n = 0; n <= g->group_count; ++n) {

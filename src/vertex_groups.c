@@ -7,18 +7,38 @@
 
 #include "cb_math.h"
 
-/* A vertex as grouping sorts it: by main joint, then by distance from that joint. */
+/* A vertex as grouping sorts it: by main joint, then along a Z-order curve through the
+ * primitive's box, so that a group's vertices lie close together. */
 typedef struct keyed_vertex {
-    uint32_t joint, vertex;
-    double distance;
+    uint32_t joint, vertex, place;
 } keyed_vertex;
 
-static int by_joint_then_distance(const void *pa, const void *pb)
+static int by_joint_then_place(const void *pa, const void *pb)
 {
     const keyed_vertex *a = pa, *b = pb;
     if (a->joint != b->joint) return a->joint < b->joint ? -1 : 1;
-    if (a->distance != b->distance) return a->distance < b->distance ? -1 : 1;
+    if (a->place != b->place) return a->place < b->place ? -1 : 1;
     return (a->vertex > b->vertex) - (a->vertex < b->vertex);
+}
+
+/* 10 bits, spread to every third bit. */
+static uint32_t spread_bits(uint32_t v)
+{
+    v = (v | v << 16) & 0x030000FFu;
+    v = (v | v << 8) & 0x0300F00Fu;
+    v = (v | v << 4) & 0x030C30C3u;
+    return (v | v << 2) & 0x09249249u;
+}
+
+/* The Z-order index of x in the box lo..hi (1024 steps an axis). */
+static uint32_t z_order(const float *x, const float *lo, const float *hi)
+{
+    uint32_t code = 0;
+    for (int k = 0; k < 3; ++k) {
+        double t = hi[k] > lo[k] ? ((double)x[k] - lo[k]) / ((double)hi[k] - lo[k]) : 0;
+        code |= spread_bits((uint32_t)(fmin(fmax(t, 0), 1) * 1023)) << k;
+    }
+    return code;
 }
 
 /* Bind-space distance from joint j's bind position, in double (no float rounding to cover). */
@@ -29,10 +49,19 @@ static double distance_from(const float *x, const float *bind, uint32_t j)
     return sqrt(dx * dx + dy * dy + dz * dz);
 }
 
-/* Adds vertex v's joints to the group's list (joints[first .. *count)). A joint named twice by
- * one vertex counts with the sum of its |weights|, as skinning applies both. */
+/* The index of joint j in the group's list of `count`, or count. */
+static uint32_t find_joint(const cb_group_joint *joints, uint32_t count, uint32_t j)
+{
+    uint32_t k = 0;
+    while (k < count && joints[k].joint != j) ++k;
+    return k;
+}
+
+/* Adds vertex v's joints to the group's list (joints[0 .. *count)) and grows each one's box of
+ * vertices (box[k]: lo then hi). A joint named twice by one vertex counts with the sum of its
+ * |weights|, as skinning applies both. */
 static void add_vertex_joints(const cb_primitive *prim, uint32_t v, const float *bind, cb_group_joint *joints,
-                              uint32_t *count)
+                              uint32_t *count, double (*box)[6])
 {
     const uint16_t *jv = prim->joints + (size_t)v * 4;
     const float *wv = prim->weights + (size_t)v * 4, *x = prim->positions + (size_t)v * 3;
@@ -44,11 +73,26 @@ static void add_vertex_joints(const cb_primitive *prim, uint32_t v, const float 
         double weight = 0;
         for (int e = i; e < 4; ++e)
             if (wv[e] != 0 && jv[e] == jv[i]) weight += fabs((double)wv[e]);
-        uint32_t k = 0;
-        while (k < *count && joints[k].joint != jv[i]) ++k;
-        if (k == *count) joints[(*count)++] = (cb_group_joint){jv[i], 0, 0};
+        uint32_t k = find_joint(joints, *count, jv[i]);
+        if (k == *count) {
+            joints[(*count)++] = (cb_group_joint){jv[i], 0, 0, {0, 0, 0}, 0};
+            for (int a = 0; a < 3; ++a) box[k][a] = INFINITY, box[k][3 + a] = -INFINITY;
+        }
         joints[k].reach = fmax(joints[k].reach, distance_from(x, bind, jv[i]));
         joints[k].weight = fmax(joints[k].weight, weight);
+        for (int a = 0; a < 3; ++a) box[k][a] = fmin(box[k][a], x[a]), box[k][3 + a] = fmax(box[k][3 + a], x[a]);
+    }
+}
+
+/* Grows the spread of vertex v's joints: its distance from their centres. */
+static void spread_vertex_joints(const cb_primitive *prim, uint32_t v, cb_group_joint *joints, uint32_t count)
+{
+    const float *x = prim->positions + (size_t)v * 3;
+    for (int i = 0; i < 4; ++i) {
+        if (prim->weights[(size_t)v * 4 + i] == 0) continue;
+        cb_group_joint *gj = &joints[find_joint(joints, count, prim->joints[(size_t)v * 4 + i])];
+        double dx = (double)x[0] - gj->centre[0], dy = (double)x[1] - gj->centre[1], dz = (double)x[2] - gj->centre[2];
+        gj->spread = fmax(gj->spread, sqrt(dx * dx + dy * dy + dz * dz));
     }
 }
 
@@ -68,12 +112,16 @@ static void group_primitive(const cb_primitive *prim, uint32_t pi, const float *
                             cb_vertex_groups *g, uint32_t *vertex_count, uint32_t *joint_count)
 {
     uint32_t n = 0;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t v = 0; v < prim->vertex_count; ++v)
+        for (int a = 0; a < 3; ++a)
+            lo[a] = fminf(lo[a], prim->positions[(size_t)v * 3 + a]), hi[a] = fmaxf(hi[a], prim->positions[(size_t)v * 3 + a]);
     for (uint32_t v = 0; v < prim->vertex_count; ++v) {
         uint32_t j;
-        if (main_joint(prim, v, &j))
-            keys[n++] = (keyed_vertex){j, v, distance_from(prim->positions + (size_t)v * 3, bind, j)};
+        if (main_joint(prim, v, &j)) keys[n++] = (keyed_vertex){j, v, z_order(prim->positions + (size_t)v * 3, lo, hi)};
     }
-    qsort(keys, n, sizeof *keys, by_joint_then_distance);
+    qsort(keys, n, sizeof *keys, by_joint_then_place);
+    double box[4 * CB_VERTEX_GROUP_SIZE][6];
     for (uint32_t i = 0; i < n;) {
         cb_vertex_group *grp = &g->groups[g->group_count++];
         *grp = (cb_vertex_group){pi, *vertex_count, 0, *joint_count, 0, 0};
@@ -84,8 +132,12 @@ static void group_primitive(const cb_primitive *prim, uint32_t pi, const float *
             double sum = fabs((double)wv[0]) + fabs((double)wv[1]) + fabs((double)wv[2]) + fabs((double)wv[3]);
             grp->weight_sum = fmax(grp->weight_sum, sum);
             g->vertices[grp->first + grp->count++] = v;
-            add_vertex_joints(prim, v, bind, g->joints + grp->joint_first, &grp->joint_count);
+            add_vertex_joints(prim, v, bind, g->joints + grp->joint_first, &grp->joint_count, box);
         }
+        cb_group_joint *joints = g->joints + grp->joint_first;
+        for (uint32_t k = 0; k < grp->joint_count; ++k)
+            for (int a = 0; a < 3; ++a) joints[k].centre[a] = 0.5 * (box[k][a] + box[k][3 + a]);
+        for (uint32_t n = 0; n < grp->count; ++n) spread_vertex_joints(prim, g->vertices[grp->first + n], joints, grp->joint_count);
         *vertex_count += grp->count;
         *joint_count += grp->joint_count;
     }

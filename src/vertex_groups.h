@@ -23,8 +23,10 @@
 
 typedef struct cb_group_joint {
     uint32_t joint;
-    double reach;  /* farthest of the group's vertices it moves, from its bind position */
-    double weight; /* the largest sum of |weights| a vertex of the group gives it */
+    double reach;     /* farthest of the group's vertices it moves, from its bind position */
+    double weight;    /* the largest sum of |weights| a vertex of the group gives it */
+    double centre[3]; /* the middle of the box of those vertices */
+    double spread;    /* farthest of them from the centre */
 } cb_group_joint;
 
 typedef struct cb_vertex_group {
