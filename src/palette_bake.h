@@ -109,6 +109,13 @@ void palette_position_offsets(cb_palette *p, const float *kept);
 /* Sets p->bounds_min/max and linear_range from every clip's range. */
 void palette_merge_ranges(cb_palette *p, const value_range *clips);
 
+/* Every bone's values of one row of p->texels, 16 doubles apart, as cb_palette_decode_values
+ * gives them. */
+void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values);
+/* cb_palette_blend from two rows' decoded values of a bone. */
+void palette_blend_values(const cb_palette *p, uint32_t bone, const double a[16], const double b[16], double fr,
+                          double out[16]);
+
 /* The worst vertex errors of clip c, at its rows and between them (st->clip_error,
  * st->clip_blend_error). */
 void palette_measure_clip(bake_state *st, worker *w, uint32_t c);

@@ -11,7 +11,21 @@ typedef struct measure_scratch {
     cb_joint_error *joints;   /* bones */
     double *group_bounds;     /* groups */
     cb_bounded_row *rows;     /* the clip's frames */
+    double *values[2];        /* bones * 16: two decoded palette rows */
+    uint32_t value_row[2];    /* which (UINT32_MAX: none) */
 } measure_scratch;
+
+/* Palette row `row` decoded, from whichever slot holds it, else decoded into the slot that does
+ * not hold row `keep`: a blend's second row is the next blend's first. */
+static const double *row_values(const cb_palette *p, measure_scratch *s, uint32_t row, uint32_t keep)
+{
+    for (int k = 0; k < 2; ++k)
+        if (s->value_row[k] == row) return s->values[k];
+    int k = s->value_row[0] == keep ? 1 : 0;
+    palette_decode_row_values(p, row, s->values[k]);
+    s->value_row[k] = row;
+    return s->values[k];
+}
 
 /* A row's bound: its largest group bound (infinite when a difference is not finite). */
 static double row_bound(const bake_state *st, measure_scratch *s)
@@ -67,11 +81,12 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     for (uint32_t i = 0; i < count; ++i) {
         if (!similar) cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
         uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
+        const double *a = row_values(p, s, row, next), *b = sub ? row_values(p, s, next, row) : NULL;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             double *d = s->diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
             if (similar) cb_similarity_matrix(&w->sims[(size_t)i * p->bone_count + j], exact);
-            if (sub) cb_palette_blend(p, p->texels, row, next, (double)sub / parts, j, d);
-            else cb_palette_decode(p, p->texels, row, j, d);
+            if (sub) palette_blend_values(p, j, a + (size_t)j * 16, b + (size_t)j * 16, (double)sub / parts, d);
+            else cb_palette_values_to_matrix(p, j, a + (size_t)j * 16, d);
             for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
         }
         if (bounds) bounds[i] = row_bound(st, s);
@@ -130,14 +145,16 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
 void palette_measure_clip(bake_state *st, worker *w, uint32_t c)
 {
     const cb_palette *p = st->p;
-    measure_scratch s = {malloc((size_t)p->bone_count * 16 * sizeof(double)), malloc(p->bone_count * sizeof *s.joints),
-                         malloc((st->groups.group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows)};
+    size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
+    measure_scratch s = {malloc(matrices), malloc(p->bone_count * sizeof *s.joints),
+                         malloc((st->groups.group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows),
+                         {malloc(matrices), malloc(matrices)}, {UINT32_MAX, UINT32_MAX}};
     st->clip_error[c] = st->clip_blend_error[c] = 0;
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
      * ways, so their quarter points are measured too. */
     uint32_t parts = p->fitted ? 4 : 2;
     double goal = st->opt->error_goal, blend = 0;
-    if (s.diff && s.joints && s.group_bounds && s.rows) {
+    if (s.diff && s.joints && s.group_bounds && s.rows && s.values[0] && s.values[1]) {
         /* Each fraction's rows only count where they exceed the worst blend so far. */
         for (uint32_t sub = 1; sub < parts && !(goal > 0 && blend > goal); ++sub)
             blend = measure_clip_rows(st, w, c, sub, parts, blend, &s);
@@ -151,7 +168,7 @@ void palette_measure_clip(bake_state *st, worker *w, uint32_t c)
     } else {
         cb_fail(&st->errors[c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
     }
-    free(s.diff), free(s.joints), free(s.group_bounds), free(s.rows);
+    free(s.diff), free(s.joints), free(s.group_bounds), free(s.rows), free(s.values[0]), free(s.values[1]);
 }
 
 /* Bind-space distance from each joint's bind position to the farthest vertex it moves;
