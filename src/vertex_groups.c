@@ -10,16 +10,32 @@
 /* A vertex as grouping sorts it: by main joint, then along a Z-order curve through the
  * primitive's box, so that a group's vertices lie close together. */
 typedef struct keyed_vertex {
-    uint32_t joint, vertex, place;
+    uint64_t key; /* main joint, then place */
+    uint32_t vertex;
 } keyed_vertex;
 
-static int by_joint_then_place(const void *pa, const void *pb)
+/* Sorts by key, equal keys in their order (by vertex): a stable radix sort, 11 bits a pass over
+ * the 46 the keys use (16 of joint, 30 of place). Leaves the result in keys. */
+static void sort_keys(keyed_vertex *keys, keyed_vertex *scratch, uint32_t n)
 {
-    const keyed_vertex *a = pa, *b = pb;
-    if (a->joint != b->joint) return a->joint < b->joint ? -1 : 1;
-    if (a->place != b->place) return a->place < b->place ? -1 : 1;
-    return (a->vertex > b->vertex) - (a->vertex < b->vertex);
+    for (int shift = 0; shift < 46; shift += 11) {
+        uint32_t count[2048] = {0};
+        for (uint32_t i = 0; i < n; ++i) count[keys[i].key >> shift & 2047]++;
+        for (uint32_t d = 0, sum = 0; d < 2048; ++d) {
+            uint32_t c = count[d];
+            count[d] = sum, sum += c;
+        }
+        for (uint32_t i = 0; i < n; ++i) scratch[count[keys[i].key >> shift & 2047]++] = keys[i];
+        keyed_vertex *swap = keys;
+        keys = scratch, scratch = swap;
+    }
+    /* Five passes, an odd number: the sorted keys are in the other buffer; copy them back. */
+    memcpy(scratch, keys, n * sizeof *keys);
 }
+
+/* fmin/fmax without the library calls (the values are finite). */
+static inline double lesser(double a, double b) { return b < a ? b : a; }
+static inline double greater(double a, double b) { return b > a ? b : a; }
 
 /* 10 bits, spread to every third bit. */
 static uint32_t spread_bits(uint32_t v)
@@ -78,9 +94,9 @@ static void add_vertex_joints(const cb_primitive *prim, uint32_t v, const float 
             joints[(*count)++] = (cb_group_joint){jv[i], 0, 0, {0, 0, 0}, 0};
             for (int a = 0; a < 3; ++a) box[k][a] = INFINITY, box[k][3 + a] = -INFINITY;
         }
-        joints[k].reach = fmax(joints[k].reach, distance_from(x, bind, jv[i]));
-        joints[k].weight = fmax(joints[k].weight, weight);
-        for (int a = 0; a < 3; ++a) box[k][a] = fmin(box[k][a], x[a]), box[k][3 + a] = fmax(box[k][3 + a], x[a]);
+        joints[k].reach = greater(joints[k].reach, distance_from(x, bind, jv[i]));
+        joints[k].weight = greater(joints[k].weight, weight);
+        for (int a = 0; a < 3; ++a) box[k][a] = lesser(box[k][a], x[a]), box[k][3 + a] = greater(box[k][3 + a], x[a]);
     }
 }
 
@@ -92,7 +108,7 @@ static void spread_vertex_joints(const cb_primitive *prim, uint32_t v, cb_group_
         if (prim->weights[(size_t)v * 4 + i] == 0) continue;
         cb_group_joint *gj = &joints[find_joint(joints, count, prim->joints[(size_t)v * 4 + i])];
         double dx = (double)x[0] - gj->centre[0], dy = (double)x[1] - gj->centre[1], dz = (double)x[2] - gj->centre[2];
-        gj->spread = fmax(gj->spread, sqrt(dx * dx + dy * dy + dz * dz));
+        gj->spread = greater(gj->spread, sqrt(dx * dx + dy * dy + dz * dz));
     }
 }
 
@@ -115,22 +131,22 @@ static void group_primitive(const cb_primitive *prim, uint32_t pi, const float *
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t v = 0; v < prim->vertex_count; ++v)
         for (int a = 0; a < 3; ++a)
-            lo[a] = fminf(lo[a], prim->positions[(size_t)v * 3 + a]), hi[a] = fmaxf(hi[a], prim->positions[(size_t)v * 3 + a]);
+            lo[a] = (float)lesser(lo[a], prim->positions[(size_t)v * 3 + a]), hi[a] = (float)greater(hi[a], prim->positions[(size_t)v * 3 + a]);
     for (uint32_t v = 0; v < prim->vertex_count; ++v) {
         uint32_t j;
-        if (main_joint(prim, v, &j)) keys[n++] = (keyed_vertex){j, v, z_order(prim->positions + (size_t)v * 3, lo, hi)};
+        if (main_joint(prim, v, &j)) keys[n++] = (keyed_vertex){(uint64_t)j << 32 | z_order(prim->positions + (size_t)v * 3, lo, hi), v};
     }
-    qsort(keys, n, sizeof *keys, by_joint_then_place);
+    sort_keys(keys, keys + prim->vertex_count, n);
     double box[4 * CB_VERTEX_GROUP_SIZE][6];
     for (uint32_t i = 0; i < n;) {
         cb_vertex_group *grp = &g->groups[g->group_count++];
         *grp = (cb_vertex_group){pi, *vertex_count, 0, *joint_count, 0, 0};
-        uint32_t joint = keys[i].joint;
-        while (i < n && grp->count < CB_VERTEX_GROUP_SIZE && keys[i].joint == joint) {
+        uint64_t joint = keys[i].key >> 32;
+        while (i < n && grp->count < CB_VERTEX_GROUP_SIZE && keys[i].key >> 32 == joint) {
             uint32_t v = keys[i++].vertex;
             const float *wv = prim->weights + (size_t)v * 4;
             double sum = fabs((double)wv[0]) + fabs((double)wv[1]) + fabs((double)wv[2]) + fabs((double)wv[3]);
-            grp->weight_sum = fmax(grp->weight_sum, sum);
+            grp->weight_sum = greater(grp->weight_sum, sum);
             g->vertices[grp->first + grp->count++] = v;
             add_vertex_joints(prim, v, bind, g->joints + grp->joint_first, &grp->joint_count, box);
         }
@@ -156,7 +172,7 @@ bool cb_vertex_groups_build(const cb_model *m, int32_t skin, const float *bind, 
     out->groups = malloc((total ? total : 1) * sizeof *out->groups);
     out->vertices = malloc((total ? total : 1) * sizeof *out->vertices);
     out->joints = malloc((total ? total : 1) * 4 * sizeof *out->joints);
-    keyed_vertex *keys = malloc((largest ? largest : 1) * sizeof *keys);
+    keyed_vertex *keys = malloc((largest ? largest : 1) * 2 * sizeof *keys); /* and the sort's scratch */
     if (!out->groups || !out->vertices || !out->joints || !keys) {
         free(keys);
         cb_vertex_groups_free(out);
