@@ -220,6 +220,14 @@ void palette_position_offsets(cb_palette *p, const float *kept)
 /* One bone's values from its texels at d; kinds[i] is u16_kind of value i (u16 only). */
 static void decode_bone(const cb_palette *p, const unsigned char *d, const int *kinds, uint32_t bone, double v[16])
 {
+    if (p->precision == CB_PRECISION_U16 && p->layout == CB_LAYOUT_QPOS) {
+        /* The default encoding, written out (decode_u16's arithmetic for kinds 4, 1..3 and 5). */
+        for (int i = 0; i < 4; ++i) v[i] = snorm16_decode(load_le16(d + i * 2));
+        for (int i = 0; i < 3; ++i) v[4 + i] = unorm16_decode(load_le16(d + 8 + i * 2), p->bounds_min[i], p->bounds_max[i]);
+        v[7] = unorm16_decode(load_le16(d + 14), 0, p->linear_range);
+        for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->position_offsets[(size_t)bone * 3 + k];
+        return;
+    }
     for (uint32_t i = 0; i < p->texels_per_bone * 4; ++i) {
         if (p->precision == CB_PRECISION_FLOAT)
             v[i] = load_le32f(d + i * 4);
