@@ -75,7 +75,7 @@ typedef struct bake_state {
     uint32_t max_clip_frames;
     const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 */
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
-    cb_error *errors;      /* clips: the first error of each */
+    cb_error *errors;      /* 2 x clips: the first error of each clip, then of measuring its baked rows */
     uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
     cb_vertex_groups groups; /* the skinned vertices as measuring bounds and skins them */
     double *clip_error;    /* clips: worst vertex error measured */
@@ -116,9 +116,13 @@ void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values
 void palette_blend_values(const cb_palette *p, uint32_t bone, const double a[16], const double b[16], double fr,
                           double out[16]);
 
-/* The worst vertex errors of clip c, at its rows and between them (st->clip_error,
- * st->clip_blend_error). */
-void palette_measure_clip(bake_state *st, worker *w, uint32_t c);
+/* The measurement's jobs: two a clip, its blends and its baked rows, measured apart (st->errors:
+ * the clip's, then the rows' after every clip's); one a clip with an error goal, where the
+ * rows only count above the blends. */
+uint32_t palette_measure_jobs(const bake_state *st);
+/* Measurement job k: the worst vertex errors of its clip at its rows and/or between them
+ * (st->clip_error, st->clip_blend_error). */
+void palette_measure_job(bake_state *st, worker *w, uint32_t k);
 /* Bind-space distance from each joint's bind position to the farthest vertex it moves; -1 for
  * joints that move none. False when no vertex is skinned. */
 bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, double *radius);

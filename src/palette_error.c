@@ -142,31 +142,36 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
     return worst;
 }
 
-void palette_measure_clip(bake_state *st, worker *w, uint32_t c)
+uint32_t palette_measure_jobs(const bake_state *st)
+{
+    return st->opt->error_goal > 0 ? st->p->clip_count : 2 * st->p->clip_count;
+}
+
+void palette_measure_job(bake_state *st, worker *w, uint32_t k)
 {
     const cb_palette *p = st->p;
+    double goal = st->opt->error_goal, blend = 0;
+    uint32_t c = goal > 0 ? k : k / 2;
+    bool blends = goal > 0 || k % 2 == 0; /* else the baked rows */
     size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
     measure_scratch s = {malloc(matrices), malloc(p->bone_count * sizeof *s.joints),
                          malloc((st->groups.group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows),
                          {malloc(matrices), malloc(matrices)}, {UINT32_MAX, UINT32_MAX}};
-    st->clip_error[c] = st->clip_blend_error[c] = 0;
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
      * ways, so their quarter points are measured too. */
     uint32_t parts = p->fitted ? 4 : 2;
-    double goal = st->opt->error_goal, blend = 0;
-    if (s.diff && s.joints && s.group_bounds && s.rows && s.values[0] && s.values[1]) {
-        /* Each fraction's rows only count where they exceed the worst blend so far. */
-        for (uint32_t sub = 1; sub < parts && !(goal > 0 && blend > goal); ++sub)
-            blend = measure_clip_rows(st, w, c, sub, parts, blend, &s);
+    if (!(s.diff && s.joints && s.group_bounds && s.rows && s.values[0] && s.values[1])) {
+        cb_fail(&st->errors[blends ? c : p->clip_count + c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
+    } else if (goal > 0) { /* the blends, then only the baked rows that could exceed them */
+        for (uint32_t sub = 1; sub < parts && !(blend > goal); ++sub) blend = measure_clip_rows(st, w, c, sub, parts, blend, &s);
         st->clip_blend_error[c] = blend;
-        if (goal > 0) { /* only the visible error: the baked rows that could exceed the blend */
-            double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, &s);
-            st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
-        } else {
-            st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, &s);
-        }
+        double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, &s);
+        st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
+    } else if (blends) { /* each fraction's rows only count where they exceed the worst blend so far */
+        for (uint32_t sub = 1; sub < parts; ++sub) blend = measure_clip_rows(st, w, c, sub, parts, blend, &s);
+        st->clip_blend_error[c] = blend;
     } else {
-        cb_fail(&st->errors[c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
+        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, &s);
     }
     free(s.diff), free(s.joints), free(s.group_bounds), free(s.rows), free(s.values[0]), free(s.values[1]);
 }
