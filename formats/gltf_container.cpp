@@ -418,6 +418,7 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
     }
     if (is_glb(data, size)) {
         if (!check_glb(data, size, name, err)) return false;
+        if (parse_fast(data, size, gltf, in_place)) return true; /* a file with Draco is not for it */
         uint32_t json_length = le32(data + 12);
         std::string json((const char *)data + 20, json_length);
         if (!check_draco_references(json, name, err)) return false;

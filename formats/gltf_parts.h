@@ -114,6 +114,7 @@ struct BinInPlace {
 };
 
 // gltf_container.cpp
+uint32_t le32(const unsigned char *p); // a little-endian field of a GLB header or chunk
 // Reads `path` into *out, bounded by max_bytes. With `tail`, a big GLB's BIN chunk is read on
 // tail->thread (see TailRead).
 template <class Buffer> bool read_file(const char *path, uint64_t max_bytes, Buffer *out, TailRead *tail, std::string *why);
@@ -123,6 +124,12 @@ bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *
 // Parses the file with tinygltf (the GLB's BIN chunk left where it lies when `in_place`).
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
                          FsState *fs_state, tinygltf::Model *gltf, BinInPlace *in_place, TailRead *tail, cb_error *err);
+
+// gltf_fast.cpp
+// Parses a GLB that needs nothing but its own BIN chunk into `gltf` (only what the converter
+// reads), the BIN chunk left where it lies when `in_place` (else copied into buffer 0); false,
+// with `gltf` untouched, for any file the tinygltf path must load.
+bool parse_fast(const unsigned char *data, size_t size, tinygltf::Model *gltf, BinInPlace *in_place);
 
 // gltf_convert.cpp
 int component_size(int type);
