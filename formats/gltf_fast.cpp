@@ -441,3 +441,13 @@ bool parse_fast(const unsigned char *data, size_t size, tinygltf::Model *gltf, B
 }
 
 } // namespace cbgltf
+
+extern "C" bool cb_gltf_fast_path_applies(const unsigned char *data, size_t size)
+{
+    tinygltf::Model g;
+    try {
+        return cbgltf::parse_fast(data, size, &g, nullptr);
+    } catch (const std::exception &) {
+        return false;
+    }
+}
