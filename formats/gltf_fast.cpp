@@ -82,7 +82,7 @@ template <size_t N, class F> unsigned members(const Value &o, const char *const 
     for (const auto &m : o.GetObject()) {
         const char *k = m.name.GetString();
         for (size_t i = 0; i < N; ++i)
-            if (std::strcmp(k, keys[i]) == 0) {
+            if (k[0] == keys[i][0] && std::strcmp(k, keys[i]) == 0) {
                 if (seen & (1u << i)) not_fast();
                 seen |= 1u << i;
                 f(i, m.value);
