@@ -9,7 +9,7 @@
 // members are walked once.
 //
 // The path is strict: whatever it does not handle exactly as tinygltf would (Draco, meshopt,
-// buffers or images with a uri, cameras, a member of another type than tinygltf reads, a key
+// buffers or data-URI images, cameras, lights, a member of another type than tinygltf reads, a key
 // given twice, anything tinygltf would refuse) makes it give up, and the tinygltf path loads the
 // file: a bad file gets tinygltf's messages and the converter's, as before.
 #include <cstring>
@@ -351,11 +351,11 @@ void parse_document(const Value &root, tinygltf::Model *g, size_t *byte_length)
 {
     static const char *const keys[] = {"asset", "extensionsUsed", "extensionsRequired", "buffers", "bufferViews",
                                        "accessors", "meshes", "nodes", "scenes", "scene", "animations", "skins",
-                                       "cameras", "images", "materials", "textures", "samplers"};
-    const Value *later[17] = {};
+                                       "cameras", "images", "materials", "textures", "samplers", "extensions"};
+    const Value *later[18] = {};
     unsigned seen = members(root, keys, [&](size_t i, const Value &v) { later[i] = &v; });
     require(seen, 1);
-    if (later[12]) not_fast(); // cameras: tinygltf checks them closely
+    if (later[12] || later[17]) not_fast(); // cameras and KHR_lights_punctual: tinygltf checks them closely
     parse_asset(*later[0]);
     for (int k = 1; k <= 2; ++k)
         if (later[k]) each(*later[k], [&](const Value &e) { (k == 1 ? g->extensionsUsed : g->extensionsRequired).push_back(as_string(e)); });

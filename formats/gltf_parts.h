@@ -1,6 +1,7 @@
 // gltf_parts.h - what the glTF adapter's files share (private to libcrowdbake):
-// gltf_container.cpp reads the file and hands tinygltf its JSON, gltf_convert.cpp reads the
-// accessors into the core's structs, gltf_load.cpp runs the load.
+// gltf_container.cpp reads the file and hands its JSON to gltf_fast.cpp (a plain GLB) or to
+// tinygltf (the rest), gltf_convert.cpp reads the accessors into the core's structs,
+// gltf_load.cpp runs the load.
 #ifndef CB_GLTF_PARTS_H
 #define CB_GLTF_PARTS_H
 
@@ -121,7 +122,8 @@ template <class Buffer> bool read_file(const char *path, uint64_t max_bytes, Buf
 // Maps a model file of 1 MiB and more (see map_model in gltf_container.cpp); false (nothing
 // done) where mapping does not apply, and read_file then reads it.
 bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail);
-// Parses the file with tinygltf (the GLB's BIN chunk left where it lies when `in_place`).
+// Parses the file: a plain GLB on the fast path (parse_fast), else with tinygltf (the GLB's BIN
+// chunk left where it lies when `in_place`).
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
                          FsState *fs_state, tinygltf::Model *gltf, BinInPlace *in_place, TailRead *tail, cb_error *err);
 

@@ -232,13 +232,20 @@ static void scene_bin(unsigned char *bin)
     memcpy(bin + 84, kMoves, 24);
 }
 
-static void scene_glb(glb *out, int byte_length, const char *translation_view)
+/* `first`: members put first in the JSON's root object, e.g. "\"cameras\":[{}],". */
+static void scene_glb_with(glb *out, int byte_length, const char *translation_view, const char *first)
 {
     char json[2048];
-    snprintf(json, sizeof json, SCENE_JSON, byte_length, translation_view);
+    size_t n = (size_t)snprintf(json, sizeof json, "{%s", first);
+    snprintf(json + n, sizeof json - n, SCENE_JSON + 1, byte_length, translation_view);
     unsigned char bin[108];
     scene_bin(bin);
     make_glb(out, json, bin, sizeof bin);
+}
+
+static void scene_glb(glb *out, int byte_length, const char *translation_view)
+{
+    scene_glb_with(out, byte_length, translation_view, "");
 }
 
 static void test_strided_misaligned_and_normalized_accessors_are_copied_right(void **state)
@@ -294,6 +301,15 @@ static void test_accessors_past_their_buffer_are_refused(void **state)
     scene_glb(&g, 112, "{\"buffer\":0,\"byteOffset\":84,\"byteLength\":24}");
     assert_false(cb_gltf_fast_path_applies(g.data, g.size));
     expect_refused(&g, "byteLength");
+    /* What the fast path does not read the way tinygltf does goes to tinygltf, and its
+     * message is the one the file gets: a camera without a type, a count given as a string. */
+    const char *view = "{\"buffer\":0,\"byteOffset\":84,\"byteLength\":24}";
+    scene_glb_with(&g, 108, view, "\"cameras\":[{}],");
+    assert_false(cb_gltf_fast_path_applies(g.data, g.size));
+    expect_refused(&g, "not a valid glTF 2.0 file");
+    scene_glb_with(&g, 108, view, "\"accessors\":[{\"componentType\":5126,\"count\":\"3\",\"type\":\"VEC3\"}],");
+    assert_false(cb_gltf_fast_path_applies(g.data, g.size)); /* and a key given twice */
+    expect_refused(&g, "not a valid glTF 2.0 file: 'count' property is not a positive integer");
     /* Truncated: one line from the container check, on either path. */
     scene_glb(&g, 108, "{\"buffer\":0,\"byteOffset\":84,\"byteLength\":24}");
     g.size -= 40;
