@@ -327,20 +327,27 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
     const tinygltf::Node &node = c.gltf->nodes[node_index];
     auto where = [&] { return "mesh node " + std::to_string(node_index) + " (" + node.name + ")"; };
     float *positions, *weights, *normals;
-    double *joints;
+    double *joints = nullptr;
+    uint16_t *joints16 = nullptr;
     uint32_t *indices;
     size_t n, nj, nw, nn, ni;
+    // Joint indices of 8 or 16 bits (all glTF allows) are read as they are; any other type is
+    // read as numbers and checked against 0..65535 below.
+    const auto &acc = c.gltf->accessors;
+    int jt = jnt->second >= 0 && (size_t)jnt->second < acc.size() && !acc[(size_t)jnt->second].normalized
+                 ? acc[(size_t)jnt->second].componentType : 0;
+    bool small = jt == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || jt == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+    auto jwhat = [&] { return where() + " JOINTS_0"; };
     if (!read_accessor(c, pos->second, 3, [&] { return where() + " POSITION"; }, &positions, &n) ||
-        !read_accessor(c, jnt->second, 4, [&] { return where() + " JOINTS_0"; }, &joints, &nj) ||
+        !(small ? read_accessor(c, jnt->second, 4, jwhat, &joints16, &nj) : read_accessor(c, jnt->second, 4, jwhat, &joints, &nj)) ||
         !read_accessor(c, wgt->second, 4, [&] { return where() + " WEIGHTS_0"; }, &weights, &nw))
         return false;
     if (nj != n || nw != n) {
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s has %zu positions but %zu joints and %zu weights", c.name, where().c_str(), n, nj, nw);
         return false;
     }
-    uint16_t *joints16 = static_cast<uint16_t *>(cb_model_alloc(c.model, n * 4, sizeof(uint16_t)));
-    if (!joints16) return false;
-    for (size_t i = 0; i < n * 4; ++i) {
+    if (!joints16 && !(joints16 = static_cast<uint16_t *>(cb_model_alloc(c.model, n * 4, sizeof(uint16_t))))) return false;
+    for (size_t i = 0; joints && i < n * 4; ++i) {
         if (joints[i] < 0 || joints[i] > 65535) {
             cb_fail(c.err, CB_ERR_INPUT, "%s: %s has joint index %.0f outside 0..65535", c.name, where().c_str(), joints[i]);
             return false;
