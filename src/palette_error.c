@@ -95,6 +95,8 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     return worst;
 }
 
+enum { SCOUT_ROWS = 8 }; /* rows a measurement with a goal tries first */
+
 /* The worst vertex error of clip c over every error_stride-th row and the last (sub > 0: at
  * fraction sub / parts from each of those rows to the next, as the runtime blends them; a
  * one-shot's last row has no next). Rows that cannot exceed `floor` are not measured (0 when
@@ -121,6 +123,15 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
         worst = measure_rows(st, w, c, batch, count, sub, parts, s, NULL, worst);
     }
     if (!sub) return worst;
+    /* With a goal, a few rows spread over the clip first: a rate that misses its goal mostly
+     * misses it over much of the clip, and one row above the goal decides - every row's bound,
+     * an exact sample each, is then not needed (Cow --fps auto: most probes fail). What the
+     * scouts find is measured, so as the floor it leaves the maximum exact. */
+    if (goal > 0 && n > SCOUT_ROWS) {
+        for (uint32_t k = 0; k < SCOUT_ROWS; ++k) batch[k] = rows[(size_t)k * n / SCOUT_ROWS].frame;
+        worst = measure_rows(st, w, c, batch, SCOUT_ROWS, sub, parts, s, NULL, worst);
+        if (worst > goal) return worst;
+    }
     for (uint32_t i = 0; i < n; i += CB_SAMPLE_BATCH) {
         uint32_t count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
         for (uint32_t k = 0; k < count; ++k) batch[k] = rows[i + k].frame;

@@ -52,15 +52,16 @@ typedef struct clip_search {
     double max_fps;
     probe done[32];
     uint32_t count;
-    cb_vertex_groups groups; /* the skinned vertices grouped for measuring: built after the first bake, kept */
-    bool grouped;
+    cb_vertex_groups *groups; /* the skinned vertices grouped for measuring: built after the first bake, kept */
+    bool *grouped;
 } clip_search;
 
 /* The visible error of the clip baked alone at `fps`: the bake measures it (the encoding, and
  * the blend halfway between every two rows). goal > 0: exact when within it; above it, the
  * measurement may stop early (any value above the goal decides the search alike). Every bake
- * of the search measures the same vertices: they are grouped once, from the first bake's bind
- * pose, not once a bake (Cow: 5 M instructions each). */
+ * of the search measures the same vertices (the bind pose is the skin's, whatever the clip):
+ * they are grouped once, from the first bake's bind pose, not once a bake or a clip (Cow: 10 M
+ * instructions each). */
 static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *err)
 {
     cb_bake_options one = *cs->o;
@@ -70,9 +71,9 @@ static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *
     cb_clip_plan plan = *cs->clip;
     plan.fps = fps;
     cb_palette p;
-    if (palette_bake_grouped(cs->s, &one, &plan, 1, cs->grouped ? &cs->groups : NULL, &p, err)) return INFINITY;
+    if (palette_bake_grouped(cs->s, &one, &plan, 1, *cs->grouped ? cs->groups : NULL, &p, err)) return INFINITY;
     const cb_model *m = cb_sampler_model(cs->s);
-    if (!cs->grouped) cs->grouped = cb_vertex_groups_build(m, cb_sampler_skin(cs->s), p.bind_positions, &cs->groups);
+    if (!*cs->grouped) *cs->grouped = cb_vertex_groups_build(m, cb_sampler_skin(cs->s), p.bind_positions, cs->groups);
     double worst = p.visible_error;
     cb_palette_free(&p);
     return worst;
@@ -115,15 +116,16 @@ static double lowest_rate(clip_search *cs, const double *rates, size_t n, double
  * its multiples and fractions. Rows that land on keys blend what the keys interpolate, so the
  * second family's error is far lower than its neighbours' in the first (Cow's Idle: 0.78 mm/m
  * at its 24 fps key rate, 3.4 at 20 and 30): the error does not fall steadily across both. */
-double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
-                          double max_fps, bool *met, double *error, cb_error *err)
+static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
+                              double max_fps, bool *met, double *error, cb_vertex_groups *groups, bool *grouped,
+                              cb_error *err)
 {
     static const double common[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120};
     static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
     double aligned[6], key = cb_animation_key_interval(&cb_sampler_model(s)->animations[clip->animation]);
     size_t n_aligned = 0;
     for (size_t i = 0; key > 0 && i < 6; ++i) aligned[n_aligned++] = round(factors[i] / key * 1000) / 1000;
-    clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps};
+    clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .groups = groups, .grouped = grouped};
     double e_common = INFINITY, e_aligned = INFINITY;
     double a = lowest_rate(&cs, common, sizeof common / sizeof common[0], max_fps, max_error, &e_common, err);
     double b = lowest_rate(&cs, aligned, n_aligned, a > 0 ? fmin(a, max_fps) : max_fps, max_error, &e_aligned, err);
@@ -137,7 +139,16 @@ double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip
         *error = err->status ? INFINITY : probe_error(&cs, max_fps, 0, err);
         *met = *error <= max_error;
     }
-    cb_vertex_groups_free(&cs.groups);
+    return fps;
+}
+
+double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
+                          double max_fps, bool *met, double *error, cb_error *err)
+{
+    cb_vertex_groups groups = {0};
+    bool grouped = false;
+    double fps = choose_clip_fps(s, o, clip, max_error, max_fps, met, error, &groups, &grouped, err);
+    if (grouped) cb_vertex_groups_free(&groups);
     return fps;
 }
 
@@ -162,6 +173,8 @@ static int rate_worker(void *arg)
     rate_search *rs = arg;
     cb_error fail = {0};
     cb_sampler *s = cb_sampler_create(rs->model, rs->skin, &fail);
+    cb_vertex_groups groups = {0}; /* this thread's, for every clip it searches */
+    bool grouped = false;
     for (;;) {
         uint32_t i = atomic_fetch_add(&rs->next, 1);
         if (i >= rs->count) break;
@@ -171,11 +184,12 @@ static int rate_worker(void *arg)
             continue;
         }
         cb_rate_choice *c = &rs->choices[i];
-        rs->plan[i].fps = cb_choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
-                                             rs->goals[i].max_fps > 0 ? rs->goals[i].max_fps : 60, &c->met, &c->error,
-                                             &rs->errors[i]);
+        rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
+                                          rs->goals[i].max_fps > 0 ? rs->goals[i].max_fps : 60, &c->met, &c->error,
+                                          &groups, &grouped, &rs->errors[i]);
         c->error_mm = cb_mm_per_m(c->error, rs->height);
     }
+    if (grouped) cb_vertex_groups_free(&groups);
     cb_sampler_free(s);
     return 0;
 }
