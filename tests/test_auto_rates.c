@@ -3,7 +3,9 @@
  * independently, each rate baked exactly (no error goal) - the lowest rate within the goal by
  * binary search over the common rates, then over the key rate's multiples and fractions below
  * that, else max_fps with its exact error. A remembered probe answered for the wrong rate, or a
- * goal-shortened value taken for an exact one, changes a rate or an error here. */
+ * goal-shortened value taken for an exact one, changes a rate or an error here. cb_choose_rates
+ * (what --fps auto runs) must choose the same for every clip at once, on 1 and 2 threads: its
+ * threads group the skinned vertices once for all the clips they search. */
 #include "testutil.h"
 
 #include <math.h>
@@ -48,7 +50,9 @@ static void expect_reference_choices(const char *asset, double max_error_mm, dou
     double lo3[3], hi3[3], height = cb_skin_rest_bounds(s, lo3, hi3), goal = max_error_mm / 1000 * height;
     static const double common[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120};
     static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
-    uint32_t met = 0, unmet = 0;
+    uint32_t met = 0, unmet = 0, n = m->animation_count;
+    double *want_fps = calloc(n, sizeof(double)), *want_err = calloc(n, sizeof(double));
+    assert_true(want_fps && want_err);
     for (uint32_t c = 0; c < m->animation_count; ++c) {
         double key = cb_animation_key_interval(&m->animations[c]), aligned[6];
         size_t na = 0;
@@ -70,8 +74,24 @@ static void expect_reference_choices(const char *asset, double max_error_mm, dou
                      want_error);
         assert_true(got_met == (want_error <= goal));
         met += got_met, unmet += !got_met;
+        want_fps[c] = want, want_err[c] = want_error;
     }
     assert_true(met > 0 && unmet > 0); /* both endings of the search are checked */
+    for (uint32_t threads = 1; threads <= 2; ++threads) {
+        cb_clip_plan plan[64];
+        cb_rate_goal goals[64];
+        cb_rate_choice choices[64];
+        assert_true(n <= 64);
+        for (uint32_t c = 0; c < n; ++c) plan[c] = (cb_clip_plan){(int32_t)c, NULL, -1, 0}, goals[c] = (cb_rate_goal){max_error_mm, max_fps};
+        cb_bake_options o = cb_default_bake_options();
+        o.threads = threads;
+        assert_int_equal(cb_choose_rates(s, &o, plan, n, goals, choices, &err), CB_OK);
+        for (uint32_t c = 0; c < n; ++c)
+            if (plan[c].fps != want_fps[c] || choices[c].error != want_err[c])
+                fail_msg("%s clip %u on %u threads: cb_choose_rates chose %g fps (error %.17g), the rule %g fps (error %.17g)",
+                         asset, c, threads, plan[c].fps, choices[c].error, want_fps[c], want_err[c]);
+    }
+    free(want_fps), free(want_err);
     cb_sampler_free(s);
     cb_model_free(m);
 }
