@@ -136,7 +136,16 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
         uint32_t count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
         for (uint32_t k = 0; k < count; ++k) batch[k] = rows[i + k].frame;
         measure_rows(st, w, c, batch, count, sub, parts, s, bounds, 0);
-        for (uint32_t k = 0; k < count; ++k) rows[i + k].bound = bounds[k];
+        uint32_t top = 0;
+        for (uint32_t k = 0; k < count; ++k) {
+            rows[i + k].bound = bounds[k];
+            if (bounds[k] > bounds[top]) top = k;
+        }
+        /* With a goal, each batch's likeliest worst at once: a row above the goal ends it. */
+        if (goal > 0 && bounds[top] > worst) {
+            worst = measure_rows(st, w, c, &batch[top], 1, sub, parts, s, NULL, worst);
+            if (worst > goal) return worst;
+        }
     }
     cb_sort_bounded_rows(rows, n);
     /* Batches of 1, 2, 4, ... rows: often the first few rows settle it. */
