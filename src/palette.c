@@ -337,50 +337,40 @@ static double seconds_now(void)
     return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
-void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
-void palette_encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                            uint32_t count);
-
 /* Values encoding waits for: u16's need the ranges of every clip, half's positions each bone's
  * offset (the centre of its positions over every clip). */
 static bool keeps_values(const cb_palette *p) { return p->precision != CB_PRECISION_FLOAT; }
 
 
 /* Encodes a clip as soon as it is sampled, from rows still in cache: all of it, or for u16
- * what needs no range, keeping the rest for encode_kept_job. */
+ * and half what needs no range or offset, keeping the rest for encode_kept_job. */
 static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
 {
     if (st->errors[c].status || sample_clip(st, w, c, &st->errors[c])) return;
     cb_palette *p = st->p;
     const cb_palette_clip *clip = &p->clips[c];
     double start = seconds_now();
-    size_t bones = (size_t)clip->frames * p->bone_count, kept = kept_floats(p->layout);
-    if (!keeps_values(p)) {
+    size_t bones = (size_t)clip->frames * p->bone_count;
+    if (!keeps_values(p))
         palette_encode_rows(p, w->rows, clip->first_row, clip->frames);
-    } else if (p->layout == CB_LAYOUT_QPOS) {
-        float *keep = st->kept + (size_t)clip->first_row * p->bone_count * kept;
-        if (p->precision == CB_PRECISION_U16) palette_encode_qpos_u16(p, w->rows, 8, 0, clip->first_row, clip->frames);
-        else palette_encode_qpos_half(p, w->rows, 8, 0, clip->first_row, clip->frames);
-        for (size_t b = 0; b < bones; ++b) memcpy(keep + b * 4, w->rows + b * 8 + 4, 4 * sizeof(float));
-    } else {
-        memcpy(st->kept + (size_t)clip->first_row * p->bone_count * kept, w->rows, bones * kept * sizeof(float));
-    }
+    else if (p->layout == CB_LAYOUT_QPOS)
+        palette_stage_qpos(p, w->rows, st->stash, clip->first_row, clip->frames);
+    else
+        memcpy(st->kept + (size_t)clip->first_row * p->bone_count * KEPT_FLOATS, w->rows, bones * KEPT_FLOATS * sizeof(float));
     st->encode_seconds[c] = seconds_now() - start;
 }
 
-/* u16 and qpos/half, once the ranges and offsets of every clip are known: the values a clip kept. */
+/* u16 and half, once the ranges and offsets of every clip are known: what a clip kept. */
 static void encode_kept_job(bake_state *st, worker *w, uint32_t c)
 {
     (void)w;
     cb_palette *p = st->p;
     const cb_palette_clip *clip = &p->clips[c];
-    const float *kept = st->kept + (size_t)clip->first_row * p->bone_count * kept_floats(p->layout);
-    if (p->layout == CB_LAYOUT_QPOS && p->precision == CB_PRECISION_HALF)
-        palette_encode_qpos_half(p, kept, 4, 4, clip->first_row, clip->frames);
-    else if (p->layout == CB_LAYOUT_QPOS)
-        palette_encode_qpos_u16(p, kept, 4, 4, clip->first_row, clip->frames);
+    if (p->layout == CB_LAYOUT_QPOS)
+        palette_finish_qpos(p, st->stash, clip->first_row, clip->frames);
     else
-        palette_encode_rows(p, kept, clip->first_row, clip->frames);
+        palette_encode_rows(p, st->kept + (size_t)clip->first_row * p->bone_count * KEPT_FLOATS, clip->first_row,
+                            clip->frames);
 }
 
 /* ---- the bake ---- */
@@ -444,7 +434,7 @@ static void bind_positions(cb_palette *p, const cb_skin *skin)
 
 static void free_bake_state(bake_state *st)
 {
-    free(st->kept), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
+    free(st->kept), free(st->stash), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
     free(st->encode_seconds);
 }
 
@@ -525,8 +515,10 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     p->texels = cb_alloc_large(p->texel_bytes);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
     p->position_offsets = calloc((size_t)p->bone_count * 3, sizeof(float));
-    if (keeps_values(p))
-        st.kept = cb_alloc_large((size_t)p->rows * p->bone_count * kept_floats(p->layout) * sizeof(float));
+    size_t bone_rows = (size_t)p->rows * p->bone_count;
+    bool kept = keeps_values(p) && p->layout != CB_LAYOUT_QPOS, staged = keeps_values(p) && !kept;
+    if (kept) st.kept = cb_alloc_large(bone_rows * KEPT_FLOATS * sizeof(float));
+    if (staged) st.stash = cb_alloc_large(bone_rows * 8);
     for (uint32_t c = 0; c < p->clip_count; ++c)
         if (p->clips[c].frames > st.max_clip_frames) st.max_clip_frames = p->clips[c].frames;
     radius = malloc((size_t)p->bone_count * sizeof(double));
@@ -536,7 +528,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.clip_blend_error = calloc(p->clip_count, sizeof *st.clip_blend_error);
     st.ranges = calloc(p->clip_count, sizeof *st.ranges);
     st.encode_seconds = calloc(p->clip_count, sizeof *st.encode_seconds);
-    if (!p->texels || !p->bind_positions || !p->position_offsets || (keeps_values(p) && !st.kept) || !radius ||
+    if (!p->texels || !p->bind_positions || !p->position_offsets || (kept && !st.kept) || (staged && !st.stash) || !radius ||
         !st.breaks || !st.errors || !st.clip_error || !st.clip_blend_error || !st.ranges || !st.encode_seconds) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
@@ -550,9 +542,12 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
     palette_merge_ranges(p, st.ranges);
-    if (p->positions_relative) palette_position_offsets(p, st.kept);
+    if (p->positions_relative && !palette_position_offsets(p, st.kept)) {
+        cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
+        goto fail;
+    }
     double t1 = seconds_now();
-    if (st.kept) for_each_clip(&st, encode_kept_job, false);
+    if (keeps_values(p)) for_each_clip(&st, encode_kept_job, false);
     double t2 = seconds_now(), lo[3], hi[3];
     /* Clips encoded as they were sampled: their encoding time, spread over the threads, moves
      * from the sampling phase to the encoding phase. */

@@ -67,10 +67,11 @@ typedef struct bake_state {
     int32_t skin;
     const cb_bake_options *opt;
     const cb_clip_info *infos;
-    /* Each worker samples a clip's rows into its own buffer and encodes them from there. Only
-     * u16 has to wait for the ranges of every clip: it keeps what it has not yet encoded of
-     * every row here (kept_floats per bone), and encodes that after the last clip. */
+    /* Each worker samples a clip's rows into its own buffer and encodes them from there. u16
+     * waits for the ranges of every clip, half for the position offsets: mat4 and affine keep
+     * every row here (KEPT_FLOATS per bone) and encode it after the last clip. */
     float *kept;
+    unsigned char *stash;  /* qpos/u16 and qpos/half: the encoded quaternions (palette_stage_qpos) */
     uint32_t max_clip_frames;
     const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 */
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
@@ -83,10 +84,9 @@ typedef struct bake_state {
     double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
 } bake_state;
 
-/* What u16 and relative half keep of a bone's row until every clip is sampled. */
-/* What u16 keeps of a bone's row until every clip is sampled: qpos's position and scale (its
- * quaternion is snorm, which needs no range, and is encoded at once), or all 12 values. */
-static inline uint32_t kept_floats(cb_layout layout) { return layout == CB_LAYOUT_QPOS ? 4 : 12; }
+/* What mat4 and affine keep of a bone's row for u16 and half until every clip is sampled: all
+ * 12 values (qpos keeps its position and scale in its texels, see palette_stage_qpos). */
+#define KEPT_FLOATS 12u
 
 /* The joint's position p = M b of a kept mat4/affine row (the upper 3x4 by rows), axis r. */
 static inline double row_position(const float *c, const float *b, int r)
@@ -96,15 +96,15 @@ static inline double row_position(const float *c, const float *b, int r)
 
 /* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
 void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
-/* u16 qpos: the values v0 .. v0 + 3 of each bone (`stride` floats apart), which need no range
- * (v0 0: the quaternion) or whose ranges are known (v0 4: position and scale). */
-void palette_encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                             uint32_t count);
-/* qpos/half: the values v0 .. v0 + 3 of each bone, positions less the palette's offsets. */
-void palette_encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                              uint32_t count);
-/* Relative half palettes: each bone's position offset, the middle of its positions' range. */
-void palette_position_offsets(cb_palette *p, const float *kept);
+/* qpos/u16 and qpos/half in place: the quaternions of `count` rows encoded into `stash`, and
+ * the positions and scales staged in their texels as floats (palette_stage_qpos); once every
+ * range and offset is known, those encoded in place and the quaternions copied back
+ * (palette_finish_qpos). */
+void palette_stage_qpos(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count);
+void palette_finish_qpos(cb_palette *p, const unsigned char *stash, uint32_t first, uint32_t count);
+/* Relative half palettes: each bone's position offset, the middle of its positions' range,
+ * from the kept rows (mat4, affine) or the staged texels (qpos, kept NULL). False: out of memory. */
+bool palette_position_offsets(cb_palette *p, const float *kept);
 /* Sets p->bounds_min/max and linear_range from every clip's range. */
 void palette_merge_ranges(cb_palette *p, const value_range *clips);
 

@@ -1,5 +1,6 @@
 /* palette_codec.c - texels: encoding canonical rows in each layout and precision, decoding
  * them back as a shader reads them, and the value ranges u16 quantizes in. */
+#include <stdlib.h>
 #include <string.h>
 
 #include "palette_bake.h"
@@ -160,61 +161,91 @@ void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint3
     }
 }
 
-/* Encodes qpos values v0..v0 + 3 (the quaternion, or position and scale) of `count` rows as
- * u16; `rows` holds `stride` floats per bone, starting with value v0. (qpos texel order is its
- * canonical order.) */
-void palette_encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                            uint32_t count)
+/* qpos in place, for u16 and half, whose positions wait for every clip's range or offset:
+ * each bone's texel pair (16 bytes) holds its position and scale as 4 floats until then, and
+ * its quaternion, which needs neither, is encoded at once into `stash` (8 bytes per bone and
+ * row, half the texels' size): the bake keeps half the output's size more, not the output's
+ * size again (a float copy of every position and scale). */
+static unsigned char *qpos_texel(cb_palette *p, uint32_t row)
+{
+    uint32_t x0, y;
+    cb_palette_texel_xy(p, row, 0, &x0, &y);
+    return (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8; /* RGBA16: 8 bytes a texel */
+}
+
+void palette_stage_qpos(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count)
 {
     u16_slot slots[16];
     u16_slots(p, slots);
+    bool u16 = p->precision == CB_PRECISION_U16;
     for (uint32_t r = first; r < first + count; ++r) {
-        uint32_t x0, y;
-        cb_palette_texel_xy(p, r, 0, &x0, &y);
-        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8 + v0 * 2; /* RGBA16 */
-        const float *row = rows + (size_t)(r - first) * p->bone_count * stride;
-        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16)
-            for (uint32_t i = 0; i < 4; ++i) store_le16(d + i * 2, quantize(&slots[v0 + i], row[j * stride + i]));
+        unsigned char *d = qpos_texel(p, r), *q = stash + (size_t)r * p->bone_count * 8;
+        const float *row = rows + (size_t)(r - first) * p->bone_count * 8;
+        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16, q += 8) {
+            const float *v = row + (size_t)j * 8;
+            for (uint32_t i = 0; i < 4; ++i) store_le16(q + i * 2, u16 ? quantize(&slots[i], v[i]) : cb_float_to_half(v[i]));
+            memcpy(d, v + 4, 4 * sizeof(float));
+        }
     }
 }
 
-/* Encodes qpos values v0..v0 + 3 of `count` rows as half floats, positions less their bone's
- * offset; `rows` holds `stride` floats per bone, starting with value v0. */
-void palette_encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                             uint32_t count)
+/* The position and scale staged in the texels (see palette_stage_qpos). */
+static void staged_values(const unsigned char *d, float out[4]) { memcpy(out, d, 4 * sizeof(float)); }
+
+void palette_finish_qpos(cb_palette *p, const unsigned char *stash, uint32_t first, uint32_t count)
 {
+    u16_slot slots[16];
+    u16_slots(p, slots);
+    bool u16 = p->precision == CB_PRECISION_U16;
     for (uint32_t r = first; r < first + count; ++r) {
-        uint32_t x0, y;
-        cb_palette_texel_xy(p, r, 0, &x0, &y);
-        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8 + v0 * 2; /* RGBA16F */
-        const float *row = rows + (size_t)(r - first) * p->bone_count * stride;
-        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16)
+        unsigned char *d = qpos_texel(p, r);
+        const unsigned char *q = stash + (size_t)r * p->bone_count * 8;
+        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16, q += 8) {
+            float v[4];
+            staged_values(d, v); /* read before the texel pair is overwritten */
             for (uint32_t i = 0; i < 4; ++i) {
-                float v = row[j * stride + i];
-                if (v0 == 4 && i < 3) v -= p->position_offsets[(size_t)j * 3 + i];
-                store_le16(d + i * 2, cb_float_to_half(v));
+                if (u16) {
+                    store_le16(d + 8 + i * 2, quantize(&slots[4 + i], v[i]));
+                } else {
+                    float x = i < 3 ? v[i] - p->position_offsets[(size_t)j * 3 + i] : v[i];
+                    store_le16(d + 8 + i * 2, cb_float_to_half(x));
+                }
             }
+            memcpy(d, q, 8);
+        }
     }
 }
 
 /* qpos/half: each bone's position offset, the centre of the box of its positions over every
  * row. A half float's step grows with the value; positions less the centre stay within half
  * the bone's reach (Cow: 0.60 -> 0.32 mm/m; less its bind position, a body that falls or
- * travels still lands far from it). */
-void palette_position_offsets(cb_palette *p, const float *kept)
+ * travels still lands far from it). qpos reads the positions staged in the texels; the other
+ * layouts, their kept rows. Row by row, so that the texels are read once, in order. */
+bool palette_position_offsets(cb_palette *p, const float *kept)
 {
-    uint32_t stride = kept_floats(p->layout);
-    for (uint32_t j = 0; j < p->bone_count; ++j) {
-        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        for (uint32_t r = 0; r < p->rows; ++r) {
-            const float *v = kept + ((size_t)r * p->bone_count + j) * stride;
+    double *box = malloc((size_t)p->bone_count * 6 * sizeof(double)); /* lo[3], hi[3] per bone */
+    if (!box) return false;
+    for (uint32_t j = 0; j < p->bone_count; ++j)
+        for (int k = 0; k < 3; ++k) box[j * 6 + k] = INFINITY, box[j * 6 + 3 + k] = -INFINITY;
+    for (uint32_t r = 0; r < p->rows; ++r) {
+        const unsigned char *d = p->layout == CB_LAYOUT_QPOS ? qpos_texel(p, r) : NULL;
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            float staged[4];
+            const float *v = staged;
+            if (d) staged_values(d + (size_t)j * 16, staged);
+            else v = kept + ((size_t)r * p->bone_count + j) * KEPT_FLOATS;
+            double *lo = box + j * 6, *hi = lo + 3;
             for (int k = 0; k < 3; ++k) {
-                double x = p->layout == CB_LAYOUT_QPOS ? v[k] : row_position(v, p->bind_positions + (size_t)j * 3, k);
+                double x = d ? v[k] : row_position(v, p->bind_positions + (size_t)j * 3, k);
                 lo[k] = x < lo[k] ? x : lo[k], hi[k] = x > hi[k] ? x : hi[k];
             }
         }
-        for (int k = 0; k < 3; ++k) p->position_offsets[(size_t)j * 3 + k] = p->rows ? (float)(0.5 * (lo[k] + hi[k])) : 0;
     }
+    for (uint32_t j = 0; j < p->bone_count; ++j)
+        for (int k = 0; k < 3; ++k)
+            p->position_offsets[(size_t)j * 3 + k] = p->rows ? (float)(0.5 * (box[j * 6 + k] + box[j * 6 + 3 + k])) : 0;
+    free(box);
+    return true;
 }
 
 void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16])
