@@ -58,7 +58,8 @@ typedef struct worker {
     double *mats;        /* bones * 16 */
     cb_similarity *sims; /* CB_SAMPLE_BATCH rows of bones: the joints, for qpos rows of similarity rigs */
     cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
-    float *rows;         /* the pre-encoding rows of the clip being sampled (max_clip_frames of them) */
+    float *rows;         /* pre-encoding rows: CB_SAMPLE_BATCH of them, or a whole clip's for --fit */
+    float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
 } worker;
 
 typedef struct bake_state {
@@ -107,6 +108,14 @@ void palette_finish_qpos(cb_palette *p, const unsigned char *stash, uint32_t fir
 bool palette_position_offsets(cb_palette *p, const float *kept);
 /* Sets p->bounds_min/max and linear_range from every clip's range. */
 void palette_merge_ranges(cb_palette *p, const value_range *clips);
+
+/* palette_plan.c: the clips' frames and rows (p->clips, *infos_out), the texture's geometry,
+ * each joint's bind-pose position, and the texels no row covers set to zero. */
+cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
+                              cb_clip_info **infos_out, cb_error *err);
+cb_status palette_plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err);
+void palette_bind_positions(cb_palette *p, const cb_skin *skin);
+void palette_zero_padding(cb_palette *p);
 
 /* The worst vertex errors of clip c, at its rows and between them (st->clip_error,
  * st->clip_blend_error). */
