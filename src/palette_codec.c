@@ -173,46 +173,71 @@ static unsigned char *qpos_texel(cb_palette *p, uint32_t row)
     return (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8; /* RGBA16: 8 bytes a texel */
 }
 
+/* One row's quaternions into the stash, as u16 (snorm, no range needed) or half; positions and
+ * scales into the texels as floats. (Per precision, so that the loop carries no branch.) */
+static void stage_row_u16(const u16_slot slots[4], const float *v, unsigned char *q, unsigned char *d, uint32_t bones)
+{
+    for (uint32_t j = 0; j < bones; ++j, v += 8, q += 8, d += 16) {
+        for (uint32_t i = 0; i < 4; ++i) store_le16(q + i * 2, quantize(&slots[i], v[i]));
+        memcpy(d, v + 4, 4 * sizeof(float));
+    }
+}
+
+static void stage_row_half(const float *v, unsigned char *q, unsigned char *d, uint32_t bones)
+{
+    for (uint32_t j = 0; j < bones; ++j, v += 8, q += 8, d += 16) {
+        for (uint32_t i = 0; i < 4; ++i) store_le16(q + i * 2, cb_float_to_half(v[i]));
+        memcpy(d, v + 4, 4 * sizeof(float));
+    }
+}
+
 void palette_stage_qpos(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count)
 {
     u16_slot slots[16];
     u16_slots(p, slots);
-    bool u16 = p->precision == CB_PRECISION_U16;
     for (uint32_t r = first; r < first + count; ++r) {
         unsigned char *d = qpos_texel(p, r), *q = stash + (size_t)r * p->bone_count * 8;
         const float *row = rows + (size_t)(r - first) * p->bone_count * 8;
-        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16, q += 8) {
-            const float *v = row + (size_t)j * 8;
-            for (uint32_t i = 0; i < 4; ++i) store_le16(q + i * 2, u16 ? quantize(&slots[i], v[i]) : cb_float_to_half(v[i]));
-            memcpy(d, v + 4, 4 * sizeof(float));
-        }
+        if (p->precision == CB_PRECISION_U16) stage_row_u16(slots, row, q, d, p->bone_count);
+        else stage_row_half(row, q, d, p->bone_count);
     }
 }
 
 /* The position and scale staged in the texels (see palette_stage_qpos). */
 static void staged_values(const unsigned char *d, float out[4]) { memcpy(out, d, 4 * sizeof(float)); }
 
+/* One row: the staged values read before their texel pair is overwritten, encoded into its
+ * second texel, the stashed quaternion copied into its first. */
+static void finish_row_u16(const u16_slot slots[16], const unsigned char *q, unsigned char *d, uint32_t bones)
+{
+    for (uint32_t j = 0; j < bones; ++j, q += 8, d += 16) {
+        float v[4];
+        staged_values(d, v);
+        for (uint32_t i = 0; i < 4; ++i) store_le16(d + 8 + i * 2, quantize(&slots[4 + i], v[i]));
+        memcpy(d, q, 8);
+    }
+}
+
+static void finish_row_half(const float *offsets, const unsigned char *q, unsigned char *d, uint32_t bones)
+{
+    for (uint32_t j = 0; j < bones; ++j, q += 8, d += 16, offsets += 3) {
+        float v[4];
+        staged_values(d, v);
+        for (uint32_t i = 0; i < 3; ++i) store_le16(d + 8 + i * 2, cb_float_to_half(v[i] - offsets[i]));
+        store_le16(d + 14, cb_float_to_half(v[3]));
+        memcpy(d, q, 8);
+    }
+}
+
 void palette_finish_qpos(cb_palette *p, const unsigned char *stash, uint32_t first, uint32_t count)
 {
     u16_slot slots[16];
     u16_slots(p, slots);
-    bool u16 = p->precision == CB_PRECISION_U16;
     for (uint32_t r = first; r < first + count; ++r) {
         unsigned char *d = qpos_texel(p, r);
         const unsigned char *q = stash + (size_t)r * p->bone_count * 8;
-        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16, q += 8) {
-            float v[4];
-            staged_values(d, v); /* read before the texel pair is overwritten */
-            for (uint32_t i = 0; i < 4; ++i) {
-                if (u16) {
-                    store_le16(d + 8 + i * 2, quantize(&slots[4 + i], v[i]));
-                } else {
-                    float x = i < 3 ? v[i] - p->position_offsets[(size_t)j * 3 + i] : v[i];
-                    store_le16(d + 8 + i * 2, cb_float_to_half(x));
-                }
-            }
-            memcpy(d, q, 8);
-        }
+        if (p->precision == CB_PRECISION_U16) finish_row_u16(slots, q, d, p->bone_count);
+        else finish_row_half(p->position_offsets, q, d, p->bone_count);
     }
 }
 
