@@ -231,7 +231,7 @@ static double seconds_now(void)
  * offset (the centre of its positions over every clip). */
 static bool keeps_values(const cb_palette *p) { return p->precision != CB_PRECISION_FLOAT; }
 
-/* Rows first_row + f0 .. + n of clip c, sampled into `rows`: encoded, staged or kept at once. */
+/* Rows first_row + f0 .. + n of clip c, sampled into `rows`: encoded, or staged, at once. */
 static void emit_rows(bake_state *st, uint32_t c, const float *rows, uint32_t f0, uint32_t n)
 {
     cb_palette *p = st->p;
@@ -242,7 +242,7 @@ static void emit_rows(bake_state *st, uint32_t c, const float *rows, uint32_t f0
     else if (p->layout == CB_LAYOUT_QPOS)
         palette_stage_qpos(p, rows, st->stash, first, n);
     else
-        memcpy(st->kept + (size_t)first * p->bone_count * KEPT_FLOATS, rows, (size_t)n * p->bone_count * KEPT_FLOATS * sizeof(float));
+        palette_stage_rows(p, rows, st->stash, first, n);
     st->encode_seconds[c] += seconds_now() - start;
 }
 
@@ -349,30 +349,39 @@ static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, ui
 
 
 /* Samples a clip and encodes it as it goes: all of it, or for u16 and half what needs no range
- * or offset, keeping the rest for encode_kept_job. */
+ * or offset, keeping the rest for encode_staged_job. */
 static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
 {
     if (!st->errors[c].status) sample_clip(st, w, c, &st->errors[c]);
 }
 
-/* u16 and half, once the ranges and offsets of every clip are known: what a clip kept. */
-static void encode_kept_job(bake_state *st, worker *w, uint32_t c)
+/* u16 and half, once the ranges and offsets of every clip are known: the values a clip staged. */
+static void encode_staged_job(bake_state *st, worker *w, uint32_t c)
 {
     (void)w;
     cb_palette *p = st->p;
     const cb_palette_clip *clip = &p->clips[c];
-    if (p->layout == CB_LAYOUT_QPOS)
+    if (p->layout == CB_LAYOUT_QPOS) {
         palette_finish_qpos(p, st->stash, clip->first_row, clip->frames);
-    else
-        palette_encode_rows(p, st->kept + (size_t)clip->first_row * p->bone_count * KEPT_FLOATS, clip->first_row,
-                            clip->frames);
+        return;
+    }
+    float *row = malloc((size_t)p->bone_count * CANON(p->layout) * sizeof(float));
+    if (!row) {
+        cb_fail(&st->errors[c], CB_ERR_INTERNAL, "out of memory encoding %s", st->model->source);
+        return;
+    }
+    for (uint32_t r = clip->first_row; r < clip->first_row + clip->frames; ++r) {
+        palette_gather_row(p, st->stash, r, row); /* read before the encoder writes over them */
+        palette_encode_rows(p, row, r, 1);
+    }
+    free(row);
 }
 
 /* ---- the bake ---- */
 
 static void free_bake_state(bake_state *st)
 {
-    free(st->kept), free(st->stash), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
+    free(st->stash), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
     free(st->encode_seconds);
 }
 
@@ -440,10 +449,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     p->texels = cb_alloc_large(p->texel_bytes);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
     p->position_offsets = calloc((size_t)p->bone_count * 3, sizeof(float));
-    size_t bone_rows = (size_t)p->rows * p->bone_count;
-    bool kept = keeps_values(p) && p->layout != CB_LAYOUT_QPOS, staged = keeps_values(p) && !kept;
-    if (kept) st.kept = cb_alloc_large(bone_rows * KEPT_FLOATS * sizeof(float));
-    if (staged) st.stash = cb_alloc_large(bone_rows * 8);
+    if (keeps_values(p)) st.stash = cb_alloc_large((size_t)p->rows * p->bone_count * palette_stash_bytes(p));
     for (uint32_t c = 0; c < p->clip_count; ++c)
         if (p->clips[c].frames > st.max_clip_frames) st.max_clip_frames = p->clips[c].frames;
     radius = malloc((size_t)p->bone_count * sizeof(double));
@@ -453,7 +459,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.clip_blend_error = calloc(p->clip_count, sizeof *st.clip_blend_error);
     st.ranges = calloc(p->clip_count, sizeof *st.ranges);
     st.encode_seconds = calloc(p->clip_count, sizeof *st.encode_seconds);
-    if (!p->texels || !p->bind_positions || !p->position_offsets || (kept && !st.kept) || (staged && !st.stash) || !radius ||
+    if (!p->texels || !p->bind_positions || !p->position_offsets || (keeps_values(p) && !st.stash) || !radius ||
         !st.breaks || !st.errors || !st.clip_error || !st.clip_blend_error || !st.ranges || !st.encode_seconds) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
@@ -467,12 +473,13 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
     palette_merge_ranges(p, st.ranges);
-    if (p->positions_relative && !palette_position_offsets(p, st.kept)) {
+    if (p->positions_relative && !palette_position_offsets(p, st.stash)) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
     }
     double t1 = seconds_now();
-    if (keeps_values(p)) for_each_clip(&st, encode_kept_job, false);
+    if (keeps_values(p)) for_each_clip(&st, encode_staged_job, false);
+    if (first_clip_error(&st, err)) goto fail;
     double t2 = seconds_now(), lo[3], hi[3];
     /* Clips encoded as they were sampled: their encoding time, spread over the threads, moves
      * from the sampling phase to the encoding phase. */

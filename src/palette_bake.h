@@ -69,10 +69,10 @@ typedef struct bake_state {
     const cb_bake_options *opt;
     const cb_clip_info *infos;
     /* Each worker samples a clip's rows into its own buffer and encodes them from there. u16
-     * waits for the ranges of every clip, half for the position offsets: mat4 and affine keep
-     * every row here (KEPT_FLOATS per bone) and encode it after the last clip. */
-    float *kept;
-    unsigned char *stash;  /* qpos/u16 and qpos/half: the encoded quaternions (palette_stage_qpos) */
+     * waits for the ranges of every clip, half for the position offsets: until then the values
+     * wait in the texels, and what does not fit there in the stash (palette_stash_bytes per
+     * bone and row: qpos's encoded quaternions, the rest of mat4's and affine's floats). */
+    unsigned char *stash;
     uint32_t max_clip_frames;
     const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 */
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
@@ -85,11 +85,7 @@ typedef struct bake_state {
     double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
 } bake_state;
 
-/* What mat4 and affine keep of a bone's row for u16 and half until every clip is sampled: all
- * 12 values (qpos keeps its position and scale in its texels, see palette_stage_qpos). */
-#define KEPT_FLOATS 12u
-
-/* The joint's position p = M b of a kept mat4/affine row (the upper 3x4 by rows), axis r. */
+/* The joint's position p = M b of a mat4/affine canonical row (the upper 3x4 by rows), axis r. */
 static inline double row_position(const float *c, const float *b, int r)
 {
     return (double)c[r * 4] * b[0] + (double)c[r * 4 + 1] * b[1] + (double)c[r * 4 + 2] * b[2] + c[r * 4 + 3];
@@ -103,9 +99,15 @@ void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint3
  * (palette_finish_qpos). */
 void palette_stage_qpos(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count);
 void palette_finish_qpos(cb_palette *p, const unsigned char *stash, uint32_t first, uint32_t count);
+/* mat4 and affine in place, for u16 and half: `count` rows' canonical floats staged in their
+ * texels and the stash (palette_stage_rows), and row r's gathered back, to be encoded
+ * (palette_gather_row). palette_stash_bytes: the stash's bytes per bone and row (qpos too). */
+void palette_stage_rows(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count);
+void palette_gather_row(const cb_palette *p, const unsigned char *stash, uint32_t r, float *row);
+uint32_t palette_stash_bytes(const cb_palette *p);
 /* Relative half palettes: each bone's position offset, the middle of its positions' range,
- * from the kept rows (mat4, affine) or the staged texels (qpos, kept NULL). False: out of memory. */
-bool palette_position_offsets(cb_palette *p, const float *kept);
+ * from the staged values. False: out of memory. */
+bool palette_position_offsets(cb_palette *p, const unsigned char *stash);
 /* Sets p->bounds_min/max and linear_range from every clip's range. */
 void palette_merge_ranges(cb_palette *p, const value_range *clips);
 

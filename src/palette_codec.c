@@ -241,24 +241,63 @@ void palette_finish_qpos(cb_palette *p, const unsigned char *stash, uint32_t fir
     }
 }
 
-/* qpos/half: each bone's position offset, the centre of the box of its positions over every
- * row. A half float's step grows with the value; positions less the centre stay within half
- * the bone's reach (Cow: 0.60 -> 0.32 mm/m; less its bind position, a body that falls or
- * travels still lands far from it). qpos reads the positions staged in the texels; the other
- * layouts, their kept rows. Row by row, so that the texels are read once, in order. */
-bool palette_position_offsets(cb_palette *p, const float *kept)
+/* mat4 and affine in place, for u16 and half: a bone's 12 canonical floats wait for every
+ * clip's range or offset split between its texels (as many floats as they hold: mat4 8,
+ * affine 6) and the stash (the rest), then go through the ordinary encoder row by row. */
+static uint32_t texel_floats(const cb_palette *p) { return p->texels_per_bone * 8 / 4; } /* 8-byte texels */
+uint32_t palette_stash_bytes(const cb_palette *p) { return p->layout == CB_LAYOUT_QPOS ? 8 : (12 - texel_floats(p)) * 4; }
+
+static unsigned char *row_texels(const cb_palette *p, uint32_t row)
+{
+    uint32_t x0, y;
+    cb_palette_texel_xy(p, row, 0, &x0, &y);
+    return (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8;
+}
+
+void palette_stage_rows(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count)
+{
+    uint32_t in_texels = texel_floats(p), in_stash = 12 - in_texels, bone_bytes = p->texels_per_bone * 8;
+    for (uint32_t r = first; r < first + count; ++r) {
+        unsigned char *d = row_texels(p, r), *q = stash + (size_t)r * p->bone_count * in_stash * 4;
+        const float *v = rows + (size_t)(r - first) * p->bone_count * 12;
+        for (uint32_t j = 0; j < p->bone_count; ++j, v += 12, d += bone_bytes, q += in_stash * 4) {
+            memcpy(d, v, in_texels * sizeof(float));
+            memcpy(q, v + in_texels, in_stash * sizeof(float));
+        }
+    }
+}
+
+/* Row r's canonical floats back from its texels and the stash (before the texels are encoded). */
+void palette_gather_row(const cb_palette *p, const unsigned char *stash, uint32_t r, float *row)
+{
+    uint32_t in_texels = texel_floats(p), in_stash = 12 - in_texels, bone_bytes = p->texels_per_bone * 8;
+    const unsigned char *d = row_texels(p, r), *q = stash + (size_t)r * p->bone_count * in_stash * 4;
+    for (uint32_t j = 0; j < p->bone_count; ++j, row += 12, d += bone_bytes, q += in_stash * 4) {
+        memcpy(row, d, in_texels * sizeof(float));
+        memcpy(row + in_texels, q, in_stash * sizeof(float));
+    }
+}
+
+/* Relative half palettes: each bone's position offset, the centre of the box of its positions
+ * over every row. A half float's step grows with the value; positions less the centre stay
+ * within half the bone's reach (Cow: 0.60 -> 0.32 mm/m; less its bind position, a body that
+ * falls or travels still lands far from it). From the values staged in the texels (and for
+ * mat4 and affine the stash), row by row, so that the texels are read once, in order. */
+bool palette_position_offsets(cb_palette *p, const unsigned char *stash)
 {
     double *box = malloc((size_t)p->bone_count * 6 * sizeof(double)); /* lo[3], hi[3] per bone */
-    if (!box) return false;
+    float *row = p->layout == CB_LAYOUT_QPOS ? NULL : malloc((size_t)p->bone_count * 12 * sizeof(float));
+    if (!box || (p->layout != CB_LAYOUT_QPOS && !row)) return free(box), free(row), false;
     for (uint32_t j = 0; j < p->bone_count; ++j)
         for (int k = 0; k < 3; ++k) box[j * 6 + k] = INFINITY, box[j * 6 + 3 + k] = -INFINITY;
     for (uint32_t r = 0; r < p->rows; ++r) {
         const unsigned char *d = p->layout == CB_LAYOUT_QPOS ? qpos_texel(p, r) : NULL;
+        if (row) palette_gather_row(p, stash, r, row);
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             float staged[4];
             const float *v = staged;
             if (d) staged_values(d + (size_t)j * 16, staged);
-            else v = kept + ((size_t)r * p->bone_count + j) * KEPT_FLOATS;
+            else v = row + (size_t)j * 12;
             double *lo = box + j * 6, *hi = lo + 3;
             for (int k = 0; k < 3; ++k) {
                 double x = d ? v[k] : row_position(v, p->bind_positions + (size_t)j * 3, k);
@@ -269,7 +308,7 @@ bool palette_position_offsets(cb_palette *p, const float *kept)
     for (uint32_t j = 0; j < p->bone_count; ++j)
         for (int k = 0; k < 3; ++k)
             p->position_offsets[(size_t)j * 3 + k] = p->rows ? (float)(0.5 * (box[j * 6 + k] + box[j * 6 + 3 + k])) : 0;
-    free(box);
+    free(box), free(row);
     return true;
 }
 
