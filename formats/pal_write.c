@@ -128,7 +128,7 @@ static unsigned char *build_meta(const cb_palette *p, const cb_model *m, int32_t
     return d;
 }
 
-enum { ZSTD_CHUNK = 1 << 20 };
+enum { ZSTD_CHUNK = 64 << 10 }; /* small enough that most palettes take several */
 
 /* Compresses the texels into the file a chunk at a time (the compressed copy of a large
  * palette is nearly its size again). The input is stable and its size pledged, which gives the
