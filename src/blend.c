@@ -8,16 +8,23 @@
  * overshoots the kinks a linearly keyed source has at every key, and a dual-quaternion (screw)
  * blend, better on key-aligned rates, needed more rows than fitted rows (src/fit.c) with this
  * blend for the same error; neither shipped. */
-#include "crowdbake/palette.h"
+#include "palette_bake.h"
+
+void palette_blend_values(const cb_palette *p, uint32_t bone, const double a[16], const double b[16], double fr,
+                          double out[16])
+{
+    double v[16], sign = 1;
+    if (p->layout == CB_LAYOUT_QPOS && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0)
+        sign = -1; /* the shorter way between the rows */
+    for (uint32_t k = 0; k < p->texels_per_bone * 4; ++k) v[k] = a[k] * (1 - fr) + (k < 4 ? sign * b[k] : b[k]) * fr;
+    cb_palette_values_to_matrix(p, bone, v, out); /* normalizes q for qpos */
+}
 
 void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr, uint32_t bone,
                       double out[16])
 {
-    double a[16], b[16], v[16];
+    double a[16], b[16];
     cb_palette_decode_values(p, texels, row0, bone, a);
     cb_palette_decode_values(p, texels, row1, bone, b);
-    if (p->layout == CB_LAYOUT_QPOS && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0)
-        for (int k = 0; k < 4; ++k) b[k] = -b[k]; /* the shorter way between the rows */
-    for (uint32_t k = 0; k < p->texels_per_bone * 4; ++k) v[k] = a[k] * (1 - fr) + b[k] * fr;
-    cb_palette_values_to_matrix(p, bone, v, out); /* normalizes q for qpos */
+    palette_blend_values(p, bone, a, b, fr, out);
 }

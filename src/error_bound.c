@@ -65,3 +65,55 @@ static int by_bound(const void *pa, const void *pb)
 }
 
 void cb_sort_bounded_rows(cb_bounded_row *rows, uint32_t count) { qsort(rows, count, sizeof *rows, by_bound); }
+
+bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_joint_error *out)
+{
+    for (uint32_t j = 0; j < bones; ++j) {
+        const double *D = diff + (size_t)j * 16;
+        double bx = bind[j * 3], by = bind[j * 3 + 1], bz = bind[j * 3 + 2];
+        double ex = D[0] * bx + D[4] * by + D[8] * bz + D[12];
+        double ey = D[1] * bx + D[5] * by + D[9] * bz + D[13];
+        double ez = D[2] * bx + D[6] * by + D[10] * bz + D[14];
+        double a = stretch(D), t = sqrt(D[12] * D[12] + D[13] * D[13] + D[14] * D[14]);
+        out[j].at_bind = sqrt(ex * ex + ey * ey + ez * ez);
+        out[j].stretch = a;
+        /* As in cb_row_error_bound: 1e-9 of the terms' sizes covers the rounding. */
+        out[j].slack_fixed = 1e-9 * (a * sqrt(bx * bx + by * by + bz * bz) + t);
+        out[j].translation = t, out[j].diff = D;
+        if (!isfinite(out[j].at_bind + out[j].slack_fixed)) return false;
+    }
+    return true;
+}
+
+/* min(W max_j e_j, sum_j w_j e_j) over the group's joints, e_j from the bind position out to the
+ * reach or (centred) from the centre out to the spread. */
+static double combine(const cb_vertex_groups *g, const cb_vertex_group *grp, const cb_joint_error *joints, bool centred)
+{
+    double most = 0, sum = 0;
+    for (uint32_t k = 0; k < grp->joint_count; ++k) {
+        const cb_group_joint *gj = &g->joints[grp->joint_first + k];
+        const cb_joint_error *je = &joints[gj->joint];
+        double e = je->at_bind + je->stretch * gj->reach * (1 + 2e-9) + je->slack_fixed;
+        if (centred) {
+            const double *D = je->diff, *c = gj->centre;
+            double cx = D[0] * c[0] + D[4] * c[1] + D[8] * c[2] + D[12];
+            double cy = D[1] * c[0] + D[5] * c[1] + D[9] * c[2] + D[13];
+            double cz = D[2] * c[0] + D[6] * c[1] + D[10] * c[2] + D[14];
+            double size = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) + gj->spread;
+            double around = sqrt(cx * cx + cy * cy + cz * cz) + je->stretch * gj->spread * (1 + 2e-9) +
+                            1e-9 * (je->stretch * size + je->translation);
+            e = around < e ? around : e;
+        }
+        most = e > most ? e : most;
+        sum += gj->weight * e;
+    }
+    double bound = grp->weight_sum * most;
+    return (sum < bound ? sum : bound) * (1 + 1e-9);
+}
+
+double cb_group_error_bound(const cb_vertex_groups *g, uint32_t group, const cb_joint_error *joints, double above)
+{
+    const cb_vertex_group *grp = &g->groups[group];
+    double bound = combine(g, grp, joints, false);
+    return bound > above ? combine(g, grp, joints, true) : bound;
+}

@@ -10,6 +10,7 @@
 #define CB_ERROR_BOUND_H
 
 #include "crowdbake/crowdbake.h"
+#include "vertex_groups.h"
 
 /* The largest sum of |weights| of a vertex of the skin's primitives (0 when none). */
 double cb_skin_max_weight_sum(const cb_model *model, int32_t skin);
@@ -17,6 +18,24 @@ double cb_skin_max_weight_sum(const cb_model *model, int32_t skin);
 /* The bound for one row: diff holds 16 doubles per bone; radius[j] < 0 for joints that move
  * no vertex. It exceeds what cb_skin_positions computes from diff, rounding included. */
 double cb_row_error_bound(const double *diff, uint32_t bones, const float *bind, const double *radius, double weight_sum);
+
+/* What a bound needs of each joint's difference D (16 doubles, column-major). */
+typedef struct cb_joint_error {
+    double at_bind;     /* |D b|: the error at the joint's bind position */
+    double stretch;     /* an upper bound on |A|, the 3x3 part's largest stretch */
+    double slack_fixed; /* rounding slack for the terms that do not grow with the reach */
+    double translation; /* |t|, D's translation */
+    const double *diff; /* D itself */
+} cb_joint_error;
+
+/* The terms for every joint; false when a difference is not finite (then no bound holds). */
+bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_joint_error *out);
+
+/* An upper bound on the error cb_skin_group_worst computes for group g (vertex_groups.h) from
+ * the differences whose terms are `joints`, rounding included. The cheap bound (from the
+ * joints' bind positions) where that is at most `above`, else the tighter of it and the bound
+ * from the centres of the group's vertices (0: always the tighter). */
+double cb_group_error_bound(const cb_vertex_groups *g, uint32_t group, const cb_joint_error *joints, double above);
 
 /* A row to measure and its bound. */
 typedef struct cb_bounded_row {

@@ -297,10 +297,11 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
 typedef struct job {
     bake_state *st;
     void (*run)(bake_state *st, worker *w, uint32_t clip);
-    bool samples; /* run uses the worker's sampler and scratch */
+    bool samples;   /* run uses the worker's sampler and scratch */
+    uint32_t count; /* jobs: one per clip, or per part of a clip */
 } job;
 
-/* One thread's share: clips first, first + stride, ... */
+/* One thread's share: jobs first, first + stride, ... */
 static void job_main(void *arg, uint32_t first, uint32_t stride)
 {
     job *jb = arg;
@@ -321,7 +322,7 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     if (jb->samples && (!w.sampler || !w.mats || !w.sims || !w.prev || !w.first)) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
-        for (uint32_t c = first; c < st->p->clip_count; c += stride) jb->run(st, &w, c);
+        for (uint32_t c = first; c < jb->count; c += stride) jb->run(st, &w, c);
     }
     cb_sampler_free(w.sampler);
     free(w.mats);
@@ -331,19 +332,19 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     free(w.rows);
 }
 
-static uint32_t threads_used(const bake_state *st)
+static uint32_t threads_used(const bake_state *st, uint32_t jobs)
 {
     uint32_t threads = st->opt->threads ? st->opt->threads : 1;
-    if (threads > st->p->clip_count) threads = st->p->clip_count ? st->p->clip_count : 1;
+    if (threads > jobs) threads = jobs ? jobs : 1;
     return threads > 64 ? 64 : threads;
 }
 
-/* Runs `run` for every clip, clip c on thread c % threads. Each clip writes only its own rows
- * and slots, so the result does not depend on the thread count. */
-static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, uint32_t), bool samples)
+/* Runs `run` for jobs 0 .. count - 1 (default: every clip), job k on thread k % threads. Each
+ * job writes only its own rows and slots, so the result does not depend on the thread count. */
+static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, uint32_t), bool samples, uint32_t count)
 {
-    job jb = {st, run, samples};
-    cb_pool_run(threads_used(st), job_main, &jb);
+    job jb = {st, run, samples, count ? count : st->p->clip_count};
+    cb_pool_run(threads_used(st, jb.count), job_main, &jb);
 }
 
 
@@ -382,13 +383,13 @@ static void encode_staged_job(bake_state *st, worker *w, uint32_t c)
 static void free_bake_state(bake_state *st)
 {
     free(st->stash), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
-    free(st->encode_seconds);
+    free(st->encode_seconds), cb_vertex_groups_free(&st->groups);
 }
 
 /* The first error in clip order, so the message does not depend on the thread count. */
 static cb_status first_clip_error(const bake_state *st, cb_error *err)
 {
-    for (uint32_t c = 0; c < st->p->clip_count; ++c)
+    for (uint32_t c = 0; c < 2 * st->p->clip_count; ++c) /* a clip's, then its baked rows' measurement's */
         if (st->errors[c].status) {
             *err = st->errors[c];
             return err->status;
@@ -454,7 +455,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
         if (p->clips[c].frames > st.max_clip_frames) st.max_clip_frames = p->clips[c].frames;
     radius = malloc((size_t)p->bone_count * sizeof(double));
     st.breaks = calloc(p->clip_count, sizeof *st.breaks);
-    st.errors = calloc(p->clip_count, sizeof *st.errors);
+    st.errors = calloc(2 * (size_t)p->clip_count, sizeof *st.errors);
     st.clip_error = calloc(p->clip_count, sizeof *st.clip_error);
     st.clip_blend_error = calloc(p->clip_count, sizeof *st.clip_blend_error);
     st.ranges = calloc(p->clip_count, sizeof *st.ranges);
@@ -469,7 +470,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     p->positions_relative = p->precision == CB_PRECISION_HALF;
     bool skinned = palette_joint_reach(p, m, skin_index, radius);
     st.radius = radius;
-    for_each_clip(&st, sample_clip_job, true);
+    for_each_clip(&st, sample_clip_job, true, 0);
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
     palette_merge_ranges(p, st.ranges);
@@ -478,23 +479,26 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
         goto fail;
     }
     double t1 = seconds_now();
-    if (keeps_values(p)) for_each_clip(&st, encode_staged_job, false);
+    if (keeps_values(p)) for_each_clip(&st, encode_staged_job, false, 0);
     if (first_clip_error(&st, err)) goto fail;
     double t2 = seconds_now(), lo[3], hi[3];
     /* Clips encoded as they were sampled: their encoding time, spread over the threads, moves
      * from the sampling phase to the encoding phase. */
     double encoded_while_sampling = 0;
     for (uint32_t c = 0; c < p->clip_count; ++c) encoded_while_sampling += st.encode_seconds[c];
-    encoded_while_sampling /= threads_used(&st);
+    encoded_while_sampling /= threads_used(&st, p->clip_count);
     p->model_height = opt->error_goal > 0 ? 0 : cb_skin_rest_bounds(sampler, lo, hi); /* a search knows it */
     /* Exact skinning of every vertex at every row costs rows x vertices; past ~4M vertex-rows
      * an even subset of rows (always each clip's last) measures the error. */
     uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);
     st.error_stride = work > CB_ERROR_BUDGET ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
     p->error_rows_measured = 0;
-    st.weight_sum = cb_skin_max_weight_sum(m, skin_index);
+    if (skinned && !cb_vertex_groups_build(m, skin_index, p->bind_positions, &st.groups)) {
+        cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring the palette's error", m->source);
+        goto fail;
+    }
     if (skinned) {
-        for_each_clip(&st, palette_measure_clip, true);
+        for_each_clip(&st, palette_measure_job, true, palette_measure_jobs(&st));
         if (first_clip_error(&st, err)) goto fail;
         for (uint32_t c = 0; c < p->clip_count; ++c) {
             p->max_error = fmax(p->max_error, st.clip_error[c]);

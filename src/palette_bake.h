@@ -8,6 +8,7 @@
 
 #include "crowdbake/palette.h"
 #include "cb_math.h"
+#include "vertex_groups.h"
 
 /* Canonical floats per bone and row before the final encoding: the upper 3x4 of the matrix
  * by rows (mat4, affine), or quaternion, position and scale (qpos). */
@@ -76,9 +77,9 @@ typedef struct bake_state {
     uint32_t max_clip_frames;
     const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 */
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
-    cb_error *errors;      /* clips: the first error of each */
+    cb_error *errors;      /* 2 x clips: the first error of each clip, then of measuring its baked rows */
     uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
-    double weight_sum;     /* the largest sum of a vertex's |weights| (error_bound.h) */
+    cb_vertex_groups groups; /* the skinned vertices as measuring bounds and skins them */
     double *clip_error;    /* clips: worst vertex error measured */
     double *clip_blend_error; /* clips: worst vertex error halfway between rows, as the runtime blends them */
     value_range *ranges;   /* clips: the values' ranges */
@@ -119,9 +120,20 @@ cb_status palette_plan_texture(cb_palette *p, uint32_t max_size, const char *sou
 void palette_bind_positions(cb_palette *p, const cb_skin *skin);
 void palette_zero_padding(cb_palette *p);
 
-/* The worst vertex errors of clip c, at its rows and between them (st->clip_error,
- * st->clip_blend_error). */
-void palette_measure_clip(bake_state *st, worker *w, uint32_t c);
+/* Every bone's values of one row of p->texels, 16 doubles apart, as cb_palette_decode_values
+ * gives them. */
+void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values);
+/* cb_palette_blend from two rows' decoded values of a bone. */
+void palette_blend_values(const cb_palette *p, uint32_t bone, const double a[16], const double b[16], double fr,
+                          double out[16]);
+
+/* The measurement's jobs: two a clip, its blends and its baked rows, measured apart (st->errors:
+ * the clip's, then the rows' after every clip's); one a clip with an error goal, where the
+ * rows only count above the blends. */
+uint32_t palette_measure_jobs(const bake_state *st);
+/* Measurement job k: the worst vertex errors of its clip at its rows and/or between them
+ * (st->clip_error, st->clip_blend_error). */
+void palette_measure_job(bake_state *st, worker *w, uint32_t k);
 /* Bind-space distance from each joint's bind position to the farthest vertex it moves; -1 for
  * joints that move none. False when no vertex is skinned. */
 bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, double *radius);

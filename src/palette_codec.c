@@ -312,22 +312,52 @@ bool palette_position_offsets(cb_palette *p, const unsigned char *stash)
     return true;
 }
 
-void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16])
+/* One bone's values from its texels at d; kinds[i] is u16_kind of value i (u16 only). */
+static void decode_bone(const cb_palette *p, const unsigned char *d, const int *kinds, uint32_t bone, double v[16])
 {
-    uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
-    cb_palette_texel_xy(p, row, bone, &x, &y);
-    const unsigned char *d = (const unsigned char *)texels + ((size_t)y * p->width + x) * tb;
+    if (p->precision == CB_PRECISION_U16 && p->layout == CB_LAYOUT_QPOS) {
+        /* The default encoding, written out (decode_u16's arithmetic for kinds 4, 1..3 and 5). */
+        for (int i = 0; i < 4; ++i) v[i] = snorm16_decode(load_le16(d + i * 2));
+        for (int i = 0; i < 3; ++i) v[4 + i] = unorm16_decode(load_le16(d + 8 + i * 2), p->bounds_min[i], p->bounds_max[i]);
+        v[7] = unorm16_decode(load_le16(d + 14), 0, p->linear_range);
+        for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->position_offsets[(size_t)bone * 3 + k];
+        return;
+    }
     for (uint32_t i = 0; i < p->texels_per_bone * 4; ++i) {
         if (p->precision == CB_PRECISION_FLOAT)
             v[i] = load_le32f(d + i * 4);
         else if (p->precision == CB_PRECISION_HALF)
             v[i] = cb_half_to_float(load_le16(d + i * 2));
         else
-            v[i] = decode_u16(p, u16_kind(p->layout, (int)i), load_le16(d + i * 2));
+            v[i] = decode_u16(p, kinds[i], load_le16(d + i * 2));
     }
     /* The position values: qpos's texel 1, mat4's column 3, affine's w of each row. */
     static const int at[3][3] = {{12, 13, 14}, {3, 7, 11}, {4, 5, 6}};
     for (int k = 0; p->positions_relative && k < 3; ++k) v[at[p->layout][k]] += p->position_offsets[(size_t)bone * 3 + k];
+}
+
+static void value_kinds(cb_layout layout, int kinds[16])
+{
+    for (int i = 0; i < 16; ++i) kinds[i] = u16_kind(layout, i);
+}
+
+void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16])
+{
+    uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
+    int kinds[16];
+    value_kinds(p->layout, kinds);
+    cb_palette_texel_xy(p, row, bone, &x, &y);
+    decode_bone(p, (const unsigned char *)texels + ((size_t)y * p->width + x) * tb, kinds, bone, v);
+}
+
+void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values)
+{
+    uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
+    int kinds[16];
+    value_kinds(p->layout, kinds);
+    cb_palette_texel_xy(p, row, 0, &x, &y); /* a row's bones lie side by side */
+    const unsigned char *d = (const unsigned char *)p->texels + ((size_t)y * p->width + x) * tb;
+    for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) decode_bone(p, d, kinds, j, values + (size_t)j * 16);
 }
 
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])

@@ -5,16 +5,70 @@
 #include "error_bound.h"
 #include "palette_bake.h"
 
+/* A measurement's scratch: one row's differences, their bound terms and its group bounds. */
+typedef struct measure_scratch {
+    double *diff;             /* bones * 16 */
+    cb_joint_error *joints;   /* bones */
+    double *group_bounds;     /* groups */
+    cb_bounded_row *rows;     /* the clip's frames */
+    double *values[2];        /* bones * 16: two decoded palette rows */
+    uint32_t value_row[2];    /* which (UINT32_MAX: none) */
+} measure_scratch;
+
+/* Palette row `row` decoded, from whichever slot holds it, else decoded into the slot that does
+ * not hold row `keep`: a blend's second row is the next blend's first. */
+static const double *row_values(const cb_palette *p, measure_scratch *s, uint32_t row, uint32_t keep)
+{
+    for (int k = 0; k < 2; ++k)
+        if (s->value_row[k] == row) return s->values[k];
+    int k = s->value_row[0] == keep ? 1 : 0;
+    palette_decode_row_values(p, row, s->values[k]);
+    s->value_row[k] = row;
+    return s->values[k];
+}
+
+/* A row's bound: its largest group bound (infinite when a difference is not finite). */
+static double row_bound(const bake_state *st, measure_scratch *s)
+{
+    if (!cb_joint_errors(s->diff, st->p->bone_count, st->p->bind_positions, s->joints)) return INFINITY;
+    double most = 0;
+    for (uint32_t k = 0; k < st->groups.group_count; ++k) most = fmax(most, cb_group_error_bound(&st->groups, k, s->joints, most));
+    return most;
+}
+
+/* The worst vertex error of one row, or `worst` when none exceeds it: the group with the
+ * largest bound first (it most likely holds the row's worst), then each group whose bound
+ * exceeds the worst so far. The groups skipped cannot change the maximum, which is the one
+ * skinning every vertex gives, bit for bit. */
+static double skin_row(const bake_state *st, measure_scratch *s, double worst)
+{
+    const cb_vertex_groups *g = &st->groups;
+    bool finite = cb_joint_errors(s->diff, st->p->bone_count, st->p->bind_positions, s->joints);
+    uint32_t top = 0;
+    for (uint32_t k = 0; k < g->group_count; ++k) {
+        s->group_bounds[k] = finite ? cb_group_error_bound(g, k, s->joints, worst) : INFINITY;
+        if (s->group_bounds[k] > s->group_bounds[top]) top = k;
+    }
+    for (uint32_t n = 0; n <= g->group_count; ++n) {
+        uint32_t k = n ? n - 1 : top;
+        if ((n && k == top) || s->group_bounds[k] <= worst) continue;
+        const cb_vertex_group *grp = &g->groups[k];
+        const cb_primitive *prim = &st->model->primitives[grp->primitive];
+        worst = fmax(worst, sqrt(cb_skin_group_worst(prim, g->vertices + grp->first, grp->count, s->diff)));
+    }
+    return worst;
+}
+
 /* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
- * the next at fraction sub / parts, blended as the runtime does. Skinning is linear in the
- * matrices, so one skinning with (exact - decoded) gives each vertex's error directly: half
- * the work of skinning twice, and no cancellation. Rows baked from similarities are measured
- * against those, sampled together like the bake did. */
+ * the next at fraction sub / parts, blended as the runtime does, or `worst` when none exceeds
+ * it; with `bounds`, only each row's bound. Skinning is linear in the matrices, so one skinning
+ * with (exact - decoded) gives each vertex's error directly: half the work of skinning twice,
+ * and no cancellation. Rows baked from similarities are measured against those, sampled
+ * together like the bake did. */
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
-                           uint32_t sub, uint32_t parts, double *diff, double *err_pos, double *bounds)
+                           uint32_t sub, uint32_t parts, measure_scratch *s, double *bounds, double worst)
 {
     cb_palette *p = st->p;
-    const cb_model *m = st->model;
     const cb_palette_clip *clip = &p->clips[c];
     /* Fraction sub / parts between rows f and f + 1 is row parts * f + sub of the clip framed at
      * `parts` times the steps. */
@@ -24,53 +78,53 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     framing.steps *= parts;
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
     if (similar) cb_clip_frame_similarities(w->sampler, &framing, times, count, st->opt->root_motion, w->sims);
-    double worst = 0;
     for (uint32_t i = 0; i < count; ++i) {
         if (!similar) cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
         uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
+        const double *a = row_values(p, s, row, next), *b = sub ? row_values(p, s, next, row) : NULL;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
-            double *d = diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
+            double *d = s->diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
             if (similar) cb_similarity_matrix(&w->sims[(size_t)i * p->bone_count + j], exact);
-            if (sub) cb_palette_blend(p, p->texels, row, next, (double)sub / parts, j, d);
-            else cb_palette_decode(p, p->texels, row, j, d);
+            if (sub) palette_blend_values(p, j, a + (size_t)j * 16, b + (size_t)j * 16, (double)sub / parts, d);
+            else cb_palette_values_to_matrix(p, j, a + (size_t)j * 16, d);
             for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
         }
-        if (bounds) { /* only the row's upper bound (error_bound.h) */
-            bounds[i] = cb_row_error_bound(diff, p->bone_count, p->bind_positions, st->radius, st->weight_sum);
-            continue;
-        }
-        for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
-            const cb_primitive *prim = &m->primitives[pi];
-            if (prim->skin != st->skin) continue;
-            cb_skin_positions(prim, diff, err_pos);
-            for (uint64_t v = 0; v < (uint64_t)prim->vertex_count * 3; v += 3) {
-                double d2 = err_pos[v] * err_pos[v] + err_pos[v + 1] * err_pos[v + 1] + err_pos[v + 2] * err_pos[v + 2];
-                worst = d2 > worst ? d2 : worst;
-            }
-        }
+        if (bounds) bounds[i] = row_bound(st, s);
+        else worst = skin_row(st, s, worst);
     }
-    return sqrt(worst);
+    return worst;
 }
 
 /* The worst vertex error of clip c over every error_stride-th row and the last (sub > 0: at
  * fraction sub / parts from each of those rows to the next, as the runtime blends them; a
- * one-shot's last row has no next). Branch and bound: every row's cheap bound first, then exact
- * skinning in order of bound, largest first, until no row left can exceed the worst found - the
- * same maximum as skinning every row, for a fraction of the work. Rows that cannot exceed
- * `floor` are not measured (0 when none may be skipped): the result is exact when above it.
- * With an error goal, measuring also stops once the worst exceeds it. */
+ * one-shot's last row has no next). Rows that cannot exceed `floor` are not measured (0 when
+ * none may be skipped): the result is exact when above it. With an error goal, measuring also
+ * stops once the worst exceeds it.
+ *
+ * Blends err most where the motion is fastest, so their rows' bounds differ widely: branch and
+ * bound - every row's bound first, then the rows in order of bound, largest first, until no row
+ * left can exceed the worst found - samples few rows twice. The baked rows' encoding error is
+ * much the same on every row, and so are their bounds: those rows are measured in one pass in
+ * frame order, each skinning only its groups that could exceed the worst so far. */
 static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t sub, uint32_t parts, double floor,
-                                double *diff, double *err_pos, cb_bounded_row *rows)
+                                measure_scratch *s)
 {
+    cb_bounded_row *rows = s->rows;
     const cb_palette_clip *clip = &st->p->clips[c];
     uint32_t frames = sub && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], n = 0;
     for (uint32_t f = 0; f < frames; ++f)
         if (f % st->error_stride == 0 || f + 1 == frames) rows[n++].frame = f;
     double bounds[CB_SAMPLE_BATCH], worst = floor, goal = st->opt->error_goal;
+    for (uint32_t i = 0; i < n && !sub && !(goal > 0 && worst > goal); i += CB_SAMPLE_BATCH) {
+        uint32_t count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
+        for (uint32_t k = 0; k < count; ++k) batch[k] = rows[i + k].frame;
+        worst = measure_rows(st, w, c, batch, count, sub, parts, s, NULL, worst);
+    }
+    if (!sub) return worst;
     for (uint32_t i = 0; i < n; i += CB_SAMPLE_BATCH) {
         uint32_t count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
         for (uint32_t k = 0; k < count; ++k) batch[k] = rows[i + k].frame;
-        measure_rows(st, w, c, batch, count, sub, parts, diff, err_pos, bounds);
+        measure_rows(st, w, c, batch, count, sub, parts, s, bounds, 0);
         for (uint32_t k = 0; k < count; ++k) rows[i + k].bound = bounds[k];
     }
     cb_sort_bounded_rows(rows, n);
@@ -83,40 +137,43 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
                 uint32_t swap = batch[y];
                 batch[y] = batch[y - 1], batch[y - 1] = swap;
             }
-        worst = fmax(worst, measure_rows(st, w, c, batch, count, sub, parts, diff, err_pos, NULL));
+        worst = measure_rows(st, w, c, batch, count, sub, parts, s, NULL, worst);
     }
     return worst;
 }
 
-void palette_measure_clip(bake_state *st, worker *w, uint32_t c)
+uint32_t palette_measure_jobs(const bake_state *st)
+{
+    return st->opt->error_goal > 0 ? st->p->clip_count : 2 * st->p->clip_count;
+}
+
+void palette_measure_job(bake_state *st, worker *w, uint32_t k)
 {
     const cb_palette *p = st->p;
-    uint64_t verts = cb_model_skin_vertex_count(st->model, st->skin);
-    double *diff = malloc((size_t)p->bone_count * 16 * sizeof(double));
-    double *err_pos = malloc((size_t)(verts ? verts : 1) * 3 * sizeof(double));
-    st->clip_error[c] = st->clip_blend_error[c] = 0;
-    cb_bounded_row *rows = malloc((size_t)p->clips[c].frames * sizeof *rows);
+    double goal = st->opt->error_goal, blend = 0;
+    uint32_t c = goal > 0 ? k : k / 2;
+    bool blends = goal > 0 || k % 2 == 0; /* else the baked rows */
+    size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
+    measure_scratch s = {malloc(matrices), malloc(p->bone_count * sizeof *s.joints),
+                         malloc((st->groups.group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows),
+                         {malloc(matrices), malloc(matrices)}, {UINT32_MAX, UINT32_MAX}};
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
      * ways, so their quarter points are measured too. */
     uint32_t parts = p->fitted ? 4 : 2;
-    double goal = st->opt->error_goal, blend = 0;
-    if (diff && err_pos && rows && verts) {
-        /* Each fraction's rows only count where they exceed the worst blend so far. */
-        for (uint32_t sub = 1; sub < parts && !(goal > 0 && blend > goal); ++sub)
-            blend = measure_clip_rows(st, w, c, sub, parts, blend, diff, err_pos, rows);
+    if (!(s.diff && s.joints && s.group_bounds && s.rows && s.values[0] && s.values[1])) {
+        cb_fail(&st->errors[blends ? c : p->clip_count + c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
+    } else if (goal > 0) { /* the blends, then only the baked rows that could exceed them */
+        for (uint32_t sub = 1; sub < parts && !(blend > goal); ++sub) blend = measure_clip_rows(st, w, c, sub, parts, blend, &s);
         st->clip_blend_error[c] = blend;
-        if (goal > 0) { /* only the visible error: the baked rows that could exceed the blend */
-            double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, diff, err_pos, rows);
-            st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
-        } else {
-            st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, diff, err_pos, rows);
-        }
-    } else if (verts) {
-        cb_fail(&st->errors[c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
+        double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, &s);
+        st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
+    } else if (blends) { /* each fraction's rows only count where they exceed the worst blend so far */
+        for (uint32_t sub = 1; sub < parts; ++sub) blend = measure_clip_rows(st, w, c, sub, parts, blend, &s);
+        st->clip_blend_error[c] = blend;
+    } else {
+        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, &s);
     }
-    free(diff);
-    free(err_pos);
-    free(rows);
+    free(s.diff), free(s.joints), free(s.group_bounds), free(s.rows), free(s.values[0]), free(s.values[1]);
 }
 
 /* Bind-space distance from each joint's bind position to the farthest vertex it moves;

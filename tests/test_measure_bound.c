@@ -1,12 +1,15 @@
 /* test_measure_bound.c - the bake measures its errors by branch and bound (src/error_bound.h):
- * the cheap per-row bound really bounds what skinning computes, the maxima equal those of
- * skinning every row (recomputed here row by row, bit for bit), an error goal only shortens
- * measurements past it, and fps = "auto" chooses the same rates on any thread count. */
+ * the cheap per-row bound really bounds what skinning computes, so do the per-group bounds
+ * (src/vertex_groups.h) over a partition of the skinned vertices, the maxima equal those of
+ * skinning every vertex of every row (recomputed here row by row, bit for bit), an error goal
+ * only shortens measurements past it, and fps = "auto" chooses the same rates on any thread
+ * count. */
 #include "testutil.h"
 
 #include <math.h>
 
 #include "../src/error_bound.h"
+#include "../src/vertex_groups.h"
 #include "crowdbake/palette.h"
 #include "crowdbake/runtime.h"
 
@@ -87,6 +90,114 @@ static void test_bound_holds_and_is_tight_on_fox(void **state)
     cb_palette_free(&p);
     cb_sampler_free(s);
     cb_model_free(m);
+}
+
+/* Per joint: a random difference of the kind `kind` names: 0 a small rotation about the bind
+ * position plus a small translation (an encoding's error), 1 a shrink towards the bind position
+ * (a blend's chord), 2 any small 3x4 (a bound must not rely on the others' shape). */
+static void random_differences(double *diff, uint32_t bones, const float *bind, int kind)
+{
+    for (uint32_t j = 0; j < bones; ++j) {
+        double *D = diff + (size_t)j * 16, w[3] = {uniform(), uniform(), uniform()}, eps = 1e-3 * uniform();
+        const float *b = bind + (size_t)j * 3;
+        memset(D, 0, 16 * sizeof *D);
+        if (kind == 0)
+            D[1] = eps * w[2], D[2] = -eps * w[1], D[4] = -eps * w[2], D[6] = eps * w[0], D[8] = eps * w[1], D[9] = -eps * w[0];
+        else if (kind == 1)
+            D[0] = D[5] = D[10] = -fabs(eps);
+        else
+            for (int c = 0; c < 3; ++c)
+                for (int r = 0; r < 3; ++r) D[c * 4 + r] = eps * uniform();
+        for (int r = 0; r < 3; ++r)
+            D[12 + r] = -(D[r] * b[0] + D[4 + r] * b[1] + D[8 + r] * b[2]) + (kind == 1 ? 0 : 1e-4 * uniform());
+    }
+}
+
+/* The groups cover every skinned vertex with a non-zero weight exactly once; each group's bound
+ * (both forms) is at least what skinning its vertices gives, which equals cb_skin_positions'
+ * result bit for bit; and the row's largest group bound stays close to the row's worst. */
+static void expect_group_bounds(const char *rel, cb_layout layout)
+{
+    cb_model *m = load_shared(rel);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_bake_options o = cb_default_bake_options();
+    o.layout = layout;
+    cb_palette p;
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &p, &err), CB_OK);
+    cb_vertex_groups g;
+    assert_true(cb_vertex_groups_build(m, 0, p.bind_positions, &g));
+    uint64_t verts = cb_model_skin_vertex_count(m, 0), covered = 0, moved = 0;
+    uint32_t bones = p.bone_count, *first = calloc(m->primitive_count + 1, sizeof *first);
+    for (uint32_t pi = 0; pi < m->primitive_count; ++pi) first[pi + 1] = first[pi] + m->primitives[pi].vertex_count;
+    uint32_t *seen = calloc(first[m->primitive_count] + 1, sizeof *seen); /* groups holding each vertex */
+    double *diff = calloc((size_t)bones * 16, sizeof *diff), *pos = malloc(verts * 3 * sizeof *pos);
+    cb_joint_error *je = malloc(bones * sizeof *je);
+    double *radius = malloc(bones * sizeof *radius), weights = cb_skin_max_weight_sum(m, 0);
+    reach(m, 0, &p, radius);
+    for (uint32_t k = 0; k < g.group_count; ++k) {
+        assert_true(g.groups[k].count > 0 && g.groups[k].count <= CB_VERTEX_GROUP_SIZE);
+        for (uint32_t n = 0; n < g.groups[k].count; ++n, ++covered)
+            seen[first[g.groups[k].primitive] + g.vertices[g.groups[k].first + n]]++;
+    }
+    for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
+        const cb_primitive *prim = &m->primitives[pi];
+        for (uint32_t v = 0; v < prim->vertex_count; ++v) {
+            const float *w = prim->weights + (size_t)v * 4;
+            bool moves = prim->skin == 0 && (w[0] != 0 || w[1] != 0 || w[2] != 0 || w[3] != 0);
+            moved += moves;
+            if (seen[first[pi] + v] != (moves ? 1u : 0u)) fail_msg("%s: primitive %u vertex %u in %u groups", rel, pi, v, seen[first[pi] + v]);
+        }
+    }
+    assert_true(covered == moved && moved > 0);
+    double loosest[3] = {0, 0, 0};
+    for (int trial = 0; trial < 90; ++trial) {
+        random_differences(diff, bones, p.bind_positions, trial % 3);
+        assert_true(cb_joint_errors(diff, bones, p.bind_positions, je));
+        double row_bound = 0, row_worst = 0;
+        for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
+            const cb_primitive *prim = &m->primitives[pi];
+            if (prim->skin != 0) continue;
+            cb_skin_positions(prim, diff, pos);
+            for (uint32_t k = 0; k < g.group_count; ++k) {
+                const cb_vertex_group *grp = &g.groups[k];
+                if (grp->primitive != pi) continue;
+                double brute = 0; /* from cb_skin_positions, as the bake measured before groups */
+                for (uint32_t n = 0; n < grp->count; ++n) {
+                    const double *e = pos + (size_t)g.vertices[grp->first + n] * 3;
+                    brute = fmax(brute, e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+                }
+                double worst = cb_skin_group_worst(prim, g.vertices + grp->first, grp->count, diff);
+                double tight = cb_group_error_bound(&g, k, je, 0), cheap = cb_group_error_bound(&g, k, je, INFINITY);
+                if (worst != brute) fail_msg("%s: group %u skins to %.17g, cb_skin_positions %.17g", rel, k, worst, brute);
+                if (!(tight >= sqrt(worst) && cheap >= tight))
+                    fail_msg("%s trial %d group %u: bounds %.9g / %.9g under the skinned error %.9g", rel, trial, k, tight, cheap, sqrt(worst));
+                row_bound = fmax(row_bound, tight), row_worst = fmax(row_worst, sqrt(worst));
+            }
+        }
+        double whole = cb_row_error_bound(diff, bones, p.bind_positions, radius, weights);
+        /* Never looser than it, up to rounding: reach() takes float differences, the groups double. */
+        if (!(row_bound <= whole * (1 + 1e-6)))
+            fail_msg("%s: group bounds up to %.9g, the whole skin's %.9g", rel, row_bound, whole);
+        loosest[trial % 3] = fmax(loosest[trial % 3], row_bound / row_worst);
+    }
+    /* Loose bounds would skin everything: within 2.5x of the truth for these differences (Fox:
+     * 1.64, 1.37, 1.81; Cow: 1.26, 1.97, 1.26 by kind). */
+    for (int kind = 0; kind < 3; ++kind)
+        if (loosest[kind] > 2.5) fail_msg("%s: a row's group bound up to %.2fx its skinned error", rel, loosest[kind]);
+    free(first), free(seen), free(diff), free(pos), free(je), free(radius);
+    cb_vertex_groups_free(&g);
+    cb_palette_free(&p);
+    cb_sampler_free(s);
+    cb_model_free(m);
+}
+
+static void test_group_bounds_hold(void **state)
+{
+    (void)state;
+    expect_group_bounds("assets/fox-bevy/Fox.glb", CB_LAYOUT_QPOS);
+    expect_group_bounds("assets/quaternius-cow/Cow.glb", CB_LAYOUT_QPOS);
+    expect_group_bounds("assets/spider-animated-luanti/gltf_spider_animated.gltf", CB_LAYOUT_AFFINE);
 }
 
 /* Skins every measured row, as the bake did before branch and bound, and compares bit for bit. */
@@ -201,6 +312,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bound_holds_and_is_tight_on_fox),
+        cmocka_unit_test(test_group_bounds_hold),
         cmocka_unit_test(test_maxima_equal_every_row_skinned),
         cmocka_unit_test(test_auto_rates_do_not_depend_on_threads),
     };
