@@ -1,8 +1,11 @@
 // bench_floor.cpp MODEL.glb - the floor a load cannot go under, measured in the same run as
 // crowdbake: read the file into fresh memory (what a plain read() costs, page faults
 // included), map it read-only with MAP_POPULATE and touch every page, and parse its JSON chunk
-// (the whole glTF JSON for a .gltf) with RapidJSON into a DOM. Medians of 7 runs; one JSON
-// object on stdout, in seconds.
+// (the whole glTF JSON for a .gltf) with RapidJSON into a DOM: "parse" with the loader's flags
+// (formats/gltf_fast.cpp: a copy parsed in place, full-precision numbers), "parse_plain" with
+// RapidJSON's defaults (copied strings, numbers that may be an ulp off). "load" is crowdbake's
+// whole load (cb_gltf_load: read, parse, convert, validate) in the same process, its runs taken
+// in turns with the floor's. Medians of 7 runs; one JSON object on stdout, in seconds.
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
@@ -17,6 +20,8 @@
 #include <vector>
 
 #include <rapidjson/document.h>
+
+#include "crowdbake/gltf.h"
 
 static double now()
 {
@@ -38,7 +43,7 @@ int main(int argc, char **argv)
     struct stat st;
     if (fd < 0 || fstat(fd, &st) != 0) return std::perror(argv[1]), 1;
     size_t size = (size_t)st.st_size;
-    std::vector<double> read_s, map_s, parse_s;
+    std::vector<double> read_s, map_s, parse_s, plain_s, load_s;
     size_t json_bytes = 0;
     unsigned long sum = 0;
     for (int run = 0; run < 7; ++run) {
@@ -56,11 +61,23 @@ int main(int argc, char **argv)
         json_bytes = size;
         if (size >= 20 && std::memcmp(buf, "glTF", 4) == 0) json = reinterpret_cast<const char *>(buf + 20), json_bytes = le32(buf + 12);
         t0 = now();
+        std::vector<char> text(json, json + json_bytes);
+        text.push_back('\0');
         rapidjson::Document doc;
-        doc.Parse(json, json_bytes);
+        doc.ParseInsitu<rapidjson::kParseInsituFlag | rapidjson::kParseFullPrecisionFlag>(text.data());
         parse_s.push_back(now() - t0);
         if (doc.HasParseError()) return std::fprintf(stderr, "%s: JSON parse error\n", argv[1]), 1;
+        t0 = now();
+        rapidjson::Document plain;
+        plain.Parse(json, json_bytes);
+        plain_s.push_back(now() - t0);
         std::free(buf);
+        t0 = now();
+        cb_error err{};
+        cb_model *model = cb_gltf_load(argv[1], nullptr, &err);
+        load_s.push_back(now() - t0);
+        if (!model) return std::fprintf(stderr, "%s\n", err.message), 1;
+        cb_model_free(model);
         t0 = now();
         void *map = mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
         if (map == MAP_FAILED) return std::perror("mmap"), 1;
@@ -69,7 +86,8 @@ int main(int argc, char **argv)
         munmap(map, size);
     }
     close(fd);
-    std::printf("{\"bytes\": %zu, \"json_bytes\": %zu, \"read\": %.6f, \"map_touch\": %.6f, \"parse\": %.6f, \"touched\": %lu}\n",
-                size, json_bytes, median(read_s), median(map_s), median(parse_s), sum & 1);
+    std::printf("{\"bytes\": %zu, \"json_bytes\": %zu, \"read\": %.6f, \"map_touch\": %.6f, \"parse\": %.6f, "
+                "\"parse_plain\": %.6f, \"load\": %.6f, \"touched\": %lu}\n",
+                size, json_bytes, median(read_s), median(map_s), median(parse_s), median(plain_s), median(load_s), sum & 1);
     return 0;
 }

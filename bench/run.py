@@ -10,9 +10,11 @@ For each: whole-process wall time, peak RSS and page faults of `crowdbake bake` 
 its own load/sample/encode/measure/write split), and the peer's in-process load + sampling and
 whole process. Median of N runs, with the spread (min..max). Then, each as a ratio measured in
 this run: the load against the floor (read + RapidJSON parse of the same file, bench_floor), a
-no-op rebuild of a 32-type catalog against its cold bake, --fps auto against a fixed-fps bake,
-60 against 30 clips and 4x the joints (512 against 128). --smoke runs one tiny input once, so `make
-check` keeps the script working.
+no-op rebuild of a 32-type catalog against its cold bake, the catalog's cold bake on -j 1 against
+-j N (parallel efficiency T1 / (N x TN), N = 2 and the machine's cores), --fps auto against a
+fixed-fps bake, 60 against 30 clips and 800 against 200 joints; then issue 21's goals, each as
+measured, its target and whether it is met. --smoke runs every part once on tiny inputs (4-type
+catalog, 20/40-joint rigs, the fish sample), so `make check` keeps the script working.
 
 The crowd benchmark (tests/browser/bench_crowd.mjs, headless Chromium): frame time of a herd drawn
 from its palette against the same herd drawn from a VAT of the same frames (crowdbake vat), one
@@ -41,7 +43,7 @@ def run(cmd, **kw):
     return wall, out.decode()
 
 
-def run_rss(cmd, faults=None):
+def run_rss(cmd, faults=None, cpu=None):
     start = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
     out = proc.stdout.read()
@@ -51,6 +53,8 @@ def run_rss(cmd, faults=None):
         sys.exit('bench: %s failed' % ' '.join(cmd))
     if faults is not None:
         faults.append(usage.ru_minflt + usage.ru_majflt)
+    if cpu is not None:
+        cpu.append(usage.ru_utime + usage.ru_stime)
     return wall, usage.ru_maxrss * 1024, out.decode()
 
 
@@ -150,46 +154,61 @@ def paired(a, b, repeat):
     return statistics.median(ta), statistics.median(tb)
 
 
-def catalog_32():
-    """A catalog of 32 types: eight models (shared assets and samples) at four rates each."""
+def catalog_n(types=32, samples_only=False):
+    """A catalog of `types` types: eight models (shared assets and samples) at four rates each;
+    samples_only: the three samples (the smoke run)."""
     S = os.path.join(SHARED, 'assets')
-    models = [os.path.join(S, 'fox-bevy', 'Fox.glb'), os.path.join(S, 'quaternius-cow', 'Cow.glb'),
-              os.path.join(S, 'robot-quaternius-raylib', 'robot.glb'),
-              os.path.join(S, 'spider-animated-luanti', 'gltf_spider_animated.gltf'),
-              os.path.join(S, 'riggedfigure-raylib', 'rigged_figure.glb')] + \
-             [os.path.join(BUILD, 'samples', n + '.glb') for n in ('quadruped', 'fish', 'bird')]
-    d = os.path.join(BUILD, 'bench', 'cat32')
+    models = [os.path.join(BUILD, 'samples', n + '.glb') for n in ('quadruped', 'fish', 'bird')]
+    if not samples_only:
+        models = [os.path.join(S, 'fox-bevy', 'Fox.glb'), os.path.join(S, 'quaternius-cow', 'Cow.glb'),
+                  os.path.join(S, 'robot-quaternius-raylib', 'robot.glb'),
+                  os.path.join(S, 'spider-animated-luanti', 'gltf_spider_animated.gltf'),
+                  os.path.join(S, 'riggedfigure-raylib', 'rigged_figure.glb')] + models
+    d = os.path.join(BUILD, 'bench', 'cat%d' % types)
     os.makedirs(d, exist_ok=True)
     text = '[bake]\nout_dir = "out"\n'
-    for i in range(32):
-        text += '\n[animal.t%02d]\nmodel = "%s"\nfps = %d\n' % (i, os.path.abspath(models[i % 8]), (15, 20, 24, 30)[i // 8])
+    for i in range(types):
+        text += '\n[animal.t%02d]\nmodel = "%s"\nfps = %d\n' % (
+            i, os.path.abspath(models[i % len(models)]), (15, 20, 24, 30)[i * 4 // types])
     path = os.path.join(d, 'catalog.toml')
     with open(path, 'w') as f:
         f.write(text)
     return path
 
 
-def bench_catalog(repeat):
-    """A no-op rebuild of 32 up-to-date types against the cold bake of the same catalog."""
-    path = catalog_32()
+def catalog_32():
+    return catalog_n(32)
+
+
+def bench_catalog(repeat, path, types):
+    """A no-op rebuild of up-to-date types against the cold bake of the same catalog; and the cold
+    bake on -j 1 against -j N in turns (N = 2 and the machine's cores): parallel efficiency
+    T1 / (N x TN), 1.0 when N threads bake N times as fast."""
     cold = [timed([EXE, 'bake', path, '-q', '--force']) for _ in range(max(1, repeat // 2))]
     noop = [timed([EXE, 'bake', path, '-q']) for _ in range(repeat)]
-    return {'types': 32, 'cold': statistics.median(cold), 'noop': statistics.median(noop)}
+    jobs = {}
+    for n in sorted({2, os.cpu_count() or 2}):
+        c1, cn = [], []  # CPU seconds (user + sys): threads that add work show here, whatever the load
+        t1, tn = paired(lambda: run_rss([EXE, 'bake', path, '-q', '--force', '-j', '1'], cpu=c1)[0],
+                        lambda: run_rss([EXE, 'bake', path, '-q', '--force', '-j', str(n)], cpu=cn)[0], repeat)
+        jobs[n] = {'t1': t1, 'tn': tn, 'efficiency': t1 / (n * tn),
+                   'cpu_1': statistics.median(c1), 'cpu_n': statistics.median(cn)}
+    return {'types': types, 'cold': statistics.median(cold), 'noop': statistics.median(noop), 'jobs': jobs}
 
 
-def bench_auto(repeat):
-    cow = os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb')
+def bench_auto(repeat, model):
     out = os.path.join(BUILD, 'bench', 'auto.pal')
-    fixed, auto = paired([EXE, 'bake', cow, '-o', out, '-q'], [EXE, 'bake', cow, '-o', out, '-q', '--fps', 'auto'], repeat)
-    return {'model': 'Cow.glb', 'fixed': fixed, 'auto': auto}
+    fixed, auto = paired([EXE, 'bake', model, '-o', out, '-q'], [EXE, 'bake', model, '-o', out, '-q', '--fps', 'auto'], repeat)
+    return {'model': os.path.basename(model), 'fixed': fixed, 'auto': auto}
 
 
-def bench_clips(repeat):
+def bench_clips(repeat, joints=200, clips=(30, 60), seconds=10):
     """60 against 30 clips of the 200-joint rig, in turns (the series above runs each input's
     repeats together, so a change in load between two inputs skews their ratio)."""
-    c30, c60 = gen_rig(200, 30, 10), gen_rig(200, 60, 10)
+    small, big = gen_rig(joints, clips[0], seconds), gen_rig(joints, clips[1], seconds)
     out = os.path.join(BUILD, 'bench', 'clips.pal')
-    return paired([EXE, 'bake', c30, '-o', out, '-q'], [EXE, 'bake', c60, '-o', out, '-q'], repeat)
+    t_small, t_big = paired([EXE, 'bake', small, '-o', out, '-q'], [EXE, 'bake', big, '-o', out, '-q'], repeat)
+    return {'small': clips[0], 'big': clips[1], 't_small': t_small, 't_big': t_big}
 
 
 def instructions(cmd):
@@ -211,16 +230,38 @@ def bench_instructions():
         'cow_auto': instructions([EXE, 'bake', cow, '-o', out, '-q', '-j', '1', '--fps', 'auto']),
         'rig_30clips': instructions([EXE, 'bake', gen_rig(200, 30, 10), '-o', out, '-q', '-j', '1']),
         'catalog_noop': instructions([EXE, 'bake', cat, '-q', '-j', '1']),
+        'joints_200': instructions([EXE, 'bake', gen_rig(200, 8, 10), '-o', out, '-q', '-j', '1']),
+        'joints_800': instructions([EXE, 'bake', gen_rig(800, 8, 10), '-o', out, '-q', '-j', '1']),
     }
 
 
-def bench_joints(repeat):
-    """4x the joints: 512 against 128, 8 clips x 10 s each (crowdbake only; the issue's 800 against
-    200, scaled to the generator's limit of 512 joints)."""
-    small, big = gen_rig(128, 8, 10), gen_rig(512, 8, 10)
+def bench_joints(repeat, joints=(200, 800), clips=8, seconds=10):
+    """4x the joints: 800 against 200, 8 clips x 10 s each, in turns (crowdbake only)."""
+    small, big = gen_rig(joints[0], clips, seconds), gen_rig(joints[1], clips, seconds)
     out = os.path.join(BUILD, 'bench', 'joints.pal')
     t_small, t_big = paired([EXE, 'bake', small, '-o', out, '-q'], [EXE, 'bake', big, '-o', out, '-q'], repeat)
-    return {'small': 128, 'big': 512, 't_small': t_small, 't_big': t_big}
+    return {'small': joints[0], 'big': joints[1], 'clips': clips, 'seconds': seconds, 't_small': t_small, 't_big': t_big}
+
+
+def goals(x, big, fox):
+    """Issue 21's goals: (what, measured, target, met); met is None where the issue sets no number."""
+    fl, c, a, j, cl = x['floor'], x['catalog'], x['auto'], x['joints'], x['clips']
+    load = big['crowdbake']['phases']['load'] / (fl['read'] + fl['parse'])
+    rows = [
+        ('big rig end to end vs three.js load + sample', big['ratios']['end_to_end_vs_peer_load_plus_sample'], '>= 12x', 12, 1),
+        ('%d / %d clips' % (cl['big'], cl['small']), cl['t_big'] / cl['t_small'], '<= 2.2x', 2.2, -1),
+        ('%d / %d joints' % (j['big'], j['small']), j['t_big'] / j['t_small'], '<= 4.4x', 4.4, -1),
+        ('no-op rebuild, %d types (ms)' % c['types'], c['noop'] * 1000, '< 50 ms', 50, -1),
+        ('--fps auto / fixed (%s)' % a['model'], a['auto'] / a['fixed'], '<= 3x', 3, -1),
+        ('%s end to end vs three.js' % fox['input'], fox['ratios']['end_to_end_vs_peer_load_plus_sample'], '>= 6x', 6, 1),
+        ('load / (read + RapidJSON parse)', load, '<= 1.5x', 1.5, -1),
+        ('peak RSS / (input + output), big rig', big['ratios']['peak_rss_vs_input_plus_output'], '<= 1.2x', 1.2, -1),
+    ]
+    out = [{'goal': g, 'measured': v, 'target': t, 'met': v * sign >= limit * sign} for g, v, t, limit, sign in rows]
+    for n, e in sorted(c['jobs'].items()):
+        out.append({'goal': 'catalog cold bake, -j %d efficiency T1 / (%d x T%d)' % (n, n, n), 'measured': e['efficiency'],
+                    'target': 'reported', 'met': None})
+    return out
 
 
 def core_numbers(model, pal, exr):
@@ -263,23 +304,30 @@ def print_table(report):
         c = x['catalog']
         print('catalog of %d types: cold bake %s ms, no-op rebuild %s ms (%.1f%% of cold)' % (
             c['types'], ms(c['cold']), ms(c['noop']), 100 * c['noop'] / c['cold']))
+        for n, e in sorted(c['jobs'].items()):
+            print('catalog cold bake -j 1 %s ms, -j %d %s ms (in turns): speed-up %.2fx, efficiency T1 / (%d x T%d) = %.2f; '
+                  'CPU time -j %d / -j 1 = %.2f' % (ms(e['t1']), n, ms(e['tn']), e['t1'] / e['tn'], n, n, e['efficiency'], n,
+                                                  e['cpu_n'] / e['cpu_1']))
         a = x['auto']
         print('--fps auto on %s: %s ms, fixed 30 fps %s ms: %.2fx' % (a['model'], ms(a['auto']), ms(a['fixed']), a['auto'] / a['fixed']))
         j = x['joints']
-        print('%d joints %s ms vs %d joints %s ms (8 clips x 10 s): %.2fx' % (
-            j['big'], ms(j['t_big']), j['small'], ms(j['t_small']), j['t_big'] / j['t_small']))
-        print('60 clips vs 30 clips (200 joints, in turns): %s vs %s ms: %.2fx' % (
-            ms(x['clips'][1]), ms(x['clips'][0]), x['clips_60_vs_30']))
+        print('%d joints %s ms vs %d joints %s ms (%d clips x %g s, in turns): %.2fx' % (
+            j['big'], ms(j['t_big']), j['small'], ms(j['t_small']), j['clips'], j['seconds'], j['t_big'] / j['t_small']))
+        cl = x['clips']
+        print('%d clips vs %d clips (in turns): %s vs %s ms: %.2fx' % (
+            cl['big'], cl['small'], ms(cl['t_big']), ms(cl['t_small']), cl['t_big'] / cl['t_small']))
         ins = x.get('instructions')
         if ins:
             print('instructions (callgrind, 1 thread): Cow fixed %.0f M, --fps auto %.0f M (%.2fx); 200-joint 30-clip rig %.0f M; '
-                  '32-type catalog no-op %.1f M' % (
+                  '32-type catalog no-op %.1f M; 800 / 200 joints %.0f / %.0f M (%.2fx)' % (
                       ins['cow_fixed'] / 1e6, ins['cow_auto'] / 1e6, ins['cow_auto'] / ins['cow_fixed'],
-                      ins['rig_30clips'] / 1e6, ins['catalog_noop'] / 1e6))
-        print('goals: big rig e2e >= 12x three.js: %.1fx; 60/30 clips <= 2.2x: %.2fx; 4x joints (512/128) <= 4.4x: %.2fx; '
-              'no-op 32 types < 50 ms: %s ms; auto <= 3x fixed: %.2fx; Fox e2e >= 6x: %.1fx' % (
-                  big['ratios']['end_to_end_vs_peer_load_plus_sample'], x['clips_60_vs_30'], j['t_big'] / j['t_small'],
-                  ms(c['noop']), a['auto'] / a['fixed'], x['fox_e2e']))
+                      ins['rig_30clips'] / 1e6, ins['catalog_noop'] / 1e6, ins['joints_800'] / 1e6,
+                      ins['joints_200'] / 1e6, ins['joints_800'] / ins['joints_200']))
+        print('\ngoals of issue 21 (each measured in this run%s):' % (
+            '; SMOKE RUN: tiny inputs, the numbers mean nothing' if report.get('smoke') else ''))
+        for g in report['goals']:
+            print('  %-56s %9.2f   %-9s %s' % (g['goal'], g['measured'], g['target'],
+                                               'met' if g['met'] else '-' if g['met'] is None else 'NOT met'))
     if report.get('exponent') is not None:
         print('\ncost ~ (joints x frames)^%.2f over the size series' % report['exponent'])
     for name, core in report.get('core', {}).items():
@@ -361,7 +409,7 @@ def main():
     three = json.load(open(os.path.join(ROOT, 'bench', 'node_modules', 'three', 'package.json')))['version']
     report = {
         'crowdbake_version': subprocess.run([EXE, '--version'], capture_output=True, text=True).stdout.split()[-1],
-        'three_version': three, 'repeat': args.repeat, 'machine': '%d cores' % os.cpu_count(), 'results': results,
+        'three_version': three, 'repeat': args.repeat, 'smoke': args.smoke, 'machine': '%d cores' % os.cpu_count(), 'results': results,
         'exponent': fit_exponent([r for r in results if r['input'].startswith('rig_200j')]),
         'core': {},
     }
@@ -369,22 +417,27 @@ def main():
     exr = os.path.join(BUILD, 'bench', 'core.exr')
     subprocess.run([EXE, 'bake', big[0], '-o', exr, '-q', '--precision', 'half', '--format', 'pal,exr'], check=True)
     report['core']['large'] = core_numbers(big[0], exr[:-4] + '.pal', exr)
-    if not args.smoke:
+    by_name = {r['input']: r for r in results}
+    if args.smoke:  # every part once, on tiny inputs: the numbers mean nothing, the script keeps working
+        big_r = fox_r = results[0]
+        report['extra'] = {
+            'floor': floor_numbers(big[0]), 'catalog': bench_catalog(1, catalog_n(4, True), 4),
+            'auto': bench_auto(1, os.path.join(BUILD, 'samples', 'fish.glb')),
+            'joints': bench_joints(1, (20, 40), 1, 1), 'clips': bench_clips(1, 20, (1, 2), 1),
+        }
+    else:
         small = os.path.join(BUILD, 'bench', 'Fox.pal')
         report['core']['Fox'] = core_numbers(inputs[0][1], small, None)
-        by_name = {r['input']: r for r in results}
-        big_r = by_name['rig_200j_30clips']
+        big_r, fox_r = by_name['rig_200j_30clips'], by_name['Fox']
         report['extra'] = {
-            'floor': floor_numbers(big[0]), 'floor_input': big_r,
-            'catalog': bench_catalog(args.repeat), 'auto': bench_auto(args.repeat), 'joints': bench_joints(args.repeat),
-            'clips': bench_clips(args.repeat),
-            'fox_e2e': by_name['Fox']['ratios']['end_to_end_vs_peer_load_plus_sample'],
+            'floor': floor_numbers(big[0]), 'catalog': bench_catalog(args.repeat, catalog_32(), 32),
+            'auto': bench_auto(args.repeat, os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb')),
+            'joints': bench_joints(args.repeat), 'clips': bench_clips(args.repeat),
         }
-        report['extra']['clips_60_vs_30'] = report['extra']['clips'][1] / report['extra']['clips'][0]
         if args.instructions:
             report['extra']['instructions'] = bench_instructions()
-    else:
-        report['floor'] = floor_numbers(inputs[0][1])
+    report['extra']['floor_input'] = big_r
+    report['goals'] = goals(report['extra'], big_r, fox_r)
     report['crowd'] = crowd_bench(args.smoke)
     if args.json:
         json.dump(report, sys.stdout, indent=2)

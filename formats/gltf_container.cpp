@@ -56,7 +56,7 @@ size_t split_point(const unsigned char *head, size_t got, size_t size)
     size_t json_end = 20 + (size_t)le32(head + 12);
     if (json_end + 8 > got || le32(head + json_end + 4) != 0x004E4942u || json_end + 8 + le32(head + json_end) != size)
         return 0;
-    for (const char *needs : {"\"uri\"", "KHR_draco_mesh_compression", "EXT_meshopt_compression"})
+    for (const char *needs : {"\"uri\"", "_compression"}) /* Draco and meshopt */
         if (memmem(head + 20, json_end - 20, needs, std::strlen(needs))) return 0;
     return json_end + 8;
 }
@@ -418,6 +418,7 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
     }
     if (is_glb(data, size)) {
         if (!check_glb(data, size, name, err)) return false;
+        if (parse_fast(data, size, gltf, in_place)) return true; /* a file with Draco is not for it */
         uint32_t json_length = le32(data + 12);
         std::string json((const char *)data + 20, json_length);
         if (!check_draco_references(json, name, err)) return false;

@@ -88,12 +88,13 @@ double read_component(const unsigned char *p, int type, bool normalized)
 }
 
 // A view of `count` elements of `elem_size` bytes `stride` apart, checked against its buffer.
+template <class What>
 bool view_span(const Context &c, int view_index, size_t offset, size_t count, size_t elem_size, size_t stride,
-               const char *what, const unsigned char **out)
+               const What &what, const unsigned char **out)
 {
     const tinygltf::Model &g = *c.gltf;
     if (view_index < 0 || view_index >= (int)g.bufferViews.size()) {
-        cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses bufferView %d, which does not exist", c.name, what, view_index);
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses bufferView %d, which does not exist", c.name, what().c_str(), view_index);
         return false;
     }
     const tinygltf::BufferView &view = g.bufferViews[(size_t)view_index];
@@ -111,7 +112,7 @@ bool view_span(const Context &c, int view_index, size_t offset, size_t count, si
     if (count > 0) {
         unsigned long long need = (unsigned long long)(count - 1) * stride + elem_size;
         if (offset > view.byteLength || need > view.byteLength - offset) {
-            cb_fail(c.err, CB_ERR_INPUT, "%s: %s reads %llu bytes from byte %zu of bufferView %d, which has %zu", c.name, what,
+            cb_fail(c.err, CB_ERR_INPUT, "%s: %s reads %llu bytes from byte %zu of bufferView %d, which has %zu", c.name, what().c_str(),
                     need, offset, view_index, view.byteLength);
             return false;
         }
@@ -122,25 +123,27 @@ bool view_span(const Context &c, int view_index, size_t offset, size_t count, si
 
 // Reads an accessor into an array of `comps` values per element, applying normalization and
 // sparse substitution. Tightly packed, aligned floats are used where they lie in the file's
-// buffers (which the model owns); anything else is converted into the model's arena.
-template <typename T>
-bool read_accessor(const Context &c, int index, int want_comps, const char *what, T **out, size_t *count_out)
+// buffers (which the model owns); anything else is converted into the model's arena. what()
+// names the accessor's use in messages: it is only formatted for one (a big rig has thousands
+// of channels, and their names cost more than reading them in place).
+template <typename T, class What>
+bool read_accessor(const Context &c, int index, int want_comps, const What &what, T **out, size_t *count_out)
 {
     const tinygltf::Model &g = *c.gltf;
     if (index < 0 || index >= (int)g.accessors.size()) {
-        cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses accessor %d, which does not exist", c.name, what, index);
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses accessor %d, which does not exist", c.name, what().c_str(), index);
         return false;
     }
     const tinygltf::Accessor &a = g.accessors[(size_t)index];
     int comps = type_components(a.type), csize = component_size(a.componentType);
     if (comps != want_comps || csize == 0) {
-        cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d has %d components of type %d, expected %d", c.name, what, index,
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d has %d components of type %d, expected %d", c.name, what().c_str(), index,
                 comps, a.componentType, want_comps);
         return false;
     }
     if (a.count > c.limits.max_accessor_count) {
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d claims %zu elements, over the limit of %llu (--max-accessor-count)",
-                c.name, what, index, a.count, (unsigned long long)c.limits.max_accessor_count);
+                c.name, what().c_str(), index, a.count, (unsigned long long)c.limits.max_accessor_count);
         return false;
     }
     size_t elem = (size_t)comps * csize;
@@ -152,7 +155,7 @@ bool read_accessor(const Context &c, int index, int want_comps, const char *what
             stride = g.bufferViews[(size_t)a.bufferView].byteStride;
         if (stride < elem) {
             cb_fail(c.err, CB_ERR_INPUT, "%s: %s: bufferView %d has byteStride %zu, smaller than its %zu-byte elements", c.name,
-                    what, a.bufferView, stride, elem);
+                    what().c_str(), a.bufferView, stride, elem);
             return false;
         }
         if (!view_span(c, a.bufferView, a.byteOffset, a.count, elem, stride, what, &p)) return false;
@@ -166,7 +169,7 @@ bool read_accessor(const Context &c, int index, int want_comps, const char *what
     }
     T *dst = static_cast<T *>(cb_model_alloc(c.model, a.count * (size_t)comps, sizeof(T))); /* zeroed */
     if (!dst) {
-        cb_fail(c.err, CB_ERR_INTERNAL, "%s: out of memory reading %s", c.name, what);
+        cb_fail(c.err, CB_ERR_INTERNAL, "%s: out of memory reading %s", c.name, what().c_str());
         return false;
     }
     if (p && std::is_same<T, float>::value && a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT && stride == elem) {
@@ -182,13 +185,13 @@ bool read_accessor(const Context &c, int index, int want_comps, const char *what
         if (n > a.count || isize == 0 || a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0 ||
             !view_span(c, a.sparse.indices.bufferView, (size_t)a.sparse.indices.byteOffset, n, isize, isize, what, &ip) ||
             !view_span(c, a.sparse.values.bufferView, (size_t)a.sparse.values.byteOffset, n, elem, elem, what, &vp)) {
-            cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d has an invalid sparse block", c.name, what, index);
+            cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d has an invalid sparse block", c.name, what().c_str(), index);
             return false;
         }
         for (size_t i = 0; i < n; ++i) {
             double target = read_component(ip + i * isize, a.sparse.indices.componentType, false);
             if (target < 0 || target >= (double)a.count) {
-                cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d sparse index %.0f is past its %zu elements", c.name, what,
+                cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d sparse index %.0f is past its %zu elements", c.name, what().c_str(),
                         index, target, a.count);
                 return false;
             }
@@ -304,8 +307,8 @@ bool convert_skins(Context &c)
         if (src.inverseBindMatrices >= 0) {
             double *ibm;
             size_t count;
-            std::string what = "skin " + std::to_string(s) + " inverseBindMatrices";
-            if (!read_accessor(c, src.inverseBindMatrices, 16, what.c_str(), &ibm, &count)) return false;
+            auto what = [s] { return "skin " + std::to_string(s) + " inverseBindMatrices"; };
+            if (!read_accessor(c, src.inverseBindMatrices, 16, what, &ibm, &count)) return false;
             if (count < src.joints.size()) {
                 cb_fail(c.err, CB_ERR_INPUT, "%s: skin %zu (%s) has %zu inverse bind matrices for %zu joints", c.name, s,
                         skin->name, count, src.joints.size());
@@ -322,24 +325,31 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
     auto pos = p.attributes.find("POSITION"), jnt = p.attributes.find("JOINTS_0"), wgt = p.attributes.find("WEIGHTS_0");
     if (pos == p.attributes.end() || jnt == p.attributes.end() || wgt == p.attributes.end()) return true; // not skinned
     const tinygltf::Node &node = c.gltf->nodes[node_index];
-    std::string where = "mesh node " + std::to_string(node_index) + " (" + node.name + ")";
+    auto where = [&] { return "mesh node " + std::to_string(node_index) + " (" + node.name + ")"; };
     float *positions, *weights, *normals;
-    double *joints;
+    double *joints = nullptr;
+    uint16_t *joints16 = nullptr;
     uint32_t *indices;
     size_t n, nj, nw, nn, ni;
-    if (!read_accessor(c, pos->second, 3, (where + " POSITION").c_str(), &positions, &n) ||
-        !read_accessor(c, jnt->second, 4, (where + " JOINTS_0").c_str(), &joints, &nj) ||
-        !read_accessor(c, wgt->second, 4, (where + " WEIGHTS_0").c_str(), &weights, &nw))
+    // Joint indices of 8 or 16 bits (all glTF allows) are read as they are; any other type is
+    // read as numbers and checked against 0..65535 below.
+    const auto &acc = c.gltf->accessors;
+    int jt = jnt->second >= 0 && (size_t)jnt->second < acc.size() && !acc[(size_t)jnt->second].normalized
+                 ? acc[(size_t)jnt->second].componentType : 0;
+    bool small = jt == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || jt == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+    auto jwhat = [&] { return where() + " JOINTS_0"; };
+    if (!read_accessor(c, pos->second, 3, [&] { return where() + " POSITION"; }, &positions, &n) ||
+        !(small ? read_accessor(c, jnt->second, 4, jwhat, &joints16, &nj) : read_accessor(c, jnt->second, 4, jwhat, &joints, &nj)) ||
+        !read_accessor(c, wgt->second, 4, [&] { return where() + " WEIGHTS_0"; }, &weights, &nw))
         return false;
     if (nj != n || nw != n) {
-        cb_fail(c.err, CB_ERR_INPUT, "%s: %s has %zu positions but %zu joints and %zu weights", c.name, where.c_str(), n, nj, nw);
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s has %zu positions but %zu joints and %zu weights", c.name, where().c_str(), n, nj, nw);
         return false;
     }
-    uint16_t *joints16 = static_cast<uint16_t *>(cb_model_alloc(c.model, n * 4, sizeof(uint16_t)));
-    if (!joints16) return false;
-    for (size_t i = 0; i < n * 4; ++i) {
+    if (!joints16 && !(joints16 = static_cast<uint16_t *>(cb_model_alloc(c.model, n * 4, sizeof(uint16_t))))) return false;
+    for (size_t i = 0; joints && i < n * 4; ++i) {
         if (joints[i] < 0 || joints[i] > 65535) {
-            cb_fail(c.err, CB_ERR_INPUT, "%s: %s has joint index %.0f outside 0..65535", c.name, where.c_str(), joints[i]);
+            cb_fail(c.err, CB_ERR_INPUT, "%s: %s has joint index %.0f outside 0..65535", c.name, where().c_str(), joints[i]);
             return false;
         }
         joints16[i] = (uint16_t)joints[i];
@@ -350,7 +360,7 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
     prim.vertex_count = (uint32_t)n;
     auto nrm = p.attributes.find("NORMAL");
     if (nrm != p.attributes.end()) {
-        if (!read_accessor(c, nrm->second, 3, (where + " NORMAL").c_str(), &normals, &nn)) return false;
+        if (!read_accessor(c, nrm->second, 3, [&] { return where() + " NORMAL"; }, &normals, &nn)) return false;
         if (nn == n) prim.normals = normals;
     }
     auto uv = p.attributes.find("TEXCOORD_0");
@@ -360,11 +370,11 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
         cb_error uv_err{};
         Context quiet = c;
         quiet.err = &uv_err;
-        if (read_accessor(quiet, uv->second, 2, (where + " TEXCOORD_0").c_str(), &texcoords, &nt) && nt == n)
+        if (read_accessor(quiet, uv->second, 2, [&] { return where() + " TEXCOORD_0"; }, &texcoords, &nt) && nt == n)
             prim.texcoords = texcoords;
     }
     if (p.indices >= 0) {
-        if (!read_accessor(c, p.indices, 1, (where + " indices").c_str(), &indices, &ni)) return false;
+        if (!read_accessor(c, p.indices, 1, [&] { return where() + " indices"; }, &indices, &ni)) return false;
         prim.index_count = (uint32_t)ni;
         prim.indices = indices;
     }
@@ -415,7 +425,7 @@ bool convert_channel(Context &c, size_t a, size_t ci, const tinygltf::Animation 
 {
     const tinygltf::AnimationChannel &ch = src.channels[ci];
     const std::string &path = ch.target_path;
-    std::string where = "clip '" + std::string(c.model->animations[a].name) + "' channel " + std::to_string(ci);
+    auto where = [&] { return "clip '" + std::string(c.model->animations[a].name) + "' channel " + std::to_string(ci); };
     if (path == "weights") {
         c.model->ignored_morph_channels++;
         return true;
@@ -426,17 +436,17 @@ bool convert_channel(Context &c, size_t a, size_t ci, const tinygltf::Animation 
     else if (path == "scale") dst.path = CB_PATH_SCALE;
     else {
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s animates '%s'; glTF 2.0 allows translation, rotation, scale and weights", c.name,
-                where.c_str(), path.c_str());
+                where().c_str(), path.c_str());
         return false;
     }
     if (ch.target_node < 0) return true; // targets something else (an extension); not a joint
     if (ch.sampler < 0 || ch.sampler >= (int)src.samplers.size()) {
-        cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses sampler %d, which does not exist", c.name, where.c_str(), ch.sampler);
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses sampler %d, which does not exist", c.name, where().c_str(), ch.sampler);
         return false;
     }
     const tinygltf::AnimationSampler &s = src.samplers[(size_t)ch.sampler];
     if (!parse_interpolation(s.interpolation, &dst.interp)) {
-        cb_fail(c.err, CB_ERR_INPUT, "%s: %s has interpolation '%s'; use LINEAR, STEP or CUBICSPLINE", c.name, where.c_str(),
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s has interpolation '%s'; use LINEAR, STEP or CUBICSPLINE", c.name, where().c_str(),
                 s.interpolation.c_str());
         return false;
     }
@@ -444,12 +454,12 @@ bool convert_channel(Context &c, size_t a, size_t ci, const tinygltf::Animation 
     int comps = dst.path == CB_PATH_ROTATION ? 4 : 3;
     float *times, *values;
     size_t nt, nv;
-    if (!read_accessor(c, s.input, 1, (where + " key times").c_str(), &times, &nt) ||
-        !read_accessor(c, s.output, comps, (where + " values").c_str(), &values, &nv))
+    if (!read_accessor(c, s.input, 1, [&] { return where() + " key times"; }, &times, &nt) ||
+        !read_accessor(c, s.output, comps, [&] { return where() + " values"; }, &values, &nv))
         return false;
     size_t per_key = dst.interp == CB_INTERP_CUBICSPLINE ? 3 : 1;
     if (nv != nt * per_key) {
-        cb_fail(c.err, CB_ERR_INPUT, "%s: %s has %zu key times but %zu values (expected %zu)", c.name, where.c_str(), nt, nv,
+        cb_fail(c.err, CB_ERR_INPUT, "%s: %s has %zu key times but %zu values (expected %zu)", c.name, where().c_str(), nt, nv,
                 nt * per_key);
         return false;
     }

@@ -1,6 +1,7 @@
 // gltf_parts.h - what the glTF adapter's files share (private to libcrowdbake):
-// gltf_container.cpp reads the file and hands tinygltf its JSON, gltf_convert.cpp reads the
-// accessors into the core's structs, gltf_load.cpp runs the load.
+// gltf_container.cpp reads the file and hands its JSON to gltf_fast.cpp (a plain GLB) or to
+// tinygltf (the rest), gltf_convert.cpp reads the accessors into the core's structs,
+// gltf_load.cpp runs the load.
 #ifndef CB_GLTF_PARTS_H
 #define CB_GLTF_PARTS_H
 
@@ -114,15 +115,23 @@ struct BinInPlace {
 };
 
 // gltf_container.cpp
+uint32_t le32(const unsigned char *p); // a little-endian field of a GLB header or chunk
 // Reads `path` into *out, bounded by max_bytes. With `tail`, a big GLB's BIN chunk is read on
 // tail->thread (see TailRead).
 template <class Buffer> bool read_file(const char *path, uint64_t max_bytes, Buffer *out, TailRead *tail, std::string *why);
 // Maps a model file of 1 MiB and more (see map_model in gltf_container.cpp); false (nothing
 // done) where mapping does not apply, and read_file then reads it.
 bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail);
-// Parses the file with tinygltf (the GLB's BIN chunk left where it lies when `in_place`).
+// Parses the file: a plain GLB on the fast path (parse_fast), else with tinygltf (the GLB's BIN
+// chunk left where it lies when `in_place`).
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
                          FsState *fs_state, tinygltf::Model *gltf, BinInPlace *in_place, TailRead *tail, cb_error *err);
+
+// gltf_fast.cpp
+// Parses a GLB that needs nothing but its own BIN chunk into `gltf` (only what the converter
+// reads), the BIN chunk left where it lies when `in_place` (else copied into buffer 0); false,
+// with `gltf` untouched, for any file the tinygltf path must load.
+bool parse_fast(const unsigned char *data, size_t size, tinygltf::Model *gltf, BinInPlace *in_place);
 
 // gltf_convert.cpp
 int component_size(int type);

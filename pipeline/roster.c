@@ -483,6 +483,7 @@ static void bake_type(roster_run *run, uint32_t i)
 typedef struct pass {
     roster_run *run;
     void (*fn)(roster_run *, uint32_t);
+    const uint32_t *order; /* the types, longest first (roster_order.c) */
 } pass;
 
 /* Each thread takes the next type until none is left (types take very different times). */
@@ -490,19 +491,17 @@ static void pass_share(void *arg, uint32_t thread, uint32_t threads)
 {
     (void)thread, (void)threads;
     pass *p = arg;
-    for (;;) {
-        uint32_t i = atomic_fetch_add(&p->run->next, 1);
-        if (i >= p->run->r->type_count) return;
-        p->fn(p->run, i);
-    }
+    for (uint32_t i; (i = atomic_fetch_add(&p->run->next, 1)) < p->run->r->type_count;) p->fn(p->run, p->order[i]);
 }
 
-static void run_pass(roster_run *run, void (*fn)(roster_run *, uint32_t))
+static void run_pass(roster_run *run, void (*fn)(roster_run *, uint32_t), uint32_t *order)
 {
-    atomic_store(&run->next, 0);
-    pass p = {run, fn};
     uint32_t threads = run->opt->jobs ? run->opt->jobs : 1;
     if (threads > run->r->type_count) threads = run->r->type_count ? run->r->type_count : 1;
+    for (uint32_t i = 0; i < run->r->type_count; ++i) order[i] = i; /* one thread: the log in catalog order */
+    if (threads > 1) roster_order_types(run->cat, run->r, fn == bake_type, order); /* changes no output */
+    atomic_store(&run->next, 0);
+    pass p = {run, fn, order};
     cb_pool_run(threads, pass_share, &p);
 }
 
@@ -518,13 +517,14 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     memset(&run, 0, sizeof run);
     run.cat = cat, run.opt = opt, run.r = r, run.start = now_seconds();
     run.work = calloc(cat->animal_count ? cat->animal_count : 1, sizeof(type_work));
-    if (!r->types || !run.work || mtx_init(&run.log_lock, mtx_plain) != thrd_success) {
-        free(run.work);
+    uint32_t *order = calloc(cat->animal_count ? cat->animal_count : 1, sizeof *order);
+    if (!r->types || !run.work || !order || mtx_init(&run.log_lock, mtx_plain) != thrd_success) {
+        free(run.work), free(order);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
-    /* Types are the unit of parallel work; a lone type spreads its clips instead. */
-    run.threads_per_bake = cat->animal_count == 1 && opt->jobs ? opt->jobs : 1;
-    run_pass(&run, prepare_type);
+    /* Types are the unit of parallel work; fewer types than threads spread their clips too. */
+    run.threads_per_bake = cat->animal_count && opt->jobs > cat->animal_count ? opt->jobs / cat->animal_count : 1;
+    run_pass(&run, prepare_type, order);
     /* Equal keys share: the first type (by name) owns the palette. */
     for (uint32_t i = 0; i < r->type_count; ++i) {
         cb_roster_type *t = &r->types[i];
@@ -536,7 +536,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
                 break;
             }
     }
-    run_pass(&run, bake_type);
+    run_pass(&run, bake_type, order);
     for (uint32_t i = 0; i < r->type_count; ++i) {
         cb_roster_type *t = &r->types[i];
         if (t->owner == i || t->error.status) continue;
@@ -574,7 +574,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
         free(run.work[i].lod_models);
         free(run.work[i].record);
     }
-    free(run.work);
+    free(run.work), free(order);
     mtx_destroy(&run.log_lock);
     return rc;
 }

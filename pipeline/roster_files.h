@@ -26,5 +26,7 @@ void roster_write_record(const char *path, const unsigned char *data, size_t siz
 /* After a failure the manifest and the failed palettes get the epoch (the next build runs
  * again); after a success the manifest is never older than an input. */
 void roster_settle_times(const cb_roster *r);
+/* order[0..type_count): the types, the longest (a guess) first (roster_order.c). */
+void roster_order_types(const cb_catalog *cat, const cb_roster *r, bool prepared, uint32_t *order);
 
 #endif

@@ -274,7 +274,8 @@ static bool all_finite(const float *v, uint64_t n)
     return !(bad[0] | bad[1] | bad[2] | bad[3]);
 }
 
-static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, cb_error *err)
+/* `checked`: key times an earlier channel of the clip passed (they are often shared). */
+static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, const cb_channel *checked, cb_error *err)
 {
     const cb_animation *anim = &m->animations[a];
     cb_channel *ch = &anim->channels[c];
@@ -284,7 +285,8 @@ static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, cb_
     if (ch->key_count == 0)
         return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u (%s of %s) has no keys", m->source, anim->name, c,
                        path_name(ch->path), m->nodes[ch->node].name);
-    for (uint32_t k = 0; k < ch->key_count; ++k) {
+    bool times_checked = checked && checked->times == ch->times && checked->key_count == ch->key_count;
+    for (uint32_t k = 0; k < ch->key_count && !times_checked; ++k) {
         if (!isfinite(ch->times[k]))
             return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u key %u has a NaN or infinite time", m->source,
                            anim->name, c, k);
@@ -330,7 +332,7 @@ static cb_status validate_animation(cb_model *m, uint32_t a, cb_error *err)
     anim->t0 = INFINITY;
     anim->t1 = -INFINITY;
     for (uint32_t c = 0; c < anim->channel_count; ++c) {
-        if (validate_channel(m, a, c, err)) return err->status;
+        if (validate_channel(m, a, c, c ? &anim->channels[c - 1] : NULL, err)) return err->status;
         const cb_channel *ch = &anim->channels[c];
         if (ch->times[0] < anim->t0) anim->t0 = ch->times[0];
         if (ch->times[ch->key_count - 1] > anim->t1) anim->t1 = ch->times[ch->key_count - 1];

@@ -397,27 +397,14 @@ static cb_status first_clip_error(const bake_state *st, cb_error *err)
     return CB_OK;
 }
 
-static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                           uint32_t plan_count, cb_palette *p, cb_error *err);
-
 cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
                           uint32_t plan_count, cb_palette *p, cb_error *err)
 {
-    cb_error first = {0};
-    cb_status rc = bake_once(sampler, opt, plan, plan_count, p, &first);
-    if (rc == CB_ERR_LAYOUT && opt->affine_fallback && opt->layout == CB_LAYOUT_QPOS) {
-        cb_bake_options affine = *opt; /* a rig qpos cannot hold: the next smallest layout */
-        affine.layout = CB_LAYOUT_AFFINE;
-        rc = bake_once(sampler, &affine, plan, plan_count, p, err);
-        if (!rc) snprintf(p->fallback_note, sizeof p->fallback_note, "%.460s; baked with affine instead", first.message);
-        return rc;
-    }
-    if (rc) *err = err->status ? *err : first;
-    return rc;
+    return palette_bake_grouped(sampler, opt, plan, plan_count, NULL, p, err);
 }
 
 static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                           uint32_t plan_count, cb_palette *p, cb_error *err)
+                           uint32_t plan_count, const cb_vertex_groups *groups, cb_palette *p, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(sampler);
     int32_t skin_index = cb_sampler_skin(sampler);
@@ -493,12 +480,13 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);
     st.error_stride = work > CB_ERROR_BUDGET ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
     p->error_rows_measured = 0;
-    if (skinned && !cb_vertex_groups_build(m, skin_index, p->bind_positions, &st.groups)) {
+    if (skinned && !(groups ? (st.groups = *groups, true) : cb_vertex_groups_build(m, skin_index, p->bind_positions, &st.groups))) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring the palette's error", m->source);
         goto fail;
     }
     if (skinned) {
         for_each_clip(&st, palette_measure_job, true, palette_measure_jobs(&st));
+        if (groups) memset(&st.groups, 0, sizeof st.groups); /* the caller's (palette_bake_grouped) */
         if (first_clip_error(&st, err)) goto fail;
         for (uint32_t c = 0; c < p->clip_count; ++c) {
             p->max_error = fmax(p->max_error, st.clip_error[c]);
@@ -519,4 +507,20 @@ fail:
     free(radius), free(infos);
     cb_palette_free(p);
     return err->status;
+}
+
+cb_status palette_bake_grouped(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                               uint32_t plan_count, const cb_vertex_groups *groups, cb_palette *p, cb_error *err)
+{
+    cb_error first = {0};
+    cb_status rc = bake_once(sampler, opt, plan, plan_count, groups, p, &first);
+    if (rc == CB_ERR_LAYOUT && opt->affine_fallback && opt->layout == CB_LAYOUT_QPOS) {
+        cb_bake_options affine = *opt; /* a rig qpos cannot hold: the next smallest layout */
+        affine.layout = CB_LAYOUT_AFFINE;
+        rc = bake_once(sampler, &affine, plan, plan_count, groups, p, err);
+        if (!rc) snprintf(p->fallback_note, sizeof p->fallback_note, "%.460s; baked with affine instead", first.message);
+        return rc;
+    }
+    if (rc) *err = err->status ? *err : first;
+    return rc;
 }

@@ -136,6 +136,11 @@ uint32_t palette_measure_jobs(const bake_state *st);
 void palette_measure_job(bake_state *st, worker *w, uint32_t k);
 /* Bind-space distance from each joint's bind position to the farthest vertex it moves; -1 for
  * joints that move none. False when no vertex is skinned. */
+/* cb_palette_bake, measuring with `groups` built for this model, skin and bind pose (by
+ * cb_vertex_groups_build from a palette's bind_positions); NULL: built here. A search that bakes
+ * one clip at many rates (runtime.c) builds them once instead of once a bake. */
+cb_status palette_bake_grouped(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                               uint32_t plan_count, const cb_vertex_groups *groups, cb_palette *p, cb_error *err);
 bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, double *radius);
 
 #endif

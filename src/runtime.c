@@ -8,6 +8,7 @@
 #include <threads.h>
 
 #include "cb_math.h"
+#include "palette_bake.h" /* palette_bake_grouped */
 
 void cb_runtime_frame(const cb_instance *in, double time, uint32_t *row0, uint32_t *row1, double *fr)
 {
@@ -38,36 +39,72 @@ void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_insta
 
 /* ---- error-driven frame rate ---- */
 
-/* The visible error of one clip baked alone at `fps`: the bake measures it (the encoding, and
+/* One clip's search: its probes so far. Both families and the closing measurement ask for some
+ * rates twice (the key rate's multiples are common rates too), and a probe is a whole bake of
+ * the clip: each rate is baked once. */
+typedef struct probe {
+    double fps, goal, error;
+} probe;
+typedef struct clip_search {
+    cb_sampler *s;
+    const cb_bake_options *o;
+    const cb_clip_plan *clip;
+    double max_fps;
+    probe done[32];
+    uint32_t count;
+    cb_vertex_groups groups; /* the skinned vertices grouped for measuring: built after the first bake, kept */
+    bool grouped;
+} clip_search;
+
+/* The visible error of the clip baked alone at `fps`: the bake measures it (the encoding, and
  * the blend halfway between every two rows). goal > 0: exact when within it; above it, the
- * measurement may stop early (any value above the goal decides the search alike). */
-static double clip_error_at(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double fps, double goal,
-                            cb_error *err)
+ * measurement may stop early (any value above the goal decides the search alike). Every bake
+ * of the search measures the same vertices: they are grouped once, from the first bake's bind
+ * pose, not once a bake (Cow: 5 M instructions each). */
+static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *err)
 {
-    cb_bake_options one = *o;
+    cb_bake_options one = *cs->o;
     one.fps = fps;
     one.threads = 1;
     one.error_goal = goal;
-    cb_clip_plan plan = *clip;
+    cb_clip_plan plan = *cs->clip;
     plan.fps = fps;
     cb_palette p;
-    if (cb_palette_bake(s, &one, &plan, 1, &p, err)) return INFINITY;
+    if (palette_bake_grouped(cs->s, &one, &plan, 1, cs->grouped ? &cs->groups : NULL, &p, err)) return INFINITY;
+    const cb_model *m = cb_sampler_model(cs->s);
+    if (!cs->grouped) cs->grouped = cb_vertex_groups_build(m, cb_sampler_skin(cs->s), p.bind_positions, &cs->groups);
     double worst = p.visible_error;
     cb_palette_free(&p);
     return worst;
 }
 
+/* clip_error_at, once per rate. A value measured exactly (no goal, or within its goal) answers
+ * any goal; one above its goal only the same goal. max_fps is measured exactly at once: when
+ * it is probed every lower common rate failed, and a clip that fails it too needs its exact
+ * error there anyway (cb_choose_clip_fps's last line). */
+static double probe_error(clip_search *cs, double fps, double goal, cb_error *err)
+{
+    for (uint32_t i = 0; i < cs->count; ++i) {
+        const probe *d = &cs->done[i];
+        if (d->fps == fps && (d->goal == goal || d->goal == 0 || d->error <= d->goal)) return d->error;
+    }
+    if (fps == cs->max_fps) goal = 0;
+    double e = clip_error_at(cs, fps, goal, err);
+    if (!err->status && cs->count < sizeof cs->done / sizeof cs->done[0]) cs->done[cs->count++] = (probe){fps, goal, e};
+    return e;
+}
+
 /* The lowest of the increasing `rates` (up to max_fps) at which the clip's error is within
  * max_error, by binary search: within one family of rates the error falls as the rate rises.
  * 0 when none is. */
-static double lowest_rate(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, const double *rates, size_t n,
-                          double max_fps, double max_error, double *error, cb_error *err)
+static double lowest_rate(clip_search *cs, const double *rates, size_t n, double max_fps, double max_error, double *error,
+                          cb_error *err)
 {
     while (n > 0 && rates[n - 1] > max_fps) --n;
     size_t lo = 0, hi = n; /* the answer lies in [lo, hi]; hi = n: none */
     while (lo < hi && !err->status) {
         size_t mid = lo + (hi - lo) / 2;
-        double e = clip_error_at(s, o, clip, rates[mid], max_error, err);
+        double e = probe_error(cs, rates[mid], max_error, err);
         if (e <= max_error) hi = mid, *error = e;
         else lo = mid + 1;
     }
@@ -86,18 +123,22 @@ double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip
     double aligned[6], key = cb_animation_key_interval(&cb_sampler_model(s)->animations[clip->animation]);
     size_t n_aligned = 0;
     for (size_t i = 0; key > 0 && i < 6; ++i) aligned[n_aligned++] = round(factors[i] / key * 1000) / 1000;
+    clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps};
     double e_common = INFINITY, e_aligned = INFINITY;
-    double a = lowest_rate(s, o, clip, common, sizeof common / sizeof common[0], max_fps, max_error, &e_common, err);
-    double b = lowest_rate(s, o, clip, aligned, n_aligned, a > 0 ? fmin(a, max_fps) : max_fps, max_error, &e_aligned, err);
+    double a = lowest_rate(&cs, common, sizeof common / sizeof common[0], max_fps, max_error, &e_common, err);
+    double b = lowest_rate(&cs, aligned, n_aligned, a > 0 ? fmin(a, max_fps) : max_fps, max_error, &e_aligned, err);
     *met = !err->status && (a > 0 || b > 0);
+    double fps = max_fps;
     if (*met) {
         bool take_b = b > 0 && (a == 0 || b < a);
         *error = take_b ? e_aligned : e_common;
-        return take_b ? b : a;
+        fps = take_b ? b : a;
+    } else {
+        *error = err->status ? INFINITY : probe_error(&cs, max_fps, 0, err);
+        *met = *error <= max_error;
     }
-    *error = err->status ? INFINITY : clip_error_at(s, o, clip, max_fps, 0, err);
-    *met = *error <= max_error;
-    return max_fps;
+    cb_vertex_groups_free(&cs.groups);
+    return fps;
 }
 
 /* Clips are searched independently: options->threads at a time, each thread with its own

@@ -6,7 +6,7 @@
 #include <stdbool.h>
 
 #define PI 3.14159265358979323846
-#define MAX_JOINTS 512
+#define MAX_JOINTS 1024
 #define MAX_CLIPS 128
 #define KEY_RATE 24.0 /* keys per second written for every animated channel */
 

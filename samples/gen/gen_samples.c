@@ -114,7 +114,7 @@ static int accessor(gltf *g, const void *data, size_t bytes_len, int component, 
 
 typedef struct mesh {
     float *pos, *nrm, *wgt;
-    uint8_t *jnt;
+    uint16_t *jnt; /* written as bytes while every joint index fits one (the samples) */
     uint16_t *idx;
     int vcount, icount;
 } mesh;
@@ -154,10 +154,10 @@ static void add_box(mesh *m, const double from[3], const double to[3], double wi
         for (int k = 0; k < 4; ++k) {
             int c = faces[f][k];
             float *P = m->pos + 3 * m->vcount, *N = m->nrm + 3 * m->vcount, *W = m->wgt + 4 * m->vcount;
-            uint8_t *J = m->jnt + 4 * m->vcount;
+            uint16_t *J = m->jnt + 4 * m->vcount;
             for (int i = 0; i < 3; ++i) P[i] = (float)corner[c][i], N[i] = (float)(n[i] / nl);
             int blend = (c & 4) && j1 >= 0;
-            J[0] = (uint8_t)j0, J[1] = (uint8_t)(blend ? j1 : 0), J[2] = J[3] = 0;
+            J[0] = (uint16_t)j0, J[1] = (uint16_t)(blend ? j1 : 0), J[2] = J[3] = 0;
             W[0] = blend ? 0.5f : 1.0f, W[1] = blend ? 0.5f : 0.0f, W[2] = W[3] = 0;
             m->vcount++;
         }
@@ -173,7 +173,7 @@ static void build_mesh(const animal *a, mesh *m)
     m->pos = calloc((size_t)boxes * 24 * 3, sizeof(float));
     m->nrm = calloc((size_t)boxes * 24 * 3, sizeof(float));
     m->wgt = calloc((size_t)boxes * 24 * 4, sizeof(float));
-    m->jnt = calloc((size_t)boxes * 24 * 4, 1);
+    m->jnt = calloc((size_t)boxes * 24 * 4, sizeof(uint16_t));
     m->idx = calloc((size_t)boxes * 36, sizeof(uint16_t));
     if (!m->pos || !m->nrm || !m->wgt || !m->jnt || !m->idx) exit(1);
     for (int j = 1; j < a->joint_count; ++j) {
@@ -204,7 +204,14 @@ static void write_animal(const animal *a, const char *dir)
         for (int k = 0; k < 3; ++k) pmin[k] = fminf(pmin[k], m.pos[3 * i + k]), pmax[k] = fmaxf(pmax[k], m.pos[3 * i + k]);
     int a_pos = accessor(&g, m.pos, (size_t)m.vcount * 12, 5126, m.vcount, "VEC3", pmin, pmax, 3, 1);
     int a_nrm = accessor(&g, m.nrm, (size_t)m.vcount * 12, 5126, m.vcount, "VEC3", NULL, NULL, 3, 1);
-    int a_jnt = accessor(&g, m.jnt, (size_t)m.vcount * 4, 5121, m.vcount, "VEC4", NULL, NULL, 4, 1);
+    /* JOINTS_0 as unsigned bytes up to 256 joints (the samples), unsigned shorts beyond (bench rigs of 800) */
+    bool wide = a->joint_count > 256;
+    uint8_t *jnt8 = malloc((size_t)m.vcount * 4 + 1);
+    if (!jnt8) exit(1);
+    for (int i = 0; i < m.vcount * 4; ++i) jnt8[i] = (uint8_t)m.jnt[i];
+    int a_jnt = wide ? accessor(&g, m.jnt, (size_t)m.vcount * 8, 5123, m.vcount, "VEC4", NULL, NULL, 4, 1)
+                     : accessor(&g, jnt8, (size_t)m.vcount * 4, 5121, m.vcount, "VEC4", NULL, NULL, 4, 1);
+    free(jnt8);
     int a_wgt = accessor(&g, m.wgt, (size_t)m.vcount * 16, 5126, m.vcount, "VEC4", NULL, NULL, 4, 1);
     int a_idx = accessor(&g, m.idx, (size_t)m.icount * 2, 5123, m.icount, "SCALAR", NULL, NULL, 1, 2);
     float *ibm = calloc((size_t)a->joint_count * 16, sizeof(float));
