@@ -162,6 +162,36 @@ cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_e
     return CB_OK;
 }
 
+cb_status cb_atomic_read_back(cb_atomic_file *f, void *data, size_t size, uint64_t offset, cb_error *err)
+{
+    char *p = data;
+    while (size > 0) {
+        ssize_t n = pread(f->fd, p, size, (off_t)offset);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0)
+            return cb_fail(err, CB_ERR_IO, "%s: reading back the temporary file failed: %s", f->path,
+                           n < 0 ? strerror(errno) : "it is shorter than what was written");
+        p += n, offset += (uint64_t)n, size -= (size_t)n;
+    }
+    return CB_OK;
+}
+
+cb_status cb_atomic_rewrite(cb_atomic_file *f, const void *data, size_t size, uint64_t offset, cb_error *err)
+{
+    const char *p = data;
+    if (offset + size > f->written)
+        return cb_fail(err, CB_ERR_INTERNAL, "%s: a rewrite past the bytes written", f->path);
+    while (size > 0) {
+        ssize_t n = pwrite(f->fd, p, size, (off_t)offset);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0)
+            return cb_fail(err, CB_ERR_IO, "%s: write failed: %s; the previous file, if any, is unchanged", f->path,
+                           n < 0 ? strerror(errno) : "no space");
+        p += n, offset += (uint64_t)n, size -= (size_t)n;
+    }
+    return CB_OK;
+}
+
 cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err)
 {
     if (f->fd < 0) f->fd = open(f->tmp_path, O_RDONLY | O_CLOEXEC); /* written by another library */

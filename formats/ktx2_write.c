@@ -145,8 +145,9 @@ cb_status cb_ktx2_write(const char *path, const cb_palette *p, const cb_model *m
     for (int i = 0; i < 3; ++i) kvd += kv_entry(NULL, keys[i], values[i]);
     size_t dfd_at = 80 + 24, kvd_at = dfd_at + DFD_BYTES, level_at = kvd_at + kvd;
     level_at = (level_at + texel - 1) / texel * texel; /* lcm(texel block size, 4) */
-    size_t level_bytes = (size_t)p->width * p->height * texel, total = level_at + level_bytes;
-    unsigned char *d = calloc(total, 1);
+    /* Header, tables and padding here; the level is written from the palette's own texels. */
+    size_t level_bytes = (size_t)p->width * p->height * texel;
+    unsigned char *d = calloc(level_at, 1);
     if (!d) {
         free(clips), free(meta);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
@@ -164,11 +165,11 @@ cb_status cb_ktx2_write(const char *path, const cb_palette *p, const cb_model *m
     write_dfd(d + dfd_at, bits);
     size_t at = kvd_at;
     for (int i = 0; i < 3; ++i) at += kv_entry(d + at, keys[i], values[i]);
-    memcpy(d + level_at, p->texels, level_bytes);
     free(clips), free(meta);
     cb_atomic_file f;
     cb_status rc = cb_atomic_open(&f, path, err);
-    if (!rc && (rc = cb_atomic_write(&f, d, total, err))) cb_atomic_abort(&f);
+    if (!rc && ((rc = cb_atomic_write(&f, d, level_at, err)) || (rc = cb_atomic_write(&f, p->texels, level_bytes, err))))
+        cb_atomic_abort(&f);
     if (!rc) rc = cb_atomic_commit(&f, err);
     free(d);
     return rc;

@@ -3,6 +3,7 @@
 
 #include <stdlib.h>
 #include <string.h>
+#define ZSTD_STATIC_LINKING_ONLY /* ZSTD_c_stableInBuffer */
 #include <zstd.h>
 
 #include "crowdbake/atomic_file.h"
@@ -105,11 +106,10 @@ static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *
     }
 }
 
-/* Header and tables (zero-padded to the payload offset) and the payload to write after them:
- * the palette's own texels, or a compressed copy in *owned. */
-static cb_status build(const cb_palette *p, const cb_model *m, int32_t skin_index, const cb_pal_write_options *opt,
-                       unsigned char **meta_out, size_t *meta_size, const void **payload, size_t *payload_size,
-                       unsigned char **owned, cb_error *err)
+/* Header and tables, zero-padded to the payload offset, for a payload of payload_size bytes;
+ * the checksum field still 0. */
+static unsigned char *build_meta(const cb_palette *p, const cb_model *m, int32_t skin_index, const cb_pal_write_options *opt,
+                                 uint64_t payload_size, size_t *meta_size)
 {
     const cb_skin *skin = &m->skins[skin_index];
     layout_plan lp;
@@ -119,53 +119,99 @@ static cb_status build(const cb_palette *p, const cb_model *m, int32_t skin_inde
     lp.strings = lp.offsets + (p->positions_relative ? (uint64_t)p->bone_count * 12 : 0);
     lp.strings_size = strings_size(p, m, skin);
     lp.payload = (lp.strings + lp.strings_size + CBPAL_PAYLOAD_ALIGN - 1) / CBPAL_PAYLOAD_ALIGN * CBPAL_PAYLOAD_ALIGN;
-    *owned = NULL;
-    *payload = p->texels;
-    lp.payload_size = p->texel_bytes;
-    if (opt->zstd) {
-        size_t bound = ZSTD_compressBound(p->texel_bytes);
-        *owned = malloc(bound ? bound : 1);
-        if (!*owned) return cb_fail(err, CB_ERR_INTERNAL, "out of memory compressing a %zu-byte palette", p->texel_bytes);
-        size_t n = ZSTD_compress(*owned, bound, p->texels, p->texel_bytes, opt->zstd_level ? opt->zstd_level : 9);
-        if (ZSTD_isError(n)) {
-            free(*owned), *owned = NULL;
-            return cb_fail(err, CB_ERR_INTERNAL, "zstd compression failed: %s", ZSTD_getErrorName(n));
-        }
-        *payload = *owned;
-        lp.payload_size = n;
-    }
+    lp.payload_size = payload_size;
     unsigned char *d = calloc((size_t)lp.payload, 1);
-    if (!d) {
-        free(*owned), *owned = NULL;
-        return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    }
+    if (!d) return NULL;
     write_header(d, p, opt, &lp);
     write_tables(d, p, m, skin, &lp);
-    cbpal_xxh64_state h; /* the checksum field is still 0 here, as the format requires */
-    cbpal_xxh64_init(&h);
-    cbpal_xxh64_update(&h, d, (size_t)lp.payload);
-    cbpal_xxh64_update(&h, *payload, (size_t)lp.payload_size);
-    put64(d + CBPAL_CHECKSUM_OFFSET, cbpal_xxh64_digest(&h));
-    *meta_out = d;
     *meta_size = (size_t)lp.payload;
-    *payload_size = (size_t)lp.payload_size;
-    return CB_OK;
+    return d;
+}
+
+enum { ZSTD_CHUNK = 64 << 10 }; /* small enough that most palettes take several */
+
+/* Compresses the texels into the file a chunk at a time (the compressed copy of a large
+ * palette is nearly its size again). The input is stable and its size pledged, which gives the
+ * bytes one-shot ZSTD_compress gives. *size gets the compressed size. */
+static cb_status write_compressed(cb_atomic_file *f, const cb_palette *p, int level, uint64_t *size, cb_error *err)
+{
+    ZSTD_CCtx *cc = ZSTD_createCCtx();
+    unsigned char *chunk = malloc(ZSTD_CHUNK);
+    cb_status rc = cc && chunk ? CB_OK : cb_fail(err, CB_ERR_INTERNAL, "out of memory compressing a %zu-byte palette", p->texel_bytes);
+    size_t r = 0;
+    if (!rc && (ZSTD_isError(r = ZSTD_CCtx_setParameter(cc, ZSTD_c_compressionLevel, level)) ||
+                ZSTD_isError(r = ZSTD_CCtx_setParameter(cc, ZSTD_c_stableInBuffer, 1)) ||
+                ZSTD_isError(r = ZSTD_CCtx_setPledgedSrcSize(cc, p->texel_bytes))))
+        rc = cb_fail(err, CB_ERR_INTERNAL, "zstd compression failed: %s", ZSTD_getErrorName(r));
+    ZSTD_inBuffer in = {p->texels, p->texel_bytes, 0};
+    *size = 0;
+    for (bool done = false; !rc && !done;) {
+        ZSTD_outBuffer out = {chunk, ZSTD_CHUNK, 0};
+        r = ZSTD_compressStream2(cc, &out, &in, ZSTD_e_end);
+        if (ZSTD_isError(r)) rc = cb_fail(err, CB_ERR_INTERNAL, "zstd compression failed: %s", ZSTD_getErrorName(r));
+        else rc = cb_atomic_write(f, chunk, out.pos, err);
+        *size += out.pos;
+        done = r == 0;
+    }
+    ZSTD_freeCCtx(cc);
+    free(chunk);
+    return rc;
+}
+
+/* The checksum over the header and tables (its own field 0) and the payload, which the file
+ * holds from payload_at on when it was compressed into it, or the palette's texels. */
+static cb_status checksum(cb_atomic_file *f, const cb_palette *p, const unsigned char *meta, size_t meta_size, uint64_t payload_size,
+                          bool in_file, uint64_t *out, cb_error *err)
+{
+    cbpal_xxh64_state h;
+    cbpal_xxh64_init(&h);
+    cbpal_xxh64_update(&h, meta, meta_size);
+    if (!in_file) {
+        cbpal_xxh64_update(&h, p->texels, p->texel_bytes);
+        *out = cbpal_xxh64_digest(&h);
+        return CB_OK;
+    }
+    unsigned char *chunk = malloc(ZSTD_CHUNK);
+    if (!chunk) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    cb_status rc = CB_OK;
+    for (uint64_t at = 0; !rc && at < payload_size; at += ZSTD_CHUNK) {
+        size_t n = payload_size - at < ZSTD_CHUNK ? (size_t)(payload_size - at) : ZSTD_CHUNK;
+        if (!(rc = cb_atomic_read_back(f, chunk, n, meta_size + at, err))) cbpal_xxh64_update(&h, chunk, n);
+    }
+    free(chunk);
+    *out = cbpal_xxh64_digest(&h);
+    return rc;
 }
 
 cb_status cb_pal_write(const char *path, const cb_palette *p, const cb_model *m, int32_t skin,
                        const cb_pal_write_options *opt, cb_error *err)
 {
-    unsigned char *meta = NULL, *owned = NULL;
-    const void *payload = NULL;
-    size_t meta_size = 0, payload_size = 0;
-    if (build(p, m, skin, opt, &meta, &meta_size, &payload, &payload_size, &owned, err)) return err->status;
+    size_t meta_size = 0;
+    uint64_t payload_size = p->texel_bytes, sum = 0;
+    unsigned char *meta = build_meta(p, m, skin, opt, payload_size, &meta_size);
+    if (!meta) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     cb_atomic_file f;
     cb_status rc = cb_atomic_open(&f, path, err);
-    if (!rc) rc = cb_atomic_write(&f, meta, meta_size, err);
-    if (!rc) rc = cb_atomic_write(&f, payload, payload_size, err);
+    if (rc) {
+        free(meta);
+        return rc;
+    }
+    /* Uncompressed: header, tables and checksum first, then the texels from where they are.
+     * Compressed: the header waits for the payload's size, and is written over its place. */
+    if (!opt->zstd && !(rc = checksum(&f, p, meta, meta_size, payload_size, false, &sum, err))) {
+        put64(meta + CBPAL_CHECKSUM_OFFSET, sum);
+        if (!(rc = cb_atomic_write(&f, meta, meta_size, err))) rc = cb_atomic_write(&f, p->texels, p->texel_bytes, err);
+    } else if (opt->zstd && !(rc = cb_atomic_write(&f, meta, meta_size, err)) &&
+               !(rc = write_compressed(&f, p, opt->zstd_level ? opt->zstd_level : 9, &payload_size, err))) {
+        free(meta);
+        if (!(meta = build_meta(p, m, skin, opt, payload_size, &meta_size))) rc = cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+        if (!rc && !(rc = checksum(&f, p, meta, meta_size, payload_size, true, &sum, err))) {
+            put64(meta + CBPAL_CHECKSUM_OFFSET, sum);
+            rc = cb_atomic_rewrite(&f, meta, meta_size, 0, err);
+        }
+    }
     if (!rc) rc = cb_atomic_commit(&f, err);
     else cb_atomic_abort(&f);
     free(meta);
-    free(owned);
     return rc;
 }

@@ -213,6 +213,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     if (cb_bake_job_plan(job, err)) return err->status;
     cb_sampler *s = cb_sampler_create(job->model, job->skin, err);
     if (!s) return err->status;
+    cb_release_free_memory(); /* before the palette's buffers: the load's freed memory */
     static const unsigned formats[3] = {CB_FORMAT_PAL, CB_FORMAT_EXR, CB_FORMAT_KTX2};
     const char *paths[3] = {job->pal_path, job->exr_path, job->ktx2_path};
     cb_palette shared = {0}; /* the last palette baked, written again by a format of the same options */

@@ -5,6 +5,9 @@
 #include "crowdbake/core.h"
 
 #include <stdlib.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -22,4 +25,12 @@ void *cb_alloc_large(size_t bytes)
     madvise(p, bytes / HUGE_PAGE * HUGE_PAGE, MADV_HUGEPAGE);
 #endif
     return p;
+}
+
+void cb_release_free_memory(void)
+{
+    /* Whole free pages inside the heap are released too (madvise), not only its top. */
+#if defined(__GLIBC__)
+    malloc_trim(0);
+#endif
 }

@@ -49,26 +49,6 @@ void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint3
     *y = row % p->height;
 }
 
-/* ---- geometry of the texture ---- */
-
-static cb_status plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err)
-{
-    if (max_size < 1) return cb_fail(err, CB_ERR_SETTINGS, "--max-texture-size must be at least 1");
-    if (p->row_texels > max_size)
-        return cb_fail(err, CB_ERR_INPUT,
-                       "%s: %u bones x %u texels = %u texels per row, wider than --max-texture-size %u; use a layout "
-                       "with fewer texels per bone (qpos: 2) or a larger limit",
-                       source, p->bone_count, p->texels_per_bone, p->row_texels, max_size);
-    cb_texture_geometry g;
-    if (!cb_wrap_rows(p->row_texels, p->rows, max_size, &g))
-        return cb_fail(err, CB_ERR_INPUT,
-                       "%s: %u baked rows do not fit a %ux%u texture even wrapped into %u columns of %u rows; lower "
-                       "--fps, bake fewer clips, or raise --max-texture-size",
-                       source, p->rows, max_size, max_size, max_size / p->row_texels, max_size);
-    p->blocks = g.blocks, p->height = g.height, p->width = g.width;
-    return CB_OK;
-}
-
 /* ---- pass 1: sample every row into canonical floats ---- */
 
 static cb_status qpos_canon(const double m[16], float out[8], const cb_model *model, const cb_skin *skin, uint32_t bone,
@@ -240,6 +220,34 @@ static cb_status fit_clip(bake_state *st, worker *w, uint32_t c, float *rows, cb
     return err->status;
 }
 
+static double seconds_now(void)
+{
+    struct timespec ts;
+    timespec_get(&ts, TIME_UTC);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* Values encoding waits for: u16's need the ranges of every clip, half's positions each bone's
+ * offset (the centre of its positions over every clip). */
+static bool keeps_values(const cb_palette *p) { return p->precision != CB_PRECISION_FLOAT; }
+
+/* Rows first_row + f0 .. + n of clip c, sampled into `rows`: encoded, or staged, at once. */
+static void emit_rows(bake_state *st, uint32_t c, const float *rows, uint32_t f0, uint32_t n)
+{
+    cb_palette *p = st->p;
+    uint32_t first = p->clips[c].first_row + f0;
+    double start = seconds_now();
+    if (!keeps_values(p))
+        palette_encode_rows(p, rows, first, n);
+    else if (p->layout == CB_LAYOUT_QPOS)
+        palette_stage_qpos(p, rows, st->stash, first, n);
+    else
+        palette_stage_rows(p, rows, st->stash, first, n);
+    st->encode_seconds[c] += seconds_now() - start;
+}
+
+/* Samples clip c and emits its rows: CB_SAMPLE_BATCH at a time from the worker's small buffer,
+ * still in cache, or (--fit, which moves every row by its neighbours) the whole clip at once. */
 static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *err)
 {
     cb_palette *p = st->p;
@@ -247,33 +255,39 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
     cb_palette_clip *clip = &p->clips[c];
     extent bounds = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
     range_reset(&st->ranges[c]);
-    bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
+    bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler), fit = st->opt->fit;
     size_t row_floats = (size_t)p->bone_count * CANON(p->layout);
-    if (!w->rows && !(w->rows = malloc(st->max_clip_frames * row_floats * sizeof(float)))) /* only sampling needs them */
+    uint32_t chunk = fit ? info->frames : CB_SAMPLE_BATCH, qv = CANON(p->layout);
+    if (!w->rows && !(w->rows = malloc((fit ? st->max_clip_frames : CB_SAMPLE_BATCH) * row_floats * sizeof(float))))
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     float *rows = w->rows;
-    for (uint32_t f = 0; similar && f < info->frames; f += CB_SAMPLE_BATCH) {
-        uint32_t frames[CB_SAMPLE_BATCH], count = 0;
-        while (count < CB_SAMPLE_BATCH && f + count < info->frames) frames[count] = f + count, ++count;
-        cb_clip_frame_similarities(w->sampler, info, frames, count, st->opt->root_motion, w->sims);
-        for (uint32_t i = 0; i < count; ++i)
-            similarity_row(st, w, c, f + i, w->sims + (size_t)i * p->bone_count, rows + (f + i) * row_floats, &bounds);
+    for (uint32_t f0 = 0; f0 < info->frames; f0 += chunk) {
+        uint32_t n = info->frames - f0 < chunk ? info->frames - f0 : chunk;
+        for (uint32_t f = f0; similar && f < f0 + n; f += CB_SAMPLE_BATCH) {
+            uint32_t frames[CB_SAMPLE_BATCH], count = 0;
+            while (count < CB_SAMPLE_BATCH && f + count < f0 + n) frames[count] = f + count, ++count;
+            cb_clip_frame_similarities(w->sampler, info, frames, count, st->opt->root_motion, w->sims);
+            for (uint32_t i = 0; i < count; ++i)
+                similarity_row(st, w, c, f + i, w->sims + (size_t)i * p->bone_count, rows + (f + i - f0) * row_floats, &bounds);
+        }
+        for (uint32_t f = f0; !similar && f < f0 + n; ++f)
+            if (matrix_row(st, w, c, f, rows + (f - f0) * row_floats, &bounds, err)) return err->status;
+        if (fit && fit_clip(st, w, c, rows, err)) return err->status;
+        for (uint32_t j = 0; f0 == 0 && j < p->bone_count; ++j) memcpy(w->first + j * 4, rows + j * qv, 4 * sizeof(float));
+        if (p->layout == CB_LAYOUT_QPOS && info->loops && info->frames > 1 && f0 + n == info->frames) {
+            /* The wrap from the last row to the first: a full turn over the loop ends on -q. */
+            const float *last = rows + (n - 1) * row_floats;
+            for (uint32_t j = 0; j < p->bone_count; ++j) {
+                const float *qa = w->first + j * 4, *qb = last + (size_t)j * qv;
+                if (qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3] < 0) st->breaks[c]++;
+            }
+        }
+        emit_rows(st, c, rows, f0, n);
     }
-    for (uint32_t f = 0; !similar && f < info->frames; ++f)
-        if (matrix_row(st, w, c, f, rows + f * row_floats, &bounds, err)) return err->status;
-    if (st->opt->fit && fit_clip(st, w, c, rows, err)) return err->status;
     bool empty = !(bounds.lo[0] <= bounds.hi[0]); /* no skinned vertex */
     for (int k = 0; k < 3; ++k) {
         clip->bounds_min[k] = empty ? 0 : (float)bounds.lo[k];
         clip->bounds_max[k] = empty ? 0 : (float)bounds.hi[k];
-    }
-    if (p->layout == CB_LAYOUT_QPOS && info->loops && info->frames > 1) {
-        /* The wrap from the last row to the first: a full turn over the loop ends on -q. */
-        const float *last = rows + (info->frames - 1) * row_floats;
-        for (uint32_t j = 0; j < p->bone_count; ++j) {
-            const float *qa = rows + (size_t)j * CANON(p->layout), *qb = last + (size_t)j * CANON(p->layout);
-            if (qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3] < 0) st->breaks[c]++;
-        }
     }
     return CB_OK;
 }
@@ -303,8 +317,9 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
         w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
         w.sims = malloc((size_t)st->p->bone_count * CB_SAMPLE_BATCH * sizeof(cb_similarity));
         w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
+        w.first = malloc((size_t)st->p->bone_count * 4 * sizeof(float));
     }
-    if (jb->samples && (!w.sampler || !w.mats || !w.sims || !w.prev)) {
+    if (jb->samples && (!w.sampler || !w.mats || !w.sims || !w.prev || !w.first)) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
         for (uint32_t c = first; c < jb->count; c += stride) jb->run(st, &w, c);
@@ -313,6 +328,7 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     free(w.mats);
     free(w.sims);
     free(w.prev);
+    free(w.first);
     free(w.rows);
 }
 
@@ -331,135 +347,43 @@ static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, ui
     cb_pool_run(threads_used(st, jb.count), job_main, &jb);
 }
 
-static double seconds_now(void)
-{
-    struct timespec ts;
-    timespec_get(&ts, TIME_UTC);
-    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
-void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
-void palette_encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                            uint32_t count);
-
-/* Values encoding waits for: u16's need the ranges of every clip, half's positions each bone's
- * offset (the centre of its positions over every clip). */
-static bool keeps_values(const cb_palette *p) { return p->precision != CB_PRECISION_FLOAT; }
 
 
-/* Encodes a clip as soon as it is sampled, from rows still in cache: all of it, or for u16
- * what needs no range, keeping the rest for encode_kept_job. */
+/* Samples a clip and encodes it as it goes: all of it, or for u16 and half what needs no range
+ * or offset, keeping the rest for encode_staged_job. */
 static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
 {
-    if (st->errors[c].status || sample_clip(st, w, c, &st->errors[c])) return;
-    cb_palette *p = st->p;
-    const cb_palette_clip *clip = &p->clips[c];
-    double start = seconds_now();
-    size_t bones = (size_t)clip->frames * p->bone_count, kept = kept_floats(p->layout);
-    if (!keeps_values(p)) {
-        palette_encode_rows(p, w->rows, clip->first_row, clip->frames);
-    } else if (p->layout == CB_LAYOUT_QPOS) {
-        float *keep = st->kept + (size_t)clip->first_row * p->bone_count * kept;
-        if (p->precision == CB_PRECISION_U16) palette_encode_qpos_u16(p, w->rows, 8, 0, clip->first_row, clip->frames);
-        else palette_encode_qpos_half(p, w->rows, 8, 0, clip->first_row, clip->frames);
-        for (size_t b = 0; b < bones; ++b) memcpy(keep + b * 4, w->rows + b * 8 + 4, 4 * sizeof(float));
-    } else {
-        memcpy(st->kept + (size_t)clip->first_row * p->bone_count * kept, w->rows, bones * kept * sizeof(float));
-    }
-    st->encode_seconds[c] = seconds_now() - start;
+    if (!st->errors[c].status) sample_clip(st, w, c, &st->errors[c]);
 }
 
-/* u16 and qpos/half, once the ranges and offsets of every clip are known: the values a clip kept. */
-static void encode_kept_job(bake_state *st, worker *w, uint32_t c)
+/* u16 and half, once the ranges and offsets of every clip are known: the values a clip staged. */
+static void encode_staged_job(bake_state *st, worker *w, uint32_t c)
 {
     (void)w;
     cb_palette *p = st->p;
     const cb_palette_clip *clip = &p->clips[c];
-    const float *kept = st->kept + (size_t)clip->first_row * p->bone_count * kept_floats(p->layout);
-    if (p->layout == CB_LAYOUT_QPOS && p->precision == CB_PRECISION_HALF)
-        palette_encode_qpos_half(p, kept, 4, 4, clip->first_row, clip->frames);
-    else if (p->layout == CB_LAYOUT_QPOS)
-        palette_encode_qpos_u16(p, kept, 4, 4, clip->first_row, clip->frames);
-    else
-        palette_encode_rows(p, kept, clip->first_row, clip->frames);
+    if (p->layout == CB_LAYOUT_QPOS) {
+        palette_finish_qpos(p, st->stash, clip->first_row, clip->frames);
+        return;
+    }
+    float *row = malloc((size_t)p->bone_count * CANON(p->layout) * sizeof(float));
+    if (!row) {
+        cb_fail(&st->errors[c], CB_ERR_INTERNAL, "out of memory encoding %s", st->model->source);
+        return;
+    }
+    for (uint32_t r = clip->first_row; r < clip->first_row + clip->frames; ++r) {
+        palette_gather_row(p, st->stash, r, row); /* read before the encoder writes over them */
+        palette_encode_rows(p, row, r, 1);
+    }
+    free(row);
 }
 
 /* ---- the bake ---- */
 
-static cb_status frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
-                             cb_clip_info **infos_out, cb_error *err)
-{
-    cb_palette *p = st->p;
-    const cb_model *m = st->model;
-    if (!plan) count = m->animation_count;
-    cb_clip_info *infos = calloc(count ? count : 1, sizeof *infos);
-    p->clips = calloc(count ? count : 1, sizeof *p->clips);
-    *infos_out = infos;
-    if (!infos || !p->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    uint64_t rows = 0;
-    for (uint32_t i = 0; i < count; ++i) {
-        cb_clip_plan one = plan ? plan[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0};
-        double fps = cb_clip_plan_fps(&one, st->opt->fps);
-        if (cb_clip_analyze(sampler, one.animation, fps, one.loop, &st->opt->limits, &infos[i], err)) return err->status;
-        cb_palette_clip *c = &p->clips[i];
-        c->name = one.name ? one.name : m->animations[one.animation].name;
-        c->first_row = (uint32_t)rows;
-        c->frames = infos[i].frames;
-        c->fps = infos[i].effective_fps;
-        c->duration = infos[i].duration;
-        c->start = infos[i].t0;
-        c->loops = infos[i].loops;
-        for (int k = 0; k < 3; ++k)
-            c->root_velocity[k] = (float)(st->opt->root_motion == CB_ROOT_MOTION_IN_PLACE ? infos[i].root_velocity[k] : 0);
-        rows += infos[i].frames;
-        if (rows > st->opt->limits.max_frames)
-            return cb_fail(err, CB_ERR_INPUT, "%s: %llu baked rows over all clips, over the limit of %u (--max-frames)",
-                           m->source, (unsigned long long)rows, st->opt->limits.max_frames);
-    }
-    p->clip_count = count;
-    p->rows = (uint32_t)rows;
-    return CB_OK;
-}
-
-static void bind_positions(cb_palette *p, const cb_skin *skin)
-{
-    for (uint32_t j = 0; j < p->bone_count; ++j) {
-        /* The joint's bind-pose position is the translation of inverse(IBM). */
-        const double *ibm = skin->inverse_bind + (size_t)j * 16;
-        double det = cb_mat4_determinant3(ibm);
-        cb_vec3 b = {0, 0, 0};
-        if (fabs(det) > 1e-300) {
-            /* Solve A b = -t with Cramer's rule. */
-            double t[3] = {-ibm[12], -ibm[13], -ibm[14]}, col[16];
-            double *res[3] = {&b.x, &b.y, &b.z};
-            for (int k = 0; k < 3; ++k) {
-                memcpy(col, ibm, sizeof col);
-                col[k * 4 + 0] = t[0], col[k * 4 + 1] = t[1], col[k * 4 + 2] = t[2];
-                *res[k] = cb_mat4_determinant3(col) / det;
-            }
-        }
-        p->bind_positions[j * 3] = (float)b.x, p->bind_positions[j * 3 + 1] = (float)b.y;
-        p->bind_positions[j * 3 + 2] = (float)b.z;
-    }
-}
-
 static void free_bake_state(bake_state *st)
 {
-    free(st->kept), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
+    free(st->stash), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
     free(st->encode_seconds), cb_vertex_groups_free(&st->groups);
-}
-
-/* The texels no row covers, which stay zero: in the last block the rows past the last baked
- * one. (Every row's texels are written by the encoder.) */
-static void zero_padding(cb_palette *p)
-{
-    size_t tb = cb_precision_texel_bytes(p->precision);
-    unsigned char *texels = p->texels;
-    for (uint32_t y = 0; y < p->height; ++y) {
-        uint32_t blocks_here = p->rows / p->height + (y < p->rows % p->height);
-        size_t x0 = (size_t)blocks_here * p->row_texels;
-        if (x0 < p->width) memset(texels + ((size_t)y * p->width + x0) * tb, 0, (p->width - x0) * tb);
-    }
 }
 
 /* The first error in clip order, so the message does not depend on the thread count. */
@@ -500,7 +424,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.p = p, st.model = m, st.skin = skin_index, st.opt = opt;
     cb_clip_info *infos = NULL;
     double *radius = NULL;
-    if (frame_clips(&st, sampler, plan, plan_count, &infos, err) || plan_texture(p, opt->max_texture_size, m->source, err))
+    if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;
     st.infos = infos;
     p->texel_bytes = (size_t)p->width * p->height * cb_precision_texel_bytes(p->precision);
@@ -513,8 +437,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     p->texels = cb_alloc_large(p->texel_bytes);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
     p->position_offsets = calloc((size_t)p->bone_count * 3, sizeof(float));
-    if (keeps_values(p))
-        st.kept = cb_alloc_large((size_t)p->rows * p->bone_count * kept_floats(p->layout) * sizeof(float));
+    if (keeps_values(p)) st.stash = cb_alloc_large((size_t)p->rows * p->bone_count * palette_stash_bytes(p));
     for (uint32_t c = 0; c < p->clip_count; ++c)
         if (p->clips[c].frames > st.max_clip_frames) st.max_clip_frames = p->clips[c].frames;
     radius = malloc((size_t)p->bone_count * sizeof(double));
@@ -524,13 +447,13 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.clip_blend_error = calloc(p->clip_count, sizeof *st.clip_blend_error);
     st.ranges = calloc(p->clip_count, sizeof *st.ranges);
     st.encode_seconds = calloc(p->clip_count, sizeof *st.encode_seconds);
-    if (!p->texels || !p->bind_positions || !p->position_offsets || (keeps_values(p) && !st.kept) || !radius ||
+    if (!p->texels || !p->bind_positions || !p->position_offsets || (keeps_values(p) && !st.stash) || !radius ||
         !st.breaks || !st.errors || !st.clip_error || !st.clip_blend_error || !st.ranges || !st.encode_seconds) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
     }
-    zero_padding(p);
-    bind_positions(p, skin);
+    palette_zero_padding(p);
+    palette_bind_positions(p, skin);
     p->positions_relative = p->precision == CB_PRECISION_HALF;
     bool skinned = palette_joint_reach(p, m, skin_index, radius);
     st.radius = radius;
@@ -538,9 +461,13 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
     palette_merge_ranges(p, st.ranges);
-    if (p->positions_relative) palette_position_offsets(p, st.kept);
+    if (p->positions_relative && !palette_position_offsets(p, st.stash)) {
+        cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
+        goto fail;
+    }
     double t1 = seconds_now();
-    if (st.kept) for_each_clip(&st, encode_kept_job, false, 0);
+    if (keeps_values(p)) for_each_clip(&st, encode_staged_job, false, 0);
+    if (first_clip_error(&st, err)) goto fail;
     double t2 = seconds_now(), lo[3], hi[3];
     /* Clips encoded as they were sampled: their encoding time, spread over the threads, moves
      * from the sampling phase to the encoding phase. */

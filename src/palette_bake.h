@@ -59,7 +59,8 @@ typedef struct worker {
     double *mats;        /* bones * 16 */
     cb_similarity *sims; /* CB_SAMPLE_BATCH rows of bones: the joints, for qpos rows of similarity rigs */
     cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
-    float *rows;         /* the pre-encoding rows of the clip being sampled (max_clip_frames of them) */
+    float *rows;         /* pre-encoding rows: CB_SAMPLE_BATCH of them, or a whole clip's for --fit */
+    float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
 } worker;
 
 typedef struct bake_state {
@@ -68,10 +69,11 @@ typedef struct bake_state {
     int32_t skin;
     const cb_bake_options *opt;
     const cb_clip_info *infos;
-    /* Each worker samples a clip's rows into its own buffer and encodes them from there. Only
-     * u16 has to wait for the ranges of every clip: it keeps what it has not yet encoded of
-     * every row here (kept_floats per bone), and encodes that after the last clip. */
-    float *kept;
+    /* Each worker samples a clip's rows into its own buffer and encodes them from there. u16
+     * waits for the ranges of every clip, half for the position offsets: until then the values
+     * wait in the texels, and what does not fit there in the stash (palette_stash_bytes per
+     * bone and row: qpos's encoded quaternions, the rest of mat4's and affine's floats). */
+    unsigned char *stash;
     uint32_t max_clip_frames;
     const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 */
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
@@ -84,12 +86,7 @@ typedef struct bake_state {
     double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
 } bake_state;
 
-/* What u16 and relative half keep of a bone's row until every clip is sampled. */
-/* What u16 keeps of a bone's row until every clip is sampled: qpos's position and scale (its
- * quaternion is snorm, which needs no range, and is encoded at once), or all 12 values. */
-static inline uint32_t kept_floats(cb_layout layout) { return layout == CB_LAYOUT_QPOS ? 4 : 12; }
-
-/* The joint's position p = M b of a kept mat4/affine row (the upper 3x4 by rows), axis r. */
+/* The joint's position p = M b of a mat4/affine canonical row (the upper 3x4 by rows), axis r. */
 static inline double row_position(const float *c, const float *b, int r)
 {
     return (double)c[r * 4] * b[0] + (double)c[r * 4 + 1] * b[1] + (double)c[r * 4 + 2] * b[2] + c[r * 4 + 3];
@@ -97,17 +94,31 @@ static inline double row_position(const float *c, const float *b, int r)
 
 /* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
 void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
-/* u16 qpos: the values v0 .. v0 + 3 of each bone (`stride` floats apart), which need no range
- * (v0 0: the quaternion) or whose ranges are known (v0 4: position and scale). */
-void palette_encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                             uint32_t count);
-/* qpos/half: the values v0 .. v0 + 3 of each bone, positions less the palette's offsets. */
-void palette_encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                              uint32_t count);
-/* Relative half palettes: each bone's position offset, the middle of its positions' range. */
-void palette_position_offsets(cb_palette *p, const float *kept);
+/* qpos/u16 and qpos/half in place: the quaternions of `count` rows encoded into `stash`, and
+ * the positions and scales staged in their texels as floats (palette_stage_qpos); once every
+ * range and offset is known, those encoded in place and the quaternions copied back
+ * (palette_finish_qpos). */
+void palette_stage_qpos(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count);
+void palette_finish_qpos(cb_palette *p, const unsigned char *stash, uint32_t first, uint32_t count);
+/* mat4 and affine in place, for u16 and half: `count` rows' canonical floats staged in their
+ * texels and the stash (palette_stage_rows), and row r's gathered back, to be encoded
+ * (palette_gather_row). palette_stash_bytes: the stash's bytes per bone and row (qpos too). */
+void palette_stage_rows(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count);
+void palette_gather_row(const cb_palette *p, const unsigned char *stash, uint32_t r, float *row);
+uint32_t palette_stash_bytes(const cb_palette *p);
+/* Relative half palettes: each bone's position offset, the middle of its positions' range,
+ * from the staged values. False: out of memory. */
+bool palette_position_offsets(cb_palette *p, const unsigned char *stash);
 /* Sets p->bounds_min/max and linear_range from every clip's range. */
 void palette_merge_ranges(cb_palette *p, const value_range *clips);
+
+/* palette_plan.c: the clips' frames and rows (p->clips, *infos_out), the texture's geometry,
+ * each joint's bind-pose position, and the texels no row covers set to zero. */
+cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
+                              cb_clip_info **infos_out, cb_error *err);
+cb_status palette_plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err);
+void palette_bind_positions(cb_palette *p, const cb_skin *skin);
+void palette_zero_padding(cb_palette *p);
 
 /* Every bone's values of one row of p->texels, 16 doubles apart, as cb_palette_decode_values
  * gives them. */

@@ -1,5 +1,6 @@
 /* palette_codec.c - texels: encoding canonical rows in each layout and precision, decoding
  * them back as a shader reads them, and the value ranges u16 quantizes in. */
+#include <stdlib.h>
 #include <string.h>
 
 #include "palette_bake.h"
@@ -160,61 +161,155 @@ void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint3
     }
 }
 
-/* Encodes qpos values v0..v0 + 3 (the quaternion, or position and scale) of `count` rows as
- * u16; `rows` holds `stride` floats per bone, starting with value v0. (qpos texel order is its
- * canonical order.) */
-void palette_encode_qpos_u16(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                            uint32_t count)
+/* qpos in place, for u16 and half, whose positions wait for every clip's range or offset:
+ * each bone's texel pair (16 bytes) holds its position and scale as 4 floats until then, and
+ * its quaternion, which needs neither, is encoded at once into `stash` (8 bytes per bone and
+ * row, half the texels' size): the bake keeps half the output's size more, not the output's
+ * size again (a float copy of every position and scale). */
+static unsigned char *qpos_texel(cb_palette *p, uint32_t row)
+{
+    uint32_t x0, y;
+    cb_palette_texel_xy(p, row, 0, &x0, &y);
+    return (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8; /* RGBA16: 8 bytes a texel */
+}
+
+/* One row's quaternions into the stash, as u16 (snorm, no range needed) or half; positions and
+ * scales into the texels as floats. (Per precision, so that the loop carries no branch.) */
+static void stage_row_u16(const u16_slot slots[4], const float *v, unsigned char *q, unsigned char *d, uint32_t bones)
+{
+    for (uint32_t j = 0; j < bones; ++j, v += 8, q += 8, d += 16) {
+        for (uint32_t i = 0; i < 4; ++i) store_le16(q + i * 2, quantize(&slots[i], v[i]));
+        memcpy(d, v + 4, 4 * sizeof(float));
+    }
+}
+
+static void stage_row_half(const float *v, unsigned char *q, unsigned char *d, uint32_t bones)
+{
+    for (uint32_t j = 0; j < bones; ++j, v += 8, q += 8, d += 16) {
+        for (uint32_t i = 0; i < 4; ++i) store_le16(q + i * 2, cb_float_to_half(v[i]));
+        memcpy(d, v + 4, 4 * sizeof(float));
+    }
+}
+
+void palette_stage_qpos(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count)
 {
     u16_slot slots[16];
     u16_slots(p, slots);
     for (uint32_t r = first; r < first + count; ++r) {
-        uint32_t x0, y;
-        cb_palette_texel_xy(p, r, 0, &x0, &y);
-        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8 + v0 * 2; /* RGBA16 */
-        const float *row = rows + (size_t)(r - first) * p->bone_count * stride;
-        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16)
-            for (uint32_t i = 0; i < 4; ++i) store_le16(d + i * 2, quantize(&slots[v0 + i], row[j * stride + i]));
+        unsigned char *d = qpos_texel(p, r), *q = stash + (size_t)r * p->bone_count * 8;
+        const float *row = rows + (size_t)(r - first) * p->bone_count * 8;
+        if (p->precision == CB_PRECISION_U16) stage_row_u16(slots, row, q, d, p->bone_count);
+        else stage_row_half(row, q, d, p->bone_count);
     }
 }
 
-/* Encodes qpos values v0..v0 + 3 of `count` rows as half floats, positions less their bone's
- * offset; `rows` holds `stride` floats per bone, starting with value v0. */
-void palette_encode_qpos_half(cb_palette *p, const float *rows, uint32_t stride, uint32_t v0, uint32_t first,
-                             uint32_t count)
+/* The position and scale staged in the texels (see palette_stage_qpos). */
+static void staged_values(const unsigned char *d, float out[4]) { memcpy(out, d, 4 * sizeof(float)); }
+
+/* One row: the staged values read before their texel pair is overwritten, encoded into its
+ * second texel, the stashed quaternion copied into its first. */
+static void finish_row_u16(const u16_slot slots[16], const unsigned char *q, unsigned char *d, uint32_t bones)
 {
+    for (uint32_t j = 0; j < bones; ++j, q += 8, d += 16) {
+        float v[4];
+        staged_values(d, v);
+        for (uint32_t i = 0; i < 4; ++i) store_le16(d + 8 + i * 2, quantize(&slots[4 + i], v[i]));
+        memcpy(d, q, 8);
+    }
+}
+
+static void finish_row_half(const float *offsets, const unsigned char *q, unsigned char *d, uint32_t bones)
+{
+    for (uint32_t j = 0; j < bones; ++j, q += 8, d += 16, offsets += 3) {
+        float v[4];
+        staged_values(d, v);
+        for (uint32_t i = 0; i < 3; ++i) store_le16(d + 8 + i * 2, cb_float_to_half(v[i] - offsets[i]));
+        store_le16(d + 14, cb_float_to_half(v[3]));
+        memcpy(d, q, 8);
+    }
+}
+
+void palette_finish_qpos(cb_palette *p, const unsigned char *stash, uint32_t first, uint32_t count)
+{
+    u16_slot slots[16];
+    u16_slots(p, slots);
     for (uint32_t r = first; r < first + count; ++r) {
-        uint32_t x0, y;
-        cb_palette_texel_xy(p, r, 0, &x0, &y);
-        unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8 + v0 * 2; /* RGBA16F */
-        const float *row = rows + (size_t)(r - first) * p->bone_count * stride;
-        for (uint32_t j = 0; j < p->bone_count; ++j, d += 16)
-            for (uint32_t i = 0; i < 4; ++i) {
-                float v = row[j * stride + i];
-                if (v0 == 4 && i < 3) v -= p->position_offsets[(size_t)j * 3 + i];
-                store_le16(d + i * 2, cb_float_to_half(v));
-            }
+        unsigned char *d = qpos_texel(p, r);
+        const unsigned char *q = stash + (size_t)r * p->bone_count * 8;
+        if (p->precision == CB_PRECISION_U16) finish_row_u16(slots, q, d, p->bone_count);
+        else finish_row_half(p->position_offsets, q, d, p->bone_count);
     }
 }
 
-/* qpos/half: each bone's position offset, the centre of the box of its positions over every
- * row. A half float's step grows with the value; positions less the centre stay within half
- * the bone's reach (Cow: 0.60 -> 0.32 mm/m; less its bind position, a body that falls or
- * travels still lands far from it). */
-void palette_position_offsets(cb_palette *p, const float *kept)
+/* mat4 and affine in place, for u16 and half: a bone's 12 canonical floats wait for every
+ * clip's range or offset split between its texels (as many floats as they hold: mat4 8,
+ * affine 6) and the stash (the rest), then go through the ordinary encoder row by row. */
+static uint32_t texel_floats(const cb_palette *p) { return p->texels_per_bone * 8 / 4; } /* 8-byte texels */
+uint32_t palette_stash_bytes(const cb_palette *p) { return p->layout == CB_LAYOUT_QPOS ? 8 : (12 - texel_floats(p)) * 4; }
+
+static unsigned char *row_texels(const cb_palette *p, uint32_t row)
 {
-    uint32_t stride = kept_floats(p->layout);
-    for (uint32_t j = 0; j < p->bone_count; ++j) {
-        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        for (uint32_t r = 0; r < p->rows; ++r) {
-            const float *v = kept + ((size_t)r * p->bone_count + j) * stride;
+    uint32_t x0, y;
+    cb_palette_texel_xy(p, row, 0, &x0, &y);
+    return (unsigned char *)p->texels + ((size_t)y * p->width + x0) * 8;
+}
+
+void palette_stage_rows(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count)
+{
+    uint32_t in_texels = texel_floats(p), in_stash = 12 - in_texels, bone_bytes = p->texels_per_bone * 8;
+    for (uint32_t r = first; r < first + count; ++r) {
+        unsigned char *d = row_texels(p, r), *q = stash + (size_t)r * p->bone_count * in_stash * 4;
+        const float *v = rows + (size_t)(r - first) * p->bone_count * 12;
+        for (uint32_t j = 0; j < p->bone_count; ++j, v += 12, d += bone_bytes, q += in_stash * 4) {
+            memcpy(d, v, in_texels * sizeof(float));
+            memcpy(q, v + in_texels, in_stash * sizeof(float));
+        }
+    }
+}
+
+/* Row r's canonical floats back from its texels and the stash (before the texels are encoded). */
+void palette_gather_row(const cb_palette *p, const unsigned char *stash, uint32_t r, float *row)
+{
+    uint32_t in_texels = texel_floats(p), in_stash = 12 - in_texels, bone_bytes = p->texels_per_bone * 8;
+    const unsigned char *d = row_texels(p, r), *q = stash + (size_t)r * p->bone_count * in_stash * 4;
+    for (uint32_t j = 0; j < p->bone_count; ++j, row += 12, d += bone_bytes, q += in_stash * 4) {
+        memcpy(row, d, in_texels * sizeof(float));
+        memcpy(row + in_texels, q, in_stash * sizeof(float));
+    }
+}
+
+/* Relative half palettes: each bone's position offset, the centre of the box of its positions
+ * over every row. A half float's step grows with the value; positions less the centre stay
+ * within half the bone's reach (Cow: 0.60 -> 0.32 mm/m; less its bind position, a body that
+ * falls or travels still lands far from it). From the values staged in the texels (and for
+ * mat4 and affine the stash), row by row, so that the texels are read once, in order. */
+bool palette_position_offsets(cb_palette *p, const unsigned char *stash)
+{
+    double *box = malloc((size_t)p->bone_count * 6 * sizeof(double)); /* lo[3], hi[3] per bone */
+    float *row = p->layout == CB_LAYOUT_QPOS ? NULL : malloc((size_t)p->bone_count * 12 * sizeof(float));
+    if (!box || (p->layout != CB_LAYOUT_QPOS && !row)) return free(box), free(row), false;
+    for (uint32_t j = 0; j < p->bone_count; ++j)
+        for (int k = 0; k < 3; ++k) box[j * 6 + k] = INFINITY, box[j * 6 + 3 + k] = -INFINITY;
+    for (uint32_t r = 0; r < p->rows; ++r) {
+        const unsigned char *d = p->layout == CB_LAYOUT_QPOS ? qpos_texel(p, r) : NULL;
+        if (row) palette_gather_row(p, stash, r, row);
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            float staged[4];
+            const float *v = staged;
+            if (d) staged_values(d + (size_t)j * 16, staged);
+            else v = row + (size_t)j * 12;
+            double *lo = box + j * 6, *hi = lo + 3;
             for (int k = 0; k < 3; ++k) {
-                double x = p->layout == CB_LAYOUT_QPOS ? v[k] : row_position(v, p->bind_positions + (size_t)j * 3, k);
+                double x = d ? v[k] : row_position(v, p->bind_positions + (size_t)j * 3, k);
                 lo[k] = x < lo[k] ? x : lo[k], hi[k] = x > hi[k] ? x : hi[k];
             }
         }
-        for (int k = 0; k < 3; ++k) p->position_offsets[(size_t)j * 3 + k] = p->rows ? (float)(0.5 * (lo[k] + hi[k])) : 0;
     }
+    for (uint32_t j = 0; j < p->bone_count; ++j)
+        for (int k = 0; k < 3; ++k)
+            p->position_offsets[(size_t)j * 3 + k] = p->rows ? (float)(0.5 * (box[j * 6 + k] + box[j * 6 + 3 + k])) : 0;
+    free(box), free(row);
+    return true;
 }
 
 /* One bone's values from its texels at d; kinds[i] is u16_kind of value i (u16 only). */

@@ -23,6 +23,10 @@ void cb_atomic_cleanup_on_signals(void);
 
 cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err);
 cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_error *err);
+/* Reads back bytes already written, and writes over them (a header whose fields depend on what
+ * follows it, written last). */
+cb_status cb_atomic_read_back(cb_atomic_file *f, void *data, size_t size, uint64_t offset, cb_error *err);
+cb_status cb_atomic_rewrite(cb_atomic_file *f, const void *data, size_t size, uint64_t offset, cb_error *err);
 /* Flushes, renames over the target and releases f. On failure the target is untouched. A
  * library may write tmp_path itself (close fd first; set it to -1). */
 cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err);
