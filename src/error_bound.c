@@ -4,21 +4,6 @@
 #include <math.h>
 #include <stdlib.h>
 
-double cb_skin_max_weight_sum(const cb_model *m, int32_t skin)
-{
-    double most = 0;
-    for (uint32_t p = 0; p < m->primitive_count; ++p) {
-        const cb_primitive *prim = &m->primitives[p];
-        if (prim->skin != skin) continue;
-        for (uint32_t v = 0; v < prim->vertex_count; ++v) {
-            const float *w = prim->weights + (size_t)v * 4;
-            double sum = fabs((double)w[0]) + fabs((double)w[1]) + fabs((double)w[2]) + fabs((double)w[3]);
-            most = sum > most ? sum : most;
-        }
-    }
-    return most;
-}
-
 /* An upper bound on the 3x3 part's largest stretch (spectral norm): the square root of the
  * largest Gershgorin row sum of its Gram matrix G = A^T A, whose eigenvalues are the squared
  * stretches. Tighter than the Frobenius norm for the near-rotations that encodings leave
@@ -33,28 +18,6 @@ static double stretch(const double *D)
     double g12 = fabs(c1[0] * c2[0] + c1[1] * c2[1] + c1[2] * c2[2]);
     double r0 = g00 + g01 + g02, r1 = g01 + g11 + g12, r2 = g02 + g12 + g22;
     return sqrt(fmax(r0, fmax(r1, r2))) * (1 + 1e-9);
-}
-
-double cb_row_error_bound(const double *diff, uint32_t bones, const float *bind, const double *radius, double weight_sum)
-{
-    double most = 0;
-    for (uint32_t j = 0; j < bones; ++j) {
-        if (radius[j] < 0) continue;
-        const double *D = diff + (size_t)j * 16;
-        double bx = bind[j * 3], by = bind[j * 3 + 1], bz = bind[j * 3 + 2];
-        double ex = D[0] * bx + D[4] * by + D[8] * bz + D[12];
-        double ey = D[1] * bx + D[5] * by + D[9] * bz + D[13];
-        double ez = D[2] * bx + D[6] * by + D[10] * bz + D[14];
-        double a = stretch(D);
-        double t = sqrt(D[12] * D[12] + D[13] * D[13] + D[14] * D[14]);
-        /* Rounding in skinning and here is far below 1e-9 of the terms' sizes: the slack keeps
-         * the bound above the computed error even where D b and t cancel (far from the origin). */
-        double slack = 1e-9 * (a * (sqrt(bx * bx + by * by + bz * bz) + radius[j]) + t);
-        double e = sqrt(ex * ex + ey * ey + ez * ez) + a * radius[j] * (1 + 1e-9) + slack;
-        if (e != e) return INFINITY; /* NaN: leave it to the measurement */
-        most = e > most ? e : most;
-    }
-    return most * weight_sum * (1 + 1e-9);
 }
 
 static int by_bound(const void *pa, const void *pb)
@@ -77,7 +40,8 @@ bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_j
         double a = stretch(D), t = sqrt(D[12] * D[12] + D[13] * D[13] + D[14] * D[14]);
         out[j].at_bind = sqrt(ex * ex + ey * ey + ez * ez);
         out[j].stretch = a;
-        /* As in cb_row_error_bound: 1e-9 of the terms' sizes covers the rounding. */
+        /* Rounding in skinning and here is far below 1e-9 of the terms' sizes: the slack keeps
+         * the bound above the computed error even where D b and t cancel (far from the origin). */
         out[j].slack_fixed = 1e-9 * (a * sqrt(bx * bx + by * by + bz * bz) + t);
         out[j].translation = t, out[j].diff = D;
         if (!isfinite(out[j].at_bind + out[j].slack_fixed)) return false;

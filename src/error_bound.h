@@ -1,23 +1,18 @@
-/* error_bound.h - a cheap upper bound on a row's worst vertex error, so measuring can skip the
- * rows that cannot change the worst (internal to the bake; see palette_error.c's measurement).
+/* error_bound.h - cheap upper bounds on a row's worst vertex error, so measuring can skip the
+ * rows and vertex groups that cannot change the worst (internal to the bake; see
+ * palette_error.c's measurement).
  *
- * A vertex skinned with joint differences D_j (exact less decoded, 4x4 column-major) moves by
- * |sum_i w_i D_ji x| <= W max_j (|D_j b_j| + |A_j|_F r_j), where W is the largest sum of a
- * vertex's |weights|, b_j the joint's bind position, r_j the farthest vertex it moves from b_j
- * and A_j the 3x3 part of D_j (its Frobenius norm bounds its stretch). O(bones) per row
- * against O(vertices) for skinning. */
+ * A vertex x skinned with joint differences D_j (exact less decoded, 4x4 column-major) moves by
+ * |sum_i w_i D_ji x| <= sum_i |w_i| e_i <= W max_i e_i, e_i = |D_i b_i| + |A_i| r_i, where W is the
+ * largest sum of |weights| in the group, b_i a point of the joint
+ * (its bind position, or the centre of a group's vertices), r_i the farthest vertex of the group
+ * from it and |A_i| a bound on the stretch of D_i's 3x3 part. O(a group's joints) per group
+ * against O(its vertices) for skinning. */
 #ifndef CB_ERROR_BOUND_H
 #define CB_ERROR_BOUND_H
 
 #include "crowdbake/crowdbake.h"
 #include "vertex_groups.h"
-
-/* The largest sum of |weights| of a vertex of the skin's primitives (0 when none). */
-double cb_skin_max_weight_sum(const cb_model *model, int32_t skin);
-
-/* The bound for one row: diff holds 16 doubles per bone; radius[j] < 0 for joints that move
- * no vertex. It exceeds what cb_skin_positions computes from diff, rounding included. */
-double cb_row_error_bound(const double *diff, uint32_t bones, const float *bind, const double *radius, double weight_sum);
 
 /* What a bound needs of each joint's difference D (16 doubles, column-major). */
 typedef struct cb_joint_error {
