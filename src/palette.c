@@ -30,6 +30,7 @@ cb_bake_options cb_default_bake_options(void)
     o.affine_fallback = false;
     o.error_goal = 0;
     o.fit = false;
+    o.texel_memory = (cb_texel_memory){NULL, NULL};
     return o;
 }
 
@@ -39,7 +40,7 @@ void cb_palette_free(cb_palette *p)
     free(p->clips);
     free(p->bind_positions);
     free(p->position_offsets);
-    free(p->texels);
+    if (!p->texels_borrowed) free(p->texels);
     memset(p, 0, sizeof *p);
 }
 
@@ -434,7 +435,10 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
                 m->source, p->texel_bytes, p->width, p->height, (unsigned long long)opt->limits.max_palette_bytes);
         goto fail;
     }
-    p->texels = cb_alloc_large(p->texel_bytes);
+    p->positions_relative = p->precision == CB_PRECISION_HALF;
+    p->texels = opt->texel_memory.acquire ? opt->texel_memory.acquire(opt->texel_memory.ctx, p) : NULL;
+    p->texels_borrowed = p->texels != NULL;
+    if (!p->texels) p->texels = cb_alloc_large(p->texel_bytes);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
     p->position_offsets = calloc((size_t)p->bone_count * 3, sizeof(float));
     if (keeps_values(p)) st.stash = cb_alloc_large((size_t)p->rows * p->bone_count * palette_stash_bytes(p));
@@ -454,7 +458,6 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     }
     palette_zero_padding(p);
     palette_bind_positions(p, skin);
-    p->positions_relative = p->precision == CB_PRECISION_HALF;
     bool skinned = palette_joint_reach(p, m, skin_index, radius);
     st.radius = radius;
     for_each_clip(&st, sample_clip_job, true, 0);
