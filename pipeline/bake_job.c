@@ -170,18 +170,14 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
 
 /* What the user should know about a bake: the layout's fallback, loops that travel, quaternion
  * flips. */
-static void bake_notes(cb_sampler *s, const cb_bake_job *job, const cb_bake_options *o, const cb_palette *p,
-                       cb_warnings *w)
+static void bake_notes(const cb_bake_options *o, const cb_palette *p, cb_warnings *w)
 {
     if (p->fallback_note[0]) cb_warn(w, "note", "%s", p->fallback_note);
     for (uint32_t c = 0; o->root_motion == CB_ROOT_MOTION_KEEP && c < p->clip_count; ++c) {
-        cb_clip_info info;
-        cb_error ignored = {0};
-        if (p->clips[c].loops && !cb_clip_analyze(s, job->plan[c].animation, o->fps, 1, &o->limits, &info, &ignored) &&
-            info.ground_speed > 0)
+        if (p->clips[c].loops && p->clips[c].ground_speed > 0)
             cb_warn(w, "note", "clip '%s' loops and travels %.3g units/s: blending its last row into its first pulls the "
                     "body back; for crowds moved by the game, bake with --root-motion in-place", p->clips[c].name,
-                    info.ground_speed);
+                    p->clips[c].ground_speed);
     }
     if (p->quat_hemisphere_breaks)
         cb_warn(w, "note", "%u bone(s) turn a full circle over a loop, so their last and first rows lie in opposite "
@@ -243,7 +239,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         o->palette.position_offsets = NULL;
         out->output_count++;
         o->input_hash = cb_bake_input_hash(job, &opt);
-        if (out->output_count == 1) bake_notes(s, job, &opt, &shared, &out->notes);
+        if (out->output_count == 1) bake_notes(&opt, &shared, &out->notes);
         write_output(job, &shared, &mapping, o, err);
     }
     cb_pal_mapping_abort(&mapping); /* a bake that failed: its temporary */

@@ -6,6 +6,7 @@
 #include "error_bound.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -300,13 +301,18 @@ typedef struct job {
     void (*run)(bake_state *st, worker *w, uint32_t clip);
     bool samples;   /* run uses the worker's sampler and scratch */
     uint32_t count; /* jobs: one per clip, or per part of a clip */
+    atomic_uint next; /* the next job not taken */
 } job;
 
-/* One thread's share: jobs first, first + stride, ... */
+/* One thread's share: the next job not taken, until none is left. Jobs differ in cost (a
+ * clip's blends take longer than its rows, clips differ in length): taken in turn, not by a
+ * fixed stride, no thread waits with jobs left. Which thread runs a job does not change what
+ * it writes (a worker's sampler only caches where its keys were). */
 static void job_main(void *arg, uint32_t first, uint32_t stride)
 {
     job *jb = arg;
     bake_state *st = jb->st;
+    (void)stride;
     worker w = {0};
     cb_error *err0 = &st->errors[first < st->p->clip_count ? first : 0];
     if (jb->samples) {
@@ -323,7 +329,8 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     if (jb->samples && (!w.sampler || !w.mats || !w.sims || !w.prev || !w.first)) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
-        for (uint32_t c = first; c < jb->count; c += stride) jb->run(st, &w, c);
+        for (uint32_t c = atomic_fetch_add(&jb->next, 1); c < jb->count; c = atomic_fetch_add(&jb->next, 1))
+            jb->run(st, &w, c);
     }
     cb_sampler_free(w.sampler);
     free(w.mats);
@@ -340,11 +347,11 @@ static uint32_t threads_used(const bake_state *st, uint32_t jobs)
     return threads > 64 ? 64 : threads;
 }
 
-/* Runs `run` for jobs 0 .. count - 1 (default: every clip), job k on thread k % threads. Each
- * job writes only its own rows and slots, so the result does not depend on the thread count. */
+/* Runs `run` for jobs 0 .. count - 1 (default: every clip) on the threads. Each job writes only
+ * its own rows and slots, so the result depends neither on the thread count nor on timing. */
 static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, uint32_t), bool samples, uint32_t count)
 {
-    job jb = {st, run, samples, count ? count : st->p->clip_count};
+    job jb = {st, run, samples, count ? count : st->p->clip_count, 0};
     cb_pool_run(threads_used(st, jb.count), job_main, &jb);
 }
 

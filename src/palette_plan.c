@@ -50,6 +50,7 @@ cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip
         c->duration = infos[i].duration;
         c->start = infos[i].t0;
         c->loops = infos[i].loops;
+        c->ground_speed = infos[i].ground_speed;
         for (int k = 0; k < 3; ++k)
             c->root_velocity[k] = (float)(st->opt->root_motion == CB_ROOT_MOTION_IN_PLACE ? infos[i].root_velocity[k] : 0);
         rows += infos[i].frames;

@@ -63,6 +63,7 @@ typedef struct cb_palette_clip {
     bool loops;
     float root_velocity[3];
     float bounds_min[3], bounds_max[3]; /* encloses the skinned mesh over the clip (conservative), model units */
+    double ground_speed;     /* the root's horizontal travel over the clip per second (cb_clip_info.ground_speed) */
 } cb_palette_clip;
 
 typedef struct cb_palette {
