@@ -130,6 +130,40 @@ static inline uint16_t quantize(const u16_slot *q, double v)
     return (uint16_t)(int16_t)n; /* snorm: two's complement; unorm: 0..65535 fits */
 }
 
+/* quantize for four values at once, written to vectorize (one AVX2 operation each): the same
+ * operations, and lrint's rounding (to nearest, ties to even) by adding and taking away 1.5 *
+ * 2^52, exact for the |x| <= 65535 here; the same bits as quantize. */
+#define ROUND_MAGIC 6755399441055744.0
+typedef struct u16_lanes {
+    double offset[4], scale[4], lo[4], hi[4], steps[4];
+} u16_lanes;
+
+static u16_lanes u16_lanes_of(const u16_slot *slots)
+{
+    u16_lanes q;
+    for (int i = 0; i < 4; ++i)
+        q.offset[i] = slots[i].offset, q.scale[i] = slots[i].scale, q.lo[i] = slots[i].lo, q.hi[i] = slots[i].hi,
+        q.steps[i] = slots[i].steps;
+    return q;
+}
+
+static CB_CLONE_INLINE void quantize4(const u16_lanes *q, const float *v, unsigned char *d)
+{
+    int32_t k[4];
+    for (int i = 0; i < 4; ++i) {
+        double x = ((double)v[i] - q->offset[i]) * q->scale[i];
+        x = x < q->lo[i] ? q->lo[i] : x;
+        x = x > q->hi[i] ? q->hi[i] : x;
+        k[i] = (int32_t)((x * q->steps[i] + ROUND_MAGIC) - ROUND_MAGIC);
+    }
+    uint16_t n[4] = {(uint16_t)k[0], (uint16_t)k[1], (uint16_t)k[2], (uint16_t)k[3]};
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    memcpy(d, n, sizeof n); /* one store */
+#else
+    for (int i = 0; i < 4; ++i) store_le16(d + i * 2, n[i]);
+#endif
+}
+
 /* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
 void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count)
 {
@@ -175,10 +209,11 @@ static unsigned char *qpos_texel(cb_palette *p, uint32_t row)
 
 /* One row's quaternions into the stash, as u16 (snorm, no range needed) or half; positions and
  * scales into the texels as floats. (Per precision, so that the loop carries no branch.) */
-static void stage_row_u16(const u16_slot slots[4], const float *v, unsigned char *q, unsigned char *d, uint32_t bones)
+static CB_CLONE_INLINE void stage_row_u16(const u16_lanes *slots, const float *v, unsigned char *q, unsigned char *d,
+                                          uint32_t bones)
 {
     for (uint32_t j = 0; j < bones; ++j, v += 8, q += 8, d += 16) {
-        for (uint32_t i = 0; i < 4; ++i) store_le16(q + i * 2, quantize(&slots[i], v[i]));
+        quantize4(slots, v, q);
         memcpy(d, v + 4, 4 * sizeof(float));
     }
 }
@@ -191,14 +226,16 @@ static void stage_row_half(const float *v, unsigned char *q, unsigned char *d, u
     }
 }
 
+CB_TARGET_CLONES
 void palette_stage_qpos(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count)
 {
     u16_slot slots[16];
     u16_slots(p, slots);
+    u16_lanes quats = u16_lanes_of(slots);
     for (uint32_t r = first; r < first + count; ++r) {
         unsigned char *d = qpos_texel(p, r), *q = stash + (size_t)r * p->bone_count * 8;
         const float *row = rows + (size_t)(r - first) * p->bone_count * 8;
-        if (p->precision == CB_PRECISION_U16) stage_row_u16(slots, row, q, d, p->bone_count);
+        if (p->precision == CB_PRECISION_U16) stage_row_u16(&quats, row, q, d, p->bone_count);
         else stage_row_half(row, q, d, p->bone_count);
     }
 }
@@ -208,12 +245,12 @@ static void staged_values(const unsigned char *d, float out[4]) { memcpy(out, d,
 
 /* One row: the staged values read before their texel pair is overwritten, encoded into its
  * second texel, the stashed quaternion copied into its first. */
-static void finish_row_u16(const u16_slot slots[16], const unsigned char *q, unsigned char *d, uint32_t bones)
+static CB_CLONE_INLINE void finish_row_u16(const u16_lanes *slots, const unsigned char *q, unsigned char *d, uint32_t bones)
 {
     for (uint32_t j = 0; j < bones; ++j, q += 8, d += 16) {
         float v[4];
         staged_values(d, v);
-        for (uint32_t i = 0; i < 4; ++i) store_le16(d + 8 + i * 2, quantize(&slots[4 + i], v[i]));
+        quantize4(slots, v, d + 8);
         memcpy(d, q, 8);
     }
 }
@@ -229,14 +266,16 @@ static void finish_row_half(const float *offsets, const unsigned char *q, unsign
     }
 }
 
+CB_TARGET_CLONES
 void palette_finish_qpos(cb_palette *p, const unsigned char *stash, uint32_t first, uint32_t count)
 {
     u16_slot slots[16];
     u16_slots(p, slots);
+    u16_lanes positions = u16_lanes_of(slots + 4);
     for (uint32_t r = first; r < first + count; ++r) {
         unsigned char *d = qpos_texel(p, r);
         const unsigned char *q = stash + (size_t)r * p->bone_count * 8;
-        if (p->precision == CB_PRECISION_U16) finish_row_u16(slots, q, d, p->bone_count);
+        if (p->precision == CB_PRECISION_U16) finish_row_u16(&positions, q, d, p->bone_count);
         else finish_row_half(p->position_offsets, q, d, p->bone_count);
     }
 }
