@@ -178,11 +178,40 @@ static void test_pal_written_where_baked_equals_pal_written(void **state)
     cb_model_free(m);
 }
 
+/* The bake's notes take a loop's ground speed from the clips the palette planned (no second
+ * analysis): each palette clip carries cb_clip_analyze's, and the CLI says so for a travelling loop. */
+static void test_palette_clips_carry_their_ground_speed(void **state)
+{
+    (void)state;
+    char path[1024], cmd[2048], out[4096];
+    sample_path(path, sizeof path, "quadruped");
+    cb_model *m = load_or_fail(path);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_palette p;
+    assert_int_equal(bake(s, CB_LAYOUT_QPOS, CB_PRECISION_U16, (cb_texel_memory){NULL, NULL}, &p, &err), CB_OK);
+    int travelling = 0;
+    for (uint32_t c = 0; c < p.clip_count; ++c) {
+        cb_clip_info info;
+        assert_int_equal(cb_clip_analyze(s, (int32_t)c, 30, -1, NULL, &info, &err), CB_OK);
+        assert_true(p.clips[c].ground_speed == info.ground_speed);
+        travelling += p.clips[c].loops && info.ground_speed > 1;
+    }
+    assert_true(travelling > 0);
+    cb_palette_free(&p);
+    cb_sampler_free(s);
+    cb_model_free(m);
+    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/q.pal 2>&1", crowdbake_exe(), path);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    if (!strstr(out, "note: clip 'walk' loops and travels 1.2 units/s")) fail_msg("%s", out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bakes_into_given_memory_equal_bakes_into_their_own),
         cmocka_unit_test(test_pal_written_where_baked_equals_pal_written),
+        cmocka_unit_test(test_palette_clips_carry_their_ground_speed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
