@@ -389,6 +389,27 @@ void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t 
     decode_bone(p, (const unsigned char *)texels + ((size_t)y * p->width + x) * tb, kinds, bone, v);
 }
 
+/* decode_bone's qpos/u16 arithmetic for a whole row, four values at a time (snorm16_decode's
+ * and unorm16_decode's operations in their order, so the same doubles), which vectorizes. */
+static CB_CLONE_INLINE void decode_qpos_u16_row(const cb_palette *p, const unsigned char *d, double *values)
+{
+    double lo[4] = {p->bounds_min[0], p->bounds_min[1], p->bounds_min[2], 0}, span[4], keep[4];
+    double hi[4] = {p->bounds_max[0], p->bounds_max[1], p->bounds_max[2], p->linear_range};
+    for (int i = 0; i < 4; ++i) span[i] = hi[i] - lo[i], keep[i] = hi[i] > lo[i] ? 1 : 0;
+    for (uint32_t j = 0; j < p->bone_count; ++j, d += 16) {
+        double *v = values + (size_t)j * 16;
+        uint16_t u[8];
+        for (int i = 0; i < 8; ++i) u[i] = load_le16(d + i * 2);
+        for (int i = 0; i < 4; ++i) {
+            double q = (int16_t)u[i] / 32767.0, x = lo[i] + span[i] * (u[4 + i] / 65535.0);
+            v[i] = q < -1 ? -1 : q;
+            v[4 + i] = keep[i] != 0 ? x : lo[i];
+        }
+        for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->position_offsets[(size_t)j * 3 + k];
+    }
+}
+
+CB_TARGET_CLONES
 void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values)
 {
     uint32_t tb = cb_precision_texel_bytes(p->precision), x, y;
@@ -396,6 +417,10 @@ void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values
     value_kinds(p->layout, kinds);
     cb_palette_texel_xy(p, row, 0, &x, &y); /* a row's bones lie side by side */
     const unsigned char *d = (const unsigned char *)p->texels + ((size_t)y * p->width + x) * tb;
+    if (p->precision == CB_PRECISION_U16 && p->layout == CB_LAYOUT_QPOS) {
+        decode_qpos_u16_row(p, d, values);
+        return;
+    }
     for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) decode_bone(p, d, kinds, j, values + (size_t)j * 16);
 }
 
