@@ -433,7 +433,7 @@ void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, ui
 
 void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const double v[16], double out[16])
 {
-    cb_mat4_identity(out);
+    if (p->layout != CB_LAYOUT_QPOS) cb_mat4_identity(out); /* qpos: cb_mat4_from_trs sets all 16 */
     if (p->layout == CB_LAYOUT_MAT4) {
         for (int c = 0; c < 4; ++c)
             for (int r = 0; r < 3; ++r) out[c * 4 + r] = v[c * 4 + r];
