@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -192,8 +193,44 @@ cb_status cb_atomic_rewrite(cb_atomic_file *f, const void *data, size_t size, ui
     return CB_OK;
 }
 
+cb_status cb_atomic_map(cb_atomic_file *f, size_t size, void **out, cb_error *err)
+{
+    *out = NULL;
+    if (f->fd < 0 || f->map || f->written || size == 0)
+        return cb_fail(err, CB_ERR_INTERNAL, "%s: only a new, empty temporary is mapped", f->path);
+#if defined(__linux__)
+    /* fallocate, not posix_fallocate: where the file system cannot allocate, glibc's fallback
+     * writes every block, which costs what writing the file costs. */
+    if (fallocate(f->fd, 0, 0, (off_t)size) != 0)
+        return cb_fail(err, CB_ERR_IO, "%s: cannot allocate %zu bytes: %s", f->path, size, strerror(errno));
+    void *map = mmap(NULL, size, PROT_READ | PROT_WRITE, MAP_SHARED, f->fd, 0);
+    if (map == MAP_FAILED) {
+        int e = errno;
+        (void)!ftruncate(f->fd, 0);
+        return cb_fail(err, CB_ERR_IO, "%s: cannot map the temporary file: %s", f->path, strerror(e));
+    }
+#if defined(MADV_HUGEPAGE)
+    /* Page-cache folios of 2 MB where the file system has them (ext4 on Linux 6.16+): 28 faults
+     * for 29 MB instead of 2,700. A hint; refused elsewhere. */
+    madvise(map, size, MADV_HUGEPAGE);
+#endif
+    f->map = map, f->map_size = size;
+    *out = map;
+    return CB_OK;
+#else
+    return cb_fail(err, CB_ERR_IO, "%s: not mapped on this system", f->path);
+#endif
+}
+
+static void unmap(cb_atomic_file *f)
+{
+    if (f->map) munmap(f->map, f->map_size);
+    f->map = NULL, f->map_size = 0;
+}
+
 cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err)
 {
+    unmap(f); /* the written pages stay in the page cache, dirty, like write()'s */
     if (f->fd < 0) f->fd = open(f->tmp_path, O_RDONLY | O_CLOEXEC); /* written by another library */
     /* No fsync: rename makes the replacement atomic for every reader and for crashes of this
      * process; flushing to the disk (tens of ms for a large palette, the slowest step of a bake)
@@ -220,6 +257,7 @@ cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err)
 
 void cb_atomic_abort(cb_atomic_file *f)
 {
+    unmap(f);
     if (f->fd >= 0) close(f->fd);
     if (f->tmp_path) unlink(f->tmp_path);
     unregister_temp(f->slot);

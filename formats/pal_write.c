@@ -108,10 +108,9 @@ static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *
 
 /* Header and tables, zero-padded to the payload offset, for a payload of payload_size bytes;
  * the checksum field still 0. */
-static unsigned char *build_meta(const cb_palette *p, const cb_model *m, int32_t skin_index, const cb_pal_write_options *opt,
-                                 uint64_t payload_size, size_t *meta_size)
+/* Where the header's tables, strings and payload lie: from the clips, the bones and their names. */
+static layout_plan plan_layout(const cb_palette *p, const cb_model *m, const cb_skin *skin, uint64_t payload_size)
 {
-    const cb_skin *skin = &m->skins[skin_index];
     layout_plan lp;
     lp.clips = CBPAL_HEADER_SIZE;
     lp.bones = lp.clips + (uint64_t)p->clip_count * CBPAL_CLIP_SIZE;
@@ -120,6 +119,14 @@ static unsigned char *build_meta(const cb_palette *p, const cb_model *m, int32_t
     lp.strings_size = strings_size(p, m, skin);
     lp.payload = (lp.strings + lp.strings_size + CBPAL_PAYLOAD_ALIGN - 1) / CBPAL_PAYLOAD_ALIGN * CBPAL_PAYLOAD_ALIGN;
     lp.payload_size = payload_size;
+    return lp;
+}
+
+static unsigned char *build_meta(const cb_palette *p, const cb_model *m, int32_t skin_index, const cb_pal_write_options *opt,
+                                 uint64_t payload_size, size_t *meta_size)
+{
+    const cb_skin *skin = &m->skins[skin_index];
+    layout_plan lp = plan_layout(p, m, skin, payload_size);
     unsigned char *d = calloc((size_t)lp.payload, 1);
     if (!d) return NULL;
     write_header(d, p, opt, &lp);
@@ -212,6 +219,63 @@ cb_status cb_pal_write(const char *path, const cb_palette *p, const cb_model *m,
     }
     if (!rc) rc = cb_atomic_commit(&f, err);
     else cb_atomic_abort(&f);
+    free(meta);
+    return rc;
+}
+
+/* ---- written where it is baked ---- */
+
+void cb_pal_mapping_init(cb_pal_mapping *mp, const char *path, const cb_model *m, int32_t skin)
+{
+    memset(mp, 0, sizeof *mp);
+    mp->path = path, mp->model = m, mp->skin = skin;
+    mp->file.fd = -1, mp->file.slot = -1;
+}
+
+void cb_pal_mapping_abort(cb_pal_mapping *mp)
+{
+    if (mp->open) cb_atomic_abort(&mp->file);
+    mp->open = false, mp->base = NULL, mp->meta_size = 0;
+}
+
+void *cb_pal_map_texels(void *ctx, const cb_palette *p)
+{
+    cb_pal_mapping *mp = ctx;
+    cb_pal_mapping_abort(mp); /* asked again (qpos fell back to affine): a file of the new size */
+    size_t meta_size = (size_t)plan_layout(p, mp->model, &mp->model->skins[mp->skin], p->texel_bytes).payload;
+    cb_error ignored = {0}; /* where mapping fails, cb_pal_write says what is wrong */
+    void *base = NULL;
+    if (cb_atomic_open(&mp->file, mp->path, &ignored)) return NULL;
+    mp->open = true;
+    if (cb_atomic_map(&mp->file, meta_size + p->texel_bytes, &base, &ignored)) {
+        cb_pal_mapping_abort(mp);
+        return NULL;
+    }
+    mp->base = base, mp->meta_size = meta_size;
+    return mp->base + meta_size;
+}
+
+bool cb_pal_mapping_holds(const cb_pal_mapping *mp, const cb_palette *p)
+{
+    return mp->open && mp->base && p->texels == mp->base + mp->meta_size;
+}
+
+cb_status cb_pal_write_mapped(cb_pal_mapping *mp, const cb_palette *p, const cb_pal_write_options *opt, cb_error *err)
+{
+    size_t meta_size = 0;
+    uint64_t sum = 0;
+    unsigned char *meta = build_meta(p, mp->model, mp->skin, opt, p->texel_bytes, &meta_size);
+    cb_status rc = !meta ? cb_fail(err, CB_ERR_INTERNAL, "out of memory")
+                   : meta_size != mp->meta_size || opt->zstd
+                       ? cb_fail(err, CB_ERR_INTERNAL, "%s: the palette does not fit the file mapped for it", mp->path)
+                       : checksum(&mp->file, p, meta, meta_size, p->texel_bytes, false, &sum, err);
+    if (!rc) {
+        put64(meta + CBPAL_CHECKSUM_OFFSET, sum);
+        rc = cb_atomic_write(&mp->file, meta, meta_size, err); /* at offset 0, before the payload */
+    }
+    if (!rc) rc = cb_atomic_commit(&mp->file, err);
+    else cb_atomic_abort(&mp->file);
+    mp->open = false, mp->base = NULL;
     free(meta);
     return rc;
 }

@@ -170,31 +170,29 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
 
 /* What the user should know about a bake: the layout's fallback, loops that travel, quaternion
  * flips. */
-static void bake_notes(cb_sampler *s, const cb_bake_job *job, const cb_bake_options *o, const cb_palette *p,
-                       cb_warnings *w)
+static void bake_notes(const cb_bake_options *o, const cb_palette *p, cb_warnings *w)
 {
     if (p->fallback_note[0]) cb_warn(w, "note", "%s", p->fallback_note);
     for (uint32_t c = 0; o->root_motion == CB_ROOT_MOTION_KEEP && c < p->clip_count; ++c) {
-        cb_clip_info info;
-        cb_error ignored = {0};
-        if (p->clips[c].loops && !cb_clip_analyze(s, job->plan[c].animation, o->fps, 1, &o->limits, &info, &ignored) &&
-            info.ground_speed > 0)
+        if (p->clips[c].loops && p->clips[c].ground_speed > 0)
             cb_warn(w, "note", "clip '%s' loops and travels %.3g units/s: blending its last row into its first pulls the "
                     "body back; for crowds moved by the game, bake with --root-motion in-place", p->clips[c].name,
-                    info.ground_speed);
+                    p->clips[c].ground_speed);
     }
     if (p->quat_hemisphere_breaks)
         cb_warn(w, "note", "%u bone(s) turn a full circle over a loop, so their last and first rows lie in opposite "
                 "quaternion hemispheres; the shipped shaders flip before blending", p->quat_hemisphere_breaks);
 }
 
-static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_bake_output *out, cb_error *err)
+static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pal_mapping *mapping, cb_bake_output *out,
+                              cb_error *err)
 {
     double t0 = now_seconds();
     if (out->format == CB_FORMAT_PAL) {
         cb_pal_write_options po = {job->settings.zstd, 0, out->input_hash, (float)job->speed_reference,
                                    job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE};
-        cb_pal_write(out->path, p, job->model, job->skin, &po, err);
+        if (cb_pal_mapping_holds(mapping, p)) cb_pal_write_mapped(mapping, p, &po, err);
+        else cb_pal_write(out->path, p, job->model, job->skin, &po, err);
     } else if (out->format == CB_FORMAT_EXR) {
         cb_exr_write(out->path, p, job->model, job->skin, job->settings.exr_compression, out->input_hash,
                      (float)job->speed_reference, err);
@@ -218,12 +216,19 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     const char *paths[3] = {job->pal_path, job->exr_path, job->ktx2_path};
     cb_palette shared = {0}; /* the last palette baked, written again by a format of the same options */
     cb_bake_options shared_opt = {0};
+    /* A lone uncompressed .pal is baked into its own file's payload, mapped: no copy to write,
+     * and 29 MB less fresh memory on the big rig. (Other formats convert the texels as they
+     * write them, and zstd compresses them: those bake into memory of their own.) */
+    cb_pal_mapping mapping;
+    cb_pal_mapping_init(&mapping, job->pal_path, job->model, job->skin);
+    bool mapped = job->settings.formats == CB_FORMAT_PAL && !job->settings.zstd && job->pal_path;
     for (int f = 0; f < 3 && !err->status; ++f) {
         if (!(job->settings.formats & formats[f])) continue;
         cb_bake_output *o = &out->outputs[out->output_count];
         o->format = formats[f];
         o->path = paths[f];
         cb_bake_options opt = cb_bake_settings_options(&job->settings, formats[f], &job->limits, job->threads);
+        if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
         if (!shared.texels || shared_opt.precision != opt.precision) {
             cb_palette_free(&shared);
             if (cb_palette_bake(s, &opt, job->plan, job->plan_count, &shared, err)) break;
@@ -234,9 +239,10 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         o->palette.position_offsets = NULL;
         out->output_count++;
         o->input_hash = cb_bake_input_hash(job, &opt);
-        if (out->output_count == 1) bake_notes(s, job, &opt, &shared, &out->notes);
-        write_output(job, &shared, o, err);
+        if (out->output_count == 1) bake_notes(&opt, &shared, &out->notes);
+        write_output(job, &shared, &mapping, o, err);
     }
+    cb_pal_mapping_abort(&mapping); /* a bake that failed: its temporary */
     cb_palette_free(&shared);
     cb_sampler_free(s);
     return err->status;

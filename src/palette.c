@@ -6,6 +6,7 @@
 #include "error_bound.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -30,6 +31,7 @@ cb_bake_options cb_default_bake_options(void)
     o.affine_fallback = false;
     o.error_goal = 0;
     o.fit = false;
+    o.texel_memory = (cb_texel_memory){NULL, NULL};
     return o;
 }
 
@@ -39,7 +41,7 @@ void cb_palette_free(cb_palette *p)
     free(p->clips);
     free(p->bind_positions);
     free(p->position_offsets);
-    free(p->texels);
+    if (!p->texels_borrowed) free(p->texels);
     memset(p, 0, sizeof *p);
 }
 
@@ -85,26 +87,6 @@ static cb_status qpos_canon(const double m[16], float out[8], const cb_model *mo
 }
 
 
-/* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
- * end gives the floats that rounding every candidate would (rounding is monotonic). */
-typedef struct extent {
-    double lo[3], hi[3];
-} extent;
-
-/* Grows a clip's bounds by the sphere a joint's vertices can reach: a vertex weighted to joint
- * j lies within |A_j| * r_j of c = M_j b_j, so the union over joints bounds the skinned mesh. */
-static inline void grow_bounds(extent *e, cb_vec3 c, double reach)
-{
-    /* Compares, not fmin: no NaN reaches here. Written out per axis, so that a local extent
-     * stays in registers (a loop here is not unrolled at -O2 and keeps it in memory). */
-    e->lo[0] = c.x - reach < e->lo[0] ? c.x - reach : e->lo[0];
-    e->lo[1] = c.y - reach < e->lo[1] ? c.y - reach : e->lo[1];
-    e->lo[2] = c.z - reach < e->lo[2] ? c.z - reach : e->lo[2];
-    e->hi[0] = c.x + reach > e->hi[0] ? c.x + reach : e->hi[0];
-    e->hi[1] = c.y + reach > e->hi[1] ? c.y + reach : e->hi[1];
-    e->hi[2] = c.z + reach > e->hi[2] ? c.z + reach : e->hi[2];
-}
-
 /* |A| for the reach: the Frobenius norm of the 3x3, at least its largest stretch. */
 static double frobenius3(const double *M)
 {
@@ -140,33 +122,6 @@ static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, f
         range_grow_qpos(&st->ranges[c], out);
     }
     return CB_OK;
-}
-
-/* One qpos row from joint similarities: what qpos stores, with no matrix to build, check or
- * decompose. */
-static void similarity_row(bake_state *st, worker *w, uint32_t c, uint32_t f, const cb_similarity *sims, float *row,
-                           extent *clip_bounds)
-{
-    cb_palette *p = st->p;
-    extent bounds = *clip_bounds;         /* locals, which the compiler keeps in registers */
-    value_range range = st->ranges[c];
-    for (uint32_t j = 0; j < p->bone_count; ++j) {
-        const cb_similarity *J = &sims[j];
-        const float *b = p->bind_positions + (size_t)j * 3;
-        float *out = row + (size_t)j * 8;
-        cb_quat q = {J->rotation[0], J->rotation[1], J->rotation[2], J->rotation[3]};
-        cb_vec3 rb = cb_quat_rotate(q, (cb_vec3){b[0], b[1], b[2]});
-        cb_vec3 pos = {J->translation[0] + J->scale * rb.x, J->translation[1] + J->scale * rb.y,
-                       J->translation[2] + J->scale * rb.z};
-        if (st->radius[j] >= 0) grow_bounds(&bounds, pos, st->radius[j] * J->scale * sqrt(3.0)); /* |s R| = sqrt(3) s */
-        if (f ? cb_quat_dot(q, w->prev[j]) < 0 : q.w < 0) q = (cb_quat){-q.x, -q.y, -q.z, -q.w};
-        out[0] = (float)q.x, out[1] = (float)q.y, out[2] = (float)q.z, out[3] = (float)q.w;
-        out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z, out[7] = (float)J->scale;
-        w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
-        range_grow_qpos(&range, out);
-    }
-    *clip_bounds = bounds;
-    st->ranges[c] = range;
 }
 
 /* The exact values halfway through each row interval of clip c (the clip framed at twice the
@@ -267,8 +222,7 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
             uint32_t frames[CB_SAMPLE_BATCH], count = 0;
             while (count < CB_SAMPLE_BATCH && f + count < f0 + n) frames[count] = f + count, ++count;
             cb_clip_frame_similarities(w->sampler, info, frames, count, st->opt->root_motion, w->sims);
-            for (uint32_t i = 0; i < count; ++i)
-                similarity_row(st, w, c, f + i, w->sims + (size_t)i * p->bone_count, rows + (f + i - f0) * row_floats, &bounds);
+            palette_similarity_rows(st, w, c, f, count, rows + (f - f0) * row_floats, &bounds);
         }
         for (uint32_t f = f0; !similar && f < f0 + n; ++f)
             if (matrix_row(st, w, c, f, rows + (f - f0) * row_floats, &bounds, err)) return err->status;
@@ -299,13 +253,18 @@ typedef struct job {
     void (*run)(bake_state *st, worker *w, uint32_t clip);
     bool samples;   /* run uses the worker's sampler and scratch */
     uint32_t count; /* jobs: one per clip, or per part of a clip */
+    atomic_uint next; /* the next job not taken */
 } job;
 
-/* One thread's share: jobs first, first + stride, ... */
+/* One thread's share: the next job not taken, until none is left. Jobs differ in cost (a
+ * clip's blends take longer than its rows, clips differ in length): taken in turn, not by a
+ * fixed stride, no thread waits with jobs left. Which thread runs a job does not change what
+ * it writes (a worker's sampler only caches where its keys were). */
 static void job_main(void *arg, uint32_t first, uint32_t stride)
 {
     job *jb = arg;
     bake_state *st = jb->st;
+    (void)stride;
     worker w = {0};
     cb_error *err0 = &st->errors[first < st->p->clip_count ? first : 0];
     if (jb->samples) {
@@ -318,17 +277,20 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
         w.sims = malloc((size_t)st->p->bone_count * CB_SAMPLE_BATCH * sizeof(cb_similarity));
         w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
         w.first = malloc((size_t)st->p->bone_count * 4 * sizeof(float));
+        w.reach = malloc((size_t)st->p->bone_count * CB_SAMPLE_BATCH * 4 * sizeof(double));
     }
-    if (jb->samples && (!w.sampler || !w.mats || !w.sims || !w.prev || !w.first)) {
+    if (jb->samples && (!w.sampler || !w.mats || !w.sims || !w.prev || !w.first || !w.reach)) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
-        for (uint32_t c = first; c < jb->count; c += stride) jb->run(st, &w, c);
+        for (uint32_t c = atomic_fetch_add(&jb->next, 1); c < jb->count; c = atomic_fetch_add(&jb->next, 1))
+            jb->run(st, &w, c);
     }
     cb_sampler_free(w.sampler);
     free(w.mats);
     free(w.sims);
     free(w.prev);
     free(w.first);
+    free(w.reach);
     free(w.rows);
 }
 
@@ -339,11 +301,11 @@ static uint32_t threads_used(const bake_state *st, uint32_t jobs)
     return threads > 64 ? 64 : threads;
 }
 
-/* Runs `run` for jobs 0 .. count - 1 (default: every clip), job k on thread k % threads. Each
- * job writes only its own rows and slots, so the result does not depend on the thread count. */
+/* Runs `run` for jobs 0 .. count - 1 (default: every clip) on the threads. Each job writes only
+ * its own rows and slots, so the result depends neither on the thread count nor on timing. */
 static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, uint32_t), bool samples, uint32_t count)
 {
-    job jb = {st, run, samples, count ? count : st->p->clip_count};
+    job jb = {st, run, samples, count ? count : st->p->clip_count, 0};
     cb_pool_run(threads_used(st, jb.count), job_main, &jb);
 }
 
@@ -434,7 +396,10 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
                 m->source, p->texel_bytes, p->width, p->height, (unsigned long long)opt->limits.max_palette_bytes);
         goto fail;
     }
-    p->texels = cb_alloc_large(p->texel_bytes);
+    p->positions_relative = p->precision == CB_PRECISION_HALF;
+    p->texels = opt->texel_memory.acquire ? opt->texel_memory.acquire(opt->texel_memory.ctx, p) : NULL;
+    p->texels_borrowed = p->texels != NULL;
+    if (!p->texels) p->texels = cb_alloc_large(p->texel_bytes);
     p->bind_positions = calloc((size_t)p->bone_count * 3, sizeof(float));
     p->position_offsets = calloc((size_t)p->bone_count * 3, sizeof(float));
     if (keeps_values(p)) st.stash = cb_alloc_large((size_t)p->rows * p->bone_count * palette_stash_bytes(p));
@@ -454,7 +419,6 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     }
     palette_zero_padding(p);
     palette_bind_positions(p, skin);
-    p->positions_relative = p->precision == CB_PRECISION_HALF;
     bool skinned = palette_joint_reach(p, m, skin_index, radius);
     st.radius = radius;
     for_each_clip(&st, sample_clip_job, true, 0);

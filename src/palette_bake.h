@@ -61,6 +61,7 @@ typedef struct worker {
     cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
     float *rows;         /* pre-encoding rows: CB_SAMPLE_BATCH of them, or a whole clip's for --fit */
     float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
+    double *reach;       /* CB_SAMPLE_BATCH rows of bones * 4: each joint's position and reach (similarity rows) */
 } worker;
 
 typedef struct bake_state {
@@ -86,11 +87,37 @@ typedef struct bake_state {
     double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
 } bake_state;
 
+/* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
+ * end gives the floats that rounding every candidate would (rounding is monotonic). */
+typedef struct extent {
+    double lo[3], hi[3];
+} extent;
+
+/* Grows a clip's bounds by the sphere a joint's vertices can reach: a vertex weighted to joint
+ * j lies within |A_j| * r_j of c = M_j b_j, so the union over joints bounds the skinned mesh. */
+static inline void grow_bounds(extent *e, cb_vec3 c, double reach)
+{
+    /* Compares, not fmin: no NaN reaches here. Written out per axis, so that a local extent
+     * stays in registers (a loop here is not unrolled at -O2 and keeps it in memory). */
+    e->lo[0] = c.x - reach < e->lo[0] ? c.x - reach : e->lo[0];
+    e->lo[1] = c.y - reach < e->lo[1] ? c.y - reach : e->lo[1];
+    e->lo[2] = c.z - reach < e->lo[2] ? c.z - reach : e->lo[2];
+    e->hi[0] = c.x + reach > e->hi[0] ? c.x + reach : e->hi[0];
+    e->hi[1] = c.y + reach > e->hi[1] ? c.y + reach : e->hi[1];
+    e->hi[2] = c.z + reach > e->hi[2] ? c.z + reach : e->hi[2];
+}
+
 /* The joint's position p = M b of a mat4/affine canonical row (the upper 3x4 by rows), axis r. */
 static inline double row_position(const float *c, const float *b, int r)
 {
     return (double)c[r * 4] * b[0] + (double)c[r * 4 + 1] * b[1] + (double)c[r * 4 + 2] * b[2] + c[r * 4 + 3];
 }
+
+/* palette_rows.c: `count` (at most CB_SAMPLE_BATCH) qpos rows of clip c from the joint
+ * similarities of frames f, f + 1, ... in w->sims, into rows (row f's first); grows the clip's
+ * bounds and st->ranges[c]. */
+void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
+                             extent *clip_bounds);
 
 /* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
 void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);

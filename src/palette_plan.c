@@ -1,11 +1,13 @@
 /* palette_plan.c - what a bake settles before sampling: every clip's frames and rows, the
  * texture's geometry (rows wrapped into column blocks), the bind positions and the padding. */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "crowdbake/budget.h"
 #include "palette_bake.h"
+#include "pool.h"
 
 /* ---- geometry of the texture ---- */
 
@@ -27,6 +29,73 @@ cb_status palette_plan_texture(cb_palette *p, uint32_t max_size, const char *sou
     return CB_OK;
 }
 
+/* ---- framing the clips ---- */
+
+/* The analyses of a plan's clips, shared out over threads: each animation's first clip, on a
+ * sampler of each thread's own. A later clip of the same animation (a loop and a one-shot of
+ * it) is analyzed after, in order, on the caller's sampler, which by then holds the period the
+ * earlier one set, as analyzing them all in order would. */
+typedef struct analyses {
+    const bake_state *st;
+    const cb_clip_plan *plan; /* or NULL: every animation */
+    uint32_t count;
+    cb_clip_info *infos;
+    cb_error *errors;         /* per clip */
+    bool *first_use;          /* per clip: the first of its animation */
+    bool *done;               /* per clip: analyzed by a share */
+    atomic_uint next;
+} analyses;
+
+static cb_clip_plan plan_entry(const cb_clip_plan *plan, uint32_t i)
+{
+    return plan ? plan[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0};
+}
+
+static void analyze_share(void *arg, uint32_t thread, uint32_t threads)
+{
+    (void)thread, (void)threads;
+    analyses *a = arg;
+    cb_error ignored = {0};
+    cb_sampler *s = cb_sampler_create(a->st->model, a->st->skin, &ignored);
+    for (uint32_t i = atomic_fetch_add(&a->next, 1); s && i < a->count; i = atomic_fetch_add(&a->next, 1)) {
+        if (!a->first_use[i]) continue;
+        cb_clip_plan one = plan_entry(a->plan, i);
+        cb_clip_analyze(s, one.animation, cb_clip_plan_fps(&one, a->st->opt->fps), one.loop, &a->st->opt->limits,
+                        &a->infos[i], &a->errors[i]);
+        a->done[i] = true;
+    }
+    cb_sampler_free(s); /* a share without a sampler leaves its clips to the caller */
+}
+
+/* The clips' analyses into infos, on opt->threads threads where there are clips to share. */
+static cb_status analyze_clips(const bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
+                               cb_clip_info *infos, cb_error *err)
+{
+    const cb_model *m = st->model;
+    size_t n = count ? count : 1;
+    analyses a = {st, plan, count, infos, calloc(n, sizeof(cb_error)), calloc(n, sizeof(bool)), calloc(n, sizeof(bool)), 0};
+    cb_status rc = a.errors && a.first_use && a.done ? CB_OK : cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    uint32_t threads = st->opt->threads < count ? st->opt->threads : count;
+    for (uint32_t i = 0; !rc && threads > 1 && i < count; ++i) {
+        int32_t anim = plan_entry(plan, i).animation;
+        a.first_use[i] = anim >= 0 && anim < (int32_t)m->animation_count;
+        for (uint32_t k = 0; a.first_use[i] && k < i; ++k) a.first_use[i] = plan_entry(plan, k).animation != anim;
+    }
+    if (!rc && threads > 1) cb_pool_run(threads, analyze_share, &a);
+    for (uint32_t i = 0; !rc && i < count; ++i) {
+        cb_clip_plan one = plan_entry(plan, i);
+        if (!a.done[i])
+            rc = cb_clip_analyze(sampler, one.animation, cb_clip_plan_fps(&one, st->opt->fps), one.loop, &st->opt->limits,
+                                 &infos[i], err);
+        else if (a.errors[i].status)
+            *err = a.errors[i], rc = err->status;
+        else
+            cb_sampler_set_period(sampler, one.animation, infos[i].loops ? infos[i].duration : 0); /* as analyzing it here */
+    }
+    free(a.errors), free(a.first_use), free(a.done);
+    return rc;
+}
+
 cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
                              cb_clip_info **infos_out, cb_error *err)
 {
@@ -37,11 +106,10 @@ cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip
     p->clips = calloc(count ? count : 1, sizeof *p->clips);
     *infos_out = infos;
     if (!infos || !p->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    if (analyze_clips(st, sampler, plan, count, infos, err)) return err->status;
     uint64_t rows = 0;
     for (uint32_t i = 0; i < count; ++i) {
-        cb_clip_plan one = plan ? plan[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0};
-        double fps = cb_clip_plan_fps(&one, st->opt->fps);
-        if (cb_clip_analyze(sampler, one.animation, fps, one.loop, &st->opt->limits, &infos[i], err)) return err->status;
+        cb_clip_plan one = plan_entry(plan, i);
         cb_palette_clip *c = &p->clips[i];
         c->name = one.name ? one.name : m->animations[one.animation].name;
         c->first_row = (uint32_t)rows;
@@ -50,6 +118,7 @@ cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip
         c->duration = infos[i].duration;
         c->start = infos[i].t0;
         c->loops = infos[i].loops;
+        c->ground_speed = infos[i].ground_speed;
         for (int k = 0; k < 3; ++k)
             c->root_velocity[k] = (float)(st->opt->root_motion == CB_ROOT_MOTION_IN_PLACE ? infos[i].root_velocity[k] : 0);
         rows += infos[i].frames;

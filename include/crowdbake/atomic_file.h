@@ -14,7 +14,9 @@ typedef struct cb_atomic_file {
     char *path;     /* the target */
     char *tmp_path; /* .NAME.tmp.XXXXXX in the same directory */
     int slot;       /* in the table the signal handlers clean up */
-    size_t written; /* bytes written so far */
+    size_t written; /* bytes written so far (through write, not the mapping) */
+    void *map;      /* cb_atomic_map's mapping of the whole temporary, or NULL */
+    size_t map_size;
 } cb_atomic_file;
 
 /* Installs SIGINT, SIGTERM and SIGHUP handlers that remove every temporary file being written,
@@ -27,6 +29,13 @@ cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_e
  * follows it, written last). */
 cb_status cb_atomic_read_back(cb_atomic_file *f, void *data, size_t size, uint64_t offset, cb_error *err);
 cb_status cb_atomic_rewrite(cb_atomic_file *f, const void *data, size_t size, uint64_t offset, cb_error *err);
+/* Gives the temporary `size` bytes with their blocks allocated, so that a full disk is an error
+ * here and not a SIGBUS when the mapping is written, and maps it shared and writable at *out
+ * (zeros; on huge pages where the file system offers them). Written through the mapping, the
+ * bytes reach the file without a copy; cb_atomic_write still writes from offset 0 (a header
+ * written last). The mapping is released by commit and abort. Fails (and leaves the file empty)
+ * where a file system cannot allocate or map: the caller writes instead. */
+cb_status cb_atomic_map(cb_atomic_file *f, size_t size, void **out, cb_error *err);
 /* Flushes, renames over the target and releases f. On failure the target is untouched. A
  * library may write tmp_path itself (close fd first; set it to -1). */
 cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err);

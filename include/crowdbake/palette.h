@@ -23,6 +23,18 @@ bool cb_precision_parse(const char *text, cb_precision *out);
 uint32_t cb_layout_texels_per_bone(cb_layout layout);
 uint32_t cb_precision_texel_bytes(cb_precision precision); /* 16, 8, 8 */
 
+/* Where a bake's texels go: memory the caller provides (say, the output file's payload, mapped,
+ * so that the texels are encoded where they are written). acquire(ctx, p) gets the planned
+ * palette (layout, precision, geometry, clips and texel_bytes set; no texel written yet) and
+ * returns p->texel_bytes of zeroed, writable memory that stays valid until the caller releases it,
+ * or NULL: the bake then allocates its own. A bake may call it more than once (qpos falling back
+ * to affine): the latest answer is the one used. */
+struct cb_palette;
+typedef struct cb_texel_memory {
+    void *(*acquire)(void *ctx, const struct cb_palette *p);
+    void *ctx;
+} cb_texel_memory;
+
 typedef struct cb_bake_options {
     double fps;
     cb_layout layout;
@@ -36,6 +48,7 @@ typedef struct cb_bake_options {
                            * units): exact when within it, a lower bound above it; max_error is then a lower
                            * bound and model_height 0. For searches that ask "within the goal?". 0: all exact. */
     bool fit;             /* rows fitted to the linear blend (src/fit.c), not sampled: half the error between rows */
+    cb_texel_memory texel_memory; /* {NULL}: the bake allocates the texels */
 } cb_bake_options;
 
 /* Vertex-rows of exact skinning spent measuring a bake's error (see cb_palette.max_error). */
@@ -50,6 +63,7 @@ typedef struct cb_palette_clip {
     bool loops;
     float root_velocity[3];
     float bounds_min[3], bounds_max[3]; /* encloses the skinned mesh over the clip (conservative), model units */
+    double ground_speed;     /* the root's horizontal travel over the clip per second (cb_clip_info.ground_speed) */
 } cb_palette_clip;
 
 typedef struct cb_palette {
@@ -72,6 +86,7 @@ typedef struct cb_palette {
     uint32_t quat_hemisphere_breaks; /* loops whose rotation ends on -q of its start (a full turn) */
     void *texels;                   /* width * height * texel bytes, little-endian */
     size_t texel_bytes;
+    bool texels_borrowed;           /* texels came from options.texel_memory: cb_palette_free leaves them */
     double model_height;            /* rest-pose height of the skinned meshes */
     double max_error;               /* encoding error: worst vertex displacement vs exact skinning at the baked rows, model units */
     double visible_error;           /* what a player sees: the worst of max_error and the error of the runtime's blend of

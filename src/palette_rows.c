@@ -1,0 +1,83 @@
+/* palette_rows.c - qpos rows from joint similarities: what qpos stores (quaternion, position,
+ * scale), with no matrix to build, check or decompose, for a batch of frames at a time.
+ *
+ * Bone by bone, the batch's frames are lanes (structure of arrays, like the sampler's), so the
+ * rotation of the bind position, the position and the conversions to float vectorize. Each
+ * lane runs cb_quat_rotate's operations in their order: the same bits as one row at a time.
+ * What depends on the rows before - the quaternion's hemisphere, the clip's bounds and value
+ * ranges - is settled after, in frame order, so it comes out as before too. */
+#include <string.h>
+
+#include "palette_bake.h"
+
+#define B CB_SAMPLE_BATCH
+
+/* One bone at frames f .. f + count - 1: its position and reach into w->reach (4 doubles a
+ * bone and frame), its 8 values into the rows, its last quaternion into w->prev. */
+static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, uint32_t f, uint32_t count, float *rows)
+{
+    const cb_palette *p = st->p;
+    uint32_t bones = p->bone_count;
+    double q[4][B], t[3][B], s[B], dot[B], e[4][B];
+    float fq[4][B + 1], fp[4][B]; /* fq: lane i's quaternion as stored at i + 1 (0 at 0) */
+    for (uint32_t i = 0; i < B; ++i) { /* lanes past count repeat the last frame */
+        const cb_similarity *J = &w->sims[(size_t)(i < count ? i : count - 1) * bones + j];
+        q[0][i] = J->rotation[0], q[1][i] = J->rotation[1], q[2][i] = J->rotation[2], q[3][i] = J->rotation[3];
+        t[0][i] = J->translation[0], t[1][i] = J->translation[1], t[2][i] = J->translation[2];
+        s[i] = J->scale;
+    }
+    const float *b = p->bind_positions + (size_t)j * 3;
+    double bx = b[0], by = b[1], bz = b[2], radius = st->radius[j];
+    fq[0][0] = fq[1][0] = fq[2][0] = fq[3][0] = 0;
+    for (int i = 0; i < B; ++i) {
+        /* cb_quat_rotate(q, b), written out over the lanes */
+        double uvx = q[1][i] * bz - q[2][i] * by, uvy = q[2][i] * bx - q[0][i] * bz, uvz = q[0][i] * by - q[1][i] * bx;
+        double uuvx = q[1][i] * uvz - q[2][i] * uvy, uuvy = q[2][i] * uvx - q[0][i] * uvz,
+               uuvz = q[0][i] * uvy - q[1][i] * uvx;
+        double rx = bx + 2 * (q[3][i] * uvx + uuvx), ry = by + 2 * (q[3][i] * uvy + uuvy),
+               rz = bz + 2 * (q[3][i] * uvz + uuvz);
+        e[0][i] = t[0][i] + s[i] * rx, e[1][i] = t[1][i] + s[i] * ry, e[2][i] = t[2][i] + s[i] * rz;
+        e[3][i] = radius * s[i] * sqrt(3.0); /* |s R| = sqrt(3) s */
+        fq[0][i + 1] = (float)q[0][i], fq[1][i + 1] = (float)q[1][i], fq[2][i + 1] = (float)q[2][i];
+        fq[3][i + 1] = (float)q[3][i];
+        fp[0][i] = (float)e[0][i], fp[1][i] = (float)e[1][i], fp[2][i] = (float)e[2][i], fp[3][i] = (float)s[i];
+    }
+    /* Lane i's quaternion against lane i - 1's as stored (cb_quat_dot's order). Against the
+     * stored one negated it is exactly the negation (IEEE rounding is symmetric), so the
+     * hemisphere of every row follows from these and the first row's alone. */
+    for (int i = 0; i < B; ++i)
+        dot[i] = q[0][i] * fq[0][i] + q[1][i] * fq[1][i] + q[2][i] * fq[2][i] + q[3][i] * fq[3][i];
+    cb_quat q0 = {q[0][0], q[1][0], q[2][0], q[3][0]};
+    bool flip = f ? cb_quat_dot(q0, w->prev[j]) < 0 : q0.w < 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        if (i) flip = (flip ? -dot[i] : dot[i]) < 0;
+        float sign = flip ? -1.0f : 1.0f;
+        float o[8] = {sign * fq[0][i + 1], sign * fq[1][i + 1], sign * fq[2][i + 1], sign * fq[3][i + 1],
+                      fp[0][i], fp[1][i], fp[2][i], fp[3][i]};
+        double r[4] = {e[0][i], e[1][i], e[2][i], e[3][i]};
+        memcpy(rows + (size_t)i * bones * 8 + (size_t)j * 8, o, sizeof o);
+        memcpy(w->reach + ((size_t)i * bones + j) * 4, r, sizeof r);
+    }
+    const float *last = rows + (size_t)(count - 1) * bones * 8 + (size_t)j * 8;
+    w->prev[j] = (cb_quat){last[0], last[1], last[2], last[3]};
+}
+
+CB_TARGET_CLONES
+void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
+                             extent *clip_bounds)
+{
+    uint32_t bones = st->p->bone_count;
+    for (uint32_t j = 0; j < bones; ++j) bone_lanes(st, w, j, f, count, rows);
+    /* Bounds and ranges in frame order, bone by bone, as one row at a time grows them (of +0
+     * and -0, the minimum is the one met first). Locals, kept in registers. */
+    extent bounds = *clip_bounds;
+    value_range range = st->ranges[c];
+    for (uint32_t i = 0; i < count; ++i)
+        for (uint32_t j = 0; j < bones; ++j) {
+            const double *e = w->reach + ((size_t)i * bones + j) * 4;
+            if (st->radius[j] >= 0) grow_bounds(&bounds, (cb_vec3){e[0], e[1], e[2]}, e[3]);
+            range_grow_qpos(&range, rows + (size_t)i * bones * 8 + (size_t)j * 8);
+        }
+    *clip_bounds = bounds;
+    st->ranges[c] = range;
+}
