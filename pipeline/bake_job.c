@@ -182,6 +182,7 @@ static void bake_notes(cb_sampler *s, const cb_bake_job *job, const cb_bake_opti
             cb_warn(w, "note", "clip '%s' loops and travels %.3g units/s: blending its last row into its first pulls the "
                     "body back; for crowds moved by the game, bake with --root-motion in-place", p->clips[c].name,
                     info.ground_speed);
+        cb_model_release_clip(job->model, job->plan[c].animation); /* analysing read every key, beside the texels */
     }
     if (p->quat_hemisphere_breaks)
         cb_warn(w, "note", "%u bone(s) turn a full circle over a loop, so their last and first rows lie in opposite "
