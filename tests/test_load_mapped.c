@@ -4,6 +4,7 @@
  * the loader normalizes are copies outside it, and nothing can write into it. A bake drops a
  * clip's key pages once it has sampled and measured it (cb_model.release); reading them again
  * gives the file's bytes, so palettes stay byte-identical however often they are dropped. */
+#define _DEFAULT_SOURCE /* realpath */
 #include "testutil.h"
 
 #include <errno.h>
