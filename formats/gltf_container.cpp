@@ -517,7 +517,7 @@ void release_mapped(void *ctx, const cb_byte_range *ranges, size_t count)
         if (from >= end || ranges[i].bytes > end - from || from < begin) continue; // not all in the mapping
         runs.emplace_back(from, from + ranges[i].bytes);
     }
-    std::sort(runs.begin(), runs.end());
+    if (!std::is_sorted(runs.begin(), runs.end())) std::sort(runs.begin(), runs.end()); // mostly in file order
     for (size_t i = 0; i < runs.size();) {
         // Runs less than a page apart join: a clip's accessors usually lie one after another,
         // each smaller than a page, with a few bytes of padding between them.

@@ -312,23 +312,19 @@ static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, con
          * written (cb_model.release drops its pages, and reading them again gives the file's
          * bytes). Tangents of cubic splines are not rotations and stay too. */
         int value_slot = ch->interp == CB_INTERP_CUBICSPLINE ? 1 : 0;
-        bool copied = false;
-        for (uint32_t k = 0; k < ch->key_count; ++k) {
-            size_t at = (size_t)k * per_key + value_slot * 4;
-            const float *q = ch->values + at;
+        const float *keys = ch->values; /* as loaded; `own` is the copy, once made */
+        float *own = NULL;
+        for (const float *q = keys + value_slot * 4; q < keys + value_count; q += per_key) {
             double len2 = (double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3];
             if (fabs(len2 - 1) <= 0x1p-22) continue; /* float rounding of a unit quaternion */
             if (len2 < 1e-24)
                 return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u (rotation of %s) key %u is a zero quaternion",
-                               m->source, anim->name, c, m->nodes[ch->node].name, k);
-            if (!copied) {
-                float *copy = cb_arena_alloc(m->arena, value_count, sizeof(float));
-                if (!copy) return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory", m->source);
-                memcpy(copy, ch->values, value_count * sizeof(float));
-                ch->values = copy, copied = true;
-            }
+                               m->source, anim->name, c, m->nodes[ch->node].name, (uint32_t)((q - keys) / per_key));
+            if (!own && !(own = cb_arena_alloc(m->arena, value_count, sizeof(float))))
+                return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory", m->source);
+            if (ch->values != own) ch->values = memcpy(own, keys, value_count * sizeof(float));
             double inv = 1 / sqrt(len2);
-            for (int i = 0; i < 4; ++i) ch->values[at + i] = (float)(q[i] * inv);
+            for (int i = 0; i < 4; ++i) own[q - keys + i] = (float)(q[i] * inv);
         }
     }
     return CB_OK;
