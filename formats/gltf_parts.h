@@ -33,7 +33,6 @@ struct Context {
     cb_model *model;
     const tinygltf::Model *gltf;
     std::vector<Span> buffers;   // the bytes of each buffer, which the model owns
-    std::vector<bool> copy;      // per accessor: read into a copy even when its floats could be used in place
     cb_limits limits;
     cb_error *err;
     const char *name;
