@@ -137,7 +137,11 @@ bool adopt_buffers(Context &c, tinygltf::Model *gltf, file_bytes *file, const Bi
     if (bin.length && !c.buffers.empty()) {
         owned->file = std::move(*file);
         c.buffers[0] = Span{owned->file.data() + bin.at, bin.length};
-        if (owned->file.mapped()) c.model->release = release_mapped, c.model->release_ctx = &owned->file;
+        if (owned->file.mapped()) {
+            c.model->release = release_mapped, c.model->release_ctx = &owned->file;
+            const cb_byte_range json = {owned->file.data(), bin.at}; /* parsed and hashed: never read again */
+            release_mapped(&owned->file, &json, 1);
+        }
     }
     if (!cb_arena_adopt(c.model->arena, owned.get(), [](void *p) { delete static_cast<OwnedBytes *>(p); })) {
         cb_fail(c.err, CB_ERR_INTERNAL, "%s: out of memory", c.name);
