@@ -504,18 +504,24 @@ bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *
 // ranges, and inside the mapping, are dropped (MADV_DONTNEED): the mapping is read-only and
 // never written, so reading them again maps the page cache's copy of the file back (a minor
 // fault, no zeroing, no copy), the same bytes. Ranges elsewhere (keys copied into the model's
-// arena, tinygltf's buffers) are left alone: dropping those would lose them.
-void release_mapped(void *ctx, const cb_byte_range *ranges, size_t count)
+// arena, tinygltf's buffers) are left alone: dropping those would lose them. Called from C:
+// nothing may throw out of it, and without memory it does nothing (it is a hint).
+void release_mapped(void *ctx, const cb_byte_range *ranges, size_t count) noexcept
 {
     const file_bytes *file = static_cast<const file_bytes *>(ctx);
     uintptr_t begin = reinterpret_cast<uintptr_t>(file->bytes()), end = begin + file->size();
     uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE);
     if (!file->mapped() || page == 0 || (page & (page - 1))) return;
     std::vector<std::pair<uintptr_t, uintptr_t>> runs; // [from, to) clipped to the mapping
+    try {
+        runs.reserve(count);
+    } catch (const std::bad_alloc &) {
+        return;
+    }
     for (size_t i = 0; i < count; ++i) {
         uintptr_t from = reinterpret_cast<uintptr_t>(ranges[i].ptr);
         if (from >= end || ranges[i].bytes > end - from || from < begin) continue; // not all in the mapping
-        runs.emplace_back(from, from + ranges[i].bytes);
+        runs.emplace_back(from, from + ranges[i].bytes);                         // reserved: no allocation
     }
     if (!std::is_sorted(runs.begin(), runs.end())) std::sort(runs.begin(), runs.end()); // mostly in file order
     for (size_t i = 0; i < runs.size();) {

@@ -125,7 +125,7 @@ template <class Buffer> bool read_file(const char *path, uint64_t max_bytes, Buf
 bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail);
 // cb_model.release for keys read in place from a mapped file (ctx: its file_bytes): drops
 // the whole pages of the ranges that lie in the mapping; reading them again maps them back.
-void release_mapped(void *ctx, const cb_byte_range *ranges, size_t count);
+void release_mapped(void *ctx, const cb_byte_range *ranges, size_t count) noexcept;
 // Parses the file: a plain GLB on the fast path (parse_fast), else with tinygltf (the GLB's BIN
 // chunk left where it lies when `in_place`).
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
