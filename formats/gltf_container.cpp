@@ -464,9 +464,10 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
 // The model file itself is read into huge pages (external buffers into tinygltf's vectors).
 // Model files of 1 MiB and more are mapped read-only with MAP_POPULATE rather than read: their
 // pages come from the page cache as they are, where read() into fresh memory zeroes and copies
-// each one (for a large rig most of the load's time, in the kernel). The mapping is private and
-// made writable once populated, so the loader's in-place writes (rotation keys it normalizes)
-// copy only the pages they touch; populating a writable private mapping would copy every page.
+// each one (for a large rig most of the load's time, in the kernel). The mapping stays
+// read-only: the loader never writes into it (rotation keys it normalizes are copied first,
+// cb_model_validate), so a stray write faults instead of changing a key, and every page is
+// the page cache's copy of the file, which release_mapped can drop and a read maps back.
 // The hash runs on tail->thread while tinygltf parses, when no other file joins it. False
 // (nothing done) where mapping does not apply; read_file then reads the file and says why not.
 bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail)
@@ -479,10 +480,6 @@ bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *
     void *p = fits ? mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0) : MAP_FAILED;
     close(fd);
     if (p == MAP_FAILED) return false;
-    if (mprotect(p, size, PROT_READ | PROT_WRITE) != 0) {
-        munmap(p, size);
-        return false;
-    }
     out->adopt_mapping(p, size);
     const unsigned char *data = out->data();
     if (split_point(data, size, size)) {
@@ -498,6 +495,43 @@ bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *
         }
     }
     return true;
+}
+
+// cb_model.release for a model that reads its keys where they lie in map_model's mapping
+// (ctx: the model's file_bytes). A bake reads a clip's keys while it samples the clip and again
+// while it measures it; in between, and after, their pages only add to the peak memory (for a
+// big rig the keys are most of the file, as large as the stash). The whole pages inside the
+// ranges, and inside the mapping, are dropped (MADV_DONTNEED): the mapping is read-only and
+// never written, so reading them again maps the page cache's copy of the file back (a minor
+// fault, no zeroing, no copy), the same bytes. Ranges elsewhere (keys copied into the model's
+// arena, tinygltf's buffers) are left alone: dropping those would lose them. Called from C:
+// nothing may throw out of it, and without memory it does nothing (it is a hint).
+void release_mapped(void *ctx, const cb_byte_range *ranges, size_t count) noexcept
+{
+    const file_bytes *file = static_cast<const file_bytes *>(ctx);
+    uintptr_t begin = reinterpret_cast<uintptr_t>(file->bytes()), end = begin + file->size();
+    uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE);
+    if (!file->mapped() || page == 0 || (page & (page - 1))) return;
+    std::vector<std::pair<uintptr_t, uintptr_t>> runs; // [from, to) clipped to the mapping
+    try {
+        runs.reserve(count);
+    } catch (const std::bad_alloc &) {
+        return;
+    }
+    for (size_t i = 0; i < count; ++i) {
+        uintptr_t from = reinterpret_cast<uintptr_t>(ranges[i].ptr);
+        if (from >= end || ranges[i].bytes > end - from || from < begin) continue; // not all in the mapping
+        runs.emplace_back(from, from + ranges[i].bytes);                         // reserved: no allocation
+    }
+    if (!std::is_sorted(runs.begin(), runs.end())) std::sort(runs.begin(), runs.end()); // mostly in file order
+    for (size_t i = 0; i < runs.size();) {
+        // Runs less than a page apart join: a clip's accessors usually lie one after another,
+        // each smaller than a page, with a few bytes of padding between them.
+        uintptr_t from = runs[i].first, to = runs[i].second;
+        for (++i; i < runs.size() && runs[i].first < to + page; ++i) to = std::max(to, runs[i].second);
+        uintptr_t first = (from + page - 1) & ~(page - 1), last = to & ~(page - 1); // whole pages only
+        if (first < last) madvise(reinterpret_cast<void *>(first), last - first, MADV_DONTNEED);
+    }
 }
 
 template bool read_file<file_bytes>(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail, std::string *why);

@@ -162,8 +162,10 @@ bool read_accessor(const Context &c, int index, int want_comps, const What &what
     }
     bool packed_floats = p && std::is_same<T, float>::value && a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT &&
                          stride == elem && !a.sparse.isSparse;
-    if (packed_floats && !c.copy[(size_t)index] && reinterpret_cast<uintptr_t>(p) % alignof(T) == 0) {
-        *out = reinterpret_cast<T *>(const_cast<unsigned char *>(p)); // the model owns the buffer; validation may write
+    if (packed_floats && reinterpret_cast<uintptr_t>(p) % alignof(T) == 0) {
+        // The model owns the buffer, and never writes into it (cb_model_validate normalizes
+        // rotation keys in a copy): channels and accessors may share bytes.
+        *out = reinterpret_cast<T *>(const_cast<unsigned char *>(p));
         *count_out = a.count;
         return true;
     }

@@ -118,67 +118,6 @@ bool decode_meshopt(Context &c, tinygltf::Model *gltf)
     return true;
 }
 
-struct ByteRange {
-    int buffer;
-    size_t begin, end, accessor;
-};
-
-void add_span(const tinygltf::Model &g, int view_index, size_t offset, size_t bytes, size_t accessor, std::vector<ByteRange> *out)
-{
-    if (view_index < 0 || (size_t)view_index >= g.bufferViews.size() || bytes == 0) return;
-    const tinygltf::BufferView &v = g.bufferViews[(size_t)view_index];
-    size_t begin = v.byteOffset + offset; // bounds are checked when read; here only overlap matters
-    out->push_back(ByteRange{v.buffer, begin, begin + std::min(bytes, v.byteLength), accessor});
-}
-
-// cb_model_validate normalizes rotation keys where they lie. Read in place, that write must
-// not reach bytes that another channel or accessor reads, so such rotation keys are copied:
-// those used by several channels and those whose bytes overlap another accessor's.
-std::vector<bool> accessors_to_copy(const tinygltf::Model &g)
-{
-    size_t n = g.accessors.size();
-    std::vector<unsigned> rotation_uses(n);
-    for (const auto &anim : g.animations)
-        for (const auto &ch : anim.channels)
-            if (ch.target_path == "rotation" && ch.sampler >= 0 && (size_t)ch.sampler < anim.samplers.size()) {
-                int out = anim.samplers[(size_t)ch.sampler].output;
-                if (out >= 0 && (size_t)out < n) rotation_uses[(size_t)out]++;
-            }
-    std::vector<bool> copy(n);
-    std::vector<ByteRange> spans;
-    for (size_t i = 0; i < n; ++i) {
-        const tinygltf::Accessor &a = g.accessors[i];
-        copy[i] = rotation_uses[i] > 1;
-        size_t elem = (size_t)type_components(a.type) * component_size(a.componentType);
-        size_t stride = elem;
-        if (a.bufferView >= 0 && (size_t)a.bufferView < g.bufferViews.size() && g.bufferViews[(size_t)a.bufferView].byteStride)
-            stride = g.bufferViews[(size_t)a.bufferView].byteStride;
-        if (a.count > 0 && a.count <= SIZE_MAX / (stride + 1))
-            add_span(g, a.bufferView, a.byteOffset, (a.count - 1) * stride + elem, i, &spans);
-        if (a.sparse.isSparse && a.sparse.count > 0) {
-            size_t sparse = (size_t)a.sparse.count;
-            if (a.sparse.indices.byteOffset >= 0)
-                add_span(g, a.sparse.indices.bufferView, (size_t)a.sparse.indices.byteOffset,
-                         sparse * component_size(a.sparse.indices.componentType), i, &spans);
-            if (a.sparse.values.byteOffset >= 0)
-                add_span(g, a.sparse.values.bufferView, (size_t)a.sparse.values.byteOffset, sparse * elem, i, &spans);
-        }
-    }
-    std::sort(spans.begin(), spans.end(),
-              [](const ByteRange &x, const ByteRange &y) { return x.buffer != y.buffer ? x.buffer < y.buffer : x.begin < y.begin; });
-    std::vector<ByteRange> open; // earlier spans of this buffer that reach past the current one's start
-    for (const ByteRange &s : spans) {
-        open.erase(std::remove_if(open.begin(), open.end(),
-                                  [&s](const ByteRange &o) { return o.buffer != s.buffer || o.end <= s.begin; }),
-                   open.end());
-        for (const ByteRange &o : open)
-            if (o.accessor != s.accessor && (rotation_uses[o.accessor] || rotation_uses[s.accessor]))
-                copy[o.accessor] = copy[s.accessor] = true;
-        open.push_back(s);
-    }
-    return copy;
-}
-
 // What the model keeps of the file: tinygltf's buffers, and the file's own bytes when the BIN
 // chunk is read where it lies.
 struct OwnedBytes {
@@ -198,13 +137,17 @@ bool adopt_buffers(Context &c, tinygltf::Model *gltf, file_bytes *file, const Bi
     if (bin.length && !c.buffers.empty()) {
         owned->file = std::move(*file);
         c.buffers[0] = Span{owned->file.data() + bin.at, bin.length};
+        if (owned->file.mapped()) {
+            c.model->release = release_mapped, c.model->release_ctx = &owned->file;
+            const cb_byte_range json = {owned->file.data(), bin.at}; /* parsed and hashed: never read again */
+            release_mapped(&owned->file, &json, 1);
+        }
     }
     if (!cb_arena_adopt(c.model->arena, owned.get(), [](void *p) { delete static_cast<OwnedBytes *>(p); })) {
         cb_fail(c.err, CB_ERR_INTERNAL, "%s: out of memory", c.name);
         return false;
     }
     owned.release(); // the model's now
-    c.copy = accessors_to_copy(*gltf);
     return true;
 }
 

@@ -33,7 +33,6 @@ struct Context {
     cb_model *model;
     const tinygltf::Model *gltf;
     std::vector<Span> buffers;   // the bytes of each buffer, which the model owns
-    std::vector<bool> copy;      // per accessor: read into a copy even when its floats could be used in place
     cb_limits limits;
     cb_error *err;
     const char *name;
@@ -66,7 +65,9 @@ class file_bytes {
         bytes_ = static_cast<unsigned char *>(p), size_ = n, mapped_ = true;
     }
     unsigned char *data() { return bytes_; }
+    const unsigned char *bytes() const { return bytes_; }
     size_t size() const { return size_; }
+    bool mapped() const { return mapped_; } // a read-only mapping of the file (map_model)
     bool empty() const { return size_ == 0; }
 
   private:
@@ -122,6 +123,9 @@ template <class Buffer> bool read_file(const char *path, uint64_t max_bytes, Buf
 // Maps a model file of 1 MiB and more (see map_model in gltf_container.cpp); false (nothing
 // done) where mapping does not apply, and read_file then reads it.
 bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail);
+// cb_model.release for keys read in place from a mapped file (ctx: its file_bytes): drops
+// the whole pages of the ranges that lie in the mapping; reading them again maps them back.
+void release_mapped(void *ctx, const cb_byte_range *ranges, size_t count) noexcept;
 // Parses the file: a plain GLB on the fast path (parse_fast), else with tinygltf (the GLB's BIN
 // chunk left where it lies when `in_place`).
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,

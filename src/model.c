@@ -306,18 +306,25 @@ static cb_status validate_channel(const cb_model *m, uint32_t a, uint32_t c, con
                            (unsigned long long)(i / per_key));
     if (ch->path == CB_PATH_ROTATION) {
         /* Real exporters write keys of length 0.9998; glTF wants unit quaternions. Keys that
-         * are unit to float precision are left as they are (most are, and the keys may lie in
-         * the file's buffer). Tangents of cubic splines are not rotations and stay too. */
+         * are unit to float precision are left as they are (most are). The first key that is
+         * not gives the channel a copy of its values in the model's arena, which is normalized:
+         * the keys may lie in the loader's read-only mapping of the file, which is never
+         * written (cb_model.release drops its pages, and reading them again gives the file's
+         * bytes). Tangents of cubic splines are not rotations and stay too. */
         int value_slot = ch->interp == CB_INTERP_CUBICSPLINE ? 1 : 0;
-        for (uint32_t k = 0; k < ch->key_count; ++k) {
-            float *q = ch->values + (size_t)k * per_key + value_slot * 4;
+        const float *keys = ch->values; /* as loaded; `own` is the copy, once made */
+        float *own = NULL;
+        for (const float *q = keys + value_slot * 4; q < keys + value_count; q += per_key) {
             double len2 = (double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3];
             if (fabs(len2 - 1) <= 0x1p-22) continue; /* float rounding of a unit quaternion */
             if (len2 < 1e-24)
                 return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' channel %u (rotation of %s) key %u is a zero quaternion",
-                               m->source, anim->name, c, m->nodes[ch->node].name, k);
+                               m->source, anim->name, c, m->nodes[ch->node].name, (uint32_t)((q - keys) / per_key));
+            if (!own && !(own = cb_arena_alloc(m->arena, value_count, sizeof(float))))
+                return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory", m->source);
+            if (ch->values != own) ch->values = memcpy(own, keys, value_count * sizeof(float));
             double inv = 1 / sqrt(len2);
-            for (int i = 0; i < 4; ++i) q[i] = (float)(q[i] * inv);
+            for (int i = 0; i < 4; ++i) own[q - keys + i] = (float)(q[i] * inv);
         }
     }
     return CB_OK;
@@ -399,6 +406,25 @@ const struct cb_skipped_clip *cb_model_find_skipped_clip(const cb_model *model, 
     for (uint32_t i = 0; i < model->skipped_clip_count; ++i)
         if (strcmp(model->skipped_clips[i].name, name) == 0) return &model->skipped_clips[i];
     return NULL;
+}
+
+void cb_model_release_clip(const cb_model *model, int32_t animation)
+{
+    if (!model->release || animation < 0 || (uint32_t)animation >= model->animation_count) return;
+    const cb_animation *anim = &model->animations[animation];
+    cb_byte_range *ranges = malloc(2 * (size_t)anim->channel_count * sizeof *ranges);
+    if (!ranges) return; /* a hint: nothing lost */
+    size_t n = 0;
+    const float *times = NULL;
+    for (uint32_t c = 0; c < anim->channel_count; ++c) {
+        const cb_channel *ch = &anim->channels[c];
+        size_t per_key = (ch->path == CB_PATH_ROTATION ? 4 : 3) * (ch->interp == CB_INTERP_CUBICSPLINE ? 3 : 1);
+        if (ch->times != times) /* channels often share their times */
+            ranges[n++] = (cb_byte_range){times = ch->times, (size_t)ch->key_count * sizeof(float)};
+        ranges[n++] = (cb_byte_range){ch->values, (size_t)ch->key_count * per_key * sizeof(float)};
+    }
+    model->release(model->release_ctx, ranges, n);
+    free(ranges);
 }
 
 uint64_t cb_model_skin_vertex_count(const cb_model *model, int32_t skin)

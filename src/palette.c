@@ -316,6 +316,7 @@ static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, ui
 static void sample_clip_job(bake_state *st, worker *w, uint32_t c)
 {
     if (!st->errors[c].status) sample_clip(st, w, c, &st->errors[c]);
+    cb_model_release_clip(st->model, st->infos[c].animation); /* not read again until measured */
 }
 
 /* u16 and half, once the ranges and offsets of every clip are known: the values a clip staged. */
@@ -431,6 +432,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     }
     double t1 = seconds_now();
     if (keeps_values(p)) for_each_clip(&st, encode_staged_job, false, 0);
+    free(st.stash), st.stash = NULL; /* encoded: its memory goes before measuring reads the keys again */
     if (first_clip_error(&st, err)) goto fail;
     double t2 = seconds_now(), lo[3], hi[3];
     /* Clips encoded as they were sampled: their encoding time, spread over the threads, moves

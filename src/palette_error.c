@@ -194,6 +194,7 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
         st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, &s);
     }
     free(s.diff), free(s.joints), free(s.group_bounds), free(s.rows), free(s.values[0]), free(s.values[1]);
+    cb_model_release_clip(st->model, st->infos[c].animation); /* measured: the keys are not read again */
 }
 
 /* Bind-space distance from each joint's bind position to the farthest vertex it moves;

@@ -152,6 +152,12 @@ typedef struct cb_animation {
     double t0, t1;      /* first and last key over all channels */
 } cb_animation;
 
+/* Bytes of model data, for cb_model.release. */
+typedef struct cb_byte_range {
+    const void *ptr;
+    size_t bytes;
+} cb_byte_range;
+
 typedef struct cb_model {
     cb_arena *arena;
     const char *source;   /* the file it came from, for messages */
@@ -174,6 +180,12 @@ typedef struct cb_model {
     uint64_t source_hash; /* set by the loader: a hash of every byte it read (file and external buffers) */
     uint32_t external_file_count;
     const char **external_files; /* what the file referenced and the loader read (buffers, images) */
+    /* Optional, set by a loader whose model data lies in memory it can drop and read again
+     * unchanged (a read-only file mapping): release(release_ctx, ranges, count) is a hint that
+     * those bytes will not be read for a while, so their memory may go; reading them later
+     * gives the same bytes. NULL: nothing to release. See cb_model_release_clip. */
+    void (*release)(void *release_ctx, const cb_byte_range *ranges, size_t count);
+    void *release_ctx;
 } cb_model;
 
 /* Warnings and notes a command shows the user: on stderr, or in its --json output. */
@@ -217,6 +229,11 @@ int32_t cb_model_find_animation(const cb_model *model, const char *name);
 void cb_model_warnings(const cb_model *model, bool skipped_clips, cb_warnings *out);
 /* The skipped clip named `name`, or NULL. */
 const struct cb_skipped_clip *cb_model_find_skipped_clip(const cb_model *model, const char *name);
+/* Tells the model's loader (cb_model.release) that the key times and values of `animation`
+ * will not be read for a while: a big rig's keys are most of its file, and a bake reads one
+ * clip's keys only while it samples or measures that clip. A hint: reading them later is
+ * always allowed. Safe from several threads; does nothing without a release hook. */
+void cb_model_release_clip(const cb_model *model, int32_t animation);
 /* Vertices of the primitives that use `skin`. */
 uint64_t cb_model_skin_vertex_count(const cb_model *model, int32_t skin);
 /* Bytes of the vertex and index buffers of the primitives that use `skin`, in their own
