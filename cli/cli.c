@@ -21,9 +21,34 @@ int cli_exit_code(cb_status status)
     return CLI_EXIT_INTERNAL;
 }
 
+const char *cli_setting_flag(cb_setting setting)
+{
+    switch (setting) {
+    case CB_SETTING_MAX_FRAMES: return "--max-frames";
+    case CB_SETTING_MAX_JOINTS: return "--max-joints";
+    case CB_SETTING_MAX_PALETTE_BYTES: return "--max-palette-size";
+    case CB_SETTING_MAX_FILE_BYTES: return "--max-file-size";
+    case CB_SETTING_MAX_ACCESSOR_COUNT: return "--max-accessor-count";
+    case CB_SETTING_MAX_TEXTURE_SIZE: return "--max-texture-size";
+    case CB_SETTING_LAYOUT: return "--layout";
+    case CB_SETTING_PRECISION: return "--precision";
+    case CB_SETTING_BATCH: return "--batch";
+    case CB_SETTING_NONE: break;
+    }
+    return NULL;
+}
+
+const char *cli_error_text(const cb_error *err, char *buf, size_t size)
+{
+    const char *flag = cli_setting_flag(err->setting);
+    snprintf(buf, size, "%s%s%s%s", err->message, flag ? " [" : "", flag ? flag : "", flag ? "]" : "");
+    return buf;
+}
+
 int cli_report(const cb_error *err)
 {
-    fprintf(stderr, "crowdbake: %s\n", err->message);
+    char text[sizeof err->message + 32];
+    fprintf(stderr, "crowdbake: %s\n", cli_error_text(err, text, sizeof text));
     return err->status ? cli_exit_code(err->status) : CLI_EXIT_INTERNAL;
 }
 

@@ -44,7 +44,11 @@ typedef struct cli_command {
 int cli_parse(int argc, char **argv, const cli_option *options, size_t option_count, const char **positional,
               size_t min_positional, size_t max_positional, bool *help);
 
-/* Prints "crowdbake: MESSAGE" to stderr and returns the error's exit code. */
+/* The flag that changes a setting an error names (cb_error.setting), or NULL. */
+const char *cli_setting_flag(cb_setting setting);
+/* An error's message with the flag that would fix it: "MESSAGE [--flag]". */
+const char *cli_error_text(const cb_error *err, char *buf, size_t size);
+/* Prints "crowdbake: MESSAGE [--flag]" to stderr and returns the error's exit code. */
 int cli_report(const cb_error *err);
 int cli_usage_error(const char *command, const char *fmt, ...)
 #if defined(__GNUC__)

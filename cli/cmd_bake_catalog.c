@@ -35,7 +35,8 @@ static void print_json(const cb_roster *r)
             cb_json_string(&j, "palette", (t->animal->bake.formats & CB_FORMAT_PAL) ? t->pal_path : t->exr_path);
             cb_json_number(&j, "seconds", t->seconds);
         } else {
-            cb_json_string(&j, "error", t->error.message);
+            char text[sizeof t->error.message + 32];
+            cb_json_string(&j, "error", cli_error_text(&t->error, text, sizeof text));
         }
         cli_json_warnings(&j, &t->warnings);
         cb_json_end(&j);
@@ -57,6 +58,7 @@ int cmd_bake_catalog(const cli_catalog_bake *o)
         return cli_report(&err);
     }
     cb_roster_options opt = {0};
+    opt.setting_name = cli_setting_flag;
     opt.jobs = jobs;
     opt.force = o->force;
     opt.log = quiet || json ? NULL : stdout;

@@ -36,12 +36,21 @@ static void print_pal_text(const char *path, const cbpal_file *f)
     bool in_place = (h->flags & CBPAL_FLAG_IN_PLACE) != 0;
     /* In place, the clip table holds the root's travel that was measured and taken out of the
      * rows (the game moves the instance by it); kept, the rows carry it and the table has 0. */
-    printf("  %-24s %9s %7s %8s %9s %-8s %s\n", "clip", "first row", "frames", "fps", "length s", "loops",
+    /* The name column as wide as the longest name, so exported names ("Armature|Walk") keep the
+     * table aligned. */
+    int name_width = 24;
+    for (uint32_t i = 0; i < h->clip_count; ++i) {
+        cbpal_clip c;
+        cbpal_get_clip(f, i, &c);
+        int len = (int)strlen(c.name);
+        if (len > name_width) name_width = len;
+    }
+    printf("  %-*s %9s %7s %8s %9s %-8s %s\n", name_width, "clip", "first row", "frames", "fps", "length s", "loops",
            in_place ? "root velocity removed (units/s)" : "root motion");
     for (uint32_t i = 0; i < h->clip_count; ++i) {
         cbpal_clip c;
         cbpal_get_clip(f, i, &c);
-        printf("  %-24s %9u %7u %8.3f %9.4f %-8s ", c.name, c.first_row, c.frames, c.fps, c.duration,
+        printf("  %-*s %9u %7u %8.3f %9.4f %-8s ", name_width, c.name, c.first_row, c.frames, c.fps, c.duration,
                c.flags & CBPAL_CLIP_LOOPS ? "loop" : "one-shot");
         if (!in_place) {
             printf("in the rows\n");

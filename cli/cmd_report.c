@@ -147,14 +147,18 @@ int cmd_report(int argc, char **argv)
         return cli_report(&err);
     if (target) apply_target(&cat, target);
     cb_roster_options opt = {0};
+    opt.setting_name = cli_setting_flag;
     opt.jobs = jobs;
     opt.measure_vat = true;
     cb_roster roster;
     cb_status bake = cb_roster_bake(&cat, &opt, &roster, &err);
     if (bake) { /* report what baked; say what did not */
         for (uint32_t i = 0; i < roster.type_count; ++i)
-            if (roster.types[i].outcome == CB_TYPE_FAILED)
-                fprintf(stderr, "crowdbake: %s: %s\n", roster.types[i].animal->name, roster.types[i].error.message);
+            if (roster.types[i].outcome == CB_TYPE_FAILED) {
+                char text[sizeof err.message + 32];
+                fprintf(stderr, "crowdbake: %s: %s\n", roster.types[i].animal->name,
+                        cli_error_text(&roster.types[i].error, text, sizeof text));
+            }
     }
     cb_report r;
     cb_error rerr = {0};

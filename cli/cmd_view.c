@@ -208,6 +208,7 @@ static int prepare_catalog(const view_paths *v, const char *catalog_path)
     cb_catalog cat;
     if (cb_catalog_load(catalog_path, &cat, &err)) return cli_report(&err);
     cb_roster_options opt = {0};
+    opt.setting_name = cli_setting_flag;
     opt.jobs = 1;
     opt.log = stdout;
     cb_roster r;

@@ -170,8 +170,8 @@ cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *m,
                        uint64_t input_hash, float speed_reference, cb_error *err)
 {
     if (p->precision == CB_PRECISION_U16)
-        return cb_fail(err, CB_ERR_SETTINGS, "%s: EXR stores half or float texels; use --precision half|float, or write a .pal "
-                       "for u16", path);
+        return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_PRECISION,
+                               "%s: EXR stores half or float texels; bake half or float precision, or write a .pal for u16", path);
     if (p->width > INT32_MAX || p->height > INT32_MAX) return cb_fail(err, CB_ERR_INPUT, "%s: palette too large", path);
     int16_t bytes = p->precision == CB_PRECISION_FLOAT ? 4 : 2;
     int32_t stride = 4 * bytes, line = (int32_t)(p->width * 4 * bytes);

@@ -130,8 +130,9 @@ cb_status cb_ktx2_write(const char *path, const cb_palette *p, const cb_model *m
                         float speed_reference, cb_error *err)
 {
     if (p->precision == CB_PRECISION_U16)
-        return cb_fail(err, CB_ERR_SETTINGS, "%s: KTX2 palettes are RGBA16F or RGBA32F; a u16 palette would be RGBA16UI, which "
-                       "three.js's KTX2Loader and most KTX2 loaders refuse: bake it with --precision half or float", path);
+        return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_PRECISION,
+                               "%s: KTX2 palettes are RGBA16F or RGBA32F; a u16 palette would be RGBA16UI, which three.js's "
+                               "KTX2Loader and most KTX2 loaders refuse: bake it with half or float precision", path);
     uint32_t texel = cb_precision_texel_bytes(p->precision), bits = texel * 2;
     char *clips = clips_json(p), *meta = palette_json(p, model, skin, input_hash, speed_reference);
     if (!clips || !meta) {

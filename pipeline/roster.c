@@ -424,7 +424,12 @@ static void log_type(roster_run *run, const cb_roster_type *t)
         fprintf(f, "%s  %-16s shares %s's palette (same rig, bind pose and clips)\n", clear, t->animal->name,
                 owner->animal->name);
         break;
-    case CB_TYPE_FAILED: fprintf(f, "%s  %-16s FAILED: %s\n", clear, t->animal->name, t->error.message); break;
+    case CB_TYPE_FAILED: {
+        const char *fix = run->opt->setting_name && t->error.setting ? run->opt->setting_name(t->error.setting) : NULL;
+        fprintf(f, "%s  %-16s FAILED: %s%s%s%s\n", clear, t->animal->name, t->error.message, fix ? " [" : "",
+                fix ? fix : "", fix ? "]" : "");
+        break;
+    }
     }
     for (uint32_t i = 0; i < t->warnings.count; ++i)
         fprintf(f, "  %-16s %s: %s\n", "", t->warnings.items[i].kind, t->warnings.items[i].message);
@@ -564,7 +569,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     if (!rc && opt->depfile && !(rc = roster_make_parent_directories(opt->depfile, err))) rc = roster_write_depfile(cat, r, opt->depfile, opt->depfile_manifest_only, err);
     if (!rc) roster_settle_times(r);
     for (uint32_t i = 0; i < r->type_count && !rc; ++i)
-        if (r->types[i].outcome == CB_TYPE_FAILED) rc = cb_fail(err, r->types[i].error.status, "%s", r->types[i].error.message);
+        if (r->types[i].outcome == CB_TYPE_FAILED && !err->status) *err = r->types[i].error, rc = err->status;
     for (uint32_t i = 0; i < r->type_count; ++i) {
         cb_bake_job_free(&run.work[i].job);
         free(run.work[i].plan);

@@ -164,7 +164,7 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
     cb_sampler_set_period(s, animation, out->loops ? out->duration : 0);
 
     if (out->duration * fps > (double)limits->max_frames)
-        return cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' lasts %gs: %.0f frames at %g fps is over the limit of %u (--max-frames)",
+        return cb_fail_setting(err, CB_ERR_INPUT, CB_SETTING_MAX_FRAMES, "%s: clip '%s' lasts %gs: %.0f frames at %g fps is over the limit of %u frames",
                        m->source, anim->name, out->duration, out->duration * fps, fps, limits->max_frames);
     uint32_t steps = cb_clip_step_count(out->duration, fps);
     out->steps = steps;

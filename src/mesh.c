@@ -111,8 +111,8 @@ static cb_status build_part(const char *source, const cb_primitive *src, const c
 {
     uint32_t n = src->vertex_count, k = o->batch, ic = src->indices ? src->index_count : n;
     if ((uint64_t)n * k > UINT32_MAX || (uint64_t)ic * k > UINT32_MAX)
-        return cb_fail(err, CB_ERR_SETTINGS, "%s: --batch %u: %u copies of %u vertices overflow 32-bit indices; batch fewer copies",
-                       source, k, k, n);
+        return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_BATCH,
+                               "%s: %u copies of %u vertices overflow 32-bit indices; batch fewer copies", source, k, n);
     size_t nk = (size_t)n * k;
     p->vertex_count = (uint32_t)nk;
     p->index_count = ic * k;

@@ -8,15 +8,30 @@
 #include <stdlib.h>
 #include <string.h>
 
-cb_status cb_fail(cb_error *err, cb_status status, const char *fmt, ...)
+static void fail_v(cb_error *err, cb_status status, cb_setting setting, const char *fmt, va_list ap)
 {
     if (err && err->status == CB_OK) {
-        va_list ap;
-        va_start(ap, fmt);
         vsnprintf(err->message, sizeof err->message, fmt, ap);
-        va_end(ap);
         err->status = status;
+        err->setting = setting;
     }
+}
+
+cb_status cb_fail(cb_error *err, cb_status status, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fail_v(err, status, CB_SETTING_NONE, fmt, ap);
+    va_end(ap);
+    return status;
+}
+
+cb_status cb_fail_setting(cb_error *err, cb_status status, cb_setting setting, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fail_v(err, status, setting, fmt, ap);
+    va_end(ap);
     return status;
 }
 
@@ -198,7 +213,7 @@ static cb_status validate_skins(const cb_model *m, const cb_limits *limits, cb_e
         if (skin->joint_count == 0)
             return cb_fail(err, CB_ERR_INPUT, "%s: skin %u (%s) has no joints", m->source, s, skin->name);
         if (skin->joint_count > limits->max_joints)
-            return cb_fail(err, CB_ERR_INPUT, "%s: skin %u (%s) has %u joints, over the limit of %u (--max-joints)",
+            return cb_fail_setting(err, CB_ERR_INPUT, CB_SETTING_MAX_JOINTS, "%s: skin %u (%s) has %u joints, over the limit of %u",
                            m->source, s, skin->name, skin->joint_count, limits->max_joints);
         int32_t common_root = -1;
         for (uint32_t j = 0; j < skin->joint_count; ++j) {

@@ -68,9 +68,9 @@ static cb_status qpos_canon(const double m[16], float out[8], const cb_model *mo
              fabs(cb_vec3_dot(c[1], c[2])) > QPOS_TOLERANCE * s * s)
         why = "shear";
     if (why)
-        return cb_fail(err, CB_ERR_LAYOUT,
-                       "%s: joint '%s' has %s (axis scales %.7g, %.7g, %.7g) at frame %u of clip '%s', which the qpos "
-                       "layout cannot represent; use --layout affine or --layout mat4",
+        return cb_fail_setting(err, CB_ERR_LAYOUT, CB_SETTING_LAYOUT,
+                               "%s: joint '%s' has %s (axis scales %.7g, %.7g, %.7g) at frame %u of clip '%s', which the "
+                               "qpos layout cannot represent; use the affine or the mat4 layout",
                        model->source, model->nodes[skin->joints[bone]].name, why, l[0], l[1], l[2], frame, clip);
     double r[16], inv = 1 / s;
     memcpy(r, m, sizeof r);
@@ -392,8 +392,8 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.infos = infos;
     p->texel_bytes = (size_t)p->width * p->height * cb_precision_texel_bytes(p->precision);
     if (p->texel_bytes > opt->limits.max_palette_bytes) {
-        cb_fail(err, CB_ERR_INPUT, "%s: the palette would be %zu bytes (%ux%u texels), over the limit of %llu "
-                "(--max-palette-size); lower --fps, bake fewer clips or use a smaller encoding",
+        cb_fail_setting(err, CB_ERR_INPUT, CB_SETTING_MAX_PALETTE_BYTES, "%s: the palette would be %zu bytes (%ux%u "
+                        "texels), over the limit of %llu; lower the fps, bake fewer clips, use a smaller encoding or raise the limit",
                 m->source, p->texel_bytes, p->width, p->height, (unsigned long long)opt->limits.max_palette_bytes);
         goto fail;
     }

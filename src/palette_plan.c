@@ -13,17 +13,17 @@
 
 cb_status palette_plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err)
 {
-    if (max_size < 1) return cb_fail(err, CB_ERR_SETTINGS, "--max-texture-size must be at least 1");
+    if (max_size < 1) return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_MAX_TEXTURE_SIZE, "the texture size limit must be at least 1");
     if (p->row_texels > max_size)
-        return cb_fail(err, CB_ERR_INPUT,
-                       "%s: %u bones x %u texels = %u texels per row, wider than --max-texture-size %u; use a layout "
-                       "with fewer texels per bone (qpos: 2) or a larger limit",
+        return cb_fail_setting(err, CB_ERR_INPUT, CB_SETTING_MAX_TEXTURE_SIZE,
+                               "%s: %u bones x %u texels = %u texels per row, wider than the texture size limit %u; use "
+                               "a layout with fewer texels per bone (qpos: 2) or a larger limit",
                        source, p->bone_count, p->texels_per_bone, p->row_texels, max_size);
     cb_texture_geometry g;
     if (!cb_wrap_rows(p->row_texels, p->rows, max_size, &g))
-        return cb_fail(err, CB_ERR_INPUT,
-                       "%s: %u baked rows do not fit a %ux%u texture even wrapped into %u columns of %u rows; lower "
-                       "--fps, bake fewer clips, or raise --max-texture-size",
+        return cb_fail_setting(err, CB_ERR_INPUT, CB_SETTING_MAX_TEXTURE_SIZE,
+                               "%s: %u baked rows do not fit a %ux%u texture even wrapped into %u columns of %u rows; "
+                               "lower the fps, bake fewer clips, or raise the texture size limit",
                        source, p->rows, max_size, max_size, max_size / p->row_texels, max_size);
     p->blocks = g.blocks, p->height = g.height, p->width = g.width;
     return CB_OK;
@@ -123,7 +123,7 @@ cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip
             c->root_velocity[k] = (float)(st->opt->root_motion == CB_ROOT_MOTION_IN_PLACE ? infos[i].root_velocity[k] : 0);
         rows += infos[i].frames;
         if (rows > st->opt->limits.max_frames)
-            return cb_fail(err, CB_ERR_INPUT, "%s: %llu baked rows over all clips, over the limit of %u (--max-frames)",
+            return cb_fail_setting(err, CB_ERR_INPUT, CB_SETTING_MAX_FRAMES, "%s: %llu baked rows over all clips, over the limit of %u",
                            m->source, (unsigned long long)rows, st->opt->limits.max_frames);
     }
     p->clip_count = count;

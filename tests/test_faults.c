@@ -190,7 +190,7 @@ static void test_hostile_sizes(void **state)
                    "\"count\":2,\"type\":\"VEC3\"}],\"nodes\":[{\"name\":\"a\"}],\"scenes\":[{\"nodes\":[0]}],"
                    "\"skins\":[{\"joints\":[0]}],\"animations\":[{\"samplers\":[{\"input\":0,\"output\":1}],"
                    "\"channels\":[{\"sampler\":0,\"target\":{\"node\":0,\"path\":\"translation\"}}]}]}",
-                   "over the limit of 1048576 (--max-frames)", "");
+                   "over the limit of 1048576 frames [--max-frames]", "");
     /* The same clip is allowed with a larger limit, and then the palette is past its size limit. */
     expect_refused("{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":32,\"uri\":\"data:application/octet-stream;"
                    "base64,AAAAAAAASEMAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA=\"}],\"bufferViews\":[{\"buffer\":0,"
@@ -199,7 +199,8 @@ static void test_hostile_sizes(void **state)
                    "\"count\":2,\"type\":\"VEC3\"}],\"nodes\":[{\"name\":\"a\"}],\"scenes\":[{\"nodes\":[0]}],"
                    "\"skins\":[{\"joints\":[0]}],\"animations\":[{\"samplers\":[{\"input\":0,\"output\":1}],"
                    "\"channels\":[{\"sampler\":0,\"target\":{\"node\":0,\"path\":\"translation\"}}]}]}",
-                   "over the limit of 4096 (--max-palette-size)", "--max-palette-size 4K");
+                   "over the limit of 4096; lower the fps, bake fewer clips, use a smaller encoding or raise the limit [--max-palette-size]",
+                   "--max-palette-size 4K");
 }
 
 static void test_broken_hierarchies(void **state)

@@ -168,7 +168,8 @@ static void test_wrapping_keeps_every_texel_addressable(void **state)
     o.max_texture_size = 128; /* narrower than one row */
     cb_palette none;
     assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &none, &err), CB_ERR_INPUT);
-    assert_non_null(strstr(err.message, "wider than --max-texture-size 128"));
+    assert_non_null(strstr(err.message, "wider than the texture size limit 128"));
+    assert_int_equal(err.setting, CB_SETTING_MAX_TEXTURE_SIZE); /* the front end names its flag */
     cb_palette_free(&flat);
     cb_palette_free(&wrapped);
     cb_sampler_free(s);
@@ -186,7 +187,8 @@ static void test_qpos_refuses_non_uniform_scale_naming_joint_and_frame(void **st
     assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &p, &err), CB_ERR_LAYOUT);
     assert_non_null(strstr(err.message, "joint '"));
     assert_non_null(strstr(err.message, "at frame "));
-    assert_non_null(strstr(err.message, "use --layout affine"));
+    assert_non_null(strstr(err.message, "use the affine or the mat4 layout"));
+    assert_int_equal(err.setting, CB_SETTING_LAYOUT);
     cb_sampler_free(s);
     cb_model_free(m);
 }

@@ -15,7 +15,7 @@
 #define CROWDBAKE_VERSION "0.1.0"
 /* The library's API version: MAJOR changes break callers, MINOR ones add to the API. */
 #define CROWDBAKE_API_VERSION_MAJOR 1
-#define CROWDBAKE_API_VERSION_MINOR 0
+#define CROWDBAKE_API_VERSION_MINOR 1
 #define CROWDBAKE_API_VERSION (CROWDBAKE_API_VERSION_MAJOR * 100 + CROWDBAKE_API_VERSION_MINOR)
 
 #ifdef __cplusplus
@@ -38,9 +38,26 @@ typedef enum cb_status {
     CB_ERR_LAYOUT = 7    /* the rig needs another layout: qpos cannot hold non-uniform scale or shear */
 } cb_status;
 
+/* The setting whose change would fix an error. The library words its messages without any
+ * front end's vocabulary; a front end names the setting its own way (the command line as a
+ * flag, see cli/cli.c), so the fix a message suggests is always one its user can type. */
+typedef enum cb_setting {
+    CB_SETTING_NONE = 0,
+    CB_SETTING_MAX_FRAMES,         /* cb_limits.max_frames */
+    CB_SETTING_MAX_JOINTS,         /* cb_limits.max_joints */
+    CB_SETTING_MAX_PALETTE_BYTES,  /* cb_limits.max_palette_bytes */
+    CB_SETTING_MAX_FILE_BYTES,     /* cb_limits.max_file_bytes */
+    CB_SETTING_MAX_ACCESSOR_COUNT, /* cb_limits.max_accessor_count */
+    CB_SETTING_MAX_TEXTURE_SIZE,   /* cb_bake_options.max_texture_size */
+    CB_SETTING_LAYOUT,             /* cb_bake_options.layout */
+    CB_SETTING_PRECISION,          /* cb_bake_options.precision */
+    CB_SETTING_BATCH               /* cb_mesh_options.batch */
+} cb_setting;
+
 typedef struct cb_error {
     cb_status status;
     char message[512];
+    cb_setting setting; /* CB_SETTING_NONE, or what would fix it */
 } cb_error;
 
 /* An error in model units as mm per metre of model height, the unit every error is reported
@@ -51,6 +68,12 @@ static inline double cb_mm_per_m(double error, double height) { return height > 
 cb_status cb_fail(cb_error *err, cb_status status, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+/* cb_fail for an error that changing `setting` would fix. */
+cb_status cb_fail_setting(cb_error *err, cb_status status, cb_setting setting, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
 #endif
     ;
 

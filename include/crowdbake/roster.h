@@ -21,6 +21,8 @@ typedef struct cb_roster_options {
     bool depfile_manifest_only; /* the depfile's one rule is the manifest's (Ninja's `depfile` without `deps = gcc`) */
     const cb_limits *limits; /* for loading and baking; NULL: the defaults */
     bool measure_vat;       /* also measure each type's VAT error (half-float positions) for the report */
+    /* How the front end names a setting (cb_error.setting) in a failed type's line, or NULL. */
+    const char *(*setting_name)(cb_setting setting);
 } cb_roster_options;
 
 typedef enum cb_type_outcome { CB_TYPE_BAKED, CB_TYPE_UP_TO_DATE, CB_TYPE_SHARED, CB_TYPE_FAILED } cb_type_outcome;
