@@ -60,7 +60,7 @@ SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
 .PHONY: all install deps demo check check-normal check-asan check-shared test test-asan test-runs readme bake-hashes bench \
-        bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds
+        bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
 SONAME    := libcrowdbake.so.$(API_MAJOR)
@@ -217,6 +217,8 @@ tests/%/node_modules/.package-lock.json: tests/%/package-lock.json
 	cd tests/$* && npm ci --no-audit --no-fund --loglevel=error
 web/node_modules/.package-lock.json: web/package-lock.json
 	cd web && npm ci --no-audit --no-fund --loglevel=error
+# What `crowdbake view` serves from the source tree: three.js and fzstd, from web/package-lock.json.
+web: web/node_modules/.package-lock.json
 
 SHARED := $(or $(CROWDBAKE_SHARED),../shared)
 check-shared:

@@ -109,8 +109,8 @@ static int find_web(view_paths *v)
     for (size_t i = 0; i < sizeof need / sizeof need[0]; ++i) {
         snprintf(probe, sizeof probe, "%s/%s", v->web, need[i]);
         if (access(probe, R_OK)) {
-            fprintf(stderr, "crowdbake: view: %s is missing: %s (run 'make' in the source tree, which installs "
-                            "web/node_modules, or set CROWDBAKE_WEB=DIR to a web/ folder)\n", probe,
+            fprintf(stderr, "crowdbake: view: %s is missing: %s (run 'make web' in the source tree, which installs "
+                            "web/node_modules from its package-lock, or set CROWDBAKE_WEB=DIR to a web/ folder)\n", probe,
                     i == 2 ? "three.js is not installed" : "not a crowdbake web folder");
             return CLI_EXIT_IO;
         }
