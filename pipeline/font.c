@@ -124,7 +124,7 @@ static unsigned char *pixel(cb_canvas *cv, int x, int y)
     return cv->rgba + ((size_t)row * cv->width + (uint32_t)x) * 4;
 }
 
-int cb_font_draw(const cb_font *f, cb_canvas *cv, int x, int y, int max_x, const char *text, const uint8_t rgb[3])
+static int draw_glyphs(const cb_font *f, cb_canvas *cv, int x, int y, int max_x, const char *text, const uint8_t rgb[3])
 {
     for (const char *s = text; *s;) {
         if (f->FT_Load_Char(f->face, next_code_point(&s), FT_LOAD_RENDER)) continue;
@@ -140,6 +140,15 @@ int cb_font_draw(const cb_font *f, cb_canvas *cv, int x, int y, int max_x, const
         x += advance;
     }
     return x;
+}
+
+/* A text that does not fit ends in an ellipsis, so a cut label reads as cut. */
+int cb_font_draw(const cb_font *f, cb_canvas *cv, int x, int y, int max_x, const char *text, const uint8_t rgb[3])
+{
+    static const char ellipsis[] = "\xe2\x80\xa6";
+    if (cb_font_width(f, text) <= max_x - x) return draw_glyphs(f, cv, x, y, max_x, text, rgb);
+    x = draw_glyphs(f, cv, x, y, max_x - cb_font_width(f, ellipsis), text, rgb);
+    return draw_glyphs(f, cv, x, y, max_x, ellipsis, rgb);
 }
 
 int cb_font_width(const cb_font *f, const char *text)

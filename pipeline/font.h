@@ -22,8 +22,9 @@ typedef struct cb_canvas {
     bool bottom_up;
 } cb_canvas;
 
-/* Draws UTF-8 text with its baseline at y, from x, clipped to [x, max_x); returns the x after
- * it. Pixels outside the canvas are skipped. */
+/* Draws UTF-8 text with its baseline at y, from x, within [x, max_x): whole glyphs, and a text
+ * too long for it cut short with an ellipsis. Returns the x after it. Pixels outside the
+ * canvas are skipped. */
 int cb_font_draw(const cb_font *font, cb_canvas *canvas, int x, int y, int max_x, const char *text, const uint8_t rgb[3]);
 /* The text's width in pixels. */
 int cb_font_width(const cb_font *font, const char *text);
