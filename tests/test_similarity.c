@@ -6,6 +6,7 @@
 #include <math.h>
 
 #include "../src/cb_math.h"
+#include "../src/sampler.h"
 
 /* The largest difference between the two samplers over every row of every clip at 30 fps,
  * relative to the size of the numbers compared: the joint's scale for its 3x3, the skeleton's
@@ -261,12 +262,62 @@ static void test_batches_give_the_bits_of_single_times(void **state)
     cb_model_free(m);
 }
 
+/* The batched sampler's lanes against the one-time path, channel by channel: the key spans a
+ * batch shares between channels of one times array, and the vectorized slerp and lerp, must
+ * give cb_channel_eval's bits at every time (between keys, on them, before and after them). */
+static uint32_t expect_lanes_match_scalar(const char *what, const cb_model *m)
+{
+    uint32_t compared = 0;
+    for (uint32_t a = 0; a < m->animation_count; ++a)
+        for (uint32_t c = 0; c < m->animations[a].channel_count; ++c) {
+            const cb_channel *ch = &m->animations[a].channels[c];
+            if (ch->interp != CB_INTERP_LINEAR || ch->key_count < 2) continue;
+            int comps = ch->path == CB_PATH_ROTATION ? 4 : 3;
+            double first = ch->times[0], span = ch->times[ch->key_count - 1] - first;
+            uint32_t steps = 4 * ch->key_count + 8;
+            for (uint32_t i = 0; i < steps; i += CB_SAMPLE_BATCH) {
+                double times[CB_SAMPLE_BATCH], lanes[4][CB_SAMPLE_BATCH];
+                for (uint32_t k = 0; k < CB_SAMPLE_BATCH; ++k) {
+                    double u = (double)(i + k) / (steps - 8) - 0.05; /* from before the first key to after the last */
+                    times[k] = (i + k) % 5 == 0 ? ch->times[(i + k) / 4 % ch->key_count] : first + span * u;
+                }
+                cb_channel_eval_lanes(ch, times, lanes);
+                for (uint32_t k = 0; k < CB_SAMPLE_BATCH; ++k) {
+                    double one[4];
+                    cb_channel_eval(ch, times[k], one);
+                    for (int v = 0; v < comps; ++v)
+                        if (memcmp(&one[v], &lanes[v][k], sizeof one[v]) != 0)
+                            fail_msg("%s: clip %u channel %u at t = %.9g: component %d is %.17g in lanes, %.17g alone",
+                                     what, a, c, times[k], v, lanes[v][k], one[v]);
+                    ++compared;
+                }
+            }
+        }
+    printf("  %-72s %u channel values match bit for bit\n", what, compared);
+    return compared;
+}
+
+static void test_lanes_give_the_bits_of_the_scalar_path(void **state)
+{
+    (void)state;
+    const char *assets[] = {"assets/fox-bevy/Fox.glb", "assets/quaternius-cow/Cow.glb",
+                            "assets/spider-animated-luanti/gltf_spider_animated.gltf",
+                            "assets/robot-quaternius-raylib/robot.glb",
+                            "assets/riggedfigure-raylib/rigged_figure.glb"};
+    for (size_t i = 0; i < COUNT_OF(assets); ++i) {
+        cb_model *m = load_shared(assets[i]);
+        assert_true(expect_lanes_match_scalar(assets[i], m) > 500);
+        cb_model_free(m);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_real_assets_sample_the_same_both_ways),
         cmocka_unit_test(test_built_rigs_take_the_path_they_should),
         cmocka_unit_test(test_batches_give_the_bits_of_single_times),
+        cmocka_unit_test(test_lanes_give_the_bits_of_the_scalar_path),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
