@@ -62,11 +62,17 @@ static double pose_distance(const double *a, const double *b, uint32_t joints, c
 double cb_animation_key_interval(const cb_animation *anim)
 {
     double min_dt = INFINITY;
-    for (uint32_t c = 0; c < anim->channel_count; ++c)
-        for (uint32_t k = 1; k < anim->channels[c].key_count; ++k) {
-            double dt = (double)anim->channels[c].times[k] - anim->channels[c].times[k - 1];
+    const float *scanned = NULL; /* channels sharing one times array (as exporters write them) scan it once */
+    uint32_t scanned_keys = 0;
+    for (uint32_t c = 0; c < anim->channel_count; ++c) {
+        const cb_channel *ch = &anim->channels[c];
+        if (ch->times == scanned && ch->key_count == scanned_keys) continue;
+        scanned = ch->times, scanned_keys = ch->key_count;
+        for (uint32_t k = 1; k < ch->key_count; ++k) {
+            double dt = (double)ch->times[k] - ch->times[k - 1];
             if (dt > 1e-4 && dt < min_dt) min_dt = dt;
         }
+    }
     return isfinite(min_dt) ? min_dt : 0;
 }
 

@@ -17,7 +17,10 @@ static double stretch(const double *D)
     double g02 = fabs(c0[0] * c2[0] + c0[1] * c2[1] + c0[2] * c2[2]);
     double g12 = fabs(c1[0] * c2[0] + c1[1] * c2[1] + c1[2] * c2[2]);
     double r0 = g00 + g01 + g02, r1 = g01 + g11 + g12, r2 = g02 + g12 + g22;
-    return sqrt(fmax(r0, fmax(r1, r2))) * (1 + 1e-9);
+    /* Not fmax: a compare and a select, where fmax is a call. They differ only for NaN, and a
+     * difference with one makes cb_joint_errors fail (its at_bind is not finite) either way. */
+    double r = r0 > r1 ? r0 : r1;
+    return sqrt(r > r2 ? r : r2) * (1 + 1e-9);
 }
 
 static int by_bound(const void *pa, const void *pb)

@@ -32,7 +32,10 @@ static double row_bound(const bake_state *st, measure_scratch *s)
 {
     if (!cb_joint_errors(s->diff, st->p->bone_count, st->p->bind_positions, s->joints)) return INFINITY;
     double most = 0;
-    for (uint32_t k = 0; k < st->groups.group_count; ++k) most = fmax(most, cb_group_error_bound(&st->groups, k, s->joints, most));
+    for (uint32_t k = 0; k < st->groups.group_count; ++k) {
+        double bound = cb_group_error_bound(&st->groups, k, s->joints, most);
+        most = bound > most ? bound : most; /* fmax(most, bound): most is never NaN */
+    }
     return most;
 }
 
@@ -54,7 +57,9 @@ static double skin_row(const bake_state *st, measure_scratch *s, double worst)
         if ((n && k == top) || s->group_bounds[k] <= worst) continue;
         const cb_vertex_group *grp = &g->groups[k];
         const cb_primitive *prim = &st->model->primitives[grp->primitive];
-        worst = fmax(worst, sqrt(cb_skin_group_worst(prim, g->vertices + grp->first, grp->count, s->diff)));
+        /* fmax's result without its call: worst is never NaN, and a NaN error leaves it as fmax does */
+        double error = sqrt(cb_skin_group_worst(prim, g->vertices + grp->first, grp->count, s->diff));
+        worst = error > worst ? error : worst;
     }
     return worst;
 }

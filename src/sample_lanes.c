@@ -66,14 +66,27 @@ static CB_CLONE_INLINE void find_spans(const float *times, uint32_t key_count, c
                                        cb_key_spans *out)
 {
     uint32_t last = key_count - 1;
+    bool any_edge = false;
     for (int i = 0; i < B; ++i) {
         double time = t[i];
-        out->edge[i] = time <= times[0] || time >= times[last];
-        uint32_t k = out->edge[i] ? 0 : cb_find_key(times, key_count, time, hint);
+        bool edge = time <= times[0] || time >= times[last];
+        uint32_t k = edge ? 0 : cb_find_key(times, key_count, time, hint);
         double t_k = times[k], dt = (double)times[k + 1] - t_k;
         out->key[i] = k;
         out->s[i] = (time - t_k) / dt;
+        out->edge[i] = edge ? 1.0 : 0.0;
+        any_edge |= edge;
     }
+    out->any_edge = any_edge;
+}
+
+/* Whether any lane is an edge or marked in `redo` (1 or 0 each): a sum, which vectorizes;
+ * most batches have none, and then no lane is looked at one by one. */
+static CB_CLONE_INLINE bool any_lane(const double *edge, const double *redo)
+{
+    double sum = 0;
+    for (int i = 0; i < B; ++i) sum += edge[i] + redo[i];
+    return sum != 0;
 }
 
 /* ---- channels ---- */
@@ -115,6 +128,7 @@ static CB_CLONE_INLINE void rotation_lanes(const cb_channel *ch, const cb_key_sp
         for (int c = 0; c < 4; ++c) a[c][i] = ka[c], b[c][i] = kb[c];
     }
     slerp_lanes((const double(*)[B])a, (const double(*)[B])b, sp->s, out, redo);
+    if (!any_lane(sp->edge, redo)) return;
     for (int i = 0; i < B; ++i) {
         if (!sp->edge[i] && !redo[i]) continue;
         double v[4];
@@ -135,7 +149,7 @@ static CB_CLONE_INLINE void lerp_lanes(const cb_channel *ch, const cb_key_spans 
     }
     for (int c = 0; c < 3; ++c)
         for (int i = 0; i < B; ++i) out[c][i] = a[c][i] + (b[c][i] - a[c][i]) * sp->s[i];
-    for (int i = 0; i < B; ++i) {
+    for (int i = 0; sp->any_edge && i < B; ++i) {
         if (!sp->edge[i]) continue;
         double v[4];
         cb_channel_eval_at(ch, times[i], v, hint, wrap); /* before or after the keys */

@@ -48,7 +48,8 @@ struct cb_sampler {
 typedef struct cb_key_spans {
     uint32_t key[CB_SAMPLE_BATCH];
     double s[CB_SAMPLE_BATCH];
-    unsigned char edge[CB_SAMPLE_BATCH];
+    double edge[CB_SAMPLE_BATCH]; /* 1 or 0; a double, so the loops that read it vectorize */
+    bool any_edge;
 } cb_key_spans;
 
 /* Index of the last key with times[k] <= t (0 when t is before the first key). `hint` holds the
