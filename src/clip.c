@@ -1,6 +1,7 @@
 /* clip.c - clip framing (how many rows, at which times), loop detection and root motion. */
 #include "cb_math.h"
 #include "crowdbake/core.h"
+#include "sampler.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -227,6 +228,23 @@ void cb_clip_frame_similarities(cb_sampler *s, const cb_clip_info *clip, const u
                 rows[(size_t)i * joints + j].translation[0] -= dx;
                 rows[(size_t)i * joints + j].translation[2] -= dz;
             }
+        }
+    }
+}
+
+void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, uint32_t first, uint32_t count,
+                         cb_root_motion root_motion, double *out)
+{
+    uint32_t joints = cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count;
+    double times[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) times[i] = cb_clip_frame_time(clip, first + (i < count ? i : count - 1));
+    cb_sample_joint_lanes(s, clip->animation, times, count, out);
+    for (uint32_t i = 0; root_motion == CB_ROOT_MOTION_IN_PLACE && i < CB_SAMPLE_BATCH; ++i) {
+        double dx, dz;
+        root_travel(clip, times[i], &dx, &dz);
+        for (uint32_t j = 0; j < joints; ++j) {
+            out[((size_t)j * 8 + 4) * CB_SAMPLE_BATCH + i] -= dx;
+            out[((size_t)j * 8 + 6) * CB_SAMPLE_BATCH + i] -= dz;
         }
     }
 }

@@ -9,23 +9,21 @@
 #include <string.h>
 
 #include "palette_bake.h"
+#include "sampler.h"
 
 #define B CB_SAMPLE_BATCH
 
-/* One bone at frames f .. f + count - 1: its position and reach into w->reach (4 doubles a
- * bone and frame), its 8 values into the rows, its last quaternion into w->prev. */
-static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, uint32_t f, uint32_t count, float *rows)
+/* One bone at frames f .. f + count - 1, its similarities' lanes `sim` (lanes past count repeat
+ * the last frame): its position and reach into w->reach (4 doubles a bone and frame), its 8
+ * values into the rows, its last quaternion into w->prev. */
+static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, uint32_t f, uint32_t count,
+                                       const double (*sim)[B], float *rows)
 {
     const cb_palette *p = st->p;
     uint32_t bones = p->bone_count;
-    double q[4][B], t[3][B], s[B], dot[B], e[4][B];
+    const double(*q)[B] = sim, (*t)[B] = sim + 4, *s = sim[7];
+    double dot[B], e[4][B];
     float fq[4][B + 1], fp[4][B]; /* fq: lane i's quaternion as stored at i + 1 (0 at 0) */
-    for (uint32_t i = 0; i < B; ++i) { /* lanes past count repeat the last frame */
-        const cb_similarity *J = &w->sims[(size_t)(i < count ? i : count - 1) * bones + j];
-        q[0][i] = J->rotation[0], q[1][i] = J->rotation[1], q[2][i] = J->rotation[2], q[3][i] = J->rotation[3];
-        t[0][i] = J->translation[0], t[1][i] = J->translation[1], t[2][i] = J->translation[2];
-        s[i] = J->scale;
-    }
     const float *b = p->bind_positions + (size_t)j * 3;
     double bx = b[0], by = b[1], bz = b[2], radius = st->radius[j];
     fq[0][0] = fq[1][0] = fq[2][0] = fq[3][0] = 0;
@@ -67,7 +65,13 @@ void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, 
                              extent *clip_bounds)
 {
     uint32_t bones = st->p->bone_count;
-    for (uint32_t j = 0; j < bones; ++j) bone_lanes(st, w, j, f, count, rows);
+    /* The joints' similarities as lanes (the sampler's layout: no transposing on either side),
+     * in w->sims's memory: bones * B similarities hold bones * 8 lanes of B. */
+    _Static_assert(sizeof(cb_similarity) == 8 * sizeof(double), "a similarity is 8 lanes' worth");
+    double *lanes = (double *)w->sims;
+    cb_clip_frame_lanes(w->sampler, &st->infos[c], f, count, st->opt->root_motion, lanes);
+    for (uint32_t j = 0; j < bones; ++j)
+        bone_lanes(st, w, j, f, count, (const double(*)[B])(lanes + (size_t)j * 8 * B), rows);
     /* Bounds and ranges in frame order, bone by bone, as one row at a time grows them (of +0
      * and -0, the minimum is the one met first). Locals, kept in registers. */
     extent bounds = *clip_bounds;

@@ -237,30 +237,29 @@ static CB_CLONE_INLINE void compose_lanes(const lane_set *restrict parent, lane_
     }
 }
 
-/* out[i * stride] = node after ibm, for the first `count` lanes. Composed in every lane (which
- * vectorizes), then stored. */
-static CB_CLONE_INLINE void joint_lanes(const lane_set *node, const cb_similarity *ibm, uint32_t count, size_t stride,
-                                        cb_similarity *out)
+/* out = node after ibm, in every lane. */
+static CB_CLONE_INLINE void joint_lanes(const lane_set *restrict node, const cb_similarity *ibm, lane_set *restrict out)
 {
     const double(*n)[B] = *node;
+    double(*r)[B] = *out;
     const double b[8] = {ibm->rotation[0],    ibm->rotation[1],    ibm->rotation[2],    ibm->rotation[3],
                          ibm->translation[0], ibm->translation[1], ibm->translation[2], ibm->scale};
-    double r[8][B];
     for (int i = 0; i < B; ++i) {
         double a[8] = {n[0][i], n[1][i], n[2][i], n[3][i], n[4][i], n[5][i], n[6][i], n[7][i]}, ri[8];
         compose8(a, b, ri);
         r[0][i] = ri[0], r[1][i] = ri[1], r[2][i] = ri[2], r[3][i] = ri[3];
         r[4][i] = ri[4], r[5][i] = ri[5], r[6][i] = ri[6], r[7][i] = ri[7];
     }
-    for (uint32_t i = 0; i < count; ++i)
-        out[i * stride] = (cb_similarity){{r[0][i], r[1][i], r[2][i], r[3][i]}, {r[4][i], r[5][i], r[6][i]}, r[7][i]};
 }
 
 /* ---- batches ---- */
 
-/* One batch: 1..B times. */
+/* One batch: 1..B times. Without `out`, each joint's lanes into joints[j]; with it, as rows of
+ * similarities, out[i * joint_count + j] for the first `count`, through one set of lanes
+ * (joints[0]). */
 CB_TARGET_CLONES
-static void sample_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count, cb_similarity *out)
+static void sample_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count, lane_set *joints,
+                         cb_similarity *out)
 {
     const cb_model *m = s->model;
     lane_set *lanes = (lane_set *)s->lanes;
@@ -292,16 +291,28 @@ static void sample_batch(cb_sampler *s, int32_t animation, const double *times, 
         if (p >= 0) compose_lanes(&lanes[s->slot[p]], &lanes[k]);
     }
     const cb_skin *skin = &m->skins[s->skin];
-    for (uint32_t j = 0; j < skin->joint_count; ++j)
-        joint_lanes(&lanes[s->slot[skin->joints[j]]], &s->sim_ibm[j], count, skin->joint_count, out + j);
+    for (uint32_t j = 0; j < skin->joint_count; ++j) {
+        lane_set *joint = out ? joints : &joints[j];
+        joint_lanes(&lanes[s->slot[skin->joints[j]]], &s->sim_ibm[j], joint);
+        const double(*r)[B] = *joint;
+        for (uint32_t i = 0; out && i < count; ++i)
+            out[i * skin->joint_count + j] =
+                (cb_similarity){{r[0][i], r[1][i], r[2][i], r[3][i]}, {r[4][i], r[5][i], r[6][i]}, r[7][i]};
+    }
 }
 
 void cb_sample_joint_similarities_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
                                         cb_similarity *out)
 {
     size_t joints = s->model->skins[s->skin].joint_count;
+    lane_set one; /* each joint's lanes in turn: its rows are all that is kept */
     for (uint32_t first = 0; first < count; first += B)
-        sample_batch(s, animation, times + first, count - first < B ? count - first : B, out + first * joints);
+        sample_batch(s, animation, times + first, count - first < B ? count - first : B, &one, out + first * joints);
+}
+
+void cb_sample_joint_lanes(cb_sampler *s, int32_t animation, const double *times, uint32_t count, double *out)
+{
+    sample_batch(s, animation, times, count, (lane_set *)out, NULL);
 }
 
 void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*out)[B])
