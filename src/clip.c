@@ -232,12 +232,12 @@ void cb_clip_frame_similarities(cb_sampler *s, const cb_clip_info *clip, const u
     }
 }
 
-void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, uint32_t first, uint32_t count,
+void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
                          cb_root_motion root_motion, double *out)
 {
     uint32_t joints = cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count;
     double times[CB_SAMPLE_BATCH];
-    for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) times[i] = cb_clip_frame_time(clip, first + (i < count ? i : count - 1));
+    for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) times[i] = cb_clip_frame_time(clip, frames[i < count ? i : count - 1]);
     cb_sample_joint_lanes(s, clip->animation, times, count, out);
     for (uint32_t i = 0; root_motion == CB_ROOT_MOTION_IN_PLACE && i < CB_SAMPLE_BATCH; ++i) {
         double dx, dz;

@@ -69,7 +69,9 @@ void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, 
      * in w->sims's memory: bones * B similarities hold bones * 8 lanes of B. */
     _Static_assert(sizeof(cb_similarity) == 8 * sizeof(double), "a similarity is 8 lanes' worth");
     double *lanes = (double *)w->sims;
-    cb_clip_frame_lanes(w->sampler, &st->infos[c], f, count, st->opt->root_motion, lanes);
+    uint32_t frames[B];
+    for (uint32_t i = 0; i < count; ++i) frames[i] = f + i;
+    cb_clip_frame_lanes(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, lanes);
     for (uint32_t j = 0; j < bones; ++j)
         bone_lanes(st, w, j, f, count, (const double(*)[B])(lanes + (size_t)j * 8 * B), rows);
     /* Bounds and ranges in frame order, bone by bone, as one row at a time grows them (of +0

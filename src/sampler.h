@@ -82,9 +82,9 @@ bool cb_sampler_prepare_spans(cb_sampler *s);
  * bits) as lanes: component c (rotation x y z w, translation x y z, scale) of joint j at
  * times[i] is out[(j * 8 + c) * CB_SAMPLE_BATCH + i]; lanes past `count` repeat the last time. */
 void cb_sample_joint_lanes(cb_sampler *s, int32_t animation, const double *times, uint32_t count, double *out);
-/* clip.c: the same for frames first .. first + count - 1 of a clip, as cb_clip_frame_similarities
- * frames them (the root's travel taken off in place). */
-void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, uint32_t first, uint32_t count,
+/* clip.c: the same for 1..CB_SAMPLE_BATCH increasing frames of a clip, as
+ * cb_clip_frame_similarities frames them (the root's travel taken off in place). */
+void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
                          cb_root_motion root_motion, double *out);
 void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*out)[CB_SAMPLE_BATCH]);
 
