@@ -333,10 +333,15 @@ static void local_matrix(const cb_sampler *s, uint32_t node, double out[16])
                      (cb_vec3){trs[7], trs[8], trs[9]});
 }
 
-const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
+/* The global matrices of the nodes order[0 .. count - 1] (parents first; a node's parent among
+ * them, or a root) at time t: every node (cb_sample_globals) or only those the joints hang from
+ * (`relevant`: cb_sample_joint_matrices). */
+static void sample_nodes(cb_sampler *s, int32_t animation, double t, const uint32_t *order, uint32_t count,
+                         const bool *relevant)
 {
     const cb_model *m = s->model;
-    for (uint32_t i = 0; i < m->node_count; ++i) {
+    for (uint32_t k = 0; k < count; ++k) {
+        uint32_t i = order[k];
         double *trs = s->local_trs + (size_t)i * 10;
         memcpy(trs, m->nodes[i].translation, 3 * sizeof(double));
         memcpy(trs + 3, m->nodes[i].rotation, 4 * sizeof(double));
@@ -347,6 +352,7 @@ const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
         const cb_animation *anim = &m->animations[animation];
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
             const cb_channel *ch = &anim->channels[c];
+            if (relevant && !relevant[ch->node]) continue;
             double v[4];
             channel_eval(ch, t, v, &s->cursor[s->cursor_base[animation] + c], &s->wraps[animation]);
             double *trs = s->local_trs + (size_t)ch->node * 10;
@@ -355,8 +361,8 @@ const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
             s->animated[ch->node] = true;
         }
     }
-    for (uint32_t k = 0; k < m->node_count; ++k) {
-        uint32_t i = s->order[k];
+    for (uint32_t k = 0; k < count; ++k) {
+        uint32_t i = order[k];
         double local[16];
         local_matrix(s, i, local);
         int32_t p = m->nodes[i].parent;
@@ -365,12 +371,18 @@ const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
         else
             cb_mat4_mul_affine(s->globals + (size_t)i * 16, s->globals + (size_t)p * 16, local);
     }
+}
+
+const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
+{
+    sample_nodes(s, animation, t, s->order, s->model->node_count, NULL);
     return s->globals;
 }
 
 void cb_sample_joint_matrices(cb_sampler *s, int32_t animation, double t, double *out)
 {
-    const double *globals = cb_sample_globals(s, animation, t);
+    sample_nodes(s, animation, t, s->relevant_order, s->relevant_count, s->relevant);
+    const double *globals = s->globals;
     const cb_skin *skin = &s->model->skins[s->skin];
     for (uint32_t j = 0; j < skin->joint_count; ++j) {
         const double *ibm = skin->inverse_bind + (size_t)j * 16;
