@@ -336,6 +336,7 @@ static void local_matrix(const cb_sampler *s, uint32_t node, double out[16])
 /* The global matrices of the nodes order[0 .. count - 1] (parents first; a node's parent among
  * them, or a root) at time t: every node (cb_sample_globals) or only those the joints hang from
  * (`relevant`: cb_sample_joint_matrices). */
+CB_TARGET_CLONES
 static void sample_nodes(cb_sampler *s, int32_t animation, double t, const uint32_t *order, uint32_t count,
                          const bool *relevant)
 {
