@@ -47,14 +47,19 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
         dot[i] = q[0][i] * fq[0][i] + q[1][i] * fq[1][i] + q[2][i] * fq[2][i] + q[3][i] * fq[3][i];
     cb_quat q0 = {q[0][0], q[1][0], q[2][0], q[3][0]};
     bool flip = f ? cb_quat_dot(q0, w->prev[j]) < 0 : q0.w < 0;
-    for (uint32_t i = 0; i < count; ++i) {
+    float sign[B], sq[4][B]; /* each row's hemisphere, one after the other; then the rows' quaternions */
+    for (uint32_t i = 0; i < B; ++i) {
         if (i) flip = (flip ? -dot[i] : dot[i]) < 0;
-        float sign = flip ? -1.0f : 1.0f;
-        float o[8] = {sign * fq[0][i + 1], sign * fq[1][i + 1], sign * fq[2][i + 1], sign * fq[3][i + 1],
-                      fp[0][i], fp[1][i], fp[2][i], fp[3][i]};
-        double r[4] = {e[0][i], e[1][i], e[2][i], e[3][i]};
-        memcpy(rows + (size_t)i * bones * 8 + (size_t)j * 8, o, sizeof o);
-        memcpy(w->reach + ((size_t)i * bones + j) * 4, r, sizeof r);
+        sign[i] = flip ? -1.0f : 1.0f;
+    }
+    for (int c = 0; c < 4; ++c)
+        for (int i = 0; i < B; ++i) sq[c][i] = sign[i] * fq[c][i + 1];
+    for (uint32_t i = 0; i < count; ++i) { /* lanes to rows: field by field, no staging copy */
+        float *o = rows + (size_t)i * bones * 8 + (size_t)j * 8;
+        double *r = w->reach + ((size_t)i * bones + j) * 4;
+        o[0] = sq[0][i], o[1] = sq[1][i], o[2] = sq[2][i], o[3] = sq[3][i];
+        o[4] = fp[0][i], o[5] = fp[1][i], o[6] = fp[2][i], o[7] = fp[3][i];
+        r[0] = e[0][i], r[1] = e[1][i], r[2] = e[2][i], r[3] = e[3][i];
     }
     const float *last = rows + (size_t)(count - 1) * bones * 8 + (size_t)j * 8;
     w->prev[j] = (cb_quat){last[0], last[1], last[2], last[3]};
