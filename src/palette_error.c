@@ -81,6 +81,7 @@ static inline void lane_matrix(const double *sim, uint32_t i, double out[16])
  * with (exact - decoded) gives each vertex's error directly: half the work of skinning twice,
  * and no cancellation. Rows baked from similarities are measured against those, sampled
  * together like the bake did. */
+CB_TARGET_CLONES
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
                            uint32_t sub, uint32_t parts, measure_scratch *s, double *bounds, double worst)
 {

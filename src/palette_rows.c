@@ -6,7 +6,6 @@
  * lane runs cb_quat_rotate's operations in their order: the same bits as one row at a time.
  * What depends on the rows before - the quaternion's hemisphere, the clip's bounds and value
  * ranges - is settled after, in frame order, so it comes out as before too. */
-#include <string.h>
 
 #include "palette_bake.h"
 #include "sampler.h"
