@@ -56,7 +56,10 @@ bool cb_sampler_prepare_spans(cb_sampler *s)
         }
     }
     s->group_base[m->animation_count] = s->span_group_count;
-    s->spans = malloc((s->span_group_count ? s->span_group_count : 1) * sizeof *s->spans);
+    uint32_t most = 1; /* spans for one clip's groups at a time */
+    for (uint32_t a = 0; a < m->animation_count; ++a)
+        if (s->group_base[a + 1] - s->group_base[a] > most) most = s->group_base[a + 1] - s->group_base[a];
+    s->spans = malloc(most * sizeof *s->spans);
     return s->spans != NULL;
 }
 
@@ -274,15 +277,16 @@ static void sample_batch(cb_sampler *s, int32_t animation, const double *times, 
     }
     if (animation >= 0 && animation < (int32_t)m->animation_count) {
         const cb_animation *anim = &m->animations[animation];
-        for (uint32_t g = s->group_base[animation]; g < s->group_base[animation + 1]; ++g)
-            find_spans(s->group_times[g], s->group_keys[g], padded, &s->group_cursor[g], &s->spans[g]);
+        uint32_t base = s->group_base[animation];
+        for (uint32_t g = base; g < s->group_base[animation + 1]; ++g)
+            find_spans(s->group_times[g], s->group_keys[g], padded, &s->group_cursor[g], &s->spans[g - base]);
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
             const cb_channel *ch = &anim->channels[c];
             if (!s->relevant[ch->node]) continue;
             uint32_t at = s->cursor_base[animation] + c;
             int32_t g = s->span_group[at];
             bool grouped = g >= 0 && s->group_times[g] == ch->times && s->group_keys[g] == ch->key_count;
-            channel_lanes(ch, grouped ? &s->spans[g] : NULL, padded, &s->cursor[at], &s->wraps[animation],
+            channel_lanes(ch, grouped ? &s->spans[g - base] : NULL, padded, &s->cursor[at], &s->wraps[animation],
                           &lanes[s->slot[ch->node]]);
         }
     }

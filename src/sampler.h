@@ -39,7 +39,7 @@ struct cb_sampler {
     const float **group_times;   /* per group: the key times it stands for */
     uint32_t *group_keys;        /* per group: their count */
     uint32_t *group_cursor;      /* per group: the key interval of the last search */
-    struct cb_key_spans *spans;  /* per group: the current batch's spans */
+    struct cb_key_spans *spans;  /* per group of the clip sampled (g - group_base[a]): the batch's spans */
 };
 
 /* Where each time of a batch falls among a channel's keys: key[i] and key[i] + 1 around it at
