@@ -1,5 +1,6 @@
 /* error_bound.c - see error_bound.h. */
 #include "error_bound.h"
+#include "cb_math.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -8,7 +9,7 @@
  * largest Gershgorin row sum of its Gram matrix G = A^T A, whose eigenvalues are the squared
  * stretches. Tighter than the Frobenius norm for the near-rotations that encodings leave
  * (sqrt(4/3) instead of sqrt(2) times the stretch at worst for a small rotation). */
-static double stretch(const double *D)
+static CB_CLONE_INLINE double stretch(const double *D)
 {
     const double *c0 = D, *c1 = D + 4, *c2 = D + 8; /* columns of A */
     double g00 = c0[0] * c0[0] + c0[1] * c0[1] + c0[2] * c0[2], g11 = c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2];
@@ -32,8 +33,10 @@ static int by_bound(const void *pa, const void *pb)
 
 void cb_sort_bounded_rows(cb_bounded_row *rows, uint32_t count) { qsort(rows, count, sizeof *rows, by_bound); }
 
+CB_TARGET_CLONES
 bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_joint_error *out)
 {
+    bool finite = true;
     for (uint32_t j = 0; j < bones; ++j) {
         const double *D = diff + (size_t)j * 16;
         double bx = bind[j * 3], by = bind[j * 3 + 1], bz = bind[j * 3 + 2];
@@ -47,9 +50,9 @@ bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_j
          * the bound above the computed error even where D b and t cancel (far from the origin). */
         out[j].slack_fixed = 1e-9 * (a * sqrt(bx * bx + by * by + bz * bz) + t);
         out[j].translation = t, out[j].diff = D;
-        if (!isfinite(out[j].at_bind + out[j].slack_fixed)) return false;
+        finite &= isfinite(out[j].at_bind + out[j].slack_fixed); /* no exit from the loop: it vectorizes */
     }
-    return true;
+    return finite;
 }
 
 /* min(W max_j e_j, sum_j w_j e_j) over the group's joints, e_j from the bind position out to the
