@@ -57,7 +57,7 @@ bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_j
 
 /* min(W max_j e_j, sum_j w_j e_j) over the group's joints, e_j from the bind position out to the
  * reach or (centred) from the centre out to the spread. */
-static double combine(const cb_vertex_groups *g, const cb_vertex_group *grp, const cb_joint_error *joints, bool centred)
+static CB_CLONE_INLINE double combine(const cb_vertex_groups *g, const cb_vertex_group *grp, const cb_joint_error *joints, bool centred)
 {
     double most = 0, sum = 0;
     for (uint32_t k = 0; k < grp->joint_count; ++k) {
@@ -81,6 +81,7 @@ static double combine(const cb_vertex_groups *g, const cb_vertex_group *grp, con
     return (sum < bound ? sum : bound) * (1 + 1e-9);
 }
 
+CB_TARGET_CLONES
 double cb_group_error_bound(const cb_vertex_groups *g, uint32_t group, const cb_joint_error *joints, double above)
 {
     const cb_vertex_group *grp = &g->groups[group];
