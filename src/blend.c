@@ -16,7 +16,9 @@ void palette_blend_values(const cb_palette *p, uint32_t bone, const double a[16]
     double v[16], sign = 1;
     if (p->layout == CB_LAYOUT_QPOS && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0)
         sign = -1; /* the shorter way between the rows */
-    for (uint32_t k = 0; k < p->texels_per_bone * 4; ++k) v[k] = a[k] * (1 - fr) + (k < 4 ? sign * b[k] : b[k]) * fr;
+    /* Two loops, the first texel's and the rest: no per-value choice of sign, so both vectorize. */
+    for (uint32_t k = 0; k < 4; ++k) v[k] = a[k] * (1 - fr) + sign * b[k] * fr;
+    for (uint32_t k = 4; k < p->texels_per_bone * 4; ++k) v[k] = a[k] * (1 - fr) + b[k] * fr;
     cb_palette_values_to_matrix(p, bone, v, out); /* normalizes q for qpos */
 }
 

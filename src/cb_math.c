@@ -18,44 +18,6 @@ void cb_mat4_mul(double out[16], const double a[16], const double b[16])
                              a[2 * 4 + r] * b[c * 4 + 2] + a[3 * 4 + r] * b[c * 4 + 3];
 }
 
-void cb_mat4_mul_affine(double out[16], const double a[16], const double b[16])
-{
-    for (int c = 0; c < 4; ++c) {
-        for (int r = 0; r < 3; ++r)
-            out[c * 4 + r] = a[r] * b[c * 4] + a[4 + r] * b[c * 4 + 1] + a[8 + r] * b[c * 4 + 2];
-        out[c * 4 + 3] = 0.0;
-    }
-    out[12] += a[12];
-    out[13] += a[13];
-    out[14] += a[14];
-    out[15] = 1.0;
-}
-
-void cb_mat4_from_trs(double m[16], cb_vec3 t, cb_quat q, cb_vec3 s)
-{
-    double x = q.x, y = q.y, z = q.z, w = q.w;
-    double xx = x * x, yy = y * y, zz = z * z;
-    double xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
-    m[0] = (1 - 2 * (yy + zz)) * s.x;
-    m[1] = (2 * (xy + wz)) * s.x;
-    m[2] = (2 * (xz - wy)) * s.x;
-    m[3] = 0;
-    m[4] = (2 * (xy - wz)) * s.y;
-    m[5] = (1 - 2 * (xx + zz)) * s.y;
-    m[6] = (2 * (yz + wx)) * s.y;
-    m[7] = 0;
-    m[8] = (2 * (xz + wy)) * s.z;
-    m[9] = (2 * (yz - wx)) * s.z;
-    m[10] = (1 - 2 * (xx + yy)) * s.z;
-    m[11] = 0;
-    m[12] = t.x;
-    m[13] = t.y;
-    m[14] = t.z;
-    m[15] = 1;
-}
-
-
-
 double cb_mat4_determinant3(const double m[16])
 {
     return m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) +

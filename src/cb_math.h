@@ -28,9 +28,44 @@ typedef struct { double x, y, z, w; } cb_quat;
 void cb_mat4_identity(double out[16]);
 /* out = a * b (out may alias neither a nor b). */
 void cb_mat4_mul(double out[16], const double a[16], const double b[16]);
-/* Affine multiply: assumes the last row of both is 0,0,0,1. */
-void cb_mat4_mul_affine(double out[16], const double a[16], const double b[16]);
-void cb_mat4_from_trs(double out[16], cb_vec3 t, cb_quat r, cb_vec3 s);
+/* Affine multiply: assumes the last row of both is 0,0,0,1. Inline, as is cb_mat4_from_trs:
+ * both run for every joint of every frame (the matrix sampler, qpos rows to matrices). */
+static inline void cb_mat4_mul_affine(double out[16], const double a[16], const double b[16])
+{
+    for (int c = 0; c < 4; ++c) {
+        for (int r = 0; r < 3; ++r)
+            out[c * 4 + r] = a[r] * b[c * 4] + a[4 + r] * b[c * 4 + 1] + a[8 + r] * b[c * 4 + 2];
+        out[c * 4 + 3] = 0.0;
+    }
+    out[12] += a[12];
+    out[13] += a[13];
+    out[14] += a[14];
+    out[15] = 1.0;
+}
+
+/* The matrix of translation t, rotation r (a unit quaternion) and scale s; writes all 16. */
+static inline void cb_mat4_from_trs(double m[16], cb_vec3 t, cb_quat q, cb_vec3 s)
+{
+    double x = q.x, y = q.y, z = q.z, w = q.w;
+    double xx = x * x, yy = y * y, zz = z * z;
+    double xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
+    m[0] = (1 - 2 * (yy + zz)) * s.x;
+    m[1] = (2 * (xy + wz)) * s.x;
+    m[2] = (2 * (xz - wy)) * s.x;
+    m[3] = 0;
+    m[4] = (2 * (xy - wz)) * s.y;
+    m[5] = (1 - 2 * (xx + zz)) * s.y;
+    m[6] = (2 * (yz + wx)) * s.y;
+    m[7] = 0;
+    m[8] = (2 * (xz + wy)) * s.z;
+    m[9] = (2 * (yz - wx)) * s.z;
+    m[10] = (1 - 2 * (xx + yy)) * s.z;
+    m[11] = 0;
+    m[12] = t.x;
+    m[13] = t.y;
+    m[14] = t.z;
+    m[15] = 1;
+}
 static inline cb_vec3 cb_mat4_transform_point(const double m[16], cb_vec3 p)
 {
     cb_vec3 r = {m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12], m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13],

@@ -1,6 +1,7 @@
 /* clip.c - clip framing (how many rows, at which times), loop detection and root motion. */
 #include "cb_math.h"
 #include "crowdbake/core.h"
+#include "sampler.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -62,11 +63,17 @@ static double pose_distance(const double *a, const double *b, uint32_t joints, c
 double cb_animation_key_interval(const cb_animation *anim)
 {
     double min_dt = INFINITY;
-    for (uint32_t c = 0; c < anim->channel_count; ++c)
-        for (uint32_t k = 1; k < anim->channels[c].key_count; ++k) {
-            double dt = (double)anim->channels[c].times[k] - anim->channels[c].times[k - 1];
+    const float *scanned = NULL; /* channels sharing one times array (as exporters write them) scan it once */
+    uint32_t scanned_keys = 0;
+    for (uint32_t c = 0; c < anim->channel_count; ++c) {
+        const cb_channel *ch = &anim->channels[c];
+        if (ch->times == scanned && ch->key_count == scanned_keys) continue;
+        scanned = ch->times, scanned_keys = ch->key_count;
+        for (uint32_t k = 1; k < ch->key_count; ++k) {
+            double dt = (double)ch->times[k] - ch->times[k - 1];
             if (dt > 1e-4 && dt < min_dt) min_dt = dt;
         }
+    }
     return isfinite(min_dt) ? min_dt : 0;
 }
 
@@ -221,6 +228,23 @@ void cb_clip_frame_similarities(cb_sampler *s, const cb_clip_info *clip, const u
                 rows[(size_t)i * joints + j].translation[0] -= dx;
                 rows[(size_t)i * joints + j].translation[2] -= dz;
             }
+        }
+    }
+}
+
+void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
+                         cb_root_motion root_motion, double *out)
+{
+    uint32_t joints = cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count;
+    double times[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) times[i] = cb_clip_frame_time(clip, frames[i < count ? i : count - 1]);
+    cb_sample_joint_lanes(s, clip->animation, times, count, out);
+    for (uint32_t i = 0; root_motion == CB_ROOT_MOTION_IN_PLACE && i < CB_SAMPLE_BATCH; ++i) {
+        double dx, dz;
+        root_travel(clip, times[i], &dx, &dz);
+        for (uint32_t j = 0; j < joints; ++j) {
+            out[((size_t)j * 8 + 4) * CB_SAMPLE_BATCH + i] -= dx;
+            out[((size_t)j * 8 + 6) * CB_SAMPLE_BATCH + i] -= dz;
         }
     }
 }

@@ -1,5 +1,6 @@
 /* error_bound.c - see error_bound.h. */
 #include "error_bound.h"
+#include "cb_math.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -8,7 +9,7 @@
  * largest Gershgorin row sum of its Gram matrix G = A^T A, whose eigenvalues are the squared
  * stretches. Tighter than the Frobenius norm for the near-rotations that encodings leave
  * (sqrt(4/3) instead of sqrt(2) times the stretch at worst for a small rotation). */
-static double stretch(const double *D)
+static CB_CLONE_INLINE double stretch(const double *D)
 {
     const double *c0 = D, *c1 = D + 4, *c2 = D + 8; /* columns of A */
     double g00 = c0[0] * c0[0] + c0[1] * c0[1] + c0[2] * c0[2], g11 = c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2];
@@ -17,7 +18,10 @@ static double stretch(const double *D)
     double g02 = fabs(c0[0] * c2[0] + c0[1] * c2[1] + c0[2] * c2[2]);
     double g12 = fabs(c1[0] * c2[0] + c1[1] * c2[1] + c1[2] * c2[2]);
     double r0 = g00 + g01 + g02, r1 = g01 + g11 + g12, r2 = g02 + g12 + g22;
-    return sqrt(fmax(r0, fmax(r1, r2))) * (1 + 1e-9);
+    /* Not fmax: a compare and a select, where fmax is a call. They differ only for NaN, and a
+     * difference with one makes cb_joint_errors fail (its at_bind is not finite) either way. */
+    double r = r0 > r1 ? r0 : r1;
+    return sqrt(r > r2 ? r : r2) * (1 + 1e-9);
 }
 
 static int by_bound(const void *pa, const void *pb)
@@ -29,8 +33,10 @@ static int by_bound(const void *pa, const void *pb)
 
 void cb_sort_bounded_rows(cb_bounded_row *rows, uint32_t count) { qsort(rows, count, sizeof *rows, by_bound); }
 
+CB_TARGET_CLONES
 bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_joint_error *out)
 {
+    bool finite = true;
     for (uint32_t j = 0; j < bones; ++j) {
         const double *D = diff + (size_t)j * 16;
         double bx = bind[j * 3], by = bind[j * 3 + 1], bz = bind[j * 3 + 2];
@@ -44,14 +50,14 @@ bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_j
          * the bound above the computed error even where D b and t cancel (far from the origin). */
         out[j].slack_fixed = 1e-9 * (a * sqrt(bx * bx + by * by + bz * bz) + t);
         out[j].translation = t, out[j].diff = D;
-        if (!isfinite(out[j].at_bind + out[j].slack_fixed)) return false;
+        finite &= isfinite(out[j].at_bind + out[j].slack_fixed); /* no exit from the loop: it vectorizes */
     }
-    return true;
+    return finite;
 }
 
 /* min(W max_j e_j, sum_j w_j e_j) over the group's joints, e_j from the bind position out to the
  * reach or (centred) from the centre out to the spread. */
-static double combine(const cb_vertex_groups *g, const cb_vertex_group *grp, const cb_joint_error *joints, bool centred)
+static CB_CLONE_INLINE double combine(const cb_vertex_groups *g, const cb_vertex_group *grp, const cb_joint_error *joints, bool centred)
 {
     double most = 0, sum = 0;
     for (uint32_t k = 0; k < grp->joint_count; ++k) {
@@ -75,6 +81,7 @@ static double combine(const cb_vertex_groups *g, const cb_vertex_group *grp, con
     return (sum < bound ? sum : bound) * (1 + 1e-9);
 }
 
+CB_TARGET_CLONES
 double cb_group_error_bound(const cb_vertex_groups *g, uint32_t group, const cb_joint_error *joints, double above)
 {
     const cb_vertex_group *grp = &g->groups[group];

@@ -219,9 +219,7 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
     for (uint32_t f0 = 0; f0 < info->frames; f0 += chunk) {
         uint32_t n = info->frames - f0 < chunk ? info->frames - f0 : chunk;
         for (uint32_t f = f0; similar && f < f0 + n; f += CB_SAMPLE_BATCH) {
-            uint32_t frames[CB_SAMPLE_BATCH], count = 0;
-            while (count < CB_SAMPLE_BATCH && f + count < f0 + n) frames[count] = f + count, ++count;
-            cb_clip_frame_similarities(w->sampler, info, frames, count, st->opt->root_motion, w->sims);
+            uint32_t count = f0 + n - f < CB_SAMPLE_BATCH ? f0 + n - f : CB_SAMPLE_BATCH;
             palette_similarity_rows(st, w, c, f, count, rows + (f - f0) * row_floats, &bounds);
         }
         for (uint32_t f = f0; !similar && f < f0 + n; ++f)

@@ -114,8 +114,8 @@ static inline double row_position(const float *c, const float *b, int r)
 }
 
 /* palette_rows.c: `count` (at most CB_SAMPLE_BATCH) qpos rows of clip c from the joint
- * similarities of frames f, f + 1, ... in w->sims, into rows (row f's first); grows the clip's
- * bounds and st->ranges[c]. */
+ * similarities of frames f, f + 1, ... (sampled into w->sims's memory), into rows (row f's
+ * first); grows the clip's bounds and st->ranges[c]. */
 void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
                              extent *clip_bounds);
 

@@ -1,9 +1,11 @@
 /* palette_error.c - a bake's error: every vertex skinned exactly (float64) from the glTF
  * against the palette as the runtime decodes it, at the baked rows and halfway between them. */
 #include <stdlib.h>
+#include <string.h>
 
 #include "error_bound.h"
 #include "palette_bake.h"
+#include "sampler.h"
 
 /* A measurement's scratch: one row's differences, their bound terms and its group bounds. */
 typedef struct measure_scratch {
@@ -32,7 +34,10 @@ static double row_bound(const bake_state *st, measure_scratch *s)
 {
     if (!cb_joint_errors(s->diff, st->p->bone_count, st->p->bind_positions, s->joints)) return INFINITY;
     double most = 0;
-    for (uint32_t k = 0; k < st->groups.group_count; ++k) most = fmax(most, cb_group_error_bound(&st->groups, k, s->joints, most));
+    for (uint32_t k = 0; k < st->groups.group_count; ++k) {
+        double bound = cb_group_error_bound(&st->groups, k, s->joints, most);
+        most = bound > most ? bound : most; /* fmax(most, bound): most is never NaN */
+    }
     return most;
 }
 
@@ -54,9 +59,20 @@ static double skin_row(const bake_state *st, measure_scratch *s, double worst)
         if ((n && k == top) || s->group_bounds[k] <= worst) continue;
         const cb_vertex_group *grp = &g->groups[k];
         const cb_primitive *prim = &st->model->primitives[grp->primitive];
-        worst = fmax(worst, sqrt(cb_skin_group_worst(prim, g->vertices + grp->first, grp->count, s->diff)));
+        /* fmax's result without its call: worst is never NaN, and a NaN error leaves it as fmax does */
+        double error = sqrt(cb_skin_group_worst(prim, g->vertices + grp->first, grp->count, s->diff));
+        worst = error > worst ? error : worst;
     }
     return worst;
+}
+
+/* Lane i of a joint's similarity lanes (cb_sample_joint_lanes) as a matrix: cb_similarity_matrix's
+ * operations, inline. */
+static inline void lane_matrix(const double *sim, uint32_t i, double out[16])
+{
+    const double(*l)[CB_SAMPLE_BATCH] = (const double(*)[CB_SAMPLE_BATCH])sim;
+    cb_mat4_from_trs(out, (cb_vec3){l[4][i], l[5][i], l[6][i]}, (cb_quat){l[0][i], l[1][i], l[2][i], l[3][i]},
+                     (cb_vec3){l[7][i], l[7][i], l[7][i]});
 }
 
 /* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
@@ -65,6 +81,7 @@ static double skin_row(const bake_state *st, measure_scratch *s, double worst)
  * with (exact - decoded) gives each vertex's error directly: half the work of skinning twice,
  * and no cancellation. Rows baked from similarities are measured against those, sampled
  * together like the bake did. */
+CB_TARGET_CLONES
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
                            uint32_t sub, uint32_t parts, measure_scratch *s, double *bounds, double worst)
 {
@@ -77,17 +94,23 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     for (uint32_t i = 0; i < count; ++i) times[i] = parts * frames[i] + sub;
     framing.steps *= parts;
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
-    if (similar) cb_clip_frame_similarities(w->sampler, &framing, times, count, st->opt->root_motion, w->sims);
+    /* Similarities as the sampler's lanes, in w->sims's memory (see palette_similarity_rows). */
+    double *lanes = (double *)w->sims;
+    if (similar) cb_clip_frame_lanes(w->sampler, &framing, times, count, st->opt->root_motion, lanes);
     for (uint32_t i = 0; i < count; ++i) {
         if (!similar) cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
         uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
         const double *a = row_values(p, s, row, next), *b = sub ? row_values(p, s, next, row) : NULL;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
-            double *d = s->diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
-            if (similar) cb_similarity_matrix(&w->sims[(size_t)i * p->bone_count + j], exact);
-            if (sub) palette_blend_values(p, j, a + (size_t)j * 16, b + (size_t)j * 16, (double)sub / parts, d);
-            else cb_palette_values_to_matrix(p, j, a + (size_t)j * 16, d);
-            for (int k = 0; k < 16; ++k) d[k] = exact[k] - d[k];
+            double exact[16], decoded[16]; /* locals: the difference below vectorizes */
+            if (similar)
+                lane_matrix(lanes + (size_t)j * 8 * CB_SAMPLE_BATCH, i, exact);
+            else
+                memcpy(exact, w->mats + (size_t)j * 16, sizeof exact);
+            if (sub) palette_blend_values(p, j, a + (size_t)j * 16, b + (size_t)j * 16, (double)sub / parts, decoded);
+            else cb_palette_values_to_matrix(p, j, a + (size_t)j * 16, decoded);
+            double *d = s->diff + (size_t)j * 16;
+            for (int k = 0; k < 16; ++k) d[k] = exact[k] - decoded[k];
         }
         if (bounds) bounds[i] = row_bound(st, s);
         else worst = skin_row(st, s, worst);

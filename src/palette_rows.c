@@ -6,26 +6,23 @@
  * lane runs cb_quat_rotate's operations in their order: the same bits as one row at a time.
  * What depends on the rows before - the quaternion's hemisphere, the clip's bounds and value
  * ranges - is settled after, in frame order, so it comes out as before too. */
-#include <string.h>
 
 #include "palette_bake.h"
+#include "sampler.h"
 
 #define B CB_SAMPLE_BATCH
 
-/* One bone at frames f .. f + count - 1: its position and reach into w->reach (4 doubles a
- * bone and frame), its 8 values into the rows, its last quaternion into w->prev. */
-static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, uint32_t f, uint32_t count, float *rows)
+/* One bone at frames f .. f + count - 1, its similarities' lanes `sim` (lanes past count repeat
+ * the last frame): its position and reach into w->reach (4 doubles a bone and frame), its 8
+ * values into the rows, its last quaternion into w->prev. */
+static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, uint32_t f, uint32_t count,
+                                       const double (*sim)[B], float *rows)
 {
     const cb_palette *p = st->p;
     uint32_t bones = p->bone_count;
-    double q[4][B], t[3][B], s[B], dot[B], e[4][B];
+    const double(*q)[B] = sim, (*t)[B] = sim + 4, *s = sim[7];
+    double dot[B], e[4][B];
     float fq[4][B + 1], fp[4][B]; /* fq: lane i's quaternion as stored at i + 1 (0 at 0) */
-    for (uint32_t i = 0; i < B; ++i) { /* lanes past count repeat the last frame */
-        const cb_similarity *J = &w->sims[(size_t)(i < count ? i : count - 1) * bones + j];
-        q[0][i] = J->rotation[0], q[1][i] = J->rotation[1], q[2][i] = J->rotation[2], q[3][i] = J->rotation[3];
-        t[0][i] = J->translation[0], t[1][i] = J->translation[1], t[2][i] = J->translation[2];
-        s[i] = J->scale;
-    }
     const float *b = p->bind_positions + (size_t)j * 3;
     double bx = b[0], by = b[1], bz = b[2], radius = st->radius[j];
     fq[0][0] = fq[1][0] = fq[2][0] = fq[3][0] = 0;
@@ -49,14 +46,19 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
         dot[i] = q[0][i] * fq[0][i] + q[1][i] * fq[1][i] + q[2][i] * fq[2][i] + q[3][i] * fq[3][i];
     cb_quat q0 = {q[0][0], q[1][0], q[2][0], q[3][0]};
     bool flip = f ? cb_quat_dot(q0, w->prev[j]) < 0 : q0.w < 0;
-    for (uint32_t i = 0; i < count; ++i) {
+    float sign[B], sq[4][B]; /* each row's hemisphere, one after the other; then the rows' quaternions */
+    for (uint32_t i = 0; i < B; ++i) {
         if (i) flip = (flip ? -dot[i] : dot[i]) < 0;
-        float sign = flip ? -1.0f : 1.0f;
-        float o[8] = {sign * fq[0][i + 1], sign * fq[1][i + 1], sign * fq[2][i + 1], sign * fq[3][i + 1],
-                      fp[0][i], fp[1][i], fp[2][i], fp[3][i]};
-        double r[4] = {e[0][i], e[1][i], e[2][i], e[3][i]};
-        memcpy(rows + (size_t)i * bones * 8 + (size_t)j * 8, o, sizeof o);
-        memcpy(w->reach + ((size_t)i * bones + j) * 4, r, sizeof r);
+        sign[i] = flip ? -1.0f : 1.0f;
+    }
+    for (int c = 0; c < 4; ++c)
+        for (int i = 0; i < B; ++i) sq[c][i] = sign[i] * fq[c][i + 1];
+    for (uint32_t i = 0; i < count; ++i) { /* lanes to rows: field by field, no staging copy */
+        float *o = rows + (size_t)i * bones * 8 + (size_t)j * 8;
+        double *r = w->reach + ((size_t)i * bones + j) * 4;
+        o[0] = sq[0][i], o[1] = sq[1][i], o[2] = sq[2][i], o[3] = sq[3][i];
+        o[4] = fp[0][i], o[5] = fp[1][i], o[6] = fp[2][i], o[7] = fp[3][i];
+        r[0] = e[0][i], r[1] = e[1][i], r[2] = e[2][i], r[3] = e[3][i];
     }
     const float *last = rows + (size_t)(count - 1) * bones * 8 + (size_t)j * 8;
     w->prev[j] = (cb_quat){last[0], last[1], last[2], last[3]};
@@ -67,7 +69,15 @@ void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, 
                              extent *clip_bounds)
 {
     uint32_t bones = st->p->bone_count;
-    for (uint32_t j = 0; j < bones; ++j) bone_lanes(st, w, j, f, count, rows);
+    /* The joints' similarities as lanes (the sampler's layout: no transposing on either side),
+     * in w->sims's memory: bones * B similarities hold bones * 8 lanes of B. */
+    _Static_assert(sizeof(cb_similarity) == 8 * sizeof(double), "a similarity is 8 lanes' worth");
+    double *lanes = (double *)w->sims;
+    uint32_t frames[B];
+    for (uint32_t i = 0; i < count; ++i) frames[i] = f + i;
+    cb_clip_frame_lanes(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, lanes);
+    for (uint32_t j = 0; j < bones; ++j)
+        bone_lanes(st, w, j, f, count, (const double(*)[B])(lanes + (size_t)j * 8 * B), rows);
     /* Bounds and ranges in frame order, bone by bone, as one row at a time grows them (of +0
      * and -0, the minimum is the one met first). Locals, kept in registers. */
     extent bounds = *clip_bounds;

@@ -1,7 +1,7 @@
 /* sample.c - glTF 2.0 animation sampling: channel interpolation, the node hierarchy and
  * joint matrices. */
 #include "cb_math.h"
-#include "crowdbake/core.h"
+#include "sampler.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -10,47 +10,6 @@
 /* Key times are float32 in files: a STEP key this close to the sample time counts as reached. */
 #define CB_STEP_EPSILON 1e-6
 
-struct cb_sampler {
-    const cb_model *model;
-    int32_t skin;
-    uint32_t *order;     /* node indices, parents before children */
-    double *local_trs;   /* 10 per node: t[3], r[4], s[3] */
-    bool *animated;      /* per node, set while evaluating one clip */
-    double *globals;     /* 16 per node */
-    bool affine_ibm;     /* every inverse bind matrix ends in 0 0 0 1: cheaper products */
-    uint32_t *cursor;    /* per channel of every clip: the key interval of the last sample */
-    uint32_t *cursor_base; /* per clip: its channels' first cursor */
-    cb_wrap *wraps;      /* per clip: where a loop without a closing key comes round (cb_sampler_set_period) */
-    /* The similarity path (cb_sampler_is_similarity) visits only the joints and their ancestors. */
-    bool similar;
-    bool *relevant;              /* per node: a joint or an ancestor of one */
-    uint32_t relevant_count;
-    uint32_t *relevant_order;    /* the relevant nodes, parents first */
-    uint32_t *slot;              /* per node: its place in relevant_order */
-    cb_similarity *sim_rest;     /* per node: its rest transform */
-    cb_similarity *sim_ibm;      /* per joint: its inverse bind matrix */
-    /* Per relevant node, its transform at each time of a batch, as 8 lanes of CB_SAMPLE_BATCH
-     * (structure of arrays: a loop over the times vectorizes and has no dependency chain). */
-    double *lanes;
-};
-
-/* Index of the last key with times[k] <= t (0 when t is before the first key). `hint` holds the
- * previous answer: frames are sampled in order, so the answer is usually it or the next key. */
-static inline uint32_t find_key(const cb_channel *ch, double t, uint32_t *hint)
-{
-    uint32_t last = ch->key_count - 1, h = *hint;
-    for (uint32_t k = h; k <= h + 1 && k <= last; ++k)
-        if (ch->times[k] <= t && (k == last || t < ch->times[k + 1])) return *hint = k;
-    uint32_t lo = 0, hi = last;
-    while (lo < hi) {
-        uint32_t mid = lo + (hi - lo + 1) / 2;
-        if (ch->times[mid] <= t)
-            lo = mid;
-        else
-            hi = mid - 1;
-    }
-    return *hint = lo;
-}
 
 static void load_key(const cb_channel *ch, uint32_t k, int slot, int comps, double out[4])
 {
@@ -101,7 +60,7 @@ static void channel_eval(const cb_channel *ch, double t, double out[4], uint32_t
         return;
     }
     if (ch->interp == CB_INTERP_STEP) {
-        load_key(ch, find_key(ch, t + CB_STEP_EPSILON, hint), 0, comps, out);
+        load_key(ch, cb_find_key(ch->times, ch->key_count, t + CB_STEP_EPSILON, hint), 0, comps, out);
         return;
     }
     if (t <= ch->times[0] || last == 0) {
@@ -112,7 +71,7 @@ static void channel_eval(const cb_channel *ch, double t, double out[4], uint32_t
         load_key(ch, last, value_slot, comps, out);
         return;
     }
-    uint32_t k = find_key(ch, t, hint);
+    uint32_t k = cb_find_key(ch->times, ch->key_count, t, hint);
     double t_k = ch->times[k], dt = (double)ch->times[k + 1] - t_k;
     double s = (t - t_k) / dt;
     if (ch->interp == CB_INTERP_CUBICSPLINE) {
@@ -136,6 +95,11 @@ void cb_channel_eval(const cb_channel *ch, double t, double out[4])
 {
     uint32_t hint = 0;
     channel_eval(ch, t, out, &hint, NULL);
+}
+
+void cb_channel_eval_at(const cb_channel *ch, double t, double out[4], uint32_t *hint, const cb_wrap *wrap)
+{
+    channel_eval(ch, t, out, hint, wrap);
 }
 
 static uint32_t node_depth(const cb_model *m, uint32_t n)
@@ -236,182 +200,13 @@ static bool prepare_similarity(cb_sampler *s)
     s->similar = rig_is_similar(s);
     if (s->similar) {
         s->lanes = malloc((s->relevant_count ? s->relevant_count : 1) * sizeof(double) * 8 * CB_SAMPLE_BATCH);
-        if (!s->lanes) return false;
+        if (!s->lanes || !cb_sampler_prepare_spans(s)) return false;
     }
     return true;
 }
 
 bool cb_sampler_is_similarity(const cb_sampler *s) { return s->similar; }
 
-/* The lanes of a batch: a node's 8 components (rotation x y z w, translation x y z, scale),
- * each CB_SAMPLE_BATCH times. Loops run over every lane, used or not: a constant trip count
- * is what lets the compiler vectorize them at -O2. */
-#define B CB_SAMPLE_BATCH
-typedef double lane_set[8][B];
-
-/* Spherical interpolation of key pairs, lane by lane: cb_quat_slerp's small-angle branch
- * (half chord below 0.1) with the same operations in the same order, so the same bits. Lanes
- * needing its other branches are marked in `redo`. */
-static CB_CLONE_INLINE void slerp_lanes(const double (*restrict a)[B], const double (*restrict b)[B],
-                                        const double *restrict t, double (*restrict out)[B], double *restrict redo)
-{
-    for (int i = 0; i < B; ++i) {
-        double d = a[0][i] * b[0][i] + a[1][i] * b[1][i] + a[2][i] * b[2][i] + a[3][i] * b[3][i];
-        double sign = copysign(1.0, d);
-        double bx = b[0][i] * sign, by = b[1][i] * sign, bz = b[2][i] * sign, bw = b[3][i] * sign;
-        double dx = a[0][i] - bx, dy = a[1][i] - by, dz = a[2][i] - bz, dw = a[3][i] - bw;
-        double half_chord = 0.5 * sqrt(dx * dx + dy * dy + dz * dz + dw * dw);
-        double angle = 2 * cb_small_asin(half_chord);
-        /* Below 1e-6 rad the weights are lerp's: a blend by 1 or 0, not a branch, so that the
-         * loop vectorizes. For these finite, non-negative weights it is exact. */
-        double tiny = angle < 1e-6 ? 1.0 : 0.0;
-        double wa = tiny * (1 - t[i]) + (1 - tiny) * cb_small_sin((1 - t[i]) * angle);
-        double wb = tiny * t[i] + (1 - tiny) * cb_small_sin(t[i] * angle);
-        double rx = wa * a[0][i] + wb * bx, ry = wa * a[1][i] + wb * by, rz = wa * a[2][i] + wb * bz,
-               rw = wa * a[3][i] + wb * bw;
-        double len2 = rx * rx + ry * ry + rz * rz + rw * rw, inv = 1 / sqrt(len2);
-        out[0][i] = rx * inv, out[1][i] = ry * inv, out[2][i] = rz * inv, out[3][i] = rw * inv;
-        redo[i] = half_chord >= 0.1 || len2 == 0 ? 1.0 : 0.0;
-    }
-}
-
-/* A linear rotation channel at the batch's times into out[4][B]. */
-static CB_CLONE_INLINE void rotation_lanes(const cb_channel *ch, const double *times, uint32_t *hint,
-                                           const cb_wrap *wrap, double (*out)[B])
-{
-    double a[4][B], b[4][B], t[B];
-    unsigned char edge[B];
-    double redo[B]; /* 1 or 0; a double, as SSE2 has no 64-bit integer compares to vectorize */
-    uint32_t last = ch->key_count - 1;
-    for (int i = 0; i < B; ++i) {
-        double time = times[i];
-        edge[i] = time <= ch->times[0] || time >= ch->times[last];
-        uint32_t k = edge[i] ? 0 : find_key(ch, time, hint);
-        const float *ka = ch->values + (size_t)k * 4, *kb = ka + 4;
-        double t_k = ch->times[k], dt = (double)ch->times[k + 1] - t_k;
-        t[i] = (time - t_k) / dt;
-        for (int c = 0; c < 4; ++c) a[c][i] = ka[c], b[c][i] = kb[c];
-    }
-    slerp_lanes((const double(*)[B])a, (const double(*)[B])b, t, out, redo);
-    for (int i = 0; i < B; ++i) {
-        if (!edge[i] && !redo[i]) continue;
-        double v[4];
-        channel_eval(ch, times[i], v, hint, wrap); /* before or after the keys, or a wide angle */
-        for (int c = 0; c < 4; ++c) out[c][i] = v[c];
-    }
-}
-
-/* One channel at the batch's times into its node's lanes. */
-static CB_CLONE_INLINE void channel_lanes(const cb_channel *ch, const double *times, uint32_t *hint,
-                                          const cb_wrap *wrap, lane_set *node)
-{
-    if (ch->path == CB_PATH_ROTATION && ch->interp == CB_INTERP_LINEAR && ch->key_count > 1) {
-        rotation_lanes(ch, times, hint, wrap, *node);
-        return;
-    }
-    for (int i = 0; i < B; ++i) {
-        double v[4];
-        channel_eval(ch, times[i], v, hint, wrap);
-        if (ch->path == CB_PATH_ROTATION)
-            for (int c = 0; c < 4; ++c) (*node)[c][i] = v[c];
-        else if (ch->path == CB_PATH_TRANSLATION)
-            for (int c = 0; c < 3; ++c) (*node)[4 + c][i] = v[c];
-        else
-            (*node)[7][i] = (v[0] + v[1] + v[2]) / 3;
-    }
-}
-
-/* x -> a(b(x)) for similarities as 8 values (rotation, translation, scale): the rotation
- * qa qb, the translation ta + sa rotate(qa, tb), the scale sa sb; the operations of
- * cb_quat_mul and cb_quat_rotate, in their order. */
-static CB_CLONE_INLINE void compose8(const double a[8], const double b[8], double out[8])
-{
-    double uvx = a[1] * b[6] - a[2] * b[5], uvy = a[2] * b[4] - a[0] * b[6], uvz = a[0] * b[5] - a[1] * b[4];
-    double uuvx = a[1] * uvz - a[2] * uvy, uuvy = a[2] * uvx - a[0] * uvz, uuvz = a[0] * uvy - a[1] * uvx;
-    out[0] = a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1];
-    out[1] = a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0];
-    out[2] = a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3];
-    out[3] = a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2];
-    out[4] = a[4] + a[7] * (b[4] + 2 * (a[3] * uvx + uuvx));
-    out[5] = a[5] + a[7] * (b[5] + 2 * (a[3] * uvy + uuvy));
-    out[6] = a[6] + a[7] * (b[6] + 2 * (a[3] * uvz + uuvz));
-    out[7] = a[7] * b[7];
-}
-
-/* node = parent after node, in every lane. */
-static CB_CLONE_INLINE void compose_lanes(const lane_set *restrict parent, lane_set *restrict node)
-{
-    const double(*p)[B] = *parent;
-    double(*n)[B] = *node;
-    for (int i = 0; i < B; ++i) {
-        double a[8] = {p[0][i], p[1][i], p[2][i], p[3][i], p[4][i], p[5][i], p[6][i], p[7][i]};
-        double b[8] = {n[0][i], n[1][i], n[2][i], n[3][i], n[4][i], n[5][i], n[6][i], n[7][i]}, r[8];
-        compose8(a, b, r);
-        n[0][i] = r[0], n[1][i] = r[1], n[2][i] = r[2], n[3][i] = r[3];
-        n[4][i] = r[4], n[5][i] = r[5], n[6][i] = r[6], n[7][i] = r[7];
-    }
-}
-
-/* out[i * stride] = node after ibm, for the first `count` lanes. Composed in every lane (which
- * vectorizes), then stored. */
-static CB_CLONE_INLINE void joint_lanes(const lane_set *node, const cb_similarity *ibm, uint32_t count, size_t stride,
-                                        cb_similarity *out)
-{
-    const double(*n)[B] = *node;
-    const double b[8] = {ibm->rotation[0],    ibm->rotation[1],    ibm->rotation[2],    ibm->rotation[3],
-                         ibm->translation[0], ibm->translation[1], ibm->translation[2], ibm->scale};
-    double r[8][B];
-    for (int i = 0; i < B; ++i) {
-        double a[8] = {n[0][i], n[1][i], n[2][i], n[3][i], n[4][i], n[5][i], n[6][i], n[7][i]}, ri[8];
-        compose8(a, b, ri);
-        r[0][i] = ri[0], r[1][i] = ri[1], r[2][i] = ri[2], r[3][i] = ri[3];
-        r[4][i] = ri[4], r[5][i] = ri[5], r[6][i] = ri[6], r[7][i] = ri[7];
-    }
-    for (uint32_t i = 0; i < count; ++i)
-        out[i * stride] = (cb_similarity){{r[0][i], r[1][i], r[2][i], r[3][i]}, {r[4][i], r[5][i], r[6][i]}, r[7][i]};
-}
-
-/* One batch: 1..B times. */
-CB_TARGET_CLONES
-static void sample_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count, cb_similarity *out)
-{
-    const cb_model *m = s->model;
-    lane_set *lanes = (lane_set *)s->lanes;
-    double padded[B]; /* the unused lanes repeat the last time */
-    for (uint32_t i = 0; i < B; ++i) padded[i] = times[i < count ? i : count - 1];
-    for (uint32_t k = 0; k < s->relevant_count; ++k) {
-        const cb_similarity *rest = &s->sim_rest[s->relevant_order[k]];
-        double v[8] = {rest->rotation[0], rest->rotation[1], rest->rotation[2], rest->rotation[3],
-                       rest->translation[0], rest->translation[1], rest->translation[2], rest->scale};
-        for (int c = 0; c < 8; ++c)
-            for (int i = 0; i < B; ++i) lanes[k][c][i] = v[c];
-    }
-    if (animation >= 0 && animation < (int32_t)m->animation_count) {
-        const cb_animation *anim = &m->animations[animation];
-        for (uint32_t c = 0; c < anim->channel_count; ++c) {
-            const cb_channel *ch = &anim->channels[c];
-            if (s->relevant[ch->node])
-                channel_lanes(ch, padded, &s->cursor[s->cursor_base[animation] + c], &s->wraps[animation],
-                              &lanes[s->slot[ch->node]]);
-        }
-    }
-    for (uint32_t k = 0; k < s->relevant_count; ++k) {
-        int32_t p = m->nodes[s->relevant_order[k]].parent;
-        if (p >= 0) compose_lanes(&lanes[s->slot[p]], &lanes[k]);
-    }
-    const cb_skin *skin = &m->skins[s->skin];
-    for (uint32_t j = 0; j < skin->joint_count; ++j)
-        joint_lanes(&lanes[s->slot[skin->joints[j]]], &s->sim_ibm[j], count, skin->joint_count, out + j);
-}
-
-void cb_sample_joint_similarities_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
-                                        cb_similarity *out)
-{
-    size_t joints = s->model->skins[s->skin].joint_count;
-    for (uint32_t first = 0; first < count; first += B)
-        sample_batch(s, animation, times + first, count - first < B ? count - first : B, out + first * joints);
-}
-#undef B
 
 void cb_similarity_matrix(const cb_similarity *s, double out[16])
 {
@@ -498,6 +293,12 @@ void cb_sampler_free(cb_sampler *s)
     free(s->sim_rest);
     free(s->sim_ibm);
     free(s->lanes);
+    free(s->span_group);
+    free(s->group_base);
+    free(s->group_times);
+    free(s->group_keys);
+    free(s->group_cursor);
+    free(s->spans);
     free(s->order);
     free(s->local_trs);
     free(s->animated);
@@ -532,10 +333,16 @@ static void local_matrix(const cb_sampler *s, uint32_t node, double out[16])
                      (cb_vec3){trs[7], trs[8], trs[9]});
 }
 
-const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
+/* The global matrices of the nodes order[0 .. count - 1] (parents first; a node's parent among
+ * them, or a root) at time t: every node (cb_sample_globals) or only those the joints hang from
+ * (`relevant`: cb_sample_joint_matrices). */
+CB_TARGET_CLONES
+static void sample_nodes(cb_sampler *s, int32_t animation, double t, const uint32_t *order, uint32_t count,
+                         const bool *relevant)
 {
     const cb_model *m = s->model;
-    for (uint32_t i = 0; i < m->node_count; ++i) {
+    for (uint32_t k = 0; k < count; ++k) {
+        uint32_t i = order[k];
         double *trs = s->local_trs + (size_t)i * 10;
         memcpy(trs, m->nodes[i].translation, 3 * sizeof(double));
         memcpy(trs + 3, m->nodes[i].rotation, 4 * sizeof(double));
@@ -546,6 +353,7 @@ const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
         const cb_animation *anim = &m->animations[animation];
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
             const cb_channel *ch = &anim->channels[c];
+            if (relevant && !relevant[ch->node]) continue;
             double v[4];
             channel_eval(ch, t, v, &s->cursor[s->cursor_base[animation] + c], &s->wraps[animation]);
             double *trs = s->local_trs + (size_t)ch->node * 10;
@@ -554,8 +362,8 @@ const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
             s->animated[ch->node] = true;
         }
     }
-    for (uint32_t k = 0; k < m->node_count; ++k) {
-        uint32_t i = s->order[k];
+    for (uint32_t k = 0; k < count; ++k) {
+        uint32_t i = order[k];
         double local[16];
         local_matrix(s, i, local);
         int32_t p = m->nodes[i].parent;
@@ -564,12 +372,18 @@ const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
         else
             cb_mat4_mul_affine(s->globals + (size_t)i * 16, s->globals + (size_t)p * 16, local);
     }
+}
+
+const double *cb_sample_globals(cb_sampler *s, int32_t animation, double t)
+{
+    sample_nodes(s, animation, t, s->order, s->model->node_count, NULL);
     return s->globals;
 }
 
 void cb_sample_joint_matrices(cb_sampler *s, int32_t animation, double t, double *out)
 {
-    const double *globals = cb_sample_globals(s, animation, t);
+    sample_nodes(s, animation, t, s->relevant_order, s->relevant_count, s->relevant);
+    const double *globals = s->globals;
     const cb_skin *skin = &s->model->skins[s->skin];
     for (uint32_t j = 0; j < skin->joint_count; ++j) {
         const double *ibm = skin->inverse_bind + (size_t)j * 16;

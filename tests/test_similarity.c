@@ -6,6 +6,7 @@
 #include <math.h>
 
 #include "../src/cb_math.h"
+#include "../src/sampler.h"
 
 /* The largest difference between the two samplers over every row of every clip at 30 fps,
  * relative to the size of the numbers compared: the joint's scale for its 3x3, the skeleton's
@@ -261,12 +262,121 @@ static void test_batches_give_the_bits_of_single_times(void **state)
     cb_model_free(m);
 }
 
+/* The batched sampler's lanes against the one-time path, channel by channel: the key spans a
+ * batch shares between channels of one times array, and the vectorized slerp and lerp, must
+ * give cb_channel_eval's bits at every time (between keys, on them, before and after them). */
+static uint32_t expect_lanes_match_scalar(const char *what, const cb_model *m)
+{
+    uint32_t compared = 0;
+    for (uint32_t a = 0; a < m->animation_count; ++a)
+        for (uint32_t c = 0; c < m->animations[a].channel_count; ++c) {
+            const cb_channel *ch = &m->animations[a].channels[c];
+            if (ch->interp != CB_INTERP_LINEAR || ch->key_count < 2) continue;
+            int comps = ch->path == CB_PATH_ROTATION ? 4 : 3;
+            double first = ch->times[0], span = ch->times[ch->key_count - 1] - first;
+            uint32_t steps = 4 * ch->key_count + 8;
+            for (uint32_t i = 0; i < steps; i += CB_SAMPLE_BATCH) {
+                double times[CB_SAMPLE_BATCH], lanes[4][CB_SAMPLE_BATCH];
+                for (uint32_t k = 0; k < CB_SAMPLE_BATCH; ++k) {
+                    double u = (double)(i + k) / (steps - 8) - 0.05; /* from before the first key to after the last */
+                    times[k] = (i + k) % 5 == 0 ? ch->times[(i + k) / 4 % ch->key_count] : first + span * u;
+                }
+                cb_channel_eval_lanes(ch, times, lanes);
+                for (uint32_t k = 0; k < CB_SAMPLE_BATCH; ++k) {
+                    double one[4];
+                    cb_channel_eval(ch, times[k], one);
+                    for (int v = 0; v < comps; ++v)
+                        if (memcmp(&one[v], &lanes[v][k], sizeof one[v]) != 0)
+                            fail_msg("%s: clip %u channel %u at t = %.9g: component %d is %.17g in lanes, %.17g alone",
+                                     what, a, c, times[k], v, lanes[v][k], one[v]);
+                    ++compared;
+                }
+            }
+        }
+    printf("  %-72s %u channel values match bit for bit\n", what, compared);
+    return compared;
+}
+
+static void test_lanes_give_the_bits_of_the_scalar_path(void **state)
+{
+    (void)state;
+    const char *assets[] = {"assets/fox-bevy/Fox.glb", "assets/quaternius-cow/Cow.glb",
+                            "assets/spider-animated-luanti/gltf_spider_animated.gltf",
+                            "assets/robot-quaternius-raylib/robot.glb",
+                            "assets/riggedfigure-raylib/rigged_figure.glb"};
+    for (size_t i = 0; i < COUNT_OF(assets); ++i) {
+        cb_model *m = load_shared(assets[i]);
+        assert_true(expect_lanes_match_scalar(assets[i], m) > 500);
+        cb_model_free(m);
+    }
+}
+
+/* The joints' similarities as lanes (what qpos rows and the measurement read) against
+ * cb_clip_frame_similarities, frame by frame: the same bits, the root's travel included. */
+static void expect_frame_lanes_match_rows(const char *what, cb_model *m)
+{
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    assert_non_null(s);
+    if (!cb_sampler_is_similarity(s)) fail_msg("%s is not sampled as similarities", what);
+    uint32_t joints = m->skins[0].joint_count, compared = 0;
+    cb_similarity *rows = malloc(joints * CB_SAMPLE_BATCH * sizeof *rows);
+    double *lanes = malloc(joints * 8 * CB_SAMPLE_BATCH * sizeof *lanes);
+    for (uint32_t a = 0; a < m->animation_count; ++a) {
+        cb_clip_info info;
+        assert_int_equal(cb_clip_analyze(s, (int32_t)a, 30, -1, NULL, &info, &err), CB_OK);
+        for (uint32_t f = 0, count = 1; f < info.frames; f += count, count = count % CB_SAMPLE_BATCH + 1) {
+            uint32_t frames[CB_SAMPLE_BATCH], n = 0;
+            while (n < count && f + n < info.frames) frames[n] = f + n, ++n;
+            cb_clip_frame_similarities(s, &info, frames, n, CB_ROOT_MOTION_IN_PLACE, rows);
+            cb_clip_frame_lanes(s, &info, frames, n, CB_ROOT_MOTION_IN_PLACE, lanes);
+            for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) /* lanes past n repeat the last frame */
+                for (uint32_t j = 0; j < joints; ++j) {
+                    const cb_similarity *r = &rows[(i < n ? i : n - 1) * joints + j];
+                    const double *l = lanes + (size_t)j * 8 * CB_SAMPLE_BATCH + i;
+                    double v[8] = {r->rotation[0],    r->rotation[1],    r->rotation[2],    r->rotation[3],
+                                   r->translation[0], r->translation[1], r->translation[2], r->scale};
+                    for (int c = 0; c < 8; ++c)
+                        if (memcmp(&v[c], &l[c * CB_SAMPLE_BATCH], sizeof v[c]) != 0)
+                            fail_msg("%s: clip %u frame %u joint %u: lane value %d differs from the row's", what, a,
+                                     f + i, j, c);
+                    ++compared;
+                }
+        }
+    }
+    printf("  %-72s %u joint lanes match bit for bit\n", what, compared);
+    free(rows);
+    free(lanes);
+    cb_sampler_free(s);
+}
+
+static void test_frame_lanes_give_the_bits_of_frame_rows(void **state)
+{
+    (void)state;
+    const char *assets[] = {"assets/fox-bevy/Fox.glb", "assets/riggedfigure-raylib/rigged_figure.glb",
+                            "assets/multitrack-luanti/gltf_multi_track_1.glb"};
+    for (size_t i = 0; i < COUNT_OF(assets); ++i) {
+        cb_model *m = load_shared(assets[i]);
+        expect_frame_lanes_match_rows(assets[i], m);
+        cb_model_free(m);
+    }
+    for (size_t i = 0; i < COUNT_OF(sample_names); ++i) { /* animals that travel: the root motion */
+        char path[1024];
+        sample_path(path, sizeof path, sample_names[i]);
+        cb_model *m = load_or_fail(path);
+        expect_frame_lanes_match_rows(path, m);
+        cb_model_free(m);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_real_assets_sample_the_same_both_ways),
         cmocka_unit_test(test_built_rigs_take_the_path_they_should),
         cmocka_unit_test(test_batches_give_the_bits_of_single_times),
+        cmocka_unit_test(test_lanes_give_the_bits_of_the_scalar_path),
+        cmocka_unit_test(test_frame_lanes_give_the_bits_of_frame_rows),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,91 @@
+/* sampler.h - the sampler's state and what sample.c (one time, 4x4 matrices) and
+ * sample_lanes.c (similarities, CB_SAMPLE_BATCH times at once) share. Internal. */
+#ifndef CB_SAMPLER_H
+#define CB_SAMPLER_H
+
+#include "crowdbake/core.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+
+struct cb_sampler {
+    const cb_model *model;
+    int32_t skin;
+    uint32_t *order;     /* node indices, parents before children */
+    double *local_trs;   /* 10 per node: t[3], r[4], s[3] */
+    bool *animated;      /* per node, set while evaluating one clip */
+    double *globals;     /* 16 per node */
+    bool affine_ibm;     /* every inverse bind matrix ends in 0 0 0 1: cheaper products */
+    uint32_t *cursor;    /* per channel of every clip: the key interval of the last sample */
+    uint32_t *cursor_base; /* per clip: its channels' first cursor */
+    cb_wrap *wraps;      /* per clip: where a loop without a closing key comes round (cb_sampler_set_period) */
+    /* The similarity path (cb_sampler_is_similarity) visits only the joints and their ancestors. */
+    bool similar;
+    bool *relevant;              /* per node: a joint or an ancestor of one */
+    uint32_t relevant_count;
+    uint32_t *relevant_order;    /* the relevant nodes, parents first */
+    uint32_t *slot;              /* per node: its place in relevant_order */
+    cb_similarity *sim_rest;     /* per node: its rest transform */
+    cb_similarity *sim_ibm;      /* per joint: its inverse bind matrix */
+    /* Per relevant node, its transform at each time of a batch, as 8 lanes of CB_SAMPLE_BATCH
+     * (structure of arrays: a loop over the times vectorizes and has no dependency chain). */
+    double *lanes;
+    /* Channels of a clip that share their key times (one input accessor for many channels, as
+     * exporters write them) share one key search per batch: a span group per distinct times
+     * array of LINEAR channels with two keys or more. */
+    int32_t *span_group;         /* per channel of every clip (as cursor): its group, -1 for none */
+    uint32_t span_group_count;
+    uint32_t *group_base;        /* per clip and one more: its groups are group_base[a] .. group_base[a + 1] - 1 */
+    const float **group_times;   /* per group: the key times it stands for */
+    uint32_t *group_keys;        /* per group: their count */
+    uint32_t *group_cursor;      /* per group: the key interval of the last search */
+    struct cb_key_spans *spans;  /* per group of the clip sampled (g - group_base[a]): the batch's spans */
+};
+
+/* Where each time of a batch falls among a channel's keys: key[i] and key[i] + 1 around it at
+ * fraction s[i], or edge[i] when it is at or outside the first or last key (those lanes are
+ * evaluated one by one: clamped, or wrapped round, see cb_wrap). */
+typedef struct cb_key_spans {
+    uint32_t key[CB_SAMPLE_BATCH];
+    double s[CB_SAMPLE_BATCH];
+    double edge[CB_SAMPLE_BATCH]; /* 1 or 0; a double, so the loops that read it vectorize */
+    bool any_edge;
+} cb_key_spans;
+
+/* Index of the last key with times[k] <= t (0 when t is before the first key). `hint` holds the
+ * previous answer: frames are sampled in order, so the answer is usually it or the next key.
+ * The answer does not depend on the hint (times increase strictly). */
+static inline uint32_t cb_find_key(const float *times, uint32_t key_count, double t, uint32_t *hint)
+{
+    uint32_t last = key_count - 1, h = *hint;
+    for (uint32_t k = h; k <= h + 1 && k <= last; ++k)
+        if (times[k] <= t && (k == last || t < times[k + 1])) return *hint = k;
+    uint32_t lo = 0, hi = last;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo + 1) / 2;
+        if (times[mid] <= t)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    return *hint = lo;
+}
+
+/* One channel at time t (sample.c): the reference every lane must equal bit for bit. */
+void cb_channel_eval_at(const cb_channel *ch, double t, double out[4], uint32_t *hint, const cb_wrap *wrap);
+
+/* sample_lanes.c: the span groups of a similarity sampler's clips (false when out of memory),
+ * and for tests, one LINEAR channel (two keys or more) at CB_SAMPLE_BATCH times the way a
+ * batch samples it: out[c][i] is component c (3 or 4) at times[i]. */
+bool cb_sampler_prepare_spans(cb_sampler *s);
+/* cb_sample_joint_similarities_batch's similarities for 1..CB_SAMPLE_BATCH times (the same
+ * bits) as lanes: component c (rotation x y z w, translation x y z, scale) of joint j at
+ * times[i] is out[(j * 8 + c) * CB_SAMPLE_BATCH + i]; lanes past `count` repeat the last time. */
+void cb_sample_joint_lanes(cb_sampler *s, int32_t animation, const double *times, uint32_t count, double *out);
+/* clip.c: the same for 1..CB_SAMPLE_BATCH increasing frames of a clip, as
+ * cb_clip_frame_similarities frames them (the root's travel taken off in place). */
+void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
+                         cb_root_motion root_motion, double *out);
+void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*out)[CB_SAMPLE_BATCH]);
+
+#endif
