@@ -415,7 +415,7 @@ bool parse_fast(const unsigned char *data, size_t size, tinygltf::Model *gltf, B
     // Draco and meshopt (KHR_draco_mesh_compression, EXT_ and KHR_meshopt_compression) are
     // decoded on the tinygltf path; one search finds all three. A NUL would end the in-place
     // parse where tinygltf's parse of the whole chunk fails.
-    if (memmem(json, json_length, "_compression", 12) || std::memchr(json, 0, json_length)) return false;
+    if (mentions(json, json_length, "_compression") || std::memchr(json, 0, json_length)) return false;
     std::vector<char> text(json, json + json_length);
     text.push_back('\0');
     rapidjson::Document doc;

@@ -117,6 +117,8 @@ struct BinInPlace {
 
 // gltf_container.cpp
 uint32_t le32(const unsigned char *p); // a little-endian field of a GLB header or chunk
+// Whether the C string `needle` occurs in the `size` bytes at `haystack` (memmem's answer, cheaper).
+bool mentions(const void *haystack, size_t size, const char *needle);
 // Reads `path` into *out, bounded by max_bytes. With `tail`, a big GLB's BIN chunk is read on
 // tail->thread (see TailRead).
 template <class Buffer> bool read_file(const char *path, uint64_t max_bytes, Buffer *out, TailRead *tail, std::string *why);
