@@ -427,7 +427,8 @@ bool glb_without_bin(const unsigned char *data, const std::string &json, std::ve
 // With `tail` reading the BIN chunk still, only the bytes before it are read until the plain
 // parse needs them all.
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
-                         FsState *fs_state, tinygltf::Model *gltf, BinInPlace *in_place, TailRead *tail, cb_error *err)
+                         FsState *fs_state, doc::Document *fast_doc, bool *fast, tinygltf::Model *gltf,
+                         BinInPlace *in_place, TailRead *tail, cb_error *err)
 {
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, nullptr);
@@ -444,7 +445,7 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
     }
     if (is_glb(data, size)) {
         if (!check_glb(data, size, name, err)) return false;
-        if (parse_fast(data, size, gltf, in_place)) return true; /* a file with Draco is not for it */
+        if (parse_fast(data, size, fast_doc, in_place)) return *fast = true; /* a file with Draco is not for it */
         uint32_t json_length = le32(data + 12);
         std::string json((const char *)data + 20, json_length);
         if (!check_draco_references(json, name, err)) return false;
