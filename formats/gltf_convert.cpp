@@ -22,6 +22,51 @@
 
 namespace cbgltf {
 
+// ---- the tinygltf path's Model as a doc::Document ----
+
+void doc_from_tinygltf(tinygltf::Model *g, doc::Document *out)
+{
+    doc::Document d;
+    d.extensionsRequired = g->extensionsRequired;
+    for (tinygltf::Buffer &b : g->buffers) d.buffers.push_back(std::move(b.data));
+    for (const tinygltf::BufferView &v : g->bufferViews) d.bufferViews.push_back({v.buffer, v.byteOffset, v.byteLength, v.byteStride});
+    d.accessors.resize(g->accessors.size());
+    for (size_t i = 0; i < g->accessors.size(); ++i) {
+        const tinygltf::Accessor &a = g->accessors[i];
+        doc::Accessor &to = d.accessors[i];
+        to.bufferView = a.bufferView, to.byteOffset = a.byteOffset, to.normalized = a.normalized;
+        to.componentType = a.componentType, to.count = a.count, to.type = a.type;
+        to.sparse.isSparse = a.sparse.isSparse;
+        if (!a.sparse.isSparse) continue; // tinygltf leaves the rest uninitialized
+        to.sparse.count = a.sparse.count;
+        to.sparse.indices.byteOffset = a.sparse.indices.byteOffset, to.sparse.indices.bufferView = a.sparse.indices.bufferView;
+        to.sparse.indices.componentType = a.sparse.indices.componentType;
+        to.sparse.values.bufferView = a.sparse.values.bufferView, to.sparse.values.byteOffset = a.sparse.values.byteOffset;
+    }
+    for (const tinygltf::Mesh &m : g->meshes) {
+        d.meshes.emplace_back();
+        for (const tinygltf::Primitive &p : m.primitives) {
+            doc::Primitive to;
+            to.attributes.assign(p.attributes.begin(), p.attributes.end());
+            to.indices = p.indices;
+            d.meshes.back().primitives.push_back(std::move(to));
+        }
+    }
+    for (const tinygltf::Node &n : g->nodes)
+        d.nodes.push_back({n.name, n.skin, n.mesh, n.children, n.matrix, n.translation, n.rotation, n.scale});
+    for (const tinygltf::Scene &sc : g->scenes) d.scenes.push_back({sc.nodes});
+    d.defaultScene = g->defaultScene;
+    for (const tinygltf::Animation &a : g->animations) {
+        doc::Animation to;
+        to.name = a.name;
+        for (const tinygltf::AnimationChannel &ch : a.channels) to.channels.push_back({ch.sampler, ch.target_node, ch.target_path});
+        for (const tinygltf::AnimationSampler &sa : a.samplers) to.samplers.push_back({sa.input, sa.output, sa.interpolation});
+        d.animations.push_back(std::move(to));
+    }
+    for (const tinygltf::Skin &sk : g->skins) d.skins.push_back({sk.name, sk.joints, sk.skeleton, sk.inverseBindMatrices});
+    *out = std::move(d);
+}
+
 // ---- accessors ----
 
 int component_size(int type)
@@ -92,13 +137,13 @@ template <class What>
 bool view_span(const Context &c, int view_index, size_t offset, size_t count, size_t elem_size, size_t stride,
                const What &what, const unsigned char **out)
 {
-    const tinygltf::Model &g = *c.gltf;
+    const doc::Document &g = *c.gltf;
     if (view_index < 0 || view_index >= (int)g.bufferViews.size()) {
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses bufferView %d, which does not exist", c.name, what().c_str(), view_index);
         return false;
     }
-    const tinygltf::BufferView &view = g.bufferViews[(size_t)view_index];
-    if (view.buffer < 0 || view.buffer >= (int)g.buffers.size()) {
+    const doc::BufferView &view = g.bufferViews[(size_t)view_index];
+    if (view.buffer < 0 || view.buffer >= (int)c.buffers.size()) {
         cb_fail(c.err, CB_ERR_INPUT, "%s: bufferView %d uses buffer %d, which does not exist", c.name, view_index, view.buffer);
         return false;
     }
@@ -129,12 +174,12 @@ bool view_span(const Context &c, int view_index, size_t offset, size_t count, si
 template <typename T, class What>
 bool read_accessor(const Context &c, int index, int want_comps, const What &what, T **out, size_t *count_out)
 {
-    const tinygltf::Model &g = *c.gltf;
+    const doc::Document &g = *c.gltf;
     if (index < 0 || index >= (int)g.accessors.size()) {
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses accessor %d, which does not exist", c.name, what().c_str(), index);
         return false;
     }
-    const tinygltf::Accessor &a = g.accessors[(size_t)index];
+    const doc::Accessor &a = g.accessors[(size_t)index];
     int comps = type_components(a.type), csize = component_size(a.componentType);
     if (comps != want_comps || csize == 0) {
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d has %d components of type %d, expected %d", c.name, what().c_str(), index,
@@ -224,7 +269,7 @@ bool convert_nodes(Context &c)
     m->nodes = static_cast<cb_node *>(cb_model_alloc(m, nodes.size(), sizeof(cb_node)));
     for (size_t i = 0; i < nodes.size(); ++i) m->nodes[i].parent = -1;
     for (size_t i = 0; i < nodes.size(); ++i) {
-        const tinygltf::Node &src = nodes[i];
+        const doc::Node &src = nodes[i];
         cb_node *n = &m->nodes[i];
         n->name = name_or(m, src.name, "node", i);
         for (int child : src.children) {
@@ -260,7 +305,7 @@ bool convert_nodes(Context &c)
 // in a hierarchy the runtime never sees.
 bool check_joints_in_scene(Context &c)
 {
-    const tinygltf::Model &g = *c.gltf;
+    const doc::Document &g = *c.gltf;
     if (g.scenes.empty()) return true;
     int scene = g.defaultScene >= 0 && g.defaultScene < (int)g.scenes.size() ? g.defaultScene : 0;
     const std::vector<int> &roots = g.scenes[(size_t)scene].nodes;
@@ -289,7 +334,7 @@ bool convert_skins(Context &c)
     m->skin_count = (uint32_t)skins.size();
     m->skins = static_cast<cb_skin *>(cb_model_alloc(m, skins.size(), sizeof(cb_skin)));
     for (size_t s = 0; s < skins.size(); ++s) {
-        const tinygltf::Skin &src = skins[s];
+        const doc::Skin &src = skins[s];
         cb_skin *skin = &m->skins[s];
         skin->name = name_or(m, src.name, "skin", s);
         skin->skeleton = src.skeleton;
@@ -322,11 +367,11 @@ bool convert_skins(Context &c)
     return true;
 }
 
-bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive &p, std::vector<cb_primitive> *out)
+bool convert_primitive(Context &c, size_t node_index, const doc::Primitive &p, std::vector<cb_primitive> *out)
 {
-    auto pos = p.attributes.find("POSITION"), jnt = p.attributes.find("JOINTS_0"), wgt = p.attributes.find("WEIGHTS_0");
-    if (pos == p.attributes.end() || jnt == p.attributes.end() || wgt == p.attributes.end()) return true; // not skinned
-    const tinygltf::Node &node = c.gltf->nodes[node_index];
+    const int *pos = p.attribute("POSITION"), *jnt = p.attribute("JOINTS_0"), *wgt = p.attribute("WEIGHTS_0");
+    if (!pos || !jnt || !wgt) return true; // not skinned
+    const doc::Node &node = c.gltf->nodes[node_index];
     auto where = [&] { return "mesh node " + std::to_string(node_index) + " (" + node.name + ")"; };
     float *positions, *weights, *normals;
     double *joints = nullptr;
@@ -336,13 +381,12 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
     // Joint indices of 8 or 16 bits (all glTF allows) are read as they are; any other type is
     // read as numbers and checked against 0..65535 below.
     const auto &acc = c.gltf->accessors;
-    int jt = jnt->second >= 0 && (size_t)jnt->second < acc.size() && !acc[(size_t)jnt->second].normalized
-                 ? acc[(size_t)jnt->second].componentType : 0;
+    int jt = *jnt >= 0 && (size_t)*jnt < acc.size() && !acc[(size_t)*jnt].normalized ? acc[(size_t)*jnt].componentType : 0;
     bool small = jt == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || jt == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
     auto jwhat = [&] { return where() + " JOINTS_0"; };
-    if (!read_accessor(c, pos->second, 3, [&] { return where() + " POSITION"; }, &positions, &n) ||
-        !(small ? read_accessor(c, jnt->second, 4, jwhat, &joints16, &nj) : read_accessor(c, jnt->second, 4, jwhat, &joints, &nj)) ||
-        !read_accessor(c, wgt->second, 4, [&] { return where() + " WEIGHTS_0"; }, &weights, &nw))
+    if (!read_accessor(c, *pos, 3, [&] { return where() + " POSITION"; }, &positions, &n) ||
+        !(small ? read_accessor(c, *jnt, 4, jwhat, &joints16, &nj) : read_accessor(c, *jnt, 4, jwhat, &joints, &nj)) ||
+        !read_accessor(c, *wgt, 4, [&] { return where() + " WEIGHTS_0"; }, &weights, &nw))
         return false;
     if (nj != n || nw != n) {
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s has %zu positions but %zu joints and %zu weights", c.name, where().c_str(), n, nj, nw);
@@ -360,19 +404,17 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
     prim.node = (int32_t)node_index;
     prim.skin = node.skin;
     prim.vertex_count = (uint32_t)n;
-    auto nrm = p.attributes.find("NORMAL");
-    if (nrm != p.attributes.end()) {
-        if (!read_accessor(c, nrm->second, 3, [&] { return where() + " NORMAL"; }, &normals, &nn)) return false;
+    if (const int *nrm = p.attribute("NORMAL")) {
+        if (!read_accessor(c, *nrm, 3, [&] { return where() + " NORMAL"; }, &normals, &nn)) return false;
         if (nn == n) prim.normals = normals;
     }
-    auto uv = p.attributes.find("TEXCOORD_0");
-    if (uv != p.attributes.end()) { /* only `mesh` carries it: a broken one is left out, never an error */
+    if (const int *uv = p.attribute("TEXCOORD_0")) { /* only `mesh` carries it: a broken one is left out, never an error */
         float *texcoords;
         size_t nt;
         cb_error uv_err{};
         Context quiet = c;
         quiet.err = &uv_err;
-        if (read_accessor(quiet, uv->second, 2, [&] { return where() + " TEXCOORD_0"; }, &texcoords, &nt) && nt == n)
+        if (read_accessor(quiet, *uv, 2, [&] { return where() + " TEXCOORD_0"; }, &texcoords, &nt) && nt == n)
             prim.texcoords = texcoords;
     }
     if (p.indices >= 0) {
@@ -381,7 +423,7 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
         prim.indices = indices;
     }
     for (auto &a : p.attributes) { /* every attribute, as the file types it: what a runtime uploads */
-        const tinygltf::Accessor &acc = c.gltf->accessors[(size_t)a.second];
+        const doc::Accessor &acc = c.gltf->accessors[(size_t)a.second];
         uint32_t elem = (uint32_t)(type_components(acc.type) * component_size(acc.componentType));
         prim.vertex_bytes += (elem + 3) / 4 * 4;
     }
@@ -395,16 +437,16 @@ bool convert_primitive(Context &c, size_t node_index, const tinygltf::Primitive 
 
 bool convert_meshes(Context &c)
 {
-    const tinygltf::Model &g = *c.gltf;
+    const doc::Document &g = *c.gltf;
     std::vector<cb_primitive> prims;
     for (size_t i = 0; i < g.nodes.size(); ++i) {
-        const tinygltf::Node &node = g.nodes[i];
+        const doc::Node &node = g.nodes[i];
         if (node.mesh < 0 || node.skin < 0) continue;
         if (node.mesh >= (int)g.meshes.size() || node.skin >= (int)g.skins.size()) {
             cb_fail(c.err, CB_ERR_INPUT, "%s: node %zu uses mesh %d / skin %d, which do not exist", c.name, i, node.mesh, node.skin);
             return false;
         }
-        for (const tinygltf::Primitive &p : g.meshes[(size_t)node.mesh].primitives)
+        for (const doc::Primitive &p : g.meshes[(size_t)node.mesh].primitives)
             if (!convert_primitive(c, i, p, &prims)) return false;
     }
     cb_model *m = c.model;
@@ -423,9 +465,9 @@ bool parse_interpolation(const std::string &s, cb_interp *out)
     return true;
 }
 
-bool convert_channel(Context &c, size_t a, size_t ci, const tinygltf::Animation &src, std::vector<cb_channel> *out)
+bool convert_channel(Context &c, size_t a, size_t ci, const doc::Animation &src, std::vector<cb_channel> *out)
 {
-    const tinygltf::AnimationChannel &ch = src.channels[ci];
+    const doc::AnimationChannel &ch = src.channels[ci];
     const std::string &path = ch.target_path;
     auto where = [&] { return "clip '" + std::string(c.model->animations[a].name) + "' channel " + std::to_string(ci); };
     if (path == "weights") {
@@ -446,7 +488,7 @@ bool convert_channel(Context &c, size_t a, size_t ci, const tinygltf::Animation 
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses sampler %d, which does not exist", c.name, where().c_str(), ch.sampler);
         return false;
     }
-    const tinygltf::AnimationSampler &s = src.samplers[(size_t)ch.sampler];
+    const doc::AnimationSampler &s = src.samplers[(size_t)ch.sampler];
     if (!parse_interpolation(s.interpolation, &dst.interp)) {
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s has interpolation '%s'; use LINEAR, STEP or CUBICSPLINE", c.name, where().c_str(),
                 s.interpolation.c_str());

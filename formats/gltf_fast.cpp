@@ -1,7 +1,9 @@
 // gltf_fast.cpp - the fast path of the glTF load: RapidJSON parses a GLB's JSON chunk in place
 // (a DOM on its pool allocator, full-precision numbers, as tinygltf is built) and only what a
-// bake reads is copied into the tinygltf::Model that gltf_convert.cpp reads; the BIN chunk is
-// left where it lies and its accessors are read there.
+// bake reads is copied into the plain doc::Document that gltf_convert.cpp reads (gltf_parts.h);
+// the BIN chunk is left where it lies and its accessors are read there. Members a bake does not
+// read (names of views, accessors, meshes; materials, modes) are still type-checked as tinygltf
+// would, so a file either path refuses is refused here too.
 //
 // tinygltf's parse was most of a big rig's load: its own DOM walk looks up every member by name
 // (FindMember), copies every extension and extra into its Value tree, and builds structs of a
@@ -40,9 +42,14 @@ size_t as_size(const Value &v)
     return (size_t)v.GetUint64();
 }
 
-std::string as_string(const Value &v) // tinygltf copies a C string: one with a NUL in it goes there
+void check_string(const Value &v) // tinygltf copies a C string: one with a NUL in it goes there
 {
     if (!v.IsString() || std::strlen(v.GetString()) != v.GetStringLength()) not_fast();
+}
+
+std::string as_string(const Value &v)
+{
+    check_string(v);
     return std::string(v.GetString(), v.GetStringLength());
 }
 
@@ -105,21 +112,21 @@ template <class F> void each(const Value &array, F f)
 void parse_asset(const Value &o)
 {
     static const char *const keys[] = {"version"};
-    require(members(o, keys, [](size_t, const Value &v) { as_string(v); }), 1);
+    require(members(o, keys, [](size_t, const Value &v) { check_string(v); }), 1);
 }
 
-void parse_buffer(const Value &o, tinygltf::Buffer *b, size_t *byte_length)
+void parse_buffer(const Value &o, size_t *byte_length)
 {
     static const char *const keys[] = {"byteLength", "uri", "name"};
     unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
         if (i == 0) *byte_length = as_size(v);
         else if (i == 1) not_fast(); // external files and data URIs: the tinygltf path
-        else b->name = as_string(v);
+        else check_string(v);
     });
     require(seen, 1);
 }
 
-void parse_view(const Value &o, tinygltf::BufferView *view)
+void parse_view(const Value &o, doc::BufferView *view)
 {
     static const char *const keys[] = {"buffer", "byteOffset", "byteLength", "byteStride", "name"};
     unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
@@ -128,14 +135,14 @@ void parse_view(const Value &o, tinygltf::BufferView *view)
         case 1: view->byteOffset = as_size(v); break;
         case 2: view->byteLength = as_size(v); break;
         case 3: view->byteStride = as_size(v); break;
-        default: view->name = as_string(v);
+        default: check_string(v);
         }
     });
     require(seen, 1 | 4);
     if (view->byteStride > 252 || view->byteStride % 4) not_fast(); // tinygltf refuses it
 }
 
-void parse_sparse(const Value &o, tinygltf::Accessor *a)
+void parse_sparse(const Value &o, doc::Accessor *a)
 {
     static const char *const keys[] = {"count", "indices", "values"};
     static const char *const indices_keys[] = {"bufferView", "byteOffset", "componentType"};
@@ -175,7 +182,7 @@ int accessor_type(const std::string &t)
     not_fast();
 }
 
-void parse_accessor(const Value &o, tinygltf::Accessor *a)
+void parse_accessor(const Value &o, doc::Accessor *a)
 {
     static const char *const keys[] = {"bufferView", "byteOffset", "normalized", "componentType",
                                        "count",      "type",       "sparse",     "name"};
@@ -196,35 +203,38 @@ void parse_accessor(const Value &o, tinygltf::Accessor *a)
         case 4: a->count = as_size(v); break;
         case 5: a->type = accessor_type(as_string(v)); break;
         case 6: parse_sparse(v, a); break;
-        default: a->name = as_string(v);
+        default: check_string(v);
         }
     });
     require(seen, 8 | 16 | 32);
 }
 
-void parse_primitive(const Value &o, tinygltf::Primitive *p)
+void parse_primitive(const Value &o, doc::Primitive *p)
 {
     static const char *const keys[] = {"attributes", "indices", "material", "mode"};
     unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
         if (i == 0) {
             if (!v.IsObject()) not_fast();
+            p->attributes.reserve(v.MemberCount());
             for (const auto &m : v.GetObject()) {
                 std::string name = as_string(m.name);
-                if (p->attributes.count(name)) not_fast();
-                p->attributes[name] = as_int(m.value);
+                if (p->attribute(name.c_str())) not_fast();
+                p->attributes.emplace_back(std::move(name), as_int(m.value));
             }
+        } else if (i == 1) {
+            p->indices = as_int(v);
         } else {
-            (i == 1 ? p->indices : i == 2 ? p->material : p->mode) = as_int(v);
+            as_int(v); // material, mode: not read
         }
     });
     require(seen, 1);
 }
 
-void parse_mesh(const Value &o, tinygltf::Mesh *mesh)
+void parse_mesh(const Value &o, doc::Mesh *mesh)
 {
     static const char *const keys[] = {"primitives", "name"};
     members(o, keys, [&](size_t i, const Value &v) {
-        if (i == 1) return void(mesh->name = as_string(v));
+        if (i == 1) return check_string(v);
         each(v, [&](const Value &e) {
             mesh->primitives.emplace_back();
             parse_primitive(e, &mesh->primitives.back());
@@ -232,7 +242,7 @@ void parse_mesh(const Value &o, tinygltf::Mesh *mesh)
     });
 }
 
-void parse_node(const Value &o, tinygltf::Node *n)
+void parse_node(const Value &o, doc::Node *n)
 {
     static const char *const keys[] = {"name", "skin", "mesh", "children", "matrix", "translation", "rotation", "scale"};
     std::vector<double> trs[3];
@@ -252,7 +262,7 @@ void parse_node(const Value &o, tinygltf::Node *n)
     n->scale = std::move(trs[2]);
 }
 
-void parse_skin(const Value &o, tinygltf::Skin *s)
+void parse_skin(const Value &o, doc::Skin *s)
 {
     static const char *const keys[] = {"name", "joints", "skeleton", "inverseBindMatrices"};
     unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
@@ -266,7 +276,7 @@ void parse_skin(const Value &o, tinygltf::Skin *s)
     require(seen, 2);
 }
 
-void parse_channel(const Value &o, tinygltf::AnimationChannel *ch)
+void parse_channel(const Value &o, doc::AnimationChannel *ch)
 {
     static const char *const keys[] = {"sampler", "target"};
     static const char *const target_keys[] = {"node", "path"};
@@ -281,7 +291,7 @@ void parse_channel(const Value &o, tinygltf::AnimationChannel *ch)
     require(seen, 1 | 2);
 }
 
-void parse_animation(const Value &o, tinygltf::Animation *a)
+void parse_animation(const Value &o, doc::Animation *a)
 {
     static const char *const keys[] = {"channels", "samplers", "name"};
     static const char *const sampler_keys[] = {"input", "output", "interpolation"};
@@ -297,7 +307,7 @@ void parse_animation(const Value &o, tinygltf::Animation *a)
         a->samplers.reserve(as_array(v).Size());
         each(v, [&](const Value &e) {
             a->samplers.emplace_back();
-            tinygltf::AnimationSampler *s = &a->samplers.back();
+            doc::AnimationSampler *s = &a->samplers.back();
             unsigned got = members(e, sampler_keys, [&](size_t k, const Value &x) {
                 if (k == 2) s->interpolation = as_string(x);
                 else (k == 0 ? s->input : s->output) = as_int(x);
@@ -307,17 +317,17 @@ void parse_animation(const Value &o, tinygltf::Animation *a)
     });
 }
 
-void parse_scene(const Value &o, tinygltf::Scene *s)
+void parse_scene(const Value &o, doc::Scene *s)
 {
     static const char *const keys[] = {"nodes", "name"};
     members(o, keys, [&](size_t i, const Value &v) {
         if (i == 0) s->nodes = int_array(v);
-        else s->name = as_string(v);
+        else check_string(v);
     });
 }
 
 // Images are never decoded, but tinygltf refuses some: only those it surely takes stay here.
-void check_image(const Value &o, const tinygltf::Model &g)
+void check_image(const Value &o, const doc::Document &g)
 {
     static const char *const keys[] = {"bufferView", "uri"};
     int view = -1;
@@ -347,7 +357,7 @@ template <class T, class F> void parse_list(const Value &v, std::vector<T> *out,
 }
 
 // The sections in tinygltf's order: images are checked against the views and buffers.
-void parse_document(const Value &root, tinygltf::Model *g, size_t *byte_length)
+void parse_document(const Value &root, doc::Document *g, size_t *byte_length)
 {
     static const char *const keys[] = {"asset", "extensionsUsed", "extensionsRequired", "buffers", "bufferViews",
                                        "accessors", "meshes", "nodes", "scenes", "scene", "animations", "skins",
@@ -358,9 +368,12 @@ void parse_document(const Value &root, tinygltf::Model *g, size_t *byte_length)
     if (later[12] || later[17]) not_fast(); // cameras and KHR_lights_punctual: tinygltf checks them closely
     parse_asset(*later[0]);
     for (int k = 1; k <= 2; ++k)
-        if (later[k]) each(*later[k], [&](const Value &e) { (k == 1 ? g->extensionsUsed : g->extensionsRequired).push_back(as_string(e)); });
+        if (later[k]) each(*later[k], [&](const Value &e) {
+                if (k == 2) g->extensionsRequired.push_back(as_string(e));
+                else check_string(e);
+            });
     if (later[3]) {
-        parse_list(*later[3], &g->buffers, [&](const Value &o, tinygltf::Buffer *b) { parse_buffer(o, b, byte_length); });
+        parse_list(*later[3], &g->buffers, [&](const Value &o, Bytes *) { parse_buffer(o, byte_length); });
         if (g->buffers.size() > 1) not_fast(); // only the BIN chunk: every other buffer has a uri
     }
     if (later[4]) parse_list(*later[4], &g->bufferViews, parse_view);
@@ -378,8 +391,8 @@ void parse_document(const Value &root, tinygltf::Model *g, size_t *byte_length)
                 if (!o.IsObject()) not_fast();
             });
     // tinygltf refuses a primitive whose indices accessor, or its view, does not exist.
-    for (const tinygltf::Mesh &mesh : g->meshes)
-        for (const tinygltf::Primitive &p : mesh.primitives)
+    for (const doc::Mesh &mesh : g->meshes)
+        for (const doc::Primitive &p : mesh.primitives)
             if (p.indices >= 0) {
                 if ((size_t)p.indices >= g->accessors.size()) not_fast();
                 int view = g->accessors[(size_t)p.indices].bufferView;
@@ -407,7 +420,7 @@ bool glb_chunks(const unsigned char *data, size_t size, size_t *json_length, siz
 
 } // namespace
 
-bool parse_fast(const unsigned char *data, size_t size, tinygltf::Model *gltf, BinInPlace *in_place)
+bool parse_fast(const unsigned char *data, size_t size, doc::Document *out, BinInPlace *in_place)
 {
     size_t json_length, bin_at, bin_length;
     if (!glb_chunks(data, size, &json_length, &bin_at, &bin_length)) return false;
@@ -415,13 +428,13 @@ bool parse_fast(const unsigned char *data, size_t size, tinygltf::Model *gltf, B
     // Draco and meshopt (KHR_draco_mesh_compression, EXT_ and KHR_meshopt_compression) are
     // decoded on the tinygltf path; one search finds all three. A NUL would end the in-place
     // parse where tinygltf's parse of the whole chunk fails.
-    if (memmem(json, json_length, "_compression", 12) || std::memchr(json, 0, json_length)) return false;
+    if (mentions(json, json_length, "_compression") || std::memchr(json, 0, json_length)) return false;
     std::vector<char> text(json, json + json_length);
     text.push_back('\0');
     rapidjson::Document doc;
     doc.ParseInsitu<rapidjson::kParseInsituFlag | rapidjson::kParseFullPrecisionFlag>(text.data());
     if (doc.HasParseError()) return false;
-    tinygltf::Model g;
+    doc::Document g;
     size_t byte_length = 0;
     try {
         parse_document(doc, &g, &byte_length);
@@ -433,10 +446,10 @@ bool parse_fast(const unsigned char *data, size_t size, tinygltf::Model *gltf, B
         if (in_place) {
             in_place->at = bin_at, in_place->length = byte_length;
         } else {
-            g.buffers[0].data.assign(data + bin_at, data + bin_at + byte_length);
+            g.buffers[0].assign(data + bin_at, data + bin_at + byte_length);
         }
     }
-    *gltf = std::move(g);
+    *out = std::move(g);
     return true;
 }
 
@@ -444,7 +457,7 @@ bool parse_fast(const unsigned char *data, size_t size, tinygltf::Model *gltf, B
 
 extern "C" bool cb_gltf_fast_path_applies(const unsigned char *data, size_t size)
 {
-    tinygltf::Model g;
+    cbgltf::doc::Document g;
     try {
         return cbgltf::parse_fast(data, size, &g, nullptr);
     } catch (const std::exception &) {

@@ -42,9 +42,9 @@ bool extension_supported(const std::string &ext)
            ext.rfind("EXT_texture_", 0) == 0 || ext == "KHR_lights_punctual";
 }
 
-bool check_required_extensions(const Context &c)
+bool check_required_extensions(const Context &c, const std::vector<std::string> &required)
 {
-    for (const std::string &ext : c.gltf->extensionsRequired)
+    for (const std::string &ext : required)
         if (!extension_supported(ext)) {
             cb_fail(c.err, CB_ERR_INPUT,
                     "%s: requires extension %s, which crowdbake does not support (re-export without it)", c.name,
@@ -118,20 +118,20 @@ bool decode_meshopt(Context &c, tinygltf::Model *gltf)
     return true;
 }
 
-// What the model keeps of the file: tinygltf's buffers, and the file's own bytes when the BIN
-// chunk is read where it lies.
+// What the model keeps of the file: the document's buffers, and the file's own bytes when the
+// BIN chunk is read where it lies.
 struct OwnedBytes {
     std::vector<Bytes> buffers;
     file_bytes file;
 };
 
 // Hands the buffers' bytes to the model, so accessors can be read in place.
-bool adopt_buffers(Context &c, tinygltf::Model *gltf, file_bytes *file, const BinInPlace &bin)
+bool adopt_buffers(Context &c, doc::Document *d, file_bytes *file, const BinInPlace &bin)
 {
     std::unique_ptr<OwnedBytes> owned(new OwnedBytes());
-    owned->buffers.reserve(gltf->buffers.size());
-    for (tinygltf::Buffer &b : gltf->buffers) {
-        owned->buffers.push_back(std::move(b.data));
+    owned->buffers.reserve(d->buffers.size());
+    for (Bytes &b : d->buffers) {
+        owned->buffers.push_back(std::move(b));
         c.buffers.push_back(Span{owned->buffers.back().data(), owned->buffers.back().size()});
     }
     if (bin.length && !c.buffers.empty()) {
@@ -171,13 +171,15 @@ cb_model *load(const unsigned char *data, size_t size, file_bytes *file, TailRea
     c.limits = limits ? *limits : cb_default_limits();
     c.err = err;
     c.name = name;
-    tinygltf::Model gltf;
+    doc::Document d;   // what the converter reads: the fast path's, or converted from
+    tinygltf::Model gltf; // the tinygltf path's
+    bool fast = false;
     cbpal_xxh64_state source_hash;
     cbpal_xxh64_init(&source_hash);
     if (!tail) cbpal_xxh64_update(&source_hash, data, size); /* else the tail's thread hashes the file */
     FsState fs{c.limits.max_file_bytes, &source_hash, {}};
     BinInPlace bin{0, 0};
-    bool parsed = parse_with_tinygltf(data, size, name, base_dir, &fs, &gltf, file ? &bin : nullptr, tail, err);
+    bool parsed = parse_with_tinygltf(data, size, name, base_dir, &fs, &d, &fast, &gltf, file ? &bin : nullptr, tail, err);
     if (tail) {
         tail->wait();
         if (parsed && !tail->ok) cb_fail(err, CB_ERR_IO, "%s: cannot read: short read", name);
@@ -185,14 +187,20 @@ cb_model *load(const unsigned char *data, size_t size, file_bytes *file, TailRea
         source_hash = tail->hash; /* no other file was read: the split needs a JSON without uris */
     }
     if (!parsed) return nullptr;
-    c.gltf = &gltf;
-    if (!check_required_extensions(c) || !decode_meshopt(c, &gltf)) return nullptr;
+    if (fast ? !check_required_extensions(c, d.extensionsRequired)
+             : !check_required_extensions(c, gltf.extensionsRequired) || !decode_meshopt(c, &gltf))
+        return nullptr;
+    if (!fast) {
+        doc_from_tinygltf(&gltf, &d);
+        gltf = tinygltf::Model(); // its buffers are d's now; the rest is not read again
+    }
+    c.gltf = &d;
     c.model = cb_model_create(name);
     if (!c.model) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory", name);
         return nullptr;
     }
-    if (!adopt_buffers(c, &gltf, file, bin)) {
+    if (!adopt_buffers(c, &d, file, bin)) {
         cb_model_free(c.model);
         return nullptr;
     }

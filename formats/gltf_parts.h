@@ -24,6 +24,102 @@ inline constexpr const char kFallbackScheme[] = "crowdbake-meshopt-fallback-";
 
 using Bytes = std::vector<unsigned char>;
 
+// ---- the parsed document: what a bake reads of a glTF, and nothing else ----
+//
+// Plain structs, filled by the fast path from RapidJSON's DOM (gltf_fast.cpp) or converted from
+// tinygltf's Model on the other path (doc_from_tinygltf), so the converter has one input. A big
+// rig has tens of thousands of accessors, views, channels and samplers: tinygltf's structs for
+// them carry strings, maps and extension trees of a few hundred bytes each, built and freed
+// for nothing. Members keep tinygltf's names, types and defaults.
+namespace doc {
+
+struct BufferView {
+    int buffer = -1;
+    size_t byteOffset = 0, byteLength = 0, byteStride = 0;
+};
+
+struct Accessor {
+    int bufferView = -1;
+    size_t byteOffset = 0;
+    bool normalized = false;
+    int componentType = -1;
+    size_t count = 0;
+    int type = -1;
+    struct {
+        int count = 0;
+        bool isSparse = false;
+        struct {
+            int byteOffset = 0, bufferView = -1, componentType = -1;
+        } indices;
+        struct {
+            int bufferView = -1, byteOffset = 0;
+        } values;
+    } sparse;
+};
+
+struct Primitive {
+    std::vector<std::pair<std::string, int>> attributes; // name, accessor; each name once
+    int indices = -1;
+    const int *attribute(const char *name) const
+    {
+        for (const auto &a : attributes)
+            if (a.first == name) return &a.second;
+        return nullptr;
+    }
+};
+
+struct Mesh {
+    std::vector<Primitive> primitives;
+};
+
+struct Node {
+    std::string name;
+    int skin = -1, mesh = -1;
+    std::vector<int> children;
+    std::vector<double> matrix, translation, rotation, scale; // as given: sizes are checked later
+};
+
+struct Skin {
+    std::string name;
+    std::vector<int> joints;
+    int skeleton = -1, inverseBindMatrices = -1;
+};
+
+struct AnimationChannel {
+    int sampler = -1, target_node = -1;
+    std::string target_path; // short: no allocation
+};
+
+struct AnimationSampler {
+    int input = -1, output = -1;
+    std::string interpolation; // short: no allocation
+};
+
+struct Animation {
+    std::string name;
+    std::vector<AnimationChannel> channels;
+    std::vector<AnimationSampler> samplers;
+};
+
+struct Scene {
+    std::vector<int> nodes;
+};
+
+struct Document {
+    std::vector<std::string> extensionsRequired;
+    std::vector<Bytes> buffers; // their bytes; an empty one where the BIN chunk is read in place
+    std::vector<BufferView> bufferViews;
+    std::vector<Accessor> accessors;
+    std::vector<Mesh> meshes;
+    std::vector<Node> nodes;
+    std::vector<Scene> scenes;
+    int defaultScene = -1;
+    std::vector<Animation> animations;
+    std::vector<Skin> skins;
+};
+
+} // namespace doc
+
 struct Span {
     unsigned char *data;
     size_t size;
@@ -31,7 +127,7 @@ struct Span {
 
 struct Context {
     cb_model *model;
-    const tinygltf::Model *gltf;
+    const doc::Document *gltf;
     std::vector<Span> buffers;   // the bytes of each buffer, which the model owns
     cb_limits limits;
     cb_error *err;
@@ -117,6 +213,8 @@ struct BinInPlace {
 
 // gltf_container.cpp
 uint32_t le32(const unsigned char *p); // a little-endian field of a GLB header or chunk
+// Whether the C string `needle` occurs in the `size` bytes at `haystack` (memmem's answer, cheaper).
+bool mentions(const void *haystack, size_t size, const char *needle);
 // Reads `path` into *out, bounded by max_bytes. With `tail`, a big GLB's BIN chunk is read on
 // tail->thread (see TailRead).
 template <class Buffer> bool read_file(const char *path, uint64_t max_bytes, Buffer *out, TailRead *tail, std::string *why);
@@ -126,18 +224,21 @@ bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *
 // cb_model.release for keys read in place from a mapped file (ctx: its file_bytes): drops
 // the whole pages of the ranges that lie in the mapping; reading them again maps them back.
 void release_mapped(void *ctx, const cb_byte_range *ranges, size_t count) noexcept;
-// Parses the file: a plain GLB on the fast path (parse_fast), else with tinygltf (the GLB's BIN
-// chunk left where it lies when `in_place`).
+// Parses the file: a plain GLB on the fast path (parse_fast) into *fast_doc, setting *fast; else
+// with tinygltf into *gltf (the GLB's BIN chunk left where it lies when `in_place`).
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
-                         FsState *fs_state, tinygltf::Model *gltf, BinInPlace *in_place, TailRead *tail, cb_error *err);
+                         FsState *fs_state, doc::Document *fast_doc, bool *fast, tinygltf::Model *gltf,
+                         BinInPlace *in_place, TailRead *tail, cb_error *err);
 
 // gltf_fast.cpp
-// Parses a GLB that needs nothing but its own BIN chunk into `gltf` (only what the converter
+// Parses a GLB that needs nothing but its own BIN chunk into `out` (only what the converter
 // reads), the BIN chunk left where it lies when `in_place` (else copied into buffer 0); false,
-// with `gltf` untouched, for any file the tinygltf path must load.
-bool parse_fast(const unsigned char *data, size_t size, tinygltf::Model *gltf, BinInPlace *in_place);
+// with `out` untouched, for any file the tinygltf path must load.
+bool parse_fast(const unsigned char *data, size_t size, doc::Document *out, BinInPlace *in_place);
 
 // gltf_convert.cpp
+// The tinygltf path's result as the converter reads it; the buffers' bytes are moved, not copied.
+void doc_from_tinygltf(tinygltf::Model *gltf, doc::Document *out);
 int component_size(int type);
 int type_components(int type);
 bool convert_nodes(Context &c);
