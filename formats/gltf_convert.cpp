@@ -187,8 +187,9 @@ bool read_accessor(const Context &c, int index, int want_comps, const What &what
         return false;
     }
     if (a.count > c.limits.max_accessor_count) {
-        cb_fail(c.err, CB_ERR_INPUT, "%s: %s: accessor %d claims %zu elements, over the limit of %llu (--max-accessor-count)",
-                c.name, what().c_str(), index, a.count, (unsigned long long)c.limits.max_accessor_count);
+        cb_fail_setting(c.err, CB_ERR_INPUT, CB_SETTING_MAX_ACCESSOR_COUNT,
+                        "%s: %s: accessor %d claims %zu elements, over the limit of %llu", c.name, what().c_str(), index,
+                        a.count, (unsigned long long)c.limits.max_accessor_count);
         return false;
     }
     size_t elem = (size_t)comps * csize;
@@ -339,8 +340,8 @@ bool convert_skins(Context &c)
         skin->name = name_or(m, src.name, "skin", s);
         skin->skeleton = src.skeleton;
         if (src.joints.size() > c.limits.max_joints) {
-            cb_fail(c.err, CB_ERR_INPUT, "%s: skin %zu (%s) has %zu joints, over the limit of %u (--max-joints)", c.name, s,
-                    skin->name, src.joints.size(), c.limits.max_joints);
+            cb_fail_setting(c.err, CB_ERR_INPUT, CB_SETTING_MAX_JOINTS, "%s: skin %zu (%s) has %zu joints, over the limit of %u",
+                            c.name, s, skin->name, src.joints.size(), c.limits.max_joints);
             return false;
         }
         skin->joint_count = (uint32_t)src.joints.size();

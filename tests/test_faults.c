@@ -181,7 +181,7 @@ static void test_hostile_sizes(void **state)
     int n = snprintf(big, sizeof big, "{\"asset\":{\"version\":\"2.0\"},\"nodes\":[{\"name\":\"a\"}],\"skins\":[{\"joints\":[0");
     for (int i = 1; i < 100000; ++i) n += snprintf(big + n, sizeof big - n, ",0");
     snprintf(big + n, sizeof big - n, "]}]}");
-    expect_refused(big, "has 100000 joints, over the limit of 4096 (--max-joints)", "");
+    expect_refused(big, "has 100000 joints, over the limit of 4096 [--max-joints]", "");
     /* A clip a billion frames long at 30 fps (key times 0 and 3.3e7 s). */
     expect_refused("{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":32,\"uri\":\"data:application/octet-stream;"
                    "base64,AAAAACtQ/ksAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA=\"}],\"bufferViews\":[{\"buffer\":0,"
