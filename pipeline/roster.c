@@ -227,8 +227,8 @@ static cb_status check_lods(const roster_run *run, const cb_catalog_animal *an, 
             else cb_lod_remap(w->model, w->skin, lod, skin, l->remap, &inner);
         }
         if (inner.status)
-            return cb_fail(err, inner.status, "%s: [animal.%s] LOD %u: %s", at(run->cat, an->lod_pos[i], where, sizeof where),
-                           an->name, i, inner.message);
+            return cb_fail_setting(err, inner.status, inner.setting, "%s: [animal.%s] LOD %u: %s",
+                                   at(run->cat, an->lod_pos[i], where, sizeof where), an->name, i, inner.message);
     }
     return CB_OK;
 }
@@ -287,8 +287,8 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     w->model = cb_gltf_load(an->model, run->opt->limits, &inner);
     if (add_inputs(t, an->model, w->model, err)) return;
     if (!w->model) {
-        cb_fail(err, inner.status, "%s: [animal.%s] %s", at(run->cat, an->model_pos, where, sizeof where), an->name,
-                inner.message);
+        cb_fail_setting(err, inner.status, inner.setting, "%s: [animal.%s] %s", at(run->cat, an->model_pos, where, sizeof where),
+                        an->name, inner.message);
         list_unloaded_lods(an, w, t);
         return;
     }
