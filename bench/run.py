@@ -246,8 +246,9 @@ def bench_joints(repeat, joints=(200, 800), clips=8, seconds=10):
 def goals(x, big, fox):
     """Issue 21's goals: (what, measured, target, met); met is None where the issue sets no number."""
     fl, c, a, j, cl = x['floor'], x['catalog'], x['auto'], x['joints'], x['clips']
-    # The load timed in bench_floor's process, in turns with the floor's read and parse.
-    load = fl['load'] / (fl['read'] + fl['parse'])
+    # The load and the floor each in a fresh process, in turns (bench_floor). The goal is held
+    # against the strictest floor: a read into memory already mapped (no page faults) + parse.
+    load = fl['load'] / (fl['read_warm'] + fl['parse'])
     rows = [
         ('big rig end to end vs three.js load + sample', big['ratios']['end_to_end_vs_peer_load_plus_sample'], '>= 12x', 12, 1),
         ('%d / %d clips' % (cl['big'], cl['small']), cl['t_big'] / cl['t_small'], '<= 2.2x', 2.2, -1),
@@ -255,7 +256,7 @@ def goals(x, big, fox):
         ('no-op rebuild, %d types (ms)' % c['types'], c['noop'] * 1000, '< 50 ms', 50, -1),
         ('--fps auto / fixed (%s)' % a['model'], a['auto'] / a['fixed'], '<= 3x', 3, -1),
         ('%s end to end vs three.js' % fox['input'], fox['ratios']['end_to_end_vs_peer_load_plus_sample'], '>= 6x', 6, 1),
-        ('load / (read + RapidJSON parse)', load, '<= 1.5x', 1.5, -1),
+        ('load / (warm read + RapidJSON parse)', load, '<= 1.5x', 1.5, -1),
         ('peak RSS / (input + output), big rig', big['ratios']['peak_rss_vs_input_plus_output'], '<= 1.2x', 1.2, -1),
     ]
     out = [{'goal': g, 'measured': v, 'target': t, 'met': v * sign >= limit * sign} for g, v, t, limit, sign in rows]
@@ -299,10 +300,12 @@ def print_table(report):
     x = report.get('extra')
     if x:
         fl, big = x['floor'], x['floor_input']
-        print('\nfloor (%s, %.1f MB, JSON %.2f MB): read %s ms, map+touch %s ms, RapidJSON parse %s ms (plain %s ms); '
-              'crowdbake load in the same process %s ms = %.1fx read + parse (in the bake: %s ms)' % (
-            big['input'], fl['bytes'] / 1e6, fl['json_bytes'] / 1e6, ms(fl['read']), ms(fl['map_touch']), ms(fl['parse']),
-            ms(fl['parse_plain']), ms(fl['load']), fl['load'] / (fl['read'] + fl['parse']), ms(big['crowdbake']['phases']['load'])))
+        print('\nfloor (%s, %.1f MB, JSON %.2f MB; each in a fresh process, in turns): read %s ms (into memory already '
+              'mapped: %s ms), map+touch %s ms, RapidJSON parse %s ms (plain %s ms); crowdbake load %s ms = %.2fx warm '
+              'read + parse, %.2fx read + parse (in the bake: %s ms)' % (
+            big['input'], fl['bytes'] / 1e6, fl['json_bytes'] / 1e6, ms(fl['read']), ms(fl['read_warm']), ms(fl['map_touch']),
+            ms(fl['parse']), ms(fl['parse_plain']), ms(fl['load']), fl['load'] / (fl['read_warm'] + fl['parse']),
+            fl['load'] / (fl['read'] + fl['parse']), ms(big['crowdbake']['phases']['load'])))
         c = x['catalog']
         print('catalog of %d types: cold bake %s ms, no-op rebuild %s ms (%.1f%% of cold)' % (
             c['types'], ms(c['cold']), ms(c['noop']), 100 * c['noop'] / c['cold']))
