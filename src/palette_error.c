@@ -7,26 +7,42 @@
 #include "palette_bake.h"
 #include "sampler.h"
 
+/* Decoded palette rows a measurement keeps: a batch's rows and the rows after them, so that
+ * the baked rows of a batch and the blends between them and their next decode each row once. */
+enum { VALUE_SLOTS = 2 * CB_SAMPLE_BATCH };
+
 /* A measurement's scratch: one row's differences, their bound terms and its group bounds. */
 typedef struct measure_scratch {
-    double *diff;             /* bones * 16 */
-    cb_joint_error *joints;   /* bones */
-    double *group_bounds;     /* groups */
-    cb_bounded_row *rows;     /* the clip's frames */
-    double *values[2];        /* bones * 16: two decoded palette rows */
-    uint32_t value_row[2];    /* which (UINT32_MAX: none) */
+    double *diff;                      /* bones * 16 */
+    cb_joint_error *joints;            /* bones */
+    double *group_bounds;              /* groups */
+    cb_bounded_row *rows;              /* the clip's frames */
+    cb_bounded_row *baked;             /* the clip's frames: the baked rows measured with the blends */
+    double *values;                    /* VALUE_SLOTS * bones * 16: decoded palette rows */
+    uint32_t value_row[VALUE_SLOTS];   /* which row each slot holds (UINT32_MAX: none) */
+    uint64_t value_read[VALUE_SLOTS];  /* when each slot was last read (0: never) */
+    uint64_t reads;                    /* the reads so far: the clock of value_read */
 } measure_scratch;
 
-/* Palette row `row` decoded, from whichever slot holds it, else decoded into the slot that does
- * not hold row `keep`: a blend's second row is the next blend's first. */
-static const double *row_values(const cb_palette *p, measure_scratch *s, uint32_t row, uint32_t keep)
+/* Slot k's values, read now. */
+static const double *read_slot(const cb_palette *p, measure_scratch *s, uint32_t k)
 {
-    for (int k = 0; k < 2; ++k)
-        if (s->value_row[k] == row) return s->values[k];
-    int k = s->value_row[0] == keep ? 1 : 0;
-    palette_decode_row_values(p, row, s->values[k]);
-    s->value_row[k] = row;
-    return s->values[k];
+    s->value_read[k] = ++s->reads;
+    return s->values + (size_t)k * p->bone_count * 16;
+}
+
+/* Palette row `row` decoded, from whichever slot holds it, else decoded into the slot read
+ * least recently: never the other row of the blend in hand, read just before. */
+static const double *row_values(const cb_palette *p, measure_scratch *s, uint32_t row)
+{
+    uint32_t oldest = 0;
+    for (uint32_t k = 0; k < VALUE_SLOTS; ++k) {
+        if (s->value_row[k] == row) return read_slot(p, s, k);
+        if (s->value_read[k] < s->value_read[oldest]) oldest = k;
+    }
+    palette_decode_row_values(p, row, s->values + (size_t)oldest * p->bone_count * 16);
+    s->value_row[oldest] = row;
+    return read_slot(p, s, oldest);
 }
 
 /* A row's bound: its largest group bound (infinite when a difference is not finite). */
@@ -100,7 +116,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     for (uint32_t i = 0; i < count; ++i) {
         if (!similar) cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
         uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
-        const double *a = row_values(p, s, row, next), *b = sub ? row_values(p, s, next, row) : NULL;
+        const double *a = row_values(p, s, row), *b = sub ? row_values(p, s, next) : NULL;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             double exact[16], decoded[16]; /* locals: the difference below vectorizes */
             if (similar)
@@ -120,11 +136,32 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
 
 enum { SCOUT_ROWS = 8 }; /* rows a measurement with a goal tries first */
 
+/* The frames of clip c measured at fraction sub (every error_stride-th and the last; at sub > 0
+ * a one-shot's last row has no next), into rows; returns how many. */
+static uint32_t measured_frames(const bake_state *st, uint32_t c, uint32_t sub, cb_bounded_row *rows)
+{
+    const cb_palette_clip *clip = &st->p->clips[c];
+    uint32_t frames = sub && !clip->loops ? clip->frames - 1 : clip->frames, n = 0;
+    for (uint32_t f = 0; f < frames; ++f)
+        if (f % st->error_stride == 0 || f + 1 == frames) rows[n++].frame = f;
+    return n;
+}
+
+/* measure_rows over the frames of rows[i ..], a batch of them (fewer at the end of n). */
+static double measure_batch(bake_state *st, worker *w, uint32_t c, const cb_bounded_row *rows, uint32_t i, uint32_t n,
+                            uint32_t sub, uint32_t parts, measure_scratch *s, double *bounds, double worst)
+{
+    uint32_t batch[CB_SAMPLE_BATCH], count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
+    for (uint32_t k = 0; k < count; ++k) batch[k] = rows[i + k].frame;
+    return measure_rows(st, w, c, batch, count, sub, parts, s, bounds, worst);
+}
+
 /* The worst vertex error of clip c over every error_stride-th row and the last (sub > 0: at
  * fraction sub / parts from each of those rows to the next, as the runtime blends them; a
  * one-shot's last row has no next). Rows that cannot exceed `floor` are not measured (0 when
  * none may be skipped): the result is exact when above it. With an error goal, measuring also
- * stops once the worst exceeds it.
+ * stops once the worst exceeds it. With `baked` (sub > 0, no goal), the baked rows' worst error
+ * too, into *baked: their batches measured along the blends' bounds, which decode the same rows.
  *
  * Blends err most where the motion is fastest, so their rows' bounds differ widely: branch and
  * bound - every row's bound first, then the rows in order of bound, largest first, until no row
@@ -132,19 +169,13 @@ enum { SCOUT_ROWS = 8 }; /* rows a measurement with a goal tries first */
  * much the same on every row, and so are their bounds: those rows are measured in one pass in
  * frame order, each skinning only its groups that could exceed the worst so far. */
 static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t sub, uint32_t parts, double floor,
-                                measure_scratch *s)
+                                measure_scratch *s, double *baked)
 {
     cb_bounded_row *rows = s->rows;
-    const cb_palette_clip *clip = &st->p->clips[c];
-    uint32_t frames = sub && !clip->loops ? clip->frames - 1 : clip->frames, batch[CB_SAMPLE_BATCH], n = 0;
-    for (uint32_t f = 0; f < frames; ++f)
-        if (f % st->error_stride == 0 || f + 1 == frames) rows[n++].frame = f;
+    uint32_t n = measured_frames(st, c, sub, rows), batch[CB_SAMPLE_BATCH];
     double bounds[CB_SAMPLE_BATCH], worst = floor, goal = st->opt->error_goal;
-    for (uint32_t i = 0; i < n && !sub && !(goal > 0 && worst > goal); i += CB_SAMPLE_BATCH) {
-        uint32_t count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
-        for (uint32_t k = 0; k < count; ++k) batch[k] = rows[i + k].frame;
-        worst = measure_rows(st, w, c, batch, count, sub, parts, s, NULL, worst);
-    }
+    for (uint32_t i = 0; i < n && !sub && !(goal > 0 && worst > goal); i += CB_SAMPLE_BATCH)
+        worst = measure_batch(st, w, c, rows, i, n, 0, 1, s, NULL, worst);
     if (!sub) return worst;
     /* With a goal, a few rows spread over the clip first: a rate that misses its goal mostly
      * misses it over much of the clip, and one row above the goal decides - every row's bound,
@@ -155,10 +186,12 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
         worst = measure_rows(st, w, c, batch, SCOUT_ROWS, sub, parts, s, NULL, worst);
         if (worst > goal) return worst;
     }
-    for (uint32_t i = 0; i < n; i += CB_SAMPLE_BATCH) {
+    uint32_t nb = baked ? measured_frames(st, c, 0, s->baked) : 0;
+    for (uint32_t i = 0; i < n || i < nb; i += CB_SAMPLE_BATCH) {
+        if (i < nb) *baked = measure_batch(st, w, c, s->baked, i, nb, 0, 1, s, NULL, *baked);
+        if (i >= n) continue;
         uint32_t count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
-        for (uint32_t k = 0; k < count; ++k) batch[k] = rows[i + k].frame;
-        measure_rows(st, w, c, batch, count, sub, parts, s, bounds, 0);
+        measure_batch(st, w, c, rows, i, n, sub, parts, s, bounds, 0);
         uint32_t top = 0;
         for (uint32_t k = 0; k < count; ++k) {
             rows[i + k].bound = bounds[k];
@@ -166,7 +199,7 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
         }
         /* With a goal, each batch's likeliest worst at once: a row above the goal ends it. */
         if (goal > 0 && bounds[top] > worst) {
-            worst = measure_rows(st, w, c, &batch[top], 1, sub, parts, s, NULL, worst);
+            worst = measure_batch(st, w, c, rows, i + top, i + top + 1, sub, parts, s, NULL, worst);
             if (worst > goal) return worst;
         }
     }
@@ -185,38 +218,52 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
     return worst;
 }
 
+/* Without a goal, a clip's blends and its baked rows are two jobs while clips are few for the
+ * threads (fewer than 2 each), so that the threads share the work more evenly; else one job,
+ * which decodes each measured row once for both. The results are the same either way. */
+static bool measure_split(const bake_state *st)
+{
+    uint32_t threads = st->opt->threads ? st->opt->threads : 1;
+    return !(st->opt->error_goal > 0) && st->p->clip_count < 2 * threads;
+}
+
 uint32_t palette_measure_jobs(const bake_state *st)
 {
-    return st->opt->error_goal > 0 ? st->p->clip_count : 2 * st->p->clip_count;
+    return measure_split(st) ? 2 * st->p->clip_count : st->p->clip_count;
 }
 
 void palette_measure_job(bake_state *st, worker *w, uint32_t k)
 {
     const cb_palette *p = st->p;
-    double goal = st->opt->error_goal, blend = 0;
-    uint32_t c = goal > 0 ? k : k / 2;
-    bool blends = goal > 0 || k % 2 == 0; /* else the baked rows */
+    double goal = st->opt->error_goal, blend = 0, baked = 0;
+    bool split = measure_split(st);
+    uint32_t c = split ? k / 2 : k;
+    bool blends = !split || k % 2 == 0, rows = !split || k % 2 == 1; /* what this job measures */
     size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
     measure_scratch s = {malloc(matrices), malloc(p->bone_count * sizeof *s.joints),
                          malloc((st->groups.group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows),
-                         {malloc(matrices), malloc(matrices)}, {UINT32_MAX, UINT32_MAX}};
+                         malloc(p->clips[c].frames * sizeof *s.baked), malloc(VALUE_SLOTS * matrices), {0}, {0}, 0};
+    for (uint32_t i = 0; i < VALUE_SLOTS; ++i) s.value_row[i] = UINT32_MAX;
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
      * ways, so their quarter points are measured too. */
     uint32_t parts = p->fitted ? 4 : 2;
-    if (!(s.diff && s.joints && s.group_bounds && s.rows && s.values[0] && s.values[1])) {
+    if (!(s.diff && s.joints && s.group_bounds && s.rows && s.baked && s.values)) {
         cb_fail(&st->errors[blends ? c : p->clip_count + c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
     } else if (goal > 0) { /* the blends, then only the baked rows that could exceed them */
-        for (uint32_t sub = 1; sub < parts && !(blend > goal); ++sub) blend = measure_clip_rows(st, w, c, sub, parts, blend, &s);
+        for (uint32_t sub = 1; sub < parts && !(blend > goal); ++sub)
+            blend = measure_clip_rows(st, w, c, sub, parts, blend, &s, NULL);
         st->clip_blend_error[c] = blend;
-        double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, &s);
+        double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, &s, NULL);
         st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
     } else if (blends) { /* each fraction's rows only count where they exceed the worst blend so far */
-        for (uint32_t sub = 1; sub < parts; ++sub) blend = measure_clip_rows(st, w, c, sub, parts, blend, &s);
+        for (uint32_t sub = 1; sub < parts; ++sub)
+            blend = measure_clip_rows(st, w, c, sub, parts, blend, &s, rows && sub == 1 ? &baked : NULL);
         st->clip_blend_error[c] = blend;
+        if (rows) st->clip_error[c] = baked;
     } else {
-        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, &s);
+        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, &s, NULL);
     }
-    free(s.diff), free(s.joints), free(s.group_bounds), free(s.rows), free(s.values[0]), free(s.values[1]);
+    free(s.diff), free(s.joints), free(s.group_bounds), free(s.rows), free(s.baked), free(s.values);
     cb_model_release_clip(st->model, st->infos[c].animation); /* measured: the keys are not read again */
 }
 
