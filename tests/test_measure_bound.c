@@ -1,7 +1,8 @@
 /* test_measure_bound.c - the bake measures its errors by branch and bound (src/error_bound.h):
  * the per-group bounds (src/vertex_groups.h) really bound what skinning computes, over a
  * partition of the skinned vertices, the maxima equal those of
- * skinning every vertex of every row (recomputed here row by row, bit for bit), an error goal
+ * skinning every vertex of every row (recomputed here row by row, bit for bit) on any thread
+ * count (one job per clip or two), an error goal
  * only shortens measurements past it, and fps = "auto" chooses the same rates on any thread
  * count. */
 #include "testutil.h"
@@ -193,6 +194,19 @@ static void expect_exhaustive_maxima(const char *rel, cb_layout layout, cb_preci
     if (!(p.max_error == quant && p.visible_error == fmax(quant, blend)))
         fail_msg("%s %s/%s: measured %.17g / %.17g, every row skinned %.17g / %.17g", rel, cb_layout_name(layout),
                  cb_precision_name(precision), p.max_error, p.visible_error, quant, fmax(quant, blend));
+    /* One thread measures a clip's blends and its baked rows in one job, 64 in two (the clips
+     * are few for them): the maxima are the same. */
+    for (uint32_t threads = 1; threads <= 64; threads *= 64) {
+        cb_palette q;
+        o.threads = threads;
+        assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &q, &err), CB_OK);
+        if (!(q.max_error == quant && q.visible_error == fmax(quant, blend)))
+            fail_msg("%s %s/%s, %u threads: measured %.17g / %.17g, every row skinned %.17g / %.17g", rel,
+                     cb_layout_name(layout), cb_precision_name(precision), threads, q.max_error, q.visible_error, quant,
+                     fmax(quant, blend));
+        cb_palette_free(&q);
+    }
+    o.threads = 2;
     /* A goal above the visible error: the same visible error. Below it: past it, found early. */
     double visible = p.visible_error;
     cb_palette_free(&p);
