@@ -275,9 +275,8 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
         w.sims = malloc((size_t)st->p->bone_count * CB_SAMPLE_BATCH * sizeof(cb_similarity));
         w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
         w.first = malloc((size_t)st->p->bone_count * 4 * sizeof(float));
-        w.reach = malloc((size_t)st->p->bone_count * CB_SAMPLE_BATCH * 4 * sizeof(double));
     }
-    if (jb->samples && (!w.sampler || !w.mats || !w.sims || !w.prev || !w.first || !w.reach)) {
+    if (jb->samples && (!w.sampler || !w.mats || !w.sims || !w.prev || !w.first)) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
         for (uint32_t c = atomic_fetch_add(&jb->next, 1); c < jb->count; c = atomic_fetch_add(&jb->next, 1))
@@ -288,7 +287,6 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     free(w.sims);
     free(w.prev);
     free(w.first);
-    free(w.reach);
     free(w.rows);
 }
 

@@ -61,7 +61,6 @@ typedef struct worker {
     cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
     float *rows;         /* pre-encoding rows: CB_SAMPLE_BATCH of them, or a whole clip's for --fit */
     float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
-    double *reach;       /* CB_SAMPLE_BATCH rows of bones * 4: each joint's position and reach (similarity rows) */
 } worker;
 
 typedef struct bake_state {

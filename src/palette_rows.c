@@ -12,11 +12,42 @@
 
 #define B CB_SAMPLE_BATCH
 
+/* The clip's bounds and value ranges grown a lane (a frame) at a time: lane i grown by every
+ * bone of row i in bone order, with the compares of grow_bounds and range_grow_qpos. A compare
+ * keeps the first of equal values (+0 or -0), so lane i holds its row's first extreme; folding
+ * the lanes in frame order after (fold_lanes) then gives the first extreme of all the rows, as
+ * growing row by row, bone by bone, does - and over the lanes the compares vectorize. */
+typedef struct lane_extent {
+    double lo[3][B], hi[3][B];       /* the bounds (grow_bounds) */
+    float vlo[3][B], vhi[3][B], linear[B]; /* the value range (range_grow_qpos) */
+} lane_extent;
+
+static void lane_extent_reset(lane_extent *x)
+{
+    for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < B; ++i)
+            x->lo[k][i] = INFINITY, x->hi[k][i] = -INFINITY, x->vlo[k][i] = INFINITY, x->vhi[k][i] = -INFINITY;
+    for (int i = 0; i < B; ++i) x->linear[i] = -INFINITY; /* no value yet: range_reset's 0 is the clip's */
+}
+
+/* Lanes 0 .. count - 1 folded into the clip's bounds and range, in frame order. */
+static void fold_lanes(const lane_extent *x, uint32_t count, extent *bounds, value_range *range)
+{
+    for (uint32_t i = 0; i < count; ++i)
+        for (int k = 0; k < 3; ++k) {
+            bounds->lo[k] = x->lo[k][i] < bounds->lo[k] ? x->lo[k][i] : bounds->lo[k];
+            bounds->hi[k] = x->hi[k][i] > bounds->hi[k] ? x->hi[k][i] : bounds->hi[k];
+            range->lo[k] = x->vlo[k][i] < range->lo[k] ? x->vlo[k][i] : range->lo[k];
+            range->hi[k] = x->vhi[k][i] > range->hi[k] ? x->vhi[k][i] : range->hi[k];
+        }
+    for (uint32_t i = 0; i < count; ++i) range->linear = x->linear[i] > range->linear ? x->linear[i] : range->linear;
+}
+
 /* One bone at frames f .. f + count - 1, its similarities' lanes `sim` (lanes past count repeat
- * the last frame): its position and reach into w->reach (4 doubles a bone and frame), its 8
- * values into the rows, its last quaternion into w->prev. */
+ * the last frame): its position and reach grow the lanes' bounds, its values their range, its 8
+ * values go into the rows and its last quaternion into w->prev. */
 static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, uint32_t f, uint32_t count,
-                                       const double (*sim)[B], float *rows)
+                                       const double (*sim)[B], float *rows, lane_extent *x)
 {
     const cb_palette *p = st->p;
     uint32_t bones = p->bone_count;
@@ -55,11 +86,22 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
         for (int i = 0; i < B; ++i) sq[c][i] = sign[i] * fq[c][i + 1];
     for (uint32_t i = 0; i < count; ++i) { /* lanes to rows: field by field, no staging copy */
         float *o = rows + (size_t)i * bones * 8 + (size_t)j * 8;
-        double *r = w->reach + ((size_t)i * bones + j) * 4;
         o[0] = sq[0][i], o[1] = sq[1][i], o[2] = sq[2][i], o[3] = sq[3][i];
         o[4] = fp[0][i], o[5] = fp[1][i], o[6] = fp[2][i], o[7] = fp[3][i];
-        r[0] = e[0][i], r[1] = e[1][i], r[2] = e[2][i], r[3] = e[3][i];
     }
+    /* Every lane grown (those past count repeat the last frame, and fold_lanes reads count). */
+    for (int k = 0; radius >= 0 && k < 3; ++k) /* a joint that moves no vertex bounds nothing */
+        for (int i = 0; i < B; ++i) {
+            double lo = e[k][i] - e[3][i], hi = e[k][i] + e[3][i];
+            x->lo[k][i] = lo < x->lo[k][i] ? lo : x->lo[k][i];
+            x->hi[k][i] = hi > x->hi[k][i] ? hi : x->hi[k][i];
+        }
+    for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < B; ++i) {
+            x->vlo[k][i] = fp[k][i] < x->vlo[k][i] ? fp[k][i] : x->vlo[k][i];
+            x->vhi[k][i] = fp[k][i] > x->vhi[k][i] ? fp[k][i] : x->vhi[k][i];
+        }
+    for (int i = 0; i < B; ++i) x->linear[i] = fp[3][i] > x->linear[i] ? fp[3][i] : x->linear[i];
     const float *last = rows + (size_t)(count - 1) * bones * 8 + (size_t)j * 8;
     w->prev[j] = (cb_quat){last[0], last[1], last[2], last[3]};
 }
@@ -76,18 +118,15 @@ void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, 
     uint32_t frames[B];
     for (uint32_t i = 0; i < count; ++i) frames[i] = f + i;
     cb_clip_frame_lanes(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, lanes);
+    lane_extent x;
+    lane_extent_reset(&x);
     for (uint32_t j = 0; j < bones; ++j)
-        bone_lanes(st, w, j, f, count, (const double(*)[B])(lanes + (size_t)j * 8 * B), rows);
-    /* Bounds and ranges in frame order, bone by bone, as one row at a time grows them (of +0
-     * and -0, the minimum is the one met first). Locals, kept in registers. */
+        bone_lanes(st, w, j, f, count, (const double(*)[B])(lanes + (size_t)j * 8 * B), rows, &x);
+    /* Bounds and ranges in frame order, as one row at a time grows them (of +0 and -0, the
+     * minimum is the one met first). Locals, kept in registers. */
     extent bounds = *clip_bounds;
     value_range range = st->ranges[c];
-    for (uint32_t i = 0; i < count; ++i)
-        for (uint32_t j = 0; j < bones; ++j) {
-            const double *e = w->reach + ((size_t)i * bones + j) * 4;
-            if (st->radius[j] >= 0) grow_bounds(&bounds, (cb_vec3){e[0], e[1], e[2]}, e[3]);
-            range_grow_qpos(&range, rows + (size_t)i * bones * 8 + (size_t)j * 8);
-        }
+    fold_lanes(&x, count, &bounds, &range);
     *clip_bounds = bounds;
     st->ranges[c] = range;
 }
