@@ -13,7 +13,7 @@ enum { VALUE_SLOTS = 2 * CB_SAMPLE_BATCH };
 
 /* A measurement's scratch: one row's differences, their bound terms and its group bounds. */
 typedef struct measure_scratch {
-    double *diff;                      /* bones * 16 */
+    double *diff;                      /* CB_SAMPLE_BATCH rows of bones * 16 */
     cb_joint_error *joints;            /* bones */
     double *group_bounds;              /* groups */
     cb_bounded_row *rows;              /* the clip's frames */
@@ -45,10 +45,11 @@ static const double *row_values(const cb_palette *p, measure_scratch *s, uint32_
     return read_slot(p, s, oldest);
 }
 
-/* A row's bound: its largest group bound (infinite when a difference is not finite). */
-static double row_bound(const bake_state *st, measure_scratch *s)
+/* A row's bound, its differences `diff`: its largest group bound (infinite when a difference is
+ * not finite). */
+static double row_bound(const bake_state *st, measure_scratch *s, const double *diff)
 {
-    if (!cb_joint_errors(s->diff, st->p->bone_count, st->p->bind_positions, s->joints)) return INFINITY;
+    if (!cb_joint_errors(diff, st->p->bone_count, st->p->bind_positions, s->joints)) return INFINITY;
     double most = 0;
     for (uint32_t k = 0; k < st->groups.group_count; ++k) {
         double bound = cb_group_error_bound(&st->groups, k, s->joints, most);
@@ -61,10 +62,10 @@ static double row_bound(const bake_state *st, measure_scratch *s)
  * largest bound first (it most likely holds the row's worst), then each group whose bound
  * exceeds the worst so far. The groups skipped cannot change the maximum, which is the one
  * skinning every vertex gives, bit for bit. */
-static double skin_row(const bake_state *st, measure_scratch *s, double worst)
+static double skin_row(const bake_state *st, measure_scratch *s, const double *diff, double worst)
 {
     const cb_vertex_groups *g = &st->groups;
-    bool finite = cb_joint_errors(s->diff, st->p->bone_count, st->p->bind_positions, s->joints);
+    bool finite = cb_joint_errors(diff, st->p->bone_count, st->p->bind_positions, s->joints);
     uint32_t top = 0;
     for (uint32_t k = 0; k < g->group_count; ++k) {
         s->group_bounds[k] = finite ? cb_group_error_bound(g, k, s->joints, worst) : INFINITY;
@@ -76,19 +77,78 @@ static double skin_row(const bake_state *st, measure_scratch *s, double worst)
         const cb_vertex_group *grp = &g->groups[k];
         const cb_primitive *prim = &st->model->primitives[grp->primitive];
         /* fmax's result without its call: worst is never NaN, and a NaN error leaves it as fmax does */
-        double error = sqrt(cb_skin_group_worst(prim, g->vertices + grp->first, grp->count, s->diff));
+        double error = sqrt(cb_skin_group_worst(prim, g->vertices + grp->first, grp->count, diff));
         worst = error > worst ? error : worst;
     }
     return worst;
 }
 
-/* Lane i of a joint's similarity lanes (cb_sample_joint_lanes) as a matrix: cb_similarity_matrix's
- * operations, inline. */
-static inline void lane_matrix(const double *sim, uint32_t i, double out[16])
+#define B CB_SAMPLE_BATCH
+
+/* cb_mat4_from_trs over the lanes: m[k][i] is lane i's m[k], with m[12..14] = t and the
+ * scale s on all three axes (the constant elements, 0 and 1, are left out). */
+static CB_CLONE_INLINE void trs_lanes(double m[15][B], const double (*t)[B], const double (*q)[B], const double *s)
 {
-    const double(*l)[CB_SAMPLE_BATCH] = (const double(*)[CB_SAMPLE_BATCH])sim;
-    cb_mat4_from_trs(out, (cb_vec3){l[4][i], l[5][i], l[6][i]}, (cb_quat){l[0][i], l[1][i], l[2][i], l[3][i]},
-                     (cb_vec3){l[7][i], l[7][i], l[7][i]});
+    for (int i = 0; i < B; ++i) {
+        double x = q[0][i], y = q[1][i], z = q[2][i], w = q[3][i];
+        double xx = x * x, yy = y * y, zz = z * z;
+        double xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
+        m[0][i] = (1 - 2 * (yy + zz)) * s[i], m[1][i] = (2 * (xy + wz)) * s[i], m[2][i] = (2 * (xz - wy)) * s[i];
+        m[4][i] = (2 * (xy - wz)) * s[i], m[5][i] = (1 - 2 * (xx + zz)) * s[i], m[6][i] = (2 * (yz + wx)) * s[i];
+        m[8][i] = (2 * (xz + wy)) * s[i], m[9][i] = (2 * (yz - wx)) * s[i], m[10][i] = (1 - 2 * (xx + yy)) * s[i];
+        m[12][i] = t[0][i], m[13][i] = t[1][i], m[14][i] = t[2][i];
+    }
+}
+
+/* Bone j of the batch's rows, measured against similarities: lane i's exact matrix from the
+ * sampler's lanes `sim` (cb_similarity_matrix's operations), its decoded one from rows a[i]
+ * (blended towards b[i] by fr when b: palette_blend_values's operations) as
+ * cb_palette_values_to_matrix builds a qpos bone, and their difference into row i's diff
+ * (diff + i * bones * 16: B rows, those past count repeat the last). The same operations in the
+ * same order as one matrix at a time, so the same bits, but over the lanes they vectorize. */
+static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, const double (*sim)[B],
+                                             const double *const *a, const double *const *b, uint32_t count, double fr,
+                                             double *diff)
+{
+    double v[8][B], exact[15][B], decoded[15][B], len2[B];
+    for (uint32_t i = 0; i < B; ++i) { /* the rows' values as lanes */
+        const double *x = a[i < count ? i : count - 1] + (size_t)j * 16;
+        for (int k = 0; k < 8; ++k) v[k][i] = x[k];
+    }
+    if (b) {
+        double w[8][B];
+        for (uint32_t i = 0; i < B; ++i) {
+            const double *x = b[i < count ? i : count - 1] + (size_t)j * 16;
+            for (int k = 0; k < 8; ++k) w[k][i] = x[k];
+        }
+        double sign[B];
+        for (int i = 0; i < B; ++i) { /* the shorter way between the rows */
+            double dot = v[0][i] * w[0][i] + v[1][i] * w[1][i] + v[2][i] * w[2][i] + v[3][i] * w[3][i];
+            sign[i] = dot < 0 ? -1 : 1;
+        }
+        for (int k = 0; k < 8; ++k)
+            for (int i = 0; i < B; ++i) v[k][i] = v[k][i] * (1 - fr) + (k < 4 ? sign[i] * w[k][i] : w[k][i]) * fr;
+    }
+    double inv[B];
+    for (int i = 0; i < B; ++i) { /* cb_quat_normalize: a zero quaternion is the identity */
+        len2[i] = v[0][i] * v[0][i] + v[1][i] * v[1][i] + v[2][i] * v[2][i] + v[3][i] * v[3][i];
+        inv[i] = 1 / sqrt(len2[i]);
+    }
+    for (int k = 0; k < 4; ++k)
+        for (int i = 0; i < B; ++i) v[k][i] = len2[i] == 0 ? (k == 3 ? 1 : 0) : v[k][i] * inv[i];
+    trs_lanes(exact, sim + 4, sim, sim[7]);
+    trs_lanes(decoded, v + 4, v, v[7]); /* t = p for now: t = p - A b below */
+    const float *bind = p->bind_positions + (size_t)j * 3;
+    double bx = bind[0], by = bind[1], bz = bind[2];
+    for (int i = 0; i < B; ++i) {
+        double abx = decoded[0][i] * bx + decoded[4][i] * by + decoded[8][i] * bz;
+        double aby = decoded[1][i] * bx + decoded[5][i] * by + decoded[9][i] * bz;
+        double abz = decoded[2][i] * bx + decoded[6][i] * by + decoded[10][i] * bz;
+        decoded[12][i] = v[4][i] - abx, decoded[13][i] = v[5][i] - aby, decoded[14][i] = v[6][i] - abz;
+    }
+    for (int k = 0; k < 15; ++k) /* each lane's difference, a matrix a row of diff: a transpose */
+        for (int i = 0; i < B; ++i) diff[((size_t)i * p->bone_count + j) * 16 + k] = k % 4 == 3 ? 0 : exact[k][i] - decoded[k][i];
+    for (int i = 0; i < B; ++i) diff[((size_t)i * p->bone_count + j) * 16 + 15] = 0; /* 1 - 1; 3, 7, 11: 0 - 0 */
 }
 
 /* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
@@ -96,7 +156,7 @@ static inline void lane_matrix(const double *sim, uint32_t i, double out[16])
  * it; with `bounds`, only each row's bound. Skinning is linear in the matrices, so one skinning
  * with (exact - decoded) gives each vertex's error directly: half the work of skinning twice,
  * and no cancellation. Rows baked from similarities are measured against those, sampled
- * together like the bake did. */
+ * together like the bake did, every row's differences at once (bone_differences). */
 CB_TARGET_CLONES
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
                            uint32_t sub, uint32_t parts, measure_scratch *s, double *bounds, double worst)
@@ -106,30 +166,38 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     /* Fraction sub / parts between rows f and f + 1 is row parts * f + sub of the clip framed at
      * `parts` times the steps. */
     cb_clip_info framing = st->infos[c];
-    uint32_t times[CB_SAMPLE_BATCH];
+    uint32_t times[B];
     for (uint32_t i = 0; i < count; ++i) times[i] = parts * frames[i] + sub;
     framing.steps *= parts;
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
-    /* Similarities as the sampler's lanes, in w->sims's memory (see palette_similarity_rows). */
-    double *lanes = (double *)w->sims;
-    if (similar) cb_clip_frame_lanes(w->sampler, &framing, times, count, st->opt->root_motion, lanes);
-    for (uint32_t i = 0; i < count; ++i) {
-        if (!similar) cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
-        uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
-        const double *a = row_values(p, s, row), *b = sub ? row_values(p, s, next) : NULL;
-        for (uint32_t j = 0; j < p->bone_count; ++j) {
-            double exact[16], decoded[16]; /* locals: the difference below vectorizes */
-            if (similar)
-                lane_matrix(lanes + (size_t)j * 8 * CB_SAMPLE_BATCH, i, exact);
-            else
-                memcpy(exact, w->mats + (size_t)j * 16, sizeof exact);
-            if (sub) palette_blend_values(p, j, a + (size_t)j * 16, b + (size_t)j * 16, (double)sub / parts, decoded);
-            else cb_palette_values_to_matrix(p, j, a + (size_t)j * 16, decoded);
-            double *d = s->diff + (size_t)j * 16;
-            for (int k = 0; k < 16; ++k) d[k] = exact[k] - decoded[k];
+    if (similar) {
+        /* Similarities as the sampler's lanes, in w->sims's memory (see palette_similarity_rows). */
+        double *lanes = (double *)w->sims;
+        cb_clip_frame_lanes(w->sampler, &framing, times, count, st->opt->root_motion, lanes);
+        const double *a[B], *b[B]; /* at most 2 B rows: all in the slots at once */
+        for (uint32_t i = 0; i < count; ++i) {
+            a[i] = row_values(p, s, clip->first_row + frames[i]);
+            b[i] = sub ? row_values(p, s, clip->first_row + (frames[i] + 1) % clip->frames) : NULL;
         }
-        if (bounds) bounds[i] = row_bound(st, s);
-        else worst = skin_row(st, s, worst);
+        for (uint32_t j = 0; j < p->bone_count; ++j)
+            bone_differences(p, j, (const double(*)[B])(lanes + (size_t)j * 8 * B), a, sub ? b : NULL, count,
+                             (double)sub / parts, s->diff);
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+        double *diff = similar ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
+        if (!similar) {
+            cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
+            uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
+            const double *a = row_values(p, s, row), *b = sub ? row_values(p, s, next) : NULL;
+            for (uint32_t j = 0; j < p->bone_count; ++j) {
+                double decoded[16], *d = diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
+                if (sub) palette_blend_values(p, j, a + (size_t)j * 16, b + (size_t)j * 16, (double)sub / parts, decoded);
+                else cb_palette_values_to_matrix(p, j, a + (size_t)j * 16, decoded);
+                for (int k = 0; k < 16; ++k) d[k] = exact[k] - decoded[k];
+            }
+        }
+        if (bounds) bounds[i] = row_bound(st, s, diff);
+        else worst = skin_row(st, s, diff, worst);
     }
     return worst;
 }
@@ -240,7 +308,7 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     uint32_t c = split ? k / 2 : k;
     bool blends = !split || k % 2 == 0, rows = !split || k % 2 == 1; /* what this job measures */
     size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
-    measure_scratch s = {malloc(matrices), malloc(p->bone_count * sizeof *s.joints),
+    measure_scratch s = {malloc(CB_SAMPLE_BATCH * matrices), malloc(p->bone_count * sizeof *s.joints),
                          malloc((st->groups.group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows),
                          malloc(p->clips[c].frames * sizeof *s.baked), malloc(VALUE_SLOTS * matrices), {0}, {0}, 0};
     for (uint32_t i = 0; i < VALUE_SLOTS; ++i) s.value_row[i] = UINT32_MAX;
