@@ -147,22 +147,42 @@ static u16_lanes u16_lanes_of(const u16_slot *slots)
     return q;
 }
 
+#if defined(__GNUC__) && defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+/* GCC's vector types: the four values are one vector each step, and the last step packs the
+ * low halves of the four integers into one 8-byte store (a loop over them, or memcpy from an
+ * array, left each a separate extract and store). The same operations, the same bits. */
+typedef double v4df __attribute__((vector_size(32)));
+typedef float v4sf __attribute__((vector_size(16)));
+typedef int64_t v4di __attribute__((vector_size(32)));
+typedef int32_t v4si __attribute__((vector_size(16)));
+typedef int16_t v8hi __attribute__((vector_size(16)));
+
 static CB_CLONE_INLINE void quantize4(const u16_lanes *q, const float *v, unsigned char *d)
 {
-    int32_t k[4];
+    v4sf f;
+    v4df offset, scale, lo, hi, steps; /* (locals, not helpers: a 32-byte vector argument changes the ABI) */
+    memcpy(&f, v, sizeof f);
+    memcpy(&offset, q->offset, sizeof offset), memcpy(&scale, q->scale, sizeof scale);
+    memcpy(&lo, q->lo, sizeof lo), memcpy(&hi, q->hi, sizeof hi), memcpy(&steps, q->steps, sizeof steps);
+    v4df x = (__builtin_convertvector(f, v4df) - offset) * scale;
+    v4di below = x < lo, above = x > hi; /* all ones where true: C has no ?: over vectors */
+    x = (v4df)(((v4di)lo & below) | ((v4di)x & ~below));
+    x = (v4df)(((v4di)hi & above) | ((v4di)x & ~above));
+    v4si k = __builtin_convertvector((x * steps + ROUND_MAGIC) - ROUND_MAGIC, v4si);
+    v8hi n = __builtin_shuffle((v8hi)k, (v8hi){0, 2, 4, 6, 0, 2, 4, 6}); /* each low half: (uint16_t) */
+    memcpy(d, &n, 8);
+}
+#else
+static CB_CLONE_INLINE void quantize4(const u16_lanes *q, const float *v, unsigned char *d)
+{
     for (int i = 0; i < 4; ++i) {
         double x = ((double)v[i] - q->offset[i]) * q->scale[i];
         x = x < q->lo[i] ? q->lo[i] : x;
         x = x > q->hi[i] ? q->hi[i] : x;
-        k[i] = (int32_t)((x * q->steps[i] + ROUND_MAGIC) - ROUND_MAGIC);
+        store_le16(d + i * 2, (uint16_t)(int32_t)((x * q->steps[i] + ROUND_MAGIC) - ROUND_MAGIC));
     }
-    uint16_t n[4] = {(uint16_t)k[0], (uint16_t)k[1], (uint16_t)k[2], (uint16_t)k[3]};
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    memcpy(d, n, sizeof n); /* one store */
-#else
-    for (int i = 0; i < 4; ++i) store_le16(d + i * 2, n[i]);
-#endif
 }
+#endif
 
 /* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
 void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count)
