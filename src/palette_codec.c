@@ -148,6 +148,12 @@ static u16_lanes u16_lanes_of(const u16_slot *slots)
 }
 
 #if defined(__GNUC__) && defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define GCC_VECTORS 1
+#else
+#define GCC_VECTORS 0
+#endif
+
+#if GCC_VECTORS
 /* GCC's vector types: the four values are one vector each step, and the last step packs the
  * low halves of the four integers into one 8-byte store (a loop over them, or memcpy from an
  * array, left each a separate extract and store). The same operations, the same bits. */
@@ -156,6 +162,8 @@ typedef float v4sf __attribute__((vector_size(16)));
 typedef int64_t v4di __attribute__((vector_size(32)));
 typedef int32_t v4si __attribute__((vector_size(16)));
 typedef int16_t v8hi __attribute__((vector_size(16)));
+typedef int16_t v4hi __attribute__((vector_size(8)));
+typedef uint16_t v4hu __attribute__((vector_size(8)));
 
 static CB_CLONE_INLINE void quantize4(const u16_lanes *q, const float *v, unsigned char *d)
 {
@@ -411,6 +419,27 @@ void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t 
 
 /* decode_bone's qpos/u16 arithmetic for a whole row, four values at a time (snorm16_decode's
  * and unorm16_decode's operations in their order, so the same doubles), which vectorizes. */
+#if GCC_VECTORS
+static CB_CLONE_INLINE void decode_qpos_u16_row(const cb_palette *p, const unsigned char *d, double *values)
+{
+    v4df lo = {p->bounds_min[0], p->bounds_min[1], p->bounds_min[2], 0}, minus1 = {-1, -1, -1, -1};
+    v4df hi = {p->bounds_max[0], p->bounds_max[1], p->bounds_max[2], p->linear_range}, span = hi - lo;
+    v4di keep = hi > lo; /* all ones where the range is not a point */
+    for (uint32_t j = 0; j < p->bone_count; ++j, d += 16) {
+        double *v = values + (size_t)j * 16;
+        v4hi qs;
+        v4hu us;
+        memcpy(&qs, d, sizeof qs), memcpy(&us, d + 8, sizeof us);
+        v4df q = __builtin_convertvector(qs, v4df) / 32767.0;
+        v4df x = lo + span * (__builtin_convertvector(us, v4df) / 65535.0);
+        v4di below = q < minus1;
+        q = (v4df)(((v4di)minus1 & below) | ((v4di)q & ~below));
+        x = (v4df)(((v4di)x & keep) | ((v4di)lo & ~keep));
+        memcpy(v, &q, sizeof q), memcpy(v + 4, &x, sizeof x);
+        for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->position_offsets[(size_t)j * 3 + k];
+    }
+}
+#else
 static CB_CLONE_INLINE void decode_qpos_u16_row(const cb_palette *p, const unsigned char *d, double *values)
 {
     double lo[4] = {p->bounds_min[0], p->bounds_min[1], p->bounds_min[2], 0}, span[4], keep[4];
@@ -428,6 +457,7 @@ static CB_CLONE_INLINE void decode_qpos_u16_row(const cb_palette *p, const unsig
         for (int k = 0; p->positions_relative && k < 3; ++k) v[4 + k] += p->position_offsets[(size_t)j * 3 + k];
     }
 }
+#endif
 
 CB_TARGET_CLONES
 void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values)
