@@ -137,7 +137,7 @@ template <class What>
 bool view_span(const Context &c, int view_index, size_t offset, size_t count, size_t elem_size, size_t stride,
                const What &what, const unsigned char **out)
 {
-    const doc::Document &g = *c.gltf;
+    const doc::Document &g = *c.doc;
     if (view_index < 0 || view_index >= (int)g.bufferViews.size()) {
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses bufferView %d, which does not exist", c.name, what().c_str(), view_index);
         return false;
@@ -174,7 +174,7 @@ bool view_span(const Context &c, int view_index, size_t offset, size_t count, si
 template <typename T, class What>
 bool read_accessor(const Context &c, int index, int want_comps, const What &what, T **out, size_t *count_out)
 {
-    const doc::Document &g = *c.gltf;
+    const doc::Document &g = *c.doc;
     if (index < 0 || index >= (int)g.accessors.size()) {
         cb_fail(c.err, CB_ERR_INPUT, "%s: %s uses accessor %d, which does not exist", c.name, what().c_str(), index);
         return false;
@@ -264,7 +264,7 @@ const char *name_or(cb_model *m, const std::string &name, const char *prefix, si
 
 bool convert_nodes(Context &c)
 {
-    const auto &nodes = c.gltf->nodes;
+    const auto &nodes = c.doc->nodes;
     cb_model *m = c.model;
     m->node_count = (uint32_t)nodes.size();
     m->nodes = static_cast<cb_node *>(cb_model_alloc(m, nodes.size(), sizeof(cb_node)));
@@ -306,7 +306,7 @@ bool convert_nodes(Context &c)
 // in a hierarchy the runtime never sees.
 bool check_joints_in_scene(Context &c)
 {
-    const doc::Document &g = *c.gltf;
+    const doc::Document &g = *c.doc;
     if (g.scenes.empty()) return true;
     int scene = g.defaultScene >= 0 && g.defaultScene < (int)g.scenes.size() ? g.defaultScene : 0;
     const std::vector<int> &roots = g.scenes[(size_t)scene].nodes;
@@ -330,7 +330,7 @@ bool check_joints_in_scene(Context &c)
 
 bool convert_skins(Context &c)
 {
-    const auto &skins = c.gltf->skins;
+    const auto &skins = c.doc->skins;
     cb_model *m = c.model;
     m->skin_count = (uint32_t)skins.size();
     m->skins = static_cast<cb_skin *>(cb_model_alloc(m, skins.size(), sizeof(cb_skin)));
@@ -372,7 +372,7 @@ bool convert_primitive(Context &c, size_t node_index, const doc::Primitive &p, s
 {
     const int *pos = p.attribute("POSITION"), *jnt = p.attribute("JOINTS_0"), *wgt = p.attribute("WEIGHTS_0");
     if (!pos || !jnt || !wgt) return true; // not skinned
-    const doc::Node &node = c.gltf->nodes[node_index];
+    const doc::Node &node = c.doc->nodes[node_index];
     auto where = [&] { return "mesh node " + std::to_string(node_index) + " (" + node.name + ")"; };
     float *positions, *weights, *normals;
     double *joints = nullptr;
@@ -381,7 +381,7 @@ bool convert_primitive(Context &c, size_t node_index, const doc::Primitive &p, s
     size_t n, nj, nw, nn, ni;
     // Joint indices of 8 or 16 bits (all glTF allows) are read as they are; any other type is
     // read as numbers and checked against 0..65535 below.
-    const auto &acc = c.gltf->accessors;
+    const auto &acc = c.doc->accessors;
     int jt = *jnt >= 0 && (size_t)*jnt < acc.size() && !acc[(size_t)*jnt].normalized ? acc[(size_t)*jnt].componentType : 0;
     bool small = jt == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || jt == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
     auto jwhat = [&] { return where() + " JOINTS_0"; };
@@ -424,11 +424,11 @@ bool convert_primitive(Context &c, size_t node_index, const doc::Primitive &p, s
         prim.indices = indices;
     }
     for (auto &a : p.attributes) { /* every attribute, as the file types it: what a runtime uploads */
-        const doc::Accessor &acc = c.gltf->accessors[(size_t)a.second];
+        const doc::Accessor &acc = c.doc->accessors[(size_t)a.second];
         uint32_t elem = (uint32_t)(type_components(acc.type) * component_size(acc.componentType));
         prim.vertex_bytes += (elem + 3) / 4 * 4;
     }
-    if (p.indices >= 0) prim.index_bytes = component_size(c.gltf->accessors[(size_t)p.indices].componentType) == 4 ? 4 : 2;
+    if (p.indices >= 0) prim.index_bytes = component_size(c.doc->accessors[(size_t)p.indices].componentType) == 4 ? 4 : 2;
     prim.positions = positions;
     prim.joints = joints16;
     prim.weights = weights;
@@ -438,7 +438,7 @@ bool convert_primitive(Context &c, size_t node_index, const doc::Primitive &p, s
 
 bool convert_meshes(Context &c)
 {
-    const doc::Document &g = *c.gltf;
+    const doc::Document &g = *c.doc;
     std::vector<cb_primitive> prims;
     for (size_t i = 0; i < g.nodes.size(); ++i) {
         const doc::Node &node = g.nodes[i];
@@ -517,7 +517,7 @@ bool convert_channel(Context &c, size_t a, size_t ci, const doc::Animation &src,
 
 bool convert_animations(Context &c)
 {
-    const auto &anims = c.gltf->animations;
+    const auto &anims = c.doc->animations;
     cb_model *m = c.model;
     m->animation_count = (uint32_t)anims.size();
     m->animations = static_cast<cb_animation *>(cb_model_alloc(m, anims.size(), sizeof(cb_animation)));

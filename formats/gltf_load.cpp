@@ -194,7 +194,7 @@ cb_model *load(const unsigned char *data, size_t size, file_bytes *file, TailRea
         doc_from_tinygltf(&gltf, &d);
         gltf = tinygltf::Model(); // its buffers are d's now; the rest is not read again
     }
-    c.gltf = &d;
+    c.doc = &d;
     c.model = cb_model_create(name);
     if (!c.model) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory", name);

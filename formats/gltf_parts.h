@@ -127,7 +127,7 @@ struct Span {
 
 struct Context {
     cb_model *model;
-    const doc::Document *gltf;
+    const doc::Document *doc; // what the file holds, from either parse
     std::vector<Span> buffers;   // the bytes of each buffer, which the model owns
     cb_limits limits;
     cb_error *err;

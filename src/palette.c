@@ -272,11 +272,11 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
         for (uint32_t c = 0; w.sampler && c < st->p->clip_count; ++c)
             if (st->infos[c].loops) cb_sampler_set_period(w.sampler, st->infos[c].animation, st->infos[c].duration);
         w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
-        w.sims = malloc((size_t)st->p->bone_count * CB_SAMPLE_BATCH * sizeof(cb_similarity));
+        w.lanes = malloc((size_t)st->p->bone_count * 8 * CB_SAMPLE_BATCH * sizeof(double));
         w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
         w.first = malloc((size_t)st->p->bone_count * 4 * sizeof(float));
     }
-    if (jb->samples && (!w.sampler || !w.mats || !w.sims || !w.prev || !w.first)) {
+    if (jb->samples && (!w.sampler || !w.mats || !w.lanes || !w.prev || !w.first)) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
         for (uint32_t c = atomic_fetch_add(&jb->next, 1); c < jb->count; c = atomic_fetch_add(&jb->next, 1))
@@ -284,7 +284,7 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     }
     cb_sampler_free(w.sampler);
     free(w.mats);
-    free(w.sims);
+    free(w.lanes);
     free(w.prev);
     free(w.first);
     free(w.rows);

@@ -57,7 +57,8 @@ static inline void range_grow_affine(value_range *r, const float *v)
 typedef struct worker {
     cb_sampler *sampler;
     double *mats;        /* bones * 16 */
-    cb_similarity *sims; /* CB_SAMPLE_BATCH rows of bones: the joints, for qpos rows of similarity rigs */
+    double *lanes;       /* bones * 8 lanes of CB_SAMPLE_BATCH: the joints' similarities (cb_clip_frame_lanes), for
+                          * qpos rows of similarity rigs and their measurement */
     cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
     float *rows;         /* pre-encoding rows: CB_SAMPLE_BATCH of them, or a whole clip's for --fit */
     float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
@@ -113,7 +114,7 @@ static inline double row_position(const float *c, const float *b, int r)
 }
 
 /* palette_rows.c: `count` (at most CB_SAMPLE_BATCH) qpos rows of clip c from the joint
- * similarities of frames f, f + 1, ... (sampled into w->sims's memory), into rows (row f's
+ * similarities of frames f, f + 1, ... (sampled into w->lanes), into rows (row f's
  * first); grows the clip's bounds and st->ranges[c]. */
 void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
                              extent *clip_bounds);

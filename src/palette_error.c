@@ -171,8 +171,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     framing.steps *= parts;
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
     if (similar) {
-        /* Similarities as the sampler's lanes, in w->sims's memory (see palette_similarity_rows). */
-        double *lanes = (double *)w->sims;
+        double *lanes = w->lanes;
         cb_clip_frame_lanes(w->sampler, &framing, times, count, st->opt->root_motion, lanes);
         const double *a[B], *b[B]; /* at most 2 B rows: all in the slots at once */
         for (uint32_t i = 0; i < count; ++i) {

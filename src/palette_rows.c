@@ -111,10 +111,8 @@ void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, 
                              extent *clip_bounds)
 {
     uint32_t bones = st->p->bone_count;
-    /* The joints' similarities as lanes (the sampler's layout: no transposing on either side),
-     * in w->sims's memory: bones * B similarities hold bones * 8 lanes of B. */
-    _Static_assert(sizeof(cb_similarity) == 8 * sizeof(double), "a similarity is 8 lanes' worth");
-    double *lanes = (double *)w->sims;
+    /* The joints' similarities as lanes (the sampler's layout: no transposing on either side). */
+    double *lanes = w->lanes;
     uint32_t frames[B];
     for (uint32_t i = 0; i < count; ++i) frames[i] = f + i;
     cb_clip_frame_lanes(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, lanes);

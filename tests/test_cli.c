@@ -219,6 +219,32 @@ static void test_inspect_in_place_velocity(void **state)
     assert_true(strstr(out, "(0, 0, 0)") == NULL); /* a kept walk does not claim to stand still */
 }
 
+/* Clip names as exporters write them ("AnimalArmature|Attack_Headbutt", 30 characters) keep
+ * inspect's table aligned: each clip's "first row" number ends under its column title. */
+static void test_inspect_aligns_long_clip_names(void **state)
+{
+    (void)state;
+    static char out[1 << 14];
+    char cow[1024];
+    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/cow.pal -q", cow), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/cow.pal"), 0);
+    const char *title = strstr(out, "first row");
+    assert_non_null(title);
+    const char *line = title;
+    while (line > out && line[-1] != '\n') --line;
+    long column_end = (title - line) + (long)strlen("first row");
+    int rows = 0;
+    for (const char *l = strchr(title, '\n'); l && *++l; l = strchr(l, '\n')) {
+        if (!strstr(l, "AnimalArmature|") || strstr(l, "AnimalArmature|") > strchr(l, '\n')) continue;
+        const char *p = l + column_end; /* the number's last digit sits just before the column end */
+        assert_true(p[-1] >= '0' && p[-1] <= '9');
+        assert_true(p[0] == ' ');
+        ++rows;
+    }
+    assert_int_equal(rows, 12); /* the Cow's 12 clips */
+}
+
 /* Each [bake] and [budget] value catalog.example.toml shows is what the parser uses when the
  * key is left out (the file says "every key ... with its default"). */
 static void test_example_catalog_states_the_defaults(void **state)
@@ -275,6 +301,7 @@ int main(void)
         cmocka_unit_test(test_format_pal_exr_keeps_each_precision),
         cmocka_unit_test(test_messages),
         cmocka_unit_test(test_inspect_in_place_velocity),
+        cmocka_unit_test(test_inspect_aligns_long_clip_names),
         cmocka_unit_test(test_example_catalog_states_the_defaults),
     };
     return cmocka_run_group_tests_name("cli", tests, setup, NULL);
