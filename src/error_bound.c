@@ -5,25 +5,6 @@
 #include <math.h>
 #include <stdlib.h>
 
-/* An upper bound on the 3x3 part's largest stretch (spectral norm): the square root of the
- * largest Gershgorin row sum of its Gram matrix G = A^T A, whose eigenvalues are the squared
- * stretches. Tighter than the Frobenius norm for the near-rotations that encodings leave
- * (sqrt(4/3) instead of sqrt(2) times the stretch at worst for a small rotation). */
-static CB_CLONE_INLINE double stretch(const double *D)
-{
-    const double *c0 = D, *c1 = D + 4, *c2 = D + 8; /* columns of A */
-    double g00 = c0[0] * c0[0] + c0[1] * c0[1] + c0[2] * c0[2], g11 = c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2];
-    double g22 = c2[0] * c2[0] + c2[1] * c2[1] + c2[2] * c2[2];
-    double g01 = fabs(c0[0] * c1[0] + c0[1] * c1[1] + c0[2] * c1[2]);
-    double g02 = fabs(c0[0] * c2[0] + c0[1] * c2[1] + c0[2] * c2[2]);
-    double g12 = fabs(c1[0] * c2[0] + c1[1] * c2[1] + c1[2] * c2[2]);
-    double r0 = g00 + g01 + g02, r1 = g01 + g11 + g12, r2 = g02 + g12 + g22;
-    /* Not fmax: a compare and a select, where fmax is a call. They differ only for NaN, and a
-     * difference with one makes cb_joint_errors fail (its at_bind is not finite) either way. */
-    double r = r0 > r1 ? r0 : r1;
-    return sqrt(r > r2 ? r : r2) * (1 + 1e-9);
-}
-
 static int by_bound(const void *pa, const void *pb)
 {
     const cb_bounded_row *a = pa, *b = pb;
@@ -39,18 +20,10 @@ bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_j
     bool finite = true;
     for (uint32_t j = 0; j < bones; ++j) {
         const double *D = diff + (size_t)j * 16;
-        double bx = bind[j * 3], by = bind[j * 3 + 1], bz = bind[j * 3 + 2];
-        double ex = D[0] * bx + D[4] * by + D[8] * bz + D[12];
-        double ey = D[1] * bx + D[5] * by + D[9] * bz + D[13];
-        double ez = D[2] * bx + D[6] * by + D[10] * bz + D[14];
-        double a = stretch(D), t = sqrt(D[12] * D[12] + D[13] * D[13] + D[14] * D[14]);
-        out[j].at_bind = sqrt(ex * ex + ey * ey + ez * ez);
-        out[j].stretch = a;
-        /* Rounding in skinning and here is far below 1e-9 of the terms' sizes: the slack keeps
-         * the bound above the computed error even where D b and t cancel (far from the origin). */
-        out[j].slack_fixed = 1e-9 * (a * sqrt(bx * bx + by * by + bz * bz) + t);
-        out[j].translation = t, out[j].diff = D;
-        finite &= isfinite(out[j].at_bind + out[j].slack_fixed); /* no exit from the loop: it vectorizes */
+        double terms[4];
+        double sum = cb_joint_error_terms(D, bind[j * 3], bind[j * 3 + 1], bind[j * 3 + 2], terms);
+        out[j] = (cb_joint_error){terms[0], terms[1], terms[2], terms[3], D};
+        finite &= isfinite(sum); /* no exit from the loop: it vectorizes */
     }
     return finite;
 }

@@ -14,7 +14,7 @@ enum { VALUE_SLOTS = 2 * CB_SAMPLE_BATCH };
 /* A measurement's scratch: one row's differences, their bound terms and its group bounds. */
 typedef struct measure_scratch {
     double *diff;                      /* CB_SAMPLE_BATCH rows of bones * 16 */
-    cb_joint_error *joints;            /* bones */
+    cb_joint_error *joints;            /* CB_SAMPLE_BATCH rows of bones: the differences' bound terms */
     double *group_bounds;              /* groups */
     cb_bounded_row *rows;              /* the clip's frames */
     cb_bounded_row *baked;             /* the clip's frames: the baked rows measured with the blends */
@@ -22,6 +22,7 @@ typedef struct measure_scratch {
     uint32_t value_row[VALUE_SLOTS];   /* which row each slot holds (UINT32_MAX: none) */
     uint64_t value_read[VALUE_SLOTS];  /* when each slot was last read (0: never) */
     uint64_t reads;                    /* the reads so far: the clock of value_read */
+    bool finite[CB_SAMPLE_BATCH];      /* per row: every difference finite (else no bound holds) */
 } measure_scratch;
 
 /* Slot k's values, read now. */
@@ -45,14 +46,14 @@ static const double *row_values(const cb_palette *p, measure_scratch *s, uint32_
     return read_slot(p, s, oldest);
 }
 
-/* A row's bound, its differences `diff`: its largest group bound (infinite when a difference is
- * not finite). */
-static double row_bound(const bake_state *st, measure_scratch *s, const double *diff)
+/* A row's bound, from its differences' terms `joints`: its largest group bound (infinite when a
+ * difference is not finite). */
+static double row_bound(const bake_state *st, const cb_joint_error *joints, bool finite)
 {
-    if (!cb_joint_errors(diff, st->p->bone_count, st->p->bind_positions, s->joints)) return INFINITY;
+    if (!finite) return INFINITY;
     double most = 0;
     for (uint32_t k = 0; k < st->groups.group_count; ++k) {
-        double bound = cb_group_error_bound(&st->groups, k, s->joints, most);
+        double bound = cb_group_error_bound(&st->groups, k, joints, most);
         most = bound > most ? bound : most; /* fmax(most, bound): most is never NaN */
     }
     return most;
@@ -62,13 +63,13 @@ static double row_bound(const bake_state *st, measure_scratch *s, const double *
  * largest bound first (it most likely holds the row's worst), then each group whose bound
  * exceeds the worst so far. The groups skipped cannot change the maximum, which is the one
  * skinning every vertex gives, bit for bit. */
-static double skin_row(const bake_state *st, measure_scratch *s, const double *diff, double worst)
+static double skin_row(const bake_state *st, measure_scratch *s, const double *diff, const cb_joint_error *joints,
+                       bool finite, double worst)
 {
     const cb_vertex_groups *g = &st->groups;
-    bool finite = cb_joint_errors(diff, st->p->bone_count, st->p->bind_positions, s->joints);
     uint32_t top = 0;
     for (uint32_t k = 0; k < g->group_count; ++k) {
-        s->group_bounds[k] = finite ? cb_group_error_bound(g, k, s->joints, worst) : INFINITY;
+        s->group_bounds[k] = finite ? cb_group_error_bound(g, k, joints, worst) : INFINITY;
         if (s->group_bounds[k] > s->group_bounds[top]) top = k;
     }
     for (uint32_t n = 0; n <= g->group_count; ++n) {
@@ -100,15 +101,48 @@ static CB_CLONE_INLINE void trs_lanes(double m[15][B], const double (*t)[B], con
     }
 }
 
+#if defined(__GNUC__) && !defined(__clang__)
+typedef double v4df __attribute__((vector_size(32)));
+typedef int64_t v4di __attribute__((vector_size(32)));
+
+/* Lane i's difference matrix into out + i * stride, from its 12 elements as lanes d[k] (column c
+ * is d[3c .. 3c + 2], then a 0): each column of four lanes a 4x4 transpose of shuffles and four
+ * 32-byte stores, where element by element takes 16 scattered stores a lane. */
+static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out, size_t stride)
+{
+    const v4df zero = {0, 0, 0, 0};
+    for (int first = 0; first < B; first += 4)
+        for (int c = 0; c < 4; ++c) {
+            v4df r0, r1, r2;
+            memcpy(&r0, &d[3 * c][first], 32), memcpy(&r1, &d[3 * c + 1][first], 32), memcpy(&r2, &d[3 * c + 2][first], 32);
+            v4df t0 = __builtin_shuffle(r0, r1, (v4di){0, 4, 2, 6}), t1 = __builtin_shuffle(r0, r1, (v4di){1, 5, 3, 7});
+            v4df t2 = __builtin_shuffle(r2, zero, (v4di){0, 4, 2, 6}), t3 = __builtin_shuffle(r2, zero, (v4di){1, 5, 3, 7});
+            v4df l0 = __builtin_shuffle(t0, t2, (v4di){0, 1, 4, 5}), l1 = __builtin_shuffle(t1, t3, (v4di){0, 1, 4, 5});
+            v4df l2 = __builtin_shuffle(t0, t2, (v4di){2, 3, 6, 7}), l3 = __builtin_shuffle(t1, t3, (v4di){2, 3, 6, 7});
+            double *o = out + (size_t)first * stride + 4 * c;
+            memcpy(o, &l0, 32), memcpy(o + stride, &l1, 32), memcpy(o + 2 * stride, &l2, 32), memcpy(o + 3 * stride, &l3, 32);
+        }
+}
+#else
+static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out, size_t stride)
+{
+    for (int i = 0; i < B; ++i)
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 4; ++r) out[i * stride + 4 * c + r] = r < 3 ? d[3 * c + r][i] : 0;
+}
+#endif
+
 /* Bone j of the batch's rows, measured against similarities: lane i's exact matrix from the
  * sampler's lanes `sim` (cb_similarity_matrix's operations), its decoded one from rows a[i]
  * (blended towards b[i] by fr when b: palette_blend_values's operations) as
  * cb_palette_values_to_matrix builds a qpos bone, and their difference into row i's diff
- * (diff + i * bones * 16: B rows, those past count repeat the last). The same operations in the
- * same order as one matrix at a time, so the same bits, but over the lanes they vectorize. */
+ * (diff + i * bones * 16: B rows, those past count repeat the last); the difference's bound
+ * terms (cb_joint_errors's) into row i's joints, for the first `count` rows, and whether they
+ * are finite into finite[i]. The same operations in the same order as one matrix at a time, so
+ * the same bits, but over the lanes they vectorize. */
 static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, const double (*sim)[B],
                                              const double *const *a, const double *const *b, uint32_t count, double fr,
-                                             double *diff)
+                                             double *diff, cb_joint_error *joints, bool *finite)
 {
     double v[8][B], exact[15][B], decoded[15][B], len2[B];
     for (uint32_t i = 0; i < B; ++i) { /* the rows' values as lanes */
@@ -146,9 +180,24 @@ static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, co
         double abz = decoded[2][i] * bx + decoded[6][i] * by + decoded[10][i] * bz;
         decoded[12][i] = v[4][i] - abx, decoded[13][i] = v[5][i] - aby, decoded[14][i] = v[6][i] - abz;
     }
-    for (int k = 0; k < 15; ++k) /* each lane's difference, a matrix a row of diff: a transpose */
-        for (int i = 0; i < B; ++i) diff[((size_t)i * p->bone_count + j) * 16 + k] = k % 4 == 3 ? 0 : exact[k][i] - decoded[k][i];
-    for (int i = 0; i < B; ++i) diff[((size_t)i * p->bone_count + j) * 16 + 15] = 0; /* 1 - 1; 3, 7, 11: 0 - 0 */
+    double d[12][B]; /* the differences' elements 0-2, 4-6, 8-10, 12-14 (3, 7, 11, 15 are 0 - 0, 1 - 1) */
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 3; ++r)
+            for (int i = 0; i < B; ++i) d[3 * c + r][i] = exact[4 * c + r][i] - decoded[4 * c + r][i];
+    store_differences((const double(*)[B])d, diff + (size_t)j * 16, (size_t)p->bone_count * 16);
+    /* Each row's bound terms for the bone (cb_joint_errors's, over the lanes). */
+    double terms[4][B], sum[B];
+    for (int i = 0; i < B; ++i) {
+        double t[4], D[16] = {d[0][i], d[1][i], d[2][i],  0, d[3][i], d[4][i],  d[5][i],  0,
+                              d[6][i], d[7][i], d[8][i], 0, d[9][i], d[10][i], d[11][i], 0};
+        sum[i] = cb_joint_error_terms(D, bx, by, bz, t);
+        terms[0][i] = t[0], terms[1][i] = t[1], terms[2][i] = t[2], terms[3][i] = t[3];
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+        size_t at = (size_t)i * p->bone_count + j;
+        joints[at] = (cb_joint_error){terms[0][i], terms[1][i], terms[2][i], terms[3][i], diff + at * 16};
+        finite[i] &= isfinite(sum[i]);
+    }
 }
 
 /* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
@@ -178,12 +227,14 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
             a[i] = row_values(p, s, clip->first_row + frames[i]);
             b[i] = sub ? row_values(p, s, clip->first_row + (frames[i] + 1) % clip->frames) : NULL;
         }
+        for (uint32_t i = 0; i < count; ++i) s->finite[i] = true;
         for (uint32_t j = 0; j < p->bone_count; ++j)
             bone_differences(p, j, (const double(*)[B])(lanes + (size_t)j * 8 * B), a, sub ? b : NULL, count,
-                             (double)sub / parts, s->diff);
+                             (double)sub / parts, s->diff, s->joints, s->finite);
     }
     for (uint32_t i = 0; i < count; ++i) {
         double *diff = similar ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
+        const cb_joint_error *joints = similar ? s->joints + (size_t)i * p->bone_count : s->joints;
         if (!similar) {
             cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
             uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
@@ -195,8 +246,9 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
                 for (int k = 0; k < 16; ++k) d[k] = exact[k] - decoded[k];
             }
         }
-        if (bounds) bounds[i] = row_bound(st, s, diff);
-        else worst = skin_row(st, s, diff, worst);
+        bool finite = similar ? s->finite[i] : cb_joint_errors(diff, p->bone_count, p->bind_positions, s->joints);
+        if (bounds) bounds[i] = row_bound(st, joints, finite);
+        else worst = skin_row(st, s, diff, joints, finite, worst);
     }
     return worst;
 }
@@ -307,9 +359,9 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     uint32_t c = split ? k / 2 : k;
     bool blends = !split || k % 2 == 0, rows = !split || k % 2 == 1; /* what this job measures */
     size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
-    measure_scratch s = {malloc(CB_SAMPLE_BATCH * matrices), malloc(p->bone_count * sizeof *s.joints),
+    measure_scratch s = {malloc(CB_SAMPLE_BATCH * matrices), malloc(CB_SAMPLE_BATCH * p->bone_count * sizeof *s.joints),
                          malloc((st->groups.group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows),
-                         malloc(p->clips[c].frames * sizeof *s.baked), malloc(VALUE_SLOTS * matrices), {0}, {0}, 0};
+                         malloc(p->clips[c].frames * sizeof *s.baked), malloc(VALUE_SLOTS * matrices), {0}, {0}, 0, {0}};
     for (uint32_t i = 0; i < VALUE_SLOTS; ++i) s.value_row[i] = UINT32_MAX;
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
      * ways, so their quarter points are measured too. */
