@@ -228,7 +228,7 @@ int accessor_type(std::string_view t)
 void parse_accessor(Value o, doc::Accessor *a)
 {
     static constexpr std::string_view keys[] = {"bufferView", "byteOffset", "normalized", "componentType",
-                                       "count",      "type",       "sparse",     "name"};
+                                                "count",      "type",       "sparse",     "name"};
     unsigned seen = members(o, keys, [&](size_t i, Value v) {
         switch (i) {
         case 0: a->bufferView = as_int(v); break;
@@ -406,8 +406,8 @@ template <class T, class F> void parse_list(Value v, std::vector<T> *out, F pars
 void parse_document(Value root, doc::Document *g, size_t *byte_length)
 {
     static constexpr std::string_view keys[] = {"asset", "extensionsUsed", "extensionsRequired", "buffers", "bufferViews",
-                                       "accessors", "meshes", "nodes", "scenes", "scene", "animations", "skins",
-                                       "cameras", "images", "materials", "textures", "samplers", "extensions"};
+                                                "accessors", "meshes", "nodes", "scenes", "scene", "animations", "skins",
+                                                "cameras", "images", "materials", "textures", "samplers", "extensions"};
     Value later[18];
     unsigned seen = members(root, keys, [&](size_t i, Value v) { later[i] = v; });
     auto given = [seen](int k) { return (seen >> k) & 1; };
@@ -449,8 +449,9 @@ void parse_document(Value root, doc::Document *g, size_t *byte_length)
 //
 // tinygltf reads numbers with RapidJSON's full precision, which is not correctly rounded
 // everywhere: a zero whose exponent, less its fraction's digits, is past +-22 leaves its exact
-// path ("0e56" reads 1e56, "0.0e-22" 1e-23), and so may more than 17 significant digits near
-// a halfway point, and subnormals; it refuses a zero past 1e308 ("0e400") that simdjson takes.
+// path and reads as whatever lies in its buffer ("0e56" gave 1.27e30 once, "0.0e-22"
+// -1.75e-192), more than 17 significant digits near a halfway point and subnormals may be an
+// ulp off, and it refuses a zero past 1e308 ("0e400") that simdjson takes.
 // simdjson rounds all of them correctly, so a file with such a number goes to tinygltf. What
 // both read alike, checked against RapidJSON 1.1.0 on millions of numbers (random, shortest
 // and %.15g to %.17g forms of doubles, and cuts of halfway points): a nonzero number of at
