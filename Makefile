@@ -13,11 +13,11 @@
 .SECONDARY: # keep intermediate files (the test programs between their sources and their runs)
 SHELL := /bin/bash
 
-DEB_PACKAGES := pkg-config rapidjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
+DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
                 cmake groff-base
-PKGS := tinygltf RapidJSON draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
+PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
 BUILD   ?= build
 CC      ?= cc
@@ -28,7 +28,7 @@ WARN    := -Wall -Wextra $(WERROR)
 SAN     ?=
 # Everything below needs pkg-config, which `make deps` brings.
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
-PKG_LIBS   = $(shell pkg-config --libs draco OpenEXR libzstd tomlplusplus libpng 2>/dev/null) -lmeshoptimizer -lpthread -lm -ldl
+PKG_LIBS   = $(shell pkg-config --libs simdjson draco OpenEXR libzstd tomlplusplus libpng 2>/dev/null) -lmeshoptimizer -lpthread -lm -ldl
 # The command links Draco from libdraco-dev's archive: its ~2,500 symbol bindings were half the
 # dynamic loader's work at every start (about 1 ms of a 9 ms Fox bake); only the decoder objects
 # it uses come in. libcrowdbake.so and the tests keep the shared library.

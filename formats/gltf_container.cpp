@@ -445,7 +445,8 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
     }
     if (is_glb(data, size)) {
         if (!check_glb(data, size, name, err)) return false;
-        if (parse_fast(data, size, fast_doc, in_place)) return *fast = true; /* a file with Draco is not for it */
+        size_t settled = tail && tail->head ? tail->head : size; /* past it, the tail's thread may be writing */
+        if (parse_fast(data, size, settled, fast_doc, in_place)) return *fast = true; /* a file with Draco is not for it */
         uint32_t json_length = le32(data + 12);
         std::string json((const char *)data + 20, json_length);
         if (!check_draco_references(json, name, err)) return false;

@@ -1,6 +1,6 @@
-// gltf_fast.cpp - the fast path of the glTF load: RapidJSON parses a GLB's JSON chunk in place
-// (a DOM on its pool allocator, full-precision numbers, as tinygltf is built) and only what a
-// bake reads is copied into the plain doc::Document that gltf_convert.cpp reads (gltf_parts.h);
+// gltf_fast.cpp - the fast path of the glTF load: simdjson parses a GLB's JSON chunk (its DOM,
+// a tape it builds several times faster than RapidJSON's DOM, which tinygltf uses) and only what
+// a bake reads is copied into the plain doc::Document that gltf_convert.cpp reads (gltf_parts.h);
 // the BIN chunk is left where it lies and its accessors are read there. Members a bake does not
 // read (names of views, accessors, meshes; materials, modes) are still type-checked as tinygltf
 // would, so a file either path refuses is refused here too.
@@ -10,13 +10,22 @@
 // few hundred bytes for each of tens of thousands of accessors and channels. Here each object's
 // members are walked once.
 //
+// simdjson reads JSON as RapidJSON does with three exceptions, each sent to tinygltf: it refuses
+// invalid UTF-8, lone surrogates and integers past 64 bits (RapidJSON takes them: parse_fast
+// gives up), and it rounds every number correctly where RapidJSON's full precision does not
+// (screened for in doubles_read_alike).
+//
 // The path is strict: whatever it does not handle exactly as tinygltf would (Draco, meshopt,
 // buffers or data-URI images, cameras, lights, a member of another type than tinygltf reads, a key
 // given twice, anything tinygltf would refuse) makes it give up, and the tinygltf path loads the
 // file: a bad file gets tinygltf's messages and the converter's, as before.
+#include <algorithm>
 #include <cstring>
 #include <string>
+#include <string_view>
 #include <vector>
+
+#include <simdjson.h>
 
 #include "gltf_parts.h"
 
@@ -24,72 +33,106 @@ namespace cbgltf {
 
 namespace {
 
-using rapidjson::Value;
+using Value = simdjson::dom::element;
 
 struct NotFast {}; // thrown to give the file to the tinygltf path
 
 [[noreturn]] void not_fast() { throw NotFast{}; }
 
-int as_int(const Value &v) // tinygltf's GetInt, less its truncation of 64-bit values
+int as_int(Value v) // tinygltf's GetInt on RapidJSON's IsInt: an integer token in int32's range
 {
-    if (!v.IsInt()) not_fast();
-    return v.GetInt();
+    int64_t i;
+    if (v.get_int64().get(i) || i < INT32_MIN || i > INT32_MAX) not_fast();
+    return (int)i;
 }
 
-size_t as_size(const Value &v)
+size_t as_size(Value v) // IsUint64: an integer token from 0 to 2^64 - 1
 {
-    if (!v.IsUint64()) not_fast();
-    return (size_t)v.GetUint64();
+    uint64_t u;
+    if (v.get_uint64().get(u)) not_fast();
+    return (size_t)u;
 }
 
-void check_string(const Value &v) // tinygltf copies a C string: one with a NUL in it goes there
+double as_number(Value v) // GetDouble: an integer converted, or the correctly rounded double
 {
-    if (!v.IsString() || std::strlen(v.GetString()) != v.GetStringLength()) not_fast();
+    double d;
+    if (v.get_double().get(d)) not_fast();
+    return d;
 }
 
-std::string as_string(const Value &v)
+std::string_view checked_string(Value v) // tinygltf copies a C string: one with a NUL in it goes there
 {
-    check_string(v);
-    return std::string(v.GetString(), v.GetStringLength());
+    std::string_view s;
+    if (v.get_string().get(s) || std::memchr(s.data(), 0, s.size())) not_fast();
+    return s;
 }
 
-const Value &as_array(const Value &v)
+void check_string(Value v) { checked_string(v); }
+
+std::string as_string(Value v) { return std::string(checked_string(v)); }
+
+simdjson::dom::array as_array(Value v)
 {
-    if (!v.IsArray()) not_fast();
-    return v;
+    simdjson::dom::array a;
+    if (v.get_array().get(a)) not_fast();
+    return a;
 }
 
-std::vector<int> int_array(const Value &v)
+simdjson::dom::object as_object(Value v)
 {
+    simdjson::dom::object o;
+    if (v.get_object().get(o)) not_fast();
+    return o;
+}
+
+std::vector<int> int_array(Value v)
+{
+    simdjson::dom::array a = as_array(v);
     std::vector<int> out;
-    out.reserve(as_array(v).Size());
-    for (const Value &e : v.GetArray()) out.push_back(as_int(e));
+    out.reserve(a.size());
+    for (Value e : a) out.push_back(as_int(e));
     return out;
 }
 
-std::vector<double> number_array(const Value &v)
+std::vector<double> number_array(Value v)
 {
+    simdjson::dom::array a = as_array(v);
     std::vector<double> out;
-    out.reserve(as_array(v).Size());
-    for (const Value &e : v.GetArray()) {
-        if (!e.IsNumber()) not_fast();
-        out.push_back(e.GetDouble());
-    }
+    out.reserve(a.size());
+    for (Value e : a) out.push_back(as_number(e));
     return out;
+}
+
+// glTF's keys are short: up to 16 bytes they are compared as two loads of 4 or 8 bytes each,
+// overlapping in the middle (every byte read lies in both keys), without a call to memcmp.
+template <class Word> bool same_ends(const char *a, const char *b, size_t n)
+{
+    Word a0, a1, b0, b1;
+    std::memcpy(&a0, a, sizeof a0), std::memcpy(&a1, a + n - sizeof a1, sizeof a1);
+    std::memcpy(&b0, b, sizeof b0), std::memcpy(&b1, b + n - sizeof b1, sizeof b1);
+    return ((a0 ^ b0) | (a1 ^ b1)) == 0;
+}
+
+inline bool same_key(std::string_view key, std::string_view wanted)
+{
+    size_t n = wanted.size();
+    if (key.size() != n) return false;
+    if (n >= 8 && n <= 16) return same_ends<uint64_t>(key.data(), wanted.data(), n);
+    if (n >= 4 && n < 8) return same_ends<uint32_t>(key.data(), wanted.data(), n);
+    return std::memcmp(key.data(), wanted.data(), n) == 0;
 }
 
 // Calls f(i, value) for each member whose key is keys[i]; other keys are not read. Returns the
 // bits of the keys found, so callers check the required ones. A key given twice gives up:
-// tinygltf reads the first, RapidJSON keeps both.
-template <size_t N, class F> unsigned members(const Value &o, const char *const (&keys)[N], F f)
+// tinygltf reads the first, simdjson keeps both. Keys are compared whole, NULs and all, as
+// RapidJSON's FindMember compares them for tinygltf.
+template <size_t N, class F> unsigned members(Value o, const std::string_view (&keys)[N], F f)
 {
     static_assert(N <= 32, "a bit per key");
-    if (!o.IsObject()) not_fast();
     unsigned seen = 0;
-    for (const auto &m : o.GetObject()) {
-        const char *k = m.name.GetString();
+    for (simdjson::dom::key_value_pair m : as_object(o)) {
         for (size_t i = 0; i < N; ++i)
-            if (k[0] == keys[i][0] && std::strcmp(k, keys[i]) == 0) {
+            if (same_key(m.key, keys[i])) {
                 if (seen & (1u << i)) not_fast();
                 seen |= 1u << i;
                 f(i, m.value);
@@ -104,21 +147,21 @@ void require(unsigned seen, unsigned bits)
     if ((seen & bits) != bits) not_fast();
 }
 
-template <class F> void each(const Value &array, F f)
+template <class F> void each(Value array, F f)
 {
-    for (const Value &e : as_array(array).GetArray()) f(e);
+    for (Value e : as_array(array)) f(e);
 }
 
-void parse_asset(const Value &o)
+void parse_asset(Value o)
 {
-    static const char *const keys[] = {"version"};
-    require(members(o, keys, [](size_t, const Value &v) { check_string(v); }), 1);
+    static constexpr std::string_view keys[] = {"version"};
+    require(members(o, keys, [](size_t, Value v) { check_string(v); }), 1);
 }
 
-void parse_buffer(const Value &o, size_t *byte_length)
+void parse_buffer(Value o, size_t *byte_length)
 {
-    static const char *const keys[] = {"byteLength", "uri", "name"};
-    unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
+    static constexpr std::string_view keys[] = {"byteLength", "uri", "name"};
+    unsigned seen = members(o, keys, [&](size_t i, Value v) {
         if (i == 0) *byte_length = as_size(v);
         else if (i == 1) not_fast(); // external files and data URIs: the tinygltf path
         else check_string(v);
@@ -126,10 +169,10 @@ void parse_buffer(const Value &o, size_t *byte_length)
     require(seen, 1);
 }
 
-void parse_view(const Value &o, doc::BufferView *view)
+void parse_view(Value o, doc::BufferView *view)
 {
-    static const char *const keys[] = {"buffer", "byteOffset", "byteLength", "byteStride", "name"};
-    unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
+    static constexpr std::string_view keys[] = {"buffer", "byteOffset", "byteLength", "byteStride", "name"};
+    unsigned seen = members(o, keys, [&](size_t i, Value v) {
         switch (i) {
         case 0: view->buffer = as_int(v); break;
         case 1: view->byteOffset = as_size(v); break;
@@ -142,24 +185,24 @@ void parse_view(const Value &o, doc::BufferView *view)
     if (view->byteStride > 252 || view->byteStride % 4) not_fast(); // tinygltf refuses it
 }
 
-void parse_sparse(const Value &o, doc::Accessor *a)
+void parse_sparse(Value o, doc::Accessor *a)
 {
-    static const char *const keys[] = {"count", "indices", "values"};
-    static const char *const indices_keys[] = {"bufferView", "byteOffset", "componentType"};
+    static constexpr std::string_view keys[] = {"count", "indices", "values"};
+    static constexpr std::string_view indices_keys[] = {"bufferView", "byteOffset", "componentType"};
     a->sparse.isSparse = true;
     a->sparse.indices.byteOffset = a->sparse.values.byteOffset = 0; // tinygltf's defaults
-    unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
+    unsigned seen = members(o, keys, [&](size_t i, Value v) {
         if (i == 0) {
             a->sparse.count = as_int(v);
         } else if (i == 1) {
             auto &ix = a->sparse.indices;
-            unsigned got = members(v, indices_keys, [&](size_t k, const Value &x) {
+            unsigned got = members(v, indices_keys, [&](size_t k, Value x) {
                 (k == 0 ? ix.bufferView : k == 1 ? ix.byteOffset : ix.componentType) = as_int(x);
             });
             require(got, 1 | 4);
         } else {
             auto &vals = a->sparse.values;
-            unsigned got = members(v, indices_keys, [&](size_t k, const Value &x) {
+            unsigned got = members(v, indices_keys, [&](size_t k, Value x) {
                 if (k == 2) return; // not a member of values: not read
                 (k == 0 ? vals.bufferView : vals.byteOffset) = as_int(x);
             });
@@ -169,10 +212,10 @@ void parse_sparse(const Value &o, doc::Accessor *a)
     require(seen, 1 | 2 | 4);
 }
 
-int accessor_type(const std::string &t)
+int accessor_type(std::string_view t)
 {
-    static const struct {
-        const char *name;
+    static constexpr struct {
+        std::string_view name;
         int type;
     } types[] = {{"SCALAR", TINYGLTF_TYPE_SCALAR}, {"VEC2", TINYGLTF_TYPE_VEC2}, {"VEC3", TINYGLTF_TYPE_VEC3},
                  {"VEC4", TINYGLTF_TYPE_VEC4},     {"MAT2", TINYGLTF_TYPE_MAT2}, {"MAT3", TINYGLTF_TYPE_MAT3},
@@ -182,17 +225,16 @@ int accessor_type(const std::string &t)
     not_fast();
 }
 
-void parse_accessor(const Value &o, doc::Accessor *a)
+void parse_accessor(Value o, doc::Accessor *a)
 {
-    static const char *const keys[] = {"bufferView", "byteOffset", "normalized", "componentType",
-                                       "count",      "type",       "sparse",     "name"};
-    unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
+    static constexpr std::string_view keys[] = {"bufferView", "byteOffset", "normalized", "componentType",
+                                                "count",      "type",       "sparse",     "name"};
+    unsigned seen = members(o, keys, [&](size_t i, Value v) {
         switch (i) {
         case 0: a->bufferView = as_int(v); break;
         case 1: a->byteOffset = as_size(v); break;
         case 2:
-            if (!v.IsBool()) not_fast();
-            a->normalized = v.GetBool();
+            if (v.get_bool().get(a->normalized)) not_fast();
             break;
         case 3: {
             size_t t = as_size(v);
@@ -201,7 +243,7 @@ void parse_accessor(const Value &o, doc::Accessor *a)
             break;
         }
         case 4: a->count = as_size(v); break;
-        case 5: a->type = accessor_type(as_string(v)); break;
+        case 5: a->type = accessor_type(checked_string(v)); break;
         case 6: parse_sparse(v, a); break;
         default: check_string(v);
         }
@@ -209,15 +251,16 @@ void parse_accessor(const Value &o, doc::Accessor *a)
     require(seen, 8 | 16 | 32);
 }
 
-void parse_primitive(const Value &o, doc::Primitive *p)
+void parse_primitive(Value o, doc::Primitive *p)
 {
-    static const char *const keys[] = {"attributes", "indices", "material", "mode"};
-    unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
+    static constexpr std::string_view keys[] = {"attributes", "indices", "material", "mode"};
+    unsigned seen = members(o, keys, [&](size_t i, Value v) {
         if (i == 0) {
-            if (!v.IsObject()) not_fast();
-            p->attributes.reserve(v.MemberCount());
-            for (const auto &m : v.GetObject()) {
-                std::string name = as_string(m.name);
+            simdjson::dom::object attributes = as_object(v);
+            p->attributes.reserve(attributes.size());
+            for (simdjson::dom::key_value_pair m : attributes) {
+                if (std::memchr(m.key.data(), 0, m.key.size())) not_fast();
+                std::string name(m.key);
                 if (p->attribute(name.c_str())) not_fast();
                 p->attributes.emplace_back(std::move(name), as_int(m.value));
             }
@@ -230,23 +273,23 @@ void parse_primitive(const Value &o, doc::Primitive *p)
     require(seen, 1);
 }
 
-void parse_mesh(const Value &o, doc::Mesh *mesh)
+void parse_mesh(Value o, doc::Mesh *mesh)
 {
-    static const char *const keys[] = {"primitives", "name"};
-    members(o, keys, [&](size_t i, const Value &v) {
+    static constexpr std::string_view keys[] = {"primitives", "name"};
+    members(o, keys, [&](size_t i, Value v) {
         if (i == 1) return check_string(v);
-        each(v, [&](const Value &e) {
+        each(v, [&](Value e) {
             mesh->primitives.emplace_back();
             parse_primitive(e, &mesh->primitives.back());
         });
     });
 }
 
-void parse_node(const Value &o, doc::Node *n)
+void parse_node(Value o, doc::Node *n)
 {
-    static const char *const keys[] = {"name", "skin", "mesh", "children", "matrix", "translation", "rotation", "scale"};
+    static constexpr std::string_view keys[] = {"name", "skin", "mesh", "children", "matrix", "translation", "rotation", "scale"};
     std::vector<double> trs[3];
-    unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
+    unsigned seen = members(o, keys, [&](size_t i, Value v) {
         switch (i) {
         case 0: n->name = as_string(v); break;
         case 1: n->skin = as_int(v); break;
@@ -262,10 +305,10 @@ void parse_node(const Value &o, doc::Node *n)
     n->scale = std::move(trs[2]);
 }
 
-void parse_skin(const Value &o, doc::Skin *s)
+void parse_skin(Value o, doc::Skin *s)
 {
-    static const char *const keys[] = {"name", "joints", "skeleton", "inverseBindMatrices"};
-    unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
+    static constexpr std::string_view keys[] = {"name", "joints", "skeleton", "inverseBindMatrices"};
+    unsigned seen = members(o, keys, [&](size_t i, Value v) {
         switch (i) {
         case 0: s->name = as_string(v); break;
         case 1: s->joints = int_array(v); break;
@@ -276,13 +319,13 @@ void parse_skin(const Value &o, doc::Skin *s)
     require(seen, 2);
 }
 
-void parse_channel(const Value &o, doc::AnimationChannel *ch)
+void parse_channel(Value o, doc::AnimationChannel *ch)
 {
-    static const char *const keys[] = {"sampler", "target"};
-    static const char *const target_keys[] = {"node", "path"};
-    unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
+    static constexpr std::string_view keys[] = {"sampler", "target"};
+    static constexpr std::string_view target_keys[] = {"node", "path"};
+    unsigned seen = members(o, keys, [&](size_t i, Value v) {
         if (i == 0) return void(ch->sampler = as_int(v));
-        unsigned got = members(v, target_keys, [&](size_t k, const Value &x) {
+        unsigned got = members(v, target_keys, [&](size_t k, Value x) {
             if (k == 0) ch->target_node = as_int(x);
             else ch->target_path = as_string(x);
         });
@@ -291,24 +334,24 @@ void parse_channel(const Value &o, doc::AnimationChannel *ch)
     require(seen, 1 | 2);
 }
 
-void parse_animation(const Value &o, doc::Animation *a)
+void parse_animation(Value o, doc::Animation *a)
 {
-    static const char *const keys[] = {"channels", "samplers", "name"};
-    static const char *const sampler_keys[] = {"input", "output", "interpolation"};
-    members(o, keys, [&](size_t i, const Value &v) {
+    static constexpr std::string_view keys[] = {"channels", "samplers", "name"};
+    static constexpr std::string_view sampler_keys[] = {"input", "output", "interpolation"};
+    members(o, keys, [&](size_t i, Value v) {
         if (i == 2) return void(a->name = as_string(v));
         if (i == 0) {
-            a->channels.reserve(as_array(v).Size());
-            return each(v, [&](const Value &e) {
+            a->channels.reserve(as_array(v).size());
+            return each(v, [&](Value e) {
                 a->channels.emplace_back();
                 parse_channel(e, &a->channels.back());
             });
         }
-        a->samplers.reserve(as_array(v).Size());
-        each(v, [&](const Value &e) {
+        a->samplers.reserve(as_array(v).size());
+        each(v, [&](Value e) {
             a->samplers.emplace_back();
             doc::AnimationSampler *s = &a->samplers.back();
-            unsigned got = members(e, sampler_keys, [&](size_t k, const Value &x) {
+            unsigned got = members(e, sampler_keys, [&](size_t k, Value x) {
                 if (k == 2) s->interpolation = as_string(x);
                 else (k == 0 ? s->input : s->output) = as_int(x);
             });
@@ -317,21 +360,21 @@ void parse_animation(const Value &o, doc::Animation *a)
     });
 }
 
-void parse_scene(const Value &o, doc::Scene *s)
+void parse_scene(Value o, doc::Scene *s)
 {
-    static const char *const keys[] = {"nodes", "name"};
-    members(o, keys, [&](size_t i, const Value &v) {
+    static constexpr std::string_view keys[] = {"nodes", "name"};
+    members(o, keys, [&](size_t i, Value v) {
         if (i == 0) s->nodes = int_array(v);
         else check_string(v);
     });
 }
 
 // Images are never decoded, but tinygltf refuses some: only those it surely takes stay here.
-void check_image(const Value &o, const doc::Document &g)
+void check_image(Value o, const doc::Document &g)
 {
-    static const char *const keys[] = {"bufferView", "uri"};
+    static constexpr std::string_view keys[] = {"bufferView", "uri"};
     int view = -1;
-    unsigned seen = members(o, keys, [&](size_t i, const Value &v) {
+    unsigned seen = members(o, keys, [&](size_t i, Value v) {
         if (i == 0) view = as_int(v);
         else if (as_string(v).rfind("data:", 0) == 0) not_fast();
     });
@@ -341,55 +384,57 @@ void check_image(const Value &o, const doc::Document &g)
         not_fast();
 }
 
-void check_material(const Value &o)
+void check_material(Value o)
 {
-    static const char *const keys[] = {"emissiveFactor"};
-    members(o, keys, [](size_t, const Value &v) {
+    static constexpr std::string_view keys[] = {"emissiveFactor"};
+    members(o, keys, [](size_t, Value v) {
         if (number_array(v).size() != 3) not_fast();
     });
 }
 
-template <class T, class F> void parse_list(const Value &v, std::vector<T> *out, F parse)
+template <class T, class F> void parse_list(Value v, std::vector<T> *out, F parse)
 {
-    out->resize(as_array(v).Size());
-    size_t i = 0;
-    for (const Value &e : v.GetArray()) parse(e, &(*out)[i++]);
+    simdjson::dom::array a = as_array(v);
+    out->reserve(a.size()); // saturates at 2^24 - 1: a hint
+    for (Value e : a) {
+        out->emplace_back();
+        parse(e, &out->back());
+    }
 }
 
 // The sections in tinygltf's order: images are checked against the views and buffers.
-void parse_document(const Value &root, doc::Document *g, size_t *byte_length)
+void parse_document(Value root, doc::Document *g, size_t *byte_length)
 {
-    static const char *const keys[] = {"asset", "extensionsUsed", "extensionsRequired", "buffers", "bufferViews",
-                                       "accessors", "meshes", "nodes", "scenes", "scene", "animations", "skins",
-                                       "cameras", "images", "materials", "textures", "samplers", "extensions"};
-    const Value *later[18] = {};
-    unsigned seen = members(root, keys, [&](size_t i, const Value &v) { later[i] = &v; });
+    static constexpr std::string_view keys[] = {"asset", "extensionsUsed", "extensionsRequired", "buffers", "bufferViews",
+                                                "accessors", "meshes", "nodes", "scenes", "scene", "animations", "skins",
+                                                "cameras", "images", "materials", "textures", "samplers", "extensions"};
+    Value later[18];
+    unsigned seen = members(root, keys, [&](size_t i, Value v) { later[i] = v; });
+    auto given = [seen](int k) { return (seen >> k) & 1; };
     require(seen, 1);
-    if (later[12] || later[17]) not_fast(); // cameras and KHR_lights_punctual: tinygltf checks them closely
-    parse_asset(*later[0]);
+    if (given(12) || given(17)) not_fast(); // cameras and KHR_lights_punctual: tinygltf checks them closely
+    parse_asset(later[0]);
     for (int k = 1; k <= 2; ++k)
-        if (later[k]) each(*later[k], [&](const Value &e) {
+        if (given(k)) each(later[k], [&](Value e) {
                 if (k == 2) g->extensionsRequired.push_back(as_string(e));
                 else check_string(e);
             });
-    if (later[3]) {
-        parse_list(*later[3], &g->buffers, [&](const Value &o, Bytes *) { parse_buffer(o, byte_length); });
+    if (given(3)) {
+        parse_list(later[3], &g->buffers, [&](Value o, Bytes *) { parse_buffer(o, byte_length); });
         if (g->buffers.size() > 1) not_fast(); // only the BIN chunk: every other buffer has a uri
     }
-    if (later[4]) parse_list(*later[4], &g->bufferViews, parse_view);
-    if (later[5]) parse_list(*later[5], &g->accessors, parse_accessor);
-    if (later[6]) parse_list(*later[6], &g->meshes, parse_mesh);
-    if (later[7]) parse_list(*later[7], &g->nodes, parse_node);
-    if (later[8]) parse_list(*later[8], &g->scenes, parse_scene);
-    if (later[9]) g->defaultScene = as_int(*later[9]);
-    if (later[10]) parse_list(*later[10], &g->animations, parse_animation);
-    if (later[11]) parse_list(*later[11], &g->skins, parse_skin);
-    if (later[13]) each(*later[13], [&](const Value &o) { check_image(o, *g); });
-    if (later[14]) each(*later[14], check_material);
+    if (given(4)) parse_list(later[4], &g->bufferViews, parse_view);
+    if (given(5)) parse_list(later[5], &g->accessors, parse_accessor);
+    if (given(6)) parse_list(later[6], &g->meshes, parse_mesh);
+    if (given(7)) parse_list(later[7], &g->nodes, parse_node);
+    if (given(8)) parse_list(later[8], &g->scenes, parse_scene);
+    if (given(9)) g->defaultScene = as_int(later[9]);
+    if (given(10)) parse_list(later[10], &g->animations, parse_animation);
+    if (given(11)) parse_list(later[11], &g->skins, parse_skin);
+    if (given(13)) each(later[13], [&](Value o) { check_image(o, *g); });
+    if (given(14)) each(later[14], check_material);
     for (int k = 15; k <= 16; ++k)
-        if (later[k]) each(*later[k], [](const Value &o) {
-                if (!o.IsObject()) not_fast();
-            });
+        if (given(k)) each(later[k], [](Value o) { as_object(o); });
     // tinygltf refuses a primitive whose indices accessor, or its view, does not exist.
     for (const doc::Mesh &mesh : g->meshes)
         for (const doc::Primitive &p : mesh.primitives)
@@ -398,6 +443,89 @@ void parse_document(const Value &root, doc::Document *g, size_t *byte_length)
                 int view = g->accessors[(size_t)p.indices].bufferView;
                 if (view < 0 || (size_t)view >= g->bufferViews.size()) not_fast();
             }
+}
+
+// ---- numbers RapidJSON's full precision reads as simdjson does ----
+//
+// tinygltf reads numbers with RapidJSON's full precision, which is not correctly rounded
+// everywhere: a zero whose exponent, less its fraction's digits, is past +-22 leaves its exact
+// path and reads as whatever lies in its buffer ("0e56" gave 1.27e30 once, "0.0e-22"
+// -1.75e-192), more than 17 significant digits near a halfway point and subnormals may be an
+// ulp off, and it refuses a zero past 1e308 ("0e400") that simdjson takes.
+// simdjson rounds all of them correctly, so a file with such a number goes to tinygltf. What
+// both read alike, checked against RapidJSON 1.1.0 on millions of numbers (random, shortest
+// and %.15g to %.17g forms of doubles, and cuts of halfway points): a nonzero number of at
+// most 17 significant digits from 1e-291 to 1e290, or a zero within the exponent range
+// above. Integers need no screen: both read them exactly, and simdjson refuses those past 64
+// bits (RapidJSON's doubles).
+
+constexpr bool is_digit(unsigned char c) { return (unsigned char)(c - '0') < 10; }
+
+// The number whose first digit is at s[i], read as JSON's grammar reads it (a screened
+// match inside a string reads as whatever digits it has). *end: the byte after it.
+bool number_read_alike(const char *s, size_t n, size_t i, size_t *end)
+{
+    size_t int_digits = 0, frac_digits = 0, significant = 0;
+    bool any_nonzero = false;
+    auto digit = [&](char c) {
+        any_nonzero |= c != '0';
+        significant += any_nonzero;
+    };
+    for (; i < n && is_digit((unsigned char)s[i]); ++i, ++int_digits) digit(s[i]);
+    if (i + 1 < n && s[i] == '.' && is_digit((unsigned char)s[i + 1]))
+        for (++i; i < n && is_digit((unsigned char)s[i]); ++i, ++frac_digits) digit(s[i]);
+    long exponent = 0;
+    bool has_exponent = i + 1 < n && (s[i] | 0x20) == 'e';
+    if (has_exponent) {
+        size_t at = i + 1;
+        bool minus = at < n && s[at] == '-';
+        at += at < n && (s[at] == '-' || s[at] == '+');
+        if (at < n && is_digit((unsigned char)s[at])) {
+            for (i = at; i < n && is_digit((unsigned char)s[i]); ++i)
+                if (exponent < 100000) exponent = exponent * 10 + (s[i] - '0'); // past it: out of range anyway
+            if (minus) exponent = -exponent;
+        } else {
+            has_exponent = false;
+        }
+    }
+    *end = i;
+    if (int_digits == 0 || (frac_digits == 0 && !has_exponent)) return true; // no digits, or an integer
+    long scale = exponent - (long)frac_digits; // the value: the digits times 10^scale
+    if (!any_nonzero) return scale >= -22 && scale <= 22;
+    long magnitude = scale + (long)significant; // the value is below 10^magnitude, at least 10^(magnitude - 1)
+    return significant <= 17 && magnitude >= -290 && magnitude <= 290;
+}
+
+// Whether the 256 bytes from b (and b[-1]) may hold a number with a fraction or an exponent: a
+// '.' or a digit before an 'e' or 'E'. A loop without branches that the compiler vectorizes, as
+// in mentions(); most of a rig's numbers are integers, and most blocks hold neither.
+bool may_hold_double(const char *b)
+{
+    unsigned char hit = 0;
+    for (int k = 0; k < 256; ++k) {
+        unsigned char c = (unsigned char)b[k], before = (unsigned char)b[k - 1];
+        hit |= (c == '.') | (((c | 0x20) == 'e') & is_digit(before));
+    }
+    return hit;
+}
+
+// Whether every number with a fraction or an exponent in the JSON reads alike: the blocks that
+// may hold one are read number by number.
+bool doubles_read_alike(const char *s, size_t n)
+{
+    size_t read_to = 0; // the numbers before here are read
+    for (size_t at = 1; at < n; at += 256) {
+        size_t stop = std::min(n, at + 256);
+        if (stop == at + 256 && !may_hold_double(s + at)) continue;
+        for (size_t k = std::max(at, read_to); k < stop; ++k) {
+            if (s[k] != '.' && ((s[k] | 0x20) != 'e' || !is_digit((unsigned char)s[k - 1]))) continue;
+            size_t first = k;
+            while (first > 0 && (is_digit((unsigned char)s[first - 1]) || s[first - 1] == '.')) --first;
+            if (!number_read_alike(s, n, first, &read_to)) return false;
+            k = std::max(k, read_to - 1);
+        }
+    }
+    return true;
 }
 
 // A GLB that tinygltf takes: a JSON chunk (4-byte aligned) and at most a BIN chunk, as
@@ -420,24 +548,31 @@ bool glb_chunks(const unsigned char *data, size_t size, size_t *json_length, siz
 
 } // namespace
 
-bool parse_fast(const unsigned char *data, size_t size, doc::Document *out, BinInPlace *in_place)
+bool parse_fast(const unsigned char *data, size_t size, size_t settled, doc::Document *out, BinInPlace *in_place)
 {
     size_t json_length, bin_at, bin_length;
     if (!glb_chunks(data, size, &json_length, &bin_at, &bin_length)) return false;
     const char *json = reinterpret_cast<const char *>(data + 20);
     // Draco and meshopt (KHR_draco_mesh_compression, EXT_ and KHR_meshopt_compression) are
-    // decoded on the tinygltf path; one search finds all three. A NUL would end the in-place
-    // parse where tinygltf's parse of the whole chunk fails.
+    // decoded on the tinygltf path; one search finds all three. A NUL (RapidJSON's end of the
+    // text) fails tinygltf's parse of the chunk.
     if (mentions(json, json_length, "_compression") || std::memchr(json, 0, json_length)) return false;
-    std::vector<char> text(json, json + json_length);
-    text.push_back('\0');
-    rapidjson::Document doc;
-    doc.ParseInsitu<rapidjson::kParseInsituFlag | rapidjson::kParseFullPrecisionFlag>(text.data());
-    if (doc.HasParseError()) return false;
+    if (!doubles_read_alike(json, json_length)) return false;
+    // simdjson may read up to SIMDJSON_PADDING bytes past the text (never using them): the BIN
+    // chunk's first bytes where they are settled, else a copy's padding.
+    simdjson::padded_string copy;
+    if (20 + json_length + simdjson::SIMDJSON_PADDING > settled) {
+        copy = simdjson::padded_string(json, json_length);
+        if (!copy.data()) throw std::bad_alloc();
+        json = copy.data();
+    }
+    simdjson::dom::parser parser;
+    Value root;
+    if (parser.parse(json, json_length, false).get(root)) return false; // tinygltf's message for it
     doc::Document g;
     size_t byte_length = 0;
     try {
-        parse_document(doc, &g, &byte_length);
+        parse_document(root, &g, &byte_length);
     } catch (const NotFast &) {
         return false;
     }
@@ -459,7 +594,7 @@ extern "C" bool cb_gltf_fast_path_applies(const unsigned char *data, size_t size
 {
     cbgltf::doc::Document g;
     try {
-        return cbgltf::parse_fast(data, size, &g, nullptr);
+        return cbgltf::parse_fast(data, size, size, &g, nullptr);
     } catch (const std::exception &) {
         return false;
     }

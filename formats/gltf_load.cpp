@@ -1,4 +1,4 @@
-// gltf_load.cpp - the glTF adapter: parses a plain GLB with RapidJSON (gltf_fast.cpp) and any
+// gltf_load.cpp - the glTF adapter: parses a plain GLB with simdjson (gltf_fast.cpp) and any
 // other file with tinygltf (Draco enabled; the file and its chunks in gltf_container.cpp),
 // decodes EXT_meshopt_compression with libmeshoptimizer, reads every accessor with bounds
 // checks and hands the core a cb_model of plain C structs (gltf_convert.cpp).

@@ -26,7 +26,7 @@ using Bytes = std::vector<unsigned char>;
 
 // ---- the parsed document: what a bake reads of a glTF, and nothing else ----
 //
-// Plain structs, filled by the fast path from RapidJSON's DOM (gltf_fast.cpp) or converted from
+// Plain structs, filled by the fast path from simdjson's DOM (gltf_fast.cpp) or converted from
 // tinygltf's Model on the other path (doc_from_tinygltf), so the converter has one input. A big
 // rig has tens of thousands of accessors, views, channels and samplers: tinygltf's structs for
 // them carry strings, maps and extension trees of a few hundred bytes each, built and freed
@@ -233,8 +233,9 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
 // gltf_fast.cpp
 // Parses a GLB that needs nothing but its own BIN chunk into `out` (only what the converter
 // reads), the BIN chunk left where it lies when `in_place` (else copied into buffer 0); false,
-// with `out` untouched, for any file the tinygltf path must load.
-bool parse_fast(const unsigned char *data, size_t size, doc::Document *out, BinInPlace *in_place);
+// with `out` untouched, for any file the tinygltf path must load. The first `settled` bytes of
+// `data` are not written while it runs (a TailRead may still be filling the rest).
+bool parse_fast(const unsigned char *data, size_t size, size_t settled, doc::Document *out, BinInPlace *in_place);
 
 // gltf_convert.cpp
 // The tinygltf path's result as the converter reads it; the buffers' bytes are moved, not copied.

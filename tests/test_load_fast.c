@@ -1,9 +1,10 @@
-/* test_load_fast.c - the fast glTF path (formats/gltf_fast.cpp: RapidJSON, accessors read where
+/* test_load_fast.c - the fast glTF path (formats/gltf_fast.cpp: simdjson, accessors read where
  * they lie in the GLB's BIN chunk) gives the model tinygltf gives. Each GLB is also written as a
  * .gltf with its BIN chunk in a separate .bin, which only tinygltf reads (it copies the bytes
  * into its own buffers), and every array of the two models is compared bit for bit. Hand-made
  * GLBs check the copy paths (strided, misaligned, normalized accessors) against the numbers
- * written, and accessors pointing past their buffer are refused. */
+ * written, accessors pointing past their buffer are refused, and what simdjson reads otherwise
+ * than tinygltf's RapidJSON goes to tinygltf. */
 #include "testutil.h"
 
 #include <sys/stat.h>
@@ -316,12 +317,107 @@ static void test_accessors_past_their_buffer_are_refused(void **state)
     expect_refused(&g, "truncated GLB");
 }
 
+/* ---- what simdjson and RapidJSON read differently ---- */
+
+/* The scene GLB with the first `from` in its JSON replaced by `to`. */
+static void scene_variant(glb *out, const char *from, const char *to)
+{
+    char json[2048], variant[2048];
+    snprintf(json, sizeof json, SCENE_JSON, 108, "{\"buffer\":0,\"byteOffset\":84,\"byteLength\":24}");
+    const char *at = strstr(json, from);
+    assert_non_null(at);
+    snprintf(variant, sizeof variant, "%.*s%s%s", (int)(at - json), json, to, at + strlen(from));
+    unsigned char bin[108];
+    scene_bin(bin);
+    make_glb(out, variant, bin, sizeof bin);
+}
+
+/* The GLB loaded from memory (on the fast path where it applies) and as .gltf + .bin (always
+ * tinygltf): the same model, or both refused. */
+static void same_as_tinygltf(const glb *g, const char *name)
+{
+    char dir[] = TEST_TMP "/load_fast", gltf[1024];
+    mkdir(TEST_TMP, 0755);
+    mkdir(dir, 0755);
+    split_glb(g->data, g->size, dir, name, gltf, sizeof gltf);
+    cb_error fast_err = {0}, slow_err = {0};
+    cb_model *fast = cb_gltf_load_memory(g->data, g->size, "case.glb", NULL, NULL, &fast_err);
+    cb_model *slow = cb_gltf_load(gltf, NULL, &slow_err);
+    if (!fast != !slow) fail_msg("%s: '%s' / '%s'", name, fast ? "loaded" : fast_err.message, slow ? "loaded" : slow_err.message);
+    if (fast) {
+        same_nodes(fast, slow);
+        same_skins(fast, slow);
+        same_primitives(fast, slow);
+        same_animations(fast, slow);
+    }
+    cb_model_free(fast), cb_model_free(slow);
+}
+
+static void test_what_simdjson_reads_otherwise_goes_to_tinygltf(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *from, *to;
+        bool fast; /* whether the fast path takes it */
+    } cases[] = {
+        /* Numbers both read alike: the fast path keeps them. An integer written -0 is an int
+         * to RapidJSON (IsInt) and to simdjson. */
+        {"{\"name\":\"hip\"}", "{\"name\":\"hip\",\"translation\":[0.1,-2.5e-3,-1.0E+2],\"scale\":[0.12345678901234568,1,-0.0]}", true},
+        {"\"mesh\":0", "\"mesh\":-0", true},
+        /* Not an int32 to either: tinygltf's answer. */
+        {"\"mesh\":0", "\"mesh\":2147483648", false},
+        {"\"mesh\":0", "\"mesh\":1.0", false},
+        {"\"mesh\":0", "\"mesh\":0e0", false},
+        /* A key given twice: RapidJSON and simdjson keep both, tinygltf reads the first. */
+        {"\"name\":\"hip\"", "\"name\":\"hip\",\"name\":\"hop\"", false},
+        /* A NUL inside a string: tinygltf's C string ends there. */
+        {"\"name\":\"hip\"", "\"name\":\"h\\u0000ip\"", false},
+        /* Strings simdjson refuses and RapidJSON takes: invalid UTF-8, a lone low surrogate. */
+        {"\"name\":\"hip\"", "\"name\":\"h\xff" "ip\"", false},
+        {"\"name\":\"hip\"", "\"name\":\"h\\udc00ip\"", false},
+        /* Numbers RapidJSON's full precision reads otherwise than the correctly rounded double
+         * simdjson gives: more than 17 digits near a halfway point, a subnormal; and a zero past
+         * 1e308 that RapidJSON refuses in a member the fast path never reads. */
+        {"{\"name\":\"hip\"}", "{\"name\":\"hip\",\"translation\":[1.47886842255842055882e-41,0,0]}", false},
+        {"{\"name\":\"hip\"}", "{\"name\":\"hip\",\"translation\":[2.4703282292062327e-324,0,0]}", false},
+        {"\"type\":\"VEC3\"}", "\"type\":\"VEC3\",\"min\":[0e400,0,0]}", false},
+        /* An integer past 64 bits, which simdjson refuses and RapidJSON reads as a double. */
+        {"\"type\":\"VEC3\"}", "\"type\":\"VEC3\",\"min\":[18446744073709551616,0,0]}", false},
+    };
+    for (size_t i = 0; i < COUNT_OF(cases); ++i) {
+        glb g;
+        char name[32];
+        scene_variant(&g, cases[i].from, cases[i].to);
+        if (cb_gltf_fast_path_applies(g.data, g.size) != cases[i].fast)
+            fail_msg("case %zu (%s): the fast path %s it", i, cases[i].to, cases[i].fast ? "refuses" : "takes");
+        snprintf(name, sizeof name, "variant%zu", i);
+        same_as_tinygltf(&g, name);
+    }
+    /* Zeros whose exponent less their fraction's digits is past +-22: RapidJSON 1.1.0 reads
+     * them as whatever its buffer held (1.27e30 for 0e56 once), so tinygltf gives no fixed
+     * answer to compare with; the fast path leaves them to it. */
+    static const char *const far_zeros[] = {"0e56", "0.0e-22", "-0e23", "0.00000000000000000000000"};
+    for (size_t i = 0; i < COUNT_OF(far_zeros); ++i) {
+        char hip[128];
+        glb g;
+        snprintf(hip, sizeof hip, "{\"name\":\"hip\",\"translation\":[1,%s,2]}", far_zeros[i]);
+        scene_variant(&g, "{\"name\":\"hip\"}", hip);
+        if (cb_gltf_fast_path_applies(g.data, g.size)) fail_msg("the fast path takes %s", far_zeros[i]);
+    }
+    /* The zeros it keeps: 0e22 is 0 to RapidJSON's exact path too. */
+    glb g;
+    scene_variant(&g, "{\"name\":\"hip\"}", "{\"name\":\"hip\",\"translation\":[0e22,0.0e-21,-0.0]}");
+    assert_true(cb_gltf_fast_path_applies(g.data, g.size));
+    same_as_tinygltf(&g, "zeros");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fast_path_equals_tinygltf_on_real_models),
         cmocka_unit_test(test_strided_misaligned_and_normalized_accessors_are_copied_right),
         cmocka_unit_test(test_accessors_past_their_buffer_are_refused),
+        cmocka_unit_test(test_what_simdjson_reads_otherwise_goes_to_tinygltf),
     };
     return cmocka_run_group_tests_name("load_fast", tests, NULL, NULL);
 }
