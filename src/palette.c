@@ -342,7 +342,7 @@ static void encode_staged_job(bake_state *st, worker *w, uint32_t c)
 static void free_bake_state(bake_state *st)
 {
     free(st->stash), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
-    free(st->encode_seconds), cb_vertex_groups_free(&st->groups);
+    free(st->encode_seconds);
 }
 
 /* The first error in clip order, so the message does not depend on the thread count. */
@@ -359,11 +359,11 @@ static cb_status first_clip_error(const bake_state *st, cb_error *err)
 cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
                           uint32_t plan_count, cb_palette *p, cb_error *err)
 {
-    return palette_bake_grouped(sampler, opt, plan, plan_count, NULL, p, err);
+    return palette_bake_with_facts(sampler, opt, plan, plan_count, NULL, p, err);
 }
 
 static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                           uint32_t plan_count, const cb_vertex_groups *groups, cb_palette *p, cb_error *err)
+                           uint32_t plan_count, const palette_skin_facts *facts, cb_palette *p, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(sampler);
     int32_t skin_index = cb_sampler_skin(sampler);
@@ -382,7 +382,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     bake_state st = {0};
     st.p = p, st.model = m, st.skin = skin_index, st.opt = opt;
     cb_clip_info *infos = NULL;
-    double *radius = NULL;
+    st.radius = facts->reach, st.groups = &facts->groups;
     if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;
     st.infos = infos;
@@ -402,22 +402,19 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (keeps_values(p)) st.stash = cb_alloc_large((size_t)p->rows * p->bone_count * palette_stash_bytes(p));
     for (uint32_t c = 0; c < p->clip_count; ++c)
         if (p->clips[c].frames > st.max_clip_frames) st.max_clip_frames = p->clips[c].frames;
-    radius = malloc((size_t)p->bone_count * sizeof(double));
     st.breaks = calloc(p->clip_count, sizeof *st.breaks);
     st.errors = calloc(2 * (size_t)p->clip_count, sizeof *st.errors);
     st.clip_error = calloc(p->clip_count, sizeof *st.clip_error);
     st.clip_blend_error = calloc(p->clip_count, sizeof *st.clip_blend_error);
     st.ranges = calloc(p->clip_count, sizeof *st.ranges);
     st.encode_seconds = calloc(p->clip_count, sizeof *st.encode_seconds);
-    if (!p->texels || !p->bind_positions || !p->position_offsets || (keeps_values(p) && !st.stash) || !radius ||
+    if (!p->texels || !p->bind_positions || !p->position_offsets || (keeps_values(p) && !st.stash) ||
         !st.breaks || !st.errors || !st.clip_error || !st.clip_blend_error || !st.ranges || !st.encode_seconds) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
     }
     palette_zero_padding(p);
-    palette_bind_positions(p, skin);
-    bool skinned = palette_joint_reach(p, m, skin_index, radius);
-    st.radius = radius;
+    memcpy(p->bind_positions, facts->bind_positions, (size_t)p->bone_count * 3 * sizeof(float));
     for_each_clip(&st, sample_clip_job, true, 0);
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
@@ -430,25 +427,20 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (keeps_values(p)) for_each_clip(&st, encode_staged_job, false, 0);
     free(st.stash), st.stash = NULL; /* encoded: its memory goes before measuring reads the keys again */
     if (first_clip_error(&st, err)) goto fail;
-    double t2 = seconds_now(), lo[3], hi[3];
+    double t2 = seconds_now();
     /* Clips encoded as they were sampled: their encoding time, spread over the threads, moves
      * from the sampling phase to the encoding phase. */
     double encoded_while_sampling = 0;
     for (uint32_t c = 0; c < p->clip_count; ++c) encoded_while_sampling += st.encode_seconds[c];
     encoded_while_sampling /= threads_used(&st, p->clip_count);
-    p->model_height = opt->error_goal > 0 ? 0 : cb_skin_rest_bounds(sampler, lo, hi); /* a search knows it */
+    p->model_height = facts->height;
     /* Exact skinning of every vertex at every row costs rows x vertices; past ~4M vertex-rows
      * an even subset of rows (always each clip's last) measures the error. */
     uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);
     st.error_stride = work > CB_ERROR_BUDGET ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
     p->error_rows_measured = 0;
-    if (skinned && !(groups ? (st.groups = *groups, true) : cb_vertex_groups_build(m, skin_index, p->bind_positions, &st.groups))) {
-        cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring the palette's error", m->source);
-        goto fail;
-    }
-    if (skinned) {
+    if (facts->skinned) {
         for_each_clip(&st, palette_measure_job, true, palette_measure_jobs(&st));
-        if (groups) memset(&st.groups, 0, sizeof st.groups); /* the caller's (palette_bake_grouped) */
         if (first_clip_error(&st, err)) goto fail;
         for (uint32_t c = 0; c < p->clip_count; ++c) {
             p->max_error = fmax(p->max_error, st.clip_error[c]);
@@ -462,27 +454,38 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     p->seconds_encode = t2 - t1 + encoded_while_sampling;
     p->seconds_measure = t3 - t2;
     free_bake_state(&st);
-    free(radius), free(infos);
+    free(infos);
     return CB_OK;
 fail:
     free_bake_state(&st);
-    free(radius), free(infos);
+    free(infos);
     cb_palette_free(p);
     return err->status;
 }
 
-cb_status palette_bake_grouped(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                               uint32_t plan_count, const cb_vertex_groups *groups, cb_palette *p, cb_error *err)
+static cb_status bake_with_fallback(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                                    uint32_t plan_count, const palette_skin_facts *facts, cb_palette *p, cb_error *err)
 {
     cb_error first = {0};
-    cb_status rc = bake_once(sampler, opt, plan, plan_count, groups, p, &first);
+    cb_status rc = bake_once(sampler, opt, plan, plan_count, facts, p, &first);
     if (rc == CB_ERR_LAYOUT && opt->affine_fallback && opt->layout == CB_LAYOUT_QPOS) {
         cb_bake_options affine = *opt; /* a rig qpos cannot hold: the next smallest layout */
         affine.layout = CB_LAYOUT_AFFINE;
-        rc = bake_once(sampler, &affine, plan, plan_count, groups, p, err);
+        rc = bake_once(sampler, &affine, plan, plan_count, facts, p, err);
         if (!rc) snprintf(p->fallback_note, sizeof p->fallback_note, "%.460s; baked with affine instead", first.message);
         return rc;
     }
     if (rc) *err = err->status ? *err : first;
+    return rc;
+}
+
+cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                                  uint32_t plan_count, const palette_skin_facts *facts, cb_palette *p, cb_error *err)
+{
+    if (facts) return bake_with_fallback(sampler, opt, plan, plan_count, facts, p, err);
+    palette_skin_facts own;
+    cb_status rc = palette_skin_facts_build(sampler, &own, err);
+    if (!rc) rc = bake_with_fallback(sampler, opt, plan, plan_count, &own, p, err);
+    palette_skin_facts_free(&own);
     return rc;
 }

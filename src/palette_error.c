@@ -51,8 +51,8 @@ static double row_bound(const bake_state *st, measure_scratch *s, const double *
 {
     if (!cb_joint_errors(diff, st->p->bone_count, st->p->bind_positions, s->joints)) return INFINITY;
     double most = 0;
-    for (uint32_t k = 0; k < st->groups.group_count; ++k) {
-        double bound = cb_group_error_bound(&st->groups, k, s->joints, most);
+    for (uint32_t k = 0; k < st->groups->group_count; ++k) {
+        double bound = cb_group_error_bound(st->groups, k, s->joints, most);
         most = bound > most ? bound : most; /* fmax(most, bound): most is never NaN */
     }
     return most;
@@ -64,7 +64,7 @@ static double row_bound(const bake_state *st, measure_scratch *s, const double *
  * skinning every vertex gives, bit for bit. */
 static double skin_row(const bake_state *st, measure_scratch *s, const double *diff, double worst)
 {
-    const cb_vertex_groups *g = &st->groups;
+    const cb_vertex_groups *g = st->groups;
     bool finite = cb_joint_errors(diff, st->p->bone_count, st->p->bind_positions, s->joints);
     uint32_t top = 0;
     for (uint32_t k = 0; k < g->group_count; ++k) {
@@ -308,7 +308,7 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     bool blends = !split || k % 2 == 0, rows = !split || k % 2 == 1; /* what this job measures */
     size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
     measure_scratch s = {malloc(CB_SAMPLE_BATCH * matrices), malloc(p->bone_count * sizeof *s.joints),
-                         malloc((st->groups.group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows),
+                         malloc((st->groups->group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows),
                          malloc(p->clips[c].frames * sizeof *s.baked), malloc(VALUE_SLOTS * matrices), {0}, {0}, 0};
     for (uint32_t i = 0; i < VALUE_SLOTS; ++i) s.value_row[i] = UINT32_MAX;
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
@@ -334,12 +334,10 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     cb_model_release_clip(st->model, st->infos[c].animation); /* measured: the keys are not read again */
 }
 
-/* Bind-space distance from each joint's bind position to the farthest vertex it moves;
- * -1 for joints that move none. Returns false when no vertex is skinned. */
-bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, double *radius)
+bool palette_joint_reach(const float *bind, uint32_t bones, const cb_model *m, int32_t skin, double *radius)
 {
     bool any = false;
-    for (uint32_t j = 0; j < p->bone_count; ++j) radius[j] = -1;
+    for (uint32_t j = 0; j < bones; ++j) radius[j] = -1;
     for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
         const cb_primitive *prim = &m->primitives[pi];
         if (prim->skin != skin) continue;
@@ -347,7 +345,7 @@ bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, d
             for (int i = 0; i < 4; ++i) {
                 if (prim->weights[(size_t)v * 4 + i] == 0) continue;
                 uint16_t j = prim->joints[(size_t)v * 4 + i];
-                const float *b = p->bind_positions + (size_t)j * 3, *x = prim->positions + (size_t)v * 3;
+                const float *b = bind + (size_t)j * 3, *x = prim->positions + (size_t)v * 3;
                 double d = sqrt((double)(x[0] - b[0]) * (x[0] - b[0]) + (double)(x[1] - b[1]) * (x[1] - b[1]) +
                                 (double)(x[2] - b[2]) * (x[2] - b[2]));
                 if (d > radius[j]) radius[j] = d;
@@ -356,4 +354,3 @@ bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, d
     }
     return any;
 }
-

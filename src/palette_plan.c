@@ -131,9 +131,9 @@ cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip
     return CB_OK;
 }
 
-void palette_bind_positions(cb_palette *p, const cb_skin *skin)
+void palette_bind_positions(const cb_skin *skin, float *bind)
 {
-    for (uint32_t j = 0; j < p->bone_count; ++j) {
+    for (uint32_t j = 0; j < skin->joint_count; ++j) {
         /* The joint's bind-pose position is the translation of inverse(IBM). */
         const double *ibm = skin->inverse_bind + (size_t)j * 16;
         double det = cb_mat4_determinant3(ibm);
@@ -148,9 +148,35 @@ void palette_bind_positions(cb_palette *p, const cb_skin *skin)
                 *res[k] = cb_mat4_determinant3(col) / det;
             }
         }
-        p->bind_positions[j * 3] = (float)b.x, p->bind_positions[j * 3 + 1] = (float)b.y;
-        p->bind_positions[j * 3 + 2] = (float)b.z;
+        bind[j * 3] = (float)b.x, bind[j * 3 + 1] = (float)b.y, bind[j * 3 + 2] = (float)b.z;
     }
+}
+
+/* ---- the skin's facts ---- */
+
+cb_status palette_skin_facts_build(cb_sampler *sampler, palette_skin_facts *out, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(sampler);
+    int32_t skin = cb_sampler_skin(sampler);
+    uint32_t bones = m->skins[skin].joint_count;
+    double lo[3], hi[3];
+    memset(out, 0, sizeof *out);
+    out->bind_positions = malloc((bones ? bones : 1) * 3 * sizeof(float));
+    out->reach = malloc((bones ? bones : 1) * sizeof(double));
+    if (!out->bind_positions || !out->reach)
+        return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring the palette's error", m->source);
+    palette_bind_positions(&m->skins[skin], out->bind_positions);
+    out->skinned = palette_joint_reach(out->bind_positions, bones, m, skin, out->reach);
+    if (out->skinned && !cb_vertex_groups_build(m, skin, out->bind_positions, &out->groups))
+        return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring the palette's error", m->source);
+    out->height = cb_skin_rest_bounds(sampler, lo, hi);
+    return CB_OK;
+}
+
+void palette_skin_facts_free(palette_skin_facts *f)
+{
+    free(f->bind_positions), free(f->reach), cb_vertex_groups_free(&f->groups);
+    memset(f, 0, sizeof *f);
 }
 
 /* The texels no row covers, which stay zero: in the last block the rows past the last baked
