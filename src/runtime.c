@@ -150,7 +150,9 @@ double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip
 
 /* Clips are searched independently: options->threads at a time, each thread with its own
  * sampler (a sampler's scratch is not shared), each clip's answer in its own slot, so the
- * choices do not depend on the thread count. */
+ * choices do not depend on the thread count nor on the order clips are taken in: the clips
+ * with the most work first (search_order), so that no long clip starts last and leaves the
+ * other threads waiting (Cow: Eating lasts 6 s, the other clips 0.6-3.3 s). */
 typedef struct rate_search {
     const cb_model *model;
     int32_t skin;
@@ -162,8 +164,32 @@ typedef struct rate_search {
     cb_error *errors; /* per clip */
     double height;
     const palette_skin_facts *facts;
+    const uint32_t *order; /* the clips in the order they are taken */
     atomic_uint next;
 } rate_search;
+
+/* The highest rate the search may probe a clip at. */
+static double max_fps_of(const cb_rate_goal *goal) { return goal->max_fps > 0 ? goal->max_fps : 60; }
+
+/* The clips' expected work: their rows at the highest rate a probe may bake them at. */
+static double search_work(const cb_model *m, const cb_clip_plan *plan, const cb_rate_goal *goal)
+{
+    if (plan->animation < 0 || plan->animation >= (int32_t)m->animation_count) return 0; /* fails at once */
+    const cb_animation *a = &m->animations[plan->animation];
+    return (a->t1 - a->t0) * max_fps_of(goal);
+}
+
+/* The clips in decreasing expected work (ties in clip order), into order. */
+static void search_order(const cb_model *m, const cb_clip_plan *plan, const cb_rate_goal *goals, uint32_t count,
+                         uint32_t *order)
+{
+    for (uint32_t i = 0; i < count; ++i) {
+        double work = search_work(m, &plan[i], &goals[i]);
+        uint32_t k = i;
+        for (; k > 0 && search_work(m, &plan[order[k - 1]], &goals[order[k - 1]]) < work; --k) order[k] = order[k - 1];
+        order[k] = i;
+    }
+}
 
 static int rate_worker(void *arg)
 {
@@ -171,8 +197,9 @@ static int rate_worker(void *arg)
     cb_error fail = {0};
     cb_sampler *s = cb_sampler_create(rs->model, rs->skin, &fail);
     for (;;) {
-        uint32_t i = atomic_fetch_add(&rs->next, 1);
-        if (i >= rs->count) break;
+        uint32_t n = atomic_fetch_add(&rs->next, 1);
+        if (n >= rs->count) break;
+        uint32_t i = rs->order[n];
         if (!(rs->goals[i].max_error_mm > 0)) continue;
         if (!s) {
             rs->errors[i] = fail;
@@ -180,7 +207,7 @@ static int rate_worker(void *arg)
         }
         cb_rate_choice *c = &rs->choices[i];
         rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
-                                          rs->goals[i].max_fps > 0 ? rs->goals[i].max_fps : 60, &c->met, &c->error,
+                                          max_fps_of(&rs->goals[i]), &c->met, &c->error,
                                           rs->facts, &rs->errors[i]);
         c->error_mm = cb_mm_per_m(c->error, rs->height);
     }
@@ -206,8 +233,11 @@ cb_status cb_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan 
                        m->source);
     }
     rate_search rs = {m, cb_sampler_skin(s), o, plan, count, goals, calloc(count, sizeof(cb_rate_choice)),
-                      calloc(count, sizeof(cb_error)), facts.height, &facts, 0};
-    if (rs.choices && rs.errors) {
+                      calloc(count, sizeof(cb_error)), facts.height, &facts, NULL, 0};
+    uint32_t *order = malloc(count * sizeof *order);
+    rs.order = order;
+    if (rs.choices && rs.errors && order) {
+        search_order(m, plan, goals, count, order);
         uint32_t threads = o->threads < 1 ? 1 : o->threads > 64 ? 64 : o->threads, started = 0;
         if (threads > count) threads = count;
         thrd_t ids[64];
@@ -222,7 +252,7 @@ cb_status cb_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan 
     } else {
         cb_fail(err, CB_ERR_INTERNAL, "out of memory choosing frame rates for %s", m->source);
     }
-    free(rs.choices), free(rs.errors);
+    free(rs.choices), free(rs.errors), free(order);
     palette_skin_facts_free(&facts);
     return err->status;
 }
