@@ -87,6 +87,19 @@ static cb_status qpos_canon(const double m[16], float out[8], const cb_model *mo
 }
 
 
+const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame)
+{
+    double t = cb_clip_frame_time(framing, frame), *out = w->mats;
+    const double *kept = st->poses ? pose_cache_find(st->poses, t) : NULL;
+    if (kept) return kept;
+    if (st->poses) {
+        double *room = pose_cache_add(st->poses, t);
+        out = room ? room : out;
+    }
+    cb_clip_frame_matrices(w->sampler, framing, frame, st->opt->root_motion, out);
+    return out;
+}
+
 /* |A| for the reach: the Frobenius norm of the 3x3, at least its largest stretch. */
 static double frobenius3(const double *M)
 {
@@ -102,9 +115,9 @@ static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, f
 {
     cb_palette *p = st->p;
     cb_palette_clip *clip = &p->clips[c];
-    cb_clip_frame_matrices(w->sampler, &st->infos[c], f, st->opt->root_motion, w->mats);
+    const double *mats = palette_frame_matrices(st, w, &st->infos[c], f);
     for (uint32_t j = 0; j < p->bone_count; ++j) {
-        const double *M = w->mats + (size_t)j * 16;
+        const double *M = mats + (size_t)j * 16;
         const float *b = p->bind_positions + (size_t)j * 3;
         float *out = row + (size_t)j * CANON(p->layout);
         cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* the joint now: M b */
@@ -134,10 +147,10 @@ static cb_status sample_mids(bake_state *st, worker *w, uint32_t c, const float 
     framing.steps *= 2;
     uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
     for (uint32_t i = 0; i < intervals; ++i) {
-        cb_clip_frame_matrices(w->sampler, &framing, 2 * i + 1, st->opt->root_motion, w->mats);
+        const double *mats = palette_frame_matrices(st, w, &framing, 2 * i + 1);
         float *out = mids + (size_t)i * p->bone_count * vals;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
-            const double *M = w->mats + (size_t)j * 16;
+            const double *M = mats + (size_t)j * 16;
             float *o = out + (size_t)j * vals;
             if (p->layout != CB_LAYOUT_QPOS) {
                 for (int r = 0; r < 3; ++r)
@@ -359,11 +372,12 @@ static cb_status first_clip_error(const bake_state *st, cb_error *err)
 cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
                           uint32_t plan_count, cb_palette *p, cb_error *err)
 {
-    return palette_bake_with_facts(sampler, opt, plan, plan_count, NULL, p, err);
+    return palette_bake_with_facts(sampler, opt, plan, plan_count, NULL, NULL, p, err);
 }
 
 static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                           uint32_t plan_count, const palette_skin_facts *facts, cb_palette *p, cb_error *err)
+                           uint32_t plan_count, const palette_skin_facts *facts, pose_cache *poses, cb_palette *p,
+                           cb_error *err)
 {
     const cb_model *m = cb_sampler_model(sampler);
     int32_t skin_index = cb_sampler_skin(sampler);
@@ -383,6 +397,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.p = p, st.model = m, st.skin = skin_index, st.opt = opt;
     cb_clip_info *infos = NULL;
     st.radius = facts->reach, st.groups = &facts->groups;
+    st.poses = plan && plan_count == 1 && opt->threads <= 1 ? poses : NULL; /* one clip's, one thread's */
     if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;
     st.infos = infos;
@@ -464,14 +479,15 @@ fail:
 }
 
 static cb_status bake_with_fallback(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                                    uint32_t plan_count, const palette_skin_facts *facts, cb_palette *p, cb_error *err)
+                                    uint32_t plan_count, const palette_skin_facts *facts, pose_cache *poses, cb_palette *p,
+                                    cb_error *err)
 {
     cb_error first = {0};
-    cb_status rc = bake_once(sampler, opt, plan, plan_count, facts, p, &first);
+    cb_status rc = bake_once(sampler, opt, plan, plan_count, facts, poses, p, &first);
     if (rc == CB_ERR_LAYOUT && opt->affine_fallback && opt->layout == CB_LAYOUT_QPOS) {
         cb_bake_options affine = *opt; /* a rig qpos cannot hold: the next smallest layout */
         affine.layout = CB_LAYOUT_AFFINE;
-        rc = bake_once(sampler, &affine, plan, plan_count, facts, p, err);
+        rc = bake_once(sampler, &affine, plan, plan_count, facts, poses, p, err);
         if (!rc) snprintf(p->fallback_note, sizeof p->fallback_note, "%.460s; baked with affine instead", first.message);
         return rc;
     }
@@ -480,12 +496,13 @@ static cb_status bake_with_fallback(cb_sampler *sampler, const cb_bake_options *
 }
 
 cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                                  uint32_t plan_count, const palette_skin_facts *facts, cb_palette *p, cb_error *err)
+                                  uint32_t plan_count, const palette_skin_facts *facts, pose_cache *poses,
+                                  cb_palette *p, cb_error *err)
 {
-    if (facts) return bake_with_fallback(sampler, opt, plan, plan_count, facts, p, err);
+    if (facts) return bake_with_fallback(sampler, opt, plan, plan_count, facts, poses, p, err);
     palette_skin_facts own;
     cb_status rc = palette_skin_facts_build(sampler, &own, err);
-    if (!rc) rc = bake_with_fallback(sampler, opt, plan, plan_count, &own, p, err);
+    if (!rc) rc = bake_with_fallback(sampler, opt, plan, plan_count, &own, poses, p, err);
     palette_skin_facts_free(&own);
     return rc;
 }

@@ -8,6 +8,7 @@
 
 #include "crowdbake/palette.h"
 #include "cb_math.h"
+#include "pose_cache.h"
 #include "vertex_groups.h"
 
 /* Canonical floats per bone and row before the final encoding: the upper 3x4 of the matrix
@@ -85,6 +86,7 @@ typedef struct bake_state {
     double *clip_blend_error; /* clips: worst vertex error halfway between rows, as the runtime blends them */
     value_range *ranges;   /* clips: the values' ranges */
     double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
+    pose_cache *poses;      /* the only clip's exact matrices by time, kept across bakes (one thread); or NULL */
 } bake_state;
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
@@ -179,10 +181,18 @@ typedef struct palette_skin_facts {
 cb_status palette_skin_facts_build(cb_sampler *sampler, palette_skin_facts *out, cb_error *err);
 void palette_skin_facts_free(palette_skin_facts *f);
 
+/* Clip framing's joint matrices at `frame` (cb_clip_frame_matrices with the bake's root motion):
+ * from st->poses where it keeps them, else sampled into w->mats (and kept). Valid until the
+ * worker's next call. */
+const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame);
+
 /* cb_palette_bake with the skin's facts settled by the caller (palette_skin_facts_build, same
- * sampler model and skin); NULL: settled here. */
+ * sampler model and skin; NULL: settled here), and `poses` (or NULL): the exact matrices of the
+ * plan's clip kept across the bakes of a search, used when the bake is of that one clip on one
+ * thread (opt->threads <= 1). */
 cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                                  uint32_t plan_count, const palette_skin_facts *facts, cb_palette *p, cb_error *err);
+                                  uint32_t plan_count, const palette_skin_facts *facts, pose_cache *poses,
+                                  cb_palette *p, cb_error *err);
 /* palette_error.c: bind-space distance from each joint's bind position (bind: 3 floats a
  * joint) to the farthest vertex it moves; -1 for joints that move none. False when no vertex
  * is skinned. */

@@ -185,11 +185,12 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     for (uint32_t i = 0; i < count; ++i) {
         double *diff = similar ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
         if (!similar) {
-            cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
+            const double *mats = palette_frame_matrices(st, w, &framing, times[i]);
             uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
             const double *a = row_values(p, s, row), *b = sub ? row_values(p, s, next) : NULL;
             for (uint32_t j = 0; j < p->bone_count; ++j) {
-                double decoded[16], *d = diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
+                double decoded[16], *d = diff + (size_t)j * 16;
+                const double *exact = mats + (size_t)j * 16;
                 if (sub) palette_blend_values(p, j, a + (size_t)j * 16, b + (size_t)j * 16, (double)sub / parts, decoded);
                 else cb_palette_values_to_matrix(p, j, a + (size_t)j * 16, decoded);
                 for (int k = 0; k < 16; ++k) d[k] = exact[k] - decoded[k];

@@ -53,13 +53,21 @@ typedef struct clip_search {
     probe done[32];
     uint32_t count;
     const palette_skin_facts *facts; /* the skin's, settled once for every bake of the search */
+    pose_cache *poses;               /* the clip's exact matrices by time, for every probe (or NULL) */
 } clip_search;
+
+/* A search thread's pose cache holds at most this much (Cow's longest clip, 6 s of 42 joints,
+ * keeps 912 poses: 4.9 MB; 32 MB is 1,250 poses of 200 joints); past it, probes sample the
+ * times it has no room for as without one. */
+#define SEARCH_POSE_BYTES ((size_t)32 << 20)
 
 /* The visible error of the clip baked alone at `fps`: the bake measures it (the encoding, and
  * the blend halfway between every two rows). goal > 0: exact when within it; above it, the
  * measurement may stop early (any value above the goal decides the search alike). Every bake
  * of the search measures the same vertices from the same bind pose (the skin's, whatever the
- * clip): what depends on the skin alone is settled once (cs->facts), not once a bake. */
+ * clip): what depends on the skin alone is settled once (cs->facts), not once a bake. The
+ * probes' times coincide (a probe's blends are the rows of one at twice its rate): each time's
+ * exact matrices are sampled once for the clip (cs->poses). */
 static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *err)
 {
     cb_bake_options one = *cs->o;
@@ -69,7 +77,7 @@ static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *
     cb_clip_plan plan = *cs->clip;
     plan.fps = fps;
     cb_palette p;
-    if (palette_bake_with_facts(cs->s, &one, &plan, 1, cs->facts, &p, err)) return INFINITY;
+    if (palette_bake_with_facts(cs->s, &one, &plan, 1, cs->facts, cs->poses, &p, err)) return INFINITY;
     double worst = p.visible_error;
     cb_palette_free(&p);
     return worst;
@@ -113,14 +121,17 @@ static double lowest_rate(clip_search *cs, const double *rates, size_t n, double
  * second family's error is far lower than its neighbours' in the first (Cow's Idle: 0.78 mm/m
  * at its 24 fps key rate, 3.4 at 20 and 30): the error does not fall steadily across both. */
 static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
-                              double max_fps, bool *met, double *error, const palette_skin_facts *facts, cb_error *err)
+                              double max_fps, bool *met, double *error, const palette_skin_facts *facts,
+                              pose_cache *poses, cb_error *err)
 {
     static const double common[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120};
     static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
-    double aligned[6], key = cb_animation_key_interval(&cb_sampler_model(s)->animations[clip->animation]);
+    const cb_model *m = cb_sampler_model(s);
+    double aligned[6], key = cb_animation_key_interval(&m->animations[clip->animation]);
     size_t n_aligned = 0;
     for (size_t i = 0; key > 0 && i < 6; ++i) aligned[n_aligned++] = round(factors[i] / key * 1000) / 1000;
-    clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts};
+    clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts, .poses = poses};
+    if (poses) pose_cache_clear(poses); /* another clip's times */
     double e_common = INFINITY, e_aligned = INFINITY;
     double a = lowest_rate(&cs, common, sizeof common / sizeof common[0], max_fps, max_error, &e_common, err);
     double b = lowest_rate(&cs, aligned, n_aligned, a > 0 ? fmin(a, max_fps) : max_fps, max_error, &e_aligned, err);
@@ -137,14 +148,22 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
     return fps;
 }
 
+static pose_cache *search_pose_cache(const cb_sampler *s)
+{
+    return pose_cache_create(cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count, SEARCH_POSE_BYTES);
+}
+
 double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
                           double max_fps, bool *met, double *error, cb_error *err)
 {
     palette_skin_facts facts;
+    pose_cache *poses = search_pose_cache(s); /* NULL (out of memory): sampled as without */
     double fps = max_fps;
     *met = false, *error = INFINITY;
-    if (!palette_skin_facts_build(s, &facts, err)) fps = choose_clip_fps(s, o, clip, max_error, max_fps, met, error, &facts, err);
+    if (!palette_skin_facts_build(s, &facts, err))
+        fps = choose_clip_fps(s, o, clip, max_error, max_fps, met, error, &facts, poses, err);
     palette_skin_facts_free(&facts);
+    pose_cache_free(poses);
     return fps;
 }
 
@@ -196,6 +215,7 @@ static int rate_worker(void *arg)
     rate_search *rs = arg;
     cb_error fail = {0};
     cb_sampler *s = cb_sampler_create(rs->model, rs->skin, &fail);
+    pose_cache *poses = s ? search_pose_cache(s) : NULL; /* this thread's, for each clip it searches in turn */
     for (;;) {
         uint32_t n = atomic_fetch_add(&rs->next, 1);
         if (n >= rs->count) break;
@@ -208,9 +228,10 @@ static int rate_worker(void *arg)
         cb_rate_choice *c = &rs->choices[i];
         rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
                                           max_fps_of(&rs->goals[i]), &c->met, &c->error,
-                                          rs->facts, &rs->errors[i]);
+                                          rs->facts, poses, &rs->errors[i]);
         c->error_mm = cb_mm_per_m(c->error, rs->height);
     }
+    pose_cache_free(poses);
     cb_sampler_free(s);
     return 0;
 }
