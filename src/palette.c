@@ -396,7 +396,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     bake_state st = {0};
     st.p = p, st.model = m, st.skin = skin_index, st.opt = opt;
     cb_clip_info *infos = NULL;
-    st.radius = facts->reach, st.groups = &facts->groups;
+    st.facts = facts, st.radius = facts->reach, st.groups = &facts->groups;
     st.poses = plan && plan_count == 1 && opt->threads <= 1 ? poses : NULL; /* one clip's, one thread's */
     if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;

@@ -81,7 +81,8 @@ typedef struct bake_state {
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
     cb_error *errors;      /* 2 x clips: the first error of each clip, then of measuring its baked rows */
     uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
-    const cb_vertex_groups *groups; /* the skinned vertices as measuring bounds and skins them (skin_facts') */
+    const cb_vertex_groups *groups; /* the skinned vertices as measuring bounds and skins them (facts') */
+    const struct palette_skin_facts *facts; /* the skin's */
     double *clip_error;    /* clips: worst vertex error measured */
     double *clip_blend_error; /* clips: worst vertex error halfway between rows, as the runtime blends them */
     value_range *ranges;   /* clips: the values' ranges */
@@ -173,6 +174,8 @@ typedef struct palette_skin_facts {
     double *reach;           /* bones: bind-space distance to the farthest vertex the joint moves; -1: none */
     bool skinned;            /* some vertex is skinned: there is an error to measure */
     cb_vertex_groups groups; /* built when skinned */
+    double *group_reach;     /* bones: the largest reach a group gives the joint (0: in none) */
+    double weight_sum;       /* the largest of the groups' weight sums */
     double height;           /* cb_skin_rest_bounds's */
 } palette_skin_facts;
 

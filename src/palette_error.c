@@ -61,11 +61,14 @@ static double row_bound(const bake_state *st, measure_scratch *s, const double *
 /* The worst vertex error of one row, or `worst` when none exceeds it: the group with the
  * largest bound first (it most likely holds the row's worst), then each group whose bound
  * exceeds the worst so far. The groups skipped cannot change the maximum, which is the one
- * skinning every vertex gives, bit for bit. */
+ * skinning every vertex gives, bit for bit. A row whose cap on all the group bounds is within
+ * the worst skips them all (a baked row against the blends' worst: its encoding errs far less). */
 static double skin_row(const bake_state *st, measure_scratch *s, const double *diff, double worst)
 {
     const cb_vertex_groups *g = st->groups;
     bool finite = cb_joint_errors(diff, st->p->bone_count, st->p->bind_positions, s->joints);
+    if (finite && cb_row_error_cap(s->joints, st->p->bone_count, st->facts->group_reach, st->facts->weight_sum) <= worst)
+        return worst;
     uint32_t top = 0;
     for (uint32_t k = 0; k < g->group_count; ++k) {
         s->group_bounds[k] = finite ? cb_group_error_bound(g, k, s->joints, worst) : INFINITY;

@@ -167,15 +167,24 @@ cb_status palette_skin_facts_build(cb_sampler *sampler, palette_skin_facts *out,
         return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring the palette's error", m->source);
     palette_bind_positions(&m->skins[skin], out->bind_positions);
     out->skinned = palette_joint_reach(out->bind_positions, bones, m, skin, out->reach);
-    if (out->skinned && !cb_vertex_groups_build(m, skin, out->bind_positions, &out->groups))
+    out->group_reach = calloc(bones ? bones : 1, sizeof(double));
+    if (!out->group_reach || (out->skinned && !cb_vertex_groups_build(m, skin, out->bind_positions, &out->groups)))
         return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring the palette's error", m->source);
+    for (uint32_t k = 0; k < out->groups.group_count; ++k) {
+        const cb_vertex_group *grp = &out->groups.groups[k];
+        out->weight_sum = grp->weight_sum > out->weight_sum ? grp->weight_sum : out->weight_sum;
+        for (uint32_t i = 0; i < grp->joint_count; ++i) {
+            const cb_group_joint *gj = &out->groups.joints[grp->joint_first + i];
+            if (gj->reach > out->group_reach[gj->joint]) out->group_reach[gj->joint] = gj->reach;
+        }
+    }
     out->height = cb_skin_rest_bounds(sampler, lo, hi);
     return CB_OK;
 }
 
 void palette_skin_facts_free(palette_skin_facts *f)
 {
-    free(f->bind_positions), free(f->reach), cb_vertex_groups_free(&f->groups);
+    free(f->bind_positions), free(f->reach), free(f->group_reach), cb_vertex_groups_free(&f->groups);
     memset(f, 0, sizeof *f);
 }
 
