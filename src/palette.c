@@ -376,7 +376,7 @@ cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const
 }
 
 static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                           uint32_t plan_count, const palette_skin_facts *facts, pose_cache *poses, cb_palette *p,
+                           uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe, cb_palette *p,
                            cb_error *err)
 {
     const cb_model *m = cb_sampler_model(sampler);
@@ -397,7 +397,8 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.p = p, st.model = m, st.skin = skin_index, st.opt = opt;
     cb_clip_info *infos = NULL;
     st.facts = facts, st.radius = facts->reach, st.groups = &facts->groups;
-    st.poses = plan && plan_count == 1 && opt->threads <= 1 ? poses : NULL; /* one clip's, one thread's */
+    if (probe && plan && plan_count == 1 && opt->threads <= 1) /* one clip's, one thread's */
+        st.poses = probe->poses, st.analysis = probe->analysis;
     if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;
     st.infos = infos;
@@ -479,15 +480,15 @@ fail:
 }
 
 static cb_status bake_with_fallback(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                                    uint32_t plan_count, const palette_skin_facts *facts, pose_cache *poses, cb_palette *p,
+                                    uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe, cb_palette *p,
                                     cb_error *err)
 {
     cb_error first = {0};
-    cb_status rc = bake_once(sampler, opt, plan, plan_count, facts, poses, p, &first);
+    cb_status rc = bake_once(sampler, opt, plan, plan_count, facts, probe, p, &first);
     if (rc == CB_ERR_LAYOUT && opt->affine_fallback && opt->layout == CB_LAYOUT_QPOS) {
         cb_bake_options affine = *opt; /* a rig qpos cannot hold: the next smallest layout */
         affine.layout = CB_LAYOUT_AFFINE;
-        rc = bake_once(sampler, &affine, plan, plan_count, facts, poses, p, err);
+        rc = bake_once(sampler, &affine, plan, plan_count, facts, probe, p, err);
         if (!rc) snprintf(p->fallback_note, sizeof p->fallback_note, "%.460s; baked with affine instead", first.message);
         return rc;
     }
@@ -496,13 +497,13 @@ static cb_status bake_with_fallback(cb_sampler *sampler, const cb_bake_options *
 }
 
 cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                                  uint32_t plan_count, const palette_skin_facts *facts, pose_cache *poses,
+                                  uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
                                   cb_palette *p, cb_error *err)
 {
-    if (facts) return bake_with_fallback(sampler, opt, plan, plan_count, facts, poses, p, err);
+    if (facts) return bake_with_fallback(sampler, opt, plan, plan_count, facts, probe, p, err);
     palette_skin_facts own;
     cb_status rc = palette_skin_facts_build(sampler, &own, err);
-    if (!rc) rc = bake_with_fallback(sampler, opt, plan, plan_count, &own, poses, p, err);
+    if (!rc) rc = bake_with_fallback(sampler, opt, plan, plan_count, &own, probe, p, err);
     palette_skin_facts_free(&own);
     return rc;
 }

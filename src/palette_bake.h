@@ -88,6 +88,7 @@ typedef struct bake_state {
     value_range *ranges;   /* clips: the values' ranges */
     double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
     pose_cache *poses;      /* the only clip's exact matrices by time, kept across bakes (one thread); or NULL */
+    const cb_clip_info *analysis; /* the only clip analyzed before the bake, or NULL */
 } bake_state;
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
@@ -142,7 +143,8 @@ bool palette_position_offsets(cb_palette *p, const unsigned char *stash);
 /* Sets p->bounds_min/max and linear_range from every clip's range. */
 void palette_merge_ranges(cb_palette *p, const value_range *clips);
 
-/* palette_plan.c: the clips' frames and rows (p->clips, *infos_out), the texture's geometry,
+/* palette_plan.c: the clips' frames and rows (p->clips, *infos_out: st->analysis framed, or
+ * each clip analyzed), the texture's geometry,
  * each joint's bind-pose position, and the texels no row covers set to zero. */
 cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
                               cb_clip_info **infos_out, cb_error *err);
@@ -189,12 +191,18 @@ void palette_skin_facts_free(palette_skin_facts *f);
  * worker's next call. */
 const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame);
 
+/* What a search that bakes one clip at many rates (runtime.c) keeps across its bakes. */
+typedef struct palette_probe {
+    pose_cache *poses;            /* the clip's exact matrices by time, or NULL */
+    const cb_clip_info *analysis; /* the clip analyzed once (cb_clip_analyze at any rate, the plan's loop and
+                                   * limits, on the bake's sampler), or NULL */
+} palette_probe;
+
 /* cb_palette_bake with the skin's facts settled by the caller (palette_skin_facts_build, same
- * sampler model and skin; NULL: settled here), and `poses` (or NULL): the exact matrices of the
- * plan's clip kept across the bakes of a search, used when the bake is of that one clip on one
- * thread (opt->threads <= 1). */
+ * sampler model and skin; NULL: settled here), and a probe's aids (or NULL), used when the bake
+ * is of the plan's one clip on one thread (opt->threads <= 1). */
 cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                                  uint32_t plan_count, const palette_skin_facts *facts, pose_cache *poses,
+                                  uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
                                   cb_palette *p, cb_error *err);
 /* palette_error.c: bind-space distance from each joint's bind position (bind: 3 floats a
  * joint) to the farthest vertex it moves; -1 for joints that move none. False when no vertex

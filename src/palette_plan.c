@@ -106,7 +106,13 @@ cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip
     p->clips = calloc(count ? count : 1, sizeof *p->clips);
     *infos_out = infos;
     if (!infos || !p->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    if (analyze_clips(st, sampler, plan, count, infos, err)) return err->status;
+    if (st->analysis) {
+        infos[0] = *st->analysis; /* framed at this bake's rate, not analyzed again */
+        if (cb_clip_frame_at(m, cb_clip_plan_fps(&plan[0], st->opt->fps), &st->opt->limits, &infos[0], err))
+            return err->status;
+    } else if (analyze_clips(st, sampler, plan, count, infos, err)) {
+        return err->status;
+    }
     uint64_t rows = 0;
     for (uint32_t i = 0; i < count; ++i) {
         cb_clip_plan one = plan_entry(plan, i);

@@ -53,7 +53,7 @@ typedef struct clip_search {
     probe done[32];
     uint32_t count;
     const palette_skin_facts *facts; /* the skin's, settled once for every bake of the search */
-    pose_cache *poses;               /* the clip's exact matrices by time, for every probe (or NULL) */
+    palette_probe probe;             /* the clip's analysis and exact poses, for every probe */
 } clip_search;
 
 /* A search thread's pose cache holds at most this much (Cow's longest clip, 6 s of 42 joints,
@@ -65,9 +65,10 @@ typedef struct clip_search {
  * the blend halfway between every two rows). goal > 0: exact when within it; above it, the
  * measurement may stop early (any value above the goal decides the search alike). Every bake
  * of the search measures the same vertices from the same bind pose (the skin's, whatever the
- * clip): what depends on the skin alone is settled once (cs->facts), not once a bake. The
- * probes' times coincide (a probe's blends are the rows of one at twice its rate): each time's
- * exact matrices are sampled once for the clip (cs->poses). */
+ * clip): what depends on the skin alone is settled once (cs->facts), not once a bake, and
+ * the clip is analyzed once (cs->probe.analysis). The probes' times coincide (a probe's blends
+ * are the rows of one at twice its rate): each time's exact matrices are sampled once for the
+ * clip (cs->probe.poses). */
 static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *err)
 {
     cb_bake_options one = *cs->o;
@@ -77,7 +78,7 @@ static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *
     cb_clip_plan plan = *cs->clip;
     plan.fps = fps;
     cb_palette p;
-    if (palette_bake_with_facts(cs->s, &one, &plan, 1, cs->facts, cs->poses, &p, err)) return INFINITY;
+    if (palette_bake_with_facts(cs->s, &one, &plan, 1, cs->facts, &cs->probe, &p, err)) return INFINITY;
     double worst = p.visible_error;
     cb_palette_free(&p);
     return worst;
@@ -130,7 +131,13 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
     double aligned[6], key = cb_animation_key_interval(&m->animations[clip->animation]);
     size_t n_aligned = 0;
     for (size_t i = 0; key > 0 && i < 6; ++i) aligned[n_aligned++] = round(factors[i] / key * 1000) / 1000;
-    clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts, .poses = poses};
+    /* Analyzed at the lowest rate, the likeliest within the frame limit; where it fails, each
+     * probe analyzes the clip itself and fails as it would. */
+    cb_clip_info analysis;
+    cb_error unanalyzed = {0};
+    bool analyzed = !cb_clip_analyze(s, clip->animation, common[0], clip->loop, &o->limits, &analysis, &unanalyzed);
+    clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts,
+                      .probe = {poses, analyzed ? &analysis : NULL}};
     if (poses) pose_cache_clear(poses); /* another clip's times */
     double e_common = INFINITY, e_aligned = INFINITY;
     double a = lowest_rate(&cs, common, sizeof common / sizeof common[0], max_fps, max_error, &e_common, err);
