@@ -279,7 +279,7 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     worker w = {0};
     cb_error *err0 = &st->errors[first < st->p->clip_count ? first : 0];
     if (jb->samples) {
-        w.sampler = cb_sampler_create(st->model, st->skin, err0);
+        w.sampler = st->lent ? st->lent : cb_sampler_create(st->model, st->skin, err0);
         /* Loops without a closing key wrap. (One-shots never sample past their last key: a clip
          * planned twice, as a loop and as a one-shot, keeps its loop's period.) */
         for (uint32_t c = 0; w.sampler && c < st->p->clip_count; ++c)
@@ -295,7 +295,7 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
         for (uint32_t c = atomic_fetch_add(&jb->next, 1); c < jb->count; c = atomic_fetch_add(&jb->next, 1))
             jb->run(st, &w, c);
     }
-    cb_sampler_free(w.sampler);
+    if (w.sampler != st->lent) cb_sampler_free(w.sampler);
     free(w.mats);
     free(w.lanes);
     free(w.prev);
@@ -398,7 +398,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     cb_clip_info *infos = NULL;
     st.facts = facts, st.radius = facts->reach, st.groups = &facts->groups;
     if (probe && plan && plan_count == 1 && opt->threads <= 1) /* one clip's, one thread's */
-        st.poses = probe->poses, st.analysis = probe->analysis;
+        st.poses = probe->poses, st.analysis = probe->analysis, st.lent = sampler; /* no sampler made per pass */
     if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;
     st.infos = infos;

@@ -89,6 +89,7 @@ typedef struct bake_state {
     double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
     pose_cache *poses;      /* the only clip's exact matrices by time, kept across bakes (one thread); or NULL */
     const cb_clip_info *analysis; /* the only clip analyzed before the bake, or NULL */
+    cb_sampler *lent;       /* the caller's sampler, for the one worker of a probe's bake; or NULL */
 } bake_state;
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
@@ -200,7 +201,8 @@ typedef struct palette_probe {
 
 /* cb_palette_bake with the skin's facts settled by the caller (palette_skin_facts_build, same
  * sampler model and skin; NULL: settled here), and a probe's aids (or NULL), used when the bake
- * is of the plan's one clip on one thread (opt->threads <= 1). */
+ * is of the plan's one clip on one thread (opt->threads <= 1): its one worker then samples on
+ * `sampler` itself, not on a sampler made for each pass. */
 cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
                                   uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
                                   cb_palette *p, cb_error *err);
