@@ -53,8 +53,10 @@ void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint3
 
 /* ---- pass 1: sample every row into canonical floats ---- */
 
-static cb_status qpos_canon(const double m[16], float out[8], const cb_model *model, const cb_skin *skin, uint32_t bone,
-                            const char *clip, uint32_t frame, cb_quat *prev, cb_error *err)
+/* What qpos takes of a joint matrix, from the matrix alone: the quaternion of its rotation
+ * (either sign) and its scale, into q[4] and q[4]; fails where it is no similarity. */
+static cb_status qpos_similarity(const double m[16], double q[5], const cb_model *model, const cb_skin *skin,
+                                 uint32_t bone, const char *clip, uint32_t frame, cb_error *err)
 {
     cb_vec3 c[3] = {{m[0], m[1], m[2]}, {m[4], m[5], m[6]}, {m[8], m[9], m[10]}};
     double l[3] = {cb_vec3_length(c[0]), cb_vec3_length(c[1]), cb_vec3_length(c[2])};
@@ -75,27 +77,55 @@ static cb_status qpos_canon(const double m[16], float out[8], const cb_model *mo
     double r[16], inv = 1 / s;
     memcpy(r, m, sizeof r);
     for (int i = 0; i < 12; ++i) r[i] *= inv;
-    cb_quat q = cb_quat_from_mat4(r);
-    if (prev) {
-        if (cb_quat_dot(q, *prev) < 0) q = (cb_quat){-q.x, -q.y, -q.z, -q.w};
-    } else if (q.w < 0) {
-        q = (cb_quat){-q.x, -q.y, -q.z, -q.w};
-    }
-    out[0] = (float)q.x, out[1] = (float)q.y, out[2] = (float)q.z, out[3] = (float)q.w;
-    out[7] = (float)s;
+    cb_quat rot = cb_quat_from_mat4(r);
+    q[0] = rot.x, q[1] = rot.y, q[2] = rot.z, q[3] = rot.w, q[4] = s;
     return CB_OK;
 }
 
+/* A qpos bone's quaternion and scale (qpos_similarity's q) as canonical floats: the quaternion
+ * on the side of the previous row's (prev), or of w >= 0 for a clip's first row. */
+static CB_CLONE_INLINE void qpos_store(const double q[5], const cb_quat *prev, float out[8])
+{
+    cb_quat rot = {q[0], q[1], q[2], q[3]};
+    if (prev) {
+        if (cb_quat_dot(rot, *prev) < 0) rot = (cb_quat){-rot.x, -rot.y, -rot.z, -rot.w};
+    } else if (rot.w < 0) {
+        rot = (cb_quat){-rot.x, -rot.y, -rot.z, -rot.w};
+    }
+    out[0] = (float)rot.x, out[1] = (float)rot.y, out[2] = (float)rot.z, out[3] = (float)rot.w;
+    out[7] = (float)q[4];
+}
 
-const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame)
+static cb_status qpos_canon(const double m[16], float out[8], const cb_model *model, const cb_skin *skin, uint32_t bone,
+                            const char *clip, uint32_t frame, cb_quat *prev, cb_error *err)
+{
+    double q[5];
+    if (qpos_similarity(m, q, model, skin, bone, clip, frame, err)) return err->status;
+    qpos_store(q, prev, out);
+    return CB_OK;
+}
+
+/* A probe pose's extra doubles (pose_cache.h): 1 when its joints' qpos_similarity follows (5
+ * doubles a joint), NaN before. */
+#define KEPT_QPOS(bones) (1 + 5 * (bones))
+
+pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes)
+{
+    return pose_cache_create(bones, KEPT_QPOS(bones), max_bytes);
+}
+
+
+const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame,
+                                     double **extra)
 {
     double t = cb_clip_frame_time(framing, frame), *out = w->mats;
-    const double *kept = st->poses ? pose_cache_find(st->poses, t) : NULL;
-    if (kept) return kept;
-    if (st->poses) {
-        double *room = pose_cache_add(st->poses, t);
-        out = room ? room : out;
+    double *kept = st->poses ? (double *)pose_cache_find(st->poses, t) : NULL;
+    if (!kept && st->poses) {
+        kept = pose_cache_add(st->poses, t);
+        if (kept) cb_clip_frame_matrices(w->sampler, framing, frame, st->opt->root_motion, kept);
     }
+    if (extra) *extra = kept ? kept + (size_t)st->p->bone_count * 16 : NULL;
+    if (kept) return kept;
     cb_clip_frame_matrices(w->sampler, framing, frame, st->opt->root_motion, out);
     return out;
 }
@@ -115,7 +145,9 @@ static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, f
 {
     cb_palette *p = st->p;
     cb_palette_clip *clip = &p->clips[c];
-    const double *mats = palette_frame_matrices(st, w, &st->infos[c], f);
+    double *kept; /* the pose's qpos_similarity, where a search keeps it (1 + 5 a joint) */
+    const double *mats = palette_frame_matrices(st, w, &st->infos[c], f, &kept);
+    bool derived = kept && kept[0] == 1;
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         const double *M = mats + (size_t)j * 16;
         const float *b = p->bind_positions + (size_t)j * 3;
@@ -128,12 +160,15 @@ static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, f
             range_grow_affine(&st->ranges[c], out);
             continue;
         }
-        if (qpos_canon(M, out, st->model, &st->model->skins[st->skin], j, clip->name, f, f ? &w->prev[j] : NULL, err))
+        double fresh[5], *q = kept ? kept + 1 + (size_t)j * 5 : fresh;
+        if (!derived && qpos_similarity(M, q, st->model, &st->model->skins[st->skin], j, clip->name, f, err))
             return err->status;
+        qpos_store(q, f ? &w->prev[j] : NULL, out);
         w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
         out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
         range_grow_qpos(&st->ranges[c], out);
     }
+    if (kept && p->layout == CB_LAYOUT_QPOS) kept[0] = 1; /* every joint's derived: the next probe takes them */
     return CB_OK;
 }
 
@@ -147,7 +182,7 @@ static cb_status sample_mids(bake_state *st, worker *w, uint32_t c, const float 
     framing.steps *= 2;
     uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
     for (uint32_t i = 0; i < intervals; ++i) {
-        const double *mats = palette_frame_matrices(st, w, &framing, 2 * i + 1);
+        const double *mats = palette_frame_matrices(st, w, &framing, 2 * i + 1, NULL);
         float *out = mids + (size_t)i * p->bone_count * vals;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             const double *M = mats + (size_t)j * 16;

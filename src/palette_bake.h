@@ -189,8 +189,12 @@ void palette_skin_facts_free(palette_skin_facts *f);
 
 /* Clip framing's joint matrices at `frame` (cb_clip_frame_matrices with the bake's root motion):
  * from st->poses where it keeps them, else sampled into w->mats (and kept). Valid until the
- * worker's next call. */
-const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame);
+ * worker's next call. extra (optional): the kept pose's extra doubles, NULL where not kept. */
+const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame,
+                                     double **extra);
+/* A pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
+ * from its matrices alone too (a probe's rows are rows of the others). */
+pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes);
 
 /* What a search that bakes one clip at many rates (runtime.c) keeps across its bakes. */
 typedef struct palette_probe {

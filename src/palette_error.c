@@ -188,7 +188,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     for (uint32_t i = 0; i < count; ++i) {
         double *diff = similar ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
         if (!similar) {
-            const double *mats = palette_frame_matrices(st, w, &framing, times[i]);
+            const double *mats = palette_frame_matrices(st, w, &framing, times[i], NULL);
             uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
             const double *a = row_values(p, s, row), *b = sub ? row_values(p, s, next) : NULL;
             for (uint32_t j = 0; j < p->bone_count; ++j) {

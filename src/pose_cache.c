@@ -6,6 +6,7 @@
 
 #include "crowdbake/core.h" /* cb_alloc_large */
 
+#include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,7 +14,8 @@
 #define BLOCK_BYTES ((size_t)2 << 20) /* a huge page */
 
 struct pose_cache {
-    uint32_t bones;
+    uint32_t bones, extra;
+    size_t stride;          /* doubles a pose: its matrices and its extra */
     uint32_t count, limit;  /* poses kept, and the most max_bytes allows */
     uint64_t *keys;         /* the table: a time's bits, or EMPTY */
     uint32_t *slots;        /* the table: its pose's number */
@@ -43,16 +45,17 @@ static uint32_t probe_entry(const pose_cache *c, uint64_t bits)
 
 static double *pose_at(const pose_cache *c, uint32_t n)
 {
-    return c->blocks[n / c->block_poses] + (size_t)(n % c->block_poses) * c->bones * 16;
+    return c->blocks[n / c->block_poses] + (n % c->block_poses) * c->stride;
 }
 
-pose_cache *pose_cache_create(uint32_t bones, size_t max_bytes)
+pose_cache *pose_cache_create(uint32_t bones, uint32_t extra, size_t max_bytes)
 {
     pose_cache *c = calloc(1, sizeof *c);
     if (!c) return NULL;
-    size_t pose_bytes = (size_t)(bones ? bones : 1) * 16 * sizeof(double);
+    c->bones = bones ? bones : 1, c->extra = extra;
+    c->stride = (size_t)c->bones * 16 + extra;
+    size_t pose_bytes = c->stride * sizeof(double);
     size_t limit = max_bytes / pose_bytes;
-    c->bones = bones ? bones : 1;
     c->block_poses = (uint32_t)((BLOCK_BYTES + pose_bytes - 1) / pose_bytes); /* at least a huge page */
     c->limit = limit > UINT32_MAX / 4 ? UINT32_MAX / 4 : (uint32_t)limit;
     c->capacity = 64;
@@ -109,7 +112,7 @@ static bool ensure_block(pose_cache *c, uint32_t n)
     double **blocks = realloc(c->blocks, (c->block_count + 1) * sizeof *blocks);
     if (!blocks) return false;
     c->blocks = blocks;
-    blocks[c->block_count] = cb_alloc_large((size_t)c->block_poses * c->bones * 16 * sizeof(double));
+    blocks[c->block_count] = cb_alloc_large(c->block_poses * c->stride * sizeof(double));
     if (!blocks[c->block_count]) return false;
     c->block_count++;
     return true;
@@ -123,7 +126,9 @@ double *pose_cache_add(pose_cache *c, double t)
     if (!ensure_block(c, c->count)) return NULL;
     uint32_t i = probe_entry(c, bits);
     c->keys[i] = bits, c->slots[i] = c->count;
-    return pose_at(c, c->count++);
+    double *pose = pose_at(c, c->count++);
+    if (c->extra) pose[(size_t)c->bones * 16] = NAN; /* not derived yet */
+    return pose;
 }
 
 void pose_cache_clear(pose_cache *c)

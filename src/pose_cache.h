@@ -12,13 +12,14 @@
 
 typedef struct pose_cache pose_cache;
 
-/* A cache of poses of `bones` joints (16 doubles each) holding at most max_bytes of them (in
- * blocks of 2 MB: up to one block more); NULL when out of memory. One clip's at a time (the
- * times say nothing of which clip), one thread's. */
-pose_cache *pose_cache_create(uint32_t bones, size_t max_bytes);
+/* A cache of poses of `bones` joints (16 doubles each), each followed by `extra` doubles for
+ * what its user derives from the matrices alone (their first is NaN until it writes them),
+ * holding at most max_bytes of them (in blocks of 2 MB: up to one block more); NULL when out
+ * of memory. One clip's at a time (the times say nothing of which clip), one thread's. */
+pose_cache *pose_cache_create(uint32_t bones, uint32_t extra, size_t max_bytes);
 void pose_cache_free(pose_cache *c);
 
-/* The matrices kept for time t, or NULL. */
+/* The matrices kept for time t (their extra doubles from + 16 x bones), or NULL. */
 const double *pose_cache_find(const pose_cache *c, double t);
 /* Room for time t's matrices, which the caller writes before the next find of t; NULL when the
  * cache is full (or out of memory): then sample without it. t must not be kept already. A

@@ -157,7 +157,7 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
 
 static pose_cache *search_pose_cache(const cb_sampler *s)
 {
-    return pose_cache_create(cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count, SEARCH_POSE_BYTES);
+    return palette_probe_poses(cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count, SEARCH_POSE_BYTES);
 }
 
 double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,

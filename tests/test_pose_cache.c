@@ -1,7 +1,8 @@
 /* test_pose_cache.c - the exact poses a --fps auto search keeps by clip time (src/pose_cache.h):
  * a time finds what was stored for it and nothing else finds it (times one ulp apart, 0 and
  * -0 are different keys); pointers stay put as the cache grows past a block; a full cache
- * refuses more and still finds what it holds; a cleared one finds nothing and is filled again.
+ * refuses more and still finds what it holds; a cleared one finds nothing and is filled again;
+ * a pose's extra doubles (qpos's derivation, for the search) stay with it, NaN until written.
  * And times coincide as the search counts on: row f at `steps` is row 2f at 2 x steps, the
  * same double. */
 #include "testutil.h"
@@ -28,7 +29,7 @@ static void expect_pose(const double *pose, double t)
 static void test_times_find_their_poses(void **state)
 {
     (void)state;
-    pose_cache *c = pose_cache_create(BONES, (size_t)1 << 20);
+    pose_cache *c = pose_cache_create(BONES, 0, (size_t)1 << 20);
     assert_non_null(c);
     double t = 0.1, next = nextafter(0.1, 1);
     fill(pose_cache_add(c, t), t);
@@ -49,7 +50,7 @@ static void test_pointers_stay_as_it_grows(void **state)
     /* 3 bones: 384 bytes a pose, 5,462 poses a 2 MB block: 12,000 span three blocks and many
      * table growths. */
     enum { N = 12000 };
-    pose_cache *c = pose_cache_create(BONES, (size_t)64 << 20);
+    pose_cache *c = pose_cache_create(BONES, 0, (size_t)64 << 20);
     assert_non_null(c);
     const double *first = NULL;
     for (uint32_t i = 0; i < N; ++i) {
@@ -67,7 +68,7 @@ static void test_pointers_stay_as_it_grows(void **state)
 static void test_full_and_cleared(void **state)
 {
     (void)state;
-    pose_cache *c = pose_cache_create(BONES, 10 * BONES * 16 * sizeof(double)); /* room for 10 poses */
+    pose_cache *c = pose_cache_create(BONES, 0, 10 * BONES * 16 * sizeof(double)); /* room for 10 poses */
     assert_non_null(c);
     for (uint32_t i = 0; i < 10; ++i) fill(pose_cache_add(c, i * 0.25), i * 0.25);
     assert_null(pose_cache_add(c, 2.5)); /* full: the caller samples without it */
@@ -79,6 +80,25 @@ static void test_full_and_cleared(void **state)
     fill(pose_cache_add(c, 7.0), 7.0);
     expect_pose(pose_cache_find(c, 7.0), 7.0);
     assert_null(pose_cache_find(c, 2.25));
+    pose_cache_free(c);
+}
+
+/* Each pose's extra doubles follow its matrices, the first NaN until the user writes it, and
+ * stay with the pose. */
+static void test_extra_doubles_follow_the_pose(void **state)
+{
+    (void)state;
+    pose_cache *c = pose_cache_create(BONES, 1 + 5 * BONES, (size_t)1 << 20);
+    assert_non_null(c);
+    double *a = pose_cache_add(c, 0.5), *b = pose_cache_add(c, 0.75);
+    fill(a, 0.5), fill(b, 0.75);
+    assert_true(isnan(a[BONES * 16]) && isnan(b[BONES * 16]));
+    a[BONES * 16] = 1, a[BONES * 16 + 5 * BONES] = 42;
+    const double *found = pose_cache_find(c, 0.5);
+    expect_pose(found, 0.5);
+    assert_true(found[BONES * 16] == 1 && found[BONES * 16 + 5 * BONES] == 42);
+    assert_true(isnan(pose_cache_find(c, 0.75)[BONES * 16]));
+    expect_pose(pose_cache_find(c, 0.75), 0.75); /* a's extra did not run into b */
     pose_cache_free(c);
 }
 
@@ -106,6 +126,7 @@ int main(void)
         cmocka_unit_test(test_times_find_their_poses),
         cmocka_unit_test(test_pointers_stay_as_it_grows),
         cmocka_unit_test(test_full_and_cleared),
+        cmocka_unit_test(test_extra_doubles_follow_the_pose),
         cmocka_unit_test(test_rows_of_twice_the_steps_are_the_same_times),
     };
     return cmocka_run_group_tests_name("pose_cache", tests, NULL, NULL);
