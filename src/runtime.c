@@ -57,8 +57,8 @@ typedef struct clip_search {
 } clip_search;
 
 /* A search thread's pose cache holds at most this much (Cow's longest clip, 6 s of 42 joints,
- * keeps 912 poses: 4.9 MB; 32 MB is 1,250 poses of 200 joints); past it, probes sample the
- * times it has no room for as without one. */
+ * keeps 912 poses: 6.4 MB with their qpos derivations; 32 MB is 950 poses of 200 joints); past
+ * it, probes sample the times it has no room for as without one. */
 #define SEARCH_POSE_BYTES ((size_t)32 << 20)
 
 /* The visible error of the clip baked alone at `fps`: the bake measures it (the encoding, and
