@@ -54,7 +54,7 @@ void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint3
 /* ---- pass 1: sample every row into canonical floats ---- */
 
 /* What qpos takes of a joint matrix, from the matrix alone: the quaternion of its rotation
- * (either sign) and its scale, into q[4] and q[4]; fails where it is no similarity. */
+ * (either sign) into q[0..3] and its scale into q[4]; fails where it is no similarity. */
 static cb_status qpos_similarity(const double m[16], double q[5], const cb_model *model, const cb_skin *skin,
                                  uint32_t bone, const char *clip, uint32_t frame, cb_error *err)
 {
@@ -113,7 +113,6 @@ pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes)
 {
     return pose_cache_create(bones, KEPT_QPOS(bones), max_bytes);
 }
-
 
 const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame,
                                      double **extra)
