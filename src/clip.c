@@ -169,14 +169,24 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
     bool open = out->loops && out->loop_reason != CB_LOOP_CLOSED && span > 0;
     out->duration = span + (open ? out->key_interval : 0);
     cb_sampler_set_period(s, animation, out->loops ? out->duration : 0);
+    return cb_clip_frame_at(m, fps, limits, out, err);
+}
 
-    if (out->duration * fps > (double)limits->max_frames)
+cb_status cb_clip_frame_at(const cb_model *model, double fps, const cb_limits *limits, cb_clip_info *clip,
+                           cb_error *err)
+{
+    cb_limits defaults = cb_default_limits();
+    if (!limits) limits = &defaults;
+    if (!(fps > 0) || !isfinite(fps) || fps > CB_FPS_LIMIT)
+        return cb_fail(err, CB_ERR_SETTINGS, "fps must be a number between 0 and %g, got %g", CB_FPS_LIMIT, fps);
+    if (clip->duration * fps > (double)limits->max_frames)
         return cb_fail_setting(err, CB_ERR_INPUT, CB_SETTING_MAX_FRAMES, "%s: clip '%s' lasts %gs: %.0f frames at %g fps is over the limit of %u frames",
-                       m->source, anim->name, out->duration, out->duration * fps, fps, limits->max_frames);
-    uint32_t steps = cb_clip_step_count(out->duration, fps);
-    out->steps = steps;
-    out->effective_fps = out->duration > 0 ? steps / out->duration : fps;
-    out->frames = out->loops ? steps : steps + 1;
+                       model->source, model->animations[clip->animation].name, clip->duration, clip->duration * fps,
+                       fps, limits->max_frames);
+    uint32_t steps = cb_clip_step_count(clip->duration, fps);
+    clip->steps = steps;
+    clip->effective_fps = clip->duration > 0 ? steps / clip->duration : fps;
+    clip->frames = clip->loops ? steps : steps + 1;
     return CB_OK;
 }
 

@@ -54,6 +54,19 @@ static CB_CLONE_INLINE double combine(const cb_vertex_groups *g, const cb_vertex
     return (sum < bound ? sum : bound) * (1 + 1e-9);
 }
 
+/* The same operations as combine's (not centred) in the same order, each on terms at least as
+ * large: rounding is monotonic, so the result is at least every group's. */
+double cb_row_error_cap(const cb_joint_error *joints, uint32_t bones, const double *reach, double weight_sum)
+{
+    double most = 0;
+    for (uint32_t j = 0; j < bones; ++j) {
+        const cb_joint_error *je = &joints[j];
+        double e = je->at_bind + je->stretch * reach[j] * (1 + 2e-9) + je->slack_fixed;
+        most = e > most ? e : most;
+    }
+    return weight_sum * most * (1 + 1e-9);
+}
+
 CB_TARGET_CLONES
 double cb_group_error_bound(const cb_vertex_groups *g, uint32_t group, const cb_joint_error *joints, double above)
 {

@@ -70,6 +70,12 @@ bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_j
  * from the centres of the group's vertices (0: always the tighter). */
 double cb_group_error_bound(const cb_vertex_groups *g, uint32_t group, const cb_joint_error *joints, double above);
 
+/* A bound on every group's bound (cb_group_error_bound) at once, from each joint's largest reach
+ * in any group (reach: one a joint) and the groups' largest weight sum: a group's cheap bound
+ * with the largest of each of its terms, and the tighter bound is below the cheap one. When it
+ * is at most a row's worst error so far, no group of the row can exceed it. O(bones). */
+double cb_row_error_cap(const cb_joint_error *joints, uint32_t bones, const double *reach, double weight_sum);
+
 /* A row to measure and its bound. */
 typedef struct cb_bounded_row {
     double bound;

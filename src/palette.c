@@ -53,8 +53,10 @@ void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint3
 
 /* ---- pass 1: sample every row into canonical floats ---- */
 
-static cb_status qpos_canon(const double m[16], float out[8], const cb_model *model, const cb_skin *skin, uint32_t bone,
-                            const char *clip, uint32_t frame, cb_quat *prev, cb_error *err)
+/* What qpos takes of a joint matrix, from the matrix alone: the quaternion of its rotation
+ * (either sign) into q[0..3] and its scale into q[4]; fails where it is no similarity. */
+static cb_status qpos_similarity(const double m[16], double q[5], const cb_model *model, const cb_skin *skin,
+                                 uint32_t bone, const char *clip, uint32_t frame, cb_error *err)
 {
     cb_vec3 c[3] = {{m[0], m[1], m[2]}, {m[4], m[5], m[6]}, {m[8], m[9], m[10]}};
     double l[3] = {cb_vec3_length(c[0]), cb_vec3_length(c[1]), cb_vec3_length(c[2])};
@@ -75,17 +77,57 @@ static cb_status qpos_canon(const double m[16], float out[8], const cb_model *mo
     double r[16], inv = 1 / s;
     memcpy(r, m, sizeof r);
     for (int i = 0; i < 12; ++i) r[i] *= inv;
-    cb_quat q = cb_quat_from_mat4(r);
-    if (prev) {
-        if (cb_quat_dot(q, *prev) < 0) q = (cb_quat){-q.x, -q.y, -q.z, -q.w};
-    } else if (q.w < 0) {
-        q = (cb_quat){-q.x, -q.y, -q.z, -q.w};
-    }
-    out[0] = (float)q.x, out[1] = (float)q.y, out[2] = (float)q.z, out[3] = (float)q.w;
-    out[7] = (float)s;
+    cb_quat rot = cb_quat_from_mat4(r);
+    q[0] = rot.x, q[1] = rot.y, q[2] = rot.z, q[3] = rot.w, q[4] = s;
     return CB_OK;
 }
 
+/* A qpos bone's quaternion and scale (qpos_similarity's q) as canonical floats: the quaternion
+ * on the side of the previous row's (prev), or of w >= 0 for a clip's first row. */
+static CB_CLONE_INLINE void qpos_store(const double q[5], const cb_quat *prev, float out[8])
+{
+    cb_quat rot = {q[0], q[1], q[2], q[3]};
+    if (prev) {
+        if (cb_quat_dot(rot, *prev) < 0) rot = (cb_quat){-rot.x, -rot.y, -rot.z, -rot.w};
+    } else if (rot.w < 0) {
+        rot = (cb_quat){-rot.x, -rot.y, -rot.z, -rot.w};
+    }
+    out[0] = (float)rot.x, out[1] = (float)rot.y, out[2] = (float)rot.z, out[3] = (float)rot.w;
+    out[7] = (float)q[4];
+}
+
+static cb_status qpos_canon(const double m[16], float out[8], const cb_model *model, const cb_skin *skin, uint32_t bone,
+                            const char *clip, uint32_t frame, cb_quat *prev, cb_error *err)
+{
+    double q[5];
+    if (qpos_similarity(m, q, model, skin, bone, clip, frame, err)) return err->status;
+    qpos_store(q, prev, out);
+    return CB_OK;
+}
+
+/* A probe pose's extra doubles (pose_cache.h): 1 when its joints' qpos_similarity follows (5
+ * doubles a joint), NaN before. */
+#define KEPT_QPOS(bones) (1 + 5 * (bones))
+
+pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes)
+{
+    return pose_cache_create(bones, KEPT_QPOS(bones), max_bytes);
+}
+
+const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame,
+                                     double **extra)
+{
+    double t = cb_clip_frame_time(framing, frame), *out = w->mats;
+    double *kept = st->poses ? (double *)pose_cache_find(st->poses, t) : NULL;
+    if (!kept && st->poses) {
+        kept = pose_cache_add(st->poses, t);
+        if (kept) cb_clip_frame_matrices(w->sampler, framing, frame, st->opt->root_motion, kept);
+    }
+    if (extra) *extra = kept ? kept + (size_t)st->p->bone_count * 16 : NULL;
+    if (kept) return kept;
+    cb_clip_frame_matrices(w->sampler, framing, frame, st->opt->root_motion, out);
+    return out;
+}
 
 /* |A| for the reach: the Frobenius norm of the 3x3, at least its largest stretch. */
 static double frobenius3(const double *M)
@@ -102,9 +144,11 @@ static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, f
 {
     cb_palette *p = st->p;
     cb_palette_clip *clip = &p->clips[c];
-    cb_clip_frame_matrices(w->sampler, &st->infos[c], f, st->opt->root_motion, w->mats);
+    double *kept; /* the pose's qpos_similarity, where a search keeps it (1 + 5 a joint) */
+    const double *mats = palette_frame_matrices(st, w, &st->infos[c], f, &kept);
+    bool derived = kept && kept[0] == 1;
     for (uint32_t j = 0; j < p->bone_count; ++j) {
-        const double *M = w->mats + (size_t)j * 16;
+        const double *M = mats + (size_t)j * 16;
         const float *b = p->bind_positions + (size_t)j * 3;
         float *out = row + (size_t)j * CANON(p->layout);
         cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* the joint now: M b */
@@ -115,12 +159,15 @@ static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, f
             range_grow_affine(&st->ranges[c], out);
             continue;
         }
-        if (qpos_canon(M, out, st->model, &st->model->skins[st->skin], j, clip->name, f, f ? &w->prev[j] : NULL, err))
+        double fresh[5], *q = kept ? kept + 1 + (size_t)j * 5 : fresh;
+        if (!derived && qpos_similarity(M, q, st->model, &st->model->skins[st->skin], j, clip->name, f, err))
             return err->status;
+        qpos_store(q, f ? &w->prev[j] : NULL, out);
         w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
         out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
         range_grow_qpos(&st->ranges[c], out);
     }
+    if (kept && p->layout == CB_LAYOUT_QPOS) kept[0] = 1; /* every joint's derived: the next probe takes them */
     return CB_OK;
 }
 
@@ -134,10 +181,10 @@ static cb_status sample_mids(bake_state *st, worker *w, uint32_t c, const float 
     framing.steps *= 2;
     uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
     for (uint32_t i = 0; i < intervals; ++i) {
-        cb_clip_frame_matrices(w->sampler, &framing, 2 * i + 1, st->opt->root_motion, w->mats);
+        const double *mats = palette_frame_matrices(st, w, &framing, 2 * i + 1, NULL);
         float *out = mids + (size_t)i * p->bone_count * vals;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
-            const double *M = w->mats + (size_t)j * 16;
+            const double *M = mats + (size_t)j * 16;
             float *o = out + (size_t)j * vals;
             if (p->layout != CB_LAYOUT_QPOS) {
                 for (int r = 0; r < 3; ++r)
@@ -266,7 +313,7 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     worker w = {0};
     cb_error *err0 = &st->errors[first < st->p->clip_count ? first : 0];
     if (jb->samples) {
-        w.sampler = cb_sampler_create(st->model, st->skin, err0);
+        w.sampler = st->lent ? st->lent : cb_sampler_create(st->model, st->skin, err0);
         /* Loops without a closing key wrap. (One-shots never sample past their last key: a clip
          * planned twice, as a loop and as a one-shot, keeps its loop's period.) */
         for (uint32_t c = 0; w.sampler && c < st->p->clip_count; ++c)
@@ -282,7 +329,7 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
         for (uint32_t c = atomic_fetch_add(&jb->next, 1); c < jb->count; c = atomic_fetch_add(&jb->next, 1))
             jb->run(st, &w, c);
     }
-    cb_sampler_free(w.sampler);
+    if (w.sampler != st->lent) cb_sampler_free(w.sampler);
     free(w.mats);
     free(w.lanes);
     free(w.prev);
@@ -342,7 +389,7 @@ static void encode_staged_job(bake_state *st, worker *w, uint32_t c)
 static void free_bake_state(bake_state *st)
 {
     free(st->stash), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
-    free(st->encode_seconds), cb_vertex_groups_free(&st->groups);
+    free(st->encode_seconds);
 }
 
 /* The first error in clip order, so the message does not depend on the thread count. */
@@ -359,11 +406,12 @@ static cb_status first_clip_error(const bake_state *st, cb_error *err)
 cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
                           uint32_t plan_count, cb_palette *p, cb_error *err)
 {
-    return palette_bake_grouped(sampler, opt, plan, plan_count, NULL, p, err);
+    return palette_bake_with_facts(sampler, opt, plan, plan_count, NULL, NULL, p, err);
 }
 
 static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                           uint32_t plan_count, const cb_vertex_groups *groups, cb_palette *p, cb_error *err)
+                           uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe, cb_palette *p,
+                           cb_error *err)
 {
     const cb_model *m = cb_sampler_model(sampler);
     int32_t skin_index = cb_sampler_skin(sampler);
@@ -382,7 +430,9 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     bake_state st = {0};
     st.p = p, st.model = m, st.skin = skin_index, st.opt = opt;
     cb_clip_info *infos = NULL;
-    double *radius = NULL;
+    st.facts = facts, st.radius = facts->reach, st.groups = &facts->groups;
+    if (probe && plan && plan_count == 1 && opt->threads <= 1) /* one clip's, one thread's */
+        st.poses = probe->poses, st.analysis = probe->analysis, st.lent = sampler; /* no sampler made per pass */
     if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;
     st.infos = infos;
@@ -402,22 +452,19 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (keeps_values(p)) st.stash = cb_alloc_large((size_t)p->rows * p->bone_count * palette_stash_bytes(p));
     for (uint32_t c = 0; c < p->clip_count; ++c)
         if (p->clips[c].frames > st.max_clip_frames) st.max_clip_frames = p->clips[c].frames;
-    radius = malloc((size_t)p->bone_count * sizeof(double));
     st.breaks = calloc(p->clip_count, sizeof *st.breaks);
     st.errors = calloc(2 * (size_t)p->clip_count, sizeof *st.errors);
     st.clip_error = calloc(p->clip_count, sizeof *st.clip_error);
     st.clip_blend_error = calloc(p->clip_count, sizeof *st.clip_blend_error);
     st.ranges = calloc(p->clip_count, sizeof *st.ranges);
     st.encode_seconds = calloc(p->clip_count, sizeof *st.encode_seconds);
-    if (!p->texels || !p->bind_positions || !p->position_offsets || (keeps_values(p) && !st.stash) || !radius ||
+    if (!p->texels || !p->bind_positions || !p->position_offsets || (keeps_values(p) && !st.stash) ||
         !st.breaks || !st.errors || !st.clip_error || !st.clip_blend_error || !st.ranges || !st.encode_seconds) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for a %ux%u palette", m->source, p->width, p->height);
         goto fail;
     }
     palette_zero_padding(p);
-    palette_bind_positions(p, skin);
-    bool skinned = palette_joint_reach(p, m, skin_index, radius);
-    st.radius = radius;
+    memcpy(p->bind_positions, facts->bind_positions, (size_t)p->bone_count * 3 * sizeof(float));
     for_each_clip(&st, sample_clip_job, true, 0);
     if (first_clip_error(&st, err)) goto fail;
     for (uint32_t c = 0; c < p->clip_count; ++c) p->quat_hemisphere_breaks += st.breaks[c];
@@ -430,25 +477,20 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (keeps_values(p)) for_each_clip(&st, encode_staged_job, false, 0);
     free(st.stash), st.stash = NULL; /* encoded: its memory goes before measuring reads the keys again */
     if (first_clip_error(&st, err)) goto fail;
-    double t2 = seconds_now(), lo[3], hi[3];
+    double t2 = seconds_now();
     /* Clips encoded as they were sampled: their encoding time, spread over the threads, moves
      * from the sampling phase to the encoding phase. */
     double encoded_while_sampling = 0;
     for (uint32_t c = 0; c < p->clip_count; ++c) encoded_while_sampling += st.encode_seconds[c];
     encoded_while_sampling /= threads_used(&st, p->clip_count);
-    p->model_height = opt->error_goal > 0 ? 0 : cb_skin_rest_bounds(sampler, lo, hi); /* a search knows it */
+    p->model_height = facts->height;
     /* Exact skinning of every vertex at every row costs rows x vertices; past ~4M vertex-rows
      * an even subset of rows (always each clip's last) measures the error. */
     uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);
     st.error_stride = work > CB_ERROR_BUDGET ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
     p->error_rows_measured = 0;
-    if (skinned && !(groups ? (st.groups = *groups, true) : cb_vertex_groups_build(m, skin_index, p->bind_positions, &st.groups))) {
-        cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring the palette's error", m->source);
-        goto fail;
-    }
-    if (skinned) {
+    if (facts->skinned) {
         for_each_clip(&st, palette_measure_job, true, palette_measure_jobs(&st));
-        if (groups) memset(&st.groups, 0, sizeof st.groups); /* the caller's (palette_bake_grouped) */
         if (first_clip_error(&st, err)) goto fail;
         for (uint32_t c = 0; c < p->clip_count; ++c) {
             p->max_error = fmax(p->max_error, st.clip_error[c]);
@@ -462,27 +504,40 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     p->seconds_encode = t2 - t1 + encoded_while_sampling;
     p->seconds_measure = t3 - t2;
     free_bake_state(&st);
-    free(radius), free(infos);
+    free(infos);
     return CB_OK;
 fail:
     free_bake_state(&st);
-    free(radius), free(infos);
+    free(infos);
     cb_palette_free(p);
     return err->status;
 }
 
-cb_status palette_bake_grouped(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                               uint32_t plan_count, const cb_vertex_groups *groups, cb_palette *p, cb_error *err)
+static cb_status bake_with_fallback(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                                    uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe, cb_palette *p,
+                                    cb_error *err)
 {
     cb_error first = {0};
-    cb_status rc = bake_once(sampler, opt, plan, plan_count, groups, p, &first);
+    cb_status rc = bake_once(sampler, opt, plan, plan_count, facts, probe, p, &first);
     if (rc == CB_ERR_LAYOUT && opt->affine_fallback && opt->layout == CB_LAYOUT_QPOS) {
         cb_bake_options affine = *opt; /* a rig qpos cannot hold: the next smallest layout */
         affine.layout = CB_LAYOUT_AFFINE;
-        rc = bake_once(sampler, &affine, plan, plan_count, groups, p, err);
+        rc = bake_once(sampler, &affine, plan, plan_count, facts, probe, p, err);
         if (!rc) snprintf(p->fallback_note, sizeof p->fallback_note, "%.460s; baked with affine instead", first.message);
         return rc;
     }
     if (rc) *err = err->status ? *err : first;
+    return rc;
+}
+
+cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                                  uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
+                                  cb_palette *p, cb_error *err)
+{
+    if (facts) return bake_with_fallback(sampler, opt, plan, plan_count, facts, probe, p, err);
+    palette_skin_facts own;
+    cb_status rc = palette_skin_facts_build(sampler, &own, err);
+    if (!rc) rc = bake_with_fallback(sampler, opt, plan, plan_count, &own, probe, p, err);
+    palette_skin_facts_free(&own);
     return rc;
 }

@@ -8,6 +8,7 @@
 
 #include "crowdbake/palette.h"
 #include "cb_math.h"
+#include "pose_cache.h"
 #include "vertex_groups.h"
 
 /* Canonical floats per bone and row before the final encoding: the upper 3x4 of the matrix
@@ -76,15 +77,19 @@ typedef struct bake_state {
      * bone and row: qpos's encoded quaternions, the rest of mat4's and affine's floats). */
     unsigned char *stash;
     uint32_t max_clip_frames;
-    const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 */
+    const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 (the skin's facts) */
     uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
     cb_error *errors;      /* 2 x clips: the first error of each clip, then of measuring its baked rows */
     uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
-    cb_vertex_groups groups; /* the skinned vertices as measuring bounds and skins them */
+    const cb_vertex_groups *groups; /* the skinned vertices as measuring bounds and skins them (facts') */
+    const struct palette_skin_facts *facts; /* the skin's */
     double *clip_error;    /* clips: worst vertex error measured */
     double *clip_blend_error; /* clips: worst vertex error halfway between rows, as the runtime blends them */
     value_range *ranges;   /* clips: the values' ranges */
     double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
+    pose_cache *poses;      /* the only clip's exact matrices by time, kept across bakes (one thread); or NULL */
+    const cb_clip_info *analysis; /* the only clip analyzed before the bake, or NULL */
+    cb_sampler *lent;       /* the caller's sampler, for the one worker of a probe's bake; or NULL */
 } bake_state;
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
@@ -139,12 +144,13 @@ bool palette_position_offsets(cb_palette *p, const unsigned char *stash);
 /* Sets p->bounds_min/max and linear_range from every clip's range. */
 void palette_merge_ranges(cb_palette *p, const value_range *clips);
 
-/* palette_plan.c: the clips' frames and rows (p->clips, *infos_out), the texture's geometry,
+/* palette_plan.c: the clips' frames and rows (p->clips, *infos_out: st->analysis framed, or
+ * each clip analyzed), the texture's geometry,
  * each joint's bind-pose position, and the texels no row covers set to zero. */
 cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
                               cb_clip_info **infos_out, cb_error *err);
 cb_status palette_plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err);
-void palette_bind_positions(cb_palette *p, const cb_skin *skin);
+void palette_bind_positions(const cb_skin *skin, float *bind);
 void palette_zero_padding(cb_palette *p);
 
 /* Every bone's values of one row of p->texels, 16 doubles apart, as cb_palette_decode_values
@@ -161,13 +167,52 @@ uint32_t palette_measure_jobs(const bake_state *st);
 /* Measurement job k: the worst vertex errors of its clip at its rows and/or between them
  * (st->clip_error, st->clip_blend_error). */
 void palette_measure_job(bake_state *st, worker *w, uint32_t k);
-/* Bind-space distance from each joint's bind position to the farthest vertex it moves; -1 for
- * joints that move none. False when no vertex is skinned. */
-/* cb_palette_bake, measuring with `groups` built for this model, skin and bind pose (by
- * cb_vertex_groups_build from a palette's bind_positions); NULL: built here. A search that bakes
- * one clip at many rates (runtime.c) builds them once instead of once a bake. */
-cb_status palette_bake_grouped(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                               uint32_t plan_count, const cb_vertex_groups *groups, cb_palette *p, cb_error *err);
-bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, double *radius);
+
+/* What a bake needs of the skin alone, whatever the clips and the rate: its joints' bind
+ * positions, how far their vertices reach, the vertices grouped for measuring and the rest
+ * pose's height. A search that bakes one skin at many rates (runtime.c) settles them once
+ * instead of once a bake (Cow --fps auto: 60 probe bakes). */
+typedef struct palette_skin_facts {
+    float *bind_positions;   /* bones * 3: each joint's bind-pose position (palette_bind_positions) */
+    double *reach;           /* bones: bind-space distance to the farthest vertex the joint moves; -1: none */
+    bool skinned;            /* some vertex is skinned: there is an error to measure */
+    cb_vertex_groups groups; /* built when skinned */
+    double *group_reach;     /* bones: the largest reach a group gives the joint (0: in none) */
+    double weight_sum;       /* the largest of the groups' weight sums */
+    double height;           /* cb_skin_rest_bounds's */
+} palette_skin_facts;
+
+/* palette_plan.c: the facts of the sampler's skin; palette_skin_facts_free frees them (also
+ * after a failure). */
+cb_status palette_skin_facts_build(cb_sampler *sampler, palette_skin_facts *out, cb_error *err);
+void palette_skin_facts_free(palette_skin_facts *f);
+
+/* Clip framing's joint matrices at `frame` (cb_clip_frame_matrices with the bake's root motion):
+ * from st->poses where it keeps them, else sampled into w->mats (and kept). Valid until the
+ * worker's next call. extra (optional): the kept pose's extra doubles, NULL where not kept. */
+const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame,
+                                     double **extra);
+/* A pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
+ * from its matrices alone too (a probe's rows are rows of the others). */
+pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes);
+
+/* What a search that bakes one clip at many rates (runtime.c) keeps across its bakes. */
+typedef struct palette_probe {
+    pose_cache *poses;            /* the clip's exact matrices by time, or NULL */
+    const cb_clip_info *analysis; /* the clip analyzed once (cb_clip_analyze at any rate, the plan's loop and
+                                   * limits, on the bake's sampler), or NULL */
+} palette_probe;
+
+/* cb_palette_bake with the skin's facts settled by the caller (palette_skin_facts_build, same
+ * sampler model and skin; NULL: settled here), and a probe's aids (or NULL), used when the bake
+ * is of the plan's one clip on one thread (opt->threads <= 1): its one worker then samples on
+ * `sampler` itself, not on a sampler made for each pass. */
+cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                                  uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
+                                  cb_palette *p, cb_error *err);
+/* palette_error.c: bind-space distance from each joint's bind position (bind: 3 floats a
+ * joint) to the farthest vertex it moves; -1 for joints that move none. False when no vertex
+ * is skinned. */
+bool palette_joint_reach(const float *bind, uint32_t bones, const cb_model *m, int32_t skin, double *radius);
 
 #endif

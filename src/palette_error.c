@@ -52,8 +52,8 @@ static double row_bound(const bake_state *st, const cb_joint_error *joints, bool
 {
     if (!finite) return INFINITY;
     double most = 0;
-    for (uint32_t k = 0; k < st->groups.group_count; ++k) {
-        double bound = cb_group_error_bound(&st->groups, k, joints, most);
+    for (uint32_t k = 0; k < st->groups->group_count; ++k) {
+        double bound = cb_group_error_bound(st->groups, k, joints, most);
         most = bound > most ? bound : most; /* fmax(most, bound): most is never NaN */
     }
     return most;
@@ -62,11 +62,14 @@ static double row_bound(const bake_state *st, const cb_joint_error *joints, bool
 /* The worst vertex error of one row, or `worst` when none exceeds it: the group with the
  * largest bound first (it most likely holds the row's worst), then each group whose bound
  * exceeds the worst so far. The groups skipped cannot change the maximum, which is the one
- * skinning every vertex gives, bit for bit. */
+ * skinning every vertex gives, bit for bit. A row whose cap on all the group bounds is within
+ * the worst skips them all (a baked row against the blends' worst: its encoding errs far less). */
 static double skin_row(const bake_state *st, measure_scratch *s, const double *diff, const cb_joint_error *joints,
                        bool finite, double worst)
 {
-    const cb_vertex_groups *g = &st->groups;
+    const cb_vertex_groups *g = st->groups;
+    if (finite && cb_row_error_cap(joints, st->p->bone_count, st->facts->group_reach, st->facts->weight_sum) <= worst)
+        return worst;
     uint32_t top = 0;
     for (uint32_t k = 0; k < g->group_count; ++k) {
         s->group_bounds[k] = finite ? cb_group_error_bound(g, k, joints, worst) : INFINITY;
@@ -236,11 +239,12 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         double *diff = similar ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
         const cb_joint_error *joints = similar ? s->joints + (size_t)i * p->bone_count : s->joints;
         if (!similar) {
-            cb_clip_frame_matrices(w->sampler, &framing, times[i], st->opt->root_motion, w->mats);
+            const double *mats = palette_frame_matrices(st, w, &framing, times[i], NULL);
             uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
             const double *a = row_values(p, s, row), *b = sub ? row_values(p, s, next) : NULL;
             for (uint32_t j = 0; j < p->bone_count; ++j) {
-                double decoded[16], *d = diff + (size_t)j * 16, *exact = w->mats + (size_t)j * 16;
+                double decoded[16], *d = diff + (size_t)j * 16;
+                const double *exact = mats + (size_t)j * 16;
                 if (sub) palette_blend_values(p, j, a + (size_t)j * 16, b + (size_t)j * 16, (double)sub / parts, decoded);
                 else cb_palette_values_to_matrix(p, j, a + (size_t)j * 16, decoded);
                 for (int k = 0; k < 16; ++k) d[k] = exact[k] - decoded[k];
@@ -360,7 +364,7 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     bool blends = !split || k % 2 == 0, rows = !split || k % 2 == 1; /* what this job measures */
     size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
     measure_scratch s = {malloc(CB_SAMPLE_BATCH * matrices), malloc(CB_SAMPLE_BATCH * p->bone_count * sizeof *s.joints),
-                         malloc((st->groups.group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows),
+                         malloc((st->groups->group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows),
                          malloc(p->clips[c].frames * sizeof *s.baked), malloc(VALUE_SLOTS * matrices), {0}, {0}, 0, {0}};
     for (uint32_t i = 0; i < VALUE_SLOTS; ++i) s.value_row[i] = UINT32_MAX;
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
@@ -386,12 +390,10 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     cb_model_release_clip(st->model, st->infos[c].animation); /* measured: the keys are not read again */
 }
 
-/* Bind-space distance from each joint's bind position to the farthest vertex it moves;
- * -1 for joints that move none. Returns false when no vertex is skinned. */
-bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, double *radius)
+bool palette_joint_reach(const float *bind, uint32_t bones, const cb_model *m, int32_t skin, double *radius)
 {
     bool any = false;
-    for (uint32_t j = 0; j < p->bone_count; ++j) radius[j] = -1;
+    for (uint32_t j = 0; j < bones; ++j) radius[j] = -1;
     for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {
         const cb_primitive *prim = &m->primitives[pi];
         if (prim->skin != skin) continue;
@@ -399,7 +401,7 @@ bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, d
             for (int i = 0; i < 4; ++i) {
                 if (prim->weights[(size_t)v * 4 + i] == 0) continue;
                 uint16_t j = prim->joints[(size_t)v * 4 + i];
-                const float *b = p->bind_positions + (size_t)j * 3, *x = prim->positions + (size_t)v * 3;
+                const float *b = bind + (size_t)j * 3, *x = prim->positions + (size_t)v * 3;
                 double d = sqrt((double)(x[0] - b[0]) * (x[0] - b[0]) + (double)(x[1] - b[1]) * (x[1] - b[1]) +
                                 (double)(x[2] - b[2]) * (x[2] - b[2]));
                 if (d > radius[j]) radius[j] = d;
@@ -408,4 +410,3 @@ bool palette_joint_reach(const cb_palette *p, const cb_model *m, int32_t skin, d
     }
     return any;
 }
-

@@ -106,7 +106,13 @@ cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip
     p->clips = calloc(count ? count : 1, sizeof *p->clips);
     *infos_out = infos;
     if (!infos || !p->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    if (analyze_clips(st, sampler, plan, count, infos, err)) return err->status;
+    if (st->analysis) {
+        infos[0] = *st->analysis; /* framed at this bake's rate, not analyzed again */
+        if (cb_clip_frame_at(m, cb_clip_plan_fps(&plan[0], st->opt->fps), &st->opt->limits, &infos[0], err))
+            return err->status;
+    } else if (analyze_clips(st, sampler, plan, count, infos, err)) {
+        return err->status;
+    }
     uint64_t rows = 0;
     for (uint32_t i = 0; i < count; ++i) {
         cb_clip_plan one = plan_entry(plan, i);
@@ -131,9 +137,9 @@ cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip
     return CB_OK;
 }
 
-void palette_bind_positions(cb_palette *p, const cb_skin *skin)
+void palette_bind_positions(const cb_skin *skin, float *bind)
 {
-    for (uint32_t j = 0; j < p->bone_count; ++j) {
+    for (uint32_t j = 0; j < skin->joint_count; ++j) {
         /* The joint's bind-pose position is the translation of inverse(IBM). */
         const double *ibm = skin->inverse_bind + (size_t)j * 16;
         double det = cb_mat4_determinant3(ibm);
@@ -148,9 +154,44 @@ void palette_bind_positions(cb_palette *p, const cb_skin *skin)
                 *res[k] = cb_mat4_determinant3(col) / det;
             }
         }
-        p->bind_positions[j * 3] = (float)b.x, p->bind_positions[j * 3 + 1] = (float)b.y;
-        p->bind_positions[j * 3 + 2] = (float)b.z;
+        bind[j * 3] = (float)b.x, bind[j * 3 + 1] = (float)b.y, bind[j * 3 + 2] = (float)b.z;
     }
+}
+
+/* ---- the skin's facts ---- */
+
+cb_status palette_skin_facts_build(cb_sampler *sampler, palette_skin_facts *out, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(sampler);
+    int32_t skin = cb_sampler_skin(sampler);
+    uint32_t bones = m->skins[skin].joint_count;
+    double lo[3], hi[3];
+    memset(out, 0, sizeof *out);
+    out->bind_positions = malloc((bones ? bones : 1) * 3 * sizeof(float));
+    out->reach = malloc((bones ? bones : 1) * sizeof(double));
+    if (!out->bind_positions || !out->reach)
+        return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring the palette's error", m->source);
+    palette_bind_positions(&m->skins[skin], out->bind_positions);
+    out->skinned = palette_joint_reach(out->bind_positions, bones, m, skin, out->reach);
+    out->group_reach = calloc(bones ? bones : 1, sizeof(double));
+    if (!out->group_reach || (out->skinned && !cb_vertex_groups_build(m, skin, out->bind_positions, &out->groups)))
+        return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring the palette's error", m->source);
+    for (uint32_t k = 0; k < out->groups.group_count; ++k) {
+        const cb_vertex_group *grp = &out->groups.groups[k];
+        out->weight_sum = grp->weight_sum > out->weight_sum ? grp->weight_sum : out->weight_sum;
+        for (uint32_t i = 0; i < grp->joint_count; ++i) {
+            const cb_group_joint *gj = &out->groups.joints[grp->joint_first + i];
+            if (gj->reach > out->group_reach[gj->joint]) out->group_reach[gj->joint] = gj->reach;
+        }
+    }
+    out->height = cb_skin_rest_bounds(sampler, lo, hi);
+    return CB_OK;
+}
+
+void palette_skin_facts_free(palette_skin_facts *f)
+{
+    free(f->bind_positions), free(f->reach), free(f->group_reach), cb_vertex_groups_free(&f->groups);
+    memset(f, 0, sizeof *f);
 }
 
 /* The texels no row covers, which stay zero: in the last block the rows past the last baked

@@ -8,7 +8,7 @@
 #include <threads.h>
 
 #include "cb_math.h"
-#include "palette_bake.h" /* palette_bake_grouped */
+#include "palette_bake.h" /* palette_bake_with_facts */
 
 void cb_runtime_frame(const cb_instance *in, double time, uint32_t *row0, uint32_t *row1, double *fr)
 {
@@ -52,16 +52,23 @@ typedef struct clip_search {
     double max_fps;
     probe done[32];
     uint32_t count;
-    cb_vertex_groups *groups; /* the skinned vertices grouped for measuring: built after the first bake, kept */
-    bool *grouped;
+    const palette_skin_facts *facts; /* the skin's, settled once for every bake of the search */
+    palette_probe probe;             /* the clip's analysis and exact poses, for every probe */
 } clip_search;
+
+/* A search thread's pose cache holds at most this much (Cow's longest clip, 6 s of 42 joints,
+ * keeps 912 poses: 6.4 MB with their qpos derivations; 32 MB is 950 poses of 200 joints); past
+ * it, probes sample the times it has no room for as without one. */
+#define SEARCH_POSE_BYTES ((size_t)32 << 20)
 
 /* The visible error of the clip baked alone at `fps`: the bake measures it (the encoding, and
  * the blend halfway between every two rows). goal > 0: exact when within it; above it, the
  * measurement may stop early (any value above the goal decides the search alike). Every bake
- * of the search measures the same vertices (the bind pose is the skin's, whatever the clip):
- * they are grouped once, from the first bake's bind pose, not once a bake or a clip (Cow: 10 M
- * instructions each). */
+ * of the search measures the same vertices from the same bind pose (the skin's, whatever the
+ * clip): what depends on the skin alone is settled once (cs->facts), not once a bake, and
+ * the clip is analyzed once (cs->probe.analysis). The probes' times coincide (a probe's blends
+ * are the rows of one at twice its rate): each time's exact matrices are sampled once for the
+ * clip (cs->probe.poses). */
 static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *err)
 {
     cb_bake_options one = *cs->o;
@@ -71,9 +78,7 @@ static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *
     cb_clip_plan plan = *cs->clip;
     plan.fps = fps;
     cb_palette p;
-    if (palette_bake_grouped(cs->s, &one, &plan, 1, *cs->grouped ? cs->groups : NULL, &p, err)) return INFINITY;
-    const cb_model *m = cb_sampler_model(cs->s);
-    if (!*cs->grouped) *cs->grouped = cb_vertex_groups_build(m, cb_sampler_skin(cs->s), p.bind_positions, cs->groups);
+    if (palette_bake_with_facts(cs->s, &one, &plan, 1, cs->facts, &cs->probe, &p, err)) return INFINITY;
     double worst = p.visible_error;
     cb_palette_free(&p);
     return worst;
@@ -117,15 +122,23 @@ static double lowest_rate(clip_search *cs, const double *rates, size_t n, double
  * second family's error is far lower than its neighbours' in the first (Cow's Idle: 0.78 mm/m
  * at its 24 fps key rate, 3.4 at 20 and 30): the error does not fall steadily across both. */
 static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
-                              double max_fps, bool *met, double *error, cb_vertex_groups *groups, bool *grouped,
-                              cb_error *err)
+                              double max_fps, bool *met, double *error, const palette_skin_facts *facts,
+                              pose_cache *poses, cb_error *err)
 {
     static const double common[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120};
     static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
-    double aligned[6], key = cb_animation_key_interval(&cb_sampler_model(s)->animations[clip->animation]);
+    const cb_model *m = cb_sampler_model(s);
+    double aligned[6], key = cb_animation_key_interval(&m->animations[clip->animation]);
     size_t n_aligned = 0;
     for (size_t i = 0; key > 0 && i < 6; ++i) aligned[n_aligned++] = round(factors[i] / key * 1000) / 1000;
-    clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .groups = groups, .grouped = grouped};
+    /* Analyzed at the lowest rate, the likeliest within the frame limit; where it fails, each
+     * probe analyzes the clip itself and fails as it would. */
+    cb_clip_info analysis;
+    cb_error unanalyzed = {0};
+    bool analyzed = !cb_clip_analyze(s, clip->animation, common[0], clip->loop, &o->limits, &analysis, &unanalyzed);
+    clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts,
+                      .probe = {poses, analyzed ? &analysis : NULL}};
+    if (poses) pose_cache_clear(poses); /* another clip's times */
     double e_common = INFINITY, e_aligned = INFINITY;
     double a = lowest_rate(&cs, common, sizeof common / sizeof common[0], max_fps, max_error, &e_common, err);
     double b = lowest_rate(&cs, aligned, n_aligned, a > 0 ? fmin(a, max_fps) : max_fps, max_error, &e_aligned, err);
@@ -142,19 +155,30 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
     return fps;
 }
 
+static pose_cache *search_pose_cache(const cb_sampler *s)
+{
+    return palette_probe_poses(cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count, SEARCH_POSE_BYTES);
+}
+
 double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
                           double max_fps, bool *met, double *error, cb_error *err)
 {
-    cb_vertex_groups groups = {0};
-    bool grouped = false;
-    double fps = choose_clip_fps(s, o, clip, max_error, max_fps, met, error, &groups, &grouped, err);
-    if (grouped) cb_vertex_groups_free(&groups);
+    palette_skin_facts facts;
+    pose_cache *poses = search_pose_cache(s); /* NULL (out of memory): sampled as without */
+    double fps = max_fps;
+    *met = false, *error = INFINITY;
+    if (!palette_skin_facts_build(s, &facts, err))
+        fps = choose_clip_fps(s, o, clip, max_error, max_fps, met, error, &facts, poses, err);
+    palette_skin_facts_free(&facts);
+    pose_cache_free(poses);
     return fps;
 }
 
 /* Clips are searched independently: options->threads at a time, each thread with its own
  * sampler (a sampler's scratch is not shared), each clip's answer in its own slot, so the
- * choices do not depend on the thread count. */
+ * choices do not depend on the thread count nor on the order clips are taken in: the clips
+ * with the most work first (search_order), so that no long clip starts last and leaves the
+ * other threads waiting (Cow: Eating lasts 6 s, the other clips 0.6-3.3 s). */
 typedef struct rate_search {
     const cb_model *model;
     int32_t skin;
@@ -165,19 +189,44 @@ typedef struct rate_search {
     cb_rate_choice *choices;
     cb_error *errors; /* per clip */
     double height;
+    const palette_skin_facts *facts;
+    const uint32_t *order; /* the clips in the order they are taken */
     atomic_uint next;
 } rate_search;
+
+/* The highest rate the search may probe a clip at. */
+static double max_fps_of(const cb_rate_goal *goal) { return goal->max_fps > 0 ? goal->max_fps : 60; }
+
+/* The clips' expected work: their rows at the highest rate a probe may bake them at. */
+static double search_work(const cb_model *m, const cb_clip_plan *plan, const cb_rate_goal *goal)
+{
+    if (plan->animation < 0 || plan->animation >= (int32_t)m->animation_count) return 0; /* fails at once */
+    const cb_animation *a = &m->animations[plan->animation];
+    return (a->t1 - a->t0) * max_fps_of(goal);
+}
+
+/* The clips in decreasing expected work (ties in clip order), into order. */
+static void search_order(const cb_model *m, const cb_clip_plan *plan, const cb_rate_goal *goals, uint32_t count,
+                         uint32_t *order)
+{
+    for (uint32_t i = 0; i < count; ++i) {
+        double work = search_work(m, &plan[i], &goals[i]);
+        uint32_t k = i;
+        for (; k > 0 && search_work(m, &plan[order[k - 1]], &goals[order[k - 1]]) < work; --k) order[k] = order[k - 1];
+        order[k] = i;
+    }
+}
 
 static int rate_worker(void *arg)
 {
     rate_search *rs = arg;
     cb_error fail = {0};
     cb_sampler *s = cb_sampler_create(rs->model, rs->skin, &fail);
-    cb_vertex_groups groups = {0}; /* this thread's, for every clip it searches */
-    bool grouped = false;
+    pose_cache *poses = s ? search_pose_cache(s) : NULL; /* this thread's, for each clip it searches in turn */
     for (;;) {
-        uint32_t i = atomic_fetch_add(&rs->next, 1);
-        if (i >= rs->count) break;
+        uint32_t n = atomic_fetch_add(&rs->next, 1);
+        if (n >= rs->count) break;
+        uint32_t i = rs->order[n];
         if (!(rs->goals[i].max_error_mm > 0)) continue;
         if (!s) {
             rs->errors[i] = fail;
@@ -185,11 +234,11 @@ static int rate_worker(void *arg)
         }
         cb_rate_choice *c = &rs->choices[i];
         rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
-                                          rs->goals[i].max_fps > 0 ? rs->goals[i].max_fps : 60, &c->met, &c->error,
-                                          &groups, &grouped, &rs->errors[i]);
+                                          max_fps_of(&rs->goals[i]), &c->met, &c->error,
+                                          rs->facts, poses, &rs->errors[i]);
         c->error_mm = cb_mm_per_m(c->error, rs->height);
     }
-    if (grouped) cb_vertex_groups_free(&groups);
+    pose_cache_free(poses);
     cb_sampler_free(s);
     return 0;
 }
@@ -197,32 +246,42 @@ static int rate_worker(void *arg)
 cb_status cb_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
                           const cb_rate_goal *goals, cb_rate_choice *out, cb_error *err)
 {
-    double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
     const cb_model *m = cb_sampler_model(s);
     bool any = false;
     for (uint32_t i = 0; i < count; ++i) any = any || goals[i].max_error_mm > 0;
     if (!any) return CB_OK;
-    if (!(height > 0))
+    palette_skin_facts facts;
+    if (palette_skin_facts_build(s, &facts, err)) {
+        palette_skin_facts_free(&facts);
+        return err->status;
+    }
+    if (!(facts.height > 0)) {
+        palette_skin_facts_free(&facts);
         return cb_fail(err, CB_ERR_INPUT, "%s: has no skinned mesh to measure errors on; give the clips a fixed fps",
                        m->source);
-    rate_search rs = {m, cb_sampler_skin(s), o, plan, count, goals, calloc(count, sizeof(cb_rate_choice)),
-                      calloc(count, sizeof(cb_error)), height, 0};
-    if (!rs.choices || !rs.errors) {
-        free(rs.choices), free(rs.errors);
-        return cb_fail(err, CB_ERR_INTERNAL, "out of memory choosing frame rates for %s", m->source);
     }
-    uint32_t threads = o->threads < 1 ? 1 : o->threads > 64 ? 64 : o->threads, started = 0;
-    if (threads > count) threads = count;
-    thrd_t ids[64];
-    for (uint32_t t = 1; t < threads; ++t)
-        if (thrd_create(&ids[started], rate_worker, &rs) == thrd_success) ++started;
-    rate_worker(&rs);
-    for (uint32_t t = 0; t < started; ++t) thrd_join(ids[t], NULL);
-    for (uint32_t i = 0; i < count && !err->status; ++i) /* the first failure in clip order */
-        if (rs.errors[i].status) *err = rs.errors[i];
-    for (uint32_t i = 0; out && i < count; ++i)
-        if (goals[i].max_error_mm > 0) out[i] = rs.choices[i];
-    free(rs.choices), free(rs.errors);
+    rate_search rs = {m, cb_sampler_skin(s), o, plan, count, goals, calloc(count, sizeof(cb_rate_choice)),
+                      calloc(count, sizeof(cb_error)), facts.height, &facts, NULL, 0};
+    uint32_t *order = malloc(count * sizeof *order);
+    rs.order = order;
+    if (rs.choices && rs.errors && order) {
+        search_order(m, plan, goals, count, order);
+        uint32_t threads = o->threads < 1 ? 1 : o->threads > 64 ? 64 : o->threads, started = 0;
+        if (threads > count) threads = count;
+        thrd_t ids[64];
+        for (uint32_t t = 1; t < threads; ++t)
+            if (thrd_create(&ids[started], rate_worker, &rs) == thrd_success) ++started;
+        rate_worker(&rs);
+        for (uint32_t t = 0; t < started; ++t) thrd_join(ids[t], NULL);
+        for (uint32_t i = 0; i < count && !err->status; ++i) /* the first failure in clip order */
+            if (rs.errors[i].status) *err = rs.errors[i];
+        for (uint32_t i = 0; out && i < count; ++i)
+            if (goals[i].max_error_mm > 0) out[i] = rs.choices[i];
+    } else {
+        cb_fail(err, CB_ERR_INTERNAL, "out of memory choosing frame rates for %s", m->source);
+    }
+    free(rs.choices), free(rs.errors), free(order);
+    palette_skin_facts_free(&facts);
     return err->status;
 }
 

@@ -369,6 +369,11 @@ double cb_clip_frame_time(const cb_clip_info *clip, uint32_t frame);
  * -1 (decide from the poses), 0 or 1. */
 cb_status cb_clip_analyze(cb_sampler *sampler, int32_t animation, double fps, int loop_override,
                           const cb_limits *limits, cb_clip_info *out, cb_error *err);
+/* An analyzed clip framed at another fps (steps, frames, effective_fps), as cb_clip_analyze at
+ * that fps frames it, without analyzing it again: a clip baked at many rates (--fps auto's
+ * search) is analyzed once. */
+cb_status cb_clip_frame_at(const cb_model *model, double fps, const cb_limits *limits, cb_clip_info *clip,
+                           cb_error *err);
 
 /* Joint matrices of a framed clip's row, with root motion removed when asked: in-place
  * subtracts the root's average horizontal travel, velocity.xz * (t - t0), from every joint. */

@@ -1,0 +1,140 @@
+/* pose_cache.c - see pose_cache.h. An open-addressed table of time bits to pose numbers, the
+ * poses in blocks that never move (so a pointer handed out stays valid as the cache grows). A
+ * block is a huge page where the OS offers them (cb_alloc_large): in a VM each fresh 4 KB page
+ * costs a fault, and a search touches megabytes. */
+#include "pose_cache.h"
+
+#include "crowdbake/core.h" /* cb_alloc_large */
+
+#include <math.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define BLOCK_BYTES ((size_t)2 << 20) /* a huge page */
+
+struct pose_cache {
+    uint32_t bones, extra;
+    size_t stride;          /* doubles a pose: its matrices and its extra */
+    uint32_t count, limit;  /* poses kept, and the most max_bytes allows */
+    uint64_t *keys;         /* the table: a time's bits, or EMPTY */
+    uint32_t *slots;        /* the table: its pose's number */
+    uint32_t capacity;      /* table entries, a power of two, at least twice count */
+    double **blocks;        /* block_poses poses each */
+    uint32_t block_count, block_poses;
+};
+
+/* No time's bits: the pattern of a NaN with a payload no arithmetic produces. */
+#define EMPTY UINT64_C(0xFFFFFFFFFFFFFFFF)
+
+static uint64_t time_bits(double t)
+{
+    uint64_t bits;
+    memcpy(&bits, &t, sizeof bits);
+    return bits;
+}
+
+/* The table entry holding bits, or the empty one where it would go. */
+static uint32_t probe_entry(const pose_cache *c, uint64_t bits)
+{
+    uint64_t h = bits * UINT64_C(0x9E3779B97F4A7C15); /* times differ in their low bits: spread them */
+    uint32_t mask = c->capacity - 1, i = (uint32_t)(h >> 32) & mask;
+    while (c->keys[i] != bits && c->keys[i] != EMPTY) i = (i + 1) & mask;
+    return i;
+}
+
+static double *pose_at(const pose_cache *c, uint32_t n)
+{
+    return c->blocks[n / c->block_poses] + (n % c->block_poses) * c->stride;
+}
+
+pose_cache *pose_cache_create(uint32_t bones, uint32_t extra, size_t max_bytes)
+{
+    pose_cache *c = calloc(1, sizeof *c);
+    if (!c) return NULL;
+    c->bones = bones ? bones : 1, c->extra = extra;
+    c->stride = (size_t)c->bones * 16 + extra;
+    size_t pose_bytes = c->stride * sizeof(double);
+    size_t limit = max_bytes / pose_bytes;
+    c->block_poses = (uint32_t)((BLOCK_BYTES + pose_bytes - 1) / pose_bytes); /* at least a huge page */
+    c->limit = limit > UINT32_MAX / 4 ? UINT32_MAX / 4 : (uint32_t)limit;
+    c->capacity = 64;
+    c->keys = malloc(c->capacity * sizeof *c->keys);
+    c->slots = malloc(c->capacity * sizeof *c->slots);
+    if (!c->keys || !c->slots) {
+        pose_cache_free(c);
+        return NULL;
+    }
+    memset(c->keys, 0xFF, c->capacity * sizeof *c->keys);
+    return c;
+}
+
+void pose_cache_free(pose_cache *c)
+{
+    if (!c) return;
+    for (uint32_t b = 0; b < c->block_count; ++b) free(c->blocks[b]);
+    free(c->blocks), free(c->keys), free(c->slots), free(c);
+}
+
+const double *pose_cache_find(const pose_cache *c, double t)
+{
+    uint32_t i = probe_entry(c, time_bits(t));
+    return c->keys[i] == EMPTY ? NULL : pose_at(c, c->slots[i]);
+}
+
+/* The table at twice its capacity, every entry placed again. False: out of memory (the table
+ * as it was). */
+static bool grow_table(pose_cache *c)
+{
+    pose_cache bigger = *c;
+    bigger.capacity = c->capacity * 2;
+    bigger.keys = malloc(bigger.capacity * sizeof *bigger.keys);
+    bigger.slots = malloc(bigger.capacity * sizeof *bigger.slots);
+    if (!bigger.keys || !bigger.slots) {
+        free(bigger.keys), free(bigger.slots);
+        return false;
+    }
+    memset(bigger.keys, 0xFF, bigger.capacity * sizeof *bigger.keys);
+    for (uint32_t i = 0; i < c->capacity; ++i) {
+        if (c->keys[i] == EMPTY) continue;
+        uint32_t k = probe_entry(&bigger, c->keys[i]);
+        bigger.keys[k] = c->keys[i], bigger.slots[k] = c->slots[i];
+    }
+    free(c->keys), free(c->slots);
+    c->keys = bigger.keys, c->slots = bigger.slots, c->capacity = bigger.capacity;
+    return true;
+}
+
+/* A block for pose number n where it has none yet. */
+static bool ensure_block(pose_cache *c, uint32_t n)
+{
+    if (n / c->block_poses < c->block_count) return true;
+    double **blocks = realloc(c->blocks, (c->block_count + 1) * sizeof *blocks);
+    if (!blocks) return false;
+    c->blocks = blocks;
+    blocks[c->block_count] = cb_alloc_large(c->block_poses * c->stride * sizeof(double));
+    if (!blocks[c->block_count]) return false;
+    c->block_count++;
+    return true;
+}
+
+double *pose_cache_add(pose_cache *c, double t)
+{
+    uint64_t bits = time_bits(t);
+    if (bits == EMPTY || c->count >= c->limit) return NULL;
+    if (2 * (c->count + 1) > c->capacity && !grow_table(c)) return NULL;
+    if (!ensure_block(c, c->count)) return NULL;
+    uint32_t i = probe_entry(c, bits);
+    c->keys[i] = bits, c->slots[i] = c->count;
+    double *pose = pose_at(c, c->count++);
+    if (c->extra) pose[(size_t)c->bones * 16] = NAN; /* not derived yet */
+    return pose;
+}
+
+void pose_cache_clear(pose_cache *c)
+{
+    c->count = 0;
+    memset(c->keys, 0xFF, c->capacity * sizeof *c->keys);
+}
+
+uint32_t pose_cache_count(const pose_cache *c) { return c->count; }
