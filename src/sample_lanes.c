@@ -9,6 +9,7 @@
 #include "sampler.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 /* The lanes of a batch: a node's 8 components (rotation x y z w, translation x y z, scale),
  * each CB_SAMPLE_BATCH times. Loops run over every lane, used or not: a constant trip count
@@ -120,16 +121,47 @@ static CB_CLONE_INLINE void slerp_lanes(const double (*restrict a)[B], const dou
     }
 }
 
+typedef double v4df __attribute__((vector_size(32)));
+typedef int64_t v4di __attribute__((vector_size(32)));
+
+/* Four lanes' quaternions (rows r0..r3, x y z w each) stored as the lanes' components:
+ * out[c][i + l] = rl[c]. A 4x4 transpose in 8 shuffles, then four vector stores. */
+static CB_CLONE_INLINE void store_columns4(v4df r0, v4df r1, v4df r2, v4df r3, double (*out)[B], int i)
+{
+    v4df t0 = __builtin_shuffle(r0, r1, (v4di){0, 4, 2, 6}), t1 = __builtin_shuffle(r0, r1, (v4di){1, 5, 3, 7});
+    v4df t2 = __builtin_shuffle(r2, r3, (v4di){0, 4, 2, 6}), t3 = __builtin_shuffle(r2, r3, (v4di){1, 5, 3, 7});
+    v4df x = __builtin_shuffle(t0, t2, (v4di){0, 1, 4, 5}), y = __builtin_shuffle(t1, t3, (v4di){0, 1, 4, 5});
+    v4df z = __builtin_shuffle(t0, t2, (v4di){2, 3, 6, 7}), w = __builtin_shuffle(t1, t3, (v4di){2, 3, 6, 7});
+    memcpy(&out[0][i], &x, sizeof x), memcpy(&out[1][i], &y, sizeof y);
+    memcpy(&out[2][i], &z, sizeof z), memcpy(&out[3][i], &w, sizeof w);
+}
+
+/* A rotation key (4 floats) as doubles, written element-wise: GCC 12 makes this one
+ * converting load (vcvtps2pd), where __builtin_convertvector converts two halves and joins
+ * them. A macro, as a function returning a 32-byte vector warns of the non-AVX clone's ABI. */
+#define KEY_OF(k) ((v4df){(k)[0], (k)[1], (k)[2], (k)[3]})
+
+/* Each lane's rotation keys k and k + 1 (adjacent) into a[c][i] and b[c][i], as doubles.
+ * Element by element this was 16 scalar conversions and stores a lane; as vectors, each key is
+ * one converting load and four lanes share a transpose. */
+static CB_CLONE_INLINE void gather_key_pairs(const float *values, const uint32_t *key, double (*a)[B],
+                                             double (*b)[B])
+{
+    for (int i = 0; i < B; i += 4) {
+        const float *k0 = values + (size_t)key[i] * 4, *k1 = values + (size_t)key[i + 1] * 4,
+                    *k2 = values + (size_t)key[i + 2] * 4, *k3 = values + (size_t)key[i + 3] * 4;
+        store_columns4(KEY_OF(k0), KEY_OF(k1), KEY_OF(k2), KEY_OF(k3), a, i);
+        store_columns4(KEY_OF(k0 + 4), KEY_OF(k1 + 4), KEY_OF(k2 + 4), KEY_OF(k3 + 4), b, i);
+    }
+}
+
 /* A linear rotation channel at the batch's times into out[4][B]. */
 static CB_CLONE_INLINE void rotation_lanes(const cb_channel *ch, const cb_key_spans *sp, const double *times,
                                            uint32_t *hint, const cb_wrap *wrap, double (*out)[B])
 {
     double a[4][B], b[4][B];
     double redo[B]; /* 1 or 0; a double, as SSE2 has no 64-bit integer compares to vectorize */
-    for (int i = 0; i < B; ++i) {
-        const float *ka = ch->values + (size_t)sp->key[i] * 4, *kb = ka + 4;
-        for (int c = 0; c < 4; ++c) a[c][i] = ka[c], b[c][i] = kb[c];
-    }
+    gather_key_pairs(ch->values, sp->key, a, b);
     slerp_lanes((const double(*)[B])a, (const double(*)[B])b, sp->s, out, redo);
     if (!any_lane(sp->edge, redo)) return;
     for (int i = 0; i < B; ++i) {
