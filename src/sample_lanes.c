@@ -43,16 +43,19 @@ bool cb_sampler_prepare_spans(cb_sampler *s)
     size_t n = channels ? channels : 1;
     s->span_group = malloc(n * sizeof *s->span_group);
     s->group_base = calloc(m->animation_count + 1, sizeof *s->group_base);
+    s->clip_paths = calloc((size_t)m->animation_count * s->relevant_count + 1, 1);
     s->group_times = malloc(n * sizeof *s->group_times);
     s->group_keys = malloc(n * sizeof *s->group_keys);
     s->group_cursor = malloc(n * sizeof *s->group_cursor);
-    if (!s->span_group || !s->group_base || !s->group_times || !s->group_keys || !s->group_cursor) return false;
+    if (!s->span_group || !s->group_base || !s->group_times || !s->group_keys || !s->group_cursor || !s->clip_paths)
+        return false;
     for (uint32_t a = 0; a < m->animation_count; ++a) {
         const cb_animation *anim = &m->animations[a];
         s->group_base[a] = s->span_group_count;
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
             const cb_channel *ch = &anim->channels[c];
             bool lanes = s->relevant[ch->node] && lane_channel(ch);
+            if (s->relevant[ch->node]) s->clip_paths[(size_t)a * s->relevant_count + s->slot[ch->node]] |= 1u << ch->path;
             s->span_group[s->cursor_base[a] + c] = lanes ? span_group_of(s, s->group_base[a], ch) : -1;
         }
     }
@@ -289,6 +292,24 @@ static CB_CLONE_INLINE void joint_lanes(const lane_set *restrict node, const cb_
 
 /* ---- batches ---- */
 
+/* A node's rest pose in every lane of the components no channel of the clip sets (`paths`:
+ * bit 1 << path for those that one does). */
+static CB_CLONE_INLINE void rest_lanes(const cb_similarity *rest, unsigned paths, lane_set *node)
+{
+    double(*n)[B] = *node;
+    /* copied first: the lanes' stores could alias `rest`, and would reload it each time */
+    double v[8] = {rest->rotation[0],    rest->rotation[1],    rest->rotation[2],    rest->rotation[3],
+                   rest->translation[0], rest->translation[1], rest->translation[2], rest->scale};
+    if (!(paths & 1u << CB_PATH_ROTATION))
+        for (int c = 0; c < 4; ++c)
+            for (int i = 0; i < B; ++i) n[c][i] = v[c];
+    if (!(paths & 1u << CB_PATH_TRANSLATION))
+        for (int c = 4; c < 7; ++c)
+            for (int i = 0; i < B; ++i) n[c][i] = v[c];
+    if (!(paths & 1u << CB_PATH_SCALE))
+        for (int i = 0; i < B; ++i) n[7][i] = v[7];
+}
+
 /* One batch: 1..B times. Without `out`, each joint's lanes into joints[j]; with it, as rows of
  * similarities, out[i * joint_count + j] for the first `count`, through one set of lanes
  * (joints[0]). */
@@ -300,14 +321,11 @@ static void sample_batch(cb_sampler *s, int32_t animation, const double *times, 
     lane_set *lanes = (lane_set *)s->lanes;
     double padded[B]; /* the unused lanes repeat the last time */
     for (uint32_t i = 0; i < B; ++i) padded[i] = times[i < count ? i : count - 1];
-    for (uint32_t k = 0; k < s->relevant_count; ++k) {
-        const cb_similarity *rest = &s->sim_rest[s->relevant_order[k]];
-        double v[8] = {rest->rotation[0], rest->rotation[1], rest->rotation[2], rest->rotation[3],
-                       rest->translation[0], rest->translation[1], rest->translation[2], rest->scale};
-        for (int c = 0; c < 8; ++c)
-            for (int i = 0; i < B; ++i) lanes[k][c][i] = v[c];
-    }
-    if (animation >= 0 && animation < (int32_t)m->animation_count) {
+    bool animated = animation >= 0 && animation < (int32_t)m->animation_count;
+    const uint8_t *paths = animated ? s->clip_paths + (size_t)animation * s->relevant_count : NULL;
+    for (uint32_t k = 0; k < s->relevant_count; ++k)
+        rest_lanes(&s->sim_rest[s->relevant_order[k]], paths ? paths[k] : 0, &lanes[k]);
+    if (animated) {
         const cb_animation *anim = &m->animations[animation];
         uint32_t base = s->group_base[animation];
         for (uint32_t g = base; g < s->group_base[animation + 1]; ++g)
