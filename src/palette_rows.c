@@ -128,6 +128,9 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
 }
 
 CB_TARGET_CLONES
+void palette_row_signs(const double *dot, bool flip, float *sign) { row_signs(dot, flip, sign); }
+
+CB_TARGET_CLONES
 void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
                              extent *clip_bounds)
 {
