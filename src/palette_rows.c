@@ -52,9 +52,12 @@ static void fold_lanes(const lane_extent *x, uint32_t count, extent *bounds, val
  * in 0, and the rows go one after the other. */
 static CB_CLONE_INLINE void row_signs(const double *dot, bool flip, float *sign)
 {
-    float p[2][8 + B]; /* 8 ones before the lanes: a shift by up to 8 reads them */
+    float d[B], p[2][8 + B]; /* p: 8 ones before the lanes, as a shift by up to 8 reads them */
+    /* The compares on floats, 8 to a vector: a double's sign survives the conversion, and one
+     * so small it becomes 0 only sends the rows one by one. */
+    for (int i = 0; i < B; ++i) d[i] = (float)dot[i];
     for (int i = 0; i < 8; ++i) p[0][i] = p[1][i] = 1;
-    for (int i = 0; i < B; ++i) p[0][8 + i] = dot[i] < 0 ? -1.0f : dot[i] > 0 ? 1.0f : 0.0f;
+    for (int i = 0; i < B; ++i) p[0][8 + i] = d[i] < 0 ? -1.0f : d[i] > 0 ? 1.0f : 0.0f;
     p[0][8] = flip ? -1.0f : 1.0f; /* lane 0's dot is not used */
     for (int i = 0; i < B; ++i) p[1][8 + i] = p[0][8 + i] * p[0][7 + i];
     for (int i = 0; i < B; ++i) p[0][8 + i] = p[1][8 + i] * p[1][6 + i];
