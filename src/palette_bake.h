@@ -124,6 +124,11 @@ static inline double row_position(const float *c, const float *b, int r)
 void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
                              extent *clip_bounds);
 
+/* palette_rows.c, for tests: the rows' hemispheres as bone_lanes settles them, sign[i] = -1 or
+ * 1 for CB_SAMPLE_BATCH rows from each row's dot with the one before as stored (dot[0] unused)
+ * and whether row 0 is flipped. */
+void palette_row_signs(const double *dot, bool flip, float *sign);
+
 /* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
 void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
 /* qpos/u16 and qpos/half in place: the quaternions of `count` rows encoded into `stash`, and

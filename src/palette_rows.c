@@ -43,6 +43,33 @@ static void fold_lanes(const lane_extent *x, uint32_t count, extent *bounds, val
     for (uint32_t i = 0; i < count; ++i) range->linear = x->linear[i] > range->linear ? x->linear[i] : range->linear;
 }
 
+/* Each row's hemisphere, sign[i] = -1 or 1: row 0 flipped when `flip`, and row i flipped when
+ * (flipped(i - 1) ? -dot[i] : dot[i]) < 0. Where no dot[i] (i > 0) is zero or NaN, that is the
+ * sign of a product: row 0's sign times, for each later row up to i, -1 where dot < 0 and 1
+ * where it is above. Products of 1 and -1 are exact, and a prefix product over the lanes in
+ * log2(B) steps vectorizes where the chain of compares did not. A zero or NaN ends the chain
+ * (the row is not flipped whatever came before): it is a 0 in the product, which then ends
+ * in 0, and the rows go one after the other. */
+static CB_CLONE_INLINE void row_signs(const double *dot, bool flip, float *sign)
+{
+    float d[B], p[2][8 + B]; /* p: 8 ones before the lanes, as a shift by up to 8 reads them */
+    /* The compares on floats, 8 to a vector: a double's sign survives the conversion, and one
+     * so small it becomes 0 only sends the rows one by one. */
+    for (int i = 0; i < B; ++i) d[i] = (float)dot[i];
+    for (int i = 0; i < 8; ++i) p[0][i] = p[1][i] = 1;
+    for (int i = 0; i < B; ++i) p[0][8 + i] = d[i] < 0 ? -1.0f : d[i] > 0 ? 1.0f : 0.0f;
+    p[0][8] = flip ? -1.0f : 1.0f; /* lane 0's dot is not used */
+    for (int i = 0; i < B; ++i) p[1][8 + i] = p[0][8 + i] * p[0][7 + i];
+    for (int i = 0; i < B; ++i) p[0][8 + i] = p[1][8 + i] * p[1][6 + i];
+    for (int i = 0; i < B; ++i) p[1][8 + i] = p[0][8 + i] * p[0][4 + i];
+    for (int i = 0; i < B; ++i) sign[i] = p[1][8 + i] * p[1][i];
+    if (sign[B - 1] != 0) return;
+    for (int i = 0; i < B; ++i) {
+        if (i) flip = (flip ? -dot[i] : dot[i]) < 0;
+        sign[i] = flip ? -1.0f : 1.0f;
+    }
+}
+
 /* One bone at frames f .. f + count - 1, its similarities' lanes `sim` (lanes past count repeat
  * the last frame): its position and reach grow the lanes' bounds, its values their range, its 8
  * values go into the rows and its last quaternion into w->prev. */
@@ -77,11 +104,8 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
         dot[i] = q[0][i] * fq[0][i] + q[1][i] * fq[1][i] + q[2][i] * fq[2][i] + q[3][i] * fq[3][i];
     cb_quat q0 = {q[0][0], q[1][0], q[2][0], q[3][0]};
     bool flip = f ? cb_quat_dot(q0, w->prev[j]) < 0 : q0.w < 0;
-    float sign[B], sq[4][B]; /* each row's hemisphere, one after the other; then the rows' quaternions */
-    for (uint32_t i = 0; i < B; ++i) {
-        if (i) flip = (flip ? -dot[i] : dot[i]) < 0;
-        sign[i] = flip ? -1.0f : 1.0f;
-    }
+    float sign[B], sq[4][B]; /* each row's hemisphere; then the rows' quaternions */
+    row_signs(dot, flip, sign);
     for (int c = 0; c < 4; ++c)
         for (int i = 0; i < B; ++i) sq[c][i] = sign[i] * fq[c][i + 1];
     for (uint32_t i = 0; i < count; ++i) { /* lanes to rows: field by field, no staging copy */
@@ -105,6 +129,9 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
     const float *last = rows + (size_t)(count - 1) * bones * 8 + (size_t)j * 8;
     w->prev[j] = (cb_quat){last[0], last[1], last[2], last[3]};
 }
+
+CB_TARGET_CLONES
+void palette_row_signs(const double *dot, bool flip, float *sign) { row_signs(dot, flip, sign); }
 
 CB_TARGET_CLONES
 void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,

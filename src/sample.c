@@ -299,6 +299,7 @@ void cb_sampler_free(cb_sampler *s)
     free(s->group_keys);
     free(s->group_cursor);
     free(s->spans);
+    free(s->clip_paths);
     free(s->order);
     free(s->local_trs);
     free(s->animated);

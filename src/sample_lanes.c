@@ -9,6 +9,7 @@
 #include "sampler.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 /* The lanes of a batch: a node's 8 components (rotation x y z w, translation x y z, scale),
  * each CB_SAMPLE_BATCH times. Loops run over every lane, used or not: a constant trip count
@@ -42,16 +43,19 @@ bool cb_sampler_prepare_spans(cb_sampler *s)
     size_t n = channels ? channels : 1;
     s->span_group = malloc(n * sizeof *s->span_group);
     s->group_base = calloc(m->animation_count + 1, sizeof *s->group_base);
+    s->clip_paths = calloc((size_t)m->animation_count * s->relevant_count + 1, 1);
     s->group_times = malloc(n * sizeof *s->group_times);
     s->group_keys = malloc(n * sizeof *s->group_keys);
     s->group_cursor = malloc(n * sizeof *s->group_cursor);
-    if (!s->span_group || !s->group_base || !s->group_times || !s->group_keys || !s->group_cursor) return false;
+    if (!s->span_group || !s->group_base || !s->group_times || !s->group_keys || !s->group_cursor || !s->clip_paths)
+        return false;
     for (uint32_t a = 0; a < m->animation_count; ++a) {
         const cb_animation *anim = &m->animations[a];
         s->group_base[a] = s->span_group_count;
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
             const cb_channel *ch = &anim->channels[c];
             bool lanes = s->relevant[ch->node] && lane_channel(ch);
+            if (s->relevant[ch->node]) s->clip_paths[(size_t)a * s->relevant_count + s->slot[ch->node]] |= 1u << ch->path;
             s->span_group[s->cursor_base[a] + c] = lanes ? span_group_of(s, s->group_base[a], ch) : -1;
         }
     }
@@ -120,16 +124,47 @@ static CB_CLONE_INLINE void slerp_lanes(const double (*restrict a)[B], const dou
     }
 }
 
+typedef double v4df __attribute__((vector_size(32)));
+typedef int64_t v4di __attribute__((vector_size(32)));
+
+/* Four lanes' quaternions (rows r0..r3, x y z w each) stored as the lanes' components:
+ * out[c][i + l] = rl[c]. A 4x4 transpose in 8 shuffles, then four vector stores. */
+static CB_CLONE_INLINE void store_columns4(v4df r0, v4df r1, v4df r2, v4df r3, double (*out)[B], int i)
+{
+    v4df t0 = __builtin_shuffle(r0, r1, (v4di){0, 4, 2, 6}), t1 = __builtin_shuffle(r0, r1, (v4di){1, 5, 3, 7});
+    v4df t2 = __builtin_shuffle(r2, r3, (v4di){0, 4, 2, 6}), t3 = __builtin_shuffle(r2, r3, (v4di){1, 5, 3, 7});
+    v4df x = __builtin_shuffle(t0, t2, (v4di){0, 1, 4, 5}), y = __builtin_shuffle(t1, t3, (v4di){0, 1, 4, 5});
+    v4df z = __builtin_shuffle(t0, t2, (v4di){2, 3, 6, 7}), w = __builtin_shuffle(t1, t3, (v4di){2, 3, 6, 7});
+    memcpy(&out[0][i], &x, sizeof x), memcpy(&out[1][i], &y, sizeof y);
+    memcpy(&out[2][i], &z, sizeof z), memcpy(&out[3][i], &w, sizeof w);
+}
+
+/* A rotation key (4 floats) as doubles, written element-wise: GCC 12 makes this one
+ * converting load (vcvtps2pd), where __builtin_convertvector converts two halves and joins
+ * them. A macro, as a function returning a 32-byte vector warns of the non-AVX clone's ABI. */
+#define KEY_OF(k) ((v4df){(k)[0], (k)[1], (k)[2], (k)[3]})
+
+/* Each lane's rotation keys k and k + 1 (adjacent) into a[c][i] and b[c][i], as doubles.
+ * Element by element this was 16 scalar conversions and stores a lane; as vectors, each key is
+ * one converting load and four lanes share a transpose. */
+static CB_CLONE_INLINE void gather_key_pairs(const float *values, const uint32_t *key, double (*a)[B],
+                                             double (*b)[B])
+{
+    for (int i = 0; i < B; i += 4) {
+        const float *k0 = values + (size_t)key[i] * 4, *k1 = values + (size_t)key[i + 1] * 4,
+                    *k2 = values + (size_t)key[i + 2] * 4, *k3 = values + (size_t)key[i + 3] * 4;
+        store_columns4(KEY_OF(k0), KEY_OF(k1), KEY_OF(k2), KEY_OF(k3), a, i);
+        store_columns4(KEY_OF(k0 + 4), KEY_OF(k1 + 4), KEY_OF(k2 + 4), KEY_OF(k3 + 4), b, i);
+    }
+}
+
 /* A linear rotation channel at the batch's times into out[4][B]. */
 static CB_CLONE_INLINE void rotation_lanes(const cb_channel *ch, const cb_key_spans *sp, const double *times,
                                            uint32_t *hint, const cb_wrap *wrap, double (*out)[B])
 {
     double a[4][B], b[4][B];
     double redo[B]; /* 1 or 0; a double, as SSE2 has no 64-bit integer compares to vectorize */
-    for (int i = 0; i < B; ++i) {
-        const float *ka = ch->values + (size_t)sp->key[i] * 4, *kb = ka + 4;
-        for (int c = 0; c < 4; ++c) a[c][i] = ka[c], b[c][i] = kb[c];
-    }
+    gather_key_pairs(ch->values, sp->key, a, b);
     slerp_lanes((const double(*)[B])a, (const double(*)[B])b, sp->s, out, redo);
     if (!any_lane(sp->edge, redo)) return;
     for (int i = 0; i < B; ++i) {
@@ -257,6 +292,24 @@ static CB_CLONE_INLINE void joint_lanes(const lane_set *restrict node, const cb_
 
 /* ---- batches ---- */
 
+/* A node's rest pose in every lane of the components no channel of the clip sets (`paths`:
+ * bit 1 << path for those that one does). */
+static CB_CLONE_INLINE void rest_lanes(const cb_similarity *rest, unsigned paths, lane_set *node)
+{
+    double(*n)[B] = *node;
+    /* copied first: the lanes' stores could alias `rest`, and would reload it each time */
+    double v[8] = {rest->rotation[0],    rest->rotation[1],    rest->rotation[2],    rest->rotation[3],
+                   rest->translation[0], rest->translation[1], rest->translation[2], rest->scale};
+    if (!(paths & 1u << CB_PATH_ROTATION))
+        for (int c = 0; c < 4; ++c)
+            for (int i = 0; i < B; ++i) n[c][i] = v[c];
+    if (!(paths & 1u << CB_PATH_TRANSLATION))
+        for (int c = 4; c < 7; ++c)
+            for (int i = 0; i < B; ++i) n[c][i] = v[c];
+    if (!(paths & 1u << CB_PATH_SCALE))
+        for (int i = 0; i < B; ++i) n[7][i] = v[7];
+}
+
 /* One batch: 1..B times. Without `out`, each joint's lanes into joints[j]; with it, as rows of
  * similarities, out[i * joint_count + j] for the first `count`, through one set of lanes
  * (joints[0]). */
@@ -268,14 +321,11 @@ static void sample_batch(cb_sampler *s, int32_t animation, const double *times, 
     lane_set *lanes = (lane_set *)s->lanes;
     double padded[B]; /* the unused lanes repeat the last time */
     for (uint32_t i = 0; i < B; ++i) padded[i] = times[i < count ? i : count - 1];
-    for (uint32_t k = 0; k < s->relevant_count; ++k) {
-        const cb_similarity *rest = &s->sim_rest[s->relevant_order[k]];
-        double v[8] = {rest->rotation[0], rest->rotation[1], rest->rotation[2], rest->rotation[3],
-                       rest->translation[0], rest->translation[1], rest->translation[2], rest->scale};
-        for (int c = 0; c < 8; ++c)
-            for (int i = 0; i < B; ++i) lanes[k][c][i] = v[c];
-    }
-    if (animation >= 0 && animation < (int32_t)m->animation_count) {
+    bool animated = animation >= 0 && animation < (int32_t)m->animation_count;
+    const uint8_t *paths = animated ? s->clip_paths + (size_t)animation * s->relevant_count : NULL;
+    for (uint32_t k = 0; k < s->relevant_count; ++k)
+        rest_lanes(&s->sim_rest[s->relevant_order[k]], paths ? paths[k] : 0, &lanes[k]);
+    if (animated) {
         const cb_animation *anim = &m->animations[animation];
         uint32_t base = s->group_base[animation];
         for (uint32_t g = base; g < s->group_base[animation + 1]; ++g)

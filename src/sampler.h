@@ -40,6 +40,10 @@ struct cb_sampler {
     uint32_t *group_keys;        /* per group: their count */
     uint32_t *group_cursor;      /* per group: the key interval of the last search */
     struct cb_key_spans *spans;  /* per group of the clip sampled (g - group_base[a]): the batch's spans */
+    /* Per clip and relevant node (a * relevant_count + slot): bit 1 << path for each path one of
+     * the clip's channels sets. Those components need no rest pose: every channel writes all of
+     * a batch's lanes. */
+    uint8_t *clip_paths;
 };
 
 /* Where each time of a batch falls among a channel's keys: key[i] and key[i] + 1 around it at

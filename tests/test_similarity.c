@@ -6,6 +6,7 @@
 #include <math.h>
 
 #include "../src/cb_math.h"
+#include "../src/palette_bake.h"
 #include "../src/sampler.h"
 
 /* The largest difference between the two samplers over every row of every clip at 30 fps,
@@ -369,6 +370,46 @@ static void test_frame_lanes_give_the_bits_of_frame_rows(void **state)
     }
 }
 
+/* The rows' hemispheres, which the bake takes as a product of signs over the lanes, against
+ * the rule one row after another: a zero or NaN dot (not flipped, whatever came before) at
+ * every lane, -0, tiny dots, and runs of flips. */
+static void test_row_signs_follow_the_rows_one_by_one(void **state)
+{
+    (void)state;
+    enum { B = CB_SAMPLE_BATCH };
+    const double odd[] = {0.0, -0.0, NAN, -NAN, 1e-300, -1e-300, 4.9e-324, -4.9e-324, INFINITY, -INFINITY};
+    uint32_t seed = 12345, checked = 0, one_by_one = 0;
+    for (int round = 0; round < 4000; ++round) {
+        double dot[B];
+        for (int i = 0; i < B; ++i) {
+            seed = seed * 1664525u + 1013904223u;
+            dot[i] = ((double)(seed >> 8) / (1 << 24) - 0.5) * 2; /* -1 .. 1 */
+        }
+        if (round % 4 == 1) { /* one odd value */
+            seed = seed * 1664525u + 1013904223u;
+            dot[1 + (seed >> 8) % (B - 1)] = odd[(seed >> 20) % (sizeof odd / sizeof *odd)];
+        }
+        if (round % 4 == 2) dot[B - 1] = odd[(round / 4) % 2]; /* +0 or -0 at the last lane */
+        if (round % 4 == 3) dot[0] = odd[(round / 4) % 4];       /* lane 0's dot is not used */
+        bool flip0 = round % 3 == 0;
+        float got[B], want[B];
+        palette_row_signs(dot, flip0, got);
+        bool flip = flip0;
+        for (int i = 0; i < B; ++i) {
+            if (i) flip = (flip ? -dot[i] : dot[i]) < 0;
+            want[i] = flip ? -1.0f : 1.0f;
+            if (i && !(dot[i] < 0 || dot[i] > 0)) ++one_by_one;
+        }
+        for (int i = 0; i < B; ++i) {
+            if (got[i] != want[i]) fail_msg("round %d lane %d: %g, want %g (dot %g)", round, i, got[i], want[i], dot[i]);
+            ++checked;
+        }
+    }
+    printf("  %u lanes checked, %u with a zero or NaN dot\n", checked, one_by_one);
+    assert_int_equal(checked, 4000 * CB_SAMPLE_BATCH);
+    assert_true(one_by_one >= 1000); /* about 1400: the zeros at the last lane and some odd values */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -377,6 +418,7 @@ int main(void)
         cmocka_unit_test(test_batches_give_the_bits_of_single_times),
         cmocka_unit_test(test_lanes_give_the_bits_of_the_scalar_path),
         cmocka_unit_test(test_frame_lanes_give_the_bits_of_frame_rows),
+        cmocka_unit_test(test_row_signs_follow_the_rows_one_by_one),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
