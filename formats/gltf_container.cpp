@@ -87,9 +87,10 @@ size_t split_point(const unsigned char *head, size_t got, size_t size)
     return json_end + 8;
 }
 
-// Reads `path` into *out, bounded by max_bytes. With `tail`, a big GLB's BIN chunk is read on
-// tail->thread (see TailRead).
-template <class Bytes> bool read_file(const char *path, uint64_t max_bytes, Bytes *out, TailRead *tail, std::string *why)
+// Reads `path` into *out, bounded by max_bytes (*over_limit, when given, says a refusal was that
+// bound's). With `tail`, a big GLB's BIN chunk is read on tail->thread (see TailRead).
+template <class Bytes>
+bool read_file(const char *path, uint64_t max_bytes, Bytes *out, TailRead *tail, std::string *why, bool *over_limit)
 {
     int fd = open(path, O_RDONLY | O_CLOEXEC);
     struct stat st;
@@ -100,7 +101,8 @@ template <class Bytes> bool read_file(const char *path, uint64_t max_bytes, Byte
     }
     if ((uint64_t)st.st_size > max_bytes) {
         close(fd);
-        *why = "larger than the " + std::to_string(max_bytes) + "-byte limit (--max-file-size)";
+        *why = "larger than the " + std::to_string(max_bytes) + "-byte file size limit; raise the limit";
+        if (over_limit) *over_limit = true;
         return false;
     }
     size_t size = (size_t)st.st_size, got = size < (4u << 20) ? size : 20; /* small files at once */
@@ -151,13 +153,14 @@ bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::strin
         // A meshopt fallback buffer: zeros now, filled by decoding the compressed views.
         unsigned long long bytes = std::strtoull(path.c_str() + marker + sizeof kFallbackScheme - 1, nullptr, 10);
         if (bytes == 0 || bytes > fs->max_bytes) {
-            *err = "meshopt fallback buffer of " + std::to_string(bytes) + " bytes is empty or over the size limit";
+            fs->over_limit |= bytes > fs->max_bytes;
+            *err = "meshopt fallback buffer of " + std::to_string(bytes) + " bytes is empty or over the file size limit";
             return false;
         }
         out->assign((size_t)bytes, 0);
         return true;
     }
-    if (!read_file(path.c_str(), fs->max_bytes, out, nullptr, err)) return false;
+    if (!read_file(path.c_str(), fs->max_bytes, out, nullptr, err, &fs->over_limit)) return false;
     cbpal_xxh64_update(fs->source_hash, out->data(), out->size());
     fs->files.push_back(path);
     return true;
@@ -484,7 +487,8 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
     }
     if (!ok) {
         std::string why = first_line(tg_err);
-        cb_fail(err, CB_ERR_INPUT, "%s: not a valid glTF 2.0 file: %s", name, why.empty() ? "parse failed" : why.c_str());
+        cb_fail_setting(err, CB_ERR_INPUT, fs_state->over_limit ? CB_SETTING_MAX_FILE_BYTES : CB_SETTING_NONE,
+                        "%s: not a valid glTF 2.0 file: %s", name, why.empty() ? "parse failed" : why.c_str());
     }
     return ok;
 }
@@ -562,6 +566,7 @@ void release_mapped(void *ctx, const cb_byte_range *ranges, size_t count) noexce
     }
 }
 
-template bool read_file<file_bytes>(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail, std::string *why);
+template bool read_file<file_bytes>(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail, std::string *why,
+                                     bool *over_limit);
 
 } // namespace cbgltf

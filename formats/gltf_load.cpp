@@ -177,7 +177,7 @@ cb_model *load(const unsigned char *data, size_t size, file_bytes *file, TailRea
     cbpal_xxh64_state source_hash;
     cbpal_xxh64_init(&source_hash);
     if (!tail) cbpal_xxh64_update(&source_hash, data, size); /* else the tail's thread hashes the file */
-    FsState fs{c.limits.max_file_bytes, &source_hash, {}};
+    FsState fs{c.limits.max_file_bytes, &source_hash, {}, false};
     BinInPlace bin{0, 0};
     bool parsed = parse_with_tinygltf(data, size, name, base_dir, &fs, &d, &fast, &gltf, file ? &bin : nullptr, tail, err);
     if (tail) {
@@ -241,8 +241,10 @@ extern "C" cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_
     TailRead tail; /* after `bytes`, so it is joined before they are freed */
     std::string why;
     try {
-        if (!map_model(path, l.max_file_bytes, &bytes, &tail) && !read_file(path, l.max_file_bytes, &bytes, &tail, &why)) {
-            cb_fail(err, CB_ERR_IO, "%s: cannot read: %s", path, why.c_str());
+        bool over_limit = false;
+        if (!map_model(path, l.max_file_bytes, &bytes, &tail) && !read_file(path, l.max_file_bytes, &bytes, &tail, &why, &over_limit)) {
+            cb_fail_setting(err, CB_ERR_IO, over_limit ? CB_SETTING_MAX_FILE_BYTES : CB_SETTING_NONE, "%s: cannot read: %s",
+                            path, why.c_str());
             return nullptr;
         }
     } catch (const std::bad_alloc &) {

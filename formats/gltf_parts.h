@@ -205,6 +205,7 @@ struct FsState {
     uint64_t max_bytes;
     cbpal_xxh64_state *source_hash; // every external file read goes into the model's source hash
     std::vector<std::string> files;  // and into its list of external files, for depfiles
+    bool over_limit;                 // a file was refused for max_bytes
 };
 
 struct BinInPlace {
@@ -217,7 +218,8 @@ uint32_t le32(const unsigned char *p); // a little-endian field of a GLB header 
 bool mentions(const void *haystack, size_t size, const char *needle);
 // Reads `path` into *out, bounded by max_bytes. With `tail`, a big GLB's BIN chunk is read on
 // tail->thread (see TailRead).
-template <class Buffer> bool read_file(const char *path, uint64_t max_bytes, Buffer *out, TailRead *tail, std::string *why);
+template <class Buffer>
+bool read_file(const char *path, uint64_t max_bytes, Buffer *out, TailRead *tail, std::string *why, bool *over_limit);
 // Maps a model file of 1 MiB and more (see map_model in gltf_container.cpp); false (nothing
 // done) where mapping does not apply, and read_file then reads it.
 bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail);

@@ -166,6 +166,29 @@ static void expect_refused(const char *json, const char *needle, const char *ext
     assert_int_not_equal(stat(TMP "/hostile.pal", &st), 0);
 }
 
+/* The file size limit, on the model and on a buffer it names: an error with the limit's flag
+ * (the core says which limit, the command line names the flag), nothing written. */
+static void test_file_size_limit_names_its_flag(void **state)
+{
+    (void)state;
+    char fox[1024], gltf[1024], args[4096], out[2048];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    shared_path(gltf, sizeof gltf, "assets/derived-fox/separate/Fox.gltf"); /* 34 KB, its Fox.bin 120 KB */
+    snprintf(args, sizeof args, "bake %s -o " TMP "/limited.pal --max-file-size 1K", fox);
+    int rc = crowdbake(args, out, sizeof out);
+    if (rc != CB_ERR_IO || !strstr(out, "larger than the 1024-byte file size limit; raise the limit [--max-file-size]"))
+        fail_msg("exit %d: %s", rc, out);
+    snprintf(args, sizeof args, "bake %s -o " TMP "/limited.pal --max-file-size 50K", gltf);
+    rc = crowdbake(args, out, sizeof out);
+    if (rc != CB_ERR_INPUT || !strstr(out, "Fox.bin : larger than the 51200-byte file size limit; raise the limit [--max-file-size]"))
+        fail_msg("exit %d: %s", rc, out);
+    struct stat st;
+    assert_int_not_equal(stat(TMP "/limited.pal", &st), 0);
+    snprintf(args, sizeof args, "bake %s -o " TMP "/limited.pal --max-file-size 200K", gltf); /* both fit */
+    rc = crowdbake(args, out, sizeof out);
+    if (rc != 0) fail_msg("exit %d: %s", rc, out);
+}
+
 #define BUF "\"buffers\":[{\"byteLength\":8,\"uri\":\"data:application/octet-stream;base64,AAAAAAAAgD8=\"}]," \
             "\"bufferViews\":[{\"buffer\":0,\"byteLength\":8}],"
 
@@ -227,6 +250,7 @@ int main(void)
         cmocka_unit_test(test_interrupted_mid_write),
         cmocka_unit_test(test_two_bakes_racing_for_one_output),
         cmocka_unit_test(test_hostile_sizes),
+        cmocka_unit_test(test_file_size_limit_names_its_flag),
         cmocka_unit_test(test_broken_hierarchies),
     };
     return cmocka_run_group_tests_name("faults", tests, setup, NULL);
