@@ -177,7 +177,7 @@ static CB_CLONE_INLINE void quantize4(const u16_lanes *q, const float *v, unsign
     x = (v4df)(((v4di)lo & below) | ((v4di)x & ~below));
     x = (v4df)(((v4di)hi & above) | ((v4di)x & ~above));
     v4si k = __builtin_convertvector((x * steps + ROUND_MAGIC) - ROUND_MAGIC, v4si);
-    v8hi n = __builtin_shuffle((v8hi)k, (v8hi){0, 2, 4, 6, 0, 2, 4, 6}); /* each low half: (uint16_t) */
+    v8hi n = __builtin_shufflevector((v8hi)k, (v8hi)k, 0, 2, 4, 6, 0, 2, 4, 6); /* each low half: (uint16_t) */
     memcpy(d, &n, 8);
 }
 #else

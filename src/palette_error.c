@@ -104,7 +104,7 @@ static CB_CLONE_INLINE void trs_lanes(double m[15][B], const double (*t)[B], con
     }
 }
 
-#if defined(__GNUC__) && !defined(__clang__)
+#if defined(__GNUC__) /* GCC and clang: vector types and __builtin_shufflevector */
 typedef double v4df __attribute__((vector_size(32)));
 typedef int64_t v4di __attribute__((vector_size(32)));
 
@@ -118,10 +118,10 @@ static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out,
         for (int c = 0; c < 4; ++c) {
             v4df r0, r1, r2;
             memcpy(&r0, &d[3 * c][first], 32), memcpy(&r1, &d[3 * c + 1][first], 32), memcpy(&r2, &d[3 * c + 2][first], 32);
-            v4df t0 = __builtin_shuffle(r0, r1, (v4di){0, 4, 2, 6}), t1 = __builtin_shuffle(r0, r1, (v4di){1, 5, 3, 7});
-            v4df t2 = __builtin_shuffle(r2, zero, (v4di){0, 4, 2, 6}), t3 = __builtin_shuffle(r2, zero, (v4di){1, 5, 3, 7});
-            v4df l0 = __builtin_shuffle(t0, t2, (v4di){0, 1, 4, 5}), l1 = __builtin_shuffle(t1, t3, (v4di){0, 1, 4, 5});
-            v4df l2 = __builtin_shuffle(t0, t2, (v4di){2, 3, 6, 7}), l3 = __builtin_shuffle(t1, t3, (v4di){2, 3, 6, 7});
+            v4df t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
+            v4df t2 = __builtin_shufflevector(r2, zero, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, zero, 1, 5, 3, 7);
+            v4df l0 = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), l1 = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+            v4df l2 = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), l3 = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
             double *o = out + (size_t)first * stride + 4 * c;
             memcpy(o, &l0, 32), memcpy(o + stride, &l1, 32), memcpy(o + 2 * stride, &l2, 32), memcpy(o + 3 * stride, &l3, 32);
         }

@@ -124,17 +124,20 @@ static CB_CLONE_INLINE void slerp_lanes(const double (*restrict a)[B], const dou
     }
 }
 
+#if defined(__GNUC__) /* GCC and clang: vector types and __builtin_shufflevector */
 typedef double v4df __attribute__((vector_size(32)));
 typedef int64_t v4di __attribute__((vector_size(32)));
 
-/* Four lanes' quaternions (rows r0..r3, x y z w each) stored as the lanes' components:
- * out[c][i + l] = rl[c]. A 4x4 transpose in 8 shuffles, then four vector stores. */
-static CB_CLONE_INLINE void store_columns4(v4df r0, v4df r1, v4df r2, v4df r3, double (*out)[B], int i)
+/* Four lanes' quaternions (r[l]: x y z w) stored as the lanes' components: out[c][i + l] =
+ * r[l][c]. A 4x4 transpose in 8 shuffles, then four vector stores. (The vectors by pointer: by
+ * value, 32-byte vectors change the calling convention of the clone without AVX.) */
+static CB_CLONE_INLINE void store_columns4(const v4df *r, double (*out)[B], int i)
 {
-    v4df t0 = __builtin_shuffle(r0, r1, (v4di){0, 4, 2, 6}), t1 = __builtin_shuffle(r0, r1, (v4di){1, 5, 3, 7});
-    v4df t2 = __builtin_shuffle(r2, r3, (v4di){0, 4, 2, 6}), t3 = __builtin_shuffle(r2, r3, (v4di){1, 5, 3, 7});
-    v4df x = __builtin_shuffle(t0, t2, (v4di){0, 1, 4, 5}), y = __builtin_shuffle(t1, t3, (v4di){0, 1, 4, 5});
-    v4df z = __builtin_shuffle(t0, t2, (v4di){2, 3, 6, 7}), w = __builtin_shuffle(t1, t3, (v4di){2, 3, 6, 7});
+    v4df r0 = r[0], r1 = r[1], r2 = r[2], r3 = r[3];
+    v4df t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
+    v4df t2 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
+    v4df x = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), y = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+    v4df z = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), w = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
     memcpy(&out[0][i], &x, sizeof x), memcpy(&out[1][i], &y, sizeof y);
     memcpy(&out[2][i], &z, sizeof z), memcpy(&out[3][i], &w, sizeof w);
 }
@@ -153,10 +156,21 @@ static CB_CLONE_INLINE void gather_key_pairs(const float *values, const uint32_t
     for (int i = 0; i < B; i += 4) {
         const float *k0 = values + (size_t)key[i] * 4, *k1 = values + (size_t)key[i + 1] * 4,
                     *k2 = values + (size_t)key[i + 2] * 4, *k3 = values + (size_t)key[i + 3] * 4;
-        store_columns4(KEY_OF(k0), KEY_OF(k1), KEY_OF(k2), KEY_OF(k3), a, i);
-        store_columns4(KEY_OF(k0 + 4), KEY_OF(k1 + 4), KEY_OF(k2 + 4), KEY_OF(k3 + 4), b, i);
+        const v4df ka[4] = {KEY_OF(k0), KEY_OF(k1), KEY_OF(k2), KEY_OF(k3)};
+        const v4df kb[4] = {KEY_OF(k0 + 4), KEY_OF(k1 + 4), KEY_OF(k2 + 4), KEY_OF(k3 + 4)};
+        store_columns4(ka, a, i), store_columns4(kb, b, i);
     }
 }
+#else
+static CB_CLONE_INLINE void gather_key_pairs(const float *values, const uint32_t *key, double (*a)[B],
+                                             double (*b)[B])
+{
+    for (int i = 0; i < B; ++i) {
+        const float *ka = values + (size_t)key[i] * 4, *kb = ka + 4;
+        for (int c = 0; c < 4; ++c) a[c][i] = ka[c], b[c][i] = kb[c];
+    }
+}
+#endif
 
 /* A linear rotation channel at the batch's times into out[4][B]. */
 static CB_CLONE_INLINE void rotation_lanes(const cb_channel *ch, const cb_key_spans *sp, const double *times,
