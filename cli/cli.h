@@ -96,6 +96,12 @@ void cli_baked_close(cli_baked *b);
  * neither is given; else malloc'ed, *count entries. Names that are not clips are errors. */
 cb_status cli_select_clips(const cb_model *model, const char *clips, const char *excluded, cb_clip_plan **plan,
                            uint32_t *count, cb_error *err);
+/* --loop A,B and --one-shot A,B: these clips loop, or play once, whatever their poses say (the
+ * bake decides from them otherwise: a clip whose last pose equals its first loops). Sets the
+ * plan's loop for each; a plan of every clip in file order is made when *plan is NULL. A name
+ * that is not a clip, not among the plan's, or given to both is an error. */
+cb_status cli_override_loops(const cb_model *model, const char *loops, const char *one_shots, cb_clip_plan **plan,
+                             uint32_t *count, cb_error *err);
 /* Calls fn for each name of a comma-separated list (as --clip takes); stops at, and returns,
  * the first failure. */
 cb_status cli_for_each_name(const char *list, cb_status (*fn)(const char *name, void *ctx), void *ctx);

@@ -1,4 +1,5 @@
-/* clip_select.c - --clip and --exclude-clip, as bake, vat and verify take them. */
+/* clip_select.c - --clip and --exclude-clip, as bake, vat and verify take them; --loop and
+ * --one-shot, as bake takes them. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -89,6 +90,48 @@ cb_status cli_select_clips(const cb_model *m, const char *clips, const char *exc
     *plan = s.plan;
     *count = s.count;
     return CB_OK;
+}
+
+/* One --loop or --one-shot name: its clip's entry in the plan gets `loop`. */
+typedef struct loop_override {
+    const cb_model *model;
+    cb_clip_plan *plan;
+    uint32_t count;
+    int loop;            /* 1: --loop, 0: --one-shot */
+    const char *option, *other; /* the flag, and the other flag's list (a clip in both is an error) */
+    cb_error *err;
+} loop_override;
+
+static cb_status override_loop(const char *name, void *ctx)
+{
+    loop_override *o = ctx;
+    selection s = {o->model, NULL, NULL, 0, o->option, o->err};
+    int32_t a = find_clip(&s, name);
+    if (a < 0) return o->err->status;
+    if (cli_list_has(o->other, name))
+        return cb_fail(o->err, CB_ERR_SETTINGS, "%s: '%s' is given to both --loop and --one-shot", o->model->source, name);
+    bool found = false;
+    for (uint32_t i = 0; i < o->count; ++i)
+        if (o->plan[i].animation == a) o->plan[i].loop = o->loop, found = true;
+    if (!found)
+        return cb_fail(o->err, CB_ERR_SETTINGS, "%s: %s %s: the clip is not among those baked (see --clip, --exclude-clip)",
+                       o->model->source, o->option, name);
+    return CB_OK;
+}
+
+cb_status cli_override_loops(const cb_model *m, const char *loops, const char *one_shots, cb_clip_plan **plan,
+                             uint32_t *count, cb_error *err)
+{
+    if (!loops && !one_shots) return CB_OK;
+    if (!*plan) { /* every clip, in file order, as a bake without a plan takes them */
+        if (!(*plan = calloc(m->animation_count + 1, sizeof **plan))) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+        for (uint32_t a = 0; a < m->animation_count; ++a) (*plan)[a] = (cb_clip_plan){(int32_t)a, NULL, -1, 0};
+        *count = m->animation_count;
+    }
+    loop_override o = {m, *plan, *count, 1, "--loop", one_shots, err};
+    if (cli_for_each_name(loops, override_loop, &o)) return err->status;
+    o.loop = 0, o.option = "--one-shot", o.other = loops;
+    return cli_for_each_name(one_shots, override_loop, &o);
 }
 
 bool cli_list_has(const char *list, const char *name)

@@ -48,6 +48,8 @@ const char cmd_bake_usage[] =
     "                             cannot be sampled, e.g. one without keys, is skipped with a warning\n"
     "                             unless named here, which makes it an error)\n"
     "  --exclude-clip A,B         every clip but these\n"
+    "  --loop A,B                 these clips loop, --one-shot A,B these play once, whatever their\n"
+    "  --one-shot A,B             poses say (default: decided from the poses; `info` says why)\n"
     "  --speed-reference M_PER_S  ground speed at playback rate 1, stored in the header\n"
     "  --zstd                     compress the .pal payload (readers decompress once)\n"
     "  --exr-compression none|rle|zips|zip|piz  (default none; lossless only)\n"
@@ -58,7 +60,8 @@ const char cmd_bake_usage[] =
 
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
-        *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir;
+        *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir, *loops,
+        *one_shots;
     bool zstd, json, quiet, quiet_long, force, depfile_manifest, fit;
 } bake_args;
 
@@ -144,6 +147,8 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     if (a->speed_ref) return cli_usage_error("bake", "--speed-reference is for single models; a catalog sets speed_reference per animal");
     if (a->clips || a->excluded)
         return cli_usage_error("bake", "--clip and --exclude-clip are for single models; a catalog lists clips per animal");
+    if (a->loops || a->one_shots)
+        return cli_usage_error("bake", "--loop and --one-shot are for single models; a catalog sets loop per clip");
     if ((a->fps && strcmp(a->fps, "auto") == 0) || a->max_error || a->max_fps)
         return cli_usage_error("bake", "--fps auto, --max-error and --max-fps are for single models; a catalog sets fps per "
                                "animal or clip");
@@ -222,8 +227,8 @@ static cb_status print_rates(const cb_bake_job *job, cb_error *err)
     for (uint32_t i = 0; i < job->plan_count && !err->status; ++i) {
         int32_t a = job->plan[i].animation;
         cb_clip_info at, fixed;
-        if (cb_clip_analyze(s, a, job->plan[i].fps, -1, &o.limits, &at, err) ||
-            cb_clip_analyze(s, a, 30, -1, &o.limits, &fixed, err))
+        if (cb_clip_analyze(s, a, job->plan[i].fps, job->plan[i].loop, &o.limits, &at, err) ||
+            cb_clip_analyze(s, a, 30, job->plan[i].loop, &o.limits, &fixed, err))
             break;
         rows_auto += at.frames, rows_30 += fixed.frames;
         printf("  %-24s %3.0f fps: %4u rows, visible error %.3f mm/m%s\n", m->animations[a].name, job->plan[i].fps,
@@ -319,6 +324,7 @@ int cmd_bake(int argc, char **argv)
         {"--manifest", "FILE", &a.manifest, NULL}, {"--max-error", "MM_PER_M", &a.max_error, NULL},
         {"--max-fps", "N", &a.max_fps, NULL},      {"--clip", "A,B", &a.clips, NULL},
         {"--exclude-clip", "A,B", &a.excluded, NULL}, {"--out-dir", "DIR", &a.out_dir, NULL},
+        {"--loop", "A,B", &a.loops, NULL},         {"--one-shot", "A,B", &a.one_shots, NULL},
         {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest}, {"--fit-rows", NULL, NULL, &a.fit},
         {"--quiet", NULL, NULL, &a.quiet_long}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
@@ -359,7 +365,8 @@ int cmd_bake(int argc, char **argv)
     job.pal_path = pal_path, job.exr_path = exr_path, job.ktx2_path = ktx2_path;
     cb_clip_plan *selection = NULL;
     cb_bake_result result = {0};
-    if (job.skin >= 0 && !cli_select_clips(m, a.clips, a.excluded, &selection, &job.clip_count, &err)) {
+    if (job.skin >= 0 && !cli_select_clips(m, a.clips, a.excluded, &selection, &job.clip_count, &err) &&
+        !cli_override_loops(m, a.loops, a.one_shots, &selection, &job.clip_count, &err)) {
         job.clips = selection;
         if (!cb_bake_job_plan(&job, &err) && settings.fps_auto && !a.quiet && !a.json) print_rates(&job, &err);
         if (!err.status) cb_bake_job_run(&job, &result, &err);

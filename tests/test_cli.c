@@ -2,12 +2,13 @@
  * verify and preview reading the .exr that bake writes (MODEL PALETTE, in that order, with
  * a message naming the order when swapped), --format pal,exr keeping each format's default
  * precision, unknown output extensions refused, did-you-mean for commands and options,
- * singular counts, distinct verify column titles, in-place root velocity in inspect, and
- * catalog.example.toml's stated defaults against the parser's. */
+ * singular counts, distinct verify column titles, in-place root velocity in inspect, --loop and
+ * --one-shot, and catalog.example.toml's stated defaults against the parser's. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
 #include <limits.h>
+#include <unistd.h>
 
 #include <math.h>
 
@@ -245,6 +246,56 @@ static void test_inspect_aligns_long_clip_names(void **state)
     assert_int_equal(rows, 12); /* the Cow's 12 clips */
 }
 
+/* Whether clip `name` of the palette at path loops (its flag in the clip table); -1 when absent. */
+static int clip_loops(const char *path, const char *name)
+{
+    cbpal_file f;
+    char err[256];
+    if (cbpal_open(path, 0, &f, err, sizeof err) != 0) fail_msg("%s", err);
+    int loops = -1;
+    for (uint32_t c = 0; c < f.header.clip_count; ++c) {
+        cbpal_clip clip;
+        assert_int_equal(cbpal_get_clip(&f, c, &clip), 0);
+        if (strcmp(clip.name, name) == 0) loops = (clip.flags & CBPAL_CLIP_LOOPS) != 0;
+    }
+    cbpal_close(&f);
+    return loops;
+}
+
+/* --loop and --one-shot overrule what the poses say, as a catalog's `loop` does: the Cow's
+ * Attack_Headbutt ends on its first pose (found a loop) and its Death does not (a one-shot).
+ * Names that are not clips, not baked or given to both are usage errors, and nothing is written. */
+static void test_loop_and_one_shot_overrule_the_poses(void **state)
+{
+    (void)state;
+    static char out[1 << 14];
+    char cow[1024];
+    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
+    const char *headbutt = "AnimalArmature|Attack_Headbutt", *death = "AnimalArmature|Death", *walk = "AnimalArmature|Walk";
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/found.pal -q", cow), 0);
+    assert_int_equal(clip_loops(TMP "/found.pal", headbutt), 1);
+    assert_int_equal(clip_loops(TMP "/found.pal", death), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/told.pal -q --one-shot '%s' --loop '%s'", cow, headbutt,
+                               death), 0);
+    assert_int_equal(clip_loops(TMP "/told.pal", headbutt), 0);
+    assert_int_equal(clip_loops(TMP "/told.pal", death), 1);
+    assert_int_equal(clip_loops(TMP "/told.pal", walk), 1); /* the others as the poses say */
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/some.pal -q --clip '%s,%s' --one-shot '%s'", cow, walk,
+                               headbutt, headbutt), 0);
+    assert_int_equal(clip_loops(TMP "/some.pal", headbutt), 0);
+    assert_int_equal(clip_loops(TMP "/some.pal", death), -1);
+
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/bad.pal -q --loop Gallopp", cow), EXIT_USAGE);
+    assert_contains(out, "--loop Gallopp: the model has no such clip; its clips are: AnimalArmature|Attack_Headbutt");
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/bad.pal -q --loop '%s' --one-shot '%s'", cow, death,
+                               death), EXIT_USAGE);
+    assert_contains(out, "'AnimalArmature|Death' is given to both --loop and --one-shot");
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/bad.pal -q --clip '%s' --one-shot '%s'", cow, walk,
+                               death), EXIT_USAGE);
+    assert_contains(out, "the clip is not among those baked");
+    assert_int_equal(access(TMP "/bad.pal", F_OK), -1);
+}
+
 /* Each [bake] and [budget] value catalog.example.toml shows is what the parser uses when the
  * key is left out (the file says "every key ... with its default"). */
 static void test_example_catalog_states_the_defaults(void **state)
@@ -302,6 +353,7 @@ int main(void)
         cmocka_unit_test(test_messages),
         cmocka_unit_test(test_inspect_in_place_velocity),
         cmocka_unit_test(test_inspect_aligns_long_clip_names),
+        cmocka_unit_test(test_loop_and_one_shot_overrule_the_poses),
         cmocka_unit_test(test_example_catalog_states_the_defaults),
     };
     return cmocka_run_group_tests_name("cli", tests, setup, NULL);
