@@ -335,6 +335,7 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     free(w.prev);
     free(w.first);
     free(w.rows);
+    palette_measure_scratch_free(w.measure);
 }
 
 static uint32_t threads_used(const bake_state *st, uint32_t jobs)

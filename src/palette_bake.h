@@ -63,6 +63,7 @@ typedef struct worker {
     cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
     float *rows;         /* pre-encoding rows: CB_SAMPLE_BATCH of them, or a whole clip's for --fit */
     float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
+    struct measure_scratch *measure; /* palette_error.c's, made by the worker's first measurement job */
 } worker;
 
 typedef struct bake_state {
@@ -172,6 +173,9 @@ uint32_t palette_measure_jobs(const bake_state *st);
 /* Measurement job k: the worst vertex errors of its clip at its rows and/or between them
  * (st->clip_error, st->clip_blend_error). */
 void palette_measure_job(bake_state *st, worker *w, uint32_t k);
+/* A worker's measurement scratch, kept from job to job (a clip's is about 1.4 MB for 200 bones,
+ * fresh memory each time where it was allocated per job). */
+void palette_measure_scratch_free(struct measure_scratch *s);
 
 /* What a bake needs of the skin alone, whatever the clips and the rate: its joints' bind
  * positions, how far their vertices reach, the vertices grouped for measuring and the rest

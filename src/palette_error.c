@@ -12,7 +12,7 @@
 enum { VALUE_SLOTS = 2 * CB_SAMPLE_BATCH };
 
 /* A measurement's scratch: one row's differences, their bound terms and its group bounds. */
-typedef struct measure_scratch {
+struct measure_scratch {
     double *diff;                      /* CB_SAMPLE_BATCH rows of bones * 16 */
     cb_joint_error *joints;            /* CB_SAMPLE_BATCH rows of bones: the differences' bound terms */
     double *group_bounds;              /* groups */
@@ -23,7 +23,8 @@ typedef struct measure_scratch {
     uint64_t value_read[VALUE_SLOTS];  /* when each slot was last read (0: never) */
     uint64_t reads;                    /* the reads so far: the clock of value_read */
     bool finite[CB_SAMPLE_BATCH];      /* per row: every difference finite (else no bound holds) */
-} measure_scratch;
+};
+typedef struct measure_scratch measure_scratch;
 
 /* Slot k's values, read now. */
 static const double *read_slot(const cb_palette *p, measure_scratch *s, uint32_t k)
@@ -205,7 +206,8 @@ static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, co
 
 /* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
  * the next at fraction sub / parts, blended as the runtime does, or `worst` when none exceeds
- * it; with `bounds`, only each row's bound. Skinning is linear in the matrices, so one skinning
+ * it; with `bounds`, each row's bound, and the worst of the row with the largest where that
+ * is cheap (see the end; the others are left for later). Skinning is linear in the matrices, so one skinning
  * with (exact - decoded) gives each vertex's error directly: half the work of skinning twice,
  * and no cancellation. Rows baked from similarities are measured against those, sampled
  * together like the bake did, every row's differences at once (bone_differences). */
@@ -253,6 +255,18 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         bool finite = similar ? s->finite[i] : cb_joint_errors(diff, p->bone_count, p->bind_positions, s->joints);
         if (bounds) bounds[i] = row_bound(st, joints, finite);
         else worst = skin_row(st, s, diff, joints, finite, worst);
+    }
+    /* The rows' likeliest worst skinned at once where that costs no sampling (rows of
+     * similarities: every row's differences are in hand), and with a goal (a row above it ends
+     * the clip; rows of matrices sampled again). Its bound becomes the worst after it, which
+     * holds its error, so it is not measured again. */
+    uint32_t top = 0;
+    for (uint32_t i = 1; bounds && i < count; ++i) top = bounds[i] > bounds[top] ? i : top;
+    if (bounds && bounds[top] > worst && (similar || st->opt->error_goal > 0)) {
+        size_t at = (size_t)top * p->bone_count;
+        worst = similar ? skin_row(st, s, s->diff + at * 16, s->joints + at, s->finite[top], worst)
+                        : measure_rows(st, w, c, frames + top, 1, sub, parts, s, NULL, worst);
+        bounds[top] = worst;
     }
     return worst;
 }
@@ -314,17 +328,9 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
         if (i < nb) *baked = measure_batch(st, w, c, s->baked, i, nb, 0, 1, s, NULL, *baked);
         if (i >= n) continue;
         uint32_t count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
-        measure_batch(st, w, c, rows, i, n, sub, parts, s, bounds, 0);
-        uint32_t top = 0;
-        for (uint32_t k = 0; k < count; ++k) {
-            rows[i + k].bound = bounds[k];
-            if (bounds[k] > bounds[top]) top = k;
-        }
-        /* With a goal, each batch's likeliest worst at once: a row above the goal ends it. */
-        if (goal > 0 && bounds[top] > worst) {
-            worst = measure_batch(st, w, c, rows, i + top, i + top + 1, sub, parts, s, NULL, worst);
-            if (worst > goal) return worst;
-        }
+        worst = measure_batch(st, w, c, rows, i, n, sub, parts, s, bounds, worst);
+        for (uint32_t k = 0; k < count; ++k) rows[i + k].bound = bounds[k];
+        if (goal > 0 && worst > goal) return worst;
     }
     cb_sort_bounded_rows(rows, n);
     /* Batches of 1, 2, 4, ... rows: often the first few rows settle it. */
@@ -355,6 +361,31 @@ uint32_t palette_measure_jobs(const bake_state *st)
     return measure_split(st) ? 2 * st->p->clip_count : st->p->clip_count;
 }
 
+void palette_measure_scratch_free(measure_scratch *s)
+{
+    if (!s) return;
+    free(s->diff), free(s->joints), free(s->group_bounds), free(s->rows), free(s->baked), free(s->values);
+    free(s);
+}
+
+/* The worker's scratch, made by its first job for the longest clip; NULL when out of memory. */
+static measure_scratch *worker_scratch(const bake_state *st, worker *w)
+{
+    if (w->measure) return w->measure;
+    const cb_palette *p = st->p;
+    size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
+    measure_scratch *s = calloc(1, sizeof *s);
+    if (!s) return NULL;
+    *s = (measure_scratch){malloc(CB_SAMPLE_BATCH * matrices), malloc(CB_SAMPLE_BATCH * p->bone_count * sizeof *s->joints),
+                           malloc((st->groups->group_count + 1) * sizeof(double)), malloc(st->max_clip_frames * sizeof *s->rows),
+                           malloc(st->max_clip_frames * sizeof *s->baked), malloc(VALUE_SLOTS * matrices), {0}, {0}, 0, {0}};
+    if (!(s->diff && s->joints && s->group_bounds && s->rows && s->baked && s->values)) {
+        palette_measure_scratch_free(s);
+        return NULL;
+    }
+    return w->measure = s;
+}
+
 void palette_measure_job(bake_state *st, worker *w, uint32_t k)
 {
     const cb_palette *p = st->p;
@@ -362,31 +393,28 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     bool split = measure_split(st);
     uint32_t c = split ? k / 2 : k;
     bool blends = !split || k % 2 == 0, rows = !split || k % 2 == 1; /* what this job measures */
-    size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
-    measure_scratch s = {malloc(CB_SAMPLE_BATCH * matrices), malloc(CB_SAMPLE_BATCH * p->bone_count * sizeof *s.joints),
-                         malloc((st->groups->group_count + 1) * sizeof(double)), malloc(p->clips[c].frames * sizeof *s.rows),
-                         malloc(p->clips[c].frames * sizeof *s.baked), malloc(VALUE_SLOTS * matrices), {0}, {0}, 0, {0}};
-    for (uint32_t i = 0; i < VALUE_SLOTS; ++i) s.value_row[i] = UINT32_MAX;
+    measure_scratch *s = worker_scratch(st, w);
+    for (uint32_t i = 0; s && i < VALUE_SLOTS; ++i) s->value_row[i] = UINT32_MAX, s->value_read[i] = 0;
+    if (s) s->reads = 0;
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
      * ways, so their quarter points are measured too. */
     uint32_t parts = p->fitted ? 4 : 2;
-    if (!(s.diff && s.joints && s.group_bounds && s.rows && s.baked && s.values)) {
+    if (!s) {
         cb_fail(&st->errors[blends ? c : p->clip_count + c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
     } else if (goal > 0) { /* the blends, then only the baked rows that could exceed them */
         for (uint32_t sub = 1; sub < parts && !(blend > goal); ++sub)
-            blend = measure_clip_rows(st, w, c, sub, parts, blend, &s, NULL);
+            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, NULL);
         st->clip_blend_error[c] = blend;
-        double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, &s, NULL);
+        double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, s, NULL);
         st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
     } else if (blends) { /* each fraction's rows only count where they exceed the worst blend so far */
         for (uint32_t sub = 1; sub < parts; ++sub)
-            blend = measure_clip_rows(st, w, c, sub, parts, blend, &s, rows && sub == 1 ? &baked : NULL);
+            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, rows && sub == 1 ? &baked : NULL);
         st->clip_blend_error[c] = blend;
         if (rows) st->clip_error[c] = baked;
     } else {
-        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, &s, NULL);
+        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, s, NULL);
     }
-    free(s.diff), free(s.joints), free(s.group_bounds), free(s.rows), free(s.baked), free(s.values);
     cb_model_release_clip(st->model, st->infos[c].animation); /* measured: the keys are not read again */
 }
 
