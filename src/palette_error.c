@@ -48,10 +48,14 @@ static const double *row_values(const cb_palette *p, measure_scratch *s, uint32_
 }
 
 /* A row's bound, from its differences' terms `joints`: its largest group bound (infinite when a
- * difference is not finite). */
-static double row_bound(const bake_state *st, const cb_joint_error *joints, bool finite)
+ * difference is not finite), or its cap on them all where that is within `worst` (the row
+ * cannot exceed the worst either way, and the cap takes O(bones) where the groups take
+ * O(their joints)). */
+static double row_bound(const bake_state *st, const cb_joint_error *joints, bool finite, double worst)
 {
     if (!finite) return INFINITY;
+    double cap = cb_row_error_cap(joints, st->p->bone_count, st->facts->group_reach, st->facts->weight_sum);
+    if (cap <= worst) return cap;
     double most = 0;
     for (uint32_t k = 0; k < st->groups->group_count; ++k) {
         double bound = cb_group_error_bound(st->groups, k, joints, most);
@@ -253,7 +257,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
             }
         }
         bool finite = similar ? s->finite[i] : cb_joint_errors(diff, p->bone_count, p->bind_positions, s->joints);
-        if (bounds) bounds[i] = row_bound(st, joints, finite);
+        if (bounds) bounds[i] = row_bound(st, joints, finite, worst);
         else worst = skin_row(st, s, diff, joints, finite, worst);
     }
     /* The rows' likeliest worst skinned at once where that costs no sampling (rows of
