@@ -211,10 +211,10 @@ static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, co
 
 /* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
  * the next at fraction sub / parts, blended as the runtime does, or `worst` when none exceeds
- * it; with `bounds`, each row's bound, and the worst of the row with the largest where that
- * is cheap (see the end; the others are left for later). Skinning is linear in the matrices, so one skinning
- * with (exact - decoded) gives each vertex's error directly: half the work of skinning twice,
- * and no cancellation. Rows baked from similarities are measured against those, sampled
+ * it; with `bounds`, each row's bound, and the worst of the row with the largest where that is
+ * cheap (see the end; the others are left for later). Skinning is linear in the matrices, so
+ * one skinning with (exact - decoded) gives each vertex's error directly: half the work of
+ * skinning twice, and no cancellation. Rows baked from similarities are measured against those, sampled
  * together like the bake did, every row's differences at once (bone_differences). */
 CB_TARGET_CLONES
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
