@@ -381,8 +381,8 @@ static void *carve(unsigned char *block, size_t *at, size_t bytes)
 }
 
 /* The worker's scratch, made by its first job for the longest clip; NULL when out of memory.
- * One block for all of it: 1.4 MB for 200 bones, which in 4 KB pages took 350 page faults of
- * fresh memory a thread; from 1 MB on it is a whole huge page (cb_alloc_large's, from 2 MB). */
+ * One block for all of it (cb_alloc_large: 1.4 MB for 200 bones is a whole huge page, where
+ * six blocks of 4 KB pages took 350 page faults of fresh memory a thread). */
 static measure_scratch *worker_scratch(const bake_state *st, worker *w)
 {
     if (w->measure) return w->measure;
@@ -394,7 +394,7 @@ static measure_scratch *worker_scratch(const bake_state *st, worker *w)
     size_t total = 0;
     for (int i = 0; i < 6; ++i) total += (sizes[i] + 63) / 64 * 64;
     measure_scratch *s = calloc(1, sizeof *s);
-    if (s) s->block = cb_alloc_large(total >= (1u << 20) && total < (2u << 20) ? (2u << 20) : total);
+    if (s) s->block = cb_alloc_large(total);
     if (!s || !s->block) {
         palette_measure_scratch_free(s);
         return NULL;

@@ -112,7 +112,8 @@ const char *cb_arena_strdup(cb_arena *arena, const char *s);
  * is freed. Returns false when out of memory (then the caller still owns ptr). */
 bool cb_arena_adopt(cb_arena *arena, void *ptr, void (*release)(void *));
 
-/* Memory for buffers of megabytes, on huge pages where the OS has them; release with free(). */
+/* Memory for buffers of a megabyte and more, on whole huge pages where the OS has them (the last
+ * one counts whole once touched); smaller ones from malloc. Release with free(). */
 void *cb_alloc_large(size_t bytes);
 /* Hands the memory the allocator keeps after free() back to the OS where it can (glibc keeps a
  * model load's freed parse buffers, 8 MB for a 25 MB rig, resident in its heap), so that a
