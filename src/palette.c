@@ -350,7 +350,7 @@ static uint32_t threads_used(const bake_state *st, uint32_t jobs)
 static void for_each_clip(bake_state *st, void (*run)(bake_state *, worker *, uint32_t), bool samples, uint32_t count)
 {
     job jb = {st, run, samples, count ? count : st->p->clip_count, 0};
-    cb_pool_run(threads_used(st, jb.count), job_main, &jb);
+    cb_pool_dispatch(st->pool, threads_used(st, jb.count), job_main, &jb);
 }
 
 
@@ -389,6 +389,7 @@ static void encode_staged_job(bake_state *st, worker *w, uint32_t c)
 
 static void free_bake_state(bake_state *st)
 {
+    cb_pool_free(st->pool);
     free(st->stash), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
     free(st->encode_seconds);
 }
@@ -437,6 +438,9 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;
     st.infos = infos;
+    /* Threads for every pass (at most one per job: a clip's blends and rows may be two), started
+     * here so that they start while the buffers are set up. */
+    st.pool = cb_pool_create(threads_used(&st, 2 * p->clip_count));
     p->texel_bytes = (size_t)p->width * p->height * cb_precision_texel_bytes(p->precision);
     if (p->texel_bytes > opt->limits.max_palette_bytes) {
         cb_fail_setting(err, CB_ERR_INPUT, CB_SETTING_MAX_PALETTE_BYTES, "%s: the palette would be %zu bytes (%ux%u "

@@ -91,6 +91,7 @@ typedef struct bake_state {
     pose_cache *poses;      /* the only clip's exact matrices by time, kept across bakes (one thread); or NULL */
     const cb_clip_info *analysis; /* the only clip analyzed before the bake, or NULL */
     cb_sampler *lent;       /* the caller's sampler, for the one worker of a probe's bake; or NULL */
+    struct cb_pool *pool;   /* the threads every pass runs on, or NULL for the caller's alone */
 } bake_state;
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
