@@ -2,7 +2,7 @@
  * exactly once and has finished when cb_pool_dispatch returns, whether the pool's threads were
  * still checking for work or had gone to sleep between runs; shares beyond the pool's threads,
  * and every share without a pool, run on the caller; a run's shares see what the caller wrote
- * before it, and the caller sees what they wrote. */
+ * before it, and the caller sees what they wrote; cb_pool_run is one such run. */
 #include "testutil.h"
 
 #include <stdatomic.h>
@@ -103,12 +103,30 @@ static void test_shares_without_a_thread_run_on_the_caller(void **state)
     cb_pool_free(NULL);
 }
 
+static void test_one_run_on_threads_of_its_own(void **state)
+{
+    (void)state;
+    static tally t;
+    for (uint32_t threads = 0; threads <= 5; ++threads) {
+        memset(&t, 0, sizeof t);
+        t.caller = thrd_current(), t.run = 7;
+        cb_pool_run(threads, count_share, &t);
+        uint32_t shares = threads ? threads : 1; /* none asked for: the caller's own */
+        for (uint32_t s = 0; s < MAX_SHARES; ++s) {
+            assert_int_equal(atomic_load(&t.count[s]), s < shares);
+            if (s < shares) assert_int_equal(t.seen[s], 7);
+        }
+        assert_false(atomic_load(&t.bad_share));
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_share_once_per_run),
         cmocka_unit_test(test_threads_that_slept_wake_for_the_next_run),
         cmocka_unit_test(test_shares_without_a_thread_run_on_the_caller),
+        cmocka_unit_test(test_one_run_on_threads_of_its_own),
     };
     return cmocka_run_group_tests_name("pool", tests, NULL, NULL);
 }
