@@ -84,7 +84,7 @@ static bool spin_again(spin *s)
             return false;
         }
     }
-    /* Not a pause instruction: in a VM a loop of them makes the hypervisor take the CPU away
+    /* Not a pause instruction: in a VM a loop of them can make the hypervisor take the CPU away
      * (pause-loop exiting); on the VMs measured, a thread spinning on pauses while another
      * analyzed Fox's clips made that 0.2 ms pass take 0.5. A thread that yields keeps its CPU
      * awake and gives way to anything else that wants it. */
