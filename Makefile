@@ -37,8 +37,11 @@ TOML_HEADER_ONLY := -UTOML_HEADER_ONLY -DTOML_HEADER_ONLY=1 -UTOML_SHARED_LIB -D
 # bake), and each shared library costs ~0.1 ms to map and bind at every start (a Fox bake is ~7 ms,
 # a third of it start-up); only the objects the command uses come in. zlib, which libpng needs,
 # stays shared: OpenEXRCore loads it anyway. libcrowdbake.so and the tests keep the shared libraries.
+# libstdc++ comes first among the command's libraries, so first in the loader's search: its own
+# ~1,700 symbol bindings, the most of any library, then find their symbols without first looking
+# through the libraries listed before it (Fox's start 2.59 -> 2.28 M instructions).
 STATIC_LIBS = $(shell pkg-config --libs-only-l draco 2>/dev/null) -lzstd -lpng16
-CLI_LIBS   = -Wl,-Bstatic $(STATIC_LIBS) -Wl,-Bdynamic $(filter-out $(STATIC_LIBS),$(PKG_LIBS)) -lz
+CLI_LIBS   = -lstdc++ -Wl,-Bstatic $(STATIC_LIBS) -Wl,-Bdynamic $(filter-out $(STATIC_LIBS),$(PKG_LIBS)) -lz
 # Tests drive OpenGL themselves; crowdbake opens OSMesa only for `preview` (pipeline/preview.c).
 GL_LIBS    = $(shell pkg-config --libs osmesa 2>/dev/null)
 
