@@ -28,18 +28,18 @@ WARN    := -Wall -Wextra $(WERROR)
 SAN     ?=
 # Everything below needs pkg-config, which `make deps` brings.
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
-PKG_LIBS   = $(shell pkg-config --libs simdjson draco OpenEXR libzstd libpng 2>/dev/null) -lmeshoptimizer -lpthread -lm -ldl
-# toml++ is compiled into formats/catalog_toml.cpp from its headers (its header-only mode), not
-# loaded from libtomlplusplus.so: every bake, catalog or not, paid ~0.1 ms to load and bind it.
-TOML_HEADER_ONLY := -UTOML_HEADER_ONLY -DTOML_HEADER_ONLY=1 -UTOML_SHARED_LIB -DTOML_SHARED_LIB=0
+PKG_LIBS   = $(shell pkg-config --libs simdjson draco OpenEXR libzstd tomlplusplus libpng 2>/dev/null) -lmeshoptimizer -lpthread -lm -ldl
 # The command links Draco, zstd and libpng from their -dev packages' archives. Draco's ~2,500
 # symbol bindings were half the dynamic loader's work at every start (about 1 ms of a 9 ms Fox
 # bake), and each shared library costs ~0.1 ms to map and bind at every start (a Fox bake is ~7 ms,
 # a third of it start-up); only the objects the command uses come in. zlib, which libpng needs,
 # stays shared: OpenEXRCore loads it anyway. libcrowdbake.so and the tests keep the shared libraries.
+# (toml++ stays shared too. Compiled in from its headers, its parser's asserts and unreachable
+# points came with it, and fuzz_catalog reached both from malformed files: an abort, and what
+# UBSan reports as undefined behaviour. tests/fuzz/regressions/catalog keeps the first.)
 # libstdc++ comes first among the command's libraries, so first in the loader's search: its own
 # ~1,700 symbol bindings, the most of any library, then find their symbols without first looking
-# through the libraries listed before it (Fox's start 2.59 -> 2.28 M instructions).
+# through the libraries listed before it (`crowdbake --version`: 2.59 -> 2.28 M instructions).
 STATIC_LIBS = $(shell pkg-config --libs-only-l draco 2>/dev/null) -lzstd -lpng16
 CLI_LIBS   = -lstdc++ -Wl,-Bstatic $(STATIC_LIBS) -Wl,-Bdynamic $(filter-out $(STATIC_LIBS),$(PKG_LIBS)) -lz
 # Tests drive OpenGL themselves; crowdbake opens OSMesa only for `preview` (pipeline/preview.c).
@@ -104,9 +104,6 @@ $(BUILD)/obj/%.o: %.c $(DEPS_STAMP)
 $(BUILD)/obj/%.o: %.cpp $(DEPS_STAMP)
 	@mkdir -p $(@D)
 	$(CXX) $(CXXFLAGS) $(PKG_CFLAGS) -MMD -MP -c $< -o $@
-
-# toml++ in its header-only mode (TOML_HEADER_ONLY above), in the one file that reads TOML.
-$(BUILD)/obj/formats/catalog_toml.o: PKG_CFLAGS += $(TOML_HEADER_ONLY)
 
 # Debian's RapidJSON (1.1.0) adds an offset to its parse stack's null pointer before the stack
 # first grows, which clang's UBSan reports on every parse (fixed upstream after 1.1.0). Only
