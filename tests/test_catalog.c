@@ -1,5 +1,5 @@
 /* test_catalog.c - the animal catalog: validation messages with line numbers, state keywords,
- * speed references, the manifest against its schema, shared rigs, LOD remapping, incremental
+ * speed references, characters outside ASCII, the manifest against its schema, shared rigs, LOD remapping, incremental
  * and parallel bakes, the depfile, and a failing type that does not stop the others. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
@@ -83,6 +83,38 @@ static void test_validation_errors_name_line_and_fix(void **state)
     expect_catalog_error("[animal.fish\nmodel = 1\n", "", 1); /* TOML syntax */
     snprintf(text, sizeof text, "[budget]\nvram = \"lots\"\n[animal.fish]\n%s\n", model);
     expect_catalog_error(text, "vram must be a size", 2);
+}
+
+/* Characters outside ASCII: accepted where TOML allows them (comments, and every kind of
+ * string: one with escaped quotes, a literal one, a multi-line one ending in two more quotes),
+ * refused with their place anywhere else. There toml++ 3.3 would reach undefined behaviour
+ * (UBSan: "execution reached an unreachable program point"), so they never get to it. */
+static void test_non_ascii_only_in_strings_and_comments(void **state)
+{
+    (void)state;
+    char text[2048], path[] = TMP "/utf8.toml";
+    snprintf(text, sizeof text,
+             "# la vache \xc3\xa9\n"
+             "[animal.fish] # poisson \xc2\xa1\n"
+             "model = '%s/fish.glb'\n"
+             "states = { \"nage \\\"\xc3\xa9\\\"\" = [\"swim\", '\xc2\xa1', \"\"\"\xe3\x80\x81\"\"\"\"\"] }\n",
+             samples_abs);
+    write_text(path, text);
+    cb_catalog cat;
+    cb_error err = {0};
+    if (cb_catalog_load(path, &cat, &err) != CB_OK) fail_msg("refused: %s", err.message);
+    assert_int_equal(cat.animal_count, 1);
+    assert_int_equal(cat.animals[0].state_count, 1);
+    const cb_catalog_state *st = &cat.animals[0].states[0];
+    assert_string_equal(st->name, "nage \"\xc3\xa9\"");
+    assert_int_equal(st->keyword_count, 3);
+    assert_string_equal(st->keywords[1], "\xc2\xa1");
+    assert_string_equal(st->keywords[2], "\xe3\x80\x81\"\""); /* the two quotes before the closing three */
+    cb_catalog_free(&cat);
+    snprintf(text, sizeof text, "[animal.fish]\nmodel = '%s/fish.glb'\nfps =\xc2\xa1 30\n", samples_abs);
+    expect_catalog_error(text, "bad.toml:3:6: a non-ASCII character outside any quoted string or comment", 3);
+    expect_catalog_error("[animal.fish]\n\xc2\xa1 = 1\n", "bad.toml:2:1: a non-ASCII character", 2);
+    expect_catalog_error("[animal.fish]\nmodel = \"x\" \xe3\x80\x80# ideographic space\n", "bad.toml:2:13:", 2);
 }
 
 /* Errors only the models can reveal come from the bake, still with the catalog's position. */
@@ -363,6 +395,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_validation_errors_name_line_and_fix),
+        cmocka_unit_test(test_non_ascii_only_in_strings_and_comments),
         cmocka_unit_test(test_state_and_clip_errors_list_what_exists),
         cmocka_unit_test(test_state_keyword_matching),
         cmocka_unit_test(test_speed_reference_auto),
