@@ -380,12 +380,20 @@ static void *carve(unsigned char *block, size_t *at, size_t bytes)
     return p;
 }
 
-/* The worker's scratch, made by its first job for the longest clip; NULL when out of memory.
- * One block for all of it (cb_alloc_large: 1.4 MB for 200 bones is a whole huge page, where
- * six blocks of 4 KB pages took 350 page faults of fresh memory a thread). */
+/* The values a scratch holds forgotten: a job's rows are not the last job's. */
+static measure_scratch *begin_job(measure_scratch *s)
+{
+    for (uint32_t i = 0; i < VALUE_SLOTS; ++i) s->value_row[i] = UINT32_MAX, s->value_read[i] = 0;
+    s->reads = 0;
+    return s;
+}
+
+/* The worker's scratch for a job, made by its first job for the longest clip; NULL when out of
+ * memory. One block for all of it (cb_alloc_large: 1.4 MB for 200 bones is a whole huge page,
+ * where six blocks of 4 KB pages took 350 page faults of fresh memory a thread). */
 static measure_scratch *worker_scratch(const bake_state *st, worker *w)
 {
-    if (w->measure) return w->measure;
+    if (w->measure) return begin_job(w->measure);
     const cb_palette *p = st->p;
     size_t matrices = (size_t)p->bone_count * 16 * sizeof(double), sizes[6] = {
         CB_SAMPLE_BATCH * matrices, VALUE_SLOTS * matrices, CB_SAMPLE_BATCH * p->bone_count * sizeof(cb_joint_error),
@@ -403,7 +411,7 @@ static measure_scratch *worker_scratch(const bake_state *st, worker *w)
     s->diff = carve(s->block, &at, sizes[0]), s->values = carve(s->block, &at, sizes[1]);
     s->joints = carve(s->block, &at, sizes[2]), s->group_bounds = carve(s->block, &at, sizes[3]);
     s->rows = carve(s->block, &at, sizes[4]), s->baked = carve(s->block, &at, sizes[5]);
-    return w->measure = s;
+    return begin_job(w->measure = s);
 }
 
 void palette_measure_job(bake_state *st, worker *w, uint32_t k)
@@ -414,8 +422,6 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     uint32_t c = split ? k / 2 : k;
     bool blends = !split || k % 2 == 0, rows = !split || k % 2 == 1; /* what this job measures */
     measure_scratch *s = worker_scratch(st, w);
-    for (uint32_t i = 0; s && i < VALUE_SLOTS; ++i) s->value_row[i] = UINT32_MAX, s->value_read[i] = 0;
-    if (s) s->reads = 0;
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
      * ways, so their quarter points are measured too. */
     uint32_t parts = p->fitted ? 4 : 2;
