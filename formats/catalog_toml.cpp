@@ -128,7 +128,7 @@ struct Parser {
     static const std::vector<std::string> &bake_keys()
     {
         static const std::vector<std::string> k = {"fps", "max_error", "max_fps", "layout", "precision", "format", "out_dir",
-                                                   "max_texture_size", "root_motion", "fit_rows"};
+                                                   "max_texture_size", "root_motion", "fit_rows", "measure_all"};
         return k;
     }
 
@@ -188,6 +188,7 @@ struct Parser {
                 fail(n->source(), where + " root_motion must be \"keep\" or \"in-place\"");
         }
         if (auto *n = t.get("fit_rows")) b->fit_rows = boolean(*n, where + " fit_rows");
+        if (auto *n = t.get("measure_all")) b->measure_all = boolean(*n, where + " measure_all");
         if (!cb_bake_settings_writable(b))
             fail(t.source(), where + " precision u16 cannot be written as EXR; use format = \"pal\" or precision half|float");
     }
@@ -404,6 +405,7 @@ struct Parser {
         std::snprintf(buf, sizeof buf, " auto=%d/%.17g/%.17g", b.fps_auto, b.max_error_mm, b.max_fps);
         c += buf;
         if (b.fit_rows) c += " fit_rows";
+        if (b.measure_all) c += " measure_all";
         c += std::string(" default=") + (an->default_state ? an->default_state : "");
         c += std::string(" speed_state=") + (an->speed_state ? an->speed_state : "");
         an->canonical = dup(c);

@@ -87,6 +87,7 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
     o.threads = threads ? threads : 1;
     o.affine_fallback = !s->layout_set; /* a rig qpos cannot hold bakes affine, unless a layout was asked for */
     o.fit = s->fit_rows;
+    o.measure_all = s->measure_all;
     return o;
 }
 
@@ -116,10 +117,10 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
         return cbpal_xxh64_digest(&h);
     }
     char opts[256];
-    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s\n",
+    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s\n",
                      CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
                      o->max_texture_size, (int)o->root_motion, job->skin, job->settings.zstd,
-                     job->settings.exr_compression, o->fit ? " fit-rows" : "");
+                     job->settings.exr_compression, o->fit ? " fit-rows" : "", o->measure_all ? " measure-all" : "");
     cbpal_xxh64_update(&h, opts, (size_t)n);
     cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
     return cbpal_xxh64_digest(&h);

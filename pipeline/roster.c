@@ -397,6 +397,7 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
         t->layout = p->layout, t->precision = p->precision;
         t->max_error = (float)p->max_error;
         t->visible_error = (float)p->visible_error;
+        t->error_rows_measured = p->error_rows_measured;
         t->palette_bytes = p->texel_bytes;
     }
     for (uint32_t i = 0; i < r.notes.count; ++i) cb_warn(&t->warnings, r.notes.items[i].kind, "%s", r.notes.items[i].message);
@@ -412,13 +413,17 @@ static void log_type(roster_run *run, const cb_roster_type *t)
     const char *clear = run->opt->tty ? "\r\033[K" : "";
     const cb_roster_type *owner = &run->r->types[t->owner];
     switch (t->outcome) {
-    case CB_TYPE_BAKED:
-        fprintf(f, "%s  %-16s baked    %s (%.1f KiB, %ux%u, %s/%s, encoding error %.3g mm/m, visible %.3g mm/m) in %.0f ms\n",
+    case CB_TYPE_BAKED: {
+        char subset[64] = ""; /* past the measuring budget: say so (measure_all = true measures every row) */
+        if (t->error_rows_measured && t->error_rows_measured < t->rows)
+            snprintf(subset, sizeof subset, ", measured at %u of %u rows", t->error_rows_measured, t->rows);
+        fprintf(f, "%s  %-16s baked    %s (%.1f KiB, %ux%u, %s/%s, encoding error %.3g mm/m, visible %.3g mm/m%s) in %.0f ms\n",
                 clear, t->animal->name, (t->animal->bake.formats & CB_FORMAT_PAL) ? t->pal_path : t->exr_path,
                 t->palette_bytes / 1024.0, t->width, t->height, cb_layout_name(t->layout), cb_precision_name(t->precision),
-                cb_mm_per_m(t->max_error, t->model_height),
-                cb_mm_per_m(t->visible_error, t->model_height), t->seconds * 1000);
+                cb_mm_per_m(t->max_error, t->model_height), cb_mm_per_m(t->visible_error, t->model_height), subset,
+                t->seconds * 1000);
         break;
+    }
     case CB_TYPE_UP_TO_DATE: fprintf(f, "%s  %-16s up to date\n", clear, t->animal->name); break;
     case CB_TYPE_SHARED:
         fprintf(f, "%s  %-16s shares %s's palette (same rig, bind pose and clips)\n", clear, t->animal->name,

@@ -16,6 +16,7 @@ uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
                           b->max_texture_size, b->root_motion, b->formats, b->zstd, b->exr_compression};
     cbpal_xxh64_update(&h, settings, sizeof settings);
     if (b->fit_rows) hash_str(&h, "fit_rows"); /* (only then: other palettes stay up to date) */
+    if (b->measure_all) hash_str(&h, "measure_all"); /* (likewise: the header's errors may differ) */
     for (uint32_t i = 0; i < m->node_count; ++i) {
         const cb_node *node = &m->nodes[i];
         hash_str(&h, node->name);

@@ -10,6 +10,7 @@ static void override_settings(cb_bake_settings *b, const cb_bake_settings *v, un
     if (fields & CB_BAKE_MAX_TEXTURE_SIZE) b->max_texture_size = v->max_texture_size;
     if (fields & CB_BAKE_ROOT_MOTION) b->root_motion = v->root_motion;
     if (fields & CB_BAKE_FIT_ROWS) b->fit_rows = v->fit_rows;
+    if (fields & CB_BAKE_MEASURE_ALL) b->measure_all = v->measure_all;
     if (fields & CB_BAKE_ZSTD) b->zstd = v->zstd;
     if (fields & CB_BAKE_EXR_COMPRESSION) b->exr_compression = v->exr_compression;
     if (fields & CB_BAKE_OUT_DIR) b->out_dir = v->out_dir;

@@ -4,11 +4,15 @@
  * skinning every vertex of every row (recomputed here row by row, bit for bit) on any thread
  * count (one job per clip or two), an error goal
  * only shortens measurements past it, and fps = "auto" chooses the same rates on any thread
- * count. */
+ * count. Past the measuring budget, measure_all measures every row. */
+#define _DEFAULT_SOURCE /* realpath */
 #include "testutil.h"
 
 #include <math.h>
 
+#include <limits.h>
+
+#include "../formats/crowdbake_pal.h"
 #include "../src/error_bound.h"
 #include "../src/vertex_groups.h"
 #include "crowdbake/palette.h"
@@ -241,6 +245,93 @@ static void test_maxima_equal_every_row_skinned(void **state)
     expect_exhaustive_maxima("assets/spider-animated-luanti/gltf_spider_animated.gltf", CB_LAYOUT_AFFINE, CB_PRECISION_U16);
 }
 
+/* The header's two errors, as the .pal at `path` records them (float32). */
+static void header_errors(const char *path, float *encoding, float *visible)
+{
+    cbpal_file f;
+    char msg[256];
+    if (cbpal_open(path, 0, &f, msg, sizeof msg)) fail_msg("%s: %s", path, msg);
+    *encoding = f.header.max_error, *visible = f.header.visible_error;
+    cbpal_close(&f);
+}
+
+/* robot.glb is past the measuring budget (589 rows x 7,218 skinned vertices): by default its
+ * errors are measured at an even subset of the rows, which cannot find more than every row
+ * and says so; measure_all (--measure-all, measure_all = true) finds what skinning every vertex
+ * of every row finds, with the same texels, and counts in what is up to date. */
+static void test_measure_all_past_the_budget(void **state)
+{
+    (void)state;
+    const char *rel = "assets/robot-quaternius-raylib/robot.glb";
+    cb_model *m = load_shared(rel);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_bake_options o = cb_default_bake_options();
+    o.threads = 2;
+    cb_palette subset, all;
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &subset, &err), CB_OK);
+    assert_true(subset.error_rows_measured > 0 && subset.error_rows_measured < subset.rows);
+    o.measure_all = true;
+    assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &all, &err), CB_OK);
+    assert_int_equal(all.error_rows_measured, all.rows);
+    assert_int_equal(all.texel_bytes, subset.texel_bytes);
+    assert_memory_equal(all.texels, subset.texels, all.texel_bytes);
+    double quant, blend;
+    exhaustive(m, &all, &o, &quant, &blend);
+    if (!(all.max_error == quant && all.visible_error == fmax(quant, blend)))
+        fail_msg("%s: measured %.17g / %.17g at every row, every row skinned %.17g / %.17g", rel, all.max_error,
+                 all.visible_error, quant, fmax(quant, blend));
+    assert_true(subset.max_error <= quant && subset.visible_error <= all.visible_error);
+    assert_true(subset.max_error < quant); /* this rig's worst encoding is on a row the subset skips */
+
+    /* The command line: the bake line says when a subset was measured. */
+    char model[PATH_MAX], model_abs[PATH_MAX], cmd[2 * PATH_MAX], text[PATH_MAX + 128], line[128];
+    static char out[65536];
+    float encoding, visible;
+    shared_path(model, sizeof model, rel);
+    assert_non_null(realpath(model, model_abs));
+    assert_int_equal(system("rm -rf " TEST_TMP "/measure && mkdir -p " TEST_TMP "/measure"), 0);
+    snprintf(cmd, sizeof cmd, "%s bake %s -o " TEST_TMP "/measure/subset.pal", crowdbake_exe(), model_abs);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    snprintf(line, sizeof line, "errors measured at %u of the %u rows", subset.error_rows_measured, subset.rows);
+    if (!strstr(out, line) || !strstr(out, "--measure-all")) fail_msg("no '%s' in: %s", line, out);
+    header_errors(TEST_TMP "/measure/subset.pal", &encoding, &visible);
+    assert_true(encoding == (float)subset.max_error && visible == (float)subset.visible_error);
+    snprintf(cmd, sizeof cmd, "%s bake %s -o " TEST_TMP "/measure/all.pal --measure-all", crowdbake_exe(), model_abs);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    if (strstr(out, "errors measured at")) fail_msg("every row was measured: %s", out);
+    header_errors(TEST_TMP "/measure/all.pal", &encoding, &visible);
+    assert_true(encoding == (float)quant && visible == (float)fmax(quant, blend));
+
+    /* A catalog: measure_all = true bakes as --measure-all; turning it off re-bakes (the
+     * header's errors differ); a value that is not a boolean names its line. */
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"out\"\nmeasure_all = true\n[animal.robot]\nmodel = \"%s\"\n", model_abs);
+    write_text(TEST_TMP "/measure/c.toml", text);
+    snprintf(cmd, sizeof cmd, "%s bake " TEST_TMP "/measure/c.toml 2>&1", crowdbake_exe());
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    header_errors(TEST_TMP "/measure/out/robot.pal", &encoding, &visible);
+    assert_true(encoding == (float)quant && visible == (float)fmax(quant, blend));
+    if (strstr(out, "measured at")) fail_msg("every row was measured: %s", out);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    if (!strstr(out, "1 up to date")) fail_msg("%s", out);
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"out\"\nmeasure_all = false\n[animal.robot]\nmodel = \"%s\"\n", model_abs);
+    write_text(TEST_TMP "/measure/c.toml", text);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    snprintf(line, sizeof line, "measured at %u of %u rows", subset.error_rows_measured, subset.rows);
+    if (!strstr(out, "1 baked") || !strstr(out, line)) fail_msg("no '%s' in: %s", line, out);
+    header_errors(TEST_TMP "/measure/out/robot.pal", &encoding, &visible);
+    assert_true(encoding == (float)subset.max_error);
+    snprintf(text, sizeof text, "[animal.robot]\nmodel = \"%s\"\nmeasure_all = 1\n", model_abs);
+    write_text(TEST_TMP "/measure/bad.toml", text);
+    snprintf(cmd, sizeof cmd, "%s bake " TEST_TMP "/measure/bad.toml 2>&1", crowdbake_exe());
+    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
+    if (!strstr(out, "bad.toml:3:") || !strstr(out, "measure_all must be true or false")) fail_msg("%s", out);
+
+    cb_palette_free(&subset), cb_palette_free(&all);
+    cb_sampler_free(s);
+    cb_model_free(m);
+}
+
 static void test_auto_rates_do_not_depend_on_threads(void **state)
 {
     (void)state;
@@ -273,6 +364,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_group_bounds_hold),
         cmocka_unit_test(test_maxima_equal_every_row_skinned),
+        cmocka_unit_test(test_measure_all_past_the_budget),
         cmocka_unit_test(test_auto_rates_do_not_depend_on_threads),
     };
     return cmocka_run_group_tests_name("measure_bound", tests, NULL, NULL);

@@ -45,13 +45,15 @@ typedef struct cb_bake_settings {
     bool zstd;                   /* compress the .pal payload */
     int exr_compression;         /* exr.h's lossless codes; 0: none */
     bool fit_rows;               /* rows fitted to the runtime's linear blend (cb_bake_options.fit) */
+    bool measure_all;            /* errors measured at every row, past the budget too (cb_bake_options.measure_all) */
 } cb_bake_settings;
 
 /* Which settings an override carries (the command line's bake options over a catalog). */
 enum {
     CB_BAKE_FPS = 1u << 0, CB_BAKE_LAYOUT = 1u << 1, CB_BAKE_PRECISION = 1u << 2, CB_BAKE_FORMATS = 1u << 3,
     CB_BAKE_MAX_TEXTURE_SIZE = 1u << 4, CB_BAKE_ROOT_MOTION = 1u << 5, CB_BAKE_ZSTD = 1u << 6,
-    CB_BAKE_EXR_COMPRESSION = 1u << 7, CB_BAKE_OUT_DIR = 1u << 8, CB_BAKE_FIT_ROWS = 1u << 9
+    CB_BAKE_EXR_COMPRESSION = 1u << 7, CB_BAKE_OUT_DIR = 1u << 8, CB_BAKE_FIT_ROWS = 1u << 9,
+    CB_BAKE_MEASURE_ALL = 1u << 10
 };
 
 /* 30 fps (auto: within 1 mm/m, up to 60 fps), qpos, u16, a .pal, textures up to 16384 texels

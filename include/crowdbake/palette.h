@@ -49,9 +49,14 @@ typedef struct cb_bake_options {
                            * bound and model_height 0. For searches that ask "within the goal?". 0: all exact. */
     bool fit;             /* rows fitted to the linear blend (src/fit.c), not sampled: half the error between rows */
     cb_texel_memory texel_memory; /* {NULL}: the bake allocates the texels */
+    bool measure_all;     /* the errors measured at every row and between every two, however many (else past
+                           * CB_ERROR_BUDGET, at an even subset of them) */
 } cb_bake_options;
 
-/* Vertex-rows of exact skinning spent measuring a bake's error (see cb_palette.max_error). */
+/* Vertex-rows (rows x skinned vertices) past which a bake measures its errors at an even subset
+ * of its rows, each clip's last always (cb_palette.error_rows_measured), unless measure_all. A
+ * subset finds the encoding error to within a percent, but it can miss the one fast interval
+ * where the blend errs most: see docs/speed.md. */
 #define CB_ERROR_BUDGET (4u << 20)
 
 cb_bake_options cb_default_bake_options(void);

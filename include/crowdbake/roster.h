@@ -69,6 +69,7 @@ typedef struct cb_roster_type {
     char **inputs;            /* every file read for it: model, LODs, their external buffers */
     cb_warnings warnings;     /* clips skipped at load, the layout's fallback, ... */
     bool prepared_from_record; /* its record (roster_cache.h) matched its files: nothing was loaded or sampled */
+    uint32_t error_rows_measured; /* baked this run: the rows its errors were measured at (cb_palette's), else 0 */
 } cb_roster_type;
 
 typedef struct cb_roster {
