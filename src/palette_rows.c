@@ -7,6 +7,8 @@
  * What depends on the rows before - the quaternion's hemisphere, the clip's bounds and value
  * ranges - is settled after, in frame order, so it comes out as before too. */
 
+#include <string.h>
+
 #include "palette_bake.h"
 #include "sampler.h"
 
@@ -70,6 +72,59 @@ static CB_CLONE_INLINE void row_signs(const double *dot, bool flip, float *sign)
     }
 }
 
+#if defined(__GNUC__) /* GCC and clang: vector types and __builtin_shufflevector */
+typedef float v8sf __attribute__((vector_size(32)));
+_Static_assert(B % 8 == 0, "store_rows8 takes a batch's lanes 8 at a time");
+
+/* Lanes first .. first + 7 of a bone's 8 values (v[k][i]: value k of lane i) as 8 rows, to
+ * out + m * stride: an 8x8 transpose of 24 shuffles, and each row one 32-byte store where value
+ * by value took 8 loads and 8 stores a row. Named vectors, not arrays: they stay in registers. */
+static CB_CLONE_INLINE void store_rows8(const float (*v)[B], int first, float *out, size_t stride)
+{
+    v8sf r0, r1, r2, r3, r4, r5, r6, r7;
+    memcpy(&r0, &v[0][first], 32), memcpy(&r1, &v[1][first], 32), memcpy(&r2, &v[2][first], 32);
+    memcpy(&r3, &v[3][first], 32), memcpy(&r4, &v[4][first], 32), memcpy(&r5, &v[5][first], 32);
+    memcpy(&r6, &v[6][first], 32), memcpy(&r7, &v[7][first], 32);
+#define LO(a, b) __builtin_shufflevector(a, b, 0, 8, 1, 9, 4, 12, 5, 13)
+#define HI(a, b) __builtin_shufflevector(a, b, 2, 10, 3, 11, 6, 14, 7, 15)
+    v8sf t0 = LO(r0, r1), t1 = HI(r0, r1), t2 = LO(r2, r3), t3 = HI(r2, r3);
+    v8sf t4 = LO(r4, r5), t5 = HI(r4, r5), t6 = LO(r6, r7), t7 = HI(r6, r7);
+#undef LO
+#undef HI
+#define EVEN(a, b) __builtin_shufflevector(a, b, 0, 1, 8, 9, 4, 5, 12, 13)
+#define ODD(a, b) __builtin_shufflevector(a, b, 2, 3, 10, 11, 6, 7, 14, 15)
+    /* s_m: values 0-3 of rows m and m + 4; s_m4: values 4-7 of them */
+    v8sf s0 = EVEN(t0, t2), s1 = ODD(t0, t2), s2 = EVEN(t1, t3), s3 = ODD(t1, t3);
+    v8sf s04 = EVEN(t4, t6), s14 = ODD(t4, t6), s24 = EVEN(t5, t7), s34 = ODD(t5, t7);
+#undef EVEN
+#undef ODD
+#define ROW(a, b) __builtin_shufflevector(a, b, 0, 1, 2, 3, 8, 9, 10, 11)
+#define ROW4(a, b) __builtin_shufflevector(a, b, 4, 5, 6, 7, 12, 13, 14, 15)
+    v8sf w0 = ROW(s0, s04), w1 = ROW(s1, s14), w2 = ROW(s2, s24), w3 = ROW(s3, s34);
+    v8sf w4 = ROW4(s0, s04), w5 = ROW4(s1, s14), w6 = ROW4(s2, s24), w7 = ROW4(s3, s34);
+#undef ROW
+#undef ROW4
+    memcpy(out, &w0, 32), memcpy(out + stride, &w1, 32), memcpy(out + 2 * stride, &w2, 32);
+    memcpy(out + 3 * stride, &w3, 32), memcpy(out + 4 * stride, &w4, 32), memcpy(out + 5 * stride, &w5, 32);
+    memcpy(out + 6 * stride, &w6, 32), memcpy(out + 7 * stride, &w7, 32);
+}
+
+/* The first `count` lanes of a bone's 8 values as rows, to out + i * stride. */
+static CB_CLONE_INLINE void store_rows(const float (*v)[B], uint32_t count, float *out, size_t stride)
+{
+    uint32_t first = 0;
+    for (; first + 8 <= count; first += 8) store_rows8(v, (int)first, out + first * stride, stride);
+    for (; first < count; ++first) /* a clip's last batch: the rows left one by one */
+        for (int k = 0; k < 8; ++k) out[first * stride + k] = v[k][first];
+}
+#else
+static CB_CLONE_INLINE void store_rows(const float (*v)[B], uint32_t count, float *out, size_t stride)
+{
+    for (uint32_t i = 0; i < count; ++i)
+        for (int k = 0; k < 8; ++k) out[i * stride + k] = v[k][i];
+}
+#endif
+
 /* One bone at frames f .. f + count - 1, its similarities' lanes `sim` (lanes past count repeat
  * the last frame): its position and reach grow the lanes' bounds, its values their range, its 8
  * values go into the rows and its last quaternion into w->prev. */
@@ -80,7 +135,8 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
     uint32_t bones = p->bone_count;
     const double(*q)[B] = sim, (*t)[B] = sim + 4, *s = sim[7];
     double dot[B], e[4][B];
-    float fq[4][B + 1], fp[4][B]; /* fq: lane i's quaternion as stored at i + 1 (0 at 0) */
+    float fq[4][B + 1], v[8][B], (*fp)[B] = v + 4; /* fq: lane i's quaternion as stored at i + 1 (0 at 0); v: the
+                                                   * rows' values, lanes of quaternion (below), position, scale (fp) */
     const float *b = p->bind_positions + (size_t)j * 3;
     double bx = b[0], by = b[1], bz = b[2], radius = st->radius[j];
     fq[0][0] = fq[1][0] = fq[2][0] = fq[3][0] = 0;
@@ -104,15 +160,11 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
         dot[i] = q[0][i] * fq[0][i] + q[1][i] * fq[1][i] + q[2][i] * fq[2][i] + q[3][i] * fq[3][i];
     cb_quat q0 = {q[0][0], q[1][0], q[2][0], q[3][0]};
     bool flip = f ? cb_quat_dot(q0, w->prev[j]) < 0 : q0.w < 0;
-    float sign[B], sq[4][B]; /* each row's hemisphere; then the rows' quaternions */
+    float sign[B]; /* each row's hemisphere */
     row_signs(dot, flip, sign);
     for (int c = 0; c < 4; ++c)
-        for (int i = 0; i < B; ++i) sq[c][i] = sign[i] * fq[c][i + 1];
-    for (uint32_t i = 0; i < count; ++i) { /* lanes to rows: field by field, no staging copy */
-        float *o = rows + (size_t)i * bones * 8 + (size_t)j * 8;
-        o[0] = sq[0][i], o[1] = sq[1][i], o[2] = sq[2][i], o[3] = sq[3][i];
-        o[4] = fp[0][i], o[5] = fp[1][i], o[6] = fp[2][i], o[7] = fp[3][i];
-    }
+        for (int i = 0; i < B; ++i) v[c][i] = sign[i] * fq[c][i + 1];
+    store_rows((const float(*)[B])v, count, rows + (size_t)j * 8, (size_t)bones * 8);
     /* Every lane grown (those past count repeat the last frame, and fold_lanes reads count). */
     for (int k = 0; radius >= 0 && k < 3; ++k) /* a joint that moves no vertex bounds nothing */
         for (int i = 0; i < B; ++i) {
