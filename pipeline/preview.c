@@ -344,16 +344,30 @@ static cb_status draw_labels(cb_canvas *cv, const cb_palette *p, const void *tex
         int band = (int)(row_top(c, opt->cell) - CB_PREVIEW_BAND), baseline = band + (CB_PREVIEW_BAND + cb_font_ascent(bold)) / 2 - 1;
         cb_canvas_fill(cv, 0, band, w, CB_PREVIEW_BAND, band_bg);
         x = cb_font_draw(bold, cv, 8, baseline, w - 4, clip->name, ink);
-        snprintf(text, sizeof text, "   %s, %u rows at %.3g fps, %.3g s", clip->loops ? "loop" : "one-shot", clip->frames,
-                 clip->fps, clip->duration);
-        x = cb_font_draw(small, cv, x, baseline, w - 4, text, faint);
         int32_t a = cb_model_find_animation(m, clip->name);
         cb_clip_error e;
-        if (a >= 0 && !cb_verify_clip(s, p, texels, c, a, 0, &e, err)) { /* over 1 mm/m shows in red */
-            snprintf(text, sizeof text, "   error %s mm/m at rows", millimetres(e.quant_max * mm, error, sizeof error));
-            x = cb_font_draw(small, cv, x, baseline, w - 4, text, e.quant_max * mm > 1 ? warn : ink);
-            snprintf(text, sizeof text, ", %s between", millimetres(e.interp_max * mm, error, sizeof error));
-            cb_font_draw(small, cv, x, baseline, w - 4, text, e.interp_max * mm > 1 ? warn : ink);
+        bool measured = a >= 0 && !cb_verify_clip(s, p, texels, c, a, 0, &e, err);
+        char info[3][128] = {"", "", ""}, rows[2][64], between[2][64], q[32], b[32];
+        snprintf(info[0], sizeof info[0], "   %s, %u rows at %.3g fps, %.3g s", clip->loops ? "loop" : "one-shot",
+                 clip->frames, clip->fps, clip->duration);
+        snprintf(info[1], sizeof info[1], "   %s, %u rows", clip->loops ? "loop" : "one-shot", clip->frames);
+        if (measured) {
+            millimetres(e.quant_max * mm, q, sizeof q), millimetres(e.interp_max * mm, b, sizeof b);
+            snprintf(rows[0], sizeof rows[0], "   error %s mm/m at rows", q), snprintf(between[0], sizeof between[0], ", %s between", b);
+            snprintf(rows[1], sizeof rows[1], "   rows %s", q), snprintf(between[1], sizeof between[1], ", between %s", b);
+        }
+        /* The longest forms that fit, the errors kept longest (the unit is the header's) */
+        static const int forms[4][2] = {{0, 0}, {1, 0}, {1, 1}, {2, 1}}; /* info, errors */
+        int fi = 0, fe = 0;
+        for (int k = 0; k < 4; ++k) {
+            fi = forms[k][0], fe = forms[k][1];
+            int width = cb_font_width(small, info[fi]) + (measured ? cb_font_width(small, rows[fe]) + cb_font_width(small, between[fe]) : 0);
+            if (x + width <= w - 4) break;
+        }
+        x = cb_font_draw(small, cv, x, baseline, w - 4, info[fi], faint);
+        if (measured) { /* over 1 mm/m shows in red */
+            x = cb_font_draw(small, cv, x, baseline, w - 4, rows[fe], e.quant_max * mm > 1 ? warn : ink);
+            cb_font_draw(small, cv, x, baseline, w - 4, between[fe], e.interp_max * mm > 1 ? warn : ink);
         }
         for (uint32_t k = 0; k < opt->columns; ++k) {
             snprintf(text, sizeof text, "%.2f s", cell_time(clip, k, opt->columns));
