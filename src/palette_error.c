@@ -132,6 +132,24 @@ static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out,
             memcpy(o, &l0, 32), memcpy(o + stride, &l1, 32), memcpy(o + 2 * stride, &l2, 32), memcpy(o + 3 * stride, &l3, 32);
         }
 }
+
+/* Values 0-7 of the rows x[i] + at as lanes, v[k][i] = x[i][at + k]: 4x4 transposes of
+ * shuffles, each group of four values and four rows four 32-byte loads and four stores. */
+static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, double (*v)[B])
+{
+    for (int first = 0; first < B; first += 4)
+        for (int h = 0; h < 8; h += 4) {
+            v4df r0, r1, r2, r3;
+            memcpy(&r0, x[first] + at + h, 32), memcpy(&r1, x[first + 1] + at + h, 32);
+            memcpy(&r2, x[first + 2] + at + h, 32), memcpy(&r3, x[first + 3] + at + h, 32);
+            v4df t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
+            v4df t2 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
+            v4df l0 = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), l1 = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+            v4df l2 = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), l3 = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+            memcpy(&v[h][first], &l0, 32), memcpy(&v[h + 1][first], &l1, 32);
+            memcpy(&v[h + 2][first], &l2, 32), memcpy(&v[h + 3][first], &l3, 32);
+        }
+}
 #else
 static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out, size_t stride)
 {
@@ -139,11 +157,18 @@ static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out,
         for (int c = 0; c < 4; ++c)
             for (int r = 0; r < 4; ++r) out[i * stride + 4 * c + r] = r < 3 ? d[3 * c + r][i] : 0;
 }
+
+static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, double (*v)[B])
+{
+    for (int i = 0; i < B; ++i)
+        for (int k = 0; k < 8; ++k) v[k][i] = x[i][at + k];
+}
 #endif
 
 /* Bone j of the batch's rows, measured against similarities: lane i's exact matrix from the
  * sampler's lanes `sim` (cb_similarity_matrix's operations), its decoded one from rows a[i]
- * (blended towards b[i] by fr when b: palette_blend_values's operations) as
+ * (blended towards b[i] by fr when b: palette_blend_values's operations; B of each, those past
+ * count repeating the last) as
  * cb_palette_values_to_matrix builds a qpos bone, and their difference into row i's diff
  * (diff + i * bones * 16: B rows, those past count repeat the last); the difference's bound
  * terms (cb_joint_errors's) into row i's joints, for the first `count` rows, and whether they
@@ -154,16 +179,10 @@ static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, co
                                              double *diff, cb_joint_error *joints, bool *finite)
 {
     double v[8][B], exact[15][B], decoded[15][B], len2[B];
-    for (uint32_t i = 0; i < B; ++i) { /* the rows' values as lanes */
-        const double *x = a[i < count ? i : count - 1] + (size_t)j * 16;
-        for (int k = 0; k < 8; ++k) v[k][i] = x[k];
-    }
+    values_to_lanes(a, (size_t)j * 16, v); /* the rows' values as lanes */
     if (b) {
         double w[8][B];
-        for (uint32_t i = 0; i < B; ++i) {
-            const double *x = b[i < count ? i : count - 1] + (size_t)j * 16;
-            for (int k = 0; k < 8; ++k) w[k][i] = x[k];
-        }
+        values_to_lanes(b, (size_t)j * 16, w);
         double sign[B];
         for (int i = 0; i < B; ++i) { /* the shorter way between the rows */
             double dot = v[0][i] * w[0][i] + v[1][i] * w[1][i] + v[2][i] * w[2][i] + v[3][i] * w[3][i];
@@ -237,6 +256,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
             a[i] = row_values(p, s, clip->first_row + frames[i]);
             b[i] = sub ? row_values(p, s, clip->first_row + (frames[i] + 1) % clip->frames) : NULL;
         }
+        for (uint32_t i = count; i < B; ++i) a[i] = a[count - 1], b[i] = b[count - 1]; /* lanes past count repeat the last */
         for (uint32_t i = 0; i < count; ++i) s->finite[i] = true;
         for (uint32_t j = 0; j < p->bone_count; ++j)
             bone_differences(p, j, (const double(*)[B])(lanes + (size_t)j * 8 * B), a, sub ? b : NULL, count,

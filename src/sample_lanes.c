@@ -87,13 +87,18 @@ static CB_CLONE_INLINE void find_spans(const float *times, uint32_t key_count, c
     out->any_edge = any_edge;
 }
 
-/* Whether any lane is an edge or marked in `redo` (1 or 0 each): a sum, which vectorizes;
- * most batches have none, and then no lane is looked at one by one. */
+/* Whether any lane is an edge or marked in `redo` (1.0 or +0.0 each): an OR of their bits,
+ * which vectorizes (a sum of doubles does not: it must add in order); most batches have none,
+ * and then no lane is looked at one by one. */
 static CB_CLONE_INLINE bool any_lane(const double *edge, const double *redo)
 {
-    double sum = 0;
-    for (int i = 0; i < B; ++i) sum += edge[i] + redo[i];
-    return sum != 0;
+    uint64_t any = 0;
+    for (int i = 0; i < B; ++i) {
+        uint64_t e, r;
+        memcpy(&e, &edge[i], sizeof e), memcpy(&r, &redo[i], sizeof r);
+        any |= e | r;
+    }
+    return any != 0;
 }
 
 /* ---- channels ---- */
