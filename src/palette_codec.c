@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lanes.h"
 #include "palette_bake.h"
 
 /* ---- names and sizes ---- */
@@ -157,9 +158,7 @@ static u16_lanes u16_lanes_of(const u16_slot *slots)
 /* GCC's vector types: the four values are one vector each step, and the last step packs the
  * low halves of the four integers into one 8-byte store (a loop over them, or memcpy from an
  * array, left each a separate extract and store). The same operations, the same bits. */
-typedef double v4df __attribute__((vector_size(32)));
-typedef float v4sf __attribute__((vector_size(16)));
-typedef int64_t v4di __attribute__((vector_size(32)));
+typedef float v4sf __attribute__((vector_size(16))); /* v4df and v4di: lanes.h */
 typedef int32_t v4si __attribute__((vector_size(16)));
 typedef int16_t v8hi __attribute__((vector_size(16)));
 typedef int16_t v4hi __attribute__((vector_size(8)));

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "error_bound.h"
+#include "lanes.h"
 #include "palette_bake.h"
 #include "sampler.h"
 
@@ -110,10 +111,7 @@ static CB_CLONE_INLINE void trs_lanes(double m[15][B], const double (*t)[B], con
     }
 }
 
-#if defined(__GNUC__) /* GCC and clang: vector types and __builtin_shufflevector */
-typedef double v4df __attribute__((vector_size(32)));
-typedef int64_t v4di __attribute__((vector_size(32)));
-
+#if defined(__GNUC__) /* GCC and clang: vector types (lanes.h) and __builtin_shufflevector */
 /* Lane i's difference matrix into out + i * stride, from its 12 elements as lanes d[k] (column c
  * is d[3c .. 3c + 2], then a 0): each column of four lanes a 4x4 transpose of shuffles and four
  * 32-byte stores, where element by element takes 16 scattered stores a lane. */
@@ -133,21 +131,18 @@ static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out,
         }
 }
 
-/* Values 0-7 of the rows x[i] + at as lanes, v[k][i] = x[i][at + k]: 4x4 transposes of
- * shuffles, each group of four values and four rows four 32-byte loads and four stores. */
+/* Values 0-7 of the rows x[i] + at as lanes, v[k][i] = x[i][at + k]: four rows and four values
+ * at a time, four 32-byte loads and a transpose, where value by value took a load and a store
+ * each. */
 static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, double (*v)[B])
 {
     for (int first = 0; first < B; first += 4)
         for (int h = 0; h < 8; h += 4) {
-            v4df r0, r1, r2, r3;
+            v4df r0, r1, r2, r3; /* named, not an array: they stay in registers */
             memcpy(&r0, x[first] + at + h, 32), memcpy(&r1, x[first + 1] + at + h, 32);
             memcpy(&r2, x[first + 2] + at + h, 32), memcpy(&r3, x[first + 3] + at + h, 32);
-            v4df t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
-            v4df t2 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
-            v4df l0 = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), l1 = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
-            v4df l2 = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), l3 = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
-            memcpy(&v[h][first], &l0, 32), memcpy(&v[h + 1][first], &l1, 32);
-            memcpy(&v[h + 2][first], &l2, 32), memcpy(&v[h + 3][first], &l3, 32);
+            const v4df r[4] = {r0, r1, r2, r3};
+            cb_rows_to_lanes4(r, v + h, first);
         }
 }
 #else

@@ -6,6 +6,7 @@
  * search for each time's keys runs once per batch for every distinct times array (a span
  * group), and the channels then only gather their key values and interpolate. */
 #include "cb_math.h"
+#include "lanes.h"
 #include "sampler.h"
 
 #include <stdlib.h>
@@ -129,24 +130,7 @@ static CB_CLONE_INLINE void slerp_lanes(const double (*restrict a)[B], const dou
     }
 }
 
-#if defined(__GNUC__) /* GCC and clang: vector types and __builtin_shufflevector */
-typedef double v4df __attribute__((vector_size(32)));
-typedef int64_t v4di __attribute__((vector_size(32)));
-
-/* Four lanes' quaternions (r[l]: x y z w) stored as the lanes' components: out[c][i + l] =
- * r[l][c]. A 4x4 transpose in 8 shuffles, then four vector stores. (The vectors by pointer: by
- * value, 32-byte vectors change the calling convention of the clone without AVX.) */
-static CB_CLONE_INLINE void store_columns4(const v4df *r, double (*out)[B], int i)
-{
-    v4df r0 = r[0], r1 = r[1], r2 = r[2], r3 = r[3];
-    v4df t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
-    v4df t2 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
-    v4df x = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), y = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
-    v4df z = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), w = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
-    memcpy(&out[0][i], &x, sizeof x), memcpy(&out[1][i], &y, sizeof y);
-    memcpy(&out[2][i], &z, sizeof z), memcpy(&out[3][i], &w, sizeof w);
-}
-
+#if defined(__GNUC__)
 /* A rotation key (4 floats) as doubles, written element-wise: GCC 12 makes this one
  * converting load (vcvtps2pd), where __builtin_convertvector converts two halves and joins
  * them. A macro, as a function returning a 32-byte vector warns of the non-AVX clone's ABI. */
@@ -163,7 +147,7 @@ static CB_CLONE_INLINE void gather_key_pairs(const float *values, const uint32_t
                     *k2 = values + (size_t)key[i + 2] * 4, *k3 = values + (size_t)key[i + 3] * 4;
         const v4df ka[4] = {KEY_OF(k0), KEY_OF(k1), KEY_OF(k2), KEY_OF(k3)};
         const v4df kb[4] = {KEY_OF(k0 + 4), KEY_OF(k1 + 4), KEY_OF(k2 + 4), KEY_OF(k3 + 4)};
-        store_columns4(ka, a, i), store_columns4(kb, b, i);
+        cb_rows_to_lanes4(ka, a, i), cb_rows_to_lanes4(kb, b, i); /* each lane's quaternions as components */
     }
 }
 #else
