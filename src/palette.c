@@ -493,7 +493,8 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     /* Exact skinning of every vertex at every row costs rows x vertices; past ~4M vertex-rows
      * an even subset of rows (always each clip's last) measures the error. */
     uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);
-    st.error_stride = work > CB_ERROR_BUDGET && !st.opt->measure_all ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
+    bool subset = work > CB_ERROR_BUDGET && !st.opt->measure_all;
+    st.error_stride = subset ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
     p->error_rows_measured = 0;
     if (facts->skinned) {
         for_each_clip(&st, palette_measure_job, true, palette_measure_jobs(&st));

@@ -109,21 +109,18 @@ static CB_CLONE_INLINE void store_rows8(const float (*v)[B], int first, float *o
     memcpy(out + 6 * stride, &w6, 32), memcpy(out + 7 * stride, &w7, 32);
 }
 
+#endif
+
 /* The first `count` lanes of a bone's 8 values as rows, to out + i * stride. */
 static CB_CLONE_INLINE void store_rows(const float (*v)[B], uint32_t count, float *out, size_t stride)
 {
     uint32_t first = 0;
+#if defined(__GNUC__)
     for (; first + 8 <= count; first += 8) store_rows8(v, (int)first, out + first * stride, stride);
-    for (; first < count; ++first) /* a clip's last batch: the rows left one by one */
+#endif
+    for (; first < count; ++first) /* a clip's last batch, or no vector types: row by row */
         for (int k = 0; k < 8; ++k) out[first * stride + k] = v[k][first];
 }
-#else
-static CB_CLONE_INLINE void store_rows(const float (*v)[B], uint32_t count, float *out, size_t stride)
-{
-    for (uint32_t i = 0; i < count; ++i)
-        for (int k = 0; k < 8; ++k) out[i * stride + k] = v[k][i];
-}
-#endif
 
 /* One bone at frames f .. f + count - 1, its similarities' lanes `sim` (lanes past count repeat
  * the last frame): its position and reach grow the lanes' bounds, its values their range, its 8
