@@ -490,8 +490,8 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     for (uint32_t c = 0; c < p->clip_count; ++c) encoded_while_sampling += st.encode_seconds[c];
     encoded_while_sampling /= threads_used(&st, p->clip_count);
     p->model_height = facts->height;
-    /* Measuring costs about rows x vertices; past CB_ERROR_ROWS rows and ~4M vertex-rows an
-     * even subset of rows (always each clip's last) measures the error, unless measure_all. */
+    /* Past both CB_ERROR_ROWS rows and ~4M vertex-rows (palette.h says why both), an even subset
+     * of rows (always each clip's last) measures the error, unless measure_all. */
     uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);
     bool subset = p->rows > CB_ERROR_ROWS && work > CB_ERROR_BUDGET && !st.opt->measure_all;
     st.error_stride = subset ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;

@@ -1,6 +1,7 @@
 /* test_catalog.c - the animal catalog: validation messages with line numbers, state keywords,
- * speed references, characters outside ASCII, the manifest against its schema, shared rigs, LOD remapping, incremental
- * and parallel bakes, the depfile, and a failing type that does not stop the others. */
+ * speed references, characters outside ASCII, the manifest against its schema, shared rigs,
+ * LOD remapping, incremental and parallel bakes, the depfile, and a failing type that does not
+ * stop the others. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
