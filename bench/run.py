@@ -116,7 +116,7 @@ def bench_input(name, path, repeat, peer=True):
     sample = [p['phases']['sample'] for p in phases]
     result = {
         'input': name, 'input_bytes': os.path.getsize(path), 'output_bytes': os.path.getsize(out_pal),
-        'bones': last['bones'], 'frames': last['rows'], 'matrices': matrices,
+        'bones': last['bones'], 'frames': last['rows'], 'matrices': matrices, 'runs': repeat,
         'crowdbake': {
             'wall': stats(walls), 'peak_rss': max(rss), 'page_faults': statistics.median(faults),
             'phases': {k: statistics.median(p['phases'][k] for p in phases) for k in last['phases']},
@@ -128,9 +128,13 @@ def bench_input(name, path, repeat, peer=True):
         },
     }
     c, p = result['crowdbake'], result['peer']
+    # Pair i is bake i and peer run i, run one right after the other (in_turns): both see the
+    # machine as it was then. Their ratio, pair by pair, leaves out what changes between pairs.
+    pairs = [(l + s) / w for l, s, w in zip(peer_load, peer_sample, walls)]
     result['ratios'] = {
         'sampling_throughput': c['matrices_per_second'] / p['matrices_per_second'],
         'end_to_end_vs_peer_load_plus_sample': (p['load']['median'] + p['sample']['median']) / c['wall']['median'],
+        'end_to_end_pairs': stats(pairs),
         'whole_process': p['wall']['median'] / c['wall']['median'],
         'peak_rss_vs_input_plus_output': c['peak_rss'] / (result['input_bytes'] + result['output_bytes']),
     }
@@ -149,6 +153,9 @@ def fit_exponent(results):
 def floor_numbers(model):
     _, out = run([os.path.join(BUILD, 'bench_floor'), model])
     return json.loads(out)
+
+
+GOAL_INPUTS, GOAL_PAIRS = ('Fox', 'rig_200j_30clips'), 3
 
 
 def in_turns(a, b, repeat):
@@ -268,12 +275,12 @@ def goals(x, big, fox):
     # against the strictest floor: a read into memory already mapped (no page faults) + parse.
     load = fl['load'] / (fl['read_warm'] + fl['parse'])
     rows = [
-        ('big rig end to end vs three.js load + sample', big['ratios']['end_to_end_vs_peer_load_plus_sample'], '>= 12x', 12, 1),
+        ('big rig end to end vs three.js load + sample', big['ratios']['end_to_end_pairs']['median'], '>= 12x', 12, 1),
         ('%d / %d clips' % (cl['big'], cl['small']), cl['t_big'] / cl['t_small'], '<= 2.2x', 2.2, -1),
         ('%d / %d joints' % (j['big'], j['small']), j['t_big'] / j['t_small'], '<= 4.4x', 4.4, -1),
         ('no-op rebuild, %d types (ms)' % c['types'], c['noop'] * 1000, '< 50 ms', 50, -1),
         ('--fps auto / fixed (%s)' % a['model'], a['auto'] / a['fixed'], '<= 3x', 3, -1),
-        ('%s end to end vs three.js' % fox['input'], fox['ratios']['end_to_end_vs_peer_load_plus_sample'], '>= 6x', 6, 1),
+        ('%s end to end vs three.js' % fox['input'], fox['ratios']['end_to_end_pairs']['median'], '>= 6x', 6, 1),
         ('load / (warm read + RapidJSON parse)', load, '<= 1.5x', 1.5, -1),
         ('peak RSS / (input + output), big rig', big['ratios']['peak_rss_vs_input_plus_output'], '<= 1.2x', 1.2, -1),
     ]
@@ -294,8 +301,9 @@ def ms(s):
 
 
 def print_table(report):
-    print('crowdbake %s vs three.js %s (peer), %d runs each, median [min..max]; %s' % (
-        report['crowdbake_version'], report['three_version'], report['repeat'], report['machine']))
+    print('crowdbake %s vs three.js %s (peer), %d runs each (%s: %d, whose ratios are goals), median [min..max]; %s' % (
+        report['crowdbake_version'], report['three_version'], report['repeat'], ' and '.join(GOAL_INPUTS),
+        report['repeat'] * GOAL_PAIRS, report['machine']))
     head = '%-22s %9s %8s %24s %9s %24s %10s %9s %9s' % ('input', 'matrices', 'MB in', 'crowdbake wall ms', 'peak MB',
                                                          'peer load+sample ms', 'cb Mmat/s', 'peer Mm/s', 'e2e x')
     print(head)
@@ -308,13 +316,16 @@ def print_table(report):
             c['peak_rss'] / 1e6,
             '%s + %s' % (ms(p['load']['median']), ms(p['sample']['median'])),
             c['matrices_per_second'] / 1e6, p['matrices_per_second'] / 1e6,
-            r['ratios']['end_to_end_vs_peer_load_plus_sample']))
+            r['ratios']['end_to_end_pairs']['median']))
+    print('(e2e x: the median over the pairs of peer load + sample / crowdbake wall, each pair a bake and a peer run '
+          'one right after the other)')
     print()
     for r in report['results']:
         ph = r['crowdbake']['phases']
         print('%-22s phases ms: load %s, sample %s, encode %s, measure %s, write %s; RSS / (in + out) = %.2f; %d page faults' % (
             r['input'], ms(ph['load']), ms(ph['sample']), ms(ph['encode']), ms(ph['measure']), ms(ph['write']),
             r['ratios']['peak_rss_vs_input_plus_output'], r['crowdbake']['page_faults']))
+    by_input = {r['input']: r for r in report['results']}
     x = report.get('extra')
     if x:
         fl, big = x['floor'], x['floor_input']
@@ -351,6 +362,12 @@ def print_table(report):
         for g in report['goals']:
             print('  %-56s %9.2f   %-9s %s' % (g['goal'], g['measured'], g['target'],
                                                'met' if g['met'] else '-' if g['met'] is None else 'NOT met'))
+        for r in (by_input[n] for n in GOAL_INPUTS if n in by_input):
+            pr, c, p = r['ratios']['end_to_end_pairs'], r['crowdbake']['wall'], r['peer']
+            print('  %s vs three.js: median of %d pairs %.2fx, pairs %.2f..%.2fx; the two medians apart: %s / %s ms = %.2fx' % (
+                r['input'], r['runs'], pr['median'], pr['min'], pr['max'],
+                ms(p['load']['median'] + p['sample']['median']), ms(c['median']),
+                r['ratios']['end_to_end_vs_peer_load_plus_sample']))
     if report.get('exponent') is not None:
         print('\ncost ~ (joints x frames)^%.2f over the size series' % report['exponent'])
     for name, core in report.get('core', {}).items():
@@ -428,7 +445,9 @@ def main():
         inputs.append(('robot', os.path.join(SHARED, 'assets', 'robot-quaternius-raylib', 'robot.glb')))
         series = [('rig_200j_%dclips' % c, gen_rig(200, c, 10)) for c in (8, 15, 30, 60)]
         inputs += series
-    results = [bench_input(name, path, args.repeat) for name, path in inputs]
+    # The two inputs whose ratio to three.js is a goal run three times the pairs: on a shared VM one
+    # run's pairs spread over +-20% (bench/RESULTS.txt), and the goal is judged on their median.
+    results = [bench_input(name, path, args.repeat * (GOAL_PAIRS if name in GOAL_INPUTS else 1)) for name, path in inputs]
     three = json.load(open(os.path.join(ROOT, 'bench', 'node_modules', 'three', 'package.json')))['version']
     report = {
         'crowdbake_version': subprocess.run([EXE, '--version'], capture_output=True, text=True).stdout.split()[-1],
