@@ -249,7 +249,7 @@ static void test_incompatible_lod_names_the_joint(void **state)
              "lods = [\"%s/fish.glb\"]\n", samples_abs, samples_abs);
     write_text(TMP "/lod.toml", text);
     char out[4096];
-    assert_int_equal(run_cli("bake " TMP "/lod.toml -q", out, sizeof out), CB_ERR_INPUT);
+    assert_int_equal(run_cli("bake " TMP "/lod.toml -q", out, sizeof out), EXIT_INPUT);
     /* The fish's first joints are "root" (same bind pose) then "spine0" (another one). */
     if (!strstr(out, "lod.toml:5:") || !strstr(out, "LOD joint 'spine0' has another bind pose")) fail_msg("%s", out);
 }
@@ -382,7 +382,7 @@ static void test_a_failing_type_does_not_stop_the_others(void **state)
     assert_int_equal(system(cmd), 0);
     const char *path = catalog("fail", "out-fail", "\n[animal.broken]\nmodel = \"broken.glb\"\n");
     snprintf(args, sizeof args, "bake %s", path);
-    assert_int_equal(run_cli(args, out, sizeof out), CB_ERR_INPUT);
+    assert_int_equal(run_cli(args, out, sizeof out), EXIT_INPUT);
     if (!strstr(out, "broken           FAILED: ") || !strstr(out, "truncated GLB") || !strstr(out, "2 baked"))
         fail_msg("%s", out);
     struct stat st;

@@ -70,10 +70,10 @@ static void test_report_of_one_model(void **state)
     char cmd[2048];
     snprintf(cmd, sizeof cmd, "head -c 3000 %s > " TMP "/broken.glb && echo hello > " TMP "/text.glb", fox);
     assert_int_equal(run_command(cmd, NULL, 0), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "report " TMP "/broken.glb"), CB_ERR_INPUT);
+    assert_int_equal(crowdbake(out, sizeof out, "report " TMP "/broken.glb"), EXIT_INPUT);
     assert_contains(out, "crowdbake: " TMP "/broken.glb: truncated GLB");
     assert_true(strstr(out, "[animal") == NULL && strstr(out, "type ") == NULL);
-    assert_int_equal(crowdbake(out, sizeof out, "report " TMP "/text.glb"), CB_ERR_INPUT);
+    assert_int_equal(crowdbake(out, sizeof out, "report " TMP "/text.glb"), EXIT_INPUT);
     assert_contains(out, "text.glb: not a GLB file");
     /* Nothing is left in the temporary folder's place, and nothing beside the model. */
     assert_int_equal(run_command("ls -A " TMP "/tmpdir | wc -l", out, sizeof out), 0);
@@ -105,7 +105,7 @@ static void test_verify_and_preview_take_the_exr(void **state)
     assert_contains(out, "catalog.example.toml: is neither a palette nor glTF, not a palette");
     /* An EXR that is not a crowdbake palette header. */
     assert_int_equal(crowdbake(out, sizeof out, "vat %s -o " TMP "/vat.exr", fox), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/vat.exr", fox), CB_ERR_INPUT);
+    assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/vat.exr", fox), EXIT_INPUT);
     assert_contains(out, "vat.exr: not a crowdbake palette");
 }
 

@@ -246,12 +246,12 @@ static void test_cli_exit_code_and_one_line(void **state)
     snprintf(cmd, sizeof cmd, "%s info %s 2>&1", crowdbake_exe(), path);
     int rc = run_command(cmd, out, sizeof out);
     unlink(path);
-    assert_int_equal(rc, CB_ERR_INPUT);
+    assert_int_equal(rc, EXIT_INPUT);
     assert_non_null(strstr(out, path));
     assert_non_null(strstr(out, "truncated GLB"));
     assert_int_equal(strchr(out, '\n') - out, (long)strlen(out) - 1); /* exactly one line */
     snprintf(cmd, sizeof cmd, "%s info /nonexistent/x.glb 2>/dev/null", crowdbake_exe());
-    assert_int_equal(run_command(cmd, NULL, 0), CB_ERR_IO);
+    assert_int_equal(run_command(cmd, NULL, 0), EXIT_IO);
     snprintf(cmd, sizeof cmd, "%s info --bogus 2>/dev/null", crowdbake_exe());
     assert_int_equal(run_command(cmd, NULL, 0), EXIT_USAGE);
 }

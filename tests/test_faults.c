@@ -52,15 +52,15 @@ static void test_unwritable_outputs(void **state)
     (void)state;
     char args[1024], out[1024];
     snprintf(args, sizeof args, "bake %s -o " TMP "/missing/x.pal", fish);
-    assert_int_equal(crowdbake(args, out, sizeof out), CB_ERR_IO);
+    assert_int_equal(crowdbake(args, out, sizeof out), EXIT_IO);
     assert_non_null(strstr(out, "does not exist (create it first)"));
     /* /proc refuses new files even to root: a read-only place. */
     snprintf(args, sizeof args, "bake %s -o /proc/crowdbake-test.pal", fish);
-    assert_int_equal(crowdbake(args, out, sizeof out), CB_ERR_IO);
+    assert_int_equal(crowdbake(args, out, sizeof out), EXIT_IO);
     assert_non_null(strstr(out, "/proc/crowdbake-test.pal: cannot write"));
     /* A device is never replaced by a file. */
     snprintf(args, sizeof args, "bake %s -o /dev/full", fish);
-    assert_int_equal(crowdbake(args, out, sizeof out), CB_ERR_IO);
+    assert_int_equal(crowdbake(args, out, sizeof out), EXIT_IO);
     assert_non_null(strstr(out, "not a regular file"));
     struct stat st;
     assert_int_equal(stat("/dev/full", &st), 0);
@@ -84,7 +84,7 @@ static void test_disk_full_keeps_the_old_file(void **state)
     uint64_t after = complete_palette(TMP "/full/animal.pal");
     int temps = temporaries(TMP "/full");
     umount(TMP "/full");
-    assert_int_equal(rc, CB_ERR_IO);
+    assert_int_equal(rc, EXIT_IO);
     if (!strstr(out, "write failed: No space left on device") || !strstr(out, "the previous file, if any, is unchanged"))
         fail_msg("%s", out);
     assert_true(before == after);
@@ -161,7 +161,7 @@ static void expect_refused(const char *json, const char *needle, const char *ext
     char args[1024], out[2048];
     snprintf(args, sizeof args, "bake " TMP "/hostile.gltf -o " TMP "/hostile.pal %s", extra_args);
     int rc = crowdbake(args, out, sizeof out);
-    if (rc != CB_ERR_INPUT || !strstr(out, needle)) fail_msg("exit %d, '%s' lacks '%s'", rc, out, needle);
+    if (rc != EXIT_INPUT || !strstr(out, needle)) fail_msg("exit %d, '%s' lacks '%s'", rc, out, needle);
     struct stat st;
     assert_int_not_equal(stat(TMP "/hostile.pal", &st), 0);
 }
@@ -176,11 +176,11 @@ static void test_file_size_limit_names_its_flag(void **state)
     shared_path(gltf, sizeof gltf, "assets/derived-fox/separate/Fox.gltf"); /* 34 KB, its Fox.bin 120 KB */
     snprintf(args, sizeof args, "bake %s -o " TMP "/limited.pal --max-file-size 1K", fox);
     int rc = crowdbake(args, out, sizeof out);
-    if (rc != CB_ERR_IO || !strstr(out, "larger than the 1024-byte file size limit; raise the limit [--max-file-size]"))
+    if (rc != EXIT_IO || !strstr(out, "larger than the 1024-byte file size limit; raise the limit [--max-file-size]"))
         fail_msg("exit %d: %s", rc, out);
     snprintf(args, sizeof args, "bake %s -o " TMP "/limited.pal --max-file-size 50K", gltf);
     rc = crowdbake(args, out, sizeof out);
-    if (rc != CB_ERR_INPUT || !strstr(out, "Fox.bin : larger than the 51200-byte file size limit; raise the limit [--max-file-size]"))
+    if (rc != EXIT_INPUT || !strstr(out, "Fox.bin : larger than the 51200-byte file size limit; raise the limit [--max-file-size]"))
         fail_msg("exit %d: %s", rc, out);
     struct stat st;
     assert_int_not_equal(stat(TMP "/limited.pal", &st), 0);

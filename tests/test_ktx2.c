@@ -73,7 +73,7 @@ static void test_u16_is_refused_and_output_repeats(void **state)
     char cmd[4096], quadruped[1024], out[4096];
     sample_path(quadruped, sizeof quadruped, "quadruped");
     snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/u16.ktx2 --precision u16 2>&1", crowdbake_exe(), quadruped);
-    assert_int_equal(run_command(cmd, out, sizeof out), 2);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_USAGE);
     assert_non_null(strstr(out, "KTX2 palettes hold half or float texels"));
     assert_non_null(strstr(out, "RGBA16UI"));
     assert_null(fopen(TMP "/u16.ktx2", "rb"));

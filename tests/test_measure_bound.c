@@ -336,7 +336,7 @@ static void test_measure_all_past_the_budget(void **state)
     snprintf(text, sizeof text, "[animal.cow]\nmodel = \"%s\"\nmeasure_all = 1\n", model_abs);
     write_text(TEST_TMP "/measure/bad.toml", text);
     snprintf(cmd, sizeof cmd, "%s bake " TEST_TMP "/measure/bad.toml 2>&1", crowdbake_exe());
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_INPUT);
     if (!strstr(out, "bad.toml:3:") || !strstr(out, "measure_all must be true or false")) fail_msg("%s", out);
 
     cb_palette_free(&subset), cb_palette_free(&all);

@@ -268,7 +268,7 @@ static void test_batch_and_catalog_lod(void **state)
     snprintf(cat, sizeof cat, "[animal.goat]\nmodel = \"%s\"\nlods = [\"%s\"]\nlod_max_influences = [3]\n", main_abs, lod_abs);
     write_text(TMP "/bad.toml", cat);
     snprintf(cmd, sizeof cmd, "%s mesh " TMP "/bad.toml --type goat --lod 1 -o " TMP "/bad.glb 2>&1", crowdbake_exe());
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_INPUT);
     assert_non_null(strstr(out, "bad.toml:4:23: [animal.goat] lod_max_influences: each LOD keeps 1, 2 or 4 influences"));
     assert_null(fopen(TMP "/bad.glb", "rb"));
 }
@@ -365,7 +365,7 @@ static void test_bad_input_is_refused_with_the_fix(void **state)
         {"%s -o " TMP "/bad.glb --batch 0", "--batch wants a count of copies from 1 to 65536", EXIT_USAGE},
         {"%s -o " TMP "/bad.glb --lod 1", "--type and --lod pick a catalog's type and LOD", EXIT_USAGE},
         {"%s -o " TMP "/bad.glb --max-quantization-error 1", "--max-quantization-error goes with --quantize", EXIT_USAGE},
-        {"%s -o " TMP "/bad.glb --palette-model %s", "fish.glb: LOD joint 'root' is not a joint of", CB_ERR_INPUT},
+        {"%s -o " TMP "/bad.glb --palette-model %s", "fish.glb: LOD joint 'root' is not a joint of", EXIT_INPUT},
     };
     for (size_t i = 0; i < COUNT_OF(cases); ++i) {
         char args[3072];

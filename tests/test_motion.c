@@ -396,7 +396,7 @@ static void test_catalog_fps_auto(void **state)
     snprintf(text, sizeof text, "[animal.cow]\nmodel = \"%s\"\nfps = \"fast\"\n", cow_abs);
     write_text(TMP "/bad-auto.toml", text);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/bad-auto.toml 2>&1", crowdbake_exe());
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_INPUT);
     if (!strstr(out, "bad-auto.toml:3:") || !strstr(out, "fps must be a rate in frames per second or \"auto\""))
         fail_msg("%s", out);
 }
@@ -629,7 +629,7 @@ static void test_fitted_rows_meet_the_goal(void **state)
     snprintf(text, sizeof text, "[animal.cow]\nmodel = \"%s\"\nfit_rows = 1\n", cow_abs);
     write_text(TMP "/bad-fit.toml", text);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/bad-fit.toml 2>&1", crowdbake_exe());
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_INPUT);
     if (!strstr(out, "bad-fit.toml:3:") || !strstr(out, "fit_rows must be true or false")) fail_msg("%s", out);
 }
 

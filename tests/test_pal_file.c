@@ -143,7 +143,7 @@ static void expect_rejected(const unsigned char *d, size_t size, const char *nee
     write_all(TMP "/bad.pal", d, size);
     char cmd[1024], out[1024];
     snprintf(cmd, sizeof cmd, "%s inspect %s/bad.pal 2>&1", crowdbake_exe(), TMP);
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_INPUT);
     if (!strstr(out, needle) || !strstr(out, "bad.pal")) fail_msg("%s: inspect said '%s'", what, out);
 }
 
@@ -248,13 +248,13 @@ static void test_failed_bake_leaves_no_file_and_keeps_the_old_one(void **state)
     unsigned char *before = read_all(TMP "/keep.pal", &n0);
     /* qpos chosen explicitly cannot hold the spider: the bake fails after loading. */
     snprintf(cmd, sizeof cmd, "%s bake %s -o %s/keep.pal --layout qpos 2>&1", crowdbake_exe(), spider, TMP);
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_INPUT);
     unsigned char *after = read_all(TMP "/keep.pal", &n1);
     assert_int_equal(n0, n1);
     assert_memory_equal(before, after, n0);
     free(before), free(after);
     snprintf(cmd, sizeof cmd, "%s bake %s -o %s/missing-dir/x.pal 2>&1", crowdbake_exe(), fox, TMP);
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_IO);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_IO);
     assert_non_null(strstr(out, "does not exist"));
     snprintf(cmd, sizeof cmd, "ls -a %s | grep -c '\\.tmp\\.' ", TMP);
     run_command(cmd, out, sizeof out);

@@ -82,7 +82,7 @@ static void test_exit_code_gate(void **state)
     char cmd[2048], out[8192];
     const char *cat = write_catalog("tiny", "target = \"tiny device\"\nvram = \"64 KiB\"");
     snprintf(cmd, sizeof cmd, "%s report %s 2>&1", crowdbake_exe(), cat);
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_BUDGET);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_BUDGET);
     assert_non_null(strstr(out, "OVER BUDGET"));
     snprintf(cmd, sizeof cmd, "%s report %s --no-fail --markdown 2>&1", crowdbake_exe(), cat);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
@@ -92,7 +92,7 @@ static void test_exit_code_gate(void **state)
     assert_int_equal(run_command(cmd, NULL, 0), 0);
     cat = write_catalog("unknown", "target = \"Toaster\"");
     snprintf(cmd, sizeof cmd, "%s report %s 2>&1", crowdbake_exe(), cat);
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_INPUT);
     assert_non_null(strstr(out, "not a built-in profile"));
 }
 

@@ -87,7 +87,7 @@ static void test_verify_exit_code(void **state)
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
     snprintf(cmd, sizeof cmd, "mkdir -p " TMP " && %s bake %s -o " TMP "/v.pal -q && %s verify %s " TMP "/v.pal "
              "--max-error 0.01 2>&1", crowdbake_exe(), fox, crowdbake_exe(), fox);
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_VERIFY);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_VERIFY);
     assert_non_null(strstr(out, "over --max-error"));
     snprintf(cmd, sizeof cmd, "%s verify %s " TMP "/v.pal --max-error 100 --json 2>&1", crowdbake_exe(), fox);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
@@ -95,7 +95,7 @@ static void test_verify_exit_code(void **state)
     char q[1024];
     snprintf(q, sizeof q, "%s/quadruped.glb", samples_dir());
     snprintf(cmd, sizeof cmd, "%s verify %s " TMP "/v.pal 2>&1", crowdbake_exe(), q);
-    assert_int_equal(run_command(cmd, out, sizeof out), CB_ERR_INPUT); /* not its palette */
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_INPUT); /* not its palette */
 }
 
 static bool ink(const unsigned char *p, const unsigned char bg[3], int threshold)

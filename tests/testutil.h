@@ -21,9 +21,13 @@
 #endif
 #define TEST_TMP BUILD_DIR "/tmp-tests"
 
-/* The command's exit code for a bad command line (README "Exit codes"; the others equal the
- * library's cb_status values of the same names). */
+/* The command's exit codes, as the README's "Exit codes" table gives them: what a test of the
+ * command checks against, rather than the library's cb_status values (which are not exit codes). */
 #define EXIT_USAGE 2
+#define EXIT_BUDGET 3
+#define EXIT_INPUT 4
+#define EXIT_IO 5
+#define EXIT_VERIFY 6
 
 /* ../shared beside the checkout, or $CROWDBAKE_SHARED. */
 static inline const char *shared_dir(void)
