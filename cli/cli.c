@@ -33,6 +33,8 @@ const char *cli_setting_flag(cb_setting setting)
     case CB_SETTING_LAYOUT: return "--layout";
     case CB_SETTING_PRECISION: return "--precision";
     case CB_SETTING_BATCH: return "--batch";
+    case CB_SETTING_SYNC: return "--sync";
+    case CB_SETTING_DEFAULT_STATE: return "--default-state";
     case CB_SETTING_NONE: break;
     }
     return NULL;

@@ -133,6 +133,7 @@ typedef struct cli_catalog_bake {
     const cb_limits *limits;
     const cb_bake_settings *overrides; /* the command line's bake options, `override_fields` of them set */
     unsigned override_fields;          /* CB_BAKE_* */
+    const char *syncs, *default_state; /* --sync STATE=speed|time,..., --default-state STATE */
 } cli_catalog_bake;
 int cmd_bake_catalog(const cli_catalog_bake *options);
 

@@ -14,7 +14,7 @@
 const char cmd_bake_usage[] =
     "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2 [options]\n"
     "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--out-dir DIR] [--json]\n"
-    "                      [-q]\n"
+    "                      [-q] [--sync STATE=speed|time,...] [--default-state STATE]\n"
     "                      [--fps N] [--layout L] [--precision P] [--format F] [--zstd] [--max-texture-size N]\n"
     "                      [--root-motion R] [--exr-compression C]\n\n"
     "Bakes every clip of the model's skin into a bone-matrix palette; or every animal type of a\n"
@@ -24,7 +24,9 @@ const char cmd_bake_usage[] =
     "own fps still applies) and count in what is up to date; --depfile writes a Make/Ninja depfile;\n"
     "--out-dir replaces the catalog's out_dir (a path from the current directory);\n"
     "--depfile-manifest-only writes the manifest's rule alone, as Ninja's depfile without\n"
-    "deps = gcc (CMake's DEPFILE) wants it.\n\n"
+    "deps = gcc (CMake's DEPFILE) wants it. --sync STATE=speed|time|auto (comma-separated) and\n"
+    "--default-state STATE replace the catalog's word on those states in every animal that has\n"
+    "them: whether a state follows the instance's speed, and the state a herd spawns in.\n\n"
     "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md), .exr (OpenEXR) or .ktx2\n"
     "                             (uncompressed KTX2, RGBA16F/RGBA32F); another extension is refused\n"
     "  --format pal,exr,ktx2      write these formats (OUT's extension is replaced per format; each\n"
@@ -66,7 +68,7 @@ const char cmd_bake_usage[] =
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
         *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir, *loops,
-        *one_shots;
+        *one_shots, *syncs, *default_state;
     bool zstd, json, quiet, quiet_long, force, depfile_manifest, fit, measure_all;
 } bake_args;
 
@@ -172,7 +174,7 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     if (a->out_dir) over.out_dir = a->out_dir, fields |= CB_BAKE_OUT_DIR;
     if (a->depfile_manifest && !a->depfile) return cli_usage_error("bake", "--depfile-manifest-only goes with --depfile");
     cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, a->depfile_manifest,
-                           limits, &over, fields};
+                           limits, &over, fields, a->syncs, a->default_state};
     return cmd_bake_catalog(&cb);
 }
 
@@ -336,7 +338,8 @@ int cmd_bake(int argc, char **argv)
         {"--exclude-clip", "A,B", &a.excluded, NULL}, {"--out-dir", "DIR", &a.out_dir, NULL},
         {"--loop", "A,B", &a.loops, NULL},         {"--one-shot", "A,B", &a.one_shots, NULL},
         {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest}, {"--fit-rows", NULL, NULL, &a.fit},
-        {"--measure-all", NULL, NULL, &a.measure_all}, {"--quiet", NULL, NULL, &a.quiet_long}};
+        {"--measure-all", NULL, NULL, &a.measure_all}, {"--quiet", NULL, NULL, &a.quiet_long},
+        {"--sync", "STATE=speed|time", &a.syncs, NULL}, {"--default-state", "STATE", &a.default_state, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
     if (help) return fputs(cmd_bake_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
@@ -347,6 +350,9 @@ int cmd_bake(int argc, char **argv)
         return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
                                a.depfile ? "--depfile" : a.depfile_manifest ? "--depfile-manifest-only" : a.manifest
                                ? "--manifest" : a.force ? "--force" : "--out-dir");
+    if (a.syncs || a.default_state)
+        return cli_usage_error("bake", "%s is for catalogs: a single model has clips, not states",
+                               a.syncs ? "--sync" : "--default-state");
     cb_bake_settings settings;
     unsigned fields, threads;
     if ((rc = parse_settings(&a, &settings, &fields)) || (rc = single_model_checks(&a, &settings))) return rc;

@@ -5,6 +5,7 @@
 
 #include "crowdbake/json.h"
 #include "crowdbake/catalog.h"
+#include "crowdbake/roster.h"
 #include "crowdbake/bake.h"
 #include "cli.h"
 
@@ -20,6 +21,7 @@ typedef struct clip_facts {
     bool analyzed;
     cb_clip_info info;
     cb_ground_speed speed;
+    cb_sync_decision sync; /* as a state of this clip alone would play */
 } clip_facts;
 
 static const char *interp_names[] = {"LINEAR", "STEP", "CUBICSPLINE"};
@@ -48,10 +50,22 @@ static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits
             if (cb_clip_analyze(s, (int32_t)a, fps, -1, limits, &facts[a].info, err)) break;
             facts[a].analyzed = true;
             cb_measure_ground_speed(s, &facts[a].info, &facts[a].speed);
+            cb_decide_sync(NULL, anim->name, facts[a].info.loops, &facts[a].speed, false, &facts[a].sync);
         }
     }
     cb_sampler_free(s);
     return err->status;
+}
+
+/* How far the planted feet slide at the clip's ground speed, foot by foot. */
+static void print_slide(int w, const cb_stride *st)
+{
+    printf("  %-*s feet slide %.0f%% of the ground speed (worst %.0f%%):", w, "", 100 * st->slide_mean, 100 * st->slide_worst);
+    for (uint32_t k = 0; k < st->foot_count; ++k)
+        if (st->feet[k].strides)
+            printf(" %s %.0f%%/%.0f%%", st->feet[k].name, 100 * st->feet[k].slide_mean, 100 * st->feet[k].slide_worst);
+    printf("; travel varied per row would leave %.0f%%%s\n", 100 * st->slide_mean_varying,
+           st->slide_mean > CB_SLIDE_WARN ? " (the asset's feet slide at any rate)" : "");
 }
 
 static void print_text(const cb_model *m, int skin, const clip_facts *facts, double fps)
@@ -94,6 +108,8 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
                    f->info.ground_speed);
             printf("  %-*s %s: %s; ground speed %.4g from %s (root %.4g, planted feet %.4g)\n", w, "",
                    f->info.loops ? "loops" : "plays once", why, f->speed.speed, f->speed.method, f->speed.root, f->speed.feet);
+            printf("  %-*s %s: %s\n", w, "", f->sync.speed ? "follows the speed" : "own rate", f->sync.reason);
+            if (f->speed.stride.stride) print_slide(w, &f->speed.stride);
         } else
             printf("  %-*s %8.4f %9.4f %6llu  %-18s %-8s %7u  -\n", w, anim->name, anim->t0, anim->t1 - anim->t0,
                    (unsigned long long)f->keys, interp, "-", cb_clip_step_count(anim->t1 - anim->t0, fps) + 1);
@@ -172,6 +188,9 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, dou
             cb_json_number(&j, "root_speed", f->speed.root);
             cb_json_number(&j, "feet_speed", f->speed.feet);
             cb_json_string(&j, "speed_method", f->speed.method);
+            cb_json_string(&j, "sync", f->sync.speed ? "speed" : "time");
+            cb_json_string(&j, "sync_reason", f->sync.reason);
+            cb_roster_json_stride(&j, &f->speed.stride);
         }
         cb_json_end(&j);
     }

@@ -272,24 +272,51 @@ struct Parser {
         }
     }
 
+    // A state's keywords: "word", ["word", ...], or { keywords = [...], sync = "speed" | "time" }.
+    void state(const toml::node &v, cb_catalog_state *s, const std::string &where)
+    {
+        std::string what = where + " state '" + s->name + "'";
+        const toml::node *words_node = &v;
+        if (const toml::table *t = v.as_table()) {
+            check_keys(*t, {"keywords", "sync"}, what);
+            words_node = t->get("keywords");
+            if (!words_node) fail(v.source(), what + " needs keywords = [\"clip keyword\", ...]");
+            if (const toml::node *sync = t->get("sync")) {
+                std::string mode = str(*sync, what + " sync");
+                if (mode != "speed" && mode != "time" && mode != "auto")
+                    fail(sync->source(), what + " sync must be \"speed\" (follows the instance's speed), \"time\" (its "
+                                                "own rate) or \"auto\" (decided from its words and feet)");
+                s->sync = mode == "speed" ? CB_SYNC_SPEED : mode == "time" ? CB_SYNC_TIME : CB_SYNC_AUTO;
+            }
+        }
+        std::vector<std::string> words;
+        if (words_node->is_string()) words.push_back(*words_node->value<std::string>());
+        else if (words_node->is_array())
+            for (const toml::node &w : *words_node->as_array()) words.push_back(str(w, what + " keyword"));
+        else fail(words_node->source(), what + " must be a keyword, a list of keywords or { keywords = [...], sync = ... }");
+        if (words.empty()) fail(words_node->source(), what + " needs at least one clip keyword");
+        s->keyword_count = (uint32_t)words.size();
+        s->keywords = alloc<const char *>(words.size());
+        for (size_t w = 0; w < words.size(); ++w) s->keywords[w] = dup(words[w]);
+    }
+
+    // States in the order the file writes them: toml++ keeps a table's keys sorted, so they are
+    // put back in order by where each key stands (the first written is the default state).
     void states(const toml::table &t, cb_catalog_animal *an, const std::string &where)
     {
-        an->state_count = (uint32_t)t.size();
-        an->states = alloc<cb_catalog_state>(t.size());
-        size_t i = 0;
-        for (auto &&[k, v] : t) {
-            cb_catalog_state *s = &an->states[i++];
-            s->name = dup(std::string(k.str()));
-            s->pos = pos(v);
-            std::vector<std::string> words;
-            if (v.is_string()) words.push_back(*v.value<std::string>());
-            else if (v.is_array())
-                for (const toml::node &w : *v.as_array()) words.push_back(str(w, where + " state '" + s->name + "' keyword"));
-            else fail(v.source(), where + " state '" + s->name + "' must be a keyword or a list of keywords");
-            if (words.empty()) fail(v.source(), where + " state '" + s->name + "' needs at least one clip keyword");
-            s->keyword_count = (uint32_t)words.size();
-            s->keywords = alloc<const char *>(words.size());
-            for (size_t w = 0; w < words.size(); ++w) s->keywords[w] = dup(words[w]);
+        std::vector<std::pair<const toml::key *, const toml::node *>> written;
+        for (auto &&[k, v] : t) written.emplace_back(&k, &v);
+        std::stable_sort(written.begin(), written.end(), [](const auto &a, const auto &b) {
+            const toml::source_position &x = a.first->source().begin, &y = b.first->source().begin;
+            return x.line != y.line ? x.line < y.line : x.column < y.column;
+        });
+        an->state_count = (uint32_t)written.size();
+        an->states = alloc<cb_catalog_state>(written.size());
+        for (size_t i = 0; i < written.size(); ++i) {
+            cb_catalog_state *s = &an->states[i];
+            s->name = dup(std::string(written[i].first->str()));
+            s->pos = pos(*written[i].second);
+            state(*written[i].second, s, where);
         }
     }
 
@@ -353,6 +380,7 @@ struct Parser {
         }
         if (auto *d = t.get("default_state")) {
             an->default_state = dup(str(*d, where + " default_state"));
+            an->default_state_from = "the catalog's default_state";
             bool found = false;
             std::string list;
             for (uint32_t i = 0; i < an->state_count; ++i) {
@@ -364,6 +392,7 @@ struct Parser {
                                       (list.empty() ? "none defined" : list) + ")");
         } else if (an->state_count) {
             an->default_state = an->states[0].name;
+            an->default_state_from = "the first state written (no default_state given)";
         }
         an->speed_auto = true;
         if (auto *sp = t.get("speed_reference")) {
@@ -395,6 +424,7 @@ struct Parser {
         }
         for (uint32_t i = 0; i < an->state_count; ++i) {
             c += std::string(" state=") + an->states[i].name;
+            if (an->states[i].sync != CB_SYNC_AUTO) c += an->states[i].sync == CB_SYNC_SPEED ? "/speed" : "/time";
             for (uint32_t k = 0; k < an->states[i].keyword_count; ++k) c += std::string(",") + an->states[i].keywords[k];
         }
         const cb_bake_settings &b = an->bake;

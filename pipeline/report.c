@@ -75,6 +75,7 @@ static void fill_type(const cb_roster *roster, uint32_t i, const cb_report *r, c
     t->model_height = rt->model_height;
     t->palette_over_limit = t->width > r->max_texture_size || t->height > r->max_texture_size;
     t->bones_over_limit = t->bones > r->max_bones;
+    report_fill_gaits(rt, t);
 }
 
 cb_status cb_report_build(const cb_catalog *cat, const cb_roster *roster, cb_report *r, cb_error *err)
@@ -94,7 +95,7 @@ cb_status cb_report_build(const cb_catalog *cat, const cb_roster *roster, cb_rep
         if (!t->shares) r->palettes_total += t->palette_bytes; /* a shared palette is one texture */
         r->meshes_total += t->mesh_bytes;
         for (int e = 0; e < CB_VAT_ENCODINGS; ++e) r->vat_total[e] += t->vat_bytes[e];
-        r->warnings += t->palette_over_limit + t->bones_over_limit + !t->vat_fits;
+        r->warnings += t->palette_over_limit + t->bones_over_limit + !t->vat_fits + report_gait_warnings(t);
     }
     r->total = r->palettes_total + r->meshes_total;
     r->over_budget = r->has_budget && r->total > r->budget_bytes;
@@ -112,7 +113,7 @@ void cb_report_add_runtime(const cb_roster *roster, cb_report *r)
 
 void cb_report_free(cb_report *r)
 {
-    for (uint32_t i = 0; i < r->type_count; ++i) cb_report_runtime_free(&r->types[i].runtime);
+    for (uint32_t i = 0; i < r->type_count; ++i) cb_report_runtime_free(&r->types[i].runtime), free(r->types[i].gaits);
     free(r->types);
     memset(r, 0, sizeof *r);
 }
@@ -212,8 +213,9 @@ void cb_report_text(FILE *f, const cb_report *r)
     }
     fputs(".\n", f);
     cb_report_runtime_text(f, r);
+    report_gaits_text(f, r);
     report_budget_line(f, r, "");
-    if (r->warnings) fprintf(f, "%u warning%s (see notes).\n", r->warnings, r->warnings == 1 ? "" : "s");
+    if (r->warnings) fprintf(f, "%u warning%s (see notes and foot-sync).\n", r->warnings, r->warnings == 1 ? "" : "s");
 }
 
 /* ---- Markdown ---- */
@@ -242,6 +244,7 @@ void cb_report_markdown(FILE *f, const cb_report *r)
     cb_human_bytes(r->vat_total[0], c, sizeof c);
     fprintf(f, "| **total** | | | | | **%s** | **%s** | %.1f× | %s | | | | |\n", a, c, report_ratio(r->vat_total[0], r->palettes_total), b);
     cb_report_runtime_markdown(f, r);
+    report_gaits_markdown(f, r);
 }
 
 /* ---- JSON (docs/report.schema.json) ---- */
@@ -304,6 +307,7 @@ void cb_report_json(FILE *f, const cb_report *r)
         cb_json_bool(&j, "palette_over_texture_limit", t->palette_over_limit);
         cb_json_bool(&j, "bones_over_limit", t->bones_over_limit);
         cb_report_runtime_json(&j, &t->runtime);
+        report_gaits_json(&j, t);
         cb_json_end(&j);
     }
     cb_json_end(&j);

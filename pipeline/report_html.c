@@ -289,6 +289,7 @@ static void cell_fixes(FILE *f, const cb_report *r, const cb_report_type *t)
     char limits[192];
     fputs("<ul>", f);
     if (report_limit_warnings(t, limits, sizeof limits)[0]) fprintf(f, "<li class=\"warn\">%s</li>", limits);
+    report_gaits_html(f, t);
     html_fixes(f, r, t);
     fputs("</ul>", f);
 }

@@ -51,7 +51,7 @@ static double now_seconds(void)
     return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
-static const char *at(const cb_catalog *cat, cb_source_pos pos, char *buf, size_t size)
+const char *roster_at(const cb_catalog *cat, cb_source_pos pos, char *buf, size_t size)
 {
     snprintf(buf, size, "%s:%u:%u", cat->path, pos.line, pos.column);
     return buf;
@@ -104,14 +104,14 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
         int32_t a = cb_model_find_animation(m, c->source);
         const struct cb_skipped_clip *skip = a < 0 ? cb_model_find_skipped_clip(m, c->source) : NULL;
         if (skip) /* asked for by name: an error, not a warning */
-            return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s", at(cat, c->pos, where, sizeof where), an->name,
+            return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s", roster_at(cat, c->pos, where, sizeof where), an->name,
                            skip->reason);
         if (a < 0) {
             char list[512] = "";
             for (uint32_t k = 0; k < m->animation_count; ++k)
                 snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", k ? ", " : "", m->animations[k].name);
             return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s has no clip '%s'; its clips are: %s",
-                           at(cat, c->pos, where, sizeof where), an->name, m->source, c->source, list);
+                           roster_at(cat, c->pos, where, sizeof where), an->name, m->source, c->source, list);
         }
         *p = (cb_clip_plan){a, c->name, c->loop, c->fps};
         w->clip_settings[i] = (cb_clip_settings){c->fps_auto, c->max_error_mm};
@@ -147,61 +147,6 @@ static cb_status analyze_clips(const cb_catalog_animal *an, const cb_limits *lim
     return err->status;
 }
 
-static cb_status match_states(const cb_catalog *cat, const cb_catalog_animal *an, cb_roster_type *t, cb_error *err)
-{
-    t->state_clip = calloc(an->state_count ? an->state_count : 1, sizeof *t->state_clip);
-    const char **names = calloc(t->clip_count ? t->clip_count : 1, sizeof *names);
-    if (!t->state_clip || !names) {
-        free(names);
-        return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    }
-    for (uint32_t i = 0; i < t->clip_count; ++i) names[i] = t->clips[i].name;
-    for (uint32_t s = 0; s < an->state_count && !err->status; ++s) {
-        const cb_catalog_state *st = &an->states[s];
-        t->state_clip[s] = cb_match_state(names, t->clip_count, st->keywords, st->keyword_count);
-        if (t->state_clip[s] >= 0) continue;
-        char list[512] = "", words[256] = "", where[1100];
-        for (uint32_t i = 0; i < t->clip_count; ++i)
-            snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", names[i]);
-        for (uint32_t k = 0; k < st->keyword_count; ++k)
-            snprintf(words + strlen(words), sizeof words - strlen(words), "%s\"%s\"", k ? ", " : "", st->keywords[k]);
-        cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] state '%s' matches no clip (keywords %s); the clips are: %s",
-                at(cat, st->pos, where, sizeof where), an->name, st->name, words, list);
-    }
-    free(names);
-    return err->status;
-}
-
-
-/* The speed at which locomotion plays at rate 1: given, or measured on a locomotion loop: the
- * default state's clip if it is one, else the state the catalog names, else the slowest
- * locomotion state. t->speed_reference_from says which. */
-static void speed_reference(const cb_catalog_animal *an, cb_roster_type *t)
-{
-    t->speed_reference = an->speed_reference;
-    snprintf(t->speed_reference_from, sizeof t->speed_reference_from, "the catalog");
-    if (!an->speed_auto) return;
-    t->speed_reference = 0;
-    snprintf(t->speed_reference_from, sizeof t->speed_reference_from, "none: no state plays a looping clip that moves");
-    int pick = -1;
-    const char *rule = "";
-    for (uint32_t s = 0; s < an->state_count && pick < 0; ++s)
-        if (strcmp(an->states[s].name, an->default_state) == 0 && roster_is_locomotion(&t->clips[t->state_clip[s]]))
-            pick = (int)s, rule = "the default state";
-    for (uint32_t s = 0; s < an->state_count && pick < 0 && an->speed_state; ++s)
-        if (strcmp(an->states[s].name, an->speed_state) == 0 && roster_is_locomotion(&t->clips[t->state_clip[s]]))
-            pick = (int)s, rule = "the catalog's speed_reference state";
-    for (uint32_t s = 0; s < an->state_count && !(pick >= 0 && *rule); ++s) {
-        const cb_roster_clip *c = &t->clips[t->state_clip[s]];
-        if (roster_is_locomotion(c) && (pick < 0 || c->speed.speed < t->clips[t->state_clip[pick]].speed.speed)) pick = (int)s;
-    }
-    if (pick < 0) return;
-    const cb_roster_clip *c = &t->clips[t->state_clip[pick]];
-    t->speed_reference = c->speed.speed;
-    snprintf(t->speed_reference_from, sizeof t->speed_reference_from, "%s '%s' (clip '%s', %s)",
-             *rule ? rule : "the slowest locomotion state", an->states[pick].name, c->name, c->speed.method);
-}
-
 static cb_status check_lods(const roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t,
                             cb_error *err)
 {
@@ -228,7 +173,7 @@ static cb_status check_lods(const roster_run *run, const cb_catalog_animal *an, 
         }
         if (inner.status)
             return cb_fail_setting(err, inner.status, inner.setting, "%s: [animal.%s] LOD %u: %s",
-                                   at(run->cat, an->lod_pos[i], where, sizeof where), an->name, i, inner.message);
+                                   roster_at(run->cat, an->lod_pos[i], where, sizeof where), an->name, i, inner.message);
     }
     return CB_OK;
 }
@@ -287,14 +232,14 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     w->model = cb_gltf_load(an->model, run->opt->limits, &inner);
     if (add_inputs(t, an->model, w->model, err)) return;
     if (!w->model) {
-        cb_fail_setting(err, inner.status, inner.setting, "%s: [animal.%s] %s", at(run->cat, an->model_pos, where, sizeof where),
+        cb_fail_setting(err, inner.status, inner.setting, "%s: [animal.%s] %s", roster_at(run->cat, an->model_pos, where, sizeof where),
                         an->name, inner.message);
         list_unloaded_lods(an, w, t);
         return;
     }
     w->skin = pick_skin(w->model);
     if (w->skin < 0) {
-        cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s has no skin to bake", at(run->cat, an->model_pos, where, sizeof where),
+        cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s has no skin to bake", roster_at(run->cat, an->model_pos, where, sizeof where),
                 an->name, an->model);
         list_unloaded_lods(an, w, t);
         return;
@@ -306,12 +251,12 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
     if (plan_clips(run->cat, an, w, t, err) || plan_job(run, an, w, t, err) ||
-        analyze_clips(an, run->opt->limits, w, t, err) || match_states(run->cat, an, t, err) ||
-        check_lods(run, an, w, t, err)) {
+        analyze_clips(an, run->opt->limits, w, t, err) || roster_match_states(run->cat, an, t, err) ||
+        roster_decide_states(run->cat, an, t, err) || check_lods(run, an, w, t, err)) {
         list_unloaded_lods(an, w, t);
         return;
     }
-    speed_reference(an, t);
+    roster_warn_foot_slide(t);
     t->key = roster_content_key(w->model, w->skin, w->job.plan, t->clip_count, &an->bake);
     w->origin = (cb_bake_origin){t->key, an->canonical, (const cb_model *const *)w->lod_models, an->lod_count};
     w->job.origin = &w->origin;
@@ -333,10 +278,15 @@ static void prepare_type(roster_run *run, uint32_t i)
     output_paths(an, t);
     char path[4096];
     if (!run->opt->force && !run->opt->measure_vat && cb_prep_record_path(an, path, sizeof path) &&
-        cb_prep_record_load(path, an, run->opt->limits, t))
-        t->prepared_from_record = true;
-    else
-        prepare_from_model(run, i);
+        cb_prep_record_load(path, an, run->opt->limits, t)) {
+        if (!roster_decide_states(run->cat, an, t, &t->error)) {
+            t->prepared_from_record = true;
+            return;
+        }
+        cb_prep_clear(t); /* out of memory: prepared again from the model */
+        t->error = (cb_error){0};
+    }
+    prepare_from_model(run, i);
 }
 
 /* ---- pass 3: bake an owner ---- */
@@ -594,6 +544,7 @@ void cb_roster_free(cb_roster *r)
     for (uint32_t i = 0; i < r->type_count; ++i) {
         free(r->types[i].clips);
         free(r->types[i].state_clip);
+        free(r->types[i].state_sync);
         for (uint32_t l = 0; l < r->types[i].lod_count; ++l) free(r->types[i].lods[l].remap);
         free(r->types[i].lods);
         for (uint32_t k = 0; k < r->types[i].input_count; ++k) free(r->types[i].inputs[k]);

@@ -9,7 +9,7 @@
 
 #include "../formats/crowdbake_pal.h"
 
-static const char magic[8] = "CBPREP1";
+static const char magic[8] = "CBPREP2"; /* 2: each clip's stride */
 
 bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {
@@ -115,6 +115,7 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
         put_f64(&w, c->fps), put_f64(&w, c->duration);
         put_f64(&w, c->speed.speed), put_f64(&w, c->speed.root), put_f64(&w, c->speed.feet);
         put_str(&w, c->speed.method);
+        put(&w, &c->speed.stride, sizeof c->speed.stride); /* plain numbers and zero-filled strings */
     }
     put_u32(&w, t->animal->state_count);
     for (uint32_t s = 0; s < t->animal->state_count; ++s) put_u32(&w, (uint32_t)t->state_clip[s]);
@@ -195,10 +196,18 @@ static bool plausible(reader *r, uint64_t count, size_t min_bytes_each)
 /* The speed methods are the measurement's own literals (catalog.h). */
 static const char *known_method(const char *text)
 {
-    static const char *const methods[] = {"none", "root motion", "planted feet", "planted feet (the root only drifts)"};
+    static const char *const methods[] = {"none", "root motion", "planted feet"};
     for (size_t i = 0; i < sizeof methods / sizeof methods[0]; ++i)
         if (strcmp(text, methods[i]) == 0) return methods[i];
     return NULL;
+}
+
+/* A stride as cb_stride_measure leaves it: feet within bounds, strings terminated. */
+static bool stride_plausible(const cb_stride *s)
+{
+    bool ok = s->foot_count <= CB_MAX_FEET && memchr(s->why, 0, sizeof s->why);
+    for (uint32_t k = 0; ok && k < s->foot_count; ++k) ok = memchr(s->feet[k].name, 0, sizeof s->feet[k].name) != NULL;
+    return ok;
 }
 
 static void read_clips(reader *r, cb_roster_type *t)
@@ -217,6 +226,8 @@ static void read_clips(reader *r, cb_roster_type *t)
         c->fps = get_f64(r), c->duration = get_f64(r);
         c->speed.speed = get_f64(r), c->speed.root = get_f64(r), c->speed.feet = get_f64(r);
         if (get_str(r, method, sizeof method) && !(c->speed.method = known_method(method))) r->failed = true;
+        get(r, &c->speed.stride, sizeof c->speed.stride);
+        if (!stride_plausible(&c->speed.stride)) r->failed = true;
     }
 }
 
@@ -318,12 +329,13 @@ void cb_prep_clear(cb_roster_type *t)
 {
     free(t->clips);
     free(t->state_clip);
+    free(t->state_sync);
     for (uint32_t l = 0; t->lods && l < t->lod_count; ++l) free(t->lods[l].remap);
     free(t->lods);
     for (uint32_t i = 0; i < t->input_count; ++i) free(t->inputs[i]);
     free(t->inputs);
     cb_warnings_free(&t->warnings);
-    t->clips = NULL, t->state_clip = NULL, t->lods = NULL, t->inputs = NULL;
+    t->clips = NULL, t->state_clip = NULL, t->state_sync = NULL, t->lods = NULL, t->inputs = NULL;
     t->clip_count = t->lod_count = t->input_count = 0;
     t->key = t->input_hash = 0;
     t->bones = t->rows = 0;

@@ -34,25 +34,60 @@ cb_status roster_make_directories(const char *dir, cb_error *err)
 
 /* ---- the manifest and the depfile ---- */
 
-static void write_state(cb_json *j, const cb_roster_type *t, const cb_catalog_state *st, int clip)
+/* The speed a state's clip plays at rate 1: its own ground speed, or the animal's given (or
+ * measured) speed reference where the clip has none or the catalog gives one. */
+static double state_speed(const cb_roster_type *t, const cb_roster_clip *c)
 {
-    const cb_roster_clip *c = &t->clips[clip];
-    /* Only locomotion loops are synced to speed; one-shots and clips that stand still play at
-     * their own rate (a dying animal at speed 0 still dies). */
-    bool synced = roster_is_locomotion(c);
-    double speed = t->animal->speed_auto ? c->speed.speed : t->speed_reference;
+    return t->animal->speed_auto && c->speed.speed > 0 ? c->speed.speed : t->speed_reference;
+}
+
+static void write_state(cb_json *j, const cb_roster_type *t, uint32_t s)
+{
+    const cb_catalog_state *st = &t->animal->states[s];
+    const cb_roster_clip *c = &t->clips[t->state_clip[s]];
+    const cb_sync_decision *sync = &t->state_sync[s];
     cb_json_object(j, st->name);
     cb_json_string(j, "clip", c->name);
     cb_json_inline_array(j, "keywords");
     for (uint32_t k = 0; k < st->keyword_count; ++k) cb_json_string(j, NULL, st->keywords[k]);
     cb_json_end(j);
+    /* Locomotion follows the instance's speed (rate = speed * rate_per_speed, feet planted);
+     * everything else plays at its own rate, also at standstill (a dying animal still dies). */
+    cb_json_string(j, "sync", sync->speed ? "speed" : "time");
+    cb_json_string(j, "sync_reason", sync->reason);
     /* The four numbers of the per-instance data, exactly as the shader wants them. */
     cb_json_object(j, "instance");
     cb_json_int(j, "first_row", c->first_row);
     cb_json_int(j, "frame_count", c->loops ? (long long)c->frames : -(long long)c->frames); /* < 0: one-shot, clamps */
     cb_json_number(j, "rate", c->fps);
-    cb_json_number(j, "rate_per_speed", synced && speed > 0 ? c->fps / speed : 0);
+    cb_json_number(j, "rate_per_speed", sync->speed ? c->fps / state_speed(t, c) : 0);
     cb_json_string(j, "phase", c->loops ? "golden_ratio" : "zero");
+    cb_json_end(j);
+    cb_json_end(j);
+}
+
+void cb_roster_json_stride(cb_json *j, const cb_stride *st)
+{
+    cb_json_bool(j, "stride", st->stride);
+    cb_json_string(j, "stride_reason", st->why);
+    if (!st->stride) return;
+    cb_json_object(j, "foot_slide");
+    cb_json_number(j, "mean", st->slide_mean);
+    cb_json_number(j, "worst", st->slide_worst);
+    cb_json_number(j, "mean_with_per_row_travel", st->slide_mean_varying); /* measured, not shipped (stride.h) */
+    cb_json_array(j, "feet");
+    for (uint32_t k = 0; k < st->foot_count; ++k) {
+        const cb_foot *f = &st->feet[k];
+        if (!f->strides) continue;
+        cb_json_object(j, NULL);
+        cb_json_string(j, "foot", f->name);
+        cb_json_int(j, "bone", f->joint);
+        cb_json_number(j, "stance", f->stance);
+        cb_json_number(j, "step_speed", f->step_speed);
+        cb_json_number(j, "mean", f->slide_mean);
+        cb_json_number(j, "worst", f->slide_worst);
+        cb_json_end(j);
+    }
     cb_json_end(j);
     cb_json_end(j);
 }
@@ -109,6 +144,7 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
     cb_json_number(j, "speed_reference", t->speed_reference);
     cb_json_string(j, "speed_reference_from", t->speed_reference_from);
     cb_json_string(j, "default_state", an->default_state ? an->default_state : "");
+    cb_json_string(j, "default_state_from", an->default_state_from ? an->default_state_from : "no states");
     cb_json_array(j, "clips");
     for (uint32_t c = 0; c < t->clip_count; ++c) {
         const cb_roster_clip *cl = &t->clips[c];
@@ -123,11 +159,12 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
         cb_json_number(j, "root_speed", cl->speed.root);
         cb_json_number(j, "feet_speed", cl->speed.feet);
         cb_json_string(j, "speed_method", cl->speed.method);
+        cb_roster_json_stride(j, &cl->speed.stride);
         cb_json_end(j);
     }
     cb_json_end(j);
     cb_json_object(j, "states");
-    for (uint32_t s = 0; s < an->state_count; ++s) write_state(j, t, &an->states[s], t->state_clip[s]);
+    for (uint32_t s = 0; s < an->state_count; ++s) write_state(j, t, s);
     cb_json_end(j);
     cb_json_array(j, "lods");
     for (uint32_t l = 0; l < t->lod_count; ++l) {

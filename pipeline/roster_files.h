@@ -5,8 +5,16 @@
 
 #include "crowdbake/roster.h"
 
-/* Locomotion: a looping clip that moves. Only these are synced to the animal's speed. */
-static inline bool roster_is_locomotion(const cb_roster_clip *c) { return c->loops && c->speed.speed > 0; }
+/* "CATALOG:LINE:COLUMN" of a place in the catalog, into buf. */
+const char *roster_at(const cb_catalog *cat, cb_source_pos pos, char *buf, size_t size);
+
+/* Each state's clip (state_clip), by its keywords; fails naming the state that matches none. */
+cb_status roster_match_states(const cb_catalog *cat, const cb_catalog_animal *an, cb_roster_type *t, cb_error *err);
+/* Which states follow the speed (state_sync, cb_decide_sync) and the speed reference; fails
+ * where a state must follow the speed but nothing gives it one (roster_states.c). */
+cb_status roster_decide_states(const cb_catalog *cat, const cb_catalog_animal *an, cb_roster_type *t, cb_error *err);
+/* A warning per speed-synced clip whose feet slide however it is played (cb_stride). */
+void roster_warn_foot_slide(cb_roster_type *t);
 
 /* The content key of a type's rig, planned clips and settings (roster_key.c). */
 uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan *plan, uint32_t n, const cb_bake_settings *b);

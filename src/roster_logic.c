@@ -1,6 +1,7 @@
 /* roster.c - roster logic on plain structs: see catalog.h. */
 #include <ctype.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -33,107 +34,191 @@ int cb_match_state(const char *const *clips, uint32_t clip_count, const char *co
     return -1;
 }
 
-/* ---- ground speed ---- */
+/* ---- the command line's word on states ---- */
 
-static bool is_leaf(const cb_model *m, const cb_skin *skin, uint32_t j)
+static bool parse_sync(const char *text, size_t n, cb_sync_mode *out)
 {
-    for (uint32_t k = 0; k < skin->joint_count; ++k)
-        for (int32_t p = m->nodes[skin->joints[k]].parent; p >= 0; p = m->nodes[p].parent)
-            if (p == skin->joints[j]) return false;
+    static const char *const names[] = {"auto", "speed", "time"};
+    for (int i = 0; i < 3; ++i)
+        if (strlen(names[i]) == n && strncmp(text, names[i], n) == 0) return *out = (cb_sync_mode)i, true;
+    return false;
+}
+
+/* Appends " WORD" to an animal's canonical entry, so a record made without the override is not
+ * taken for one made with it. */
+static bool note_override(cb_catalog *cat, cb_catalog_animal *an, const char *what, const char *value)
+{
+    size_t n = strlen(an->canonical) + strlen(what) + strlen(value) + 3;
+    char *c = cb_arena_alloc(cat->arena, n, 1);
+    if (!c) return false;
+    snprintf(c, n, "%s %s=%s", an->canonical, what, value);
+    an->canonical = c;
     return true;
 }
 
-/* Mean horizontal speed, relative to the root, of one foot while it is down (in the lowest
- * tenth of its height range): a planted foot slides back at the ground speed. h, x, z: the
- * foot's height and horizontal offset from the root at `samples` times dt apart. */
-static double stance_speed(const double *h, const double *x, const double *z, uint32_t samples, double dt, double size)
+/* Sets `state`'s sync (or, with mode < 0, makes it the default state) in every animal that has
+ * it; false when none does. */
+static bool apply_to_state(cb_catalog *cat, const char *state, size_t len, int mode, bool *oom)
 {
-    double lo = INFINITY, hi = -INFINITY;
-    for (uint32_t i = 0; i < samples; ++i) lo = fmin(lo, h[i]), hi = fmax(hi, h[i]);
-    /* A foot that never lifts is not stepping: its sway is not travel. */
-    if (hi - lo < 0.02 * size) return 0;
-    double band = lo + 0.1 * (hi - lo), dist = 0, time = 0;
-    for (uint32_t i = 0; i + 1 < samples; ++i)
-        if (h[i] <= band && h[i + 1] <= band) {
-            dist += hypot(x[i + 1] - x[i], z[i + 1] - z[i]);
-            time += dt;
-        }
-    return time > 0 && hi > lo ? dist / time : 0;
-}
-
-static int compare_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-enum { STANCE_SAMPLES = 240, MAX_FEET = 64 };
-
-/* Mean stance speed of the feet (leaf joints in the lowest 15 % of the rest pose), their
- * median; 0 when no foot steps or they only shuffle on the spot. Each pose is sampled once
- * for every foot (a pose per foot and time would repeat the same work for each foot). */
-static double feet_speed(cb_sampler *s, const cb_clip_info *clip, double lo, double size)
-{
-    const cb_model *m = cb_sampler_model(s);
-    const cb_skin *skin = &m->skins[cb_sampler_skin(s)];
-    const double *g = cb_sample_globals(s, -1, 0);
-    uint32_t root = cb_skin_root_joint(m, cb_sampler_skin(s)), feet = 0, candidates[MAX_FEET], n = 0;
-    for (uint32_t j = 0; j < skin->joint_count && n < MAX_FEET; ++j) {
-        double y = g[(size_t)skin->joints[j] * 16 + 13];
-        if (y <= lo + 0.15 * size && is_leaf(m, skin, j)) candidates[n++] = j;
-    }
-    if (n == 0) return 0;
-    double *track = malloc((size_t)n * 3 * STANCE_SAMPLES * sizeof(double)); /* per foot: h, x, z */
-    if (!track) return 0;
-    double dt = clip->duration / STANCE_SAMPLES;
-    for (uint32_t i = 0; i < STANCE_SAMPLES; ++i) {
-        g = cb_sample_globals(s, clip->animation, clip->t0 + i * dt);
-        const double *r = g + (size_t)skin->joints[root] * 16;
-        for (uint32_t k = 0; k < n; ++k) {
-            const double *f = g + (size_t)skin->joints[candidates[k]] * 16;
-            double *h = track + (size_t)k * 3 * STANCE_SAMPLES;
-            h[i] = f[13], h[STANCE_SAMPLES + i] = f[12] - r[12], h[2 * STANCE_SAMPLES + i] = f[14] - r[14];
+    bool found = false;
+    for (uint32_t a = 0; a < cat->animal_count; ++a) {
+        cb_catalog_animal *an = &cat->animals[a];
+        for (uint32_t s = 0; s < an->state_count; ++s) {
+            if (strlen(an->states[s].name) != len || strncmp(an->states[s].name, state, len) != 0) continue;
+            found = true;
+            if (mode >= 0) an->states[s].sync = (cb_sync_mode)mode, an->states[s].sync_from_command_line = true;
+            else an->default_state = an->states[s].name, an->default_state_from = "the command line (--default-state)";
+            static const char *const modes[] = {"auto", "speed", "time"};
+            *oom |= !note_override(cat, an, mode >= 0 ? an->states[s].name : "default", mode >= 0 ? modes[mode] : state);
         }
     }
-    double speeds[MAX_FEET];
-    for (uint32_t k = 0; k < n; ++k) {
-        const double *h = track + (size_t)k * 3 * STANCE_SAMPLES;
-        double v = stance_speed(h, h + STANCE_SAMPLES, h + 2 * STANCE_SAMPLES, STANCE_SAMPLES, dt, size);
-        if (v > 0) speeds[feet++] = v;
-    }
-    free(track);
-    if (feet == 0) return 0;
-    qsort(speeds, feet, sizeof speeds[0], compare_double);
-    return speeds[feet / 2] > 0.1 * size ? speeds[feet / 2] : 0; /* shuffling on the spot is not travel */
+    return found;
 }
+
+cb_status cb_catalog_override_states(cb_catalog *cat, const char *syncs, const char *default_state, cb_error *err)
+{
+    bool oom = false;
+    for (const char *p = syncs; p && *p;) {
+        const char *end = strchr(p, ','), *eq = strchr(p, '=');
+        if (!end) end = p + strlen(p);
+        cb_sync_mode mode;
+        if (!eq || eq > end || eq == p || !parse_sync(eq + 1, (size_t)(end - eq - 1), &mode))
+            return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_SYNC,
+                                   "'%.*s': a state's sync is STATE=speed (follows the instance's speed), STATE=time "
+                                   "(its own rate) or STATE=auto", (int)(end - p), p);
+        if (!apply_to_state(cat, p, (size_t)(eq - p), (int)mode, &oom))
+            return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_SYNC, "%s: no animal has a state '%.*s'", cat->path,
+                                   (int)(eq - p), p);
+        p = *end ? end + 1 : end;
+    }
+    if (default_state && !apply_to_state(cat, default_state, strlen(default_state), -1, &oom))
+        return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_DEFAULT_STATE, "%s: no animal has a state '%s'", cat->path,
+                               default_state);
+    return oom ? cb_fail(err, CB_ERR_INTERNAL, "out of memory") : CB_OK;
+}
+
+/* ---- ground speed ---- */
 
 void cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, cb_ground_speed *out)
 {
     memset(out, 0, sizeof *out);
     out->method = "none";
     if (clip->duration <= 0) return;
-    const cb_model *m = cb_sampler_model(s);
-    const cb_skin *skin = &m->skins[cb_sampler_skin(s)];
-    const double *g = cb_sample_globals(s, -1, 0);
-    double lo = INFINITY, hi = -INFINITY;
-    for (uint32_t j = 0; j < skin->joint_count; ++j) {
-        double y = g[(size_t)skin->joints[j] * 16 + 13];
-        lo = fmin(lo, y), hi = fmax(hi, y);
-    }
-    double size = hi - lo > 0 ? hi - lo : 1;
+    double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
+    cb_stride_measure(s, clip, &out->stride);
     out->root = clip->ground_speed;
-    out->feet = feet_speed(s, clip, lo, size);
-    /* Root travel counts when it is more than a percent of the skeleton per second. A planted
-     * foot is still in the world, so relative to the root it slides back at the ground speed
-     * whether the root moves or not: where both exist they agree, and a root that moves far
-     * less than the feet only drifts while the clip walks in place. */
-    bool root_moves = out->root > 0.01 * size;
-    if (out->feet > 0 && (!root_moves || out->root < 0.5 * out->feet)) {
+    out->feet = out->stride.stride ? out->stride.speed : 0;
+    if (out->feet > 0) {
         out->speed = out->feet;
-        out->method = root_moves ? "planted feet (the root only drifts)" : "planted feet";
-    } else if (root_moves) {
+        out->method = "planted feet";
+    } else if (out->root > 0.01 * (height > 0 ? height : 1)) { /* under that, root jitter */
         out->speed = out->root;
         out->method = "root motion";
+    }
+}
+
+/* ---- speed or time: what a state's words and feet say ---- */
+
+/* Words that name a gait, and words that name an action done in place. A name's words match a
+ * stem as themselves or with an ending (walks, walking, trotted, running, swimmer). */
+static const char *const locomotion_words[] = {
+    "walk", "run", "trot", "canter", "gallop", "lope", "amble", "jog", "sprint", "dash", "flee", "wander", "roam",
+    "stroll", "march", "patrol", "migrate", "move", "locomotion", "crawl", "slither", "hop", "swim", "fly", "flight",
+    "glide", "soar", "strafe", "chase", "stride"};
+static const char *const in_place_words[] = {
+    "idle", "stand", "eat", "graze", "drink", "sniff", "attack", "bite", "headbutt", "kick", "punch", "hit", "react",
+    "hurt", "damage", "stun", "death", "die", "dead", "dying", "sit", "sleep", "lie", "rest", "look", "survey",
+    "roar", "howl", "bark", "call", "emote", "dance", "wave", "yes", "no", "spawn", "pose", "scratch", "shake",
+    "groom", "yawn", "breathe", "alert", "cower"};
+
+static bool word_matches(const char *word, size_t n, const char *stem)
+{
+    static const char *const endings[] = {"", "s", "es", "ed", "d", "er", "ing", "ion"};
+    size_t k = strlen(stem);
+    if (n < k || strncmp(word, stem, k) != 0) return false;
+    const char *rest = word + k;
+    size_t r = n - k;
+    if (r > 0 && rest[0] == stem[k - 1] && r > 1) ++rest, --r; /* a doubled consonant: running, trotted */
+    for (size_t e = 0; e < sizeof endings / sizeof *endings; ++e)
+        if (strlen(endings[e]) == r && strncmp(rest, endings[e], r) == 0) return true;
+    return false;
+}
+
+/* The first word of `text` (split at anything not a letter and where a lower-case letter meets
+ * an upper-case one: "Idle_HitReact" is idle, hit, react) in either list: *kind 1 for a gait,
+ * -1 for an action in place; the matching word, lower-cased, into out. 0 when none. */
+static int classify_words(const char *text, char *out, size_t size)
+{
+    char word[64];
+    for (const char *p = text; *p;) {
+        size_t n = 0;
+        while (*p && !isalpha((unsigned char)*p)) ++p;
+        while (isalpha((unsigned char)*p)) {
+            if (n < sizeof word - 1) word[n++] = (char)tolower((unsigned char)*p);
+            ++p;
+            if (islower((unsigned char)p[-1]) && isupper((unsigned char)*p)) break;
+        }
+        for (size_t i = 0; n && i < sizeof locomotion_words / sizeof *locomotion_words; ++i)
+            if (word_matches(word, n, locomotion_words[i])) return snprintf(out, size, "%.*s", (int)n, word), 1;
+        for (size_t i = 0; n && i < sizeof in_place_words / sizeof *in_place_words; ++i)
+            if (word_matches(word, n, in_place_words[i])) return snprintf(out, size, "%.*s", (int)n, word), -1;
+    }
+    return 0;
+}
+
+/* What the words say: the state's name first, then its keywords, then the clip's name. */
+static int words_say(const cb_catalog_state *st, const char *clip_name, char *out, size_t size)
+{
+    char word[64];
+    int kind = 0;
+    if (st && (kind = classify_words(st->name, word, sizeof word)))
+        return snprintf(out, size, "the state's name '%s' says '%s'", st->name, word), kind;
+    for (uint32_t k = 0; st && k < st->keyword_count; ++k)
+        if ((kind = classify_words(st->keywords[k], word, sizeof word)))
+            return snprintf(out, size, "its keyword '%s' says '%s'", st->keywords[k], word), kind;
+    if ((kind = classify_words(clip_name, word, sizeof word)))
+        return snprintf(out, size, "the clip's name says '%s'", word), kind;
+    return 0;
+}
+
+void cb_decide_sync(const cb_catalog_state *st, const char *clip_name, bool loops, const cb_ground_speed *gs,
+                    bool speed_given, cb_sync_decision *out)
+{
+    char words[200] = "";
+    const cb_stride *feet = &gs->stride;
+    bool measured = gs->speed > 0;
+    out->speed = false;
+    if (st && st->sync != CB_SYNC_AUTO) {
+        out->speed = st->sync == CB_SYNC_SPEED;
+        const char *mode = out->speed ? "speed" : "time";
+        if (st->sync_from_command_line) snprintf(out->reason, sizeof out->reason, "the command line says --sync %s=%s", st->name, mode);
+        else snprintf(out->reason, sizeof out->reason, "the catalog says sync = \"%s\"", mode);
+        return;
+    }
+    if (!loops) {
+        snprintf(out->reason, sizeof out->reason, "a one-shot: it plays once at its own rate, also at standstill");
+        return;
+    }
+    int kind = words_say(st, clip_name, words, sizeof words);
+    if (kind < 0) {
+        snprintf(out->reason, sizeof out->reason, "in place: %s%s; it plays at its own rate at standstill", words,
+                 feet->stride ? " (its feet stride, but the words decide: set sync = \"speed\" to follow speed)" : "");
+    } else if (kind > 0 && (measured || speed_given)) {
+        out->speed = true;
+        snprintf(out->reason, sizeof out->reason, "locomotion: %s, and %s", words,
+                 feet->stride ? feet->why : measured ? "its root travels" : "the animal gives speed_reference");
+    } else if (kind > 0) {
+        snprintf(out->reason, sizeof out->reason, "plays at its own rate: %s, but nothing measures its ground speed "
+                 "(%s; no root travel); give the animal a speed_reference to follow speed", words, feet->why);
+    } else if (feet->stride) {
+        out->speed = true;
+        snprintf(out->reason, sizeof out->reason, "locomotion: no word decides, and %s", feet->why);
+    } else if (measured) {
+        out->speed = true;
+        snprintf(out->reason, sizeof out->reason, "locomotion: no word decides, and its root travels %.3g units/s",
+                 gs->speed);
+    } else {
+        snprintf(out->reason, sizeof out->reason, "in place: no word decides, and %s", feet->why);
     }
 }
 

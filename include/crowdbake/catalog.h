@@ -5,6 +5,7 @@
 #define CB_CATALOG_H
 
 #include "bake.h"
+#include "stride.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -24,10 +25,16 @@ typedef struct cb_catalog_clip {
     cb_source_pos pos;
 } cb_catalog_clip;
 
+/* A state's playback: decided by crowdbake (cb_decide_sync), or the catalog's sync = "speed" |
+ * "time". */
+typedef enum cb_sync_mode { CB_SYNC_AUTO, CB_SYNC_SPEED, CB_SYNC_TIME } cb_sync_mode;
+
 typedef struct cb_catalog_state {
     const char *name;
     const char **keywords;
     uint32_t keyword_count;
+    cb_sync_mode sync;
+    bool sync_from_command_line; /* sync was given by --sync (cb_catalog_override_states) */
     cb_source_pos pos;
 } cb_catalog_state;
 
@@ -45,6 +52,7 @@ typedef struct cb_catalog_animal {
     cb_catalog_state *states;
     uint32_t state_count;
     const char *default_state;
+    const char *default_state_from; /* why: "the catalog's default_state", "the first state written", ... */
     double speed_reference; /* m/s (model units/s); with speed_auto, measured */
     bool speed_auto;
     const char *speed_state; /* speed_reference = "STATE": measure it on that state's clip (unless the default state's is locomotion) */
@@ -80,22 +88,44 @@ void cb_catalog_free(cb_catalog *catalog);
  * EXR (which holds half or float only). */
 cb_status cb_catalog_override_bake(cb_catalog *catalog, const cb_bake_settings *values, unsigned fields, cb_error *err);
 
+/* The command line's word on states, over the catalog's for this run: `syncs` is a comma-separated
+ * list of STATE=speed|time|auto (NULL: none), `default_state` a state's name (NULL: none); each
+ * applies to every animal with that state, and is an error when no animal has it. Counts in
+ * what is up to date (the animals' canonical entries record it). */
+cb_status cb_catalog_override_states(cb_catalog *catalog, const char *syncs, const char *default_state, cb_error *err);
+
 /* Index of the first clip whose name contains a keyword, trying keywords in order
  * (case-insensitive), or -1. */
 int cb_match_state(const char *const *clip_names, uint32_t clip_count, const char *const *keywords,
                    uint32_t keyword_count);
 
 /* Ground speed of a clip in model units per second, from two pieces of evidence: the root's
- * horizontal travel, and the speed at which planted feet slide back relative to the root (a
- * foot on the ground is still in the world). Root travel when the two agree or no foot steps;
- * the feet when the root moves far less than they do (the clip walks in place and its root
- * only drifts). 0 when neither moves. */
+ * horizontal travel and the clip's stride (stride.h: the speed at which its planted feet slide
+ * least). The stride's speed where the feet stride (it holds the root's travel too, since the
+ * feet are measured in the frame that travel is taken off); else the root's travel where it
+ * moves more than 1% of the model's height per second; else 0. */
 typedef struct cb_ground_speed {
     double speed;       /* the ground speed: what foot-sync uses */
-    double root, feet;  /* both measurements; feet 0 when no foot steps */
-    const char *method; /* "root motion", "planted feet", "planted feet (the root only drifts)" or "none" */
+    double root, feet;  /* both measurements; feet 0 without a stride */
+    const char *method; /* "planted feet", "root motion" or "none" (static strings) */
+    cb_stride stride;   /* the feet: the stride, its ground speed and the feet's slide */
 } cb_ground_speed;
 void cb_measure_ground_speed(cb_sampler *sampler, const cb_clip_info *clip, cb_ground_speed *out);
+
+/* Whether a state's clip follows the instance's speed (foot-sync: its rate is speed times
+ * rate_per_speed) or plays at its own rate, and why in one line. Decided from, in order: the
+ * catalog's sync for the state; a one-shot never follows speed; the words of the state's name,
+ * then of its keywords, then of the clip's name (gaits such as walk, run, gallop, swim, fly
+ * name locomotion; idle, eat, attack, hit, death and the like name actions in place); and
+ * where no word decides, the clip's stride. Locomotion needs a ground speed (a stride or root
+ * travel) unless the animal gives speed_reference. `state` may be NULL (a clip alone, as
+ * `info` shows it). */
+typedef struct cb_sync_decision {
+    bool speed;         /* follows the instance's speed */
+    char reason[512];
+} cb_sync_decision;
+void cb_decide_sync(const cb_catalog_state *state, const char *clip_name, bool loops, const cb_ground_speed *speed,
+                    bool speed_given, cb_sync_decision *out);
 
 /* For a LOD skin: remap[i] = the main skin's joint with the LOD joint i's name. Fails, naming
  * the first mismatch, when a name is missing or its bind pose (inverse bind matrix) differs. */

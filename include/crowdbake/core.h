@@ -51,7 +51,9 @@ typedef enum cb_setting {
     CB_SETTING_MAX_TEXTURE_SIZE,   /* cb_bake_options.max_texture_size */
     CB_SETTING_LAYOUT,             /* cb_bake_options.layout */
     CB_SETTING_PRECISION,          /* cb_bake_options.precision */
-    CB_SETTING_BATCH               /* cb_mesh_options.batch */
+    CB_SETTING_BATCH,              /* cb_mesh_options.batch */
+    CB_SETTING_SYNC,               /* a catalog state's sync (cb_catalog_override_states) */
+    CB_SETTING_DEFAULT_STATE       /* a catalog animal's default_state */
 } cb_setting;
 
 typedef struct cb_error {

@@ -14,6 +14,16 @@
 extern "C" {
 #endif
 
+/* A state that follows the instance's speed: its ground speed and its feet's slide there. */
+typedef struct cb_report_gait {
+    const char *state;
+    char clip[128];
+    double ground_speed;            /* model units/s at rate 1 */
+    bool stride;                    /* measured on planted feet (else the root's travel) */
+    double slide_mean, slide_worst; /* shares of the ground speed */
+    bool slides;                    /* slide_mean > CB_SLIDE_WARN: the asset's feet slide at any rate */
+} cb_report_gait;
+
 typedef struct cb_report_type {
     const char *name;
     const char *shares;                 /* the owner's name when the palette is shared */
@@ -33,6 +43,8 @@ typedef struct cb_report_type {
     bool palette_over_limit, bones_over_limit;
     cb_report_runtime runtime;          /* with cb_report_add_runtime: meshes, batch and transition bytes */
     uint32_t roster_index;
+    uint32_t gait_count;
+    cb_report_gait *gaits;              /* the type's states that follow the speed */
 } cb_report_type;
 
 typedef struct cb_report {

@@ -6,6 +6,7 @@
 #include <stdio.h>
 
 #include "catalog.h"
+#include "json.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -63,6 +64,7 @@ typedef struct cb_roster_type {
     uint32_t clip_count;
     cb_roster_clip *clips;
     int *state_clip;          /* per catalog state: index into clips */
+    cb_sync_decision *state_sync; /* per catalog state: follows the speed or not, and why */
     uint32_t lod_count;
     cb_roster_lod *lods;
     uint32_t input_count;
@@ -85,6 +87,11 @@ typedef struct cb_roster {
  * status of the first failure (by name), or CB_OK. */
 cb_status cb_roster_bake(const cb_catalog *catalog, const cb_roster_options *options, cb_roster *out, cb_error *err);
 void cb_roster_free(cb_roster *roster);
+
+/* A clip's stride as the manifest and `info --json` give it: "stride", "stride_reason" and, for
+ * a stride, "foot_slide": how much each planted foot slides at the clip's ground speed
+ * (fractions of that speed, mean and worst over the foot's stance). */
+void cb_roster_json_stride(cb_json *j, const cb_stride *stride);
 
 #ifdef __cplusplus
 }

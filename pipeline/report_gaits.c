@@ -1,0 +1,101 @@
+/* report_gaits.c - the report's foot-sync section: each state that follows the instance's speed,
+ * its ground speed and how far its planted feet slide there (cb_stride), as a share of that
+ * speed; a gait whose feet slide past CB_SLIDE_WARN at any rate is a warning. */
+#include "report_parts.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+void report_fill_gaits(const cb_roster_type *rt, cb_report_type *t)
+{
+    const cb_catalog_animal *an = rt->animal;
+    t->gaits = calloc(an->state_count ? an->state_count : 1, sizeof *t->gaits);
+    for (uint32_t s = 0; t->gaits && s < an->state_count; ++s) {
+        if (!rt->state_sync[s].speed) continue;
+        const cb_roster_clip *c = &rt->clips[rt->state_clip[s]];
+        cb_report_gait *g = &t->gaits[t->gait_count++];
+        g->state = an->states[s].name;
+        snprintf(g->clip, sizeof g->clip, "%s", c->name);
+        g->ground_speed = c->speed.speed > 0 ? c->speed.speed : rt->speed_reference;
+        g->stride = c->speed.stride.stride;
+        g->slide_mean = c->speed.stride.slide_mean, g->slide_worst = c->speed.stride.slide_worst;
+        g->slides = g->stride && g->slide_mean > CB_SLIDE_WARN;
+    }
+}
+
+uint32_t report_gait_warnings(const cb_report_type *t)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < t->gait_count; ++i) n += t->gaits[i].slides;
+    return n;
+}
+
+/* "49% (worst 235%)", or why nothing is measured. */
+static const char *slide_text(const cb_report_gait *g, char *buf, size_t size)
+{
+    if (!g->stride) snprintf(buf, size, "not measured (no stride: its speed is its root's travel)");
+    else snprintf(buf, size, "%.0f%% (worst %.0f%%)%s", 100 * g->slide_mean, 100 * g->slide_worst,
+                  g->slides ? ": FEET SLIDE AT ANY RATE" : "");
+    return buf;
+}
+
+void report_gaits_text(FILE *f, const cb_report *r)
+{
+    bool any = false;
+    char slide[96];
+    for (uint32_t i = 0; i < r->type_count; ++i)
+        for (uint32_t k = 0; k < r->types[i].gait_count; ++k) {
+            const cb_report_gait *g = &r->types[i].gaits[k];
+            if (!any) fprintf(f, "\nFoot-sync (states that follow the speed; planted feet's slide as a share of the ground speed):\n");
+            any = true;
+            fprintf(f, "%-14s %-10s %-28s %9.3g units/s  slide %s\n", r->types[i].name, g->state, g->clip, g->ground_speed,
+                    slide_text(g, slide, sizeof slide));
+        }
+    if (any) fputc('\n', f);
+}
+
+void report_gaits_markdown(FILE *f, const cb_report *r)
+{
+    bool any = false;
+    char slide[96];
+    for (uint32_t i = 0; i < r->type_count; ++i)
+        for (uint32_t k = 0; k < r->types[i].gait_count; ++k) {
+            const cb_report_gait *g = &r->types[i].gaits[k];
+            if (!any) fputs("\n### Foot-sync\n\n| type | state | clip | ground speed (units/s) | feet slide (share of the ground "
+                            "speed) |\n|---|---|---|--:|---|\n", f);
+            any = true;
+            fprintf(f, "| %s | %s | %s | %.3g | %s |\n", r->types[i].name, g->state, g->clip, g->ground_speed,
+                    slide_text(g, slide, sizeof slide));
+        }
+}
+
+void report_gaits_json(cb_json *j, const cb_report_type *t)
+{
+    cb_json_array(j, "gaits");
+    for (uint32_t k = 0; k < t->gait_count; ++k) {
+        const cb_report_gait *g = &t->gaits[k];
+        cb_json_object(j, NULL);
+        cb_json_string(j, "state", g->state);
+        cb_json_string(j, "clip", g->clip);
+        cb_json_number(j, "ground_speed", g->ground_speed);
+        cb_json_bool(j, "stride", g->stride);
+        if (g->stride) {
+            cb_json_number(j, "slide_mean", g->slide_mean);
+            cb_json_number(j, "slide_worst", g->slide_worst);
+        }
+        cb_json_bool(j, "feet_slide_at_any_rate", g->slides);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
+}
+
+void report_gaits_html(FILE *f, const cb_report_type *t)
+{
+    char slide[96];
+    for (uint32_t k = 0; k < t->gait_count; ++k) {
+        const cb_report_gait *g = &t->gaits[k];
+        fprintf(f, "<li%s>", g->slides ? " class=\"warn\"" : "");
+        report_html_escape(f, g->state);
+        fprintf(f, " follows the speed (%.3g units/s): feet slide %s</li>", g->ground_speed, slide_text(g, slide, sizeof slide));
+    }
+}
