@@ -178,14 +178,15 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     return cmd_bake_catalog(&cb);
 }
 
-/* Both error figures: the encoding's at the baked rows, and what a player sees (the runtime's
- * blend of two rows, halfway between them), which is usually far larger. */
+/* Both sizes, as a catalog's log gives them: the texture as uploaded, and the file (its header
+ * and tables too, or compressed). Both error figures: the encoding's at the baked rows, and what a
+ * player sees (the runtime's blend of two rows, halfway between them), which is usually far larger. */
 static void print_summary(const cb_bake_output *out, double seconds)
 {
     const cb_palette *p = &out->palette;
-    printf("%s: %.1f KiB, %ux%u texels (%u block%s), %u bone%s, %u clip%s, %u row%s, %s/%s, encoding error %.3g mm/m "
+    printf("%s: %.1f KiB texture, %.1f KiB file, %ux%u texels (%u block%s), %u bone%s, %u clip%s, %u row%s, %s/%s, encoding error %.3g mm/m "
            "(at the baked rows), visible error %.3g mm/m (blending rows at runtime), %.0f ms\n",
-           out->path, out->file_bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count,
+           out->path, p->texel_bytes / 1024.0, out->file_bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count,
            p->bone_count == 1 ? "" : "s", p->clip_count, p->clip_count == 1 ? "" : "s", p->rows, p->rows == 1 ? "" : "s",
            cb_layout_name(p->layout), cb_precision_name(p->precision), cb_mm_per_m(p->max_error, p->model_height),
            cb_mm_per_m(p->visible_error, p->model_height), seconds * 1000);
@@ -201,6 +202,7 @@ static void json_output(cb_json *j, const cb_bake_output *out, double seconds, d
     cb_json_string(j, "path", out->path);
     cb_json_string(j, "format", out->format == CB_FORMAT_PAL ? "pal" : out->format == CB_FORMAT_EXR ? "exr" : "ktx2");
     cb_json_int(j, "bytes", (long long)out->file_bytes);
+    cb_json_int(j, "texture_bytes", (long long)p->texel_bytes); /* as uploaded: what a catalog's log and report give */
     cb_json_int(j, "width", p->width);
     cb_json_int(j, "height", p->height);
     cb_json_int(j, "blocks", p->blocks);

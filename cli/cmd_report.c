@@ -2,6 +2,7 @@
 #define _GNU_SOURCE /* open_memstream */
 #include <ctype.h>
 #include <dirent.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -91,6 +92,14 @@ static cb_status open_single_model(const char *path, char *tmp, size_t tmp_size,
     const char *dir = getenv("TMPDIR") && *getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
     snprintf(tmp, tmp_size, "%s/crowdbake-report-XXXXXX", dir);
     if (!mkdtemp(tmp)) return cb_fail(err, CB_ERR_IO, "%s: cannot create a temporary folder for the bake (set TMPDIR)", tmp);
+    /* Absolute: the catalog made for the model resolves out_dir from the model's folder, so a
+     * relative TMPDIR would bake beside the model (and be left there), not where it was made. */
+    char abs[PATH_MAX];
+    if (!realpath(tmp, abs) || strlen(abs) >= tmp_size) {
+        rmdir(tmp);
+        return cb_fail(err, CB_ERR_IO, "%s: cannot resolve the temporary folder's path (set TMPDIR to an absolute path)", tmp);
+    }
+    memcpy(tmp, abs, strlen(abs) + 1);
     if (single_model_catalog(path, tmp, cat, err)) remove_folder(tmp);
     return err->status;
 }

@@ -21,9 +21,10 @@ struct Parser {
     cb_error *err;
     std::string file;
 
-    [[noreturn]] void fail(const toml::source_region &where, const std::string &what)
+    /* status: CB_ERR_IO where a file the catalog names cannot be read, as for a model on the command line. */
+    [[noreturn]] void fail(const toml::source_region &where, const std::string &what, cb_status status = CB_ERR_INPUT)
     {
-        cb_fail(err, CB_ERR_INPUT, "%s:%u:%u: %s", file.c_str(), (unsigned)where.begin.line, (unsigned)where.begin.column,
+        cb_fail(err, status, "%s:%u:%u: %s", file.c_str(), (unsigned)where.begin.line, (unsigned)where.begin.column,
                 what.c_str());
         throw Failure{};
     }
@@ -352,7 +353,8 @@ struct Parser {
         std::string path = resolve(str(*model, where + " model"));
         struct stat st;
         if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
-            fail(model->source(), where + " model file " + path + " does not exist (paths are relative to the catalog)");
+            fail(model->source(), where + " model file " + path + " does not exist (paths are relative to the catalog)",
+                 CB_ERR_IO);
         an->model = dup(path);
         an->model_pos = pos(*model);
         if (auto *l = t.get("lods")) {
@@ -364,7 +366,7 @@ struct Parser {
             for (size_t i = 0; i < a.size(); ++i) {
                 std::string lp = resolve(str(*a.get(i), where + " lod"));
                 if (stat(lp.c_str(), &st) != 0)
-                    fail(a.get(i)->source(), where + " LOD file " + lp + " does not exist");
+                    fail(a.get(i)->source(), where + " LOD file " + lp + " does not exist", CB_ERR_IO);
                 an->lods[i] = dup(lp);
                 an->lod_pos[i] = pos(*a.get(i));
             }

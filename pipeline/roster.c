@@ -1,7 +1,7 @@
 /* roster.c - see roster.h. Three passes: prepare every type (load, plan clips, match states,
  * measure speeds, check LODs, hash the rig and clips) in parallel; let types with equal hashes
  * share one palette; bake the owners that are out of date in parallel. Then the manifest and
- * the depfile. Nothing that is written depends on the thread count or on timing. */
+ * the depfile. Nothing that is written, the log included, depends on the thread count or on timing. */
 #define _GNU_SOURCE /* open_memstream, strcasecmp */
 #include "roster_cache.h"
 #include "roster_files.h"
@@ -40,6 +40,7 @@ typedef struct roster_run {
     type_work *work;
     atomic_uint next;
     mtx_t log_lock;
+    roster_log log;           /* guarded by log_lock */
     double start;
     uint32_t threads_per_bake;
 } roster_run;
@@ -355,11 +356,15 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
     return err->status;
 }
 
+/* The type's lines, printed in catalog order (roster_log); on a terminal, the progress after them. */
 static void log_type(roster_run *run, const cb_roster_type *t)
 {
     if (!run->opt->log) return;
     mtx_lock(&run->log_lock);
-    FILE *f = run->opt->log;
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    if (!f) f = run->opt->log; /* no memory: as it comes */
     const char *clear = run->opt->tty ? "\r\033[K" : "";
     const cb_roster_type *owner = &run->r->types[t->owner];
     switch (t->outcome) {
@@ -367,9 +372,11 @@ static void log_type(roster_run *run, const cb_roster_type *t)
         char subset[64] = ""; /* past the measuring budget: say so (measure_all = true measures every row) */
         if (t->error_rows_measured && t->error_rows_measured < t->rows)
             snprintf(subset, sizeof subset, ", measured at %u of %u rows", t->error_rows_measured, t->rows);
-        fprintf(f, "%s  %-16s baked    %s (%.1f KiB, %ux%u, %s/%s, encoding error %.3g mm/m, visible %.3g mm/m%s) in %.0f ms\n",
-                clear, t->animal->name, (t->animal->bake.formats & CB_FORMAT_PAL) ? t->pal_path : t->exr_path,
-                t->palette_bytes / 1024.0, t->width, t->height, cb_layout_name(t->layout), cb_precision_name(t->precision),
+        bool pal = t->animal->bake.formats & CB_FORMAT_PAL; /* the file named; both sizes as `bake MODEL` gives them */
+        fprintf(f, "%s  %-16s baked    %s (%.1f KiB texture, %.1f KiB file, %ux%u, %s/%s, encoding error %.3g mm/m, "
+                "visible %.3g mm/m%s) in %.0f ms\n", clear, t->animal->name, pal ? t->pal_path : t->exr_path,
+                t->palette_bytes / 1024.0, (pal ? t->pal_file_bytes : t->exr_file_bytes) / 1024.0, t->width, t->height,
+                cb_layout_name(t->layout), cb_precision_name(t->precision),
                 cb_mm_per_m(t->max_error, t->model_height), cb_mm_per_m(t->visible_error, t->model_height), subset,
                 t->seconds * 1000);
         break;
@@ -388,8 +395,12 @@ static void log_type(roster_run *run, const cb_roster_type *t)
     }
     for (uint32_t i = 0; i < t->warnings.count; ++i)
         fprintf(f, "  %-16s %s: %s\n", "", t->warnings.items[i].kind, t->warnings.items[i].message);
+    if (f != run->opt->log) fclose(f);
+    else text = NULL;
+    roster_log_put(&run->log, (uint32_t)(t - run->r->types), text);
+    f = run->opt->log;
     if (run->opt->tty)
-        fprintf(f, "  [%u/%u done, %.1f s]", run->r->baked + run->r->up_to_date + run->r->shared + run->r->failed,
+        fprintf(f, "\r\033[K  [%u/%u done, %.1f s]", run->r->baked + run->r->up_to_date + run->r->shared + run->r->failed,
                 run->r->type_count, now_seconds() - run->start);
     fflush(f);
     mtx_unlock(&run->log_lock);
@@ -458,7 +469,7 @@ static void run_pass(roster_run *run, void (*fn)(roster_run *, uint32_t), uint32
 {
     uint32_t threads = run->opt->jobs ? run->opt->jobs : 1;
     if (threads > run->r->type_count) threads = run->r->type_count ? run->r->type_count : 1;
-    for (uint32_t i = 0; i < run->r->type_count; ++i) order[i] = i; /* one thread: the log in catalog order */
+    for (uint32_t i = 0; i < run->r->type_count; ++i) order[i] = i; /* one thread: catalog order */
     if (threads > 1) roster_order_types(run->cat, run->r, fn == bake_type, order); /* changes no output */
     atomic_store(&run->next, 0);
     pass p = {run, fn, order};
@@ -478,8 +489,9 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     run.cat = cat, run.opt = opt, run.r = r, run.start = now_seconds();
     run.work = calloc(cat->animal_count ? cat->animal_count : 1, sizeof(type_work));
     uint32_t *order = calloc(cat->animal_count ? cat->animal_count : 1, sizeof *order);
+    roster_log_init(&run.log, opt->log, r->type_count); /* without memory, lines print as they come */
     if (!r->types || !run.work || !order || mtx_init(&run.log_lock, mtx_plain) != thrd_success) {
-        free(run.work), free(order);
+        free(run.work), free(order), roster_log_free(&run.log);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
     /* Types are the unit of parallel work; fewer types than threads spread their clips too. */
@@ -534,7 +546,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
         free(run.work[i].lod_models);
         free(run.work[i].record);
     }
-    free(run.work), free(order);
+    free(run.work), free(order), roster_log_free(&run.log);
     mtx_destroy(&run.log_lock);
     return rc;
 }

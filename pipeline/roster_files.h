@@ -3,6 +3,8 @@
 #ifndef CB_ROSTER_FILES_H
 #define CB_ROSTER_FILES_H
 
+#include <stdio.h>
+
 #include "crowdbake/roster.h"
 
 /* "CATALOG:LINE:COLUMN" of a place in the catalog, into buf. */
@@ -36,5 +38,19 @@ void roster_write_record(const char *path, const unsigned char *data, size_t siz
 void roster_settle_times(const cb_roster *r);
 /* order[0..type_count): the types, the longest (a guess) first (roster_order.c). */
 void roster_order_types(const cb_catalog *cat, const cb_roster *r, bool prepared, uint32_t *order);
+
+/* The roster's log in catalog order (roster_log.c): each type's lines are held until every type
+ * before it has printed, so the log reads the same whatever order the threads finish in. The
+ * caller serialises the calls. */
+typedef struct roster_log {
+    FILE *out;
+    char **held;     /* per type: its lines once it is settled, until they are printed */
+    uint32_t count, next; /* next: the first type not printed yet */
+} roster_log;
+bool roster_log_init(roster_log *log, FILE *out, uint32_t count); /* false: no memory (lines print as they come) */
+/* Type i's lines (malloc'd, taken over; NULL prints nothing): printed now, with the held lines of
+ * the types after it, once every type before it has printed. */
+void roster_log_put(roster_log *log, uint32_t i, char *text);
+void roster_log_free(roster_log *log);
 
 #endif

@@ -1,7 +1,7 @@
 /* test_catalog.c - the animal catalog: validation messages with line numbers, state keywords,
  * speed references, characters outside ASCII, the manifest against its schema, shared rigs,
- * LOD remapping, incremental and parallel bakes, the depfile, and a failing type that does not
- * stop the others. */
+ * LOD remapping, incremental and parallel bakes, the depfile, a failing type that does not
+ * stop the others, a missing model's exit code, and the log's order and sizes. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
@@ -72,7 +72,6 @@ static void test_validation_errors_name_line_and_fix(void **state)
     expect_catalog_error(text, "unknown key 'bak'; did you mean 'bake'?", 1);
     snprintf(text, sizeof text, "[animal.fish]\n%s\nfps = \"fast\"\n", model);
     expect_catalog_error(text, "fps must be a rate in frames per second or \"auto\"", 3);
-    expect_catalog_error("[animal.fish]\nmodel = \"nope/missing.glb\"\n", "does not exist", 2);
     snprintf(text, sizeof text, "[animal.fish]\n%s\nstates = { swim = [\"swim\"] }\ndefault_state = \"fly\"\n", model);
     expect_catalog_error(text, "default_state 'fly' is not one of its states (swim)", 4);
     snprintf(text, sizeof text, "[animal.fish]\n%s\n\n[animal.fish]\n%s\n", model, model);
@@ -392,6 +391,61 @@ static void test_a_failing_type_does_not_stop_the_others(void **state)
     assert_int_equal(system("ls -a " TMP "/out-fail | grep -q '\\.tmp\\.'"), 256); /* no temporaries left */
 }
 
+/* A missing model is a file that cannot be read (EXIT_IO), named on the command line or by a
+ * catalog (whose bake said EXIT_INPUT, as for a catalog that is wrong); a missing LOD too. Nothing
+ * is written. */
+static void test_a_missing_model_exits_as_on_the_command_line(void **state)
+{
+    (void)state;
+    char out[8192], args[2048];
+    assert_int_equal(run_cli("bake " TMP "/nope/missing.glb -o " TMP "/missing.pal", out, sizeof out), EXIT_IO);
+    assert_non_null(strstr(out, "crowdbake: " TMP "/nope/missing.glb: cannot read: No such file or directory"));
+    write_text(TMP "/missing.toml", "[bake]\nout_dir = \"out-missing\"\n[animal.fish]\nmodel = \"nope/missing.glb\"\n");
+    assert_int_equal(run_cli("bake " TMP "/missing.toml", out, sizeof out), EXIT_IO);
+    if (!strstr(out, "crowdbake: " TMP "/missing.toml:4:9: [animal.fish] model file " TMP "/nope/missing.glb does not exist"))
+        fail_msg("%s", out);
+    assert_int_equal(run_cli("report " TMP "/missing.toml", out, sizeof out), EXIT_IO);
+    snprintf(args, sizeof args, "[bake]\nout_dir = \"out-missing\"\n[animal.fish]\nmodel = \"%s/fish.glb\"\nlods = [\"nope/lod.glb\"]\n",
+             samples_abs);
+    write_text(TMP "/missing-lod.toml", args);
+    assert_int_equal(run_cli("bake " TMP "/missing-lod.toml", out, sizeof out), EXIT_IO);
+    assert_non_null(strstr(out, "missing-lod.toml:5:9: [animal.fish] LOD file " TMP "/nope/lod.glb does not exist"));
+    assert_int_equal(system("test ! -e " TMP "/missing.pal && test ! -e " TMP "/out-missing"), 0);
+}
+
+/* The log lists the types in catalog order, the order of the manifest, whatever order the
+ * threads finish in: here the Cow (../shared, 744 rows, first by name and the longest, so the
+ * threads start it first and it finishes last) before three short types. Each baked line gives
+ * the sizes `bake MODEL` gives for the same palette, labelled: the texture as uploaded and the
+ * file (they said 59.6 KiB and 63.6 KiB for the same Fox palette). */
+static void test_the_log_is_in_catalog_order_with_the_sizes_of_bake_model(void **state)
+{
+    (void)state;
+    static char out[16384];
+    char args[4 * PATH_MAX], fox[PATH_MAX], cow[PATH_MAX], fox_abs[PATH_MAX], cow_abs[PATH_MAX], expect[128];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
+    assert_non_null(realpath(fox, fox_abs)), assert_non_null(realpath(cow, cow_abs)); /* the catalog is in TMP */
+    snprintf(args, sizeof args, "[bake]\nout_dir = \"out-order\"\n[animal.acow]\nmodel = \"%s\"\n"
+             "[animal.bfish]\nmodel = \"%s/fish.glb\"\n[animal.cbird]\nmodel = \"%s/bird.glb\"\n"
+             "[animal.dfox]\nmodel = \"%s\"\n", cow_abs, samples_abs, samples_abs, fox_abs);
+    write_text(TMP "/order.toml", args);
+    assert_int_equal(run_cli("bake " TMP "/order.toml -j 4 --force", out, sizeof out), 0);
+    const char *names[] = {"  acow ", "  bfish ", "  cbird ", "  dfox "}, *at = out;
+    for (size_t i = 0; i < COUNT_OF(names); ++i)
+        if (!(at = strstr(at, names[i]))) fail_msg("'%s' not after the types before it in:\n%s", names[i], out);
+    /* Fox: 24 bones x 2 texels x 159 rows x 8 bytes (qpos/u16); the file as written. */
+    struct stat st;
+    assert_int_equal(stat(TMP "/out-order/dfox.pal", &st), 0);
+    snprintf(expect, sizeof expect, "(%.1f KiB texture, %.1f KiB file, 48x159,", 24 * 2 * 159 * 8 / 1024.0, st.st_size / 1024.0);
+    if (!strstr(out, expect)) fail_msg("expected '%s' in:\n%s", expect, out);
+    snprintf(args, sizeof args, "bake %s -o " TMP "/fox-alone.pal", fox);
+    assert_int_equal(run_cli(args, out, sizeof out), 0);
+    snprintf(expect, sizeof expect, "fox-alone.pal: %.1f KiB texture, %.1f KiB file, 48x159 texels", 24 * 2 * 159 * 8 / 1024.0,
+             st.st_size / 1024.0);
+    if (!strstr(out, expect)) fail_msg("expected '%s' in:\n%s", expect, out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -406,6 +460,8 @@ int main(void)
         cmocka_unit_test(test_parallel_bake_is_byte_identical),
         cmocka_unit_test(test_depfile_lists_every_input_of_every_output),
         cmocka_unit_test(test_a_failing_type_does_not_stop_the_others),
+        cmocka_unit_test(test_a_missing_model_exits_as_on_the_command_line),
+        cmocka_unit_test(test_the_log_is_in_catalog_order_with_the_sizes_of_bake_model),
     };
     return cmocka_run_group_tests_name("catalog", tests, setup, NULL);
 }

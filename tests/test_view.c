@@ -3,8 +3,9 @@
  * URL, and the page shows 1,000 cows in a mix of idle, walk and gallop: not blank, in frame, moving
  * between two times, in one draw call per herd, with no console error; the palette half and the
  * VAT half (exact skinning, from `crowdbake vat`) cover the same pixels; Ctrl-C stops it with exit
- * 0. The same run with a deliberately broken shader (texels of a bone swapped) must fail the
- * palette-vs-VAT comparison, so the comparison is shown to catch a wrong palette. */
+ * 0; ?count=N shows N instances for any N (capped at the viewer's 100,000). The same run with a
+ * deliberately broken shader (texels of a bone swapped) must fail the palette-vs-VAT comparison,
+ * so the comparison is shown to catch a wrong palette. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
@@ -28,12 +29,13 @@ static double number(const char *key)
     return atof(at);
 }
 
-static int run_view(const char *env, const char *cache, const char *shot)
+/* more: the page opened again with each of these as ?count= (view_check's MORE,COUNTS), or "". */
+static int run_view(const char *env, const char *cache, const char *shot, const char *more)
 {
     char model[PATH_MAX], cmd[4 * PATH_MAX];
     shared_path(model, sizeof model, "assets/quaternius-cow/Cow.glb");
-    snprintf(cmd, sizeof cmd, "%s node tests/browser/view_check.mjs %s %s %s %s 1000 2>&1", env, crowdbake_exe(), model, cache,
-             shot);
+    snprintf(cmd, sizeof cmd, "%s node tests/browser/view_check.mjs %s %s %s %s 1000 960x540 '%s' 2>&1", env, crowdbake_exe(), model,
+             cache, shot, more);
     int rc = run_command(cmd, out, sizeof out);
     printf("%s", out);
     return rc;
@@ -46,7 +48,7 @@ static void test_view_shows_a_moving_herd_of_cows(void **state)
     FILE *installed = fopen("web/node_modules/.package-lock.json", "r");
     if (!installed) fail_msg("web: npm packages not installed (make installs them; or: cd web && npm ci)");
     fclose(installed);
-    assert_int_equal(run_view("", TMP "/cache", TMP "/viewer.png"), 0);
+    assert_int_equal(run_view("", TMP "/cache", TMP "/viewer.png", "333,0,250000,lots"), 0);
     assert_non_null(strstr(out, "\"exit\":{\"code\":0,"));
     assert_non_null(strstr(out, "crowdbake: viewer stopped"));
     assert_non_null(strstr(out, "\"printed\":[\"cow              baked"));
@@ -65,6 +67,19 @@ static void test_view_shows_a_moving_herd_of_cows(void **state)
     assert_int_equal((int)number("instances"), 1000);
     /* VRAM on screen: the palette and the 118x larger VAT. */
     assert_true(number("vatBytes") > 50 * number("paletteBytes"));
+    /* ?count=N for any N, not only the menu's 100, 1000, 10000 and 100000 (333 used to show an
+     * empty field; 250000 threw past the crowd's capacity): the menu gains N, past 100,000 is
+     * capped there, and what is not a number keeps 1000; the panel says which. */
+    static const char *const counts[] = {
+        "{\"query\":\"333\",\"instances\":333,\"selected\":\"333\",\"drawCalls\":2,\"notice\":\"\",\"error\":\"\",\"console_errors\":[]}",
+        "{\"query\":\"0\",\"instances\":0,\"selected\":\"0\",\"drawCalls\":0,\"notice\":\"\",\"error\":\"\",\"console_errors\":[]}",
+        "{\"query\":\"250000\",\"instances\":100000,\"selected\":\"100000\",\"drawCalls\":null,"
+        "\"notice\":\"?count=250000: capped at 100000 instances, the viewer's capacity\",\"error\":\"\",\"console_errors\":[]}",
+        "{\"query\":\"lots\",\"instances\":1000,\"selected\":\"1000\",\"drawCalls\":2,"
+        "\"notice\":\"?count=lots: not a whole number of instances; showing 1000\",\"error\":\"\",\"console_errors\":[]}",
+    };
+    for (size_t i = 0; i < COUNT_OF(counts); ++i)
+        if (!strstr(out, counts[i])) fail_msg("expected %s in the viewer check's output", counts[i]);
 }
 
 static void test_a_broken_palette_shader_is_caught(void **state)
@@ -81,7 +96,7 @@ static void test_a_broken_palette_shader_is_caught(void **state)
     char env[2 * PATH_MAX], cwd[PATH_MAX];
     assert_non_null(getcwd(cwd, sizeof cwd));
     snprintf(env, sizeof env, "CROWDBAKE_WEB=%s/" TMP "/broken/web", cwd);
-    assert_int_equal(run_view(env, TMP "/cache-broken", TMP "/broken.png"), 0);
+    assert_int_equal(run_view(env, TMP "/cache-broken", TMP "/broken.png", ""), 0);
     double mismatch = number("palette_vs_vat_mismatch");
     printf("  broken shader: palette and VAT silhouettes differ on %.0f%% of the covered pixels\n", 100 * mismatch);
     assert_true(mismatch > 0.2);

@@ -3,7 +3,9 @@
 // frames side by side with the VRAM of each, frame time and draw calls on screen.
 // It reads /view.json (written by the command): { roster, types: [{ name, model, palette?, vat }] }.
 // Test hooks: window.crowdbakeViewer (ready, renderAt(t), setCount(n), setState(name), stats()).
-// ?paused stops the clock (tests render chosen times).
+// ?paused stops the clock (tests render chosen times); ?count=N starts with N instances, any
+// whole number from 0 to 100,000 (more is capped there, anything else keeps 1000, and the panel
+// says so).
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { decompress } from 'fzstd';
@@ -61,6 +63,23 @@ async function loadType(view, entry, glsl) {
              defaultState: rosterType?.default_state ?? Object.keys(states)[0] };
 }
 
+// ?count=TEXT as a number of instances and what the panel says about it ('' when taken as is).
+function countFromQuery(text) {
+    if (!/^\d+$/.test(text.trim())) return { n: 1000, note: `?count=${text}: not a whole number of instances; showing 1000` };
+    const n = Number(text);
+    if (n > MAX) return { n: MAX, note: `?count=${text}: capped at ${MAX} instances, the viewer's capacity` };
+    return { n, note: '' };
+}
+
+// The count selector holds n: the menu's own values, or n added in its place among them.
+function selectCount(select, n) {
+    if (![...select.options].some((o) => +o.value === n)) {
+        const after = [...select.options].find((o) => +o.value > n) ?? null;
+        select.insertBefore(Object.assign(document.createElement('option'), { textContent: String(n) }), after);
+    }
+    select.value = String(n);
+}
+
 // The herd: positions, headings and states in typed arrays, moved on the CPU each frame.
 class Herd {
     constructor(type) {
@@ -72,6 +91,7 @@ class Herd {
     }
 
     setCount(n) {
+        n = Math.max(0, Math.min(MAX, Math.floor(n) || 0)); // the typed arrays and crowds hold MAX
         const t = this.type, spacing = t.size * 1.6;
         this.side = Math.ceil(Math.sqrt(n)) * spacing;
         for (let i = 0; i < n; ++i) { // a jittered grid, deterministic
@@ -190,7 +210,11 @@ async function main() {
 
     $('count').onchange = () => herd.setCount(+$('count').value);
     buildButtons();
-    if (params.get('count')) $('count').value = params.get('count');
+    if (params.has('count')) {
+        const { n, note } = countFromQuery(params.get('count'));
+        selectCount($('count'), n);
+        $('notice').textContent = note;
+    }
     herd.setCount(+$('count').value);
     const paused = params.has('paused');
     const start = performance.now();

@@ -1,17 +1,19 @@
 // view_check.mjs - `crowdbake view` used as a user would, in headless Chromium.
 //
-//   node tests/browser/view_check.mjs CROWDBAKE INPUT CACHE_DIR SCREENSHOT.png [COUNT [WIDTHxHEIGHT]]
+//   node tests/browser/view_check.mjs CROWDBAKE INPUT CACHE_DIR SCREENSHOT.png [COUNT [WIDTHxHEIGHT [MORE,COUNTS]]]
 //
 // Starts `crowdbake view INPUT --cache CACHE_DIR --port 0`, reads the URL it prints, opens the
 // viewer with the clock stopped (?paused), puts the herd in a mix of states, renders two chosen
 // times and reads the canvas back: prints, per half (palette | VAT), the share of pixels that are
 // not the background, how many pixels differ between the two times, the page's own stats and
-// every console error; saves a screenshot. Then Ctrl-C (SIGINT) must stop the command with exit 0.
+// every console error; saves a screenshot. MORE,COUNTS: the page opened again with each as
+// ?count=, what it shows (instances, the count menu, the panel's notice; draw calls of a frame
+// where there are at most 1000 instances: more take minutes in a software renderer). Then Ctrl-C (SIGINT) must stop the command with exit 0.
 // Prints JSON on the last line; the judging is tests/test_view.c's.
 import { spawn } from 'node:child_process';
 import { launchBrowser, openPage } from './driver.mjs';
 
-const [exe, input, cache, shot, count = '1000', size = '960x540'] = process.argv.slice(2);
+const [exe, input, cache, shot, count = '1000', size = '960x540', more = ''] = process.argv.slice(2);
 const [width, height] = size.split('x').map(Number);
 const view = spawn(exe, ['view', input, '--cache', cache, '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
 let output = '';
@@ -73,6 +75,20 @@ try {
     });
     await page.screenshot({ path: shot });
     result.console_errors = page.crowdbakeErrors;
+    result.counts = [];
+    for (const query of more ? more.split(',') : []) {
+        const p = await openPage(browser, `${url}?paused&count=${encodeURIComponent(query)}`, { width: 320, height: 180 });
+        await p.evaluate(() => window.crowdbakeReady);
+        result.counts.push(await p.evaluate((query) => {
+            const v = window.crowdbakeViewer, drawn = v.stats().instances <= 1000;
+            if (drawn) v.renderAt(1.0);
+            const s = v.stats(), $ = (id) => document.getElementById(id);
+            return { query, instances: s.instances, selected: $('count').value, drawCalls: drawn ? s.drawCalls : null,
+                     notice: $('notice')?.textContent ?? null, error: $('error').textContent };
+        }, query));
+        result.counts.at(-1).console_errors = p.crowdbakeErrors;
+        await p.close();
+    }
 } catch (e) {
     result = { failure: String(e.message ?? e).split('\n')[0] };
 } finally {
