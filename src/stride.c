@@ -315,7 +315,9 @@ static void explain(cb_stride *st, const cb_clip_info *clip, const foot_verdict 
     }
     char *w = st->why;
     size_t size = sizeof st->why;
-    if (st->foot_count == 0)
+    if (clip->duration <= 0)
+        snprintf(w, size, "a single pose: no cycle to stride in");
+    else if (st->foot_count == 0)
         snprintf(w, size, "no feet: nothing of the model touches the ground in its rest pose");
     else if (!clip->loops)
         snprintf(w, size, "plays once: a one-shot has no cycle to stride in");
