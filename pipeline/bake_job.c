@@ -143,12 +143,15 @@ bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t i)
 }
 
 /* Clip i's error budget, mm/m: an error-bounded clip's goal; a fixed fps is checked only
- * against a max_error asked for (the clip's own, or the job's), else 0: none. */
+ * against a max_error asked for beside it: the clip's own, or the job's for the job's fixed fps
+ * (a clip pinned to an fps of its own keeps it unchecked by the job's max_error), else 0: none. */
 static double clip_budget_mm(const cb_bake_job *job, uint32_t i)
 {
     const cb_clip_settings *c = job->clip_settings ? &job->clip_settings[i] : NULL;
     if (c && c->max_error_mm > 0) return c->max_error_mm;
-    return cb_bake_job_clip_auto(job, i) || job->settings.max_error_given ? job->settings.max_error_mm : 0;
+    if (cb_bake_job_clip_auto(job, i)) return job->settings.max_error_mm;
+    bool own_fps = (job->clips && job->clips[i].fps > 0) || (c && c->fps_auto == 0);
+    return !own_fps && job->settings.max_error_given ? job->settings.max_error_mm : 0;
 }
 
 /* Clip i's goal when its rate is chosen by error: the fewest rows within its budget, fitted or
@@ -258,6 +261,33 @@ static cb_status check_budgets(const cb_bake_job *job, const cb_palette *p, cb_b
                            p->clip_count, p->clip_count == 1 ? "" : "s");
 }
 
+/* An error-bounded clip that met its budget baked alone can miss it in the palette by a hair:
+ * u16 quantizes positions in the palette's box, wider than the clip's own (Fox's Walk: 0.996
+ * mm/m alone, 1.0004 in the palette). Such clips are searched again, once, against their budget
+ * less 1.5 times what the palette added; true when any was (the palette is then baked again). */
+static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette *p, cb_error *err)
+{
+    uint32_t n = job->plan_count;
+    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
+    cb_rate_choice *fresh = calloc(n ? n : 1, sizeof *fresh);
+    bool any = false;
+    for (uint32_t i = 0; goals && fresh && i < n && i < p->clip_count; ++i) {
+        double budget = clip_budget_mm(job, i), e = cb_mm_per_m(p->clips[i].visible_error, p->model_height);
+        double tighter = budget - 1.5 * (e - job->rates[i].error_mm);
+        if (!cb_bake_job_clip_auto(job, i) || !job->rates[i].met || !(e > budget) || !(tighter > 0)) continue;
+        goals[i] = (cb_rate_goal){tighter, job->settings.max_fps, CB_ROWS_BEST};
+        any = true;
+    }
+    if (any) {
+        cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
+        cb_choose_rates(s, &o, job->plan, n, goals, fresh, err);
+        for (uint32_t i = 0; i < n && !err->status; ++i)
+            if (goals[i].max_error_mm > 0) job->rates[i] = fresh[i];
+    }
+    free(goals), free(fresh);
+    return any;
+}
+
 cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -274,7 +304,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
      * write them, and zstd compresses them: those bake into memory of their own.) */
     cb_pal_mapping mapping;
     cb_pal_mapping_init(&mapping, job->pal_path, job->model, job->skin);
-    bool mapped = job->settings.formats == CB_FORMAT_PAL && !job->settings.zstd && job->pal_path;
+    bool mapped = job->settings.formats == CB_FORMAT_PAL && !job->settings.zstd && job->pal_path, replanned = false;
     for (int f = 0; f < 3 && !err->status; ++f) {
         if (!(job->settings.formats & formats[f])) continue;
         cb_bake_output *o = &out->outputs[out->output_count];
@@ -292,6 +322,11 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         o->palette.position_offsets = NULL;
         out->output_count++;
         o->input_hash = cb_bake_input_hash(job, &opt);
+        if (out->output_count == 1 && !replanned && (replanned = true) && replan_clips_over(job, s, &shared, err)) {
+            out->output_count = 0, --f; /* baked again with the clips' new rates */
+            cb_palette_free(&shared);
+            continue;
+        }
         if (out->output_count == 1 && check_budgets(job, &shared, out, err)) {
             out->output_count = 0; /* nothing written */
             break;
