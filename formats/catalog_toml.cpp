@@ -191,6 +191,9 @@ struct Parser {
         if (auto *n = t.get("fit_rows")) b->fit_rows = boolean(*n, where + " fit_rows");
         if (auto *n = t.get("measure_all")) b->measure_all = boolean(*n, where + " measure_all");
         if (auto *n = t.get("allow_over_budget")) b->allow_over_budget = boolean(*n, where + " allow_over_budget");
+        /* A fixed fps is checked against a max_error given beside it: an animal's own fps is not
+         * held to the max_error [bake] states for error-bounded rates, unless it states its own. */
+        if (t.get("fps") && !t.get("max_error")) b->max_error_given = false;
         if (!cb_bake_settings_writable(b))
             fail(t.source(), where + " precision u16 cannot be written as EXR; use format = \"pal\" or precision half|float");
     }

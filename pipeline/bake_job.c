@@ -137,6 +137,9 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
 bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t i)
 {
     const cb_clip_settings *c = job->clip_settings ? &job->clip_settings[i] : NULL;
+    if (c && c->fps_auto == 1) return true; /* asked for by name: a skin with no mesh then fails, saying so */
+    /* A skin with no skinned mesh has no error to bound: the default bakes it at the fixed fps. */
+    if (cb_model_skin_vertex_count(job->model, job->skin) == 0) return false;
     if (c && c->fps_auto >= 0) return c->fps_auto == 1;
     if (job->clips && job->clips[i].fps > 0) return false;
     return job->settings.fps_auto;

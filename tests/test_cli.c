@@ -324,6 +324,8 @@ static void test_example_catalog_states_the_defaults(void **state)
     if (cb_catalog_parse(stripped, used, "catalog.example.toml", &defaults, &err)) fail_msg("%s", err.message);
     const cb_bake_settings *a = &shown.defaults, *b = &defaults.defaults;
     assert_true(a->fps == b->fps);
+    assert_true(a->fps_auto == b->fps_auto && a->max_error_mm == b->max_error_mm && a->max_fps == b->max_fps);
+    assert_true(a->fit_rows == b->fit_rows && a->allow_over_budget == b->allow_over_budget);
     assert_int_equal(a->layout, b->layout);
     assert_int_equal(a->precision, b->precision);
     assert_int_equal(a->formats, b->formats);

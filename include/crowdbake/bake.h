@@ -169,7 +169,8 @@ void cb_bake_result_free(cb_bake_result *result);
 void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result, const char *(*setting_name)(cb_setting),
                           cb_warnings *notes);
 /* Whether clip i's rate is chosen by error (else fixed): its own fps = "auto", else a fixed fps
- * of its own, else the job's settings. */
+ * of its own, else the job's settings; a skin with no skinned mesh (nothing to measure) bakes
+ * at the fixed fps unless the clip itself asks for "auto". */
 bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t clip);
 /* Why planned clip i has its rate and rows, in words: "72 fps, fitted rows: within 1 mm/m at 45
  * rows, sampled rows need more than 72 fps", "30 fps, sampled rows: the fixed fps". */
