@@ -86,7 +86,7 @@ static void test_clip_settings_override_the_job(void **state)
 {
     (void)state;
     cb_model *m = load_shared("assets/fox-bevy/Fox.glb");
-    cb_clip_plan clips[3] = {{0, NULL, -1, 0}, {1, NULL, -1, 12}, {2, NULL, -1, 0}};
+    cb_clip_plan clips[3] = {{0, NULL, -1, 0, false}, {1, NULL, -1, 12, false}, {2, NULL, -1, 0, false}};
     cb_clip_settings per_clip[3] = {{-1, 0}, {0, 0}, {-1, 0}};
     cb_bake_job job = job_for(m);
     job.clips = clips, job.clip_count = 3, job.clip_settings = per_clip;
