@@ -15,7 +15,8 @@ const char cmd_bake_usage[] =
     "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2 [options]\n"
     "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--out-dir DIR] [--json]\n"
     "                      [-q] [--sync STATE=speed|time,...] [--default-state STATE]\n"
-    "                      [--fps N] [--layout L] [--precision P] [--format F] [--zstd] [--max-texture-size N]\n"
+    "                      [--fps N] [--fit-rows] [--allow-over-budget] [--layout L] [--precision P] [--format F] [--zstd]\n"
+    "                      [--max-texture-size N]\n"
     "                      [--root-motion R] [--exr-compression C]\n\n"
     "Bakes every clip of the model's skin into a bone-matrix palette; or every animal type of a\n"
     "catalog (see catalog.example.toml) into palettes and a roster manifest, re-baking only what\n"
@@ -31,17 +32,27 @@ const char cmd_bake_usage[] =
     "                             (uncompressed KTX2, RGBA16F/RGBA32F); another extension is refused\n"
     "  --format pal,exr,ktx2      write these formats (OUT's extension is replaced per format; each\n"
     "                             keeps its own default precision unless --precision is given)\n"
-    "  --fps N|auto               baked frames per second (default 30); auto: per clip, the lowest rate\n"
-    "                             whose error stays under --max-error (mm per metre of model height,\n"
-    "                             default 1) at baked frames and between them, up to --max-fps (60)\n"
+    "  --fps N|auto               baked frames per second; default auto: per clip, the fewest rows whose\n"
+    "                             visible error (at the rows and between them, as the runtime blends\n"
+    "                             them) stays within --max-error, fitted or sampled (ties: sampled),\n"
+    "                             up to --max-fps; N: a fixed rate, rows sampled (--fps 30: the old\n"
+    "                             default's bytes)\n"
+    "  --max-error MM_PER_M       the error budget, mm per metre of model height (default 1); a clip\n"
+    "                             over it fails the bake (exit 6, nothing written, a line per clip\n"
+    "                             with what would meet it); with --fps N, a check of the fixed rate\n"
+    "  --max-fps N                the highest rate auto may choose (default 120: every clip of Cow,\n"
+    "                             Fox and the samples meets 1 mm/m under it)\n"
+    "  --allow-over-budget        write a bake with clips over --max-error anyway, with a warning per\n"
+    "                             clip (and \"over_budget\" in --json)\n"
     "  --layout mat4|affine|qpos  texels per bone: 4, 3 or 2 (default qpos; affine when the rig has\n"
     "                             non-uniform scale or shear, which qpos cannot hold)\n"
     "  --precision float|half|u16 RGBA32F, RGBA16F or RGBA16UI (default u16 for .pal, float for .exr\n"
     "                             and .ktx2, which refuse u16)\n"
-    "  --fit-rows                 fit the rows to the runtime's linear blend instead of sampling\n"
-    "                             them: each row moves out by half the arc a bone cuts as a chord\n"
-    "                             between rows, which halves that error (the encoding error at the\n"
-    "                             rows grows to about the same size); no shader change\n"
+    "  --fit-rows                 fit every clip's rows to the runtime's linear blend instead of\n"
+    "                             sampling them: each row moves out by half the arc a bone cuts as a\n"
+    "                             chord between rows, which halves that error (the encoding error at\n"
+    "                             the rows grows to about the same size); no shader change (auto\n"
+    "                             fits the clips it saves rows on without it)\n"
     "  --measure-all              measure the errors at every row and between every two, however\n"
     "                             many (default: past 1024 rows and 4M rows x skinned vertices, at\n"
     "                             an even subset of the rows, each clip's last always; faster on\n"
@@ -69,7 +80,7 @@ typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
         *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir, *loops,
         *one_shots, *syncs, *default_state;
-    bool zstd, json, quiet, quiet_long, force, depfile_manifest, fit, measure_all;
+    bool zstd, json, quiet, quiet_long, force, depfile_manifest, fit, measure_all, over_budget;
 } bake_args;
 
 static double now_seconds(void)
@@ -100,9 +111,12 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
 {
     *s = cb_default_bake_settings();
     *fields = 0;
-    if (a->fps && strcmp(a->fps, "auto") == 0) s->fps_auto = true;
-    else if (a->fps && (!cli_parse_double(a->fps, &s->fps) || !cb_fps_valid(s->fps)))
-        return cli_usage_error("bake", "--fps wants a number between 0 and 1000, got '%s'", a->fps);
+    if (a->fps && strcmp(a->fps, "auto") != 0) {
+        s->fps_auto = false;
+        if (!cli_parse_double(a->fps, &s->fps) || !cb_fps_valid(s->fps))
+            return cli_usage_error("bake", "--fps wants auto or a number between 0 and 1000, got '%s'", a->fps);
+        if (a->max_fps) return cli_usage_error("bake", "--max-fps caps the rates auto chooses; --fps %s is fixed", a->fps);
+    }
     if (a->layout && !cb_layout_parse(a->layout, &s->layout))
         return cli_usage_error("bake", "--layout is mat4, affine or qpos, got '%s'", a->layout);
     if (a->precision && !cb_precision_parse(a->precision, &s->precision))
@@ -124,6 +138,8 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
     s->zstd = a->zstd;
     s->fit_rows = a->fit;
     s->measure_all = a->measure_all;
+    s->allow_over_budget = a->over_budget;
+    s->max_error_given = a->max_error != NULL;
     if (a->max_error && (!cli_parse_double(a->max_error, &s->max_error_mm) || !(s->max_error_mm > 0)))
         return cli_usage_error("bake", "--max-error wants mm per metre of model height");
     if (a->max_fps && (!cli_parse_double(a->max_fps, &s->max_fps) || !cb_max_fps_valid(s->max_fps)))
@@ -132,7 +148,7 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
               (a->max_size ? CB_BAKE_MAX_TEXTURE_SIZE : 0u) | (a->root_motion ? CB_BAKE_ROOT_MOTION : 0u) |
               (a->format ? CB_BAKE_FORMATS : 0u) | (a->zstd ? CB_BAKE_ZSTD : 0u) |
               (a->exr_compression ? CB_BAKE_EXR_COMPRESSION : 0u) | (a->fit ? CB_BAKE_FIT_ROWS : 0u) |
-              (a->measure_all ? CB_BAKE_MEASURE_ALL : 0u);
+              (a->measure_all ? CB_BAKE_MEASURE_ALL : 0u) | (a->over_budget ? CB_BAKE_ALLOW_OVER_BUDGET : 0u);
     return 0;
 }
 
@@ -229,36 +245,100 @@ static void json_output(cb_json *j, const cb_bake_output *out, double seconds, d
     cb_json_end(j);
 }
 
-/* --fps auto: what the plan chose per clip, and what it saved against 30 fps. */
-static cb_status print_rates(const cb_bake_job *job, cb_error *err)
+static const char *clip_label(const cb_bake_job *job, uint32_t i)
+{
+    const cb_clip_plan *c = &job->plan[i];
+    return c->name ? c->name : job->model->animations[c->animation].name;
+}
+
+/* The rows error-bounded rates took against a fixed 30 fps (the old default). */
+static cb_status print_saving(const cb_bake_job *job, const cb_bake_result *r, cb_error *err)
 {
     const cb_model *m = job->model;
     cb_sampler *s = cb_sampler_create(m, job->skin, err);
     if (!s) return err->status;
-    cb_bake_options o = cb_bake_settings_options(&job->settings, (job->settings.formats & CB_FORMAT_PAL) ? CB_FORMAT_PAL
-                                                 : CB_FORMAT_EXR, &job->limits, 1);
-    uint64_t rows_auto = 0, rows_30 = 0;
+    const cb_palette *p = &r->outputs[0].palette;
+    uint64_t rows_30 = 0;
     for (uint32_t i = 0; i < job->plan_count && !err->status; ++i) {
-        int32_t a = job->plan[i].animation;
-        cb_clip_info at, fixed;
-        if (cb_clip_analyze(s, a, job->plan[i].fps, job->plan[i].loop, &o.limits, &at, err) ||
-            cb_clip_analyze(s, a, 30, job->plan[i].loop, &o.limits, &fixed, err))
-            break;
-        rows_auto += at.frames, rows_30 += fixed.frames;
-        printf("  %-24s %3.0f fps: %4u rows, visible error %.3f mm/m%s\n", m->animations[a].name, job->plan[i].fps,
-               at.frames, job->rates[i].error_mm, job->rates[i].met ? "" : " (over --max-error even at --max-fps)");
+        cb_clip_info fixed;
+        if (!cb_clip_analyze(s, job->plan[i].animation, 30, job->plan[i].loop, &job->limits, &fixed, err))
+            rows_30 += fixed.frames;
     }
     if (!err->status) {
         cb_texture_geometry g;
-        uint32_t bones = m->skins[job->skin].joint_count;
-        uint64_t b_auto = cb_palette_texture_bytes(bones, (uint32_t)rows_auto, o.layout, o.precision, o.max_texture_size, &g);
-        uint64_t b_30 = cb_palette_texture_bytes(bones, (uint32_t)rows_30, o.layout, o.precision, o.max_texture_size, &g);
-        printf("  auto fps: %llu rows, %.1f KiB, against %llu rows, %.1f KiB at 30 fps (%.0f%% %s)\n",
-               (unsigned long long)rows_auto, b_auto / 1024.0, (unsigned long long)rows_30, b_30 / 1024.0,
-               b_30 ? fabs(100.0 * (1 - (double)b_auto / b_30)) : 0, b_auto <= b_30 ? "saved" : "more");
+        uint64_t b_30 = cb_palette_texture_bytes(p->bone_count, (uint32_t)rows_30, p->layout, p->precision,
+                                                 job->settings.max_texture_size, &g);
+        printf("  %u rows, %.1f KiB, against %llu rows, %.1f KiB at a fixed 30 fps (%.2fx the bytes)\n", p->rows,
+               p->texel_bytes / 1024.0, (unsigned long long)rows_30, b_30 / 1024.0, b_30 ? (double)p->texel_bytes / b_30 : 0);
     }
     cb_sampler_free(s);
     return err->status;
+}
+
+/* Each clip's rate and rows, and why (error-bounded bakes). */
+static void print_clips(const cb_bake_job *job, const cb_bake_result *r)
+{
+    for (uint32_t i = 0; i < r->budget_count; ++i) {
+        const cb_clip_budget *b = &r->budgets[i];
+        char why[320];
+        cb_bake_clip_reason(job, i, why, sizeof why);
+        printf("  %-24s %4u rows, visible error %.3f mm/m%s: %s\n", clip_label(job, i), b->rows, b->error_mm, b->over ? " (OVER max_error)" : "", why);
+    }
+}
+
+static bool any_auto(const cb_bake_job *job)
+{
+    for (uint32_t i = 0; i < job->plan_count; ++i)
+        if (cb_bake_job_clip_auto(job, i)) return true;
+    return false;
+}
+
+/* Clips over their budget: a line each, on stderr when the bake failed for them, else as
+ * warnings (the bake was written anyway, --allow-over-budget). */
+static void report_over_budget(const cb_bake_job *job, const cb_bake_result *r, cb_warnings *warnings)
+{
+    for (uint32_t i = 0; i < r->budget_count; ++i) {
+        if (!r->budgets[i].over) continue;
+        char text[640];
+        cb_bake_budget_text(job, r, i, cli_setting_flag, text, sizeof text);
+        if (warnings) cb_warn(warnings, "warning", "%s (written anyway: --allow-over-budget)", text);
+        else fprintf(stderr, "crowdbake: %s: %s\n", job->model->source, text);
+    }
+}
+
+static void json_clips(cb_json *j, const cb_bake_job *job, const cb_bake_result *r)
+{
+    cb_json_array(j, "clips");
+    for (uint32_t i = 0; i < r->budget_count; ++i) {
+        const cb_clip_budget *b = &r->budgets[i];
+        char why[320];
+        cb_bake_clip_reason(job, i, why, sizeof why);
+        cb_json_object(j, NULL);
+        cb_json_string(j, "name", clip_label(job, i));
+        cb_json_number(j, "fps", b->fps);
+        cb_json_int(j, "rows", b->rows);
+        cb_json_bool(j, "fitted_rows", b->fitted);
+        cb_json_bool(j, "error_bounded", cb_bake_job_clip_auto(job, i));
+        cb_json_number(j, "visible_error_mm_per_m", b->error_mm);
+        cb_json_number(j, "max_error_mm_per_m", b->max_error_mm);
+        cb_json_string(j, "why", why);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
+    cb_json_array(j, "over_budget"); /* written anyway (--allow-over-budget); else the bake failed */
+    for (uint32_t i = 0; i < r->budget_count; ++i) {
+        if (!r->budgets[i].over) continue;
+        char text[640];
+        cb_bake_budget_text(job, r, i, cli_setting_flag, text, sizeof text);
+        cb_json_object(j, NULL);
+        cb_json_string(j, "name", clip_label(job, i));
+        cb_json_number(j, "visible_error_mm_per_m", r->budgets[i].error_mm);
+        cb_json_number(j, "max_error_mm_per_m", r->budgets[i].max_error_mm);
+        cb_json_number(j, "fps_needed", job->rates[i].fps_needed);
+        cb_json_string(j, "message", text);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
 }
 
 /* --format, or OUT's extension: .pal, .exr, or none (a device, a pipe: a .pal, as always);
@@ -291,16 +371,17 @@ static int single_model_checks(const bake_args *a, cb_bake_settings *s)
         return cli_usage_error("bake", "KTX2 palettes hold half or float texels (RGBA16F, RGBA32F; common KTX2 loaders "
                                "refuse u16's RGBA16UI); use --precision half|float%s", want_pal ? " (or write only the .pal)" : "");
     if (a->zstd && !want_pal) return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
-    if (a->max_error && !s->fps_auto) return cli_usage_error("bake", "--max-error goes with --fps auto");
     return 0;
 }
 
-/* The bake line or --json, and the warnings: the model's, then the bake's notes. */
-static void report_bake(const bake_args *a, const cb_model *m, const cb_bake_result *r, double t0, double load)
+/* The bake line or --json, and the warnings: the model's, the bake's notes, clips written over
+ * their budget. Error-bounded bakes list each clip's rate, rows and why. */
+static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bake_result *r, double t0, double load)
 {
     cb_warnings warnings = {0};
-    cb_model_warnings(m, a->clips == NULL, &warnings);
+    cb_model_warnings(job->model, a->clips == NULL, &warnings);
     for (uint32_t i = 0; i < r->notes.count; ++i) cb_warn(&warnings, r->notes.items[i].kind, "%s", r->notes.items[i].message);
+    report_over_budget(job, r, &warnings);
     double seconds = now_seconds() - t0;
     if (a->json) {
         cb_json j;
@@ -310,9 +391,12 @@ static void report_bake(const bake_args *a, const cb_model *m, const cb_bake_res
         cb_json_array(&j, "outputs");
         for (uint32_t i = 0; i < r->output_count; ++i) json_output(&j, &r->outputs[i], seconds, load);
         cb_json_end(&j);
+        json_clips(&j, job, r);
         cli_json_warnings(&j, &warnings);
         cb_json_end(&j);
     } else {
+        cb_error ignored = {0};
+        if (!a->quiet && any_auto(job)) print_clips(job, r), print_saving(job, r, &ignored);
         for (uint32_t i = 0; i < r->output_count && !a->quiet; ++i) print_summary(&r->outputs[i], seconds);
         cli_print_warnings(&warnings, !a->quiet);
     }
@@ -341,6 +425,7 @@ int cmd_bake(int argc, char **argv)
         {"--loop", "A,B", &a.loops, NULL},         {"--one-shot", "A,B", &a.one_shots, NULL},
         {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest}, {"--fit-rows", NULL, NULL, &a.fit},
         {"--measure-all", NULL, NULL, &a.measure_all}, {"--quiet", NULL, NULL, &a.quiet_long},
+        {"--allow-over-budget", NULL, NULL, &a.over_budget},
         {"--sync", "STATE=speed|time", &a.syncs, NULL}, {"--default-state", "STATE", &a.default_state, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
     if (help) return fputs(cmd_bake_usage, stdout), fputs(cli_limits_usage, stdout), 0;
@@ -386,10 +471,10 @@ int cmd_bake(int argc, char **argv)
     if (job.skin >= 0 && !cli_select_clips(m, a.clips, a.excluded, &selection, &job.clip_count, &err) &&
         !cli_override_loops(m, a.loops, a.one_shots, &selection, &job.clip_count, &err)) {
         job.clips = selection;
-        if (!cb_bake_job_plan(&job, &err) && settings.fps_auto && !a.quiet && !a.json) print_rates(&job, &err);
-        if (!err.status) cb_bake_job_run(&job, &result, &err);
+        cb_bake_job_run(&job, &result, &err);
     }
-    if (!err.status) report_bake(&a, m, &result, t0, load);
+    if (!err.status) report_bake(&a, &job, &result, t0, load);
+    else if (result.over_budget) report_over_budget(&job, &result, NULL); /* a line each, above the error's */
     cb_bake_result_free(&result);
     cb_bake_job_free(&job);
     free(selection);

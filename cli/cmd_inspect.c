@@ -32,7 +32,7 @@ static void print_pal_text(const char *path, const cbpal_file *f)
            h->flags & CBPAL_FLAG_ZSTD ? " (zstd)" : "", h->fps, h->speed_reference, h->max_error, h->model_height);
     printf("  input hash %016llx, checksum %016llx%s%s\n", (unsigned long long)h->input_hash,
            (unsigned long long)h->checksum, h->flags & CBPAL_FLAG_IN_PLACE ? ", root motion removed" : "",
-           h->flags & CBPAL_FLAG_FITTED_ROWS ? ", rows fitted to the linear blend" : "");
+           h->flags & CBPAL_FLAG_FITTED_ROWS ? ", every clip's rows fitted to the linear blend" : "");
     bool in_place = (h->flags & CBPAL_FLAG_IN_PLACE) != 0;
     /* In place, the clip table holds the root's travel that was measured and taken out of the
      * rows (the game moves the instance by it); kept, the rows carry it and the table has 0. */
@@ -45,13 +45,13 @@ static void print_pal_text(const char *path, const cbpal_file *f)
         int len = (int)strlen(c.name);
         if (len > name_width) name_width = len;
     }
-    printf("  %-*s %9s %7s %8s %9s %-8s %s\n", name_width, "clip", "first row", "frames", "fps", "length s", "loops",
-           in_place ? "root velocity removed (units/s)" : "root motion");
+    printf("  %-*s %9s %7s %8s %9s %-8s %-7s %s\n", name_width, "clip", "first row", "frames", "fps", "length s", "loops",
+           "rows", in_place ? "root velocity removed (units/s)" : "root motion");
     for (uint32_t i = 0; i < h->clip_count; ++i) {
         cbpal_clip c;
         cbpal_get_clip(f, i, &c);
-        printf("  %-*s %9u %7u %8.3f %9.4f %-8s ", name_width, c.name, c.first_row, c.frames, c.fps, c.duration,
-               c.flags & CBPAL_CLIP_LOOPS ? "loop" : "one-shot");
+        printf("  %-*s %9u %7u %8.3f %9.4f %-8s %-7s ", name_width, c.name, c.first_row, c.frames, c.fps, c.duration,
+               c.flags & CBPAL_CLIP_LOOPS ? "loop" : "one-shot", c.flags & CBPAL_CLIP_FITTED ? "fitted" : "sampled");
         if (!in_place) {
             printf("in the rows\n");
             continue;
@@ -102,6 +102,7 @@ static void print_pal_json(const char *path, const cbpal_file *f, const cb_palet
         cb_json_number(&j, "fps", c.fps);
         cb_json_number(&j, "duration", c.duration);
         cb_json_bool(&j, "loops", (c.flags & CBPAL_CLIP_LOOPS) != 0);
+        cb_json_bool(&j, "fitted_rows", (c.flags & CBPAL_CLIP_FITTED) != 0);
         cb_json_inline_array(&j, "root_velocity");
         for (int k = 0; k < 3; ++k) cb_json_number(&j, NULL, c.root_velocity[k]);
         cb_json_end(&j);

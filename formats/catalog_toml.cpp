@@ -129,7 +129,8 @@ struct Parser {
     static const std::vector<std::string> &bake_keys()
     {
         static const std::vector<std::string> k = {"fps", "max_error", "max_fps", "layout", "precision", "format", "out_dir",
-                                                   "max_texture_size", "root_motion", "fit_rows", "measure_all"};
+                                                   "max_texture_size", "root_motion", "fit_rows", "measure_all",
+                                                   "allow_over_budget"};
         return k;
     }
 
@@ -158,7 +159,7 @@ struct Parser {
             int automatic = fps(*n, &b->fps, where + " fps");
             b->fps_auto = automatic;
         }
-        if (auto *n = t.get("max_error")) b->max_error_mm = max_error(*n, where);
+        if (auto *n = t.get("max_error")) b->max_error_mm = max_error(*n, where), b->max_error_given = true;
         if (auto *n = t.get("max_fps")) {
             b->max_fps = number(*n, where + " max_fps");
             if (!cb_max_fps_valid(b->max_fps)) fail(n->source(), where + " max_fps must be between 2 and 1000");
@@ -190,6 +191,10 @@ struct Parser {
         }
         if (auto *n = t.get("fit_rows")) b->fit_rows = boolean(*n, where + " fit_rows");
         if (auto *n = t.get("measure_all")) b->measure_all = boolean(*n, where + " measure_all");
+        if (auto *n = t.get("allow_over_budget")) b->allow_over_budget = boolean(*n, where + " allow_over_budget");
+        /* A fixed fps is checked against a max_error given beside it: an animal's own fps is not
+         * held to the max_error [bake] states for error-bounded rates, unless it states its own. */
+        if (t.get("fps") && !t.get("max_error")) b->max_error_given = false;
         if (!cb_bake_settings_writable(b))
             fail(t.source(), where + " precision u16 cannot be written as EXR; use format = \"pal\" or precision half|float");
     }
@@ -438,6 +443,8 @@ struct Parser {
         c += buf;
         if (b.fit_rows) c += " fit_rows";
         if (b.measure_all) c += " measure_all";
+        if (b.max_error_given) c += " max_error_given";
+        if (b.allow_over_budget) c += " allow_over_budget";
         c += std::string(" default=") + (an->default_state ? an->default_state : "");
         c += std::string(" speed_state=") + (an->speed_state ? an->speed_state : "");
         an->canonical = dup(c);

@@ -42,10 +42,12 @@ enum { CBPAL_PRECISION_FLOAT = 0, CBPAL_PRECISION_HALF = 1, CBPAL_PRECISION_U16 
  * less its bone's position offset (cbpal_bone.position_offset: version 3 files store it in their
  * offset table, version 2 files used the bind position); add it back (CB_POSITIONS_RELATIVE in
  * the shipped GLSL). */
-/* CBPAL_FLAG_FITTED_ROWS: the rows were fitted to the linear blend between them rather than
- * sampled (crowdbake bake --fit-rows); read and blend them as always. */
+/* CBPAL_FLAG_FITTED_ROWS: every clip's rows were fitted to the linear blend between them rather
+ * than sampled; CBPAL_CLIP_FITTED: this clip's were (a palette may mix fitted and sampled clips;
+ * files written before the clip flag set only the header's, and cbpal_get_clip then sets the
+ * clip's). Read and blend them as always. */
 enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u, CBPAL_FLAG_FITTED_ROWS = 8u };
-enum { CBPAL_CLIP_LOOPS = 1u };
+enum { CBPAL_CLIP_LOOPS = 1u, CBPAL_CLIP_FITTED = 2u };
 /* cbpal_open flags */
 enum { CBPAL_VERIFY_CHECKSUM = 1u };
 
@@ -468,7 +470,7 @@ int cbpal_get_clip(const cbpal_file *f, uint32_t i, cbpal_clip *out)
     out->fps = cbpal__f32(c + 16);
     out->duration = cbpal__f32(c + 20);
     out->start = cbpal__f32(c + 24);
-    out->flags = cbpal__u32(c + 28);
+    out->flags = cbpal__u32(c + 28) | (f->header.flags & CBPAL_FLAG_FITTED_ROWS ? CBPAL_CLIP_FITTED : 0u);
     for (int k = 0; k < 3; ++k) {
         out->root_velocity[k] = cbpal__f32(c + 32 + 4 * k);
         out->bounds_min[k] = cbpal__f32(c + 44 + 4 * k);

@@ -56,7 +56,7 @@ static exr_result_t set_metadata(exr_context_t c, int part, const cb_palette *p,
     rc |= exr_attr_set_float(c, part, "crowdbake.visibleError", (float)p->visible_error);
     rc |= exr_attr_set_int(c, part, "crowdbake.positionsRelative", p->positions_relative); /* see docs/pal-format.md */
     rc |= exr_attr_set_float_vector(c, part, "crowdbake.bindPositions", (int32_t)p->bone_count * 3, p->bind_positions);
-    if (p->fitted) rc |= exr_attr_set_int(c, part, "crowdbake.fittedRows", 1); /* --fit-rows, as the .pal's flag bit 3 */
+    if (p->fitted) rc |= exr_attr_set_int(c, part, "crowdbake.fittedRows", 1); /* every clip's, as the .pal's flag bit 3 */
     if (p->positions_relative) /* what the positions are relative to (an EXR without it: the bind positions) */
         rc |= exr_attr_set_float_vector(c, part, "crowdbake.positionOffsets", (int32_t)p->bone_count * 3, p->position_offsets);
     const cb_skin *sk = &m->skins[skin];
@@ -75,6 +75,7 @@ static exr_result_t set_metadata(exr_context_t c, int part, const cb_palette *p,
         rc |= exr_attr_set_int(c, part, KEY("firstRow"), (int32_t)cl->first_row);
         rc |= exr_attr_set_int(c, part, KEY("frames"), (int32_t)cl->frames);
         rc |= exr_attr_set_int(c, part, KEY("loops"), cl->loops);
+        if (cl->fitted) rc |= exr_attr_set_int(c, part, KEY("fittedRows"), 1); /* as the .pal's clip flag bit 1 */
         rc |= exr_attr_set_float(c, part, KEY("fps"), (float)cl->fps);
         rc |= exr_attr_set_float(c, part, KEY("duration"), (float)cl->duration);
         rc |= exr_attr_set_double(c, part, KEY("start"), cl->start);
@@ -324,7 +325,7 @@ static bool read_palette_attributes(exr_const_context_t c, const char *path, con
         cb_palette_clip *cl = &p->clips[i];
         char key[96], *name = out->names + 256 * (size_t)i;
         const char *text = NULL;
-        int32_t first = -1, frames = 0, loops = 0;
+        int32_t first = -1, frames = 0, loops = 0, clip_fitted = p->fitted; /* files before per clip: every clip */
         float cfps = 0, duration = 0;
         exr_attr_v3f_t v = {{{0, 0, 0}}}, lo = v, hi = v;
 #define KEY(field) (snprintf(key, sizeof key, "crowdbake.clip%u." field, i), key)
@@ -333,6 +334,7 @@ static bool read_palette_attributes(exr_const_context_t c, const char *path, con
         exr_attr_get_int(c, 0, KEY("firstRow"), &first);
         exr_attr_get_int(c, 0, KEY("frames"), &frames);
         exr_attr_get_int(c, 0, KEY("loops"), &loops);
+        exr_attr_get_int(c, 0, KEY("fittedRows"), &clip_fitted);
         exr_attr_get_float(c, 0, KEY("fps"), &cfps);
         exr_attr_get_float(c, 0, KEY("duration"), &duration);
         exr_attr_get_double(c, 0, KEY("start"), &cl->start); /* absent before 0.1.x: clips started at 0 */
@@ -344,7 +346,7 @@ static bool read_palette_attributes(exr_const_context_t c, const char *path, con
             return cb_fail(err, CB_ERR_INPUT, "%s: clip %u of its crowdbake header is missing or lies outside its %d rows",
                            path, i, img->rows), false;
         cl->name = name;
-        cl->first_row = (uint32_t)first, cl->frames = (uint32_t)frames, cl->loops = loops != 0;
+        cl->first_row = (uint32_t)first, cl->frames = (uint32_t)frames, cl->loops = loops != 0, cl->fitted = clip_fitted != 0;
         cl->fps = cfps, cl->duration = duration;
         memcpy(cl->root_velocity, v.arr, sizeof cl->root_velocity);
         memcpy(cl->bounds_min, lo.arr, sizeof cl->bounds_min);

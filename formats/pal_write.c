@@ -86,7 +86,7 @@ static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *
         s += len + 1;
         put32(e + 8, clip->first_row), put32(e + 12, clip->frames);
         putf(e + 16, (float)clip->fps), putf(e + 20, (float)clip->duration), putf(e + 24, (float)clip->start);
-        put32(e + 28, clip->loops ? CBPAL_CLIP_LOOPS : 0);
+        put32(e + 28, (clip->loops ? CBPAL_CLIP_LOOPS : 0) | (clip->fitted ? CBPAL_CLIP_FITTED : 0));
         for (int k = 0; k < 3; ++k) {
             putf(e + 32 + 4 * k, clip->root_velocity[k]);
             putf(e + 44 + 4 * k, clip->bounds_min[k]);

@@ -25,9 +25,10 @@ cb_bake_settings cb_default_bake_settings(void)
 {
     cb_bake_settings s;
     memset(&s, 0, sizeof s);
-    s.fps = 30;
+    s.fps = 30; /* a fixed rate's, when fps_auto is turned off */
+    s.fps_auto = true;
     s.max_error_mm = 1;
-    s.max_fps = 60;
+    s.max_fps = CB_AUTO_MAX_FPS;
     s.layout = CB_LAYOUT_QPOS;
     s.precision = CB_PRECISION_U16;
     s.formats = CB_FORMAT_PAL;
@@ -116,11 +117,14 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
             cbpal_xxh64_update(&h, &g->lods[i]->source_hash, sizeof g->lods[i]->source_hash);
         return cbpal_xxh64_digest(&h);
     }
-    char opts[256];
-    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s\n",
+    char opts[320], chosen[96] = ""; /* error-bounded rates: the goal chooses them (a fixed fps: as before it) */
+    if (job->settings.fps_auto)
+        snprintf(chosen, sizeof chosen, " auto max_error=%.17g max_fps=%.17g", job->settings.max_error_mm,
+                 job->settings.max_fps);
+    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s\n",
                      CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
                      o->max_texture_size, (int)o->root_motion, job->skin, job->settings.zstd,
-                     job->settings.exr_compression, o->fit ? " fit-rows" : "", o->measure_all ? " measure-all" : "");
+                     job->settings.exr_compression, o->fit ? " fit-rows" : "", o->measure_all ? " measure-all" : "", chosen);
     cbpal_xxh64_update(&h, opts, (size_t)n);
     cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
     return cbpal_xxh64_digest(&h);
@@ -128,12 +132,37 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
 
 /* ---- planning: the clips and their rates ---- */
 
-/* Whether clip i's rate is chosen by error, and its goal. */
-static bool clip_goal(const cb_bake_job *job, uint32_t i, cb_rate_goal *goal)
+/* Whether clip i's rate is chosen by error: its own fps = "auto", else a fixed fps of its own
+ * (a catalog's clip fps = N), else the job's. */
+bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t i)
 {
     const cb_clip_settings *c = job->clip_settings ? &job->clip_settings[i] : NULL;
-    if (!(c && c->fps_auto >= 0 ? c->fps_auto == 1 : job->settings.fps_auto)) return false;
-    *goal = (cb_rate_goal){c && c->max_error_mm > 0 ? c->max_error_mm : job->settings.max_error_mm, job->settings.max_fps};
+    if (c && c->fps_auto == 1) return true; /* asked for by name: a skin with no mesh then fails, saying so */
+    /* A skin with no skinned mesh has no error to bound: the default bakes it at the fixed fps. */
+    if (cb_model_skin_vertex_count(job->model, job->skin) == 0) return false;
+    if (c && c->fps_auto >= 0) return c->fps_auto == 1;
+    if (job->clips && job->clips[i].fps > 0) return false;
+    return job->settings.fps_auto;
+}
+
+/* Clip i's error budget, mm/m: an error-bounded clip's goal; a fixed fps is checked only
+ * against a max_error asked for beside it: the clip's own, or the job's for the job's fixed fps
+ * (a clip pinned to an fps of its own keeps it unchecked by the job's max_error), else 0: none. */
+static double clip_budget_mm(const cb_bake_job *job, uint32_t i)
+{
+    const cb_clip_settings *c = job->clip_settings ? &job->clip_settings[i] : NULL;
+    if (c && c->max_error_mm > 0) return c->max_error_mm;
+    if (cb_bake_job_clip_auto(job, i)) return job->settings.max_error_mm;
+    bool own_fps = (job->clips && job->clips[i].fps > 0) || (c && c->fps_auto == 0);
+    return !own_fps && job->settings.max_error_given ? job->settings.max_error_mm : 0;
+}
+
+/* Clip i's goal when its rate is chosen by error: the fewest rows within its budget, fitted or
+ * sampled (every clip fitted under fit_rows, cb_bake_options.fit). */
+static bool clip_goal(const cb_bake_job *job, uint32_t i, cb_rate_goal *goal)
+{
+    if (!cb_bake_job_clip_auto(job, i)) return false;
+    *goal = (cb_rate_goal){clip_budget_mm(job, i), job->settings.max_fps, CB_ROWS_BEST};
     return true;
 }
 
@@ -151,10 +180,8 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
     bool any = false;
-    for (uint32_t i = 0; i < n; ++i) {
-        job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0};
-        any |= clip_goal(job, i, &goals[i]);
-    }
+    for (uint32_t i = 0; i < n; ++i) job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false};
+    for (uint32_t i = 0; i < n; ++i) any |= clip_goal(job, i, &goals[i]);
     job->plan_count = n;
     if (any) {
         cb_sampler *s = cb_sampler_create(m, job->skin, err);
@@ -215,6 +242,55 @@ static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pa
     return err->status;
 }
 
+/* Every clip against its budget in the palette baked: what a player sees of each. An
+ * error-bounded clip met it baked alone; in the palette its u16 box is the palette's, wider,
+ * so its encoding errs a little more: the palette is what is promised. */
+static cb_status check_budgets(const cb_bake_job *job, const cb_palette *p, cb_bake_result *out, cb_error *err)
+{
+    out->budgets = calloc(p->clip_count ? p->clip_count : 1, sizeof *out->budgets);
+    if (!out->budgets) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    out->budget_count = p->clip_count;
+    for (uint32_t i = 0; i < p->clip_count; ++i) {
+        cb_clip_budget *b = &out->budgets[i];
+        b->max_error_mm = clip_budget_mm(job, i);
+        b->error_mm = cb_mm_per_m(p->clips[i].visible_error, p->model_height);
+        b->over = b->max_error_mm > 0 && b->error_mm > b->max_error_mm;
+        b->fps = p->clips[i].fps, b->rows = p->clips[i].frames, b->fitted = p->clips[i].fitted;
+        out->over_budget += b->over;
+    }
+    if (!out->over_budget || job->settings.allow_over_budget) return CB_OK;
+    return cb_fail_setting(err, CB_ERR_VERIFY, CB_SETTING_ALLOW_OVER_BUDGET, "%s: %u of %u clip%s over its error budget "
+                           "(max_error), each listed; nothing was written", job->model->source, out->over_budget,
+                           p->clip_count, p->clip_count == 1 ? "" : "s");
+}
+
+/* An error-bounded clip that met its budget baked alone can miss it in the palette by a hair:
+ * u16 quantizes positions in the palette's box, wider than the clip's own (Fox's Walk: 0.996
+ * mm/m alone, 1.0004 in the palette). Such clips are searched again, once, against their budget
+ * less 1.5 times what the palette added; true when any was (the palette is then baked again). */
+static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette *p, cb_error *err)
+{
+    uint32_t n = job->plan_count;
+    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
+    cb_rate_choice *fresh = calloc(n ? n : 1, sizeof *fresh);
+    bool any = false;
+    for (uint32_t i = 0; goals && fresh && i < n && i < p->clip_count; ++i) {
+        double budget = clip_budget_mm(job, i), e = cb_mm_per_m(p->clips[i].visible_error, p->model_height);
+        double tighter = budget - 1.5 * (e - job->rates[i].error_mm);
+        if (!cb_bake_job_clip_auto(job, i) || !job->rates[i].met || !(e > budget) || !(tighter > 0)) continue;
+        goals[i] = (cb_rate_goal){tighter, job->settings.max_fps, CB_ROWS_BEST};
+        any = true;
+    }
+    if (any) {
+        cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
+        cb_choose_rates(s, &o, job->plan, n, goals, fresh, err);
+        for (uint32_t i = 0; i < n && !err->status; ++i)
+            if (goals[i].max_error_mm > 0) job->rates[i] = fresh[i];
+    }
+    free(goals), free(fresh);
+    return any;
+}
+
 cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -231,7 +307,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
      * write them, and zstd compresses them: those bake into memory of their own.) */
     cb_pal_mapping mapping;
     cb_pal_mapping_init(&mapping, job->pal_path, job->model, job->skin);
-    bool mapped = job->settings.formats == CB_FORMAT_PAL && !job->settings.zstd && job->pal_path;
+    bool mapped = job->settings.formats == CB_FORMAT_PAL && !job->settings.zstd && job->pal_path, replanned = false;
     for (int f = 0; f < 3 && !err->status; ++f) {
         if (!(job->settings.formats & formats[f])) continue;
         cb_bake_output *o = &out->outputs[out->output_count];
@@ -249,6 +325,15 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         o->palette.position_offsets = NULL;
         out->output_count++;
         o->input_hash = cb_bake_input_hash(job, &opt);
+        if (out->output_count == 1 && !replanned && (replanned = true) && replan_clips_over(job, s, &shared, err)) {
+            out->output_count = 0, --f; /* baked again with the clips' new rates */
+            cb_palette_free(&shared);
+            continue;
+        }
+        if (out->output_count == 1 && check_budgets(job, &shared, out, err)) {
+            out->output_count = 0; /* nothing written */
+            break;
+        }
         if (out->output_count == 1) bake_notes(&opt, &shared, &out->notes);
         write_output(job, &shared, &mapping, o, err);
     }
@@ -262,6 +347,7 @@ void cb_bake_result_free(cb_bake_result *r)
 {
     for (uint32_t i = 0; i < r->output_count; ++i) cb_palette_free(&r->outputs[i].palette);
     cb_warnings_free(&r->notes);
+    free(r->budgets);
     memset(r, 0, sizeof *r);
 }
 

@@ -98,7 +98,7 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
         cb_clip_plan *p = &w->plan[i];
         w->clip_settings[i] = (cb_clip_settings){-1, 0};
         if (!an->clips) {
-            *p = (cb_clip_plan){(int32_t)i, m->animations[i].name, -1, 0};
+            *p = (cb_clip_plan){(int32_t)i, m->animations[i].name, -1, 0, false};
             continue;
         }
         const cb_catalog_clip *c = &an->clips[i];
@@ -114,7 +114,7 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
             return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s has no clip '%s'; its clips are: %s",
                            roster_at(cat, c->pos, where, sizeof where), an->name, m->source, c->source, list);
         }
-        *p = (cb_clip_plan){a, c->name, c->loop, c->fps};
+        *p = (cb_clip_plan){a, c->name, c->loop, c->fps, false};
         w->clip_settings[i] = (cb_clip_settings){c->fps_auto, c->max_error_mm};
     }
     t->clip_count = n;
@@ -352,6 +352,7 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
         t->palette_bytes = p->texel_bytes;
     }
     for (uint32_t i = 0; i < r.notes.count; ++i) cb_warn(&t->warnings, r.notes.items[i].kind, "%s", r.notes.items[i].message);
+    cb_bake_budget_notes(&w->job, &r, NULL, &t->warnings); /* in the catalog's words */
     cb_bake_result_free(&r);
     return err->status;
 }

@@ -17,6 +17,7 @@ uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
     cbpal_xxh64_update(&h, settings, sizeof settings);
     if (b->fit_rows) hash_str(&h, "fit_rows"); /* (only then: other palettes stay up to date) */
     if (b->measure_all) hash_str(&h, "measure_all"); /* (likewise: the header's errors may differ) */
+    if (b->allow_over_budget) hash_str(&h, "allow_over_budget"); /* a palette written over budget is not one that met it */
     for (uint32_t i = 0; i < m->node_count; ++i) {
         const cb_node *node = &m->nodes[i];
         hash_str(&h, node->name);
@@ -33,6 +34,7 @@ uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
         hash_str(&h, plan[i].name);
         cbpal_xxh64_update(&h, &plan[i].loop, sizeof plan[i].loop);
         cbpal_xxh64_update(&h, &plan[i].fps, sizeof plan[i].fps);
+        if (plan[i].fit) hash_str(&h, "fit"); /* its rows fitted (error-bounded rates choose it per clip) */
         const cb_animation *a = &m->animations[plan[i].animation];
         for (uint32_t c = 0; c < a->channel_count; ++c) {
             const cb_channel *ch = &a->channels[c];

@@ -3,7 +3,8 @@
 
 static void override_settings(cb_bake_settings *b, const cb_bake_settings *v, unsigned fields)
 {
-    if (fields & CB_BAKE_FPS) b->fps = v->fps;
+    if (fields & CB_BAKE_FPS) b->fps = v->fps, b->fps_auto = v->fps_auto;
+    if (fields & CB_BAKE_ALLOW_OVER_BUDGET) b->allow_over_budget = v->allow_over_budget;
     if (fields & CB_BAKE_LAYOUT) b->layout = v->layout, b->layout_set = true;
     if (fields & CB_BAKE_PRECISION) b->precision = v->precision, b->precision_set = true;
     if (fields & CB_BAKE_FORMATS) b->formats = v->formats;

@@ -258,11 +258,16 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
     cb_palette_clip *clip = &p->clips[c];
     extent bounds = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
     range_reset(&st->ranges[c]);
-    bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler), fit = st->opt->fit;
+    bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler), fit = clip->fitted;
     size_t row_floats = (size_t)p->bone_count * CANON(p->layout);
     uint32_t chunk = fit ? info->frames : CB_SAMPLE_BATCH, qv = CANON(p->layout);
-    if (!w->rows && !(w->rows = malloc((fit ? st->max_clip_frames : CB_SAMPLE_BATCH) * row_floats * sizeof(float))))
-        return cb_fail(err, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
+    uint32_t room = fit && st->max_clip_frames > CB_SAMPLE_BATCH ? st->max_clip_frames : CB_SAMPLE_BATCH;
+    if (w->rows_held < room) { /* a palette may mix sampled clips and fitted ones, which need the whole clip */
+        free(w->rows);
+        if (!(w->rows = malloc(room * row_floats * sizeof(float))))
+            return w->rows_held = 0, cb_fail(err, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
+        w->rows_held = room;
+    }
     float *rows = w->rows;
     for (uint32_t f0 = 0; f0 < info->frames; f0 += chunk) {
         uint32_t n = info->frames - f0 < chunk ? info->frames - f0 : chunk;
@@ -422,7 +427,6 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     memset(p, 0, sizeof *p);
     p->layout = opt->layout;
     p->precision = opt->precision;
-    p->fitted = opt->fit;
     p->fps = opt->fps;
     p->bone_count = skin->joint_count;
     p->texels_per_bone = cb_layout_texels_per_bone(opt->layout);
@@ -438,6 +442,8 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
         st.poses = probe->poses, st.analysis = probe->analysis, st.lent = sampler; /* no sampler made per pass */
     if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;
+    p->fitted = p->clip_count > 0;
+    for (uint32_t c = 0; c < p->clip_count; ++c) p->fitted = p->fitted && p->clips[c].fitted;
     st.infos = infos;
     /* Threads for every pass (at most one per job: a clip's blends and rows may be two), started
      * here so that they start while the buffers are set up. */
@@ -501,7 +507,8 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
         if (first_clip_error(&st, err)) goto fail;
         for (uint32_t c = 0; c < p->clip_count; ++c) {
             p->max_error = fmax(p->max_error, st.clip_error[c]);
-            p->visible_error = fmax(p->visible_error, fmax(st.clip_error[c], st.clip_blend_error[c]));
+            p->clips[c].visible_error = fmax(st.clip_error[c], st.clip_blend_error[c]);
+            p->visible_error = fmax(p->visible_error, p->clips[c].visible_error);
             p->error_rows_measured += (p->clips[c].frames + st.error_stride - 1) / st.error_stride +
                                       ((p->clips[c].frames - 1) % st.error_stride != 0);
         }

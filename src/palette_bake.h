@@ -61,7 +61,8 @@ typedef struct worker {
     double *lanes;       /* bones * 8 lanes of CB_SAMPLE_BATCH: the joints' similarities (cb_clip_frame_lanes), for
                           * qpos rows of similarity rigs and their measurement */
     cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
-    float *rows;         /* pre-encoding rows: CB_SAMPLE_BATCH of them, or a whole clip's for --fit */
+    float *rows;         /* pre-encoding rows: CB_SAMPLE_BATCH of them, or a whole clip's for a fitted one */
+    uint32_t rows_held;  /* the rows `rows` has room for */
     float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
     struct measure_scratch *measure; /* palette_error.c's, made by the worker's first measurement job */
 } worker;

@@ -439,7 +439,7 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     measure_scratch *s = worker_scratch(st, w);
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
      * ways, so their quarter points are measured too. */
-    uint32_t parts = p->fitted ? 4 : 2;
+    uint32_t parts = p->clips[c].fitted ? 4 : 2;
     if (!s) {
         cb_fail(&st->errors[blends ? c : p->clip_count + c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
     } else if (goal > 0) { /* the blends, then only the baked rows that could exceed them */

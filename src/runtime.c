@@ -39,18 +39,20 @@ void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_insta
 
 /* ---- error-driven frame rate ---- */
 
-/* One clip's search: its probes so far. Both families and the closing measurement ask for some
- * rates twice (the key rate's multiples are common rates too), and a probe is a whole bake of
- * the clip: each rate is baked once. */
+/* One clip's search: its probes so far. Both families, both kinds of rows and the closing
+ * measurement ask for some rates twice (the key rate's multiples are common rates too), and a
+ * probe is a whole bake of the clip: each rate is baked once for each kind of rows. */
 typedef struct probe {
     double fps, goal, error;
+    bool fit;
 } probe;
 typedef struct clip_search {
     cb_sampler *s;
     const cb_bake_options *o;
     const cb_clip_plan *clip;
+    bool fit;                        /* the kind of rows probed now: fitted, or sampled */
     double max_fps;
-    probe done[32];
+    probe done[64];
     uint32_t count;
     const palette_skin_facts *facts; /* the skin's, settled once for every bake of the search */
     palette_probe probe;             /* the clip's analysis and exact poses, for every probe */
@@ -61,22 +63,25 @@ typedef struct clip_search {
  * it, probes sample the times it has no room for as without one. */
 #define SEARCH_POSE_BYTES ((size_t)32 << 20)
 
-/* The visible error of the clip baked alone at `fps`: the bake measures it (the encoding, and
- * the blend halfway between every two rows). goal > 0: exact when within it; above it, the
- * measurement may stop early (any value above the goal decides the search alike). Every bake
- * of the search measures the same vertices from the same bind pose (the skin's, whatever the
- * clip): what depends on the skin alone is settled once (cs->facts), not once a bake, and
- * the clip is analyzed once (cs->probe.analysis). The probes' times coincide (a probe's blends
- * are the rows of one at twice its rate): each time's exact matrices are sampled once for the
- * clip (cs->probe.poses). */
+/* The visible error of the clip baked alone at `fps` with the rows cs->fit says: the bake
+ * measures it (the encoding, and the blend halfway between every two rows; fitted rows at the
+ * quarter points too). goal > 0: exact when within it; above it, the measurement may stop early
+ * (any value above the goal decides the search alike). Every bake of the search measures the
+ * same vertices from the same bind pose (the skin's, whatever the clip): what depends on the
+ * skin alone is settled once (cs->facts), not once a bake, and the clip is analyzed once
+ * (cs->probe.analysis). The probes' times coincide (a probe's blends are the rows of one at
+ * twice its rate, a fitted probe's mid-rows too): each time's exact matrices are sampled once
+ * for the clip (cs->probe.poses). */
 static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *err)
 {
     cb_bake_options one = *cs->o;
     one.fps = fps;
     one.threads = 1;
     one.error_goal = goal;
+    one.fit = false;
     cb_clip_plan plan = *cs->clip;
     plan.fps = fps;
+    plan.fit = cs->fit;
     cb_palette p;
     if (palette_bake_with_facts(cs->s, &one, &plan, 1, cs->facts, &cs->probe, &p, err)) return INFINITY;
     double worst = p.visible_error;
@@ -84,19 +89,20 @@ static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *
     return worst;
 }
 
-/* clip_error_at, once per rate. A value measured exactly (no goal, or within its goal) answers
- * any goal; one above its goal only the same goal. max_fps is measured exactly at once: when
- * it is probed every lower common rate failed, and a clip that fails it too needs its exact
- * error there anyway (cb_choose_clip_fps's last line). */
+/* clip_error_at, once per rate and kind of rows. A value measured exactly (no goal, or within
+ * its goal) answers any goal; one above its goal only the same goal. max_fps is measured
+ * exactly at once: when it is probed every lower common rate failed, and a clip that fails it
+ * too needs its exact error there anyway (choose_clip's last lines). */
 static double probe_error(clip_search *cs, double fps, double goal, cb_error *err)
 {
     for (uint32_t i = 0; i < cs->count; ++i) {
         const probe *d = &cs->done[i];
-        if (d->fps == fps && (d->goal == goal || d->goal == 0 || d->error <= d->goal)) return d->error;
+        if (d->fps == fps && d->fit == cs->fit && (d->goal == goal || d->goal == 0 || d->error <= d->goal)) return d->error;
     }
     if (fps == cs->max_fps) goal = 0;
     double e = clip_error_at(cs, fps, goal, err);
-    if (!err->status && cs->count < sizeof cs->done / sizeof cs->done[0]) cs->done[cs->count++] = (probe){fps, goal, e};
+    if (!err->status && cs->count < sizeof cs->done / sizeof cs->done[0])
+        cs->done[cs->count++] = (probe){fps, goal, e, cs->fit};
     return e;
 }
 
@@ -117,42 +123,104 @@ static double lowest_rate(clip_search *cs, const double *rates, size_t n, double
     return hi < n && !err->status ? rates[hi] : 0;
 }
 
-/* Two families of rates, each searched on its own: common rates, and the clip's key rate with
- * its multiples and fractions. Rows that land on keys blend what the keys interpolate, so the
- * second family's error is far lower than its neighbours' in the first (Cow's Idle: 0.78 mm/m
- * at its 24 fps key rate, 3.4 at 20 and 30): the error does not fall steadily across both. */
+/* The rates a clip may bake at: common rates, and the clip's key rate with its multiples and
+ * fractions. */
+typedef struct rate_families {
+    const double *common;
+    size_t n_common, n_aligned;
+    double aligned[6];
+} rate_families;
+static const double common_rates[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120};
+
+static rate_families families_of(const cb_animation *a)
+{
+    static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
+    rate_families f = {common_rates, sizeof common_rates / sizeof common_rates[0], 0, {0}};
+    double key = cb_animation_key_interval(a);
+    for (size_t i = 0; key > 0 && i < 6; ++i) f.aligned[f.n_aligned++] = round(factors[i] / key * 1000) / 1000;
+    return f;
+}
+
+/* The lowest rate up to `cap` within max_error for the rows cs->fit says, 0 when none is, with
+ * its error. The two families are searched each on its own: rows that land on keys blend what
+ * the keys interpolate, so the second family's error is far lower than its neighbours' in the
+ * first (Cow's Idle: 0.78 mm/m at its 24 fps key rate, 3.4 at 20 and 30): the error does not
+ * fall steadily across both. */
+static double lowest_rate_of_rows(clip_search *cs, const rate_families *f, double cap, double max_error, double *error,
+                                  cb_error *err)
+{
+    double e_common = INFINITY, e_aligned = INFINITY;
+    double a = lowest_rate(cs, f->common, f->n_common, cap, max_error, &e_common, err);
+    double b = lowest_rate(cs, f->aligned, f->n_aligned, a > 0 ? fmin(a, cap) : cap, max_error, &e_aligned, err);
+    if (err->status || (a == 0 && b == 0)) return 0;
+    bool take_b = b > 0 && (a == 0 || b < a);
+    *error = take_b ? e_aligned : e_common;
+    return take_b ? b : a;
+}
+
+/* A clip over its goal at max_fps: the lowest rate up to CB_FPS_LIMIT (a ladder of multiples of
+ * max_fps) within it, for the rows cs->fit says, or 0 when none is (the encoding's own error
+ * stays over the goal). Only a failing bake pays for it: it is what the message suggests. */
+static double rate_that_meets(clip_search *cs, double max_error, cb_error *err)
+{
+    static const double steps[] = {1.5, 2, 3, 4, 6, 8, 12, 16};
+    double ladder[8];
+    size_t n = 0;
+    for (size_t i = 0; i < 8 && cs->max_fps * steps[i] <= CB_FPS_LIMIT; ++i) ladder[n++] = ceil(cs->max_fps * steps[i]);
+    if (n == 0 || ladder[n - 1] < CB_FPS_LIMIT) ladder[n++] = CB_FPS_LIMIT;
+    double ignored = 0;
+    return lowest_rate(cs, ladder, n, CB_FPS_LIMIT, max_error, &ignored, err);
+}
+
+/* One clip's rate and rows: the fewest rows within max_error. Fitted rows first (half the
+ * blend's error of sampled ones at a rate), then sampled rows at that rate or lower: sampled
+ * rows win ties, being the exact poses themselves (nearest-row playback and anything reading a
+ * row alone sees no fitting error). `rows` forces one kind. Over the goal even at max_fps: the
+ * kind with the lower error there, and the rate that would meet it (c->fps_needed). */
+static double choose_clip(clip_search *cs, const rate_families *f, cb_rows rows, double max_error, cb_rate_choice *c,
+                          cb_error *err)
+{
+    double e_fit = INFINITY, e_sampled = INFINITY, r_fit = 0, r_sampled = 0;
+    if (rows != CB_ROWS_SAMPLED) cs->fit = true, r_fit = lowest_rate_of_rows(cs, f, cs->max_fps, max_error, &e_fit, err);
+    if (rows != CB_ROWS_FITTED && !err->status)
+        cs->fit = false, r_sampled = lowest_rate_of_rows(cs, f, r_fit > 0 ? r_fit : cs->max_fps, max_error, &e_sampled, err);
+    memset(c, 0, sizeof *c);
+    if (err->status) return cs->max_fps;
+    if (r_sampled > 0 || r_fit > 0) {
+        bool sampled = r_sampled > 0 && (r_fit == 0 || r_sampled <= r_fit);
+        c->met = true, c->fitted = !sampled, c->error = sampled ? e_sampled : e_fit;
+        c->other_fps = sampled ? r_fit : 0; /* fitted won: sampled rows need more than its rate */
+        return sampled ? r_sampled : r_fit;
+    }
+    /* None met: the exact error at max_fps of each kind allowed, the lower one taken. */
+    cs->fit = rows != CB_ROWS_SAMPLED;
+    double at_max = probe_error(cs, cs->max_fps, 0, err);
+    if (rows == CB_ROWS_BEST && !err->status) {
+        cs->fit = false;
+        double sampled = probe_error(cs, cs->max_fps, 0, err);
+        cs->fit = !(sampled < at_max);
+        at_max = fmin(at_max, sampled);
+    }
+    c->fitted = cs->fit, c->error = at_max, c->met = at_max <= max_error;
+    if (!err->status && !c->met) c->fps_needed = rate_that_meets(cs, max_error, err);
+    return cs->max_fps;
+}
+
 static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
-                              double max_fps, bool *met, double *error, const palette_skin_facts *facts,
+                              double max_fps, cb_rows rows, cb_rate_choice *c, const palette_skin_facts *facts,
                               pose_cache *poses, cb_error *err)
 {
-    static const double common[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120};
-    static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
     const cb_model *m = cb_sampler_model(s);
-    double aligned[6], key = cb_animation_key_interval(&m->animations[clip->animation]);
-    size_t n_aligned = 0;
-    for (size_t i = 0; key > 0 && i < 6; ++i) aligned[n_aligned++] = round(factors[i] / key * 1000) / 1000;
+    rate_families f = families_of(&m->animations[clip->animation]);
     /* Analyzed at the lowest rate, the likeliest within the frame limit; where it fails, each
      * probe analyzes the clip itself and fails as it would. */
     cb_clip_info analysis;
     cb_error unanalyzed = {0};
-    bool analyzed = !cb_clip_analyze(s, clip->animation, common[0], clip->loop, &o->limits, &analysis, &unanalyzed);
+    bool analyzed = !cb_clip_analyze(s, clip->animation, common_rates[0], clip->loop, &o->limits, &analysis, &unanalyzed);
     clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts,
                       .probe = {poses, analyzed ? &analysis : NULL}};
     if (poses) pose_cache_clear(poses); /* another clip's times */
-    double e_common = INFINITY, e_aligned = INFINITY;
-    double a = lowest_rate(&cs, common, sizeof common / sizeof common[0], max_fps, max_error, &e_common, err);
-    double b = lowest_rate(&cs, aligned, n_aligned, a > 0 ? fmin(a, max_fps) : max_fps, max_error, &e_aligned, err);
-    *met = !err->status && (a > 0 || b > 0);
-    double fps = max_fps;
-    if (*met) {
-        bool take_b = b > 0 && (a == 0 || b < a);
-        *error = take_b ? e_aligned : e_common;
-        fps = take_b ? b : a;
-    } else {
-        *error = err->status ? INFINITY : probe_error(&cs, max_fps, 0, err);
-        *met = *error <= max_error;
-    }
-    return fps;
+    return choose_clip(&cs, &f, rows, max_error, c, err);
 }
 
 static pose_cache *search_pose_cache(const cb_sampler *s)
@@ -166,11 +234,14 @@ double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip
     palette_skin_facts facts;
     pose_cache *poses = search_pose_cache(s); /* NULL (out of memory): sampled as without */
     double fps = max_fps;
-    *met = false, *error = INFINITY;
+    cb_rate_choice c = {0};
+    c.error = INFINITY;
     if (!palette_skin_facts_build(s, &facts, err))
-        fps = choose_clip_fps(s, o, clip, max_error, max_fps, met, error, &facts, poses, err);
+        fps = choose_clip_fps(s, o, clip, max_error, max_fps, o->fit || clip->fit ? CB_ROWS_FITTED : CB_ROWS_SAMPLED, &c,
+                              &facts, poses, err);
     palette_skin_facts_free(&facts);
     pose_cache_free(poses);
+    *met = c.met, *error = err->status ? INFINITY : c.error;
     return fps;
 }
 
@@ -195,7 +266,7 @@ typedef struct rate_search {
 } rate_search;
 
 /* The highest rate the search may probe a clip at. */
-static double max_fps_of(const cb_rate_goal *goal) { return goal->max_fps > 0 ? goal->max_fps : 60; }
+static double max_fps_of(const cb_rate_goal *goal) { return goal->max_fps > 0 ? goal->max_fps : CB_AUTO_MAX_FPS; }
 
 /* The clips' expected work: their rows at the highest rate a probe may bake them at. */
 static double search_work(const cb_model *m, const cb_clip_plan *plan, const cb_rate_goal *goal)
@@ -234,8 +305,9 @@ static int rate_worker(void *arg)
         }
         cb_rate_choice *c = &rs->choices[i];
         rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
-                                          max_fps_of(&rs->goals[i]), &c->met, &c->error,
+                                          max_fps_of(&rs->goals[i]), rs->o->fit ? CB_ROWS_FITTED : rs->goals[i].rows, c,
                                           rs->facts, poses, &rs->errors[i]);
+        rs->plan[i].fit = c->fitted;
         c->error_mm = cb_mm_per_m(c->error, rs->height);
     }
     pose_cache_free(poses);

@@ -53,7 +53,7 @@ static void make_project(const char *dir)
     snprintf(path, sizeof path, "%s/eel.glb", dir);
     copy_file(fish, path);
     snprintf(path, sizeof path, "%s/catalog.toml", dir);
-    write_text(path, "[animal.fish]\nmodel = \"fish.glb\"\n\n[animal.eel]\nmodel = \"eel.glb\"\nfps = 24\n");
+    write_text(path, "[bake]\nfps = 30\n[animal.fish]\nmodel = \"fish.glb\"\n\n[animal.eel]\nmodel = \"eel.glb\"\nfps = 24\n");
 }
 
 /* Every file of the project 100 s older, as if the last build ran a while ago: the edit that
@@ -180,7 +180,7 @@ static void test_default_output_folder_is_created(void **state)
     (void)state;
     char dir[] = TMP "/fresh", text[PATH_MAX + 64], out[8192];
     assert_int_equal(system("rm -rf " TMP "/fresh && mkdir -p " TMP "/fresh"), 0);
-    snprintf(text, sizeof text, "[animal.fish]\nmodel = \"%s\"\n", fish);
+    snprintf(text, sizeof text, "[bake]\nfps = 30\n[animal.fish]\nmodel = \"%s\"\n", fish);
     write_text(TMP "/fresh/catalog.toml", text);
     char cmd[PATH_MAX + 128];
     snprintf(cmd, sizeof cmd, "%s bake catalog.toml -q", exe);
@@ -239,7 +239,7 @@ static void test_catalog_applies_bake_flags(void **state)
     static char out[16384];
     char cmd[PATH_MAX + 256], text[PATH_MAX + 64];
     assert_int_equal(system("rm -rf " TMP "/flags && mkdir -p " TMP "/flags/build/roster"), 0);
-    snprintf(text, sizeof text, "[animal.fish]\nmodel = \"%s\"\n", fish);
+    snprintf(text, sizeof text, "[bake]\nfps = 30\n[animal.fish]\nmodel = \"%s\"\n", fish);
     write_text(TMP "/flags/catalog.toml", text);
     const char *flags = "--layout mat4 --precision float --zstd --format pal,exr --fps 24 --root-motion in-place "
                         "--exr-compression zip";
@@ -301,7 +301,7 @@ static void test_catalog_applies_limits(void **state)
     (void)state;
     char cmd[PATH_MAX + 256], text[PATH_MAX + 64], out[4096];
     assert_int_equal(system("rm -rf " TMP "/limits && mkdir -p " TMP "/limits/build/roster"), 0);
-    snprintf(text, sizeof text, "[animal.fish]\nmodel = \"%s\"\n", fish);
+    snprintf(text, sizeof text, "[bake]\nfps = 30\n[animal.fish]\nmodel = \"%s\"\n", fish);
     write_text(TMP "/limits/catalog.toml", text);
     snprintf(cmd, sizeof cmd, "%s bake catalog.toml -q --max-joints 4", exe);
     int rc = run_in(TMP "/limits", cmd, out, sizeof out);

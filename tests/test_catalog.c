@@ -33,7 +33,7 @@ static const char *catalog(const char *name, const char *out_dir, const char *ex
     static char path[PATH_MAX];
     static char text[16384];
     snprintf(text, sizeof text,
-             "[bake]\nout_dir = \"%s\"\n\n"
+             "[bake]\nout_dir = \"%s\"\nfps = 30\n\n"
              "[animal.goat]\nmodel = \"%s/quadruped.glb\"\nlods = [\"%s/quadruped_lod1.glb\"]\n"
              "states = { idle = [\"idle\"], wander = [\"walk\"], flee = [\"gallop\", \"run\"] }\ndefault_state = \"wander\"\n\n"
              "[animal.sheep]\nmodel = \"%s/quadruped.glb\"\nstates = { idle = [\"idle\"] }\n\n"

@@ -59,8 +59,9 @@ static void test_report_of_one_model(void **state)
     char *json = read_whole_file(TMP "/fox.json", &n);
     assert_contains(json, "\"target\": \"Steam Deck\"");
     assert_contains(json, "\"name\": \"Fox\"");
-    /* Fox: 24 bones x 2 texels x 159 rows x 8 bytes (qpos/u16, the default bake). */
-    assert_contains(json, "\"bytes\": 61056");
+    /* Fox: 24 bones x 2 texels x 289 rows x 8 bytes (qpos/u16, the default bake: error-bounded, Survey 82
+     * rows at 24 fps, Walk 68 at 96, Run 139 at 120; 159 rows at a fixed 30 fps). */
+    assert_contains(json, "\"bytes\": 110976");
     free(json);
     assert_int_equal(crowdbake(out, sizeof out, "report %s", fox), 0);
     assert_contains(out, "no budget to check (give --target NAME)");
@@ -93,10 +94,10 @@ static void test_verify_and_preview_take_the_exr(void **state)
 {
     (void)state;
     static char out[1 << 16];
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/fox.exr -q", fox), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/fox.exr -q", fox), 0);
     assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/fox.exr --json > " TMP "/v.json", fox), 0);
     /* The EXR's float texels verify as the float .pal of the same bake does. */
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/foxf.pal --precision float -q", fox), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/foxf.pal --precision float -q", fox), 0);
     assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/foxf.pal --json > " TMP "/vp.json", fox), 0);
     char *a = read_whole_file(TMP "/v.json", NULL), *b = read_whole_file(TMP "/vp.json", NULL);
     assert_string_equal(strstr(a, "\"clips\""), strstr(b, "\"clips\""));
@@ -122,7 +123,7 @@ static void test_exr_palette_matches_the_pal(void **state)
 {
     (void)state;
     char out[4096];
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/both.pal --format pal,exr --precision half -q "
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/both.pal --format pal,exr --precision half -q "
                                                 "--root-motion in-place", fox), 0);
     cbpal_file f;
     char msg[256];
@@ -159,17 +160,17 @@ static void test_format_pal_exr_keeps_each_precision(void **state)
 {
     (void)state;
     char out[4096];
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/one.pal -q", fox), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/one.exr -q", fox), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/two.pal --format pal,exr", fox), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/one.pal -q", fox), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/one.exr -q", fox), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/two.pal --format pal,exr", fox), 0);
     assert_contains(out, "two.pal: 59.6 KiB texture, 63.6 KiB file"); /* was 123.2 KiB: the EXR's float */
     assert_contains(out, "qpos/u16");
     /* Byte for byte the files each single-format bake writes. */
     assert_int_equal(run_command("cmp " TMP "/one.pal " TMP "/two.pal && cmp " TMP "/one.exr " TMP "/two.exr", NULL, 0), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/fox.png", fox), EXIT_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/fox.png", fox), EXIT_USAGE);
     assert_contains(out, "unknown output extension '.png'");
     assert_int_equal(run_command("test ! -e " TMP "/fox.png", NULL, 0), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/f --format pal,exrs", fox), EXIT_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/f --format pal,exrs", fox), EXIT_USAGE);
     assert_contains(out, "--format is pal, exr or pal,exr");
 }
 
@@ -188,7 +189,7 @@ static void test_messages(void **state)
     /* One clip, one type: no "1 clips". */
     char fish[1024];
     sample_path(fish, sizeof fish, "fish");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/fish.pal", fish), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/fish.pal", fish), 0);
     assert_contains(out, " 1 clip, ");
     assert_int_equal(crowdbake(out, sizeof out, "report %s", fish), 0);
     assert_contains(out, "type ");
@@ -196,7 +197,7 @@ static void test_messages(void **state)
     assert_non_null(f);
     char fish_abs[PATH_MAX];
     assert_non_null(realpath(fish, fish_abs)); /* the catalog's folder is as deep as the build's */
-    fprintf(f, "[bake]\nout_dir = \"one\"\n[animal.fish]\nmodel = \"%s\"\n", fish_abs);
+    fprintf(f, "[bake]\nout_dir = \"one\"\nfps = 30\n[animal.fish]\nmodel = \"%s\"\n", fish_abs);
     fclose(f);
     assert_int_equal(crowdbake(out, sizeof out, "bake " TMP "/one.toml"), 0);
     assert_contains(out, "baking 1 animal type from");
@@ -214,14 +215,14 @@ static void test_inspect_in_place_velocity(void **state)
     static char out[1 << 14];
     char q[1024];
     sample_path(q, sizeof q, "quadruped");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/q.pal --root-motion in-place -q", q), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/q.pal --root-motion in-place -q", q), 0);
     assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/q.pal"), 0);
     assert_contains(out, "root velocity removed (units/s)");
     assert_contains(out, "(0, 0, 1.2), speed 1.2");
     assert_contains(out, "(0, 0, 4), speed 4");
     const char *table = strstr(out, "idle"); /* no float noise (-9.797e-18) as velocities */
     assert_true(strstr(table, "e-0") == NULL && strstr(table, "e-1") == NULL && strstr(table, "e-2") == NULL);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/qk.pal -q", q), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/qk.pal -q", q), 0);
     assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/qk.pal"), 0);
     assert_contains(out, "walk");
     assert_contains(out, "in the rows");
@@ -236,7 +237,7 @@ static void test_inspect_aligns_long_clip_names(void **state)
     static char out[1 << 14];
     char cow[1024];
     shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/cow.pal -q", cow), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/cow.pal -q", cow), 0);
     assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/cow.pal"), 0);
     const char *title = strstr(out, "first row");
     assert_non_null(title);
@@ -280,25 +281,25 @@ static void test_loop_and_one_shot_overrule_the_poses(void **state)
     char cow[1024];
     shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
     const char *headbutt = "AnimalArmature|Attack_Headbutt", *death = "AnimalArmature|Death", *walk = "AnimalArmature|Walk";
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/found.pal -q", cow), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/found.pal -q", cow), 0);
     assert_int_equal(clip_loops(TMP "/found.pal", headbutt), 1);
     assert_int_equal(clip_loops(TMP "/found.pal", death), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/told.pal -q --one-shot '%s' --loop '%s'", cow, headbutt,
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/told.pal -q --one-shot '%s' --loop '%s'", cow, headbutt,
                                death), 0);
     assert_int_equal(clip_loops(TMP "/told.pal", headbutt), 0);
     assert_int_equal(clip_loops(TMP "/told.pal", death), 1);
     assert_int_equal(clip_loops(TMP "/told.pal", walk), 1); /* the others as the poses say */
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/some.pal -q --clip '%s,%s' --one-shot '%s'", cow, walk,
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/some.pal -q --clip '%s,%s' --one-shot '%s'", cow, walk,
                                headbutt, headbutt), 0);
     assert_int_equal(clip_loops(TMP "/some.pal", headbutt), 0);
     assert_int_equal(clip_loops(TMP "/some.pal", death), -1);
 
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/bad.pal -q --loop Gallopp", cow), EXIT_USAGE);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/bad.pal -q --loop Gallopp", cow), EXIT_USAGE);
     assert_contains(out, "--loop Gallopp: the model has no such clip; its clips are: AnimalArmature|Attack_Headbutt");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/bad.pal -q --loop '%s' --one-shot '%s'", cow, death,
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/bad.pal -q --loop '%s' --one-shot '%s'", cow, death,
                                death), EXIT_USAGE);
     assert_contains(out, "'AnimalArmature|Death' is given to both --loop and --one-shot");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o " TMP "/bad.pal -q --clip '%s' --one-shot '%s'", cow, walk,
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/bad.pal -q --clip '%s' --one-shot '%s'", cow, walk,
                                death), EXIT_USAGE);
     assert_contains(out, "the clip is not among those baked");
     assert_int_equal(access(TMP "/bad.pal", F_OK), -1);
@@ -331,6 +332,8 @@ static void test_example_catalog_states_the_defaults(void **state)
     if (cb_catalog_parse(stripped, used, "catalog.example.toml", &defaults, &err)) fail_msg("%s", err.message);
     const cb_bake_settings *a = &shown.defaults, *b = &defaults.defaults;
     assert_true(a->fps == b->fps);
+    assert_true(a->fps_auto == b->fps_auto && a->max_error_mm == b->max_error_mm && a->max_fps == b->max_fps);
+    assert_true(a->fit_rows == b->fit_rows && a->allow_over_budget == b->allow_over_budget);
     assert_int_equal(a->layout, b->layout);
     assert_int_equal(a->precision, b->precision);
     assert_int_equal(a->formats, b->formats);

@@ -84,15 +84,15 @@ static void test_info_and_bake_skip_the_broken_clip(void **state)
     assert_int_equal(cli("info Fox-broken.gltf --json", false, out, sizeof out), 0);
     if (!strstr(out, "\"skipped_clips\": [\n    {\n      \"name\": \"Broken\"") || !strstr(out, warning)) fail_msg("%s", out);
     /* Fox's three clips, 159 rows at 30 fps, as from Fox.glb itself. */
-    expect("bake Fox-broken.gltf -o all.pal", 0, warning);
+    expect("bake Fox-broken.gltf --fps 30 -o all.pal", 0, warning);
     expect_clips("all.pal", 3, 159, "Survey");
-    assert_int_equal(cli("bake Fox-broken.gltf -o all.pal --json", false, out, sizeof out), 0);
+    assert_int_equal(cli("bake Fox-broken.gltf --fps 30 -o all.pal --json", false, out, sizeof out), 0);
     if (!strstr(out, "\"warnings\": [\n    {\n      \"kind\": \"warning\",\n      \"message\": \"Fox-broken.gltf: clip 'Broken'"))
         fail_msg("%s", out);
     validate("docs/bake.schema.json", out);
     /* The palette's texels are those of the untouched file (only the input hash differs). */
     char cmd[PATH_MAX + 512], a[128], b[128];
-    snprintf(cmd, sizeof cmd, "bake %s/assets/derived-fox/separate/Fox.gltf -o fox.pal -q", shared);
+    snprintf(cmd, sizeof cmd, "bake %s/assets/derived-fox/separate/Fox.gltf --fps 30 -o fox.pal -q", shared);
     assert_int_equal(cli(cmd, true, out, sizeof out), 0);
     assert_int_equal(run_command("tail -c +4097 " TMP "/all.pal | md5sum", a, sizeof a), 0);
     assert_int_equal(run_command("tail -c +4097 " TMP "/fox.pal | md5sum", b, sizeof b), 0);
@@ -104,18 +104,18 @@ static void test_clip_selection(void **state)
     (void)state;
     static char out[65536];
     /* Asked for by name: an error with the reason. */
-    expect("bake Fox-broken.gltf -o x.pal --clip Broken", 4, "clip 'Broken' has no channels");
-    expect("bake Fox-broken.gltf -o x.pal --clip Walk,Nope", 2, "--clip Nope: the model has no such clip; its clips are: "
+    expect("bake Fox-broken.gltf --fps 30 -o x.pal --clip Broken", 4, "clip 'Broken' has no channels");
+    expect("bake Fox-broken.gltf --fps 30 -o x.pal --clip Walk,Nope", 2, "--clip Nope: the model has no such clip; its clips are: "
            "Survey, Walk, Run");
-    expect("bake Fox-broken.gltf -o x.pal --exclude-clip Jump", 2, "--exclude-clip Jump: the model has no such clip");
-    expect("bake Fox-broken.gltf -o x.pal --exclude-clip Survey,Walk,Run", 2, "no clip left to bake");
-    expect("bake Fox-broken.gltf -o x.pal --clip Walk --exclude-clip Run", 2, "give --clip or --exclude-clip, not both");
+    expect("bake Fox-broken.gltf --fps 30 -o x.pal --exclude-clip Jump", 2, "--exclude-clip Jump: the model has no such clip");
+    expect("bake Fox-broken.gltf --fps 30 -o x.pal --exclude-clip Survey,Walk,Run", 2, "no clip left to bake");
+    expect("bake Fox-broken.gltf --fps 30 -o x.pal --clip Walk --exclude-clip Run", 2, "give --clip or --exclude-clip, not both");
     expect("verify Fox-broken.gltf all.pal --clip Walk --exclude-clip Run", 2, "give --clip or --exclude-clip, not both");
     /* In the order given: Run's 35 rows then Walk's 21; the broken clip not mentioned. */
-    assert_int_equal(cli("bake Fox-broken.gltf -o sel.pal --clip Run,Walk --json", true, out, sizeof out), 0);
+    assert_int_equal(cli("bake Fox-broken.gltf --fps 30 -o sel.pal --clip Run,Walk --json", true, out, sizeof out), 0);
     if (strstr(out, "Broken") || !strstr(out, "\"warnings\": []")) fail_msg("%s", out);
     expect_clips("sel.pal", 2, 56, "Run");
-    expect("bake Fox-broken.gltf -o ex.pal --exclude-clip Survey", 0, warning);
+    expect("bake Fox-broken.gltf --fps 30 -o ex.pal --exclude-clip Survey", 0, warning);
     expect_clips("ex.pal", 2, 56, "Walk");
     /* vat: 21 frames of Walk alone. */
     assert_int_equal(cli("vat Fox-broken.gltf -o walk.exr --clip Walk --json", false, out, sizeof out), 0);
@@ -140,7 +140,7 @@ static void test_catalog_skips_or_names_the_broken_clip(void **state)
     static char out[65536];
     FILE *f = fopen(TMP "/all.toml", "w");
     assert_non_null(f);
-    fputs("[bake]\nout_dir = \"out\"\n\n[animal.fox]\nmodel = \"Fox-broken.gltf\"\n", f);
+    fputs("[bake]\nout_dir = \"out\"\nfps = 30\n[animal.fox]\nmodel = \"Fox-broken.gltf\"\n", f);
     fclose(f);
     f = fopen(TMP "/named.toml", "w");
     assert_non_null(f);

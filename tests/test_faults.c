@@ -51,15 +51,15 @@ static void test_unwritable_outputs(void **state)
 {
     (void)state;
     char args[1024], out[1024];
-    snprintf(args, sizeof args, "bake %s -o " TMP "/missing/x.pal", fish);
+    snprintf(args, sizeof args, "bake %s --fps 30 -o " TMP "/missing/x.pal", fish);
     assert_int_equal(crowdbake(args, out, sizeof out), EXIT_IO);
     assert_non_null(strstr(out, "does not exist (create it first)"));
     /* /proc refuses new files even to root: a read-only place. */
-    snprintf(args, sizeof args, "bake %s -o /proc/crowdbake-test.pal", fish);
+    snprintf(args, sizeof args, "bake %s --fps 30 -o /proc/crowdbake-test.pal", fish);
     assert_int_equal(crowdbake(args, out, sizeof out), EXIT_IO);
     assert_non_null(strstr(out, "/proc/crowdbake-test.pal: cannot write"));
     /* A device is never replaced by a file. */
-    snprintf(args, sizeof args, "bake %s -o /dev/full", fish);
+    snprintf(args, sizeof args, "bake %s --fps 30 -o /dev/full", fish);
     assert_int_equal(crowdbake(args, out, sizeof out), EXIT_IO);
     assert_non_null(strstr(out, "not a regular file"));
     struct stat st;
@@ -76,10 +76,10 @@ static void test_disk_full_keeps_the_old_file(void **state)
         skip();
     }
     char args[1024], out[1024];
-    snprintf(args, sizeof args, "bake %s -o " TMP "/full/animal.pal", fish); /* 10 KiB: fits */
+    snprintf(args, sizeof args, "bake %s --fps 30 -o " TMP "/full/animal.pal", fish); /* 10 KiB: fits */
     assert_int_equal(crowdbake(args, out, sizeof out), 0);
     uint64_t before = complete_palette(TMP "/full/animal.pal");
-    snprintf(args, sizeof args, "bake %s -o " TMP "/full/animal.pal", quad); /* 174 KiB: does not */
+    snprintf(args, sizeof args, "bake %s --fps 30 -o " TMP "/full/animal.pal", quad); /* 174 KiB: does not */
     int rc = crowdbake(args, out, sizeof out);
     uint64_t after = complete_palette(TMP "/full/animal.pal");
     int temps = temporaries(TMP "/full");
@@ -104,10 +104,10 @@ static void file_hash(const char *path, char *hash, size_t size)
 static void interrupt(const char *signal, const char *point, const char *out_path)
 {
     char cmd[2048], out[2048], old[1024], now[1024];
-    snprintf(cmd, sizeof cmd, "%s bake %s -o %s -q", crowdbake_exe(), fish, out_path); /* the old file */
+    snprintf(cmd, sizeof cmd, "%s bake %s --fps 30 -o %s -q", crowdbake_exe(), fish, out_path); /* the old file */
     assert_int_equal(system(cmd), 0);
     file_hash(out_path, old, sizeof old);
-    snprintf(cmd, sizeof cmd, "python3 tests/tools/interrupt_mid_write.py %s %s %s %s bake %s -o %s -q 2>&1", signal,
+    snprintf(cmd, sizeof cmd, "python3 tests/tools/interrupt_mid_write.py %s %s %s %s bake %s --fps 30 -o %s -q 2>&1", signal,
              point, out_path, crowdbake_exe(), quad, out_path);
     int rc = run_command(cmd, out, sizeof out);
     printf("  %s at %s of %s: %s", signal, point, out_path, out);
@@ -136,12 +136,12 @@ static void test_two_bakes_racing_for_one_output(void **state)
 {
     (void)state;
     char cmd[4096];
-    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/a.pal -q --layout mat4 && %s bake %s -o " TMP "/b.pal -q --layout affine",
+    snprintf(cmd, sizeof cmd, "%s bake %s --fps 30 -o " TMP "/a.pal -q --layout mat4 && %s bake %s --fps 30 -o " TMP "/b.pal -q --layout affine",
              crowdbake_exe(), quad, crowdbake_exe(), quad);
     assert_int_equal(system(cmd), 0);
     uint64_t a = complete_palette(TMP "/a.pal"), b = complete_palette(TMP "/b.pal");
     for (int round = 0; round < 5; ++round) {
-        snprintf(cmd, sizeof cmd, "(%s bake %s -o " TMP "/race.pal -q --layout mat4 & %s bake %s -o " TMP
+        snprintf(cmd, sizeof cmd, "(%s bake %s --fps 30 -o " TMP "/race.pal -q --layout mat4 & %s bake %s --fps 30 -o " TMP
                  "/race.pal -q --layout affine & wait)", crowdbake_exe(), quad, crowdbake_exe(), quad);
         assert_int_equal(system(cmd), 0);
         uint64_t r = complete_palette(TMP "/race.pal"); /* complete, and one of the two */
@@ -174,17 +174,17 @@ static void test_file_size_limit_names_its_flag(void **state)
     char fox[1024], gltf[1024], args[4096], out[2048];
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
     shared_path(gltf, sizeof gltf, "assets/derived-fox/separate/Fox.gltf"); /* 34 KB, its Fox.bin 120 KB */
-    snprintf(args, sizeof args, "bake %s -o " TMP "/limited.pal --max-file-size 1K", fox);
+    snprintf(args, sizeof args, "bake %s --fps 30 -o " TMP "/limited.pal --max-file-size 1K", fox);
     int rc = crowdbake(args, out, sizeof out);
     if (rc != EXIT_IO || !strstr(out, "larger than the 1024-byte file size limit; raise the limit [--max-file-size]"))
         fail_msg("exit %d: %s", rc, out);
-    snprintf(args, sizeof args, "bake %s -o " TMP "/limited.pal --max-file-size 50K", gltf);
+    snprintf(args, sizeof args, "bake %s --fps 30 -o " TMP "/limited.pal --max-file-size 50K", gltf);
     rc = crowdbake(args, out, sizeof out);
     if (rc != EXIT_INPUT || !strstr(out, "Fox.bin : larger than the 51200-byte file size limit; raise the limit [--max-file-size]"))
         fail_msg("exit %d: %s", rc, out);
     struct stat st;
     assert_int_not_equal(stat(TMP "/limited.pal", &st), 0);
-    snprintf(args, sizeof args, "bake %s -o " TMP "/limited.pal --max-file-size 200K", gltf); /* both fit */
+    snprintf(args, sizeof args, "bake %s --fps 30 -o " TMP "/limited.pal --max-file-size 200K", gltf); /* both fit */
     rc = crowdbake(args, out, sizeof out);
     if (rc != 0) fail_msg("exit %d: %s", rc, out);
 }

@@ -21,10 +21,10 @@ static int setup(void **state)
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
     if (system("rm -rf " TMP " && mkdir -p " TMP)) return -1;
     /* The same bake as .pal and .ktx2: half on the sample (with relative positions), float on Fox. */
-    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/quadruped --format pal,ktx2 --precision half -q", crowdbake_exe(),
+    snprintf(cmd, sizeof cmd, "%s bake %s --fps 30 -o " TMP "/quadruped --format pal,ktx2 --precision half -q", crowdbake_exe(),
              quadruped);
     if (system(cmd)) return -1;
-    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/fox --format pal,ktx2 --precision float --layout mat4 -q",
+    snprintf(cmd, sizeof cmd, "%s bake %s --fps 30 -o " TMP "/fox --format pal,ktx2 --precision float --layout mat4 -q",
              crowdbake_exe(), fox);
     return system(cmd);
 }
@@ -72,13 +72,13 @@ static void test_u16_is_refused_and_output_repeats(void **state)
     (void)state;
     char cmd[4096], quadruped[1024], out[4096];
     sample_path(quadruped, sizeof quadruped, "quadruped");
-    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/u16.ktx2 --precision u16 2>&1", crowdbake_exe(), quadruped);
+    snprintf(cmd, sizeof cmd, "%s bake %s --fps 30 -o " TMP "/u16.ktx2 --precision u16 2>&1", crowdbake_exe(), quadruped);
     assert_int_equal(run_command(cmd, out, sizeof out), EXIT_USAGE);
     assert_non_null(strstr(out, "KTX2 palettes hold half or float texels"));
     assert_non_null(strstr(out, "RGBA16UI"));
     assert_null(fopen(TMP "/u16.ktx2", "rb"));
     /* The same bake twice gives the same bytes. */
-    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/again.ktx2 --precision half -q", crowdbake_exe(), quadruped);
+    snprintf(cmd, sizeof cmd, "%s bake %s --fps 30 -o " TMP "/again.ktx2 --precision half -q", crowdbake_exe(), quadruped);
     assert_int_equal(system(cmd), 0);
     size_t a, b;
     char *x = read_whole_file(TMP "/again.ktx2", &a), *y = read_whole_file(TMP "/quadruped.ktx2", &b);

@@ -35,7 +35,7 @@ static void write_all(const char *path, const unsigned char *d, size_t size)
 static void bake(const char *model, const char *out, const char *extra)
 {
     char cmd[2048], log[4096];
-    snprintf(cmd, sizeof cmd, "%s bake %s -o %s -q %s 2>&1", crowdbake_exe(), model, out, extra);
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s -q --fps 30 %s 2>&1", crowdbake_exe(), model, out, extra);
     if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s failed: %s", cmd, log);
 }
 

@@ -90,7 +90,7 @@ static void test_rebuild_from_records_says_what_the_models_say(void **state)
     snprintf(path, sizeof path, "%s/Fox.bin", fox_dir);
     copy_file(path, TMP "/Fox.bin");
     snprintf(text, sizeof text,
-             "[bake]\nout_dir = \"out\"\n\n"
+             "[bake]\nout_dir = \"out\"\nfps = 30\n"
              "[animal.bird]\nmodel = \"bird.glb\"\nfps = 24\n\n"
              "[animal.fox]\nmodel = \"Fox.gltf\"\nstates = { idle = [\"survey\"], wander = [\"walk\"], flee = [\"run\"] }\n"
              "default_state = \"wander\"\n\n"

@@ -41,7 +41,7 @@ static const char *write_catalog(const char *name, const char *budget)
     snprintf(path, sizeof path, TMP "/%s.toml", name);
     FILE *f = fopen(path, "w");
     assert_non_null(f);
-    fprintf(f, "[bake]\nout_dir = \"out-%s\"\n\n[budget]\n%s\n\n"
+    fprintf(f, "[bake]\nout_dir = \"out-%s\"\nfps = 30\n\n[budget]\n%s\n\n"
                "[animal.fox]\nmodel = \"%s\"\n[animal.goat]\nmodel = \"%s/quadruped.glb\"\n"
                "[animal.sheep]\nmodel = \"%s/quadruped.glb\"\n[animal.fish]\nmodel = \"%s/fish.glb\"\n"
                "[animal.bird]\nmodel = \"%s/bird.glb\"\n[animal.foxq]\nmodel = \"%s\"\n[animal.foxd]\nmodel = \"%s\"\n",
@@ -103,7 +103,7 @@ static const char *write_small_catalog(const char *name, const char *bake, const
     snprintf(path, sizeof path, TMP "/%s.toml", name);
     FILE *f = fopen(path, "w");
     assert_non_null(f);
-    fprintf(f, "[bake]\nout_dir = \"out-%s\"\n%s\n[budget]\n%s\n[animal.fish]\nmodel = \"%s/fish.glb\"\n", name, bake, budget,
+    fprintf(f, "[bake]\nout_dir = \"out-%s\"\nfps = 30\n%s\n[budget]\n%s\n[animal.fish]\nmodel = \"%s/fish.glb\"\n", name, bake, budget,
             samples_abs);
     if (all)
         fprintf(f, "[animal.goat]\nmodel = \"%s/quadruped.glb\"\n[animal.sheep]\nmodel = \"%s/quadruped.glb\"\n"

@@ -201,14 +201,14 @@ static void test_palette_clips_carry_their_ground_speed(void **state)
     cb_palette_free(&p);
     cb_sampler_free(s);
     cb_model_free(m);
-    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/q.pal 2>&1", crowdbake_exe(), path);
+    snprintf(cmd, sizeof cmd, "%s bake %s --fps 30 -o " TMP "/q.pal 2>&1", crowdbake_exe(), path);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     if (!strstr(out, "note: clip 'walk' loops and travels 1.2 units/s")) fail_msg("%s", out);
 
     /* The Cow's loops are in place: its Gallop's root drifts 0.0176 units/s, 11 mm over a loop of a
      * 4.6-unit animal (0.24% of its height), which is jitter, not travel worth a note. */
     shared_path(path, sizeof path, "assets/quaternius-cow/Cow.glb");
-    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/cow.pal 2>&1", crowdbake_exe(), path);
+    snprintf(cmd, sizeof cmd, "%s bake %s --fps 30 -o " TMP "/cow.pal 2>&1", crowdbake_exe(), path);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     if (strstr(out, "travels")) fail_msg("%s", out);
     m = load_or_fail(path);

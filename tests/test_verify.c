@@ -85,7 +85,7 @@ static void test_verify_exit_code(void **state)
     (void)state;
     char cmd[4096], out[8192], fox[1024];
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
-    snprintf(cmd, sizeof cmd, "mkdir -p " TMP " && %s bake %s -o " TMP "/v.pal -q && %s verify %s " TMP "/v.pal "
+    snprintf(cmd, sizeof cmd, "mkdir -p " TMP " && %s bake %s --fps 30 -o " TMP "/v.pal -q && %s verify %s " TMP "/v.pal "
              "--max-error 0.01 2>&1", crowdbake_exe(), fox, crowdbake_exe(), fox);
     assert_int_equal(run_command(cmd, out, sizeof out), EXIT_VERIFY);
     assert_non_null(strstr(out, "over --max-error"));
@@ -155,7 +155,7 @@ static void test_preview_sheets_of_the_samples(void **state)
     mkdir(PREVIEWS, 0777); /* CI keeps these as artifacts */
     for (int i = 0; i < 3; ++i) {
         char cmd[4096], out[2048];
-        snprintf(cmd, sizeof cmd, "%s bake %s/%s.glb -o " PREVIEWS "/%s.pal -q && %s preview %s/%s.glb " PREVIEWS
+        snprintf(cmd, sizeof cmd, "%s bake %s/%s.glb --fps 30 -o " PREVIEWS "/%s.pal -q && %s preview %s/%s.glb " PREVIEWS
                  "/%s.pal -o " PREVIEWS "/%s.png --columns 6 --cell 96 2>&1",
                  crowdbake_exe(), samples_dir(), names[i], names[i], crowdbake_exe(), samples_dir(), names[i], names[i],
                  names[i]);

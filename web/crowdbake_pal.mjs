@@ -31,7 +31,9 @@ export const FLAG_IN_PLACE = 2;
 // versions 2 and 3: qpos positions are stored less the bone's position_offset (version 3: its offset table; version 2:
 // the bind position)
 export const FLAG_POSITIONS_RELATIVE = 4;
+export const FLAG_FITTED_ROWS = 8; // every clip's rows fitted to the linear blend between them, not sampled
 export const CLIP_LOOPS = 1;
+export const CLIP_FITTED = 2; // this clip's rows fitted to the linear blend (before it: header flag bit 3, every clip)
 
 const MAGIC = [0x43, 0x42, 0x50, 0x41, 0x4c, 0x0d, 0x0a, 0x1a]; // "CBPAL\r\n\x1a"
 const TEXELS_PER_BONE = [4, 3, 2]; // by layout
@@ -248,6 +250,7 @@ function readClips(bytes, view, h, fail) {
         clips.push({
             name, first_row, frames, fps: f32(16), duration: f32(20), start: f32(24), flags,
             loops: (flags & CLIP_LOOPS) !== 0,
+            fitted: (flags & CLIP_FITTED) !== 0 || (h.flags & FLAG_FITTED_ROWS) !== 0,
             root_velocity: [f32(32), f32(36), f32(40)],
             bounds_min: [f32(44), f32(48), f32(52)], bounds_max: [f32(56), f32(60), f32(64)],
         });

@@ -32,9 +32,13 @@ enum { CB_FORMAT_PAL = 1u, CB_FORMAT_EXR = 2u, CB_FORMAT_KTX2 = 4u };
  * [animal] keys fill the same struct. */
 typedef struct cb_bake_settings {
     double fps;
-    bool fps_auto;               /* fps = "auto": per clip, the lowest rate within max_error_mm */
-    double max_error_mm;         /* visible error goal of fps = "auto", mm per metre of model height (default 1) */
-    double max_fps;              /* fps = "auto" goes no higher (default 60) */
+    bool fps_auto;               /* fps = "auto" (the default): per clip, the fewest rows within max_error_mm */
+    double max_error_mm;         /* the visible error budget, mm per metre of model height (default 1): fps = "auto"
+                                  * meets it; with a fixed fps, checked only when max_error_given */
+    bool max_error_given;        /* max_error was asked for: a fixed fps is then checked against it too */
+    double max_fps;              /* fps = "auto" goes no higher (default CB_AUTO_MAX_FPS, 120) */
+    bool allow_over_budget;      /* a clip over its budget is written anyway, with a warning (else the bake fails with
+                                  * CB_ERR_VERIFY and writes nothing) */
     cb_layout layout;
     cb_precision precision;
     unsigned formats;            /* CB_FORMAT_* */
@@ -44,7 +48,8 @@ typedef struct cb_bake_settings {
     bool layout_set, precision_set; /* chosen explicitly (else: defaults, with fallbacks) */
     bool zstd;                   /* compress the .pal payload */
     int exr_compression;         /* exr.h's lossless codes; 0: none */
-    bool fit_rows;               /* rows fitted to the runtime's linear blend (cb_bake_options.fit) */
+    bool fit_rows;               /* every clip's rows fitted to the runtime's linear blend (cb_bake_options.fit); else
+                                  * sampled at a fixed fps, and fitted or sampled per clip with fps = "auto" */
     bool measure_all;            /* errors measured at every row, past the budget too (cb_bake_options.measure_all) */
 } cb_bake_settings;
 
@@ -53,11 +58,11 @@ enum {
     CB_BAKE_FPS = 1u << 0, CB_BAKE_LAYOUT = 1u << 1, CB_BAKE_PRECISION = 1u << 2, CB_BAKE_FORMATS = 1u << 3,
     CB_BAKE_MAX_TEXTURE_SIZE = 1u << 4, CB_BAKE_ROOT_MOTION = 1u << 5, CB_BAKE_ZSTD = 1u << 6,
     CB_BAKE_EXR_COMPRESSION = 1u << 7, CB_BAKE_OUT_DIR = 1u << 8, CB_BAKE_FIT_ROWS = 1u << 9,
-    CB_BAKE_MEASURE_ALL = 1u << 10
+    CB_BAKE_MEASURE_ALL = 1u << 10, CB_BAKE_ALLOW_OVER_BUDGET = 1u << 11
 };
 
-/* 30 fps (auto: within 1 mm/m, up to 60 fps), qpos, u16, a .pal, textures up to 16384 texels
- * a side, root motion kept, no compression; out_dir NULL. */
+/* fps = "auto" within 1 mm/m up to 120 fps (fps, 30, only for a fixed rate), qpos, u16, a .pal,
+ * textures up to 16384 texels a side, root motion kept, no compression; out_dir NULL. */
 cb_bake_settings cb_default_bake_settings(void);
 
 /* "keep" or "in-place". */
@@ -82,8 +87,18 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *settings, unsig
 /* What a catalog's clip entry can say beyond cb_clip_plan. */
 typedef struct cb_clip_settings {
     int fps_auto;        /* -1: as the job's settings; 0: the plan's fixed fps; 1: chosen by error */
-    double max_error_mm; /* 0: the job's */
+    double max_error_mm; /* 0: the job's; given, a fixed fps is checked against it */
 } cb_clip_settings;
+
+/* One clip as baked, against its error budget. */
+typedef struct cb_clip_budget {
+    double max_error_mm; /* its budget; 0: none (a fixed fps, no max_error given) */
+    double error_mm;     /* the visible error it reaches in the palette */
+    bool over;           /* error_mm > max_error_mm > 0 */
+    double fps;          /* its effective rate */
+    uint32_t rows;
+    bool fitted;         /* its rows fitted, else sampled */
+} cb_clip_budget;
 
 /* A catalog type's identity, which its files record instead of the single bake's options: the
  * content key (rig, planned clips and settings; equal keys share a palette), the resolved
@@ -130,7 +145,10 @@ typedef struct cb_bake_output {
 typedef struct cb_bake_result {
     uint32_t output_count;
     cb_bake_output outputs[3]; /* .pal, .exr, .ktx2, those asked for */
-    cb_warnings notes;         /* the layout's fallback, loops that travel, quaternion flips */
+    cb_warnings notes;         /* the layout's fallback, loops that travel, quaternion flips, clips over budget */
+    cb_clip_budget *budgets;   /* per planned clip, as the first format's palette measured it (also when the bake
+                                * failed for a clip over budget) */
+    uint32_t budget_count, over_budget;
 } cb_bake_result;
 
 /* Resolves the clips and each one's rate: the clip's fps, else the job's; chosen by visible
@@ -138,9 +156,32 @@ typedef struct cb_bake_result {
  * file the job writes. */
 cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err);
 /* Plans (when not yet), bakes and writes every file of settings.formats (each through a
- * temporary file and a rename). The result references the model and the plan: free it first. */
+ * temporary file and a rename). A clip over its budget fails the bake with CB_ERR_VERIFY before
+ * anything is written (result->budgets says which; cb_bake_budget_text words each), unless
+ * settings.allow_over_budget, which writes it with a warning in result->notes. The result
+ * references the model and the plan: free it first. */
 cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err);
 void cb_bake_result_free(cb_bake_result *result);
+
+/* A note summing up the clips whose rates were chosen by error (their rates, how many fitted),
+ * and a line per clip over its budget (cb_bake_budget_text): an "error" when the bake failed
+ * for it, a "warning" when written anyway. */
+void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result, const char *(*setting_name)(cb_setting),
+                          cb_warnings *notes);
+/* Whether clip i's rate is chosen by error (else fixed): its own fps = "auto", else a fixed fps
+ * of its own, else the job's settings; a skin with no skinned mesh (nothing to measure) bakes
+ * at the fixed fps unless the clip itself asks for "auto". */
+bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t clip);
+/* Why planned clip i has its rate and rows, in words: "72 fps, fitted rows: within 1 mm/m at 45
+ * rows, sampled rows need more than 72 fps", "30 fps, sampled rows: the fixed fps". */
+void cb_bake_clip_reason(const cb_bake_job *job, uint32_t clip, char *buf, size_t size);
+/* Clip i over its budget, in words, with what would meet it: "clip 'Gallop' reaches 1.8 mm/m at
+ * 120 fps (fitted rows), over max_error 1; it meets it at 180 fps (max_fps = 180), or give it
+ * max_error = 1.9". setting_name names CB_SETTING_MAX_FPS, CB_SETTING_MAX_ERROR and
+ * CB_SETTING_FPS the front end's way (the command line's flags); NULL, or NULL for a setting: the
+ * catalog's keys. */
+void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, uint32_t clip,
+                         const char *(*setting_name)(cb_setting), char *buf, size_t size);
 void cb_bake_job_free(cb_bake_job *job);
 
 /* What a file records of what produced it: for a single bake, the crowdbake version, the

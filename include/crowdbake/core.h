@@ -34,7 +34,7 @@ typedef enum cb_status {
     CB_ERR_BUDGET = 3,   /* the roster exceeds its VRAM budget (report) */
     CB_ERR_INPUT = 4,    /* an input file is invalid or unsupported */
     CB_ERR_IO = 5,       /* a file could not be read or written */
-    CB_ERR_VERIFY = 6,   /* a verification threshold was exceeded */
+    CB_ERR_VERIFY = 6,   /* a verification threshold was exceeded, or a bake's error budget (max_error) */
     CB_ERR_LAYOUT = 7    /* the rig needs another layout: qpos cannot hold non-uniform scale or shear */
 } cb_status;
 
@@ -53,7 +53,11 @@ typedef enum cb_setting {
     CB_SETTING_PRECISION,          /* cb_bake_options.precision */
     CB_SETTING_BATCH,              /* cb_mesh_options.batch */
     CB_SETTING_SYNC,               /* a catalog state's sync (cb_catalog_override_states) */
-    CB_SETTING_DEFAULT_STATE       /* a catalog animal's default_state */
+    CB_SETTING_DEFAULT_STATE,      /* a catalog animal's default_state */
+    CB_SETTING_FPS,                /* cb_bake_settings.fps (fixed) */
+    CB_SETTING_MAX_FPS,            /* cb_bake_settings.max_fps */
+    CB_SETTING_MAX_ERROR,          /* cb_bake_settings.max_error_mm */
+    CB_SETTING_ALLOW_OVER_BUDGET   /* cb_bake_settings.allow_over_budget */
 } cb_setting;
 
 typedef struct cb_error {

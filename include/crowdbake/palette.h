@@ -47,7 +47,8 @@ typedef struct cb_bake_options {
     double error_goal;    /* > 0: only the visible error is measured, and only as far as the goal needs (model
                            * units): exact when within it, a lower bound above it; max_error is then a lower
                            * bound and model_height 0. For searches that ask "within the goal?". 0: all exact. */
-    bool fit;             /* rows fitted to the linear blend (src/fit.c), not sampled: half the error between rows */
+    bool fit;             /* every clip's rows fitted to the linear blend (src/fit.c), not sampled: half the error
+                           * between rows (cb_clip_plan.fit: one clip's) */
     cb_texel_memory texel_memory; /* {NULL}: the bake allocates the texels */
     bool measure_all;     /* the errors measured at every row and between every two, however many (else past
                            * CB_ERROR_ROWS and CB_ERROR_BUDGET, at an even subset of them) */
@@ -72,12 +73,15 @@ typedef struct cb_palette_clip {
     float root_velocity[3];
     float bounds_min[3], bounds_max[3]; /* encloses the skinned mesh over the clip (conservative), model units */
     double ground_speed;     /* the root's horizontal travel over the clip per second (cb_clip_info.ground_speed) */
+    bool fitted;             /* its rows fitted to the runtime's linear blend, not sampled (clip flag bit 1) */
+    double visible_error;    /* the clip's visible error (cb_palette.visible_error's, for this clip alone), model units */
 } cb_palette_clip;
 
 typedef struct cb_palette {
     cb_layout layout;
     cb_precision precision;
-    bool fitted;                    /* rows fitted to the runtime's linear blend, not sampled (header flag bit 3) */
+    bool fitted;                    /* every clip's rows fitted to the runtime's linear blend, not sampled (header flag
+                                     * bit 3); a palette may mix fitted and sampled clips (cb_palette_clip.fitted) */
     uint32_t bone_count, texels_per_bone, row_texels;
     uint32_t rows;                  /* baked frames over all clips */
     uint32_t width, height, blocks; /* texture size: blocks of `height` rows side by side */
@@ -110,6 +114,7 @@ typedef struct cb_clip_plan {
     const char *name;   /* the name in the palette (a rename), or NULL for the clip's own */
     int loop;           /* -1 decide from the poses, 0 one-shot, 1 loop */
     double fps;         /* 0: the bake's fps */
+    bool fit;           /* its rows fitted to the runtime's linear blend (as cb_bake_options.fit does for every clip) */
 } cb_clip_plan;
 
 /* The rate a planned clip bakes at: its own, else the bake's. */

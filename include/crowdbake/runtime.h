@@ -40,24 +40,43 @@ cb_status cb_verify_clip(cb_sampler *sampler, const cb_palette *p, const void *t
 
 /* Error-driven frame rate: the lowest of the candidate rates (common rates from 2 fps, and the
  * clip's key rate with its multiples and fractions, up to max_fps) at which the clip, baked
- * alone with `options` and the clip's own loop setting, has a visible error (cb_palette's:
- * the encoding, and the blend halfway between rows) within max_error (model units). Binary
- * search: the error falls as the rate rises. Returns max_fps (and *met = false) when none
- * does; *error is the error at the rate returned. */
+ * alone with `options` and the clip's own loop setting (its rows fitted where options->fit or
+ * clip->fit says), has a visible error (cb_palette's: the encoding, and the blend between rows)
+ * within max_error (model units). Binary search: the error falls as the rate rises. Returns
+ * max_fps (and *met = false) when none does; *error is the error at the rate returned. */
 double cb_choose_clip_fps(cb_sampler *sampler, const cb_bake_options *options, const cb_clip_plan *clip, double max_error,
                           double max_fps, bool *met, double *error, cb_error *err);
 
+/* The highest rate an error-bounded clip bakes at unless its goal says otherwise: every clip of
+ * Cow, Fox and the samples (in place) meets 1 mm/m under it (Cow's Attack_Kick and Fox's Run
+ * need 120 fps, fitted). */
+#define CB_AUTO_MAX_FPS 120.0
+
+/* Which rows an error-bounded clip may have. */
+typedef enum cb_rows {
+    CB_ROWS_BEST = 0, /* fitted or sampled, whichever meets the goal with fewer rows (ties: sampled) */
+    CB_ROWS_SAMPLED,  /* the exact poses */
+    CB_ROWS_FITTED    /* fitted to the runtime's linear blend (cb_bake_options.fit) */
+} cb_rows;
+
 /* fps = "auto" for a plan: per clip, the visible error to stay under (mm per metre of model
- * height; 0: keep the plan's fps) and the highest rate allowed (0: 60). */
+ * height; 0: keep the plan's fps), the highest rate allowed (0: CB_AUTO_MAX_FPS) and the rows
+ * allowed (options->fit: fitted, whatever this says). */
 typedef struct cb_rate_goal {
     double max_error_mm, max_fps;
+    cb_rows rows;
 } cb_rate_goal;
 typedef struct cb_rate_choice {
     bool met;               /* the error is within the goal */
     double error, error_mm; /* at the chosen rate: model units, and mm per metre of height */
+    bool fitted;            /* the rows chosen: fitted (else sampled) */
+    double other_fps;       /* sampled rows chosen: the rate fitted rows needed (0: none up to max_fps, or not
+                             * searched); fitted rows chosen, sampled ones needed more than its rate */
+    double fps_needed;      /* not met: the lowest rate up to CB_FPS_LIMIT that meets it (0: none does) */
 } cb_rate_choice;
-/* Sets plan[i].fps for every clip with a goal (cb_choose_clip_fps); out (optional) says what
- * each choice reached. */
+/* Sets plan[i].fps and plan[i].fit for every clip with a goal: per clip, fitted rows searched
+ * first, then sampled rows up to that rate; the fewer rows win, sampled on a tie (they are the
+ * exact poses). out (optional) says what each choice reached. */
 cb_status cb_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan, uint32_t count,
                           const cb_rate_goal *goals, cb_rate_choice *out, cb_error *err);
 

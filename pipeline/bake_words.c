@@ -1,0 +1,112 @@
+/* bake_words.c - see bake.h: a bake job's decisions in words, per clip: why it has its rate
+ * and rows, and, over its error budget, what would meet it. */
+#include "crowdbake/bake.h"
+
+#include <math.h>
+#include <stdio.h>
+
+static const char *clip_name(const cb_bake_job *job, uint32_t i)
+{
+    const cb_clip_plan *c = &job->plan[i];
+    return c->name ? c->name : job->model->animations[c->animation].name;
+}
+
+/* "--max-fps 180" (a front end's name for the setting), or the catalog's "max_fps = 180". */
+static void setting_words(const char *(*setting_name)(cb_setting), cb_setting setting, const char *key, double value,
+                          char *buf, size_t size)
+{
+    const char *flag = setting_name ? setting_name(setting) : NULL;
+    if (flag) snprintf(buf, size, "%s %g", flag, value);
+    else snprintf(buf, size, "%s = %g", key, value);
+}
+
+/* An error rounded up to two significant digits: a budget the clip meets as baked. */
+static double budget_above(double error_mm)
+{
+    if (!(error_mm > 0) || !isfinite(error_mm)) return error_mm;
+    double unit = pow(10, floor(log10(error_mm)) - 1);
+    double up = ceil(error_mm / unit) * unit;
+    return up > error_mm ? up : up + unit;
+}
+
+void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t size)
+{
+    const cb_clip_plan *c = &job->plan[i];
+    const cb_rate_choice *r = &job->rates[i];
+    double fps = cb_clip_plan_fps(c, job->settings.fps);
+    bool fitted = c->fit || job->settings.fit_rows;
+    const char *rows = fitted ? "fitted rows" : "sampled rows";
+    if (!cb_bake_job_clip_auto(job, i)) {
+        snprintf(buf, size, "%g fps, %s: a fixed fps%s", fps, rows, fitted ? " (fit_rows)" : "");
+    } else if (!r->met) {
+        snprintf(buf, size, "%g fps, %s: over its budget even at max_fps (%.3g mm/m)", fps, rows, r->error_mm);
+    } else if (job->settings.fit_rows) {
+        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m), every clip fitted (fit_rows)", fps, rows,
+                 r->error_mm);
+    } else if (fitted) {
+        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); sampled rows need more than %g fps", fps,
+                 rows, r->error_mm, fps);
+    } else if (r->other_fps == fps) {
+        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows need %g fps too, and a tie "
+                 "goes to the exact poses", fps, rows, r->error_mm, fps);
+    } else if (r->other_fps > 0) {
+        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows need %g fps", fps, rows,
+                 r->error_mm, r->other_fps);
+    } else {
+        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows do not meet it up to %g fps",
+                 fps, rows, r->error_mm, job->settings.max_fps);
+    }
+}
+
+void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, uint32_t i,
+                         const char *(*setting_name)(cb_setting), char *buf, size_t size)
+{
+    const cb_clip_plan *c = &job->plan[i];
+    const cb_rate_choice *r = &job->rates[i];
+    const cb_clip_budget *b = &result->budgets[i];
+    double fps = cb_clip_plan_fps(c, job->settings.fps);
+    bool fitted = c->fit || job->settings.fit_rows;
+    char fix[96], relax[96];
+    setting_words(setting_name, CB_SETTING_MAX_ERROR, "max_error", budget_above(b->error_mm), relax, sizeof relax);
+    if (!cb_bake_job_clip_auto(job, i)) {
+        setting_words(setting_name, CB_SETTING_FPS, "fps", fps, fix, sizeof fix);
+        snprintf(buf, size, "clip '%s' reaches %.3g mm/m at %g fps (%s rows), over max_error %g; its rate is fixed (%s): "
+                 "leave fps out for the fewest rows within max_error, or give it %s", clip_name(job, i), b->error_mm, fps,
+                 fitted ? "fitted" : "sampled", b->max_error_mm, fix, relax);
+    } else if (r->met) { /* met baked alone, not in the palette: its u16 range is the palette's */
+        snprintf(buf, size, "clip '%s' reaches %.3g mm/m at %g fps (%s rows) in the palette, over max_error %g, though "
+                 "%.3g baked alone (the palette's u16 range is wider); give it %s, or the precision float",
+                 clip_name(job, i), b->error_mm, fps, fitted ? "fitted" : "sampled", b->max_error_mm, r->error_mm, relax);
+    } else if (r->fps_needed > 0) {
+        setting_words(setting_name, CB_SETTING_MAX_FPS, "max_fps", r->fps_needed, fix, sizeof fix);
+        snprintf(buf, size, "clip '%s' reaches %.3g mm/m at %g fps (%s rows), over max_error %g; it meets it at %g fps "
+                 "(%s), or give it %s", clip_name(job, i), b->error_mm, fps, fitted ? "fitted" : "sampled", b->max_error_mm,
+                 r->fps_needed, fix, relax);
+    } else {
+        snprintf(buf, size, "clip '%s' reaches %.3g mm/m at %g fps (%s rows), over max_error %g; no rate up to %g fps meets "
+                 "it (the encoding's own error stays over it), give it %s", clip_name(job, i), b->error_mm, fps,
+                 fitted ? "fitted" : "sampled", b->max_error_mm, CB_FPS_LIMIT, relax);
+    }
+}
+
+void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result, const char *(*setting_name)(cb_setting),
+                          cb_warnings *notes)
+{
+    uint32_t chosen = 0, fitted = 0;
+    double lo = INFINITY, hi = 0;
+    for (uint32_t i = 0; i < result->budget_count && i < job->plan_count; ++i) {
+        if (!cb_bake_job_clip_auto(job, i)) continue;
+        chosen++, fitted += result->budgets[i].fitted;
+        lo = fmin(lo, result->budgets[i].fps), hi = fmax(hi, result->budgets[i].fps);
+    }
+    if (chosen)
+        cb_warn(notes, "note", "%u clip%s error-bounded (max_error %g mm/m): %.3g-%.3g fps, %u with fitted rows, %u sampled",
+                chosen, chosen == 1 ? "" : "s", job->settings.max_error_mm, lo, hi, fitted, chosen - fitted);
+    for (uint32_t i = 0; i < result->budget_count; ++i) {
+        if (!result->budgets[i].over) continue;
+        char text[640];
+        cb_bake_budget_text(job, result, i, setting_name, text, sizeof text);
+        cb_warn(notes, job->settings.allow_over_budget ? "warning" : "error", "%s%s", text,
+                job->settings.allow_over_budget ? " (written anyway: allow_over_budget)" : "");
+    }
+}

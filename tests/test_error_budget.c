@@ -1,0 +1,196 @@
+/* test_error_budget.c - the error budget is a promise (issue 33, items 3 and 4), through the
+ * command as a user runs it: a bake without --fps meets 1 mm/m on Cow, measured independently
+ * by `crowdbake verify` (exact float64 skinning from the glTF at every row, mid-row and 64
+ * random times), at no more than 1.5x the bytes of a fixed 30 fps bake; an unmeetable
+ * --max-error fails with exit 6, writes nothing (no temporary left either) and names every
+ * clip; --allow-over-budget writes it with a warning per clip, in text and --json; a fixed
+ * --fps with --max-error is checked; a palette mixes fitted and sampled clips (inspect says
+ * which); and the catalog forms of each. */
+#define _DEFAULT_SOURCE /* realpath */
+#include "testutil.h"
+
+#include <dirent.h>
+#include <limits.h>
+#include <sys/stat.h>
+
+#define OUT_DIR TEST_TMP "/budget"
+
+static char cow[1024];
+
+static int setup(void **state)
+{
+    (void)state;
+    char rel[1024];
+    shared_path(rel, sizeof rel, "assets/quaternius-cow/Cow.glb");
+    if (!realpath(rel, cow)) return -1; /* catalogs resolve paths against their own directory */
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "rm -rf %s && mkdir -p %s", OUT_DIR, OUT_DIR);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
+static int run(char *out, size_t size, const char *fmt, ...)
+{
+    char cmd[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(cmd, sizeof cmd, fmt, ap);
+    va_end(ap);
+    return run_command(cmd, out, size);
+}
+
+static long file_bytes(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 ? (long)st.st_size : -1;
+}
+
+/* Files in dir whose name contains `part` (a temporary is ".NAME.tmp.XXXXXX"). */
+static int files_matching(const char *dir, const char *part)
+{
+    DIR *d = opendir(dir);
+    int n = 0;
+    for (struct dirent *e; d && (e = readdir(d));) n += strstr(e->d_name, part) != NULL;
+    if (d) closedir(d);
+    return n;
+}
+
+static void test_default_bake_meets_1mm_at_most_1_5x_the_bytes(void **state)
+{
+    (void)state;
+    static char out[1 << 16];
+    int rc = run(out, sizeof out, "%s bake %s -o %s/cow.pal 2>&1", crowdbake_exe(), cow, OUT_DIR);
+    if (rc != 0) fail_msg("%s", out);
+    rc = run(out, sizeof out, "%s bake %s -o %s/cow30.pal --fps 30 -q 2>&1", crowdbake_exe(), cow, OUT_DIR);
+    assert_int_equal(rc, 0);
+    char pal[512], pal30[512];
+    snprintf(pal, sizeof pal, "%s/cow.pal", OUT_DIR), snprintf(pal30, sizeof pal30, "%s/cow30.pal", OUT_DIR);
+    long bytes = file_bytes(pal), bytes30 = file_bytes(pal30);
+    printf("  default %ld bytes, fixed 30 fps %ld (%.2fx)\n", bytes, bytes30, (double)bytes / bytes30);
+    assert_true(bytes > bytes30 && bytes <= 1.5 * bytes30);
+    /* Independently: verify skins every clip exactly and compares; exit 6 if any is over 1 mm/m. */
+    rc = run(out, sizeof out, "%s verify %s %s --max-error 1 2>&1", crowdbake_exe(), cow, pal);
+    if (rc != 0) fail_msg("default bake over 1 mm/m: %s", out);
+    rc = run(out, sizeof out, "%s verify %s %s --max-error 1 2>&1", crowdbake_exe(), cow, pal30);
+    assert_int_equal(rc, EXIT_VERIFY); /* the old default did not */
+    /* The palette mixes fitted and sampled clips, and says so per clip. */
+    rc = run(out, sizeof out, "%s inspect %s 2>&1", crowdbake_exe(), pal);
+    assert_int_equal(rc, 0);
+    if (!strstr(out, " fitted ") || !strstr(out, " sampled ")) fail_msg("%s", out);
+    rc = run(out, sizeof out, "%s inspect %s --json 2>&1", crowdbake_exe(), pal);
+    assert_non_null(strstr(out, "\"fitted_rows\": true"));
+    assert_non_null(strstr(out, "\"fitted_rows\": false"));
+}
+
+/* The Cow's 12 clips, each named in a message. */
+static void expect_every_clip_named(const char *out)
+{
+    static const char *const clips[] = {"Attack_Headbutt", "Attack_Kick", "Death", "Eating", "'AnimalArmature|Gallop'",
+                                        "Gallop_Jump", "'AnimalArmature|Idle'", "Idle_2", "Idle_Headlow",
+                                        "Idle_HitReact_Left", "Jump_toIdle", "'AnimalArmature|Walk'"};
+    for (size_t i = 0; i < COUNT_OF(clips); ++i)
+        if (!strstr(out, clips[i])) fail_msg("clip %s not named in:\n%s", clips[i], out);
+}
+
+static void test_unmeetable_budget_fails_and_writes_nothing(void **state)
+{
+    (void)state;
+    static char out[1 << 16];
+    int rc = run(out, sizeof out, "%s bake %s -o %s/tight.pal --max-error 0.01 2>&1", crowdbake_exe(), cow, OUT_DIR);
+    assert_int_equal(rc, EXIT_VERIFY);
+    char path[512];
+    snprintf(path, sizeof path, "%s/tight.pal", OUT_DIR);
+    assert_int_equal(file_bytes(path), -1);
+    assert_int_equal(files_matching(OUT_DIR, "tight"), 0); /* no temporary left */
+    expect_every_clip_named(out);
+    /* Each line: the error reached, the rate it stopped at, and what would meet it. */
+    if (!strstr(out, "reaches ") || !strstr(out, "at 120 fps") || !strstr(out, "over max_error 0.01") ||
+        !strstr(out, "--max-error 0.") || !strstr(out, "nothing was written"))
+        fail_msg("%s", out);
+    /* Reachable by raising the cap: the line says which rate meets it. */
+    rc = run(out, sizeof out, "%s bake %s -o %s/capped.pal --max-fps 24 2>&1", crowdbake_exe(), cow, OUT_DIR);
+    assert_int_equal(rc, EXIT_VERIFY);
+    if (!strstr(out, "it meets it at ") || !strstr(out, "(--max-fps ")) fail_msg("%s", out);
+    snprintf(path, sizeof path, "%s/capped.pal", OUT_DIR);
+    assert_int_equal(file_bytes(path), -1);
+    /* A fixed rate with a budget is checked, not raised. */
+    rc = run(out, sizeof out, "%s bake %s -o %s/fixed.pal --fps 30 --max-error 1 2>&1", crowdbake_exe(), cow, OUT_DIR);
+    assert_int_equal(rc, EXIT_VERIFY);
+    if (!strstr(out, "at 30 fps") || !strstr(out, "its rate is fixed")) fail_msg("%s", out);
+}
+
+static void test_allow_over_budget_writes_with_warnings(void **state)
+{
+    (void)state;
+    static char out[1 << 16];
+    int rc = run(out, sizeof out, "%s bake %s -o %s/over.pal --max-error 0.01 --allow-over-budget 2>&1", crowdbake_exe(),
+                 cow, OUT_DIR);
+    if (rc != 0) fail_msg("%s", out);
+    char path[512];
+    snprintf(path, sizeof path, "%s/over.pal", OUT_DIR);
+    assert_true(file_bytes(path) > 0);
+    expect_every_clip_named(out);
+    assert_non_null(strstr(out, "warning: clip"));
+    assert_non_null(strstr(out, "written anyway"));
+    rc = run(out, sizeof out, "%s bake %s -o %s/over.pal --max-error 0.01 --allow-over-budget --json 2>/dev/null",
+             crowdbake_exe(), cow, OUT_DIR);
+    assert_int_equal(rc, 0);
+    const char *over = strstr(out, "\"over_budget\": [");
+    assert_non_null(over);
+    assert_non_null(strstr(over, "\"max_error_mm_per_m\": 0.01"));
+    assert_non_null(strstr(out, "\"why\": "));
+}
+
+static void write_catalog(const char *name, const char *bake_keys)
+{
+    char path[512], text[2048];
+    snprintf(path, sizeof path, "%s/%s.toml", OUT_DIR, name);
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"%s-out\"\n%s\n[animal.cow]\nmodel = \"%s\"\n", name, bake_keys, cow);
+    write_text(path, text);
+}
+
+static void test_catalog_forms(void **state)
+{
+    (void)state;
+    static char out[1 << 16];
+    char path[512];
+    /* Unmeetable: the type fails, exit 6, no palette, every clip named in the log. */
+    write_catalog("tight", "max_error = 0.01");
+    int rc = run(out, sizeof out, "%s bake %s/tight.toml -j 1 2>&1", crowdbake_exe(), OUT_DIR);
+    assert_int_equal(rc, EXIT_VERIFY);
+    snprintf(path, sizeof path, "%s/tight-out/cow.pal", OUT_DIR);
+    assert_int_equal(file_bytes(path), -1);
+    expect_every_clip_named(out);
+    if (!strstr(out, "FAILED") || !strstr(out, "max_error = 0.")) fail_msg("%s", out);
+    /* The opt-out: written, with a warning per clip. */
+    write_catalog("over", "max_error = 0.01\nallow_over_budget = true");
+    rc = run(out, sizeof out, "%s bake %s/over.toml -j 1 2>&1", crowdbake_exe(), OUT_DIR);
+    if (rc != 0) fail_msg("%s", out);
+    snprintf(path, sizeof path, "%s/over-out/cow.pal", OUT_DIR);
+    assert_true(file_bytes(path) > 0);
+    expect_every_clip_named(out);
+    assert_non_null(strstr(out, "warning: clip"));
+    /* The default (no fps): error-bounded, verified within 1 mm/m. */
+    write_catalog("plain", "");
+    rc = run(out, sizeof out, "%s bake %s/plain.toml -j 1 2>&1", crowdbake_exe(), OUT_DIR);
+    if (rc != 0) fail_msg("%s", out);
+    assert_non_null(strstr(out, "error-bounded (max_error 1 mm/m)"));
+    snprintf(path, sizeof path, "%s/plain-out/cow.pal", OUT_DIR);
+    rc = run(out, sizeof out, "%s verify %s %s --max-error 1 2>&1", crowdbake_exe(), cow, path);
+    if (rc != 0) fail_msg("%s", out);
+    /* A fixed fps with max_error: checked. */
+    write_catalog("fixed", "fps = 30\nmax_error = 1");
+    rc = run(out, sizeof out, "%s bake %s/fixed.toml -j 1 2>&1", crowdbake_exe(), OUT_DIR);
+    assert_int_equal(rc, EXIT_VERIFY);
+    if (!strstr(out, "its rate is fixed (fps = 30)")) fail_msg("%s", out);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_default_bake_meets_1mm_at_most_1_5x_the_bytes),
+        cmocka_unit_test(test_unmeetable_budget_fails_and_writes_nothing),
+        cmocka_unit_test(test_allow_over_budget_writes_with_warnings),
+        cmocka_unit_test(test_catalog_forms),
+    };
+    return cmocka_run_group_tests(tests, setup, NULL);
+}
