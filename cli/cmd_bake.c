@@ -278,11 +278,15 @@ static cb_status print_saving(const cb_bake_job *job, const cb_bake_result *r, c
 /* Each clip's rate and rows, and why (error-bounded bakes). */
 static void print_clips(const cb_bake_job *job, const cb_bake_result *r)
 {
+    int width = 0; /* the longest name: exporters prefix clips ("AnimalArmature|Walk") */
+    for (uint32_t i = 0; i < r->budget_count; ++i)
+        if ((int)strlen(clip_label(job, i)) > width) width = (int)strlen(clip_label(job, i));
     for (uint32_t i = 0; i < r->budget_count; ++i) {
         const cb_clip_budget *b = &r->budgets[i];
         char why[320];
         cb_bake_clip_reason(job, i, why, sizeof why);
-        printf("  %-24s %4u rows, visible error %.3f mm/m%s: %s\n", clip_label(job, i), b->rows, b->error_mm, b->over ? " (OVER max_error)" : "", why);
+        printf("  %-*s %4u rows, visible error %.3f mm/m%s: %s\n", width, clip_label(job, i), b->rows, b->error_mm,
+               b->over ? " (OVER max_error)" : "", why);
     }
 }
 

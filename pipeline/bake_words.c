@@ -43,18 +43,15 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
     } else if (job->settings.fit_rows) {
         snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m), every clip fitted (fit_rows)", fps, rows,
                  r->error_mm);
-    } else if (fitted) {
-        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); sampled rows need more than %g fps", fps,
-                 rows, r->error_mm, fps);
-    } else if (r->other_fps == fps) {
-        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows need %g fps too, and a tie "
-                 "goes to the exact poses", fps, rows, r->error_mm, fps);
-    } else if (r->other_fps > 0) {
-        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows need %g fps", fps, rows,
+    } else if (fitted && r->other_fps > 0) {
+        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); sampled rows need %g fps", fps, rows,
                  r->error_mm, r->other_fps);
-    } else {
-        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows do not meet it up to %g fps",
+    } else if (fitted) {
+        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); sampled rows do not meet it up to %g fps",
                  fps, rows, r->error_mm, job->settings.max_fps);
+    } else {
+        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows do not meet it at a lower "
+                 "rate", fps, rows, r->error_mm);
     }
 }
 

@@ -1,15 +1,18 @@
-/* test_auto_rates.c - fps = "auto" bakes each candidate rate once per clip and kind of rows
- * (src/runtime.c keeps its probes): its choices must be those of the plain rule applied to
- * errors measured here independently, each rate baked exactly (no error goal) - for one kind of
- * rows, the lowest rate within the goal by binary search over the common rates, then over the
- * key rate's multiples and fractions below that, else max_fps with its exact error; for a clip,
- * fitted rows first, then sampled rows up to that rate, the lower rate taken and sampled rows on
- * a tie. A remembered probe answered for the wrong rate or kind of rows, or a goal-shortened
- * value taken for an exact one, changes a rate, a kind of rows or an error here.
- * cb_choose_rates (what a bake without --fps runs) must choose the same for every clip at once,
- * on 1 and 2 threads; and on Cow the choice must mix fitted and sampled clips (one palette of
- * both), and every clip's error, measured by cb_verify_clip in the palette baked with the
- * choices, must be within 1 mm/m. */
+/* test_auto_rates.c - a bake without --fps chooses each clip's rate and rows by error, baking
+ * each candidate rate once per clip and kind of rows (src/runtime.c keeps its probes): its
+ * choices must be those of the plain rule applied here to the clip baked afresh at each rate -
+ * exactly at max_fps, elsewhere measured only as far as the goal needs, as the search measures
+ * it. The rule: sampled rows first, then fitted rows under that rate (a tie goes to the exact
+ * poses); for each, the key rate's family walked from the key rate (down while rates meet the
+ * goal, else up), then the common rates under its answer (from the highest under it; with no
+ * answer, walked from 30 fps); a rate whose error the probes so far predict (error x fps^2, per
+ * kind and family; fitted rows at half the sampled ones') over 1.5x the goal is a miss unbaked;
+ * neither kind meeting it: max_fps, the kind with the lower exact error. A remembered probe
+ * answered for the wrong rate or kind of rows, or a goal-shortened value taken for an exact one,
+ * changes a rate, a kind of rows or an error here. cb_choose_rates (what a bake without --fps
+ * runs) must choose the same for every clip at once, on 1 and 2 threads; and on Cow the choice
+ * must mix fitted and sampled clips (one palette of both), and every clip's error, measured by
+ * cb_verify_clip in the palette baked with the choices, must be within 1 mm/m. */
 #include "testutil.h"
 
 #include <math.h>
@@ -17,11 +20,13 @@
 #include "crowdbake/palette.h"
 #include "crowdbake/runtime.h"
 
-/* The clip baked alone at fps (its rows fitted or sampled), its visible error measured in full. */
-static double exact_error(cb_sampler *s, int32_t animation, double fps, bool fit)
+/* The clip baked alone at fps (its rows fitted or sampled), its visible error measured in full,
+ * or with goal > 0 only as far as the goal needs (exact within it, a lower bound above it). */
+static double baked_error(cb_sampler *s, int32_t animation, double fps, bool fit, double goal)
 {
     cb_bake_options o = cb_default_bake_options();
     o.fps = fps;
+    o.error_goal = goal;
     cb_clip_plan plan = {animation, NULL, -1, fps, fit};
     cb_palette p;
     cb_error err = {0};
@@ -31,18 +36,47 @@ static double exact_error(cb_sampler *s, int32_t animation, double fps, bool fit
     return e;
 }
 
-static double lowest(cb_sampler *s, int32_t animation, const double *rates, size_t n, double max_fps, double goal,
-                     double *error, bool fit)
+static double exact_error(cb_sampler *s, int32_t animation, double fps, bool fit)
 {
-    while (n > 0 && rates[n - 1] > max_fps) --n;
-    size_t lo = 0, hi = n;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        double e = exact_error(s, animation, rates[mid], fit);
-        if (e <= goal) hi = mid, *error = e;
-        else lo = mid + 1;
+    return baked_error(s, animation, fps, fit, 0);
+}
+
+/* The rule's search of one clip (see the top of the file). */
+typedef struct rule {
+    cb_sampler *s;
+    int32_t animation;
+    double goal, max_fps;
+    double law[2][2]; /* [fit][family: 0 key rates, 1 common]: the largest error x fps^2 baked */
+} rule;
+
+static double rule_law(const rule *r, bool fit, int family)
+{
+    double law = r->law[fit][family] > 0 ? r->law[fit][family] : r->law[fit][0];
+    return fit ? fmax(law, 0.5 * rule_law(r, false, family)) : law;
+}
+
+static double rule_error(rule *r, double fps, bool fit, int family)
+{
+    if (fps < r->max_fps && rule_law(r, fit, family) / (fps * fps) > 1.5 * r->goal) return INFINITY;
+    double e = baked_error(r->s, r->animation, fps, fit, fps == r->max_fps ? 0 : r->goal);
+    if (isfinite(e) && e * fps * fps > r->law[fit][family]) r->law[fit][family] = e * fps * fps;
+    return e;
+}
+
+static double rule_lowest(rule *r, const double *rates, size_t n, size_t first, double below, bool fit, int family,
+                          double *error)
+{
+    while (n > 0 && (rates[n - 1] > r->max_fps || (below > 0 && rates[n - 1] >= below))) --n;
+    if (n == 0) return 0;
+    size_t at = below > 0 || first >= n ? n - 1 : first;
+    double e = rule_error(r, rates[at], fit, family);
+    if (e <= r->goal) {
+        for (*error = e; at > 0 && (e = rule_error(r, rates[at - 1], fit, family)) <= r->goal; --at) *error = e;
+        return rates[at];
     }
-    return hi < n ? rates[hi] : 0;
+    while (++at < n)
+        if ((e = rule_error(r, rates[at], fit, family)) <= r->goal) return *error = e, rates[at];
+    return 0;
 }
 
 /* The palette of the chosen rates and rows, each clip verified against exact skinning (its rows,
@@ -81,18 +115,19 @@ static void expect_reference_choices(const char *asset, double max_error_mm, dou
         double key = cb_animation_key_interval(&m->animations[c]), aligned[6];
         size_t na = 0;
         for (size_t i = 0; key > 0 && i < 6; ++i) aligned[na++] = round(factors[i] / key * 1000) / 1000;
+        size_t key_at = 2; /* the key rate, factor 1 */
+        rule r = {s, (int32_t)c, goal, max_fps, {{0, 0}, {0, 0}}};
         double rate[2] = {0, 0}, err_at[2] = {INFINITY, INFINITY}; /* [fit]: the lowest rate within the goal */
-        for (int fit = 1; fit >= 0; --fit) {
-            double cap = fit ? max_fps : rate[1] > 0 ? rate[1] : max_fps, ea = INFINITY, eb = INFINITY;
-            double a = lowest(s, (int32_t)c, common, 17, cap, goal, &ea, fit);
-            double b = lowest(s, (int32_t)c, aligned, na, a > 0 ? fmin(a, cap) : cap, goal, &eb, fit);
-            bool take_b = b > 0 && (a == 0 || b < a);
-            rate[fit] = take_b ? b : a, err_at[fit] = take_b ? eb : a > 0 ? ea : INFINITY;
+        for (int fit = 0; fit <= 1; ++fit) {
+            double below = fit ? rate[0] : 0, ea = INFINITY, eb = INFINITY;
+            double a = rule_lowest(&r, aligned, na, key_at, below, fit, 0, &ea);
+            double b = rule_lowest(&r, common, 17, 11, a > 0 ? a : below, fit, 1, &eb);
+            rate[fit] = b > 0 ? b : a, err_at[fit] = b > 0 ? eb : a > 0 ? ea : INFINITY;
         }
         bool want_fit;
         double want, want_error;
         if (rate[0] > 0 || rate[1] > 0) {
-            want_fit = !(rate[0] > 0 && (rate[1] == 0 || rate[0] <= rate[1])); /* sampled on a tie */
+            want_fit = rate[1] > 0; /* fitted rows were searched under the sampled ones' rate only */
             want = rate[want_fit], want_error = err_at[want_fit];
         } else { /* neither: the lower exact error at max_fps */
             double ef = exact_error(s, (int32_t)c, max_fps, true), es = exact_error(s, (int32_t)c, max_fps, false);

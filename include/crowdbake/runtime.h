@@ -70,13 +70,14 @@ typedef struct cb_rate_choice {
     bool met;               /* the error is within the goal */
     double error, error_mm; /* at the chosen rate: model units, and mm per metre of height */
     bool fitted;            /* the rows chosen: fitted (else sampled) */
-    double other_fps;       /* sampled rows chosen: the rate fitted rows needed (0: none up to max_fps, or not
-                             * searched); fitted rows chosen, sampled ones needed more than its rate */
+    double other_fps;       /* fitted rows chosen: the rate sampled rows need (0: none up to max_fps); sampled rows
+                             * chosen: 0 (fitted rows are searched under their rate only) */
     double fps_needed;      /* not met: the lowest rate up to CB_FPS_LIMIT that meets it (0: none does) */
 } cb_rate_choice;
-/* Sets plan[i].fps and plan[i].fit for every clip with a goal: per clip, fitted rows searched
- * first, then sampled rows up to that rate; the fewer rows win, sampled on a tie (they are the
- * exact poses). out (optional) says what each choice reached. */
+/* Sets plan[i].fps and plan[i].fit for every clip with a goal: per clip, sampled rows searched
+ * first, then fitted rows under that rate; the fewer rows win, sampled on a tie (they are the
+ * exact poses). Rates the probes so far predict far over the goal are not baked (runtime.c).
+ * out (optional) says what each choice reached. */
 cb_status cb_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan, uint32_t count,
                           const cb_rate_goal *goals, cb_rate_choice *out, cb_error *err);
 
