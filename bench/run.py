@@ -95,7 +95,7 @@ def bench_input(name, path, repeat, peer=True):
     def bake():
         if os.path.exists(out_pal):
             os.remove(out_pal)
-        wall, peak, out = run_rss([EXE, 'bake', path, '-o', out_pal, '--json'], faults)
+        wall, peak, out = run_rss([EXE, 'bake', path, '-o', out_pal, '--json', '--fps', '30'], faults)
         walls.append(wall)
         rss.append(peak)
         phases.append(json.loads(out)['outputs'][0])
@@ -235,7 +235,7 @@ def bench_clips(repeat, joints=200, clips=(30, 60), seconds=10):
     repeats together, so a change in load between two inputs skews their ratio)."""
     small, big = gen_rig(joints, clips[0], seconds), gen_rig(joints, clips[1], seconds)
     out = os.path.join(BUILD, 'bench', 'clips.pal')
-    t_small, t_big = paired([EXE, 'bake', small, '-o', out, '-q'], [EXE, 'bake', big, '-o', out, '-q'], repeat)
+    t_small, t_big = paired([EXE, 'bake', small, '-o', out, '-q', '--fps', '30'], [EXE, 'bake', big, '-o', out, '-q', '--fps', '30'], repeat)
     return {'small': clips[0], 'big': clips[1], 't_small': t_small, 't_big': t_big}
 
 
@@ -256,10 +256,10 @@ def bench_instructions():
     return {
         'cow_fixed': instructions([EXE, 'bake', cow, '-o', out, '-q', '-j', '1', '--fps', '30']),
         'cow_auto': instructions([EXE, 'bake', cow, '-o', out, '-q', '-j', '1']),
-        'rig_30clips': instructions([EXE, 'bake', gen_rig(200, 30, 10), '-o', out, '-q', '-j', '1']),
+        'rig_30clips': instructions([EXE, 'bake', gen_rig(200, 30, 10), '-o', out, '-q', '-j', '1', '--fps', '30']),
         'catalog_noop': instructions([EXE, 'bake', cat, '-q', '-j', '1']),
-        'joints_200': instructions([EXE, 'bake', gen_rig(200, 8, 10), '-o', out, '-q', '-j', '1']),
-        'joints_800': instructions([EXE, 'bake', gen_rig(800, 8, 10), '-o', out, '-q', '-j', '1']),
+        'joints_200': instructions([EXE, 'bake', gen_rig(200, 8, 10), '-o', out, '-q', '-j', '1', '--fps', '30']),
+        'joints_800': instructions([EXE, 'bake', gen_rig(800, 8, 10), '-o', out, '-q', '-j', '1', '--fps', '30']),
     }
 
 
@@ -267,7 +267,7 @@ def bench_joints(repeat, joints=(200, 800), clips=8, seconds=10):
     """4x the joints: 800 against 200, 8 clips x 10 s each, in turns (crowdbake only)."""
     small, big = gen_rig(joints[0], clips, seconds), gen_rig(joints[1], clips, seconds)
     out = os.path.join(BUILD, 'bench', 'joints.pal')
-    t_small, t_big = paired([EXE, 'bake', small, '-o', out, '-q'], [EXE, 'bake', big, '-o', out, '-q'], repeat)
+    t_small, t_big = paired([EXE, 'bake', small, '-o', out, '-q', '--fps', '30'], [EXE, 'bake', big, '-o', out, '-q', '--fps', '30'], repeat)
     return {'small': joints[0], 'big': joints[1], 'clips': clips, 'seconds': seconds, 't_small': t_small, 't_big': t_big}
 
 
@@ -461,7 +461,7 @@ def main():
     }
     big = [p for n, p in inputs if n == 'rig_200j_30clips'] or [inputs[-1][1]]
     exr = os.path.join(BUILD, 'bench', 'core.exr')
-    subprocess.run([EXE, 'bake', big[0], '-o', exr, '-q', '--precision', 'half', '--format', 'pal,exr'], check=True)
+    subprocess.run([EXE, 'bake', big[0], '-o', exr, '-q', '--precision', 'half', '--format', 'pal,exr', '--fps', '30'], check=True)
     report['core']['large'] = core_numbers(big[0], exr[:-4] + '.pal', exr)
     by_name = {r['input']: r for r in results}
     if args.smoke:  # every part once, on tiny inputs: the numbers mean nothing, the script keeps working
