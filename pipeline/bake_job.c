@@ -11,6 +11,8 @@
 #include "crowdbake/exr.h"
 #include "crowdbake/ktx2.h"
 #include "crowdbake/pal_write.h"
+#include "../src/palette_bake.h" /* palette_choose_rates, the search's poses kept for the bake */
+#include "../src/pose_cache.h"
 
 static double now_seconds(void)
 {
@@ -166,11 +168,20 @@ static bool clip_goal(const cb_bake_job *job, uint32_t i, cb_rate_goal *goal)
     return true;
 }
 
+static void free_search_poses(cb_bake_job *job)
+{
+    pose_cache **poses = job->search_poses;
+    for (uint32_t i = 0; poses && i < job->plan_count; ++i) pose_cache_free(poses[i]);
+    free(poses);
+    job->search_poses = NULL;
+}
+
 cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
 {
     if (job->planned) return CB_OK;
     const cb_model *m = job->model;
     uint32_t n = job->clips ? job->clip_count : m->animation_count;
+    free_search_poses(job);
     free(job->plan), free(job->rates);
     job->plan = calloc(n ? n : 1, sizeof *job->plan);
     job->rates = calloc(n ? n : 1, sizeof *job->rates);
@@ -186,7 +197,8 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
     if (any) {
         cb_sampler *s = cb_sampler_create(m, job->skin, err);
         cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
-        if (s) cb_choose_rates(s, &o, job->plan, n, goals, job->rates, err);
+        job->search_poses = calloc(n ? n : 1, sizeof(pose_cache *)); /* NULL: nothing kept, as slow */
+        if (s) palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_poses, err);
         cb_sampler_free(s);
     }
     free(goals);
@@ -283,7 +295,7 @@ static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette 
     }
     if (any) {
         cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
-        cb_choose_rates(s, &o, job->plan, n, goals, fresh, err);
+        palette_choose_rates(s, &o, job->plan, n, goals, fresh, job->search_poses, err);
         for (uint32_t i = 0; i < n && !err->status; ++i)
             if (goals[i].max_error_mm > 0) job->rates[i] = fresh[i];
     }
@@ -317,7 +329,8 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
         if (!shared.texels || shared_opt.precision != opt.precision) {
             cb_palette_free(&shared);
-            if (cb_palette_bake(s, &opt, job->plan, job->plan_count, &shared, err)) break;
+            palette_probe kept = {NULL, NULL, job->search_poses}; /* what the rate search sampled */
+            if (palette_bake_with_facts(s, &opt, job->plan, job->plan_count, NULL, &kept, &shared, err)) break;
             shared_opt = opt;
         }
         o->palette = shared; /* its facts; the tables and texels stay with `shared` */
@@ -353,6 +366,7 @@ void cb_bake_result_free(cb_bake_result *r)
 
 void cb_bake_job_free(cb_bake_job *job)
 {
+    free_search_poses(job);
     free(job->plan), free(job->rates);
     job->plan = NULL, job->rates = NULL;
     job->plan_count = 0;

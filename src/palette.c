@@ -115,13 +115,14 @@ pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes)
     return pose_cache_create(bones, KEPT_QPOS(bones), max_bytes);
 }
 
-const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame,
+const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, uint32_t frame,
                                      double **extra)
 {
     double t = cb_clip_frame_time(framing, frame), *out = w->mats;
-    double *kept = st->poses ? (double *)pose_cache_find(st->poses, t) : NULL;
-    if (!kept && st->poses) {
-        kept = pose_cache_add(st->poses, t);
+    pose_cache *poses = st->poses ? st->poses : st->clip_poses ? st->clip_poses[c] : NULL;
+    double *kept = poses ? (double *)pose_cache_find(poses, t) : NULL;
+    if (!kept && poses) {
+        kept = pose_cache_add(poses, t);
         if (kept) cb_clip_frame_matrices(w->sampler, framing, frame, st->opt->root_motion, kept);
     }
     if (extra) *extra = kept ? kept + (size_t)st->p->bone_count * 16 : NULL;
@@ -146,7 +147,7 @@ static cb_status matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, f
     cb_palette *p = st->p;
     cb_palette_clip *clip = &p->clips[c];
     double *kept; /* the pose's qpos_similarity, where a search keeps it (1 + 5 a joint) */
-    const double *mats = palette_frame_matrices(st, w, &st->infos[c], f, &kept);
+    const double *mats = palette_frame_matrices(st, w, c, &st->infos[c], f, &kept);
     bool derived = kept && kept[0] == 1;
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         const double *M = mats + (size_t)j * 16;
@@ -182,7 +183,7 @@ static cb_status sample_mids(bake_state *st, worker *w, uint32_t c, const float 
     framing.steps *= 2;
     uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
     for (uint32_t i = 0; i < intervals; ++i) {
-        const double *mats = palette_frame_matrices(st, w, &framing, 2 * i + 1, NULL);
+        const double *mats = palette_frame_matrices(st, w, c, &framing, 2 * i + 1, NULL);
         float *out = mids + (size_t)i * p->bone_count * vals;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             const double *M = mats + (size_t)j * 16;
@@ -440,6 +441,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     st.facts = facts, st.radius = facts->reach, st.groups = &facts->groups;
     if (probe && plan && plan_count == 1 && opt->threads <= 1) /* one clip's, one thread's */
         st.poses = probe->poses, st.analysis = probe->analysis, st.lent = sampler; /* no sampler made per pass */
+    if (probe) st.clip_poses = probe->clip_poses;
     if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;
     p->fitted = p->clip_count > 0;

@@ -90,6 +90,7 @@ typedef struct bake_state {
     value_range *ranges;   /* clips: the values' ranges */
     double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
     pose_cache *poses;      /* the only clip's exact matrices by time, kept across bakes (one thread); or NULL */
+    pose_cache *const *clip_poses; /* or per clip: those its rate search sampled (palette_probe.clip_poses) */
     const cb_clip_info *analysis; /* the only clip analyzed before the bake, or NULL */
     cb_sampler *lent;       /* the caller's sampler, for the one worker of a probe's bake; or NULL */
     struct cb_pool *pool;   /* the threads every pass runs on, or NULL for the caller's alone */
@@ -198,10 +199,11 @@ typedef struct palette_skin_facts {
 cb_status palette_skin_facts_build(cb_sampler *sampler, palette_skin_facts *out, cb_error *err);
 void palette_skin_facts_free(palette_skin_facts *f);
 
-/* Clip framing's joint matrices at `frame` (cb_clip_frame_matrices with the bake's root motion):
- * from st->poses where it keeps them, else sampled into w->mats (and kept). Valid until the
+/* Clip c's joint matrices at `frame` of framing (cb_clip_frame_matrices with the bake's root
+ * motion): from st->poses or the clip's st->clip_poses where they keep them, else sampled into
+ * w->mats (and kept). Valid until the
  * worker's next call. extra (optional): the kept pose's extra doubles, NULL where not kept. */
-const double *palette_frame_matrices(bake_state *st, worker *w, const cb_clip_info *framing, uint32_t frame,
+const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, uint32_t frame,
                                      double **extra);
 /* A pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
  * from its matrices alone too (a probe's rows are rows of the others). */
@@ -212,7 +214,17 @@ typedef struct palette_probe {
     pose_cache *poses;            /* the clip's exact matrices by time, or NULL */
     const cb_clip_info *analysis; /* the clip analyzed once (cb_clip_analyze at any rate, the plan's loop and
                                    * limits, on the bake's sampler), or NULL */
+    pose_cache *const *clip_poses; /* a bake of the plan's every clip after their rates were searched: per clip
+                                    * the poses its search sampled (entries may be NULL), or NULL. The bake
+                                    * samples again only the times no probe did (Cow's default bake: 43% of
+                                    * its final bake); a clip's measurement then stays on one worker. */
 } palette_probe;
+
+/* cb_choose_rates keeping what each clip's search sampled: kept[i] (NULL: none yet) gets clip
+ * i's pose cache, made or added to, while all the caches together stay under a budget (past it
+ * a clip's is freed and left NULL); NULL kept: none kept. The caller frees the caches. */
+cb_status palette_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan, uint32_t count,
+                               const cb_rate_goal *goals, cb_rate_choice *out, pose_cache **kept, cb_error *err);
 
 /* cb_palette_bake with the skin's facts settled by the caller (palette_skin_facts_build, same
  * sampler model and skin; NULL: settled here), and a probe's aids (or NULL), used when the bake

@@ -261,7 +261,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         double *diff = similar ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
         const cb_joint_error *joints = similar ? s->joints + (size_t)i * p->bone_count : s->joints;
         if (!similar) {
-            const double *mats = palette_frame_matrices(st, w, &framing, times[i], NULL);
+            const double *mats = palette_frame_matrices(st, w, c, &framing, times[i], NULL);
             uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
             const double *a = row_values(p, s, row), *b = sub ? row_values(p, s, next) : NULL;
             for (uint32_t j = 0; j < p->bone_count; ++j) {
@@ -372,8 +372,8 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
  * which decodes each measured row once for both. The results are the same either way. */
 static bool measure_split(const bake_state *st)
 {
-    uint32_t threads = st->opt->threads ? st->opt->threads : 1;
-    return !(st->opt->error_goal > 0) && st->p->clip_count < 2 * threads;
+    uint32_t threads = st->opt->threads ? st->opt->threads : 1; /* a clip's kept poses are one worker's */
+    return !(st->opt->error_goal > 0) && !st->clip_poses && st->p->clip_count < 2 * threads;
 }
 
 uint32_t palette_measure_jobs(const bake_state *st)

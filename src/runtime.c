@@ -258,7 +258,7 @@ static double choose_clip(clip_search *cs, const rate_families *f, cb_rows rows,
 
 static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
                               double max_fps, cb_rows rows, cb_rate_choice *c, const palette_skin_facts *facts,
-                              pose_cache *poses, cb_error *err)
+                              pose_cache *poses, bool fresh, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
     rate_families f = families_of(&m->animations[clip->animation]);
@@ -269,7 +269,7 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
     bool analyzed = !cb_clip_analyze(s, clip->animation, common_rates[0], clip->loop, &o->limits, &analysis, &unanalyzed);
     clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts,
                       .probe = {poses, analyzed ? &analysis : NULL}};
-    if (poses) pose_cache_clear(poses); /* another clip's times */
+    if (poses && fresh) pose_cache_clear(poses); /* another clip's times */
     return choose_clip(&cs, &f, rows, max_error, c, err);
 }
 
@@ -288,7 +288,7 @@ double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip
     c.error = INFINITY;
     if (!palette_skin_facts_build(s, &facts, err))
         fps = choose_clip_fps(s, o, clip, max_error, max_fps, o->fit || clip->fit ? CB_ROWS_FITTED : CB_ROWS_SAMPLED, &c,
-                              &facts, poses, err);
+                              &facts, poses, true, err);
     palette_skin_facts_free(&facts);
     pose_cache_free(poses);
     *met = c.met, *error = err->status ? INFINITY : c.error;
@@ -313,7 +313,31 @@ typedef struct rate_search {
     const palette_skin_facts *facts;
     const uint32_t *order; /* the clips in the order they are taken */
     atomic_uint next;
+    pose_cache **kept;     /* per clip, or NULL: the poses each clip's search sampled, for the bake after */
+    atomic_size_t kept_bytes;
 } rate_search;
+
+/* What the caches kept for a bake may hold together (past it a clip's is freed): Cow's twelve
+ * clips keep about 50 MB, and spare its bake 150 M of its 750 M instructions. */
+#define KEPT_POSE_BYTES ((size_t)128 << 20)
+
+/* The cache clip i's search samples into: the thread's own (`mine`, emptied for each clip), or,
+ * when the caller keeps them, the clip's own. */
+static pose_cache *clip_cache(rate_search *rs, uint32_t i, pose_cache *mine, const cb_sampler *s)
+{
+    if (!rs->kept) return mine;
+    if (!rs->kept[i]) rs->kept[i] = search_pose_cache(s);
+    return rs->kept[i];
+}
+
+/* A kept cache past the budget is freed: the bake samples that clip again. */
+static void settle_kept(rate_search *rs, uint32_t i)
+{
+    if (!rs->kept || !rs->kept[i]) return;
+    uint32_t bones = rs->model->skins[rs->skin].joint_count;
+    size_t bytes = (size_t)pose_cache_count(rs->kept[i]) * (16 * bones + 1 + 5 * bones) * sizeof(double);
+    if (atomic_fetch_add(&rs->kept_bytes, bytes) + bytes > KEPT_POSE_BYTES) pose_cache_free(rs->kept[i]), rs->kept[i] = NULL;
+}
 
 /* The highest rate the search may probe a clip at. */
 static double max_fps_of(const cb_rate_goal *goal) { return goal->max_fps > 0 ? goal->max_fps : CB_AUTO_MAX_FPS; }
@@ -343,7 +367,7 @@ static int rate_worker(void *arg)
     rate_search *rs = arg;
     cb_error fail = {0};
     cb_sampler *s = cb_sampler_create(rs->model, rs->skin, &fail);
-    pose_cache *poses = s ? search_pose_cache(s) : NULL; /* this thread's, for each clip it searches in turn */
+    pose_cache *poses = s && !rs->kept ? search_pose_cache(s) : NULL; /* this thread's, for each clip in turn */
     for (;;) {
         uint32_t n = atomic_fetch_add(&rs->next, 1);
         if (n >= rs->count) break;
@@ -356,7 +380,8 @@ static int rate_worker(void *arg)
         cb_rate_choice *c = &rs->choices[i];
         rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
                                           max_fps_of(&rs->goals[i]), rs->o->fit ? CB_ROWS_FITTED : rs->goals[i].rows, c,
-                                          rs->facts, poses, &rs->errors[i]);
+                                          rs->facts, clip_cache(rs, i, poses, s), !rs->kept, &rs->errors[i]);
+        settle_kept(rs, i);
         rs->plan[i].fit = c->fitted;
         c->error_mm = cb_mm_per_m(c->error, rs->height);
     }
@@ -367,6 +392,12 @@ static int rate_worker(void *arg)
 
 cb_status cb_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
                           const cb_rate_goal *goals, cb_rate_choice *out, cb_error *err)
+{
+    return palette_choose_rates(s, o, plan, count, goals, out, NULL, err);
+}
+
+cb_status palette_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
+                               const cb_rate_goal *goals, cb_rate_choice *out, pose_cache **kept, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
     bool any = false;
@@ -383,7 +414,7 @@ cb_status cb_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan 
                        m->source);
     }
     rate_search rs = {m, cb_sampler_skin(s), o, plan, count, goals, calloc(count, sizeof(cb_rate_choice)),
-                      calloc(count, sizeof(cb_error)), facts.height, &facts, NULL, 0};
+                      calloc(count, sizeof(cb_error)), facts.height, &facts, NULL, 0, kept, 0};
     uint32_t *order = malloc(count * sizeof *order);
     rs.order = order;
     if (rs.choices && rs.errors && order) {

@@ -128,6 +128,8 @@ typedef struct cb_bake_job {
     uint32_t plan_count;
     cb_rate_choice *rates;
     bool planned;
+    void *search_poses; /* internal: per clip, the poses its rate search sampled, which the bake samples no
+                         * more (cb_bake_job_free frees them) */
 } cb_bake_job;
 
 /* One file written. */
