@@ -25,7 +25,7 @@ static void bake(const char *extra, const char *out)
     const char *exe = getenv("CROWDBAKE") ? getenv("CROWDBAKE") : BUILD_DIR "/crowdbake";
     const char *shared = getenv("CROWDBAKE_SHARED") ? getenv("CROWDBAKE_SHARED") : "../shared";
     char cmd[2048];
-    snprintf(cmd, sizeof cmd, "mkdir -p " TMP " && %s bake %s/assets/fox-bevy/Fox.glb -o %s -q %s", exe, shared, out,
+    snprintf(cmd, sizeof cmd, "mkdir -p " TMP " && %s bake %s/assets/fox-bevy/Fox.glb -o %s -q --fps 30 %s", exe, shared, out,
              extra);
     assert_int_equal(system(cmd), 0);
 }

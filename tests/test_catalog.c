@@ -426,7 +426,7 @@ static void test_the_log_is_in_catalog_order_with_the_sizes_of_bake_model(void *
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
     shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
     assert_non_null(realpath(fox, fox_abs)), assert_non_null(realpath(cow, cow_abs)); /* the catalog is in TMP */
-    snprintf(args, sizeof args, "[bake]\nout_dir = \"out-order\"\n[animal.acow]\nmodel = \"%s\"\n"
+    snprintf(args, sizeof args, "[bake]\nout_dir = \"out-order\"\nfps = 30\n[animal.acow]\nmodel = \"%s\"\n"
              "[animal.bfish]\nmodel = \"%s/fish.glb\"\n[animal.cbird]\nmodel = \"%s/bird.glb\"\n"
              "[animal.dfox]\nmodel = \"%s\"\n", cow_abs, samples_abs, samples_abs, fox_abs);
     write_text(TMP "/order.toml", args);
@@ -439,7 +439,7 @@ static void test_the_log_is_in_catalog_order_with_the_sizes_of_bake_model(void *
     assert_int_equal(stat(TMP "/out-order/dfox.pal", &st), 0);
     snprintf(expect, sizeof expect, "(%.1f KiB texture, %.1f KiB file, 48x159,", 24 * 2 * 159 * 8 / 1024.0, st.st_size / 1024.0);
     if (!strstr(out, expect)) fail_msg("expected '%s' in:\n%s", expect, out);
-    snprintf(args, sizeof args, "bake %s -o " TMP "/fox-alone.pal", fox);
+    snprintf(args, sizeof args, "bake %s -o " TMP "/fox-alone.pal --fps 30", fox);
     assert_int_equal(run_cli(args, out, sizeof out), 0);
     snprintf(expect, sizeof expect, "fox-alone.pal: %.1f KiB texture, %.1f KiB file, 48x159 texels", 24 * 2 * 159 * 8 / 1024.0,
              st.st_size / 1024.0);

@@ -340,13 +340,20 @@ static void test_report_counts_runtime_meshes_batches_and_transitions(void **sta
     printf("  batch of 100: report %.0f, mesh --batch 100 %.0f bytes\n", number_after(rt, "\"batched_bytes\": ", 0), batch);
     assert_true(number_after(rt, "\"batched_bytes\": ", 0) == batch);
     assert_true(number_after(rt, "\"instanced_bytes\": ", 0) == vb + ib + 1600);
-    /* Transitions: one into each loop from every other loop, 0.5 s at 30 fps = 16 rows of 84 u16 texels. */
+    /* Transitions: one into each loop from every other loop, 0.5 s at the destination's rate (the
+     * default bake's, per clip, as `inspect` reads them from the palette) in rows of 84 u16 texels. */
     snprintf(cmd, sizeof cmd, "%s info %s --json 2>&1", crowdbake_exe(), model);
     assert_int_equal(run_command(cmd, info, sizeof info), 0);
     int loops = 0;
     for (const char *p = info; (p = strstr(p, "\"loops\": true")); ++p) ++loops;
     assert_int_equal((int)number_after(rt, "\"loops\": ", 0), loops);
-    assert_true(number_after(rt, "\"prebaked_transition_bytes\": ", 0) == (double)loops * (loops - 1) * 16 * 84 * 8);
+    snprintf(cmd, sizeof cmd,
+             "%s bake %s -o " TMP "/report-default.pal -q && %s inspect " TMP "/report-default.pal --json | python3 -c "
+             "\"import json, sys; c = [x for x in json.load(sys.stdin)['clips'] if x['loops']]; "
+             "print(sum((len(c) - 1) * (int(0.5 * x['fps'] + 0.5) + 1) for x in c))\"",
+             crowdbake_exe(), model, crowdbake_exe());
+    assert_int_equal(run_command(cmd, info, sizeof info), 0);
+    assert_true(number_after(rt, "\"prebaked_transition_bytes\": ", 0) == strtod(info, NULL) * 84 * 8);
 }
 
 /* Bad input: one line naming the file or option and the fix, the exit code, no file written. */
