@@ -49,7 +49,8 @@ function checkAgainstC(file, pal, framesPerClip = 2) {
     assert.equal(Math.fround(c.max_error), h.max_error);
     assert.deepEqual(pal.bones.map((b) => b.name), c.bones);
     assert.deepEqual(pal.clips.map((k) => ({ name: k.name, first_row: k.first_row, frames: k.frames, fps: k.fps,
-                                             duration: k.duration, loops: k.loops, root_velocity: k.root_velocity })),
+                                             duration: k.duration, loops: k.loops, fitted_rows: k.fitted,
+                                             root_velocity: k.root_velocity })),
                      c.clips.map((k) => ({ ...k, fps: Math.fround(k.fps), duration: Math.fround(k.duration),
                                            root_velocity: k.root_velocity.map(Math.fround) })));
     // Texels: a few frames of every clip decoded by the format's rules, against the C reader's matrices.

@@ -49,18 +49,21 @@ test('each type\'s palette opens, and its states address the palette\'s clips', 
 
 test('per-instance numbers follow docs/roster.md', () => {
     const goat = readRoster(JSON.parse(manifestText)).types.goat;
-    const raw = JSON.parse(manifestText).types.goat.states;
-    assert.deepEqual(goat.states.wander, { clip: raw.wander.clip, ...raw.wander.instance });
-    // Locomotion: rate_per_speed x ground speed; phase fract(i x golden ratio).
+    const raw = JSON.parse(manifestText).types.goat;
+    const clip = (name) => raw.clips.find((c) => c.name === name); // the clip table, beside the states
+    assert.deepEqual(goat.states.wander, { clip: raw.states.wander.clip, ...raw.states.wander.instance });
+    // Locomotion: rate_per_speed x ground speed; phase fract(i x golden ratio). At the walk's own
+    // ground speed (1.2, the generator's) it plays at the walk's baked rate.
+    const walk = clip('walk');
     const [x, y, z, w] = instanceData(goat.states.wander, 1.2, 3);
-    assert.deepEqual([x, y], [90, 30]);
-    assert.ok(Math.abs(z - raw.wander.instance.rate_per_speed * 1.2) < 1e-12 && Math.abs(z - 30) < 1e-5);
+    assert.deepEqual([x, y], [walk.first_row, walk.frame_count]);
+    assert.ok(Math.abs(z - raw.states.wander.instance.rate_per_speed * 1.2) < 1e-12 && Math.abs(z - walk.fps) < 1e-5);
     assert.ok(Math.abs(w - 0.8541019661) < 1e-9);
     // Not synced to speed: rate; a one-shot started at T: -T x rate / frames.
-    assert.equal(instanceData(goat.states.graze, 5, 0)[2], 30);
-    const die = instanceData(goat.states.die, 0, 7, 2);
-    assert.deepEqual(die.slice(0, 3), [219, -31, 20]);
-    assert.ok(Math.abs(die[3] - (-2 * 20) / 31) < 1e-12);
+    assert.equal(instanceData(goat.states.graze, 5, 0)[2], clip('eat').fps);
+    const death = clip('death'), die = instanceData(goat.states.die, 0, 7, 2);
+    assert.deepEqual(die.slice(0, 3), [death.first_row, -death.frame_count, death.fps]);
+    assert.ok(Math.abs(die[3] - (-2 * death.fps) / death.frame_count) < 1e-12);
 });
 
 test('broken manifests are refused with the field that is wrong', () => {

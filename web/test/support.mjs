@@ -17,8 +17,11 @@ export function tmpDir(name) {
     return dir;
 }
 
+// A fixed 30 fps unless args say otherwise: these tests read files, and the quadruped's loops travel
+// (root motion kept), which no rate bakes within the default error budget.
 export function bake(model, out, args = []) {
-    execFileSync(CROWDBAKE, ['bake', model, '-o', out, '-q', ...args], { stdio: ['ignore', 'ignore', 'pipe'] });
+    const rate = args.includes('--fps') ? [] : ['--fps', '30'];
+    execFileSync(CROWDBAKE, ['bake', model, '-o', out, '-q', ...rate, ...args], { stdio: ['ignore', 'ignore', 'pipe'] });
     return readFileSync(out);
 }
 
