@@ -4,38 +4,67 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../formats/crowdbake_pal.h"
+#include "crowdbake/bake.h"
 #include "crowdbake/exr.h"
 #include "crowdbake/json.h"
-#include "crowdbake/bake.h"
 #include "cli.h"
 
 const char cmd_vat_usage[] =
     "usage: crowdbake vat MODEL -o OUT.exr [--fps N] [--max-texture-size N] [--root-motion keep|in-place]\n"
     "                     [--skin NAME|INDEX] [--exr-compression none|rle|zips|zip|piz] [--json]\n"
-    "                     [--clip A,B | --exclude-clip A,B]\n\n"
+    "                     [--clip A,B | --exclude-clip A,B | --like PALETTE.pal]\n\n"
     "Bakes a vertex animation texture: every skinned vertex of every frame (framed like the palette's\n"
     "rows), positions and normals as RGBA16F layers position.* and normal.* of one EXR, a frame per\n"
     "texture row (a frame of more vertices than the limit takes several rows; rows wrap into column\n"
     "blocks). Prints its size and the error half-float positions cause, next to the size of the\n"
     "default palette of the same frames. --clip and --exclude-clip select clips as for 'bake'; a clip\n"
-    "that cannot be sampled is skipped with a warning unless --clip names it.\n";
+    "that cannot be sampled is skipped with a warning unless --clip names it. --like PALETTE.pal: the\n"
+    "palette's clips at its clips' own rates (a default bake chooses a rate per clip), so the VAT's\n"
+    "frames are the palette's rows one for one.\n";
+
+/* --like PALETTE: the palette's clips, each at its own rate and loop, so the VAT's frames are
+ * the palette's rows one for one (an error-bounded bake chooses a rate per clip). */
+static cb_status plan_like(const cb_model *m, const char *palette, cb_clip_plan **plan, uint32_t *count, cb_error *err)
+{
+    cbpal_file f;
+    char msg[256];
+    if (cbpal_open(palette, 0, &f, msg, sizeof msg)) return cb_fail(err, CB_ERR_INPUT, "%s", msg);
+    *plan = calloc(f.header.clip_count ? f.header.clip_count : 1, sizeof **plan);
+    if (!*plan) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    for (uint32_t i = 0; *plan && i < f.header.clip_count && !err->status; ++i) {
+        cbpal_clip c;
+        cbpal_get_clip(&f, i, &c);
+        int32_t a = cb_model_find_animation(m, c.name);
+        if (a < 0)
+            cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' is not a clip of %s; --like wants a palette baked from this model",
+                    palette, c.name, m->source);
+        else (*plan)[i] = (cb_clip_plan){a, m->animations[a].name, (c.flags & CBPAL_CLIP_LOOPS) ? 1 : 0, c.fps, false};
+        *count = i + 1;
+    }
+    cbpal_close(&f);
+    return err->status;
+}
 
 int cmd_vat(int argc, char **argv)
 {
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     const char *path = NULL, *out = NULL, *fps = NULL, *max = NULL, *rm = NULL, *skin_name = NULL, *comp = NULL,
-               *clips = NULL, *excluded = NULL;
+               *clips = NULL, *excluded = NULL, *like = NULL;
     bool json = false, help;
     const cli_option options[] = {{"-o", "FILE", &out, NULL},          {"--output", "FILE", &out, NULL},
                                   {"--fps", "N", &fps, NULL},          {"--max-texture-size", "N", &max, NULL},
                                   {"--root-motion", "MODE", &rm, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL},
                                   {"--exr-compression", "NAME", &comp, NULL}, {"--json", NULL, NULL, &json},
-                                  {"--clip", "A,B", &clips, NULL},     {"--exclude-clip", "A,B", &excluded, NULL}};
+                                  {"--clip", "A,B", &clips, NULL},     {"--exclude-clip", "A,B", &excluded, NULL},
+                                  {"--like", "PALETTE.pal", &like, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &path, 1, 1, &help);
     if (help) return fputs(cmd_vat_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     if (!out) return cli_usage_error("vat", "-o OUT.exr is required");
+    if (like && (fps || clips || excluded))
+        return cli_usage_error("vat", "--like takes the palette's clips and rates: not with --fps, --clip or --exclude-clip");
     cb_bake_options o = cb_default_bake_options();
     o.limits = limits;
     unsigned max_size = o.max_texture_size;
@@ -53,7 +82,7 @@ int cmd_vat(int argc, char **argv)
     cb_vat vat = {0};
     cb_clip_plan *plan = NULL;
     uint32_t planned = 0;
-    if (s && !cli_select_clips(m, clips, excluded, &plan, &planned, &err) &&
+    if (s && !(like ? plan_like(m, like, &plan, &planned, &err) : cli_select_clips(m, clips, excluded, &plan, &planned, &err)) &&
         !cb_vat_bake(s, &o, plan, planned, true, &vat, &err))
         cb_exr_write_vat(out, &vat, compression, &err);
     free(plan);

@@ -177,25 +177,28 @@ static int write_model_catalog(const char *model_path, const cb_limits *limits, 
 }
 
 /* A VAT of a type's frames into site/vat/TYPE.exr (uncompressed: the page reads it as is),
- * unless one newer than the palette is there. Only for types that bake every clip at a fixed
- * rate: the VAT's frames then line up with the palette's rows. */
-static bool bake_vat(const view_paths *v, const cb_roster_type *t)
+ * unless one newer than the palette is there: the palette's clips at their own rates (`vat
+ * --like`), so the VAT's frames line up with the palette's rows whatever rate each clip was
+ * baked at. Not for a type that renames its clips (the palette's names are not the model's) or
+ * writes no .pal. */
+static bool bake_vat(const view_paths *v, const cb_roster_type *t, const char *palette)
 {
     const cb_bake_settings *b = &t->animal->bake;
-    if (t->animal->clips || b->fps_auto) {
-        printf("  %-16s no VAT (its clips or fps are chosen per clip: the VAT's frames would not match)\n", t->animal->name);
+    if (t->animal->clips || !(b->formats & CB_FORMAT_PAL)) {
+        printf("  %-16s no VAT (its catalog entry lists or renames its clips, or writes no .pal to take them from)\n",
+               t->animal->name);
         return false;
     }
-    char out[PATH_MAX + 192], fps[32], max[32];
+    char out[PATH_MAX + 192], max[32];
     snprintf(out, sizeof out, "%s/vat", v->site);
     if (mkdirs(out)) return fail_io("cannot create", out), false;
     snprintf(out, sizeof out, "%s/vat/%s.exr", v->site, t->animal->name);
     struct stat so, sp;
-    if (!stat(out, &so) && !stat(t->pal_path, &sp) && so.st_mtime >= sp.st_mtime) return true;
-    snprintf(fps, sizeof fps, "%.17g", b->fps);
+    if (!stat(out, &so) && !stat(palette, &sp) && so.st_mtime >= sp.st_mtime) return true;
     snprintf(max, sizeof max, "%u", b->max_texture_size);
-    char *argv[] = {"vat", (char *)t->animal->model, "-o", out, "--fps", fps, "--max-texture-size", max, "--root-motion",
-                    b->root_motion == CB_ROOT_MOTION_IN_PLACE ? "in-place" : "keep", "--exr-compression", "none", NULL};
+    char *argv[] = {"vat", (char *)t->animal->model, "-o", out, "--like", (char *)palette, "--max-texture-size", max,
+                    "--root-motion", b->root_motion == CB_ROOT_MOTION_IN_PLACE ? "in-place" : "keep",
+                    "--exr-compression", "none", NULL};
     printf("  %-16s VAT: ", t->animal->name);
     fflush(stdout);
     return cmd_vat(12, argv) == 0;
@@ -228,7 +231,7 @@ static int prepare_catalog(const view_paths *v, const char *catalog_path)
         dir_of(t->animal->model, dir, sizeof dir);
         if ((rc = link_into_site(v, name, dir))) break;
         const char *base = strrchr(t->animal->model, '/') ? strrchr(t->animal->model, '/') + 1 : t->animal->model;
-        bool vat = bake_vat(v, t);
+        bool vat = bake_vat(v, t, r.types[t->owner].pal_path);
         fprintf(f, "%s\n  {\"name\": \"%s\", \"model\": \"models/%s/%s\", \"vat\": %s%s%s%s}", n++ ? "," : "", t->animal->name,
                 t->animal->name, base, vat ? "\"vat/" : "null", vat ? t->animal->name : "", vat ? ".exr" : "", vat ? "\"" : "");
     }

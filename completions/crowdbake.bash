@@ -14,7 +14,8 @@ _crowdbake_options()
     inspect) echo "--json --clip --frame --no-verify" ;;
     verify) echo "--json --clip --exclude-clip --max-error --random --skin $limits" ;;
     preview) echo "-o --output --skin --cell --columns $limits" ;;
-    vat) echo "-o --output --fps --max-texture-size --root-motion --skin --exr-compression --json --clip --exclude-clip $limits" ;;
+    vat) echo "-o --output --fps --max-texture-size --root-motion --skin --exr-compression --json --clip --exclude-clip
+                --like $limits" ;;
     report) echo "--json --markdown --html --no-fail -j --target" ;;
     view) echo "--port --open --cache --model" ;;
     mesh) echo "-o --output --palette-model --max-influences --quantize --batch --max-quantization-error --fps --skin
