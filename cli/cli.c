@@ -35,6 +35,7 @@ const char *cli_setting_flag(cb_setting setting)
     case CB_SETTING_BATCH: return "--batch";
     case CB_SETTING_SYNC: return "--sync";
     case CB_SETTING_DEFAULT_STATE: return "--default-state";
+    case CB_SETTING_ROOT_MOTION: return "--root-motion";
     case CB_SETTING_FPS: return "--fps";
     case CB_SETTING_MAX_FPS: return "--max-fps";
     case CB_SETTING_MAX_ERROR: return "--max-error";

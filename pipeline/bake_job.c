@@ -268,6 +268,8 @@ static cb_status check_budgets(const cb_bake_job *job, const cb_palette *p, cb_b
         b->error_mm = cb_mm_per_m(p->clips[i].visible_error, p->model_height);
         b->over = b->max_error_mm > 0 && b->error_mm > b->max_error_mm;
         b->fps = p->clips[i].fps, b->rows = p->clips[i].frames, b->fitted = p->clips[i].fitted;
+        if (job->settings.root_motion == CB_ROOT_MOTION_KEEP && loop_travel_visible(p, &p->clips[i]))
+            b->travel = p->clips[i].ground_speed * p->clips[i].duration;
         out->over_budget += b->over;
     }
     if (!out->over_budget || job->settings.allow_over_budget) return CB_OK;

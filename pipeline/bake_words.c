@@ -65,7 +65,14 @@ void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, u
     bool fitted = c->fit || job->settings.fit_rows;
     char fix[96], relax[96];
     setting_words(setting_name, CB_SETTING_MAX_ERROR, "max_error", budget_above(b->error_mm), relax, sizeof relax);
-    if (!cb_bake_job_clip_auto(job, i)) {
+    if (b->travel > 0) { /* no rate helps: the wrap jumps back by the loop's travel */
+        const char *flag = setting_name ? setting_name(CB_SETTING_ROOT_MOTION) : NULL;
+        snprintf(fix, sizeof fix, flag ? "%s in-place" : "root_motion = \"in-place\"", flag);
+        snprintf(buf, size, "clip '%s' reaches %.3g mm/m at %g fps (%s rows), over max_error %g: it loops and its root "
+                 "travels %.3g units a loop, which its wrap pulls back at any rate; bake crowds the game moves in place "
+                 "(%s), or give it %s", clip_name(job, i), b->error_mm, fps, fitted ? "fitted" : "sampled",
+                 b->max_error_mm, b->travel, fix, relax);
+    } else if (!cb_bake_job_clip_auto(job, i)) {
         setting_words(setting_name, CB_SETTING_FPS, "fps", fps, fix, sizeof fix);
         snprintf(buf, size, "clip '%s' reaches %.3g mm/m at %g fps (%s rows), over max_error %g; its rate is fixed (%s): "
                  "leave fps out for the fewest rows within max_error, or give it %s", clip_name(job, i), b->error_mm, fps,

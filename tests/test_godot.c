@@ -28,14 +28,14 @@ static int setup(void **state)
         {"qpos", "half", ""}, {"affine", "half", ""}, /* version 3: positions relative to each bone's offset */
     };
     for (size_t i = 0; i < COUNT_OF(bakes); ++i) {
-        snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/bakes/%s-%s%s.pal --layout %s --precision %s %s -q",
+        snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/bakes/%s-%s%s.pal --fps 30 --layout %s --precision %s %s -q",
                  crowdbake_exe(), model, bakes[i][0], bakes[i][1], bakes[i][2][0] ? "-zstd" : "", bakes[i][0],
                  bakes[i][1], bakes[i][2]);
         if (system(cmd)) return -1;
     }
     FILE *f = fopen(TMP "/bakes/catalog.toml", "w");
     if (!f) return -1;
-    fprintf(f, "[bake]\nout_dir = \"roster\"\n\n[animal.goat]\nmodel = \"%s\"\nstates = { wander = [\"walk\"] }\n", model);
+    fprintf(f, "[bake]\nout_dir = \"roster\"\nfps = 30\n\n[animal.goat]\nmodel = \"%s\"\nstates = { wander = [\"walk\"] }\n", model);
     fclose(f);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/catalog.toml -q", crowdbake_exe());
     return system(cmd);

@@ -98,6 +98,8 @@ typedef struct cb_clip_budget {
     double fps;          /* its effective rate */
     uint32_t rows;
     bool fitted;         /* its rows fitted, else sampled */
+    double travel;       /* a loop baked with its root motion kept: how far it travels, model units a loop (its
+                          * wrap jumps back that far, at any rate); else 0 */
 } cb_clip_budget;
 
 /* A catalog type's identity, which its files record instead of the single bake's options: the

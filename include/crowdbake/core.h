@@ -54,6 +54,7 @@ typedef enum cb_setting {
     CB_SETTING_BATCH,              /* cb_mesh_options.batch */
     CB_SETTING_SYNC,               /* a catalog state's sync (cb_catalog_override_states) */
     CB_SETTING_DEFAULT_STATE,      /* a catalog animal's default_state */
+    CB_SETTING_ROOT_MOTION,        /* cb_bake_settings.root_motion */
     CB_SETTING_FPS,                /* cb_bake_settings.fps (fixed) */
     CB_SETTING_MAX_FPS,            /* cb_bake_settings.max_fps */
     CB_SETTING_MAX_ERROR,          /* cb_bake_settings.max_error_mm */
