@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "crowdbake/catalog_toml.h"
+#include "toml_guard.h"
 
 namespace {
 
@@ -490,70 +491,11 @@ struct Parser {
     }
 };
 
-/* Where TOML meets a character outside ASCII that is neither in a string nor in a comment
- * (1-based line, and column in characters), or false. TOML allows none there, and toml++ 3.3
- * reaches a __builtin_unreachable on some of them (U+00A1 where a key or value starts; found by
- * fuzzing it under UBSan): such a file is refused here, before it is parsed. The strings are
- * TOML's four kinds; a multi-line one ends at the last of a run of 3 to 5 quotes. */
-bool non_ascii_outside_strings(std::string_view t, unsigned *line, unsigned *column)
-{
-    enum { CODE, COMMENT, BASIC, LITERAL, MULTI_BASIC, MULTI_LITERAL } state = CODE;
-    unsigned l = 1, c = 0;
-    auto starts_character = [](unsigned char ch) { return (ch & 0xC0) != 0x80; };
-    auto run_of = [&t](size_t i, char quote) {
-        size_t n = 0;
-        while (i + n < t.size() && t[i + n] == quote) ++n;
-        return n;
-    };
-    for (size_t i = 0; i < t.size(); ++i) {
-        unsigned char ch = (unsigned char)t[i];
-        c += starts_character(ch);
-        if (ch == '\n') {
-            l++, c = 0;
-            if (state == COMMENT || state == BASIC || state == LITERAL) state = CODE; /* ended, or unterminated */
-            continue;
-        }
-        bool basic = state == BASIC || state == MULTI_BASIC;
-        if (basic && ch == '\\' && i + 1 < t.size() && t[i + 1] != '\n') { /* an escaped character */
-            c += starts_character((unsigned char)t[++i]);
-            continue;
-        }
-        char quote = basic ? '"' : '\'';
-        size_t run = state == CODE && (ch == '"' || ch == '\'') ? run_of(i, (char)ch) : 0;
-        switch (state) {
-        case CODE:
-            if (ch >= 0x80) {
-                *line = l, *column = c;
-                return true;
-            }
-            if (ch == '#') state = COMMENT;
-            else if (run >= 3) state = ch == '"' ? MULTI_BASIC : MULTI_LITERAL, i += 2, c += 2;
-            else if (run) state = ch == '"' ? BASIC : LITERAL;
-            break;
-        case BASIC:
-        case LITERAL:
-            if (ch == (unsigned char)quote) state = CODE;
-            break;
-        case MULTI_BASIC:
-        case MULTI_LITERAL:
-            if (ch == (unsigned char)quote) {
-                size_t n = run_of(i, quote);
-                i += n - 1, c += (unsigned)n - 1;
-                if (n >= 3) state = CODE;
-            }
-            break;
-        case COMMENT:
-            break;
-        }
-    }
-    return false;
-}
-
 cb_status parse(const char *text, size_t size, const char *path, cb_catalog *out, cb_error *err)
 {
     std::memset(out, 0, sizeof *out);
     unsigned line, column;
-    if (non_ascii_outside_strings(std::string_view(text, size), &line, &column))
+    if (toml_non_ascii_outside_strings(text, size, &line, &column))
         return cb_fail(err, CB_ERR_INPUT, "%s:%u:%u: a non-ASCII character outside any quoted string or comment, which "
                        "TOML does not allow; put the key or value in quotes", path, line, column);
     out->arena = cb_arena_create();
