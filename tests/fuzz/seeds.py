@@ -8,6 +8,7 @@
   exr      bakes in both EXR precisions x every EXR compression
   catalog  the catalogs
   web      the .pal seeds and roster.json manifests (the web reader reads both)
+and each target's regression inputs (tests/fuzz/regressions/T).
 
 Usage: seeds.py --build BUILD --shared SHARED --out OUT
        seeds.py --escape-regressions SAMPLE.glb DIR   (the gltf escape inputs make check replays)
@@ -141,7 +142,9 @@ def main():
     for path in glob.glob(f'{dirs["pal"]}/*.pal'):
         shutil.copy(path, dirs['web'])
     roster_seeds(a.build, dirs['web'], os.path.join(a.out, 'scratch'))
-    for t, d in dirs.items():
+    for t, d in dirs.items():  # and what the fuzzers found before
+        for path in glob.glob(f'tests/fuzz/regressions/{t}/*'):
+            shutil.copy(path, d)
         print(f'seeds: {t}: {len(os.listdir(d))} files')
 
 
