@@ -45,38 +45,41 @@ def run_target(target, build, seconds):
     log_path = f'{build}/fuzz-{target}.log'
     executions, coverage, features, findings, restarts = 0, 0, 0, [], 0
     deadline = time.monotonic() + seconds
-    with open(log_path, 'w') as log:
-        while True:
-            left = int(deadline - time.monotonic())
-            if left < 5 or restarts > MAX_RESTARTS:
-                break
-            before = set(os.listdir(artifacts))
-            cmd, env = command(target, build, corpus, seeds, left, artifacts)
-            out = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                 errors='replace').stdout
-            log.write(out)
-            units = re.findall(r'stat::number_of_executed_units:\s*(\d+)', out)
-            if units:
-                executions += int(units[-1])
-            else:  # no final stats (a crash): the last status line's count
-                counts = re.findall(r'^#(\d+)\s', out, re.M)
-                executions += int(counts[-1]) if counts else 0
-            cov = re.findall(r'cov: (\d+) ft: (\d+)', out)
-            if cov:
-                coverage, features = max(coverage, int(cov[-1][0])), max(features, int(cov[-1][1]))
-            new = sorted(set(os.listdir(artifacts)) - before)
-            new = [n for n in new if n.startswith(KINDS)]
-            if not new:
-                if 'Done ' not in out and 'DONE' not in out:
-                    print(f'fuzz {target}: the fuzzer stopped without finishing; see {log_path}', file=sys.stderr)
-                    print(out[-2000:], file=sys.stderr)
-                    findings.append('(stopped: see the log)')
-                break
-            for name in new:
-                os.makedirs(f'tests/fuzz/regressions/{target}', exist_ok=True)
-                shutil.copy(f'{artifacts}/{name}', f'tests/fuzz/regressions/{target}/{name}')
-                findings.append(f'tests/fuzz/regressions/{target}/{name}')
-            restarts += 1
+    open(log_path, 'w').close()  # each run appends as it goes (tail -f it) and is read back when it ends
+    while True:
+        left = int(deadline - time.monotonic())
+        if left < 5 or restarts > MAX_RESTARTS:
+            break
+        before = set(os.listdir(artifacts))
+        cmd, env = command(target, build, corpus, seeds, left, artifacts)
+        with open(log_path, 'a') as log:
+            start = log.tell()
+            subprocess.run(cmd, env=env, stdout=log, stderr=subprocess.STDOUT)
+        with open(log_path, errors='replace') as log:
+            log.seek(start)
+            out = log.read()
+        units = re.findall(r'stat::number_of_executed_units:\s*(\d+)', out)
+        if units:
+            executions += int(units[-1])
+        else:  # no final stats (a crash): the last status line's count
+            counts = re.findall(r'^#(\d+)\s', out, re.M)
+            executions += int(counts[-1]) if counts else 0
+        cov = re.findall(r'cov: (\d+) ft: (\d+)', out)
+        if cov:
+            coverage, features = max(coverage, int(cov[-1][0])), max(features, int(cov[-1][1]))
+        new = sorted(set(os.listdir(artifacts)) - before)
+        new = [n for n in new if n.startswith(KINDS)]
+        if not new:
+            if 'Done ' not in out and 'DONE' not in out:
+                print(f'fuzz {target}: the fuzzer stopped without finishing; see {log_path}', file=sys.stderr)
+                print(out[-2000:], file=sys.stderr)
+                findings.append('(stopped: see the log)')
+            break
+        for name in new:
+            os.makedirs(f'tests/fuzz/regressions/{target}', exist_ok=True)
+            shutil.copy(f'{artifacts}/{name}', f'tests/fuzz/regressions/{target}/{name}')
+            findings.append(f'tests/fuzz/regressions/{target}/{name}')
+        restarts += 1
     corpus_size = len(os.listdir(corpus))
     print(f'fuzz {target}: {seconds} s, {executions:,} executions, coverage {coverage} edges ({features} features), '
           f'corpus {corpus_size} inputs, {len(findings)} findings' + (': ' + ', '.join(findings) if findings else ''),
