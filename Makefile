@@ -297,11 +297,20 @@ test-asan: deps check-shared $(NODE_DEPS)
 	@$(ASAN_ENV) $(MAKE) --no-print-directory $(PARALLEL) $(SANITIZE) test-runs || true
 	$(call test_summary,build/asan)
 
-# libFuzzer runs under ASan + UBSan (clang): make fuzz FUZZ_SECONDS=600 [FUZZ_TARGETS=gltf]
+# Fuzzing: libFuzzer under ASan + UBSan (clang) for the C targets, Jazzer.js for the web reader.
+#   make fuzz MINUTES=10 [TARGETS="gltf web"]   each target in turn, one process at a time, from its
+#   kept corpus (build/fuzz/corpus) and seeds; one line per target. Findings are copied into
+#   tests/fuzz/regressions/TARGET, which make check replays. (FUZZ_SECONDS=N still works.)
+MINUTES ?=
 FUZZ_SECONDS ?= 60
+FUZZ_TIME = $(if $(MINUTES),$(shell awk 'BEGIN { print int($(MINUTES) * 60) }'),$(FUZZ_SECONDS))
+TARGETS ?= $(FUZZ_TARGETS) web
 FUZZ_BUILD := build/fuzz
 FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all
-fuzz-build: deps
+FUZZ_WEB := tests/fuzz/web/node_modules/.package-lock.json
+$(FUZZ_WEB): tests/fuzz/web/package-lock.json
+	cd tests/fuzz/web && npm ci --no-audit --no-fund --loglevel=error
+fuzz-build: deps $(FUZZ_WEB) web/node_modules/.package-lock.json
 	@dpkg-query -W -f='$${Status}' libclang-rt-14-dev 2>/dev/null | grep -q 'install ok installed' || \
 	  { [ "$$(id -u)" = 0 ] && apt-get install -y --no-install-recommends libclang-rt-14-dev >/dev/null; }
 	$(MAKE) --no-print-directory BUILD=$(FUZZ_BUILD) CC=clang CXX=clang++ OPT="-O1 -g" \
@@ -311,20 +320,14 @@ fuzz-build: deps
 	  clang++ $(FUZZ_SAN) -fsanitize=fuzzer -o $(FUZZ_BUILD)/fuzz_$$t $(FUZZ_BUILD)/fuzz_$$t.o $(FUZZ_BUILD)/libcrowdbake.a \
 	    $(PKG_LIBS) || exit 1; done
 
-# Seed corpora: the shared assets, the samples and bakes of them, the catalogs.
+# Seed corpora (tests/fuzz/seeds.py): the shared models and the samples, .gltf files with the
+# files they name, bakes of every layout, precision, zstd and EXR compression, the catalogs, a
+# roster, and every regression input.
 fuzz-seeds: fuzz-build all
-	@mkdir -p $(FUZZ_BUILD)/corpus/{gltf,pal,exr,catalog}
-	@find ../shared/assets -name '*.gl[bt]*' -size -400k -exec cp {} $(FUZZ_BUILD)/corpus/gltf/ \; 2>/dev/null; true
-	@cp $(BUILD)/samples/*.glb $(FUZZ_BUILD)/corpus/gltf/
-	@for s in fish bird; do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(FUZZ_BUILD)/corpus/pal/$$s.pal -q; \
-	  $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(FUZZ_BUILD)/corpus/pal/$$s-z.pal -q --zstd --layout mat4; \
-	  $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(FUZZ_BUILD)/corpus/exr/$$s.exr -q --precision half; done
-	@cp catalog.example.toml samples/catalog.toml tests/fuzz/regressions/catalog/* $(FUZZ_BUILD)/corpus/catalog/ 2>/dev/null; true
+	python3 tests/fuzz/seeds.py --build $(BUILD) --shared $(SHARED) --out $(FUZZ_BUILD)/seeds
 
 fuzz: fuzz-seeds
-	@for t in $(FUZZ_TARGETS); do echo "fuzz $$t for $(FUZZ_SECONDS) s"; \
-	  (cd $(FUZZ_BUILD) && ./fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 -max_len=400000 \
-	    -artifact_prefix=artifacts-$$t- corpus/$$t 2>&1 | tail -3) || exit 1; done
+	python3 tests/fuzz/campaign.py --fuzz-build $(FUZZ_BUILD) --seconds $(FUZZ_TIME) $(TARGETS)
 
 # ---- benchmarks (not part of check; only a smoke run is) -------------------------------
 $(BUILD)/bench_core: bench/bench_core.c $(BUILD)/libcrowdbake.a

@@ -283,10 +283,15 @@ static bool read_palette_attributes(exr_const_context_t c, const char *path, con
     const float *bind = NULL;
     exr_attr_get_int(c, 0, "crowdbake.texelsPerBone", &tpb);
     exr_attr_get_float_vector(c, 0, "crowdbake.bindPositions", &n, &bind);
+    /* Every count is the file's: products in 64 bits (a fuzzer found 3 * bones overflowing), and
+     * no more clips than the header has attributes (each has its own), before they are allocated. */
+    int32_t attributes = 0;
+    exr_get_attribute_count(c, 0, &attributes);
     if (!cb_layout_parse(img->layout, &p->layout) || tpb != (int32_t)cb_layout_texels_per_bone(p->layout) ||
-        img->bones <= 0 || n != 3 * img->bones || img->clips < 0 || img->rows_per_block <= 0 || img->blocks <= 0 ||
+        img->bones <= 0 || n != 3 * (int64_t)img->bones || img->clips < 0 || img->clips > attributes ||
+        img->rows_per_block <= 0 || img->blocks <= 0 ||
         (int64_t)img->blocks * tpb * img->bones != (int64_t)img->width || img->rows_per_block != (int32_t)img->height ||
-        img->rows <= 0 || img->rows > img->blocks * img->rows_per_block)
+        img->rows <= 0 || img->rows > (int64_t)img->blocks * img->rows_per_block)
         return cb_fail(err, CB_ERR_INPUT, "%s: an EXR without a consistent crowdbake palette header (bake it with "
                        "'crowdbake bake MODEL -o OUT.exr')", path), false;
     p->precision = img->precision;

@@ -1,5 +1,5 @@
 // gltf_load.cpp - the glTF adapter: parses a plain GLB with simdjson (gltf_fast.cpp) and any
-// other file with tinygltf (Draco enabled; the file and its chunks in gltf_container.cpp),
+// other file with tinygltf (Draco enabled; the file in gltf_files.cpp, its chunks in gltf_container.cpp),
 // decodes EXT_meshopt_compression with libmeshoptimizer, reads every accessor with bounds
 // checks and hands the core a cb_model of plain C structs (gltf_convert.cpp).
 #include "gltf_parts.h"
@@ -177,7 +177,7 @@ cb_model *load(const unsigned char *data, size_t size, file_bytes *file, TailRea
     cbpal_xxh64_state source_hash;
     cbpal_xxh64_init(&source_hash);
     if (!tail) cbpal_xxh64_update(&source_hash, data, size); /* else the tail's thread hashes the file */
-    FsState fs{c.limits.max_file_bytes, &source_hash, {}, false};
+    FsState fs{c.limits.max_file_bytes, &source_hash, {}, false, base_dir};
     BinInPlace bin{0, 0};
     bool parsed = parse_with_tinygltf(data, size, name, base_dir, &fs, &d, &fast, &gltf, file ? &bin : nullptr, tail, err);
     if (tail) {
@@ -217,7 +217,7 @@ cb_model *load_guarded(const unsigned char *data, size_t size, file_bytes *file,
                        const char *base_dir, const cb_limits *limits, cb_error *err)
 {
     try {
-        return load(data, size, file, tail, name, base_dir ? base_dir : "/nonexistent-crowdbake-dir", limits, err);
+        return load(data, size, file, tail, name, base_dir ? base_dir : "", limits, err);
     } catch (const std::bad_alloc &) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory while loading", name);
     } catch (const std::exception &e) {
@@ -257,6 +257,6 @@ extern "C" cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_
     }
     std::string dir = path;
     size_t slash = dir.find_last_of('/');
-    dir = slash == std::string::npos ? "." : dir.substr(0, slash);
+    dir = slash == std::string::npos ? "." : slash == 0 ? "/" : dir.substr(0, slash);
     return load_guarded(bytes.data(), bytes.size(), &bytes, tail.head ? &tail : nullptr, path, dir.c_str(), &l, err);
 }

@@ -1,7 +1,7 @@
 // gltf_parts.h - what the glTF adapter's files share (private to libcrowdbake):
-// gltf_container.cpp reads the file and hands its JSON to gltf_fast.cpp (a plain GLB) or to
-// tinygltf (the rest), gltf_convert.cpp reads the accessors into the core's structs,
-// gltf_load.cpp runs the load.
+// gltf_files.cpp reads the file (and the external files it names), gltf_container.cpp hands its
+// JSON to gltf_fast.cpp (a plain GLB) or to tinygltf (the rest), gltf_convert.cpp reads the
+// accessors into the core's structs, gltf_load.cpp runs the load.
 #ifndef CB_GLTF_PARTS_H
 #define CB_GLTF_PARTS_H
 
@@ -206,6 +206,7 @@ struct FsState {
     cbpal_xxh64_state *source_hash; // every external file read goes into the model's source hash
     std::vector<std::string> files;  // and into its list of external files, for depfiles
     bool over_limit;                 // a file was refused for max_bytes
+    std::string folder;              // the model's folder: external files are read only inside it ("": none)
 };
 
 struct BinInPlace {
@@ -216,21 +217,29 @@ struct BinInPlace {
 uint32_t le32(const unsigned char *p); // a little-endian field of a GLB header or chunk
 // Whether the C string `needle` occurs in the `size` bytes at `haystack` (memmem's answer, cheaper).
 bool mentions(const void *haystack, size_t size, const char *needle);
-// Reads `path` into *out, bounded by max_bytes. With `tail`, a big GLB's BIN chunk is read on
-// tail->thread (see TailRead).
-template <class Buffer>
-bool read_file(const char *path, uint64_t max_bytes, Buffer *out, TailRead *tail, std::string *why, bool *over_limit);
-// Maps a model file of 1 MiB and more (see map_model in gltf_container.cpp); false (nothing
-// done) where mapping does not apply, and read_file then reads it.
-bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail);
-// cb_model.release for keys read in place from a mapped file (ctx: its file_bytes): drops
-// the whole pages of the ranges that lie in the mapping; reading them again maps them back.
-void release_mapped(void *ctx, const cb_byte_range *ranges, size_t count) noexcept;
 // Parses the file: a plain GLB on the fast path (parse_fast) into *fast_doc, setting *fast; else
 // with tinygltf into *gltf (the GLB's BIN chunk left where it lies when `in_place`).
 bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *name, const std::string &base_dir,
                          FsState *fs_state, doc::Document *fast_doc, bool *fast, tinygltf::Model *gltf,
                          BinInPlace *in_place, TailRead *tail, cb_error *err);
+
+// gltf_files.cpp
+// Reads `path` into *out, bounded by max_bytes. With `tail`, a big GLB's BIN chunk is read on
+// tail->thread (see TailRead).
+template <class Buffer>
+bool read_file(const char *path, uint64_t max_bytes, Buffer *out, TailRead *tail, std::string *why, bool *over_limit);
+// Maps a model file of 1 MiB and more (see map_model in gltf_files.cpp); false (nothing
+// done) where mapping does not apply, and read_file then reads it.
+bool map_model(const char *path, uint64_t max_bytes, file_bytes *out, TailRead *tail);
+// cb_model.release for keys read in place from a mapped file (ctx: its file_bytes): drops
+// the whole pages of the ranges that lie in the mapping; reading them again maps them back.
+void release_mapped(void *ctx, const cb_byte_range *ranges, size_t count) noexcept;
+// tinygltf's file-system callbacks (user data: the FsState): external buffers are read only
+// from inside fs->folder, bounded by fs->max_bytes, and hashed; nothing is written.
+bool fs_exists(const std::string &path, void *user);
+std::string fs_expand(const std::string &path, void *user);
+bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user);
+bool fs_write(std::string *err, const std::string &path, const std::vector<unsigned char> &bytes, void *user);
 
 // gltf_fast.cpp
 // Parses a GLB that needs nothing but its own BIN chunk into `out` (only what the converter

@@ -4,6 +4,8 @@
 #define _DEFAULT_SOURCE /* mkstemps */
 #include "testutil.h"
 
+#include "crowdbake/exr.h"
+
 #include <math.h>
 #include <unistd.h>
 
@@ -256,6 +258,20 @@ static void test_cli_exit_code_and_one_line(void **state)
     assert_int_equal(run_command(cmd, NULL, 0), EXIT_USAGE);
 }
 
+/* A palette EXR whose header claims 2^31 - 1 clips (tests/fuzz/regressions/exr, from a bake of
+ * fish.exr) is refused as inconsistent, naming the file, before the clip table is allocated:
+ * it asked for 512 GiB and reported "out of memory" without the file's name. */
+static void test_exr_palette_with_huge_clip_count(void **state)
+{
+    (void)state;
+    const char *path = "tests/fuzz/regressions/exr/clip-count-huge.exr";
+    cb_exr_palette pal;
+    cb_error err = {0};
+    assert_int_equal(cb_exr_read_palette(path, &pal, &err), CB_ERR_INPUT);
+    if (!strstr(err.message, path) || !strstr(err.message, "consistent crowdbake palette header"))
+        fail_msg("%s", err.message);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -271,6 +287,7 @@ int main(void)
         cmocka_unit_test(test_skin_without_joints),
         cmocka_unit_test(test_clip_without_channels),
         cmocka_unit_test(test_cli_exit_code_and_one_line),
+        cmocka_unit_test(test_exr_palette_with_huge_clip_count),
     };
     return cmocka_run_group_tests_name("errors", tests, NULL, NULL);
 }

@@ -1,8 +1,11 @@
 /* test_load.c - every model in ../shared/assets loads (or fails clearly), and the re-encoded
  * Fox variants skin to the same positions as Fox.glb within their quantization error. */
+#define _DEFAULT_SOURCE /* realpath */
 #include "testutil.h"
 
+#include <limits.h>
 #include <math.h>
+#include <unistd.h>
 
 #define TMP TEST_TMP "/load"
 
@@ -190,6 +193,71 @@ static void test_source_hash_covers_external_buffers(void **state)
     cb_model_free(after);
 }
 
+/* A copy of derived-fox/separate's Fox.gltf in `dir`, its buffer's uri replaced by `uri`. */
+static void write_fox_naming(const char *dir, const char *uri)
+{
+    char src[1024], path[1024];
+    shared_path(src, sizeof src, "assets/derived-fox/separate/Fox.gltf");
+    size_t size;
+    char *text = read_whole_file(src, &size);
+    char *at = strstr(text, "\"uri\": \"Fox.bin\"");
+    assert_non_null(at);
+    snprintf(path, sizeof path, "%s/Fox.gltf", dir);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    fprintf(f, "%.*s\"uri\": \"%s\"%s", (int)(at - text), text, uri, at + strlen("\"uri\": \"Fox.bin\""));
+    fclose(f);
+    free(text);
+}
+
+static void expect_refused(const char *dir, const char *uri, const char *why)
+{
+    char path[1024];
+    write_fox_naming(dir, uri);
+    snprintf(path, sizeof path, "%s/Fox.gltf", dir);
+    cb_error err = {0};
+    cb_model *m = cb_gltf_load(path, NULL, &err);
+    if (m) fail_msg("uri %s: loaded %s from outside the model's folder", uri, m->external_files[0]);
+    assert_int_equal(err.status, CB_ERR_INPUT);
+    if (!strstr(err.message, why) || !strstr(err.message, path)) fail_msg("uri %s: '%s' lacks '%s'", uri, err.message, why);
+}
+
+/* External buffers are read only from the model's folder: "../", an absolute path (plain or
+ * percent-encoded) and a file missing there are refused, though each names a real Fox.bin
+ * outside it (tinygltf would read them all, the last one from the working directory). */
+static void test_external_files_only_inside_the_model_folder(void **state)
+{
+    (void)state;
+    char src[1024], cmd[2300], abs_bin[PATH_MAX + 16], cwd[PATH_MAX];
+    shared_path(src, sizeof src, "assets/derived-fox/separate/Fox.bin");
+    snprintf(cmd, sizeof cmd, "rm -rf " TMP "/uri && mkdir -p " TMP "/uri/model/sub && cp %s " TMP "/uri/ && cp %s "
+             TMP "/uri/model/sub/ && chmod -R u+w " TMP "/uri", src, src);
+    assert_int_equal(system(cmd), 0);
+    assert_non_null(realpath(TMP "/uri/Fox.bin", abs_bin));
+
+    write_fox_naming(TMP "/uri/model", "sub/Fox.bin"); /* below the folder: fine */
+    cb_model *m = load_or_fail(TMP "/uri/model/Fox.gltf");
+    assert_int_equal(m->external_file_count, 1);
+    cb_model_free(m);
+
+    expect_refused(TMP "/uri/model", "../Fox.bin", "outside the model's folder");
+    expect_refused(TMP "/uri/model", "sub/../../Fox.bin", "outside the model's folder");
+    expect_refused(TMP "/uri/model", "%2E%2E/Fox.bin", "outside the model's folder");
+    expect_refused(TMP "/uri/model", abs_bin, "outside the model's folder");
+    expect_refused(TMP "/uri/model", "Missing.bin", "not found");
+    /* The working directory holds a Fox.bin, the model's folder none. */
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    char path[PATH_MAX + 64];
+    snprintf(path, sizeof path, "%s/" TMP "/uri/model/Fox.gltf", cwd);
+    write_fox_naming(TMP "/uri/model", "Fox.bin");
+    assert_int_equal(chdir(TMP "/uri"), 0);
+    cb_error err = {0};
+    m = cb_gltf_load(path, NULL, &err);
+    assert_int_equal(chdir(cwd), 0);
+    if (m) fail_msg("loaded %s from the working directory", m->external_files[0]);
+    assert_non_null(strstr(err.message, "not found"));
+}
+
 /* The same file loaded from memory: cb_gltf_load_memory copies what it reads, where
  * cb_gltf_load reads a GLB's BIN chunk in place, in the file's own bytes. */
 static cb_model *load_copied(const char *path)
@@ -373,6 +441,7 @@ int main(void)
         cmocka_unit_test(test_broken_clips_are_skipped_not_fatal),
         cmocka_unit_test(test_fox_variants_skin_like_the_original),
         cmocka_unit_test(test_source_hash_covers_external_buffers),
+        cmocka_unit_test(test_external_files_only_inside_the_model_folder),
         cmocka_unit_test(test_in_place_and_copied_loads_agree),
         cmocka_unit_test(test_normalizing_rotation_keys_never_touches_shared_bytes),
         cmocka_unit_test(test_json_numbers_are_correctly_rounded),

@@ -359,13 +359,17 @@ export function readRoster(json, options = {}) {
         }
     }
     const isObject = (v) => v !== null && typeof v === 'object' && !Array.isArray(v);
+    // Names come from the file: "constructor" or "toString" must not find Object.prototype's members, and
+    // "__proto__" must be a name like any other, not the object's prototype.
+    const has = (obj, key) => Object.prototype.hasOwnProperty.call(obj, key);
+    const put = (obj, key, value) => Object.defineProperty(obj, key, { value, enumerable: true, writable: true, configurable: true });
     const need = (obj, where, key, check, what) => {
         if (!isObject(obj)) fail(where, 'expected an object');
-        if (!(key in obj)) fail(`${where}.${key}`, `missing (${what})`);
+        if (!has(obj, key)) fail(`${where}.${key}`, `missing (${what})`);
         if (!check(obj[key])) fail(`${where}.${key}`, `expected ${what}, got ${JSON.stringify(obj[key])}`);
         return obj[key];
     };
-    const optional = (obj, where, key, check, what) => (key in obj ? need(obj, where, key, check, what) : undefined);
+    const optional = (obj, where, key, check, what) => (has(obj, key) ? need(obj, where, key, check, what) : undefined);
     const isString = (v) => typeof v === 'string';
     const isCount = (v) => Number.isInteger(v) && v >= 1;
     const isIndex = (v) => Number.isInteger(v) && v >= 0;
@@ -435,7 +439,7 @@ export function readRoster(json, options = {}) {
             if (state.first_row + Math.abs(state.frame_count) > type.rows)
                 fail(wi, `rows ${state.first_row}..${state.first_row + Math.abs(state.frame_count)} outside the type's ` +
                          `${type.rows} rows`);
-            type.states[stateName] = state;
+            put(type.states, stateName, state);
         }
         need(t, at, 'lods', Array.isArray, 'an array').forEach((l, i) => {
             const w = `${at}.lods[${i}]`;
@@ -443,13 +447,14 @@ export function readRoster(json, options = {}) {
                                      `an array of bone indices below ${type.bones}`);
             type.lods.push({ model: need(l, w, 'model', isString, 'a string'), joint_remap });
         });
-        if (!(type.default_state in type.states))
+        if (!has(type.states, type.default_state))
             fail(`${at}.default_state`, `"${type.default_state}" is not one of the type's states`);
-        out.types[typeName] = type;
+        put(out.types, typeName, type);
     }
     for (const [typeName, f] of Object.entries(optional(doc, 'top level', 'failed', isObject, 'an object') ?? {})) {
         const at = `failed.${typeName}`;
-        out.failed[typeName] = { model: need(f, at, 'model', isString, 'a string'), error: need(f, at, 'error', isString, 'a string') };
+        put(out.failed, typeName,
+            { model: need(f, at, 'model', isString, 'a string'), error: need(f, at, 'error', isString, 'a string') });
     }
     return out;
 }

@@ -1,8 +1,11 @@
-/* fuzz_pal.c - libFuzzer target: the .pal reader header on arbitrary bytes, with and without
- * checksum verification, then every table entry and the texels it hands out. */
+/* fuzz_pal.c - libFuzzer target: the .pal reader (formats/crowdbake_pal.h) on arbitrary bytes,
+ * with and without checksum verification, then every table entry, and the palette decoded as
+ * `verify`, `view` and the runtimes decode it (cb_palette_view, fuzz_decode.h). */
 #include <stdint.h>
 
 #include "../../formats/crowdbake_pal.h" /* the implementation is in libcrowdbake, with zstd */
+#include "crowdbake/pal_view.h"
+#include "fuzz_decode.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -21,8 +24,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             cbpal_get_bone(&f, i, &b);
             sink += (unsigned char)b.name[0];
         }
-        if (f.texels_size) sink += ((const unsigned char *)f.texels)[0] + ((const unsigned char *)f.texels)[f.texels_size - 1];
         (void)sink;
+        cb_palette view;
+        cb_error e = {0};
+        if (flags == 0 && cb_palette_view(&f, &view, &e) == CB_OK) { /* the checksum changes nothing it decodes */
+            fuzz_decode_palette(&view, f.texels);
+            cb_palette_view_free(&view);
+        }
         cbpal_close(&f);
     }
     return 0;

@@ -86,6 +86,11 @@ test('broken manifests are refused with the field that is wrong', () => {
         [(d) => { d.types.goat.default_state = 'sleep'; }, /types\.goat\.default_state: "sleep" is not one of the type's states/],
         [(d) => { d.types.goat.lods[0].joint_remap[2] = 41; }, /types\.goat\.lods\[0\]\.joint_remap: expected an array of bone indices below 41/],
         [(d) => { d.failed = { eel: { model: 'eel.glb' } }; }, /failed\.eel\.error: missing/],
+        // Names from the file are not Object.prototype's members (the reader returned a type whose
+        // default state was a function; tests/fuzz/regressions/web keeps the input).
+        [(d) => { d.types.goat.default_state = 'constructor'; }, /types\.goat\.default_state: "constructor" is not one of/],
+        [(d) => { d.types.goat.states.die.clip = 'toString'; }, /states\.die\.clip: "toString" is not one of/],
+        [(d) => { d.types.goat.clips[0].hasOwnProperty = 1; delete d.types.goat.clips[0].name; }, /clips\[0\]\.name: missing/],
     ];
     for (const [mutation, expected] of cases) {
         let input = mutation;
@@ -104,6 +109,14 @@ test('broken manifests are refused with the field that is wrong', () => {
         assert.ok(error.message.startsWith('r.json: ') && !error.message.includes('\n'), error.message);
         assert.match(error.message, expected);
     }
+    // "__proto__" is a name like any other (JSON.parse makes it an own member): a type and a state so named
+    // are read, not turned into the objects' prototypes.
+    const proto = JSON.parse(manifestText.replace('"goat":', '"__proto__":').replace('"wander":', '"__proto__":')
+        .replace('"default_state": "wander"', '"default_state": "__proto__"'));
+    const read = readRoster(proto);
+    assert.ok(Object.keys(read.types).includes('__proto__'), Object.keys(read.types).join());
+    assert.equal(Object.getPrototypeOf(read.types), Object.prototype);
+    assert.equal(read.types.__proto__.states.__proto__.first_row, 90);
     // A failed type is reported, not an error: the others still load.
     const withFailure = readRoster({ ...good, failed: { eel: { model: 'eel.glb', error: 'not a GLB file' } } });
     assert.deepEqual(withFailure.failed, { eel: { model: 'eel.glb', error: 'not a GLB file' } });
