@@ -76,7 +76,7 @@ export function paletteTextures(pal) {
 // States of a roster type (readRoster(...).types.NAME), or made from the palette's clips.
 function statesOf(pal, type) {
     if (type) return type.states;
-    const states = {};
+    const states = Object.create(null); // clip names are data: '__proto__' is a clip like any other
     for (const c of pal.clips)
         states[c.name] = { clip: c.name, first_row: c.first_row, frame_count: c.loops ? c.frames : -c.frames, rate: c.fps,
                            rate_per_speed: 0, phase: c.loops ? 'golden_ratio' : 'zero' };
@@ -157,7 +157,8 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // speed (model units/s) drives locomotion states' playback so feet stay planted; phase 0..1
     // overrides the golden-ratio spread.
     setState(i, state, { speed = this.speed[i], phase = this.phase[i], fade = this.fade } = {}) {
-        const s = this.states[state];
+        // Own properties only: 'constructor' or '__proto__' is a name, never the object's prototype.
+        const s = Object.hasOwn(this.states, state) ? this.states[state] : undefined;
         if (!s) throw new Error(`CrowdbakeHerd: no state '${state}' (have ${Object.keys(this.states).join(', ')})`);
         const attrs = this.geometry.attributes;
         const current = [0, 1, 2, 3].map((k) => attrs.cb_inst.array[i * 4 + k]);
