@@ -191,7 +191,7 @@ void cb_decide_sync(const cb_catalog_state *st, const char *clip_name, bool loop
     if (st && st->sync != CB_SYNC_AUTO) {
         out->speed = st->sync == CB_SYNC_SPEED;
         const char *mode = out->speed ? "speed" : "time";
-        if (st->sync_from_command_line) snprintf(out->reason, sizeof out->reason, "the command line says --sync %s=%s", st->name, mode);
+        if (st->sync_from_command_line) snprintf(out->reason, sizeof out->reason, "the command line says --sync %.200s=%s", st->name, mode);
         else snprintf(out->reason, sizeof out->reason, "the catalog says sync = \"%s\"", mode);
         return;
     }
@@ -201,24 +201,24 @@ void cb_decide_sync(const cb_catalog_state *st, const char *clip_name, bool loop
     }
     int kind = words_say(st, clip_name, words, sizeof words);
     if (kind < 0) {
-        snprintf(out->reason, sizeof out->reason, "in place: %s%s; it plays at its own rate at standstill", words,
+        snprintf(out->reason, sizeof out->reason, "in place: %.200s%s; it plays at its own rate at standstill", words,
                  feet->stride ? " (its feet stride, but the words decide: set sync = \"speed\" to follow speed)" : "");
     } else if (kind > 0 && (measured || speed_given)) {
         out->speed = true;
-        snprintf(out->reason, sizeof out->reason, "locomotion: %s, and %s", words,
+        snprintf(out->reason, sizeof out->reason, "locomotion: %.200s, and %.250s", words,
                  feet->stride ? feet->why : measured ? "its root travels" : "the animal gives speed_reference");
     } else if (kind > 0) {
-        snprintf(out->reason, sizeof out->reason, "plays at its own rate: %s, but nothing measures its ground speed "
-                 "(%s; no root travel); give the animal a speed_reference to follow speed", words, feet->why);
+        snprintf(out->reason, sizeof out->reason, "plays at its own rate: %.100s, but nothing measures its ground speed "
+                 "(%.200s; no root travel); give the animal a speed_reference to follow speed", words, feet->why);
     } else if (feet->stride) {
         out->speed = true;
-        snprintf(out->reason, sizeof out->reason, "locomotion: no word decides, and %s", feet->why);
+        snprintf(out->reason, sizeof out->reason, "locomotion: no word decides, and %.250s", feet->why);
     } else if (measured) {
         out->speed = true;
         snprintf(out->reason, sizeof out->reason, "locomotion: no word decides, and its root travels %.3g units/s",
                  gs->speed);
     } else {
-        snprintf(out->reason, sizeof out->reason, "in place: no word decides, and %s", feet->why);
+        snprintf(out->reason, sizeof out->reason, "in place: no word decides, and %.250s", feet->why);
     }
 }
 

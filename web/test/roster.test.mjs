@@ -116,7 +116,7 @@ test('broken manifests are refused with the field that is wrong', () => {
     const read = readRoster(proto);
     assert.ok(Object.keys(read.types).includes('__proto__'), Object.keys(read.types).join());
     assert.equal(Object.getPrototypeOf(read.types), Object.prototype);
-    assert.equal(read.types.__proto__.states.__proto__.first_row, 90);
+    assert.equal(read.types.__proto__.states.__proto__.first_row, JSON.parse(manifestText).types.goat.states.wander.instance.first_row);
     // A failed type is reported, not an error: the others still load.
     const withFailure = readRoster({ ...good, failed: { eel: { model: 'eel.glb', error: 'not a GLB file' } } });
     assert.deepEqual(withFailure.failed, { eel: { model: 'eel.glb', error: 'not a GLB file' } });
