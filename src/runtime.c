@@ -210,7 +210,7 @@ static double lowest_rate_of_rows(clip_search *cs, const rate_families *f, doubl
 static double rate_that_meets(clip_search *cs, double max_error, cb_error *err)
 {
     static const double steps[] = {1.5, 2, 3, 4, 6, 8, 12, 16};
-    double ladder[8];
+    double ladder[9]; /* the steps, and CB_FPS_LIMIT after them */
     size_t n = 0;
     for (size_t i = 0; i < 8 && cs->max_fps * steps[i] <= CB_FPS_LIMIT; ++i) ladder[n++] = ceil(cs->max_fps * steps[i]);
     if (n == 0 || ladder[n - 1] < CB_FPS_LIMIT) ladder[n++] = CB_FPS_LIMIT;
