@@ -1,6 +1,6 @@
 /* test_three_herd.c - what a game needs from the three.js drop-in (web/crowdbake_three.mjs,
  * CrowdbakeHerd), in headless Chromium (tests/browser/herd_check.mjs): animated shadows under a
- * directional and a point light equal to those of three.js's own SkinnedMesh + AnimationMixer
+ * directional, a spot and a point light equal to those of three.js's own SkinnedMesh + AnimationMixer
  * (an unskinned depth material fails); frustum culling against the clip table's animated bounds
  * (no draw behind the camera, one in view, bounds that follow a moved instance) holding every
  * vertex of every baked row and mid-row of Cow and the fish; per-instance tints and scale, the
@@ -75,10 +75,12 @@ static int setup(void **state)
 static void test_shadows_move_with_the_animation(void **state)
 {
     (void)state;
-    for (int l = 0; l < 2; ++l) {
-        const char *light = l ? "point" : "directional";
-        const char *at = strstr(out, l ? "\"point\":" : "\"directional\":");
-        assert_non_null(at);
+    const char *lights[] = {"directional", "spot", "point"};
+    for (int l = 0; l < 3; ++l) {
+        const char *light = lights[l], *at = out;
+        char key[32];
+        snprintf(key, sizeof key, "\"%s\":", light);
+        assert_non_null(at = strstr(out, key));
         for (int i = 0; i < 2; ++i) {
             assert_non_null(at = strstr(at + 1, "\"shadow_pixels\":"));
             double pixels = number_after(at, "shadow_pixels"), herd = number_after(at, "herd");

@@ -1,6 +1,6 @@
 // herd_check.mjs - what a game needs from CrowdbakeHerd (web/crowdbake_three.mjs), checked in
 // headless Chromium against three.js itself and the WebGL2 runtime:
-//   shadows  - the herd's shadow on a ground plane (a directional and a point light) against the
+//   shadows  - the herd's shadow on a ground plane (directional, spot and point lights) against the
 //              shadow of three's own SkinnedMesh + AnimationMixer at the same clip time; the same
 //              herd with an unskinned depth material as the negative control;
 //   culling  - draw calls (renderer.info) with the herd in view, behind the camera, moved back in;
@@ -82,6 +82,13 @@ const result = await withPage({ '/': REPO, '/check/': path.resolve(dir) }, '/__b
                     l.target.position.copy(center);
                     Object.assign(l.shadow.camera, { left: -extent, right: extent, top: extent, bottom: -extent,
                                                      near: 0.01 * extent, far: 6 * extent });
+                    return l;
+                },
+                spot: () => {
+                    const l = new THREE.SpotLight(0xffffff, 3, 0, Math.PI / 4, 0, 0);
+                    l.position.copy(center).add(new THREE.Vector3(-extent * 0.4, extent * 1.5, extent * 0.3));
+                    l.target.position.copy(center);
+                    Object.assign(l.shadow.camera, { near: 0.01 * extent, far: 6 * extent });
                     return l;
                 },
                 point: () => {
