@@ -201,6 +201,9 @@ static void test_catalog_forms(void **state)
     if (!strstr(out, "over max_error 1;")) fail_msg("%s", out);
     rc = run(out, sizeof out, "%s bake %s/cli.toml -j 1 2>&1", crowdbake_exe(), OUT_DIR);
     if (rc != 0) fail_msg("%s", out);
+    /* Baked unchecked, then asked for the check (the default's value, 1): not up to date. */
+    rc = run(out, sizeof out, "%s bake %s/cli.toml -j 1 --max-error 1 2>&1", crowdbake_exe(), OUT_DIR);
+    assert_int_equal(rc, EXIT_VERIFY);
 }
 
 int main(void)
