@@ -321,8 +321,9 @@ static void json_clips(cb_json *j, const cb_bake_job *job, const cb_bake_result 
     cb_json_array(j, "clips");
     for (uint32_t i = 0; i < r->budget_count; ++i) {
         const cb_clip_budget *b = &r->budgets[i];
-        char why[320];
+        char why[320], settings[400];
         cb_bake_clip_reason(job, i, why, sizeof why);
+        cb_clip_settings_text(&job->clip_settings[i], settings, sizeof settings);
         cb_json_object(j, NULL);
         cb_json_string(j, "name", clip_label(job, i));
         cb_json_number(j, "fps", b->fps);
@@ -332,6 +333,7 @@ static void json_clips(cb_json *j, const cb_bake_job *job, const cb_bake_result 
         cb_json_number(j, "visible_error_mm_per_m", b->error_mm);
         cb_json_number(j, "max_error_mm_per_m", b->max_error_mm);
         cb_json_string(j, "why", why);
+        cb_json_string(j, "settings", settings);
         cb_json_end(j);
     }
     cb_json_end(j);

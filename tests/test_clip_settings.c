@@ -154,6 +154,29 @@ static void test_reason_text(void **state)
                               "rows fitted or sampled (default), root_motion keep (default), loop from the poses (default)");
 }
 
+/* `bake MODEL --json` states each clip's settings and their origins: the command line's, the
+ * defaults' and the poses'. */
+static void test_bake_json_states_the_settings(void **state)
+{
+    (void)state;
+    char model[512], cmd[2048];
+    static char out[1 << 16];
+    sample_path(model, sizeof model, "quadruped");
+    snprintf(cmd, sizeof cmd, "mkdir -p %s && %s bake %s -o %s/settings.pal --fps 24 --clip idle,walk --one-shot walk "
+             "--json 2>&1", TEST_TMP, crowdbake_exe(), model, TEST_TMP);
+    if (run_command(cmd, out, sizeof out) != 0) fail_msg("%s", out);
+    const char *idle = strstr(out, "\"name\": \"idle\""), *walk = strstr(out, "\"name\": \"walk\"");
+    assert_non_null(idle);
+    assert_non_null(walk);
+    const char *first = strstr(idle, "\"settings\": \"fps 24 (command line), max_error none (command line), max_fps 120 "
+                                     "(default), rows fitted or sampled (default), root_motion keep (default), loop from "
+                                     "the poses (default)\"");
+    const char *second = strstr(walk, "\"settings\": \"fps 24 (command line), max_error none (command line), max_fps 120 "
+                                      "(default), rows fitted or sampled (default), root_motion keep (default), loop false "
+                                      "(command line)\"");
+    if (!first || first > walk || !second) fail_msg("%s", out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -161,6 +184,7 @@ int main(void)
         cmocka_unit_test(test_budget_precedence),
         cmocka_unit_test(test_job_wide_settings),
         cmocka_unit_test(test_reason_text),
+        cmocka_unit_test(test_bake_json_states_the_settings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
