@@ -54,7 +54,7 @@ void cb_resolve_clip_settings(const cb_bake_settings *job, const cb_clip_plan *c
 {
     resolve_rate(job, clip, request, clip_from, measurable, out);
     resolve_budget(job, clip, request, clip_from, out);
-    out->max_fps = job->max_fps > 0 ? job->max_fps : CB_AUTO_MAX_FPS, out->from.max_fps = job->from.max_fps;
+    out->max_fps = job->max_fps, out->from.max_fps = job->from.max_fps;
     out->fit_rows = job->fit_rows, out->from.fit_rows = job->from.fit_rows;
     out->root_motion = job->root_motion, out->from.root_motion = job->from.root_motion;
     out->loop = clip->loop < 0 ? -1 : clip->loop;

@@ -177,6 +177,26 @@ static void test_bake_json_states_the_settings(void **state)
     if (!first || first > walk || !second) fail_msg("%s", out);
 }
 
+/* The rate search takes a concrete ceiling: a goal's max_fps of 0 no longer means "the default"
+ * (resolved once, above), it is an error naming the setting. */
+static void test_rate_search_wants_a_concrete_max_fps(void **state)
+{
+    (void)state;
+    char model[512];
+    sample_path(model, sizeof model, "quadruped");
+    cb_model *m = load_or_fail(model);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    assert_non_null(s);
+    cb_bake_options o = cb_default_bake_options();
+    cb_clip_plan plan = {0, NULL, -1, 0, false};
+    cb_rate_goal goal = {1, 0, CB_ROWS_BEST};
+    assert_int_equal(cb_choose_rates(s, &o, &plan, 1, &goal, NULL, &err), CB_ERR_SETTINGS);
+    assert_int_equal(err.setting, CB_SETTING_MAX_FPS);
+    cb_sampler_free(s);
+    cb_model_free(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -185,6 +205,7 @@ int main(void)
         cmocka_unit_test(test_job_wide_settings),
         cmocka_unit_test(test_reason_text),
         cmocka_unit_test(test_bake_json_states_the_settings),
+        cmocka_unit_test(test_rate_search_wants_a_concrete_max_fps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -68,7 +68,7 @@ struct cb_bake_settings;
  *  - budget: the clip's max_error; else the job's for an error-bounded clip; else none for a
  *    clip with a fixed fps of its own; else the job's if max_error was given beside its fixed
  *    fps; else none;
- *  - max_fps, fit_rows, root_motion: the job's (a zeroed max_fps: CB_AUTO_MAX_FPS). */
+ *  - max_fps, fit_rows, root_motion: the job's. */
 void cb_resolve_clip_settings(const struct cb_bake_settings *job, const cb_clip_plan *clip, const cb_clip_request *request,
                               cb_setting_from clip_from, bool measurable, cb_clip_settings *out);
 
