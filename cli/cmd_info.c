@@ -13,7 +13,7 @@ const char cmd_info_usage[] =
     "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX]\n\n"
     "Skins, joints, skinned mesh nodes and vertex counts, and per clip: start, duration, keys,\n"
     "interpolation modes, whether it loops and why, frames at --fps (default 30), root velocity and\n"
-    "ground speed (root travel and planted feet).\n";
+    "ground speed (root travel and planted feet), and the footsteps: when each foot lands and lifts.\n";
 
 typedef struct clip_facts {
     uint64_t keys;
@@ -68,6 +68,16 @@ static void print_slide(int w, const cb_stride *st)
            st->slide_mean > CB_SLIDE_WARN ? " (the asset's feet slide at any rate)" : "");
 }
 
+/* When each striding foot lands and lifts (the manifest's contacts). */
+static void print_contacts(int w, const cb_stride *st)
+{
+    printf("  %-*s footsteps (lands-lifts s):", w, "");
+    for (uint32_t k = 0; k < st->foot_count; ++k)
+        for (uint32_t s = 0; st->feet[k].strides && s < st->feet[k].stance_count; ++s)
+            printf(" %s %.3f-%.3f", st->feet[k].name, st->feet[k].stances[s].land, st->feet[k].stances[s].lift);
+    printf("\n");
+}
+
 static void print_text(const cb_model *m, int skin, const clip_facts *facts, double fps)
 {
     printf("%s\n", m->source);
@@ -109,7 +119,7 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
             printf("  %-*s %s: %s; ground speed %.4g from %s (root %.4g, planted feet %.4g)\n", w, "",
                    f->info.loops ? "loops" : "plays once", why, f->speed.speed, f->speed.method, f->speed.root, f->speed.feet);
             printf("  %-*s %s: %s\n", w, "", f->sync.speed ? "follows the speed" : "own rate", f->sync.reason);
-            if (f->speed.stride.stride) print_slide(w, &f->speed.stride);
+            if (f->speed.stride.stride) print_slide(w, &f->speed.stride), print_contacts(w, &f->speed.stride);
         } else
             printf("  %-*s %8.4f %9.4f %6llu  %-18s %-8s %7u  -\n", w, anim->name, anim->t0, anim->t1 - anim->t0,
                    (unsigned long long)f->keys, interp, "-", cb_clip_step_count(anim->t1 - anim->t0, fps) + 1);

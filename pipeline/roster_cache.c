@@ -9,7 +9,7 @@
 
 #include "../formats/crowdbake_pal.h"
 
-static const char magic[8] = "CBPREP2"; /* 2: each clip's stride */
+static const char magic[8] = "CBPREP3"; /* 2: each clip's stride; 3: its feet's stances */
 
 bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {
@@ -206,7 +206,8 @@ static const char *known_method(const char *text)
 static bool stride_plausible(const cb_stride *s)
 {
     bool ok = s->foot_count <= CB_MAX_FEET && memchr(s->why, 0, sizeof s->why);
-    for (uint32_t k = 0; ok && k < s->foot_count; ++k) ok = memchr(s->feet[k].name, 0, sizeof s->feet[k].name) != NULL;
+    for (uint32_t k = 0; ok && k < s->foot_count; ++k)
+        ok = memchr(s->feet[k].name, 0, sizeof s->feet[k].name) != NULL && s->feet[k].stance_count <= CB_MAX_STANCES;
     return ok;
 }
 

@@ -344,7 +344,7 @@ export function texelIndex(header, row, bone) {
 
 // Parses a roster manifest (its text, or the object JSON.parse made) and checks what a runtime
 // uses. Returns { generator, catalog, types: { NAME: { palette, palette_exr, shares_palette_of,
-// layout, precision, bones, rows, width, height, blocks, speed_reference, default_state, clips,
+// layout, precision, bones, rows, width, height, blocks, speed_reference, default_state, clips (with contacts),
 // states: { STATE: { clip, first_row, frame_count, rate, rate_per_speed, phase } }, lods } }, failed }.
 // Paths stay relative to the manifest's directory.
 export function readRoster(json, options = {}) {
@@ -417,6 +417,13 @@ export function readRoster(json, options = {}) {
                 duration: need(c, w, 'duration', isNonNegative, 'a number >= 0'),
                 loops: need(c, w, 'loops', (v) => typeof v === 'boolean', 'true or false'),
                 ground_speed: need(c, w, 'ground_speed', isNonNegative, 'a number >= 0'),
+                // Footsteps (older manifests: none): when each foot lands (time) and lifts, seconds into the clip.
+                contacts: (optional(c, w, 'contacts', Array.isArray, 'an array') ?? []).map((k, j) => ({
+                    foot: need(k, `${w}.contacts[${j}]`, 'foot', isString, 'a string'),
+                    bone: need(k, `${w}.contacts[${j}]`, 'bone', (v) => isIndex(v) && v < type.bones, `a bone index below ${type.bones}`),
+                    time: need(k, `${w}.contacts[${j}]`, 'time', isNonNegative, 'a number >= 0'),
+                    lift: need(k, `${w}.contacts[${j}]`, 'lift', isNonNegative, 'a number >= 0'),
+                })),
             });
             const last = type.clips[i];
             if (last.first_row + last.frame_count > type.rows)
