@@ -91,6 +91,21 @@ static void write_contacts(cb_json *j, const cb_stride *st)
     cb_json_end(j);
 }
 
+void cb_roster_json_sockets(cb_json *j, const cb_socket *sockets, uint32_t count)
+{
+    cb_json_array(j, "sockets");
+    for (uint32_t i = 0; i < count; ++i) {
+        cb_json_object(j, NULL);
+        cb_json_string(j, "name", sockets[i].name);
+        cb_json_int(j, "bone", sockets[i].bone);
+        cb_json_inline_array(j, "bind_transform"); /* the prop's world: instance x bone matrix x this */
+        for (int e = 0; e < 16; ++e) cb_json_number(j, NULL, sockets[i].bind_transform[e]);
+        cb_json_end(j);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
+}
+
 void cb_roster_json_stride(cb_json *j, const cb_stride *st)
 {
     cb_json_bool(j, "stride", st->stride);
@@ -203,6 +218,7 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
         cb_json_end(j);
     }
     cb_json_end(j);
+    cb_roster_json_sockets(j, t->sockets, t->socket_count);
     cb_json_end(j);
 }
 

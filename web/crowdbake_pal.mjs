@@ -345,7 +345,7 @@ export function texelIndex(header, row, bone) {
 // Parses a roster manifest (its text, or the object JSON.parse made) and checks what a runtime
 // uses. Returns { generator, catalog, types: { NAME: { palette, palette_exr, shares_palette_of,
 // layout, precision, bones, rows, width, height, blocks, speed_reference, default_state, clips (with contacts),
-// states: { STATE: { clip, first_row, frame_count, rate, rate_per_speed, phase } }, lods } }, failed }.
+// states: { STATE: { clip, first_row, frame_count, rate, rate_per_speed, phase } }, lods, sockets } }, failed }.
 // Paths stay relative to the manifest's directory.
 export function readRoster(json, options = {}) {
     const name = options.name ?? 'roster.json';
@@ -403,7 +403,7 @@ export function readRoster(json, options = {}) {
             blocks: need(t, at, 'blocks', isCount, 'an integer >= 1'),
             speed_reference: need(t, at, 'speed_reference', isNonNegative, 'a number >= 0'),
             default_state: need(t, at, 'default_state', isString, 'a string'),
-            clips: [], states: {}, lods: [],
+            clips: [], states: {}, lods: [], sockets: [],
         };
         if (type.palette === undefined && type.palette_exr === undefined)
             fail(at, 'has neither palette nor palette_exr');
@@ -453,6 +453,16 @@ export function readRoster(json, options = {}) {
             const joint_remap = need(l, w, 'joint_remap', (v) => Array.isArray(v) && v.every((j) => isIndex(j) && j < type.bones),
                                      `an array of bone indices below ${type.bones}`);
             type.lods.push({ model: need(l, w, 'model', isString, 'a string'), joint_remap });
+        });
+        // Where props attach (older manifests: none): a prop's world is instance x bone matrix x bind_transform.
+        (optional(t, at, 'sockets', Array.isArray, 'an array') ?? []).forEach((k, i) => {
+            const w = `${at}.sockets[${i}]`;
+            type.sockets.push({
+                name: need(k, w, 'name', isString, 'a string'),
+                bone: need(k, w, 'bone', (v) => isIndex(v) && v < type.bones, `a bone index below ${type.bones}`),
+                bind_transform: need(k, w, 'bind_transform', (v) => Array.isArray(v) && v.length === 16 && v.every(Number.isFinite),
+                                     '16 numbers'),
+            });
         });
         if (!has(type.states, type.default_state))
             fail(`${at}.default_state`, `"${type.default_state}" is not one of the type's states`);
