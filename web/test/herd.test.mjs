@@ -30,7 +30,15 @@ const mesh = { positions: new Float32Array(9), normals: new Float32Array(9), joi
 const herdOf = (count) => new CrowdbakeHerd(mesh, pal, cow, { count, glsl: '// not compiled here' });
 const walk = cow.clips.find((c) => c.name.endsWith('|Walk'));
 
-test('the manifest gives Walk a landing and a lift per hoof', () => {
+test('the manifest gives Walk a landing and a lift per hoof, and Cow its sockets, as the schema says', () => {
+    execFileSync('node', ['tests/validator/validate_schema.mjs', 'docs/roster.schema.json', path.join(dir, 'out', 'roster.json')]);
+    assert.equal(cow.sockets.length, 14);
+    const doc = JSON.parse(readFileSync(path.join(dir, 'out', 'roster.json'), 'utf8'));
+    doc.types.cow.sockets[0].bone = 99;
+    assert.throws(() => readRoster(doc), /types\.cow\.sockets\[0\]\.bone: expected a bone index below 42/);
+    doc.types.cow.sockets[0].bone = 8;
+    doc.types.cow.clips.find((c) => c.contacts).contacts[0].time = -1;
+    assert.throws(() => readRoster(doc), /contacts\[0\]\.time: expected a number >= 0/);
     assert.equal(walk.contacts.length, 4);
     assert.deepEqual(walk.contacts.map((c) => c.foot).sort(), ['FF.L', 'FF.R', 'FFB.L', 'FFB.R']);
 });
