@@ -2,9 +2,12 @@
  * in a CrowdbakeHerd beside three.js's own SkinnedMesh + AnimationMixer of the glTF. Every socket
  * of `crowdbake info` placed by herd.socketMatrixAt sits where three.js's node hierarchy puts that
  * node; the head bone's rigid triangles placed by boneMatrixAt cover exactly the pixels the herd's
- * shader skins them to, and placed at a wrong time they do not. */
+ * shader skins them to, at a row and half-way between rows (the GLSL's blend), and placed at a
+ * wrong time they do not. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
+
+#include <math.h>
 
 #define TMP TEST_TMP "/web_sockets"
 
@@ -20,7 +23,7 @@ static void test_props_follow_their_bones_in_chromium(void **state)
              TMP, TMP, cow, TMP, crowdbake_exe(), cow, TMP, crowdbake_exe(), cow, TMP);
     if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s: %s", cmd, log);
     static char out[1 << 16];
-    int rc = run_command("node tests/browser/socket_check.mjs " TMP " 'AnimalArmature|Eating' 1.0,2.5,4.0 | python3 -c \""
+    int rc = run_command("node tests/browser/socket_check.mjs " TMP " 'AnimalArmature|Eating' 1.0,2.55,4.05 | python3 -c \""
                          "import json, sys\n"
                          "d = json.load(sys.stdin)\n"
                          "for r in d['results']: print(r['time'], r['covered'], r['differ'], r['differ_wrong_time'], "
@@ -36,12 +39,15 @@ static void test_props_follow_their_bones_in_chromium(void **state)
         assert_int_equal(sscanf(p, "%lf %d %lf %lf %d %lf %lf%n", &t, &covered, &differ, &wrong, &sockets, &position, &axes, &used),
                          7);
         p += used;
-        printf("  %.1f s: %d sockets within %.3g of the height (axes %.2g) of three.js's nodes; head triangles (%d px) "
+        printf("  %.2f s: %d sockets within %.3g of the height (axes %.2g) of three.js's nodes; head triangles (%d px) "
                "differ on %.1f%% of the pixels, at a wrong time %.0f%%\n",
                t, sockets, position, axes, covered, 100 * differ, 100 * wrong);
         assert_int_equal(sockets, 14);
-        assert_true(position < 2e-4); /* the u16 encoding: 0.16 mm/m at the rows, and the blend of two */
-        assert_true(axes < 1e-3);
+        /* At a row (1.0 s) the u16 encoding's error alone; half-way between rows (2.55 s, 4.05 s: the shader's blend
+         * of two, which the pixels compare) also the blend's, within the default budget of 1 mm/m. */
+        bool at_row = fabs(t * 30 - round(t * 30)) < 1e-6;
+        assert_true(position < (at_row ? 2e-4 : 1e-3));
+        assert_true(axes < (at_row ? 1e-3 : 5e-3));
         assert_true(covered > 100);
         assert_true(differ < 0.02);
         assert_true(wrong > 0.15);
