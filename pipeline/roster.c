@@ -143,6 +143,7 @@ static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_
     t->rows = row;
     double lo[3], hi[3];
     if (!err->status) t->model_height = cb_skin_rest_bounds(s, lo, hi);
+    if (!err->status) t->socket_count = cb_find_sockets(s, &t->sockets);
     cb_sampler_free(s);
     return err->status;
 }
@@ -559,6 +560,7 @@ void cb_roster_free(cb_roster *r)
         free(r->types[i].state_sync);
         for (uint32_t l = 0; l < r->types[i].lod_count; ++l) free(r->types[i].lods[l].remap);
         free(r->types[i].lods);
+        free(r->types[i].sockets);
         for (uint32_t k = 0; k < r->types[i].input_count; ++k) free(r->types[i].inputs[k]);
         free(r->types[i].inputs);
         cb_warnings_free(&r->types[i].warnings);

@@ -13,7 +13,8 @@
 // its screen-space velocity for TAA or motion blur. `three` is an import-map name (pages) or the
 // npm package (web/package.json pins it).
 import * as THREE from 'three';
-import { instanceData } from './crowdbake_pal.mjs';
+import { instanceData, instanceBoneMatrix } from './crowdbake_pal.mjs';
+import { FootstepClock } from './crowdbake_contacts.mjs';
 import { paletteDefines } from './crowdbake_crowd.mjs';
 
 // The skinned meshes of a GLTFLoader result that use its first skin, merged in glTF order:
@@ -169,6 +170,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         this.instanceState = new Array(count).fill(null);
         this.speed = new Float32Array(count);
         this.phase = new Float32Array(count).fill(NaN); // NaN: the state's own phase rule
+        this.footsteps = new FootstepClock(type?.clips, count); // the roster's contacts (onContact)
         const textures = paletteTextures(pal);
         const uniforms = {
             cb_palette: { value: textures.palette }, cb_bind_positions: { value: textures.bind },
@@ -221,6 +223,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         attrs.cb_from.array.set(fade > 0 && current[1] !== 0 ? current : inst, i * 4);
         attrs.cb_fade.array.set([this.time, fade], i * 2);
         attrs.cb_inst.needsUpdate = attrs.cb_from.needsUpdate = attrs.cb_fade.needsUpdate = true;
+        this.footsteps.restart(i, inst, this.time);
     }
 
     // A new speed, keeping the frame it is on (no pop): the phase absorbs the change of rate.
@@ -285,6 +288,8 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // motion vectors' previous frame.
     update(time) {
         this.uniforms.cb_previous_time.value = this.time;
+        const inst = this.geometry.attributes.cb_inst.array;
+        this.footsteps.advance(this.count, time, (i) => [this.states[this.instanceState[i]].clip, inst.subarray(i * 4, i * 4 + 4)]);
         this.time = time;
         this.uniforms.cb_time.value = time;
         if (this.instanceMatrix.version !== this.boundsVersion) {
@@ -292,4 +297,36 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
             this.boundingBox = this.boundingSphere = null;
         }
     }
+
+    // Calls listener({ instance, foot, bone, kind: 'land' | 'lift', time }) from update() whenever an
+    // instance's clip time crosses one of its clip's footstep contacts (the roster type's clips'
+    // contacts): every crossing since the last update, in order, across loop ends and rate changes.
+    onContact(listener) {
+        this.footsteps.listeners.push(listener);
+        return this;
+    }
+
+    // The skinning matrix (bind space to the instance's posed model, before its instance matrix) of
+    // `bone` for instance i at the herd's time: its clip, time and cross-fade, as the shader blends.
+    boneMatrixAt(i, bone, out = new THREE.Matrix4()) {
+        const a = this.geometry.attributes, at = (attr, n) => attr.array.subarray(i * n, i * n + n);
+        const [start, length] = at(a.cb_fade, 2);
+        const fade = length > 0 ? Math.min(Math.max((this.time - start) / length, 0), 1) : 1;
+        const m = instanceBoneMatrix(this.pal, at(a.cb_inst, 4), this.time, bone);
+        if (fade < 1) { // the shader mixes the two skinned positions: the same as mixing the matrices
+            const from = instanceBoneMatrix(this.pal, at(a.cb_from, 4), this.time, bone);
+            for (let k = 0; k < 16; ++k) m[k] = from[k] + (m[k] - from[k]) * fade;
+        }
+        return out.fromArray(m);
+    }
+
+    // Where a prop attached to a socket (a roster socket: { bone, bind_transform }) of instance i is
+    // in the world: the herd's world matrix x the instance's matrix x the bone's x the socket's.
+    socketMatrixAt(i, socket, out = new THREE.Matrix4()) {
+        const instance = new THREE.Matrix4();
+        this.getMatrixAt(i, instance);
+        this.boneMatrixAt(i, socket.bone, out).multiply(new THREE.Matrix4().fromArray(socket.bind_transform));
+        return out.premultiply(instance).premultiply(this.matrixWorld);
+    }
 }
+
