@@ -133,14 +133,28 @@ static size_t base64(const unsigned char *d, size_t n, char *out)
     return o;
 }
 
+/* A row of the file: the palette's row; a loop's closing row: the pose at the clip's end, either
+ * sampled (pose: the joint matrices, scene space) or the first row moved by the root's travel. */
+typedef struct babylon_row {
+    uint32_t row;
+    double travel[3];
+    const double *pose;
+} babylon_row;
+
 /* One row as Babylon's little-endian Float32 values: joints, zeros for non-joint bones, identity. */
-static void encode_row(const cb_palette *p, uint32_t row, const double *rebase, uint32_t bones, unsigned char *out)
+static void encode_row(const cb_palette *p, const babylon_row *r, const double *rebase, uint32_t bones,
+                       unsigned char *out)
 {
     memset(out, 0, (size_t)(bones + 1) * 64);
     for (uint32_t j = 0; j <= p->bone_count; ++j) {
         double m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}, scene[16];
         uint32_t slot = j < p->bone_count ? j : bones;
-        if (j < p->bone_count) cb_palette_decode(p, p->texels, row, j, scene), mat4_mul(m, rebase + 16 * j, scene);
+        if (j < p->bone_count) {
+            if (r->pose) memcpy(scene, r->pose + 16 * j, sizeof scene);
+            else cb_palette_decode(p, p->texels, r->row, j, scene);
+            for (int k = 0; k < 3; ++k) scene[12 + k] += r->travel[k]; /* translated: travel x the last row (0 0 0 1) */
+            mat4_mul(m, rebase + 16 * j, scene);
+        }
         for (int k = 0; k < 16; ++k) {
             float f = (float)m[k];
             uint32_t u;
@@ -151,20 +165,43 @@ static void encode_row(const cb_palette *p, uint32_t row, const double *rebase, 
 }
 
 /* Babylon plays rows from..to of a loop once, then from + 1..to over and over (its shader's
- * frameCorrection): its loops end on a closing row, a copy of their first. The file's rows: the
- * palette's, with that row after each loop. */
-static uint32_t *babylon_rows(const cb_palette *p, uint32_t *count)
+ * frameCorrection): its loops end on a closing row, the pose at the clip's end (what its own bake
+ * of a range holds there). Root motion kept: sampled there (ends, poses: p->clip_count x joints
+ * matrices); in place, the first pose moved by the root's vertical travel (in-place bakes take
+ * off x and z, and a loop's last pose is its first). */
+static babylon_row *babylon_rows(const cb_palette *p, const double *ends, uint32_t joints, uint32_t *count)
 {
     uint32_t n = p->rows;
     for (uint32_t c = 0; c < p->clip_count; ++c) n += p->clips[c].loops;
-    uint32_t *rows = malloc((n ? n : 1) * sizeof *rows), k = 0;
-    for (uint32_t c = 0; rows && c < p->clip_count; ++c) {
+    babylon_row *rows = calloc(n ? n : 1, sizeof *rows);
+    for (uint32_t c = 0, k = 0; rows && c < p->clip_count; ++c) {
         const cb_palette_clip *cl = &p->clips[c];
-        for (uint32_t f = 0; f < cl->frames; ++f) rows[k++] = cl->first_row + f;
-        if (cl->loops) rows[k++] = cl->first_row;
+        for (uint32_t f = 0; f < cl->frames; ++f) rows[k++].row = cl->first_row + f;
+        if (!cl->loops) continue;
+        rows[k].row = cl->first_row;
+        rows[k].travel[1] = cl->root_velocity[1] * cl->duration;
+        rows[k++].pose = ends ? ends + (size_t)c * joints * 16 : NULL;
     }
     *count = n;
     return rows;
+}
+
+/* Root motion kept: every loop's pose at its end, sampled as the bake samples (its period set); NULL
+ * in place, or when out of memory (then, as in place, the first pose: never a wrong size). */
+static double *loop_end_poses(const cb_palette *p, const cb_model *m, int32_t skin, bool in_place)
+{
+    cb_error e = {0};
+    cb_sampler *s = in_place ? NULL : cb_sampler_create(m, skin, &e);
+    double *ends = s ? calloc((size_t)p->clip_count * p->bone_count * 16 + 1, sizeof *ends) : NULL;
+    for (uint32_t c = 0; ends && c < p->clip_count; ++c) {
+        const cb_palette_clip *cl = &p->clips[c];
+        int32_t a = cb_model_find_animation(m, cl->name);
+        if (!cl->loops || a < 0) continue;
+        cb_sampler_set_period(s, a, cl->duration);
+        cb_sample_joint_matrices(s, a, cl->start + cl->duration, ends + (size_t)c * p->bone_count * 16);
+    }
+    if (s) cb_sampler_free(s);
+    return ends;
 }
 
 /* What follows vertexData: the texture's size and the clip table (rows, rates, loops). */
@@ -203,7 +240,7 @@ static char *tail_json(const cb_palette *p, uint32_t bones, uint32_t height, flo
     return fclose(f) == 0 ? text : (free(text), NULL);
 }
 
-static cb_status write_rows(cb_atomic_file *f, const cb_palette *p, const uint32_t *rows, uint32_t count,
+static cb_status write_rows(cb_atomic_file *f, const cb_palette *p, const babylon_row *rows, uint32_t count,
                             const double *rebase, uint32_t bones, cb_error *err)
 {
     size_t row_bytes = (size_t)(bones + 1) * 64; /* three rows at a time: whole base64 quads until the last */
@@ -212,7 +249,7 @@ static cb_status write_rows(cb_atomic_file *f, const cb_palette *p, const uint32
     cb_status rc = raw && text ? CB_OK : cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     for (uint32_t r = 0; !rc && r < count; r += 3) {
         uint32_t n = count - r < 3 ? count - r : 3;
-        for (uint32_t k = 0; k < n; ++k) encode_row(p, rows[r + k], rebase, bones, raw + k * row_bytes);
+        for (uint32_t k = 0; k < n; ++k) encode_row(p, &rows[r + k], rebase, bones, raw + k * row_bytes);
         rc = cb_atomic_write(f, text, base64(raw, n * row_bytes, text), err);
     }
     free(raw), free(text);
@@ -220,13 +257,15 @@ static cb_status write_rows(cb_atomic_file *f, const cb_palette *p, const uint32
 }
 
 cb_status cb_babylon_write(const char *path, const cb_palette *p, const cb_model *m, int32_t skin,
-                           float speed_reference, cb_error *err)
+                           float speed_reference, bool in_place, cb_error *err)
 {
     const cb_skin *s = &m->skins[skin];
     int32_t skeleton = skeleton_node(m, s);
     bool *bone = calloc(m->node_count ? m->node_count : 1, sizeof *bone);
     double *rebase = malloc((size_t)s->joint_count * 16 * sizeof *rebase);
-    uint32_t count, *rows = babylon_rows(p, &count);
+    uint32_t count;
+    double *ends = loop_end_poses(p, m, skin, in_place);
+    babylon_row *rows = babylon_rows(p, ends, p->bone_count, &count);
     char *tail = NULL;
     if (!bone || !rebase || !rows) {
         free(bone), free(rebase), free(rows);
@@ -243,6 +282,6 @@ cb_status cb_babylon_write(const char *path, const cb_palette *p, const cb_model
     if (!rc) rc = cb_atomic_write(&f, tail, strlen(tail), err);
     if (rc) cb_atomic_abort(&f);
     else rc = cb_atomic_commit(&f, err);
-    free(bone), free(rebase), free(rows), free(tail);
+    free(bone), free(rebase), free(rows), free(ends), free(tail);
     return rc;
 }

@@ -3,8 +3,10 @@
  * Cow.glb loaded by @babylonjs/loaders at the file's row times, and the two must agree value by
  * value; thin instances drawn by BakedVertexAnimationManager from each must cover the same
  * pixels. Three broken files (the joints reversed, the handedness mirrored into the matrices,
- * rows without Babylon's extra bones and matrix) must fail those checks. u16 is refused; the
- * same bake twice gives the same bytes. */
+ * rows without Babylon's extra bones and matrix) must fail those checks. The quadruped sample
+ * without its skin's skeleton node (Babylon finds the joints' common ancestor) and with a walk and
+ * a run that travel (a loop's closing row is its end pose) agrees too. u16 is refused; the same
+ * bake twice gives the same bytes. */
 #include "testutil.h"
 
 #define TMP TEST_TMP "/babylon"
@@ -46,6 +48,25 @@ static void test_babylon_bakes_the_same_matrices_and_draws_the_same_herd(void **
     assert_non_null(strstr(out, "ok   control joints-only fails"));
 }
 
+static void test_a_skin_without_skeleton_node_and_travelling_loops_agree(void **state)
+{
+    (void)state;
+    require_babylon();
+    char cmd[4096], quadruped[1024], out[16384];
+    sample_path(quadruped, sizeof quadruped, "quadruped");
+    snprintf(cmd, sizeof cmd, "node tests/babylon/strip_skeleton.mjs %s " TMP "/quadruped.glb", quadruped);
+    assert_int_equal(system(cmd), 0);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/quadruped.glb --fps 30 --root-motion keep -o " TMP "/quadruped.bvat.json -q",
+             crowdbake_exe());
+    assert_int_equal(system(cmd), 0);
+    int rc = run_command("node tests/babylon/check_babylon.mjs " TMP "/quadruped.glb " TMP "/quadruped.bvat.json --values-only 2>&1",
+                         out, sizeof out);
+    printf("%s", out);
+    assert_int_equal(rc, 0);
+    assert_non_null(strstr(out, "ok   quadruped.bvat.json: 168x269 texels, as Babylon's bake of 41 bones (+1) and 269 rows"));
+    assert_non_null(strstr(out, "ok   quadruped.bvat.json: worst difference from Babylon's VertexAnimationBaker"));
+}
+
 static void test_u16_is_refused_and_output_repeats(void **state)
 {
     (void)state;
@@ -68,6 +89,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_babylon_bakes_the_same_matrices_and_draws_the_same_herd),
+        cmocka_unit_test(test_a_skin_without_skeleton_node_and_travelling_loops_agree),
         cmocka_unit_test(test_u16_is_refused_and_output_repeats),
     };
     return cmocka_run_group_tests_name("babylon", tests, setup, NULL);

@@ -9,7 +9,9 @@
  *  - each joint's matrix is relative to the parent of the top of its bone chain (the skin's
  *    skeleton node, or a scene root): the loader parents the skinned mesh there, under its
  *    __root__ node whose handedness flip therefore reaches the mesh through its world matrix,
- *    never through the bones.
+ *    never through the bones;
+ *  - a loop's rows end on a closing row, the pose at its end (Babylon plays from..to once, then
+ *    from + 1..to).
  * Any layout and precision decode to float matrices; float mat4 palettes hold them exactly. */
 #ifndef CB_BABYLON_WRITE_H
 #define CB_BABYLON_WRITE_H
@@ -24,8 +26,10 @@ extern "C" {
  * nodes on their chains); 0 when out of memory. */
 uint32_t cb_babylon_bone_count(const cb_model *model, int32_t skin);
 
+/* in_place: the palette was baked with root motion in place (a loop's closing row then moves
+ * by the root's vertical travel alone). */
 cb_status cb_babylon_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
-                           float speed_reference, cb_error *err);
+                           float speed_reference, bool in_place, cb_error *err);
 
 #ifdef __cplusplus
 }
