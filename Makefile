@@ -216,11 +216,12 @@ ARGS_replay_catalog := tests/fuzz/regressions/catalog catalog.example.toml sampl
 # JSON schema validator (tests/validator); Godot 4.6's web build and playwright-core to drive
 # the system's Chromium (tests/godot); ktx-parse and three.js, which read KTX2 palettes back
 # (tests/ktx2); playwright-core again for the web runtime's browser tests and the crowd benchmark
-# (tests/browser); three.js and fzstd for the web runtime itself (web/: the viewer, the three.js
+# (tests/browser); Babylon.js, which bakes Cow itself to check crowdbake's .bvat.json
+# (tests/babylon); three.js and fzstd for the web runtime itself (web/: the viewer, the three.js
 # drop-in). Installed here, once, before any test runs.
 NODE_DEPS := tests/validator/node_modules/.package-lock.json tests/godot/node_modules/.package-lock.json \
              tests/ktx2/node_modules/.package-lock.json tests/browser/node_modules/.package-lock.json \
-             web/node_modules/.package-lock.json
+             tests/babylon/node_modules/.package-lock.json web/node_modules/.package-lock.json
 tests/%/node_modules/.package-lock.json: tests/%/package-lock.json
 	cd tests/$* && npm ci --no-audit --no-fund --loglevel=error
 web/node_modules/.package-lock.json: web/package-lock.json

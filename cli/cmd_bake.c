@@ -12,7 +12,7 @@
 #include "cli.h"
 
 const char cmd_bake_usage[] =
-    "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2 [options]\n"
+    "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2|OUT.bvat.json [options]\n"
     "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--out-dir DIR] [--json]\n"
     "                      [-q] [--sync STATE=speed|time,...] [--default-state STATE]\n"
     "                      [--fps N|auto] [--max-error MM_PER_M] [--max-fps N] [--fit-rows] [--allow-over-budget]\n"
@@ -31,10 +31,14 @@ const char cmd_bake_usage[] =
     "deps = gcc (CMake's DEPFILE) wants it. --sync STATE=speed|time|auto (comma-separated) and\n"
     "--default-state STATE replace the catalog's word on those states in every animal that has\n"
     "them: whether a state follows the instance's speed, and the state a herd spawns in.\n\n"
-    "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md), .exr (OpenEXR) or .ktx2\n"
-    "                             (uncompressed KTX2, RGBA16F/RGBA32F); another extension is refused\n"
-    "  --format pal,exr,ktx2      write these formats (OUT's extension is replaced per format; each\n"
-    "                             keeps its own default precision unless --precision is given)\n"
+    "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md), .exr (OpenEXR), .ktx2\n"
+    "                             (uncompressed KTX2, RGBA16F/RGBA32F) or .bvat.json (Babylon.js's\n"
+    "                             baked vertex animation data and clip table, docs/babylon.md);\n"
+    "                             another extension is refused\n"
+    "  --format F                 a comma-separated set of pal, exr, ktx2 and babylon (.bvat.json): write\n"
+    "                             these formats (OUT's extension is replaced per format; each keeps\n"
+    "                             its own default precision unless --precision is given; babylon is\n"
+    "                             always float mat4)\n"
     "  --fps N|auto               baked frames per second; default auto: per clip, the fewest rows whose\n"
     "                             visible error (at the rows and between them, as the runtime blends\n"
     "                             them) stays within --max-error, fitted or sampled (ties: sampled),\n"
@@ -136,7 +140,7 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
         return cli_usage_error("bake", "--root-motion is keep or in-place");
     if (a->root_motion) s->from.root_motion = CB_FROM_COMMAND_LINE;
     if (a->format && !(s->formats = cb_formats_parse(a->format)))
-        return cli_usage_error("bake", "--format is pal, exr or pal,exr (any comma-separated set of pal, exr and ktx2), "
+        return cli_usage_error("bake", "--format is pal, exr or pal,exr (any comma-separated set of pal, exr, ktx2 and babylon), "
                                "got '%s'", a->format);
     if (a->exr_compression && !cb_exr_compression_parse(a->exr_compression, &s->exr_compression))
         return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
@@ -186,7 +190,8 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     unsigned formats = a->format ? cb_formats_parse(a->format) : 0;
     if (a->format && !formats) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
     /* KTX2 from a catalog would need its manifest and up-to-date check to learn the format. */
-    if (formats & CB_FORMAT_KTX2) return cli_usage_error("bake", "--format ktx2 is for single models for now; a catalog writes pal and exr");
+    if (formats & (CB_FORMAT_KTX2 | CB_FORMAT_BABYLON))
+        return cli_usage_error("bake", "--format ktx2 and babylon are for single models for now; a catalog writes pal and exr");
     if (a->zstd && a->format && !(cb_formats_parse(a->format) & CB_FORMAT_PAL))
         return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
     cb_bake_settings over;
@@ -222,7 +227,10 @@ static void json_output(cb_json *j, const cb_bake_output *out, double seconds, d
     const cb_palette *p = &out->palette;
     cb_json_object(j, NULL);
     cb_json_string(j, "path", out->path);
-    cb_json_string(j, "format", out->format == CB_FORMAT_PAL ? "pal" : out->format == CB_FORMAT_EXR ? "exr" : "ktx2");
+    cb_json_string(j, "format", out->format == CB_FORMAT_PAL  ? "pal"
+                                : out->format == CB_FORMAT_EXR  ? "exr"
+                                : out->format == CB_FORMAT_KTX2 ? "ktx2"
+                                                                : "babylon");
     cb_json_int(j, "bytes", (long long)out->file_bytes);
     cb_json_int(j, "texture_bytes", (long long)p->texel_bytes); /* as uploaded: what a catalog's log and report give */
     cb_json_int(j, "width", p->width);
@@ -360,11 +368,12 @@ static int output_formats(const bake_args *a, unsigned *formats)
     if (a->format) return 0; /* parse_settings read it */
     const char *dot = strrchr(a->output, '.'), *slash = strrchr(a->output, '/');
     const char *ext = dot && (!slash || dot > slash) ? dot : "";
-    *formats = strcmp(ext, ".exr") == 0    ? CB_FORMAT_EXR
+    *formats = ends_with(a->output, ".bvat.json") ? CB_FORMAT_BABYLON
+               : strcmp(ext, ".exr") == 0    ? CB_FORMAT_EXR
                : strcmp(ext, ".ktx2") == 0 ? CB_FORMAT_KTX2
                : strcmp(ext, ".pal") == 0 || !ext[0] ? CB_FORMAT_PAL : 0;
     if (!*formats)
-        return cli_usage_error("bake", "%s: unknown output extension '%s'; write OUT.pal, OUT.exr or OUT.ktx2, or give "
+        return cli_usage_error("bake", "%s: unknown output extension '%s'; write OUT.pal, OUT.exr, OUT.ktx2 or OUT.bvat.json, or give "
                                "--format pal,exr", a->output, ext);
     return 0;
 }
@@ -379,6 +388,9 @@ static int single_model_checks(const bake_args *a, cb_bake_settings *s)
     if (!cb_bake_settings_writable(s) && (s->formats & CB_FORMAT_EXR))
         return cli_usage_error("bake", "EXR holds half or float texels; use --precision half|float%s",
                                want_pal ? " (or write only the .pal)" : "");
+    if (!cb_bake_settings_writable(s) && (s->formats & CB_FORMAT_BABYLON))
+        return cli_usage_error("bake", "Babylon.js's baked vertex animation data is Float32 matrices, never u16; leave "
+                               "--precision out%s", want_pal ? " (or write only the .pal)" : "");
     if (!cb_bake_settings_writable(s))
         return cli_usage_error("bake", "KTX2 palettes hold half or float texels (RGBA16F, RGBA32F; common KTX2 loaders "
                                "refuse u16's RGBA16UI); use --precision half|float%s", want_pal ? " (or write only the .pal)" : "");
@@ -465,10 +477,12 @@ int cmd_bake(int argc, char **argv)
     cb_model *m = cli_load_model(a.model, &limits, &err);
     if (!m) return cli_report(&err);
     double load = now_seconds() - t0;
-    char pal_path[4096], exr_path[4096], ktx2_path[4096];
+    char pal_path[4096], exr_path[4096], ktx2_path[4096], babylon_path[4096];
     snprintf(pal_path, sizeof pal_path, "%s", a.output);
     snprintf(exr_path, sizeof exr_path, "%s", a.output);
     snprintf(ktx2_path, sizeof ktx2_path, "%s", a.output);
+    snprintf(babylon_path, sizeof babylon_path, "%s", a.output);
+    if (a.format && !ends_with(a.output, ".bvat.json")) output_path(a.output, "bvat.json", babylon_path, sizeof babylon_path);
     if (a.format) {
         output_path(a.output, "pal", pal_path, sizeof pal_path), output_path(a.output, "exr", exr_path, sizeof exr_path);
         output_path(a.output, "ktx2", ktx2_path, sizeof ktx2_path);
@@ -477,7 +491,7 @@ int cmd_bake(int argc, char **argv)
     memset(&job, 0, sizeof job);
     job.model = m, job.skin = cli_pick_skin(m, a.skin, &err);
     job.settings = settings, job.limits = limits, job.threads = threads, job.speed_reference = speed_ref;
-    job.pal_path = pal_path, job.exr_path = exr_path, job.ktx2_path = ktx2_path;
+    job.pal_path = pal_path, job.exr_path = exr_path, job.ktx2_path = ktx2_path, job.babylon_path = babylon_path;
     cb_clip_plan *selection = NULL;
     cb_bake_result result = {0};
     if (job.skin >= 0 && !cli_select_clips(m, a.clips, a.excluded, &selection, &job.clip_count, &err) &&

@@ -39,7 +39,7 @@ _crowdbake()
     case $prev in
     --layout) COMPREPLY=($(compgen -W "mat4 affine qpos" -- "$cur")); return ;;
     --precision) COMPREPLY=($(compgen -W "float half u16" -- "$cur")); return ;;
-    --format) COMPREPLY=($(compgen -W "pal exr ktx2 pal,exr pal,exr,ktx2" -- "$cur")); return ;;
+    --format) COMPREPLY=($(compgen -W "pal exr ktx2 babylon pal,exr pal,exr,ktx2 pal,babylon" -- "$cur")); return ;;
     --max-influences) COMPREPLY=($(compgen -W "1 2 4" -- "$cur")); return ;;
     --root-motion) COMPREPLY=($(compgen -W "keep in-place" -- "$cur")); return ;;
     --exr-compression) COMPREPLY=($(compgen -W "none rle zips zip piz" -- "$cur")); return ;;

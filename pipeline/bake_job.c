@@ -10,6 +10,7 @@
 #include "../formats/crowdbake_pal.h" /* XXH64 */
 #include "crowdbake/exr.h"
 #include "crowdbake/ktx2.h"
+#include "crowdbake/babylon.h"
 #include "crowdbake/pal_write.h"
 #include "../src/palette_bake.h" /* palette_choose_rates, the search's poses kept for the bake */
 #include "../src/pose_cache.h"
@@ -54,12 +55,12 @@ const char *cb_root_motion_name(cb_root_motion root_motion)
 unsigned cb_formats_parse(const char *text)
 {
     if (strcmp(text, "both") == 0) return CB_FORMAT_PAL | CB_FORMAT_EXR;
-    static const char *const names[3] = {"pal", "exr", "ktx2"};
+    static const char *const names[4] = {"pal", "exr", "ktx2", "babylon"};
     unsigned formats = 0;
     for (const char *w = text;; ++w) {
         size_t n = strcspn(w, ",");
         unsigned bit = 0;
-        for (unsigned k = 0; k < 3; ++k)
+        for (unsigned k = 0; k < 4; ++k)
             if (strlen(names[k]) == n && strncmp(w, names[k], n) == 0) bit = 1u << k;
         if (!bit || (formats & bit)) return 0;
         formats |= bit;
@@ -73,7 +74,7 @@ bool cb_max_fps_valid(double max_fps) { return max_fps >= CB_MAX_FPS_LOWEST && m
 
 bool cb_bake_settings_writable(const cb_bake_settings *s)
 {
-    return !((s->formats & (CB_FORMAT_EXR | CB_FORMAT_KTX2)) && s->precision_set && s->precision == CB_PRECISION_U16);
+    return !((s->formats & (CB_FORMAT_EXR | CB_FORMAT_KTX2 | CB_FORMAT_BABYLON)) && s->precision_set && s->precision == CB_PRECISION_U16);
 }
 
 cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned format, const cb_limits *limits,
@@ -91,6 +92,8 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
     o.affine_fallback = !s->layout_set; /* a rig qpos cannot hold bakes affine, unless a layout was asked for */
     o.fit = s->fit_rows;
     o.measure_all = s->measure_all;
+    /* Babylon.js's baked vertex animation texture holds Float32 4x4 matrices: bake them exactly so. */
+    if (format == CB_FORMAT_BABYLON) o.layout = CB_LAYOUT_MAT4, o.precision = CB_PRECISION_FLOAT, o.affine_fallback = false;
     return o;
 }
 
@@ -98,7 +101,10 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
 static unsigned first_format(const cb_bake_job *job)
 {
     unsigned f = job->settings.formats;
-    return (f & CB_FORMAT_PAL) || !f ? CB_FORMAT_PAL : (f & CB_FORMAT_EXR) ? CB_FORMAT_EXR : CB_FORMAT_KTX2;
+    return (f & CB_FORMAT_PAL) || !f ? CB_FORMAT_PAL
+           : (f & CB_FORMAT_EXR)     ? CB_FORMAT_EXR
+           : (f & CB_FORMAT_KTX2)    ? CB_FORMAT_KTX2
+                                     : CB_FORMAT_BABYLON;
 }
 
 /* ---- the input hash ---- */
@@ -241,8 +247,11 @@ static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pa
     } else if (out->format == CB_FORMAT_EXR) {
         cb_exr_write(out->path, p, job->model, job->skin, job->settings.exr_compression, out->input_hash,
                      (float)job->speed_reference, err);
-    } else {
+    } else if (out->format == CB_FORMAT_KTX2) {
         cb_ktx2_write(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference, err);
+    } else {
+        cb_babylon_write(out->path, p, job->model, job->skin, (float)job->speed_reference,
+                         job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE, err);
     }
     out->seconds_write = now_seconds() - t0;
     struct stat st;
@@ -318,8 +327,8 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     cb_sampler *s = cb_sampler_create(job->model, job->skin, err);
     if (!s) return free(baked), err->status;
     cb_release_free_memory(); /* before the palette's buffers: the load's freed memory */
-    static const unsigned formats[3] = {CB_FORMAT_PAL, CB_FORMAT_EXR, CB_FORMAT_KTX2};
-    const char *paths[3] = {job->pal_path, job->exr_path, job->ktx2_path};
+    static const unsigned formats[4] = {CB_FORMAT_PAL, CB_FORMAT_EXR, CB_FORMAT_KTX2, CB_FORMAT_BABYLON};
+    const char *paths[4] = {job->pal_path, job->exr_path, job->ktx2_path, job->babylon_path};
     cb_palette shared = {0}; /* the last palette baked, written again by a format of the same options */
     cb_bake_options shared_opt = {0};
     /* A lone uncompressed .pal is baked into its own file's payload, mapped: no copy to write,
@@ -328,14 +337,14 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     cb_pal_mapping mapping;
     cb_pal_mapping_init(&mapping, job->pal_path, job->model, job->skin);
     bool mapped = job->settings.formats == CB_FORMAT_PAL && !job->settings.zstd && job->pal_path, replanned = false;
-    for (int f = 0; f < 3 && !err->status; ++f) {
+    for (int f = 0; f < 4 && !err->status; ++f) {
         if (!(job->settings.formats & formats[f])) continue;
         cb_bake_output *o = &out->outputs[out->output_count];
         o->format = formats[f];
         o->path = paths[f];
         cb_bake_options opt = cb_bake_settings_options(&job->settings, formats[f], &job->limits, job->threads);
         if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
-        if (!shared.texels || shared_opt.precision != opt.precision) {
+        if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout) {
             cb_palette_free(&shared);
             palette_probe kept = {NULL, NULL, job->search_poses}; /* what the rate search sampled */
             resolved_plan(job, baked);

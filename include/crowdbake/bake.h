@@ -23,7 +23,7 @@
 extern "C" {
 #endif
 
-enum { CB_FORMAT_PAL = 1u, CB_FORMAT_EXR = 2u, CB_FORMAT_KTX2 = 4u };
+enum { CB_FORMAT_PAL = 1u, CB_FORMAT_EXR = 2u, CB_FORMAT_KTX2 = 4u, CB_FORMAT_BABYLON = 8u };
 
 /* The rates a setting may take: fps in (0, CB_FPS_LIMIT] (core.h); an auto rate's ceiling
  * (max_fps) in [CB_MAX_FPS_LOWEST, CB_FPS_LIMIT]. */
@@ -72,7 +72,7 @@ cb_bake_settings cb_default_bake_settings(void);
 /* "keep" or "in-place". */
 bool cb_root_motion_parse(const char *text, cb_root_motion *out);
 const char *cb_root_motion_name(cb_root_motion root_motion);
-/* A comma-separated set of "pal", "exr" and "ktx2" (each once), or "both" (pal and exr):
+/* A comma-separated set of "pal", "exr", "ktx2" and "babylon" (each once), or "both" (pal and exr):
  * CB_FORMAT_* bits, 0 when it is none of those. */
 unsigned cb_formats_parse(const char *text);
 /* 0 < fps <= CB_FPS_LIMIT; CB_MAX_FPS_LOWEST <= max_fps <= CB_FPS_LIMIT. */
@@ -121,6 +121,7 @@ typedef struct cb_bake_job {
     uint32_t threads;               /* clips sampled in parallel (0: 1); the bytes do not depend on it */
     double speed_reference;         /* recorded in the files */
     const char *pal_path, *exr_path, *ktx2_path; /* the files settings.formats asks for */
+    const char *babylon_path;       /* .bvat.json: Babylon.js's baked vertex animation data (babylon.h) */
     const cb_bake_origin *origin;   /* a catalog type, or NULL */
     /* Filled by cb_bake_job_plan (cb_bake_job_run calls it when it was not): the clips with
      * their rates, and for each clip chosen by error what its rate reached. */
@@ -136,7 +137,7 @@ typedef struct cb_bake_job {
 
 /* One file written. */
 typedef struct cb_bake_output {
-    unsigned format;        /* CB_FORMAT_PAL, CB_FORMAT_EXR or CB_FORMAT_KTX2 */
+    unsigned format;        /* CB_FORMAT_PAL, CB_FORMAT_EXR, CB_FORMAT_KTX2 or CB_FORMAT_BABYLON */
     const char *path;
     uint64_t file_bytes;
     uint64_t input_hash;    /* recorded in the file */
@@ -148,7 +149,7 @@ typedef struct cb_bake_output {
 
 typedef struct cb_bake_result {
     uint32_t output_count;
-    cb_bake_output outputs[3]; /* .pal, .exr, .ktx2, those asked for */
+    cb_bake_output outputs[4]; /* .pal, .exr, .ktx2, .bvat.json, those asked for */
     cb_warnings notes;         /* the layout's fallback, loops that travel, quaternion flips, clips over budget */
     cb_clip_budget *budgets;   /* per planned clip, as the first format's palette measured it (also when the bake
                                 * failed for a clip over budget) */

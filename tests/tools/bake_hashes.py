@@ -2,7 +2,8 @@
 """bake_hashes.py [--write] [--build DIR] [--shared DIR]: the bytes every bake writes, pinned.
 
 Bakes every bundled sample and every shared asset in several formats (.pal, .pal with zstd,
-.exr, mat4/half, affine/float; --fps auto and .pal + .exr + .ktx2 on the samples and Fox), `inspect --json` of each
+.exr, mat4/half, affine/float; --fps auto and .pal + .exr + .ktx2 on the samples and Fox; .bvat.json on
+the samples, Fox and Cow), `inspect --json` of each
 default .pal, and the sample catalog (palettes, roster.json, depfile, with a --format pal,exr
 override too), then compares the sha256 of every file with tests/bake_hashes.txt. A model that
 does not bake is recorded by its exit code. `make check` runs this (normal build only), so a
@@ -29,6 +30,7 @@ VARIANTS = [
                           '--fps', '30']),
 ]
 KTX2 = ('pal-exr-ktx2', ['-o', '{out}.pal', '--format', 'pal,exr,ktx2', '--precision', 'half', '--fps', '30'])
+BABYLON = ('babylon', ['-o', '{out}.bvat.json', '--fps', '30'])  # Babylon.js's baked vertex animation data
 # The default bake (no --fps: error-bounded within 1 mm/m, rows fitted or sampled per clip), kept
 # and in place; a model whose clips cannot meet the budget is recorded by its exit code (6), and
 # the other variants still run.
@@ -62,6 +64,7 @@ def bake_models(crowdbake, build, shared, tmp, out):
     for model in models(build, shared):
         key = key_of(model, shared)
         variants = VARIANTS + ([KTX2] if key.startswith('samples/') or key.endswith('fox-bevy/Fox.glb') else [])
+        variants += [BABYLON] if key.startswith('samples/') or key.endswith(('Fox.glb', 'Cow.glb')) else []
         for name, args in variants + ERROR_BOUNDED:
             d = os.path.join(tmp, key.replace('/', '_'), name)
             os.makedirs(d)
