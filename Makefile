@@ -188,7 +188,7 @@ demo: all
 # sanitizer passes run side by side.
 TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(shell pkg-config --cflags cmocka 2>/dev/null)
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
-$(BUILD)/tests/%: tests/%.c tests/testutil.h $(BUILD)/libcrowdbake.a
+$(BUILD)/tests/%: tests/%.c tests/testutil.h tests/view_server.h $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TEST_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
