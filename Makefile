@@ -6,7 +6,8 @@
 #   make bench    benchmarks (not part of check)
 #   make deps     install the Debian packages the build needs (as root; prints the command otherwise)
 #   make install  PREFIX=/usr/local DESTDIR=: the command, libcrowdbake (static and shared), its headers,
-#                 crowdbake.pc, the CMake package, the man page and the bash/zsh completions
+#                 crowdbake.pc, the CMake package, the man page, the bash/zsh completions and what
+#                 `crowdbake view` serves (DATADIR/crowdbake/web: the viewer, three.js and fzstd)
 
 .SUFFIXES:
 .DELETE_ON_ERROR:
@@ -67,7 +68,7 @@ CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: all install deps demo check check-normal check-asan check-shared test test-asan test-runs readme bake-hashes bench \
+.PHONY: all install install-web deps demo check check-normal check-asan check-shared test test-asan test-runs readme bake-hashes bench \
         bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
@@ -146,7 +147,7 @@ MANDIR     ?= $(DATADIR)/man
 INSTALL_SED = -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@BINDIR@|$(BINDIR)|g' -e 's|@LIBDIR@|$(LIBDIR)|g' \
   -e 's|@INCLUDEDIR@|$(INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' -e 's|@SONAME@|$(SONAME)|g' \
   -e 's|@API_MAJOR@|$(API_MAJOR)|g'
-install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME)
+install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) install-web
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(LIBDIR)/cmake/crowdbake \
 	  $(DESTDIR)$(INCLUDEDIR)/crowdbake $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(DATADIR)/bash-completion/completions \
 	  $(DESTDIR)$(DATADIR)/zsh/site-functions
@@ -164,6 +165,22 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME)
 	install -m 644 completions/crowdbake.bash $(DESTDIR)$(DATADIR)/bash-completion/completions/crowdbake
 	install -m 644 completions/_crowdbake $(DESTDIR)$(DATADIR)/zsh/site-functions/_crowdbake
 
+# What the installed `crowdbake view` serves: it looks for BIN/../share/crowdbake/web (so
+# DATADIR is PREFIX/share for it to be found; else CROWDBAKE_WEB=DIR): the viewer, the palette
+# shader beside it as in the source tree, and the pinned three.js (its module build and the
+# addons the viewer imports from) and fzstd, from web/package-lock.json.
+WEBDIR = $(DATADIR)/crowdbake/web
+THREE  = web/node_modules/three
+install-web: web/node_modules/.package-lock.json
+	install -d $(DESTDIR)$(WEBDIR)/node_modules/three/build $(DESTDIR)$(WEBDIR)/node_modules/three/examples \
+	  $(DESTDIR)$(DATADIR)/crowdbake/samples/shaders
+	install -m 644 web/viewer.html web/*.mjs web/serve.py web/package.json web/package-lock.json $(DESTDIR)$(WEBDIR)/
+	install -m 644 $(THREE)/package.json $(THREE)/LICENSE $(DESTDIR)$(WEBDIR)/node_modules/three/
+	install -m 644 $(THREE)/build/three.module.js $(DESTDIR)$(WEBDIR)/node_modules/three/build/
+	cp -R $(THREE)/examples/jsm $(DESTDIR)$(WEBDIR)/node_modules/three/examples/
+	cp -R web/node_modules/fzstd $(DESTDIR)$(WEBDIR)/node_modules/
+	install -m 644 samples/shaders/crowdbake_palette.glsl $(DESTDIR)$(DATADIR)/crowdbake/samples/shaders/
+
 # ---- samples: the project's own rigged animals ----------------------------------------
 $(BUILD)/gen_samples: $(wildcard samples/gen/*.c samples/gen/*.h) $(DEPS_STAMP)
 	@mkdir -p $(@D)
@@ -174,7 +191,8 @@ $(SAMPLE_GLB) &: $(BUILD)/gen_samples
 	$(BUILD)/gen_samples $(BUILD)/samples
 samples: $(SAMPLE_GLB)
 
-demo: all
+# The viewer's npm packages come with the demo where npm is there; else the demo names the command.
+demo: all $(if $(shell command -v npm 2>/dev/null),web/node_modules/.package-lock.json)
 	@mkdir -p $(BUILD)/demo
 	@for s in $(SAMPLES); do $(BUILD)/crowdbake info $(BUILD)/samples/$$s.glb || exit 1; echo; done
 	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.pal --format pal,exr --root-motion in-place \
@@ -182,6 +200,9 @@ demo: all
 	@$(BUILD)/crowdbake inspect $(BUILD)/demo/quadruped.pal
 	@echo
 	$(BUILD)/crowdbake bake samples/catalog.toml
+	@echo
+	@[ -f web/node_modules/.package-lock.json ] || echo "crowdbake view needs three.js and fzstd: apt-get install npm, then make web"
+	@echo "watch the herd in a browser: $(BUILD)/crowdbake view samples/catalog.toml (or put $(BUILD) on PATH)"
 
 # ---- tests ----------------------------------------------------------------------------
 # Each build's tests write under $(BUILD)/tmp-tests (BUILD_DIR), so the normal and the

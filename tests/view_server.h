@@ -46,7 +46,8 @@ static inline int view_start(view_server *s, const char *exe, const char *input,
     return -1;
 }
 
-/* Sends `request` as is to 127.0.0.1:port and reads the answer until the server closes. */
+/* Sends `request` as is to 127.0.0.1:port and reads the answer until the server closes (its
+ * first size - 1 bytes kept). */
 static inline int http_raw(unsigned port, const char *request, char *out, size_t size)
 {
     int fd = socket(AF_INET, SOCK_STREAM, 0);
@@ -60,7 +61,9 @@ static inline int http_raw(unsigned port, const char *request, char *out, size_t
     }
     size_t n = 0;
     ssize_t got;
-    while (n + 1 < size && (got = read(fd, out + n, size - 1 - n)) > 0) n += (size_t)got;
+    char rest[4096]; /* past `size`: read to the end all the same, so the server finishes its answer */
+    while ((got = n + 1 < size ? read(fd, out + n, size - 1 - n) : read(fd, rest, sizeof rest)) > 0)
+        if (n + 1 < size) n += (size_t)got;
     out[n] = 0;
     close(fd);
     return 0;
