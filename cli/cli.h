@@ -105,6 +105,11 @@ cb_status cli_override_loops(const cb_model *model, const char *loops, const cha
 /* Calls fn for each name of a comma-separated list (as --clip takes); stops at, and returns,
  * the first failure. */
 cb_status cli_for_each_name(const char *list, cb_status (*fn)(const char *name, void *ctx), void *ctx);
+/* The one clip-name matcher of every command that takes clip names: the name exactly, else
+ * regardless of case, else the one clip whose name holds it (`--clip walk` for "Armature|Walk").
+ * names[i] lies `stride` bytes after names[i-1] (as cb_closest_name reads them). The index, or
+ * -1 with `why` saying so: "no clip 'X'; did you mean 'Y'?", or the clips an ambiguous name fits. */
+int cli_match_clip(const char *typed, const char *const *names, size_t count, size_t stride, char *why, size_t size);
 /* Whether a comma-separated list (as --clip takes) holds the name. */
 bool cli_list_has(const char *list, const char *name);
 /* "crowdbake: warning: ..." on stderr, one line each (notes too unless !notes, for -q); or a

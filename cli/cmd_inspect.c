@@ -188,13 +188,13 @@ int cmd_inspect(int argc, char **argv)
     unsigned frame = 0;
     cb_error err = {0};
     if (clip_name) {
-        for (uint32_t i = 0; i < f.header.clip_count && clip < 0; ++i) {
-            cbpal_clip c;
-            cbpal_get_clip(&f, i, &c);
-            if (strcmp(c.name, clip_name) == 0) clip = (int)i;
-        }
+        const char **names = calloc(f.header.clip_count + 1, sizeof *names);
         cbpal_clip c;
-        if (clip < 0) cb_fail(&err, CB_ERR_SETTINGS, "%s: has no clip '%s'", path, clip_name);
+        for (uint32_t i = 0; names && i < f.header.clip_count; ++i) cbpal_get_clip(&f, i, &c), names[i] = c.name;
+        char why[512] = "out of memory";
+        if (names) clip = cli_match_clip(clip_name, names, f.header.clip_count, sizeof *names, why, sizeof why);
+        free(names);
+        if (clip < 0) cb_fail(&err, CB_ERR_SETTINGS, "%s: --clip %s: %s", path, clip_name, why);
         else if (!cli_parse_u32(frame_text, &frame) || (cbpal_get_clip(&f, (uint32_t)clip, &c), frame >= c.frames))
             cb_fail(&err, CB_ERR_SETTINGS, "%s: clip '%s' has %u frames; --frame %s is not one of them", path, clip_name,
                     c.frames, frame_text);

@@ -24,25 +24,32 @@ const char cmd_verify_usage[] =
 typedef struct clip_check {
     const cb_palette *p;
     const char *palette, *option;
+    bool *named; /* per palette clip: the list names it */
     cb_error *err;
 } clip_check;
 
-static cb_status palette_has_clip(const char *name, void *ctx)
+static cb_status mark_palette_clip(const char *name, void *ctx)
 {
     const clip_check *c = ctx;
-    for (uint32_t i = 0; i < c->p->clip_count; ++i)
-        if (strcmp(c->p->clips[i].name, name) == 0) return CB_OK;
-    return cb_fail(c->err, CB_ERR_SETTINGS, "%s: %s %s: the palette has no such clip (see 'crowdbake inspect')", c->palette,
-                   c->option, name);
+    char why[512];
+    int i = c->p->clip_count ? cli_match_clip(name, &c->p->clips[0].name, c->p->clip_count, sizeof c->p->clips[0], why,
+                                              sizeof why)
+                             : (snprintf(why, sizeof why, "the palette has no clip"), -1);
+    if (i < 0) return cb_fail(c->err, CB_ERR_SETTINGS, "%s: %s %s: %s (see 'crowdbake inspect')", c->palette, c->option, name, why);
+    c->named[i] = true;
+    return CB_OK;
 }
 
-/* --clip and --exclude-clip name the palette's clips; both at once is an error. */
+/* --clip and --exclude-clip name the palette's clips (cli_match_clip); both at once is an error.
+ * skip[c]: the palette's clip c is not verified. */
 static cb_status check_clip_options(const cb_palette *p, const char *palette, const char *clips, const char *excluded,
-                                    cb_error *err)
+                                    bool *skip, cb_error *err)
 {
     if (clips && excluded) return cb_fail(err, CB_ERR_SETTINGS, "give --clip or --exclude-clip, not both");
-    clip_check c = {p, palette, clips ? "--clip" : "--exclude-clip", err};
-    return cli_for_each_name(clips ? clips : excluded, palette_has_clip, &c);
+    clip_check c = {p, palette, clips ? "--clip" : "--exclude-clip", skip, err};
+    if (cli_for_each_name(clips ? clips : excluded, mark_palette_clip, &c)) return err->status;
+    for (uint32_t i = 0; clips && i < p->clip_count; ++i) skip[i] = !skip[i]; /* named: verified */
+    return CB_OK;
 }
 
 int cmd_verify(int argc, char **argv)
@@ -66,8 +73,11 @@ int cmd_verify(int argc, char **argv)
     if (cli_open_baked("verify", pos[0], pos[1], &limits, skin_name, &b, &err)) return cli_report(&err);
     const cb_palette *pv = &b.view;
     const cb_model *m = b.model;
-    cb_sampler *s = check_clip_options(pv, pos[1], clips, excluded, &err) ? NULL : cb_sampler_create(m, b.skin, &err);
+    bool *skip = calloc(pv->clip_count + 1, sizeof *skip);
+    if (!skip) cb_fail(&err, CB_ERR_INTERNAL, "out of memory");
+    cb_sampler *s = !skip || check_clip_options(pv, pos[1], clips, excluded, skip, &err) ? NULL : cb_sampler_create(m, b.skin, &err);
     if (!s) {
+        free(skip);
         cli_baked_close(&b);
         return cli_report(&err);
     }
@@ -90,7 +100,7 @@ int cmd_verify(int argc, char **argv)
                "between max", "between mean", "rows mm/m", "between mm/m", "worst vertex @ time");
     }
     for (uint32_t c = 0; c < pv->clip_count && !err.status; ++c) {
-        if ((clips && !cli_list_has(clips, pv->clips[c].name)) || cli_list_has(excluded, pv->clips[c].name)) continue;
+        if (skip[c]) continue;
         int32_t a = cb_model_find_animation(m, pv->clips[c].name);
         if (a < 0) {
             cb_fail(&err, CB_ERR_INPUT, "%s: has no clip '%s' that %s holds; verify the model the palette was baked from",
@@ -131,6 +141,7 @@ int cmd_verify(int argc, char **argv)
         }
     }
     cb_sampler_free(s);
+    free(skip);
     cli_baked_close(&b);
     if (err.status) return cli_report(&err);
     if (max_error >= 0 && cb_mm_per_m(worst, height) > max_error) {

@@ -1,0 +1,182 @@
+/* test_cli_habits.c - the command's habits, as a user of gltfpack, ktx or toktx expects them:
+ * --version/-V, `crowdbake help COMMAND`, `-o -` refused with a message (never a file named
+ * "-"), a .fbx/.obj/.png/.blend named as what it is with the converters to use, and clip names
+ * matched regardless of case and by a unique part, with "did you mean" for a miss and the
+ * candidates for an ambiguity, the same in every command that takes clip names. The clip names
+ * are the shared models' own (Fox: Survey, Walk, Run; the Cow: AnimalArmature|Gallop and
+ * AnimalArmature|Gallop_Jump among others). */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <limits.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "crowdbake/core.h"
+
+#define TMP TEST_TMP "/cli_habits"
+
+static char fox[PATH_MAX], cow[PATH_MAX];
+static char out[1 << 16];
+
+static int setup(void **state)
+{
+    (void)state;
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
+    return system("rm -rf " TMP " && mkdir -p " TMP);
+}
+
+/* Runs `crowdbake ARGS 2>&1`; returns the exit code, the output in out. */
+static int crowdbake(const char *fmt, ...)
+{
+    char args[2048], cmd[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(args, sizeof args, fmt, ap);
+    va_end(ap);
+    snprintf(cmd, sizeof cmd, "%s %s 2>&1", crowdbake_exe(), args);
+    return run_command(cmd, out, sizeof out);
+}
+
+static void assert_contains(const char *needle)
+{
+    if (!strstr(out, needle)) fail_msg("expected \"%s\" in:\n%s", needle, out);
+}
+
+static void test_version_and_help_command(void **state)
+{
+    (void)state;
+    static const char *const version_flags[] = {"--version", "-V"};
+    for (size_t i = 0; i < COUNT_OF(version_flags); ++i) {
+        assert_int_equal(crowdbake("%s", version_flags[i]), 0);
+        assert_string_equal(out, "crowdbake " CROWDBAKE_VERSION "\n");
+    }
+    /* `help COMMAND` is the command's --help, for every command. */
+    static const char *const commands[] = {"info", "sample", "bake", "inspect", "verify", "preview", "mesh", "vat", "report", "view"};
+    static char want[1 << 16];
+    for (size_t i = 0; i < COUNT_OF(commands); ++i) {
+        assert_int_equal(crowdbake("%s --help", commands[i]), 0);
+        snprintf(want, sizeof want, "%s", out);
+        assert_int_equal(crowdbake("help %s", commands[i]), 0);
+        assert_string_equal(out, want);
+        assert_non_null(strstr(out, "usage: crowdbake "));
+    }
+    assert_int_equal(crowdbake("help bkae"), EXIT_USAGE);
+    assert_contains("unknown command 'bkae'; did you mean 'bake'?");
+    assert_int_equal(crowdbake("help"), 0);
+    assert_contains("crowdbake help COMMAND");
+}
+
+/* `-o -` is no file named "-": every command writing files says so and writes nothing. */
+static void test_output_dash_is_refused(void **state)
+{
+    (void)state;
+    char abs_fox[PATH_MAX];
+    assert_non_null(realpath(fox, abs_fox));
+    /* From inside TMP, so a file named "-" would land there. */
+    char exe[PATH_MAX], cmd[3 * PATH_MAX];
+    assert_non_null(realpath(crowdbake_exe(), exe));
+    snprintf(cmd, sizeof cmd, "cd " TMP " && %s bake %s -o - 2>&1", exe, abs_fox);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_USAGE);
+    struct stat st;
+    assert_int_not_equal(stat(TMP "/-", &st), 0);
+    static const char *const commands[][2] = {{"bake", "-o -"}, {"bake", "--output=-"}, {"vat", "-o -"}, {"mesh", "-o -"}};
+    for (size_t i = 0; i < COUNT_OF(commands); ++i) {
+        assert_int_equal(crowdbake("%s %s %s", commands[i][0], abs_fox, commands[i][1]), EXIT_USAGE);
+        assert_contains(": writes no standard output");
+        assert_contains("name a file, e.g. ");
+        assert_int_equal(strchr(out, '\n'), out + strlen(out) - 1); /* one line */
+    }
+}
+
+/* What artists export before glTF is named, by its first bytes or else its name, with the way
+ * to convert it; never "not a valid glTF 2.0 file: Root element is not a JSON object". */
+static void test_other_formats_are_named_with_their_converters(void **state)
+{
+    (void)state;
+    write_text(TMP "/cow.fbx", "Kaydara FBX Binary  \x1a");
+    write_text(TMP "/cow_ascii.fbx", "; FBX 7.4.0 project file\n");
+    write_text(TMP "/fbx_named_model", "Kaydara FBX Binary  \x1a"); /* the bytes decide */
+    write_text(TMP "/cow.obj", "# exported\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write_text(TMP "/cow.blend", "BLENDER-v300RENDH");
+    assert_int_equal(system("cp docs/viewer.png " TMP "/cow.png"), 0);
+    static const char *const files[][2] = {{"cow.fbx", "(an FBX file)"}, {"cow_ascii.fbx", "(an FBX file (ASCII))"},
+                                           {"fbx_named_model", "(an FBX file)"}, {"cow.obj", "(a Wavefront OBJ file)"},
+                                           {"cow.blend", "(a Blender .blend file)"}, {"cow.png", "(a PNG image)"}};
+    static const char *const commands[] = {"info", "bake", "sample --fps 10 --json", "vat"};
+    for (size_t i = 0; i < COUNT_OF(files); ++i)
+        for (size_t c = 0; c < COUNT_OF(commands); ++c) {
+            bool writes = strncmp(commands[c], "bake", 4) == 0 || strncmp(commands[c], "vat", 3) == 0;
+            assert_int_equal(crowdbake("%s " TMP "/%s%s", commands[c], files[i][0], writes ? " -o " TMP "/out.pal" : ""),
+                             EXIT_INPUT);
+            assert_contains(": not glTF ");
+            assert_contains(files[i][1]);
+            assert_contains("FBX2glTF");
+            assert_contains("Blender");
+            struct stat st;
+            assert_int_not_equal(stat(TMP "/out.pal", &st), 0);
+        }
+    /* A real glTF with a surprising name is still read. */
+    char cmd[2 * PATH_MAX];
+    snprintf(cmd, sizeof cmd, "cp %s " TMP "/fox.obj", fox);
+    assert_int_equal(system(cmd), 0);
+    assert_int_equal(crowdbake("info " TMP "/fox.obj"), 0);
+    assert_contains("3 clips");
+}
+
+/* A bake's bytes, to compare two spellings of the same clips. */
+static char *bake_bytes(const char *clips, size_t *n)
+{
+    assert_int_equal(crowdbake("bake %s -o " TMP "/clips.pal -q --clip %s", fox, clips), 0);
+    return read_whole_file(TMP "/clips.pal", n);
+}
+
+static void test_clip_names_match_by_case_and_part(void **state)
+{
+    (void)state;
+    /* Case and parts: the same palette as the exact names. */
+    size_t na, nb;
+    char *exact = bake_bytes("Walk,Run", &na), *loose = bake_bytes("walk,RUN", &nb);
+    assert_true(na == nb && memcmp(exact, loose, na) == 0);
+    free(loose);
+    loose = bake_bytes("alk,ru", &nb);
+    assert_true(na == nb && memcmp(exact, loose, na) == 0);
+    free(exact), free(loose);
+    /* The part after an exporter's "Armature|" picks that clip though a longer one holds it. */
+    assert_int_equal(crowdbake("sample %s --fps 2 --json --clip gallop --frame 0", cow), 0);
+    assert_contains("\"name\": \"AnimalArmature|Gallop\",");
+    assert_int_equal(crowdbake("sample %s --fps 2 --json --clip GALLOP_jump --frame 0", cow), 0);
+    assert_contains("\"name\": \"AnimalArmature|Gallop_Jump\",");
+    /* An ambiguity lists the candidates; a miss says what was meant. */
+    assert_int_equal(crowdbake("bake %s -o " TMP "/cow.pal --clip gall", cow), EXIT_USAGE);
+    assert_contains("--clip gall: 'gall' matches 2 clips: 'AnimalArmature|Gallop', 'AnimalArmature|Gallop_Jump'; give more "
+                    "of the name");
+    assert_int_equal(crowdbake("bake %s -o " TMP "/fox.pal --clip wlak", fox), EXIT_USAGE);
+    assert_contains("--clip wlak: no clip 'wlak'; did you mean 'Walk'?");
+    assert_int_equal(crowdbake("vat %s -o " TMP "/cow.exr --clip galop", cow), EXIT_USAGE);
+    assert_contains("no clip 'galop'; did you mean 'AnimalArmature|Gallop'?");
+    assert_int_equal(crowdbake("bake %s -o " TMP "/fox.pal -q --loop survey --one-shot RUN", fox), 0);
+    /* The same matcher for a palette's clips: inspect and verify. */
+    assert_int_equal(crowdbake("bake %s -o " TMP "/fox.pal -q", fox), 0);
+    assert_int_equal(crowdbake("inspect " TMP "/fox.pal --clip walk --frame 0 --json"), 0);
+    assert_contains("\"clip\": \"Walk\"");
+    assert_int_equal(crowdbake("inspect " TMP "/fox.pal --clip wak --frame 0"), EXIT_USAGE);
+    assert_contains("no clip 'wak'; did you mean 'Walk'?");
+    assert_int_equal(crowdbake("verify %s " TMP "/fox.pal --clip walk --random 2", fox), 0);
+    assert_contains("  Walk ");
+    assert_true(!strstr(out, "  Run ") && !strstr(out, "  Survey "));
+    assert_int_equal(crowdbake("verify %s " TMP "/fox.pal --exclude-clip WALK --random 2", fox), 0);
+    assert_true(strstr(out, "  Run ") && strstr(out, "  Survey ") && !strstr(out, "  Walk "));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_version_and_help_command),
+        cmocka_unit_test(test_output_dash_is_refused),
+        cmocka_unit_test(test_other_formats_are_named_with_their_converters),
+        cmocka_unit_test(test_clip_names_match_by_case_and_part),
+    };
+    return cmocka_run_group_tests_name("cli_habits", tests, setup, NULL);
+}
