@@ -68,7 +68,7 @@ CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: all install install-web deps demo check check-normal check-asan check-shared test test-asan test-runs readme bake-hashes bench \
+.PHONY: all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs readme bake-hashes bench \
         bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
@@ -255,6 +255,17 @@ check-shared:
 	third-party models and reference matrices in $(SHARED)/assets and $(SHARED)/reference: clone this repository \
 	beside that folder, or set CROWDBAKE_SHARED=DIR" >&2; exit 1; }
 
+# playwright-core, which drives Chromium for the browser tests (tests/browser, tests/godot), needs
+# Node.js 20; Debian 12's own nodejs is 18, and every browser test would fail on its own with
+# "Playwright requires Node.js 20 or higher". Said once, up front, with the command that gets it.
+NODE_MAJOR_NEEDED := 20
+check-node:
+	@v=$$(node --version 2>/dev/null | sed 's/^v//'); major=$${v%%.*}; have=$${v:+Node.js $$v}; \
+	[ -n "$$major" ] && [ "$$major" -ge $(NODE_MAJOR_NEEDED) ] 2>/dev/null || { echo "crowdbake: the tests need Node.js \
+	$(NODE_MAJOR_NEEDED) or newer (playwright-core, which drives Chromium for the browser tests, requires it); this is \
+	$${have:-no node on PATH} (Debian 12's nodejs is 18). As root: curl -fsSL \
+	https://deb.nodesource.com/setup_$(NODE_MAJOR_NEEDED).x | bash - && apt-get install -y nodejs" >&2; exit 1; }
+
 # One test run: its output comes in one piece (make -O) and its outcome goes to
 # $(BUILD)/tests/results: NAME.pending before it runs, NAME.passed or NAME.failed after, so
 # the summary also counts a program that never ran (its build failed) as failed. The .run files
@@ -308,12 +319,12 @@ SANITIZE := BUILD=build/asan OPT=-O1 SAN="-fsanitize=address,undefined -fno-omit
 # upstream after GCC 13 / LLVM 16).
 ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:intercept_tls_get_addr=0 UBSAN_OPTIONS=print_stacktrace=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp
 
-test: deps check-shared $(NODE_DEPS)
+test: deps check-shared check-node $(NODE_DEPS)
 	@rm -rf $(RESULTS)
 	@$(MAKE) --no-print-directory $(PARALLEL) test-runs || true
 	$(call test_summary,$(BUILD))
 
-test-asan: deps check-shared $(NODE_DEPS)
+test-asan: deps check-shared check-node $(NODE_DEPS)
 	@rm -rf build/asan/tests/results
 	@$(ASAN_ENV) $(MAKE) --no-print-directory $(PARALLEL) $(SANITIZE) test-runs || true
 	$(call test_summary,build/asan)
@@ -367,7 +378,7 @@ bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
 
 # The normal and the sanitizer builds and their tests, side by side on every core.
-check: deps check-shared $(NODE_DEPS)
+check: deps check-shared check-node $(NODE_DEPS)
 	@rm -rf $(BUILD)/tests/results build/asan/tests/results
 	@$(MAKE) --no-print-directory $(PARALLEL) check-normal check-asan || true
 	$(call test_summary,$(BUILD) build/asan)

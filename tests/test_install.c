@@ -264,6 +264,21 @@ static void test_cmake_roster_rebakes_only_what_changed(void **state)
     ninja_build(dir, false);
 }
 
+/* On Debian 12's own Node.js 18 the tests stop before any runs, saying which Node.js they need
+ * and the command that gets it (instead of every browser test failing in playwright-core). */
+static void test_make_check_names_the_node_it_needs(void **state)
+{
+    (void)state;
+    assert_int_equal(system("mkdir -p " TMP "/node18 && printf '#!/bin/sh\\necho v18.19.0\\n' > " TMP "/node18/node && "
+                            "chmod +x " TMP "/node18/node"), 0);
+    static char out[65536];
+    assert_int_not_equal(sh(out, sizeof out, "PATH=%s/" TMP "/node18:$PATH make --no-print-directory check-node", root), 0);
+    if (!strstr(out, "need Node.js 20 or newer") || !strstr(out, "this is Node.js 18.19.0") ||
+        !strstr(out, "https://deb.nodesource.com/setup_20.x | bash - && apt-get install -y nodejs"))
+        fail_msg("%s", out);
+    assert_int_equal(sh(out, sizeof out, "make --no-print-directory check-node"), 0); /* this machine's own node */
+}
+
 /* Whether `text` holds `word` with no letter, digit or '-' right before or after it. */
 static bool has_word(const char *text, const char *word)
 {
@@ -339,6 +354,7 @@ int main(void)
         cmocka_unit_test(test_cmake_program_bakes_fox),
         cmocka_unit_test_teardown(test_installed_view_serves_the_viewer, stop_server),
         cmocka_unit_test(test_cmake_roster_rebakes_only_what_changed),
+        cmocka_unit_test(test_make_check_names_the_node_it_needs),
         cmocka_unit_test(test_man_page_and_completions),
         cmocka_unit_test(test_cli_uses_only_the_public_headers),
     };
