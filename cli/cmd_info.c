@@ -68,6 +68,53 @@ static void print_slide(int w, const cb_stride *st)
            st->slide_mean > CB_SLIDE_WARN ? " (the asset's feet slide at any rate)" : "");
 }
 
+/* A mesh node's primitives: primitives[first, end) (the loader keeps a node's together). */
+typedef struct mesh_run {
+    uint32_t first, end;
+} mesh_run;
+
+static mesh_run node_primitives(const cb_model *m, uint32_t first)
+{
+    mesh_run r = {first, first + 1};
+    while (r.end < m->primitive_count && m->primitives[r.end].node == m->primitives[first].node) ++r.end;
+    return r;
+}
+
+/* Whether two nodes draw the same mesh: the same primitives, vertex for vertex (what an
+ * exporter writes for instances of one mesh). */
+static bool same_mesh(const cb_model *m, mesh_run a, mesh_run b)
+{
+    if (a.end - a.first != b.end - b.first) return false;
+    for (uint32_t i = 0; i < a.end - a.first; ++i) {
+        const cb_primitive *x = &m->primitives[a.first + i], *y = &m->primitives[b.first + i];
+        if (x->vertex_count != y->vertex_count || x->index_count != y->index_count || x->skin != y->skin ||
+            !x->normals != !y->normals || memcmp(x->positions, y->positions, (size_t)x->vertex_count * 3 * sizeof(float)))
+            return false;
+    }
+    return true;
+}
+
+/* One line per mesh node (its primitives summed), and one for a row of nodes drawing the same
+ * mesh: "mesh nodes 'a' .. 'b' (12 nodes, one mesh): ..." rather than a line each. */
+static void print_mesh_nodes(const cb_model *m)
+{
+    for (uint32_t p = 0; p < m->primitive_count;) {
+        mesh_run first = node_primitives(m, p), last = first;
+        uint32_t nodes = 1, vertices = 0, indices = 0;
+        while (last.end < m->primitive_count && same_mesh(m, first, node_primitives(m, last.end)))
+            last = node_primitives(m, last.end), ++nodes;
+        for (uint32_t i = first.first; i < first.end; ++i) vertices += m->primitives[i].vertex_count, indices += m->primitives[i].index_count;
+        const cb_primitive *pr = &m->primitives[first.first];
+        char prims[32] = "";
+        if (first.end - first.first > 1) snprintf(prims, sizeof prims, "%u primitives, ", first.end - first.first);
+        if (nodes == 1) printf("  mesh node '%s' (node %d): ", m->nodes[pr->node].name, pr->node);
+        else printf("  mesh nodes '%s' .. '%s' (nodes %d .. %d: %u nodes, one mesh): each ", m->nodes[pr->node].name,
+                    m->nodes[m->primitives[last.first].node].name, pr->node, m->primitives[last.first].node, nodes);
+        printf("%s%u vertices, %u indices, skin %d%s\n", prims, vertices, indices, pr->skin, pr->normals ? "" : ", no normals");
+        p = last.end;
+    }
+}
+
 static void print_text(const cb_model *m, int skin, const clip_facts *facts, double fps)
 {
     printf("%s\n", m->source);
@@ -80,11 +127,7 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
                m->nodes[sk->joints[cb_skin_root_joint(m, (int32_t)s)]].name,
                (unsigned long long)cb_model_skin_vertex_count(m, (int32_t)s), (int)s == skin ? " (baked)" : "");
     }
-    for (uint32_t p = 0; p < m->primitive_count; ++p) {
-        const cb_primitive *pr = &m->primitives[p];
-        printf("  mesh node '%s' (node %d): %u vertices, %u indices, skin %d%s\n", m->nodes[pr->node].name, pr->node,
-               pr->vertex_count, pr->index_count, pr->skin, pr->normals ? "" : ", no normals");
-    }
+    print_mesh_nodes(m);
     if (m->ignored_morph_channels)
         printf("  warning: %u morph-weight channel%s ignored (palettes carry joints only)\n", m->ignored_morph_channels,
                m->ignored_morph_channels == 1 ? "" : "s");

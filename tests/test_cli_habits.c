@@ -4,7 +4,8 @@
  * matched regardless of case and by a unique part, with "did you mean" for a miss and the
  * candidates for an ambiguity, the same in every command that takes clip names. The clip names
  * are the shared models' own (Fox: Survey, Walk, Run; the Cow: AnimalArmature|Gallop and
- * AnimalArmature|Gallop_Jump among others). */
+ * AnimalArmature|Gallop_Jump among others); and info's line per mesh node, one for a row of
+ * nodes drawing the same mesh. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
@@ -170,6 +171,38 @@ static void test_clip_names_match_by_case_and_part(void **state)
     assert_true(strstr(out, "  Run ") && strstr(out, "  Survey ") && !strstr(out, "  Walk "));
 }
 
+static int count_lines_with(const char *text, const char *part)
+{
+    int n = 0;
+    for (const char *p = strstr(text, part); p; p = strstr(p + 1, part)) ++n;
+    return n;
+}
+
+/* info: a line per mesh node, not per primitive, and one for nodes drawing the same mesh. The
+ * counts are MANIFEST.md's: the robot has 14 skinned mesh nodes sharing one skin, the Cow 7
+ * primitives on one skinned mesh node. */
+static void test_info_folds_primitives_and_instances(void **state)
+{
+    (void)state;
+    char robot[PATH_MAX], simple[PATH_MAX], cmd[4 * PATH_MAX];
+    shared_path(robot, sizeof robot, "assets/robot-quaternius-raylib/robot.glb");
+    assert_int_equal(crowdbake("info %s", robot), 0);
+    assert_int_equal(count_lines_with(out, "  mesh node "), 14);
+    assert_int_equal(crowdbake("info %s", cow), 0);
+    assert_int_equal(count_lines_with(out, "  mesh node"), 1);
+    assert_contains("  mesh node 'Cow' (node 58): 7 primitives, ");
+    /* SimpleSkin's one mesh drawn by twelve nodes (a herd placed in the file): one line. */
+    shared_path(simple, sizeof simple, "assets/simpleskin-bevy/SimpleSkin.gltf");
+    snprintf(cmd, sizeof cmd, "python3 -c \"import json,sys; g=json.load(open(sys.argv[1])); "
+             "g['nodes'] += [{'name': 'copy%%d' %% i, 'mesh': 0, 'skin': 0} for i in range(11)]; "
+             "g['scenes'][0]['nodes'] += list(range(3, 14)); json.dump(g, open(sys.argv[2], 'w'))\" %s " TMP "/herd.gltf", simple);
+    assert_int_equal(system(cmd), 0);
+    assert_int_equal(crowdbake("info " TMP "/herd.gltf"), 0);
+    assert_int_equal(count_lines_with(out, "  mesh node"), 1);
+    assert_contains("  mesh nodes '");
+    assert_contains(" .. 'copy10' (nodes 0 .. 13: 12 nodes, one mesh): each ");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -177,6 +210,7 @@ int main(void)
         cmocka_unit_test(test_output_dash_is_refused),
         cmocka_unit_test(test_other_formats_are_named_with_their_converters),
         cmocka_unit_test(test_clip_names_match_by_case_and_part),
+        cmocka_unit_test(test_info_folds_primitives_and_instances),
     };
     return cmocka_run_group_tests_name("cli_habits", tests, setup, NULL);
 }
