@@ -16,7 +16,7 @@ _crowdbake_options()
     preview) echo "-o --output --skin --cell --columns $limits" ;;
     vat) echo "-o --output --fps --max-texture-size --root-motion --skin --exr-compression --json --clip --exclude-clip
                 --like $limits" ;;
-    report) echo "--json --markdown --html --no-fail -j --target" ;;
+    report) echo "--json --markdown --html --no-fail -j --target -v --verbose -q --quiet" ;;
     view) echo "--port --open --cache --model" ;;
     mesh) echo "-o --output --palette-model --max-influences --quantize --batch --max-quantization-error --fps --skin
                 --json --type --lod $limits" ;;
@@ -33,7 +33,11 @@ _crowdbake()
     fi
     local commands="info sample bake inspect verify preview vat report mesh view"
     if [[ $cword -eq 1 ]]; then
-        COMPREPLY=($(compgen -W "$commands --help" -- "$cur"))
+        COMPREPLY=($(compgen -W "$commands help --help --version -V" -- "$cur"))
+        return
+    fi
+    if [[ $cword -eq 2 && ${words[1]} == help ]]; then
+        COMPREPLY=($(compgen -W "$commands" -- "$cur"))
         return
     fi
     case $prev in

@@ -171,6 +171,42 @@ static void test_clip_names_match_by_case_and_part(void **state)
     assert_true(strstr(out, "  Run ") && strstr(out, "  Survey ") && !strstr(out, "  Walk "));
 }
 
+/* report bakes for seconds: a line per type on stderr with -v (and on a terminal), none with
+ * -q or when stderr is not a terminal; stdout keeps only the report, so --json still parses.
+ * The types are samples/catalog.toml's. */
+static void test_report_progress(void **state)
+{
+    (void)state;
+    static char err[1 << 16];
+    char cmd[2 * PATH_MAX];
+    snprintf(cmd, sizeof cmd, "%s report samples/catalog.toml --json -v 2>&1 >" TMP "/report.json", crowdbake_exe());
+    assert_int_equal(run_command(cmd, err, sizeof err), 0);
+    static const char *const types[] = {"  bird ", "  fish ", "  goat ", "  sheep "};
+    for (size_t i = 0; i < COUNT_OF(types); ++i)
+        if (!strstr(err, types[i])) fail_msg("no progress line for %s in:\n%s", types[i], err);
+    assert_int_equal(system("python3 -c 'import json; json.load(open(\"" TMP "/report.json\"))'"), 0);
+    static const char *const silent[] = {"--json", "--json -q", "--json -v --quiet"};
+    for (size_t i = 0; i < COUNT_OF(silent); ++i) {
+        snprintf(cmd, sizeof cmd, "%s report samples/catalog.toml %s 2>&1 >/dev/null", crowdbake_exe(), silent[i]);
+        assert_int_equal(run_command(cmd, err, sizeof err), 0);
+        assert_string_equal(err, "");
+    }
+}
+
+/* The completions know `help COMMAND` and --version. */
+static void test_completions_know_help_and_version(void **state)
+{
+    (void)state;
+    assert_int_equal(run_command("bash -c '. completions/crowdbake.bash; COMP_WORDS=(crowdbake help ba); COMP_CWORD=2; "
+                                 "_crowdbake; echo ${COMPREPLY[@]}; COMP_WORDS=(crowdbake --v); COMP_CWORD=1; _crowdbake; "
+                                 "echo ${COMPREPLY[@]}'", out, sizeof out), 0);
+    assert_string_equal(out, "bake\n--version\n");
+    char *zsh = read_whole_file("completions/_crowdbake", NULL);
+    assert_non_null(strstr(zsh, "{-V,--version}"));
+    assert_non_null(strstr(zsh, "  help)"));
+    free(zsh);
+}
+
 static int count_lines_with(const char *text, const char *part)
 {
     int n = 0;
@@ -211,6 +247,8 @@ int main(void)
         cmocka_unit_test(test_other_formats_are_named_with_their_converters),
         cmocka_unit_test(test_clip_names_match_by_case_and_part),
         cmocka_unit_test(test_info_folds_primitives_and_instances),
+        cmocka_unit_test(test_report_progress),
+        cmocka_unit_test(test_completions_know_help_and_version),
     };
     return cmocka_run_group_tests_name("cli_habits", tests, setup, NULL);
 }
