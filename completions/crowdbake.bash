@@ -13,13 +13,13 @@ _crowdbake_options()
     sample) echo "--json --fps --clip --frame --skin --root-motion $limits" ;;
     inspect) echo "--json --clip --frame --no-verify" ;;
     verify) echo "--json --clip --exclude-clip --max-error --random --skin $limits" ;;
-    preview) echo "-o --output --skin --cell --columns $limits" ;;
+    preview) echo "-o --output --skin --cell --columns -q --quiet $limits" ;;
     vat) echo "-o --output --fps --max-texture-size --root-motion --skin --exr-compression --json --clip --exclude-clip
-                --like $limits" ;;
+                --like -q --quiet $limits" ;;
     report) echo "--json --markdown --html --no-fail -j --target -v --verbose -q --quiet" ;;
     view) echo "--port --open --cache --model" ;;
     mesh) echo "-o --output --palette-model --max-influences --quantize --batch --max-quantization-error --fps --skin
-                --json --type --lod $limits" ;;
+                --json --type --lod -q --quiet $limits" ;;
     esac
 }
 

@@ -193,6 +193,27 @@ static void test_report_progress(void **state)
     }
 }
 
+/* -q on the commands that print a summary of what they wrote: nothing printed, the file written. */
+static void test_quiet_writes_without_a_summary(void **state)
+{
+    (void)state;
+    assert_int_equal(crowdbake("bake %s -o " TMP "/q.pal -q", fox), 0);
+    static const char *const commands[][2] = {{"vat %s -o " TMP "/q.exr", TMP "/q.exr"},
+                                              {"mesh %s -o " TMP "/q.glb", TMP "/q.glb"},
+                                              {"preview %s " TMP "/q.pal -o " TMP "/q.png", TMP "/q.png"}};
+    char args[1024];
+    for (size_t i = 0; i < COUNT_OF(commands); ++i)
+        for (int quiet = 0; quiet < 3; ++quiet) {
+            unlink(commands[i][1]);
+            snprintf(args, sizeof args, commands[i][0], fox);
+            assert_int_equal(crowdbake("%s%s", args, quiet == 0 ? "" : quiet == 1 ? " -q" : " --quiet"), 0);
+            struct stat st;
+            assert_int_equal(stat(commands[i][1], &st), 0);
+            if (quiet) assert_string_equal(out, "");
+            else assert_int_equal(strncmp(out, commands[i][1], strlen(commands[i][1])), 0); /* "FILE: what it holds" */
+        }
+}
+
 /* The completions know `help COMMAND` and --version. */
 static void test_completions_know_help_and_version(void **state)
 {
@@ -248,6 +269,7 @@ int main(void)
         cmocka_unit_test(test_clip_names_match_by_case_and_part),
         cmocka_unit_test(test_info_folds_primitives_and_instances),
         cmocka_unit_test(test_report_progress),
+        cmocka_unit_test(test_quiet_writes_without_a_summary),
         cmocka_unit_test(test_completions_know_help_and_version),
     };
     return cmocka_run_group_tests_name("cli_habits", tests, setup, NULL);
