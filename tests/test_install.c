@@ -176,7 +176,7 @@ static void test_installed_view_serves_the_viewer(void **state)
 {
     (void)state;
     if (skip_under_sanitizers()) skip();
-    char away[] = "/tmp/crowdbake-view-XXXXXX", exe[PATH_MAX + 32], fish[PATH_MAX], rel[PATH_MAX], cache[PATH_MAX + 16];
+    char away[] = "/tmp/crowdbake-view-XXXXXX", exe[PATH_MAX + 96], fish[PATH_MAX], rel[PATH_MAX], cache[PATH_MAX + 16];
     if (!mkdtemp(away)) fail_msg("mkdtemp");
     snprintf(rel, sizeof rel, "%s/fish.glb", samples_dir());
     if (!realpath(rel, fish)) fail_msg("%s: missing", rel);
@@ -196,7 +196,7 @@ static void test_installed_view_serves_the_viewer(void **state)
         if (strncmp(answer, "HTTP/1.0 200 ", 13)) fail_msg("GET %s: %.300s", pages[i], answer);
     }
     /* And it is the installed copy that is served, not the source tree's. */
-    char link[PATH_MAX + 32], target[PATH_MAX], want[PATH_MAX + 64];
+    char link[PATH_MAX + 32], target[PATH_MAX], want[PATH_MAX + 128];
     snprintf(link, sizeof link, "%s/site/web", cache);
     ssize_t n = readlink(link, target, sizeof target - 1);
     target[n > 0 ? n : 0] = 0;
