@@ -11,14 +11,14 @@
 
 const char cmd_verify_usage[] =
     "usage: crowdbake verify MODEL PALETTE.pal|.exr [--max-error MM_PER_M] [--random N] [--skin NAME|INDEX] [--json]\n"
-    "                        [--clip A,B | --exclude-clip A,B]\n\n"
+    "                        [--clip A,B | --exclude-clip A,B] [-q]\n\n"
     "Skins the model's mesh from the palette the way the runtime shaders do (two adjacent rows\n"
     "blended, up to 4 weighted bones, loops wrap, one-shots clamp) and compares it with exact float64\n"
     "skinning from the glTF: at every baked frame (the encoding's error), at every mid-frame and at N\n"
     "random times (default 64; the blending's error). Reports per clip the max and mean vertex error\n"
     "in model units and in mm per metre of model height, and the worst vertex and time. Exits 6 when\n"
     "an error exceeds --max-error (mm per metre of height). --clip verifies only the palette's clips\n"
-    "named, --exclude-clip all but those.\n";
+    "named, --exclude-clip all but those. -q prints nothing but why it fails: the exit code says.\n";
 
 
 typedef struct clip_check {
@@ -57,10 +57,11 @@ int cmd_verify(int argc, char **argv)
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     const char *pos[2] = {0}, *max_text = NULL, *random_text = NULL, *skin_name = NULL, *clips = NULL, *excluded = NULL;
-    bool json = false, help;
+    bool json = false, help, quiet[2] = {false, false};
     const cli_option options[] = {{"--max-error", "MM_PER_M", &max_text, NULL}, {"--random", "N", &random_text, NULL},
                                   {"--skin", "NAME|INDEX", &skin_name, NULL}, {"--json", NULL, NULL, &json},
-                                  {"--clip", "A,B", &clips, NULL}, {"--exclude-clip", "A,B", &excluded, NULL}};
+                                  {"--clip", "A,B", &clips, NULL}, {"--exclude-clip", "A,B", &excluded, NULL},
+                                  {"-q", NULL, NULL, &quiet[0]}, {"--quiet", NULL, NULL, &quiet[1]}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], pos, 2, 2, &help);
     if (help) return fputs(cmd_verify_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
@@ -94,7 +95,8 @@ int cmd_verify(int argc, char **argv)
     int name_width = 20; /* the clip column fits the longest name */
     for (uint32_t c = 0; c < pv->clip_count; ++c)
         if ((int)strlen(pv->clips[c].name) > name_width) name_width = (int)strlen(pv->clips[c].name);
-    if (!json) {
+    bool table = !json && !quiet[0] && !quiet[1]; /* -q: only the exit status (and why, over --max-error) */
+    if (table) {
         printf("%s with %s (%s/%s, model height %.4g):\n  %-*s %12s %12s %12s %12s %12s %13s  %s\n", pos[1], pos[0],
                cb_layout_name(pv->layout), cb_precision_name(pv->precision), height, name_width, "clip", "rows max", "rows mean",
                "between max", "between mean", "rows mm/m", "between mm/m", "worst vertex @ time");
@@ -123,7 +125,7 @@ int cmd_verify(int argc, char **argv)
             cb_json_int(&j, "worst_vertex", (long long)e.worst_vertex);
             cb_json_number(&j, "worst_time", e.worst_time);
             cb_json_end(&j);
-        } else {
+        } else if (table) {
             printf("  %-*s %12.4g %12.4g %12.4g %12.4g %12.3f %13.3f  %llu @ %.3f s\n", name_width, pv->clips[c].name, e.quant_max,
                    e.quant_mean, e.interp_max, e.interp_mean, cb_mm_per_m(e.quant_max, height), cb_mm_per_m(e.interp_max, height),
                    (unsigned long long)e.worst_vertex, e.worst_time);
@@ -135,7 +137,7 @@ int cmd_verify(int argc, char **argv)
             cb_json_number(&j, "max_error", worst);
             cb_json_number(&j, "max_error_mm_per_m", cb_mm_per_m(worst, height));
             cb_json_end(&j);
-        } else {
+        } else if (table) {
             printf("  worst %.4g units = %.3f mm per m of height%s\n", worst, cb_mm_per_m(worst, height),
                    max_error >= 0 ? (cb_mm_per_m(worst, height) > max_error ? " — over --max-error" : " — within --max-error") : "");
         }

@@ -12,7 +12,7 @@ _crowdbake_options()
     info) echo "--json --fps --skin $limits" ;;
     sample) echo "--json --fps --clip --frame --skin --root-motion $limits" ;;
     inspect) echo "--json --clip --frame --no-verify" ;;
-    verify) echo "--json --clip --exclude-clip --max-error --random --skin $limits" ;;
+    verify) echo "--json --clip --exclude-clip --max-error --random --skin -q --quiet $limits" ;;
     preview) echo "-o --output --skin --cell --columns -q --quiet $limits" ;;
     vat) echo "-o --output --fps --max-texture-size --root-motion --skin --exr-compression --json --clip --exclude-clip
                 --like -q --quiet $limits" ;;

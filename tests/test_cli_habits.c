@@ -214,6 +214,18 @@ static void test_quiet_writes_without_a_summary(void **state)
         }
 }
 
+/* verify -q: nothing printed when it passes; over --max-error only the one line of why, exit 6. */
+static void test_verify_quiet(void **state)
+{
+    (void)state;
+    assert_int_equal(crowdbake("bake %s -o " TMP "/vq.pal -q", fox), 0);
+    assert_int_equal(crowdbake("verify %s " TMP "/vq.pal --random 2 -q", fox), 0);
+    assert_string_equal(out, "");
+    assert_int_equal(crowdbake("verify %s " TMP "/vq.pal --random 2 --quiet --max-error 0.0001", fox), EXIT_VERIFY);
+    assert_contains("is over --max-error 0.0001");
+    assert_int_equal(strchr(out, '\n'), out + strlen(out) - 1);
+}
+
 /* The completions know `help COMMAND` and --version. */
 static void test_completions_know_help_and_version(void **state)
 {
@@ -270,6 +282,7 @@ int main(void)
         cmocka_unit_test(test_info_folds_primitives_and_instances),
         cmocka_unit_test(test_report_progress),
         cmocka_unit_test(test_quiet_writes_without_a_summary),
+        cmocka_unit_test(test_verify_quiet),
         cmocka_unit_test(test_completions_know_help_and_version),
     };
     return cmocka_run_group_tests_name("cli_habits", tests, setup, NULL);
