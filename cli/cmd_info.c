@@ -10,10 +10,11 @@
 #include "cli.h"
 
 const char cmd_info_usage[] =
-    "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX]\n\n"
+    "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX] [-q]\n\n"
     "Skins, joints, skinned mesh nodes and vertex counts, and per clip: start, duration, keys,\n"
     "interpolation modes, whether it loops and why, frames at --fps (default 30), root velocity and\n"
-    "ground speed (root travel and planted feet).\n";
+    "ground speed (root travel and planted feet). Then, on stderr, the warnings a bake would give\n"
+    "(clips it would leave out, and why); -q leaves them out.\n";
 
 typedef struct clip_facts {
     uint64_t keys;
@@ -258,10 +259,11 @@ int cmd_info(int argc, char **argv)
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     const char *path = NULL, *fps_text = "30", *skin_name = NULL;
-    bool json = false, help;
+    bool json = false, help, quiet[2] = {false, false};
     const cli_option options[] = {
-        {"--json", NULL, NULL, &json}, {"--fps", "N", &fps_text, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL}};
-    int rc = cli_parse(argc, argv, options, 3, &path, 1, 1, &help);
+        {"--json", NULL, NULL, &json}, {"--fps", "N", &fps_text, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL},
+        {"-q", NULL, NULL, &quiet[0]}, {"--quiet", NULL, NULL, &quiet[1]}};
+    int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &path, 1, 1, &help);
     if (help) return fputs(cmd_info_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     double fps;
@@ -282,7 +284,7 @@ int cmd_info(int argc, char **argv)
     if (!facts) cb_fail(&err, CB_ERR_INTERNAL, "out of memory");
     if (!err.status) gather_clips(m, skin, fps, &limits, facts, &err);
     if (!err.status) (json ? print_json : print_text)(m, skin, facts, fps);
-    if (!err.status && !json) { /* what a bake would leave out */
+    if (!err.status && !json && !quiet[0] && !quiet[1]) { /* what a bake would leave out (-q: not said) */
         cb_warnings warnings = {0};
         cb_model_warnings(m, true, &warnings);
         cli_print_warnings(&warnings, false);

@@ -9,7 +9,7 @@ _crowdbake_options()
     bake) echo "-o --output --format --fps --layout --precision --max-texture-size --root-motion --skin
                 --speed-reference --exr-compression --zstd --json -q --quiet -j --threads --force --depfile
                 --manifest --out-dir --depfile-manifest-only --fit-rows --allow-over-budget --measure-all --max-error --max-fps --clip --exclude-clip --loop --one-shot --sync --default-state $limits" ;;
-    info) echo "--json --fps --skin $limits" ;;
+    info) echo "--json --fps --skin -q --quiet $limits" ;;
     sample) echo "--json --fps --clip --frame --skin --root-motion $limits" ;;
     inspect) echo "--json --clip --frame --no-verify" ;;
     verify) echo "--json --clip --exclude-clip --max-error --random --skin -q --quiet $limits" ;;

@@ -226,6 +226,24 @@ static void test_verify_quiet(void **state)
     assert_int_equal(strchr(out, '\n'), out + strlen(out) - 1);
 }
 
+/* info -q: the description without the warnings a bake would give. Magnum's animation.glb has
+ * an empty clip and a channel with no keys (MANIFEST.md: deliberately invalid). */
+static void test_info_quiet(void **state)
+{
+    (void)state;
+    char model[PATH_MAX], cmd[2 * PATH_MAX];
+    shared_path(model, sizeof model, "assets/magnum-animation/animation.glb");
+    snprintf(cmd, sizeof cmd, "%s info %s 2>&1 >/dev/null", crowdbake_exe(), model);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    assert_contains("crowdbake: warning: ");
+    assert_contains("clip 'empty' has no channels");
+    snprintf(cmd, sizeof cmd, "%s info %s -q 2>&1 >/dev/null", crowdbake_exe(), model);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    assert_string_equal(out, "");
+    assert_int_equal(crowdbake("info %s --quiet", model), 0);
+    assert_contains("clip ");
+}
+
 /* The completions know `help COMMAND` and --version. */
 static void test_completions_know_help_and_version(void **state)
 {
@@ -283,6 +301,7 @@ int main(void)
         cmocka_unit_test(test_report_progress),
         cmocka_unit_test(test_quiet_writes_without_a_summary),
         cmocka_unit_test(test_verify_quiet),
+        cmocka_unit_test(test_info_quiet),
         cmocka_unit_test(test_completions_know_help_and_version),
     };
     return cmocka_run_group_tests_name("cli_habits", tests, setup, NULL);
