@@ -89,7 +89,8 @@ static bool same_mesh(const cb_model *m, mesh_run a, mesh_run b)
     for (uint32_t i = 0; i < a.end - a.first; ++i) {
         const cb_primitive *x = &m->primitives[a.first + i], *y = &m->primitives[b.first + i];
         if (x->vertex_count != y->vertex_count || x->index_count != y->index_count || x->skin != y->skin ||
-            !x->normals != !y->normals || memcmp(x->positions, y->positions, (size_t)x->vertex_count * 3 * sizeof(float)))
+            !x->normals != !y->normals ||
+            (x->vertex_count && memcmp(x->positions, y->positions, (size_t)x->vertex_count * 3 * sizeof(float))))
             return false;
     }
     return true;
