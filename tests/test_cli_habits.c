@@ -173,13 +173,19 @@ static void test_clip_names_match_by_case_and_part(void **state)
 
 /* report bakes for seconds: a line per type on stderr with -v (and on a terminal), none with
  * -q or when stderr is not a terminal; stdout keeps only the report, so --json still parses.
- * The types are samples/catalog.toml's. */
+ * The types are samples/catalog.toml's (a copy baking into this test's folder). */
 static void test_report_progress(void **state)
 {
     (void)state;
     static char err[1 << 16];
-    char cmd[2 * PATH_MAX];
-    snprintf(cmd, sizeof cmd, "%s report samples/catalog.toml --json -v 2>&1 >" TMP "/report.json", crowdbake_exe());
+    char cmd[4 * PATH_MAX], cwd[PATH_MAX], samples[PATH_MAX];
+    /* The catalog's copy bakes into this test's folder, the models from this build's samples. */
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    assert_non_null(realpath(samples_dir(), samples));
+    snprintf(cmd, sizeof cmd, "sed -e 's|^out_dir = .*|out_dir = \"%s/" TMP "/roster\"|' -e 's|\"../build/samples/|\"%s/|' "
+             "samples/catalog.toml > " TMP "/catalog.toml", cwd, samples);
+    assert_int_equal(system(cmd), 0);
+    snprintf(cmd, sizeof cmd, "%s report " TMP "/catalog.toml --json -v 2>&1 >" TMP "/report.json", crowdbake_exe());
     assert_int_equal(run_command(cmd, err, sizeof err), 0);
     static const char *const types[] = {"  bird ", "  fish ", "  goat ", "  sheep "};
     for (size_t i = 0; i < COUNT_OF(types); ++i)
@@ -187,7 +193,7 @@ static void test_report_progress(void **state)
     assert_int_equal(system("python3 -c 'import json; json.load(open(\"" TMP "/report.json\"))'"), 0);
     static const char *const silent[] = {"--json", "--json -q", "--json -v --quiet"};
     for (size_t i = 0; i < COUNT_OF(silent); ++i) {
-        snprintf(cmd, sizeof cmd, "%s report samples/catalog.toml %s 2>&1 >/dev/null", crowdbake_exe(), silent[i]);
+        snprintf(cmd, sizeof cmd, "%s report " TMP "/catalog.toml %s 2>&1 >/dev/null", crowdbake_exe(), silent[i]);
         assert_int_equal(run_command(cmd, err, sizeof err), 0);
         assert_string_equal(err, "");
     }
