@@ -273,7 +273,7 @@ int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err)
 
 cli_file_kind cli_file_kind_of(const char *path)
 {
-    unsigned char head[8] = {0};
+    unsigned char head[12] = {0};
     FILE *f = fopen(path, "rb");
     if (!f) return CLI_FILE_MISSING;
     size_t n = fread(head, 1, sizeof head, f);
@@ -281,12 +281,20 @@ cli_file_kind cli_file_kind_of(const char *path)
     static const unsigned char exr_magic[4] = {0x76, 0x2f, 0x31, 0x01};
     if (n >= 8 && memcmp(head, "CBPAL\r\n\x1a", 8) == 0) return CLI_FILE_PAL;
     if (n >= 4 && memcmp(head, exr_magic, 4) == 0) return CLI_FILE_EXR;
+    if (n >= 12 && memcmp(head, "\xabKTX 20\xbb\r\n\x1a\n", 12) == 0) return CLI_FILE_KTX2;
     if (n >= 4 && memcmp(head, "glTF", 4) == 0) return CLI_FILE_MODEL;
     size_t i = 0; /* a .gltf is JSON: an object */
     while (i < n && (head[i] == ' ' || head[i] == '\t' || head[i] == '\r' || head[i] == '\n')) ++i;
     if (i < n && head[i] == '{') return CLI_FILE_MODEL;
     if (n >= 3 && memcmp(head, "\xef\xbb\xbf", 3) == 0) return CLI_FILE_MODEL; /* JSON with a byte-order mark */
     return CLI_FILE_UNKNOWN;
+}
+
+const char *cli_ktx2_not_read(const char *path, const char *command, char *buf, size_t size)
+{
+    snprintf(buf, size, "%s: a KTX2 palette, which '%s' does not read: give it the .pal or .exr of the same bake "
+             "('crowdbake bake MODEL -o OUT.pal --format pal,ktx2' writes both)", path, command);
+    return buf;
 }
 
 static bool is_palette(cli_file_kind k) { return k == CLI_FILE_PAL || k == CLI_FILE_EXR; }
@@ -300,6 +308,9 @@ static cb_status check_kinds(const char *command, const char *model_path, const 
     if (mk != CLI_FILE_MODEL)
         return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a glTF model; 'crowdbake %s MODEL PALETTE' takes the .glb/.gltf "
                        "first", model_path, is_palette(mk) ? "a palette" : "neither glTF nor a palette", command);
+    char ktx2[1024];
+    if (pk == CLI_FILE_KTX2)
+        return cb_fail(err, CB_ERR_SETTINGS, "%s", cli_ktx2_not_read(palette_path, command, ktx2, sizeof ktx2));
     if (!is_palette(pk))
         return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a palette; 'crowdbake %s MODEL PALETTE' takes the .pal or .exr "
                        "that 'crowdbake bake' wrote second", palette_path, pk == CLI_FILE_MODEL ? "a glTF model" : "neither a "

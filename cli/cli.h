@@ -70,8 +70,10 @@ cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *er
 /* The skin a command works on: --skin NAME|INDEX, or the only one; an error otherwise. */
 int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err);
 /* What a file holds, from its first bytes (not its name). */
-typedef enum cli_file_kind { CLI_FILE_UNKNOWN, CLI_FILE_MODEL, CLI_FILE_PAL, CLI_FILE_EXR, CLI_FILE_MISSING } cli_file_kind;
+typedef enum cli_file_kind { CLI_FILE_UNKNOWN, CLI_FILE_MODEL, CLI_FILE_PAL, CLI_FILE_EXR, CLI_FILE_MISSING, CLI_FILE_KTX2 } cli_file_kind;
 cli_file_kind cli_file_kind_of(const char *path);
+/* What to say of a KTX2 palette where a .pal or .exr is read: "PATH: a KTX2 palette, which ..." */
+const char *cli_ktx2_not_read(const char *path, const char *command, char *buf, size_t size);
 
 /* A palette (.pal or .exr) and the model it was baked from, as `verify` and `preview` take them. */
 typedef struct cli_baked {

@@ -177,6 +177,9 @@ int cmd_inspect(int argc, char **argv)
     if (!clip_name != !frame_text) return cli_usage_error("inspect", "--clip and --frame go together");
     size_t n = strlen(path);
     if (n >= 4 && strcmp(path + n - 4, ".exr") == 0) return inspect_exr(path, json);
+    char ktx2[1024];
+    if (cli_file_kind_of(path) == CLI_FILE_KTX2)
+        return fprintf(stderr, "crowdbake: %s\n", cli_ktx2_not_read(path, "inspect", ktx2, sizeof ktx2)), CLI_EXIT_USAGE;
     cbpal_file f;
     char msg[512];
     if (cbpal_open(path, no_verify ? 0 : CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg) != 0) {

@@ -250,6 +250,19 @@ static void test_info_quiet(void **state)
     assert_contains("clip ");
 }
 
+/* A .ktx2 from bake given to inspect or verify is named as what it is, with the files of the same
+ * bake they read (not "neither a palette nor glTF"). */
+static void test_ktx2_is_named(void **state)
+{
+    (void)state;
+    assert_int_equal(crowdbake("bake %s -o " TMP "/k.pal --format pal,ktx2 -q", fox), 0);
+    assert_int_equal(crowdbake("inspect " TMP "/k.ktx2"), EXIT_USAGE);
+    assert_contains("k.ktx2: a KTX2 palette, which 'inspect' does not read: give it the .pal or .exr of the same bake");
+    assert_int_equal(crowdbake("verify %s " TMP "/k.ktx2", fox), EXIT_USAGE);
+    assert_contains("k.ktx2: a KTX2 palette, which 'verify' does not read");
+    assert_int_equal(crowdbake("verify %s " TMP "/k.pal --random 2 -q", fox), 0); /* the .pal beside it */
+}
+
 /* The completions know `help COMMAND` and --version. */
 static void test_completions_know_help_and_version(void **state)
 {
@@ -308,6 +321,7 @@ int main(void)
         cmocka_unit_test(test_quiet_writes_without_a_summary),
         cmocka_unit_test(test_verify_quiet),
         cmocka_unit_test(test_info_quiet),
+        cmocka_unit_test(test_ktx2_is_named),
         cmocka_unit_test(test_completions_know_help_and_version),
     };
     return cmocka_run_group_tests_name("cli_habits", tests, setup, NULL);
