@@ -6,7 +6,8 @@
 #   make bench    benchmarks (not part of check)
 #   make deps     install the Debian packages the build needs (as root; prints the command otherwise)
 #   make install  PREFIX=/usr/local DESTDIR=: the command, libcrowdbake (static and shared), its headers,
-#                 crowdbake.pc, the CMake package, the man page and the bash/zsh completions
+#                 crowdbake.pc, the CMake package, the man page, the bash/zsh completions and what
+#                 `crowdbake view` serves (DATADIR/crowdbake/web: the viewer, three.js and fzstd)
 
 .SUFFIXES:
 .DELETE_ON_ERROR:
@@ -67,7 +68,7 @@ CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: all install deps demo check check-normal check-asan check-shared test test-asan test-runs readme bake-hashes bench \
+.PHONY: all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs readme bake-hashes bench \
         bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
@@ -146,7 +147,7 @@ MANDIR     ?= $(DATADIR)/man
 INSTALL_SED = -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@BINDIR@|$(BINDIR)|g' -e 's|@LIBDIR@|$(LIBDIR)|g' \
   -e 's|@INCLUDEDIR@|$(INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' -e 's|@SONAME@|$(SONAME)|g' \
   -e 's|@API_MAJOR@|$(API_MAJOR)|g'
-install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME)
+install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) install-web
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(LIBDIR)/cmake/crowdbake \
 	  $(DESTDIR)$(INCLUDEDIR)/crowdbake $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(DATADIR)/bash-completion/completions \
 	  $(DESTDIR)$(DATADIR)/zsh/site-functions
@@ -164,6 +165,22 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME)
 	install -m 644 completions/crowdbake.bash $(DESTDIR)$(DATADIR)/bash-completion/completions/crowdbake
 	install -m 644 completions/_crowdbake $(DESTDIR)$(DATADIR)/zsh/site-functions/_crowdbake
 
+# What the installed `crowdbake view` serves: it looks for BIN/../share/crowdbake/web (so
+# DATADIR is PREFIX/share for it to be found; else CROWDBAKE_WEB=DIR): the viewer, the palette
+# shader beside it as in the source tree, and the pinned three.js (its module build and the
+# addons the viewer imports from) and fzstd, from web/package-lock.json.
+WEBDIR = $(DATADIR)/crowdbake/web
+THREE  = web/node_modules/three
+install-web: web/node_modules/.package-lock.json
+	install -d $(DESTDIR)$(WEBDIR)/node_modules/three/build $(DESTDIR)$(WEBDIR)/node_modules/three/examples \
+	  $(DESTDIR)$(DATADIR)/crowdbake/samples/shaders
+	install -m 644 web/viewer.html web/*.mjs web/serve.py web/package.json web/package-lock.json $(DESTDIR)$(WEBDIR)/
+	install -m 644 $(THREE)/package.json $(THREE)/LICENSE $(DESTDIR)$(WEBDIR)/node_modules/three/
+	install -m 644 $(THREE)/build/three.module.js $(DESTDIR)$(WEBDIR)/node_modules/three/build/
+	cp -R $(THREE)/examples/jsm $(DESTDIR)$(WEBDIR)/node_modules/three/examples/
+	cp -R web/node_modules/fzstd $(DESTDIR)$(WEBDIR)/node_modules/
+	install -m 644 samples/shaders/crowdbake_palette.glsl $(DESTDIR)$(DATADIR)/crowdbake/samples/shaders/
+
 # ---- samples: the project's own rigged animals ----------------------------------------
 $(BUILD)/gen_samples: $(wildcard samples/gen/*.c samples/gen/*.h) $(DEPS_STAMP)
 	@mkdir -p $(@D)
@@ -174,7 +191,8 @@ $(SAMPLE_GLB) &: $(BUILD)/gen_samples
 	$(BUILD)/gen_samples $(BUILD)/samples
 samples: $(SAMPLE_GLB)
 
-demo: all
+# The viewer's npm packages come with the demo where npm is there; else the demo names the command.
+demo: all $(if $(shell command -v npm 2>/dev/null),web/node_modules/.package-lock.json)
 	@mkdir -p $(BUILD)/demo
 	@for s in $(SAMPLES); do $(BUILD)/crowdbake info $(BUILD)/samples/$$s.glb || exit 1; echo; done
 	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.pal --format pal,exr --root-motion in-place \
@@ -182,13 +200,16 @@ demo: all
 	@$(BUILD)/crowdbake inspect $(BUILD)/demo/quadruped.pal
 	@echo
 	$(BUILD)/crowdbake bake samples/catalog.toml
+	@echo
+	@[ -f web/node_modules/.package-lock.json ] || echo "crowdbake view needs three.js and fzstd: apt-get install npm, then make web"
+	@echo "watch the herd in a browser: $(BUILD)/crowdbake view samples/catalog.toml (or put $(BUILD) on PATH)"
 
 # ---- tests ----------------------------------------------------------------------------
 # Each build's tests write under $(BUILD)/tmp-tests (BUILD_DIR), so the normal and the
 # sanitizer passes run side by side.
 TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(shell pkg-config --cflags cmocka 2>/dev/null)
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
-$(BUILD)/tests/%: tests/%.c tests/testutil.h $(BUILD)/libcrowdbake.a
+$(BUILD)/tests/%: tests/%.c tests/testutil.h tests/view_server.h $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TEST_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
@@ -234,6 +255,17 @@ check-shared:
 	@[ -d "$(SHARED)/assets" ] && [ -d "$(SHARED)/reference" ] || { echo "crowdbake: the tests need the shared \
 	third-party models and reference matrices in $(SHARED)/assets and $(SHARED)/reference: clone this repository \
 	beside that folder, or set CROWDBAKE_SHARED=DIR" >&2; exit 1; }
+
+# playwright-core, which drives Chromium for the browser tests (tests/browser, tests/godot), needs
+# Node.js 20; Debian 12's own nodejs is 18, and every browser test would fail on its own with
+# "Playwright requires Node.js 20 or higher". Said once, up front, with the command that gets it.
+NODE_MAJOR_NEEDED := 20
+check-node:
+	@v=$$(node --version 2>/dev/null | sed 's/^v//'); major=$${v%%.*}; have=$${v:+Node.js $$v}; \
+	[ -n "$$major" ] && [ "$$major" -ge $(NODE_MAJOR_NEEDED) ] 2>/dev/null || { echo "crowdbake: the tests need Node.js \
+	$(NODE_MAJOR_NEEDED) or newer (playwright-core, which drives Chromium for the browser tests, requires it); this is \
+	$${have:-no node on PATH} (Debian 12's nodejs is 18). As root: curl -fsSL \
+	https://deb.nodesource.com/setup_$(NODE_MAJOR_NEEDED).x | bash - && apt-get install -y nodejs" >&2; exit 1; }
 
 # One test run: its output comes in one piece (make -O) and its outcome goes to
 # $(BUILD)/tests/results: NAME.pending before it runs, NAME.passed or NAME.failed after, so
@@ -288,12 +320,12 @@ SANITIZE := BUILD=build/asan OPT=-O1 SAN="-fsanitize=address,undefined -fno-omit
 # upstream after GCC 13 / LLVM 16).
 ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:intercept_tls_get_addr=0 UBSAN_OPTIONS=print_stacktrace=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp
 
-test: deps check-shared $(NODE_DEPS)
+test: deps check-shared check-node $(NODE_DEPS)
 	@rm -rf $(RESULTS)
 	@$(MAKE) --no-print-directory $(PARALLEL) test-runs || true
 	$(call test_summary,$(BUILD))
 
-test-asan: deps check-shared $(NODE_DEPS)
+test-asan: deps check-shared check-node $(NODE_DEPS)
 	@rm -rf build/asan/tests/results
 	@$(ASAN_ENV) $(MAKE) --no-print-directory $(PARALLEL) $(SANITIZE) test-runs || true
 	$(call test_summary,build/asan)
@@ -347,7 +379,7 @@ bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
 
 # The normal and the sanitizer builds and their tests, side by side on every core.
-check: deps check-shared $(NODE_DEPS)
+check: deps check-shared check-node $(NODE_DEPS)
 	@rm -rf $(BUILD)/tests/results build/asan/tests/results
 	@$(MAKE) --no-print-directory $(PARALLEL) check-normal check-asan || true
 	$(call test_summary,$(BUILD) build/asan)

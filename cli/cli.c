@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 int cli_exit_code(cb_status status)
 {
@@ -115,6 +116,11 @@ int cli_parse(int argc, char **argv, const cli_option *options, size_t option_co
                 if (i + 1 >= argc) return cli_usage_error(argv[0], "option %s needs a value (%s)", opt->name, opt->metavar);
                 *opt->value = argv[++i];
             }
+            if (strcmp(*opt->value, "-") == 0 && (strcmp(opt->name, "-o") == 0 || strcmp(opt->name, "--output") == 0))
+                return cli_usage_error(argv[0], "%s -: writes no standard output (a palette is binary, and its sidecars need a "
+                                       "name); name a file, e.g. %s out.%s", opt->name, opt->name,
+                                       strcmp(argv[0], "preview") == 0 ? "png" : strcmp(argv[0], "mesh") == 0 ? "glb"
+                                       : strcmp(argv[0], "vat") == 0 ? "exr" : "pal");
             continue;
         }
         if (npos >= max_positional) return cli_usage_error(argv[0], "unexpected argument '%s'", arg);
@@ -198,7 +204,46 @@ int cli_take_limits(int *argc, char **argv, cb_limits *limits)
     return 0;
 }
 
-cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *err) { return cb_gltf_load(path, limits, err); }
+static bool has_extension(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    return n > e && strcasecmp(path + n - e, ext) == 0;
+}
+
+/* What a file that is not glTF holds, from its first bytes, else from its name: the formats
+ * artists export before glTF. NULL when it may be glTF (the loader then says what is wrong). */
+static const char *foreign_format(const char *path)
+{
+    char head[24] = {0};
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    size_t n = fread(head, 1, sizeof head, f);
+    fclose(f);
+    if (n >= 4 && (memcmp(head, "glTF", 4) == 0 || head[0] == '{')) return NULL;
+    if (n >= 18 && memcmp(head, "Kaydara FBX Binary", 18) == 0) return "an FBX file";
+    if (n >= 5 && memcmp(head, "; FBX", 5) == 0) return "an FBX file (ASCII)";
+    if (n >= 7 && memcmp(head, "BLENDER", 7) == 0) return "a Blender .blend file";
+    if (n >= 4 && memcmp(head, "\x89PNG", 4) == 0) return "a PNG image";
+    if (n >= 3 && memcmp(head, "\xff\xd8\xff", 3) == 0) return "a JPEG image";
+    static const char *const by_name[][2] = {{".fbx", "an FBX file"}, {".obj", "a Wavefront OBJ file"},
+                                              {".blend", "a Blender .blend file"}, {".dae", "a COLLADA file"},
+                                              {".png", "a PNG image"}, {".usd", "a USD file"}, {".usdz", "a USD file"}};
+    for (size_t i = 0; i < sizeof by_name / sizeof by_name[0]; ++i)
+        if (has_extension(path, by_name[i][0])) return by_name[i][1];
+    return NULL;
+}
+
+cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *err)
+{
+    const char *foreign = foreign_format(path);
+    if (foreign) {
+        cb_fail(err, CB_ERR_INPUT, "%s: not glTF (%s): convert it with FBX2glTF (FBX2glTF -b -i IN.fbx -o OUT) or Blender "
+                "(File > Export > glTF 2.0, format .glb, with the armature and its animations), then give the .glb",
+                path, foreign);
+        return NULL;
+    }
+    return cb_gltf_load(path, limits, err);
+}
 
 int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err)
 {
@@ -228,7 +273,7 @@ int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err)
 
 cli_file_kind cli_file_kind_of(const char *path)
 {
-    unsigned char head[8] = {0};
+    unsigned char head[12] = {0};
     FILE *f = fopen(path, "rb");
     if (!f) return CLI_FILE_MISSING;
     size_t n = fread(head, 1, sizeof head, f);
@@ -236,12 +281,20 @@ cli_file_kind cli_file_kind_of(const char *path)
     static const unsigned char exr_magic[4] = {0x76, 0x2f, 0x31, 0x01};
     if (n >= 8 && memcmp(head, "CBPAL\r\n\x1a", 8) == 0) return CLI_FILE_PAL;
     if (n >= 4 && memcmp(head, exr_magic, 4) == 0) return CLI_FILE_EXR;
+    if (n >= 12 && memcmp(head, "\xabKTX 20\xbb\r\n\x1a\n", 12) == 0) return CLI_FILE_KTX2;
     if (n >= 4 && memcmp(head, "glTF", 4) == 0) return CLI_FILE_MODEL;
     size_t i = 0; /* a .gltf is JSON: an object */
     while (i < n && (head[i] == ' ' || head[i] == '\t' || head[i] == '\r' || head[i] == '\n')) ++i;
     if (i < n && head[i] == '{') return CLI_FILE_MODEL;
     if (n >= 3 && memcmp(head, "\xef\xbb\xbf", 3) == 0) return CLI_FILE_MODEL; /* JSON with a byte-order mark */
     return CLI_FILE_UNKNOWN;
+}
+
+const char *cli_ktx2_not_read(const char *path, const char *command, char *buf, size_t size)
+{
+    snprintf(buf, size, "%s: a KTX2 palette, which '%s' does not read: give it the .pal or .exr of the same bake "
+             "('crowdbake bake MODEL -o OUT.pal --format pal,ktx2' writes both)", path, command);
+    return buf;
 }
 
 static bool is_palette(cli_file_kind k) { return k == CLI_FILE_PAL || k == CLI_FILE_EXR; }
@@ -255,6 +308,9 @@ static cb_status check_kinds(const char *command, const char *model_path, const 
     if (mk != CLI_FILE_MODEL)
         return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a glTF model; 'crowdbake %s MODEL PALETTE' takes the .glb/.gltf "
                        "first", model_path, is_palette(mk) ? "a palette" : "neither glTF nor a palette", command);
+    char ktx2[1024];
+    if (pk == CLI_FILE_KTX2)
+        return cb_fail(err, CB_ERR_SETTINGS, "%s", cli_ktx2_not_read(palette_path, command, ktx2, sizeof ktx2));
     if (!is_palette(pk))
         return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a palette; 'crowdbake %s MODEL PALETTE' takes the .pal or .exr "
                        "that 'crowdbake bake' wrote second", palette_path, pk == CLI_FILE_MODEL ? "a glTF model" : "neither a "

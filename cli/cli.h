@@ -70,8 +70,10 @@ cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *er
 /* The skin a command works on: --skin NAME|INDEX, or the only one; an error otherwise. */
 int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err);
 /* What a file holds, from its first bytes (not its name). */
-typedef enum cli_file_kind { CLI_FILE_UNKNOWN, CLI_FILE_MODEL, CLI_FILE_PAL, CLI_FILE_EXR, CLI_FILE_MISSING } cli_file_kind;
+typedef enum cli_file_kind { CLI_FILE_UNKNOWN, CLI_FILE_MODEL, CLI_FILE_PAL, CLI_FILE_EXR, CLI_FILE_MISSING, CLI_FILE_KTX2 } cli_file_kind;
 cli_file_kind cli_file_kind_of(const char *path);
+/* What to say of a KTX2 palette where a .pal or .exr is read: "PATH: a KTX2 palette, which ..." */
+const char *cli_ktx2_not_read(const char *path, const char *command, char *buf, size_t size);
 
 /* A palette (.pal or .exr) and the model it was baked from, as `verify` and `preview` take them. */
 typedef struct cli_baked {
@@ -105,6 +107,11 @@ cb_status cli_override_loops(const cb_model *model, const char *loops, const cha
 /* Calls fn for each name of a comma-separated list (as --clip takes); stops at, and returns,
  * the first failure. */
 cb_status cli_for_each_name(const char *list, cb_status (*fn)(const char *name, void *ctx), void *ctx);
+/* The one clip-name matcher of every command that takes clip names: the name exactly, else
+ * regardless of case, else the one clip whose name holds it (`--clip walk` for "Armature|Walk").
+ * names[i] lies `stride` bytes after names[i-1] (as cb_closest_name reads them). The index, or
+ * -1 with `why` saying so: "no clip 'X'; did you mean 'Y'?", or the clips an ambiguous name fits. */
+int cli_match_clip(const char *typed, const char *const *names, size_t count, size_t stride, char *why, size_t size);
 /* Whether a comma-separated list (as --clip takes) holds the name. */
 bool cli_list_has(const char *list, const char *name);
 /* "crowdbake: warning: ..." on stderr, one line each (notes too unless !notes, for -q); or a

@@ -10,11 +10,13 @@
 #include "cli.h"
 
 const char cmd_info_usage[] =
-    "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX]\n\n"
+    "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX] [-q]\n\n"
     "Skins, joints, skinned mesh nodes and vertex counts, and per clip: start, duration, keys,\n"
     "interpolation modes, whether it loops and why, frames at --fps (default 30), root velocity and\n"
     "ground speed (root travel and planted feet), and the footsteps: when each foot lands and lifts;\n"
-    "the sockets: nodes under a joint that are not joints, where props attach (bone, bind transform).\n";
+    "the sockets: nodes under a joint that are not joints, where props attach (bone, bind transform).\n"
+    "Then, on stderr, the warnings a bake would give (clips it would leave out, and why); -q leaves\n"
+    "them out.\n";
 
 typedef struct clip_facts {
     uint64_t keys;
@@ -97,6 +99,54 @@ static void print_sockets(const cb_model *m, int skin, const socket_list *socket
     }
 }
 
+/* A mesh node's primitives: primitives[first, end) (the loader keeps a node's together). */
+typedef struct mesh_run {
+    uint32_t first, end;
+} mesh_run;
+
+static mesh_run node_primitives(const cb_model *m, uint32_t first)
+{
+    mesh_run r = {first, first + 1};
+    while (r.end < m->primitive_count && m->primitives[r.end].node == m->primitives[first].node) ++r.end;
+    return r;
+}
+
+/* Whether two nodes draw the same mesh: the same primitives, vertex for vertex (what an
+ * exporter writes for instances of one mesh). */
+static bool same_mesh(const cb_model *m, mesh_run a, mesh_run b)
+{
+    if (a.end - a.first != b.end - b.first) return false;
+    for (uint32_t i = 0; i < a.end - a.first; ++i) {
+        const cb_primitive *x = &m->primitives[a.first + i], *y = &m->primitives[b.first + i];
+        if (x->vertex_count != y->vertex_count || x->index_count != y->index_count || x->skin != y->skin ||
+            !x->normals != !y->normals ||
+            (x->vertex_count && memcmp(x->positions, y->positions, (size_t)x->vertex_count * 3 * sizeof(float))))
+            return false;
+    }
+    return true;
+}
+
+/* One line per mesh node (its primitives summed), and one for a row of nodes drawing the same
+ * mesh: "mesh nodes 'a' .. 'b' (12 nodes, one mesh): ..." rather than a line each. */
+static void print_mesh_nodes(const cb_model *m)
+{
+    for (uint32_t p = 0; p < m->primitive_count;) {
+        mesh_run first = node_primitives(m, p), last = first;
+        uint32_t nodes = 1, vertices = 0, indices = 0;
+        while (last.end < m->primitive_count && same_mesh(m, first, node_primitives(m, last.end)))
+            last = node_primitives(m, last.end), ++nodes;
+        for (uint32_t i = first.first; i < first.end; ++i) vertices += m->primitives[i].vertex_count, indices += m->primitives[i].index_count;
+        const cb_primitive *pr = &m->primitives[first.first];
+        char prims[32] = "";
+        if (first.end - first.first > 1) snprintf(prims, sizeof prims, "%u primitives, ", first.end - first.first);
+        if (nodes == 1) printf("  mesh node '%s' (node %d): ", m->nodes[pr->node].name, pr->node);
+        else printf("  mesh nodes '%s' .. '%s' (nodes %d .. %d: %u nodes, one mesh): each ", m->nodes[pr->node].name,
+                    m->nodes[m->primitives[last.first].node].name, pr->node, m->primitives[last.first].node, nodes);
+        printf("%s%u vertices, %u indices, skin %d%s\n", prims, vertices, indices, pr->skin, pr->normals ? "" : ", no normals");
+        p = last.end;
+    }
+}
+
 static void print_text(const cb_model *m, int skin, const clip_facts *facts, double fps)
 {
     printf("%s\n", m->source);
@@ -109,11 +159,7 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
                m->nodes[sk->joints[cb_skin_root_joint(m, (int32_t)s)]].name,
                (unsigned long long)cb_model_skin_vertex_count(m, (int32_t)s), (int)s == skin ? " (baked)" : "");
     }
-    for (uint32_t p = 0; p < m->primitive_count; ++p) {
-        const cb_primitive *pr = &m->primitives[p];
-        printf("  mesh node '%s' (node %d): %u vertices, %u indices, skin %d%s\n", m->nodes[pr->node].name, pr->node,
-               pr->vertex_count, pr->index_count, pr->skin, pr->normals ? "" : ", no normals");
-    }
+    print_mesh_nodes(m);
     if (m->ignored_morph_channels)
         printf("  warning: %u morph-weight channel%s ignored (palettes carry joints only)\n", m->ignored_morph_channels,
                m->ignored_morph_channels == 1 ? "" : "s");
@@ -245,10 +291,11 @@ int cmd_info(int argc, char **argv)
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     const char *path = NULL, *fps_text = "30", *skin_name = NULL;
-    bool json = false, help;
+    bool json = false, help, quiet[2] = {false, false};
     const cli_option options[] = {
-        {"--json", NULL, NULL, &json}, {"--fps", "N", &fps_text, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL}};
-    int rc = cli_parse(argc, argv, options, 3, &path, 1, 1, &help);
+        {"--json", NULL, NULL, &json}, {"--fps", "N", &fps_text, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL},
+        {"-q", NULL, NULL, &quiet[0]}, {"--quiet", NULL, NULL, &quiet[1]}};
+    int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &path, 1, 1, &help);
     if (help) return fputs(cmd_info_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     double fps;
@@ -271,7 +318,7 @@ int cmd_info(int argc, char **argv)
     if (!err.status) gather_clips(m, skin, fps, &limits, facts, &sockets, &err);
     if (!err.status && json) print_json(m, skin, facts, &sockets, fps);
     if (!err.status && !json) print_text(m, skin, facts, fps), print_sockets(m, skin, &sockets);
-    if (!err.status && !json) { /* what a bake would leave out */
+    if (!err.status && !json && !quiet[0] && !quiet[1]) { /* what a bake would leave out (-q: not said) */
         cb_warnings warnings = {0};
         cb_model_warnings(m, true, &warnings);
         cli_print_warnings(&warnings, false);

@@ -177,6 +177,9 @@ int cmd_inspect(int argc, char **argv)
     if (!clip_name != !frame_text) return cli_usage_error("inspect", "--clip and --frame go together");
     size_t n = strlen(path);
     if (n >= 4 && strcmp(path + n - 4, ".exr") == 0) return inspect_exr(path, json);
+    char ktx2[1024];
+    if (cli_file_kind_of(path) == CLI_FILE_KTX2)
+        return fprintf(stderr, "crowdbake: %s\n", cli_ktx2_not_read(path, "inspect", ktx2, sizeof ktx2)), CLI_EXIT_USAGE;
     cbpal_file f;
     char msg[512];
     if (cbpal_open(path, no_verify ? 0 : CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg) != 0) {
@@ -188,13 +191,13 @@ int cmd_inspect(int argc, char **argv)
     unsigned frame = 0;
     cb_error err = {0};
     if (clip_name) {
-        for (uint32_t i = 0; i < f.header.clip_count && clip < 0; ++i) {
-            cbpal_clip c;
-            cbpal_get_clip(&f, i, &c);
-            if (strcmp(c.name, clip_name) == 0) clip = (int)i;
-        }
+        const char **names = calloc(f.header.clip_count + 1, sizeof *names);
         cbpal_clip c;
-        if (clip < 0) cb_fail(&err, CB_ERR_SETTINGS, "%s: has no clip '%s'", path, clip_name);
+        for (uint32_t i = 0; names && i < f.header.clip_count; ++i) cbpal_get_clip(&f, i, &c), names[i] = c.name;
+        char why[512] = "out of memory";
+        if (names) clip = cli_match_clip(clip_name, names, f.header.clip_count, sizeof *names, why, sizeof why);
+        free(names);
+        if (clip < 0) cb_fail(&err, CB_ERR_SETTINGS, "%s: --clip %s: %s", path, clip_name, why);
         else if (!cli_parse_u32(frame_text, &frame) || (cbpal_get_clip(&f, (uint32_t)clip, &c), frame >= c.frames))
             cb_fail(&err, CB_ERR_SETTINGS, "%s: clip '%s' has %u frames; --frame %s is not one of them", path, clip_name,
                     c.frames, frame_text);

@@ -11,7 +11,7 @@
 
 const char cmd_mesh_usage[] =
     "usage: crowdbake mesh MODEL -o OUT.glb [--palette-model MAIN] [--max-influences 1|2|4] [--quantize] [--batch K]\n"
-    "                      [--max-quantization-error MM_PER_M] [--fps N] [--skin NAME|INDEX] [--json]\n"
+    "                      [--max-quantization-error MM_PER_M] [--fps N] [--skin NAME|INDEX] [--json] [-q]\n"
     "       crowdbake mesh CATALOG.toml --type NAME [--lod N] -o OUT.glb [options]\n\n"
     "Writes the skinned mesh as a palette runtime draws it, a .glb validated by the Khronos validator:\n"
     "  JOINTS_0 are palette bones: the mesh's joints remapped by name to the skin the palette is baked\n"
@@ -31,7 +31,7 @@ const char cmd_mesh_usage[] =
 
 typedef struct mesh_args {
     const char *input, *output, *palette_model, *type, *lod, *influences, *batch, *fps, *skin, *max_quant;
-    bool quantize, json;
+    bool quantize, json, quiet[2]; /* -q, --quiet: no summary line */
 } mesh_args;
 
 /* Resolves a catalog's --type/--lod into model paths and the LOD's influence setting. */
@@ -88,6 +88,7 @@ static void print_result(const mesh_args *a, const cb_mesh *m, const cb_mesh_err
         cb_json_end(&j);
         return;
     }
+    if (a->quiet[0] || a->quiet[1]) return;
     printf("%s: %llu vertices%s, %u influence%s%s, vertex buffers %.1f KiB + indices %.1f KiB; extra error vs 4 "
            "influences %.3f mm/m (vertex %llu, '%s' at %.3f s, %u frames at the palette model's clips)",
            a->output, (unsigned long long)verts, m->batch > 1 ? " (batch of copies with _INSTANCE_ID)" : "", m->max_influences,
@@ -145,7 +146,8 @@ int cmd_mesh(int argc, char **argv)
         {"--lod", "N", &a.lod, NULL},                {"--max-influences", "N", &a.influences, NULL},
         {"--quantize", NULL, NULL, &a.quantize},     {"--batch", "K", &a.batch, NULL},
         {"--fps", "N", &a.fps, NULL},                {"--skin", "NAME|INDEX", &a.skin, NULL},
-        {"--json", NULL, NULL, &a.json},             {"--max-quantization-error", "MM_PER_M", &a.max_quant, NULL}};
+        {"--json", NULL, NULL, &a.json},             {"--max-quantization-error", "MM_PER_M", &a.max_quant, NULL},
+        {"-q", NULL, NULL, &a.quiet[0]},             {"--quiet", NULL, NULL, &a.quiet[1]}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.input, 1, 1, &help);
     if (help) return fputs(cmd_mesh_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;

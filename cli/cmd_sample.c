@@ -70,8 +70,11 @@ int cmd_sample(int argc, char **argv)
     if (!m) return cli_report(&err);
     int skin = cli_pick_skin(m, skin_name, &err);
     int clip_index = -1;
-    if (!err.status && clip_name && (clip_index = cb_model_find_animation(m, clip_name)) < 0)
-        cb_fail(&err, CB_ERR_SETTINGS, "%s: has no clip '%s' (see 'crowdbake info')", path, clip_name);
+    char why[512] = "the model has no clip";
+    if (!err.status && clip_name &&
+        (clip_index = m->animation_count ? cli_match_clip(clip_name, &m->animations[0].name, m->animation_count,
+                                                          sizeof m->animations[0], why, sizeof why) : -1) < 0)
+        cb_fail(&err, CB_ERR_SETTINGS, "%s: --clip %s: %s (see 'crowdbake info')", path, clip_name, why);
     cb_sampler *s = err.status ? NULL : cb_sampler_create(m, skin, &err);
     double *mats = s ? malloc((size_t)m->skins[skin].joint_count * 16 * sizeof(double)) : NULL;
     if (s && !mats) cb_fail(&err, CB_ERR_INTERNAL, "out of memory");

@@ -13,7 +13,7 @@
 const char cmd_vat_usage[] =
     "usage: crowdbake vat MODEL -o OUT.exr [--fps N] [--max-texture-size N] [--root-motion keep|in-place]\n"
     "                     [--skin NAME|INDEX] [--exr-compression none|rle|zips|zip|piz] [--json]\n"
-    "                     [--clip A,B | --exclude-clip A,B | --like PALETTE.pal]\n\n"
+    "                     [--clip A,B | --exclude-clip A,B | --like PALETTE.pal] [-q]\n\n"
     "Bakes a vertex animation texture: every skinned vertex of every frame (framed like the palette's\n"
     "rows), positions and normals as RGBA16F layers position.* and normal.* of one EXR, a frame per\n"
     "texture row (a frame of more vertices than the limit takes several rows; rows wrap into column\n"
@@ -52,8 +52,9 @@ int cmd_vat(int argc, char **argv)
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     const char *path = NULL, *out = NULL, *fps = NULL, *max = NULL, *rm = NULL, *skin_name = NULL, *comp = NULL,
                *clips = NULL, *excluded = NULL, *like = NULL;
-    bool json = false, help;
+    bool json = false, help, quiet[2] = {false, false};
     const cli_option options[] = {{"-o", "FILE", &out, NULL},          {"--output", "FILE", &out, NULL},
+                                  {"-q", NULL, NULL, &quiet[0]},       {"--quiet", NULL, NULL, &quiet[1]},
                                   {"--fps", "N", &fps, NULL},          {"--max-texture-size", "N", &max, NULL},
                                   {"--root-motion", "MODE", &rm, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL},
                                   {"--exr-compression", "NAME", &comp, NULL}, {"--json", NULL, NULL, &json},
@@ -110,6 +111,8 @@ int cmd_vat(int argc, char **argv)
             cb_json_int(&j, "palette_qpos_u16_bytes", (long long)pal);
             cli_json_warnings(&j, &warnings);
             cb_json_end(&j);
+        } else if (quiet[0] || quiet[1]) {
+            cli_print_warnings(&warnings, false); /* warnings still; no summary, no notes */
         } else {
             printf("%s: %llu vertices x %u frames, %ux%u texels (%u block%s), %.1f KiB of RGBA16F positions + normals, "
                    "max error %.3g units (%.3g mm per m); the qpos/u16 palette of the same frames: %.1f KiB (%.1fx smaller)\n",

@@ -11,38 +11,45 @@
 
 const char cmd_verify_usage[] =
     "usage: crowdbake verify MODEL PALETTE.pal|.exr [--max-error MM_PER_M] [--random N] [--skin NAME|INDEX] [--json]\n"
-    "                        [--clip A,B | --exclude-clip A,B]\n\n"
+    "                        [--clip A,B | --exclude-clip A,B] [-q]\n\n"
     "Skins the model's mesh from the palette the way the runtime shaders do (two adjacent rows\n"
     "blended, up to 4 weighted bones, loops wrap, one-shots clamp) and compares it with exact float64\n"
     "skinning from the glTF: at every baked frame (the encoding's error), at every mid-frame and at N\n"
     "random times (default 64; the blending's error). Reports per clip the max and mean vertex error\n"
     "in model units and in mm per metre of model height, and the worst vertex and time. Exits 6 when\n"
     "an error exceeds --max-error (mm per metre of height). --clip verifies only the palette's clips\n"
-    "named, --exclude-clip all but those.\n";
+    "named, --exclude-clip all but those. -q prints nothing but why it fails: the exit code says.\n";
 
 
 typedef struct clip_check {
     const cb_palette *p;
     const char *palette, *option;
+    bool *named; /* per palette clip: the list names it */
     cb_error *err;
 } clip_check;
 
-static cb_status palette_has_clip(const char *name, void *ctx)
+static cb_status mark_palette_clip(const char *name, void *ctx)
 {
     const clip_check *c = ctx;
-    for (uint32_t i = 0; i < c->p->clip_count; ++i)
-        if (strcmp(c->p->clips[i].name, name) == 0) return CB_OK;
-    return cb_fail(c->err, CB_ERR_SETTINGS, "%s: %s %s: the palette has no such clip (see 'crowdbake inspect')", c->palette,
-                   c->option, name);
+    char why[512];
+    int i = c->p->clip_count ? cli_match_clip(name, &c->p->clips[0].name, c->p->clip_count, sizeof c->p->clips[0], why,
+                                              sizeof why)
+                             : (snprintf(why, sizeof why, "the palette has no clip"), -1);
+    if (i < 0) return cb_fail(c->err, CB_ERR_SETTINGS, "%s: %s %s: %s (see 'crowdbake inspect')", c->palette, c->option, name, why);
+    c->named[i] = true;
+    return CB_OK;
 }
 
-/* --clip and --exclude-clip name the palette's clips; both at once is an error. */
+/* --clip and --exclude-clip name the palette's clips (cli_match_clip); both at once is an error.
+ * skip[c]: the palette's clip c is not verified. */
 static cb_status check_clip_options(const cb_palette *p, const char *palette, const char *clips, const char *excluded,
-                                    cb_error *err)
+                                    bool *skip, cb_error *err)
 {
     if (clips && excluded) return cb_fail(err, CB_ERR_SETTINGS, "give --clip or --exclude-clip, not both");
-    clip_check c = {p, palette, clips ? "--clip" : "--exclude-clip", err};
-    return cli_for_each_name(clips ? clips : excluded, palette_has_clip, &c);
+    clip_check c = {p, palette, clips ? "--clip" : "--exclude-clip", skip, err};
+    if (cli_for_each_name(clips ? clips : excluded, mark_palette_clip, &c)) return err->status;
+    for (uint32_t i = 0; clips && i < p->clip_count; ++i) skip[i] = !skip[i]; /* named: verified */
+    return CB_OK;
 }
 
 int cmd_verify(int argc, char **argv)
@@ -50,10 +57,11 @@ int cmd_verify(int argc, char **argv)
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     const char *pos[2] = {0}, *max_text = NULL, *random_text = NULL, *skin_name = NULL, *clips = NULL, *excluded = NULL;
-    bool json = false, help;
+    bool json = false, help, quiet[2] = {false, false};
     const cli_option options[] = {{"--max-error", "MM_PER_M", &max_text, NULL}, {"--random", "N", &random_text, NULL},
                                   {"--skin", "NAME|INDEX", &skin_name, NULL}, {"--json", NULL, NULL, &json},
-                                  {"--clip", "A,B", &clips, NULL}, {"--exclude-clip", "A,B", &excluded, NULL}};
+                                  {"--clip", "A,B", &clips, NULL}, {"--exclude-clip", "A,B", &excluded, NULL},
+                                  {"-q", NULL, NULL, &quiet[0]}, {"--quiet", NULL, NULL, &quiet[1]}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], pos, 2, 2, &help);
     if (help) return fputs(cmd_verify_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
@@ -66,8 +74,11 @@ int cmd_verify(int argc, char **argv)
     if (cli_open_baked("verify", pos[0], pos[1], &limits, skin_name, &b, &err)) return cli_report(&err);
     const cb_palette *pv = &b.view;
     const cb_model *m = b.model;
-    cb_sampler *s = check_clip_options(pv, pos[1], clips, excluded, &err) ? NULL : cb_sampler_create(m, b.skin, &err);
+    bool *skip = calloc(pv->clip_count + 1, sizeof *skip);
+    if (!skip) cb_fail(&err, CB_ERR_INTERNAL, "out of memory");
+    cb_sampler *s = !skip || check_clip_options(pv, pos[1], clips, excluded, skip, &err) ? NULL : cb_sampler_create(m, b.skin, &err);
     if (!s) {
+        free(skip);
         cli_baked_close(&b);
         return cli_report(&err);
     }
@@ -84,13 +95,14 @@ int cmd_verify(int argc, char **argv)
     int name_width = 20; /* the clip column fits the longest name */
     for (uint32_t c = 0; c < pv->clip_count; ++c)
         if ((int)strlen(pv->clips[c].name) > name_width) name_width = (int)strlen(pv->clips[c].name);
-    if (!json) {
+    bool table = !json && !quiet[0] && !quiet[1]; /* -q: only the exit status (and why, over --max-error) */
+    if (table) {
         printf("%s with %s (%s/%s, model height %.4g):\n  %-*s %12s %12s %12s %12s %12s %13s  %s\n", pos[1], pos[0],
                cb_layout_name(pv->layout), cb_precision_name(pv->precision), height, name_width, "clip", "rows max", "rows mean",
                "between max", "between mean", "rows mm/m", "between mm/m", "worst vertex @ time");
     }
     for (uint32_t c = 0; c < pv->clip_count && !err.status; ++c) {
-        if ((clips && !cli_list_has(clips, pv->clips[c].name)) || cli_list_has(excluded, pv->clips[c].name)) continue;
+        if (skip[c]) continue;
         int32_t a = cb_model_find_animation(m, pv->clips[c].name);
         if (a < 0) {
             cb_fail(&err, CB_ERR_INPUT, "%s: has no clip '%s' that %s holds; verify the model the palette was baked from",
@@ -113,7 +125,7 @@ int cmd_verify(int argc, char **argv)
             cb_json_int(&j, "worst_vertex", (long long)e.worst_vertex);
             cb_json_number(&j, "worst_time", e.worst_time);
             cb_json_end(&j);
-        } else {
+        } else if (table) {
             printf("  %-*s %12.4g %12.4g %12.4g %12.4g %12.3f %13.3f  %llu @ %.3f s\n", name_width, pv->clips[c].name, e.quant_max,
                    e.quant_mean, e.interp_max, e.interp_mean, cb_mm_per_m(e.quant_max, height), cb_mm_per_m(e.interp_max, height),
                    (unsigned long long)e.worst_vertex, e.worst_time);
@@ -125,12 +137,13 @@ int cmd_verify(int argc, char **argv)
             cb_json_number(&j, "max_error", worst);
             cb_json_number(&j, "max_error_mm_per_m", cb_mm_per_m(worst, height));
             cb_json_end(&j);
-        } else {
+        } else if (table) {
             printf("  worst %.4g units = %.3f mm per m of height%s\n", worst, cb_mm_per_m(worst, height),
                    max_error >= 0 ? (cb_mm_per_m(worst, height) > max_error ? " — over --max-error" : " — within --max-error") : "");
         }
     }
     cb_sampler_free(s);
+    free(skip);
     cli_baked_close(&b);
     if (err.status) return cli_report(&err);
     if (max_error >= 0 && cb_mm_per_m(worst, height) > max_error) {

@@ -29,12 +29,14 @@ const char cmd_view_usage[] =
     "Shows a herd in the browser: bakes what is missing (a model gets a catalog of one type with a\n"
     "state per clip, root motion in place; a catalog is baked as 'bake' does), bakes a VAT of the same\n"
     "frames to compare, then serves the viewer on 127.0.0.1 (port N, default any free port) with\n"
-    "Python's http.server and prints its URL. --open starts a browser ($BROWSER, else xdg-open).\n"
+    "Python's http.server and prints its URL: a local server, it answers only requests for\n"
+    "127.0.0.1, localhost or [::1] with its port (403 otherwise) and lists no folders. --open starts a browser ($BROWSER, else xdg-open).\n"
     "The viewer: the herd walking about, a button per state (cross-fading), up to 100,000\n"
     "instances in one draw call, frame time and draw calls, palette and VAT side by side with the\n"
     "VRAM of each. Ctrl-C stops the server. The cache is DIR (default\n"
-    "$XDG_CACHE_HOME/crowdbake/view/NAME-HASH). The web files are found beside the executable\n"
-    "(BIN/../web); CROWDBAKE_WEB=DIR names another web/ folder (its samples/shaders beside it).\n";
+    "$XDG_CACHE_HOME/crowdbake/view/NAME-HASH). The web files are found beside the executable:\n"
+    "BIN/../share/crowdbake/web where 'make install' puts them, or the source tree's web/ for\n"
+    "build/crowdbake; CROWDBAKE_WEB=DIR names another web/ folder (its samples/shaders beside it).\n";
 
 typedef struct view_paths {
     char cache[PATH_MAX], site[PATH_MAX + 8], web[PATH_MAX + 16], shaders[PATH_MAX + 48];
@@ -83,25 +85,33 @@ static int link_into_site(const view_paths *v, const char *name, const char *tar
     return 0;
 }
 
-/* The web folder: $CROWDBAKE_WEB, else web/ beside the build folder that holds the executable. */
-static int find_web(view_paths *v)
+/* The web folder: $CROWDBAKE_WEB, else the installed one (BIN/../share/crowdbake/web, as `make
+ * install` lays it out), else web/ of the source tree whose build folder holds the executable
+ * (build/crowdbake, build/asan/crowdbake: one or two levels up). */
+static void find_web_folder(view_paths *v)
 {
     const char *env = getenv("CROWDBAKE_WEB");
-    char exe[PATH_MAX];
-    if (env) snprintf(v->web, sizeof v->web, "%s", env);
-    else {
-        ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-        exe[n > 0 ? n : 0] = 0;
-        char *slash = strrchr(exe, '/');
-        if (slash) *slash = 0;
-        /* build/crowdbake, build/asan/crowdbake: the source tree is one or two levels up */
-        char probe[PATH_MAX + 64];
-        for (int up = 1; up <= 3; ++up) {
-            snprintf(v->web, sizeof v->web, "%s/%s", exe, up == 1 ? "../web" : up == 2 ? "../../web" : "../../../web");
-            snprintf(probe, sizeof probe, "%s/viewer.html", v->web);
-            if (!access(probe, R_OK)) break;
-        }
+    if (env) {
+        snprintf(v->web, sizeof v->web, "%s", env);
+        return;
     }
+    char exe[PATH_MAX], probe[PATH_MAX + 64];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    exe[n > 0 ? n : 0] = 0;
+    char *slash = strrchr(exe, '/');
+    if (slash) *slash = 0;
+    static const char *const beside[] = {"../share/crowdbake/web", "../web", "../../web", "../../../web"};
+    for (size_t i = 0; i < sizeof beside / sizeof beside[0]; ++i) {
+        snprintf(v->web, sizeof v->web, "%s/%s", exe, beside[i]);
+        snprintf(probe, sizeof probe, "%s/viewer.html", v->web);
+        if (!access(probe, R_OK)) return;
+    }
+    if (snprintf(v->web, sizeof v->web, "%s/%s", exe, beside[0]) >= (int)sizeof v->web) v->web[0] = 0; /* named in the error */
+}
+
+static int find_web(view_paths *v)
+{
+    find_web_folder(v);
     snprintf(v->shaders, sizeof v->shaders, "%s/../samples/shaders", v->web);
     char probe[PATH_MAX + 128];
     const char *need[] = {"viewer.html", "serve.py", "node_modules/three/build/three.module.js",
@@ -109,8 +119,9 @@ static int find_web(view_paths *v)
     for (size_t i = 0; i < sizeof need / sizeof need[0]; ++i) {
         snprintf(probe, sizeof probe, "%s/%s", v->web, need[i]);
         if (access(probe, R_OK)) {
-            fprintf(stderr, "crowdbake: view: %s is missing: %s (run 'make web' in the source tree, which installs "
-                            "web/node_modules from its package-lock, or set CROWDBAKE_WEB=DIR to a web/ folder)\n", probe,
+            fprintf(stderr, "crowdbake: view: %s is missing: %s (in the source tree run 'make web', which installs "
+                            "web/node_modules from its package-lock; 'make install' installs them with the command; or "
+                            "set CROWDBAKE_WEB=DIR to a web/ folder)\n", probe,
                     i == 2 ? "three.js is not installed" : "not a crowdbake web folder");
             return CLI_EXIT_IO;
         }

@@ -26,26 +26,49 @@ static void print_help(FILE *out)
             CROWDBAKE_VERSION);
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i)
         fprintf(out, "  %-9s %s\n", commands[i].name, commands[i].summary);
-    fprintf(out, "\n'crowdbake COMMAND --help' describes a command.\n"
+    fprintf(out, "\n'crowdbake help COMMAND' (or 'crowdbake COMMAND --help') describes a command; 'crowdbake --version'\n"
+                 "(-V) prints the version.\n"
                  "exit codes: 0 ok, 1 internal error, 2 usage, 3 over budget, 4 invalid input, 5 I/O error,\n"
                  "            6 verification failed\n");
 }
 
+static const cli_command *find_command(const char *name)
+{
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i)
+        if (strcmp(name, commands[i].name) == 0) return &commands[i];
+    return NULL;
+}
+
+static int unknown_command(const char *name)
+{
+    const char *guess = cb_closest_name(name, &commands[0].name, sizeof commands / sizeof commands[0], sizeof commands[0]);
+    if (guess) fprintf(stderr, "crowdbake: unknown command '%s'; did you mean '%s'? (see 'crowdbake --help')\n", name, guess);
+    else fprintf(stderr, "crowdbake: unknown command '%s' (see 'crowdbake --help')\n", name);
+    return CLI_EXIT_USAGE;
+}
+
+/* `crowdbake help [COMMAND]`, as git and cargo take it: the command's --help. */
+static int help(int argc, char **argv)
+{
+    if (argc < 3) return print_help(stdout), 0;
+    const cli_command *c = find_command(argv[2]);
+    if (!c) return unknown_command(argv[2]);
+    char *args[] = {argv[2], "--help", NULL};
+    return c->run(2, args);
+}
+
 int main(int argc, char **argv)
 {
-    if (argc < 2 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "help") == 0) {
+    if (argc < 2 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0) {
         print_help(argc < 2 ? stderr : stdout);
         return argc < 2 ? CLI_EXIT_USAGE : 0;
     }
-    if (strcmp(argv[1], "--version") == 0) {
+    if (strcmp(argv[1], "help") == 0) return help(argc, argv);
+    if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "-V") == 0) {
         printf("crowdbake %s\n", CROWDBAKE_VERSION);
         return 0;
     }
     cb_atomic_cleanup_on_signals(); /* an interrupted bake leaves no partial file */
-    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i)
-        if (strcmp(argv[1], commands[i].name) == 0) return commands[i].run(argc - 1, argv + 1);
-    const char *guess = cb_closest_name(argv[1], &commands[0].name, sizeof commands / sizeof commands[0], sizeof commands[0]);
-    if (guess) fprintf(stderr, "crowdbake: unknown command '%s'; did you mean '%s'? (see 'crowdbake --help')\n", argv[1], guess);
-    else fprintf(stderr, "crowdbake: unknown command '%s' (see 'crowdbake --help')\n", argv[1]);
-    return CLI_EXIT_USAGE;
+    const cli_command *c = find_command(argv[1]);
+    return c ? c->run(argc - 1, argv + 1) : unknown_command(argv[1]);
 }

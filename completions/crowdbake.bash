@@ -9,17 +9,17 @@ _crowdbake_options()
     bake) echo "-o --output --format --fps --layout --precision --max-texture-size --root-motion --skin
                 --speed-reference --exr-compression --zstd --json -q --quiet -j --threads --force --depfile
                 --manifest --out-dir --depfile-manifest-only --fit-rows --allow-over-budget --measure-all --max-error --max-fps --clip --exclude-clip --loop --one-shot --sync --default-state $limits" ;;
-    info) echo "--json --fps --skin $limits" ;;
+    info) echo "--json --fps --skin -q --quiet $limits" ;;
     sample) echo "--json --fps --clip --frame --skin --root-motion $limits" ;;
     inspect) echo "--json --clip --frame --no-verify" ;;
-    verify) echo "--json --clip --exclude-clip --max-error --random --skin $limits" ;;
-    preview) echo "-o --output --skin --cell --columns $limits" ;;
+    verify) echo "--json --clip --exclude-clip --max-error --random --skin -q --quiet $limits" ;;
+    preview) echo "-o --output --skin --cell --columns -q --quiet $limits" ;;
     vat) echo "-o --output --fps --max-texture-size --root-motion --skin --exr-compression --json --clip --exclude-clip
-                --like $limits" ;;
-    report) echo "--json --markdown --html --no-fail -j --target" ;;
+                --like -q --quiet $limits" ;;
+    report) echo "--json --markdown --html --no-fail -j --target -v --verbose -q --quiet" ;;
     view) echo "--port --open --cache --model" ;;
     mesh) echo "-o --output --palette-model --max-influences --quantize --batch --max-quantization-error --fps --skin
-                --json --type --lod $limits" ;;
+                --json --type --lod -q --quiet $limits" ;;
     esac
 }
 
@@ -33,7 +33,11 @@ _crowdbake()
     fi
     local commands="info sample bake inspect verify preview vat report mesh view"
     if [[ $cword -eq 1 ]]; then
-        COMPREPLY=($(compgen -W "$commands --help" -- "$cur"))
+        COMPREPLY=($(compgen -W "$commands help --help --version -V" -- "$cur"))
+        return
+    fi
+    if [[ $cword -eq 2 && ${words[1]} == help ]]; then
+        COMPREPLY=($(compgen -W "$commands" -- "$cur"))
         return
     fi
     case $prev in

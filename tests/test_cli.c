@@ -295,7 +295,7 @@ static void test_loop_and_one_shot_overrule_the_poses(void **state)
     assert_int_equal(clip_loops(TMP "/some.pal", death), -1);
 
     assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/bad.pal -q --loop Gallopp", cow), EXIT_USAGE);
-    assert_contains(out, "--loop Gallopp: the model has no such clip; its clips are: AnimalArmature|Attack_Headbutt");
+    assert_contains(out, "--loop Gallopp: no clip 'Gallopp'; did you mean 'AnimalArmature|Gallop'?");
     assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/bad.pal -q --loop '%s' --one-shot '%s'", cow, death,
                                death), EXIT_USAGE);
     assert_contains(out, "'AnimalArmature|Death' is given to both --loop and --one-shot");

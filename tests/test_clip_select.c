@@ -105,9 +105,9 @@ static void test_clip_selection(void **state)
     static char out[65536];
     /* Asked for by name: an error with the reason. */
     expect("bake Fox-broken.gltf --fps 30 -o x.pal --clip Broken", 4, "clip 'Broken' has no channels");
-    expect("bake Fox-broken.gltf --fps 30 -o x.pal --clip Walk,Nope", 2, "--clip Nope: the model has no such clip; its clips are: "
+    expect("bake Fox-broken.gltf --fps 30 -o x.pal --clip Walk,Nope", 2, "--clip Nope: no clip 'Nope'; the clips are: "
            "Survey, Walk, Run");
-    expect("bake Fox-broken.gltf --fps 30 -o x.pal --exclude-clip Jump", 2, "--exclude-clip Jump: the model has no such clip");
+    expect("bake Fox-broken.gltf --fps 30 -o x.pal --exclude-clip Jump", 2, "--exclude-clip Jump: no clip 'Jump'; the clips are: Survey");
     expect("bake Fox-broken.gltf --fps 30 -o x.pal --exclude-clip Survey,Walk,Run", 2, "no clip left to bake");
     expect("bake Fox-broken.gltf --fps 30 -o x.pal --clip Walk --exclude-clip Run", 2, "give --clip or --exclude-clip, not both");
     expect("verify Fox-broken.gltf all.pal --clip Walk --exclude-clip Run", 2, "give --clip or --exclude-clip, not both");
@@ -129,7 +129,7 @@ static void test_clip_selection(void **state)
     assert_int_equal(cli("verify Fox-broken.gltf all.pal --exclude-clip Walk --random 2 --json", false, out, sizeof out), 0);
     if (strstr(out, "\"name\": \"Walk\"") || !strstr(out, "\"name\": \"Run\"") || !strstr(out, "\"name\": \"Survey\""))
         fail_msg("%s", out);
-    expect("verify Fox-broken.gltf all.pal --clip Gallop", 2, "all.pal: --clip Gallop: the palette has no such clip");
+    expect("verify Fox-broken.gltf all.pal --clip Gallop", 2, "all.pal: --clip Gallop: no clip 'Gallop'; the clips are: ");
 }
 
 /* A catalog takes every clip but the broken one (a warning in the log and in --json), and

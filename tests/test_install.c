@@ -8,6 +8,7 @@
  * would need the sanitizer runtime too. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
+#include "view_server.h"
 
 #include <ctype.h>
 #include <limits.h>
@@ -96,7 +97,10 @@ static void test_destdir_layout(void **state)
         "include/crowdbake/crowdbake.h", "include/crowdbake/bake.h", "include/crowdbake_pal.h",
         "lib/pkgconfig/crowdbake.pc", "lib/cmake/crowdbake/crowdbakeConfig.cmake",
         "lib/cmake/crowdbake/crowdbakeConfigVersion.cmake", "lib/cmake/crowdbake/CrowdbakeRoster.cmake",
-        "share/man/man1/crowdbake.1", "share/bash-completion/completions/crowdbake", "share/zsh/site-functions/_crowdbake"};
+        "share/man/man1/crowdbake.1", "share/bash-completion/completions/crowdbake", "share/zsh/site-functions/_crowdbake",
+        "share/crowdbake/web/viewer.html", "share/crowdbake/web/serve.py", "share/crowdbake/web/crowdbake_pal.mjs",
+        "share/crowdbake/web/node_modules/three/build/three.module.js", "share/crowdbake/web/node_modules/fzstd/esm/index.mjs",
+        "share/crowdbake/samples/shaders/crowdbake_palette.glsl"};
     for (size_t i = 0; i < COUNT_OF(files); ++i) {
         char path[PATH_MAX * 2];
         snprintf(path, sizeof path, TMP "/stage/opt/cb/%s", files[i]);
@@ -110,7 +114,8 @@ static void test_destdir_layout(void **state)
     if (!strstr(out, "(SONAME)") || !strstr(out, "libcrowdbake.so.1") || !strstr(out, "libzstd")) fail_msg("%s", out);
 }
 
-/* A program outside the tree, through pkg-config: the same bytes as the command. */
+/* A program outside the tree, through pkg-config: the same bytes as the command. It runs as
+ * built, with no LD_LIBRARY_PATH and no -rpath of its own: crowdbake.pc carries the rpath. */
 static void test_pkg_config_program_bakes_fox(void **state)
 {
     (void)state;
@@ -118,9 +123,9 @@ static void test_pkg_config_program_bakes_fox(void **state)
     static char out[65536];
     int rc = sh(out, sizeof out,
                 "export PKG_CONFIG_PATH=%s/lib/pkgconfig && cc -std=c11 -Wall -Wextra -Werror -o " TMP "/bake_model "
-                "tests/install/bake_model.c $(pkg-config --cflags --libs crowdbake) -Wl,-rpath,%s/lib && "
-                TMP "/bake_model %s " TMP "/pkg.pal",
-                prefix, prefix, fox);
+                "tests/install/bake_model.c $(pkg-config --cflags --libs crowdbake) && "
+                "env -u LD_LIBRARY_PATH " TMP "/bake_model %s " TMP "/pkg.pal",
+                prefix, fox);
     if (rc != 0) fail_msg("%s", out);
     /* The default bake: error-bounded, Fox's clips at 24, 96 and 120 fps (289 rows). */
     if (!strstr(out, "289 rows, 24 bones, qpos/u16") || !strstr(out, "read back: 48x289 texels")) fail_msg("%s", out);
@@ -153,6 +158,56 @@ static void test_cmake_program_bakes_fox(void **state)
     if (rc != 0) fail_msg("%s", out);
     reference_bake(TMP "/reference.pal");
     assert_same_file(TMP "/cmake.pal", TMP "/reference.pal");
+}
+
+static view_server server; /* stopped by the teardown too, when a check fails half-way */
+
+static int stop_server(void **state)
+{
+    (void)state;
+    if (server.pid > 0) view_stop(&server);
+    server.pid = 0;
+    return 0;
+}
+
+/* The installed command's `view`, run from a folder outside the source tree, serves the
+ * installed viewer (PREFIX/share/crowdbake/web) and every file the page imports. */
+static void test_installed_view_serves_the_viewer(void **state)
+{
+    (void)state;
+    if (skip_under_sanitizers()) skip();
+    char away[] = "/tmp/crowdbake-view-XXXXXX", exe[PATH_MAX + 96], fish[PATH_MAX], rel[PATH_MAX], cache[PATH_MAX + 16];
+    if (!mkdtemp(away)) fail_msg("mkdtemp");
+    snprintf(rel, sizeof rel, "%s/fish.glb", samples_dir());
+    if (!realpath(rel, fish)) fail_msg("%s: missing", rel);
+    snprintf(exe, sizeof exe, "%s/bin/crowdbake", prefix);
+    snprintf(cache, sizeof cache, "%s/cache", away);
+    if (view_start(&server, exe, fish, cache, away)) fail_msg("no URL from the installed crowdbake view:\n%s", server.printed);
+    char host[64], answer[1 << 16];
+    snprintf(host, sizeof host, "127.0.0.1:%u", server.port);
+    static const char *const pages[] = {"/web/viewer.html", "/web/viewer.mjs", "/web/crowdbake_vat.mjs",
+                                        "/web/node_modules/three/build/three.module.js",
+                                        "/web/node_modules/three/examples/jsm/loaders/GLTFLoader.js",
+                                        "/web/node_modules/three/examples/jsm/utils/BufferGeometryUtils.js",
+                                        "/web/node_modules/fzstd/esm/index.mjs", "/samples/shaders/crowdbake_palette.glsl",
+                                        "/view.json"};
+    for (size_t i = 0; i < COUNT_OF(pages); ++i) {
+        assert_int_equal(http_get(server.port, pages[i], host, answer, sizeof answer), 0);
+        if (strncmp(answer, "HTTP/1.0 200 ", 13)) fail_msg("GET %s: %.300s", pages[i], answer);
+    }
+    /* And it is the installed copy that is served, not the source tree's. */
+    char link[PATH_MAX + 32], target[PATH_MAX], want[PATH_MAX + 128];
+    snprintf(link, sizeof link, "%s/site/web", cache);
+    ssize_t n = readlink(link, target, sizeof target - 1);
+    target[n > 0 ? n : 0] = 0;
+    snprintf(want, sizeof want, "%s/share/crowdbake/web", prefix);
+    char want_real[PATH_MAX];
+    if (!realpath(want, want_real) || strcmp(target, want_real)) fail_msg("the site's web/ is %s, not %s", target, want);
+    assert_int_equal(view_stop(&server), 0);
+    server.pid = 0;
+    char cmd[PATH_MAX + 16];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", away);
+    assert_int_equal(system(cmd), 0);
 }
 
 static struct timespec mtime(const char *path)
@@ -207,6 +262,21 @@ static void test_cmake_roster_rebakes_only_what_changed(void **state)
     if (!strstr(json, "\"clip\": \"walk\"")) fail_msg("the manifest does not show the new fish:\n%s", json);
     free(json);
     ninja_build(dir, false);
+}
+
+/* On Debian 12's own Node.js 18 the tests stop before any runs, saying which Node.js they need
+ * and the command that gets it (instead of every browser test failing in playwright-core). */
+static void test_make_check_names_the_node_it_needs(void **state)
+{
+    (void)state;
+    assert_int_equal(system("mkdir -p " TMP "/node18 && printf '#!/bin/sh\\necho v18.19.0\\n' > " TMP "/node18/node && "
+                            "chmod +x " TMP "/node18/node"), 0);
+    static char out[65536];
+    assert_int_not_equal(sh(out, sizeof out, "PATH=%s/" TMP "/node18:$PATH make --no-print-directory check-node", root), 0);
+    if (!strstr(out, "need Node.js 20 or newer") || !strstr(out, "this is Node.js 18.19.0") ||
+        !strstr(out, "https://deb.nodesource.com/setup_20.x | bash - && apt-get install -y nodejs"))
+        fail_msg("%s", out);
+    assert_int_equal(sh(out, sizeof out, "make --no-print-directory check-node"), 0); /* this machine's own node */
 }
 
 /* Whether `text` holds `word` with no letter, digit or '-' right before or after it. */
@@ -282,7 +352,9 @@ int main(void)
         cmocka_unit_test(test_destdir_layout),
         cmocka_unit_test(test_pkg_config_program_bakes_fox),
         cmocka_unit_test(test_cmake_program_bakes_fox),
+        cmocka_unit_test_teardown(test_installed_view_serves_the_viewer, stop_server),
         cmocka_unit_test(test_cmake_roster_rebakes_only_what_changed),
+        cmocka_unit_test(test_make_check_names_the_node_it_needs),
         cmocka_unit_test(test_man_page_and_completions),
         cmocka_unit_test(test_cli_uses_only_the_public_headers),
     };

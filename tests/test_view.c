@@ -8,6 +8,7 @@
  * so the comparison is shown to catch a wrong palette. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
+#include "view_server.h"
 
 #include <limits.h>
 #include <math.h>
@@ -102,9 +103,65 @@ static void test_a_broken_palette_shader_is_caught(void **state)
     assert_true(mismatch > 0.2);
 }
 
+/* The viewer is a local server: only requests that name it (127.0.0.1, localhost or [::1] with
+ * its port) are answered, so a page elsewhere cannot read the models through DNS rebinding (its
+ * own name pointed at 127.0.0.1: the browser then sends Host: that name); folders are not listed. */
+static view_server server; /* stopped by the teardown too, when a check fails half-way */
+
+static int stop_server(void **state)
+{
+    (void)state;
+    if (server.pid > 0) view_stop(&server);
+    server.pid = 0;
+    return 0;
+}
+
+static void test_view_answers_only_its_own_host_and_lists_nothing(void **state)
+{
+    (void)state;
+    char fish[PATH_MAX], host[64], answer[1 << 16];
+    snprintf(fish, sizeof fish, "%s/fish.glb", samples_dir());
+    assert_int_equal(system("rm -rf " TMP "/host && mkdir -p " TMP "/host"), 0);
+    view_server *s = &server;
+    if (view_start(s, crowdbake_exe(), fish, TMP "/host/cache", NULL)) fail_msg("no URL from crowdbake view:\n%s", s->printed);
+    static const char *const local[] = {"127.0.0.1", "localhost", "[::1]", "LocalHost"};
+    for (size_t i = 0; i < COUNT_OF(local); ++i) {
+        snprintf(host, sizeof host, "%s:%u", local[i], s->port);
+        assert_int_equal(http_get(s->port, "/web/viewer.html", host, answer, sizeof answer), 0);
+        if (strncmp(answer, "HTTP/1.0 200 ", 13) || !strstr(http_body(answer), "<canvas id=\"view\""))
+            fail_msg("Host %s: %.300s", host, answer);
+    }
+    /* A rebinding page's name, another port, the right name on no port, no Host at all. */
+    char other_port[64], bare[64];
+    snprintf(other_port, sizeof other_port, "127.0.0.1:%u", s->port + 1);
+    snprintf(bare, sizeof bare, "localhost");
+    const char *const refused[] = {"attacker.example:80", "attacker.example", other_port, bare, "127.0.0.1.nip.io", NULL};
+    for (size_t i = 0; i < COUNT_OF(refused); ++i) {
+        assert_int_equal(http_get(s->port, "/view.json", refused[i], answer, sizeof answer), 0);
+        const char *body = http_body(answer);
+        if (strncmp(answer, "HTTP/1.0 403 ", 13) || !strstr(body, "crowdbake view: Host '") ||
+            strchr(body, '\n') != body + strlen(body) - 1 || strstr(body, "\"types\""))
+            fail_msg("Host %s: %.300s", refused[i] ? refused[i] : "(none)", answer);
+    }
+    /* Folders: 404 with one line, never a listing of the site, the web files or the models. */
+    snprintf(host, sizeof host, "127.0.0.1:%u", s->port);
+    static const char *const folders[] = {"/", "/web/", "/models/fish/", "/data/", "/web"};
+    for (size_t i = 0; i < COUNT_OF(folders); ++i) {
+        assert_int_equal(http_get(s->port, folders[i], host, answer, sizeof answer), 0);
+        if (strncmp(answer, "HTTP/1.0 404 ", 13) || strstr(answer, "Directory listing") || strstr(answer, "viewer.html\""))
+            fail_msg("GET %s: %.300s", folders[i], answer);
+    }
+    /* The files themselves are still served. */
+    assert_int_equal(http_get(s->port, "/view.json", host, answer, sizeof answer), 0);
+    if (strncmp(answer, "HTTP/1.0 200 ", 13) || !strstr(http_body(answer), "\"name\": \"fish\"")) fail_msg("%.300s", answer);
+    assert_int_equal(view_stop(s), 0);
+    s->pid = 0;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test_teardown(test_view_answers_only_its_own_host_and_lists_nothing, stop_server),
         cmocka_unit_test(test_view_shows_a_moving_herd_of_cows),
         cmocka_unit_test(test_a_broken_palette_shader_is_caught),
     };

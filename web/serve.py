@@ -4,12 +4,18 @@ command has already bound to 127.0.0.1 (so it knows and prints the port before t
 
   python3 web/serve.py --fd N --directory SITE
 
-Serves SITE (links followed) until Ctrl-C, then exits 0. Requests are not logged; errors are."""
+Serves SITE (links followed) until Ctrl-C, then exits 0. Requests are not logged; errors are.
+A local server only: a request whose Host is not this server's own address (127.0.0.1, localhost
+or [::1] with its port) gets 403, so a web page the user visits cannot read the site through DNS
+rebinding (its name made to point at 127.0.0.1); and a folder gets 404, not a listing."""
 import argparse
 import functools
 import http.server
+import os
 import socket
 import sys
+
+LOCAL_NAMES = ('127.0.0.1', 'localhost', '[::1]')
 
 
 class Handler(http.server.SimpleHTTPRequestHandler):
@@ -17,6 +23,34 @@ class Handler(http.server.SimpleHTTPRequestHandler):
                       '.mjs': 'text/javascript', '.js': 'text/javascript', '.glsl': 'text/plain',
                       '.json': 'application/json', '.pal': 'application/octet-stream',
                       '.exr': 'application/octet-stream', '.glb': 'model/gltf-binary'}
+
+    def parse_request(self):
+        if not super().parse_request():
+            return False
+        port = self.server.server_address[1]
+        host = (self.headers.get('Host') or '').strip().lower()
+        if host in ['%s:%d' % (name, port) for name in LOCAL_NAMES]:
+            return True
+        self.refuse(403, "Host '%s' is not this server: open http://127.0.0.1:%d/web/viewer.html" % (host[:100], port))
+        return False
+
+    def send_head(self):
+        if os.path.isdir(self.translate_path(self.path)):
+            self.refuse(404, 'no listing of folders: open /web/viewer.html')
+            return None
+        return super().send_head()
+
+    def refuse(self, code, line):
+        """A one-line plain-text answer, the connection closed after it."""
+        body = ('crowdbake view: %s\n' % line).encode('utf-8', 'replace')
+        self.close_connection = True
+        self.send_response(code)
+        self.send_header('Content-Type', 'text/plain; charset=utf-8')
+        self.send_header('Content-Length', str(len(body)))
+        self.send_header('Connection', 'close')
+        self.end_headers()
+        if self.command != 'HEAD':
+            self.wfile.write(body)
 
     def end_headers(self):
         self.send_header('Cache-Control', 'no-cache')  # a re-bake shows on reload
@@ -39,6 +73,7 @@ def main():
                                              bind_and_activate=False)
     server.socket.close()
     server.socket = socket.socket(fileno=a.fd)
+    server.server_address = server.socket.getsockname()[:2]  # the port Host must name
     server.daemon_threads = True
     try:
         server.serve_forever()

@@ -1,0 +1,328 @@
+/* test_cli_habits.c - the command's habits, as a user of gltfpack, ktx or toktx expects them:
+ * --version/-V, `crowdbake help COMMAND`, `-o -` refused with a message (never a file named
+ * "-"), a .fbx/.obj/.png/.blend named as what it is with the converters to use, and clip names
+ * matched regardless of case and by a unique part, with "did you mean" for a miss and the
+ * candidates for an ambiguity, the same in every command that takes clip names. The clip names
+ * are the shared models' own (Fox: Survey, Walk, Run; the Cow: AnimalArmature|Gallop and
+ * AnimalArmature|Gallop_Jump among others); and info's line per mesh node, one for a row of
+ * nodes drawing the same mesh. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <limits.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "crowdbake/core.h"
+
+#define TMP TEST_TMP "/cli_habits"
+
+static char fox[PATH_MAX], cow[PATH_MAX];
+static char out[1 << 16];
+
+static int setup(void **state)
+{
+    (void)state;
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
+    return system("rm -rf " TMP " && mkdir -p " TMP);
+}
+
+/* Runs `crowdbake ARGS 2>&1`; returns the exit code, the output in out. */
+static int crowdbake(const char *fmt, ...)
+{
+    char args[2048], cmd[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(args, sizeof args, fmt, ap);
+    va_end(ap);
+    snprintf(cmd, sizeof cmd, "%s %s 2>&1", crowdbake_exe(), args);
+    return run_command(cmd, out, sizeof out);
+}
+
+static void assert_contains(const char *needle)
+{
+    if (!strstr(out, needle)) fail_msg("expected \"%s\" in:\n%s", needle, out);
+}
+
+static void test_version_and_help_command(void **state)
+{
+    (void)state;
+    static const char *const version_flags[] = {"--version", "-V"};
+    for (size_t i = 0; i < COUNT_OF(version_flags); ++i) {
+        assert_int_equal(crowdbake("%s", version_flags[i]), 0);
+        assert_string_equal(out, "crowdbake " CROWDBAKE_VERSION "\n");
+    }
+    /* `help COMMAND` is the command's --help, for every command. */
+    static const char *const commands[] = {"info", "sample", "bake", "inspect", "verify", "preview", "mesh", "vat", "report", "view"};
+    static char want[1 << 16];
+    for (size_t i = 0; i < COUNT_OF(commands); ++i) {
+        assert_int_equal(crowdbake("%s --help", commands[i]), 0);
+        snprintf(want, sizeof want, "%s", out);
+        assert_int_equal(crowdbake("help %s", commands[i]), 0);
+        assert_string_equal(out, want);
+        assert_non_null(strstr(out, "usage: crowdbake "));
+    }
+    assert_int_equal(crowdbake("help bkae"), EXIT_USAGE);
+    assert_contains("unknown command 'bkae'; did you mean 'bake'?");
+    assert_int_equal(crowdbake("help"), 0);
+    assert_contains("crowdbake help COMMAND");
+}
+
+/* `-o -` is no file named "-": every command writing files says so and writes nothing. */
+static void test_output_dash_is_refused(void **state)
+{
+    (void)state;
+    char abs_fox[PATH_MAX];
+    assert_non_null(realpath(fox, abs_fox));
+    /* From inside TMP, so a file named "-" would land there. */
+    char exe[PATH_MAX], cmd[3 * PATH_MAX];
+    assert_non_null(realpath(crowdbake_exe(), exe));
+    snprintf(cmd, sizeof cmd, "cd " TMP " && %s bake %s -o - 2>&1", exe, abs_fox);
+    assert_int_equal(run_command(cmd, out, sizeof out), EXIT_USAGE);
+    struct stat st;
+    assert_int_not_equal(stat(TMP "/-", &st), 0);
+    static const char *const commands[][2] = {{"bake", "-o -"}, {"bake", "--output=-"}, {"vat", "-o -"}, {"mesh", "-o -"}};
+    for (size_t i = 0; i < COUNT_OF(commands); ++i) {
+        assert_int_equal(crowdbake("%s %s %s", commands[i][0], abs_fox, commands[i][1]), EXIT_USAGE);
+        assert_contains(": writes no standard output");
+        assert_contains("name a file, e.g. ");
+        assert_int_equal(strchr(out, '\n'), out + strlen(out) - 1); /* one line */
+    }
+}
+
+/* What artists export before glTF is named, by its first bytes or else its name, with the way
+ * to convert it; never "not a valid glTF 2.0 file: Root element is not a JSON object". */
+static void test_other_formats_are_named_with_their_converters(void **state)
+{
+    (void)state;
+    write_text(TMP "/cow.fbx", "Kaydara FBX Binary  \x1a");
+    write_text(TMP "/cow_ascii.fbx", "; FBX 7.4.0 project file\n");
+    write_text(TMP "/fbx_named_model", "Kaydara FBX Binary  \x1a"); /* the bytes decide */
+    write_text(TMP "/cow.obj", "# exported\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write_text(TMP "/cow.blend", "BLENDER-v300RENDH");
+    assert_int_equal(system("cp docs/viewer.png " TMP "/cow.png"), 0);
+    static const char *const files[][2] = {{"cow.fbx", "(an FBX file)"}, {"cow_ascii.fbx", "(an FBX file (ASCII))"},
+                                           {"fbx_named_model", "(an FBX file)"}, {"cow.obj", "(a Wavefront OBJ file)"},
+                                           {"cow.blend", "(a Blender .blend file)"}, {"cow.png", "(a PNG image)"}};
+    static const char *const commands[] = {"info", "bake", "sample --fps 10 --json", "vat"};
+    for (size_t i = 0; i < COUNT_OF(files); ++i)
+        for (size_t c = 0; c < COUNT_OF(commands); ++c) {
+            bool writes = strncmp(commands[c], "bake", 4) == 0 || strncmp(commands[c], "vat", 3) == 0;
+            assert_int_equal(crowdbake("%s " TMP "/%s%s", commands[c], files[i][0], writes ? " -o " TMP "/out.pal" : ""),
+                             EXIT_INPUT);
+            assert_contains(": not glTF ");
+            assert_contains(files[i][1]);
+            assert_contains("FBX2glTF");
+            assert_contains("Blender");
+            struct stat st;
+            assert_int_not_equal(stat(TMP "/out.pal", &st), 0);
+        }
+    /* A real glTF with a surprising name is still read. */
+    char cmd[2 * PATH_MAX];
+    snprintf(cmd, sizeof cmd, "cp %s " TMP "/fox.obj", fox);
+    assert_int_equal(system(cmd), 0);
+    assert_int_equal(crowdbake("info " TMP "/fox.obj"), 0);
+    assert_contains("3 clips");
+}
+
+/* A bake's bytes, to compare two spellings of the same clips. */
+static char *bake_bytes(const char *clips, size_t *n)
+{
+    assert_int_equal(crowdbake("bake %s -o " TMP "/clips.pal -q --clip %s", fox, clips), 0);
+    return read_whole_file(TMP "/clips.pal", n);
+}
+
+static void test_clip_names_match_by_case_and_part(void **state)
+{
+    (void)state;
+    /* Case and parts: the same palette as the exact names. */
+    size_t na, nb;
+    char *exact = bake_bytes("Walk,Run", &na), *loose = bake_bytes("walk,RUN", &nb);
+    assert_true(na == nb && memcmp(exact, loose, na) == 0);
+    free(loose);
+    loose = bake_bytes("alk,ru", &nb);
+    assert_true(na == nb && memcmp(exact, loose, na) == 0);
+    free(exact), free(loose);
+    /* The part after an exporter's "Armature|" picks that clip though a longer one holds it. */
+    assert_int_equal(crowdbake("sample %s --fps 2 --json --clip gallop --frame 0", cow), 0);
+    assert_contains("\"name\": \"AnimalArmature|Gallop\",");
+    assert_int_equal(crowdbake("sample %s --fps 2 --json --clip GALLOP_jump --frame 0", cow), 0);
+    assert_contains("\"name\": \"AnimalArmature|Gallop_Jump\",");
+    /* An ambiguity lists the candidates; a miss says what was meant. */
+    assert_int_equal(crowdbake("bake %s -o " TMP "/cow.pal --clip gall", cow), EXIT_USAGE);
+    assert_contains("--clip gall: 'gall' matches 2 clips: 'AnimalArmature|Gallop', 'AnimalArmature|Gallop_Jump'; give more "
+                    "of the name");
+    assert_int_equal(crowdbake("bake %s -o " TMP "/fox.pal --clip wlak", fox), EXIT_USAGE);
+    assert_contains("--clip wlak: no clip 'wlak'; did you mean 'Walk'?");
+    assert_int_equal(crowdbake("vat %s -o " TMP "/cow.exr --clip galop", cow), EXIT_USAGE);
+    assert_contains("no clip 'galop'; did you mean 'AnimalArmature|Gallop'?");
+    assert_int_equal(crowdbake("bake %s -o " TMP "/fox.pal -q --loop survey --one-shot RUN", fox), 0);
+    /* The same matcher for a palette's clips: inspect and verify. */
+    assert_int_equal(crowdbake("bake %s -o " TMP "/fox.pal -q", fox), 0);
+    assert_int_equal(crowdbake("inspect " TMP "/fox.pal --clip walk --frame 0 --json"), 0);
+    assert_contains("\"clip\": \"Walk\"");
+    assert_int_equal(crowdbake("inspect " TMP "/fox.pal --clip wak --frame 0"), EXIT_USAGE);
+    assert_contains("no clip 'wak'; did you mean 'Walk'?");
+    assert_int_equal(crowdbake("verify %s " TMP "/fox.pal --clip walk --random 2", fox), 0);
+    assert_contains("  Walk ");
+    assert_true(!strstr(out, "  Run ") && !strstr(out, "  Survey "));
+    assert_int_equal(crowdbake("verify %s " TMP "/fox.pal --exclude-clip WALK --random 2", fox), 0);
+    assert_true(strstr(out, "  Run ") && strstr(out, "  Survey ") && !strstr(out, "  Walk "));
+}
+
+/* report bakes for seconds: a line per type on stderr with -v (and on a terminal), none with
+ * -q or when stderr is not a terminal; stdout keeps only the report, so --json still parses.
+ * The types are samples/catalog.toml's (a copy baking into this test's folder). */
+static void test_report_progress(void **state)
+{
+    (void)state;
+    static char err[1 << 16];
+    char cmd[4 * PATH_MAX], cwd[PATH_MAX], samples[PATH_MAX];
+    /* The catalog's copy bakes into this test's folder, the models from this build's samples. */
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    assert_non_null(realpath(samples_dir(), samples));
+    snprintf(cmd, sizeof cmd, "sed -e 's|^out_dir = .*|out_dir = \"%s/" TMP "/roster\"|' -e 's|\"../build/samples/|\"%s/|' "
+             "samples/catalog.toml > " TMP "/catalog.toml", cwd, samples);
+    assert_int_equal(system(cmd), 0);
+    snprintf(cmd, sizeof cmd, "%s report " TMP "/catalog.toml --json -v 2>&1 >" TMP "/report.json", crowdbake_exe());
+    assert_int_equal(run_command(cmd, err, sizeof err), 0);
+    static const char *const types[] = {"  bird ", "  fish ", "  goat ", "  sheep "};
+    for (size_t i = 0; i < COUNT_OF(types); ++i)
+        if (!strstr(err, types[i])) fail_msg("no progress line for %s in:\n%s", types[i], err);
+    assert_int_equal(system("python3 -c 'import json; json.load(open(\"" TMP "/report.json\"))'"), 0);
+    static const char *const silent[] = {"--json", "--json -q", "--json -v --quiet"};
+    for (size_t i = 0; i < COUNT_OF(silent); ++i) {
+        snprintf(cmd, sizeof cmd, "%s report " TMP "/catalog.toml %s 2>&1 >/dev/null", crowdbake_exe(), silent[i]);
+        assert_int_equal(run_command(cmd, err, sizeof err), 0);
+        assert_string_equal(err, "");
+    }
+}
+
+/* -q on the commands that print a summary of what they wrote: nothing printed, the file written. */
+static void test_quiet_writes_without_a_summary(void **state)
+{
+    (void)state;
+    assert_int_equal(crowdbake("bake %s -o " TMP "/q.pal -q", fox), 0);
+    static const char *const commands[][2] = {{"vat %s -o " TMP "/q.exr", TMP "/q.exr"},
+                                              {"mesh %s -o " TMP "/q.glb", TMP "/q.glb"},
+                                              {"preview %s " TMP "/q.pal -o " TMP "/q.png", TMP "/q.png"}};
+    char args[1024];
+    for (size_t i = 0; i < COUNT_OF(commands); ++i)
+        for (int quiet = 0; quiet < 3; ++quiet) {
+            unlink(commands[i][1]);
+            snprintf(args, sizeof args, commands[i][0], fox);
+            assert_int_equal(crowdbake("%s%s", args, quiet == 0 ? "" : quiet == 1 ? " -q" : " --quiet"), 0);
+            struct stat st;
+            assert_int_equal(stat(commands[i][1], &st), 0);
+            if (quiet) assert_string_equal(out, "");
+            else assert_int_equal(strncmp(out, commands[i][1], strlen(commands[i][1])), 0); /* "FILE: what it holds" */
+        }
+}
+
+/* verify -q: nothing printed when it passes; over --max-error only the one line of why, exit 6. */
+static void test_verify_quiet(void **state)
+{
+    (void)state;
+    assert_int_equal(crowdbake("bake %s -o " TMP "/vq.pal -q", fox), 0);
+    assert_int_equal(crowdbake("verify %s " TMP "/vq.pal --random 2 -q", fox), 0);
+    assert_string_equal(out, "");
+    assert_int_equal(crowdbake("verify %s " TMP "/vq.pal --random 2 --quiet --max-error 0.0001", fox), EXIT_VERIFY);
+    assert_contains("is over --max-error 0.0001");
+    assert_int_equal(strchr(out, '\n'), out + strlen(out) - 1);
+}
+
+/* info -q: the description without the warnings a bake would give. Magnum's animation.glb has
+ * an empty clip and a channel with no keys (MANIFEST.md: deliberately invalid). */
+static void test_info_quiet(void **state)
+{
+    (void)state;
+    char model[PATH_MAX], cmd[2 * PATH_MAX];
+    shared_path(model, sizeof model, "assets/magnum-animation/animation.glb");
+    snprintf(cmd, sizeof cmd, "%s info %s 2>&1 >/dev/null", crowdbake_exe(), model);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    assert_contains("crowdbake: warning: ");
+    assert_contains("clip 'empty' has no channels");
+    snprintf(cmd, sizeof cmd, "%s info %s -q 2>&1 >/dev/null", crowdbake_exe(), model);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    assert_string_equal(out, "");
+    assert_int_equal(crowdbake("info %s --quiet", model), 0);
+    assert_contains("clip ");
+}
+
+/* A .ktx2 from bake given to inspect or verify is named as what it is, with the files of the same
+ * bake they read (not "neither a palette nor glTF"). */
+static void test_ktx2_is_named(void **state)
+{
+    (void)state;
+    assert_int_equal(crowdbake("bake %s -o " TMP "/k.pal --format pal,ktx2 -q", fox), 0);
+    assert_int_equal(crowdbake("inspect " TMP "/k.ktx2"), EXIT_USAGE);
+    assert_contains("k.ktx2: a KTX2 palette, which 'inspect' does not read: give it the .pal or .exr of the same bake");
+    assert_int_equal(crowdbake("verify %s " TMP "/k.ktx2", fox), EXIT_USAGE);
+    assert_contains("k.ktx2: a KTX2 palette, which 'verify' does not read");
+    assert_int_equal(crowdbake("verify %s " TMP "/k.pal --random 2 -q", fox), 0); /* the .pal beside it */
+}
+
+/* The completions know `help COMMAND` and --version. */
+static void test_completions_know_help_and_version(void **state)
+{
+    (void)state;
+    assert_int_equal(run_command("bash -c '. completions/crowdbake.bash; COMP_WORDS=(crowdbake help ba); COMP_CWORD=2; "
+                                 "_crowdbake; echo ${COMPREPLY[@]}; COMP_WORDS=(crowdbake --v); COMP_CWORD=1; _crowdbake; "
+                                 "echo ${COMPREPLY[@]}'", out, sizeof out), 0);
+    assert_string_equal(out, "bake\n--version\n");
+    char *zsh = read_whole_file("completions/_crowdbake", NULL);
+    assert_non_null(strstr(zsh, "{-V,--version}"));
+    assert_non_null(strstr(zsh, "  help)"));
+    free(zsh);
+}
+
+static int count_lines_with(const char *text, const char *part)
+{
+    int n = 0;
+    for (const char *p = strstr(text, part); p; p = strstr(p + 1, part)) ++n;
+    return n;
+}
+
+/* info: a line per mesh node, not per primitive, and one for nodes drawing the same mesh. The
+ * counts are MANIFEST.md's: the robot has 14 skinned mesh nodes sharing one skin, the Cow 7
+ * primitives on one skinned mesh node. */
+static void test_info_folds_primitives_and_instances(void **state)
+{
+    (void)state;
+    char robot[PATH_MAX], simple[PATH_MAX], cmd[4 * PATH_MAX];
+    shared_path(robot, sizeof robot, "assets/robot-quaternius-raylib/robot.glb");
+    assert_int_equal(crowdbake("info %s", robot), 0);
+    assert_int_equal(count_lines_with(out, "  mesh node "), 14);
+    assert_int_equal(crowdbake("info %s", cow), 0);
+    assert_int_equal(count_lines_with(out, "  mesh node"), 1);
+    assert_contains("  mesh node 'Cow' (node 58): 7 primitives, ");
+    /* SimpleSkin's one mesh drawn by twelve nodes (a herd placed in the file): one line. */
+    shared_path(simple, sizeof simple, "assets/simpleskin-bevy/SimpleSkin.gltf");
+    snprintf(cmd, sizeof cmd, "python3 -c \"import json,sys; g=json.load(open(sys.argv[1])); "
+             "g['nodes'] += [{'name': 'copy%%d' %% i, 'mesh': 0, 'skin': 0} for i in range(11)]; "
+             "g['scenes'][0]['nodes'] += list(range(3, 14)); json.dump(g, open(sys.argv[2], 'w'))\" %s " TMP "/herd.gltf", simple);
+    assert_int_equal(system(cmd), 0);
+    assert_int_equal(crowdbake("info " TMP "/herd.gltf"), 0);
+    assert_int_equal(count_lines_with(out, "  mesh node"), 1);
+    assert_contains("  mesh nodes '");
+    assert_contains(" .. 'copy10' (nodes 0 .. 13: 12 nodes, one mesh): each ");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_version_and_help_command),
+        cmocka_unit_test(test_output_dash_is_refused),
+        cmocka_unit_test(test_other_formats_are_named_with_their_converters),
+        cmocka_unit_test(test_clip_names_match_by_case_and_part),
+        cmocka_unit_test(test_info_folds_primitives_and_instances),
+        cmocka_unit_test(test_report_progress),
+        cmocka_unit_test(test_quiet_writes_without_a_summary),
+        cmocka_unit_test(test_verify_quiet),
+        cmocka_unit_test(test_info_quiet),
+        cmocka_unit_test(test_ktx2_is_named),
+        cmocka_unit_test(test_completions_know_help_and_version),
+    };
+    return cmocka_run_group_tests_name("cli_habits", tests, setup, NULL);
+}
