@@ -78,14 +78,9 @@ uniform float u_time; uniform mat4 u_view_projection;
 out vec3 v_world; out vec3 v_normal;
 void main() {
     float fade = a_fade.y > 0.0 ? clamp((u_time - a_fade.x) / a_fade.y, 0.0, 1.0) : 1.0;
-    vec3 p, n;
-    if (fade < 1.0) {
-        p = cb_skin_position_crossfade(a_position, a_joints, a_weights, a_from, a_inst, fade, u_time);
-        n = cb_skin_normal_crossfade(a_normal, a_joints, a_weights, a_from, a_inst, fade, u_time);
-    } else {
-        p = cb_skin_position(a_position, a_joints, a_weights, a_inst, u_time);
-        n = cb_skin_normal(a_normal, a_joints, a_weights, a_inst, u_time);
-    }
+    vec3 p, n; // one pass over the bones for both (each texel read once)
+    if (fade < 1.0) cb_skin_position_normal_crossfade(a_position, a_normal, a_joints, a_weights, a_from, a_inst, fade, u_time, p, n);
+    else cb_skin_position_normal(a_position, a_normal, a_joints, a_weights, a_inst, u_time, p, n);
     float c = cos(a_place.w), s = sin(a_place.w);
     mat3 yaw = mat3(c, 0.0, -s, 0.0, 1.0, 0.0, s, 0.0, c);
     v_world = a_place.xyz + a_fade.z * (yaw * p);
