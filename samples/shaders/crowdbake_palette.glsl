@@ -192,6 +192,12 @@ cb_affine cb_bone_affine(int row0, int row1, float fr, int bone)
 #endif
 }
 
+// A cross-fade of two transforms: from f (fade 0) to m (fade 1).
+cb_affine cb_affine_mix(cb_affine f, cb_affine m, float fade)
+{
+    return cb_affine(m.a * fade + f.a * (1.0 - fade), mix(f.t, m.t, fade));
+}
+
 // Skins a position v and a normal n (not normalized) in one pass over the influences, cross-faded
 // from from_inst (fade 0 -> 1; 1: inst alone): each bone's texels are fetched once for both.
 // Blending the bones' transforms is blending what they skin: both are linear in them.
@@ -207,10 +213,7 @@ void cb_skin_both(vec3 v, vec3 n, ivec4 joints, vec4 weights, vec4 from_inst, ve
     for (int i = 0; i < CB_INFLUENCES; ++i) // cb:influences - crowdbake mesh puts the largest weights first
         if (weights[i] != 0.0) {
             cb_affine m = cb_bone_affine(row0, row1, fr, joints[i]);
-            if (fade < 1.0) {
-                cb_affine f = cb_bone_affine(from0, from1, from_fr, joints[i]);
-                m = cb_affine(m.a * fade + f.a * (1.0 - fade), mix(f.t, m.t, fade));
-            }
+            if (fade < 1.0) m = cb_affine_mix(cb_bone_affine(from0, from1, from_fr, joints[i]), m, fade);
             p += weights[i] * (m.a * v + m.t);
             skinned_n += weights[i] * (m.a * n);
         }
@@ -258,3 +261,55 @@ vec3 cb_skin_normal_crossfade(vec3 n, ivec4 joints, vec4 weights, vec4 from_inst
     cb_skin_both(vec3(0.0), n, joints, weights, from_inst, inst, fade, time, p, skinned_n);
     return normalize(skinned_n);
 }
+
+// ---- The bone pass: each instance's bones blended once a frame instead of once a vertex ----
+// A fragment shader, one fragment per (instance, bone), writes cb_bone_pass's three texels to three
+// RGBA32F render targets (bone textures: instance i's bone j at (block * bones + j, i - block *
+// cb_bone_rows), block = i / cb_bone_rows); a vertex shader compiled with #define CB_BONE_TEXTURE
+// then skins from them, three plain texel fetches an influence, no decoding and no blending:
+//
+//   cb_bone_pass(int(gl_FragCoord.x) - first_bone_x, from_inst, inst, fade, time, out0, out1, out2); // fragment
+//   cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, gl_InstanceID, p, n);                 // vertex
+//
+// (web/crowdbake_crowd.mjs's bonePass option runs both.)
+
+// Bone `bone` of an instance: the columns of its transform, translation in w.
+void cb_bone_pass(int bone, vec4 from_inst, vec4 inst, float fade, float time, out vec4 c0, out vec4 c1, out vec4 c2)
+{
+    int row0, row1;
+    float fr;
+    cb_frame(inst, time, row0, row1, fr);
+    cb_affine m = cb_bone_affine(row0, row1, fr, bone);
+    if (fade < 1.0) {
+        cb_frame(from_inst, time, row0, row1, fr);
+        m = cb_affine_mix(cb_bone_affine(row0, row1, fr, bone), m, fade);
+    }
+    c0 = vec4(m.a[0], m.t.x), c1 = vec4(m.a[1], m.t.y), c2 = vec4(m.a[2], m.t.z);
+}
+
+#ifdef CB_BONE_TEXTURE
+uniform sampler2D cb_bones0, cb_bones1, cb_bones2; // the bone pass's three targets
+uniform int cb_bone_rows;                          // instances per column block of them
+
+cb_affine cb_passed_bone(int instance, int bone)
+{
+    int block = instance / cb_bone_rows;
+    ivec2 xy = ivec2(block * (cb_row_texels / CB_TEXELS_PER_BONE) + bone, instance - block * cb_bone_rows);
+    vec4 c0 = texelFetch(cb_bones0, xy, 0), c1 = texelFetch(cb_bones1, xy, 0), c2 = texelFetch(cb_bones2, xy, 0);
+    return cb_affine(mat3(c0.xyz, c1.xyz, c2.xyz), vec3(c0.w, c1.w, c2.w)); // cb:bone-columns
+}
+
+// The position and the normal (normalized) of a vertex of instance `instance`, from the bone pass.
+void cb_skin_bone_pass(vec3 v, vec3 n, ivec4 joints, vec4 weights, int instance, out vec3 p, out vec3 skinned_n)
+{
+    p = vec3(0.0);
+    skinned_n = vec3(0.0);
+    for (int i = 0; i < CB_INFLUENCES; ++i)
+        if (weights[i] != 0.0) {
+            cb_affine m = cb_passed_bone(instance, joints[i]);
+            p += weights[i] * (m.a * v + m.t);
+            skinned_n += weights[i] * (m.a * n);
+        }
+    skinned_n = normalize(skinned_n);
+}
+#endif
