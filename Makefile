@@ -17,7 +17,7 @@ SHELL := /bin/bash
 DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
-                cmake groff-base
+                cmake groff-base libegl-dev libgl-dev libegl-mesa0
 PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
 BUILD   ?= build
@@ -291,6 +291,11 @@ $(BUILD)/tests/bake_hashes.run: all | $(RESULTS)/pending
 	$(call record_run,bake_hashes,python3 tests/tools/bake_hashes.py --build $(BUILD) --shared $(SHARED))
 bake-hashes: all
 	python3 tests/tools/bake_hashes.py --write --build $(BUILD) --shared $(SHARED)
+# The native crowd benchmark's images, not its times: palette, bone pass and VAT draw the same herd.
+TEST_RUNS += $(if $(SAN),,$(BUILD)/tests/bench_gl_images.run)
+$(BUILD)/tests/bench_gl_images.run: all $(BUILD)/bench_gl | $(RESULTS)/pending
+	$(call record_run,bench_gl_images,for m in fish quadruped; do EGL_PLATFORM=surfaceless $(BUILD)/bench_gl \
+	  $(BUILD)/samples/$$m.glb --check || exit 1; done)
 $(BUILD)/tests/web_reader.run: all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test web/test/)
 test-runs: $(TEST_RUNS)
@@ -372,10 +377,16 @@ $(BUILD)/bench_core: bench/bench_core.c $(BUILD)/libcrowdbake.a
 $(BUILD)/bench_floor: bench/bench_floor.cpp $(BUILD)/libcrowdbake.a $(DEPS_STAMP)
 	$(CXX) $(CXXFLAGS) $(PKG_CFLAGS) -o $@ $< $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 
-bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(NODE_DEPS)
+# The native crowd benchmark (bench/bench_gl.c): OpenGL 3.3 through EGL, no window; Mesa's
+# llvmpipe here, a GPU's driver where there is one.
+$(BUILD)/bench_gl: bench/bench_gl.c $(BUILD)/libcrowdbake.a
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
+	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs egl gl 2>/dev/null)
+
+bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(NODE_DEPS)
 	python3 bench/run.py
 
-bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(NODE_DEPS)
+bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
 
 # The normal and the sanitizer builds and their tests, side by side on every core.

@@ -2,7 +2,7 @@
 """crowdbake benchmark: crowdbake against its peer (three.js GLTFLoader + AnimationMixer, bench/peer.mjs)
 measured in the same run on the same inputs.
 
-  python3 bench/run.py [--repeat N] [--json] [--smoke] [--instructions] [--crowd-only]
+  python3 bench/run.py [--repeat N] [--json] [--smoke] [--instructions] [--crowd-only] [--gl-only] [--gl-counts N,...]
 
 Inputs: ../shared/assets Fox.glb and robot.glb, and rigs from the sample generator: 200 joints x
 {8, 15, 30, 60} clips x 10 s at 30 fps (the 30-clip rig is 9,000 frames, 1.8 M joint matrices).
@@ -21,8 +21,14 @@ rigs, the fish sample), so `make check` keeps the script working.
 The crowd benchmark (tests/browser/bench_crowd.mjs, headless Chromium): frame time of a herd drawn
 from its palette against the same herd drawn from a VAT of the same frames (crowdbake vat), one
 instanced draw each, alternating in one page, for 10 to 100,000 instances of the fish sample and
-1,000 Cows. --crowd-only runs only it. Without a GPU, Chromium renders with SwiftShader (software:
-its absolute times say little about a GPU; the ratio is measured in the same run).
+100 and 1,000 Cows, each drawn three ways: palette (per-vertex blending), bones (the bone pass: each
+instance's bones blended once a frame, web/crowdbake_bones.mjs) and VAT. --crowd-only runs only it.
+Without a GPU, Chromium renders with SwiftShader (software: its absolute times say little about a
+GPU; the ratio is measured in the same run).
+
+The native benchmark (bench/bench_gl.c): the same three methods with the shipped GLSL in OpenGL 3.3
+through EGL without a window, frames timed with GL timer queries: Mesa's llvmpipe here, a GPU's
+driver where there is one (--gl-only runs only it; --gl-counts sets the herd sizes).
 """
 import argparse, json, math, os, resource, statistics, subprocess, sys, time
 
@@ -395,6 +401,9 @@ def crowd_input(name, model):
     return out
 
 
+CROWD_METHODS = ('palette', 'bones', 'vat')
+
+
 def crowd_bench(smoke):
     runs = [('fish', os.path.join(BUILD, 'samples', 'fish.glb'), '10' if smoke else '10,30,100,1000,10000,100000',
              1 if smoke else 2)]
@@ -403,24 +412,57 @@ def crowd_bench(smoke):
     results = []
     for name, model, counts, frames in runs:
         _, out = run(['node', os.path.join(ROOT, 'tests', 'browser', 'bench_crowd.mjs'), crowd_input(name, model), counts,
-                      '--frames', str(frames)])
+                      '--frames', str(frames), '--methods', ','.join(CROWD_METHODS)])
         r = json.loads(out.strip().split('\n')[-1])
         r['input'] = name
         results.append(r)
     return results
 
 
+def print_methods(r, title, key='_ms'):
+    """A crowd table: frame ms of each method (palette: per-vertex blending; bones: the bone pass; vat)."""
+    print(title)
+    print('%10s %12s %12s %12s %12s %12s' % ('instances', 'palette ms', 'bones ms', 'VAT ms', 'VAT/palette', 'VAT/bones'))
+    for n, c in sorted(r['counts'].items(), key=lambda kv: int(kv[0])):
+        t = {m: max(c[m + key], 1e-3) for m in CROWD_METHODS}
+        print('%10s %12.1f %12.1f %12.1f %12.2f %12.2f' % (n, t['palette'], t['bones'], t['vat'],
+                                                         t['vat'] / t['palette'], t['vat'] / t['bones']))
+    held = {m: [int(n) for n, c in r['counts'].items() if c[m + key] <= 1000 / 60] for m in CROWD_METHODS}
+    print('VRAM: palette %d bytes, VAT %d bytes (%.1fx); largest measured herd holding 60 fps: %s' % (
+        r['palette_bytes'], r['vat_bytes'], r['vat_bytes'] / r['palette_bytes'],
+        ', '.join('%s %s' % (m, max(h) if h else 'none') for m, h in held.items())))
+
+
 def print_crowd(results):
     for r in results:
-        print('\ncrowd: %s (%d vertices), WebGL2 in headless Chromium on %s; median of %d frames (960x540, each to a '
-              'readPixels sync)' % (r['input'], r['vertices'], r['renderer'], r['frames']))
-        print('%10s %12s %12s %12s %10s' % ('instances', 'palette ms', 'VAT ms', 'VAT/palette', 'fps (pal)'))
-        for n, c in sorted(r['counts'].items(), key=lambda kv: int(kv[0])):
-            print('%10s %12.1f %12.1f %12.2f %10.1f' % (n, c['palette_ms'], c['vat_ms'], c['vat_over_palette'],
-                                                     1000 / c['palette_ms']))
-        held = [int(n) for n, c in r['counts'].items() if c['palette_ms'] <= 1000 / 60]
-        print('VRAM: palette %d bytes, VAT %d bytes (%.1fx); largest measured herd holding 60 fps from the palette: %s' % (
-            r['palette_bytes'], r['vat_bytes'], r['vat_bytes'] / r['palette_bytes'], max(held) if held else 'none'))
+        print_methods(r, '\ncrowd: %s (%d vertices), WebGL2 in headless Chromium on %s; median of %d frames (960x540, each to '
+                      'a readPixels sync)' % (r['input'], r['vertices'], r['renderer'], r['frames']))
+
+
+# The native benchmark (bench/bench_gl.c, OpenGL through EGL): llvmpipe here, where a whole frame of
+# 100,000 Cows takes minutes; on a GPU: python3 bench/run.py --gl-only --gl-counts 1000,3000,10000,30000,100000,300000
+GL_RUNS = (('Cow', '1000,10000', 2), ('fish', '100,1000,10000,100000', 2))
+
+
+def gl_bench(smoke, counts=None):
+    models = {'Cow': os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb'),
+              'fish': os.path.join(BUILD, 'samples', 'fish.glb')}
+    runs = [('fish', '10', 1)] if smoke else [(name, counts or c, frames) for name, c, frames in GL_RUNS]
+    results = []
+    for name, c, frames in runs:
+        _, out = run([os.path.join(BUILD, 'bench_gl'), models[name], c, '--frames', str(frames)])
+        r = json.loads(out.strip().split('\n')[-1])
+        r['input'] = name
+        results.append(r)
+    return results
+
+
+def print_gl(results):
+    for r in results:
+        head = '\nnative: %s (%d vertices), OpenGL %s on %s (EGL, no window); median of %d frames (960x540, ' % (
+            r['input'], r['vertices'], r['version'], r['renderer'], r['frames'])
+        print_methods(r, head + 'GL_TIME_ELAPSED)')
+        print_methods(r, head + 'wall time to glFinish)', '_wall_ms')
 
 
 def main():
@@ -430,7 +472,17 @@ def main():
     ap.add_argument('--smoke', action='store_true')
     ap.add_argument('--instructions', action='store_true', help='also count instructions with valgrind (slow)')
     ap.add_argument('--crowd-only', action='store_true')
+    ap.add_argument('--gl-only', action='store_true', help='only the native benchmark (bench_gl)')
+    ap.add_argument('--gl-counts', help='herd sizes for the native benchmark, e.g. 1000,10000,100000')
     args = ap.parse_args()
+    if args.gl_only:
+        gl = gl_bench(args.smoke, args.gl_counts)
+        if args.json:
+            json.dump({'gl': gl}, sys.stdout, indent=2)
+            print()
+        else:
+            print_gl(gl)
+        return
     if args.crowd_only:
         crowd = crowd_bench(args.smoke)
         if args.json:
@@ -487,12 +539,14 @@ def main():
     report['extra']['floor_input'] = big_r
     report['goals'] = goals(report['extra'], big_r, fox_r)
     report['crowd'] = crowd_bench(args.smoke)
+    report['gl'] = gl_bench(args.smoke, args.gl_counts)
     if args.json:
         json.dump(report, sys.stdout, indent=2)
         print()
     else:
         print_table(report)
         print_crowd(report['crowd'])
+        print_gl(report['gl'])
 
 
 if __name__ == '__main__':

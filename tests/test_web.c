@@ -88,13 +88,14 @@ static void instance_of(const cb_palette_clip *c, double time, int k, double row
 }
 
 static void append_case(FILE *f, bool first, const char *name, const char *pal, const char *mesh, const cb_palette *p,
-                        double row_offset, bool transpose, const char *marker, const char *line)
+                        double row_offset, bool transpose, const char *marker, const char *line, const char *bone_pass)
 {
     fprintf(f, "%s\n{\"name\": \"%s\", \"pal\": \"%s\", \"out\": \"%s.out\", \"transpose\": %s,\n", first ? "" : ",", name,
             pal, name, transpose ? "true" : "false");
     fprintf(f, " \"mesh\": {\"positions\": \"%s.positions\", \"joints\": \"%s.joints\", \"weights\": \"%s.weights\"},\n", mesh,
             mesh, mesh);
     if (marker) fprintf(f, " \"glsl_break\": {\"marker\": \"%s\", \"line\": \"%s\"},\n", marker, line);
+    if (bone_pass) fprintf(f, " \"bone_pass\": %s,\n", bone_pass);
     fprintf(f, " \"groups\": [");
     for (int t = 0; t < TIMES; ++t) {
         fprintf(f, "%s{\"time\": %.9g, \"instances\": [", t ? ", " : "", times[t]);
@@ -179,25 +180,34 @@ static void test_runtime_in_chromium_matches_the_cpu(void **state)
         if (i == 0) write_mesh(&all[0].model->primitives[0], "quadruped");
         char case_name[64];
         snprintf(case_name, sizeof case_name, "%s-%s", layouts[i / 3], precisions[i % 3]);
-        append_case(jobs, i == 0, case_name, name, "quadruped", &all[i].view, 0, false, NULL, NULL);
+        append_case(jobs, i == 0, case_name, name, "quadruped", &all[i].view, 0, false, NULL, NULL, NULL);
     }
     /* The broken variants (the C side of the comparison stays right). */
-    append_case(jobs, false, "broken-transposed", "mat4-float.pal", "quadruped", &all[0].view, 0, true, NULL, NULL);
-    append_case(jobs, false, "broken-row-off-by-one", "qpos-u16.pal", "quadruped", &all[8].view, 1, false, NULL, NULL);
+    append_case(jobs, false, "broken-transposed", "mat4-float.pal", "quadruped", &all[0].view, 0, true, NULL, NULL, NULL);
+    append_case(jobs, false, "broken-row-off-by-one", "qpos-u16.pal", "quadruped", &all[8].view, 1, false, NULL, NULL, NULL);
     append_case(jobs, false, "broken-no-wrap", "qpos-half.pal", "quadruped", &all[7].view, 0, false, "cb:wrap",
-                "        f1 = f0 + 1.0;");
+                "        f1 = f0 + 1.0;", NULL);
     bake(multitrack, TMP "/spin.pal", "qpos", "float", "");
     open_baked(multitrack, TMP "/spin.pal", &spin);
     write_mesh(&spin.model->primitives[0], "spin");
     /* multitrack's bones spin a full turn per loop: their last and first rows are -q apart. */
-    append_case(jobs, false, "broken-no-hemisphere-flip", "spin.pal", "spin", &spin.view, 0, false, "cb:hemisphere", "");
-    append_case(jobs, false, "spin", "spin.pal", "spin", &spin.view, 0, false, NULL, NULL);
+    append_case(jobs, false, "broken-no-hemisphere-flip", "spin.pal", "spin", &spin.view, 0, false, "cb:hemisphere", "", NULL);
+    append_case(jobs, false, "spin", "spin.pal", "spin", &spin.view, 0, false, NULL, NULL, NULL);
     /* Rows wrapped into two column blocks (a 200-texel limit): the runtime addresses them as the
      * header says. */
     bake(quadruped, TMP "/wrapped.pal", "qpos", "half", "--max-texture-size 200");
     open_baked(quadruped, TMP "/wrapped.pal", &wrapped);
     assert_int_equal(wrapped.view.blocks, 2);
-    append_case(jobs, false, "wrapped", "wrapped.pal", "quadruped", &wrapped.view, 0, false, NULL, NULL);
+    append_case(jobs, false, "wrapped", "wrapped.pal", "quadruped", &wrapped.view, 0, false, NULL, NULL, NULL);
+    /* The bone pass (bonePass): each instance's bones blended once into float textures, then skinned
+     * from; the default qpos/u16 and a half mat4 of positions relative to the bones' offsets, one
+     * in column blocks of 16 instances; and broken, its columns read as rows. */
+    append_case(jobs, false, "bones-qpos-u16", "qpos-u16.pal", "quadruped", &all[8].view, 0, false, NULL, NULL, "true");
+    append_case(jobs, false, "bones-mat4-half", "mat4-half.pal", "quadruped", &all[1].view, 0, false, NULL, NULL,
+                "{\"rows\": 16}");
+    append_case(jobs, false, "broken-bones-transposed", "qpos-u16.pal", "quadruped", &all[8].view, 0, false,
+                "cb:bone-columns", "    return cb_affine(transpose(mat3(c0.xyz, c1.xyz, c2.xyz)), vec3(c0.w, c1.w, c2.w));",
+                "true");
     fprintf(jobs, "\n]}\n");
     fclose(jobs);
 
@@ -234,6 +244,12 @@ static void test_runtime_in_chromium_matches_the_cpu(void **state)
            "(the same spin palette, shipped shader: %.2f)\n", transposed, off_by_one, no_wrap, no_flip, spin_ok);
     assert_true(spin_ok <= 1);
     assert_true(transposed > 10 && off_by_one > 10 && no_wrap > 10 && no_flip > 10);
+    double bones_qpos = compare("bones-qpos-u16", &all[8], &units), bones_mat4 = compare("bones-mat4-half", &all[1], &units);
+    double bones_broken = compare("broken-bones-transposed", &all[8], &units);
+    printf("  bone pass: browser vs CPU %.2f (qpos/u16), %.2f (mat4/half, 16 instances a column block) of the tolerance; "
+           "its columns read as rows: %.0f\n", bones_qpos, bones_mat4, bones_broken);
+    assert_true(strstr(out, "ran  bones-qpos-u16: ") && strstr(out, "with the bone pass"));
+    assert_true(bones_qpos <= 1 && bones_mat4 <= 1 && bones_broken > 10);
     for (int i = 0; i < 9; ++i) close_baked(&all[i]);
     close_baked(&spin);
     close_baked(&wrapped);

@@ -13,6 +13,8 @@
 // expect: positions (3 floats a vertex), normals (3, optional), joints (4 integers), weights (4
 // floats), indices (optional).
 
+import { BonePass, boneShaderSource } from './crowdbake_bones.mjs';
+
 export const GLSL_URL = new URL('../samples/shaders/crowdbake_palette.glsl', import.meta.url);
 
 export async function loadPaletteGLSL(url = GLSL_URL) {
@@ -71,21 +73,15 @@ export function uploadPalette(gl, pal) {
 // previous state's four, for a cross-fade), fade (start time, duration, scale, unused).
 export const INSTANCE_FLOATS = 16;
 
-const MAIN = `
+// The runtime's vertex main around a skinning that sets p and n (object space).
+const mainSource = (skin) => `
 in vec3 a_position; in vec3 a_normal; in ivec4 a_joints; in vec4 a_weights;
 in vec4 a_place; in vec4 a_inst; in vec4 a_from; in vec4 a_fade;
 uniform float u_time; uniform mat4 u_view_projection;
 out vec3 v_world; out vec3 v_normal;
 void main() {
-    float fade = a_fade.y > 0.0 ? clamp((u_time - a_fade.x) / a_fade.y, 0.0, 1.0) : 1.0;
     vec3 p, n;
-    if (fade < 1.0) {
-        p = cb_skin_position_crossfade(a_position, a_joints, a_weights, a_from, a_inst, fade, u_time);
-        n = cb_skin_normal_crossfade(a_normal, a_joints, a_weights, a_from, a_inst, fade, u_time);
-    } else {
-        p = cb_skin_position(a_position, a_joints, a_weights, a_inst, u_time);
-        n = cb_skin_normal(a_normal, a_joints, a_weights, a_inst, u_time);
-    }
+${skin}
     float c = cos(a_place.w), s = sin(a_place.w);
     mat3 yaw = mat3(c, 0.0, -s, 0.0, 1.0, 0.0, s, 0.0, c);
     v_world = a_place.xyz + a_fade.z * (yaw * p);
@@ -93,6 +89,15 @@ void main() {
     gl_Position = u_view_projection * vec4(v_world, 1.0);
 }
 `;
+
+// One pass over the bones for both the position and the normal (each texel read once).
+const MAIN = mainSource(`
+    float fade = a_fade.y > 0.0 ? clamp((u_time - a_fade.x) / a_fade.y, 0.0, 1.0) : 1.0;
+    if (fade < 1.0) cb_skin_position_normal_crossfade(a_position, a_normal, a_joints, a_weights, a_from, a_inst, fade, u_time, p, n);
+    else cb_skin_position_normal(a_position, a_normal, a_joints, a_weights, a_inst, u_time, p, n);`);
+
+// With the bone pass (crowdbake_bones.mjs), which blended every instance's bones before the draw.
+const MAIN_BONES = mainSource('    cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, gl_InstanceID, p, n);');
 
 const FRAGMENT = `#version 300 es
 precision mediump float;
@@ -138,10 +143,13 @@ function buffer(gl, target, data) {
 
 export class Crowd {
     // options: pal (readPal), glsl (the library's text), mesh, capacity (instances), color,
-    // captureWorld (link v_world for transform feedback: tests read skinned positions back).
+    // captureWorld (link v_world for transform feedback: tests read skinned positions back),
+    // bonePass (true, or { rows }: blend each instance's bones once a frame, then skin from them;
+    // crowdbake_bones.mjs).
     constructor(gl, options) {
-        const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false } = options;
+        const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false, bonePass = false } = options;
         this.gl = gl;
+        this.bonePass = bonePass;
         this.pal = pal;
         this.color = color;
         this.capacity = capacity;
@@ -185,6 +193,8 @@ export class Crowd {
             this.indexCount = indices.length;
         }
         gl.bindVertexArray(null);
+        this.bones = bonePass ? new BonePass(gl, { glsl, header: pal.header, capacity, instanceBuffer: this.instanceBuffer,
+                                                   instanceFloats: INSTANCE_FLOATS, ...(bonePass === true ? {} : bonePass) }) : null;
         this.meshBytes = mesh.positions.byteLength + (mesh.normals?.byteLength ?? 0) + mesh.joints.length * 4 +
                          mesh.weights.byteLength + (mesh.indices?.byteLength ?? 0);
         this.dirty = true;
@@ -207,7 +217,9 @@ export class Crowd {
     }
 
     makeProgram(glsl, header, fragment, varyings) {
-        return compileProgram(this.gl, vertexShaderSource(glsl, header), fragment, varyings);
+        const vertex = this.bonePass ? boneShaderSource(glsl, header, MAIN_BONES, ['CB_BONE_TEXTURE'])
+            : vertexShaderSource(glsl, header);
+        return compileProgram(this.gl, vertex, fragment, varyings);
     }
 
     upload(options) {
@@ -234,15 +246,17 @@ export class Crowd {
     // Binds the program, textures and uniforms for a draw at `time` seconds.
     bind(viewProjection, time) {
         const gl = this.gl, p = this.program;
-        gl.useProgram(p);
-        gl.bindVertexArray(this.vao);
         if (this.dirty) {
             gl.bindBuffer(gl.ARRAY_BUFFER, this.instanceBuffer);
             gl.bufferSubData(gl.ARRAY_BUFFER, 0, this.instances, 0, this.count * INSTANCE_FLOATS);
             this.dirty = false;
         }
+        this.bones?.run(this.count, time, (u) => this.bindTextures(u));
+        gl.useProgram(p);
+        gl.bindVertexArray(this.vao);
         const u = (name) => gl.getUniformLocation(p, name);
         this.bindTextures(u);
+        this.bones?.bindTargets(u);
         gl.uniform1f(u('u_time'), time);
         gl.uniformMatrix4fv(u('u_view_projection'), false, viewProjection);
         gl.uniform3fv(u('u_color'), this.color);
@@ -286,6 +300,6 @@ export class Crowd {
     }
 
     get vramBytes() {
-        return this.textures.bytes + this.meshBytes + this.instances.byteLength;
+        return this.textures.bytes + this.meshBytes + this.instances.byteLength + (this.bones?.bytes ?? 0);
     }
 }

@@ -87,19 +87,24 @@ function statesOf(pal, type) {
     return states;
 }
 
+// The position and the normal are skinned together where three's shader asks for the normal
+// (beginnormal_vertex, before begin_vertex), each bone's texels read once; a shader without
+// normals (a depth material) skins the position alone in begin_vertex.
 const VERTEX_PARS = `
 in vec4 cb_joints; in vec4 cb_weights; in vec4 cb_inst; in vec4 cb_from; in vec2 cb_fade;
 uniform float cb_time;
+vec3 cb_skinned_position; bool cb_skinned = false;
 float cb_fade_weight() { return cb_fade.y > 0.0 ? clamp((cb_time - cb_fade.x) / cb_fade.y, 0.0, 1.0) : 1.0; }
-vec3 cb_herd_position(vec3 p) {
-    float f = cb_fade_weight();
-    return f < 1.0 ? cb_skin_position_crossfade(p, ivec4(cb_joints), cb_weights, cb_from, cb_inst, f, cb_time)
-                   : cb_skin_position(p, ivec4(cb_joints), cb_weights, cb_inst, cb_time);
+vec3 cb_herd_normal(vec3 p, vec3 n) {
+    vec3 skinned_n;
+    cb_skin_position_normal_crossfade(p, n, ivec4(cb_joints), cb_weights, cb_from, cb_inst, cb_fade_weight(), cb_time,
+                                      cb_skinned_position, skinned_n);
+    cb_skinned = true;
+    return skinned_n;
 }
-vec3 cb_herd_normal(vec3 n) {
-    float f = cb_fade_weight();
-    return f < 1.0 ? cb_skin_normal_crossfade(n, ivec4(cb_joints), cb_weights, cb_from, cb_inst, f, cb_time)
-                   : cb_skin_normal(n, ivec4(cb_joints), cb_weights, cb_inst, cb_time);
+vec3 cb_herd_position(vec3 p) {
+    return cb_skinned ? cb_skinned_position
+                      : cb_skin_position_crossfade(p, ivec4(cb_joints), cb_weights, cb_from, cb_inst, cb_fade_weight(), cb_time);
 }
 `;
 
@@ -185,7 +190,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
             Object.assign(shader.uniforms, uniforms);
             shader.vertexShader = shader.vertexShader
                 .replace('#include <common>', `#include <common>\n${glsl}\n${VERTEX_PARS}`)
-                .replace('#include <beginnormal_vertex>', 'vec3 objectNormal = cb_herd_normal(normal);')
+                .replace('#include <beginnormal_vertex>', 'vec3 objectNormal = cb_herd_normal(position, normal);')
                 .replace('#include <begin_vertex>', 'vec3 transformed = cb_herd_position(position);');
         };
         material.customProgramCacheKey = () => `crowdbake-${paletteDefines(pal.header).join('-')}`;

@@ -19,8 +19,11 @@
 // (negative for a one-shot: it clamps instead of wrapping), inst.z rate in rows per second,
 // inst.w phase in 0..1. Time in seconds.
 //
-//   vec3 p = cb_skin_position(a_position, a_joints, a_weights, inst, time);
+//   vec3 p, n;
+//   cb_skin_position_normal(a_position, a_normal, a_joints, a_weights, inst, time, p, n);  // both, each texel read once
+//   vec3 p = cb_skin_position(a_position, a_joints, a_weights, inst, time);                // or one of them
 //   vec3 n = cb_skin_normal(a_normal, a_joints, a_weights, inst, time);
+//   cb_skin_position_normal_crossfade(a_position, a_normal, a_joints, a_weights, from_inst, inst, fade, time, p, n);
 //   vec3 p = cb_skin_position_crossfade(a_position, a_joints, a_weights, from_inst, inst, fade, time);
 //
 // Motion vectors (TAA, motion blur): the time is a parameter, so the previous frame's position is
@@ -143,13 +146,26 @@ void cb_frame(vec4 inst, float time, out int row0, out int row1, out float fr)
     row1 = int(inst.x + f1);
 }
 
-vec3 cb_rotate(vec4 q, vec3 v)
+// The rotation matrix of a unit quaternion (x, y, z, w).
+mat3 cb_quat_matrix(vec4 q)
 {
-    return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v);
+    vec3 q2 = 2.0 * q.xyz, w2 = q.w * q2;
+    vec3 d = q.xyz * q2;                          // 2xx, 2yy, 2zz
+    vec3 o = q.xyz * q2.yzx;                      // 2xy, 2yz, 2zx
+    return mat3(1.0 - d.y - d.z, o.x + w2.z, o.z - w2.y,
+                o.x - w2.z, 1.0 - d.x - d.z, o.y + w2.x,
+                o.z + w2.y, o.y - w2.x, 1.0 - d.x - d.y);
 }
 
-// A bone's transform of a point (w = 1) or a direction (w = 0), blended between two rows.
-vec3 cb_bone_transform(int row0, int row1, float fr, int bone, vec3 v, float w)
+// A bone's transform: a point v goes to a * v + t, a direction n to a * n.
+struct cb_affine {
+    mat3 a;
+    vec3 t;
+};
+
+// A bone's transform blended between two rows. Each of its texels is fetched once, whatever is
+// skinned with it (a position and a normal share it).
+cb_affine cb_bone_affine(int row0, int row1, float fr, int bone)
 {
 #if defined(CB_LAYOUT_QPOS)
     vec4 q0 = cb_texel(row0, bone, 0), q1 = cb_texel(row1, bone, 0);
@@ -160,7 +176,8 @@ vec3 cb_bone_transform(int row0, int row1, float fr, int bone, vec3 v, float w)
 #ifdef CB_POSITIONS_RELATIVE
     ps.xyz += texelFetch(cb_bind_positions, ivec2(bone, 1), 0).xyz; // cb:offset - the texel holds p less the bone's offset
 #endif
-    return w * ps.xyz + ps.w * cb_rotate(q, v - w * b);
+    mat3 a = ps.w * cb_quat_matrix(q); // v -> p + s R (v - b)
+    return cb_affine(a, ps.xyz - a * b);
 #else
 #if defined(CB_LAYOUT_AFFINE)
     mat3x4 rows = mat3x4(mix(cb_texel(row0, bone, 0), cb_texel(row1, bone, 0), fr),
@@ -177,41 +194,131 @@ vec3 cb_bone_transform(int row0, int row1, float fr, int bone, vec3 v, float w)
     // The translation holds the joint's position less the bone's offset: A (v - b) + p.
     vec3 b = texelFetch(cb_bind_positions, ivec2(bone, 0), 0).xyz;
     vec3 p = m[3].xyz + texelFetch(cb_bind_positions, ivec2(bone, 1), 0).xyz; // cb:offset-matrix
-    return mat3(m) * (v - w * b) + w * p;
+    return cb_affine(mat3(m), p - mat3(m) * b);
 #else
-    return (m * vec4(v, w)).xyz;
+    return cb_affine(mat3(m), m[3].xyz);
 #endif
 #endif
 }
 
-vec3 cb_skin(vec3 v, float w, ivec4 joints, vec4 weights, vec4 inst, float time)
+// A cross-fade of two transforms: from f (fade 0) to m (fade 1).
+cb_affine cb_affine_mix(cb_affine f, cb_affine m, float fade)
 {
-    int row0, row1;
-    float fr;
+    return cb_affine(m.a * fade + f.a * (1.0 - fade), mix(f.t, m.t, fade));
+}
+
+// Skins a position v and a normal n (not normalized) in one pass over the influences, cross-faded
+// from from_inst (fade 0 -> 1; 1: inst alone): each bone's texels are fetched once for both.
+// Blending the bones' transforms is blending what they skin: both are linear in them.
+void cb_skin_both(vec3 v, vec3 n, ivec4 joints, vec4 weights, vec4 from_inst, vec4 inst, float fade, float time,
+                  out vec3 p, out vec3 skinned_n)
+{
+    int row0, row1, from0, from1;
+    float fr, from_fr;
     cb_frame(inst, time, row0, row1, fr);
-    vec3 r = vec3(0.0);
+    cb_frame(from_inst, time, from0, from1, from_fr);
+    p = vec3(0.0);
+    skinned_n = vec3(0.0);
     for (int i = 0; i < CB_INFLUENCES; ++i) // cb:influences - crowdbake mesh puts the largest weights first
-        if (weights[i] != 0.0) r += weights[i] * cb_bone_transform(row0, row1, fr, joints[i], v, w);
-    return r;
+        if (weights[i] != 0.0) {
+            cb_affine m = cb_bone_affine(row0, row1, fr, joints[i]);
+            if (fade < 1.0) m = cb_affine_mix(cb_bone_affine(from0, from1, from_fr, joints[i]), m, fade);
+            p += weights[i] * (m.a * v + m.t);
+            skinned_n += weights[i] * (m.a * n);
+        }
 }
 
 vec3 cb_skin_position(vec3 v, ivec4 joints, vec4 weights, vec4 inst, float time)
 {
-    return cb_skin(v, 1.0, joints, weights, inst, time);
+    vec3 p, n;
+    cb_skin_both(v, vec3(0.0), joints, weights, inst, inst, 1.0, time, p, n);
+    return p;
 }
 
 vec3 cb_skin_normal(vec3 n, ivec4 joints, vec4 weights, vec4 inst, float time)
 {
-    return normalize(cb_skin(n, 0.0, joints, weights, inst, time));
+    vec3 p, skinned_n;
+    cb_skin_both(vec3(0.0), n, joints, weights, inst, inst, 1.0, time, p, skinned_n);
+    return normalize(skinned_n);
+}
+
+// The position and the normal together, for the price of one (the runtimes' vertex shaders use it).
+void cb_skin_position_normal(vec3 v, vec3 n, ivec4 joints, vec4 weights, vec4 inst, float time, out vec3 p, out vec3 skinned_n)
+{
+    cb_skin_both(v, n, joints, weights, inst, inst, 1.0, time, p, skinned_n);
+    skinned_n = normalize(skinned_n);
 }
 
 // Cross-fade from a previous clip (from_inst) to the current one: fade goes 0 -> 1.
+void cb_skin_position_normal_crossfade(vec3 v, vec3 n, ivec4 joints, vec4 weights, vec4 from_inst, vec4 inst, float fade,
+                                       float time, out vec3 p, out vec3 skinned_n)
+{
+    cb_skin_both(v, n, joints, weights, from_inst, inst, fade, time, p, skinned_n);
+    skinned_n = normalize(skinned_n);
+}
+
 vec3 cb_skin_position_crossfade(vec3 v, ivec4 joints, vec4 weights, vec4 from_inst, vec4 inst, float fade, float time)
 {
-    return mix(cb_skin(v, 1.0, joints, weights, from_inst, time), cb_skin(v, 1.0, joints, weights, inst, time), fade);
+    vec3 p, n;
+    cb_skin_both(v, vec3(0.0), joints, weights, from_inst, inst, fade, time, p, n);
+    return p;
 }
 
 vec3 cb_skin_normal_crossfade(vec3 n, ivec4 joints, vec4 weights, vec4 from_inst, vec4 inst, float fade, float time)
 {
-    return normalize(mix(cb_skin(n, 0.0, joints, weights, from_inst, time), cb_skin(n, 0.0, joints, weights, inst, time), fade));
+    vec3 p, skinned_n;
+    cb_skin_both(vec3(0.0), n, joints, weights, from_inst, inst, fade, time, p, skinned_n);
+    return normalize(skinned_n);
 }
+
+// ---- The bone pass: each instance's bones blended once a frame instead of once a vertex ----
+// A fragment shader, one fragment per (instance, bone), writes cb_bone_pass's three texels to three
+// RGBA32F render targets (bone textures: instance i's bone j at (block * bones + j, i - block *
+// cb_bone_rows), block = i / cb_bone_rows); a vertex shader compiled with #define CB_BONE_TEXTURE
+// then skins from them, three plain texel fetches an influence, no decoding and no blending:
+//
+//   cb_bone_pass(int(gl_FragCoord.x) - first_bone_x, from_inst, inst, fade, time, out0, out1, out2); // fragment
+//   cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, gl_InstanceID, p, n);                 // vertex
+//
+// (web/crowdbake_crowd.mjs's bonePass option runs both.)
+
+// Bone `bone` of an instance: the columns of its transform, translation in w.
+void cb_bone_pass(int bone, vec4 from_inst, vec4 inst, float fade, float time, out vec4 c0, out vec4 c1, out vec4 c2)
+{
+    int row0, row1;
+    float fr;
+    cb_frame(inst, time, row0, row1, fr);
+    cb_affine m = cb_bone_affine(row0, row1, fr, bone);
+    if (fade < 1.0) {
+        cb_frame(from_inst, time, row0, row1, fr);
+        m = cb_affine_mix(cb_bone_affine(row0, row1, fr, bone), m, fade);
+    }
+    c0 = vec4(m.a[0], m.t.x), c1 = vec4(m.a[1], m.t.y), c2 = vec4(m.a[2], m.t.z);
+}
+
+#ifdef CB_BONE_TEXTURE
+uniform sampler2D cb_bones0, cb_bones1, cb_bones2; // the bone pass's three targets
+uniform int cb_bone_rows;                          // instances per column block of them
+
+cb_affine cb_passed_bone(int instance, int bone)
+{
+    int block = instance / cb_bone_rows;
+    ivec2 xy = ivec2(block * (cb_row_texels / CB_TEXELS_PER_BONE) + bone, instance - block * cb_bone_rows);
+    vec4 c0 = texelFetch(cb_bones0, xy, 0), c1 = texelFetch(cb_bones1, xy, 0), c2 = texelFetch(cb_bones2, xy, 0);
+    return cb_affine(mat3(c0.xyz, c1.xyz, c2.xyz), vec3(c0.w, c1.w, c2.w)); // cb:bone-columns
+}
+
+// The position and the normal (normalized) of a vertex of instance `instance`, from the bone pass.
+void cb_skin_bone_pass(vec3 v, vec3 n, ivec4 joints, vec4 weights, int instance, out vec3 p, out vec3 skinned_n)
+{
+    p = vec3(0.0);
+    skinned_n = vec3(0.0);
+    for (int i = 0; i < CB_INFLUENCES; ++i)
+        if (weights[i] != 0.0) {
+            cb_affine m = cb_passed_bone(instance, joints[i]);
+            p += weights[i] * (m.a * v + m.t);
+            skinned_n += weights[i] * (m.a * n);
+        }
+    skinned_n = normalize(skinned_n);
+}
+#endif

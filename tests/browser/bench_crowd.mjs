@@ -2,7 +2,12 @@
 // from its palette (web/crowdbake_crowd.mjs) against the same herd drawn from a VAT of the same
 // frames (web/crowdbake_vat.mjs), in the same Chromium page, one instanced draw each.
 //
-//   node tests/browser/bench_crowd.mjs DIR N1,N2,... [--frames K] [--gpu]
+//   node tests/browser/bench_crowd.mjs DIR N1,N2,... [--frames K] [--gpu] [--methods palette,bones,vat,before]
+//       [--before TREE]
+//
+// Methods: palette (per-vertex blending), bones (Crowd's bonePass: each instance's bones blended
+// once, crowdbake_bones.mjs), vat, before (the palette runtime of another tree TREE - its web/ and
+// samples/shaders/ - e.g. `git worktree add` of an older commit: a before/after in one page).
 //
 // DIR holds model.glb, model.pal and model.exr (the VAT, uncompressed). For each count, palette and
 // VAT alternate (so a change in the machine's load hits both alike): each draws K frames of a
@@ -17,13 +22,16 @@ const [dir, countsText] = process.argv.slice(2);
 const frames = Number(process.argv[process.argv.indexOf('--frames') + 1] || 5);
 const gpu = process.argv.includes('--gpu');
 const counts = countsText.split(',').map(Number);
+const option = (name, fallback) => (process.argv.includes(name) ? process.argv[process.argv.indexOf(name) + 1] : fallback);
+const methods = option('--methods', 'palette,vat').split(',');
+const before = option('--before', null);
 
 const page = `<!DOCTYPE html><script type="importmap">{ "imports": { "three": "/web/node_modules/three/build/three.module.js",
   "three/addons/": "/web/node_modules/three/examples/jsm/" } }</script><canvas id="c" width="960" height="540"></canvas>`;
 
-const result = await withPage({ '/': REPO, '/bench/': path.resolve(dir) }, '/__blank.html', async (p) => {
+const result = await withPage({ '/': REPO, '/bench/': path.resolve(dir), ...(before ? { '/before/': path.resolve(before) } : {}) }, '/__blank.html', async (p) => {
     await p.setContent(page);
-    const r = await p.evaluate(async ({ counts, frames }) => {
+    const r = await p.evaluate(async ({ counts, frames, methods }) => {
         const THREE = await import('three');
         const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
         const { readPal, instanceData } = await import('/web/crowdbake_pal.mjs');
@@ -37,8 +45,17 @@ const result = await withPage({ '/': REPO, '/bench/': path.resolve(dir) }, '/__b
         const mesh = meshFromGLTF(await new GLTFLoader().loadAsync('/bench/model.glb'));
         const glsl = await loadPaletteGLSL();
         const max = Math.max(...counts);
-        const crowds = { palette: new Crowd(gl, { pal, glsl, mesh, capacity: max }),
-                         vat: new VatCrowd(gl, { pal, vat, glsl, mesh, capacity: max }) };
+        const make = {
+            palette: () => new Crowd(gl, { pal, glsl, mesh, capacity: max }),
+            bones: () => new Crowd(gl, { pal, glsl, mesh, capacity: max, bonePass: true }),
+            vat: () => new VatCrowd(gl, { pal, vat, glsl, mesh, capacity: max }),
+            before: async () => {
+                const old = await import('/before/web/crowdbake_crowd.mjs');
+                return new old.Crowd(gl, { pal, glsl: await old.loadPaletteGLSL(), mesh, capacity: max });
+            },
+        };
+        const crowds = {};
+        for (const m of methods) crowds[m] = await make[m]();
         const clip = pal.clips.find((c) => c.loops) ?? pal.clips[0];
         const state = { first_row: clip.first_row, frame_count: clip.loops ? clip.frames : -clip.frames, rate: clip.fps,
                         rate_per_speed: 0, phase: 'golden_ratio' };
@@ -60,9 +77,9 @@ const result = await withPage({ '/': REPO, '/bench/': path.resolve(dir) }, '/__b
             camera.updateMatrixWorld();
             const vp = new THREE.Matrix4().multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse).elements;
             out[n] = {};
-            for (const method of ['palette', 'vat']) out[n][method] = [];
+            for (const method of methods) out[n][method] = [];
             for (let f = -1; f < frames; ++f) // frame -1 warms up (shader compile, upload)
-                for (const method of f % 2 ? ['palette', 'vat'] : ['vat', 'palette']) {
+                for (const method of f % 2 ? methods : [...methods].reverse()) {
                     const t0 = performance.now();
                     gl.viewport(0, 0, 960, 540);
                     gl.enable(gl.DEPTH_TEST);
@@ -74,17 +91,19 @@ const result = await withPage({ '/': REPO, '/bench/': path.resolve(dir) }, '/__b
         }
         const ext = gl.getExtension('WEBGL_debug_renderer_info');
         return { renderer: ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER), times: out,
-                 vertices: crowds.palette.vertexCount, palette_bytes: crowds.palette.textures.bytes,
-                 vat_bytes: crowds.vat.textures.bytes };
-    }, { counts, frames });
+                 vertices: mesh.positions.length / 3, palette_bytes: crowds.palette?.textures.bytes,
+                 vat_bytes: crowds.vat?.textures.bytes, bone_pass_bytes: crowds.bones?.bones.bytes };
+    }, { counts, frames, methods });
     if (p.crowdbakeErrors.length) throw new Error(p.crowdbakeErrors.join('; '));
     return r;
 }, { gpu });
 
 const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
 const report = { renderer: result.renderer, vertices: result.vertices, palette_bytes: result.palette_bytes,
-                 vat_bytes: result.vat_bytes, frames, counts: {} };
-for (const [n, m] of Object.entries(result.times))
-    report.counts[n] = { palette_ms: median(m.palette), vat_ms: median(m.vat), palette_min_ms: Math.min(...m.palette),
-                         vat_min_ms: Math.min(...m.vat), vat_over_palette: median(m.vat) / median(m.palette) };
+                 vat_bytes: result.vat_bytes, bone_pass_bytes: result.bone_pass_bytes, frames, methods, counts: {} };
+for (const [n, m] of Object.entries(result.times)) {
+    const c = report.counts[n] = {};
+    for (const method of methods) c[`${method}_ms`] = median(m[method]), c[`${method}_min_ms`] = Math.min(...m[method]);
+    if (m.palette && m.vat) c.vat_over_palette = c.vat_ms / c.palette_ms;
+}
 console.log(JSON.stringify(report));

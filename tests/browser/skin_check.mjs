@@ -5,7 +5,7 @@
 //
 // JOB_DIR/jobs.json: { cases: [{ name, pal, mesh: { vertex_count, positions, joints, weights },
 // groups: [{ time, instances: [[16 floats], ...] }], transpose, glsl_break: { marker, line } | null,
-// out }] } (file names relative to JOB_DIR). For each case, the palette is read with readPal, the
+// bone_pass (Crowd's bonePass option), out }] } (file names relative to JOB_DIR). For each case, the palette is read with readPal, the
 // runtime draws every instance of each group at its time as points (one instanced draw), and
 // v_world of every instance and vertex lands in JOB_DIR/OUT as float32, group after group. The C
 // test compares them with its CPU skinning. A case can break the runtime on purpose: transpose
@@ -45,7 +45,7 @@ const failures = await withPage({ '/': REPO, '/job/': dir }, '/__blank.html', as
             const canvas = document.createElement('canvas');
             const gl = canvas.getContext('webgl2');
             const capacity = Math.max(...c.groups.map((g) => g.instances.length));
-            const crowd = new Crowd(gl, { pal, glsl, mesh, capacity, captureWorld: true });
+            const crowd = new Crowd(gl, { pal, glsl, mesh, capacity, captureWorld: true, bonePass: c.bone_pass ?? false });
             const out = [];
             for (const g of c.groups) {
                 crowd.count = 0;
@@ -57,14 +57,14 @@ const failures = await withPage({ '/': REPO, '/job/': dir }, '/__blank.html', as
                 const got = crowd.capture(g.time);
                 out.push(...got);
             }
-            return { values: out, renderer: gl.getParameter(gl.RENDERER), format: crowd.textures.format };
+            return { values: out, renderer: gl.getParameter(gl.RENDERER), format: crowd.textures.format, bones: crowd.bones !== null };
         }, c).catch((e) => ({ error: String(e.message ?? e).split('\n')[0] }));
         if (result.error) {
             console.log(`FAIL ${c.name}: ${result.error}`);
             continue;
         }
         fs.writeFileSync(path.join(dir, c.out), Buffer.from(new Float32Array(result.values).buffer));
-        console.log(`ran  ${c.name}: ${result.values.length / 3} vertices on ${result.format} (${result.renderer})`);
+        console.log(`ran  ${c.name}: ${result.values.length / 3} vertices on ${result.format}${result.bones ? ' with the bone pass' : ''} (${result.renderer})`);
     }
     // The hostile palettes the fuzzers found, read in the page with the decoder a page would use:
     // each must be refused with a one-line Error naming the file, the page left working.

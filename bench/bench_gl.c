@@ -1,0 +1,549 @@
+/* bench_gl.c - the native crowd benchmark: N instances of a model drawn from its palette (the
+ * shipped samples/shaders/crowdbake_palette.glsl, per-vertex blending), from the bone pass (the
+ * same GLSL's cb_bone_pass and CB_BONE_TEXTURE) and from a VAT of the same frames, each as one
+ * instanced draw into a 960x540 offscreen framebuffer, timed with GL timer queries
+ * (GL_TIME_ELAPSED). OpenGL 3.3 core through EGL without a window: Mesa's llvmpipe here
+ * (EGL_PLATFORM=surfaceless), a GPU's driver through EGL's device platform elsewhere, unchanged.
+ *
+ *   bench_gl MODEL.glb N1,N2,... [--frames K]   JSON: per count and method, median and min frame ms
+ *   bench_gl MODEL.glb --check                    the three images of 16 instances must agree
+ *
+ * The palette and the VAT are baked here from MODEL.glb alike (qpos/u16 and RGBA16F, 30 fps, in
+ * place), so both play the same frames. Methods alternate within a count (a change of the
+ * machine's load hits all alike). */
+#define GL_GLEXT_PROTOTYPES
+#include <EGL/egl.h>
+#include <EGL/eglext.h>
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "crowdbake/crowdbake.h"
+
+#define WIDTH 960
+#define HEIGHT 540
+#define METHODS 3
+static const char *method_names[METHODS] = {"palette", "bones", "vat"};
+
+static void die(const char *what)
+{
+    fprintf(stderr, "bench_gl: %s\n", what);
+    exit(1);
+}
+
+/* EGL's first device that is a GPU (not Mesa's software one), else its first; NULL when it lists none. */
+static EGLDeviceEXT first_device(void)
+{
+    PFNEGLQUERYDEVICESEXTPROC query_devices = (PFNEGLQUERYDEVICESEXTPROC)eglGetProcAddress("eglQueryDevicesEXT");
+    PFNEGLQUERYDEVICESTRINGEXTPROC query_string =
+        (PFNEGLQUERYDEVICESTRINGEXTPROC)eglGetProcAddress("eglQueryDeviceStringEXT");
+    EGLDeviceEXT devices[8];
+    EGLint n = 0;
+    if (!query_devices || !query_string || !query_devices(8, devices, &n) || !n) return NULL;
+    for (EGLint i = 0; i < n; ++i) {
+        const char *ext = query_string(devices[i], EGL_EXTENSIONS);
+        if (!ext || !strstr(ext, "EGL_MESA_device_software")) return devices[i];
+    }
+    return devices[0];
+}
+
+/* An OpenGL 3.3 core context without a surface: EGL's device platform when it has one (a GPU's
+ * driver, or Mesa's llvmpipe), else the default display (Mesa with EGL_PLATFORM=surfaceless,
+ * which also skips the devices). */
+static void open_context(void)
+{
+    EGLDisplay dpy = EGL_NO_DISPLAY;
+    PFNEGLGETPLATFORMDISPLAYEXTPROC platform_display =
+        (PFNEGLGETPLATFORMDISPLAYEXTPROC)eglGetProcAddress("eglGetPlatformDisplayEXT");
+    EGLDeviceEXT device = getenv("EGL_PLATFORM") || !platform_display ? NULL : first_device();
+    if (device) dpy = platform_display(EGL_PLATFORM_DEVICE_EXT, device, NULL);
+    if (dpy == EGL_NO_DISPLAY || !eglInitialize(dpy, NULL, NULL)) {
+        dpy = eglGetDisplay(EGL_DEFAULT_DISPLAY);
+        if (dpy == EGL_NO_DISPLAY || !eglInitialize(dpy, NULL, NULL)) die("no EGL display (Mesa: EGL_PLATFORM=surfaceless)");
+    }
+    const EGLint config_attrs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_NONE};
+    EGLConfig config;
+    EGLint configs = 0;
+    if (!eglChooseConfig(dpy, config_attrs, &config, 1, &configs) || !configs) die("no EGL config for desktop OpenGL");
+    if (!eglBindAPI(EGL_OPENGL_API)) die("EGL cannot bind desktop OpenGL");
+    const EGLint ctx_attrs[] = {EGL_CONTEXT_MAJOR_VERSION, 3, EGL_CONTEXT_MINOR_VERSION, 3, EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                                EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+    EGLContext ctx = eglCreateContext(dpy, config, EGL_NO_CONTEXT, ctx_attrs);
+    if (ctx == EGL_NO_CONTEXT || !eglMakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, ctx))
+        die("no OpenGL 3.3 core context without a surface (EGL_KHR_surfaceless_context)");
+}
+
+/* ---- shaders: the shipped library, then a main ---- */
+
+static const char *MAIN_HEAD =
+    "in vec3 a_position; in vec3 a_normal; in ivec4 a_joints; in vec4 a_weights; in vec4 a_place; in vec4 a_inst;\n"
+    "uniform float u_time; uniform mat4 u_view_projection;\n"
+    "out vec3 v_normal;\n";
+static const char *MAIN_TAIL =
+    "    float c = cos(a_place.w), s = sin(a_place.w);\n"
+    "    mat3 yaw = mat3(c, 0.0, -s, 0.0, 1.0, 0.0, s, 0.0, c);\n"
+    "    v_normal = yaw * n;\n"
+    "    gl_Position = u_view_projection * vec4(a_place.xyz + yaw * p, 1.0);\n"
+    "}\n";
+static const char *SKIN_PALETTE =
+    "void main() {\n    vec3 p, n;\n"
+    "    cb_skin_position_normal(a_position, a_normal, a_joints, a_weights, a_inst, u_time, p, n);\n";
+static const char *SKIN_BONES =
+    "void main() {\n    vec3 p, n;\n"
+    "    cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, gl_InstanceID, p, n);\n";
+static const char *SKIN_VAT =
+    "uniform sampler2D u_vat_positions, u_vat_normals; uniform int u_frame_width, u_rows_per_frame, u_vat_rows;\n"
+    "vec3 vat_fetch(sampler2D t, int frame) {\n"
+    "    int row = frame * u_rows_per_frame + gl_VertexID / u_frame_width, block = row / u_vat_rows;\n"
+    "    return texelFetch(t, ivec2(block * u_frame_width + gl_VertexID % u_frame_width, row - block * u_vat_rows), 0).xyz;\n"
+    "}\n"
+    "void main() {\n    int row0, row1; float fr;\n    cb_frame(a_inst, u_time, row0, row1, fr);\n"
+    "    vec3 p = mix(vat_fetch(u_vat_positions, row0), vat_fetch(u_vat_positions, row1), fr);\n"
+    "    vec3 n = normalize(mix(vat_fetch(u_vat_normals, row0), vat_fetch(u_vat_normals, row1), fr));\n";
+static const char *FRAGMENT =
+    "#version 330 core\nin vec3 v_normal; out vec4 o_color;\n"
+    "void main() { float l = 0.35 + 0.65 * max(dot(normalize(v_normal), normalize(vec3(0.4, 0.8, 0.3))), 0.0);\n"
+    "              o_color = vec4(vec3(0.8, 0.7, 0.55) * l, 1.0); }\n";
+static const char *PASS_VERTEX =
+    "in vec4 a_inst; uniform float u_time; uniform int u_rows; uniform vec2 u_size;\n"
+    "flat out vec4 v_inst; flat out int v_x0;\n"
+    "void main() {\n"
+    "    int block = gl_InstanceID / u_rows, row = gl_InstanceID - block * u_rows, bones = cb_row_texels / CB_TEXELS_PER_BONE;\n"
+    "    v_x0 = block * bones;\n"
+    "    vec2 corner = vec2(float(gl_VertexID & 1), float(gl_VertexID >> 1));\n"
+    "    gl_Position = vec4(vec2(float(v_x0) + corner.x * float(bones), float(row) + corner.y) / u_size * 2.0 - 1.0, 0.0, 1.0);\n"
+    "    v_inst = a_inst;\n"
+    "}\n";
+static const char *PASS_FRAGMENT =
+    "flat in vec4 v_inst; flat in int v_x0; uniform float u_time;\n"
+    "layout(location = 0) out vec4 o_c0; layout(location = 1) out vec4 o_c1; layout(location = 2) out vec4 o_c2;\n"
+    "void main() { cb_bone_pass(int(gl_FragCoord.x) - v_x0, v_inst, v_inst, 1.0, u_time, o_c0, o_c1, o_c2); }\n";
+
+static GLuint shader(GLenum type, const char *const *parts, int n)
+{
+    GLuint s = glCreateShader(type);
+    glShaderSource(s, n, parts, NULL);
+    glCompileShader(s);
+    GLint ok;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        char log[4096];
+        glGetShaderInfoLog(s, sizeof log, NULL, log);
+        fprintf(stderr, "bench_gl: a shader does not compile: %s\n", log);
+        exit(1);
+    }
+    return s;
+}
+
+/* The shipped library with the palette's defines (and CB_BONE_TEXTURE for `bones`) before each stage's main. */
+static GLuint program(const char *library, const cb_palette *p, bool bones, const char *const *vs, int vs_n,
+                      const char *const *fs, int fs_n)
+{
+    static const char *layouts[] = {"CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS"};
+    static const char *precisions[] = {"CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16"};
+    char defines[256];
+    snprintf(defines, sizeof defines, "#version 330 core\n#define %s\n#define %s\n%s%s", layouts[p->layout],
+             precisions[p->precision], p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "",
+             bones ? "#define CB_BONE_TEXTURE\n" : "");
+    const char *v[8] = {defines, library}, *f[8] = {defines, library};
+    for (int i = 0; i < vs_n; ++i) v[2 + i] = vs[i];
+    for (int i = 0; i < fs_n; ++i) f[2 + i] = fs[i];
+    GLuint prog = glCreateProgram();
+    glAttachShader(prog, shader(GL_VERTEX_SHADER, v, 2 + vs_n));
+    glAttachShader(prog, fs_n ? shader(GL_FRAGMENT_SHADER, f, 2 + fs_n) : shader(GL_FRAGMENT_SHADER, &FRAGMENT, 1));
+    const char *attrs[] = {"a_position", "a_normal", "a_joints", "a_weights", "a_place", "a_inst"};
+    for (GLuint a = 0; a < 6; ++a) glBindAttribLocation(prog, a, attrs[a]);
+    glLinkProgram(prog);
+    GLint ok;
+    glGetProgramiv(prog, GL_LINK_STATUS, &ok);
+    if (!ok) die("a program does not link");
+    return prog;
+}
+
+/* ---- textures ---- */
+
+static GLuint texture(GLint internal, GLsizei w, GLsizei h, GLenum format, GLenum type, const void *data)
+{
+    GLuint t;
+    glGenTextures(1, &t);
+    glBindTexture(GL_TEXTURE_2D, t);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, internal, w, h, 0, format, type, data);
+    return t;
+}
+
+typedef struct scene {
+    const cb_palette *pal;
+    const cb_vat *vat;
+    GLuint palette_tex, bind_tex, vat_pos, vat_nrm, bone_tex[3], bone_fbo, bone_rows, bone_width;
+    GLuint prog[METHODS], pass, vao, pass_vao, instance_vbo;
+    GLsizei index_count;
+} scene;
+
+static void upload_palette(scene *s)
+{
+    const cb_palette *p = s->pal;
+    static const GLint internal[] = {GL_RGBA32F, GL_RGBA16F, GL_RGBA16UI};
+    static const GLenum format[] = {GL_RGBA, GL_RGBA, GL_RGBA_INTEGER}, type[] = {GL_FLOAT, GL_HALF_FLOAT, GL_UNSIGNED_SHORT};
+    s->palette_tex = texture(internal[p->precision], (GLsizei)p->width, (GLsizei)p->height, format[p->precision],
+                             type[p->precision], p->texels);
+    float *rgba = calloc((size_t)p->bone_count * 8, sizeof(float)); /* row 0: bind positions; row 1: position offsets */
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        memcpy(rgba + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
+        if (p->positions_relative) memcpy(rgba + (p->bone_count + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
+    }
+    s->bind_tex = texture(GL_RGBA32F, (GLsizei)p->bone_count, 2, GL_RGBA, GL_FLOAT, rgba);
+    free(rgba);
+    s->vat_pos = texture(GL_RGBA16F, (GLsizei)s->vat->geometry.width, (GLsizei)s->vat->geometry.height, GL_RGBA,
+                         GL_HALF_FLOAT, s->vat->positions);
+    s->vat_nrm = texture(GL_RGBA16F, (GLsizei)s->vat->geometry.width, (GLsizei)s->vat->geometry.height, GL_RGBA,
+                         GL_HALF_FLOAT, s->vat->normals);
+}
+
+/* The bone pass's three RGBA32F targets for `capacity` instances, in column blocks of the texture limit. */
+static void bone_targets(scene *s, uint32_t capacity)
+{
+    GLint max;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max);
+    s->bone_rows = capacity < (uint32_t)max ? capacity : (uint32_t)max;
+    s->bone_width = (capacity + s->bone_rows - 1) / s->bone_rows * s->pal->bone_count;
+    if (s->bone_width > (uint32_t)max) die("too many instances for the bone pass's textures");
+    glGenFramebuffers(1, &s->bone_fbo);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, s->bone_fbo);
+    for (int k = 0; k < 3; ++k) {
+        s->bone_tex[k] = texture(GL_RGBA32F, (GLsizei)s->bone_width, (GLsizei)s->bone_rows, GL_RGBA, GL_FLOAT, NULL);
+        glFramebufferTexture2D(GL_DRAW_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + (GLenum)k, GL_TEXTURE_2D, s->bone_tex[k], 0);
+    }
+    const GLenum buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glDrawBuffers(3, buffers);
+    if (glCheckFramebufferStatus(GL_DRAW_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) die("the bone textures are not renderable");
+}
+
+/* ---- the mesh: every primitive of the first skin, in the VAT's vertex order ---- */
+
+static void upload_mesh(scene *s, const cb_model *m, uint32_t capacity)
+{
+    uint32_t verts = 0, indices = 0;
+    for (uint32_t i = 0; i < m->primitive_count; ++i)
+        if (m->primitives[i].skin == 0) verts += m->primitives[i].vertex_count, indices += m->primitives[i].index_count;
+    float *pos = malloc(verts * 12), *nrm = calloc(verts, 12), *w = malloc(verts * 16);
+    int32_t *j = malloc(verts * 16);
+    uint32_t *idx = malloc(indices * 4), v0 = 0, i0 = 0;
+    for (uint32_t i = 0; i < m->primitive_count; ++i) {
+        const cb_primitive *p = &m->primitives[i];
+        if (p->skin != 0) continue;
+        memcpy(pos + v0 * 3, p->positions, p->vertex_count * 12);
+        if (p->normals) memcpy(nrm + v0 * 3, p->normals, p->vertex_count * 12);
+        memcpy(w + v0 * 4, p->weights, p->vertex_count * 16);
+        for (uint32_t k = 0; k < p->vertex_count * 4; ++k) j[v0 * 4 + k] = p->joints[k];
+        for (uint32_t k = 0; k < p->index_count; ++k) idx[i0 + k] = v0 + p->indices[k];
+        v0 += p->vertex_count, i0 += p->index_count;
+    }
+    glGenVertexArrays(1, &s->vao);
+    glBindVertexArray(s->vao);
+    const void *data[4] = {pos, nrm, j, w};
+    const int size[4] = {3, 3, 4, 4};
+    for (GLuint a = 0; a < 4; ++a) {
+        GLuint b;
+        glGenBuffers(1, &b);
+        glBindBuffer(GL_ARRAY_BUFFER, b);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)verts * size[a] * 4, data[a], GL_STATIC_DRAW);
+        glEnableVertexAttribArray(a);
+        if (a == 2) glVertexAttribIPointer(a, 4, GL_INT, 0, 0);
+        else glVertexAttribPointer(a, size[a], GL_FLOAT, GL_FALSE, 0, 0);
+    }
+    GLuint ib;
+    glGenBuffers(1, &ib);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ib);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)indices * 4, idx, GL_STATIC_DRAW);
+    s->index_count = (GLsizei)indices;
+    glGenBuffers(1, &s->instance_vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, s->instance_vbo);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)capacity * 32, NULL, GL_STATIC_DRAW);
+    for (GLuint a = 4; a < 6; ++a) { /* a_place, a_inst: 8 floats an instance */
+        glEnableVertexAttribArray(a);
+        glVertexAttribPointer(a, 4, GL_FLOAT, GL_FALSE, 32, (const void *)(uintptr_t)((a - 4) * 16));
+        glVertexAttribDivisor(a, 1);
+    }
+    glGenVertexArrays(1, &s->pass_vao);
+    glBindVertexArray(s->pass_vao);
+    glEnableVertexAttribArray(5);
+    glVertexAttribPointer(5, 4, GL_FLOAT, GL_FALSE, 32, (const void *)16);
+    glVertexAttribDivisor(5, 1);
+    glBindVertexArray(0);
+    free(pos), free(nrm), free(w), free(j), free(idx);
+}
+
+/* ---- a frame ---- */
+
+static void bind_palette(const scene *s, GLuint prog)
+{
+    const cb_palette *p = s->pal;
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, s->palette_tex);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, s->bind_tex);
+    glUniform1i(glGetUniformLocation(prog, "cb_palette"), 0);
+    glUniform1i(glGetUniformLocation(prog, "cb_bind_positions"), 1);
+    glUniform1i(glGetUniformLocation(prog, "cb_row_texels"), (GLint)p->row_texels);
+    glUniform1i(glGetUniformLocation(prog, "cb_rows_per_block"), (GLint)p->height);
+    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_min"), 1, p->bounds_min);
+    glUniform3fv(glGetUniformLocation(prog, "cb_bounds_max"), 1, p->bounds_max);
+    glUniform1f(glGetUniformLocation(prog, "cb_linear_range"), p->linear_range);
+}
+
+/* The bone pass: every instance's bones blended once into the three targets. */
+static void run_bone_pass(const scene *s, uint32_t n, float time)
+{
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, s->bone_fbo);
+    glViewport(0, 0, (GLsizei)s->bone_width, (GLsizei)s->bone_rows);
+    glDisable(GL_DEPTH_TEST);
+    glUseProgram(s->pass);
+    bind_palette(s, s->pass);
+    glUniform1f(glGetUniformLocation(s->pass, "u_time"), time);
+    glUniform1i(glGetUniformLocation(s->pass, "u_rows"), (GLint)s->bone_rows);
+    glUniform2f(glGetUniformLocation(s->pass, "u_size"), (float)s->bone_width, (float)s->bone_rows);
+    glBindVertexArray(s->pass_vao);
+    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)n);
+}
+
+static void draw(const scene *s, int method, uint32_t n, float time, const float *view_projection, GLuint target)
+{
+    if (method == 1) run_bone_pass(s, n, time);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, target);
+    glViewport(0, 0, WIDTH, HEIGHT);
+    glEnable(GL_DEPTH_TEST);
+    glClearColor(0, 0, 0, 1);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    GLuint prog = s->prog[method];
+    glUseProgram(prog);
+    if (method == 2) {
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_2D, s->vat_pos);
+        glActiveTexture(GL_TEXTURE1);
+        glBindTexture(GL_TEXTURE_2D, s->vat_nrm);
+        glUniform1i(glGetUniformLocation(prog, "u_vat_positions"), 0);
+        glUniform1i(glGetUniformLocation(prog, "u_vat_normals"), 1);
+        glUniform1i(glGetUniformLocation(prog, "u_frame_width"), (GLint)s->vat->frame_width);
+        glUniform1i(glGetUniformLocation(prog, "u_rows_per_frame"), (GLint)s->vat->rows_per_frame);
+        glUniform1i(glGetUniformLocation(prog, "u_vat_rows"), (GLint)s->vat->geometry.height);
+    } else bind_palette(s, prog);
+    if (method == 1) {
+        for (int k = 0; k < 3; ++k) {
+            char name[16];
+            snprintf(name, sizeof name, "cb_bones%d", k);
+            glActiveTexture(GL_TEXTURE2 + (GLenum)k);
+            glBindTexture(GL_TEXTURE_2D, s->bone_tex[k]);
+            glUniform1i(glGetUniformLocation(prog, name), 2 + k);
+        }
+        glUniform1i(glGetUniformLocation(prog, "cb_bone_rows"), (GLint)s->bone_rows);
+    }
+    glUniform1f(glGetUniformLocation(prog, "u_time"), time);
+    glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, view_projection);
+    glBindVertexArray(s->vao);
+    glDrawElementsInstanced(GL_TRIANGLES, s->index_count, GL_UNSIGNED_INT, 0, (GLsizei)n);
+}
+
+/* n instances walking in a grid, the camera looking down at all of them (none culled). */
+static void place_herd(const scene *s, uint32_t n, float view_projection[16])
+{
+    const cb_palette *p = s->pal;
+    const cb_palette_clip *clip = &p->clips[0];
+    for (uint32_t c = 0; c < p->clip_count; ++c)
+        if (p->clips[c].loops) { clip = &p->clips[c]; break; }
+    float size = 0;
+    for (uint32_t c = 0; c < p->clip_count; ++c)
+        for (int k = 0; k < 3; ++k) size = fmaxf(size, p->clips[c].bounds_max[k] - p->clips[c].bounds_min[k]);
+    uint32_t g = (uint32_t)ceil(sqrt((double)n));
+    float *inst = malloc((size_t)n * 32);
+    for (uint32_t i = 0; i < n; ++i) {
+        float v[8] = {((float)(i % g) - (float)g / 2) * size * 1.5f, 0, ((float)(i / g) - (float)g / 2) * size * 1.5f,
+                      (float)i * 2.4f, (float)clip->first_row, clip->loops ? (float)clip->frames : -(float)clip->frames,
+                      (float)clip->fps, (float)fmod(i * 0.6180339887, 1.0)};
+        memcpy(inst + i * 8, v, sizeof v);
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, s->instance_vbo);
+    glBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)n * 32, inst);
+    free(inst);
+    /* perspective(50 degrees, 960/540) x lookAt(eye (0, 0.8, 0.7) x side, the origin), column-major */
+    double side = g * size * 1.5, f = 1 / tan(25 * acos(-1.0) / 180), near = side * 0.01, far = side * 10, a = (double)WIDTH / HEIGHT;
+    double eye[3] = {0, side * 0.8, side * 0.7}, len = sqrt(eye[1] * eye[1] + eye[2] * eye[2]);
+    double zc[3] = {0, eye[1] / len, eye[2] / len}, xc[3] = {1, 0, 0}, yc[3] = {0, zc[2], -zc[1]};
+    double view[16] = {xc[0], yc[0], zc[0], 0, xc[1], yc[1], zc[1], 0, xc[2], yc[2], zc[2], 0,
+                       0, -(yc[1] * eye[1] + yc[2] * eye[2]), -(zc[1] * eye[1] + zc[2] * eye[2]), 1};
+    double proj[16] = {f / a, 0, 0, 0, 0, f, 0, 0, 0, 0, (far + near) / (near - far), -1, 0, 0, 2 * far * near / (near - far), 0};
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) {
+            double sum = 0;
+            for (int k = 0; k < 4; ++k) sum += proj[k * 4 + r] * view[c * 4 + k];
+            view_projection[c * 4 + r] = (float)sum;
+        }
+}
+
+/* ---- the offscreen target, timing and the image check ---- */
+
+static GLuint offscreen_target(void)
+{
+    GLuint fbo, rb[2];
+    glGenFramebuffers(1, &fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glGenRenderbuffers(2, rb);
+    glBindRenderbuffer(GL_RENDERBUFFER, rb[0]);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, WIDTH, HEIGHT);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
+    glBindRenderbuffer(GL_RENDERBUFFER, rb[1]);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, WIDTH, HEIGHT);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) die("the 960x540 target is not renderable");
+    return fbo;
+}
+
+static int by_value(const void *a, const void *b) { return (*(const double *)a > *(const double *)b) - (*(const double *)a < *(const double *)b); }
+
+static double now_ms(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
+}
+
+/* Milliseconds of one frame on the GPU, as GL_TIME_ELAPSED measures from the clear to the draw's
+ * end; *wall: from the clear's call to glFinish's return (llvmpipe rasterizes at the flush, which
+ * its timer query may leave out). */
+static double timed_frame(const scene *s, int method, uint32_t n, float time, const float *vp, GLuint target, double *wall)
+{
+    GLuint q;
+    GLuint64 ns = 0;
+    glGenQueries(1, &q);
+    double t0 = now_ms();
+    glBeginQuery(GL_TIME_ELAPSED, q);
+    draw(s, method, n, time, vp, target);
+    glEndQuery(GL_TIME_ELAPSED);
+    glFinish();
+    *wall = now_ms() - t0;
+    glGetQueryObjectui64v(q, GL_QUERY_RESULT, &ns);
+    glDeleteQueries(1, &q);
+    return ns / 1e6;
+}
+
+static void bench_counts(const scene *s, const char *counts, int frames, GLuint target)
+{
+    printf("{\"renderer\": \"%s\", \"version\": \"%s\", \"vertices\": %llu, \"palette_bytes\": %llu, \"vat_bytes\": %llu, "
+           "\"frames\": %d, \"counts\": {", (const char *)glGetString(GL_RENDERER), (const char *)glGetString(GL_VERSION),
+           (unsigned long long)s->vat->vertices, (unsigned long long)s->pal->width * s->pal->height * 8,
+           (unsigned long long)s->vat->geometry.width * s->vat->geometry.height * 16, frames);
+    const char *c = counts;
+    for (int first = 1; *c; first = 0) {
+        uint32_t n = (uint32_t)strtoul(c, (char **)&c, 10);
+        if (*c == ',') ++c;
+        float vp[16];
+        place_herd(s, n, vp);
+        double ms[METHODS][64], wall[METHODS][64], w;
+        for (int f = -1; f < frames && f < 64; ++f) /* frame -1 warms up (shader compile, upload) */
+            for (int k = 0; k < METHODS; ++k) {
+                int m = f % 2 ? k : METHODS - 1 - k; /* in turns: a b c, c b a, ... */
+                double t = timed_frame(s, m, n, 0.5f + (float)f / 30, vp, target, &w);
+                if (f >= 0) ms[m][f] = t, wall[m][f] = w;
+            }
+        printf("%s\"%u\": {", first ? "" : ", ", n);
+        for (int m = 0; m < METHODS; ++m) {
+            qsort(ms[m], (size_t)frames, sizeof(double), by_value);
+            qsort(wall[m], (size_t)frames, sizeof(double), by_value);
+            printf("%s\"%s_ms\": %.3f, \"%s_min_ms\": %.3f, \"%s_wall_ms\": %.3f", m ? ", " : "", method_names[m],
+                   ms[m][frames / 2], method_names[m], ms[m][0], method_names[m], wall[m][frames / 2]);
+        }
+        printf("}");
+        fflush(stdout);
+    }
+    printf("}}\n");
+}
+
+/* Share of the pixels covered in either image whose colours differ by more than 8 of 255. */
+static double image_difference(const unsigned char *a, const unsigned char *b, long *covered)
+{
+    long differ = 0;
+    *covered = 0;
+    for (size_t i = 0; i < (size_t)WIDTH * HEIGHT * 4; i += 4) {
+        bool ca = a[i] | a[i + 1] | a[i + 2], cb = b[i] | b[i + 1] | b[i + 2];
+        if (!ca && !cb) continue;
+        ++*covered;
+        for (int k = 0; k < 3; ++k)
+            if (abs(a[i + k] - b[i + k]) > 8) { ++differ; break; }
+    }
+    return *covered ? (double)differ / *covered : 1;
+}
+
+/* 16 instances drawn by each method at the same time must give the same image; the VAT a
+ * quarter second later (a runtime playing the wrong rows) must not. */
+static int check_images(const scene *s, GLuint target)
+{
+    unsigned char *img[METHODS + 1];
+    float vp[16];
+    place_herd(s, 16, vp);
+    for (int m = 0; m <= METHODS; ++m) {
+        img[m] = malloc((size_t)WIDTH * HEIGHT * 4);
+        draw(s, m < METHODS ? m : 2, 16, m < METHODS ? 0.77f : 0.77f + 0.25f, vp, target);
+        glBindFramebuffer(GL_READ_FRAMEBUFFER, target);
+        glReadPixels(0, 0, WIDTH, HEIGHT, GL_RGBA, GL_UNSIGNED_BYTE, img[m]);
+    }
+    long covered;
+    double late = image_difference(img[0], img[3], &covered), bones = image_difference(img[0], img[1], &covered),
+           vat = image_difference(img[0], img[2], &covered);
+    printf("16 instances on %s, %ld pixels covered: palette vs bone pass %.4f, palette vs VAT %.4f of the pixels differ; "
+           "the VAT 0.25 s late %.4f\n", (const char *)glGetString(GL_RENDERER), covered, bones, vat, late);
+    for (int m = 0; m <= METHODS; ++m) free(img[m]);
+    bool ok = covered > 1000 && bones <= 0.01 && vat <= 0.01 && late > 0.05 && glGetError() == GL_NO_ERROR;
+    if (!ok) fprintf(stderr, "bench_gl: the images disagree (limits: 0.01 alike, > 0.05 0.25 s late)\n");
+    return ok ? 0 : 1;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 3) die("usage: bench_gl MODEL.glb N1,N2,... [--frames K] | bench_gl MODEL.glb --check");
+    bool check = !strcmp(argv[2], "--check");
+    int frames = argc > 4 && !strcmp(argv[3], "--frames") ? atoi(argv[4]) : 5;
+    if (frames < 1 || frames > 64) die("--frames: 1 to 64");
+    cb_error err = {0};
+    cb_model *model = cb_gltf_load(argv[1], NULL, &err);
+    cb_sampler *sampler = model ? cb_sampler_create(model, 0, &err) : NULL;
+    cb_bake_options o = cb_default_bake_options();
+    o.root_motion = CB_ROOT_MOTION_IN_PLACE;
+    cb_palette pal;
+    cb_vat vat;
+    if (!sampler || cb_palette_bake(sampler, &o, NULL, 0, &pal, &err) != CB_OK ||
+        cb_vat_bake(sampler, &o, NULL, 0, true, &vat, &err) != CB_OK) {
+        fprintf(stderr, "bench_gl: %s\n", err.message);
+        return 1;
+    }
+    open_context();
+    uint32_t capacity = 16;
+    for (const char *c = argv[2]; !check && *c; ++c)
+        if (*c >= '0' && *c <= '9') {
+            uint32_t n = (uint32_t)strtoul(c, (char **)&c, 10);
+            capacity = n > capacity ? n : capacity;
+            if (!*c) break;
+        }
+    scene s = {.pal = &pal, .vat = &vat};
+    upload_palette(&s);
+    bone_targets(&s, capacity);
+    upload_mesh(&s, model, capacity);
+    const char *skins[METHODS] = {SKIN_PALETTE, SKIN_BONES, SKIN_VAT};
+    for (int m = 0; m < METHODS; ++m) {
+        const char *vs[3] = {MAIN_HEAD, skins[m], MAIN_TAIL};
+        s.prog[m] = program(cb_palette_glsl, &pal, m == 1, vs, 3, NULL, 0);
+    }
+    s.pass = program(cb_palette_glsl, &pal, false, &PASS_VERTEX, 1, &PASS_FRAGMENT, 1);
+    GLuint target = offscreen_target();
+    int rc = check ? check_images(&s, target) : (bench_counts(&s, argv[2], frames, target), 0);
+    cb_vat_free(&vat);
+    cb_palette_free(&pal);
+    cb_sampler_free(sampler);
+    cb_model_free(model);
+    return rc;
+}
