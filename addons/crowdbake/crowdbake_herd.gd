@@ -43,6 +43,8 @@ var _states := PackedStringArray()
 var _speeds := PackedFloat32Array()
 var _texture: ImageTexture
 var _dirty := false
+var _bounds_dirty := false
+var _has_contacts := false # any clip of the type lists contacts (else advance skips the search)
 
 func _ready() -> void:
 	if roster and not animal.is_empty() and mesh and count > 0 and palette == null:
@@ -53,7 +55,7 @@ func _process(delta: float) -> void:
 		return
 	if playing:
 		advance(delta)
-	elif _dirty:
+	elif _dirty or _bounds_dirty:
 		_upload() # what set_state, set_speed and place changed
 
 # Builds the herd: `count` instances of `type` at the origin, in the type's default state at its
@@ -67,6 +69,7 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 		return _fail("%s: no animal type '%s' in the roster; see roster.json's types" % [name, type])
 	_type = roster.types[type]
 	palette = _type["palette"]
+	_has_contacts = _type["clips"].values().any(func(clip): return not clip.get("contacts", []).is_empty())
 	material_override = _material()
 	var mm := MultiMesh.new()
 	mm.transform_format = MultiMesh.TRANSFORM_3D
@@ -109,8 +112,9 @@ func _material() -> ShaderMaterial:
 func advance(delta: float) -> void:
 	var before := time
 	time += delta
-	for i in count:
-		_raise_contacts(i, before, time)
+	if _has_contacts:
+		for i in count:
+			_raise_contacts(i, before, time)
 	_upload()
 
 # Puts instance `i` into `state` (a state of the roster type), cross-fading from its current clip
@@ -146,12 +150,12 @@ func set_speed(i: int, speed: float) -> void:
 	_speeds[i] = speed
 	_retime(i)
 
-# Instance `i`'s transform in the herd (a uniform scale is the animal's size); keeps the bounds and
-# the feet (rate) in step.
+# Instance `i`'s transform in the herd (a uniform scale is the animal's size); keeps the feet (rate)
+# in step, and the bounds by the next frame (or update_bounds()).
 func place(i: int, xform: Transform3D) -> void:
 	multimesh.set_instance_transform(i, xform)
 	_retime(i)
-	update_bounds()
+	_bounds_dirty = true
 
 func set_color(i: int, color: Color) -> void:
 	multimesh.set_instance_color(i, color)
@@ -194,6 +198,7 @@ func update_bounds() -> void:
 		var b := multimesh.get_instance_transform(i) * clip_box
 		box = b if i == 0 else box.merge(b)
 	multimesh.custom_aabb = box
+	_bounds_dirty = false
 
 func _fade(i: int) -> float:
 	var at := i * FLOATS
@@ -254,6 +259,8 @@ static func _crossings(at: float, f0: float, f1: float, frames: float, loops: bo
 
 # The instance texture: three RGBA32F texels per instance.
 func _upload() -> void:
+	if _bounds_dirty:
+		update_bounds()
 	if not _dirty and _texture != null:
 		material_override.set_shader_parameter("herd_time", time)
 		return

@@ -244,6 +244,7 @@ func _check_bounds(roster, mesh: Mesh) -> void:
 	herd.place(2, Transform3D(Basis(Vector3.UP, 2.0).scaled(Vector3.ONE * 1.2), Vector3(15, 1, -3)))
 	herd.set_state(1, "graze", 0.0)
 	herd.set_state(2, "run", 0.0)
+	herd.update_bounds()
 	var box: AABB = herd.multimesh.custom_aabb.grow(1e-4)
 	var clip_box: AABB = herd.palette.largest_bounds().grow(1e-4) # without the instances' places
 	var arrays := mesh.surface_get_arrays(0)
@@ -382,6 +383,36 @@ func _check_drawing(roster, mesh: Mesh) -> void:
 	print("crowdbake-check: %d pixels change setting the state it is in, %d going to graze" % [same, graze])
 	_end(name, "" if same == 0 and graze > 20 else "%d and %d pixels changed" % [same, graze])
 	herd.queue_free()
+	await _check_other_layout(roster, mesh)
+
+# The herd rewrites its shader's defines to the palette's layout and precision: Cow's mat4/float bake
+# (the same clips and rows) draws the pose the default qpos/u16 one draws.
+func _check_other_layout(roster, mesh: Mesh) -> void:
+	var name := "a mat4/float palette draws the herd as qpos/u16 does"
+	_begin(name)
+	var masks := []
+	var default_palette = roster.types["cow"]["palette"]
+	var mat4 = load(ADDON + "/crowdbake_palette.gd").new()
+	mat4.load_file(COW + "/mat4-float.pal")
+	for palette in [default_palette, mat4]:
+		roster.types["cow"]["palette"] = palette
+		var herd := _new_herd(roster, mesh, 1)
+		herd.place(0, Transform3D(Basis(Vector3.UP, PI / 2).scaled(Vector3.ONE * SIZE), Vector3.ZERO))
+		herd.set_state(0, "graze", 0.0)
+		herd.advance(2.5)
+		var image := await _frame()
+		var mask := PackedByteArray()
+		for y in image.get_height():
+			for x in image.get_width():
+				mask.append(1 if image.get_pixel(x, y).a > 0.0 else 0)
+		masks.append(mask)
+		herd.queue_free()
+	roster.types["cow"]["palette"] = default_palette
+	var differ := 0
+	for i in masks[0].size():
+		differ += 1 if masks[0][i] != masks[1][i] else 0
+	print("crowdbake-check: %d of %d covered pixels differ" % [differ, masks[0].count(1)])
+	_end(name, "" if masks[0].count(1) > 50 and differ * 50 <= masks[0].count(1) else "%d of %d covered pixels differ" % [differ, masks[0].count(1)])
 
 # The shadow pass skins too: looking down at the ground under a herd that casts only shadows, the
 # shadow differs between two times; a herd standing still (speed 0) casts the same shadow.
