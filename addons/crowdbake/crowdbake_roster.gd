@@ -38,15 +38,16 @@ func load_file(path: String) -> bool:
 				"speed_reference": float(entry.get("speed_reference", palette.speed_reference))}
 	return true
 
-# Sockets, as a list of {name, bone, transform} or a map of name -> {bone, transform}; the transform
-# (bind space, 16 numbers column-major like the joint matrices) defaults to the identity.
+# Sockets, as the manifest lists them ([{name, bone, bind_transform}]) or a map of name -> {bone,
+# bind_transform}; the transform (the socket's frame in bind space, 16 numbers column-major like the
+# joint matrices: the prop's place is instance x bone matrix x this) defaults to the identity.
 static func _sockets(listed) -> Dictionary:
 	var out := {}
 	var entries: Array = listed.values() if listed is Dictionary else listed
 	var names: Array = listed.keys() if listed is Dictionary else []
 	for i in entries.size():
 		var e: Dictionary = entries[i]
-		var m: Array = e.get("transform", [])
+		var m: Array = e.get("bind_transform", e.get("transform", []))
 		var t := Transform3D()
 		if m.size() == 16:
 			t = Transform3D(Vector3(m[0], m[1], m[2]), Vector3(m[4], m[5], m[6]), Vector3(m[8], m[9], m[10]), Vector3(m[12], m[13], m[14]))

@@ -313,12 +313,12 @@ func _check_footsteps(roster, mesh: Mesh) -> void:
 	herd.queue_free()
 	_end(name, why)
 
-# Sockets of the manifest's shape (name -> bone and bind-space transform) follow their bone.
+# Sockets of the manifest's shape ([{name, bone, bind_transform}]) follow their bone.
 func _check_sockets(roster, mesh: Mesh) -> void:
 	var name := "socket_transform follows its bone"
 	_begin(name)
 	roster.types["cow"]["sockets"] = load(ADDON + "/crowdbake_roster.gd")._sockets(
-			{"bell": {"bone": 5, "transform": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0.5, 0.25, 1]}})
+			[{"name": "bell", "bone": 5, "bind_transform": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0.5, 0.25, 1]}])
 	var herd := _new_herd(roster, mesh, 1)
 	herd.advance(0.4)
 	var got: Transform3D = herd.socket_transform(0, "bell")
