@@ -212,7 +212,7 @@ $(BUILD)/tests/%: tests/%.c tests/testutil.h $(BUILD)/libcrowdbake.a
 $(BUILD)/tests/standalone_pal_reader: tests/standalone_pal_reader.c formats/crowdbake_pal.h $(DEPS_STAMP)
 	@mkdir -p $(@D)
 	$(CC) -std=c99 -pedantic $(OPT) -g $(WARN) $(SAN) $(TEST_CFLAGS) $< -o $@ \
-	  $(shell pkg-config --libs cmocka libzstd 2>/dev/null)
+	  $(shell pkg-config --libs cmocka libzstd 2>/dev/null) -lm
 TEST_BINS += $(BUILD)/tests/standalone_pal_reader
 
 # Fuzz targets, replayed over their regression inputs (and the samples) by every test run.

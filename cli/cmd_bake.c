@@ -15,14 +15,17 @@ const char cmd_bake_usage[] =
     "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2 [options]\n"
     "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--out-dir DIR] [--json]\n"
     "                      [-q] [--sync STATE=speed|time,...] [--default-state STATE]\n"
-    "                      [--fps N] [--fit-rows] [--allow-over-budget] [--layout L] [--precision P] [--format F] [--zstd]\n"
+    "                      [--fps N|auto] [--max-error MM_PER_M] [--max-fps N] [--fit-rows] [--allow-over-budget]\n"
+    "                      [--layout L] [--precision P] [--format F] [--zstd]\n"
     "                      [--max-texture-size N]\n"
     "                      [--root-motion R] [--exr-compression C]\n\n"
     "Bakes every clip of the model's skin into a bone-matrix palette; or every animal type of a\n"
     "catalog (see catalog.example.toml) into palettes and a roster manifest, re-baking only what\n"
     "changed (--force: everything), N types at a time (default: the number of cores). With a\n"
-    "catalog, the bake options given replace its [bake] and [animal] values for this run (a clip's\n"
-    "own fps still applies) and count in what is up to date; --depfile writes a Make/Ninja depfile;\n"
+    "catalog, the bake options given replace its [bake] and [animal] values for this run and count\n"
+    "in what is up to date; a clip's own fps and max_error still apply (each setting: the catalog\n"
+    "clip's, else the command line's, else the animal's, else [bake]'s, else the default);\n"
+    "--depfile writes a Make/Ninja depfile;\n"
     "--out-dir replaces the catalog's out_dir (a path from the current directory);\n"
     "--depfile-manifest-only writes the manifest's rule alone, as Ninja's depfile without\n"
     "deps = gcc (CMake's DEPFILE) wants it. --sync STATE=speed|time|auto (comma-separated) and\n"
@@ -111,6 +114,7 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
 {
     *s = cb_default_bake_settings();
     *fields = 0;
+    if (a->fps) s->from.fps = CB_FROM_COMMAND_LINE;
     if (a->fps && strcmp(a->fps, "auto") != 0) {
         s->fps_auto = false;
         if (!cli_parse_double(a->fps, &s->fps) || !cb_fps_valid(s->fps))
@@ -130,6 +134,7 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
     }
     if (a->root_motion && !cb_root_motion_parse(a->root_motion, &s->root_motion))
         return cli_usage_error("bake", "--root-motion is keep or in-place");
+    if (a->root_motion) s->from.root_motion = CB_FROM_COMMAND_LINE;
     if (a->format && !(s->formats = cb_formats_parse(a->format)))
         return cli_usage_error("bake", "--format is pal, exr or pal,exr (any comma-separated set of pal, exr and ktx2), "
                                "got '%s'", a->format);
@@ -137,6 +142,7 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
         return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
     s->zstd = a->zstd;
     s->fit_rows = a->fit;
+    if (a->fit) s->from.fit_rows = CB_FROM_COMMAND_LINE;
     s->measure_all = a->measure_all;
     s->allow_over_budget = a->over_budget;
     s->max_error_given = a->max_error != NULL;
@@ -144,11 +150,14 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
         return cli_usage_error("bake", "--max-error wants mm per metre of model height");
     if (a->max_fps && (!cli_parse_double(a->max_fps, &s->max_fps) || !cb_max_fps_valid(s->max_fps)))
         return cli_usage_error("bake", "--max-fps wants 2..1000");
+    if (a->max_error) s->from.max_error = CB_FROM_COMMAND_LINE;
+    if (a->max_fps) s->from.max_fps = CB_FROM_COMMAND_LINE;
     *fields = (a->fps ? CB_BAKE_FPS : 0u) | (a->layout ? CB_BAKE_LAYOUT : 0u) | (a->precision ? CB_BAKE_PRECISION : 0u) |
               (a->max_size ? CB_BAKE_MAX_TEXTURE_SIZE : 0u) | (a->root_motion ? CB_BAKE_ROOT_MOTION : 0u) |
               (a->format ? CB_BAKE_FORMATS : 0u) | (a->zstd ? CB_BAKE_ZSTD : 0u) |
               (a->exr_compression ? CB_BAKE_EXR_COMPRESSION : 0u) | (a->fit ? CB_BAKE_FIT_ROWS : 0u) |
-              (a->measure_all ? CB_BAKE_MEASURE_ALL : 0u) | (a->over_budget ? CB_BAKE_ALLOW_OVER_BUDGET : 0u);
+              (a->measure_all ? CB_BAKE_MEASURE_ALL : 0u) | (a->over_budget ? CB_BAKE_ALLOW_OVER_BUDGET : 0u) |
+              (a->max_error ? CB_BAKE_MAX_ERROR : 0u) | (a->max_fps ? CB_BAKE_MAX_FPS : 0u);
     return 0;
 }
 
@@ -174,9 +183,6 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
         return cli_usage_error("bake", "--clip and --exclude-clip are for single models; a catalog lists clips per animal");
     if (a->loops || a->one_shots)
         return cli_usage_error("bake", "--loop and --one-shot are for single models; a catalog sets loop per clip");
-    if ((a->fps && strcmp(a->fps, "auto") == 0) || a->max_error || a->max_fps)
-        return cli_usage_error("bake", "--fps auto, --max-error and --max-fps are for single models; a catalog sets fps per "
-                               "animal or clip");
     unsigned formats = a->format ? cb_formats_parse(a->format) : 0;
     if (a->format && !formats) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
     /* KTX2 from a catalog would need its manifest and up-to-date check to learn the format. */
@@ -315,8 +321,9 @@ static void json_clips(cb_json *j, const cb_bake_job *job, const cb_bake_result 
     cb_json_array(j, "clips");
     for (uint32_t i = 0; i < r->budget_count; ++i) {
         const cb_clip_budget *b = &r->budgets[i];
-        char why[320];
+        char why[320], settings[400];
         cb_bake_clip_reason(job, i, why, sizeof why);
+        cb_clip_settings_text(&job->clip_settings[i], settings, sizeof settings);
         cb_json_object(j, NULL);
         cb_json_string(j, "name", clip_label(job, i));
         cb_json_number(j, "fps", b->fps);
@@ -326,6 +333,7 @@ static void json_clips(cb_json *j, const cb_bake_job *job, const cb_bake_result 
         cb_json_number(j, "visible_error_mm_per_m", b->error_mm);
         cb_json_number(j, "max_error_mm_per_m", b->max_error_mm);
         cb_json_string(j, "why", why);
+        cb_json_string(j, "settings", settings);
         cb_json_end(j);
     }
     cb_json_end(j);

@@ -13,7 +13,8 @@ const char cmd_info_usage[] =
     "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX]\n\n"
     "Skins, joints, skinned mesh nodes and vertex counts, and per clip: start, duration, keys,\n"
     "interpolation modes, whether it loops and why, frames at --fps (default 30), root velocity and\n"
-    "ground speed (root travel and planted feet).\n";
+    "ground speed (root travel and planted feet), and the footsteps: when each foot lands and lifts;\n"
+    "the sockets: nodes under a joint that are not joints, where props attach (bone, bind transform).\n";
 
 typedef struct clip_facts {
     uint64_t keys;
@@ -23,6 +24,12 @@ typedef struct clip_facts {
     cb_ground_speed speed;
     cb_sync_decision sync; /* as a state of this clip alone would play */
 } clip_facts;
+
+/* Where props attach: the baked skin's sockets (socket.h). */
+typedef struct socket_list {
+    uint32_t count;
+    cb_socket *items;
+} socket_list;
 
 static const char *interp_names[] = {"LINEAR", "STEP", "CUBICSPLINE"};
 
@@ -36,10 +43,12 @@ static void interp_list(unsigned mask, char *out, size_t size)
         }
 }
 
-static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits *limits, clip_facts *facts, cb_error *err)
+static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits *limits, clip_facts *facts,
+                        socket_list *sockets, cb_error *err)
 {
     cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, err) : NULL;
     if (skin >= 0 && !s) return err->status;
+    if (s) sockets->count = cb_find_sockets(s, &sockets->items);
     for (uint32_t a = 0; a < m->animation_count; ++a) {
         const cb_animation *anim = &m->animations[a];
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
@@ -66,6 +75,26 @@ static void print_slide(int w, const cb_stride *st)
             printf(" %s %.0f%%/%.0f%%", st->feet[k].name, 100 * st->feet[k].slide_mean, 100 * st->feet[k].slide_worst);
     printf("; travel varied per row would leave %.0f%%%s\n", 100 * st->slide_mean_varying,
            st->slide_mean > CB_SLIDE_WARN ? " (the asset's feet slide at any rate)" : "");
+}
+
+/* When each striding foot lands and lifts (the manifest's contacts). */
+static void print_contacts(int w, const cb_stride *st)
+{
+    printf("  %-*s footsteps (lands-lifts s):", w, "");
+    for (uint32_t k = 0; k < st->foot_count; ++k)
+        for (uint32_t s = 0; st->feet[k].strides && s < st->feet[k].stance_count; ++s)
+            printf(" %s %.3f-%.3f", st->feet[k].name, st->feet[k].stances[s].land, st->feet[k].stances[s].lift);
+    printf("\n");
+}
+
+static void print_sockets(const cb_model *m, int skin, const socket_list *sockets)
+{
+    for (uint32_t i = 0; i < sockets->count; ++i) {
+        const cb_socket *k = &sockets->items[i];
+        const double *b = k->bind_transform;
+        printf("  socket '%s' (node %d) on joint '%s' (bone %u), bind position (%.4g, %.4g, %.4g)\n", k->name, k->node,
+               m->nodes[m->skins[skin].joints[k->bone]].name, k->bone, b[12], b[13], b[14]);
+    }
 }
 
 static void print_text(const cb_model *m, int skin, const clip_facts *facts, double fps)
@@ -109,14 +138,14 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
             printf("  %-*s %s: %s; ground speed %.4g from %s (root %.4g, planted feet %.4g)\n", w, "",
                    f->info.loops ? "loops" : "plays once", why, f->speed.speed, f->speed.method, f->speed.root, f->speed.feet);
             printf("  %-*s %s: %s\n", w, "", f->sync.speed ? "follows the speed" : "own rate", f->sync.reason);
-            if (f->speed.stride.stride) print_slide(w, &f->speed.stride);
+            if (f->speed.stride.stride) print_slide(w, &f->speed.stride), print_contacts(w, &f->speed.stride);
         } else
             printf("  %-*s %8.4f %9.4f %6llu  %-18s %-8s %7u  -\n", w, anim->name, anim->t0, anim->t1 - anim->t0,
                    (unsigned long long)f->keys, interp, "-", cb_clip_step_count(anim->t1 - anim->t0, fps) + 1);
     }
 }
 
-static void print_json(const cb_model *m, int skin, const clip_facts *facts, double fps)
+static void print_json(const cb_model *m, int skin, const clip_facts *facts, const socket_list *sockets, double fps)
 {
     cb_json j;
     cb_json_init(&j, stdout);
@@ -154,6 +183,7 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, dou
     }
     cb_json_end(&j);
     cb_json_int(&j, "ignored_morph_channels", m->ignored_morph_channels);
+    cb_roster_json_sockets(&j, sockets->items, sockets->count);
     cb_json_array(&j, "clips");
     for (uint32_t a = 0; a < m->animation_count; ++a) {
         const cb_animation *anim = &m->animations[a];
@@ -237,8 +267,10 @@ int cmd_info(int argc, char **argv)
     }
     clip_facts *facts = calloc(m->animation_count + 1, sizeof *facts);
     if (!facts) cb_fail(&err, CB_ERR_INTERNAL, "out of memory");
-    if (!err.status) gather_clips(m, skin, fps, &limits, facts, &err);
-    if (!err.status) (json ? print_json : print_text)(m, skin, facts, fps);
+    socket_list sockets = {0};
+    if (!err.status) gather_clips(m, skin, fps, &limits, facts, &sockets, &err);
+    if (!err.status && json) print_json(m, skin, facts, &sockets, fps);
+    if (!err.status && !json) print_text(m, skin, facts, fps), print_sockets(m, skin, &sockets);
     if (!err.status && !json) { /* what a bake would leave out */
         cb_warnings warnings = {0};
         cb_model_warnings(m, true, &warnings);
@@ -246,6 +278,7 @@ int cmd_info(int argc, char **argv)
         cb_warnings_free(&warnings);
     }
     free(facts);
+    free(sockets.items);
     cb_model_free(m);
     return err.status ? cli_report(&err) : 0;
 }

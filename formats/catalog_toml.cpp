@@ -154,14 +154,18 @@ struct Parser {
         return v;
     }
 
-    void bake_settings(const toml::table &t, cb_bake_settings *b, const std::string &where)
+    /* `from`: the layer these keys are ([bake] or an animal's), recorded with each value. */
+    void bake_settings(const toml::table &t, cb_bake_settings *b, const std::string &where, cb_setting_from from)
     {
         if (auto *n = t.get("fps")) {
             int automatic = fps(*n, &b->fps, where + " fps");
             b->fps_auto = automatic;
+            b->from.fps = from;
         }
-        if (auto *n = t.get("max_error")) b->max_error_mm = max_error(*n, where), b->max_error_given = true;
+        if (auto *n = t.get("max_error"))
+            b->max_error_mm = max_error(*n, where), b->max_error_given = true, b->from.max_error = from;
         if (auto *n = t.get("max_fps")) {
+            b->from.max_fps = from;
             b->max_fps = number(*n, where + " max_fps");
             if (!cb_max_fps_valid(b->max_fps)) fail(n->source(), where + " max_fps must be between 2 and 1000");
         }
@@ -189,8 +193,9 @@ struct Parser {
         if (auto *n = t.get("root_motion")) {
             if (!cb_root_motion_parse(str(*n, where + " root_motion").c_str(), &b->root_motion))
                 fail(n->source(), where + " root_motion must be \"keep\" or \"in-place\"");
+            b->from.root_motion = from;
         }
-        if (auto *n = t.get("fit_rows")) b->fit_rows = boolean(*n, where + " fit_rows");
+        if (auto *n = t.get("fit_rows")) b->fit_rows = boolean(*n, where + " fit_rows"), b->from.fit_rows = from;
         if (auto *n = t.get("measure_all")) b->measure_all = boolean(*n, where + " measure_all");
         if (auto *n = t.get("allow_over_budget")) b->allow_over_budget = boolean(*n, where + " allow_over_budget");
         /* A fixed fps is checked against a max_error given beside it: an animal's own fps is not
@@ -353,7 +358,7 @@ struct Parser {
         an->name = dup(name);
         an->pos = cb_source_pos{(uint32_t)key.source().begin.line, (uint32_t)key.source().begin.column};
         an->bake = cat->defaults;
-        bake_settings(t, &an->bake, where);
+        bake_settings(t, &an->bake, where, CB_FROM_ANIMAL);
         const toml::node *model = t.get("model");
         if (!model) fail(key.source(), where + " needs model = \"path/to/model.glb\" (relative to the catalog)");
         std::string path = resolve(str(*model, where + " model"));
@@ -460,7 +465,7 @@ struct Parser {
         if (auto *b = root.get("bake")) {
             if (!b->is_table()) fail(b->source(), "[bake] must be a table");
             check_keys(*b->as_table(), bake_keys(), "[bake]");
-            bake_settings(*b->as_table(), &d, "[bake]");
+            bake_settings(*b->as_table(), &d, "[bake]", CB_FROM_CATALOG);
         }
         if (auto *b = root.get("budget")) {
             if (!b->is_table()) fail(b->source(), "[budget] must be a table");

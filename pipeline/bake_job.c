@@ -134,37 +134,31 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
 
 /* ---- planning: the clips and their rates ---- */
 
-/* Whether clip i's rate is chosen by error: its own fps = "auto", else a fixed fps of its own
- * (a catalog's clip fps = N), else the job's. */
-bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t i)
+bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t i) { return job->clip_settings[i].fps_auto; }
+
+double cb_bake_job_clip_fps(const cb_bake_job *job, uint32_t i)
 {
-    const cb_clip_settings *c = job->clip_settings ? &job->clip_settings[i] : NULL;
-    if (c && c->fps_auto == 1) return true; /* asked for by name: a skin with no mesh then fails, saying so */
-    /* A skin with no skinned mesh has no error to bound: the default bakes it at the fixed fps. */
-    if (cb_model_skin_vertex_count(job->model, job->skin) == 0) return false;
-    if (c && c->fps_auto >= 0) return c->fps_auto == 1;
-    if (job->clips && job->clips[i].fps > 0) return false;
-    return job->settings.fps_auto;
+    return job->clip_settings[i].fps_auto ? job->plan[i].fps : job->clip_settings[i].fps;
 }
 
-/* Clip i's error budget, mm/m: an error-bounded clip's goal; a fixed fps is checked only
- * against a max_error asked for beside it: the clip's own, or the job's for the job's fixed fps
- * (a clip pinned to an fps of its own keeps it unchecked by the job's max_error), else 0: none. */
-static double clip_budget_mm(const cb_bake_job *job, uint32_t i)
+/* Every clip's settings, resolved once (clip_settings.h): a catalog's clip entries are its
+ * own; the plan's own values otherwise came from the front end (a single model's --loop). */
+static void resolve_clips(cb_bake_job *job)
 {
-    const cb_clip_settings *c = job->clip_settings ? &job->clip_settings[i] : NULL;
-    if (c && c->max_error_mm > 0) return c->max_error_mm;
-    if (cb_bake_job_clip_auto(job, i)) return job->settings.max_error_mm;
-    bool own_fps = (job->clips && job->clips[i].fps > 0) || (c && c->fps_auto == 0);
-    return !own_fps && job->settings.max_error_given ? job->settings.max_error_mm : 0;
+    bool measurable = cb_model_skin_vertex_count(job->model, job->skin) > 0;
+    cb_setting_from clip_from = job->clip_requests ? CB_FROM_CLIP : CB_FROM_COMMAND_LINE;
+    for (uint32_t i = 0; i < job->plan_count; ++i)
+        cb_resolve_clip_settings(&job->settings, &job->plan[i], job->clip_requests ? &job->clip_requests[i] : NULL,
+                                 clip_from, measurable, &job->clip_settings[i]);
 }
 
 /* Clip i's goal when its rate is chosen by error: the fewest rows within its budget, fitted or
  * sampled (every clip fitted under fit_rows, cb_bake_options.fit). */
 static bool clip_goal(const cb_bake_job *job, uint32_t i, cb_rate_goal *goal)
 {
-    if (!cb_bake_job_clip_auto(job, i)) return false;
-    *goal = (cb_rate_goal){clip_budget_mm(job, i), job->settings.max_fps, CB_ROWS_BEST};
+    const cb_clip_settings *c = &job->clip_settings[i];
+    if (!c->fps_auto) return false;
+    *goal = (cb_rate_goal){c->max_error_mm, c->max_fps, CB_ROWS_BEST};
     return true;
 }
 
@@ -182,18 +176,20 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
     const cb_model *m = job->model;
     uint32_t n = job->clips ? job->clip_count : m->animation_count;
     free_search_poses(job);
-    free(job->plan), free(job->rates);
+    free(job->plan), free(job->rates), free(job->clip_settings);
     job->plan = calloc(n ? n : 1, sizeof *job->plan);
     job->rates = calloc(n ? n : 1, sizeof *job->rates);
+    job->clip_settings = calloc(n ? n : 1, sizeof *job->clip_settings);
     cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
-    if (!job->plan || !job->rates || !goals) {
+    if (!job->plan || !job->rates || !job->clip_settings || !goals) {
         free(goals);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
     bool any = false;
     for (uint32_t i = 0; i < n; ++i) job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false};
-    for (uint32_t i = 0; i < n; ++i) any |= clip_goal(job, i, &goals[i]);
     job->plan_count = n;
+    resolve_clips(job);
+    for (uint32_t i = 0; i < n; ++i) any |= clip_goal(job, i, &goals[i]);
     if (any) {
         cb_sampler *s = cb_sampler_create(m, job->skin, err);
         cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
@@ -264,7 +260,7 @@ static cb_status check_budgets(const cb_bake_job *job, const cb_palette *p, cb_b
     out->budget_count = p->clip_count;
     for (uint32_t i = 0; i < p->clip_count; ++i) {
         cb_clip_budget *b = &out->budgets[i];
-        b->max_error_mm = clip_budget_mm(job, i);
+        b->max_error_mm = job->clip_settings[i].max_error_mm;
         b->error_mm = cb_mm_per_m(p->clips[i].visible_error, p->model_height);
         b->over = b->max_error_mm > 0 && b->error_mm > b->max_error_mm;
         b->fps = p->clips[i].fps, b->rows = p->clips[i].frames, b->fitted = p->clips[i].fitted;
@@ -289,10 +285,11 @@ static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette 
     cb_rate_choice *fresh = calloc(n ? n : 1, sizeof *fresh);
     bool any = false;
     for (uint32_t i = 0; goals && fresh && i < n && i < p->clip_count; ++i) {
-        double budget = clip_budget_mm(job, i), e = cb_mm_per_m(p->clips[i].visible_error, p->model_height);
+        const cb_clip_settings *c = &job->clip_settings[i];
+        double budget = c->max_error_mm, e = cb_mm_per_m(p->clips[i].visible_error, p->model_height);
         double tighter = budget - 1.5 * (e - job->rates[i].error_mm);
-        if (!cb_bake_job_clip_auto(job, i) || !job->rates[i].met || !(e > budget) || !(tighter > 0)) continue;
-        goals[i] = (cb_rate_goal){tighter, job->settings.max_fps, CB_ROWS_BEST};
+        if (!c->fps_auto || !job->rates[i].met || !(e > budget) || !(tighter > 0)) continue;
+        goals[i] = (cb_rate_goal){tighter, c->max_fps, CB_ROWS_BEST};
         any = true;
     }
     if (any) {
@@ -305,12 +302,21 @@ static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette 
     return any;
 }
 
+/* The plan as baked: every clip at its resolved rate (the palette's "0: the options' fps" is for
+ * callers without a job), into `baked` (plan_count entries). */
+static void resolved_plan(const cb_bake_job *job, cb_clip_plan *baked)
+{
+    for (uint32_t i = 0; i < job->plan_count; ++i) baked[i] = job->plan[i], baked[i].fps = cb_bake_job_clip_fps(job, i);
+}
+
 cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
 {
     memset(out, 0, sizeof *out);
     if (cb_bake_job_plan(job, err)) return err->status;
+    cb_clip_plan *baked = malloc((job->plan_count ? job->plan_count : 1) * sizeof *baked);
+    if (!baked) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     cb_sampler *s = cb_sampler_create(job->model, job->skin, err);
-    if (!s) return err->status;
+    if (!s) return free(baked), err->status;
     cb_release_free_memory(); /* before the palette's buffers: the load's freed memory */
     static const unsigned formats[3] = {CB_FORMAT_PAL, CB_FORMAT_EXR, CB_FORMAT_KTX2};
     const char *paths[3] = {job->pal_path, job->exr_path, job->ktx2_path};
@@ -332,7 +338,8 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         if (!shared.texels || shared_opt.precision != opt.precision) {
             cb_palette_free(&shared);
             palette_probe kept = {NULL, NULL, job->search_poses}; /* what the rate search sampled */
-            if (palette_bake_with_facts(s, &opt, job->plan, job->plan_count, NULL, &kept, &shared, err)) break;
+            resolved_plan(job, baked);
+            if (palette_bake_with_facts(s, &opt, baked, job->plan_count, NULL, &kept, &shared, err)) break;
             shared_opt = opt;
         }
         o->palette = shared; /* its facts; the tables and texels stay with `shared` */
@@ -355,6 +362,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     cb_pal_mapping_abort(&mapping); /* a bake that failed: its temporary */
     cb_palette_free(&shared);
     cb_sampler_free(s);
+    free(baked); /* after the palette, which references it */
     return err->status;
 }
 
@@ -369,8 +377,8 @@ void cb_bake_result_free(cb_bake_result *r)
 void cb_bake_job_free(cb_bake_job *job)
 {
     free_search_poses(job);
-    free(job->plan), free(job->rates);
-    job->plan = NULL, job->rates = NULL;
+    free(job->plan), free(job->rates), free(job->clip_settings);
+    job->plan = NULL, job->rates = NULL, job->clip_settings = NULL;
     job->plan_count = 0;
     job->planned = false;
 }

@@ -33,14 +33,15 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
 {
     const cb_clip_plan *c = &job->plan[i];
     const cb_rate_choice *r = &job->rates[i];
-    double fps = cb_clip_plan_fps(c, job->settings.fps);
-    bool fitted = c->fit || job->settings.fit_rows;
+    const cb_clip_settings *cs = &job->clip_settings[i];
+    double fps = cb_bake_job_clip_fps(job, i);
+    bool fitted = c->fit || cs->fit_rows;
     const char *rows = fitted ? "fitted rows" : "sampled rows";
-    if (!cb_bake_job_clip_auto(job, i)) {
+    if (!cs->fps_auto) {
         snprintf(buf, size, "%g fps, %s: a fixed fps%s", fps, rows, fitted ? " (fit_rows)" : "");
     } else if (!r->met) {
         snprintf(buf, size, "%g fps, %s: over its budget even at max_fps (%.3g mm/m)", fps, rows, r->error_mm);
-    } else if (job->settings.fit_rows) {
+    } else if (cs->fit_rows) {
         snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m), every clip fitted (fit_rows)", fps, rows,
                  r->error_mm);
     } else if (fitted && r->other_fps > 0) {
@@ -48,7 +49,7 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
                  r->error_mm, r->other_fps);
     } else if (fitted) {
         snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); sampled rows do not meet it up to %g fps",
-                 fps, rows, r->error_mm, job->settings.max_fps);
+                 fps, rows, r->error_mm, cs->max_fps);
     } else {
         snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows do not meet it at a lower "
                  "rate", fps, rows, r->error_mm);
@@ -61,8 +62,8 @@ void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, u
     const cb_clip_plan *c = &job->plan[i];
     const cb_rate_choice *r = &job->rates[i];
     const cb_clip_budget *b = &result->budgets[i];
-    double fps = cb_clip_plan_fps(c, job->settings.fps);
-    bool fitted = c->fit || job->settings.fit_rows;
+    double fps = cb_bake_job_clip_fps(job, i);
+    bool fitted = c->fit || job->clip_settings[i].fit_rows;
     char fix[96], relax[96];
     setting_words(setting_name, CB_SETTING_MAX_ERROR, "max_error", budget_above(b->error_mm), relax, sizeof relax);
     if (b->travel > 0) { /* no rate helps: the wrap jumps back by the loop's travel */

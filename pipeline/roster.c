@@ -25,7 +25,7 @@ typedef struct type_work {
     cb_model *model;
     int32_t skin;
     cb_clip_plan *plan;       /* the catalog's clips, before their rates are planned */
-    cb_clip_settings *clip_settings;
+    cb_clip_request *clip_requests; /* the catalog's clip entries */
     cb_model **lod_models;
     cb_bake_job job;          /* job.plan: the clips with their rates */
     cb_bake_origin origin;
@@ -90,13 +90,13 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
     const cb_model *m = w->model;
     uint32_t n = an->clips ? an->clip_count : m->animation_count;
     w->plan = calloc(n ? n : 1, sizeof *w->plan);
-    w->clip_settings = calloc(n ? n : 1, sizeof *w->clip_settings);
+    w->clip_requests = calloc(n ? n : 1, sizeof *w->clip_requests);
     t->clips = calloc(n ? n : 1, sizeof *t->clips);
-    if (!w->plan || !w->clip_settings || !t->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    if (!w->plan || !w->clip_requests || !t->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     char where[1100];
     for (uint32_t i = 0; i < n; ++i) {
         cb_clip_plan *p = &w->plan[i];
-        w->clip_settings[i] = (cb_clip_settings){-1, 0};
+        w->clip_requests[i] = (cb_clip_request){-1, 0};
         if (!an->clips) {
             *p = (cb_clip_plan){(int32_t)i, m->animations[i].name, -1, 0, false};
             continue;
@@ -115,14 +115,13 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
                            roster_at(cat, c->pos, where, sizeof where), an->name, m->source, c->source, list);
         }
         *p = (cb_clip_plan){a, c->name, c->loop, c->fps, false};
-        w->clip_settings[i] = (cb_clip_settings){c->fps_auto, c->max_error_mm};
+        w->clip_requests[i] = (cb_clip_request){c->fps_auto, c->max_error_mm};
     }
     t->clip_count = n;
     return CB_OK;
 }
 
-static cb_status analyze_clips(const cb_catalog_animal *an, const cb_limits *limits, type_work *w, cb_roster_type *t,
-                               cb_error *err)
+static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_type *t, cb_error *err)
 {
     cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
     if (!s) return err->status;
@@ -130,7 +129,7 @@ static cb_status analyze_clips(const cb_catalog_animal *an, const cb_limits *lim
     for (uint32_t i = 0; i < t->clip_count && !err->status; ++i) {
         cb_clip_info info;
         const cb_clip_plan *plan = &w->job.plan[i];
-        if (cb_clip_analyze(s, plan->animation, cb_clip_plan_fps(plan, an->bake.fps), plan->loop, limits, &info, err)) break;
+        if (cb_clip_analyze(s, plan->animation, cb_bake_job_clip_fps(&w->job, i), plan->loop, limits, &info, err)) break;
         cb_roster_clip *c = &t->clips[i];
         snprintf(c->name, sizeof c->name, "%s", plan->name);
         c->first_row = row;
@@ -144,6 +143,7 @@ static cb_status analyze_clips(const cb_catalog_animal *an, const cb_limits *lim
     t->rows = row;
     double lo[3], hi[3];
     if (!err->status) t->model_height = cb_skin_rest_bounds(s, lo, hi);
+    if (!err->status) t->socket_count = cb_find_sockets(s, &t->sockets);
     cb_sampler_free(s);
     return err->status;
 }
@@ -213,7 +213,7 @@ static cb_status plan_job(const roster_run *run, const cb_catalog_animal *an, ty
     cb_bake_job *job = &w->job;
     memset(job, 0, sizeof *job);
     job->model = w->model, job->skin = w->skin;
-    job->clips = w->plan, job->clip_count = t->clip_count, job->clip_settings = w->clip_settings;
+    job->clips = w->plan, job->clip_count = t->clip_count, job->clip_requests = w->clip_requests;
     job->settings = an->bake;
     job->limits = run->opt->limits ? *run->opt->limits : cb_default_limits();
     job->pal_path = t->pal_path, job->exr_path = t->exr_path;
@@ -252,7 +252,7 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
     if (plan_clips(run->cat, an, w, t, err) || plan_job(run, an, w, t, err) ||
-        analyze_clips(an, run->opt->limits, w, t, err) || roster_match_states(run->cat, an, t, err) ||
+        analyze_clips(run->opt->limits, w, t, err) || roster_match_states(run->cat, an, t, err) ||
         roster_decide_states(run->cat, an, t, err) || check_lods(run, an, w, t, err)) {
         list_unloaded_lods(an, w, t);
         return;
@@ -541,7 +541,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     for (uint32_t i = 0; i < r->type_count; ++i) {
         cb_bake_job_free(&run.work[i].job);
         free(run.work[i].plan);
-        free(run.work[i].clip_settings);
+        free(run.work[i].clip_requests);
         cb_model_free(run.work[i].model);
         for (uint32_t l = 0; l < cat->animals[i].lod_count && run.work[i].lod_models; ++l) cb_model_free(run.work[i].lod_models[l]);
         free(run.work[i].lod_models);
@@ -560,6 +560,7 @@ void cb_roster_free(cb_roster *r)
         free(r->types[i].state_sync);
         for (uint32_t l = 0; l < r->types[i].lod_count; ++l) free(r->types[i].lods[l].remap);
         free(r->types[i].lods);
+        free(r->types[i].sockets);
         for (uint32_t k = 0; k < r->types[i].input_count; ++k) free(r->types[i].inputs[k]);
         free(r->types[i].inputs);
         cb_warnings_free(&r->types[i].warnings);

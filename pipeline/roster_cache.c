@@ -9,7 +9,7 @@
 
 #include "../formats/crowdbake_pal.h"
 
-static const char magic[8] = "CBPREP2"; /* 2: each clip's stride */
+static const char magic[8] = "CBPREP3"; /* 2: each clip's stride; 3: its feet's stances, the sockets */
 
 bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {
@@ -48,6 +48,7 @@ bool cb_prep_key(const cb_catalog_animal *an, const cb_limits *limits, char *con
                            b->exr_compression, an->speed_reference, b->fit_rows};
     cbpal_xxh64_update(&h, settings, sizeof settings);
     if (b->measure_all) hash_str(&h, "measure_all"); /* only then: records made before it stay valid */
+    if (b->max_error_given && b->from.max_error == CB_FROM_COMMAND_LINE) hash_str(&h, "max_error from the command line");
     hash_str(&h, b->out_dir);
     cb_limits l = limits ? *limits : cb_default_limits();
     uint64_t lim[5] = {l.max_joints, l.max_frames, l.max_accessor_count, l.max_file_bytes, l.max_palette_bytes};
@@ -126,6 +127,8 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
         put(&w, lod->remap, (size_t)lod->joint_count * sizeof *lod->remap);
         put_u64(&w, lod->vertices), put_u64(&w, lod->indices);
     }
+    put_u32(&w, t->socket_count);
+    put(&w, t->sockets, (size_t)t->socket_count * sizeof *t->sockets); /* plain numbers and zero-filled names */
     put_u32(&w, t->input_count);
     for (uint32_t i = 0; i < t->input_count; ++i) put_str(&w, t->inputs[i]);
     put_u32(&w, t->warnings.count);
@@ -206,7 +209,8 @@ static const char *known_method(const char *text)
 static bool stride_plausible(const cb_stride *s)
 {
     bool ok = s->foot_count <= CB_MAX_FEET && memchr(s->why, 0, sizeof s->why);
-    for (uint32_t k = 0; ok && k < s->foot_count; ++k) ok = memchr(s->feet[k].name, 0, sizeof s->feet[k].name) != NULL;
+    for (uint32_t k = 0; ok && k < s->foot_count; ++k)
+        ok = memchr(s->feet[k].name, 0, sizeof s->feet[k].name) != NULL && s->feet[k].stance_count <= CB_MAX_STANCES;
     return ok;
 }
 
@@ -229,6 +233,20 @@ static void read_clips(reader *r, cb_roster_type *t)
         get(r, &c->speed.stride, sizeof c->speed.stride);
         if (!stride_plausible(&c->speed.stride)) r->failed = true;
     }
+}
+
+/* Sockets as written: names terminated, bones inside the rig. */
+static void read_sockets(reader *r, cb_roster_type *t)
+{
+    uint32_t n = get_u32(r);
+    if (r->failed || !plausible(r, n, sizeof *t->sockets) || (n && !(t->sockets = calloc(n, sizeof *t->sockets)))) {
+        r->failed = true;
+        return;
+    }
+    t->socket_count = n;
+    get(r, t->sockets, (size_t)n * sizeof *t->sockets);
+    for (uint32_t i = 0; i < n && !r->failed; ++i)
+        r->failed = !memchr(t->sockets[i].name, 0, sizeof t->sockets[i].name) || t->sockets[i].bone >= t->bones;
 }
 
 static void read_states_and_lods(reader *r, const cb_catalog_animal *an, cb_roster_type *t)
@@ -300,6 +318,7 @@ static bool decode(const unsigned char *data, size_t size, const cb_catalog_anim
     get_str(&r, t->speed_reference_from, sizeof t->speed_reference_from);
     read_clips(&r, t);
     read_states_and_lods(&r, an, t);
+    read_sockets(&r, t);
     read_inputs_and_warnings(&r, t);
     if (r.failed || r.p != r.end || t->input_count == 0) return false;
     uint64_t now;
@@ -332,11 +351,12 @@ void cb_prep_clear(cb_roster_type *t)
     free(t->state_sync);
     for (uint32_t l = 0; t->lods && l < t->lod_count; ++l) free(t->lods[l].remap);
     free(t->lods);
+    free(t->sockets);
     for (uint32_t i = 0; i < t->input_count; ++i) free(t->inputs[i]);
     free(t->inputs);
     cb_warnings_free(&t->warnings);
-    t->clips = NULL, t->state_clip = NULL, t->state_sync = NULL, t->lods = NULL, t->inputs = NULL;
-    t->clip_count = t->lod_count = t->input_count = 0;
+    t->clips = NULL, t->state_clip = NULL, t->state_sync = NULL, t->lods = NULL, t->inputs = NULL, t->sockets = NULL;
+    t->clip_count = t->lod_count = t->input_count = t->socket_count = 0;
     t->key = t->input_hash = 0;
     t->bones = t->rows = 0;
     t->vertices = t->indices = t->mesh_bytes = 0;

@@ -66,6 +66,46 @@ static void write_state(cb_json *j, const cb_roster_type *t, uint32_t s)
     cb_json_end(j);
 }
 
+/* Footsteps: each striding foot's landings and lifts, in landing order over the cycle. */
+static void write_contacts(cb_json *j, const cb_stride *st)
+{
+    const cb_foot *order[CB_MAX_FEET * CB_MAX_STANCES];
+    const cb_stance *stance[CB_MAX_FEET * CB_MAX_STANCES];
+    uint32_t n = 0;
+    for (uint32_t k = 0; k < st->foot_count; ++k)
+        for (uint32_t s = 0; st->feet[k].strides && s < st->feet[k].stance_count; ++s) {
+            uint32_t at = n++;
+            for (; at > 0 && stance[at - 1]->land > st->feet[k].stances[s].land; --at)
+                order[at] = order[at - 1], stance[at] = stance[at - 1];
+            order[at] = &st->feet[k], stance[at] = &st->feet[k].stances[s];
+        }
+    cb_json_array(j, "contacts");
+    for (uint32_t i = 0; i < n; ++i) {
+        cb_json_object(j, NULL);
+        cb_json_string(j, "foot", order[i]->name);
+        cb_json_int(j, "bone", order[i]->joint);
+        cb_json_number(j, "time", stance[i]->land);
+        cb_json_number(j, "lift", stance[i]->lift);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
+}
+
+void cb_roster_json_sockets(cb_json *j, const cb_socket *sockets, uint32_t count)
+{
+    cb_json_array(j, "sockets");
+    for (uint32_t i = 0; i < count; ++i) {
+        cb_json_object(j, NULL);
+        cb_json_string(j, "name", sockets[i].name);
+        cb_json_int(j, "bone", sockets[i].bone);
+        cb_json_inline_array(j, "bind_transform"); /* the prop's world: instance x bone matrix x this */
+        for (int e = 0; e < 16; ++e) cb_json_number(j, NULL, sockets[i].bind_transform[e]);
+        cb_json_end(j);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
+}
+
 void cb_roster_json_stride(cb_json *j, const cb_stride *st)
 {
     cb_json_bool(j, "stride", st->stride);
@@ -90,6 +130,7 @@ void cb_roster_json_stride(cb_json *j, const cb_stride *st)
     }
     cb_json_end(j);
     cb_json_end(j);
+    write_contacts(j, st);
 }
 
 /* `path` relative to directory `dir` (both as the catalog resolved them, or absolute), so a
@@ -177,6 +218,7 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
         cb_json_end(j);
     }
     cb_json_end(j);
+    cb_roster_json_sockets(j, t->sockets, t->socket_count);
     cb_json_end(j);
 }
 

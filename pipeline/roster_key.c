@@ -18,6 +18,12 @@ uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
     if (b->fit_rows) hash_str(&h, "fit_rows"); /* (only then: other palettes stay up to date) */
     if (b->measure_all) hash_str(&h, "measure_all"); /* (likewise: the header's errors may differ) */
     if (b->allow_over_budget) hash_str(&h, "allow_over_budget"); /* a palette written over budget is not one that met it */
+    /* A budget the command line gave (the catalog's own is in the canonical entry): a palette
+     * checked against it is not one baked unchecked, nor one checked against another. */
+    if (b->max_error_given && b->from.max_error == CB_FROM_COMMAND_LINE) {
+        hash_str(&h, "max_error from the command line");
+        cbpal_xxh64_update(&h, &b->max_error_mm, sizeof b->max_error_mm);
+    }
     for (uint32_t i = 0; i < m->node_count; ++i) {
         const cb_node *node = &m->nodes[i];
         hash_str(&h, node->name);

@@ -339,8 +339,9 @@ static void settle_kept(rate_search *rs, uint32_t i)
     if (atomic_fetch_add(&rs->kept_bytes, bytes) + bytes > KEPT_POSE_BYTES) pose_cache_free(rs->kept[i]), rs->kept[i] = NULL;
 }
 
-/* The highest rate the search may probe a clip at. */
-static double max_fps_of(const cb_rate_goal *goal) { return goal->max_fps > 0 ? goal->max_fps : CB_AUTO_MAX_FPS; }
+/* The highest rate the search may probe a clip at: its goal's, checked by palette_choose_rates
+ * (a bake's is resolved once, cb_resolve_clip_settings). */
+static double max_fps_of(const cb_rate_goal *goal) { return goal->max_fps; }
 
 /* The clips' expected work: their rows at the highest rate a probe may bake them at. */
 static double search_work(const cb_model *m, const cb_clip_plan *plan, const cb_rate_goal *goal)
@@ -403,6 +404,11 @@ cb_status palette_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_
     bool any = false;
     for (uint32_t i = 0; i < count; ++i) any = any || goals[i].max_error_mm > 0;
     if (!any) return CB_OK;
+    for (uint32_t i = 0; i < count; ++i)
+        if (goals[i].max_error_mm > 0 && !(goals[i].max_fps >= 2 && goals[i].max_fps <= CB_FPS_LIMIT))
+            return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_MAX_FPS, "%s: clip %u's rate search goes up to max_fps "
+                                   "%g; give it 2..%g (a bake's default: %g)", m->source, i, goals[i].max_fps,
+                                   CB_FPS_LIMIT, CB_AUTO_MAX_FPS);
     palette_skin_facts facts;
     if (palette_skin_facts_build(s, &facts, err)) {
         palette_skin_facts_free(&facts);

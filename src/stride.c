@@ -32,6 +32,7 @@ typedef struct contact {
 } contact;
 
 typedef struct track {
+    double band; /* planted below this height */
     double *h;  /* height at each sample (STRIDE_SAMPLES + 1) */
     double *u;  /* horizontal velocity x, z over each interval (2 * STRIDE_SAMPLES) */
     bool *down; /* per interval: planted */
@@ -176,11 +177,11 @@ typedef enum foot_verdict { FOOT_STRIDES, FOOT_STILL, FOOT_SHORT, FOOT_SLOW, FOO
 
 /* One foot's stance: planted intervals, its mean backwards velocity while planted (mean[2]) and
  * whether it strides on its own. */
-static foot_verdict foot_stance(const track *tr, double size, cb_foot *f, double mean[2])
+static foot_verdict foot_stance(track *tr, double size, cb_foot *f, double mean[2])
 {
     double lo = INFINITY, hi = -INFINITY, speed_sum = 0;
     for (uint32_t i = 0; i <= STRIDE_SAMPLES; ++i) lo = fmin(lo, tr->h[i]), hi = fmax(hi, tr->h[i]);
-    double band = lo + STANCE_BAND * (hi - lo);
+    double band = tr->band = lo + STANCE_BAND * (hi - lo);
     uint32_t down = 0;
     mean[0] = mean[1] = 0;
     for (uint32_t i = 0; i < STRIDE_SAMPLES; ++i) {
@@ -200,6 +201,39 @@ static foot_verdict foot_stance(const track *tr, double size, cb_foot *f, double
                                                              : FOOT_STRIDES;
     f->strides = v == FOOT_STRIDES;
     return v;
+}
+
+/* The moment, in samples, the height crosses the band between samples a and a + 1. */
+static double band_crossing(const track *tr, uint32_t a)
+{
+    double dh = tr->h[a + 1] - tr->h[a], x = dh != 0 ? (tr->band - tr->h[a]) / dh : 0;
+    return a + (x < 0 ? 0 : x > 1 ? 1 : x);
+}
+
+/* A loop's planted intervals (runs of planted samples, the last one wrapping into the first) as
+ * the times it lands and lifts. */
+static void find_stances(const track *tr, double duration, cb_foot *f)
+{
+    const uint32_t n = STRIDE_SAMPLES;
+    double dt = duration / n, land = -1;
+    f->stance_count = 0;
+    uint32_t first = 0; /* start after a lifted interval, so every stance is seen whole */
+    while (first < n && tr->down[first]) ++first;
+    if (first == n) return; /* always planted (or never lifts enough): no steps */
+    for (uint32_t k = 1; k <= n; ++k) {
+        uint32_t i = (first + k) % n, prev = (i + n - 1) % n;
+        if (tr->down[i] && !tr->down[prev]) land = band_crossing(tr, prev) * dt;
+        if (tr->down[i] && !tr->down[(i + 1) % n] && land >= 0 && f->stance_count < CB_MAX_STANCES) {
+            double lift = band_crossing(tr, (i + 1) % n) * dt;
+            f->stances[f->stance_count++] = (cb_stance){fmod(land, duration), fmod(lift, duration)};
+            land = -1;
+        }
+    }
+    for (uint32_t i = 1; i < f->stance_count; ++i) /* in time order */
+        for (uint32_t j = i; j > 0 && f->stances[j].land < f->stances[j - 1].land; --j) {
+            cb_stance t = f->stances[j];
+            f->stances[j] = f->stances[j - 1], f->stances[j - 1] = t;
+        }
 }
 
 /* Sum over the striding feet's planted intervals of |u + v d|: convex in v. */
@@ -355,7 +389,7 @@ void cb_stride_measure(cb_sampler *s, const cb_clip_info *clip, cb_stride *out)
     buf = malloc((size_t)(n ? n : 1) * (STRIDE_SAMPLES * 3 + 1) * sizeof(double));
     down = malloc((size_t)(n ? n : 1) * STRIDE_SAMPLES * sizeof(bool));
     for (uint32_t k = 0; buf && down && k < n; ++k) {
-        tr[k] = (track){buf + (size_t)k * (STRIDE_SAMPLES * 3 + 1), NULL, down + (size_t)k * STRIDE_SAMPLES};
+        tr[k] = (track){.h = buf + (size_t)k * (STRIDE_SAMPLES * 3 + 1), .down = down + (size_t)k * STRIDE_SAMPLES};
         tr[k].u = tr[k].h + STRIDE_SAMPLES + 1;
         out->feet[k].joint = cs[k].joint;
         snprintf(out->feet[k].name, sizeof out->feet[k].name, "%s", m->nodes[m->skins[cb_sampler_skin(s)].joints[cs[k].joint]].name);
@@ -364,7 +398,10 @@ void cb_stride_measure(cb_sampler *s, const cb_clip_info *clip, cb_stride *out)
     foot_verdict verdicts[CB_MAX_FEET] = {FOOT_STILL};
     if (n && buf && down && sample_tracks(s, clip, cs, n, tr)) {
         double means[CB_MAX_FEET][2];
-        for (uint32_t k = 0; k < n; ++k) verdicts[k] = foot_stance(&tr[k], size, &out->feet[k], means[k]);
+        for (uint32_t k = 0; k < n; ++k) {
+            verdicts[k] = foot_stance(&tr[k], size, &out->feet[k], means[k]);
+            if (clip->loops) find_stances(&tr[k], clip->duration, &out->feet[k]);
+        }
         striding = clip->loops ? agree_on_heading(out, means, verdicts) : 0;
         out->stride = striding >= 2;
         if (out->stride) fit_speed(out, tr), measure_varying_travel(out, tr, clip->steps);

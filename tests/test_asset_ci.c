@@ -283,7 +283,10 @@ static void test_catalog_applies_bake_flags(void **state)
     cbpal_close(&f);
     expect_refused("catalog.toml --skin 0", "--skin is for single models");
     expect_refused("catalog.toml --speed-reference 2", "--speed-reference is for single models");
-    expect_refused("catalog.toml --fps auto", "--fps auto, --max-error and --max-fps are for single models");
+    /* --fps auto and its goal apply too (in place: the fish swims forward). */
+    snprintf(cmd, sizeof cmd, "%s bake catalog.toml --fps auto --max-error 2 --max-fps 60 --root-motion in-place --json", exe);
+    assert_int_equal(run_in(TMP "/flags", cmd, out, sizeof out), 0);
+    if (!strstr(out, "\"baked\": 1") || !strstr(out, "error-bounded (max_error 2 mm/m)")) fail_msg("%s", out);
     expect_refused("catalog.toml --format exr --zstd", "--zstd compresses .pal payloads");
     expect_refused("catalog.toml --format exr --precision u16", "[animal.fish] would write u16 texels to EXR");
     expect_refused("catalog.toml --layout mat5", "--layout is mat4, affine or qpos");

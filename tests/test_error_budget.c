@@ -193,6 +193,17 @@ static void test_catalog_forms(void **state)
     rc = run(out, sizeof out, "%s bake %s/fixed.toml -j 1 2>&1", crowdbake_exe(), OUT_DIR);
     assert_int_equal(rc, EXIT_VERIFY);
     if (!strstr(out, "its rate is fixed (fps = 30)")) fail_msg("%s", out);
+    /* The command line's --max-error over every animal (no clip says otherwise): the catalog's
+     * fixed fps, unchecked alone, is then checked against it. */
+    write_catalog("cli", "fps = 30");
+    rc = run(out, sizeof out, "%s bake %s/cli.toml -j 1 --max-error 1 2>&1", crowdbake_exe(), OUT_DIR);
+    assert_int_equal(rc, EXIT_VERIFY);
+    if (!strstr(out, "over max_error 1;")) fail_msg("%s", out);
+    rc = run(out, sizeof out, "%s bake %s/cli.toml -j 1 2>&1", crowdbake_exe(), OUT_DIR);
+    if (rc != 0) fail_msg("%s", out);
+    /* Baked unchecked, then asked for the check (the default's value, 1): not up to date. */
+    rc = run(out, sizeof out, "%s bake %s/cli.toml -j 1 --max-error 1 2>&1", crowdbake_exe(), OUT_DIR);
+    assert_int_equal(rc, EXIT_VERIFY);
 }
 
 int main(void)

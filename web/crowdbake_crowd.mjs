@@ -192,6 +192,9 @@ export class Crowd {
 
     // Instance i: position [x, y, z], yaw (radians), scale, inst (the four numbers of
     // instanceData), and for a cross-fade from (the previous four), fadeStart and fadeDuration (s).
+    // A scaled instance moving at a world speed v plays instanceData(state, v / scale, i): its
+    // feet stay planted (rate = speed / (scale x speed reference)). The previous frame's position
+    // for motion vectors is the same skinning at time - dt (samples/shaders/README.md).
     setInstance(i, { position = [0, 0, 0], yaw = 0, scale = 1, inst, from = inst, fadeStart = 0, fadeDuration = 0 }) {
         if (i >= this.capacity) throw new Error(`instance ${i} is beyond the crowd's capacity of ${this.capacity}`);
         this.instances.set([...position, yaw, ...inst, ...from, fadeStart, fadeDuration, scale, 0], i * INSTANCE_FLOATS);

@@ -344,8 +344,8 @@ export function texelIndex(header, row, bone) {
 
 // Parses a roster manifest (its text, or the object JSON.parse made) and checks what a runtime
 // uses. Returns { generator, catalog, types: { NAME: { palette, palette_exr, shares_palette_of,
-// layout, precision, bones, rows, width, height, blocks, speed_reference, default_state, clips,
-// states: { STATE: { clip, first_row, frame_count, rate, rate_per_speed, phase } }, lods } }, failed }.
+// layout, precision, bones, rows, width, height, blocks, speed_reference, default_state, clips (with contacts),
+// states: { STATE: { clip, first_row, frame_count, rate, rate_per_speed, phase } }, lods, sockets } }, failed }.
 // Paths stay relative to the manifest's directory.
 export function readRoster(json, options = {}) {
     const name = options.name ?? 'roster.json';
@@ -403,7 +403,7 @@ export function readRoster(json, options = {}) {
             blocks: need(t, at, 'blocks', isCount, 'an integer >= 1'),
             speed_reference: need(t, at, 'speed_reference', isNonNegative, 'a number >= 0'),
             default_state: need(t, at, 'default_state', isString, 'a string'),
-            clips: [], states: {}, lods: [],
+            clips: [], states: {}, lods: [], sockets: [],
         };
         if (type.palette === undefined && type.palette_exr === undefined)
             fail(at, 'has neither palette nor palette_exr');
@@ -417,6 +417,13 @@ export function readRoster(json, options = {}) {
                 duration: need(c, w, 'duration', isNonNegative, 'a number >= 0'),
                 loops: need(c, w, 'loops', (v) => typeof v === 'boolean', 'true or false'),
                 ground_speed: need(c, w, 'ground_speed', isNonNegative, 'a number >= 0'),
+                // Footsteps (older manifests: none): when each foot lands (time) and lifts, seconds into the clip.
+                contacts: (optional(c, w, 'contacts', Array.isArray, 'an array') ?? []).map((k, j) => ({
+                    foot: need(k, `${w}.contacts[${j}]`, 'foot', isString, 'a string'),
+                    bone: need(k, `${w}.contacts[${j}]`, 'bone', (v) => isIndex(v) && v < type.bones, `a bone index below ${type.bones}`),
+                    time: need(k, `${w}.contacts[${j}]`, 'time', isNonNegative, 'a number >= 0'),
+                    lift: need(k, `${w}.contacts[${j}]`, 'lift', isNonNegative, 'a number >= 0'),
+                })),
             });
             const last = type.clips[i];
             if (last.first_row + last.frame_count > type.rows)
@@ -447,6 +454,16 @@ export function readRoster(json, options = {}) {
                                      `an array of bone indices below ${type.bones}`);
             type.lods.push({ model: need(l, w, 'model', isString, 'a string'), joint_remap });
         });
+        // Where props attach (older manifests: none): a prop's world is instance x bone matrix x bind_transform.
+        (optional(t, at, 'sockets', Array.isArray, 'an array') ?? []).forEach((k, i) => {
+            const w = `${at}.sockets[${i}]`;
+            type.sockets.push({
+                name: need(k, w, 'name', isString, 'a string'),
+                bone: need(k, w, 'bone', (v) => isIndex(v) && v < type.bones, `a bone index below ${type.bones}`),
+                bind_transform: need(k, w, 'bind_transform', (v) => Array.isArray(v) && v.length === 16 && v.every(Number.isFinite),
+                                     '16 numbers'),
+            });
+        });
         if (!has(type.states, type.default_state))
             fail(`${at}.default_state`, `"${type.default_state}" is not one of the type's states`);
         put(out.types, typeName, type);
@@ -468,4 +485,88 @@ export function instanceData(state, groundSpeed = 0, index = 0, startTime = 0) {
     const golden = index * 0.6180339887;
     const phase = state.phase === 'golden_ratio' ? golden - Math.floor(golden) : (-startTime * rate) / frames;
     return [state.first_row, state.frame_count, rate, phase];
+}
+
+// ---- a bone's matrix at a time (sockets), decoded and blended as samples/shaders/crowdbake_palette.glsl ----
+
+const halfToFloat = (h) => { // exponent rebiased; zero and subnormals are m 2^-24
+    const e = (h >> 10) & 0x1f, m = h & 0x3ff, sign = h & 0x8000 ? -1 : 1;
+    if (e === 0) return sign * m * 2 ** -24;
+    return e === 31 ? (m ? NaN : sign * Infinity) : sign * (1 + m / 1024) * 2 ** (e - 15);
+};
+const snorm = (u) => Math.max((u >= 32768 ? u - 65536 : u) / 32767, -1);
+
+// Texel k of a bone in a row, as the GLSL's cb_texel decodes it.
+function decodeTexel(pal, row, bone, k) {
+    const h = pal.header, i = texelIndex(h, row, bone) + 4 * k, t = pal.texels;
+    if (h.precision === 0) return [t[i], t[i + 1], t[i + 2], t[i + 3]];
+    if (h.precision === 1) return [0, 1, 2, 3].map((c) => halfToFloat(t[i + c]));
+    const lo = h.bounds_min, hi = h.bounds_max, range = h.linear_range, u = [t[i], t[i + 1], t[i + 2], t[i + 3]];
+    const box = (h.layout === 2 && k === 1) || (h.layout === 0 && k === 3);
+    const out = [0, 1, 2].map((c) => (box ? lo[c] + (hi[c] - lo[c]) * (u[c] / 65535) : snorm(u[c]) * (h.layout === 2 ? 1 : range)));
+    if (h.layout === 2) out.push(k === 0 ? snorm(u[3]) : (range * u[3]) / 65535);
+    else if (h.layout === 1) out.push(lo[k] + (hi[k] - lo[k]) * (u[3] / 65535));
+    else out.push(k === 3 ? 1 : 0);
+    return out;
+}
+
+// The two rows to blend for the four per-instance numbers at `time`, and the weight of the second (cb_frame).
+export function instanceFrame(inst, time) {
+    const frames = Math.abs(inst[1]);
+    let fpos = time * inst[2] + inst[3] * frames, f1;
+    if (inst[1] > 0) fpos -= frames * Math.floor(fpos / frames);
+    else fpos = Math.min(Math.max(fpos, 0), frames - 1);
+    if (!(fpos >= 0 && fpos < frames)) fpos = 0; // rounding at the wrap
+    const f0 = Math.floor(fpos);
+    if (inst[1] > 0) f1 = f0 + 1 < frames ? f0 + 1 : 0; // a loop's last row blends into its first
+    else f1 = Math.min(f0 + 1, frames - 1);
+    return { row0: inst[0] + f0, row1: inst[0] + f1, fr: fpos - f0 };
+}
+
+// The bone's skinning matrix (column-major, 16 numbers: the glTF joint matrix, bind space to the
+// posed model) for an instance's four numbers (instanceData's) at `time` seconds. A prop on the
+// bone is placed at boneMatrix x the prop's bind-space transform (a roster socket's bind_transform).
+export function instanceBoneMatrix(pal, inst, time, bone, out = new Array(16)) {
+    const h = pal.header;
+    if (!Number.isInteger(bone) || bone < 0 || bone >= h.bone_count)
+        throw new Error(`bone ${bone} is not one of the palette's ${h.bone_count} bones`);
+    if (!inst.every(Number.isFinite) || !Number.isFinite(time) || !Number.isFinite(time * inst[2] + inst[3]))
+        throw new Error(`time ${time} or instance numbers ${inst} are not finite numbers`);
+    const { row0, row1, fr } = instanceFrame(inst, time);
+    if (row1 >= h.rows || row0 >= h.rows) throw new Error(`rows ${row0}, ${row1} lie past the palette's ${h.rows} rows`);
+    const t = [];
+    for (let k = 0; k < h.texels_per_bone; ++k) {
+        const a = decodeTexel(pal, row0, bone, k), b = decodeTexel(pal, row1, bone, k);
+        const flip = h.layout === 2 && k === 0 && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0 ? -1 : 1;
+        t.push(a.map((x, c) => x + (flip * b[c] - x) * fr)); // cb:hemisphere for the rotation
+    }
+    out.fill(0);
+    out[15] = 1;
+    let p;
+    if (h.layout === 2) {
+        const n = Math.hypot(...t[0]), [x, y, z, w] = t[0].map((c) => c / n), s = t[1][3];
+        const r = [1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y),
+                   2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x),
+                   2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)]; // columns
+        for (let k = 0; k < 9; ++k) out[Math.floor(k / 3) * 4 + (k % 3)] = s * r[k];
+        p = t[1].slice(0, 3);
+    } else {
+        const affine = h.layout === 1; // affine: texel k is row k; mat4: texel k is column k
+        for (let c = 0; c < 3; ++c) for (let r = 0; r < 3; ++r) out[c * 4 + r] = affine ? t[r][c] : t[c][r];
+        p = affine ? [t[0][3], t[1][3], t[2][3]] : t[3].slice(0, 3);
+    }
+    // qpos and relative positions: A (v - b) + p, with p stored less the bone's position offset.
+    const { bind_position: bp, position_offset: off } = pal.bones[bone];
+    const aboutBind = h.layout === 2 || (h.flags & FLAG_POSITIONS_RELATIVE) !== 0;
+    for (let k = 0; k < 3; ++k)
+        out[12 + k] = p[k] + off[k] - (aboutBind ? out[k] * bp[0] + out[4 + k] * bp[1] + out[8 + k] * bp[2] : 0);
+    return out;
+}
+
+// The bone's skinning matrix `time` seconds into clip `clip` (an index into pal.clips): loops
+// wrap, one-shots clamp; the same numbers as cbpal_bone_matrix in formats/crowdbake_pal.h.
+export function boneMatrix(pal, clip, time, bone, out) {
+    const c = pal.clips[clip];
+    if (!Number.isInteger(clip) || !c) throw new Error(`clip ${clip} is not one of the palette's ${pal.clips.length} clips`);
+    return instanceBoneMatrix(pal, [c.first_row, c.loops ? c.frames : -c.frames, c.fps, 0], time, bone, out);
 }

@@ -7,10 +7,14 @@
 //     scene.add(herd); herd.setState(7, 'flee', { speed: 9.9 });
 //     renderer.setAnimationLoop((ms) => { herd.update(ms / 1000); renderer.render(scene, camera); });
 //
-// Place instances with InstancedMesh's setMatrixAt. `three` is an import-map name (pages) or the
+// Place instances with place(i, position, { yaw, scale }) or InstancedMesh's setMatrixAt; tint them
+// with setColorAt. The herd casts animated shadows (customDepthMaterial, customDistanceMaterial),
+// is frustum-culled against bounds that hold every baked pose, and motionVectorMaterial() draws
+// its screen-space velocity for TAA or motion blur. `three` is an import-map name (pages) or the
 // npm package (web/package.json pins it).
 import * as THREE from 'three';
-import { instanceData } from './crowdbake_pal.mjs';
+import { instanceData, instanceBoneMatrix } from './crowdbake_pal.mjs';
+import { FootstepClock } from './crowdbake_contacts.mjs';
 import { paletteDefines } from './crowdbake_crowd.mjs';
 
 // The skinned meshes of a GLTFLoader result that use its first skin, merged in glTF order:
@@ -99,6 +103,40 @@ vec3 cb_herd_normal(vec3 n) {
 }
 `;
 
+// The box that holds every clip's animated bounds (the .pal clip table: the skinned mesh over each
+// baked row), in the model's space, and the sphere around it: an instance's bounds in any pose.
+export function animatedBounds(pal) {
+    const box = new THREE.Box3();
+    for (const c of pal.clips)
+        box.union(new THREE.Box3(new THREE.Vector3(...c.bounds_min), new THREE.Vector3(...c.bounds_max)));
+    return { box, sphere: box.getBoundingSphere(new THREE.Sphere()) };
+}
+
+// The motion-vector pass's additions to a patched material: the position at cb_previous_time
+// (the same skinning, one call at the previous frame's time) projected by the previous frame's
+// view-projection; the fragment writes 0.5 x (NDC now - NDC before), the velocity in units of
+// the screen's width and height, as RG.
+const MOTION_VERTEX_PARS = `
+uniform float cb_previous_time; uniform mat4 cb_previous_view_projection;
+out vec4 cb_clip_now; out vec4 cb_clip_before;
+vec3 cb_herd_previous_position(vec3 p) {
+    float f = cb_fade.y > 0.0 ? clamp((cb_previous_time - cb_fade.x) / cb_fade.y, 0.0, 1.0) : 1.0;
+    return f < 1.0 ? cb_skin_position_crossfade(p, ivec4(cb_joints), cb_weights, cb_from, cb_inst, f, cb_previous_time)
+                   : cb_skin_position(p, ivec4(cb_joints), cb_weights, cb_inst, cb_previous_time);
+}
+`;
+const MOTION_VERTEX = `
+cb_clip_now = gl_Position;
+vec4 cb_before = vec4(cb_herd_previous_position(position), 1.0);
+#ifdef USE_INSTANCING
+cb_before = instanceMatrix * cb_before;
+#endif
+cb_clip_before = cb_previous_view_projection * modelMatrix * cb_before;
+`;
+const MOTION_FRAGMENT = `
+gl_FragColor = vec4(0.5 * (cb_clip_now.xy / cb_clip_now.w - cb_clip_before.xy / cb_clip_before.w), 0.0, 1.0);
+`;
+
 export class CrowdbakeHerd extends THREE.InstancedMesh {
     // gltf: GLTFLoader's result (or meshFromGLTF's arrays); pal: readPal's; type: a roster type
     // (readRoster(...).types.NAME) or null to make a state of each clip. options: count, glsl
@@ -119,7 +157,12 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         geometry.setAttribute('cb_fade', per(2));
         material ??= new THREE.MeshLambertMaterial({ color: 0xd8c8a8 });
         super(geometry, material, count);
-        this.frustumCulled = false; // instances move in the shader
+        const bounds = animatedBounds(pal);
+        geometry.boundingBox = bounds.box; // InstancedMesh places these at each instance: the herd's bounds
+        geometry.boundingSphere = bounds.sphere;
+        this.frustumCulled = true;
+        this.boundsVersion = this.instanceMatrix.version;
+        this.instanceScale = new Float32Array(count).fill(1);
         this.pal = pal;
         this.states = statesOf(pal, type);
         this.fade = fade;
@@ -127,6 +170,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         this.instanceState = new Array(count).fill(null);
         this.speed = new Float32Array(count);
         this.phase = new Float32Array(count).fill(NaN); // NaN: the state's own phase rule
+        this.footsteps = new FootstepClock(type?.clips, count); // the roster's contacts (onContact)
         const textures = paletteTextures(pal);
         const uniforms = {
             cb_palette: { value: textures.palette }, cb_bind_positions: { value: textures.bind },
@@ -145,6 +189,14 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
                 .replace('#include <begin_vertex>', 'vec3 transformed = cb_herd_position(position);');
         };
         material.customProgramCacheKey = () => `crowdbake-${paletteDefines(pal.header).join('-')}`;
+        const skinnedLike = (m) => Object.assign(m, { defines: { ...m.defines, ...material.defines },
+            onBeforeCompile: material.onBeforeCompile, customProgramCacheKey: material.customProgramCacheKey });
+        this.skinnedLike = skinnedLike; // one skinning patch for colour, shadow depth and motion vectors
+        this.customDepthMaterial = skinnedLike(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }));
+        this.customDistanceMaterial = skinnedLike(new THREE.MeshDistanceMaterial());
+        uniforms.cb_previous_time = { value: 0 };
+        uniforms.cb_previous_view_projection = { value: new THREE.Matrix4() };
+        this.previousViewProjection = null; // null: the camera's current one (the velocity of the animation alone)
         const identity = new THREE.Matrix4();
         const def = type?.default_state ?? Object.keys(this.states)[0];
         for (let i = 0; i < count; ++i) {
@@ -162,7 +214,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         if (!s) throw new Error(`CrowdbakeHerd: no state '${state}' (have ${Object.keys(this.states).join(', ')})`);
         const attrs = this.geometry.attributes;
         const current = [0, 1, 2, 3].map((k) => attrs.cb_inst.array[i * 4 + k]);
-        const inst = instanceData(s, speed, i, this.time);
+        const inst = instanceData(s, speed / this.instanceScale[i], i, this.time); // world speed / scale: the model's own speed
         if (!Number.isNaN(phase)) inst[3] = phase;
         this.instanceState[i] = state;
         this.speed[i] = speed;
@@ -171,24 +223,110 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         attrs.cb_from.array.set(fade > 0 && current[1] !== 0 ? current : inst, i * 4);
         attrs.cb_fade.array.set([this.time, fade], i * 2);
         attrs.cb_inst.needsUpdate = attrs.cb_from.needsUpdate = attrs.cb_fade.needsUpdate = true;
+        this.footsteps.restart(i, inst, this.time);
     }
 
     // A new speed, keeping the frame it is on (no pop): the phase absorbs the change of rate.
     setSpeed(i, speed) {
         const [, count, rate, phase] = this.geometry.attributes.cb_inst.array.subarray(i * 4, i * 4 + 4);
         const frames = Math.abs(count), fpos = this.time * rate + phase * frames;
-        const next = instanceData(this.states[this.instanceState[i]], speed, i, this.time)[2];
+        const next = instanceData(this.states[this.instanceState[i]], speed / this.instanceScale[i], i, this.time)[2];
         const p = (fpos - this.time * next) / frames;
         this.setState(i, this.instanceState[i], { speed, phase: p - Math.floor(p), fade: 0 });
+    }
+
+    // Places instance i at `position` ([x, y, z]), turned `yaw` radians about +y and scaled by
+    // `scale`: a locomotion state then plays at speed / (scale x speed reference), feet planted.
+    place(i, position, { yaw = 0, scale = 1 } = {}) {
+        const turn = new THREE.Quaternion().setFromAxisAngle(new THREE.Vector3(0, 1, 0), yaw);
+        this.setMatrixAt(i, new THREE.Matrix4().compose(new THREE.Vector3(...position), turn, new THREE.Vector3().setScalar(scale)));
+        this.instanceMatrix.needsUpdate = true;
+        const was = this.instanceScale[i];
+        this.instanceScale[i] = scale;
+        if (was !== scale && this.states[this.instanceState[i]].rate_per_speed > 0) this.setSpeed(i, this.speed[i]); // same frame
+    }
+
+    // The herd's bounds follow its instances: computed again (lazily, by three's culling) after
+    // setMatrixAt or a write to instanceMatrix flagged needsUpdate (an O(count) pass, once a frame
+    // at most).
+    setMatrixAt(i, matrix) {
+        super.setMatrixAt(i, matrix);
+        this.boundingBox = this.boundingSphere = null;
+    }
+
+    // A material that draws the herd's screen-space velocity (RG: 0.5 x NDC now - NDC at the
+    // previous update's time, through previousViewProjection) for a TAA or motion-blur pass,
+    // e.g. as scene.overrideMaterial into a HalfFloat render target. Instances are taken where
+    // they are now: moving ones add their own displacement.
+    motionVectorMaterial() {
+        const m = this.skinnedLike(new THREE.MeshBasicMaterial());
+        const patch = m.onBeforeCompile, key = m.customProgramCacheKey();
+        m.onBeforeCompile = (shader, renderer) => {
+            patch(shader, renderer);
+            shader.vertexShader = shader.vertexShader
+                .replace('void main() {', `${MOTION_VERTEX_PARS}\nvoid main() {`) // after the herd's own functions
+                .replace('#include <project_vertex>', `#include <project_vertex>\n${MOTION_VERTEX}`);
+            shader.fragmentShader = shader.fragmentShader
+                .replace('#include <common>', '#include <common>\nin vec4 cb_clip_now; in vec4 cb_clip_before;')
+                .replace('#include <dithering_fragment>', MOTION_FRAGMENT);
+        };
+        m.customProgramCacheKey = () => `${key}-motion`;
+        return m;
+    }
+
+    onBeforeRender(renderer, scene, camera) {
+        const before = this.uniforms.cb_previous_view_projection.value;
+        if (this.previousViewProjection) before.copy(this.previousViewProjection);
+        else before.multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse);
     }
 
     setPhase(i, phase) {
         this.setState(i, this.instanceState[i], { phase, fade: 0 });
     }
 
-    // The clock the shader plays every instance at, in seconds.
+    // The clock the shader plays every instance at, in seconds; the time it replaces is the
+    // motion vectors' previous frame.
     update(time) {
+        this.uniforms.cb_previous_time.value = this.time;
+        const inst = this.geometry.attributes.cb_inst.array;
+        this.footsteps.advance(this.count, time, (i) => [this.states[this.instanceState[i]].clip, inst.subarray(i * 4, i * 4 + 4)]);
         this.time = time;
         this.uniforms.cb_time.value = time;
+        if (this.instanceMatrix.version !== this.boundsVersion) {
+            this.boundsVersion = this.instanceMatrix.version;
+            this.boundingBox = this.boundingSphere = null;
+        }
+    }
+
+    // Calls listener({ instance, foot, bone, kind: 'land' | 'lift', time }) from update() whenever an
+    // instance's clip time crosses one of its clip's footstep contacts (the roster type's clips'
+    // contacts): every crossing since the last update, in order, across loop ends and rate changes.
+    onContact(listener) {
+        this.footsteps.listeners.push(listener);
+        return this;
+    }
+
+    // The skinning matrix (bind space to the instance's posed model, before its instance matrix) of
+    // `bone` for instance i at the herd's time: its clip, time and cross-fade, as the shader blends.
+    boneMatrixAt(i, bone, out = new THREE.Matrix4()) {
+        const a = this.geometry.attributes, at = (attr, n) => attr.array.subarray(i * n, i * n + n);
+        const [start, length] = at(a.cb_fade, 2);
+        const fade = length > 0 ? Math.min(Math.max((this.time - start) / length, 0), 1) : 1;
+        const m = instanceBoneMatrix(this.pal, at(a.cb_inst, 4), this.time, bone);
+        if (fade < 1) { // the shader mixes the two skinned positions: the same as mixing the matrices
+            const from = instanceBoneMatrix(this.pal, at(a.cb_from, 4), this.time, bone);
+            for (let k = 0; k < 16; ++k) m[k] = from[k] + (m[k] - from[k]) * fade;
+        }
+        return out.fromArray(m);
+    }
+
+    // Where a prop attached to a socket (a roster socket: { bone, bind_transform }) of instance i is
+    // in the world: the herd's world matrix x the instance's matrix x the bone's x the socket's.
+    socketMatrixAt(i, socket, out = new THREE.Matrix4()) {
+        const instance = new THREE.Matrix4();
+        this.getMatrixAt(i, instance);
+        this.boneMatrixAt(i, socket.bone, out).multiply(new THREE.Matrix4().fromArray(socket.bind_transform));
+        return out.premultiply(instance).premultiply(this.matrixWorld);
     }
 }
+

@@ -16,6 +16,7 @@
 #ifndef CB_BAKE_H
 #define CB_BAKE_H
 
+#include "clip_settings.h"
 #include "runtime.h"
 
 #ifdef __cplusplus
@@ -51,6 +52,8 @@ typedef struct cb_bake_settings {
     bool fit_rows;               /* every clip's rows fitted to the runtime's linear blend (cb_bake_options.fit); else
                                   * sampled at a fixed fps, and fitted or sampled per clip with fps = "auto" */
     bool measure_all;            /* errors measured at every row, past the budget too (cb_bake_options.measure_all) */
+    cb_settings_from from;       /* where fps, max_error, max_fps, fit_rows and root_motion came from (all
+                                  * CB_FROM_DEFAULT in cb_default_bake_settings) */
 } cb_bake_settings;
 
 /* Which settings an override carries (the command line's bake options over a catalog). */
@@ -58,7 +61,8 @@ enum {
     CB_BAKE_FPS = 1u << 0, CB_BAKE_LAYOUT = 1u << 1, CB_BAKE_PRECISION = 1u << 2, CB_BAKE_FORMATS = 1u << 3,
     CB_BAKE_MAX_TEXTURE_SIZE = 1u << 4, CB_BAKE_ROOT_MOTION = 1u << 5, CB_BAKE_ZSTD = 1u << 6,
     CB_BAKE_EXR_COMPRESSION = 1u << 7, CB_BAKE_OUT_DIR = 1u << 8, CB_BAKE_FIT_ROWS = 1u << 9,
-    CB_BAKE_MEASURE_ALL = 1u << 10, CB_BAKE_ALLOW_OVER_BUDGET = 1u << 11
+    CB_BAKE_MEASURE_ALL = 1u << 10, CB_BAKE_ALLOW_OVER_BUDGET = 1u << 11, CB_BAKE_MAX_ERROR = 1u << 12,
+    CB_BAKE_MAX_FPS = 1u << 13
 };
 
 /* fps = "auto" within 1 mm/m up to 120 fps (fps, 30, only for a fixed rate), qpos, u16, a .pal,
@@ -83,12 +87,6 @@ bool cb_bake_settings_writable(const cb_bake_settings *settings);
  * formats gives the bytes of single bakes; the affine fallback unless a layout was set. */
 cb_bake_options cb_bake_settings_options(const cb_bake_settings *settings, unsigned format, const cb_limits *limits,
                                          uint32_t threads);
-
-/* What a catalog's clip entry can say beyond cb_clip_plan. */
-typedef struct cb_clip_settings {
-    int fps_auto;        /* -1: as the job's settings; 0: the plan's fixed fps; 1: chosen by error */
-    double max_error_mm; /* 0: the job's; given, a fixed fps is checked against it */
-} cb_clip_settings;
 
 /* One clip as baked, against its error budget. */
 typedef struct cb_clip_budget {
@@ -117,7 +115,7 @@ typedef struct cb_bake_job {
     int32_t skin;
     const cb_clip_plan *clips;      /* in row order; NULL: every clip of the model, in file order */
     uint32_t clip_count;
-    const cb_clip_settings *clip_settings; /* per clip, or NULL */
+    const cb_clip_request *clip_requests; /* per clip, its catalog entry (clip_settings.h), or NULL */
     cb_bake_settings settings;
     cb_limits limits;
     uint32_t threads;               /* clips sampled in parallel (0: 1); the bytes do not depend on it */
@@ -129,6 +127,8 @@ typedef struct cb_bake_job {
     cb_clip_plan *plan;
     uint32_t plan_count;
     cb_rate_choice *rates;
+    cb_clip_settings *clip_settings; /* per planned clip, its settings resolved (cb_resolve_clip_settings): what
+                                      * planning, the bake, its checks and its words read */
     bool planned;
     void *search_poses; /* internal: per clip, the poses its rate search sampled, which the bake samples no
                          * more (cb_bake_job_free frees them) */
@@ -172,10 +172,11 @@ void cb_bake_result_free(cb_bake_result *result);
  * for it, a "warning" when written anyway. */
 void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result, const char *(*setting_name)(cb_setting),
                           cb_warnings *notes);
-/* Whether clip i's rate is chosen by error (else fixed): its own fps = "auto", else a fixed fps
- * of its own, else the job's settings; a skin with no skinned mesh (nothing to measure) bakes
- * at the fixed fps unless the clip itself asks for "auto". */
+/* Whether planned clip i's rate is chosen by error (else fixed): job->clip_settings[i].fps_auto
+ * (cb_resolve_clip_settings says how). */
 bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t clip);
+/* Planned clip i's rate: the one its search chose, else its fixed fps. */
+double cb_bake_job_clip_fps(const cb_bake_job *job, uint32_t clip);
 /* Why planned clip i has its rate and rows, in words: "72 fps, fitted rows: within 1 mm/m at 45
  * rows, sampled rows need more than 72 fps", "30 fps, sampled rows: the fixed fps". */
 void cb_bake_clip_reason(const cb_bake_job *job, uint32_t clip, char *buf, size_t size);

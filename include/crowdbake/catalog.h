@@ -83,8 +83,9 @@ typedef struct cb_catalog {
 void cb_catalog_free(cb_catalog *catalog);
 
 /* Replaces the `fields` (CB_BAKE_*) of the catalog's defaults and of every animal's settings
- * with those of `values`: options given for one run win over what the catalog says. A clip's
- * own fps still applies. Fails, naming the animal, when an animal would write u16 texels to
+ * with those of `values`, recording CB_FROM_COMMAND_LINE: options given for one run win over
+ * what [bake] and [animal] say. A clip's own fps and max_error still apply (clip_settings.h's
+ * precedence). CB_BAKE_MAX_ERROR also makes max_error given (a fixed fps is checked). Fails, naming the animal, when an animal would write u16 texels to
  * EXR (which holds half or float only). */
 cb_status cb_catalog_override_bake(cb_catalog *catalog, const cb_bake_settings *values, unsigned fields, cb_error *err);
 

@@ -7,7 +7,9 @@
  * palette.h  palettes: layouts, precisions, the bake of planned clips, decoding
  * runtime.h  what the shipped shaders compute, on the CPU; verification; error-driven rates
  * bake.h     one bake job (a model into .pal/.exr files): every bake policy, decided once
+ * clip_settings.h  each clip's settings resolved once, with where each value came from
  * catalog.h, catalog_toml.h, roster.h, report.h   catalogs of animal types, their roster bake, the budget report
+ * stride.h, socket.h   what a game hangs on a clip and a rig: planted feet and footsteps, prop sockets
  * mesh.h, gltf_mesh_write.h   runtime-ready meshes for a palette (`crowdbake mesh`)
  * gltf.h, pal_write.h, pal_view.h, exr.h, ktx2.h, json.h, atomic_file.h, vat.h, budget.h, preview.h   files and tools
  *
@@ -23,11 +25,14 @@
 #include "palette.h"
 #include "runtime.h"
 #include "bake.h"
+#include "clip_settings.h"
 #include "budget.h"
 #include "vat.h"
 #include "catalog.h"
 #include "catalog_toml.h"
 #include "roster.h"
+#include "stride.h"
+#include "socket.h"
 #include "report.h"
 #include "report_runtime.h"
 #include "mesh.h"

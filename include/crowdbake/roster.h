@@ -7,6 +7,7 @@
 
 #include "catalog.h"
 #include "json.h"
+#include "socket.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -67,6 +68,8 @@ typedef struct cb_roster_type {
     cb_sync_decision *state_sync; /* per catalog state: follows the speed or not, and why */
     uint32_t lod_count;
     cb_roster_lod *lods;
+    uint32_t socket_count;
+    cb_socket *sockets;       /* where props attach (socket.h) */
     uint32_t input_count;
     char **inputs;            /* every file read for it: model, LODs, their external buffers */
     cb_warnings warnings;     /* clips skipped at load, the layout's fallback, ... */
@@ -92,6 +95,8 @@ void cb_roster_free(cb_roster *roster);
  * a stride, "foot_slide": how much each planted foot slides at the clip's ground speed
  * (fractions of that speed, mean and worst over the foot's stance). */
 void cb_roster_json_stride(cb_json *j, const cb_stride *stride);
+/* "sockets": [{name, bone, bind_transform}], as the manifest and `info --json` give them. */
+void cb_roster_json_sockets(cb_json *j, const cb_socket *sockets, uint32_t count);
 
 #ifdef __cplusplus
 }

@@ -60,8 +60,8 @@ typedef enum cb_rows {
 } cb_rows;
 
 /* fps = "auto" for a plan: per clip, the visible error to stay under (mm per metre of model
- * height; 0: keep the plan's fps), the highest rate allowed (0: CB_AUTO_MAX_FPS) and the rows
- * allowed (options->fit: fitted, whatever this says). */
+ * height; 0: keep the plan's fps), the highest rate allowed (2..CB_FPS_LIMIT; a bake's default
+ * is CB_AUTO_MAX_FPS) and the rows allowed (options->fit: fitted, whatever this says). */
 typedef struct cb_rate_goal {
     double max_error_mm, max_fps;
     cb_rows rows;

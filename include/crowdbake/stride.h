@@ -17,7 +17,14 @@
 extern "C" {
 #endif
 
-enum { CB_MAX_FEET = 8 };
+enum { CB_MAX_FEET = 8, CB_MAX_STANCES = 4 };
+
+/* One planted interval of a foot: when it lands and when it lifts, in seconds into the clip (a
+ * stance across a loop's end lifts before it lands). The moments its contact point crosses the
+ * top of its stance band (interpolated between the analysis's samples). */
+typedef struct cb_stance {
+    double land, lift;
+} cb_stance;
 
 /* A mean slide above a quarter of the ground speed reads as skating from a game's camera: the
  * roster warns about such a locomotion clip, whose feet no playback rate can plant. */
@@ -31,6 +38,8 @@ typedef struct cb_foot {
     double step_speed;  /* its mean speed backwards while planted, model units/s */
     bool strides;       /* planted for a real part of the cycle, moving backwards steadily */
     double slide_mean, slide_worst; /* while planted, at the clip's ground speed: |u + v d| / v */
+    uint32_t stance_count;          /* a loop's planted intervals, in time order (one-shots: none) */
+    cb_stance stances[CB_MAX_STANCES];
 } cb_foot;
 
 typedef struct cb_stride {

@@ -23,6 +23,15 @@
 //   vec3 n = cb_skin_normal(a_normal, a_joints, a_weights, inst, time);
 //   vec3 p = cb_skin_position_crossfade(a_position, a_joints, a_weights, from_inst, inst, fade, time);
 //
+// Motion vectors (TAA, motion blur): the time is a parameter, so the previous frame's position is
+// one more call at time - dt with the same instance numbers (in a cross-fade, with the fade
+// weight at time - dt), projected by the previous frame's view-projection; pass both clip
+// positions to the fragment shader and divide there:
+//
+//   vec3 before = cb_skin_position(a_position, a_joints, a_weights, inst, time - dt);
+//   v_clip_now = gl_Position; v_clip_before = u_previous_view_projection * (u_model * vec4(before, 1.0));
+//   velocity = 0.5 * (v_clip_now.xy / v_clip_now.w - v_clip_before.xy / v_clip_before.w); // fragment: screen units
+//
 // Batches, for runtimes without instancing: `crowdbake mesh --batch K` writes one mesh of K copies
 // whose attribute _INSTANCE_ID (float) is the copy, 0..K-1. With #define CB_BATCH K, the uniform
 // array cb_batch_instances[K] holds each copy's four numbers, and cb_batch_instance picks them:

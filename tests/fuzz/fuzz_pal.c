@@ -1,5 +1,6 @@
 /* fuzz_pal.c - libFuzzer target: the .pal reader (formats/crowdbake_pal.h) on arbitrary bytes,
- * with and without checksum verification, then every table entry, and the palette decoded as
+ * with and without checksum verification, then every table entry, every bone's matrix at a few
+ * times in every clip (cbpal_bone_matrix), and the palette decoded as
  * `verify`, `view` and the runtimes decode it (cb_palette_view, fuzz_decode.h). */
 #include <stdint.h>
 
@@ -24,6 +25,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             cbpal_get_bone(&f, i, &b);
             sink += (unsigned char)b.name[0];
         }
+        /* Every clip's every bone at times before, inside and far past the clip (a file's fps may be anything). */
+        static const double times[] = {-1.0, 0.3, 1e6};
+        for (uint32_t i = 0; i < f.header.clip_count; ++i)
+            for (uint32_t j = 0; j < f.header.bone_count; ++j)
+                for (int t = 0; t < 3; ++t) {
+                    float m[16];
+                    if (cbpal_bone_matrix(&f, i, times[t], j, m) == 0) sink += m[15] == 1.0f;
+                }
         (void)sink;
         cb_palette view;
         cb_error e = {0};

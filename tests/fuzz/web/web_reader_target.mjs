@@ -7,7 +7,7 @@
 // returned value a runtime can use as it is - every row of every clip and every bone inside the
 // texels, every state a real one - or in one thrown Error whose message names the file; a
 // RangeError or TypeError from a typed array, a DataView or a missing member is a finding.
-import { readPal, readRoster, texelIndex } from '../../../web/crowdbake_pal.mjs';
+import { readPal, readRoster, texelIndex, boneMatrix } from '../../../web/crowdbake_pal.mjs';
 
 // Decompressed payloads the fuzzer may ask for: enough for every seed, small enough that a
 // header asking for more is refused before anything is allocated.
@@ -27,7 +27,8 @@ function checkRefusal(e, name) {
     if (e.message.includes('\n')) finding(`multi-line error: ${JSON.stringify(e.message)}`);
 }
 
-// What a runtime does with an opened palette: sample every row of every clip for every bone.
+// What a runtime does with an opened palette: sample every row of every clip for every bone, and
+// ask where each bone is (sockets).
 function usePal(pal) {
     const h = pal.header, texels = pal.texels;
     const expect = h.width * h.height * 4;
@@ -50,6 +51,19 @@ function usePal(pal) {
         if (!(b.parent >= -1 && b.parent < h.bone_count)) finding(`bone ${b.name}: parent ${b.parent}`);
         sink += b.position_offset[0] + b.bind_position[0];
     }
+    // A socket's matrix in every clip for every bone (the first 10,000 pairs): 16 numbers, or a plain
+    // Error where the file's fps makes the time meaningless.
+    for (let c = 0; c < pal.clips.length; ++c)
+        for (let bone = 0; bone < h.bone_count && c * h.bone_count + bone < 10000; ++bone)
+            for (const time of [-1, 0.3, 1e6]) {
+                try {
+                    const m = boneMatrix(pal, c, time, bone);
+                    if (m.length !== 16) finding(`boneMatrix(${c}, ${time}, ${bone}): ${m.length} numbers`);
+                    sink += m[15];
+                } catch (e) {
+                    if (e?.name === 'WebReaderFinding' || !(e instanceof Error) || e.constructor !== Error) throw e;
+                }
+            }
     return sink;
 }
 

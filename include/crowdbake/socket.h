@@ -1,0 +1,31 @@
+/* socket.h - where a game attaches a mesh to an animated instance: the nodes that hang under a
+ * joint of the skin without being joints themselves (props, rigid meshes, exporters' empties
+ * such as Blender's "_end" tips), each with its bone and its frame in bind space. The posed
+ * socket is the bone's skinning matrix (what the palette stores, cbpal_bone_matrix) times the
+ * socket's bind transform: posed = J(t) B = G_joint(t) IBM B, and B = J_rest^-1 G_socket_rest,
+ * so in the rest pose it is the node's own global transform and it follows the joint rigidly. */
+#ifndef CB_SOCKET_H
+#define CB_SOCKET_H
+
+#include "core.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cb_socket {
+    char name[64];             /* the node's name (cut at 63 bytes) */
+    int32_t node;
+    uint32_t bone;             /* the nearest joint above it: its palette bone */
+    double bind_transform[16]; /* column-major: the socket's frame in bind space */
+} cb_socket;
+
+/* The sampler's skin's sockets, in node order: their count, and in *out an array to free()
+ * (NULL when there are none or memory ran out). Skinned mesh nodes of the skin are not sockets. */
+uint32_t cb_find_sockets(cb_sampler *sampler, cb_socket **out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

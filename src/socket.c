@@ -1,0 +1,67 @@
+/* socket.c - the nodes a game attaches props to (socket.h). */
+#include "crowdbake/socket.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cb_math.h"
+
+/* The inverse of an affine matrix (column-major; last row 0 0 0 1) by cofactors; false when singular. */
+static bool affine_inverse(const double *a, double out[16])
+{
+    double c[9] = {a[5] * a[10] - a[9] * a[6], a[9] * a[2] - a[1] * a[10], a[1] * a[6] - a[5] * a[2],
+                   a[8] * a[6] - a[4] * a[10], a[0] * a[10] - a[8] * a[2], a[4] * a[2] - a[0] * a[6],
+                   a[4] * a[9] - a[8] * a[5], a[8] * a[1] - a[0] * a[9], a[0] * a[5] - a[4] * a[1]};
+    double det = a[0] * c[0] + a[4] * c[1] + a[8] * c[2];
+    if (det == 0) return false;
+    memset(out, 0, 16 * sizeof *out);
+    for (int col = 0; col < 3; ++col) /* the adjugate's column col is cofactor column col, transposed */
+        for (int row = 0; row < 3; ++row) out[col * 4 + row] = c[col * 3 + row] / det;
+    for (int row = 0; row < 3; ++row)
+        out[12 + row] = -(out[row] * a[12] + out[4 + row] * a[13] + out[8 + row] * a[14]);
+    out[15] = 1;
+    return true;
+}
+
+/* The skin joint index of the nearest joint above node n (not n itself), or -1. */
+static int32_t joint_above(const cb_model *m, const int32_t *joint_of, int32_t n)
+{
+    for (int32_t p = m->nodes[n].parent; p >= 0; p = m->nodes[p].parent)
+        if (joint_of[p] >= 0) return joint_of[p];
+    return -1;
+}
+
+uint32_t cb_find_sockets(cb_sampler *s, cb_socket **out)
+{
+    const cb_model *m = cb_sampler_model(s);
+    const cb_skin *sk = &m->skins[cb_sampler_skin(s)];
+    *out = NULL;
+    int32_t *joint_of = malloc(sizeof *joint_of * (m->node_count ? m->node_count : 1));
+    double *rest = malloc(sizeof *rest * 16 * sk->joint_count);
+    cb_socket *list = calloc(m->node_count ? m->node_count : 1, sizeof *list);
+    uint32_t n = 0;
+    if (joint_of && rest && list) {
+        for (uint32_t i = 0; i < m->node_count; ++i) joint_of[i] = -1;
+        for (uint32_t j = 0; j < sk->joint_count; ++j) joint_of[sk->joints[j]] = (int32_t)j;
+        for (uint32_t p = 0; p < m->primitive_count; ++p) /* the skin's own meshes are skinned, not attached */
+            if (m->primitives[p].skin == cb_sampler_skin(s) && joint_of[m->primitives[p].node] < 0)
+                joint_of[m->primitives[p].node] = -2;
+        cb_sample_joint_matrices(s, -1, 0, rest);
+        const double *globals = cb_sample_globals(s, -1, 0);
+        for (uint32_t i = 0; i < m->node_count; ++i) {
+            int32_t bone = joint_of[i] == -1 ? joint_above(m, joint_of, (int32_t)i) : -1;
+            double inverse[16];
+            if (bone < 0 || !affine_inverse(rest + (size_t)bone * 16, inverse)) continue;
+            cb_socket *k = &list[n++];
+            snprintf(k->name, sizeof k->name, "%s", m->nodes[i].name);
+            k->node = (int32_t)i;
+            k->bone = (uint32_t)bone;
+            cb_mat4_mul(k->bind_transform, inverse, globals + (size_t)i * 16);
+        }
+    }
+    free(joint_of), free(rest);
+    if (n) *out = list;
+    else free(list);
+    return n;
+}

@@ -1,0 +1,88 @@
+// Sockets in the web reader: boneMatrix at the baked rows equals `crowdbake sample` (the exact joint
+// matrices) within the encoding for every layout x precision; between rows it is the GLSL's blend of
+// the two rows (decoded independently by support.mjs's jointMatrix); bad clips, bones, times throw.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
+import path from 'node:path';
+import { readPal, boneMatrix, LAYOUTS, PRECISIONS } from '../crowdbake_pal.mjs';
+import { CROWDBAKE, FOX, tmpDir, bake, jointMatrix } from './support.mjs';
+
+const dir = tmpDir('sockets');
+const sampled = JSON.parse(execFileSync(CROWDBAKE, ['sample', FOX, '--fps', '30', '--json'],
+                                        { encoding: 'utf8', maxBuffer: 1 << 28 }));
+
+// The farthest two matrices move the bone's bind position or a point a tenth of the height off it.
+function pointDistance(a, b, bind, reach) {
+    let worst = 0;
+    for (let i = 0; i < 7; ++i) {
+        const p = bind.slice();
+        if (i) p[(i - 1) >> 1] += i % 2 ? reach : -reach;
+        const apply = (m) => [0, 1, 2].map((k) => m[12 + k] + m[k] * p[0] + m[4 + k] * p[1] + m[8 + k] * p[2]);
+        const x = apply(a), y = apply(b);
+        worst = Math.max(worst, Math.hypot(x[0] - y[0], x[1] - y[1], x[2] - y[2]));
+    }
+    return worst;
+}
+
+for (const layout of LAYOUTS) {
+    for (const precision of PRECISIONS) {
+        test(`boneMatrix at the rows equals crowdbake sample: ${layout} ${precision}`, () => {
+            const file = path.join(dir, `${layout}-${precision}.pal`);
+            const pal = readPal(bake(FOX, file, ['--layout', layout, '--precision', precision, '--max-error', '1000']));
+            const h = pal.header, reach = 0.1 * h.model_height;
+            let worst = 0;
+            pal.clips.forEach((clip, c) => {
+                const samples = sampled.clips[c].samples;
+                assert.equal(samples.length, clip.frames);
+                for (const s of samples)
+                    for (let j = 0; j < h.bone_count; ++j)
+                        worst = Math.max(worst, pointDistance(boneMatrix(pal, c, s.frame / clip.fps, j), s.joints[j],
+                                                              pal.bones[j].bind_position, reach));
+            });
+            // float32 rounding; half's 2^-11 and u16's steps as the bake measured them (max_error), with room for
+            // points a tenth of the height off the skinned vertices.
+            const bound = precision === 'float' ? 1e-5 * h.model_height : 2 * h.max_error + 1e-4 * h.model_height;
+            assert.ok(worst <= bound, `${layout} ${precision}: ${worst} over ${bound}`);
+        });
+    }
+}
+
+test('boneMatrix between rows is the blend of the two rows the GLSL computes', () => {
+    for (const layout of LAYOUTS) {
+        const pal = readPal(bake(FOX, path.join(dir, `blend-${layout}.pal`), ['--layout', layout, '--precision', 'u16',
+                                                                             '--max-error', '1000']));
+        const clip = pal.clips[1], c = 1, h = pal.header;
+        for (let r = 0; r < clip.frames; ++r) {
+            const next = (r + 1) % clip.frames; // a loop's last row blends into its first
+            for (let j = 0; j < h.bone_count; ++j) {
+                const a = jointMatrix(pal, clip.first_row + r, j), b = jointMatrix(pal, clip.first_row + next, j);
+                const m = boneMatrix(pal, c, (r + 0.25) / clip.fps, j);
+                const bind = pal.bones[j].bind_position;
+                if (layout !== 'qpos') { // matrices blend term by term
+                    a.forEach((x, e) => assert.ok(Math.abs(m[e] - (0.75 * x + 0.25 * b[e])) < 1e-4 * (1 + Math.abs(x)),
+                                                  `${layout} row ${r} bone ${j} [${e}]`));
+                } else { // the joint's position blends linearly; the rotation by normalized lerp keeps it orthonormal
+                    const at = (mm) => [0, 1, 2].map((k) => mm[12 + k] + mm[k] * bind[0] + mm[4 + k] * bind[1] + mm[8 + k] * bind[2]);
+                    const pm = at(m), pa = at(a), pb = at(b);
+                    for (let k = 0; k < 3; ++k) assert.ok(Math.abs(pm[k] - (0.75 * pa[k] + 0.25 * pb[k])) < 1e-3, `qpos position ${k}`);
+                    const col = (mm, i) => Math.hypot(mm[4 * i], mm[4 * i + 1], mm[4 * i + 2]);
+                    const s = 0.75 * col(a, 0) + 0.25 * col(b, 0);
+                    for (let i = 0; i < 3; ++i) assert.ok(Math.abs(col(m, i) - s) < 1e-3 * s, 'qpos scale');
+                }
+            }
+        }
+    }
+});
+
+test('boneMatrix refuses a clip, bone or time that does not exist', () => {
+    const pal = readPal(bake(FOX, path.join(dir, 'bad.pal'), ['--max-error', '1000']));
+    assert.equal(boneMatrix(pal, 0, 0.1, 0).length, 16);
+    assert.throws(() => boneMatrix(pal, pal.clips.length, 0.1, 0), /clip/);
+    assert.throws(() => boneMatrix(pal, 0, 0.1, pal.header.bone_count), /bone/);
+    assert.throws(() => boneMatrix(pal, 0, NaN, 0), /time/);
+    // One-shots clamp, loops wrap: a loop one period on is where it began.
+    const loop = pal.clips.findIndex((c) => c.loops);
+    const period = pal.clips[loop].frames / pal.clips[loop].fps;
+    boneMatrix(pal, loop, 0.3, 3).forEach((x, e, m0) => assert.ok(Math.abs(boneMatrix(pal, loop, 0.3 + period, 3)[e] - x) < 1e-4 * (1 + Math.abs(x)), `${m0}`));
+});
