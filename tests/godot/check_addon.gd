@@ -35,6 +35,7 @@ func run() -> void:
 	var roster = ResourceLoader.load(COW + "/roster/roster.json", "CrowdbakeRoster")
 	_check_instance_numbers(roster, mesh)
 	_check_bounds(roster, mesh)
+	_check_manifest_footsteps(mesh) # before _check_footsteps changes the roster
 	_check_footsteps(roster, mesh)
 	_check_sockets(roster, mesh)
 	await _check_drawing(roster, mesh)
@@ -310,6 +311,45 @@ func _check_footsteps(roster, mesh: Mesh) -> void:
 			if steps[k][3] < lands[k] or steps[k][3] > lands[k] + 1.0 / 60.0 + 1e-6:
 				why = "footstep %d came at %.4f s, the contact is at %.4f s" % [k, steps[k][3], lands[k]]
 	print("crowdbake-check: footsteps at %s, lifts at %s" % [steps, lifts])
+	herd.queue_free()
+	_end(name, why)
+
+# The contacts crowdbake wrote for Cow's Gallop (the run state): played at its own rate (speed = its
+# ground speed), two cycles raise each listed landing twice, each on the first 60 Hz frame at or past
+# its time; and the 14 sockets it lists are read by name.
+func _check_manifest_footsteps(mesh: Mesh) -> void:
+	var name := "footsteps at Cow's own contacts (the run state), sockets by name"
+	_begin(name)
+	var roster = ResourceLoader.load(COW + "/roster/roster.json", "CrowdbakeRoster", ResourceLoader.CACHE_MODE_IGNORE)
+	var clip: Dictionary = _manifest["types"]["cow"]["clips"].filter(func(c): return c["name"] == _manifest["types"]["cow"]["states"]["run"]["clip"])[0]
+	var contacts: Array = clip.get("contacts", [])
+	var herd := _new_herd(roster, mesh, 1)
+	herd.set_state(0, "run", 0.0)
+	herd.set_speed(0, clip["ground_speed"] * SIZE) # playback rate 1: clip time = herd time
+	var steps := []
+	herd.footstep.connect(func(_i, foot, bone): steps.append([foot, bone, herd.time]))
+	var frames := int(ceilf(2.0 * clip["duration"] * 60.0))
+	for n in frames:
+		herd.advance(1.0 / 60.0)
+	var want := []
+	for cycle in 2:
+		for c in contacts:
+			if c["time"] + cycle * clip["duration"] <= herd.time:
+				want.append([c["foot"], int(c["bone"]), c["time"] + cycle * clip["duration"]])
+	want.sort_custom(func(a, b): return a[2] < b[2])
+	var why := ""
+	if contacts.size() < 2 or steps.size() != want.size():
+		why = "%d footsteps, the manifest's %d contacts make %d: %s" % [steps.size(), contacts.size(), want.size(), steps]
+	else:
+		for k in want.size():
+			if steps[k][0] != want[k][0] or steps[k][1] != want[k][1] or steps[k][2] < want[k][2] - 1e-4 or steps[k][2] > want[k][2] + 1.0 / 60.0 + 1e-4:
+				why = "footstep %d: %s, want %s (time up to a frame later)" % [k, steps[k], want[k]]
+				break
+	var sockets: Array = _manifest["types"]["cow"].get("sockets", [])
+	if why.is_empty() and (sockets.size() != roster.types["cow"]["sockets"].size() or sockets.is_empty()
+			or herd.socket_transform(0, sockets[0]["name"]) == null):
+		why = "the manifest lists %d sockets, the roster read %d" % [sockets.size(), roster.types["cow"]["sockets"].size()]
+	print("crowdbake-check: %d footsteps in two run cycles from %d contacts; %d sockets" % [steps.size(), contacts.size(), sockets.size()])
 	herd.queue_free()
 	_end(name, why)
 
