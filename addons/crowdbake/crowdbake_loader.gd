@@ -1,6 +1,9 @@
 # crowdbake_loader.gd - loads crowdbake palettes and the roster manifest into Godot 4 (tested with 4.6;
 # needs Image.FORMAT_RGBA16I, the RGBA16UI texture of the default u16 bake).
 #
+# The addon's resources (load("res://x.pal"), CrowdbakeHerd) are built on it; use it directly to
+# fill a MultiMeshInstance3D of your own:
+#
 #   var loader := CrowdbakeLoader.new()
 #   if not loader.load_roster("res://roster/roster.json") \
 #           or not loader.fill_herd($Goats, "goat", "wander", 1.4, 200, 30.0):   # a MultiMeshInstance3D
@@ -120,6 +123,7 @@ func load_palette(path: String) -> Dictionary:
 		"texture": ImageTexture.create_from_image(image),
 		"image": image,
 		"bind_positions": ImageTexture.create_from_image(bind_image),
+		"bind": bind, # the same, 4 floats per bone and row, for CPU-side lookups
 		"positions_relative": 1.0 if flags & 4 else 0.0, # qpos/half: position texels hold p less the offset (row 1)
 		"layout": LAYOUTS[layout],
 		"precision": PRECISIONS[precision],

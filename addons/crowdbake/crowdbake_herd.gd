@@ -1,0 +1,295 @@
+# crowdbake_herd.gd - a herd of one animal type as one MultiMeshInstance3D: one draw call, no
+# Skeleton3D, no AnimationPlayer. Each instance plays a state of the roster manifest at its own
+# speed, cross-fades between states, takes a colour and a uniform scale, and reports its footsteps.
+#
+#   var herd := CrowdbakeHerd.new()
+#   herd.setup(ResourceLoader.load("res://roster/roster.json", "CrowdbakeRoster"), "cow", preload("res://cow_mesh.tres"), 100)
+#   add_child(herd)
+#   herd.place(7, Transform3D(Basis().scaled(Vector3.ONE * 1.2), Vector3(3, 0, 1)))
+#   herd.set_state(7, "run")      # cross-fades over fade_seconds
+#   herd.set_speed(7, 4.0)        # metres per second: the feet stay planted at any scale
+#   herd.footstep.connect(func(i, foot, bone): ...)
+#
+# The mesh is the animal's skinned mesh (bone indices = the palette's bones, as in the glTF skin).
+# The instances' clip numbers live in a float texture (crowdbake_herd.gdshader), and the herd keeps
+# its own clock (`time`), so the CPU side (bone_transform_at, sockets, footsteps) sees the pose the
+# GPU draws.
+class_name CrowdbakeHerd
+extends MultiMeshInstance3D
+
+signal footstep(instance: int, foot: String, bone: int) # a foot lands (the manifest's contacts)
+signal foot_lifted(instance: int, foot: String, bone: int)
+
+const _SHADER := preload("crowdbake_herd.gdshader")
+const _INCLUDE := preload("crowdbake_palette.gdshaderinc")
+const GOLDEN := 0.6180339887
+const INSTANCES_PER_ROW := 256 # instances per row of the instance texture
+const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade start and length, 2 spare
+
+@export var roster: Resource # a CrowdbakeRoster
+@export var animal := ""
+@export var mesh: Mesh
+@export var count := 0
+@export var fade_seconds := 0.25 # set_state's cross-fade
+@export var playing := true # advance the clock in _process
+
+var time := 0.0 # the herd's clock, seconds (the shader's herd_time)
+var palette # the type's CrowdbakePalette
+var error := "" # the last failure, one line
+
+var _type := {}
+var _data := PackedFloat32Array()
+var _states := PackedStringArray()
+var _speeds := PackedFloat32Array()
+var _texture: ImageTexture
+var _dirty := false
+var _bounds_dirty := false
+var _has_contacts := false # any clip of the type lists contacts (else advance skips the search)
+
+func _ready() -> void:
+	if roster and not animal.is_empty() and mesh and count > 0 and palette == null:
+		setup(roster, animal, mesh, count)
+
+func _process(delta: float) -> void:
+	if palette == null:
+		return
+	if playing:
+		advance(delta)
+	elif _dirty or _bounds_dirty:
+		_upload() # what set_state, set_speed and place changed
+
+# Builds the herd: `count` instances of `type` at the origin, in the type's default state at its
+# reference speed (playback rate 1), white. false (with `error`) when the type is not in the roster.
+func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instances: int) -> bool:
+	roster = roster_resource
+	animal = type
+	mesh = skinned_mesh
+	count = instances
+	if roster == null or not roster.types.has(type):
+		return _fail("%s: no animal type '%s' in the roster; see roster.json's types" % [name, type])
+	_type = roster.types[type]
+	palette = _type["palette"]
+	_has_contacts = _type["clips"].values().any(func(clip): return not clip.get("contacts", []).is_empty())
+	material_override = _material()
+	var mm := MultiMesh.new()
+	mm.transform_format = MultiMesh.TRANSFORM_3D
+	mm.use_colors = true
+	mm.mesh = mesh
+	mm.instance_count = instances
+	multimesh = mm
+	_data.resize(instances * FLOATS)
+	_data.fill(0.0)
+	_states.resize(instances)
+	_speeds.resize(instances)
+	_speeds.fill(_type["speed_reference"])
+	for i in instances:
+		mm.set_instance_transform(i, Transform3D())
+		mm.set_instance_color(i, Color.WHITE)
+		if not set_state(i, _type["default_state"], 0.0):
+			return false
+	update_bounds()
+	_upload()
+	return true
+
+# The herd shader with the palette's layout and precision, its include inlined (so that it also
+# resolves outside res://) and every uniform set.
+func _material() -> ShaderMaterial:
+	var code := _SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
+	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
+	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
+	var shader := Shader.new()
+	shader.code = code
+	var material := ShaderMaterial.new()
+	material.shader = shader
+	for key in ["bind_positions", "positions_relative", "row_texels", "rows_per_block", "bounds_min", "bounds_max", "linear_range"]:
+		material.set_shader_parameter(key, palette.get(key))
+	material.set_shader_parameter("palette", palette.texture)
+	material.set_shader_parameter("instances_per_row", INSTANCES_PER_ROW)
+	return material
+
+# Moves the clock on by `delta` seconds, raising footstep / foot_lifted for every contact an
+# instance's clip time crosses, and hands the GPU what changed.
+func advance(delta: float) -> void:
+	var before := time
+	time += delta
+	if _has_contacts:
+		for i in count:
+			_raise_contacts(i, before, time)
+	_upload()
+
+# Puts instance `i` into `state` (a state of the roster type), cross-fading from its current clip
+# over `fade` seconds (default fade_seconds; 0: at once). A loop starts at the instance's golden-ratio
+# phase, a one-shot at its first row.
+func set_state(i: int, state: String, fade := -1.0) -> bool:
+	var states: Dictionary = _type.get("states", {})
+	if not states.has(state) or i < 0 or i >= count:
+		return _fail("%s: no state '%s' in type '%s' or no instance %d (states: %s)" % [name, state, animal, i, ", ".join(states.keys())])
+	var inst: Dictionary = states[state]["instance"]
+	var at := i * FLOATS
+	for k in 4:
+		_data[at + 4 + k] = _data[at + k] # the previous clip fades out
+	_data[at + 8] = time
+	_data[at + 9] = fade_seconds if fade < 0.0 else fade
+	if _states[i].is_empty():
+		_data[at + 9] = 0.0
+	_states[i] = state
+	var frames := float(inst["frame_count"])
+	var rate := _rate(i, state)
+	var start := fmod(i * GOLDEN, 1.0) if frames > 0.0 and inst.get("phase") == "golden_ratio" else 0.0
+	_data[at] = inst["first_row"]
+	_data[at + 1] = frames
+	_data[at + 2] = rate
+	_data[at + 3] = _wrap(start - time * rate / absf(frames), frames)
+	_dirty = true
+	return true
+
+# Ground speed of instance `i` in metres per second: a state that follows speed plays at
+# rate_per_speed x speed / scale rows per second (rate = speed / (scale x speed_reference) times its
+# own), so the feet stay planted at any uniform scale; the pose does not jump.
+func set_speed(i: int, speed: float) -> void:
+	_speeds[i] = speed
+	_retime(i)
+
+# Instance `i`'s transform in the herd (a uniform scale is the animal's size); keeps the feet (rate)
+# in step, and the bounds by the next frame (or update_bounds()).
+func place(i: int, xform: Transform3D) -> void:
+	multimesh.set_instance_transform(i, xform)
+	_retime(i)
+	_bounds_dirty = true
+
+func set_color(i: int, color: Color) -> void:
+	multimesh.set_instance_color(i, color)
+
+func get_state(i: int) -> String:
+	return _states[i]
+
+# The four numbers instance `i` plays (first row, frame count, rows per second, phase).
+func instance_numbers(i: int, previous := false) -> Vector4:
+	var at := i * FLOATS + (4 if previous else 0)
+	return Vector4(_data[at], _data[at + 1], _data[at + 2], _data[at + 3])
+
+# Bone `bone`'s skinning matrix for instance `i` now, in the herd's space (its instance transform
+# applied): the pose the shader draws, cross-fade included (the shader mixes skinned points, which is
+# the matrices' mix).
+func bone_transform_at(i: int, bone: int) -> Transform3D:
+	var m: Transform3D = palette.matrix_at(instance_numbers(i), time, bone)
+	var fade := _fade(i)
+	if fade < 1.0:
+		var m0: Transform3D = palette.matrix_at(instance_numbers(i, true), time, bone)
+		m = Transform3D(Basis(m0.basis.x.lerp(m.basis.x, fade), m0.basis.y.lerp(m.basis.y, fade), m0.basis.z.lerp(m.basis.z, fade)),
+				m0.origin.lerp(m.origin, fade))
+	return multimesh.get_instance_transform(i) * m
+
+# A named socket of the manifest (a prop's node under a joint) for instance `i`, in the herd's space;
+# null when the type has no such socket.
+func socket_transform(i: int, socket: String):
+	var s = _type.get("sockets", {}).get(socket)
+	if s == null:
+		_fail("%s: no socket '%s' in type '%s' (sockets: %s)" % [name, socket, animal, ", ".join(_type.get("sockets", {}).keys())])
+		return null
+	return bone_transform_at(i, s["bone"]) * s["transform"]
+
+# The herd's bounds: every instance's box around the largest of the clips' animated bounds (the
+# .pal clip table), so Godot culls the herd as a whole and never clips a walking animal.
+func update_bounds() -> void:
+	var clip_box: AABB = palette.largest_bounds()
+	var box := AABB()
+	for i in count:
+		var b := multimesh.get_instance_transform(i) * clip_box
+		box = b if i == 0 else box.merge(b)
+	multimesh.custom_aabb = box
+	_bounds_dirty = false
+
+func _fade(i: int) -> float:
+	var at := i * FLOATS
+	return clampf((time - _data[at + 8]) / _data[at + 9], 0.0, 1.0) if _data[at + 9] > 0.0 else 1.0
+
+# Rows per second of instance i's state at its speed and scale.
+func _rate(i: int, state: String) -> float:
+	var inst: Dictionary = _type["states"][state]["instance"]
+	var per_speed := float(inst.get("rate_per_speed", 0.0))
+	if per_speed == 0.0:
+		return inst["rate"]
+	var scale := multimesh.get_instance_transform(i).basis.get_scale().x
+	return per_speed * _speeds[i] / scale
+
+# A new rate for instance i with its clip position kept: the phase takes up the difference.
+func _retime(i: int) -> void:
+	if _states[i].is_empty():
+		return
+	var at := i * FLOATS
+	var frames := absf(_data[at + 1])
+	var fpos := time * _data[at + 2] + _data[at + 3] * frames
+	var rate := _rate(i, _states[i])
+	_data[at + 2] = rate
+	_data[at + 3] = _wrap((fpos - time * rate) / frames, _data[at + 1])
+	_dirty = true
+
+static func _wrap(phase: float, frames: float) -> float:
+	return fposmod(phase, 1.0) if frames > 0.0 else phase
+
+# The footsteps of instance i's current clip whose times lie in (before, after].
+func _raise_contacts(i: int, before: float, after: float) -> void:
+	var clip: Dictionary = _type["clips"].get(_type["states"][_states[i]]["clip"], {})
+	var contacts: Array = clip.get("contacts", [])
+	if contacts.is_empty():
+		return
+	var inst := instance_numbers(i)
+	var frames := absf(inst.y)
+	var fps := float(clip.get("fps", 0.0))
+	var f0 := before * inst.z + inst.w * frames
+	var f1 := after * inst.z + inst.w * frames
+	for c in contacts:
+		for key in ["time", "lift"]:
+			if not c.has(key):
+				continue
+			var at: float = float(c[key]) * fps # the contact's row
+			var times := _crossings(at, f0, f1, frames, inst.y > 0.0)
+			for n in times:
+				if key == "time":
+					footstep.emit(i, c.get("foot", ""), int(c.get("bone", -1)))
+				else:
+					foot_lifted.emit(i, c.get("foot", ""), int(c.get("bone", -1)))
+
+# How often a clip at row position f0 -> f1 passes row `at`: a loop every `frames` rows, a one-shot once.
+static func _crossings(at: float, f0: float, f1: float, frames: float, loops: bool) -> int:
+	if loops:
+		return int(floorf((f1 - at) / frames) - floorf((f0 - at) / frames))
+	return 1 if f0 < at and at <= f1 else 0
+
+# The instance texture: three RGBA32F texels per instance.
+func _upload() -> void:
+	if _bounds_dirty:
+		update_bounds()
+	if not _dirty and _texture != null:
+		material_override.set_shader_parameter("herd_time", time)
+		return
+	var rows := maxi(1, ceili(float(count) / INSTANCES_PER_ROW))
+	var texels := PackedFloat32Array()
+	texels.resize(rows * INSTANCES_PER_ROW * FLOATS)
+	for k in _data.size():
+		texels[k] = _data[k]
+	var image := Image.create_from_data(INSTANCES_PER_ROW * FLOATS / 4, rows, false, Image.FORMAT_RGBAF, texels.to_byte_array())
+	if _texture != null and _texture.get_size() == Vector2(image.get_size()):
+		_texture.update(image)
+	else:
+		_texture = ImageTexture.create_from_image(image)
+		material_override.set_shader_parameter("instances", _texture)
+	material_override.set_shader_parameter("herd_time", time)
+	_dirty = false
+
+func _fail(message: String) -> bool:
+	error = message
+	push_error(message)
+	return false
+
+# The first skinned mesh under `root` (an imported glTF scene, or GLTFDocument.generate_scene's):
+# its bone indices are the glTF skin's joints, as the palette's bones are.
+static func skinned_mesh_in(root: Node) -> Mesh:
+	if root is MeshInstance3D and root.mesh != null and root.mesh.surface_get_format(0) & Mesh.ARRAY_FORMAT_BONES:
+		return root.mesh
+	for child in root.get_children():
+		var found := skinned_mesh_in(child)
+		if found != null:
+			return found
+	return null

@@ -1,0 +1,194 @@
+# crowdbake_palette.gd - a crowdbake .pal as a Godot resource: the texture the shaders read, the
+# header's numbers, the clip table (with each clip's animated bounds) and the bones, plus the CPU side
+# of the shader's skinning: bone_matrix(clip, time, bone), blended exactly as the shaders blend rows.
+#
+#   var pal: CrowdbakePalette = load("res://roster/cow.pal")   # crowdbake_format_loader.gd
+#   var m: Transform3D = pal.bone_matrix("AnimalArmature|Walk", 0.4, pal.bone_index("Head"))
+#
+# The loading and its checks are crowdbake_loader.gd's (load_palette); this adds the tables.
+@tool
+class_name CrowdbakePalette
+extends Resource
+
+const _Loader := preload("crowdbake_loader.gd")
+const CLIP_ENTRY_SIZE := 80
+
+var texture: ImageTexture          # the payload as baked: RGBA16UI (u16), RGBAH (half) or RGBAF (float)
+var bind_positions: ImageTexture   # row 0 the bones' bind positions, row 1 their position offsets
+var positions_relative := 0.0
+var layout := ""                   # mat4, affine, qpos
+var precision := ""                # float, half, u16
+var row_texels := 0
+var rows_per_block := 0
+var linear_range := 0.0
+var bounds_min := Vector3.ZERO
+var bounds_max := Vector3.ZERO
+var speed_reference := 0.0         # ground speed (m/s) at playback rate 1; 0 when unset
+# One Dictionary per clip: name, first_row, frames, fps (rows per second of clip time), duration,
+# loops, bounds (AABB of the skinned mesh over the clip).
+var clips: Array[Dictionary] = []
+var bone_names := PackedStringArray()
+var error := "" # the last failure, one line
+
+var _payload := PackedByteArray() # the texels, for bone_matrix
+var _bind := PackedFloat32Array() # 4 floats per bone: row 0 then row 1 of bind_positions
+var _width := 0
+var _texel_bytes := 0
+var _texels_per_bone := 0
+
+# Reads `path` into this resource; false (with `error`) when the file is refused.
+func load_file(path: String) -> bool:
+	var loader := _Loader.new()
+	var pal: Dictionary = loader.load_palette(path)
+	if pal.is_empty():
+		error = loader.error
+		return false
+	for key in ["texture", "bind_positions", "positions_relative", "layout", "precision", "row_texels",
+			"rows_per_block", "linear_range", "bounds_min", "bounds_max"]:
+		set(key, pal[key])
+	var image: Image = pal["image"]
+	_payload = image.get_data()
+	_width = image.get_width()
+	_texels_per_bone = _Loader.TEXELS_PER_BONE[_Loader.LAYOUTS.find(layout)]
+	_texel_bytes = _Loader.TEXEL_BYTES[_Loader.PRECISIONS.find(precision)]
+	_bind = pal["bind"]
+	return _read_tables(path)
+
+# The clip table and the bone names from the string table (load_palette checked the header's sizes).
+func _read_tables(path: String) -> bool:
+	var bytes := FileAccess.get_file_as_bytes(path)
+	var clip_count := bytes.decode_u32(60)
+	var clip_table := bytes.decode_u64(120)
+	var bone_table := bytes.decode_u64(128)
+	var strings := bytes.decode_u64(136)
+	var strings_size := bytes.decode_u64(144)
+	speed_reference = bytes.decode_float(68)
+	if clip_table < 256 or clip_table + clip_count * CLIP_ENTRY_SIZE > bytes.size() or strings + strings_size > bytes.size():
+		error = "%s: the clip table or the string table lies past the end of the file; re-bake it" % path
+		push_error(error)
+		return false
+	var text := func(at: int) -> String:
+		var offset := bytes.decode_u32(at)
+		return bytes.slice(strings + offset, strings + offset + bytes.decode_u32(at + 4)).get_string_from_utf8()
+	for i in clip_count:
+		var at := clip_table + i * CLIP_ENTRY_SIZE
+		var low := Vector3(bytes.decode_float(at + 44), bytes.decode_float(at + 48), bytes.decode_float(at + 52))
+		var high := Vector3(bytes.decode_float(at + 56), bytes.decode_float(at + 60), bytes.decode_float(at + 64))
+		clips.append({"name": text.call(at), "first_row": bytes.decode_u32(at + 8), "frames": bytes.decode_u32(at + 12),
+				"fps": bytes.decode_float(at + 16), "duration": bytes.decode_float(at + 20),
+				"loops": bytes.decode_u32(at + 28) & 1 == 1, "bounds": AABB(low, high - low)})
+	for i in bytes.decode_u32(32):
+		bone_names.append(text.call(bone_table + i * _Loader.BONE_ENTRY_SIZE))
+	return true
+
+# A clip's index by name (or an index passed through), -1 when there is none.
+func clip_index(clip) -> int:
+	if clip is int:
+		return clip if clip >= 0 and clip < clips.size() else -1
+	for i in clips.size():
+		if clips[i]["name"] == clip:
+			return i
+	return -1
+
+func bone_index(bone_name: String) -> int:
+	return bone_names.find(bone_name)
+
+# The four numbers the shaders take for a clip played at its own rate (rows per second) from `phase`.
+func clip_instance(clip: int, rate := -1.0, phase := 0.0) -> Vector4:
+	var c: Dictionary = clips[clip]
+	return Vector4(c["first_row"], c["frames"] if c["loops"] else -c["frames"], c["fps"] if rate < 0.0 else rate, phase)
+
+# The largest of the clips' animated bounds: a box every animated vertex of any clip stays in.
+func largest_bounds() -> AABB:
+	var box := AABB()
+	for i in clips.size():
+		box = clips[i]["bounds"] if i == 0 else box.merge(clips[i]["bounds"])
+	return box
+
+# Bone `bone`'s skinning matrix (the glTF joint matrix, global(joint) x inverse bind) `time` seconds
+# into `clip` (a name or an index; loops wrap, one-shots clamp), blended as the shaders blend rows;
+# null (with `error`) for a clip or bone that does not exist.
+func bone_matrix(clip, time: float, bone: int):
+	var index := clip_index(clip)
+	if index < 0 or bone < 0 or bone >= bone_names.size():
+		error = "bone_matrix: no clip %s or no bone %d in this palette (%d clips, %d bones)" % [clip, bone, clips.size(), bone_names.size()]
+		push_error(error)
+		return null
+	return matrix_at(clip_instance(index), time, bone)
+
+# The skinning matrix of `bone` for an instance's four numbers at `time`: cb_frame, then cb_bone.
+func matrix_at(inst: Vector4, time: float, bone: int) -> Transform3D:
+	var frame := frame_at(inst, time)
+	return _blend(frame[0], frame[1], frame[2], bone)
+
+# cb_frame of crowdbake_palette.gdshaderinc: [row0, row1, weight of row1].
+static func frame_at(inst: Vector4, time: float) -> Array:
+	var frames := absf(inst.y)
+	var fpos := time * inst.z + inst.w * frames
+	var f0: float
+	var f1: float
+	if inst.y > 0.0:
+		fpos = fposmod(fpos, frames)
+		f0 = floorf(fpos)
+		f1 = fmod(f0 + 1.0, frames) # a loop's last row blends into its first
+	else:
+		fpos = clampf(fpos, 0.0, frames - 1.0)
+		f0 = floorf(fpos)
+		f1 = minf(f0 + 1.0, frames - 1.0)
+	return [int(inst.x + f0), int(inst.x + f1), fpos - f0]
+
+# cb_bone as a matrix: the transform of points (w = 1), whose basis alone turns directions.
+func _blend(row0: int, row1: int, fr: float, bone: int) -> Transform3D:
+	var b := Vector3(_bind[bone * 4], _bind[bone * 4 + 1], _bind[bone * 4 + 2])
+	var row := bone_names.size() * 4
+	var o := Vector3(_bind[row + bone * 4], _bind[row + bone * 4 + 1], _bind[row + bone * 4 + 2])
+	if layout == "qpos":
+		var q0 := _texel(row0, bone, 0)
+		var q1 := _texel(row1, bone, 0)
+		if q0.dot(q1) < 0.0:
+			q1 = -q1 # the shorter way between the rows
+		var q := q0.lerp(q1, fr).normalized()
+		var ps := _texel(row0, bone, 1).lerp(_texel(row1, bone, 1), fr)
+		var basis := Basis(Quaternion(q.x, q.y, q.z, q.w)).scaled(Vector3.ONE * ps.w)
+		return Transform3D(basis, Vector3(ps.x, ps.y, ps.z) + positions_relative * o - basis * b)
+	var t: Array[Vector4] = []
+	for k in _texels_per_bone:
+		t.append(_texel(row0, bone, k).lerp(_texel(row1, bone, k), fr))
+	var basis: Basis
+	var p: Vector3
+	if layout == "affine": # texel k is row k
+		basis = Basis(Vector3(t[0].x, t[1].x, t[2].x), Vector3(t[0].y, t[1].y, t[2].y), Vector3(t[0].z, t[1].z, t[2].z))
+		p = Vector3(t[0].w, t[1].w, t[2].w)
+	else: # mat4: texel k is column k
+		basis = Basis(Vector3(t[0].x, t[0].y, t[0].z), Vector3(t[1].x, t[1].y, t[1].z), Vector3(t[2].x, t[2].y, t[2].z))
+		p = Vector3(t[3].x, t[3].y, t[3].z)
+	# A half palette's translation holds the joint's position less the bone's offset: A (v - b) + p.
+	return Transform3D(basis, p + positions_relative * (o - basis * b))
+
+# Texel k of a bone in a baked row, decoded as the shader's cb_texel does.
+func _texel(row: int, bone: int, k: int) -> Vector4:
+	var block := row / rows_per_block
+	var x := block * row_texels + bone * _texels_per_bone + k
+	var at := ((row - block * rows_per_block) * _width + x) * _texel_bytes
+	if precision == "float":
+		return Vector4(_payload.decode_float(at), _payload.decode_float(at + 4), _payload.decode_float(at + 8), _payload.decode_float(at + 12))
+	if precision == "half":
+		return Vector4(_payload.decode_half(at), _payload.decode_half(at + 2), _payload.decode_half(at + 4), _payload.decode_half(at + 6))
+	var u := Vector4(_payload.decode_u16(at), _payload.decode_u16(at + 2), _payload.decode_u16(at + 4), _payload.decode_u16(at + 6))
+	return _decode_u16(u, k)
+
+# cb_decode: crowdbake's u16 precision (docs/pal-format.md).
+func _decode_u16(u: Vector4, k: int) -> Vector4:
+	var snorm := Vector4(_snorm(u.x), _snorm(u.y), _snorm(u.z), _snorm(u.w))
+	var box := bounds_min + (bounds_max - bounds_min) * (Vector3(u.x, u.y, u.z) / 65535.0)
+	if layout == "qpos":
+		return snorm if k == 0 else Vector4(box.x, box.y, box.z, linear_range * u.w / 65535.0)
+	if layout == "affine":
+		return Vector4(snorm.x * linear_range, snorm.y * linear_range, snorm.z * linear_range,
+				bounds_min[k] + (bounds_max[k] - bounds_min[k]) * (u.w / 65535.0))
+	if k == 3:
+		return Vector4(box.x, box.y, box.z, 1.0)
+	return Vector4(snorm.x * linear_range, snorm.y * linear_range, snorm.z * linear_range, 0.0)
+
+static func _snorm(u: float) -> float:
+	return maxf((u - 65536.0 if u >= 32768.0 else u) / 32767.0, -1.0)

@@ -1,0 +1,60 @@
+# crowdbake_roster.gd - a roster manifest (roster.json of `crowdbake bake catalog.toml`) as a Godot
+# resource: each animal type's palette (a CrowdbakePalette), states, clips and sockets.
+#
+#   var roster: CrowdbakeRoster = ResourceLoader.load("res://roster/roster.json", "CrowdbakeRoster")
+#   var cow: Dictionary = roster.types["cow"]   # palette, states, clips, sockets, default_state
+#
+# Godot's own JSON loader answers a plain load() of a .json; the type hint picks this one.
+@tool
+class_name CrowdbakeRoster
+extends Resource
+
+const _Palette := preload("crowdbake_palette.gd")
+const SCHEMA := "crowdbake-roster/1"
+
+# Type name -> {palette, states (the manifest's), clips (the manifest's, by name: contacts among
+# them when the bake wrote them), sockets (name -> {bone, transform}), default_state, speed_reference}.
+var types := {}
+var error := "" # the last failure, one line
+
+func load_file(path: String) -> bool:
+	var text := FileAccess.get_file_as_string(path)
+	if text.is_empty():
+		return _fail("%s: cannot read the roster manifest (%s)" % [path, error_string(FileAccess.get_open_error())])
+	var parsed = JSON.parse_string(text)
+	if not (parsed is Dictionary and parsed.get("schema") == SCHEMA and parsed.get("types") is Dictionary):
+		return _fail("%s is not a crowdbake roster (schema %s); give the roster.json that `crowdbake bake catalog.toml` wrote"
+				% [path, SCHEMA])
+	for name in parsed["types"]:
+		var entry: Dictionary = parsed["types"][name]
+		var palette := _Palette.new()
+		if not palette.load_file(path.get_base_dir().path_join(str(entry.get("palette", "")))):
+			return _fail(palette.error)
+		var clips := {}
+		for clip in entry.get("clips", []):
+			clips[clip["name"]] = clip
+		types[name] = {"palette": palette, "states": entry.get("states", {}), "clips": clips,
+				"sockets": _sockets(entry.get("sockets", {})), "default_state": entry.get("default_state", ""),
+				"speed_reference": float(entry.get("speed_reference", palette.speed_reference))}
+	return true
+
+# Sockets, as the manifest lists them ([{name, bone, bind_transform}]) or a map of name -> {bone,
+# bind_transform}; the transform (the socket's frame in bind space, 16 numbers column-major like the
+# joint matrices: the prop's place is instance x bone matrix x this) defaults to the identity.
+static func _sockets(listed) -> Dictionary:
+	var out := {}
+	var entries: Array = listed.values() if listed is Dictionary else listed
+	var names: Array = listed.keys() if listed is Dictionary else []
+	for i in entries.size():
+		var e: Dictionary = entries[i]
+		var m: Array = e.get("bind_transform", e.get("transform", []))
+		var t := Transform3D()
+		if m.size() == 16:
+			t = Transform3D(Vector3(m[0], m[1], m[2]), Vector3(m[4], m[5], m[6]), Vector3(m[8], m[9], m[10]), Vector3(m[12], m[13], m[14]))
+		out[names[i] if names else e.get("name", "")] = {"bone": int(e.get("bone", 0)), "transform": t}
+	return out
+
+func _fail(message: String) -> bool:
+	error = message
+	push_error(message)
+	return false
