@@ -7,9 +7,11 @@
  * palette.h  palettes: layouts, precisions, the bake of planned clips, decoding
  * runtime.h  what the shipped shaders compute, on the CPU; verification; error-driven rates
  * bake.h     one bake job (a model into .pal/.exr files): every bake policy, decided once
- * catalog.h, catalog_toml.h, roster.h, report.h   catalogs of animal types, their roster bake, the budget report
  * mesh.h, gltf_mesh_write.h   runtime-ready meshes for a palette (`crowdbake mesh`)
- * gltf.h, pal_write.h, pal_view.h, exr.h, ktx2.h, json.h, atomic_file.h, vat.h, budget.h, preview.h   files and tools
+ * gltf.h, pal_write.h, pal_view.h, exr.h, ktx2.h, json.h, atomic_file.h, vat.h, budget.h   files and sizes
+ *
+ * Catalogs, rosters, the budget report and the preview are the crowdbake command's (tool/),
+ * a client of this library like any other program.
  *
  * An engine that only reads palettes needs none of this: crowdbake_pal.h is a dependency-free
  * C99 reader (installed beside this folder).
@@ -25,11 +27,6 @@
 #include "bake.h"
 #include "budget.h"
 #include "vat.h"
-#include "catalog.h"
-#include "catalog_toml.h"
-#include "roster.h"
-#include "report.h"
-#include "report_runtime.h"
 #include "mesh.h"
 #include "gltf_mesh_write.h"
 #include "ktx2.h"
@@ -39,6 +36,5 @@
 #include "exr.h"
 #include "json.h"
 #include "atomic_file.h"
-#include "preview.h"
 
 #endif
