@@ -114,6 +114,11 @@ $(DEPS_STAMP): Makefile
 	@mkdir -p $(@D) && touch $@
 
 # ---- the library and the command ------------------------------------------------------
+# libcrowdbake exports what its headers declare with CROWDBAKE_API (include/crowdbake/export.h)
+# and nothing else: its objects are compiled with hidden visibility, and the version script
+# (lib/libcrowdbake.map) makes local whatever a dependency's headers mark visible (C++ templates).
+$(BUILD)/obj/lib/%.o: CFLAGS += -fvisibility=hidden
+$(BUILD)/obj/lib/%.o: CXXFLAGS += -fvisibility=hidden -fvisibility-inlines-hidden
 $(BUILD)/obj/tool/%.o: CFLAGS += $(TOOL_INC)
 $(BUILD)/obj/tool/%.o: CXXFLAGS += $(TOOL_INC)
 $(BUILD)/obj/%.o: %.c $(DEPS_STAMP)
@@ -152,8 +157,9 @@ $(TOOL_A): $(TOOL_OBJ)
 	ar rcs $@ $^
 
 # The shared library: its dependencies come with it (NEEDED), so a program links -lcrowdbake alone.
-$(BUILD)/$(SONAME): $(LIB_OBJ)
-	$(CXX) $(SAN) -shared -Wl,-soname,$(SONAME) -Wl,--no-undefined -o $@ $^ $(LIB_LIBS)
+$(BUILD)/$(SONAME): $(LIB_OBJ) lib/libcrowdbake.map
+	$(CXX) $(SAN) -shared -Wl,-soname,$(SONAME) -Wl,--no-undefined -Wl,--version-script=lib/libcrowdbake.map \
+	  -o $@ $(LIB_OBJ) $(LIB_LIBS)
 
 $(BUILD)/crowdbake: $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a
 	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a $(CLI_LIBS)

@@ -110,6 +110,25 @@ static void test_destdir_layout(void **state)
     if (!strstr(out, "(SONAME)") || !strstr(out, "libcrowdbake.so.1") || !strstr(out, "libzstd")) fail_msg("%s", out);
 }
 
+/* The installed shared library exports exactly what its installed headers declare: every
+ * CROWDBAKE_API function and object, in the version node CROWDBAKE_1, and nothing else (no C++
+ * internals of the glTF adapter or its dependencies, no library-private helpers). */
+static void test_shared_library_exports_only_its_api(void **state)
+{
+    (void)state;
+    if (skip_under_sanitizers()) skip();
+    static char out[65536];
+    if (sh(out, sizeof out,
+           "python3 tests/tools/abi_symbols.py %s/lib/libcrowdbake.so.1 %s/include/crowdbake %s/include/crowdbake_pal.h",
+           prefix, prefix, prefix) != 0)
+        fail_msg("%s", out);
+    unsigned exported = 0;
+    if (!strstr(out, "exported symbols") || sscanf(strstr(out, ": ") + 2, "%u", &exported) != 1) fail_msg("%s", out);
+    /* The API has about 150 functions (and three tables); the library exported 700 symbols
+     * before its visibility was set, 440 of them C++ internals. */
+    if (exported < 120 || exported > 250) fail_msg("%u exported symbols: %s", exported, out);
+}
+
 /* A program outside the tree, through pkg-config: the same bytes as the command. */
 static void test_pkg_config_program_bakes_fox(void **state)
 {
@@ -296,6 +315,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_destdir_layout),
+        cmocka_unit_test(test_shared_library_exports_only_its_api),
         cmocka_unit_test(test_pkg_config_program_bakes_fox),
         cmocka_unit_test(test_cmake_program_bakes_fox),
         cmocka_unit_test(test_cmake_roster_rebakes_only_what_changed),

@@ -3,6 +3,8 @@
 #ifndef CB_ATOMIC_FILE_H
 #define CB_ATOMIC_FILE_H
 
+#include "export.h"
+
 #include "core.h"
 
 #ifdef __cplusplus
@@ -21,26 +23,27 @@ typedef struct cb_atomic_file {
 
 /* Installs SIGINT, SIGTERM and SIGHUP handlers that remove every temporary file being written,
  * say so, and end the process by the same signal. For programs; libraries leave signals alone. */
-void cb_atomic_cleanup_on_signals(void);
+CROWDBAKE_API void cb_atomic_cleanup_on_signals(void);
 
-cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err);
-cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_error *err);
+CROWDBAKE_API cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err);
+CROWDBAKE_API cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_error *err);
 /* Reads back bytes already written, and writes over them (a header whose fields depend on what
  * follows it, written last). */
-cb_status cb_atomic_read_back(cb_atomic_file *f, void *data, size_t size, uint64_t offset, cb_error *err);
-cb_status cb_atomic_rewrite(cb_atomic_file *f, const void *data, size_t size, uint64_t offset, cb_error *err);
+CROWDBAKE_API cb_status cb_atomic_read_back(cb_atomic_file *f, void *data, size_t size, uint64_t offset, cb_error *err);
+CROWDBAKE_API cb_status cb_atomic_rewrite(cb_atomic_file *f, const void *data, size_t size, uint64_t offset,
+                                          cb_error *err);
 /* Gives the temporary `size` bytes with their blocks allocated, so that a full disk is an error
  * here and not a SIGBUS when the mapping is written, and maps it shared and writable at *out
  * (zeros; on huge pages where the file system offers them). Written through the mapping, the
  * bytes reach the file without a copy; cb_atomic_write still writes from offset 0 (a header
  * written last). The mapping is released by commit and abort. Fails (and leaves the file empty)
  * where a file system cannot allocate or map: the caller writes instead. */
-cb_status cb_atomic_map(cb_atomic_file *f, size_t size, void **out, cb_error *err);
+CROWDBAKE_API cb_status cb_atomic_map(cb_atomic_file *f, size_t size, void **out, cb_error *err);
 /* Flushes, renames over the target and releases f. On failure the target is untouched. A
  * library may write tmp_path itself (close fd first; set it to -1). */
-cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err);
+CROWDBAKE_API cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err);
 /* Removes the temporary file and releases f. Safe after a failed open or commit. */
-void cb_atomic_abort(cb_atomic_file *f);
+CROWDBAKE_API void cb_atomic_abort(cb_atomic_file *f);
 
 #ifdef __cplusplus
 }
