@@ -1,90 +1,57 @@
 /* atomic_file.c - see atomic_file.h. */
-#define _GNU_SOURCE /* mkostemp */
+#define _GNU_SOURCE /* fallocate, getrandom */
 #include "crowdbake/atomic_file.h"
 
 #include <errno.h>
 #include <fcntl.h>
-#include <signal.h>
-#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <sys/random.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-/* ---- temporaries to remove when the process is interrupted ----
- * A signal handler can reach nothing but globals, so this is crowdbake's one piece of global
- * mutable state: a fixed table of the temporary files being written, filled and emptied
- * lock-free, read by the handler with async-signal-safe calls only. */
-enum { TEMP_SLOTS = 64, TEMP_PATH = 4096 };
-static char temp_paths[TEMP_SLOTS][TEMP_PATH];
-static atomic_int temp_state[TEMP_SLOTS]; /* 0 free, 1 being named, 2 named */
+/* The caller's way to create and release temporaries (cb_atomic_set_temp_files); all NULL: the
+ * library's own, tracked by no one. Set by the program before it writes, never by the library. */
+static cb_temp_files temp_files;
 
-/* Creates the temporary file from `template` (ending in XXXXXX) inside a claimed slot, so the
- * name mkostemp chooses is visible to the handler before the file can exist. */
-static int create_registered(char *template, int *slot)
+void cb_atomic_set_temp_files(const cb_temp_files *files)
 {
-    *slot = -1;
-    size_t n = strlen(template) + 1;
-    for (int i = 0; i < TEMP_SLOTS && n <= TEMP_PATH; ++i) {
-        int expected = 0;
-        if (!atomic_compare_exchange_strong(&temp_state[i], &expected, 1)) continue;
-        memcpy(temp_paths[i], template, n);
-        int fd = mkostemp(temp_paths[i], O_CLOEXEC);
-        memcpy(template, temp_paths[i], n);
-        if (fd < 0) {
-            atomic_store(&temp_state[i], 0);
-            return -1;
-        }
-        atomic_store(&temp_state[i], 2);
-        *slot = i;
-        return fd;
+    if (files) temp_files = *files;
+    else memset(&temp_files, 0, sizeof temp_files);
+}
+
+int cb_atomic_create_temp(char *path_template)
+{
+    size_t n = strlen(path_template);
+    if (n < 6 || strcmp(path_template + n - 6, "XXXXXX") != 0) {
+        errno = EINVAL;
+        return -1;
     }
-    return mkostemp(template, O_CLOEXEC); /* untracked: still removed on every failure but a signal */
-}
-
-static void unregister_temp(int slot)
-{
-    if (slot >= 0) atomic_store(&temp_state[slot], 0);
-}
-
-static void write_stderr(const char *s) { (void)!write(2, s, strlen(s)); }
-
-static void on_signal(int sig)
-{
-    int removed = 0;
-    for (int i = 0; i < TEMP_SLOTS; ++i) {
-        /* a slot being named holds either the template (no such file) or the created name */
-        if (atomic_load(&temp_state[i]) != 0 && unlink(temp_paths[i]) == 0) ++removed;
+    static const char letters[] = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
+    for (int attempt = 0; attempt < 100; ++attempt) {
+        unsigned char r[6];
+        if (getrandom(r, sizeof r, 0) != (ssize_t)sizeof r) return -1;
+        for (int k = 0; k < 6; ++k) path_template[n - 6 + k] = letters[r[k] % (sizeof letters - 1)];
+        /* 0666 less the umask, as a plain create makes it (mkstemp's 0600 would need the umask
+         * read, and reading it means setting it: process-wide, under other threads' creates) */
+        int fd = open(path_template, O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        if (fd >= 0 || errno != EEXIST) return fd;
     }
-    write_stderr(sig == SIGINT ? "crowdbake: interrupted (SIGINT)" : sig == SIGTERM ? "crowdbake: terminated (SIGTERM)"
-                                                                                  : "crowdbake: hung up (SIGHUP)");
-    write_stderr(removed ? "; removed the partial output; the previous files are unchanged\n"
-                         : "; no partial output was left (each file is the previous one or complete)\n");
-    signal(sig, SIG_DFL);
-    raise(sig);
+    errno = EEXIST;
+    return -1;
 }
 
-void cb_atomic_cleanup_on_signals(void)
+static void release_temp(cb_atomic_file *f)
 {
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
-    sigaction(SIGHUP, &sa, NULL);
+    if (f->slot >= 0 && temp_files.released) temp_files.released(temp_files.ctx, f->slot);
+    f->slot = -1;
 }
 
-/* Test hook: CROWDBAKE_TEST_STOP=mid-write stops the process (SIGSTOP) once half of its first
- * write to a temporary file is done; =before-rename stops it when the temporary is complete but
- * not yet renamed. A test then signals the stopped process at that exact point instead of racing
- * a short-lived file (tests/tools/interrupt_mid_write.py). Never set outside tests. */
-static void stop_here_for_tests(const char *point)
+static void reached(const char *point)
 {
-    const char *at = getenv("CROWDBAKE_TEST_STOP");
-    if (at && strcmp(at, point) == 0) raise(SIGSTOP);
+    if (temp_files.reached) temp_files.reached(temp_files.ctx, point);
 }
 
 static char *dir_of(const char *path)
@@ -127,7 +94,8 @@ cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err)
         cb_atomic_abort(f);
         return CB_ERR_IO;
     }
-    f->fd = create_registered(f->tmp_path, &f->slot);
+    f->fd = temp_files.create ? temp_files.create(temp_files.ctx, f->tmp_path, &f->slot)
+                              : cb_atomic_create_temp(f->tmp_path);
     if (f->fd < 0) {
         int e = errno;
         free(f->tmp_path), f->tmp_path = NULL; /* nothing was created */
@@ -135,20 +103,16 @@ cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err)
         cb_atomic_abort(f);
         return CB_ERR_IO;
     }
-    /* mkstemp makes 0600; give the file the mode a plain create would. */
-    mode_t mask = umask(0);
-    umask(mask);
-    fchmod(f->fd, 0666 & ~mask);
     return CB_OK;
 }
 
 cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_error *err)
 {
     const char *p = data;
-    size_t half = f->written == 0 ? size / 2 : 0; /* where the mid-write test stop falls */
+    size_t half = f->written == 0 ? size / 2 : 0; /* where "mid-write" falls (cb_temp_files.reached) */
     while (size > 0) {
         if (half && f->written >= half) {
-            stop_here_for_tests("mid-write");
+            reached("mid-write");
             half = 0;
         }
         ssize_t n = write(f->fd, p, half ? half - f->written : size);
@@ -243,14 +207,14 @@ cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err)
     }
     int rc = close(f->fd);
     f->fd = -1;
-    stop_here_for_tests("before-rename");
+    reached("before-rename");
     if (rc != 0 || rename(f->tmp_path, f->path) != 0) {
         cb_fail(err, CB_ERR_IO, "%s: cannot replace the file: %s", f->path, strerror(errno));
         cb_atomic_abort(f);
         return CB_ERR_IO;
     }
     free(f->tmp_path), f->tmp_path = NULL;
-    unregister_temp(f->slot), f->slot = -1;
+    release_temp(f);
     cb_atomic_abort(f); /* releases the rest */
     return CB_OK;
 }
@@ -260,8 +224,7 @@ void cb_atomic_abort(cb_atomic_file *f)
     unmap(f);
     if (f->fd >= 0) close(f->fd);
     if (f->tmp_path) unlink(f->tmp_path);
-    unregister_temp(f->slot);
-    f->slot = -1;
+    release_temp(f);
     free(f->tmp_path);
     free(f->path);
     f->fd = -1;

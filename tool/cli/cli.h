@@ -137,6 +137,10 @@ typedef struct cli_catalog_bake {
 } cli_catalog_bake;
 int cmd_bake_catalog(const cli_catalog_bake *options);
 
+/* signals.c: the library's temporaries created where SIGINT, SIGTERM and SIGHUP handlers find
+ * and remove them; an interrupted command then ends by the same signal. */
+void cli_remove_temporaries_on_signals(void);
+
 extern const char cmd_info_usage[], cmd_sample_usage[], cmd_bake_usage[], cmd_inspect_usage[], cmd_vat_usage[],
     cmd_report_usage[], cmd_verify_usage[], cmd_preview_usage[], cmd_mesh_usage[];
 

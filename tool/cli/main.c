@@ -2,7 +2,6 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "crowdbake/atomic_file.h"
 #include "cli.h"
 
 static const cli_command commands[] = {
@@ -41,7 +40,7 @@ int main(int argc, char **argv)
         printf("crowdbake %s\n", CROWDBAKE_VERSION);
         return 0;
     }
-    cb_atomic_cleanup_on_signals(); /* an interrupted bake leaves no partial file */
+    cli_remove_temporaries_on_signals(); /* an interrupted bake leaves no partial file */
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i)
         if (strcmp(argv[1], commands[i].name) == 0) return commands[i].run(argc - 1, argv + 1);
     const char *guess = cb_closest_name(argv[1], &commands[0].name, sizeof commands / sizeof commands[0], sizeof commands[0]);
