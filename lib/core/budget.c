@@ -3,18 +3,6 @@
 
 #include <ctype.h>
 
-bool cb_wrap_rows(uint32_t row_texels, uint64_t rows, uint32_t max, cb_texture_geometry *out)
-{
-    out->width = out->height = out->blocks = 0;
-    if (max < 1 || row_texels < 1 || rows < 1 || row_texels > max) return false;
-    uint64_t blocks = (rows + max - 1) / max;
-    if (blocks > max / row_texels) return false;
-    out->blocks = (uint32_t)blocks;
-    out->height = (uint32_t)((rows + blocks - 1) / blocks); /* balanced blocks: the least padding */
-    out->width = out->blocks * row_texels;
-    return true;
-}
-
 uint64_t cb_palette_texture_bytes(uint32_t bones, uint32_t rows, cb_layout layout, cb_precision precision, uint32_t max,
                                   cb_texture_geometry *g)
 {

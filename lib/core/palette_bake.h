@@ -1,6 +1,7 @@
 /* palette_bake.h - what the palette bake's files share (private to libcrowdbake): the
  * per-thread scratch and the bake's state, the u16 value ranges, and the passes that live in
- * files of their own: texel encoding (palette_codec.c) and the error measure (palette_error.c). */
+ * files of their own: the rows (palette_rows.c), texel encoding (palette_codec.c), the plan
+ * (palette_plan.c) and the error measure (palette_error.c). palette.c runs them. */
 #ifndef CB_PALETTE_BAKE_H
 #define CB_PALETTE_BAKE_H
 
@@ -128,6 +129,13 @@ static inline double row_position(const float *c, const float *b, int r)
 void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
                              extent *clip_bounds);
 
+/* palette_rows.c: row f of clip c from its joint matrices, any layout (qpos checks each is a
+ * similarity), growing the clip's bounds and value range. */
+cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row, extent *bounds,
+                             cb_error *err);
+/* palette_rows.c: the exact values halfway through each row interval of clip c (the clip framed
+ * at twice the steps, odd frames), into mids; quaternions on the side of the row before. */
+cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *rows, float *mids, cb_error *err);
 /* palette_rows.c, for tests: the rows' hemispheres as bone_lanes settles them, sign[i] = -1 or
  * 1 for CB_SAMPLE_BATCH rows from each row's dot with the one before as stored (dot[0] unused)
  * and whether row 0 is flipped. */
@@ -199,13 +207,13 @@ typedef struct palette_skin_facts {
 cb_status palette_skin_facts_build(cb_sampler *sampler, palette_skin_facts *out, cb_error *err);
 void palette_skin_facts_free(palette_skin_facts *f);
 
-/* Clip c's joint matrices at `frame` of framing (cb_clip_frame_matrices with the bake's root
+/* palette_rows.c: clip c's joint matrices at `frame` of framing (cb_clip_frame_matrices with the bake's root
  * motion): from st->poses or the clip's st->clip_poses where they keep them, else sampled into
  * w->mats (and kept). Valid until the
  * worker's next call. extra (optional): the kept pose's extra doubles, NULL where not kept. */
 const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, uint32_t frame,
                                      double **extra);
-/* A pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
+/* palette_rows.c: a pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
  * from its matrices alone too (a probe's rows are rows of the others). */
 pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes);
 

@@ -28,9 +28,6 @@ bool cb_precision_parse(const char *text, cb_precision *out)
     return false;
 }
 
-uint32_t cb_layout_texels_per_bone(cb_layout l) { return l == CB_LAYOUT_MAT4 ? 4 : l == CB_LAYOUT_AFFINE ? 3 : 2; }
-uint32_t cb_precision_texel_bytes(cb_precision p) { return p == CB_PRECISION_FLOAT ? 16 : 8; }
-
 /* Quantization arithmetic runs in double so it adds nothing to the half-step of the format. */
 static double snorm16_decode(uint16_t u)
 {

@@ -1,5 +1,7 @@
-/* palette_rows.c - qpos rows from joint similarities: what qpos stores (quaternion, position,
- * scale), with no matrix to build, check or decompose, for a batch of frames at a time.
+/* palette_rows.c - where a bake's rows are made: a clip's frame matrices (kept for a search's
+ * probes), rows of any layout from them, the exact mid-rows --fit needs; and qpos rows from joint
+ * similarities: what qpos stores (quaternion, position, scale), with no matrix to build, check
+ * or decompose, for a batch of frames at a time.
  *
  * Bone by bone, the batch's frames are lanes (structure of arrays, like the sampler's), so the
  * rotation of the bind position, the position and the conversions to float vectorize. Each
@@ -7,12 +9,169 @@
  * What depends on the rows before - the quaternion's hemisphere, the clip's bounds and value
  * ranges - is settled after, in frame order, so it comes out as before too. */
 
+#include <math.h>
 #include <string.h>
 
 #include "palette_bake.h"
 #include "sampler.h"
 
 #define B CB_SAMPLE_BATCH
+
+/* ---- rows from joint matrices, any layout ---- */
+
+#define QPOS_TOLERANCE 1e-4 /* relative: scale differences and shear qpos may drop */
+
+/* What qpos takes of a joint matrix, from the matrix alone: the quaternion of its rotation
+ * (either sign) into q[0..3] and its scale into q[4]; fails where it is no similarity. */
+static cb_status qpos_similarity(const double m[16], double q[5], const cb_model *model, const cb_skin *skin,
+                                 uint32_t bone, const char *clip, uint32_t frame, cb_error *err)
+{
+    cb_vec3 c[3] = {{m[0], m[1], m[2]}, {m[4], m[5], m[6]}, {m[8], m[9], m[10]}};
+    double l[3] = {cb_vec3_length(c[0]), cb_vec3_length(c[1]), cb_vec3_length(c[2])};
+    double s = (l[0] + l[1] + l[2]) / 3;
+    const char *why = NULL;
+    if (cb_mat4_determinant3(m) <= 0)
+        why = "a negative (mirroring) scale";
+    else if (fabs(l[0] - s) > QPOS_TOLERANCE * s || fabs(l[1] - s) > QPOS_TOLERANCE * s || fabs(l[2] - s) > QPOS_TOLERANCE * s)
+        why = "a non-uniform scale";
+    else if (fabs(cb_vec3_dot(c[0], c[1])) > QPOS_TOLERANCE * s * s || fabs(cb_vec3_dot(c[0], c[2])) > QPOS_TOLERANCE * s * s ||
+             fabs(cb_vec3_dot(c[1], c[2])) > QPOS_TOLERANCE * s * s)
+        why = "shear";
+    if (why)
+        return cb_fail_setting(err, CB_ERR_LAYOUT, CB_SETTING_LAYOUT,
+                               "%s: joint '%s' has %s (axis scales %.7g, %.7g, %.7g) at frame %u of clip '%s', which the "
+                               "qpos layout cannot represent; use the affine or the mat4 layout",
+                       model->source, model->nodes[skin->joints[bone]].name, why, l[0], l[1], l[2], frame, clip);
+    double r[16], inv = 1 / s;
+    memcpy(r, m, sizeof r);
+    for (int i = 0; i < 12; ++i) r[i] *= inv;
+    cb_quat rot = cb_quat_from_mat4(r);
+    q[0] = rot.x, q[1] = rot.y, q[2] = rot.z, q[3] = rot.w, q[4] = s;
+    return CB_OK;
+}
+
+/* A qpos bone's quaternion and scale (qpos_similarity's q) as canonical floats: the quaternion
+ * on the side of the previous row's (prev), or of w >= 0 for a clip's first row. */
+static CB_CLONE_INLINE void qpos_store(const double q[5], const cb_quat *prev, float out[8])
+{
+    cb_quat rot = {q[0], q[1], q[2], q[3]};
+    if (prev) {
+        if (cb_quat_dot(rot, *prev) < 0) rot = (cb_quat){-rot.x, -rot.y, -rot.z, -rot.w};
+    } else if (rot.w < 0) {
+        rot = (cb_quat){-rot.x, -rot.y, -rot.z, -rot.w};
+    }
+    out[0] = (float)rot.x, out[1] = (float)rot.y, out[2] = (float)rot.z, out[3] = (float)rot.w;
+    out[7] = (float)q[4];
+}
+
+static cb_status qpos_canon(const double m[16], float out[8], const cb_model *model, const cb_skin *skin, uint32_t bone,
+                            const char *clip, uint32_t frame, cb_quat *prev, cb_error *err)
+{
+    double q[5];
+    if (qpos_similarity(m, q, model, skin, bone, clip, frame, err)) return err->status;
+    qpos_store(q, prev, out);
+    return CB_OK;
+}
+
+/* A probe pose's extra doubles (pose_cache.h): 1 when its joints' qpos_similarity follows (5
+ * doubles a joint), NaN before. */
+#define KEPT_QPOS(bones) (1 + 5 * (bones))
+
+pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes)
+{
+    return pose_cache_create(bones, KEPT_QPOS(bones), max_bytes);
+}
+
+const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, uint32_t frame,
+                                     double **extra)
+{
+    double t = cb_clip_frame_time(framing, frame), *out = w->mats;
+    pose_cache *poses = st->poses ? st->poses : st->clip_poses ? st->clip_poses[c] : NULL;
+    double *kept = poses ? (double *)pose_cache_find(poses, t) : NULL;
+    if (!kept && poses) {
+        kept = pose_cache_add(poses, t);
+        if (kept) cb_clip_frame_matrices(w->sampler, framing, frame, st->opt->root_motion, kept);
+    }
+    if (extra) *extra = kept ? kept + (size_t)st->p->bone_count * 16 : NULL;
+    if (kept) return kept;
+    cb_clip_frame_matrices(w->sampler, framing, frame, st->opt->root_motion, out);
+    return out;
+}
+
+/* |A| for the reach: the Frobenius norm of the 3x3, at least its largest stretch. */
+static double frobenius3(const double *M)
+{
+    double norm = 0;
+    for (int k = 0; k < 12; ++k)
+        if (k % 4 != 3) norm += M[k] * M[k];
+    return sqrt(norm);
+}
+
+/* One row from joint matrices: any layout; qpos checks each matrix is a similarity. */
+cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row, extent *bounds,
+                             cb_error *err)
+{
+    cb_palette *p = st->p;
+    cb_palette_clip *clip = &p->clips[c];
+    double *kept; /* the pose's qpos_similarity, where a search keeps it (1 + 5 a joint) */
+    const double *mats = palette_frame_matrices(st, w, c, &st->infos[c], f, &kept);
+    bool derived = kept && kept[0] == 1;
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        const double *M = mats + (size_t)j * 16;
+        const float *b = p->bind_positions + (size_t)j * 3;
+        float *out = row + (size_t)j * CANON(p->layout);
+        cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* the joint now: M b */
+        if (st->radius[j] >= 0) grow_bounds(bounds, pos, st->radius[j] * frobenius3(M));
+        if (p->layout != CB_LAYOUT_QPOS) {
+            for (int r = 0; r < 3; ++r)
+                for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
+            range_grow_affine(&st->ranges[c], out);
+            continue;
+        }
+        double fresh[5], *q = kept ? kept + 1 + (size_t)j * 5 : fresh;
+        if (!derived && qpos_similarity(M, q, st->model, &st->model->skins[st->skin], j, clip->name, f, err))
+            return err->status;
+        qpos_store(q, f ? &w->prev[j] : NULL, out);
+        w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
+        out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
+        range_grow_qpos(&st->ranges[c], out);
+    }
+    if (kept && p->layout == CB_LAYOUT_QPOS) kept[0] = 1; /* every joint's derived: the next probe takes them */
+    return CB_OK;
+}
+
+/* The exact values halfway through each row interval of clip c (the clip framed at twice the
+ * steps, odd frames), into mids; quaternions on the side of the row before. */
+cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *rows, float *mids, cb_error *err)
+{
+    cb_palette *p = st->p;
+    const cb_clip_info *info = &st->infos[c];
+    cb_clip_info framing = *info;
+    framing.steps *= 2;
+    uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
+    for (uint32_t i = 0; i < intervals; ++i) {
+        const double *mats = palette_frame_matrices(st, w, c, &framing, 2 * i + 1, NULL);
+        float *out = mids + (size_t)i * p->bone_count * vals;
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            const double *M = mats + (size_t)j * 16;
+            float *o = out + (size_t)j * vals;
+            if (p->layout != CB_LAYOUT_QPOS) {
+                for (int r = 0; r < 3; ++r)
+                    for (int k = 0; k < 4; ++k) o[r * 4 + k] = (float)M[k * 4 + r];
+                continue;
+            }
+            const float *prev = rows + ((size_t)i * p->bone_count + j) * vals, *b = p->bind_positions + (size_t)j * 3;
+            cb_quat q = {prev[0], prev[1], prev[2], prev[3]};
+            if (qpos_canon(M, o, st->model, &st->model->skins[st->skin], j, p->clips[c].name, i, &q, err))
+                return err->status;
+            cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
+            o[4] = (float)pos.x, o[5] = (float)pos.y, o[6] = (float)pos.z;
+        }
+    }
+    return CB_OK;
+}
+
+/* ---- qpos rows from joint similarities, a batch of frames at a time ---- */
 
 /* The clip's bounds and value ranges grown a lane (a frame) at a time: lane i grown by every
  * bone of row i in bone order, with the compares of grow_bounds and range_grow_qpos. A compare

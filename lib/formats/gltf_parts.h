@@ -247,6 +247,11 @@ bool fs_write(std::string *err, const std::string &path, const std::vector<unsig
 // with `out` untouched, for any file the tinygltf path must load. The first `settled` bytes of
 // `data` are not written while it runs (a TailRead may still be filling the rest).
 bool parse_fast(const unsigned char *data, size_t size, size_t settled, doc::Document *out, BinInPlace *in_place);
+// The fast path's screens (gltf_fast_screen.cpp): a GLB whose chunks tinygltf takes (the JSON
+// chunk's length, where the BIN chunk's bytes start and their length), and a JSON text whose
+// every number with a fraction or an exponent RapidJSON reads as simdjson does.
+bool glb_chunks(const unsigned char *data, size_t size, size_t *json_length, size_t *bin_at, size_t *bin_length);
+bool doubles_read_alike(const char *s, size_t n);
 
 // gltf_convert.cpp
 // The tinygltf path's result as the converter reads it; the buffers' bytes are moved, not copied.
