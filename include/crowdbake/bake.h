@@ -4,9 +4,9 @@
  * file format gets, the qpos -> affine fallback, each clip's rate (the job's, the clip's own, or
  * chosen by error), the input hash a file records, and the notes a bake gives.
  *
- *     cb_bake_job job = {model, skin};
- *     job.settings = cb_default_bake_settings();
- *     job.limits = cb_default_limits();
+ *     cb_bake_job job;
+ *     cb_bake_job_init(&job); // its size, the default settings and limits
+ *     job.model = model, job.skin = 0;
  *     job.pal_path = "fox.pal";
  *     cb_bake_result result;
  *     if (cb_bake_job_run(&job, &result, &err) == CB_OK) ... result.outputs[0].palette ...
@@ -115,6 +115,9 @@ typedef struct cb_bake_origin {
 } cb_bake_origin;
 
 typedef struct cb_bake_job {
+    /* sizeof(cb_bake_job) in the header the caller was compiled with (cb_bake_job_init sets it):
+     * the job grows at its end under one soname, and the library reads no further than this. */
+    size_t size;
     const cb_model *model;
     int32_t skin;
     const cb_clip_plan *clips;      /* in row order; NULL: every clip of the model, in file order */
@@ -157,9 +160,13 @@ typedef struct cb_bake_result {
     uint32_t budget_count, over_budget;
 } cb_bake_result;
 
+/* A job with nothing set but its size, the default settings (cb_default_bake_settings) and
+ * limits (cb_default_limits): what every job starts from. */
+CROWDBAKE_API void cb_bake_job_init(cb_bake_job *job);
 /* Resolves the clips and each one's rate: the clip's fps, else the job's; chosen by visible
  * error (cb_choose_rates) where the clip or the job says auto, with the options of the first
- * file the job writes. */
+ * file the job writes. A job whose size is not one this library knows (not started by
+ * cb_bake_job_init) fails with CB_ERR_INTERNAL, before anything is read past it. */
 CROWDBAKE_API cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err);
 /* Plans (when not yet), bakes and writes every file of settings.formats (each through a
  * temporary file and a rename). A clip over its budget fails the bake with CB_ERR_VERIFY before

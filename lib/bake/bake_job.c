@@ -176,8 +176,23 @@ static void free_search_poses(cb_bake_job *job)
     job->search_poses = NULL;
 }
 
+void cb_bake_job_init(cb_bake_job *job)
+{
+    memset(job, 0, sizeof *job);
+    job->size = sizeof *job;
+    job->settings = cb_default_bake_settings();
+    job->limits = cb_default_limits();
+}
+
 cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
 {
+    /* The one size there is so far; a later MINOR that adds fields also takes this size and
+     * gives the fields it lacks their defaults. */
+    if (job->size != sizeof *job)
+        return cb_fail(err, CB_ERR_INTERNAL,
+                       "cb_bake_job.size is %zu, but this libcrowdbake's job is %zu bytes: start the job with "
+                       "cb_bake_job_init, and build against the headers of the library it runs with",
+                       job->size, sizeof *job);
     if (job->planned) return CB_OK;
     const cb_model *m = job->model;
     uint32_t n = job->clips ? job->clip_count : m->animation_count;

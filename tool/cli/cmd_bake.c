@@ -466,7 +466,7 @@ int cmd_bake(int argc, char **argv)
         output_path(a.output, "ktx2", ktx2_path, sizeof ktx2_path);
     }
     cb_bake_job job;
-    memset(&job, 0, sizeof job);
+    cb_bake_job_init(&job);
     job.model = m, job.skin = cli_pick_skin(m, a.skin, &err);
     job.settings = settings, job.limits = limits, job.threads = threads, job.speed_reference = speed_ref;
     job.pal_path = pal_path, job.exr_path = exr_path, job.ktx2_path = ktx2_path;

@@ -210,7 +210,7 @@ static cb_status plan_job(const roster_run *run, const cb_catalog_animal *an, ty
                           cb_error *err)
 {
     cb_bake_job *job = &w->job;
-    memset(job, 0, sizeof *job);
+    cb_bake_job_init(job);
     job->model = w->model, job->skin = w->skin;
     job->clips = w->plan, job->clip_count = t->clip_count, job->clip_settings = w->clip_settings;
     job->settings = an->bake;
