@@ -152,6 +152,27 @@ static void test_pkg_config_program_bakes_fox(void **state)
     if (!strstr(out, want)) fail_msg("bake_model does not use %s:\n%s", want, out);
 }
 
+/* The command is a client like any other: its objects link against the installed shared
+ * library, which exports only the declared API, with nothing else of libcrowdbake, and that
+ * command bakes Fox to the same bytes. */
+static void test_tool_links_against_the_installed_library(void **state)
+{
+    (void)state;
+    if (skip_under_sanitizers()) skip();
+    static char out[65536];
+    int rc = sh(out, sizeof out,
+                "c++ -o " TMP "/crowdbake_shared %s/obj/tool/cli/*.o %s/libcrowdbake_tool.a -L%s/lib -lcrowdbake "
+                "-Wl,-rpath,%s/lib $(pkg-config --libs tomlplusplus libpng) -ldl -lpthread -lm && "
+                TMP "/crowdbake_shared bake %s -o " TMP "/shared.pal -q && ldd " TMP "/crowdbake_shared",
+                BUILD_DIR, BUILD_DIR, prefix, prefix, fox);
+    if (rc != 0) fail_msg("%s", out);
+    char want[PATH_MAX * 2];
+    snprintf(want, sizeof want, "%s/lib/libcrowdbake.so.1", prefix);
+    if (!strstr(out, want)) fail_msg("the command does not use %s:\n%s", want, out);
+    reference_bake(TMP "/reference-shared.pal");
+    assert_same_file(TMP "/shared.pal", TMP "/reference-shared.pal");
+}
+
 /* The same program through find_package(crowdbake) and crowdbake::crowdbake. */
 static void test_cmake_program_bakes_fox(void **state)
 {
@@ -317,6 +338,7 @@ int main(void)
         cmocka_unit_test(test_destdir_layout),
         cmocka_unit_test(test_shared_library_exports_only_its_api),
         cmocka_unit_test(test_pkg_config_program_bakes_fox),
+        cmocka_unit_test(test_tool_links_against_the_installed_library),
         cmocka_unit_test(test_cmake_program_bakes_fox),
         cmocka_unit_test(test_cmake_roster_rebakes_only_what_changed),
         cmocka_unit_test(test_man_page_and_completions),
