@@ -124,8 +124,8 @@ static void test_shared_library_exports_only_its_api(void **state)
         fail_msg("%s", out);
     unsigned exported = 0;
     if (!strstr(out, "exported symbols") || sscanf(strstr(out, ": ") + 2, "%u", &exported) != 1) fail_msg("%s", out);
-    /* The API has about 150 functions (and three tables); the library exported 700 symbols
-     * before its visibility was set, 440 of them C++ internals. */
+    /* The API has about 155 functions (and three tables); the library exported 700 symbols
+     * before its visibility was set, 411 of them C++ (tinygltf, Draco, RapidJSON, cbgltf::). */
     if (exported < 120 || exported > 250) fail_msg("%u exported symbols: %s", exported, out);
 }
 
