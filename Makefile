@@ -1,6 +1,11 @@
 # crowdbake - build, test, demo.
 #
-#   make          build/crowdbake, build/libcrowdbake.a and the sample models
+#   make          build/crowdbake, build/libcrowdbake.a (and .so) and the sample models
+#
+# The tree: lib/ is libcrowdbake (lib/core the model, sampling and palettes; lib/formats glTF in,
+# .pal/EXR/KTX2 out; lib/bake the bake job); include/crowdbake its public headers. tool/ is the
+# crowdbake command, a client of the library through those headers (tool/cli the commands,
+# tool/catalog catalogs in TOML, tool/roster roster bakes, tool/report the report and preview).
 #   make demo     bake the bundled samples
 #   make check    the test suite, normal and AddressSanitizer + UBSan builds
 #   make bench    benchmarks (not part of check)
@@ -31,7 +36,11 @@ WARN    := -Wall -Wextra $(WERROR)
 SAN     ?=
 # Everything below needs pkg-config, which `make deps` brings.
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
-PKG_LIBS   = $(shell pkg-config --libs simdjson draco OpenEXR libzstd tomlplusplus libpng 2>/dev/null) -lmeshoptimizer -lpthread -lm -ldl
+# The library needs the glTF, EXR and zstd libraries; the tool adds toml++ (catalogs) and libpng
+# (the preview). Programs that link the tool's objects link both.
+LIB_LIBS   = $(shell pkg-config --libs simdjson draco OpenEXR libzstd 2>/dev/null) -lmeshoptimizer -lpthread -lm
+TOOL_LIBS  = $(shell pkg-config --libs tomlplusplus libpng 2>/dev/null) -ldl
+PKG_LIBS   = $(TOOL_LIBS) $(LIB_LIBS)
 # The command links Draco, zstd and libpng from their -dev packages' archives. Draco's ~2,500
 # symbol bindings were half the dynamic loader's work at every start (about 1 ms of a 9 ms Fox
 # bake), and each shared library costs ~0.1 ms to map and bind at every start (a Fox bake is ~7 ms,
@@ -45,7 +54,7 @@ PKG_LIBS   = $(shell pkg-config --libs simdjson draco OpenEXR libzstd tomlpluspl
 # through the libraries listed before it (`crowdbake --version`: 2.59 -> 2.28 M instructions).
 STATIC_LIBS = $(shell pkg-config --libs-only-l draco 2>/dev/null) -lzstd -lpng16
 CLI_LIBS   = -lstdc++ -Wl,-Bstatic $(STATIC_LIBS) -Wl,-Bdynamic $(filter-out $(STATIC_LIBS),$(PKG_LIBS)) -lz
-# Tests drive OpenGL themselves; crowdbake opens OSMesa only for `preview` (pipeline/preview.c).
+# Tests drive OpenGL themselves; crowdbake opens OSMesa only for `preview` (tool/report/preview.c).
 GL_LIBS    = $(shell pkg-config --libs osmesa 2>/dev/null)
 
 # -fno-math-errno: sqrt and lrint become single instructions (nothing reads errno from libm).
@@ -56,16 +65,24 @@ FPFLAGS  := -fno-math-errno -fno-trapping-math -ffp-contract=off
 # -fPIC: the same objects make the static and the shared library (-fno-semantic-interposition
 # keeps calls inside the library as direct, inlinable calls, as without -fPIC).
 PICFLAGS := -fPIC -fno-semantic-interposition
-CFLAGS   := -std=c11 $(OPT) $(FPFLAGS) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude $(PICFLAGS) $(SAN)
-CXXFLAGS := -std=c++17 $(OPT) $(FPFLAGS) -g $(WARN) -Iinclude $(PICFLAGS) $(SAN)
+# -Iformats: crowdbake_pal.h, the standalone reader, installed beside include/crowdbake.
+CFLAGS   := -std=c11 $(OPT) $(FPFLAGS) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude -Iformats $(PICFLAGS) $(SAN)
+CXXFLAGS := -std=c++17 $(OPT) $(FPFLAGS) -g $(WARN) -Iinclude -Iformats $(PICFLAGS) $(SAN)
+# The tool's own headers (tool/catalog, tool/roster, tool/report), for the tool and its tests.
+TOOL_INC := -Itool
 
-LIB_C   := $(wildcard src/*.c) $(wildcard formats/*.c) $(wildcard pipeline/*.c)
-LIB_CXX := $(wildcard formats/*.cpp)
-CLI_C   := $(wildcard cli/*.c)
+LIB_C   := $(wildcard lib/*/*.c)
+LIB_CXX := $(wildcard lib/*/*.cpp)
+TOOL_C  := $(wildcard tool/catalog/*.c tool/roster/*.c tool/report/*.c)
+TOOL_CXX:= $(wildcard tool/catalog/*.cpp)
+CLI_C   := $(wildcard tool/cli/*.c)
 TESTS   := $(patsubst tests/%.c,%,$(wildcard tests/test_*.c))
 
-LIB_OBJ := $(LIB_C:%.c=$(BUILD)/obj/%.o) $(LIB_CXX:%.cpp=$(BUILD)/obj/%.o) $(BUILD)/obj/gen/palette_glsl.o
+LIB_OBJ := $(LIB_C:%.c=$(BUILD)/obj/%.o) $(LIB_CXX:%.cpp=$(BUILD)/obj/%.o)
+TOOL_OBJ:= $(TOOL_C:%.c=$(BUILD)/obj/%.o) $(TOOL_CXX:%.cpp=$(BUILD)/obj/%.o) $(BUILD)/obj/gen/palette_glsl.o
 CLI_OBJ := $(CLI_C:%.c=$(BUILD)/obj/%.o)
+# The tool's objects other than its main, in one archive its tests link too (never installed).
+TOOL_A  := $(BUILD)/libcrowdbake_tool.a
 
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
@@ -101,6 +118,13 @@ $(DEPS_STAMP): Makefile
 	@mkdir -p $(@D) && touch $@
 
 # ---- the library and the command ------------------------------------------------------
+# libcrowdbake exports what its headers declare with CROWDBAKE_API (include/crowdbake/export.h)
+# and nothing else: its objects are compiled with hidden visibility, and the version script
+# (lib/libcrowdbake.map) makes local whatever a dependency's headers mark visible (C++ templates).
+$(BUILD)/obj/lib/%.o: CFLAGS += -fvisibility=hidden
+$(BUILD)/obj/lib/%.o: CXXFLAGS += -fvisibility=hidden -fvisibility-inlines-hidden
+$(BUILD)/obj/tool/%.o: CFLAGS += $(TOOL_INC)
+$(BUILD)/obj/tool/%.o: CXXFLAGS += $(TOOL_INC)
 $(BUILD)/obj/%.o: %.c $(DEPS_STAMP)
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -MMD -MP -c $< -o $@
@@ -111,13 +135,13 @@ $(BUILD)/obj/%.o: %.cpp $(DEPS_STAMP)
 
 # Debian's RapidJSON (1.1.0) adds an offset to its parse stack's null pointer before the stack
 # first grows, which clang's UBSan reports on every parse (fixed upstream after 1.1.0). Only
-# the glTF adapter (formats/gltf_*.cpp) includes RapidJSON; every other check stays on for it.
-$(BUILD)/obj/formats/gltf_load.o $(BUILD)/obj/formats/gltf_container.o $(BUILD)/obj/formats/gltf_convert.o $(BUILD)/obj/formats/gltf_fast.o \
-  $(BUILD)/obj/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-fno-sanitize=pointer-overflow)
+# the glTF adapter (lib/formats/gltf_*.cpp) includes RapidJSON; every other check stays on for it.
+$(BUILD)/obj/lib/formats/gltf_load.o $(BUILD)/obj/lib/formats/gltf_container.o $(BUILD)/obj/lib/formats/gltf_convert.o \
+  $(BUILD)/obj/lib/formats/gltf_fast.o $(BUILD)/obj/lib/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-fno-sanitize=pointer-overflow)
 # tinygltf's implementation is third-party code that takes 108 s of CPU to compile at -O1 -g
 # under the sanitizers (14 s at -O0, every check still in): the sanitizer build skips its
 # optimizer.
-$(BUILD)/obj/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-O0)
+$(BUILD)/obj/lib/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-O0)
 
 # The shipped GLSL, embedded so `crowdbake preview` renders with exactly what runtimes get.
 $(BUILD)/gen/palette_glsl.c: samples/shaders/crowdbake_palette.glsl
@@ -132,12 +156,17 @@ $(BUILD)/libcrowdbake.a: $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
 
-# The shared library: its dependencies come with it (NEEDED), so a program links -lcrowdbake alone.
-$(BUILD)/$(SONAME): $(LIB_OBJ)
-	$(CXX) $(SAN) -shared -Wl,-soname,$(SONAME) -Wl,--no-undefined -o $@ $^ $(PKG_LIBS)
+$(TOOL_A): $(TOOL_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
 
-$(BUILD)/crowdbake: $(CLI_OBJ) $(BUILD)/libcrowdbake.a
-	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(BUILD)/libcrowdbake.a $(CLI_LIBS)
+# The shared library: its dependencies come with it (NEEDED), so a program links -lcrowdbake alone.
+$(BUILD)/$(SONAME): $(LIB_OBJ) lib/libcrowdbake.map
+	$(CXX) $(SAN) -shared -Wl,-soname,$(SONAME) -Wl,--no-undefined -Wl,--version-script=lib/libcrowdbake.map \
+	  -o $@ $(LIB_OBJ) $(LIB_LIBS)
+
+$(BUILD)/crowdbake: $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a
+	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a $(CLI_LIBS)
 
 # ---- install --------------------------------------------------------------------------
 PREFIX     ?= /usr/local
@@ -223,12 +252,12 @@ demo: all $(if $(shell command -v npm 2>/dev/null),web/node_modules/.package-loc
 # ---- tests ----------------------------------------------------------------------------
 # Each build's tests write under $(BUILD)/tmp-tests (BUILD_DIR), so the normal and the
 # sanitizer passes run side by side.
-TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(shell pkg-config --cflags cmocka 2>/dev/null)
+TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(TOOL_INC) $(shell pkg-config --cflags cmocka 2>/dev/null)
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
-$(BUILD)/tests/%: tests/%.c tests/testutil.h tests/view_server.h $(BUILD)/libcrowdbake.a
+$(BUILD)/tests/%: tests/%.c tests/testutil.h tests/view_server.h $(TOOL_A) $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TEST_CFLAGS) -c $< -o $@.o
-	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
+	$(CXX) $(SAN) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
 
 # The reader header alone, strict C99, as an engine would compile it: no libcrowdbake.
 $(BUILD)/tests/standalone_pal_reader: tests/standalone_pal_reader.c formats/crowdbake_pal.h $(DEPS_STAMP)
@@ -239,11 +268,11 @@ TEST_BINS += $(BUILD)/tests/standalone_pal_reader
 
 # Fuzz targets, replayed over their regression inputs (and the samples) by every test run.
 FUZZ_TARGETS := gltf pal exr catalog
-$(BUILD)/tests/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c $(BUILD)/libcrowdbake.a
+$(BUILD)/tests/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c $(TOOL_A) $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c tests/fuzz/fuzz_$*.c -o $@.fuzz.o
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TOOL_INC) -c tests/fuzz/fuzz_$*.c -o $@.fuzz.o
 	$(CC) $(CFLAGS) -c tests/fuzz/replay.c -o $@.main.o
-	$(CXX) $(SAN) -o $@ $@.fuzz.o $@.main.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
+	$(CXX) $(SAN) -o $@ $@.fuzz.o $@.main.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 ARGS_replay_gltf    := tests/fuzz/regressions/gltf $(BUILD)/samples
 ARGS_replay_pal     := tests/fuzz/regressions/pal
 ARGS_replay_exr     := tests/fuzz/regressions/exr
@@ -368,10 +397,10 @@ fuzz-build: deps $(FUZZ_WEB) web/node_modules/.package-lock.json
 	@dpkg-query -W -f='$${Status}' libclang-rt-14-dev 2>/dev/null | grep -q 'install ok installed' || \
 	  { [ "$$(id -u)" = 0 ] && apt-get install -y --no-install-recommends libclang-rt-14-dev >/dev/null; }
 	$(MAKE) --no-print-directory BUILD=$(FUZZ_BUILD) CC=clang CXX=clang++ OPT="-O1 -g" \
-	  SAN="$(FUZZ_SAN) -fsanitize=fuzzer-no-link" $(FUZZ_BUILD)/libcrowdbake.a $(FUZZ_BUILD)/samples/quadruped.glb
+	  SAN="$(FUZZ_SAN) -fsanitize=fuzzer-no-link" $(FUZZ_BUILD)/libcrowdbake.a $(FUZZ_BUILD)/libcrowdbake_tool.a $(FUZZ_BUILD)/samples/quadruped.glb
 	@for t in $(FUZZ_TARGETS); do \
-	  clang $(CFLAGS) -O1 -g $(FUZZ_SAN) -fsanitize=fuzzer $(PKG_CFLAGS) -c tests/fuzz/fuzz_$$t.c -o $(FUZZ_BUILD)/fuzz_$$t.o && \
-	  clang++ $(FUZZ_SAN) -fsanitize=fuzzer -o $(FUZZ_BUILD)/fuzz_$$t $(FUZZ_BUILD)/fuzz_$$t.o $(FUZZ_BUILD)/libcrowdbake.a \
+	  clang $(CFLAGS) -O1 -g $(FUZZ_SAN) -fsanitize=fuzzer $(PKG_CFLAGS) $(TOOL_INC) -c tests/fuzz/fuzz_$$t.c -o $(FUZZ_BUILD)/fuzz_$$t.o && \
+	  clang++ $(FUZZ_SAN) -fsanitize=fuzzer -o $(FUZZ_BUILD)/fuzz_$$t $(FUZZ_BUILD)/fuzz_$$t.o $(FUZZ_BUILD)/libcrowdbake_tool.a $(FUZZ_BUILD)/libcrowdbake.a \
 	    $(PKG_LIBS) || exit 1; done
 
 # Seed corpora (tests/fuzz/seeds.py): the shared models and the samples, .gltf files with the

@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <time.h>
 
-#include "../formats/crowdbake_pal.h"
+#include "crowdbake_pal.h"
 #include "crowdbake/exr.h"
 #include "crowdbake/gltf.h"
 

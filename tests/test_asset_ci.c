@@ -10,7 +10,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "../formats/crowdbake_pal.h"
+#include "crowdbake_pal.h"
 #include "crowdbake/exr.h"
 
 #define TMP TEST_TMP "/asset_ci"

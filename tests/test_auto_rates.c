@@ -1,5 +1,5 @@
 /* test_auto_rates.c - a bake without --fps chooses each clip's rate and rows by error, baking
- * each candidate rate once per clip and kind of rows (src/runtime.c keeps its probes): its
+ * each candidate rate once per clip and kind of rows (lib/core/runtime.c keeps its probes): its
  * choices must be those of the plain rule applied here to the clip baked afresh at each rate -
  * exactly at max_fps, elsewhere measured only as far as the goal needs, as the search measures
  * it. The rule: sampled rows first, then fitted rows under that rate (a tie goes to the exact

@@ -8,7 +8,7 @@
 #include <limits.h>
 #include <sys/wait.h>
 
-#include "../formats/crowdbake_pal.h"
+#include "crowdbake_pal.h"
 #include "crowdbake/bake.h"
 #include "crowdbake/exr.h"
 
@@ -23,10 +23,8 @@ static int setup(void **state)
 static cb_bake_job job_for(const cb_model *m)
 {
     cb_bake_job job;
-    memset(&job, 0, sizeof job);
+    cb_bake_job_init(&job);
     job.model = m, job.skin = 0;
-    job.settings = cb_default_bake_settings();
-    job.limits = cb_default_limits();
     job.threads = 2;
     return job;
 }
@@ -52,6 +50,30 @@ static void test_each_format_gets_its_precision(void **state)
     assert_true(cb_root_motion_parse("in-place", &rm) && rm == CB_ROOT_MOTION_IN_PLACE);
     assert_false(cb_root_motion_parse("inplace", &rm));
     assert_true(cb_fps_valid(1000) && !cb_fps_valid(1000.5) && !cb_fps_valid(0));
+}
+
+/* A job that did not start from cb_bake_job_init (its size unset, or another header's) is
+ * refused before the library reads it, with the function to call; with its size, it bakes. */
+static void test_job_carries_its_size(void **state)
+{
+    (void)state;
+    cb_model *m = load_shared("assets/spider-animated-luanti/gltf_spider_animated.gltf");
+    cb_bake_job job = job_for(m);
+    job.pal_path = TMP "/sized.pal";
+    cb_error err = {0};
+    for (size_t size = 0; size <= sizeof job + 8; size += sizeof job / 2 + 4) {
+        job.size = size;
+        memset(&err, 0, sizeof err);
+        assert_int_equal(cb_bake_job_plan(&job, &err), CB_ERR_INTERNAL);
+        assert_non_null(strstr(err.message, "cb_bake_job_init"));
+        assert_false(job.planned);
+    }
+    job.size = sizeof job;
+    memset(&err, 0, sizeof err);
+    assert_int_equal(cb_bake_job_plan(&job, &err), CB_OK);
+    assert_true(job.planned);
+    cb_bake_job_free(&job);
+    cb_model_free(m);
 }
 
 /* The spider's non-uniform scale: qpos reports CB_ERR_LAYOUT; a job without a layout set falls
@@ -183,6 +205,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_each_format_gets_its_precision),
+        cmocka_unit_test(test_job_carries_its_size),
         cmocka_unit_test(test_fallback_acts_on_the_status),
         cmocka_unit_test(test_clip_settings_override_the_job),
         cmocka_unit_test(test_catalog_and_single_bake_agree),

@@ -11,8 +11,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "crowdbake/catalog_toml.h"
-#include "crowdbake/roster.h"
+#include "catalog/catalog_toml.h"
+#include "roster/roster.h"
 
 #define TMP TEST_TMP "/catalog"
 

@@ -12,10 +12,10 @@
 
 #include <math.h>
 
-#include "crowdbake/catalog_toml.h"
-#include "../formats/crowdbake_pal.h"
+#include "catalog/catalog_toml.h"
+#include "crowdbake_pal.h"
 #include "crowdbake/exr.h"
-#include "crowdbake/report.h"
+#include "report/report.h"
 
 #define TMP TEST_TMP "/cli"
 

@@ -8,7 +8,7 @@
 #include <limits.h>
 #include <unistd.h>
 
-#include "../formats/crowdbake_pal.h"
+#include "crowdbake_pal.h"
 
 #define TMP TEST_TMP "/clip_select"
 

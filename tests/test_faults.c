@@ -7,7 +7,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "../formats/crowdbake_pal.h"
+#include "crowdbake_pal.h"
 
 #define TMP TEST_TMP "/faults"
 
@@ -99,7 +99,7 @@ static void file_hash(const char *path, char *hash, size_t size)
 }
 
 /* Bakes quad over an existing bake of fish at out_path, stops the process at `point` of writing
- * it (a test hook in formats/atomic_file.c; no race with the short-lived temporary), sends it
+ * it (a test hook in tool/cli/signals.c; no race with the short-lived temporary), sends it
  * `signal`: the temporary must have existed, be gone, and the old file be unchanged. */
 static void interrupt(const char *signal, const char *point, const char *out_path)
 {

@@ -1,6 +1,6 @@
 /* test_gl.c - the shipped GLSL (samples/shaders/crowdbake_palette.glsl) run on a real OpenGL:
  * Mesa's llvmpipe through OSMesa, no GPU. Transform feedback captures the skinned positions of
- * many instances at many times; they must match the CPU runtime (src/runtime.c, which verify
+ * many instances at many times; they must match the CPU runtime (lib/core/runtime.c, which verify
  * compares with exact skinning). Deliberately broken variants - transposed matrices, rows off
  * by one, a wrong wrap, no hemisphere flip - must fail the same comparison. */
 #define _DEFAULT_SOURCE

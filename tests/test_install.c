@@ -116,6 +116,25 @@ static void test_destdir_layout(void **state)
     if (!strstr(out, "(SONAME)") || !strstr(out, "libcrowdbake.so.1") || !strstr(out, "libzstd")) fail_msg("%s", out);
 }
 
+/* The installed shared library exports exactly what its installed headers declare: every
+ * CROWDBAKE_API function and object, in the version node CROWDBAKE_1, and nothing else (no C++
+ * internals of the glTF adapter or its dependencies, no library-private helpers). */
+static void test_shared_library_exports_only_its_api(void **state)
+{
+    (void)state;
+    if (skip_under_sanitizers()) skip();
+    static char out[65536];
+    if (sh(out, sizeof out,
+           "python3 tests/tools/abi_symbols.py %s/lib/libcrowdbake.so.1 %s/include/crowdbake %s/include/crowdbake_pal.h",
+           prefix, prefix, prefix) != 0)
+        fail_msg("%s", out);
+    unsigned exported = 0;
+    if (!strstr(out, "exported symbols") || sscanf(strstr(out, ": ") + 2, "%u", &exported) != 1) fail_msg("%s", out);
+    /* The API has about 155 functions (and three tables); the library exported 700 symbols
+     * before its visibility was set, 411 of them C++ (tinygltf, Draco, RapidJSON, cbgltf::). */
+    if (exported < 120 || exported > 250) fail_msg("%u exported symbols: %s", exported, out);
+}
+
 /* A program outside the tree, through pkg-config: the same bytes as the command. It runs as
  * built, with no LD_LIBRARY_PATH and no -rpath of its own: crowdbake.pc carries the rpath. */
 static void test_pkg_config_program_bakes_fox(void **state)
@@ -138,6 +157,27 @@ static void test_pkg_config_program_bakes_fox(void **state)
     char want[PATH_MAX * 2];
     snprintf(want, sizeof want, "%s/lib/libcrowdbake.so.1", prefix);
     if (!strstr(out, want)) fail_msg("bake_model does not use %s:\n%s", want, out);
+}
+
+/* The command is a client like any other: its objects link against the installed shared
+ * library, which exports only the declared API, with nothing else of libcrowdbake, and that
+ * command bakes Fox to the same bytes. */
+static void test_tool_links_against_the_installed_library(void **state)
+{
+    (void)state;
+    if (skip_under_sanitizers()) skip();
+    static char out[65536];
+    int rc = sh(out, sizeof out,
+                "c++ -o " TMP "/crowdbake_shared %s/obj/tool/cli/*.o %s/libcrowdbake_tool.a -L%s/lib -lcrowdbake "
+                "-Wl,-rpath,%s/lib $(pkg-config --libs tomlplusplus libpng) -ldl -lpthread -lm && "
+                TMP "/crowdbake_shared bake %s -o " TMP "/shared.pal -q && ldd " TMP "/crowdbake_shared",
+                BUILD_DIR, BUILD_DIR, prefix, prefix, fox);
+    if (rc != 0) fail_msg("%s", out);
+    char want[PATH_MAX * 2];
+    snprintf(want, sizeof want, "%s/lib/libcrowdbake.so.1", prefix);
+    if (!strstr(out, want)) fail_msg("the command does not use %s:\n%s", want, out);
+    reference_bake(TMP "/reference-shared.pal");
+    assert_same_file(TMP "/shared.pal", TMP "/reference-shared.pal");
 }
 
 /* The same program through find_package(crowdbake) and crowdbake::crowdbake. */
@@ -304,9 +344,10 @@ static void test_man_page_and_completions(void **state)
     assert_int_equal(sh(out, sizeof out, "groff -man -ww -z docs/crowdbake.1"), 0);
     if (out[0]) fail_msg("docs/crowdbake.1: %s", out);
     char *bash = read_whole_file("completions/crowdbake.bash", NULL), *zsh = read_whole_file("completions/_crowdbake", NULL);
-    static const char *const sources[] = {"cli/cmd_bake.c", "cli/cmd_info.c", "cli/cmd_inspect.c", "cli/cmd_preview.c",
-                                          "cli/cmd_report.c", "cli/cmd_sample.c", "cli/cmd_vat.c", "cli/cmd_verify.c",
-                                          "cli/cmd_mesh.c", "cli/cmd_view.c", "cli/cli.c"};
+    static const char *const sources[] = {"tool/cli/cmd_bake.c",   "tool/cli/cmd_info.c",   "tool/cli/cmd_inspect.c",
+                                          "tool/cli/cmd_preview.c", "tool/cli/cmd_report.c", "tool/cli/cmd_sample.c",
+                                          "tool/cli/cmd_vat.c",     "tool/cli/cmd_verify.c", "tool/cli/cmd_mesh.c",
+                                          "tool/cli/cmd_view.c",    "tool/cli/cli.c"};
     int options = 0;
     for (size_t i = 0; i < COUNT_OF(sources); ++i) {
         char *src = read_whole_file(sources[i], NULL);
@@ -328,24 +369,39 @@ static void test_man_page_and_completions(void **state)
     if (strcmp(out, "--root-motion\n") != 0) fail_msg("bash completion of 'bake --roo': %s", out);
 }
 
-/* The command is a client of the public API: its files include only the installed headers
- * (crowdbake/X.h, the reader crowdbake_pal.h) and its own cli.h; and the public headers include
- * only each other. */
-static void test_cli_uses_only_the_public_headers(void **state)
+/* Whether `inc` (as written between the quotes) names one of the tool's own headers: beside
+ * `file`, or under tool/ (its -I). */
+static bool tool_header(const char *file, const char *inc, size_t len)
+{
+    char path[PATH_MAX];
+    const char *slash = strrchr(file, '/');
+    snprintf(path, sizeof path, "%.*s/%.*s", (int)(slash - file), file, (int)len, inc);
+    if (exists(path) && strstr(path, "/../") == NULL) return true;
+    snprintf(path, sizeof path, "tool/%.*s", (int)len, inc);
+    return exists(path) && strstr(path, "/../") == NULL;
+}
+
+/* The command is a client of the public API: its files (tool/) include only the installed
+ * headers (crowdbake/X.h, the reader crowdbake_pal.h) and the tool's own; and the public
+ * headers include only each other. */
+static void test_tool_uses_only_the_public_headers(void **state)
 {
     (void)state;
-    static char out[65536];
-    assert_int_equal(sh(out, sizeof out, "grep -H \"^#include \\\"\" cli/*.c cli/*.h include/crowdbake/*.h"), 0);
+    static char out[1 << 17];
+    assert_int_equal(sh(out, sizeof out, "grep -H \"^#include \\\"\" tool/*/*.c tool/*/*.cpp tool/*/*.h include/crowdbake/*.h"),
+                     0);
     int lines = 0;
     for (char *line = strtok(out, "\n"); line; line = strtok(NULL, "\n"), ++lines) {
-        const char *file = line, *inc = strstr(line, "#include \"") + 10;
-        bool cli = strncmp(file, "cli/", 4) == 0;
-        bool ok = cli ? strncmp(inc, "crowdbake/", 10) == 0 || strncmp(inc, "cli.h\"", 6) == 0 ||
-                            strncmp(inc, "../formats/crowdbake_pal.h\"", 27) == 0
-                      : strchr(inc, '/') == NULL || strchr(inc, '/') > strchr(inc, '"');
-        if (!ok) fail_msg("%s: not a public header", line);
+        *strchr(line, ':') = '\0';
+        const char *file = line, *inc = strstr(line + strlen(line) + 1, "#include \"") + 10;
+        size_t len = (size_t)(strchr(inc, '"') - inc);
+        bool tool = strncmp(file, "tool/", 5) == 0;
+        bool ok = tool ? strncmp(inc, "crowdbake/", 10) == 0 || strncmp(inc, "crowdbake_pal.h\"", 16) == 0 ||
+                             tool_header(file, inc, len)
+                       : memchr(inc, '/', len) == NULL;
+        if (!ok) fail_msg("%s: #include \"%.*s\" is not a public header", file, (int)len, inc);
     }
-    assert_true(lines > 30);
+    assert_true(lines > 60);
 }
 
 /* The Godot addon's zip (make godot-addon) is the same bytes from any build directory and holds
@@ -368,13 +424,15 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_destdir_layout),
+        cmocka_unit_test(test_shared_library_exports_only_its_api),
         cmocka_unit_test(test_pkg_config_program_bakes_fox),
+        cmocka_unit_test(test_tool_links_against_the_installed_library),
         cmocka_unit_test(test_cmake_program_bakes_fox),
         cmocka_unit_test_teardown(test_installed_view_serves_the_viewer, stop_server),
         cmocka_unit_test(test_cmake_roster_rebakes_only_what_changed),
         cmocka_unit_test(test_make_check_names_the_node_it_needs),
         cmocka_unit_test(test_man_page_and_completions),
-        cmocka_unit_test(test_cli_uses_only_the_public_headers),
+        cmocka_unit_test(test_tool_uses_only_the_public_headers),
         cmocka_unit_test(test_godot_addon_zip),
     };
     return cmocka_run_group_tests(tests, setup, NULL);

@@ -7,7 +7,7 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-#include "../src/cb_math.h"
+#include "../lib/core/cb_math.h"
 
 static cb_channel make_channel(cb_path path, cb_interp interp, float *times, float *values, uint32_t keys)
 {

@@ -369,7 +369,7 @@ static void put_le32(unsigned char *d, uint32_t v)
 
 /* Rotation keys are read where they lie. Here the bytes of a rotation accessor (keys of length
  * 2) are also a translation accessor's: normalizing them in place would move the translation,
- * so validation must normalize a copy (src/model.c, validate_channel). */
+ * so validation must normalize a copy (lib/core/model_validate.c, validate_channel). */
 static void test_normalizing_rotation_keys_never_touches_shared_bytes(void **state)
 {
     (void)state;

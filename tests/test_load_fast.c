@@ -1,4 +1,4 @@
-/* test_load_fast.c - the fast glTF path (formats/gltf_fast.cpp: simdjson, accessors read where
+/* test_load_fast.c - the fast glTF path (lib/formats/gltf_fast.cpp: simdjson, accessors read where
  * they lie in the GLB's BIN chunk) gives the model tinygltf gives. Each GLB is also written as a
  * .gltf with its BIN chunk in a separate .bin, which only tinygltf reads (it copies the bytes
  * into its own buffers), and every array of the two models is compared bit for bit. Hand-made

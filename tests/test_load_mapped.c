@@ -1,4 +1,4 @@
-/* test_load_mapped.c - model files of 1 MiB and more are mapped (formats/gltf_container.cpp,
+/* test_load_mapped.c - model files of 1 MiB and more are mapped (lib/formats/gltf_container.cpp,
  * map_model), not read: the model is the one loading the same bytes from memory gives, its
  * source hash (hashed on a second thread) is the same. The mapping is read-only: rotation keys
  * the loader normalizes are copies outside it, and nothing can write into it. A bake drops a

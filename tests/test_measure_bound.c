@@ -1,5 +1,5 @@
-/* test_measure_bound.c - the bake measures its errors by branch and bound (src/error_bound.h):
- * the per-group bounds (src/vertex_groups.h) really bound what skinning computes, over a
+/* test_measure_bound.c - the bake measures its errors by branch and bound (lib/core/error_bound.h):
+ * the per-group bounds (lib/core/vertex_groups.h) really bound what skinning computes, over a
  * partition of the skinned vertices, the maxima equal those of
  * skinning every vertex of every row (recomputed here row by row, bit for bit) on any thread
  * count (one job per clip or two), an error goal
@@ -12,9 +12,9 @@
 
 #include <limits.h>
 
-#include "../formats/crowdbake_pal.h"
-#include "../src/error_bound.h"
-#include "../src/vertex_groups.h"
+#include "crowdbake_pal.h"
+#include "../lib/core/error_bound.h"
+#include "../lib/core/vertex_groups.h"
 #include "crowdbake/palette.h"
 #include "crowdbake/runtime.h"
 

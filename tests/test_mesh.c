@@ -10,7 +10,7 @@
 #include <limits.h>
 #include <math.h>
 
-#include "crowdbake/catalog.h"
+#include "catalog/catalog.h"
 
 #define TMP TEST_TMP "/mesh"
 
@@ -37,7 +37,7 @@ static double mesh_json(const char *args, const char *key)
 
 /* The worst distance, over every frame of every clip at 30 fps, between the written mesh and the
  * source's own skinning (joints through `remap`), both with the palette model's joint matrices.
- * Independent of src/mesh.c: the file as the glTF loader reads it. */
+ * Independent of lib/core/mesh.c: the file as the glTF loader reads it. */
 static double reskin_error(cb_model *palette, cb_model *source, const uint32_t *remap, cb_model *written, double *height)
 {
     cb_error err = {0};

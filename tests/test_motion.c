@@ -7,11 +7,11 @@
 #include <limits.h>
 #include <math.h>
 
-#include "crowdbake/catalog_toml.h"
-#include "../formats/crowdbake_pal.h"
+#include "catalog/catalog_toml.h"
+#include "crowdbake_pal.h"
 #include "crowdbake/pal_view.h"
-#include "crowdbake/roster.h"
-#include "crowdbake/catalog.h"
+#include "roster/roster.h"
+#include "catalog/catalog.h"
 #include "crowdbake/runtime.h"
 
 #define TMP TEST_TMP "/motion"

@@ -6,7 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "../formats/crowdbake_pal.h"
+#include "crowdbake_pal.h"
 #include "crowdbake/exr.h"
 
 #define TMP TEST_TMP "/pal_file"

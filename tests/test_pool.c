@@ -1,4 +1,4 @@
-/* test_pool.c - the threads a bake's passes run on (src/pool.h): every share of every run runs
+/* test_pool.c - the threads a bake's passes run on (lib/core/pool.h): every share of every run runs
  * exactly once and has finished when cb_pool_dispatch returns, whether the pool's threads were
  * still checking for work or had gone to sleep between runs; shares beyond the pool's threads,
  * and every share without a pool, run on the caller; a run's shares see what the caller wrote
@@ -10,7 +10,7 @@
 #include <threads.h>
 #include <time.h>
 
-#include "../src/pool.h"
+#include "../lib/core/pool.h"
 
 enum { RUNS = 300, MAX_SHARES = 8 };
 

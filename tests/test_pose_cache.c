@@ -1,4 +1,4 @@
-/* test_pose_cache.c - the exact poses a --fps auto search keeps by clip time (src/pose_cache.h):
+/* test_pose_cache.c - the exact poses a --fps auto search keeps by clip time (lib/core/pose_cache.h):
  * a time finds what was stored for it and nothing else finds it (times one ulp apart, 0 and
  * -0 are different keys); pointers stay put as the cache grows past a block; a full cache
  * refuses more and still finds what it holds; a cleared one finds nothing and is filled again;
@@ -9,7 +9,7 @@
 
 #include <math.h>
 
-#include "../src/pose_cache.h"
+#include "../lib/core/pose_cache.h"
 #include "crowdbake/core.h"
 
 enum { BONES = 3 };

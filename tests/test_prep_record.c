@@ -1,5 +1,5 @@
 /* test_prep_record.c - a catalog rebuild decides "up to date" from each type's record
- * (pipeline/roster_cache.h) without loading or sampling, and says exactly what a rebuild from
+ * (tool/roster/roster_cache.h) without loading or sampling, and says exactly what a rebuild from
  * the models would: the same manifest bytes, depfile and report. Any change to a type's files,
  * a damaged record or a missing palette sends that type (and only it) back to its model. */
 #define _DEFAULT_SOURCE
@@ -9,9 +9,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "crowdbake/catalog_toml.h"
-#include "crowdbake/report.h"
-#include "crowdbake/roster.h"
+#include "catalog/catalog_toml.h"
+#include "report/report.h"
+#include "roster/roster.h"
 
 #define TMP TEST_TMP "/prep_record"
 

@@ -5,7 +5,7 @@
 #include <dirent.h>
 #include <math.h>
 
-#include "../src/cb_math.h"
+#include "../lib/core/cb_math.h"
 
 typedef struct ref_row {
     int clip, frame, frames, skin, joint;

@@ -1,9 +1,9 @@
 /* test_roster_order.c - the order a catalog bake hands its types to the threads: longest
- * first, so no long type is left running alone at the end (pipeline/roster_order.c). The order
+ * first, so no long type is left running alone at the end (tool/roster/roster_order.c). The order
  * changes no output: test_catalog compares -j 1 with -j 4 byte for byte. */
 #include "testutil.h"
 
-#include "../pipeline/roster_files.h"
+#include "roster/roster_files.h"
 
 #define TMP TEST_TMP "/roster_order"
 

@@ -5,9 +5,9 @@
 
 #include <math.h>
 
-#include "../src/cb_math.h"
-#include "../src/palette_bake.h"
-#include "../src/sampler.h"
+#include "../lib/core/cb_math.h"
+#include "../lib/core/palette_bake.h"
+#include "../lib/core/sampler.h"
 
 /* The largest difference between the two samplers over every row of every clip at 30 fps,
  * relative to the size of the numbers compared: the joint's scale for its 3x3, the skeleton's

@@ -10,8 +10,8 @@
 #include <limits.h>
 #include <math.h>
 
-#include "crowdbake/catalog_toml.h"
-#include "crowdbake/roster.h"
+#include "catalog/catalog_toml.h"
+#include "roster/roster.h"
 
 #define TMP TEST_TMP "/states"
 #define COW "assets/quaternius-cow/Cow.glb"

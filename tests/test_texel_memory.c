@@ -2,13 +2,13 @@
  * the same texels and facts as a bake into its own memory, for every layout and precision, on
  * several threads, through qpos falling back to affine (the memory asked for again); memory the
  * bake does not own is not freed with the palette. And the .pal written where it is baked (its
- * temporary file's payload mapped, formats/pal_write.c) against cb_pal_write's file, byte for
+ * temporary file's payload mapped, lib/formats/pal_write.c) against cb_pal_write's file, byte for
  * byte; where the file cannot be mapped, the bake falls back to its own memory. */
 #include "testutil.h"
 
 #include <sys/stat.h>
 
-#include "../formats/crowdbake_pal.h"
+#include "crowdbake_pal.h"
 #include "crowdbake/pal_write.h"
 
 #define TMP TEST_TMP "/texel_memory"

@@ -1,4 +1,4 @@
-/* test_validate_keys.c - cb_model_validate's key pre-scan (src/model.c) decides as the key-by-key
+/* test_validate_keys.c - cb_model_validate's key pre-scan (lib/core/key_scan.c) decides as the key-by-key
  * checks do: whole-channel scans against plain scalar references at every length and every
  * position of a bad key, and whole models whose clips are kept, normalized or skipped with the
  * same messages as before, on one thread and (from 2 M keys) on several. */
@@ -7,7 +7,7 @@
 #include <float.h>
 #include <math.h>
 
-/* Library-private (src/model.c): the pre-scan's whole-channel checks. */
+/* Library-private (lib/core/key_scan.h): the pre-scan's whole-channel checks. */
 bool cb_times_increasing(const float *times, uint64_t n);
 bool cb_rotations_unit(const float *q, uint64_t count, uint32_t stride);
 

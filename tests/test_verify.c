@@ -6,7 +6,7 @@
 #include <png.h>
 #include <sys/stat.h>
 
-#include "crowdbake/preview.h"
+#include "report/preview.h"
 #include "crowdbake/runtime.h"
 
 #define TMP TEST_TMP "/verify"

@@ -3,7 +3,7 @@
  * SwiftShader, driven by tests/browser/skin_check.mjs. For every layout x precision, palettes
  * baked by the command are read by web/crowdbake_pal.mjs, uploaded by the runtime and drawn as one
  * instanced draw per time; transform feedback reads every instance's skinned vertices back and
- * they must match the CPU runtime (src/runtime.c) within 1e-5 x model height. The broken variants
+ * they must match the CPU runtime (lib/core/runtime.c) within 1e-5 x model height. The broken variants
  * test_gl catches (transposed matrices, rows off by one, no loop wrap, no hemisphere flip) must
  * fail the same comparison here. The fuzzers' hostile palettes are read in the same page (fzstd as
  * the decoder) and every one is refused with a one-line message. CrowdbakeHerd (three.js) is
@@ -14,7 +14,7 @@
 #include <limits.h>
 #include <math.h>
 
-#include "../formats/crowdbake_pal.h"
+#include "crowdbake_pal.h"
 #include "crowdbake/pal_view.h"
 #include "crowdbake/runtime.h"
 

@@ -4,9 +4,9 @@
  * file format gets, the qpos -> affine fallback, each clip's rate (the job's, the clip's own, or
  * chosen by error), the input hash a file records, and the notes a bake gives.
  *
- *     cb_bake_job job = {model, skin};
- *     job.settings = cb_default_bake_settings();
- *     job.limits = cb_default_limits();
+ *     cb_bake_job job;
+ *     cb_bake_job_init(&job); // its size, the default settings and limits
+ *     job.model = model, job.skin = 0;
  *     job.pal_path = "fox.pal";
  *     cb_bake_result result;
  *     if (cb_bake_job_run(&job, &result, &err) == CB_OK) ... result.outputs[0].palette ...
@@ -16,7 +16,9 @@
 #ifndef CB_BAKE_H
 #define CB_BAKE_H
 
+#include "export.h"
 #include "clip_settings.h"
+
 #include "runtime.h"
 
 #ifdef __cplusplus
@@ -67,26 +69,26 @@ enum {
 
 /* fps = "auto" within 1 mm/m up to 120 fps (fps, 30, only for a fixed rate), qpos, u16, a .pal,
  * textures up to 16384 texels a side, root motion kept, no compression; out_dir NULL. */
-cb_bake_settings cb_default_bake_settings(void);
+CROWDBAKE_API cb_bake_settings cb_default_bake_settings(void);
 
 /* "keep" or "in-place". */
-bool cb_root_motion_parse(const char *text, cb_root_motion *out);
-const char *cb_root_motion_name(cb_root_motion root_motion);
+CROWDBAKE_API bool cb_root_motion_parse(const char *text, cb_root_motion *out);
+CROWDBAKE_API const char *cb_root_motion_name(cb_root_motion root_motion);
 /* A comma-separated set of "pal", "exr", "ktx2" and "babylon" (each once), or "both" (pal and exr):
  * CB_FORMAT_* bits, 0 when it is none of those. */
-unsigned cb_formats_parse(const char *text);
+CROWDBAKE_API unsigned cb_formats_parse(const char *text);
 /* 0 < fps <= CB_FPS_LIMIT; CB_MAX_FPS_LOWEST <= max_fps <= CB_FPS_LIMIT. */
-bool cb_fps_valid(double fps);
-bool cb_max_fps_valid(double max_fps);
+CROWDBAKE_API bool cb_fps_valid(double fps);
+CROWDBAKE_API bool cb_max_fps_valid(double max_fps);
 
 /* Whether the settings can be written: EXR and KTX2 hold half or float texels, never u16. */
-bool cb_bake_settings_writable(const cb_bake_settings *settings);
+CROWDBAKE_API bool cb_bake_settings_writable(const cb_bake_settings *settings);
 
 /* The options of the bake for one file format (CB_FORMAT_*): the precision set, else u16 for
  * .pal and float for .exr and .ktx2 (half misses 0.5 mm/m on the samples), so writing several
  * formats gives the bytes of single bakes; the affine fallback unless a layout was set. */
-cb_bake_options cb_bake_settings_options(const cb_bake_settings *settings, unsigned format, const cb_limits *limits,
-                                         uint32_t threads);
+CROWDBAKE_API cb_bake_options cb_bake_settings_options(const cb_bake_settings *settings, unsigned format,
+                                                       const cb_limits *limits, uint32_t threads);
 
 /* One clip as baked, against its error budget. */
 typedef struct cb_clip_budget {
@@ -111,6 +113,9 @@ typedef struct cb_bake_origin {
 } cb_bake_origin;
 
 typedef struct cb_bake_job {
+    /* sizeof(cb_bake_job) in the header the caller was compiled with (cb_bake_job_init sets it):
+     * the job grows at its end under one soname, and the library reads no further than this. */
+    size_t size;
     const cb_model *model;
     int32_t skin;
     const cb_clip_plan *clips;      /* in row order; NULL: every clip of the model, in file order */
@@ -156,45 +161,49 @@ typedef struct cb_bake_result {
     uint32_t budget_count, over_budget;
 } cb_bake_result;
 
+/* A job with nothing set but its size, the default settings (cb_default_bake_settings) and
+ * limits (cb_default_limits): what every job starts from. */
+CROWDBAKE_API void cb_bake_job_init(cb_bake_job *job);
 /* Resolves the clips and each one's rate: the clip's fps, else the job's; chosen by visible
  * error (cb_choose_rates) where the clip or the job says auto, with the options of the first
- * file the job writes. */
-cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err);
+ * file the job writes. A job whose size is not one this library knows (not started by
+ * cb_bake_job_init) fails with CB_ERR_INTERNAL, before anything is read past it. */
+CROWDBAKE_API cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err);
 /* Plans (when not yet), bakes and writes every file of settings.formats (each through a
  * temporary file and a rename). A clip over its budget fails the bake with CB_ERR_VERIFY before
  * anything is written (result->budgets says which; cb_bake_budget_text words each), unless
  * settings.allow_over_budget, which writes it with a warning in result->notes. The result
  * references the model and the plan: free it first. */
-cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err);
-void cb_bake_result_free(cb_bake_result *result);
+CROWDBAKE_API cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err);
+CROWDBAKE_API void cb_bake_result_free(cb_bake_result *result);
 
 /* A note summing up the clips whose rates were chosen by error (their rates, how many fitted),
  * and a line per clip over its budget (cb_bake_budget_text): an "error" when the bake failed
  * for it, a "warning" when written anyway. */
-void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result, const char *(*setting_name)(cb_setting),
-                          cb_warnings *notes);
+CROWDBAKE_API void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result,
+                                        const char *(*setting_name)(cb_setting), cb_warnings *notes);
 /* Whether planned clip i's rate is chosen by error (else fixed): job->clip_settings[i].fps_auto
  * (cb_resolve_clip_settings says how). */
-bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t clip);
+CROWDBAKE_API bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t clip);
 /* Planned clip i's rate: the one its search chose, else its fixed fps. */
-double cb_bake_job_clip_fps(const cb_bake_job *job, uint32_t clip);
+CROWDBAKE_API double cb_bake_job_clip_fps(const cb_bake_job *job, uint32_t clip);
 /* Why planned clip i has its rate and rows, in words: "72 fps, fitted rows: within 1 mm/m at 45
  * rows, sampled rows need more than 72 fps", "30 fps, sampled rows: the fixed fps". */
-void cb_bake_clip_reason(const cb_bake_job *job, uint32_t clip, char *buf, size_t size);
+CROWDBAKE_API void cb_bake_clip_reason(const cb_bake_job *job, uint32_t clip, char *buf, size_t size);
 /* Clip i over its budget, in words, with what would meet it: "clip 'Gallop' reaches 1.8 mm/m at
  * 120 fps (fitted rows), over max_error 1; it meets it at 180 fps (max_fps = 180), or give it
  * max_error = 1.9". setting_name names CB_SETTING_MAX_FPS, CB_SETTING_MAX_ERROR and
  * CB_SETTING_FPS the front end's way (the command line's flags); NULL, or NULL for a setting: the
  * catalog's keys. */
-void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, uint32_t clip,
-                         const char *(*setting_name)(cb_setting), char *buf, size_t size);
-void cb_bake_job_free(cb_bake_job *job);
+CROWDBAKE_API void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, uint32_t clip,
+                                       const char *(*setting_name)(cb_setting), char *buf, size_t size);
+CROWDBAKE_API void cb_bake_job_free(cb_bake_job *job);
 
 /* What a file records of what produced it: for a single bake, the crowdbake version, the
  * options that shape the file (`options`) and the model's bytes; for a catalog type
  * (job->origin), its content key, resolved entry and model and LOD bytes. Same inputs, same
  * hash: a build step whose hash is unchanged need not run. */
-uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *options);
+CROWDBAKE_API uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *options);
 
 #ifdef __cplusplus
 }

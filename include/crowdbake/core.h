@@ -8,6 +8,8 @@
 #ifndef CROWDBAKE_H
 #define CROWDBAKE_H
 
+#include "export.h"
+
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -72,24 +74,24 @@ typedef struct cb_error {
 static inline double cb_mm_per_m(double error, double height) { return height > 0 ? error / height * 1000 : 0; }
 
 /* Records the first error only; later ones are dropped so the root cause is reported. */
-cb_status cb_fail(cb_error *err, cb_status status, const char *fmt, ...)
+CROWDBAKE_API cb_status cb_fail(cb_error *err, cb_status status, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
 /* cb_fail for an error that changing `setting` would fix. */
-cb_status cb_fail_setting(cb_error *err, cb_status status, cb_setting setting, const char *fmt, ...)
+CROWDBAKE_API cb_status cb_fail_setting(cb_error *err, cb_status status, cb_setting setting, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 4, 5)))
 #endif
     ;
 
 /* Edit distance (insertions, deletions, substitutions) between two names. */
-size_t cb_edit_distance(const char *a, const char *b);
+CROWDBAKE_API size_t cb_edit_distance(const char *a, const char *b);
 /* The known name within two edits of `name` (the closest, the first on a tie), or NULL.
  * known[i] lies `stride` bytes after known[i-1], so it reads an array of strings or the name
  * field of an array of structs alike. */
-const char *cb_closest_name(const char *name, const char *const *known, size_t count, size_t stride);
+CROWDBAKE_API const char *cb_closest_name(const char *name, const char *const *known, size_t count, size_t stride);
 
 /* ---- limits --------------------------------------------------------------------------- */
 
@@ -104,28 +106,28 @@ typedef struct cb_limits {
     uint64_t max_palette_bytes;  /* one palette's texture */
 } cb_limits;
 
-cb_limits cb_default_limits(void);
+CROWDBAKE_API cb_limits cb_default_limits(void);
 
 /* ---- arenas: one owner for many small allocations ------------------------------------- */
 
 typedef struct cb_arena cb_arena;
 
-cb_arena *cb_arena_create(void);
-void cb_arena_free(cb_arena *arena);
+CROWDBAKE_API cb_arena *cb_arena_create(void);
+CROWDBAKE_API void cb_arena_free(cb_arena *arena);
 /* Zeroed memory that lives until cb_arena_free; NULL when out of memory. */
-void *cb_arena_alloc(cb_arena *arena, size_t count, size_t size);
-const char *cb_arena_strdup(cb_arena *arena, const char *s);
+CROWDBAKE_API void *cb_arena_alloc(cb_arena *arena, size_t count, size_t size);
+CROWDBAKE_API const char *cb_arena_strdup(cb_arena *arena, const char *s);
 /* Makes the arena the owner of memory allocated elsewhere: release(ptr) runs when the arena
  * is freed. Returns false when out of memory (then the caller still owns ptr). */
-bool cb_arena_adopt(cb_arena *arena, void *ptr, void (*release)(void *));
+CROWDBAKE_API bool cb_arena_adopt(cb_arena *arena, void *ptr, void (*release)(void *));
 
 /* Memory for buffers of a megabyte and more, on whole huge pages where the OS has them (the last
  * one counts whole once touched); smaller ones from malloc. Release with free(). */
-void *cb_alloc_large(size_t bytes);
+CROWDBAKE_API void *cb_alloc_large(size_t bytes);
 /* Hands the memory the allocator keeps after free() back to the OS where it can (glibc keeps a
  * model load's freed parse buffers, 8 MB for a 25 MB rig, resident in its heap), so that a
  * bake's buffers do not add to it. */
-void cb_release_free_memory(void);
+CROWDBAKE_API void cb_release_free_memory(void);
 
 /* ---- the model ------------------------------------------------------------------------ */
 
@@ -231,45 +233,45 @@ typedef struct cb_warnings {
 } cb_warnings;
 
 /* Appends one; when out of memory it is dropped (a warning is never worth failing a bake). */
-void cb_warn(cb_warnings *list, const char *kind, const char *fmt, ...)
+CROWDBAKE_API void cb_warn(cb_warnings *list, const char *kind, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
-void cb_warnings_free(cb_warnings *list);
+CROWDBAKE_API void cb_warnings_free(cb_warnings *list);
 
 /* An empty model with its own arena; NULL when out of memory. */
-cb_model *cb_model_create(const char *source);
-void cb_model_free(cb_model *model);
+CROWDBAKE_API cb_model *cb_model_create(const char *source);
+CROWDBAKE_API void cb_model_free(cb_model *model);
 /* Zeroed memory owned by the model; NULL when out of memory. */
-void *cb_model_alloc(cb_model *model, size_t count, size_t size);
-const char *cb_model_strdup(cb_model *model, const char *s);
+CROWDBAKE_API void *cb_model_alloc(cb_model *model, size_t count, size_t size);
+CROWDBAKE_API const char *cb_model_strdup(cb_model *model, const char *s);
 
 /* Checks what the core relies on: parents form a forest without cycles, joint and node
  * indices are in range, key times strictly increase, no value is NaN or infinite, skins
  * have joints, clips have channels. Rotation keys are normalized here. A clip that breaks a
  * rule is moved to skipped_clips with the reason, unless every clip does (then the first
  * reason is the error: nothing in the file could be baked). */
-cb_status cb_model_validate(cb_model *model, const cb_limits *limits, cb_error *err);
+CROWDBAKE_API cb_status cb_model_validate(cb_model *model, const cb_limits *limits, cb_error *err);
 
 /* Index of the skin named or numbered `name`, or -1. */
-int32_t cb_model_find_skin(const cb_model *model, const char *name);
-int32_t cb_model_find_animation(const cb_model *model, const char *name);
+CROWDBAKE_API int32_t cb_model_find_skin(const cb_model *model, const char *name);
+CROWDBAKE_API int32_t cb_model_find_animation(const cb_model *model, const char *name);
 /* What loading left out: skipped clips (when skipped_clips: a command given its clips by name
  * does not care about others), ignored morph-weight channels. */
-void cb_model_warnings(const cb_model *model, bool skipped_clips, cb_warnings *out);
+CROWDBAKE_API void cb_model_warnings(const cb_model *model, bool skipped_clips, cb_warnings *out);
 /* The skipped clip named `name`, or NULL. */
-const struct cb_skipped_clip *cb_model_find_skipped_clip(const cb_model *model, const char *name);
+CROWDBAKE_API const struct cb_skipped_clip *cb_model_find_skipped_clip(const cb_model *model, const char *name);
 /* Tells the model's loader (cb_model.release) that the key times and values of `animation`
  * will not be read for a while: a big rig's keys are most of its file, and a bake reads one
  * clip's keys only while it samples or measures that clip. A hint: reading them later is
  * always allowed. Safe from several threads; does nothing without a release hook. */
-void cb_model_release_clip(const cb_model *model, int32_t animation);
+CROWDBAKE_API void cb_model_release_clip(const cb_model *model, int32_t animation);
 /* Vertices of the primitives that use `skin`. */
-uint64_t cb_model_skin_vertex_count(const cb_model *model, int32_t skin);
+CROWDBAKE_API uint64_t cb_model_skin_vertex_count(const cb_model *model, int32_t skin);
 /* Bytes of the vertex and index buffers of the primitives that use `skin`, in their own
  * vertex formats (cb_primitive.vertex_bytes, index_bytes). */
-uint64_t cb_model_skin_mesh_bytes(const cb_model *model, int32_t skin);
+CROWDBAKE_API uint64_t cb_model_skin_mesh_bytes(const cb_model *model, int32_t skin);
 
 /* ---- sampling ------------------------------------------------------------------------- */
 
@@ -277,10 +279,10 @@ uint64_t cb_model_skin_mesh_bytes(const cb_model *model, int32_t skin);
  * per thread. */
 typedef struct cb_sampler cb_sampler;
 
-cb_sampler *cb_sampler_create(const cb_model *model, int32_t skin, cb_error *err);
-void cb_sampler_free(cb_sampler *sampler);
-const cb_model *cb_sampler_model(const cb_sampler *sampler);
-int32_t cb_sampler_skin(const cb_sampler *sampler);
+CROWDBAKE_API cb_sampler *cb_sampler_create(const cb_model *model, int32_t skin, cb_error *err);
+CROWDBAKE_API void cb_sampler_free(cb_sampler *sampler);
+CROWDBAKE_API const cb_model *cb_sampler_model(const cb_sampler *sampler);
+CROWDBAKE_API int32_t cb_sampler_skin(const cb_sampler *sampler);
 
 /* A loop without a closing key (cb_clip_analyze): from time `from` (its last key) to `to` (its
  * start plus its period) every channel returns to its first key. from = to = 0: none. */
@@ -292,14 +294,14 @@ typedef struct cb_wrap {
  * exporter left out the closing key), times past the last key interpolate back to the first
  * key over the rest of the period instead of clamping. 0 (the default): times clamp.
  * cb_clip_analyze sets it on its sampler; another sampler of the same clips needs it set too. */
-void cb_sampler_set_period(cb_sampler *sampler, int32_t animation, double period);
+CROWDBAKE_API void cb_sampler_set_period(cb_sampler *sampler, int32_t animation, double period);
 
 /* Joint matrices (16 doubles each, column-major, skin joint order) of `animation` at time t.
  * animation < 0 gives the rest pose. Times outside the clip clamp to its ends (or wrap, see
  * cb_sampler_set_period). */
-void cb_sample_joint_matrices(cb_sampler *sampler, int32_t animation, double t, double *out);
+CROWDBAKE_API void cb_sample_joint_matrices(cb_sampler *sampler, int32_t animation, double t, double *out);
 /* Global (scene-space) matrices of every node at time t; out holds 16 * node_count. */
-const double *cb_sample_globals(cb_sampler *sampler, int32_t animation, double t);
+CROWDBAKE_API const double *cb_sample_globals(cb_sampler *sampler, int32_t animation, double t);
 
 /* A joint matrix that is a similarity: x -> translation + scale * rotate(rotation, x). */
 typedef struct cb_similarity {
@@ -313,19 +315,19 @@ typedef struct cb_similarity {
  * within 1e-6 relative). Then cb_sample_joint_similarities gives the joint matrices without
  * building, multiplying and decomposing 4x4 matrices: what the qpos layout stores, and the
  * qpos bake's sampling takes half the time. */
-bool cb_sampler_is_similarity(const cb_sampler *sampler);
+CROWDBAKE_API bool cb_sampler_is_similarity(const cb_sampler *sampler);
 /* The joint matrices of cb_sample_joint_matrices as similarities (equal within the 1e-6
  * tolerance). Only for samplers where cb_sampler_is_similarity is true. */
-void cb_sample_joint_similarities(cb_sampler *sampler, int32_t animation, double t, cb_similarity *out);
+CROWDBAKE_API void cb_sample_joint_similarities(cb_sampler *sampler, int32_t animation, double t, cb_similarity *out);
 /* The same at `count` increasing times at once, bit for bit: out[i * joints + j] is joint j at
  * times[i]. The sampler runs each step over CB_SAMPLE_BATCH times at a time, which vectorizes:
  * several times the throughput of one time per call. */
 #define CB_SAMPLE_BATCH 16
-void cb_sample_joint_similarities_batch(cb_sampler *sampler, int32_t animation, const double *times, uint32_t count,
-                                        cb_similarity *out);
+CROWDBAKE_API void cb_sample_joint_similarities_batch(cb_sampler *sampler, int32_t animation, const double *times,
+                                                      uint32_t count, cb_similarity *out);
 
 /* Evaluates one channel at time t into out (3 or 4 components). Exposed for tests. */
-void cb_channel_eval(const cb_channel *channel, double t, double out[4]);
+CROWDBAKE_API void cb_channel_eval(const cb_channel *channel, double t, double out[4]);
 
 /* ---- clip framing --------------------------------------------------------------------- */
 
@@ -359,53 +361,53 @@ typedef struct cb_clip_info {
  * clip time t (from the clip's start). tau = t over the keys (span); a loop without a closing
  * key returns to its first pose over its last interval, from span to duration, and so does
  * the travel taken off (tau falls back to 0): the in-place loop ends where it starts. */
-double cb_root_travel_time(double t, double span, double duration, bool loops);
+CROWDBAKE_API double cb_root_travel_time(double t, double span, double duration, bool loops);
 
 /* Why the clip was judged a loop or not, with the measured numbers, in a few words (for `info`). */
-void cb_loop_reason_text(const cb_clip_info *clip, char *out, size_t size);
+CROWDBAKE_API void cb_loop_reason_text(const cb_clip_info *clip, char *out, size_t size);
 
 /* The shortest interval between keys of any channel of the clip (exporters that bake keys
  * sample every channel at one rate), ignoring intervals under 0.1 ms; 0 when none. */
-double cb_animation_key_interval(const cb_animation *animation);
+CROWDBAKE_API double cb_animation_key_interval(const cb_animation *animation);
 
 /* Frame count rule: N = max(1, round(D * fps)); loops bake N rows, one-shots N + 1. */
-uint32_t cb_clip_step_count(double duration, double fps);
+CROWDBAKE_API uint32_t cb_clip_step_count(double duration, double fps);
 /* Time of row i: t0 + i * D / N. */
-double cb_clip_frame_time(const cb_clip_info *clip, uint32_t frame);
+CROWDBAKE_API double cb_clip_frame_time(const cb_clip_info *clip, uint32_t frame);
 
 /* Measures a clip: duration, loop test, root motion and framing at `fps`. loop_override is
  * -1 (decide from the poses), 0 or 1. */
-cb_status cb_clip_analyze(cb_sampler *sampler, int32_t animation, double fps, int loop_override,
-                          const cb_limits *limits, cb_clip_info *out, cb_error *err);
+CROWDBAKE_API cb_status cb_clip_analyze(cb_sampler *sampler, int32_t animation, double fps, int loop_override,
+                                        const cb_limits *limits, cb_clip_info *out, cb_error *err);
 /* An analyzed clip framed at another fps (steps, frames, effective_fps), as cb_clip_analyze at
  * that fps frames it, without analyzing it again: a clip baked at many rates (--fps auto's
  * search) is analyzed once. */
-cb_status cb_clip_frame_at(const cb_model *model, double fps, const cb_limits *limits, cb_clip_info *clip,
-                           cb_error *err);
+CROWDBAKE_API cb_status cb_clip_frame_at(const cb_model *model, double fps, const cb_limits *limits,
+                                         cb_clip_info *clip, cb_error *err);
 
 /* Joint matrices of a framed clip's row, with root motion removed when asked: in-place
  * subtracts the root's average horizontal travel, velocity.xz * (t - t0), from every joint. */
-void cb_clip_frame_matrices(cb_sampler *sampler, const cb_clip_info *clip, uint32_t frame,
-                            cb_root_motion root_motion, double *out);
+CROWDBAKE_API void cb_clip_frame_matrices(cb_sampler *sampler, const cb_clip_info *clip, uint32_t frame,
+                                          cb_root_motion root_motion, double *out);
 /* The same as similarities, for samplers where cb_sampler_is_similarity is true, at `count`
  * increasing frames: out[i * joints + j] is joint j at frames[i]. */
-void cb_clip_frame_similarities(cb_sampler *sampler, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
-                                cb_root_motion root_motion, cb_similarity *out);
+CROWDBAKE_API void cb_clip_frame_similarities(cb_sampler *sampler, const cb_clip_info *clip, const uint32_t *frames,
+                                              uint32_t count, cb_root_motion root_motion, cb_similarity *out);
 /* A similarity as a 4x4 matrix. */
-void cb_similarity_matrix(const cb_similarity *s, double out[16]);
+CROWDBAKE_API void cb_similarity_matrix(const cb_similarity *s, double out[16]);
 
 /* The skin's root joint (the top-most joint), as an index into its joints. */
-uint32_t cb_skin_root_joint(const cb_model *model, int32_t skin);
+CROWDBAKE_API uint32_t cb_skin_root_joint(const cb_model *model, int32_t skin);
 
 /* ---- skinning ------------------------------------------------------------------------- */
 
 /* Linear blend skinning in double precision: out[3 * v] = sum_i w_i * M_{j_i} * p_v, with
  * the weights as stored (glTF requires them to sum to 1). joint_mats: 16 per skin joint. */
-void cb_skin_positions(const cb_primitive *prim, const double *joint_mats, double *out);
+CROWDBAKE_API void cb_skin_positions(const cb_primitive *prim, const double *joint_mats, double *out);
 
 /* Axis-aligned bounds of the skin's meshes in the rest pose (skinned with the rest-pose joint
  * matrices): min[3], max[3]. Returns the height (max.y - min.y). */
-double cb_skin_rest_bounds(cb_sampler *sampler, double min[3], double max[3]);
+CROWDBAKE_API double cb_skin_rest_bounds(cb_sampler *sampler, double min[3], double max[3]);
 
 #ifdef __cplusplus
 }

@@ -8,10 +8,12 @@
  * runtime.h  what the shipped shaders compute, on the CPU; verification; error-driven rates
  * bake.h     one bake job (a model into .pal/.exr files): every bake policy, decided once
  * clip_settings.h  each clip's settings resolved once, with where each value came from
- * catalog.h, catalog_toml.h, roster.h, report.h   catalogs of animal types, their roster bake, the budget report
  * stride.h, socket.h   what a game hangs on a clip and a rig: planted feet and footsteps, prop sockets
  * mesh.h, gltf_mesh_write.h   runtime-ready meshes for a palette (`crowdbake mesh`)
- * gltf.h, pal_write.h, pal_view.h, exr.h, ktx2.h, json.h, atomic_file.h, vat.h, budget.h, preview.h   files and tools
+ * gltf.h, pal_write.h, pal_view.h, exr.h, ktx2.h, json.h, atomic_file.h, vat.h, budget.h   files and sizes
+ *
+ * Catalogs, rosters, the budget report and the preview are the crowdbake command's (tool/),
+ * a client of this library like any other program.
  *
  * An engine that only reads palettes needs none of this: crowdbake_pal.h is a dependency-free
  * C99 reader (installed beside this folder).
@@ -28,13 +30,8 @@
 #include "clip_settings.h"
 #include "budget.h"
 #include "vat.h"
-#include "catalog.h"
-#include "catalog_toml.h"
-#include "roster.h"
 #include "stride.h"
 #include "socket.h"
-#include "report.h"
-#include "report_runtime.h"
 #include "mesh.h"
 #include "gltf_mesh_write.h"
 #include "ktx2.h"
@@ -44,6 +41,5 @@
 #include "exr.h"
 #include "json.h"
 #include "atomic_file.h"
-#include "preview.h"
 
 #endif

@@ -4,6 +4,8 @@
 #ifndef CB_EXR_IO_H
 #define CB_EXR_IO_H
 
+#include "export.h"
+
 #include "palette.h"
 #include "vat.h"
 
@@ -12,13 +14,13 @@ extern "C" {
 #endif
 
 /* Lossless compressions only: the texels must read back bit-identical. */
-bool cb_exr_compression_parse(const char *text, int *out);
+CROWDBAKE_API bool cb_exr_compression_parse(const char *text, int *out);
 
-cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin, int compression,
-                       uint64_t input_hash, float speed_reference, cb_error *err);
+CROWDBAKE_API cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
+                                     int compression, uint64_t input_hash, float speed_reference, cb_error *err);
 
 /* A VAT: channels position.RGBA and normal.RGBA, half floats, one frame per row block. */
-cb_status cb_exr_write_vat(const char *path, const cb_vat *vat, int compression, cb_error *err);
+CROWDBAKE_API cb_status cb_exr_write_vat(const char *path, const cb_vat *vat, int compression, cb_error *err);
 
 typedef struct cb_exr_image {
     uint32_t width, height;
@@ -32,8 +34,8 @@ typedef struct cb_exr_image {
 } cb_exr_image;
 
 /* Reads the texels back through OpenEXR, and the main crowdbake attributes. */
-cb_status cb_exr_read(const char *path, cb_exr_image *out, cb_error *err);
-void cb_exr_image_free(cb_exr_image *img);
+CROWDBAKE_API cb_status cb_exr_read(const char *path, cb_exr_image *out, cb_error *err);
+CROWDBAKE_API void cb_exr_image_free(cb_exr_image *img);
 
 /* A palette EXR as a palette that decodes and skins like the .pal of the same bake: texels,
  * clip table (names included) and bind positions, all owned here. */
@@ -43,8 +45,8 @@ typedef struct cb_exr_palette {
 } cb_exr_palette;
 
 /* Fails, naming the file, when the crowdbake attributes are missing or disagree with the image. */
-cb_status cb_exr_read_palette(const char *path, cb_exr_palette *out, cb_error *err);
-void cb_exr_palette_free(cb_exr_palette *p);
+CROWDBAKE_API cb_status cb_exr_read_palette(const char *path, cb_exr_palette *out, cb_error *err);
+CROWDBAKE_API void cb_exr_palette_free(cb_exr_palette *p);
 
 #ifdef __cplusplus
 }

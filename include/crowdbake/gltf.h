@@ -7,6 +7,8 @@
 #ifndef CB_GLTF_LOAD_H
 #define CB_GLTF_LOAD_H
 
+#include "export.h"
+
 #include "core.h"
 
 #ifdef __cplusplus
@@ -14,15 +16,15 @@ extern "C" {
 #endif
 
 /* NULL on failure, with err filled ("FILE: what is wrong"). limits may be NULL. */
-cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_error *err);
+CROWDBAKE_API cb_model *cb_gltf_load(const char *path, const cb_limits *limits, cb_error *err);
 /* Same, from bytes in memory (a GLB, or glTF JSON with embedded data); base_dir resolves
  * external URIs (NULL forbids them). Used by the fuzzers. */
-cb_model *cb_gltf_load_memory(const unsigned char *data, size_t size, const char *name, const char *base_dir,
-                              const cb_limits *limits, cb_error *err);
+CROWDBAKE_API cb_model *cb_gltf_load_memory(const unsigned char *data, size_t size, const char *name,
+                                            const char *base_dir, const cb_limits *limits, cb_error *err);
 /* Whether these bytes (a GLB) load on the fast path: RapidJSON reads the JSON and the BIN
  * chunk's accessors are used where they lie. Every other file loads through tinygltf, with the
  * same result. For tests and benchmarks, which must know which path they ran. */
-bool cb_gltf_fast_path_applies(const unsigned char *data, size_t size);
+CROWDBAKE_API bool cb_gltf_fast_path_applies(const unsigned char *data, size_t size);
 
 #ifdef __cplusplus
 }

@@ -10,6 +10,8 @@
 #ifndef CB_GLTF_MESH_WRITE_H
 #define CB_GLTF_MESH_WRITE_H
 
+#include "export.h"
+
 #include "mesh.h"
 
 #ifdef __cplusplus
@@ -19,8 +21,8 @@ extern "C" {
 /* The custom attribute of a batch's copy index (glTF wants custom names to start with '_'). */
 #define CB_INSTANCE_ID_ATTRIBUTE "_INSTANCE_ID"
 
-cb_status cb_gltf_mesh_write(const char *path, const cb_mesh *mesh, const cb_model *palette_model, int32_t palette_skin,
-                             const cb_mesh_error *error, cb_error *err);
+CROWDBAKE_API cb_status cb_gltf_mesh_write(const char *path, const cb_mesh *mesh, const cb_model *palette_model,
+                                           int32_t palette_skin, const cb_mesh_error *error, cb_error *err);
 
 #ifdef __cplusplus
 }

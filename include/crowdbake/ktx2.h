@@ -12,14 +12,16 @@
 #ifndef CB_KTX2_WRITE_H
 #define CB_KTX2_WRITE_H
 
+#include "export.h"
+
 #include "palette.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-cb_status cb_ktx2_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin, uint64_t input_hash,
-                        float speed_reference, cb_error *err);
+CROWDBAKE_API cb_status cb_ktx2_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
+                                      uint64_t input_hash, float speed_reference, cb_error *err);
 
 #ifdef __cplusplus
 }

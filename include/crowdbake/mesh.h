@@ -5,6 +5,8 @@
 #ifndef CB_MESH_H
 #define CB_MESH_H
 
+#include "export.h"
+
 #include "core.h"
 
 #ifdef __cplusplus
@@ -50,27 +52,29 @@ typedef struct cb_mesh {
 
 /* The primitives of `skin` in `model` as a runtime mesh. Fails on a joint outside the skin or
  * a batch whose vertices overflow 32-bit indices. */
-cb_status cb_mesh_build(const cb_model *model, int32_t skin, const cb_mesh_options *o, cb_mesh *out, cb_error *err);
-void cb_mesh_free(cb_mesh *mesh);
+CROWDBAKE_API cb_status cb_mesh_build(const cb_model *model, int32_t skin, const cb_mesh_options *o, cb_mesh *out,
+                                      cb_error *err);
+CROWDBAKE_API void cb_mesh_free(cb_mesh *mesh);
 
 /* The bytes a runtime uploads for the mesh in the types the .glb writer gives it, each
  * attribute padded to 4 bytes: positions f32x3; normals i8x3 quantized, else f32x3; texcoords
  * u16x2 quantized (within 0..1), else f32x2; joints u8x4 for palettes of at most 256 bones (no
  * loss), else u16x4; weights u8x4 quantized, else f32x4; the instance id f32. Indices u16 below
  * 65536 vertices per part (65535 is primitive restart), else u32. */
-void cb_mesh_bytes(const cb_mesh *mesh, uint64_t *vertex_bytes, uint64_t *index_bytes);
+CROWDBAKE_API void cb_mesh_bytes(const cb_mesh *mesh, uint64_t *vertex_bytes, uint64_t *index_bytes);
 
 /* The same for `copies` copies of a plain mesh (batch 1) in one batch: every vertex gains the
  * 4-byte instance id, and the indices widen to u32 once the copies pass 65535 vertices. */
-void cb_mesh_batch_bytes(const cb_mesh *mesh, uint32_t copies, uint64_t *vertex_bytes, uint64_t *index_bytes);
+CROWDBAKE_API void cb_mesh_batch_bytes(const cb_mesh *mesh, uint32_t copies, uint64_t *vertex_bytes,
+                                       uint64_t *index_bytes);
 
 /* Keeps a vertex's `max` largest weights (the first on a tie), largest first, renormalized to
  * sum 1; the other slots get joint 0 and weight 0. */
-void cb_reduce_influences(const uint16_t joints[4], const float weights[4], uint32_t max, uint16_t out_joints[4],
-                          float out_weights[4]);
+CROWDBAKE_API void cb_reduce_influences(const uint16_t joints[4], const float weights[4], uint32_t max,
+                                        uint16_t out_joints[4], float out_weights[4]);
 /* Weights summing to 1 as integers summing to exactly `scale` (255 or 65535; largest remainders
  * round up), as glTF's normalized UNSIGNED_BYTE / UNSIGNED_SHORT weights must. */
-void cb_quantize_weights(const float weights[4], uint32_t scale, uint16_t out[4]);
+CROWDBAKE_API void cb_quantize_weights(const float weights[4], uint32_t scale, uint16_t out[4]);
 
 /* The extra vertex error of a mesh: its first copy skinned with its joints and weights against
  * the model's own skinning (4 influences, the weights as stored, joints through the remap),
@@ -88,11 +92,13 @@ typedef struct cb_mesh_error {
 /* With o->quantize: builds the mesh with u8 weights and keeps them when they add at most
  * max_extra_mm (mm per metre of height) to the error the same mesh has with float weights;
  * else rebuilds it with u16 weights. Measures the mesh it returns into *error. */
-cb_status cb_mesh_build_measured(cb_sampler *palette_sampler, const cb_model *model, int32_t skin, const cb_mesh_options *o,
-                                 double fps, double max_extra_mm, cb_mesh *out, cb_mesh_error *error, cb_error *err);
+CROWDBAKE_API cb_status cb_mesh_build_measured(cb_sampler *palette_sampler, const cb_model *model, int32_t skin,
+                                               const cb_mesh_options *o, double fps, double max_extra_mm,
+                                               cb_mesh *out, cb_mesh_error *error, cb_error *err);
 
-cb_status cb_mesh_measure(cb_sampler *palette_sampler, const cb_model *model, int32_t skin, const cb_mesh *mesh,
-                          const uint32_t *remap, double fps, cb_mesh_error *out, cb_error *err);
+CROWDBAKE_API cb_status cb_mesh_measure(cb_sampler *palette_sampler, const cb_model *model, int32_t skin,
+                                        const cb_mesh *mesh, const uint32_t *remap, double fps, cb_mesh_error *out,
+                                        cb_error *err);
 
 #ifdef __cplusplus
 }

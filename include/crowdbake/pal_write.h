@@ -2,6 +2,8 @@
 #ifndef CB_PAL_WRITE_H
 #define CB_PAL_WRITE_H
 
+#include "export.h"
+
 #include "atomic_file.h"
 #include "palette.h"
 
@@ -17,8 +19,8 @@ typedef struct cb_pal_write_options {
     bool in_place;          /* root motion was removed */
 } cb_pal_write_options;
 
-cb_status cb_pal_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
-                       const cb_pal_write_options *opt, cb_error *err);
+CROWDBAKE_API cb_status cb_pal_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
+                                     const cb_pal_write_options *opt, cb_error *err);
 
 /* An uncompressed .pal written where it is baked: the bake's texels (cb_bake_options.texel_memory
  * = {cb_pal_map_texels, &mapping}) are the payload of the temporary file, mapped, so they are
@@ -35,14 +37,15 @@ typedef struct cb_pal_mapping {
     size_t meta_size;    /* the payload's offset */
 } cb_pal_mapping;
 
-void cb_pal_mapping_init(cb_pal_mapping *mapping, const char *path, const cb_model *model, int32_t skin);
-void *cb_pal_map_texels(void *mapping, const cb_palette *p);
+CROWDBAKE_API void cb_pal_mapping_init(cb_pal_mapping *mapping, const char *path, const cb_model *model, int32_t skin);
+CROWDBAKE_API void *cb_pal_map_texels(void *mapping, const cb_palette *p);
 /* Whether p's texels are the mapping's payload. */
-bool cb_pal_mapping_holds(const cb_pal_mapping *mapping, const cb_palette *p);
+CROWDBAKE_API bool cb_pal_mapping_holds(const cb_pal_mapping *mapping, const cb_palette *p);
 /* opt->zstd must be false. Releases the mapping, written or not. */
-cb_status cb_pal_write_mapped(cb_pal_mapping *mapping, const cb_palette *p, const cb_pal_write_options *opt, cb_error *err);
+CROWDBAKE_API cb_status cb_pal_write_mapped(cb_pal_mapping *mapping, const cb_palette *p,
+                                            const cb_pal_write_options *opt, cb_error *err);
 /* Removes the temporary file, if any (after a failed bake; a no-op once written). */
-void cb_pal_mapping_abort(cb_pal_mapping *mapping);
+CROWDBAKE_API void cb_pal_mapping_abort(cb_pal_mapping *mapping);
 
 #ifdef __cplusplus
 }

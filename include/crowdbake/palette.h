@@ -7,6 +7,8 @@
 #ifndef CB_PALETTE_H
 #define CB_PALETTE_H
 
+#include "export.h"
+
 #include "core.h"
 
 #ifdef __cplusplus
@@ -16,12 +18,12 @@ extern "C" {
 typedef enum cb_layout { CB_LAYOUT_MAT4 = 0, CB_LAYOUT_AFFINE = 1, CB_LAYOUT_QPOS = 2 } cb_layout;
 typedef enum cb_precision { CB_PRECISION_FLOAT = 0, CB_PRECISION_HALF = 1, CB_PRECISION_U16 = 2 } cb_precision;
 
-const char *cb_layout_name(cb_layout layout);
-const char *cb_precision_name(cb_precision precision);
-bool cb_layout_parse(const char *text, cb_layout *out);
-bool cb_precision_parse(const char *text, cb_precision *out);
-uint32_t cb_layout_texels_per_bone(cb_layout layout);
-uint32_t cb_precision_texel_bytes(cb_precision precision); /* 16, 8, 8 */
+CROWDBAKE_API const char *cb_layout_name(cb_layout layout);
+CROWDBAKE_API const char *cb_precision_name(cb_precision precision);
+CROWDBAKE_API bool cb_layout_parse(const char *text, cb_layout *out);
+CROWDBAKE_API bool cb_precision_parse(const char *text, cb_precision *out);
+CROWDBAKE_API uint32_t cb_layout_texels_per_bone(cb_layout layout);
+CROWDBAKE_API uint32_t cb_precision_texel_bytes(cb_precision precision); /* 16, 8, 8 */
 
 /* Where a bake's texels go: memory the caller provides (say, the output file's payload, mapped,
  * so that the texels are encoded where they are written). acquire(ctx, p) gets the planned
@@ -63,7 +65,7 @@ typedef struct cb_bake_options {
 #define CB_ERROR_ROWS 1024u
 #define CB_ERROR_BUDGET (4u << 20)
 
-cb_bake_options cb_default_bake_options(void);
+CROWDBAKE_API cb_bake_options cb_default_bake_options(void);
 
 typedef struct cb_palette_clip {
     const char *name;        /* owned by the model the palette was baked from */
@@ -123,36 +125,39 @@ static inline double cb_clip_plan_fps(const cb_clip_plan *clip, double fps) { re
 /* Samples the planned clips (every clip, in file order, when plan is NULL) of the sampler's
  * skin and encodes them. The palette references names in the model and the plan: free it
  * before them. */
-cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *options, const cb_clip_plan *plan,
-                          uint32_t plan_count, cb_palette *out, cb_error *err);
-void cb_palette_free(cb_palette *palette);
+CROWDBAKE_API cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *options, const cb_clip_plan *plan,
+                                        uint32_t plan_count, cb_palette *out, cb_error *err);
+CROWDBAKE_API void cb_palette_free(cb_palette *palette);
 
 /* Texel coordinates of a bone's first texel in a baked row. */
-void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint32_t *x, uint32_t *y);
+CROWDBAKE_API void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint32_t *x, uint32_t *y);
 
 /* Decodes one bone of one row back to a 4x4 column-major matrix. texels points at the
  * palette's texel data (as in cb_palette, or mapped from a file). */
-void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16]);
+CROWDBAKE_API void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone,
+                                     double out[16]);
 /* The bone's 4 x texels_per_bone values as a shader reads them (u16 already scaled; relative
  * positions with the bind position added back, as the shader does under CB_POSITIONS_RELATIVE). */
-void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double v[16]);
+CROWDBAKE_API void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone,
+                                            double v[16]);
 /* Those values (or a blend of two rows of them) as a 4x4 matrix. */
-void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const double v[16], double out[16]);
+CROWDBAKE_API void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bone, const double v[16], double out[16]);
 /* What the shipped shaders compute for a bone between two rows: the rows' values blended by
  * fr (0: row0, 1: row1) - matrices term by term, qpos quaternions the shorter way round (a
  * hemisphere flip) and normalized - as a 4x4 matrix. */
-void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr, uint32_t bone,
-                      double out[16]);
+CROWDBAKE_API void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr,
+                                    uint32_t bone, double out[16]);
 
 /* Moves each of `frames` rows (bones x values floats each) outward by half the sagitta of the
  * linear blend over its intervals: mids holds the exact values halfway through each interval
  * (frames of them for a loop, whose last interval wraps to row 0; frames - 1 otherwise). qpos
  * rows (8 values: quaternion, position, scale) keep unit quaternions. */
-void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones, uint32_t values, bool loops, bool qpos);
+CROWDBAKE_API void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones, uint32_t values,
+                               bool loops, bool qpos);
 
 /* ---- conversions ---- */
-uint16_t cb_float_to_half(float f);
-float cb_half_to_float(uint16_t h);
+CROWDBAKE_API uint16_t cb_float_to_half(float f);
+CROWDBAKE_API float cb_half_to_float(uint16_t h);
 
 #ifdef __cplusplus
 }

@@ -5,6 +5,8 @@
 #ifndef CB_RUNTIME_H
 #define CB_RUNTIME_H
 
+#include "export.h"
+
 #include "palette.h"
 
 #ifdef __cplusplus
@@ -19,11 +21,12 @@ typedef struct cb_instance {
 
 /* fpos = time * rate + phase * frames, wrapped (loops) or clamped (one-shots) to the clip; the
  * two rows blended and the weight of the second. */
-void cb_runtime_frame(const cb_instance *in, double time, uint32_t *row0, uint32_t *row1, double *fr);
+CROWDBAKE_API void cb_runtime_frame(const cb_instance *in, double time, uint32_t *row0, uint32_t *row1, double *fr);
 
 /* The bone transforms at `time` (16 doubles per bone): the two rows' values blended - matrices
  * term by term, qpos quaternions by normalized lerp after a hemisphere flip - then as matrices. */
-void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_instance *in, double time, double *out);
+CROWDBAKE_API void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_instance *in, double time,
+                                       double *out);
 
 /* Verification of one clip: the runtime's skinned mesh against exact skinning from the model. */
 typedef struct cb_clip_error {
@@ -35,8 +38,8 @@ typedef struct cb_clip_error {
 
 /* `animation` is the model's clip baked as palette clip `clip`; random_times are drawn from a
  * fixed-seed generator, so results repeat. */
-cb_status cb_verify_clip(cb_sampler *sampler, const cb_palette *p, const void *texels, uint32_t clip, int32_t animation,
-                         uint32_t random_times, cb_clip_error *out, cb_error *err);
+CROWDBAKE_API cb_status cb_verify_clip(cb_sampler *sampler, const cb_palette *p, const void *texels, uint32_t clip,
+                                       int32_t animation, uint32_t random_times, cb_clip_error *out, cb_error *err);
 
 /* Error-driven frame rate: the lowest of the candidate rates (common rates from 2 fps, and the
  * clip's key rate with its multiples and fractions, up to max_fps) at which the clip, baked
@@ -44,8 +47,8 @@ cb_status cb_verify_clip(cb_sampler *sampler, const cb_palette *p, const void *t
  * clip->fit says), has a visible error (cb_palette's: the encoding, and the blend between rows)
  * within max_error (model units). Binary search: the error falls as the rate rises. Returns
  * max_fps (and *met = false) when none does; *error is the error at the rate returned. */
-double cb_choose_clip_fps(cb_sampler *sampler, const cb_bake_options *options, const cb_clip_plan *clip, double max_error,
-                          double max_fps, bool *met, double *error, cb_error *err);
+CROWDBAKE_API double cb_choose_clip_fps(cb_sampler *sampler, const cb_bake_options *options, const cb_clip_plan *clip,
+                                        double max_error, double max_fps, bool *met, double *error, cb_error *err);
 
 /* The highest rate an error-bounded clip bakes at unless its goal says otherwise: every clip of
  * Cow, Fox and the samples (in place) meets 1 mm/m under it (Cow's Attack_Kick and Fox's Run
@@ -78,8 +81,8 @@ typedef struct cb_rate_choice {
  * first, then fitted rows under that rate; the fewer rows win, sampled on a tie (they are the
  * exact poses). Rates the probes so far predict far over the goal are not baked (runtime.c).
  * out (optional) says what each choice reached. */
-cb_status cb_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan, uint32_t count,
-                          const cb_rate_goal *goals, cb_rate_choice *out, cb_error *err);
+CROWDBAKE_API cb_status cb_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan,
+                                        uint32_t count, const cb_rate_goal *goals, cb_rate_choice *out, cb_error *err);
 
 #ifdef __cplusplus
 }

@@ -11,6 +11,8 @@
 #ifndef CB_STRIDE_H
 #define CB_STRIDE_H
 
+#include "export.h"
+
 #include "core.h"
 
 #ifdef __cplusplus
@@ -57,7 +59,7 @@ typedef struct cb_stride {
 
 /* Analyses clip `clip` (framed by cb_clip_analyze on this sampler, so a loop without a closing
  * key wraps). Without a skinned mesh the feet are the lowest leaf joints. */
-void cb_stride_measure(cb_sampler *sampler, const cb_clip_info *clip, cb_stride *out);
+CROWDBAKE_API void cb_stride_measure(cb_sampler *sampler, const cb_clip_info *clip, cb_stride *out);
 
 #ifdef __cplusplus
 }

@@ -4,6 +4,8 @@
 #ifndef CB_VAT_H
 #define CB_VAT_H
 
+#include "export.h"
+
 #include "budget.h"
 
 #ifdef __cplusplus
@@ -23,13 +25,13 @@ typedef struct cb_vat {
 } cb_vat;
 
 /* Texel of vertex v in frame f. */
-void cb_vat_texel_xy(const cb_vat *vat, uint32_t frame, uint64_t vertex, uint32_t *x, uint32_t *y);
+CROWDBAKE_API void cb_vat_texel_xy(const cb_vat *vat, uint32_t frame, uint64_t vertex, uint32_t *x, uint32_t *y);
 
 /* Bakes (store = true) or only measures the error of a VAT of the planned clips (every clip
  * when plan is NULL). Fails when the texture exceeds options->max_texture_size. */
-cb_status cb_vat_bake(cb_sampler *sampler, const cb_bake_options *options, const cb_clip_plan *plan, uint32_t plan_count,
-                      bool store, cb_vat *out, cb_error *err);
-void cb_vat_free(cb_vat *vat);
+CROWDBAKE_API cb_status cb_vat_bake(cb_sampler *sampler, const cb_bake_options *options, const cb_clip_plan *plan,
+                                    uint32_t plan_count, bool store, cb_vat *out, cb_error *err);
+CROWDBAKE_API void cb_vat_free(cb_vat *vat);
 
 #ifdef __cplusplus
 }

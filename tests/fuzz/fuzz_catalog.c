@@ -1,7 +1,7 @@
 /* fuzz_catalog.c - libFuzzer target: the TOML catalog parser and its validation. */
 #include <stdint.h>
 
-#include "crowdbake/catalog_toml.h"
+#include "catalog/catalog_toml.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

@@ -4,7 +4,7 @@
  * `verify`, `view` and the runtimes decode it (cb_palette_view, fuzz_decode.h). */
 #include <stdint.h>
 
-#include "../../formats/crowdbake_pal.h" /* the implementation is in libcrowdbake, with zstd */
+#include "crowdbake_pal.h" /* the implementation is in libcrowdbake, with zstd */
 #include "crowdbake/pal_view.h"
 #include "fuzz_decode.h"
 

@@ -18,10 +18,9 @@ int main(int argc, char **argv)
     cb_model *model = cb_gltf_load(argv[1], &limits, &err);
     if (!model) return fprintf(stderr, "bake_model: %s\n", err.message), 1;
     cb_bake_job job;
-    memset(&job, 0, sizeof job);
+    cb_bake_job_init(&job); /* its size, the default settings and limits */
     job.model = model;
     job.skin = 0;
-    job.settings = cb_default_bake_settings();
     job.limits = limits;
     job.threads = 2;
     job.pal_path = argv[2];

@@ -1,0 +1,408 @@
+/* bake_job.c - see bake.h: the one place where a bake's policy is decided. */
+#include "crowdbake/bake.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "crowdbake_pal.h" /* XXH64 */
+#include "crowdbake/exr.h"
+#include "crowdbake/ktx2.h"
+#include "crowdbake/babylon.h"
+#include "crowdbake/pal_write.h"
+#include "../core/palette_bake.h" /* palette_choose_rates, the search's poses kept for the bake */
+#include "../core/pose_cache.h"
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* ---- settings ---- */
+
+cb_bake_settings cb_default_bake_settings(void)
+{
+    cb_bake_settings s;
+    memset(&s, 0, sizeof s);
+    s.fps = 30; /* a fixed rate's, when fps_auto is turned off */
+    s.fps_auto = true;
+    s.max_error_mm = 1;
+    s.max_fps = CB_AUTO_MAX_FPS;
+    s.layout = CB_LAYOUT_QPOS;
+    s.precision = CB_PRECISION_U16;
+    s.formats = CB_FORMAT_PAL;
+    s.max_texture_size = 16384;
+    s.root_motion = CB_ROOT_MOTION_KEEP;
+    return s;
+}
+
+bool cb_root_motion_parse(const char *text, cb_root_motion *out)
+{
+    if (strcmp(text, "keep") == 0) return *out = CB_ROOT_MOTION_KEEP, true;
+    if (strcmp(text, "in-place") == 0) return *out = CB_ROOT_MOTION_IN_PLACE, true;
+    return false;
+}
+
+const char *cb_root_motion_name(cb_root_motion root_motion)
+{
+    return root_motion == CB_ROOT_MOTION_IN_PLACE ? "in-place" : "keep";
+}
+
+unsigned cb_formats_parse(const char *text)
+{
+    if (strcmp(text, "both") == 0) return CB_FORMAT_PAL | CB_FORMAT_EXR;
+    static const char *const names[4] = {"pal", "exr", "ktx2", "babylon"};
+    unsigned formats = 0;
+    for (const char *w = text;; ++w) {
+        size_t n = strcspn(w, ",");
+        unsigned bit = 0;
+        for (unsigned k = 0; k < 4; ++k)
+            if (strlen(names[k]) == n && strncmp(w, names[k], n) == 0) bit = 1u << k;
+        if (!bit || (formats & bit)) return 0;
+        formats |= bit;
+        if (!w[n]) return formats;
+        w += n;
+    }
+}
+
+bool cb_fps_valid(double fps) { return fps > 0 && fps <= CB_FPS_LIMIT; }
+bool cb_max_fps_valid(double max_fps) { return max_fps >= CB_MAX_FPS_LOWEST && max_fps <= CB_FPS_LIMIT; }
+
+bool cb_bake_settings_writable(const cb_bake_settings *s)
+{
+    return !((s->formats & (CB_FORMAT_EXR | CB_FORMAT_KTX2 | CB_FORMAT_BABYLON)) && s->precision_set && s->precision == CB_PRECISION_U16);
+}
+
+cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned format, const cb_limits *limits,
+                                         uint32_t threads)
+{
+    cb_bake_options o = cb_default_bake_options();
+    if (limits) o.limits = *limits;
+    o.fps = s->fps;
+    o.layout = s->layout;
+    /* EXR and KTX2 hold half or float; half misses 0.5 mm/m on the samples, so float unless asked. */
+    o.precision = s->precision_set || format == CB_FORMAT_PAL ? s->precision : CB_PRECISION_FLOAT;
+    o.max_texture_size = s->max_texture_size;
+    o.root_motion = s->root_motion;
+    o.threads = threads ? threads : 1;
+    o.affine_fallback = !s->layout_set; /* a rig qpos cannot hold bakes affine, unless a layout was asked for */
+    o.fit = s->fit_rows;
+    o.measure_all = s->measure_all;
+    /* Babylon.js's baked vertex animation texture holds Float32 4x4 matrices: bake them exactly so. */
+    if (format == CB_FORMAT_BABYLON) o.layout = CB_LAYOUT_MAT4, o.precision = CB_PRECISION_FLOAT, o.affine_fallback = false;
+    return o;
+}
+
+/* The first format the job writes: its options choose the rates. */
+static unsigned first_format(const cb_bake_job *job)
+{
+    unsigned f = job->settings.formats;
+    return (f & CB_FORMAT_PAL) || !f ? CB_FORMAT_PAL
+           : (f & CB_FORMAT_EXR)     ? CB_FORMAT_EXR
+           : (f & CB_FORMAT_KTX2)    ? CB_FORMAT_KTX2
+                                     : CB_FORMAT_BABYLON;
+}
+
+/* ---- the input hash ---- */
+
+static void hash_str(cbpal_xxh64_state *h, const char *s) { cbpal_xxh64_update(h, s, strlen(s) + 1); }
+
+uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
+{
+    cbpal_xxh64_state h;
+    cbpal_xxh64_init(&h);
+    const cb_model *m = job->model;
+    if (job->origin) {
+        const cb_bake_origin *g = job->origin;
+        cbpal_xxh64_update(&h, &g->content_key, sizeof g->content_key);
+        hash_str(&h, g->canonical);
+        cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
+        for (uint32_t i = 0; i < g->lod_count; ++i)
+            cbpal_xxh64_update(&h, &g->lods[i]->source_hash, sizeof g->lods[i]->source_hash);
+        return cbpal_xxh64_digest(&h);
+    }
+    char opts[320], chosen[96] = ""; /* error-bounded rates: the goal chooses them (a fixed fps: as before it) */
+    if (job->settings.fps_auto)
+        snprintf(chosen, sizeof chosen, " auto max_error=%.17g max_fps=%.17g", job->settings.max_error_mm,
+                 job->settings.max_fps);
+    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s\n",
+                     CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
+                     o->max_texture_size, (int)o->root_motion, job->skin, job->settings.zstd,
+                     job->settings.exr_compression, o->fit ? " fit-rows" : "", o->measure_all ? " measure-all" : "", chosen);
+    cbpal_xxh64_update(&h, opts, (size_t)n);
+    cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
+    return cbpal_xxh64_digest(&h);
+}
+
+/* ---- planning: the clips and their rates ---- */
+
+bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t i) { return job->clip_settings[i].fps_auto; }
+
+double cb_bake_job_clip_fps(const cb_bake_job *job, uint32_t i)
+{
+    return job->clip_settings[i].fps_auto ? job->plan[i].fps : job->clip_settings[i].fps;
+}
+
+/* Every clip's settings, resolved once (clip_settings.h): a catalog's clip entries are its
+ * own; the plan's own values otherwise came from the front end (a single model's --loop). */
+static void resolve_clips(cb_bake_job *job)
+{
+    bool measurable = cb_model_skin_vertex_count(job->model, job->skin) > 0;
+    cb_setting_from clip_from = job->clip_requests ? CB_FROM_CLIP : CB_FROM_COMMAND_LINE;
+    for (uint32_t i = 0; i < job->plan_count; ++i)
+        cb_resolve_clip_settings(&job->settings, &job->plan[i], job->clip_requests ? &job->clip_requests[i] : NULL,
+                                 clip_from, measurable, &job->clip_settings[i]);
+}
+
+/* Clip i's goal when its rate is chosen by error: the fewest rows within its budget, fitted or
+ * sampled (every clip fitted under fit_rows, cb_bake_options.fit). */
+static bool clip_goal(const cb_bake_job *job, uint32_t i, cb_rate_goal *goal)
+{
+    const cb_clip_settings *c = &job->clip_settings[i];
+    if (!c->fps_auto) return false;
+    *goal = (cb_rate_goal){c->max_error_mm, c->max_fps, CB_ROWS_BEST};
+    return true;
+}
+
+static void free_search_poses(cb_bake_job *job)
+{
+    pose_cache **poses = job->search_poses;
+    for (uint32_t i = 0; poses && i < job->plan_count; ++i) pose_cache_free(poses[i]);
+    free(poses);
+    job->search_poses = NULL;
+}
+
+void cb_bake_job_init(cb_bake_job *job)
+{
+    memset(job, 0, sizeof *job);
+    job->size = sizeof *job;
+    job->settings = cb_default_bake_settings();
+    job->limits = cb_default_limits();
+}
+
+cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
+{
+    /* The one size there is so far; a later MINOR that adds fields also takes this size and
+     * gives the fields it lacks their defaults. */
+    if (job->size != sizeof *job)
+        return cb_fail(err, CB_ERR_INTERNAL,
+                       "cb_bake_job.size is %zu, but this libcrowdbake's job is %zu bytes: start the job with "
+                       "cb_bake_job_init, and build against the headers of the library it runs with",
+                       job->size, sizeof *job);
+    if (job->planned) return CB_OK;
+    const cb_model *m = job->model;
+    uint32_t n = job->clips ? job->clip_count : m->animation_count;
+    free_search_poses(job);
+    free(job->plan), free(job->rates), free(job->clip_settings);
+    job->plan = calloc(n ? n : 1, sizeof *job->plan);
+    job->rates = calloc(n ? n : 1, sizeof *job->rates);
+    job->clip_settings = calloc(n ? n : 1, sizeof *job->clip_settings);
+    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
+    if (!job->plan || !job->rates || !job->clip_settings || !goals) {
+        free(goals);
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    }
+    bool any = false;
+    for (uint32_t i = 0; i < n; ++i) job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false};
+    job->plan_count = n;
+    resolve_clips(job);
+    for (uint32_t i = 0; i < n; ++i) any |= clip_goal(job, i, &goals[i]);
+    if (any) {
+        cb_sampler *s = cb_sampler_create(m, job->skin, err);
+        cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
+        job->search_poses = calloc(n ? n : 1, sizeof(pose_cache *)); /* NULL: nothing kept, as slow */
+        if (s) palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_poses, err);
+        cb_sampler_free(s);
+    }
+    free(goals);
+    job->planned = !err->status;
+    return err->status;
+}
+
+/* ---- the bake ---- */
+
+/* A loop whose root travels jumps back by its travel over one loop where it wraps. Under 1% of
+ * the model's height (10 mm/m, a third of a typical bake's visible blending error) that jump is
+ * root jitter of an in-place clip, not travel worth a note. */
+static bool loop_travel_visible(const cb_palette *p, const cb_palette_clip *clip)
+{
+    double travel = clip->ground_speed * clip->duration;
+    return clip->loops && travel > 0 && travel > 0.01 * p->model_height;
+}
+
+/* What the user should know about a bake: the layout's fallback, loops that travel, quaternion
+ * flips. */
+static void bake_notes(const cb_bake_options *o, const cb_palette *p, cb_warnings *w)
+{
+    if (p->fallback_note[0]) cb_warn(w, "note", "%s", p->fallback_note);
+    for (uint32_t c = 0; o->root_motion == CB_ROOT_MOTION_KEEP && c < p->clip_count; ++c) {
+        if (loop_travel_visible(p, &p->clips[c]))
+            cb_warn(w, "note", "clip '%s' loops and travels %.3g units/s: blending its last row into its first pulls the "
+                    "body back; for crowds moved by the game, bake with --root-motion in-place", p->clips[c].name,
+                    p->clips[c].ground_speed);
+    }
+    if (p->quat_hemisphere_breaks)
+        cb_warn(w, "note", "%u bone(s) turn a full circle over a loop, so their last and first rows lie in opposite "
+                "quaternion hemispheres; the shipped shaders flip before blending", p->quat_hemisphere_breaks);
+}
+
+static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pal_mapping *mapping, cb_bake_output *out,
+                              cb_error *err)
+{
+    double t0 = now_seconds();
+    if (out->format == CB_FORMAT_PAL) {
+        cb_pal_write_options po = {job->settings.zstd, 0, out->input_hash, (float)job->speed_reference,
+                                   job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE};
+        if (cb_pal_mapping_holds(mapping, p)) cb_pal_write_mapped(mapping, p, &po, err);
+        else cb_pal_write(out->path, p, job->model, job->skin, &po, err);
+    } else if (out->format == CB_FORMAT_EXR) {
+        cb_exr_write(out->path, p, job->model, job->skin, job->settings.exr_compression, out->input_hash,
+                     (float)job->speed_reference, err);
+    } else if (out->format == CB_FORMAT_KTX2) {
+        cb_ktx2_write(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference, err);
+    } else {
+        cb_babylon_write(out->path, p, job->model, job->skin, (float)job->speed_reference,
+                         job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE, err);
+    }
+    out->seconds_write = now_seconds() - t0;
+    struct stat st;
+    out->file_bytes = !err->status && stat(out->path, &st) == 0 ? (uint64_t)st.st_size : 0;
+    return err->status;
+}
+
+/* Every clip against its budget in the palette baked: what a player sees of each. An
+ * error-bounded clip met it baked alone; in the palette its u16 box is the palette's, wider,
+ * so its encoding errs a little more: the palette is what is promised. */
+static cb_status check_budgets(const cb_bake_job *job, const cb_palette *p, cb_bake_result *out, cb_error *err)
+{
+    out->budgets = calloc(p->clip_count ? p->clip_count : 1, sizeof *out->budgets);
+    if (!out->budgets) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    out->budget_count = p->clip_count;
+    for (uint32_t i = 0; i < p->clip_count; ++i) {
+        cb_clip_budget *b = &out->budgets[i];
+        b->max_error_mm = job->clip_settings[i].max_error_mm;
+        b->error_mm = cb_mm_per_m(p->clips[i].visible_error, p->model_height);
+        b->over = b->max_error_mm > 0 && b->error_mm > b->max_error_mm;
+        b->fps = p->clips[i].fps, b->rows = p->clips[i].frames, b->fitted = p->clips[i].fitted;
+        if (job->settings.root_motion == CB_ROOT_MOTION_KEEP && loop_travel_visible(p, &p->clips[i]))
+            b->travel = p->clips[i].ground_speed * p->clips[i].duration;
+        out->over_budget += b->over;
+    }
+    if (!out->over_budget || job->settings.allow_over_budget) return CB_OK;
+    return cb_fail_setting(err, CB_ERR_VERIFY, CB_SETTING_ALLOW_OVER_BUDGET, "%s: %u of %u clip%s over its error budget "
+                           "(max_error), each listed; nothing was written", job->model->source, out->over_budget,
+                           p->clip_count, p->clip_count == 1 ? "" : "s");
+}
+
+/* An error-bounded clip that met its budget baked alone can miss it in the palette by a hair:
+ * u16 quantizes positions in the palette's box, wider than the clip's own (Fox's Walk: 0.996
+ * mm/m alone, 1.0004 in the palette). Such clips are searched again, once, against their budget
+ * less 1.5 times what the palette added; true when any was (the palette is then baked again). */
+static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette *p, cb_error *err)
+{
+    uint32_t n = job->plan_count;
+    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
+    cb_rate_choice *fresh = calloc(n ? n : 1, sizeof *fresh);
+    bool any = false;
+    for (uint32_t i = 0; goals && fresh && i < n && i < p->clip_count; ++i) {
+        const cb_clip_settings *c = &job->clip_settings[i];
+        double budget = c->max_error_mm, e = cb_mm_per_m(p->clips[i].visible_error, p->model_height);
+        double tighter = budget - 1.5 * (e - job->rates[i].error_mm);
+        if (!c->fps_auto || !job->rates[i].met || !(e > budget) || !(tighter > 0)) continue;
+        goals[i] = (cb_rate_goal){tighter, c->max_fps, CB_ROWS_BEST};
+        any = true;
+    }
+    if (any) {
+        cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
+        palette_choose_rates(s, &o, job->plan, n, goals, fresh, job->search_poses, err);
+        for (uint32_t i = 0; i < n && !err->status; ++i)
+            if (goals[i].max_error_mm > 0) job->rates[i] = fresh[i];
+    }
+    free(goals), free(fresh);
+    return any;
+}
+
+/* The plan as baked: every clip at its resolved rate (the palette's "0: the options' fps" is for
+ * callers without a job), into `baked` (plan_count entries). */
+static void resolved_plan(const cb_bake_job *job, cb_clip_plan *baked)
+{
+    for (uint32_t i = 0; i < job->plan_count; ++i) baked[i] = job->plan[i], baked[i].fps = cb_bake_job_clip_fps(job, i);
+}
+
+cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (cb_bake_job_plan(job, err)) return err->status;
+    cb_clip_plan *baked = malloc((job->plan_count ? job->plan_count : 1) * sizeof *baked);
+    if (!baked) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    cb_sampler *s = cb_sampler_create(job->model, job->skin, err);
+    if (!s) return free(baked), err->status;
+    cb_release_free_memory(); /* before the palette's buffers: the load's freed memory */
+    static const unsigned formats[4] = {CB_FORMAT_PAL, CB_FORMAT_EXR, CB_FORMAT_KTX2, CB_FORMAT_BABYLON};
+    const char *paths[4] = {job->pal_path, job->exr_path, job->ktx2_path, job->babylon_path};
+    cb_palette shared = {0}; /* the last palette baked, written again by a format of the same options */
+    cb_bake_options shared_opt = {0};
+    /* A lone uncompressed .pal is baked into its own file's payload, mapped: no copy to write,
+     * and 29 MB less fresh memory on the big rig. (Other formats convert the texels as they
+     * write them, and zstd compresses them: those bake into memory of their own.) */
+    cb_pal_mapping mapping;
+    cb_pal_mapping_init(&mapping, job->pal_path, job->model, job->skin);
+    bool mapped = job->settings.formats == CB_FORMAT_PAL && !job->settings.zstd && job->pal_path, replanned = false;
+    for (int f = 0; f < 4 && !err->status; ++f) {
+        if (!(job->settings.formats & formats[f])) continue;
+        cb_bake_output *o = &out->outputs[out->output_count];
+        o->format = formats[f];
+        o->path = paths[f];
+        cb_bake_options opt = cb_bake_settings_options(&job->settings, formats[f], &job->limits, job->threads);
+        if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
+        if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout) {
+            cb_palette_free(&shared);
+            palette_probe kept = {NULL, NULL, job->search_poses}; /* what the rate search sampled */
+            resolved_plan(job, baked);
+            if (palette_bake_with_facts(s, &opt, baked, job->plan_count, NULL, &kept, &shared, err)) break;
+            shared_opt = opt;
+        }
+        o->palette = shared; /* its facts; the tables and texels stay with `shared` */
+        o->palette.clips = NULL, o->palette.bind_positions = NULL, o->palette.texels = NULL;
+        o->palette.position_offsets = NULL;
+        out->output_count++;
+        o->input_hash = cb_bake_input_hash(job, &opt);
+        if (out->output_count == 1 && !replanned && (replanned = true) && replan_clips_over(job, s, &shared, err)) {
+            out->output_count = 0, --f; /* baked again with the clips' new rates */
+            cb_palette_free(&shared);
+            continue;
+        }
+        if (out->output_count == 1 && check_budgets(job, &shared, out, err)) {
+            out->output_count = 0; /* nothing written */
+            break;
+        }
+        if (out->output_count == 1) bake_notes(&opt, &shared, &out->notes);
+        write_output(job, &shared, &mapping, o, err);
+    }
+    cb_pal_mapping_abort(&mapping); /* a bake that failed: its temporary */
+    cb_palette_free(&shared);
+    cb_sampler_free(s);
+    free(baked); /* after the palette, which references it */
+    return err->status;
+}
+
+void cb_bake_result_free(cb_bake_result *r)
+{
+    for (uint32_t i = 0; i < r->output_count; ++i) cb_palette_free(&r->outputs[i].palette);
+    cb_warnings_free(&r->notes);
+    free(r->budgets);
+    memset(r, 0, sizeof *r);
+}
+
+void cb_bake_job_free(cb_bake_job *job)
+{
+    free_search_poses(job);
+    free(job->plan), free(job->rates), free(job->clip_settings);
+    job->plan = NULL, job->rates = NULL, job->clip_settings = NULL;
+    job->plan_count = 0;
+    job->planned = false;
+}

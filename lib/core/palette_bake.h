@@ -1,0 +1,249 @@
+/* palette_bake.h - what the palette bake's files share (private to libcrowdbake): the
+ * per-thread scratch and the bake's state, the u16 value ranges, and the passes that live in
+ * files of their own: the rows (palette_rows.c), texel encoding (palette_codec.c), the plan
+ * (palette_plan.c) and the error measure (palette_error.c). palette.c runs them. */
+#ifndef CB_PALETTE_BAKE_H
+#define CB_PALETTE_BAKE_H
+
+#include <math.h>
+
+#include "crowdbake/palette.h"
+#include "cb_math.h"
+#include "pose_cache.h"
+#include "vertex_groups.h"
+
+/* Canonical floats per bone and row before the final encoding: the upper 3x4 of the matrix
+ * by rows (mat4, affine), or quaternion, position and scale (qpos). */
+/* Floats per bone per row before encoding: the texels' values (qpos uses 8 of them). */
+#define CANON(layout) ((layout) == CB_LAYOUT_QPOS ? 8u : 12u)
+
+/* What u16 quantization needs of the values: the box of the translations (or positions) and
+ * the largest linear term (or qpos scale). Kept per clip while sampling, merged after. */
+typedef struct value_range {
+    float lo[3], hi[3], linear;
+} value_range;
+
+static inline void range_reset(value_range *r)
+{
+    for (int k = 0; k < 3; ++k) r->lo[k] = INFINITY, r->hi[k] = -INFINITY;
+    r->linear = 0;
+}
+
+/* Compares, not fminf/fmaxf: the values are finite and the compares inline. A qpos bone's
+ * position and scale, written out per axis so a local range stays in registers. */
+static inline void range_grow_qpos(value_range *r, const float *v)
+{
+    r->lo[0] = v[4] < r->lo[0] ? v[4] : r->lo[0];
+    r->lo[1] = v[5] < r->lo[1] ? v[5] : r->lo[1];
+    r->lo[2] = v[6] < r->lo[2] ? v[6] : r->lo[2];
+    r->hi[0] = v[4] > r->hi[0] ? v[4] : r->hi[0];
+    r->hi[1] = v[5] > r->hi[1] ? v[5] : r->hi[1];
+    r->hi[2] = v[6] > r->hi[2] ? v[6] : r->hi[2];
+    r->linear = v[7] > r->linear ? v[7] : r->linear;
+}
+
+/* An affine or mat4 bone's 12 canonical values (3 rows of 4). */
+static inline void range_grow_affine(value_range *r, const float *v)
+{
+    for (int k = 0; k < 3; ++k) {
+        float t = v[k * 4 + 3];
+        if (t < r->lo[k]) r->lo[k] = t;
+        if (t > r->hi[k]) r->hi[k] = t;
+    }
+    for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k)
+            if (fabsf(v[i * 4 + k]) > r->linear) r->linear = fabsf(v[i * 4 + k]);
+}
+
+/* Per-thread scratch: each worker samples its own clips with its own sampler. */
+typedef struct worker {
+    cb_sampler *sampler;
+    double *mats;        /* bones * 16 */
+    double *lanes;       /* bones * 8 lanes of CB_SAMPLE_BATCH: the joints' similarities (cb_clip_frame_lanes), for
+                          * qpos rows of similarity rigs and their measurement */
+    cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
+    float *rows;         /* pre-encoding rows: CB_SAMPLE_BATCH of them, or a whole clip's for a fitted one */
+    uint32_t rows_held;  /* the rows `rows` has room for */
+    float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
+    struct measure_scratch *measure; /* palette_error.c's, made by the worker's first measurement job */
+} worker;
+
+typedef struct bake_state {
+    cb_palette *p;
+    const cb_model *model;
+    int32_t skin;
+    const cb_bake_options *opt;
+    const cb_clip_info *infos;
+    /* Each worker samples a clip's rows into its own buffer and encodes them from there. u16
+     * waits for the ranges of every clip, half for the position offsets: until then the values
+     * wait in the texels, and what does not fit there in the stash (palette_stash_bytes per
+     * bone and row: qpos's encoded quaternions, the rest of mat4's and affine's floats). */
+    unsigned char *stash;
+    uint32_t max_clip_frames;
+    const double *radius;  /* bones: bind-space reach of the vertices each joint moves, or -1 (the skin's facts) */
+    uint32_t *breaks;      /* clips: hemisphere breaks at the loop wrap */
+    cb_error *errors;      /* 2 x clips: the first error of each clip, then of measuring its baked rows */
+    uint32_t error_stride; /* measure every n-th row of a clip (and its last) */
+    const cb_vertex_groups *groups; /* the skinned vertices as measuring bounds and skins them (facts') */
+    const struct palette_skin_facts *facts; /* the skin's */
+    double *clip_error;    /* clips: worst vertex error measured */
+    double *clip_blend_error; /* clips: worst vertex error halfway between rows, as the runtime blends them */
+    value_range *ranges;   /* clips: the values' ranges */
+    double *encode_seconds; /* clips: time spent encoding each, when encoded as sampled */
+    pose_cache *poses;      /* the only clip's exact matrices by time, kept across bakes (one thread); or NULL */
+    pose_cache *const *clip_poses; /* or per clip: those its rate search sampled (palette_probe.clip_poses) */
+    const cb_clip_info *analysis; /* the only clip analyzed before the bake, or NULL */
+    cb_sampler *lent;       /* the caller's sampler, for the one worker of a probe's bake; or NULL */
+    struct cb_pool *pool;   /* the threads every pass runs on, or NULL for the caller's alone */
+} bake_state;
+
+/* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
+ * end gives the floats that rounding every candidate would (rounding is monotonic). */
+typedef struct extent {
+    double lo[3], hi[3];
+} extent;
+
+/* Grows a clip's bounds by the sphere a joint's vertices can reach: a vertex weighted to joint
+ * j lies within |A_j| * r_j of c = M_j b_j, so the union over joints bounds the skinned mesh. */
+static inline void grow_bounds(extent *e, cb_vec3 c, double reach)
+{
+    /* Compares, not fmin: no NaN reaches here. Written out per axis, so that a local extent
+     * stays in registers (a loop here is not unrolled at -O2 and keeps it in memory). */
+    e->lo[0] = c.x - reach < e->lo[0] ? c.x - reach : e->lo[0];
+    e->lo[1] = c.y - reach < e->lo[1] ? c.y - reach : e->lo[1];
+    e->lo[2] = c.z - reach < e->lo[2] ? c.z - reach : e->lo[2];
+    e->hi[0] = c.x + reach > e->hi[0] ? c.x + reach : e->hi[0];
+    e->hi[1] = c.y + reach > e->hi[1] ? c.y + reach : e->hi[1];
+    e->hi[2] = c.z + reach > e->hi[2] ? c.z + reach : e->hi[2];
+}
+
+/* The joint's position p = M b of a mat4/affine canonical row (the upper 3x4 by rows), axis r. */
+static inline double row_position(const float *c, const float *b, int r)
+{
+    return (double)c[r * 4] * b[0] + (double)c[r * 4 + 1] * b[1] + (double)c[r * 4 + 2] * b[2] + c[r * 4 + 3];
+}
+
+/* palette_rows.c: `count` (at most CB_SAMPLE_BATCH) qpos rows of clip c from the joint
+ * similarities of frames f, f + 1, ... (sampled into w->lanes), into rows (row f's
+ * first); grows the clip's bounds and st->ranges[c]. */
+void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
+                             extent *clip_bounds);
+
+/* palette_rows.c: row f of clip c from its joint matrices, any layout (qpos checks each is a
+ * similarity), growing the clip's bounds and value range. */
+cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row, extent *bounds,
+                             cb_error *err);
+/* palette_rows.c: the exact values halfway through each row interval of clip c (the clip framed
+ * at twice the steps, odd frames), into mids; quaternions on the side of the row before. */
+cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *rows, float *mids, cb_error *err);
+/* palette_rows.c, for tests: the rows' hemispheres as bone_lanes settles them, sign[i] = -1 or
+ * 1 for CB_SAMPLE_BATCH rows from each row's dot with the one before as stored (dot[0] unused)
+ * and whether row 0 is flipped. */
+void palette_row_signs(const double *dot, bool flip, float *sign);
+
+/* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
+void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
+/* qpos/u16 and qpos/half in place: the quaternions of `count` rows encoded into `stash`, and
+ * the positions and scales staged in their texels as floats (palette_stage_qpos); once every
+ * range and offset is known, those encoded in place and the quaternions copied back
+ * (palette_finish_qpos). */
+void palette_stage_qpos(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count);
+void palette_finish_qpos(cb_palette *p, const unsigned char *stash, uint32_t first, uint32_t count);
+/* mat4 and affine in place, for u16 and half: `count` rows' canonical floats staged in their
+ * texels and the stash (palette_stage_rows), and row r's gathered back, to be encoded
+ * (palette_gather_row). palette_stash_bytes: the stash's bytes per bone and row (qpos too). */
+void palette_stage_rows(cb_palette *p, const float *rows, unsigned char *stash, uint32_t first, uint32_t count);
+void palette_gather_row(const cb_palette *p, const unsigned char *stash, uint32_t r, float *row);
+uint32_t palette_stash_bytes(const cb_palette *p);
+/* Relative half palettes: each bone's position offset, the middle of its positions' range,
+ * from the staged values. False: out of memory. */
+bool palette_position_offsets(cb_palette *p, const unsigned char *stash);
+/* Sets p->bounds_min/max and linear_range from every clip's range. */
+void palette_merge_ranges(cb_palette *p, const value_range *clips);
+
+/* palette_plan.c: the clips' frames and rows (p->clips, *infos_out: st->analysis framed, or
+ * each clip analyzed), the texture's geometry,
+ * each joint's bind-pose position, and the texels no row covers set to zero. */
+cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
+                              cb_clip_info **infos_out, cb_error *err);
+cb_status palette_plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err);
+void palette_bind_positions(const cb_skin *skin, float *bind);
+void palette_zero_padding(cb_palette *p);
+
+/* Every bone's values of one row of p->texels, 16 doubles apart, as cb_palette_decode_values
+ * gives them. */
+void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values);
+/* cb_palette_blend from two rows' decoded values of a bone. */
+void palette_blend_values(const cb_palette *p, uint32_t bone, const double a[16], const double b[16], double fr,
+                          double out[16]);
+
+/* The measurement's jobs: two a clip, its blends and its baked rows, measured apart (st->errors:
+ * the clip's, then the rows' after every clip's); one a clip with an error goal, where the
+ * rows only count above the blends. */
+uint32_t palette_measure_jobs(const bake_state *st);
+/* Measurement job k: the worst vertex errors of its clip at its rows and/or between them
+ * (st->clip_error, st->clip_blend_error). */
+void palette_measure_job(bake_state *st, worker *w, uint32_t k);
+/* A worker's measurement scratch, kept from job to job (a clip's is about 1.4 MB for 200 bones,
+ * fresh memory each time where it was allocated per job). */
+void palette_measure_scratch_free(struct measure_scratch *s);
+
+/* What a bake needs of the skin alone, whatever the clips and the rate: its joints' bind
+ * positions, how far their vertices reach, the vertices grouped for measuring and the rest
+ * pose's height. A search that bakes one skin at many rates (runtime.c) settles them once
+ * instead of once a bake (Cow --fps auto: 60 probe bakes). */
+typedef struct palette_skin_facts {
+    float *bind_positions;   /* bones * 3: each joint's bind-pose position (palette_bind_positions) */
+    double *reach;           /* bones: bind-space distance to the farthest vertex the joint moves; -1: none */
+    bool skinned;            /* some vertex is skinned: there is an error to measure */
+    cb_vertex_groups groups; /* built when skinned */
+    double *group_reach;     /* bones: the largest reach a group gives the joint (0: in none) */
+    double weight_sum;       /* the largest of the groups' weight sums */
+    double height;           /* cb_skin_rest_bounds's */
+} palette_skin_facts;
+
+/* palette_plan.c: the facts of the sampler's skin; palette_skin_facts_free frees them (also
+ * after a failure). */
+cb_status palette_skin_facts_build(cb_sampler *sampler, palette_skin_facts *out, cb_error *err);
+void palette_skin_facts_free(palette_skin_facts *f);
+
+/* palette_rows.c: clip c's joint matrices at `frame` of framing (cb_clip_frame_matrices with the bake's root
+ * motion): from st->poses or the clip's st->clip_poses where they keep them, else sampled into
+ * w->mats (and kept). Valid until the
+ * worker's next call. extra (optional): the kept pose's extra doubles, NULL where not kept. */
+const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, uint32_t frame,
+                                     double **extra);
+/* palette_rows.c: a pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
+ * from its matrices alone too (a probe's rows are rows of the others). */
+pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes);
+
+/* What a search that bakes one clip at many rates (runtime.c) keeps across its bakes. */
+typedef struct palette_probe {
+    pose_cache *poses;            /* the clip's exact matrices by time, or NULL */
+    const cb_clip_info *analysis; /* the clip analyzed once (cb_clip_analyze at any rate, the plan's loop and
+                                   * limits, on the bake's sampler), or NULL */
+    pose_cache *const *clip_poses; /* a bake of the plan's every clip after their rates were searched: per clip
+                                    * the poses its search sampled (entries may be NULL), or NULL. The bake
+                                    * samples again only the times no probe did (Cow's default bake: 43% of
+                                    * its final bake); a clip's measurement then stays on one worker. */
+} palette_probe;
+
+/* cb_choose_rates keeping what each clip's search sampled: kept[i] (NULL: none yet) gets clip
+ * i's pose cache, made or added to, while all the caches together stay under a budget (past it
+ * a clip's is freed and left NULL); NULL kept: none kept. The caller frees the caches. */
+cb_status palette_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan, uint32_t count,
+                               const cb_rate_goal *goals, cb_rate_choice *out, pose_cache **kept, cb_error *err);
+
+/* cb_palette_bake with the skin's facts settled by the caller (palette_skin_facts_build, same
+ * sampler model and skin; NULL: settled here), and a probe's aids (or NULL), used when the bake
+ * is of the plan's one clip on one thread (opt->threads <= 1): its one worker then samples on
+ * `sampler` itself, not on a sampler made for each pass. */
+cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                                  uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
+                                  cb_palette *p, cb_error *err);
+/* palette_error.c: bind-space distance from each joint's bind position (bind: 3 floats a
+ * joint) to the farthest vertex it moves; -1 for joints that move none. False when no vertex
+ * is skinned. */
+bool palette_joint_reach(const float *bind, uint32_t bones, const cb_model *m, int32_t skin, double *radius);
+
+#endif

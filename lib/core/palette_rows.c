@@ -1,0 +1,365 @@
+/* palette_rows.c - where a bake's rows are made: a clip's frame matrices (kept for a search's
+ * probes), rows of any layout from them, the exact mid-rows --fit needs; and qpos rows from joint
+ * similarities: what qpos stores (quaternion, position, scale), with no matrix to build, check
+ * or decompose, for a batch of frames at a time.
+ *
+ * Bone by bone, the batch's frames are lanes (structure of arrays, like the sampler's), so the
+ * rotation of the bind position, the position and the conversions to float vectorize. Each
+ * lane runs cb_quat_rotate's operations in their order: the same bits as one row at a time.
+ * What depends on the rows before - the quaternion's hemisphere, the clip's bounds and value
+ * ranges - is settled after, in frame order, so it comes out as before too. */
+
+#include <math.h>
+#include <string.h>
+
+#include "palette_bake.h"
+#include "sampler.h"
+
+#define B CB_SAMPLE_BATCH
+
+/* ---- rows from joint matrices, any layout ---- */
+
+#define QPOS_TOLERANCE 1e-4 /* relative: scale differences and shear qpos may drop */
+
+/* What qpos takes of a joint matrix, from the matrix alone: the quaternion of its rotation
+ * (either sign) into q[0..3] and its scale into q[4]; fails where it is no similarity. */
+static cb_status qpos_similarity(const double m[16], double q[5], const cb_model *model, const cb_skin *skin,
+                                 uint32_t bone, const char *clip, uint32_t frame, cb_error *err)
+{
+    cb_vec3 c[3] = {{m[0], m[1], m[2]}, {m[4], m[5], m[6]}, {m[8], m[9], m[10]}};
+    double l[3] = {cb_vec3_length(c[0]), cb_vec3_length(c[1]), cb_vec3_length(c[2])};
+    double s = (l[0] + l[1] + l[2]) / 3;
+    const char *why = NULL;
+    if (cb_mat4_determinant3(m) <= 0)
+        why = "a negative (mirroring) scale";
+    else if (fabs(l[0] - s) > QPOS_TOLERANCE * s || fabs(l[1] - s) > QPOS_TOLERANCE * s || fabs(l[2] - s) > QPOS_TOLERANCE * s)
+        why = "a non-uniform scale";
+    else if (fabs(cb_vec3_dot(c[0], c[1])) > QPOS_TOLERANCE * s * s || fabs(cb_vec3_dot(c[0], c[2])) > QPOS_TOLERANCE * s * s ||
+             fabs(cb_vec3_dot(c[1], c[2])) > QPOS_TOLERANCE * s * s)
+        why = "shear";
+    if (why)
+        return cb_fail_setting(err, CB_ERR_LAYOUT, CB_SETTING_LAYOUT,
+                               "%s: joint '%s' has %s (axis scales %.7g, %.7g, %.7g) at frame %u of clip '%s', which the "
+                               "qpos layout cannot represent; use the affine or the mat4 layout",
+                       model->source, model->nodes[skin->joints[bone]].name, why, l[0], l[1], l[2], frame, clip);
+    double r[16], inv = 1 / s;
+    memcpy(r, m, sizeof r);
+    for (int i = 0; i < 12; ++i) r[i] *= inv;
+    cb_quat rot = cb_quat_from_mat4(r);
+    q[0] = rot.x, q[1] = rot.y, q[2] = rot.z, q[3] = rot.w, q[4] = s;
+    return CB_OK;
+}
+
+/* A qpos bone's quaternion and scale (qpos_similarity's q) as canonical floats: the quaternion
+ * on the side of the previous row's (prev), or of w >= 0 for a clip's first row. */
+static CB_CLONE_INLINE void qpos_store(const double q[5], const cb_quat *prev, float out[8])
+{
+    cb_quat rot = {q[0], q[1], q[2], q[3]};
+    if (prev) {
+        if (cb_quat_dot(rot, *prev) < 0) rot = (cb_quat){-rot.x, -rot.y, -rot.z, -rot.w};
+    } else if (rot.w < 0) {
+        rot = (cb_quat){-rot.x, -rot.y, -rot.z, -rot.w};
+    }
+    out[0] = (float)rot.x, out[1] = (float)rot.y, out[2] = (float)rot.z, out[3] = (float)rot.w;
+    out[7] = (float)q[4];
+}
+
+static cb_status qpos_canon(const double m[16], float out[8], const cb_model *model, const cb_skin *skin, uint32_t bone,
+                            const char *clip, uint32_t frame, cb_quat *prev, cb_error *err)
+{
+    double q[5];
+    if (qpos_similarity(m, q, model, skin, bone, clip, frame, err)) return err->status;
+    qpos_store(q, prev, out);
+    return CB_OK;
+}
+
+/* A probe pose's extra doubles (pose_cache.h): 1 when its joints' qpos_similarity follows (5
+ * doubles a joint), NaN before. */
+#define KEPT_QPOS(bones) (1 + 5 * (bones))
+
+pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes)
+{
+    return pose_cache_create(bones, KEPT_QPOS(bones), max_bytes);
+}
+
+const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, uint32_t frame,
+                                     double **extra)
+{
+    double t = cb_clip_frame_time(framing, frame), *out = w->mats;
+    pose_cache *poses = st->poses ? st->poses : st->clip_poses ? st->clip_poses[c] : NULL;
+    double *kept = poses ? (double *)pose_cache_find(poses, t) : NULL;
+    if (!kept && poses) {
+        kept = pose_cache_add(poses, t);
+        if (kept) cb_clip_frame_matrices(w->sampler, framing, frame, st->opt->root_motion, kept);
+    }
+    if (extra) *extra = kept ? kept + (size_t)st->p->bone_count * 16 : NULL;
+    if (kept) return kept;
+    cb_clip_frame_matrices(w->sampler, framing, frame, st->opt->root_motion, out);
+    return out;
+}
+
+/* |A| for the reach: the Frobenius norm of the 3x3, at least its largest stretch. */
+static double frobenius3(const double *M)
+{
+    double norm = 0;
+    for (int k = 0; k < 12; ++k)
+        if (k % 4 != 3) norm += M[k] * M[k];
+    return sqrt(norm);
+}
+
+/* One row from joint matrices: any layout; qpos checks each matrix is a similarity. */
+cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row, extent *bounds,
+                             cb_error *err)
+{
+    cb_palette *p = st->p;
+    cb_palette_clip *clip = &p->clips[c];
+    double *kept; /* the pose's qpos_similarity, where a search keeps it (1 + 5 a joint) */
+    const double *mats = palette_frame_matrices(st, w, c, &st->infos[c], f, &kept);
+    bool derived = kept && kept[0] == 1;
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        const double *M = mats + (size_t)j * 16;
+        const float *b = p->bind_positions + (size_t)j * 3;
+        float *out = row + (size_t)j * CANON(p->layout);
+        cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* the joint now: M b */
+        if (st->radius[j] >= 0) grow_bounds(bounds, pos, st->radius[j] * frobenius3(M));
+        if (p->layout != CB_LAYOUT_QPOS) {
+            for (int r = 0; r < 3; ++r)
+                for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
+            range_grow_affine(&st->ranges[c], out);
+            continue;
+        }
+        double fresh[5], *q = kept ? kept + 1 + (size_t)j * 5 : fresh;
+        if (!derived && qpos_similarity(M, q, st->model, &st->model->skins[st->skin], j, clip->name, f, err))
+            return err->status;
+        qpos_store(q, f ? &w->prev[j] : NULL, out);
+        w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
+        out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
+        range_grow_qpos(&st->ranges[c], out);
+    }
+    if (kept && p->layout == CB_LAYOUT_QPOS) kept[0] = 1; /* every joint's derived: the next probe takes them */
+    return CB_OK;
+}
+
+/* The exact values halfway through each row interval of clip c (the clip framed at twice the
+ * steps, odd frames), into mids; quaternions on the side of the row before. */
+cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *rows, float *mids, cb_error *err)
+{
+    cb_palette *p = st->p;
+    const cb_clip_info *info = &st->infos[c];
+    cb_clip_info framing = *info;
+    framing.steps *= 2;
+    uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
+    for (uint32_t i = 0; i < intervals; ++i) {
+        const double *mats = palette_frame_matrices(st, w, c, &framing, 2 * i + 1, NULL);
+        float *out = mids + (size_t)i * p->bone_count * vals;
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            const double *M = mats + (size_t)j * 16;
+            float *o = out + (size_t)j * vals;
+            if (p->layout != CB_LAYOUT_QPOS) {
+                for (int r = 0; r < 3; ++r)
+                    for (int k = 0; k < 4; ++k) o[r * 4 + k] = (float)M[k * 4 + r];
+                continue;
+            }
+            const float *prev = rows + ((size_t)i * p->bone_count + j) * vals, *b = p->bind_positions + (size_t)j * 3;
+            cb_quat q = {prev[0], prev[1], prev[2], prev[3]};
+            if (qpos_canon(M, o, st->model, &st->model->skins[st->skin], j, p->clips[c].name, i, &q, err))
+                return err->status;
+            cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
+            o[4] = (float)pos.x, o[5] = (float)pos.y, o[6] = (float)pos.z;
+        }
+    }
+    return CB_OK;
+}
+
+/* ---- qpos rows from joint similarities, a batch of frames at a time ---- */
+
+/* The clip's bounds and value ranges grown a lane (a frame) at a time: lane i grown by every
+ * bone of row i in bone order, with the compares of grow_bounds and range_grow_qpos. A compare
+ * keeps the first of equal values (+0 or -0), so lane i holds its row's first extreme; folding
+ * the lanes in frame order after (fold_lanes) then gives the first extreme of all the rows, as
+ * growing row by row, bone by bone, does - and over the lanes the compares vectorize. */
+typedef struct lane_extent {
+    double lo[3][B], hi[3][B];       /* the bounds (grow_bounds) */
+    float vlo[3][B], vhi[3][B], linear[B]; /* the value range (range_grow_qpos) */
+} lane_extent;
+
+static void lane_extent_reset(lane_extent *x)
+{
+    for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < B; ++i)
+            x->lo[k][i] = INFINITY, x->hi[k][i] = -INFINITY, x->vlo[k][i] = INFINITY, x->vhi[k][i] = -INFINITY;
+    for (int i = 0; i < B; ++i) x->linear[i] = -INFINITY; /* no value yet: range_reset's 0 is the clip's */
+}
+
+/* Lanes 0 .. count - 1 folded into the clip's bounds and range, in frame order. */
+static void fold_lanes(const lane_extent *x, uint32_t count, extent *bounds, value_range *range)
+{
+    for (uint32_t i = 0; i < count; ++i)
+        for (int k = 0; k < 3; ++k) {
+            bounds->lo[k] = x->lo[k][i] < bounds->lo[k] ? x->lo[k][i] : bounds->lo[k];
+            bounds->hi[k] = x->hi[k][i] > bounds->hi[k] ? x->hi[k][i] : bounds->hi[k];
+            range->lo[k] = x->vlo[k][i] < range->lo[k] ? x->vlo[k][i] : range->lo[k];
+            range->hi[k] = x->vhi[k][i] > range->hi[k] ? x->vhi[k][i] : range->hi[k];
+        }
+    for (uint32_t i = 0; i < count; ++i) range->linear = x->linear[i] > range->linear ? x->linear[i] : range->linear;
+}
+
+/* Each row's hemisphere, sign[i] = -1 or 1: row 0 flipped when `flip`, and row i flipped when
+ * (flipped(i - 1) ? -dot[i] : dot[i]) < 0. Where no dot[i] (i > 0) is zero or NaN, that is the
+ * sign of a product: row 0's sign times, for each later row up to i, -1 where dot < 0 and 1
+ * where it is above. Products of 1 and -1 are exact, and a prefix product over the lanes in
+ * log2(B) steps vectorizes where the chain of compares did not. A zero or NaN ends the chain
+ * (the row is not flipped whatever came before): it is a 0 in the product, which then ends
+ * in 0, and the rows go one after the other. */
+static CB_CLONE_INLINE void row_signs(const double *dot, bool flip, float *sign)
+{
+    float d[B], p[2][8 + B]; /* p: 8 ones before the lanes, as a shift by up to 8 reads them */
+    /* The compares on floats, 8 to a vector: a double's sign survives the conversion, and one
+     * so small it becomes 0 only sends the rows one by one. */
+    for (int i = 0; i < B; ++i) d[i] = (float)dot[i];
+    for (int i = 0; i < 8; ++i) p[0][i] = p[1][i] = 1;
+    for (int i = 0; i < B; ++i) p[0][8 + i] = d[i] < 0 ? -1.0f : d[i] > 0 ? 1.0f : 0.0f;
+    p[0][8] = flip ? -1.0f : 1.0f; /* lane 0's dot is not used */
+    for (int i = 0; i < B; ++i) p[1][8 + i] = p[0][8 + i] * p[0][7 + i];
+    for (int i = 0; i < B; ++i) p[0][8 + i] = p[1][8 + i] * p[1][6 + i];
+    for (int i = 0; i < B; ++i) p[1][8 + i] = p[0][8 + i] * p[0][4 + i];
+    for (int i = 0; i < B; ++i) sign[i] = p[1][8 + i] * p[1][i];
+    if (sign[B - 1] != 0) return;
+    for (int i = 0; i < B; ++i) {
+        if (i) flip = (flip ? -dot[i] : dot[i]) < 0;
+        sign[i] = flip ? -1.0f : 1.0f;
+    }
+}
+
+#if defined(__GNUC__) /* GCC and clang: vector types and __builtin_shufflevector */
+typedef float v8sf __attribute__((vector_size(32)));
+_Static_assert(B % 8 == 0, "store_rows8 takes a batch's lanes 8 at a time");
+
+/* Lanes first .. first + 7 of a bone's 8 values (v[k][i]: value k of lane i) as 8 rows, to
+ * out + m * stride: an 8x8 transpose of 24 shuffles, and each row one 32-byte store where value
+ * by value took 8 loads and 8 stores a row. Named vectors, not arrays: they stay in registers. */
+static CB_CLONE_INLINE void store_rows8(const float (*v)[B], int first, float *out, size_t stride)
+{
+    v8sf r0, r1, r2, r3, r4, r5, r6, r7;
+    memcpy(&r0, &v[0][first], 32), memcpy(&r1, &v[1][first], 32), memcpy(&r2, &v[2][first], 32);
+    memcpy(&r3, &v[3][first], 32), memcpy(&r4, &v[4][first], 32), memcpy(&r5, &v[5][first], 32);
+    memcpy(&r6, &v[6][first], 32), memcpy(&r7, &v[7][first], 32);
+#define LO(a, b) __builtin_shufflevector(a, b, 0, 8, 1, 9, 4, 12, 5, 13)
+#define HI(a, b) __builtin_shufflevector(a, b, 2, 10, 3, 11, 6, 14, 7, 15)
+    v8sf t0 = LO(r0, r1), t1 = HI(r0, r1), t2 = LO(r2, r3), t3 = HI(r2, r3);
+    v8sf t4 = LO(r4, r5), t5 = HI(r4, r5), t6 = LO(r6, r7), t7 = HI(r6, r7);
+#undef LO
+#undef HI
+#define EVEN(a, b) __builtin_shufflevector(a, b, 0, 1, 8, 9, 4, 5, 12, 13)
+#define ODD(a, b) __builtin_shufflevector(a, b, 2, 3, 10, 11, 6, 7, 14, 15)
+    /* s_m: values 0-3 of rows m and m + 4; s_m4: values 4-7 of them */
+    v8sf s0 = EVEN(t0, t2), s1 = ODD(t0, t2), s2 = EVEN(t1, t3), s3 = ODD(t1, t3);
+    v8sf s04 = EVEN(t4, t6), s14 = ODD(t4, t6), s24 = EVEN(t5, t7), s34 = ODD(t5, t7);
+#undef EVEN
+#undef ODD
+#define ROW(a, b) __builtin_shufflevector(a, b, 0, 1, 2, 3, 8, 9, 10, 11)
+#define ROW4(a, b) __builtin_shufflevector(a, b, 4, 5, 6, 7, 12, 13, 14, 15)
+    v8sf w0 = ROW(s0, s04), w1 = ROW(s1, s14), w2 = ROW(s2, s24), w3 = ROW(s3, s34);
+    v8sf w4 = ROW4(s0, s04), w5 = ROW4(s1, s14), w6 = ROW4(s2, s24), w7 = ROW4(s3, s34);
+#undef ROW
+#undef ROW4
+    memcpy(out, &w0, 32), memcpy(out + stride, &w1, 32), memcpy(out + 2 * stride, &w2, 32);
+    memcpy(out + 3 * stride, &w3, 32), memcpy(out + 4 * stride, &w4, 32), memcpy(out + 5 * stride, &w5, 32);
+    memcpy(out + 6 * stride, &w6, 32), memcpy(out + 7 * stride, &w7, 32);
+}
+
+#endif
+
+/* The first `count` lanes of a bone's 8 values as rows, to out + i * stride. */
+static CB_CLONE_INLINE void store_rows(const float (*v)[B], uint32_t count, float *out, size_t stride)
+{
+    uint32_t first = 0;
+#if defined(__GNUC__)
+    for (; first + 8 <= count; first += 8) store_rows8(v, (int)first, out + first * stride, stride);
+#endif
+    for (; first < count; ++first) /* a clip's last batch, or no vector types: row by row */
+        for (int k = 0; k < 8; ++k) out[first * stride + k] = v[k][first];
+}
+
+/* One bone at frames f .. f + count - 1, its similarities' lanes `sim` (lanes past count repeat
+ * the last frame): its position and reach grow the lanes' bounds, its values their range, its 8
+ * values go into the rows and its last quaternion into w->prev. */
+static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, uint32_t f, uint32_t count,
+                                       const double (*sim)[B], float *rows, lane_extent *x)
+{
+    const cb_palette *p = st->p;
+    uint32_t bones = p->bone_count;
+    const double(*q)[B] = sim, (*t)[B] = sim + 4, *s = sim[7];
+    double dot[B], e[4][B];
+    float fq[4][B + 1], v[8][B], (*fp)[B] = v + 4; /* fq: lane i's quaternion as stored at i + 1 (0 at 0); v: the
+                                                   * rows' values, lanes of quaternion (below), position, scale (fp) */
+    const float *b = p->bind_positions + (size_t)j * 3;
+    double bx = b[0], by = b[1], bz = b[2], radius = st->radius[j];
+    fq[0][0] = fq[1][0] = fq[2][0] = fq[3][0] = 0;
+    for (int i = 0; i < B; ++i) {
+        /* cb_quat_rotate(q, b), written out over the lanes */
+        double uvx = q[1][i] * bz - q[2][i] * by, uvy = q[2][i] * bx - q[0][i] * bz, uvz = q[0][i] * by - q[1][i] * bx;
+        double uuvx = q[1][i] * uvz - q[2][i] * uvy, uuvy = q[2][i] * uvx - q[0][i] * uvz,
+               uuvz = q[0][i] * uvy - q[1][i] * uvx;
+        double rx = bx + 2 * (q[3][i] * uvx + uuvx), ry = by + 2 * (q[3][i] * uvy + uuvy),
+               rz = bz + 2 * (q[3][i] * uvz + uuvz);
+        e[0][i] = t[0][i] + s[i] * rx, e[1][i] = t[1][i] + s[i] * ry, e[2][i] = t[2][i] + s[i] * rz;
+        e[3][i] = radius * s[i] * sqrt(3.0); /* |s R| = sqrt(3) s */
+        fq[0][i + 1] = (float)q[0][i], fq[1][i + 1] = (float)q[1][i], fq[2][i + 1] = (float)q[2][i];
+        fq[3][i + 1] = (float)q[3][i];
+        fp[0][i] = (float)e[0][i], fp[1][i] = (float)e[1][i], fp[2][i] = (float)e[2][i], fp[3][i] = (float)s[i];
+    }
+    /* Lane i's quaternion against lane i - 1's as stored (cb_quat_dot's order). Against the
+     * stored one negated it is exactly the negation (IEEE rounding is symmetric), so the
+     * hemisphere of every row follows from these and the first row's alone. */
+    for (int i = 0; i < B; ++i)
+        dot[i] = q[0][i] * fq[0][i] + q[1][i] * fq[1][i] + q[2][i] * fq[2][i] + q[3][i] * fq[3][i];
+    cb_quat q0 = {q[0][0], q[1][0], q[2][0], q[3][0]};
+    bool flip = f ? cb_quat_dot(q0, w->prev[j]) < 0 : q0.w < 0;
+    float sign[B]; /* each row's hemisphere */
+    row_signs(dot, flip, sign);
+    for (int c = 0; c < 4; ++c)
+        for (int i = 0; i < B; ++i) v[c][i] = sign[i] * fq[c][i + 1];
+    store_rows((const float(*)[B])v, count, rows + (size_t)j * 8, (size_t)bones * 8);
+    /* Every lane grown (those past count repeat the last frame, and fold_lanes reads count). */
+    for (int k = 0; radius >= 0 && k < 3; ++k) /* a joint that moves no vertex bounds nothing */
+        for (int i = 0; i < B; ++i) {
+            double lo = e[k][i] - e[3][i], hi = e[k][i] + e[3][i];
+            x->lo[k][i] = lo < x->lo[k][i] ? lo : x->lo[k][i];
+            x->hi[k][i] = hi > x->hi[k][i] ? hi : x->hi[k][i];
+        }
+    for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < B; ++i) {
+            x->vlo[k][i] = fp[k][i] < x->vlo[k][i] ? fp[k][i] : x->vlo[k][i];
+            x->vhi[k][i] = fp[k][i] > x->vhi[k][i] ? fp[k][i] : x->vhi[k][i];
+        }
+    for (int i = 0; i < B; ++i) x->linear[i] = fp[3][i] > x->linear[i] ? fp[3][i] : x->linear[i];
+    const float *last = rows + (size_t)(count - 1) * bones * 8 + (size_t)j * 8;
+    w->prev[j] = (cb_quat){last[0], last[1], last[2], last[3]};
+}
+
+CB_TARGET_CLONES
+void palette_row_signs(const double *dot, bool flip, float *sign) { row_signs(dot, flip, sign); }
+
+CB_TARGET_CLONES
+void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
+                             extent *clip_bounds)
+{
+    uint32_t bones = st->p->bone_count;
+    /* The joints' similarities as lanes (the sampler's layout: no transposing on either side). */
+    double *lanes = w->lanes;
+    uint32_t frames[B];
+    for (uint32_t i = 0; i < count; ++i) frames[i] = f + i;
+    cb_clip_frame_lanes(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, lanes);
+    lane_extent x;
+    lane_extent_reset(&x);
+    for (uint32_t j = 0; j < bones; ++j)
+        bone_lanes(st, w, j, f, count, (const double(*)[B])(lanes + (size_t)j * 8 * B), rows, &x);
+    /* Bounds and ranges in frame order, as one row at a time grows them (of +0 and -0, the
+     * minimum is the one met first). Locals, kept in registers. */
+    extent bounds = *clip_bounds;
+    value_range range = st->ranges[c];
+    fold_lanes(&x, count, &bounds, &range);
+    *clip_bounds = bounds;
+    st->ranges[c] = range;
+}

@@ -1,0 +1,140 @@
+/* catalog.h - an animal catalog (a roster of animal types to bake) as plain structs, and the
+ * roster logic that needs no file: state keywords, ground speed, LOD joint remapping.
+ * formats/catalog_toml.cpp fills a cb_catalog from TOML; pipeline/roster.c bakes it. */
+#ifndef CB_CATALOG_H
+#define CB_CATALOG_H
+
+#include "crowdbake/bake.h"
+#include "crowdbake/stride.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cb_source_pos {
+    uint32_t line, column; /* 1-based; 0 when unknown */
+} cb_source_pos;
+
+typedef struct cb_catalog_clip {
+    const char *source; /* the clip's name in the model */
+    const char *name;   /* its name in the palette */
+    int loop;           /* -1 from the poses, 0, 1 */
+    double fps;         /* 0: the animal's fps */
+    int fps_auto;       /* -1: as the animal; 0: fixed fps; 1: fps = "auto" */
+    double max_error_mm; /* 0: the animal's */
+    cb_source_pos pos;
+} cb_catalog_clip;
+
+/* A state's playback: decided by crowdbake (cb_decide_sync), or the catalog's sync = "speed" |
+ * "time". */
+typedef enum cb_sync_mode { CB_SYNC_AUTO, CB_SYNC_SPEED, CB_SYNC_TIME } cb_sync_mode;
+
+typedef struct cb_catalog_state {
+    const char *name;
+    const char **keywords;
+    uint32_t keyword_count;
+    cb_sync_mode sync;
+    bool sync_from_command_line; /* sync was given by --sync (cb_catalog_override_states) */
+    cb_source_pos pos;
+} cb_catalog_state;
+
+typedef struct cb_catalog_animal {
+    const char *name;
+    cb_source_pos pos;
+    const char *model; /* resolved path */
+    cb_source_pos model_pos;
+    const char **lods;
+    cb_source_pos *lod_pos;
+    uint32_t lod_count;
+    uint32_t *lod_max_influences; /* lod_count entries (1, 2 or 4) for `crowdbake mesh --lod N`, or NULL */
+    cb_catalog_clip *clips; /* NULL: every clip of the model */
+    uint32_t clip_count;
+    cb_catalog_state *states;
+    uint32_t state_count;
+    const char *default_state;
+    const char *default_state_from; /* why: "the catalog's default_state", "the first state written", ... */
+    double speed_reference; /* m/s (model units/s); with speed_auto, measured */
+    bool speed_auto;
+    const char *speed_state; /* speed_reference = "STATE": measure it on that state's clip (unless the default state's is locomotion) */
+    cb_source_pos speed_pos;
+    cb_bake_settings bake;
+    const char *canonical;  /* the resolved entry as text: part of the input hash */
+} cb_catalog_animal;
+
+typedef struct cb_budget {
+    bool set;
+    const char *target;        /* a built-in profile or one defined in the catalog */
+    uint64_t vram_bytes;
+    double crowd_share;        /* the share of vram crowds may use, 0..1 */
+    uint32_t max_texture_size; /* the target's limit */
+    uint32_t max_bones;        /* the runtime shader's limit */
+    cb_source_pos pos;
+} cb_budget;
+
+typedef struct cb_catalog {
+    cb_arena *arena;
+    const char *path, *dir;
+    cb_bake_settings defaults;
+    cb_budget budget;
+    cb_catalog_animal *animals; /* sorted by name */
+    uint32_t animal_count;
+} cb_catalog;
+
+void cb_catalog_free(cb_catalog *catalog);
+
+/* Replaces the `fields` (CB_BAKE_*) of the catalog's defaults and of every animal's settings
+ * with those of `values`, recording CB_FROM_COMMAND_LINE: options given for one run win over
+ * what [bake] and [animal] say. A clip's own fps and max_error still apply (clip_settings.h's
+ * precedence). CB_BAKE_MAX_ERROR also makes max_error given (a fixed fps is checked). Fails, naming the animal, when an animal would write u16 texels to
+ * EXR (which holds half or float only). */
+cb_status cb_catalog_override_bake(cb_catalog *catalog, const cb_bake_settings *values, unsigned fields, cb_error *err);
+
+/* The command line's word on states, over the catalog's for this run: `syncs` is a comma-separated
+ * list of STATE=speed|time|auto (NULL: none), `default_state` a state's name (NULL: none); each
+ * applies to every animal with that state, and is an error when no animal has it. Counts in
+ * what is up to date (the animals' canonical entries record it). */
+cb_status cb_catalog_override_states(cb_catalog *catalog, const char *syncs, const char *default_state, cb_error *err);
+
+/* Index of the first clip whose name contains a keyword, trying keywords in order
+ * (case-insensitive), or -1. */
+int cb_match_state(const char *const *clip_names, uint32_t clip_count, const char *const *keywords,
+                   uint32_t keyword_count);
+
+/* Ground speed of a clip in model units per second, from two pieces of evidence: the root's
+ * horizontal travel and the clip's stride (stride.h: the speed at which its planted feet slide
+ * least). The stride's speed where the feet stride (it holds the root's travel too, since the
+ * feet are measured in the frame that travel is taken off); else the root's travel where it
+ * moves more than 1% of the model's height per second; else 0. */
+typedef struct cb_ground_speed {
+    double speed;       /* the ground speed: what foot-sync uses */
+    double root, feet;  /* both measurements; feet 0 without a stride */
+    const char *method; /* "planted feet", "root motion" or "none" (static strings) */
+    cb_stride stride;   /* the feet: the stride, its ground speed and the feet's slide */
+} cb_ground_speed;
+void cb_measure_ground_speed(cb_sampler *sampler, const cb_clip_info *clip, cb_ground_speed *out);
+
+/* Whether a state's clip follows the instance's speed (foot-sync: its rate is speed times
+ * rate_per_speed) or plays at its own rate, and why in one line. Decided from, in order: the
+ * catalog's sync for the state; a one-shot never follows speed; the words of the state's name,
+ * then of its keywords, then of the clip's name (gaits such as walk, run, gallop, swim, fly
+ * name locomotion; idle, eat, attack, hit, death and the like name actions in place); and
+ * where no word decides, the clip's stride. Locomotion needs a ground speed (a stride or root
+ * travel) unless the animal gives speed_reference. `state` may be NULL (a clip alone, as
+ * `info` shows it). */
+typedef struct cb_sync_decision {
+    bool speed;         /* follows the instance's speed */
+    char reason[512];
+} cb_sync_decision;
+void cb_decide_sync(const cb_catalog_state *state, const char *clip_name, bool loops, const cb_ground_speed *speed,
+                    bool speed_given, cb_sync_decision *out);
+
+/* For a LOD skin: remap[i] = the main skin's joint with the LOD joint i's name. Fails, naming
+ * the first mismatch, when a name is missing or its bind pose (inverse bind matrix) differs. */
+cb_status cb_lod_remap(const cb_model *main, int32_t main_skin, const cb_model *lod, int32_t lod_skin, uint32_t *remap,
+                       cb_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,154 @@
+/* cli.h - shared pieces of the crowdbake command: option parsing, loading, messages. */
+#ifndef CB_CLI_H
+#define CB_CLI_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "crowdbake/exr.h"
+#include "crowdbake/gltf.h"
+#include "crowdbake/json.h"
+#include "crowdbake_pal.h" /* the runtime reader (installed as crowdbake_pal.h) */
+#include "crowdbake/pal_view.h"
+#include "catalog/catalog.h"
+
+/* The command's exit codes (README "Exit codes"), apart from the library's cb_status. */
+enum {
+    CLI_EXIT_OK = 0,
+    CLI_EXIT_INTERNAL = 1, /* a bug, or out of memory */
+    CLI_EXIT_USAGE = 2,    /* bad command line (or a setting out of range) */
+    CLI_EXIT_BUDGET = 3,   /* the roster exceeds its VRAM budget (report) */
+    CLI_EXIT_INPUT = 4,    /* an input file is invalid or unsupported */
+    CLI_EXIT_IO = 5,       /* a file could not be read or written */
+    CLI_EXIT_VERIFY = 6    /* verification failed */
+};
+/* The exit code of a library status. */
+int cli_exit_code(cb_status status);
+
+typedef struct cli_option {
+    const char *name;     /* "--fps" */
+    const char *metavar;  /* NULL for a flag */
+    const char **value;   /* where a value option stores its argument */
+    bool *flag;           /* where a flag stores true */
+} cli_option;
+
+typedef struct cli_command {
+    const char *name;
+    const char *summary;
+    const char *usage; /* full --help text */
+    int (*run)(int argc, char **argv);
+} cli_command;
+
+/* Parses argv[1..] (argv[0] is the command name). Positionals fill `positional` in order.
+ * Returns 0, or CLI_EXIT_USAGE after printing why; sets *help for -h/--help. */
+int cli_parse(int argc, char **argv, const cli_option *options, size_t option_count, const char **positional,
+              size_t min_positional, size_t max_positional, bool *help);
+
+/* The flag that changes a setting an error names (cb_error.setting), or NULL. */
+const char *cli_setting_flag(cb_setting setting);
+/* An error's message with the flag that would fix it: "MESSAGE [--flag]". */
+const char *cli_error_text(const cb_error *err, char *buf, size_t size);
+/* Prints "crowdbake: MESSAGE [--flag]" to stderr and returns the error's exit code. */
+int cli_report(const cb_error *err);
+int cli_usage_error(const char *command, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+bool cli_parse_double(const char *text, double *out);
+bool cli_parse_u32(const char *text, unsigned *out);
+
+/* Takes the resource-limit options (--max-joints N, --max-frames N, --max-accessor-count N,
+ * --max-file-size SIZE, --max-palette-size SIZE; SIZE like 512M or 2G) out of argv, whichever
+ * command they come with. Returns 0 or CLI_EXIT_USAGE after printing why. */
+int cli_take_limits(int *argc, char **argv, cb_limits *limits);
+extern const char cli_limits_usage[];
+
+/* Loads a model within `limits`. */
+cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *err);
+/* The skin a command works on: --skin NAME|INDEX, or the only one; an error otherwise. */
+int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err);
+/* What a file holds, from its first bytes (not its name). */
+typedef enum cli_file_kind { CLI_FILE_UNKNOWN, CLI_FILE_MODEL, CLI_FILE_PAL, CLI_FILE_EXR, CLI_FILE_MISSING, CLI_FILE_KTX2 } cli_file_kind;
+cli_file_kind cli_file_kind_of(const char *path);
+/* What to say of a KTX2 palette where a .pal or .exr is read: "PATH: a KTX2 palette, which ..." */
+const char *cli_ktx2_not_read(const char *path, const char *command, char *buf, size_t size);
+
+/* A palette (.pal or .exr) and the model it was baked from, as `verify` and `preview` take them. */
+typedef struct cli_baked {
+    cb_model *model;
+    int skin;
+    cb_palette view;        /* header and clip table; for a .pal, its texels stay in the mapping */
+    const void *texels;     /* the payload the decoders read */
+    cbpal_file pal;         /* a .pal: mapped, checksum verified */
+    cb_exr_palette exr;     /* an .exr: decoded */
+    bool is_exr, pal_open;
+} cli_baked;
+
+/* Opens MODEL PALETTE: checks each is the kind of file it should be (naming the order when
+ * they are swapped), loads and picks the skin, compares bone counts. 0, or the error's status
+ * with *err set and nothing left open; else close with cli_baked_close. */
+cb_status cli_open_baked(const char *command, const char *model_path, const char *palette_path, const cb_limits *limits,
+                         const char *skin_option, cli_baked *out, cb_error *err);
+void cli_baked_close(cli_baked *b);
+
+/* --clip A,B (only these, in this order; a clip skipped at load is then an error with its
+ * reason) and --exclude-clip A,B (every clip but these). *plan is NULL (every clip) when
+ * neither is given; else malloc'ed, *count entries. Names that are not clips are errors. */
+cb_status cli_select_clips(const cb_model *model, const char *clips, const char *excluded, cb_clip_plan **plan,
+                           uint32_t *count, cb_error *err);
+/* --loop A,B and --one-shot A,B: these clips loop, or play once, whatever their poses say (the
+ * bake decides from them otherwise: a clip whose last pose equals its first loops). Sets the
+ * plan's loop for each; a plan of every clip in file order is made when *plan is NULL. A name
+ * that is not a clip, not among the plan's, or given to both is an error. */
+cb_status cli_override_loops(const cb_model *model, const char *loops, const char *one_shots, cb_clip_plan **plan,
+                             uint32_t *count, cb_error *err);
+/* Calls fn for each name of a comma-separated list (as --clip takes); stops at, and returns,
+ * the first failure. */
+cb_status cli_for_each_name(const char *list, cb_status (*fn)(const char *name, void *ctx), void *ctx);
+/* The one clip-name matcher of every command that takes clip names: the name exactly, else
+ * regardless of case, else the one clip whose name holds it (`--clip walk` for "Armature|Walk").
+ * names[i] lies `stride` bytes after names[i-1] (as cb_closest_name reads them). The index, or
+ * -1 with `why` saying so: "no clip 'X'; did you mean 'Y'?", or the clips an ambiguous name fits. */
+int cli_match_clip(const char *typed, const char *const *names, size_t count, size_t stride, char *why, size_t size);
+/* Whether a comma-separated list (as --clip takes) holds the name. */
+bool cli_list_has(const char *list, const char *name);
+/* "crowdbake: warning: ..." on stderr, one line each (notes too unless !notes, for -q); or a
+ * "warnings" array of {kind, message}. */
+void cli_print_warnings(const cb_warnings *warnings, bool notes);
+void cli_json_warnings(cb_json *json, const cb_warnings *warnings);
+
+int cmd_info(int argc, char **argv);
+int cmd_sample(int argc, char **argv);
+int cmd_bake(int argc, char **argv);
+int cmd_inspect(int argc, char **argv);
+int cmd_vat(int argc, char **argv);
+extern const char cmd_view_usage[];
+int cmd_view(int argc, char **argv);
+int cmd_verify(int argc, char **argv);
+int cmd_preview(int argc, char **argv);
+int cmd_report(int argc, char **argv);
+int cmd_mesh(int argc, char **argv);
+/* `crowdbake bake CATALOG.toml`, once cmd_bake has read its options. */
+typedef struct cli_catalog_bake {
+    const char *path;
+    uint32_t jobs;
+    bool force, quiet, json;
+    const char *depfile, *manifest;
+    bool depfile_manifest_only;
+    const cb_limits *limits;
+    const cb_bake_settings *overrides; /* the command line's bake options, `override_fields` of them set */
+    unsigned override_fields;          /* CB_BAKE_* */
+    const char *syncs, *default_state; /* --sync STATE=speed|time,..., --default-state STATE */
+} cli_catalog_bake;
+int cmd_bake_catalog(const cli_catalog_bake *options);
+
+/* signals.c: the library's temporaries created where SIGINT, SIGTERM and SIGHUP handlers find
+ * and remove them; an interrupted command then ends by the same signal. */
+void cli_remove_temporaries_on_signals(void);
+
+extern const char cmd_info_usage[], cmd_sample_usage[], cmd_bake_usage[], cmd_inspect_usage[], cmd_vat_usage[],
+    cmd_report_usage[], cmd_verify_usage[], cmd_preview_usage[], cmd_mesh_usage[];
+
+#endif

@@ -1,0 +1,509 @@
+/* cmd_bake.c - `crowdbake bake MODEL -o OUT.pal|OUT.exr`: the main job. */
+#include <math.h>
+#include <stdlib.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "crowdbake/bake.h"
+#include "crowdbake/budget.h"
+#include "cli.h"
+
+const char cmd_bake_usage[] =
+    "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2|OUT.bvat.json [options]\n"
+    "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--out-dir DIR] [--json]\n"
+    "                      [-q] [--sync STATE=speed|time,...] [--default-state STATE]\n"
+    "                      [--fps N|auto] [--max-error MM_PER_M] [--max-fps N] [--fit-rows] [--allow-over-budget]\n"
+    "                      [--layout L] [--precision P] [--format F] [--zstd]\n"
+    "                      [--max-texture-size N]\n"
+    "                      [--root-motion R] [--exr-compression C]\n\n"
+    "Bakes every clip of the model's skin into a bone-matrix palette; or every animal type of a\n"
+    "catalog (see catalog.example.toml) into palettes and a roster manifest, re-baking only what\n"
+    "changed (--force: everything), N types at a time (default: the number of cores). With a\n"
+    "catalog, the bake options given replace its [bake] and [animal] values for this run and count\n"
+    "in what is up to date; a clip's own fps and max_error still apply (each setting: the catalog\n"
+    "clip's, else the command line's, else the animal's, else [bake]'s, else the default);\n"
+    "--depfile writes a Make/Ninja depfile;\n"
+    "--out-dir replaces the catalog's out_dir (a path from the current directory);\n"
+    "--depfile-manifest-only writes the manifest's rule alone, as Ninja's depfile without\n"
+    "deps = gcc (CMake's DEPFILE) wants it. --sync STATE=speed|time|auto (comma-separated) and\n"
+    "--default-state STATE replace the catalog's word on those states in every animal that has\n"
+    "them: whether a state follows the instance's speed, and the state a herd spawns in.\n\n"
+    "  -o, --output FILE          .pal (mmap-ready, docs/pal-format.md), .exr (OpenEXR), .ktx2\n"
+    "                             (uncompressed KTX2, RGBA16F/RGBA32F) or .bvat.json (Babylon.js's\n"
+    "                             baked vertex animation data and clip table, docs/babylon.md);\n"
+    "                             another extension is refused\n"
+    "  --format F                 a comma-separated set of pal, exr, ktx2 and babylon (.bvat.json): write\n"
+    "                             these formats (OUT's extension is replaced per format; each keeps\n"
+    "                             its own default precision unless --precision is given; babylon is\n"
+    "                             always float mat4)\n"
+    "  --fps N|auto               baked frames per second; default auto: per clip, the fewest rows whose\n"
+    "                             visible error (at the rows and between them, as the runtime blends\n"
+    "                             them) stays within --max-error, fitted or sampled (ties: sampled),\n"
+    "                             up to --max-fps; N: a fixed rate, rows sampled (--fps 30: the old\n"
+    "                             default's bytes)\n"
+    "  --max-error MM_PER_M       the error budget, mm per metre of model height (default 1); a clip\n"
+    "                             over it fails the bake (exit 6, nothing written, a line per clip\n"
+    "                             with what would meet it); with --fps N, a check of the fixed rate\n"
+    "  --max-fps N                the highest rate auto may choose (default 120: every clip of Cow,\n"
+    "                             Fox and the samples meets 1 mm/m under it)\n"
+    "  --allow-over-budget        write a bake with clips over --max-error anyway, with a warning per\n"
+    "                             clip (and \"over_budget\" in --json)\n"
+    "  --layout mat4|affine|qpos  texels per bone: 4, 3 or 2 (default qpos; affine when the rig has\n"
+    "                             non-uniform scale or shear, which qpos cannot hold)\n"
+    "  --precision float|half|u16 RGBA32F, RGBA16F or RGBA16UI (default u16 for .pal, float for .exr\n"
+    "                             and .ktx2, which refuse u16)\n"
+    "  --fit-rows                 fit every clip's rows to the runtime's linear blend instead of\n"
+    "                             sampling them: each row moves out by half the arc a bone cuts as a\n"
+    "                             chord between rows, which halves that error (the encoding error at\n"
+    "                             the rows grows to about the same size); no shader change (auto\n"
+    "                             fits the clips it saves rows on without it)\n"
+    "  --measure-all              measure the errors at every row and between every two, however\n"
+    "                             many (default: past 1024 rows and 4M rows x skinned vertices, at\n"
+    "                             an even subset of the rows, each clip's last always; faster on\n"
+    "                             large rigs, but it can miss the one fast interval where the blend\n"
+    "                             errs most)\n"
+    "  --max-texture-size N       never emit a dimension above N (default 16384); rows wrap into\n"
+    "                             side-by-side column blocks\n"
+    "  --root-motion keep|in-place  in-place removes the root's average horizontal travel\n"
+    "  --skin NAME|INDEX          the skin to bake when the file has several\n"
+    "  --clip A,B                 only these clips, in this order (default: every clip; a clip that\n"
+    "                             cannot be sampled, e.g. one without keys, is skipped with a warning\n"
+    "                             unless named here, which makes it an error)\n"
+    "  --exclude-clip A,B         every clip but these\n"
+    "  --loop A,B                 these clips loop, --one-shot A,B these play once, whatever their\n"
+    "  --one-shot A,B             poses say (default: decided from the poses; `info` says why)\n"
+    "  --speed-reference M_PER_S  ground speed at playback rate 1, stored in the header\n"
+    "  --zstd                     compress the .pal payload (readers decompress once)\n"
+    "  --exr-compression none|rle|zips|zip|piz  (default none; lossless only)\n"
+    "  -j, --threads N            sample clips on N threads (default: the number of cores); the\n"
+    "                             output is byte-identical for any N\n"
+    "  --json                     a machine-readable summary on stdout, warnings included\n"
+    "  -q, --quiet                no summary lines\n";
+
+typedef struct bake_args {
+    const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
+        *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir, *loops,
+        *one_shots, *syncs, *default_state;
+    bool zstd, json, quiet, quiet_long, force, depfile_manifest, fit, measure_all, over_budget;
+} bake_args;
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* OUT with its extension replaced by ext. */
+static void output_path(const char *out, const char *ext, char *buf, size_t size)
+{
+    const char *dot = strrchr(out, '.'), *slash = strrchr(out, '/');
+    size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - out) : strlen(out);
+    snprintf(buf, size, "%.*s.%s", (int)stem, out, ext);
+}
+
+static bool ends_with(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    return n >= k && strcmp(s + n - k, suffix) == 0;
+}
+
+/* The bake options given, into the settings a catalog's keys also fill (bake.h); `fields`
+ * says which were given (CB_BAKE_*). Only the command line's words are checked here: what a
+ * setting means is the pipeline's. */
+static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fields)
+{
+    *s = cb_default_bake_settings();
+    *fields = 0;
+    if (a->fps) s->from.fps = CB_FROM_COMMAND_LINE;
+    if (a->fps && strcmp(a->fps, "auto") != 0) {
+        s->fps_auto = false;
+        if (!cli_parse_double(a->fps, &s->fps) || !cb_fps_valid(s->fps))
+            return cli_usage_error("bake", "--fps wants auto or a number between 0 and 1000, got '%s'", a->fps);
+        if (a->max_fps) return cli_usage_error("bake", "--max-fps caps the rates auto chooses; --fps %s is fixed", a->fps);
+    }
+    if (a->layout && !cb_layout_parse(a->layout, &s->layout))
+        return cli_usage_error("bake", "--layout is mat4, affine or qpos, got '%s'", a->layout);
+    if (a->precision && !cb_precision_parse(a->precision, &s->precision))
+        return cli_usage_error("bake", "--precision is float, half or u16, got '%s'", a->precision);
+    s->layout_set = a->layout != NULL, s->precision_set = a->precision != NULL;
+    unsigned max;
+    if (a->max_size) {
+        if (!cli_parse_u32(a->max_size, &max) || max < 1)
+            return cli_usage_error("bake", "--max-texture-size wants a positive integer");
+        s->max_texture_size = max;
+    }
+    if (a->root_motion && !cb_root_motion_parse(a->root_motion, &s->root_motion))
+        return cli_usage_error("bake", "--root-motion is keep or in-place");
+    if (a->root_motion) s->from.root_motion = CB_FROM_COMMAND_LINE;
+    if (a->format && !(s->formats = cb_formats_parse(a->format)))
+        return cli_usage_error("bake", "--format is pal, exr or pal,exr (any comma-separated set of pal, exr, ktx2 and babylon), "
+                               "got '%s'", a->format);
+    if (a->exr_compression && !cb_exr_compression_parse(a->exr_compression, &s->exr_compression))
+        return cli_usage_error("bake", "--exr-compression is none, rle, zips, zip or piz (lossless only)");
+    s->zstd = a->zstd;
+    s->fit_rows = a->fit;
+    if (a->fit) s->from.fit_rows = CB_FROM_COMMAND_LINE;
+    s->measure_all = a->measure_all;
+    s->allow_over_budget = a->over_budget;
+    s->max_error_given = a->max_error != NULL;
+    if (a->max_error && (!cli_parse_double(a->max_error, &s->max_error_mm) || !(s->max_error_mm > 0)))
+        return cli_usage_error("bake", "--max-error wants mm per metre of model height");
+    if (a->max_fps && (!cli_parse_double(a->max_fps, &s->max_fps) || !cb_max_fps_valid(s->max_fps)))
+        return cli_usage_error("bake", "--max-fps wants 2..1000");
+    if (a->max_error) s->from.max_error = CB_FROM_COMMAND_LINE;
+    if (a->max_fps) s->from.max_fps = CB_FROM_COMMAND_LINE;
+    *fields = (a->fps ? CB_BAKE_FPS : 0u) | (a->layout ? CB_BAKE_LAYOUT : 0u) | (a->precision ? CB_BAKE_PRECISION : 0u) |
+              (a->max_size ? CB_BAKE_MAX_TEXTURE_SIZE : 0u) | (a->root_motion ? CB_BAKE_ROOT_MOTION : 0u) |
+              (a->format ? CB_BAKE_FORMATS : 0u) | (a->zstd ? CB_BAKE_ZSTD : 0u) |
+              (a->exr_compression ? CB_BAKE_EXR_COMPRESSION : 0u) | (a->fit ? CB_BAKE_FIT_ROWS : 0u) |
+              (a->measure_all ? CB_BAKE_MEASURE_ALL : 0u) | (a->over_budget ? CB_BAKE_ALLOW_OVER_BUDGET : 0u) |
+              (a->max_error ? CB_BAKE_MAX_ERROR : 0u) | (a->max_fps ? CB_BAKE_MAX_FPS : 0u);
+    return 0;
+}
+
+static int parse_threads(const char *text, unsigned *threads, const char *what)
+{
+    *threads = (unsigned)sysconf(_SC_NPROCESSORS_ONLN);
+    if (text && (!cli_parse_u32(text, threads) || *threads < 1 || *threads > 64))
+        return cli_usage_error("bake", "%s wants 1..64", what);
+    return 0;
+}
+
+/* A catalog: the bake options given override its [bake] and [animal] settings for this run
+ * (and count in what is up to date); options that only mean something for one model are
+ * refused, never ignored. */
+static int bake_catalog(const bake_args *a, const cb_limits *limits)
+{
+    unsigned jobs;
+    if (parse_threads(a->threads, &jobs, "-j")) return CLI_EXIT_USAGE;
+    if (a->output) return cli_usage_error("bake", "a catalog writes to its [bake] out_dir; -o is for single models");
+    if (a->skin) return cli_usage_error("bake", "--skin is for single models (a catalog bakes each model's skinned mesh)");
+    if (a->speed_ref) return cli_usage_error("bake", "--speed-reference is for single models; a catalog sets speed_reference per animal");
+    if (a->clips || a->excluded)
+        return cli_usage_error("bake", "--clip and --exclude-clip are for single models; a catalog lists clips per animal");
+    if (a->loops || a->one_shots)
+        return cli_usage_error("bake", "--loop and --one-shot are for single models; a catalog sets loop per clip");
+    unsigned formats = a->format ? cb_formats_parse(a->format) : 0;
+    if (a->format && !formats) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
+    /* KTX2 from a catalog would need its manifest and up-to-date check to learn the format. */
+    if (formats & (CB_FORMAT_KTX2 | CB_FORMAT_BABYLON))
+        return cli_usage_error("bake", "--format ktx2 and babylon are for single models for now; a catalog writes pal and exr");
+    if (a->zstd && a->format && !(cb_formats_parse(a->format) & CB_FORMAT_PAL))
+        return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+    cb_bake_settings over;
+    unsigned fields;
+    int rc = parse_settings(a, &over, &fields);
+    if (rc) return rc;
+    if (a->out_dir) over.out_dir = a->out_dir, fields |= CB_BAKE_OUT_DIR;
+    if (a->depfile_manifest && !a->depfile) return cli_usage_error("bake", "--depfile-manifest-only goes with --depfile");
+    cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, a->depfile_manifest,
+                           limits, &over, fields, a->syncs, a->default_state};
+    return cmd_bake_catalog(&cb);
+}
+
+/* Both sizes, as a catalog's log gives them: the texture as uploaded, and the file (its header
+ * and tables too, or compressed). Both error figures: the encoding's at the baked rows, and what a
+ * player sees (the runtime's blend of two rows, halfway between them), which is usually far larger. */
+static void print_summary(const cb_bake_output *out, double seconds)
+{
+    const cb_palette *p = &out->palette;
+    printf("%s: %.1f KiB texture, %.1f KiB file, %ux%u texels (%u block%s), %u bone%s, %u clip%s, %u row%s, %s/%s, encoding error %.3g mm/m "
+           "(at the baked rows), visible error %.3g mm/m (blending rows at runtime), %.0f ms\n",
+           out->path, p->texel_bytes / 1024.0, out->file_bytes / 1024.0, p->width, p->height, p->blocks, p->blocks == 1 ? "" : "s", p->bone_count,
+           p->bone_count == 1 ? "" : "s", p->clip_count, p->clip_count == 1 ? "" : "s", p->rows, p->rows == 1 ? "" : "s",
+           cb_layout_name(p->layout), cb_precision_name(p->precision), cb_mm_per_m(p->max_error, p->model_height),
+           cb_mm_per_m(p->visible_error, p->model_height), seconds * 1000);
+    if (p->error_rows_measured && p->error_rows_measured < p->rows) /* 0: nothing skinned, nothing measured */
+        printf("  errors measured at %u of the %u rows, an even subset (the rig is past the measuring budget); "
+               "--measure-all measures every row\n", p->error_rows_measured, p->rows);
+}
+
+static void json_output(cb_json *j, const cb_bake_output *out, double seconds, double load)
+{
+    const cb_palette *p = &out->palette;
+    cb_json_object(j, NULL);
+    cb_json_string(j, "path", out->path);
+    cb_json_string(j, "format", out->format == CB_FORMAT_PAL  ? "pal"
+                                : out->format == CB_FORMAT_EXR  ? "exr"
+                                : out->format == CB_FORMAT_KTX2 ? "ktx2"
+                                                                : "babylon");
+    cb_json_int(j, "bytes", (long long)out->file_bytes);
+    cb_json_int(j, "texture_bytes", (long long)p->texel_bytes); /* as uploaded: what a catalog's log and report give */
+    cb_json_int(j, "width", p->width);
+    cb_json_int(j, "height", p->height);
+    cb_json_int(j, "blocks", p->blocks);
+    cb_json_int(j, "bones", p->bone_count);
+    cb_json_int(j, "clips", p->clip_count);
+    cb_json_int(j, "rows", p->rows); /* every clip's baked frames, one texture row each */
+    cb_json_string(j, "layout", cb_layout_name(p->layout));
+    cb_json_string(j, "precision", cb_precision_name(p->precision));
+    cb_json_bool(j, "fitted_rows", p->fitted);
+    cb_json_number(j, "max_error", p->max_error);
+    cb_json_number(j, "model_height", p->model_height);
+    cb_json_number(j, "max_error_mm_per_m", cb_mm_per_m(p->max_error, p->model_height));
+    cb_json_number(j, "visible_error", p->visible_error);
+    cb_json_number(j, "visible_error_mm_per_m", cb_mm_per_m(p->visible_error, p->model_height));
+    cb_json_int(j, "error_rows_measured", p->error_rows_measured);
+    cb_json_number(j, "seconds", seconds);
+    cb_json_object(j, "phases");
+    cb_json_number(j, "load", load);
+    cb_json_number(j, "sample", p->seconds_sample);
+    cb_json_number(j, "encode", p->seconds_encode);
+    cb_json_number(j, "measure", p->seconds_measure);
+    cb_json_number(j, "write", out->seconds_write);
+    cb_json_end(j);
+    cb_json_end(j);
+}
+
+static const char *clip_label(const cb_bake_job *job, uint32_t i)
+{
+    const cb_clip_plan *c = &job->plan[i];
+    return c->name ? c->name : job->model->animations[c->animation].name;
+}
+
+/* The rows error-bounded rates took against a fixed 30 fps (the old default). */
+static cb_status print_saving(const cb_bake_job *job, const cb_bake_result *r, cb_error *err)
+{
+    const cb_model *m = job->model;
+    cb_sampler *s = cb_sampler_create(m, job->skin, err);
+    if (!s) return err->status;
+    const cb_palette *p = &r->outputs[0].palette;
+    uint64_t rows_30 = 0;
+    for (uint32_t i = 0; i < job->plan_count && !err->status; ++i) {
+        cb_clip_info fixed;
+        if (!cb_clip_analyze(s, job->plan[i].animation, 30, job->plan[i].loop, &job->limits, &fixed, err))
+            rows_30 += fixed.frames;
+    }
+    if (!err->status) {
+        cb_texture_geometry g;
+        uint64_t b_30 = cb_palette_texture_bytes(p->bone_count, (uint32_t)rows_30, p->layout, p->precision,
+                                                 job->settings.max_texture_size, &g);
+        printf("  %u rows, %.1f KiB, against %llu rows, %.1f KiB at a fixed 30 fps (%.2fx the bytes)\n", p->rows,
+               p->texel_bytes / 1024.0, (unsigned long long)rows_30, b_30 / 1024.0, b_30 ? (double)p->texel_bytes / b_30 : 0);
+    }
+    cb_sampler_free(s);
+    return err->status;
+}
+
+/* Each clip's rate and rows, and why (error-bounded bakes). */
+static void print_clips(const cb_bake_job *job, const cb_bake_result *r)
+{
+    int width = 0; /* the longest name: exporters prefix clips ("AnimalArmature|Walk") */
+    for (uint32_t i = 0; i < r->budget_count; ++i)
+        if ((int)strlen(clip_label(job, i)) > width) width = (int)strlen(clip_label(job, i));
+    for (uint32_t i = 0; i < r->budget_count; ++i) {
+        const cb_clip_budget *b = &r->budgets[i];
+        char why[320];
+        cb_bake_clip_reason(job, i, why, sizeof why);
+        printf("  %-*s %4u rows, visible error %.3f mm/m%s: %s\n", width, clip_label(job, i), b->rows, b->error_mm,
+               b->over ? " (OVER max_error)" : "", why);
+    }
+}
+
+static bool any_auto(const cb_bake_job *job)
+{
+    for (uint32_t i = 0; i < job->plan_count; ++i)
+        if (cb_bake_job_clip_auto(job, i)) return true;
+    return false;
+}
+
+/* Clips over their budget: a line each, on stderr when the bake failed for them, else as
+ * warnings (the bake was written anyway, --allow-over-budget). */
+static void report_over_budget(const cb_bake_job *job, const cb_bake_result *r, cb_warnings *warnings)
+{
+    for (uint32_t i = 0; i < r->budget_count; ++i) {
+        if (!r->budgets[i].over) continue;
+        char text[640];
+        cb_bake_budget_text(job, r, i, cli_setting_flag, text, sizeof text);
+        if (warnings) cb_warn(warnings, "warning", "%s (written anyway: --allow-over-budget)", text);
+        else fprintf(stderr, "crowdbake: %s: %s\n", job->model->source, text);
+    }
+}
+
+static void json_clips(cb_json *j, const cb_bake_job *job, const cb_bake_result *r)
+{
+    cb_json_array(j, "clips");
+    for (uint32_t i = 0; i < r->budget_count; ++i) {
+        const cb_clip_budget *b = &r->budgets[i];
+        char why[320], settings[400];
+        cb_bake_clip_reason(job, i, why, sizeof why);
+        cb_clip_settings_text(&job->clip_settings[i], settings, sizeof settings);
+        cb_json_object(j, NULL);
+        cb_json_string(j, "name", clip_label(job, i));
+        cb_json_number(j, "fps", b->fps);
+        cb_json_int(j, "rows", b->rows);
+        cb_json_bool(j, "fitted_rows", b->fitted);
+        cb_json_bool(j, "error_bounded", cb_bake_job_clip_auto(job, i));
+        cb_json_number(j, "visible_error_mm_per_m", b->error_mm);
+        cb_json_number(j, "max_error_mm_per_m", b->max_error_mm);
+        cb_json_string(j, "why", why);
+        cb_json_string(j, "settings", settings);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
+    cb_json_array(j, "over_budget"); /* written anyway (--allow-over-budget); else the bake failed */
+    for (uint32_t i = 0; i < r->budget_count; ++i) {
+        if (!r->budgets[i].over) continue;
+        char text[640];
+        cb_bake_budget_text(job, r, i, cli_setting_flag, text, sizeof text);
+        cb_json_object(j, NULL);
+        cb_json_string(j, "name", clip_label(job, i));
+        cb_json_number(j, "visible_error_mm_per_m", r->budgets[i].error_mm);
+        cb_json_number(j, "max_error_mm_per_m", r->budgets[i].max_error_mm);
+        cb_json_number(j, "fps_needed", job->rates[i].fps_needed);
+        cb_json_string(j, "message", text);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
+}
+
+/* --format, or OUT's extension: .pal, .exr, or none (a device, a pipe: a .pal, as always);
+ * another extension is refused, never guessed. */
+static int output_formats(const bake_args *a, unsigned *formats)
+{
+    if (a->format) return 0; /* parse_settings read it */
+    const char *dot = strrchr(a->output, '.'), *slash = strrchr(a->output, '/');
+    const char *ext = dot && (!slash || dot > slash) ? dot : "";
+    *formats = ends_with(a->output, ".bvat.json") ? CB_FORMAT_BABYLON
+               : strcmp(ext, ".exr") == 0    ? CB_FORMAT_EXR
+               : strcmp(ext, ".ktx2") == 0 ? CB_FORMAT_KTX2
+               : strcmp(ext, ".pal") == 0 || !ext[0] ? CB_FORMAT_PAL : 0;
+    if (!*formats)
+        return cli_usage_error("bake", "%s: unknown output extension '%s'; write OUT.pal, OUT.exr, OUT.ktx2 or OUT.bvat.json, or give "
+                               "--format pal,exr", a->output, ext);
+    return 0;
+}
+
+/* Everything the command line decides before the job runs. */
+static int single_model_checks(const bake_args *a, cb_bake_settings *s)
+{
+    int rc;
+    if ((rc = output_formats(a, &s->formats))) return rc;
+    bool want_pal = s->formats & CB_FORMAT_PAL;
+    /* KTX2 could hold u16 as RGBA16UI, but three.js's KTX2Loader and most loaders refuse integer formats. */
+    if (!cb_bake_settings_writable(s) && (s->formats & CB_FORMAT_EXR))
+        return cli_usage_error("bake", "EXR holds half or float texels; use --precision half|float%s",
+                               want_pal ? " (or write only the .pal)" : "");
+    if (!cb_bake_settings_writable(s) && (s->formats & CB_FORMAT_BABYLON))
+        return cli_usage_error("bake", "Babylon.js's baked vertex animation data is Float32 matrices, never u16; leave "
+                               "--precision out%s", want_pal ? " (or write only the .pal)" : "");
+    if (!cb_bake_settings_writable(s))
+        return cli_usage_error("bake", "KTX2 palettes hold half or float texels (RGBA16F, RGBA32F; common KTX2 loaders "
+                               "refuse u16's RGBA16UI); use --precision half|float%s", want_pal ? " (or write only the .pal)" : "");
+    if (a->zstd && !want_pal) return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+    return 0;
+}
+
+/* The bake line or --json, and the warnings: the model's, the bake's notes, clips written over
+ * their budget. Error-bounded bakes list each clip's rate, rows and why. */
+static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bake_result *r, double t0, double load)
+{
+    cb_warnings warnings = {0};
+    cb_model_warnings(job->model, a->clips == NULL, &warnings);
+    for (uint32_t i = 0; i < r->notes.count; ++i) cb_warn(&warnings, r->notes.items[i].kind, "%s", r->notes.items[i].message);
+    report_over_budget(job, r, &warnings);
+    double seconds = now_seconds() - t0;
+    if (a->json) {
+        cb_json j;
+        cb_json_init(&j, stdout);
+        cb_json_object(&j, NULL);
+        cb_json_string(&j, "model", a->model);
+        cb_json_array(&j, "outputs");
+        for (uint32_t i = 0; i < r->output_count; ++i) json_output(&j, &r->outputs[i], seconds, load);
+        cb_json_end(&j);
+        json_clips(&j, job, r);
+        cli_json_warnings(&j, &warnings);
+        cb_json_end(&j);
+    } else {
+        cb_error ignored = {0};
+        if (!a->quiet && any_auto(job)) print_clips(job, r), print_saving(job, r, &ignored);
+        for (uint32_t i = 0; i < r->output_count && !a->quiet; ++i) print_summary(&r->outputs[i], seconds);
+        cli_print_warnings(&warnings, !a->quiet);
+    }
+    cb_warnings_free(&warnings);
+}
+
+int cmd_bake(int argc, char **argv)
+{
+    cb_limits limits;
+    if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
+    bake_args a = {0};
+    bool help;
+    const cli_option options[] = {
+        {"-o", "FILE", &a.output, NULL},           {"--output", "FILE", &a.output, NULL},
+        {"--format", "pal,exr", &a.format, NULL},  {"--fps", "N", &a.fps, NULL},
+        {"--layout", "LAYOUT", &a.layout, NULL},   {"--precision", "PRECISION", &a.precision, NULL},
+        {"--max-texture-size", "N", &a.max_size, NULL}, {"--root-motion", "keep|in-place", &a.root_motion, NULL},
+        {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "M_PER_S", &a.speed_ref, NULL},
+        {"--exr-compression", "NAME", &a.exr_compression, NULL}, {"--zstd", NULL, NULL, &a.zstd},
+        {"--json", NULL, NULL, &a.json},           {"-q", NULL, NULL, &a.quiet},
+        {"-j", "N", &a.threads, NULL},             {"--threads", "N", &a.threads, NULL},
+        {"--force", NULL, NULL, &a.force},         {"--depfile", "FILE", &a.depfile, NULL},
+        {"--manifest", "FILE", &a.manifest, NULL}, {"--max-error", "MM_PER_M", &a.max_error, NULL},
+        {"--max-fps", "N", &a.max_fps, NULL},      {"--clip", "A,B", &a.clips, NULL},
+        {"--exclude-clip", "A,B", &a.excluded, NULL}, {"--out-dir", "DIR", &a.out_dir, NULL},
+        {"--loop", "A,B", &a.loops, NULL},         {"--one-shot", "A,B", &a.one_shots, NULL},
+        {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest}, {"--fit-rows", NULL, NULL, &a.fit},
+        {"--measure-all", NULL, NULL, &a.measure_all}, {"--quiet", NULL, NULL, &a.quiet_long},
+        {"--allow-over-budget", NULL, NULL, &a.over_budget},
+        {"--sync", "STATE=speed|time", &a.syncs, NULL}, {"--default-state", "STATE", &a.default_state, NULL}};
+    int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
+    if (help) return fputs(cmd_bake_usage, stdout), fputs(cli_limits_usage, stdout), 0;
+    if (rc) return rc;
+    a.quiet |= a.quiet_long;
+    if (ends_with(a.model, ".toml")) return bake_catalog(&a, &limits);
+    if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
+    if (a.depfile || a.depfile_manifest || a.manifest || a.force || a.out_dir)
+        return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
+                               a.depfile ? "--depfile" : a.depfile_manifest ? "--depfile-manifest-only" : a.manifest
+                               ? "--manifest" : a.force ? "--force" : "--out-dir");
+    if (a.syncs || a.default_state)
+        return cli_usage_error("bake", "%s is for catalogs: a single model has clips, not states",
+                               a.syncs ? "--sync" : "--default-state");
+    cb_bake_settings settings;
+    unsigned fields, threads;
+    if ((rc = parse_settings(&a, &settings, &fields)) || (rc = single_model_checks(&a, &settings))) return rc;
+    double speed_ref = 0;
+    if (a.speed_ref && (!cli_parse_double(a.speed_ref, &speed_ref) || speed_ref < 0))
+        return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
+    if (parse_threads(a.threads, &threads, "--threads")) return CLI_EXIT_USAGE;
+
+    double t0 = now_seconds();
+    cb_error err = {0};
+    cb_model *m = cli_load_model(a.model, &limits, &err);
+    if (!m) return cli_report(&err);
+    double load = now_seconds() - t0;
+    char pal_path[4096], exr_path[4096], ktx2_path[4096], babylon_path[4096];
+    snprintf(pal_path, sizeof pal_path, "%s", a.output);
+    snprintf(exr_path, sizeof exr_path, "%s", a.output);
+    snprintf(ktx2_path, sizeof ktx2_path, "%s", a.output);
+    snprintf(babylon_path, sizeof babylon_path, "%s", a.output);
+    if (a.format && !ends_with(a.output, ".bvat.json")) output_path(a.output, "bvat.json", babylon_path, sizeof babylon_path);
+    if (a.format) {
+        output_path(a.output, "pal", pal_path, sizeof pal_path), output_path(a.output, "exr", exr_path, sizeof exr_path);
+        output_path(a.output, "ktx2", ktx2_path, sizeof ktx2_path);
+    }
+    cb_bake_job job;
+    cb_bake_job_init(&job);
+    job.model = m, job.skin = cli_pick_skin(m, a.skin, &err);
+    job.settings = settings, job.limits = limits, job.threads = threads, job.speed_reference = speed_ref;
+    job.pal_path = pal_path, job.exr_path = exr_path, job.ktx2_path = ktx2_path, job.babylon_path = babylon_path;
+    cb_clip_plan *selection = NULL;
+    cb_bake_result result = {0};
+    if (job.skin >= 0 && !cli_select_clips(m, a.clips, a.excluded, &selection, &job.clip_count, &err) &&
+        !cli_override_loops(m, a.loops, a.one_shots, &selection, &job.clip_count, &err)) {
+        job.clips = selection;
+        cb_bake_job_run(&job, &result, &err);
+    }
+    if (!err.status) report_bake(&a, &job, &result, t0, load);
+    else if (result.over_budget) report_over_budget(&job, &result, NULL); /* a line each, above the error's */
+    cb_bake_result_free(&result);
+    cb_bake_job_free(&job);
+    free(selection);
+    cb_model_free(m);
+    return err.status ? cli_report(&err) : 0;
+}

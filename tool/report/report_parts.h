@@ -1,0 +1,27 @@
+/* report_parts.h - what the report's renderings share (private to libcrowdbake): report.c
+ * renders the terminal, Markdown and JSON forms, report_html.c the HTML page. */
+#ifndef CB_REPORT_PARTS_H
+#define CB_REPORT_PARTS_H
+
+#include "crowdbake/json.h"
+#include "report/report.h"
+
+/* The limits a type breaks, "; "-separated, or "". */
+const char *report_limit_warnings(const cb_report_type *t, char *buf, size_t size);
+/* What a type's row says beside its numbers: the palette it shares, the limits it breaks. */
+const char *report_notes(const cb_report_type *t, char *buf, size_t size);
+/* a / b, 0 when b is 0. */
+double report_ratio(uint64_t a, uint64_t b);
+/* The roster's total against its budget, in one sentence; `bold` wraps the verdict. */
+void report_budget_line(FILE *f, const cb_report *r, const char *bold);
+/* The foot-sync section (report_gaits.c): the gaits of a type, its warnings, and each rendering. */
+void report_fill_gaits(const cb_roster_type *rt, cb_report_type *t);
+uint32_t report_gait_warnings(const cb_report_type *t);
+void report_gaits_text(FILE *f, const cb_report *r);
+void report_gaits_markdown(FILE *f, const cb_report *r);
+void report_gaits_json(cb_json *j, const cb_report_type *t);
+void report_gaits_html(FILE *f, const cb_report_type *t);
+/* Writes s with HTML's special characters escaped (report_html.c, report_runtime.c). */
+void report_html_escape(FILE *f, const char *s);
+
+#endif

@@ -1,0 +1,582 @@
+/* roster.c - see roster.h. Three passes: prepare every type (load, plan clips, match states,
+ * measure speeds, check LODs, hash the rig and clips) in parallel; let types with equal hashes
+ * share one palette; bake the owners that are out of date in parallel. Then the manifest and
+ * the depfile. Nothing that is written, the log included, depends on the thread count or on timing. */
+#define _GNU_SOURCE /* open_memstream, strcasecmp */
+#include "roster_cache.h"
+#include "roster_files.h"
+
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <threads.h>
+#include <time.h>
+
+#include "crowdbake_pal.h"
+#include "crowdbake/bake.h"
+#include "crowdbake/exr.h"
+#include "crowdbake/gltf.h"
+#include "crowdbake/runtime.h"
+#include "crowdbake/vat.h"
+
+typedef struct type_work {
+    cb_model *model;
+    int32_t skin;
+    cb_clip_plan *plan;       /* the catalog's clips, before their rates are planned */
+    cb_clip_request *clip_requests; /* the catalog's clip entries */
+    cb_model **lod_models;
+    cb_bake_job job;          /* job.plan: the clips with their rates */
+    cb_bake_origin origin;
+    unsigned char *record;    /* what preparing found, for the type's record (roster_cache.h) */
+    size_t record_size;
+} type_work;
+
+typedef struct roster_run {
+    const cb_catalog *cat;
+    const cb_roster_options *opt;
+    cb_roster *r;
+    type_work *work;
+    atomic_uint next;
+    mtx_t log_lock;
+    roster_log log;           /* guarded by log_lock */
+    double start;
+    uint32_t threads_per_bake;
+} roster_run;
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    timespec_get(&ts, TIME_UTC);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+const char *roster_at(const cb_catalog *cat, cb_source_pos pos, char *buf, size_t size)
+{
+    snprintf(buf, size, "%s:%u:%u", cat->path, pos.line, pos.column);
+    return buf;
+}
+
+/* Appends a model's files to the type's inputs (for the depfile): its path even when it failed
+ * to load (m NULL), so that fixing it makes the build out of date; its external files when it
+ * loaded. */
+static cb_status add_inputs(cb_roster_type *t, const char *path, const cb_model *m, cb_error *err)
+{
+    uint32_t externals = m ? m->external_file_count : 0;
+    char **grown = realloc(t->inputs, (t->input_count + 1 + externals) * sizeof *grown);
+    if (!grown) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    t->inputs = grown;
+    for (uint32_t i = 0; i <= externals; ++i) {
+        if (!(t->inputs[t->input_count] = strdup(i ? m->external_files[i - 1] : path)))
+            return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+        ++t->input_count;
+    }
+    return CB_OK;
+}
+
+/* ---- pass 1: prepare a type ---- */
+
+static int pick_skin(const cb_model *m)
+{
+    for (uint32_t s = 0; s < m->skin_count; ++s)
+        if (cb_model_skin_vertex_count(m, (int32_t)s) > 0) return (int)s;
+    return m->skin_count ? 0 : -1;
+}
+
+static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, type_work *w, cb_roster_type *t,
+                            cb_error *err)
+{
+    const cb_model *m = w->model;
+    uint32_t n = an->clips ? an->clip_count : m->animation_count;
+    w->plan = calloc(n ? n : 1, sizeof *w->plan);
+    w->clip_requests = calloc(n ? n : 1, sizeof *w->clip_requests);
+    t->clips = calloc(n ? n : 1, sizeof *t->clips);
+    if (!w->plan || !w->clip_requests || !t->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    char where[1100];
+    for (uint32_t i = 0; i < n; ++i) {
+        cb_clip_plan *p = &w->plan[i];
+        w->clip_requests[i] = (cb_clip_request){-1, 0};
+        if (!an->clips) {
+            *p = (cb_clip_plan){(int32_t)i, m->animations[i].name, -1, 0, false};
+            continue;
+        }
+        const cb_catalog_clip *c = &an->clips[i];
+        int32_t a = cb_model_find_animation(m, c->source);
+        const struct cb_skipped_clip *skip = a < 0 ? cb_model_find_skipped_clip(m, c->source) : NULL;
+        if (skip) /* asked for by name: an error, not a warning */
+            return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s", roster_at(cat, c->pos, where, sizeof where), an->name,
+                           skip->reason);
+        if (a < 0) {
+            char list[512] = "";
+            for (uint32_t k = 0; k < m->animation_count; ++k)
+                snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", k ? ", " : "", m->animations[k].name);
+            return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s has no clip '%s'; its clips are: %s",
+                           roster_at(cat, c->pos, where, sizeof where), an->name, m->source, c->source, list);
+        }
+        *p = (cb_clip_plan){a, c->name, c->loop, c->fps, false};
+        w->clip_requests[i] = (cb_clip_request){c->fps_auto, c->max_error_mm};
+    }
+    t->clip_count = n;
+    return CB_OK;
+}
+
+static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_type *t, cb_error *err)
+{
+    cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
+    if (!s) return err->status;
+    uint32_t row = 0;
+    for (uint32_t i = 0; i < t->clip_count && !err->status; ++i) {
+        cb_clip_info info;
+        const cb_clip_plan *plan = &w->job.plan[i];
+        if (cb_clip_analyze(s, plan->animation, cb_bake_job_clip_fps(&w->job, i), plan->loop, limits, &info, err)) break;
+        cb_roster_clip *c = &t->clips[i];
+        snprintf(c->name, sizeof c->name, "%s", plan->name);
+        c->first_row = row;
+        c->frames = info.frames;
+        c->fps = info.effective_fps;
+        c->duration = info.duration;
+        c->loops = info.loops;
+        cb_measure_ground_speed(s, &info, &c->speed);
+        row += info.frames;
+    }
+    t->rows = row;
+    double lo[3], hi[3];
+    if (!err->status) t->model_height = cb_skin_rest_bounds(s, lo, hi);
+    if (!err->status) t->socket_count = cb_find_sockets(s, &t->sockets);
+    cb_sampler_free(s);
+    return err->status;
+}
+
+static cb_status check_lods(const roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t,
+                            cb_error *err)
+{
+    t->lod_count = an->lod_count;
+    t->lods = calloc(an->lod_count ? an->lod_count : 1, sizeof *t->lods);
+    w->lod_models = calloc(an->lod_count ? an->lod_count : 1, sizeof *w->lod_models);
+    if (!t->lods || !w->lod_models) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    char where[1100];
+    for (uint32_t i = 0; i < an->lod_count; ++i) {
+        cb_error inner = {0};
+        cb_model *lod = w->lod_models[i] = cb_gltf_load(an->lods[i], run->opt->limits, &inner);
+        if (add_inputs(t, an->lods[i], lod, err)) return err->status;
+        int skin = lod ? pick_skin(lod) : -1;
+        if (lod && skin < 0) cb_fail(&inner, CB_ERR_INPUT, "%s: has no skin", an->lods[i]);
+        cb_roster_lod *l = &t->lods[i];
+        if (!inner.status) {
+            l->path = an->lods[i];
+            l->joint_count = lod->skins[skin].joint_count;
+            l->remap = calloc(l->joint_count, sizeof *l->remap);
+            l->vertices = cb_model_skin_vertex_count(lod, skin);
+            for (uint32_t p = 0; p < lod->primitive_count; ++p) l->indices += lod->primitives[p].index_count;
+            if (!l->remap) cb_fail(&inner, CB_ERR_INTERNAL, "out of memory");
+            else cb_lod_remap(w->model, w->skin, lod, skin, l->remap, &inner);
+        }
+        if (inner.status)
+            return cb_fail_setting(err, inner.status, inner.setting, "%s: [animal.%s] LOD %u: %s",
+                                   roster_at(run->cat, an->lod_pos[i], where, sizeof where), an->name, i, inner.message);
+    }
+    return CB_OK;
+}
+
+/* The error a VAT of the same frames would have: half-float positions against exact skinning. */
+static void measure_vat(const cb_catalog_animal *an, const cb_limits *limits, type_work *w, cb_roster_type *t)
+{
+    cb_bake_options o = cb_bake_settings_options(&an->bake, CB_FORMAT_PAL, limits, 1);
+    o.max_texture_size = 1u << 30; /* only measured: no texture is made */
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(w->model, w->skin, &err);
+    cb_vat vat = {0};
+    if (s && !cb_vat_bake(s, &o, w->job.plan, t->clip_count, false, &vat, &err)) t->vat_error = vat.max_error;
+    cb_vat_free(&vat);
+    cb_sampler_free(s);
+}
+
+static void output_paths(const cb_catalog_animal *an, cb_roster_type *t)
+{
+    snprintf(t->pal_path, sizeof t->pal_path, "%s/%s.pal", an->bake.out_dir, an->name);
+    snprintf(t->exr_path, sizeof t->exr_path, "%s/%s.exr", an->bake.out_dir, an->name);
+}
+
+/* A type that failed before its LODs were loaded still lists them: they are its inputs. */
+static void list_unloaded_lods(const cb_catalog_animal *an, const type_work *w, cb_roster_type *t)
+{
+    for (uint32_t l = 0; !w->lod_models && l < an->lod_count; ++l)
+        if (add_inputs(t, an->lods[l], NULL, &t->error)) break;
+}
+
+/* The type's bake job (bake.h): its clips, settings and outputs; planning it chooses the rates
+ * of clips with fps = "auto". */
+static cb_status plan_job(const roster_run *run, const cb_catalog_animal *an, type_work *w, const cb_roster_type *t,
+                          cb_error *err)
+{
+    cb_bake_job *job = &w->job;
+    cb_bake_job_init(job);
+    job->model = w->model, job->skin = w->skin;
+    job->clips = w->plan, job->clip_count = t->clip_count, job->clip_requests = w->clip_requests;
+    job->settings = an->bake;
+    job->limits = run->opt->limits ? *run->opt->limits : cb_default_limits();
+    job->pal_path = t->pal_path, job->exr_path = t->exr_path;
+    job->threads = run->threads_per_bake; /* clips whose rates are searched at once */
+    return cb_bake_job_plan(job, err);
+}
+
+/* Preparing from the model: load, plan, sample what the manifest states, hash. */
+static void prepare_from_model(roster_run *run, uint32_t i)
+{
+    const cb_catalog_animal *an = &run->cat->animals[i];
+    cb_roster_type *t = &run->r->types[i];
+    type_work *w = &run->work[i];
+    cb_error *err = &t->error;
+    char where[1100];
+    cb_error inner = {0};
+    w->model = cb_gltf_load(an->model, run->opt->limits, &inner);
+    if (add_inputs(t, an->model, w->model, err)) return;
+    if (!w->model) {
+        cb_fail_setting(err, inner.status, inner.setting, "%s: [animal.%s] %s", roster_at(run->cat, an->model_pos, where, sizeof where),
+                        an->name, inner.message);
+        list_unloaded_lods(an, w, t);
+        return;
+    }
+    w->skin = pick_skin(w->model);
+    if (w->skin < 0) {
+        cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s has no skin to bake", roster_at(run->cat, an->model_pos, where, sizeof where),
+                an->name, an->model);
+        list_unloaded_lods(an, w, t);
+        return;
+    }
+    cb_model_warnings(w->model, !an->clips, &t->warnings);
+    t->bones = w->model->skins[w->skin].joint_count;
+    t->vertices = cb_model_skin_vertex_count(w->model, w->skin);
+    t->mesh_bytes = cb_model_skin_mesh_bytes(w->model, w->skin);
+    for (uint32_t p = 0; p < w->model->primitive_count; ++p)
+        if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
+    if (plan_clips(run->cat, an, w, t, err) || plan_job(run, an, w, t, err) ||
+        analyze_clips(run->opt->limits, w, t, err) || roster_match_states(run->cat, an, t, err) ||
+        roster_decide_states(run->cat, an, t, err) || check_lods(run, an, w, t, err)) {
+        list_unloaded_lods(an, w, t);
+        return;
+    }
+    roster_warn_foot_slide(t);
+    t->key = roster_content_key(w->model, w->skin, w->job.plan, t->clip_count, &an->bake);
+    w->origin = (cb_bake_origin){t->key, an->canonical, (const cb_model *const *)w->lod_models, an->lod_count};
+    w->job.origin = &w->origin;
+    t->input_hash = cb_bake_input_hash(&w->job, NULL);
+    if (run->opt->measure_vat) measure_vat(an, run->opt->limits, w, t);
+    uint64_t key;
+    if (cb_prep_key(an, run->opt->limits, t->inputs, t->input_count, &key))
+        cb_prep_record_encode(t, key, &w->record, &w->record_size);
+}
+
+/* A type's record, when it matches its files, stands in for loading and sampling: an
+ * up-to-date type then costs the hashing of its files and the check of its palette. */
+static void prepare_type(roster_run *run, uint32_t i)
+{
+    const cb_catalog_animal *an = &run->cat->animals[i];
+    cb_roster_type *t = &run->r->types[i];
+    t->animal = an;
+    t->owner = i;
+    output_paths(an, t);
+    char path[4096];
+    if (!run->opt->force && !run->opt->measure_vat && cb_prep_record_path(an, path, sizeof path) &&
+        cb_prep_record_load(path, an, run->opt->limits, t)) {
+        if (!roster_decide_states(run->cat, an, t, &t->error)) {
+            t->prepared_from_record = true;
+            return;
+        }
+        cb_prep_clear(t); /* out of memory: prepared again from the model */
+        t->error = (cb_error){0};
+    }
+    prepare_from_model(run, i);
+}
+
+/* ---- pass 3: bake an owner ---- */
+
+static uint64_t file_size(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 ? (uint64_t)st.st_size : 0;
+}
+
+/* True when every output exists and records this key; fills the geometry from the .pal. */
+static bool up_to_date(cb_roster_type *t, unsigned formats)
+{
+    char msg[256];
+    if (formats & CB_FORMAT_PAL) {
+        cbpal_file f;
+        /* Verified (memory speed): a file torn by a power loss is baked again, not trusted. */
+        if (cbpal_open(t->pal_path, CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg) != 0) return false;
+        bool same = f.header.input_hash == t->input_hash && f.header.rows == t->rows;
+        if (same) {
+            t->width = f.header.width, t->height = f.header.height, t->blocks = f.header.blocks;
+            t->layout = (cb_layout)f.header.layout, t->precision = (cb_precision)f.header.precision;
+            t->max_error = f.header.max_error;
+            t->visible_error = f.header.visible_error;
+            t->palette_bytes = f.header.payload_raw_size;
+        }
+        cbpal_close(&f);
+        if (!same) return false;
+    }
+    if (formats & CB_FORMAT_EXR) {
+        cb_exr_image img;
+        cb_error e = {0};
+        if (cb_exr_read(t->exr_path, &img, &e)) return false;
+        bool same = img.input_hash == t->input_hash && (uint32_t)img.rows == t->rows;
+        if (same && !(formats & CB_FORMAT_PAL)) {
+            t->width = img.width, t->height = img.height, t->blocks = (uint32_t)img.blocks;
+            cb_layout_parse(img.layout, &t->layout);
+            t->precision = img.precision;
+            t->palette_bytes = img.texel_bytes;
+            t->max_error = img.max_error, t->visible_error = img.visible_error;
+        }
+        cb_exr_image_free(&img);
+        if (!same) return false;
+    }
+    return true;
+}
+
+static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
+{
+    w->job.threads = run->threads_per_bake;
+    w->job.speed_reference = t->speed_reference;
+    if (roster_make_directories(an->bake.out_dir, err)) return err->status;
+    cb_bake_result r;
+    cb_bake_job_run(&w->job, &r, err);
+    if (r.output_count) {
+        const cb_palette *p = &r.outputs[0].palette;
+        t->width = p->width, t->height = p->height, t->blocks = p->blocks;
+        t->layout = p->layout, t->precision = p->precision;
+        t->max_error = (float)p->max_error;
+        t->visible_error = (float)p->visible_error;
+        t->error_rows_measured = p->error_rows_measured;
+        t->palette_bytes = p->texel_bytes;
+    }
+    for (uint32_t i = 0; i < r.notes.count; ++i) cb_warn(&t->warnings, r.notes.items[i].kind, "%s", r.notes.items[i].message);
+    cb_bake_budget_notes(&w->job, &r, NULL, &t->warnings); /* in the catalog's words */
+    cb_bake_result_free(&r);
+    return err->status;
+}
+
+/* The type's lines, printed in catalog order (roster_log); on a terminal, the progress after them. */
+static void log_type(roster_run *run, const cb_roster_type *t)
+{
+    if (!run->opt->log) return;
+    mtx_lock(&run->log_lock);
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    if (!f) f = run->opt->log; /* no memory: as it comes */
+    const char *clear = run->opt->tty ? "\r\033[K" : "";
+    const cb_roster_type *owner = &run->r->types[t->owner];
+    switch (t->outcome) {
+    case CB_TYPE_BAKED: {
+        char subset[64] = ""; /* past the measuring budget: say so (measure_all = true measures every row) */
+        if (t->error_rows_measured && t->error_rows_measured < t->rows)
+            snprintf(subset, sizeof subset, ", measured at %u of %u rows", t->error_rows_measured, t->rows);
+        bool pal = t->animal->bake.formats & CB_FORMAT_PAL; /* the file named; both sizes as `bake MODEL` gives them */
+        fprintf(f, "%s  %-16s baked    %s (%.1f KiB texture, %.1f KiB file, %ux%u, %s/%s, encoding error %.3g mm/m, "
+                "visible %.3g mm/m%s) in %.0f ms\n", clear, t->animal->name, pal ? t->pal_path : t->exr_path,
+                t->palette_bytes / 1024.0, (pal ? t->pal_file_bytes : t->exr_file_bytes) / 1024.0, t->width, t->height,
+                cb_layout_name(t->layout), cb_precision_name(t->precision),
+                cb_mm_per_m(t->max_error, t->model_height), cb_mm_per_m(t->visible_error, t->model_height), subset,
+                t->seconds * 1000);
+        break;
+    }
+    case CB_TYPE_UP_TO_DATE: fprintf(f, "%s  %-16s up to date\n", clear, t->animal->name); break;
+    case CB_TYPE_SHARED:
+        fprintf(f, "%s  %-16s shares %s's palette (same rig, bind pose and clips)\n", clear, t->animal->name,
+                owner->animal->name);
+        break;
+    case CB_TYPE_FAILED: {
+        const char *fix = run->opt->setting_name && t->error.setting ? run->opt->setting_name(t->error.setting) : NULL;
+        fprintf(f, "%s  %-16s FAILED: %s%s%s%s\n", clear, t->animal->name, t->error.message, fix ? " [" : "",
+                fix ? fix : "", fix ? "]" : "");
+        break;
+    }
+    }
+    for (uint32_t i = 0; i < t->warnings.count; ++i)
+        fprintf(f, "  %-16s %s: %s\n", "", t->warnings.items[i].kind, t->warnings.items[i].message);
+    if (f != run->opt->log) fclose(f);
+    else text = NULL;
+    roster_log_put(&run->log, (uint32_t)(t - run->r->types), text);
+    f = run->opt->log;
+    if (run->opt->tty)
+        fprintf(f, "\r\033[K  [%u/%u done, %.1f s]", run->r->baked + run->r->up_to_date + run->r->shared + run->r->failed,
+                run->r->type_count, now_seconds() - run->start);
+    fflush(f);
+    mtx_unlock(&run->log_lock);
+}
+
+/* Saves the record of a type prepared from its model (unless the file holds it already); a
+ * record that cannot be written only costs the next run the preparation. */
+static void write_record(roster_run *run, uint32_t i)
+{
+    type_work *w = &run->work[i];
+    char path[4096];
+    if (w->record && cb_prep_record_path(run->r->types[i].animal, path, sizeof path))
+        roster_write_record(path, w->record, w->record_size);
+}
+
+static void bake_type(roster_run *run, uint32_t i)
+{
+    cb_roster_type *t = &run->r->types[i];
+    const cb_catalog_animal *an = t->animal;
+    double t0 = now_seconds();
+    if (t->error.status) {
+        t->outcome = CB_TYPE_FAILED;
+    } else if (t->owner != i) {
+        return; /* shared types are settled once their owner is */
+    } else {
+        if (!run->opt->force && up_to_date(t, an->bake.formats)) {
+            t->outcome = CB_TYPE_UP_TO_DATE;
+        } else {
+            if (t->prepared_from_record) { /* the palette is not: bake it from the model */
+                cb_prep_clear(t);
+                t->prepared_from_record = false;
+                prepare_from_model(run, i);
+            }
+            t->outcome = t->error.status || bake_files(run, an, &run->work[i], t, &t->error) ? CB_TYPE_FAILED : CB_TYPE_BAKED;
+        }
+        if (t->outcome != CB_TYPE_FAILED) write_record(run, i);
+        t->pal_file_bytes = file_size(t->pal_path);
+        t->exr_file_bytes = file_size(t->exr_path);
+    }
+    t->seconds = now_seconds() - t0;
+    mtx_lock(&run->log_lock);
+    if (t->outcome == CB_TYPE_BAKED) run->r->baked++;
+    else if (t->outcome == CB_TYPE_UP_TO_DATE) run->r->up_to_date++;
+    else run->r->failed++;
+    mtx_unlock(&run->log_lock);
+    log_type(run, t);
+}
+
+/* ---- parallel passes ---- */
+
+typedef struct pass {
+    roster_run *run;
+    void (*fn)(roster_run *, uint32_t);
+    const uint32_t *order; /* the types, longest first (roster_order.c) */
+} pass;
+
+/* Each thread takes the next type until none is left (types take very different times). */
+static int pass_share(void *arg)
+{
+    pass *p = arg;
+    for (uint32_t i; (i = atomic_fetch_add(&p->run->next, 1)) < p->run->r->type_count;) p->fn(p->run, p->order[i]);
+    return 0;
+}
+
+/* The calling thread and threads - 1 more take types; one that fails to start leaves its
+ * types to the others. */
+#define PASS_MAX_THREADS 64
+static void pass_on_threads(pass *p, uint32_t threads)
+{
+    thrd_t ids[PASS_MAX_THREADS];
+    uint32_t started = 0;
+    for (uint32_t t = 1; t < threads && t < PASS_MAX_THREADS; ++t)
+        if (thrd_create(&ids[started], pass_share, p) == thrd_success) ++started;
+    pass_share(p);
+    for (uint32_t t = 0; t < started; ++t) thrd_join(ids[t], NULL);
+}
+
+static void run_pass(roster_run *run, void (*fn)(roster_run *, uint32_t), uint32_t *order)
+{
+    uint32_t threads = run->opt->jobs ? run->opt->jobs : 1;
+    if (threads > run->r->type_count) threads = run->r->type_count ? run->r->type_count : 1;
+    for (uint32_t i = 0; i < run->r->type_count; ++i) order[i] = i; /* one thread: catalog order */
+    if (threads > 1) roster_order_types(run->cat, run->r, fn == bake_type, order); /* changes no output */
+    atomic_store(&run->next, 0);
+    pass p = {run, fn, order};
+    pass_on_threads(&p, threads);
+}
+
+/* ---- the whole bake ---- */
+
+cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb_roster *r, cb_error *err)
+{
+    memset(r, 0, sizeof *r);
+    r->catalog = cat;
+    r->type_count = cat->animal_count;
+    r->types = calloc(cat->animal_count ? cat->animal_count : 1, sizeof *r->types);
+    roster_run run;
+    memset(&run, 0, sizeof run);
+    run.cat = cat, run.opt = opt, run.r = r, run.start = now_seconds();
+    run.work = calloc(cat->animal_count ? cat->animal_count : 1, sizeof(type_work));
+    uint32_t *order = calloc(cat->animal_count ? cat->animal_count : 1, sizeof *order);
+    roster_log_init(&run.log, opt->log, r->type_count); /* without memory, lines print as they come */
+    if (!r->types || !run.work || !order || mtx_init(&run.log_lock, mtx_plain) != thrd_success) {
+        free(run.work), free(order), roster_log_free(&run.log);
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    }
+    /* Types are the unit of parallel work; fewer types than threads spread their clips too. */
+    run.threads_per_bake = cat->animal_count && opt->jobs > cat->animal_count ? opt->jobs / cat->animal_count : 1;
+    run_pass(&run, prepare_type, order);
+    /* Equal keys share: the first type (by name) owns the palette. */
+    for (uint32_t i = 0; i < r->type_count; ++i) {
+        cb_roster_type *t = &r->types[i];
+        if (t->error.status) continue;
+        for (uint32_t k = 0; k < i; ++k)
+            if (!r->types[k].error.status && r->types[k].owner == k && r->types[k].key == t->key) {
+                t->owner = k;
+                t->outcome = CB_TYPE_SHARED;
+                break;
+            }
+    }
+    run_pass(&run, bake_type, order);
+    for (uint32_t i = 0; i < r->type_count; ++i) {
+        cb_roster_type *t = &r->types[i];
+        if (t->owner == i || t->error.status) continue;
+        const cb_roster_type *o = &r->types[t->owner];
+        if (o->outcome == CB_TYPE_FAILED) {
+            t->outcome = CB_TYPE_FAILED;
+            cb_fail(&t->error, o->error.status, "its palette is %s's, which failed", o->animal->name);
+            r->failed++;
+        } else {
+            memcpy(t->pal_path, o->pal_path, sizeof t->pal_path);
+            memcpy(t->exr_path, o->exr_path, sizeof t->exr_path);
+            t->layout = o->layout, t->precision = o->precision, t->palette_bytes = o->palette_bytes;
+            t->width = o->width, t->height = o->height, t->blocks = o->blocks, t->max_error = o->max_error;
+            t->visible_error = o->visible_error;
+            write_record(&run, i);
+            r->shared++;
+        }
+        log_type(&run, t);
+    }
+    if (opt->log && opt->tty) fputs("\r\033[K", opt->log);
+    if (opt->manifest) snprintf(r->manifest_path, sizeof r->manifest_path, "%s", opt->manifest);
+    else snprintf(r->manifest_path, sizeof r->manifest_path, "%s/roster.json", cat->defaults.out_dir);
+    cb_status rc = roster_make_parent_directories(r->manifest_path, err);
+    if (!rc) rc = roster_write_manifest(cat, r, r->manifest_path, err);
+    if (!rc && opt->depfile && !(rc = roster_make_parent_directories(opt->depfile, err))) rc = roster_write_depfile(cat, r, opt->depfile, opt->depfile_manifest_only, err);
+    if (!rc) roster_settle_times(r);
+    for (uint32_t i = 0; i < r->type_count && !rc; ++i)
+        if (r->types[i].outcome == CB_TYPE_FAILED && !err->status) *err = r->types[i].error, rc = err->status;
+    for (uint32_t i = 0; i < r->type_count; ++i) {
+        cb_bake_job_free(&run.work[i].job);
+        free(run.work[i].plan);
+        free(run.work[i].clip_requests);
+        cb_model_free(run.work[i].model);
+        for (uint32_t l = 0; l < cat->animals[i].lod_count && run.work[i].lod_models; ++l) cb_model_free(run.work[i].lod_models[l]);
+        free(run.work[i].lod_models);
+        free(run.work[i].record);
+    }
+    free(run.work), free(order), roster_log_free(&run.log);
+    mtx_destroy(&run.log_lock);
+    return rc;
+}
+
+void cb_roster_free(cb_roster *r)
+{
+    for (uint32_t i = 0; i < r->type_count; ++i) {
+        free(r->types[i].clips);
+        free(r->types[i].state_clip);
+        free(r->types[i].state_sync);
+        for (uint32_t l = 0; l < r->types[i].lod_count; ++l) free(r->types[i].lods[l].remap);
+        free(r->types[i].lods);
+        free(r->types[i].sockets);
+        for (uint32_t k = 0; k < r->types[i].input_count; ++k) free(r->types[i].inputs[k]);
+        free(r->types[i].inputs);
+        cb_warnings_free(&r->types[i].warnings);
+    }
+    free(r->types);
+    memset(r, 0, sizeof *r);
+}

@@ -1,0 +1,105 @@
+/* roster.h - bakes a whole catalog: one palette per animal type (shared between types whose
+ * rigs and clips are identical), a roster manifest, a depfile; incremental and parallel. */
+#ifndef CB_ROSTER_H
+#define CB_ROSTER_H
+
+#include <stdio.h>
+
+#include "catalog/catalog.h"
+#include "crowdbake/json.h"
+#include "crowdbake/socket.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cb_roster_options {
+    uint32_t jobs;          /* types baked at once */
+    bool force;             /* re-bake what is up to date */
+    FILE *log;              /* one line per type, or NULL */
+    bool tty;               /* log is a terminal: show progress */
+    const char *manifest;   /* roster.json path; NULL: OUT_DIR/roster.json */
+    const char *depfile;    /* Make/Ninja depfile, or NULL */
+    bool depfile_manifest_only; /* the depfile's one rule is the manifest's (Ninja's `depfile` without `deps = gcc`) */
+    const cb_limits *limits; /* for loading and baking; NULL: the defaults */
+    bool measure_vat;       /* also measure each type's VAT error (half-float positions) for the report */
+    /* How the front end names a setting (cb_error.setting) in a failed type's line, or NULL. */
+    const char *(*setting_name)(cb_setting setting);
+} cb_roster_options;
+
+typedef enum cb_type_outcome { CB_TYPE_BAKED, CB_TYPE_UP_TO_DATE, CB_TYPE_SHARED, CB_TYPE_FAILED } cb_type_outcome;
+
+typedef struct cb_roster_clip {
+    char name[128];
+    uint32_t first_row, frames;
+    double fps, duration;
+    bool loops;
+    cb_ground_speed speed; /* speed.speed is the clip's ground speed */
+} cb_roster_clip;
+
+typedef struct cb_roster_lod {
+    const char *path;
+    uint32_t joint_count;
+    uint32_t *remap;          /* joint_count entries */
+    uint64_t vertices, indices;
+} cb_roster_lod;
+
+typedef struct cb_roster_type {
+    const cb_catalog_animal *animal;
+    cb_type_outcome outcome;
+    cb_error error;
+    uint32_t owner;           /* the type whose palette file this type uses */
+    uint64_t key;             /* content hash of rig, clips and settings: equal keys share */
+    uint64_t input_hash;      /* key + model and LOD bytes + the resolved entry: recorded in the files */
+    char pal_path[1024], exr_path[1024];
+    uint32_t bones, rows, width, height, blocks;
+    cb_layout layout;
+    cb_precision precision;
+    uint64_t vertices, indices, palette_bytes; /* palette_bytes: the texture as uploaded */
+    uint64_t mesh_bytes;      /* vertex and index buffers in the model's own vertex format */
+    uint64_t pal_file_bytes, exr_file_bytes;
+    float max_error, visible_error; /* see cb_palette; float32 as the files record them, so an up-to-date run reports the same */
+    double model_height, speed_reference, seconds;
+    char speed_reference_from[512]; /* which rule picked speed_reference, in words */
+    double vat_error;         /* with measure_vat */
+    uint32_t clip_count;
+    cb_roster_clip *clips;
+    int *state_clip;          /* per catalog state: index into clips */
+    cb_sync_decision *state_sync; /* per catalog state: follows the speed or not, and why */
+    uint32_t lod_count;
+    cb_roster_lod *lods;
+    uint32_t socket_count;
+    cb_socket *sockets;       /* where props attach (socket.h) */
+    uint32_t input_count;
+    char **inputs;            /* every file read for it: model, LODs, their external buffers */
+    cb_warnings warnings;     /* clips skipped at load, the layout's fallback, ... */
+    bool prepared_from_record; /* its record (roster_cache.h) matched its files: nothing was loaded or sampled */
+    uint32_t error_rows_measured; /* baked this run: the rows its errors were measured at (cb_palette's), else 0 */
+} cb_roster_type;
+
+typedef struct cb_roster {
+    const cb_catalog *catalog;
+    uint32_t type_count;
+    cb_roster_type *types;
+    uint32_t baked, up_to_date, shared, failed;
+    char manifest_path[1024];
+    bool manifest_written;
+} cb_roster;
+
+/* Bakes every type; failures are recorded per type and the others still bake. Returns the
+ * status of the first failure (by name), or CB_OK. */
+cb_status cb_roster_bake(const cb_catalog *catalog, const cb_roster_options *options, cb_roster *out, cb_error *err);
+void cb_roster_free(cb_roster *roster);
+
+/* A clip's stride as the manifest and `info --json` give it: "stride", "stride_reason" and, for
+ * a stride, "foot_slide": how much each planted foot slides at the clip's ground speed
+ * (fractions of that speed, mean and worst over the foot's stance). */
+void cb_roster_json_stride(cb_json *j, const cb_stride *stride);
+/* "sockets": [{name, bone, bind_transform}], as the manifest and `info --json` give them. */
+void cb_roster_json_sockets(cb_json *j, const cb_socket *sockets, uint32_t count);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

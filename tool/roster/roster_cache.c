@@ -1,0 +1,365 @@
+/* roster_cache.c - see roster_cache.h. A record is "CBPREP1" and a NUL, the key, the length
+ * and xxh64 of the body, then the body: fixed-size numbers in this machine's byte order and
+ * strings as a u32 length and their bytes. Doubles are stored bit for bit, so a manifest
+ * written from a record is byte-identical to one written after loading the model. */
+#include "roster_cache.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "crowdbake_pal.h"
+
+static const char magic[8] = "CBPREP3"; /* 2: each clip's stride; 3: its feet's stances, the sockets */
+
+bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
+{
+    int n = snprintf(out, size, "%s/.%s.prep", an->bake.out_dir, an->name);
+    return n > 0 && (size_t)n < size;
+}
+
+/* ---- the key ---- */
+
+static void hash_str(cbpal_xxh64_state *h, const char *s) { cbpal_xxh64_update(h, s ? s : "", (s ? strlen(s) : 0) + 1); }
+
+static bool hash_file(cbpal_xxh64_state *h, const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return false;
+    unsigned char buf[1 << 16];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, f)) > 0) cbpal_xxh64_update(h, buf, n);
+    bool ok = !ferror(f);
+    fclose(f);
+    return ok;
+}
+
+bool cb_prep_key(const cb_catalog_animal *an, const cb_limits *limits, char *const *inputs, uint32_t input_count,
+                 uint64_t *key)
+{
+    cbpal_xxh64_state h;
+    cbpal_xxh64_init(&h);
+    hash_str(&h, "crowdbake prepare " CROWDBAKE_VERSION);
+    hash_str(&h, an->name);
+    hash_str(&h, an->canonical);
+    /* The settings a run's options may override (the canonical entry is the catalog's text). */
+    const cb_bake_settings *b = &an->bake;
+    double settings[15] = {b->fps, b->fps_auto, b->max_error_mm, b->max_fps, b->layout, b->layout_set, b->precision,
+                           b->precision_set, b->formats, b->max_texture_size, b->root_motion, b->zstd,
+                           b->exr_compression, an->speed_reference, b->fit_rows};
+    cbpal_xxh64_update(&h, settings, sizeof settings);
+    if (b->measure_all) hash_str(&h, "measure_all"); /* only then: records made before it stay valid */
+    if (b->max_error_given && b->from.max_error == CB_FROM_COMMAND_LINE) hash_str(&h, "max_error from the command line");
+    hash_str(&h, b->out_dir);
+    cb_limits l = limits ? *limits : cb_default_limits();
+    uint64_t lim[5] = {l.max_joints, l.max_frames, l.max_accessor_count, l.max_file_bytes, l.max_palette_bytes};
+    cbpal_xxh64_update(&h, lim, sizeof lim);
+    for (uint32_t i = 0; i < input_count; ++i) {
+        hash_str(&h, inputs[i]);
+        if (!hash_file(&h, inputs[i])) return false;
+    }
+    *key = cbpal_xxh64_digest(&h);
+    return true;
+}
+
+/* ---- writing ---- */
+
+typedef struct writer {
+    unsigned char *data;
+    size_t size, cap;
+    bool failed;
+} writer;
+
+static void put(writer *w, const void *p, size_t n)
+{
+    if (w->failed || n == 0) return;
+    if (w->size + n > w->cap) {
+        size_t cap = w->cap ? w->cap * 2 : 4096;
+        while (cap < w->size + n) cap *= 2;
+        unsigned char *grown = realloc(w->data, cap);
+        if (!grown) {
+            w->failed = true;
+            return;
+        }
+        w->data = grown, w->cap = cap;
+    }
+    memcpy(w->data + w->size, p, n);
+    w->size += n;
+}
+
+static void put_u32(writer *w, uint32_t v) { put(w, &v, sizeof v); }
+static void put_u64(writer *w, uint64_t v) { put(w, &v, sizeof v); }
+static void put_f64(writer *w, double v) { put(w, &v, sizeof v); }
+static void put_str(writer *w, const char *s)
+{
+    uint32_t n = (uint32_t)strlen(s);
+    put_u32(w, n);
+    put(w, s, n);
+}
+
+bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char **data, size_t *size)
+{
+    writer w = {0};
+    put(&w, magic, sizeof magic);
+    put_u64(&w, key);
+    put_u64(&w, 0), put_u64(&w, 0); /* body length and hash, filled in below */
+    size_t body = w.size;
+    put_u64(&w, t->key), put_u64(&w, t->input_hash);
+    put_u32(&w, t->bones), put_u32(&w, t->rows);
+    put_u64(&w, t->vertices), put_u64(&w, t->indices), put_u64(&w, t->mesh_bytes);
+    put_f64(&w, t->model_height), put_f64(&w, t->speed_reference);
+    put_str(&w, t->speed_reference_from);
+    put_u32(&w, t->clip_count);
+    for (uint32_t i = 0; i < t->clip_count; ++i) {
+        const cb_roster_clip *c = &t->clips[i];
+        put_str(&w, c->name);
+        put_u32(&w, c->first_row), put_u32(&w, c->frames), put_u32(&w, c->loops);
+        put_f64(&w, c->fps), put_f64(&w, c->duration);
+        put_f64(&w, c->speed.speed), put_f64(&w, c->speed.root), put_f64(&w, c->speed.feet);
+        put_str(&w, c->speed.method);
+        put(&w, &c->speed.stride, sizeof c->speed.stride); /* plain numbers and zero-filled strings */
+    }
+    put_u32(&w, t->animal->state_count);
+    for (uint32_t s = 0; s < t->animal->state_count; ++s) put_u32(&w, (uint32_t)t->state_clip[s]);
+    put_u32(&w, t->lod_count);
+    for (uint32_t l = 0; l < t->lod_count; ++l) {
+        const cb_roster_lod *lod = &t->lods[l];
+        put_u32(&w, lod->joint_count);
+        put(&w, lod->remap, (size_t)lod->joint_count * sizeof *lod->remap);
+        put_u64(&w, lod->vertices), put_u64(&w, lod->indices);
+    }
+    put_u32(&w, t->socket_count);
+    put(&w, t->sockets, (size_t)t->socket_count * sizeof *t->sockets); /* plain numbers and zero-filled names */
+    put_u32(&w, t->input_count);
+    for (uint32_t i = 0; i < t->input_count; ++i) put_str(&w, t->inputs[i]);
+    put_u32(&w, t->warnings.count);
+    for (uint32_t i = 0; i < t->warnings.count; ++i) {
+        put_str(&w, t->warnings.items[i].kind);
+        put_str(&w, t->warnings.items[i].message);
+    }
+    if (w.failed) {
+        free(w.data);
+        return false;
+    }
+    uint64_t length = w.size - body, hash = cbpal_xxh64(w.data + body, length);
+    memcpy(w.data + body - 16, &length, 8);
+    memcpy(w.data + body - 8, &hash, 8);
+    *data = w.data, *size = w.size;
+    return true;
+}
+
+/* ---- reading ---- */
+
+typedef struct reader {
+    const unsigned char *p, *end;
+    bool failed;
+} reader;
+
+static void get(reader *r, void *out, size_t n)
+{
+    if (n == 0) return;
+    if (r->failed || (size_t)(r->end - r->p) < n) {
+        r->failed = true;
+        memset(out, 0, n);
+        return;
+    }
+    memcpy(out, r->p, n);
+    r->p += n;
+}
+
+static uint32_t get_u32(reader *r) { uint32_t v; get(r, &v, sizeof v); return v; }
+static uint64_t get_u64(reader *r) { uint64_t v; get(r, &v, sizeof v); return v; }
+static double get_f64(reader *r) { double v; get(r, &v, sizeof v); return v; }
+
+/* A string into buf (truncation fails the record); NULL buf: a malloc'ed copy. */
+static char *get_str(reader *r, char *buf, size_t size)
+{
+    uint32_t n = get_u32(r);
+    if (r->failed || (size_t)(r->end - r->p) < n || (buf && n >= size)) {
+        r->failed = true;
+        return NULL;
+    }
+    char *s = buf ? buf : malloc((size_t)n + 1);
+    if (!s) {
+        r->failed = true;
+        return NULL;
+    }
+    memcpy(s, r->p, n);
+    s[n] = '\0';
+    r->p += n;
+    return s;
+}
+
+/* Counts are checked against what is left of the record before anything is allocated. */
+static bool plausible(reader *r, uint64_t count, size_t min_bytes_each)
+{
+    if (r->failed || count > (uint64_t)(r->end - r->p) / (min_bytes_each ? min_bytes_each : 1)) r->failed = true;
+    return !r->failed;
+}
+
+/* The speed methods are the measurement's own literals (catalog.h). */
+static const char *known_method(const char *text)
+{
+    static const char *const methods[] = {"none", "root motion", "planted feet"};
+    for (size_t i = 0; i < sizeof methods / sizeof methods[0]; ++i)
+        if (strcmp(text, methods[i]) == 0) return methods[i];
+    return NULL;
+}
+
+/* A stride as cb_stride_measure leaves it: feet within bounds, strings terminated. */
+static bool stride_plausible(const cb_stride *s)
+{
+    bool ok = s->foot_count <= CB_MAX_FEET && memchr(s->why, 0, sizeof s->why);
+    for (uint32_t k = 0; ok && k < s->foot_count; ++k)
+        ok = memchr(s->feet[k].name, 0, sizeof s->feet[k].name) != NULL && s->feet[k].stance_count <= CB_MAX_STANCES;
+    return ok;
+}
+
+static void read_clips(reader *r, cb_roster_type *t)
+{
+    uint32_t n = get_u32(r);
+    if (!plausible(r, n, 64) || !(t->clips = calloc(n ? n : 1, sizeof *t->clips))) {
+        r->failed = true;
+        return;
+    }
+    t->clip_count = n;
+    for (uint32_t i = 0; i < n && !r->failed; ++i) {
+        cb_roster_clip *c = &t->clips[i];
+        char method[64];
+        get_str(r, c->name, sizeof c->name);
+        c->first_row = get_u32(r), c->frames = get_u32(r), c->loops = get_u32(r) != 0;
+        c->fps = get_f64(r), c->duration = get_f64(r);
+        c->speed.speed = get_f64(r), c->speed.root = get_f64(r), c->speed.feet = get_f64(r);
+        if (get_str(r, method, sizeof method) && !(c->speed.method = known_method(method))) r->failed = true;
+        get(r, &c->speed.stride, sizeof c->speed.stride);
+        if (!stride_plausible(&c->speed.stride)) r->failed = true;
+    }
+}
+
+/* Sockets as written: names terminated, bones inside the rig. */
+static void read_sockets(reader *r, cb_roster_type *t)
+{
+    uint32_t n = get_u32(r);
+    if (r->failed || !plausible(r, n, sizeof *t->sockets) || (n && !(t->sockets = calloc(n, sizeof *t->sockets)))) {
+        r->failed = true;
+        return;
+    }
+    t->socket_count = n;
+    get(r, t->sockets, (size_t)n * sizeof *t->sockets);
+    for (uint32_t i = 0; i < n && !r->failed; ++i)
+        r->failed = !memchr(t->sockets[i].name, 0, sizeof t->sockets[i].name) || t->sockets[i].bone >= t->bones;
+}
+
+static void read_states_and_lods(reader *r, const cb_catalog_animal *an, cb_roster_type *t)
+{
+    uint32_t states = get_u32(r);
+    if (r->failed || states != an->state_count || !(t->state_clip = calloc(states ? states : 1, sizeof *t->state_clip))) {
+        r->failed = true;
+        return;
+    }
+    for (uint32_t s = 0; s < states; ++s) {
+        t->state_clip[s] = (int)get_u32(r);
+        if (t->state_clip[s] < 0 || (uint32_t)t->state_clip[s] >= t->clip_count) r->failed = true;
+    }
+    uint32_t lods = get_u32(r);
+    if (r->failed || lods != an->lod_count || !(t->lods = calloc(lods ? lods : 1, sizeof *t->lods))) {
+        r->failed = true;
+        return;
+    }
+    t->lod_count = lods;
+    for (uint32_t l = 0; l < lods && !r->failed; ++l) {
+        cb_roster_lod *lod = &t->lods[l];
+        lod->path = an->lods[l];
+        uint32_t joints = get_u32(r);
+        if (!plausible(r, joints, sizeof *lod->remap) || !(lod->remap = malloc((joints ? joints : 1) * sizeof *lod->remap))) {
+            r->failed = true;
+            return;
+        }
+        lod->joint_count = joints;
+        get(r, lod->remap, (size_t)joints * sizeof *lod->remap);
+        for (uint32_t k = 0; k < joints; ++k)
+            if (lod->remap[k] >= t->bones) r->failed = true;
+        lod->vertices = get_u64(r), lod->indices = get_u64(r);
+    }
+}
+
+static void read_inputs_and_warnings(reader *r, cb_roster_type *t)
+{
+    uint32_t n = get_u32(r);
+    if (!plausible(r, n, 4) || !(t->inputs = calloc(n ? n : 1, sizeof *t->inputs))) {
+        r->failed = true;
+        return;
+    }
+    for (uint32_t i = 0; i < n && !r->failed; ++i)
+        if ((t->inputs[i] = get_str(r, NULL, 0))) t->input_count = i + 1;
+    uint32_t warnings = get_u32(r);
+    if (!plausible(r, warnings, 8)) return;
+    for (uint32_t i = 0; i < warnings && !r->failed; ++i) {
+        char kind[16];
+        char *message = get_str(r, kind, sizeof kind) ? get_str(r, NULL, 0) : NULL;
+        if (message) cb_warn(&t->warnings, strcmp(kind, "warning") == 0 ? "warning" : "note", "%s", message);
+        free(message);
+    }
+}
+
+static bool decode(const unsigned char *data, size_t size, const cb_catalog_animal *an, const cb_limits *limits,
+                   cb_roster_type *t)
+{
+    reader r = {data, data + size, false};
+    char head[8];
+    get(&r, head, sizeof head);
+    uint64_t key = get_u64(&r), length = get_u64(&r), hash = get_u64(&r);
+    if (r.failed || memcmp(head, magic, sizeof magic) != 0 || length != (uint64_t)(r.end - r.p) ||
+        cbpal_xxh64(r.p, length) != hash)
+        return false;
+    t->key = get_u64(&r), t->input_hash = get_u64(&r);
+    t->bones = get_u32(&r), t->rows = get_u32(&r);
+    t->vertices = get_u64(&r), t->indices = get_u64(&r), t->mesh_bytes = get_u64(&r);
+    t->model_height = get_f64(&r), t->speed_reference = get_f64(&r);
+    get_str(&r, t->speed_reference_from, sizeof t->speed_reference_from);
+    read_clips(&r, t);
+    read_states_and_lods(&r, an, t);
+    read_sockets(&r, t);
+    read_inputs_and_warnings(&r, t);
+    if (r.failed || r.p != r.end || t->input_count == 0) return false;
+    uint64_t now;
+    return cb_prep_key(an, limits, t->inputs, t->input_count, &now) && now == key;
+}
+
+bool cb_prep_record_load(const char *path, const cb_catalog_animal *an, const cb_limits *limits, cb_roster_type *t)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return false;
+    unsigned char *data = NULL;
+    size_t size = 0;
+    if (fseek(f, 0, SEEK_END) == 0) {
+        long end = ftell(f);
+        if (end > 0 && end < (1L << 26) && fseek(f, 0, SEEK_SET) == 0 && (data = malloc((size_t)end)) &&
+            fread(data, 1, (size_t)end, f) == (size_t)end)
+            size = (size_t)end;
+    }
+    fclose(f);
+    bool ok = size > 0 && decode(data, size, an, limits, t);
+    free(data);
+    if (!ok) cb_prep_clear(t);
+    return ok;
+}
+
+void cb_prep_clear(cb_roster_type *t)
+{
+    free(t->clips);
+    free(t->state_clip);
+    free(t->state_sync);
+    for (uint32_t l = 0; t->lods && l < t->lod_count; ++l) free(t->lods[l].remap);
+    free(t->lods);
+    free(t->sockets);
+    for (uint32_t i = 0; i < t->input_count; ++i) free(t->inputs[i]);
+    free(t->inputs);
+    cb_warnings_free(&t->warnings);
+    t->clips = NULL, t->state_clip = NULL, t->state_sync = NULL, t->lods = NULL, t->inputs = NULL, t->sockets = NULL;
+    t->clip_count = t->lod_count = t->input_count = t->socket_count = 0;
+    t->key = t->input_hash = 0;
+    t->bones = t->rows = 0;
+    t->vertices = t->indices = t->mesh_bytes = 0;
+    t->model_height = t->speed_reference = 0;
+    t->speed_reference_from[0] = '\0';
+}

@@ -1,0 +1,56 @@
+/* roster_files.h - the roster bake's pieces beside its passes: the content key, and the files
+ * beside its palettes (private to libcrowdbake). */
+#ifndef CB_ROSTER_FILES_H
+#define CB_ROSTER_FILES_H
+
+#include <stdio.h>
+
+#include "roster/roster.h"
+
+/* "CATALOG:LINE:COLUMN" of a place in the catalog, into buf. */
+const char *roster_at(const cb_catalog *cat, cb_source_pos pos, char *buf, size_t size);
+
+/* Each state's clip (state_clip), by its keywords; fails naming the state that matches none. */
+cb_status roster_match_states(const cb_catalog *cat, const cb_catalog_animal *an, cb_roster_type *t, cb_error *err);
+/* Which states follow the speed (state_sync, cb_decide_sync) and the speed reference; fails
+ * where a state must follow the speed but nothing gives it one (roster_states.c). */
+cb_status roster_decide_states(const cb_catalog *cat, const cb_catalog_animal *an, cb_roster_type *t, cb_error *err);
+/* A warning per speed-synced clip whose feet slide however it is played (cb_stride). */
+void roster_warn_foot_slide(cb_roster_type *t);
+
+/* The content key of a type's rig, planned clips and settings (roster_key.c). */
+uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan *plan, uint32_t n, const cb_bake_settings *b);
+
+/* mkdir -p: a directory and any missing parents; or the folder a file goes in. */
+cb_status roster_make_directories(const char *dir, cb_error *err);
+cb_status roster_make_parent_directories(const char *file, cb_error *err);
+/* roster.json (docs/roster.schema.json), rewritten only when its bytes change (r->manifest_written). */
+cb_status roster_write_manifest(const cb_catalog *cat, cb_roster *r, const char *path, cb_error *err);
+/* One rule per output, Make and Ninja both read it; or (manifest_only) one rule, the manifest's,
+ * as Ninja wants it for a rule with `depfile` but no `deps = gcc` (CMake's DEPFILE). */
+cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, bool manifest_only,
+                               cb_error *err);
+/* A type's prep record (roster_cache.h), rewritten only when its bytes change; a failure is
+ * ignored (the next run prepares the type again). */
+void roster_write_record(const char *path, const unsigned char *data, size_t size);
+/* After a failure the manifest and the failed palettes get the epoch (the next build runs
+ * again); after a success the manifest is never older than an input. */
+void roster_settle_times(const cb_roster *r);
+/* order[0..type_count): the types, the longest (a guess) first (roster_order.c). */
+void roster_order_types(const cb_catalog *cat, const cb_roster *r, bool prepared, uint32_t *order);
+
+/* The roster's log in catalog order (roster_log.c): each type's lines are held until every type
+ * before it has printed, so the log reads the same whatever order the threads finish in. The
+ * caller serialises the calls. */
+typedef struct roster_log {
+    FILE *out;
+    char **held;     /* per type: its lines once it is settled, until they are printed */
+    uint32_t count, next; /* next: the first type not printed yet */
+} roster_log;
+bool roster_log_init(roster_log *log, FILE *out, uint32_t count); /* false: no memory (lines print as they come) */
+/* Type i's lines (malloc'd, taken over; NULL prints nothing): printed now, with the held lines of
+ * the types after it, once every type before it has printed. */
+void roster_log_put(roster_log *log, uint32_t i, char *text);
+void roster_log_free(roster_log *log);
+
+#endif
