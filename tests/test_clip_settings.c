@@ -6,7 +6,7 @@
 #include "testutil.h"
 
 #include "crowdbake/bake.h"
-#include "crowdbake/catalog_toml.h"
+#include "catalog/catalog_toml.h"
 
 /* A catalog of one animal (the quadruped sample) with these [bake], [animal] and clip keys. */
 static void parse_catalog(const char *bake_keys, const char *animal_keys, const char *clip_keys, cb_catalog *cat)

@@ -16,6 +16,7 @@
 #ifndef CB_BABYLON_WRITE_H
 #define CB_BABYLON_WRITE_H
 
+#include "export.h"
 #include "palette.h"
 
 #ifdef __cplusplus
@@ -24,12 +25,12 @@ extern "C" {
 
 /* The bones of the skeleton @babylonjs/loaders builds for `skin` (joints and the non-joint
  * nodes on their chains); 0 when out of memory. */
-uint32_t cb_babylon_bone_count(const cb_model *model, int32_t skin);
+CROWDBAKE_API uint32_t cb_babylon_bone_count(const cb_model *model, int32_t skin);
 
 /* in_place: the palette was baked with root motion in place (a loop's closing row then moves
  * by the root's vertical travel alone). */
-cb_status cb_babylon_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
-                           float speed_reference, bool in_place, cb_error *err);
+CROWDBAKE_API cb_status cb_babylon_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
+                                         float speed_reference, bool in_place, cb_error *err);
 
 #ifdef __cplusplus
 }

@@ -11,6 +11,7 @@
 
 #include <stddef.h>
 
+#include "export.h"
 #include "palette.h"
 
 #ifdef __cplusplus
@@ -28,7 +29,7 @@ typedef enum cb_setting_from {
 } cb_setting_from;
 
 /* "default", "catalog [bake]", "catalog animal", "command line", "catalog clip", "rig: no skinned mesh". */
-const char *cb_setting_from_name(cb_setting_from from);
+CROWDBAKE_API const char *cb_setting_from_name(cb_setting_from from);
 
 /* Where a bake's job-wide settings (cb_bake_settings.from) came from: fps covers fps and auto. */
 typedef struct cb_settings_from {
@@ -69,13 +70,14 @@ struct cb_bake_settings;
  *    clip with a fixed fps of its own; else the job's if max_error was given beside its fixed
  *    fps; else none;
  *  - max_fps, fit_rows, root_motion: the job's. */
-void cb_resolve_clip_settings(const struct cb_bake_settings *job, const cb_clip_plan *clip, const cb_clip_request *request,
-                              cb_setting_from clip_from, bool measurable, cb_clip_settings *out);
+CROWDBAKE_API void cb_resolve_clip_settings(const struct cb_bake_settings *job, const cb_clip_plan *clip,
+                                            const cb_clip_request *request, cb_setting_from clip_from, bool measurable,
+                                            cb_clip_settings *out);
 
 /* The settings and their origins in one line: "fps auto (default), max_error 1 mm/m (catalog
  * animal), max_fps 120 (default), rows fitted or sampled (default), root_motion keep (default),
  * loop from the poses (default)". */
-void cb_clip_settings_text(const cb_clip_settings *settings, char *buf, size_t size);
+CROWDBAKE_API void cb_clip_settings_text(const cb_clip_settings *settings, char *buf, size_t size);
 
 #ifdef __cplusplus
 }

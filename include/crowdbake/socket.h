@@ -7,6 +7,7 @@
 #ifndef CB_SOCKET_H
 #define CB_SOCKET_H
 
+#include "export.h"
 #include "core.h"
 
 #ifdef __cplusplus
@@ -22,7 +23,7 @@ typedef struct cb_socket {
 
 /* The sampler's skin's sockets, in node order: their count, and in *out an array to free()
  * (NULL when there are none or memory ran out). Skinned mesh nodes of the skin are not sockets. */
-uint32_t cb_find_sockets(cb_sampler *sampler, cb_socket **out);
+CROWDBAKE_API uint32_t cb_find_sockets(cb_sampler *sampler, cb_socket **out);
 
 #ifdef __cplusplus
 }
