@@ -424,9 +424,10 @@ $(BUILD)/bench_floor: bench/bench_floor.cpp $(BUILD)/libcrowdbake.a $(DEPS_STAMP
 
 # The native crowd benchmark (bench/bench_gl.c): OpenGL 3.3 through EGL, no window; Mesa's
 # llvmpipe here, a GPU's driver where there is one.
-$(BUILD)/bench_gl: bench/bench_gl.c $(BUILD)/libcrowdbake.a
+# It draws with the shipped GLSL, embedded as the command's preview embeds it (gen/palette_glsl.o).
+$(BUILD)/bench_gl: bench/bench_gl.c $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
-	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs egl gl 2>/dev/null)
+	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs egl gl 2>/dev/null)
 
 bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(NODE_DEPS)
 	python3 bench/run.py

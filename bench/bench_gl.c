@@ -24,6 +24,9 @@
 
 #include "crowdbake/crowdbake.h"
 
+/* samples/shaders/crowdbake_palette.glsl, embedded by the build (build/gen/palette_glsl.c). */
+extern const char cb_palette_glsl[];
+
 #define WIDTH 960
 #define HEIGHT 540
 #define METHODS 3
