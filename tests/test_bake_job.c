@@ -43,6 +43,11 @@ static void test_each_format_gets_its_precision(void **state)
     assert_false(cb_bake_settings_options(&s, CB_FORMAT_PAL, NULL, 1).affine_fallback);
     s.precision = CB_PRECISION_U16, s.formats = CB_FORMAT_PAL | CB_FORMAT_EXR;
     assert_false(cb_bake_settings_writable(&s));
+    s.formats = CB_FORMAT_PAL | CB_FORMAT_BABYLON; /* u16 is the .pal's; a .bvat.json is always float mat4 */
+    assert_true(cb_bake_settings_writable(&s));
+    assert_int_equal(cb_bake_settings_options(&s, CB_FORMAT_BABYLON, NULL, 1).precision, CB_PRECISION_FLOAT);
+    s.formats = CB_FORMAT_BABYLON; /* u16 for it alone: refused, never ignored */
+    assert_false(cb_bake_settings_writable(&s));
     assert_int_equal(cb_formats_parse("both"), CB_FORMAT_PAL | CB_FORMAT_EXR);
     assert_int_equal(cb_formats_parse("exr,pal"), CB_FORMAT_PAL | CB_FORMAT_EXR);
     assert_int_equal(cb_formats_parse("png"), 0);

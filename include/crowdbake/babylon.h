@@ -27,10 +27,36 @@ extern "C" {
  * nodes on their chains); 0 when out of memory. */
 CROWDBAKE_API uint32_t cb_babylon_bone_count(const cb_model *model, int32_t skin);
 
-/* in_place: the palette was baked with root motion in place (a loop's closing row then moves
- * by the root's vertical travel alone). */
+/* The rows a clip takes in the file: its palette rows, and for a loop its closing row. */
+CROWDBAKE_API uint32_t cb_babylon_clip_rows(uint32_t frames, bool loops);
+
+/* A catalog state: its name and the palette clip it plays (an index into p->clips). */
+typedef struct cb_babylon_state {
+    const char *name;
+    uint32_t clip;
+} cb_babylon_state;
+
+typedef struct cb_babylon_write_options {
+    float speed_reference;
+    bool in_place;          /* baked with root motion in place (a loop's closing row then moves by
+                             * the root's vertical travel alone) */
+    uint64_t input_hash;    /* recorded as crowdbake.input_hash: what an up-to-date check compares */
+    const cb_babylon_state *states; /* a catalog type's states (crowdbake.states), or NULL */
+    uint32_t state_count;
+} cb_babylon_write_options;
+
 CROWDBAKE_API cb_status cb_babylon_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
-                                         float speed_reference, bool in_place, cb_error *err);
+                                         const cb_babylon_write_options *options, cb_error *err);
+
+/* What an up-to-date check reads of a .bvat.json without decoding its rows: its size, its
+ * rows and its input hash. Fails on a file that is not whole (its base64 not the length that
+ * width x height Float32 values take). */
+typedef struct cb_babylon_facts {
+    uint32_t width, height;
+    uint64_t input_hash;
+} cb_babylon_facts;
+
+CROWDBAKE_API cb_status cb_babylon_read_facts(const char *path, cb_babylon_facts *out, cb_error *err);
 
 #ifdef __cplusplus
 }

@@ -81,7 +81,9 @@ CROWDBAKE_API unsigned cb_formats_parse(const char *text);
 CROWDBAKE_API bool cb_fps_valid(double fps);
 CROWDBAKE_API bool cb_max_fps_valid(double max_fps);
 
-/* Whether the settings can be written: EXR and KTX2 hold half or float texels, never u16. */
+/* Whether the settings can be written: EXR and KTX2 hold half or float texels, never u16. A
+ * .bvat.json is always float (Babylon's Float32 matrices): u16 beside it is the .pal's, and
+ * u16 for it alone is refused, never ignored. */
 CROWDBAKE_API bool cb_bake_settings_writable(const cb_bake_settings *settings);
 
 /* The options of the bake for one file format (CB_FORMAT_*): the precision set, else u16 for
@@ -127,6 +129,8 @@ typedef struct cb_bake_job {
     double speed_reference;         /* recorded in the files */
     const char *pal_path, *exr_path, *ktx2_path; /* the files settings.formats asks for */
     const char *babylon_path;       /* .bvat.json: Babylon.js's baked vertex animation data (babylon.h) */
+    const struct cb_babylon_state *babylon_states; /* a catalog type's states, listed in its .bvat.json, or NULL */
+    uint32_t babylon_state_count;
     const cb_bake_origin *origin;   /* a catalog type, or NULL */
     /* Filled by cb_bake_job_plan (cb_bake_job_run calls it when it was not): the clips with
      * their rates, and for each clip chosen by error what its rate reached. */

@@ -74,7 +74,8 @@ bool cb_max_fps_valid(double max_fps) { return max_fps >= CB_MAX_FPS_LOWEST && m
 
 bool cb_bake_settings_writable(const cb_bake_settings *s)
 {
-    return !((s->formats & (CB_FORMAT_EXR | CB_FORMAT_KTX2 | CB_FORMAT_BABYLON)) && s->precision_set && s->precision == CB_PRECISION_U16);
+    bool holds_no_u16 = (s->formats & (CB_FORMAT_EXR | CB_FORMAT_KTX2)) || s->formats == CB_FORMAT_BABYLON;
+    return !(holds_no_u16 && s->precision_set && s->precision == CB_PRECISION_U16);
 }
 
 cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned format, const cb_limits *limits,
@@ -265,8 +266,9 @@ static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pa
     } else if (out->format == CB_FORMAT_KTX2) {
         cb_ktx2_write(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference, err);
     } else {
-        cb_babylon_write(out->path, p, job->model, job->skin, (float)job->speed_reference,
-                         job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE, err);
+        cb_babylon_write_options bo = {(float)job->speed_reference, job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE,
+                                       out->input_hash, job->babylon_states, job->babylon_state_count};
+        cb_babylon_write(out->path, p, job->model, job->skin, &bo, err);
     }
     out->seconds_write = now_seconds() - t0;
     struct stat st;

@@ -204,10 +204,42 @@ static double *loop_end_poses(const cb_palette *p, const cb_model *m, int32_t sk
     return ends;
 }
 
-/* What follows vertexData: the texture's size and the clip table (rows, rates, loops). */
-static char *tail_json(const cb_palette *p, uint32_t bones, uint32_t height, float speed_reference)
+uint32_t cb_babylon_clip_rows(uint32_t frames, bool loops) { return frames + loops; }
+
+/* Clip c's first row in the file (the clips before it, their closing rows included). */
+static uint32_t clip_from(const cb_palette *p, uint32_t c)
 {
-    char *text = NULL;
+    uint32_t from = 0;
+    for (uint32_t k = 0; k < c; ++k) from += cb_babylon_clip_rows(p->clips[k].frames, p->clips[k].loops);
+    return from;
+}
+
+/* The numbers BakedVertexAnimationManager plays clip c with: from, to (inclusive), fps. */
+static void json_play(cb_json *j, const cb_palette *p, uint32_t c)
+{
+    uint32_t from = clip_from(p, c);
+    cb_json_int(j, "from", from);
+    cb_json_int(j, "to", from + cb_babylon_clip_rows(p->clips[c].frames, p->clips[c].loops) - 1);
+    cb_json_number(j, "fps", p->clips[c].fps);
+}
+
+/* A catalog's states, by name: what a scene plays for each (its clip's numbers). */
+static void json_states(cb_json *j, const cb_palette *p, const cb_babylon_write_options *o)
+{
+    cb_json_object(j, "states");
+    for (uint32_t s = 0; s < o->state_count; ++s) {
+        cb_json_object(j, o->states[s].name);
+        cb_json_string(j, "clip", p->clips[o->states[s].clip].name);
+        json_play(j, p, o->states[s].clip);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
+}
+
+/* What follows vertexData: the texture's size and the clip table (rows, rates, loops). */
+static char *tail_json(const cb_palette *p, uint32_t bones, uint32_t height, const cb_babylon_write_options *o)
+{
+    char *text = NULL, hash[17];
     size_t size = 0;
     FILE *f = open_memstream(&text, &size);
     if (!f) return NULL;
@@ -216,25 +248,24 @@ static char *tail_json(const cb_palette *p, uint32_t bones, uint32_t height, flo
     cb_json_init(&j, f);
     cb_json_object(&j, NULL);
     cb_json_string(&j, "writer", "crowdbake " CROWDBAKE_VERSION);
+    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)o->input_hash); /* 64 bits: past a double's */
+    cb_json_string(&j, "input_hash", hash);
     cb_json_int(&j, "joints", p->bone_count);
     cb_json_int(&j, "bones", bones);
     cb_json_number(&j, "fps", p->fps);
-    cb_json_number(&j, "speed_reference", speed_reference);
+    cb_json_number(&j, "speed_reference", o->speed_reference);
     cb_json_array(&j, "clips");
-    for (uint32_t c = 0, from = 0; c < p->clip_count; ++c) {
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
         const cb_palette_clip *cl = &p->clips[c];
-        uint32_t to = from + cl->frames - !cl->loops; /* a loop's closing row included */
         cb_json_object(&j, NULL);
         cb_json_string(&j, "name", cl->name);
-        cb_json_int(&j, "from", from);
-        cb_json_int(&j, "to", to);
-        from = to + 1;
-        cb_json_number(&j, "fps", cl->fps);
+        json_play(&j, p, c); /* a loop's closing row included */
         cb_json_number(&j, "start", cl->start);
         cb_json_bool(&j, "loops", cl->loops);
         cb_json_end(&j);
     }
     cb_json_end(&j);
+    if (o->states) json_states(&j, p, o);
     cb_json_end(&j);
     fputs("}\n", f);
     return fclose(f) == 0 ? text : (free(text), NULL);
@@ -257,14 +288,14 @@ static cb_status write_rows(cb_atomic_file *f, const cb_palette *p, const babylo
 }
 
 cb_status cb_babylon_write(const char *path, const cb_palette *p, const cb_model *m, int32_t skin,
-                           float speed_reference, bool in_place, cb_error *err)
+                           const cb_babylon_write_options *o, cb_error *err)
 {
     const cb_skin *s = &m->skins[skin];
     int32_t skeleton = skeleton_node(m, s);
     bool *bone = calloc(m->node_count ? m->node_count : 1, sizeof *bone);
     double *rebase = malloc((size_t)s->joint_count * 16 * sizeof *rebase);
     uint32_t count;
-    double *ends = loop_end_poses(p, m, skin, in_place);
+    double *ends = loop_end_poses(p, m, skin, o->in_place);
     babylon_row *rows = babylon_rows(p, ends, p->bone_count, &count);
     char *tail = NULL;
     if (!bone || !rebase || !rows) {
@@ -276,7 +307,7 @@ cb_status cb_babylon_write(const char *path, const cb_palette *p, const cb_model
     static const char head[] = "{\"vertexData\": \"";
     cb_atomic_file f;
     cb_status rc = cb_atomic_open(&f, path, err);
-    if (!rc && !(tail = tail_json(p, bones, count, speed_reference))) rc = cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    if (!rc && !(tail = tail_json(p, bones, count, o))) rc = cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     if (!rc) rc = cb_atomic_write(&f, head, sizeof head - 1, err);
     if (!rc) rc = write_rows(&f, p, rows, count, rebase, bones, err);
     if (!rc) rc = cb_atomic_write(&f, tail, strlen(tail), err);

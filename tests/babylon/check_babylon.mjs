@@ -1,6 +1,7 @@
 // check_babylon.mjs - crowdbake's Babylon.js bake (.bvat.json) against Babylon.js's own.
 //
 //   node tests/babylon/check_babylon.mjs MODEL.glb FILE.bvat.json [--bound B] [--controls] [--values-only]
+//                                        [--roster ROSTER.json --type NAME]
 //
 // In headless Chromium (playwright-core driving the system's Chromium, as tests/ktx2 does), real
 // Babylon.js (@babylonjs/core and @babylonjs/loaders, pinned in package-lock.json) loads the model,
@@ -11,7 +12,10 @@
 // pixel by pixel. --controls also runs three broken variants of the file, each of which must fail
 // the same checks: the joints in reverse order, the matrices mirrored as if the handedness were
 // the file's to apply (it is __root__'s), and rows without Babylon's non-joint bones and extra
-// matrix. --values-only leaves out the herd (a model too small for its framing). Prints a line per
+// matrix. --values-only leaves out the herd (a model too small for its framing). --roster and
+// --type: a catalog's file; each state of the type in the manifest must be in the file's
+// crowdbake.states with the manifest's clip and from/to/fps, and the file's rows from..to must be
+// Babylon's own bake of the glTF clip the manifest names, at the state's fps. Prints a line per
 // check; exit 0 when all pass.
 import fs from 'node:fs';
 import http from 'node:http';
@@ -22,6 +26,7 @@ const here = path.dirname(fileURLToPath(import.meta.url));
 const args = process.argv.slice(2);
 const option = (name, fallback) => { const i = args.indexOf(name); return i < 0 ? fallback : args.splice(i, 2)[1]; };
 const bound = Number(option('--bound', '1e-4'));
+const rosterPath = option('--roster', null), typeName = option('--type', null);
 const controls = args.includes('--controls'), valuesOnly = args.includes('--values-only');
 const [modelPath, filePath] = args.filter((a) => !a.startsWith('--'));
 let failed = 0;
@@ -31,13 +36,17 @@ const file = JSON.parse(fs.readFileSync(filePath, 'utf8'));
 const variants = [{ name: path.basename(filePath), json: file }];
 if (controls) variants.push(...brokenVariants(file));
 
-const results = await inBrowser(fs.readFileSync(modelPath), variants);
+const states = rosterPath ? rosterStates(JSON.parse(fs.readFileSync(rosterPath, 'utf8')).types[typeName]) : [];
+const results = await inBrowser(fs.readFileSync(modelPath), variants, states);
 const [mine, ...broken] = results;
 const herd = mine.herd;
 if (!valuesOnly)
   check(herd.covered > 2000 && herd.covered < herd.pixels / 2,
         `the herd covers ${herd.covered} of ${herd.pixels} pixels in Babylon's own bake`);
 report(mine, variants[0].name);
+for (const s of mine.states)
+  check(s.compared > 0 && s.worst <= bound, `state ${s.name}: rows ${s.from}..${s.to} at ${s.fps} fps are Babylon's bake of ` +
+        `${s.clip}: worst difference ${s.worst.toExponential(2)} over ${s.compared} values`);
 for (const r of broken) {
   const valuesFail = !(r.sizeMatch && r.worst <= bound), pixelsFail = r.silhouetteDiff > Math.max(4, herd.covered * 0.001);
   const ok = valuesFail && (pixelsFail || r.name === 'joints-only'); // Babylon draws joints-only alike: only its size tells
@@ -56,6 +65,18 @@ function report(r, name) {
   if (!valuesOnly) check(r.silhouetteDiff <= Math.max(4, r.herd.covered * 0.001),
         `${name}: thin instances through BakedVertexAnimationManager: ${r.silhouetteDiff} of ${r.herd.covered} silhouette pixels ` +
         `differ from Babylon's own bake`);
+}
+
+// The manifest's states (its clip, its rows in the .bvat.json), each checked against the file's own table.
+function rosterStates(type) {
+  check(type && type.palette_babylon, `the manifest lists ${typeName}'s .bvat.json`);
+  const mine = file.crowdbake.states || {};
+  return Object.entries(type ? type.states : {}).map(([name, s]) => {
+    const f = mine[name], b = s.babylon;
+    check(f && b && f.clip === s.clip && f.from === b.from && f.to === b.to && f.fps === b.fps,
+          `state ${name}: the file's crowdbake.states and the manifest agree (${s.clip}, rows ${b && b.from}..${b && b.to})`);
+    return { name, clip: s.clip, from: b.from, to: b.to, fps: b.fps };
+  });
 }
 
 // Broken files a careless writer could produce; each must fail.
@@ -81,7 +102,7 @@ function brokenVariants(good) {
   ];
 }
 
-async function inBrowser(model, variants) {
+async function inBrowser(model, variants, states) {
   const { chromium } = await import('playwright-core');
   const modules = path.join(here, 'node_modules');
   const page = `<!DOCTYPE html><canvas id="c" width="320" height="240"></canvas>
@@ -109,7 +130,7 @@ async function inBrowser(model, variants) {
     tab.on('pageerror', (e) => errors.push(e.message));
     if (process.env.BABYLON_DEBUG) tab.on('console', (m) => process.stderr.write(`page: ${m.text()}\n`));
     await tab.goto(`http://127.0.0.1:${server.address().port}/`);
-    const out = await tab.evaluate(pageMain, { count: variants.length, names: variants.map((v) => v.name) });
+    const out = await tab.evaluate(pageMain, { count: variants.length, names: variants.map((v) => v.name), states });
     for (const e of errors) check(false, `page error: ${e}`);
     return out;
   } finally {
@@ -119,7 +140,7 @@ async function inBrowser(model, variants) {
 }
 
 // Runs in the page: Babylon's own bake, the comparison, and the herds.
-async function pageMain({ count, names }) {
+async function pageMain({ count, names, states }) {
   const B = await import('@babylonjs/core/index.js');
   await import('@babylonjs/loaders/glTF/index.js');
   const engine = new B.Engine(document.getElementById('c'), false, { preserveDrawingBuffer: true, antialias: false });
@@ -163,6 +184,20 @@ async function pageMain({ count, names }) {
     }
     parts.push(baker.bakeVertexDataSync([{ from: 0, to: clip.to - clip.from }], false));
   }
+  // A state's rows: Babylon's bake of the glTF clip the manifest names, re-timed at the state's fps.
+  const stateBakes = states.map((s) => {
+    const group = loaded.animationGroups.find((g) => g.name === s.clip);
+    for (const bone of skeleton.bones) bone.animations = [];
+    for (const t of group ? group.targetedAnimations : []) {
+      const bone = boneOf.get(t.target);
+      if (!bone) continue;
+      const a = t.animation.clone();
+      a.setKeys(t.animation.getKeys().map((k) => ({ ...k, frame: (k.frame / 60) * s.fps })));
+      bone.animations.push(a);
+    }
+    const last = group ? Math.floor((group.to / 60) * s.fps - 1e-3) : -1; // rows before the clip's last key
+    return { ...s, own: group ? baker.bakeVertexDataSync([{ from: 0, to: s.to - s.from }], false) : null, last };
+  });
   const own = new Float32Array(parts.reduce((n, p) => n + p.length, 0));
   parts.reduce((at, p) => (own.set(p, at), at + p.length), 0);
   const ownTexture = baker.textureFromBakedVertexData(own);
@@ -227,7 +262,17 @@ async function pageMain({ count, names }) {
     const mask = await herd(texture);
     let silhouetteDiff = 0;
     for (let i = 0; i < mask.length; ++i) silhouetteDiff += mask[i] !== ownMask[i];
-    out.push({ name: names[v], width: meta.width, height: meta.height, bones, rows, sizeMatch, worst, worstRow, worstIndex,
+    const stateResults = v ? [] : stateBakes.map((s) => {
+      const n = (bones + 1) * 16;
+      let worst = s.own ? 0 : Infinity, compared = 0;
+      for (let k = 0; s.own && sizeMatch && k <= Math.min(s.to - s.from, s.last - 1); ++k)
+        for (let i = 0; i < n; ++i, ++compared) {
+          const own = s.own[k * n + i], d = Math.abs(data[(s.from + k) * n + i] - own) / Math.max(1, Math.abs(own));
+          if (!(d <= worst)) worst = d;
+        }
+      return { name: s.name, clip: s.clip, from: s.from, to: s.to, fps: s.fps, worst, compared };
+    });
+    out.push({ name: names[v], states: stateResults, width: meta.width, height: meta.height, bones, rows, sizeMatch, worst, worstRow, worstIndex,
                compared, wrapRows, cycled, silhouetteDiff, herd: { covered, pixels: ownMask.length } });
   }
   return out;

@@ -4,7 +4,7 @@
 Bakes every bundled sample and every shared asset in several formats (.pal, .pal with zstd,
 .exr, mat4/half, affine/float; --fps auto and .pal + .exr + .ktx2 on the samples and Fox; .bvat.json on
 the samples, Fox and Cow), `inspect --json` of each
-default .pal, and the sample catalog (palettes, roster.json, depfile, with a --format pal,exr
+default .pal, and the sample catalog (palettes, roster.json, depfile, with a --format pal,exr and a --format pal,babylon
 override too), then compares the sha256 of every file with tests/bake_hashes.txt. A model that
 does not bake is recorded by its exit code. `make check` runs this (normal build only), so a
 refactoring that changes one output byte fails.
@@ -88,7 +88,9 @@ def bake_catalog(crowdbake, build, tmp, out):
     # The catalog names its models through a link beside it, so that no absolute path (which
     # differs between checkouts) reaches the outputs.
     text = text.replace('../build/samples', 'samples').replace('"../build/roster"', '"roster"')
-    for name, extra in (('catalog', []), ('catalog-pal-exr', ['--format', 'pal,exr', '--precision', 'half', '--zstd'])):
+    variants = (('catalog', []), ('catalog-pal-exr', ['--format', 'pal,exr', '--precision', 'half', '--zstd']),
+                ('catalog-babylon', ['--format', 'pal,babylon']))
+    for name, extra in variants:
         d = os.path.join(tmp, name)
         os.makedirs(d)
         os.symlink(samples, os.path.join(d, 'samples'))

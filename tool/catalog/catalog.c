@@ -20,6 +20,11 @@ static void override_settings(cb_bake_settings *b, const cb_bake_settings *v, un
     if (fields & CB_BAKE_OUT_DIR) b->out_dir = v->out_dir;
 }
 
+bool cb_catalog_formats_valid(unsigned formats)
+{
+    return (formats & (CB_FORMAT_PAL | CB_FORMAT_EXR)) && !(formats & CB_FORMAT_KTX2);
+}
+
 cb_status cb_catalog_override_bake(cb_catalog *cat, const cb_bake_settings *values, unsigned fields, cb_error *err)
 {
     override_settings(&cat->defaults, values, fields);

@@ -89,6 +89,11 @@ void cb_catalog_free(cb_catalog *catalog);
  * EXR (which holds half or float only). */
 cb_status cb_catalog_override_bake(cb_catalog *catalog, const cb_bake_settings *values, unsigned fields, cb_error *err);
 
+/* The formats (CB_FORMAT_*) a catalog can write: pal and/or exr, and babylon (.bvat.json) beside
+ * either (the manifest's palette and its up-to-date facts are a .pal's or an .exr's); ktx2 is for
+ * single models. */
+bool cb_catalog_formats_valid(unsigned formats);
+
 /* The command line's word on states, over the catalog's for this run: `syncs` is a comma-separated
  * list of STATE=speed|time|auto (NULL: none), `default_state` a state's name (NULL: none); each
  * applies to every animal with that state, and is an error when no animal has it. Counts in

@@ -181,8 +181,10 @@ struct Parser {
         }
         if (auto *n = t.get("format")) {
             std::string f = str(*n, where + " format");
-            b->formats = f == "pal" || f == "exr" || f == "both" ? cb_formats_parse(f.c_str()) : 0;
-            if (!b->formats) fail(n->source(), where + " format must be \"pal\", \"exr\" or \"both\"");
+            b->formats = cb_formats_parse(f.c_str());
+            if (!cb_catalog_formats_valid(b->formats))
+                fail(n->source(), where + " format must be \"pal\", \"exr\" or \"both\", with \"babylon\" beside "
+                                          "either if wanted (\"pal,babylon\")");
         }
         if (auto *n = t.get("out_dir")) b->out_dir = dup(resolve(str(*n, where + " out_dir")));
         if (auto *n = t.get("max_texture_size")) {

@@ -190,8 +190,9 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     unsigned formats = a->format ? cb_formats_parse(a->format) : 0;
     if (a->format && !formats) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
     /* KTX2 from a catalog would need its manifest and up-to-date check to learn the format. */
-    if (formats & (CB_FORMAT_KTX2 | CB_FORMAT_BABYLON))
-        return cli_usage_error("bake", "--format ktx2 and babylon are for single models for now; a catalog writes pal and exr");
+    if (formats && !cb_catalog_formats_valid(formats))
+        return cli_usage_error("bake", "a catalog writes pal and/or exr, and babylon beside either (--format pal,babylon); "
+                               "ktx2 is for single models for now");
     if (a->zstd && a->format && !(cb_formats_parse(a->format) & CB_FORMAT_PAL))
         return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
     cb_bake_settings over;
@@ -390,7 +391,7 @@ static int single_model_checks(const bake_args *a, cb_bake_settings *s)
                                want_pal ? " (or write only the .pal)" : "");
     if (!cb_bake_settings_writable(s) && (s->formats & CB_FORMAT_BABYLON))
         return cli_usage_error("bake", "Babylon.js's baked vertex animation data is Float32 matrices, never u16; leave "
-                               "--precision out%s", want_pal ? " (or write only the .pal)" : "");
+                               "--precision out (or write a .pal beside it, --format pal,babylon: u16 is then the .pal's)");
     if (!cb_bake_settings_writable(s))
         return cli_usage_error("bake", "KTX2 palettes hold half or float texels (RGBA16F, RGBA32F; common KTX2 loaders "
                                "refuse u16's RGBA16UI); use --precision half|float%s", want_pal ? " (or write only the .pal)" : "");

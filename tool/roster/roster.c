@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "crowdbake_pal.h"
+#include "crowdbake/babylon.h"
 #include "crowdbake/bake.h"
 #include "crowdbake/exr.h"
 #include "crowdbake/gltf.h"
@@ -195,6 +196,7 @@ static void output_paths(const cb_catalog_animal *an, cb_roster_type *t)
 {
     snprintf(t->pal_path, sizeof t->pal_path, "%s/%s.pal", an->bake.out_dir, an->name);
     snprintf(t->exr_path, sizeof t->exr_path, "%s/%s.exr", an->bake.out_dir, an->name);
+    snprintf(t->babylon_path, sizeof t->babylon_path, "%s/%s.bvat.json", an->bake.out_dir, an->name);
 }
 
 /* A type that failed before its LODs were loaded still lists them: they are its inputs. */
@@ -215,7 +217,7 @@ static cb_status plan_job(const roster_run *run, const cb_catalog_animal *an, ty
     job->clips = w->plan, job->clip_count = t->clip_count, job->clip_requests = w->clip_requests;
     job->settings = an->bake;
     job->limits = run->opt->limits ? *run->opt->limits : cb_default_limits();
-    job->pal_path = t->pal_path, job->exr_path = t->exr_path;
+    job->pal_path = t->pal_path, job->exr_path = t->exr_path, job->babylon_path = t->babylon_path;
     job->threads = run->threads_per_bake; /* clips whose rates are searched at once */
     return cb_bake_job_plan(job, err);
 }
@@ -331,7 +333,7 @@ static bool up_to_date(cb_roster_type *t, unsigned formats)
         cb_exr_image_free(&img);
         if (!same) return false;
     }
-    return true;
+    return !(formats & CB_FORMAT_BABYLON) || roster_babylon_up_to_date(t);
 }
 
 static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
@@ -339,8 +341,13 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
     w->job.threads = run->threads_per_bake;
     w->job.speed_reference = t->speed_reference;
     if (roster_make_directories(an->bake.out_dir, err)) return err->status;
+    cb_babylon_state *states = roster_babylon_states(an, t); /* the .bvat.json lists them */
+    if (!states) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    w->job.babylon_states = states, w->job.babylon_state_count = an->state_count;
     cb_bake_result r;
     cb_bake_job_run(&w->job, &r, err);
+    free(states);
+    w->job.babylon_states = NULL;
     if (r.output_count) {
         const cb_palette *p = &r.outputs[0].palette;
         t->width = p->width, t->height = p->height, t->blocks = p->blocks;
@@ -533,6 +540,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
         } else {
             memcpy(t->pal_path, o->pal_path, sizeof t->pal_path);
             memcpy(t->exr_path, o->exr_path, sizeof t->exr_path);
+            memcpy(t->babylon_path, o->babylon_path, sizeof t->babylon_path);
             t->layout = o->layout, t->precision = o->precision, t->palette_bytes = o->palette_bytes;
             t->width = o->width, t->height = o->height, t->blocks = o->blocks, t->max_error = o->max_error;
             t->visible_error = o->visible_error;

@@ -52,6 +52,7 @@ typedef struct cb_roster_type {
     uint64_t key;             /* content hash of rig, clips and settings: equal keys share */
     uint64_t input_hash;      /* key + model and LOD bytes + the resolved entry: recorded in the files */
     char pal_path[1024], exr_path[1024];
+    char babylon_path[1024];  /* format "babylon": the .bvat.json */
     uint32_t bones, rows, width, height, blocks;
     cb_layout layout;
     cb_precision precision;

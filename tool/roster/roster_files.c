@@ -63,6 +63,7 @@ static void write_state(cb_json *j, const cb_roster_type *t, uint32_t s)
     cb_json_number(j, "rate_per_speed", sync->speed ? c->fps / state_speed(t, c) : 0);
     cb_json_string(j, "phase", c->loops ? "golden_ratio" : "zero");
     cb_json_end(j);
+    if (t->animal->bake.formats & CB_FORMAT_BABYLON) roster_json_babylon_play(j, t, (uint32_t)t->state_clip[s]);
     cb_json_end(j);
 }
 
@@ -167,6 +168,10 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
     if (owner->animal->bake.formats & CB_FORMAT_EXR) {
         relative_path(manifest_dir, owner->exr_path, rel, sizeof rel);
         cb_json_string(j, "palette_exr", rel);
+    }
+    if (owner->animal->bake.formats & CB_FORMAT_BABYLON) {
+        relative_path(manifest_dir, owner->babylon_path, rel, sizeof rel);
+        cb_json_string(j, "palette_babylon", rel);
     }
     if (t->owner != (uint32_t)(t - r->types)) cb_json_string(j, "shares_palette_of", owner->animal->name);
     cb_json_string(j, "layout", cb_layout_name(owner->layout));
@@ -331,9 +336,11 @@ cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const 
     for (uint32_t i = 0; i < r->type_count && !manifest_only; ++i) {
         const cb_roster_type *t = &r->types[i];
         if (t->owner != i) continue; /* failed types too: their inputs keep the build out of date */
-        for (int fmt = 0; fmt < 2; ++fmt) {
-            if (!(t->animal->bake.formats & (fmt ? CB_FORMAT_EXR : CB_FORMAT_PAL))) continue;
-            depfile_path(f, fmt ? t->exr_path : t->pal_path);
+        static const unsigned formats[3] = {CB_FORMAT_PAL, CB_FORMAT_EXR, CB_FORMAT_BABYLON};
+        const char *outputs[3] = {t->pal_path, t->exr_path, t->babylon_path};
+        for (int fmt = 0; fmt < 3; ++fmt) {
+            if (!(t->animal->bake.formats & formats[fmt])) continue;
+            depfile_path(f, outputs[fmt]);
             fputs(":", f);
             fputc(' ', f), depfile_path(f, cat->path);
             for (uint32_t k = 0; k < r->type_count; ++k) /* every type sharing this palette */
@@ -390,6 +397,8 @@ void roster_settle_times(const cb_roster *r)
                 /* only regular files: a bake refuses to replace anything else, and so does this */
                 if (stat(r->types[i].pal_path, &st) == 0 && S_ISREG(st.st_mode)) utimensat(AT_FDCWD, r->types[i].pal_path, epoch, 0);
                 if (stat(r->types[i].exr_path, &st) == 0 && S_ISREG(st.st_mode)) utimensat(AT_FDCWD, r->types[i].exr_path, epoch, 0);
+                if (stat(r->types[i].babylon_path, &st) == 0 && S_ISREG(st.st_mode))
+                    utimensat(AT_FDCWD, r->types[i].babylon_path, epoch, 0);
             }
         return;
     }

@@ -39,6 +39,16 @@ void roster_settle_times(const cb_roster *r);
 /* order[0..type_count): the types, the longest (a guess) first (roster_order.c). */
 void roster_order_types(const cb_catalog *cat, const cb_roster *r, bool prepared, uint32_t *order);
 
+/* Format "babylon" (roster_babylon.c): the row clip `clip` starts at in the .bvat.json (its
+ * clips' closing rows counted; clip_count: the file's height); "babylon": {from, to, fps} of a
+ * clip, as a state in the manifest gives it; the states the file lists (malloc'd, NULL when out
+ * of memory); whether the file on disk holds this bake (its input hash and rows). */
+struct cb_babylon_state;
+uint32_t roster_babylon_from(const cb_roster_type *t, uint32_t clip);
+void roster_json_babylon_play(cb_json *j, const cb_roster_type *t, uint32_t clip);
+struct cb_babylon_state *roster_babylon_states(const cb_catalog_animal *an, const cb_roster_type *t);
+bool roster_babylon_up_to_date(const cb_roster_type *t);
+
 /* The roster's log in catalog order (roster_log.c): each type's lines are held until every type
  * before it has printed, so the log reads the same whatever order the threads finish in. The
  * caller serialises the calls. */
