@@ -290,14 +290,7 @@ cli_file_kind cli_file_kind_of(const char *path)
     return CLI_FILE_UNKNOWN;
 }
 
-const char *cli_ktx2_not_read(const char *path, const char *command, char *buf, size_t size)
-{
-    snprintf(buf, size, "%s: a KTX2 palette, which '%s' does not read: give it the .pal or .exr of the same bake "
-             "('crowdbake bake MODEL -o OUT.pal --format pal,ktx2' writes both)", path, command);
-    return buf;
-}
-
-static bool is_palette(cli_file_kind k) { return k == CLI_FILE_PAL || k == CLI_FILE_EXR; }
+static bool is_palette(cli_file_kind k) { return k == CLI_FILE_PAL || k == CLI_FILE_EXR || k == CLI_FILE_KTX2; }
 
 /* The arguments are MODEL PALETTE: says which one is wrong and how, before anything is read. */
 static cb_status check_kinds(const char *command, const char *model_path, const char *palette_path, cb_error *err)
@@ -308,18 +301,22 @@ static cb_status check_kinds(const char *command, const char *model_path, const 
     if (mk != CLI_FILE_MODEL)
         return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a glTF model; 'crowdbake %s MODEL PALETTE' takes the .glb/.gltf "
                        "first", model_path, is_palette(mk) ? "a palette" : "neither glTF nor a palette", command);
-    char ktx2[1024];
-    if (pk == CLI_FILE_KTX2)
-        return cb_fail(err, CB_ERR_SETTINGS, "%s", cli_ktx2_not_read(palette_path, command, ktx2, sizeof ktx2));
     if (!is_palette(pk))
-        return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a palette; 'crowdbake %s MODEL PALETTE' takes the .pal or .exr "
-                       "that 'crowdbake bake' wrote second", palette_path, pk == CLI_FILE_MODEL ? "a glTF model" : "neither a "
+        return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a palette; 'crowdbake %s MODEL PALETTE' takes the .pal, .exr "
+                       "or .ktx2 that 'crowdbake bake' wrote second", palette_path, pk == CLI_FILE_MODEL ? "a glTF model" : "neither a "
                        "palette nor glTF", command);
     return CB_OK;
 }
 
 static cb_status open_palette(const char *path, cli_baked *b, cb_error *err)
 {
+    if (cli_file_kind_of(path) == CLI_FILE_KTX2) {
+        if (cb_ktx2_read_palette(path, &b->ktx2, err)) return err->status;
+        b->is_ktx2 = true;
+        b->view = b->ktx2.palette;
+        b->texels = b->ktx2.palette.texels;
+        return CB_OK;
+    }
     if (cli_file_kind_of(path) == CLI_FILE_EXR) {
         if (cb_exr_read_palette(path, &b->exr, err)) return err->status;
         b->is_exr = true;
@@ -341,6 +338,7 @@ static cb_status open_palette(const char *path, cli_baked *b, cb_error *err)
 void cli_baked_close(cli_baked *b)
 {
     if (b->is_exr) cb_exr_palette_free(&b->exr);
+    else if (b->is_ktx2) cb_ktx2_palette_free(&b->ktx2);
     else if (b->pal_open) cb_palette_view_free(&b->view), cbpal_close(&b->pal);
     cb_model_free(b->model);
     memset(b, 0, sizeof *b);

@@ -7,7 +7,7 @@
 #include "cli.h"
 
 const char cmd_preview_usage[] =
-    "usage: crowdbake preview MODEL PALETTE.pal|.exr -o SHEET.png [--columns N] [--cell PIXELS] [--skin NAME|INDEX] [-q]\n\n"
+    "usage: crowdbake preview MODEL PALETTE.pal|.exr|.ktx2 -o SHEET.png [--columns N] [--cell PIXELS] [--skin NAME|INDEX] [-q]\n\n"
     "Renders a contact sheet: a row per clip (in the palette's order), N frames across (default 6),\n"
     "the model's mesh skinned from the palette by the shipped GLSL on Mesa's software OpenGL, flat\n"
     "shaded, framed by each clip's bounds. One look tells whether the bake is right.\n";

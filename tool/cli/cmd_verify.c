@@ -10,7 +10,7 @@
 #include "cli.h"
 
 const char cmd_verify_usage[] =
-    "usage: crowdbake verify MODEL PALETTE.pal|.exr [--max-error MM_PER_M] [--random N] [--skin NAME|INDEX] [--json]\n"
+    "usage: crowdbake verify MODEL PALETTE.pal|.exr|.ktx2 [--max-error MM_PER_M] [--random N] [--skin NAME|INDEX] [--json]\n"
     "                        [--clip A,B | --exclude-clip A,B] [-q]\n\n"
     "Skins the model's mesh from the palette the way the runtime shaders do (two adjacent rows\n"
     "blended, up to 4 weighted bones, loops wrap, one-shots clamp) and compares it with exact float64\n"
