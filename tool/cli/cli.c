@@ -233,7 +233,20 @@ static const char *foreign_format(const char *path)
     return NULL;
 }
 
-cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *err)
+static cb_model *load_model(const char *path, const cb_limits *limits, cb_error *err);
+
+cb_model *cli_load_model(const cli_output *out, const char *path, const cb_limits *limits, cb_error *err)
+{
+    double t0 = cli_seconds();
+    cb_model *m = load_model(path, limits, err);
+    if (m && out)
+        cli_verbose(out, "read %s in %.3f s: %u skin%s, %u node%s, %u clip%s", path, cli_seconds() - t0, m->skin_count,
+                    m->skin_count == 1 ? "" : "s", m->node_count, m->node_count == 1 ? "" : "s", m->animation_count,
+                    m->animation_count == 1 ? "" : "s");
+    return m;
+}
+
+static cb_model *load_model(const char *path, const cb_limits *limits, cb_error *err)
 {
     const char *foreign = foreign_format(path);
     if (foreign) {
@@ -344,20 +357,24 @@ void cli_baked_close(cli_baked *b)
     memset(b, 0, sizeof *b);
 }
 
-cb_status cli_open_baked(const char *command, const char *model_path, const char *palette_path, const cb_limits *limits,
-                         const char *skin_option, cli_baked *b, cb_error *err)
+cb_status cli_open_baked(const cli_output *out, const char *command, const char *model_path, const char *palette_path,
+                         const cb_limits *limits, const char *skin_option, cli_baked *b, cb_error *err)
 {
     memset(b, 0, sizeof *b);
     if (is_palette(cli_file_kind_of(model_path)) && cli_file_kind_of(palette_path) == CLI_FILE_MODEL) {
         /* `preview PALETTE MODEL` was the documented order before both commands took MODEL PALETTE:
          * scripts written for it keep working, with a note. */
-        fprintf(stderr, "crowdbake: note: '%s %s %s' is the old order, still accepted; write 'crowdbake %s MODEL "
+        if (!out->quiet) fprintf(stderr, "crowdbake: note: '%s %s %s' is the old order, still accepted; write 'crowdbake %s MODEL "
                 "PALETTE'\n", command, model_path, palette_path, command);
         const char *swap = model_path;
         model_path = palette_path, palette_path = swap;
     }
+    double t0 = cli_seconds();
     if (check_kinds(command, model_path, palette_path, err) || open_palette(palette_path, b, err)) return err->status;
-    b->model = cli_load_model(model_path, limits, err);
+    cli_verbose(out, "read %s in %.3f s: %s/%s, %u bones, %u rows, %u clip%s", palette_path, cli_seconds() - t0,
+                cb_layout_name(b->view.layout), cb_precision_name(b->view.precision), b->view.bone_count, b->view.rows,
+                b->view.clip_count, b->view.clip_count == 1 ? "" : "s");
+    b->model = cli_load_model(out, model_path, limits, err);
     b->skin = b->model ? cli_pick_skin(b->model, skin_option, err) : -1;
     if (b->skin >= 0 && b->model->skins[b->skin].joint_count != b->view.bone_count)
         cb_fail(err, CB_ERR_INPUT, "%s: its skin has %u joints, %s has %u bones: not its palette", model_path,

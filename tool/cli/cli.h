@@ -68,8 +68,8 @@ extern const char cli_limits_usage[];
 
 /* -q/--quiet (nothing on stderr but errors) and -v/--verbose (each file read and written,
  * timings, decisions), which every command takes: cli_take_output removes them from argv, as
- * cli_take_limits does its options (up to a "--"), before the command's own parsing. Both at
- * once is a usage error. Progress lines go to stderr on a terminal or with -v, never with -q. */
+ * cli_take_limits does its options (up to a "--"), before the command's own parsing. With both,
+ * -q wins. Progress lines go to stderr on a terminal or with -v, never with -q. */
 typedef struct cli_output {
     bool quiet, verbose;
 } cli_output;
@@ -84,8 +84,8 @@ void cli_verbose(const cli_output *out, const char *fmt, ...)
 bool cli_progress(const cli_output *out);
 double cli_seconds(void); /* monotonic, for -v's timings */
 
-/* Loads a model within `limits`. */
-cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *err);
+/* Loads a model within `limits`; with -v, says what it read and how long it took (out may be NULL). */
+cb_model *cli_load_model(const cli_output *out, const char *path, const cb_limits *limits, cb_error *err);
 /* The skin a command works on: --skin NAME|INDEX, or the only one; an error otherwise. */
 int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err);
 /* What a file holds, from its first bytes (not its name). */
@@ -107,8 +107,8 @@ typedef struct cli_baked {
 /* Opens MODEL PALETTE: checks each is the kind of file it should be (naming the order when
  * they are swapped), loads and picks the skin, compares bone counts. 0, or the error's status
  * with *err set and nothing left open; else close with cli_baked_close. */
-cb_status cli_open_baked(const char *command, const char *model_path, const char *palette_path, const cb_limits *limits,
-                         const char *skin_option, cli_baked *out, cb_error *err);
+cb_status cli_open_baked(const cli_output *out, const char *command, const char *model_path, const char *palette_path,
+                         const cb_limits *limits, const char *skin_option, cli_baked *b, cb_error *err);
 void cli_baked_close(cli_baked *b);
 
 /* --clip A,B (only these, in this order; a clip skipped at load is then an error with its
@@ -159,6 +159,7 @@ typedef struct cli_catalog_bake {
     const cb_bake_settings *overrides; /* the command line's bake options, `override_fields` of them set */
     unsigned override_fields;          /* CB_BAKE_* */
     const char *syncs, *default_state; /* --sync STATE=speed|time,..., --default-state STATE */
+    const cli_output *out;             /* -v: progress on stderr (as on a terminal) */
 } cli_catalog_bake;
 int cmd_bake_catalog(const cli_catalog_bake *options);
 

@@ -9,7 +9,7 @@
 
 const char cli_output_usage[] =
     "\noutput (every command):\n"
-    "  -q, --quiet     nothing on stderr but errors: no notes, warnings or progress\n"
+    "  -q, --quiet     no notes, progress or summary lines (a bake's warnings still show)\n"
     "  -v, --verbose   more on stderr: each file read and written, timings, the decisions taken\n";
 
 int cli_take_output(int *argc, char **argv, cli_output *out)
@@ -24,7 +24,7 @@ int cli_take_output(int *argc, char **argv, cli_output *out)
     while (i < *argc) argv[kept++] = argv[i++];
     *argc = kept;
     argv[kept] = NULL;
-    if (out->quiet && out->verbose) return cli_usage_error(argv[0], "-q and -v ask for opposite things; give one");
+    if (out->quiet) out->verbose = false; /* -q wins: a script's -q stays quiet whatever else it passes */
     return 0;
 }
 

@@ -244,7 +244,7 @@ int cmd_inspect(int argc, char **argv)
     if (!clip_name != !frame_text) return cli_usage_error("inspect", "--clip and --frame go together");
     size_t n = strlen(path);
     if (n >= 4 && strcmp(path + n - 4, ".exr") == 0) return inspect_exr(path, json);
-    cli_verbose(&out, "reading %s", path);
+    double t0 = cli_seconds();
     cb_error err = {0};
     inspected in = {.path = path};
     cbpal_file f;
@@ -263,6 +263,10 @@ int cmd_inspect(int argc, char **argv)
         in.input_hash = h->input_hash, in.speed_reference = h->speed_reference, in.bone_names = pal_bones;
         opened = true;
     }
+    if (opened)
+        cli_verbose(&out, "read %s in %.3f s: %s/%s, %u bones, %u rows, %u clip%s", path, cli_seconds() - t0,
+                    cb_layout_name(in.view->layout), cb_precision_name(in.view->precision), in.view->bone_count, in.view->rows,
+                    in.view->clip_count, in.view->clip_count == 1 ? "" : "s");
     int clip = -1;
     unsigned frame = 0;
     if (opened && clip_name) clip = find_frame(&in, clip_name, frame_text, &frame, &err);
