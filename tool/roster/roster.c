@@ -364,14 +364,10 @@ static void progress_line(roster_run *run, const cb_roster_type *t)
     mtx_lock(&run->log_lock);
     const cb_roster *r = run->r;
     fprintf(f, "crowdbake: [%u/%u] %s: ", r->baked + r->up_to_date + r->shared + r->failed, r->type_count, t->animal->name);
-    switch (t->outcome) {
-    case CB_TYPE_BAKED: fprintf(f, "baked %u rows in %.0f ms\n", t->rows, t->seconds * 1000); break;
-    case CB_TYPE_UP_TO_DATE: fprintf(f, "up to date\n"); break;
-    case CB_TYPE_SHARED: fprintf(f, "shares %s's palette\n", r->types[t->owner].animal->name); break;
-    case CB_TYPE_FAILED: fprintf(f, "failed\n"); break;
-    }
-    fflush(f);
-    mtx_unlock(&run->log_lock);
+    if (t->outcome == CB_TYPE_BAKED) fprintf(f, "baked %u rows in %.0f ms\n", t->rows, t->seconds * 1000);
+    else if (t->outcome == CB_TYPE_SHARED) fprintf(f, "shares %s's palette\n", r->types[t->owner].animal->name);
+    else fprintf(f, "%s\n", t->outcome == CB_TYPE_UP_TO_DATE ? "up to date" : "failed");
+    fflush(f), mtx_unlock(&run->log_lock);
 }
 
 /* The type's lines, printed in catalog order (roster_log); on a terminal, the progress after them. */
