@@ -267,7 +267,7 @@ $(BUILD)/tests/standalone_pal_reader: tests/standalone_pal_reader.c formats/crow
 TEST_BINS += $(BUILD)/tests/standalone_pal_reader
 
 # Fuzz targets, replayed over their regression inputs (and the samples) by every test run.
-FUZZ_TARGETS := gltf pal exr catalog
+FUZZ_TARGETS := gltf pal exr ktx2 catalog
 $(BUILD)/tests/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c $(TOOL_A) $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TOOL_INC) -c tests/fuzz/fuzz_$*.c -o $@.fuzz.o
@@ -276,6 +276,7 @@ $(BUILD)/tests/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c $(TOOL_A) $(BUI
 ARGS_replay_gltf    := tests/fuzz/regressions/gltf $(BUILD)/samples
 ARGS_replay_pal     := tests/fuzz/regressions/pal
 ARGS_replay_exr     := tests/fuzz/regressions/exr
+ARGS_replay_ktx2    := tests/fuzz/regressions/ktx2
 ARGS_replay_catalog := tests/fuzz/regressions/catalog catalog.example.toml samples/catalog.toml
 
 # The npm packages the tests use, from their package-locks: the Khronos glTF validator and a

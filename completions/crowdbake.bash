@@ -5,21 +5,22 @@
 _crowdbake_options()
 {
     local limits="--max-joints --max-frames --max-accessor-count --max-file-size --max-palette-size"
+    local output="-q --quiet -v --verbose" # every command's (tool/cli/cli_output.c)
     case $1 in
     bake) echo "-o --output --format --fps --layout --precision --max-texture-size --root-motion --skin
-                --speed-reference --exr-compression --zstd --json -q --quiet -j --threads --force --depfile
+                --speed-reference --exr-compression --zstd --json $output -j --threads --force --depfile
                 --manifest --out-dir --depfile-manifest-only --fit-rows --allow-over-budget --measure-all --max-error --max-fps --clip --exclude-clip --loop --one-shot --sync --default-state $limits" ;;
-    info) echo "--json --fps --skin -q --quiet $limits" ;;
-    sample) echo "--json --fps --clip --frame --skin --root-motion $limits" ;;
-    inspect) echo "--json --clip --frame --no-verify" ;;
-    verify) echo "--json --clip --exclude-clip --max-error --random --skin -q --quiet $limits" ;;
-    preview) echo "-o --output --skin --cell --columns -q --quiet $limits" ;;
+    info) echo "--json --fps --skin $output $limits" ;;
+    sample) echo "--json --fps --clip --frame --skin --root-motion $output $limits" ;;
+    inspect) echo "--json --clip --frame --no-verify $output" ;;
+    verify) echo "--json --clip --exclude-clip --max-error --random --skin $output $limits" ;;
+    preview) echo "-o --output --skin --cell --columns $output $limits" ;;
     vat) echo "-o --output --fps --max-texture-size --root-motion --skin --exr-compression --json --clip --exclude-clip
-                --like -q --quiet $limits" ;;
-    report) echo "--json --markdown --html --no-fail -j --target -v --verbose -q --quiet" ;;
-    view) echo "--port --open --cache --model" ;;
+                --like $output $limits" ;;
+    report) echo "--json --markdown --html --no-fail -j --target $output" ;;
+    view) echo "--port --open --cache --model $output $limits" ;;
     mesh) echo "-o --output --palette-model --max-influences --quantize --batch --max-quantization-error --fps --skin
-                --json --type --lod -q --quiet $limits" ;;
+                --json --type --lod $output $limits" ;;
     esac
 }
 

@@ -250,17 +250,101 @@ static void test_info_quiet(void **state)
     assert_contains("clip ");
 }
 
-/* A .ktx2 from bake given to inspect or verify is named as what it is, with the files of the same
- * bake they read (not "neither a palette nor glTF"). */
-static void test_ktx2_is_named(void **state)
+/* A .ktx2 from bake is read by inspect and verify like the .pal beside it (test_ktx2 compares
+ * their outputs). */
+static void test_ktx2_is_read(void **state)
 {
     (void)state;
-    assert_int_equal(crowdbake("bake %s -o " TMP "/k.pal --format pal,ktx2 -q", fox), 0);
-    assert_int_equal(crowdbake("inspect " TMP "/k.ktx2"), EXIT_USAGE);
-    assert_contains("k.ktx2: a KTX2 palette, which 'inspect' does not read: give it the .pal or .exr of the same bake");
-    assert_int_equal(crowdbake("verify %s " TMP "/k.ktx2", fox), EXIT_USAGE);
-    assert_contains("k.ktx2: a KTX2 palette, which 'verify' does not read");
-    assert_int_equal(crowdbake("verify %s " TMP "/k.pal --random 2 -q", fox), 0); /* the .pal beside it */
+    assert_int_equal(crowdbake("bake %s -o " TMP "/k.pal --format pal,ktx2 --precision half -q", fox), 0);
+    assert_int_equal(crowdbake("inspect " TMP "/k.ktx2"), 0);
+    assert_contains("k.ktx2: KTX2 palette, qpos/half, 24 bones x 2 texels");
+    assert_int_equal(crowdbake("verify %s " TMP "/k.ktx2 --random 2 -q", fox), 0);
+    assert_string_equal(out, "");
+}
+
+/* Runs `crowdbake ARGS` with stdout thrown away; its stderr in out, its exit code returned. */
+static int crowdbake_stderr(const char *args)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "%s %.3000s 2>&1 >/dev/null", crowdbake_exe(), args);
+    return run_command(cmd, out, sizeof out);
+}
+
+/* -q and -v on every command: -v says on stderr what was read (and written) and how long it
+ * took; -q leaves stderr empty (here, on inputs without warnings); both: -q wins. Each command's
+ * --help lists both. view serves until stopped: it is run on a missing file, which must fail on
+ * the file, not on the options. */
+static void test_quiet_and_verbose_everywhere(void **state)
+{
+    (void)state;
+    assert_int_equal(crowdbake("bake %s -o " TMP "/qv.pal -q", fox), 0);
+    static const char *const runs[][2] = {
+        {"info %s", NULL},
+        {"sample %s --fps 5 --json --clip walk --frame 0", NULL},
+        {"bake %s -o " TMP "/qv2.pal", TMP "/qv2.pal"},
+        {"inspect " TMP "/qv.pal", NULL},
+        {"verify %s " TMP "/qv.pal --random 2", NULL},
+        {"preview %s " TMP "/qv.pal -o " TMP "/qv.png --cell 32 --columns 2", TMP "/qv.png"},
+        {"mesh %s -o " TMP "/qv.glb", TMP "/qv.glb"},
+        {"vat %s -o " TMP "/qv.exr", TMP "/qv.exr"},
+        {"report %s", NULL},
+    };
+    char args[2048], with[2200], read_line[PATH_MAX + 32];
+    for (size_t i = 0; i < COUNT_OF(runs); ++i) {
+        snprintf(args, sizeof args, runs[i][0], fox);
+        const char *first = strchr(args, ' ') + 1; /* the first file the command reads */
+        snprintf(read_line, sizeof read_line, "crowdbake: read %.*s in ", (int)strcspn(first, " "), first);
+        snprintf(with, sizeof with, "%s -v", args);
+        assert_int_equal(crowdbake_stderr(with), 0);
+        if (strncmp(args, "report", 6) == 0) assert_contains("  Fox "); /* its per-type line */
+        else if (!strstr(out, read_line)) fail_msg("'%s': no \"%s\" in:\n%s", with, read_line, out);
+        if (runs[i][1] && strncmp(args, "bake", 4) == 0) assert_contains("crowdbake: wrote " TMP "/qv2.pal (");
+        else if (runs[i][1]) assert_contains(runs[i][1]);
+        for (int k = 0; k < 3; ++k) {
+            snprintf(with, sizeof with, "%s %s", args, k == 0 ? "-q" : k == 1 ? "--quiet" : "-v --quiet");
+            assert_int_equal(crowdbake_stderr(with), 0);
+            if (out[0]) fail_msg("'%s' printed on stderr:\n%s", with, out);
+        }
+    }
+    static const char *const commands[] = {"info", "sample", "bake", "inspect", "verify", "preview", "mesh", "vat", "report", "view"};
+    for (size_t i = 0; i < COUNT_OF(commands); ++i) {
+        assert_int_equal(crowdbake("%s --help", commands[i]), 0);
+        assert_contains("-q, --quiet");
+        assert_contains("-v, --verbose");
+        assert_int_not_equal(crowdbake("%s " TMP "/missing.glb -v -q", commands[i]), 0);
+        if (strstr(out, "unknown option")) fail_msg("%s -v -q: %s", commands[i], out);
+    }
+}
+
+/* A catalog's bake: with -v a progress line per type on stderr as each is done, whatever
+ * order they finish in, and --json on stdout still one JSON document; none with -q. */
+static void test_catalog_bake_progress(void **state)
+{
+    (void)state;
+    char cmd[4 * PATH_MAX], cwd[PATH_MAX], samples[PATH_MAX];
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    assert_non_null(realpath(samples_dir(), samples));
+    snprintf(cmd, sizeof cmd, "sed -e 's|^out_dir = .*|out_dir = \"%s/" TMP "/progress\"|' -e 's|\"../build/samples/|\"%s/|' "
+             "samples/catalog.toml > " TMP "/progress.toml", cwd, samples);
+    assert_int_equal(system(cmd), 0);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/progress.toml --force --json -v 2>&1 >" TMP "/bake.json", crowdbake_exe());
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    /* samples/catalog.toml: bird, fish and goat baked, sheep sharing goat's palette */
+    static const char *const lines[] = {"] bird: baked ", "] fish: baked ", "] goat: baked ", "] sheep: shares goat's palette\n"};
+    for (size_t i = 0; i < COUNT_OF(lines); ++i)
+        if (!strstr(out, lines[i])) fail_msg("no progress line \"%s\" in:\n%s", lines[i], out);
+    for (int n = 1; n <= 4; ++n) {
+        char counted[32];
+        snprintf(counted, sizeof counted, "crowdbake: [%d/4] ", n);
+        assert_contains(counted);
+    }
+    assert_int_equal(system("python3 -c 'import json; json.load(open(\"" TMP "/bake.json\"))'"), 0);
+    static const char *const silent[] = {"--json", "--json -q", "-q", "--json -v -q"};
+    for (size_t i = 0; i < COUNT_OF(silent); ++i) {
+        snprintf(cmd, sizeof cmd, "bake " TMP "/progress.toml --force %s", silent[i]);
+        assert_int_equal(crowdbake_stderr(cmd), 0);
+        if (out[0]) fail_msg("'%s' printed on stderr:\n%s", cmd, out);
+    }
 }
 
 /* The completions know `help COMMAND` and --version. */
@@ -321,7 +405,9 @@ int main(void)
         cmocka_unit_test(test_quiet_writes_without_a_summary),
         cmocka_unit_test(test_verify_quiet),
         cmocka_unit_test(test_info_quiet),
-        cmocka_unit_test(test_ktx2_is_named),
+        cmocka_unit_test(test_ktx2_is_read),
+        cmocka_unit_test(test_quiet_and_verbose_everywhere),
+        cmocka_unit_test(test_catalog_bake_progress),
         cmocka_unit_test(test_completions_know_help_and_version),
     };
     return cmocka_run_group_tests_name("cli_habits", tests, setup, NULL);

@@ -264,7 +264,8 @@ static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pa
         cb_exr_write(out->path, p, job->model, job->skin, job->settings.exr_compression, out->input_hash,
                      (float)job->speed_reference, err);
     } else if (out->format == CB_FORMAT_KTX2) {
-        cb_ktx2_write(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference, err);
+        cb_ktx2_write(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference,
+                      job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE, err);
     } else {
         cb_babylon_write_options bo = {(float)job->speed_reference, job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE,
                                        out->input_hash, job->babylon_states, job->babylon_state_count};

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "crowdbake/atomic_file.h"
+#include "crowdbake/bake.h"
 #include "crowdbake/json.h"
 
 enum { VK_FORMAT_R16G16B16A16_SFLOAT = 97, VK_FORMAT_R32G32B32A32_SFLOAT = 109 };
@@ -66,13 +67,19 @@ static char *clips_json(const cb_palette *p)
         cb_json_number(&j, "fps", cl->fps);
         cb_json_number(&j, "duration", cl->duration);
         cb_json_bool(&j, "loops", cl->loops);
+        /* what `verify` needs to compare with the glTF, as the .pal's clip table holds it */
+        cb_json_number(&j, "start", cl->start);
+        cb_json_bool(&j, "fitted_rows", cl->fitted);
+        cb_json_inline_array(&j, "root_velocity");
+        for (int k = 0; k < 3; ++k) cb_json_number(&j, NULL, cl->root_velocity[k]);
+        cb_json_end(&j);
         cb_json_end(&j);
     }
     cb_json_end(&j);
     return fclose(f) == 0 ? text : (free(text), NULL);
 }
 
-static char *palette_json(const cb_palette *p, const cb_model *m, int32_t skin, uint64_t hash, float speed)
+static char *palette_json(const cb_palette *p, const cb_model *m, int32_t skin, uint64_t hash, float speed, bool in_place)
 {
     char *text = NULL, hex[17];
     size_t size = 0;
@@ -90,6 +97,9 @@ static char *palette_json(const cb_palette *p, const cb_model *m, int32_t skin, 
     cb_json_int(&j, "blocks", p->blocks);
     cb_json_int(&j, "rows_per_block", p->height);
     cb_json_bool(&j, "positions_relative", p->positions_relative);
+    cb_json_number(&j, "fps", p->fps);
+    cb_json_string(&j, "root_motion", cb_root_motion_name(in_place ? CB_ROOT_MOTION_IN_PLACE : CB_ROOT_MOTION_KEEP));
+    cb_json_bool(&j, "fitted_rows", p->fitted);
     cb_json_array(&j, "bone_names");
     for (uint32_t b = 0; b < p->bone_count; ++b) cb_json_string(&j, NULL, m->nodes[m->skins[skin].joints[b]].name);
     cb_json_end(&j);
@@ -127,14 +137,14 @@ static size_t kv_entry(unsigned char *d, const char *key, const char *value)
 }
 
 cb_status cb_ktx2_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin, uint64_t input_hash,
-                        float speed_reference, cb_error *err)
+                        float speed_reference, bool in_place, cb_error *err)
 {
     if (p->precision == CB_PRECISION_U16)
         return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_PRECISION,
                                "%s: KTX2 palettes are RGBA16F or RGBA32F; a u16 palette would be RGBA16UI, which three.js's "
                                "KTX2Loader and most KTX2 loaders refuse: bake it with half or float precision", path);
     uint32_t texel = cb_precision_texel_bytes(p->precision), bits = texel * 2;
-    char *clips = clips_json(p), *meta = palette_json(p, model, skin, input_hash, speed_reference);
+    char *clips = clips_json(p), *meta = palette_json(p, model, skin, input_hash, speed_reference, in_place);
     if (!clips || !meta) {
         free(clips), free(meta);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");

@@ -8,7 +8,7 @@ tests/fuzz/regressions/T/, where `make check` replays it (replay_T, or for the w
 web/test/fuzz_regressions.test.mjs) until it is fixed; the target then starts again for the
 rest of its time, so one bug does not end the campaign.
 
-Usage: campaign.py --fuzz-build DIR --seconds N TARGET...   (TARGET: gltf pal exr catalog web)
+Usage: campaign.py --fuzz-build DIR --seconds N TARGET...   (TARGET: gltf pal exr ktx2 catalog web)
 """
 import argparse
 import os

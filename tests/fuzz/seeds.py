@@ -6,6 +6,7 @@
            its folder ("../", absolute, missing), the named file put there
   pal      bakes of the samples in every layout x precision, plain and zstd
   exr      bakes in both EXR precisions x every EXR compression
+  ktx2     bakes of the samples in every layout x half and float, and one in place
   catalog  the catalogs
   web      the .pal seeds and roster.json manifests (the web reader reads both)
 and each target's regression inputs (tests/fuzz/regressions/T).
@@ -103,6 +104,15 @@ def palette_seeds(build, pal, exr):
     bake(build, f'{build}/samples/bird.glb', f'{exr}/bird-qpos-half.exr', ['--layout', 'qpos', '--precision', 'half'])
 
 
+def ktx2_seeds(build, ktx2):
+    for s in ['fish', 'bird']:
+        for layout in LAYOUTS:
+            for precision in ['float', 'half']:
+                bake(build, f'{build}/samples/{s}.glb', f'{ktx2}/{s}-{layout}-{precision}.ktx2',
+                     ['--layout', layout, '--precision', precision])
+    bake(build, f'{build}/samples/fish.glb', f'{ktx2}/fish-in-place.ktx2', ['--precision', 'half', '--root-motion', 'in-place'])
+
+
 def roster_seeds(build, web, scratch):
     """The sample catalog baked (its roster.json) and two variants of it."""
     os.makedirs(scratch, exist_ok=True)
@@ -131,12 +141,13 @@ def main():
             open(os.path.join(folder, f'external-{stem}-{name}.gltf-bundle'), 'wb').write(data)
         return
     a = ap.parse_args()
-    dirs = {t: os.path.join(a.out, t) for t in ['gltf', 'pal', 'exr', 'catalog', 'web']}
+    dirs = {t: os.path.join(a.out, t) for t in ['gltf', 'pal', 'exr', 'ktx2', 'catalog', 'web']}
     for d in dirs.values():
         shutil.rmtree(d, ignore_errors=True)
         os.makedirs(d)
     gltf_seeds(a.shared, a.build, dirs['gltf'])
     palette_seeds(a.build, dirs['pal'], dirs['exr'])
+    ktx2_seeds(a.build, dirs['ktx2'])
     for path in ['catalog.example.toml', 'samples/catalog.toml']:
         shutil.copy(path, dirs['catalog'])
     for path in glob.glob(f'{dirs["pal"]}/*.pal'):

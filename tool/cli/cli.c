@@ -233,7 +233,20 @@ static const char *foreign_format(const char *path)
     return NULL;
 }
 
-cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *err)
+static cb_model *load_model(const char *path, const cb_limits *limits, cb_error *err);
+
+cb_model *cli_load_model(const cli_output *out, const char *path, const cb_limits *limits, cb_error *err)
+{
+    double t0 = cli_seconds();
+    cb_model *m = load_model(path, limits, err);
+    if (m && out)
+        cli_verbose(out, "read %s in %.3f s: %u skin%s, %u node%s, %u clip%s", path, cli_seconds() - t0, m->skin_count,
+                    m->skin_count == 1 ? "" : "s", m->node_count, m->node_count == 1 ? "" : "s", m->animation_count,
+                    m->animation_count == 1 ? "" : "s");
+    return m;
+}
+
+static cb_model *load_model(const char *path, const cb_limits *limits, cb_error *err)
 {
     const char *foreign = foreign_format(path);
     if (foreign) {
@@ -290,14 +303,7 @@ cli_file_kind cli_file_kind_of(const char *path)
     return CLI_FILE_UNKNOWN;
 }
 
-const char *cli_ktx2_not_read(const char *path, const char *command, char *buf, size_t size)
-{
-    snprintf(buf, size, "%s: a KTX2 palette, which '%s' does not read: give it the .pal or .exr of the same bake "
-             "('crowdbake bake MODEL -o OUT.pal --format pal,ktx2' writes both)", path, command);
-    return buf;
-}
-
-static bool is_palette(cli_file_kind k) { return k == CLI_FILE_PAL || k == CLI_FILE_EXR; }
+static bool is_palette(cli_file_kind k) { return k == CLI_FILE_PAL || k == CLI_FILE_EXR || k == CLI_FILE_KTX2; }
 
 /* The arguments are MODEL PALETTE: says which one is wrong and how, before anything is read. */
 static cb_status check_kinds(const char *command, const char *model_path, const char *palette_path, cb_error *err)
@@ -308,18 +314,22 @@ static cb_status check_kinds(const char *command, const char *model_path, const 
     if (mk != CLI_FILE_MODEL)
         return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a glTF model; 'crowdbake %s MODEL PALETTE' takes the .glb/.gltf "
                        "first", model_path, is_palette(mk) ? "a palette" : "neither glTF nor a palette", command);
-    char ktx2[1024];
-    if (pk == CLI_FILE_KTX2)
-        return cb_fail(err, CB_ERR_SETTINGS, "%s", cli_ktx2_not_read(palette_path, command, ktx2, sizeof ktx2));
     if (!is_palette(pk))
-        return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a palette; 'crowdbake %s MODEL PALETTE' takes the .pal or .exr "
-                       "that 'crowdbake bake' wrote second", palette_path, pk == CLI_FILE_MODEL ? "a glTF model" : "neither a "
+        return cb_fail(err, CB_ERR_SETTINGS, "%s: is %s, not a palette; 'crowdbake %s MODEL PALETTE' takes the .pal, .exr "
+                       "or .ktx2 that 'crowdbake bake' wrote second", palette_path, pk == CLI_FILE_MODEL ? "a glTF model" : "neither a "
                        "palette nor glTF", command);
     return CB_OK;
 }
 
 static cb_status open_palette(const char *path, cli_baked *b, cb_error *err)
 {
+    if (cli_file_kind_of(path) == CLI_FILE_KTX2) {
+        if (cb_ktx2_read_palette(path, &b->ktx2, err)) return err->status;
+        b->is_ktx2 = true;
+        b->view = b->ktx2.palette;
+        b->texels = b->ktx2.palette.texels;
+        return CB_OK;
+    }
     if (cli_file_kind_of(path) == CLI_FILE_EXR) {
         if (cb_exr_read_palette(path, &b->exr, err)) return err->status;
         b->is_exr = true;
@@ -341,25 +351,30 @@ static cb_status open_palette(const char *path, cli_baked *b, cb_error *err)
 void cli_baked_close(cli_baked *b)
 {
     if (b->is_exr) cb_exr_palette_free(&b->exr);
+    else if (b->is_ktx2) cb_ktx2_palette_free(&b->ktx2);
     else if (b->pal_open) cb_palette_view_free(&b->view), cbpal_close(&b->pal);
     cb_model_free(b->model);
     memset(b, 0, sizeof *b);
 }
 
-cb_status cli_open_baked(const char *command, const char *model_path, const char *palette_path, const cb_limits *limits,
-                         const char *skin_option, cli_baked *b, cb_error *err)
+cb_status cli_open_baked(const cli_output *out, const char *command, const char *model_path, const char *palette_path,
+                         const cb_limits *limits, const char *skin_option, cli_baked *b, cb_error *err)
 {
     memset(b, 0, sizeof *b);
     if (is_palette(cli_file_kind_of(model_path)) && cli_file_kind_of(palette_path) == CLI_FILE_MODEL) {
         /* `preview PALETTE MODEL` was the documented order before both commands took MODEL PALETTE:
          * scripts written for it keep working, with a note. */
-        fprintf(stderr, "crowdbake: note: '%s %s %s' is the old order, still accepted; write 'crowdbake %s MODEL "
+        if (!out->quiet) fprintf(stderr, "crowdbake: note: '%s %s %s' is the old order, still accepted; write 'crowdbake %s MODEL "
                 "PALETTE'\n", command, model_path, palette_path, command);
         const char *swap = model_path;
         model_path = palette_path, palette_path = swap;
     }
+    double t0 = cli_seconds();
     if (check_kinds(command, model_path, palette_path, err) || open_palette(palette_path, b, err)) return err->status;
-    b->model = cli_load_model(model_path, limits, err);
+    cli_verbose(out, "read %s in %.3f s: %s/%s, %u bones, %u rows, %u clip%s", palette_path, cli_seconds() - t0,
+                cb_layout_name(b->view.layout), cb_precision_name(b->view.precision), b->view.bone_count, b->view.rows,
+                b->view.clip_count, b->view.clip_count == 1 ? "" : "s");
+    b->model = cli_load_model(out, model_path, limits, err);
     b->skin = b->model ? cli_pick_skin(b->model, skin_option, err) : -1;
     if (b->skin >= 0 && b->model->skins[b->skin].joint_count != b->view.bone_count)
         cb_fail(err, CB_ERR_INPUT, "%s: its skin has %u joints, %s has %u bones: not its palette", model_path,

@@ -7,6 +7,7 @@
 
 #include "crowdbake/exr.h"
 #include "crowdbake/gltf.h"
+#include "crowdbake/ktx2.h"
 #include "crowdbake/json.h"
 #include "crowdbake_pal.h" /* the runtime reader (installed as crowdbake_pal.h) */
 #include "crowdbake/pal_view.h"
@@ -65,17 +66,33 @@ bool cli_parse_u32(const char *text, unsigned *out);
 int cli_take_limits(int *argc, char **argv, cb_limits *limits);
 extern const char cli_limits_usage[];
 
-/* Loads a model within `limits`. */
-cb_model *cli_load_model(const char *path, const cb_limits *limits, cb_error *err);
+/* -q/--quiet (nothing on stderr but errors) and -v/--verbose (each file read and written,
+ * timings, decisions), which every command takes: cli_take_output removes them from argv, as
+ * cli_take_limits does its options (up to a "--"), before the command's own parsing. With both,
+ * -q wins. Progress lines go to stderr on a terminal or with -v, never with -q. */
+typedef struct cli_output {
+    bool quiet, verbose;
+} cli_output;
+int cli_take_output(int *argc, char **argv, cli_output *out);
+extern const char cli_output_usage[];
+/* "crowdbake: MESSAGE" on stderr with -v (and not -q). */
+void cli_verbose(const cli_output *out, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+bool cli_progress(const cli_output *out);
+double cli_seconds(void); /* monotonic, for -v's timings */
+
+/* Loads a model within `limits`; with -v, says what it read and how long it took (out may be NULL). */
+cb_model *cli_load_model(const cli_output *out, const char *path, const cb_limits *limits, cb_error *err);
 /* The skin a command works on: --skin NAME|INDEX, or the only one; an error otherwise. */
 int cli_pick_skin(const cb_model *model, const char *skin_option, cb_error *err);
 /* What a file holds, from its first bytes (not its name). */
 typedef enum cli_file_kind { CLI_FILE_UNKNOWN, CLI_FILE_MODEL, CLI_FILE_PAL, CLI_FILE_EXR, CLI_FILE_MISSING, CLI_FILE_KTX2 } cli_file_kind;
 cli_file_kind cli_file_kind_of(const char *path);
-/* What to say of a KTX2 palette where a .pal or .exr is read: "PATH: a KTX2 palette, which ..." */
-const char *cli_ktx2_not_read(const char *path, const char *command, char *buf, size_t size);
 
-/* A palette (.pal or .exr) and the model it was baked from, as `verify` and `preview` take them. */
+/* A palette (.pal, .exr or .ktx2) and the model it was baked from, as `verify` and `preview` take them. */
 typedef struct cli_baked {
     cb_model *model;
     int skin;
@@ -83,14 +100,15 @@ typedef struct cli_baked {
     const void *texels;     /* the payload the decoders read */
     cbpal_file pal;         /* a .pal: mapped, checksum verified */
     cb_exr_palette exr;     /* an .exr: decoded */
-    bool is_exr, pal_open;
+    cb_ktx2_palette ktx2;   /* a .ktx2: read */
+    bool is_exr, is_ktx2, pal_open;
 } cli_baked;
 
 /* Opens MODEL PALETTE: checks each is the kind of file it should be (naming the order when
  * they are swapped), loads and picks the skin, compares bone counts. 0, or the error's status
  * with *err set and nothing left open; else close with cli_baked_close. */
-cb_status cli_open_baked(const char *command, const char *model_path, const char *palette_path, const cb_limits *limits,
-                         const char *skin_option, cli_baked *out, cb_error *err);
+cb_status cli_open_baked(const cli_output *out, const char *command, const char *model_path, const char *palette_path,
+                         const cb_limits *limits, const char *skin_option, cli_baked *b, cb_error *err);
 void cli_baked_close(cli_baked *b);
 
 /* --clip A,B (only these, in this order; a clip skipped at load is then an error with its
@@ -141,6 +159,7 @@ typedef struct cli_catalog_bake {
     const cb_bake_settings *overrides; /* the command line's bake options, `override_fields` of them set */
     unsigned override_fields;          /* CB_BAKE_* */
     const char *syncs, *default_state; /* --sync STATE=speed|time,..., --default-state STATE */
+    const cli_output *out;             /* -v: progress on stderr (as on a terminal) */
 } cli_catalog_bake;
 int cmd_bake_catalog(const cli_catalog_bake *options);
 

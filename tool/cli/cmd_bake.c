@@ -14,7 +14,7 @@
 const char cmd_bake_usage[] =
     "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2|OUT.bvat.json [options]\n"
     "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--out-dir DIR] [--json]\n"
-    "                      [-q] [--sync STATE=speed|time,...] [--default-state STATE]\n"
+    "                      [-q|-v] [--sync STATE=speed|time,...] [--default-state STATE]\n"
     "                      [--fps N|auto] [--max-error MM_PER_M] [--max-fps N] [--fit-rows] [--allow-over-budget]\n"
     "                      [--layout L] [--precision P] [--format F] [--zstd]\n"
     "                      [--max-texture-size N]\n"
@@ -81,13 +81,15 @@ const char cmd_bake_usage[] =
     "  -j, --threads N            sample clips on N threads (default: the number of cores); the\n"
     "                             output is byte-identical for any N\n"
     "  --json                     a machine-readable summary on stdout, warnings included\n"
-    "  -q, --quiet                no summary lines\n";
+    "  -q, --quiet                no summary lines, notes or progress (a bake's warnings still show)\n"
+    "  -v, --verbose              each file read and written with its time; a catalog's progress\n";
 
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
         *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir, *loops,
         *one_shots, *syncs, *default_state;
-    bool zstd, json, quiet, quiet_long, force, depfile_manifest, fit, measure_all, over_budget;
+    bool zstd, json, quiet, force, depfile_manifest, fit, measure_all, over_budget;
+    cli_output out;
 } bake_args;
 
 static double now_seconds(void)
@@ -202,7 +204,7 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     if (a->out_dir) over.out_dir = a->out_dir, fields |= CB_BAKE_OUT_DIR;
     if (a->depfile_manifest && !a->depfile) return cli_usage_error("bake", "--depfile-manifest-only goes with --depfile");
     cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, a->depfile_manifest,
-                           limits, &over, fields, a->syncs, a->default_state};
+                           limits, &over, fields, a->syncs, a->default_state, &a->out};
     return cmd_bake_catalog(&cb);
 }
 
@@ -408,6 +410,10 @@ static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bak
     for (uint32_t i = 0; i < r->notes.count; ++i) cb_warn(&warnings, r->notes.items[i].kind, "%s", r->notes.items[i].message);
     report_over_budget(job, r, &warnings);
     double seconds = now_seconds() - t0;
+    for (uint32_t i = 0; i < r->output_count; ++i)
+        cli_verbose(&a->out, "wrote %s (%llu bytes; %s/%s, %u rows) in %.3f s", r->outputs[i].path,
+                    (unsigned long long)r->outputs[i].file_bytes, cb_layout_name(r->outputs[i].palette.layout),
+                    cb_precision_name(r->outputs[i].palette.precision), r->outputs[i].palette.rows, r->outputs[i].seconds_write);
     if (a->json) {
         cb_json j;
         cb_json_init(&j, stdout);
@@ -433,6 +439,7 @@ int cmd_bake(int argc, char **argv)
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     bake_args a = {0};
+    if (cli_take_output(&argc, argv, &a.out)) return CLI_EXIT_USAGE;
     bool help;
     const cli_option options[] = {
         {"-o", "FILE", &a.output, NULL},           {"--output", "FILE", &a.output, NULL},
@@ -441,7 +448,7 @@ int cmd_bake(int argc, char **argv)
         {"--max-texture-size", "N", &a.max_size, NULL}, {"--root-motion", "keep|in-place", &a.root_motion, NULL},
         {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "M_PER_S", &a.speed_ref, NULL},
         {"--exr-compression", "NAME", &a.exr_compression, NULL}, {"--zstd", NULL, NULL, &a.zstd},
-        {"--json", NULL, NULL, &a.json},           {"-q", NULL, NULL, &a.quiet},
+        {"--json", NULL, NULL, &a.json},
         {"-j", "N", &a.threads, NULL},             {"--threads", "N", &a.threads, NULL},
         {"--force", NULL, NULL, &a.force},         {"--depfile", "FILE", &a.depfile, NULL},
         {"--manifest", "FILE", &a.manifest, NULL}, {"--max-error", "MM_PER_M", &a.max_error, NULL},
@@ -449,13 +456,13 @@ int cmd_bake(int argc, char **argv)
         {"--exclude-clip", "A,B", &a.excluded, NULL}, {"--out-dir", "DIR", &a.out_dir, NULL},
         {"--loop", "A,B", &a.loops, NULL},         {"--one-shot", "A,B", &a.one_shots, NULL},
         {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest}, {"--fit-rows", NULL, NULL, &a.fit},
-        {"--measure-all", NULL, NULL, &a.measure_all}, {"--quiet", NULL, NULL, &a.quiet_long},
+        {"--measure-all", NULL, NULL, &a.measure_all},
         {"--allow-over-budget", NULL, NULL, &a.over_budget},
         {"--sync", "STATE=speed|time", &a.syncs, NULL}, {"--default-state", "STATE", &a.default_state, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
     if (help) return fputs(cmd_bake_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
-    a.quiet |= a.quiet_long;
+    a.quiet = a.out.quiet;
     if (ends_with(a.model, ".toml")) return bake_catalog(&a, &limits);
     if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
     if (a.depfile || a.depfile_manifest || a.manifest || a.force || a.out_dir)
@@ -475,7 +482,7 @@ int cmd_bake(int argc, char **argv)
 
     double t0 = now_seconds();
     cb_error err = {0};
-    cb_model *m = cli_load_model(a.model, &limits, &err);
+    cb_model *m = cli_load_model(&a.out, a.model, &limits, &err);
     if (!m) return cli_report(&err);
     double load = now_seconds() - t0;
     char pal_path[4096], exr_path[4096], ktx2_path[4096], babylon_path[4096];

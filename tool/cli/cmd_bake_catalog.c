@@ -64,6 +64,11 @@ int cmd_bake_catalog(const cli_catalog_bake *o)
     opt.force = o->force;
     opt.log = quiet || json ? NULL : stdout;
     opt.tty = opt.log && isatty(fileno(stdout));
+    /* Progress on stderr, on a terminal or with -v (never -q): where stdout does not show the log
+     * as it goes (--json, or stdout piped) - a terminal's log has its own progress line. */
+    if ((json || !opt.tty) && cli_progress(o->out)) opt.progress = stderr;
+    cli_verbose(o->out, "%s: %u animal type%s, %u thread%s", path, cat.animal_count, cat.animal_count == 1 ? "" : "s", jobs,
+                jobs == 1 ? "" : "s");
     opt.depfile = o->depfile;
     opt.depfile_manifest_only = o->depfile_manifest_only;
     opt.manifest = o->manifest;

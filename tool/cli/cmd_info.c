@@ -10,7 +10,7 @@
 #include "cli.h"
 
 const char cmd_info_usage[] =
-    "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX] [-q]\n\n"
+    "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX] [-q] [-v]\n\n"
     "Skins, joints, skinned mesh nodes and vertex counts, and per clip: start, duration, keys,\n"
     "interpolation modes, whether it loops and why, frames at --fps (default 30), root velocity and\n"
     "ground speed (root travel and planted feet), and the footsteps: when each foot lands and lifts;\n"
@@ -290,19 +290,20 @@ int cmd_info(int argc, char **argv)
 {
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
+    cli_output out;
+    if (cli_take_output(&argc, argv, &out)) return CLI_EXIT_USAGE;
     const char *path = NULL, *fps_text = "30", *skin_name = NULL;
-    bool json = false, help, quiet[2] = {false, false};
+    bool json = false, help;
     const cli_option options[] = {
-        {"--json", NULL, NULL, &json}, {"--fps", "N", &fps_text, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL},
-        {"-q", NULL, NULL, &quiet[0]}, {"--quiet", NULL, NULL, &quiet[1]}};
+        {"--json", NULL, NULL, &json}, {"--fps", "N", &fps_text, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &path, 1, 1, &help);
-    if (help) return fputs(cmd_info_usage, stdout), fputs(cli_limits_usage, stdout), 0;
+    if (help) return fputs(cmd_info_usage, stdout), fputs(cli_output_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     double fps;
     if (!cli_parse_double(fps_text, &fps) || !cb_fps_valid(fps))
         return cli_usage_error("info", "--fps wants a number between 0 and 1000");
     cb_error err = {0};
-    cb_model *m = cli_load_model(path, &limits, &err);
+    cb_model *m = cli_load_model(&out, path, &limits, &err);
     if (!m) return cli_report(&err);
     /* info describes every skin; clips are analysed with the one a bake would use. */
     int skin = -1;
@@ -318,7 +319,7 @@ int cmd_info(int argc, char **argv)
     if (!err.status) gather_clips(m, skin, fps, &limits, facts, &sockets, &err);
     if (!err.status && json) print_json(m, skin, facts, &sockets, fps);
     if (!err.status && !json) print_text(m, skin, facts, fps), print_sockets(m, skin, &sockets);
-    if (!err.status && !json && !quiet[0] && !quiet[1]) { /* what a bake would leave out (-q: not said) */
+    if (!err.status && !json && !out.quiet) { /* what a bake would leave out (-q: not said) */
         cb_warnings warnings = {0};
         cb_model_warnings(m, true, &warnings);
         cli_print_warnings(&warnings, false);

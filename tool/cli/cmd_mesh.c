@@ -11,7 +11,7 @@
 
 const char cmd_mesh_usage[] =
     "usage: crowdbake mesh MODEL -o OUT.glb [--palette-model MAIN] [--max-influences 1|2|4] [--quantize] [--batch K]\n"
-    "                      [--max-quantization-error MM_PER_M] [--fps N] [--skin NAME|INDEX] [--json] [-q]\n"
+    "                      [--max-quantization-error MM_PER_M] [--fps N] [--skin NAME|INDEX] [--json] [-q] [-v]\n"
     "       crowdbake mesh CATALOG.toml --type NAME [--lod N] -o OUT.glb [options]\n\n"
     "Writes the skinned mesh as a palette runtime draws it, a .glb validated by the Khronos validator:\n"
     "  JOINTS_0 are palette bones: the mesh's joints remapped by name to the skin the palette is baked\n"
@@ -31,7 +31,8 @@ const char cmd_mesh_usage[] =
 
 typedef struct mesh_args {
     const char *input, *output, *palette_model, *type, *lod, *influences, *batch, *fps, *skin, *max_quant;
-    bool quantize, json, quiet[2]; /* -q, --quiet: no summary line */
+    bool quantize, json;
+    cli_output out; /* -q: no summary line */
 } mesh_args;
 
 /* Resolves a catalog's --type/--lod into model paths and the LOD's influence setting. */
@@ -88,7 +89,7 @@ static void print_result(const mesh_args *a, const cb_mesh *m, const cb_mesh_err
         cb_json_end(&j);
         return;
     }
-    if (a->quiet[0] || a->quiet[1]) return;
+    if (a->out.quiet) return;
     printf("%s: %llu vertices%s, %u influence%s%s, vertex buffers %.1f KiB + indices %.1f KiB; extra error vs 4 "
            "influences %.3f mm/m (vertex %llu, '%s' at %.3f s, %u frames at the palette model's clips)",
            a->output, (unsigned long long)verts, m->batch > 1 ? " (batch of copies with _INSTANCE_ID)" : "", m->max_influences,
@@ -110,9 +111,9 @@ static int run(mesh_args *a, unsigned influences, unsigned batch, double fps, do
     cb_mesh mesh = {0};
     int ps = -1, ms = -1;
     bool same = !a->palette_model || strcmp(a->palette_model, a->input) == 0;
-    if (!(pm = cli_load_model(same ? a->input : a->palette_model, limits, &err)) || (ps = cli_pick_skin(pm, a->skin, &err)) < 0)
+    if (!(pm = cli_load_model(&a->out, same ? a->input : a->palette_model, limits, &err)) || (ps = cli_pick_skin(pm, a->skin, &err)) < 0)
         goto done;
-    mm = same ? pm : cli_load_model(a->input, limits, &err);
+    mm = same ? pm : cli_load_model(&a->out, a->input, limits, &err);
     if (!mm || (ms = same ? ps : cli_pick_skin(mm, NULL, &err)) < 0) goto done;
     if (!same) {
         remap = calloc(mm->skins[ms].joint_count, sizeof *remap);
@@ -121,9 +122,11 @@ static int run(mesh_args *a, unsigned influences, unsigned batch, double fps, do
     }
     cb_mesh_options o = {influences, a->quantize, false, batch, remap, pm->skins[ps].joint_count};
     cb_mesh_error e;
+    double t0 = cli_seconds();
     if (!(s = cb_sampler_create(pm, ps, &err)) || cb_mesh_build_measured(s, mm, ms, &o, fps, max_quant, &mesh, &e, &err) ||
         cb_gltf_mesh_write(a->output, &mesh, pm, ps, &e, &err))
         goto done;
+    cli_verbose(&a->out, "built, measured and wrote %s in %.3f s", a->output, cli_seconds() - t0);
     print_result(a, &mesh, &e, pm);
 done:
     cb_sampler_free(s);
@@ -139,6 +142,7 @@ int cmd_mesh(int argc, char **argv)
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
     mesh_args a = {0};
+    if (cli_take_output(&argc, argv, &a.out)) return CLI_EXIT_USAGE;
     bool help;
     const cli_option options[] = {
         {"-o", "OUT.glb", &a.output, NULL},          {"--output", "OUT.glb", &a.output, NULL},
@@ -146,10 +150,9 @@ int cmd_mesh(int argc, char **argv)
         {"--lod", "N", &a.lod, NULL},                {"--max-influences", "N", &a.influences, NULL},
         {"--quantize", NULL, NULL, &a.quantize},     {"--batch", "K", &a.batch, NULL},
         {"--fps", "N", &a.fps, NULL},                {"--skin", "NAME|INDEX", &a.skin, NULL},
-        {"--json", NULL, NULL, &a.json},             {"--max-quantization-error", "MM_PER_M", &a.max_quant, NULL},
-        {"-q", NULL, NULL, &a.quiet[0]},             {"--quiet", NULL, NULL, &a.quiet[1]}};
+        {"--json", NULL, NULL, &a.json},             {"--max-quantization-error", "MM_PER_M", &a.max_quant, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.input, 1, 1, &help);
-    if (help) return fputs(cmd_mesh_usage, stdout), fputs(cli_limits_usage, stdout), 0;
+    if (help) return fputs(cmd_mesh_usage, stdout), fputs(cli_output_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     if (!a.output) return cli_usage_error("mesh", "-o OUT.glb is required");
     unsigned influences = 4, batch = 1;

@@ -90,7 +90,7 @@ static void remove_folder(const char *dir)
 static cb_status open_single_model(const char *path, char *tmp, size_t tmp_size, cb_catalog *cat, cb_error *err)
 {
     cb_limits limits = cb_default_limits();
-    cb_model *m = cli_load_model(path, &limits, err);
+    cb_model *m = cli_load_model(NULL, path, &limits, err);
     if (m && cli_pick_skin(m, NULL, err) < 0) cb_model_free(m), m = NULL;
     if (!m) return err->status;
     cb_model_free(m);
@@ -141,13 +141,13 @@ static cb_status write_html(const char *path, const cb_report *r, cb_error *err)
 
 int cmd_report(int argc, char **argv)
 {
+    cli_output out;
+    if (cli_take_output(&argc, argv, &out)) return CLI_EXIT_USAGE;
     const char *path = NULL, *html = NULL, *jobs_text = NULL, *target = NULL;
-    bool json = false, markdown = false, no_fail = false, help, verbose[2] = {false, false}, quiet[2] = {false, false};
+    bool json = false, markdown = false, no_fail = false, help;
     const cli_option options[] = {{"--json", NULL, NULL, &json},      {"--markdown", NULL, NULL, &markdown},
                                   {"--html", "FILE", &html, NULL},    {"--no-fail", NULL, NULL, &no_fail},
-                                  {"-j", "N", &jobs_text, NULL},      {"--target", "NAME", &target, NULL},
-                                  {"-v", NULL, NULL, &verbose[0]},    {"--verbose", NULL, NULL, &verbose[1]},
-                                  {"-q", NULL, NULL, &quiet[0]},      {"--quiet", NULL, NULL, &quiet[1]}};
+                                  {"-j", "N", &jobs_text, NULL},      {"--target", "NAME", &target, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &path, 1, 1, &help);
     if (help) return fputs(cmd_report_usage, stdout), 0;
     if (rc) return rc;
@@ -168,7 +168,7 @@ int cmd_report(int argc, char **argv)
     opt.measure_vat = true;
     /* The bake takes seconds (7 s for three animals): a line per type on stderr as each is
      * done, on a terminal or with -v, never with -q; stdout keeps only the report. */
-    bool progress = !(quiet[0] || quiet[1]) && (verbose[0] || verbose[1] || isatty(STDERR_FILENO));
+    bool progress = cli_progress(&out);
     opt.log = progress ? stderr : NULL;
     opt.tty = progress && isatty(STDERR_FILENO);
     cb_roster roster;

@@ -10,7 +10,7 @@
 
 const char cmd_sample_usage[] =
     "usage: crowdbake sample MODEL --fps N --json [--clip NAME] [--frame I] [--skin NAME|INDEX]\n"
-    "                        [--root-motion keep|in-place]\n\n"
+    "                        [--root-motion keep|in-place] [-q] [-v]\n\n"
     "Prints the joint matrices (4x4, column-major, glTF order) of every baked frame of every clip,\n"
     "or of one clip / one frame: the debugging view of what 'crowdbake bake' stores.\n";
 
@@ -47,13 +47,15 @@ int cmd_sample(int argc, char **argv)
 {
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
+    cli_output out;
+    if (cli_take_output(&argc, argv, &out)) return CLI_EXIT_USAGE;
     const char *path = NULL, *fps_text = NULL, *clip_name = NULL, *frame_text = NULL, *skin_name = NULL, *rm_text = "keep";
     bool json = false, help;
     const cli_option options[] = {{"--json", NULL, NULL, &json},          {"--fps", "N", &fps_text, NULL},
                                   {"--clip", "NAME", &clip_name, NULL},   {"--frame", "I", &frame_text, NULL},
                                   {"--skin", "NAME|INDEX", &skin_name, NULL}, {"--root-motion", "keep|in-place", &rm_text, NULL}};
     int rc = cli_parse(argc, argv, options, 6, &path, 1, 1, &help);
-    if (help) return fputs(cmd_sample_usage, stdout), fputs(cli_limits_usage, stdout), 0;
+    if (help) return fputs(cmd_sample_usage, stdout), fputs(cli_output_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     double fps;
     unsigned frame = 0;
@@ -66,7 +68,7 @@ int cmd_sample(int argc, char **argv)
     if (!cb_root_motion_parse(rm_text, &rm)) return cli_usage_error("sample", "--root-motion is keep or in-place");
 
     cb_error err = {0};
-    cb_model *m = cli_load_model(path, &limits, &err);
+    cb_model *m = cli_load_model(&out, path, &limits, &err);
     if (!m) return cli_report(&err);
     int skin = cli_pick_skin(m, skin_name, &err);
     int clip_index = -1;
@@ -96,6 +98,8 @@ int cmd_sample(int argc, char **argv)
                         m->animations[a].name, clip.frames, fps, frame);
                 break;
             }
+            cli_verbose(&out, "clip '%s': %u frames at %.4g fps (%s)", m->animations[a].name, clip.frames, clip.effective_fps,
+                        clip.loops ? "loops: its last pose is its first" : "one-shot");
             write_clip(&j, s, m, &clip, frame_text ? (long)frame : -1, rm, mats);
         }
         cb_json_end(&j);

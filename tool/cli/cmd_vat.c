@@ -13,7 +13,7 @@
 const char cmd_vat_usage[] =
     "usage: crowdbake vat MODEL -o OUT.exr [--fps N] [--max-texture-size N] [--root-motion keep|in-place]\n"
     "                     [--skin NAME|INDEX] [--exr-compression none|rle|zips|zip|piz] [--json]\n"
-    "                     [--clip A,B | --exclude-clip A,B | --like PALETTE.pal] [-q]\n\n"
+    "                     [--clip A,B | --exclude-clip A,B | --like PALETTE.pal] [-q] [-v]\n\n"
     "Bakes a vertex animation texture: every skinned vertex of every frame (framed like the palette's\n"
     "rows), positions and normals as RGBA16F layers position.* and normal.* of one EXR, a frame per\n"
     "texture row (a frame of more vertices than the limit takes several rows; rows wrap into column\n"
@@ -50,18 +50,19 @@ int cmd_vat(int argc, char **argv)
 {
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
+    cli_output said;
+    if (cli_take_output(&argc, argv, &said)) return CLI_EXIT_USAGE;
     const char *path = NULL, *out = NULL, *fps = NULL, *max = NULL, *rm = NULL, *skin_name = NULL, *comp = NULL,
                *clips = NULL, *excluded = NULL, *like = NULL;
-    bool json = false, help, quiet[2] = {false, false};
+    bool json = false, help;
     const cli_option options[] = {{"-o", "FILE", &out, NULL},          {"--output", "FILE", &out, NULL},
-                                  {"-q", NULL, NULL, &quiet[0]},       {"--quiet", NULL, NULL, &quiet[1]},
                                   {"--fps", "N", &fps, NULL},          {"--max-texture-size", "N", &max, NULL},
                                   {"--root-motion", "MODE", &rm, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL},
                                   {"--exr-compression", "NAME", &comp, NULL}, {"--json", NULL, NULL, &json},
                                   {"--clip", "A,B", &clips, NULL},     {"--exclude-clip", "A,B", &excluded, NULL},
                                   {"--like", "PALETTE.pal", &like, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &path, 1, 1, &help);
-    if (help) return fputs(cmd_vat_usage, stdout), fputs(cli_limits_usage, stdout), 0;
+    if (help) return fputs(cmd_vat_usage, stdout), fputs(cli_output_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     if (!out) return cli_usage_error("vat", "-o OUT.exr is required");
     if (like && (fps || clips || excluded))
@@ -76,7 +77,7 @@ int cmd_vat(int argc, char **argv)
     if (rm && !cb_root_motion_parse(rm, &o.root_motion)) return cli_usage_error("vat", "--root-motion is keep or in-place");
     if (comp && !cb_exr_compression_parse(comp, &compression)) return cli_usage_error("vat", "--exr-compression: lossless only");
     cb_error err = {0};
-    cb_model *m = cli_load_model(path, &limits, &err);
+    cb_model *m = cli_load_model(&said, path, &limits, &err);
     if (!m) return cli_report(&err);
     int skin = cli_pick_skin(m, skin_name, &err);
     cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, &err) : NULL;
@@ -84,8 +85,10 @@ int cmd_vat(int argc, char **argv)
     cb_clip_plan *plan = NULL;
     uint32_t planned = 0;
     if (s && !(like ? plan_like(m, like, &plan, &planned, &err) : cli_select_clips(m, clips, excluded, &plan, &planned, &err)) &&
-        !cb_vat_bake(s, &o, plan, planned, true, &vat, &err))
-        cb_exr_write_vat(out, &vat, compression, &err);
+        !cb_vat_bake(s, &o, plan, planned, true, &vat, &err)) {
+        double t0 = cli_seconds();
+        if (!cb_exr_write_vat(out, &vat, compression, &err)) cli_verbose(&said, "wrote %s in %.3f s", out, cli_seconds() - t0);
+    }
     free(plan);
     cb_warnings warnings = {0};
     if (!err.status) cb_model_warnings(m, clips == NULL, &warnings);
@@ -111,7 +114,7 @@ int cmd_vat(int argc, char **argv)
             cb_json_int(&j, "palette_qpos_u16_bytes", (long long)pal);
             cli_json_warnings(&j, &warnings);
             cb_json_end(&j);
-        } else if (quiet[0] || quiet[1]) {
+        } else if (said.quiet) {
             cli_print_warnings(&warnings, false); /* warnings still; no summary, no notes */
         } else {
             printf("%s: %llu vertices x %u frames, %ux%u texels (%u block%s), %.1f KiB of RGBA16F positions + normals, "

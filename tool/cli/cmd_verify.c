@@ -10,8 +10,8 @@
 #include "cli.h"
 
 const char cmd_verify_usage[] =
-    "usage: crowdbake verify MODEL PALETTE.pal|.exr [--max-error MM_PER_M] [--random N] [--skin NAME|INDEX] [--json]\n"
-    "                        [--clip A,B | --exclude-clip A,B] [-q]\n\n"
+    "usage: crowdbake verify MODEL PALETTE.pal|.exr|.ktx2 [--max-error MM_PER_M] [--random N] [--skin NAME|INDEX] [--json]\n"
+    "                        [--clip A,B | --exclude-clip A,B] [-q] [-v]\n\n"
     "Skins the model's mesh from the palette the way the runtime shaders do (two adjacent rows\n"
     "blended, up to 4 weighted bones, loops wrap, one-shots clamp) and compares it with exact float64\n"
     "skinning from the glTF: at every baked frame (the encoding's error), at every mid-frame and at N\n"
@@ -56,14 +56,15 @@ int cmd_verify(int argc, char **argv)
 {
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
+    cli_output out;
+    if (cli_take_output(&argc, argv, &out)) return CLI_EXIT_USAGE;
     const char *pos[2] = {0}, *max_text = NULL, *random_text = NULL, *skin_name = NULL, *clips = NULL, *excluded = NULL;
-    bool json = false, help, quiet[2] = {false, false};
+    bool json = false, help;
     const cli_option options[] = {{"--max-error", "MM_PER_M", &max_text, NULL}, {"--random", "N", &random_text, NULL},
                                   {"--skin", "NAME|INDEX", &skin_name, NULL}, {"--json", NULL, NULL, &json},
-                                  {"--clip", "A,B", &clips, NULL}, {"--exclude-clip", "A,B", &excluded, NULL},
-                                  {"-q", NULL, NULL, &quiet[0]}, {"--quiet", NULL, NULL, &quiet[1]}};
+                                  {"--clip", "A,B", &clips, NULL}, {"--exclude-clip", "A,B", &excluded, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], pos, 2, 2, &help);
-    if (help) return fputs(cmd_verify_usage, stdout), fputs(cli_limits_usage, stdout), 0;
+    if (help) return fputs(cmd_verify_usage, stdout), fputs(cli_output_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     double max_error = -1;
     unsigned random_times = 64;
@@ -71,7 +72,7 @@ int cmd_verify(int argc, char **argv)
     if (random_text && !cli_parse_u32(random_text, &random_times)) return cli_usage_error("verify", "--random wants a count");
     cb_error err = {0};
     cli_baked b;
-    if (cli_open_baked("verify", pos[0], pos[1], &limits, skin_name, &b, &err)) return cli_report(&err);
+    if (cli_open_baked(&out, "verify", pos[0], pos[1], &limits, skin_name, &b, &err)) return cli_report(&err);
     const cb_palette *pv = &b.view;
     const cb_model *m = b.model;
     bool *skip = calloc(pv->clip_count + 1, sizeof *skip);
@@ -95,7 +96,7 @@ int cmd_verify(int argc, char **argv)
     int name_width = 20; /* the clip column fits the longest name */
     for (uint32_t c = 0; c < pv->clip_count; ++c)
         if ((int)strlen(pv->clips[c].name) > name_width) name_width = (int)strlen(pv->clips[c].name);
-    bool table = !json && !quiet[0] && !quiet[1]; /* -q: only the exit status (and why, over --max-error) */
+    bool table = !json && !out.quiet; /* -q: only the exit status (and why, over --max-error) */
     if (table) {
         printf("%s with %s (%s/%s, model height %.4g):\n  %-*s %12s %12s %12s %12s %12s %13s  %s\n", pos[1], pos[0],
                cb_layout_name(pv->layout), cb_precision_name(pv->precision), height, name_width, "clip", "rows max", "rows mean",
@@ -110,7 +111,10 @@ int cmd_verify(int argc, char **argv)
             break;
         }
         cb_clip_error e;
+        double t0 = cli_seconds();
         if (cb_verify_clip(s, pv, b.texels, c, a, random_times, &e, &err)) break;
+        cli_verbose(&out, "clip '%s': %u rows, their %u mid-points and %u random times compared in %.3f s", pv->clips[c].name,
+                    pv->clips[c].frames, pv->clips[c].frames, random_times, cli_seconds() - t0);
         worst = e.quant_max > worst ? e.quant_max : worst;
         worst = e.interp_max > worst ? e.interp_max : worst;
         if (json) {

@@ -24,8 +24,8 @@
 #include "cli.h"
 
 const char cmd_view_usage[] =
-    "usage: crowdbake view MODEL|catalog.toml [--port N] [--open] [--cache DIR]\n"
-    "       crowdbake view PALETTE.pal --model MODEL [--port N] [--open] [--cache DIR]\n\n"
+    "usage: crowdbake view MODEL|catalog.toml [--port N] [--open] [--cache DIR] [-q] [-v]\n"
+    "       crowdbake view PALETTE.pal --model MODEL [--port N] [--open] [--cache DIR] [-q] [-v]\n\n"
     "Shows a herd in the browser: bakes what is missing (a model gets a catalog of one type with a\n"
     "state per clip, root motion in place; a catalog is baked as 'bake' does), bakes a VAT of the same\n"
     "frames to compare, then serves the viewer on 127.0.0.1 (port N, default any free port) with\n"
@@ -40,6 +40,7 @@ const char cmd_view_usage[] =
 
 typedef struct view_paths {
     char cache[PATH_MAX], site[PATH_MAX + 8], web[PATH_MAX + 16], shaders[PATH_MAX + 48];
+    cli_output out; /* -q: no bake log; -v: what is baked and linked where */
 } view_paths;
 
 static int fail_io(const char *what, const char *path)
@@ -158,7 +159,7 @@ static int write_model_catalog(const char *model_path, const cb_limits *limits, 
                                char *catalog, size_t size)
 {
     cb_error err = {0};
-    cb_model *m = cli_load_model(model_path, limits, &err);
+    cb_model *m = cli_load_model(NULL, model_path, limits, &err);
     if (!m) return cli_report(&err);
     char abs[PATH_MAX], state[128], default_state[128] = "";
     if (!realpath(model_path, abs)) snprintf(abs, sizeof abs, "%s", model_path);
@@ -224,7 +225,8 @@ static int prepare_catalog(const view_paths *v, const char *catalog_path)
     cb_roster_options opt = {0};
     opt.setting_name = cli_setting_flag;
     opt.jobs = 1;
-    opt.log = stdout;
+    opt.log = v->out.quiet ? NULL : stdout;
+    cli_verbose(&v->out, "baking %s into %s", catalog_path, v->cache);
     cb_roster r;
     int rc = cb_roster_bake(&cat, &opt, &r, &err);
     if (rc && r.failed < r.type_count) rc = 0; /* show the types that baked; the log named the others */
@@ -353,12 +355,14 @@ int cmd_view(int argc, char **argv)
 {
     cb_limits limits;
     if (cli_take_limits(&argc, argv, &limits)) return CLI_EXIT_USAGE;
+    view_paths v;
+    if (cli_take_output(&argc, argv, &v.out)) return CLI_EXIT_USAGE;
     const char *input = NULL, *port_text = NULL, *cache = NULL, *model = NULL;
     bool open_browser = false, help;
     const cli_option options[] = {{"--port", "N", &port_text, NULL}, {"--open", NULL, NULL, &open_browser},
                                   {"--cache", "DIR", &cache, NULL},  {"--model", "MODEL", &model, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &input, 1, 1, &help);
-    if (help) return fputs(cmd_view_usage, stdout), fputs(cli_limits_usage, stdout), 0;
+    if (help) return fputs(cmd_view_usage, stdout), fputs(cli_output_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     unsigned port = 0;
     if (port_text && (!cli_parse_u32(port_text, &port) || port > 65535)) return cli_usage_error("view", "--port wants 0..65535");
@@ -371,7 +375,6 @@ int cmd_view(int argc, char **argv)
     if (kind != CLI_FILE_PAL && model) return cli_usage_error("view", "--model goes with a palette only");
     if (!catalog && kind != CLI_FILE_MODEL && kind != CLI_FILE_PAL)
         return cli_usage_error("view", "%s: not a glTF model, a .pal palette or a .toml catalog", input);
-    view_paths v;
     if ((rc = find_web(&v))) return rc;
     char type[128];
     plain_name(input, type, sizeof type);

@@ -363,9 +363,24 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
     return err->status;
 }
 
+/* "[done/all] name: outcome", as each type is done (cb_roster_options.progress). */
+static void progress_line(roster_run *run, const cb_roster_type *t)
+{
+    FILE *f = run->opt->progress;
+    if (!f) return;
+    mtx_lock(&run->log_lock);
+    const cb_roster *r = run->r;
+    fprintf(f, "crowdbake: [%u/%u] %s: ", r->baked + r->up_to_date + r->shared + r->failed, r->type_count, t->animal->name);
+    if (t->outcome == CB_TYPE_BAKED) fprintf(f, "baked %u rows in %.0f ms\n", t->rows, t->seconds * 1000);
+    else if (t->outcome == CB_TYPE_SHARED) fprintf(f, "shares %s's palette\n", r->types[t->owner].animal->name);
+    else fprintf(f, "%s\n", t->outcome == CB_TYPE_UP_TO_DATE ? "up to date" : "failed");
+    fflush(f), mtx_unlock(&run->log_lock);
+}
+
 /* The type's lines, printed in catalog order (roster_log); on a terminal, the progress after them. */
 static void log_type(roster_run *run, const cb_roster_type *t)
 {
+    progress_line(run, t);
     if (!run->opt->log) return;
     mtx_lock(&run->log_lock);
     char *text = NULL;

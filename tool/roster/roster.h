@@ -18,6 +18,8 @@ typedef struct cb_roster_options {
     bool force;             /* re-bake what is up to date */
     FILE *log;              /* one line per type, or NULL */
     bool tty;               /* log is a terminal: show progress */
+    FILE *progress;         /* a line per type as each is done, in the order they finish ("crowdbake: [2/4] goat:
+                             * baked 247 rows in 10 ms"), or NULL */
     const char *manifest;   /* roster.json path; NULL: OUT_DIR/roster.json */
     const char *depfile;    /* Make/Ninja depfile, or NULL */
     bool depfile_manifest_only; /* the depfile's one rule is the manifest's (Ninja's `depfile` without `deps = gcc`) */
