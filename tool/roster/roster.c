@@ -13,10 +13,8 @@
 #include <threads.h>
 #include <time.h>
 
-#include "crowdbake_pal.h"
 #include "crowdbake/babylon.h"
 #include "crowdbake/bake.h"
-#include "crowdbake/exr.h"
 #include "crowdbake/gltf.h"
 #include "crowdbake/runtime.h"
 #include "crowdbake/vat.h"
@@ -299,43 +297,6 @@ static uint64_t file_size(const char *path)
     return stat(path, &st) == 0 ? (uint64_t)st.st_size : 0;
 }
 
-/* True when every output exists and records this key; fills the geometry from the .pal. */
-static bool up_to_date(cb_roster_type *t, unsigned formats)
-{
-    char msg[256];
-    if (formats & CB_FORMAT_PAL) {
-        cbpal_file f;
-        /* Verified (memory speed): a file torn by a power loss is baked again, not trusted. */
-        if (cbpal_open(t->pal_path, CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg) != 0) return false;
-        bool same = f.header.input_hash == t->input_hash && f.header.rows == t->rows;
-        if (same) {
-            t->width = f.header.width, t->height = f.header.height, t->blocks = f.header.blocks;
-            t->layout = (cb_layout)f.header.layout, t->precision = (cb_precision)f.header.precision;
-            t->max_error = f.header.max_error;
-            t->visible_error = f.header.visible_error;
-            t->palette_bytes = f.header.payload_raw_size;
-        }
-        cbpal_close(&f);
-        if (!same) return false;
-    }
-    if (formats & CB_FORMAT_EXR) {
-        cb_exr_image img;
-        cb_error e = {0};
-        if (cb_exr_read(t->exr_path, &img, &e)) return false;
-        bool same = img.input_hash == t->input_hash && (uint32_t)img.rows == t->rows;
-        if (same && !(formats & CB_FORMAT_PAL)) {
-            t->width = img.width, t->height = img.height, t->blocks = (uint32_t)img.blocks;
-            cb_layout_parse(img.layout, &t->layout);
-            t->precision = img.precision;
-            t->palette_bytes = img.texel_bytes;
-            t->max_error = img.max_error, t->visible_error = img.visible_error;
-        }
-        cb_exr_image_free(&img);
-        if (!same) return false;
-    }
-    return !(formats & CB_FORMAT_BABYLON) || roster_babylon_up_to_date(t);
-}
-
 static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t, cb_error *err)
 {
     w->job.threads = run->threads_per_bake;
@@ -448,7 +409,7 @@ static void bake_type(roster_run *run, uint32_t i)
     } else if (t->owner != i) {
         return; /* shared types are settled once their owner is */
     } else {
-        if (!run->opt->force && up_to_date(t, an->bake.formats)) {
+        if (!run->opt->force && roster_outputs_up_to_date(t, an->bake.formats)) {
             t->outcome = CB_TYPE_UP_TO_DATE;
         } else {
             if (t->prepared_from_record) { /* the palette is not: bake it from the model */
