@@ -369,7 +369,7 @@ SANITIZE := BUILD=build/asan OPT=-O1 SAN="-fsanitize=address,undefined -fno-omit
 # bounds; LeakSanitizer's tracer then dies at exit ("Tracer caught signal 11") with no leak
 # found, depending only on the heap's layout (seen with OSMesa's threads in `preview`; fixed
 # upstream after GCC 13 / LLVM 16).
-ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:intercept_tls_get_addr=0 UBSAN_OPTIONS=print_stacktrace=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp
+ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:intercept_tls_get_addr=0 UBSAN_OPTIONS=print_stacktrace=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0
 
 test: deps check-shared check-node $(NODE_DEPS)
 	@rm -rf $(RESULTS)
