@@ -191,10 +191,9 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
         return cli_usage_error("bake", "--loop and --one-shot are for single models; a catalog sets loop per clip");
     unsigned formats = a->format ? cb_formats_parse(a->format) : 0;
     if (a->format && !formats) return cli_usage_error("bake", "--format is pal, exr or pal,exr");
-    /* KTX2 from a catalog would need its manifest and up-to-date check to learn the format. */
     if (formats && !cb_catalog_formats_valid(formats))
-        return cli_usage_error("bake", "a catalog writes pal and/or exr, and babylon beside either (--format pal,babylon); "
-                               "ktx2 is for single models for now");
+        return cli_usage_error("bake", "a catalog writes pal, exr or ktx2 (or several), and babylon beside any of them "
+                               "(--format pal,babylon)");
     if (a->zstd && a->format && !(cb_formats_parse(a->format) & CB_FORMAT_PAL))
         return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
     cb_bake_settings over;
@@ -230,10 +229,7 @@ static void json_output(cb_json *j, const cb_bake_output *out, double seconds, d
     const cb_palette *p = &out->palette;
     cb_json_object(j, NULL);
     cb_json_string(j, "path", out->path);
-    cb_json_string(j, "format", out->format == CB_FORMAT_PAL  ? "pal"
-                                : out->format == CB_FORMAT_EXR  ? "exr"
-                                : out->format == CB_FORMAT_KTX2 ? "ktx2"
-                                                                : "babylon");
+    cb_json_string(j, "format", cb_output_format_of(out->format)->name);
     cb_json_int(j, "bytes", (long long)out->file_bytes);
     cb_json_int(j, "texture_bytes", (long long)p->texel_bytes); /* as uploaded: what a catalog's log and report give */
     cb_json_int(j, "width", p->width);
@@ -364,21 +360,47 @@ static void json_clips(cb_json *j, const cb_bake_job *job, const cb_bake_result 
     cb_json_end(j);
 }
 
-/* --format, or OUT's extension: .pal, .exr, or none (a device, a pipe: a .pal, as always);
- * another extension is refused, never guessed. */
+/* The extensions of the table of formats, for messages: "OUT.pal, OUT.exr, OUT.ktx2 or OUT.bvat.json". */
+static void extensions_text(char *buf, size_t size)
+{
+    buf[0] = '\0';
+    uint32_t n = cb_output_format_count();
+    for (uint32_t i = 0; i < n; ++i)
+        snprintf(buf + strlen(buf), size - strlen(buf), "%sOUT%s", i == 0 ? "" : i + 1 == n ? " or " : ", ",
+                 cb_output_format_at(i)->extension);
+}
+
+/* --format, or OUT's extension (the table of formats): none (a device, a pipe) is a .pal, as
+ * always; another extension is refused, never guessed. */
 static int output_formats(const bake_args *a, unsigned *formats)
 {
     if (a->format) return 0; /* parse_settings read it */
     const char *dot = strrchr(a->output, '.'), *slash = strrchr(a->output, '/');
     const char *ext = dot && (!slash || dot > slash) ? dot : "";
-    *formats = ends_with(a->output, ".bvat.json") ? CB_FORMAT_BABYLON
-               : strcmp(ext, ".exr") == 0    ? CB_FORMAT_EXR
-               : strcmp(ext, ".ktx2") == 0 ? CB_FORMAT_KTX2
-               : strcmp(ext, ".pal") == 0 || !ext[0] ? CB_FORMAT_PAL : 0;
+    const cb_output_format *f = cb_output_format_for_path(a->output);
+    *formats = f ? f->format : !ext[0] ? CB_FORMAT_PAL : 0;
+    char known[256];
+    extensions_text(known, sizeof known);
     if (!*formats)
-        return cli_usage_error("bake", "%s: unknown output extension '%s'; write OUT.pal, OUT.exr, OUT.ktx2 or OUT.bvat.json, or give "
-                               "--format pal,exr", a->output, ext);
+        return cli_usage_error("bake", "%s: unknown output extension '%s'; write %s, or give --format pal,exr", a->output,
+                               ext, known);
     return 0;
+}
+
+/* Each format's path: OUT itself for the format it names (or for the one format asked for),
+ * else OUT with that format's extension (--format pal,exr -o fox: fox.pal and fox.exr). */
+static uint32_t output_paths(const bake_args *a, unsigned formats, char (*buf)[4096], cb_output_path *outs)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < cb_output_format_count(); ++i) {
+        const cb_output_format *f = cb_output_format_at(i);
+        if (!(formats & f->format)) continue;
+        if (!a->format || ends_with(a->output, f->extension)) snprintf(buf[n], sizeof buf[n], "%s", a->output);
+        else output_path(a->output, f->extension + 1, buf[n], sizeof buf[n]);
+        outs[n] = (cb_output_path){f->format, buf[n]};
+        ++n;
+    }
+    return n;
 }
 
 /* Everything the command line decides before the job runs. */
@@ -485,21 +507,14 @@ int cmd_bake(int argc, char **argv)
     cb_model *m = cli_load_model(&a.out, a.model, &limits, &err);
     if (!m) return cli_report(&err);
     double load = now_seconds() - t0;
-    char pal_path[4096], exr_path[4096], ktx2_path[4096], babylon_path[4096];
-    snprintf(pal_path, sizeof pal_path, "%s", a.output);
-    snprintf(exr_path, sizeof exr_path, "%s", a.output);
-    snprintf(ktx2_path, sizeof ktx2_path, "%s", a.output);
-    snprintf(babylon_path, sizeof babylon_path, "%s", a.output);
-    if (a.format && !ends_with(a.output, ".bvat.json")) output_path(a.output, "bvat.json", babylon_path, sizeof babylon_path);
-    if (a.format) {
-        output_path(a.output, "pal", pal_path, sizeof pal_path), output_path(a.output, "exr", exr_path, sizeof exr_path);
-        output_path(a.output, "ktx2", ktx2_path, sizeof ktx2_path);
-    }
+    char paths[CB_OUTPUT_MAX][4096];
+    cb_output_path outputs[CB_OUTPUT_MAX];
+    uint32_t output_count = output_paths(&a, settings.formats, paths, outputs);
     cb_bake_job job;
     cb_bake_job_init(&job);
     job.model = m, job.skin = cli_pick_skin(m, a.skin, &err);
     job.settings = settings, job.limits = limits, job.threads = threads, job.speed_reference = speed_ref;
-    job.pal_path = pal_path, job.exr_path = exr_path, job.ktx2_path = ktx2_path, job.babylon_path = babylon_path;
+    job.outputs = outputs, job.output_count = output_count;
     cb_clip_plan *selection = NULL;
     cb_bake_result result = {0};
     if (job.skin >= 0 && !cli_select_clips(m, a.clips, a.excluded, &selection, &job.clip_count, &err) &&

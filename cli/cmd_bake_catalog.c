@@ -32,7 +32,7 @@ static void print_json(const cb_roster *r)
         cb_json_string(&j, "name", t->animal->name);
         cb_json_string(&j, "outcome", outcome_name(t->outcome));
         if (t->outcome != CB_TYPE_FAILED) {
-            cb_json_string(&j, "palette", (t->animal->bake.formats & CB_FORMAT_PAL) ? t->pal_path : t->exr_path);
+            cb_json_string(&j, "palette", roster_palette_path(t));
             cb_json_number(&j, "seconds", t->seconds);
         } else {
             char text[sizeof t->error.message + 32];

@@ -263,7 +263,7 @@ static int prepare_catalog(const view_paths *v, const char *catalog_path)
         dir_of(t->animal->model, dir, sizeof dir);
         if ((rc = link_into_site(v, name, dir))) break;
         const char *base = strrchr(t->animal->model, '/') ? strrchr(t->animal->model, '/') + 1 : t->animal->model;
-        bool vat = bake_vat(v, t, r.types[t->owner].pal_path);
+        bool vat = bake_vat(v, t, roster_output_path(&r.types[t->owner], CB_FORMAT_PAL));
         fprintf(f, "%s\n  {\"name\": \"%s\", \"model\": \"models/%s/%s\", \"vat\": %s%s%s%s}", n++ ? "," : "", t->animal->name,
                 t->animal->name, base, vat ? "\"vat/" : "null", vat ? t->animal->name : "", vat ? ".exr" : "", vat ? "\"" : "");
     }

@@ -55,7 +55,7 @@ _crowdbake()
     if [[ $cur == -* ]]; then
         COMPREPLY=($(compgen -W "$(_crowdbake_options "${words[1]}") --help" -- "$cur"))
     else
-        COMPREPLY=($(compgen -f -X '!*.@(glb|gltf|pal|exr|ktx2|toml)' -- "$cur") $(compgen -d -- "$cur"))
+        COMPREPLY=($(compgen -f -X '!*.@(glb|gltf|pal|exr|ktx2|json|toml)' -- "$cur") $(compgen -d -- "$cur"))
     fi
 }
 complete -F _crowdbake crowdbake

@@ -22,7 +22,15 @@ static void override_settings(cb_bake_settings *b, const cb_bake_settings *v, un
 
 bool cb_catalog_formats_valid(unsigned formats)
 {
-    return (formats & (CB_FORMAT_PAL | CB_FORMAT_EXR)) && !(formats & CB_FORMAT_KTX2);
+    bool palette = false;
+    for (uint32_t i = 0; i < cb_output_format_count(); ++i) {
+        const cb_output_format *f = cb_output_format_at(i);
+        if (!(formats & f->format)) continue;
+        if (!f->in_catalogs) return false;
+        palette |= f->holds_palette;
+        formats &= ~f->format;
+    }
+    return palette && !formats;
 }
 
 cb_status cb_catalog_override_bake(cb_catalog *cat, const cb_bake_settings *values, unsigned fields, cb_error *err)

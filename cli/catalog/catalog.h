@@ -89,9 +89,9 @@ void cb_catalog_free(cb_catalog *catalog);
  * EXR (which holds half or float only). */
 cb_status cb_catalog_override_bake(cb_catalog *catalog, const cb_bake_settings *values, unsigned fields, cb_error *err);
 
-/* The formats (CB_FORMAT_*) a catalog can write: pal and/or exr, and babylon (.bvat.json) beside
- * either (the manifest's palette and its up-to-date facts are a .pal's or an .exr's); ktx2 is for
- * single models. */
+/* The formats (CB_FORMAT_*) a catalog can write: those of the table of formats (outputs.h) that
+ * are in_catalogs, at least one of which holds the palette (the manifest's palette and its
+ * up-to-date facts are its): pal, exr and ktx2, and babylon (.bvat.json) beside any of them. */
 bool cb_catalog_formats_valid(unsigned formats);
 
 /* The command line's word on states, over the catalog's for this run: `syncs` is a comma-separated

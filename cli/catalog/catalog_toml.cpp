@@ -183,8 +183,8 @@ struct Parser {
             std::string f = str(*n, where + " format");
             b->formats = cb_formats_parse(f.c_str());
             if (!cb_catalog_formats_valid(b->formats))
-                fail(n->source(), where + " format must be \"pal\", \"exr\" or \"both\", with \"babylon\" beside "
-                                          "either if wanted (\"pal,babylon\")");
+                fail(n->source(), where + " format must be \"pal\", \"exr\", \"ktx2\" or \"both\", or several of them "
+                                          "(\"pal,ktx2\"), with \"babylon\" beside any if wanted (\"pal,babylon\")");
         }
         if (auto *n = t.get("out_dir")) b->out_dir = dup(resolve(str(*n, where + " out_dir")));
         if (auto *n = t.get("max_texture_size")) {

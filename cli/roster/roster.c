@@ -26,6 +26,7 @@ typedef struct type_work {
     cb_clip_request *clip_requests; /* the catalog's clip entries */
     cb_model **lod_models;
     cb_bake_job job;          /* job.plan: the clips with their rates */
+    cb_output_path outputs[CB_OUTPUT_MAX]; /* the job's files */
     cb_bake_origin origin;
     unsigned char *record;    /* what preparing found, for the type's record (roster_cache.h) */
     size_t record_size;
@@ -192,9 +193,8 @@ static void measure_vat(const cb_catalog_animal *an, const cb_limits *limits, ty
 
 static void output_paths(const cb_catalog_animal *an, cb_roster_type *t)
 {
-    snprintf(t->pal_path, sizeof t->pal_path, "%s/%s.pal", an->bake.out_dir, an->name);
-    snprintf(t->exr_path, sizeof t->exr_path, "%s/%s.exr", an->bake.out_dir, an->name);
-    snprintf(t->babylon_path, sizeof t->babylon_path, "%s/%s.bvat.json", an->bake.out_dir, an->name);
+    for (uint32_t k = 0; k < cb_output_format_count(); ++k)
+        snprintf(t->paths[k], sizeof t->paths[k], "%s/%s%s", an->bake.out_dir, an->name, cb_output_format_at(k)->extension);
 }
 
 /* A type that failed before its LODs were loaded still lists them: they are its inputs. */
@@ -215,7 +215,10 @@ static cb_status plan_job(const roster_run *run, const cb_catalog_animal *an, ty
     job->clips = w->plan, job->clip_count = t->clip_count, job->clip_requests = w->clip_requests;
     job->settings = an->bake;
     job->limits = run->opt->limits ? *run->opt->limits : cb_default_limits();
-    job->pal_path = t->pal_path, job->exr_path = t->exr_path, job->babylon_path = t->babylon_path;
+    job->outputs = w->outputs, job->output_count = 0;
+    for (uint32_t k = 0; k < cb_output_format_count(); ++k)
+        if (an->bake.formats & cb_output_format_at(k)->format)
+            w->outputs[job->output_count++] = (cb_output_path){cb_output_format_at(k)->format, t->paths[k]};
     job->threads = run->threads_per_bake; /* clips whose rates are searched at once */
     return cb_bake_job_plan(job, err);
 }
@@ -355,10 +358,10 @@ static void log_type(roster_run *run, const cb_roster_type *t)
         char subset[64] = ""; /* past the measuring budget: say so (measure_all = true measures every row) */
         if (t->error_rows_measured && t->error_rows_measured < t->rows)
             snprintf(subset, sizeof subset, ", measured at %u of %u rows", t->error_rows_measured, t->rows);
-        bool pal = t->animal->bake.formats & CB_FORMAT_PAL; /* the file named; both sizes as `bake MODEL` gives them */
+        /* the palette's file named; both sizes as `bake MODEL` gives them */
         fprintf(f, "%s  %-16s baked    %s (%.1f KiB texture, %.1f KiB file, %ux%u, %s/%s, encoding error %.3g mm/m, "
-                "visible %.3g mm/m%s) in %.0f ms\n", clear, t->animal->name, pal ? t->pal_path : t->exr_path,
-                t->palette_bytes / 1024.0, (pal ? t->pal_file_bytes : t->exr_file_bytes) / 1024.0, t->width, t->height,
+                "visible %.3g mm/m%s) in %.0f ms\n", clear, t->animal->name, roster_palette_path(t),
+                t->palette_bytes / 1024.0, t->file_bytes / 1024.0, t->width, t->height,
                 cb_layout_name(t->layout), cb_precision_name(t->precision),
                 cb_mm_per_m(t->max_error, t->model_height), cb_mm_per_m(t->visible_error, t->model_height), subset,
                 t->seconds * 1000);
@@ -420,8 +423,7 @@ static void bake_type(roster_run *run, uint32_t i)
             t->outcome = t->error.status || bake_files(run, an, &run->work[i], t, &t->error) ? CB_TYPE_FAILED : CB_TYPE_BAKED;
         }
         if (t->outcome != CB_TYPE_FAILED) write_record(run, i);
-        t->pal_file_bytes = file_size(t->pal_path);
-        t->exr_file_bytes = file_size(t->exr_path);
+        t->file_bytes = file_size(roster_palette_path(t));
     }
     t->seconds = now_seconds() - t0;
     mtx_lock(&run->log_lock);
@@ -514,9 +516,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
             cb_fail(&t->error, o->error.status, "its palette is %s's, which failed", o->animal->name);
             r->failed++;
         } else {
-            memcpy(t->pal_path, o->pal_path, sizeof t->pal_path);
-            memcpy(t->exr_path, o->exr_path, sizeof t->exr_path);
-            memcpy(t->babylon_path, o->babylon_path, sizeof t->babylon_path);
+            memcpy(t->paths, o->paths, sizeof t->paths);
             t->layout = o->layout, t->precision = o->precision, t->palette_bytes = o->palette_bytes;
             t->width = o->width, t->height = o->height, t->blocks = o->blocks, t->max_error = o->max_error;
             t->visible_error = o->visible_error;

@@ -53,14 +53,13 @@ typedef struct cb_roster_type {
     uint32_t owner;           /* the type whose palette file this type uses */
     uint64_t key;             /* content hash of rig, clips and settings: equal keys share */
     uint64_t input_hash;      /* key + model and LOD bytes + the resolved entry: recorded in the files */
-    char pal_path[1024], exr_path[1024];
-    char babylon_path[1024];  /* format "babylon": the .bvat.json */
+    char paths[CB_OUTPUT_MAX][1024]; /* per row of the table of formats (outputs.h): OUT_DIR/NAME.EXT */
     uint32_t bones, rows, width, height, blocks;
     cb_layout layout;
     cb_precision precision;
     uint64_t vertices, indices, palette_bytes; /* palette_bytes: the texture as uploaded */
     uint64_t mesh_bytes;      /* vertex and index buffers in the model's own vertex format */
-    uint64_t pal_file_bytes, exr_file_bytes;
+    uint64_t file_bytes;      /* the palette file the log names (roster_palette_path) */
     float max_error, visible_error; /* see cb_palette; float32 as the files record them, so an up-to-date run reports the same */
     double model_height, speed_reference, seconds;
     char speed_reference_from[512]; /* which rule picked speed_reference, in words */
@@ -100,6 +99,12 @@ void cb_roster_free(cb_roster *roster);
 void cb_roster_json_stride(cb_json *j, const cb_stride *stride);
 /* "sockets": [{name, bone, bind_transform}], as the manifest and `info --json` give them. */
 void cb_roster_json_sockets(cb_json *j, const cb_socket *sockets, uint32_t count);
+
+/* A type's file of `format` (a CB_FORMAT_* bit; "" for a format it does not write), and the file
+ * that stands for its palette: the first of its formats, in the table's order, that holds one
+ * (roster_fresh.c). */
+const char *roster_output_path(const cb_roster_type *t, unsigned format);
+const char *roster_palette_path(const cb_roster_type *t);
 
 #ifdef __cplusplus
 }

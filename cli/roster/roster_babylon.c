@@ -36,6 +36,6 @@ bool roster_babylon_up_to_date(const cb_roster_type *t)
 {
     cb_babylon_facts facts;
     cb_error e = {0};
-    if (cb_babylon_read_facts(t->babylon_path, &facts, &e)) return false;
+    if (cb_babylon_read_facts(roster_output_path(t, CB_FORMAT_BABYLON), &facts, &e)) return false;
     return facts.input_hash == t->input_hash && facts.height == roster_babylon_from(t, t->clip_count);
 }

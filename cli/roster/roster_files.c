@@ -161,17 +161,11 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
     cb_json_object(j, an->name);
     relative_path(manifest_dir, an->model, rel, sizeof rel);
     cb_json_string(j, "model", rel);
-    if (owner->animal->bake.formats & CB_FORMAT_PAL) {
-        relative_path(manifest_dir, owner->pal_path, rel, sizeof rel);
-        cb_json_string(j, "palette", rel);
-    }
-    if (owner->animal->bake.formats & CB_FORMAT_EXR) {
-        relative_path(manifest_dir, owner->exr_path, rel, sizeof rel);
-        cb_json_string(j, "palette_exr", rel);
-    }
-    if (owner->animal->bake.formats & CB_FORMAT_BABYLON) {
-        relative_path(manifest_dir, owner->babylon_path, rel, sizeof rel);
-        cb_json_string(j, "palette_babylon", rel);
+    for (uint32_t k = 0; k < cb_output_format_count(); ++k) { /* each file under its format's key */
+        const cb_output_format *f = cb_output_format_at(k);
+        if (!(owner->animal->bake.formats & f->format)) continue;
+        relative_path(manifest_dir, owner->paths[k], rel, sizeof rel);
+        cb_json_string(j, f->manifest_key, rel);
     }
     if (t->owner != (uint32_t)(t - r->types)) cb_json_string(j, "shares_palette_of", owner->animal->name);
     cb_json_string(j, "layout", cb_layout_name(owner->layout));
@@ -336,11 +330,9 @@ cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const 
     for (uint32_t i = 0; i < r->type_count && !manifest_only; ++i) {
         const cb_roster_type *t = &r->types[i];
         if (t->owner != i) continue; /* failed types too: their inputs keep the build out of date */
-        static const unsigned formats[3] = {CB_FORMAT_PAL, CB_FORMAT_EXR, CB_FORMAT_BABYLON};
-        const char *outputs[3] = {t->pal_path, t->exr_path, t->babylon_path};
-        for (int fmt = 0; fmt < 3; ++fmt) {
-            if (!(t->animal->bake.formats & formats[fmt])) continue;
-            depfile_path(f, outputs[fmt]);
+        for (uint32_t k = 0; k < cb_output_format_count(); ++k) {
+            if (!(t->animal->bake.formats & cb_output_format_at(k)->format)) continue;
+            depfile_path(f, t->paths[k]);
             fputs(":", f);
             fputc(' ', f), depfile_path(f, cat->path);
             for (uint32_t k = 0; k < r->type_count; ++k) /* every type sharing this palette */
@@ -395,10 +387,10 @@ void roster_settle_times(const cb_roster *r)
             if (r->types[i].outcome == CB_TYPE_FAILED && r->types[i].owner == i) {
                 struct stat st;
                 /* only regular files: a bake refuses to replace anything else, and so does this */
-                if (stat(r->types[i].pal_path, &st) == 0 && S_ISREG(st.st_mode)) utimensat(AT_FDCWD, r->types[i].pal_path, epoch, 0);
-                if (stat(r->types[i].exr_path, &st) == 0 && S_ISREG(st.st_mode)) utimensat(AT_FDCWD, r->types[i].exr_path, epoch, 0);
-                if (stat(r->types[i].babylon_path, &st) == 0 && S_ISREG(st.st_mode))
-                    utimensat(AT_FDCWD, r->types[i].babylon_path, epoch, 0);
+                for (uint32_t k = 0; k < cb_output_format_count(); ++k) {
+                    const char *path = r->types[i].paths[k];
+                    if (path[0] && stat(path, &st) == 0 && S_ISREG(st.st_mode)) utimensat(AT_FDCWD, path, epoch, 0);
+                }
             }
         return;
     }

@@ -49,7 +49,7 @@ void roster_json_babylon_play(cb_json *j, const cb_roster_type *t, uint32_t clip
 struct cb_babylon_state *roster_babylon_states(const cb_catalog_animal *an, const cb_roster_type *t);
 bool roster_babylon_up_to_date(const cb_roster_type *t);
 /* True when every output in `formats` exists and records this key; fills the geometry from the
- * .pal (else the .exr). */
+ * first format, in the table's order, that holds the palette (roster_fresh.c). */
 bool roster_outputs_up_to_date(cb_roster_type *t, unsigned formats);
 
 /* The roster's log in catalog order (roster_log.c): each type's lines are held until every type

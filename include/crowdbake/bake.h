@@ -7,7 +7,8 @@
  *     cb_bake_job job;
  *     cb_bake_job_init(&job); // its size, the default settings and limits
  *     job.model = model, job.skin = 0;
- *     job.pal_path = "fox.pal";
+ *     cb_output_path out = {CB_FORMAT_PAL, "fox.pal"};
+ *     job.outputs = &out, job.output_count = 1;
  *     cb_bake_result result;
  *     if (cb_bake_job_run(&job, &result, &err) == CB_OK) ... result.outputs[0].palette ...
  *     cb_bake_result_free(&result);
@@ -18,14 +19,13 @@
 
 #include "export.h"
 #include "clip_settings.h"
+#include "outputs.h"
 
 #include "runtime.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-enum { CB_FORMAT_PAL = 1u, CB_FORMAT_EXR = 2u, CB_FORMAT_KTX2 = 4u, CB_FORMAT_BABYLON = 8u };
 
 /* The rates a setting may take: fps in (0, CB_FPS_LIMIT] (core.h); an auto rate's ceiling
  * (max_fps) in [CB_MAX_FPS_LOWEST, CB_FPS_LIMIT]. */
@@ -44,7 +44,7 @@ typedef struct cb_bake_settings {
                                   * CB_ERR_VERIFY and writes nothing) */
     cb_layout layout;
     cb_precision precision;
-    unsigned formats;            /* CB_FORMAT_* */
+    unsigned formats;            /* CB_FORMAT_* bits: the files a front end asks for (a job writes job->outputs) */
     const char *out_dir;         /* a catalog's: resolved against the catalog's directory */
     uint32_t max_texture_size;
     cb_root_motion root_motion;
@@ -74,16 +74,17 @@ CROWDBAKE_API cb_bake_settings cb_default_bake_settings(void);
 /* "keep" or "in-place". */
 CROWDBAKE_API bool cb_root_motion_parse(const char *text, cb_root_motion *out);
 CROWDBAKE_API const char *cb_root_motion_name(cb_root_motion root_motion);
-/* A comma-separated set of "pal", "exr", "ktx2" and "babylon" (each once), or "both" (pal and exr):
- * CB_FORMAT_* bits, 0 when it is none of those. */
+/* A comma-separated set of the formats' names (outputs.h: "pal", "exr", "ktx2", "babylon"; each
+ * once), or "both" (pal and exr): CB_FORMAT_* bits, 0 when it is none of those. */
 CROWDBAKE_API unsigned cb_formats_parse(const char *text);
 /* 0 < fps <= CB_FPS_LIMIT; CB_MAX_FPS_LOWEST <= max_fps <= CB_FPS_LIMIT. */
 CROWDBAKE_API bool cb_fps_valid(double fps);
 CROWDBAKE_API bool cb_max_fps_valid(double max_fps);
 
-/* Whether the settings can be written: EXR and KTX2 hold half or float texels, never u16. A
- * .bvat.json is always float (Babylon's Float32 matrices): u16 beside it is the .pal's, and
- * u16 for it alone is refused, never ignored. */
+/* Whether the settings can be written: each format of settings.formats holds the precision
+ * asked for (outputs.h: EXR and KTX2 hold half or float texels, never u16). A .bvat.json is
+ * always float (Babylon's Float32 matrices): u16 beside it is the .pal's, and u16 for it alone
+ * is refused, never ignored. */
 CROWDBAKE_API bool cb_bake_settings_writable(const cb_bake_settings *settings);
 
 /* The options of the bake for one file format (CB_FORMAT_*): the precision set, else u16 for
@@ -114,6 +115,12 @@ typedef struct cb_bake_origin {
     uint32_t lod_count;
 } cb_bake_origin;
 
+/* One file a job writes: its format (a CB_FORMAT_* bit) and path. */
+typedef struct cb_output_path {
+    unsigned format;
+    const char *path;
+} cb_output_path;
+
 typedef struct cb_bake_job {
     /* sizeof(cb_bake_job) in the header the caller was compiled with (cb_bake_job_init sets it):
      * the job grows at its end under one soname, and the library reads no further than this. */
@@ -127,8 +134,9 @@ typedef struct cb_bake_job {
     cb_limits limits;
     uint32_t threads;               /* clips sampled in parallel (0: 1); the bytes do not depend on it */
     double speed_reference;         /* recorded in the files */
-    const char *pal_path, *exr_path, *ktx2_path; /* the files settings.formats asks for */
-    const char *babylon_path;       /* .bvat.json: Babylon.js's baked vertex animation data (babylon.h) */
+    const cb_output_path *outputs;  /* the files to write, each format once, in any order: they are written in
+                                     * the order of the table of formats (outputs.h) */
+    uint32_t output_count;
     const struct cb_babylon_state *babylon_states; /* a catalog type's states, listed in its .bvat.json, or NULL */
     uint32_t babylon_state_count;
     const cb_bake_origin *origin;   /* a catalog type, or NULL */
@@ -146,7 +154,7 @@ typedef struct cb_bake_job {
 
 /* One file written. */
 typedef struct cb_bake_output {
-    unsigned format;        /* CB_FORMAT_PAL, CB_FORMAT_EXR, CB_FORMAT_KTX2 or CB_FORMAT_BABYLON */
+    unsigned format;        /* its CB_FORMAT_* bit (cb_output_format_of names it) */
     const char *path;
     uint64_t file_bytes;
     uint64_t input_hash;    /* recorded in the file */
@@ -158,7 +166,7 @@ typedef struct cb_bake_output {
 
 typedef struct cb_bake_result {
     uint32_t output_count;
-    cb_bake_output outputs[4]; /* .pal, .exr, .ktx2, .bvat.json, those asked for */
+    cb_bake_output outputs[CB_OUTPUT_MAX]; /* those asked for, in the table's order */
     cb_warnings notes;         /* the layout's fallback, loops that travel, quaternion flips, clips over budget */
     cb_clip_budget *budgets;   /* per planned clip, as the first format's palette measured it (also when the bake
                                 * failed for a clip over budget) */
@@ -173,8 +181,9 @@ CROWDBAKE_API void cb_bake_job_init(cb_bake_job *job);
  * file the job writes. A job whose size is not one this library knows (not started by
  * cb_bake_job_init) fails with CB_ERR_INTERNAL, before anything is read past it. */
 CROWDBAKE_API cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err);
-/* Plans (when not yet), bakes and writes every file of settings.formats (each through a
- * temporary file and a rename). A clip over its budget fails the bake with CB_ERR_VERIFY before
+/* Plans (when not yet), bakes and writes every file of job->outputs (each through a temporary
+ * file and a rename); a format that cannot hold the precision or layout asked for fails with
+ * CB_ERR_SETTINGS before anything is baked. A clip over its budget fails the bake with CB_ERR_VERIFY before
  * anything is written (result->budgets says which; cb_bake_budget_text words each), unless
  * settings.allow_over_budget, which writes it with a warning in result->notes. The result
  * references the model and the plan: free it first. */

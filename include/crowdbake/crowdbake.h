@@ -6,7 +6,8 @@
  * core.h     a model as plain structs, sampling, clip framing, root motion, errors (cb_status)
  * palette.h  palettes: layouts, precisions, the bake of planned clips, decoding
  * runtime.h  what the shipped shaders compute, on the CPU; verification; error-driven rates
- * bake.h     one bake job (a model into .pal/.exr files): every bake policy, decided once
+ * bake.h     one bake job (a model into .pal/.exr/.ktx2/.bvat.json files): every bake policy, decided once
+ * outputs.h  the table of output formats: names, extensions, what each holds, their readers
  * clip_settings.h  each clip's settings resolved once, with where each value came from
  * stride.h, socket.h   what a game hangs on a clip and a rig: planted feet and footsteps, prop sockets
  * mesh.h, gltf_mesh_write.h   runtime-ready meshes for a palette (`crowdbake mesh`)
@@ -27,6 +28,7 @@
 #include "palette.h"
 #include "runtime.h"
 #include "bake.h"
+#include "outputs.h"
 #include "clip_settings.h"
 #include "budget.h"
 #include "vat.h"

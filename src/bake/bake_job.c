@@ -8,10 +8,7 @@
 #include <time.h>
 
 #include "crowdbake_pal.h" /* XXH64 */
-#include "crowdbake/exr.h"
-#include "crowdbake/ktx2.h"
-#include "crowdbake/babylon.h"
-#include "crowdbake/pal_write.h"
+#include "outputs.h"
 #include "../core/palette_bake.h" /* palette_choose_rates, the search's poses kept for the bake */
 #include "../core/pose_cache.h"
 
@@ -55,15 +52,12 @@ const char *cb_root_motion_name(cb_root_motion root_motion)
 unsigned cb_formats_parse(const char *text)
 {
     if (strcmp(text, "both") == 0) return CB_FORMAT_PAL | CB_FORMAT_EXR;
-    static const char *const names[4] = {"pal", "exr", "ktx2", "babylon"};
     unsigned formats = 0;
     for (const char *w = text;; ++w) {
         size_t n = strcspn(w, ",");
-        unsigned bit = 0;
-        for (unsigned k = 0; k < 4; ++k)
-            if (strlen(names[k]) == n && strncmp(w, names[k], n) == 0) bit = 1u << k;
-        if (!bit || (formats & bit)) return 0;
-        formats |= bit;
+        const cb_output_format *f = cb_output_format_named(w, n);
+        if (!f || (formats & f->format)) return 0;
+        formats |= f->format;
         if (!w[n]) return formats;
         w += n;
     }
@@ -72,10 +66,24 @@ unsigned cb_formats_parse(const char *text)
 bool cb_fps_valid(double fps) { return fps > 0 && fps <= CB_FPS_LIMIT; }
 bool cb_max_fps_valid(double max_fps) { return max_fps >= CB_MAX_FPS_LOWEST && max_fps <= CB_FPS_LIMIT; }
 
+static bool holds(const cb_output_format *f, const cb_bake_options *o)
+{
+    return (f->precisions >> o->precision & 1u) && (f->layouts >> o->layout & 1u);
+}
+
+/* u16 asked for a format that holds no u16 is refused; a .bvat.json's own precision is its own,
+ * so u16 beside it is the other format's, and for it alone refused. */
 bool cb_bake_settings_writable(const cb_bake_settings *s)
 {
-    bool holds_no_u16 = (s->formats & (CB_FORMAT_EXR | CB_FORMAT_KTX2)) || s->formats == CB_FORMAT_BABYLON;
-    return !(holds_no_u16 && s->precision_set && s->precision == CB_PRECISION_U16);
+    if (!s->precision_set || s->precision != CB_PRECISION_U16) return true;
+    bool other = false;
+    for (uint32_t i = 0; i < cb_output_format_count(); ++i) {
+        const cb_output_format *f = cb_output_format_at(i);
+        if (!(s->formats & f->format)) continue;
+        if (!(f->precisions >> CB_PRECISION_U16 & 1u) && f->holds_palette) return false;
+        other |= f->holds_palette;
+    }
+    return other || !s->formats;
 }
 
 cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned format, const cb_limits *limits,
@@ -98,14 +106,29 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
     return o;
 }
 
-/* The first format the job writes: its options choose the rates. */
+/* The formats of the job's outputs (CB_FORMAT_* bits). */
+static unsigned job_formats(const cb_bake_job *job)
+{
+    unsigned f = 0;
+    for (uint32_t i = 0; i < job->output_count; ++i) f |= job->outputs[i].format;
+    return f;
+}
+
+/* The first format the job writes, in the table's order: its options choose the rates. */
 static unsigned first_format(const cb_bake_job *job)
 {
-    unsigned f = job->settings.formats;
-    return (f & CB_FORMAT_PAL) || !f ? CB_FORMAT_PAL
-           : (f & CB_FORMAT_EXR)     ? CB_FORMAT_EXR
-           : (f & CB_FORMAT_KTX2)    ? CB_FORMAT_KTX2
-                                     : CB_FORMAT_BABYLON;
+    unsigned f = job_formats(job);
+    for (uint32_t i = 0; i < cb_output_format_count(); ++i)
+        if (f & cb_output_format_at(i)->format) return cb_output_format_at(i)->format;
+    return CB_FORMAT_PAL;
+}
+
+/* The path the job writes `format` to, or NULL. */
+static const char *output_path(const cb_bake_job *job, unsigned format)
+{
+    for (uint32_t i = 0; i < job->output_count; ++i)
+        if (job->outputs[i].format == format) return job->outputs[i].path;
+    return NULL;
 }
 
 /* ---- the input hash ---- */
@@ -255,26 +278,33 @@ static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pa
                               cb_error *err)
 {
     double t0 = now_seconds();
-    if (out->format == CB_FORMAT_PAL) {
-        cb_pal_write_options po = {job->settings.zstd, 0, out->input_hash, (float)job->speed_reference,
-                                   job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE};
-        if (cb_pal_mapping_holds(mapping, p)) cb_pal_write_mapped(mapping, p, &po, err);
-        else cb_pal_write(out->path, p, job->model, job->skin, &po, err);
-    } else if (out->format == CB_FORMAT_EXR) {
-        cb_exr_write(out->path, p, job->model, job->skin, job->settings.exr_compression, out->input_hash,
-                     (float)job->speed_reference, err);
-    } else if (out->format == CB_FORMAT_KTX2) {
-        cb_ktx2_write(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference,
-                      job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE, err);
-    } else {
-        cb_babylon_write_options bo = {(float)job->speed_reference, job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE,
-                                       out->input_hash, job->babylon_states, job->babylon_state_count};
-        cb_babylon_write(out->path, p, job->model, job->skin, &bo, err);
-    }
+    bake_output_row_of(out->format)->write(job, p, mapping, out, err);
     out->seconds_write = now_seconds() - t0;
     struct stat st;
     out->file_bytes = !err->status && stat(out->path, &st) == 0 ? (uint64_t)st.st_size : 0;
     return err->status;
+}
+
+/* Every output a known format, once, with a path, able to hold what the settings bake for it. */
+static cb_status check_outputs(const cb_bake_job *job, cb_error *err)
+{
+    if (!job->output_count) return cb_fail(err, CB_ERR_SETTINGS, "%s: the bake job lists no output", job->model->source);
+    if (job->output_count > CB_OUTPUT_MAX)
+        return cb_fail(err, CB_ERR_SETTINGS, "the bake job lists %u outputs; at most %d", job->output_count, CB_OUTPUT_MAX);
+    unsigned seen = 0;
+    for (uint32_t i = 0; i < job->output_count; ++i) {
+        const cb_output_path *o = &job->outputs[i];
+        const cb_output_format *f = cb_output_format_of(o->format);
+        if (!f || !o->path || (seen & o->format))
+            return cb_fail(err, CB_ERR_SETTINGS, "the bake job's output %u is %s", i,
+                           !f ? "no format of outputs.h" : !o->path ? "without a path" : "a format listed twice");
+        seen |= o->format;
+        cb_bake_options opt = cb_bake_settings_options(&job->settings, o->format, &job->limits, 1);
+        if (!holds(f, &opt))
+            return cb_fail(err, CB_ERR_SETTINGS, "%s: a %s file holds no %s/%s texels; choose another precision or "
+                           "layout", o->path, f->name, cb_layout_name(opt.layout), cb_precision_name(opt.precision));
+    }
+    return CB_OK;
 }
 
 /* Every clip against its budget in the palette baked: what a player sees of each. An
@@ -339,28 +369,28 @@ static void resolved_plan(const cb_bake_job *job, cb_clip_plan *baked)
 cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
 {
     memset(out, 0, sizeof *out);
-    if (cb_bake_job_plan(job, err)) return err->status;
+    if (check_outputs(job, err) || cb_bake_job_plan(job, err)) return err->status;
     cb_clip_plan *baked = malloc((job->plan_count ? job->plan_count : 1) * sizeof *baked);
     if (!baked) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     cb_sampler *s = cb_sampler_create(job->model, job->skin, err);
     if (!s) return free(baked), err->status;
     cb_release_free_memory(); /* before the palette's buffers: the load's freed memory */
-    static const unsigned formats[4] = {CB_FORMAT_PAL, CB_FORMAT_EXR, CB_FORMAT_KTX2, CB_FORMAT_BABYLON};
-    const char *paths[4] = {job->pal_path, job->exr_path, job->ktx2_path, job->babylon_path};
     cb_palette shared = {0}; /* the last palette baked, written again by a format of the same options */
     cb_bake_options shared_opt = {0};
     /* A lone uncompressed .pal is baked into its own file's payload, mapped: no copy to write,
      * and 29 MB less fresh memory on the big rig. (Other formats convert the texels as they
      * write them, and zstd compresses them: those bake into memory of their own.) */
+    const char *pal_path = output_path(job, CB_FORMAT_PAL);
     cb_pal_mapping mapping;
-    cb_pal_mapping_init(&mapping, job->pal_path, job->model, job->skin);
-    bool mapped = job->settings.formats == CB_FORMAT_PAL && !job->settings.zstd && job->pal_path, replanned = false;
-    for (int f = 0; f < 4 && !err->status; ++f) {
-        if (!(job->settings.formats & formats[f])) continue;
+    cb_pal_mapping_init(&mapping, pal_path, job->model, job->skin);
+    bool mapped = job_formats(job) == CB_FORMAT_PAL && !job->settings.zstd, replanned = false;
+    for (int f = 0; f < (int)cb_output_format_count() && !err->status; ++f) {
+        unsigned format = cb_output_format_at((uint32_t)f)->format;
+        if (!output_path(job, format)) continue;
         cb_bake_output *o = &out->outputs[out->output_count];
-        o->format = formats[f];
-        o->path = paths[f];
-        cb_bake_options opt = cb_bake_settings_options(&job->settings, formats[f], &job->limits, job->threads);
+        o->format = format;
+        o->path = output_path(job, format);
+        cb_bake_options opt = cb_bake_settings_options(&job->settings, format, &job->limits, job->threads);
         if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
         if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout) {
             cb_palette_free(&shared);

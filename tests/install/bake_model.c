@@ -6,8 +6,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#if CROWDBAKE_API_VERSION_MAJOR != 1
-#error "written for crowdbake's API 1"
+#if CROWDBAKE_API_VERSION_MAJOR != 2
+#error "written for crowdbake's API 2"
 #endif
 
 int main(int argc, char **argv)
@@ -23,7 +23,8 @@ int main(int argc, char **argv)
     job.skin = 0;
     job.limits = limits;
     job.threads = 2;
-    job.pal_path = argv[2];
+    cb_output_path out = {CB_FORMAT_PAL, argv[2]}; /* one file: a .pal */
+    job.outputs = &out, job.output_count = 1;
     cb_bake_result result;
     if (cb_bake_job_run(&job, &result, &err) == CB_OK) {
         const cb_palette *p = &result.outputs[0].palette;

@@ -94,7 +94,7 @@ static void test_destdir_layout(void **state)
            root) != 0)
         fail_msg("%s", out);
     static const char *const files[] = {
-        "bin/crowdbake", "lib/libcrowdbake.a", "lib/libcrowdbake.so", "lib/libcrowdbake.so.1",
+        "bin/crowdbake", "lib/libcrowdbake.a", "lib/libcrowdbake.so", "lib/libcrowdbake.so.2",
         "include/crowdbake/crowdbake.h", "include/crowdbake/bake.h", "include/crowdbake_pal.h",
         "lib/pkgconfig/crowdbake.pc", "lib/cmake/crowdbake/crowdbakeConfig.cmake",
         "lib/cmake/crowdbake/crowdbakeConfigVersion.cmake", "lib/cmake/crowdbake/CrowdbakeRoster.cmake",
@@ -112,12 +112,12 @@ static void test_destdir_layout(void **state)
     if (!strstr(pc, "prefix=/opt/cb\n") || strstr(pc, "stage")) fail_msg("crowdbake.pc:\n%s", pc);
     free(pc);
     /* The shared library names its dependencies, so -lcrowdbake alone links. */
-    assert_int_equal(sh(out, sizeof out, "readelf -d " TMP "/stage/opt/cb/lib/libcrowdbake.so.1"), 0);
-    if (!strstr(out, "(SONAME)") || !strstr(out, "libcrowdbake.so.1") || !strstr(out, "libzstd")) fail_msg("%s", out);
+    assert_int_equal(sh(out, sizeof out, "readelf -d " TMP "/stage/opt/cb/lib/libcrowdbake.so.2"), 0);
+    if (!strstr(out, "(SONAME)") || !strstr(out, "libcrowdbake.so.2") || !strstr(out, "libzstd")) fail_msg("%s", out);
 }
 
 /* The installed shared library exports exactly what its installed headers declare: every
- * CROWDBAKE_API function and object, in the version node CROWDBAKE_1, and nothing else (no C++
+ * CROWDBAKE_API function and object, in the version node CROWDBAKE_2, and nothing else (no C++
  * internals of the glTF adapter or its dependencies, no library-private helpers). */
 static void test_shared_library_exports_only_its_api(void **state)
 {
@@ -125,7 +125,7 @@ static void test_shared_library_exports_only_its_api(void **state)
     if (skip_under_sanitizers()) skip();
     static char out[65536];
     if (sh(out, sizeof out,
-           "python3 tests/tools/abi_symbols.py %s/lib/libcrowdbake.so.1 %s/include/crowdbake %s/include/crowdbake_pal.h",
+           "python3 tests/tools/abi_symbols.py %s/lib/libcrowdbake.so.2 %s/include/crowdbake %s/include/crowdbake_pal.h",
            prefix, prefix, prefix) != 0)
         fail_msg("%s", out);
     unsigned exported = 0;
@@ -155,7 +155,7 @@ static void test_pkg_config_program_bakes_fox(void **state)
     /* It is the installed library that ran, not one from the build tree. */
     assert_int_equal(sh(out, sizeof out, "ldd " TMP "/bake_model"), 0);
     char want[PATH_MAX * 2];
-    snprintf(want, sizeof want, "%s/lib/libcrowdbake.so.1", prefix);
+    snprintf(want, sizeof want, "%s/lib/libcrowdbake.so.2", prefix);
     if (!strstr(out, want)) fail_msg("bake_model does not use %s:\n%s", want, out);
 }
 
@@ -174,7 +174,7 @@ static void test_tool_links_against_the_installed_library(void **state)
                 BUILD_DIR, BUILD_DIR, prefix, prefix, fox);
     if (rc != 0) fail_msg("%s", out);
     char want[PATH_MAX * 2];
-    snprintf(want, sizeof want, "%s/lib/libcrowdbake.so.1", prefix);
+    snprintf(want, sizeof want, "%s/lib/libcrowdbake.so.2", prefix);
     if (!strstr(out, want)) fail_msg("the command does not use %s:\n%s", want, out);
     reference_bake(TMP "/reference-shared.pal");
     assert_same_file(TMP "/shared.pal", TMP "/reference-shared.pal");

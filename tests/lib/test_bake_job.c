@@ -64,7 +64,7 @@ static void test_job_carries_its_size(void **state)
     (void)state;
     cb_model *m = load_shared("assets/spider-animated-luanti/gltf_spider_animated.gltf");
     cb_bake_job job = job_for(m);
-    job.pal_path = TMP "/sized.pal";
+    job.outputs = &(cb_output_path){CB_FORMAT_PAL, TMP "/sized.pal"}, job.output_count = 1;
     cb_error err = {0};
     for (size_t size = 0; size <= sizeof job + 8; size += sizeof job / 2 + 4) {
         job.size = size;
@@ -88,7 +88,7 @@ static void test_fallback_acts_on_the_status(void **state)
     (void)state;
     cb_model *m = load_shared("assets/spider-animated-luanti/gltf_spider_animated.gltf");
     cb_bake_job job = job_for(m);
-    job.pal_path = TMP "/spider.pal";
+    job.outputs = &(cb_output_path){CB_FORMAT_PAL, TMP "/spider.pal"}, job.output_count = 1;
     cb_bake_result r;
     cb_error err = {0};
     assert_int_equal(cb_bake_job_run(&job, &r, &err), CB_OK);
@@ -99,7 +99,7 @@ static void test_fallback_acts_on_the_status(void **state)
     cb_bake_job_free(&job);
     job = job_for(m);
     job.settings.layout_set = true; /* qpos, asked for */
-    job.pal_path = TMP "/spider-qpos.pal";
+    job.outputs = &(cb_output_path){CB_FORMAT_PAL, TMP "/spider-qpos.pal"}, job.output_count = 1;
     assert_int_equal(cb_bake_job_run(&job, &r, &err), CB_ERR_LAYOUT);
     assert_non_null(strstr(err.message, "non-uniform scale"));
     cb_bake_result_free(&r);
