@@ -69,8 +69,10 @@ FPFLAGS  := -fno-math-errno -fno-trapping-math -ffp-contract=off
 # keeps calls inside the library as direct, inlinable calls, as without -fPIC).
 PICFLAGS := -fPIC -fno-semantic-interposition
 # -Iinclude: the public headers and crowdbake_pal.h, the standalone reader, installed beside them.
-CFLAGS   := -std=c11 $(OPT) $(FPFLAGS) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude $(PICFLAGS) $(SAN)
-CXXFLAGS := -std=c++17 $(OPT) $(FPFLAGS) -g $(WARN) -Iinclude $(PICFLAGS) $(SAN)
+# -Isrc: the internal tier, src/internal/*.h ("internal/json.h"): the plumbing the library and the
+# tool share, linked from libcrowdbake.a but neither exported from libcrowdbake.so nor installed.
+CFLAGS   := -std=c11 $(OPT) $(FPFLAGS) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude -Isrc $(PICFLAGS) $(SAN)
+CXXFLAGS := -std=c++17 $(OPT) $(FPFLAGS) -g $(WARN) -Iinclude -Isrc $(PICFLAGS) $(SAN)
 # The tool's own headers (cli/catalog, cli/roster, cli/report), for the tool and its tests.
 TOOL_INC := -Icli
 

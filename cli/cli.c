@@ -1,5 +1,6 @@
 /* cli.c - option parsing and the helpers every subcommand shares. */
 #include "cli.h"
+#include "internal/plumbing.h"
 
 #include <stdarg.h>
 #include <stdio.h>

@@ -8,7 +8,7 @@
 #include "crowdbake/exr.h"
 #include "crowdbake/gltf.h"
 #include "crowdbake/ktx2.h"
-#include "crowdbake/json.h"
+#include "internal/json.h"
 #include "crowdbake_pal.h" /* the runtime reader (installed as crowdbake_pal.h) */
 #include "crowdbake/pal_view.h"
 #include "catalog/catalog.h"

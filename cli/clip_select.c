@@ -7,6 +7,7 @@
 #include <strings.h>
 
 #include "cli.h"
+#include "internal/plumbing.h"
 
 cb_status cli_for_each_name(const char *list, cb_status (*fn)(const char *name, void *ctx), void *ctx)
 {

@@ -10,6 +10,8 @@
 #include "crowdbake/bake.h"
 #include "crowdbake/budget.h"
 #include "cli.h"
+#include "internal/plumbing.h"
+#include "internal/bake_words.h"
 
 const char cmd_bake_usage[] =
     "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2|OUT.bvat.json [options]\n"

@@ -4,7 +4,7 @@
 #include <unistd.h>
 
 #include "catalog/catalog_toml.h"
-#include "crowdbake/json.h"
+#include "internal/json.h"
 #include "report/report.h"
 #include "roster/roster.h"
 #include "cli.h"

@@ -3,11 +3,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "crowdbake/json.h"
+#include "internal/json.h"
 #include "catalog/catalog.h"
 #include "roster/roster.h"
 #include "crowdbake/bake.h"
 #include "cli.h"
+#include "internal/plumbing.h"
 
 const char cmd_info_usage[] =
     "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX] [-q] [-v]\n\n"

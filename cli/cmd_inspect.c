@@ -7,7 +7,7 @@
 
 #include "crowdbake_pal.h"
 #include "crowdbake/exr.h"
-#include "crowdbake/json.h"
+#include "internal/json.h"
 #include "crowdbake/ktx2.h"
 #include "crowdbake/pal_view.h"
 #include "crowdbake/palette.h"

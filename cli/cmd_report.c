@@ -9,7 +9,7 @@
 #include <strings.h>
 #include <unistd.h>
 
-#include "crowdbake/atomic_file.h"
+#include "internal/atomic_file.h"
 #include "catalog/catalog_toml.h"
 #include "report/report.h"
 #include "cli.h"

@@ -4,9 +4,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "crowdbake/json.h"
+#include "internal/json.h"
 #include "crowdbake/bake.h"
 #include "cli.h"
+#include "internal/plumbing.h"
 
 const char cmd_sample_usage[] =
     "usage: crowdbake sample MODEL --fps N --json [--clip NAME] [--frame I] [--skin NAME|INDEX]\n"

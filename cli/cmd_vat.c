@@ -7,8 +7,9 @@
 #include "crowdbake_pal.h"
 #include "crowdbake/bake.h"
 #include "crowdbake/exr.h"
-#include "crowdbake/json.h"
+#include "internal/json.h"
 #include "cli.h"
+#include "internal/plumbing.h"
 
 const char cmd_vat_usage[] =
     "usage: crowdbake vat MODEL -o OUT.exr [--fps N] [--max-texture-size N] [--root-motion keep|in-place]\n"

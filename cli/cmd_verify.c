@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "crowdbake/json.h"
+#include "internal/json.h"
 #include "crowdbake/pal_view.h"
 #include "crowdbake/runtime.h"
 #include "cli.h"

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "internal/plumbing.h"
 
 static const cli_command commands[] = {
     {"info", "what a model holds: skins, joints, meshes, clips", cmd_info_usage, cmd_info},

@@ -5,7 +5,7 @@
  * piece of global mutable state: filled and emptied lock-free, read by the handler with
  * async-signal-safe calls only. */
 #include "cli.h"
-#include "crowdbake/atomic_file.h"
+#include "internal/atomic_file.h"
 
 #include <signal.h>
 #include <stdatomic.h>

@@ -1,6 +1,6 @@
 /* atomic_file.c - see atomic_file.h. */
 #define _GNU_SOURCE /* fallocate, getrandom */
-#include "crowdbake/atomic_file.h"
+#include "internal/atomic_file.h"
 
 #include <errno.h>
 #include <fcntl.h>

@@ -10,8 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "crowdbake/atomic_file.h"
-#include "crowdbake/json.h"
+#include "internal/atomic_file.h"
+#include "internal/json.h"
 
 /* The node the loader's bone chains stop at: the skin's skeleton node when the file names one,
  * else the joints' nearest common ancestor (-1: none, every chain runs up to its scene root). */

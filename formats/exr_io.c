@@ -4,7 +4,8 @@
 #include <openexr.h>
 #include <unistd.h>
 
-#include "crowdbake/atomic_file.h"
+#include "internal/atomic_file.h"
+#include "internal/plumbing.h"
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

@@ -24,6 +24,7 @@
 
 #include "crowdbake_pal.h"
 #include "crowdbake/gltf.h"
+#include "internal/plumbing.h"
 
 using namespace cbgltf;
 

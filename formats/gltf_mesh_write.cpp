@@ -9,7 +9,7 @@
 #include <vector>
 
 extern "C" {
-#include "crowdbake/atomic_file.h"
+#include "internal/atomic_file.h"
 }
 #include "crowdbake/gltf_mesh_write.h"
 

@@ -17,6 +17,7 @@
 
 #include "crowdbake_pal.h"
 #include "crowdbake/gltf.h"
+#include "internal/plumbing.h"
 
 namespace cbgltf {
 

@@ -1,5 +1,5 @@
 /* json_writer.c - see json_writer.h. */
-#include "crowdbake/json.h"
+#include "internal/json.h"
 
 #include <math.h>
 

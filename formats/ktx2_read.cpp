@@ -16,6 +16,7 @@
 #include <simdjson.h>
 
 #include "crowdbake/bake.h"
+#include "internal/plumbing.h"
 
 namespace {
 

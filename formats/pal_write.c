@@ -6,8 +6,9 @@
 #define ZSTD_STATIC_LINKING_ONLY /* ZSTD_c_stableInBuffer */
 #include <zstd.h>
 
-#include "crowdbake/atomic_file.h"
+#include "internal/atomic_file.h"
 #include "crowdbake_pal.h"
+#include "internal/pal_mapping.h"
 
 static void put32(unsigned char *d, uint32_t v)
 {

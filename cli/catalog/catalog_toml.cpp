@@ -12,6 +12,8 @@
 
 #include "catalog/catalog_toml.h"
 #include "toml_guard.h"
+#include "internal/plumbing.h"
+#include "internal/bake_words.h"
 
 namespace {
 

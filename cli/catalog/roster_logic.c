@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "catalog/catalog.h"
+#include "internal/plumbing.h"
 
 void cb_catalog_free(cb_catalog *c)
 {

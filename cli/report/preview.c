@@ -14,7 +14,7 @@
 #include <unistd.h>
 
 #include "crowdbake/runtime.h"
-#include "crowdbake/atomic_file.h"
+#include "internal/atomic_file.h"
 #include "font.h"
 
 /* OpenGL through Mesa's OSMesa, opened when a preview is drawn: linking it would load Mesa and

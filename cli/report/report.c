@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "crowdbake/json.h"
+#include "internal/json.h"
 
 void cb_human_bytes(uint64_t b, char *buf, size_t size)
 {

@@ -3,7 +3,7 @@
 #ifndef CB_REPORT_PARTS_H
 #define CB_REPORT_PARTS_H
 
-#include "crowdbake/json.h"
+#include "internal/json.h"
 #include "report/report.h"
 
 /* The limits a type breaks, "; "-separated, or "". */

@@ -6,7 +6,7 @@
 
 #include <stdio.h>
 
-#include "crowdbake/json.h"
+#include "internal/json.h"
 #include "catalog/catalog.h"
 
 #ifdef __cplusplus

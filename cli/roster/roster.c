@@ -18,6 +18,8 @@
 #include "crowdbake/gltf.h"
 #include "crowdbake/runtime.h"
 #include "crowdbake/vat.h"
+#include "internal/plumbing.h"
+#include "internal/bake_words.h"
 
 typedef struct type_work {
     cb_model *model;

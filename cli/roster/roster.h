@@ -6,7 +6,7 @@
 #include <stdio.h>
 
 #include "catalog/catalog.h"
-#include "crowdbake/json.h"
+#include "internal/json.h"
 #include "crowdbake/socket.h"
 
 #ifdef __cplusplus

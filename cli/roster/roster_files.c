@@ -9,8 +9,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "crowdbake/atomic_file.h"
-#include "crowdbake/json.h"
+#include "internal/atomic_file.h"
+#include "internal/json.h"
 
 /* mkdir -p: the output directory and any missing parents. */
 cb_status roster_make_directories(const char *dir, cb_error *err)

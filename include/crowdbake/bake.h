@@ -71,12 +71,8 @@ enum {
  * textures up to 16384 texels a side, root motion kept, no compression; out_dir NULL. */
 CROWDBAKE_API cb_bake_settings cb_default_bake_settings(void);
 
-/* "keep" or "in-place". */
-CROWDBAKE_API bool cb_root_motion_parse(const char *text, cb_root_motion *out);
+/* "keep" or "in-place" (its parser: internal/plumbing.h). */
 CROWDBAKE_API const char *cb_root_motion_name(cb_root_motion root_motion);
-/* A comma-separated set of the formats' names (outputs.h: "pal", "exr", "ktx2", "babylon"; each
- * once), or "both" (pal and exr): CB_FORMAT_* bits, 0 when it is none of those. */
-CROWDBAKE_API unsigned cb_formats_parse(const char *text);
 /* 0 < fps <= CB_FPS_LIMIT; CB_MAX_FPS_LOWEST <= max_fps <= CB_FPS_LIMIT. */
 CROWDBAKE_API bool cb_fps_valid(double fps);
 CROWDBAKE_API bool cb_max_fps_valid(double max_fps);
@@ -190,26 +186,11 @@ CROWDBAKE_API cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err);
 CROWDBAKE_API cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err);
 CROWDBAKE_API void cb_bake_result_free(cb_bake_result *result);
 
-/* A note summing up the clips whose rates were chosen by error (their rates, how many fitted),
- * and a line per clip over its budget (cb_bake_budget_text): an "error" when the bake failed
- * for it, a "warning" when written anyway. */
-CROWDBAKE_API void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result,
-                                        const char *(*setting_name)(cb_setting), cb_warnings *notes);
 /* Whether planned clip i's rate is chosen by error (else fixed): job->clip_settings[i].fps_auto
  * (cb_resolve_clip_settings says how). */
 CROWDBAKE_API bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t clip);
 /* Planned clip i's rate: the one its search chose, else its fixed fps. */
 CROWDBAKE_API double cb_bake_job_clip_fps(const cb_bake_job *job, uint32_t clip);
-/* Why planned clip i has its rate and rows, in words: "72 fps, fitted rows: within 1 mm/m at 45
- * rows, sampled rows need more than 72 fps", "30 fps, sampled rows: the fixed fps". */
-CROWDBAKE_API void cb_bake_clip_reason(const cb_bake_job *job, uint32_t clip, char *buf, size_t size);
-/* Clip i over its budget, in words, with what would meet it: "clip 'Gallop' reaches 1.8 mm/m at
- * 120 fps (fitted rows), over max_error 1; it meets it at 180 fps (max_fps = 180), or give it
- * max_error = 1.9". setting_name names CB_SETTING_MAX_FPS, CB_SETTING_MAX_ERROR and
- * CB_SETTING_FPS the front end's way (the command line's flags); NULL, or NULL for a setting: the
- * catalog's keys. */
-CROWDBAKE_API void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, uint32_t clip,
-                                       const char *(*setting_name)(cb_setting), char *buf, size_t size);
 CROWDBAKE_API void cb_bake_job_free(cb_bake_job *job);
 
 /* What a file records of what produced it: for a single bake, the crowdbake version, the

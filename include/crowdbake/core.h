@@ -86,13 +86,6 @@ CROWDBAKE_API cb_status cb_fail_setting(cb_error *err, cb_status status, cb_sett
 #endif
     ;
 
-/* Edit distance (insertions, deletions, substitutions) between two names. */
-CROWDBAKE_API size_t cb_edit_distance(const char *a, const char *b);
-/* The known name within two edits of `name` (the closest, the first on a tie), or NULL.
- * known[i] lies `stride` bytes after known[i-1], so it reads an array of strings or the name
- * field of an array of structs alike. */
-CROWDBAKE_API const char *cb_closest_name(const char *name, const char *const *known, size_t count, size_t stride);
-
 /* ---- limits --------------------------------------------------------------------------- */
 
 /* The highest frame rate anything is baked or sampled at. */
@@ -111,23 +104,6 @@ CROWDBAKE_API cb_limits cb_default_limits(void);
 /* ---- arenas: one owner for many small allocations ------------------------------------- */
 
 typedef struct cb_arena cb_arena;
-
-CROWDBAKE_API cb_arena *cb_arena_create(void);
-CROWDBAKE_API void cb_arena_free(cb_arena *arena);
-/* Zeroed memory that lives until cb_arena_free; NULL when out of memory. */
-CROWDBAKE_API void *cb_arena_alloc(cb_arena *arena, size_t count, size_t size);
-CROWDBAKE_API const char *cb_arena_strdup(cb_arena *arena, const char *s);
-/* Makes the arena the owner of memory allocated elsewhere: release(ptr) runs when the arena
- * is freed. Returns false when out of memory (then the caller still owns ptr). */
-CROWDBAKE_API bool cb_arena_adopt(cb_arena *arena, void *ptr, void (*release)(void *));
-
-/* Memory for buffers of a megabyte and more, on whole huge pages where the OS has them (the last
- * one counts whole once touched); smaller ones from malloc. Release with free(). */
-CROWDBAKE_API void *cb_alloc_large(size_t bytes);
-/* Hands the memory the allocator keeps after free() back to the OS where it can (glibc keeps a
- * model load's freed parse buffers, 8 MB for a 25 MB rig, resident in its heap), so that a
- * bake's buffers do not add to it. */
-CROWDBAKE_API void cb_release_free_memory(void);
 
 /* ---- the model ------------------------------------------------------------------------ */
 
@@ -362,9 +338,6 @@ typedef struct cb_clip_info {
  * key returns to its first pose over its last interval, from span to duration, and so does
  * the travel taken off (tau falls back to 0): the in-place loop ends where it starts. */
 CROWDBAKE_API double cb_root_travel_time(double t, double span, double duration, bool loops);
-
-/* Why the clip was judged a loop or not, with the measured numbers, in a few words (for `info`). */
-CROWDBAKE_API void cb_loop_reason_text(const cb_clip_info *clip, char *out, size_t size);
 
 /* The shortest interval between keys of any channel of the clip (exporters that bake keys
  * sample every channel at one rate), ignoring intervals under 0.1 ms; 0 when none. */

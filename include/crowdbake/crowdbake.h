@@ -11,7 +11,10 @@
  * clip_settings.h  each clip's settings resolved once, with where each value came from
  * stride.h, socket.h   what a game hangs on a clip and a rig: planted feet and footsteps, prop sockets
  * mesh.h, gltf_mesh_write.h   runtime-ready meshes for a palette (`crowdbake mesh`)
- * gltf.h, pal_write.h, pal_view.h, exr.h, ktx2.h, json.h, atomic_file.h, vat.h, budget.h   files and sizes
+ * gltf.h, pal_write.h, pal_view.h, exr.h, ktx2.h, babylon.h, vat.h, budget.h   files and sizes
+ *
+ * The tool's plumbing (the JSON writer, atomic files, arenas, name parsers, the sentences that
+ * explain a bake) is internal (src/internal/): in libcrowdbake.a for the command, not exported.
  *
  * Catalogs, rosters, the budget report and the preview are the crowdbake command's (cli/),
  * a client of this library like any other program.
@@ -41,7 +44,6 @@
 #include "pal_write.h"
 #include "pal_view.h"
 #include "exr.h"
-#include "json.h"
-#include "atomic_file.h"
+#include "babylon.h"
 
 #endif

@@ -14,7 +14,6 @@ extern "C" {
 #endif
 
 /* Lossless compressions only: the texels must read back bit-identical. */
-CROWDBAKE_API bool cb_exr_compression_parse(const char *text, int *out);
 
 CROWDBAKE_API cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
                                      int compression, uint64_t input_hash, float speed_reference, cb_error *err);

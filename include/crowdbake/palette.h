@@ -20,8 +20,6 @@ typedef enum cb_precision { CB_PRECISION_FLOAT = 0, CB_PRECISION_HALF = 1, CB_PR
 
 CROWDBAKE_API const char *cb_layout_name(cb_layout layout);
 CROWDBAKE_API const char *cb_precision_name(cb_precision precision);
-CROWDBAKE_API bool cb_layout_parse(const char *text, cb_layout *out);
-CROWDBAKE_API bool cb_precision_parse(const char *text, cb_precision *out);
 CROWDBAKE_API uint32_t cb_layout_texels_per_bone(cb_layout layout);
 CROWDBAKE_API uint32_t cb_precision_texel_bytes(cb_precision precision); /* 16, 8, 8 */
 

@@ -11,6 +11,8 @@
 #include "outputs.h"
 #include "../core/palette_bake.h" /* palette_choose_rates, the search's poses kept for the bake */
 #include "../core/pose_cache.h"
+#include "internal/plumbing.h"
+#include "internal/bake_words.h"
 
 static double now_seconds(void)
 {

@@ -1,6 +1,8 @@
 /* bake_words.c - see bake.h: a bake job's decisions in words, per clip: why it has its rate
  * and rows, and, over its error budget, what would meet it. */
 #include "crowdbake/bake.h"
+#include "internal/plumbing.h"
+#include "internal/bake_words.h"
 
 #include <math.h>
 #include <stdio.h>

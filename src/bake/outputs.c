@@ -8,6 +8,7 @@
 #include "crowdbake/babylon.h"
 #include "crowdbake/exr.h"
 #include "crowdbake/ktx2.h"
+#include "internal/plumbing.h"
 
 static bool in_place(const cb_bake_job *job) { return job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE; }
 

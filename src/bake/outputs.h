@@ -5,6 +5,7 @@
 
 #include "crowdbake/bake.h"
 #include "crowdbake/pal_write.h"
+#include "internal/pal_mapping.h"
 
 typedef struct bake_output_row {
     cb_output_format format; /* first: cb_output_format_at hands out its address */

@@ -2,6 +2,7 @@
 #include "cb_math.h"
 #include "crowdbake/core.h"
 #include "sampler.h"
+#include "internal/plumbing.h"
 
 #include <math.h>
 #include <stdio.h>

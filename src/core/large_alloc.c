@@ -3,6 +3,7 @@
  * in 4 KB pages and 28 in 2 MB ones, which in a VM is a third of a bake's sampling time. */
 #define _DEFAULT_SOURCE /* madvise, posix_memalign */
 #include "crowdbake/core.h"
+#include "internal/plumbing.h"
 
 #include <stdlib.h>
 #if defined(__GLIBC__)

@@ -1,6 +1,7 @@
 /* model.c - cb_model ownership (an arena per model), the default limits and lookups.
  * model_validate.c checks a loaded model; key_scan.c is its pre-scan of animation keys. */
 #include "crowdbake/core.h"
+#include "internal/plumbing.h"
 
 #include <stdint.h>
 #include <stdlib.h>

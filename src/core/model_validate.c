@@ -3,6 +3,7 @@
 #include "cb_math.h"
 #include "crowdbake/core.h"
 #include "key_scan.h"
+#include "internal/plumbing.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,5 +1,6 @@
 /* names.c - the closest known name to a mistyped one, for "did you mean" messages. */
 #include "crowdbake/core.h"
+#include "internal/plumbing.h"
 
 #include <string.h>
 

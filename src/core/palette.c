@@ -14,6 +14,7 @@
 
 #include "palette_bake.h"
 #include "pool.h"
+#include "internal/plumbing.h"
 
 
 

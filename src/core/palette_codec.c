@@ -5,6 +5,7 @@
 
 #include "lanes.h"
 #include "palette_bake.h"
+#include "internal/plumbing.h"
 
 /* ---- names and sizes ---- */
 

@@ -7,6 +7,7 @@
 #include "lanes.h"
 #include "palette_bake.h"
 #include "sampler.h"
+#include "internal/plumbing.h"
 
 /* Decoded palette rows a measurement keeps: a batch's rows and the rows after them, so that
  * the baked rows of a batch and the blends between them and their next decode each row once. */

@@ -5,6 +5,7 @@
 #include "pose_cache.h"
 
 #include "crowdbake/core.h" /* cb_alloc_large */
+#include "internal/plumbing.h"
 
 #include <math.h>
 #include <stdbool.h>

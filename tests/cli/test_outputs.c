@@ -12,6 +12,7 @@
 
 #include "crowdbake/bake.h"
 #include "crowdbake/ktx2.h"
+#include "internal/bake_words.h"
 
 #define TMP TEST_TMP "/outputs"
 #define CATALOG TMP "/catalog"

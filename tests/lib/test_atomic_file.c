@@ -9,7 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "crowdbake/atomic_file.h"
+#include "internal/atomic_file.h"
 
 #define TMP TEST_TMP "/atomic_file"
 

@@ -11,6 +11,8 @@
 #include "crowdbake_pal.h"
 #include "crowdbake/bake.h"
 #include "crowdbake/exr.h"
+#include "internal/bake_words.h"
+#include "internal/plumbing.h"
 
 #define TMP TEST_TMP "/bake_job"
 

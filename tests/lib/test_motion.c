@@ -13,6 +13,7 @@
 #include "roster/roster.h"
 #include "catalog/catalog.h"
 #include "crowdbake/runtime.h"
+#include "internal/plumbing.h"
 
 #define TMP TEST_TMP "/motion"
 #define COW "assets/quaternius-cow/Cow.glb"

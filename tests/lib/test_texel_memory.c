@@ -10,6 +10,7 @@
 
 #include "crowdbake_pal.h"
 #include "crowdbake/pal_write.h"
+#include "internal/pal_mapping.h"
 
 #define TMP TEST_TMP "/texel_memory"
 

@@ -1,11 +1,10 @@
-/* atomic_file.h - write a file so that readers see the old file or the complete new one,
+/* atomic_file.h (internal: linked from libcrowdbake.a, not exported) - write a file so that readers see the old file or the complete new one,
  * never a partial one: a temporary file beside the target, renamed over it when complete. */
 #ifndef CB_ATOMIC_FILE_H
 #define CB_ATOMIC_FILE_H
 
-#include "export.h"
 
-#include "core.h"
+#include "crowdbake/core.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -40,17 +39,17 @@ typedef struct cb_temp_files {
 /* Where every later cb_atomic_open creates its temporary; NULL (the default) for the library's
  * own. Process-wide, so for the program to set, once, before any thread writes; the library
  * never calls it. */
-CROWDBAKE_API void cb_atomic_set_temp_files(const cb_temp_files *files);
+void cb_atomic_set_temp_files(const cb_temp_files *files);
 /* Creates path_template (ending in XXXXXX, replaced by random letters) exclusively, mode 0666
  * less the umask, and returns its descriptor, or -1 with errno. */
-CROWDBAKE_API int cb_atomic_create_temp(char *path_template);
+int cb_atomic_create_temp(char *path_template);
 
-CROWDBAKE_API cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err);
-CROWDBAKE_API cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_error *err);
+cb_status cb_atomic_open(cb_atomic_file *f, const char *path, cb_error *err);
+cb_status cb_atomic_write(cb_atomic_file *f, const void *data, size_t size, cb_error *err);
 /* Reads back bytes already written, and writes over them (a header whose fields depend on what
  * follows it, written last). */
-CROWDBAKE_API cb_status cb_atomic_read_back(cb_atomic_file *f, void *data, size_t size, uint64_t offset, cb_error *err);
-CROWDBAKE_API cb_status cb_atomic_rewrite(cb_atomic_file *f, const void *data, size_t size, uint64_t offset,
+cb_status cb_atomic_read_back(cb_atomic_file *f, void *data, size_t size, uint64_t offset, cb_error *err);
+cb_status cb_atomic_rewrite(cb_atomic_file *f, const void *data, size_t size, uint64_t offset,
                                           cb_error *err);
 /* Gives the temporary `size` bytes with their blocks allocated, so that a full disk is an error
  * here and not a SIGBUS when the mapping is written, and maps it shared and writable at *out
@@ -58,12 +57,12 @@ CROWDBAKE_API cb_status cb_atomic_rewrite(cb_atomic_file *f, const void *data, s
  * bytes reach the file without a copy; cb_atomic_write still writes from offset 0 (a header
  * written last). The mapping is released by commit and abort. Fails (and leaves the file empty)
  * where a file system cannot allocate or map: the caller writes instead. */
-CROWDBAKE_API cb_status cb_atomic_map(cb_atomic_file *f, size_t size, void **out, cb_error *err);
+cb_status cb_atomic_map(cb_atomic_file *f, size_t size, void **out, cb_error *err);
 /* Flushes, renames over the target and releases f. On failure the target is untouched. A
  * library may write tmp_path itself (close fd first; set it to -1). */
-CROWDBAKE_API cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err);
+cb_status cb_atomic_commit(cb_atomic_file *f, cb_error *err);
 /* Removes the temporary file and releases f. Safe after a failed open or commit. */
-CROWDBAKE_API void cb_atomic_abort(cb_atomic_file *f);
+void cb_atomic_abort(cb_atomic_file *f);
 
 #ifdef __cplusplus
 }

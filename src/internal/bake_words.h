@@ -1,0 +1,38 @@
+/* bake_words.h (internal) - the bake job's plumbing for its front ends: the parser of --format
+ * and a catalog's format, and the sentences that explain a bake's rates and budgets
+ * (src/bake/bake_words.c). Linked into the tool from libcrowdbake.a; not exported, not installed. */
+#ifndef CB_INTERNAL_BAKE_WORDS_H
+#define CB_INTERNAL_BAKE_WORDS_H
+
+#include "crowdbake/bake.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* A comma-separated set of the formats' names (outputs.h: "pal", "exr", "ktx2", "babylon"; each
+ * once), or "both" (pal and exr): CB_FORMAT_* bits, 0 when it is none of those. */
+unsigned cb_formats_parse(const char *text);
+
+/* A note summing up the clips whose rates were chosen by error (their rates, how many fitted),
+ * and a line per clip over its budget (cb_bake_budget_text): an "error" when the bake failed
+ * for it, a "warning" when written anyway. */
+void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result,
+                          const char *(*setting_name)(cb_setting), cb_warnings *notes);
+
+/* Why planned clip i has its rate and rows, in words: "72 fps, fitted rows: within 1 mm/m at 45
+ * rows, sampled rows need more than 72 fps", "30 fps, sampled rows: the fixed fps". */
+void cb_bake_clip_reason(const cb_bake_job *job, uint32_t clip, char *buf, size_t size);
+/* Clip i over its budget, in words, with what would meet it: "clip 'Gallop' reaches 1.8 mm/m at
+ * 120 fps (fitted rows), over max_error 1; it meets it at 180 fps (max_fps = 180), or give it
+ * max_error = 1.9". setting_name names CB_SETTING_MAX_FPS, CB_SETTING_MAX_ERROR and
+ * CB_SETTING_FPS the front end's way (the command line's flags); NULL, or NULL for a setting: the
+ * catalog's keys. */
+void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, uint32_t clip,
+                         const char *(*setting_name)(cb_setting), char *buf, size_t size);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
