@@ -7,7 +7,6 @@
 #include <string.h>
 
 #include "internal/atomic_file.h"
-#include "crowdbake/bake.h"
 #include "internal/json.h"
 
 enum { VK_FORMAT_R16G16B16A16_SFLOAT = 97, VK_FORMAT_R32G32B32A32_SFLOAT = 109 };

@@ -71,8 +71,6 @@ enum {
  * textures up to 16384 texels a side, root motion kept, no compression; out_dir NULL. */
 CROWDBAKE_API cb_bake_settings cb_default_bake_settings(void);
 
-/* "keep" or "in-place" (its parser: internal/plumbing.h). */
-CROWDBAKE_API const char *cb_root_motion_name(cb_root_motion root_motion);
 /* 0 < fps <= CB_FPS_LIMIT; CB_MAX_FPS_LOWEST <= max_fps <= CB_FPS_LIMIT. */
 CROWDBAKE_API bool cb_fps_valid(double fps);
 CROWDBAKE_API bool cb_max_fps_valid(double max_fps);

@@ -308,6 +308,8 @@ CROWDBAKE_API void cb_channel_eval(const cb_channel *channel, double t, double o
 /* ---- clip framing --------------------------------------------------------------------- */
 
 typedef enum cb_root_motion { CB_ROOT_MOTION_KEEP, CB_ROOT_MOTION_IN_PLACE } cb_root_motion;
+/* "keep" or "in-place" (its parser: the internal plumbing.h). */
+CROWDBAKE_API const char *cb_root_motion_name(cb_root_motion root_motion);
 
 /* Why a clip was judged a loop or a one-shot (cb_clip_info.loop_reason). */
 typedef enum cb_loop_reason {

@@ -39,18 +39,6 @@ cb_bake_settings cb_default_bake_settings(void)
     return s;
 }
 
-bool cb_root_motion_parse(const char *text, cb_root_motion *out)
-{
-    if (strcmp(text, "keep") == 0) return *out = CB_ROOT_MOTION_KEEP, true;
-    if (strcmp(text, "in-place") == 0) return *out = CB_ROOT_MOTION_IN_PLACE, true;
-    return false;
-}
-
-const char *cb_root_motion_name(cb_root_motion root_motion)
-{
-    return root_motion == CB_ROOT_MOTION_IN_PLACE ? "in-place" : "keep";
-}
-
 unsigned cb_formats_parse(const char *text)
 {
     if (strcmp(text, "both") == 0) return CB_FORMAT_PAL | CB_FORMAT_EXR;

@@ -5,18 +5,6 @@
 
 #include "crowdbake/bake.h"
 
-const char *cb_setting_from_name(cb_setting_from from)
-{
-    switch (from) {
-    case CB_FROM_CATALOG: return "catalog [bake]";
-    case CB_FROM_ANIMAL: return "catalog animal";
-    case CB_FROM_COMMAND_LINE: return "command line";
-    case CB_FROM_CLIP: return "catalog clip";
-    case CB_FROM_RIG: return "rig: no skinned mesh";
-    default: return "default";
-    }
-}
-
 /* The rate: chosen by error or fixed, at which fps, and who said so. */
 static void resolve_rate(const cb_bake_settings *job, const cb_clip_plan *clip, const cb_clip_request *request,
                          cb_setting_from clip_from, bool measurable, cb_clip_settings *out)

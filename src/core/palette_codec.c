@@ -7,28 +7,6 @@
 #include "palette_bake.h"
 #include "internal/plumbing.h"
 
-/* ---- names and sizes ---- */
-
-static const char *const layout_names[] = {"mat4", "affine", "qpos"};
-static const char *const precision_names[] = {"float", "half", "u16"};
-
-const char *cb_layout_name(cb_layout l) { return (unsigned)l < 3 ? layout_names[l] : "?"; }
-const char *cb_precision_name(cb_precision p) { return (unsigned)p < 3 ? precision_names[p] : "?"; }
-
-bool cb_layout_parse(const char *text, cb_layout *out)
-{
-    for (int i = 0; i < 3; ++i)
-        if (strcmp(text, layout_names[i]) == 0) return *out = (cb_layout)i, true;
-    return false;
-}
-
-bool cb_precision_parse(const char *text, cb_precision *out)
-{
-    for (int i = 0; i < 3; ++i)
-        if (strcmp(text, precision_names[i]) == 0) return *out = (cb_precision)i, true;
-    return false;
-}
-
 /* Quantization arithmetic runs in double so it adds nothing to the half-step of the format. */
 static double snorm16_decode(uint16_t u)
 {

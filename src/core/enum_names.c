@@ -1,0 +1,56 @@
+/* enum_names.c - every enum's words, in one place: the names files, logs and manifests write
+ * (layouts, precisions, root motion, where a setting came from) and the parsers of the words a
+ * command line or catalog gives. The core owns them, so the formats and the bake use them
+ * without reaching up a layer. */
+#include "crowdbake/clip_settings.h"
+#include "internal/plumbing.h"
+
+#include <string.h>
+
+static const char *const layout_names[] = {"mat4", "affine", "qpos"};
+static const char *const precision_names[] = {"float", "half", "u16"};
+static const char *const root_motion_names[] = {"keep", "in-place"};
+
+/* The index of `text` among `count` names, or -1. */
+static int name_index(const char *text, const char *const *names, int count)
+{
+    for (int i = 0; i < count; ++i)
+        if (strcmp(text, names[i]) == 0) return i;
+    return -1;
+}
+
+const char *cb_layout_name(cb_layout l) { return (unsigned)l < 3 ? layout_names[l] : "?"; }
+const char *cb_precision_name(cb_precision p) { return (unsigned)p < 3 ? precision_names[p] : "?"; }
+const char *cb_root_motion_name(cb_root_motion r) { return root_motion_names[r == CB_ROOT_MOTION_IN_PLACE]; }
+
+bool cb_layout_parse(const char *text, cb_layout *out)
+{
+    int i = name_index(text, layout_names, 3);
+    return i >= 0 && (*out = (cb_layout)i, true);
+}
+
+bool cb_precision_parse(const char *text, cb_precision *out)
+{
+    int i = name_index(text, precision_names, 3);
+    return i >= 0 && (*out = (cb_precision)i, true);
+}
+
+bool cb_root_motion_parse(const char *text, cb_root_motion *out)
+{
+    int i = name_index(text, root_motion_names, 2);
+    if (i < 0) return false;
+    *out = i ? CB_ROOT_MOTION_IN_PLACE : CB_ROOT_MOTION_KEEP;
+    return true;
+}
+
+const char *cb_setting_from_name(cb_setting_from from)
+{
+    switch (from) {
+    case CB_FROM_CATALOG: return "catalog [bake]";
+    case CB_FROM_ANIMAL: return "catalog animal";
+    case CB_FROM_COMMAND_LINE: return "command line";
+    case CB_FROM_CLIP: return "catalog clip";
+    case CB_FROM_RIG: return "rig: no skinned mesh";
+    default: return "default";
+    }
+}

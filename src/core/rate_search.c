@@ -1,0 +1,419 @@
+/* rate_search.c - see runtime.h: each clip's frame rate chosen by visible error (cb_choose_rates),
+ * what the bake job decides its auto rates with. */
+#include "crowdbake/runtime.h"
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <threads.h>
+
+#include "cb_math.h"
+#include "palette_bake.h" /* palette_bake_with_facts */
+
+/* ---- error-driven frame rate ---- */
+
+/* One clip's search: its probes so far. Both families, both kinds of rows and the closing
+ * measurement ask for some rates twice (the key rate's multiples are common rates too), and a
+ * probe is a whole bake of the clip: each rate is baked once for each kind of rows. */
+typedef struct probe {
+    double fps, goal, error;
+    bool fit;
+} probe;
+typedef struct clip_search {
+    cb_sampler *s;
+    const cb_bake_options *o;
+    const cb_clip_plan *clip;
+    bool fit;                        /* the kind of rows probed now: fitted, or sampled */
+    double max_fps;
+    probe done[64];
+    uint32_t count;
+    int family;                      /* the family of rates searched now: FAMILY_KEYS or FAMILY_COMMON */
+    double law[2][2];                /* [fit][family]: the largest error x fps^2 probed (rate_error) */
+    const palette_skin_facts *facts; /* the skin's, settled once for every bake of the search */
+    palette_probe probe;             /* the clip's analysis and exact poses, for every probe */
+} clip_search;
+
+/* A search thread's pose cache holds at most this much (Cow's longest clip, 6 s of 42 joints,
+ * keeps 912 poses: 6.4 MB with their qpos derivations; 32 MB is 950 poses of 200 joints); past
+ * it, probes sample the times it has no room for as without one. */
+#define SEARCH_POSE_BYTES ((size_t)32 << 20)
+
+/* The visible error of the clip baked alone at `fps` with the rows cs->fit says: the bake
+ * measures it (the encoding, and the blend halfway between every two rows; fitted rows at the
+ * quarter points too). goal > 0: exact when within it; above it, the measurement may stop early
+ * (any value above the goal decides the search alike). Every bake of the search measures the
+ * same vertices from the same bind pose (the skin's, whatever the clip): what depends on the
+ * skin alone is settled once (cs->facts), not once a bake, and the clip is analyzed once
+ * (cs->probe.analysis). The probes' times coincide (a probe's blends are the rows of one at
+ * twice its rate, a fitted probe's mid-rows too): each time's exact matrices are sampled once
+ * for the clip (cs->probe.poses). */
+static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *err)
+{
+    cb_bake_options one = *cs->o;
+    one.fps = fps;
+    one.threads = 1;
+    one.error_goal = goal;
+    one.fit = false;
+    cb_clip_plan plan = *cs->clip;
+    plan.fps = fps;
+    plan.fit = cs->fit;
+    cb_palette p;
+    if (palette_bake_with_facts(cs->s, &one, &plan, 1, cs->facts, &cs->probe, &p, err)) return INFINITY;
+    double worst = p.visible_error;
+    cb_palette_free(&p);
+    return worst;
+}
+
+/* clip_error_at, once per rate and kind of rows. A value measured exactly (no goal, or within
+ * its goal) answers any goal; one above its goal only the same goal. max_fps is measured
+ * exactly at once: when it is probed every lower common rate failed, and a clip that fails it
+ * too needs its exact error there anyway (choose_clip's last lines). */
+static double probe_error(clip_search *cs, double fps, double goal, cb_error *err)
+{
+    for (uint32_t i = 0; i < cs->count; ++i) {
+        const probe *d = &cs->done[i];
+        if (d->fps == fps && d->fit == cs->fit && (d->goal == goal || d->goal == 0 || d->error <= d->goal)) return d->error;
+    }
+    if (fps == cs->max_fps) goal = 0;
+    double e = clip_error_at(cs, fps, goal, err);
+    if (!err->status && cs->count < sizeof cs->done / sizeof cs->done[0])
+        cs->done[cs->count++] = (probe){fps, goal, e, cs->fit};
+    return e;
+}
+
+/* The two families of rates a clip may bake at: its key rate's multiples and fractions, whose
+ * rows land on keys, and the common rates. */
+enum { FAMILY_KEYS, FAMILY_COMMON };
+
+/* The blend's error falls as the square of the row spacing (a chord under an arc): a clip that
+ * errs e at f fps errs about e (f / g)^2 at g fps, within a few percent on Cow and Fox (Walk,
+ * sampled: 0.0185 at 24 fps, 0.00466 at 48, 0.00209 at 72), and fitted rows err at best half of
+ * what sampled ones do at the same rate (0.54-0.71 of it on Cow). So the largest error x fps^2
+ * probed so far, per kind of rows and family of rates, predicts a lower bound for a rate not yet
+ * baked: for fitted rows, also half of what the sampled ones predict; for a common rate not yet
+ * probed, what the key rates predict (rows between keys err more). A rate predicted over one and
+ * a half times the goal is taken as a miss without baking it. Every rate chosen is still one
+ * that was baked and met its goal; the prediction only spares bakes that would miss, and
+ * fitted bakes cost several sampled ones (they sample every mid-row to fit the rows). max_fps is
+ * always baked: its exact error is what an unmet goal reports. */
+#define PREDICTED_MISS 1.5
+
+static double predicted_law(const clip_search *cs, bool fit, int family)
+{
+    double law = cs->law[fit][family] > 0 ? cs->law[fit][family] : cs->law[fit][FAMILY_KEYS];
+    return fit ? fmax(law, 0.5 * predicted_law(cs, false, family)) : law;
+}
+
+static double rate_error(clip_search *cs, double fps, double max_error, cb_error *err)
+{
+    if (fps < cs->max_fps && predicted_law(cs, cs->fit, cs->family) / (fps * fps) > PREDICTED_MISS * max_error)
+        return INFINITY;
+    double e = probe_error(cs, fps, max_error, err), *law = &cs->law[cs->fit][cs->family];
+    if (isfinite(e) && e * fps * fps > *law) *law = e * fps * fps;
+    return e;
+}
+
+/* The lowest of the increasing `rates` (up to max_fps, and under `below` unless it is 0) at
+ * which the clip's error is within max_error, 0 when none is, with its error. Within one family
+ * of rates the error falls as the rate rises, so the search walks from one rate: down while the
+ * rates meet the goal, else up until one does. A probe that misses the goal stops measuring at
+ * the first row above it, and most of a search's probes miss; one that meets it is measured in
+ * full, and walking rather than bisecting measures few besides the answer. It starts at the
+ * likeliest answer (`first`), or under a bound at the highest rate under it: the bound is a rate
+ * already known to meet the goal, and a miss there settles that nothing lower meets it. */
+static double lowest_rate(clip_search *cs, const double *rates, size_t n, size_t first, double below,
+                          double max_error, double *error, cb_error *err)
+{
+    while (n > 0 && (rates[n - 1] > cs->max_fps || (below > 0 && rates[n - 1] >= below))) --n;
+    if (n == 0) return 0;
+    size_t at = below > 0 || first >= n ? n - 1 : first;
+    double e = rate_error(cs, rates[at], max_error, err);
+    if (e <= max_error) { /* down while the rates meet it */
+        for (*error = e; at > 0 && !err->status && (e = rate_error(cs, rates[at - 1], max_error, err)) <= max_error; --at)
+            *error = e;
+        return err->status ? 0 : rates[at];
+    }
+    while (++at < n && !err->status)
+        if ((e = rate_error(cs, rates[at], max_error, err)) <= max_error) return *error = e, rates[at];
+    return 0;
+}
+
+/* The rates a clip may bake at: common rates, and the clip's key rate with its multiples and
+ * fractions. */
+typedef struct rate_families {
+    const double *common;
+    size_t n_common, n_aligned;
+    double aligned[6];
+    size_t key;         /* the key rate's place in aligned (probed first) */
+} rate_families;
+static const double common_rates[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120};
+enum { COMMON_FIRST = 11 }; /* 30 fps: where a search of the common rates alone starts */
+
+static rate_families families_of(const cb_animation *a)
+{
+    static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
+    rate_families f = {common_rates, sizeof common_rates / sizeof common_rates[0], 0, {0}, 2};
+    double key = cb_animation_key_interval(a);
+    for (size_t i = 0; key > 0 && i < 6; ++i) f.aligned[f.n_aligned++] = round(factors[i] / key * 1000) / 1000;
+    return f;
+}
+
+/* The lowest rate within max_error for the rows cs->fit says, under `below` (0: none), over both
+ * families, 0 when none is, with its error. The key rate's family first: rows that land on keys
+ * blend what the keys interpolate, so its error is far lower than its neighbours' in the common
+ * family (Cow's Idle: 0.78 mm/m at its 24 fps key rate, 3.4 at 20 and 30) and it is usually the
+ * answer; the common rates are then searched under it. The two are searched each on its own:
+ * the error does not fall steadily across both. */
+static double lowest_rate_of_rows(clip_search *cs, const rate_families *f, double below, double max_error, double *error,
+                                  cb_error *err)
+{
+    double e_aligned = INFINITY, e_common = INFINITY;
+    cs->family = FAMILY_KEYS;
+    double a = lowest_rate(cs, f->aligned, f->n_aligned, f->key, below, max_error, &e_aligned, err);
+    cs->family = FAMILY_COMMON;
+    double b = lowest_rate(cs, f->common, f->n_common, COMMON_FIRST, a > 0 ? a : below, max_error, &e_common, err);
+    if (err->status || (a == 0 && b == 0)) return 0;
+    *error = b > 0 ? e_common : e_aligned;
+    return b > 0 ? b : a;
+}
+
+/* A clip over its goal at max_fps: the lowest rate up to CB_FPS_LIMIT (a ladder of multiples of
+ * max_fps) within it, for the rows cs->fit says, or 0 when none is (the encoding's own error
+ * stays over the goal). Only a failing bake pays for it: it is what the message suggests. */
+static double rate_that_meets(clip_search *cs, double max_error, cb_error *err)
+{
+    static const double steps[] = {1.5, 2, 3, 4, 6, 8, 12, 16};
+    double ladder[9]; /* the steps, and CB_FPS_LIMIT after them */
+    size_t n = 0;
+    for (size_t i = 0; i < 8 && cs->max_fps * steps[i] <= CB_FPS_LIMIT; ++i) ladder[n++] = ceil(cs->max_fps * steps[i]);
+    if (n == 0 || ladder[n - 1] < CB_FPS_LIMIT) ladder[n++] = CB_FPS_LIMIT;
+    double ignored = 0, cap = cs->max_fps;
+    cs->max_fps = CB_FPS_LIMIT, cs->family = FAMILY_COMMON;
+    double fps = lowest_rate(cs, ladder, n, 0, 0, max_error, &ignored, err);
+    cs->max_fps = cap;
+    return fps;
+}
+
+/* One clip's rate and rows: the fewest rows within max_error. Sampled rows first, then fitted
+ * rows under that rate: sampled rows win ties, being the exact poses themselves (nearest-row
+ * playback and anything reading a row alone sees no fitting error), and fitted rows, which
+ * halve the blend's error, are searched only where they would save rows. `rows` forces one kind.
+ * Over the goal even at max_fps: the kind with the lower error there, and the rate that would
+ * meet it (c->fps_needed). */
+static double choose_clip(clip_search *cs, const rate_families *f, cb_rows rows, double max_error, cb_rate_choice *c,
+                          cb_error *err)
+{
+    double e_fit = INFINITY, e_sampled = INFINITY, r_fit = 0, r_sampled = 0;
+    if (rows != CB_ROWS_FITTED) cs->fit = false, r_sampled = lowest_rate_of_rows(cs, f, 0, max_error, &e_sampled, err);
+    if (rows != CB_ROWS_SAMPLED && !err->status)
+        cs->fit = true, r_fit = lowest_rate_of_rows(cs, f, r_sampled, max_error, &e_fit, err);
+    memset(c, 0, sizeof *c);
+    if (err->status) return cs->max_fps;
+    if (r_sampled > 0 || r_fit > 0) {
+        bool fitted = r_fit > 0;
+        c->met = true, c->fitted = fitted, c->error = fitted ? e_fit : e_sampled;
+        c->other_fps = fitted ? r_sampled : 0; /* fitted won: the rate sampled rows need (0: none up to max_fps) */
+        return fitted ? r_fit : r_sampled;
+    }
+    /* None met: the exact error at max_fps of each kind allowed, the lower one taken. */
+    cs->fit = rows != CB_ROWS_SAMPLED;
+    double at_max = probe_error(cs, cs->max_fps, 0, err);
+    if (rows == CB_ROWS_BEST && !err->status) {
+        cs->fit = false;
+        double sampled = probe_error(cs, cs->max_fps, 0, err);
+        cs->fit = !(sampled < at_max);
+        at_max = fmin(at_max, sampled);
+    }
+    c->fitted = cs->fit, c->error = at_max, c->met = at_max <= max_error;
+    if (!err->status && !c->met) c->fps_needed = rate_that_meets(cs, max_error, err);
+    return cs->max_fps;
+}
+
+static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
+                              double max_fps, cb_rows rows, cb_rate_choice *c, const palette_skin_facts *facts,
+                              pose_cache *poses, bool fresh, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(s);
+    rate_families f = families_of(&m->animations[clip->animation]);
+    /* Analyzed at the lowest rate, the likeliest within the frame limit; where it fails, each
+     * probe analyzes the clip itself and fails as it would. */
+    cb_clip_info analysis;
+    cb_error unanalyzed = {0};
+    bool analyzed = !cb_clip_analyze(s, clip->animation, common_rates[0], clip->loop, &o->limits, &analysis, &unanalyzed);
+    clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts,
+                      .probe = {poses, analyzed ? &analysis : NULL}};
+    if (poses && fresh) pose_cache_clear(poses); /* another clip's times */
+    return choose_clip(&cs, &f, rows, max_error, c, err);
+}
+
+static pose_cache *search_pose_cache(const cb_sampler *s)
+{
+    return palette_probe_poses(cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count, SEARCH_POSE_BYTES);
+}
+
+double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
+                          double max_fps, bool *met, double *error, cb_error *err)
+{
+    palette_skin_facts facts;
+    pose_cache *poses = search_pose_cache(s); /* NULL (out of memory): sampled as without */
+    double fps = max_fps;
+    cb_rate_choice c = {0};
+    c.error = INFINITY;
+    if (!palette_skin_facts_build(s, &facts, err))
+        fps = choose_clip_fps(s, o, clip, max_error, max_fps, o->fit || clip->fit ? CB_ROWS_FITTED : CB_ROWS_SAMPLED, &c,
+                              &facts, poses, true, err);
+    palette_skin_facts_free(&facts);
+    pose_cache_free(poses);
+    *met = c.met, *error = err->status ? INFINITY : c.error;
+    return fps;
+}
+
+/* Clips are searched independently: options->threads at a time, each thread with its own
+ * sampler (a sampler's scratch is not shared), each clip's answer in its own slot, so the
+ * choices do not depend on the thread count nor on the order clips are taken in: the clips
+ * with the most work first (search_order), so that no long clip starts last and leaves the
+ * other threads waiting (Cow: Eating lasts 6 s, the other clips 0.6-3.3 s). */
+typedef struct rate_search {
+    const cb_model *model;
+    int32_t skin;
+    const cb_bake_options *o;
+    cb_clip_plan *plan;
+    uint32_t count;
+    const cb_rate_goal *goals;
+    cb_rate_choice *choices;
+    cb_error *errors; /* per clip */
+    double height;
+    const palette_skin_facts *facts;
+    const uint32_t *order; /* the clips in the order they are taken */
+    atomic_uint next;
+    pose_cache **kept;     /* per clip, or NULL: the poses each clip's search sampled, for the bake after */
+    atomic_size_t kept_bytes;
+} rate_search;
+
+/* What the caches kept for a bake may hold together (past it a clip's is freed): Cow's twelve
+ * clips keep about 50 MB, and spare its bake 150 M of its 750 M instructions. */
+#define KEPT_POSE_BYTES ((size_t)128 << 20)
+
+/* The cache clip i's search samples into: the thread's own (`mine`, emptied for each clip), or,
+ * when the caller keeps them, the clip's own. */
+static pose_cache *clip_cache(rate_search *rs, uint32_t i, pose_cache *mine, const cb_sampler *s)
+{
+    if (!rs->kept) return mine;
+    if (!rs->kept[i]) rs->kept[i] = search_pose_cache(s);
+    return rs->kept[i];
+}
+
+/* A kept cache past the budget is freed: the bake samples that clip again. */
+static void settle_kept(rate_search *rs, uint32_t i)
+{
+    if (!rs->kept || !rs->kept[i]) return;
+    uint32_t bones = rs->model->skins[rs->skin].joint_count;
+    size_t bytes = (size_t)pose_cache_count(rs->kept[i]) * (16 * bones + 1 + 5 * bones) * sizeof(double);
+    if (atomic_fetch_add(&rs->kept_bytes, bytes) + bytes > KEPT_POSE_BYTES) pose_cache_free(rs->kept[i]), rs->kept[i] = NULL;
+}
+
+/* The highest rate the search may probe a clip at: its goal's, checked by palette_choose_rates
+ * (a bake's is resolved once, cb_resolve_clip_settings). */
+static double max_fps_of(const cb_rate_goal *goal) { return goal->max_fps; }
+
+/* The clips' expected work: their rows at the highest rate a probe may bake them at. */
+static double search_work(const cb_model *m, const cb_clip_plan *plan, const cb_rate_goal *goal)
+{
+    if (plan->animation < 0 || plan->animation >= (int32_t)m->animation_count) return 0; /* fails at once */
+    const cb_animation *a = &m->animations[plan->animation];
+    return (a->t1 - a->t0) * max_fps_of(goal);
+}
+
+/* The clips in decreasing expected work (ties in clip order), into order. */
+static void search_order(const cb_model *m, const cb_clip_plan *plan, const cb_rate_goal *goals, uint32_t count,
+                         uint32_t *order)
+{
+    for (uint32_t i = 0; i < count; ++i) {
+        double work = search_work(m, &plan[i], &goals[i]);
+        uint32_t k = i;
+        for (; k > 0 && search_work(m, &plan[order[k - 1]], &goals[order[k - 1]]) < work; --k) order[k] = order[k - 1];
+        order[k] = i;
+    }
+}
+
+static int rate_worker(void *arg)
+{
+    rate_search *rs = arg;
+    cb_error fail = {0};
+    cb_sampler *s = cb_sampler_create(rs->model, rs->skin, &fail);
+    pose_cache *poses = s && !rs->kept ? search_pose_cache(s) : NULL; /* this thread's, for each clip in turn */
+    for (;;) {
+        uint32_t n = atomic_fetch_add(&rs->next, 1);
+        if (n >= rs->count) break;
+        uint32_t i = rs->order[n];
+        if (!(rs->goals[i].max_error_mm > 0)) continue;
+        if (!s) {
+            rs->errors[i] = fail;
+            continue;
+        }
+        cb_rate_choice *c = &rs->choices[i];
+        rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
+                                          max_fps_of(&rs->goals[i]), rs->o->fit ? CB_ROWS_FITTED : rs->goals[i].rows, c,
+                                          rs->facts, clip_cache(rs, i, poses, s), !rs->kept, &rs->errors[i]);
+        settle_kept(rs, i);
+        rs->plan[i].fit = c->fitted;
+        c->error_mm = cb_mm_per_m(c->error, rs->height);
+    }
+    pose_cache_free(poses);
+    cb_sampler_free(s);
+    return 0;
+}
+
+cb_status cb_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
+                          const cb_rate_goal *goals, cb_rate_choice *out, cb_error *err)
+{
+    return palette_choose_rates(s, o, plan, count, goals, out, NULL, err);
+}
+
+cb_status palette_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
+                               const cb_rate_goal *goals, cb_rate_choice *out, pose_cache **kept, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(s);
+    bool any = false;
+    for (uint32_t i = 0; i < count; ++i) any = any || goals[i].max_error_mm > 0;
+    if (!any) return CB_OK;
+    for (uint32_t i = 0; i < count; ++i)
+        if (goals[i].max_error_mm > 0 && !(goals[i].max_fps >= 2 && goals[i].max_fps <= CB_FPS_LIMIT))
+            return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_MAX_FPS, "%s: clip %u's rate search goes up to max_fps "
+                                   "%g; give it 2..%g (a bake's default: %g)", m->source, i, goals[i].max_fps,
+                                   CB_FPS_LIMIT, CB_AUTO_MAX_FPS);
+    palette_skin_facts facts;
+    if (palette_skin_facts_build(s, &facts, err)) {
+        palette_skin_facts_free(&facts);
+        return err->status;
+    }
+    if (!(facts.height > 0)) {
+        palette_skin_facts_free(&facts);
+        return cb_fail(err, CB_ERR_INPUT, "%s: has no skinned mesh to measure errors on; give the clips a fixed fps",
+                       m->source);
+    }
+    rate_search rs = {m, cb_sampler_skin(s), o, plan, count, goals, calloc(count, sizeof(cb_rate_choice)),
+                      calloc(count, sizeof(cb_error)), facts.height, &facts, NULL, 0, kept, 0};
+    uint32_t *order = malloc(count * sizeof *order);
+    rs.order = order;
+    if (rs.choices && rs.errors && order) {
+        search_order(m, plan, goals, count, order);
+        uint32_t threads = o->threads < 1 ? 1 : o->threads > 64 ? 64 : o->threads, started = 0;
+        if (threads > count) threads = count;
+        thrd_t ids[64];
+        for (uint32_t t = 1; t < threads; ++t)
+            if (thrd_create(&ids[started], rate_worker, &rs) == thrd_success) ++started;
+        rate_worker(&rs);
+        for (uint32_t t = 0; t < started; ++t) thrd_join(ids[t], NULL);
+        for (uint32_t i = 0; i < count && !err->status; ++i) /* the first failure in clip order */
+            if (rs.errors[i].status) *err = rs.errors[i];
+        for (uint32_t i = 0; out && i < count; ++i)
+            if (goals[i].max_error_mm > 0) out[i] = rs.choices[i];
+    } else {
+        cb_fail(err, CB_ERR_INTERNAL, "out of memory choosing frame rates for %s", m->source);
+    }
+    free(rs.choices), free(rs.errors), free(order);
+    palette_skin_facts_free(&facts);
+    return err->status;
+}
