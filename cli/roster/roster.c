@@ -16,9 +16,9 @@
 #include "crowdbake/babylon.h"
 #include "crowdbake/bake.h"
 #include "crowdbake/gltf.h"
+#include "crowdbake/pool.h"
 #include "crowdbake/runtime.h"
 #include "crowdbake/vat.h"
-#include "internal/plumbing.h"
 #include "internal/bake_words.h"
 
 typedef struct type_work {
@@ -444,25 +444,13 @@ typedef struct pass {
     const uint32_t *order; /* the types, longest first (roster_order.c) */
 } pass;
 
-/* Each thread takes the next type until none is left (types take very different times). */
-static int pass_share(void *arg)
+/* Each share takes the next type until none is left (types take very different times), on the
+ * library's threads (cb_pool_run): the calling thread and threads - 1 more. */
+static void pass_share(void *arg, uint32_t thread, uint32_t threads)
 {
+    (void)thread, (void)threads;
     pass *p = arg;
     for (uint32_t i; (i = atomic_fetch_add(&p->run->next, 1)) < p->run->r->type_count;) p->fn(p->run, p->order[i]);
-    return 0;
-}
-
-/* The calling thread and threads - 1 more take types; one that fails to start leaves its
- * types to the others. */
-#define PASS_MAX_THREADS 64
-static void pass_on_threads(pass *p, uint32_t threads)
-{
-    thrd_t ids[PASS_MAX_THREADS];
-    uint32_t started = 0;
-    for (uint32_t t = 1; t < threads && t < PASS_MAX_THREADS; ++t)
-        if (thrd_create(&ids[started], pass_share, p) == thrd_success) ++started;
-    pass_share(p);
-    for (uint32_t t = 0; t < started; ++t) thrd_join(ids[t], NULL);
 }
 
 static void run_pass(roster_run *run, void (*fn)(roster_run *, uint32_t), uint32_t *order)
@@ -473,7 +461,7 @@ static void run_pass(roster_run *run, void (*fn)(roster_run *, uint32_t), uint32
     if (threads > 1) roster_order_types(run->cat, run->r, fn == bake_type, order); /* changes no output */
     atomic_store(&run->next, 0);
     pass p = {run, fn, order};
-    pass_on_threads(&p, threads);
+    cb_pool_run(threads, pass_share, &p);
 }
 
 /* ---- the whole bake ---- */

@@ -9,6 +9,7 @@
  * bake.h     one bake job (a model into .pal/.exr/.ktx2/.bvat.json files): every bake policy, decided once
  * outputs.h  the table of output formats: names, extensions, what each holds, their readers
  * clip_settings.h  each clip's settings resolved once, with where each value came from
+ * pool.h     the library's threads, for a program that bakes many models at once
  * stride.h, socket.h   what a game hangs on a clip and a rig: planted feet and footsteps, prop sockets
  * mesh.h, gltf_mesh_write.h   runtime-ready meshes for a palette (`crowdbake mesh`)
  * gltf.h, pal_write.h, pal_view.h, exr.h, ktx2.h, babylon.h, vat.h, budget.h   files and sizes
@@ -45,5 +46,6 @@
 #include "pal_view.h"
 #include "exr.h"
 #include "babylon.h"
+#include "pool.h"
 
 #endif

@@ -1,8 +1,11 @@
-/* pool.h - the library's one way to run work on several threads (private to libcrowdbake). */
+/* pool.h - the library's one way to run work on several threads (private to libcrowdbake but
+ * for cb_pool_run, crowdbake/pool.h). */
 #ifndef CB_POOL_H
 #define CB_POOL_H
 
 #include <stdint.h>
+
+#include "crowdbake/pool.h" /* cb_pool_run, the public part */
 
 /* Threads that run work(ctx, t, shares) for t = 0..shares-1, t = 0 on the calling thread and
  * the others on threads of their own, and return when every share is done. How the shares
@@ -24,6 +27,5 @@ cb_pool *cb_pool_create(uint32_t threads);
 void cb_pool_dispatch(cb_pool *pool, uint32_t shares, void (*work)(void *ctx, uint32_t thread, uint32_t threads),
                       void *ctx);
 void cb_pool_free(cb_pool *pool);
-void cb_pool_run(uint32_t threads, void (*work)(void *ctx, uint32_t thread, uint32_t threads), void *ctx);
 
 #endif

@@ -437,7 +437,7 @@ static void test_godot_addon_zip(void **state)
            "/zip2 godot-addon && cmp " TMP "/zip1/crowdbake-godot-addon.zip " TMP "/zip2/crowdbake-godot-addon.zip") != 0)
         fail_msg("%s", out);
     if (sh(out, sizeof out,
-           "find runtimes/godot/addons/crowdbake -type f | LC_ALL=C sort > " TMP "/zip1/want && unzip -Z1 " TMP
+           "(cd runtimes/godot && find addons/crowdbake -type f) | LC_ALL=C sort > " TMP "/zip1/want && unzip -Z1 " TMP
            "/zip1/crowdbake-godot-addon.zip | LC_ALL=C sort | diff " TMP "/zip1/want -") != 0)
         fail_msg("the zip's files differ from runtimes/godot/addons/crowdbake:\n%s", out);
 }
