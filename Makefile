@@ -24,7 +24,8 @@ SHELL := /bin/bash
 DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
-                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip
+                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip \
+                glslang-tools spirv-tools mesa-vulkan-drivers libvulkan-dev
 PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
 BUILD   ?= build
@@ -76,7 +77,7 @@ LIB_CXX := $(wildcard lib/*/*.cpp)
 TOOL_C  := $(wildcard tool/catalog/*.c tool/roster/*.c tool/report/*.c)
 TOOL_CXX:= $(wildcard tool/catalog/*.cpp)
 CLI_C   := $(wildcard tool/cli/*.c)
-TESTS   := $(patsubst tests/%.c,%,$(wildcard tests/test_*.c))
+TESTS   := $(patsubst tests/%.c,%,$(wildcard tests/test_*.c tests/runtimes/test_*.c))
 
 LIB_OBJ := $(LIB_C:%.c=$(BUILD)/obj/%.o) $(LIB_CXX:%.cpp=$(BUILD)/obj/%.o)
 TOOL_OBJ:= $(TOOL_C:%.c=$(BUILD)/obj/%.o) $(TOOL_CXX:%.cpp=$(BUILD)/obj/%.o) $(BUILD)/obj/gen/palette_glsl.o
@@ -254,10 +255,12 @@ demo: all $(if $(shell command -v npm 2>/dev/null),web/node_modules/.package-loc
 # sanitizer passes run side by side.
 TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(TOOL_INC) $(shell pkg-config --cflags cmocka 2>/dev/null)
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
-$(BUILD)/tests/%: tests/%.c tests/testutil.h tests/view_server.h $(TOOL_A) $(BUILD)/libcrowdbake.a
+$(BUILD)/tests/%: tests/%.c tests/testutil.h tests/view_server.h $(wildcard tests/runtimes/*.h) $(TOOL_A) $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TEST_CFLAGS) -c $< -o $@.o
-	$(CXX) $(SAN) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
+	$(CXX) $(SAN) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(TEST_EXTRA_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
+# The HLSL runtime's tests drive Vulkan (Mesa's lavapipe) and run glslangValidator and spirv-val.
+$(BUILD)/tests/runtimes/%: TEST_EXTRA_LIBS := -lvulkan
 
 # The reader header alone, strict C99, as an engine would compile it: no libcrowdbake.
 $(BUILD)/tests/standalone_pal_reader: tests/standalone_pal_reader.c formats/crowdbake_pal.h $(DEPS_STAMP)
@@ -329,7 +332,7 @@ endef
 $(RESULTS)/pending:
 	@mkdir -p $(RESULTS) && for r in $(notdir $(TEST_RUNS:.run=)); do touch $(RESULTS)/$$r.pending; done && touch $@
 $(BUILD)/tests/%.run: $(BUILD)/tests/% all $(NODE_DEPS) | $(RESULTS)/pending
-	$(call record_run,$*,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples $< $(ARGS_$*))
+	$(call record_run,$(notdir $*),CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples $< $(ARGS_$*))
 $(BUILD)/tests/readme_examples.run: all | $(RESULTS)/pending
 	$(call record_run,readme_examples,python3 tests/tools/readme_examples.py --build $(BUILD))
 # Every bake's bytes, pinned (tests/bake_hashes.txt; `make bake-hashes` after a change on purpose).

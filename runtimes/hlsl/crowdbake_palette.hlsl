@@ -103,7 +103,7 @@ cb_header cb_make_header(int row_texels, int rows_per_block, float3 bounds_min, 
 // GLSL's mod: x - y * floor(x / y), never negative for y > 0.
 float cb_mod(float x, float y)
 {
-    return x - y * floor(x / y);
+    return x - y * floor(x / y); // cb:mod
 }
 
 #ifdef CB_PRECISION_U16
