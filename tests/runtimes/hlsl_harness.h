@@ -15,7 +15,7 @@ static const char *layout_define[] = {"CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_
 static const char *precision_define[] = {"CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16"};
 
 /* Replaces the line containing `marker` (a "cb:" comment of the shipped shader) with `line`. */
-static char *break_shader(const char *src, const char *marker, const char *line)
+static inline char *break_shader(const char *src, const char *marker, const char *line)
 {
     const char *at = strstr(src, marker);
     assert_non_null(at);
@@ -31,7 +31,7 @@ static char *break_shader(const char *src, const char *marker, const char *line)
  * `includes` (-I...), and validates the module with spirv-val; returns the SPIR-V words. */
 static uint32_t *compile_hlsl(const char *src, const char *name, const char *includes, size_t *bytes)
 {
-    char path[512], spv[512], cmd[2048], log[8192];
+    char path[512], spv[512], cmd[4096], log[8192];
     mkdir(TEST_TMP, 0755);
     snprintf(path, sizeof path, "%s/%s.hlsl", TEST_TMP, name);
     snprintf(spv, sizeof spv, "%s/%s.spv", TEST_TMP, name);
@@ -134,8 +134,8 @@ typedef struct gpu_sample {
     float inst[4], from[4], fade_time_dt_mode[4];
 } gpu_sample;
 
-/* Instances of every clip at many times (test_gl's: mid-frames, the loop seam, random phases),
- * each also cross-faded from another clip in the modes that fade; mode = index % 4. */
+/* Instances of every clip at many times (test_gl's: mid-frames, the loop seam, random phases;
+ * one before 0), each also cross-faded from another clip in the modes that fade; mode = index % 4. */
 static uint32_t make_samples(const cb_palette *p, sample *out, uint32_t cap)
 {
     uint32_t n = 0;
@@ -143,8 +143,10 @@ static uint32_t make_samples(const cb_palette *p, sample *out, uint32_t cap)
         const cb_palette_clip *cl = &p->clips[c];
         cb_instance in = {cl->first_row, cl->loops ? cl->frames : -(double)cl->frames, cl->fps, 0};
         double span = cl->frames / cl->fps;
-        double times[] = {0.3 / cl->fps, 2.5 / cl->fps, span * 0.37, span - 0.4 / cl->fps /* the seam */, span * 1.5};
-        for (int k = 0; k < 5 && n < cap; ++k) out[n++] = (sample){.inst = in, .time = times[k]};
+        /* ...and a time before 0 (a herd's clock offset): GLSL's floored mod, not HLSL's fmod. */
+        double times[] = {0.3 / cl->fps, 2.5 / cl->fps, span * 0.37, span - 0.4 / cl->fps /* the seam */, span * 1.5,
+                          -span * 0.37};
+        for (int k = 0; k < 6 && n < cap; ++k) out[n++] = (sample){.inst = in, .time = times[k]};
         for (int k = 0; k < 3 && n < cap; ++k) {
             cb_instance phased = in;
             phased.phase = fmod((k + 1) * 0.6180339887, 1.0);

@@ -30,6 +30,7 @@ typedef struct vkc_resource {
     VkBuffer buffer;
     VkImage image;
     VkImageView view;
+    VkSampler sampler;
     VkDeviceMemory memory;
     VkDeviceSize size;
     VkDescriptorType type;
@@ -214,12 +215,25 @@ static inline vkc_resource vkc_image(vkc_context *c, VkFormat format, uint32_t w
     return t;
 }
 
+/* A nearest-filtering sampler (Unreal's Custom node hands each texture's sampler to the code). */
+static inline vkc_resource vkc_sampler(vkc_context *c)
+{
+    vkc_resource s = {.type = VK_DESCRIPTOR_TYPE_SAMPLER};
+    VkSamplerCreateInfo sci = {.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO, .magFilter = VK_FILTER_NEAREST,
+                               .minFilter = VK_FILTER_NEAREST, .addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                               .addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                               .addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE};
+    VKC_CHECK(vkCreateSampler(c->device, &sci, NULL, &s.sampler));
+    return s;
+}
+
 static inline void vkc_free(vkc_context *c, vkc_resource *r)
 {
+    if (r->sampler) vkDestroySampler(c->device, r->sampler, NULL);
     if (r->view) vkDestroyImageView(c->device, r->view, NULL);
     if (r->image) vkDestroyImage(c->device, r->image, NULL);
     if (r->buffer) vkDestroyBuffer(c->device, r->buffer, NULL);
-    vkFreeMemory(c->device, r->memory, NULL);
+    if (r->memory) vkFreeMemory(c->device, r->memory, NULL);
     memset(r, 0, sizeof *r);
 }
 
@@ -264,10 +278,11 @@ static inline vkc_pipeline vkc_compute(vkc_context *c, const uint32_t *spirv, si
     VKC_CHECK(vkAllocateDescriptorSets(c->device, &dsi, &p.set));
     for (uint32_t i = 0; i < n; ++i) {
         VkDescriptorBufferInfo bi = {resources[i].buffer, 0, VK_WHOLE_SIZE};
-        VkDescriptorImageInfo ii = {VK_NULL_HANDLE, resources[i].view, VK_IMAGE_LAYOUT_GENERAL};
+        VkDescriptorImageInfo ii = {resources[i].sampler, resources[i].view, VK_IMAGE_LAYOUT_GENERAL};
+        bool image = resources[i].image || resources[i].sampler;
         VkWriteDescriptorSet w = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = p.set, .dstBinding = i,
                                   .descriptorCount = 1, .descriptorType = resources[i].type,
-                                  .pImageInfo = resources[i].image ? &ii : NULL, .pBufferInfo = resources[i].image ? NULL : &bi};
+                                  .pImageInfo = image ? &ii : NULL, .pBufferInfo = image ? NULL : &bi};
         vkUpdateDescriptorSets(c->device, 1, &w, 0, NULL);
     }
     return p;
