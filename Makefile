@@ -421,6 +421,11 @@ $(BUILD)/bench_core: bench/bench_core.c $(BUILD)/libcrowdbake.a
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 
+# crowdbake's qpos palettes against AnimToTexture's bone-mode encoding, bytes and error (bench/bench_att.c).
+$(BUILD)/bench_att: bench/bench_att.c $(BUILD)/libcrowdbake.a
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
+	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
+
 # The floor: read + RapidJSON parse of the same file, and crowdbake's load, in the same run
 # (bench/bench_floor.cpp).
 $(BUILD)/bench_floor: bench/bench_floor.cpp $(BUILD)/libcrowdbake.a $(DEPS_STAMP)
@@ -433,10 +438,10 @@ $(BUILD)/bench_gl: bench/bench_gl.c $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/lib
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs egl gl 2>/dev/null)
 
-bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(NODE_DEPS)
+bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(NODE_DEPS)
 	python3 bench/run.py
 
-bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(NODE_DEPS)
+bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
 
 # The normal and the sanitizer builds and their tests, side by side on every core.
