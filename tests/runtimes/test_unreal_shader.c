@@ -172,6 +172,26 @@ static float *gpu_unreal(const cb_palette *p, const cb_primitive *prim, const sa
     return out;
 }
 
+/* Worst position error / tolerance of the node code on a bake of `path`; normals' in *normal_ratio. */
+static double run_node(const char *path, cb_layout l, cb_precision pr, const char *node, double *normal_ratio, bool print)
+{
+    fixture f;
+    bake(path, l, pr, false, &f);
+    sample samples[48];
+    uint32_t n = make_samples(&f.palette, samples, 48);
+    const cb_primitive *prim = &f.model->primitives[0];
+    float *gpu = gpu_unreal(&f.palette, prim, samples, n, node);
+    double pe, ne, tol = tolerance(&f);
+    compare(&f.palette, prim, samples, n, gpu, &pe, &ne);
+    if (print)
+        printf("  Cow %-6s %-5s %u instances x %u vertices: positions %.2g, normals %.2g (tolerance %.2g, %.2g)\n",
+               cb_layout_name(l), cb_precision_name(pr), n, prim->vertex_count, pe, ne, tol, 1e-5);
+    *normal_ratio = ne / 1e-5;
+    free(gpu);
+    release(&f);
+    return pe / tol;
+}
+
 static void test_the_custom_node_matches_the_c_runtime(void **state)
 {
     (void)state;
@@ -180,21 +200,18 @@ static void test_the_custom_node_matches_the_c_runtime(void **state)
     shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
     for (int l = 0; l < 3; ++l)
         for (int pr = 0; pr < 3; ++pr) {
-            fixture f;
-            bake(cow, (cb_layout)l, (cb_precision)pr, false, &f);
-            sample samples[48];
-            uint32_t n = make_samples(&f.palette, samples, 48);
-            const cb_primitive *prim = &f.model->primitives[0];
-            float *gpu = gpu_unreal(&f.palette, prim, samples, n, node);
-            double pe, ne, tol = tolerance(&f);
-            compare(&f.palette, prim, samples, n, gpu, &pe, &ne);
-            printf("  Cow %-6s %-5s %u instances x %u vertices: positions %.2g, normals %.2g (tolerance %.2g, %.2g)\n",
-                   cb_layout_name((cb_layout)l), cb_precision_name((cb_precision)pr), n, prim->vertex_count, pe, ne, tol, 1e-5);
-            assert_true(pe <= tol && ne <= 1e-5);
-            free(gpu);
-            release(&f);
+            double normals, positions = run_node(cow, (cb_layout)l, (cb_precision)pr, node, &normals, true);
+            assert_true(positions <= 1 && normals <= 1);
         }
-    free(node);
+    /* Broken variant: the node with its two clips swapped (a cross-fade played backwards). */
+    const char *call = "Clip, FromClip, Fade";
+    char *at = strstr(node, call), *swapped = malloc(strlen(node) + 1);
+    assert_non_null(at);
+    sprintf(swapped, "%.*sFromClip, Clip, Fade%s", (int)(at - node), node, at + strlen(call));
+    double normals, backwards = run_node(cow, CB_LAYOUT_QPOS, CB_PRECISION_U16, swapped, &normals, false);
+    printf("  the node with its clips swapped: error / tolerance %.0f\n", backwards);
+    assert_true(backwards > 10);
+    free(node), free(swapped);
 }
 
 int main(void)
