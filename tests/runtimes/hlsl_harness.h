@@ -185,7 +185,7 @@ static void cpu_matrices(const cb_palette *p, const sample *s, double t, double 
     for (size_t i = 0; i < (size_t)p->bone_count * 16; ++i) mats[i] = mats[i] * s->fade + from[i] * (1 - s->fade);
 }
 
-/* Skinned normals (normalized), as lib/core/vat.c skins them. */
+/* Skinned normals (normalized), as src/core/vat.c skins them. */
 static void cpu_normals(const cb_primitive *prim, const double *mats, double *out)
 {
     for (uint32_t v = 0; v < prim->vertex_count; ++v) {

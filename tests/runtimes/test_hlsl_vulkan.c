@@ -2,10 +2,10 @@
  * HLSL front end to SPIR-V (validated by spirv-val) and run as a compute shader on Mesa's lavapipe,
  * one invocation per (instance, vertex). For every layout x precision its skinned positions, normals
  * and previous-frame positions - through every skinning function, cross-faded or not - must equal
- * the C runtime's (lib/core/runtime.c, which verify compares with exact skinning) within test_gl's
+ * the C runtime's (src/core/runtime.c, which verify compares with exact skinning) within test_gl's
  * tolerance; the bone pass too; and the broken variants test_gl plants must fail the comparison. */
 #define _DEFAULT_SOURCE
-#include "../testutil.h"
+#include "testutil.h"
 
 #include "hlsl_harness.h"
 

@@ -9,7 +9,7 @@
  * World Position Offset + the position, and the normal, must equal the C runtime's for every
  * layout x precision; the previous frame's offset too. */
 #define _DEFAULT_SOURCE
-#include "../testutil.h"
+#include "testutil.h"
 
 #include <unistd.h>
 
