@@ -1,9 +1,10 @@
-// skin_check.mjs - runs runtimes/web/crowdbake_crowd.mjs in headless Chromium (WebGL2) on the cases that
-// tests/runtimes/test_web.c writes, and reads the skinned positions back with transform feedback.
+// skin_check.mjs - runs runtimes/web/crowdbake_crowd.mjs in headless Chromium (WebGL2) on the runtime
+// conformance cases (tests/runtimes/conformance.h writes them; tests/runtimes/test_web.c compares the
+// results with their expected positions), and reads the skinned positions back with transform feedback.
 //
 //   node tests/runtimes/browser/skin_check.mjs JOB_DIR
 //
-// JOB_DIR/jobs.json: { cases: [{ name, pal, mesh: { vertex_count, positions, joints, weights },
+// JOB_DIR/cases.json: { cases: [{ name, pal, mesh: { vertex_count, positions, joints, weights },
 // groups: [{ time, instances: [[16 floats], ...] }], transpose, glsl_break: { marker, line } | null,
 // bone_pass (Crowd's bonePass option), out }] } (file names relative to JOB_DIR). For each case, the palette is read with readPal, the
 // runtime draws every instance of each group at its time as points (one instanced draw), and
@@ -16,7 +17,7 @@ import path from 'node:path';
 import { withPage, REPO, RUNTIMES } from './driver.mjs';
 
 const dir = path.resolve(process.argv[2]);
-const jobs = JSON.parse(fs.readFileSync(path.join(dir, 'jobs.json'), 'utf8'));
+const jobs = JSON.parse(fs.readFileSync(path.join(dir, 'cases.json'), 'utf8'));
 
 const failures = await withPage({ '/': RUNTIMES, '/job/': dir }, '/__blank.html', async (page) => {
     for (const c of jobs.cases) {
