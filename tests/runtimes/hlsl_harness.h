@@ -29,7 +29,7 @@ static inline char *break_shader(const char *src, const char *marker, const char
 
 /* Compiles a compute shader (entry main) with glslangValidator's HLSL front end, include paths
  * `includes` (-I...), and validates the module with spirv-val; returns the SPIR-V words. */
-static uint32_t *compile_hlsl(const char *src, const char *name, const char *includes, size_t *bytes)
+static inline uint32_t *compile_hlsl(const char *src, const char *name, const char *includes, size_t *bytes)
 {
     char path[512], spv[512], cmd[4096], log[8192];
     mkdir(TEST_TMP, 0755);
@@ -50,7 +50,7 @@ typedef struct fixture {
 } fixture;
 
 /* Bakes the model's first skin, every clip, in place, as test_gl does; fitted rows when `fit`. */
-static void bake(const char *path, cb_layout l, cb_precision pr, bool fit, fixture *f)
+static inline void bake(const char *path, cb_layout l, cb_precision pr, bool fit, fixture *f)
 {
     f->model = load_or_fail(path);
     cb_error err = {0};
@@ -61,18 +61,18 @@ static void bake(const char *path, cb_layout l, cb_precision pr, bool fit, fixtu
     cb_sampler_free(s);
 }
 
-static void release(fixture *f)
+static inline void release(fixture *f)
 {
     cb_palette_free(&f->palette);
     cb_model_free(f->model);
 }
 
 /* test_gl's tolerance: 1e-5 of the model's height (at least 1e-5), for positions; 1e-5 for unit normals. */
-static double tolerance(const fixture *f) { return 1e-5 * fmax(1.0, f->palette.model_height); }
+static inline double tolerance(const fixture *f) { return 1e-5 * fmax(1.0, f->palette.model_height); }
 
 /* The palette's texels as a texture (u16: RGBA16UI, or RGBA16 UNORM with `unorm`), optionally with
  * every mat4 bone transposed (the reference runtime's shipped bug test_gl also plants). */
-static vkc_resource upload_palette(vkc_context *c, const cb_palette *p, bool unorm, bool transpose)
+static inline vkc_resource upload_palette(vkc_context *c, const cb_palette *p, bool unorm, bool transpose)
 {
     const void *data = p->texels;
     float *t = NULL;
@@ -93,7 +93,7 @@ static vkc_resource upload_palette(vkc_context *c, const cb_palette *p, bool uno
 }
 
 /* One texel per bone, two rows: the bind positions, then the position offsets (RGBA32F). */
-static vkc_resource upload_bind_positions(vkc_context *c, const cb_palette *p)
+static inline vkc_resource upload_bind_positions(vkc_context *c, const cb_palette *p)
 {
     float *rgba = calloc((size_t)p->bone_count * 8, sizeof(float));
     for (uint32_t j = 0; j < p->bone_count; ++j) {
@@ -114,7 +114,7 @@ typedef struct header_block {
     "float3 cb_bounds_min; float cb_row_texels; float3 cb_bounds_max; float cb_rows_per_block; float cb_linear_range; " \
     "uint cb_vertex_count; uint cb_sample_count;"
 
-static header_block header_of(const cb_palette *p, uint32_t vertex_count, uint32_t sample_count)
+static inline header_block header_of(const cb_palette *p, uint32_t vertex_count, uint32_t sample_count)
 {
     header_block h = {.row_texels = (float)p->row_texels, .rows_per_block = (float)p->height, .linear_range = p->linear_range,
                       .vertex_count = vertex_count, .sample_count = sample_count};
@@ -136,7 +136,7 @@ typedef struct gpu_sample {
 
 /* Instances of every clip at many times (test_gl's: mid-frames, the loop seam, random phases;
  * one before 0), each also cross-faded from another clip in the modes that fade; mode = index % 4. */
-static uint32_t make_samples(const cb_palette *p, sample *out, uint32_t cap)
+static inline uint32_t make_samples(const cb_palette *p, sample *out, uint32_t cap)
 {
     uint32_t n = 0;
     for (uint32_t c = 0; c < p->clip_count; ++c) {
@@ -162,7 +162,7 @@ static uint32_t make_samples(const cb_palette *p, sample *out, uint32_t cap)
     return n;
 }
 
-static gpu_sample *gpu_samples(const sample *s, uint32_t n, double row_offset)
+static inline gpu_sample *gpu_samples(const sample *s, uint32_t n, double row_offset)
 {
     gpu_sample *g = calloc(n, sizeof *g);
     for (uint32_t i = 0; i < n; ++i) {
@@ -177,7 +177,7 @@ static gpu_sample *gpu_samples(const sample *s, uint32_t n, double row_offset)
 
 /* The C runtime's bone matrices of a sample at time t: the two clips' matrices blended by the
  * fade, term by term (what blending the transforms in the shader is). */
-static void cpu_matrices(const cb_palette *p, const sample *s, double t, double *mats, double *from)
+static inline void cpu_matrices(const cb_palette *p, const sample *s, double t, double *mats, double *from)
 {
     cb_runtime_matrices(p, p->texels, &s->inst, t, mats);
     if (s->fade >= 1) return;
@@ -186,7 +186,7 @@ static void cpu_matrices(const cb_palette *p, const sample *s, double t, double 
 }
 
 /* Skinned normals (normalized), as src/core/vat.c skins them. */
-static void cpu_normals(const cb_primitive *prim, const double *mats, double *out)
+static inline void cpu_normals(const cb_primitive *prim, const double *mats, double *out)
 {
     for (uint32_t v = 0; v < prim->vertex_count; ++v) {
         double *o = out + (size_t)v * 3, len;
@@ -205,7 +205,7 @@ static void cpu_normals(const cb_primitive *prim, const double *mats, double *ou
 
 /* Largest |GPU - C runtime| of the positions (now and at time - dt) and of the normals; gpu holds
  * three float4 per (sample, vertex): position, normal, previous position. */
-static void compare(const cb_palette *p, const cb_primitive *prim, const sample *s, uint32_t n, const float *gpu,
+static inline void compare(const cb_palette *p, const cb_primitive *prim, const sample *s, uint32_t n, const float *gpu,
                     double *position_error, double *normal_error)
 {
     size_t verts = prim->vertex_count;
@@ -228,7 +228,7 @@ static void compare(const cb_palette *p, const cb_primitive *prim, const sample 
 }
 
 /* A primitive's vertices as the test shaders read them: position, normal, joints, weights (float4 each). */
-static vkc_resource upload_vertices(vkc_context *c, const cb_primitive *prim)
+static inline vkc_resource upload_vertices(vkc_context *c, const cb_primitive *prim)
 {
     size_t verts = prim->vertex_count;
     float *v = calloc(verts * 16, sizeof(float));
