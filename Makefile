@@ -24,7 +24,7 @@ SHELL := /bin/bash
 DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
-                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip
+                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip mono-mcs mono-runtime libmono-system-core4.0-cil
 PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
 BUILD   ?= build
