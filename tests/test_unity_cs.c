@@ -391,6 +391,27 @@ static void test_unity_facing_code_compiles(void **state)
     run_or_fail(cmd);
 }
 
+/* The shader glue (CrowdbakeUnity.hlsl, CrowdbakeShaderGraph.hlsl) over the shared HLSL runtime:
+ * glslang's HLSL front end compiles it to SPIR-V that spirv-val accepts, in all nine encodings. */
+static void test_shader_glue_compiles(void **state)
+{
+    (void)state;
+    FILE *runtime = fopen("runtimes/hlsl/crowdbake_palette.hlsl", "r");
+    if (!runtime) fail_msg("runtimes/hlsl/crowdbake_palette.hlsl is missing: the Unity shaders include the shared HLSL runtime");
+    fclose(runtime);
+    const char *layouts[] = {"MAT4", "AFFINE", "QPOS"}, *precisions[] = {"FLOAT", "HALF", "U16"};
+    char cmd[2048];
+    for (int l = 0; l < 3; ++l)
+        for (int p = 0; p < 3; ++p) {
+            snprintf(cmd, sizeof cmd,
+                     "mkdir -p %s && glslangValidator -D -V -S vert -e main -DCB_LAYOUT_%s -DCB_PRECISION_%s %s -o %s/glue.spv "
+                     "tests/runtimes/unity/unity_glue.hlsl 2>&1 && spirv-val %s/glue.spv 2>&1",
+                     TMP, layouts[l], precisions[p], p == 1 ? "-DCB_POSITIONS_RELATIVE" : "", TMP, TMP);
+            run_or_fail(cmd);
+        }
+    printf("  Unity shader glue: 9 encodings compile (glslang, HLSL) and validate (spirv-val)\n");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -399,6 +420,7 @@ int main(void)
         cmocka_unit_test(test_roster_equals_the_manifest),
         cmocka_unit_test(test_herd_equals_the_c_reader),
         cmocka_unit_test(test_unity_facing_code_compiles),
+        cmocka_unit_test(test_shader_glue_compiles),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

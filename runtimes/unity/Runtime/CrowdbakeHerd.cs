@@ -32,6 +32,7 @@ namespace Crowdbake
         Matrix4x4[] placement; // each instance in the herd's space
         Color[] tint;
         Material drawMaterial;
+        Texture2D skin;
         Batch[] batches;
         bool boundsDirty = true;
         float clockStart;
@@ -75,12 +76,14 @@ namespace Crowdbake
                 tint[i] = Color.white;
             }
             drawMaterial = palette.MaterialFor(material);
+            skin = SkinTexture(mesh);
             batches = new Batch[(state.Count + BatchSize - 1) / BatchSize];
             for (int b = 0; b < batches.Length; ++b) {
                 int n = Math.Min(BatchSize, state.Count - b * BatchSize);
                 batches[b] = new Batch { matrices = new Matrix4x4[n], inst = new Vector4[n], from = new Vector4[n], fade = new Vector4[n],
                                          tint = new Vector4[n], block = new MaterialPropertyBlock() };
                 palette.SetProperties(batches[b].block);
+                batches[b].block.SetTexture("cb_skin", skin);
             }
             clockStart = Time.time;
             return state;
@@ -200,10 +203,33 @@ namespace Crowdbake
             return all;
         }
 
+        // The mesh's joints and weights by vertex id, for Shader Graph (which has no node for them):
+        // vertex i's four joints at (i % width, 2 (i / width)), its four weights one row below.
+        static Texture2D SkinTexture(Mesh mesh)
+        {
+            BoneWeight[] bw = mesh.boneWeights;
+            int n = Math.Max(bw.Length, 1), width = Math.Min(n, 4096), rows = (n + width - 1) / width;
+            var texels = new float[width * rows * 8];
+            for (int v = 0; v < bw.Length; ++v) {
+                int j = ((v / width) * 2 * width + v % width) * 4, w = j + width * 4;
+                texels[j] = bw[v].boneIndex0; texels[j + 1] = bw[v].boneIndex1; texels[j + 2] = bw[v].boneIndex2; texels[j + 3] = bw[v].boneIndex3;
+                texels[w] = bw[v].weight0; texels[w + 1] = bw[v].weight1; texels[w + 2] = bw[v].weight2; texels[w + 3] = bw[v].weight3;
+            }
+            var t = new Texture2D(width, rows * 2, TextureFormat.RGBAFloat, false, true);
+            t.name = mesh.name + " skin";
+            t.filterMode = FilterMode.Point;
+            t.wrapMode = TextureWrapMode.Clamp;
+            t.SetPixelData(texels, 0);
+            t.Apply(false, true);
+            return t;
+        }
+
         void OnDisable()
         {
             if (drawMaterial != null) Destroy(drawMaterial);
+            if (skin != null) Destroy(skin);
             drawMaterial = null;
+            skin = null;
             state = null;
         }
     }

@@ -38,7 +38,22 @@ namespace UnityEngine
         public void SetPositionAndRotation(Vector3 position, Quaternion rotation) { }
     }
 
-    public sealed class Mesh : Object { }
+    public sealed class Mesh : Object
+    {
+        public BoneWeight[] boneWeights { get { return null; } set { } }
+    }
+
+    public struct BoneWeight
+    {
+        public int boneIndex0 { get; set; }
+        public int boneIndex1 { get; set; }
+        public int boneIndex2 { get; set; }
+        public int boneIndex3 { get; set; }
+        public float weight0 { get; set; }
+        public float weight1 { get; set; }
+        public float weight2 { get; set; }
+        public float weight3 { get; set; }
+    }
 
     public class Texture : Object
     {
