@@ -36,9 +36,26 @@ void Expected(const cbpal_file &pal, uint32_t c, int i, double start, double now
 }
 } // namespace
 
+// `reader_check skin FILE.cbskin`: every vertex's joints and weights as ReadSkin gives them, one line each.
+int Skin(const char *path)
+{
+    std::ifstream in(path, std::ios::binary);
+    std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    crowdbake::SkinContents skin;
+    std::string error;
+    if (!crowdbake::ReadSkin(bytes.data(), bytes.size(), path, skin, error)) return Fail(error.c_str());
+    for (uint32_t v = 0; v < skin.vertex_count; ++v) {
+        size_t j = ((size_t)(v / skin.width) * 2 * skin.width + v % skin.width) * 4, w = j + (size_t)skin.width * 4;
+        std::printf("%u %g %g %g %g %.9g %.9g %.9g %.9g\n", v, skin.texels[j], skin.texels[j + 1], skin.texels[j + 2], skin.texels[j + 3],
+                    skin.texels[w], skin.texels[w + 1], skin.texels[w + 2], skin.texels[w + 3]);
+    }
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
-    if (argc != 2) return Fail("usage: reader_check FILE.pal");
+    if (argc == 3 && std::strcmp(argv[1], "skin") == 0) return Skin(argv[2]);
+    if (argc != 2) return Fail("usage: reader_check FILE.pal | skin FILE.cbskin");
     std::ifstream in(argv[1], std::ios::binary);
     std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     crowdbake::PalContents pc;

@@ -68,6 +68,36 @@ bool ReadPal(const uint8_t *data, size_t size, const std::string &name, PalConte
     return true;
 }
 
+static uint32_t U32(const uint8_t *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
+
+bool ReadSkin(const uint8_t *data, size_t size, const std::string &name, SkinContents &out, std::string &error)
+{
+    const size_t header = 24;
+    if (size < header || std::memcmp(data, "CBSKIN\r\n", 8) != 0) {
+        error = name + ": not a crowdbake skin texture (wrong magic); write one with crowdbake mesh --skin-texture";
+        return false;
+    }
+    if (U32(data + 8) != 1) {
+        error = name + ": skin texture version " + std::to_string(U32(data + 8)) + " is not 1; update the plugin";
+        return false;
+    }
+    out = SkinContents();
+    out.vertex_count = U32(data + 12), out.width = U32(data + 16), out.height = U32(data + 20);
+    uint64_t texels = (uint64_t)out.width * out.height;
+    if (out.width == 0 || out.height % 2 || (uint64_t)out.vertex_count > texels / 2 ||
+        (uint64_t)out.vertex_count + out.width <= texels / 2 || texels * 16 != size - header) {
+        error = name + ": inconsistent skin texture (" + std::to_string(out.vertex_count) + " vertices in " + std::to_string(out.width) +
+                "x" + std::to_string(out.height) + ", " + std::to_string(size) + " bytes); write it again";
+        return false;
+    }
+    out.texels.resize((size_t)texels * 4);
+    for (size_t i = 0; i < out.texels.size(); ++i) {
+        uint32_t bits = U32(data + header + 4 * i);
+        std::memcpy(&out.texels[i], &bits, 4);
+    }
+    return true;
+}
+
 bool InstanceBoneMatrix(const uint8_t *data, size_t size, const float inst[4], double time, uint32_t bone, float out[16])
 {
     cbpal_file pal;

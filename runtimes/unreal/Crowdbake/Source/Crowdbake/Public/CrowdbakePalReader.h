@@ -41,6 +41,16 @@ struct PalContents {
 // naming `name`, the place and the fix (the C reader's message) on a bad file.
 bool ReadPal(const uint8_t *data, size_t size, const std::string &name, PalContents &out, std::string &error);
 
+// A skin texture (`crowdbake mesh --skin-texture FILE.cbskin`): vertex v's four joints at
+// (v % width, 2 (v / width)), its four weights one row below, RGBA32F.
+struct SkinContents {
+    uint32_t vertex_count = 0, width = 0, height = 0;
+    std::vector<float> texels; // width x height x 4
+};
+
+// Reads and checks a .cbskin file's bytes; false with a one-line error naming `name`.
+bool ReadSkin(const uint8_t *data, size_t size, const std::string &name, SkinContents &out, std::string &error);
+
 // The bone's skinning matrix (column-major, glTF space: bind space to the posed model) for an
 // instance's four numbers (first row, frame count: negative for a one-shot, rate, phase) at `time`:
 // the clip they point at, through cbpal_bone_matrix. False for a bone or clip that does not exist.
