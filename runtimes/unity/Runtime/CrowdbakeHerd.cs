@@ -1,7 +1,7 @@
 // CrowdbakeHerd.cs - a herd of N palette-skinned instances of one mesh, drawn with
 // Graphics.RenderMeshInstanced in batches of up to 1023, each instance's clip, rate, phase,
 // cross-fade and tint as per-instance shader data (the Crowdbake/Herd shaders). The state logic is
-// HerdState's (Runtime/Core, tested under mono): the herd of web/crowdbake_three.mjs, in Unity.
+// HerdState's (Runtime/Core, tested under mono): the herd of runtimes/web/crowdbake_three.mjs, in Unity.
 //
 //     herd.SetState(7, "flee", 0.3f);      // cross-fade into a roster state over 0.3 s
 //     herd.SetSpeed(7, 9.9f);              // locomotion plays at the speed, feet planted, no pop

@@ -1,5 +1,5 @@
 // CrowdbakeCheck.cs - prints what the Unity package's engine-free C# (runtimes/unity/Runtime/Core)
-// reads, for tests/test_unity_cs.c to hold against the C reader (formats/crowdbake_pal.h) and
+// reads, for tests/runtimes/test_unity_cs.c to hold against the C reader (include/crowdbake_pal.h) and
 // against Python's reading of roster.json. Numbers are printed round-trip ("R").
 //   mono CrowdbakeCheck.exe pal FILE.pal          header, clips, bones, bone matrices
 //   mono CrowdbakeCheck.exe bad FILE.pal          the reader's verdict: "ok" or its error line

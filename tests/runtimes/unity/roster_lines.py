@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """roster_lines.py ROSTER.json - the roster's types, clips, contacts, states and sockets, one line
 each, in the line format of CrowdbakeCheck.exe's `roster` mode: Python's json reads the manifest
-that the Unity package's C# reader must equal (tests/test_unity_cs.c)."""
+that the Unity package's C# reader must equal (tests/runtimes/test_unity_cs.c)."""
 import json
 import sys
 

@@ -1,7 +1,7 @@
 // unity_glue.hlsl - the Unity package's shader glue (CrowdbakeUnity.hlsl, CrowdbakeShaderGraph.hlsl)
 // as a vertex shader for glslang's HLSL front end, Unity's instancing macros stubbed as Unity's
 // UnityInstancing.hlsl defines them in spirit (an array per property, indexed by the instance):
-// tests/test_unity_cs.c compiles it for every layout x precision and validates the SPIR-V.
+// tests/runtimes/test_unity_cs.c compiles it for every layout x precision and validates the SPIR-V.
 #define UNITY_INSTANCING_ENABLED 1
 #define UNITY_INSTANCING_BUFFER_START(name) cbuffer UnityInstancing_##name {
 #define UNITY_DEFINE_INSTANCED_PROP(type, var) type var[128];

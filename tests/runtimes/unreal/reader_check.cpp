@@ -2,7 +2,7 @@
 // built with g++ outside Unreal, against the C reader read directly: the texels handed to the
 // texture are the file's payload byte for byte, the bind positions and clip table are the C
 // reader's, and a herd's custom data gives the C reader's bone matrices (mid-fade included) for
-// the states made from the clips. tests/test_unreal_reader.c runs it on Fox and Cow in every
+// the states made from the clips. tests/runtimes/test_unreal_reader.c runs it on Fox and Cow in every
 // layout x precision. Prints one summary line; exit status 1 with the first difference.
 #include <cmath>
 #include <cstdio>

@@ -1,7 +1,7 @@
 // HerdState.cs - what a herd of palette-skinned instances plays, without the engine: per instance
 // the four numbers the shader reads (first row, frame count, rate, phase), the four it cross-fades
 // from and the fade's start and length; states by name, speeds that keep feet planted, scale,
-// footsteps. The logic of web/crowdbake_three.mjs's CrowdbakeHerd, so a Unity herd and a three.js
+// footsteps. The logic of runtimes/web/crowdbake_three.mjs's CrowdbakeHerd, so a Unity herd and a three.js
 // herd given the same calls play the same frames. CrowdbakeHerd (the MonoBehaviour) uploads
 // Inst, From and Fade as per-instance shader data.
 using System;

@@ -1,5 +1,5 @@
 // PalBoneMatrix.cs - a bone's skinning matrix at a time, decoded and blended as the shipped shaders
-// blend two rows: the numbers of cbpal_bone_matrix (formats/crowdbake_pal.h), statement for
+// blend two rows: the numbers of cbpal_bone_matrix (include/crowdbake_pal.h), statement for
 // statement in the same float arithmetic, so C# and C agree to the last bit or within a rounding.
 using System;
 

@@ -1,7 +1,7 @@
 // PalFile.cs - reader for crowdbake .pal bone-matrix palettes (docs/pal-format.md), in plain C#
 // (no UnityEngine): the importer, the herd and the tests (under mono) share it. It makes the
-// checks of the C reader formats/crowdbake_pal.h, in the same order with the same verdicts, and
-// its BoneMatrix gives the numbers of cbpal_bone_matrix (tests/test_unity_cs.c holds them equal
+// checks of the C reader include/crowdbake_pal.h, in the same order with the same verdicts, and
+// its BoneMatrix gives the numbers of cbpal_bone_matrix (tests/runtimes/test_unity_cs.c holds them equal
 // on every layout x precision).
 //
 // zstd payloads (bake --zstd) are refused with the fix: .NET has no zstd decoder, and a Unity

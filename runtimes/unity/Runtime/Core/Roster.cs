@@ -1,5 +1,5 @@
 // Roster.cs - the roster manifest (roster.json, docs/roster.md) as C# objects, with the checks of
-// the JavaScript reader (web/crowdbake_pal.mjs readRoster): every field a game relies on is there,
+// the JavaScript reader (runtimes/web/crowdbake_pal.mjs readRoster): every field a game relies on is there,
 // of the right kind, and inside the palette (rows, bones); an error names the file and the field.
 using System;
 using System.Collections.Generic;

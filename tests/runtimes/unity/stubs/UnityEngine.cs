@@ -1,6 +1,6 @@
 // UnityEngine.cs - stubs of exactly the UnityEngine API the Crowdbake package calls, each member
 // declared as the Unity Scripting Reference (2022.3 / Unity 6) documents it, so that mcs type-checks
-// the package's Unity-facing code without the Editor (tests/test_unity_cs.c). Bodies do nothing:
+// the package's Unity-facing code without the Editor (tests/runtimes/test_unity_cs.c). Bodies do nothing:
 // nothing here runs.
 using System;
 

@@ -1,8 +1,8 @@
 // CrowdbakeHerdLogic.h - what a herd plays, in plain C++ (no Unreal types; tested with g++ in
-// tests/test_unreal_reader.c): per instance the ten custom-data floats Crowdbake.ush reads (the
+// tests/runtimes/test_unreal_reader.c): per instance the ten custom-data floats Crowdbake.ush reads (the
 // clip's four numbers, the four it cross-fades from, the fade's start and length), states by name,
 // speeds that keep feet planted without a pop, scale. The logic of the Unity package's HerdState and
-// web/crowdbake_three.mjs's CrowdbakeHerd. UCrowdbakeHerdComponent holds one.
+// runtimes/web/crowdbake_three.mjs's CrowdbakeHerd. UCrowdbakeHerdComponent holds one.
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,5 @@
 // CrowdbakePalReader.h - the reading part of the Unreal plugin's .pal import, in plain C++ (no
-// Unreal types), so it compiles and is tested outside Unreal (tests/test_unreal_reader.c builds it
+// Unreal types), so it compiles and is tested outside Unreal (tests/runtimes/test_unreal_reader.c builds it
 // with g++): the file is checked and read by the project's C reader, crowdbake_pal.h, and turned
 // into what the palette asset keeps: the texels for a texture of the right pixel format, the bind
 // positions, the clip table, the header numbers the material needs. The palette asset and the
