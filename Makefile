@@ -27,9 +27,11 @@ SHELL := /bin/bash
 DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
-                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip mono-mcs mono-runtime libmono-system-core4.0-cil
+                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip
 PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
+# The Unity package's C# runs under mono in the tests (tests/runtimes/test_unity_cs.c).
+DEB_PACKAGES += mono-mcs mono-runtime libmono-system-core4.0-cil
 BUILD   ?= build
 CC      ?= cc
 CXX     ?= c++
