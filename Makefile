@@ -32,6 +32,7 @@ PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa li
 
 # The Unity package's C# runs under mono in the tests (tests/runtimes/test_unity_cs.c).
 DEB_PACKAGES += mono-mcs mono-runtime libmono-system-core4.0-cil
+
 BUILD   ?= build
 CC      ?= cc
 CXX     ?= c++
