@@ -25,6 +25,10 @@ namespace Crowdbake
         public int count = 100;
         public float fadeSeconds = 0.25f;
         public ShadowCastingMode shadows = ShadowCastingMode.On;
+        // The palette is in the glTF's right-handed space; glTF importers (glTFast) bring the mesh into Unity's
+        // left-handed one by mirroring X. True: the shader and BoneMatrixAt mirror X around the palette, so
+        // the herd matches the mesh. False for a mesh kept in glTF space.
+        public bool meshMirroredX = true;
 
         const int BatchSize = 1023; // instanced property arrays hold up to 1023 per draw
         HerdState state;
@@ -123,8 +127,18 @@ namespace Crowdbake
             var m = new float[16];
             if (!Ready().BoneMatrixAt(i, bone, m))
                 throw new ArgumentOutOfRangeException("bone", "bone " + bone + " is not one of the palette's " + palette.Pal.Bones.Length + " bones");
+            return Mirrored(m);
+        }
+
+        // A column-major glTF-space matrix in the mesh's space: S M S with S the X mirror when the mesh is mirrored.
+        Matrix4x4 Mirrored(float[] m)
+        {
             var out4 = new Matrix4x4();
-            for (int k = 0; k < 16; ++k) out4[k % 4, k / 4] = m[k]; // column-major
+            for (int k = 0; k < 16; ++k) {
+                int row = k % 4, column = k / 4;
+                bool flip = meshMirroredX && (row == 0) != (column == 0);
+                out4[row, column] = flip ? -m[k] : m[k];
+            }
             return out4;
         }
 
@@ -139,8 +153,7 @@ namespace Crowdbake
         // Where a prop on `socket` of instance i is in the world: herd x placement x bone x socket.
         public Matrix4x4 SocketMatrixAt(int i, RosterSocket socket)
         {
-            var bind = new Matrix4x4();
-            for (int k = 0; k < 16; ++k) bind[k % 4, k / 4] = socket.bindTransform[k];
+            Matrix4x4 bind = Mirrored(socket.bindTransform);
             return transform.localToWorldMatrix * placement[i] * BoneMatrixAt(i, socket.bone) * bind;
         }
 
@@ -177,6 +190,7 @@ namespace Crowdbake
                 batch.block.SetVectorArray("_CbFade", batch.fade);
                 batch.block.SetVectorArray("_CbTint", batch.tint);
                 batch.block.SetFloat("_CbTime", now);
+                batch.block.SetFloat("_CbMirrorX", meshMirroredX ? -1 : 1);
                 var rp = new RenderParams(drawMaterial) { worldBounds = batch.bounds, matProps = batch.block, shadowCastingMode = shadows,
                                                           receiveShadows = true, layer = gameObject.layer };
                 Graphics.RenderMeshInstanced(rp, mesh, 0, batch.matrices, batch.matrices.Length);

@@ -16,6 +16,7 @@
 #include "CrowdbakePalette.hlsl"
 
 float _CbTime;
+float _CbMirrorX; // -1: the mesh came through a glTF importer that mirrors X (glTFast), the palette did not; 1: no mirror
 Texture2D<float4> cb_skin; // joints and weights by vertex id (Shader Graph): built from the mesh by CrowdbakeHerd
 
 UNITY_INSTANCING_BUFFER_START(Crowdbake)
@@ -40,7 +41,10 @@ void CrowdbakeSkin(float3 v, float3 n, int4 joints, float4 weights, out float3 p
     float4 inst = UNITY_ACCESS_INSTANCED_PROP(Crowdbake, _CbInst);
     float4 from = UNITY_ACCESS_INSTANCED_PROP(Crowdbake, _CbFrom);
     float fade = CrowdbakeFadeWeight(UNITY_ACCESS_INSTANCED_PROP(Crowdbake, _CbFade));
-    cb_skin_position_normal_crossfade(v, n, joints, weights, from, inst, fade, _CbTime, p, skinned_n);
+    float3 mirror = float3(_CbMirrorX < 0.0 ? -1.0 : 1.0, 1.0, 1.0); // into the palette's (glTF's) space and back
+    cb_skin_position_normal_crossfade(v * mirror, n * mirror, joints, weights, from, inst, fade, _CbTime, p, skinned_n);
+    p *= mirror;
+    skinned_n *= mirror;
 #else
     p = v;
     skinned_n = n;
