@@ -82,7 +82,7 @@ static void print_result(const mesh_args *a, const cb_mesh *m, const cb_mesh_err
         cb_json_bool(&j, "quantized", m->quantized);
         cb_json_int(&j, "batch", m->batch);
         if (m->batch > 1) cb_json_string(&j, "instance_id_attribute", CB_INSTANCE_ID_ATTRIBUTE);
-        if (m->vertex_id_uv) cb_json_int(&j, "vertex_id_texcoord", m->vertex_id_set);
+        if (a->vertex_id_uv) cb_json_int(&j, "vertex_id_texcoord", a->vertex_id_set);
         if (a->skin_texture) cb_json_string(&j, "skin_texture", a->skin_texture);
         cb_json_int(&j, "vertex_buffer_bytes", (long long)vb);
         cb_json_int(&j, "index_buffer_bytes", (long long)ib);
@@ -108,22 +108,21 @@ static void print_result(const mesh_args *a, const cb_mesh *m, const cb_mesh_err
     bool normals = false;
     for (uint32_t i = 0; i < m->part_count; ++i) normals |= m->parts[i].normals_i8 != NULL;
     if (normals) printf(", normals within %.2f deg", m->normal_error_deg);
-    if (m->vertex_id_uv) printf("; vertex ids in TEXCOORD_%u", m->vertex_id_set);
+    if (a->vertex_id_uv) printf("; vertex ids in TEXCOORD_%u", a->vertex_id_set);
     if (a->skin_texture) printf("; joints and weights by vertex id in %s", a->skin_texture);
     printf("\n");
 }
 
-/* --vertex-id-uv N: the channel, unless the model's own texture coordinates are there. */
-static cb_status vertex_id_channel(const mesh_args *a, cb_mesh *mesh, cb_error *err)
+/* Writes the .glb, with --vertex-id-uv N's channel unless the model's own texture coordinates are there. */
+static cb_status write_glb(const mesh_args *a, const cb_mesh *mesh, const cb_model *pm, int32_t ps, const cb_mesh_error *e,
+                           cb_error *err)
 {
-    if (!a->vertex_id_uv) return CB_OK;
+    if (!a->vertex_id_uv) return cb_gltf_mesh_write(a->output, mesh, pm, ps, e, err);
     for (uint32_t i = 0; i < mesh->part_count && a->vertex_id_set == 0; ++i)
         if (mesh->parts[i].texcoords)
             return cb_fail(err, CB_ERR_INPUT, "%s: TEXCOORD_0 holds the model's texture coordinates; put the vertex id in "
                            "another channel (--vertex-id-uv 1)", a->input);
-    mesh->vertex_id_uv = true;
-    mesh->vertex_id_set = a->vertex_id_set;
-    return CB_OK;
+    return cb_gltf_mesh_write_vertex_ids(a->output, mesh, pm, ps, e, a->vertex_id_set, err);
 }
 
 /* Loads the mesh's model and the palette's, the remap between their skins, and does the job. */
@@ -149,7 +148,7 @@ static int run(mesh_args *a, unsigned influences, unsigned batch, double fps, do
     cb_mesh_error e;
     double t0 = cli_seconds();
     if (!(s = cb_sampler_create(pm, ps, &err)) || cb_mesh_build_measured(s, mm, ms, &o, fps, max_quant, &mesh, &e, &err) ||
-        vertex_id_channel(a, &mesh, &err) || cb_gltf_mesh_write(a->output, &mesh, pm, ps, &e, &err) ||
+        write_glb(a, &mesh, pm, ps, &e, &err) ||
         (a->skin_texture && cli_write_skin_texture(a->skin_texture, &mesh, &err)))
         goto done;
     cli_verbose(&a->out, "built, measured and wrote %s in %.3f s", a->output, cli_seconds() - t0);

@@ -48,11 +48,6 @@ typedef struct cb_mesh {
     uint32_t weight_scale;    /* quantize: 255 (u8 weights) or 65535 (u16) */
     double normal_error_deg;  /* quantize: the largest angle between a normal and its i8 form */
     double texcoord_error;    /* quantize: the largest change of a texcoord (u16 steps) */
-    bool vertex_id_uv;        /* the .glb writer adds TEXCOORD_<vertex_id_set> = (vertex id, 0): each vertex's index
-                                 over all parts, exact in a float; engines that reorder vertices on import (Unreal's
-                                 static meshes) keep it. Channels below it the mesh lacks are written as zeros.
-                                 Set by the caller after cb_mesh_build. */
-    uint32_t vertex_id_set;
 } cb_mesh;
 
 /* The primitives of `skin` in `model` as a runtime mesh. Fails on a joint outside the skin or
