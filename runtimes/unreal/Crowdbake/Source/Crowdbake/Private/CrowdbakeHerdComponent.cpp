@@ -5,6 +5,7 @@
 
 #include "CrowdbakePalette.h"
 #include "Dom/JsonObject.h"
+#include "Engine/StaticMesh.h"
 #include "Engine/World.h"
 #include "Materials/MaterialInstanceDynamic.h"
 #include "Misc/FileHelper.h"
@@ -90,9 +91,9 @@ void UCrowdbakeHerdComponent::ApplyMaterial()
     Material->SetTextureParameterValue(TEXT("Palette"), Palette->PaletteTexture);
     Material->SetTextureParameterValue(TEXT("BindPositions"), Palette->BindPositionsTexture);
     Material->SetTextureParameterValue(TEXT("Skin"), Palette->SkinTexture);
-    Material->SetVectorParameterValue(TEXT("Header"), FLinearColor(Palette->RowTexels, Palette->RowsPerBlock, Palette->LinearRange, 0));
-    Material->SetVectorParameterValue(TEXT("BoundsMin"), FLinearColor(Palette->BoundsMin.X, Palette->BoundsMin.Y, Palette->BoundsMin.Z, 0));
-    Material->SetVectorParameterValue(TEXT("BoundsMax"), FLinearColor(Palette->BoundsMax.X, Palette->BoundsMax.Y, Palette->BoundsMax.Z, 0));
+    Material->SetVectorParameterValue(TEXT("Header"), FLinearColor((float)Palette->RowTexels, (float)Palette->RowsPerBlock, Palette->LinearRange, 0.f));
+    Material->SetVectorParameterValue(TEXT("BoundsMin"), FLinearColor(Palette->BoundsMin.X, Palette->BoundsMin.Y, Palette->BoundsMin.Z, 0.f));
+    Material->SetVectorParameterValue(TEXT("BoundsMax"), FLinearColor(Palette->BoundsMax.X, Palette->BoundsMax.Y, Palette->BoundsMax.Z, 0.f));
     SetMaterial(0, Material);
 }
 
