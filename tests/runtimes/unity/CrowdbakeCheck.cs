@@ -2,7 +2,7 @@
 // reads, for tests/runtimes/test_unity_cs.c to hold against the C reader (include/crowdbake_pal.h) and
 // against Python's reading of roster.json. Numbers are printed round-trip ("R").
 //   mono CrowdbakeCheck.exe pal FILE.pal          header, clips, bones, bone matrices
-//   mono CrowdbakeCheck.exe bad FILE.pal          the reader's verdict: "ok" or its error line
+//   mono CrowdbakeCheck.exe bad FILE.pal          the reader's verdicts, checksum verified and not: "ok" or the error
 //   mono CrowdbakeCheck.exe roster roster.json    the manifest's types, clips, contacts, states, sockets
 //   mono CrowdbakeCheck.exe herd FILE.pal roster.json TYPE   a herd's matrices, cross-fades, speeds, footsteps
 using System;
@@ -60,14 +60,16 @@ static class CrowdbakeCheck
             }
     }
 
+    // The verdict with the checksum verified, then without (the checks of the tables alone).
     static void Bad(string path)
     {
-        try {
-            PalFile.Read(File.ReadAllBytes(path), "x.pal", true);
-            Line("ok");
-        } catch (PalException e) {
-            Line(e.Message);
-        }
+        foreach (bool verify in new[] { true, false })
+            try {
+                PalFile.Read(File.ReadAllBytes(path), "x.pal", verify);
+                Line("ok");
+            } catch (PalException e) {
+                Line(e.Message);
+            }
     }
 
     static void RosterLines(string path)
