@@ -31,6 +31,9 @@ DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdrac
                 glslang-tools spirv-tools mesa-vulkan-drivers libvulkan-dev
 PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
+# The Unity package's C# runs under mono in the tests (tests/runtimes/test_unity_cs.c).
+DEB_PACKAGES += mono-mcs mono-runtime libmono-system-core4.0-cil
+
 BUILD   ?= build
 CC      ?= cc
 CXX     ?= c++
@@ -97,7 +100,7 @@ SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod
 
 .PHONY: all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs \
         test-lib test-cli test-runtimes test-install test-fuzz readme bake-hashes bench \
-        bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web godot-addon
+        bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web godot-addon unity-package
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
 SONAME    := libcrowdbake.so.$(API_MAJOR)
@@ -218,6 +221,20 @@ $(GODOT_ADDON_ZIP): $(GODOT_ADDON_FILES:%=runtimes/godot/%)
 	cd runtimes/godot && cp --parents $(GODOT_ADDON_FILES) $(abspath $(BUILD))/godot-addon/
 	find $(BUILD)/godot-addon -type f -exec chmod 644 {} + && find $(BUILD)/godot-addon -exec touch -d '1980-01-01 00:00:00 UTC' {} +
 	cd $(BUILD)/godot-addon && find addons -type f | LC_ALL=C sort | TZ=UTC zip -X -q $(abspath $@) -@
+
+# ---- the Unity package as a tarball (Package Manager: Add package from tarball) ------------------
+# runtimes/unity under package/, with the shared HLSL runtime in place of the shim that reaches it in
+# the checkout (Runtime/Shaders/CrowdbakePalette.hlsl), so the tarball stands alone. Byte for byte the
+# same on every build: sorted names, one date, owner 0, mode 644, gzip without a name or time.
+UNITY_PACKAGE_TGZ := $(BUILD)/com.crowdbake.palette.tgz
+UNITY_PACKAGE_FILES := $(shell find runtimes/unity -type f | LC_ALL=C sort)
+unity-package: $(UNITY_PACKAGE_TGZ)
+$(UNITY_PACKAGE_TGZ): $(UNITY_PACKAGE_FILES) runtimes/hlsl/crowdbake_palette.hlsl
+	rm -rf $(BUILD)/unity-package $@ && mkdir -p $(BUILD)/unity-package
+	cp -R runtimes/unity $(BUILD)/unity-package/package
+	cp runtimes/hlsl/crowdbake_palette.hlsl $(BUILD)/unity-package/package/Runtime/Shaders/CrowdbakePalette.hlsl
+	find $(BUILD)/unity-package -type f -exec chmod 644 {} + && find $(BUILD)/unity-package -exec touch -d '1980-01-01 00:00:00 UTC' {} +
+	cd $(BUILD)/unity-package && LC_ALL=C tar --sort=name --owner=0 --group=0 --numeric-owner -cf - package | gzip -n -9 > $(abspath $@)
 
 # What the installed `crowdbake view` serves: it looks for BIN/../share/crowdbake (so DATADIR is
 # PREFIX/share for it to be found; else CROWDBAKE_WEB=DIR), laid out as viewer/ (cli/viewer), web/
