@@ -31,7 +31,20 @@ typedef struct clip_facts {
 typedef struct socket_list {
     uint32_t count;
     cb_socket *items;
+    char helpers[512]; /* the nodes left out as rig helpers, each after a space */
 } socket_list;
+
+/* The nodes under a joint that are rig helpers (cb_socket_is_rig_helper), named after a space each. */
+static void list_rig_helpers(cb_sampler *s, const cb_model *m, char *out, size_t size)
+{
+    size_t n = 0;
+    out[0] = '\0';
+    for (uint32_t i = 0; i < m->node_count && n < size; ++i)
+        if (cb_socket_is_rig_helper(s, (int32_t)i)) {
+            int w = snprintf(out + n, size - n, " %s", m->nodes[i].name);
+            n += w > 0 ? (size_t)w : 0;
+        }
+}
 
 static const char *interp_names[] = {"LINEAR", "STEP", "CUBICSPLINE"};
 
@@ -50,7 +63,7 @@ static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits
 {
     cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, err) : NULL;
     if (skin >= 0 && !s) return err->status;
-    if (s) sockets->count = cb_find_sockets(s, &sockets->items);
+    if (s) sockets->count = cb_find_sockets(s, &sockets->items), list_rig_helpers(s, m, sockets->helpers, sizeof sockets->helpers);
     for (uint32_t a = 0; a < m->animation_count; ++a) {
         const cb_animation *anim = &m->animations[a];
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
@@ -89,8 +102,9 @@ static void print_contacts(int w, const cb_stride *st)
     printf("\n");
 }
 
-static void print_sockets(const cb_model *m, int skin, const socket_list *sockets)
+static void print_sockets(const cb_model *m, int skin, const socket_list *sockets, const char *helpers)
 {
+    if (helpers[0]) printf("  not sockets (rig helpers: their joint moves no vertex and is named as a control):%s\n", helpers);
     for (uint32_t i = 0; i < sockets->count; ++i) {
         const cb_socket *k = &sockets->items[i];
         const double *b = k->bind_transform;
@@ -318,7 +332,7 @@ int cmd_info(int argc, char **argv)
     socket_list sockets = {0};
     if (!err.status) gather_clips(m, skin, fps, &limits, facts, &sockets, &err);
     if (!err.status && json) print_json(m, skin, facts, &sockets, fps);
-    if (!err.status && !json) print_text(m, skin, facts, fps), print_sockets(m, skin, &sockets);
+    if (!err.status && !json) print_text(m, skin, facts, fps), print_sockets(m, skin, &sockets, sockets.helpers);
     if (!err.status && !json && !out.quiet) { /* what a bake would leave out (-q: not said) */
         cb_warnings warnings = {0};
         cb_model_warnings(m, true, &warnings);
