@@ -67,7 +67,9 @@ const char cmd_bake_usage[] =
     "                             errs most)\n"
     "  --max-texture-size N       never emit a dimension above N (default 16384); rows wrap into\n"
     "                             side-by-side column blocks\n"
-    "  --root-motion keep|in-place  in-place removes the root's average horizontal travel\n"
+    "  --root-motion keep|in-place|loops-in-place  in-place removes the root's average horizontal\n"
+    "                             travel (the clip records it as a velocity), loops-in-place from the\n"
+    "                             loops only; default: keep, or loops-in-place when a loop travels\n"
     "  --skin NAME|INDEX          the skin to bake when the file has several\n"
     "  --clip A,B                 only these clips, in this order (default: every clip; a clip that\n"
     "                             cannot be sampled, e.g. one without keys, is skipped with a warning\n"
@@ -139,7 +141,7 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
         s->max_texture_size = max;
     }
     if (a->root_motion && !cb_root_motion_parse(a->root_motion, &s->root_motion))
-        return cli_usage_error("bake", "--root-motion is keep or in-place");
+        return cli_usage_error("bake", "--root-motion is keep, in-place or loops-in-place");
     if (a->root_motion) s->from.root_motion = CB_FROM_COMMAND_LINE;
     if (a->format && !(s->formats = cb_formats_parse(a->format)))
         return cli_usage_error("bake", "--format is pal, exr or pal,exr (any comma-separated set of pal, exr, ktx2 and babylon), "
@@ -445,7 +447,7 @@ int cmd_bake(int argc, char **argv)
         {"-o", "FILE", &a.output, NULL},           {"--output", "FILE", &a.output, NULL},
         {"--format", "pal,exr", &a.format, NULL},  {"--fps", "N", &a.fps, NULL},
         {"--layout", "LAYOUT", &a.layout, NULL},   {"--precision", "PRECISION", &a.precision, NULL},
-        {"--max-texture-size", "N", &a.max_size, NULL}, {"--root-motion", "keep|in-place", &a.root_motion, NULL},
+        {"--max-texture-size", "N", &a.max_size, NULL}, {"--root-motion", "keep|in-place|loops-in-place", &a.root_motion, NULL},
         {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "M_PER_S", &a.speed_ref, NULL},
         {"--exr-compression", "NAME", &a.exr_compression, NULL}, {"--zstd", NULL, NULL, &a.zstd},
         {"--json", NULL, NULL, &a.json},

@@ -25,7 +25,29 @@ typedef struct clip_facts {
     cb_clip_info info;
     cb_ground_speed speed;
     cb_sync_decision sync; /* as a state of this clip alone would play */
+    bool in_place;         /* a bare bake takes its root travel out (cb_bake_job_plan's decision) */
+    char root_motion[256]; /* why, for a clip whose root travels; else empty */
 } clip_facts;
+
+/* What a bare bake does with each clip's root travel, and why (cb_bake_job_plan decides it the
+ * same way): with a loop that travels, the loops go in place and the one-shots keep theirs. */
+static void decide_root_motion(clip_facts *facts, uint32_t n, double height)
+{
+    bool loop_travels = false;
+    for (uint32_t a = 0; a < n; ++a) loop_travels |= facts[a].analyzed && facts[a].info.loops && cb_clip_travels(&facts[a].info, height);
+    for (uint32_t a = 0; a < n; ++a) {
+        const cb_clip_info *c = &facts[a].info;
+        facts[a].in_place = loop_travels && facts[a].analyzed && c->loops;
+        if (!facts[a].analyzed || !cb_clip_travels(c, height)) continue;
+        if (c->loops)
+            snprintf(facts[a].root_motion, sizeof facts[a].root_motion, "in place: it loops and travels %.3g units a loop, "
+                     "which its wrap would pull back at any rate; its velocity (%.3g units/s) is recorded for the game to "
+                     "move the instance (--root-motion keep keeps the travel)", c->ground_speed * c->duration, c->ground_speed);
+        else
+            snprintf(facts[a].root_motion, sizeof facts[a].root_motion, "kept: a one-shot keeps its travel (%.3g units), ending "
+                     "where it moved (--root-motion in-place takes it out)", c->ground_speed * c->duration);
+    }
+}
 
 /* Where props attach: the baked skin's sockets (socket.h). */
 typedef struct socket_list {
@@ -77,6 +99,8 @@ static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits
             cb_decide_sync(NULL, anim->name, facts[a].info.loops, &facts[a].speed, false, &facts[a].sync);
         }
     }
+    double lo[3], hi[3];
+    if (s) decide_root_motion(facts, m->animation_count, cb_skin_rest_bounds(s, lo, hi));
     cb_sampler_free(s);
     return err->status;
 }
@@ -198,6 +222,7 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
             printf("  %-*s %s: %s; ground speed %.4g from %s (root %.4g, planted feet %.4g)\n", w, "",
                    f->info.loops ? "loops" : "plays once", why, f->speed.speed, f->speed.method, f->speed.root, f->speed.feet);
             printf("  %-*s %s: %s\n", w, "", f->sync.speed ? "follows the speed" : "own rate", f->sync.reason);
+            if (f->root_motion[0]) printf("  %-*s root motion %s\n", w, "", f->root_motion);
             if (f->speed.stride.stride) print_slide(w, &f->speed.stride), print_contacts(w, &f->speed.stride);
         } else
             printf("  %-*s %8.4f %9.4f %6llu  %-18s %-8s %7u  -\n", w, anim->name, anim->t0, anim->t1 - anim->t0,
@@ -280,6 +305,8 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, con
             cb_json_string(&j, "speed_method", f->speed.method);
             cb_json_string(&j, "sync", f->sync.speed ? "speed" : "time");
             cb_json_string(&j, "sync_reason", f->sync.reason);
+            cb_json_string(&j, "root_motion", f->in_place ? "in-place" : "keep");
+            if (f->root_motion[0]) cb_json_string(&j, "root_motion_reason", f->root_motion);
             cb_roster_json_stride(&j, &f->speed.stride);
         }
         cb_json_end(&j);
