@@ -1,0 +1,164 @@
+/* test_sockets_contacts.c - what a game hangs on an animated instance, against Cow's independent
+ * reference joint matrices (../shared/reference/Cow.fps30.csv) and the model file's own nodes:
+ * sockets (`sockets`), whose origin placed by the .pal reader (cbpal_bone_matrix x bind_transform)
+ * is where the node's parent joint carries it, and the rig helpers (IK pole targets) that are not
+ * sockets. The footstep contacts are test_feet's. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <math.h>
+
+#include "crowdbake_pal.h"
+
+#define TMP TEST_TMP "/sockets_contacts"
+enum { MAX_FRAMES = 128 };
+
+/* The joint's reference matrix at each frame of a clip (times from the clip's start). */
+static uint32_t reference_matrices(const char *csv, const char *clip, uint32_t joint, double *t, double (*mats)[16])
+{
+    FILE *f = fopen(csv, "r");
+    assert_non_null(f);
+    char line[4096], quoted[160];
+    snprintf(quoted, sizeof quoted, ",\"%.140s\",", clip);
+    uint32_t n = 0;
+    double t0 = 0;
+    while (fgets(line, sizeof line, f)) {
+        char *at = strstr(line, quoted);
+        if (line[0] == '#' || !at) continue;
+        unsigned frame, frames, skin, j;
+        double time, m[16];
+        if (sscanf(at + strlen(quoted), "%u,%u,%lf,%u,%u,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &frame,
+                   &frames, &time, &skin, &j, &m[0], &m[1], &m[2], &m[3], &m[4], &m[5], &m[6], &m[7], &m[8], &m[9], &m[10], &m[11],
+                   &m[12], &m[13], &m[14], &m[15]) != 21 || j != joint || frame >= MAX_FRAMES)
+            continue;
+        if (frame == 0) t0 = time;
+        t[frame] = time - t0;
+        memcpy(mats[frame], m, sizeof m);
+        if (frame + 1 > n) n = frame + 1;
+    }
+    fclose(f);
+    return n;
+}
+
+/* The point whose image under the affine matrix a (column-major) is q: the joint's bind position
+ * for q = 0 and a its inverse bind matrix. */
+static void solve_affine(const double *a, const double q[3], double out[3])
+{
+    double c[9] = {a[5] * a[10] - a[9] * a[6], a[9] * a[2] - a[1] * a[10], a[1] * a[6] - a[5] * a[2],
+                   a[8] * a[6] - a[4] * a[10], a[0] * a[10] - a[8] * a[2], a[4] * a[2] - a[0] * a[6],
+                   a[4] * a[9] - a[8] * a[5], a[8] * a[1] - a[0] * a[9], a[0] * a[5] - a[4] * a[1]};
+    double det = a[0] * c[0] + a[4] * c[1] + a[8] * c[2];
+    for (int r = 0; r < 3; ++r) /* inverse row r = c[r], c[3 + r], c[6 + r] (column-major cofactor layout) */
+        out[r] = (c[r] * (q[0] - a[12]) + c[3 + r] * (q[1] - a[13]) + c[6 + r] * (q[2] - a[14])) / det;
+}
+
+/* Cow's sockets as `crowdbake info --json` gives them: name, bone and the bind-space origin. */
+typedef struct socket_row {
+    char name[64];
+    uint32_t bone;
+    double origin[3];
+} socket_row;
+
+static uint32_t info_sockets(const char *cow, socket_row *out, uint32_t cap)
+{
+    char cmd[4096], log[4096];
+    snprintf(cmd, sizeof cmd,
+             "%s info %s --json | python3 -c \"import json, sys\n"
+             "for k in json.load(sys.stdin)['sockets']: print(k['name'], k['bone'], *k['bind_transform'][12:15])\" > %s/sockets.txt",
+             crowdbake_exe(), cow, TMP);
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s: %s", cmd, log);
+    FILE *f = fopen(TMP "/sockets.txt", "r");
+    assert_non_null(f);
+    uint32_t n = 0;
+    while (n < cap && fscanf(f, "%63s %u %lf %lf %lf", out[n].name, &out[n].bone, &out[n].origin[0], &out[n].origin[1],
+                             &out[n].origin[2]) == 5)
+        ++n;
+    fclose(f);
+    return n;
+}
+
+static void test_sockets_follow_their_joints(void **state)
+{
+    (void)state;
+    char cow[1024], csv[1024], cmd[4096], log[4096], err[256];
+    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
+    shared_path(csv, sizeof csv, "reference/Cow.fps30.csv");
+    snprintf(cmd, sizeof cmd, "mkdir -p %s && %s bake %s -o %s/cow.pal -q --fps 30 --max-error 1000 2>&1", TMP, crowdbake_exe(),
+             cow, TMP);
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s: %s", cmd, log);
+    cbpal_file pal;
+    if (cbpal_open(TMP "/cow.pal", 0, &pal, err, sizeof err)) fail_msg("%s", err);
+    cb_model *m = load_or_fail(cow);
+    socket_row sockets[32];
+    uint32_t n = info_sockets(cow, sockets, 32);
+    assert_int_equal(n, 10); /* Head_end, the legs' and the tail's tips; not the 4 pole targets */
+    /* At the rows the encoding's error is all there is: the bake's max_error, with room for a tip off the mesh. */
+    double worst = 0, bound = 2 * pal.header.max_error + 1e-4 * pal.header.model_height;
+    uint32_t clips_compared = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        /* The reference: the node's own translation under its parent joint, J(t) IBM^-1 T. */
+        const cb_node *node = NULL;
+        for (uint32_t k = 0; k < m->node_count && !node; ++k)
+            if (strcmp(m->nodes[k].name, sockets[i].name) == 0) node = &m->nodes[k];
+        assert_non_null(node);
+        assert_int_equal(node->parent, m->skins[0].joints[sockets[i].bone]);
+        double local[3];
+        solve_affine(m->skins[0].inverse_bind + (size_t)sockets[i].bone * 16, node->translation, local);
+        for (uint32_t c = 0; c < pal.header.clip_count; ++c) {
+            cbpal_clip clip;
+            cbpal_get_clip(&pal, c, &clip);
+            double t[MAX_FRAMES], mats[MAX_FRAMES][16];
+            uint32_t frames = reference_matrices(csv, clip.name, sockets[i].bone, t, mats), at_rows = 0;
+            for (uint32_t f = 0; f < frames; ++f) {
+                /* The reference's frames that are rows (a loop given a wrap interval, or baked at 29.76 fps, has its
+                 * frames between rows, in the blend). */
+                if (fabs(t[f] * clip.fps - round(t[f] * clip.fps)) > 1e-3) continue;
+                ++at_rows;
+                float b[16];
+                assert_int_equal(cbpal_bone_matrix(&pal, c, t[f], sockets[i].bone, b), 0);
+                const double *o = sockets[i].origin, *r = mats[f];
+                double d2 = 0;
+                for (int k = 0; k < 3; ++k) {
+                    double ours = b[12 + k] + b[k] * o[0] + b[4 + k] * o[1] + b[8 + k] * o[2];
+                    double ref = r[12 + k] + r[k] * local[0] + r[4 + k] * local[1] + r[8 + k] * local[2];
+                    d2 += (ours - ref) * (ours - ref);
+                }
+                worst = fmax(worst, sqrt(d2));
+            }
+            clips_compared += i == 0 && at_rows >= frames / 2;
+        }
+    }
+    printf("  10 sockets, the reference frames at rows of %u clips: worst %.3g (%.3g mm/m), bound %.3g\n", clips_compared, worst,
+           1000 * worst / pal.header.model_height, bound);
+    assert_true(clips_compared >= 8);
+    assert_true(worst <= bound);
+    cb_model_free(m);
+    cbpal_close(&pal);
+}
+
+/* An IK pole target's tip (PoleTarget.L_end) is where a solver aims a knee, not a place for a prop:
+ * Husky's 4 are left out of the sockets, and info says why. */
+static void test_pole_targets_are_not_sockets(void **state)
+{
+    (void)state;
+    char husky[1024], cmd[4096], log[8192];
+    shared_path(husky, sizeof husky, "assets/quaternius-husky/Husky.glb");
+    snprintf(cmd, sizeof cmd, "mkdir -p %s", TMP);
+    assert_int_equal(run_command(cmd, log, sizeof log), 0);
+    socket_row sockets[32];
+    uint32_t n = info_sockets(husky, sockets, 32);
+    for (uint32_t i = 0; i < n; ++i) assert_null(strstr(sockets[i].name, "PoleTarget"));
+    assert_int_equal(n, 12); /* head, ears, 4 lower legs, tail, 4 feet */
+    snprintf(cmd, sizeof cmd, "%s info %s | grep 'not sockets'", crowdbake_exe(), husky);
+    assert_int_equal(run_command(cmd, log, sizeof log), 0);
+    assert_non_null(strstr(log, "PoleTargetBack.L_end PoleTarget.L_end PoleTargetBack.R_end PoleTarget.R_end"));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_sockets_follow_their_joints),
+        cmocka_unit_test(test_pole_targets_are_not_sockets),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
