@@ -222,11 +222,18 @@ static void test_inspect_in_place_velocity(void **state)
     assert_contains(out, "(0, 0, 4), speed 4");
     const char *table = strstr(out, "idle"); /* no float noise (-9.797e-18) as velocities */
     assert_true(strstr(table, "e-0") == NULL && strstr(table, "e-1") == NULL && strstr(table, "e-2") == NULL);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/qk.pal -q", q), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/qk.pal --root-motion keep -q", q), 0);
     assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/qk.pal"), 0);
     assert_contains(out, "walk");
     assert_contains(out, "in the rows");
     assert_true(strstr(out, "(0, 0, 0)") == NULL); /* a kept walk does not claim to stand still */
+    /* A bare bake: its loops travel, so they go in place; the one-shot (death) keeps its travel. */
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/qd.pal -q", q), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/qd.pal"), 0);
+    assert_contains(out, "(0, 0, 1.2), speed 1.2");
+    const char *death = strstr(out, "death");
+    assert_non_null(death);
+    assert_non_null(strstr(death, "in the rows"));
 }
 
 /* Clip names as exporters write them ("AnimalArmature|Attack_Headbutt", 30 characters) keep
