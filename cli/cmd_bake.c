@@ -92,6 +92,7 @@ typedef struct bake_args {
         *one_shots, *syncs, *default_state;
     bool zstd, json, quiet, force, depfile_manifest, fit, measure_all, over_budget;
     cli_output out;
+    char speed_why[192]; /* why the speed reference is what it is, when crowdbake measured it */
 } bake_args;
 
 static double now_seconds(void)
@@ -410,6 +411,8 @@ static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bak
     cb_warnings warnings = {0};
     cb_model_warnings(job->model, a->clips == NULL, &warnings);
     for (uint32_t i = 0; i < r->notes.count; ++i) cb_warn(&warnings, r->notes.items[i].kind, "%s", r->notes.items[i].message);
+    if (a->speed_why[0] && job->speed_reference > 0)
+        cb_warn(&warnings, "note", "speed reference %.4g units/s recorded: %s", job->speed_reference, a->speed_why);
     report_over_budget(job, r, &warnings);
     double seconds = now_seconds() - t0;
     for (uint32_t i = 0; i < r->output_count; ++i)
@@ -507,6 +510,8 @@ int cmd_bake(int argc, char **argv)
     if (job.skin >= 0 && !cli_select_clips(m, a.clips, a.excluded, &selection, &job.clip_count, &err) &&
         !cli_override_loops(m, a.loops, a.one_shots, &selection, &job.clip_count, &err)) {
         job.clips = selection;
+        if (!a.speed_ref)
+            job.speed_reference = cli_speed_reference(m, job.skin, selection, job.clip_count, a.speed_why, sizeof a.speed_why);
         cb_bake_job_run(&job, &result, &err);
     }
     if (!err.status) report_bake(&a, &job, &result, t0, load);
