@@ -225,6 +225,8 @@ static uint32_t agree_on_heading(cb_stride *st, double (*means)[2], foot_verdict
 
 static void explain(cb_stride *st, const cb_clip_info *clip, const foot_verdict *verdicts, uint32_t striding)
 {
+    /* The ranges quoted: of the striding feet where the clip strides (a foot left out, shuffling
+     * on the spot, is not among those stepping back together), else of every foot that steps. */
     double smin = INFINITY, smax = 0, vmin = INFINITY, vmax = 0;
     uint32_t count[FOOT_DISAGREES + 1] = {0}, stepping = 0;
     for (uint32_t k = 0; k < st->foot_count; ++k) {
@@ -232,6 +234,7 @@ static void explain(cb_stride *st, const cb_clip_info *clip, const foot_verdict 
         count[verdicts[k]]++;
         if (verdicts[k] == FOOT_STILL) continue;
         ++stepping;
+        if (striding >= 2 && !f->strides) continue;
         smin = fmin(smin, f->stance), smax = fmax(smax, f->stance);
         vmin = fmin(vmin, f->step_speed), vmax = fmax(vmax, f->step_speed);
     }

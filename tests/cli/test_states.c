@@ -306,6 +306,33 @@ static void test_cow_walk_feet_disagree(void **state)
     cb_catalog_free(&cat);
 }
 
+/* An attack made a loop (Attack_Kick, whose feet step back as it rears) is no stride: no contacts,
+ * no ground speed from its feet (issue 45). And a stride's reason quotes the striding feet's
+ * ranges, the numbers in its foot_slide (a shuffling foot left out is not among them). */
+static void test_attack_kick_is_no_stride(void **state)
+{
+    (void)state;
+    cb_catalog cat;
+    cb_roster r;
+    bake_or_fail(cow_catalog("kick", "clips = [{ source = \"AnimalArmature|Attack_Kick\", loop = true }, \"AnimalArmature|Walk\"]\n"
+                                     "states = { attack = [\"kick\"], wander = [\"walk\"] }\n"),
+                 &cat, &r);
+    const cb_roster_type *t = &r.types[0];
+    const cb_stride *kick = &t->clips[0].speed.stride, *walk = &t->clips[1].speed.stride;
+    printf("  Attack_Kick (a loop): %s\n  Walk: %s\n", kick->why, walk->why);
+    assert_true(t->clips[0].loops && !kick->stride);
+    assert_non_null(strstr(kick->why, "the clip's name says 'attack'"));
+    for (uint32_t k = 0; k < kick->foot_count; ++k) assert_int_equal(kick->feet[k].stance_count, 0); /* no contacts */
+    double lo = INFINITY, hi = 0;
+    for (uint32_t k = 0; k < walk->foot_count; ++k)
+        if (walk->feet[k].strides) lo = fmin(lo, walk->feet[k].step_speed), hi = fmax(hi, walk->feet[k].step_speed);
+    char range[64];
+    snprintf(range, sizeof range, "at %.3g-%.3g units/s", lo, hi);
+    assert_non_null(strstr(walk->why, range));
+    cb_roster_free(&r);
+    cb_catalog_free(&cat);
+}
+
 /* ---- info and report say it ---- */
 
 static void test_info_and_report_say_why(void **state)
@@ -341,6 +368,7 @@ int main(void)
         cmocka_unit_test(test_sync_from_words_then_feet),
         cmocka_unit_test(test_sync_overrides),
         cmocka_unit_test(test_cow_walk_feet_disagree),
+        cmocka_unit_test(test_attack_kick_is_no_stride),
         cmocka_unit_test(test_info_and_report_say_why),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
