@@ -411,7 +411,7 @@ static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bak
     cb_warnings warnings = {0};
     cb_model_warnings(job->model, a->clips == NULL, &warnings);
     for (uint32_t i = 0; i < r->notes.count; ++i) cb_warn(&warnings, r->notes.items[i].kind, "%s", r->notes.items[i].message);
-    if (a->speed_why[0] && job->speed_reference > 0)
+    if (a->speed_why[0] && job->speed_reference > 0 && !a->json) /* --json: its own fields */
         cb_warn(&warnings, "note", "speed reference %.4g units/s recorded: %s", job->speed_reference, a->speed_why);
     report_over_budget(job, r, &warnings);
     double seconds = now_seconds() - t0;
@@ -424,6 +424,8 @@ static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bak
         cb_json_init(&j, stdout);
         cb_json_object(&j, NULL);
         cb_json_string(&j, "model", a->model);
+        cb_json_number(&j, "speed_reference", job->speed_reference);
+        cb_json_string(&j, "speed_reference_from", a->speed_ref ? "the command line" : a->speed_why);
         cb_json_array(&j, "outputs");
         for (uint32_t i = 0; i < r->output_count; ++i) json_output(&j, &r->outputs[i], seconds, load);
         cb_json_end(&j);
