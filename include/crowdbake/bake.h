@@ -71,6 +71,9 @@ enum {
  * textures up to 16384 texels a side, root motion kept, no compression; out_dir NULL. */
 CROWDBAKE_API cb_bake_settings cb_default_bake_settings(void);
 
+/* Whether a clip's root travels: over the clip, more than 1% of the model's height (10 mm/m, a
+ * third of a typical bake's visible blending error); less is root jitter of an in-place clip. */
+CROWDBAKE_API bool cb_clip_travels(const cb_clip_info *clip, double model_height);
 /* 0 < fps <= CB_FPS_LIMIT; CB_MAX_FPS_LOWEST <= max_fps <= CB_FPS_LIMIT. */
 CROWDBAKE_API bool cb_fps_valid(double fps);
 CROWDBAKE_API bool cb_max_fps_valid(double max_fps);

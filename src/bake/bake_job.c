@@ -39,6 +39,12 @@ cb_bake_settings cb_default_bake_settings(void)
     return s;
 }
 
+bool cb_clip_travels(const cb_clip_info *clip, double model_height)
+{
+    double travel = clip->ground_speed * clip->duration;
+    return travel > 0 && travel > 0.01 * model_height;
+}
+
 unsigned cb_formats_parse(const char *text)
 {
     if (strcmp(text, "both") == 0) return CB_FORMAT_PAL | CB_FORMAT_EXR;
@@ -198,6 +204,30 @@ void cb_bake_job_init(cb_bake_job *job)
     job->limits = cb_default_limits();
 }
 
+/* Root motion decided like the rest: a bake nobody told what to do with root travel keeps it,
+ * unless a loop travels: its wrap would pull the body back at any rate, and what a crowd wants
+ * is the loop in place with its velocity recorded, the game moving the instance. Then the loops
+ * go in place and the one-shots keep their travel (a fall ends where it falls); bake_notes says
+ * so, and --root-motion (or the catalog's root_motion) overrides. */
+static void decide_root_motion(cb_bake_job *job)
+{
+    if (job->settings.from.root_motion != CB_FROM_DEFAULT || job->settings.root_motion != CB_ROOT_MOTION_KEEP) return;
+    cb_error e = {0};
+    cb_sampler *s = cb_sampler_create(job->model, job->skin, &e);
+    if (!s) return; /* the bake reports it */
+    double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
+    bool travels = false;
+    for (uint32_t i = 0; i < job->plan_count && !travels; ++i) {
+        cb_clip_info info;
+        cb_error ce = {0};
+        double fps = cb_clip_plan_fps(&job->plan[i], job->settings.fps);
+        if (!cb_clip_analyze(s, job->plan[i].animation, fps, job->plan[i].loop, &job->limits, &info, &ce))
+            travels = info.loops && cb_clip_travels(&info, height);
+    }
+    cb_sampler_free(s);
+    if (travels) job->settings.root_motion = CB_ROOT_MOTION_LOOPS_IN_PLACE, job->settings.from.root_motion = CB_FROM_TRAVEL;
+}
+
 cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
 {
     /* The one size there is so far; a later MINOR that adds fields also takes this size and
@@ -223,6 +253,7 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
     bool any = false;
     for (uint32_t i = 0; i < n; ++i) job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false};
     job->plan_count = n;
+    decide_root_motion(job);
     resolve_clips(job);
     for (uint32_t i = 0; i < n; ++i) any |= clip_goal(job, i, &goals[i]);
     if (any) {
@@ -244,15 +275,21 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
  * root jitter of an in-place clip, not travel worth a note. */
 static bool loop_travel_visible(const cb_palette *p, const cb_palette_clip *clip)
 {
-    double travel = clip->ground_speed * clip->duration;
-    return clip->loops && travel > 0 && travel > 0.01 * p->model_height;
+    cb_clip_info info = {.duration = clip->duration, .loops = clip->loops, .ground_speed = clip->ground_speed};
+    return clip->loops && cb_clip_travels(&info, p->model_height);
 }
 
 /* What the user should know about a bake: the layout's fallback, loops that travel, quaternion
  * flips. */
-static void bake_notes(const cb_bake_options *o, const cb_palette *p, cb_warnings *w)
+static void bake_notes(const cb_bake_options *o, cb_setting_from from, const cb_palette *p, cb_warnings *w)
 {
     if (p->fallback_note[0]) cb_warn(w, "note", "%s", p->fallback_note);
+    for (uint32_t c = 0; from == CB_FROM_TRAVEL && c < p->clip_count; ++c)
+        if (loop_travel_visible(p, &p->clips[c]))
+            cb_warn(w, "note", "clip '%s' loops and travels %.3g units/s, which its wrap would pull back at any rate: the "
+                    "loops are baked in place with their velocity recorded (the game moves the instance), the one-shots "
+                    "keep their travel (root_motion loops-in-place; --root-motion keep keeps it)", p->clips[c].name,
+                    p->clips[c].ground_speed);
     for (uint32_t c = 0; o->root_motion == CB_ROOT_MOTION_KEEP && c < p->clip_count; ++c) {
         if (loop_travel_visible(p, &p->clips[c]))
             cb_warn(w, "note", "clip '%s' loops and travels %.3g units/s: blending its last row into its first pulls the "
@@ -403,7 +440,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
             out->output_count = 0; /* nothing written */
             break;
         }
-        if (out->output_count == 1) bake_notes(&opt, &shared, &out->notes);
+        if (out->output_count == 1) bake_notes(&opt, job->settings.from.root_motion, &shared, &out->notes);
         write_output(job, &shared, &mapping, o, err);
     }
     cb_pal_mapping_abort(&mapping); /* a bake that failed: its temporary */

@@ -10,7 +10,8 @@
 #include "crowdbake/ktx2.h"
 #include "internal/plumbing.h"
 
-static bool in_place(const cb_bake_job *job) { return job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE; }
+/* Root motion taken out of some rows (in place, or loops in place): the files say so. */
+static bool in_place(const cb_bake_job *job) { return job->settings.root_motion != CB_ROOT_MOTION_KEEP; }
 
 static cb_status write_pal(const cb_bake_job *job, const cb_palette *p, cb_pal_mapping *mapping,
                            const cb_bake_output *out, cb_error *err)

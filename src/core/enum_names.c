@@ -9,7 +9,7 @@
 
 static const char *const layout_names[] = {"mat4", "affine", "qpos"};
 static const char *const precision_names[] = {"float", "half", "u16"};
-static const char *const root_motion_names[] = {"keep", "in-place"};
+static const char *const root_motion_names[] = {"keep", "in-place", "loops-in-place"}; /* cb_root_motion's order */
 
 /* The index of `text` among `count` names, or -1. */
 static int name_index(const char *text, const char *const *names, int count)
@@ -21,7 +21,7 @@ static int name_index(const char *text, const char *const *names, int count)
 
 const char *cb_layout_name(cb_layout l) { return (unsigned)l < 3 ? layout_names[l] : "?"; }
 const char *cb_precision_name(cb_precision p) { return (unsigned)p < 3 ? precision_names[p] : "?"; }
-const char *cb_root_motion_name(cb_root_motion r) { return root_motion_names[r == CB_ROOT_MOTION_IN_PLACE]; }
+const char *cb_root_motion_name(cb_root_motion r) { return (unsigned)r < 3 ? root_motion_names[r] : "keep"; }
 
 bool cb_layout_parse(const char *text, cb_layout *out)
 {
@@ -37,10 +37,8 @@ bool cb_precision_parse(const char *text, cb_precision *out)
 
 bool cb_root_motion_parse(const char *text, cb_root_motion *out)
 {
-    int i = name_index(text, root_motion_names, 2);
-    if (i < 0) return false;
-    *out = i ? CB_ROOT_MOTION_IN_PLACE : CB_ROOT_MOTION_KEEP;
-    return true;
+    int i = name_index(text, root_motion_names, 3);
+    return i >= 0 && (*out = (cb_root_motion)i, true);
 }
 
 const char *cb_setting_from_name(cb_setting_from from)
@@ -51,6 +49,7 @@ const char *cb_setting_from_name(cb_setting_from from)
     case CB_FROM_COMMAND_LINE: return "command line";
     case CB_FROM_CLIP: return "catalog clip";
     case CB_FROM_RIG: return "rig: no skinned mesh";
+    case CB_FROM_TRAVEL: return "a loop travels";
     default: return "default";
     }
 }

@@ -50,7 +50,7 @@ void cb_loop_reason_text(const cb_clip_info *clip, char *out, size_t size);
 bool cb_layout_parse(const char *text, cb_layout *out);
 bool cb_precision_parse(const char *text, cb_precision *out);
 bool cb_exr_compression_parse(const char *text, int *out);
-/* "keep" or "in-place". */
+/* "keep", "in-place" or "loops-in-place". */
 bool cb_root_motion_parse(const char *text, cb_root_motion *out);
 
 #ifdef __cplusplus
