@@ -24,7 +24,7 @@ SHELL := /bin/bash
 DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
-                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip
+                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip bazel-bootstrap
 PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
 BUILD   ?= build
@@ -87,7 +87,7 @@ TOOL_A  := $(BUILD)/libcrowdbake_tool.a
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs readme bake-hashes bench \
+.PHONY: bundle bench-scale all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs readme bake-hashes bench \
         bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web godot-addon
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
@@ -167,6 +167,20 @@ $(BUILD)/$(SONAME): $(LIB_OBJ) lib/libcrowdbake.map
 
 $(BUILD)/crowdbake: $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a
 	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a $(CLI_LIBS)
+
+# ---- the bundle: crowdbake for a machine without the -dev packages ---------------------
+# A remote executor (docs/bazel.md) has libc and nothing else: build/bundle holds the command,
+# linked again with its library folder as run path ($ORIGIN/../lib, DT_RPATH so the libraries'
+# own dependencies are found there too), and every shared library it needs but libc's own.
+BUNDLE := $(BUILD)/bundle
+bundle: $(BUNDLE)/.done
+$(BUNDLE)/bin/crowdbake: $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a
+	@mkdir -p $(@D)
+	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a $(CLI_LIBS) \
+	  -Wl,--disable-new-dtags -Wl,-rpath,'$$ORIGIN/../lib'
+$(BUNDLE)/.done: $(BUNDLE)/bin/crowdbake tests/tools/bundle.sh
+	sh tests/tools/bundle.sh $(BUNDLE)
+	@touch $@
 
 # ---- install --------------------------------------------------------------------------
 PREFIX     ?= /usr/local
@@ -344,6 +358,11 @@ $(BUILD)/tests/bench_gl_images.run: all $(BUILD)/bench_gl | $(RESULTS)/pending
 	  $(BUILD)/samples/$$m.glb --check || exit 1; done)
 $(BUILD)/tests/web_reader.run: all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test web/test/)
+# The Bazel rules (bazel/, docs/bazel.md) against the make build, the disk and HTTP caches and
+# an incremental rebuild; Debian's bazel-bootstrap, offline. The normal build only.
+TEST_RUNS += $(if $(SAN),,$(BUILD)/tests/bazel_rules.run)
+$(BUILD)/tests/bazel_rules.run: all $(BUNDLE)/.done | $(RESULTS)/pending
+	$(call record_run,bazel_rules,python3 tests/tools/bazel_rules.py --build $(BUILD) --shared $(SHARED))
 test-runs: $(TEST_RUNS)
 replay: $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
 readme: all
@@ -432,6 +451,11 @@ $(BUILD)/bench_gl: bench/bench_gl.c $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/lib
 
 bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(NODE_DEPS)
 	python3 bench/run.py
+
+# A 1,000-type roster: Bazel's actions against make -j, one action's memory, the merge, an
+# incremental rebuild (slow: minutes; bench/RESULTS.txt keeps a run's numbers).
+bench-scale: all $(BUNDLE)/.done
+	python3 bench/scale.py --build $(BUILD) --shared $(SHARED)
 
 bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke

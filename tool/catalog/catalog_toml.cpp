@@ -427,11 +427,38 @@ struct Parser {
         }
     }
 
+    /* A resolved path as seen from the catalog's folder: what the catalog says, whatever folder
+     * the catalog was named from, so the input hash holds no absolute path (the same bytes in
+     * every checkout and build sandbox). A path written absolute stays absolute. */
+    std::string from_catalog(const std::string &path) const
+    {
+        std::string dir = cat->dir;
+        if (!path.empty() && path[0] == '/' && dir[0] != '/') return path;
+        auto split = [](const std::string &p) {
+            std::vector<std::string> parts;
+            for (size_t start = 0; start <= p.size();) {
+                size_t end = p.find('/', start);
+                if (end == std::string::npos) end = p.size();
+                std::string part = p.substr(start, end - start);
+                if (!part.empty() && part != ".") parts.push_back(part);
+                start = end + 1;
+            }
+            return parts;
+        };
+        std::vector<std::string> d = split(dir), f = split(path);
+        size_t common = 0;
+        while (common < d.size() && common < f.size() && d[common] == f[common]) ++common;
+        std::string out;
+        for (size_t i = common; i < d.size(); ++i) out += "../";
+        for (size_t i = common; i < f.size(); ++i) out += f[i] + (i + 1 < f.size() ? "/" : "");
+        return out;
+    }
+
     void canonical(cb_catalog_animal *an)
     {
         char buf[256];
-        std::string c = std::string("model=") + an->model;
-        for (uint32_t i = 0; i < an->lod_count; ++i) c += std::string(" lod=") + an->lods[i];
+        std::string c = std::string("model=") + from_catalog(an->model);
+        for (uint32_t i = 0; i < an->lod_count; ++i) c += std::string(" lod=") + from_catalog(an->lods[i]);
         for (uint32_t i = 0; i < an->clip_count; ++i) {
             std::snprintf(buf, sizeof buf, " loop=%d fps=%.17g/%d/%.17g", an->clips[i].loop, an->clips[i].fps,
                           an->clips[i].fps_auto, an->clips[i].max_error_mm);

@@ -493,43 +493,21 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     /* Types are the unit of parallel work; fewer types than threads spread their clips too. */
     run.threads_per_bake = cat->animal_count && opt->jobs > cat->animal_count ? opt->jobs / cat->animal_count : 1;
     run_pass(&run, prepare_type, order);
-    /* Equal keys share: the first type (by name) owns the palette. */
-    for (uint32_t i = 0; i < r->type_count; ++i) {
-        cb_roster_type *t = &r->types[i];
-        if (t->error.status) continue;
-        for (uint32_t k = 0; k < i; ++k)
-            if (!r->types[k].error.status && r->types[k].owner == k && r->types[k].key == t->key) {
-                t->owner = k;
-                t->outcome = CB_TYPE_SHARED;
-                break;
-            }
-    }
+    roster_assign_owners(r);
     run_pass(&run, bake_type, order);
     for (uint32_t i = 0; i < r->type_count; ++i) {
         cb_roster_type *t = &r->types[i];
         if (t->owner == i || t->error.status) continue;
-        const cb_roster_type *o = &r->types[t->owner];
-        if (o->outcome == CB_TYPE_FAILED) {
-            t->outcome = CB_TYPE_FAILED;
-            cb_fail(&t->error, o->error.status, "its palette is %s's, which failed", o->animal->name);
-            r->failed++;
-        } else {
-            memcpy(t->pal_path, o->pal_path, sizeof t->pal_path);
-            memcpy(t->exr_path, o->exr_path, sizeof t->exr_path);
-            memcpy(t->babylon_path, o->babylon_path, sizeof t->babylon_path);
-            t->layout = o->layout, t->precision = o->precision, t->palette_bytes = o->palette_bytes;
-            t->width = o->width, t->height = o->height, t->blocks = o->blocks, t->max_error = o->max_error;
-            t->visible_error = o->visible_error;
-            write_record(&run, i);
-            r->shared++;
-        }
+        if (roster_settle_shared(r, i)) write_record(&run, i);
         log_type(&run, t);
     }
     if (opt->log && opt->tty) fputs("\r\033[K", opt->log);
-    if (opt->manifest) snprintf(r->manifest_path, sizeof r->manifest_path, "%s", opt->manifest);
+    if (opt->fragment) snprintf(r->manifest_path, sizeof r->manifest_path, "%s", opt->fragment->path);
+    else if (opt->manifest) snprintf(r->manifest_path, sizeof r->manifest_path, "%s", opt->manifest);
     else snprintf(r->manifest_path, sizeof r->manifest_path, "%s/roster.json", cat->defaults.out_dir);
     cb_status rc = roster_make_parent_directories(r->manifest_path, err);
-    if (!rc) rc = roster_write_manifest(cat, r, r->manifest_path, err);
+    if (!rc && opt->fragment) rc = roster_write_fragment(r, opt->fragment, err);
+    else if (!rc) rc = roster_write_manifest(cat, r, r->manifest_path, err);
     if (!rc && opt->depfile && !(rc = roster_make_parent_directories(opt->depfile, err))) rc = roster_write_depfile(cat, r, opt->depfile, opt->depfile_manifest_only, err);
     if (!rc) roster_settle_times(r);
     for (uint32_t i = 0; i < r->type_count && !rc; ++i)

@@ -301,13 +301,13 @@ static void read_inputs_and_warnings(reader *r, cb_roster_type *t)
     }
 }
 
-static bool decode(const unsigned char *data, size_t size, const cb_catalog_animal *an, const cb_limits *limits,
-                   cb_roster_type *t)
+bool cb_prep_record_decode(const unsigned char *data, size_t size, const cb_catalog_animal *an, cb_roster_type *t,
+                           uint64_t *key)
 {
     reader r = {data, data + size, false};
     char head[8];
     get(&r, head, sizeof head);
-    uint64_t key = get_u64(&r), length = get_u64(&r), hash = get_u64(&r);
+    uint64_t record_key = get_u64(&r), length = get_u64(&r), hash = get_u64(&r);
     if (r.failed || memcmp(head, magic, sizeof magic) != 0 || length != (uint64_t)(r.end - r.p) ||
         cbpal_xxh64(r.p, length) != hash)
         return false;
@@ -320,9 +320,16 @@ static bool decode(const unsigned char *data, size_t size, const cb_catalog_anim
     read_states_and_lods(&r, an, t);
     read_sockets(&r, t);
     read_inputs_and_warnings(&r, t);
-    if (r.failed || r.p != r.end || t->input_count == 0) return false;
-    uint64_t now;
-    return cb_prep_key(an, limits, t->inputs, t->input_count, &now) && now == key;
+    *key = record_key;
+    return !r.failed && r.p == r.end && t->input_count > 0;
+}
+
+static bool decode(const unsigned char *data, size_t size, const cb_catalog_animal *an, const cb_limits *limits,
+                   cb_roster_type *t)
+{
+    uint64_t key, now;
+    return cb_prep_record_decode(data, size, an, t, &key) && cb_prep_key(an, limits, t->inputs, t->input_count, &now) &&
+           now == key;
 }
 
 bool cb_prep_record_load(const char *path, const cb_catalog_animal *an, const cb_limits *limits, cb_roster_type *t)
