@@ -16,9 +16,12 @@ ldd "$bundle/bin/crowdbake" | awk '$2 == "=>" && $3 ~ /^\// { print $1, $3 }' | 
     esac
 done
 # Anything left resolved outside the bundle, apart from glibc, is a mistake worth stopping for.
+libdir=$(cd "$lib" && pwd -P)
 outside=$(env -u LD_LIBRARY_PATH ldd "$bundle/bin/crowdbake" | awk '$2 == "=>" { print $1, $3 }' |
-          grep -v "^\(ld-linux\|libc\.so\|libm\.so\|libpthread\.so\|libdl\.so\|librt\.so\)" | grep -v " $lib/" |
-          grep -v " $(cd "$lib" && pwd)/" || true)
+          grep -v "^\(ld-linux\|libc\.so\|libm\.so\|libpthread\.so\|libdl\.so\|librt\.so\)" |
+          while read -r name path; do
+              case $(realpath "$path" 2>/dev/null) in "$libdir"/*) ;; *) echo "$name => $path" ;; esac
+          done)
 if [ -n "$outside" ]; then
     echo "bundle.sh: these libraries resolve outside $lib: $outside" >&2
     exit 1

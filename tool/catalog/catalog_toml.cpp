@@ -21,6 +21,9 @@ struct Parser {
     cb_catalog *cat;
     cb_error *err;
     std::string file;
+    const char *files_of = nullptr; /* whose files must exist: NULL every animal's (cb_catalog_load_checking) */
+
+    bool checks_files(const std::string &name) const { return !files_of || name == files_of; }
 
     /* status: CB_ERR_IO where a file the catalog names cannot be read, as for a model on the command line. */
     [[noreturn]] void fail(const toml::source_region &where, const std::string &what, cb_status status = CB_ERR_INPUT)
@@ -365,7 +368,7 @@ struct Parser {
         if (!model) fail(key.source(), where + " needs model = \"path/to/model.glb\" (relative to the catalog)");
         std::string path = resolve(str(*model, where + " model"));
         struct stat st;
-        if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+        if (checks_files(name) && (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)))
             fail(model->source(), where + " model file " + path + " does not exist (paths are relative to the catalog)",
                  CB_ERR_IO);
         an->model = dup(path);
@@ -378,7 +381,7 @@ struct Parser {
             an->lod_pos = alloc<cb_source_pos>(a.size());
             for (size_t i = 0; i < a.size(); ++i) {
                 std::string lp = resolve(str(*a.get(i), where + " lod"));
-                if (stat(lp.c_str(), &st) != 0)
+                if (checks_files(name) && stat(lp.c_str(), &st) != 0)
                     fail(a.get(i)->source(), where + " LOD file " + lp + " does not exist", CB_ERR_IO);
                 an->lods[i] = dup(lp);
                 an->lod_pos[i] = pos(*a.get(i));
@@ -525,7 +528,7 @@ struct Parser {
     }
 };
 
-cb_status parse(const char *text, size_t size, const char *path, cb_catalog *out, cb_error *err)
+cb_status parse(const char *text, size_t size, const char *path, const char *files_of, cb_catalog *out, cb_error *err)
 {
     std::memset(out, 0, sizeof *out);
     unsigned line, column;
@@ -535,6 +538,7 @@ cb_status parse(const char *text, size_t size, const char *path, cb_catalog *out
     out->arena = cb_arena_create();
     if (!out->arena) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     Parser p{out, err, path};
+    p.files_of = files_of;
     try {
         out->path = p.dup(path);
         std::string dir = path;
@@ -560,10 +564,15 @@ cb_status parse(const char *text, size_t size, const char *path, cb_catalog *out
 
 extern "C" cb_status cb_catalog_parse(const char *text, size_t size, const char *path, cb_catalog *out, cb_error *err)
 {
-    return parse(text, size, path, out, err);
+    return parse(text, size, path, NULL, out, err);
 }
 
 extern "C" cb_status cb_catalog_load(const char *path, cb_catalog *out, cb_error *err)
+{
+    return cb_catalog_load_checking(path, NULL, out, err);
+}
+
+extern "C" cb_status cb_catalog_load_checking(const char *path, const char *files_of, cb_catalog *out, cb_error *err)
 {
     std::memset(out, 0, sizeof *out);
     FILE *f = std::fopen(path, "rb");
@@ -579,5 +588,5 @@ extern "C" cb_status cb_catalog_load(const char *path, cb_catalog *out, cb_error
         }
     }
     std::fclose(f);
-    return parse(text.data(), text.size(), path, out, err);
+    return parse(text.data(), text.size(), path, files_of, out, err);
 }

@@ -67,7 +67,7 @@ int cmd_bake_catalog(const cli_catalog_bake *o)
     bool quiet = o->quiet, json = o->json;
     cb_error err = {0};
     cb_catalog cat;
-    if (cb_catalog_load(path, &cat, &err)) return cli_report(&err);
+    if (cb_catalog_load_checking(path, o->type, &cat, &err)) return cli_report(&err);
     if (cb_catalog_override_bake(&cat, o->overrides, o->override_fields, &err) ||
         cb_catalog_override_states(&cat, o->syncs, o->default_state, &err)) {
         cb_catalog_free(&cat);

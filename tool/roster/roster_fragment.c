@@ -186,7 +186,7 @@ static cb_status load_catalog(const fragment *frags, uint32_t count, cb_catalog 
             return cb_fail(err, CB_ERR_INPUT, "%s: baked from %s, %s from %s (or with other --sync or --default-state): "
                            "merge the fragments of one catalog baked with the same options", frags[i].path,
                            frags[i].catalog, frags[0].path, frags[0].catalog);
-    if (cb_catalog_load(frags[0].catalog, cat, err)) return err->status;
+    if (cb_catalog_load_checking(frags[0].catalog, "", cat, err)) return err->status; /* reads no model */
     const char *syncs = frags[0].syncs[0] ? frags[0].syncs : NULL;
     const char *state = frags[0].default_state[0] ? frags[0].default_state : NULL;
     if (cb_catalog_override_states(cat, syncs, state, err)) return cb_catalog_free(cat), err->status;
