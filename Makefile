@@ -87,7 +87,7 @@ TOOL_A  := $(BUILD)/libcrowdbake_tool.a
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: bundle bench-scale all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs readme bake-hashes bench \
+.PHONY: generic bundle bench-scale all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs readme bake-hashes bench \
         bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web godot-addon
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
@@ -167,6 +167,18 @@ $(BUILD)/$(SONAME): $(LIB_OBJ) lib/libcrowdbake.map
 
 $(BUILD)/crowdbake: $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a
 	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a $(CLI_LIBS)
+
+# ---- generic: crowdbake without its AVX2 clones ----------------------------------------
+# The files with CB_TARGET_CLONES compiled again with CB_GENERIC_ONLY (the x86-64 baseline
+# alone); everything else is the normal build's. tests/tools/hermetic.py compares its bytes.
+CLONE_SRC   := $(shell grep -l CB_TARGET_CLONES lib/core/*.c)
+GENERIC_OBJ := $(CLONE_SRC:%.c=$(BUILD)/generic/obj/%.o)
+$(BUILD)/generic/obj/%.o: %.c $(DEPS_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -fvisibility=hidden -DCB_GENERIC_ONLY $(PKG_CFLAGS) -MMD -MP -c $< -o $@
+$(BUILD)/generic/crowdbake: $(CLI_OBJ) $(TOOL_A) $(GENERIC_OBJ) $(filter-out $(CLONE_SRC:%.c=$(BUILD)/obj/%.o),$(LIB_OBJ))
+	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(GENERIC_OBJ) $(filter-out $(CLONE_SRC:%.c=$(BUILD)/obj/%.o),$(LIB_OBJ)) $(CLI_LIBS)
+generic: $(BUILD)/generic/crowdbake
 
 # ---- the bundle: crowdbake for a machine without the -dev packages ---------------------
 # A remote executor (docs/bazel.md) has libc and nothing else: build/bundle holds the command,
@@ -363,6 +375,13 @@ $(BUILD)/tests/web_reader.run: all $(NODE_DEPS) | $(RESULTS)/pending
 TEST_RUNS += $(if $(SAN),,$(BUILD)/tests/bazel_rules.run)
 $(BUILD)/tests/bazel_rules.run: all $(BUNDLE)/.done | $(RESULTS)/pending
 	$(call record_run,bazel_rules,python3 tests/tools/bazel_rules.py --build $(BUILD) --shared $(SHARED))
+# Same bytes whatever the path, user, umask, TZ, LANG, threads and CPU path (make generic).
+TEST_RUNS += $(if $(SAN),,$(BUILD)/tests/hermetic.run $(BUILD)/tests/bundle_root.run)
+$(BUILD)/tests/hermetic.run: all $(BUILD)/generic/crowdbake | $(RESULTS)/pending
+	$(call record_run,hermetic,python3 tests/tools/hermetic.py --build $(BUILD) --shared $(SHARED))
+# make bundle's crowdbake in a root with only glibc.
+$(BUILD)/tests/bundle_root.run: all $(BUNDLE)/.done | $(RESULTS)/pending
+	$(call record_run,bundle_root,python3 tests/tools/bundle_root.py --build $(BUILD) --shared $(SHARED))
 test-runs: $(TEST_RUNS)
 replay: $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
 readme: all
@@ -474,4 +493,4 @@ check-asan:
 clean:
 	rm -rf build
 
--include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)
+-include $(shell find $(BUILD)/obj $(BUILD)/generic/obj -name '*.d' 2>/dev/null)

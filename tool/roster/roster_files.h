@@ -21,6 +21,21 @@ void roster_warn_foot_slide(cb_roster_type *t);
 /* The content key of a type's rig, planned clips and settings (roster_key.c). */
 uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan *plan, uint32_t n, const cb_bake_settings *b);
 
+/* The catalog's models, each loaded once when a type first needs it and shared read-only by
+ * every type naming it (roster_models.c). */
+#include <threads.h>
+struct roster_model;
+typedef struct roster_models {
+    struct roster_model *items;
+    uint32_t count;
+    const cb_limits *limits;
+} roster_models;
+bool roster_models_init(roster_models *ms, const cb_catalog *cat, const cb_limits *limits); /* false: no memory */
+/* The model at `path` (one of the catalog's), loading it if no type has; NULL with *err (the
+ * load's error, the same for every type) when it cannot be loaded. Thread-safe. */
+const cb_model *roster_model_get(roster_models *ms, const char *path, cb_error *err);
+void roster_models_free(roster_models *ms);
+
 /* Owners of shared palettes (roster_share.c): among types with equal content keys, the first
  * by name owns the palette, the others' owner is set to it and their outcome to shared. */
 void roster_assign_owners(cb_roster *r);
