@@ -501,11 +501,12 @@ $(BUILD)/bench_gl: bench/bench_gl.c $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/lib
 
 bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(NODE_DEPS)
 	python3 bench/run.py
+	python3 bench/scale.py --build $(BUILD) --shared $(SHARED) --no-bazel
 
 # A 1,000-type roster: Bazel's actions against make -j, one action's memory, the merge, an
 # incremental rebuild (slow: minutes; bench/RESULTS.txt keeps a run's numbers).
 bench-scale: all $(BUNDLE)/.done
-	python3 bench/scale.py --build $(BUILD) --shared $(SHARED)
+	python3 bench/scale.py --build $(BUILD) --shared $(SHARED) --counts 10,100 --bazel-types 1000
 
 bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
