@@ -145,6 +145,21 @@ def main():
     else:
         check(False, 'build/generic/crowdbake exists (make generic)')
 
+    # samples/catalog.toml itself (states, a LOD, a shared rig, per-animal overrides): the merge of its
+    # per-type bakes writes the one-step manifest, byte for byte.
+    sample_out = os.path.join(work, 'samples')
+    shutil.rmtree(sample_out, ignore_errors=True)
+    one, two = os.path.join(sample_out, 'one'), os.path.join(sample_out, 'two')
+    rc = subprocess.run([crowdbake, 'bake', 'samples/catalog.toml', '--out-dir', one, '-q'], cwd=ROOT).returncode
+    for t in ('bird', 'fish', 'goat', 'sheep'):
+        rc |= subprocess.run([crowdbake, 'bake', 'samples/catalog.toml', '--type', t, '--out-dir', two, '-q'],
+                             cwd=ROOT).returncode
+    rc |= subprocess.run([crowdbake, 'roster', 'merge', '-q', '-o', os.path.join(two, 'roster.json')] +
+                         [os.path.join(two, t + '.fragment') for t in ('bird', 'fish', 'goat', 'sheep')]).returncode
+    same = rc == 0 and all(open(os.path.join(one, f), 'rb').read() == open(os.path.join(two, f), 'rb').read()
+                           for f in ('roster.json', 'bird.pal', 'fish.pal', 'goat.pal'))
+    check(same, 'samples/catalog.toml: merged manifest and palettes equal the one-step bake\'s')
+
     # The merge's refusals, each one line naming the file and the fix.
     def merge(args):
         return subprocess.run([crowdbake, 'roster', 'merge', '-o', 'bad.json'] + args, cwd=base_top,
