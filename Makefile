@@ -27,7 +27,7 @@ SHELL := /bin/bash
 DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
-                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip bazel-bootstrap
+                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip bazel-bootstrap time
 PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
 BUILD   ?= build
