@@ -262,7 +262,7 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     w->origin = (cb_bake_origin){t->key, an->canonical, (const cb_model *const *)w->lod_models, an->lod_count};
     w->job.origin = &w->origin;
     t->input_hash = cb_bake_input_hash(&w->job, NULL);
-    if (run->opt->measure_vat) measure_vat(an, run->opt->limits, w, t);
+    if (run->opt->measure_vat) measure_vat(an, run->opt->limits, w, t), t->vat_measured = true;
     /* The rate search's poses would save the bake one sampling pass, but held by every type
      * waiting to bake they made a roster's memory grow with its types: only the plan is kept. */
     cb_bake_job_release_search(&w->job);
@@ -281,8 +281,13 @@ static void prepare_type(roster_run *run, uint32_t i)
     t->owner = i;
     output_paths(an, t);
     char path[4096];
-    if (!run->opt->force && !run->opt->measure_vat && cb_prep_record_path(an, path, sizeof path) &&
-        cb_prep_record_load(path, an, run->opt->limits, t)) {
+    bool from_record = !run->opt->force && cb_prep_record_path(an, path, sizeof path) &&
+                       cb_prep_record_load(path, an, run->opt->limits, t);
+    if (from_record && run->opt->measure_vat && !t->vat_measured) { /* a report needs the VAT error too */
+        cb_prep_clear(t);
+        from_record = false;
+    }
+    if (from_record) {
         if (!roster_decide_states(run->cat, an, t, &t->error)) {
             t->prepared_from_record = true;
             return;

@@ -74,6 +74,7 @@ typedef struct cb_roster_type {
     double model_height, speed_reference, seconds;
     char speed_reference_from[512]; /* which rule picked speed_reference, in words */
     double vat_error;         /* with measure_vat */
+    bool vat_measured;        /* vat_error holds a measure (this run's, or its record's: a report reuses it) */
     uint32_t clip_count;
     cb_roster_clip *clips;
     int *state_clip;          /* per catalog state: index into clips */

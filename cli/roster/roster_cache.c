@@ -9,7 +9,7 @@
 
 #include "crowdbake_pal.h"
 
-static const char magic[8] = "CBPREP3"; /* 2: each clip's stride; 3: its feet's stances, the sockets */
+static const char magic[8] = "CBPREP4"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: the VAT error */
 
 bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {
@@ -108,6 +108,7 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
     put_u64(&w, t->vertices), put_u64(&w, t->indices), put_u64(&w, t->mesh_bytes);
     put_f64(&w, t->model_height), put_f64(&w, t->speed_reference);
     put_str(&w, t->speed_reference_from);
+    put_u32(&w, t->vat_measured), put_f64(&w, t->vat_error);
     put_u32(&w, t->clip_count);
     for (uint32_t i = 0; i < t->clip_count; ++i) {
         const cb_roster_clip *c = &t->clips[i];
@@ -316,6 +317,7 @@ bool cb_prep_record_decode(const unsigned char *data, size_t size, const cb_cata
     t->vertices = get_u64(&r), t->indices = get_u64(&r), t->mesh_bytes = get_u64(&r);
     t->model_height = get_f64(&r), t->speed_reference = get_f64(&r);
     get_str(&r, t->speed_reference_from, sizeof t->speed_reference_from);
+    t->vat_measured = get_u32(&r) != 0, t->vat_error = get_f64(&r);
     read_clips(&r, t);
     read_states_and_lods(&r, an, t);
     read_sockets(&r, t);
@@ -368,5 +370,6 @@ void cb_prep_clear(cb_roster_type *t)
     t->bones = t->rows = 0;
     t->vertices = t->indices = t->mesh_bytes = 0;
     t->model_height = t->speed_reference = 0;
+    t->vat_measured = false, t->vat_error = 0;
     t->speed_reference_from[0] = '\0';
 }
