@@ -21,7 +21,7 @@ _crowdbake_options()
     roster) echo "merge -o --output -q --quiet" ;;
     view) echo "--port --open --cache --model $output $limits" ;;
     mesh) echo "-o --output --palette-model --max-influences --quantize --batch --max-quantization-error --fps --skin
-                --json --type --lod $output $limits" ;;
+                --vertex-id-uv --skin-texture --json --type --lod $output $limits" ;;
     esac
 }
 

@@ -19,7 +19,8 @@ import { withPage, REPO, RUNTIMES } from './driver.mjs';
 const dir = path.resolve(process.argv[2]);
 const jobs = JSON.parse(fs.readFileSync(path.join(dir, 'cases.json'), 'utf8'));
 
-const failures = await withPage({ '/': RUNTIMES, '/job/': dir }, '/__blank.html', async (page) => {
+const hostileDir = path.join(REPO, 'tests/fuzz/regressions/pal');
+const failures = await withPage({ '/': RUNTIMES, '/job/': dir, '/hostile/': hostileDir }, '/__blank.html', async (page) => {
     for (const c of jobs.cases) {
         const result = await page.evaluate(async (c) => {
             const { readPal } = await import('/web/crowdbake_pal.mjs');
@@ -69,13 +70,13 @@ const failures = await withPage({ '/': RUNTIMES, '/job/': dir }, '/__blank.html'
     }
     // The hostile palettes the fuzzers found, read in the page with the decoder a page would use:
     // each must be refused with a one-line Error naming the file, the page left working.
-    const hostile = fs.readdirSync(path.join(REPO, 'tests/fuzz/regressions/pal'));
+    const hostile = fs.readdirSync(hostileDir);
     const verdicts = await page.evaluate(async (files) => {
         const { readPal } = await import('/web/crowdbake_pal.mjs');
         const { decompress } = await import('/web/node_modules/fzstd/esm/index.mjs');
         const out = [];
         for (const f of files) for (const verifyChecksum of [true, false]) { // without it, the decoder meets the damage
-            const bytes = new Uint8Array(await (await fetch(`/tests/fuzz/regressions/pal/${f}`)).arrayBuffer());
+            const bytes = new Uint8Array(await (await fetch(`/hostile/${f}`)).arrayBuffer());
             try {
                 readPal(bytes, { name: f, verifyChecksum, decompress: (b, n) => decompress(b, new Uint8Array(n)) });
                 out.push(`ACCEPTED ${f}`);
