@@ -27,7 +27,7 @@ SHELL := /bin/bash
 DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
-                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip \
+                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip bazel-bootstrap time \
                 glslang-tools spirv-tools mesa-vulkan-drivers libvulkan-dev
 PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
@@ -98,7 +98,7 @@ TOOL_A  := $(BUILD)/libcrowdbake_tool.a
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs \
+.PHONY: generic bundle bench-scale all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs \
         test-lib test-cli test-runtimes test-install test-fuzz readme bake-hashes bench \
         bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web godot-addon unity-package
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
@@ -179,6 +179,32 @@ $(BUILD)/$(SONAME): $(LIB_OBJ) src/libcrowdbake.map
 
 $(BUILD)/crowdbake: $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a
 	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a $(CLI_LIBS)
+
+# ---- generic: crowdbake without its AVX2 clones ----------------------------------------
+# The files with CB_TARGET_CLONES compiled again with CB_GENERIC_ONLY (the x86-64 baseline
+# alone); everything else is the normal build's. tests/tools/hermetic.py compares its bytes.
+CLONE_SRC   := $(shell grep -l CB_TARGET_CLONES src/core/*.c)
+GENERIC_OBJ := $(CLONE_SRC:%.c=$(BUILD)/generic/obj/%.o)
+$(BUILD)/generic/obj/%.o: %.c $(DEPS_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -fvisibility=hidden -DCB_GENERIC_ONLY $(PKG_CFLAGS) -MMD -MP -c $< -o $@
+$(BUILD)/generic/crowdbake: $(CLI_OBJ) $(TOOL_A) $(GENERIC_OBJ) $(filter-out $(CLONE_SRC:%.c=$(BUILD)/obj/%.o),$(LIB_OBJ))
+	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(GENERIC_OBJ) $(filter-out $(CLONE_SRC:%.c=$(BUILD)/obj/%.o),$(LIB_OBJ)) $(CLI_LIBS)
+generic: $(BUILD)/generic/crowdbake
+
+# ---- the bundle: crowdbake for a machine without the -dev packages ---------------------
+# A remote executor (docs/bazel.md) has libc and nothing else: build/bundle holds the command,
+# linked again with its library folder as run path ($ORIGIN/../lib, DT_RPATH so the libraries'
+# own dependencies are found there too), and every shared library it needs but libc's own.
+BUNDLE := $(BUILD)/bundle
+bundle: $(BUNDLE)/.done
+$(BUNDLE)/bin/crowdbake: $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a
+	@mkdir -p $(@D)
+	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a $(CLI_LIBS) \
+	  -Wl,--disable-new-dtags -Wl,-rpath,'$$ORIGIN/../lib'
+$(BUNDLE)/.done: $(BUNDLE)/bin/crowdbake tests/tools/bundle.sh
+	sh tests/tools/bundle.sh $(BUNDLE)
+	@touch $@
 
 # ---- install --------------------------------------------------------------------------
 PREFIX     ?= /usr/local
@@ -382,6 +408,18 @@ $(BUILD)/tests/bench_gl_images.run: all $(BUILD)/bench_gl | $(RESULTS)/pending
 	  $(BUILD)/samples/$$m.glb --check || exit 1; done)
 $(BUILD)/tests/web_reader.run: all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test runtimes/web/test/)
+# The Bazel rules (bazel/, docs/bazel.md) against the one-step bake, the disk and HTTP caches and
+# an incremental rebuild; Debian's bazel-bootstrap, offline. Then the same bytes whatever the
+# path, user, umask, TZ, LANG, threads and CPU path (make generic). The normal build only.
+RUNS_cli += $(if $(SAN),,$(BUILD)/tests/bazel_rules.run $(BUILD)/tests/hermetic.run)
+$(BUILD)/tests/bazel_rules.run: all $(BUNDLE)/.done | $(RESULTS)/pending
+	$(call record_run,bazel_rules,python3 tests/tools/bazel_rules.py --build $(BUILD) --shared $(SHARED))
+$(BUILD)/tests/hermetic.run: all $(BUILD)/generic/crowdbake | $(RESULTS)/pending
+	$(call record_run,hermetic,python3 tests/tools/hermetic.py --build $(BUILD) --shared $(SHARED))
+# make bundle's crowdbake in a root with only glibc.
+RUNS_install += $(if $(SAN),,$(BUILD)/tests/bundle_root.run)
+$(BUILD)/tests/bundle_root.run: all $(BUNDLE)/.done | $(RESULTS)/pending
+	$(call record_run,bundle_root,python3 tests/tools/bundle_root.py --build $(BUILD) --shared $(SHARED))
 test-runs: $(RUN_SET)
 replay: $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
 readme: all
@@ -488,6 +526,12 @@ $(BUILD)/bench_gl: bench/bench_gl.c $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/lib
 
 bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(NODE_DEPS)
 	python3 bench/run.py
+	python3 bench/scale.py --build $(BUILD) --shared $(SHARED) --no-bazel
+
+# A 1,000-type roster: Bazel's actions against make -j, one action's memory, the merge, an
+# incremental rebuild (slow: minutes; bench/RESULTS.txt keeps a run's numbers).
+bench-scale: all $(BUNDLE)/.done
+	python3 bench/scale.py --build $(BUILD) --shared $(SHARED) --counts 10,100 --bazel-types 1000
 
 bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
@@ -506,4 +550,4 @@ check-asan:
 clean:
 	rm -rf build
 
--include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)
+-include $(shell find $(BUILD)/obj $(BUILD)/generic/obj -name '*.d' 2>/dev/null)

@@ -153,12 +153,15 @@ int cmd_verify(int argc, char **argv);
 int cmd_preview(int argc, char **argv);
 int cmd_report(int argc, char **argv);
 int cmd_mesh(int argc, char **argv);
+extern const char cmd_roster_usage[];
+int cmd_roster(int argc, char **argv);
 /* `crowdbake bake CATALOG.toml`, once cmd_bake has read its options. */
 typedef struct cli_catalog_bake {
     const char *path;
     uint32_t jobs;
     bool force, quiet, json;
     const char *depfile, *manifest;
+    const char *type, *fragment;       /* --type NAME: that type alone, and its manifest fragment */
     bool depfile_manifest_only;
     const cb_limits *limits;
     const cb_bake_settings *overrides; /* the command line's bake options, `override_fields` of them set */

@@ -14,6 +14,7 @@
 const char cmd_bake_usage[] =
     "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2|OUT.bvat.json [options]\n"
     "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--out-dir DIR] [--json]\n"
+    "                      [--type NAME [--fragment FILE]]\n"
     "                      [-q|-v] [--sync STATE=speed|time,...] [--default-state STATE]\n"
     "                      [--fps N|auto] [--max-error MM_PER_M] [--max-fps N] [--fit-rows] [--allow-over-budget]\n"
     "                      [--layout L] [--precision P] [--format F] [--zstd]\n"
@@ -27,6 +28,9 @@ const char cmd_bake_usage[] =
     "clip's, else the command line's, else the animal's, else [bake]'s, else the default);\n"
     "--depfile writes a Make/Ninja depfile;\n"
     "--out-dir replaces the catalog's out_dir (a path from the current directory);\n"
+    "--type NAME bakes that animal type alone, as one build action of many (docs/bazel.md): its outputs\n"
+    "and, in place of the manifest, a fragment of it (--fragment FILE, default OUT_DIR/NAME.fragment)\n"
+    "that 'crowdbake roster merge' joins with the other types' into the manifest;\n"
     "--depfile-manifest-only writes the manifest's rule alone, as Ninja's depfile without\n"
     "deps = gcc (CMake's DEPFILE) wants it. --sync STATE=speed|time|auto (comma-separated) and\n"
     "--default-state STATE replace the catalog's word on those states in every animal that has\n"
@@ -89,7 +93,7 @@ const char cmd_bake_usage[] =
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
         *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir, *loops,
-        *one_shots, *syncs, *default_state;
+        *one_shots, *syncs, *default_state, *type, *fragment;
     bool zstd, json, quiet, force, depfile_manifest, fit, measure_all, over_budget;
     cli_output out;
     char speed_why[192]; /* why the speed reference is what it is, when crowdbake measured it */
@@ -206,8 +210,12 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
     if (rc) return rc;
     if (a->out_dir) over.out_dir = a->out_dir, fields |= CB_BAKE_OUT_DIR;
     if (a->depfile_manifest && !a->depfile) return cli_usage_error("bake", "--depfile-manifest-only goes with --depfile");
-    cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, a->depfile_manifest,
-                           limits, &over, fields, a->syncs, a->default_state, &a->out};
+    if (a->fragment && !a->type) return cli_usage_error("bake", "--fragment goes with --type NAME");
+    if (a->type && a->manifest)
+        return cli_usage_error("bake", "--type writes a fragment (--fragment FILE), not a manifest: "
+                               "'crowdbake roster merge' writes the manifest from every type's fragment");
+    cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, a->type, a->fragment,
+                           a->depfile_manifest, limits, &over, fields, a->syncs, a->default_state, &a->out};
     return cmd_bake_catalog(&cb);
 }
 
@@ -465,6 +473,7 @@ int cmd_bake(int argc, char **argv)
         {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest}, {"--fit-rows", NULL, NULL, &a.fit},
         {"--measure-all", NULL, NULL, &a.measure_all},
         {"--allow-over-budget", NULL, NULL, &a.over_budget},
+        {"--type", "NAME", &a.type, NULL},        {"--fragment", "FILE", &a.fragment, NULL},
         {"--sync", "STATE=speed|time", &a.syncs, NULL}, {"--default-state", "STATE", &a.default_state, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
     if (help) return fputs(cmd_bake_usage, stdout), fputs(cli_limits_usage, stdout), 0;
@@ -472,10 +481,11 @@ int cmd_bake(int argc, char **argv)
     a.quiet = a.out.quiet;
     if (ends_with(a.model, ".toml")) return bake_catalog(&a, &limits);
     if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
-    if (a.depfile || a.depfile_manifest || a.manifest || a.force || a.out_dir)
+    if (a.depfile || a.depfile_manifest || a.manifest || a.force || a.out_dir || a.type || a.fragment)
         return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
                                a.depfile ? "--depfile" : a.depfile_manifest ? "--depfile-manifest-only" : a.manifest
-                               ? "--manifest" : a.force ? "--force" : "--out-dir");
+                               ? "--manifest" : a.force ? "--force" : a.out_dir ? "--out-dir" : a.type ? "--type"
+                               : "--fragment");
     if (a.syncs || a.default_state)
         return cli_usage_error("bake", "%s is for catalogs: a single model has clips, not states",
                                a.syncs ? "--sync" : "--default-state");

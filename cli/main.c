@@ -14,6 +14,7 @@ static const cli_command commands[] = {
     {"mesh", "the runtime-ready mesh: palette bones, fewer influences, quantized, batched", cmd_mesh_usage, cmd_mesh},
     {"vat", "bake a vertex animation texture of the same frames, to compare", cmd_vat_usage, cmd_vat},
     {"report", "palette vs VAT bytes and the roster's VRAM budget", cmd_report_usage, cmd_report},
+    {"roster", "merge the manifest fragments of types baked one action each", cmd_roster_usage, cmd_roster},
     {"view", "watch a herd in the browser: palette and VAT side by side", cmd_view_usage, cmd_view},
 };
 

@@ -21,6 +21,9 @@ struct Parser {
     cb_catalog *cat;
     cb_error *err;
     std::string file;
+    const char *files_of = nullptr; /* whose files must exist: NULL every animal's (cb_catalog_load_checking) */
+
+    bool checks_files(const std::string &name) const { return !files_of || name == files_of; }
 
     /* status: CB_ERR_IO where a file the catalog names cannot be read, as for a model on the command line. */
     [[noreturn]] void fail(const toml::source_region &where, const std::string &what, cb_status status = CB_ERR_INPUT)
@@ -365,7 +368,7 @@ struct Parser {
         if (!model) fail(key.source(), where + " needs model = \"path/to/model.glb\" (relative to the catalog)");
         std::string path = resolve(str(*model, where + " model"));
         struct stat st;
-        if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+        if (checks_files(name) && (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)))
             fail(model->source(), where + " model file " + path + " does not exist (paths are relative to the catalog)",
                  CB_ERR_IO);
         an->model = dup(path);
@@ -378,7 +381,7 @@ struct Parser {
             an->lod_pos = alloc<cb_source_pos>(a.size());
             for (size_t i = 0; i < a.size(); ++i) {
                 std::string lp = resolve(str(*a.get(i), where + " lod"));
-                if (stat(lp.c_str(), &st) != 0)
+                if (checks_files(name) && stat(lp.c_str(), &st) != 0)
                     fail(a.get(i)->source(), where + " LOD file " + lp + " does not exist", CB_ERR_IO);
                 an->lods[i] = dup(lp);
                 an->lod_pos[i] = pos(*a.get(i));
@@ -427,11 +430,38 @@ struct Parser {
         }
     }
 
+    /* A resolved path as seen from the catalog's folder: what the catalog says, whatever folder
+     * the catalog was named from, so the input hash holds no absolute path (the same bytes in
+     * every checkout and build sandbox). A path written absolute stays absolute. */
+    std::string from_catalog(const std::string &path) const
+    {
+        std::string dir = cat->dir;
+        if (!path.empty() && path[0] == '/' && dir[0] != '/') return path;
+        auto split = [](const std::string &p) {
+            std::vector<std::string> parts;
+            for (size_t start = 0; start <= p.size();) {
+                size_t end = p.find('/', start);
+                if (end == std::string::npos) end = p.size();
+                std::string part = p.substr(start, end - start);
+                if (!part.empty() && part != ".") parts.push_back(part);
+                start = end + 1;
+            }
+            return parts;
+        };
+        std::vector<std::string> d = split(dir), f = split(path);
+        size_t common = 0;
+        while (common < d.size() && common < f.size() && d[common] == f[common]) ++common;
+        std::string out;
+        for (size_t i = common; i < d.size(); ++i) out += "../";
+        for (size_t i = common; i < f.size(); ++i) out += f[i] + (i + 1 < f.size() ? "/" : "");
+        return out;
+    }
+
     void canonical(cb_catalog_animal *an)
     {
         char buf[256];
-        std::string c = std::string("model=") + an->model;
-        for (uint32_t i = 0; i < an->lod_count; ++i) c += std::string(" lod=") + an->lods[i];
+        std::string c = std::string("model=") + from_catalog(an->model);
+        for (uint32_t i = 0; i < an->lod_count; ++i) c += std::string(" lod=") + from_catalog(an->lods[i]);
         for (uint32_t i = 0; i < an->clip_count; ++i) {
             std::snprintf(buf, sizeof buf, " loop=%d fps=%.17g/%d/%.17g", an->clips[i].loop, an->clips[i].fps,
                           an->clips[i].fps_auto, an->clips[i].max_error_mm);
@@ -498,7 +528,7 @@ struct Parser {
     }
 };
 
-cb_status parse(const char *text, size_t size, const char *path, cb_catalog *out, cb_error *err)
+cb_status parse(const char *text, size_t size, const char *path, const char *files_of, cb_catalog *out, cb_error *err)
 {
     std::memset(out, 0, sizeof *out);
     unsigned line, column;
@@ -508,6 +538,7 @@ cb_status parse(const char *text, size_t size, const char *path, cb_catalog *out
     out->arena = cb_arena_create();
     if (!out->arena) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     Parser p{out, err, path};
+    p.files_of = files_of;
     try {
         out->path = p.dup(path);
         std::string dir = path;
@@ -533,10 +564,15 @@ cb_status parse(const char *text, size_t size, const char *path, cb_catalog *out
 
 extern "C" cb_status cb_catalog_parse(const char *text, size_t size, const char *path, cb_catalog *out, cb_error *err)
 {
-    return parse(text, size, path, out, err);
+    return parse(text, size, path, NULL, out, err);
 }
 
 extern "C" cb_status cb_catalog_load(const char *path, cb_catalog *out, cb_error *err)
+{
+    return cb_catalog_load_checking(path, NULL, out, err);
+}
+
+extern "C" cb_status cb_catalog_load_checking(const char *path, const char *files_of, cb_catalog *out, cb_error *err)
 {
     std::memset(out, 0, sizeof *out);
     FILE *f = std::fopen(path, "rb");
@@ -552,5 +588,5 @@ extern "C" cb_status cb_catalog_load(const char *path, cb_catalog *out, cb_error
         }
     }
     std::fclose(f);
-    return parse(text.data(), text.size(), path, out, err);
+    return parse(text.data(), text.size(), path, files_of, out, err);
 }

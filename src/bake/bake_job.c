@@ -439,6 +439,8 @@ void cb_bake_result_free(cb_bake_result *r)
     memset(r, 0, sizeof *r);
 }
 
+void cb_bake_job_release_search(cb_bake_job *job) { free_search_poses(job); }
+
 void cb_bake_job_free(cb_bake_job *job)
 {
     free_search_poses(job);

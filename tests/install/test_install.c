@@ -348,7 +348,7 @@ static void test_man_page_and_completions(void **state)
     static const char *const sources[] = {"cli/cmd_bake.c",   "cli/cmd_info.c",   "cli/cmd_inspect.c",
                                           "cli/cmd_preview.c", "cli/cmd_report.c", "cli/cmd_sample.c",
                                           "cli/cmd_vat.c",     "cli/cmd_verify.c", "cli/cmd_mesh.c",
-                                          "cli/cmd_view.c",    "cli/cli.c"};
+                                          "cli/cmd_view.c",    "cli/cmd_roster.c",  "cli/cli.c"};
     int options = 0;
     for (size_t i = 0; i < COUNT_OF(sources); ++i) {
         char *src = read_whole_file(sources[i], NULL);
