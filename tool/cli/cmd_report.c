@@ -26,7 +26,8 @@ const char cmd_report_usage[] =
     "and the bytes pre-baked transitions between loops would take that a runtime cross-fade saves.\n"
     "  --target NAME   the budget's target profile (docs/budget.md): replaces the catalog's\n"
     "                  [budget] target; for a MODEL, the only way to give one\n"
-    "  -v, --verbose   a line per type on stderr as it is baked (the default on a terminal)\n"
+    "  -v, --verbose   a line per type on stderr as it is baked (the default on a terminal; with stdout\n"
+    "                  redirected, a progress line per type on stderr)\n"
     "  -q, --quiet     no progress lines\n"
     "Exit code 3 when the roster exceeds its budget, unless --no-fail.\n";
 
@@ -171,6 +172,9 @@ int cmd_report(int argc, char **argv)
     bool progress = cli_progress(&out);
     opt.log = progress ? stderr : NULL;
     opt.tty = progress && isatty(STDERR_FILENO);
+    /* stdout redirected (a file, a pipe, CI): a line per type on stderr as each is done, as the
+     * bake's progress, so seconds of baking are not silent; -q silences it. */
+    if (!progress && !out.quiet && !isatty(STDOUT_FILENO)) opt.progress = stderr;
     cb_roster roster;
     cb_status bake = cb_roster_bake(&cat, &opt, &roster, &err);
     if (bake) { /* report what baked; say what did not */
@@ -185,7 +189,7 @@ int cmd_report(int argc, char **argv)
     cb_error rerr = {0};
     if (!cb_report_build(&cat, &roster, &r, &rerr)) {
         r.single_model = model;
-        cb_report_add_runtime(&roster, &r);
+        cb_report_add_runtime(&roster, &r, opt.progress ? opt.progress : opt.log);
         if (json) cb_report_json(stdout, &r);
         else if (markdown) cb_report_markdown(stdout, &r);
         else cb_report_text(stdout, &r);
