@@ -441,6 +441,12 @@ static void test_a_failing_type_does_not_stop_the_others(void **state)
     assert_int_equal(stat(TMP "/out-fail/fish.pal", &st), 0);
     assert_int_not_equal(stat(TMP "/out-fail/broken.pal", &st), 0);
     assert_int_equal(system("ls -a " TMP "/out-fail | grep -q '\\.tmp\\.'"), 256); /* no temporaries left */
+    /* Every type failed: no sizes of nothing ("0 types in 0 palettes ... 0.0x") after the log. */
+    write_text(TMP "/allfail.toml", "[bake]\nout_dir = \"out-allfail\"\n[animal.broken]\nmodel = \"broken.glb\"\n");
+    assert_int_equal(run_cli("bake " TMP "/allfail.toml", out, sizeof out), EXIT_INPUT);
+    if (!strstr(out, "0 baked, 0 up to date, 0 sharing a palette, 1 failed") || strstr(out, "0 types") || strstr(out, "0.0x") ||
+        strstr(out, "Roster:"))
+        fail_msg("%s", out);
 }
 
 /* A missing model is a file that cannot be read (EXIT_IO), named on the command line or by a

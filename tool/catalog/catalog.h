@@ -55,7 +55,7 @@ typedef struct cb_catalog_animal {
     uint32_t state_count;
     const char *default_state;
     const char *default_state_from; /* why: "the catalog's default_state", "the first state written", ... */
-    double speed_reference; /* m/s (model units/s); with speed_auto, measured */
+    double speed_reference; /* model units/s; with speed_auto, measured */
     bool speed_auto;
     const char *speed_state; /* speed_reference = "STATE": measure it on that state's clip (unless the default state's is locomotion) */
     cb_source_pos speed_pos;

@@ -424,7 +424,7 @@ struct Parser {
                 bool state = false;
                 for (uint32_t i = 0; i < an->state_count; ++i) state |= v == an->states[i].name;
                 if (v != "auto" && !state)
-                    fail(sp->source(), where + " speed_reference must be a speed in m/s, \"auto\" or the name of a state");
+                    fail(sp->source(), where + " speed_reference must be a speed in model units/s, \"auto\" or the name of a state");
                 if (state) an->speed_state = dup(v);
             } else {
                 an->speed_reference = number(*sp, where + " speed_reference");

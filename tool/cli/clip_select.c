@@ -26,6 +26,35 @@ int cli_match_clip(const char *typed, const char *const *names, size_t count, si
     return cb_match_clip_name(typed, names, count, stride, why, size);
 }
 
+typedef struct clip_check {
+    const cb_palette *p;
+    const char *palette, *option;
+    bool *named; /* per palette clip: the list names it */
+    cb_error *err;
+} clip_check;
+
+static cb_status mark_palette_clip(const char *name, void *ctx)
+{
+    const clip_check *c = ctx;
+    char why[512];
+    int i = c->p->clip_count ? cli_match_clip(name, &c->p->clips[0].name, c->p->clip_count, sizeof c->p->clips[0], why,
+                                              sizeof why)
+                             : (snprintf(why, sizeof why, "the palette has no clip"), -1);
+    if (i < 0) return cb_fail(c->err, CB_ERR_SETTINGS, "%s: %s %s: %s (see 'crowdbake inspect')", c->palette, c->option, name, why);
+    c->named[i] = true;
+    return CB_OK;
+}
+
+cb_status cli_palette_clip_options(const cb_palette *p, const char *palette, const char *clips, const char *excluded,
+                                    bool *skip, cb_error *err)
+{
+    if (clips && excluded) return cb_fail(err, CB_ERR_SETTINGS, "give --clip or --exclude-clip, not both");
+    clip_check c = {p, palette, clips ? "--clip" : "--exclude-clip", skip, err};
+    if (cli_for_each_name(clips ? clips : excluded, mark_palette_clip, &c)) return err->status;
+    for (uint32_t i = 0; clips && i < p->clip_count; ++i) skip[i] = !skip[i]; /* named: verified */
+    return CB_OK;
+}
+
 typedef struct selection {
     const cb_model *model;
     bool *chosen;         /* per animation */

@@ -1,4 +1,4 @@
-/* cmd_bake.c - `crowdbake bake MODEL -o OUT.pal|OUT.exr`: the main job. */
+/* cmd_bake.c - `crowdbake bake MODEL -o OUT.pal|.exr|.ktx2|.bvat.json`: the main job. */
 #include <math.h>
 #include <stdlib.h>
 #include <stdio.h>
@@ -75,7 +75,7 @@ const char cmd_bake_usage[] =
     "  --exclude-clip A,B         every clip but these\n"
     "  --loop A,B                 these clips loop, --one-shot A,B these play once, whatever their\n"
     "  --one-shot A,B             poses say (default: decided from the poses; `info` says why)\n"
-    "  --speed-reference M_PER_S  ground speed at playback rate 1, stored in the header\n"
+    "  --speed-reference UNITS_PER_S  ground speed at playback rate 1 (model units/s), stored in the header\n"
     "  --zstd                     compress the .pal payload (readers decompress once)\n"
     "  --exr-compression none|rle|zips|zip|piz  (default none; lossless only)\n"
     "  -j, --threads N            sample clips on N threads (default: the number of cores); the\n"
@@ -446,7 +446,7 @@ int cmd_bake(int argc, char **argv)
         {"--format", "pal,exr", &a.format, NULL},  {"--fps", "N", &a.fps, NULL},
         {"--layout", "LAYOUT", &a.layout, NULL},   {"--precision", "PRECISION", &a.precision, NULL},
         {"--max-texture-size", "N", &a.max_size, NULL}, {"--root-motion", "keep|in-place", &a.root_motion, NULL},
-        {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "M_PER_S", &a.speed_ref, NULL},
+        {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "UNITS_PER_S", &a.speed_ref, NULL},
         {"--exr-compression", "NAME", &a.exr_compression, NULL}, {"--zstd", NULL, NULL, &a.zstd},
         {"--json", NULL, NULL, &a.json},
         {"-j", "N", &a.threads, NULL},             {"--threads", "N", &a.threads, NULL},
@@ -464,7 +464,7 @@ int cmd_bake(int argc, char **argv)
     if (rc) return rc;
     a.quiet = a.out.quiet;
     if (ends_with(a.model, ".toml")) return bake_catalog(&a, &limits);
-    if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
+    if (!a.output) return cli_usage_error("bake", "-o OUT.pal, OUT.exr, OUT.ktx2 or OUT.bvat.json is required");
     if (a.depfile || a.depfile_manifest || a.manifest || a.force || a.out_dir)
         return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
                                a.depfile ? "--depfile" : a.depfile_manifest ? "--depfile-manifest-only" : a.manifest
@@ -477,7 +477,7 @@ int cmd_bake(int argc, char **argv)
     if ((rc = parse_settings(&a, &settings, &fields)) || (rc = single_model_checks(&a, &settings))) return rc;
     double speed_ref = 0;
     if (a.speed_ref && (!cli_parse_double(a.speed_ref, &speed_ref) || speed_ref < 0))
-        return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
+        return cli_usage_error("bake", "--speed-reference wants a non-negative speed in the model's units per second");
     if (parse_threads(a.threads, &threads, "--threads")) return CLI_EXIT_USAGE;
 
     double t0 = now_seconds();

@@ -359,7 +359,7 @@ static void html_encodings(FILE *f, const cb_report *r)
 static void html_targets(FILE *f, const cb_report *r)
 {
     double share = r->has_budget ? r->crowd_share : 1;
-    fprintf(f, "<h2>Other targets</h2>\n<p>The same roster against each built-in profile, %.0f%% of its memory for "
+    fprintf(f, "<h2>Other targets</h2>\n<p>The same roster against each built-in profile, %g%% of its memory for "
                "crowds.</p>\n<div class=\"scroll\"><table id=\"targets\"><tr><th>target</th><th>crowd budget</th>"
                "<th>roster</th><th>as VAT</th><th>texture limit</th><th>verdict</th></tr>\n",
             share * 100);

@@ -88,7 +88,7 @@ cb_status roster_decide_states(const cb_catalog *cat, const cb_catalog_animal *a
         char where[1100];
         return cb_fail(err, CB_ERR_INPUT,
                        "%s: [animal.%s] state '%s' follows the speed (%s), but clip '%s' has no ground speed (no stride, "
-                       "no root travel) and no other state gives one; give the animal speed_reference = M/S, or the "
+                       "no root travel) and no other state gives one; give the animal speed_reference = UNITS_PER_S, or the "
                        "state sync = \"time\"",
                        roster_at(cat, an->states[s].pos, where, sizeof where), an->name, an->states[s].name,
                        t->state_sync[s].reason, c->name);
