@@ -76,7 +76,8 @@ const char cmd_bake_usage[] =
     "  --loop A,B                 these clips loop, --one-shot A,B these play once, whatever their\n"
     "  --one-shot A,B             poses say (default: decided from the poses; `info` says why)\n"
     "  --speed-reference UNITS_PER_S  ground speed at playback rate 1 (model units/s), stored in the header\n"
-    "  --zstd                     compress the .pal payload (readers decompress once)\n"
+    "  --zstd                     compress the .pal payload (readers decompress once) and the .ktx2\n"
+    "                             level (Zstandard supercompression, as toktx --zcmp)\n"
     "  --exr-compression none|rle|zips|zip|piz  (default none; lossless only)\n"
     "  -j, --threads N            sample clips on N threads (default: the number of cores); the\n"
     "                             output is byte-identical for any N\n"
@@ -196,7 +197,7 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
         return cli_usage_error("bake", "a catalog writes pal and/or exr, and babylon beside either (--format pal,babylon); "
                                "ktx2 is for single models for now");
     if (a->zstd && a->format && !(cb_formats_parse(a->format) & CB_FORMAT_PAL))
-        return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+        return cli_usage_error("bake", "--zstd compresses .pal payloads (a catalog writes no .ktx2); EXR takes --exr-compression");
     cb_bake_settings over;
     unsigned fields;
     int rc = parse_settings(a, &over, &fields);
@@ -397,7 +398,8 @@ static int single_model_checks(const bake_args *a, cb_bake_settings *s)
     if (!cb_bake_settings_writable(s))
         return cli_usage_error("bake", "KTX2 palettes hold half or float texels (RGBA16F, RGBA32F; common KTX2 loaders "
                                "refuse u16's RGBA16UI); use --precision half|float%s", want_pal ? " (or write only the .pal)" : "");
-    if (a->zstd && !want_pal) return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+    if (a->zstd && !(s->formats & (CB_FORMAT_PAL | CB_FORMAT_KTX2)))
+        return cli_usage_error("bake", "--zstd compresses .pal payloads and .ktx2 levels; EXR takes --exr-compression");
     return 0;
 }
 

@@ -264,8 +264,9 @@ static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pa
         cb_exr_write(out->path, p, job->model, job->skin, job->settings.exr_compression, out->input_hash,
                      (float)job->speed_reference, err);
     } else if (out->format == CB_FORMAT_KTX2) {
-        cb_ktx2_write(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference,
-                      job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE, err);
+        /* --zstd: the level supercompressed as `toktx --zcmp` does, at the .pal payload's level */
+        cb_ktx2_write_zstd(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference,
+                           job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE, job->settings.zstd ? 9 : 0, err);
     } else {
         cb_babylon_write_options bo = {(float)job->speed_reference, job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE,
                                        out->input_hash, job->babylon_states, job->babylon_state_count};
