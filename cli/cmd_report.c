@@ -27,7 +27,7 @@ const char cmd_report_usage[] =
     "  --target NAME   the budget's target profile (docs/budget.md): replaces the catalog's\n"
     "                  [budget] target; for a MODEL, the only way to give one\n"
     "  -v, --verbose   a line per type on stderr as it is baked (the default on a terminal; with stdout\n"
-    "                  redirected, a progress line per type on stderr)\n"
+    "                  redirected, a progress line per type as it is baked and as its meshes are measured)\n"
     "  -q, --quiet     no progress lines\n"
     "Exit code 3 when the roster exceeds its budget, unless --no-fail.\n";
 
@@ -169,12 +169,13 @@ int cmd_report(int argc, char **argv)
     opt.measure_vat = true;
     /* The bake takes seconds (7 s for three animals): a line per type on stderr as each is
      * done, on a terminal or with -v, never with -q; stdout keeps only the report. */
-    bool progress = cli_progress(&out);
-    opt.log = progress ? stderr : NULL;
-    opt.tty = progress && isatty(STDERR_FILENO);
-    /* stdout redirected (a file, a pipe, CI): a line per type on stderr as each is done, as the
-     * bake's progress, so seconds of baking are not silent; -q silences it. */
-    if (!progress && !out.quiet && !isatty(STDOUT_FILENO)) opt.progress = stderr;
+    bool progress = cli_progress(&out), redirected = !isatty(STDOUT_FILENO);
+    /* stdout redirected (a file, a pipe): a line per type on stderr as each is done, as the
+     * bake's progress, through the bake and the runtime meshes' measuring (seconds each);
+     * else the bake's log, with its progress line on a terminal. */
+    opt.log = progress && !redirected ? stderr : NULL;
+    opt.tty = opt.log && isatty(STDERR_FILENO);
+    opt.progress = progress && redirected ? stderr : NULL;
     cb_roster roster;
     cb_status bake = cb_roster_bake(&cat, &opt, &roster, &err);
     if (bake) { /* report what baked; say what did not */
