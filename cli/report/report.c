@@ -76,6 +76,7 @@ static void fill_type(const cb_roster *roster, uint32_t i, const cb_report *r, c
     t->palette_over_limit = t->width > r->max_texture_size || t->height > r->max_texture_size;
     t->bones_over_limit = t->bones > r->max_bones;
     report_fill_gaits(rt, t);
+    t->bake_warnings = &rt->warnings;
 }
 
 cb_status cb_report_build(const cb_catalog *cat, const cb_roster *roster, cb_report *r, cb_error *err)

@@ -48,6 +48,7 @@ typedef struct cb_report_type {
     uint32_t roster_index;
     uint32_t gait_count;
     cb_report_gait *gaits;              /* the type's states that follow the speed */
+    const cb_warnings *bake_warnings;   /* the roster's for the type (owned by the roster): the page lists them */
 } cb_report_type;
 
 typedef struct cb_report {

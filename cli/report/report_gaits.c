@@ -105,6 +105,39 @@ static bool first_of_group(const cb_report *r, uint32_t i, uint32_t k)
     return true;
 }
 
+/* The bake's own warnings (a fixed fps over max_error, ...) beside the gaits' (whose foot-slide
+ * lines the gaits above group), each text once with the types that have it. */
+static bool is_foot_slide(const char *message) { return strstr(message, "its planted feet slide") != NULL; }
+
+static bool bake_warnings_html(FILE *f, const cb_report *r, bool any)
+{
+    for (uint32_t i = 0; i < r->type_count; ++i) {
+        const cb_warnings *w = r->types[i].bake_warnings;
+        for (uint32_t k = 0; w && k < w->count; ++k) {
+            const char *m = w->items[k].message;
+            if (strcmp(w->items[k].kind, "warning") != 0 || is_foot_slide(m)) continue;
+            bool seen = false;
+            for (uint32_t a = 0; a < i && !seen; ++a)
+                for (uint32_t b = 0; r->types[a].bake_warnings && b < r->types[a].bake_warnings->count; ++b)
+                    seen |= strcmp(r->types[a].bake_warnings->items[b].message, m) == 0;
+            if (seen) continue;
+            if (!any) fputs("<h2>Warnings</h2>\n<ul id=\"warnings\">", f);
+            any = true;
+            fputs("<li class=\"warn\">", f);
+            for (uint32_t a = i, listed = 0; a < r->type_count; ++a)
+                for (uint32_t b = 0; r->types[a].bake_warnings && b < r->types[a].bake_warnings->count; ++b)
+                    if (strcmp(r->types[a].bake_warnings->items[b].message, m) == 0) {
+                        fputs(listed++ ? ", " : "", f);
+                        report_html_escape(f, r->types[a].name);
+                    }
+            fputs(": ", f);
+            report_html_escape(f, m);
+            fputs("</li>", f);
+        }
+    }
+    return any;
+}
+
 void report_warnings_html(FILE *f, const cb_report *r)
 {
     char limits[192], slide[96];
@@ -142,5 +175,6 @@ void report_warnings_html(FILE *f, const cb_report *r)
                     }
             fputs("): the asset's feet slide; re-time them in the animation, or accept it</li>", f);
         }
+    any |= bake_warnings_html(f, r, any);
     if (any) fputs("</ul>\n", f);
 }

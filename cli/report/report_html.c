@@ -155,6 +155,12 @@ static void html_fixes(FILE *f, const cb_report *r, const cb_report_type *t)
         cb_human_bytes(t->palette_bytes - best, a, sizeof a);
         fprintf(f, "<li>%s saves %s</li>", enc, a);
     }
+    uint32_t fixed_over = 0; /* clips whose fixed fps misses max_error (the bake's warnings) */
+    for (uint32_t i = 0; t->bake_warnings && i < t->bake_warnings->count; ++i)
+        fixed_over += strstr(t->bake_warnings->items[i].message, "which a fixed fps is not held to") != NULL;
+    if (fixed_over)
+        fprintf(f, "<li>leave <code>fps</code> out: %u clip%s miss%s max_error at the fixed rate (see the warnings)</li>",
+                fixed_over, fixed_over == 1 ? "" : "s", fixed_over == 1 ? "es" : "");
     uint64_t half = half_rate_bytes(r, t);
     if (half && half < t->palette_bytes) {
         cb_human_bytes(t->palette_bytes - half, a, sizeof a);
