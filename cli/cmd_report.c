@@ -26,8 +26,8 @@ const char cmd_report_usage[] =
     "and the bytes pre-baked transitions between loops would take that a runtime cross-fade saves.\n"
     "  --target NAME   the budget's target profile (docs/budget.md): replaces the catalog's\n"
     "                  [budget] target; for a MODEL, the only way to give one\n"
-    "  -v, --verbose   a line per type on stderr as it is baked (the default on a terminal; with stdout\n"
-    "                  redirected, a progress line per type as it is baked and as its meshes are measured)\n"
+    "  -v, --verbose   a line per type on stderr as it is baked and as its runtime meshes are measured\n"
+    "                  (the default on a terminal)\n"
     "  -q, --quiet     no progress lines\n"
     "Exit code 3 when the roster exceeds its budget, unless --no-fail.\n";
 
@@ -169,13 +169,9 @@ int cmd_report(int argc, char **argv)
     opt.measure_vat = true;
     /* The bake takes seconds (7 s for three animals): a line per type on stderr as each is
      * done, on a terminal or with -v, never with -q; stdout keeps only the report. */
-    bool progress = cli_progress(&out), redirected = !isatty(STDOUT_FILENO);
-    /* stdout redirected (a file, a pipe): a line per type on stderr as each is done, as the
-     * bake's progress, through the bake and the runtime meshes' measuring (seconds each);
-     * else the bake's log, with its progress line on a terminal. */
-    opt.log = progress && !redirected ? stderr : NULL;
-    opt.tty = opt.log && isatty(STDERR_FILENO);
-    opt.progress = progress && redirected ? stderr : NULL;
+    bool progress = cli_progress(&out);
+    opt.log = progress ? stderr : NULL;
+    opt.tty = progress && isatty(STDERR_FILENO);
     cb_roster roster;
     cb_status bake = cb_roster_bake(&cat, &opt, &roster, &err);
     if (bake) { /* report what baked; say what did not */
@@ -190,7 +186,9 @@ int cmd_report(int argc, char **argv)
     cb_error rerr = {0};
     if (!cb_report_build(&cat, &roster, &r, &rerr)) {
         r.single_model = model;
-        cb_report_add_runtime(&roster, &r, opt.progress ? opt.progress : opt.log);
+        /* then a line per type as its runtime meshes are measured: seconds more, which the log
+         * alone left silent (stdout redirected, the report still to come) */
+        cb_report_add_runtime(&roster, &r, opt.log);
         if (json) cb_report_json(stdout, &r);
         else if (markdown) cb_report_markdown(stdout, &r);
         else cb_report_text(stdout, &r);
