@@ -152,7 +152,7 @@ const char *report_notes(const cb_report_type *t, char *buf, size_t size)
 
 double report_ratio(uint64_t a, uint64_t b) { return b ? (double)a / b : 0; }
 
-void report_budget_line(FILE *f, const cb_report *r, const char *bold)
+void report_budget_line(FILE *f, const cb_report *r, const char *bold, const char *line_end)
 {
     char total[32], budget[32], vram[32], vat[32];
     cb_human_bytes(r->total, total, sizeof total);
@@ -177,8 +177,8 @@ void report_budget_line(FILE *f, const cb_report *r, const char *bold)
         snprintf(verdict, sizeof verdict, "OVER BUDGET by %s", over);
     }
     /* The verdict alone on its line (a CI greps it); the VAT comparison on the next, in neutral words. */
-    fprintf(f, "%sRoster: %s = %.2f%% of the %s crowd budget (%s: crowd_share %g of %s): %s.%s\n", bold, total,
-            100.0 * r->total / r->budget_bytes, r->target, budget, r->crowd_share, vram, verdict, bold);
+    fprintf(f, "%sRoster: %s = %.2f%% of the %s crowd budget (%s: crowd_share %g of %s): %s.%s%s", bold, total,
+            100.0 * r->total / r->budget_bytes, r->target, budget, r->crowd_share, vram, verdict, bold, line_end);
     fprintf(f, "As VAT (RGBA16F + RGBA8), the same frames and meshes would take %s = %.2f%% of that budget.\n", vat,
             100.0 * (r->vat_total[0] + r->meshes_total) / r->budget_bytes);
 }
@@ -230,7 +230,7 @@ void cb_report_text(FILE *f, const cb_report *r)
     cb_report_runtime_text(f, r);
     report_gaits_text(f, r);
     report_herds_text(f, r);
-    report_budget_line(f, r, "");
+    report_budget_line(f, r, "", "\n");
     if (r->warnings) fprintf(f, "%u warning%s (see notes and foot-sync).\n", r->warnings, r->warnings == 1 ? "" : "s");
 }
 
@@ -240,7 +240,7 @@ void cb_report_markdown(FILE *f, const cb_report *r)
 {
     char a[32], b[32], c[32], note[256];
     fputs("## crowdbake roster report\n\n", f);
-    report_budget_line(f, r, "**");
+    report_budget_line(f, r, "**", "  \n"); /* Markdown's line break: the VAT line under the verdict */
     fputs("\n| type | bones | rows | vertices | palette | bytes | VAT RGBA16F+RGBA8 | VAT / palette | mesh | palette encoding "
           "error mm/m | palette visible error mm/m | VAT error mm/m | notes |\n|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|---|\n",
           f);
@@ -354,5 +354,5 @@ void cb_report_paragraph(FILE *f, const cb_report *r)
     fprintf(f, "%u type%s in %u palette%s: %s of palettes + %s of meshes; vertex animation textures of the same frames "
                "would take %.1fx the palettes. ",
             r->type_count, r->type_count == 1 ? "" : "s", files, files == 1 ? "" : "s", a, b, report_ratio(r->vat_total[0], r->palettes_total));
-    report_budget_line(f, r, "");
+    report_budget_line(f, r, "", "\n");
 }

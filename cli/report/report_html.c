@@ -428,7 +428,7 @@ void cb_report_html(FILE *f, const cb_report *r)
     else fputs("<body>\n", f);
     fputs("<h1>crowdbake roster report</h1>\n<p class=\"summary", f);
     fputs(r->over_budget ? " over\">" : "\">", f);
-    report_budget_line(f, r, "");
+    report_budget_line(f, r, "", "<br>\n");
     fputs("</p>\n", f);
     if (r->over_budget) html_overrun(f, r);
     html_chart(f, r);

@@ -12,8 +12,9 @@ const char *report_limit_warnings(const cb_report_type *t, char *buf, size_t siz
 const char *report_notes(const cb_report_type *t, char *buf, size_t size);
 /* a / b, 0 when b is 0. */
 double report_ratio(uint64_t a, uint64_t b);
-/* The roster's total against its budget, in one sentence; `bold` wraps the verdict. */
-void report_budget_line(FILE *f, const cb_report *r, const char *bold);
+/* The roster's total against its budget: the verdict alone on its line (`bold` wraps it,
+ * `line_end` ends it: "\n", Markdown's "  \n", HTML's "<br>"), then the VAT comparison. */
+void report_budget_line(FILE *f, const cb_report *r, const char *bold, const char *line_end);
 /* The foot-sync section (report_gaits.c): the gaits of a type, its warnings, and each rendering. */
 void report_fill_gaits(const cb_roster_type *rt, cb_report_type *t);
 uint32_t report_gait_warnings(const cb_report_type *t);
