@@ -1,4 +1,4 @@
-/* cmd_bake.c - `crowdbake bake MODEL -o OUT.pal|OUT.exr`: the main job. */
+/* cmd_bake.c - `crowdbake bake MODEL -o OUT.pal|.exr|.ktx2|.bvat.json`: the main job. */
 #include <math.h>
 #include <stdlib.h>
 #include <stdio.h>
@@ -81,8 +81,9 @@ const char cmd_bake_usage[] =
     "  --exclude-clip A,B         every clip but these\n"
     "  --loop A,B                 these clips loop, --one-shot A,B these play once, whatever their\n"
     "  --one-shot A,B             poses say (default: decided from the poses; `info` says why)\n"
-    "  --speed-reference M_PER_S  ground speed at playback rate 1, stored in the header\n"
-    "  --zstd                     compress the .pal payload (readers decompress once)\n"
+    "  --speed-reference UNITS_PER_S  ground speed at playback rate 1 (model units/s), stored in the header\n"
+    "  --zstd                     compress the .pal payload (readers decompress once) and the .ktx2\n"
+    "                             level (Zstandard supercompression, as toktx --zcmp)\n"
     "  --exr-compression none|rle|zips|zip|piz  (default none; lossless only)\n"
     "  -j, --threads N            sample clips on N threads (default: the number of cores); the\n"
     "                             output is byte-identical for any N\n"
@@ -203,7 +204,7 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
         return cli_usage_error("bake", "a catalog writes pal and/or exr, and babylon beside either (--format pal,babylon); "
                                "ktx2 is for single models for now");
     if (a->zstd && a->format && !(cb_formats_parse(a->format) & CB_FORMAT_PAL))
-        return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+        return cli_usage_error("bake", "--zstd compresses .pal payloads (a catalog writes no .ktx2); EXR takes --exr-compression");
     cb_bake_settings over;
     unsigned fields;
     int rc = parse_settings(a, &over, &fields);
@@ -408,7 +409,8 @@ static int single_model_checks(const bake_args *a, cb_bake_settings *s)
     if (!cb_bake_settings_writable(s))
         return cli_usage_error("bake", "KTX2 palettes hold half or float texels (RGBA16F, RGBA32F; common KTX2 loaders "
                                "refuse u16's RGBA16UI); use --precision half|float%s", want_pal ? " (or write only the .pal)" : "");
-    if (a->zstd && !want_pal) return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+    if (a->zstd && !(s->formats & (CB_FORMAT_PAL | CB_FORMAT_KTX2)))
+        return cli_usage_error("bake", "--zstd compresses .pal payloads and .ktx2 levels; EXR takes --exr-compression");
     return 0;
 }
 
@@ -461,7 +463,7 @@ int cmd_bake(int argc, char **argv)
         {"--format", "pal,exr", &a.format, NULL},  {"--fps", "N", &a.fps, NULL},
         {"--layout", "LAYOUT", &a.layout, NULL},   {"--precision", "PRECISION", &a.precision, NULL},
         {"--max-texture-size", "N", &a.max_size, NULL}, {"--root-motion", "keep|in-place|loops-in-place", &a.root_motion, NULL},
-        {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "M_PER_S", &a.speed_ref, NULL},
+        {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "UNITS_PER_S", &a.speed_ref, NULL},
         {"--exr-compression", "NAME", &a.exr_compression, NULL}, {"--zstd", NULL, NULL, &a.zstd},
         {"--json", NULL, NULL, &a.json},
         {"-j", "N", &a.threads, NULL},             {"--threads", "N", &a.threads, NULL},
@@ -480,7 +482,7 @@ int cmd_bake(int argc, char **argv)
     if (rc) return rc;
     a.quiet = a.out.quiet;
     if (ends_with(a.model, ".toml")) return bake_catalog(&a, &limits);
-    if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
+    if (!a.output) return cli_usage_error("bake", "-o OUT.pal, OUT.exr, OUT.ktx2 or OUT.bvat.json is required");
     if (a.depfile || a.depfile_manifest || a.manifest || a.force || a.out_dir || a.type || a.fragment)
         return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
                                a.depfile ? "--depfile" : a.depfile_manifest ? "--depfile-manifest-only" : a.manifest
@@ -494,7 +496,7 @@ int cmd_bake(int argc, char **argv)
     if ((rc = parse_settings(&a, &settings, &fields)) || (rc = single_model_checks(&a, &settings))) return rc;
     double speed_ref = 0;
     if (a.speed_ref && (!cli_parse_double(a.speed_ref, &speed_ref) || speed_ref < 0))
-        return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
+        return cli_usage_error("bake", "--speed-reference wants a non-negative speed in the model's units per second");
     if (parse_threads(a.threads, &threads, "--threads")) return CLI_EXIT_USAGE;
 
     double t0 = now_seconds();

@@ -28,7 +28,8 @@ const char cmd_report_usage[] =
     "  --target NAME   the budget's target profile (docs/budget.md): replaces the catalog's\n"
     "                  [budget] target; for a MODEL, the only way to give one\n"
     "  --out-dir DIR   a catalog's palettes are brought up to date there, not in its out_dir\n"
-    "  -v, --verbose   a line per type on stderr as it is baked (the default on a terminal)\n"
+    "  -v, --verbose   a line per type on stderr as it is baked and as its runtime meshes are measured\n"
+    "                  (the default on a terminal)\n"
     "  -q, --quiet     no progress lines\n"
     "Exit code 3 when the roster exceeds its budget, unless --no-fail.\n";
 
@@ -196,7 +197,9 @@ int cmd_report(int argc, char **argv)
     cb_error rerr = {0};
     if (!cb_report_build(&cat, &roster, &r, &rerr)) {
         r.single_model = model;
-        cb_report_add_runtime(&roster, &r);
+        /* then a line per type as its runtime meshes are measured: seconds more, which the log
+         * alone left silent (stdout redirected, the report still to come) */
+        cb_report_add_runtime(&roster, &r, opt.log);
         if (json) cb_report_json(stdout, &r);
         else if (markdown) cb_report_markdown(stdout, &r);
         else cb_report_text(stdout, &r);

@@ -7,7 +7,7 @@
 static const cli_command commands[] = {
     {"info", "what a model holds: skins, joints, meshes, clips", cmd_info_usage, cmd_info},
     {"sample", "the joint matrices of each baked frame, as JSON", cmd_sample_usage, cmd_sample},
-    {"bake", "bake a model's clips into a bone-matrix palette (.pal / .exr)", cmd_bake_usage, cmd_bake},
+    {"bake", "bake a model's clips into a bone-matrix palette (.pal / .exr / .ktx2 / .bvat.json)", cmd_bake_usage, cmd_bake},
     {"inspect", "the header and clip table of a palette; decode a frame", cmd_inspect_usage, cmd_inspect},
     {"verify", "skin with a palette as the runtime does; compare with the glTF", cmd_verify_usage, cmd_verify},
     {"preview", "a contact sheet PNG of a palette skinning its model", cmd_preview_usage, cmd_preview},

@@ -83,43 +83,6 @@ static int pick_skin(const cb_model *m)
     return m->skin_count ? 0 : -1;
 }
 
-static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, type_work *w, cb_roster_type *t,
-                            cb_error *err)
-{
-    const cb_model *m = w->model;
-    uint32_t n = an->clips ? an->clip_count : m->animation_count;
-    w->plan = calloc(n ? n : 1, sizeof *w->plan);
-    w->clip_requests = calloc(n ? n : 1, sizeof *w->clip_requests);
-    t->clips = calloc(n ? n : 1, sizeof *t->clips);
-    if (!w->plan || !w->clip_requests || !t->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    char where[1100];
-    for (uint32_t i = 0; i < n; ++i) {
-        cb_clip_plan *p = &w->plan[i];
-        w->clip_requests[i] = (cb_clip_request){-1, 0};
-        if (!an->clips) {
-            *p = (cb_clip_plan){(int32_t)i, m->animations[i].name, -1, 0, false};
-            continue;
-        }
-        const cb_catalog_clip *c = &an->clips[i];
-        int32_t a = cb_model_find_animation(m, c->source);
-        const struct cb_skipped_clip *skip = a < 0 ? cb_model_find_skipped_clip(m, c->source) : NULL;
-        if (skip) /* asked for by name: an error, not a warning */
-            return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s", roster_at(cat, c->pos, where, sizeof where), an->name,
-                           skip->reason);
-        if (a < 0) {
-            char list[512] = "";
-            for (uint32_t k = 0; k < m->animation_count; ++k)
-                snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", k ? ", " : "", m->animations[k].name);
-            return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s has no clip '%s'; its clips are: %s",
-                           roster_at(cat, c->pos, where, sizeof where), an->name, m->source, c->source, list);
-        }
-        *p = (cb_clip_plan){a, c->name, c->loop, c->fps, false};
-        w->clip_requests[i] = (cb_clip_request){c->fps_auto, c->max_error_mm};
-    }
-    t->clip_count = n;
-    return CB_OK;
-}
-
 static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_type *t, cb_error *err)
 {
     cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
@@ -251,7 +214,7 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     t->mesh_bytes = cb_model_skin_mesh_bytes(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
-    if (plan_clips(run->cat, an, w, t, err) || plan_job(run, an, w, t, err) ||
+    if (roster_plan_clips(run->cat, an, w->model, &w->plan, &w->clip_requests, t, err) || plan_job(run, an, w, t, err) ||
         analyze_clips(run->opt->limits, w, t, err) || roster_match_states(run->cat, an, t, err) ||
         roster_decide_states(run->cat, an, t, err) || check_lods(run, an, w, t, err)) {
         list_unloaded_lods(an, w, t);

@@ -10,6 +10,14 @@
 /* "CATALOG:LINE:COLUMN" of a place in the catalog, into buf. */
 const char *roster_at(const cb_catalog *cat, cb_source_pos pos, char *buf, size_t size);
 
+/* The clips a type bakes, in row order, with their catalog requests, and t->clips allocated
+ * (roster_clips.c): the catalog's clips list, else the states' clips and extra_clips (a note
+ * names what was left out), else every clip. */
+cb_status roster_plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, const cb_model *m, cb_clip_plan **plan,
+                            cb_clip_request **requests, cb_roster_type *t, cb_error *err);
+/* Fails naming the state whose keywords match none of `names` (the clips it could play). */
+cb_status roster_state_matches_none(const cb_catalog *cat, const cb_catalog_animal *an, const cb_catalog_state *st,
+                                   const char *const *names, uint32_t count, cb_error *err);
 /* Each state's clip (state_clip), by its keywords; fails naming the state that matches none. */
 cb_status roster_match_states(const cb_catalog *cat, const cb_catalog_animal *an, cb_roster_type *t, cb_error *err);
 /* Which states follow the speed (state_sync, cb_decide_sync) and the speed reference; fails
