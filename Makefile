@@ -94,7 +94,7 @@ API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/
 SONAME    := libcrowdbake.so.$(API_MAJOR)
 GODOT_ADDON_ZIP := $(BUILD)/crowdbake-godot-addon.zip
 
-all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(SAMPLE_GLB)
+all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(SAMPLE_GLB) $(WEB_GLSL)
 
 # ---- dependencies --------------------------------------------------------------------
 DEPS_STAMP := $(BUILD)/.deps-ok
@@ -142,6 +142,15 @@ $(BUILD)/obj/lib/formats/gltf_load.o $(BUILD)/obj/lib/formats/gltf_container.o $
 # under the sanitizers (14 s at -O0, every check still in): the sanitizer build skips its
 # optimizer.
 $(BUILD)/obj/lib/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-O0)
+
+# The shipped GLSL as a JavaScript module beside the web runtime's modules, so that they find it
+# wherever they are served from (the source tree, `make install`'s share/crowdbake/web, a copy of
+# the folder in an npm-style layout): an import, not a fetch of a path relative to the module.
+WEB_GLSL := web/crowdbake_palette_glsl.mjs
+$(WEB_GLSL): samples/shaders/crowdbake_palette.glsl
+	python3 -c "import json, sys; d = open(sys.argv[1], encoding='utf-8').read(); \
+	print('// generated from ' + sys.argv[1] + ' by make: the shipped GLSL, as crowdbake_crowd.mjs imports it'); \
+	print('export const PALETTE_GLSL = ' + json.dumps(d) + ';')" $< > $@.tmp && mv $@.tmp $@
 
 # The shipped GLSL, embedded so `crowdbake preview` renders with exactly what runtimes get.
 $(BUILD)/gen/palette_glsl.c: samples/shaders/crowdbake_palette.glsl
@@ -216,7 +225,7 @@ $(GODOT_ADDON_ZIP): $(GODOT_ADDON_FILES)
 # addons the viewer imports from) and fzstd, from web/package-lock.json.
 WEBDIR = $(DATADIR)/crowdbake/web
 THREE  = web/node_modules/three
-install-web: web/node_modules/.package-lock.json
+install-web: web/node_modules/.package-lock.json $(WEB_GLSL)
 	install -d $(DESTDIR)$(WEBDIR)/node_modules/three/build $(DESTDIR)$(WEBDIR)/node_modules/three/examples \
 	  $(DESTDIR)$(DATADIR)/crowdbake/samples/shaders
 	install -m 644 web/viewer.html web/*.mjs web/serve.py web/package.json web/package-lock.json $(DESTDIR)$(WEBDIR)/
