@@ -94,7 +94,7 @@ API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/
 SONAME    := libcrowdbake.so.$(API_MAJOR)
 GODOT_ADDON_ZIP := $(BUILD)/crowdbake-godot-addon.zip
 
-all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(SAMPLE_GLB) $(WEB_GLSL)
+all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(SAMPLE_GLB)
 
 # ---- dependencies --------------------------------------------------------------------
 DEPS_STAMP := $(BUILD)/.deps-ok
@@ -151,6 +151,7 @@ $(WEB_GLSL): samples/shaders/crowdbake_palette.glsl
 	python3 -c "import json, sys; d = open(sys.argv[1], encoding='utf-8').read(); \
 	print('// generated from ' + sys.argv[1] + ' by make: the shipped GLSL, as crowdbake_crowd.mjs imports it'); \
 	print('export const PALETTE_GLSL = ' + json.dumps(d) + ';')" $< > $@.tmp && mv $@.tmp $@
+all: $(WEB_GLSL)
 
 # The shipped GLSL, embedded so `crowdbake preview` renders with exactly what runtimes get.
 $(BUILD)/gen/palette_glsl.c: samples/shaders/crowdbake_palette.glsl
@@ -211,7 +212,16 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_A
 # ---- the Godot addon: addons/crowdbake as a zip to unpack into a project ----------------
 # Byte for byte the same on every build: files only, sorted, one date (1980-01-01 UTC), mode 644,
 # no extra fields (zip -X).
-GODOT_ADDON_FILES := $(shell find addons/crowdbake -type f | LC_ALL=C sort)
+# The demo's herd (addons/crowdbake/demo/herd/): the project's generated quadruped and its roster,
+# baked by this build's crowdbake from demo/herd.toml, so the demo scene opens to a herd.
+GODOT_DEMO := addons/crowdbake/demo/herd/roster.json
+$(GODOT_DEMO): addons/crowdbake/demo/herd.toml $(BUILD)/samples/quadruped.glb $(BUILD)/crowdbake
+	mkdir -p $(@D) && cp $(BUILD)/samples/quadruped.glb $(@D)/quadruped.glb
+	$(BUILD)/crowdbake bake $< -q
+all: $(GODOT_DEMO)
+GODOT_ADDON_FILES := $(sort $(shell find addons/crowdbake -type f -not -name '.*' -not -path '*/demo/herd/*') \
+                            $(GODOT_DEMO) addons/crowdbake/demo/herd/quadruped.glb addons/crowdbake/demo/herd/goat.pal)
+addons/crowdbake/demo/herd/quadruped.glb addons/crowdbake/demo/herd/goat.pal: $(GODOT_DEMO)
 godot-addon: $(GODOT_ADDON_ZIP)
 $(GODOT_ADDON_ZIP): $(GODOT_ADDON_FILES)
 	rm -rf $(BUILD)/godot-addon $@ && mkdir -p $(BUILD)/godot-addon

@@ -37,6 +37,7 @@ const files = {
   ...filesUnder(bakesDir, '/crowdbake/bakes'),
   '/crowdbake/check.gd': path.join(here, 'check.gd'),
   '/crowdbake/check_addon.gd': path.join(here, 'check_addon.gd'),
+  '/crowdbake/check_addon_look.gd': path.join(here, 'check_addon_look.gd'),
   '/engine/override.cfg': path.join(here, 'override.cfg'),
 };
 
