@@ -1,0 +1,599 @@
+/* crowdbake_pal.h - reader for crowdbake .pal bone-matrix palettes. Public domain / MIT-0.
+ *
+ * One C99 header, no dependencies (define CBPAL_WITH_ZSTD and link libzstd to read files
+ * baked with --zstd). In exactly one C file:
+ *
+ *     #define CROWDBAKE_PAL_IMPLEMENTATION
+ *     #include "crowdbake_pal.h"
+ *
+ * Then:
+ *
+ *     cbpal_file pal;
+ *     char err[256];
+ *     if (cbpal_open("goat.pal", 0, &pal, err, sizeof err) != 0) { puts(err); ... }
+ *     upload(pal.texels, pal.header.width, pal.header.height);   // straight from the page cache
+ *     cbpal_close(&pal);
+ *
+ * The file is mapped with mmap (read() where that fails); every size and offset is checked
+ * against the file length before use; uncompressed texels are returned without a copy.
+ * The format is specified in docs/pal-format.md. Little-endian hosts only (the texels are
+ * little-endian and handed over as they are).
+ */
+#ifndef CROWDBAKE_PAL_H
+#define CROWDBAKE_PAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define CBPAL_VERSION 3 /* newest known; files without relative positions are still written as version 1 */
+#define CBPAL_HEADER_SIZE 256
+#define CBPAL_CLIP_SIZE 80
+#define CBPAL_BONE_SIZE 32
+#define CBPAL_PAYLOAD_ALIGN 4096
+#define CBPAL_CHECKSUM_OFFSET 176
+
+enum { CBPAL_LAYOUT_MAT4 = 0, CBPAL_LAYOUT_AFFINE = 1, CBPAL_LAYOUT_QPOS = 2 };
+enum { CBPAL_PRECISION_FLOAT = 0, CBPAL_PRECISION_HALF = 1, CBPAL_PRECISION_U16 = 2 };
+/* CBPAL_FLAG_POSITIONS_RELATIVE (versions 2 and 3): qpos position texels hold the joint's position
+ * less its bone's position offset (cbpal_bone.position_offset: version 3 files store it in their
+ * offset table, version 2 files used the bind position); add it back (CB_POSITIONS_RELATIVE in
+ * the shipped GLSL). */
+/* CBPAL_FLAG_FITTED_ROWS: every clip's rows were fitted to the linear blend between them rather
+ * than sampled; CBPAL_CLIP_FITTED: this clip's were (a palette may mix fitted and sampled clips;
+ * files written before the clip flag set only the header's, and cbpal_get_clip then sets the
+ * clip's). Read and blend them as always. */
+enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u, CBPAL_FLAG_FITTED_ROWS = 8u };
+enum { CBPAL_CLIP_LOOPS = 1u, CBPAL_CLIP_FITTED = 2u };
+/* cbpal_open flags */
+enum { CBPAL_VERIFY_CHECKSUM = 1u };
+
+typedef struct cbpal_header {
+    uint32_t version, flags, header_size;
+    uint32_t layout, precision, texels_per_bone, bone_count, row_texels;
+    uint32_t rows, width, height, blocks, texel_bytes, clip_count;
+    float fps, speed_reference, linear_range, bounds_min[3], bounds_max[3], max_error, model_height;
+    float visible_error; /* max_error is at the baked rows; this includes blending two rows (0: not recorded) */
+    uint64_t input_hash, clip_table_offset, bone_table_offset, strings_offset, strings_size;
+    uint64_t payload_offset, payload_size, payload_raw_size, checksum;
+    uint64_t offset_table_offset; /* version 3 with relative positions: bone_count x 3 f32 position offsets */
+} cbpal_header;
+
+typedef struct cbpal_clip {
+    const char *name; /* NUL-terminated, inside the file */
+    uint32_t first_row, frames, flags;
+    float fps, duration, start, root_velocity[3], bounds_min[3], bounds_max[3];
+} cbpal_clip;
+
+typedef struct cbpal_bone {
+    const char *name;
+    int32_t parent;
+    float bind_position[3];
+    float position_offset[3]; /* with CBPAL_FLAG_POSITIONS_RELATIVE: added to the position texel; else 0 */
+} cbpal_bone;
+
+typedef struct cbpal_file {
+    cbpal_header header;
+    const unsigned char *data; /* the whole file */
+    size_t size;
+    const void *texels;        /* width * height * texel_bytes */
+    size_t texels_size;
+    void *owned_;              /* read() fallback buffer or decompressed texels */
+    void *map_;
+    size_t map_size_;
+} cbpal_file;
+
+/* 0 on success; otherwise non-zero and a one-line message in err. */
+int cbpal_open(const char *path, unsigned flags, cbpal_file *out, char *err, size_t err_size);
+/* Same over bytes the caller keeps alive. */
+int cbpal_open_memory(const void *data, size_t size, unsigned flags, cbpal_file *out, char *err, size_t err_size);
+void cbpal_close(cbpal_file *file);
+int cbpal_get_clip(const cbpal_file *file, uint32_t index, cbpal_clip *out);
+int cbpal_get_bone(const cbpal_file *file, uint32_t index, cbpal_bone *out);
+/* Texel coordinates of a bone's first texel in a baked row (rows wrap into column blocks). */
+void cbpal_texel_xy(const cbpal_header *h, uint32_t row, uint32_t bone, uint32_t *x, uint32_t *y);
+/* The bone's skinning matrix (column-major 4x4: the glTF joint matrix, bind space to the posed
+ * model) `time` seconds into the clip (loops wrap, one-shots clamp), the two rows blended as the
+ * shipped GLSL blends them. Attach a prop by composing it with the prop's bind-space transform.
+ * Non-zero for a clip or bone that does not exist or a time that is not finite. Uses <math.h>. */
+int cbpal_bone_matrix(const cbpal_file *file, uint32_t clip, double time, uint32_t bone, float out[16]);
+
+/* XXH64 (seed 0), streaming: the checksum and input-hash function of the format. */
+typedef struct cbpal_xxh64 {
+    uint64_t v[4], total;
+    unsigned char buf[32];
+    size_t buffered;
+} cbpal_xxh64_state;
+void cbpal_xxh64_init(cbpal_xxh64_state *s);
+void cbpal_xxh64_update(cbpal_xxh64_state *s, const void *data, size_t size);
+uint64_t cbpal_xxh64_digest(const cbpal_xxh64_state *s);
+uint64_t cbpal_xxh64(const void *data, size_t size);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CROWDBAKE_PAL_H */
+
+#ifdef CROWDBAKE_PAL_IMPLEMENTATION
+#ifndef CROWDBAKE_PAL_IMPLEMENTED
+#define CROWDBAKE_PAL_IMPLEMENTED
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#if defined(__unix__) || defined(__APPLE__)
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#define CBPAL_HAVE_MMAP 1
+#endif
+#ifdef CBPAL_WITH_ZSTD
+#include <zstd.h>
+#endif
+
+/* ---- XXH64, from the algorithm's specification ---- */
+
+#define CBPAL_P1 0x9E3779B185EBCA87ull
+#define CBPAL_P2 0xC2B2AE3D27D4EB4Full
+#define CBPAL_P3 0x165667B19E3779F9ull
+#define CBPAL_P4 0x85EBCA77C2B2AE63ull
+#define CBPAL_P5 0x27D4EB2F165667C5ull
+
+static uint64_t cbpal__rotl(uint64_t x, int r) { return (x << r) | (x >> (64 - r)); }
+static uint64_t cbpal__u64(const unsigned char *p)
+{
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    uint64_t v; /* one unaligned load on little-endian hosts */
+    memcpy(&v, p, 8);
+    return v;
+#else
+    uint64_t v = 0;
+    for (int i = 7; i >= 0; --i) v = (v << 8) | p[i];
+    return v;
+#endif
+}
+static uint32_t cbpal__u32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+static float cbpal__f32(const unsigned char *p)
+{
+    uint32_t v = cbpal__u32(p);
+    float f;
+    memcpy(&f, &v, 4);
+    return f;
+}
+static uint64_t cbpal__round(uint64_t acc, uint64_t input)
+{
+    acc += input * CBPAL_P2;
+    return cbpal__rotl(acc, 31) * CBPAL_P1;
+}
+static uint64_t cbpal__merge(uint64_t acc, uint64_t v)
+{
+    acc ^= cbpal__round(0, v);
+    return acc * CBPAL_P1 + CBPAL_P4;
+}
+
+void cbpal_xxh64_init(cbpal_xxh64_state *s)
+{
+    memset(s, 0, sizeof *s);
+    s->v[0] = CBPAL_P1 + CBPAL_P2;
+    s->v[1] = CBPAL_P2;
+    s->v[2] = 0;
+    s->v[3] = (uint64_t)0 - CBPAL_P1;
+}
+
+static void cbpal__stripe(uint64_t v[4], const unsigned char *p)
+{
+    v[0] = cbpal__round(v[0], cbpal__u64(p));
+    v[1] = cbpal__round(v[1], cbpal__u64(p + 8));
+    v[2] = cbpal__round(v[2], cbpal__u64(p + 16));
+    v[3] = cbpal__round(v[3], cbpal__u64(p + 24));
+}
+
+void cbpal_xxh64_update(cbpal_xxh64_state *s, const void *data, size_t size)
+{
+    const unsigned char *p = (const unsigned char *)data;
+    s->total += size;
+    if (s->buffered) {
+        size_t take = 32 - s->buffered < size ? 32 - s->buffered : size;
+        memcpy(s->buf + s->buffered, p, take);
+        s->buffered += take, p += take, size -= take;
+        if (s->buffered < 32) return;
+        cbpal__stripe(s->v, s->buf);
+        s->buffered = 0;
+    }
+    uint64_t v[4] = {s->v[0], s->v[1], s->v[2], s->v[3]};
+    for (; size >= 32; p += 32, size -= 32) cbpal__stripe(v, p);
+    memcpy(s->v, v, sizeof v);
+    memcpy(s->buf, p, size);
+    s->buffered = size;
+}
+
+uint64_t cbpal_xxh64_digest(const cbpal_xxh64_state *s)
+{
+    uint64_t h;
+    if (s->total >= 32) {
+        h = cbpal__rotl(s->v[0], 1) + cbpal__rotl(s->v[1], 7) + cbpal__rotl(s->v[2], 12) + cbpal__rotl(s->v[3], 18);
+        for (int i = 0; i < 4; ++i) h = cbpal__merge(h, s->v[i]);
+    } else {
+        h = CBPAL_P5;
+    }
+    h += s->total;
+    const unsigned char *p = s->buf;
+    size_t n = s->buffered;
+    for (; n >= 8; p += 8, n -= 8) h = cbpal__rotl(h ^ cbpal__round(0, cbpal__u64(p)), 27) * CBPAL_P1 + CBPAL_P4;
+    if (n >= 4) h = cbpal__rotl(h ^ ((uint64_t)cbpal__u32(p) * CBPAL_P1), 23) * CBPAL_P2 + CBPAL_P3, p += 4, n -= 4;
+    for (; n; ++p, --n) h = cbpal__rotl(h ^ (*p * CBPAL_P5), 11) * CBPAL_P1;
+    h ^= h >> 33, h *= CBPAL_P2, h ^= h >> 29, h *= CBPAL_P3, h ^= h >> 32;
+    return h;
+}
+
+uint64_t cbpal_xxh64(const void *data, size_t size)
+{
+    cbpal_xxh64_state s;
+    cbpal_xxh64_init(&s);
+    cbpal_xxh64_update(&s, data, size);
+    return cbpal_xxh64_digest(&s);
+}
+
+/* ---- validation ---- */
+
+static int cbpal__fail(char *err, size_t err_size, const char *fmt, ...)
+{
+    if (err && err_size) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, err_size, fmt, ap);
+        va_end(ap);
+    }
+    return -1;
+}
+
+/* begin + count * size <= limit, without overflow. */
+static int cbpal__fits(uint64_t begin, uint64_t count, uint64_t size, uint64_t limit)
+{
+    if (begin > limit) return 0;
+    if (size && count > (limit - begin) / size) return 0;
+    return 1;
+}
+
+static void cbpal__parse_header(const unsigned char *d, cbpal_header *h)
+{
+    uint32_t *u[] = {&h->version, &h->flags, &h->header_size, &h->layout, &h->precision, &h->texels_per_bone,
+                     &h->bone_count, &h->row_texels, &h->rows, &h->width, &h->height, &h->blocks, &h->texel_bytes,
+                     &h->clip_count};
+    for (int i = 0; i < 14; ++i) *u[i] = cbpal__u32(d + 8 + 4 * i);
+    h->fps = cbpal__f32(d + 64);
+    h->speed_reference = cbpal__f32(d + 68);
+    h->linear_range = cbpal__f32(d + 72);
+    for (int k = 0; k < 3; ++k) h->bounds_min[k] = cbpal__f32(d + 76 + 4 * k), h->bounds_max[k] = cbpal__f32(d + 88 + 4 * k);
+    h->max_error = cbpal__f32(d + 100);
+    h->model_height = cbpal__f32(d + 104);
+    h->visible_error = cbpal__f32(d + 108);
+    uint64_t *w[] = {&h->input_hash, &h->clip_table_offset, &h->bone_table_offset, &h->strings_offset, &h->strings_size,
+                     &h->payload_offset, &h->payload_size, &h->payload_raw_size, &h->checksum};
+    for (int i = 0; i < 9; ++i) *w[i] = cbpal__u64(d + 112 + 8 * i);
+    h->offset_table_offset = h->version >= 3 ? cbpal__u64(d + 184) : 0;
+}
+
+static int cbpal__check_string(const cbpal_header *h, const unsigned char *d, uint32_t off, uint32_t len)
+{
+    return (uint64_t)off + len < h->strings_size && d[h->strings_offset + off + len] == 0;
+}
+
+static int cbpal__validate(const unsigned char *d, size_t size, cbpal_header *h, char *err, size_t es)
+{
+    static const unsigned char magic[8] = {'C', 'B', 'P', 'A', 'L', '\r', '\n', 0x1a};
+    if (size < 8 || memcmp(d, magic, 8) != 0) return cbpal__fail(err, es, "not a crowdbake palette (wrong magic)");
+    if (size < 12) return cbpal__fail(err, es, "truncated: %zu bytes, shorter than the header", size);
+    uint32_t version = cbpal__u32(d + 8);
+    if (version > CBPAL_VERSION)
+        return cbpal__fail(err, es, "palette format version %u is newer than this reader (version %u); update the reader",
+                           version, CBPAL_VERSION);
+    if (version < 1) return cbpal__fail(err, es, "unknown palette format version %u", version);
+    if (size < CBPAL_HEADER_SIZE) return cbpal__fail(err, es, "truncated: %zu bytes, shorter than the header", size);
+    cbpal__parse_header(d, h);
+    if (h->header_size != CBPAL_HEADER_SIZE) return cbpal__fail(err, es, "bad header size %u", h->header_size);
+    if (h->layout > 2 || h->precision > 2) return cbpal__fail(err, es, "unknown layout %u or precision %u", h->layout, h->precision);
+    static const uint32_t tpb[3] = {4, 3, 2}, tbytes[3] = {16, 8, 8};
+    if (h->texels_per_bone != tpb[h->layout] || h->texel_bytes != tbytes[h->precision])
+        return cbpal__fail(err, es, "texels per bone or bytes per texel do not match the layout and precision");
+    if (h->bone_count == 0 || (uint64_t)h->bone_count * h->texels_per_bone != h->row_texels || h->blocks == 0 ||
+        (uint64_t)h->blocks * h->row_texels != h->width || h->height == 0 || (uint64_t)h->height * h->blocks < h->rows ||
+        (uint64_t)(h->blocks - 1) * h->height >= h->rows || (uint64_t)h->width * h->height * h->texel_bytes != h->payload_raw_size)
+        return cbpal__fail(err, es, "inconsistent texture geometry (%u bones, %u rows, %ux%u in %u blocks)", h->bone_count,
+                           h->rows, h->width, h->height, h->blocks);
+    if (!cbpal__fits(h->clip_table_offset, h->clip_count, CBPAL_CLIP_SIZE, size) || h->clip_table_offset < CBPAL_HEADER_SIZE)
+        return cbpal__fail(err, es, "clip table (offset %llu, %u clips) lies outside the file",
+                           (unsigned long long)h->clip_table_offset, h->clip_count);
+    if (!cbpal__fits(h->bone_table_offset, h->bone_count, CBPAL_BONE_SIZE, size) || h->bone_table_offset < CBPAL_HEADER_SIZE)
+        return cbpal__fail(err, es, "bone table (offset %llu, %u bones) lies outside the file",
+                           (unsigned long long)h->bone_table_offset, h->bone_count);
+    if (h->version >= 3 && (h->flags & CBPAL_FLAG_POSITIONS_RELATIVE) &&
+        (!cbpal__fits(h->offset_table_offset, h->bone_count, 12, size) || h->offset_table_offset < CBPAL_HEADER_SIZE))
+        return cbpal__fail(err, es, "position offset table (offset %llu, %u bones) lies outside the file",
+                           (unsigned long long)h->offset_table_offset, h->bone_count);
+    if (!cbpal__fits(h->strings_offset, h->strings_size, 1, size) || h->strings_offset < CBPAL_HEADER_SIZE)
+        return cbpal__fail(err, es, "string table lies outside the file");
+    if (h->payload_offset % CBPAL_PAYLOAD_ALIGN || !cbpal__fits(h->payload_offset, h->payload_size, 1, size) ||
+        h->payload_offset < CBPAL_HEADER_SIZE)
+        return cbpal__fail(err, es, "truncated or bad payload: offset %llu + %llu bytes, file has %zu",
+                           (unsigned long long)h->payload_offset, (unsigned long long)h->payload_size, size);
+    if (!(h->flags & CBPAL_FLAG_ZSTD) && h->payload_size != h->payload_raw_size)
+        return cbpal__fail(err, es, "payload is %llu bytes, the texture needs %llu", (unsigned long long)h->payload_size,
+                           (unsigned long long)h->payload_raw_size);
+    for (uint32_t i = 0; i < h->clip_count; ++i) {
+        const unsigned char *c = d + h->clip_table_offset + (uint64_t)i * CBPAL_CLIP_SIZE;
+        uint32_t first = cbpal__u32(c + 8), frames = cbpal__u32(c + 12);
+        if (!cbpal__check_string(h, d, cbpal__u32(c), cbpal__u32(c + 4)) || frames == 0 || first > h->rows ||
+            frames > h->rows - first)
+            return cbpal__fail(err, es, "clip %u has a bad name or rows %u..%u outside the %u rows", i, first,
+                               first + frames, h->rows);
+    }
+    for (uint32_t i = 0; i < h->bone_count; ++i) {
+        const unsigned char *b = d + h->bone_table_offset + (uint64_t)i * CBPAL_BONE_SIZE;
+        int32_t parent = (int32_t)cbpal__u32(b + 8);
+        if (!cbpal__check_string(h, d, cbpal__u32(b), cbpal__u32(b + 4)) || parent < -1 || parent >= (int32_t)h->bone_count)
+            return cbpal__fail(err, es, "bone %u has a bad name or parent", i);
+    }
+    return 0;
+}
+
+static uint64_t cbpal__checksum(const unsigned char *d, uint64_t end)
+{
+    static const unsigned char zero[8] = {0};
+    cbpal_xxh64_state s;
+    cbpal_xxh64_init(&s);
+    cbpal_xxh64_update(&s, d, CBPAL_CHECKSUM_OFFSET);
+    cbpal_xxh64_update(&s, zero, 8);
+    cbpal_xxh64_update(&s, d + CBPAL_CHECKSUM_OFFSET + 8, (size_t)(end - CBPAL_CHECKSUM_OFFSET - 8));
+    return cbpal_xxh64_digest(&s);
+}
+
+static int cbpal__attach(cbpal_file *f, unsigned flags, char *err, size_t es)
+{
+    cbpal_header *h = &f->header;
+    if (cbpal__validate(f->data, f->size, h, err, es)) return -1;
+    if ((flags & CBPAL_VERIFY_CHECKSUM) && cbpal__checksum(f->data, h->payload_offset + h->payload_size) != h->checksum)
+        return cbpal__fail(err, es, "checksum mismatch: the file is corrupted");
+    const unsigned char *payload = f->data + h->payload_offset;
+    f->texels_size = (size_t)h->payload_raw_size;
+    if (!(h->flags & CBPAL_FLAG_ZSTD)) {
+        f->texels = payload;
+        return 0;
+    }
+#ifdef CBPAL_WITH_ZSTD
+    void *out = malloc(f->texels_size ? f->texels_size : 1);
+    if (!out) return cbpal__fail(err, es, "out of memory for %zu decompressed bytes", f->texels_size);
+    size_t got = ZSTD_decompress(out, f->texels_size, payload, (size_t)h->payload_size);
+    if (ZSTD_isError(got) || got != f->texels_size) {
+        free(out);
+        return cbpal__fail(err, es, "compressed payload does not decompress to %zu bytes", f->texels_size);
+    }
+    f->owned_ = out; /* replaces nothing: read() buffers are freed through map_ below */
+    f->texels = out;
+    return 0;
+#else
+    return cbpal__fail(err, es, "payload is zstd-compressed; build the reader with CBPAL_WITH_ZSTD and -lzstd");
+#endif
+}
+
+int cbpal_open_memory(const void *data, size_t size, unsigned flags, cbpal_file *out, char *err, size_t err_size)
+{
+    memset(out, 0, sizeof *out);
+    out->data = (const unsigned char *)data;
+    out->size = size;
+    if (cbpal__attach(out, flags, err, err_size)) {
+        cbpal_close(out);
+        return -1;
+    }
+    return 0;
+}
+
+int cbpal_open(const char *path, unsigned flags, cbpal_file *out, char *err, size_t err_size)
+{
+    memset(out, 0, sizeof *out);
+#ifdef CBPAL_HAVE_MMAP
+    int fd = open(path, O_RDONLY);
+    if (fd < 0) return cbpal__fail(err, err_size, "%s: %s", path, strerror(errno));
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        close(fd);
+        return cbpal__fail(err, err_size, "%s: not a regular file", path);
+    }
+    size_t size = (size_t)st.st_size;
+    void *map = size ? mmap(NULL, size, PROT_READ, MAP_PRIVATE, fd, 0) : MAP_FAILED;
+    if (map != MAP_FAILED) {
+        close(fd);
+        out->map_ = map;
+        out->map_size_ = size;
+        out->data = (const unsigned char *)map;
+        out->size = size;
+    } else { /* read() fallback */
+        unsigned char *buf = (unsigned char *)malloc(size ? size : 1);
+        size_t got = 0;
+        while (buf && got < size) {
+            ssize_t n = read(fd, buf + got, size - got);
+            if (n <= 0) break;
+            got += (size_t)n;
+        }
+        close(fd);
+        if (!buf || got != size) {
+            free(buf);
+            return cbpal__fail(err, err_size, "%s: read failed", path);
+        }
+        out->map_ = buf;
+        out->data = buf;
+        out->size = size;
+    }
+#else
+    FILE *fp = fopen(path, "rb");
+    if (!fp) return cbpal__fail(err, err_size, "%s: %s", path, strerror(errno));
+    fseek(fp, 0, SEEK_END);
+    long len = ftell(fp);
+    fseek(fp, 0, SEEK_SET);
+    unsigned char *buf = (unsigned char *)malloc(len > 0 ? (size_t)len : 1);
+    size_t size = buf && len > 0 ? fread(buf, 1, (size_t)len, fp) : 0;
+    fclose(fp);
+    out->map_ = buf;
+    out->data = buf;
+    out->size = size;
+#endif
+    char inner[256];
+    if (cbpal__attach(out, flags, inner, sizeof inner)) {
+        cbpal_close(out);
+        return cbpal__fail(err, err_size, "%s: %s", path, inner);
+    }
+    return 0;
+}
+
+void cbpal_close(cbpal_file *f)
+{
+    free(f->owned_);
+#ifdef CBPAL_HAVE_MMAP
+    if (f->map_ && f->map_size_) munmap(f->map_, f->map_size_);
+    else
+#endif
+        free(f->map_);
+    memset(f, 0, sizeof *f);
+}
+
+int cbpal_get_clip(const cbpal_file *f, uint32_t i, cbpal_clip *out)
+{
+    if (i >= f->header.clip_count) return -1;
+    const unsigned char *c = f->data + f->header.clip_table_offset + (uint64_t)i * CBPAL_CLIP_SIZE;
+    out->name = (const char *)f->data + f->header.strings_offset + cbpal__u32(c);
+    out->first_row = cbpal__u32(c + 8);
+    out->frames = cbpal__u32(c + 12);
+    out->fps = cbpal__f32(c + 16);
+    out->duration = cbpal__f32(c + 20);
+    out->start = cbpal__f32(c + 24);
+    out->flags = cbpal__u32(c + 28) | (f->header.flags & CBPAL_FLAG_FITTED_ROWS ? CBPAL_CLIP_FITTED : 0u);
+    for (int k = 0; k < 3; ++k) {
+        out->root_velocity[k] = cbpal__f32(c + 32 + 4 * k);
+        out->bounds_min[k] = cbpal__f32(c + 44 + 4 * k);
+        out->bounds_max[k] = cbpal__f32(c + 56 + 4 * k);
+    }
+    return 0;
+}
+
+int cbpal_get_bone(const cbpal_file *f, uint32_t i, cbpal_bone *out)
+{
+    if (i >= f->header.bone_count) return -1;
+    const unsigned char *b = f->data + f->header.bone_table_offset + (uint64_t)i * CBPAL_BONE_SIZE;
+    out->name = (const char *)f->data + f->header.strings_offset + cbpal__u32(b);
+    out->parent = (int32_t)cbpal__u32(b + 8);
+    const cbpal_header *h = &f->header;
+    const unsigned char *o = f->data + h->offset_table_offset + (uint64_t)i * 12;
+    for (int k = 0; k < 3; ++k) {
+        out->bind_position[k] = cbpal__f32(b + 16 + 4 * k);
+        out->position_offset[k] = !(h->flags & CBPAL_FLAG_POSITIONS_RELATIVE) ? 0.0f
+                                  : h->version >= 3 ? cbpal__f32(o + 4 * k) : out->bind_position[k];
+    }
+    return 0;
+}
+
+void cbpal_texel_xy(const cbpal_header *h, uint32_t row, uint32_t bone, uint32_t *x, uint32_t *y)
+{
+    *x = (row / h->height) * h->row_texels + bone * h->texels_per_bone;
+    *y = row % h->height;
+}
+
+/* ---- a bone's matrix at a time, decoded and blended as runtimes/glsl/crowdbake_palette.glsl ---- */
+
+static float cbpal__half(uint16_t h) /* the exponent rebiased; zero and subnormals are m 2^-24 */
+{
+    uint32_t e = (h >> 10) & 0x1fu, m = h & 0x3ffu, bits = (uint32_t)(h & 0x8000u) << 16 | m << 13;
+    float f;
+    bits |= e == 31 ? 0x7f800000u : (e + 112) << 23;
+    memcpy(&f, &bits, 4);
+    return e ? f : (h & 0x8000u ? -1.0f : 1.0f) * (float)m / 16777216.0f;
+}
+static float cbpal__snorm(uint16_t u) { return fmaxf((float)((int32_t)u - (u >= 32768u ? 65536 : 0)) / 32767.0f, -1.0f); }
+
+/* Texel k of a bone in a row, as the GLSL's cb_texel decodes it. */
+static void cbpal__texel(const cbpal_file *f, uint32_t row, uint32_t bone, uint32_t k, float t[4])
+{
+    const cbpal_header *h = &f->header;
+    uint32_t x, y;
+    cbpal_texel_xy(h, row, bone, &x, &y);
+    const unsigned char *p = (const unsigned char *)f->texels + ((size_t)y * h->width + x + k) * h->texel_bytes;
+    uint16_t u[4];
+    memcpy(u, p, 8);
+    const float *lo = h->bounds_min, *hi = h->bounds_max, range = h->linear_range;
+    int box = (h->layout == CBPAL_LAYOUT_QPOS && k == 1) || (h->layout == CBPAL_LAYOUT_MAT4 && k == 3), i;
+    float scale = h->layout == CBPAL_LAYOUT_QPOS ? 1.0f : range; /* quaternions are plain snorm */
+    if (h->precision == CBPAL_PRECISION_FLOAT) memcpy(t, p, 16);
+    for (i = 0; i < 4 && h->precision == CBPAL_PRECISION_HALF; ++i) t[i] = cbpal__half(u[i]);
+    if (h->precision != CBPAL_PRECISION_U16) return;
+    for (i = 0; i < 3; ++i) t[i] = box ? lo[i] + (hi[i] - lo[i]) * ((float)u[i] / 65535.0f) : cbpal__snorm(u[i]) * scale;
+    if (h->layout == CBPAL_LAYOUT_QPOS) t[3] = k == 0 ? cbpal__snorm(u[3]) : range * (float)u[3] / 65535.0f;
+    else if (h->layout == CBPAL_LAYOUT_AFFINE) t[3] = lo[k] + (hi[k] - lo[k]) * ((float)u[3] / 65535.0f);
+    else t[3] = k == 3 ? 1.0f : 0.0f;
+}
+
+/* Texel k of a bone, mixed between two rows with weight fr on the second (qpos: the rotation the
+ * shorter way). */
+static void cbpal__mix(const cbpal_file *f, uint32_t r0, uint32_t r1, float fr, uint32_t bone, uint32_t k, float t[4])
+{
+    float a[4], b[4];
+    cbpal__texel(f, r0, bone, k, a);
+    cbpal__texel(f, r1, bone, k, b);
+    int flip = f->header.layout == CBPAL_LAYOUT_QPOS && k == 0 && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0;
+    for (int i = 0; i < 4; ++i) t[i] = a[i] + ((flip ? -b[i] : b[i]) - a[i]) * fr;
+}
+
+/* The rows at `time` and the weight of the second, as the GLSL's cb_frame picks them. */
+static int cbpal__frame(const cbpal_clip *c, double time, uint32_t *r0, uint32_t *r1, float *fr)
+{
+    double frames = c->frames, fpos = time * c->fps, f0, f1;
+    if (!isfinite(fpos)) return -1;
+    if (c->flags & CBPAL_CLIP_LOOPS) fpos -= frames * floor(fpos / frames);
+    else fpos = fpos < 0 ? 0 : fpos > frames - 1 ? frames - 1 : fpos;
+    if (!(fpos >= 0 && fpos < frames)) fpos = 0; /* rounding at the wrap */
+    f0 = floor(fpos), f1 = f0 + 1 < frames ? f0 + 1 : (c->flags & CBPAL_CLIP_LOOPS) ? 0 : f0; /* a loop's last row blends into its first */
+    *fr = (float)(fpos - f0), *r0 = c->first_row + (uint32_t)f0, *r1 = c->first_row + (uint32_t)f1;
+    return 0;
+}
+
+int cbpal_bone_matrix(const cbpal_file *f, uint32_t clip, double time, uint32_t bone, float m[16])
+{
+    cbpal_clip c;
+    cbpal_bone b;
+    uint32_t r0, r1, k;
+    float fr, t[4][4] = {{0}}, p[3];
+    if (cbpal_get_clip(f, clip, &c) || cbpal_get_bone(f, bone, &b) || cbpal__frame(&c, time, &r0, &r1, &fr)) return -1;
+    for (k = 0; k < f->header.texels_per_bone; ++k) cbpal__mix(f, r0, r1, fr, bone, k, t[k]);
+    memset(m, 0, 16 * sizeof *m), m[15] = 1.0f;
+    if (f->header.layout == CBPAL_LAYOUT_QPOS) {
+        float n = sqrtf(t[0][0] * t[0][0] + t[0][1] * t[0][1] + t[0][2] * t[0][2] + t[0][3] * t[0][3]);
+        float x = t[0][0] / n, y = t[0][1] / n, z = t[0][2] / n, w = t[0][3] / n;
+        float r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y),  /* column 0 */
+                      2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x),  /* column 1 */
+                      2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)}; /* column 2 */
+        for (k = 0; k < 9; ++k) m[k / 3 * 4 + k % 3] = t[1][3] * r[k]; /* scale */
+        memcpy(p, t[1], sizeof p);
+    } else {
+        for (k = 0; k < 12; ++k) /* affine: texel k is row k; mat4: texel k is column k */
+            m[k / 3 * 4 + k % 3] = f->header.layout == CBPAL_LAYOUT_AFFINE ? t[k % 3][k / 3] : t[k / 3][k % 3];
+        for (k = 0; k < 3; ++k) p[k] = f->header.layout == CBPAL_LAYOUT_AFFINE ? t[k][3] : t[3][k];
+    }
+    /* qpos and relative positions: A (v - b) + p, with p stored less the bone's position offset. */
+    int about_bind = f->header.layout == CBPAL_LAYOUT_QPOS || (f->header.flags & CBPAL_FLAG_POSITIONS_RELATIVE);
+    for (k = 0; k < 3; ++k) {
+        m[12 + k] = p[k] + b.position_offset[k];
+        if (about_bind) m[12 + k] -= m[k] * b.bind_position[0] + m[4 + k] * b.bind_position[1] + m[8 + k] * b.bind_position[2];
+    }
+    return 0;
+}
+
+#endif /* CROWDBAKE_PAL_IMPLEMENTED */
+#endif /* CROWDBAKE_PAL_IMPLEMENTATION */

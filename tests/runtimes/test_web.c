@@ -1,0 +1,131 @@
+/* test_web.c - the WebGL2 runtime (runtimes/web/crowdbake_crowd.mjs, whose vertex shader is the shipped
+ * runtimes/glsl/crowdbake_palette.glsl) in a real browser: headless Chromium, WebGL2 on
+ * SwiftShader, driven by tests/runtimes/browser/skin_check.mjs. For every layout x precision, palettes
+ * baked by the command are read by runtimes/web/crowdbake_pal.mjs, uploaded by the runtime and drawn as one
+ * instanced draw per time; transform feedback reads every instance's skinned vertices back and
+ * they must match the C runtime's positions of the conformance cases (conformance.h, the one set
+ * every runtime's test reads) within 1e-5 x model height. The broken variants test_gl catches
+ * (transposed matrices, rows off by one, no loop wrap, no hemisphere flip) must fail the same
+ * comparison here. The fuzzers' hostile palettes are read in the same page (fzstd as
+ * the decoder) and every one is refused with a one-line message. CrowdbakeHerd (three.js) is
+ * compared with three.js's own skinning of the glTF. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include "runtimes/conformance.h"
+
+#define TMP TEST_TMP "/web"
+
+/* Largest |browser - C runtime| over a conformance case, in tolerances (conformance.h). */
+static double compare(const conformance *c, const char *name, double *units)
+{
+    const conf_case *k = conformance_case(c, name);
+    char path[PATH_MAX];
+    snprintf(path, sizeof path, TMP "/%s.out", name);
+    size_t size = 0;
+    float *got = (float *)read_whole_file(path, &size);
+    if (!got) fail_msg("%s: the browser wrote no result", name);
+    assert_int_equal(size, conf_positions(c, k) * 12);
+    double ratio = conformance_compare(c, k, got, units);
+    free(got);
+    return ratio;
+}
+
+static void test_runtime_in_chromium_matches_the_cpu(void **state)
+{
+    (void)state;
+    FILE *installed = fopen("tests/runtimes/browser/node_modules/.package-lock.json", "r");
+    if (!installed) fail_msg("tests/runtimes/browser: npm packages not installed (make test installs them; or: cd tests/runtimes/browser && npm ci)");
+    fclose(installed);
+    conformance conf;
+    conformance_make(&conf, TMP);
+    static char out[1 << 16];
+    int rc = run_command("node tests/runtimes/browser/skin_check.mjs " TMP " 2>&1", out, sizeof out);
+    printf("%s", out);
+    assert_int_equal(rc, 0);
+    /* Every hostile palette of tests/fuzz/regressions/pal refused in the page with a message. */
+    char count_cmd[] = "ls tests/fuzz/regressions/pal | wc -l";
+    char listed[32];
+    assert_int_equal(run_command(count_cmd, listed, sizeof listed), 0);
+    int refused = 0;
+    for (const char *p = out; (p = strstr(p, "\nrefused ")); ++p) ++refused;
+    assert_true(atoi(listed) >= 8);
+    assert_int_equal(refused, 2 * atoi(listed)); /* with and without the checksum check */
+    assert_null(strstr(out, "ACCEPTED"));
+    assert_null(strstr(out, "BAD ERROR"));
+    double units;
+    for (int i = 0; i < 9; ++i) {
+        const conf_case *k = &conf.cases[i];
+        double ratio = compare(&conf, k->name, &units);
+        printf("  %-12s %zu positions: browser vs C runtime %.2g (%.2f of the tolerance)\n", k->name,
+               conf_positions(&conf, k), units, ratio);
+        assert_true(ratio <= 1);
+    }
+    double spin_ok = compare(&conf, "spin", &units), wrapped_ok = compare(&conf, "wrapped", &units);
+    printf("  qpos/half in 2 column blocks: browser vs C runtime %.2g (%.2f of the tolerance)\n", units, wrapped_ok);
+    assert_true(wrapped_ok <= 1);
+    double transposed = compare(&conf, "broken-transposed", &units);
+    double off_by_one = compare(&conf, "broken-row-off-by-one", &units);
+    double no_wrap = compare(&conf, "broken-no-wrap", &units);
+    double no_flip = compare(&conf, "broken-no-hemisphere-flip", &units);
+    printf("  error / tolerance: transposed %.0f, rows off by one %.0f, no wrap %.0f, no hemisphere flip %.0f "
+           "(the same spin palette, shipped shader: %.2f)\n", transposed, off_by_one, no_wrap, no_flip, spin_ok);
+    assert_true(spin_ok <= 1);
+    assert_true(transposed > 10 && off_by_one > 10 && no_wrap > 10 && no_flip > 10);
+    double bones_qpos = compare(&conf, "bones-qpos-u16", &units), bones_mat4 = compare(&conf, "bones-mat4-half", &units);
+    double bones_broken = compare(&conf, "broken-bones-transposed", &units);
+    printf("  bone pass: browser vs C runtime %.2f (qpos/u16), %.2f (mat4/half, 16 instances a column block) of the "
+           "tolerance; its columns read as rows: %.0f\n", bones_qpos, bones_mat4, bones_broken);
+    assert_true(strstr(out, "ran  bones-qpos-u16: ") && strstr(out, "with the bone pass"));
+    assert_true(bones_qpos <= 1 && bones_mat4 <= 1 && bones_broken > 10);
+    conformance_free(&conf);
+}
+
+/* The share of covered pixels where two silhouettes disagree, at the `index`th time of the
+ * three.js check's output, for "herd" or "broken". */
+static double disagreement(const char *out, int index, const char *which)
+{
+    const char *at = strstr(out, "\"results\":[");
+    assert_non_null(at);
+    for (int i = 0; i <= index; ++i) assert_non_null(at = strstr(at + 1, "{\"time\":"));
+    char key[32];
+    snprintf(key, sizeof key, "\"%s\":{", which);
+    assert_non_null(at = strstr(at, key));
+    assert_non_null(at = strstr(at, "\"share\":"));
+    return atof(at + 8);
+}
+
+/* CrowdbakeHerd (three.js InstancedMesh, the shipped GLSL patched in) against three.js's own
+ * SkinnedMesh + AnimationMixer playing the glTF: the Fox walking, silhouettes from one camera. */
+static void test_three_herd_matches_three_skinning(void **state)
+{
+    (void)state;
+    char fox[PATH_MAX], cmd[2 * PATH_MAX + 64];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    assert_int_equal(system("rm -rf " TMP "/three && mkdir -p " TMP "/three"), 0);
+    snprintf(cmd, sizeof cmd, "ln -s \"$(realpath %s)\" " TMP "/three/model.glb", fox);
+    assert_int_equal(system(cmd), 0);
+    /* Root motion kept: three plays the clip with its travel. */
+    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/three/model.pal -q", crowdbake_exe(), fox);
+    assert_int_equal(system(cmd), 0);
+    static char out[1 << 16];
+    int rc = run_command("node tests/runtimes/browser/three_check.mjs " TMP "/three Walk 0.1,0.37,0.6 2>&1", out, sizeof out);
+    printf("%s", out);
+    assert_int_equal(rc, 0);
+    for (int i = 0; i < 3; ++i) {
+        double herd = disagreement(out, i, "herd"), broken = disagreement(out, i, "broken");
+        printf("  time %d: herd vs three.js skinning %.2f%% of the covered pixels; unpatched herd %.0f%%\n", i, 100 * herd,
+               100 * broken);
+        assert_true(herd < 0.03);
+        assert_true(broken > 0.2);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_runtime_in_chromium_matches_the_cpu),
+        cmocka_unit_test(test_three_herd_matches_three_skinning),
+    };
+    return cmocka_run_group_tests_name("web", tests, NULL, NULL);
+}
