@@ -224,9 +224,12 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_A
 # its roster, baked by this build's crowdbake from demo/herd.toml, so the demo scene opens to a herd.
 GODOT_DEMO_DIR := runtimes/godot/addons/crowdbake/demo/herd
 GODOT_DEMO := $(GODOT_DEMO_DIR)/roster.json
-$(GODOT_DEMO): runtimes/godot/addons/crowdbake/demo/herd.toml $(BUILD)/samples/quadruped.glb $(BUILD)/crowdbake
+# The command is a prerequisite only where this BUILD has one (a zip made with another BUILD takes
+# the demo as it is); the bake's caches (.prep) are not part of the addon.
+$(GODOT_DEMO): runtimes/godot/addons/crowdbake/demo/herd.toml $(wildcard $(BUILD)/crowdbake)
+	$(MAKE) --no-print-directory $(BUILD)/crowdbake $(BUILD)/samples/quadruped.glb
 	mkdir -p $(@D) && cp $(BUILD)/samples/quadruped.glb $(@D)/quadruped.glb
-	$(BUILD)/crowdbake bake $< -q
+	$(BUILD)/crowdbake bake $< -q && rm -f $(@D)/.*.prep
 $(GODOT_DEMO_DIR)/quadruped.glb $(GODOT_DEMO_DIR)/goat.pal: $(GODOT_DEMO)
 all: $(GODOT_DEMO)
 GODOT_ADDON_FILES := $(sort $(shell cd runtimes/godot && find addons/crowdbake -type f -not -name '.*' -not -path '*/demo/herd/*') \

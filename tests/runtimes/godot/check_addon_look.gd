@@ -125,6 +125,7 @@ func check_demo() -> void:
 	var demo: Node3D = load(ADDON + "/demo/crowdbake_demo.gd").new()
 	demo.roster_path = ADDON + "/demo/herd/roster.json"
 	demo.model_path = ADDON + "/demo/herd/quadruped.glb"
+	demo.animals = 16 # a smaller field than the scene's 64: SwiftShader draws it on the CPU
 	var herd: MultiMeshInstance3D = load(ADDON + "/crowdbake_herd.gd").new()
 	herd.name = "Herd"
 	demo.add_child(herd)
@@ -133,7 +134,7 @@ func check_demo() -> void:
 	var image: Image = await addon._frame()
 	var covered: Array = addon._covered(image)
 	print("crowdbake-check: the demo's herd: %d animals of type '%s', %d pixels drawn" % [herd.count, demo.animal, covered[1]])
-	var why := "" if herd.palette != null and herd.count == demo.animals and covered[1] > 50 else "see the numbers above"
+	var why := "" if herd.palette != null and herd.count == demo.animals and covered[1] > 20 else "see the numbers above"
 	demo.queue_free()
 	addon._end(name, why)
 
