@@ -155,6 +155,16 @@ $(BUILD)/obj/formats/gltf_load.o $(BUILD)/obj/formats/gltf_container.o $(BUILD)/
 # optimizer.
 $(BUILD)/obj/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-O0)
 
+# The shipped GLSL as a JavaScript module beside the web runtime's modules, so that they find it
+# wherever they are served from (the source tree, `make install`'s share/crowdbake/web, a copy of
+# the folder in an npm-style layout): an import, not a fetch of a path relative to the module.
+WEB_GLSL := runtimes/web/crowdbake_palette_glsl.mjs
+$(WEB_GLSL): runtimes/glsl/crowdbake_palette.glsl
+	python3 -c "import json, sys; d = open(sys.argv[1], encoding='utf-8').read(); \
+	print('// generated from ' + sys.argv[1] + ' by make: the shipped GLSL, as crowdbake_crowd.mjs imports it'); \
+	print('export const PALETTE_GLSL = ' + json.dumps(d) + ';')" $< > $@.tmp && mv $@.tmp $@
+all: $(WEB_GLSL)
+
 # The shipped GLSL, embedded so `crowdbake preview` renders with exactly what runtimes get.
 $(BUILD)/gen/palette_glsl.c: runtimes/glsl/crowdbake_palette.glsl
 	@mkdir -p $(@D)
@@ -240,7 +250,21 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_A
 # ---- the Godot addon: runtimes/godot/addons/crowdbake as a zip to unpack into a project ----------------
 # Byte for byte the same on every build: files only, sorted, one date (1980-01-01 UTC), mode 644,
 # no extra fields (zip -X).
-GODOT_ADDON_FILES := $(shell cd runtimes/godot && find addons/crowdbake -type f | LC_ALL=C sort)
+# The demo's herd (runtimes/godot/addons/crowdbake/demo/herd/): the project's generated quadruped and
+# its roster, baked by this build's crowdbake from demo/herd.toml, so the demo scene opens to a herd.
+GODOT_DEMO_DIR := runtimes/godot/addons/crowdbake/demo/herd
+GODOT_DEMO := $(GODOT_DEMO_DIR)/roster.json
+# The command is a prerequisite only where this BUILD has one (a zip made with another BUILD takes
+# the demo as it is); the bake's caches (.prep) are not part of the addon.
+$(GODOT_DEMO): runtimes/godot/addons/crowdbake/demo/herd.toml $(wildcard $(BUILD)/crowdbake)
+	$(MAKE) --no-print-directory $(BUILD)/crowdbake $(BUILD)/samples/quadruped.glb
+	mkdir -p $(@D) && cp $(BUILD)/samples/quadruped.glb $(@D)/quadruped.glb
+	$(BUILD)/crowdbake bake $< -q && rm -f $(@D)/.*.prep
+$(GODOT_DEMO_DIR)/quadruped.glb $(GODOT_DEMO_DIR)/goat.pal: $(GODOT_DEMO)
+all: $(GODOT_DEMO)
+GODOT_ADDON_FILES := $(sort $(shell cd runtimes/godot && find addons/crowdbake -type f -not -name '.*' -not -path '*/demo/herd/*') \
+                            addons/crowdbake/demo/herd/roster.json addons/crowdbake/demo/herd/quadruped.glb \
+                            addons/crowdbake/demo/herd/goat.pal)
 godot-addon: $(GODOT_ADDON_ZIP)
 $(GODOT_ADDON_ZIP): $(GODOT_ADDON_FILES:%=runtimes/godot/%)
 	rm -rf $(BUILD)/godot-addon $@ && mkdir -p $(BUILD)/godot-addon
@@ -269,7 +293,7 @@ $(UNITY_PACKAGE_TGZ): $(UNITY_PACKAGE_FILES) runtimes/hlsl/crowdbake_palette.hls
 # the modules find the shader at ../glsl/ as in the source tree.
 WEBDIR = $(DATADIR)/crowdbake/web
 THREE  = runtimes/web/node_modules/three
-install-web: runtimes/web/node_modules/.package-lock.json
+install-web: runtimes/web/node_modules/.package-lock.json $(WEB_GLSL)
 	install -d $(DESTDIR)$(WEBDIR)/node_modules/three/build $(DESTDIR)$(WEBDIR)/node_modules/three/examples \
 	  $(DESTDIR)$(DATADIR)/crowdbake/glsl $(DESTDIR)$(DATADIR)/crowdbake/viewer
 	install -m 644 cli/viewer/viewer.html cli/viewer/viewer.mjs cli/viewer/serve.py $(DESTDIR)$(DATADIR)/crowdbake/viewer/
