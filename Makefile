@@ -105,6 +105,7 @@ VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' includ
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
 SONAME    := libcrowdbake.so.$(API_MAJOR)
 GODOT_ADDON_ZIP := $(BUILD)/crowdbake-godot-addon.zip
+UNITY_PACKAGE_TGZ := $(BUILD)/com.crowdbake.palette.tgz
 
 all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(SAMPLE_GLB)
 
@@ -227,7 +228,7 @@ MANDIR     ?= $(DATADIR)/man
 INSTALL_SED = -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@BINDIR@|$(BINDIR)|g' -e 's|@LIBDIR@|$(LIBDIR)|g' \
   -e 's|@INCLUDEDIR@|$(INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' -e 's|@SONAME@|$(SONAME)|g' \
   -e 's|@API_MAJOR@|$(API_MAJOR)|g'
-install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_ADDON_ZIP) install-web
+install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_ADDON_ZIP) $(UNITY_PACKAGE_TGZ) install-web
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(LIBDIR)/cmake/crowdbake \
 	  $(DESTDIR)$(INCLUDEDIR)/crowdbake $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(DATADIR)/bash-completion/completions \
 	  $(DESTDIR)$(DATADIR)/zsh/site-functions
@@ -244,8 +245,9 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_A
 	install -m 644 docs/crowdbake.1 $(DESTDIR)$(MANDIR)/man1/crowdbake.1
 	install -m 644 completions/crowdbake.bash $(DESTDIR)$(DATADIR)/bash-completion/completions/crowdbake
 	install -m 644 completions/_crowdbake $(DESTDIR)$(DATADIR)/zsh/site-functions/_crowdbake
-	install -d $(DESTDIR)$(DATADIR)/crowdbake
-	install -m 644 $(GODOT_ADDON_ZIP) $(DESTDIR)$(DATADIR)/crowdbake/
+	install -d $(DESTDIR)$(DATADIR)/crowdbake/hlsl
+	install -m 644 $(GODOT_ADDON_ZIP) $(UNITY_PACKAGE_TGZ) $(DESTDIR)$(DATADIR)/crowdbake/
+	install -m 644 runtimes/hlsl/crowdbake_palette.hlsl $(DESTDIR)$(DATADIR)/crowdbake/hlsl/
 
 # ---- the Godot addon: runtimes/godot/addons/crowdbake as a zip to unpack into a project ----------------
 # Byte for byte the same on every build: files only, sorted, one date (1980-01-01 UTC), mode 644,
@@ -276,7 +278,6 @@ $(GODOT_ADDON_ZIP): $(GODOT_ADDON_FILES:%=runtimes/godot/%)
 # runtimes/unity under package/, with the shared HLSL runtime in place of the shim that reaches it in
 # the checkout (Runtime/Shaders/CrowdbakePalette.hlsl), so the tarball stands alone. Byte for byte the
 # same on every build: sorted names, one date, owner 0, mode 644, gzip without a name or time.
-UNITY_PACKAGE_TGZ := $(BUILD)/com.crowdbake.palette.tgz
 UNITY_PACKAGE_FILES := $(shell find runtimes/unity -type f | LC_ALL=C sort)
 unity-package: $(UNITY_PACKAGE_TGZ)
 $(UNITY_PACKAGE_TGZ): $(UNITY_PACKAGE_FILES) runtimes/hlsl/crowdbake_palette.hlsl

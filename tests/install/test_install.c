@@ -102,7 +102,8 @@ static void test_destdir_layout(void **state)
         "share/crowdbake/viewer/viewer.html", "share/crowdbake/viewer/serve.py", "share/crowdbake/web/crowdbake_pal.mjs",
         "share/crowdbake/web/node_modules/three/build/three.module.js", "share/crowdbake/web/node_modules/fzstd/esm/index.mjs",
         "share/crowdbake/glsl/crowdbake_palette.glsl",
-        "share/crowdbake/crowdbake-godot-addon.zip"};
+        "share/crowdbake/crowdbake-godot-addon.zip", "share/crowdbake/com.crowdbake.palette.tgz",
+        "share/crowdbake/hlsl/crowdbake_palette.hlsl"};
     for (size_t i = 0; i < COUNT_OF(files); ++i) {
         char path[PATH_MAX * 2];
         snprintf(path, sizeof path, TMP "/stage/opt/cb/%s", files[i]);
