@@ -193,6 +193,10 @@ CROWDBAKE_API bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t clip);
 /* Planned clip i's rate: the one its search chose, else its fixed fps. */
 CROWDBAKE_API double cb_bake_job_clip_fps(const cb_bake_job *job, uint32_t clip);
 CROWDBAKE_API void cb_bake_job_free(cb_bake_job *job);
+/* Frees what planning kept only to save the bake work (the poses its rate searches sampled): a
+ * planned job waiting its turn then holds its plan alone, and bakes the same bytes, sampling its
+ * rows again. A roster holding many planned types calls it (memory follows the work). */
+CROWDBAKE_API void cb_bake_job_release_search(cb_bake_job *job);
 
 /* What a file records of what produced it: for a single bake, the crowdbake version, the
  * options that shape the file (`options`) and the model's bytes; for a catalog type

@@ -33,8 +33,9 @@ static cb_status write_ktx2(const cb_bake_job *job, const cb_palette *p, cb_pal_
                             const cb_bake_output *out, cb_error *err)
 {
     (void)mapping;
-    return cb_ktx2_write(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference,
-                         in_place(job), err);
+    /* --zstd: the level supercompressed as `toktx --zcmp` does, at the .pal payload's level */
+    return cb_ktx2_write_zstd(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference,
+                              in_place(job), job->settings.zstd ? 9 : 0, err);
 }
 
 static cb_status write_babylon(const cb_bake_job *job, const cb_palette *p, cb_pal_mapping *mapping,
@@ -106,7 +107,7 @@ static const bake_output_row rows[] = {
       false, true, true},
      write_exr, facts_exr},
     {{CB_FORMAT_KTX2, "ktx2", ".ktx2", "KTX2 texture of the palette (RGBA16F/RGBA32F), with its tables", "palette_ktx2",
-      ALL_LAYOUTS, FLOATS, false, true, true},
+      ALL_LAYOUTS, FLOATS, true, true, true},
      write_ktx2, facts_ktx2},
     /* Babylon.js's baked vertex animation texture is Float32 4x4 matrices; beside another format in a catalog,
      * whose palette the manifest describes. */
