@@ -80,14 +80,20 @@ static void write_catalog(const char *cow, const char *format)
     char text[8192];
     snprintf(text, sizeof text,
              "[bake]\nfps = 30\nroot_motion = \"keep\"\nformat = \"%s\"\nout_dir = \"out\"\n\n"
-             "[animal.cow]\nmodel = \"%s\"\nstates = { wander = [\"walk\"], flee = [\"gallop\"] }\n",
+             "[animal.cow]\nmodel = \"%s\"\n"
+             "states = { wander = [\"walk\"], flee = [\"gallop\"], graze = [\"eating\"], die = [\"death\"] }\n"
+             /* every clip, as the single bake it is compared with (a catalog bakes its states' clips
+              * and extra_clips) */
+             "extra_clips = [\"Attack_Headbutt\", \"Attack_Kick\", \"Gallop_Jump\", \"Idle\", \"Idle_2\", "
+             "\"Idle_Headlow\", \"Idle_HitReact_Left\", \"Jump_toIdle\"]\n",
              format, cow);
     write_text(CATALOG "/catalog.toml", text);
 }
 
 static void bake_catalog(const char *expect)
 {
-    char cmd[4096], out[4096];
+    static char out[1 << 16]; /* the bake's warnings come first */
+    char cmd[4096];
     snprintf(cmd, sizeof cmd, "%s bake " CATALOG "/catalog.toml --depfile " CATALOG "/cow.d 2>&1", crowdbake_exe());
     int rc = run_command(cmd, out, sizeof out);
     if (rc != 0 || !strstr(out, expect)) fail_msg("%s: exit %d, wanted '%s':\n%s", cmd, rc, expect, out);
