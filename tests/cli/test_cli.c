@@ -251,7 +251,7 @@ static void test_single_model_speed_reference(void **state)
     assert_contains(out, "speed reference 1.40");
     assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/husky2.pal --speed-reference 2 -q", husky), 0);
     assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/husky2.pal"), 0);
-    assert_contains(out, "speed reference 2 m/s");
+    assert_contains(out, "speed reference 2 units/s");
 }
 
 /* Clip names as exporters write them ("AnimalArmature|Attack_Headbutt", 30 characters) keep

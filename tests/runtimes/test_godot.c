@@ -28,8 +28,11 @@ static int setup_cow(void)
              "mkdir -p " TMP "/bakes/cow && cp %s " TMP "/bakes/cow/Cow.glb"
              " && %s bake %s -o " TMP "/bakes/cow/mat4-float.pal --fps 30 --root-motion keep --layout mat4 --precision float -q"
              " && %s bake %s -o " TMP "/bakes/cow/qpos-u16.pal --fps 30 --root-motion keep -q"
+             /* the catalog's palette below as mat4/float: its states' clips, in the model's order, its root motion */
+             " && %s bake %s -o " TMP "/bakes/cow/mat4-states.pal --fps 30 --layout mat4 --precision float -q"
+             " --clip 'AnimalArmature|Eating,AnimalArmature|Gallop,AnimalArmature|Walk'"
              " && grep -E '^[0-9]+,\"AnimalArmature\\|(Walk|Death)\"' %s > " TMP "/bakes/cow/reference.csv",
-             model, crowdbake_exe(), model, crowdbake_exe(), model, csv);
+             model, crowdbake_exe(), model, crowdbake_exe(), model, crowdbake_exe(), model, csv);
     if (system(cmd)) return -1;
     FILE *f = fopen(TMP "/bakes/cow/catalog.toml", "w");
     if (!f) return -1;

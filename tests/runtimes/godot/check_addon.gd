@@ -441,7 +441,7 @@ func _check_other_layout(roster, mesh: Mesh) -> void:
 	var masks := []
 	var default_palette = roster.types["cow"]["palette"]
 	var mat4 = load(ADDON + "/crowdbake_palette.gd").new()
-	mat4.load_file(COW + "/mat4-float.pal")
+	mat4.load_file(COW + "/mat4-states.pal")
 	for palette in [default_palette, mat4]:
 		roster.types["cow"]["palette"] = palette
 		var herd := _new_herd(roster, mesh, 1)
