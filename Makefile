@@ -189,6 +189,7 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_A
 	ln -sf $(SONAME) $(DESTDIR)$(LIBDIR)/libcrowdbake.so
 	install -m 644 include/crowdbake/*.h $(DESTDIR)$(INCLUDEDIR)/crowdbake/
 	install -m 644 formats/crowdbake_pal.h $(DESTDIR)$(INCLUDEDIR)/crowdbake_pal.h
+	install -m 644 formats/crowdbake_pal_runtime.h $(DESTDIR)$(INCLUDEDIR)/crowdbake_pal_runtime.h
 	sed $(INSTALL_SED) cmake/crowdbake.pc.in > $(DESTDIR)$(LIBDIR)/pkgconfig/crowdbake.pc
 	sed $(INSTALL_SED) cmake/crowdbakeConfig.cmake.in > $(DESTDIR)$(LIBDIR)/cmake/crowdbake/crowdbakeConfig.cmake
 	sed $(INSTALL_SED) cmake/crowdbakeConfigVersion.cmake.in > $(DESTDIR)$(LIBDIR)/cmake/crowdbake/crowdbakeConfigVersion.cmake
@@ -260,7 +261,7 @@ $(BUILD)/tests/%: tests/%.c tests/testutil.h tests/view_server.h $(TOOL_A) $(BUI
 	$(CXX) $(SAN) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
 
 # The reader header alone, strict C99, as an engine would compile it: no libcrowdbake.
-$(BUILD)/tests/standalone_pal_reader: tests/standalone_pal_reader.c formats/crowdbake_pal.h $(DEPS_STAMP)
+$(BUILD)/tests/standalone_pal_reader: tests/standalone_pal_reader.c formats/crowdbake_pal.h formats/crowdbake_pal_runtime.h $(DEPS_STAMP)
 	@mkdir -p $(@D)
 	$(CC) -std=c99 -pedantic $(OPT) -g $(WARN) $(SAN) $(TEST_CFLAGS) $< -o $@ \
 	  $(shell pkg-config --libs cmocka libzstd 2>/dev/null) -lm

@@ -253,7 +253,7 @@ static uint32_t make_samples(const cb_palette *p, sample *out, uint32_t cap)
     uint32_t n = 0;
     for (uint32_t c = 0; c < p->clip_count; ++c) {
         const cb_palette_clip *cl = &p->clips[c];
-        cb_instance in = {cl->first_row, cl->loops ? cl->frames : -(double)cl->frames, cl->fps, 0};
+        cb_instance in = cb_instance_of(cl);
         double span = cl->frames / cl->fps;
         double times[] = {0.3 / cl->fps, 2.5 / cl->fps, span * 0.37, span - 0.4 / cl->fps /* the seam */, span * 1.5};
         for (int k = 0; k < 5 && n < cap; ++k) out[n++] = (sample){in, times[k]};

@@ -102,6 +102,8 @@ typedef struct cb_clip_budget {
     bool fitted;         /* its rows fitted, else sampled */
     double travel;       /* a loop baked with its root motion kept: how far it travels, model units a loop (its
                           * wrap jumps back that far, at any rate); else 0 */
+    bool goal;           /* its budget is crowdbake's default, not one the user stated: a goal the bake reaches for,
+                          * not a promise. Over it, the clip is written at the best the bake can do, with a warning */
 } cb_clip_budget;
 
 /* A catalog type's identity, which its files record instead of the single bake's options: the
@@ -162,7 +164,8 @@ typedef struct cb_bake_result {
     cb_warnings notes;         /* the layout's fallback, loops that travel, quaternion flips, clips over budget */
     cb_clip_budget *budgets;   /* per planned clip, as the first format's palette measured it (also when the bake
                                 * failed for a clip over budget) */
-    uint32_t budget_count, over_budget;
+    uint32_t budget_count, over_budget; /* over_budget: clips over a budget the user stated (they fail the bake) */
+    uint32_t over_goal;        /* clips over the default budget, written with a warning each (cb_clip_budget.goal) */
 } cb_bake_result;
 
 /* A job with nothing set but its size, the default settings (cb_default_bake_settings) and
@@ -174,9 +177,10 @@ CROWDBAKE_API void cb_bake_job_init(cb_bake_job *job);
  * cb_bake_job_init) fails with CB_ERR_INTERNAL, before anything is read past it. */
 CROWDBAKE_API cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err);
 /* Plans (when not yet), bakes and writes every file of settings.formats (each through a
- * temporary file and a rename). A clip over its budget fails the bake with CB_ERR_VERIFY before
- * anything is written (result->budgets says which; cb_bake_budget_text words each), unless
- * settings.allow_over_budget, which writes it with a warning in result->notes. The result
+ * temporary file and a rename). A clip over a budget the user stated fails the bake with
+ * CB_ERR_VERIFY before anything is written (result->budgets says which; cb_bake_budget_text
+ * words each), unless settings.allow_over_budget, which writes it with a warning in
+ * result->notes. A clip over the default budget (a goal) is written, counted in over_goal. The result
  * references the model and the plan: free it first. */
 CROWDBAKE_API cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err);
 CROWDBAKE_API void cb_bake_result_free(cb_bake_result *result);
@@ -186,6 +190,10 @@ CROWDBAKE_API void cb_bake_result_free(cb_bake_result *result);
  * for it, a "warning" when written anyway. */
 CROWDBAKE_API void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result,
                                         const char *(*setting_name)(cb_setting), cb_warnings *notes);
+/* Why a clip over its budget was written, " (written ...)", or "" when it fails the bake: over
+ * the default budget (a goal, cb_clip_budget.goal), or allowed (allow_over_budget). */
+CROWDBAKE_API void cb_bake_goal_words(const cb_clip_budget *budget, const char *(*setting_name)(cb_setting), bool allowed,
+                                      char *buf, size_t size);
 /* Whether planned clip i's rate is chosen by error (else fixed): job->clip_settings[i].fps_auto
  * (cb_resolve_clip_settings says how). */
 CROWDBAKE_API bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t clip);

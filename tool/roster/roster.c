@@ -96,7 +96,7 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
         cb_clip_plan *p = &w->plan[i];
         w->clip_requests[i] = (cb_clip_request){-1, 0};
         if (!an->clips) {
-            *p = (cb_clip_plan){(int32_t)i, m->animations[i].name, -1, 0, false};
+            *p = (cb_clip_plan){(int32_t)i, m->animations[i].name, -1, 0, false, false};
             continue;
         }
         const cb_catalog_clip *c = &an->clips[i];
@@ -112,7 +112,7 @@ static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
             return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s has no clip '%s'; its clips are: %s",
                            roster_at(cat, c->pos, where, sizeof where), an->name, m->source, c->source, list);
         }
-        *p = (cb_clip_plan){a, c->name, c->loop, c->fps, false};
+        *p = (cb_clip_plan){a, c->name, c->loop, c->fps, false, false};
         w->clip_requests[i] = (cb_clip_request){c->fps_auto, c->max_error_mm};
     }
     t->clip_count = n;
