@@ -144,8 +144,8 @@ void cb_frame(vec4 inst, float time, out int row0, out int row1, out float fr)
         f0 = floor(fpos);
         f1 = min(f0 + 1.0, frames - 1.0);
     }
-    if (held) f1 = f0;
-    fr = held ? 0.0 : fpos - f0;
+    if (held) { f1 = f0; fpos = f0; } // cb:held - no blend across a step
+    fr = fpos - f0;
     row0 = int(first + f0);
     row1 = int(first + f1);
 }
