@@ -102,7 +102,7 @@ static void print_clips_json(cb_json *j, const cb_palette *p)
         cb_json_number(j, "duration", (float)c->duration);
         cb_json_bool(j, "loops", c->loops);
         cb_json_bool(j, "fitted_rows", c->fitted);
-        cb_json_bool(j, "step_rows", c->step); /* held, not blended (clip flag bit 2) */
+        if (c->step) cb_json_bool(j, "step_rows", true); /* held, not blended (clip flag bit 2); absent: blended */
         cb_json_inline_array(j, "root_velocity");
         for (int k = 0; k < 3; ++k) cb_json_number(j, NULL, c->root_velocity[k]);
         cb_json_end(j);
