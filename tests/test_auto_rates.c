@@ -27,7 +27,7 @@ static double baked_error(cb_sampler *s, int32_t animation, double fps, bool fit
     cb_bake_options o = cb_default_bake_options();
     o.fps = fps;
     o.error_goal = goal;
-    cb_clip_plan plan = {animation, NULL, -1, fps, fit};
+    cb_clip_plan plan = {animation, NULL, -1, fps, fit, false};
     cb_palette p;
     cb_error err = {0};
     assert_int_equal(cb_palette_bake(s, &o, &plan, 1, &p, &err), CB_OK);
