@@ -2,19 +2,22 @@
 #
 #   make          build/crowdbake, build/libcrowdbake.a (and .so) and the sample models
 #
-# The tree: lib/ is libcrowdbake (lib/core the model, sampling and palettes; lib/formats glTF in,
-# .pal/EXR/KTX2 out; lib/bake the bake job); include/crowdbake its public headers. tool/ is the
-# crowdbake command, a client of the library through those headers (tool/cli the commands,
-# tool/catalog catalogs in TOML, tool/roster roster bakes, tool/report the report and preview).
+# The tree (CONTRIBUTING.md draws it): src/ and formats/ are libcrowdbake (src/core the model,
+# sampling and palettes; src/bake the bake job; formats/ every file format in and out);
+# include/crowdbake its public headers, include/crowdbake_pal.h the single-header C reader. cli/ is
+# the crowdbake command, a client of the library through those headers (cli/*.c the commands,
+# cli/catalog catalogs in TOML, cli/roster roster bakes, cli/report the report and preview,
+# cli/viewer what `crowdbake view` serves). runtimes/ holds what games run: glsl, web, godot.
 #   make demo     bake the bundled samples
 #   make check    the test suite, normal and AddressSanitizer + UBSan builds
+#   make test-lib | test-cli | test-runtimes | test-install | test-fuzz   one folder of tests/ (normal build)
 #   make bench    benchmarks (not part of check)
 #   make deps     install the Debian packages the build needs (as root; prints the command otherwise)
 #   make install  PREFIX=/usr/local DESTDIR=: the command, libcrowdbake (static and shared), its headers,
 #                 crowdbake.pc, the CMake package, the man page, the bash/zsh completions, what
 #                 `crowdbake view` serves (DATADIR/crowdbake/web: the viewer, three.js and fzstd) and the
 #                 Godot addon
-#   make godot-addon  build/crowdbake-godot-addon.zip: addons/crowdbake, to unpack into a Godot project
+#   make godot-addon  build/crowdbake-godot-addon.zip: runtimes/godot/addons/crowdbake, to unpack into a Godot project
 
 .SUFFIXES:
 .DELETE_ON_ERROR:
@@ -54,7 +57,7 @@ PKG_LIBS   = $(TOOL_LIBS) $(LIB_LIBS)
 # through the libraries listed before it (`crowdbake --version`: 2.59 -> 2.28 M instructions).
 STATIC_LIBS = $(shell pkg-config --libs-only-l draco 2>/dev/null) -lzstd -lpng16
 CLI_LIBS   = -lstdc++ -Wl,-Bstatic $(STATIC_LIBS) -Wl,-Bdynamic $(filter-out $(STATIC_LIBS),$(PKG_LIBS)) -lz
-# Tests drive OpenGL themselves; crowdbake opens OSMesa only for `preview` (tool/report/preview.c).
+# Tests drive OpenGL themselves; crowdbake opens OSMesa only for `preview` (cli/report/preview.c).
 GL_LIBS    = $(shell pkg-config --libs osmesa 2>/dev/null)
 
 # -fno-math-errno: sqrt and lrint become single instructions (nothing reads errno from libm).
@@ -65,18 +68,22 @@ FPFLAGS  := -fno-math-errno -fno-trapping-math -ffp-contract=off
 # -fPIC: the same objects make the static and the shared library (-fno-semantic-interposition
 # keeps calls inside the library as direct, inlinable calls, as without -fPIC).
 PICFLAGS := -fPIC -fno-semantic-interposition
-# -Iformats: crowdbake_pal.h, the standalone reader, installed beside include/crowdbake.
-CFLAGS   := -std=c11 $(OPT) $(FPFLAGS) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude -Iformats $(PICFLAGS) $(SAN)
-CXXFLAGS := -std=c++17 $(OPT) $(FPFLAGS) -g $(WARN) -Iinclude -Iformats $(PICFLAGS) $(SAN)
-# The tool's own headers (tool/catalog, tool/roster, tool/report), for the tool and its tests.
-TOOL_INC := -Itool
+# -Iinclude: the public headers and crowdbake_pal.h, the standalone reader, installed beside them.
+CFLAGS   := -std=c11 $(OPT) $(FPFLAGS) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude $(PICFLAGS) $(SAN)
+CXXFLAGS := -std=c++17 $(OPT) $(FPFLAGS) -g $(WARN) -Iinclude $(PICFLAGS) $(SAN)
+# The tool's own headers (cli/catalog, cli/roster, cli/report), for the tool and its tests.
+TOOL_INC := -Icli
 
-LIB_C   := $(wildcard lib/*/*.c)
-LIB_CXX := $(wildcard lib/*/*.cpp)
-TOOL_C  := $(wildcard tool/catalog/*.c tool/roster/*.c tool/report/*.c)
-TOOL_CXX:= $(wildcard tool/catalog/*.cpp)
-CLI_C   := $(wildcard tool/cli/*.c)
-TESTS   := $(patsubst tests/%.c,%,$(wildcard tests/test_*.c))
+LIB_C   := $(wildcard src/*/*.c formats/*.c)
+LIB_CXX := $(wildcard src/*/*.cpp formats/*.cpp)
+TOOL_C  := $(wildcard cli/catalog/*.c cli/roster/*.c cli/report/*.c)
+TOOL_CXX:= $(wildcard cli/catalog/*.cpp)
+CLI_C   := $(wildcard cli/*.c)
+# The tests, a folder each by what they test (tests/README.md); fuzz/ and bench/ have their own rules.
+TEST_DIRS := lib cli runtimes install
+$(foreach d,$(TEST_DIRS),$(eval TESTS_$(d) := $(patsubst tests/$(d)/%.c,%,$(wildcard tests/$(d)/test_*.c))))
+TESTS   := $(foreach d,$(TEST_DIRS),$(TESTS_$(d)))
+vpath test_%.c $(TEST_DIRS:%=tests/%)
 
 LIB_OBJ := $(LIB_C:%.c=$(BUILD)/obj/%.o) $(LIB_CXX:%.cpp=$(BUILD)/obj/%.o)
 TOOL_OBJ:= $(TOOL_C:%.c=$(BUILD)/obj/%.o) $(TOOL_CXX:%.cpp=$(BUILD)/obj/%.o) $(BUILD)/obj/gen/palette_glsl.o
@@ -87,7 +94,8 @@ TOOL_A  := $(BUILD)/libcrowdbake_tool.a
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs readme bake-hashes bench \
+.PHONY: all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs \
+        test-lib test-cli test-runtimes test-install test-fuzz readme bake-hashes bench \
         bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web godot-addon
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
@@ -120,11 +128,11 @@ $(DEPS_STAMP): Makefile
 # ---- the library and the command ------------------------------------------------------
 # libcrowdbake exports what its headers declare with CROWDBAKE_API (include/crowdbake/export.h)
 # and nothing else: its objects are compiled with hidden visibility, and the version script
-# (lib/libcrowdbake.map) makes local whatever a dependency's headers mark visible (C++ templates).
-$(BUILD)/obj/lib/%.o: CFLAGS += -fvisibility=hidden
-$(BUILD)/obj/lib/%.o: CXXFLAGS += -fvisibility=hidden -fvisibility-inlines-hidden
-$(BUILD)/obj/tool/%.o: CFLAGS += $(TOOL_INC)
-$(BUILD)/obj/tool/%.o: CXXFLAGS += $(TOOL_INC)
+# (src/libcrowdbake.map) makes local whatever a dependency's headers mark visible (C++ templates).
+$(BUILD)/obj/src/%.o $(BUILD)/obj/formats/%.o: CFLAGS += -fvisibility=hidden
+$(BUILD)/obj/src/%.o $(BUILD)/obj/formats/%.o: CXXFLAGS += -fvisibility=hidden -fvisibility-inlines-hidden
+$(BUILD)/obj/cli/%.o: CFLAGS += $(TOOL_INC)
+$(BUILD)/obj/cli/%.o: CXXFLAGS += $(TOOL_INC)
 $(BUILD)/obj/%.o: %.c $(DEPS_STAMP)
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -MMD -MP -c $< -o $@
@@ -135,16 +143,16 @@ $(BUILD)/obj/%.o: %.cpp $(DEPS_STAMP)
 
 # Debian's RapidJSON (1.1.0) adds an offset to its parse stack's null pointer before the stack
 # first grows, which clang's UBSan reports on every parse (fixed upstream after 1.1.0). Only
-# the glTF adapter (lib/formats/gltf_*.cpp) includes RapidJSON; every other check stays on for it.
-$(BUILD)/obj/lib/formats/gltf_load.o $(BUILD)/obj/lib/formats/gltf_container.o $(BUILD)/obj/lib/formats/gltf_convert.o \
-  $(BUILD)/obj/lib/formats/gltf_fast.o $(BUILD)/obj/lib/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-fno-sanitize=pointer-overflow)
+# the glTF adapter (formats/gltf_*.cpp) includes RapidJSON; every other check stays on for it.
+$(BUILD)/obj/formats/gltf_load.o $(BUILD)/obj/formats/gltf_container.o $(BUILD)/obj/formats/gltf_convert.o \
+  $(BUILD)/obj/formats/gltf_fast.o $(BUILD)/obj/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-fno-sanitize=pointer-overflow)
 # tinygltf's implementation is third-party code that takes 108 s of CPU to compile at -O1 -g
 # under the sanitizers (14 s at -O0, every check still in): the sanitizer build skips its
 # optimizer.
-$(BUILD)/obj/lib/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-O0)
+$(BUILD)/obj/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-O0)
 
 # The shipped GLSL, embedded so `crowdbake preview` renders with exactly what runtimes get.
-$(BUILD)/gen/palette_glsl.c: samples/shaders/crowdbake_palette.glsl
+$(BUILD)/gen/palette_glsl.c: runtimes/glsl/crowdbake_palette.glsl
 	@mkdir -p $(@D)
 	python3 -c "import sys; d = open(sys.argv[1], 'rb').read(); print('/* generated from ' + sys.argv[1] + ' */'); \
 	print('const char cb_palette_glsl[] = {' + ','.join(str(b) for b in d) + ',0};')" $< > $@
@@ -161,8 +169,8 @@ $(TOOL_A): $(TOOL_OBJ)
 	ar rcs $@ $^
 
 # The shared library: its dependencies come with it (NEEDED), so a program links -lcrowdbake alone.
-$(BUILD)/$(SONAME): $(LIB_OBJ) lib/libcrowdbake.map
-	$(CXX) $(SAN) -shared -Wl,-soname,$(SONAME) -Wl,--no-undefined -Wl,--version-script=lib/libcrowdbake.map \
+$(BUILD)/$(SONAME): $(LIB_OBJ) src/libcrowdbake.map
+	$(CXX) $(SAN) -shared -Wl,-soname,$(SONAME) -Wl,--no-undefined -Wl,--version-script=src/libcrowdbake.map \
 	  -o $@ $(LIB_OBJ) $(LIB_LIBS)
 
 $(BUILD)/crowdbake: $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a
@@ -188,8 +196,8 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_A
 	install -m 755 $(BUILD)/$(SONAME) $(DESTDIR)$(LIBDIR)/$(SONAME)
 	ln -sf $(SONAME) $(DESTDIR)$(LIBDIR)/libcrowdbake.so
 	install -m 644 include/crowdbake/*.h $(DESTDIR)$(INCLUDEDIR)/crowdbake/
-	install -m 644 formats/crowdbake_pal.h $(DESTDIR)$(INCLUDEDIR)/crowdbake_pal.h
-	install -m 644 formats/crowdbake_pal_runtime.h $(DESTDIR)$(INCLUDEDIR)/crowdbake_pal_runtime.h
+	install -m 644 include/crowdbake_pal.h $(DESTDIR)$(INCLUDEDIR)/crowdbake_pal.h
+	install -m 644 include/crowdbake_pal_runtime.h $(DESTDIR)$(INCLUDEDIR)/crowdbake_pal_runtime.h
 	sed $(INSTALL_SED) cmake/crowdbake.pc.in > $(DESTDIR)$(LIBDIR)/pkgconfig/crowdbake.pc
 	sed $(INSTALL_SED) cmake/crowdbakeConfig.cmake.in > $(DESTDIR)$(LIBDIR)/cmake/crowdbake/crowdbakeConfig.cmake
 	sed $(INSTALL_SED) cmake/crowdbakeConfigVersion.cmake.in > $(DESTDIR)$(LIBDIR)/cmake/crowdbake/crowdbakeConfigVersion.cmake
@@ -200,32 +208,34 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_A
 	install -d $(DESTDIR)$(DATADIR)/crowdbake
 	install -m 644 $(GODOT_ADDON_ZIP) $(DESTDIR)$(DATADIR)/crowdbake/
 
-# ---- the Godot addon: addons/crowdbake as a zip to unpack into a project ----------------
+# ---- the Godot addon: runtimes/godot/addons/crowdbake as a zip to unpack into a project ----------------
 # Byte for byte the same on every build: files only, sorted, one date (1980-01-01 UTC), mode 644,
 # no extra fields (zip -X).
-GODOT_ADDON_FILES := $(shell find addons/crowdbake -type f | LC_ALL=C sort)
+GODOT_ADDON_FILES := $(shell cd runtimes/godot && find addons/crowdbake -type f | LC_ALL=C sort)
 godot-addon: $(GODOT_ADDON_ZIP)
-$(GODOT_ADDON_ZIP): $(GODOT_ADDON_FILES)
+$(GODOT_ADDON_ZIP): $(GODOT_ADDON_FILES:%=runtimes/godot/%)
 	rm -rf $(BUILD)/godot-addon $@ && mkdir -p $(BUILD)/godot-addon
-	cp --parents $(GODOT_ADDON_FILES) $(BUILD)/godot-addon/
+	cd runtimes/godot && cp --parents $(GODOT_ADDON_FILES) $(abspath $(BUILD))/godot-addon/
 	find $(BUILD)/godot-addon -type f -exec chmod 644 {} + && find $(BUILD)/godot-addon -exec touch -d '1980-01-01 00:00:00 UTC' {} +
 	cd $(BUILD)/godot-addon && find addons -type f | LC_ALL=C sort | TZ=UTC zip -X -q $(abspath $@) -@
 
-# What the installed `crowdbake view` serves: it looks for BIN/../share/crowdbake/web (so
-# DATADIR is PREFIX/share for it to be found; else CROWDBAKE_WEB=DIR): the viewer, the palette
-# shader beside it as in the source tree, and the pinned three.js (its module build and the
-# addons the viewer imports from) and fzstd, from web/package-lock.json.
+# What the installed `crowdbake view` serves: it looks for BIN/../share/crowdbake (so DATADIR is
+# PREFIX/share for it to be found; else CROWDBAKE_WEB=DIR), laid out as viewer/ (cli/viewer), web/
+# (the web runtime, runtimes/web, with the pinned three.js - its module build and the addons the
+# viewer imports from - and fzstd, from runtimes/web/package-lock.json) and glsl/ (runtimes/glsl):
+# the modules find the shader at ../glsl/ as in the source tree.
 WEBDIR = $(DATADIR)/crowdbake/web
-THREE  = web/node_modules/three
-install-web: web/node_modules/.package-lock.json
+THREE  = runtimes/web/node_modules/three
+install-web: runtimes/web/node_modules/.package-lock.json
 	install -d $(DESTDIR)$(WEBDIR)/node_modules/three/build $(DESTDIR)$(WEBDIR)/node_modules/three/examples \
-	  $(DESTDIR)$(DATADIR)/crowdbake/samples/shaders
-	install -m 644 web/viewer.html web/*.mjs web/serve.py web/package.json web/package-lock.json $(DESTDIR)$(WEBDIR)/
+	  $(DESTDIR)$(DATADIR)/crowdbake/glsl $(DESTDIR)$(DATADIR)/crowdbake/viewer
+	install -m 644 cli/viewer/viewer.html cli/viewer/viewer.mjs cli/viewer/serve.py $(DESTDIR)$(DATADIR)/crowdbake/viewer/
+	install -m 644 runtimes/web/*.mjs runtimes/web/package.json runtimes/web/package-lock.json $(DESTDIR)$(WEBDIR)/
 	install -m 644 $(THREE)/package.json $(THREE)/LICENSE $(DESTDIR)$(WEBDIR)/node_modules/three/
 	install -m 644 $(THREE)/build/three.module.js $(DESTDIR)$(WEBDIR)/node_modules/three/build/
 	cp -R $(THREE)/examples/jsm $(DESTDIR)$(WEBDIR)/node_modules/three/examples/
-	cp -R web/node_modules/fzstd $(DESTDIR)$(WEBDIR)/node_modules/
-	install -m 644 samples/shaders/crowdbake_palette.glsl $(DESTDIR)$(DATADIR)/crowdbake/samples/shaders/
+	cp -R runtimes/web/node_modules/fzstd $(DESTDIR)$(WEBDIR)/node_modules/
+	install -m 644 runtimes/glsl/crowdbake_palette.glsl $(DESTDIR)$(DATADIR)/crowdbake/glsl/
 
 # ---- samples: the project's own rigged animals ----------------------------------------
 $(BUILD)/gen_samples: $(wildcard samples/gen/*.c samples/gen/*.h) $(DEPS_STAMP)
@@ -238,7 +248,7 @@ $(SAMPLE_GLB) &: $(BUILD)/gen_samples
 samples: $(SAMPLE_GLB)
 
 # The viewer's npm packages come with the demo where npm is there; else the demo names the command.
-demo: all $(if $(shell command -v npm 2>/dev/null),web/node_modules/.package-lock.json)
+demo: all $(if $(shell command -v npm 2>/dev/null),runtimes/web/node_modules/.package-lock.json)
 	@mkdir -p $(BUILD)/demo
 	@for s in $(SAMPLES); do $(BUILD)/crowdbake info $(BUILD)/samples/$$s.glb || exit 1; echo; done
 	@for s in $(SAMPLES); do $(BUILD)/crowdbake bake $(BUILD)/samples/$$s.glb -o $(BUILD)/demo/$$s.pal --format pal,exr --root-motion in-place \
@@ -247,23 +257,23 @@ demo: all $(if $(shell command -v npm 2>/dev/null),web/node_modules/.package-loc
 	@echo
 	$(BUILD)/crowdbake bake samples/catalog.toml
 	@echo
-	@[ -f web/node_modules/.package-lock.json ] || echo "crowdbake view needs three.js and fzstd: apt-get install npm, then make web"
+	@[ -f runtimes/web/node_modules/.package-lock.json ] || echo "crowdbake view needs three.js and fzstd: apt-get install npm, then make web"
 	@echo "watch the herd in a browser: $(BUILD)/crowdbake view samples/catalog.toml (or put $(BUILD) on PATH)"
 
 # ---- tests ----------------------------------------------------------------------------
 # Each build's tests write under $(BUILD)/tmp-tests (BUILD_DIR), so the normal and the
 # sanitizer passes run side by side.
-TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(TOOL_INC) $(shell pkg-config --cflags cmocka 2>/dev/null)
+TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(TOOL_INC) -Itests $(shell pkg-config --cflags cmocka 2>/dev/null)
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
-$(BUILD)/tests/%: tests/%.c tests/testutil.h tests/view_server.h $(TOOL_A) $(BUILD)/libcrowdbake.a
+$(BUILD)/tests/%: %.c tests/testutil.h tests/view_server.h $(TOOL_A) $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TEST_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
 
 # The reader header alone, strict C99, as an engine would compile it: no libcrowdbake.
-$(BUILD)/tests/standalone_pal_reader: tests/standalone_pal_reader.c formats/crowdbake_pal.h formats/crowdbake_pal_runtime.h $(DEPS_STAMP)
+$(BUILD)/tests/standalone_pal_reader: tests/runtimes/standalone_pal_reader.c include/crowdbake_pal.h include/crowdbake_pal_runtime.h $(DEPS_STAMP)
 	@mkdir -p $(@D)
-	$(CC) -std=c99 -pedantic $(OPT) -g $(WARN) $(SAN) $(TEST_CFLAGS) $< -o $@ \
+	$(CC) -std=c99 -pedantic $(OPT) -g $(WARN) $(SAN) -Iinclude $(TEST_CFLAGS) $< -o $@ \
 	  $(shell pkg-config --libs cmocka libzstd 2>/dev/null) -lm
 TEST_BINS += $(BUILD)/tests/standalone_pal_reader
 
@@ -281,21 +291,21 @@ ARGS_replay_ktx2    := tests/fuzz/regressions/ktx2
 ARGS_replay_catalog := tests/fuzz/regressions/catalog catalog.example.toml samples/catalog.toml
 
 # The npm packages the tests use, from their package-locks: the Khronos glTF validator and a
-# JSON schema validator (tests/validator); Godot 4.6's web build and playwright-core to drive
-# the system's Chromium (tests/godot); ktx-parse and three.js, which read KTX2 palettes back
-# (tests/ktx2); playwright-core again for the web runtime's browser tests and the crowd benchmark
-# (tests/browser); Babylon.js, which bakes Cow itself to check crowdbake's .bvat.json
-# (tests/babylon); three.js and fzstd for the web runtime itself (web/: the viewer, the three.js
+# JSON schema validator (tests/tools/validator); Godot 4.6's web build and playwright-core to drive
+# the system's Chromium (tests/runtimes/godot); ktx-parse and three.js, which read KTX2 palettes back
+# (tests/tools/ktx2); playwright-core again for the web runtime's browser tests and the crowd benchmark
+# (tests/runtimes/browser); Babylon.js, which bakes Cow itself to check crowdbake's .bvat.json
+# (tests/runtimes/babylon); three.js and fzstd for the web runtime itself (runtimes/web: the viewer, the three.js
 # drop-in). Installed here, once, before any test runs.
-NODE_DEPS := tests/validator/node_modules/.package-lock.json tests/godot/node_modules/.package-lock.json \
-             tests/ktx2/node_modules/.package-lock.json tests/browser/node_modules/.package-lock.json \
-             tests/babylon/node_modules/.package-lock.json web/node_modules/.package-lock.json
+NODE_DEPS := tests/tools/validator/node_modules/.package-lock.json tests/runtimes/godot/node_modules/.package-lock.json \
+             tests/tools/ktx2/node_modules/.package-lock.json tests/runtimes/browser/node_modules/.package-lock.json \
+             tests/runtimes/babylon/node_modules/.package-lock.json runtimes/web/node_modules/.package-lock.json
 tests/%/node_modules/.package-lock.json: tests/%/package-lock.json
 	cd tests/$* && npm ci --no-audit --no-fund --loglevel=error
-web/node_modules/.package-lock.json: web/package-lock.json
-	cd web && npm ci --no-audit --no-fund --loglevel=error
-# What `crowdbake view` serves from the source tree: three.js and fzstd, from web/package-lock.json.
-web: web/node_modules/.package-lock.json
+runtimes/web/node_modules/.package-lock.json: runtimes/web/package-lock.json
+	cd runtimes/web && npm ci --no-audit --no-fund --loglevel=error
+# What `crowdbake view` serves from the source tree: three.js and fzstd, from runtimes/web/package-lock.json.
+web: runtimes/web/node_modules/.package-lock.json
 
 SHARED := $(or $(CROWDBAKE_SHARED),../shared)
 check-shared:
@@ -303,7 +313,7 @@ check-shared:
 	third-party models and reference matrices in $(SHARED)/assets and $(SHARED)/reference: clone this repository \
 	beside that folder, or set CROWDBAKE_SHARED=DIR" >&2; exit 1; }
 
-# playwright-core, which drives Chromium for the browser tests (tests/browser, tests/godot), needs
+# playwright-core, which drives Chromium for the browser tests (tests/runtimes/browser, tests/runtimes/godot), needs
 # Node.js 20; Debian 12's own nodejs is 18, and every browser test would fail on its own with
 # "Playwright requires Node.js 20 or higher". Said once, up front, with the command that gets it.
 NODE_MAJOR_NEEDED := 20
@@ -319,16 +329,25 @@ check-node:
 # the summary also counts a program that never ran (its build failed) as failed. The .run files
 # are never made, so every `make test` runs everything.
 RESULTS = $(BUILD)/tests/results
-TEST_RUNS = $(TEST_BINS:%=%.run) $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
-# The README's example outputs come from real runs (once: the sanitizer build need not).
-TEST_RUNS += $(if $(SAN),,$(BUILD)/tests/readme_examples.run $(BUILD)/tests/web_reader.run $(BUILD)/tests/bake_hashes.run)
+# The runs of each folder of tests/ (make test-lib, test-cli, test-runtimes, test-install,
+# test-fuzz); the README's example outputs, the pinned bake hashes, the web reader's node tests and
+# the native benchmark's images run once (the sanitizer build need not).
+RUNS_lib      = $(TESTS_lib:%=$(BUILD)/tests/%.run) $(if $(SAN),,$(BUILD)/tests/bake_hashes.run)
+RUNS_cli      = $(TESTS_cli:%=$(BUILD)/tests/%.run) $(if $(SAN),,$(BUILD)/tests/readme_examples.run)
+RUNS_runtimes = $(TESTS_runtimes:%=$(BUILD)/tests/%.run) $(BUILD)/tests/standalone_pal_reader.run \
+                $(if $(SAN),,$(BUILD)/tests/web_reader.run $(BUILD)/tests/bench_gl_images.run)
+RUNS_install  = $(TESTS_install:%=$(BUILD)/tests/%.run)
+RUNS_fuzz     = $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
+TEST_GROUPS  := lib cli runtimes install fuzz
+TEST_RUNS     = $(foreach g,$(TEST_GROUPS),$(RUNS_$(g)))
+RUN_SET      ?= $(TEST_RUNS)
 define record_run
 	@echo "---- $(1) ($(BUILD))"
 	@rm -f $(RESULTS)/$(1).pending; if $(2); then touch $(RESULTS)/$(1).passed; \
 	 else echo "---- FAILED: $(1) ($(BUILD))"; touch $(RESULTS)/$(1).failed; exit 1; fi
 endef
 $(RESULTS)/pending:
-	@mkdir -p $(RESULTS) && for r in $(notdir $(TEST_RUNS:.run=)); do touch $(RESULTS)/$$r.pending; done && touch $@
+	@mkdir -p $(RESULTS) && for r in $(notdir $(RUN_SET:.run=)); do touch $(RESULTS)/$$r.pending; done && touch $@
 $(BUILD)/tests/%.run: $(BUILD)/tests/% all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,$*,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples $< $(ARGS_$*))
 $(BUILD)/tests/readme_examples.run: all | $(RESULTS)/pending
@@ -339,13 +358,12 @@ $(BUILD)/tests/bake_hashes.run: all | $(RESULTS)/pending
 bake-hashes: all
 	python3 tests/tools/bake_hashes.py --write --build $(BUILD) --shared $(SHARED)
 # The native crowd benchmark's images, not its times: palette, bone pass and VAT draw the same herd.
-TEST_RUNS += $(if $(SAN),,$(BUILD)/tests/bench_gl_images.run)
 $(BUILD)/tests/bench_gl_images.run: all $(BUILD)/bench_gl | $(RESULTS)/pending
 	$(call record_run,bench_gl_images,for m in fish quadruped; do EGL_PLATFORM=surfaceless $(BUILD)/bench_gl \
 	  $(BUILD)/samples/$$m.glb --check || exit 1; done)
 $(BUILD)/tests/web_reader.run: all $(NODE_DEPS) | $(RESULTS)/pending
-	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test web/test/)
-test-runs: $(TEST_RUNS)
+	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test runtimes/web/test/)
+test-runs: $(RUN_SET)
 replay: $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
 readme: all
 	python3 tests/tools/readme_examples.py --write --build $(BUILD)
@@ -377,6 +395,11 @@ test: deps check-shared check-node $(NODE_DEPS)
 	@$(MAKE) --no-print-directory $(PARALLEL) test-runs || true
 	$(call test_summary,$(BUILD))
 
+$(TEST_GROUPS:%=test-%): test-%: deps check-shared check-node $(NODE_DEPS)
+	@rm -rf $(RESULTS)
+	@$(MAKE) --no-print-directory $(PARALLEL) RUN_SET='$(RUNS_$*)' test-runs || true
+	$(call test_summary,$(BUILD))
+
 test-asan: deps check-shared check-node $(NODE_DEPS)
 	@rm -rf build/asan/tests/results
 	@$(ASAN_ENV) $(MAKE) --no-print-directory $(PARALLEL) $(SANITIZE) test-runs || true
@@ -395,7 +418,7 @@ FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all
 FUZZ_WEB := tests/fuzz/web/node_modules/.package-lock.json
 $(FUZZ_WEB): tests/fuzz/web/package-lock.json
 	cd tests/fuzz/web && npm ci --no-audit --no-fund --loglevel=error
-fuzz-build: deps $(FUZZ_WEB) web/node_modules/.package-lock.json
+fuzz-build: deps $(FUZZ_WEB) runtimes/web/node_modules/.package-lock.json
 	@dpkg-query -W -f='$${Status}' libclang-rt-14-dev 2>/dev/null | grep -q 'install ok installed' || \
 	  { [ "$$(id -u)" = 0 ] && apt-get install -y --no-install-recommends libclang-rt-14-dev >/dev/null; }
 	$(MAKE) --no-print-directory BUILD=$(FUZZ_BUILD) CC=clang CXX=clang++ OPT="-O1 -g" \

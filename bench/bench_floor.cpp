@@ -1,7 +1,7 @@
 // bench_floor.cpp MODEL.glb - the floor a load cannot go under, measured in the same run as
 // crowdbake: read the file into memory, map it read-only with MAP_POPULATE and touch every
 // page, and parse its JSON chunk (the whole glTF JSON for a .gltf) with RapidJSON into a DOM:
-// "parse" with the loader's flags (lib/formats/gltf_fast.cpp: a copy parsed in place,
+// "parse" with the loader's flags (formats/gltf_fast.cpp: a copy parsed in place,
 // full-precision numbers), "parse_plain" with RapidJSON's defaults (copied strings, numbers that
 // may be an ulp off). "load" is crowdbake's whole load (cb_gltf_load: read, parse, convert,
 // validate), its runs taken in turns with the floor's. Medians of 7 runs; one JSON object on

@@ -1,5 +1,5 @@
 /* bench_gl.c - the native crowd benchmark: N instances of a model drawn from its palette (the
- * shipped samples/shaders/crowdbake_palette.glsl, per-vertex blending), from the bone pass (the
+ * shipped runtimes/glsl/crowdbake_palette.glsl, per-vertex blending), from the bone pass (the
  * same GLSL's cb_bone_pass and CB_BONE_TEXTURE) and from a VAT of the same frames, each as one
  * instanced draw into a 960x540 offscreen framebuffer, timed with GL timer queries
  * (GL_TIME_ELAPSED). OpenGL 3.3 core through EGL without a window: Mesa's llvmpipe here
@@ -24,7 +24,7 @@
 
 #include "crowdbake/crowdbake.h"
 
-/* samples/shaders/crowdbake_palette.glsl, embedded by the build (build/gen/palette_glsl.c). */
+/* runtimes/glsl/crowdbake_palette.glsl, embedded by the build (build/gen/palette_glsl.c). */
 extern const char cb_palette_glsl[];
 
 #define WIDTH 960

@@ -18,11 +18,11 @@ against 30 clips and 800 against 200 joints; then issue 21's goals, each as meas
 and whether it is met. --smoke runs every part once on tiny inputs (4-type catalog, 20/40-joint
 rigs, the fish sample), so `make check` keeps the script working.
 
-The crowd benchmark (tests/browser/bench_crowd.mjs, headless Chromium): frame time of a herd drawn
+The crowd benchmark (tests/runtimes/browser/bench_crowd.mjs, headless Chromium): frame time of a herd drawn
 from its palette against the same herd drawn from a VAT of the same frames (crowdbake vat), one
 instanced draw each, alternating in one page, for 10 to 100,000 instances of the fish sample and
 100 and 1,000 Cows, each drawn three ways: palette (per-vertex blending), bones (the bone pass: each
-instance's bones blended once a frame, web/crowdbake_bones.mjs) and VAT. --crowd-only runs only it.
+instance's bones blended once a frame, runtimes/web/crowdbake_bones.mjs) and VAT. --crowd-only runs only it.
 Without a GPU, Chromium renders with SwiftShader (software: its absolute times say little about a
 GPU; the ratio is measured in the same run).
 

@@ -1,11 +1,11 @@
 # bash completion for crowdbake (installed as share/bash-completion/completions/crowdbake).
-# Each command's options are those of its --help; tests/test_install.c keeps them in step with
+# Each command's options are those of its --help; tests/install/test_install.c keeps them in step with
 # the command's own option tables.
 
 _crowdbake_options()
 {
     local limits="--max-joints --max-frames --max-accessor-count --max-file-size --max-palette-size"
-    local output="-q --quiet -v --verbose" # every command's (tool/cli/cli_output.c)
+    local output="-q --quiet -v --verbose" # every command's (cli/cli_output.c)
     case $1 in
     bake) echo "-o --output --format --fps --layout --precision --max-texture-size --root-motion --skin
                 --speed-reference --exr-compression --zstd --json $output -j --threads --force --depfile

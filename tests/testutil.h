@@ -152,12 +152,12 @@ static inline int run_command(const char *cmd, char *out, size_t out_size)
     return status >= 0 && (status & 0x7f) == 0 ? (status >> 8) & 0xff : -1;
 }
 
-/* The npm packages of tests/validator (the Khronos glTF validator, ajv), which `make test`
+/* The npm packages of tests/tools/validator (the Khronos glTF validator, ajv), which `make test`
  * installs from their package-lock before any test runs. */
 static inline void require_node_validators(void)
 {
-    FILE *f = fopen("tests/validator/node_modules/.package-lock.json", "r");
-    if (!f) fail_msg("tests/validator: npm packages not installed (make test installs them; or: cd tests/validator && npm ci)");
+    FILE *f = fopen("tests/tools/validator/node_modules/.package-lock.json", "r");
+    if (!f) fail_msg("tests/tools/validator: npm packages not installed (make test installs them; or: cd tests/tools/validator && npm ci)");
     fclose(f);
 }
 

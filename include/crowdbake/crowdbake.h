@@ -12,7 +12,7 @@
  * mesh.h, gltf_mesh_write.h   runtime-ready meshes for a palette (`crowdbake mesh`)
  * gltf.h, pal_write.h, pal_view.h, exr.h, ktx2.h, json.h, atomic_file.h, vat.h, budget.h   files and sizes
  *
- * Catalogs, rosters, the budget report and the preview are the crowdbake command's (tool/),
+ * Catalogs, rosters, the budget report and the preview are the crowdbake command's (cli/),
  * a client of this library like any other program.
  *
  * An engine that only reads palettes needs none of this: crowdbake_pal.h is a dependency-free

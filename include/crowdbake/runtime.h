@@ -1,6 +1,6 @@
 /* runtime.h - what a game's vertex shader computes from a palette, on the CPU: the frame
  * position of an instance at a time, the blend of two adjacent rows, the skinned mesh. The
- * shipped shaders (samples/shaders/) do exactly this; verification compares it with exact
+ * shipped shaders (runtimes/glsl/) do exactly this; verification compares it with exact
  * skinning from the glTF. */
 #ifndef CB_RUNTIME_H
 #define CB_RUNTIME_H

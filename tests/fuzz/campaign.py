@@ -5,7 +5,7 @@ with the regression inputs), and prints one line per target: executions, coverag
 
 A finding (a crash, leak, timeout or out-of-memory input) is copied into
 tests/fuzz/regressions/T/, where `make check` replays it (replay_T, or for the web reader
-web/test/fuzz_regressions.test.mjs) until it is fixed; the target then starts again for the
+runtimes/web/test/fuzz_regressions.test.mjs) until it is fixed; the target then starts again for the
 rest of its time, so one bug does not end the campaign.
 
 Usage: campaign.py --fuzz-build DIR --seconds N TARGET...   (TARGET: gltf pal exr ktx2 catalog web)

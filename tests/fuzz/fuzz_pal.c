@@ -1,4 +1,4 @@
-/* fuzz_pal.c - libFuzzer target: the .pal reader (formats/crowdbake_pal.h) on arbitrary bytes,
+/* fuzz_pal.c - libFuzzer target: the .pal reader (include/crowdbake_pal.h) on arbitrary bytes,
  * with and without checksum verification, then every table entry, every bone's matrix at a few
  * times in every clip (cbpal_bone_matrix), and the palette decoded as
  * `verify`, `view` and the runtimes decode it (cb_palette_view, fuzz_decode.h). */

@@ -1,5 +1,5 @@
 /* bake_model.c - a program outside crowdbake that bakes a model through the installed public
- * API, as an engine's asset tool would: `bake_model MODEL OUT.pal`. tests/test_install.c
+ * API, as an engine's asset tool would: `bake_model MODEL OUT.pal`. tests/install/test_install.c
  * builds it against an installed tree with pkg-config and with CMake. */
 #include <crowdbake/crowdbake.h>
 #include <crowdbake_pal.h>

@@ -105,7 +105,7 @@ def bake_catalog(crowdbake, build, tmp, out):
                 path = os.path.join(root, f)
                 rel = os.path.relpath(path, d)
                 if rel == 'catalog.toml' or (f.startswith('.') and f.endswith('.prep')):
-                    continue  # the input; the prep records (tool/roster/roster_cache.h), a cache in this machine's byte order
+                    continue  # the input; the prep records (cli/roster/roster_cache.h), a cache in this machine's byte order
                 data = open(path, 'rb').read()
                 out.append('%s %s %s' % (name, rel, hashlib.sha256(data).hexdigest()))
 

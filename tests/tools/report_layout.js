@@ -1,4 +1,4 @@
-// report_layout.js - appended to a `crowdbake report --html` page by tests/test_report.c and run
+// report_layout.js - appended to a `crowdbake report --html` page by tests/cli/test_report.c and run
 // by headless Chromium (--dump-dom): checks the laid-out boxes, not the markup. Writes one
 // line per failure and a last line, LAYOUT then OK or FAILED and the number of checks, into a
 // pre element with the id layout-check that it appends to the body.

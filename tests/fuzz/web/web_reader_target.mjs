@@ -1,13 +1,13 @@
 // web_reader_target.mjs - what the web reader's fuzzer checks on each input, shared by the
 // Jazzer.js entry (fuzz_web.mjs) and the regression replay in `make check`
-// (web/test/fuzz_regressions.test.mjs).
+// (runtimes/web/test/fuzz_regressions.test.mjs).
 //
 // Every input is read as a .pal (with and without the checksum, zstd through the caller's
 // decoder) and as a roster.json, as a page would read untrusted files. Each read must end in a
 // returned value a runtime can use as it is - every row of every clip and every bone inside the
 // texels, every state a real one - or in one thrown Error whose message names the file; a
 // RangeError or TypeError from a typed array, a DataView or a missing member is a finding.
-import { readPal, readRoster, texelIndex, boneMatrix } from '../../../web/crowdbake_pal.mjs';
+import { readPal, readRoster, texelIndex, boneMatrix } from '../../../runtimes/web/crowdbake_pal.mjs';
 
 // Decompressed payloads the fuzzer may ask for: enough for every seed, small enough that a
 // header asking for more is refused before anything is allocated.

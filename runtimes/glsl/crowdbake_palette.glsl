@@ -1,0 +1,328 @@
+// crowdbake_palette.glsl - skinning from a crowdbake bone-matrix palette in a vertex shader.
+// GLSL 330 core and GLSL ES 3.00. Put it after your #version line and one define of each pair:
+//
+//   #define CB_LAYOUT_MAT4 | CB_LAYOUT_AFFINE | CB_LAYOUT_QPOS        (the .pal header's layout)
+//   #define CB_PRECISION_FLOAT | CB_PRECISION_HALF | CB_PRECISION_U16 (its precision)
+//   #define CB_POSITIONS_RELATIVE   when the header's flags have bit 2 (4: a half palette, version 2 or 3)
+//   #define CB_INFLUENCES 1|2       optional, for a mesh written with `crowdbake mesh --max-influences 1|2`:
+//                                   only that many bones per vertex are read (a far LOD's cheaper shader)
+//
+// Textures: cb_palette is the .pal payload as is - RGBA32F, RGBA16F, or RGBA16UI (u16, read as
+// usampler2D) - width x height from the header. For qpos and CB_POSITIONS_RELATIVE,
+// cb_bind_positions is an RGBA32F texture of one texel per bone and two rows: row 0 xyz = the
+// bone table's bind position, row 1 xyz = the bone's position offset (cbpal_bone.position_offset:
+// version 3's offset table, the bind position in version 2), which CB_POSITIONS_RELATIVE adds to
+// the stored position (qpos texel 1; mat4 and affine: the translation, which then holds the
+// joint's position p = M b, skinned as A (v - b) + p).
+//
+// Per-instance data, the roster manifest's four numbers: inst.x first row (negative for a clip
+// whose rows are held, not blended - .pal clip flag bit 2, a STEP-keyed clip: its first row is
+// -inst.x - 1), inst.y frame count (negative for a one-shot: it clamps instead of wrapping),
+// inst.z rate in rows per second, inst.w phase in 0..1. Time in seconds.
+//
+//   vec3 p, n;
+//   cb_skin_position_normal(a_position, a_normal, a_joints, a_weights, inst, time, p, n);  // both, each texel read once
+//   vec3 p = cb_skin_position(a_position, a_joints, a_weights, inst, time);                // or one of them
+//   vec3 n = cb_skin_normal(a_normal, a_joints, a_weights, inst, time);
+//   cb_skin_position_normal_crossfade(a_position, a_normal, a_joints, a_weights, from_inst, inst, fade, time, p, n);
+//   vec3 p = cb_skin_position_crossfade(a_position, a_joints, a_weights, from_inst, inst, fade, time);
+//
+// Motion vectors (TAA, motion blur): the time is a parameter, so the previous frame's position is
+// one more call at time - dt with the same instance numbers (in a cross-fade, with the fade
+// weight at time - dt), projected by the previous frame's view-projection; pass both clip
+// positions to the fragment shader and divide there:
+//
+//   vec3 before = cb_skin_position(a_position, a_joints, a_weights, inst, time - dt);
+//   v_clip_now = gl_Position; v_clip_before = u_previous_view_projection * (u_model * vec4(before, 1.0));
+//   velocity = 0.5 * (v_clip_now.xy / v_clip_now.w - v_clip_before.xy / v_clip_before.w); // fragment: screen units
+//
+// Batches, for runtimes without instancing: `crowdbake mesh --batch K` writes one mesh of K copies
+// whose attribute _INSTANCE_ID (float) is the copy, 0..K-1. With #define CB_BATCH K, the uniform
+// array cb_batch_instances[K] holds each copy's four numbers, and cb_batch_instance picks them:
+//
+//   vec4 inst = cb_batch_instance(a_instance_id);   // then skin as above
+//
+// (GLSL ES 3.00 guarantees 256 vertex uniform vectors: keep K well under that, or batch fewer.)
+
+#ifdef GL_ES
+precision highp float;
+precision highp int;
+precision highp sampler2D;
+precision highp usampler2D;
+#endif
+
+#ifndef CB_INFLUENCES
+#define CB_INFLUENCES 4
+#endif
+
+#if defined(CB_LAYOUT_MAT4)
+#define CB_TEXELS_PER_BONE 4
+#elif defined(CB_LAYOUT_AFFINE)
+#define CB_TEXELS_PER_BONE 3
+#else
+#define CB_TEXELS_PER_BONE 2
+#endif
+
+#ifdef CB_PRECISION_U16
+uniform usampler2D cb_palette;
+uniform vec3 cb_bounds_min;   // header: bounds_min
+uniform vec3 cb_bounds_max;   // header: bounds_max
+uniform float cb_linear_range; // header: linear_range
+#else
+uniform sampler2D cb_palette;
+#endif
+uniform int cb_row_texels;     // header: row_texels (bones x texels per bone)
+uniform int cb_rows_per_block; // header: height
+#if defined(CB_LAYOUT_QPOS) || defined(CB_POSITIONS_RELATIVE)
+uniform sampler2D cb_bind_positions;
+#endif
+
+#ifdef CB_BATCH
+uniform vec4 cb_batch_instances[CB_BATCH];
+
+// The per-instance numbers of a batch's copy (its _INSTANCE_ID, exact in a float).
+vec4 cb_batch_instance(float instance_id)
+{
+    return cb_batch_instances[int(instance_id + 0.5)]; // cb:batch-id
+}
+#endif
+
+#ifdef CB_PRECISION_U16
+vec4 cb_snorm(uvec4 u)
+{
+    ivec4 s = ivec4(u) - ivec4(greaterThanEqual(u, uvec4(32768u))) * 65536;
+    return max(vec4(s) / 32767.0, vec4(-1.0));
+}
+
+vec3 cb_unorm_box(uvec3 u)
+{
+    return cb_bounds_min + (cb_bounds_max - cb_bounds_min) * (vec3(u) / 65535.0);
+}
+
+// Texel k of a bone, decoded as crowdbake's u16 precision defines it (docs/pal-format.md).
+vec4 cb_decode(uvec4 u, int k)
+{
+#if defined(CB_LAYOUT_QPOS)
+    if (k == 0) return cb_snorm(u);
+    return vec4(cb_unorm_box(u.xyz), cb_linear_range * float(u.w) / 65535.0);
+#elif defined(CB_LAYOUT_AFFINE)
+    vec3 lin = cb_snorm(u).xyz * cb_linear_range;
+    return vec4(lin, cb_bounds_min[k] + (cb_bounds_max[k] - cb_bounds_min[k]) * (float(u.w) / 65535.0));
+#else
+    if (k == 3) return vec4(cb_unorm_box(u.xyz), 1.0);
+    return vec4(cb_snorm(u).xyz * cb_linear_range, 0.0);
+#endif
+}
+#endif
+
+// Texel k of a bone in a baked row: rows wrap into column blocks of cb_rows_per_block rows.
+vec4 cb_texel(int row, int bone, int k)
+{
+    int block = row / cb_rows_per_block;
+    ivec2 xy = ivec2(block * cb_row_texels + bone * CB_TEXELS_PER_BONE + k, row - block * cb_rows_per_block);
+#ifdef CB_PRECISION_U16
+    return cb_decode(texelFetch(cb_palette, xy, 0), k);
+#else
+    return texelFetch(cb_palette, xy, 0);
+#endif
+}
+
+// The two rows to blend at `time`, and the weight of the second.
+void cb_frame(vec4 inst, float time, out int row0, out int row1, out float fr)
+{
+    bool held = inst.x < 0.0; // a stepped clip: its row alone, no blend across a step
+    float first = held ? -inst.x - 1.0 : inst.x;
+    float frames = abs(inst.y);
+    float fpos = time * inst.z + inst.w * frames;
+    float f0, f1;
+    if (inst.y > 0.0) {
+        fpos = mod(fpos, frames);
+        f0 = floor(fpos);
+        f1 = mod(f0 + 1.0, frames); // cb:wrap - a loop's last row blends into its first
+    } else {
+        fpos = clamp(fpos, 0.0, frames - 1.0);
+        f0 = floor(fpos);
+        f1 = min(f0 + 1.0, frames - 1.0);
+    }
+    if (held) { f1 = f0; fpos = f0; } // cb:held - no blend across a step
+    fr = fpos - f0;
+    row0 = int(first + f0);
+    row1 = int(first + f1);
+}
+
+// The rotation matrix of a unit quaternion (x, y, z, w).
+mat3 cb_quat_matrix(vec4 q)
+{
+    vec3 q2 = 2.0 * q.xyz, w2 = q.w * q2;
+    vec3 d = q.xyz * q2;                          // 2xx, 2yy, 2zz
+    vec3 o = q.xyz * q2.yzx;                      // 2xy, 2yz, 2zx
+    return mat3(1.0 - d.y - d.z, o.x + w2.z, o.z - w2.y,
+                o.x - w2.z, 1.0 - d.x - d.z, o.y + w2.x,
+                o.z + w2.y, o.y - w2.x, 1.0 - d.x - d.y);
+}
+
+// A bone's transform: a point v goes to a * v + t, a direction n to a * n.
+struct cb_affine {
+    mat3 a;
+    vec3 t;
+};
+
+// A bone's transform blended between two rows. Each of its texels is fetched once, whatever is
+// skinned with it (a position and a normal share it).
+cb_affine cb_bone_affine(int row0, int row1, float fr, int bone)
+{
+#if defined(CB_LAYOUT_QPOS)
+    vec4 q0 = cb_texel(row0, bone, 0), q1 = cb_texel(row1, bone, 0);
+    if (dot(q0, q1) < 0.0) q1 = -q1; // cb:hemisphere - the shorter way between the rows
+    vec4 q = normalize(mix(q0, q1, fr));
+    vec4 ps = mix(cb_texel(row0, bone, 1), cb_texel(row1, bone, 1), fr); // position, scale
+    vec3 b = texelFetch(cb_bind_positions, ivec2(bone, 0), 0).xyz;
+#ifdef CB_POSITIONS_RELATIVE
+    ps.xyz += texelFetch(cb_bind_positions, ivec2(bone, 1), 0).xyz; // cb:offset - the texel holds p less the bone's offset
+#endif
+    mat3 a = ps.w * cb_quat_matrix(q); // v -> p + s R (v - b)
+    return cb_affine(a, ps.xyz - a * b);
+#else
+#if defined(CB_LAYOUT_AFFINE)
+    mat3x4 rows = mat3x4(mix(cb_texel(row0, bone, 0), cb_texel(row1, bone, 0), fr),
+                         mix(cb_texel(row0, bone, 1), cb_texel(row1, bone, 1), fr),
+                         mix(cb_texel(row0, bone, 2), cb_texel(row1, bone, 2), fr)); // texel k = row k
+    mat4 m = transpose(mat4(rows[0], rows[1], rows[2], vec4(0.0, 0.0, 0.0, 1.0)));
+#else
+    mat4 m = mat4(mix(cb_texel(row0, bone, 0), cb_texel(row1, bone, 0), fr),
+                  mix(cb_texel(row0, bone, 1), cb_texel(row1, bone, 1), fr),
+                  mix(cb_texel(row0, bone, 2), cb_texel(row1, bone, 2), fr),
+                  mix(cb_texel(row0, bone, 3), cb_texel(row1, bone, 3), fr)); // texel k = column k
+#endif
+#ifdef CB_POSITIONS_RELATIVE
+    // The translation holds the joint's position less the bone's offset: A (v - b) + p.
+    vec3 b = texelFetch(cb_bind_positions, ivec2(bone, 0), 0).xyz;
+    vec3 p = m[3].xyz + texelFetch(cb_bind_positions, ivec2(bone, 1), 0).xyz; // cb:offset-matrix
+    return cb_affine(mat3(m), p - mat3(m) * b);
+#else
+    return cb_affine(mat3(m), m[3].xyz);
+#endif
+#endif
+}
+
+// A cross-fade of two transforms: from f (fade 0) to m (fade 1).
+cb_affine cb_affine_mix(cb_affine f, cb_affine m, float fade)
+{
+    return cb_affine(m.a * fade + f.a * (1.0 - fade), mix(f.t, m.t, fade));
+}
+
+// Skins a position v and a normal n (not normalized) in one pass over the influences, cross-faded
+// from from_inst (fade 0 -> 1; 1: inst alone): each bone's texels are fetched once for both.
+// Blending the bones' transforms is blending what they skin: both are linear in them.
+void cb_skin_both(vec3 v, vec3 n, ivec4 joints, vec4 weights, vec4 from_inst, vec4 inst, float fade, float time,
+                  out vec3 p, out vec3 skinned_n)
+{
+    int row0, row1, from0, from1;
+    float fr, from_fr;
+    cb_frame(inst, time, row0, row1, fr);
+    cb_frame(from_inst, time, from0, from1, from_fr);
+    p = vec3(0.0);
+    skinned_n = vec3(0.0);
+    for (int i = 0; i < CB_INFLUENCES; ++i) // cb:influences - crowdbake mesh puts the largest weights first
+        if (weights[i] != 0.0) {
+            cb_affine m = cb_bone_affine(row0, row1, fr, joints[i]);
+            if (fade < 1.0) m = cb_affine_mix(cb_bone_affine(from0, from1, from_fr, joints[i]), m, fade);
+            p += weights[i] * (m.a * v + m.t);
+            skinned_n += weights[i] * (m.a * n);
+        }
+}
+
+vec3 cb_skin_position(vec3 v, ivec4 joints, vec4 weights, vec4 inst, float time)
+{
+    vec3 p, n;
+    cb_skin_both(v, vec3(0.0), joints, weights, inst, inst, 1.0, time, p, n);
+    return p;
+}
+
+vec3 cb_skin_normal(vec3 n, ivec4 joints, vec4 weights, vec4 inst, float time)
+{
+    vec3 p, skinned_n;
+    cb_skin_both(vec3(0.0), n, joints, weights, inst, inst, 1.0, time, p, skinned_n);
+    return normalize(skinned_n);
+}
+
+// The position and the normal together, for the price of one (the runtimes' vertex shaders use it).
+void cb_skin_position_normal(vec3 v, vec3 n, ivec4 joints, vec4 weights, vec4 inst, float time, out vec3 p, out vec3 skinned_n)
+{
+    cb_skin_both(v, n, joints, weights, inst, inst, 1.0, time, p, skinned_n);
+    skinned_n = normalize(skinned_n);
+}
+
+// Cross-fade from a previous clip (from_inst) to the current one: fade goes 0 -> 1.
+void cb_skin_position_normal_crossfade(vec3 v, vec3 n, ivec4 joints, vec4 weights, vec4 from_inst, vec4 inst, float fade,
+                                       float time, out vec3 p, out vec3 skinned_n)
+{
+    cb_skin_both(v, n, joints, weights, from_inst, inst, fade, time, p, skinned_n);
+    skinned_n = normalize(skinned_n);
+}
+
+vec3 cb_skin_position_crossfade(vec3 v, ivec4 joints, vec4 weights, vec4 from_inst, vec4 inst, float fade, float time)
+{
+    vec3 p, n;
+    cb_skin_both(v, vec3(0.0), joints, weights, from_inst, inst, fade, time, p, n);
+    return p;
+}
+
+vec3 cb_skin_normal_crossfade(vec3 n, ivec4 joints, vec4 weights, vec4 from_inst, vec4 inst, float fade, float time)
+{
+    vec3 p, skinned_n;
+    cb_skin_both(vec3(0.0), n, joints, weights, from_inst, inst, fade, time, p, skinned_n);
+    return normalize(skinned_n);
+}
+
+// ---- The bone pass: each instance's bones blended once a frame instead of once a vertex ----
+// A fragment shader, one fragment per (instance, bone), writes cb_bone_pass's three texels to three
+// RGBA32F render targets (bone textures: instance i's bone j at (block * bones + j, i - block *
+// cb_bone_rows), block = i / cb_bone_rows); a vertex shader compiled with #define CB_BONE_TEXTURE
+// then skins from them, three plain texel fetches an influence, no decoding and no blending:
+//
+//   cb_bone_pass(int(gl_FragCoord.x) - first_bone_x, from_inst, inst, fade, time, out0, out1, out2); // fragment
+//   cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, gl_InstanceID, p, n);                 // vertex
+//
+// (runtimes/web/crowdbake_crowd.mjs's bonePass option runs both.)
+
+// Bone `bone` of an instance: the columns of its transform, translation in w.
+void cb_bone_pass(int bone, vec4 from_inst, vec4 inst, float fade, float time, out vec4 c0, out vec4 c1, out vec4 c2)
+{
+    int row0, row1;
+    float fr;
+    cb_frame(inst, time, row0, row1, fr);
+    cb_affine m = cb_bone_affine(row0, row1, fr, bone);
+    if (fade < 1.0) {
+        cb_frame(from_inst, time, row0, row1, fr);
+        m = cb_affine_mix(cb_bone_affine(row0, row1, fr, bone), m, fade);
+    }
+    c0 = vec4(m.a[0], m.t.x), c1 = vec4(m.a[1], m.t.y), c2 = vec4(m.a[2], m.t.z);
+}
+
+#ifdef CB_BONE_TEXTURE
+uniform sampler2D cb_bones0, cb_bones1, cb_bones2; // the bone pass's three targets
+uniform int cb_bone_rows;                          // instances per column block of them
+
+cb_affine cb_passed_bone(int instance, int bone)
+{
+    int block = instance / cb_bone_rows;
+    ivec2 xy = ivec2(block * (cb_row_texels / CB_TEXELS_PER_BONE) + bone, instance - block * cb_bone_rows);
+    vec4 c0 = texelFetch(cb_bones0, xy, 0), c1 = texelFetch(cb_bones1, xy, 0), c2 = texelFetch(cb_bones2, xy, 0);
+    return cb_affine(mat3(c0.xyz, c1.xyz, c2.xyz), vec3(c0.w, c1.w, c2.w)); // cb:bone-columns
+}
+
+// The position and the normal (normalized) of a vertex of instance `instance`, from the bone pass.
+void cb_skin_bone_pass(vec3 v, vec3 n, ivec4 joints, vec4 weights, int instance, out vec3 p, out vec3 skinned_n)
+{
+    p = vec3(0.0);
+    skinned_n = vec3(0.0);
+    for (int i = 0; i < CB_INFLUENCES; ++i)
+        if (weights[i] != 0.0) {
+            cb_affine m = cb_passed_bone(instance, joints[i]);
+            p += weights[i] * (m.a * v + m.t);
+            skinned_n += weights[i] * (m.a * n);
+        }
+    skinned_n = normalize(skinned_n);
+}
+#endif

@@ -1,0 +1,305 @@
+// crowdbake_crowd.mjs - a WebGL2 crowd runtime for crowdbake palettes: one instanced draw call per
+// animal type. An ES module with no dependencies (readPal from crowdbake_pal.mjs gives the palette).
+//
+//     import { readPal } from './crowdbake_pal.mjs';
+//     import { Crowd, loadPaletteGLSL } from './crowdbake_crowd.mjs';
+//     const crowd = new Crowd(gl, { pal: readPal(bytes), glsl: await loadPaletteGLSL(), mesh, capacity: 10000 });
+//     crowd.setInstance(i, { position: [x, 0, z], yaw, inst: instanceData(state, speed, i) });
+//     crowd.draw(viewProjection, seconds);                 // every instance, one drawElementsInstanced
+//
+// The vertex shader is runtimes/glsl/crowdbake_palette.glsl itself (ES 3.00), fetched at run time
+// and prefixed with the palette's #defines: there is no second copy of the skinning to drift.
+// `mesh` holds the skinned mesh in the model's own vertex order, as the palette's bone indices
+// expect: positions (3 floats a vertex), normals (3, optional), joints (4 integers), weights (4
+// floats), indices (optional).
+
+import { BonePass, boneShaderSource } from './crowdbake_bones.mjs';
+
+export const GLSL_URL = new URL('../glsl/crowdbake_palette.glsl', import.meta.url);
+
+export async function loadPaletteGLSL(url = GLSL_URL) {
+    const response = await fetch(url);
+    if (!response.ok) throw new Error(`${url}: HTTP ${response.status} (the runtime's vertex shader)`);
+    return response.text();
+}
+
+// The defines that select the library's layout and precision for a .pal header.
+export function paletteDefines(header) {
+    const defines = [`CB_LAYOUT_${header.layout_name.toUpperCase()}`, `CB_PRECISION_${header.precision_name.toUpperCase()}`];
+    if (header.flags & 4) defines.push('CB_POSITIONS_RELATIVE');
+    return defines;
+}
+
+// The texture format of a palette's payload, taken as is: RGBA32F, RGBA16F, or RGBA16UI
+// (read through usampler2D).
+export function paletteTextureFormat(gl, header) {
+    if (header.precision === 0) return { internalFormat: gl.RGBA32F, format: gl.RGBA, type: gl.FLOAT, name: 'RGBA32F' };
+    if (header.precision === 1) return { internalFormat: gl.RGBA16F, format: gl.RGBA, type: gl.HALF_FLOAT, name: 'RGBA16F' };
+    return { internalFormat: gl.RGBA16UI, format: gl.RGBA_INTEGER, type: gl.UNSIGNED_SHORT, name: 'RGBA16UI' };
+}
+
+function texture(gl, internalFormat, width, height, format, type, data) {
+    const t = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+    gl.texImage2D(gl.TEXTURE_2D, 0, internalFormat, width, height, 0, format, type, data);
+    return t;
+}
+
+// Uploads the palette (and, for qpos or a half palette, its bind positions and position offsets
+// as two RGBA32F rows). Returns the textures and the bytes they take on the GPU.
+export function uploadPalette(gl, pal) {
+    const h = pal.header, f = paletteTextureFormat(gl, h);
+    const max = gl.getParameter(gl.MAX_TEXTURE_SIZE);
+    if (h.width > max || h.height > max)
+        throw new Error(`palette ${h.width}x${h.height} exceeds this GPU's ${max}-texel limit; bake with --max-texture-size ${max}`);
+    const palette = texture(gl, f.internalFormat, h.width, h.height, f.format, f.type, pal.texels);
+    let bind = null, bytes = h.width * h.height * h.texel_bytes;
+    if (h.layout === 2 || h.flags & 4) {
+        const rgba = new Float32Array(h.bone_count * 8); // row 0: bind positions; row 1: position offsets
+        pal.bones.forEach((b, j) => {
+            rgba.set(b.bind_position, j * 4);
+            rgba.set(b.position_offset, (h.bone_count + j) * 4);
+        });
+        bind = texture(gl, gl.RGBA32F, h.bone_count, 2, gl.RGBA, gl.FLOAT, rgba);
+        bytes += rgba.byteLength;
+    }
+    return { palette, bind, bytes, format: f.name };
+}
+
+// Per instance, 16 floats: place (x, y, z, yaw), inst (the roster's four numbers), from (the
+// previous state's four, for a cross-fade), fade (start time, duration, scale, unused).
+export const INSTANCE_FLOATS = 16;
+
+// The runtime's vertex main around a skinning that sets p and n (object space).
+const mainSource = (skin) => `
+in vec3 a_position; in vec3 a_normal; in ivec4 a_joints; in vec4 a_weights;
+in vec4 a_place; in vec4 a_inst; in vec4 a_from; in vec4 a_fade;
+uniform float u_time; uniform mat4 u_view_projection;
+out vec3 v_world; out vec3 v_normal;
+void main() {
+    vec3 p, n;
+${skin}
+    float c = cos(a_place.w), s = sin(a_place.w);
+    mat3 yaw = mat3(c, 0.0, -s, 0.0, 1.0, 0.0, s, 0.0, c);
+    v_world = a_place.xyz + a_fade.z * (yaw * p);
+    v_normal = yaw * n;
+    gl_Position = u_view_projection * vec4(v_world, 1.0);
+}
+`;
+
+// One pass over the bones for both the position and the normal (each texel read once).
+const MAIN = mainSource(`
+    float fade = a_fade.y > 0.0 ? clamp((u_time - a_fade.x) / a_fade.y, 0.0, 1.0) : 1.0;
+    if (fade < 1.0) cb_skin_position_normal_crossfade(a_position, a_normal, a_joints, a_weights, a_from, a_inst, fade, u_time, p, n);
+    else cb_skin_position_normal(a_position, a_normal, a_joints, a_weights, a_inst, u_time, p, n);`);
+
+// With the bone pass (crowdbake_bones.mjs), which blended every instance's bones before the draw.
+const MAIN_BONES = mainSource('    cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, gl_InstanceID, p, n);');
+
+const FRAGMENT = `#version 300 es
+precision mediump float;
+in vec3 v_world; in vec3 v_normal;
+uniform vec3 u_color;
+out vec4 o_color;
+void main() {
+    vec3 n = normalize(v_normal);
+    float light = 0.35 + 0.65 * max(dot(n, normalize(vec3(0.4, 0.8, 0.3))), 0.0);
+    o_color = vec4(u_color * light, 1.0);
+}
+`;
+
+// The runtime's vertex shader for a palette: the shipped library with its defines, then main.
+export function vertexShaderSource(glsl, header) {
+    return `#version 300 es\n${paletteDefines(header).map((d) => `#define ${d}\n`).join('')}${glsl}\n${MAIN}`;
+}
+
+export function compileProgram(gl, vertexSource, fragmentSource, varyings = null) {
+    const shader = (type, source) => {
+        const s = gl.createShader(type);
+        gl.shaderSource(s, source);
+        gl.compileShader(s);
+        if (!gl.getShaderParameter(s, gl.COMPILE_STATUS))
+            throw new Error(`${type === gl.VERTEX_SHADER ? 'vertex' : 'fragment'} shader does not compile: ${gl.getShaderInfoLog(s)}`);
+        return s;
+    };
+    const program = gl.createProgram();
+    gl.attachShader(program, shader(gl.VERTEX_SHADER, vertexSource));
+    gl.attachShader(program, shader(gl.FRAGMENT_SHADER, fragmentSource));
+    if (varyings) gl.transformFeedbackVaryings(program, varyings, gl.INTERLEAVED_ATTRIBS);
+    gl.linkProgram(program);
+    if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(`does not link: ${gl.getProgramInfoLog(program)}`);
+    return program;
+}
+
+function buffer(gl, target, data) {
+    const b = gl.createBuffer();
+    gl.bindBuffer(target, b);
+    gl.bufferData(target, data, gl.STATIC_DRAW);
+    return b;
+}
+
+export class Crowd {
+    // options: pal (readPal), glsl (the library's text), mesh, capacity (instances), color,
+    // captureWorld (link v_world for transform feedback: tests read skinned positions back),
+    // bonePass (true, or { rows }: blend each instance's bones once a frame, then skin from them;
+    // crowdbake_bones.mjs).
+    constructor(gl, options) {
+        const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false, bonePass = false } = options;
+        this.gl = gl;
+        this.bonePass = bonePass;
+        this.pal = pal;
+        this.color = color;
+        this.capacity = capacity;
+        this.count = 0;
+        this.vertexCount = mesh.positions.length / 3;
+        this.program = this.makeProgram(glsl, pal.header, FRAGMENT, captureWorld ? ['v_world'] : null);
+        this.textures = this.upload(options);
+        this.vao = gl.createVertexArray();
+        gl.bindVertexArray(this.vao);
+        const attribute = (name, size, data, integer = false) => {
+            const loc = gl.getAttribLocation(this.program, name);
+            if (loc < 0) return;
+            gl.bindBuffer(gl.ARRAY_BUFFER, buffer(gl, gl.ARRAY_BUFFER, data));
+            gl.enableVertexAttribArray(loc);
+            if (integer) gl.vertexAttribIPointer(loc, size, gl.INT, 0, 0); // ivec4: WebGL wants a signed type
+            else gl.vertexAttribPointer(loc, size, gl.FLOAT, false, 0, 0);
+        };
+        attribute('a_position', 3, mesh.positions);
+        if (mesh.normals) attribute('a_normal', 3, mesh.normals);
+        else if (gl.getAttribLocation(this.program, 'a_normal') >= 0)
+            gl.vertexAttrib3f(gl.getAttribLocation(this.program, 'a_normal'), 0, 1, 0);
+        attribute('a_joints', 4, Int32Array.from(mesh.joints), true);
+        attribute('a_weights', 4, mesh.weights);
+        this.instances = new Float32Array(capacity * INSTANCE_FLOATS);
+        this.instanceBuffer = gl.createBuffer();
+        gl.bindBuffer(gl.ARRAY_BUFFER, this.instanceBuffer);
+        gl.bufferData(gl.ARRAY_BUFFER, this.instances.byteLength, gl.DYNAMIC_DRAW);
+        ['a_place', 'a_inst', 'a_from', 'a_fade'].forEach((name, k) => {
+            const loc = gl.getAttribLocation(this.program, name);
+            if (loc < 0) return;
+            gl.enableVertexAttribArray(loc);
+            gl.vertexAttribPointer(loc, 4, gl.FLOAT, false, INSTANCE_FLOATS * 4, k * 16);
+            gl.vertexAttribDivisor(loc, 1);
+        });
+        this.indexCount = 0;
+        if (mesh.indices) {
+            const indices = mesh.indices instanceof Uint32Array || mesh.indices instanceof Uint16Array ? mesh.indices
+                : new Uint32Array(mesh.indices);
+            buffer(gl, gl.ELEMENT_ARRAY_BUFFER, indices);
+            this.indexType = indices instanceof Uint16Array ? gl.UNSIGNED_SHORT : gl.UNSIGNED_INT;
+            this.indexCount = indices.length;
+        }
+        gl.bindVertexArray(null);
+        this.bones = bonePass ? new BonePass(gl, { glsl, header: pal.header, capacity, instanceBuffer: this.instanceBuffer,
+                                                   instanceFloats: INSTANCE_FLOATS, ...(bonePass === true ? {} : bonePass) }) : null;
+        this.meshBytes = mesh.positions.byteLength + (mesh.normals?.byteLength ?? 0) + mesh.joints.length * 4 +
+                         mesh.weights.byteLength + (mesh.indices?.byteLength ?? 0);
+        this.dirty = true;
+    }
+
+    // Instance i: position [x, y, z], yaw (radians), scale, inst (the four numbers of
+    // instanceData), and for a cross-fade from (the previous four), fadeStart and fadeDuration (s).
+    // A scaled instance moving at a world speed v plays instanceData(state, v / scale, i): its
+    // feet stay planted (rate = speed / (scale x speed reference)). The previous frame's position
+    // for motion vectors is the same skinning at time - dt (runtimes/glsl/README.md).
+    setInstance(i, { position = [0, 0, 0], yaw = 0, scale = 1, inst, from = inst, fadeStart = 0, fadeDuration = 0 }) {
+        if (i >= this.capacity) throw new Error(`instance ${i} is beyond the crowd's capacity of ${this.capacity}`);
+        this.instances.set([...position, yaw, ...inst, ...from, fadeStart, fadeDuration, scale, 0], i * INSTANCE_FLOATS);
+        this.count = Math.max(this.count, i + 1);
+        this.dirty = true;
+    }
+
+    setCount(n) {
+        this.count = Math.min(n, this.capacity);
+    }
+
+    makeProgram(glsl, header, fragment, varyings) {
+        const vertex = this.bonePass ? boneShaderSource(glsl, header, MAIN_BONES, ['CB_BONE_TEXTURE'])
+            : vertexShaderSource(glsl, header);
+        return compileProgram(this.gl, vertex, fragment, varyings);
+    }
+
+    upload(options) {
+        return uploadPalette(this.gl, options.pal);
+    }
+
+    bindTextures(u) {
+        const gl = this.gl, h = this.pal.header;
+        gl.activeTexture(gl.TEXTURE0);
+        gl.bindTexture(gl.TEXTURE_2D, this.textures.palette);
+        gl.uniform1i(u('cb_palette'), 0);
+        if (this.textures.bind) {
+            gl.activeTexture(gl.TEXTURE1);
+            gl.bindTexture(gl.TEXTURE_2D, this.textures.bind);
+            gl.uniform1i(u('cb_bind_positions'), 1);
+        }
+        gl.uniform1i(u('cb_row_texels'), h.row_texels);
+        gl.uniform1i(u('cb_rows_per_block'), h.height);
+        gl.uniform3fv(u('cb_bounds_min'), h.bounds_min);
+        gl.uniform3fv(u('cb_bounds_max'), h.bounds_max);
+        gl.uniform1f(u('cb_linear_range'), h.linear_range);
+    }
+
+    // Binds the program, textures and uniforms for a draw at `time` seconds.
+    bind(viewProjection, time) {
+        const gl = this.gl, p = this.program;
+        if (this.dirty) {
+            gl.bindBuffer(gl.ARRAY_BUFFER, this.instanceBuffer);
+            gl.bufferSubData(gl.ARRAY_BUFFER, 0, this.instances, 0, this.count * INSTANCE_FLOATS);
+            this.dirty = false;
+        }
+        this.bones?.run(this.count, time, (u) => this.bindTextures(u));
+        gl.useProgram(p);
+        gl.bindVertexArray(this.vao);
+        const u = (name) => gl.getUniformLocation(p, name);
+        this.bindTextures(u);
+        this.bones?.bindTargets(u);
+        gl.uniform1f(u('u_time'), time);
+        gl.uniformMatrix4fv(u('u_view_projection'), false, viewProjection);
+        gl.uniform3fv(u('u_color'), this.color);
+    }
+
+    // Every instance with one instanced draw call.
+    draw(viewProjection, time) {
+        const gl = this.gl;
+        if (!this.count) return 0;
+        this.bind(viewProjection, time);
+        if (this.indexCount) gl.drawElementsInstanced(gl.TRIANGLES, this.indexCount, this.indexType, 0, this.count);
+        else gl.drawArraysInstanced(gl.TRIANGLES, 0, this.vertexCount, this.count);
+        gl.bindVertexArray(null);
+        return 1;
+    }
+
+    // With captureWorld: every instance's skinned vertices (v_world, 3 floats, instance by
+    // instance in the mesh's vertex order) at `time`, read back with transform feedback from one
+    // instanced draw of points (transform feedback takes no indexed draws).
+    capture(time) {
+        const gl = this.gl, n = this.count * this.vertexCount * 3;
+        const out = gl.createBuffer();
+        gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, out);
+        gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, n * 4, gl.STATIC_READ);
+        this.bind(new Float32Array([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]), time);
+        gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, out);
+        gl.enable(gl.RASTERIZER_DISCARD);
+        gl.beginTransformFeedback(gl.POINTS);
+        gl.drawArraysInstanced(gl.POINTS, 0, this.vertexCount, this.count);
+        gl.endTransformFeedback();
+        gl.disable(gl.RASTERIZER_DISCARD);
+        gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, null);
+        gl.bindVertexArray(null);
+        const values = new Float32Array(n);
+        gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, out);
+        gl.getBufferSubData(gl.TRANSFORM_FEEDBACK_BUFFER, 0, values);
+        gl.deleteBuffer(out);
+        const error = gl.getError();
+        if (error !== gl.NO_ERROR) throw new Error(`WebGL error 0x${error.toString(16)} while capturing the skinned vertices`);
+        return values;
+    }
+
+    get vramBytes() {
+        return this.textures.bytes + this.meshBytes + this.instances.byteLength + (this.bones?.bytes ?? 0);
+    }
+}

@@ -1,0 +1,584 @@
+// crowdbake_pal.mjs - reader for crowdbake .pal bone-matrix palettes and the roster manifest.
+// An ES module with no dependencies, for browsers and Node. Public domain / MIT-0.
+//
+//     import { readPal, readRoster } from './crowdbake_pal.mjs';
+//     const pal = readPal(new Uint8Array(await (await fetch('goat.pal')).arrayBuffer()),
+//                         { name: 'goat.pal', verifyChecksum: true });
+//     gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA16UI, pal.header.width, pal.header.height, 0,
+//                   gl.RGBA_INTEGER, gl.UNSIGNED_SHORT, pal.texels);
+//
+// It makes exactly the checks of the C reader include/crowdbake_pal.h (the format is specified in
+// docs/pal-format.md): every size and offset is checked against the file length before it is used,
+// so hostile bytes give an Error with a one-line message naming the file, the field and its byte
+// offset, never an out-of-range read or an allocation the file asks for.
+//
+// zstd payloads (bake --zstd) are decoded by a function the caller passes as options.decompress
+// (bytes, rawSize) -> Uint8Array, e.g. `decompress: (b, n) => fzstd.decompress(b, new Uint8Array(n))`
+// with the npm package fzstd: this module stays dependency-free, and runtimes that never load
+// compressed palettes ship no decoder. Without one, such a file is refused with the fix.
+
+export const PAL_VERSION = 4; // newest known; writers write the oldest version that holds what a file says
+export const HEADER_SIZE = 256;
+export const CLIP_SIZE = 80;
+export const BONE_SIZE = 32;
+export const PAYLOAD_ALIGN = 4096;
+export const CHECKSUM_OFFSET = 176;
+
+export const LAYOUTS = ['mat4', 'affine', 'qpos'];
+export const PRECISIONS = ['float', 'half', 'u16'];
+export const FLAG_ZSTD = 1;
+export const FLAG_IN_PLACE = 2;
+// versions 2 and 3: qpos positions are stored less the bone's position_offset (version 3: its offset table; version 2:
+// the bind position)
+export const FLAG_POSITIONS_RELATIVE = 4;
+export const FLAG_FITTED_ROWS = 8; // every clip's rows fitted to the linear blend between them, not sampled
+export const CLIP_LOOPS = 1;
+export const CLIP_FITTED = 2; // this clip's rows fitted to the linear blend (before it: header flag bit 3, every clip)
+// Version 4: this clip's rows are held, not blended (a STEP-keyed clip baked at its key times): the row at or before
+// the time alone. Its instance numbers say so with a negative first row, -first_row - 1 (instanceFirstRow).
+export const CLIP_STEP = 4;
+
+const MAGIC = [0x43, 0x42, 0x50, 0x41, 0x4c, 0x0d, 0x0a, 0x1a]; // "CBPAL\r\n\x1a"
+const TEXELS_PER_BONE = [4, 3, 2]; // by layout
+const TEXEL_BYTES = [16, 8, 8]; // by precision
+// Decompressed payloads larger than this are refused unless the caller raises it: the size comes
+// from the file, so a hostile file must not choose how much memory the reader asks for.
+const DEFAULT_MAX_DECOMPRESSED_BYTES = 1 << 30;
+// Typed arrays use the host's byte order; the texels are little-endian, as on every engine in use.
+const HOST_IS_LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 1;
+
+// ---- XXH64 (seed 0), from the algorithm's specification ----
+// On 32-bit halves (hi, lo): BigInt arithmetic allocates per operation and hashes at about 1 MB/s.
+
+const P1H = 0x9e3779b1, P1L = 0x85ebca87, P2H = 0xc2b2ae3d, P2L = 0x27d4eb4f, P3H = 0x165667b1, P3L = 0x9e3779f9;
+const P4H = 0x85ebca77, P4L = 0xc2b2ae63, P5H = 0x27d4eb2f, P5L = 0x165667c5;
+
+// XXH64 of `parts`, an array of Uint8Arrays hashed as if concatenated (the checksum hashes the
+// file with its checksum field read as zero without copying the file). Returns a BigInt.
+export function xxh64(parts) {
+    if (parts instanceof Uint8Array) parts = [parts];
+    let rh = 0, rl = 0; // the result register of the helpers below
+    const mul = (ah, al, bh, bl) => { // low 64 bits of a * b
+        const a0 = al & 0xffff, a1 = al >>> 16, b0 = bl & 0xffff, b1 = bl >>> 16;
+        const p00 = a0 * b0, p01 = a0 * b1, p10 = a1 * b0;
+        const mid = (p00 >>> 16) + (p01 & 0xffff) + (p10 & 0xffff);
+        rl = (((mid & 0xffff) << 16) | (p00 & 0xffff)) >>> 0;
+        const carry = a1 * b1 + (p01 >>> 16) + (p10 >>> 16) + (mid >>> 16);
+        rh = (carry + Math.imul(al, bh) + Math.imul(ah, bl)) >>> 0;
+    };
+    const add = (ah, al, bh, bl) => {
+        const lo = al + bl;
+        rl = lo >>> 0;
+        rh = (ah + bh + (lo > 0xffffffff ? 1 : 0)) >>> 0;
+    };
+    const rotl = (h, l, r) => { // 0 < r < 32
+        rh = ((h << r) | (l >>> (32 - r))) >>> 0;
+        rl = ((l << r) | (h >>> (32 - r))) >>> 0;
+    };
+    const round = (ah, al, ih, il) => { // rotl(acc + input * P2, 31) * P1
+        mul(ih, il, P2H, P2L);
+        add(ah, al, rh, rl);
+        rotl(rh, rl, 31);
+        mul(rh, rl, P1H, P1L);
+    };
+    let total = 0;
+    for (const p of parts) total += p.length;
+    const v = new Uint32Array([0x60ea27ee, 0xadc0b5d6, P2H, P2L, 0, 0, 0x61c8864e, 0x7a143579]); // P1+P2, P2, 0, -P1
+    const consume = (view, o) => {
+        for (let k = 0; k < 4; ++k) {
+            round(v[2 * k], v[2 * k + 1], view.getUint32(o + 8 * k + 4, true), view.getUint32(o + 8 * k, true));
+            v[2 * k] = rh, v[2 * k + 1] = rl;
+        }
+    };
+    const stripe = new Uint8Array(32); // carries bytes across part boundaries
+    const stripeView = new DataView(stripe.buffer);
+    let buffered = 0;
+    for (const p of parts) {
+        const view = new DataView(p.buffer, p.byteOffset, p.byteLength);
+        let i = 0;
+        if (buffered) {
+            const take = Math.min(32 - buffered, p.length);
+            stripe.set(p.subarray(0, take), buffered);
+            buffered += take, i = take;
+            if (buffered < 32) continue;
+            consume(stripeView, 0);
+            buffered = 0;
+        }
+        for (; i + 32 <= p.length; i += 32) consume(view, i);
+        stripe.set(p.subarray(i), 0);
+        buffered = p.length - i;
+    }
+    let hh, hl;
+    if (total >= 32) {
+        rotl(v[0], v[1], 1); hh = rh, hl = rl;
+        for (const [k, r] of [[1, 7], [2, 12], [3, 18]]) {
+            const sh = hh, sl = hl;
+            rotl(v[2 * k], v[2 * k + 1], r);
+            add(sh, sl, rh, rl); hh = rh, hl = rl;
+        }
+        for (let k = 0; k < 4; ++k) { // h = (h ^ round(0, v_k)) * P1 + P4
+            round(0, 0, v[2 * k], v[2 * k + 1]);
+            mul((hh ^ rh) >>> 0, (hl ^ rl) >>> 0, P1H, P1L);
+            add(rh, rl, P4H, P4L); hh = rh, hl = rl;
+        }
+    } else {
+        hh = P5H, hl = P5L;
+    }
+    add(hh, hl, Math.floor(total / 0x100000000), total >>> 0); hh = rh, hl = rl;
+    let o = 0;
+    for (; o + 8 <= buffered; o += 8) { // h = rotl(h ^ round(0, lane), 27) * P1 + P4
+        round(0, 0, stripeView.getUint32(o + 4, true), stripeView.getUint32(o, true));
+        rotl((hh ^ rh) >>> 0, (hl ^ rl) >>> 0, 27);
+        mul(rh, rl, P1H, P1L);
+        add(rh, rl, P4H, P4L); hh = rh, hl = rl;
+    }
+    if (o + 4 <= buffered) { // h = rotl(h ^ (u32 * P1), 23) * P2 + P3
+        mul(0, stripeView.getUint32(o, true), P1H, P1L);
+        rotl((hh ^ rh) >>> 0, (hl ^ rl) >>> 0, 23);
+        mul(rh, rl, P2H, P2L);
+        add(rh, rl, P3H, P3L); hh = rh, hl = rl;
+        o += 4;
+    }
+    for (; o < buffered; ++o) { // h = rotl(h ^ (byte * P5), 11) * P1
+        mul(0, stripe[o], P5H, P5L);
+        rotl((hh ^ rh) >>> 0, (hl ^ rl) >>> 0, 11);
+        mul(rh, rl, P1H, P1L); hh = rh, hl = rl;
+    }
+    hl = (hl ^ (hh >>> 1)) >>> 0; // h ^= h >> 33
+    mul(hh, hl, P2H, P2L); hh = rh, hl = rl;
+    hl = (hl ^ ((hl >>> 29) | (hh << 3))) >>> 0, hh = (hh ^ (hh >>> 29)) >>> 0; // h ^= h >> 29
+    mul(hh, hl, P3H, P3L); hh = rh, hl = rl;
+    hl = (hl ^ hh) >>> 0; // h ^= h >> 32
+    return (BigInt(hh) << 32n) | BigInt(hl);
+}
+
+// ---- .pal ----
+
+function asBytes(data, where) {
+    if (data instanceof Uint8Array) return data;
+    if (data instanceof ArrayBuffer) return new Uint8Array(data);
+    if (ArrayBuffer.isView(data)) return new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
+    throw new Error(`${where}: expected an ArrayBuffer or Uint8Array, got ${data === null ? 'null' : typeof data}`);
+}
+
+// begin + count * size <= limit, on BigInt so no u64 field can wrap.
+const fits = (begin, count, size, limit) => begin <= limit && BigInt(count) * BigInt(size) <= limit - begin;
+
+// The header fields, named as in docs/pal-format.md; u64 fields as BigInt until validated.
+function parseHeader(view) {
+    const u32 = (o) => view.getUint32(o, true);
+    const f32 = (o) => view.getFloat32(o, true);
+    const u64 = (o) => view.getBigUint64(o, true);
+    const vec3 = (o) => [f32(o), f32(o + 4), f32(o + 8)];
+    return {
+        version: u32(8), flags: u32(12), header_size: u32(16), layout: u32(20), precision: u32(24),
+        texels_per_bone: u32(28), bone_count: u32(32), row_texels: u32(36), rows: u32(40), width: u32(44),
+        height: u32(48), blocks: u32(52), texel_bytes: u32(56), clip_count: u32(60),
+        fps: f32(64), speed_reference: f32(68), linear_range: f32(72), bounds_min: vec3(76), bounds_max: vec3(88),
+        max_error: f32(100), model_height: f32(104), visible_error: f32(108),
+        input_hash: u64(112), clip_table_offset: u64(120), bone_table_offset: u64(128), strings_offset: u64(136),
+        strings_size: u64(144), payload_offset: u64(152), payload_size: u64(160), payload_raw_size: u64(168),
+        checksum: u64(176), offset_table_offset: u32(8) >= 3 ? u64(184) : 0n,
+    };
+}
+
+// A name's bytes [off, off + len) and its NUL lie inside the string table (as the C reader checks).
+function readName(bytes, view, h, entry) {
+    const off = view.getUint32(entry, true), len = view.getUint32(entry + 4, true);
+    const strings = Number(h.strings_offset), size = Number(h.strings_size);
+    if (off + len >= size || bytes[strings + off + len] !== 0) return null;
+    return new TextDecoder('utf-8').decode(bytes.subarray(strings + off, strings + off + len));
+}
+
+function validateHeader(bytes, view, fail) {
+    const size = bytes.length, n = BigInt(size);
+    if (size < 8 || MAGIC.some((m, i) => bytes[i] !== m))
+        fail('not a crowdbake palette (wrong magic at byte 0; expected "CBPAL\\r\\n\\x1a")');
+    if (size < 12) fail(`truncated: ${size} bytes, shorter than the ${HEADER_SIZE}-byte header`);
+    const version = view.getUint32(8, true);
+    if (version > PAL_VERSION)
+        fail(`palette format version ${version} (byte 8) is newer than this reader (version ${PAL_VERSION}); update the reader`);
+    if (version < 1) fail(`unknown palette format version ${version} (byte 8)`);
+    if (size < HEADER_SIZE) fail(`truncated: ${size} bytes, shorter than the ${HEADER_SIZE}-byte header`);
+    const h = parseHeader(view);
+    if (h.header_size !== HEADER_SIZE) fail(`bad header_size ${h.header_size} (byte 16), expected ${HEADER_SIZE}`);
+    if (h.layout > 2 || h.precision > 2)
+        fail(`unknown layout ${h.layout} (byte 20) or precision ${h.precision} (byte 24)`);
+    if (h.texels_per_bone !== TEXELS_PER_BONE[h.layout] || h.texel_bytes !== TEXEL_BYTES[h.precision])
+        fail(`texels_per_bone ${h.texels_per_bone} (byte 28) or texel_bytes ${h.texel_bytes} (byte 56) do not match ` +
+             `layout ${LAYOUTS[h.layout]} and precision ${PRECISIONS[h.precision]}`);
+    const B = BigInt;
+    if (h.bone_count === 0 || B(h.bone_count) * B(h.texels_per_bone) !== B(h.row_texels) || h.blocks === 0 ||
+        B(h.blocks) * B(h.row_texels) !== B(h.width) || h.height === 0 || B(h.height) * B(h.blocks) < B(h.rows) ||
+        B(h.blocks - 1) * B(h.height) >= B(h.rows) ||
+        B(h.width) * B(h.height) * B(h.texel_bytes) !== h.payload_raw_size)
+        fail(`inconsistent texture geometry (bytes 32-56, 168: ${h.bone_count} bones, ${h.row_texels} texels a row, ` +
+             `${h.rows} rows, ${h.width}x${h.height} in ${h.blocks} blocks, payload_raw_size ${h.payload_raw_size})`);
+    if (!fits(h.clip_table_offset, h.clip_count, CLIP_SIZE, n) || h.clip_table_offset < B(HEADER_SIZE))
+        fail(`clip table (clip_table_offset ${h.clip_table_offset} at byte 120, ${h.clip_count} clips at byte 60) ` +
+             `lies outside the ${size}-byte file`);
+    if (!fits(h.bone_table_offset, h.bone_count, BONE_SIZE, n) || h.bone_table_offset < B(HEADER_SIZE))
+        fail(`bone table (bone_table_offset ${h.bone_table_offset} at byte 128, ${h.bone_count} bones) ` +
+             `lies outside the ${size}-byte file`);
+    if (h.version >= 3 && (h.flags & FLAG_POSITIONS_RELATIVE) &&
+        (!fits(h.offset_table_offset, h.bone_count, 12, n) || h.offset_table_offset < B(HEADER_SIZE)))
+        fail(`position offset table (offset_table_offset ${h.offset_table_offset} at byte 184, ${h.bone_count} bones) ` +
+             `lies outside the ${size}-byte file`);
+    if (!fits(h.strings_offset, h.strings_size, 1, n) || h.strings_offset < B(HEADER_SIZE))
+        fail(`string table (strings_offset ${h.strings_offset} at byte 136, strings_size ${h.strings_size} at byte 144) ` +
+             `lies outside the ${size}-byte file`);
+    if (h.payload_offset % B(PAYLOAD_ALIGN) !== 0n || !fits(h.payload_offset, h.payload_size, 1, n) ||
+        h.payload_offset < B(HEADER_SIZE))
+        fail(`truncated or bad payload: payload_offset ${h.payload_offset} (byte 152) + payload_size ` +
+             `${h.payload_size} (byte 160) bytes, the file has ${size}`);
+    if (!(h.flags & FLAG_ZSTD) && h.payload_size !== h.payload_raw_size)
+        fail(`payload_size ${h.payload_size} (byte 160) is not the ${h.payload_raw_size} bytes the texture needs`);
+    // Every offset and size now lies inside the file: exact as Numbers.
+    for (const k of ['clip_table_offset', 'bone_table_offset', 'strings_offset', 'strings_size', 'payload_offset',
+                     'payload_size', 'offset_table_offset'])
+        h[k] = Number(h[k]);
+    return h;
+}
+
+function readClips(bytes, view, h, fail) {
+    const clips = [];
+    for (let i = 0; i < h.clip_count; ++i) {
+        const c = h.clip_table_offset + i * CLIP_SIZE;
+        const f32 = (o) => view.getFloat32(c + o, true);
+        const first_row = view.getUint32(c + 8, true), frames = view.getUint32(c + 12, true);
+        const name = readName(bytes, view, h, c);
+        if (name === null || frames === 0 || first_row > h.rows || frames > h.rows - first_row)
+            fail(`clip ${i} (byte ${c}) has a bad name or rows ${first_row}..${first_row + frames} outside the ${h.rows} rows`);
+        const flags = view.getUint32(c + 28, true);
+        clips.push({
+            name, first_row, frames, fps: f32(16), duration: f32(20), start: f32(24), flags,
+            loops: (flags & CLIP_LOOPS) !== 0,
+            fitted: (flags & CLIP_FITTED) !== 0 || (h.flags & FLAG_FITTED_ROWS) !== 0,
+            step: (flags & CLIP_STEP) !== 0,
+            root_velocity: [f32(32), f32(36), f32(40)],
+            bounds_min: [f32(44), f32(48), f32(52)], bounds_max: [f32(56), f32(60), f32(64)],
+        });
+    }
+    return clips;
+}
+
+function readBones(bytes, view, h, fail) {
+    const bones = [];
+    for (let i = 0; i < h.bone_count; ++i) {
+        const b = h.bone_table_offset + i * BONE_SIZE;
+        const parent = view.getInt32(b + 8, true);
+        const name = readName(bytes, view, h, b);
+        if (name === null || parent < -1 || parent >= h.bone_count)
+            fail(`bone ${i} (byte ${b}) has a bad name or parent ${parent}`);
+        const bind_position = [0, 4, 8].map((o) => view.getFloat32(b + 16 + o, true));
+        // What CB_POSITIONS_RELATIVE adds to a qpos position texel (0 without the flag).
+        const relative = (h.flags & FLAG_POSITIONS_RELATIVE) !== 0;
+        const position_offset = !relative ? [0, 0, 0] : h.version >= 3
+            ? [0, 4, 8].map((o) => view.getFloat32(h.offset_table_offset + i * 12 + o, true)) : bind_position.slice();
+        bones.push({ name, parent, bind_position, position_offset });
+    }
+    return bones;
+}
+
+function checksumOf(bytes, end) {
+    return xxh64([bytes.subarray(0, CHECKSUM_OFFSET), new Uint8Array(8), bytes.subarray(CHECKSUM_OFFSET + 8, end)]);
+}
+
+function decodePayload(bytes, h, options, fail) {
+    const payload = bytes.subarray(h.payload_offset, h.payload_offset + h.payload_size);
+    if (!(h.flags & FLAG_ZSTD)) return payload;
+    if (typeof options.decompress !== 'function')
+        fail('payload is zstd-compressed (flags bit 0, byte 12); bake without --zstd, or pass options.decompress ' +
+             '(e.g. fzstd\'s decompress)');
+    const limit = options.maxDecompressedBytes ?? DEFAULT_MAX_DECOMPRESSED_BYTES;
+    if (h.payload_raw_size > BigInt(limit))
+        fail(`payload_raw_size ${h.payload_raw_size} (byte 168) is over the ${limit}-byte limit for decompression ` +
+             '(options.maxDecompressedBytes)');
+    const rawSize = Number(h.payload_raw_size);
+    let out;
+    try {
+        out = options.decompress(payload, rawSize);
+    } catch (e) {
+        fail(`compressed payload (byte ${h.payload_offset}) does not decompress: ${String(e?.message ?? e).split('\n')[0]}`);
+    }
+    if (!(out instanceof Uint8Array) || out.length !== rawSize)
+        fail(`compressed payload (byte ${h.payload_offset}) does not decompress to ${rawSize} bytes`);
+    return out;
+}
+
+// Texel components as the GPU takes them: Float32Array for float, Uint16Array for half and u16.
+function texelView(raw, precision) {
+    const Type = precision === 0 ? Float32Array : Uint16Array;
+    if (raw.byteOffset % Type.BYTES_PER_ELEMENT !== 0) raw = raw.slice(); // a caller's unaligned view: copy
+    return new Type(raw.buffer, raw.byteOffset, raw.byteLength / Type.BYTES_PER_ELEMENT);
+}
+
+// Parses a .pal held in `data` (ArrayBuffer or Uint8Array; kept, not copied: the texels are a view
+// into it). options: name (for messages), verifyChecksum, decompress, maxDecompressedBytes.
+// Returns { header, clips, bones, texels, texelBytes }: header has the fields of docs/pal-format.md
+// by name (input_hash and checksum as BigInt) plus layout_name and precision_name; clips and bones
+// what cbpal_get_clip / cbpal_get_bone give (and loops); texelBytes the payload's raw bytes.
+// Beyond the C reader's checks: a zstd payload over options.maxDecompressedBytes (1 GiB) is refused.
+export function readPal(data, options = {}) {
+    const name = options.name ?? 'palette';
+    const fail = (message) => { throw new Error(`${name}: ${message}`); };
+    if (!HOST_IS_LITTLE_ENDIAN) fail('this reader needs a little-endian host (the texels are little-endian)');
+    const bytes = asBytes(data, name);
+    const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
+    const h = validateHeader(bytes, view, fail);
+    const clips = readClips(bytes, view, h, fail);
+    const bones = readBones(bytes, view, h, fail);
+    if (options.verifyChecksum && checksumOf(bytes, h.payload_offset + h.payload_size) !== h.checksum)
+        fail(`checksum mismatch (checksum at byte ${CHECKSUM_OFFSET}): the file is corrupted`);
+    const texelBytes = decodePayload(bytes, h, options, fail);
+    h.payload_raw_size = Number(h.payload_raw_size); // now the length of a buffer in hand
+    h.layout_name = LAYOUTS[h.layout];
+    h.precision_name = PRECISIONS[h.precision];
+    return { header: h, clips, bones, texelBytes, texels: texelView(texelBytes, h.precision) };
+}
+
+// Index into `texels` of a bone's first component in a baked row (rows wrap into column blocks).
+export function texelIndex(header, row, bone) {
+    const x = Math.floor(row / header.height) * header.row_texels + bone * header.texels_per_bone;
+    const y = row % header.height;
+    return (y * header.width + x) * 4;
+}
+
+// ---- roster.json (docs/roster.md, docs/roster.schema.json) ----
+
+// Parses a roster manifest (its text, or the object JSON.parse made) and checks what a runtime
+// uses. Returns { generator, catalog, types: { NAME: { palette, palette_exr, shares_palette_of,
+// layout, precision, bones, rows, width, height, blocks, speed_reference, default_state, clips (with contacts),
+// states: { STATE: { clip, first_row, frame_count, rate, rate_per_speed, phase } }, lods, sockets } }, failed }.
+// Paths stay relative to the manifest's directory.
+export function readRoster(json, options = {}) {
+    const name = options.name ?? 'roster.json';
+    const fail = (where, message) => { throw new Error(`${name}: ${where}: ${message}`); };
+    let doc = json;
+    if (typeof json === 'string') {
+        try {
+            doc = JSON.parse(json);
+        } catch (e) {
+            throw new Error(`${name}: not JSON: ${String(e?.message ?? e).split('\n')[0]}`);
+        }
+    }
+    const isObject = (v) => v !== null && typeof v === 'object' && !Array.isArray(v);
+    // Names come from the file: "constructor" or "toString" must not find Object.prototype's members, and
+    // "__proto__" must be a name like any other, not the object's prototype.
+    const has = (obj, key) => Object.prototype.hasOwnProperty.call(obj, key);
+    const put = (obj, key, value) => Object.defineProperty(obj, key, { value, enumerable: true, writable: true, configurable: true });
+    const need = (obj, where, key, check, what) => {
+        if (!isObject(obj)) fail(where, 'expected an object');
+        if (!has(obj, key)) fail(`${where}.${key}`, `missing (${what})`);
+        if (!check(obj[key])) fail(`${where}.${key}`, `expected ${what}, got ${JSON.stringify(obj[key])}`);
+        return obj[key];
+    };
+    const optional = (obj, where, key, check, what) => (has(obj, key) ? need(obj, where, key, check, what) : undefined);
+    const isString = (v) => typeof v === 'string';
+    const isCount = (v) => Number.isInteger(v) && v >= 1;
+    const isIndex = (v) => Number.isInteger(v) && v >= 0;
+    const isNonNegative = (v) => typeof v === 'number' && Number.isFinite(v) && v >= 0;
+
+    if (!isObject(doc)) fail('top level', 'expected an object');
+    const schema = need(doc, 'top level', 'schema', isString, 'a string');
+    if (schema !== 'crowdbake-roster/1')
+        fail('schema', `"${schema}" is not crowdbake-roster/1; update the reader or re-bake with a matching crowdbake`);
+    const types = need(doc, 'top level', 'types', isObject, 'an object');
+    const out = {
+        generator: need(doc, 'top level', 'generator', isString, 'a string'),
+        catalog: need(doc, 'top level', 'catalog', isString, 'a string'),
+        types: {}, failed: {},
+    };
+    for (const [typeName, t] of Object.entries(types)) {
+        const at = `types.${typeName}`;
+        if (!isObject(t)) fail(at, 'expected an object');
+        const type = {
+            model: need(t, at, 'model', isString, 'a string'),
+            palette: optional(t, at, 'palette', isString, 'a string'),
+            palette_exr: optional(t, at, 'palette_exr', isString, 'a string'),
+            shares_palette_of: optional(t, at, 'shares_palette_of', isString, 'a string'),
+            layout: need(t, at, 'layout', (v) => LAYOUTS.includes(v), `one of ${LAYOUTS.join(', ')}`),
+            precision: need(t, at, 'precision', (v) => PRECISIONS.includes(v), `one of ${PRECISIONS.join(', ')}`),
+            bones: need(t, at, 'bones', isCount, 'an integer >= 1'),
+            texels_per_bone: need(t, at, 'texels_per_bone', (v) => [2, 3, 4].includes(v), '2, 3 or 4'),
+            rows: need(t, at, 'rows', isCount, 'an integer >= 1'),
+            width: need(t, at, 'width', isCount, 'an integer >= 1'),
+            height: need(t, at, 'height', isCount, 'an integer >= 1'),
+            blocks: need(t, at, 'blocks', isCount, 'an integer >= 1'),
+            speed_reference: need(t, at, 'speed_reference', isNonNegative, 'a number >= 0'),
+            default_state: need(t, at, 'default_state', isString, 'a string'),
+            clips: [], states: {}, lods: [], sockets: [],
+        };
+        if (type.palette === undefined && type.palette_exr === undefined)
+            fail(at, 'has neither palette nor palette_exr');
+        need(t, at, 'clips', Array.isArray, 'an array').forEach((c, i) => {
+            const w = `${at}.clips[${i}]`;
+            type.clips.push({
+                name: need(c, w, 'name', isString, 'a string'),
+                first_row: need(c, w, 'first_row', isIndex, 'an integer >= 0'),
+                frame_count: need(c, w, 'frame_count', isCount, 'an integer >= 1'),
+                step_rows: optional(c, w, 'step_rows', (v) => typeof v === 'boolean', 'true or false') ?? false,
+                fps: need(c, w, 'fps', (v) => typeof v === 'number' && v > 0, 'a number > 0'),
+                duration: need(c, w, 'duration', isNonNegative, 'a number >= 0'),
+                loops: need(c, w, 'loops', (v) => typeof v === 'boolean', 'true or false'),
+                ground_speed: need(c, w, 'ground_speed', isNonNegative, 'a number >= 0'),
+                // Footsteps (older manifests: none): when each foot lands (time) and lifts, seconds into the clip.
+                contacts: (optional(c, w, 'contacts', Array.isArray, 'an array') ?? []).map((k, j) => ({
+                    foot: need(k, `${w}.contacts[${j}]`, 'foot', isString, 'a string'),
+                    bone: need(k, `${w}.contacts[${j}]`, 'bone', (v) => isIndex(v) && v < type.bones, `a bone index below ${type.bones}`),
+                    time: need(k, `${w}.contacts[${j}]`, 'time', isNonNegative, 'a number >= 0'),
+                    lift: need(k, `${w}.contacts[${j}]`, 'lift', isNonNegative, 'a number >= 0'),
+                })),
+            });
+            const last = type.clips[i];
+            if (last.first_row + last.frame_count > type.rows)
+                fail(w, `rows ${last.first_row}..${last.first_row + last.frame_count} outside the type's ${type.rows} rows`);
+        });
+        for (const [stateName, s] of Object.entries(need(t, at, 'states', isObject, 'an object'))) {
+            const w = `${at}.states.${stateName}`;
+            const clip = need(s, w, 'clip', isString, 'a string');
+            if (!type.clips.some((c) => c.name === clip)) fail(`${w}.clip`, `"${clip}" is not one of the type's clips`);
+            const inst = need(s, w, 'instance', isObject, 'an object');
+            const wi = `${w}.instance`;
+            const state = {
+                clip,
+                // < 0: held rows (a STEP-keyed clip), the first -first_row - 1
+                first_row: need(inst, wi, 'first_row', Number.isInteger, 'an integer'),
+                frame_count: need(inst, wi, 'frame_count', (v) => Number.isInteger(v) && v !== 0, 'a non-zero integer'),
+                rate: need(inst, wi, 'rate', isNonNegative, 'a number >= 0'),
+                rate_per_speed: need(inst, wi, 'rate_per_speed', isNonNegative, 'a number >= 0'),
+                phase: need(inst, wi, 'phase', (v) => v === 'golden_ratio' || v === 'zero', '"golden_ratio" or "zero"'),
+            };
+            const first = state.first_row < 0 ? -state.first_row - 1 : state.first_row;
+            if (first + Math.abs(state.frame_count) > type.rows)
+                fail(wi, `rows ${first}..${first + Math.abs(state.frame_count)} outside the type's ${type.rows} rows`);
+            put(type.states, stateName, state);
+        }
+        need(t, at, 'lods', Array.isArray, 'an array').forEach((l, i) => {
+            const w = `${at}.lods[${i}]`;
+            const joint_remap = need(l, w, 'joint_remap', (v) => Array.isArray(v) && v.every((j) => isIndex(j) && j < type.bones),
+                                     `an array of bone indices below ${type.bones}`);
+            type.lods.push({ model: need(l, w, 'model', isString, 'a string'), joint_remap });
+        });
+        // Where props attach (older manifests: none): a prop's world is instance x bone matrix x bind_transform.
+        (optional(t, at, 'sockets', Array.isArray, 'an array') ?? []).forEach((k, i) => {
+            const w = `${at}.sockets[${i}]`;
+            type.sockets.push({
+                name: need(k, w, 'name', isString, 'a string'),
+                bone: need(k, w, 'bone', (v) => isIndex(v) && v < type.bones, `a bone index below ${type.bones}`),
+                bind_transform: need(k, w, 'bind_transform', (v) => Array.isArray(v) && v.length === 16 && v.every(Number.isFinite),
+                                     '16 numbers'),
+            });
+        });
+        if (!has(type.states, type.default_state))
+            fail(`${at}.default_state`, `"${type.default_state}" is not one of the type's states`);
+        put(out.types, typeName, type);
+    }
+    for (const [typeName, f] of Object.entries(optional(doc, 'top level', 'failed', isObject, 'an object') ?? {})) {
+        const at = `failed.${typeName}`;
+        put(out.failed, typeName,
+            { model: need(f, at, 'model', isString, 'a string'), error: need(f, at, 'error', isString, 'a string') });
+    }
+    return out;
+}
+
+// The four per-instance floats of docs/roster.md for an instance in `state` (from readRoster),
+// moving at `groundSpeed` model units/s, with instance index `index`; a one-shot started at
+// `startTime` seconds.
+export function instanceData(state, groundSpeed = 0, index = 0, startTime = 0) {
+    const rate = state.rate_per_speed > 0 ? state.rate_per_speed * groundSpeed : state.rate;
+    const frames = Math.abs(state.frame_count);
+    const golden = index * 0.6180339887;
+    const phase = state.phase === 'golden_ratio' ? golden - Math.floor(golden) : (-startTime * rate) / frames;
+    return [state.first_row, state.frame_count, rate, phase];
+}
+
+// ---- a bone's matrix at a time (sockets), decoded and blended as runtimes/glsl/crowdbake_palette.glsl ----
+
+const halfToFloat = (h) => { // exponent rebiased; zero and subnormals are m 2^-24
+    const e = (h >> 10) & 0x1f, m = h & 0x3ff, sign = h & 0x8000 ? -1 : 1;
+    if (e === 0) return sign * m * 2 ** -24;
+    return e === 31 ? (m ? NaN : sign * Infinity) : sign * (1 + m / 1024) * 2 ** (e - 15);
+};
+const snorm = (u) => Math.max((u >= 32768 ? u - 65536 : u) / 32767, -1);
+
+// Texel k of a bone in a row, as the GLSL's cb_texel decodes it.
+function decodeTexel(pal, row, bone, k) {
+    const h = pal.header, i = texelIndex(h, row, bone) + 4 * k, t = pal.texels;
+    if (h.precision === 0) return [t[i], t[i + 1], t[i + 2], t[i + 3]];
+    if (h.precision === 1) return [0, 1, 2, 3].map((c) => halfToFloat(t[i + c]));
+    const lo = h.bounds_min, hi = h.bounds_max, range = h.linear_range, u = [t[i], t[i + 1], t[i + 2], t[i + 3]];
+    const box = (h.layout === 2 && k === 1) || (h.layout === 0 && k === 3);
+    const out = [0, 1, 2].map((c) => (box ? lo[c] + (hi[c] - lo[c]) * (u[c] / 65535) : snorm(u[c]) * (h.layout === 2 ? 1 : range)));
+    if (h.layout === 2) out.push(k === 0 ? snorm(u[3]) : (range * u[3]) / 65535);
+    else if (h.layout === 1) out.push(lo[k] + (hi[k] - lo[k]) * (u[3] / 65535));
+    else out.push(k === 3 ? 1 : 0);
+    return out;
+}
+
+// A clip's first row as the per-instance numbers hold it: negative for held rows (CLIP_STEP), -first_row - 1.
+export const instanceFirstRow = (clip) => (clip.step ? -clip.first_row - 1 : clip.first_row);
+
+// The two rows to blend for the four per-instance numbers at `time`, and the weight of the second (cb_frame);
+// held rows (a negative first row) give their row alone.
+export function instanceFrame(inst, time) {
+    const held = inst[0] < 0, first = held ? -inst[0] - 1 : inst[0];
+    const frames = Math.abs(inst[1]);
+    let fpos = time * inst[2] + inst[3] * frames, f1;
+    if (inst[1] > 0) fpos -= frames * Math.floor(fpos / frames);
+    else fpos = Math.min(Math.max(fpos, 0), frames - 1);
+    if (!(fpos >= 0 && fpos < frames)) fpos = 0; // rounding at the wrap
+    const f0 = Math.floor(fpos);
+    if (inst[1] > 0) f1 = f0 + 1 < frames ? f0 + 1 : 0; // a loop's last row blends into its first
+    else f1 = Math.min(f0 + 1, frames - 1);
+    if (held) return { row0: first + f0, row1: first + f0, fr: 0 }; // no blend across a step
+    return { row0: first + f0, row1: first + f1, fr: fpos - f0 };
+}
+
+// The bone's skinning matrix (column-major, 16 numbers: the glTF joint matrix, bind space to the
+// posed model) for an instance's four numbers (instanceData's) at `time` seconds. A prop on the
+// bone is placed at boneMatrix x the prop's bind-space transform (a roster socket's bind_transform).
+export function instanceBoneMatrix(pal, inst, time, bone, out = new Array(16)) {
+    const h = pal.header;
+    if (!Number.isInteger(bone) || bone < 0 || bone >= h.bone_count)
+        throw new Error(`bone ${bone} is not one of the palette's ${h.bone_count} bones`);
+    if (!inst.every(Number.isFinite) || !Number.isFinite(time) || !Number.isFinite(time * inst[2] + inst[3]))
+        throw new Error(`time ${time} or instance numbers ${inst} are not finite numbers`);
+    const { row0, row1, fr } = instanceFrame(inst, time);
+    if (row1 >= h.rows || row0 >= h.rows) throw new Error(`rows ${row0}, ${row1} lie past the palette's ${h.rows} rows`);
+    const t = [];
+    for (let k = 0; k < h.texels_per_bone; ++k) {
+        const a = decodeTexel(pal, row0, bone, k), b = decodeTexel(pal, row1, bone, k);
+        const flip = h.layout === 2 && k === 0 && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0 ? -1 : 1;
+        t.push(a.map((x, c) => x + (flip * b[c] - x) * fr)); // cb:hemisphere for the rotation
+    }
+    out.fill(0);
+    out[15] = 1;
+    let p;
+    if (h.layout === 2) {
+        const n = Math.hypot(...t[0]), [x, y, z, w] = t[0].map((c) => c / n), s = t[1][3];
+        const r = [1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y),
+                   2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x),
+                   2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)]; // columns
+        for (let k = 0; k < 9; ++k) out[Math.floor(k / 3) * 4 + (k % 3)] = s * r[k];
+        p = t[1].slice(0, 3);
+    } else {
+        const affine = h.layout === 1; // affine: texel k is row k; mat4: texel k is column k
+        for (let c = 0; c < 3; ++c) for (let r = 0; r < 3; ++r) out[c * 4 + r] = affine ? t[r][c] : t[c][r];
+        p = affine ? [t[0][3], t[1][3], t[2][3]] : t[3].slice(0, 3);
+    }
+    // qpos and relative positions: A (v - b) + p, with p stored less the bone's position offset.
+    const { bind_position: bp, position_offset: off } = pal.bones[bone];
+    const aboutBind = h.layout === 2 || (h.flags & FLAG_POSITIONS_RELATIVE) !== 0;
+    for (let k = 0; k < 3; ++k)
+        out[12 + k] = p[k] + off[k] - (aboutBind ? out[k] * bp[0] + out[4 + k] * bp[1] + out[8 + k] * bp[2] : 0);
+    return out;
+}
+
+// The bone's skinning matrix `time` seconds into clip `clip` (an index into pal.clips): loops
+// wrap, one-shots clamp; the same numbers as cbpal_bone_matrix in include/crowdbake_pal.h.
+export function boneMatrix(pal, clip, time, bone, out) {
+    const c = pal.clips[clip];
+    if (!Number.isInteger(clip) || !c) throw new Error(`clip ${clip} is not one of the palette's ${pal.clips.length} clips`);
+    return instanceBoneMatrix(pal, [instanceFirstRow(c), c.loops ? c.frames : -c.frames, c.fps, 0], time, bone, out);
+}

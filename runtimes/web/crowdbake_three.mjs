@@ -1,0 +1,337 @@
+// crowdbake_three.mjs - a three.js drop-in for crowdbake palettes: CrowdbakeHerd, an
+// InstancedMesh whose material skins every instance from the palette (the shipped
+// runtimes/glsl/crowdbake_palette.glsl, patched into three's own material with onBeforeCompile),
+// one draw call for the whole herd.
+//
+//     const herd = new CrowdbakeHerd(gltf, readPal(palBytes), readRoster(json).types.cow, { count: 1000, glsl });
+//     scene.add(herd); herd.setState(7, 'flee', { speed: 9.9 });
+//     renderer.setAnimationLoop((ms) => { herd.update(ms / 1000); renderer.render(scene, camera); });
+//
+// Place instances with place(i, position, { yaw, scale }) or InstancedMesh's setMatrixAt; tint them
+// with setColorAt. The herd casts animated shadows (customDepthMaterial, customDistanceMaterial),
+// is frustum-culled against bounds that hold every baked pose, and motionVectorMaterial() draws
+// its screen-space velocity for TAA or motion blur. `three` is an import-map name (pages) or the
+// npm package (runtimes/web/package.json pins it).
+import * as THREE from 'three';
+import { instanceData, instanceBoneMatrix, instanceFirstRow } from './crowdbake_pal.mjs';
+import { FootstepClock } from './crowdbake_contacts.mjs';
+import { paletteDefines } from './crowdbake_crowd.mjs';
+
+// The skinned meshes of a GLTFLoader result that use its first skin, merged in glTF order:
+// positions, normals, joints, weights and indices as the palette's bone indices expect
+// (crowdbake bakes the same vertices in the same order).
+export function meshFromGLTF(gltf) {
+    const parts = [];
+    let skeleton = null;
+    gltf.scene.updateMatrixWorld(true);
+    gltf.scene.traverse((o) => {
+        if (!o.isSkinnedMesh) return;
+        skeleton ??= o.skeleton;
+        if (o.skeleton.bones.every((b, i) => b === skeleton.bones[i])) parts.push(o.geometry);
+    });
+    if (!parts.length) throw new Error('the model has no skinned mesh');
+    const vertices = parts.reduce((n, g) => n + g.attributes.position.count, 0);
+    const indices = parts.reduce((n, g) => n + (g.index ? g.index.count : g.attributes.position.count), 0);
+    const out = { positions: new Float32Array(vertices * 3), normals: new Float32Array(vertices * 3),
+                  joints: new Uint16Array(vertices * 4), weights: new Float32Array(vertices * 4),
+                  indices: new Uint32Array(indices) };
+    let v0 = 0, i0 = 0;
+    for (const g of parts) {
+        const a = g.attributes, n = a.position.count;
+        const copy = (attr, dst, size) => {
+            if (!attr) return;
+            for (let v = 0; v < n; ++v) for (let k = 0; k < size; ++k) dst[(v0 + v) * size + k] = attr.getComponent(v, k);
+        };
+        copy(a.position, out.positions, 3);
+        copy(a.normal, out.normals, 3);
+        copy(a.skinIndex, out.joints, 4);
+        copy(a.skinWeight, out.weights, 4);
+        if (g.index) for (let i = 0; i < g.index.count; ++i) out.indices[i0 + i] = v0 + g.index.getX(i);
+        else for (let i = 0; i < n; ++i) out.indices[i0 + i] = v0 + i;
+        v0 += n, i0 += g.index ? g.index.count : n;
+    }
+    return out;
+}
+
+// The palette as three.js textures: RGBA32F, RGBA16F or RGBA16UI (usampler2D), and the bind
+// positions (row 0) and position offsets (row 1, half palettes) the shader reads.
+export function paletteTextures(pal) {
+    const h = pal.header;
+    const types = [[THREE.RGBAFormat, THREE.FloatType, 'RGBA32F'], [THREE.RGBAFormat, THREE.HalfFloatType, 'RGBA16F'],
+                   [THREE.RGBAIntegerFormat, THREE.UnsignedShortType, 'RGBA16UI']];
+    const [format, type, internal] = types[h.precision];
+    const palette = new THREE.DataTexture(pal.texels, h.width, h.height, format, type);
+    palette.internalFormat = internal;
+    const bindData = new Float32Array(h.bone_count * 8); // row 0: bind positions; row 1: position offsets
+    pal.bones.forEach((b, j) => {
+        bindData.set(b.bind_position, j * 4);
+        bindData.set(b.position_offset, (h.bone_count + j) * 4);
+    });
+    const bind = new THREE.DataTexture(bindData, h.bone_count, 2, THREE.RGBAFormat, THREE.FloatType);
+    for (const t of [palette, bind]) {
+        t.minFilter = t.magFilter = THREE.NearestFilter;
+        t.generateMipmaps = false;
+        t.flipY = false;
+        t.needsUpdate = true;
+    }
+    return { palette, bind };
+}
+
+// States of a roster type (readRoster(...).types.NAME), or made from the palette's clips.
+function statesOf(pal, type) {
+    if (type) return type.states;
+    const states = Object.create(null); // clip names are data: '__proto__' is a clip like any other
+    for (const c of pal.clips)
+        states[c.name] = { clip: c.name, first_row: instanceFirstRow(c), frame_count: c.loops ? c.frames : -c.frames, rate: c.fps,
+                           rate_per_speed: 0, phase: c.loops ? 'golden_ratio' : 'zero' };
+    return states;
+}
+
+// The position and the normal are skinned together where three's shader asks for the normal
+// (beginnormal_vertex, before begin_vertex), each bone's texels read once; a shader without
+// normals (a depth material) skins the position alone in begin_vertex.
+const VERTEX_PARS = `
+in vec4 cb_joints; in vec4 cb_weights; in vec4 cb_inst; in vec4 cb_from; in vec2 cb_fade;
+uniform float cb_time;
+vec3 cb_skinned_position; bool cb_skinned = false;
+float cb_fade_weight() { return cb_fade.y > 0.0 ? clamp((cb_time - cb_fade.x) / cb_fade.y, 0.0, 1.0) : 1.0; }
+vec3 cb_herd_normal(vec3 p, vec3 n) {
+    vec3 skinned_n;
+    cb_skin_position_normal_crossfade(p, n, ivec4(cb_joints), cb_weights, cb_from, cb_inst, cb_fade_weight(), cb_time,
+                                      cb_skinned_position, skinned_n);
+    cb_skinned = true;
+    return skinned_n;
+}
+vec3 cb_herd_position(vec3 p) {
+    return cb_skinned ? cb_skinned_position
+                      : cb_skin_position_crossfade(p, ivec4(cb_joints), cb_weights, cb_from, cb_inst, cb_fade_weight(), cb_time);
+}
+`;
+
+// The box that holds every clip's animated bounds (the .pal clip table: the skinned mesh over each
+// baked row), in the model's space, and the sphere around it: an instance's bounds in any pose.
+export function animatedBounds(pal) {
+    const box = new THREE.Box3();
+    for (const c of pal.clips)
+        box.union(new THREE.Box3(new THREE.Vector3(...c.bounds_min), new THREE.Vector3(...c.bounds_max)));
+    return { box, sphere: box.getBoundingSphere(new THREE.Sphere()) };
+}
+
+// The motion-vector pass's additions to a patched material: the position at cb_previous_time
+// (the same skinning, one call at the previous frame's time) projected by the previous frame's
+// view-projection; the fragment writes 0.5 x (NDC now - NDC before), the velocity in units of
+// the screen's width and height, as RG.
+const MOTION_VERTEX_PARS = `
+uniform float cb_previous_time; uniform mat4 cb_previous_view_projection;
+out vec4 cb_clip_now; out vec4 cb_clip_before;
+vec3 cb_herd_previous_position(vec3 p) {
+    float f = cb_fade.y > 0.0 ? clamp((cb_previous_time - cb_fade.x) / cb_fade.y, 0.0, 1.0) : 1.0;
+    return f < 1.0 ? cb_skin_position_crossfade(p, ivec4(cb_joints), cb_weights, cb_from, cb_inst, f, cb_previous_time)
+                   : cb_skin_position(p, ivec4(cb_joints), cb_weights, cb_inst, cb_previous_time);
+}
+`;
+const MOTION_VERTEX = `
+cb_clip_now = gl_Position;
+vec4 cb_before = vec4(cb_herd_previous_position(position), 1.0);
+#ifdef USE_INSTANCING
+cb_before = instanceMatrix * cb_before;
+#endif
+cb_clip_before = cb_previous_view_projection * modelMatrix * cb_before;
+`;
+const MOTION_FRAGMENT = `
+gl_FragColor = vec4(0.5 * (cb_clip_now.xy / cb_clip_now.w - cb_clip_before.xy / cb_clip_before.w), 0.0, 1.0);
+`;
+
+export class CrowdbakeHerd extends THREE.InstancedMesh {
+    // gltf: GLTFLoader's result (or meshFromGLTF's arrays); pal: readPal's; type: a roster type
+    // (readRoster(...).types.NAME) or null to make a state of each clip. options: count, glsl
+    // (the library's text: loadPaletteGLSL()), material (a three.js material to patch; default
+    // MeshLambertMaterial), fade (cross-fade seconds, 0.25).
+    constructor(gltf, pal, type, { count = 1000, glsl, material, fade = 0.25 } = {}) {
+        if (!glsl) throw new Error('CrowdbakeHerd: options.glsl is the shipped library (await loadPaletteGLSL())');
+        const mesh = gltf.positions ? gltf : meshFromGLTF(gltf);
+        const geometry = new THREE.BufferGeometry();
+        geometry.setAttribute('position', new THREE.BufferAttribute(mesh.positions, 3));
+        geometry.setAttribute('normal', new THREE.BufferAttribute(mesh.normals, 3));
+        geometry.setAttribute('cb_joints', new THREE.BufferAttribute(Float32Array.from(mesh.joints), 4));
+        geometry.setAttribute('cb_weights', new THREE.BufferAttribute(mesh.weights, 4));
+        geometry.setIndex(new THREE.BufferAttribute(mesh.indices, 1));
+        const per = (n) => new THREE.InstancedBufferAttribute(new Float32Array(count * n), n).setUsage(THREE.DynamicDrawUsage);
+        geometry.setAttribute('cb_inst', per(4));
+        geometry.setAttribute('cb_from', per(4));
+        geometry.setAttribute('cb_fade', per(2));
+        material ??= new THREE.MeshLambertMaterial({ color: 0xd8c8a8 });
+        super(geometry, material, count);
+        const bounds = animatedBounds(pal);
+        geometry.boundingBox = bounds.box; // InstancedMesh places these at each instance: the herd's bounds
+        geometry.boundingSphere = bounds.sphere;
+        this.frustumCulled = true;
+        this.boundsVersion = this.instanceMatrix.version;
+        this.instanceScale = new Float32Array(count).fill(1);
+        this.pal = pal;
+        this.states = statesOf(pal, type);
+        this.fade = fade;
+        this.time = 0;
+        this.instanceState = new Array(count).fill(null);
+        this.speed = new Float32Array(count);
+        this.phase = new Float32Array(count).fill(NaN); // NaN: the state's own phase rule
+        this.footsteps = new FootstepClock(type?.clips, count); // the roster's contacts (onContact)
+        const textures = paletteTextures(pal);
+        const uniforms = {
+            cb_palette: { value: textures.palette }, cb_bind_positions: { value: textures.bind },
+            cb_row_texels: { value: pal.header.row_texels }, cb_rows_per_block: { value: pal.header.height },
+            cb_bounds_min: { value: new THREE.Vector3(...pal.header.bounds_min) },
+            cb_bounds_max: { value: new THREE.Vector3(...pal.header.bounds_max) },
+            cb_linear_range: { value: pal.header.linear_range }, cb_time: { value: 0 },
+        };
+        this.uniforms = uniforms;
+        material.defines = { ...material.defines, ...Object.fromEntries(paletteDefines(pal.header).map((d) => [d, ''])) };
+        material.onBeforeCompile = (shader) => {
+            Object.assign(shader.uniforms, uniforms);
+            shader.vertexShader = shader.vertexShader
+                .replace('#include <common>', `#include <common>\n${glsl}\n${VERTEX_PARS}`)
+                .replace('#include <beginnormal_vertex>', 'vec3 objectNormal = cb_herd_normal(position, normal);')
+                .replace('#include <begin_vertex>', 'vec3 transformed = cb_herd_position(position);');
+        };
+        material.customProgramCacheKey = () => `crowdbake-${paletteDefines(pal.header).join('-')}`;
+        const skinnedLike = (m) => Object.assign(m, { defines: { ...m.defines, ...material.defines },
+            onBeforeCompile: material.onBeforeCompile, customProgramCacheKey: material.customProgramCacheKey });
+        this.skinnedLike = skinnedLike; // one skinning patch for colour, shadow depth and motion vectors
+        this.customDepthMaterial = skinnedLike(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }));
+        this.customDistanceMaterial = skinnedLike(new THREE.MeshDistanceMaterial());
+        uniforms.cb_previous_time = { value: 0 };
+        uniforms.cb_previous_view_projection = { value: new THREE.Matrix4() };
+        this.previousViewProjection = null; // null: the camera's current one (the velocity of the animation alone)
+        const identity = new THREE.Matrix4();
+        const def = type?.default_state ?? Object.keys(this.states)[0];
+        for (let i = 0; i < count; ++i) {
+            this.setMatrixAt(i, identity);
+            this.setState(i, def, { fade: 0 });
+        }
+    }
+
+    // Puts instance i in `state` (a roster state or clip name), cross-fading from what it played;
+    // speed (model units/s) drives locomotion states' playback so feet stay planted; phase 0..1
+    // overrides the golden-ratio spread.
+    setState(i, state, { speed = this.speed[i], phase = this.phase[i], fade = this.fade } = {}) {
+        // Own properties only: 'constructor' or '__proto__' is a name, never the object's prototype.
+        const s = Object.hasOwn(this.states, state) ? this.states[state] : undefined;
+        if (!s) throw new Error(`CrowdbakeHerd: no state '${state}' (have ${Object.keys(this.states).join(', ')})`);
+        const attrs = this.geometry.attributes;
+        const current = [0, 1, 2, 3].map((k) => attrs.cb_inst.array[i * 4 + k]);
+        const inst = instanceData(s, speed / this.instanceScale[i], i, this.time); // world speed / scale: the model's own speed
+        if (!Number.isNaN(phase)) inst[3] = phase;
+        this.instanceState[i] = state;
+        this.speed[i] = speed;
+        this.phase[i] = phase;
+        attrs.cb_inst.array.set(inst, i * 4);
+        attrs.cb_from.array.set(fade > 0 && current[1] !== 0 ? current : inst, i * 4);
+        attrs.cb_fade.array.set([this.time, fade], i * 2);
+        attrs.cb_inst.needsUpdate = attrs.cb_from.needsUpdate = attrs.cb_fade.needsUpdate = true;
+        this.footsteps.restart(i, inst, this.time);
+    }
+
+    // A new speed, keeping the frame it is on (no pop): the phase absorbs the change of rate.
+    setSpeed(i, speed) {
+        const [, count, rate, phase] = this.geometry.attributes.cb_inst.array.subarray(i * 4, i * 4 + 4);
+        const frames = Math.abs(count), fpos = this.time * rate + phase * frames;
+        const next = instanceData(this.states[this.instanceState[i]], speed / this.instanceScale[i], i, this.time)[2];
+        const p = (fpos - this.time * next) / frames;
+        this.setState(i, this.instanceState[i], { speed, phase: p - Math.floor(p), fade: 0 });
+    }
+
+    // Places instance i at `position` ([x, y, z]), turned `yaw` radians about +y and scaled by
+    // `scale`: a locomotion state then plays at speed / (scale x speed reference), feet planted.
+    place(i, position, { yaw = 0, scale = 1 } = {}) {
+        const turn = new THREE.Quaternion().setFromAxisAngle(new THREE.Vector3(0, 1, 0), yaw);
+        this.setMatrixAt(i, new THREE.Matrix4().compose(new THREE.Vector3(...position), turn, new THREE.Vector3().setScalar(scale)));
+        this.instanceMatrix.needsUpdate = true;
+        const was = this.instanceScale[i];
+        this.instanceScale[i] = scale;
+        if (was !== scale && this.states[this.instanceState[i]].rate_per_speed > 0) this.setSpeed(i, this.speed[i]); // same frame
+    }
+
+    // The herd's bounds follow its instances: computed again (lazily, by three's culling) after
+    // setMatrixAt or a write to instanceMatrix flagged needsUpdate (an O(count) pass, once a frame
+    // at most).
+    setMatrixAt(i, matrix) {
+        super.setMatrixAt(i, matrix);
+        this.boundingBox = this.boundingSphere = null;
+    }
+
+    // A material that draws the herd's screen-space velocity (RG: 0.5 x NDC now - NDC at the
+    // previous update's time, through previousViewProjection) for a TAA or motion-blur pass,
+    // e.g. as scene.overrideMaterial into a HalfFloat render target. Instances are taken where
+    // they are now: moving ones add their own displacement.
+    motionVectorMaterial() {
+        const m = this.skinnedLike(new THREE.MeshBasicMaterial());
+        const patch = m.onBeforeCompile, key = m.customProgramCacheKey();
+        m.onBeforeCompile = (shader, renderer) => {
+            patch(shader, renderer);
+            shader.vertexShader = shader.vertexShader
+                .replace('void main() {', `${MOTION_VERTEX_PARS}\nvoid main() {`) // after the herd's own functions
+                .replace('#include <project_vertex>', `#include <project_vertex>\n${MOTION_VERTEX}`);
+            shader.fragmentShader = shader.fragmentShader
+                .replace('#include <common>', '#include <common>\nin vec4 cb_clip_now; in vec4 cb_clip_before;')
+                .replace('#include <dithering_fragment>', MOTION_FRAGMENT);
+        };
+        m.customProgramCacheKey = () => `${key}-motion`;
+        return m;
+    }
+
+    onBeforeRender(renderer, scene, camera) {
+        const before = this.uniforms.cb_previous_view_projection.value;
+        if (this.previousViewProjection) before.copy(this.previousViewProjection);
+        else before.multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse);
+    }
+
+    setPhase(i, phase) {
+        this.setState(i, this.instanceState[i], { phase, fade: 0 });
+    }
+
+    // The clock the shader plays every instance at, in seconds; the time it replaces is the
+    // motion vectors' previous frame.
+    update(time) {
+        this.uniforms.cb_previous_time.value = this.time;
+        const inst = this.geometry.attributes.cb_inst.array;
+        this.footsteps.advance(this.count, time, (i) => [this.states[this.instanceState[i]].clip, inst.subarray(i * 4, i * 4 + 4)]);
+        this.time = time;
+        this.uniforms.cb_time.value = time;
+        if (this.instanceMatrix.version !== this.boundsVersion) {
+            this.boundsVersion = this.instanceMatrix.version;
+            this.boundingBox = this.boundingSphere = null;
+        }
+    }
+
+    // Calls listener({ instance, foot, bone, kind: 'land' | 'lift', time }) from update() whenever an
+    // instance's clip time crosses one of its clip's footstep contacts (the roster type's clips'
+    // contacts): every crossing since the last update, in order, across loop ends and rate changes.
+    onContact(listener) {
+        this.footsteps.listeners.push(listener);
+        return this;
+    }
+
+    // The skinning matrix (bind space to the instance's posed model, before its instance matrix) of
+    // `bone` for instance i at the herd's time: its clip, time and cross-fade, as the shader blends.
+    boneMatrixAt(i, bone, out = new THREE.Matrix4()) {
+        const a = this.geometry.attributes, at = (attr, n) => attr.array.subarray(i * n, i * n + n);
+        const [start, length] = at(a.cb_fade, 2);
+        const fade = length > 0 ? Math.min(Math.max((this.time - start) / length, 0), 1) : 1;
+        const m = instanceBoneMatrix(this.pal, at(a.cb_inst, 4), this.time, bone);
+        if (fade < 1) { // the shader mixes the two skinned positions: the same as mixing the matrices
+            const from = instanceBoneMatrix(this.pal, at(a.cb_from, 4), this.time, bone);
+            for (let k = 0; k < 16; ++k) m[k] = from[k] + (m[k] - from[k]) * fade;
+        }
+        return out.fromArray(m);
+    }
+
+    // Where a prop attached to a socket (a roster socket: { bone, bind_transform }) of instance i is
+    // in the world: the herd's world matrix x the instance's matrix x the bone's x the socket's.
+    socketMatrixAt(i, socket, out = new THREE.Matrix4()) {
+        const instance = new THREE.Matrix4();
+        this.getMatrixAt(i, instance);
+        this.boneMatrixAt(i, socket.bone, out).multiply(new THREE.Matrix4().fromArray(socket.bind_transform));
+        return out.premultiply(instance).premultiply(this.matrixWorld);
+    }
+}
+

