@@ -47,7 +47,13 @@ static int setup(void **state)
     char model[PATH_MAX], rel[1024], cmd[2 * PATH_MAX];
     sample_path(rel, sizeof rel, "quadruped");
     if (!realpath(rel, model)) return -1;
-    if (system("rm -rf " TMP " && mkdir -p " TMP "/bakes")) return -1;
+    if (system("rm -rf " TMP " && mkdir -p " TMP "/bakes/step")) return -1;
+    /* A STEP-keyed clip, baked with its rows held (.pal version 4): check_addon.gd's held rows. */
+    char step[PATH_MAX];
+    shared_path(rel, sizeof rel, "assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf");
+    if (!realpath(rel, step)) return -1;
+    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/bakes/step/step.pal -q", crowdbake_exe(), step);
+    if (system(cmd)) return -1;
     /* NAME.pal with NAME = LAYOUT-PRECISION[-zstd], as check.gd expects. */
     const char *bakes[][3] = {
         {"qpos", "u16", ""},    {"qpos", "float", ""},   {"affine", "u16", ""}, {"affine", "float", ""},
