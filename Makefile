@@ -337,7 +337,7 @@ RUNS_cli      = $(TESTS_cli:%=$(BUILD)/tests/%.run) $(if $(SAN),,$(BUILD)/tests/
 RUNS_runtimes = $(TESTS_runtimes:%=$(BUILD)/tests/%.run) $(BUILD)/tests/standalone_pal_reader.run \
                 $(if $(SAN),,$(BUILD)/tests/web_reader.run $(BUILD)/tests/bench_gl_images.run)
 RUNS_install  = $(TESTS_install:%=$(BUILD)/tests/%.run)
-RUNS_fuzz     = $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
+RUNS_fuzz     = $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run) $(if $(SAN),,$(BUILD)/tests/fuzz_smoke.run)
 TEST_GROUPS  := lib cli runtimes install fuzz
 TEST_RUNS     = $(foreach g,$(TEST_GROUPS),$(RUNS_$(g)))
 RUN_SET      ?= $(TEST_RUNS)
@@ -436,6 +436,14 @@ fuzz-seeds: fuzz-build all
 
 fuzz: fuzz-seeds
 	python3 tests/fuzz/campaign.py --fuzz-build $(FUZZ_BUILD) --seconds $(FUZZ_TIME) $(TARGETS)
+
+# Every fuzz target for a few seconds from its seeds, in the normal build's tests, so a target that no
+# longer builds, starts or survives its seeds fails the suite (findings stay in build/fuzz/artifacts).
+FUZZ_SMOKE_SECONDS ?= 10
+$(BUILD)/tests/fuzz_smoke.run: all | $(RESULTS)/pending
+	$(call record_run,fuzz_smoke,$(MAKE) --no-print-directory fuzz-seeds >$(BUILD)/tests/fuzz_smoke.log 2>&1 || \
+	  { tail -n 40 $(BUILD)/tests/fuzz_smoke.log; false; } && \
+	  python3 tests/fuzz/campaign.py --smoke --fuzz-build $(FUZZ_BUILD) --seconds $(FUZZ_SMOKE_SECONDS) $(FUZZ_TARGETS) web)
 
 # ---- benchmarks (not part of check; only a smoke run is) -------------------------------
 $(BUILD)/bench_core: bench/bench_core.c $(BUILD)/libcrowdbake.a

@@ -8,7 +8,10 @@ tests/fuzz/regressions/T/, where `make check` replays it (replay_T, or for the w
 runtimes/web/test/fuzz_regressions.test.mjs) until it is fixed; the target then starts again for the
 rest of its time, so one bug does not end the campaign.
 
-Usage: campaign.py --fuzz-build DIR --seconds N TARGET...   (TARGET: gltf pal exr ktx2 catalog web)
+Usage: campaign.py --fuzz-build DIR --seconds N [--smoke] TARGET...   (TARGET: gltf pal exr ktx2 catalog web)
+
+--smoke (make check's short run of every target): findings stay in DIR/artifacts, are named and fail the
+run; nothing is written under tests/.
 """
 import argparse
 import os
@@ -37,7 +40,7 @@ def command(target, build, corpus, seeds, seconds, artifacts):
     return [f'{build}/fuzz_{target}', *libfuzzer, *inputs], dict(os.environ)
 
 
-def run_target(target, build, seconds):
+def run_target(target, build, seconds, smoke=False):
     corpus, seeds = f'{build}/corpus/{target}', f'{build}/seeds/{target}'
     artifacts = f'{build}/artifacts/{target}'
     for d in (corpus, artifacts):
@@ -76,9 +79,14 @@ def run_target(target, build, seconds):
                 findings.append('(stopped: see the log)')
             break
         for name in new:
+            if smoke:
+                findings.append(f'{artifacts}/{name}')
+                continue
             os.makedirs(f'tests/fuzz/regressions/{target}', exist_ok=True)
             shutil.copy(f'{artifacts}/{name}', f'tests/fuzz/regressions/{target}/{name}')
             findings.append(f'tests/fuzz/regressions/{target}/{name}')
+        if smoke:
+            break
         restarts += 1
     corpus_size = len(os.listdir(corpus))
     print(f'fuzz {target}: {seconds} s, {executions:,} executions, coverage {coverage} edges ({features} features), '
@@ -91,11 +99,12 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--fuzz-build', required=True)
     ap.add_argument('--seconds', type=int, required=True)
+    ap.add_argument('--smoke', action='store_true')
     ap.add_argument('targets', nargs='+')
     a = ap.parse_args()
     ok = True
     for t in a.targets:
-        ok = run_target(t, a.fuzz_build, a.seconds) and ok
+        ok = run_target(t, a.fuzz_build, a.seconds, a.smoke) and ok
     sys.exit(0 if ok else 1)
 
 

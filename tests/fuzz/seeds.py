@@ -86,6 +86,10 @@ def gltf_seeds(shared, build, out):
 
 
 def bake(build, model, out, args):
+    # The samples travel: their loops are baked in place, as a crowd game bakes them, whatever the
+    # default for root motion is.
+    if '--root-motion' not in args:
+        args = [*args, '--root-motion', 'in-place']
     subprocess.run([f'{build}/crowdbake', 'bake', model, '-o', out, '-q', *args], check=True)
 
 

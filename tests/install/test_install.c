@@ -407,7 +407,7 @@ static void test_tool_uses_only_the_public_headers(void **state)
 }
 
 /* The Godot addon's zip (make godot-addon) is the same bytes from any build directory and holds
- * every file of runtimes/godot/addons/crowdbake under that path, to unpack into a project's folder. */
+ * every file of runtimes/godot/addons/crowdbake under addons/crowdbake, to unpack into a project's folder. */
 static void test_godot_addon_zip(void **state)
 {
     (void)state;
@@ -417,7 +417,7 @@ static void test_godot_addon_zip(void **state)
            "/zip2 godot-addon && cmp " TMP "/zip1/crowdbake-godot-addon.zip " TMP "/zip2/crowdbake-godot-addon.zip") != 0)
         fail_msg("%s", out);
     if (sh(out, sizeof out,
-           "find runtimes/godot/addons/crowdbake -type f | LC_ALL=C sort > " TMP "/zip1/want && unzip -Z1 " TMP
+           "cd runtimes/godot && find addons/crowdbake -type f | LC_ALL=C sort > ../../" TMP "/zip1/want && cd ../.. && unzip -Z1 " TMP
            "/zip1/crowdbake-godot-addon.zip | LC_ALL=C sort | diff " TMP "/zip1/want -") != 0)
         fail_msg("the zip's files differ from runtimes/godot/addons/crowdbake:\n%s", out);
 }

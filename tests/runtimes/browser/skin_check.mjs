@@ -1,9 +1,10 @@
-// skin_check.mjs - runs runtimes/web/crowdbake_crowd.mjs in headless Chromium (WebGL2) on the cases that
-// tests/runtimes/test_web.c writes, and reads the skinned positions back with transform feedback.
+// skin_check.mjs - runs runtimes/web/crowdbake_crowd.mjs in headless Chromium (WebGL2) on the runtime
+// conformance cases (tests/runtimes/conformance.h writes them; tests/runtimes/test_web.c compares the
+// results with their expected positions), and reads the skinned positions back with transform feedback.
 //
 //   node tests/runtimes/browser/skin_check.mjs JOB_DIR
 //
-// JOB_DIR/jobs.json: { cases: [{ name, pal, mesh: { vertex_count, positions, joints, weights },
+// JOB_DIR/cases.json: { cases: [{ name, pal, mesh: { vertex_count, positions, joints, weights },
 // groups: [{ time, instances: [[16 floats], ...] }], transpose, glsl_break: { marker, line } | null,
 // bone_pass (Crowd's bonePass option), out }] } (file names relative to JOB_DIR). For each case, the palette is read with readPal, the
 // runtime draws every instance of each group at its time as points (one instanced draw), and
@@ -16,9 +17,10 @@ import path from 'node:path';
 import { withPage, REPO, RUNTIMES } from './driver.mjs';
 
 const dir = path.resolve(process.argv[2]);
-const jobs = JSON.parse(fs.readFileSync(path.join(dir, 'jobs.json'), 'utf8'));
+const jobs = JSON.parse(fs.readFileSync(path.join(dir, 'cases.json'), 'utf8'));
 
-const failures = await withPage({ '/': RUNTIMES, '/job/': dir }, '/__blank.html', async (page) => {
+const hostileDir = path.join(REPO, 'tests/fuzz/regressions/pal');
+const failures = await withPage({ '/': RUNTIMES, '/job/': dir, '/hostile/': hostileDir }, '/__blank.html', async (page) => {
     for (const c of jobs.cases) {
         const result = await page.evaluate(async (c) => {
             const { readPal } = await import('/web/crowdbake_pal.mjs');
@@ -68,13 +70,13 @@ const failures = await withPage({ '/': RUNTIMES, '/job/': dir }, '/__blank.html'
     }
     // The hostile palettes the fuzzers found, read in the page with the decoder a page would use:
     // each must be refused with a one-line Error naming the file, the page left working.
-    const hostile = fs.readdirSync(path.join(REPO, 'tests/fuzz/regressions/pal'));
+    const hostile = fs.readdirSync(hostileDir);
     const verdicts = await page.evaluate(async (files) => {
         const { readPal } = await import('/web/crowdbake_pal.mjs');
         const { decompress } = await import('/web/node_modules/fzstd/esm/index.mjs');
         const out = [];
         for (const f of files) for (const verifyChecksum of [true, false]) { // without it, the decoder meets the damage
-            const bytes = new Uint8Array(await (await fetch(`/tests/fuzz/regressions/pal/${f}`)).arrayBuffer());
+            const bytes = new Uint8Array(await (await fetch(`/hostile/${f}`)).arrayBuffer());
             try {
                 readPal(bytes, { name: f, verifyChecksum, decompress: (b, n) => decompress(b, new Uint8Array(n)) });
                 out.push(`ACCEPTED ${f}`);
