@@ -27,8 +27,12 @@ SHELL := /bin/bash
 DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
-                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip
+                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip \
+                glslang-tools spirv-tools mesa-vulkan-drivers libvulkan-dev
 PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
+
+# The Unity package's C# runs under mono in the tests (tests/runtimes/test_unity_cs.c).
+DEB_PACKAGES += mono-mcs mono-runtime libmono-system-core4.0-cil
 
 BUILD   ?= build
 CC      ?= cc
@@ -96,7 +100,7 @@ SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod
 
 .PHONY: all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs \
         test-lib test-cli test-runtimes test-install test-fuzz readme bake-hashes bench \
-        bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web godot-addon
+        bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web godot-addon unity-package
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
 SONAME    := libcrowdbake.so.$(API_MAJOR)
@@ -219,6 +223,20 @@ $(GODOT_ADDON_ZIP): $(GODOT_ADDON_FILES:%=runtimes/godot/%)
 	find $(BUILD)/godot-addon -type f -exec chmod 644 {} + && find $(BUILD)/godot-addon -exec touch -d '1980-01-01 00:00:00 UTC' {} +
 	cd $(BUILD)/godot-addon && find addons -type f | LC_ALL=C sort | TZ=UTC zip -X -q $(abspath $@) -@
 
+# ---- the Unity package as a tarball (Package Manager: Add package from tarball) ------------------
+# runtimes/unity under package/, with the shared HLSL runtime in place of the shim that reaches it in
+# the checkout (Runtime/Shaders/CrowdbakePalette.hlsl), so the tarball stands alone. Byte for byte the
+# same on every build: sorted names, one date, owner 0, mode 644, gzip without a name or time.
+UNITY_PACKAGE_TGZ := $(BUILD)/com.crowdbake.palette.tgz
+UNITY_PACKAGE_FILES := $(shell find runtimes/unity -type f | LC_ALL=C sort)
+unity-package: $(UNITY_PACKAGE_TGZ)
+$(UNITY_PACKAGE_TGZ): $(UNITY_PACKAGE_FILES) runtimes/hlsl/crowdbake_palette.hlsl
+	rm -rf $(BUILD)/unity-package $@ && mkdir -p $(BUILD)/unity-package
+	cp -R runtimes/unity $(BUILD)/unity-package/package
+	cp runtimes/hlsl/crowdbake_palette.hlsl $(BUILD)/unity-package/package/Runtime/Shaders/CrowdbakePalette.hlsl
+	find $(BUILD)/unity-package -type f -exec chmod 644 {} + && find $(BUILD)/unity-package -exec touch -d '1980-01-01 00:00:00 UTC' {} +
+	cd $(BUILD)/unity-package && LC_ALL=C tar --sort=name --owner=0 --group=0 --numeric-owner -cf - package | gzip -n -9 > $(abspath $@)
+
 # What the installed `crowdbake view` serves: it looks for BIN/../share/crowdbake (so DATADIR is
 # PREFIX/share for it to be found; else CROWDBAKE_WEB=DIR), laid out as viewer/ (cli/viewer), web/
 # (the web runtime, runtimes/web, with the pinned three.js - its module build and the addons the
@@ -265,10 +283,16 @@ demo: all $(if $(shell command -v npm 2>/dev/null),runtimes/web/node_modules/.pa
 # sanitizer passes run side by side.
 TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(TOOL_INC) -Itests $(shell pkg-config --cflags cmocka 2>/dev/null)
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
+<<<<<<< HEAD
 $(BUILD)/tests/%: %.c tests/testutil.h tests/view_server.h tests/runtimes/conformance.h tests/runtimes/gl_harness.h $(TOOL_A) $(BUILD)/libcrowdbake.a
+=======
+$(BUILD)/tests/%: %.c tests/testutil.h tests/view_server.h $(wildcard tests/runtimes/*.h) $(TOOL_A) $(BUILD)/libcrowdbake.a
+>>>>>>> main
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TEST_CFLAGS) -c $< -o $@.o
-	$(CXX) $(SAN) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
+	$(CXX) $(SAN) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(TEST_EXTRA_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
+# The HLSL runtime's tests drive Vulkan (Mesa's lavapipe) and run glslangValidator and spirv-val.
+$(BUILD)/tests/test_hlsl_vulkan $(BUILD)/tests/test_hlsl_conformance $(BUILD)/tests/test_unreal_shader: TEST_EXTRA_LIBS := -lvulkan
 
 # The reader header alone, strict C99, as an engine would compile it: no libcrowdbake.
 $(BUILD)/tests/standalone_pal_reader: tests/runtimes/standalone_pal_reader.c include/crowdbake_pal.h include/crowdbake_pal_runtime.h $(DEPS_STAMP)
@@ -450,6 +474,11 @@ $(BUILD)/bench_core: bench/bench_core.c $(BUILD)/libcrowdbake.a
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 
+# crowdbake's qpos palettes against AnimToTexture's bone-mode encoding, bytes and error (bench/bench_att.c).
+$(BUILD)/bench_att: bench/bench_att.c $(BUILD)/libcrowdbake.a
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
+	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
+
 # The floor: read + RapidJSON parse of the same file, and crowdbake's load, in the same run
 # (bench/bench_floor.cpp).
 $(BUILD)/bench_floor: bench/bench_floor.cpp $(BUILD)/libcrowdbake.a $(DEPS_STAMP)
@@ -462,10 +491,10 @@ $(BUILD)/bench_gl: bench/bench_gl.c $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/lib
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs egl gl 2>/dev/null)
 
-bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(NODE_DEPS)
+bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(NODE_DEPS)
 	python3 bench/run.py
 
-bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(NODE_DEPS)
+bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
 
 # The normal and the sanitizer builds and their tests, side by side on every core.

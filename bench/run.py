@@ -465,6 +465,35 @@ def print_gl(results):
         print_methods(r, head + 'wall time to glFinish)', '_wall_ms')
 
 
+# crowdbake's qpos palettes against Unreal's AnimToTexture bone mode, written from its documented
+# rules (bench/bench_att.c says which and how): bytes and visible error at the same frames.
+ATT_MODELS = (('Cow', ('quaternius-cow', 'Cow.glb')), ('Husky', ('quaternius-husky', 'Husky.glb')))
+
+
+def att_bench(smoke):
+    models = [('fish', os.path.join(BUILD, 'samples', 'fish.glb'))] if smoke else \
+        [(name, os.path.join(SHARED, 'assets', *rel)) for name, rel in ATT_MODELS]
+    results = []
+    for name, path in models:
+        _, out = run([os.path.join(BUILD, 'bench_att'), path, '30'])
+        for line in out.strip().split('\n'):
+            r = json.loads(line)
+            r['input'] = name
+            results.append(r)
+    return results
+
+
+def print_att(results):
+    print('\nagainst AnimToTexture (Unreal, bone mode; its encoding written from its documented rules, bench/bench_att.c):'
+          '\nevery clip at 30 fps, the same rows; error = |skinned - the glTF\'s own skinning| over every vertex of every row,'
+          '\nmm per metre of the model\'s height')
+    print('%-7s %-27s %10s %9s %12s %11s' % ('model', 'encoding', 'bytes', 'vs u16', 'worst mm/m', 'mean mm/m'))
+    base = {r['input']: r['bytes'] for r in results if r['encoding'] == 'crowdbake qpos/u16'}
+    for r in results:
+        print('%-7s %-27s %10d %8.2fx %12.4f %11.4f' % (r['input'], r['encoding'], r['bytes'], r['bytes'] / base[r['input']],
+                                                      r['worst_mm_per_m'], r['mean_mm_per_m']))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--repeat', type=int, default=5)
@@ -540,6 +569,7 @@ def main():
     report['goals'] = goals(report['extra'], big_r, fox_r)
     report['crowd'] = crowd_bench(args.smoke)
     report['gl'] = gl_bench(args.smoke, args.gl_counts)
+    report['att'] = att_bench(args.smoke)
     if args.json:
         json.dump(report, sys.stdout, indent=2)
         print()
@@ -547,6 +577,7 @@ def main():
         print_table(report)
         print_crowd(report['crowd'])
         print_gl(report['gl'])
+        print_att(report['att'])
 
 
 if __name__ == '__main__':

@@ -8,10 +8,12 @@
 #include "crowdbake/gltf_mesh_write.h"
 #include "crowdbake/mesh.h"
 #include "cli.h"
+#include "mesh_skin.h"
 
 const char cmd_mesh_usage[] =
     "usage: crowdbake mesh MODEL -o OUT.glb [--palette-model MAIN] [--max-influences 1|2|4] [--quantize] [--batch K]\n"
-    "                      [--max-quantization-error MM_PER_M] [--fps N] [--skin NAME|INDEX] [--json] [-q] [-v]\n"
+    "                      [--max-quantization-error MM_PER_M] [--fps N] [--skin NAME|INDEX] [--vertex-id-uv N]\n"
+    "                      [--skin-texture FILE.cbskin] [--json] [-q] [-v]\n"
     "       crowdbake mesh CATALOG.toml --type NAME [--lod N] -o OUT.glb [options]\n\n"
     "Writes the skinned mesh as a palette runtime draws it, a .glb validated by the Khronos validator:\n"
     "  JOINTS_0 are palette bones: the mesh's joints remapped by name to the skin the palette is baked\n"
@@ -25,12 +27,18 @@ const char cmd_mesh_usage[] =
     "                      dequantization transform would change)\n"
     "  --batch K           K copies in one mesh with a per-copy attribute _INSTANCE_ID (SCALAR FLOAT, 0..K-1),\n"
     "                      for runtimes without instancing (CB_BATCH in runtimes/glsl/crowdbake_palette.glsl)\n"
+    "  --vertex-id-uv N    TEXCOORD_N = (vertex id, 0): each vertex's index over all parts, for engines whose\n"
+    "                      instanced meshes carry no skin and may reorder vertices on import (Unreal: UV channel\n"
+    "                      N, with full-precision UVs); channels below N the mesh lacks are written as zeros\n"
+    "  --skin-texture FILE.cbskin  the joints and weights by that vertex id, as a texture (runtimes/unreal/README.md)\n"
     "  --fps N             frame rate the error is measured at (default 30)\n"
     "Prints the extra vertex error against the model's own 4-influence skinning over every frame of every\n"
     "clip (mm per metre of height, worst vertex and clip), and the bytes of the vertex and index buffers.\n";
 
 typedef struct mesh_args {
     const char *input, *output, *palette_model, *type, *lod, *influences, *batch, *fps, *skin, *max_quant;
+    const char *vertex_id_uv, *skin_texture;
+    uint32_t vertex_id_set;
     bool quantize, json;
     cli_output out; /* -q: no summary line */
 } mesh_args;
@@ -74,6 +82,8 @@ static void print_result(const mesh_args *a, const cb_mesh *m, const cb_mesh_err
         cb_json_bool(&j, "quantized", m->quantized);
         cb_json_int(&j, "batch", m->batch);
         if (m->batch > 1) cb_json_string(&j, "instance_id_attribute", CB_INSTANCE_ID_ATTRIBUTE);
+        if (a->vertex_id_uv) cb_json_int(&j, "vertex_id_texcoord", a->vertex_id_set);
+        if (a->skin_texture) cb_json_string(&j, "skin_texture", a->skin_texture);
         cb_json_int(&j, "vertex_buffer_bytes", (long long)vb);
         cb_json_int(&j, "index_buffer_bytes", (long long)ib);
         cb_json_number(&j, "error", e->max);
@@ -98,7 +108,21 @@ static void print_result(const mesh_args *a, const cb_mesh *m, const cb_mesh_err
     bool normals = false;
     for (uint32_t i = 0; i < m->part_count; ++i) normals |= m->parts[i].normals_i8 != NULL;
     if (normals) printf(", normals within %.2f deg", m->normal_error_deg);
+    if (a->vertex_id_uv) printf("; vertex ids in TEXCOORD_%u", a->vertex_id_set);
+    if (a->skin_texture) printf("; joints and weights by vertex id in %s", a->skin_texture);
     printf("\n");
+}
+
+/* Writes the .glb, with --vertex-id-uv N's channel unless the model's own texture coordinates are there. */
+static cb_status write_glb(const mesh_args *a, const cb_mesh *mesh, const cb_model *pm, int32_t ps, const cb_mesh_error *e,
+                           cb_error *err)
+{
+    if (!a->vertex_id_uv) return cb_gltf_mesh_write(a->output, mesh, pm, ps, e, err);
+    for (uint32_t i = 0; i < mesh->part_count && a->vertex_id_set == 0; ++i)
+        if (mesh->parts[i].texcoords)
+            return cb_fail(err, CB_ERR_INPUT, "%s: TEXCOORD_0 holds the model's texture coordinates; put the vertex id in "
+                           "another channel (--vertex-id-uv 1)", a->input);
+    return cb_gltf_mesh_write_vertex_ids(a->output, mesh, pm, ps, e, a->vertex_id_set, err);
 }
 
 /* Loads the mesh's model and the palette's, the remap between their skins, and does the job. */
@@ -124,7 +148,8 @@ static int run(mesh_args *a, unsigned influences, unsigned batch, double fps, do
     cb_mesh_error e;
     double t0 = cli_seconds();
     if (!(s = cb_sampler_create(pm, ps, &err)) || cb_mesh_build_measured(s, mm, ms, &o, fps, max_quant, &mesh, &e, &err) ||
-        cb_gltf_mesh_write(a->output, &mesh, pm, ps, &e, &err))
+        write_glb(a, &mesh, pm, ps, &e, &err) ||
+        (a->skin_texture && cli_write_skin_texture(a->skin_texture, &mesh, &err)))
         goto done;
     cli_verbose(&a->out, "built, measured and wrote %s in %.3f s", a->output, cli_seconds() - t0);
     print_result(a, &mesh, &e, pm);
@@ -150,7 +175,8 @@ int cmd_mesh(int argc, char **argv)
         {"--lod", "N", &a.lod, NULL},                {"--max-influences", "N", &a.influences, NULL},
         {"--quantize", NULL, NULL, &a.quantize},     {"--batch", "K", &a.batch, NULL},
         {"--fps", "N", &a.fps, NULL},                {"--skin", "NAME|INDEX", &a.skin, NULL},
-        {"--json", NULL, NULL, &a.json},             {"--max-quantization-error", "MM_PER_M", &a.max_quant, NULL}};
+        {"--json", NULL, NULL, &a.json},             {"--max-quantization-error", "MM_PER_M", &a.max_quant, NULL},
+        {"--vertex-id-uv", "N", &a.vertex_id_uv, NULL}, {"--skin-texture", "FILE.cbskin", &a.skin_texture, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.input, 1, 1, &help);
     if (help) return fputs(cmd_mesh_usage, stdout), fputs(cli_output_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
@@ -166,6 +192,10 @@ int cmd_mesh(int argc, char **argv)
     if (a.max_quant && (!cli_parse_double(a.max_quant, &max_quant) || !(max_quant >= 0)))
         return cli_usage_error("mesh", "--max-quantization-error wants mm per metre of height (0 or more)");
     if (a.max_quant && !a.quantize) return cli_usage_error("mesh", "--max-quantization-error goes with --quantize");
+    if (a.vertex_id_uv && (!cli_parse_u32(a.vertex_id_uv, &a.vertex_id_set) || a.vertex_id_set > 7))
+        return cli_usage_error("mesh", "--vertex-id-uv wants a texture coordinate set from 0 to 7 (Unreal has 8 UV channels)");
+    if (a.skin_texture && !a.vertex_id_uv)
+        return cli_usage_error("mesh", "--skin-texture is read by vertex id: give --vertex-id-uv N too");
     const char *ext = strrchr(a.output, '.');
     if (!ext || strcmp(ext, ".glb") != 0) return cli_usage_error("mesh", "%s: the mesh is written as a .glb; name it OUT.glb", a.output);
     cb_catalog cat = {0};

@@ -20,7 +20,7 @@ _crowdbake_options()
     report) echo "--json --markdown --html --no-fail -j --target $output" ;;
     view) echo "--port --open --cache --model $output $limits" ;;
     mesh) echo "-o --output --palette-model --max-influences --quantize --batch --max-quantization-error --fps --skin
-                --json --type --lod $output $limits" ;;
+                --vertex-id-uv --skin-texture --json --type --lod $output $limits" ;;
     esac
 }
 

@@ -108,7 +108,23 @@ void add_skeleton(Writer &w, const cb_model *pm, int32_t skin_index)
     w.g.skins.push_back(s);
 }
 
-void add_part(Writer &w, const cb_mesh *m, const cb_mesh_part &p, tinygltf::Mesh &mesh)
+// TEXCOORD_n = (vertex id, 0) from `first_id` on, and zeros in the channels below n the part lacks
+// (glTF wants texture coordinate sets numbered without gaps).
+void add_vertex_id(Writer &w, uint32_t vertex_id_set, const cb_mesh_part &p, uint32_t first_id, tinygltf::Primitive &prim)
+{
+    size_t n = p.vertex_count;
+    std::vector<float> ids(n * 2, 0.0f), zeros(n * 2, 0.0f);
+    for (size_t v = 0; v < n; ++v) ids[v * 2] = (float)(first_id + v);
+    for (uint32_t set = 0; set <= vertex_id_set; ++set) {
+        std::string name = "TEXCOORD_" + std::to_string(set);
+        if (prim.attributes.count(name)) continue;
+        const std::vector<float> &data = set == vertex_id_set ? ids : zeros;
+        prim.attributes[name] = w.accessor(w.view(data.data(), n, 8, true), n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, false);
+    }
+}
+
+// vertex_id_set < 0: no vertex-id channel.
+void add_part(Writer &w, const cb_mesh *m, const cb_mesh_part &p, uint32_t first_id, int64_t vertex_id_set, tinygltf::Mesh &mesh)
 {
     tinygltf::Primitive prim;
     prim.mode = TINYGLTF_MODE_TRIANGLES;
@@ -147,6 +163,7 @@ void add_part(Writer &w, const cb_mesh *m, const cb_mesh_part &p, tinygltf::Mesh
     } else {
         prim.attributes["WEIGHTS_0"] = w.accessor(w.view(p.weights, n, 16, true), n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, false);
     }
+    if (vertex_id_set >= 0) add_vertex_id(w, (uint32_t)vertex_id_set, p, first_id, prim);
     if (p.instance_ids)
         prim.attributes[CB_INSTANCE_ID_ATTRIBUTE] =
             w.accessor(w.view(p.instance_ids, n, 4, true), n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, false);
@@ -161,13 +178,14 @@ void add_part(Writer &w, const cb_mesh *m, const cb_mesh_part &p, tinygltf::Mesh
     mesh.primitives.push_back(prim);
 }
 
-tinygltf::Value extras(const cb_mesh *m, const cb_mesh_error *e)
+tinygltf::Value extras(const cb_mesh *m, const cb_mesh_error *e, int64_t vertex_id_set)
 {
     tinygltf::Value::Object o;
     o["max_influences"] = tinygltf::Value((int)m->max_influences);
     o["quantized"] = tinygltf::Value(m->quantized);
     o["batch"] = tinygltf::Value((int)m->batch);
     if (m->batch > 1) o["instance_id_attribute"] = tinygltf::Value(std::string(CB_INSTANCE_ID_ATTRIBUTE));
+    if (vertex_id_set >= 0) o["vertex_id_texcoord"] = tinygltf::Value((int)vertex_id_set);
     o["palette_bones"] = tinygltf::Value((int)m->bone_count);
     if (e) {
         o["error_mm_per_m"] = tinygltf::Value(e->max_mm_per_m);
@@ -182,18 +200,22 @@ tinygltf::Value extras(const cb_mesh *m, const cb_mesh_error *e)
 
 } // namespace
 
-extern "C" cb_status cb_gltf_mesh_write(const char *path, const cb_mesh *mesh, const cb_model *palette_model,
-                                        int32_t palette_skin, const cb_mesh_error *error, cb_error *err)
+static cb_status write_mesh(const char *path, const cb_mesh *mesh, const cb_model *palette_model, int32_t palette_skin,
+                     const cb_mesh_error *error, int64_t vertex_id_set, cb_error *err)
 {
     Writer w;
     w.g.asset.version = "2.0";
     w.g.asset.generator = "crowdbake " CROWDBAKE_VERSION;
-    w.g.asset.extras = extras(mesh, error);
+    w.g.asset.extras = extras(mesh, error, vertex_id_set);
     w.g.buffers.resize(1);
     add_skeleton(w, palette_model, palette_skin);
     tinygltf::Mesh m;
     m.name = "crowd_mesh";
-    for (uint32_t i = 0; i < mesh->part_count; ++i) add_part(w, mesh, mesh->parts[i], m);
+    uint32_t first_id = 0;
+    for (uint32_t i = 0; i < mesh->part_count; ++i) {
+        add_part(w, mesh, mesh->parts[i], first_id, vertex_id_set, m);
+        first_id += mesh->parts[i].vertex_count;
+    }
     w.g.meshes.push_back(m);
     tinygltf::Node node;
     node.name = "crowd_mesh";
@@ -222,4 +244,17 @@ extern "C" cb_status cb_gltf_mesh_write(const char *path, const cb_mesh *mesh, c
         return err->status;
     }
     return CB_OK;
+}
+
+extern "C" cb_status cb_gltf_mesh_write(const char *path, const cb_mesh *mesh, const cb_model *palette_model,
+                                        int32_t palette_skin, const cb_mesh_error *error, cb_error *err)
+{
+    return write_mesh(path, mesh, palette_model, palette_skin, error, -1, err);
+}
+
+extern "C" cb_status cb_gltf_mesh_write_vertex_ids(const char *path, const cb_mesh *mesh, const cb_model *palette_model,
+                                                   int32_t palette_skin, const cb_mesh_error *error, uint32_t vertex_id_set,
+                                                   cb_error *err)
+{
+    return write_mesh(path, mesh, palette_model, palette_skin, error, vertex_id_set, err);
 }

@@ -479,7 +479,7 @@ int cbpal_get_clip(const cbpal_file *f, uint32_t i, cbpal_clip *out)
     out->fps = cbpal__f32(c + 16);
     out->duration = cbpal__f32(c + 20);
     out->start = cbpal__f32(c + 24);
-    out->flags = cbpal__u32(c + 28) | (f->header.flags & CBPAL_FLAG_FITTED_ROWS ? CBPAL_CLIP_FITTED : 0u);
+    out->flags = cbpal__u32(c + 28) | (f->header.flags & CBPAL_FLAG_FITTED_ROWS ? (uint32_t)CBPAL_CLIP_FITTED : 0u);
     for (int k = 0; k < 3; ++k) {
         out->root_velocity[k] = cbpal__f32(c + 32 + 4 * k);
         out->bounds_min[k] = cbpal__f32(c + 44 + 4 * k);

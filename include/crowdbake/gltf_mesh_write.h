@@ -24,6 +24,16 @@ extern "C" {
 CROWDBAKE_API cb_status cb_gltf_mesh_write(const char *path, const cb_mesh *mesh, const cb_model *palette_model,
                                            int32_t palette_skin, const cb_mesh_error *error, cb_error *err);
 
+/* The same, plus TEXCOORD_<vertex_id_set> = (vertex id, 0) in every primitive: each vertex's index over
+ * all parts, exact in a float, for engines that reorder vertices on import and carry no skin on
+ * instanced meshes (Unreal's static meshes). Sets below it a primitive lacks are written as zeros
+ * (glTF numbers sets without gaps); the caller keeps the model's own TEXCOORD_0 out of the way
+ * (vertex_id_set >= 1 when the mesh has texture coordinates). asset.extras.crowdbake records
+ * vertex_id_texcoord. (API 1.4) */
+CROWDBAKE_API cb_status cb_gltf_mesh_write_vertex_ids(const char *path, const cb_mesh *mesh, const cb_model *palette_model,
+                                                      int32_t palette_skin, const cb_mesh_error *error, uint32_t vertex_id_set,
+                                                      cb_error *err);
+
 #ifdef __cplusplus
 }
 #endif

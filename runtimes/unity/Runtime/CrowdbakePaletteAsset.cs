@@ -1,0 +1,127 @@
+// CrowdbakePaletteAsset.cs - an imported .pal: the palette texture and the bind-position texture
+// the shader reads, the numbers of its header the shader needs, and the file itself (the clip table,
+// and the rows BoneMatrixAt decodes on the CPU for sockets). CrowdbakePalImporter makes it.
+using UnityEngine;
+
+namespace Crowdbake
+{
+    public sealed class CrowdbakePaletteAsset : ScriptableObject
+    {
+        public Texture2D palette;       // RGBA32F, RGBA16F or RGBA64 (u16 as UNORM16: the shader's CB_U16_UNORM)
+        public Texture2D bindPositions; // RGBA32F, bones x 2: bind positions, then position offsets
+        public int layout, precision, rowTexels, rowsPerBlock;
+        public bool positionsRelative;
+        public Vector3 boundsMin, boundsMax; // u16: the box positions are quantized in
+        public float linearRange;
+        public Bounds animatedBounds;        // every clip's skinned mesh at every baked row, model space
+        public string[] clipNames;
+        [SerializeField, HideInInspector] byte[] file; // the .pal as it was imported
+
+        PalFile pal;
+
+        // The reader over the imported bytes (made once, on first use).
+        public PalFile Pal
+        {
+            get {
+                if (pal == null) pal = PalFile.Read(file, name, false);
+                return pal;
+            }
+        }
+
+        // The shader keywords of this palette's encoding (the HLSL runtime's defines).
+        public string[] Keywords
+        {
+            get {
+                string[] layouts = { "CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS" };
+                string[] precisions = { "CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16" };
+                return positionsRelative ? new[] { layouts[layout], precisions[precision], "CB_POSITIONS_RELATIVE" }
+                                         : new[] { layouts[layout], precisions[precision] };
+            }
+        }
+
+        // Reads a .pal file's bytes into a new asset (throws PalException with a one-line message).
+        public static CrowdbakePaletteAsset FromBytes(byte[] bytes, string assetName)
+        {
+            PalFile pal = PalFile.Read(bytes, assetName, true);
+            PalHeader h = pal.Header;
+            var asset = CreateInstance<CrowdbakePaletteAsset>();
+            asset.name = assetName;
+            asset.file = bytes;
+            asset.pal = pal;
+            asset.layout = (int)h.Layout;
+            asset.precision = (int)h.Precision;
+            asset.rowTexels = (int)h.RowTexels;
+            asset.rowsPerBlock = (int)h.Height;
+            asset.positionsRelative = (h.Flags & PalFile.FlagPositionsRelative) != 0;
+            asset.boundsMin = new Vector3(h.BoundsMin[0], h.BoundsMin[1], h.BoundsMin[2]);
+            asset.boundsMax = new Vector3(h.BoundsMax[0], h.BoundsMax[1], h.BoundsMax[2]);
+            asset.linearRange = h.LinearRange;
+            asset.clipNames = new string[pal.Clips.Length];
+            for (int i = 0; i < pal.Clips.Length; ++i) {
+                PalClip c = pal.Clips[i];
+                asset.clipNames[i] = c.Name;
+                var box = new Bounds();
+                box.SetMinMax(new Vector3(c.BoundsMin[0], c.BoundsMin[1], c.BoundsMin[2]),
+                              new Vector3(c.BoundsMax[0], c.BoundsMax[1], c.BoundsMax[2]));
+                if (i == 0) asset.animatedBounds = box;
+                else asset.animatedBounds.Encapsulate(box);
+            }
+            asset.palette = PaletteTexture(pal, assetName);
+            asset.bindPositions = BindTexture(pal, assetName);
+            return asset;
+        }
+
+        // The payload as it is in the file: no conversion, nearest texels, no mips, linear.
+        static Texture2D PaletteTexture(PalFile pal, string assetName)
+        {
+            TextureFormat[] formats = { TextureFormat.RGBAFloat, TextureFormat.RGBAHalf, TextureFormat.RGBA64 };
+            var t = new Texture2D((int)pal.Header.Width, (int)pal.Header.Height, formats[pal.Header.Precision], false, true);
+            t.name = assetName + " palette";
+            t.filterMode = FilterMode.Point;
+            t.wrapMode = TextureWrapMode.Clamp;
+            t.SetPixelData(pal.Data, 0, pal.TexelOffset);
+            t.Apply(false, true);
+            return t;
+        }
+
+        static Texture2D BindTexture(PalFile pal, string assetName)
+        {
+            int bones = pal.Bones.Length;
+            var texels = new float[bones * 8];
+            for (int j = 0; j < bones; ++j)
+                for (int k = 0; k < 3; ++k) {
+                    texels[j * 4 + k] = pal.Bones[j].BindPosition[k];
+                    texels[(bones + j) * 4 + k] = pal.Bones[j].PositionOffset[k];
+                }
+            var t = new Texture2D(bones, 2, TextureFormat.RGBAFloat, false, true);
+            t.name = assetName + " bind positions";
+            t.filterMode = FilterMode.Point;
+            t.wrapMode = TextureWrapMode.Clamp;
+            t.SetPixelData(texels, 0);
+            t.Apply(false, true);
+            return t;
+        }
+
+        // Binds the textures and numbers to a draw's property block.
+        public void SetProperties(MaterialPropertyBlock block)
+        {
+            block.SetTexture("cb_palette", palette);
+            block.SetTexture("cb_bind_positions", bindPositions);
+            block.SetFloat("cb_row_texels", rowTexels);
+            block.SetFloat("cb_rows_per_block", rowsPerBlock);
+            block.SetVector("cb_bounds_min", boundsMin);
+            block.SetVector("cb_bounds_max", boundsMax);
+            block.SetFloat("cb_linear_range", linearRange);
+        }
+
+        // A copy of `material` with this palette's keywords on (the shader's multi_compile sets).
+        public Material MaterialFor(Material material)
+        {
+            var m = new Material(material);
+            m.name = material.name + " (" + name + ")";
+            foreach (string k in Keywords) m.EnableKeyword(k);
+            m.enableInstancing = true;
+            return m;
+        }
+    }
+}

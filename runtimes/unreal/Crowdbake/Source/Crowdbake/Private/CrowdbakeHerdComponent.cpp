@@ -1,0 +1,143 @@
+// CrowdbakeHerdComponent.cpp - see CrowdbakeHerdComponent.h. The palette is in glTF space (metres,
+// +Y up); Crowdbake.ush converts with CROWDBAKE_GLTF_FROM_UNREAL (x, z, y) / 100 by default, and
+// BoneMatrixAt does the same here.
+#include "CrowdbakeHerdComponent.h"
+
+#include "CrowdbakePalette.h"
+#include "Dom/JsonObject.h"
+#include "Engine/StaticMesh.h"
+#include "Engine/World.h"
+#include "Materials/MaterialInstanceDynamic.h"
+#include "Misc/FileHelper.h"
+#include "Serialization/JsonReader.h"
+#include "Serialization/JsonSerializer.h"
+
+namespace
+{
+// glTF (x, y, z) in metres -> Unreal (100 x, 100 z, 100 y): the default of Crowdbake.ush.
+const FMatrix GltfToUnreal(FPlane(100, 0, 0, 0), FPlane(0, 0, 100, 0), FPlane(0, 100, 0, 0), FPlane(0, 0, 0, 1));
+} // namespace
+
+UCrowdbakeHerdComponent::UCrowdbakeHerdComponent()
+{
+    NumCustomDataFloats = crowdbake::HerdLogic::kCustomDataFloats;
+}
+
+double UCrowdbakeHerdComponent::Now() const
+{
+    const UWorld *World = GetWorld();
+    return World ? World->GetTimeSeconds() : 0.0; // the material's Time node: the world's game time
+}
+
+void UCrowdbakeHerdComponent::LoadStates(std::vector<crowdbake::HerdStateInfo> &States, FString &DefaultState) const
+{
+    FString Text;
+    TSharedPtr<FJsonObject> Doc;
+    if (Roster.FilePath.IsEmpty() || !FFileHelper::LoadFileToString(Text, *Roster.FilePath) ||
+        !FJsonSerializer::Deserialize(TJsonReaderFactory<>::Create(Text), Doc) || !Doc.IsValid())
+        return;
+    const TSharedPtr<FJsonObject> *Types, *TypeObject, *StateMap;
+    if (!Doc->TryGetObjectField(TEXT("types"), Types) || !(*Types)->TryGetObjectField(Type, TypeObject) ||
+        !(*TypeObject)->TryGetObjectField(TEXT("states"), StateMap))
+        return;
+    (*TypeObject)->TryGetStringField(TEXT("default_state"), DefaultState);
+    for (const auto &Entry : (*StateMap)->Values) {
+        const TSharedPtr<FJsonObject> State = Entry.Value->AsObject();
+        const TSharedPtr<FJsonObject> *Inst;
+        if (!State.IsValid() || !State->TryGetObjectField(TEXT("instance"), Inst)) continue;
+        crowdbake::HerdStateInfo Info;
+        Info.name = TCHAR_TO_UTF8(*Entry.Key);
+        Info.first_row = (int32_t)(*Inst)->GetNumberField(TEXT("first_row"));
+        Info.frame_count = (int32_t)(*Inst)->GetNumberField(TEXT("frame_count"));
+        Info.rate = (float)(*Inst)->GetNumberField(TEXT("rate"));
+        Info.rate_per_speed = (float)(*Inst)->GetNumberField(TEXT("rate_per_speed"));
+        Info.golden_ratio_phase = (*Inst)->GetStringField(TEXT("phase")) == TEXT("golden_ratio");
+        States.push_back(Info);
+    }
+}
+
+void UCrowdbakeHerdComponent::SpawnHerd(int32 Count)
+{
+    if (!Palette) return;
+    std::vector<crowdbake::HerdStateInfo> States;
+    FString DefaultState;
+    LoadStates(States, DefaultState);
+    if (States.empty()) {
+        crowdbake::PalContents Pal;
+        std::string Error;
+        if (!crowdbake::ReadPal(Palette->PalBytes.GetData(), (size_t)Palette->PalBytes.Num(), "palette", Pal, Error)) return;
+        States = crowdbake::StatesFromClips(Pal);
+    }
+    Logic = MakeUnique<crowdbake::HerdLogic>(States, Count, FadeSeconds);
+    ClearInstances();
+    SetNumCustomDataFloats(crowdbake::HerdLogic::kCustomDataFloats);
+    for (int32 I = 0; I < Count; ++I) AddInstance(FTransform::Identity);
+    for (int32 I = 0; I < Count; ++I) {
+        if (!DefaultState.IsEmpty()) Logic->SetState(I, TCHAR_TO_UTF8(*DefaultState), Now(), 0.f);
+        WriteCustomData(I);
+    }
+    // Culling: the instances' bounds must hold every baked pose, which reaches past the rest pose.
+    const FBox3f Anim = Palette->AnimatedBounds;
+    const FVector Size = GltfToUnreal.TransformVector(FVector(Anim.GetSize())).GetAbs();
+    const FVector Rest = GetStaticMesh() ? GetStaticMesh()->GetBounds().BoxExtent * 2.0 : Size;
+    BoundsScale = FMath::Max(1.f, (float)(Size.GetMax() / FMath::Max(Rest.GetMin(), 1.0)));
+    ApplyMaterial();
+}
+
+void UCrowdbakeHerdComponent::ApplyMaterial()
+{
+    if (!CrowdMaterial || !Palette) return;
+    Material = UMaterialInstanceDynamic::Create(CrowdMaterial, this);
+    Material->SetTextureParameterValue(TEXT("Palette"), Palette->PaletteTexture);
+    Material->SetTextureParameterValue(TEXT("BindPositions"), Palette->BindPositionsTexture);
+    Material->SetTextureParameterValue(TEXT("Skin"), Palette->SkinTexture);
+    Material->SetVectorParameterValue(TEXT("Header"), FLinearColor((float)Palette->RowTexels, (float)Palette->RowsPerBlock, Palette->LinearRange, 0.f));
+    Material->SetVectorParameterValue(TEXT("BoundsMin"), FLinearColor(Palette->BoundsMin.X, Palette->BoundsMin.Y, Palette->BoundsMin.Z, 0.f));
+    Material->SetVectorParameterValue(TEXT("BoundsMax"), FLinearColor(Palette->BoundsMax.X, Palette->BoundsMax.Y, Palette->BoundsMax.Z, 0.f));
+    SetMaterial(0, Material);
+}
+
+void UCrowdbakeHerdComponent::WriteCustomData(int32 Index)
+{
+    const float *Data = Logic->CustomData(Index);
+    SetCustomData(Index, TArray<float>(Data, crowdbake::HerdLogic::kCustomDataFloats), true);
+}
+
+bool UCrowdbakeHerdComponent::SetState(int32 Index, const FString &State, float Fade)
+{
+    if (!Logic || !Logic->SetState(Index, TCHAR_TO_UTF8(*State), Now(), Fade)) {
+        UE_LOG(LogTemp, Warning, TEXT("CrowdbakeHerd %s: no state '%s' (have %s)"), *GetName(), *State,
+               Logic ? UTF8_TO_TCHAR(Logic->StateNames().c_str()) : TEXT("none: SpawnHerd first"));
+        return false;
+    }
+    WriteCustomData(Index);
+    return true;
+}
+
+void UCrowdbakeHerdComponent::SetSpeed(int32 Index, float Speed)
+{
+    if (!Logic) return;
+    Logic->SetSpeed(Index, Speed, Now());
+    WriteCustomData(Index);
+}
+
+void UCrowdbakeHerdComponent::Place(int32 Index, FVector Location, float YawDegrees, float Scale)
+{
+    UpdateInstanceTransform(Index, FTransform(FRotator(0, YawDegrees, 0), Location, FVector(Scale)), false, true);
+    if (!Logic) return;
+    Logic->SetScale(Index, Scale, Now());
+    WriteCustomData(Index);
+}
+
+FMatrix UCrowdbakeHerdComponent::BoneMatrixAt(int32 Index, int32 Bone) const
+{
+    float M[16];
+    if (!Logic || !Palette || Bone < 0 ||
+        !Logic->BoneMatrixAt(Palette->PalBytes.GetData(), (size_t)Palette->PalBytes.Num(), Index, (uint32_t)Bone, Now(), M))
+        return FMatrix::Identity;
+    FMatrix Gltf;
+    for (int K = 0; K < 16; ++K) Gltf.M[K / 4][K % 4] = M[K]; // Unreal's row k is the glTF matrix's column k
+    FTransform Instance;
+    GetInstanceTransform(Index, Instance, false);
+    return GltfToUnreal.Inverse() * Gltf * GltfToUnreal * Instance.ToMatrixWithScale();
+}

@@ -1,0 +1,110 @@
+// CrowdbakeHerdLogic.cpp - see CrowdbakeHerdLogic.h.
+#include "CrowdbakeHerdLogic.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace crowdbake
+{
+std::vector<HerdStateInfo> StatesFromClips(const PalContents &pal)
+{
+    std::vector<HerdStateInfo> states;
+    for (const PalClipInfo &c : pal.clips) {
+        HerdStateInfo s;
+        s.name = c.name;
+        s.first_row = (int32_t)c.first_row;
+        s.frame_count = c.loops ? (int32_t)c.frames : -(int32_t)c.frames;
+        s.rate = c.fps;
+        s.golden_ratio_phase = c.loops;
+        states.push_back(s);
+    }
+    return states;
+}
+
+HerdLogic::HerdLogic(std::vector<HerdStateInfo> states, int count, float default_fade)
+    : states_(std::move(states)), count_(std::max(count, 0)), default_fade_(default_fade),
+      data_((size_t)count_ * kCustomDataFloats, 0.0f), speed_((size_t)count_, 0.0f), scale_((size_t)count_, 1.0f),
+      state_((size_t)count_)
+{
+    for (int i = 0; i < count_ && !states_.empty(); ++i) SetState(i, states_[0].name, 0.0, 0.0f);
+}
+
+const HerdStateInfo *HerdLogic::Find(const std::string &name) const
+{
+    for (const HerdStateInfo &s : states_)
+        if (s.name == name) return &s;
+    return nullptr;
+}
+
+std::string HerdLogic::StateNames() const
+{
+    std::string names;
+    for (const HerdStateInfo &s : states_) names += (names.empty() ? "" : ", ") + s.name;
+    return names;
+}
+
+// docs/roster.md's four numbers: moving at `speed` model units/s, index i, a one-shot started at `start`.
+void HerdLogic::InstanceNumbers(const HerdStateInfo &s, double speed, int i, double start, float out[4]) const
+{
+    double rate = s.rate_per_speed > 0 ? s.rate_per_speed * speed : s.rate;
+    double frames = std::fabs((double)s.frame_count), golden = i * 0.6180339887;
+    out[0] = (float)s.first_row;
+    out[1] = (float)s.frame_count;
+    out[2] = (float)rate;
+    out[3] = (float)(s.golden_ratio_phase ? golden - std::floor(golden) : -start * rate / frames);
+}
+
+bool HerdLogic::SetState(int i, const std::string &state, double now, float fade, float speed, float phase)
+{
+    const HerdStateInfo *s = Find(state);
+    if (!s || i < 0 || i >= count_) return false;
+    if (speed < 0) speed = speed_[(size_t)i];
+    if (fade < 0) fade = default_fade_;
+    float *d = &data_[(size_t)i * kCustomDataFloats];
+    float current[4];
+    std::memcpy(current, d, sizeof current);
+    InstanceNumbers(*s, speed / scale_[(size_t)i], i, now, d); // world speed / scale: the model's own speed
+    if (phase >= 0) d[3] = phase;
+    std::memcpy(d + 4, fade > 0 && current[1] != 0 ? current : d, sizeof current);
+    d[8] = (float)now;
+    d[9] = fade;
+    state_[(size_t)i] = state;
+    speed_[(size_t)i] = speed;
+    return true;
+}
+
+void HerdLogic::SetSpeed(int i, float speed, double now)
+{
+    const float *d = CustomData(i);
+    double frames = std::fabs((double)d[1]), rows = now * d[2] + d[3] * frames;
+    float next[4];
+    InstanceNumbers(*Find(state_[(size_t)i]), speed / scale_[(size_t)i], i, now, next);
+    double p = (rows - now * next[2]) / frames;
+    SetState(i, state_[(size_t)i], now, 0.0f, speed, (float)(p - std::floor(p)));
+}
+
+void HerdLogic::SetScale(int i, float scale, double now)
+{
+    float was = scale_[(size_t)i];
+    scale_[(size_t)i] = scale;
+    if (was != scale && Find(state_[(size_t)i])->rate_per_speed > 0) SetSpeed(i, speed_[(size_t)i], now);
+}
+
+float HerdLogic::FadeWeight(int i, double now) const
+{
+    const float *d = CustomData(i);
+    return d[9] > 0 ? (float)std::min(std::max((now - d[8]) / d[9], 0.0), 1.0) : 1.0f;
+}
+
+bool HerdLogic::BoneMatrixAt(const uint8_t *pal, size_t size, int i, uint32_t bone, double now, float out[16]) const
+{
+    const float *d = CustomData(i);
+    if (!InstanceBoneMatrix(pal, size, d, now, bone, out)) return false;
+    float fade = FadeWeight(i, now), from[16];
+    if (fade >= 1) return true;
+    if (!InstanceBoneMatrix(pal, size, d + 4, now, bone, from)) return false;
+    for (int k = 0; k < 16; ++k) out[k] = from[k] + (out[k] - from[k]) * fade; // mixing positions = mixing matrices
+    return true;
+}
+} // namespace crowdbake

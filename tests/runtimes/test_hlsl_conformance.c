@@ -1,0 +1,140 @@
+/* test_hlsl_conformance.c - the runtime conformance cases (conformance.h: the one set every
+ * runtime's test reads) through the HLSL runtime (runtimes/hlsl/crowdbake_palette.hlsl), compiled by
+ * glslang's HLSL front end and run as a compute shader on Mesa's lavapipe: every case's instances,
+ * cross-fades included, skinned by cb_skin_position_crossfade, against the C runtime's expected
+ * positions within 1e-5 of the model's height; every broken case it can express (bones transposed,
+ * rows off by one, a shader line broken) misses by far. The bone-pass cases are the web runtime's;
+ * test_hlsl_vulkan.c runs the HLSL bone pass. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include "runtimes/conformance.h"
+#include "runtimes/hlsl_harness.h"
+
+#define TMP TEST_TMP "/hlsl-conformance"
+#define LIBRARY "runtimes/hlsl/crowdbake_palette.hlsl"
+
+static vkc_context vk;
+static bool have_device;
+
+static int setup(void **state)
+{
+    (void)state;
+    char why[256];
+    have_device = vkc_init(&vk, why, sizeof why);
+    if (have_device) printf("  Vulkan on %s\n", vk.name);
+    else printf("  SKIPPED: %s: the HLSL runtime cannot be run here\n", why);
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    if (have_device) vkc_free_context(&vk);
+    return 0;
+}
+
+/* The globals form, bound where the harness puts them; one invocation per (instance, vertex). */
+static char *case_source(const cb_palette *p, const char *library)
+{
+    static char src[1 << 17];
+    snprintf(src, sizeof src,
+             "#define %s\n#define %s\n%s#define CB_TEXTURES_DECLARED\n#define CB_HEADER_DECLARED\n"
+             "[[vk::binding(0)]] Texture2D<%s> cb_palette;\n"
+             "[[vk::binding(1)]] Texture2D<float4> cb_bind_positions;\n"
+             "[[vk::binding(2)]] cbuffer cb_test_header { " HEADER_CBUFFER " };\n%s\n" HARNESS_BUFFERS
+             "struct cb_conf_instance { float4 clip; float4 from_clip; float4 fade_time; };\n"
+             "[[vk::binding(3)]] StructuredBuffer<cb_test_vertex> cb_vertices;\n"
+             "[[vk::binding(4)]] StructuredBuffer<cb_conf_instance> cb_instances;\n"
+             "[[vk::binding(5)]] RWStructuredBuffer<float4> cb_skinned;\n"
+             "[numthreads(64, 1, 1)]\n"
+             "void main(uint3 id : SV_DispatchThreadID)\n"
+             "{\n"
+             "    uint s = id.x / cb_vertex_count, i = id.x - s * cb_vertex_count;\n"
+             "    if (s >= cb_sample_count) return;\n"
+             "    cb_test_vertex v = cb_vertices[i];\n"
+             "    cb_conf_instance k = cb_instances[s];\n"
+             "    float time = k.fade_time.z;\n"
+             "    float fade = k.fade_time.y > 0.0 ? saturate((time - k.fade_time.x) / k.fade_time.y) : 1.0;\n"
+             "    cb_skinned[id.x] = float4(cb_skin_position_crossfade(v.position.xyz, v.joints, v.weights, k.from_clip,\n"
+             "                                                          k.clip, fade, time), 1.0);\n"
+             "}\n",
+             layout_define[p->layout], precision_define[p->precision],
+             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "",
+             p->precision == CB_PRECISION_U16 ? "uint4" : "float4", library);
+    return src;
+}
+
+/* Every instance of every group of a case: the skinned positions, in the expected file's order. */
+static float *gpu_case(const conformance *c, const conf_case *k, const char *library)
+{
+    const conf_palette *p = &c->palettes[k->palette];
+    const cb_primitive *prim = &p->model->primitives[0];
+    size_t verts = prim->vertex_count, total = conf_positions(c, k), n = total / verts, at = 0;
+    float *inst = calloc(n * 12, sizeof(float));
+    for (int t = 0; t < CONF_TIMES; ++t)
+        for (uint32_t cl = 0; cl < p->view.clip_count; ++cl)
+            for (int i = 0; i < CONF_PER_CLIP; ++i, ++at) {
+                float v[16];
+                conf_instance(&p->view.clips[cl], conf_times[t], i, k->row_offset, v);
+                memcpy(inst + at * 12, v + 4, 8 * sizeof(float)); /* the clip, the clip it fades from */
+                inst[at * 12 + 8] = v[12], inst[at * 12 + 9] = v[13], inst[at * 12 + 10] = (float)conf_times[t];
+            }
+    cb_palette view = p->view; /* the view leaves the texels in the file */
+    view.texels = (void *)p->pal.texels;
+    size_t spv_bytes;
+    char name[64];
+    snprintf(name, sizeof name, "hlsl_conformance_%s", k->name);
+    uint32_t *spv = compile_hlsl(case_source(&view, library), name, "", &spv_bytes);
+    header_block h = header_of(&view, (uint32_t)verts, (uint32_t)n);
+    vkc_resource r[6] = {upload_palette(&vk, &view, false, k->transpose), upload_bind_positions(&vk, &view),
+                         vkc_buffer(&vk, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, &h, sizeof h), upload_vertices(&vk, prim),
+                         vkc_buffer(&vk, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, inst, n * 12 * sizeof(float)),
+                         vkc_buffer(&vk, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, NULL, total * 16)};
+    vkc_pipeline pipe = vkc_compute(&vk, spv, spv_bytes, r, 6);
+    VkCommandBuffer cmd = vkc_begin(&vk);
+    vkc_dispatch(cmd, &pipe, (uint32_t)((total + 63) / 64));
+    vkc_submit(&vk, cmd);
+    float *out4 = malloc(total * 16), *out = malloc(total * 12);
+    vkc_read(&vk, &r[5], out4);
+    for (size_t i = 0; i < total; ++i) memcpy(out + i * 3, out4 + i * 4, 12);
+    vkc_free_pipeline(&vk, &pipe);
+    for (int i = 0; i < 6; ++i) vkc_free(&vk, &r[i]);
+    free(spv), free(inst), free(out4);
+    return out;
+}
+
+static void test_conformance_cases(void **state)
+{
+    (void)state;
+    if (!have_device) skip();
+    conformance conf;
+    conformance_make(&conf, TMP);
+    char *lib = read_whole_file(LIBRARY, NULL);
+    int ran = 0, caught = 0;
+    for (int i = 0; i < conf.case_count; ++i) {
+        const conf_case *k = &conf.cases[i];
+        if (k->bone_pass) continue;
+        char *source = k->glsl_marker ? break_shader(lib, k->glsl_marker, k->glsl_line) : lib;
+        float *got = gpu_case(&conf, k, source);
+        double units, ratio = conformance_compare(&conf, k, got, &units);
+        printf("  %-26s %7zu positions: GPU vs C runtime %.2g (%.2f of the tolerance)\n", k->name, conf_positions(&conf, k),
+               units, ratio);
+        if (k->broken) assert_true(ratio > 10), ++caught;
+        else assert_true(ratio <= 1);
+        ++ran;
+        free(got);
+        if (source != lib) free(source);
+    }
+    assert_true(ran >= 15 && caught >= 4);
+    free(lib);
+    conformance_free(&conf);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_conformance_cases),
+    };
+    return cmocka_run_group_tests_name("hlsl_conformance", tests, setup, teardown);
+}

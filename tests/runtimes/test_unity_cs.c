@@ -1,0 +1,432 @@
+/* test_unity_cs.c - the Unity package's C# (runtimes/unity), proven without the Unity Editor: its
+ * engine-free core compiles with Debian's mcs and runs under mono, and what it reads equals the C
+ * reader (include/crowdbake_pal.h) on Fox and Cow in every layout x precision, and Python's json on
+ * the Cow roster; its herd's matrices, cross-fades, speed changes and footsteps equal what the C
+ * reader gives for the same instance numbers; the Unity-facing code compiles against stubs of the
+ * Unity API it calls (tests/runtimes/unity/stubs, each signature as Unity documents it). */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#include <math.h>
+
+#include "crowdbake_pal.h"
+
+#define TMP TEST_TMP "/unity_cs"
+#define CHECK_EXE TMP "/CrowdbakeCheck.exe"
+#define PKG "runtimes/unity"
+
+static void run_or_fail(const char *cmd)
+{
+    static char log[16384];
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s:\n%s", cmd, log);
+}
+
+/* mcs and mono: DEB_PACKAGES installs them (mono-mcs, mono-runtime). */
+static void build_check(void)
+{
+    static int built;
+    if (built) return;
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd,
+             "mkdir -p %s && mcs -warnaserror -nologo -out:%s tests/runtimes/unity/CrowdbakeCheck.cs %s/Runtime/Core/*.cs 2>&1",
+             TMP, CHECK_EXE, PKG);
+    run_or_fail(cmd);
+    built = 1;
+}
+
+static void check_close(const char *what, double got, double want, double tol, double *worst)
+{
+    double d = fabs(got - want) / fmax(1.0, fabs(want));
+    if (d > *worst) *worst = d;
+    if (!(d <= tol)) fail_msg("%s: C# %.9g, C %.9g (relative difference %.3g > %.3g)", what, got, want, d, tol);
+}
+
+/* mono CrowdbakeCheck.exe ARGS > OUT */
+static FILE *run_check(const char *args, const char *out)
+{
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "mono %s %s > %s 2>&1", CHECK_EXE, args, out);
+    run_or_fail(cmd);
+    FILE *f = fopen(out, "r");
+    assert_non_null(f);
+    return f;
+}
+
+/* Header, clips, bones and every bone's matrix at 11 times of every clip: C# against cbpal. */
+static double compare_pal(const char *pal_path, unsigned *matrices)
+{
+    cbpal_file pal;
+    char err[256], args[1024], line[8192];
+    if (cbpal_open(pal_path, CBPAL_VERIFY_CHECKSUM, &pal, err, sizeof err)) fail_msg("%s", err);
+    snprintf(args, sizeof args, "pal %s", pal_path);
+    FILE *f = run_check(args, TMP "/pal.txt");
+    double worst = 0;
+    unsigned header = 0, clips = 0, bones = 0;
+    while (fgets(line, sizeof line, f)) {
+        if (line[0] == 'H') {
+            unsigned v, fl, lay, prec, bc, rows, w, h, blocks, cc;
+            unsigned long long sum;
+            float fps, range, maxe, height, vis;
+            assert_int_equal(sscanf(line, "H %u %u %u %u %u %u %u %u %u %u %f %f %f %f %f %llu", &v, &fl, &lay, &prec, &bc, &rows, &w,
+                                    &h, &blocks, &cc, &fps, &range, &maxe, &height, &vis, &sum), 16);
+            const cbpal_header *x = &pal.header;
+            assert_true(v == x->version && fl == x->flags && lay == x->layout && prec == x->precision && bc == x->bone_count &&
+                        rows == x->rows && w == x->width && h == x->height && blocks == x->blocks && cc == x->clip_count);
+            assert_true(fps == x->fps && range == x->linear_range && maxe == x->max_error && height == x->model_height &&
+                        vis == x->visible_error && sum == x->checksum);
+            ++header;
+        } else if (line[0] == 'C') {
+            unsigned i, first, frames, flags;
+            float fps, dur, start, lo, hi;
+            cbpal_clip c;
+            assert_int_equal(sscanf(line, "C %u %u %u %u %f %f %f %f %f", &i, &first, &frames, &flags, &fps, &dur, &start, &lo, &hi), 9);
+            assert_int_equal(cbpal_get_clip(&pal, i, &c), 0);
+            assert_true(first == c.first_row && frames == c.frames && flags == c.flags && fps == c.fps && dur == c.duration &&
+                        start == c.start && lo == c.bounds_min[1] && hi == c.bounds_max[1]);
+            ++clips;
+        } else if (line[0] == 'B') {
+            unsigned j;
+            int parent;
+            float b[6];
+            cbpal_bone bone;
+            assert_int_equal(sscanf(line, "B %u %d %f %f %f %f %f %f", &j, &parent, &b[0], &b[1], &b[2], &b[3], &b[4], &b[5]), 8);
+            assert_int_equal(cbpal_get_bone(&pal, j, &bone), 0);
+            assert_int_equal(parent, bone.parent);
+            for (int k = 0; k < 3; ++k) assert_true(b[k] == bone.bind_position[k] && b[3 + k] == bone.position_offset[k]);
+            ++bones;
+        } else if (line[0] == 'M') {
+            unsigned clip, bone;
+            double t;
+            float m[16], want[16];
+            char *p = line + 2;
+            clip = (unsigned)strtoul(p, &p, 10);
+            t = strtod(p, &p);
+            bone = (unsigned)strtoul(p, &p, 10);
+            for (int k = 0; k < 16; ++k) m[k] = strtof(p, &p);
+            assert_int_equal(cbpal_bone_matrix(&pal, clip, t, bone, want), 0);
+            for (int k = 0; k < 16; ++k) check_close("bone matrix", m[k], want[k], 1e-6, &worst);
+            ++*matrices;
+        } else {
+            fail_msg("%s: unexpected line from CrowdbakeCheck: %s", pal_path, line);
+        }
+    }
+    fclose(f);
+    assert_int_equal(header, 1);
+    assert_int_equal(clips, pal.header.clip_count);
+    assert_int_equal(bones, pal.header.bone_count);
+    assert_int_equal(*matrices, pal.header.clip_count * 11 * pal.header.bone_count);
+    cbpal_close(&pal);
+    return worst;
+}
+
+static void test_reader_equals_the_c_reader(void **state)
+{
+    (void)state;
+    build_check();
+    const char *models[] = {"assets/fox-bevy/Fox.glb", "assets/quaternius-cow/Cow.glb"};
+    const char *layouts[] = {"mat4", "affine", "qpos"}, *precisions[] = {"float", "half", "u16"};
+    char model[1024], cmd[4096];
+    for (int m = 0; m < 2; ++m) {
+        shared_path(model, sizeof model, models[m]);
+        for (int l = 0; l < 3; ++l)
+            for (int p = 0; p < 3; ++p) {
+                snprintf(cmd, sizeof cmd, "%s bake %s -o %s/x.pal --layout %s --precision %s -q 2>&1", crowdbake_exe(), model, TMP,
+                         layouts[l], precisions[p]);
+                run_or_fail(cmd);
+                unsigned matrices = 0;
+                double worst = compare_pal(TMP "/x.pal", &matrices);
+                printf("  %s %s/%s: %u bone matrices, worst relative difference C# vs C %.3g\n", models[m] + 7, layouts[l],
+                       precisions[p], matrices, worst);
+            }
+    }
+}
+
+/* Damaged files: the same verdict as cbpal_open_memory, word for word; zstd is refused with the fix. */
+static void test_reader_verdicts_match(void **state)
+{
+    (void)state;
+    build_check();
+    char fox[1024], cmd[4096], line[1024], want[600], err[512];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s/v.pal --layout qpos --precision half -q 2>&1", crowdbake_exe(), fox, TMP);
+    run_or_fail(cmd);
+    size_t size;
+    unsigned char *good = (unsigned char *)read_whole_file(TMP "/v.pal", &size);
+    assert_non_null(good);
+    /* offsets into the header and the first clip and bone entries, and lengths to cut the file to */
+    const size_t pokes[] = {0, 8, 16, 20, 24, 28, 32, 36, 40, 44, 48, 52, 56, 60, 120, 128, 136, 144, 152, 160, 168, 176, 184, 256 + 8,
+                            256 + 12, 256 + 4};
+    unsigned char *bad = malloc(size);
+    assert_non_null(bad);
+    unsigned compared = 0, refused = 0;
+    for (size_t i = 0; i < COUNT_OF(pokes) * 2 + 3; ++i) {
+        size_t len = size;
+        memcpy(bad, good, size);
+        if (i < COUNT_OF(pokes) * 2) bad[pokes[i / 2] + (i % 2 ? 3 : 0)] ^= i % 2 ? 0x80 : 0x01;
+        else len = i == COUNT_OF(pokes) * 2 ? 100 : i == COUNT_OF(pokes) * 2 + 1 ? 4096 : size - 1;
+        FILE *f = fopen(TMP "/bad.pal", "wb");
+        assert_non_null(f);
+        assert_int_equal(fwrite(bad, 1, len, f), len);
+        fclose(f);
+        FILE *out = run_check("bad " TMP "/bad.pal", TMP "/bad.txt");
+        for (unsigned flags = CBPAL_VERIFY_CHECKSUM;; flags = 0) {
+            cbpal_file pal;
+            if (cbpal_open_memory(bad, len, flags, &pal, err, sizeof err) == 0) {
+                snprintf(want, sizeof want, "ok");
+                cbpal_close(&pal);
+            } else {
+                snprintf(want, sizeof want, "x.pal: %s", err);
+            }
+            assert_non_null(fgets(line, sizeof line, out));
+            line[strcspn(line, "\n")] = 0;
+            if (strcmp(line, want) != 0) fail_msg("damage %zu (checksum %s): C# says '%s', C says '%s'", i, flags ? "on" : "off", line, want);
+            refused += strcmp(want, "ok") != 0 && !strstr(want, "checksum");
+            if (!flags) break;
+        }
+        fclose(out);
+        ++compared;
+    }
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s/z.pal --zstd -q 2>&1", crowdbake_exe(), fox, TMP);
+    run_or_fail(cmd);
+    FILE *out = run_check("bad " TMP "/z.pal", TMP "/bad.txt");
+    assert_non_null(fgets(line, sizeof line, out));
+    fclose(out);
+    if (!strstr(line, "zstd-compressed") || !strstr(line, "without --zstd")) fail_msg("zstd palette: %s", line);
+    printf("  %u damaged files: C# and C give the same verdicts, checksum verified and not (%u refused by the tables' checks); "
+           "zstd refused: %s", compared, refused, line);
+    assert_true(refused >= 20);
+    free(bad);
+    free(good);
+}
+
+/* A catalog bake of Cow: what a Unity roster import needs. */
+static void bake_cow_roster(void)
+{
+    static int baked;
+    if (baked) return;
+    char cow[1024], cmd[4096], toml[2048];
+    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
+    char *abs_cow = realpath(cow, NULL);
+    assert_non_null(abs_cow);
+    snprintf(toml, sizeof toml,
+             "[bake]\nout_dir = \"roster\"\n[animal.cow]\nmodel = \"%s\"\n"
+             "states = { idle = [\"idle\"], wander = [\"walk\"], flee = [\"gallop\"], die = [\"death\"] }\n"
+             "default_state = \"wander\"\n", abs_cow);
+    free(abs_cow);
+    run_or_fail("mkdir -p " TMP);
+    write_text(TMP "/cow.toml", toml);
+    snprintf(cmd, sizeof cmd, "%s bake %s/cow.toml -q 2>&1", crowdbake_exe(), TMP);
+    run_or_fail(cmd);
+    baked = 1;
+}
+
+/* Compares two files of space-separated tokens: numbers within tol (relative), words equal. */
+static unsigned compare_token_files(const char *got_path, const char *want_path, double tol)
+{
+    FILE *got = fopen(got_path, "r"), *want = fopen(want_path, "r");
+    assert_non_null(got);
+    assert_non_null(want);
+    char a[8192], b[8192];
+    unsigned lines = 0;
+    double worst = 0;
+    while (fgets(b, sizeof b, want)) {
+        if (!fgets(a, sizeof a, got)) fail_msg("C# stops before: %s", b);
+        char *sa, *sb, *ta = strtok_r(a, " \n", &sa), *tb = strtok_r(b, " \n", &sb);
+        for (; ta && tb; ta = strtok_r(NULL, " \n", &sa), tb = strtok_r(NULL, " \n", &sb)) {
+            char *ea, *eb;
+            double x = strtod(ta, &ea), y = strtod(tb, &eb);
+            if (*ea || *eb || ea == ta) {
+                if (strcmp(ta, tb) != 0) fail_msg("line %u: C# '%s', the manifest '%s'", lines + 1, ta, tb);
+            } else {
+                check_close("roster number", x, y, tol, &worst);
+            }
+        }
+        if (ta || tb) fail_msg("line %u: C# and the manifest have different fields", lines + 1);
+        ++lines;
+    }
+    if (fgets(a, sizeof a, got)) fail_msg("C# prints more: %s", a);
+    fclose(got);
+    fclose(want);
+    return lines;
+}
+
+/* Types, clips, contacts, states and sockets as the C# roster reads them, against Python's json. */
+static void test_roster_equals_the_manifest(void **state)
+{
+    (void)state;
+    build_check();
+    bake_cow_roster();
+    fclose(run_check("roster " TMP "/roster/roster.json", TMP "/roster_cs.txt"));
+    run_or_fail("python3 tests/runtimes/unity/roster_lines.py " TMP "/roster/roster.json > " TMP "/roster_py.txt 2>&1");
+    unsigned lines = compare_token_files(TMP "/roster_cs.txt", TMP "/roster_py.txt", 1e-7); /* floats in C# */
+    char log[65536];
+    assert_int_equal(run_command("grep -c '^K ' " TMP "/roster_py.txt; grep -c '^O ' " TMP "/roster_py.txt; grep -c '^S ' " TMP
+                                 "/roster_py.txt", log, sizeof log), 0);
+    unsigned contacts, sockets, states;
+    assert_int_equal(sscanf(log, "%u %u %u", &contacts, &sockets, &states), 3);
+    printf("  Cow roster: %u lines equal (%u contacts, %u sockets, %u states)\n", lines, contacts, sockets, states);
+    assert_int_equal(sockets, 14); /* docs/roster.md: Cow has 14 */
+    assert_int_equal(states, 4);
+    assert_true(contacts >= 8);
+}
+
+
+typedef struct roster_contact {
+    char state[64];
+    unsigned bone;
+    double land, lift, fps;
+} roster_contact;
+
+/* The contacts of each state's clip, from Python's lines (S: state -> clip, L: clip fps, K: contacts). */
+static unsigned state_contacts(roster_contact *out, unsigned max)
+{
+    FILE *f = fopen(TMP "/roster_py.txt", "r");
+    assert_non_null(f);
+    char line[8192], states[16][2][256];
+    unsigned n = 0, ns = 0;
+    while (fgets(line, sizeof line, f))
+        if (line[0] == 'S' && ns < 16) assert_int_equal(sscanf(line, "S %*s %255s %255s", states[ns][0], states[ns][1]), 2), ++ns;
+    rewind(f);
+    double fps = 0;
+    char clip[256], foot[256];
+    while (fgets(line, sizeof line, f)) {
+        if (line[0] == 'L') assert_int_equal(sscanf(line, "L %*s %255s %*d %*d %lf", clip, &fps), 2);
+        unsigned bone;
+        double land, lift;
+        if (line[0] != 'K' || sscanf(line, "K %*s %*s %255s %u %lf %lf", foot, &bone, &land, &lift) != 4) continue;
+        for (unsigned s = 0; s < ns; ++s)
+            if (strcmp(states[s][1], clip) == 0 && n < max) {
+                snprintf(out[n].state, sizeof out[n].state, "%s", states[s][0]);
+                out[n].bone = bone, out[n].land = land, out[n].lift = lift, out[n].fps = fps;
+                ++n;
+            }
+    }
+    fclose(f);
+    return n;
+}
+
+/* The C reader's matrix for an instance's four numbers: the clip they point at, at the clip time
+ * they give. */
+static void instance_matrix(const cbpal_file *pal, const float inst[4], double time, unsigned bone, float m[16])
+{
+    for (uint32_t c = 0; c < pal->header.clip_count; ++c) {
+        cbpal_clip clip;
+        cbpal_get_clip(pal, c, &clip);
+        if (clip.first_row != (uint32_t)inst[0] || clip.frames != (uint32_t)fabsf(inst[1])) continue;
+        double fpos = time * inst[2] + inst[3] * fabs((double)inst[1]);
+        assert_int_equal(cbpal_bone_matrix(pal, c, fpos / clip.fps, bone, m), 0);
+        return;
+    }
+    fail_msg("instance numbers %g %g point at no clip", inst[0], inst[1]);
+}
+
+/* A herd's bone matrices (mid-fade and after), SetSpeed's frame and its footsteps, against the C
+ * reader at the same instance numbers and the manifest's contacts. */
+static void test_herd_equals_the_c_reader(void **state)
+{
+    (void)state;
+    test_roster_equals_the_manifest(state);
+    roster_contact contacts[256];
+    unsigned ncontacts = state_contacts(contacts, 256);
+    cbpal_file pal;
+    char err[256], line[8192], line2[8192];
+    if (cbpal_open(TMP "/roster/cow.pal", 0, &pal, err, sizeof err)) fail_msg("%s", err);
+    FILE *f = run_check("herd " TMP "/roster/cow.pal " TMP "/roster/roster.json cow", TMP "/herd.txt");
+    unsigned matrices = 0, faded = 0, steps = 0, speeds = 0;
+    double worst = 0;
+    while (fgets(line, sizeof line, f)) {
+        if (line[0] == 'I') {
+            unsigned i, bone, i2, bone2;
+            double t, t2;
+            float fade, inst[4], from[4], m[16], want[16], was[16];
+            assert_int_equal(sscanf(line, "I %u %u %lf %f %f %f %f %f %f %f %f %f", &i, &bone, &t, &fade, &inst[0], &inst[1], &inst[2],
+                                    &inst[3], &from[0], &from[1], &from[2], &from[3]), 12);
+            assert_non_null(fgets(line2, sizeof line2, f));
+            char *p = line2 + 2;
+            i2 = (unsigned)strtoul(p, &p, 10), bone2 = (unsigned)strtoul(p, &p, 10), t2 = strtod(p, &p);
+            assert_true(line2[0] == 'N' && i2 == i && bone2 == bone && t2 == t);
+            for (int k = 0; k < 16; ++k) m[k] = strtof(p, &p);
+            instance_matrix(&pal, inst, t, bone, want);
+            if (fade < 1) {
+                instance_matrix(&pal, from, t, bone, was);
+                for (int k = 0; k < 16; ++k) want[k] = was[k] + (want[k] - was[k]) * fade;
+                faded += fade > 0 && memcmp(inst, from, sizeof inst) != 0;
+            }
+            for (int k = 0; k < 16; ++k) check_close("herd bone matrix", m[k], want[k], 1e-5, &worst);
+            ++matrices;
+        } else if (line[0] == 'P') {
+            double before, after, frames;
+            assert_int_equal(sscanf(line, "P %*u %lf %lf %lf", &before, &after, &frames), 3);
+            double d = fmod(fabs(before - after), frames);
+            assert_true(fmin(d, frames - d) < 1e-3); /* SetSpeed keeps the frame it is on */
+            ++speeds;
+        } else if (line[0] == 'F') {
+            unsigned bone, found = 0;
+            char kind[16], st[256];
+            double t;
+            float frames, rate, phase;
+            assert_int_equal(sscanf(line, "F %*u %u %15s %lf %f %f %f %255s", &bone, kind, &t, &frames, &rate, &phase, st), 7);
+            double row = t * rate + phase * fabs((double)frames), n = fabs((double)frames);
+            for (unsigned c = 0; c < ncontacts; ++c) {
+                if (contacts[c].bone != bone || strcmp(contacts[c].state, st) != 0) continue;
+                double at = (strcmp(kind, "land") == 0 ? contacts[c].land : contacts[c].lift) * contacts[c].fps;
+                double d = fmod(fabs(row - at), n);
+                found |= fmin(d, n - d) < 1e-3;
+            }
+            if (!found) fail_msg("footstep at no contact of its clip: %s", line);
+            ++steps;
+        }
+    }
+    fclose(f);
+    cbpal_close(&pal);
+    printf("  herd: %u bone matrices (%u mid-fade), worst relative difference %.3g; %u speed change; %u footsteps on the manifest's "
+           "contacts\n", matrices, faded, worst, speeds, steps);
+    assert_true(matrices > 100 && faded > 0 && speeds == 1 && steps > 10);
+}
+
+/* The MonoBehaviour, the importers, the asset types and the sample's script against stubs of the
+ * Unity API (C# 7.2 for the stubs' `in` parameter, as Unity declares RenderMeshInstanced). */
+static void test_unity_facing_code_compiles(void **state)
+{
+    (void)state;
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd,
+             "mkdir -p %s && mcs -langversion:7.2 -warnaserror -nologo -target:library -out:%s/Crowdbake.Unity.dll tests/runtimes/unity/stubs/*.cs "
+             "%s/Runtime/*.cs %s/Runtime/Core/*.cs %s/Editor/*.cs '%s/Samples~/Herd/'*.cs 2>&1",
+             TMP, TMP, PKG, PKG, PKG, PKG);
+    run_or_fail(cmd);
+}
+
+/* The shader glue (CrowdbakeUnity.hlsl, CrowdbakeShaderGraph.hlsl) over the shared HLSL runtime:
+ * glslang's HLSL front end compiles it to SPIR-V that spirv-val accepts, in all nine encodings. */
+static void test_shader_glue_compiles(void **state)
+{
+    (void)state;
+    FILE *runtime = fopen("runtimes/hlsl/crowdbake_palette.hlsl", "r");
+    if (!runtime) fail_msg("runtimes/hlsl/crowdbake_palette.hlsl is missing: the Unity shaders include the shared HLSL runtime");
+    fclose(runtime);
+    const char *layouts[] = {"MAT4", "AFFINE", "QPOS"}, *precisions[] = {"FLOAT", "HALF", "U16"};
+    char cmd[2048];
+    for (int l = 0; l < 3; ++l)
+        for (int p = 0; p < 3; ++p) {
+            snprintf(cmd, sizeof cmd,
+                     "mkdir -p %s && glslangValidator -D -V -S vert -e main -DCB_LAYOUT_%s -DCB_PRECISION_%s %s -o %s/glue.spv "
+                     "tests/runtimes/unity/unity_glue.hlsl 2>&1 && spirv-val %s/glue.spv 2>&1",
+                     TMP, layouts[l], precisions[p], p == 1 ? "-DCB_POSITIONS_RELATIVE" : "", TMP, TMP);
+            run_or_fail(cmd);
+        }
+    printf("  Unity shader glue: 9 encodings compile (glslang, HLSL) and validate (spirv-val)\n");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_reader_equals_the_c_reader),
+        cmocka_unit_test(test_reader_verdicts_match),
+        cmocka_unit_test(test_roster_equals_the_manifest),
+        cmocka_unit_test(test_herd_equals_the_c_reader),
+        cmocka_unit_test(test_unity_facing_code_compiles),
+        cmocka_unit_test(test_shader_glue_compiles),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

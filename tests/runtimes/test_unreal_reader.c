@@ -1,0 +1,105 @@
+/* test_unreal_reader.c - the Unreal plugin's engine-free part, proven outside Unreal: its .pal
+ * reading (runtimes/unreal/.../CrowdbakePalReader.cpp, the factory's and the palette asset's, through
+ * the C reader crowdbake_pal.h) and its herd logic (CrowdbakeHerdLogic.cpp, the herd component's)
+ * compile with g++ -Wall -Wextra -Werror, and tests/runtimes/unreal/reader_check.cpp holds them to
+ * the C reader on Fox and Cow in every layout x precision: texels byte for byte, bind positions,
+ * clip table, a herd's bone matrices mid-fade and after, SetSpeed without a pop. */
+#define _DEFAULT_SOURCE
+#include "testutil.h"
+
+#define TMP TEST_TMP "/unreal_reader"
+#define SRC "runtimes/unreal/Crowdbake/Source/Crowdbake"
+
+static void run_or_fail(const char *cmd, char *log, size_t size)
+{
+    if (run_command(cmd, log, size) != 0) fail_msg("%s:\n%s", cmd, log);
+}
+
+/* g++, warnings as errors, outside Unreal: the reading part and the herd logic with the check program. */
+static void build_reader_check(void)
+{
+    static char log[8192];
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd,
+             "mkdir -p %s && g++ -std=c++17 -O1 -Wall -Wextra -Werror -I%s/Public -Iinclude -o %s/reader_check "
+             "tests/runtimes/unreal/reader_check.cpp %s/Private/CrowdbakePalReader.cpp %s/Private/CrowdbakeHerdLogic.cpp 2>&1",
+             TMP, SRC, TMP, SRC, SRC);
+    run_or_fail(cmd, log, sizeof log);
+}
+
+static void test_reader_and_herd_equal_the_c_reader(void **state)
+{
+    (void)state;
+    static char log[8192];
+    char cmd[4096], model[1024];
+    build_reader_check();
+    const char *models[] = {"assets/fox-bevy/Fox.glb", "assets/quaternius-cow/Cow.glb"};
+    const char *layouts[] = {"mat4", "affine", "qpos"}, *precisions[] = {"float", "half", "u16"};
+    for (int m = 0; m < 2; ++m) {
+        shared_path(model, sizeof model, models[m]);
+        for (int l = 0; l < 3; ++l)
+            for (int p = 0; p < 3; ++p) {
+                snprintf(cmd, sizeof cmd, "%s bake %s -o %s/x.pal --layout %s --precision %s -q 2>&1 && %s/reader_check %s/x.pal 2>&1",
+                         crowdbake_exe(), model, TMP, layouts[l], precisions[p], TMP, TMP);
+                run_or_fail(cmd, log, sizeof log);
+                printf("  %s %s/%s: %s", models[m] + 7, layouts[l], precisions[p], strstr(log, ": ") ? strstr(log, ": ") + 2 : log);
+            }
+    }
+}
+
+/* A damaged file: the factory's message is the C reader's, with the file's name. */
+static void test_bad_file_message(void **state)
+{
+    (void)state;
+    static char log[8192];
+    build_reader_check();
+    run_or_fail("mkdir -p " TMP " && printf 'CBPAL\\r\\n\\032\\377\\377\\377\\377' > " TMP "/bad.pal", log, sizeof log);
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "%s/reader_check %s/bad.pal 2>&1", TMP, TMP);
+    assert_int_equal(run_command(cmd, log, sizeof log), 1);
+    if (!strstr(log, "bad.pal: palette format version 4294967295 is newer than this reader")) fail_msg("%s", log);
+}
+
+/* `crowdbake mesh --vertex-id-uv N --skin-texture F`: the Khronos validator passes the .glb; Python
+ * reads the ids (0, 1, ... over the primitives) and each vertex's joints and weights from the .glb,
+ * equal to the skin texture as the plugin's ReadSkin reads it; a channel the model's own UVs hold,
+ * or a skin texture without ids, is refused with the fix. */
+static void test_vertex_ids_and_skin_texture(void **state)
+{
+    (void)state;
+    static char log[16384];
+    require_node_validators();
+    build_reader_check();
+    struct { const char *model, *args; unsigned set; } cases[] = {
+        {"assets/fox-bevy/Fox.glb", "", 1}, {"assets/quaternius-cow/Cow.glb", "--quantize --max-influences 2", 2}};
+    char cmd[8192], model[1024];
+    for (int i = 0; i < 2; ++i) {
+        shared_path(model, sizeof model, cases[i].model);
+        snprintf(cmd, sizeof cmd,
+                 "%s mesh %s -o %s/ids.glb --vertex-id-uv %u --skin-texture %s/ids.cbskin %s -q 2>&1 && "
+                 "node tests/tools/validator/validate.mjs %s/ids.glb 2>&1 && %s/reader_check skin %s/ids.cbskin > %s/skin.txt && "
+                 "python3 tests/runtimes/unreal/check_vertex_ids.py %s/ids.glb %u %s/skin.txt 2>&1",
+                 crowdbake_exe(), model, TMP, cases[i].set, TMP, cases[i].args, TMP, TMP, TMP, TMP, TMP, cases[i].set, TMP);
+        run_or_fail(cmd, log, sizeof log);
+        printf("  %s", strstr(log, "vertex ids") ? strstr(log, "vertex ids") - 0 : log);
+    }
+    shared_path(model, sizeof model, "assets/fox-bevy/Fox.glb");
+    snprintf(cmd, sizeof cmd, "%s mesh %s -o %s/no.glb --vertex-id-uv 0 2>&1", crowdbake_exe(), model, TMP);
+    assert_int_equal(run_command(cmd, log, sizeof log), EXIT_INPUT);
+    if (!strstr(log, "TEXCOORD_0 holds the model's texture coordinates") || !strstr(log, "--vertex-id-uv 1")) fail_msg("%s", log);
+    snprintf(cmd, sizeof cmd, "%s mesh %s -o %s/no.glb --skin-texture %s/no.cbskin 2>&1", crowdbake_exe(), model, TMP, TMP);
+    assert_int_equal(run_command(cmd, log, sizeof log), EXIT_USAGE);
+    if (!strstr(log, "give --vertex-id-uv N too")) fail_msg("%s", log);
+    FILE *f = fopen(TMP "/no.glb", "r");
+    assert_null(f); /* nothing half-written */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_reader_and_herd_equal_the_c_reader),
+        cmocka_unit_test(test_bad_file_message),
+        cmocka_unit_test(test_vertex_ids_and_skin_texture),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,149 @@
+// CrowdbakeCheck.cs - prints what the Unity package's engine-free C# (runtimes/unity/Runtime/Core)
+// reads, for tests/runtimes/test_unity_cs.c to hold against the C reader (include/crowdbake_pal.h) and
+// against Python's reading of roster.json. Numbers are printed round-trip ("R").
+//   mono CrowdbakeCheck.exe pal FILE.pal          header, clips, bones, bone matrices
+//   mono CrowdbakeCheck.exe bad FILE.pal          the reader's verdicts, checksum verified and not: "ok" or the error
+//   mono CrowdbakeCheck.exe roster roster.json    the manifest's types, clips, contacts, states, sockets
+//   mono CrowdbakeCheck.exe herd FILE.pal roster.json TYPE   a herd's matrices, cross-fades, speeds, footsteps
+using System;
+using System.Globalization;
+using System.IO;
+using System.Text;
+using Crowdbake;
+
+static class CrowdbakeCheck
+{
+    static readonly StringBuilder output = new StringBuilder();
+
+    static string R(double v) { return v.ToString("R", CultureInfo.InvariantCulture); }
+    static string R(float v) { return v.ToString("R", CultureInfo.InvariantCulture); }
+    static void Line(params object[] parts)
+    {
+        for (int i = 0; i < parts.Length; ++i) {
+            object p = parts[i];
+            output.Append(i > 0 ? " " : "").Append(p is float ? R((float)p) : p is double ? R((double)p) : p.ToString());
+        }
+        output.Append('\n');
+    }
+    static void Matrix(string tag, object a, object b, object c, float[] m)
+    {
+        var parts = new object[20];
+        parts[0] = tag; parts[1] = a; parts[2] = b; parts[3] = c;
+        for (int k = 0; k < 16; ++k) parts[4 + k] = m[k];
+        Line(parts);
+    }
+
+    static void Pal(string path)
+    {
+        PalFile pal = PalFile.Read(path, true);
+        PalHeader h = pal.Header;
+        Line("H", h.Version, h.Flags, h.Layout, h.Precision, h.BoneCount, h.Rows, h.Width, h.Height, h.Blocks, h.ClipCount,
+             h.Fps, h.LinearRange, h.MaxError, h.ModelHeight, h.VisibleError, h.Checksum);
+        for (int i = 0; i < pal.Clips.Length; ++i) {
+            PalClip c = pal.Clips[i];
+            Line("C", i, c.FirstRow, c.Frames, c.Flags, c.Fps, c.Duration, c.Start, c.BoundsMin[1], c.BoundsMax[1]);
+        }
+        for (int j = 0; j < pal.Bones.Length; ++j) {
+            PalBone b = pal.Bones[j];
+            Line("B", j, b.Parent, b.BindPosition[0], b.BindPosition[1], b.BindPosition[2], b.PositionOffset[0], b.PositionOffset[1],
+                 b.PositionOffset[2]);
+        }
+        var m = new float[16];
+        for (uint c = 0; c < pal.Clips.Length; ++c)
+            for (int k = -1; k <= 9; ++k) {
+                // grid times, between rows, before the start and past the end (loops wrap, one-shots clamp)
+                double t = k * pal.Clips[c].Duration / 7.0 + 0.0123 * k;
+                for (uint bone = 0; bone < pal.Bones.Length; ++bone) {
+                    if (!pal.BoneMatrix(c, t, bone, m)) throw new Exception("BoneMatrix refused clip " + c + " bone " + bone);
+                    Matrix("M", c, t, bone, m);
+                }
+            }
+    }
+
+    // The verdict with the checksum verified, then without (the checks of the tables alone).
+    static void Bad(string path)
+    {
+        foreach (bool verify in new[] { true, false })
+            try {
+                PalFile.Read(File.ReadAllBytes(path), "x.pal", verify);
+                Line("ok");
+            } catch (PalException e) {
+                Line(e.Message);
+            }
+    }
+
+    static void RosterLines(string path)
+    {
+        Roster roster = Roster.Parse(File.ReadAllText(path), path);
+        foreach (RosterType t in roster.types) {
+            Line("T", t.name, t.palette, t.layout, t.precision, t.bones, t.rows, t.speedReference, t.defaultState);
+            foreach (RosterClip c in t.clips) {
+                Line("L", t.name, c.name, c.firstRow, c.frameCount, c.fps, c.duration, c.loops ? 1 : 0, c.groundSpeed);
+                foreach (RosterContact k in c.contacts) Line("K", t.name, c.name, k.foot, k.bone, k.time, k.lift);
+            }
+            foreach (RosterState s in t.states)
+                Line("S", t.name, s.name, s.clip, s.firstRow, s.frameCount, s.rate, s.ratePerSpeed, s.goldenRatioPhase ? "golden_ratio" : "zero");
+            foreach (RosterSocket k in t.sockets) {
+                var parts = new object[20];
+                parts[0] = "O"; parts[1] = t.name; parts[2] = k.name; parts[3] = k.bone;
+                for (int i = 0; i < 16; ++i) parts[4 + i] = k.bindTransform[i];
+                Line(parts);
+            }
+        }
+    }
+
+    // The herd: each instance's matrix with its numbers (the C side recomputes it from the clip the
+    // numbers point at), mid-fade and after; SetSpeed's frame before and after; footsteps.
+    static void Herd(string palPath, string rosterPath, string typeName)
+    {
+        PalFile pal = PalFile.Read(palPath, false);
+        RosterType type = Roster.Parse(File.ReadAllText(rosterPath), rosterPath).Type(typeName);
+        var herd = new HerdState(pal, type, 8);
+        herd.OnFootstep += (e) => Line("F", e.instance, e.bone, e.lands ? "land" : "lift", e.time, herd.Inst[e.instance * 4 + 1],
+                                       herd.Inst[e.instance * 4 + 2], herd.Inst[e.instance * 4 + 3], herd.StateOf[e.instance]);
+        var m = new float[16];
+        herd.Update(0.5);
+        for (int i = 0; i < herd.Count; ++i) herd.SetSpeed(i, 0.5f + 0.25f * i);
+        string[] names = new string[type.states.Count];
+        for (int s = 0; s < names.Length; ++s) names[s] = type.states[s].name;
+        for (int step = 1; step <= 40; ++step) {
+            double t = 0.5 + step * 0.05;
+            herd.Update(t);
+            if (step == 10) for (int i = 0; i < herd.Count; i += 2) herd.SetState(i, names[i % names.Length], 0.4f);
+            if (step == 20) {
+                int i = 1;
+                double before = herd.Time * herd.Inst[6] + herd.Inst[7] * Math.Abs((double)herd.Inst[5]);
+                herd.SetSpeed(i, 1.7f);
+                double after = herd.Time * herd.Inst[6] + herd.Inst[7] * Math.Abs((double)herd.Inst[5]);
+                Line("P", i, before, after, Math.Abs((double)herd.Inst[5]));
+            }
+            if (step % 5 != 1 && step != 12) continue;
+            for (int i = 0; i < herd.Count; ++i)
+                for (int bone = 0; bone < pal.Bones.Length; bone += 7) {
+                    if (!herd.BoneMatrixAt(i, bone, m)) throw new Exception("BoneMatrixAt refused instance " + i);
+                    Line("I", i, bone, herd.Time, herd.FadeWeight(i, herd.Time), herd.Inst[i * 4], herd.Inst[i * 4 + 1], herd.Inst[i * 4 + 2],
+                         herd.Inst[i * 4 + 3], herd.From[i * 4], herd.From[i * 4 + 1], herd.From[i * 4 + 2], herd.From[i * 4 + 3]);
+                    Matrix("N", i, bone, herd.Time, m);
+                }
+        }
+    }
+
+    static int Main(string[] args)
+    {
+        try {
+            if (args.Length == 2 && args[0] == "pal") Pal(args[1]);
+            else if (args.Length == 2 && args[0] == "bad") Bad(args[1]);
+            else if (args.Length == 2 && args[0] == "roster") RosterLines(args[1]);
+            else if (args.Length == 4 && args[0] == "herd") Herd(args[1], args[2], args[3]);
+            else {
+                Console.Error.WriteLine("usage: CrowdbakeCheck.exe pal|bad FILE.pal | roster roster.json | herd FILE.pal roster.json TYPE");
+                return 2;
+            }
+        } catch (Exception e) {
+            Console.Error.WriteLine("CrowdbakeCheck: " + e.Message);
+            return 1;
+        }
+        Console.Out.Write(output.ToString());
+        return 0;
+    }
+}
