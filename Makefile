@@ -283,11 +283,7 @@ demo: all $(if $(shell command -v npm 2>/dev/null),runtimes/web/node_modules/.pa
 # sanitizer passes run side by side.
 TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(TOOL_INC) -Itests $(shell pkg-config --cflags cmocka 2>/dev/null)
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
-<<<<<<< HEAD
-$(BUILD)/tests/%: %.c tests/testutil.h tests/view_server.h tests/runtimes/conformance.h tests/runtimes/gl_harness.h $(TOOL_A) $(BUILD)/libcrowdbake.a
-=======
 $(BUILD)/tests/%: %.c tests/testutil.h tests/view_server.h $(wildcard tests/runtimes/*.h) $(TOOL_A) $(BUILD)/libcrowdbake.a
->>>>>>> main
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TEST_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(TEST_EXTRA_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
