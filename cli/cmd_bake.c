@@ -69,7 +69,9 @@ const char cmd_bake_usage[] =
     "                             errs most)\n"
     "  --max-texture-size N       never emit a dimension above N (default 16384); rows wrap into\n"
     "                             side-by-side column blocks\n"
-    "  --root-motion keep|in-place  in-place removes the root's average horizontal travel\n"
+    "  --root-motion keep|in-place|loops-in-place  in-place removes the root's average horizontal\n"
+    "                             travel (the clip records it as a velocity), loops-in-place from the\n"
+    "                             loops only; default: keep, or loops-in-place when a loop travels\n"
     "  --skin NAME|INDEX          the skin to bake when the file has several\n"
     "  --clip A,B                 only these clips, in this order (default: every clip; a clip that\n"
     "                             cannot be sampled, e.g. one without keys, is skipped with a warning\n"
@@ -92,6 +94,7 @@ typedef struct bake_args {
         *one_shots, *syncs, *default_state;
     bool zstd, json, quiet, force, depfile_manifest, fit, measure_all, over_budget;
     cli_output out;
+    char speed_why[192]; /* why the speed reference is what it is, when crowdbake measured it */
 } bake_args;
 
 static double now_seconds(void)
@@ -141,7 +144,7 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
         s->max_texture_size = max;
     }
     if (a->root_motion && !cb_root_motion_parse(a->root_motion, &s->root_motion))
-        return cli_usage_error("bake", "--root-motion is keep or in-place");
+        return cli_usage_error("bake", "--root-motion is keep, in-place or loops-in-place");
     if (a->root_motion) s->from.root_motion = CB_FROM_COMMAND_LINE;
     if (a->format && !(s->formats = cb_formats_parse(a->format)))
         return cli_usage_error("bake", "--format is pal, exr or pal,exr (any comma-separated set of pal, exr, ktx2 and babylon), "
@@ -413,6 +416,8 @@ static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bak
     cb_warnings warnings = {0};
     cb_model_warnings(job->model, a->clips == NULL, &warnings);
     for (uint32_t i = 0; i < r->notes.count; ++i) cb_warn(&warnings, r->notes.items[i].kind, "%s", r->notes.items[i].message);
+    if (a->speed_why[0] && job->speed_reference > 0 && !a->json) /* --json: its own fields */
+        cb_warn(&warnings, "note", "speed reference %.4g units/s recorded: %s", job->speed_reference, a->speed_why);
     report_over_budget(job, r, &warnings);
     double seconds = now_seconds() - t0;
     for (uint32_t i = 0; i < r->output_count; ++i)
@@ -424,6 +429,8 @@ static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bak
         cb_json_init(&j, stdout);
         cb_json_object(&j, NULL);
         cb_json_string(&j, "model", a->model);
+        cb_json_number(&j, "speed_reference", job->speed_reference);
+        cb_json_string(&j, "speed_reference_from", a->speed_ref ? "the command line" : a->speed_why);
         cb_json_array(&j, "outputs");
         for (uint32_t i = 0; i < r->output_count; ++i) json_output(&j, &r->outputs[i], seconds, load);
         cb_json_end(&j);
@@ -450,7 +457,7 @@ int cmd_bake(int argc, char **argv)
         {"-o", "FILE", &a.output, NULL},           {"--output", "FILE", &a.output, NULL},
         {"--format", "pal,exr", &a.format, NULL},  {"--fps", "N", &a.fps, NULL},
         {"--layout", "LAYOUT", &a.layout, NULL},   {"--precision", "PRECISION", &a.precision, NULL},
-        {"--max-texture-size", "N", &a.max_size, NULL}, {"--root-motion", "keep|in-place", &a.root_motion, NULL},
+        {"--max-texture-size", "N", &a.max_size, NULL}, {"--root-motion", "keep|in-place|loops-in-place", &a.root_motion, NULL},
         {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "M_PER_S", &a.speed_ref, NULL},
         {"--exr-compression", "NAME", &a.exr_compression, NULL}, {"--zstd", NULL, NULL, &a.zstd},
         {"--json", NULL, NULL, &a.json},
@@ -510,6 +517,8 @@ int cmd_bake(int argc, char **argv)
     if (job.skin >= 0 && !cli_select_clips(m, a.clips, a.excluded, &selection, &job.clip_count, &err) &&
         !cli_override_loops(m, a.loops, a.one_shots, &selection, &job.clip_count, &err)) {
         job.clips = selection;
+        if (!a.speed_ref)
+            job.speed_reference = cli_speed_reference(m, job.skin, selection, job.clip_count, a.speed_why, sizeof a.speed_why);
         cb_bake_job_run(&job, &result, &err);
     }
     if (!err.status) report_bake(&a, &job, &result, t0, load);

@@ -25,13 +25,48 @@ typedef struct clip_facts {
     cb_clip_info info;
     cb_ground_speed speed;
     cb_sync_decision sync; /* as a state of this clip alone would play */
+    bool in_place;         /* a bare bake takes its root travel out (cb_bake_job_plan's decision) */
+    char root_motion[256]; /* why, for a clip whose root travels; else empty */
 } clip_facts;
+
+/* What a bare bake does with each clip's root travel, and why (cb_bake_job_plan decides it the
+ * same way): with a loop that travels, the loops go in place and the one-shots keep theirs. */
+static void decide_root_motion(clip_facts *facts, uint32_t n, double height)
+{
+    bool loop_travels = false;
+    for (uint32_t a = 0; a < n; ++a) loop_travels |= facts[a].analyzed && facts[a].info.loops && cb_clip_travels(&facts[a].info, height);
+    for (uint32_t a = 0; a < n; ++a) {
+        const cb_clip_info *c = &facts[a].info;
+        facts[a].in_place = loop_travels && facts[a].analyzed && c->loops;
+        if (!facts[a].analyzed || !cb_clip_travels(c, height)) continue;
+        if (c->loops)
+            snprintf(facts[a].root_motion, sizeof facts[a].root_motion, "in place: it loops and travels %.3g units a loop, "
+                     "which its wrap would pull back at any rate; its velocity (%.3g units/s) is recorded for the game to "
+                     "move the instance (--root-motion keep keeps the travel)", c->ground_speed * c->duration, c->ground_speed);
+        else
+            snprintf(facts[a].root_motion, sizeof facts[a].root_motion, "kept: a one-shot keeps its travel (%.3g units), ending "
+                     "where it moved (--root-motion in-place takes it out)", c->ground_speed * c->duration);
+    }
+}
 
 /* Where props attach: the baked skin's sockets (socket.h). */
 typedef struct socket_list {
     uint32_t count;
     cb_socket *items;
+    char helpers[512]; /* the nodes left out as rig helpers, each after a space */
 } socket_list;
+
+/* The nodes under a joint that are rig helpers (cb_socket_is_rig_helper), named after a space each. */
+static void list_rig_helpers(cb_sampler *s, const cb_model *m, char *out, size_t size)
+{
+    size_t n = 0;
+    out[0] = '\0';
+    for (uint32_t i = 0; i < m->node_count && n < size; ++i)
+        if (cb_socket_is_rig_helper(s, (int32_t)i)) {
+            int w = snprintf(out + n, size - n, " %s", m->nodes[i].name);
+            n += w > 0 ? (size_t)w : 0;
+        }
+}
 
 static const char *interp_names[] = {"LINEAR", "STEP", "CUBICSPLINE"};
 
@@ -50,7 +85,7 @@ static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits
 {
     cb_sampler *s = skin >= 0 ? cb_sampler_create(m, skin, err) : NULL;
     if (skin >= 0 && !s) return err->status;
-    if (s) sockets->count = cb_find_sockets(s, &sockets->items);
+    if (s) sockets->count = cb_find_sockets(s, &sockets->items), list_rig_helpers(s, m, sockets->helpers, sizeof sockets->helpers);
     for (uint32_t a = 0; a < m->animation_count; ++a) {
         const cb_animation *anim = &m->animations[a];
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
@@ -64,6 +99,8 @@ static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits
             cb_decide_sync(NULL, anim->name, facts[a].info.loops, &facts[a].speed, false, &facts[a].sync);
         }
     }
+    double lo[3], hi[3];
+    if (s) decide_root_motion(facts, m->animation_count, cb_skin_rest_bounds(s, lo, hi));
     cb_sampler_free(s);
     return err->status;
 }
@@ -89,8 +126,9 @@ static void print_contacts(int w, const cb_stride *st)
     printf("\n");
 }
 
-static void print_sockets(const cb_model *m, int skin, const socket_list *sockets)
+static void print_sockets(const cb_model *m, int skin, const socket_list *sockets, const char *helpers)
 {
+    if (helpers[0]) printf("  not sockets (rig helpers: their joint moves no vertex and is named as a control):%s\n", helpers);
     for (uint32_t i = 0; i < sockets->count; ++i) {
         const cb_socket *k = &sockets->items[i];
         const double *b = k->bind_transform;
@@ -184,6 +222,7 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
             printf("  %-*s %s: %s; ground speed %.4g from %s (root %.4g, planted feet %.4g)\n", w, "",
                    f->info.loops ? "loops" : "plays once", why, f->speed.speed, f->speed.method, f->speed.root, f->speed.feet);
             printf("  %-*s %s: %s\n", w, "", f->sync.speed ? "follows the speed" : "own rate", f->sync.reason);
+            if (f->root_motion[0]) printf("  %-*s root motion %s\n", w, "", f->root_motion);
             if (f->speed.stride.stride) print_slide(w, &f->speed.stride), print_contacts(w, &f->speed.stride);
         } else
             printf("  %-*s %8.4f %9.4f %6llu  %-18s %-8s %7u  -\n", w, anim->name, anim->t0, anim->t1 - anim->t0,
@@ -266,6 +305,8 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, con
             cb_json_string(&j, "speed_method", f->speed.method);
             cb_json_string(&j, "sync", f->sync.speed ? "speed" : "time");
             cb_json_string(&j, "sync_reason", f->sync.reason);
+            cb_json_string(&j, "root_motion", f->in_place ? "in-place" : "keep");
+            if (f->root_motion[0]) cb_json_string(&j, "root_motion_reason", f->root_motion);
             cb_roster_json_stride(&j, &f->speed.stride);
         }
         cb_json_end(&j);
@@ -318,7 +359,7 @@ int cmd_info(int argc, char **argv)
     socket_list sockets = {0};
     if (!err.status) gather_clips(m, skin, fps, &limits, facts, &sockets, &err);
     if (!err.status && json) print_json(m, skin, facts, &sockets, fps);
-    if (!err.status && !json) print_text(m, skin, facts, fps), print_sockets(m, skin, &sockets);
+    if (!err.status && !json) print_text(m, skin, facts, fps), print_sockets(m, skin, &sockets, sockets.helpers);
     if (!err.status && !json && !out.quiet) { /* what a bake would leave out (-q: not said) */
         cb_warnings warnings = {0};
         cb_model_warnings(m, true, &warnings);

@@ -77,7 +77,10 @@ static void print_clip_table(const inspected *in)
         const cb_palette_clip *c = &p->clips[i];
         printf("  %-*s %9u %7u %8.3f %9.4f %-8s %-7s ", name_width, c->name, c->first_row, c->frames, (float)c->fps,
                (float)c->duration, c->loops ? "loop" : "one-shot", c->step ? "held" : c->fitted ? "fitted" : "sampled");
-        if (!in->in_place) {
+        /* A one-shot with nothing removed keeps its travel in the rows: a bake that put only its
+         * loops in place (root_motion loops-in-place, the default where a loop travels). */
+        bool moved = c->root_velocity[0] != 0 || c->root_velocity[1] != 0 || c->root_velocity[2] != 0;
+        if (!in->in_place || (!c->loops && !moved)) {
             printf("in the rows\n");
             continue;
         }

@@ -10,7 +10,7 @@
 
 const char cmd_sample_usage[] =
     "usage: crowdbake sample MODEL --fps N --json [--clip NAME] [--frame I] [--skin NAME|INDEX]\n"
-    "                        [--root-motion keep|in-place] [-q] [-v]\n\n"
+    "                        [--root-motion keep|in-place|loops-in-place] [-q] [-v]\n\n"
     "Prints the joint matrices (4x4, column-major, glTF order) of every baked frame of every clip,\n"
     "or of one clip / one frame: the debugging view of what 'crowdbake bake' stores.\n";
 
@@ -53,7 +53,7 @@ int cmd_sample(int argc, char **argv)
     bool json = false, help;
     const cli_option options[] = {{"--json", NULL, NULL, &json},          {"--fps", "N", &fps_text, NULL},
                                   {"--clip", "NAME", &clip_name, NULL},   {"--frame", "I", &frame_text, NULL},
-                                  {"--skin", "NAME|INDEX", &skin_name, NULL}, {"--root-motion", "keep|in-place", &rm_text, NULL}};
+                                  {"--skin", "NAME|INDEX", &skin_name, NULL}, {"--root-motion", "keep|in-place|loops-in-place", &rm_text, NULL}};
     int rc = cli_parse(argc, argv, options, 6, &path, 1, 1, &help);
     if (help) return fputs(cmd_sample_usage, stdout), fputs(cli_output_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
@@ -65,7 +65,7 @@ int cmd_sample(int argc, char **argv)
     if (frame_text && !cli_parse_u32(frame_text, &frame)) return cli_usage_error("sample", "--frame wants a frame index");
     if (!json) return cli_usage_error("sample", "only --json output exists; add --json");
     cb_root_motion rm;
-    if (!cb_root_motion_parse(rm_text, &rm)) return cli_usage_error("sample", "--root-motion is keep or in-place");
+    if (!cb_root_motion_parse(rm_text, &rm)) return cli_usage_error("sample", "--root-motion is keep, in-place or loops-in-place");
 
     cb_error err = {0};
     cb_model *m = cli_load_model(&out, path, &limits, &err);

@@ -11,7 +11,7 @@
 #include "cli.h"
 
 const char cmd_vat_usage[] =
-    "usage: crowdbake vat MODEL -o OUT.exr [--fps N] [--max-texture-size N] [--root-motion keep|in-place]\n"
+    "usage: crowdbake vat MODEL -o OUT.exr [--fps N] [--max-texture-size N] [--root-motion keep|in-place|loops-in-place]\n"
     "                     [--skin NAME|INDEX] [--exr-compression none|rle|zips|zip|piz] [--json]\n"
     "                     [--clip A,B | --exclude-clip A,B | --like PALETTE.pal] [-q] [-v]\n\n"
     "Bakes a vertex animation texture: every skinned vertex of every frame (framed like the palette's\n"
@@ -74,7 +74,7 @@ int cmd_vat(int argc, char **argv)
     if (fps && (!cli_parse_double(fps, &o.fps) || !cb_fps_valid(o.fps))) return cli_usage_error("vat", "--fps wants 0..1000");
     if (max && (!cli_parse_u32(max, &max_size) || max_size < 1)) return cli_usage_error("vat", "--max-texture-size wants a positive integer");
     o.max_texture_size = max_size;
-    if (rm && !cb_root_motion_parse(rm, &o.root_motion)) return cli_usage_error("vat", "--root-motion is keep or in-place");
+    if (rm && !cb_root_motion_parse(rm, &o.root_motion)) return cli_usage_error("vat", "--root-motion is keep, in-place or loops-in-place");
     if (comp && !cb_exr_compression_parse(comp, &compression)) return cli_usage_error("vat", "--exr-compression: lossless only");
     cb_error err = {0};
     cb_model *m = cli_load_model(&said, path, &limits, &err);

@@ -228,7 +228,7 @@ static bool bake_vat(const view_paths *v, const cb_roster_type *t, const char *p
     if (!stat(out, &so) && !stat(palette, &sp) && so.st_mtime >= sp.st_mtime) return true;
     snprintf(max, sizeof max, "%u", b->max_texture_size);
     char *argv[] = {"vat", (char *)t->animal->model, "-o", out, "--like", (char *)palette, "--max-texture-size", max,
-                    "--root-motion", b->root_motion == CB_ROOT_MOTION_IN_PLACE ? "in-place" : "keep",
+                    "--root-motion", (char *)cb_root_motion_name(b->root_motion),
                     "--exr-compression", "none", NULL};
     printf("  %-16s VAT: ", t->animal->name);
     fflush(stdout);

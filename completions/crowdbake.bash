@@ -46,7 +46,7 @@ _crowdbake()
     --precision) COMPREPLY=($(compgen -W "float half u16" -- "$cur")); return ;;
     --format) COMPREPLY=($(compgen -W "pal exr ktx2 babylon pal,exr pal,exr,ktx2 pal,babylon" -- "$cur")); return ;;
     --max-influences) COMPREPLY=($(compgen -W "1 2 4" -- "$cur")); return ;;
-    --root-motion) COMPREPLY=($(compgen -W "keep in-place" -- "$cur")); return ;;
+    --root-motion) COMPREPLY=($(compgen -W "keep in-place loops-in-place" -- "$cur")); return ;;
     --exr-compression) COMPREPLY=($(compgen -W "none rle zips zip piz" -- "$cur")); return ;;
     --fps) COMPREPLY=($(compgen -W "24 30 60 auto" -- "$cur")); return ;;
     -o|--output|--depfile|--manifest|--html) COMPREPLY=($(compgen -f -- "$cur")); return ;;

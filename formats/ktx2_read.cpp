@@ -174,8 +174,8 @@ void read_palette_table(simdjson::dom::object o, cb_ktx2_palette *out, Names &na
     std::string_view motion;
     cb_root_motion rm = CB_ROOT_MOTION_KEEP;
     if (!o["root_motion"].get(v) && (v.get_string().get(motion) || !cb_root_motion_parse(std::string(motion).c_str(), &rm)))
-        r.fail("'root_motion' is not keep or in-place");
-    out->in_place = rm == CB_ROOT_MOTION_IN_PLACE;
+        r.fail("'root_motion' is not keep, in-place or loops-in-place");
+    out->in_place = rm != CB_ROOT_MOTION_KEEP;
     number(o, "model_height", p->model_height, r), number(o, "max_error", p->max_error, r);
     number(o, "visible_error", p->visible_error, r, false);
     /* float32, as the .pal's header holds them: a palette decodes, plays and verifies the same in either file */

@@ -194,7 +194,7 @@ struct Parser {
         }
         if (auto *n = t.get("root_motion")) {
             if (!cb_root_motion_parse(str(*n, where + " root_motion").c_str(), &b->root_motion))
-                fail(n->source(), where + " root_motion must be \"keep\" or \"in-place\"");
+                fail(n->source(), where + " root_motion must be \"keep\", \"in-place\" or \"loops-in-place\"");
             b->from.root_motion = from;
         }
         if (auto *n = t.get("fit_rows")) b->fit_rows = boolean(*n, where + " fit_rows"), b->from.fit_rows = from;

@@ -99,6 +99,21 @@ cb_status cb_catalog_override_states(cb_catalog *cat, const char *syncs, const c
 
 /* ---- ground speed ---- */
 
+static int classify_words(const char *text, char *out, size_t size);
+
+/* A clip whose name says an action done in place (Attack_Kick, Idle_Scratch) is no stride,
+ * whatever its feet do: a kick's feet step back while it rears, and its contacts would be
+ * footsteps of a walk that is not there. */
+static void no_stride_in_actions(const cb_model *m, const cb_clip_info *clip, cb_stride *st)
+{
+    char word[64];
+    const char *name = m->animations[clip->animation].name;
+    if (!st->stride || classify_words(name, word, sizeof word) >= 0) return;
+    st->stride = false, st->speed = 0, st->slide_mean = st->slide_worst = st->slide_mean_varying = 0;
+    for (uint32_t k = 0; k < st->foot_count; ++k) st->feet[k].strides = false, st->feet[k].stance_count = 0;
+    snprintf(st->why, sizeof st->why, "the clip's name says '%s': an action in place, its feet give no stride", word);
+}
+
 void cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, cb_ground_speed *out)
 {
     memset(out, 0, sizeof *out);
@@ -106,6 +121,7 @@ void cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, cb_ground_
     if (clip->duration <= 0) return;
     double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
     cb_stride_measure(s, clip, &out->stride);
+    no_stride_in_actions(cb_sampler_model(s), clip, &out->stride);
     out->root = clip->ground_speed;
     out->feet = out->stride.stride ? out->stride.speed : 0;
     if (out->feet > 0) {

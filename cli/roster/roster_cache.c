@@ -9,7 +9,7 @@
 
 #include "crowdbake_pal.h"
 
-static const char magic[8] = "CBPREP3"; /* 2: each clip's stride; 3: its feet's stances, the sockets */
+static const char magic[8] = "CBPREP4"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by their soles */
 
 bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {

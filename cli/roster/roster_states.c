@@ -102,10 +102,14 @@ void roster_warn_foot_slide(cb_roster_type *t)
         double lo = INFINITY, hi = 0;
         for (uint32_t k = 0; k < st->foot_count; ++k)
             if (st->feet[k].strides) lo = fmin(lo, st->feet[k].step_speed), hi = fmax(hi, st->feet[k].step_speed);
+        /* The words follow the numbers: feet whose mean speeds differ by a quarter or more cannot all
+         * be planted by one rate; feet that agree on average slide within each stance instead. */
+        const char *why = hi > 1.25 * lo ? "so no one rate plants them all"
+                                         : "together on average, but each slides back and forth within its stance";
         cb_warn(&t->warnings, "warning",
                 "clip '%s': its planted feet slide %.0f%% of the ground speed on average (worst %.0f%%) at any speed: "
-                "its feet step back at %.3g to %.3g units/s, so no one rate plants them all; the asset itself slides "
-                "(re-time the feet in the animation, or accept it)",
-                t->clips[c].name, 100 * st->slide_mean, 100 * st->slide_worst, lo, hi);
+                "its feet step back at %.3g to %.3g units/s, %s; the asset itself slides (re-time the feet in the "
+                "animation, or accept it)",
+                t->clips[c].name, 100 * st->slide_mean, 100 * st->slide_worst, lo, hi, why);
     }
 }

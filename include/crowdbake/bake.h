@@ -71,9 +71,13 @@ enum {
  * textures up to 16384 texels a side, root motion kept, no compression; out_dir NULL. */
 CROWDBAKE_API cb_bake_settings cb_default_bake_settings(void);
 
-/* "keep" or "in-place". */
+/* "keep", "in-place" or "loops-in-place". */
 CROWDBAKE_API bool cb_root_motion_parse(const char *text, cb_root_motion *out);
 CROWDBAKE_API const char *cb_root_motion_name(cb_root_motion root_motion);
+
+/* Whether a clip's root travels: over the clip, more than 1% of the model's height (10 mm/m, a
+ * third of a typical bake's visible blending error); less is root jitter of an in-place clip. */
+CROWDBAKE_API bool cb_clip_travels(const cb_clip_info *clip, double model_height);
 /* A comma-separated set of "pal", "exr", "ktx2" and "babylon" (each once), or "both" (pal and exr):
  * CB_FORMAT_* bits, 0 when it is none of those. */
 CROWDBAKE_API unsigned cb_formats_parse(const char *text);

@@ -331,7 +331,12 @@ CROWDBAKE_API void cb_channel_eval(const cb_channel *channel, double t, double o
 
 /* ---- clip framing --------------------------------------------------------------------- */
 
-typedef enum cb_root_motion { CB_ROOT_MOTION_KEEP, CB_ROOT_MOTION_IN_PLACE } cb_root_motion;
+/* How a clip's root travel is baked: kept in the rows; taken out (in place, its average velocity
+ * recorded for the game to move the instance); or taken out of the loops only, the one-shots
+ * keeping theirs (a death fall lands where it lands; a travelling loop would be pulled back at
+ * its wrap). */
+typedef enum cb_root_motion { CB_ROOT_MOTION_KEEP, CB_ROOT_MOTION_IN_PLACE, CB_ROOT_MOTION_LOOPS_IN_PLACE } cb_root_motion;
+
 
 /* Why a clip was judged a loop or a one-shot (cb_clip_info.loop_reason). */
 typedef enum cb_loop_reason {
@@ -356,6 +361,9 @@ typedef struct cb_clip_info {
     double root_velocity[3];     /* average velocity (displacement / duration); y is kept */
     double ground_speed;         /* |velocity.xz| */
 } cb_clip_info;
+
+/* Whether a clip is baked in place under a root motion mode. */
+CROWDBAKE_API bool cb_root_motion_in_place(cb_root_motion root_motion, const cb_clip_info *clip);
 
 /* In-place bakes take the root's average horizontal travel, velocity * tau, off every joint at
  * clip time t (from the clip's start). tau = t over the keys (span); a loop without a closing

@@ -22,8 +22,14 @@ typedef struct cb_socket {
 } cb_socket;
 
 /* The sampler's skin's sockets, in node order: their count, and in *out an array to free()
- * (NULL when there are none or memory ran out). Skinned mesh nodes of the skin are not sockets. */
+ * (NULL when there are none or memory ran out). Skinned mesh nodes of the skin are not sockets,
+ * nor are rig helpers (cb_socket_is_rig_helper). */
 CROWDBAKE_API uint32_t cb_find_sockets(cb_sampler *sampler, cb_socket **out);
+
+/* Whether a node under a joint is a rig helper, not a socket: its joint moves no vertex and it or
+ * its joint is named as a control (an IK target, a pole target such as "PoleTarget.L_end", a
+ * "_ctrl"): a prop hung there would float beside the body. */
+CROWDBAKE_API bool cb_socket_is_rig_helper(cb_sampler *sampler, int32_t node);
 
 #ifdef __cplusplus
 }

@@ -44,12 +44,19 @@ bool cb_root_motion_parse(const char *text, cb_root_motion *out)
 {
     if (strcmp(text, "keep") == 0) return *out = CB_ROOT_MOTION_KEEP, true;
     if (strcmp(text, "in-place") == 0) return *out = CB_ROOT_MOTION_IN_PLACE, true;
+    if (strcmp(text, "loops-in-place") == 0) return *out = CB_ROOT_MOTION_LOOPS_IN_PLACE, true;
     return false;
 }
 
 const char *cb_root_motion_name(cb_root_motion root_motion)
 {
-    return root_motion == CB_ROOT_MOTION_IN_PLACE ? "in-place" : "keep";
+    return root_motion == CB_ROOT_MOTION_IN_PLACE ? "in-place" : root_motion == CB_ROOT_MOTION_LOOPS_IN_PLACE ? "loops-in-place" : "keep";
+}
+
+bool cb_clip_travels(const cb_clip_info *clip, double model_height)
+{
+    double travel = clip->ground_speed * clip->duration;
+    return travel > 0 && travel > 0.01 * model_height;
 }
 
 unsigned cb_formats_parse(const char *text)
@@ -197,6 +204,30 @@ void cb_bake_job_init(cb_bake_job *job)
     job->limits = cb_default_limits();
 }
 
+/* Root motion decided like the rest: a bake nobody told what to do with root travel keeps it,
+ * unless a loop travels: its wrap would pull the body back at any rate, and what a crowd wants
+ * is the loop in place with its velocity recorded, the game moving the instance. Then the loops
+ * go in place and the one-shots keep their travel (a fall ends where it falls); bake_notes says
+ * so, and --root-motion (or the catalog's root_motion) overrides. */
+static void decide_root_motion(cb_bake_job *job)
+{
+    if (job->settings.from.root_motion != CB_FROM_DEFAULT || job->settings.root_motion != CB_ROOT_MOTION_KEEP) return;
+    cb_error e = {0};
+    cb_sampler *s = cb_sampler_create(job->model, job->skin, &e);
+    if (!s) return; /* the bake reports it */
+    double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
+    bool travels = false;
+    for (uint32_t i = 0; i < job->plan_count && !travels; ++i) {
+        cb_clip_info info;
+        cb_error ce = {0};
+        double fps = cb_clip_plan_fps(&job->plan[i], job->settings.fps);
+        if (!cb_clip_analyze(s, job->plan[i].animation, fps, job->plan[i].loop, &job->limits, &info, &ce))
+            travels = info.loops && cb_clip_travels(&info, height);
+    }
+    cb_sampler_free(s);
+    if (travels) job->settings.root_motion = CB_ROOT_MOTION_LOOPS_IN_PLACE, job->settings.from.root_motion = CB_FROM_TRAVEL;
+}
+
 cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
 {
     /* The one size there is so far; a later MINOR that adds fields also takes this size and
@@ -222,6 +253,7 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
     bool any = false;
     for (uint32_t i = 0; i < n; ++i) job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false};
     job->plan_count = n;
+    decide_root_motion(job);
     resolve_clips(job);
     for (uint32_t i = 0; i < n; ++i) plan_step_rows(job, i);
     for (uint32_t i = 0; i < n; ++i) any |= clip_goal(job, i, &goals[i]);
@@ -244,15 +276,21 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
  * root jitter of an in-place clip, not travel worth a note. */
 static bool loop_travel_visible(const cb_palette *p, const cb_palette_clip *clip)
 {
-    double travel = clip->ground_speed * clip->duration;
-    return clip->loops && travel > 0 && travel > 0.01 * p->model_height;
+    cb_clip_info info = {.duration = clip->duration, .loops = clip->loops, .ground_speed = clip->ground_speed};
+    return clip->loops && cb_clip_travels(&info, p->model_height);
 }
 
 /* What the user should know about a bake: the layout's fallback, loops that travel, quaternion
  * flips. */
-static void bake_notes(const cb_bake_options *o, const cb_palette *p, cb_warnings *w)
+static void bake_notes(const cb_bake_options *o, cb_setting_from from, const cb_palette *p, cb_warnings *w)
 {
     if (p->fallback_note[0]) cb_warn(w, "note", "%s", p->fallback_note);
+    for (uint32_t c = 0; from == CB_FROM_TRAVEL && c < p->clip_count; ++c)
+        if (loop_travel_visible(p, &p->clips[c]))
+            cb_warn(w, "note", "clip '%s' loops and travels %.3g units/s, which its wrap would pull back at any rate: the "
+                    "loops are baked in place with their velocity recorded (the game moves the instance), the one-shots "
+                    "keep their travel (root_motion loops-in-place; --root-motion keep keeps it)", p->clips[c].name,
+                    p->clips[c].ground_speed);
     for (uint32_t c = 0; o->root_motion == CB_ROOT_MOTION_KEEP && c < p->clip_count; ++c) {
         if (loop_travel_visible(p, &p->clips[c]))
             cb_warn(w, "note", "clip '%s' loops and travels %.3g units/s: blending its last row into its first pulls the "
@@ -270,7 +308,7 @@ static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pa
     double t0 = now_seconds();
     if (out->format == CB_FORMAT_PAL) {
         cb_pal_write_options po = {job->settings.zstd, 0, out->input_hash, (float)job->speed_reference,
-                                   job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE};
+                                   job->settings.root_motion != CB_ROOT_MOTION_KEEP};
         if (cb_pal_mapping_holds(mapping, p)) cb_pal_write_mapped(mapping, p, &po, err);
         else cb_pal_write(out->path, p, job->model, job->skin, &po, err);
     } else if (out->format == CB_FORMAT_EXR) {
@@ -278,9 +316,9 @@ static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pa
                      (float)job->speed_reference, err);
     } else if (out->format == CB_FORMAT_KTX2) {
         cb_ktx2_write(out->path, p, job->model, job->skin, out->input_hash, (float)job->speed_reference,
-                      job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE, err);
+                      job->settings.root_motion != CB_ROOT_MOTION_KEEP, err);
     } else {
-        cb_babylon_write_options bo = {(float)job->speed_reference, job->settings.root_motion == CB_ROOT_MOTION_IN_PLACE,
+        cb_babylon_write_options bo = {(float)job->speed_reference, job->settings.root_motion != CB_ROOT_MOTION_KEEP,
                                        out->input_hash, job->babylon_states, job->babylon_state_count};
         cb_babylon_write(out->path, p, job->model, job->skin, &bo, err);
     }
@@ -401,7 +439,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
             out->output_count = 0; /* nothing written */
             break;
         }
-        if (out->output_count == 1) bake_notes(&opt, &shared, &out->notes);
+        if (out->output_count == 1) bake_notes(&opt, job->settings.from.root_motion, &shared, &out->notes);
         write_output(job, &shared, &mapping, o, err);
     }
     cb_pal_mapping_abort(&mapping); /* a bake that failed: its temporary */

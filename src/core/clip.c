@@ -205,6 +205,11 @@ static void root_travel(const cb_clip_info *clip, double t, double *dx, double *
     *dz = clip->root_velocity[2] * tau;
 }
 
+bool cb_root_motion_in_place(cb_root_motion root_motion, const cb_clip_info *clip)
+{
+    return root_motion == CB_ROOT_MOTION_IN_PLACE || (root_motion == CB_ROOT_MOTION_LOOPS_IN_PLACE && clip->loops);
+}
+
 void cb_clip_frame_matrices(cb_sampler *s, const cb_clip_info *clip, uint32_t frame, cb_root_motion root_motion,
                             double *out)
 {
@@ -212,7 +217,7 @@ void cb_clip_frame_matrices(cb_sampler *s, const cb_clip_info *clip, uint32_t fr
     int32_t skin = cb_sampler_skin(s);
     double t = cb_clip_frame_time(clip, frame);
     cb_sample_joint_matrices(s, clip->animation, t, out);
-    if (root_motion != CB_ROOT_MOTION_IN_PLACE) return;
+    if (!cb_root_motion_in_place(root_motion, clip)) return;
     double dx, dz;
     root_travel(clip, t, &dx, &dz);
     for (uint32_t j = 0; j < m->skins[skin].joint_count; ++j) {
@@ -231,7 +236,7 @@ void cb_clip_frame_similarities(cb_sampler *s, const cb_clip_info *clip, const u
         for (uint32_t i = 0; i < n; ++i) times[i] = cb_clip_frame_time(clip, frames[first + i]);
         cb_similarity *rows = out + (size_t)first * joints;
         cb_sample_joint_similarities_batch(s, clip->animation, times, n, rows);
-        for (uint32_t i = 0; root_motion == CB_ROOT_MOTION_IN_PLACE && i < n; ++i) {
+        for (uint32_t i = 0; cb_root_motion_in_place(root_motion, clip) && i < n; ++i) {
             double dx, dz;
             root_travel(clip, times[i], &dx, &dz);
             for (uint32_t j = 0; j < joints; ++j) {
@@ -249,7 +254,7 @@ void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t
     double times[CB_SAMPLE_BATCH];
     for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) times[i] = cb_clip_frame_time(clip, frames[i < count ? i : count - 1]);
     cb_sample_joint_lanes(s, clip->animation, times, count, out);
-    for (uint32_t i = 0; root_motion == CB_ROOT_MOTION_IN_PLACE && i < CB_SAMPLE_BATCH; ++i) {
+    for (uint32_t i = 0; cb_root_motion_in_place(root_motion, clip) && i < CB_SAMPLE_BATCH; ++i) {
         double dx, dz;
         root_travel(clip, times[i], &dx, &dz);
         for (uint32_t j = 0; j < joints; ++j) {

@@ -13,6 +13,7 @@ const char *cb_setting_from_name(cb_setting_from from)
     case CB_FROM_COMMAND_LINE: return "command line";
     case CB_FROM_CLIP: return "catalog clip";
     case CB_FROM_RIG: return "rig: no skinned mesh";
+    case CB_FROM_TRAVEL: return "a loop travels";
     default: return "default";
     }
 }

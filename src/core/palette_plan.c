@@ -128,7 +128,7 @@ cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip
         c->fitted = (st->opt->fit || one.fit) && !one.step;
         c->step = one.step;
         for (int k = 0; k < 3; ++k)
-            c->root_velocity[k] = (float)(st->opt->root_motion == CB_ROOT_MOTION_IN_PLACE ? infos[i].root_velocity[k] : 0);
+            c->root_velocity[k] = (float)(cb_root_motion_in_place(st->opt->root_motion, &infos[i]) ? infos[i].root_velocity[k] : 0);
         rows += infos[i].frames;
         if (rows > st->opt->limits.max_frames)
             return cb_fail_setting(err, CB_ERR_INPUT, CB_SETTING_MAX_FRAMES, "%s: %llu baked rows over all clips, over the limit of %u",

@@ -6,146 +6,35 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "palette_bake.h" /* palette_bind_positions */
+#include "foot_sole.h"
 
 /* Samples over one clip: 240 over a Cow's 1.2 s walk is 5 ms apart, well inside a stance. */
 enum { STRIDE_SAMPLES = 240 };
 
 /* The thresholds of a stride, as fractions of the model's height (size) where they are lengths.
- * A contact point must lift by 2% of the height to be stepping; it is planted while in the
- * lowest 15% of its own lift; a stride needs it planted for 15% of the cycle, stepping back at
- * 10% of the height per second or more (slower is shuffling on the spot), in a steady direction
- * (the mean velocity at least 70% of the mean speed) that agrees with the other feet (cosine
- * 0.7). */
-#define LIFT_MIN 0.02
-#define STANCE_BAND 0.15
-#define STANCE_MIN 0.15
+ * A foot's sole must lift by 3% of the height to be stepping; it is planted while within 2% of
+ * the height of its lowest (a band of the foot's own lift would follow how high it steps: 15% of
+ * a gallop's leap is 7-9% of the height, a paw still in the air). A stride needs it planted for
+ * 8% of the cycle (a leap's landing), stepping back at 10% of the height per second or more
+ * (slower is shuffling on the spot), in a steady direction (the mean velocity at least half the
+ * mean speed: a sole rolls as it plants and lifts) that agrees with the other feet (cosine 0.7). */
+#define LIFT_MIN 0.03
+#define STANCE_BAND 0.02
+#define STANCE_MIN 0.08
 #define STEP_SPEED_MIN 0.1
-#define STEADY_MIN 0.7
+#define STEADY_MIN 0.5
 #define AGREE_MIN 0.7
-
-/* A contact point: position = J_joint(t) * point. */
-typedef struct contact {
-    uint32_t joint, vertices;
-    double point[3]; /* in the mesh's bind space */
-    double at[3];    /* where the rest pose puts it */
-} contact;
 
 typedef struct track {
     double band; /* planted below this height */
-    double *h;  /* height at each sample (STRIDE_SAMPLES + 1) */
+    double *h;  /* the sole's height at each sample (STRIDE_SAMPLES + 1) */
     double *u;  /* horizontal velocity x, z over each interval (2 * STRIDE_SAMPLES) */
     bool *down; /* per interval: planted */
 } track;
 
-static void transform(const double *m, const double *p, double out[3])
-{
-    for (int k = 0; k < 3; ++k) out[k] = m[k] * p[0] + m[4 + k] * p[1] + m[8 + k] * p[2] + m[12 + k];
-}
-
-static bool is_ancestor(const cb_model *m, int32_t node, int32_t of)
-{
-    for (int32_t p = m->nodes[of].parent; p >= 0; p = m->nodes[p].parent)
-        if (p == node) return true;
-    return false;
-}
-
-/* Whether two joints are one leg: one above the other. */
-static bool same_leg(const cb_model *m, int32_t skin, uint32_t a, uint32_t b)
-{
-    int32_t x = m->skins[skin].joints[a], y = m->skins[skin].joints[b];
-    return is_ancestor(m, x, y) || is_ancestor(m, y, x);
-}
-
-static int by_vertices(const void *a, const void *b)
-{
-    const contact *x = a, *y = b;
-    if (x->vertices != y->vertices) return x->vertices < y->vertices ? 1 : -1;
-    return (x->joint > y->joint) - (x->joint < y->joint);
-}
-
-static int by_joint(const void *a, const void *b)
-{
-    const contact *x = a, *y = b;
-    return (x->joint > y->joint) - (x->joint < y->joint);
-}
-
-/* The contact points of the rest pose: per joint, the mean of the skinned vertices it moves most
- * that lie in the lowest 3% of the model's height; or, without a mesh, the leaf joints in the
- * lowest 15% of the joints' heights. Returns their count (at most CB_MAX_FEET, the ones with
- * the most vertices) and the model's height in *size. */
-static uint32_t find_contacts(cb_sampler *s, const double *rest, contact *out, double *size)
-{
-    const cb_model *m = cb_sampler_model(s);
-    int32_t skin = cb_sampler_skin(s);
-    uint32_t bones = m->skins[skin].joint_count, n = 0;
-    double lo[3], hi[3];
-    *size = cb_skin_rest_bounds(s, lo, hi);
-    contact *per_joint = calloc(bones, sizeof *per_joint);
-    if (!per_joint) return 0;
-    for (uint32_t pi = 0; pi < m->primitive_count && *size > 0; ++pi) {
-        const cb_primitive *prim = &m->primitives[pi];
-        if (prim->skin != skin) continue;
-        double *pos = malloc((size_t)prim->vertex_count * 3 * sizeof(double));
-        if (!pos) break;
-        cb_skin_positions(prim, rest, pos);
-        for (uint32_t v = 0; v < prim->vertex_count; ++v) {
-            if (pos[(size_t)v * 3 + 1] > lo[1] + 0.03 * *size) continue;
-            uint32_t best = 0;
-            for (int i = 1; i < 4; ++i)
-                if (prim->weights[(size_t)v * 4 + i] > prim->weights[(size_t)v * 4 + best]) best = (uint32_t)i;
-            contact *c = &per_joint[prim->joints[(size_t)v * 4 + best]];
-            for (int k = 0; k < 3; ++k) c->point[k] += prim->positions[(size_t)v * 3 + k];
-            c->vertices++;
-        }
-        free(pos);
-    }
-    /* The joints with the most vertices down there (ties: the first joint), then in joint order. */
-    for (uint32_t j = 0; j < bones; ++j) per_joint[j].joint = j;
-    qsort(per_joint, bones, sizeof *per_joint, by_vertices);
-    /* Joints that share one foot's vertices (an IK bone and the leg's last, a heel and its toes)
-     * are one contact (one above the other, or within 8% of the height: a human's feet stand 14%
-     * apart, a quadruped's 17-27%): the one moving the most vertices down there stands for the foot. */
-    for (uint32_t j = 0; j < bones && n < CB_MAX_FEET && per_joint[j].vertices; ++j) {
-        contact c = per_joint[j];
-        for (int k = 0; k < 3; ++k) c.point[k] /= c.vertices;
-        transform(rest + (size_t)c.joint * 16, c.point, c.at);
-        bool same = false;
-        for (uint32_t i = 0; i < n && !same; ++i)
-            same = same_leg(m, skin, c.joint, out[i].joint) ||
-                   hypot(hypot(c.at[0] - out[i].at[0], c.at[1] - out[i].at[1]), c.at[2] - out[i].at[2]) < 0.08 * *size;
-        if (!same) out[n++] = c;
-    }
-    qsort(out, n, sizeof *out, by_joint);
-    free(per_joint);
-    if (n > 0) return n;
-    /* No skinned mesh: the lowest leaf joints, at their bind positions. */
-    const cb_skin *sk = &m->skins[skin];
-    float *bind = malloc((size_t)bones * 3 * sizeof(float));
-    if (!bind) return 0;
-    palette_bind_positions(sk, bind);
-    double ylo = INFINITY, yhi = -INFINITY, p[3];
-    for (uint32_t j = 0; j < bones; ++j) {
-        double b[3] = {bind[j * 3], bind[j * 3 + 1], bind[j * 3 + 2]};
-        transform(rest + (size_t)j * 16, b, p);
-        ylo = fmin(ylo, p[1]), yhi = fmax(yhi, p[1]);
-    }
-    *size = yhi - ylo > 0 ? yhi - ylo : 1;
-    for (uint32_t j = 0; j < bones && n < CB_MAX_FEET; ++j) {
-        bool leaf = true;
-        for (uint32_t k = 0; k < bones && leaf; ++k)
-            for (int32_t q = m->nodes[sk->joints[k]].parent; q >= 0 && leaf; q = m->nodes[q].parent) leaf = q != sk->joints[j];
-        double b[3] = {bind[j * 3], bind[j * 3 + 1], bind[j * 3 + 2]};
-        transform(rest + (size_t)j * 16, b, p);
-        if (leaf && p[1] <= ylo + 0.15 * *size) out[n++] = (contact){j, 1, {b[0], b[1], b[2]}, {p[0], p[1], p[2]}};
-    }
-    free(bind);
-    return n;
-}
-
-/* Every contact's height and velocity over the clip, in the game's frame: the root's average
+/* Every foot's sole height and velocity over the clip, in the game's frame: the root's average
  * horizontal travel taken off as an in-place bake does (cb_root_travel_time). */
-static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const contact *cs, uint32_t n, track *tr)
+static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const foot_sole *soles, uint32_t n, track *tr)
 {
     const cb_model *m = cb_sampler_model(s);
     uint32_t bones = m->skins[cb_sampler_skin(s)].joint_count;
@@ -154,13 +43,12 @@ static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const contact
     bool ok = mats && x;
     double dt = clip->duration / STRIDE_SAMPLES, span = clip->t1 - clip->t0;
     for (uint32_t i = 0; ok && i <= STRIDE_SAMPLES; ++i) {
-        double t = i * dt, tau = cb_root_travel_time(t, span, clip->duration, clip->loops), p[3];
+        double t = i * dt, tau = cb_root_travel_time(t, span, clip->duration, clip->loops), xz[2];
         cb_sample_joint_matrices(s, clip->animation, clip->t0 + t, mats);
         for (uint32_t k = 0; k < n; ++k) {
-            transform(mats + (size_t)cs[k].joint * 16, cs[k].point, p);
-            tr[k].h[i] = p[1];
-            x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2] = p[0] - clip->root_velocity[0] * tau;
-            x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2 + 1] = p[2] - clip->root_velocity[2] * tau;
+            foot_sole_at(&soles[k], mats, &tr[k].h[i], xz);
+            x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2] = xz[0] - clip->root_velocity[0] * tau;
+            x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2 + 1] = xz[1] - clip->root_velocity[2] * tau;
         }
     }
     for (uint32_t k = 0; ok && k < n; ++k)
@@ -181,7 +69,7 @@ static foot_verdict foot_stance(track *tr, double size, cb_foot *f, double mean[
 {
     double lo = INFINITY, hi = -INFINITY, speed_sum = 0;
     for (uint32_t i = 0; i <= STRIDE_SAMPLES; ++i) lo = fmin(lo, tr->h[i]), hi = fmax(hi, tr->h[i]);
-    double band = tr->band = lo + STANCE_BAND * (hi - lo);
+    double band = tr->band = lo + STANCE_BAND * size;
     uint32_t down = 0;
     mean[0] = mean[1] = 0;
     for (uint32_t i = 0; i < STRIDE_SAMPLES; ++i) {
@@ -337,6 +225,8 @@ static uint32_t agree_on_heading(cb_stride *st, double (*means)[2], foot_verdict
 
 static void explain(cb_stride *st, const cb_clip_info *clip, const foot_verdict *verdicts, uint32_t striding)
 {
+    /* The ranges quoted: of the striding feet where the clip strides (a foot left out, shuffling
+     * on the spot, is not among those stepping back together), else of every foot that steps. */
     double smin = INFINITY, smax = 0, vmin = INFINITY, vmax = 0;
     uint32_t count[FOOT_DISAGREES + 1] = {0}, stepping = 0;
     for (uint32_t k = 0; k < st->foot_count; ++k) {
@@ -344,6 +234,7 @@ static void explain(cb_stride *st, const cb_clip_info *clip, const foot_verdict 
         count[verdicts[k]]++;
         if (verdicts[k] == FOOT_STILL) continue;
         ++stepping;
+        if (striding >= 2 && !f->strides) continue;
         smin = fmin(smin, f->stance), smax = fmax(smax, f->stance);
         vmin = fmin(vmin, f->step_speed), vmax = fmax(vmax, f->step_speed);
     }
@@ -377,13 +268,13 @@ void cb_stride_measure(cb_sampler *s, const cb_clip_info *clip, cb_stride *out)
     const cb_model *m = cb_sampler_model(s);
     uint32_t bones = m->skins[cb_sampler_skin(s)].joint_count;
     double *rest = malloc((size_t)bones * 16 * sizeof(double)), size = 0;
-    contact cs[CB_MAX_FEET];
+    foot_sole soles[CB_MAX_FEET] = {{0}};
     track tr[CB_MAX_FEET];
     double *buf = NULL;
     bool *down = NULL;
     if (rest) {
         cb_sample_joint_matrices(s, -1, 0, rest);
-        out->foot_count = clip->duration > 0 ? find_contacts(s, rest, cs, &size) : 0;
+        out->foot_count = clip->duration > 0 ? foot_soles_find(s, rest, soles, CB_MAX_FEET, &size) : 0;
     }
     uint32_t n = out->foot_count;
     buf = malloc((size_t)(n ? n : 1) * (STRIDE_SAMPLES * 3 + 1) * sizeof(double));
@@ -391,12 +282,12 @@ void cb_stride_measure(cb_sampler *s, const cb_clip_info *clip, cb_stride *out)
     for (uint32_t k = 0; buf && down && k < n; ++k) {
         tr[k] = (track){.h = buf + (size_t)k * (STRIDE_SAMPLES * 3 + 1), .down = down + (size_t)k * STRIDE_SAMPLES};
         tr[k].u = tr[k].h + STRIDE_SAMPLES + 1;
-        out->feet[k].joint = cs[k].joint;
-        snprintf(out->feet[k].name, sizeof out->feet[k].name, "%s", m->nodes[m->skins[cb_sampler_skin(s)].joints[cs[k].joint]].name);
+        out->feet[k].joint = soles[k].joint;
+        snprintf(out->feet[k].name, sizeof out->feet[k].name, "%s", m->nodes[m->skins[cb_sampler_skin(s)].joints[soles[k].joint]].name);
     }
     uint32_t striding = 0;
     foot_verdict verdicts[CB_MAX_FEET] = {FOOT_STILL};
-    if (n && buf && down && sample_tracks(s, clip, cs, n, tr)) {
+    if (n && buf && down && sample_tracks(s, clip, soles, n, tr)) {
         double means[CB_MAX_FEET][2];
         for (uint32_t k = 0; k < n; ++k) {
             verdicts[k] = foot_stance(&tr[k], size, &out->feet[k], means[k]);
@@ -408,5 +299,6 @@ void cb_stride_measure(cb_sampler *s, const cb_clip_info *clip, cb_stride *out)
     }
     for (uint32_t k = 0; !out->stride && k < n; ++k) out->feet[k].strides = false; /* one foot is no stride */
     explain(out, clip, verdicts, striding);
+    foot_soles_free(soles, n);
     free(rest), free(buf), free(down);
 }

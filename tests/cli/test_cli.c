@@ -222,11 +222,36 @@ static void test_inspect_in_place_velocity(void **state)
     assert_contains(out, "(0, 0, 4), speed 4");
     const char *table = strstr(out, "idle"); /* no float noise (-9.797e-18) as velocities */
     assert_true(strstr(table, "e-0") == NULL && strstr(table, "e-1") == NULL && strstr(table, "e-2") == NULL);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/qk.pal -q", q), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/qk.pal --root-motion keep -q", q), 0);
     assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/qk.pal"), 0);
     assert_contains(out, "walk");
     assert_contains(out, "in the rows");
     assert_true(strstr(out, "(0, 0, 0)") == NULL); /* a kept walk does not claim to stand still */
+    /* A bare bake: its loops travel, so they go in place; the one-shot (death) keeps its travel. */
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/qd.pal -q", q), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/qd.pal"), 0);
+    assert_contains(out, "(0, 0, 1.2), speed 1.2");
+    const char *death = strstr(out, "death");
+    assert_non_null(death);
+    assert_non_null(strstr(death, "in the rows"));
+}
+
+/* A single-model bake records a speed reference, as a catalog animal's is decided: the ground
+ * speed of its slowest locomotion clip (Husky's Walk, all four paws: 1.405 units/s; it wrote 0),
+ * saying so in a note; --speed-reference overrides it. */
+static void test_single_model_speed_reference(void **state)
+{
+    (void)state;
+    static char out[1 << 14];
+    char husky[1024];
+    shared_path(husky, sizeof husky, "assets/quaternius-husky/Husky.glb");
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/husky.pal", husky), 0);
+    assert_contains(out, "speed reference 1.405 units/s recorded: the slowest locomotion clip 'AnimalArmature|Walk'");
+    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/husky.pal"), 0);
+    assert_contains(out, "speed reference 1.40");
+    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/husky2.pal --speed-reference 2 -q", husky), 0);
+    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/husky2.pal"), 0);
+    assert_contains(out, "speed reference 2 m/s");
 }
 
 /* Clip names as exporters write them ("AnimalArmature|Attack_Headbutt", 30 characters) keep
@@ -363,6 +388,7 @@ int main(void)
         cmocka_unit_test(test_format_pal_exr_keeps_each_precision),
         cmocka_unit_test(test_messages),
         cmocka_unit_test(test_inspect_in_place_velocity),
+        cmocka_unit_test(test_single_model_speed_reference),
         cmocka_unit_test(test_inspect_aligns_long_clip_names),
         cmocka_unit_test(test_loop_and_one_shot_overrule_the_poses),
         cmocka_unit_test(test_example_catalog_states_the_defaults),

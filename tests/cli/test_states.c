@@ -273,67 +273,7 @@ static void test_sync_overrides(void **state)
 
 /* ---- the feet, against the reference matrices ---- */
 
-/* A 4x4 column-major affine inverse's translation applied to the origin: where inverse(IBM)
- * puts the joint, its bind position. */
-static void bind_position(const double *ibm, double out[3])
-{
-    const double *a = ibm;
-    double det = a[0] * (a[5] * a[10] - a[9] * a[6]) - a[4] * (a[1] * a[10] - a[9] * a[2]) + a[8] * (a[1] * a[6] - a[5] * a[2]);
-    double inv[9] = {(a[5] * a[10] - a[9] * a[6]) / det, (a[9] * a[2] - a[1] * a[10]) / det, (a[1] * a[6] - a[5] * a[2]) / det,
-                     (a[8] * a[6] - a[4] * a[10]) / det, (a[0] * a[10] - a[8] * a[2]) / det, (a[4] * a[2] - a[0] * a[6]) / det,
-                     (a[4] * a[9] - a[8] * a[5]) / det, (a[8] * a[1] - a[0] * a[9]) / det, (a[0] * a[5] - a[4] * a[1]) / det};
-    for (int r = 0; r < 3; ++r) out[r] = -(inv[r] * a[12] + inv[3 + r] * a[13] + inv[6 + r] * a[14]);
-}
-
-enum { WALK_ROWS = 36 }; /* 1.1667 s at 30 fps: N = 35, rows 0..35 (the last is the first again) */
-
-/* Each foot joint's position at every reference row of the Walk: M * bind position. */
-static void reference_feet(const cb_model *m, const uint32_t *joints, double (*pos)[WALK_ROWS][3])
-{
-    char path[1024], line[2048];
-    shared_path(path, sizeof path, "reference/Cow.fps30.csv");
-    FILE *f = fopen(path, "r");
-    assert_non_null(f);
-    double bind[4][3];
-    for (int k = 0; k < 4; ++k) bind_position(m->skins[0].inverse_bind + (size_t)joints[k] * 16, bind[k]);
-    uint32_t found = 0;
-    while (fgets(line, sizeof line, f)) {
-        char name[128];
-        unsigned clip, frame, frames, skin, joint;
-        double t, M[16];
-        if (sscanf(line, "%u,\"%127[^\"]\",%u,%u,%lf,%u,%u,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &clip,
-                   name, &frame, &frames, &t, &skin, &joint, &M[0], &M[1], &M[2], &M[3], &M[4], &M[5], &M[6], &M[7], &M[8],
-                   &M[9], &M[10], &M[11], &M[12], &M[13], &M[14], &M[15]) != 23 ||
-            strcmp(name, "AnimalArmature|Walk") != 0)
-            continue;
-        assert_int_equal(frames, WALK_ROWS);
-        for (int k = 0; k < 4; ++k)
-            if (joint == joints[k]) {
-                for (int r = 0; r < 3; ++r)
-                    pos[k][frame][r] = M[r] * bind[k][0] + M[4 + r] * bind[k][1] + M[8 + r] * bind[k][2] + M[12 + r];
-                ++found;
-            }
-    }
-    fclose(f);
-    assert_int_equal(found, 4 * WALK_ROWS);
-}
-
-/* A foot's stance from its own heights (the lowest 15% of its lift) and its mean velocity there. */
-static double reference_stance(const double (*p)[3], double dt, bool *down, double mean[2])
-{
-    double lo = INFINITY, hi = -INFINITY;
-    for (int i = 0; i < WALK_ROWS; ++i) lo = fmin(lo, p[i][1]), hi = fmax(hi, p[i][1]);
-    int n = 0;
-    mean[0] = mean[1] = 0;
-    for (int i = 0; i + 1 < WALK_ROWS; ++i) {
-        down[i] = p[i][1] <= lo + 0.15 * (hi - lo) && p[i + 1][1] <= lo + 0.15 * (hi - lo);
-        if (down[i]) mean[0] += (p[i + 1][0] - p[i][0]) / dt, mean[1] += (p[i + 1][2] - p[i][2]) / dt, ++n;
-    }
-    mean[0] /= n, mean[1] /= n;
-    return hypot(mean[0], mean[1]);
-}
-
-static void test_cow_walk_feet_against_the_reference(void **state)
+static void test_cow_walk_feet_disagree(void **state)
 {
     (void)state;
     cb_catalog cat;
@@ -342,52 +282,53 @@ static void test_cow_walk_feet_against_the_reference(void **state)
     const cb_roster_type *t = &r.types[0];
     const cb_roster_clip *walk = &t->clips[t->state_clip[state_index(&cat.animals[0], "wander")]];
     const cb_stride *st = &walk->speed.stride;
-    /* crowdbake's feet: the four hooves, named by the joints that move them. */
+    /* crowdbake's feet: the four hooves, named by the foot bones that move them (each foot's stance
+     * and step speed against the reference matrices: test_feet). */
     assert_true(st->stride && st->foot_count == 4);
-    cb_model *m = load_shared(COW);
-    uint32_t joints[4];
-    bool front[4];
+    double fmax_ = 0, hmin = INFINITY;
     for (int k = 0; k < 4; ++k) {
-        joints[k] = st->feet[k].joint;
-        front[k] = strncmp(st->feet[k].name, "FF.", 3) == 0;
-        assert_true(front[k] || strncmp(st->feet[k].name, "FFB.", 4) == 0);
-    }
-    /* The reference's feet: the same joints, at 30 fps, planted by their own heights. */
-    static double pos[4][WALK_ROWS][3];
-    reference_feet(m, joints, pos);
-    double dt = walk->duration / (WALK_ROWS - 1), speed[4], mean[4][2], dx = 0, dz = 0, fmax_ = 0, hmin = INFINITY;
-    bool down[4][WALK_ROWS];
-    for (int k = 0; k < 4; ++k) {
-        speed[k] = reference_stance((const double(*)[3])pos[k], dt, down[k], mean[k]);
-        dx += mean[k][0], dz += mean[k][1];
-        if (front[k]) fmax_ = fmax(fmax_, speed[k]);
-        else hmin = fmin(hmin, speed[k]);
-        printf("  %-6s reference %.3f units/s back while planted, crowdbake %.3f\n", st->feet[k].name, speed[k],
-               st->feet[k].step_speed);
-        assert_true(fabs(speed[k] - st->feet[k].step_speed) <= 0.1 * speed[k]);
+        bool front = strncmp(st->feet[k].name, "FF.", 3) == 0;
+        assert_true(front || strncmp(st->feet[k].name, "FFB.", 4) == 0);
+        if (front) fmax_ = fmax(fmax_, st->feet[k].step_speed);
+        else hmin = fmin(hmin, st->feet[k].step_speed);
     }
     /* Front and hind feet disagree by over a quarter: no single speed plants them all. */
     printf("  front feet %.3f, hind feet %.3f units/s; crowdbake's ground speed %.3f\n", fmax_, hmin, walk->speed.speed);
     assert_true(hmin > 1.25 * fmax_);
     /* The speed with the least slide lies between them (not the hind feet's, as it once was). */
     assert_true(walk->speed.speed > fmax_ && walk->speed.speed < hmin);
-    /* The slide at that speed, from the reference tracks: |u + v d| / v over every stance. */
-    double len = hypot(dx, dz), d[2] = {-dx / len, -dz / len}, v = walk->speed.speed, sum = 0;
-    int n = 0;
-    for (int k = 0; k < 4; ++k)
-        for (int i = 0; i + 1 < WALK_ROWS; ++i)
-            if (down[k][i]) {
-                double ux = (pos[k][i + 1][0] - pos[k][i][0]) / dt, uz = (pos[k][i + 1][2] - pos[k][i][2]) / dt;
-                sum += hypot(ux + v * d[0], uz + v * d[1]) / v, ++n;
-            }
-    printf("  mean slide: reference %.3f, crowdbake %.3f (worst %.3f)\n", sum / n, st->slide_mean, st->slide_worst);
-    assert_true(fabs(sum / n - st->slide_mean) <= 0.1);
     assert_true(st->slide_mean > CB_SLIDE_WARN); /* so the bake warns */
     bool warned = false;
     for (uint32_t i = 0; i < t->warnings.count; ++i)
         warned |= strstr(t->warnings.items[i].message, "clip 'AnimalArmature|Walk': its planted feet slide") != NULL;
     assert_true(warned);
-    cb_model_free(m);
+    cb_roster_free(&r);
+    cb_catalog_free(&cat);
+}
+
+/* An attack made a loop (Attack_Kick, whose feet step back as it rears) is no stride: no contacts,
+ * no ground speed from its feet (issue 45). And a stride's reason quotes the striding feet's
+ * ranges, the numbers in its foot_slide (a shuffling foot left out is not among them). */
+static void test_attack_kick_is_no_stride(void **state)
+{
+    (void)state;
+    cb_catalog cat;
+    cb_roster r;
+    bake_or_fail(cow_catalog("kick", "clips = [{ source = \"AnimalArmature|Attack_Kick\", loop = true }, \"AnimalArmature|Walk\"]\n"
+                                     "states = { attack = [\"kick\"], wander = [\"walk\"] }\n"),
+                 &cat, &r);
+    const cb_roster_type *t = &r.types[0];
+    const cb_stride *kick = &t->clips[0].speed.stride, *walk = &t->clips[1].speed.stride;
+    printf("  Attack_Kick (a loop): %s\n  Walk: %s\n", kick->why, walk->why);
+    assert_true(t->clips[0].loops && !kick->stride);
+    assert_non_null(strstr(kick->why, "the clip's name says 'attack'"));
+    for (uint32_t k = 0; k < kick->foot_count; ++k) assert_int_equal(kick->feet[k].stance_count, 0); /* no contacts */
+    double lo = INFINITY, hi = 0;
+    for (uint32_t k = 0; k < walk->foot_count; ++k)
+        if (walk->feet[k].strides) lo = fmin(lo, walk->feet[k].step_speed), hi = fmax(hi, walk->feet[k].step_speed);
+    char range[64];
+    snprintf(range, sizeof range, "at %.3g-%.3g units/s", lo, hi);
+    assert_non_null(strstr(walk->why, range));
     cb_roster_free(&r);
     cb_catalog_free(&cat);
 }
@@ -403,7 +344,7 @@ static void test_info_and_report_say_why(void **state)
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     if (!strstr(out, "follows the speed: locomotion: the clip's name says 'walk', and 4 of 4 feet planted") ||
         !strstr(out, "own rate: in place: the clip's name says 'attack'") ||
-        !strstr(out, "own rate: a one-shot") || !strstr(out, "feet slide 49% of the ground speed"))
+        !strstr(out, "own rate: a one-shot") || !strstr(out, "feet slide 53% of the ground speed"))
         fail_msg("%s", out);
     snprintf(cmd, sizeof cmd,
              "%s info %s --json | python3 -c \"import json, sys; c = {x['name']: x for x in json.load(sys.stdin)['clips']}; "
@@ -426,7 +367,8 @@ int main(void)
         cmocka_unit_test(test_cow_every_state),
         cmocka_unit_test(test_sync_from_words_then_feet),
         cmocka_unit_test(test_sync_overrides),
-        cmocka_unit_test(test_cow_walk_feet_against_the_reference),
+        cmocka_unit_test(test_cow_walk_feet_disagree),
+        cmocka_unit_test(test_attack_kick_is_no_stride),
         cmocka_unit_test(test_info_and_report_say_why),
     };
     return cmocka_run_group_tests(tests, setup, NULL);

@@ -32,7 +32,7 @@ const walk = cow.clips.find((c) => c.name.endsWith('|Walk'));
 
 test('the manifest gives Walk a landing and a lift per hoof, and Cow its sockets, as the schema says', () => {
     execFileSync('node', ['tests/tools/validator/validate_schema.mjs', 'docs/roster.schema.json', path.join(dir, 'out', 'roster.json')]);
-    assert.equal(cow.sockets.length, 14);
+    assert.equal(cow.sockets.length, 10); // not the 4 IK pole targets (rig helpers)
     const doc = JSON.parse(readFileSync(path.join(dir, 'out', 'roster.json'), 'utf8'));
     doc.types.cow.sockets[0].bone = 99;
     assert.throws(() => readRoster(doc), /types\.cow\.sockets\[0\]\.bone: expected a bone index below 42/);
@@ -84,14 +84,16 @@ test('onContact: every instance and foot, crossing times on the clip, feet down 
             assert.ok(Math.min(Math.abs(clipTime - c.time), walk.duration - Math.abs(clipTime - c.time)) < 1e-6);
         }
     }
-    // The feet are really down at their landings: the hoof's joint is in the lowest quarter of its lift.
+    // The feet are really down: mid-stance the hoof's joint is in the lowest quarter of its lift, and at the landing
+    // (where the hoof's sole, which crowdbake tracks, meets the ground: the joint above it still rolls down) in the
+    // lower half.
     const clip = pal.clips.findIndex((c) => c.name === walk.name);
     for (const c of walk.contacts) {
         const b = pal.bones[c.bone].bind_position;
         const height = (s) => { const m = boneMatrix(pal, clip, s, c.bone); return m[1] * b[0] + m[5] * b[1] + m[9] * b[2] + m[13]; };
         const heights = Array.from({ length: 120 }, (_, k) => height((k / 120) * walk.duration));
         const lo = Math.min(...heights), hi = Math.max(...heights);
-        assert.ok(height(c.time) < lo + 0.25 * (hi - lo), `${c.foot} lands at ${c.time}`);
+        assert.ok(height(c.time) < lo + 0.5 * (hi - lo), `${c.foot} lands at ${c.time}`);
         assert.ok(height((c.time + c.lift + (c.lift < c.time ? walk.duration : 0)) / 2) < lo + 0.25 * (hi - lo));
     }
 });
