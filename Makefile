@@ -27,7 +27,7 @@ SHELL := /bin/bash
 DEB_PACKAGES := pkg-config rapidjson-dev libsimdjson-dev libtinygltf-dev libdraco-dev libmeshoptimizer-dev \
                 libopenexr-dev openexr libzstd-dev libcmocka-dev libtomlplusplus-dev chromium \
                 libosmesa6-dev libpng-dev zstd ninja-build libfreetype-dev libfontconfig-dev fonts-dejavu-core \
-                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip \
+                cmake groff-base libegl-dev libgl-dev libegl-mesa0 zip unzip bazel-bootstrap time \
                 glslang-tools spirv-tools mesa-vulkan-drivers libvulkan-dev
 PKGS := tinygltf RapidJSON simdjson draco OpenEXR libzstd tomlplusplus osmesa libpng freetype2 fontconfig
 
@@ -98,13 +98,14 @@ TOOL_A  := $(BUILD)/libcrowdbake_tool.a
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs \
+.PHONY: generic bundle bench-scale all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs \
         test-lib test-cli test-runtimes test-install test-fuzz readme bake-hashes bench \
         bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web godot-addon unity-package
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
 API_MAJOR := $(shell sed -n 's/^\#define CROWDBAKE_API_VERSION_MAJOR \([0-9]*\)/\1/p' include/crowdbake/core.h)
 SONAME    := libcrowdbake.so.$(API_MAJOR)
 GODOT_ADDON_ZIP := $(BUILD)/crowdbake-godot-addon.zip
+UNITY_PACKAGE_TGZ := $(BUILD)/com.crowdbake.palette.tgz
 
 all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(SAMPLE_GLB)
 
@@ -155,6 +156,16 @@ $(BUILD)/obj/formats/gltf_load.o $(BUILD)/obj/formats/gltf_container.o $(BUILD)/
 # optimizer.
 $(BUILD)/obj/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-O0)
 
+# The shipped GLSL as a JavaScript module beside the web runtime's modules, so that they find it
+# wherever they are served from (the source tree, `make install`'s share/crowdbake/web, a copy of
+# the folder in an npm-style layout): an import, not a fetch of a path relative to the module.
+WEB_GLSL := runtimes/web/crowdbake_palette_glsl.mjs
+$(WEB_GLSL): runtimes/glsl/crowdbake_palette.glsl
+	python3 -c "import json, sys; d = open(sys.argv[1], encoding='utf-8').read(); \
+	print('// generated from ' + sys.argv[1] + ' by make: the shipped GLSL, as crowdbake_crowd.mjs imports it'); \
+	print('export const PALETTE_GLSL = ' + json.dumps(d) + ';')" $< > $@.tmp && mv $@.tmp $@
+all: $(WEB_GLSL)
+
 # The shipped GLSL, embedded so `crowdbake preview` renders with exactly what runtimes get.
 $(BUILD)/gen/palette_glsl.c: runtimes/glsl/crowdbake_palette.glsl
 	@mkdir -p $(@D)
@@ -180,6 +191,32 @@ $(BUILD)/$(SONAME): $(LIB_OBJ) src/libcrowdbake.map
 $(BUILD)/crowdbake: $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a
 	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a $(CLI_LIBS)
 
+# ---- generic: crowdbake without its AVX2 clones ----------------------------------------
+# The files with CB_TARGET_CLONES compiled again with CB_GENERIC_ONLY (the x86-64 baseline
+# alone); everything else is the normal build's. tests/tools/hermetic.py compares its bytes.
+CLONE_SRC   := $(shell grep -l CB_TARGET_CLONES src/core/*.c)
+GENERIC_OBJ := $(CLONE_SRC:%.c=$(BUILD)/generic/obj/%.o)
+$(BUILD)/generic/obj/%.o: %.c $(DEPS_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -fvisibility=hidden -DCB_GENERIC_ONLY $(PKG_CFLAGS) -MMD -MP -c $< -o $@
+$(BUILD)/generic/crowdbake: $(CLI_OBJ) $(TOOL_A) $(GENERIC_OBJ) $(filter-out $(CLONE_SRC:%.c=$(BUILD)/obj/%.o),$(LIB_OBJ))
+	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(GENERIC_OBJ) $(filter-out $(CLONE_SRC:%.c=$(BUILD)/obj/%.o),$(LIB_OBJ)) $(CLI_LIBS)
+generic: $(BUILD)/generic/crowdbake
+
+# ---- the bundle: crowdbake for a machine without the -dev packages ---------------------
+# A remote executor (docs/bazel.md) has libc and nothing else: build/bundle holds the command,
+# linked again with its library folder as run path ($ORIGIN/../lib, DT_RPATH so the libraries'
+# own dependencies are found there too), and every shared library it needs but libc's own.
+BUNDLE := $(BUILD)/bundle
+bundle: $(BUNDLE)/.done
+$(BUNDLE)/bin/crowdbake: $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a
+	@mkdir -p $(@D)
+	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(TOOL_A) $(BUILD)/libcrowdbake.a $(CLI_LIBS) \
+	  -Wl,--disable-new-dtags -Wl,-rpath,'$$ORIGIN/../lib'
+$(BUNDLE)/.done: $(BUNDLE)/bin/crowdbake tests/tools/bundle.sh
+	sh tests/tools/bundle.sh $(BUNDLE)
+	@touch $@
+
 # ---- install --------------------------------------------------------------------------
 PREFIX     ?= /usr/local
 BINDIR     ?= $(PREFIX)/bin
@@ -191,7 +228,7 @@ MANDIR     ?= $(DATADIR)/man
 INSTALL_SED = -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@BINDIR@|$(BINDIR)|g' -e 's|@LIBDIR@|$(LIBDIR)|g' \
   -e 's|@INCLUDEDIR@|$(INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' -e 's|@SONAME@|$(SONAME)|g' \
   -e 's|@API_MAJOR@|$(API_MAJOR)|g'
-install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_ADDON_ZIP) install-web
+install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_ADDON_ZIP) $(UNITY_PACKAGE_TGZ) install-web
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(LIBDIR)/cmake/crowdbake \
 	  $(DESTDIR)$(INCLUDEDIR)/crowdbake $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(DATADIR)/bash-completion/completions \
 	  $(DESTDIR)$(DATADIR)/zsh/site-functions
@@ -209,13 +246,28 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_A
 	install -m 644 docs/crowdbake.1 $(DESTDIR)$(MANDIR)/man1/crowdbake.1
 	install -m 644 completions/crowdbake.bash $(DESTDIR)$(DATADIR)/bash-completion/completions/crowdbake
 	install -m 644 completions/_crowdbake $(DESTDIR)$(DATADIR)/zsh/site-functions/_crowdbake
-	install -d $(DESTDIR)$(DATADIR)/crowdbake
-	install -m 644 $(GODOT_ADDON_ZIP) $(DESTDIR)$(DATADIR)/crowdbake/
+	install -d $(DESTDIR)$(DATADIR)/crowdbake/hlsl
+	install -m 644 $(GODOT_ADDON_ZIP) $(UNITY_PACKAGE_TGZ) $(DESTDIR)$(DATADIR)/crowdbake/
+	install -m 644 runtimes/hlsl/crowdbake_palette.hlsl $(DESTDIR)$(DATADIR)/crowdbake/hlsl/
 
 # ---- the Godot addon: runtimes/godot/addons/crowdbake as a zip to unpack into a project ----------------
 # Byte for byte the same on every build: files only, sorted, one date (1980-01-01 UTC), mode 644,
 # no extra fields (zip -X).
-GODOT_ADDON_FILES := $(shell cd runtimes/godot && find addons/crowdbake -type f | LC_ALL=C sort)
+# The demo's herd (runtimes/godot/addons/crowdbake/demo/herd/): the project's generated quadruped and
+# its roster, baked by this build's crowdbake from demo/herd.toml, so the demo scene opens to a herd.
+GODOT_DEMO_DIR := runtimes/godot/addons/crowdbake/demo/herd
+GODOT_DEMO := $(GODOT_DEMO_DIR)/roster.json
+# The command is a prerequisite only where this BUILD has one (a zip made with another BUILD takes
+# the demo as it is); the bake's caches (.prep) are not part of the addon.
+$(GODOT_DEMO): runtimes/godot/addons/crowdbake/demo/herd.toml $(wildcard $(BUILD)/crowdbake)
+	$(MAKE) --no-print-directory $(BUILD)/crowdbake $(BUILD)/samples/quadruped.glb
+	mkdir -p $(@D) && cp $(BUILD)/samples/quadruped.glb $(@D)/quadruped.glb
+	$(BUILD)/crowdbake bake $< -q && rm -f $(@D)/.*.prep
+$(GODOT_DEMO_DIR)/quadruped.glb $(GODOT_DEMO_DIR)/goat.pal: $(GODOT_DEMO)
+all: $(GODOT_DEMO)
+GODOT_ADDON_FILES := $(sort $(shell cd runtimes/godot && find addons/crowdbake -type f -not -name '.*' -not -path '*/demo/herd/*') \
+                            addons/crowdbake/demo/herd/roster.json addons/crowdbake/demo/herd/quadruped.glb \
+                            addons/crowdbake/demo/herd/goat.pal)
 godot-addon: $(GODOT_ADDON_ZIP)
 $(GODOT_ADDON_ZIP): $(GODOT_ADDON_FILES:%=runtimes/godot/%)
 	rm -rf $(BUILD)/godot-addon $@ && mkdir -p $(BUILD)/godot-addon
@@ -227,7 +279,6 @@ $(GODOT_ADDON_ZIP): $(GODOT_ADDON_FILES:%=runtimes/godot/%)
 # runtimes/unity under package/, with the shared HLSL runtime in place of the shim that reaches it in
 # the checkout (Runtime/Shaders/CrowdbakePalette.hlsl), so the tarball stands alone. Byte for byte the
 # same on every build: sorted names, one date, owner 0, mode 644, gzip without a name or time.
-UNITY_PACKAGE_TGZ := $(BUILD)/com.crowdbake.palette.tgz
 UNITY_PACKAGE_FILES := $(shell find runtimes/unity -type f | LC_ALL=C sort)
 unity-package: $(UNITY_PACKAGE_TGZ)
 $(UNITY_PACKAGE_TGZ): $(UNITY_PACKAGE_FILES) runtimes/hlsl/crowdbake_palette.hlsl
@@ -244,7 +295,7 @@ $(UNITY_PACKAGE_TGZ): $(UNITY_PACKAGE_FILES) runtimes/hlsl/crowdbake_palette.hls
 # the modules find the shader at ../glsl/ as in the source tree.
 WEBDIR = $(DATADIR)/crowdbake/web
 THREE  = runtimes/web/node_modules/three
-install-web: runtimes/web/node_modules/.package-lock.json
+install-web: runtimes/web/node_modules/.package-lock.json $(WEB_GLSL)
 	install -d $(DESTDIR)$(WEBDIR)/node_modules/three/build $(DESTDIR)$(WEBDIR)/node_modules/three/examples \
 	  $(DESTDIR)$(DATADIR)/crowdbake/glsl $(DESTDIR)$(DATADIR)/crowdbake/viewer
 	install -m 644 cli/viewer/viewer.html cli/viewer/viewer.mjs cli/viewer/serve.py $(DESTDIR)$(DATADIR)/crowdbake/viewer/
@@ -383,6 +434,18 @@ $(BUILD)/tests/bench_gl_images.run: all $(BUILD)/bench_gl | $(RESULTS)/pending
 	  $(BUILD)/samples/$$m.glb --check || exit 1; done)
 $(BUILD)/tests/web_reader.run: all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test runtimes/web/test/)
+# The Bazel rules (bazel/, docs/bazel.md) against the one-step bake, the disk and HTTP caches and
+# an incremental rebuild; Debian's bazel-bootstrap, offline. Then the same bytes whatever the
+# path, user, umask, TZ, LANG, threads and CPU path (make generic). The normal build only.
+RUNS_cli += $(if $(SAN),,$(BUILD)/tests/bazel_rules.run $(BUILD)/tests/hermetic.run)
+$(BUILD)/tests/bazel_rules.run: all $(BUNDLE)/.done | $(RESULTS)/pending
+	$(call record_run,bazel_rules,python3 tests/tools/bazel_rules.py --build $(BUILD) --shared $(SHARED))
+$(BUILD)/tests/hermetic.run: all $(BUILD)/generic/crowdbake | $(RESULTS)/pending
+	$(call record_run,hermetic,python3 tests/tools/hermetic.py --build $(BUILD) --shared $(SHARED))
+# make bundle's crowdbake in a root with only glibc.
+RUNS_install += $(if $(SAN),,$(BUILD)/tests/bundle_root.run)
+$(BUILD)/tests/bundle_root.run: all $(BUNDLE)/.done | $(RESULTS)/pending
+	$(call record_run,bundle_root,python3 tests/tools/bundle_root.py --build $(BUILD) --shared $(SHARED))
 test-runs: $(RUN_SET)
 replay: $(FUZZ_TARGETS:%=$(BUILD)/tests/replay_%.run)
 readme: all
@@ -489,6 +552,12 @@ $(BUILD)/bench_gl: bench/bench_gl.c $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/lib
 
 bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(NODE_DEPS)
 	python3 bench/run.py
+	python3 bench/scale.py --build $(BUILD) --shared $(SHARED) --no-bazel
+
+# A 1,000-type roster: Bazel's actions against make -j, one action's memory, the merge, an
+# incremental rebuild (slow: minutes; bench/RESULTS.txt keeps a run's numbers).
+bench-scale: all $(BUNDLE)/.done
+	python3 bench/scale.py --build $(BUILD) --shared $(SHARED) --counts 10,100 --bazel-types 1000
 
 bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
@@ -507,4 +576,4 @@ check-asan:
 clean:
 	rm -rf build
 
--include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)
+-include $(shell find $(BUILD)/obj $(BUILD)/generic/obj -name '*.d' 2>/dev/null)

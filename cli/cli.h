@@ -135,6 +135,11 @@ cb_status cli_for_each_name(const char *list, cb_status (*fn)(const char *name, 
  * names[i] lies `stride` bytes after names[i-1] (as cb_closest_name reads them). The index, or
  * -1 with `why` saying so: "no clip 'X'; did you mean 'Y'?", or the clips an ambiguous name fits. */
 int cli_match_clip(const char *typed, const char *const *names, size_t count, size_t stride, char *why, size_t size);
+/* --clip and --exclude-clip naming a palette's clips (cli_match_clip), as verify and preview
+ * take them; both at once is an error. skip[c] (clip_count entries, zeroed): the palette's clip
+ * c is left out. */
+cb_status cli_palette_clip_options(const cb_palette *p, const char *palette, const char *clips, const char *excluded,
+                                   bool *skip, cb_error *err);
 /* Whether a comma-separated list (as --clip takes) holds the name. */
 bool cli_list_has(const char *list, const char *name);
 /* "crowdbake: warning: ..." on stderr, one line each (notes too unless !notes, for -q); or a
@@ -153,12 +158,15 @@ int cmd_verify(int argc, char **argv);
 int cmd_preview(int argc, char **argv);
 int cmd_report(int argc, char **argv);
 int cmd_mesh(int argc, char **argv);
+extern const char cmd_roster_usage[];
+int cmd_roster(int argc, char **argv);
 /* `crowdbake bake CATALOG.toml`, once cmd_bake has read its options. */
 typedef struct cli_catalog_bake {
     const char *path;
     uint32_t jobs;
     bool force, quiet, json;
     const char *depfile, *manifest;
+    const char *type, *fragment;       /* --type NAME: that type alone, and its manifest fragment */
     bool depfile_manifest_only;
     const cb_limits *limits;
     const cb_bake_settings *overrides; /* the command line's bake options, `override_fields` of them set */

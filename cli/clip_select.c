@@ -1,10 +1,8 @@
 /* clip_select.c - --clip and --exclude-clip, as bake, vat and verify take them; --loop and
  * --one-shot, as bake takes them. */
-#include <ctype.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 
 #include "catalog/catalog.h"
 #include "cli.h"
@@ -23,76 +21,38 @@ cb_status cli_for_each_name(const char *list, cb_status (*fn)(const char *name, 
     return CB_OK;
 }
 
-/* The name at index i of an array read with a stride (as cb_closest_name reads it). */
-static const char *name_at(const char *const *names, size_t stride, size_t i)
-{
-    return *(const char *const *)((const char *)names + i * stride);
-}
-
-static bool contains_ignoring_case(const char *text, const char *part)
-{
-    size_t n = strlen(part);
-    for (; *text; ++text)
-        if (strncasecmp(text, part, n) == 0) return true;
-    return false;
-}
-
-/* The rules, tried in turn: the exact name; regardless of case; the part after an exporter's
- * "Armature|" regardless of case; a part of the name regardless of case. */
-enum { MATCH_RULES = 4 };
-static bool matches(int rule, const char *name, const char *typed)
-{
-    const char *bar = strrchr(name, '|');
-    switch (rule) {
-    case 0: return strcmp(name, typed) == 0;
-    case 1: return strcasecmp(name, typed) == 0;
-    case 2: return bar && strcasecmp(bar + 1, typed) == 0;
-    default: return contains_ignoring_case(name, typed);
-    }
-}
-
-/* The name within two edits of `typed`, regardless of case (the closest; the first on a tie). */
-static const char *closest_ignoring_case(const char *typed, const char *const *names, size_t count, size_t stride)
-{
-    char a[256], b[256];
-    size_t best = 3;
-    const char *guess = NULL;
-    snprintf(a, sizeof a, "%s", typed);
-    for (char *p = a; *p; ++p) *p = (char)tolower((unsigned char)*p);
-    for (size_t i = 0; i < count; ++i) {
-        const char *name = name_at(names, stride, i), *bar = strrchr(name, '|');
-        snprintf(b, sizeof b, "%s", bar && !strchr(a, '|') ? bar + 1 : name);
-        for (char *p = b; *p; ++p) *p = (char)tolower((unsigned char)*p);
-        size_t d = cb_edit_distance(a, b);
-        if (d < best) best = d, guess = name;
-    }
-    return guess;
-}
-
 int cli_match_clip(const char *typed, const char *const *names, size_t count, size_t stride, char *why, size_t size)
 {
-    for (int rule = 0; rule < MATCH_RULES; ++rule) {
-        int found = -1, hits = 0;
-        for (size_t i = 0; i < count; ++i)
-            if (matches(rule, name_at(names, stride, i), typed) && hits++ == 0) found = (int)i;
-        if (hits == 1) return found;
-        if (hits > 1) {
-            snprintf(why, size, "'%s' matches %d clips:", typed, hits);
-            for (size_t i = 0, listed = 0; i < count && listed < 6; ++i)
-                if (matches(rule, name_at(names, stride, i), typed))
-                    snprintf(why + strlen(why), size - strlen(why), "%s '%s'", listed++ ? "," : "", name_at(names, stride, i));
-            snprintf(why + strlen(why), size - strlen(why), "; give more of the name");
-            return -1;
-        }
-    }
-    const char *guess = closest_ignoring_case(typed, names, count, stride);
-    if (guess) snprintf(why, size, "no clip '%s'; did you mean '%s'?", typed, guess);
-    else {
-        snprintf(why, size, "no clip '%s'; the clips are:", typed);
-        for (size_t i = 0; i < count && strlen(why) + 8 < size; ++i)
-            snprintf(why + strlen(why), size - strlen(why), "%s %s", i ? "," : "", name_at(names, stride, i));
-    }
-    return -1;
+    return cb_match_clip_name(typed, names, count, stride, why, size);
+}
+
+typedef struct clip_check {
+    const cb_palette *p;
+    const char *palette, *option;
+    bool *named; /* per palette clip: the list names it */
+    cb_error *err;
+} clip_check;
+
+static cb_status mark_palette_clip(const char *name, void *ctx)
+{
+    const clip_check *c = ctx;
+    char why[512];
+    int i = c->p->clip_count ? cli_match_clip(name, &c->p->clips[0].name, c->p->clip_count, sizeof c->p->clips[0], why,
+                                              sizeof why)
+                             : (snprintf(why, sizeof why, "the palette has no clip"), -1);
+    if (i < 0) return cb_fail(c->err, CB_ERR_SETTINGS, "%s: %s %s: %s (see 'crowdbake inspect')", c->palette, c->option, name, why);
+    c->named[i] = true;
+    return CB_OK;
+}
+
+cb_status cli_palette_clip_options(const cb_palette *p, const char *palette, const char *clips, const char *excluded,
+                                    bool *skip, cb_error *err)
+{
+    if (clips && excluded) return cb_fail(err, CB_ERR_SETTINGS, "give --clip or --exclude-clip, not both");
+    clip_check c = {p, palette, clips ? "--clip" : "--exclude-clip", skip, err};
+    if (cli_for_each_name(clips ? clips : excluded, mark_palette_clip, &c)) return err->status;
+    for (uint32_t i = 0; clips && i < p->clip_count; ++i) skip[i] = !skip[i]; /* named: verified */
+    return CB_OK;
 }
 
 typedef struct selection {

@@ -1,4 +1,4 @@
-/* cmd_bake.c - `crowdbake bake MODEL -o OUT.pal|OUT.exr`: the main job. */
+/* cmd_bake.c - `crowdbake bake MODEL -o OUT.pal|.exr|.ktx2|.bvat.json`: the main job. */
 #include <math.h>
 #include <stdlib.h>
 #include <stdio.h>
@@ -14,6 +14,7 @@
 const char cmd_bake_usage[] =
     "usage: crowdbake bake MODEL -o OUT.pal|OUT.exr|OUT.ktx2|OUT.bvat.json [options]\n"
     "       crowdbake bake CATALOG.toml [-j N] [--force] [--depfile FILE] [--manifest FILE] [--out-dir DIR] [--json]\n"
+    "                      [--type NAME [--fragment FILE]]\n"
     "                      [-q|-v] [--sync STATE=speed|time,...] [--default-state STATE]\n"
     "                      [--fps N|auto] [--max-error MM_PER_M] [--max-fps N] [--fit-rows] [--allow-over-budget]\n"
     "                      [--layout L] [--precision P] [--format F] [--zstd]\n"
@@ -27,6 +28,9 @@ const char cmd_bake_usage[] =
     "clip's, else the command line's, else the animal's, else [bake]'s, else the default);\n"
     "--depfile writes a Make/Ninja depfile;\n"
     "--out-dir replaces the catalog's out_dir (a path from the current directory);\n"
+    "--type NAME bakes that animal type alone, as one build action of many (docs/bazel.md): its outputs\n"
+    "and, in place of the manifest, a fragment of it (--fragment FILE, default OUT_DIR/NAME.fragment)\n"
+    "that 'crowdbake roster merge' joins with the other types' into the manifest;\n"
     "--depfile-manifest-only writes the manifest's rule alone, as Ninja's depfile without\n"
     "deps = gcc (CMake's DEPFILE) wants it. --sync STATE=speed|time|auto (comma-separated) and\n"
     "--default-state STATE replace the catalog's word on those states in every animal that has\n"
@@ -79,8 +83,9 @@ const char cmd_bake_usage[] =
     "  --exclude-clip A,B         every clip but these\n"
     "  --loop A,B                 these clips loop, --one-shot A,B these play once, whatever their\n"
     "  --one-shot A,B             poses say (default: decided from the poses; `info` says why)\n"
-    "  --speed-reference M_PER_S  ground speed at playback rate 1, stored in the header\n"
-    "  --zstd                     compress the .pal payload (readers decompress once)\n"
+    "  --speed-reference UNITS_PER_S  ground speed at playback rate 1 (model units/s), stored in the header\n"
+    "  --zstd                     compress the .pal payload (readers decompress once) and the .ktx2\n"
+    "                             level (Zstandard supercompression, as toktx --zcmp)\n"
     "  --exr-compression none|rle|zips|zip|piz  (default none; lossless only)\n"
     "  -j, --threads N            sample clips on N threads (default: the number of cores); the\n"
     "                             output is byte-identical for any N\n"
@@ -91,7 +96,7 @@ const char cmd_bake_usage[] =
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
         *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir, *loops,
-        *one_shots, *syncs, *default_state;
+        *one_shots, *syncs, *default_state, *type, *fragment;
     bool zstd, json, quiet, force, depfile_manifest, fit, measure_all, over_budget;
     cli_output out;
     char speed_why[192]; /* why the speed reference is what it is, when crowdbake measured it */
@@ -201,15 +206,19 @@ static int bake_catalog(const bake_args *a, const cb_limits *limits)
         return cli_usage_error("bake", "a catalog writes pal and/or exr, and babylon beside either (--format pal,babylon); "
                                "ktx2 is for single models for now");
     if (a->zstd && a->format && !(cb_formats_parse(a->format) & CB_FORMAT_PAL))
-        return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+        return cli_usage_error("bake", "--zstd compresses .pal payloads (a catalog writes no .ktx2); EXR takes --exr-compression");
     cb_bake_settings over;
     unsigned fields;
     int rc = parse_settings(a, &over, &fields);
     if (rc) return rc;
     if (a->out_dir) over.out_dir = a->out_dir, fields |= CB_BAKE_OUT_DIR;
     if (a->depfile_manifest && !a->depfile) return cli_usage_error("bake", "--depfile-manifest-only goes with --depfile");
-    cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, a->depfile_manifest,
-                           limits, &over, fields, a->syncs, a->default_state, &a->out};
+    if (a->fragment && !a->type) return cli_usage_error("bake", "--fragment goes with --type NAME");
+    if (a->type && a->manifest)
+        return cli_usage_error("bake", "--type writes a fragment (--fragment FILE), not a manifest: "
+                               "'crowdbake roster merge' writes the manifest from every type's fragment");
+    cli_catalog_bake cb = {a->model, jobs, a->force, a->quiet, a->json, a->depfile, a->manifest, a->type, a->fragment,
+                           a->depfile_manifest, limits, &over, fields, a->syncs, a->default_state, &a->out};
     return cmd_bake_catalog(&cb);
 }
 
@@ -405,7 +414,8 @@ static int single_model_checks(const bake_args *a, cb_bake_settings *s)
     if (!cb_bake_settings_writable(s))
         return cli_usage_error("bake", "KTX2 palettes hold half or float texels (RGBA16F, RGBA32F; common KTX2 loaders "
                                "refuse u16's RGBA16UI); use --precision half|float%s", want_pal ? " (or write only the .pal)" : "");
-    if (a->zstd && !want_pal) return cli_usage_error("bake", "--zstd compresses .pal payloads; EXR takes --exr-compression");
+    if (a->zstd && !(s->formats & (CB_FORMAT_PAL | CB_FORMAT_KTX2)))
+        return cli_usage_error("bake", "--zstd compresses .pal payloads and .ktx2 levels; EXR takes --exr-compression");
     return 0;
 }
 
@@ -458,7 +468,7 @@ int cmd_bake(int argc, char **argv)
         {"--format", "pal,exr", &a.format, NULL},  {"--fps", "N", &a.fps, NULL},
         {"--layout", "LAYOUT", &a.layout, NULL},   {"--precision", "PRECISION", &a.precision, NULL},
         {"--max-texture-size", "N", &a.max_size, NULL}, {"--root-motion", "keep|in-place|loops-in-place", &a.root_motion, NULL},
-        {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "M_PER_S", &a.speed_ref, NULL},
+        {"--skin", "NAME|INDEX", &a.skin, NULL},   {"--speed-reference", "UNITS_PER_S", &a.speed_ref, NULL},
         {"--exr-compression", "NAME", &a.exr_compression, NULL}, {"--zstd", NULL, NULL, &a.zstd},
         {"--json", NULL, NULL, &a.json},
         {"-j", "N", &a.threads, NULL},             {"--threads", "N", &a.threads, NULL},
@@ -470,17 +480,19 @@ int cmd_bake(int argc, char **argv)
         {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest}, {"--fit-rows", NULL, NULL, &a.fit},
         {"--measure-all", NULL, NULL, &a.measure_all},
         {"--allow-over-budget", NULL, NULL, &a.over_budget},
+        {"--type", "NAME", &a.type, NULL},        {"--fragment", "FILE", &a.fragment, NULL},
         {"--sync", "STATE=speed|time", &a.syncs, NULL}, {"--default-state", "STATE", &a.default_state, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &a.model, 1, 1, &help);
     if (help) return fputs(cmd_bake_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
     a.quiet = a.out.quiet;
     if (ends_with(a.model, ".toml")) return bake_catalog(&a, &limits);
-    if (!a.output) return cli_usage_error("bake", "-o OUT.pal or -o OUT.exr is required");
-    if (a.depfile || a.depfile_manifest || a.manifest || a.force || a.out_dir)
+    if (!a.output) return cli_usage_error("bake", "-o OUT.pal, OUT.exr, OUT.ktx2 or OUT.bvat.json is required");
+    if (a.depfile || a.depfile_manifest || a.manifest || a.force || a.out_dir || a.type || a.fragment)
         return cli_usage_error("bake", "%s is for catalogs (a single bake always writes its outputs)",
                                a.depfile ? "--depfile" : a.depfile_manifest ? "--depfile-manifest-only" : a.manifest
-                               ? "--manifest" : a.force ? "--force" : "--out-dir");
+                               ? "--manifest" : a.force ? "--force" : a.out_dir ? "--out-dir" : a.type ? "--type"
+                               : "--fragment");
     if (a.syncs || a.default_state)
         return cli_usage_error("bake", "%s is for catalogs: a single model has clips, not states",
                                a.syncs ? "--sync" : "--default-state");
@@ -489,7 +501,7 @@ int cmd_bake(int argc, char **argv)
     if ((rc = parse_settings(&a, &settings, &fields)) || (rc = single_model_checks(&a, &settings))) return rc;
     double speed_ref = 0;
     if (a.speed_ref && (!cli_parse_double(a.speed_ref, &speed_ref) || speed_ref < 0))
-        return cli_usage_error("bake", "--speed-reference wants a non-negative speed in m/s");
+        return cli_usage_error("bake", "--speed-reference wants a non-negative speed in the model's units per second");
     if (parse_threads(a.threads, &threads, "--threads")) return CLI_EXIT_USAGE;
 
     double t0 = now_seconds();

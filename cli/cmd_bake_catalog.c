@@ -45,6 +45,21 @@ static void print_json(const cb_roster *r)
     cb_json_end(&j);
 }
 
+/* --type NAME: the catalog's view of that one type (its animals are the catalog's own). */
+static cb_status pick_type(const cb_catalog *cat, const char *name, cb_catalog *one, cb_error *err)
+{
+    for (uint32_t i = 0; i < cat->animal_count; ++i)
+        if (strcmp(cat->animals[i].name, name) == 0) {
+            *one = *cat;
+            one->animals = &cat->animals[i], one->animal_count = 1;
+            return CB_OK;
+        }
+    const char *guess = cb_closest_name(name, (const char *const *)&cat->animals[0].name, cat->animal_count,
+                                        sizeof cat->animals[0]);
+    return cb_fail(err, CB_ERR_SETTINGS, "%s has no animal type '%s'%s%s%s", cat->path, name, guess ? "; did you mean '" : "",
+                   guess ? guess : "", guess ? "'?" : "");
+}
+
 int cmd_bake_catalog(const cli_catalog_bake *o)
 {
     const char *path = o->path;
@@ -52,13 +67,23 @@ int cmd_bake_catalog(const cli_catalog_bake *o)
     bool quiet = o->quiet, json = o->json;
     cb_error err = {0};
     cb_catalog cat;
-    if (cb_catalog_load(path, &cat, &err)) return cli_report(&err);
+    if (cb_catalog_load_checking(path, o->type, &cat, &err)) return cli_report(&err);
     if (cb_catalog_override_bake(&cat, o->overrides, o->override_fields, &err) ||
         cb_catalog_override_states(&cat, o->syncs, o->default_state, &err)) {
         cb_catalog_free(&cat);
         return cli_report(&err);
     }
+    cb_catalog whole = cat; /* --type: cat becomes the one type's view; whole is freed */
+    if (o->type && pick_type(&whole, o->type, &cat, &err)) {
+        cb_catalog_free(&whole);
+        return cli_report(&err);
+    }
+    char fragment_path[4096] = "";
+    if (o->type) /* beside the type's palette */
+        snprintf(fragment_path, sizeof fragment_path, "%s/%s.fragment", cat.animals[0].bake.out_dir, cat.animals[0].name);
+    cb_roster_fragment fragment = {o->fragment ? o->fragment : fragment_path, o->syncs, o->default_state};
     cb_roster_options opt = {0};
+    opt.fragment = o->type ? &fragment : NULL;
     opt.setting_name = cli_setting_flag;
     opt.jobs = jobs;
     opt.force = o->force;
@@ -82,11 +107,14 @@ int cmd_bake_catalog(const cli_catalog_bake *o)
         cli_print_warnings(&r.types[i].warnings, false);
     if (json) print_json(&r);
     else if (!quiet) {
-        printf("crowdbake: %u baked, %u up to date, %u sharing a palette, %u failed; manifest %s%s\n", r.baked, r.up_to_date,
-               r.shared, r.failed, r.manifest_path, r.manifest_written ? "" : " (unchanged)");
+        printf("crowdbake: %u baked, %u up to date, %u sharing a palette, %u failed; %s %s%s\n", r.baked, r.up_to_date,
+               r.shared, r.failed, o->type ? "fragment" : "manifest", r.manifest_path,
+               r.manifest_written || o->type ? "" : " (unchanged)");
         cb_report rep;
         cb_error rerr = {0};
-        if (!cb_report_build(&cat, &r, &rep, &rerr)) {
+        /* Sizes of nothing ("0 types ... 0.0x") say nothing: with every type failed, the log and
+         * the exit code have said it all. */
+        if (r.failed < r.type_count && !cb_report_build(&cat, &r, &rep, &rerr)) {
             cb_report_paragraph(stdout, &rep);
             cb_report_free(&rep);
         }
@@ -94,6 +122,6 @@ int cmd_bake_catalog(const cli_catalog_bake *o)
     if (rc && r.failed > 1) /* every failure was listed; the exit message names the first */
         fprintf(stderr, "crowdbake: %u animal types failed\n", r.failed);
     cb_roster_free(&r);
-    cb_catalog_free(&cat);
+    cb_catalog_free(&whole);
     return rc ? cli_report(&err) : 0;
 }

@@ -34,6 +34,22 @@ typedef struct inspected {
     const char *const *bone_names;
 } inspected;
 
+/* The rates the clips were baked at: "fps 30" when every clip has the file's rate, else "fps
+ * 24-48 per clip" (an error-bounded bake chooses each clip's); and how many clips' rows are
+ * fitted to the runtime's blend. */
+static const char *clip_rates(const cb_palette *p, char *buf, size_t size)
+{
+    double lo = p->clip_count ? INFINITY : p->fps, hi = p->clip_count ? 0 : p->fps;
+    uint32_t fitted = 0;
+    for (uint32_t i = 0; i < p->clip_count; ++i)
+        lo = fmin(lo, (float)p->clips[i].fps), hi = fmax(hi, (float)p->clips[i].fps), fitted += p->clips[i].fitted;
+    if (lo == hi) snprintf(buf, size, "fps %g", lo);
+    else snprintf(buf, size, "fps %g-%g per clip", lo, hi);
+    snprintf(buf + strlen(buf), size - strlen(buf), ", %u of %u clip%s fitted", fitted, p->clip_count,
+             p->clip_count == 1 ? "" : "s");
+    return buf;
+}
+
 static void print_header_text(const inspected *in)
 {
     const cb_palette *p = in->view;
@@ -53,8 +69,9 @@ static void print_header_text(const inspected *in)
     } else {
         printf("  texels %zu bytes, ", p->texel_bytes);
     }
-    printf("fps %g, speed reference %g m/s, max error %g (model height %g)\n", (float)p->fps, in->speed_reference,
-           (float)p->max_error, (float)p->model_height);
+    char rates[96];
+    printf("%s, speed reference %g units/s, max error %g (model height %g)\n", clip_rates(p, rates, sizeof rates),
+           in->speed_reference, (float)p->max_error, (float)p->model_height);
     printf("  input hash %016llx", (unsigned long long)in->input_hash);
     if (in->pal) printf(", checksum %016llx", (unsigned long long)in->pal->header.checksum);
     printf("%s%s\n", in->in_place ? ", root motion removed" : "",
@@ -151,8 +168,17 @@ static void print_json(const inspected *in, int clip, long frame)
     cb_json_int(&j, "blocks", p->blocks);
     if (h) cb_json_bool(&j, "zstd", (h->flags & CBPAL_FLAG_ZSTD) != 0);
     cb_json_string(&j, "root_motion", cb_root_motion_name(in->in_place ? CB_ROOT_MOTION_IN_PLACE : CB_ROOT_MOTION_KEEP));
-    cb_json_bool(&j, "fitted_rows", p->fitted);
+    cb_json_bool(&j, "fitted_rows", p->fitted); /* every clip fitted; each clip says its own below */
+    uint32_t fitted = 0;
+    double lo = p->clip_count ? INFINITY : p->fps, hi = p->clip_count ? 0 : p->fps;
+    for (uint32_t i = 0; i < p->clip_count; ++i)
+        fitted += p->clips[i].fitted, lo = fmin(lo, (float)p->clips[i].fps), hi = fmax(hi, (float)p->clips[i].fps);
+    cb_json_int(&j, "fitted_clips", fitted);
     cb_json_number(&j, "fps", (float)p->fps);
+    cb_json_inline_array(&j, "clip_fps_range"); /* the clips' own rates: an error-bounded bake chooses each */
+    cb_json_number(&j, NULL, lo);
+    cb_json_number(&j, NULL, hi);
+    cb_json_end(&j);
     cb_json_number(&j, "speed_reference", in->speed_reference);
     cb_json_number(&j, "max_error", (float)p->max_error);
     if (h) cb_json_int(&j, "payload_offset", (long long)h->payload_offset);

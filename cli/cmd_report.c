@@ -15,7 +15,8 @@
 #include "cli.h"
 
 const char cmd_report_usage[] =
-    "usage: crowdbake report CATALOG.toml|MODEL [--target NAME] [--json | --markdown] [--html FILE] [--no-fail] [-j N] [-v|-q]\n\n"
+    "usage: crowdbake report CATALOG.toml|MODEL [--target NAME] [--json | --markdown] [--html FILE] [--no-fail] [-j N]\n"
+    "                        [--out-dir DIR] [-v|-q]\n\n"
     "Brings the roster's palettes up to date (as 'crowdbake bake' does; a single MODEL is baked with\n"
     "the default settings into a temporary folder), then reports per animal type\n"
     "the exact palette bytes, every layout x precision side by side, vertex-animation-texture bytes\n"
@@ -26,7 +27,9 @@ const char cmd_report_usage[] =
     "and the bytes pre-baked transitions between loops would take that a runtime cross-fade saves.\n"
     "  --target NAME   the budget's target profile (docs/budget.md): replaces the catalog's\n"
     "                  [budget] target; for a MODEL, the only way to give one\n"
-    "  -v, --verbose   a line per type on stderr as it is baked (the default on a terminal)\n"
+    "  --out-dir DIR   a catalog's palettes are brought up to date there, not in its out_dir\n"
+    "  -v, --verbose   a line per type on stderr as it is baked and as its runtime meshes are measured\n"
+    "                  (the default on a terminal)\n"
     "  -q, --quiet     no progress lines\n"
     "Exit code 3 when the roster exceeds its budget, unless --no-fail.\n";
 
@@ -143,11 +146,12 @@ int cmd_report(int argc, char **argv)
 {
     cli_output out;
     if (cli_take_output(&argc, argv, &out)) return CLI_EXIT_USAGE;
-    const char *path = NULL, *html = NULL, *jobs_text = NULL, *target = NULL;
+    const char *path = NULL, *html = NULL, *jobs_text = NULL, *target = NULL, *out_dir = NULL;
     bool json = false, markdown = false, no_fail = false, help;
     const cli_option options[] = {{"--json", NULL, NULL, &json},      {"--markdown", NULL, NULL, &markdown},
                                   {"--html", "FILE", &html, NULL},    {"--no-fail", NULL, NULL, &no_fail},
-                                  {"-j", "N", &jobs_text, NULL},      {"--target", "NAME", &target, NULL}};
+                                  {"-j", "N", &jobs_text, NULL},      {"--target", "NAME", &target, NULL},
+                                  {"--out-dir", "DIR", &out_dir, NULL}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &path, 1, 1, &help);
     if (help) return fputs(cmd_report_usage, stdout), 0;
     if (rc) return rc;
@@ -162,6 +166,14 @@ int cmd_report(int argc, char **argv)
     if (model ? open_single_model(path, tmp, sizeof tmp, &cat, &err) : cb_catalog_load(path, &cat, &err))
         return cli_report(&err);
     if (target) apply_target(&cat, target);
+    if (out_dir && !model) { /* the palettes the report bakes go there (a build action's own folder) */
+        cb_bake_settings over = cat.defaults;
+        over.out_dir = out_dir;
+        if (cb_catalog_override_bake(&cat, &over, CB_BAKE_OUT_DIR, &err)) {
+            cb_catalog_free(&cat);
+            return cli_report(&err);
+        }
+    }
     cb_roster_options opt = {0};
     opt.setting_name = cli_setting_flag;
     opt.jobs = jobs;
@@ -185,7 +197,9 @@ int cmd_report(int argc, char **argv)
     cb_error rerr = {0};
     if (!cb_report_build(&cat, &roster, &r, &rerr)) {
         r.single_model = model;
-        cb_report_add_runtime(&roster, &r);
+        /* then a line per type as its runtime meshes are measured: seconds more, which the log
+         * alone left silent (stdout redirected, the report still to come) */
+        cb_report_add_runtime(&roster, &r, opt.log);
         if (json) cb_report_json(stdout, &r);
         else if (markdown) cb_report_markdown(stdout, &r);
         else cb_report_text(stdout, &r);

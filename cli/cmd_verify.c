@@ -20,38 +20,6 @@ const char cmd_verify_usage[] =
     "an error exceeds --max-error (mm per metre of height). --clip verifies only the palette's clips\n"
     "named, --exclude-clip all but those. -q prints nothing but why it fails: the exit code says.\n";
 
-
-typedef struct clip_check {
-    const cb_palette *p;
-    const char *palette, *option;
-    bool *named; /* per palette clip: the list names it */
-    cb_error *err;
-} clip_check;
-
-static cb_status mark_palette_clip(const char *name, void *ctx)
-{
-    const clip_check *c = ctx;
-    char why[512];
-    int i = c->p->clip_count ? cli_match_clip(name, &c->p->clips[0].name, c->p->clip_count, sizeof c->p->clips[0], why,
-                                              sizeof why)
-                             : (snprintf(why, sizeof why, "the palette has no clip"), -1);
-    if (i < 0) return cb_fail(c->err, CB_ERR_SETTINGS, "%s: %s %s: %s (see 'crowdbake inspect')", c->palette, c->option, name, why);
-    c->named[i] = true;
-    return CB_OK;
-}
-
-/* --clip and --exclude-clip name the palette's clips (cli_match_clip); both at once is an error.
- * skip[c]: the palette's clip c is not verified. */
-static cb_status check_clip_options(const cb_palette *p, const char *palette, const char *clips, const char *excluded,
-                                    bool *skip, cb_error *err)
-{
-    if (clips && excluded) return cb_fail(err, CB_ERR_SETTINGS, "give --clip or --exclude-clip, not both");
-    clip_check c = {p, palette, clips ? "--clip" : "--exclude-clip", skip, err};
-    if (cli_for_each_name(clips ? clips : excluded, mark_palette_clip, &c)) return err->status;
-    for (uint32_t i = 0; clips && i < p->clip_count; ++i) skip[i] = !skip[i]; /* named: verified */
-    return CB_OK;
-}
-
 int cmd_verify(int argc, char **argv)
 {
     cb_limits limits;
@@ -77,7 +45,7 @@ int cmd_verify(int argc, char **argv)
     const cb_model *m = b.model;
     bool *skip = calloc(pv->clip_count + 1, sizeof *skip);
     if (!skip) cb_fail(&err, CB_ERR_INTERNAL, "out of memory");
-    cb_sampler *s = !skip || check_clip_options(pv, pos[1], clips, excluded, skip, &err) ? NULL : cb_sampler_create(m, b.skin, &err);
+    cb_sampler *s = !skip || cli_palette_clip_options(pv, pos[1], clips, excluded, skip, &err) ? NULL : cb_sampler_create(m, b.skin, &err);
     if (!s) {
         free(skip);
         cli_baked_close(&b);

@@ -7,13 +7,14 @@
 static const cli_command commands[] = {
     {"info", "what a model holds: skins, joints, meshes, clips", cmd_info_usage, cmd_info},
     {"sample", "the joint matrices of each baked frame, as JSON", cmd_sample_usage, cmd_sample},
-    {"bake", "bake a model's clips into a bone-matrix palette (.pal / .exr)", cmd_bake_usage, cmd_bake},
+    {"bake", "bake a model's clips into a bone-matrix palette (.pal / .exr / .ktx2 / .bvat.json)", cmd_bake_usage, cmd_bake},
     {"inspect", "the header and clip table of a palette; decode a frame", cmd_inspect_usage, cmd_inspect},
     {"verify", "skin with a palette as the runtime does; compare with the glTF", cmd_verify_usage, cmd_verify},
     {"preview", "a contact sheet PNG of a palette skinning its model", cmd_preview_usage, cmd_preview},
     {"mesh", "the runtime-ready mesh: palette bones, fewer influences, quantized, batched", cmd_mesh_usage, cmd_mesh},
     {"vat", "bake a vertex animation texture of the same frames, to compare", cmd_vat_usage, cmd_vat},
     {"report", "palette vs VAT bytes and the roster's VRAM budget", cmd_report_usage, cmd_report},
+    {"roster", "merge the manifest fragments of types baked one action each", cmd_roster_usage, cmd_roster},
     {"view", "watch a herd in the browser: palette and VAT side by side", cmd_view_usage, cmd_view},
 };
 

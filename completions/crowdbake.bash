@@ -9,7 +9,7 @@ _crowdbake_options()
     case $1 in
     bake) echo "-o --output --format --fps --layout --precision --max-texture-size --root-motion --skin
                 --speed-reference --exr-compression --zstd --json $output -j --threads --force --depfile
-                --manifest --out-dir --depfile-manifest-only --fit-rows --allow-over-budget --measure-all --max-error --max-fps --clip --exclude-clip --loop --one-shot --sync --default-state $limits" ;;
+                --manifest --out-dir --depfile-manifest-only --fit-rows --allow-over-budget --measure-all --max-error --max-fps --clip --exclude-clip --loop --one-shot --sync --default-state --type --fragment $limits" ;;
     info) echo "--json --fps --skin $output $limits" ;;
     sample) echo "--json --fps --clip --frame --skin --root-motion $output $limits" ;;
     inspect) echo "--json --clip --frame --no-verify $output" ;;
@@ -17,7 +17,8 @@ _crowdbake_options()
     preview) echo "-o --output --skin --cell --columns $output $limits" ;;
     vat) echo "-o --output --fps --max-texture-size --root-motion --skin --exr-compression --json --clip --exclude-clip
                 --like $output $limits" ;;
-    report) echo "--json --markdown --html --no-fail -j --target $output" ;;
+    report) echo "--json --markdown --html --no-fail -j --target --out-dir $output" ;;
+    roster) echo "merge -o --output -q --quiet" ;;
     view) echo "--port --open --cache --model $output $limits" ;;
     mesh) echo "-o --output --palette-model --max-influences --quantize --batch --max-quantization-error --fps --skin
                 --vertex-id-uv --skin-texture --json --type --lod $output $limits" ;;
@@ -32,7 +33,7 @@ _crowdbake()
     else
         cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[COMP_CWORD-1]} words=("${COMP_WORDS[@]}") cword=$COMP_CWORD
     fi
-    local commands="info sample bake inspect verify preview vat report mesh view"
+    local commands="info sample bake inspect verify preview vat report roster mesh view"
     if [[ $cword -eq 1 ]]; then
         COMPREPLY=($(compgen -W "$commands help --help --version -V" -- "$cur"))
         return
@@ -49,13 +50,13 @@ _crowdbake()
     --root-motion) COMPREPLY=($(compgen -W "keep in-place loops-in-place" -- "$cur")); return ;;
     --exr-compression) COMPREPLY=($(compgen -W "none rle zips zip piz" -- "$cur")); return ;;
     --fps) COMPREPLY=($(compgen -W "24 30 60 auto" -- "$cur")); return ;;
-    -o|--output|--depfile|--manifest|--html) COMPREPLY=($(compgen -f -- "$cur")); return ;;
+    -o|--output|--depfile|--manifest|--html|--fragment) COMPREPLY=($(compgen -f -- "$cur")); return ;;
     --out-dir|--cache) COMPREPLY=($(compgen -d -- "$cur")); return ;;
     esac
     if [[ $cur == -* ]]; then
         COMPREPLY=($(compgen -W "$(_crowdbake_options "${words[1]}") --help" -- "$cur"))
     else
-        COMPREPLY=($(compgen -f -X '!*.@(glb|gltf|pal|exr|ktx2|toml)' -- "$cur") $(compgen -d -- "$cur"))
+        COMPREPLY=($(compgen -f -X '!*.@(glb|gltf|pal|exr|ktx2|toml|fragment)' -- "$cur") $(compgen -d -- "$cur"))
     fi
 }
 complete -F _crowdbake crowdbake

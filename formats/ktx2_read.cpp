@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <simdjson.h>
+#include <zstd.h>
 
 #include "crowdbake/bake.h"
 
@@ -271,7 +272,8 @@ void read_tables(const unsigned char *kvd, uint64_t kvd_bytes, cb_ktx2_palette *
 }
 
 // The container: returns the level's bytes (the texels), after every check, or null.
-const unsigned char *read_container(const std::vector<unsigned char> &file, cb_ktx2_palette *out, Reader &r)
+const unsigned char *read_container(const std::vector<unsigned char> &file, cb_ktx2_palette *out, uint64_t *stored_bytes,
+                                    bool *zstd, Reader &r)
 {
     static const unsigned char id[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
     const unsigned char *d = file.data();
@@ -284,21 +286,37 @@ const unsigned char *read_container(const std::vector<unsigned char> &file, cb_k
     else if (format == VK_FORMAT_R32G32B32A32_SFLOAT) p->precision = CB_PRECISION_FLOAT;
     else return r.fail("vkFormat " + std::to_string(format) + " is not a palette's (RGBA16F or RGBA32F)"), nullptr;
     uint32_t texel = cb_precision_texel_bytes(p->precision);
+    uint32_t scheme = get32(d + 44); // 0 none, 2 Zstandard (toktx --zcmp, crowdbake bake --zstd)
     if (type_size != texel / 4 || width == 0 || height == 0 || get32(d + 28) || get32(d + 32) || get32(d + 36) != 1 ||
-        get32(d + 40) != 1 || get32(d + 44))
-        return r.fail("not a palette's texture (one 2D level, no array, cube or supercompression)"), nullptr;
+        get32(d + 40) != 1 || (scheme != 0 && scheme != 2))
+        return r.fail("not a palette's texture (one 2D level, no array or cube, no supercompression but zstd)"), nullptr;
     p->width = width, p->height = height;
     uint64_t kvd_at = get32(d + 56), kvd_bytes = get32(d + 60);
     uint64_t level_at = get64(d + 80), level_bytes = get64(d + 88), texels = (uint64_t)width * height * texel;
     if (width > UINT32_MAX / height || (uint64_t)width * height > cb_default_limits().max_palette_bytes / texel ||
-        level_bytes != texels || get64(d + 96) != texels)
+        (scheme == 0 && level_bytes != texels) || get64(d + 96) != texels)
         return r.fail("its level's size disagrees with its " + std::to_string(width) + "x" + std::to_string(height) +
                       " texels"), nullptr;
     if (kvd_at > size || kvd_bytes > size - kvd_at || level_at > size || level_bytes > size - level_at)
         return r.fail("truncated: its header places data past its " + std::to_string(size) + " bytes"), nullptr;
     read_tables(d + kvd_at, kvd_bytes, out, r);
     p->texel_bytes = (size_t)texels;
+    *stored_bytes = level_bytes;
+    *zstd = scheme == 2;
     return r.failed ? nullptr : d + level_at;
+}
+
+// The level's texels into the palette: copied, or a Zstandard frame decompressed, which must
+// give exactly the texels the header promises.
+void take_level(const unsigned char *level, uint64_t stored, bool zstd, cb_palette *p, Reader &r)
+{
+    if (!(p->texels = std::malloc(p->texel_bytes ? p->texel_bytes : 1))) return r.fail("out of memory");
+    if (!zstd) return (void)std::memcpy(p->texels, level, p->texel_bytes);
+    size_t n = ZSTD_decompress(p->texels, p->texel_bytes, level, (size_t)stored);
+    if (ZSTD_isError(n)) return r.fail(std::string("its zstd level does not decompress: ") + ZSTD_getErrorName(n));
+    if (n != p->texel_bytes)
+        r.fail("its zstd level holds " + std::to_string(n) + " bytes, not the " + std::to_string(p->texel_bytes) +
+               " of its texels");
 }
 
 } // namespace
@@ -310,9 +328,10 @@ extern "C" cb_status cb_ktx2_read_palette(const char *path, cb_ktx2_palette *out
     try {
         std::vector<unsigned char> file;
         if (!read_file(path, file, err)) return err->status;
-        const unsigned char *texels = read_container(file, out, r);
-        if (texels && !(out->palette.texels = std::malloc(out->palette.texel_bytes))) r.fail("out of memory");
-        if (!r.failed) std::memcpy(out->palette.texels, texels, out->palette.texel_bytes);
+        uint64_t stored = 0;
+        bool zstd = false;
+        const unsigned char *level = read_container(file, out, &stored, &zstd, r);
+        if (level) take_level(level, stored, zstd, &out->palette, r);
     } catch (const std::exception &) { // std::bad_alloc: simdjson itself reports through error codes
         r.fail("out of memory");
     }

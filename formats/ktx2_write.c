@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <zstd.h>
 
 #include "crowdbake/atomic_file.h"
 #include "crowdbake/bake.h"
@@ -25,7 +26,7 @@ static void put64(unsigned char *d, uint64_t v)
 /* The data format descriptor: dfdTotalSize, then one basic block of 24 bytes and a sample per
  * channel (R, G, B, A), each a signed float of `bits` bits, as KTX-Software writes them. */
 #define DFD_BYTES (4 + 24 + 4 * 16)
-static void write_dfd(unsigned char *d, uint32_t bits)
+static void write_dfd(unsigned char *d, uint32_t bits, bool supercompressed)
 {
     memset(d, 0, DFD_BYTES);
     put32(d, DFD_BYTES);
@@ -36,7 +37,7 @@ static void write_dfd(unsigned char *d, uint32_t bits)
     d[14] = 1;                                      /* transferFunction LINEAR: the texels are numbers, not colours */
     d[15] = 0;                                      /* flags: alpha straight */
     /* texelBlockDimension0..3 = 0 (1x1x1x1), bytesPlane0 = the texel's bytes */
-    d[20] = (unsigned char)(bits / 2);
+    d[20] = supercompressed ? 0 : (unsigned char)(bits / 2); /* the specification: 0 under supercompression */
     static const unsigned char channel[4] = {0, 1, 2, 15};
     for (int s = 0; s < 4; ++s) {
         unsigned char *w = d + 28 + 16 * s;
@@ -137,8 +138,31 @@ static size_t kv_entry(unsigned char *d, const char *key, const char *value)
     return padded;
 }
 
+/* The level as stored: the texels, or (zstd_level > 0) a Zstandard frame of them, as
+ * `toktx --zcmp` writes them (supercompressionScheme 2). *level is the palette's own texels
+ * (nothing to free) or a compressed copy (*owned). */
+static cb_status stored_level(const cb_palette *p, int zstd_level, const void **level, size_t *bytes, void **owned,
+                              cb_error *err)
+{
+    size_t raw = p->texel_bytes ? p->texel_bytes : 0;
+    *level = p->texels, *bytes = raw, *owned = NULL;
+    if (zstd_level <= 0) return CB_OK;
+    size_t bound = ZSTD_compressBound(raw);
+    if (!(*owned = malloc(bound ? bound : 1))) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    size_t n = ZSTD_compress(*owned, bound, p->texels, raw, zstd_level);
+    if (ZSTD_isError(n)) return cb_fail(err, CB_ERR_INTERNAL, "zstd: %s", ZSTD_getErrorName(n));
+    *level = *owned, *bytes = n;
+    return CB_OK;
+}
+
 cb_status cb_ktx2_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin, uint64_t input_hash,
                         float speed_reference, bool in_place, cb_error *err)
+{
+    return cb_ktx2_write_zstd(path, p, model, skin, input_hash, speed_reference, in_place, 0, err);
+}
+
+cb_status cb_ktx2_write_zstd(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
+                             uint64_t input_hash, float speed_reference, bool in_place, int zstd_level, cb_error *err)
 {
     if (p->precision == CB_PRECISION_U16)
         return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_PRECISION,
@@ -156,33 +180,35 @@ cb_status cb_ktx2_write(const char *path, const cb_palette *p, const cb_model *m
     size_t kvd = 0;
     for (int i = 0; i < 3; ++i) kvd += kv_entry(NULL, keys[i], values[i]);
     size_t dfd_at = 80 + 24, kvd_at = dfd_at + DFD_BYTES, level_at = kvd_at + kvd;
-    level_at = (level_at + texel - 1) / texel * texel; /* lcm(texel block size, 4) */
+    if (zstd_level <= 0) level_at = (level_at + texel - 1) / texel * texel; /* lcm(texel block size, 4); 1 supercompressed */
     /* Header, tables and padding here; the level is written from the palette's own texels. */
-    size_t level_bytes = (size_t)p->width * p->height * texel;
+    size_t level_bytes = (size_t)p->width * p->height * texel, stored_bytes;
+    const void *level;
+    void *compressed = NULL;
     unsigned char *d = calloc(level_at, 1);
-    if (!d) {
-        free(clips), free(meta);
-        return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    if (!d || stored_level(p, zstd_level, &level, &stored_bytes, &compressed, err)) {
+        free(clips), free(meta), free(d), free(compressed);
+        return err->status ? err->status : cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
     static const unsigned char id[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
     memcpy(d, id, 12);
     uint32_t header[9] = {p->precision == CB_PRECISION_FLOAT ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R16G16B16A16_SFLOAT,
                           texel / 4, p->width, p->height, 0 /* depth */, 0 /* layers */, 1 /* faces */, 1 /* levels */,
-                          0 /* no supercompression */};
+                          zstd_level > 0 ? 2u : 0u /* supercompressionScheme: Zstandard, or none */};
     for (int i = 0; i < 9; ++i) put32(d + 12 + 4 * i, header[i]);
     put32(d + 48, (uint32_t)dfd_at), put32(d + 52, DFD_BYTES);
     put32(d + 56, (uint32_t)kvd_at), put32(d + 60, (uint32_t)kvd);
     put64(d + 64, 0), put64(d + 72, 0); /* no supercompression global data */
-    put64(d + 80, level_at), put64(d + 88, level_bytes), put64(d + 96, level_bytes);
-    write_dfd(d + dfd_at, bits);
+    put64(d + 80, level_at), put64(d + 88, stored_bytes), put64(d + 96, level_bytes);
+    write_dfd(d + dfd_at, bits, zstd_level > 0);
     size_t at = kvd_at;
     for (int i = 0; i < 3; ++i) at += kv_entry(d + at, keys[i], values[i]);
     free(clips), free(meta);
     cb_atomic_file f;
     cb_status rc = cb_atomic_open(&f, path, err);
-    if (!rc && ((rc = cb_atomic_write(&f, d, level_at, err)) || (rc = cb_atomic_write(&f, p->texels, level_bytes, err))))
+    if (!rc && ((rc = cb_atomic_write(&f, d, level_at, err)) || (rc = cb_atomic_write(&f, level, stored_bytes, err))))
         cb_atomic_abort(&f);
     if (!rc) rc = cb_atomic_commit(&f, err);
-    free(d);
+    free(d), free(compressed);
     return rc;
 }

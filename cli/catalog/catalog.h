@@ -47,13 +47,15 @@ typedef struct cb_catalog_animal {
     cb_source_pos *lod_pos;
     uint32_t lod_count;
     uint32_t *lod_max_influences; /* lod_count entries (1, 2 or 4) for `crowdbake mesh --lod N`, or NULL */
-    cb_catalog_clip *clips; /* NULL: every clip of the model */
+    cb_catalog_clip *clips; /* NULL: the clips the states play and extra_clips (every clip without states) */
     uint32_t clip_count;
+    cb_catalog_clip *extra_clips; /* baked beside the states' clips though no state plays them */
+    uint32_t extra_clip_count;
     cb_catalog_state *states;
     uint32_t state_count;
     const char *default_state;
     const char *default_state_from; /* why: "the catalog's default_state", "the first state written", ... */
-    double speed_reference; /* m/s (model units/s); with speed_auto, measured */
+    double speed_reference; /* model units/s; with speed_auto, measured */
     bool speed_auto;
     const char *speed_state; /* speed_reference = "STATE": measure it on that state's clip (unless the default state's is locomotion) */
     cb_source_pos speed_pos;
@@ -99,6 +101,14 @@ bool cb_catalog_formats_valid(unsigned formats);
  * applies to every animal with that state, and is an error when no animal has it. Counts in
  * what is up to date (the animals' canonical entries record it). */
 cb_status cb_catalog_override_states(cb_catalog *catalog, const char *syncs, const char *default_state, cb_error *err);
+
+/* The one clip-name matcher, for the command line's --clip and a catalog's clips alike: the name
+ * exactly, else regardless of case, else the part after an exporter's "Armature|" regardless of
+ * case, else the one clip whose name holds it (`walk` for "AnimalArmature|Walk"). names[i] lies
+ * `stride` bytes after names[i-1] (as cb_closest_name reads them). The index, or -1 with `why`
+ * saying so: "no clip 'X'; did you mean 'Y'?", or the clips an ambiguous name fits. */
+int cb_match_clip_name(const char *typed, const char *const *names, size_t count, size_t stride, char *why,
+                       size_t size);
 
 /* Index of the first clip whose name contains a keyword, trying keywords in order
  * (case-insensitive), or -1. */

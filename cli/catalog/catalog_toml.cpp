@@ -21,6 +21,9 @@ struct Parser {
     cb_catalog *cat;
     cb_error *err;
     std::string file;
+    const char *files_of = nullptr; /* whose files must exist: NULL every animal's (cb_catalog_load_checking) */
+
+    bool checks_files(const std::string &name) const { return !files_of || name == files_of; }
 
     /* status: CB_ERR_IO where a file the catalog names cannot be read, as for a model on the command line. */
     [[noreturn]] void fail(const toml::source_region &where, const std::string &what, cb_status status = CB_ERR_INPUT)
@@ -256,13 +259,16 @@ struct Parser {
 
     /* ---- [animal.NAME] ---- */
 
-    void clips(const toml::array &a, cb_catalog_animal *an, const std::string &where)
+    // clips or extra_clips (`key`): names or tables, into *out.
+    cb_catalog_clip *clips(const toml::node &node, const char *key, uint32_t *count, const std::string &where)
     {
-        an->clip_count = (uint32_t)a.size();
-        an->clips = alloc<cb_catalog_clip>(a.size());
+        if (!node.is_array()) fail(node.source(), where + " " + key + " must be a list");
+        const toml::array &a = *node.as_array();
+        *count = (uint32_t)a.size();
+        cb_catalog_clip *out = alloc<cb_catalog_clip>(a.size());
         for (size_t i = 0; i < a.size(); ++i) {
             const toml::node &n = *a.get(i);
-            cb_catalog_clip *c = &an->clips[i];
+            cb_catalog_clip *c = &out[i];
             c->loop = -1;
             c->fps_auto = -1;
             c->pos = pos(n);
@@ -270,7 +276,7 @@ struct Parser {
                 c->source = c->name = dup(*n.value<std::string>());
                 continue;
             }
-            if (!n.is_table()) fail(n.source(), where + " clips entries are clip names or { source = \"...\", name = \"...\" }");
+            if (!n.is_table()) fail(n.source(), where + " " + key + " entries are clip names or { source = \"...\", name = \"...\" }");
             const toml::table &t = *n.as_table();
             check_keys(t, {"source", "name", "loop", "fps", "max_error"}, where + " clip");
             const toml::node *src = t.get("source");
@@ -281,9 +287,10 @@ struct Parser {
             if (auto *f = t.get("fps")) c->fps_auto = fps(*f, &c->fps, where + " clip fps");
             if (auto *e = t.get("max_error")) c->max_error_mm = max_error(*e, where + " clip");
             for (size_t k = 0; k < i; ++k)
-                if (std::strcmp(an->clips[k].name, c->name) == 0)
+                if (std::strcmp(out[k].name, c->name) == 0)
                     fail(n.source(), where + " two clips are named '" + c->name + "'; rename one with name = \"...\"");
         }
+        return out;
     }
 
     // A state's keywords: "word", ["word", ...], or { keywords = [...], sync = "speed" | "time" }.
@@ -353,8 +360,8 @@ struct Parser {
     void animal(const std::string &name, const toml::table &t, const toml::key &key, cb_catalog_animal *an)
     {
         std::string where = "[animal." + name + "]";
-        std::vector<std::string> known = {"model", "lods", "lod_max_influences", "clips", "states", "default_state",
-                                         "speed_reference"};
+        std::vector<std::string> known = {"model", "lods", "lod_max_influences", "clips", "extra_clips", "states",
+                                         "default_state", "speed_reference"};
         known.insert(known.end(), bake_keys().begin(), bake_keys().end());
         check_keys(t, known, where);
         an->name = dup(name);
@@ -365,7 +372,7 @@ struct Parser {
         if (!model) fail(key.source(), where + " needs model = \"path/to/model.glb\" (relative to the catalog)");
         std::string path = resolve(str(*model, where + " model"));
         struct stat st;
-        if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+        if (checks_files(name) && (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)))
             fail(model->source(), where + " model file " + path + " does not exist (paths are relative to the catalog)",
                  CB_ERR_IO);
         an->model = dup(path);
@@ -378,16 +385,19 @@ struct Parser {
             an->lod_pos = alloc<cb_source_pos>(a.size());
             for (size_t i = 0; i < a.size(); ++i) {
                 std::string lp = resolve(str(*a.get(i), where + " lod"));
-                if (stat(lp.c_str(), &st) != 0)
+                if (checks_files(name) && stat(lp.c_str(), &st) != 0)
                     fail(a.get(i)->source(), where + " LOD file " + lp + " does not exist", CB_ERR_IO);
                 an->lods[i] = dup(lp);
                 an->lod_pos[i] = pos(*a.get(i));
             }
         }
         if (auto *l = t.get("lod_max_influences")) lod_influences(*l, an, where);
-        if (auto *c = t.get("clips")) {
-            if (!c->is_array()) fail(c->source(), where + " clips must be a list");
-            clips(*c->as_array(), an, where);
+        if (auto *c = t.get("clips")) an->clips = clips(*c, "clips", &an->clip_count, where);
+        if (auto *c = t.get("extra_clips")) {
+            if (an->clips)
+                fail(c->source(), where + " clips lists every clip baked: move extra_clips into it, or drop clips "
+                                          "(then the states' clips and extra_clips are baked)");
+            an->extra_clips = clips(*c, "extra_clips", &an->extra_clip_count, where);
         }
         if (auto *s = t.get("states")) {
             if (!s->is_table()) fail(s->source(), where + " states must be a table: state = [\"keyword\", ...]");
@@ -417,7 +427,7 @@ struct Parser {
                 bool state = false;
                 for (uint32_t i = 0; i < an->state_count; ++i) state |= v == an->states[i].name;
                 if (v != "auto" && !state)
-                    fail(sp->source(), where + " speed_reference must be a speed in m/s, \"auto\" or the name of a state");
+                    fail(sp->source(), where + " speed_reference must be a speed in model units/s, \"auto\" or the name of a state");
                 if (state) an->speed_state = dup(v);
             } else {
                 an->speed_reference = number(*sp, where + " speed_reference");
@@ -427,16 +437,49 @@ struct Parser {
         }
     }
 
+    /* A resolved path as seen from the catalog's folder: what the catalog says, whatever folder
+     * the catalog was named from, so the input hash holds no absolute path (the same bytes in
+     * every checkout and build sandbox). A path written absolute stays absolute. */
+    std::string from_catalog(const std::string &path) const
+    {
+        std::string dir = cat->dir;
+        if (!path.empty() && path[0] == '/' && dir[0] != '/') return path;
+        auto split = [](const std::string &p) {
+            std::vector<std::string> parts;
+            for (size_t start = 0; start <= p.size();) {
+                size_t end = p.find('/', start);
+                if (end == std::string::npos) end = p.size();
+                std::string part = p.substr(start, end - start);
+                if (!part.empty() && part != ".") parts.push_back(part);
+                start = end + 1;
+            }
+            return parts;
+        };
+        std::vector<std::string> d = split(dir), f = split(path);
+        size_t common = 0;
+        while (common < d.size() && common < f.size() && d[common] == f[common]) ++common;
+        std::string out;
+        for (size_t i = common; i < d.size(); ++i) out += "../";
+        for (size_t i = common; i < f.size(); ++i) out += f[i] + (i + 1 < f.size() ? "/" : "");
+        return out;
+    }
+
+    static std::string clip_words(const char *what, const cb_catalog_clip &clip)
+    {
+        char buf[128];
+        std::snprintf(buf, sizeof buf, " loop=%d fps=%.17g/%d/%.17g", clip.loop, clip.fps, clip.fps_auto, clip.max_error_mm);
+        return std::string(what) + clip.source + ">" + clip.name + buf;
+    }
+
     void canonical(cb_catalog_animal *an)
     {
         char buf[256];
-        std::string c = std::string("model=") + an->model;
-        for (uint32_t i = 0; i < an->lod_count; ++i) c += std::string(" lod=") + an->lods[i];
-        for (uint32_t i = 0; i < an->clip_count; ++i) {
-            std::snprintf(buf, sizeof buf, " loop=%d fps=%.17g/%d/%.17g", an->clips[i].loop, an->clips[i].fps,
-                          an->clips[i].fps_auto, an->clips[i].max_error_mm);
-            c += std::string(" clip=") + an->clips[i].source + ">" + an->clips[i].name + buf;
-        }
+        std::string c = std::string("model=") + from_catalog(an->model);
+        for (uint32_t i = 0; i < an->lod_count; ++i) c += std::string(" lod=") + from_catalog(an->lods[i]);
+        for (uint32_t i = 0; i < an->clip_count; ++i) c += clip_words(" clip=", an->clips[i]);
+        // the states' clips are what is baked without a clips list (older records baked every clip)
+        if (!an->clips) c += " clips=states";
+        for (uint32_t i = 0; i < an->extra_clip_count; ++i) c += clip_words(" extra=", an->extra_clips[i]);
         for (uint32_t i = 0; i < an->state_count; ++i) {
             c += std::string(" state=") + an->states[i].name;
             if (an->states[i].sync != CB_SYNC_AUTO) c += an->states[i].sync == CB_SYNC_SPEED ? "/speed" : "/time";
@@ -498,7 +541,7 @@ struct Parser {
     }
 };
 
-cb_status parse(const char *text, size_t size, const char *path, cb_catalog *out, cb_error *err)
+cb_status parse(const char *text, size_t size, const char *path, const char *files_of, cb_catalog *out, cb_error *err)
 {
     std::memset(out, 0, sizeof *out);
     unsigned line, column;
@@ -508,6 +551,7 @@ cb_status parse(const char *text, size_t size, const char *path, cb_catalog *out
     out->arena = cb_arena_create();
     if (!out->arena) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     Parser p{out, err, path};
+    p.files_of = files_of;
     try {
         out->path = p.dup(path);
         std::string dir = path;
@@ -533,10 +577,15 @@ cb_status parse(const char *text, size_t size, const char *path, cb_catalog *out
 
 extern "C" cb_status cb_catalog_parse(const char *text, size_t size, const char *path, cb_catalog *out, cb_error *err)
 {
-    return parse(text, size, path, out, err);
+    return parse(text, size, path, NULL, out, err);
 }
 
 extern "C" cb_status cb_catalog_load(const char *path, cb_catalog *out, cb_error *err)
+{
+    return cb_catalog_load_checking(path, NULL, out, err);
+}
+
+extern "C" cb_status cb_catalog_load_checking(const char *path, const char *files_of, cb_catalog *out, cb_error *err)
 {
     std::memset(out, 0, sizeof *out);
     FILE *f = std::fopen(path, "rb");
@@ -552,5 +601,5 @@ extern "C" cb_status cb_catalog_load(const char *path, cb_catalog *out, cb_error
         }
     }
     std::fclose(f);
-    return parse(text.data(), text.size(), path, out, err);
+    return parse(text.data(), text.size(), path, files_of, out, err);
 }

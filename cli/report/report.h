@@ -38,6 +38,9 @@ typedef struct cb_report_type {
     bool vat_fits;                      /* at the target's texture limit */
     cb_texture_geometry vat_geometry;
     uint64_t mesh_bytes;
+    const char *mesh_of;                /* an earlier type on the same model: the mesh is counted there, once */
+    uint64_t herd_instances;            /* with a budget: instances the budget left holds (report_herd.c) */
+    double herd_vertices;               /* vertices skinned a frame drawing that herd */
     double palette_error, vat_error, model_height; /* model units; palette_error: the encoding's, at the baked rows */
     double palette_visible_error; /* the palette as the runtime plays it: encoding and the blend of two rows */
     bool palette_over_limit, bones_over_limit;
@@ -45,6 +48,7 @@ typedef struct cb_report_type {
     uint32_t roster_index;
     uint32_t gait_count;
     cb_report_gait *gaits;              /* the type's states that follow the speed */
+    const cb_warnings *bake_warnings;   /* the roster's for the type (owned by the roster): the page lists them */
 } cb_report_type;
 
 typedef struct cb_report {
@@ -65,9 +69,14 @@ typedef struct cb_report {
 
 cb_status cb_report_build(const cb_catalog *catalog, const cb_roster *roster, cb_report *out, cb_error *err);
 void cb_report_free(cb_report *report);
+/* Per type, the herd the budget left holds (report_herd.c): its instances at
+ * CB_REPORT_INSTANCE_BYTES each (palettes and meshes are in the roster's total already) and the
+ * vertices it skins a frame. */
+enum { CB_REPORT_INSTANCE_BYTES = 16 + 48 }; /* the shipped shader's vec4 a_instance and a 3x4 transform */
+void cb_report_fill_herds(cb_report *report);
 /* The runtime section (report_runtime.h): re-reads every type's model and LODs and measures
- * their runtime meshes. `report` adds it; the bake's closing paragraph does not need it. */
-void cb_report_add_runtime(const cb_roster *roster, cb_report *r);
+ * their runtime meshes (seconds on a large roster). `report` adds it; the bake's closing paragraph does not need it. */
+void cb_report_add_runtime(const cb_roster *roster, cb_report *r, FILE *progress /* a line per type, or NULL */);
 
 void cb_report_text(FILE *out, const cb_report *r);
 void cb_report_markdown(FILE *out, const cb_report *r);

@@ -89,13 +89,92 @@ void report_gaits_json(cb_json *j, const cb_report_type *t)
     cb_json_end(j);
 }
 
-void report_gaits_html(FILE *f, const cb_report_type *t)
+/* Two sliding gaits are one warning when they are the same clip of the same model (types on one
+ * model, or two states on one clip): same name and the same measured slide. */
+static bool same_warning(const cb_report_gait *a, const cb_report_gait *b)
 {
-    char slide[96];
-    for (uint32_t k = 0; k < t->gait_count; ++k) {
-        const cb_report_gait *g = &t->gaits[k];
-        fprintf(f, "<li%s>", g->slides ? " class=\"warn\"" : "");
-        report_html_escape(f, g->state);
-        fprintf(f, " follows the speed (%.3g units/s): feet slide %s</li>", g->ground_speed, slide_text(g, slide, sizeof slide));
+    return strcmp(a->clip, b->clip) == 0 && a->slide_mean == b->slide_mean && a->slide_worst == b->slide_worst;
+}
+
+/* Whether gait k of type i is the first of its group (no earlier type or state has it). */
+static bool first_of_group(const cb_report *r, uint32_t i, uint32_t k)
+{
+    for (uint32_t a = 0; a <= i; ++a)
+        for (uint32_t b = 0; b < (a == i ? k : r->types[a].gait_count); ++b)
+            if (r->types[a].gaits[b].slides && same_warning(&r->types[a].gaits[b], &r->types[i].gaits[k])) return false;
+    return true;
+}
+
+/* The bake's own warnings (a fixed fps over max_error, ...) beside the gaits' (whose foot-slide
+ * lines the gaits above group), each text once with the types that have it. */
+static bool is_foot_slide(const char *message) { return strstr(message, "its planted feet slide") != NULL; }
+
+static bool bake_warnings_html(FILE *f, const cb_report *r, bool any)
+{
+    for (uint32_t i = 0; i < r->type_count; ++i) {
+        const cb_warnings *w = r->types[i].bake_warnings;
+        for (uint32_t k = 0; w && k < w->count; ++k) {
+            const char *m = w->items[k].message;
+            if (strcmp(w->items[k].kind, "warning") != 0 || is_foot_slide(m)) continue;
+            bool seen = false;
+            for (uint32_t a = 0; a < i && !seen; ++a)
+                for (uint32_t b = 0; r->types[a].bake_warnings && b < r->types[a].bake_warnings->count; ++b)
+                    seen |= strcmp(r->types[a].bake_warnings->items[b].message, m) == 0;
+            if (seen) continue;
+            if (!any) fputs("<h2>Warnings</h2>\n<ul id=\"warnings\">", f);
+            any = true;
+            fputs("<li class=\"warn\">", f);
+            for (uint32_t a = i, listed = 0; a < r->type_count; ++a)
+                for (uint32_t b = 0; r->types[a].bake_warnings && b < r->types[a].bake_warnings->count; ++b)
+                    if (strcmp(r->types[a].bake_warnings->items[b].message, m) == 0) {
+                        fputs(listed++ ? ", " : "", f);
+                        report_html_escape(f, r->types[a].name);
+                    }
+            fputs(": ", f);
+            report_html_escape(f, m);
+            fputs("</li>", f);
+        }
     }
+    return any;
+}
+
+void report_warnings_html(FILE *f, const cb_report *r)
+{
+    char limits[192], slide[96];
+    bool any = false;
+    for (uint32_t i = 0; i < r->type_count; ++i) {
+        const cb_report_type *t = &r->types[i];
+        if (!report_limit_warnings(t, limits, sizeof limits)[0]) continue;
+        if (!any) fputs("<h2>Warnings</h2>\n<ul id=\"warnings\">", f);
+        any = true;
+        fputs("<li class=\"warn\">", f);
+        report_html_escape(f, t->name);
+        fprintf(f, ": %s</li>", limits);
+    }
+    for (uint32_t i = 0; i < r->type_count; ++i)
+        for (uint32_t k = 0; k < r->types[i].gait_count; ++k) {
+            const cb_report_gait *g = &r->types[i].gaits[k];
+            if (!g->slides || !first_of_group(r, i, k)) continue;
+            if (!any) fputs("<h2>Warnings</h2>\n<ul id=\"warnings\">", f);
+            any = true;
+            uint32_t count = 0;
+            for (uint32_t a = i; a < r->type_count; ++a)
+                for (uint32_t b = 0; b < r->types[a].gait_count; ++b)
+                    count += r->types[a].gaits[b].slides && same_warning(&r->types[a].gaits[b], g);
+            fputs("<li class=\"warn\">clip <b>", f);
+            report_html_escape(f, g->clip);
+            fprintf(f, "</b> (%.3g units/s): feet slide %s &middot; <span class=\"count\">%u&times;</span> (", g->ground_speed,
+                    slide_text(g, slide, sizeof slide), count);
+            for (uint32_t a = i, listed = 0; a < r->type_count; ++a)
+                for (uint32_t b = 0; b < r->types[a].gait_count; ++b)
+                    if (r->types[a].gaits[b].slides && same_warning(&r->types[a].gaits[b], g)) {
+                        fputs(listed++ ? ", " : "", f);
+                        report_html_escape(f, r->types[a].name);
+                        fputc(' ', f);
+                        report_html_escape(f, r->types[a].gaits[b].state);
+                    }
+            fputs("): the asset's feet slide; re-time them in the animation, or accept it</li>", f);
+        }
+    any |= bake_warnings_html(f, r, any);
+    if (any) fputs("</ul>\n", f);
 }

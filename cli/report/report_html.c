@@ -117,9 +117,12 @@ static void html_axis(FILE *f, const log_axis *a)
     fputs("</div>", f);
 }
 
-/* Bytes a type's palette would take at half its frame rate (rows halved), same encoding. */
+/* Bytes a type's palette would take at half its frame rate (rows halved), same encoding; 0
+ * unless the palette baked at half the rates kept every clip within its max_error (measured,
+ * report_half.c): the report never advises what breaks the error budget. */
 static uint64_t half_rate_bytes(const cb_report *r, const cb_report_type *t)
 {
+    if (!t->runtime.half_rate_measured || !t->runtime.half_rate_within) return 0;
     cb_texture_geometry g;
     return cb_palette_texture_bytes(t->bones, (t->frames + 1) / 2, t->layout, t->precision, r->max_texture_size, &g);
 }
@@ -152,10 +155,17 @@ static void html_fixes(FILE *f, const cb_report *r, const cb_report_type *t)
         cb_human_bytes(t->palette_bytes - best, a, sizeof a);
         fprintf(f, "<li>%s saves %s</li>", enc, a);
     }
+    uint32_t fixed_over = 0; /* clips whose fixed fps misses max_error (the bake's warnings) */
+    for (uint32_t i = 0; t->bake_warnings && i < t->bake_warnings->count; ++i)
+        fixed_over += strstr(t->bake_warnings->items[i].message, "which a fixed fps is not held to") != NULL;
+    if (fixed_over)
+        fprintf(f, "<li>leave <code>fps</code> out: %u clip%s miss%s max_error at the fixed rate (see the warnings)</li>",
+                fixed_over, fixed_over == 1 ? "" : "s", fixed_over == 1 ? "es" : "");
     uint64_t half = half_rate_bytes(r, t);
     if (half && half < t->palette_bytes) {
         cb_human_bytes(t->palette_bytes - half, a, sizeof a);
-        fprintf(f, "<li>half the fps saves %s (<code>--fps auto</code> picks per clip)</li>", a);
+        fprintf(f, "<li>half the fps saves %s and stays within max_error (%.3g mm/m measured)</li>", a,
+                t->runtime.half_rate_error_mm);
     }
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_type *o = &r->types[i];
@@ -185,9 +195,11 @@ static void html_overrun(FILE *f, const cb_report *r)
     cb_human_bytes(encodings, b, sizeof b);
     cb_human_bytes(rates, c, sizeof c);
     cb_human_bytes(r->meshes_total, m, sizeof m);
-    fprintf(f, "<div class=\"overrun\"><b>Over budget by %s.</b> The smallest encoding for every type saves %s%s; half "
-               "the frame rate saves %s%s; the meshes alone take %s. ",
-            a, b, encodings >= over ? " (enough)" : "", c, rates >= over ? " (enough)" : "", m);
+    fprintf(f, "<div class=\"overrun\"><b>Over budget by %s.</b> The smallest encoding for every type saves %s%s; ", a, b,
+            encodings >= over ? " (enough)" : "");
+    if (rates) fprintf(f, "half the frame rate, where every clip stays within max_error, saves %s%s; ", c, rates >= over ? " (enough)" : "");
+    else fputs("half the frame rate would put clips over max_error in every type (measured); ", f);
+    fprintf(f, "the meshes alone take %s. ", m);
     fputs(encodings >= over || rates >= over ? "</div>\n"
                                              : "Neither is enough alone: raise <code>crowd_share</code>, pick a larger "
                                                "target or bake fewer types or clips.</div>\n", f);
@@ -213,7 +225,8 @@ static void html_chart(FILE *f, const cb_report *r)
     }
     fputs("<div class=\"chart\"><div class=\"row head\"><span class=\"name\"></span><span class=\"kind\"></span>", f);
     html_axis(f, &a);
-    fprintf(f, "<span class=\"fits\" title=\"how many times the budget holds it\">%s</span></div>\n", a.shares ? "fits ×" : "");
+    fprintf(f, "<span class=\"fits\" title=\"instances of the type the budget left holds, %d B each\">%s</span></div>\n",
+            CB_REPORT_INSTANCE_BYTES, a.shares ? "instances" : "");
     for (uint32_t i = 0; i <= r->type_count; ++i) {
         bool roster = i == r->type_count;
         const cb_report_type *t = roster ? NULL : &r->types[i];
@@ -228,14 +241,13 @@ static void html_chart(FILE *f, const cb_report *r)
             if (!k && !roster && t->shares) snprintf(note, sizeof note, "(mesh only: the palette is %s's)", t->shares);
             html_bar(f, r, &a, k ? "vat" : "palette", name, k ? vat : pal, k ? vat_classes : pal_classes, 2,
                      note[0] ? note : NULL);
-            uint64_t sum = (k ? vat : pal)[0] + (k ? vat : pal)[1];
-            if (a.shares && sum) {
-                double times = (double)r->budget_bytes / (double)sum;
-                fprintf(f, times >= 1 ? "<span class=\"fits\">%.0f×</span></div>\n" : "<span class=\"fits over\">%.2f×</span></div>\n",
-                        times >= 1 ? floor(times) : times);
-            } else {
+            /* The herd the budget left holds (report_herd.c), on the type's palette row. */
+            if (a.shares && !k && !roster && t->herd_instances)
+                fprintf(f, "<span class=\"fits\">%s</span></div>\n", report_count_text((double)t->herd_instances, note, sizeof note));
+            else if (a.shares && !k && roster && r->over_budget)
+                fputs("<span class=\"fits over\">over</span></div>\n", f);
+            else
                 fputs("<span class=\"fits\"></span></div>\n", f);
-            }
         }
     }
     fputs("</div>\n", f);
@@ -286,10 +298,7 @@ static void cell_vat_error(FILE *f, const cb_report *r, const cb_report_type *t)
 }
 static void cell_fixes(FILE *f, const cb_report *r, const cb_report_type *t)
 {
-    char limits[192];
     fputs("<ul>", f);
-    if (report_limit_warnings(t, limits, sizeof limits)[0]) fprintf(f, "<li class=\"warn\">%s</li>", limits);
-    report_gaits_html(f, t);
     html_fixes(f, r, t);
     fputs("</ul>", f);
 }
@@ -299,7 +308,7 @@ static const html_column html_columns[] = {
     {"vertices", cell_vertices},  {"encoding", cell_encoding},    {"palette", cell_palette},
     {"mesh", cell_mesh},          {"VAT 16F+8", cell_vat},        {"VAT / palette", cell_ratio},
     {"palette encoding error mm/m", cell_pal_error}, {"palette visible error mm/m", cell_pal_visible_error},
-    {"VAT error mm/m", cell_vat_error}, {"notes; what would shrink it", cell_fixes},
+    {"VAT error mm/m", cell_vat_error}, {"what would shrink it", cell_fixes},
 };
 
 static void html_table(FILE *f, const cb_report *r)
@@ -356,7 +365,7 @@ static void html_encodings(FILE *f, const cb_report *r)
 static void html_targets(FILE *f, const cb_report *r)
 {
     double share = r->has_budget ? r->crowd_share : 1;
-    fprintf(f, "<h2>Other targets</h2>\n<p>The same roster against each built-in profile, %.0f%% of its memory for "
+    fprintf(f, "<h2>Other targets</h2>\n<p>The same roster against each built-in profile, %g%% of its memory for "
                "crowds.</p>\n<div class=\"scroll\"><table id=\"targets\"><tr><th>target</th><th>crowd budget</th>"
                "<th>roster</th><th>as VAT</th><th>texture limit</th><th>verdict</th></tr>\n",
             share * 100);
@@ -419,11 +428,12 @@ void cb_report_html(FILE *f, const cb_report *r)
     else fputs("<body>\n", f);
     fputs("<h1>crowdbake roster report</h1>\n<p class=\"summary", f);
     fputs(r->over_budget ? " over\">" : "\">", f);
-    report_budget_line(f, r, "");
+    report_budget_line(f, r, "", "<br>\n");
     fputs("</p>\n", f);
     if (r->over_budget) html_overrun(f, r);
     html_chart(f, r);
     html_table(f, r);
+    report_warnings_html(f, r);
     html_encodings(f, r);
     html_targets(f, r);
     cb_report_runtime_html(f, r);

@@ -12,15 +12,24 @@ const char *report_limit_warnings(const cb_report_type *t, char *buf, size_t siz
 const char *report_notes(const cb_report_type *t, char *buf, size_t size);
 /* a / b, 0 when b is 0. */
 double report_ratio(uint64_t a, uint64_t b);
-/* The roster's total against its budget, in one sentence; `bold` wraps the verdict. */
-void report_budget_line(FILE *f, const cb_report *r, const char *bold);
+/* The roster's total against its budget: the verdict alone on its line (`bold` wraps it,
+ * `line_end` ends it: "\n", Markdown's "  \n", HTML's "<br>"), then the VAT comparison. */
+void report_budget_line(FILE *f, const cb_report *r, const char *bold, const char *line_end);
 /* The foot-sync section (report_gaits.c): the gaits of a type, its warnings, and each rendering. */
 void report_fill_gaits(const cb_roster_type *rt, cb_report_type *t);
 uint32_t report_gait_warnings(const cb_report_type *t);
 void report_gaits_text(FILE *f, const cb_report *r);
 void report_gaits_markdown(FILE *f, const cb_report *r);
 void report_gaits_json(cb_json *j, const cb_report_type *t);
-void report_gaits_html(FILE *f, const cb_report_type *t);
+/* The page's warnings, out of the advice column: each type's broken limits, and each sliding
+ * gait once per clip with how many types' states play it. */
+void report_warnings_html(FILE *f, const cb_report *r);
+/* The herds section (report_herd.c): per type, the instances the budget left holds and the
+ * vertices a frame they skin. */
+void report_herds_text(FILE *f, const cb_report *r);
+/* A count in three digits and an SI prefix: "83.4 G". */
+const char *report_count_text(double n, char *buf, size_t size);
+void report_herds_json(cb_json *j, const cb_report_type *t);
 /* Writes s with HTML's special characters escaped (report_html.c, report_runtime.c). */
 void report_html_escape(FILE *f, const char *s);
 

@@ -88,6 +88,7 @@ cb_status cb_report_runtime_measure(const cb_roster_type *t, const cb_roster_typ
         cb_model_free(lod);
     }
     transitions(t, owner, out);
+    if (s && !err->status && t == owner) report_measure_half_rate(s, owner, out);
     cb_sampler_free(s);
     cb_model_free(m);
     out->measured = !err->status;

@@ -42,6 +42,9 @@ typedef struct cb_report_runtime {
     uint32_t loops;                /* looping clips */
     uint64_t transition_bytes;     /* a pre-baked transition between every ordered pair of loops */
     bool measured;                 /* false when the model could not be read again (the section is left out) */
+    bool half_rate_measured;       /* the palette baked again at half every clip's rate (report_half.c) */
+    bool half_rate_within;         /* ... and every clip stayed within its max_error */
+    double half_rate_error_mm;     /* the worst clip's visible error there, mm per metre */
 } cb_report_runtime;
 
 struct cb_roster_type;
@@ -50,6 +53,9 @@ struct cb_roster_type;
 cb_status cb_report_runtime_measure(const struct cb_roster_type *type, const struct cb_roster_type *owner,
                                     cb_report_runtime *out, cb_error *err);
 void cb_report_runtime_free(cb_report_runtime *rt);
+/* Bakes the owner's clips at half their rates, in its encoding, and records in `out` whether
+ * every clip stays within its budget (report_half.c). */
+void report_measure_half_rate(cb_sampler *s, const struct cb_roster_type *owner, cb_report_runtime *out);
 
 typedef struct cb_report cb_report;
 void cb_report_runtime_text(FILE *f, const cb_report *r);

@@ -20,11 +20,11 @@
 #include "crowdbake/vat.h"
 
 typedef struct type_work {
-    cb_model *model;
+    const cb_model *model;    /* the catalog's copy (roster_models), shared with every type naming it */
     int32_t skin;
     cb_clip_plan *plan;       /* the catalog's clips, before their rates are planned */
     cb_clip_request *clip_requests; /* the catalog's clip entries */
-    cb_model **lod_models;
+    const cb_model **lod_models;
     cb_bake_job job;          /* job.plan: the clips with their rates */
     cb_bake_origin origin;
     unsigned char *record;    /* what preparing found, for the type's record (roster_cache.h) */
@@ -41,6 +41,7 @@ typedef struct roster_run {
     roster_log log;           /* guarded by log_lock */
     double start;
     uint32_t threads_per_bake;
+    roster_models models;     /* each model loaded once */
 } roster_run;
 
 static double now_seconds(void)
@@ -82,43 +83,6 @@ static int pick_skin(const cb_model *m)
     return m->skin_count ? 0 : -1;
 }
 
-static cb_status plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, type_work *w, cb_roster_type *t,
-                            cb_error *err)
-{
-    const cb_model *m = w->model;
-    uint32_t n = an->clips ? an->clip_count : m->animation_count;
-    w->plan = calloc(n ? n : 1, sizeof *w->plan);
-    w->clip_requests = calloc(n ? n : 1, sizeof *w->clip_requests);
-    t->clips = calloc(n ? n : 1, sizeof *t->clips);
-    if (!w->plan || !w->clip_requests || !t->clips) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    char where[1100];
-    for (uint32_t i = 0; i < n; ++i) {
-        cb_clip_plan *p = &w->plan[i];
-        w->clip_requests[i] = (cb_clip_request){-1, 0};
-        if (!an->clips) {
-            *p = (cb_clip_plan){(int32_t)i, m->animations[i].name, -1, 0, false, false};
-            continue;
-        }
-        const cb_catalog_clip *c = &an->clips[i];
-        int32_t a = cb_model_find_animation(m, c->source);
-        const struct cb_skipped_clip *skip = a < 0 ? cb_model_find_skipped_clip(m, c->source) : NULL;
-        if (skip) /* asked for by name: an error, not a warning */
-            return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s", roster_at(cat, c->pos, where, sizeof where), an->name,
-                           skip->reason);
-        if (a < 0) {
-            char list[512] = "";
-            for (uint32_t k = 0; k < m->animation_count; ++k)
-                snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", k ? ", " : "", m->animations[k].name);
-            return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] %s has no clip '%s'; its clips are: %s",
-                           roster_at(cat, c->pos, where, sizeof where), an->name, m->source, c->source, list);
-        }
-        *p = (cb_clip_plan){a, c->name, c->loop, c->fps, false, false};
-        w->clip_requests[i] = (cb_clip_request){c->fps_auto, c->max_error_mm};
-    }
-    t->clip_count = n;
-    return CB_OK;
-}
-
 static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_type *t, cb_error *err)
 {
     cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
@@ -146,7 +110,7 @@ static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_
     return err->status;
 }
 
-static cb_status check_lods(const roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t,
+static cb_status check_lods(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t,
                             cb_error *err)
 {
     t->lod_count = an->lod_count;
@@ -156,7 +120,7 @@ static cb_status check_lods(const roster_run *run, const cb_catalog_animal *an, 
     char where[1100];
     for (uint32_t i = 0; i < an->lod_count; ++i) {
         cb_error inner = {0};
-        cb_model *lod = w->lod_models[i] = cb_gltf_load(an->lods[i], run->opt->limits, &inner);
+        const cb_model *lod = w->lod_models[i] = roster_model_get(&run->models, an->lods[i], &inner);
         if (add_inputs(t, an->lods[i], lod, err)) return err->status;
         int skin = lod ? pick_skin(lod) : -1;
         if (lod && skin < 0) cb_fail(&inner, CB_ERR_INPUT, "%s: has no skin", an->lods[i]);
@@ -229,7 +193,7 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     cb_error *err = &t->error;
     char where[1100];
     cb_error inner = {0};
-    w->model = cb_gltf_load(an->model, run->opt->limits, &inner);
+    w->model = roster_model_get(&run->models, an->model, &inner);
     if (add_inputs(t, an->model, w->model, err)) return;
     if (!w->model) {
         cb_fail_setting(err, inner.status, inner.setting, "%s: [animal.%s] %s", roster_at(run->cat, an->model_pos, where, sizeof where),
@@ -250,7 +214,7 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     t->mesh_bytes = cb_model_skin_mesh_bytes(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
-    if (plan_clips(run->cat, an, w, t, err) || plan_job(run, an, w, t, err) ||
+    if (roster_plan_clips(run->cat, an, w->model, &w->plan, &w->clip_requests, t, err) || plan_job(run, an, w, t, err) ||
         analyze_clips(run->opt->limits, w, t, err) || roster_match_states(run->cat, an, t, err) ||
         roster_decide_states(run->cat, an, t, err) || check_lods(run, an, w, t, err)) {
         list_unloaded_lods(an, w, t);
@@ -261,7 +225,10 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     w->origin = (cb_bake_origin){t->key, an->canonical, (const cb_model *const *)w->lod_models, an->lod_count};
     w->job.origin = &w->origin;
     t->input_hash = cb_bake_input_hash(&w->job, NULL);
-    if (run->opt->measure_vat) measure_vat(an, run->opt->limits, w, t);
+    if (run->opt->measure_vat) measure_vat(an, run->opt->limits, w, t), t->vat_measured = true;
+    /* The rate search's poses would save the bake one sampling pass, but held by every type
+     * waiting to bake they made a roster's memory grow with its types: only the plan is kept. */
+    cb_bake_job_release_search(&w->job);
     uint64_t key;
     if (cb_prep_key(an, run->opt->limits, t->inputs, t->input_count, &key))
         cb_prep_record_encode(t, key, &w->record, &w->record_size);
@@ -277,8 +244,13 @@ static void prepare_type(roster_run *run, uint32_t i)
     t->owner = i;
     output_paths(an, t);
     char path[4096];
-    if (!run->opt->force && !run->opt->measure_vat && cb_prep_record_path(an, path, sizeof path) &&
-        cb_prep_record_load(path, an, run->opt->limits, t)) {
+    bool from_record = !run->opt->force && cb_prep_record_path(an, path, sizeof path) &&
+                       cb_prep_record_load(path, an, run->opt->limits, t);
+    if (from_record && run->opt->measure_vat && !t->vat_measured) { /* a report needs the VAT error too */
+        cb_prep_clear(t);
+        from_record = false;
+    }
+    if (from_record) {
         if (!roster_decide_states(run->cat, an, t, &t->error)) {
             t->prepared_from_record = true;
             return;
@@ -287,6 +259,15 @@ static void prepare_type(roster_run *run, uint32_t i)
         t->error = (cb_error){0};
     }
     prepare_from_model(run, i);
+}
+
+/* What preparing a type kept, once it is baked or settled (its model stays: other types share it). */
+static void free_work(type_work *w)
+{
+    cb_bake_job_free(&w->job);
+    cb_bake_job_init(&w->job);
+    free(w->plan), free(w->clip_requests), free(w->lod_models), free(w->record);
+    w->plan = NULL, w->clip_requests = NULL, w->lod_models = NULL, w->record = NULL;
 }
 
 /* ---- pass 3: bake an owner ---- */
@@ -420,6 +401,7 @@ static void bake_type(roster_run *run, uint32_t i)
             t->outcome = t->error.status || bake_files(run, an, &run->work[i], t, &t->error) ? CB_TYPE_FAILED : CB_TYPE_BAKED;
         }
         if (t->outcome != CB_TYPE_FAILED) write_record(run, i);
+        free_work(&run->work[i]);
         t->pal_file_bytes = file_size(t->pal_path);
         t->exr_file_bytes = file_size(t->exr_path);
     }
@@ -486,63 +468,36 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     run.work = calloc(cat->animal_count ? cat->animal_count : 1, sizeof(type_work));
     uint32_t *order = calloc(cat->animal_count ? cat->animal_count : 1, sizeof *order);
     roster_log_init(&run.log, opt->log, r->type_count); /* without memory, lines print as they come */
-    if (!r->types || !run.work || !order || mtx_init(&run.log_lock, mtx_plain) != thrd_success) {
-        free(run.work), free(order), roster_log_free(&run.log);
+    if (!r->types || !run.work || !order || !roster_models_init(&run.models, cat, opt->limits) ||
+        mtx_init(&run.log_lock, mtx_plain) != thrd_success) {
+        free(run.work), free(order), roster_log_free(&run.log), roster_models_free(&run.models);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
     /* Types are the unit of parallel work; fewer types than threads spread their clips too. */
     run.threads_per_bake = cat->animal_count && opt->jobs > cat->animal_count ? opt->jobs / cat->animal_count : 1;
     run_pass(&run, prepare_type, order);
-    /* Equal keys share: the first type (by name) owns the palette. */
-    for (uint32_t i = 0; i < r->type_count; ++i) {
-        cb_roster_type *t = &r->types[i];
-        if (t->error.status) continue;
-        for (uint32_t k = 0; k < i; ++k)
-            if (!r->types[k].error.status && r->types[k].owner == k && r->types[k].key == t->key) {
-                t->owner = k;
-                t->outcome = CB_TYPE_SHARED;
-                break;
-            }
-    }
+    roster_assign_owners(r);
     run_pass(&run, bake_type, order);
     for (uint32_t i = 0; i < r->type_count; ++i) {
         cb_roster_type *t = &r->types[i];
         if (t->owner == i || t->error.status) continue;
-        const cb_roster_type *o = &r->types[t->owner];
-        if (o->outcome == CB_TYPE_FAILED) {
-            t->outcome = CB_TYPE_FAILED;
-            cb_fail(&t->error, o->error.status, "its palette is %s's, which failed", o->animal->name);
-            r->failed++;
-        } else {
-            memcpy(t->pal_path, o->pal_path, sizeof t->pal_path);
-            memcpy(t->exr_path, o->exr_path, sizeof t->exr_path);
-            memcpy(t->babylon_path, o->babylon_path, sizeof t->babylon_path);
-            t->layout = o->layout, t->precision = o->precision, t->palette_bytes = o->palette_bytes;
-            t->width = o->width, t->height = o->height, t->blocks = o->blocks, t->max_error = o->max_error;
-            t->visible_error = o->visible_error;
-            write_record(&run, i);
-            r->shared++;
-        }
+        if (roster_settle_shared(r, i)) write_record(&run, i);
+        free_work(&run.work[i]);
         log_type(&run, t);
     }
     if (opt->log && opt->tty) fputs("\r\033[K", opt->log);
-    if (opt->manifest) snprintf(r->manifest_path, sizeof r->manifest_path, "%s", opt->manifest);
+    if (opt->fragment) snprintf(r->manifest_path, sizeof r->manifest_path, "%s", opt->fragment->path);
+    else if (opt->manifest) snprintf(r->manifest_path, sizeof r->manifest_path, "%s", opt->manifest);
     else snprintf(r->manifest_path, sizeof r->manifest_path, "%s/roster.json", cat->defaults.out_dir);
     cb_status rc = roster_make_parent_directories(r->manifest_path, err);
-    if (!rc) rc = roster_write_manifest(cat, r, r->manifest_path, err);
+    if (!rc && opt->fragment) rc = roster_write_fragment(r, opt->fragment, err);
+    else if (!rc) rc = roster_write_manifest(cat, r, r->manifest_path, err);
     if (!rc && opt->depfile && !(rc = roster_make_parent_directories(opt->depfile, err))) rc = roster_write_depfile(cat, r, opt->depfile, opt->depfile_manifest_only, err);
     if (!rc) roster_settle_times(r);
     for (uint32_t i = 0; i < r->type_count && !rc; ++i)
         if (r->types[i].outcome == CB_TYPE_FAILED && !err->status) *err = r->types[i].error, rc = err->status;
-    for (uint32_t i = 0; i < r->type_count; ++i) {
-        cb_bake_job_free(&run.work[i].job);
-        free(run.work[i].plan);
-        free(run.work[i].clip_requests);
-        cb_model_free(run.work[i].model);
-        for (uint32_t l = 0; l < cat->animals[i].lod_count && run.work[i].lod_models; ++l) cb_model_free(run.work[i].lod_models[l]);
-        free(run.work[i].lod_models);
-        free(run.work[i].record);
-    }
+    for (uint32_t i = 0; i < r->type_count; ++i) free_work(&run.work[i]);
+    roster_models_free(&run.models);
     free(run.work), free(order), roster_log_free(&run.log);
     mtx_destroy(&run.log_lock);
     return rc;

@@ -13,6 +13,14 @@
 extern "C" {
 #endif
 
+/* `bake CATALOG --type NAME`: a manifest fragment in place of the manifest (roster_fragment.c).
+ * It records what the manifest says of the type and the run's state options, which the merge
+ * applies to the catalog again. */
+typedef struct cb_roster_fragment {
+    const char *path;
+    const char *syncs, *default_state; /* --sync and --default-state as given, or NULL */
+} cb_roster_fragment;
+
 typedef struct cb_roster_options {
     uint32_t jobs;          /* types baked at once */
     bool force;             /* re-bake what is up to date */
@@ -23,6 +31,7 @@ typedef struct cb_roster_options {
     const char *manifest;   /* roster.json path; NULL: OUT_DIR/roster.json */
     const char *depfile;    /* Make/Ninja depfile, or NULL */
     bool depfile_manifest_only; /* the depfile's one rule is the manifest's (Ninja's `depfile` without `deps = gcc`) */
+    const cb_roster_fragment *fragment; /* write this fragment instead of the manifest, or NULL */
     const cb_limits *limits; /* for loading and baking; NULL: the defaults */
     bool measure_vat;       /* also measure each type's VAT error (half-float positions) for the report */
     /* How the front end names a setting (cb_error.setting) in a failed type's line, or NULL. */
@@ -66,6 +75,7 @@ typedef struct cb_roster_type {
     double model_height, speed_reference, seconds;
     char speed_reference_from[512]; /* which rule picked speed_reference, in words */
     double vat_error;         /* with measure_vat */
+    bool vat_measured;        /* vat_error holds a measure (this run's, or its record's: a report reuses it) */
     uint32_t clip_count;
     cb_roster_clip *clips;
     int *state_clip;          /* per catalog state: index into clips */
@@ -94,6 +104,14 @@ typedef struct cb_roster {
  * status of the first failure (by name), or CB_OK. */
 cb_status cb_roster_bake(const cb_catalog *catalog, const cb_roster_options *options, cb_roster *out, cb_error *err);
 void cb_roster_free(cb_roster *roster);
+
+/* `crowdbake roster merge`: reads the fragments `bake CATALOG --type NAME` wrote, one per type
+ * of their catalog (which it loads, as `catalog`, applying the state options they record), and
+ * writes the manifest at `manifest`, byte-identical to the one `bake CATALOG` writes: types
+ * whose content keys are equal share the palette of the first by name. Fails naming a missing,
+ * repeated or damaged fragment; a type that failed is listed as failed and fails the merge. */
+cb_status cb_roster_merge(char *const *fragments, uint32_t count, const char *manifest, cb_catalog *catalog,
+                          cb_roster *out, cb_error *err);
 
 /* A clip's stride as the manifest and `info --json` give it: "stride", "stride_reason" and, for
  * a stride, "foot_slide": how much each planted foot slides at the clip's ground speed

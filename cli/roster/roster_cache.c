@@ -9,7 +9,8 @@
 
 #include "crowdbake_pal.h"
 
-static const char magic[8] = "CBPREP4"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by their soles */
+static const char magic[8] = "CBPREP5"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by
+                                        * their soles; 5: the VAT error */
 
 bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {
@@ -108,6 +109,7 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
     put_u64(&w, t->vertices), put_u64(&w, t->indices), put_u64(&w, t->mesh_bytes);
     put_f64(&w, t->model_height), put_f64(&w, t->speed_reference);
     put_str(&w, t->speed_reference_from);
+    put_u32(&w, t->vat_measured), put_f64(&w, t->vat_error);
     put_u32(&w, t->clip_count);
     for (uint32_t i = 0; i < t->clip_count; ++i) {
         const cb_roster_clip *c = &t->clips[i];
@@ -303,13 +305,13 @@ static void read_inputs_and_warnings(reader *r, cb_roster_type *t)
     }
 }
 
-static bool decode(const unsigned char *data, size_t size, const cb_catalog_animal *an, const cb_limits *limits,
-                   cb_roster_type *t)
+bool cb_prep_record_decode(const unsigned char *data, size_t size, const cb_catalog_animal *an, cb_roster_type *t,
+                           uint64_t *key)
 {
     reader r = {data, data + size, false};
     char head[8];
     get(&r, head, sizeof head);
-    uint64_t key = get_u64(&r), length = get_u64(&r), hash = get_u64(&r);
+    uint64_t record_key = get_u64(&r), length = get_u64(&r), hash = get_u64(&r);
     if (r.failed || memcmp(head, magic, sizeof magic) != 0 || length != (uint64_t)(r.end - r.p) ||
         cbpal_xxh64(r.p, length) != hash)
         return false;
@@ -318,13 +320,21 @@ static bool decode(const unsigned char *data, size_t size, const cb_catalog_anim
     t->vertices = get_u64(&r), t->indices = get_u64(&r), t->mesh_bytes = get_u64(&r);
     t->model_height = get_f64(&r), t->speed_reference = get_f64(&r);
     get_str(&r, t->speed_reference_from, sizeof t->speed_reference_from);
+    t->vat_measured = get_u32(&r) != 0, t->vat_error = get_f64(&r);
     read_clips(&r, t);
     read_states_and_lods(&r, an, t);
     read_sockets(&r, t);
     read_inputs_and_warnings(&r, t);
-    if (r.failed || r.p != r.end || t->input_count == 0) return false;
-    uint64_t now;
-    return cb_prep_key(an, limits, t->inputs, t->input_count, &now) && now == key;
+    *key = record_key;
+    return !r.failed && r.p == r.end && t->input_count > 0;
+}
+
+static bool decode(const unsigned char *data, size_t size, const cb_catalog_animal *an, const cb_limits *limits,
+                   cb_roster_type *t)
+{
+    uint64_t key, now;
+    return cb_prep_record_decode(data, size, an, t, &key) && cb_prep_key(an, limits, t->inputs, t->input_count, &now) &&
+           now == key;
 }
 
 bool cb_prep_record_load(const char *path, const cb_catalog_animal *an, const cb_limits *limits, cb_roster_type *t)
@@ -363,5 +373,6 @@ void cb_prep_clear(cb_roster_type *t)
     t->bones = t->rows = 0;
     t->vertices = t->indices = t->mesh_bytes = 0;
     t->model_height = t->speed_reference = 0;
+    t->vat_measured = false, t->vat_error = 0;
     t->speed_reference_from[0] = '\0';
 }

@@ -26,6 +26,12 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
  * files as they are now. False otherwise, with t's prepared fields freed and cleared. */
 bool cb_prep_record_load(const char *path, const cb_catalog_animal *an, const cb_limits *limits, cb_roster_type *t);
 
+/* Fills t's prepared fields from a record's bytes when they are intact (the framing, its hash
+ * and plausible counts), whatever the files are now; *key: the key it was written under. A
+ * manifest fragment (roster_fragment.c) carries one. False leaves t to cb_prep_clear. */
+bool cb_prep_record_decode(const unsigned char *data, size_t size, const cb_catalog_animal *an, cb_roster_type *t,
+                           uint64_t *key);
+
 /* Frees and clears what preparing filled in (clips, states, LODs, inputs, warnings, sizes). */
 void cb_prep_clear(cb_roster_type *t);
 

@@ -7,6 +7,7 @@
 #include <fcntl.h> /* AT_FDCWD */
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <sys/stat.h>
 
 #include "crowdbake/atomic_file.h"
@@ -135,15 +136,39 @@ void cb_roster_json_stride(cb_json *j, const cb_stride *st)
     write_contacts(j, st);
 }
 
+/* `p` as an absolute path without "." or ".." steps or repeated slashes, worked out from the
+ * text and the current directory alone: symbolic links are not followed, so where a build
+ * engine's sandbox links its inputs from changes nothing the manifest says. */
+static void lexical_absolute(const char *p, char *out, size_t size)
+{
+    char joined[8192] = "";
+    if (p[0] != '/' && !getcwd(joined, sizeof joined)) joined[0] = '\0';
+    size_t n = strlen(joined);
+    snprintf(joined + n, sizeof joined - n, "/%s", p);
+    size_t len = 0;
+    out[0] = '\0';
+    for (char *save = NULL, *step = strtok_r(joined, "/", &save); step; step = strtok_r(NULL, "/", &save)) {
+        if (strcmp(step, ".") == 0) continue;
+        if (strcmp(step, "..") == 0) {
+            char *slash = strrchr(out, '/');
+            len = slash ? (size_t)(slash - out) : 0;
+            out[len] = '\0';
+            continue;
+        }
+        int k = snprintf(out + len, size - len, "/%s", step);
+        if (k > 0 && (size_t)k < size - len) len += (size_t)k;
+    }
+    if (!len) snprintf(out, size, "/");
+}
+
 /* `path` relative to directory `dir` (both as the catalog resolved them, or absolute), so a
  * game resolves palette paths against the manifest's own directory. */
 static void relative_path(const char *dir, const char *path, char *out, size_t size)
 {
     char a[4096], b[4096];
-    if (!realpath(dir, a) || !realpath(path, b)) {
-        snprintf(out, size, "%s", path);
-        return;
-    }
+    lexical_absolute(dir, a, sizeof a);
+    lexical_absolute(path, b, sizeof b);
+    if (strcmp(a, "/") == 0) a[0] = '\0'; /* the root: every path is below it */
     size_t common = 0, i = 0;
     for (; a[i] && a[i] == b[i]; ++i)
         if (a[i] == '/') common = i;
@@ -230,7 +255,7 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
 }
 
 /* Writes `data` to path unless the file already holds exactly it (mtimes stay put). */
-static cb_status write_if_changed(const char *path, const char *data, size_t size, bool *written, cb_error *err)
+cb_status roster_write_if_changed(const char *path, const char *data, size_t size, bool *written, cb_error *err)
 {
     *written = false;
     FILE *f = fopen(path, "rb");
@@ -257,7 +282,7 @@ void roster_write_record(const char *path, const unsigned char *data, size_t siz
 {
     cb_error ignored = {0};
     bool written;
-    write_if_changed(path, (const char *)data, size, &written, &ignored);
+    roster_write_if_changed(path, (const char *)data, size, &written, &ignored);
 }
 
 cb_status roster_write_manifest(const cb_catalog *cat, cb_roster *r, const char *path, cb_error *err)
@@ -299,7 +324,7 @@ cb_status roster_write_manifest(const cb_catalog *cat, cb_roster *r, const char 
     }
     cb_json_end(&j);
     fclose(mem);
-    cb_status rc = write_if_changed(path, buf, size, &r->manifest_written, err);
+    cb_status rc = roster_write_if_changed(path, buf, size, &r->manifest_written, err);
     free(buf);
     return rc;
 }
@@ -362,7 +387,7 @@ cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const 
             if (!listed_before(r, i, k)) fputc('\n', f), depfile_path(f, r->types[i].inputs[k]), fputs(":\n", f);
     fclose(f);
     bool written;
-    cb_status rc = write_if_changed(path, buf, size, &written, err);
+    cb_status rc = roster_write_if_changed(path, buf, size, &written, err);
     free(buf);
     return rc;
 }

@@ -10,6 +10,14 @@
 /* "CATALOG:LINE:COLUMN" of a place in the catalog, into buf. */
 const char *roster_at(const cb_catalog *cat, cb_source_pos pos, char *buf, size_t size);
 
+/* The clips a type bakes, in row order, with their catalog requests, and t->clips allocated
+ * (roster_clips.c): the catalog's clips list, else the states' clips and extra_clips (a note
+ * names what was left out), else every clip. */
+cb_status roster_plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, const cb_model *m, cb_clip_plan **plan,
+                            cb_clip_request **requests, cb_roster_type *t, cb_error *err);
+/* Fails naming the state whose keywords match none of `names` (the clips it could play). */
+cb_status roster_state_matches_none(const cb_catalog *cat, const cb_catalog_animal *an, const cb_catalog_state *st,
+                                   const char *const *names, uint32_t count, cb_error *err);
 /* Each state's clip (state_clip), by its keywords; fails naming the state that matches none. */
 cb_status roster_match_states(const cb_catalog *cat, const cb_catalog_animal *an, cb_roster_type *t, cb_error *err);
 /* Which states follow the speed (state_sync, cb_decide_sync) and the speed reference; fails
@@ -21,9 +29,35 @@ void roster_warn_foot_slide(cb_roster_type *t);
 /* The content key of a type's rig, planned clips and settings (roster_key.c). */
 uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan *plan, uint32_t n, const cb_bake_settings *b);
 
+/* The catalog's models, each loaded once when a type first needs it and shared read-only by
+ * every type naming it (roster_models.c). */
+#include <threads.h>
+struct roster_model;
+typedef struct roster_models {
+    struct roster_model *items;
+    uint32_t count;
+    const cb_limits *limits;
+} roster_models;
+bool roster_models_init(roster_models *ms, const cb_catalog *cat, const cb_limits *limits); /* false: no memory */
+/* The model at `path` (one of the catalog's), loading it if no type has; NULL with *err (the
+ * load's error, the same for every type) when it cannot be loaded. Thread-safe. */
+const cb_model *roster_model_get(roster_models *ms, const char *path, cb_error *err);
+void roster_models_free(roster_models *ms);
+
+/* Owners of shared palettes (roster_share.c): among types with equal content keys, the first
+ * by name owns the palette, the others' owner is set to it and their outcome to shared. */
+void roster_assign_owners(cb_roster *r);
+/* Shared type i once its owner is settled: its owner's files and geometry, counted as shared;
+ * or failed with its owner (false). */
+bool roster_settle_shared(cb_roster *r, uint32_t i);
+/* The fragment of a roster of one type (roster_fragment.c), written only when its bytes change. */
+cb_status roster_write_fragment(const cb_roster *r, const cb_roster_fragment *fragment, cb_error *err);
+
 /* mkdir -p: a directory and any missing parents; or the folder a file goes in. */
 cb_status roster_make_directories(const char *dir, cb_error *err);
 cb_status roster_make_parent_directories(const char *file, cb_error *err);
+/* Writes `data` to path (temporary file + rename) unless the file already holds exactly it. */
+cb_status roster_write_if_changed(const char *path, const char *data, size_t size, bool *written, cb_error *err);
 /* roster.json (docs/roster.schema.json), rewritten only when its bytes change (r->manifest_written). */
 cb_status roster_write_manifest(const cb_catalog *cat, cb_roster *r, const char *path, cb_error *err);
 /* One rule per output, Make and Ninja both read it; or (manifest_only) one rule, the manifest's,

@@ -6,6 +6,18 @@
 #include <stdlib.h>
 #include <string.h>
 
+cb_status roster_state_matches_none(const cb_catalog *cat, const cb_catalog_animal *an, const cb_catalog_state *st,
+                                   const char *const *names, uint32_t count, cb_error *err)
+{
+    char list[512] = "", words[256] = "", where[1100];
+    for (uint32_t i = 0; i < count; ++i)
+        snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", names[i]);
+    for (uint32_t k = 0; k < st->keyword_count; ++k)
+        snprintf(words + strlen(words), sizeof words - strlen(words), "%s\"%s\"", k ? ", " : "", st->keywords[k]);
+    return cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] state '%s' matches no clip (keywords %s); the clips are: %s",
+                   roster_at(cat, st->pos, where, sizeof where), an->name, st->name, words, list);
+}
+
 cb_status roster_match_states(const cb_catalog *cat, const cb_catalog_animal *an, cb_roster_type *t, cb_error *err)
 {
     t->state_clip = calloc(an->state_count ? an->state_count : 1, sizeof *t->state_clip);
@@ -18,14 +30,7 @@ cb_status roster_match_states(const cb_catalog *cat, const cb_catalog_animal *an
     for (uint32_t s = 0; s < an->state_count && !err->status; ++s) {
         const cb_catalog_state *st = &an->states[s];
         t->state_clip[s] = cb_match_state(names, t->clip_count, st->keywords, st->keyword_count);
-        if (t->state_clip[s] >= 0) continue;
-        char list[512] = "", words[256] = "", where[1100];
-        for (uint32_t i = 0; i < t->clip_count; ++i)
-            snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", names[i]);
-        for (uint32_t k = 0; k < st->keyword_count; ++k)
-            snprintf(words + strlen(words), sizeof words - strlen(words), "%s\"%s\"", k ? ", " : "", st->keywords[k]);
-        cb_fail(err, CB_ERR_INPUT, "%s: [animal.%s] state '%s' matches no clip (keywords %s); the clips are: %s",
-                roster_at(cat, st->pos, where, sizeof where), an->name, st->name, words, list);
+        if (t->state_clip[s] < 0) roster_state_matches_none(cat, an, st, names, t->clip_count, err);
     }
     free(names);
     return err->status;
@@ -83,7 +88,7 @@ cb_status roster_decide_states(const cb_catalog *cat, const cb_catalog_animal *a
         char where[1100];
         return cb_fail(err, CB_ERR_INPUT,
                        "%s: [animal.%s] state '%s' follows the speed (%s), but clip '%s' has no ground speed (no stride, "
-                       "no root travel) and no other state gives one; give the animal speed_reference = M/S, or the "
+                       "no root travel) and no other state gives one; give the animal speed_reference = UNITS_PER_S, or the "
                        "state sync = \"time\"",
                        roster_at(cat, an->states[s].pos, where, sizeof where), an->name, an->states[s].name,
                        t->state_sync[s].reason, c->name);

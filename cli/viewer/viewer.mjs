@@ -10,7 +10,7 @@ import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { decompress } from 'fzstd';
 import { readPal, readRoster, instanceData, instanceFirstRow } from '../web/crowdbake_pal.mjs';
-import { Crowd, loadPaletteGLSL } from '../web/crowdbake_crowd.mjs';
+import { Crowd, GLSL_URL, loadPaletteGLSL } from '../web/crowdbake_crowd.mjs';
 import { VatCrowd, readVat } from '../web/crowdbake_vat.mjs';
 import { meshFromGLTF } from '../web/crowdbake_three.mjs';
 
@@ -140,7 +140,7 @@ class Herd {
 
 async function main() {
     const view = await (await fetch('/view.json')).json();
-    const glsl = await loadPaletteGLSL();
+    const glsl = await loadPaletteGLSL(GLSL_URL); // the site's glsl/ (crowdbake view serves it)
     const types = [];
     for (const entry of view.types) types.push(await loadType(view, entry, glsl));
     let type = types[0], herd = new Herd(type);

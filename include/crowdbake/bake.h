@@ -214,6 +214,10 @@ CROWDBAKE_API void cb_bake_clip_reason(const cb_bake_job *job, uint32_t clip, ch
 CROWDBAKE_API void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, uint32_t clip,
                                        const char *(*setting_name)(cb_setting), char *buf, size_t size);
 CROWDBAKE_API void cb_bake_job_free(cb_bake_job *job);
+/* Frees what planning kept only to save the bake work (the poses its rate searches sampled): a
+ * planned job waiting its turn then holds its plan alone, and bakes the same bytes, sampling its
+ * rows again. A roster holding many planned types calls it (memory follows the work). */
+CROWDBAKE_API void cb_bake_job_release_search(cb_bake_job *job);
 
 /* What a file records of what produced it: for a single bake, the crowdbake version, the
  * options that shape the file (`options`) and the model's bytes; for a catalog type

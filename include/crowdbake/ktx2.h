@@ -25,6 +25,12 @@ extern "C" {
 /* in_place: root motion was taken out of the rows (the clips' root_velocity says how much). */
 CROWDBAKE_API cb_status cb_ktx2_write(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
                                       uint64_t input_hash, float speed_reference, bool in_place, cb_error *err);
+/* The same with the level supercompressed by Zstandard at zstd_level (1..22; 0: none), as
+ * `toktx --zcmp` writes it (supercompressionScheme 2): readers that take KTX2's zstd, such as
+ * three.js's KTX2Loader and ktx-parse with a zstd decoder, get the same texels. */
+CROWDBAKE_API cb_status cb_ktx2_write_zstd(const char *path, const cb_palette *p, const cb_model *model, int32_t skin,
+                                           uint64_t input_hash, float speed_reference, bool in_place, int zstd_level,
+                                           cb_error *err);
 
 /* A KTX2 palette read back as a palette that decodes and skins like the .pal of the same bake:
  * texels, clip table (names included), bones and bind positions, all owned here. */

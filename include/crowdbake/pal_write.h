@@ -15,7 +15,7 @@ typedef struct cb_pal_write_options {
     bool zstd;              /* compress the payload */
     int zstd_level;
     uint64_t input_hash;    /* of everything that produced the palette */
-    float speed_reference;  /* m/s at playback rate 1, or 0 */
+    float speed_reference;  /* model units/s at playback rate 1, or 0 */
     bool in_place;          /* root motion was removed */
 } cb_pal_write_options;
 

@@ -2,8 +2,10 @@
  * joint of the skin without being joints themselves (props, rigid meshes, exporters' empties
  * such as Blender's "_end" tips), each with its bone and its frame in bind space. The posed
  * socket is the bone's skinning matrix (what the palette stores, cbpal_bone_matrix) times the
- * socket's bind transform: posed = J(t) B = G_joint(t) IBM B, and B = J_rest^-1 G_socket_rest,
- * so in the rest pose it is the node's own global transform and it follows the joint rigidly. */
+ * socket's bind transform: posed = J(t) B = G_joint(t) IBM B, and B = J_rest^-1 G_socket_rest S^-1,
+ * so in the rest pose it is the node's own global transform without its scale S (the lengths of
+ * its axes: a prop keeps its own size in the model's units even where an ancestor, such as an
+ * armature exported with scale 100, scales the node) and it follows the joint rigidly. */
 #ifndef CB_SOCKET_H
 #define CB_SOCKET_H
 

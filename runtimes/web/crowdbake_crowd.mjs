@@ -7,17 +7,24 @@
 //     crowd.setInstance(i, { position: [x, 0, z], yaw, inst: instanceData(state, speed, i) });
 //     crowd.draw(viewProjection, seconds);                 // every instance, one drawElementsInstanced
 //
-// The vertex shader is runtimes/glsl/crowdbake_palette.glsl itself (ES 3.00), fetched at run time
-// and prefixed with the palette's #defines: there is no second copy of the skinning to drift.
+// The vertex shader is runtimes/glsl/crowdbake_palette.glsl itself (ES 3.00), prefixed with the
+// palette's #defines: there is no second copy of the skinning to drift. `make` writes it beside these
+// modules as crowdbake_palette_glsl.mjs (a string), so the modules find it wherever they are served.
 // `mesh` holds the skinned mesh in the model's own vertex order, as the palette's bone indices
 // expect: positions (3 floats a vertex), normals (3, optional), joints (4 integers), weights (4
 // floats), indices (optional).
 
 import { BonePass, boneShaderSource } from './crowdbake_bones.mjs';
 
+import { PALETTE_GLSL } from './crowdbake_palette_glsl.mjs';
+
+// Where the source tree keeps the GLSL file, relative to this module (the viewer's site has it there).
 export const GLSL_URL = new URL('../glsl/crowdbake_palette.glsl', import.meta.url);
 
-export async function loadPaletteGLSL(url = GLSL_URL) {
+// The shipped GLSL: the copy made at build time beside this module, or the text at `url` (another
+// version of the library, e.g. a shader being edited).
+export async function loadPaletteGLSL(url) {
+    if (url === undefined) return PALETTE_GLSL;
     const response = await fetch(url);
     if (!response.ok) throw new Error(`${url}: HTTP ${response.status} (the runtime's vertex shader)`);
     return response.text();

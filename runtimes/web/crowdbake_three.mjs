@@ -1,7 +1,7 @@
 // crowdbake_three.mjs - a three.js drop-in for crowdbake palettes: CrowdbakeHerd, an
-// InstancedMesh whose material skins every instance from the palette (the shipped
-// runtimes/glsl/crowdbake_palette.glsl, patched into three's own material with onBeforeCompile),
-// one draw call for the whole herd.
+// InstancedMesh whose materials skin every instance from the palette (the shipped
+// runtimes/glsl/crowdbake_palette.glsl, patched into three's own materials with onBeforeCompile): the model's own
+// glTF materials (textures, vertex colours, alpha modes), one draw call per material for the whole herd.
 //
 //     const herd = new CrowdbakeHerd(gltf, readPal(palBytes), readRoster(json).types.cow, { count: 1000, glsl });
 //     scene.add(herd); herd.setState(7, 'flee', { speed: 9.9 });
@@ -19,7 +19,10 @@ import { paletteDefines } from './crowdbake_crowd.mjs';
 
 // The skinned meshes of a GLTFLoader result that use its first skin, merged in glTF order:
 // positions, normals, joints, weights and indices as the palette's bone indices expect
-// (crowdbake bakes the same vertices in the same order).
+// (crowdbake bakes the same vertices in the same order), and what draws them as the model looks:
+// texture coordinates (uvs, TEXCOORD_0) and vertex colours (colors, RGBA) where any primitive has
+// them, and one group per primitive ({ start, count, materialIndex } into materials, the glTF's own
+// materials: base colour, textures, alpha mode, vertex colours).
 export function meshFromGLTF(gltf) {
     const parts = [];
     let skeleton = null;
@@ -27,29 +30,38 @@ export function meshFromGLTF(gltf) {
     gltf.scene.traverse((o) => {
         if (!o.isSkinnedMesh) return;
         skeleton ??= o.skeleton;
-        if (o.skeleton.bones.every((b, i) => b === skeleton.bones[i])) parts.push(o.geometry);
+        if (o.skeleton.bones.every((b, i) => b === skeleton.bones[i])) parts.push(o);
     });
     if (!parts.length) throw new Error('the model has no skinned mesh');
-    const vertices = parts.reduce((n, g) => n + g.attributes.position.count, 0);
-    const indices = parts.reduce((n, g) => n + (g.index ? g.index.count : g.attributes.position.count), 0);
+    const geometries = parts.map((o) => o.geometry);
+    const vertices = geometries.reduce((n, g) => n + g.attributes.position.count, 0);
+    const indices = geometries.reduce((n, g) => n + (g.index ? g.index.count : g.attributes.position.count), 0);
+    const any = (name) => geometries.some((g) => g.attributes[name]);
     const out = { positions: new Float32Array(vertices * 3), normals: new Float32Array(vertices * 3),
                   joints: new Uint16Array(vertices * 4), weights: new Float32Array(vertices * 4),
-                  indices: new Uint32Array(indices) };
+                  indices: new Uint32Array(indices), uvs: any('uv') ? new Float32Array(vertices * 2) : null,
+                  colors: any('color') ? new Float32Array(vertices * 4).fill(1) : null, groups: [], materials: [] };
     let v0 = 0, i0 = 0;
-    for (const g of parts) {
-        const a = g.attributes, n = a.position.count;
-        const copy = (attr, dst, size) => {
-            if (!attr) return;
-            for (let v = 0; v < n; ++v) for (let k = 0; k < size; ++k) dst[(v0 + v) * size + k] = attr.getComponent(v, k);
+    parts.forEach((o, p) => {
+        const g = o.geometry, a = g.attributes, n = a.position.count;
+        const copy = (attr, dst, size) => { // getComponent: normalized integers (quantized UVs, colours) as floats
+            if (!attr || !dst) return;
+            for (let v = 0; v < n; ++v)
+                for (let k = 0; k < Math.min(size, attr.itemSize); ++k) dst[(v0 + v) * size + k] = attr.getComponent(v, k);
         };
         copy(a.position, out.positions, 3);
         copy(a.normal, out.normals, 3);
         copy(a.skinIndex, out.joints, 4);
         copy(a.skinWeight, out.weights, 4);
-        if (g.index) for (let i = 0; i < g.index.count; ++i) out.indices[i0 + i] = v0 + g.index.getX(i);
+        copy(a.uv, out.uvs, 2);
+        copy(a.color, out.colors, 4);
+        const count = g.index ? g.index.count : n;
+        if (g.index) for (let i = 0; i < count; ++i) out.indices[i0 + i] = v0 + g.index.getX(i);
         else for (let i = 0; i < n; ++i) out.indices[i0 + i] = v0 + i;
-        v0 += n, i0 += g.index ? g.index.count : n;
-    }
+        out.groups.push({ start: i0, count, materialIndex: p });
+        out.materials.push(Array.isArray(o.material) ? o.material[0] : o.material);
+        v0 += n, i0 += count;
+    });
     return out;
 }
 
@@ -145,8 +157,9 @@ gl_FragColor = vec4(0.5 * (cb_clip_now.xy / cb_clip_now.w - cb_clip_before.xy / 
 export class CrowdbakeHerd extends THREE.InstancedMesh {
     // gltf: GLTFLoader's result (or meshFromGLTF's arrays); pal: readPal's; type: a roster type
     // (readRoster(...).types.NAME) or null to make a state of each clip. options: count, glsl
-    // (the library's text: loadPaletteGLSL()), material (a three.js material to patch; default
-    // MeshLambertMaterial), fade (cross-fade seconds, 0.25).
+    // (the library's text: loadPaletteGLSL()), material (one three.js material, or an array with one
+    // per primitive, to patch; default: a clone of each primitive's own glTF material, so the herd
+    // looks like the model), fade (cross-fade seconds, 0.25).
     constructor(gltf, pal, type, { count = 1000, glsl, material, fade = 0.25 } = {}) {
         if (!glsl) throw new Error('CrowdbakeHerd: options.glsl is the shipped library (await loadPaletteGLSL())');
         const mesh = gltf.positions ? gltf : meshFromGLTF(gltf);
@@ -155,12 +168,18 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         geometry.setAttribute('normal', new THREE.BufferAttribute(mesh.normals, 3));
         geometry.setAttribute('cb_joints', new THREE.BufferAttribute(Float32Array.from(mesh.joints), 4));
         geometry.setAttribute('cb_weights', new THREE.BufferAttribute(mesh.weights, 4));
+        if (mesh.uvs) geometry.setAttribute('uv', new THREE.BufferAttribute(mesh.uvs, 2));
+        if (mesh.colors) geometry.setAttribute('color', new THREE.BufferAttribute(mesh.colors, 4));
         geometry.setIndex(new THREE.BufferAttribute(mesh.indices, 1));
         const per = (n) => new THREE.InstancedBufferAttribute(new Float32Array(count * n), n).setUsage(THREE.DynamicDrawUsage);
         geometry.setAttribute('cb_inst', per(4));
         geometry.setAttribute('cb_from', per(4));
         geometry.setAttribute('cb_fade', per(2));
-        material ??= new THREE.MeshLambertMaterial({ color: 0xd8c8a8 });
+        material ??= mesh.materials?.length ? mesh.materials.map((m) => m.clone()) // the herd's own: patched below
+                                            : new THREE.MeshStandardMaterial({ color: 0xd8c8a8 });
+        if (Array.isArray(material)) // one group per primitive: one draw each, every instance in it
+            (mesh.groups ?? [{ start: 0, count: mesh.indices.length, materialIndex: 0 }])
+                .forEach((g) => geometry.addGroup(g.start, g.count, Math.min(g.materialIndex, material.length - 1)));
         super(geometry, material, count);
         const bounds = animatedBounds(pal);
         geometry.boundingBox = bounds.box; // InstancedMesh places these at each instance: the herd's bounds
@@ -185,18 +204,19 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
             cb_linear_range: { value: pal.header.linear_range }, cb_time: { value: 0 },
         };
         this.uniforms = uniforms;
-        material.defines = { ...material.defines, ...Object.fromEntries(paletteDefines(pal.header).map((d) => [d, ''])) };
-        material.onBeforeCompile = (shader) => {
+        const defines = Object.fromEntries(paletteDefines(pal.header).map((d) => [d, '']));
+        const onBeforeCompile = (shader) => {
             Object.assign(shader.uniforms, uniforms);
             shader.vertexShader = shader.vertexShader
                 .replace('#include <common>', `#include <common>\n${glsl}\n${VERTEX_PARS}`)
                 .replace('#include <beginnormal_vertex>', 'vec3 objectNormal = cb_herd_normal(position, normal);')
                 .replace('#include <begin_vertex>', 'vec3 transformed = cb_herd_position(position);');
         };
-        material.customProgramCacheKey = () => `crowdbake-${paletteDefines(pal.header).join('-')}`;
-        const skinnedLike = (m) => Object.assign(m, { defines: { ...m.defines, ...material.defines },
-            onBeforeCompile: material.onBeforeCompile, customProgramCacheKey: material.customProgramCacheKey });
-        this.skinnedLike = skinnedLike; // one skinning patch for colour, shadow depth and motion vectors
+        const customProgramCacheKey = () => `crowdbake-${paletteDefines(pal.header).join('-')}`;
+        const skinnedLike = (m) => Object.assign(m, { defines: { ...m.defines, ...defines }, onBeforeCompile,
+                                                      customProgramCacheKey });
+        this.skinnedLike = skinnedLike; // one skinning patch for every primitive's colour, shadow depth and motion vectors
+        (Array.isArray(material) ? material : [material]).forEach(skinnedLike);
         this.customDepthMaterial = skinnedLike(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }));
         this.customDistanceMaterial = skinnedLike(new THREE.MeshDistanceMaterial());
         uniforms.cb_previous_time = { value: 0 };

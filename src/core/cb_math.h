@@ -13,8 +13,11 @@
  * (SSE2), and the loader picks one for the CPU. Both run the same IEEE operations in the same
  * order (no FMA: contraction is off and AVX2 does not imply FMA), so the output is the same
  * bits on every machine. CB_CLONE_INLINE makes a helper part of each copy. GCC only: clang 14
- * gives the dispatcher another name than the one callers link to. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
+ * gives the dispatcher another name than the one callers link to. CB_GENERIC_ONLY compiles the
+ * baseline alone: `make generic` builds a crowdbake that never takes the AVX2 path, which
+ * tests/tools/hermetic.py holds to the same bytes (the loader's choice cannot be steered from a
+ * run's options without global state: the ifunc resolver runs before main). */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && !defined(CB_GENERIC_ONLY)
 #define CB_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
 #define CB_CLONE_INLINE inline __attribute__((always_inline))
 #else

@@ -1,6 +1,7 @@
 /* socket.c - the nodes a game attaches props to (socket.h). */
 #include "crowdbake/socket.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,6 +24,21 @@ static bool affine_inverse(const double *a, double out[16])
         out[12 + row] = -(out[row] * a[12] + out[4 + row] * a[13] + out[8 + row] * a[14]);
     out[15] = 1;
     return true;
+}
+
+/* Divides the first three columns of `m` by the lengths of those of `frame`: the socket keeps the
+ * node's orientation and position but not the scale its ancestors give it. Exporters put a unit
+ * scale on the armature (Quaternius' FBX exports: 100, undone by the skinned mesh node's own 100,
+ * which glTF ignores for a skinned mesh), so the node's own axes are 100 model units long and a
+ * prop hung on them would be drawn 100 times its size; a unit frame keeps the prop's own scale. */
+static void drop_frame_scale(double m[16], const double frame[16])
+{
+    for (int col = 0; col < 3; ++col) {
+        const double *a = frame + col * 4;
+        double length = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        if (length > 0)
+            for (int row = 0; row < 3; ++row) m[col * 4 + row] /= length;
+    }
 }
 
 /* The skin joint index of the nearest joint above node n (not n itself), or -1. */
@@ -87,6 +103,7 @@ uint32_t cb_find_sockets(cb_sampler *s, cb_socket **out)
             k->node = (int32_t)i;
             k->bone = (uint32_t)bone;
             cb_mat4_mul(k->bind_transform, inverse, globals + (size_t)i * 16);
+            drop_frame_scale(k->bind_transform, globals + (size_t)i * 16);
         }
     }
     free(joint_of), free(rest), free(deforms);

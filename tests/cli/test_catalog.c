@@ -36,7 +36,7 @@ static const char *catalog(const char *name, const char *out_dir, const char *ex
              "[bake]\nout_dir = \"%s\"\nfps = 30\n\n"
              "[animal.goat]\nmodel = \"%s/quadruped.glb\"\nlods = [\"%s/quadruped_lod1.glb\"]\n"
              "states = { idle = [\"idle\"], wander = [\"walk\"], flee = [\"gallop\", \"run\"] }\ndefault_state = \"wander\"\n\n"
-             "[animal.sheep]\nmodel = \"%s/quadruped.glb\"\nstates = { idle = [\"idle\"] }\n\n"
+             "[animal.sheep]\nmodel = \"%s/quadruped.glb\"\nstates = { rest = [\"idle\"], walk = [\"walk\"], run = [\"run\"] }\n\n"
              "[animal.fish]\nmodel = \"%s/fish.glb\"\nstates = { swim = [\"SWIM\"] }\n%s",
              out_dir, samples_abs, samples_abs, samples_abs, samples_abs, extra);
     snprintf(path, sizeof path, TMP "/%s.toml", name);
@@ -138,7 +138,59 @@ static void test_state_and_clip_errors_list_what_exists(void **state)
     const char *bird = r.types[0].error.message, *fish = r.types[1].error.message;
     if (!strstr(bird, "errors.toml:5:") || !strstr(bird, "state 'flee' matches no clip") || !strstr(bird, "flap, glide"))
         fail_msg("bird: %s", bird);
-    if (!strstr(fish, "errors.toml:8:") || !strstr(fish, "has no clip 'jump'; its clips are: swim")) fail_msg("fish: %s", fish);
+    if (!strstr(fish, "errors.toml:8:") || !strstr(fish, "clips: no clip 'jump'; the clips are: swim")) fail_msg("fish: %s", fish);
+    cb_roster_free(&r);
+    cb_catalog_free(&cat);
+}
+
+/* A type with states bakes the clips they play and extra_clips, and says what it left out; a
+ * catalog's clip names match as --clip's do (Cow's clips are "AnimalArmature|NAME"). */
+static void test_a_catalog_bakes_the_clips_its_states_play(void **state)
+{
+    (void)state;
+    char cow[PATH_MAX], rel[PATH_MAX], text[3 * PATH_MAX + 1024];
+    shared_path(rel, sizeof rel, "assets/quaternius-cow/Cow.glb");
+    assert_non_null(realpath(rel, cow));
+    const char *states = "states = { idle = [\"idle\"], walk = [\"walk\"], run = [\"gallop\"], graze = [\"eating\"] }\n";
+    snprintf(text, sizeof text,
+             "[bake]\nout_dir = \"out-used\"\nfps = 30\n[animal.a]\nmodel = \"%s\"\n%s[animal.b]\nmodel = \"%s\"\n%s"
+             "extra_clips = [\"death\"]\n[animal.c]\nmodel = \"%s\"\nclips = [\"Walk\", { source = \"idle\", name = \"rest\" }]\n",
+             cow, states, cow, states, cow);
+    write_text(TMP "/used.toml", text);
+    cb_catalog cat;
+    cb_error err = {0};
+    assert_int_equal(cb_catalog_load(TMP "/used.toml", &cat, &err), CB_OK);
+    cb_roster r;
+    cb_roster_options opt = {.jobs = 1};
+    assert_int_equal(cb_roster_bake(&cat, &opt, &r, &err), CB_OK);
+    const cb_roster_type *a = &r.types[0], *b = &r.types[1], *c = &r.types[2];
+    /* Cow at 30 fps: Eating 180 frames, Gallop 19, Idle 100, Walk 31 (info), in file order */
+    assert_int_equal(a->clip_count, 4);
+    assert_string_equal(a->clips[0].name, "AnimalArmature|Eating");
+    assert_string_equal(a->clips[3].name, "AnimalArmature|Walk");
+    assert_int_equal(a->clips[0].frames + a->clips[1].frames + a->clips[2].frames + a->clips[3].frames, a->rows);
+    bool noted = false;
+    for (uint32_t i = 0; i < a->warnings.count; ++i)
+        noted |= strstr(a->warnings.items[i].message, "baked 4 of 12 clips") &&
+                 strstr(a->warnings.items[i].message, "AnimalArmature|Attack_Kick") &&
+                 strstr(a->warnings.items[i].message, "extra_clips = [\"Attack_Headbutt\", \"Attack_Kick\"");
+    assert_true(noted);
+    assert_int_equal(b->clip_count, 5); /* Death joins them, in the model's order */
+    assert_string_equal(b->clips[0].name, "AnimalArmature|Death");
+    assert_int_equal(c->clip_count, 2);
+    assert_string_equal(c->clips[0].name, "AnimalArmature|Walk");
+    assert_string_equal(c->clips[1].name, "rest");
+    cb_roster_free(&r);
+    cb_catalog_free(&cat);
+
+    char *at = strstr(text, "\"Walk\"");
+    memcpy(at, "\"Wakl\"", 6);
+    write_text(TMP "/used.toml", text);
+    assert_int_equal(cb_catalog_load(TMP "/used.toml", &cat, &err), CB_OK);
+    assert_int_equal(cb_roster_bake(&cat, &opt, &r, &err), CB_ERR_INPUT);
+    if (!strstr(r.types[2].error.message, "used.toml:13:") ||
+        !strstr(r.types[2].error.message, "clips: no clip 'Wakl'; did you mean 'AnimalArmature|Walk'?"))
+        fail_msg("c: %s", r.types[2].error.message);
     cb_roster_free(&r);
     cb_catalog_free(&cat);
 }
@@ -389,6 +441,12 @@ static void test_a_failing_type_does_not_stop_the_others(void **state)
     assert_int_equal(stat(TMP "/out-fail/fish.pal", &st), 0);
     assert_int_not_equal(stat(TMP "/out-fail/broken.pal", &st), 0);
     assert_int_equal(system("ls -a " TMP "/out-fail | grep -q '\\.tmp\\.'"), 256); /* no temporaries left */
+    /* Every type failed: no sizes of nothing ("0 types in 0 palettes ... 0.0x") after the log. */
+    write_text(TMP "/allfail.toml", "[bake]\nout_dir = \"out-allfail\"\n[animal.broken]\nmodel = \"broken.glb\"\n");
+    assert_int_equal(run_cli("bake " TMP "/allfail.toml", out, sizeof out), EXIT_INPUT);
+    if (!strstr(out, "0 baked, 0 up to date, 0 sharing a palette, 1 failed") || strstr(out, "0 types") || strstr(out, "0.0x") ||
+        strstr(out, "Roster:"))
+        fail_msg("%s", out);
 }
 
 /* A missing model is a file that cannot be read (EXIT_IO), named on the command line or by a
@@ -452,6 +510,7 @@ int main(void)
         cmocka_unit_test(test_validation_errors_name_line_and_fix),
         cmocka_unit_test(test_non_ascii_only_in_strings_and_comments),
         cmocka_unit_test(test_state_and_clip_errors_list_what_exists),
+        cmocka_unit_test(test_a_catalog_bakes_the_clips_its_states_play),
         cmocka_unit_test(test_state_keyword_matching),
         cmocka_unit_test(test_speed_reference_auto),
         cmocka_unit_test(test_manifest_sharing_and_lods),

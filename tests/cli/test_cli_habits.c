@@ -169,6 +169,18 @@ static void test_clip_names_match_by_case_and_part(void **state)
     assert_true(!strstr(out, "  Run ") && !strstr(out, "  Survey "));
     assert_int_equal(crowdbake("verify %s " TMP "/fox.pal --exclude-clip WALK --random 2", fox), 0);
     assert_true(strstr(out, "  Run ") && strstr(out, "  Survey ") && !strstr(out, "  Walk "));
+    /* preview takes them as verify does. */
+    assert_int_equal(crowdbake("preview %s " TMP "/fox.pal -o " TMP "/fox-walk.png --cell 32 --clip walk", fox), 0);
+    assert_contains(": 1 clip x 6 frames (192x84 pixels): Walk (rows, top to bottom)");
+    assert_int_equal(crowdbake("preview %s " TMP "/fox.pal -o " TMP "/fox-walk.png --cell 32 --clip wak", fox), EXIT_USAGE);
+    assert_contains("--clip wak: no clip 'wak'; did you mean 'Walk'?");
+    assert_int_equal(crowdbake("preview %s " TMP "/fox.pal -o " TMP "/fox-walk.png --cell 32 --exclude-clip walk", fox), 0);
+    assert_contains(": 2 clips x 6 frames (192x138 pixels): Survey / Run (rows, top to bottom)");
+    /* An error-bounded bake's header gives its clips' rates and fitted rows (Fox: Survey 24 fps,
+     * Walk and Run chosen above it, one fitted, as the clip table below says), not the base 30. */
+    assert_int_equal(crowdbake("inspect " TMP "/fox.pal"), 0);
+    assert_contains("fps 24-120 per clip, 1 of 3 clips fitted, speed reference 0 units/s");
+    assert_true(!strstr(out, "fps 30,") && !strstr(out, " m/s"));
 }
 
 /* report bakes for seconds: a line per type on stderr with -v (and on a terminal), none with

@@ -113,7 +113,11 @@ static void test_clip_selection(void **state)
     expect("verify Fox-broken.gltf all.pal --clip Walk --exclude-clip Run", 2, "give --clip or --exclude-clip, not both");
     /* In the order given: Run's 35 rows then Walk's 21; the broken clip not mentioned. */
     assert_int_equal(cli("bake Fox-broken.gltf --fps 30 -o sel.pal --clip Run,Walk --json", true, out, sizeof out), 0);
-    if (strstr(out, "Broken") || !strstr(out, "\"warnings\": []")) fail_msg("%s", out);
+    /* The only warnings: the fixed 30 fps's misses of the default max_error (item 4 of issue 42). */
+    int warnings = 0, fixed = 0;
+    for (const char *p = out; (p = strstr(p, "\"kind\": \"warning\"")); ++p) ++warnings;
+    for (const char *p = out; (p = strstr(p, "which a fixed fps is not held to")); ++p) ++fixed;
+    if (strstr(out, "Broken") || warnings != fixed) fail_msg("%s", out);
     expect_clips("sel.pal", 2, 56, "Run");
     expect("bake Fox-broken.gltf --fps 30 -o ex.pal --exclude-clip Survey", 0, warning);
     expect_clips("ex.pal", 2, 56, "Walk");

@@ -96,7 +96,7 @@ static void test_rebuild_from_records_says_what_the_models_say(void **state)
              "default_state = \"wander\"\n\n"
              "[animal.goat]\nmodel = \"%s/quadruped.glb\"\nlods = [\"%s/quadruped_lod1.glb\"]\n"
              "states = { idle = [\"idle\"], wander = [\"walk\"], flee = [\"run\"] }\ndefault_state = \"wander\"\n\n"
-             "[animal.sheep]\nmodel = \"%s/quadruped.glb\"\nstates = { idle = [\"idle\"] }\n",
+             "[animal.sheep]\nmodel = \"%s/quadruped.glb\"\nstates = { rest = [\"idle\"], walk = [\"walk\"], run = [\"run\"] }\n",
              samples, samples, samples);
     write_text(TMP "/catalog.toml", text);
 

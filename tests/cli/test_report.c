@@ -4,6 +4,7 @@
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
+#include <ctype.h>
 #include <limits.h>
 #include <math.h>
 
@@ -87,9 +88,25 @@ static void test_exit_code_gate(void **state)
     snprintf(cmd, sizeof cmd, "%s report %s --no-fail --markdown 2>&1", crowdbake_exe(), cat);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     assert_non_null(strstr(out, "| fox |"));
-    cat = write_catalog("roomy", "target = \"Desktop 8 GiB\"");
+    cat = write_catalog("roomy", "target = \"Desktop 8 GiB\"\ncrowd_share = 0.125");
     snprintf(cmd, sizeof cmd, "%s report %s >/dev/null 2>&1", crowdbake_exe(), cat);
     assert_int_equal(run_command(cmd, NULL, 0), 0);
+    /* A roster that fits says so alone on its verdict line, with crowd_share as given; the VAT
+     * comparison (here far smaller than the budget) is on its own line, and no "over budget"
+     * words anywhere (a CI greps for them). Progress goes to stderr, a line per type, with
+     * stdout redirected (-v: the tests' stderr is no terminal). */
+    snprintf(cmd, sizeof cmd, "%s report %s -v 2>" TMP "/roomy.err", crowdbake_exe(), cat);
+    static char text[1 << 16];
+    assert_int_equal(run_command(cmd, text, sizeof text), 0);
+    const char *verdict = strstr(text, "\nRoster: ");
+    if (!verdict || !strstr(verdict, "crowd_share 0.125 of 8.00 GiB): fits.\nAs VAT (RGBA16F + RGBA8)")) fail_msg("%s", text);
+    for (char *p = text; *p; ++p) *p = (char)tolower((unsigned char)*p);
+    assert_null(strstr(text, "over budget"));
+    char *err = read_whole_file(TMP "/roomy.err", NULL);
+    assert_non_null(err);
+    if (!strstr(err, "crowdbake: [1/7] ") || !strstr(err, "crowdbake: [7/7] ") || !strstr(err, ": runtime meshes measured"))
+        fail_msg("stderr: %s", err);
+    free(err);
     cat = write_catalog("unknown", "target = \"Toaster\"");
     snprintf(cmd, sizeof cmd, "%s report %s 2>&1", crowdbake_exe(), cat);
     assert_int_equal(run_command(cmd, out, sizeof out), EXIT_INPUT);
@@ -103,12 +120,35 @@ static const char *write_small_catalog(const char *name, const char *bake, const
     snprintf(path, sizeof path, TMP "/%s.toml", name);
     FILE *f = fopen(path, "w");
     assert_non_null(f);
-    fprintf(f, "[bake]\nout_dir = \"out-%s\"\nfps = 30\n%s\n[budget]\n%s\n[animal.fish]\nmodel = \"%s/fish.glb\"\n", name, bake, budget,
-            samples_abs);
+    fprintf(f, "[bake]\nout_dir = \"out-%s\"\n%s\n%s\n[budget]\n%s\n[animal.fish]\nmodel = \"%s/fish.glb\"\n", name,
+            strstr(bake, "fps") ? "" : "fps = 30", bake, budget, samples_abs);
     if (all)
         fprintf(f, "[animal.goat]\nmodel = \"%s/quadruped.glb\"\n[animal.sheep]\nmodel = \"%s/quadruped.glb\"\n"
                    "[animal.bird]\nmodel = \"%s/bird.glb\"\n[animal.fox]\nmodel = \"%s\"\n",
                 samples_abs, samples_abs, samples_abs, fox_abs);
+    fclose(f);
+    return path;
+}
+
+/* Cow (twice: one model, its mesh counted once) and Husky (at a fixed 240 fps), each with
+ * states, on a Steam Deck. */
+static const char *write_animal_catalog(const char *name)
+{
+    static char path[256];
+    char cow[1024], husky[1024], rel[1024];
+    shared_path(rel, sizeof rel, "assets/quaternius-cow/Cow.glb");
+    assert_non_null(realpath(rel, cow));
+    shared_path(rel, sizeof rel, "assets/quaternius-husky/Husky.glb");
+    assert_non_null(realpath(rel, husky));
+    snprintf(path, sizeof path, TMP "/%s.toml", name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    const char *states = "states = { idle = [\"idle\"], walk = [\"walk\"], run = [\"gallop\"], graze = [\"eating\"] }\n"
+                         "root_motion = \"in-place\"\n";
+    fprintf(f, "[bake]\nout_dir = \"out-%s\"\n[budget]\ntarget = \"Steam Deck\"\ncrowd_share = 0.25\n"
+               "[animal.cow]\nmodel = \"%s\"\n%s[animal.cow2]\nmodel = \"%s\"\nstates = { idle = [\"idle\"], walk = [\"walk\"] }\n"
+               "[animal.husky]\nmodel = \"%s\"\n%sfps = 240\n",
+            name, cow, states, cow, husky, states);
     fclose(f);
     return path;
 }
@@ -180,12 +220,41 @@ static void test_html_page_layout_in_chromium(void **state)
     check_page("over", write_small_catalog("over", "layout = \"mat4\"\nprecision = \"float\"",
                                            "target = \"tiny device\"\nvram = \"1 MiB\"\ncrowd_share = 0.5", true),
                524288, true);
+    /* Cow twice (4 and 2 states) and Husky: stock gaits whose feet slide, grouped once per clip
+     * out of the advice column; the page still fits 1280 px. */
+    check_page("animals", write_animal_catalog("animals"), 268435456, false);
+    char *animals = read_whole_file(TMP "/animals.html", NULL);
+    const char *warnings = strstr(animals, "<ul id=\"warnings\">");
+    assert_non_null(warnings);
+    assert_non_null(strstr(warnings, "<b>AnimalArmature|Walk</b> (2.44 units/s): feet slide 49% (worst 235%)"));
+    assert_non_null(strstr(warnings, "<span class=\"count\">2&times;</span> (cow walk, cow2 walk)"));
+    const char *table = strstr(animals, "<table id=\"types\">");
+    assert_true(table && warnings > table && strstr(table, "slide") > warnings); /* none in the table's advice */
+    free(animals);
     /* One model, no target: bytes on the log axis, no budget line. */
     check_page("model", fox_abs, 0, false);
     char *html = read_whole_file(TMP "/over.html", NULL);
     assert_non_null(strstr(html, "qpos/u16 saves"));
-    assert_non_null(strstr(html, "half the fps saves"));
+    /* At a fixed 30 fps, half the rate breaks max_error (measured): not advised. */
+    assert_null(strstr(html, "half the fps saves"));
+    assert_non_null(strstr(html, "half the frame rate would put clips over max_error"));
     assert_non_null(strstr(html, "shares <b>goat</b>"));
+    /* The fixed 30 fps misses max_error on some clips: advised in the column, said in the warnings. */
+    assert_non_null(strstr(html, "<li>leave <code>fps</code> out: "));
+    assert_non_null(strstr(strstr(html, "<ul id=\"warnings\">"), "which a fixed fps is not held to: "));
+    free(html);
+    /* Husky at a fixed 240 fps: half the rate stays within max_error, and is advised; verify,
+     * skinning from the glTF in float64, agrees that 120 fps meets 1 mm/m. */
+    html = read_whole_file(TMP "/animals.html", NULL);
+    assert_non_null(strstr(html, "half the fps saves"));
+    assert_non_null(strstr(html, "stays within max_error ("));
+    char cmd[4096], out[8192], husky[1024], rel[1024];
+    shared_path(rel, sizeof rel, "assets/quaternius-husky/Husky.glb");
+    assert_non_null(realpath(rel, husky));
+    snprintf(cmd, sizeof cmd, "%s bake %s --clip idle,walk,gallop,eating --root-motion in-place --fps 120 -o " TMP
+             "/husky120.pal 2>&1 && %s verify %s " TMP "/husky120.pal --max-error 1 2>&1", crowdbake_exe(), husky,
+             crowdbake_exe(), husky);
+    if (run_command(cmd, out, sizeof out)) fail_msg("%s", out);
     free(html);
 }
 

@@ -242,7 +242,7 @@ static void test_sync_overrides(void **state)
     opt.jobs = 1;
     assert_int_not_equal(cb_roster_bake(&cat, &opt, &r, &err), CB_OK);
     if (!strstr(err.message, "nospeed.toml:7:") || !strstr(err.message, "state 'idle' follows the speed") ||
-        !strstr(err.message, "speed_reference = M/S"))
+        !strstr(err.message, "speed_reference = UNITS_PER_S"))
         fail_msg("%s", err.message);
     cb_roster_free(&r);
     cb_catalog_free(&cat);

@@ -103,7 +103,8 @@ static void test_destdir_layout(void **state)
         "share/crowdbake/viewer/viewer.html", "share/crowdbake/viewer/serve.py", "share/crowdbake/web/crowdbake_pal.mjs",
         "share/crowdbake/web/node_modules/three/build/three.module.js", "share/crowdbake/web/node_modules/fzstd/esm/index.mjs",
         "share/crowdbake/glsl/crowdbake_palette.glsl",
-        "share/crowdbake/crowdbake-godot-addon.zip"};
+        "share/crowdbake/crowdbake-godot-addon.zip", "share/crowdbake/com.crowdbake.palette.tgz",
+        "share/crowdbake/hlsl/crowdbake_palette.hlsl"};
     for (size_t i = 0; i < COUNT_OF(files); ++i) {
         char path[PATH_MAX * 2];
         snprintf(path, sizeof path, TMP "/stage/opt/cb/%s", files[i]);
@@ -349,7 +350,7 @@ static void test_man_page_and_completions(void **state)
     static const char *const sources[] = {"cli/cmd_bake.c",   "cli/cmd_info.c",   "cli/cmd_inspect.c",
                                           "cli/cmd_preview.c", "cli/cmd_report.c", "cli/cmd_sample.c",
                                           "cli/cmd_vat.c",     "cli/cmd_verify.c", "cli/cmd_mesh.c",
-                                          "cli/cmd_view.c",    "cli/cli.c"};
+                                          "cli/cmd_view.c",    "cli/cmd_roster.c",  "cli/cli.c"};
     int options = 0;
     for (size_t i = 0; i < COUNT_OF(sources); ++i) {
         char *src = read_whole_file(sources[i], NULL);

@@ -29,6 +29,10 @@ static int setup(void **state)
     snprintf(cmd, sizeof cmd, "%s bake %s --fps 30 -o " TMP "/fox --format pal,ktx2 --precision float --layout mat4 -q",
              crowdbake_exe(), fox);
     if (system(cmd)) return -1;
+    /* --zstd: the KTX2 level supercompressed (Zstandard, as toktx --zcmp), beside a plain .pal of the same bake. */
+    snprintf(cmd, sizeof cmd, "%s bake %s --fps 30 -o " TMP "/foxz.ktx2 --precision half --zstd -q && %s bake %s --fps 30 -o "
+             TMP "/foxz.pal --precision half -q", crowdbake_exe(), fox, crowdbake_exe(), fox);
+    if (system(cmd)) return -1;
     /* In place (a root velocity per clip), qpos/half: every clip field verify reads. */
     snprintf(cmd, sizeof cmd, "%s bake %s --fps 30 -o " TMP "/fox_in_place --format pal,exr,ktx2 --precision half "
              "--root-motion in-place -q", crowdbake_exe(), fox);
@@ -41,12 +45,16 @@ static void test_readers_find_the_pal_texels_bit_for_bit(void **state)
     require_ktx2_readers();
     static char out[1 << 16];
     int rc = run_command("node tests/tools/ktx2/check_ktx2.mjs " TMP "/quadruped.ktx2 " TMP "/quadruped.pal " TMP "/fox.ktx2 " TMP
-                         "/fox.pal 2>&1", out, sizeof out);
+                         "/fox.pal " TMP "/foxz.ktx2 " TMP "/foxz.pal 2>&1", out, sizeof out);
     printf("%s", out);
     assert_int_equal(rc, 0);
     assert_non_null(strstr(out, "quadruped.ktx2: ktx-parse level 0 is bit-identical to the .pal texels (173840 bytes)"));
     assert_non_null(strstr(out, "fox.ktx2: three.js KTX2Loader makes a 96x159 RGBA FloatType texture"));
     assert_non_null(strstr(out, "quadruped.ktx2: three.js KTX2Loader makes a 82x265 RGBA HalfFloatType texture"));
+    /* zstd: ktx-parse and the zstd command, then three.js's KTX2Loader (its own zstd decoder), find the texels */
+    assert_non_null(strstr(out, "ok   foxz.ktx2: zstd -d reads its level"));
+    assert_non_null(strstr(out, "ok   foxz.ktx2: ktx-parse level 0 is bit-identical to the .pal texels"));
+    assert_non_null(strstr(out, "ok   foxz.ktx2: the three.js texture's data is bit-identical to the .pal texels"));
 }
 
 static void test_a_changed_texel_is_caught(void **state)

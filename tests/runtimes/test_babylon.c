@@ -101,7 +101,11 @@ static void write_cow_catalog(const char *format)
     snprintf(text, sizeof text,
              "[bake]\nfps = 30\nroot_motion = \"keep\"\nformat = \"%s\"\nout_dir = \"out\"\n\n"
              "[animal.cow]\nmodel = \"%s\"\n"
-             "states = { wander = [\"walk\"], flee = [\"gallop\"], graze = [\"eating\"], die = [\"death\"] }\n",
+             "states = { wander = [\"walk\"], flee = [\"gallop\"], graze = [\"eating\"], die = [\"death\"] }\n"
+             /* every clip, as the single bake it is compared with: the states' four and the eight the
+              * bake's note names to keep with extra_clips */
+             "extra_clips = [\"Attack_Headbutt\", \"Attack_Kick\", \"Gallop_Jump\", \"Idle\", \"Idle_2\", \"Idle_Headlow\", "
+             "\"Idle_HitReact_Left\", \"Jump_toIdle\"]\n",
              format, abs);
     write_text(CATALOG "/catalog.toml", text);
 }

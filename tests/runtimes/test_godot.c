@@ -104,9 +104,9 @@ static void test_shipped_files_run_in_godot(void **state)
     assert_non_null(strstr(out, "ok   loader parses"));
     assert_non_null(strstr(out, "ok   fill_herd from roster.json"));
     /* The addon (check_addon.gd): its loader, bone_matrix against the reference CSV, the herd. */
-    assert_int_equal(count(out, "\nok   addon: "), 15); /* 14 + the held rows of a STEP-keyed clip */
+    assert_int_equal(count(out, "\nok   addon: "), 19); /* with the held rows of a STEP-keyed clip */
     assert_int_equal(count(out, "\nok   expect-error: addon: "), 3);
-    assert_non_null(strstr(out, "godot: 69 cases, 0 failed, exit code 0"));
+    assert_non_null(strstr(out, "godot: 73 cases, 0 failed, exit code 0"));
     /* The log is Godot 4.6's own, on WebGL 2 (the Compatibility renderer). */
     assert_int_equal(run_command("grep -q 'Godot Engine v4.6' " TMP "/godot.log && grep -q 'Compatibility' " TMP "/godot.log",
                                  NULL, 0),

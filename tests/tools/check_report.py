@@ -72,6 +72,7 @@ TEXELS = {'mat4': 4, 'affine': 3, 'qpos': 2}
 BYTES = {'float': 16, 'half': 8, 'u16': 8}
 VAT = {'position RGBA16F + normal RGBA8': 12, 'position + normal RGBA16F': 16, 'position + normal RGBA32F': 32}
 totals = {'palettes': 0, 'meshes': 0, 'vat': {k: 0 for k in VAT}}
+meshes_counted = {}  # model path -> the first type on it: a model's mesh is on the GPU once, however many types use it
 by_name = {t['name']: t for t in report['types']}
 for name, (model, owner) in sorted(types.items()):
     info = json.loads(subprocess.run([exe, 'info', model, '--json', '--fps', fps], capture_output=True, check=True).stdout)
@@ -103,7 +104,12 @@ for name, (model, owner) in sorted(types.items()):
         totals['vat'][enc] += want
     mesh = mesh_bytes(model, skin)
     expect(name + ' mesh bytes', t['mesh_bytes'], mesh)
-    totals['meshes'] += mesh
+    if model in meshes_counted:
+        expect(name + ' mesh counted with', t.get('mesh_counted_with'), meshes_counted[model])
+    else:
+        meshes_counted[model] = name
+        expect(name + ' mesh counted here', t.get('mesh_counted_with'), None)
+        totals['meshes'] += mesh
     if owner:
         expect(name + ' shares', t.get('shares_palette_of'), owner)
     else:
@@ -116,4 +122,11 @@ if 'budget' in report:
     b = report['budget']
     expect('budget bytes', b['budget_bytes'], round(b['vram_bytes'] * b['crowd_share']))
     expect('over budget', report['totals']['over_budget'], totals['palettes'] + totals['meshes'] > b['budget_bytes'])
+    # the herd the budget left holds: 64 B an instance (a_instance + a 3x4 transform), palettes and meshes in the total
+    left = b['budget_bytes'] - totals['palettes'] - totals['meshes']
+    for name, (model, owner) in sorted(types.items()):
+        t = by_name[name]
+        herd = left // 64 if left > 0 else 0
+        expect(name + ' herd instances', t['herd']['instances'], herd)
+        expect(name + ' herd vertices a frame', t['herd']['vertices_per_frame'], herd * t['vertices'])
 print('%d numbers match the formulas' % checks)

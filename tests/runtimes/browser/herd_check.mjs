@@ -109,7 +109,7 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
             fox.gltf.scene.traverse((o) => { if (o.isMesh) Object.assign(o, { material: unseen, frustumCulled: false }); });
             for (const c of Object.values(casters)) {
                 c.traverse((o) => { o.castShadow = true; });
-                if (c.isInstancedMesh) Object.assign(c.material, { colorWrite: false, depthWrite: false });
+                if (c.isInstancedMesh) [c.material].flat().forEach((m) => Object.assign(m, { colorWrite: false, depthWrite: false }));
             }
             const out = {};
             for (const [name, make] of Object.entries(lights)) {

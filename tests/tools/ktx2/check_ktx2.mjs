@@ -8,6 +8,7 @@
 // Then three.js's KTX2Loader loads every KTX2 in headless Chromium (playwright-core driving the
 // system's Chromium, as tests/runtimes/godot does), and the texture it makes must hold the same bytes.
 // Prints a line per check; exit 0 when all pass.
+import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import http from 'node:http';
 import path from 'node:path';
@@ -39,10 +40,23 @@ for (let i = 0; i + 1 < files.length; i += 2) {
   check(c.pixelWidth === h.width && c.pixelHeight === h.height && c.levels.length === 1 && c.faceCount === 1,
         `${name}: ${c.pixelWidth}x${c.pixelHeight}, ${c.levels.length} level, ${c.faceCount} face (pal ${h.width}x${h.height})`);
   const dfd = c.dataFormatDescriptor[0];
-  check(dfd.samples.length === 4 && dfd.bytesPlane[0] === texels.byteLength / (h.width * h.height) &&
-        dfd.samples.every((s) => (s.channelType & 0xc0) === 0xc0),
-        `${name}: data format descriptor: 4 signed float samples, ${dfd.bytesPlane[0]} bytes a texel`);
-  const level = c.levels[0].levelData;
+  // Zstandard supercompression (scheme 2, as toktx --zcmp writes it): bytesPlane0 is 0, and the
+  // level is one zstd frame, decompressed here by the zstd command (not crowdbake's code).
+  const zstd = c.supercompressionScheme === 2;
+  const plane = zstd ? 0 : texels.byteLength / (h.width * h.height);
+  check(dfd.samples.length === 4 && dfd.bytesPlane[0] === plane && dfd.samples.every((s) => (s.channelType & 0xc0) === 0xc0),
+        `${name}: data format descriptor: 4 signed float samples, ${dfd.bytesPlane[0]} bytes a texel` +
+        (zstd ? ' (0: zstd supercompressed)' : ''));
+  let level = c.levels[0].levelData;
+  if (zstd) {
+    check(c.levels[0].uncompressedByteLength === texels.byteLength,
+          `${name}: zstd level: ${level.byteLength} bytes stored, ${c.levels[0].uncompressedByteLength} uncompressed`);
+    const z = spawnSync('zstd', ['-d', '-c', '-q'], { input: Buffer.from(level), maxBuffer: 1 << 30 });
+    check(z.status === 0, `${name}: zstd -d reads its level${z.status === 0 ? '' : `: ${z.stderr}`}`);
+    level = new Uint8Array(z.stdout || []);
+  } else {
+    check(c.supercompressionScheme === 0, `${name}: supercompression scheme ${c.supercompressionScheme} (0 or zstd's 2)`);
+  }
   const same = level.byteLength === texels.byteLength && Buffer.compare(Buffer.from(level), Buffer.from(texels)) === 0;
   let firstDiff = -1;
   for (let k = 0; !same && k < Math.min(level.byteLength, texels.byteLength); ++k) if (level[k] !== texels[k]) { firstDiff = k; break; }

@@ -10,7 +10,10 @@
 #   herd.set_speed(7, 4.0)        # metres per second: the feet stay planted at any scale
 #   herd.footstep.connect(func(i, foot, bone): ...)
 #
-# The mesh is the animal's skinned mesh (bone indices = the palette's bones, as in the glTF skin).
+# The mesh is the animal's skinned mesh (bone indices = the palette's bones, as in the glTF skin). The
+# herd keeps its look: each surface's material (base colour, texture, vertex colours, alpha scissor)
+# on its own copy of the herd's shader, plain-colour surfaces merged into one (one draw call):
+# crowdbake_herd_mesh.gd.
 # The instances' clip numbers live in a float texture (crowdbake_herd.gdshader), and the herd keeps
 # its own clock (`time`), so the CPU side (bone_transform_at, sockets, footsteps) sees the pose the
 # GPU draws.
@@ -22,6 +25,7 @@ signal foot_lifted(instance: int, foot: String, bone: int)
 
 const _SHADER := preload("crowdbake_herd.gdshader")
 const _INCLUDE := preload("crowdbake_palette.gdshaderinc")
+const _HERD_MESH := preload("crowdbake_herd_mesh.gd")
 const GOLDEN := 0.6180339887
 const INSTANCES_PER_ROW := 256 # instances per row of the instance texture
 const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade start and length, 2 spare
@@ -36,6 +40,8 @@ const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade sta
 var time := 0.0 # the herd's clock, seconds (the shader's herd_time)
 var palette # the type's CrowdbakePalette
 var error := "" # the last failure, one line
+var materials: Array[ShaderMaterial] = [] # one per surface drawn: the herd's shader set to its look
+var surfaces_merged := 0 # the model's plain-colour surfaces drawn as one (one draw call for them)
 
 var _type := {}
 var _data := PackedFloat32Array()
@@ -70,11 +76,13 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	_type = roster.types[type]
 	palette = _type["palette"]
 	_has_contacts = _type["clips"].values().any(func(clip): return not clip.get("contacts", []).is_empty())
-	material_override = _material()
+	var look := _HERD_MESH.build(mesh, _material())
+	materials = look["materials"]
+	surfaces_merged = look["merged"]
 	var mm := MultiMesh.new()
 	mm.transform_format = MultiMesh.TRANSFORM_3D
 	mm.use_colors = true
-	mm.mesh = mesh
+	mm.mesh = look["mesh"]
 	mm.instance_count = instances
 	multimesh = mm
 	_data.resize(instances * FLOATS)
@@ -262,7 +270,7 @@ func _upload() -> void:
 	if _bounds_dirty:
 		update_bounds()
 	if not _dirty and _texture != null:
-		material_override.set_shader_parameter("herd_time", time)
+		_set_all("herd_time", time)
 		return
 	var rows := maxi(1, ceili(float(count) / INSTANCES_PER_ROW))
 	var texels := PackedFloat32Array()
@@ -274,9 +282,14 @@ func _upload() -> void:
 		_texture.update(image)
 	else:
 		_texture = ImageTexture.create_from_image(image)
-		material_override.set_shader_parameter("instances", _texture)
-	material_override.set_shader_parameter("herd_time", time)
+		_set_all("instances", _texture)
+	_set_all("herd_time", time)
 	_dirty = false
+
+# A shader parameter of every surface's material.
+func _set_all(key: String, value) -> void:
+	for m in materials:
+		m.set_shader_parameter(key, value)
 
 func _fail(message: String) -> bool:
 	error = message

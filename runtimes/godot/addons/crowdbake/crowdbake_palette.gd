@@ -5,7 +5,9 @@
 #   var pal: CrowdbakePalette = load("res://roster/cow.pal")   # crowdbake_format_loader.gd
 #   var m: Transform3D = pal.bone_matrix("AnimalArmature|Walk", 0.4, pal.bone_index("Head"))
 #
-# The loading and its checks are crowdbake_loader.gd's (load_palette); this adds the tables.
+# The loading and its checks are crowdbake_loader.gd's (load_palette); this adds the tables. Every
+# field is stored (@export_storage, Godot 4.3+): the editor's import (crowdbake_import_palette.gd)
+# saves a loaded palette as a resource, which loads back whole in the editor and in exported games.
 @tool
 class_name CrowdbakePalette
 extends Resource
@@ -13,29 +15,29 @@ extends Resource
 const _Loader := preload("crowdbake_loader.gd")
 const CLIP_ENTRY_SIZE := 80
 
-var texture: ImageTexture          # the payload as baked: RGBA16UI (u16), RGBAH (half) or RGBAF (float)
-var bind_positions: ImageTexture   # row 0 the bones' bind positions, row 1 their position offsets
-var positions_relative := 0.0
-var layout := ""                   # mat4, affine, qpos
-var precision := ""                # float, half, u16
-var row_texels := 0
-var rows_per_block := 0
-var linear_range := 0.0
-var bounds_min := Vector3.ZERO
-var bounds_max := Vector3.ZERO
-var speed_reference := 0.0         # ground speed (m/s) at playback rate 1; 0 when unset
+@export_storage var texture: ImageTexture          # the payload as baked: RGBA16UI (u16), RGBAH (half) or RGBAF (float)
+@export_storage var bind_positions: ImageTexture   # row 0 the bones' bind positions, row 1 their position offsets
+@export_storage var positions_relative := 0.0
+@export_storage var layout := ""                   # mat4, affine, qpos
+@export_storage var precision := ""                # float, half, u16
+@export_storage var row_texels := 0
+@export_storage var rows_per_block := 0
+@export_storage var linear_range := 0.0
+@export_storage var bounds_min := Vector3.ZERO
+@export_storage var bounds_max := Vector3.ZERO
+@export_storage var speed_reference := 0.0         # ground speed (m/s) at playback rate 1; 0 when unset
 # One Dictionary per clip: name, first_row, frames, fps (rows per second of clip time), duration,
 # loops, step (rows held, not blended: a STEP-keyed clip, .pal version 4), bounds (AABB of the
 # skinned mesh over the clip).
-var clips: Array[Dictionary] = []
-var bone_names := PackedStringArray()
+@export_storage var clips: Array[Dictionary] = []
+@export_storage var bone_names := PackedStringArray()
 var error := "" # the last failure, one line
 
-var _payload := PackedByteArray() # the texels, for bone_matrix
-var _bind := PackedFloat32Array() # 4 floats per bone: row 0 then row 1 of bind_positions
-var _width := 0
-var _texel_bytes := 0
-var _texels_per_bone := 0
+@export_storage var _payload := PackedByteArray() # the texels, for bone_matrix
+@export_storage var _bind := PackedFloat32Array() # 4 floats per bone: row 0 then row 1 of bind_positions
+@export_storage var _width := 0
+@export_storage var _texel_bytes := 0
+@export_storage var _texels_per_bone := 0
 
 # Reads `path` into this resource; false (with `error`) when the file is refused.
 func load_file(path: String) -> bool:

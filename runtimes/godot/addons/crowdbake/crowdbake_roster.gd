@@ -27,9 +27,10 @@ func load_file(path: String) -> bool:
 				% [path, SCHEMA])
 	for name in parsed["types"]:
 		var entry: Dictionary = parsed["types"][name]
-		var palette := _Palette.new()
-		if not palette.load_file(path.get_base_dir().path_join(str(entry.get("palette", "")))):
-			return _fail(palette.error)
+		var palette_path := path.get_base_dir().path_join(str(entry.get("palette", "")))
+		var palette = _palette(palette_path)
+		if palette is String:
+			return _fail(palette)
 		var clips := {}
 		for clip in entry.get("clips", []):
 			clips[clip["name"]] = clip
@@ -37,6 +38,16 @@ func load_file(path: String) -> bool:
 				"sockets": _sockets(entry.get("sockets", {})), "default_state": entry.get("default_state", ""),
 				"speed_reference": float(entry.get("speed_reference", palette.speed_reference))}
 	return true
+
+# The palette at `path`: in a project (res://), through load(), which gives the imported resource
+# (crowdbake_import_palette.gd; what an exported game has); elsewhere read from the file. The error
+# line when it cannot be had.
+static func _palette(path: String):
+	if path.begins_with("res://") and ResourceLoader.exists(path):
+		var imported = load(path)
+		return imported if imported != null else "%s: Godot could not load it (see its import errors)" % path
+	var palette := _Palette.new()
+	return palette if palette.load_file(path) else palette.error
 
 # Sockets, as the manifest lists them ([{name, bone, bind_transform}]) or a map of name -> {bone,
 # bind_transform}; the transform (the socket's frame in bind space, 16 numbers column-major like the

@@ -1,6 +1,16 @@
 # plugin.gd - the editor side of the crowdbake addon. Its classes (CrowdbakeHerd in the Create Node
 # dialog, CrowdbakePalette, CrowdbakeRoster) and its ResourceFormatLoader (crowdbake_format_loader.gd)
-# are registered by their class_name, in the editor and in exported games alike, so the plugin has
-# nothing to add; enabling it marks the addon as in use.
+# are registered by their class_name, in the editor and in exported games alike. The plugin adds the
+# .pal importer (crowdbake_import_palette.gd): palettes become resources the export takes along.
 @tool
 extends EditorPlugin
+
+var _palette_importer: EditorImportPlugin
+
+func _enter_tree() -> void:
+	_palette_importer = preload("crowdbake_import_palette.gd").new()
+	add_import_plugin(_palette_importer)
+
+func _exit_tree() -> void:
+	remove_import_plugin(_palette_importer)
+	_palette_importer = null

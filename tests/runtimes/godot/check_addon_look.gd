@@ -1,0 +1,170 @@
+# check_addon_look.gd - the addon's look, sockets, demo and import in Godot 4.6's web build, run by
+# check_addon.gd (whose viewport, camera, herds and case lines it uses): the herd against Godot's own
+# skinned import of Cow.glb in colour, Cow's sockets at a prop's own size, the demo scene's herd, and
+# a palette saved as a resource (what the editor's .pal import does) loading back whole.
+extends RefCounted
+
+const ROOT := "/crowdbake"
+const ADDON := ROOT + "/addons/crowdbake"
+const COW := ROOT + "/bakes/cow"
+const WALK := "AnimalArmature|Walk"
+const SIZE := 0.1
+
+var addon # check_addon.gd's instance
+
+func _init(addon_check) -> void:
+	addon = addon_check
+
+# Cow's own sockets (the manifest's, Head_end among them): Cow's armature is at scale 100, yet a prop
+# hung on socket_transform keeps its own size: the socket's axes are as long as the instance's scale.
+func check_socket_scale(roster, mesh: Mesh) -> void:
+	var name := "socket_transform keeps a prop's own size on Cow (armature at scale 100)"
+	addon._begin(name)
+	roster.types["cow"]["sockets"] = load(ADDON + "/crowdbake_roster.gd")._sockets(addon._manifest["types"]["cow"]["sockets"])
+	var herd: MultiMeshInstance3D = addon._new_herd(roster, mesh, 1)
+	herd.advance(0.4)
+	var worst := 0.0
+	for socket in roster.types["cow"]["sockets"]:
+		var scale: Vector3 = herd.socket_transform(0, socket).basis.get_scale()
+		worst = maxf(worst, maxf(absf(scale.x / SIZE - 1.0), maxf(absf(scale.y / SIZE - 1.0), absf(scale.z / SIZE - 1.0))))
+	herd.queue_free()
+	print("crowdbake-check: %d sockets, axes within %s of the instance's scale" % [roster.types["cow"]["sockets"].size(), worst])
+	var listed: int = addon._manifest["types"]["cow"]["sockets"].size()
+	addon._end(name, "" if worst < 1e-3 and listed > 0 and roster.types["cow"]["sockets"].size() == listed else "axes off by %s" % worst)
+
+# The largest difference of two colours' channels, relative to the second's brightest channel.
+static func _colour_distance(c: Color, reference: Color) -> float:
+	var d := maxf(absf(c.r - reference.r), maxf(absf(c.g - reference.g), absf(c.b - reference.b)))
+	return d / maxf(maxf(reference.r, maxf(reference.g, reference.b)), 1e-6)
+
+# Covered pixels whose colour differs by more than 0.1 in a channel, and those covered in either image.
+static func _colour_differ(a: Image, b: Image) -> Array:
+	var n := 0
+	var covered := 0
+	for y in a.get_height():
+		for x in a.get_width():
+			var p := a.get_pixel(x, y)
+			var q := b.get_pixel(x, y)
+			if p.a == 0.0 and q.a == 0.0:
+				continue
+			covered += 1
+			n += 1 if maxf(absf(p.r - q.r), maxf(absf(p.g - q.g), maxf(absf(p.b - q.b), absf(p.a - q.a)))) > 0.1 else 0
+	return [n, covered]
+
+# The herd keeps Cow's look: its 7 plain-colour surfaces (7 glTF materials) merged into one draw call,
+# drawn in colour like Godot's own import of Cow.glb (Skeleton3D + AnimationPlayer, the glTF's
+# materials) at the same clip time; the old look (the whole mesh in one white material) as the
+# negative control.
+func check_look(roster, mesh: Mesh) -> void:
+	var name := "the herd looks like Godot's own skinned Cow: 7 materials in one draw call"
+	addon._begin(name)
+	var doc := GLTFDocument.new()
+	var state := GLTFState.new()
+	doc.append_from_file(COW + "/Cow.glb", state)
+	var scene: Node3D = doc.generate_scene(state)
+	var players := scene.find_children("*", "AnimationPlayer", true, false)
+	var xform := Transform3D(Basis(Vector3.UP, PI / 2).scaled(Vector3.ONE * SIZE), Vector3.ZERO)
+	addon._camera.transform = Transform3D(Basis(), Vector3(0, 0.35, 1.4))
+	addon._viewport.size = Vector2i(128, 128) # colours need more than a silhouette's pixels
+	var herd: MultiMeshInstance3D = addon._new_herd(roster, mesh, 1)
+	herd.place(0, xform)
+	herd.set_state(0, "wander", 0.0)
+	herd.advance(0.5)
+	var inst: Vector4 = herd.instance_numbers(0)
+	var clip: Dictionary = roster.types["cow"]["clips"][WALK]
+	var seconds: float = fposmod(herd.time * inst.z + inst.w * absf(inst.y), absf(inst.y)) / float(clip["fps"])
+	var drawn: Image = await addon._frame()
+	var calls: int = addon._viewport.get_render_info(Viewport.RENDER_INFO_TYPE_VISIBLE, Viewport.RENDER_INFO_DRAW_CALLS_IN_FRAME)
+	var herd_mesh := herd.multimesh.mesh
+	herd.multimesh.mesh = mesh # the old look: the model's surfaces in one material
+	var one_colour: ShaderMaterial = herd.materials[0].duplicate()
+	one_colour.set_shader_parameter("albedo", Color(0.85, 0.78, 0.66))
+	herd.material_override = one_colour
+	var old_look: Image = await addon._frame()
+	herd.multimesh.mesh = herd_mesh
+	herd.material_override = null
+	herd.visible = false
+	scene.transform = xform
+	addon._viewport.add_child(scene)
+	if not players.is_empty():
+		players[0].play(WALK)
+		players[0].seek(seconds, true)
+		players[0].pause()
+	var reference: Image = await addon._frame()
+	var reference_calls: int = addon._viewport.get_render_info(Viewport.RENDER_INFO_TYPE_VISIBLE, Viewport.RENDER_INFO_DRAW_CALLS_IN_FRAME)
+	scene.queue_free()
+	herd.queue_free()
+	addon._viewport.size = Vector2i(64, 64)
+	var look := _colour_differ(drawn, reference)
+	var old := _colour_differ(old_look, reference)
+	var share := float(look[0]) / maxf(look[1], 1)
+	var old_share := float(old[0]) / maxf(old[1], 1)
+	# The mean colour of the covered pixels, which a pixel's worth of silhouette does not move.
+	var mean_herd: Color = addon._covered(drawn)[0]
+	var mean_reference: Color = addon._covered(reference)[0]
+	var mean_old: Color = addon._covered(old_look)[0]
+	var off := _colour_distance(mean_herd, mean_reference)
+	var off_old := _colour_distance(mean_old, mean_reference)
+	print("crowdbake-check: Cow at %.3f s: %d covered pixels, %.1f%% differ in colour by more than 0.1 from Godot's own skinning (one colour: %.1f%%); mean colour %s against %s: off by %.1f%% (one colour %s: %.1f%%); %d surfaces merged, %d draw calls a frame (shadow pass included), Godot's import %d"
+			% [seconds, look[1], 100 * share, 100 * old_share, mean_herd, mean_reference, 100 * off, mean_old, 100 * off_old,
+			herd.surfaces_merged, calls, reference_calls])
+	var why := ""
+	if players.is_empty():
+		why = "no AnimationPlayer in Godot's import"
+	elif look[1] < 200 or share >= old_share or off >= off_old: # nearer Godot's colours than one colour is
+		why = "see the numbers above"
+	elif herd.surfaces_merged != 7 or calls * 4 > reference_calls:
+		why = "%d surfaces merged, %d draw calls" % [herd.surfaces_merged, calls]
+	addon._end(name, why)
+
+
+# The demo's script (demo/crowdbake_demo.gd) on its own model and roster, which make bakes into
+# demo/herd/ (the project's generated quadruped): it opens to a herd, drawn.
+func check_demo() -> void:
+	var name := "the demo opens to a herd: its own model and roster"
+	addon._begin(name)
+	var demo: Node3D = load(ADDON + "/demo/crowdbake_demo.gd").new()
+	demo.roster_path = ADDON + "/demo/herd/roster.json"
+	demo.model_path = ADDON + "/demo/herd/quadruped.glb"
+	demo.animals = 16 # a smaller field than the scene's 64: SwiftShader draws it on the CPU
+	var herd: MultiMeshInstance3D = load(ADDON + "/crowdbake_herd.gd").new()
+	herd.name = "Herd"
+	demo.add_child(herd)
+	addon._viewport.add_child(demo) # _ready builds the herd
+	addon._camera.transform = Transform3D(Basis(), Vector3(0, 8, 20)).looking_at(Vector3.ZERO)
+	var image: Image = await addon._frame()
+	var covered: Array = addon._covered(image)
+	print("crowdbake-check: the demo's herd: %d animals of type '%s', %d pixels drawn" % [herd.count, demo.animal, covered[1]])
+	var why := "" if herd.palette != null and herd.count == demo.animals and covered[1] > 20 else "see the numbers above"
+	demo.queue_free()
+	addon._end(name, why)
+
+# What the editor's .pal import does (crowdbake_import_palette.gd: CrowdbakePalette.load_file, then
+# ResourceSaver.save) and what load() of the imported palette then gives: every bone matrix of every
+# clip as the palette read from the file gives it, and the same texture.
+func check_imported_palette() -> void:
+	var name := "a palette saved as a resource (the .pal import) loads back whole"
+	addon._begin(name)
+	var palette = load(ADDON + "/crowdbake_palette.gd").new()
+	var why := "" if palette.load_file(COW + "/qpos-u16.pal") else str(palette.error)
+	var saved := "user://crowdbake_imported_palette.res"
+	if why.is_empty() and ResourceSaver.save(palette, saved) != OK:
+		why = "ResourceSaver could not save it"
+	var back = ResourceLoader.load(saved, "", ResourceLoader.CACHE_MODE_IGNORE) if why.is_empty() else null
+	if why.is_empty() and back == null:
+		why = "it did not load back"
+	var worst := 0.0
+	var compared := 0
+	if why.is_empty():
+		for clip in palette.clips:
+			for bone in palette.bone_names.size():
+				var m1: Transform3D = palette.bone_matrix(clip["name"], 0.37, bone)
+				var m2: Transform3D = back.bone_matrix(clip["name"], 0.37, bone)
+				worst = maxf(worst, (m1.origin - m2.origin).length() + (m1.basis.x - m2.basis.x).length())
+				compared += 1
+		if back.texture == null or back.texture.get_image().get_data() != palette.texture.get_image().get_data():
+			why = "the texture differs"
+		elif compared == 0 or worst > 0.0:
+			why = "%d matrices compared, off by up to %s" % [compared, worst]
+	print("crowdbake-check: the saved palette: %d bone matrices compared, off by %s" % [compared, worst])
+	addon._end(name, why)
