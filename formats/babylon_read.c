@@ -11,7 +11,8 @@
 
 #define TAIL_BYTES (1u << 20) /* the crowdbake object: clips and states, far below this */
 
-static const char HEAD[] = "{\"vertexData\": \"";
+/* The bytes before the base64 data: `{"vertexData": "` (only its length is read). */
+#define HEAD_BYTES (sizeof "{\"vertexData\": \"" - 1)
 static const char AFTER_DATA[] = "\",\n\"width\": ";
 
 /* Reads the last TAIL_BYTES of the file (all of a smaller one) into a string; *start: where it
@@ -40,7 +41,7 @@ static bool parse_tail(const char *text, long long start, cb_babylon_facts *out)
     if (sscanf(hash + 15, "%16" SCNx64, &out->input_hash) != 1) return false;
     unsigned long long bytes = (unsigned long long)out->width * out->height * 16;
     unsigned long long base64 = (bytes + 2) / 3 * 4;
-    return (unsigned long long)(start + (data_end - text)) == sizeof HEAD - 1 + base64;
+    return (unsigned long long)(start + (data_end - text)) == HEAD_BYTES + base64;
 }
 
 cb_status cb_babylon_read_facts(const char *path, cb_babylon_facts *out, cb_error *err)

@@ -242,7 +242,7 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
     cb_error unanalyzed = {0};
     bool analyzed = !cb_clip_analyze(s, clip->animation, common_rates[0], clip->loop, &o->limits, &analysis, &unanalyzed);
     clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts,
-                      .probe = {poses, analyzed ? &analysis : NULL}};
+                      .probe = {.poses = poses, .analysis = analyzed ? &analysis : NULL}};
     if (poses && fresh) pose_cache_clear(poses); /* another clip's times */
     return choose_clip(&cs, &f, rows, max_error, c, err);
 }
