@@ -28,6 +28,7 @@ func run() -> void:
 	_check_format_loader()
 	_check_bone_matrix("mat4-float", 2e-4, true)
 	_check_bone_matrix("qpos-u16", 0.02, false)
+	load(ROOT + "/check_conformance.gd").new(self).run()
 	var mesh := _cow_mesh()
 	if mesh == null:
 		return
