@@ -240,6 +240,7 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_A
 	ln -sf $(SONAME) $(DESTDIR)$(LIBDIR)/libcrowdbake.so
 	install -m 644 include/crowdbake/*.h $(DESTDIR)$(INCLUDEDIR)/crowdbake/
 	install -m 644 include/crowdbake_pal.h $(DESTDIR)$(INCLUDEDIR)/crowdbake_pal.h
+	install -m 644 include/crowdbake_pal_runtime.h $(DESTDIR)$(INCLUDEDIR)/crowdbake_pal_runtime.h
 	sed $(INSTALL_SED) cmake/crowdbake.pc.in > $(DESTDIR)$(LIBDIR)/pkgconfig/crowdbake.pc
 	sed $(INSTALL_SED) cmake/crowdbakeConfig.cmake.in > $(DESTDIR)$(LIBDIR)/cmake/crowdbake/crowdbakeConfig.cmake
 	sed $(INSTALL_SED) cmake/crowdbakeConfigVersion.cmake.in > $(DESTDIR)$(LIBDIR)/cmake/crowdbake/crowdbakeConfigVersion.cmake
@@ -343,7 +344,7 @@ $(BUILD)/tests/%: %.c tests/testutil.h tests/view_server.h $(wildcard tests/runt
 $(BUILD)/tests/test_hlsl_vulkan $(BUILD)/tests/test_hlsl_conformance $(BUILD)/tests/test_unreal_shader: TEST_EXTRA_LIBS := -lvulkan
 
 # The reader header alone, strict C99, as an engine would compile it: no libcrowdbake.
-$(BUILD)/tests/standalone_pal_reader: tests/runtimes/standalone_pal_reader.c include/crowdbake_pal.h $(DEPS_STAMP)
+$(BUILD)/tests/standalone_pal_reader: tests/runtimes/standalone_pal_reader.c include/crowdbake_pal.h include/crowdbake_pal_runtime.h $(DEPS_STAMP)
 	@mkdir -p $(@D)
 	$(CC) -std=c99 -pedantic $(OPT) -g $(WARN) $(SAN) -Iinclude $(TEST_CFLAGS) $< -o $@ \
 	  $(shell pkg-config --libs cmocka libzstd 2>/dev/null) -lm

@@ -50,9 +50,11 @@ const char cmd_bake_usage[] =
     "                             them) stays within --max-error, fitted or sampled (ties: sampled),\n"
     "                             up to --max-fps; N: a fixed rate, rows sampled (--fps 30: the old\n"
     "                             default's bytes)\n"
-    "  --max-error MM_PER_M       the error budget, mm per metre of model height (default 1); a clip\n"
-    "                             over it fails the bake (exit 6, nothing written, a line per clip\n"
-    "                             with what would meet it); with --fps N, a check of the fixed rate\n"
+    "  --max-error MM_PER_M       the error budget, mm per metre of model height; a clip over it fails\n"
+    "                             the bake (exit 6, nothing written, a line per clip with what would\n"
+    "                             meet it); with --fps N, a check of the fixed rate. Left out: 1, a\n"
+    "                             goal, not a promise (a clip over it is written at the best the bake\n"
+    "                             reached, with a warning saying what would meet it)\n"
     "  --max-fps N                the highest rate auto may choose (default 120: every clip of Cow,\n"
     "                             Fox and the samples meets 1 mm/m under it)\n"
     "  --allow-over-budget        write a bake with clips over --max-error anyway, with a warning per\n"
@@ -324,15 +326,17 @@ static bool any_auto(const cb_bake_job *job)
     return false;
 }
 
-/* Clips over their budget: a line each, on stderr when the bake failed for them, else as
- * warnings (the bake was written anyway, --allow-over-budget). */
+/* Clips over their budget: a line each, on stderr when the bake failed for them (a budget the
+ * user stated), else as warnings (written: over the default budget, a goal, or
+ * --allow-over-budget). */
 static void report_over_budget(const cb_bake_job *job, const cb_bake_result *r, cb_warnings *warnings)
 {
     for (uint32_t i = 0; i < r->budget_count; ++i) {
-        if (!r->budgets[i].over) continue;
-        char text[640];
+        if (!r->budgets[i].over || (!warnings && r->budgets[i].goal)) continue;
+        char text[640], why[160];
         cb_bake_budget_text(job, r, i, cli_setting_flag, text, sizeof text);
-        if (warnings) cb_warn(warnings, "warning", "%s (written anyway: --allow-over-budget)", text);
+        cb_bake_goal_words(&r->budgets[i], cli_setting_flag, job->settings.allow_over_budget, why, sizeof why);
+        if (warnings) cb_warn(warnings, "warning", "%s%s", text, why);
         else fprintf(stderr, "crowdbake: %s: %s\n", job->model->source, text);
     }
 }
@@ -358,7 +362,7 @@ static void json_clips(cb_json *j, const cb_bake_job *job, const cb_bake_result 
         cb_json_end(j);
     }
     cb_json_end(j);
-    cb_json_array(j, "over_budget"); /* written anyway (--allow-over-budget); else the bake failed */
+    cb_json_array(j, "over_budget"); /* written: over the default budget or --allow-over-budget; else the bake failed */
     for (uint32_t i = 0; i < r->budget_count; ++i) {
         if (!r->budgets[i].over) continue;
         char text[640];
@@ -368,6 +372,7 @@ static void json_clips(cb_json *j, const cb_bake_job *job, const cb_bake_result 
         cb_json_number(j, "visible_error_mm_per_m", r->budgets[i].error_mm);
         cb_json_number(j, "max_error_mm_per_m", r->budgets[i].max_error_mm);
         cb_json_number(j, "fps_needed", job->rates[i].fps_needed);
+        cb_json_bool(j, "default_budget", r->budgets[i].goal); /* a goal: written at the best the bake reached */
         cb_json_string(j, "message", text);
         cb_json_end(j);
     }

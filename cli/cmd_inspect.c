@@ -93,7 +93,7 @@ static void print_clip_table(const inspected *in)
     for (uint32_t i = 0; i < p->clip_count; ++i) {
         const cb_palette_clip *c = &p->clips[i];
         printf("  %-*s %9u %7u %8.3f %9.4f %-8s %-7s ", name_width, c->name, c->first_row, c->frames, (float)c->fps,
-               (float)c->duration, c->loops ? "loop" : "one-shot", c->fitted ? "fitted" : "sampled");
+               (float)c->duration, c->loops ? "loop" : "one-shot", c->step ? "held" : c->fitted ? "fitted" : "sampled");
         /* A one-shot with nothing removed keeps its travel in the rows: a bake that put only its
          * loops in place (root_motion loops-in-place, the default where a loop travels). */
         bool moved = c->root_velocity[0] != 0 || c->root_velocity[1] != 0 || c->root_velocity[2] != 0;
@@ -122,6 +122,7 @@ static void print_clips_json(cb_json *j, const cb_palette *p)
         cb_json_number(j, "duration", (float)c->duration);
         cb_json_bool(j, "loops", c->loops);
         cb_json_bool(j, "fitted_rows", c->fitted);
+        if (c->step) cb_json_bool(j, "step_rows", true); /* held, not blended (clip flag bit 2); absent: blended */
         cb_json_inline_array(j, "root_velocity");
         for (int k = 0; k < 3; ++k) cb_json_number(j, NULL, c->root_velocity[k]);
         cb_json_end(j);

@@ -77,6 +77,7 @@ static exr_result_t set_metadata(exr_context_t c, int part, const cb_palette *p,
         rc |= exr_attr_set_int(c, part, KEY("frames"), (int32_t)cl->frames);
         rc |= exr_attr_set_int(c, part, KEY("loops"), cl->loops);
         if (cl->fitted) rc |= exr_attr_set_int(c, part, KEY("fittedRows"), 1); /* as the .pal's clip flag bit 1 */
+        if (cl->step) rc |= exr_attr_set_int(c, part, KEY("stepRows"), 1); /* held, not blended: clip flag bit 2 */
         rc |= exr_attr_set_float(c, part, KEY("fps"), (float)cl->fps);
         rc |= exr_attr_set_float(c, part, KEY("duration"), (float)cl->duration);
         rc |= exr_attr_set_double(c, part, KEY("start"), cl->start);
@@ -331,7 +332,7 @@ static bool read_palette_attributes(exr_const_context_t c, const char *path, con
         cb_palette_clip *cl = &p->clips[i];
         char key[96], *name = out->names + 256 * (size_t)i;
         const char *text = NULL;
-        int32_t first = -1, frames = 0, loops = 0, clip_fitted = p->fitted; /* files before per clip: every clip */
+        int32_t first = -1, frames = 0, loops = 0, clip_fitted = p->fitted, step = 0; /* fitted: before per clip, all */
         float cfps = 0, duration = 0;
         exr_attr_v3f_t v = {{{0, 0, 0}}}, lo = v, hi = v;
 #define KEY(field) (snprintf(key, sizeof key, "crowdbake.clip%u." field, i), key)
@@ -341,6 +342,7 @@ static bool read_palette_attributes(exr_const_context_t c, const char *path, con
         exr_attr_get_int(c, 0, KEY("frames"), &frames);
         exr_attr_get_int(c, 0, KEY("loops"), &loops);
         exr_attr_get_int(c, 0, KEY("fittedRows"), &clip_fitted);
+        exr_attr_get_int(c, 0, KEY("stepRows"), &step);
         exr_attr_get_float(c, 0, KEY("fps"), &cfps);
         exr_attr_get_float(c, 0, KEY("duration"), &duration);
         exr_attr_get_double(c, 0, KEY("start"), &cl->start); /* absent before 0.1.x: clips started at 0 */
@@ -353,6 +355,7 @@ static bool read_palette_attributes(exr_const_context_t c, const char *path, con
                            path, i, img->rows), false;
         cl->name = name;
         cl->first_row = (uint32_t)first, cl->frames = (uint32_t)frames, cl->loops = loops != 0, cl->fitted = clip_fitted != 0;
+        cl->step = step != 0;
         cl->fps = cfps, cl->duration = duration;
         memcpy(cl->root_velocity, v.arr, sizeof cl->root_velocity);
         memcpy(cl->bounds_min, lo.arr, sizeof cl->bounds_min);

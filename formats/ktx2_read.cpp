@@ -218,7 +218,7 @@ void read_clip_table(simdjson::dom::array clips, cb_palette *p, Names &names, Re
         c->first_row = count(o, "first_row", r), c->frames = count(o, "frames", r);
         double fps = 0, duration = 0, start = 0; /* files before "start" was written: clips started at 0 */
         number(o, "fps", fps, r), number(o, "duration", duration, r), number(o, "start", start, r, false);
-        c->loops = flag(o, "loops", r), c->fitted = flag(o, "fitted_rows", r);
+        c->loops = flag(o, "loops", r), c->fitted = flag(o, "fitted_rows", r), c->step = flag(o, "step_rows", r);
         floats(o, "root_velocity", 3, c->root_velocity, false, r);
         if (r.failed) return;
         c->fps = float32(fps), c->duration = float32(duration), c->start = float32(start); /* as the .pal holds them */

@@ -70,6 +70,7 @@ static char *clips_json(const cb_palette *p)
         /* what `verify` needs to compare with the glTF, as the .pal's clip table holds it */
         cb_json_number(&j, "start", cl->start);
         cb_json_bool(&j, "fitted_rows", cl->fitted);
+        if (cl->step) cb_json_bool(&j, "step_rows", true); /* held, not blended: the .pal's clip flag bit 2 */
         cb_json_inline_array(&j, "root_velocity");
         for (int k = 0; k < 3; ++k) cb_json_number(&j, NULL, cl->root_velocity[k]);
         cb_json_end(&j);

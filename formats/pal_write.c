@@ -55,8 +55,12 @@ static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_wri
     uint32_t flags = (opt->zstd ? CBPAL_FLAG_ZSTD : 0) | (opt->in_place ? CBPAL_FLAG_IN_PLACE : 0) |
                      (p->positions_relative ? CBPAL_FLAG_POSITIONS_RELATIVE : 0) |
                      (p->fitted ? CBPAL_FLAG_FITTED_ROWS : 0);
-    /* Version 2 only where its meaning differs from 1: readers of version 1 keep reading the rest. */
-    uint32_t version = p->positions_relative ? 3 : 1;
+    /* A version only where its meaning differs from the one before: readers of version 1 keep
+     * reading the rest. Version 4: held rows (a clip's step flag), which an older reader would
+     * blend, so it must refuse them (docs/pal-format.md). */
+    bool held = false;
+    for (uint32_t c = 0; c < p->clip_count; ++c) held = held || p->clips[c].step;
+    uint32_t version = held ? 4 : p->positions_relative ? 3 : 1;
     uint32_t u[14] = {version, flags, CBPAL_HEADER_SIZE, (uint32_t)p->layout, (uint32_t)p->precision,
                       p->texels_per_bone, p->bone_count, p->row_texels, p->rows, p->width, p->height, p->blocks,
                       cb_precision_texel_bytes(p->precision), p->clip_count};
@@ -87,7 +91,8 @@ static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *
         s += len + 1;
         put32(e + 8, clip->first_row), put32(e + 12, clip->frames);
         putf(e + 16, (float)clip->fps), putf(e + 20, (float)clip->duration), putf(e + 24, (float)clip->start);
-        put32(e + 28, (clip->loops ? CBPAL_CLIP_LOOPS : 0) | (clip->fitted ? CBPAL_CLIP_FITTED : 0));
+        put32(e + 28, (clip->loops ? CBPAL_CLIP_LOOPS : 0) | (clip->fitted ? CBPAL_CLIP_FITTED : 0) |
+                          (clip->step ? CBPAL_CLIP_STEP : 0));
         for (int k = 0; k < 3; ++k) {
             putf(e + 32 + 4 * k, clip->root_velocity[k]);
             putf(e + 44 + 4 * k, clip->bounds_min[k]);

@@ -1,7 +1,8 @@
 /* crowdbake_pal.h - reader for crowdbake .pal bone-matrix palettes. Public domain / MIT-0.
  *
- * One C99 header, no dependencies (define CBPAL_WITH_ZSTD and link libzstd to read files
- * baked with --zstd). In exactly one C file:
+ * One C99 header and its part crowdbake_pal_runtime.h (a bone's matrix at a time, as the shaders
+ * blend rows; keep the two side by side), no dependencies (define CBPAL_WITH_ZSTD and link
+ * libzstd to read files baked with --zstd). In exactly one C file:
  *
  *     #define CROWDBAKE_PAL_IMPLEMENTATION
  *     #include "crowdbake_pal.h"
@@ -29,7 +30,7 @@
 extern "C" {
 #endif
 
-#define CBPAL_VERSION 3 /* newest known; files without relative positions are still written as version 1 */
+#define CBPAL_VERSION 4 /* newest known; writers write the oldest version that holds what a file says (pal-format.md) */
 #define CBPAL_HEADER_SIZE 256
 #define CBPAL_CLIP_SIZE 80
 #define CBPAL_BONE_SIZE 32
@@ -47,7 +48,9 @@ enum { CBPAL_PRECISION_FLOAT = 0, CBPAL_PRECISION_HALF = 1, CBPAL_PRECISION_U16 
  * files written before the clip flag set only the header's, and cbpal_get_clip then sets the
  * clip's). Read and blend them as always. */
 enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u, CBPAL_FLAG_FITTED_ROWS = 8u };
-enum { CBPAL_CLIP_LOOPS = 1u, CBPAL_CLIP_FITTED = 2u };
+/* CBPAL_CLIP_STEP (version 4): the clip's rows are held, not blended - at clip time t the runtime
+ * shows row floor(t * fps) alone (a STEP-keyed clip, baked at its key times: exact). */
+enum { CBPAL_CLIP_LOOPS = 1u, CBPAL_CLIP_FITTED = 2u, CBPAL_CLIP_STEP = 4u };
 /* cbpal_open flags */
 enum { CBPAL_VERIFY_CHECKSUM = 1u };
 
@@ -97,7 +100,7 @@ int cbpal_get_bone(const cbpal_file *file, uint32_t index, cbpal_bone *out);
 void cbpal_texel_xy(const cbpal_header *h, uint32_t row, uint32_t bone, uint32_t *x, uint32_t *y);
 /* The bone's skinning matrix (column-major 4x4: the glTF joint matrix, bind space to the posed
  * model) `time` seconds into the clip (loops wrap, one-shots clamp), the two rows blended as the
- * shipped GLSL blends them. Attach a prop by composing it with the prop's bind-space transform.
+ * shipped GLSL blends them (a CBPAL_CLIP_STEP clip's row held, not blended). Attach a prop by composing it with the prop's bind-space transform.
  * Non-zero for a clip or bone that does not exist or a time that is not finite. Uses <math.h>. */
 int cbpal_bone_matrix(const cbpal_file *file, uint32_t clip, double time, uint32_t bone, float out[16]);
 
@@ -507,93 +510,8 @@ void cbpal_texel_xy(const cbpal_header *h, uint32_t row, uint32_t bone, uint32_t
     *y = row % h->height;
 }
 
-/* ---- a bone's matrix at a time, decoded and blended as runtimes/glsl/crowdbake_palette.glsl ---- */
-
-static float cbpal__half(uint16_t h) /* the exponent rebiased; zero and subnormals are m 2^-24 */
-{
-    uint32_t e = (h >> 10) & 0x1fu, m = h & 0x3ffu, bits = (uint32_t)(h & 0x8000u) << 16 | m << 13;
-    float f;
-    bits |= e == 31 ? 0x7f800000u : (e + 112) << 23;
-    memcpy(&f, &bits, 4);
-    return e ? f : (h & 0x8000u ? -1.0f : 1.0f) * (float)m / 16777216.0f;
-}
-static float cbpal__snorm(uint16_t u) { return fmaxf((float)((int32_t)u - (u >= 32768u ? 65536 : 0)) / 32767.0f, -1.0f); }
-
-/* Texel k of a bone in a row, as the GLSL's cb_texel decodes it. */
-static void cbpal__texel(const cbpal_file *f, uint32_t row, uint32_t bone, uint32_t k, float t[4])
-{
-    const cbpal_header *h = &f->header;
-    uint32_t x, y;
-    cbpal_texel_xy(h, row, bone, &x, &y);
-    const unsigned char *p = (const unsigned char *)f->texels + ((size_t)y * h->width + x + k) * h->texel_bytes;
-    uint16_t u[4];
-    memcpy(u, p, 8);
-    const float *lo = h->bounds_min, *hi = h->bounds_max, range = h->linear_range;
-    int box = (h->layout == CBPAL_LAYOUT_QPOS && k == 1) || (h->layout == CBPAL_LAYOUT_MAT4 && k == 3), i;
-    float scale = h->layout == CBPAL_LAYOUT_QPOS ? 1.0f : range; /* quaternions are plain snorm */
-    if (h->precision == CBPAL_PRECISION_FLOAT) memcpy(t, p, 16);
-    for (i = 0; i < 4 && h->precision == CBPAL_PRECISION_HALF; ++i) t[i] = cbpal__half(u[i]);
-    if (h->precision != CBPAL_PRECISION_U16) return;
-    for (i = 0; i < 3; ++i) t[i] = box ? lo[i] + (hi[i] - lo[i]) * ((float)u[i] / 65535.0f) : cbpal__snorm(u[i]) * scale;
-    if (h->layout == CBPAL_LAYOUT_QPOS) t[3] = k == 0 ? cbpal__snorm(u[3]) : range * (float)u[3] / 65535.0f;
-    else if (h->layout == CBPAL_LAYOUT_AFFINE) t[3] = lo[k] + (hi[k] - lo[k]) * ((float)u[3] / 65535.0f);
-    else t[3] = k == 3 ? 1.0f : 0.0f;
-}
-
-/* Texel k of a bone, mixed between two rows with weight fr on the second (qpos: the rotation the
- * shorter way). */
-static void cbpal__mix(const cbpal_file *f, uint32_t r0, uint32_t r1, float fr, uint32_t bone, uint32_t k, float t[4])
-{
-    float a[4], b[4];
-    cbpal__texel(f, r0, bone, k, a);
-    cbpal__texel(f, r1, bone, k, b);
-    int flip = f->header.layout == CBPAL_LAYOUT_QPOS && k == 0 && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0;
-    for (int i = 0; i < 4; ++i) t[i] = a[i] + ((flip ? -b[i] : b[i]) - a[i]) * fr;
-}
-
-/* The rows at `time` and the weight of the second, as the GLSL's cb_frame picks them. */
-static int cbpal__frame(const cbpal_clip *c, double time, uint32_t *r0, uint32_t *r1, float *fr)
-{
-    double frames = c->frames, fpos = time * c->fps, f0, f1;
-    if (!isfinite(fpos)) return -1;
-    if (c->flags & CBPAL_CLIP_LOOPS) fpos -= frames * floor(fpos / frames);
-    else fpos = fpos < 0 ? 0 : fpos > frames - 1 ? frames - 1 : fpos;
-    if (!(fpos >= 0 && fpos < frames)) fpos = 0; /* rounding at the wrap */
-    f0 = floor(fpos), f1 = f0 + 1 < frames ? f0 + 1 : (c->flags & CBPAL_CLIP_LOOPS) ? 0 : f0; /* a loop's last row blends into its first */
-    *fr = (float)(fpos - f0), *r0 = c->first_row + (uint32_t)f0, *r1 = c->first_row + (uint32_t)f1;
-    return 0;
-}
-
-int cbpal_bone_matrix(const cbpal_file *f, uint32_t clip, double time, uint32_t bone, float m[16])
-{
-    cbpal_clip c;
-    cbpal_bone b;
-    uint32_t r0, r1, k;
-    float fr, t[4][4] = {{0}}, p[3];
-    if (cbpal_get_clip(f, clip, &c) || cbpal_get_bone(f, bone, &b) || cbpal__frame(&c, time, &r0, &r1, &fr)) return -1;
-    for (k = 0; k < f->header.texels_per_bone; ++k) cbpal__mix(f, r0, r1, fr, bone, k, t[k]);
-    memset(m, 0, 16 * sizeof *m), m[15] = 1.0f;
-    if (f->header.layout == CBPAL_LAYOUT_QPOS) {
-        float n = sqrtf(t[0][0] * t[0][0] + t[0][1] * t[0][1] + t[0][2] * t[0][2] + t[0][3] * t[0][3]);
-        float x = t[0][0] / n, y = t[0][1] / n, z = t[0][2] / n, w = t[0][3] / n;
-        float r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y),  /* column 0 */
-                      2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x),  /* column 1 */
-                      2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)}; /* column 2 */
-        for (k = 0; k < 9; ++k) m[k / 3 * 4 + k % 3] = t[1][3] * r[k]; /* scale */
-        memcpy(p, t[1], sizeof p);
-    } else {
-        for (k = 0; k < 12; ++k) /* affine: texel k is row k; mat4: texel k is column k */
-            m[k / 3 * 4 + k % 3] = f->header.layout == CBPAL_LAYOUT_AFFINE ? t[k % 3][k / 3] : t[k / 3][k % 3];
-        for (k = 0; k < 3; ++k) p[k] = f->header.layout == CBPAL_LAYOUT_AFFINE ? t[k][3] : t[3][k];
-    }
-    /* qpos and relative positions: A (v - b) + p, with p stored less the bone's position offset. */
-    int about_bind = f->header.layout == CBPAL_LAYOUT_QPOS || (f->header.flags & CBPAL_FLAG_POSITIONS_RELATIVE);
-    for (k = 0; k < 3; ++k) {
-        m[12 + k] = p[k] + b.position_offset[k];
-        if (about_bind) m[12 + k] -= m[k] * b.bind_position[0] + m[4 + k] * b.bind_position[1] + m[8 + k] * b.bind_position[2];
-    }
-    return 0;
-}
+/* A bone's matrix at a time, as the shipped shaders compute it: its own file. */
+#include "crowdbake_pal_runtime.h"
 
 #endif /* CROWDBAKE_PAL_IMPLEMENTED */
 #endif /* CROWDBAKE_PAL_IMPLEMENTATION */

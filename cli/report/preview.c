@@ -416,7 +416,7 @@ cb_status cb_preview_write(const cb_palette *p, const void *texels, const cb_mod
         double *centers = malloc((size_t)cols * 3 * sizeof(double));
         for (uint32_t c = 0; centers && c < p->clip_count; ++c) {
             const cb_palette_clip *clip = &p->clips[c];
-            cb_instance in = {clip->first_row, clip->loops ? clip->frames : -(double)clip->frames, clip->fps, 0};
+            cb_instance in = cb_instance_of(clip);
             float inst[4] = {(float)in.first_row, (float)in.frame_count, (float)in.rate, 0};
             gl->Uniform4fv(gl->GetUniformLocation(prog, "u_instance"), 1, inst);
             double radius = 0;

@@ -101,7 +101,7 @@ static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_
         c->frames = info.frames;
         c->fps = info.effective_fps;
         c->duration = info.duration;
-        c->loops = info.loops;
+        c->loops = info.loops, c->step = plan->step;
         cb_measure_ground_speed(s, &info, &c->speed);
         row += info.frames;
     }

@@ -45,6 +45,7 @@ typedef struct cb_roster_clip {
     uint32_t first_row, frames;
     double fps, duration;
     bool loops;
+    bool step;             /* its rows held, not blended (cb_clip_plan.step): the instance's first row is -first - 1 */
     cb_ground_speed speed; /* speed.speed is the clip's ground speed */
 } cb_roster_clip;
 

@@ -114,7 +114,7 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
     for (uint32_t i = 0; i < t->clip_count; ++i) {
         const cb_roster_clip *c = &t->clips[i];
         put_str(&w, c->name);
-        put_u32(&w, c->first_row), put_u32(&w, c->frames), put_u32(&w, c->loops);
+        put_u32(&w, c->first_row), put_u32(&w, c->frames), put_u32(&w, (c->loops ? 1u : 0u) | (c->step ? 2u : 0u));
         put_f64(&w, c->fps), put_f64(&w, c->duration);
         put_f64(&w, c->speed.speed), put_f64(&w, c->speed.root), put_f64(&w, c->speed.feet);
         put_str(&w, c->speed.method);
@@ -228,7 +228,9 @@ static void read_clips(reader *r, cb_roster_type *t)
         cb_roster_clip *c = &t->clips[i];
         char method[64];
         get_str(r, c->name, sizeof c->name);
-        c->first_row = get_u32(r), c->frames = get_u32(r), c->loops = get_u32(r) != 0;
+        c->first_row = get_u32(r), c->frames = get_u32(r);
+        uint32_t flags = get_u32(r); /* bit 0 loops, bit 1 held rows */
+        c->loops = (flags & 1u) != 0, c->step = (flags & 2u) != 0;
         c->fps = get_f64(r), c->duration = get_f64(r);
         c->speed.speed = get_f64(r), c->speed.root = get_f64(r), c->speed.feet = get_f64(r);
         if (get_str(r, method, sizeof method) && !(c->speed.method = known_method(method))) r->failed = true;

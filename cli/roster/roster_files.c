@@ -58,7 +58,8 @@ static void write_state(cb_json *j, const cb_roster_type *t, uint32_t s)
     cb_json_string(j, "sync_reason", sync->reason);
     /* The four numbers of the per-instance data, exactly as the shader wants them. */
     cb_json_object(j, "instance");
-    cb_json_int(j, "first_row", c->first_row);
+    /* < 0: the clip's rows are held, not blended (a STEP-keyed clip), its first row -first_row - 1 */
+    cb_json_int(j, "first_row", c->step ? -(long long)c->first_row - 1 : (long long)c->first_row);
     cb_json_int(j, "frame_count", c->loops ? (long long)c->frames : -(long long)c->frames); /* < 0: one-shot, clamps */
     cb_json_number(j, "rate", c->fps);
     cb_json_number(j, "rate_per_speed", sync->speed ? c->fps / state_speed(t, c) : 0);
@@ -220,6 +221,7 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
         cb_json_number(j, "fps", cl->fps);
         cb_json_number(j, "duration", cl->duration);
         cb_json_bool(j, "loops", cl->loops);
+        if (cl->step) cb_json_bool(j, "step_rows", true); /* held, not blended: .pal clip flag bit 2 */
         cb_json_number(j, "ground_speed", cl->speed.speed);
         cb_json_number(j, "root_speed", cl->speed.root);
         cb_json_number(j, "feet_speed", cl->speed.feet);

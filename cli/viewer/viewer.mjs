@@ -9,7 +9,7 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { decompress } from 'fzstd';
-import { readPal, readRoster, instanceData } from '../web/crowdbake_pal.mjs';
+import { readPal, readRoster, instanceData, instanceFirstRow } from '../web/crowdbake_pal.mjs';
 import { Crowd, GLSL_URL, loadPaletteGLSL } from '../web/crowdbake_crowd.mjs';
 import { VatCrowd, readVat } from '../web/crowdbake_vat.mjs';
 import { meshFromGLTF } from '../web/crowdbake_three.mjs';
@@ -51,7 +51,7 @@ async function loadType(view, entry, glsl) {
         }
     }
     const states = rosterType ? rosterType.states : Object.fromEntries(pal.clips.map((c) => [c.name, {
-        clip: c.name, first_row: c.first_row, frame_count: c.loops ? c.frames : -c.frames, rate: c.fps, rate_per_speed: 0,
+        clip: c.name, first_row: instanceFirstRow(c), frame_count: c.loops ? c.frames : -c.frames, rate: c.fps, rate_per_speed: 0,
         phase: c.loops ? 'golden_ratio' : 'zero' }]));
     // Ground speed of a state: its clip's (roster), so locomotion plays with planted feet.
     const speedOf = (s) => (s.rate_per_speed > 0 ? (rosterType.clips.find((c) => c.name === s.clip)?.ground_speed ?? 0) : 0);

@@ -100,6 +100,8 @@ typedef struct cb_clip_budget {
     bool fitted;         /* its rows fitted, else sampled */
     double travel;       /* a loop baked with its root motion kept: how far it travels, model units a loop (its
                           * wrap jumps back that far, at any rate); else 0 */
+    bool goal;           /* its budget is crowdbake's default, not one the user stated: a goal the bake reaches for,
+                          * not a promise. Over it, the clip is written at the best the bake can do, with a warning */
 } cb_clip_budget;
 
 /* A catalog type's identity, which its files record instead of the single bake's options: the
@@ -167,7 +169,8 @@ typedef struct cb_bake_result {
     cb_warnings notes;         /* the layout's fallback, loops that travel, quaternion flips, clips over budget */
     cb_clip_budget *budgets;   /* per planned clip, as the first format's palette measured it (also when the bake
                                 * failed for a clip over budget) */
-    uint32_t budget_count, over_budget;
+    uint32_t budget_count, over_budget; /* over_budget: clips over a budget the user stated (they fail the bake) */
+    uint32_t over_goal;        /* clips over the default budget, written with a warning each (cb_clip_budget.goal) */
 } cb_bake_result;
 
 /* A job with nothing set but its size, the default settings (cb_default_bake_settings) and
@@ -182,7 +185,8 @@ CROWDBAKE_API cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err);
  * file and a rename); a format that cannot hold the precision or layout asked for fails with
  * CB_ERR_SETTINGS before anything is baked. A clip over its budget fails the bake with CB_ERR_VERIFY before
  * anything is written (result->budgets says which; cb_bake_budget_text words each), unless
- * settings.allow_over_budget, which writes it with a warning in result->notes. The result
+ * settings.allow_over_budget, which writes it with a warning in result->notes; a clip over the
+ * default budget (a goal, not stated by the user) is written, counted in over_goal. The result
  * references the model and the plan: free it first. */
 CROWDBAKE_API cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err);
 CROWDBAKE_API void cb_bake_result_free(cb_bake_result *result);

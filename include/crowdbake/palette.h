@@ -75,6 +75,8 @@ typedef struct cb_palette_clip {
     double ground_speed;     /* the root's horizontal travel over the clip per second (cb_clip_info.ground_speed) */
     bool fitted;             /* its rows fitted to the runtime's linear blend, not sampled (clip flag bit 1) */
     double visible_error;    /* the clip's visible error (cb_palette.visible_error's, for this clip alone), model units */
+    bool step;               /* its rows are held, not blended: the runtime shows the row at or before the time (clip
+                              * flag bit 2, .pal version 4) */
 } cb_palette_clip;
 
 typedef struct cb_palette {
@@ -115,7 +117,15 @@ typedef struct cb_clip_plan {
     int loop;           /* -1 decide from the poses, 0 one-shot, 1 loop */
     double fps;         /* 0: the bake's fps */
     bool fit;           /* its rows fitted to the runtime's linear blend (as cb_bake_options.fit does for every clip) */
+    bool step;          /* its rows are held, not blended (.pal clip flag bit 2): a STEP-keyed clip at the rate of its
+                         * key grid (cb_clip_step_grid), exact */
 } cb_clip_plan;
+
+/* Whether animation `animation` is keyed with STEP on one grid: every channel with two keys or
+ * more is STEP, and every key time lies on start + k / fps (to 1e-3 of a step) for the lowest
+ * such rate up to CB_FPS_LIMIT, into *fps. Rows at that rate, held, are its poses exactly: no
+ * blend across a step (cb_clip_plan.step). */
+CROWDBAKE_API bool cb_clip_step_grid(const cb_model *model, int32_t animation, double *fps);
 
 /* The rate a planned clip bakes at: its own, else the bake's. */
 static inline double cb_clip_plan_fps(const cb_clip_plan *clip, double fps) { return clip->fps > 0 ? clip->fps : fps; }

@@ -14,10 +14,14 @@ extern "C" {
 #endif
 
 /* The four per-instance numbers. A negative frame_count marks a one-shot of -frame_count rows:
- * it clamps at its ends instead of wrapping. */
+ * it clamps at its ends instead of wrapping. A negative first_row marks a clip whose rows are
+ * held, not blended (cb_palette_clip.step), its first row -first_row - 1 (cb_instance_of). */
 typedef struct cb_instance {
     double first_row, frame_count, rate, phase;
 } cb_instance;
+
+/* A clip's numbers, played from its start at its own rate. */
+CROWDBAKE_API cb_instance cb_instance_of(const cb_palette_clip *clip);
 
 /* fpos = time * rate + phase * frames, wrapped (loops) or clamped (one-shots) to the clip; the
  * two rows blended and the weight of the second. */

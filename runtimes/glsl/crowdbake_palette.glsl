@@ -15,9 +15,10 @@
 // the stored position (qpos texel 1; mat4 and affine: the translation, which then holds the
 // joint's position p = M b, skinned as A (v - b) + p).
 //
-// Per-instance data, the roster manifest's four numbers: inst.x first row, inst.y frame count
-// (negative for a one-shot: it clamps instead of wrapping), inst.z rate in rows per second,
-// inst.w phase in 0..1. Time in seconds.
+// Per-instance data, the roster manifest's four numbers: inst.x first row (negative for a clip
+// whose rows are held, not blended - .pal clip flag bit 2, a STEP-keyed clip: its first row is
+// -inst.x - 1), inst.y frame count (negative for a one-shot: it clamps instead of wrapping),
+// inst.z rate in rows per second, inst.w phase in 0..1. Time in seconds.
 //
 //   vec3 p, n;
 //   cb_skin_position_normal(a_position, a_normal, a_joints, a_weights, inst, time, p, n);  // both, each texel read once
@@ -129,6 +130,8 @@ vec4 cb_texel(int row, int bone, int k)
 // The two rows to blend at `time`, and the weight of the second.
 void cb_frame(vec4 inst, float time, out int row0, out int row1, out float fr)
 {
+    bool held = inst.x < 0.0; // a stepped clip: its row alone, no blend across a step
+    float first = held ? -inst.x - 1.0 : inst.x;
     float frames = abs(inst.y);
     float fpos = time * inst.z + inst.w * frames;
     float f0, f1;
@@ -141,9 +144,10 @@ void cb_frame(vec4 inst, float time, out int row0, out int row1, out float fr)
         f0 = floor(fpos);
         f1 = min(f0 + 1.0, frames - 1.0);
     }
+    if (held) { f1 = f0; fpos = f0; } // cb:held - no blend across a step
     fr = fpos - f0;
-    row0 = int(inst.x + f0);
-    row1 = int(inst.x + f1);
+    row0 = int(first + f0);
+    row1 = int(first + f1);
 }
 
 // The rotation matrix of a unit quaternion (x, y, z, w).

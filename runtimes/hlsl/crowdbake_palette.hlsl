@@ -35,7 +35,8 @@
 // bind_positions (RGBA32F, one texel per bone, two rows: the bone table's bind positions, then the
 // bones' position offsets) is read by qpos and CB_POSITIONS_RELATIVE only; bind any texture otherwise.
 //
-// Per-instance data, the roster manifest's four numbers: inst.x first row, inst.y frame count
+// Per-instance data, the roster manifest's four numbers: inst.x first row (negative for a clip whose
+// rows are held, not blended - .pal version 4's clip flag bit 2: its first row is -inst.x - 1), inst.y frame count
 // (negative: a one-shot, clamped instead of wrapped), inst.z rate in rows per second, inst.w phase
 // in 0..1. Time in seconds. Motion vectors: one more call at time - dt (see the GLSL's comment).
 //
@@ -149,6 +150,8 @@ float4 cb_texel(CB_PALETTE_PARAMS, int row, int bone, int k)
 // The two rows to blend at `time`, and the weight of the second.
 void cb_frame(float4 inst, float time, out int row0, out int row1, out float fr)
 {
+    bool held = inst.x < 0.0; // a stepped clip: its row alone, no blend across a step
+    float first = held ? -inst.x - 1.0 : inst.x;
     float frames = abs(inst.y);
     float fpos = time * inst.z + inst.w * frames;
     float f0, f1;
@@ -161,9 +164,10 @@ void cb_frame(float4 inst, float time, out int row0, out int row1, out float fr)
         f0 = floor(fpos);
         f1 = min(f0 + 1.0, frames - 1.0);
     }
+    if (held) { f1 = f0; fpos = f0; } // cb:held - no blend across a step
     fr = fpos - f0;
-    row0 = int(inst.x + f0);
-    row1 = int(inst.x + f1);
+    row0 = int(first + f0);
+    row1 = int(first + f1);
 }
 
 // The rotation matrix of a unit quaternion (x, y, z, w), by rows (the GLSL's mat3 transposed).

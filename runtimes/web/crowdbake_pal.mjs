@@ -17,7 +17,7 @@
 // with the npm package fzstd: this module stays dependency-free, and runtimes that never load
 // compressed palettes ship no decoder. Without one, such a file is refused with the fix.
 
-export const PAL_VERSION = 3; // newest known; files without relative positions are written as version 1
+export const PAL_VERSION = 4; // newest known; writers write the oldest version that holds what a file says
 export const HEADER_SIZE = 256;
 export const CLIP_SIZE = 80;
 export const BONE_SIZE = 32;
@@ -34,6 +34,9 @@ export const FLAG_POSITIONS_RELATIVE = 4;
 export const FLAG_FITTED_ROWS = 8; // every clip's rows fitted to the linear blend between them, not sampled
 export const CLIP_LOOPS = 1;
 export const CLIP_FITTED = 2; // this clip's rows fitted to the linear blend (before it: header flag bit 3, every clip)
+// Version 4: this clip's rows are held, not blended (a STEP-keyed clip baked at its key times): the row at or before
+// the time alone. Its instance numbers say so with a negative first row, -first_row - 1 (instanceFirstRow).
+export const CLIP_STEP = 4;
 
 const MAGIC = [0x43, 0x42, 0x50, 0x41, 0x4c, 0x0d, 0x0a, 0x1a]; // "CBPAL\r\n\x1a"
 const TEXELS_PER_BONE = [4, 3, 2]; // by layout
@@ -251,6 +254,7 @@ function readClips(bytes, view, h, fail) {
             name, first_row, frames, fps: f32(16), duration: f32(20), start: f32(24), flags,
             loops: (flags & CLIP_LOOPS) !== 0,
             fitted: (flags & CLIP_FITTED) !== 0 || (h.flags & FLAG_FITTED_ROWS) !== 0,
+            step: (flags & CLIP_STEP) !== 0,
             root_velocity: [f32(32), f32(36), f32(40)],
             bounds_min: [f32(44), f32(48), f32(52)], bounds_max: [f32(56), f32(60), f32(64)],
         });
@@ -413,6 +417,7 @@ export function readRoster(json, options = {}) {
                 name: need(c, w, 'name', isString, 'a string'),
                 first_row: need(c, w, 'first_row', isIndex, 'an integer >= 0'),
                 frame_count: need(c, w, 'frame_count', isCount, 'an integer >= 1'),
+                step_rows: optional(c, w, 'step_rows', (v) => typeof v === 'boolean', 'true or false') ?? false,
                 fps: need(c, w, 'fps', (v) => typeof v === 'number' && v > 0, 'a number > 0'),
                 duration: need(c, w, 'duration', isNonNegative, 'a number >= 0'),
                 loops: need(c, w, 'loops', (v) => typeof v === 'boolean', 'true or false'),
@@ -437,15 +442,16 @@ export function readRoster(json, options = {}) {
             const wi = `${w}.instance`;
             const state = {
                 clip,
-                first_row: need(inst, wi, 'first_row', isIndex, 'an integer >= 0'),
+                // < 0: held rows (a STEP-keyed clip), the first -first_row - 1
+                first_row: need(inst, wi, 'first_row', Number.isInteger, 'an integer'),
                 frame_count: need(inst, wi, 'frame_count', (v) => Number.isInteger(v) && v !== 0, 'a non-zero integer'),
                 rate: need(inst, wi, 'rate', isNonNegative, 'a number >= 0'),
                 rate_per_speed: need(inst, wi, 'rate_per_speed', isNonNegative, 'a number >= 0'),
                 phase: need(inst, wi, 'phase', (v) => v === 'golden_ratio' || v === 'zero', '"golden_ratio" or "zero"'),
             };
-            if (state.first_row + Math.abs(state.frame_count) > type.rows)
-                fail(wi, `rows ${state.first_row}..${state.first_row + Math.abs(state.frame_count)} outside the type's ` +
-                         `${type.rows} rows`);
+            const first = state.first_row < 0 ? -state.first_row - 1 : state.first_row;
+            if (first + Math.abs(state.frame_count) > type.rows)
+                fail(wi, `rows ${first}..${first + Math.abs(state.frame_count)} outside the type's ${type.rows} rows`);
             put(type.states, stateName, state);
         }
         need(t, at, 'lods', Array.isArray, 'an array').forEach((l, i) => {
@@ -510,8 +516,13 @@ function decodeTexel(pal, row, bone, k) {
     return out;
 }
 
-// The two rows to blend for the four per-instance numbers at `time`, and the weight of the second (cb_frame).
+// A clip's first row as the per-instance numbers hold it: negative for held rows (CLIP_STEP), -first_row - 1.
+export const instanceFirstRow = (clip) => (clip.step ? -clip.first_row - 1 : clip.first_row);
+
+// The two rows to blend for the four per-instance numbers at `time`, and the weight of the second (cb_frame);
+// held rows (a negative first row) give their row alone.
 export function instanceFrame(inst, time) {
+    const held = inst[0] < 0, first = held ? -inst[0] - 1 : inst[0];
     const frames = Math.abs(inst[1]);
     let fpos = time * inst[2] + inst[3] * frames, f1;
     if (inst[1] > 0) fpos -= frames * Math.floor(fpos / frames);
@@ -520,7 +531,8 @@ export function instanceFrame(inst, time) {
     const f0 = Math.floor(fpos);
     if (inst[1] > 0) f1 = f0 + 1 < frames ? f0 + 1 : 0; // a loop's last row blends into its first
     else f1 = Math.min(f0 + 1, frames - 1);
-    return { row0: inst[0] + f0, row1: inst[0] + f1, fr: fpos - f0 };
+    if (held) return { row0: first + f0, row1: first + f0, fr: 0 }; // no blend across a step
+    return { row0: first + f0, row1: first + f1, fr: fpos - f0 };
 }
 
 // The bone's skinning matrix (column-major, 16 numbers: the glTF joint matrix, bind space to the
@@ -568,5 +580,5 @@ export function instanceBoneMatrix(pal, inst, time, bone, out = new Array(16)) {
 export function boneMatrix(pal, clip, time, bone, out) {
     const c = pal.clips[clip];
     if (!Number.isInteger(clip) || !c) throw new Error(`clip ${clip} is not one of the palette's ${pal.clips.length} clips`);
-    return instanceBoneMatrix(pal, [c.first_row, c.loops ? c.frames : -c.frames, c.fps, 0], time, bone, out);
+    return instanceBoneMatrix(pal, [instanceFirstRow(c), c.loops ? c.frames : -c.frames, c.fps, 0], time, bone, out);
 }

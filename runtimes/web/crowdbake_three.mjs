@@ -13,7 +13,7 @@
 // its screen-space velocity for TAA or motion blur. `three` is an import-map name (pages) or the
 // npm package (runtimes/web/package.json pins it).
 import * as THREE from 'three';
-import { instanceData, instanceBoneMatrix } from './crowdbake_pal.mjs';
+import { instanceData, instanceBoneMatrix, instanceFirstRow } from './crowdbake_pal.mjs';
 import { FootstepClock } from './crowdbake_contacts.mjs';
 import { paletteDefines } from './crowdbake_crowd.mjs';
 
@@ -94,7 +94,7 @@ function statesOf(pal, type) {
     if (type) return type.states;
     const states = Object.create(null); // clip names are data: '__proto__' is a clip like any other
     for (const c of pal.clips)
-        states[c.name] = { clip: c.name, first_row: c.first_row, frame_count: c.loops ? c.frames : -c.frames, rate: c.fps,
+        states[c.name] = { clip: c.name, first_row: instanceFirstRow(c), frame_count: c.loops ? c.frames : -c.frames, rate: c.fps,
                            rate_per_speed: 0, phase: c.loops ? 'golden_ratio' : 'zero' };
     return states;
 }

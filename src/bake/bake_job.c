@@ -178,12 +178,24 @@ static void resolve_clips(cb_bake_job *job)
                                  clip_from, measurable, &job->clip_settings[i]);
 }
 
+/* A STEP-keyed clip whose rate is chosen (fps auto): rows at its key times, held, not blended
+ * (cb_clip_step_grid) - exact, so no search. A fixed fps bakes it blended, as before. True when
+ * clip i is one; its plan then says so. */
+static bool plan_step_rows(cb_bake_job *job, uint32_t i)
+{
+    double fps;
+    if (!job->clip_settings[i].fps_auto || !cb_clip_step_grid(job->model, job->plan[i].animation, &fps)) return false;
+    job->plan[i].fps = fps, job->plan[i].step = true, job->plan[i].fit = false;
+    job->rates[i] = (cb_rate_choice){.met = true};
+    return true;
+}
+
 /* Clip i's goal when its rate is chosen by error: the fewest rows within its budget, fitted or
  * sampled (every clip fitted under fit_rows, cb_bake_options.fit). */
 static bool clip_goal(const cb_bake_job *job, uint32_t i, cb_rate_goal *goal)
 {
     const cb_clip_settings *c = &job->clip_settings[i];
-    if (!c->fps_auto) return false;
+    if (!c->fps_auto || job->plan[i].step) return false;
     *goal = (cb_rate_goal){c->max_error_mm, c->max_fps, CB_ROWS_BEST};
     return true;
 }
@@ -251,10 +263,11 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
     bool any = false;
-    for (uint32_t i = 0; i < n; ++i) job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false};
+    for (uint32_t i = 0; i < n; ++i) job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false};
     job->plan_count = n;
     decide_root_motion(job);
     resolve_clips(job);
+    for (uint32_t i = 0; i < n; ++i) plan_step_rows(job, i);
     for (uint32_t i = 0; i < n; ++i) any |= clip_goal(job, i, &goals[i]);
     if (any) {
         cb_sampler *s = cb_sampler_create(m, job->skin, err);
@@ -336,7 +349,10 @@ static cb_status check_outputs(const cb_bake_job *job, cb_error *err)
 
 /* Every clip against its budget in the palette baked: what a player sees of each. An
  * error-bounded clip met it baked alone; in the palette its u16 box is the palette's, wider,
- * so its encoding errs a little more: the palette is what is promised. */
+ * so its encoding errs a little more: the palette is what is promised. Only a budget the user
+ * stated (command line, catalog) is a promise: crowdbake's default is a goal, so a bare bake of
+ * a punch or a death that no rate up to max_fps brings within 1 mm/m is written at the best the
+ * search found, with a warning per clip (issue 43, item 0), not refused. */
 static cb_status check_budgets(const cb_bake_job *job, const cb_palette *p, cb_bake_result *out, cb_error *err)
 {
     out->budgets = calloc(p->clip_count ? p->clip_count : 1, sizeof *out->budgets);
@@ -347,10 +363,12 @@ static cb_status check_budgets(const cb_bake_job *job, const cb_palette *p, cb_b
         b->max_error_mm = job->clip_settings[i].max_error_mm;
         b->error_mm = cb_mm_per_m(p->clips[i].visible_error, p->model_height);
         b->over = b->max_error_mm > 0 && b->error_mm > b->max_error_mm;
+        b->goal = b->max_error_mm > 0 && job->clip_settings[i].from.max_error == CB_FROM_DEFAULT;
         b->fps = p->clips[i].fps, b->rows = p->clips[i].frames, b->fitted = p->clips[i].fitted;
         if (job->settings.root_motion == CB_ROOT_MOTION_KEEP && loop_travel_visible(p, &p->clips[i]))
             b->travel = p->clips[i].ground_speed * p->clips[i].duration;
-        out->over_budget += b->over;
+        out->over_budget += b->over && !b->goal;
+        out->over_goal += b->over && b->goal;
     }
     if (!out->over_budget || job->settings.allow_over_budget) return CB_OK;
     return cb_fail_setting(err, CB_ERR_VERIFY, CB_SETTING_ALLOW_OVER_BUDGET, "%s: %u of %u clip%s over its error budget "
@@ -403,7 +421,7 @@ static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette 
         const cb_clip_settings *c = &job->clip_settings[i];
         double budget = c->max_error_mm, e = cb_mm_per_m(p->clips[i].visible_error, p->model_height);
         double tighter = budget - 1.5 * (e - job->rates[i].error_mm);
-        if (!c->fps_auto || !job->rates[i].met || !(e > budget) || !(tighter > 0)) continue;
+        if (!c->fps_auto || job->plan[i].step || !job->rates[i].met || !(e > budget) || !(tighter > 0)) continue;
         goals[i] = (cb_rate_goal){tighter, c->max_fps, CB_ROWS_BEST};
         any = true;
     }

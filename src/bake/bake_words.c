@@ -39,7 +39,10 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
     double fps = cb_bake_job_clip_fps(job, i);
     bool fitted = c->fit || cs->fit_rows;
     const char *rows = fitted ? "fitted rows" : "sampled rows";
-    if (!cs->fps_auto) {
+    if (c->step) {
+        snprintf(buf, size, "%g fps, step rows: keyed with STEP, rows at its key times, held not blended (exact; a fixed "
+                 "fps bakes it blended)", fps);
+    } else if (!cs->fps_auto) {
         snprintf(buf, size, "%g fps, %s: a fixed fps%s", fps, rows, fitted ? " (fit_rows)" : "");
     } else if (!r->met) {
         snprintf(buf, size, "%g fps, %s: over its budget even at max_fps (%.3g mm/m)", fps, rows, r->error_mm);
@@ -96,6 +99,20 @@ void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, u
     }
 }
 
+void cb_bake_goal_words(const cb_clip_budget *b, const char *(*setting_name)(cb_setting), bool allowed, char *buf,
+                        size_t size)
+{
+    const char *flag = setting_name ? setting_name(CB_SETTING_MAX_ERROR) : NULL;
+    const char *allow = setting_name ? setting_name(CB_SETTING_ALLOW_OVER_BUDGET) : NULL;
+    if (b->goal)
+        snprintf(buf, size, " (written at the best the bake reached: the default max_error is a goal; %s %g makes it a "
+                 "promise)", flag ? flag : "max_error =", b->max_error_mm);
+    else if (allowed)
+        snprintf(buf, size, " (written anyway: %s)", allow ? allow : "allow_over_budget");
+    else
+        buf[0] = 0;
+}
+
 void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result, const char *(*setting_name)(cb_setting),
                           cb_warnings *notes)
 {
@@ -110,10 +127,12 @@ void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result, 
         cb_warn(notes, "note", "%u clip%s error-bounded (max_error %g mm/m): %.3g-%.3g fps, %u with fitted rows, %u sampled",
                 chosen, chosen == 1 ? "" : "s", job->settings.max_error_mm, lo, hi, fitted, chosen - fitted);
     for (uint32_t i = 0; i < result->budget_count; ++i) {
-        if (!result->budgets[i].over) continue;
-        char text[640];
+        const cb_clip_budget *b = &result->budgets[i];
+        if (!b->over) continue;
+        char text[640], why[160];
         cb_bake_budget_text(job, result, i, setting_name, text, sizeof text);
-        cb_warn(notes, job->settings.allow_over_budget ? "warning" : "error", "%s%s", text,
-                job->settings.allow_over_budget ? " (written anyway: allow_over_budget)" : "");
+        bool written = b->goal || job->settings.allow_over_budget;
+        cb_bake_goal_words(b, setting_name, job->settings.allow_over_budget, why, sizeof why);
+        cb_warn(notes, written ? "warning" : "error", "%s%s", text, why);
     }
 }

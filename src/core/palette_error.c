@@ -244,18 +244,19 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     for (uint32_t i = 0; i < count; ++i) times[i] = parts * frames[i] + sub;
     framing.steps *= parts;
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
+    bool blend = sub && !clip->step; /* a stepped clip's runtime holds row f until row f + 1 */
     if (similar) {
         double *lanes = w->lanes;
         cb_clip_frame_lanes(w->sampler, &framing, times, count, st->opt->root_motion, lanes);
         const double *a[B], *b[B]; /* at most 2 B rows: all in the slots at once */
         for (uint32_t i = 0; i < count; ++i) {
             a[i] = row_values(p, s, clip->first_row + frames[i]);
-            b[i] = sub ? row_values(p, s, clip->first_row + (frames[i] + 1) % clip->frames) : NULL;
+            b[i] = blend ? row_values(p, s, clip->first_row + (frames[i] + 1) % clip->frames) : NULL;
         }
         for (uint32_t i = count; i < B; ++i) a[i] = a[count - 1], b[i] = b[count - 1]; /* lanes past count repeat the last */
         for (uint32_t i = 0; i < count; ++i) s->finite[i] = true;
         for (uint32_t j = 0; j < p->bone_count; ++j)
-            bone_differences(p, j, (const double(*)[B])(lanes + (size_t)j * 8 * B), a, sub ? b : NULL, count,
+            bone_differences(p, j, (const double(*)[B])(lanes + (size_t)j * 8 * B), a, blend ? b : NULL, count,
                              (double)sub / parts, s->diff, s->joints, s->finite);
     }
     for (uint32_t i = 0; i < count; ++i) {
@@ -264,11 +265,11 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         if (!similar) {
             const double *mats = palette_frame_matrices(st, w, c, &framing, times[i], NULL);
             uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
-            const double *a = row_values(p, s, row), *b = sub ? row_values(p, s, next) : NULL;
+            const double *a = row_values(p, s, row), *b = blend ? row_values(p, s, next) : NULL;
             for (uint32_t j = 0; j < p->bone_count; ++j) {
                 double decoded[16], *d = diff + (size_t)j * 16;
                 const double *exact = mats + (size_t)j * 16;
-                if (sub) palette_blend_values(p, j, a + (size_t)j * 16, b + (size_t)j * 16, (double)sub / parts, decoded);
+                if (blend) palette_blend_values(p, j, a + (size_t)j * 16, b + (size_t)j * 16, (double)sub / parts, decoded);
                 else cb_palette_values_to_matrix(p, j, a + (size_t)j * 16, decoded);
                 for (int k = 0; k < 16; ++k) d[k] = exact[k] - decoded[k];
             }

@@ -48,7 +48,7 @@ typedef struct analyses {
 
 static cb_clip_plan plan_entry(const cb_clip_plan *plan, uint32_t i)
 {
-    return plan ? plan[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false};
+    return plan ? plan[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false};
 }
 
 static void analyze_share(void *arg, uint32_t thread, uint32_t threads)
@@ -125,7 +125,8 @@ cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip
         c->start = infos[i].t0;
         c->loops = infos[i].loops;
         c->ground_speed = infos[i].ground_speed;
-        c->fitted = st->opt->fit || one.fit;
+        c->fitted = (st->opt->fit || one.fit) && !one.step;
+        c->step = one.step;
         for (int k = 0; k < 3; ++k)
             c->root_velocity[k] = (float)(cb_root_motion_in_place(st->opt->root_motion, &infos[i]) ? infos[i].root_velocity[k] : 0);
         rows += infos[i].frames;

@@ -6,9 +6,11 @@
 #include <string.h>
 
 #include "cb_math.h"
+
 void cb_runtime_frame(const cb_instance *in, double time, uint32_t *row0, uint32_t *row1, double *fr)
 {
-    bool loops = in->frame_count > 0;
+    bool loops = in->frame_count > 0, held = in->first_row < 0;
+    double first = held ? -in->first_row - 1 : in->first_row;
     double frames = fabs(in->frame_count), fpos = time * in->rate + in->phase * frames, f0, f1;
     if (loops) {
         fpos = fmod(fpos, frames);
@@ -20,9 +22,16 @@ void cb_runtime_frame(const cb_instance *in, double time, uint32_t *row0, uint32
         f0 = floor(fpos);
         f1 = f0 + 1 < frames ? f0 + 1 : frames - 1;
     }
+    if (held) f1 = f0, fpos = f0; /* a stepped clip: its row alone, no blend across a step */
     *fr = fpos - f0;
-    *row0 = (uint32_t)(in->first_row + f0);
-    *row1 = (uint32_t)(in->first_row + f1);
+    *row0 = (uint32_t)(first + f0);
+    *row1 = (uint32_t)(first + f1);
+}
+
+cb_instance cb_instance_of(const cb_palette_clip *clip)
+{
+    double first = clip->step ? -(double)clip->first_row - 1 : clip->first_row;
+    return (cb_instance){first, clip->loops ? clip->frames : -(double)clip->frames, clip->fps, 0};
 }
 
 void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_instance *in, double time, double *out)

@@ -34,7 +34,7 @@ static double compare_at(verify_ctx *c, double t, double *sum, uint64_t *worst_v
         c->exact_m[(size_t)j * 16 + 12] -= c->clip->root_velocity[0] * tau;
         c->exact_m[(size_t)j * 16 + 14] -= c->clip->root_velocity[2] * tau;
     }
-    cb_instance in = {c->clip->first_row, c->clip->loops ? c->clip->frames : -(double)c->clip->frames, c->clip->fps, 0};
+    cb_instance in = cb_instance_of(c->clip); /* held rows too: verify plays what the shaders play */
     cb_runtime_matrices(c->p, c->texels, &in, t, c->run_m);
     double *e = c->exact_v, *r = c->run_v;
     for (uint32_t pi = 0; pi < m->primitive_count; ++pi) {

@@ -30,6 +30,10 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t clip, char *buf, size_
  * catalog's keys. */
 void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, uint32_t clip,
                          const char *(*setting_name)(cb_setting), char *buf, size_t size);
+/* Why a clip over its budget was written, " (written ...)", or "" when it fails the bake: over
+ * the default budget (a goal, cb_clip_budget.goal), or allowed (allow_over_budget). */
+void cb_bake_goal_words(const cb_clip_budget *budget, const char *(*setting_name)(cb_setting), bool allowed, char *buf,
+                        size_t size);
 
 #ifdef __cplusplus
 }

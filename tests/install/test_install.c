@@ -102,6 +102,7 @@ static void test_destdir_layout(void **state)
     static const char *const files[] = {
         "bin/crowdbake", "lib/libcrowdbake.a", "lib/libcrowdbake.so", "lib/libcrowdbake.so.2",
         "include/crowdbake/crowdbake.h", "include/crowdbake/bake.h", "include/crowdbake_pal.h",
+        "include/crowdbake_pal_runtime.h",
         "lib/pkgconfig/crowdbake.pc", "lib/cmake/crowdbake/crowdbakeConfig.cmake",
         "lib/cmake/crowdbake/crowdbakeConfigVersion.cmake", "lib/cmake/crowdbake/CrowdbakeRoster.cmake",
         "share/man/man1/crowdbake.1", "share/bash-completion/completions/crowdbake", "share/zsh/site-functions/_crowdbake",

@@ -27,7 +27,7 @@ static double baked_error(cb_sampler *s, int32_t animation, double fps, bool fit
     cb_bake_options o = cb_default_bake_options();
     o.fps = fps;
     o.error_goal = goal;
-    cb_clip_plan plan = {animation, NULL, -1, fps, fit};
+    cb_clip_plan plan = {animation, NULL, -1, fps, fit, false};
     cb_palette p;
     cb_error err = {0};
     assert_int_equal(cb_palette_bake(s, &o, &plan, 1, &p, &err), CB_OK);
@@ -145,7 +145,7 @@ static void expect_reference_choices(const char *asset, double max_error_mm, dou
         cb_rate_choice choices[64];
         assert_true(n <= 64);
         for (uint32_t c = 0; c < n; ++c)
-            plan[c] = (cb_clip_plan){(int32_t)c, NULL, -1, 0, false}, goals[c] = (cb_rate_goal){max_error_mm, max_fps, CB_ROWS_BEST};
+            plan[c] = (cb_clip_plan){(int32_t)c, NULL, -1, 0, false, false}, goals[c] = (cb_rate_goal){max_error_mm, max_fps, CB_ROWS_BEST};
         cb_bake_options o = cb_default_bake_options();
         o.threads = threads;
         assert_int_equal(cb_choose_rates(s, &o, plan, n, goals, choices, &err), CB_OK);

@@ -2,7 +2,7 @@
  * command as a user runs it: a bake without --fps meets 1 mm/m on Cow, measured independently
  * by `crowdbake verify` (exact float64 skinning from the glTF at every row, mid-row and 64
  * random times), at no more than 1.5x the bytes of a fixed 30 fps bake; an unmeetable
- * --max-error fails with exit 6, writes nothing (no temporary left either) and names every
+ * --max-error (a budget stated, not the default's goal: issue 43) fails with exit 6, writes nothing (no temporary left either) and names every
  * clip; --allow-over-budget writes it with a warning per clip, in text and --json; a fixed
  * --fps with --max-error is checked; a palette mixes fitted and sampled clips (inspect says
  * which); and the catalog forms of each. */
@@ -106,11 +106,16 @@ static void test_unmeetable_budget_fails_and_writes_nothing(void **state)
     if (!strstr(out, "reaches ") || !strstr(out, "at 120 fps") || !strstr(out, "over max_error 0.01") ||
         !strstr(out, "--max-error 0.") || !strstr(out, "nothing was written"))
         fail_msg("%s", out);
-    /* Reachable by raising the cap: the line says which rate meets it. */
+    /* Reachable by raising the cap: the line says which rate meets it. The default budget is a
+     * goal (written, a warning per clip: issue 43); stated, a promise. */
     rc = run(out, sizeof out, "%s bake %s -o %s/capped.pal --max-fps 24 2>&1", crowdbake_exe(), cow, OUT_DIR);
+    if (rc != 0 || !strstr(out, "warning: clip") || !strstr(out, "the default max_error is a goal")) fail_msg("%s", out);
+    snprintf(path, sizeof path, "%s/capped.pal", OUT_DIR);
+    assert_true(file_bytes(path) > 0);
+    rc = run(out, sizeof out, "%s bake %s -o %s/capped1.pal --max-fps 24 --max-error 1 2>&1", crowdbake_exe(), cow, OUT_DIR);
     assert_int_equal(rc, EXIT_VERIFY);
     if (!strstr(out, "it meets it at ") || !strstr(out, "(--max-fps ")) fail_msg("%s", out);
-    snprintf(path, sizeof path, "%s/capped.pal", OUT_DIR);
+    snprintf(path, sizeof path, "%s/capped1.pal", OUT_DIR);
     assert_int_equal(file_bytes(path), -1);
     /* A fixed rate with a budget is checked, not raised. */
     rc = run(out, sizeof out, "%s bake %s -o %s/fixed.pal --fps 30 --max-error 1 2>&1", crowdbake_exe(), cow, OUT_DIR);
@@ -121,7 +126,8 @@ static void test_unmeetable_budget_fails_and_writes_nothing(void **state)
      * The sample quadruped's walk is generated travelling 1.2 units a 1 s loop. */
     char quadruped[1024];
     sample_path(quadruped, sizeof quadruped, "quadruped");
-    rc = run(out, sizeof out, "%s bake %s -o %s/travel.pal --root-motion keep 2>&1", crowdbake_exe(), quadruped, OUT_DIR);
+    rc = run(out, sizeof out, "%s bake %s -o %s/travel.pal --max-error 1 --root-motion keep 2>&1", crowdbake_exe(),
+             quadruped, OUT_DIR);
     assert_int_equal(rc, EXIT_VERIFY);
     if (!strstr(out, "clip 'walk' reaches ") || !strstr(out, "its root travels 1.2 units a loop") ||
         !strstr(out, "(--root-motion in-place)"))

@@ -358,7 +358,7 @@ static void test_auto_rates_do_not_depend_on_threads(void **state)
     for (int run = 0; run < 2; ++run) {
         cb_bake_options o = cb_default_bake_options();
         o.threads = run ? 3 : 1;
-        for (uint32_t i = 0; i < n; ++i) plan[run][i] = (cb_clip_plan){(int32_t)i, NULL, -1, 0, false}, goals[i] = (cb_rate_goal){1, 60, CB_ROWS_SAMPLED};
+        for (uint32_t i = 0; i < n; ++i) plan[run][i] = (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false}, goals[i] = (cb_rate_goal){1, 60, CB_ROWS_SAMPLED};
         assert_int_equal(cb_choose_rates(s, &o, plan[run], n, goals, out[run], &err), CB_OK);
     }
     bool varied = false;

@@ -32,7 +32,7 @@
 
 #define CONF_TIMES 2
 #define CONF_PER_CLIP 7 /* instances per clip and time */
-#define CONF_PALETTES 11
+#define CONF_PALETTES 12
 #define CONF_MAX_CASES 24
 
 static const double conf_times[CONF_TIMES] = {0.77, 2.31};
@@ -70,7 +70,8 @@ static inline void conf_instance(const cb_palette_clip *c, double time, int k, d
     double targets[] = {0.3, 2.5, frames * 0.37, frames - 0.4 /* the seam */};
     double phase = k < 4 ? (targets[k] - time * rate) / frames : fmod((k - 3) * 0.6180339887, 1.0);
     if (c->loops) phase -= floor(phase);
-    float v[16] = {0, 0, 0, 0, (float)(c->first_row + row_offset), (float)(c->loops ? frames : -frames), (float)rate,
+    double first = c->step ? -(double)c->first_row - 1 : c->first_row; /* held rows: -first - 1 (cb_instance_of) */
+    float v[16] = {0, 0, 0, 0, (float)(first + row_offset), (float)(c->loops ? frames : -frames), (float)rate,
                    (float)phase, 0, 0, 0, 0, 0, 0, 1, 0};
     if (k == CONF_PER_CLIP - 1) { /* from: the first row, still; fade 0.5 at `time` */
         v[8] = (float)(c->first_row + row_offset), v[9] = 1, v[10] = 0, v[11] = 0;
@@ -188,7 +189,7 @@ static inline void conf_write_case(FILE *f, const conformance *c, const conf_cas
 
 /* The cases: every layout x precision, wrapped rows, spinning bones, the bone pass, and the broken
  * variants every runtime's test must catch. */
-static inline void conf_define_cases(conformance *c, int all[9], int spin, int wrapped)
+static inline void conf_define_cases(conformance *c, int all[9], int spin, int wrapped, int held)
 {
     for (int i = 0; i < 9; ++i) {
         char name[40];
@@ -197,6 +198,7 @@ static inline void conf_define_cases(conformance *c, int all[9], int spin, int w
     }
     conf_add(c, "spin", spin);
     conf_add(c, "wrapped", wrapped);
+    conf_add(c, "held", held);
     conf_add(c, "bones-qpos-u16", all[8])->bone_pass = "true";
     conf_add(c, "bones-mat4-half", all[1])->bone_pass = "{\"rows\": 16}";
     conf_case *k = conf_add(c, "broken-transposed", all[0]);
@@ -205,6 +207,8 @@ static inline void conf_define_cases(conformance *c, int all[9], int spin, int w
     k->broken = true, k->row_offset = 1;
     k = conf_add(c, "broken-no-wrap", all[7]);
     k->broken = true, k->glsl_marker = "cb:wrap", k->glsl_line = "        f1 = f0 + 1.0;";
+    k = conf_add(c, "broken-no-held", held); /* a STEP-keyed clip's rows blended across its steps */
+    k->broken = true, k->glsl_marker = "cb:held", k->glsl_line = "";
     k = conf_add(c, "broken-no-hemisphere-flip", spin);
     k->broken = true, k->glsl_marker = "cb:hemisphere", k->glsl_line = "";
     k = conf_add(c, "broken-bones-transposed", all[8]);
@@ -234,7 +238,12 @@ static inline void conformance_make(conformance *c, const char *dir)
     /* Rows wrapped into two column blocks (a 200-texel limit): addressed as the header says. */
     int wrapped = conf_bake(c, quadruped, "wrapped.pal", "quadruped", "--layout qpos --precision half --max-texture-size 200");
     assert_int_equal(c->palettes[wrapped].view.blocks, 2);
-    conf_define_cases(c, all, spin, wrapped);
+    /* The STEP SimpleSkin: rows at its key times, held (.pal version 4's clip flag bit 2). */
+    char step[PATH_MAX];
+    shared_path(step, sizeof step, "assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf");
+    int held = conf_bake(c, step, "held.pal", "step", "--layout qpos --precision u16");
+    assert_true(c->palettes[held].view.clips[0].step);
+    conf_define_cases(c, all, spin, wrapped, held);
     char path[PATH_MAX];
     snprintf(path, sizeof path, "%s/cases.json", dir);
     FILE *f = fopen(path, "w");

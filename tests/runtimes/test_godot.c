@@ -51,7 +51,13 @@ static int setup(void **state)
     char model[PATH_MAX], rel[1024], cmd[2 * PATH_MAX];
     sample_path(rel, sizeof rel, "quadruped");
     if (!realpath(rel, model)) return -1;
-    if (system("rm -rf " TMP " && mkdir -p " TMP "/bakes")) return -1;
+    if (system("rm -rf " TMP " && mkdir -p " TMP "/bakes/step")) return -1;
+    /* A STEP-keyed clip, baked with its rows held (.pal version 4): check_addon.gd's held rows. */
+    char step[PATH_MAX];
+    shared_path(rel, sizeof rel, "assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf");
+    if (!realpath(rel, step)) return -1;
+    snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/bakes/step/step.pal -q", crowdbake_exe(), step);
+    if (system(cmd)) return -1;
     /* NAME.pal with NAME = LAYOUT-PRECISION[-zstd], as check.gd expects. */
     const char *bakes[][3] = {
         {"qpos", "u16", ""},    {"qpos", "float", ""},   {"affine", "u16", ""}, {"affine", "float", ""},
@@ -107,11 +113,11 @@ static void test_shipped_files_run_in_godot(void **state)
     assert_non_null(strstr(out, "ok   loader parses"));
     assert_non_null(strstr(out, "ok   fill_herd from roster.json"));
     /* The addon (check_addon.gd): its loader, bone_matrix against the reference CSV, the herd. */
-    assert_int_equal(count(out, "\nok   addon: "), 30);
-    /* 11 cases skinned on the CPU within the tolerance, and broken-row-off-by-one missing by far. */
-    assert_int_equal(count(out, "\nok   addon: conformance "), 12);
+    assert_int_equal(count(out, "\nok   addon: "), 32); /* with the held rows of a STEP-keyed clip */
+    /* 12 cases skinned on the CPU within the tolerance (held rows among them), and broken-row-off-by-one missing by far. */
+    assert_int_equal(count(out, "\nok   addon: conformance "), 13);
     assert_int_equal(count(out, "\nok   expect-error: addon: "), 3);
-    assert_non_null(strstr(out, "godot: 84 cases, 0 failed, exit code 0"));
+    assert_non_null(strstr(out, "godot: 86 cases, 0 failed, exit code 0"));
     /* The log is Godot 4.6's own, on WebGL 2 (the Compatibility renderer). */
     assert_int_equal(run_command("grep -q 'Godot Engine v4.6' " TMP "/godot.log && grep -q 'Compatibility' " TMP "/godot.log",
                                  NULL, 0),

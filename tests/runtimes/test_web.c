@@ -72,6 +72,10 @@ static void test_runtime_in_chromium_matches_the_cpu(void **state)
            "(the same spin palette, shipped shader: %.2f)\n", transposed, off_by_one, no_wrap, no_flip, spin_ok);
     assert_true(spin_ok <= 1);
     assert_true(transposed > 10 && off_by_one > 10 && no_wrap > 10 && no_flip > 10);
+    /* A STEP-keyed clip's held rows (.pal version 4): the row alone; blended across its steps, far off. */
+    double held = compare(&conf, "held", &units), no_held = compare(&conf, "broken-no-held", &units);
+    printf("  held rows (STEP SimpleSkin): browser vs C runtime %.2f of the tolerance; blended: %.0f\n", held, no_held);
+    assert_true(held <= 1 && no_held > 10);
     double bones_qpos = compare(&conf, "bones-qpos-u16", &units), bones_mat4 = compare(&conf, "bones-mat4-half", &units);
     double bones_broken = compare(&conf, "broken-bones-transposed", &units);
     printf("  bone pass: browser vs C runtime %.2f (qpos/u16), %.2f (mat4/half, 16 instances a column block) of the "

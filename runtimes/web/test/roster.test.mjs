@@ -5,7 +5,7 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFileSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
-import { readPal, readRoster, instanceData } from '../crowdbake_pal.mjs';
+import { readPal, readRoster, instanceData, instanceBoneMatrix, boneMatrix } from '../crowdbake_pal.mjs';
 import { CROWDBAKE, SAMPLES, tmpDir } from './support.mjs';
 
 const dir = tmpDir('roster');
@@ -64,6 +64,22 @@ test('per-instance numbers follow docs/roster.md', () => {
     const death = clip('death'), die = instanceData(goat.states.die, 0, 7, 2);
     assert.deepEqual(die.slice(0, 3), [death.first_row, -death.frame_count, death.fps]);
     assert.ok(Math.abs(die[3] - (-2 * death.fps) / death.frame_count) < 1e-12);
+});
+
+test('a STEP-keyed clip\'s state holds its rows: a negative first row, played as the palette\'s clip', () => {
+    const model = path.resolve('../shared/assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf');
+    writeFileSync(path.join(dir, 'step.toml'), `[bake]\nout_dir = "step"\n[animal.skin]\nmodel = "${model}"\n` +
+                  'states = { swing = ["animation"] }\n');
+    execFileSync(CROWDBAKE, ['bake', path.join(dir, 'step.toml'), '-q'], { stdio: ['ignore', 'ignore', 'pipe'] });
+    const raw = JSON.parse(readFileSync(path.join(dir, 'step', 'roster.json'), 'utf8')).types.skin;
+    const type = readRoster(JSON.parse(readFileSync(path.join(dir, 'step', 'roster.json'), 'utf8'))).types.skin;
+    assert.equal(raw.clips[0].step_rows, true);
+    assert.equal(type.states.swing.first_row, -raw.clips[0].first_row - 1); // docs/roster.md: held rows
+    const pal = readPal(readFileSync(path.join(dir, 'step', type.palette)));
+    const inst = instanceData(type.states.swing, 0, 0);
+    for (const t of [0.1, 0.6, 1.3, 2.9, 5.2])
+        for (let j = 0; j < pal.header.bone_count; ++j)
+            assert.deepEqual(instanceBoneMatrix(pal, [inst[0], inst[1], inst[2], 0], t, j), boneMatrix(pal, 0, t, j));
 });
 
 test('broken manifests are refused with the field that is wrong', () => {

@@ -4,8 +4,9 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
+import { readFileSync } from 'node:fs';
 import path from 'node:path';
-import { readPal, boneMatrix, LAYOUTS, PRECISIONS } from '../crowdbake_pal.mjs';
+import { readPal, boneMatrix, instanceFrame, LAYOUTS, PRECISIONS, CLIP_STEP } from '../crowdbake_pal.mjs';
 import { CROWDBAKE, FOX, tmpDir, bake, jointMatrix } from './support.mjs';
 
 const dir = tmpDir('sockets');
@@ -73,6 +74,45 @@ test('boneMatrix between rows is the blend of the two rows the GLSL computes', (
             }
         }
     }
+});
+
+// The independent reference's joint matrices of clip 0 (../shared/reference: a JavaScript implementation of the glTF
+// rules that shares no code with crowdbake): [{ t, joints: [16 numbers per joint] }] by frame.
+function referenceFrames(csv) {
+    const frames = [];
+    for (const line of readFileSync(csv, 'utf8').split('\n')) {
+        if (!line || line.startsWith('#') || line.startsWith('clip,')) continue;
+        const v = line.split(','), frame = Number(v[2]), joint = Number(v[6]);
+        frames[frame] ??= { t: Number(v[4]), joints: [] };
+        frames[frame].joints[joint] = v.slice(7, 23).map(Number);
+    }
+    return frames;
+}
+
+test('a STEP-keyed clip (version 4) holds its rows: its row alone between rows, and the reference between its keys', () => {
+    const model = '../shared/assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf';
+    const pal = readPal(bake(model, path.join(dir, 'step.pal'), ['--fps', 'auto'])); // auto: rows at its key times
+    const clip = pal.clips[0];
+    assert.equal(pal.header.version, 4);
+    assert.ok(clip.step && (clip.flags & CLIP_STEP) !== 0 && clip.fps === 2);
+    for (let r = 0; r < clip.frames; ++r) {
+        assert.deepEqual(instanceFrame([-clip.first_row - 1, clip.frames, clip.fps, 0], (r + 0.75) / clip.fps),
+                         { row0: clip.first_row + r, row1: clip.first_row + r, fr: 0 });
+        for (let j = 0; j < pal.header.bone_count; ++j) { // support.mjs decodes the row on its own
+            const row = jointMatrix(pal, clip.first_row + r, j), m = boneMatrix(pal, 0, (r + 0.75) / clip.fps, j);
+            row.forEach((x, e) => assert.ok(Math.abs(m[e] - x) < 1e-6, `row ${r} bone ${j} [${e}]`));
+        }
+    }
+    // Half a reference frame past each of its times with no key between (the keys lie every 0.5 s), the matrices are
+    // the reference's: a STEP channel holds its value there.
+    let worst = 0, compared = 0;
+    for (const f of referenceFrames('../shared/reference/gltf_simple_skin_step.fps30.csv')) {
+        const t = f.t + 1 / 60;
+        if (Math.floor(f.t * 2 + 1e-6) !== Math.floor(t * 2 - 1e-6)) continue;
+        f.joints.forEach((ref, j) => boneMatrix(pal, 0, t, j).forEach((x, e) => { worst = Math.max(worst, Math.abs(x - ref[e])); }));
+        ++compared;
+    }
+    assert.ok(compared > 100 && worst < 1e-4, `${compared} times, worst ${worst}`);
 });
 
 test('boneMatrix refuses a clip, bone or time that does not exist', () => {

@@ -28,6 +28,7 @@ func run() -> void:
 	_check_format_loader()
 	_check_bone_matrix("mat4-float", 2e-4, true)
 	_check_bone_matrix("qpos-u16", 0.02, false)
+	_check_held_rows()
 	load(ROOT + "/check_conformance.gd").new(self).run()
 	var mesh := _cow_mesh()
 	if mesh == null:
@@ -158,6 +159,30 @@ func _check_bone_matrix(bake: String, tolerance: float, halfway: bool) -> void:
 	_begin(name)
 	var refused: bool = pal.bone_matrix("no such clip", 0.0, 0) == null and pal.bone_matrix(WALK, 0.0, pal.bone_names.size()) == null
 	_end(name, "" if refused and pal.error.contains("no clip") else "returned a matrix")
+
+# The shared STEP SimpleSkin (.pal version 4): its clip's rows are held, not blended. Between two rows
+# bone_matrix is the earlier row's alone (frame_at: that row twice, weight 0), where a blend of the two
+# would differ: the rows are the keys' poses.
+func _check_held_rows() -> void:
+	var name := "a STEP-keyed clip's rows are held (version 4)"
+	_begin(name)
+	var pal = load(ADDON + "/crowdbake_palette.gd").new()
+	if not pal.load_file(ROOT + "/bakes/step/step.pal"):
+		return _end(name, pal.error)
+	var c: Dictionary = pal.clips[0]
+	var worst := 0.0
+	var blended := 0.0
+	for r in c["frames"] - 1:
+		var frame: Array = pal.frame_at(pal.clip_instance(0), (r + 0.75) / c["fps"])
+		if frame != [c["first_row"] + r, c["first_row"] + r, 0.0]:
+			return _end(name, "frame_at gave %s at row %d" % [frame, r])
+		for bone in pal.bone_names.size():
+			var at: Transform3D = pal.bone_matrix(0, (r + 0.05) / c["fps"], bone)
+			var later: Transform3D = pal.bone_matrix(0, (r + 0.75) / c["fps"], bone)
+			var next: Transform3D = pal.bone_matrix(0, (r + 1.05) / c["fps"], bone)
+			worst = maxf(worst, (later.origin - at.origin).length() + (later.basis.x - at.basis.x).length())
+			blended = maxf(blended, (next.basis.x - at.basis.x).length())
+	_end(name, "" if c["step"] and worst < 1e-6 and blended > 0.01 else "step %s, held rows differ by %s, rows %s apart" % [c["step"], worst, blended])
 
 # Cow's skinned mesh as Godot's own glTF importer reads it.
 func _cow_mesh() -> Mesh:

@@ -66,8 +66,8 @@ func load_palette(path: String) -> Dictionary:
 	var flags := head.decode_u32(12)
 	var layout := head.decode_u32(20)
 	var precision := head.decode_u32(24)
-	if version < 1 or version > 3 or head.decode_u32(16) != HEADER_SIZE:
-		_fail("%s: palette format version %d is not supported (this loader reads versions 1 to 3); use the loader of the crowdbake that baked it"
+	if version < 1 or version > 4 or head.decode_u32(16) != HEADER_SIZE:
+		_fail("%s: palette format version %d is not supported (this loader reads versions 1 to 4); use the loader of the crowdbake that baked it"
 				% [path, version])
 		return {}
 	if layout > 2 or precision > 2:

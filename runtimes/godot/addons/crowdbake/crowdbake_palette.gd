@@ -27,7 +27,8 @@ const CLIP_ENTRY_SIZE := 80
 @export_storage var bounds_max := Vector3.ZERO
 @export_storage var speed_reference := 0.0         # ground speed (m/s) at playback rate 1; 0 when unset
 # One Dictionary per clip: name, first_row, frames, fps (rows per second of clip time), duration,
-# loops, bounds (AABB of the skinned mesh over the clip).
+# loops, step (rows held, not blended: a STEP-keyed clip, .pal version 4), bounds (AABB of the
+# skinned mesh over the clip).
 @export_storage var clips: Array[Dictionary] = []
 @export_storage var bone_names := PackedStringArray()
 var error := "" # the last failure, one line
@@ -78,7 +79,8 @@ func _read_tables(path: String) -> bool:
 		var high := Vector3(bytes.decode_float(at + 56), bytes.decode_float(at + 60), bytes.decode_float(at + 64))
 		clips.append({"name": text.call(at), "first_row": bytes.decode_u32(at + 8), "frames": bytes.decode_u32(at + 12),
 				"fps": bytes.decode_float(at + 16), "duration": bytes.decode_float(at + 20),
-				"loops": bytes.decode_u32(at + 28) & 1 == 1, "bounds": AABB(low, high - low)})
+				"loops": bytes.decode_u32(at + 28) & 1 == 1, "step": bytes.decode_u32(at + 28) & 4 == 4,
+				"bounds": AABB(low, high - low)})
 	for i in bytes.decode_u32(32):
 		bone_names.append(text.call(bone_table + i * _Loader.BONE_ENTRY_SIZE))
 	return true
@@ -98,7 +100,8 @@ func bone_index(bone_name: String) -> int:
 # The four numbers the shaders take for a clip played at its own rate (rows per second) from `phase`.
 func clip_instance(clip: int, rate := -1.0, phase := 0.0) -> Vector4:
 	var c: Dictionary = clips[clip]
-	return Vector4(c["first_row"], c["frames"] if c["loops"] else -c["frames"], c["fps"] if rate < 0.0 else rate, phase)
+	var first: float = -c["first_row"] - 1.0 if c["step"] else c["first_row"] # held rows: negative
+	return Vector4(first, c["frames"] if c["loops"] else -c["frames"], c["fps"] if rate < 0.0 else rate, phase)
 
 # The largest of the clips' animated bounds: a box every animated vertex of any clip stays in.
 func largest_bounds() -> AABB:
@@ -125,6 +128,8 @@ func matrix_at(inst: Vector4, time: float, bone: int) -> Transform3D:
 
 # cb_frame of crowdbake_palette.gdshaderinc: [row0, row1, weight of row1].
 static func frame_at(inst: Vector4, time: float) -> Array:
+	var held := inst.x < 0.0 # a stepped clip: its row alone
+	var first := -inst.x - 1.0 if held else inst.x
 	var frames := absf(inst.y)
 	var fpos := time * inst.z + inst.w * frames
 	var f0: float
@@ -137,7 +142,9 @@ static func frame_at(inst: Vector4, time: float) -> Array:
 		fpos = clampf(fpos, 0.0, frames - 1.0)
 		f0 = floorf(fpos)
 		f1 = minf(f0 + 1.0, frames - 1.0)
-	return [int(inst.x + f0), int(inst.x + f1), fpos - f0]
+	if held:
+		return [int(first + f0), int(first + f0), 0.0]
+	return [int(first + f0), int(first + f1), fpos - f0]
 
 # cb_bone as a matrix: the transform of points (w = 1), whose basis alone turns directions.
 func _blend(row0: int, row1: int, fr: float, bone: int) -> Transform3D:

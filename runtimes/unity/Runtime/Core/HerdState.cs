@@ -66,7 +66,7 @@ namespace Crowdbake
             var list = new List<RosterState>();
             foreach (PalClip c in pal.Clips)
                 list.Add(new RosterState {
-                    name = c.Name, clip = c.Name, firstRow = (int)c.FirstRow,
+                    name = c.Name, clip = c.Name, firstRow = c.Step ? -(int)c.FirstRow - 1 : (int)c.FirstRow,
                     frameCount = c.Loops ? (int)c.Frames : -(int)c.Frames, rate = c.Fps, ratePerSpeed = 0, goldenRatioPhase = c.Loops
                 });
             return list;

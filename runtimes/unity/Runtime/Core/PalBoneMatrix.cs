@@ -72,6 +72,7 @@ namespace Crowdbake
             if (!(fpos >= 0 && fpos < frames)) fpos = 0; // rounding at the wrap
             f0 = Math.Floor(fpos);
             f1 = f0 + 1 < frames ? f0 + 1 : c.Loops ? 0 : f0; // a loop's last row blends into its first
+            if (c.Step) { f1 = f0; fpos = f0; } // held: no blend across a step
             fr = (float)(fpos - f0);
             r0 = c.FirstRow + (uint)f0;
             r1 = c.FirstRow + (uint)f1;
@@ -90,9 +91,12 @@ namespace Crowdbake
             if (!(fpos >= 0 && fpos < frames)) fpos = 0; // rounding at the wrap
             f0 = Math.Floor(fpos);
             f1 = inst[1] > 0 ? (f0 + 1 < frames ? f0 + 1 : 0) : Math.Min(f0 + 1, frames - 1);
+            bool held = inst[0] < 0; // a stepped clip: its row alone, its first row -inst[0] - 1
+            double first = held ? -(double)inst[0] - 1 : inst[0];
+            if (held) { f1 = f0; fpos = f0; }
             fr = (float)(fpos - f0);
-            r0 = (uint)inst[0] + (uint)f0;
-            r1 = (uint)inst[0] + (uint)f1;
+            r0 = (uint)first + (uint)f0;
+            r1 = (uint)first + (uint)f1;
             return true;
         }
 

@@ -36,6 +36,8 @@ namespace Crowdbake
         public float Fps, Duration, Start;
         public float[] RootVelocity, BoundsMin, BoundsMax;
         public bool Loops { get { return (Flags & PalFile.ClipLoops) != 0; } }
+        // Its rows are held, not blended (a STEP-keyed clip): the instance's first row is -FirstRow - 1.
+        public bool Step { get { return (Flags & PalFile.ClipStep) != 0; } }
     }
 
     public struct PalBone
@@ -47,10 +49,10 @@ namespace Crowdbake
 
     public sealed partial class PalFile
     {
-        public const uint NewestVersion = 3, HeaderBytes = 256, ClipBytes = 80, BoneBytes = 32, PayloadAlign = 4096;
+        public const uint NewestVersion = 4, HeaderBytes = 256, ClipBytes = 80, BoneBytes = 32, PayloadAlign = 4096;
         public const int ChecksumOffset = 176;
         public const uint FlagZstd = 1, FlagInPlace = 2, FlagPositionsRelative = 4, FlagFittedRows = 8;
-        public const uint ClipLoops = 1, ClipFitted = 2;
+        public const uint ClipLoops = 1, ClipFitted = 2, ClipStep = 4; // ClipStep (version 4): rows held, not blended
         static readonly byte[] Magic = { 0x43, 0x42, 0x50, 0x41, 0x4C, 0x0D, 0x0A, 0x1A };
 
         public readonly PalHeader Header;

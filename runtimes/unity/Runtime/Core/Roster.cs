@@ -242,14 +242,15 @@ namespace Crowdbake
             if (type.Clip(clip) == null) throw r.Fail(w + ".clip", "\"" + clip + "\" is not one of the type's clips");
             JsonObject inst = r.Obj(r.Need(s, w, "instance"), wi);
             var state = new RosterState {
-                name = name, clip = clip, firstRow = r.Int(inst, wi, "first_row", 0, int.MaxValue),
+                name = name, clip = clip, firstRow = r.Int(inst, wi, "first_row", int.MinValue + 1, int.MaxValue), // < 0: held rows
                 frameCount = r.Int(inst, wi, "frame_count", int.MinValue + 1, int.MaxValue),
                 rate = (float)r.Num(inst, wi, "rate", 0, false), ratePerSpeed = (float)r.Num(inst, wi, "rate_per_speed", 0, false),
                 goldenRatioPhase = r.OneOf(inst, wi, "phase", new[] { "golden_ratio", "zero" }) == "golden_ratio"
             };
             if (state.frameCount == 0) throw r.Fail(wi + ".frame_count", "expected a non-zero integer");
-            if ((long)state.firstRow + Math.Abs((long)state.frameCount) > type.rows)
-                throw r.Fail(wi, "rows " + state.firstRow + ".." + (state.firstRow + Math.Abs((long)state.frameCount)) + " outside the type's " +
+            long first = state.firstRow < 0 ? -(long)state.firstRow - 1 : state.firstRow; // held rows: -first_row - 1
+            if (first + Math.Abs((long)state.frameCount) > type.rows)
+                throw r.Fail(wi, "rows " + first + ".." + (first + Math.Abs((long)state.frameCount)) + " outside the type's " +
                                  type.rows + " rows");
             return state;
         }

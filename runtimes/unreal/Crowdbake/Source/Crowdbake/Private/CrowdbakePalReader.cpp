@@ -107,7 +107,8 @@ bool InstanceBoneMatrix(const uint8_t *data, size_t size, const float inst[4], d
     for (uint32_t c = 0; c < pal.header.clip_count && !found; ++c) {
         cbpal_clip clip;
         cbpal_get_clip(&pal, c, &clip);
-        if (clip.first_row != (uint32_t)inst[0] || clip.frames != (uint32_t)std::fabs(inst[1])) continue;
+        double first = inst[0] < 0 ? -(double)inst[0] - 1 : inst[0]; // < 0: held rows (CBPAL_CLIP_STEP)
+        if (clip.first_row != (uint32_t)first || clip.frames != (uint32_t)std::fabs(inst[1])) continue;
         // the clip time the numbers give: rows played over the clip's rows per second
         double rows = time * inst[2] + inst[3] * std::fabs((double)inst[1]);
         found = cbpal_bone_matrix(&pal, c, rows / clip.fps, bone, out) == 0;

@@ -1,0 +1,241 @@
+/* test_bare_bake.c - a bare `crowdbake bake` succeeds (issue 43, item 0), through the command
+ * as a new user runs it: the default max_error is a goal, not a promise - the shared robot's
+ * punch, which no rate up to max_fps brings within 1 mm/m, is written at the best the bake
+ * reached with one warning line (exit 0), while a budget the user states (--max-error, catalog
+ * max_error) still fails the bake and writes nothing (exit 6); every shared model with a skin
+ * (MANIFEST.md's Skins column, the Khronos validator without errors) bakes bare with exit 0. And
+ * STEP keys are exact: the shared STEP SimpleSkin bakes its rows at its key times, held, not
+ * blended (.pal version 4, clip flag bit 2), and the C reader's bone matrices at every time of
+ * the independent reference (../shared/reference, sampled by a JavaScript implementation of the
+ * glTF rules) match it - where rows blended across a step miss it by 218 mm/m. */
+#include "testutil.h"
+
+#include <math.h>
+#include <sys/stat.h>
+
+#include "crowdbake_pal.h"
+
+#define OUT_DIR TEST_TMP "/bare"
+
+static int setup(void **state)
+{
+    (void)state;
+    return system("rm -rf " OUT_DIR " && mkdir -p " OUT_DIR) == 0 ? 0 : -1;
+}
+
+static int run(char *out, size_t size, const char *fmt, ...)
+{
+    char cmd[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(cmd, sizeof cmd, fmt, ap);
+    va_end(ap);
+    return run_command(cmd, out, size);
+}
+
+static bool exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+static int count_of(const char *text, const char *part)
+{
+    int n = 0;
+    for (const char *p = text; (p = strstr(p, part)); p += strlen(part)) ++n;
+    return n;
+}
+
+static void test_the_robot_bakes_bare_and_a_stated_budget_is_a_promise(void **state)
+{
+    (void)state;
+    static char out[1 << 16];
+    char robot[1024];
+    shared_path(robot, sizeof robot, "assets/robot-quaternius-raylib/robot.glb");
+    int rc = run(out, sizeof out, "%s bake %s -o %s/robot.pal 2>&1", crowdbake_exe(), robot, OUT_DIR);
+    printf("%s", strstr(out, "crowdbake: warning") ? strstr(out, "crowdbake: warning") : out);
+    if (rc != 0) fail_msg("bare bake exit %d:\n%s", rc, out);
+    assert_true(exists(OUT_DIR "/robot.pal"));
+    /* One line per clip over the goal, saying what it reached and what meets it. */
+    assert_int_equal(count_of(out, "warning: clip"), 1);
+    if (!strstr(out, "warning: clip 'Robot_Punch' reaches ") || !strstr(out, "it meets it at ") ||
+        !strstr(out, "(--max-fps ") || !strstr(out, "the default max_error is a goal; --max-error 1 makes it a promise"))
+        fail_msg("%s", out);
+    /* Stated on the command line: a promise. */
+    rc = run(out, sizeof out, "%s bake %s -o %s/robot1.pal --max-error 1 2>&1", crowdbake_exe(), robot, OUT_DIR);
+    assert_int_equal(rc, EXIT_VERIFY);
+    assert_false(exists(OUT_DIR "/robot1.pal"));
+    if (!strstr(out, "Robot_Punch") || !strstr(out, "nothing was written")) fail_msg("%s", out);
+    /* Stated in a catalog: a promise too. */
+    char text[2048];
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"cat-out\"\nmax_error = 1\n[animal.robot]\nmodel = \"%s%s\"\n",
+             robot[0] == '/' ? "" : "../../../", robot);
+    write_text(OUT_DIR "/robot.toml", text);
+    rc = run(out, sizeof out, "%s bake %s/robot.toml -j 1 2>&1", crowdbake_exe(), OUT_DIR);
+    assert_int_equal(rc, EXIT_VERIFY);
+    assert_false(exists(OUT_DIR "/cat-out/robot.pal"));
+    /* And without it the catalog bakes, with the warning. */
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"bare-out\"\n[animal.robot]\nmodel = \"%s%s\"\n",
+             robot[0] == '/' ? "" : "../../../", robot);
+    write_text(OUT_DIR "/bare.toml", text);
+    rc = run(out, sizeof out, "%s bake %s/bare.toml -j 1 2>&1", crowdbake_exe(), OUT_DIR);
+    if (rc != 0) fail_msg("%s", out);
+    assert_true(exists(OUT_DIR "/bare-out/robot.pal"));
+    assert_non_null(strstr(out, "Robot_Punch"));
+}
+
+/* The Skins column of MANIFEST.md's row for `rel` ("assets/..."), -1 without a row; *valid
+ * when the Khronos validator found no errors ("0E"). */
+static int manifest_skins(const char *manifest, const char *rel, bool *valid)
+{
+    char key[600];
+    snprintf(key, sizeof key, "| `%s` |", rel + strlen("assets/"));
+    const char *row = strstr(manifest, key);
+    if (!row) return -1;
+    const char *cell = row;
+    for (int column = 0; column < 4; ++column) cell = strchr(cell + 1, '|'); /* past path, source, licence, size */
+    const char *validator = cell;
+    for (int column = 0; column < 5; ++column) validator = strchr(validator + 1, '|'); /* skins .. extensions */
+    *valid = strncmp(validator + 2, "0E", 2) == 0;
+    return atoi(cell + 1);
+}
+
+/* Skins of a model MANIFEST.md describes in words only (the animal packs): what `info` reads. */
+static int info_skins(const char *path)
+{
+    static char out[1 << 14];
+    int skins = -1;
+    if (run(out, sizeof out, "%s info %s 2>/dev/null", crowdbake_exe(), path) != 0) return -1;
+    const char *line = strstr(out, " nodes, "); /* "59 nodes, 1 skin, 7 skinned primitives" */
+    if (line) skins = atoi(line + strlen(" nodes, "));
+    return skins;
+}
+
+/* Every model file under ../shared/assets: those with a skin (MANIFEST.md's table, else `info`)
+ * and without errors from the Khronos validator bake bare with exit 0. */
+static void test_every_shared_model_with_a_skin_bakes_bare(void **state)
+{
+    (void)state;
+    static char out[1 << 16], files[1 << 14];
+    char path[1024];
+    shared_path(path, sizeof path, "assets");
+    assert_int_equal(run(files, sizeof files, "cd %s && find . -name '*.glb' -o -name '*.gltf' | sort", path), 0);
+    shared_path(path, sizeof path, "assets/MANIFEST.md");
+    char *manifest = read_whole_file(path, NULL);
+    int baked = 0;
+    for (char *file = strtok(files, "\n"); file; file = strtok(NULL, "\n")) {
+        char rel[600];
+        snprintf(rel, sizeof rel, "assets/%s", file + 2);
+        shared_path(path, sizeof path, rel);
+        bool valid = true;
+        int skins = manifest_skins(manifest, rel, &valid);
+        if (skins < 0) skins = info_skins(path);
+        if (skins <= 0 || !valid) continue;
+        int rc = run(out, sizeof out, "%s bake %s -o %s/each.pal -q 2>&1", crowdbake_exe(), path, OUT_DIR);
+        printf("  %-64s exit %d, %d warning line(s)\n", rel, rc, count_of(out, "warning: clip"));
+        if (rc != 0) fail_msg("%s: bare bake exit %d:\n%s", rel, rc, out);
+        ++baked;
+    }
+    free(manifest);
+    assert_true(baked >= 18);
+}
+
+/* Reference rows of `csv` for clip 0, skin 0: time and the 16 numbers of each joint. */
+typedef struct ref_frame {
+    double t, m[2][16];
+} ref_frame;
+
+static int read_reference(const char *csv, ref_frame *frames, int cap)
+{
+    FILE *f = fopen(csv, "r");
+    assert_non_null(f);
+    char line[4096];
+    int n = 0;
+    while (fgets(line, sizeof line, f)) {
+        if (line[0] == '#' || strncmp(line, "clip,", 5) == 0) continue;
+        char *p = strchr(line, ',') + 1; /* clip 0 */
+        p = strchr(p, ',');               /* past the name */
+        int frame = (int)strtol(p + 1, &p, 10);
+        strtol(p + 1, &p, 10); /* frames */
+        double t = strtod(p + 1, &p);
+        strtol(p + 1, &p, 10); /* skin 0 */
+        int joint = (int)strtol(p + 1, &p, 10);
+        assert_true(frame < cap && joint < 2);
+        frames[frame].t = t;
+        for (int k = 0; k < 16; ++k) frames[frame].m[joint][k] = strtod(p + 1, &p);
+        if (frame + 1 > n) n = frame + 1;
+    }
+    fclose(f);
+    return n;
+}
+
+/* Worst |reader - reference| for the palette at `pal`, half a reference frame (1/60 s) after
+ * each of the reference's times with no key in between: a STEP channel holds its value there,
+ * and a 30 fps palette's rows lie on the reference's own times, so this is between them. */
+static double worst_against_reference(const char *pal, const ref_frame *frames, int n)
+{
+    cbpal_file f;
+    char err[256];
+    if (cbpal_open(pal, CBPAL_VERIFY_CHECKSUM, &f, err, sizeof err)) fail_msg("%s", err);
+    double worst = 0;
+    for (int i = 0; i < n; ++i) {
+        double t = frames[i].t + 1.0 / 60;
+        if (floor(frames[i].t * 2 + 1e-6) != floor(t * 2 - 1e-6)) continue; /* the STEP keys lie every 0.5 s */
+        for (uint32_t j = 0; j < 2; ++j) {
+            float m[16];
+            assert_int_equal(cbpal_bone_matrix(&f, 0, t, j, m), 0);
+            for (int k = 0; k < 16; ++k) worst = fmax(worst, fabs(m[k] - frames[i].m[j][k]));
+        }
+    }
+    cbpal_close(&f);
+    return worst;
+}
+
+static void test_step_keys_are_exact(void **state)
+{
+    (void)state;
+    static char out[1 << 16];
+    static ref_frame frames[400];
+    char model[1024], csv[1024];
+    shared_path(model, sizeof model, "assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf");
+    shared_path(csv, sizeof csv, "reference/gltf_simple_skin_step.fps30.csv");
+    int n = read_reference(csv, frames, 400);
+    assert_true(n > 100);
+    int rc = run(out, sizeof out, "%s bake %s -o %s/step.pal 2>&1", crowdbake_exe(), model, OUT_DIR);
+    if (rc != 0 || !strstr(out, "step rows: keyed with STEP")) fail_msg("%s", out);
+    rc = run(out, sizeof out, "%s bake %s -o %s/blended.pal --fps 30 -q 2>&1", crowdbake_exe(), model, OUT_DIR);
+    assert_int_equal(rc, 0);
+    double held = worst_against_reference(OUT_DIR "/step.pal", frames, n);
+    double blended = worst_against_reference(OUT_DIR "/blended.pal", frames, n);
+    printf("  reader vs reference at %d times: held rows %.3g, rows blended at 30 fps %.3g\n", n, held, blended);
+    assert_true(held < 1e-4); /* u16's steps */
+    assert_true(blended > 0.1);
+    /* The file: version 4, the clip flag, 11 rows at 2 fps; verify (exact skinning at every
+     * row, mid-row and random times, played as the shaders play it) within 0.01 mm/m. */
+    cbpal_file f;
+    char err[256];
+    assert_int_equal(cbpal_open(OUT_DIR "/step.pal", 0, &f, err, sizeof err), 0);
+    cbpal_clip c;
+    assert_int_equal(cbpal_get_clip(&f, 0, &c), 0);
+    assert_int_equal(f.header.version, 4);
+    assert_true((c.flags & CBPAL_CLIP_STEP) && c.fps == 2.0f && c.frames == 11);
+    cbpal_close(&f);
+    rc = run(out, sizeof out, "%s verify %s %s/step.pal --max-error 0.01 2>&1", crowdbake_exe(), model, OUT_DIR);
+    if (rc != 0) fail_msg("%s", out);
+    rc = run(out, sizeof out, "%s verify %s %s/blended.pal --max-error 1 2>&1", crowdbake_exe(), model, OUT_DIR);
+    assert_int_equal(rc, EXIT_VERIFY);
+    /* Palettes without a held clip keep their version (their bytes do not move). */
+    assert_int_equal(cbpal_open(OUT_DIR "/blended.pal", 0, &f, err, sizeof err), 0);
+    assert_true(f.header.version < 4);
+    cbpal_close(&f);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_the_robot_bakes_bare_and_a_stated_budget_is_a_promise),
+        cmocka_unit_test(test_every_shared_model_with_a_skin_bakes_bare),
+        cmocka_unit_test(test_step_keys_are_exact),
+    };
+    return cmocka_run_group_tests(tests, setup, NULL);
+}
