@@ -29,6 +29,7 @@ func run() -> void:
 	_check_bone_matrix("mat4-float", 2e-4, true)
 	_check_bone_matrix("qpos-u16", 0.02, false)
 	_check_held_rows()
+	load(ROOT + "/check_conformance.gd").new(self).run()
 	var mesh := _cow_mesh()
 	if mesh == null:
 		return

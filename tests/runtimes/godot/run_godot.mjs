@@ -3,7 +3,7 @@
 //
 //   node tests/runtimes/godot/run_godot.mjs BAKES_DIR LOG_FILE
 //
-// The shipped addon (runtimes/godot/addons/crowdbake), check.gd, check_addon.gd and every file under BAKES_DIR are put
+// The shipped addon (runtimes/godot/addons/crowdbake), check*.gd and every file under BAKES_DIR (subfolders too) are put
 // in the engine's file system under /crowdbake; tests/runtimes/godot/override.cfg, beside the main pack, makes check.gd an
 // autoload (the web export ignores command-line arguments such as --script).
 // Godot reports shader compile errors only in its log (a material with a broken shader still
@@ -38,6 +38,7 @@ const files = {
   '/crowdbake/check.gd': path.join(here, 'check.gd'),
   '/crowdbake/check_addon.gd': path.join(here, 'check_addon.gd'),
   '/crowdbake/check_addon_look.gd': path.join(here, 'check_addon_look.gd'),
+  '/crowdbake/check_conformance.gd': path.join(here, 'check_conformance.gd'),
   '/engine/override.cfg': path.join(here, 'override.cfg'),
 };
 
