@@ -5,6 +5,7 @@
 #define CROWDBAKE_TEST_GL_HARNESS_H
 
 #include "testutil.h"
+#include "runtimes/shader_source.h"
 
 #include <GL/osmesa.h>
 #include <GL/gl.h>
@@ -35,21 +36,6 @@ static inline int teardown(void **state)
     return 0;
 }
 
-/* Replaces the line containing `marker` (a "cb:" comment of the shipped shader) with `line`. */
-static inline char *break_shader(const char *src, const char *marker, const char *line)
-{
-    const char *at = strstr(src, marker);
-    assert_non_null(at);
-    const char *start = at, *end = strchr(at, '\n');
-    while (start > src && start[-1] != '\n') --start;
-    size_t n = strlen(src) + strlen(line) + 1;
-    char *out = malloc(n);
-    snprintf(out, n, "%.*s%s%s", (int)(start - src), src, line, end);
-    return out;
-}
-
-static const char *layout_define[] = {"CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS"};
-static const char *precision_define[] = {"CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16"};
 
 /* Compiles and links a vertex shader (with a do-nothing fragment shader) that writes v_skinned. */
 static inline GLuint link_program(const char *src, bool es)

@@ -10,22 +10,8 @@
 
 #include "crowdbake/runtime.h"
 #include "vulkan_compute.h"
+#include "runtimes/shader_source.h"
 
-static const char *layout_define[] = {"CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS"};
-static const char *precision_define[] = {"CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16"};
-
-/* Replaces the line containing `marker` (a "cb:" comment of the shipped shader) with `line`. */
-static inline char *break_shader(const char *src, const char *marker, const char *line)
-{
-    const char *at = strstr(src, marker);
-    assert_non_null(at);
-    const char *start = at, *end = strchr(at, '\n');
-    while (start > src && start[-1] != '\n') --start;
-    size_t n = strlen(src) + strlen(line) + 1;
-    char *out = malloc(n);
-    snprintf(out, n, "%.*s%s%s", (int)(start - src), src, line, end);
-    return out;
-}
 
 /* Compiles a compute shader (entry main) with glslangValidator's HLSL front end, include paths
  * `includes` (-I...), and validates the module with spirv-val; returns the SPIR-V words. */
