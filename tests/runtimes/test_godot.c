@@ -45,6 +45,22 @@ static int setup_cow(void)
     return system(cmd);
 }
 
+/* check_addon_look.gd's second multi-material model: Husky (5 materials) and a roster of one state. */
+static int setup_husky(void)
+{
+    char model[PATH_MAX], rel[PATH_MAX], cmd[4 * PATH_MAX];
+    shared_path(rel, sizeof rel, "assets/quaternius-husky/Husky.glb");
+    if (!realpath(rel, model)) return -1;
+    snprintf(cmd, sizeof cmd, "mkdir -p " TMP "/bakes/husky && cp %s " TMP "/bakes/husky/Husky.glb", model);
+    if (system(cmd)) return -1;
+    FILE *f = fopen(TMP "/bakes/husky/catalog.toml", "w");
+    if (!f) return -1;
+    fprintf(f, "[bake]\nout_dir = \"roster\"\nfps = 30\n\n[animal.husky]\nmodel = \"%s\"\nstates = { wander = [\"Walk\"] }\n", model);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/husky/catalog.toml -q 2>/dev/null", crowdbake_exe());
+    return system(cmd);
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -75,7 +91,7 @@ static int setup(void **state)
     fprintf(f, "[bake]\nout_dir = \"roster\"\nfps = 30\n\n[animal.goat]\nmodel = \"%s\"\nstates = { wander = [\"walk\"] }\n", model);
     fclose(f);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/catalog.toml -q", crowdbake_exe());
-    if (system(cmd) || setup_cow()) return -1;
+    if (system(cmd) || setup_cow() || setup_husky()) return -1;
     /* The runtime conformance cases, which check_conformance.gd skins with the addon's matrix_at. */
     conformance conf;
     conformance_make(&conf, TMP "/bakes/conformance");
