@@ -47,6 +47,7 @@ func run() -> void:
 	await look.check_look("husky", look.HUSKY + "/Husky.glb", look.HUSKY + "/roster/roster.json", 5)
 	await look.check_demo()
 	look.check_imported_palette()
+	look.check_imported_roster(roster, mesh)
 	await _check_shadow(roster, mesh)
 	_viewport.queue_free()
 

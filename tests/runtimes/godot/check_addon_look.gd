@@ -187,3 +187,67 @@ func check_imported_palette() -> void:
 			why = "%d matrices compared, off by up to %s" % [compared, worst]
 	print("crowdbake-check: the saved palette: %d bone matrices compared, off by %s" % [compared, worst])
 	addon._end(name, why)
+
+# What the editor's roster.json import does (crowdbake_import_roster.gd: CrowdbakeRoster.import_file,
+# then ResourceSaver.save) and what load() of the imported roster then gives: Cow's types, states,
+# clips and sockets as the manifest has them, its palette resolved and whole (the same texture), a herd
+# set up from it drawing the same bone matrices as a herd of the roster read at run time; any other
+# JSON (the conformance cases' cases.json) imported as the JSON Godot's own loader gives; a file
+# that is not JSON refused with a line naming it.
+func check_imported_roster(roster, mesh: Mesh) -> void:
+	var name := "a roster.json saved as a resource (the roster import) loads back with its palette, and a herd takes it"
+	addon._begin(name)
+	var importer := load(ADDON + "/crowdbake_roster.gd")
+	var imported = importer.new().import_file(COW + "/roster/roster.json")
+	var why := "" if not imported is String and imported.get("types") != null else "not a roster: %s" % imported
+	var saved := "user://crowdbake_imported_roster.res"
+	if why.is_empty() and ResourceSaver.save(imported, saved) != OK:
+		why = "ResourceSaver could not save it"
+	var back = ResourceLoader.load(saved, "", ResourceLoader.CACHE_MODE_IGNORE) if why.is_empty() else null
+	if why.is_empty() and (back == null or back.get_script() == null or back.types.keys() != roster.types.keys()):
+		why = "it did not load back as a roster: %s" % back
+	var worst := 0.0
+	if why.is_empty():
+		var cow: Dictionary = back.types["cow"]
+		var want: Dictionary = roster.types["cow"]
+		for key in ["states", "clips", "sockets", "default_state", "speed_reference"]:
+			if cow[key] != want[key]:
+				why += "%s differ; " % key
+		if cow["palette"] == null or cow["palette"].texture.get_image().get_data() != want["palette"].texture.get_image().get_data():
+			why += "the palette's texture differs; "
+		var herds: Array[MultiMeshInstance3D] = []
+		for r in [roster, back]:
+			var herd: MultiMeshInstance3D = addon._herd_script.new()
+			herd.playing = false
+			if not herd.setup(r, "cow", mesh, 2):
+				why += "setup failed: %s; " % herd.error
+			herd.advance(0.7)
+			herds.append(herd)
+		for bone in want["palette"].bone_names.size():
+			var a: Transform3D = herds[0].bone_transform_at(1, bone)
+			var b: Transform3D = herds[1].bone_transform_at(1, bone)
+			worst = maxf(worst, (a.origin - b.origin).length() + (a.basis.x - b.basis.x).length() + (a.basis.y - b.basis.y).length())
+		for herd in herds:
+			herd.free()
+		if worst > 0.0:
+			why += "the herds' bone matrices differ by %s" % worst
+	var other := _imported_other_json()
+	print("crowdbake-check: the imported roster: types %s, herd bone matrices off by %s; %s"
+			% [back.types.keys() if back else [], worst, other if not other.is_empty() else "other JSON imported as JSON, a broken file refused"])
+	addon._end(name, why + other)
+
+# Any other JSON imports as Godot's own JSON resource (its data whole after a save and a load), and a
+# file that is not JSON is refused with a line naming it. "" when both hold, else what failed.
+func _imported_other_json() -> String:
+	var importer := load(ADDON + "/crowdbake_roster.gd")
+	var cases := ROOT + "/bakes/conformance/cases.json"
+	var json = importer.new().import_file(cases)
+	if not json is JSON or ResourceSaver.save(json, "user://crowdbake_imported_json.res") != OK:
+		return "cases.json did not import as JSON: %s" % json
+	var back = ResourceLoader.load("user://crowdbake_imported_json.res", "", ResourceLoader.CACHE_MODE_IGNORE)
+	if not back is JSON or back.data != JSON.parse_string(FileAccess.get_file_as_string(cases)):
+		return "cases.json's data did not load back whole"
+	var bad := "user://crowdbake_not_json.json"
+	FileAccess.open(bad, FileAccess.WRITE).store_string("{\"schema\": \"crowdbake-roster/1\",")
+	var refused = importer.new().import_file(bad)
+	return "" if refused is String and refused.begins_with(bad + ":") else "a broken .json gave %s" % refused
