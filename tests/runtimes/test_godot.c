@@ -5,6 +5,8 @@
  * as float), the loader parses and loads every layout x precision (zstd too) bit for bit, refuses
  * damaged palettes and mismatched shaders with a message, and fills a herd from a roster manifest (refusing
  * rows that the Compatibility renderer's half-float instance data cannot address, whose premise it measures).
+ * The addon's own cases (check_addon*.gd, check_conformance*.gd) add the herd's look against Godot's own import
+ * of Cow and Husky, the roster import, and the conformance cases on the CPU path and on the herd shader's GPU path.
  * Two deliberately broken shaders (a Godot-language error and a GLSL error only the draw finds)
  * must make Godot log an error, so the log scan is shown to catch both kinds. */
 #define _DEFAULT_SOURCE
