@@ -3,6 +3,7 @@
 #include "crowdbake/core.h"
 #include "sampler.h"
 #include "internal/plumbing.h"
+#include "loop_decide.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -13,6 +14,8 @@
  * terms relative to the skeleton's size) are the same pose: a clip whose end pose equals
  * its start pose loops. */
 #define CB_LOOP_TOLERANCE 1e-3
+/* A wrap under this part of its neighbour key steps closes the loop too. */
+#define CB_LOOP_NEAR 0.25
 
 uint32_t cb_clip_step_count(double duration, double fps)
 {
@@ -107,26 +110,21 @@ static cb_status judge_loop(cb_sampler *s, cb_clip_info *out, cb_error *err)
         cb_sample_joint_matrices(s, out->animation, out->t1 - h, pose + 2 * n);
         out->largest_step = fmax(pose_distance(pose, pose + n, joints, step_travel, extent),
                                  pose_distance(pose + 2 * n, pose + 3 * n, joints, step_travel, extent));
-        if (out->wrap_jump <= out->largest_step) out->loop_reason = CB_LOOP_OPEN;
+        /* A wrap that is a small part of a step is the first pose written again with an exporter's
+         * rounding: the loop closes over the keys, and one more key interval would hold that pose
+         * twice (a hitch at every wrap). */
+        if (out->wrap_jump <= CB_LOOP_NEAR * out->largest_step) out->loop_reason = CB_LOOP_CLOSED;
+        else if (out->wrap_jump <= out->largest_step) out->loop_reason = CB_LOOP_OPEN;
     }
     free(pose);
     return CB_OK;
 }
 
-void cb_loop_reason_text(const cb_clip_info *c, char *out, size_t size)
+void cb_clip_wrap_sampler(cb_sampler *s, const cb_clip_info *clip)
 {
-    switch (c->loop_reason) {
-    case CB_LOOP_SET: snprintf(out, size, "set by the catalog"); break;
-    case CB_LOOP_CLOSED: snprintf(out, size, "last pose = first pose"); break;
-    case CB_LOOP_OPEN:
-        snprintf(out, size, "no closing key: wrap %.3g <= its neighbour steps %.3g, period + %.4gs", c->wrap_jump, c->largest_step,
-                 c->key_interval);
-        break;
-    case CB_LOOP_ENDS_ELSEWHERE:
-        if (c->largest_step > 0) snprintf(out, size, "ends elsewhere: wrap %.3g > its neighbour steps %.3g", c->wrap_jump, c->largest_step);
-        else snprintf(out, size, "ends elsewhere: wrap %.3g", c->wrap_jump);
-        break;
-    }
+    cb_sampler_set_period(s, clip->animation, clip->loops ? clip->duration : 0);
+    if (clip->loops && clip->loop_reason == CB_LOOP_CLOSED && clip->wrap_jump > CB_LOOP_TOLERANCE && clip->key_interval > 0)
+        cb_sampler_close_on_first_pose(s, clip->animation, clip->t1 - clip->key_interval);
 }
 
 cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop_override, const cb_limits *limits,
@@ -161,15 +159,17 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
     out->loop_reason = CB_LOOP_CLOSED; /* a clip of one instant */
     if (span > 0 && judge_loop(s, out, err)) return err->status;
     if (loop_override >= 0) {
-        out->loops = loop_override != 0;
+        out->loops = loop_override != 0, out->loop_set = true;
         if (out->loops != (out->loop_reason == CB_LOOP_CLOSED || out->loop_reason == CB_LOOP_OPEN)) out->loop_reason = CB_LOOP_SET;
+    } else if (span > 0) {
+        cb_loop_decide(s, fps, limits, out);
     } else {
-        out->loops = out->loop_reason == CB_LOOP_CLOSED || out->loop_reason == CB_LOOP_OPEN || span <= 0;
+        out->loops = true;
     }
     /* A loop whose last pose is not its first wraps over one more key interval. */
     bool open = out->loops && out->loop_reason != CB_LOOP_CLOSED && span > 0;
     out->duration = span + (open ? out->key_interval : 0);
-    cb_sampler_set_period(s, animation, out->loops ? out->duration : 0);
+    cb_clip_wrap_sampler(s, out);
     return cb_clip_frame_at(m, fps, limits, out, err);
 }
 
