@@ -14,8 +14,6 @@
  * terms relative to the skeleton's size) are the same pose: a clip whose end pose equals
  * its start pose loops. */
 #define CB_LOOP_TOLERANCE 1e-3
-/* A wrap under this part of its neighbour key steps closes the loop too. */
-#define CB_LOOP_NEAR 0.25
 
 uint32_t cb_clip_step_count(double duration, double fps)
 {
@@ -110,21 +108,10 @@ static cb_status judge_loop(cb_sampler *s, cb_clip_info *out, cb_error *err)
         cb_sample_joint_matrices(s, out->animation, out->t1 - h, pose + 2 * n);
         out->largest_step = fmax(pose_distance(pose, pose + n, joints, step_travel, extent),
                                  pose_distance(pose + 2 * n, pose + 3 * n, joints, step_travel, extent));
-        /* A wrap that is a small part of a step is the first pose written again with an exporter's
-         * rounding: the loop closes over the keys, and one more key interval would hold that pose
-         * twice (a hitch at every wrap). */
-        if (out->wrap_jump <= CB_LOOP_NEAR * out->largest_step) out->loop_reason = CB_LOOP_CLOSED;
-        else if (out->wrap_jump <= out->largest_step) out->loop_reason = CB_LOOP_OPEN;
+        if (out->wrap_jump <= out->largest_step) out->loop_reason = CB_LOOP_OPEN;
     }
     free(pose);
     return CB_OK;
-}
-
-void cb_clip_wrap_sampler(cb_sampler *s, const cb_clip_info *clip)
-{
-    cb_sampler_set_period(s, clip->animation, clip->loops ? clip->duration : 0);
-    if (clip->loops && clip->loop_reason == CB_LOOP_CLOSED && clip->wrap_jump > CB_LOOP_TOLERANCE && clip->key_interval > 0)
-        cb_sampler_close_on_first_pose(s, clip->animation, clip->t1 - clip->key_interval);
 }
 
 cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop_override, const cb_limits *limits,
@@ -169,7 +156,7 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
     /* A loop whose last pose is not its first wraps over one more key interval. */
     bool open = out->loops && out->loop_reason != CB_LOOP_CLOSED && span > 0;
     out->duration = span + (open ? out->key_interval : 0);
-    cb_clip_wrap_sampler(s, out);
+    cb_sampler_set_period(s, animation, out->loops ? out->duration : 0);
     return cb_clip_frame_at(m, fps, limits, out, err);
 }
 

@@ -103,12 +103,7 @@ void cb_loop_reason_text(const cb_clip_info *c, char *out, size_t size)
 {
     char pose[160];
     switch (c->loop_reason) {
-    case CB_LOOP_CLOSED:
-        if (c->wrap_jump > 1e-3)
-            snprintf(pose, sizeof pose, "last pose = first pose (wrap %.3g, under a quarter of its neighbour steps %.3g)",
-                     c->wrap_jump, c->largest_step);
-        else snprintf(pose, sizeof pose, "last pose = first pose");
-        break;
+    case CB_LOOP_CLOSED: snprintf(pose, sizeof pose, "last pose = first pose"); break;
     case CB_LOOP_OPEN:
         snprintf(pose, sizeof pose, "no closing key: wrap %.3g <= its neighbour steps %.3g", c->wrap_jump, c->largest_step);
         break;

@@ -13,7 +13,6 @@
 #include <time.h>
 
 #include "palette_bake.h"
-#include "sampler.h"
 #include "pool.h"
 #include "internal/plumbing.h"
 
@@ -167,7 +166,7 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
         /* Loops without a closing key wrap. (One-shots never sample past their last key: a clip
          * planned twice, as a loop and as a one-shot, keeps its loop's period.) */
         for (uint32_t c = 0; w.sampler && c < st->p->clip_count; ++c)
-            if (st->infos[c].loops) cb_clip_wrap_sampler(w.sampler, &st->infos[c]);
+            if (st->infos[c].loops) cb_sampler_set_period(w.sampler, st->infos[c].animation, st->infos[c].duration);
         w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
         w.lanes = malloc((size_t)st->p->bone_count * 8 * CB_SAMPLE_BATCH * sizeof(double));
         w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));

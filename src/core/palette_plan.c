@@ -7,7 +7,6 @@
 
 #include "crowdbake/budget.h"
 #include "palette_bake.h"
-#include "sampler.h"
 #include "pool.h"
 
 /* ---- geometry of the texture ---- */
@@ -91,7 +90,7 @@ static cb_status analyze_clips(const bake_state *st, cb_sampler *sampler, const 
         else if (a.errors[i].status)
             *err = a.errors[i], rc = err->status;
         else
-            cb_clip_wrap_sampler(sampler, &infos[i]); /* as analyzing it here */
+            cb_sampler_set_period(sampler, one.animation, infos[i].loops ? infos[i].duration : 0); /* as analyzing it here */
     }
     free(a.errors), free(a.first_use), free(a.done);
     return rc;

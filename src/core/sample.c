@@ -319,13 +319,6 @@ void cb_sampler_set_period(cb_sampler *s, int32_t animation, double period)
     s->wraps[animation] = open ? (cb_wrap){a->t1, a->t0 + period} : (cb_wrap){0, 0};
 }
 
-void cb_sampler_close_on_first_pose(cb_sampler *s, int32_t animation, double from)
-{
-    if (animation < 0 || animation >= (int32_t)s->model->animation_count) return;
-    const cb_animation *a = &s->model->animations[animation];
-    if (from > a->t0 && from < a->t1) s->wraps[animation] = (cb_wrap){from, a->t1};
-}
-
 const cb_model *cb_sampler_model(const cb_sampler *s) { return s->model; }
 int32_t cb_sampler_skin(const cb_sampler *s) { return s->skin; }
 

@@ -5,7 +5,6 @@
  * Exporters write one key-time accessor for many channels (all of a clip's, often), so the
  * search for each time's keys runs once per batch for every distinct times array (a span
  * group), and the channels then only gather their key values and interpolate. */
-#include <math.h>
 #include "cb_math.h"
 #include "lanes.h"
 #include "sampler.h"
@@ -71,21 +70,14 @@ bool cb_sampler_prepare_spans(cb_sampler *s)
 
 /* Where each of the batch's times falls among the keys: the operations of sample.c's
  * channel_eval, so the same key and the same fraction. */
-/* Where a loop's wrap takes over (sample.c's channel_eval hands those times to wrap_eval): those
- * times are edges, evaluated one by one. */
-static double wrap_start(const cb_wrap *wrap)
-{
-    return wrap && wrap->to > wrap->from ? wrap->from : INFINITY;
-}
-
 static CB_CLONE_INLINE void find_spans(const float *times, uint32_t key_count, const double *t, uint32_t *hint,
-                                       double wrap_from, cb_key_spans *out)
+                                       cb_key_spans *out)
 {
     uint32_t last = key_count - 1;
     bool any_edge = false;
     for (int i = 0; i < B; ++i) {
         double time = t[i];
-        bool edge = time <= times[0] || time >= times[last] || time > wrap_from;
+        bool edge = time <= times[0] || time >= times[last];
         uint32_t k = edge ? 0 : cb_find_key(times, key_count, time, hint);
         double t_k = times[k], dt = (double)times[k + 1] - t_k;
         out->key[i] = k;
@@ -247,7 +239,7 @@ static CB_CLONE_INLINE void channel_lanes(const cb_channel *ch, const cb_key_spa
     }
     cb_key_spans own;
     if (!sp) { /* keys unlike its group's (not seen when the sampler was made) */
-        find_spans(ch->times, ch->key_count, times, hint, wrap_start(wrap), &own);
+        find_spans(ch->times, ch->key_count, times, hint, &own);
         sp = &own;
     }
     interpolate_lanes(ch, sp, times, hint, wrap, node);
@@ -340,8 +332,7 @@ static void sample_batch(cb_sampler *s, int32_t animation, const double *times, 
         const cb_animation *anim = &m->animations[animation];
         uint32_t base = s->group_base[animation];
         for (uint32_t g = base; g < s->group_base[animation + 1]; ++g)
-            find_spans(s->group_times[g], s->group_keys[g], padded, &s->group_cursor[g], wrap_start(&s->wraps[animation]),
-                       &s->spans[g - base]);
+            find_spans(s->group_times[g], s->group_keys[g], padded, &s->group_cursor[g], &s->spans[g - base]);
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
             const cb_channel *ch = &anim->channels[c];
             if (!s->relevant[ch->node]) continue;
@@ -385,7 +376,7 @@ void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*o
 {
     uint32_t hint = 0;
     cb_key_spans sp;
-    find_spans(ch->times, ch->key_count, times, &hint, INFINITY, &sp);
+    find_spans(ch->times, ch->key_count, times, &hint, &sp);
     if (ch->path == CB_PATH_ROTATION)
         rotation_lanes(ch, &sp, times, &hint, NULL, out);
     else

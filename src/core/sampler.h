@@ -91,13 +91,5 @@ void cb_sample_joint_lanes(cb_sampler *s, int32_t animation, const double *times
 void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
                          cb_root_motion root_motion, double *out);
 void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*out)[CB_SAMPLE_BATCH]);
-/* A loop whose last key is its first pose written again with an exporter's rounding (a wrap a
- * small part of a key step): from `from` (its last key interval's start) to its last key, each
- * channel goes to its first key instead, so the loop closes without a pop and without the extra
- * key interval of a loop that lacks its closing key. Until the next cb_sampler_set_period. */
-void cb_sampler_close_on_first_pose(cb_sampler *s, int32_t animation, double from);
-/* clip.c: how an analyzed clip wraps, on this sampler: its period, and a loop that closes on
- * its first pose (the two above); what cb_clip_analyze leaves set. */
-void cb_clip_wrap_sampler(cb_sampler *s, const cb_clip_info *clip);
 
 #endif

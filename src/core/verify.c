@@ -9,7 +9,6 @@
 
 #include "cb_math.h"
 #include "palette_bake.h" /* palette_bake_with_facts */
-#include "sampler.h"
 
 /* ---- verification ---- */
 
@@ -78,12 +77,7 @@ cb_status cb_verify_clip(cb_sampler *s, const cb_palette *p, const void *texels,
     c.run_v = malloc((size_t)(c.verts ? c.verts : 1) * 3 * sizeof(double));
     if (c.exact_m && c.run_m && c.exact_v && c.run_v) {
         const cb_palette_clip *cl = c.clip;
-        /* A loop without a closing key wraps; one whose last key is its first pose rounded closes
-         * on it: as the bake's analysis of the clip (at the palette's own loop decision) says. */
-        cb_clip_info info;
-        cb_error ignored = {0};
-        if (cb_clip_analyze(s, animation, cl->fps > 0 ? cl->fps : 30, cl->loops, NULL, &info, &ignored))
-            cb_sampler_set_period(s, animation, cl->loops ? cl->duration : 0);
+        cb_sampler_set_period(s, animation, cl->loops ? cl->duration : 0); /* a loop without a closing key wraps */
         uint32_t steps = cl->loops ? cl->frames : cl->frames - 1; /* row intervals */
         double dt = cl->fps > 0 ? 1 / cl->fps : 0, qsum = 0, isum = 0;
         uint64_t v, qn = 0, in = 0;
