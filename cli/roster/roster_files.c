@@ -192,6 +192,9 @@ static void root_motion_reason(const cb_roster_type *t, const cb_roster_clip *c,
     for (uint32_t i = 0; i < t->clip_count; ++i) decided |= t->clips[i].in_place;
     if (b->from.root_motion != CB_FROM_DEFAULT)
         snprintf(why, size, "root_motion = \"%s\" (%s)", cb_root_motion_name(b->root_motion), cb_setting_from_name(b->from.root_motion));
+    else if (decided && c->in_place && !travels)
+        snprintf(why, size, "in place with the type's loops that travel (its own root moves %.3g units a loop, under 1%% of "
+                 "the model's height) (root_motion = \"keep\" overrides)", travel);
     else if (decided && c->in_place)
         snprintf(why, size, "a loop travelling %.3g units a loop, which its wrap would pull back: in place, its velocity "
                  "%.3g units/s recorded for the game to move the instance (root_motion = \"keep\" overrides)", travel, c->speed.root);

@@ -376,7 +376,8 @@ static void test_info_and_report_say_why(void **state)
     snprintf(cmd, sizeof cmd, "%s info %s", crowdbake_exe(), cow_abs);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     if (!strstr(out, "follows the speed: locomotion: the clip's name says 'walk', and 4 of 4 feet planted") ||
-        !strstr(out, "own rate: in place: the clip's name says 'attack'") ||
+        !strstr(out, "own rate: in place: the clip's name says 'eating'") || /* the attacks play once now */
+        !strstr(out, "own rate: in place: the clip's name says 'idle'") ||
         !strstr(out, "own rate: a one-shot") || !strstr(out, "feet slide 53% of the ground speed"))
         fail_msg("%s", out);
     snprintf(cmd, sizeof cmd,
