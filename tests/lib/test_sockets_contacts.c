@@ -224,6 +224,40 @@ static void test_no_foot_is_named_after_an_ik_control(void **state)
         cb_model_free(m);
     }
     assert_int_equal(husky_feet, 4); /* the hind paws too, where the IK bones carry part of the weight */
+
+    /* The rule bites where the heaviest bone of a paw is named as a control (as on another animal of
+     * the pack, whose hind contacts were named IKBackLeg.L): Husky's hind paw bones (FFB.L, FFB.R)
+     * renamed so, those feet are named after their legs' deforming bones, never the control. */
+    cb_model *m = load_shared(rigs[0]);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_clip_info info;
+    assert_int_equal(cb_clip_analyze(s, cb_model_find_animation(m, "AnimalArmature|Walk"), 30, -1, NULL, &info, &err), CB_OK);
+    cb_stride before, after;
+    cb_stride_measure(s, &info, &before);
+    static char renamed[CB_MAX_FEET][80];
+    const char *own[CB_MAX_FEET];
+    uint32_t hind = 0;
+    for (uint32_t k = 0; k < before.foot_count; ++k) {
+        uint32_t node = m->skins[0].joints[before.feet[k].joint];
+        own[k] = m->nodes[node].name;
+        if (strncmp(own[k], "FFB.", 4) != 0) continue;
+        snprintf(renamed[k], sizeof renamed[k], "IK%s", own[k]);
+        m->nodes[node].name = renamed[k], ++hind;
+    }
+    assert_int_equal(hind, 2);
+    cb_stride_measure(s, &info, &after);
+    for (uint32_t k = 0; k < before.foot_count; ++k) m->nodes[m->skins[0].joints[before.feet[k].joint]].name = own[k];
+    assert_int_equal(after.foot_count, before.foot_count);
+    uint32_t legs = 0;
+    for (uint32_t k = 0; k < after.foot_count; ++k) {
+        printf("  hind paw bones renamed IKFFB.*: a foot is named %s\n", after.feet[k].name);
+        assert_false(named_as_control(after.feet[k].name));
+        legs += strncmp(after.feet[k].name, "BackLowerLeg.", 13) == 0;
+    }
+    assert_int_equal(legs, 2);
+    cb_sampler_free(s);
+    cb_model_free(m);
     /* The check itself reads controls as controls. */
     assert_true(named_as_control("IKBackLeg.L") && named_as_control("PoleTarget.L_end") && named_as_control("Leg_IK"));
     assert_false(named_as_control("BackLeg.L") || named_as_control("Pike") || named_as_control("Kick"));
