@@ -396,15 +396,6 @@ static void write_record(roster_run *run, uint32_t i)
         roster_write_record(path, w->record, w->record_size);
 }
 
-/* Whether each clip's error is known (a record from a bake of this crowdbake): else the files,
- * though up to date, are baked again to measure them, so the manifest never lacks them. */
-static bool clip_errors_known(const cb_roster_type *t)
-{
-    for (uint32_t c = 0; c < t->clip_count; ++c)
-        if (t->clips[c].visible_error_mm < 0) return false;
-    return true;
-}
-
 static void bake_type(roster_run *run, uint32_t i)
 {
     cb_roster_type *t = &run->r->types[i];
@@ -415,7 +406,7 @@ static void bake_type(roster_run *run, uint32_t i)
     } else if (t->owner != i) {
         return; /* shared types are settled once their owner is */
     } else {
-        if (!run->opt->force && clip_errors_known(t) && roster_outputs_up_to_date(t, an->bake.formats)) {
+        if (!run->opt->force && roster_outputs_up_to_date(t, an->bake.formats)) {
             t->outcome = CB_TYPE_UP_TO_DATE;
         } else {
             if (t->prepared_from_record) { /* the palette is not: bake it from the model */
