@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "crowdbake/babylon.h"
+#include "internal/plumbing.h"
 #include "crowdbake/bake.h"
 #include "crowdbake/gltf.h"
 #include "crowdbake/pool.h"
@@ -32,6 +33,7 @@ typedef struct type_work {
     cb_bake_origin origin;
     unsigned char *record;    /* what preparing found, for the type's record (roster_cache.h) */
     size_t record_size;
+    uint64_t record_key;
 } type_work;
 
 typedef struct roster_run {
@@ -103,6 +105,9 @@ static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_
         c->fps = info.effective_fps;
         c->duration = info.duration;
         c->loops = info.loops, c->step = plan->step;
+        c->in_place = cb_root_motion_in_place(w->job.settings.root_motion, &info);
+        c->visible_error_mm = -1; /* the bake measures it */
+        cb_loop_reason_text(&info, c->loop_reason, sizeof c->loop_reason);
         cb_measure_ground_speed(s, &info, &c->speed);
         row += info.frames;
     }
@@ -270,7 +275,7 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     cb_bake_job_release_search(&w->job);
     uint64_t key;
     if (cb_prep_key(an, run->opt->limits, t->inputs, t->input_count, &key))
-        cb_prep_record_encode(t, key, &w->record, &w->record_size);
+        cb_prep_record_encode(t, key, &w->record, &w->record_size), w->record_key = key;
 }
 
 /* A type's record, when it matches its files, stands in for loading and sampling: an
@@ -338,6 +343,7 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
         t->error_rows_measured = p->error_rows_measured;
         t->palette_bytes = p->texel_bytes;
     }
+    for (uint32_t i = 0; i < r.budget_count && i < t->clip_count; ++i) t->clips[i].visible_error_mm = r.budgets[i].error_mm;
     for (uint32_t i = 0; i < r.notes.count; ++i) cb_warn(&t->warnings, r.notes.items[i].kind, "%s", r.notes.items[i].message);
     cb_bake_budget_notes(&w->job, &r, NULL, &t->warnings); /* in the catalog's words */
     cb_bake_result_free(&r);
@@ -414,7 +420,12 @@ static void log_type(roster_run *run, const cb_roster_type *t)
 static void write_record(roster_run *run, uint32_t i)
 {
     type_work *w = &run->work[i];
+    const cb_roster_type *t = &run->r->types[i];
     char path[4096];
+    if (w->record && t->outcome == CB_TYPE_BAKED) { /* again, with what the bake measured (each clip's error) */
+        free(w->record), w->record = NULL;
+        cb_prep_record_encode(t, w->record_key, &w->record, &w->record_size);
+    }
     if (w->record && cb_prep_record_path(run->r->types[i].animal, path, sizeof path))
         roster_write_record(path, w->record, w->record_size);
 }
