@@ -20,9 +20,6 @@
 
 enum { MAX_CARRIED = 4, MEAN_SAMPLES = 32 };
 
-/* The fade: a quarter of the shortest swing on each side of a stance, the middle half of the
- * swing untouched. */
-#define RAMP_SHARE 0.25
 
 typedef struct leg {
     uint32_t foot;                   /* index into the stride's feet and the soles */
@@ -39,7 +36,8 @@ typedef struct plant_ctx {
     const cb_clip_info *clip;
     const cb_stride *st;
     const foot_sole *soles;
-    double *mats; /* joint matrices, scratch */
+    double *mats;       /* joint matrices, scratch */
+    double ramp_share;  /* the fade's share of the shortest swing, on each side of a stance */
 } plant_ctx;
 
 bool plant_owned_add(plant_owned *o, void *p)
@@ -180,7 +178,7 @@ static void plan_stances(const plant_ctx *c, leg *l)
         const cb_stance *next = &f->stances[(j + 1) % f->stance_count];
         swing = fmin(swing, fmod(next->land - sn->lift + 2 * D, D));
     }
-    l->ramp = RAMP_SHARE * swing;
+    l->ramp = c->ramp_share * swing;
 }
 
 static double smooth(double x) { return x * x * (3 - 2 * x); }
@@ -366,8 +364,8 @@ static bool alloc_keys(leg_keys *lk, const leg *l, uint32_t keys)
     return ok;
 }
 
-bool plant_clip(cb_sampler *s, const cb_clip_info *clip, const cb_stride *st, cb_animation *anim, plant_owned *owned,
-                cb_plant_clip *out)
+bool plant_clip(cb_sampler *s, const cb_clip_info *clip, const cb_stride *st, double ramp_share, cb_animation *anim,
+                plant_owned *owned, cb_plant_clip *out)
 {
     const cb_model *m = cb_sampler_model(s);
     const cb_channel *grid = densest(anim);
@@ -376,7 +374,7 @@ bool plant_clip(cb_sampler *s, const cb_clip_info *clip, const cb_stride *st, cb
     leg_keys keys[CB_MAX_FEET];
     uint32_t bones = m->skins[cb_sampler_skin(s)].joint_count, n = 0, found = 0;
     double size, *rest = malloc((size_t)bones * 16 * sizeof *rest);
-    plant_ctx c = {s, m, clip, st, soles, malloc((size_t)bones * 16 * sizeof(double))};
+    plant_ctx c = {s, m, clip, st, soles, malloc((size_t)bones * 16 * sizeof(double)), ramp_share};
     bool ok = rest && c.mats && grid;
     if (ok) {
         cb_sample_joint_matrices(s, -1, 0, rest);
@@ -386,6 +384,11 @@ bool plant_clip(cb_sampler *s, const cb_clip_info *clip, const cb_stride *st, cb
         if (!st->feet[k].strides || !st->feet[k].stance_count || soles[k].joint != st->feet[k].joint) continue;
         legs[n] = (leg){.foot = k};
         if (!find_leg(&c, &soles[k], &legs[n])) continue;
+        if (getenv("PLANT_DEBUG")) {
+            fprintf(stderr, "DBG %s: %s %s %s carried", st->feet[k].name, m->nodes[legs[n].hip].name, m->nodes[legs[n].knee].name, m->nodes[legs[n].ankle].name);
+            for (uint32_t i = 0; i < legs[n].carried_count; ++i) fprintf(stderr, " %s", m->nodes[legs[n].carried[i]].name);
+            fprintf(stderr, "\n");
+        }
         plan_stances(&c, &legs[n]);
         ok = alloc_keys(&keys[n], &legs[n], grid->key_count);
         ++n;
