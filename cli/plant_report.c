@@ -5,6 +5,7 @@
 
 #include "cli.h"
 #include "crowdbake/plant_feet.h"
+#include "roster/roster.h"
 
 static const char *plant_clip_name(const cb_bake_job *job, uint32_t i)
 {
@@ -19,20 +20,6 @@ void cli_plant_print(const cb_bake_job *job)
     for (uint32_t i = 0; i < r->clip_count; ++i) printf("  %s: %s\n", plant_clip_name(job, i), r->clips[i].why);
 }
 
-void cli_plant_clip_json(cb_json *j, const cb_plant_clip *c)
-{
-    cb_json_bool(j, "planted", c->planted);
-    cb_json_string(j, "why", c->why);
-    cb_json_number(j, "ground_speed", c->speed);
-    cb_json_int(j, "feet", c->feet);
-    cb_json_number(j, "slide_before", c->slide_before);
-    cb_json_number(j, "slide_worst_before", c->slide_worst_before);
-    cb_json_number(j, "slide_after", c->planted ? c->slide_after : c->slide_before);
-    cb_json_number(j, "slide_worst_after", c->planted ? c->slide_worst_after : c->slide_worst_before);
-    cb_json_number(j, "max_rotation_deg", c->max_rotation_deg);
-    cb_json_number(j, "max_shortfall", c->max_shortfall);
-}
-
 void cli_plant_json(cb_json *j, const cb_bake_job *job)
 {
     const cb_plant_report *r = cb_bake_job_plant_report(job);
@@ -41,7 +28,7 @@ void cli_plant_json(cb_json *j, const cb_bake_job *job)
     for (uint32_t i = 0; i < r->clip_count; ++i) {
         cb_json_object(j, NULL);
         cb_json_string(j, "clip", plant_clip_name(job, i));
-        cli_plant_clip_json(j, &r->clips[i]);
+        cb_roster_json_plant(j, &r->clips[i]);
         cb_json_end(j);
     }
     cb_json_end(j);

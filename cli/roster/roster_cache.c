@@ -115,11 +115,13 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
     for (uint32_t i = 0; i < t->clip_count; ++i) {
         const cb_roster_clip *c = &t->clips[i];
         put_str(&w, c->name);
-        put_u32(&w, c->first_row), put_u32(&w, c->frames), put_u32(&w, (c->loops ? 1u : 0u) | (c->step ? 2u : 0u));
+        put_u32(&w, c->first_row), put_u32(&w, c->frames),
+                put_u32(&w, (c->loops ? 1u : 0u) | (c->step ? 2u : 0u) | (c->plant.planted ? 4u : 0u));
         put_f64(&w, c->fps), put_f64(&w, c->duration);
         put_f64(&w, c->speed.speed), put_f64(&w, c->speed.root), put_f64(&w, c->speed.feet);
         put_str(&w, c->speed.method);
         put(&w, &c->speed.stride, sizeof c->speed.stride); /* plain numbers and zero-filled strings */
+        if (c->plant.planted) put(&w, &c->plant, sizeof c->plant); /* (likewise; only then: older records read) */
     }
     put_u32(&w, t->animal->state_count);
     for (uint32_t s = 0; s < t->animal->state_count; ++s) put_u32(&w, (uint32_t)t->state_clip[s]);
@@ -230,13 +232,15 @@ static void read_clips(reader *r, cb_roster_type *t)
         char method[64];
         get_str(r, c->name, sizeof c->name);
         c->first_row = get_u32(r), c->frames = get_u32(r);
-        uint32_t flags = get_u32(r); /* bit 0 loops, bit 1 held rows */
+        uint32_t flags = get_u32(r); /* bit 0 loops, bit 1 held rows, bit 2 a planting follows */
         c->loops = (flags & 1u) != 0, c->step = (flags & 2u) != 0;
         c->fps = get_f64(r), c->duration = get_f64(r);
         c->speed.speed = get_f64(r), c->speed.root = get_f64(r), c->speed.feet = get_f64(r);
         if (get_str(r, method, sizeof method) && !(c->speed.method = known_method(method))) r->failed = true;
         get(r, &c->speed.stride, sizeof c->speed.stride);
         if (!stride_plausible(&c->speed.stride)) r->failed = true;
+        if (flags & 4u) get(r, &c->plant, sizeof c->plant);
+        if ((flags & 4u) && (!c->plant.planted || !memchr(c->plant.why, 0, sizeof c->plant.why))) r->failed = true;
     }
 }
 

@@ -124,5 +124,8 @@ void roster_note_planted(const cb_bake_job *job, cb_roster_type *t)
 {
     const cb_plant_report *r = cb_bake_job_plant_report(job);
     for (uint32_t c = 0; r && c < r->clip_count && c < t->clip_count; ++c)
-        if (r->clips[c].planted) cb_warn(&t->warnings, "note", "clip '%s' (plant_feet): %s", t->clips[c].name, r->clips[c].why);
+        if (r->clips[c].planted) {
+            t->clips[c].plant = r->clips[c];
+            cb_warn(&t->warnings, "note", "clip '%s' (plant_feet): %s", t->clips[c].name, r->clips[c].why);
+        }
 }

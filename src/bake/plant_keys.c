@@ -384,11 +384,6 @@ bool plant_clip(cb_sampler *s, const cb_clip_info *clip, const cb_stride *st, do
         if (!st->feet[k].strides || !st->feet[k].stance_count || soles[k].joint != st->feet[k].joint) continue;
         legs[n] = (leg){.foot = k};
         if (!find_leg(&c, &soles[k], &legs[n])) continue;
-        if (getenv("PLANT_DEBUG")) {
-            fprintf(stderr, "DBG %s: %s %s %s carried", st->feet[k].name, m->nodes[legs[n].hip].name, m->nodes[legs[n].knee].name, m->nodes[legs[n].ankle].name);
-            for (uint32_t i = 0; i < legs[n].carried_count; ++i) fprintf(stderr, " %s", m->nodes[legs[n].carried[i]].name);
-            fprintf(stderr, "\n");
-        }
         plan_stances(&c, &legs[n]);
         ok = alloc_keys(&keys[n], &legs[n], grid->key_count);
         ++n;

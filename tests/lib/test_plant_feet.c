@@ -14,7 +14,9 @@
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
+#include <limits.h>
 #include <math.h>
+#include <stdlib.h>
 
 #include "crowdbake_pal.h"
 
@@ -241,6 +243,66 @@ static void check_model(const char *rel)
     cb_model_free(m);
 }
 
+/* How many clips of the catalog's manifest say plant_feet, and the Walk's slide before and after
+ * (the manifest's foot_slide is of the clip as baked). */
+static int manifest_planted(const char *dir, double *before, double *after)
+{
+    char cmd[4096], log[4096];
+    snprintf(cmd, sizeof cmd, "python3 -c \"import json\nh = json.load(open('%s/roster.json'))['types']['husky']\n"
+             "p = [c for c in h['clips'] if 'plant_feet' in c]\nw = [c for c in p if c['name'].endswith('Walk')]\n"
+             "print(len(p), w[0]['plant_feet']['slide_before'] if w else 0, w[0]['foot_slide']['mean'] if w else 0)\" > %s/m.txt",
+             dir, TMP);
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s: %s", cmd, log);
+    FILE *f = fopen(TMP "/m.txt", "r");
+    int n = -1;
+    assert_non_null(f);
+    assert_int_equal(fscanf(f, "%d %lf %lf", &n, before, after), 3);
+    fclose(f);
+    return n;
+}
+
+/* The catalog key ([animal] plant_feet = true) and the flag over a catalog: the manifest lists
+ * what planting changed per clip, its foot_slide is the planted clip's, the log says it; without
+ * either, nothing is planted. And `info --plant-feet --json` gives the same per clip. */
+static void test_catalog_and_info(void **state)
+{
+    (void)state;
+    char rel[1024], model[PATH_MAX], text[8192], cmd[16384], log[16384], toml[1200];
+    shared_path(rel, sizeof rel, "assets/quaternius-husky/Husky.glb");
+    assert_non_null(realpath(rel, model)); /* the catalog lies elsewhere */
+    assert_int_equal(system("mkdir -p " TMP), 0);
+    const char *dirs[] = {"key", "flag", "none"};
+    for (int k = 0; k < 3; ++k) {
+        snprintf(text, sizeof text, "[bake]\nfps = 30\nout_dir = \"%s\"\n[animal.husky]\nmodel = \"%s\"\n%s", dirs[k], model,
+                 k == 0 ? "plant_feet = true\n" : "");
+        snprintf(toml, sizeof toml, "%s/%s.toml", TMP, dirs[k]);
+        write_text(toml, text);
+        snprintf(cmd, sizeof cmd, "%s bake %s %s 2>&1", crowdbake_exe(), toml, k == 1 ? "--plant-feet" : "");
+        if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s: %s", cmd, log);
+        assert_true((strstr(log, "(plant_feet): 4 feet planted") != NULL) == (k < 2));
+        char dir[1200];
+        snprintf(dir, sizeof dir, "%s/%s", TMP, dirs[k]);
+        double before, after;
+        int planted = manifest_planted(dir, &before, &after);
+        print_message("catalog %s: %d clips planted, Walk %.1f%% -> %.1f%%\n", dirs[k], planted, 100 * before, 100 * after);
+        assert_int_equal(planted, k < 2 ? 3 : 0); /* Walk, Gallop, Gallop_Jump */
+        if (k < 2) assert_true(before > 1 && after <= 0.10);
+    }
+    snprintf(cmd, sizeof cmd, "%s info %s --plant-feet --json > %s/info.json && python3 -c \"import json\n"
+             "p = {c['clip']: c for c in json.load(open('%s/info.json'))['plant_feet']}\n"
+             "print(p['AnimalArmature|Walk']['planted'], p['AnimalArmature|Idle']['planted'], p['AnimalArmature|Walk']['slide_after'])\" > %s/i.txt",
+             crowdbake_exe(), model, TMP, TMP, TMP);
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s: %s", cmd, log);
+    FILE *f = fopen(TMP "/i.txt", "r");
+    char walk[8], idle[8];
+    double after;
+    assert_non_null(f);
+    assert_int_equal(fscanf(f, "%7s %7s %lf", walk, idle, &after), 3);
+    fclose(f);
+    assert_string_equal(walk, "True"), assert_string_equal(idle, "False");
+    assert_true(after <= 0.10);
+}
+
 static void test_husky_planted(void **state)
 {
     (void)state;
@@ -258,6 +320,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_husky_planted),
         cmocka_unit_test(test_cow_planted),
+        cmocka_unit_test(test_catalog_and_info),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
