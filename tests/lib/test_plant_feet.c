@@ -206,6 +206,70 @@ static void compare_joints(const cbpal_file *plain, const cbpal_file *planted, d
     }
 }
 
+static int bone_named(const cbpal_file *f, const char *name)
+{
+    for (uint32_t b = 0; b < f->header.bone_count; ++b) {
+        cbpal_bone bone;
+        if (!cbpal_get_bone(f, b, &bone) && strcmp(bone.name, name) == 0) return (int)b;
+    }
+    fail_msg("no bone %s", name);
+    return -1;
+}
+
+/* A joint's place: its matrix applied to its bind position. */
+static void joint_at(const cbpal_file *f, const double (*m)[16], int b, double out[3])
+{
+    cbpal_bone bone;
+    assert_int_equal(cbpal_get_bone(f, (uint32_t)b, &bone), 0);
+    const float *x = bone.bind_position;
+    for (int k = 0; k < 3; ++k) out[k] = m[b][k] * x[0] + m[b][4 + k] * x[1] + m[b][8 + k] * x[2] + m[b][12 + k];
+}
+
+/* The knee's plane (the normal of hip, knee, ankle) and its angle, degrees. */
+static void knee_of(const cbpal_file *f, const double (*m)[16], const int chain[3], double normal[3], double *angle)
+{
+    double p[3][3], u[3], v[3];
+    for (int i = 0; i < 3; ++i) joint_at(f, m, chain[i], p[i]);
+    for (int k = 0; k < 3; ++k) u[k] = p[0][k] - p[1][k], v[k] = p[2][k] - p[1][k];
+    normal[0] = u[1] * v[2] - u[2] * v[1], normal[1] = u[2] * v[0] - u[0] * v[2], normal[2] = u[0] * v[1] - u[1] * v[0];
+    double n = sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), lv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (int k = 0; k < 3; ++k) normal[k] /= n;
+    *angle = acos(fmax(-1, fmin(1, (u[0] * v[0] + u[1] * v[1] + u[2] * v[2]) / (lu * lv)))) * 180 / M_PI;
+}
+
+/* The knees of the planted clips, against the plain bake (same rows): how far each knee's plane
+ * turned (degrees), and the largest change of a knee's angle from one row to the next in each
+ * (a pop is a jump there that the plain clip does not have). */
+static void compare_knees(const cbpal_file *plain, const cbpal_file *planted, double *plane, double *jump_plain,
+                          double *jump_planted)
+{
+    static const char *const legs[][3] = {{"FrontShoulder.L", "FrontUpperLeg.L", "FrontLowerLeg.L"},
+                                          {"FrontShoulder.R", "FrontUpperLeg.R", "FrontLowerLeg.R"},
+                                          {"BackLeg.L", "BackUpperLeg.L", "BackLowerLeg.L"},
+                                          {"BackLeg.R", "BackUpperLeg.R", "BackLowerLeg.R"}};
+    static double a[MAX_BONES][16], b[MAX_BONES][16];
+    *plane = *jump_plain = *jump_planted = 0;
+    for (uint32_t c = 1; c < plain->header.clip_count; ++c) { /* Walk, Gallop (Idle is not planted) */
+        cbpal_clip clip;
+        assert_int_equal(cbpal_get_clip(plain, c, &clip), 0);
+        for (int l = 0; l < 4; ++l) {
+            int chain[3] = {bone_named(plain, legs[l][0]), bone_named(plain, legs[l][1]), bone_named(plain, legs[l][2])};
+            double last_a = NAN, last_b = NAN;
+            for (uint32_t r = 0; r <= clip.frames; ++r) { /* and round the loop to its first row */
+                double t = (r % clip.frames) / (double)clip.fps, na[3], nb[3], ka, kb;
+                pose_at(plain, c, t, a), pose_at(planted, c, t, b);
+                knee_of(plain, (const double (*)[16])a, chain, na, &ka);
+                knee_of(planted, (const double (*)[16])b, chain, nb, &kb);
+                double cosine = fmin(1, fabs(na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2]));
+                *plane = fmax(*plane, acos(cosine) * 180 / M_PI);
+                if (r > 0) *jump_plain = fmax(*jump_plain, fabs(ka - last_a)), *jump_planted = fmax(*jump_planted, fabs(kb - last_b));
+                last_a = ka, last_b = kb;
+            }
+        }
+    }
+}
+
 static void check_model(const char *rel)
 {
     char model[1024];
@@ -239,6 +303,10 @@ static void check_model(const char *rel)
     print_message("%s: joints outside the legs move %.2g mm/m, leg bones' lengths change %.2g mm/m\n", rel, outside, length);
     assert_true(outside <= 0.01);
     assert_true(length <= 0.05);
+    double plane, jump_plain, jump_planted;
+    compare_knees(&plain, &planted, &plane, &jump_plain, &jump_planted);
+    print_message("%s: knee planes turn up to %.1f deg; a knee's angle changes up to %.1f deg a row (%.1f unplanted)\n", rel,
+                  plane, jump_planted, jump_plain);
     cbpal_close(&plain), cbpal_close(&planted);
     cb_model_free(m);
 }
