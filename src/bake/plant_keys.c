@@ -82,15 +82,19 @@ static bool chain_end(const cb_model *m, const cb_skin *sk, int32_t node, int32_
     return *hip >= 0 && is_joint(sk, *knee) && is_joint(sk, *hip) && !under_control(m, node);
 }
 
-/* Distance from p to a bone: from its joint to its first child node (a leaf joint: the joint). */
+static int32_t first_child(const cb_model *m, int32_t node)
+{
+    for (uint32_t i = 0; i < m->node_count; ++i)
+        if (m->nodes[i].parent == node) return (int32_t)i;
+    return -1;
+}
+
+/* Distance from p to a bone: from its joint to its first child node. */
 static double bone_distance(const cb_model *m, const double *g, int32_t node, cb_vec3 p)
 {
-    cb_vec3 a = {g[node * 16 + 12], g[node * 16 + 13], g[node * 16 + 14]}, b = a;
-    for (uint32_t i = 0; i < m->node_count; ++i)
-        if (m->nodes[i].parent == node) {
-            b = (cb_vec3){g[i * 16 + 12], g[i * 16 + 13], g[i * 16 + 14]};
-            break;
-        }
+    int32_t tip = first_child(m, node);
+    cb_vec3 a = {g[node * 16 + 12], g[node * 16 + 13], g[node * 16 + 14]};
+    cb_vec3 b = {g[tip * 16 + 12], g[tip * 16 + 13], g[tip * 16 + 14]};
     cb_vec3 ab = cb_vec3_sub(b, a), ap = cb_vec3_sub(p, a);
     double len2 = cb_vec3_dot(ab, ab), x = len2 > 0 ? cb_vec3_dot(ap, ab) / len2 : 0;
     x = x < 0 ? 0 : x > 1 ? 1 : x;
@@ -106,10 +110,12 @@ static int32_t nearest_chain_end(const plant_ctx *c, const foot_sole *sole, cons
     cb_sample_joint_matrices(c->s, -1, 0, c->mats);
     foot_sole_at(sole, c->mats, &h, xz);
     const double *g = cb_sample_globals(c->s, -1, 0);
-    int32_t found = -1, knee, hip;
+    int32_t found = -1;
     for (uint32_t j = 0; j < sk->joint_count; ++j) {
-        double d = deforms[j] && chain_end(c->m, sk, sk->joints[j], &knee, &hip)
-                       ? bone_distance(c->m, g, sk->joints[j], (cb_vec3){xz[0], h, xz[1]}) : INFINITY;
+        int32_t node = sk->joints[j], parent = c->m->nodes[node].parent;
+        bool bone = deforms[j] && parent >= 0 && is_joint(sk, parent) && !under_control(c->m, node) &&
+                    first_child(c->m, node) >= 0;
+        double d = bone ? bone_distance(c->m, g, node, (cb_vec3){xz[0], h, xz[1]}) : INFINITY;
         if (d < best) best = d, found = sk->joints[j];
     }
     return found;
@@ -131,8 +137,9 @@ static bool find_leg(const plant_ctx *c, const foot_sole *sole, leg *out)
     out->ankle = -1;
     for (uint32_t j = 0; j < sk->joint_count; ++j)
         if (w[j] > top && chain_end(c->m, sk, sk->joints[j], &out->knee, &out->hip)) top = w[j], out->ankle = sk->joints[j];
-    if (out->ankle < 0) out->ankle = nearest_chain_end(c, sole, deforms);
     if (out->ankle >= 0) chain_end(c->m, sk, out->ankle, &out->knee, &out->hip);
+    else if ((out->knee = nearest_chain_end(c, sole, deforms)) >= 0) /* reach with its tip */
+        out->hip = c->m->nodes[out->knee].parent, out->ankle = first_child(c->m, out->knee);
     out->carried_count = 0;
     for (uint32_t j = 0; out->ankle >= 0 && j < sk->joint_count; ++j) {
         int32_t node = sk->joints[j];

@@ -244,8 +244,9 @@ static void knee_of(const cbpal_file *f, const double (*m)[16], const int chain[
 static void compare_knees(const cbpal_file *plain, const cbpal_file *planted, double *plane, double *jump_plain,
                           double *jump_planted)
 {
-    static const char *const legs[][3] = {{"FrontShoulder.L", "FrontUpperLeg.L", "FrontLowerLeg.L"},
-                                          {"FrontShoulder.R", "FrontUpperLeg.R", "FrontLowerLeg.R"},
+    /* The front paw hangs from the shin's tip, where the paw's bone (FF) stands. */
+    static const char *const legs[][3] = {{"FrontUpperLeg.L", "FrontLowerLeg.L", "FF.L"},
+                                          {"FrontUpperLeg.R", "FrontLowerLeg.R", "FF.R"},
                                           {"BackLeg.L", "BackUpperLeg.L", "BackLowerLeg.L"},
                                           {"BackLeg.R", "BackUpperLeg.R", "BackLowerLeg.R"}};
     static double a[MAX_BONES][16], b[MAX_BONES][16];
@@ -307,6 +308,11 @@ static void check_model(const char *rel)
     compare_knees(&plain, &planted, &plane, &jump_plain, &jump_planted);
     print_message("%s: knee planes turn up to %.1f deg; a knee's angle changes up to %.1f deg a row (%.1f unplanted)\n", rel,
                   plane, jump_planted, jump_plain);
+    /* No pop: no knee bends faster from row to row than the clip's own knees do (Husky 42.1 deg
+     * against 50.9, Cow 24.3 against 23.1); the knee's plane turns with the leg's swing onto the
+     * planted place, not over (Husky 13.0 deg, Cow 21.6). */
+    assert_true(jump_planted <= 1.1 * jump_plain);
+    assert_true(plane <= 25);
     cbpal_close(&plain), cbpal_close(&planted);
     cb_model_free(m);
 }
