@@ -6,10 +6,12 @@
  * rate. Planting turns each leg's two bones above the foot (two-bone IK, analytic: the bones
  * keep their lengths, the knee bends in its own plane) so that while a foot is planted its sole
  * stays where it landed in a world the body crosses at the clip's ground speed; the change
- * fades in before the landing and out after the lift (a quarter of the swing each), so nothing
- * pops. Only the leg chains (hip and knee bones, the foot bone's rotation that keeps the foot's
- * world orientation, and rig bones that carry the sole, e.g. an IK control the paw is weighted
- * to) change; every other joint keeps its keys. */
+ * fades in before the landing and out after the lift (a tenth, a quarter or two fifths of the
+ * swing each, whichever leaves the least slide), so nothing pops. Only the leg chains (hip and
+ * knee bones, the foot bone's rotation that keeps the foot's world orientation, and rig bones
+ * that carry the sole, e.g. an IK control the paw is weighted to) change; every other joint
+ * keeps its keys. The bake samples a copy of the model with the new keys; the caller's model is
+ * not touched. */
 #ifndef CB_PLANT_FEET_H
 #define CB_PLANT_FEET_H
 

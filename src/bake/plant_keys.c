@@ -5,7 +5,10 @@
  * bake stores it). At each key of the clip every planted foot's sole is pulled back there by
  * turning the leg's two bones above the foot (leg_ik.h); the foot bone keeps its orientation in
  * the world, and rig bones outside the chain that carry the sole (an IK control the paw is
- * weighted to) move with it. The pull fades in before the landing and out after the lift. */
+ * weighted to) move with it. A paw weighted to such a bone alone is reached with the leg's two
+ * long bones and the shin's tip. The pull fades in before the landing and out after the lift.
+ * New keys go at the clip's own key times (its densest channel's), so its key step, span and
+ * loop framing stay. */
 #include "plant_feet.h"
 
 #include <math.h>
