@@ -141,6 +141,10 @@ bool cli_list_has(const char *list, const char *name);
  * "warnings" array of {kind, message}. */
 void cli_print_warnings(const cb_warnings *warnings, bool notes);
 void cli_json_warnings(cb_json *json, const cb_warnings *warnings);
+/* plant_report.c: what --plant-feet changed per clip, as log lines and as --json's "plant_feet"
+ * (nothing without it). */
+void cli_plant_print(const cb_bake_job *job);
+void cli_plant_json(cb_json *j, const cb_bake_job *job);
 
 int cmd_info(int argc, char **argv);
 int cmd_sample(int argc, char **argv);

@@ -73,6 +73,10 @@ const char cmd_bake_usage[] =
     "                             an even subset of the rows, each clip's last always; faster on\n"
     "                             large rigs, but it can miss the one fast interval where the blend\n"
     "                             errs most)\n"
+    "  --plant-feet               lock planted feet at bake time: in a locomotion loop whose feet slide\n"
+    "                             over 10% of its ground speed, turn each leg's two bones (IK) so a\n"
+    "                             planted foot stays where it landed; only the legs change, what\n"
+    "                             changed is listed per clip (catalog: plant_feet = true)\n"
     "  --max-texture-size N       never emit a dimension above N (default 16384); rows wrap into\n"
     "                             side-by-side column blocks\n"
     "  --root-motion keep|in-place|loops-in-place  in-place removes the root's average horizontal\n"
@@ -99,7 +103,7 @@ typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
         *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir, *loops,
         *one_shots, *syncs, *default_state, *type, *fragment;
-    bool zstd, json, quiet, force, depfile_manifest, fit, measure_all, over_budget;
+    bool zstd, json, quiet, force, depfile_manifest, fit, measure_all, over_budget, plant_feet;
     cli_output out;
 } bake_args;
 
@@ -161,6 +165,7 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
     s->fit_rows = a->fit;
     if (a->fit) s->from.fit_rows = CB_FROM_COMMAND_LINE;
     s->measure_all = a->measure_all;
+    s->plant_feet = a->plant_feet;
     s->allow_over_budget = a->over_budget;
     s->max_error_given = a->max_error != NULL;
     if (a->max_error && (!cli_parse_double(a->max_error, &s->max_error_mm) || !(s->max_error_mm > 0)))
@@ -174,7 +179,7 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
               (a->format ? CB_BAKE_FORMATS : 0u) | (a->zstd ? CB_BAKE_ZSTD : 0u) |
               (a->exr_compression ? CB_BAKE_EXR_COMPRESSION : 0u) | (a->fit ? CB_BAKE_FIT_ROWS : 0u) |
               (a->measure_all ? CB_BAKE_MEASURE_ALL : 0u) | (a->over_budget ? CB_BAKE_ALLOW_OVER_BUDGET : 0u) |
-              (a->max_error ? CB_BAKE_MAX_ERROR : 0u) | (a->max_fps ? CB_BAKE_MAX_FPS : 0u);
+              (a->max_error ? CB_BAKE_MAX_ERROR : 0u) | (a->max_fps ? CB_BAKE_MAX_FPS : 0u) | (a->plant_feet ? CB_BAKE_PLANT_FEET : 0u);
     return 0;
 }
 
@@ -468,11 +473,13 @@ static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bak
         for (uint32_t i = 0; i < r->output_count; ++i) json_output(&j, &r->outputs[i], seconds, load);
         cb_json_end(&j);
         json_clips(&j, job, r);
+        cli_plant_json(&j, job);
         cli_json_warnings(&j, &warnings);
         cb_json_end(&j);
     } else {
         cb_error ignored = {0};
         if (!a->quiet && any_auto(job)) print_clips(job, r), print_saving(job, r, &ignored);
+        if (!a->quiet) cli_plant_print(job);
         for (uint32_t i = 0; i < r->output_count && !a->quiet; ++i) print_summary(&r->outputs[i], seconds);
         cli_print_warnings(&warnings, !a->quiet);
     }
@@ -501,7 +508,7 @@ int cmd_bake(int argc, char **argv)
         {"--exclude-clip", "A,B", &a.excluded, NULL}, {"--out-dir", "DIR", &a.out_dir, NULL},
         {"--loop", "A,B", &a.loops, NULL},         {"--one-shot", "A,B", &a.one_shots, NULL},
         {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest}, {"--fit-rows", NULL, NULL, &a.fit},
-        {"--measure-all", NULL, NULL, &a.measure_all},
+        {"--measure-all", NULL, NULL, &a.measure_all}, {"--plant-feet", NULL, NULL, &a.plant_feet},
         {"--allow-over-budget", NULL, NULL, &a.over_budget},
         {"--type", "NAME", &a.type, NULL},        {"--fragment", "FILE", &a.fragment, NULL},
         {"--sync", "STATE=speed|time", &a.syncs, NULL}, {"--default-state", "STATE", &a.default_state, NULL}};

@@ -11,13 +11,14 @@
 #include "internal/plumbing.h"
 
 const char cmd_info_usage[] =
-    "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX] [-q] [-v]\n\n"
+    "usage: crowdbake info MODEL [--json] [--fps N] [--skin NAME|INDEX] [--plant-feet] [-q] [-v]\n\n"
     "Skins, joints, skinned mesh nodes and vertex counts, and per clip: start, duration, keys,\n"
     "interpolation modes, whether it loops and why, frames at --fps (default 30), root velocity and\n"
     "ground speed (root travel and planted feet), and the footsteps: when each foot lands and lifts;\n"
     "the sockets: nodes under a joint that are not joints, where props attach (bone, bind transform).\n"
     "Then, on stderr, the warnings a bake would give (clips it would leave out, and why); -q leaves\n"
-    "them out.\n";
+    "them out. --plant-feet adds what `bake --plant-feet` would change per clip (feet locked at bake\n"
+    "time: the slide before and after, the largest joint rotation change).\n";
 
 typedef struct clip_facts {
     uint64_t keys;
@@ -230,7 +231,8 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
     }
 }
 
-static void print_json(const cb_model *m, int skin, const clip_facts *facts, const socket_list *sockets, double fps)
+static void print_json(const cb_model *m, int skin, const clip_facts *facts, const socket_list *sockets, double fps,
+                       const cb_bake_job *planted)
 {
     cb_json j;
     cb_json_init(&j, stdout);
@@ -320,11 +322,21 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, con
         cb_json_end(&j);
     }
     cb_json_end(&j);
+    if (planted) cli_plant_json(&j, planted);
     cb_warnings warnings = {0};
     cb_model_warnings(m, true, &warnings);
     cli_json_warnings(&j, &warnings);
     cb_warnings_free(&warnings);
     cb_json_end(&j);
+}
+
+/* --plant-feet: what a bake with it would change, from a job planned at the fixed --fps (no rate
+ * search: planting does not depend on the rates). */
+static cb_status plan_planted(cb_model *m, int skin, double fps, const cb_limits *limits, cb_bake_job *job, cb_error *err)
+{
+    job->model = m, job->skin = skin, job->limits = *limits;
+    job->settings.plant_feet = true, job->settings.fps_auto = false, job->settings.fps = fps;
+    return cb_bake_job_plan(job, err);
 }
 
 int cmd_info(int argc, char **argv)
@@ -334,9 +346,9 @@ int cmd_info(int argc, char **argv)
     cli_output out;
     if (cli_take_output(&argc, argv, &out)) return CLI_EXIT_USAGE;
     const char *path = NULL, *fps_text = "30", *skin_name = NULL;
-    bool json = false, help;
-    const cli_option options[] = {
-        {"--json", NULL, NULL, &json}, {"--fps", "N", &fps_text, NULL}, {"--skin", "NAME|INDEX", &skin_name, NULL}};
+    bool json = false, plant = false, help;
+    const cli_option options[] = {{"--json", NULL, NULL, &json}, {"--fps", "N", &fps_text, NULL},
+                                  {"--skin", "NAME|INDEX", &skin_name, NULL}, {"--plant-feet", NULL, NULL, &plant}};
     int rc = cli_parse(argc, argv, options, sizeof options / sizeof options[0], &path, 1, 1, &help);
     if (help) return fputs(cmd_info_usage, stdout), fputs(cli_output_usage, stdout), fputs(cli_limits_usage, stdout), 0;
     if (rc) return rc;
@@ -358,14 +370,19 @@ int cmd_info(int argc, char **argv)
     if (!facts) cb_fail(&err, CB_ERR_INTERNAL, "out of memory");
     socket_list sockets = {0};
     if (!err.status) gather_clips(m, skin, fps, &limits, facts, &sockets, &err);
-    if (!err.status && json) print_json(m, skin, facts, &sockets, fps);
+    cb_bake_job job;
+    cb_bake_job_init(&job);
+    bool planted = plant && skin >= 0 && !err.status && !plan_planted(m, skin, fps, &limits, &job, &err);
+    if (!err.status && json) print_json(m, skin, facts, &sockets, fps, planted ? &job : NULL);
     if (!err.status && !json) print_text(m, skin, facts, fps), print_sockets(m, skin, &sockets, sockets.helpers);
+    if (!err.status && !json && planted) cli_plant_print(&job);
     if (!err.status && !json && !out.quiet) { /* what a bake would leave out (-q: not said) */
         cb_warnings warnings = {0};
         cb_model_warnings(m, true, &warnings);
         cli_print_warnings(&warnings, false);
         cb_warnings_free(&warnings);
     }
+    cb_bake_job_free(&job);
     free(facts);
     free(sockets.items);
     cb_model_free(m);

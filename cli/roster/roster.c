@@ -91,7 +91,9 @@ static int pick_skin(const cb_model *m)
 
 static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_type *t, cb_error *err)
 {
-    cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
+    /* The job's model: with plant_feet, the copy whose planted clips' legs were turned (what the
+     * palette holds, so the manifest's ground speed and slide are of the feet as baked). */
+    cb_sampler *s = cb_sampler_create(w->job.model, w->skin, err);
     if (!s) return err->status;
     uint32_t row = 0;
     for (uint32_t i = 0; i < t->clip_count && !err->status; ++i) {
@@ -216,7 +218,8 @@ static cb_status plan_and_sample(roster_run *run, const cb_catalog_animal *an, t
 {
     set_up_job(run, an, w, t);
     uint64_t key = roster_plan_key(w->model, w->skin, w->plan, w->clip_requests, t->clip_count, &an->bake);
-    roster_plan *memo = roster_plan_claim(&run->plans, key);
+    /* A job that plants feet samples the planted copy of the model its own planning makes: it plans alone. */
+    roster_plan *memo = an->bake.plant_feet ? NULL : roster_plan_claim(&run->plans, key);
     roster_plan_facts facts;
     if (roster_plan_copy(memo, &w->job, &facts)) {
         take_facts(t, &facts);
@@ -266,6 +269,7 @@ static void prepare_from_model(roster_run *run, uint32_t i)
         return;
     }
     roster_warn_foot_slide(t);
+    roster_note_planted(&w->job, t);
     t->key = roster_content_key(w->model, w->skin, w->job.plan, t->clip_count, &an->bake);
     w->origin = (cb_bake_origin){t->key, an->canonical, (const cb_model *const *)w->lod_models, an->lod_count};
     w->job.origin = &w->origin;

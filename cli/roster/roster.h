@@ -8,6 +8,7 @@
 #include "catalog/catalog.h"
 #include "internal/json.h"
 #include "crowdbake/socket.h"
+#include "crowdbake/plant_feet.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -52,6 +53,7 @@ typedef struct cb_roster_clip {
                               * (a record lost beside an up-to-date palette: the files record only the type's) */
     bool in_place;         /* its root travel taken out (the job's root motion, cb_root_motion_in_place) */
     cb_ground_speed speed; /* speed.speed is the clip's ground speed */
+    cb_plant_clip plant;   /* with plant_feet, what planting its feet changed (plant.planted: it did) */
 } cb_roster_clip;
 
 typedef struct cb_roster_lod {
@@ -121,6 +123,9 @@ cb_status cb_roster_merge(char *const *fragments, uint32_t count, const char *ma
  * a stride, "foot_slide": how much each planted foot slides at the clip's ground speed
  * (fractions of that speed, mean and worst over the foot's stance). */
 void cb_roster_json_stride(cb_json *j, const cb_stride *stride);
+/* What planting a clip's feet changed (crowdbake/plant_feet.h), into an open object: the manifest's
+ * plant_feet, bake and info --json's. */
+void cb_roster_json_plant(cb_json *j, const cb_plant_clip *plant);
 /* "sockets": [{name, bone, bind_transform}], as the manifest and `info --json` give them. */
 void cb_roster_json_sockets(cb_json *j, const cb_socket *sockets, uint32_t count);
 

@@ -49,6 +49,7 @@ bool cb_prep_key(const cb_catalog_animal *an, const cb_limits *limits, char *con
                            b->exr_compression, an->speed_reference, b->fit_rows};
     cbpal_xxh64_update(&h, settings, sizeof settings);
     if (b->measure_all) hash_str(&h, "measure_all"); /* only then: records made before it stay valid */
+    if (b->plant_feet) hash_str(&h, "plant_feet");   /* (likewise) */
     if (b->max_error_given && b->from.max_error == CB_FROM_COMMAND_LINE) hash_str(&h, "max_error from the command line");
     hash_str(&h, b->out_dir);
     cb_limits l = limits ? *limits : cb_default_limits();
@@ -114,13 +115,15 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
     for (uint32_t i = 0; i < t->clip_count; ++i) {
         const cb_roster_clip *c = &t->clips[i];
         put_str(&w, c->name);
-        put_u32(&w, c->first_row), put_u32(&w, c->frames), put_u32(&w, (c->loops ? 1u : 0u) | (c->step ? 2u : 0u) | (c->in_place ? 4u : 0u));
+        put_u32(&w, c->first_row), put_u32(&w, c->frames);
+        put_u32(&w, (c->loops ? 1u : 0u) | (c->step ? 2u : 0u) | (c->in_place ? 4u : 0u) | (c->plant.planted ? 8u : 0u));
         put_f64(&w, c->fps), put_f64(&w, c->duration);
         put_str(&w, c->loop_reason);
         put_f64(&w, c->visible_error_mm);
         put_f64(&w, c->speed.speed), put_f64(&w, c->speed.root), put_f64(&w, c->speed.feet);
         put_str(&w, c->speed.method);
         put(&w, &c->speed.stride, sizeof c->speed.stride); /* plain numbers and zero-filled strings */
+        if (c->plant.planted) put(&w, &c->plant, sizeof c->plant); /* (likewise; only then: older records read) */
     }
     put_u32(&w, t->animal->state_count);
     for (uint32_t s = 0; s < t->animal->state_count; ++s) put_u32(&w, (uint32_t)t->state_clip[s]);
@@ -231,7 +234,7 @@ static void read_clips(reader *r, cb_roster_type *t)
         char method[64];
         get_str(r, c->name, sizeof c->name);
         c->first_row = get_u32(r), c->frames = get_u32(r);
-        uint32_t flags = get_u32(r); /* bit 0 loops, bit 1 held rows, bit 2 in place */
+        uint32_t flags = get_u32(r); /* bit 0 loops, bit 1 held rows, bit 2 in place, bit 3 a planting follows */
         c->loops = (flags & 1u) != 0, c->step = (flags & 2u) != 0, c->in_place = (flags & 4u) != 0;
         c->fps = get_f64(r), c->duration = get_f64(r);
         get_str(r, c->loop_reason, sizeof c->loop_reason);
@@ -240,6 +243,8 @@ static void read_clips(reader *r, cb_roster_type *t)
         if (get_str(r, method, sizeof method) && !(c->speed.method = known_method(method))) r->failed = true;
         get(r, &c->speed.stride, sizeof c->speed.stride);
         if (!stride_plausible(&c->speed.stride)) r->failed = true;
+        if (flags & 8u) get(r, &c->plant, sizeof c->plant);
+        if ((flags & 8u) && (!c->plant.planted || !memchr(c->plant.why, 0, sizeof c->plant.why))) r->failed = true;
     }
 }
 

@@ -109,6 +109,20 @@ void cb_roster_json_sockets(cb_json *j, const cb_socket *sockets, uint32_t count
     cb_json_end(j);
 }
 
+void cb_roster_json_plant(cb_json *j, const cb_plant_clip *c)
+{
+    cb_json_bool(j, "planted", c->planted);
+    cb_json_string(j, "why", c->why);
+    cb_json_number(j, "ground_speed", c->speed);
+    cb_json_int(j, "feet", c->feet);
+    cb_json_number(j, "slide_before", c->slide_before);
+    cb_json_number(j, "slide_worst_before", c->slide_worst_before);
+    cb_json_number(j, "slide_after", c->planted ? c->slide_after : c->slide_before);
+    cb_json_number(j, "slide_worst_after", c->planted ? c->slide_worst_after : c->slide_worst_before);
+    cb_json_number(j, "max_rotation_deg", c->max_rotation_deg);
+    cb_json_number(j, "max_shortfall", c->max_shortfall);
+}
+
 void cb_roster_json_stride(cb_json *j, const cb_stride *st)
 {
     cb_json_bool(j, "stride", st->stride);
@@ -260,6 +274,11 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
         cb_json_number(j, "feet_speed", cl->speed.feet);
         cb_json_string(j, "speed_method", cl->speed.method);
         cb_roster_json_stride(j, &cl->speed.stride);
+        if (cl->plant.planted) { /* plant_feet: the slide above is after; what it was, and what changed */
+            cb_json_object(j, "plant_feet");
+            cb_roster_json_plant(j, &cl->plant);
+            cb_json_end(j);
+        }
         cb_json_end(j);
     }
     cb_json_end(j);

@@ -26,6 +26,9 @@ cb_status roster_match_states(const cb_catalog *cat, const cb_catalog_animal *an
 cb_status roster_decide_states(const cb_catalog *cat, const cb_catalog_animal *an, cb_roster_type *t, cb_error *err);
 /* A warning per speed-synced clip whose feet slide however it is played (cb_stride). */
 void roster_warn_foot_slide(cb_roster_type *t);
+/* With plant_feet: a note per clip whose feet were planted, with what it changed (its slide
+ * before and after, the largest joint rotation change). */
+void roster_note_planted(const cb_bake_job *job, cb_roster_type *t);
 
 /* The content key of a type's rig, planned clips and settings (roster_key.c). */
 uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan *plan, uint32_t n, const cb_bake_settings *b);

@@ -1,6 +1,7 @@
 /* roster_states.c - what a type's states play: each state's clip, whether it follows the
  * instance's speed (and why), the speed reference, and the feet that slide whatever the rate. */
 #include "roster_files.h"
+#include "crowdbake/plant_feet.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -117,4 +118,14 @@ void roster_warn_foot_slide(cb_roster_type *t)
                 "animation, or accept it)",
                 t->clips[c].name, 100 * st->slide_mean, 100 * st->slide_worst, lo, hi, why);
     }
+}
+
+void roster_note_planted(const cb_bake_job *job, cb_roster_type *t)
+{
+    const cb_plant_report *r = cb_bake_job_plant_report(job);
+    for (uint32_t c = 0; r && c < r->clip_count && c < t->clip_count; ++c)
+        if (r->clips[c].planted) {
+            t->clips[c].plant = r->clips[c];
+            cb_warn(&t->warnings, "note", "clip '%s' (plant_feet): %s", t->clips[c].name, r->clips[c].why);
+        }
 }

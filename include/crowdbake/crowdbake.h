@@ -38,6 +38,7 @@
 #include "vat.h"
 #include "stride.h"
 #include "locomotion.h"
+#include "plant_feet.h"
 #include "socket.h"
 #include "mesh.h"
 #include "gltf_mesh_write.h"

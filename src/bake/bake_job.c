@@ -10,6 +10,7 @@
 
 #include "crowdbake_pal.h" /* XXH64 */
 #include "outputs.h"
+#include "plant_feet.h"
 #include "../core/palette_bake.h" /* palette_choose_rates, the search's poses kept for the bake */
 #include "../core/pose_cache.h"
 #include "internal/plumbing.h"
@@ -150,10 +151,11 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
     if (job->settings.fps_auto)
         snprintf(chosen, sizeof chosen, " auto max_error=%.17g max_fps=%.17g", job->settings.max_error_mm,
                  job->settings.max_fps);
-    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s\n",
+    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s%s\n",
                      CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
                      o->max_texture_size, (int)o->root_motion, job->skin, job->settings.zstd,
-                     job->settings.exr_compression, o->fit ? " fit-rows" : "", o->measure_all ? " measure-all" : "", chosen);
+                     job->settings.exr_compression, o->fit ? " fit-rows" : "", o->measure_all ? " measure-all" : "", chosen,
+                     job->settings.plant_feet ? " plant-feet" : "");
     cbpal_xxh64_update(&h, opts, (size_t)n);
     cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
     return cbpal_xxh64_digest(&h);
@@ -276,12 +278,13 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
     bool any = false;
     for (uint32_t i = 0; i < n; ++i) job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false};
     job->plan_count = n;
+    if (job->settings.plant_feet && !job->planted && plant_feet_apply(job, err)) return free(goals), err->status;
     decide_root_motion(job);
     resolve_clips(job);
     for (uint32_t i = 0; i < n; ++i) plan_step_rows(job, i);
     for (uint32_t i = 0; i < n; ++i) any |= clip_goal(job, i, &goals[i]);
     if (any) {
-        cb_sampler *s = cb_sampler_create(m, job->skin, err);
+        cb_sampler *s = cb_sampler_create(job->model, job->skin, err); /* planted feet: the copy */
         cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
         job->search_poses = calloc(n ? n : 1, sizeof(pose_cache *)); /* NULL: nothing kept, as slow */
         if (s) palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_poses, err);
@@ -525,6 +528,7 @@ void cb_bake_job_release_search(cb_bake_job *job) { free_search_poses(job); }
 void cb_bake_job_free(cb_bake_job *job)
 {
     free_search_poses(job);
+    plant_feet_release(job);
     free(job->plan), free(job->rates), free(job->clip_settings);
     job->plan = NULL, job->rates = NULL, job->clip_settings = NULL;
     job->plan_count = 0;
