@@ -1,33 +1,81 @@
-// crowdbake_bones.mjs - the bone pass of crowdbake_crowd.mjs (new Crowd(gl, { ..., bonePass: true })).
+// crowdbake_bones.mjs - the bone pass of crowdbake_crowd.mjs (new Crowd(gl, { ..., bonePass: 'auto' | true })).
 // Per-vertex skinning decodes and blends every influence's bone from the palette's two rows at
 // every vertex. The bone pass does that once per instance and bone: before the draw, one fragment
 // per (instance, bone) writes the bone's blended transform (cross-fade included) to three RGBA32F
-// render targets (cb_bone_pass of the shipped GLSL), and the draw's vertex shader reads it back with
-// three plain texel fetches an influence (cb_skin_bone_pass, #define CB_BONE_TEXTURE). It needs
+// render targets (cb_bone_pass_placed of the shipped GLSL: the instance's yaw, scale and position applied
+// too), and the draw's vertex shader reads it back with three plain texel fetches an influence, blends
+// the influences' transforms and applies the sum once (cb_skin_bone_pass_influences, #define
+// CB_BONE_TEXTURE), straight to world space. It needs
 // EXT_color_buffer_float (render to float textures), which WebGL2 on desktop GPUs and SwiftShader have.
 import { compileProgram, paletteDefines } from './crowdbake_crowd.mjs';
 
 const PASS_VERTEX = `
-in vec4 a_inst; in vec4 a_from; in vec4 a_fade;
+in vec4 a_place; in vec4 a_inst; in vec4 a_from; in vec4 a_fade;
 uniform float u_time; uniform int u_rows; uniform vec2 u_size;
-flat out vec4 v_inst; flat out vec4 v_from; flat out float v_fade; flat out int v_x0;
+flat out vec4 v_place; flat out vec4 v_inst; flat out vec4 v_from; flat out vec2 v_fade; flat out int v_x0;
 void main() {  // instance i: a quad over its row of bones in its column block
     int block = gl_InstanceID / u_rows, row = gl_InstanceID - block * u_rows, bones = cb_row_texels / CB_TEXELS_PER_BONE;
     v_x0 = block * bones;
     vec2 corner = vec2(float(gl_VertexID & 1), float(gl_VertexID >> 1));
     vec2 px = vec2(float(v_x0) + corner.x * float(bones), float(row) + corner.y);
     gl_Position = vec4(px / u_size * 2.0 - 1.0, 0.0, 1.0);
-    v_inst = a_inst, v_from = a_from;
-    v_fade = a_fade.y > 0.0 ? clamp((u_time - a_fade.x) / a_fade.y, 0.0, 1.0) : 1.0;
+    v_place = a_place, v_inst = a_inst, v_from = a_from;
+    v_fade = vec2(a_fade.y > 0.0 ? clamp((u_time - a_fade.x) / a_fade.y, 0.0, 1.0) : 1.0, a_fade.z); // weight, scale
 }
 `;
 
 const PASS_FRAGMENT = `
-flat in vec4 v_inst; flat in vec4 v_from; flat in float v_fade; flat in int v_x0;
+flat in vec4 v_place; flat in vec4 v_inst; flat in vec4 v_from; flat in vec2 v_fade; flat in int v_x0;
 uniform float u_time;
 layout(location = 0) out vec4 o_c0; layout(location = 1) out vec4 o_c1; layout(location = 2) out vec4 o_c2;
-void main() { cb_bone_pass(int(gl_FragCoord.x) - v_x0, v_from, v_inst, v_fade, u_time, o_c0, o_c1, o_c2); }
+void main() {
+    cb_bone_pass_placed(int(gl_FragCoord.x) - v_x0, v_from, v_inst, v_fade.x, u_time, v_place, v_fade.y, o_c0, o_c1, o_c2);
+}
 `;
+
+// When a Crowd with bonePass: 'auto' (the default) takes the bone pass: from this many skinned
+// vertices a frame (instances x mesh vertices). Below it the pass's fixed cost (a render target
+// switch and a second program) is not paid back; above it, per-vertex blending decodes and blends
+// every influence's bone at every vertex, the bone pass once per instance and bone (bench/run.py's
+// crowd benchmark measures both: the bone pass is ahead from 100 Cows, 500 k vertices).
+export const AUTO_BONE_PASS_VERTICES = 50000;
+
+// Animation LOD, on by default: an instance whose animated bounds span fewer than `pixels` pixels on
+// screen is skinned with its `influences` largest bone weights (scaled to sum to 1), the rule
+// crowdbake mesh --max-influences applies to a far LOD mesh. lod: false, or { pixels, influences }.
+export const DEFAULT_LOD = { pixels: 24, influences: 2 };
+
+// The vertex main that skins from the bone pass straight to world space (the pass placed each bone).
+export const MAIN_BONES = `
+in vec3 a_position; in vec3 a_normal; in ivec4 a_joints; in vec4 a_weights;
+in vec4 a_place; in vec4 a_fade;
+uniform mat4 u_view_projection; uniform vec3 u_lod; // pixels per unit of size at w = 1, threshold, influences
+out vec3 v_world; out vec3 v_normal;
+void main() {
+    float w = (u_view_projection * vec4(a_place.xyz, 1.0)).w; // the instance's depth: one number a vertex
+    int influences = u_lod.x * a_fade.z < u_lod.y * w ? int(u_lod.z) : CB_INFLUENCES;
+    cb_skin_bone_pass_influences(a_position, a_normal, a_joints, a_weights, gl_InstanceID, influences, v_world, v_normal);
+    gl_Position = u_view_projection * vec4(v_world, 1.0);
+}
+`;
+
+// u_lod for a draw: the instance's size on screen is size x scale x (viewport height / 2) x P[1][1] / w,
+// and P[1][1] is the length of the view-projection's second row (the view's rotation keeps lengths).
+export function lodUniform(lod, size, viewProjection, viewportHeight) {
+    if (!lod) return [0, 0, 4];
+    const p11 = Math.hypot(viewProjection[1], viewProjection[5], viewProjection[9]);
+    return [size * 0.5 * viewportHeight * p11, lod.pixels, lod.influences];
+}
+
+// Each vertex's influences largest weight first (the order LOD keeps), in place of mesh.joints/weights.
+export function sortInfluences(joints, weights) {
+    const j = Int32Array.from(joints), w = Float32Array.from(weights);
+    for (let v = 0; v < w.length; v += 4) {
+        const order = [0, 1, 2, 3].sort((a, b) => weights[v + b] - weights[v + a]);
+        order.forEach((k, i) => { j[v + i] = joints[v + k]; w[v + i] = weights[v + k]; });
+    }
+    return { joints: j, weights: w };
+}
 
 // The shipped library with the palette's defines (and `extra`), then a main.
 export function boneShaderSource(glsl, header, main, extra = []) {
@@ -66,7 +114,7 @@ export class BonePass {
         this.vao = gl.createVertexArray();
         gl.bindVertexArray(this.vao);
         gl.bindBuffer(gl.ARRAY_BUFFER, instanceBuffer);
-        [['a_inst', 1], ['a_from', 2], ['a_fade', 3]].forEach(([name, k]) => {
+        [['a_place', 0], ['a_inst', 1], ['a_from', 2], ['a_fade', 3]].forEach(([name, k]) => {
             const loc = gl.getAttribLocation(this.program, name);
             if (loc < 0) return;
             gl.enableVertexAttribArray(loc);

@@ -39,7 +39,23 @@ const result = await withPage({ '/': RUNTIMES, '/bench/': path.resolve(dir), ...
         const THREE = await import('three');
         const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
         const { readPal, instanceData } = await import('/web/crowdbake_pal.mjs');
-        const { Crowd, loadPaletteGLSL } = await import('/web/crowdbake_crowd.mjs');
+        const { Crowd, loadPaletteGLSL, compileProgram } = await import('/web/crowdbake_crowd.mjs');
+        // The floor every method pays (triangle setup, rasterisation, the instance's placement): the
+        // mesh at rest, no skinning.
+        class RestCrowd extends Crowd {
+            makeProgram(glsl, header, fragment) {
+                return compileProgram(gl, `#version 300 es
+in vec3 a_position; in vec3 a_normal; in vec4 a_place; in vec4 a_fade;
+uniform mat4 u_view_projection; out vec3 v_world; out vec3 v_normal;
+void main() {
+    float c = cos(a_place.w), s = sin(a_place.w);
+    mat3 yaw = mat3(c, 0.0, -s, 0.0, 1.0, 0.0, s, 0.0, c);
+    v_world = a_place.xyz + a_fade.z * (yaw * a_position);
+    v_normal = yaw * a_normal;
+    gl_Position = u_view_projection * vec4(v_world, 1.0);
+}`, fragment);
+            }
+        }
         const { VatCrowd, readVat } = await import('/web/crowdbake_vat.mjs');
         const { meshFromGLTF } = await import('/web/crowdbake_three.mjs');
         const bytes = async (u) => new Uint8Array(await (await fetch(u)).arrayBuffer());
@@ -50,8 +66,11 @@ const result = await withPage({ '/': RUNTIMES, '/bench/': path.resolve(dir), ...
         const glsl = await loadPaletteGLSL();
         const max = Math.max(...counts);
         const make = {
-            palette: () => new Crowd(gl, { pal, glsl, mesh, capacity: max }),
-            bones: () => new Crowd(gl, { pal, glsl, mesh, capacity: max, bonePass: true }),
+            palette: () => new Crowd(gl, { pal, glsl, mesh, capacity: max, bonePass: false }),
+            bones: () => new Crowd(gl, { pal, glsl, mesh, capacity: max, bonePass: true, lod: false }),
+            lod: () => new Crowd(gl, { pal, glsl, mesh, capacity: max, bonePass: true }),
+            auto: () => new Crowd(gl, { pal, glsl, mesh, capacity: max }),
+            rest: () => new RestCrowd(gl, { pal, glsl, mesh, capacity: max, bonePass: false }),
             vat: () => new VatCrowd(gl, { pal, vat, glsl, mesh, capacity: max }),
             before: async () => {
                 const old = await import('/before/web/crowdbake_crowd.mjs');
