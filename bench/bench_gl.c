@@ -95,9 +95,10 @@ static const char *MAIN_TAIL =
 static const char *SKIN_PALETTE =
     "void main() {\n    vec3 p, n;\n"
     "    cb_skin_position_normal(a_position, a_normal, a_joints, a_weights, a_inst, u_time, p, n);\n";
-static const char *SKIN_BONES =
+static const char *SKIN_BONES = /* the pass placed each bone: world space straight away, no per-vertex yaw */
     "void main() {\n    vec3 p, n;\n"
-    "    cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, gl_InstanceID, p, n);\n";
+    "    cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, gl_InstanceID, p, n);\n"
+    "    v_normal = n;\n    gl_Position = u_view_projection * vec4(p, 1.0);\n}\n";
 static const char *SKIN_VAT =
     "uniform sampler2D u_vat_positions, u_vat_normals; uniform int u_frame_width, u_rows_per_frame, u_vat_rows;\n"
     "vec3 vat_fetch(sampler2D t, int frame) {\n"
@@ -112,19 +113,19 @@ static const char *FRAGMENT =
     "void main() { float l = 0.35 + 0.65 * max(dot(normalize(v_normal), normalize(vec3(0.4, 0.8, 0.3))), 0.0);\n"
     "              o_color = vec4(vec3(0.8, 0.7, 0.55) * l, 1.0); }\n";
 static const char *PASS_VERTEX =
-    "in vec4 a_inst; uniform float u_time; uniform int u_rows; uniform vec2 u_size;\n"
-    "flat out vec4 v_inst; flat out int v_x0;\n"
+    "in vec4 a_place; in vec4 a_inst; uniform float u_time; uniform int u_rows; uniform vec2 u_size;\n"
+    "flat out vec4 v_place; flat out vec4 v_inst; flat out int v_x0;\n"
     "void main() {\n"
     "    int block = gl_InstanceID / u_rows, row = gl_InstanceID - block * u_rows, bones = cb_row_texels / CB_TEXELS_PER_BONE;\n"
     "    v_x0 = block * bones;\n"
     "    vec2 corner = vec2(float(gl_VertexID & 1), float(gl_VertexID >> 1));\n"
     "    gl_Position = vec4(vec2(float(v_x0) + corner.x * float(bones), float(row) + corner.y) / u_size * 2.0 - 1.0, 0.0, 1.0);\n"
-    "    v_inst = a_inst;\n"
+    "    v_place = a_place, v_inst = a_inst;\n"
     "}\n";
 static const char *PASS_FRAGMENT =
-    "flat in vec4 v_inst; flat in int v_x0; uniform float u_time;\n"
+    "flat in vec4 v_place; flat in vec4 v_inst; flat in int v_x0; uniform float u_time;\n"
     "layout(location = 0) out vec4 o_c0; layout(location = 1) out vec4 o_c1; layout(location = 2) out vec4 o_c2;\n"
-    "void main() { cb_bone_pass(int(gl_FragCoord.x) - v_x0, v_inst, v_inst, 1.0, u_time, o_c0, o_c1, o_c2); }\n";
+    "void main() { cb_bone_pass_placed(int(gl_FragCoord.x) - v_x0, v_inst, v_inst, 1.0, u_time, v_place, 1.0, o_c0, o_c1, o_c2); }\n";
 
 static GLuint shader(GLenum type, const char *const *parts, int n)
 {
@@ -276,9 +277,11 @@ static void upload_mesh(scene *s, const cb_model *m, uint32_t capacity)
     }
     glGenVertexArrays(1, &s->pass_vao);
     glBindVertexArray(s->pass_vao);
-    glEnableVertexAttribArray(5);
-    glVertexAttribPointer(5, 4, GL_FLOAT, GL_FALSE, 32, (const void *)16);
-    glVertexAttribDivisor(5, 1);
+    for (GLuint a = 4; a < 6; ++a) { /* the pass places each bone: it reads a_place too */
+        glEnableVertexAttribArray(a);
+        glVertexAttribPointer(a, 4, GL_FLOAT, GL_FALSE, 32, (const void *)(uintptr_t)((a - 4) * 16));
+        glVertexAttribDivisor(a, 1);
+    }
     glBindVertexArray(0);
     free(pos), free(nrm), free(w), free(j), free(idx);
 }
@@ -455,6 +458,12 @@ static void bench_counts(const scene *s, const char *counts, int frames, GLuint 
                 if (f >= 0) ms[m][f] = t, wall[m][f] = w;
             }
         printf("%s\"%u\": {", first ? "" : ", ", n);
+        double pair[2][64]; /* frame f's VAT wall time over each method's: pairs the same moment's load hit alike */
+        for (int m = 0; m < 2; ++m) {
+            for (int f = 0; f < frames; ++f) pair[m][f] = wall[2][f] / wall[m][f];
+            qsort(pair[m], (size_t)frames, sizeof(double), by_value);
+            printf("\"vat_over_%s\": %.4f, ", method_names[m], pair[m][frames / 2]);
+        }
         for (int m = 0; m < METHODS; ++m) {
             qsort(ms[m], (size_t)frames, sizeof(double), by_value);
             qsort(wall[m], (size_t)frames, sizeof(double), by_value);
@@ -539,7 +548,7 @@ int main(int argc, char **argv)
     const char *skins[METHODS] = {SKIN_PALETTE, SKIN_BONES, SKIN_VAT};
     for (int m = 0; m < METHODS; ++m) {
         const char *vs[3] = {MAIN_HEAD, skins[m], MAIN_TAIL};
-        s.prog[m] = program(cb_palette_glsl, &pal, m == 1, vs, 3, NULL, 0);
+        s.prog[m] = program(cb_palette_glsl, &pal, m == 1, vs, m == 1 ? 2 : 3, NULL, 0);
     }
     s.pass = program(cb_palette_glsl, &pal, false, &PASS_VERTEX, 1, &PASS_FRAGMENT, 1);
     GLuint target = offscreen_target();

@@ -6,7 +6,9 @@
 //       [--before TREE]
 //
 // Methods: palette (per-vertex blending), bones (Crowd's bonePass: each instance's bones blended
-// once, crowdbake_bones.mjs), vat, before (the palette runtime of another tree TREE - its runtimes/web
+// once, crowdbake_bones.mjs, every influence), lod (the bone pass with its animation LOD), auto (Crowd's
+// default: bone pass or not by herd size, LOD on), vat, rest (the mesh unskinned: the floor every method
+// pays), before (the palette runtime of another tree TREE - its runtimes/web
 // and runtimes/glsl, or an older tree's web/ and samples/shaders/ - e.g. `git worktree add` of an
 // older commit: a before/after in one page).
 //
@@ -113,9 +115,13 @@ void main() {
                 }
         }
         const ext = gl.getExtension('WEBGL_debug_renderer_info');
+        const perInstance = Object.fromEntries(Object.entries(crowds).map(([m, c]) => [m, c.bytesPerInstance(m === 'palette' ? 'palette'
+            : m === 'vat' || m === 'rest' ? 'vat' : c.choice(max).method)]));
         return { renderer: ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER), times: out,
                  vertices: mesh.positions.length / 3, palette_bytes: crowds.palette?.textures.bytes,
-                 vat_bytes: crowds.vat?.textures.bytes, bone_pass_bytes: crowds.bones?.bones.bytes };
+                 vat_bytes: crowds.vat?.textures.bytes, bone_pass_bytes: crowds.bones?.bones.bytes,
+                 bytes_per_instance: perInstance,
+                 auto_choice: crowds.auto ? Object.fromEntries(counts.map((n) => [n, crowds.auto.choice(n)])) : undefined };
     }, { counts, frames, methods });
     if (p.crowdbakeErrors.length) throw new Error(p.crowdbakeErrors.join('; '));
     return r;
@@ -123,10 +129,14 @@ void main() {
 
 const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
 const report = { renderer: result.renderer, vertices: result.vertices, palette_bytes: result.palette_bytes,
-                 vat_bytes: result.vat_bytes, bone_pass_bytes: result.bone_pass_bytes, frames, methods, counts: {} };
+                 vat_bytes: result.vat_bytes, bone_pass_bytes: result.bone_pass_bytes, bytes_per_instance: result.bytes_per_instance,
+                 auto_choice: result.auto_choice, frames, methods, counts: {} };
 for (const [n, m] of Object.entries(result.times)) {
     const c = report.counts[n] = {};
     for (const method of methods) c[`${method}_ms`] = median(m[method]), c[`${method}_min_ms`] = Math.min(...m[method]);
-    if (m.palette && m.vat) c.vat_over_palette = c.vat_ms / c.palette_ms;
+    // Each frame drew every method back to back (in turns): frame f's VAT time over a method's is a pair
+    // that one moment's load hit alike; the ratio reported is the median over the pairs.
+    if (m.vat) for (const method of methods.filter((x) => x !== 'vat'))
+        c[`vat_over_${method}`] = median(m.vat.map((v, f) => v / m[method][f]));
 }
 console.log(JSON.stringify(report));
