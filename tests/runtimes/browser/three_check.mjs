@@ -43,14 +43,18 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
         const mixer = new THREE.AnimationMixer(gltf.scene);
         const animation = gltf.animations.find((a) => a.name === clip);
         mixer.clipAction(animation).play();
+        // herd: bonePass 'auto', one Fox (under the threshold: per vertex); herd_bones: the bone pass;
+        // herd_auto_big: 'auto' with a threshold of one vertex (the bone pass); broken: unpatched.
         const herds = {};
-        for (const broken of [false, true]) {
+        for (const [name, options] of [['herd', {}], ['herd_bones', { bonePass: true }], ['herd_auto_big', { bonePassVertices: 1 }],
+                                       ['broken', {}]]) {
             const scene = new THREE.Scene();
-            const herd = new CrowdbakeHerd(gltf, pal, null, { count: 1, glsl, material: new THREE.MeshBasicMaterial({ color: 0xffffff }) });
-            if (broken) herd.material.onBeforeCompile = () => {}, herd.material.customProgramCacheKey = () => 'unpatched';
+            const herd = new CrowdbakeHerd(gltf, pal, null, { count: 1, glsl, material: new THREE.MeshBasicMaterial({ color: 0xffffff }),
+                                                              ...options });
+            if (name === 'broken') herd.material.onBeforeCompile = () => {}, herd.material.customProgramCacheKey = () => 'unpatched';
             herd.setState(0, clip, { phase: 0, fade: 0 });
             scene.add(herd);
-            herds[broken ? 'broken' : 'herd'] = { scene, herd };
+            herds[name] = { scene, herd };
         }
         const c = pal.clips.find((k) => k.name === clip);
         const lo = new THREE.Vector3(...c.bounds_min), hi = new THREE.Vector3(...c.bounds_max);
@@ -87,6 +91,7 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
             lod_forced: crowdOf({ bonePass: true, lod: { pixels: 1e6, influences: 2 } }), lod_default: crowdOf({ bonePass: true }),
         };
         const choices = Object.fromEntries(Object.entries(crowds).map(([k, v]) => [k, v.choice()]));
+        for (const [k, h] of Object.entries(herds)) choices[k] = h.herd.choice(renderer);
         camera.updateMatrixWorld();
         const vp = new THREE.Matrix4().multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse).elements;
         const crowdMask = (crowd, t) => {
@@ -105,7 +110,7 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
             const want = mask(reference);
             const row = { time: t };
             for (const [name, h] of Object.entries(herds)) {
-                h.herd.update(t);
+                h.herd.update(t, renderer);
                 row[name] = compare(want, mask(h.scene));
             }
             const bones = crowdMask(crowds.bones, t);
