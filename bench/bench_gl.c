@@ -422,17 +422,27 @@ static double now_ms(void)
 /* Milliseconds of one frame on the GPU, as GL_TIME_ELAPSED measures from the clear to the draw's
  * end; *wall: from the clear's call to glFinish's return (llvmpipe rasterizes at the flush, which
  * its timer query may leave out). */
-static double timed_frame(const scene *s, int method, uint32_t n, float time, const float *vp, GLuint target, double *wall)
+/* The process's CPU time (ms): llvmpipe rasterises on this process's threads, and on a machine shared
+ * with other work a frame's CPU time is its own where its wall time is also the others' load. */
+static double cpu_ms(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
+}
+
+static double timed_frame(const scene *s, int method, uint32_t n, float time, const float *vp, GLuint target, double *wall,
+                          double *cpu)
 {
     GLuint q;
     GLuint64 ns = 0;
     glGenQueries(1, &q);
-    double t0 = now_ms();
+    double t0 = now_ms(), c0 = cpu_ms();
     glBeginQuery(GL_TIME_ELAPSED, q);
     draw(s, method, n, time, vp, target);
     glEndQuery(GL_TIME_ELAPSED);
     glFinish();
-    *wall = now_ms() - t0;
+    *wall = now_ms() - t0, *cpu = cpu_ms() - c0;
     glGetQueryObjectui64v(q, GL_QUERY_RESULT, &ns);
     glDeleteQueries(1, &q);
     return ns / 1e6;
@@ -450,25 +460,28 @@ static void bench_counts(const scene *s, const char *counts, int frames, GLuint 
         if (*c == ',') ++c;
         float vp[16];
         place_herd(s, n, vp);
-        double ms[METHODS][64], wall[METHODS][64], w;
+        double ms[METHODS][64], wall[METHODS][64], cpu[METHODS][64], w, u;
         for (int f = -1; f < frames && f < 64; ++f) /* frame -1 warms up (shader compile, upload) */
             for (int k = 0; k < METHODS; ++k) {
                 int m = f % 2 ? k : METHODS - 1 - k; /* in turns: a b c, c b a, ... */
-                double t = timed_frame(s, m, n, 0.5f + (float)f / 30, vp, target, &w);
-                if (f >= 0) ms[m][f] = t, wall[m][f] = w;
+                double t = timed_frame(s, m, n, 0.5f + (float)f / 30, vp, target, &w, &u);
+                if (f >= 0) ms[m][f] = t, wall[m][f] = w, cpu[m][f] = u;
             }
         printf("%s\"%u\": {", first ? "" : ", ", n);
-        double pair[2][64]; /* frame f's VAT wall time over each method's: pairs the same moment's load hit alike */
-        for (int m = 0; m < 2; ++m) {
-            for (int f = 0; f < frames; ++f) pair[m][f] = wall[2][f] / wall[m][f];
-            qsort(pair[m], (size_t)frames, sizeof(double), by_value);
-            printf("\"vat_over_%s\": %.4f, ", method_names[m], pair[m][frames / 2]);
+        double pair[2][64]; /* frame f's VAT time over each method's: pairs the same moment's load hit alike */
+        for (int k = 0; k < 4; ++k) {
+            double (*t)[64] = k < 2 ? wall : cpu;
+            for (int f = 0; f < frames; ++f) pair[k % 2][f] = t[2][f] / t[k % 2][f];
+            qsort(pair[k % 2], (size_t)frames, sizeof(double), by_value);
+            printf("\"%svat_over_%s\": %.4f, ", k < 2 ? "" : "cpu_", method_names[k % 2], pair[k % 2][frames / 2]);
         }
         for (int m = 0; m < METHODS; ++m) {
             qsort(ms[m], (size_t)frames, sizeof(double), by_value);
             qsort(wall[m], (size_t)frames, sizeof(double), by_value);
+            qsort(cpu[m], (size_t)frames, sizeof(double), by_value);
             printf("%s\"%s_ms\": %.3f, \"%s_min_ms\": %.3f, \"%s_wall_ms\": %.3f", m ? ", " : "", method_names[m],
                    ms[m][frames / 2], method_names[m], ms[m][0], method_names[m], wall[m][frames / 2]);
+            printf(", \"%s_cpu_ms\": %.3f", method_names[m], cpu[m][frames / 2]);
         }
         printf("}");
         fflush(stdout);

@@ -433,6 +433,12 @@ def print_methods(r, title, key='_ms', methods=CROWD_METHODS, pairs=True):
         ratio = {m: c['vat_over_' + m] if pairs and 'vat_over_' + m in c else t['vat'] / t[m] for m in others}
         print('%10s' % n + ''.join('%12.1f' % t[m] for m in methods) + ''.join('%14.2f' % ratio[m] for m in others))
     print('(speed X: the VAT\'s frame time over X\'s, X\'s frame speed in VATs; >= 1.0: X at least as fast as the VAT)')
+    if pairs and any('cpu_vat_over_' + m in c for c in r['counts'].values() for m in others):
+        print('the same pairs by CPU time (the renderer\'s processes\' user + system time: what the frame cost, whatever else '
+              'the machine ran):')
+        for n, c in sorted(r['counts'].items(), key=lambda kv: int(kv[0])):
+            print('%10s' % n + ''.join('%12.1f' % c.get(m + '_cpu_ms', 0) for m in methods) +
+                  ''.join('%14.2f' % c.get('cpu_vat_over_' + m, 0) for m in others))
     held = {m: [int(n) for n, c in r['counts'].items() if c[m + key] <= 1000 / 60] for m in methods}
     print('VRAM: palette %d bytes, VAT %d bytes (%.1fx); largest measured herd holding 60 fps: %s' % (
         r['palette_bytes'], r['vat_bytes'], r['vat_bytes'] / r['palette_bytes'],
