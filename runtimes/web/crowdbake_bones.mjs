@@ -92,6 +92,7 @@ export class BonePass {
         const max = gl.getParameter(gl.MAX_TEXTURE_SIZE), bones = header.bone_count;
         this.gl = gl;
         this.header = header;
+        this.capacity = capacity;
         this.rows = Math.min(capacity, max, rows);
         this.width = Math.ceil(capacity / this.rows) * bones;
         if (this.width > max) throw new Error(`bonePass: ${capacity} instances of ${bones} bones exceed this GPU's ${max}-texel textures`);
@@ -147,6 +148,15 @@ export class BonePass {
         gl.viewport(...viewport);
         if (blend) gl.enable(gl.BLEND);
         if (depth) gl.enable(gl.DEPTH_TEST);
+    }
+
+    // Frees its textures, framebuffer, program and vertex array (a larger pass replaces it).
+    dispose() {
+        const gl = this.gl;
+        this.targets.forEach((t) => gl.deleteTexture(t));
+        gl.deleteFramebuffer(this.framebuffer);
+        gl.deleteProgram(this.program);
+        gl.deleteVertexArray(this.vao);
     }
 
     // Binds the bone textures to units 2-4 of the draw's program.

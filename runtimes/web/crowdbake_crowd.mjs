@@ -203,13 +203,13 @@ export class Crowd {
         this.vao = this.makeVertexArray(this.program);
         if (this.bonesProgram) {
             this.bonesVao = this.makeVertexArray(this.bonesProgram);
-            try {
-                this.bones = new BonePass(gl, { glsl, header: pal.header, capacity, instanceBuffer: this.instanceBuffer,
-                                                instanceFloats: INSTANCE_FLOATS, ...(typeof bonePass === 'object' ? bonePass : {}) });
-            } catch (e) {
-                if (bonePass !== 'auto') throw e;
-                this.bonesUnavailable = e.message;
-            }
+            // Forced, the pass is made now for the whole capacity (its errors thrown); 'auto' makes it when
+            // a herd first takes it, for that herd (grown by powers of two): memory follows the herd.
+            this.makeBonePass = (n) => new BonePass(gl, { glsl, header: pal.header, capacity: n, instanceBuffer: this.instanceBuffer,
+                                                          instanceFloats: INSTANCE_FLOATS, ...(typeof bonePass === 'object' ? bonePass : {}) });
+            if (bonePass !== 'auto') this.bones = this.makeBonePass(capacity);
+            else if (!gl.getExtension('EXT_color_buffer_float'))
+                this.bonesUnavailable = 'this WebGL2 cannot render to float textures (no EXT_color_buffer_float)';
         }
         this.meshBytes = mesh.positions.byteLength + (mesh.normals?.byteLength ?? 0) + mesh.joints.length * 4 +
                          mesh.weights.byteLength + (mesh.indices?.byteLength ?? 0);
@@ -246,13 +246,22 @@ export class Crowd {
     // How a herd of n instances is drawn, and why: { method: 'bones' | 'palette', reason }.
     choice(n = this.count) {
         const vertices = n * this.vertexCount;
-        if (this.bones && vertices >= this.bonePassVertices)
+        if (this.bonesProgram && !this.bonesUnavailable && vertices >= this.bonePassVertices)
             return { method: 'bones', reason: this.bonePassVertices ? `${vertices} skinned vertices a frame >= ${this.bonePassVertices}: ` +
                 'each bone blended once per instance (bonePass: false draws per vertex)' : 'bonePass: true' };
         if (this.bonesUnavailable) return { method: 'palette', reason: `no bone pass here: ${this.bonesUnavailable}` };
         if (this.bonePassVertices === Infinity) return { method: 'palette', reason: 'bonePass: false' };
         return { method: 'palette', reason: `${vertices} skinned vertices a frame < ${this.bonePassVertices}: the bone pass ` +
             'would not pay for its extra pass (bonePass: true forces it)' };
+    }
+
+    // The bone pass, large enough for n instances (made or grown here under bonePass: 'auto').
+    bonePassFor(n) {
+        if (!this.bones || this.bones.capacity < n) {
+            this.bones?.dispose();
+            this.bones = this.makeBonePass(Math.min(this.capacity, 2 ** Math.ceil(Math.log2(Math.max(n, 64)))));
+        }
+        return this.bones;
     }
 
     // Bytes per instance on the GPU: its row of the instance buffer, and the bone pass's three texels
@@ -311,7 +320,7 @@ export class Crowd {
             gl.bufferSubData(gl.ARRAY_BUFFER, 0, this.instances, 0, this.count * INSTANCE_FLOATS);
             this.dirty = false;
         }
-        if (bones) this.bones.run(this.count, time, (u) => this.bindTextures(u));
+        if (bones) this.bonePassFor(this.count).run(this.count, time, (u) => this.bindTextures(u));
         gl.useProgram(p);
         gl.bindVertexArray(bones ? this.bonesVao : this.vao);
         const u = (name) => gl.getUniformLocation(p, name);
