@@ -40,20 +40,21 @@ void main() {
 // crowd benchmark measures both: the bone pass is ahead from 100 Cows, 500 k vertices).
 export const AUTO_BONE_PASS_VERTICES = 50000;
 
-// Animation LOD, on by default: an instance whose animated bounds span fewer than `pixels` pixels on
-// screen is skinned with its `influences` largest bone weights (scaled to sum to 1), the rule
-// crowdbake mesh --max-influences applies to a far LOD mesh. lod: false, or { pixels, influences }.
-export const DEFAULT_LOD = { pixels: 24, influences: 2 };
+// Animation LOD, on by default: an instance whose animated bounds span fewer than `two` pixels on
+// screen is skinned with its 2 largest bone weights, fewer than `one` pixels with its largest alone
+// (the kept weights scaled to sum to 1), the rule crowdbake mesh --max-influences 2|1 applies to a far
+// LOD mesh: at 24 pixels a pixel is 4% of the animal. lod: false, or { two, one } (0: never).
+export const DEFAULT_LOD = { two: 24, one: 12 };
 
 // The vertex main that skins from the bone pass straight to world space (the pass placed each bone).
 export const MAIN_BONES = `
 in vec3 a_position; in vec3 a_normal; in ivec4 a_joints; in vec4 a_weights;
 in vec4 a_place; in vec4 a_fade;
-uniform mat4 u_view_projection; uniform vec3 u_lod; // pixels per unit of size at w = 1, threshold, influences
+uniform mat4 u_view_projection; uniform vec3 u_lod; // pixels tall at w = 1 and scale 1, the two thresholds
 out vec3 v_world; out vec3 v_normal;
 void main() {
-    float w = (u_view_projection * vec4(a_place.xyz, 1.0)).w; // the instance's depth: one number a vertex
-    int influences = u_lod.x * a_fade.z < u_lod.y * w ? int(u_lod.z) : CB_INFLUENCES;
+    float pixels = u_lod.x * a_fade.z / (u_view_projection * vec4(a_place.xyz, 1.0)).w; // the instance's size on screen
+    int influences = pixels < u_lod.z ? 1 : pixels < u_lod.y ? 2 : CB_INFLUENCES;
     cb_skin_bone_pass_influences(a_position, a_normal, a_joints, a_weights, gl_InstanceID, influences, v_world, v_normal);
     gl_Position = u_view_projection * vec4(v_world, 1.0);
 }
@@ -62,9 +63,23 @@ void main() {
 // u_lod for a draw: the instance's size on screen is size x scale x (viewport height / 2) x P[1][1] / w,
 // and P[1][1] is the length of the view-projection's second row (the view's rotation keeps lengths).
 export function lodUniform(lod, size, viewProjection, viewportHeight) {
-    if (!lod) return [0, 0, 4];
+    if (!lod) return [0, 0, 0];
     const p11 = Math.hypot(viewProjection[1], viewProjection[5], viewProjection[9]);
-    return [size * 0.5 * viewportHeight * p11, lod.pixels, lod.influences];
+    return [size * 0.5 * viewportHeight * p11, lod.two ?? 0, lod.one ?? 0];
+}
+
+// The mesh's triangles ordered by how many influences their vertices read (stable within each count):
+// a CPU rasteriser shades neighbouring vertices of the index list together and runs the influence loop
+// as long as the longest of them, so grouping alike vertices shortens the loops. The same triangles.
+export function sortTrianglesByInfluences(indices, weights) {
+    const count = (v) => (weights[v * 4 + 3] ? 4 : weights[v * 4 + 2] ? 3 : weights[v * 4 + 1] ? 2 : 1);
+    const triangles = indices.length / 3, keys = new Uint8Array(triangles), order = new Uint32Array(triangles);
+    for (let t = 0; t < triangles; ++t)
+        keys[t] = Math.max(count(indices[t * 3]), count(indices[t * 3 + 1]), count(indices[t * 3 + 2])), order[t] = t;
+    order.sort((a, b) => keys[a] - keys[b] || a - b);
+    const out = new indices.constructor(indices.length);
+    order.forEach((t, k) => out.set(indices.subarray(t * 3, t * 3 + 3), k * 3));
+    return out;
 }
 
 // Each vertex's influences largest weight first (the order LOD keeps), in place of mesh.joints/weights.

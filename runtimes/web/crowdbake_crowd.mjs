@@ -14,8 +14,8 @@
 // expect: positions (3 floats a vertex), normals (3, optional), joints (4 integers), weights (4
 // floats), indices (optional).
 
-import { AUTO_BONE_PASS_VERTICES, BonePass, DEFAULT_LOD, MAIN_BONES, boneShaderSource, lodUniform, sortInfluences }
-    from './crowdbake_bones.mjs';
+import { AUTO_BONE_PASS_VERTICES, BonePass, DEFAULT_LOD, MAIN_BONES, boneShaderSource, lodUniform, sortInfluences,
+         sortTrianglesByInfluences } from './crowdbake_bones.mjs';
 
 import { PALETTE_GLSL } from './crowdbake_palette_glsl.mjs';
 
@@ -152,7 +152,8 @@ export class Crowd {
     // bonePass: 'auto' (the default: the bone pass from bonePassVertices skinned vertices a frame,
     // AUTO_BONE_PASS_VERTICES unless given; per-vertex blending below it or where WebGL2 cannot
     // render to float textures), true (always; or { rows }), false (never); crowdbake_bones.mjs.
-    // lod: the bone pass's animation LOD (DEFAULT_LOD, or { pixels, influences }, or false).
+    // lod: the bone pass's animation LOD (DEFAULT_LOD: fewer influences under so many pixels tall, or
+    // { two, one }, or false).
     // crowd.choice(n) says which a herd of n gets, and why.
     constructor(gl, options) {
         const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false, bonePass = 'auto' } = options;
@@ -194,8 +195,8 @@ export class Crowd {
         gl.bufferData(gl.ARRAY_BUFFER, this.instances.byteLength, gl.DYNAMIC_DRAW);
         this.indexCount = 0;
         if (mesh.indices) {
-            const indices = mesh.indices instanceof Uint32Array || mesh.indices instanceof Uint16Array ? mesh.indices
-                : new Uint32Array(mesh.indices);
+            const indices = sortTrianglesByInfluences(mesh.indices instanceof Uint32Array || mesh.indices instanceof Uint16Array
+                ? mesh.indices : new Uint32Array(mesh.indices), sorted.weights);
             this.indexBuffer = buffer(gl, gl.ELEMENT_ARRAY_BUFFER, indices);
             this.indexType = indices instanceof Uint16Array ? gl.UNSIGNED_SHORT : gl.UNSIGNED_INT;
             this.indexCount = indices.length;

@@ -6,7 +6,7 @@
 // left out: the mesh stays in its bind pose) is measured the same way. So is the WebGL2 Crowd
 // (runtimes/web/crowdbake_crowd.mjs), its own canvas, the same camera: per-vertex blending, the bone
 // pass, the herd-size choice (bonePass: 'auto' below and above its threshold: which it picked, and its
-// pixels) and the animation LOD (forced on at this size: the 2 largest weights; and at its default,
+// pixels) and the animation LOD (forced on at this size: the 2 largest weights, the largest alone; and at its default,
 // where an instance this large on screen keeps every influence).
 //
 //   node tests/runtimes/browser/three_check.mjs DIR CLIP T1,T2,...
@@ -88,7 +88,8 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
         const crowds = {
             palette: crowdOf({ bonePass: false }), bones: crowdOf({ bonePass: true, lod: false }),
             auto_small: crowdOf({}), auto_big: crowdOf({ bonePassVertices: 1 }),
-            lod_forced: crowdOf({ bonePass: true, lod: { pixels: 1e6, influences: 2 } }), lod_default: crowdOf({ bonePass: true }),
+            lod_forced: crowdOf({ bonePass: true, lod: { two: 1e6 } }), lod_one_forced: crowdOf({ bonePass: true, lod: { one: 1e6 } }),
+            lod_default: crowdOf({ bonePass: true }),
         };
         const choices = Object.fromEntries(Object.entries(crowds).map(([k, v]) => [k, v.choice()]));
         for (const [k, h] of Object.entries(herds)) choices[k] = h.herd.choice(renderer);
