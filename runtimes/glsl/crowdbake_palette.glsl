@@ -285,6 +285,14 @@ vec3 cb_skin_normal_crossfade(vec3 n, ivec4 joints, vec4 weights, vec4 from_inst
     return normalize(skinned_n);
 }
 
+// Animation LOD: how many influences an instance `pixels` tall on screen reads - its largest alone under
+// `one` pixels, its 2 largest under `two`, else every one (a tier of 0 never applies) - as a far LOD mesh
+// of crowdbake mesh --max-influences 1|2 would (cb_skin_bone_pass_influences reads that many).
+int cb_lod_influences(float pixels, float two, float one)
+{
+    return pixels < one ? 1 : pixels < two ? 2 : CB_INFLUENCES;
+}
+
 // ---- The bone pass: each instance's bones blended once a frame instead of once a vertex ----
 // A fragment shader, one fragment per (instance, bone), writes cb_bone_pass's three texels to three
 // RGBA32F render targets (bone textures: instance i's bone j at (block * bones + j, i - block *

@@ -54,8 +54,8 @@ uniform mat4 u_view_projection; uniform vec3 u_lod; // pixels tall at w = 1 and 
 out vec3 v_world; out vec3 v_normal;
 void main() {
     float pixels = u_lod.x * a_fade.z / (u_view_projection * vec4(a_place.xyz, 1.0)).w; // the instance's size on screen
-    int influences = pixels < u_lod.z ? 1 : pixels < u_lod.y ? 2 : CB_INFLUENCES;
-    cb_skin_bone_pass_influences(a_position, a_normal, a_joints, a_weights, gl_InstanceID, influences, v_world, v_normal);
+    cb_skin_bone_pass_influences(a_position, a_normal, a_joints, a_weights, gl_InstanceID, cb_lod_influences(pixels, u_lod.y, u_lod.z),
+                                 v_world, v_normal);
     gl_Position = u_view_projection * vec4(v_world, 1.0);
 }
 `;
