@@ -459,18 +459,20 @@ def print_crowd(results):
 
 # The native benchmark (bench/bench_gl.c, OpenGL through EGL): llvmpipe here, where a whole frame of
 # 100,000 Cows takes minutes; on a GPU: python3 bench/run.py --gl-only --gl-counts 1000,3000,10000,30000,100000,300000
-GL_RUNS = (('Cow', '1000', 5), ('Husky', '1000', 5), ('fish', '100,1000,10000,100000', 3))
-GL_METHODS = ('palette', 'bones', 'vat')
+# (model, counts, frames, --lod: the bone pass with the WebGL2 Crowd's default animation LOD in place of every influence)
+GL_RUNS = (('Cow', '1000', 5, False), ('Cow', '1000', 5, True), ('Husky', '1000', 5, False), ('Husky', '1000', 5, True),
+           ('fish', '100,1000,10000,100000', 3, False))
+GL_METHODS = ('palette', 'bones', 'lod', 'vat')
 
 
 def gl_bench(smoke, counts=None):
     models = {'Cow': os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb'),
               'Husky': os.path.join(SHARED, 'assets', 'quaternius-husky', 'Husky.glb'),
               'fish': os.path.join(BUILD, 'samples', 'fish.glb')}
-    runs = [('fish', '10', 1)] if smoke else [(name, counts or c, frames) for name, c, frames in GL_RUNS]
+    runs = [('fish', '10', 1, True)] if smoke else [(name, counts or c, frames, lod) for name, c, frames, lod in GL_RUNS]
     results = []
-    for name, c, frames in runs:
-        _, out = run([os.path.join(BUILD, 'bench_gl'), models[name], c, '--frames', str(frames)])
+    for name, c, frames, lod in runs:
+        _, out = run([os.path.join(BUILD, 'bench_gl'), models[name], c, '--frames', str(frames)] + (['--lod'] if lod else []))
         r = json.loads(out.strip().split('\n')[-1])
         r['input'] = name
         results.append(r)
