@@ -145,11 +145,12 @@ export class BonePass {
     run(count, time, bindPalette) {
         const gl = this.gl, p = this.program;
         const framebuffer = gl.getParameter(gl.DRAW_FRAMEBUFFER_BINDING), viewport = gl.getParameter(gl.VIEWPORT);
-        const blend = gl.isEnabled(gl.BLEND), depth = gl.isEnabled(gl.DEPTH_TEST);
+        const blend = gl.isEnabled(gl.BLEND), depth = gl.isEnabled(gl.DEPTH_TEST), scissor = gl.isEnabled(gl.SCISSOR_TEST);
         gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, this.framebuffer);
         gl.viewport(0, 0, this.width, this.rows);
         gl.disable(gl.BLEND);
         gl.disable(gl.DEPTH_TEST);
+        gl.disable(gl.SCISSOR_TEST); // a page drawing into part of its canvas must not clip the bone textures
         gl.useProgram(p);
         gl.bindVertexArray(this.vao);
         const u = (name) => gl.getUniformLocation(p, name);
@@ -163,6 +164,7 @@ export class BonePass {
         gl.viewport(...viewport);
         if (blend) gl.enable(gl.BLEND);
         if (depth) gl.enable(gl.DEPTH_TEST);
+        if (scissor) gl.enable(gl.SCISSOR_TEST);
     }
 
     // Frees its textures, framebuffer, program and vertex array (a larger pass replaces it).
