@@ -19,7 +19,7 @@ import * as THREE from 'three';
 import { instanceData, instanceBoneMatrix, instanceFirstRow } from './crowdbake_pal.mjs';
 import { FootstepClock } from './crowdbake_contacts.mjs';
 import { paletteDefines } from './crowdbake_crowd.mjs';
-import { AUTO_BONE_PASS_VERTICES } from './crowdbake_bones.mjs';
+import { AUTO_BONE_PASS_VERTICES, DEFAULT_LOD, sortInfluences } from './crowdbake_bones.mjs';
 import { BONE_VERTEX_PARS, HerdBonePass } from './crowdbake_three_bones.mjs';
 
 // The skinned meshes of a GLTFLoader result that use its first skin, merged in glTF order:
@@ -169,14 +169,17 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // looks like the model), fade (cross-fade seconds, 0.25), bonePass ('auto': the bone pass from
     // bonePassVertices skinned vertices a frame, AUTO_BONE_PASS_VERTICES unless given, when update()
     // is given the renderer; true: always then; false: never).
-    constructor(gltf, pal, type, { count = 1000, glsl, material, fade = 0.25, bonePass = 'auto', bonePassVertices } = {}) {
+    // lod: with the bone pass, the animation LOD of crowdbake_bones.mjs (DEFAULT_LOD, { two, one } or false).
+    constructor(gltf, pal, type, { count = 1000, glsl, material, fade = 0.25, bonePass = 'auto', bonePassVertices,
+                                   lod = DEFAULT_LOD } = {}) {
         if (!glsl) throw new Error('CrowdbakeHerd: options.glsl is the shipped library (await loadPaletteGLSL())');
         const mesh = gltf.positions ? gltf : meshFromGLTF(gltf);
         const geometry = new THREE.BufferGeometry();
         geometry.setAttribute('position', new THREE.BufferAttribute(mesh.positions, 3));
         geometry.setAttribute('normal', new THREE.BufferAttribute(mesh.normals, 3));
-        geometry.setAttribute('cb_joints', new THREE.BufferAttribute(Float32Array.from(mesh.joints), 4));
-        geometry.setAttribute('cb_weights', new THREE.BufferAttribute(mesh.weights, 4));
+        const sorted = sortInfluences(mesh.joints, mesh.weights); // largest first: the LOD keeps the first ones
+        geometry.setAttribute('cb_joints', new THREE.BufferAttribute(Float32Array.from(sorted.joints), 4));
+        geometry.setAttribute('cb_weights', new THREE.BufferAttribute(sorted.weights, 4));
         if (mesh.uvs) geometry.setAttribute('uv', new THREE.BufferAttribute(mesh.uvs, 2));
         if (mesh.colors) geometry.setAttribute('color', new THREE.BufferAttribute(mesh.colors, 4));
         geometry.setIndex(new THREE.BufferAttribute(mesh.indices, 1));
@@ -215,6 +218,8 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         this.uniforms = uniforms;
         const defines = Object.fromEntries(paletteDefines(pal.header).map((d) => [d, '']));
         this.bonePassVertices = bonePass === 'auto' ? bonePassVertices ?? AUTO_BONE_PASS_VERTICES : bonePass ? 0 : Infinity;
+        this.lod = lod;
+        this.lodSize = Math.max(...[0, 1, 2].map((k) => bounds.box.max.getComponent(k) - bounds.box.min.getComponent(k)));
         this.bones = null;
         this.bonesOn = false;
         this.patched = [];
@@ -318,6 +323,11 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     }
 
     onBeforeRender(renderer, scene, camera) {
+        if (this.bonesOn) { // the LOD's scale: pixels tall at w = 1 (size x half the viewport's height x P[1][1])
+            const viewport = renderer.getCurrentViewport(new THREE.Vector4());
+            this.uniforms.cb_lod.value.set(this.lodSize * 0.5 * viewport.w * camera.projectionMatrix.elements[5],
+                                           this.lod ? this.lod.two ?? 0 : 0, this.lod ? this.lod.one ?? 0 : 0);
+        }
         const before = this.uniforms.cb_previous_view_projection.value;
         if (this.previousViewProjection) before.copy(this.previousViewProjection);
         else before.multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse);

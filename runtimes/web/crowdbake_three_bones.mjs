@@ -34,16 +34,28 @@ void main() { cb_bone_pass(int(gl_FragCoord.x) - v_x0, v_from, v_inst, v_fade, c
 // The herd's skinning with the bone pass (CB_BONE_TEXTURE): the same two functions as the
 // per-vertex VERTEX_PARS of crowdbake_three.mjs, read from the pass's textures.
 export const BONE_VERTEX_PARS = `
+uniform vec3 cb_lod; // the animation LOD: pixels tall at w = 1 and scale 1, the 2- and 1-influence thresholds
 vec3 cb_skinned_position; bool cb_skinned = false;
+int cb_herd_influences() { // the instance's size on screen: its origin's depth and its scale
+#ifdef USE_INSTANCING
+    mat4 place = modelMatrix * instanceMatrix;
+#else
+    mat4 place = modelMatrix;
+#endif
+    float w = (projectionMatrix * viewMatrix * place[3]).w;
+    return cb_lod_influences(cb_lod.x * length(place[0].xyz) / w, cb_lod.y, cb_lod.z);
+}
 vec3 cb_herd_normal(vec3 p, vec3 n) {
     vec3 skinned_n;
-    cb_skin_bone_pass(p, n, ivec4(cb_joints), cb_weights, gl_InstanceID, cb_skinned_position, skinned_n);
+    cb_skin_bone_pass_influences(p, n, ivec4(cb_joints), cb_weights, gl_InstanceID, cb_herd_influences(), cb_skinned_position,
+                                 skinned_n);
     cb_skinned = true;
     return skinned_n;
 }
 vec3 cb_herd_position(vec3 p) {
     vec3 n;
-    if (!cb_skinned) cb_skin_bone_pass(p, vec3(0.0, 1.0, 0.0), ivec4(cb_joints), cb_weights, gl_InstanceID, cb_skinned_position, n);
+    if (!cb_skinned) cb_skin_bone_pass_influences(p, vec3(0.0, 1.0, 0.0), ivec4(cb_joints), cb_weights, gl_InstanceID,
+                                                  cb_herd_influences(), cb_skinned_position, n);
     return cb_skinned_position;
 }
 `;
@@ -68,6 +80,7 @@ export class HerdBonePass {
             cb_bones0: { value: this.target.textures[0] }, cb_bones1: { value: this.target.textures[1] },
             cb_bones2: { value: this.target.textures[2] }, cb_bone_rows: { value: this.rows },
             cb_pass_rows: { value: this.rows }, cb_pass_size: { value: new THREE.Vector2(this.width, this.rows) },
+            cb_lod: { value: new THREE.Vector3() },
         });
         const material = new THREE.RawShaderMaterial({
             glslVersion: THREE.GLSL3, uniforms, depthTest: false, depthWrite: false,

@@ -127,8 +127,8 @@ static void test_three_herd_matches_three_skinning(void **state)
         /* The WebGL2 Crowd, each way it can skin, within the herd's tolerance of three.js. */
         static const char *crowds[] = {"crowd_palette", "crowd_bones", "crowd_auto_small", "crowd_auto_big",
                                        "crowd_lod_forced", "crowd_lod_one_forced", "crowd_lod_default", "herd_bones",
-                                       "herd_auto_big"};
-        for (int k = 0; k < 9; ++k) {
+                                       "herd_auto_big", "herd_lod_one"};
+        for (int k = 0; k < 10; ++k) {
             double share = disagreement(out, i, crowds[k]);
             printf("  time %d: %s vs three.js skinning %.2f%%\n", i, crowds[k], 100 * share);
             assert_true(share < 0.03);

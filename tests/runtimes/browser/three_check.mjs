@@ -44,10 +44,11 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
         const animation = gltf.animations.find((a) => a.name === clip);
         mixer.clipAction(animation).play();
         // herd: bonePass 'auto', one Fox (under the threshold: per vertex); herd_bones: the bone pass;
-        // herd_auto_big: 'auto' with a threshold of one vertex (the bone pass); broken: unpatched.
+        // herd_auto_big: 'auto' with a threshold of one vertex (the bone pass); herd_lod_one: the bone pass's LOD forced to
+        // one influence; broken: unpatched.
         const herds = {};
         for (const [name, options] of [['herd', {}], ['herd_bones', { bonePass: true }], ['herd_auto_big', { bonePassVertices: 1 }],
-                                       ['broken', {}]]) {
+                                       ['herd_lod_one', { bonePass: true, lod: { one: 1e6 } }], ['broken', {}]]) {
             const scene = new THREE.Scene();
             const herd = new CrowdbakeHerd(gltf, pal, null, { count: 1, glsl, material: new THREE.MeshBasicMaterial({ color: 0xffffff }),
                                                               ...options });
