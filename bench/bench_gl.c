@@ -23,6 +23,7 @@
 #include <time.h>
 
 #include "crowdbake/crowdbake.h"
+#include "bench_gl_mesh.h"
 
 /* runtimes/glsl/crowdbake_palette.glsl, embedded by the build (build/gen/palette_glsl.c). */
 extern const char cb_palette_glsl[];
@@ -30,7 +31,7 @@ extern const char cb_palette_glsl[];
 #define WIDTH 960
 #define HEIGHT 540
 #define METHODS 3
-static const char *method_names[METHODS] = {"palette", "bones", "vat"};
+static const char *const method_names[METHODS] = {"palette", "bones", "vat"}; /* bones is "lod" with --lod */
 
 static void die(const char *what)
 {
@@ -95,9 +96,12 @@ static const char *MAIN_TAIL =
 static const char *SKIN_PALETTE =
     "void main() {\n    vec3 p, n;\n"
     "    cb_skin_position_normal(a_position, a_normal, a_joints, a_weights, a_inst, u_time, p, n);\n";
-static const char *SKIN_BONES =
-    "void main() {\n    vec3 p, n;\n"
-    "    cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, gl_InstanceID, p, n);\n";
+static const char *SKIN_BONES = /* the pass placed each bone: world space straight away; --lod: the animation LOD */
+    "uniform vec3 u_lod;\n" /* pixels tall at w = 1, the 2- and 1-influence thresholds (0: off) */
+    "void main() {\n    vec3 p, n;\n    float pixels = u_lod.x / (u_view_projection * vec4(a_place.xyz, 1.0)).w;\n"
+    "    cb_skin_bone_pass_influences(a_position, a_normal, a_joints, a_weights, gl_InstanceID,\n"
+    "                                 cb_lod_influences(pixels, u_lod.y, u_lod.z), p, n);\n"
+    "    v_normal = n;\n    gl_Position = u_view_projection * vec4(p, 1.0);\n}\n";
 static const char *SKIN_VAT =
     "uniform sampler2D u_vat_positions, u_vat_normals; uniform int u_frame_width, u_rows_per_frame, u_vat_rows;\n"
     "vec3 vat_fetch(sampler2D t, int frame) {\n"
@@ -112,19 +116,19 @@ static const char *FRAGMENT =
     "void main() { float l = 0.35 + 0.65 * max(dot(normalize(v_normal), normalize(vec3(0.4, 0.8, 0.3))), 0.0);\n"
     "              o_color = vec4(vec3(0.8, 0.7, 0.55) * l, 1.0); }\n";
 static const char *PASS_VERTEX =
-    "in vec4 a_inst; uniform float u_time; uniform int u_rows; uniform vec2 u_size;\n"
-    "flat out vec4 v_inst; flat out int v_x0;\n"
+    "in vec4 a_place; in vec4 a_inst; uniform float u_time; uniform int u_rows; uniform vec2 u_size;\n"
+    "flat out vec4 v_place; flat out vec4 v_inst; flat out int v_x0;\n"
     "void main() {\n"
     "    int block = gl_InstanceID / u_rows, row = gl_InstanceID - block * u_rows, bones = cb_row_texels / CB_TEXELS_PER_BONE;\n"
     "    v_x0 = block * bones;\n"
     "    vec2 corner = vec2(float(gl_VertexID & 1), float(gl_VertexID >> 1));\n"
     "    gl_Position = vec4(vec2(float(v_x0) + corner.x * float(bones), float(row) + corner.y) / u_size * 2.0 - 1.0, 0.0, 1.0);\n"
-    "    v_inst = a_inst;\n"
+    "    v_place = a_place, v_inst = a_inst;\n"
     "}\n";
 static const char *PASS_FRAGMENT =
-    "flat in vec4 v_inst; flat in int v_x0; uniform float u_time;\n"
+    "flat in vec4 v_place; flat in vec4 v_inst; flat in int v_x0; uniform float u_time;\n"
     "layout(location = 0) out vec4 o_c0; layout(location = 1) out vec4 o_c1; layout(location = 2) out vec4 o_c2;\n"
-    "void main() { cb_bone_pass(int(gl_FragCoord.x) - v_x0, v_inst, v_inst, 1.0, u_time, o_c0, o_c1, o_c2); }\n";
+    "void main() { cb_bone_pass_placed(int(gl_FragCoord.x) - v_x0, v_inst, v_inst, 1.0, u_time, v_place, 1.0, o_c0, o_c1, o_c2); }\n";
 
 static GLuint shader(GLenum type, const char *const *parts, int n)
 {
@@ -187,6 +191,7 @@ typedef struct scene {
     GLuint palette_tex, bind_tex, vat_pos, vat_nrm, bone_tex[3], bone_fbo, bone_rows, bone_width;
     GLuint prog[METHODS], pass, vao, pass_vao, instance_vbo;
     GLsizei index_count;
+    bool lod; /* --lod: the bone pass's animation LOD, as the WebGL2 Crowd's default (24 and 12 pixels) */
 } scene;
 
 static void upload_palette(scene *s)
@@ -248,6 +253,8 @@ static void upload_mesh(scene *s, const cb_model *m, uint32_t capacity)
         for (uint32_t k = 0; k < p->index_count; ++k) idx[i0 + k] = v0 + p->indices[k];
         v0 += p->vertex_count, i0 += p->index_count;
     }
+    bench_sort_influences(j, w, verts); /* as the WebGL2 Crowd: every method draws the same order */
+    bench_sort_triangles(idx, indices, w);
     glGenVertexArrays(1, &s->vao);
     glBindVertexArray(s->vao);
     const void *data[4] = {pos, nrm, j, w};
@@ -276,9 +283,11 @@ static void upload_mesh(scene *s, const cb_model *m, uint32_t capacity)
     }
     glGenVertexArrays(1, &s->pass_vao);
     glBindVertexArray(s->pass_vao);
-    glEnableVertexAttribArray(5);
-    glVertexAttribPointer(5, 4, GL_FLOAT, GL_FALSE, 32, (const void *)16);
-    glVertexAttribDivisor(5, 1);
+    for (GLuint a = 4; a < 6; ++a) { /* the pass places each bone: it reads a_place too */
+        glEnableVertexAttribArray(a);
+        glVertexAttribPointer(a, 4, GL_FLOAT, GL_FALSE, 32, (const void *)(uintptr_t)((a - 4) * 16));
+        glVertexAttribDivisor(a, 1);
+    }
     glBindVertexArray(0);
     free(pos), free(nrm), free(w), free(j), free(idx);
 }
@@ -316,6 +325,15 @@ static void run_bone_pass(const scene *s, uint32_t n, float time)
     glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)n);
 }
 
+/* The largest side of any clip's animated bounds: the grid's spacing and the LOD's size of an instance. */
+static float herd_size(const cb_palette *p)
+{
+    float size = 0;
+    for (uint32_t c = 0; c < p->clip_count; ++c)
+        for (int k = 0; k < 3; ++k) size = fmaxf(size, p->clips[c].bounds_max[k] - p->clips[c].bounds_min[k]);
+    return size;
+}
+
 static void draw(const scene *s, int method, uint32_t n, float time, const float *view_projection, GLuint target)
 {
     if (method == 1) run_bone_pass(s, n, time);
@@ -346,6 +364,8 @@ static void draw(const scene *s, int method, uint32_t n, float time, const float
             glUniform1i(glGetUniformLocation(prog, name), 2 + k);
         }
         glUniform1i(glGetUniformLocation(prog, "cb_bone_rows"), (GLint)s->bone_rows);
+        float pixels = herd_size(s->pal) * 0.5f * HEIGHT * hypotf(hypotf(view_projection[1], view_projection[5]), view_projection[9]);
+        glUniform3f(glGetUniformLocation(prog, "u_lod"), pixels, s->lod ? 24.0f : 0.0f, s->lod ? 12.0f : 0.0f);
     }
     glUniform1f(glGetUniformLocation(prog, "u_time"), time);
     glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, view_projection);
@@ -360,9 +380,7 @@ static void place_herd(const scene *s, uint32_t n, float view_projection[16])
     const cb_palette_clip *clip = &p->clips[0];
     for (uint32_t c = 0; c < p->clip_count; ++c)
         if (p->clips[c].loops) { clip = &p->clips[c]; break; }
-    float size = 0;
-    for (uint32_t c = 0; c < p->clip_count; ++c)
-        for (int k = 0; k < 3; ++k) size = fmaxf(size, p->clips[c].bounds_max[k] - p->clips[c].bounds_min[k]);
+    float size = herd_size(p);
     uint32_t g = (uint32_t)ceil(sqrt((double)n));
     float *inst = malloc((size_t)n * 32);
     for (uint32_t i = 0; i < n; ++i) {
@@ -419,17 +437,27 @@ static double now_ms(void)
 /* Milliseconds of one frame on the GPU, as GL_TIME_ELAPSED measures from the clear to the draw's
  * end; *wall: from the clear's call to glFinish's return (llvmpipe rasterizes at the flush, which
  * its timer query may leave out). */
-static double timed_frame(const scene *s, int method, uint32_t n, float time, const float *vp, GLuint target, double *wall)
+/* The process's CPU time (ms): llvmpipe rasterises on this process's threads, and on a machine shared
+ * with other work a frame's CPU time is its own where its wall time is also the others' load. */
+static double cpu_ms(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
+}
+
+static double timed_frame(const scene *s, int method, uint32_t n, float time, const float *vp, GLuint target, double *wall,
+                          double *cpu)
 {
     GLuint q;
     GLuint64 ns = 0;
     glGenQueries(1, &q);
-    double t0 = now_ms();
+    double t0 = now_ms(), c0 = cpu_ms();
     glBeginQuery(GL_TIME_ELAPSED, q);
     draw(s, method, n, time, vp, target);
     glEndQuery(GL_TIME_ELAPSED);
     glFinish();
-    *wall = now_ms() - t0;
+    *wall = now_ms() - t0, *cpu = cpu_ms() - c0;
     glGetQueryObjectui64v(q, GL_QUERY_RESULT, &ns);
     glDeleteQueries(1, &q);
     return ns / 1e6;
@@ -447,19 +475,29 @@ static void bench_counts(const scene *s, const char *counts, int frames, GLuint 
         if (*c == ',') ++c;
         float vp[16];
         place_herd(s, n, vp);
-        double ms[METHODS][64], wall[METHODS][64], w;
+        double ms[METHODS][64], wall[METHODS][64], cpu[METHODS][64], w, u;
         for (int f = -1; f < frames && f < 64; ++f) /* frame -1 warms up (shader compile, upload) */
             for (int k = 0; k < METHODS; ++k) {
                 int m = f % 2 ? k : METHODS - 1 - k; /* in turns: a b c, c b a, ... */
-                double t = timed_frame(s, m, n, 0.5f + (float)f / 30, vp, target, &w);
-                if (f >= 0) ms[m][f] = t, wall[m][f] = w;
+                double t = timed_frame(s, m, n, 0.5f + (float)f / 30, vp, target, &w, &u);
+                if (f >= 0) ms[m][f] = t, wall[m][f] = w, cpu[m][f] = u;
             }
         printf("%s\"%u\": {", first ? "" : ", ", n);
+        double pair[2][64]; /* frame f's VAT time over each method's: pairs the same moment's load hit alike */
+        for (int k = 0; k < 4; ++k) {
+            double (*t)[64] = k < 2 ? wall : cpu;
+            for (int f = 0; f < frames; ++f) pair[k % 2][f] = t[2][f] / t[k % 2][f];
+            qsort(pair[k % 2], (size_t)frames, sizeof(double), by_value);
+            printf("\"%svat_over_%s\": %.4f, ", k < 2 ? "" : "cpu_", (k % 2 == 1 && s->lod ? "lod" : method_names[k % 2]), pair[k % 2][frames / 2]);
+        }
         for (int m = 0; m < METHODS; ++m) {
+            const char *name = m == 1 && s->lod ? "lod" : method_names[m];
             qsort(ms[m], (size_t)frames, sizeof(double), by_value);
             qsort(wall[m], (size_t)frames, sizeof(double), by_value);
-            printf("%s\"%s_ms\": %.3f, \"%s_min_ms\": %.3f, \"%s_wall_ms\": %.3f", m ? ", " : "", method_names[m],
-                   ms[m][frames / 2], method_names[m], ms[m][0], method_names[m], wall[m][frames / 2]);
+            qsort(cpu[m], (size_t)frames, sizeof(double), by_value);
+            printf("%s\"%s_ms\": %.3f, \"%s_min_ms\": %.3f, \"%s_wall_ms\": %.3f", m ? ", " : "", name,
+                   ms[m][frames / 2], name, ms[m][0], name, wall[m][frames / 2]);
+            printf(", \"%s_cpu_ms\": %.3f", name, cpu[m][frames / 2]);
         }
         printf("}");
         fflush(stdout);
@@ -508,7 +546,7 @@ static int check_images(const scene *s, GLuint target)
 
 int main(int argc, char **argv)
 {
-    if (argc < 3) die("usage: bench_gl MODEL.glb N1,N2,... [--frames K] | bench_gl MODEL.glb --check");
+    if (argc < 3) die("usage: bench_gl MODEL.glb N1,N2,... [--frames K] [--lod] | bench_gl MODEL.glb --check");
     bool check = !strcmp(argv[2], "--check");
     int frames = argc > 4 && !strcmp(argv[3], "--frames") ? atoi(argv[4]) : 5;
     if (frames < 1 || frames > 64) die("--frames: 1 to 64");
@@ -533,13 +571,14 @@ int main(int argc, char **argv)
             if (!*c) break;
         }
     scene s = {.pal = &pal, .vat = &vat};
+    for (int a = 3; a < argc; ++a) s.lod |= !strcmp(argv[a], "--lod");
     upload_palette(&s);
     bone_targets(&s, capacity);
     upload_mesh(&s, model, capacity);
     const char *skins[METHODS] = {SKIN_PALETTE, SKIN_BONES, SKIN_VAT};
     for (int m = 0; m < METHODS; ++m) {
         const char *vs[3] = {MAIN_HEAD, skins[m], MAIN_TAIL};
-        s.prog[m] = program(cb_palette_glsl, &pal, m == 1, vs, 3, NULL, 0);
+        s.prog[m] = program(cb_palette_glsl, &pal, m == 1, vs, m == 1 ? 2 : 3, NULL, 0);
     }
     s.pass = program(cb_palette_glsl, &pal, false, &PASS_VERTEX, 1, &PASS_FRAGMENT, 1);
     GLuint target = offscreen_target();

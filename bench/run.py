@@ -34,23 +34,8 @@ import argparse, json, math, os, resource, statistics, subprocess, sys, time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import auto_speed  # noqa: E402  (issue 43 item 2: default / fixed 30 fps on Cow, Husky, Fox)
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-BUILD = os.path.join(ROOT, 'build')
-SHARED = os.environ.get('CROWDBAKE_SHARED', os.path.join(ROOT, '..', 'shared'))
-EXE = os.environ.get('CROWDBAKE', os.path.join(BUILD, 'crowdbake'))
-
-
-def run(cmd, **kw):
-    """Runs cmd; returns (wall seconds, peak RSS bytes of that child, stdout)."""
-    start = time.perf_counter()
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, **kw)
-    out, err = proc.communicate()
-    wall = time.perf_counter() - start
-    # communicate() reaped it; RUSAGE_CHILDREN keeps the max over children, so take a fresh
-    # measurement by running each command through wait4 instead when possible.
-    if proc.returncode != 0:
-        sys.exit('bench: %s failed: %s' % (' '.join(cmd), err.decode()[-500:]))
-    return wall, out.decode()
+from common import BUILD, EXE, ROOT, SHARED, run
+from crowd import crowd_bench, gl_bench, print_crowd, print_gl
 
 
 def run_rss(cmd, faults=None, cpu=None):
@@ -381,81 +366,6 @@ def print_table(report):
             ', %.2f M/s as similarities (the qpos path)' % (similar / 1e6) if similar else '',
             core['pal_open_us'], core['pal_bytes'], core['pal_verify_gb_per_s'],
             ', same palette from EXR via OpenEXR %.1f ms' % (core['exr_read_us'] / 1000) if 'exr_read_us' in core else ''))
-
-
-def crowd_input(name, model):
-    """model.glb, model.pal (the default qpos/u16) and model.exr (its VAT) in build/bench/crowd-NAME."""
-    out = os.path.join(BUILD, 'bench', 'crowd-' + name)
-    os.makedirs(out, exist_ok=True)
-    subprocess.run(['cp', model, os.path.join(out, 'model.glb')], check=True)
-    subprocess.run([EXE, 'bake', model, '-o', os.path.join(out, 'model.pal'), '-q', '--root-motion', 'in-place'], check=True)
-    subprocess.run([EXE, 'vat', model, '-o', os.path.join(out, 'model.exr'), '--root-motion', 'in-place',
-                    '--exr-compression', 'none'], check=True, stdout=subprocess.DEVNULL)
-    return out
-
-
-CROWD_METHODS = ('palette', 'bones', 'vat')
-
-
-def crowd_bench(smoke):
-    runs = [('fish', os.path.join(BUILD, 'samples', 'fish.glb'), '10' if smoke else '10,30,100,1000,10000,100000',
-             1 if smoke else 2)]
-    if not smoke:
-        runs.append(('Cow', os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb'), '100,1000', 2))
-    results = []
-    for name, model, counts, frames in runs:
-        _, out = run(['node', os.path.join(ROOT, 'tests', 'browser', 'bench_crowd.mjs'), crowd_input(name, model), counts,
-                      '--frames', str(frames), '--methods', ','.join(CROWD_METHODS)])
-        r = json.loads(out.strip().split('\n')[-1])
-        r['input'] = name
-        results.append(r)
-    return results
-
-
-def print_methods(r, title, key='_ms'):
-    """A crowd table: frame ms of each method (palette: per-vertex blending; bones: the bone pass; vat)."""
-    print(title)
-    print('%10s %12s %12s %12s %12s %12s' % ('instances', 'palette ms', 'bones ms', 'VAT ms', 'VAT/palette', 'VAT/bones'))
-    for n, c in sorted(r['counts'].items(), key=lambda kv: int(kv[0])):
-        t = {m: max(c[m + key], 1e-3) for m in CROWD_METHODS}
-        print('%10s %12.1f %12.1f %12.1f %12.2f %12.2f' % (n, t['palette'], t['bones'], t['vat'],
-                                                         t['vat'] / t['palette'], t['vat'] / t['bones']))
-    held = {m: [int(n) for n, c in r['counts'].items() if c[m + key] <= 1000 / 60] for m in CROWD_METHODS}
-    print('VRAM: palette %d bytes, VAT %d bytes (%.1fx); largest measured herd holding 60 fps: %s' % (
-        r['palette_bytes'], r['vat_bytes'], r['vat_bytes'] / r['palette_bytes'],
-        ', '.join('%s %s' % (m, max(h) if h else 'none') for m, h in held.items())))
-
-
-def print_crowd(results):
-    for r in results:
-        print_methods(r, '\ncrowd: %s (%d vertices), WebGL2 in headless Chromium on %s; median of %d frames (960x540, each to '
-                      'a readPixels sync)' % (r['input'], r['vertices'], r['renderer'], r['frames']))
-
-
-# The native benchmark (bench/bench_gl.c, OpenGL through EGL): llvmpipe here, where a whole frame of
-# 100,000 Cows takes minutes; on a GPU: python3 bench/run.py --gl-only --gl-counts 1000,3000,10000,30000,100000,300000
-GL_RUNS = (('Cow', '1000,10000', 2), ('fish', '100,1000,10000,100000', 2))
-
-
-def gl_bench(smoke, counts=None):
-    models = {'Cow': os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb'),
-              'fish': os.path.join(BUILD, 'samples', 'fish.glb')}
-    runs = [('fish', '10', 1)] if smoke else [(name, counts or c, frames) for name, c, frames in GL_RUNS]
-    results = []
-    for name, c, frames in runs:
-        _, out = run([os.path.join(BUILD, 'bench_gl'), models[name], c, '--frames', str(frames)])
-        r = json.loads(out.strip().split('\n')[-1])
-        r['input'] = name
-        results.append(r)
-    return results
-
-
-def print_gl(results):
-    for r in results:
-        head = '\nnative: %s (%d vertices), OpenGL %s on %s (EGL, no window); median of %d frames (960x540, ' % (
-            r['input'], r['vertices'], r['version'], r['renderer'], r['frames'])
-        print_methods(r, head + 'GL_TIME_ELAPSED)')
-        print_methods(r, head + 'wall time to glFinish)', '_wall_ms')
 
 
 # crowdbake's qpos palettes against Unreal's AnimToTexture bone mode, written from its documented

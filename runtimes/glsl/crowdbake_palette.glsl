@@ -211,6 +211,15 @@ cb_affine cb_affine_mix(cb_affine f, cb_affine m, float fade)
     return cb_affine(m.a * fade + f.a * (1.0 - fade), mix(f.t, m.t, fade));
 }
 
+// How many of a vertex's influences to read: up to its last nonzero weight, at most CB_INFLUENCES.
+// CPU rasterisers (SwiftShader, llvmpipe) shade several vertices at once and run a masked-off `if`
+// all the same, but leave a loop once none of their vertices goes on: a loop this long reads
+// 2.5 bones a vertex on Cow, not 4.
+int cb_influence_count(vec4 weights)
+{
+    return min(CB_INFLUENCES, weights.w != 0.0 ? 4 : weights.z != 0.0 ? 3 : weights.y != 0.0 ? 2 : 1);
+}
+
 // Skins a position v and a normal n (not normalized) in one pass over the influences, cross-faded
 // from from_inst (fade 0 -> 1; 1: inst alone): each bone's texels are fetched once for both.
 // Blending the bones' transforms is blending what they skin: both are linear in them.
@@ -223,13 +232,14 @@ void cb_skin_both(vec3 v, vec3 n, ivec4 joints, vec4 weights, vec4 from_inst, ve
     cb_frame(from_inst, time, from0, from1, from_fr);
     p = vec3(0.0);
     skinned_n = vec3(0.0);
-    for (int i = 0; i < CB_INFLUENCES; ++i) // cb:influences - crowdbake mesh puts the largest weights first
-        if (weights[i] != 0.0) {
-            cb_affine m = cb_bone_affine(row0, row1, fr, joints[i]);
-            if (fade < 1.0) m = cb_affine_mix(cb_bone_affine(from0, from1, from_fr, joints[i]), m, fade);
-            p += weights[i] * (m.a * v + m.t);
-            skinned_n += weights[i] * (m.a * n);
-        }
+    // cb:influences - up to the last nonzero weight (crowdbake mesh puts the largest first), a loop and
+    // not an `if` per influence, which a CPU rasteriser's vertex lanes would all pay for.
+    for (int i = 0; i < cb_influence_count(weights); ++i) {
+        cb_affine m = cb_bone_affine(row0, row1, fr, joints[i]);
+        if (fade < 1.0) m = cb_affine_mix(cb_bone_affine(from0, from1, from_fr, joints[i]), m, fade);
+        p += weights[i] * (m.a * v + m.t);
+        skinned_n += weights[i] * (m.a * n);
+    }
 }
 
 vec3 cb_skin_position(vec3 v, ivec4 joints, vec4 weights, vec4 inst, float time)
@@ -275,6 +285,14 @@ vec3 cb_skin_normal_crossfade(vec3 n, ivec4 joints, vec4 weights, vec4 from_inst
     return normalize(skinned_n);
 }
 
+// Animation LOD: how many influences an instance `pixels` tall on screen reads - its largest alone under
+// `one` pixels, its 2 largest under `two`, else every one (a tier of 0 never applies) - as a far LOD mesh
+// of crowdbake mesh --max-influences 1|2 would (cb_skin_bone_pass_influences reads that many).
+int cb_lod_influences(float pixels, float two, float one)
+{
+    return pixels < one ? 1 : pixels < two ? 2 : CB_INFLUENCES;
+}
+
 // ---- The bone pass: each instance's bones blended once a frame instead of once a vertex ----
 // A fragment shader, one fragment per (instance, bone), writes cb_bone_pass's three texels to three
 // RGBA32F render targets (bone textures: instance i's bone j at (block * bones + j, i - block *
@@ -300,29 +318,54 @@ void cb_bone_pass(int bone, vec4 from_inst, vec4 inst, float fade, float time, o
     c0 = vec4(m.a[0], m.t.x), c1 = vec4(m.a[1], m.t.y), c2 = vec4(m.a[2], m.t.z);
 }
 
+// The same bone already placed in the world: the instance's yaw (place.w, about +y), uniform scale and
+// position (place.xyz) applied once per bone, so the draw skins straight to world space and no
+// vertex pays for a sine, a cosine and a yaw matrix (cb_skin_bone_pass then gives world p and n).
+void cb_bone_pass_placed(int bone, vec4 from_inst, vec4 inst, float fade, float time, vec4 place, float scale,
+                         out vec4 c0, out vec4 c1, out vec4 c2)
+{
+    cb_bone_pass(bone, from_inst, inst, fade, time, c0, c1, c2);
+    float c = cos(place.w), s = sin(place.w);
+    mat3 r = scale * mat3(c, 0.0, -s, 0.0, 1.0, 0.0, s, 0.0, c);
+    mat3 a = r * mat3(c0.xyz, c1.xyz, c2.xyz);
+    vec3 t = r * vec3(c0.w, c1.w, c2.w) + place.xyz;
+    c0 = vec4(a[0], t.x), c1 = vec4(a[1], t.y), c2 = vec4(a[2], t.z);
+}
+
 #ifdef CB_BONE_TEXTURE
 uniform sampler2D cb_bones0, cb_bones1, cb_bones2; // the bone pass's three targets
 uniform int cb_bone_rows;                          // instances per column block of them
 
-cb_affine cb_passed_bone(int instance, int bone)
+// The position and the normal (normalized) of a vertex of instance `instance`, from the bone pass,
+// reading its first `influences` bones (animation LOD: fewer for a far instance; its weights are
+// then scaled to sum to 1, so the influences must come largest first, as crowdbake mesh writes them
+// and the runtimes sort them). The influences' transforms are blended first and applied once
+// (12 multiply-adds an influence, not 24, and the instance's column block found once a vertex).
+void cb_skin_bone_pass_influences(vec3 v, vec3 n, ivec4 joints, vec4 weights, int instance, int influences,
+                                  out vec3 p, out vec3 skinned_n)
 {
     int block = instance / cb_bone_rows;
-    ivec2 xy = ivec2(block * (cb_row_texels / CB_TEXELS_PER_BONE) + bone, instance - block * cb_bone_rows);
-    vec4 c0 = texelFetch(cb_bones0, xy, 0), c1 = texelFetch(cb_bones1, xy, 0), c2 = texelFetch(cb_bones2, xy, 0);
-    return cb_affine(mat3(c0.xyz, c1.xyz, c2.xyz), vec3(c0.w, c1.w, c2.w)); // cb:bone-columns
+    int x0 = block * (cb_row_texels / CB_TEXELS_PER_BONE), y = instance - block * cb_bone_rows;
+    vec4 c0 = vec4(0.0), c1 = vec4(0.0), c2 = vec4(0.0);
+    float sum = 0.0;
+    int count = min(influences, cb_influence_count(weights)); // cb_influence_count says why a loop
+    for (int i = 0; i < count; ++i) {
+        ivec2 xy = ivec2(x0 + joints[i], y);
+        c0 += weights[i] * texelFetch(cb_bones0, xy, 0);
+        c1 += weights[i] * texelFetch(cb_bones1, xy, 0);
+        c2 += weights[i] * texelFetch(cb_bones2, xy, 0);
+        sum += weights[i];
+    }
+    if (influences < CB_INFLUENCES) { // cb:lod-weights - the kept weights sum to 1
+        c0 /= sum, c1 /= sum, c2 /= sum;
+    }
+    mat3 a = mat3(c0.xyz, c1.xyz, c2.xyz); // cb:bone-columns
+    p = a * v + vec3(c0.w, c1.w, c2.w);
+    skinned_n = normalize(a * n);
 }
 
-// The position and the normal (normalized) of a vertex of instance `instance`, from the bone pass.
 void cb_skin_bone_pass(vec3 v, vec3 n, ivec4 joints, vec4 weights, int instance, out vec3 p, out vec3 skinned_n)
 {
-    p = vec3(0.0);
-    skinned_n = vec3(0.0);
-    for (int i = 0; i < CB_INFLUENCES; ++i)
-        if (weights[i] != 0.0) {
-            cb_affine m = cb_passed_bone(instance, joints[i]);
-            p += weights[i] * (m.a * v + m.t);
-            skinned_n += weights[i] * (m.a * n);
-        }
-    skinned_n = normalize(skinned_n);
+    cb_skin_bone_pass_influences(v, n, joints, weights, instance, CB_INFLUENCES, p, skinned_n);
 }
 #endif

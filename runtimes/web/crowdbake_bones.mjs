@@ -1,33 +1,96 @@
-// crowdbake_bones.mjs - the bone pass of crowdbake_crowd.mjs (new Crowd(gl, { ..., bonePass: true })).
+// crowdbake_bones.mjs - the bone pass of crowdbake_crowd.mjs (new Crowd(gl, { ..., bonePass: 'auto' | true })).
 // Per-vertex skinning decodes and blends every influence's bone from the palette's two rows at
 // every vertex. The bone pass does that once per instance and bone: before the draw, one fragment
 // per (instance, bone) writes the bone's blended transform (cross-fade included) to three RGBA32F
-// render targets (cb_bone_pass of the shipped GLSL), and the draw's vertex shader reads it back with
-// three plain texel fetches an influence (cb_skin_bone_pass, #define CB_BONE_TEXTURE). It needs
+// render targets (cb_bone_pass_placed of the shipped GLSL: the instance's yaw, scale and position applied
+// too), and the draw's vertex shader reads it back with three plain texel fetches an influence, blends
+// the influences' transforms and applies the sum once (cb_skin_bone_pass_influences, #define
+// CB_BONE_TEXTURE), straight to world space. It needs
 // EXT_color_buffer_float (render to float textures), which WebGL2 on desktop GPUs and SwiftShader have.
 import { compileProgram, paletteDefines } from './crowdbake_crowd.mjs';
 
 const PASS_VERTEX = `
-in vec4 a_inst; in vec4 a_from; in vec4 a_fade;
+in vec4 a_place; in vec4 a_inst; in vec4 a_from; in vec4 a_fade;
 uniform float u_time; uniform int u_rows; uniform vec2 u_size;
-flat out vec4 v_inst; flat out vec4 v_from; flat out float v_fade; flat out int v_x0;
+flat out vec4 v_place; flat out vec4 v_inst; flat out vec4 v_from; flat out vec2 v_fade; flat out int v_x0;
 void main() {  // instance i: a quad over its row of bones in its column block
     int block = gl_InstanceID / u_rows, row = gl_InstanceID - block * u_rows, bones = cb_row_texels / CB_TEXELS_PER_BONE;
     v_x0 = block * bones;
     vec2 corner = vec2(float(gl_VertexID & 1), float(gl_VertexID >> 1));
     vec2 px = vec2(float(v_x0) + corner.x * float(bones), float(row) + corner.y);
     gl_Position = vec4(px / u_size * 2.0 - 1.0, 0.0, 1.0);
-    v_inst = a_inst, v_from = a_from;
-    v_fade = a_fade.y > 0.0 ? clamp((u_time - a_fade.x) / a_fade.y, 0.0, 1.0) : 1.0;
+    v_place = a_place, v_inst = a_inst, v_from = a_from;
+    v_fade = vec2(a_fade.y > 0.0 ? clamp((u_time - a_fade.x) / a_fade.y, 0.0, 1.0) : 1.0, a_fade.z); // weight, scale
 }
 `;
 
 const PASS_FRAGMENT = `
-flat in vec4 v_inst; flat in vec4 v_from; flat in float v_fade; flat in int v_x0;
+flat in vec4 v_place; flat in vec4 v_inst; flat in vec4 v_from; flat in vec2 v_fade; flat in int v_x0;
 uniform float u_time;
 layout(location = 0) out vec4 o_c0; layout(location = 1) out vec4 o_c1; layout(location = 2) out vec4 o_c2;
-void main() { cb_bone_pass(int(gl_FragCoord.x) - v_x0, v_from, v_inst, v_fade, u_time, o_c0, o_c1, o_c2); }
+void main() {
+    cb_bone_pass_placed(int(gl_FragCoord.x) - v_x0, v_from, v_inst, v_fade.x, u_time, v_place, v_fade.y, o_c0, o_c1, o_c2);
+}
 `;
+
+// When a Crowd with bonePass: 'auto' (the default) takes the bone pass: from this many skinned
+// vertices a frame (instances x mesh vertices). Below it the pass's fixed cost (a render target
+// switch and a second program) is not paid back; above it, per-vertex blending decodes and blends
+// every influence's bone at every vertex, the bone pass once per instance and bone (bench/run.py's
+// crowd benchmark measures both: the bone pass is ahead from 100 Cows, 500 k vertices).
+export const AUTO_BONE_PASS_VERTICES = 50000;
+
+// Animation LOD, on by default: an instance whose animated bounds span fewer than `two` pixels on
+// screen is skinned with its 2 largest bone weights, fewer than `one` pixels with its largest alone
+// (the kept weights scaled to sum to 1), the rule crowdbake mesh --max-influences 2|1 applies to a far
+// LOD mesh: at 24 pixels a pixel is 4% of the animal. lod: false, or { two, one } (0: never).
+export const DEFAULT_LOD = { two: 24, one: 12 };
+
+// The vertex main that skins from the bone pass straight to world space (the pass placed each bone).
+export const MAIN_BONES = `
+in vec3 a_position; in vec3 a_normal; in ivec4 a_joints; in vec4 a_weights;
+in vec4 a_place; in vec4 a_fade;
+uniform mat4 u_view_projection; uniform vec3 u_lod; // pixels tall at w = 1 and scale 1, the two thresholds
+out vec3 v_world; out vec3 v_normal;
+void main() {
+    float pixels = u_lod.x * a_fade.z / (u_view_projection * vec4(a_place.xyz, 1.0)).w; // the instance's size on screen
+    cb_skin_bone_pass_influences(a_position, a_normal, a_joints, a_weights, gl_InstanceID, cb_lod_influences(pixels, u_lod.y, u_lod.z),
+                                 v_world, v_normal);
+    gl_Position = u_view_projection * vec4(v_world, 1.0);
+}
+`;
+
+// u_lod for a draw: the instance's size on screen is size x scale x (viewport height / 2) x P[1][1] / w,
+// and P[1][1] is the length of the view-projection's second row (the view's rotation keeps lengths).
+export function lodUniform(lod, size, viewProjection, viewportHeight) {
+    if (!lod) return [0, 0, 0];
+    const p11 = Math.hypot(viewProjection[1], viewProjection[5], viewProjection[9]);
+    return [size * 0.5 * viewportHeight * p11, lod.two ?? 0, lod.one ?? 0];
+}
+
+// The mesh's triangles ordered by how many influences their vertices read (stable within each count):
+// a CPU rasteriser shades neighbouring vertices of the index list together and runs the influence loop
+// as long as the longest of them, so grouping alike vertices shortens the loops. The same triangles.
+export function sortTrianglesByInfluences(indices, weights) {
+    const count = (v) => (weights[v * 4 + 3] ? 4 : weights[v * 4 + 2] ? 3 : weights[v * 4 + 1] ? 2 : 1);
+    const triangles = indices.length / 3, keys = new Uint8Array(triangles), order = new Uint32Array(triangles);
+    for (let t = 0; t < triangles; ++t)
+        keys[t] = Math.max(count(indices[t * 3]), count(indices[t * 3 + 1]), count(indices[t * 3 + 2])), order[t] = t;
+    order.sort((a, b) => keys[a] - keys[b] || a - b);
+    const out = new indices.constructor(indices.length);
+    order.forEach((t, k) => out.set(indices.subarray(t * 3, t * 3 + 3), k * 3));
+    return out;
+}
+
+// Each vertex's influences largest weight first (the order LOD keeps), in place of mesh.joints/weights.
+export function sortInfluences(joints, weights) {
+    const j = Int32Array.from(joints), w = Float32Array.from(weights);
+    for (let v = 0; v < w.length; v += 4) {
+        const order = [0, 1, 2, 3].sort((a, b) => weights[v + b] - weights[v + a]);
+        order.forEach((k, i) => { j[v + i] = joints[v + k]; w[v + i] = weights[v + k]; });
+    }
+    return { joints: j, weights: w };
+}
 
 // The shipped library with the palette's defines (and `extra`), then a main.
 export function boneShaderSource(glsl, header, main, extra = []) {
@@ -44,6 +107,7 @@ export class BonePass {
         const max = gl.getParameter(gl.MAX_TEXTURE_SIZE), bones = header.bone_count;
         this.gl = gl;
         this.header = header;
+        this.capacity = capacity;
         this.rows = Math.min(capacity, max, rows);
         this.width = Math.ceil(capacity / this.rows) * bones;
         if (this.width > max) throw new Error(`bonePass: ${capacity} instances of ${bones} bones exceed this GPU's ${max}-texel textures`);
@@ -66,7 +130,7 @@ export class BonePass {
         this.vao = gl.createVertexArray();
         gl.bindVertexArray(this.vao);
         gl.bindBuffer(gl.ARRAY_BUFFER, instanceBuffer);
-        [['a_inst', 1], ['a_from', 2], ['a_fade', 3]].forEach(([name, k]) => {
+        [['a_place', 0], ['a_inst', 1], ['a_from', 2], ['a_fade', 3]].forEach(([name, k]) => {
             const loc = gl.getAttribLocation(this.program, name);
             if (loc < 0) return;
             gl.enableVertexAttribArray(loc);
@@ -81,11 +145,12 @@ export class BonePass {
     run(count, time, bindPalette) {
         const gl = this.gl, p = this.program;
         const framebuffer = gl.getParameter(gl.DRAW_FRAMEBUFFER_BINDING), viewport = gl.getParameter(gl.VIEWPORT);
-        const blend = gl.isEnabled(gl.BLEND), depth = gl.isEnabled(gl.DEPTH_TEST);
+        const blend = gl.isEnabled(gl.BLEND), depth = gl.isEnabled(gl.DEPTH_TEST), scissor = gl.isEnabled(gl.SCISSOR_TEST);
         gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, this.framebuffer);
         gl.viewport(0, 0, this.width, this.rows);
         gl.disable(gl.BLEND);
         gl.disable(gl.DEPTH_TEST);
+        gl.disable(gl.SCISSOR_TEST); // a page drawing into part of its canvas must not clip the bone textures
         gl.useProgram(p);
         gl.bindVertexArray(this.vao);
         const u = (name) => gl.getUniformLocation(p, name);
@@ -99,6 +164,16 @@ export class BonePass {
         gl.viewport(...viewport);
         if (blend) gl.enable(gl.BLEND);
         if (depth) gl.enable(gl.DEPTH_TEST);
+        if (scissor) gl.enable(gl.SCISSOR_TEST);
+    }
+
+    // Frees its textures, framebuffer, program and vertex array (a larger pass replaces it).
+    dispose() {
+        const gl = this.gl;
+        this.targets.forEach((t) => gl.deleteTexture(t));
+        gl.deleteFramebuffer(this.framebuffer);
+        gl.deleteProgram(this.program);
+        gl.deleteVertexArray(this.vao);
     }
 
     // Binds the bone textures to units 2-4 of the draw's program.

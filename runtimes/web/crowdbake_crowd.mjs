@@ -14,7 +14,8 @@
 // expect: positions (3 floats a vertex), normals (3, optional), joints (4 integers), weights (4
 // floats), indices (optional).
 
-import { BonePass, boneShaderSource } from './crowdbake_bones.mjs';
+import { AUTO_BONE_PASS_VERTICES, BonePass, DEFAULT_LOD, MAIN_BONES, boneShaderSource, lodUniform, sortInfluences,
+         sortTrianglesByInfluences } from './crowdbake_bones.mjs';
 
 import { PALETTE_GLSL } from './crowdbake_palette_glsl.mjs';
 
@@ -103,9 +104,6 @@ const MAIN = mainSource(`
     if (fade < 1.0) cb_skin_position_normal_crossfade(a_position, a_normal, a_joints, a_weights, a_from, a_inst, fade, u_time, p, n);
     else cb_skin_position_normal(a_position, a_normal, a_joints, a_weights, a_inst, u_time, p, n);`);
 
-// With the bone pass (crowdbake_bones.mjs), which blended every instance's bones before the draw.
-const MAIN_BONES = mainSource('    cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, gl_InstanceID, p, n);');
-
 const FRAGMENT = `#version 300 es
 precision mediump float;
 in vec3 v_world; in vec3 v_normal;
@@ -151,60 +149,126 @@ function buffer(gl, target, data) {
 export class Crowd {
     // options: pal (readPal), glsl (the library's text), mesh, capacity (instances), color,
     // captureWorld (link v_world for transform feedback: tests read skinned positions back),
-    // bonePass (true, or { rows }: blend each instance's bones once a frame, then skin from them;
-    // crowdbake_bones.mjs).
+    // bonePass: 'auto' (the default: the bone pass from bonePassVertices skinned vertices a frame,
+    // AUTO_BONE_PASS_VERTICES unless given; per-vertex blending below it or where WebGL2 cannot
+    // render to float textures), true (always; or { rows }), false (never); crowdbake_bones.mjs.
+    // lod: the bone pass's animation LOD (DEFAULT_LOD: fewer influences under so many pixels tall, or
+    // { two, one }, or false).
+    // crowd.choice(n) says which a herd of n gets, and why.
     constructor(gl, options) {
-        const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false, bonePass = false } = options;
+        const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false, bonePass = 'auto' } = options;
         this.gl = gl;
-        this.bonePass = bonePass;
         this.pal = pal;
         this.color = color;
         this.capacity = capacity;
         this.count = 0;
         this.vertexCount = mesh.positions.length / 3;
-        this.program = this.makeProgram(glsl, pal.header, FRAGMENT, captureWorld ? ['v_world'] : null);
+        this.bonePassVertices = bonePass === 'auto' ? options.bonePassVertices ?? AUTO_BONE_PASS_VERTICES : bonePass ? 0 : Infinity;
+        this.lod = options.lod === undefined ? DEFAULT_LOD : options.lod;
+        this.size = Math.max(1e-6, ...pal.clips.flatMap((c) => [0, 1, 2].map((k) => c.bounds_max[k] - c.bounds_min[k])));
         this.textures = this.upload(options);
-        this.vao = gl.createVertexArray();
-        gl.bindVertexArray(this.vao);
-        const attribute = (name, size, data, integer = false) => {
-            const loc = gl.getAttribLocation(this.program, name);
-            if (loc < 0) return;
-            gl.bindBuffer(gl.ARRAY_BUFFER, buffer(gl, gl.ARRAY_BUFFER, data));
-            gl.enableVertexAttribArray(loc);
-            if (integer) gl.vertexAttribIPointer(loc, size, gl.INT, 0, 0); // ivec4: WebGL wants a signed type
-            else gl.vertexAttribPointer(loc, size, gl.FLOAT, false, 0, 0);
+        const varyings = captureWorld ? ['v_world'] : null;
+        this.program = this.makeProgram(glsl, pal.header, FRAGMENT, varyings);
+        this.bones = null;
+        this.bonesUnavailable = null;
+        if (this.bonePassVertices !== Infinity) {
+            const fail = (e) => {
+                if (bonePass !== 'auto') throw e;
+                this.bonesUnavailable = e.message; // 'auto' draws every herd per vertex, and says why
+            };
+            try {
+                this.bonesProgram = compileProgram(gl, boneShaderSource(glsl, pal.header, MAIN_BONES, ['CB_BONE_TEXTURE']),
+                                                   FRAGMENT, varyings);
+            } catch (e) { fail(e); }
+        }
+        gl.bindVertexArray(null); // the buffers below join no other vertex array
+        const sorted = sortInfluences(mesh.joints, mesh.weights); // the LOD keeps the first ones
+        this.buffers = {
+            a_position: [3, buffer(gl, gl.ARRAY_BUFFER, mesh.positions)],
+            a_normal: mesh.normals ? [3, buffer(gl, gl.ARRAY_BUFFER, mesh.normals)] : null,
+            a_joints: [4, buffer(gl, gl.ARRAY_BUFFER, sorted.joints), true], // ivec4: WebGL wants a signed type
+            a_weights: [4, buffer(gl, gl.ARRAY_BUFFER, sorted.weights)],
         };
-        attribute('a_position', 3, mesh.positions);
-        if (mesh.normals) attribute('a_normal', 3, mesh.normals);
-        else if (gl.getAttribLocation(this.program, 'a_normal') >= 0)
-            gl.vertexAttrib3f(gl.getAttribLocation(this.program, 'a_normal'), 0, 1, 0);
-        attribute('a_joints', 4, Int32Array.from(mesh.joints), true);
-        attribute('a_weights', 4, mesh.weights);
         this.instances = new Float32Array(capacity * INSTANCE_FLOATS);
         this.instanceBuffer = gl.createBuffer();
         gl.bindBuffer(gl.ARRAY_BUFFER, this.instanceBuffer);
         gl.bufferData(gl.ARRAY_BUFFER, this.instances.byteLength, gl.DYNAMIC_DRAW);
+        this.indexCount = 0;
+        if (mesh.indices) {
+            const indices = sortTrianglesByInfluences(mesh.indices instanceof Uint32Array || mesh.indices instanceof Uint16Array
+                ? mesh.indices : new Uint32Array(mesh.indices), sorted.weights);
+            this.indexBuffer = buffer(gl, gl.ELEMENT_ARRAY_BUFFER, indices);
+            this.indexType = indices instanceof Uint16Array ? gl.UNSIGNED_SHORT : gl.UNSIGNED_INT;
+            this.indexCount = indices.length;
+        }
+        this.vao = this.makeVertexArray(this.program);
+        if (this.bonesProgram) {
+            this.bonesVao = this.makeVertexArray(this.bonesProgram);
+            // Forced, the pass is made now for the whole capacity (its errors thrown); 'auto' makes it when
+            // a herd first takes it, for that herd (grown by powers of two): memory follows the herd.
+            this.makeBonePass = (n) => new BonePass(gl, { glsl, header: pal.header, capacity: n, instanceBuffer: this.instanceBuffer,
+                                                          instanceFloats: INSTANCE_FLOATS, ...(typeof bonePass === 'object' ? bonePass : {}) });
+            if (bonePass !== 'auto') this.bones = this.makeBonePass(capacity);
+            else if (!gl.getExtension('EXT_color_buffer_float'))
+                this.bonesUnavailable = 'this WebGL2 cannot render to float textures (no EXT_color_buffer_float)';
+        }
+        this.meshBytes = mesh.positions.byteLength + (mesh.normals?.byteLength ?? 0) + mesh.joints.length * 4 +
+                         mesh.weights.byteLength + (mesh.indices?.byteLength ?? 0);
+        this.dirty = true;
+    }
+
+    // The vertex array of one of the crowd's programs: the mesh's buffers and the instance rows.
+    makeVertexArray(program) {
+        const gl = this.gl, vao = gl.createVertexArray();
+        gl.bindVertexArray(vao);
+        for (const [name, b] of Object.entries(this.buffers)) {
+            const loc = gl.getAttribLocation(program, name);
+            if (loc < 0) continue;
+            if (!b) { gl.vertexAttrib3f(loc, 0, 1, 0); continue; } // no normals: straight up
+            const [size, data, integer] = b;
+            gl.bindBuffer(gl.ARRAY_BUFFER, data);
+            gl.enableVertexAttribArray(loc);
+            if (integer) gl.vertexAttribIPointer(loc, size, gl.INT, 0, 0);
+            else gl.vertexAttribPointer(loc, size, gl.FLOAT, false, 0, 0);
+        }
+        gl.bindBuffer(gl.ARRAY_BUFFER, this.instanceBuffer);
         ['a_place', 'a_inst', 'a_from', 'a_fade'].forEach((name, k) => {
-            const loc = gl.getAttribLocation(this.program, name);
+            const loc = gl.getAttribLocation(program, name);
             if (loc < 0) return;
             gl.enableVertexAttribArray(loc);
             gl.vertexAttribPointer(loc, 4, gl.FLOAT, false, INSTANCE_FLOATS * 4, k * 16);
             gl.vertexAttribDivisor(loc, 1);
         });
-        this.indexCount = 0;
-        if (mesh.indices) {
-            const indices = mesh.indices instanceof Uint32Array || mesh.indices instanceof Uint16Array ? mesh.indices
-                : new Uint32Array(mesh.indices);
-            buffer(gl, gl.ELEMENT_ARRAY_BUFFER, indices);
-            this.indexType = indices instanceof Uint16Array ? gl.UNSIGNED_SHORT : gl.UNSIGNED_INT;
-            this.indexCount = indices.length;
-        }
+        if (this.indexBuffer) gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.indexBuffer);
         gl.bindVertexArray(null);
-        this.bones = bonePass ? new BonePass(gl, { glsl, header: pal.header, capacity, instanceBuffer: this.instanceBuffer,
-                                                   instanceFloats: INSTANCE_FLOATS, ...(bonePass === true ? {} : bonePass) }) : null;
-        this.meshBytes = mesh.positions.byteLength + (mesh.normals?.byteLength ?? 0) + mesh.joints.length * 4 +
-                         mesh.weights.byteLength + (mesh.indices?.byteLength ?? 0);
-        this.dirty = true;
+        return vao;
+    }
+
+    // How a herd of n instances is drawn, and why: { method: 'bones' | 'palette', reason }.
+    choice(n = this.count) {
+        const vertices = n * this.vertexCount;
+        if (this.bonesProgram && !this.bonesUnavailable && vertices >= this.bonePassVertices)
+            return { method: 'bones', reason: this.bonePassVertices ? `${vertices} skinned vertices a frame >= ${this.bonePassVertices}: ` +
+                'each bone blended once per instance (bonePass: false draws per vertex)' : 'bonePass: true' };
+        if (this.bonesUnavailable) return { method: 'palette', reason: `no bone pass here: ${this.bonesUnavailable}` };
+        if (this.bonePassVertices === Infinity) return { method: 'palette', reason: 'bonePass: false' };
+        return { method: 'palette', reason: `${vertices} skinned vertices a frame < ${this.bonePassVertices}: the bone pass ` +
+            'would not pay for its extra pass (bonePass: true forces it)' };
+    }
+
+    // The bone pass, large enough for n instances (made or grown here under bonePass: 'auto').
+    bonePassFor(n) {
+        if (!this.bones || this.bones.capacity < n) {
+            this.bones?.dispose();
+            this.bones = this.makeBonePass(Math.min(this.capacity, 2 ** Math.ceil(Math.log2(Math.max(n, 64)))));
+        }
+        return this.bones;
+    }
+
+    // Bytes per instance on the GPU: its row of the instance buffer, and the bone pass's three texels
+    // a bone when that pass is used (a VAT's instance costs its row alone; its texture is shared).
+    bytesPerInstance(method = this.choice().method) {
+        return INSTANCE_FLOATS * 4 + (method === 'bones' ? 48 * this.pal.header.bone_count : 0);
     }
 
     // Instance i: position [x, y, z], yaw (radians), scale, inst (the four numbers of
@@ -224,9 +288,7 @@ export class Crowd {
     }
 
     makeProgram(glsl, header, fragment, varyings) {
-        const vertex = this.bonePass ? boneShaderSource(glsl, header, MAIN_BONES, ['CB_BONE_TEXTURE'])
-            : vertexShaderSource(glsl, header);
-        return compileProgram(this.gl, vertex, fragment, varyings);
+        return compileProgram(this.gl, vertexShaderSource(glsl, header), fragment, varyings);
     }
 
     upload(options) {
@@ -250,20 +312,24 @@ export class Crowd {
         gl.uniform1f(u('cb_linear_range'), h.linear_range);
     }
 
-    // Binds the program, textures and uniforms for a draw at `time` seconds.
-    bind(viewProjection, time) {
-        const gl = this.gl, p = this.program;
+    // Binds the program, textures and uniforms for a draw at `time` seconds (lod: false draws every
+    // instance with all its influences, as capture does).
+    bind(viewProjection, time, lod = this.lod) {
+        const gl = this.gl, bones = this.choice().method === 'bones', p = bones ? this.bonesProgram : this.program;
         if (this.dirty) {
             gl.bindBuffer(gl.ARRAY_BUFFER, this.instanceBuffer);
             gl.bufferSubData(gl.ARRAY_BUFFER, 0, this.instances, 0, this.count * INSTANCE_FLOATS);
             this.dirty = false;
         }
-        this.bones?.run(this.count, time, (u) => this.bindTextures(u));
+        if (bones) this.bonePassFor(this.count).run(this.count, time, (u) => this.bindTextures(u));
         gl.useProgram(p);
-        gl.bindVertexArray(this.vao);
+        gl.bindVertexArray(bones ? this.bonesVao : this.vao);
         const u = (name) => gl.getUniformLocation(p, name);
         this.bindTextures(u);
-        this.bones?.bindTargets(u);
+        if (bones) {
+            this.bones.bindTargets(u);
+            gl.uniform3fv(u('u_lod'), lodUniform(lod, this.size, viewProjection, gl.getParameter(gl.VIEWPORT)[3]));
+        }
         gl.uniform1f(u('u_time'), time);
         gl.uniformMatrix4fv(u('u_view_projection'), false, viewProjection);
         gl.uniform3fv(u('u_color'), this.color);
@@ -288,7 +354,7 @@ export class Crowd {
         const out = gl.createBuffer();
         gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, out);
         gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, n * 4, gl.STATIC_READ);
-        this.bind(new Float32Array([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]), time);
+        this.bind(new Float32Array([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]), time, false);
         gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, out);
         gl.enable(gl.RASTERIZER_DISCARD);
         gl.beginTransformFeedback(gl.POINTS);

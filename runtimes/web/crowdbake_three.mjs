@@ -5,7 +5,10 @@
 //
 //     const herd = new CrowdbakeHerd(gltf, readPal(palBytes), readRoster(json).types.cow, { count: 1000, glsl });
 //     scene.add(herd); herd.setState(7, 'flee', { speed: 9.9 });
-//     renderer.setAnimationLoop((ms) => { herd.update(ms / 1000); renderer.render(scene, camera); });
+//     renderer.setAnimationLoop((ms) => { herd.update(ms / 1000, renderer); renderer.render(scene, camera); });
+//
+// Given the renderer, update() runs the bone pass (crowdbake_three_bones.mjs) when the herd is large
+// enough for it to pay (bonePass: 'auto', the default; herd.choice() says which and why).
 //
 // Place instances with place(i, position, { yaw, scale }) or InstancedMesh's setMatrixAt; tint them
 // with setColorAt. The herd casts animated shadows (customDepthMaterial, customDistanceMaterial),
@@ -16,6 +19,8 @@ import * as THREE from 'three';
 import { instanceData, instanceBoneMatrix, instanceFirstRow } from './crowdbake_pal.mjs';
 import { FootstepClock } from './crowdbake_contacts.mjs';
 import { paletteDefines } from './crowdbake_crowd.mjs';
+import { AUTO_BONE_PASS_VERTICES, DEFAULT_LOD, sortInfluences } from './crowdbake_bones.mjs';
+import { BONE_VERTEX_PARS, HerdBonePass } from './crowdbake_three_bones.mjs';
 
 // The skinned meshes of a GLTFLoader result that use its first skin, merged in glTF order:
 // positions, normals, joints, weights and indices as the palette's bone indices expect
@@ -102,9 +107,11 @@ function statesOf(pal, type) {
 // The position and the normal are skinned together where three's shader asks for the normal
 // (beginnormal_vertex, before begin_vertex), each bone's texels read once; a shader without
 // normals (a depth material) skins the position alone in begin_vertex.
-const VERTEX_PARS = `
+const VERTEX_INPUTS = `
 in vec4 cb_joints; in vec4 cb_weights; in vec4 cb_inst; in vec4 cb_from; in vec2 cb_fade;
 uniform float cb_time;
+`;
+const VERTEX_PARS = `
 vec3 cb_skinned_position; bool cb_skinned = false;
 float cb_fade_weight() { return cb_fade.y > 0.0 ? clamp((cb_time - cb_fade.x) / cb_fade.y, 0.0, 1.0) : 1.0; }
 vec3 cb_herd_normal(vec3 p, vec3 n) {
@@ -159,15 +166,20 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // (readRoster(...).types.NAME) or null to make a state of each clip. options: count, glsl
     // (the library's text: loadPaletteGLSL()), material (one three.js material, or an array with one
     // per primitive, to patch; default: a clone of each primitive's own glTF material, so the herd
-    // looks like the model), fade (cross-fade seconds, 0.25).
-    constructor(gltf, pal, type, { count = 1000, glsl, material, fade = 0.25 } = {}) {
+    // looks like the model), fade (cross-fade seconds, 0.25), bonePass ('auto': the bone pass from
+    // bonePassVertices skinned vertices a frame, AUTO_BONE_PASS_VERTICES unless given, when update()
+    // is given the renderer; true: always then; false: never).
+    // lod: with the bone pass, the animation LOD of crowdbake_bones.mjs (DEFAULT_LOD, { two, one } or false).
+    constructor(gltf, pal, type, { count = 1000, glsl, material, fade = 0.25, bonePass = 'auto', bonePassVertices,
+                                   lod = DEFAULT_LOD } = {}) {
         if (!glsl) throw new Error('CrowdbakeHerd: options.glsl is the shipped library (await loadPaletteGLSL())');
         const mesh = gltf.positions ? gltf : meshFromGLTF(gltf);
         const geometry = new THREE.BufferGeometry();
         geometry.setAttribute('position', new THREE.BufferAttribute(mesh.positions, 3));
         geometry.setAttribute('normal', new THREE.BufferAttribute(mesh.normals, 3));
-        geometry.setAttribute('cb_joints', new THREE.BufferAttribute(Float32Array.from(mesh.joints), 4));
-        geometry.setAttribute('cb_weights', new THREE.BufferAttribute(mesh.weights, 4));
+        const sorted = sortInfluences(mesh.joints, mesh.weights); // largest first: the LOD keeps the first ones
+        geometry.setAttribute('cb_joints', new THREE.BufferAttribute(Float32Array.from(sorted.joints), 4));
+        geometry.setAttribute('cb_weights', new THREE.BufferAttribute(sorted.weights, 4));
         if (mesh.uvs) geometry.setAttribute('uv', new THREE.BufferAttribute(mesh.uvs, 2));
         if (mesh.colors) geometry.setAttribute('color', new THREE.BufferAttribute(mesh.colors, 4));
         geometry.setIndex(new THREE.BufferAttribute(mesh.indices, 1));
@@ -205,16 +217,27 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         };
         this.uniforms = uniforms;
         const defines = Object.fromEntries(paletteDefines(pal.header).map((d) => [d, '']));
+        this.bonePassVertices = bonePass === 'auto' ? bonePassVertices ?? AUTO_BONE_PASS_VERTICES : bonePass ? 0 : Infinity;
+        this.lod = lod;
+        this.lodSize = Math.max(...[0, 1, 2].map((k) => bounds.box.max.getComponent(k) - bounds.box.min.getComponent(k)));
+        this.bones = null;
+        this.bonesOn = false;
+        this.patched = [];
+        this.vertexCount = mesh.positions.length / 3;
+        this.makeBonePass = () => new HerdBonePass({ glsl, header: pal.header, capacity: count, geometry, uniforms });
         const onBeforeCompile = (shader) => {
             Object.assign(shader.uniforms, uniforms);
+            const pars = 'CB_BONE_TEXTURE' in shader.defines ? BONE_VERTEX_PARS : VERTEX_PARS;
             shader.vertexShader = shader.vertexShader
-                .replace('#include <common>', `#include <common>\n${glsl}\n${VERTEX_PARS}`)
+                .replace('#include <common>', `#include <common>\n${glsl}\n${VERTEX_INPUTS}${pars}`)
                 .replace('#include <beginnormal_vertex>', 'vec3 objectNormal = cb_herd_normal(position, normal);')
                 .replace('#include <begin_vertex>', 'vec3 transformed = cb_herd_position(position);');
         };
-        const customProgramCacheKey = () => `crowdbake-${paletteDefines(pal.header).join('-')}`;
-        const skinnedLike = (m) => Object.assign(m, { defines: { ...m.defines, ...defines }, onBeforeCompile,
-                                                      customProgramCacheKey });
+        const customProgramCacheKey = () => `crowdbake-${paletteDefines(pal.header).join('-')}${this.bonesOn ? '-bones' : ''}`;
+        const skinnedLike = (m) => {
+            this.patched.push(m);
+            return Object.assign(m, { defines: { ...m.defines, ...defines }, onBeforeCompile, customProgramCacheKey });
+        };
         this.skinnedLike = skinnedLike; // one skinning patch for every primitive's colour, shadow depth and motion vectors
         (Array.isArray(material) ? material : [material]).forEach(skinnedLike);
         this.customDepthMaterial = skinnedLike(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }));
@@ -285,7 +308,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // they are now: moving ones add their own displacement.
     motionVectorMaterial() {
         const m = this.skinnedLike(new THREE.MeshBasicMaterial());
-        const patch = m.onBeforeCompile, key = m.customProgramCacheKey();
+        const patch = m.onBeforeCompile, key = m.customProgramCacheKey; // with or without the bone pass
         m.onBeforeCompile = (shader, renderer) => {
             patch(shader, renderer);
             shader.vertexShader = shader.vertexShader
@@ -295,11 +318,16 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
                 .replace('#include <common>', '#include <common>\nin vec4 cb_clip_now; in vec4 cb_clip_before;')
                 .replace('#include <dithering_fragment>', MOTION_FRAGMENT);
         };
-        m.customProgramCacheKey = () => `${key}-motion`;
+        m.customProgramCacheKey = () => `${key()}-motion`;
         return m;
     }
 
     onBeforeRender(renderer, scene, camera) {
+        if (this.bonesOn) { // the LOD's scale: pixels tall at w = 1 (size x half the viewport's height x P[1][1])
+            const viewport = renderer.getCurrentViewport(new THREE.Vector4());
+            this.uniforms.cb_lod.value.set(this.lodSize * 0.5 * viewport.w * camera.projectionMatrix.elements[5],
+                                           this.lod ? this.lod.two ?? 0 : 0, this.lod ? this.lod.one ?? 0 : 0);
+        }
         const before = this.uniforms.cb_previous_view_projection.value;
         if (this.previousViewProjection) before.copy(this.previousViewProjection);
         else before.multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse);
@@ -309,14 +337,50 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         this.setState(i, this.instanceState[i], { phase, fade: 0 });
     }
 
+    // How the herd is skinned with `renderer` (the one update() was given): { method: 'bones' |
+    // 'palette', reason }.
+    choice(renderer) {
+        const vertices = this.count * this.vertexCount;
+        if (this.bonePassVertices === Infinity) return { method: 'palette', reason: 'bonePass: false' };
+        if (!renderer) return { method: 'palette', reason: 'update(time) was not given the renderer the bone pass draws with' };
+        if (!renderer.extensions.has('EXT_color_buffer_float'))
+            return { method: 'palette', reason: 'this WebGL2 cannot render to float textures (no EXT_color_buffer_float)' };
+        if (vertices < this.bonePassVertices)
+            return { method: 'palette', reason: `${vertices} skinned vertices a frame < ${this.bonePassVertices}: the bone pass ` +
+                     'would not pay for its extra pass (bonePass: true forces it)' };
+        return { method: 'bones', reason: this.bonePassVertices ? `${vertices} skinned vertices a frame >= ${this.bonePassVertices}` +
+                 ': each bone blended once per instance (bonePass: false draws per vertex)' : 'bonePass: true' };
+    }
+
+    // Switches every patched material (colour, shadow depth, motion vectors) to the bone pass or back:
+    // a define, so three compiles each variant once and keeps both.
+    useBonePass(on) {
+        if (on === this.bonesOn) return;
+        this.bonesOn = on;
+        this.bones ??= on ? this.makeBonePass() : null;
+        for (const m of this.patched) {
+            if (on) m.defines.CB_BONE_TEXTURE = '';
+            else delete m.defines.CB_BONE_TEXTURE;
+            m.needsUpdate = true;
+        }
+    }
+
+    // GPU bytes per instance: its matrix, colour slot and four crowdbake rows (14 + 16 + 4 floats
+    // with a colour), and the bone pass's 48 bytes a bone when it runs.
+    bytesPerInstance() {
+        return (16 + 4 + 4 + 2 + (this.instanceColor ? 3 : 0)) * 4 + (this.bonesOn ? 48 * this.pal.header.bone_count : 0);
+    }
+
     // The clock the shader plays every instance at, in seconds; the time it replaces is the
-    // motion vectors' previous frame.
-    update(time) {
+    // motion vectors' previous frame. With the renderer, the bone pass runs here when chosen.
+    update(time, renderer = null) {
         this.uniforms.cb_previous_time.value = this.time;
         const inst = this.geometry.attributes.cb_inst.array;
         this.footsteps.advance(this.count, time, (i) => [this.states[this.instanceState[i]].clip, inst.subarray(i * 4, i * 4 + 4)]);
         this.time = time;
         this.uniforms.cb_time.value = time;
+        this.useBonePass(this.choice(renderer).method === 'bones');
+        if (this.bonesOn) this.bones.run(renderer, this.count);
         if (this.instanceMatrix.version !== this.boundsVersion) {
             this.boundsVersion = this.instanceMatrix.version;
             this.boundingBox = this.boundingSphere = null;

@@ -113,6 +113,10 @@ void main() {
 // replaced by two texel fetches per vertex. `pal` is the palette of the same frames (for its
 // header only) and `vat` readVat's result: new VatCrowd(gl, { pal, vat, glsl, mesh, capacity }).
 export class VatCrowd extends Crowd {
+    constructor(gl, options) {
+        super(gl, { ...options, bonePass: false }); // a VAT has no bones to pass
+    }
+
     makeProgram(glsl, header, fragment, varyings) {
         const defines = '#define CB_LAYOUT_MAT4\n#define CB_PRECISION_FLOAT\n'; // only cb_frame is used
         return compileProgram(this.gl, `#version 300 es\n${defines}${glsl}\n${VAT_MAIN}`, fragment, varyings);

@@ -100,7 +100,9 @@ static double disagreement(const char *out, int index, const char *which)
 }
 
 /* CrowdbakeHerd (three.js InstancedMesh, the shipped GLSL patched in) against three.js's own
- * SkinnedMesh + AnimationMixer playing the glTF: the Fox walking, silhouettes from one camera. */
+ * SkinnedMesh + AnimationMixer playing the glTF: the Fox walking, silhouettes from one camera; and the
+ * WebGL2 Crowd the same way: per vertex, bone pass, the herd-size choice and the animation LOD; and the
+ * herd's own bone pass and herd-size choice. */
 static void test_three_herd_matches_three_skinning(void **state)
 {
     (void)state;
@@ -122,6 +124,28 @@ static void test_three_herd_matches_three_skinning(void **state)
                100 * broken);
         assert_true(herd < 0.03);
         assert_true(broken > 0.2);
+        /* The WebGL2 Crowd, each way it can skin, within the herd's tolerance of three.js. */
+        static const char *crowds[] = {"crowd_palette", "crowd_bones", "crowd_auto_small", "crowd_auto_big",
+                                       "crowd_lod_forced", "crowd_lod_one_forced", "crowd_lod_default", "herd_bones",
+                                       "herd_auto_big", "herd_lod_one"};
+        for (int k = 0; k < 10; ++k) {
+            double share = disagreement(out, i, crowds[k]);
+            printf("  time %d: %s vs three.js skinning %.2f%%\n", i, crowds[k], 100 * share);
+            assert_true(share < 0.03);
+        }
+    }
+    /* bonePass 'auto' picks by herd size: one Fox is under the threshold, over it with bonePassVertices 1. */
+    assert_non_null(strstr(out, "\"auto_small\":{\"method\":\"palette\""));
+    assert_non_null(strstr(out, "\"auto_big\":{\"method\":\"bones\""));
+    assert_non_null(strstr(out, "\"herd\":{\"method\":\"palette\""));
+    assert_non_null(strstr(out, "\"herd_auto_big\":{\"method\":\"bones\""));
+    assert_non_null(strstr(out, "\"herd_bones\":{\"method\":\"bones\""));
+    /* The LOD at its default leaves an instance this large on screen alone: the bone pass's pixels exactly. */
+    const char *at = out;
+    for (int i = 0; i < 3; ++i) {
+        assert_non_null(at = strstr(at, "\"crowd_lod_default\":{"));
+        assert_non_null(at = strstr(at, "\"vs_bones\":"));
+        assert_int_equal(atoi(at + 11), 0);
     }
 }
 

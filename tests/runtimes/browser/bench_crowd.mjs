@@ -6,7 +6,9 @@
 //       [--before TREE]
 //
 // Methods: palette (per-vertex blending), bones (Crowd's bonePass: each instance's bones blended
-// once, crowdbake_bones.mjs), vat, before (the palette runtime of another tree TREE - its runtimes/web
+// once, crowdbake_bones.mjs, every influence), lod (the bone pass with its animation LOD), auto (Crowd's
+// default: bone pass or not by herd size, LOD on), vat, rest (the mesh unskinned: the floor every method
+// pays), before (the palette runtime of another tree TREE - its runtimes/web
 // and runtimes/glsl, or an older tree's web/ and samples/shaders/ - e.g. `git worktree add` of an
 // older commit: a before/after in one page).
 //
@@ -21,6 +23,25 @@ import path from 'node:path';
 import { withPage, RUNTIMES, THREE_PAGE } from './driver.mjs';
 
 const [dir, countsText] = process.argv.slice(2);
+
+// CPU time (user + system, ms) of every process under this one: the browser and its GPU process, where
+// SwiftShader rasterises. On a machine shared with other work a frame's wall time is as much the
+// others' load as its own; the CPU time it took is its own (reported beside the wall time).
+function cpuMs() {
+    const children = new Map();
+    for (const pid of fs.readdirSync('/proc').filter((d) => /^\d+$/.test(d))) {
+        try {
+            const stat = fs.readFileSync(`/proc/${pid}/stat`, 'utf8'), fields = stat.slice(stat.lastIndexOf(')') + 2).split(' ');
+            const list = children.get(fields[1]) ?? [];
+            list.push({ pid, ticks: Number(fields[11]) + Number(fields[12]) });
+            children.set(fields[1], list);
+        } catch { /* the process ended meanwhile */ }
+    }
+    let ticks = 0;
+    const walk = (pid) => { for (const c of children.get(pid) ?? []) ticks += c.ticks, walk(c.pid); };
+    walk(String(process.pid));
+    return ticks * 10; // USER_HZ: 100 on Linux
+}
 const frames = Number(process.argv[process.argv.indexOf('--frames') + 1] || 5);
 const gpu = process.argv.includes('--gpu');
 const counts = countsText.split(',').map(Number);
@@ -34,11 +55,27 @@ const page = THREE_PAGE + '<canvas id="c" width="960" height="540"></canvas>';
 
 const result = await withPage({ '/': RUNTIMES, '/bench/': path.resolve(dir), ...(before ? { '/before/': beforeRoot(before) } : {}) }, '/__blank.html', async (p) => {
     await p.setContent(page);
-    const r = await p.evaluate(async ({ counts, frames, methods }) => {
+    const r = await p.evaluate(async ({ counts, methods }) => {
         const THREE = await import('three');
         const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
         const { readPal, instanceData } = await import('/web/crowdbake_pal.mjs');
-        const { Crowd, loadPaletteGLSL } = await import('/web/crowdbake_crowd.mjs');
+        const { Crowd, loadPaletteGLSL, compileProgram } = await import('/web/crowdbake_crowd.mjs');
+        // The floor every method pays (triangle setup, rasterisation, the instance's placement): the
+        // mesh at rest, no skinning.
+        class RestCrowd extends Crowd {
+            makeProgram(glsl, header, fragment) {
+                return compileProgram(gl, `#version 300 es
+in vec3 a_position; in vec3 a_normal; in vec4 a_place; in vec4 a_fade;
+uniform mat4 u_view_projection; out vec3 v_world; out vec3 v_normal;
+void main() {
+    float c = cos(a_place.w), s = sin(a_place.w);
+    mat3 yaw = mat3(c, 0.0, -s, 0.0, 1.0, 0.0, s, 0.0, c);
+    v_world = a_place.xyz + a_fade.z * (yaw * a_position);
+    v_normal = yaw * a_normal;
+    gl_Position = u_view_projection * vec4(v_world, 1.0);
+}`, fragment);
+            }
+        }
         const { VatCrowd, readVat } = await import('/web/crowdbake_vat.mjs');
         const { meshFromGLTF } = await import('/web/crowdbake_three.mjs');
         const bytes = async (u) => new Uint8Array(await (await fetch(u)).arrayBuffer());
@@ -49,8 +86,11 @@ const result = await withPage({ '/': RUNTIMES, '/bench/': path.resolve(dir), ...
         const glsl = await loadPaletteGLSL();
         const max = Math.max(...counts);
         const make = {
-            palette: () => new Crowd(gl, { pal, glsl, mesh, capacity: max }),
-            bones: () => new Crowd(gl, { pal, glsl, mesh, capacity: max, bonePass: true }),
+            palette: () => new Crowd(gl, { pal, glsl, mesh, capacity: max, bonePass: false }),
+            bones: () => new Crowd(gl, { pal, glsl, mesh, capacity: max, bonePass: true, lod: false }),
+            lod: () => new Crowd(gl, { pal, glsl, mesh, capacity: max, bonePass: true }),
+            auto: () => new Crowd(gl, { pal, glsl, mesh, capacity: max }),
+            rest: () => new RestCrowd(gl, { pal, glsl, mesh, capacity: max, bonePass: false }),
             vat: () => new VatCrowd(gl, { pal, vat, glsl, mesh, capacity: max }),
             before: async () => {
                 const old = await import('/before/web/crowdbake_crowd.mjs');
@@ -64,8 +104,8 @@ const result = await withPage({ '/': RUNTIMES, '/bench/': path.resolve(dir), ...
                         rate_per_speed: 0, phase: 'golden_ratio' };
         const size = Math.max(...[0, 1, 2].map((k) => Math.max(...pal.clips.map((c) => c.bounds_max[k] - c.bounds_min[k]))));
         const pixel = new Uint8Array(4);
-        const out = {};
-        for (const n of counts) {
+        let vp = null;
+        window.benchPlace = (n) => {
             const g = Math.ceil(Math.sqrt(n)), side = g * size * 1.5;
             for (const c of Object.values(crowds)) {
                 c.count = 0;
@@ -78,35 +118,59 @@ const result = await withPage({ '/': RUNTIMES, '/bench/': path.resolve(dir), ...
             camera.position.set(0, side * 0.8, side * 0.7);
             camera.lookAt(0, 0, 0);
             camera.updateMatrixWorld();
-            const vp = new THREE.Matrix4().multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse).elements;
-            out[n] = {};
-            for (const method of methods) out[n][method] = [];
-            for (let f = -1; f < frames; ++f) // frame -1 warms up (shader compile, upload)
-                for (const method of f % 2 ? methods : [...methods].reverse()) {
-                    const t0 = performance.now();
-                    gl.viewport(0, 0, 960, 540);
-                    gl.enable(gl.DEPTH_TEST);
-                    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
-                    crowds[method].draw(vp, 0.5 + f / 30);
-                    gl.readPixels(480, 270, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
-                    if (f >= 0) out[n][method].push(performance.now() - t0);
-                }
-        }
+            vp = new THREE.Matrix4().multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse).elements;
+        };
+        window.benchFrame = (method, f) => { // one frame of one method: ms from its draw to a 1-pixel readPixels
+            const t0 = performance.now();
+            gl.viewport(0, 0, 960, 540);
+            gl.enable(gl.DEPTH_TEST);
+            gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+            crowds[method].draw(vp, 0.5 + f / 30);
+            gl.readPixels(480, 270, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+            return performance.now() - t0;
+        };
         const ext = gl.getExtension('WEBGL_debug_renderer_info');
-        return { renderer: ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER), times: out,
+        const perInstance = Object.fromEntries(Object.entries(crowds).map(([m, c]) => [m, c.bytesPerInstance(m === 'palette' ? 'palette'
+            : m === 'vat' || m === 'rest' ? 'vat' : c.choice(max).method)]));
+        return { renderer: ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER),
                  vertices: mesh.positions.length / 3, palette_bytes: crowds.palette?.textures.bytes,
-                 vat_bytes: crowds.vat?.textures.bytes, bone_pass_bytes: crowds.bones?.bones.bytes };
-    }, { counts, frames, methods });
+                 vat_bytes: crowds.vat?.textures.bytes, bone_pass_bytes: crowds.bones?.bones.bytes,
+                 bytes_per_instance: perInstance,
+                 auto_choice: crowds.auto ? Object.fromEntries(counts.map((n) => [n, crowds.auto.choice(n)])) : undefined };
+    }, { counts, methods });
+    r.times = {};
+    r.cpu = {};
+    for (const n of counts) {
+        await p.evaluate((n) => window.benchPlace(n), n);
+        r.times[n] = {};
+        r.cpu[n] = {};
+        for (const method of methods) r.times[n][method] = [], r.cpu[n][method] = [];
+        for (let f = -1; f < frames; ++f) // frame -1 warms up (shader compile, upload)
+            for (const method of f % 2 ? methods : [...methods].reverse()) {
+                const cpu0 = cpuMs();
+                const wall = await p.evaluate(([m, f]) => window.benchFrame(m, f), [method, f]);
+                const cpu = cpuMs() - cpu0;
+                if (f >= 0) r.times[n][method].push(wall), r.cpu[n][method].push(cpu);
+            }
+    }
     if (p.crowdbakeErrors.length) throw new Error(p.crowdbakeErrors.join('; '));
     return r;
 }, { gpu });
 
 const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
 const report = { renderer: result.renderer, vertices: result.vertices, palette_bytes: result.palette_bytes,
-                 vat_bytes: result.vat_bytes, bone_pass_bytes: result.bone_pass_bytes, frames, methods, counts: {} };
+                 vat_bytes: result.vat_bytes, bone_pass_bytes: result.bone_pass_bytes, bytes_per_instance: result.bytes_per_instance,
+                 auto_choice: result.auto_choice, frames, methods, counts: {} };
 for (const [n, m] of Object.entries(result.times)) {
     const c = report.counts[n] = {};
     for (const method of methods) c[`${method}_ms`] = median(m[method]), c[`${method}_min_ms`] = Math.min(...m[method]);
-    if (m.palette && m.vat) c.vat_over_palette = c.vat_ms / c.palette_ms;
+    // Each frame drew every method back to back (in turns): frame f's VAT time over a method's is a pair
+    // that one moment's load hit alike; the ratio reported is the median over the pairs.
+    if (m.vat) for (const method of methods.filter((x) => x !== 'vat'))
+        c[`vat_over_${method}`] = median(m.vat.map((v, f) => v / m[method][f]));
+    const cpu = result.cpu[n];
+    for (const method of methods) c[`${method}_cpu_ms`] = median(cpu[method]);
+    if (cpu.vat) for (const method of methods.filter((x) => x !== 'vat'))
+        c[`cpu_vat_over_${method}`] = median(cpu.vat.map((v, f) => v / Math.max(cpu[method][f], 1)));
 }
 console.log(JSON.stringify(report));
