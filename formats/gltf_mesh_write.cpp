@@ -52,7 +52,13 @@ struct Writer {
         return (int)g.accessors.size() - 1;
     }
 
-    // Plain data (inverse bind matrices): no target, no padding.
+    // What the parts look like, each material, texture and image written once, in the order
+    // the parts first use them (so the bytes follow the model's primitive order alone).
+    std::vector<const cb_material *> materials;
+    std::vector<const cb_texture *> textures;
+    std::vector<const cb_image *> images;
+
+    // Plain data (inverse bind matrices, images): no target, no padding.
     int data_view(const void *data, size_t bytes)
     {
         while (bin().size() % 4) bin().push_back(0);
@@ -65,6 +71,54 @@ struct Writer {
         return (int)g.bufferViews.size() - 1;
     }
 };
+
+template <class T> int index_of(std::vector<const T *> &list, const T *item)
+{
+    for (size_t i = 0; i < list.size(); ++i)
+        if (list[i] == item) return (int)i;
+    list.push_back(item);
+    return (int)list.size() - 1;
+}
+
+// Only TEXCOORD_0 is carried, so a texture read through another set is left out (the colour
+// factor stays).
+tinygltf::Material material(Writer &w, const cb_material &m)
+{
+    tinygltf::Material out;
+    out.name = m.name;
+    out.pbrMetallicRoughness.baseColorFactor.assign(m.base_color, m.base_color + 4);
+    out.pbrMetallicRoughness.metallicFactor = m.metallic;
+    out.pbrMetallicRoughness.roughnessFactor = m.roughness;
+    if (m.base_color_texture && m.base_color_texcoord == 0)
+        out.pbrMetallicRoughness.baseColorTexture.index = index_of(w.textures, m.base_color_texture);
+    static const char *const modes[] = {"OPAQUE", "MASK", "BLEND"};
+    out.alphaMode = modes[m.alpha_mode <= CB_ALPHA_BLEND ? m.alpha_mode : 0];
+    if (m.alpha_mode == CB_ALPHA_MASK) out.alphaCutoff = m.alpha_cutoff;
+    out.doubleSided = m.double_sided;
+    return out;
+}
+
+// The textures, one sampler each, and their images embedded in the binary chunk.
+void add_textures(Writer &w)
+{
+    for (const cb_texture *t : w.textures) {
+        tinygltf::Sampler s;
+        s.magFilter = t->mag_filter ? t->mag_filter : -1;
+        s.minFilter = t->min_filter ? t->min_filter : -1;
+        s.wrapS = t->wrap_s, s.wrapT = t->wrap_t;
+        w.g.samplers.push_back(s);
+        tinygltf::Texture tex;
+        tex.sampler = (int)w.g.samplers.size() - 1;
+        tex.source = index_of(w.images, t->image);
+        w.g.textures.push_back(tex);
+    }
+    for (const cb_image *im : w.images) {
+        tinygltf::Image out;
+        out.mimeType = im->mime_type;
+        out.bufferView = w.data_view(im->bytes, (size_t)im->size);
+        w.g.images.push_back(out);
+    }
+}
 
 // The bind pose of a joint: the inverse of its inverse bind matrix (affine).
 void invert_affine(const double m[16], double out[16])
@@ -163,6 +217,9 @@ void add_part(Writer &w, const cb_mesh *m, const cb_mesh_part &p, uint32_t first
     } else {
         prim.attributes["WEIGHTS_0"] = w.accessor(w.view(p.weights, n, 16, true), n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, false);
     }
+    if (p.colors)
+        prim.attributes["COLOR_0"] = w.accessor(w.view(p.colors, n, 16, true), n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, false);
+    if (p.material) prim.material = index_of(w.materials, p.material);
     if (vertex_id_set >= 0) add_vertex_id(w, (uint32_t)vertex_id_set, p, first_id, prim);
     if (p.instance_ids)
         prim.attributes[CB_INSTANCE_ID_ATTRIBUTE] =
@@ -217,6 +274,8 @@ static cb_status write_mesh(const char *path, const cb_mesh *mesh, const cb_mode
         first_id += mesh->parts[i].vertex_count;
     }
     w.g.meshes.push_back(m);
+    for (const cb_material *used : w.materials) w.g.materials.push_back(material(w, *used));
+    add_textures(w);
     tinygltf::Node node;
     node.name = "crowd_mesh";
     node.mesh = 0;

@@ -62,12 +62,6 @@ static bool skip_under_sanitizers(void)
 #endif
 }
 
-static bool exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
 /* The bake the command itself writes, to compare the library's bytes with. */
 /* The settings tests/install/bake_model.c bakes with, as options: the command also records a speed
  * reference (its slowest locomotion clip's ground speed, decided by the catalog logic in the tool),
