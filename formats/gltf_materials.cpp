@@ -1,6 +1,7 @@
 // gltf_materials.cpp - what a primitive looks like (base colour, its texture and sampler, alpha
 // mode, sides), kept from either parse so `crowdbake mesh` writes it back. Nothing here can fail
 // a bake: a material part that cannot be read is left out, as the bake never draws.
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <utility>
@@ -27,7 +28,8 @@ void materials_from_tinygltf(tinygltf::Model *g, doc::Document *out)
         doc::Image to;
         to.bufferView = im.bufferView;
         to.mimeType = im.mimeType;
-        if (im.bufferView < 0) to.bytes = std::move(im.image); // kept raw by the loader's image callback
+        if (im.bufferView < 0) to.bytes = std::move(im.image); // a data uri's, kept raw by the loader's image callback
+        if (im.bufferView < 0 && to.bytes.empty()) to.uri = im.uri;
         out->images.push_back(std::move(to));
     }
     for (const tinygltf::Sampler &s : g->samplers) out->samplers.push_back({s.magFilter, s.minFilter, s.wrapS, s.wrapT});
@@ -35,8 +37,41 @@ void materials_from_tinygltf(tinygltf::Model *g, doc::Document *out)
 
 namespace {
 
-// The bytes of an image: its bufferView checked against its buffer, or what tinygltf read for
-// its uri. The model owns both (the buffers are the model's; uri bytes are copied).
+// %XX escapes decoded, as glTF's uris are URI references.
+std::string uri_decoded(const std::string &uri)
+{
+    std::string out;
+    for (size_t i = 0; i < uri.size(); ++i) {
+        unsigned code;
+        if (uri[i] == '%' && i + 2 < uri.size() && std::sscanf(uri.c_str() + i + 1, "%2x", &code) == 1) {
+            out += (char)code;
+            i += 2;
+        } else {
+            out += uri[i];
+        }
+    }
+    return out;
+}
+
+// The path of an image in a file beside the model, for `mesh` to read: a relative uri that stays
+// inside the model's folder (the loader's rule for external files); "" for any other.
+std::string image_path(const Context &c, const std::string &uri)
+{
+    std::string rel = uri_decoded(uri);
+    if (rel.empty() || rel[0] == '/' || rel.find(':') != std::string::npos || rel.find('\0') != std::string::npos) return "";
+    for (size_t start = 0;;) {
+        size_t end = rel.find('/', start);
+        if (rel.compare(start, end == std::string::npos ? std::string::npos : end - start, "..") == 0) return "";
+        if (end == std::string::npos) break;
+        start = end + 1;
+    }
+    std::string dir = c.name;
+    size_t slash = dir.find_last_of('/');
+    return slash == std::string::npos ? rel : dir.substr(0, slash + 1) + rel;
+}
+
+// The bytes of an image: its bufferView checked against its buffer, or what tinygltf decoded of
+// its data uri. The model owns both (the buffers are the model's; uri bytes are copied).
 bool image_bytes(Context &c, const doc::Image &im, cb_image *out)
 {
     const doc::Document &g = *c.doc;
@@ -64,15 +99,6 @@ cb_alpha_mode alpha_mode(const std::string &s)
     return s == "MASK" ? CB_ALPHA_MASK : s == "BLEND" ? CB_ALPHA_BLEND : CB_ALPHA_OPAQUE;
 }
 
-// A file image's uri gives no type; glTF wants one on an image in a bufferView, where `mesh` puts it.
-const char *sniffed_mime_type(const cb_image &im)
-{
-    static const unsigned char png[4] = {0x89, 'P', 'N', 'G'}, jpeg[3] = {0xFF, 0xD8, 0xFF};
-    if (im.size >= 4 && std::memcmp(im.bytes, png, 4) == 0) return "image/png";
-    if (im.size >= 3 && std::memcmp(im.bytes, jpeg, 3) == 0) return "image/jpeg";
-    return "";
-}
-
 bool convert_images(Context &c)
 {
     const doc::Document &g = *c.doc;
@@ -83,7 +109,9 @@ bool convert_images(Context &c)
     for (size_t i = 0; i < g.images.size(); ++i) {
         cb_image &to = m->images[i];
         if (!image_bytes(c, g.images[i], &to)) to.bytes = nullptr, to.size = 0;
-        to.mime_type = cb_model_strdup(m, g.images[i].mimeType.empty() ? sniffed_mime_type(to) : g.images[i].mimeType.c_str());
+        std::string path = to.bytes ? "" : image_path(c, g.images[i].uri);
+        if (!path.empty() && !(to.path = cb_model_strdup(m, path.c_str()))) return false;
+        to.mime_type = cb_model_strdup(m, g.images[i].mimeType.c_str());
         if (!to.mime_type) return false;
     }
     return true;
@@ -99,7 +127,7 @@ bool convert_textures(Context &c)
     for (size_t i = 0; i < g.textures.size(); ++i) {
         const doc::Texture &t = g.textures[i];
         cb_texture &to = m->textures[i];
-        bool has_image = t.source >= 0 && (size_t)t.source < m->image_count && m->images[t.source].bytes;
+        bool has_image = t.source >= 0 && (size_t)t.source < m->image_count && (m->images[t.source].bytes || m->images[t.source].path);
         to.image = has_image ? &m->images[t.source] : nullptr;
         doc::Sampler s;
         if (t.sampler >= 0 && (size_t)t.sampler < g.samplers.size()) s = g.samplers[(size_t)t.sampler];

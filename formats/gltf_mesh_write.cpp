@@ -2,7 +2,9 @@
 // vertex gets which joints and weights, and what is quantized, comes from src/mesh.c.
 #include "tinygltf_config.h"
 
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <sstream>
 #include <string>
@@ -98,8 +100,40 @@ tinygltf::Material material(Writer &w, const cb_material &m)
     return out;
 }
 
+// An image's bytes: the model's, or its file's (read now: loading never reads image files).
+bool image_bytes(const cb_image &im, std::vector<unsigned char> *out, std::string *why)
+{
+    if (im.bytes) {
+        out->assign(im.bytes, im.bytes + im.size);
+        return true;
+    }
+    FILE *f = std::fopen(im.path, "rb");
+    if (!f) {
+        *why = std::string(im.path) + ": cannot read the image a material uses (" + std::strerror(errno) +
+               "); put it beside the model, where its uri says";
+        return false;
+    }
+    unsigned char chunk[65536];
+    size_t n;
+    while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) out->insert(out->end(), chunk, chunk + n);
+    bool ok = !std::ferror(f) && !out->empty();
+    std::fclose(f);
+    if (!ok) *why = std::string(im.path) + ": the image a material uses is empty or unreadable; re-export it";
+    return ok;
+}
+
+// glTF wants a type on an image in a bufferView, and a uri gives none.
+std::string mime_type(const cb_image &im, const std::vector<unsigned char> &bytes)
+{
+    static const unsigned char png[4] = {0x89, 'P', 'N', 'G'}, jpeg[3] = {0xFF, 0xD8, 0xFF};
+    if (im.mime_type && im.mime_type[0]) return im.mime_type;
+    if (bytes.size() >= 4 && std::memcmp(bytes.data(), png, 4) == 0) return "image/png";
+    if (bytes.size() >= 3 && std::memcmp(bytes.data(), jpeg, 3) == 0) return "image/jpeg";
+    return "application/octet-stream";
+}
+
 // The textures, one sampler each, and their images embedded in the binary chunk.
-void add_textures(Writer &w)
+bool add_textures(Writer &w, std::string *why)
 {
     for (const cb_texture *t : w.textures) {
         tinygltf::Sampler s;
@@ -113,11 +147,14 @@ void add_textures(Writer &w)
         w.g.textures.push_back(tex);
     }
     for (const cb_image *im : w.images) {
+        std::vector<unsigned char> bytes;
+        if (!image_bytes(*im, &bytes, why)) return false;
         tinygltf::Image out;
-        out.mimeType = im->mime_type;
-        out.bufferView = w.data_view(im->bytes, (size_t)im->size);
+        out.mimeType = mime_type(*im, bytes);
+        out.bufferView = w.data_view(bytes.data(), bytes.size());
         w.g.images.push_back(out);
     }
+    return true;
 }
 
 // The bind pose of a joint: the inverse of its inverse bind matrix (affine).
@@ -275,7 +312,8 @@ static cb_status write_mesh(const char *path, const cb_mesh *mesh, const cb_mode
     }
     w.g.meshes.push_back(m);
     for (const cb_material *used : w.materials) w.g.materials.push_back(material(w, *used));
-    add_textures(w);
+    std::string why;
+    if (!add_textures(w, &why)) return cb_fail(err, CB_ERR_IO, "%s", why.c_str());
     tinygltf::Node node;
     node.name = "crowd_mesh";
     node.mesh = 0;

@@ -125,7 +125,8 @@ struct Texture {
 struct Image {
     int bufferView = -1;
     std::string mimeType;
-    Bytes bytes; // an image given by uri (data or file): its bytes, as tinygltf read them
+    Bytes bytes;     // an image given by a data uri: its bytes, as tinygltf decoded them
+    std::string uri; // an image in a file: its uri (tinygltf reads no external image)
 };
 
 struct Sampler {

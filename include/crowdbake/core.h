@@ -132,12 +132,15 @@ typedef enum cb_alpha_mode { CB_ALPHA_OPAQUE, CB_ALPHA_MASK, CB_ALPHA_BLEND } cb
 
 typedef struct cb_image {
     const char *mime_type;      /* "image/png", "image/jpeg", ...; "" when the file gives none */
-    const unsigned char *bytes; /* the encoded image as stored (never decoded); owned by the model */
+    const unsigned char *bytes; /* the encoded image as stored (never decoded); owned by the model; NULL: see path */
     uint64_t size;
+    /* An image in a file of its own (a uri beside the model): its path, read by `mesh` when it
+     * writes it (a bake never draws it, so loading never reads it); NULL otherwise. */
+    const char *path;
 } cb_image;
 
 typedef struct cb_texture {
-    const cb_image *image;      /* NULL when the file's image could not be read (then the colour factor alone is kept) */
+    const cb_image *image;      /* NULL when the file's image is missing or broken (then the colour factor alone is kept) */
     int32_t mag_filter, min_filter, wrap_s, wrap_t; /* glTF sampler values; 0 for the filters when unset */
 } cb_texture;
 

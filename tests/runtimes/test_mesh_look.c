@@ -6,7 +6,9 @@
  * material on every primitive (the old output) differs almost everywhere. Cow (7 materials) and
  * Husky (5), multi-material, and the textured Fox, plain and --quantize'd (u16 UVs). The same mesh
  * written twice, from another folder, is the same bytes; a COLOR_0 added to the Fox
- * (tests/tools/add_vertex_colors.py) comes out as three's vertex colours. */
+ * (tests/tools/add_vertex_colors.py) comes out as three's vertex colours; the Fox as .gltf with its
+ * PNG in a file beside it gets the same texture embedded, and without that file `mesh` fails in
+ * one line naming it, writing nothing. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
@@ -49,7 +51,13 @@ static int setup(void **state)
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
     assert_int_equal(run(NULL, 0, "python3 tests/tools/add_vertex_colors.py %s " TMP "/foxc.glb && %s mesh " TMP "/foxc.glb -o " TMP
                          "/foxc.mesh.glb -q", fox, crowdbake_exe()), 0);
-    int rc = run(out, sizeof out, "node tests/runtimes/browser/mesh_look_check.mjs " TMP " cow husky fox foxq foxc 2>&1");
+    /* The Fox as .gltf + .bin + a PNG file beside it: the image is read when the mesh is written. */
+    char separate[PATH_MAX];
+    shared_path(separate, sizeof separate, "assets/derived-fox/separate");
+    assert_int_equal(run(NULL, 0, "cp -r %s " TMP "/separate && %s mesh " TMP "/separate/Fox.gltf -o " TMP "/foxs.mesh.glb -q",
+                         separate, crowdbake_exe()), 0);
+    int rc = run(out, sizeof out, "node tests/runtimes/browser/mesh_look_check.mjs " TMP " cow husky fox foxq foxc "
+                 "foxs=separate/Fox.gltf 2>&1");
     if (rc) fail_msg("mesh_look_check.mjs failed (%d): %s", rc, out);
     return 0;
 }
@@ -100,6 +108,24 @@ static void test_vertex_colours(void **state)
     assert_non_null(strstr(strstr(out, "\"foxc\":"), "\"vertex_colours\":1"));
 }
 
+static void test_an_image_file_beside_the_model(void **state)
+{
+    (void)state;
+    check_model("foxs", 1, 1, 1);
+    /* the same pixels as the GLB's embedded texture: the same PNG */
+    const char *a = strstr(strstr(out, "\"fox\":"), "\"texture_pixels\":[\""), *b = strstr(strstr(out, "\"foxs\":"), "\"texture_pixels\":[\"");
+    assert_true(a && b && strncmp(a, b, 50) == 0);
+    printf("  foxs: %.47s, as the GLB's\n", b);
+    /* without its image file: a one-line error naming it, and no output */
+    static char err[4096];
+    assert_int_equal(run(err, sizeof err, "rm " TMP "/separate/baseColor.png && %s mesh " TMP "/separate/Fox.gltf -o " TMP
+                         "/missing.glb 2>&1", crowdbake_exe()), EXIT_IO);
+    printf("  %s", err);
+    assert_non_null(strstr(err, "separate/baseColor.png: cannot read the image a material uses (No such file or directory); "
+                                "put it beside the model, where its uri says"));
+    assert_false(exists(TMP "/missing.glb"));
+}
+
 static void test_the_same_bytes_from_another_folder(void **state)
 {
     (void)state;
@@ -116,6 +142,7 @@ int main(void)
         cmocka_unit_test(test_multi_material_husky),
         cmocka_unit_test(test_textured_fox),
         cmocka_unit_test(test_vertex_colours),
+        cmocka_unit_test(test_an_image_file_beside_the_model),
         cmocka_unit_test(test_the_same_bytes_from_another_folder),
     };
     return cmocka_run_group_tests_name("mesh_look", tests, setup, NULL);

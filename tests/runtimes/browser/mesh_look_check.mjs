@@ -8,9 +8,10 @@
 // default material on every primitive (what `mesh` wrote before it kept materials) is the negative
 // control.
 //
-//   node tests/runtimes/browser/mesh_look_check.mjs DIR NAME ...
+//   node tests/runtimes/browser/mesh_look_check.mjs DIR NAME[=SOURCE] ...
 //
-// DIR holds NAME.glb (the source) and NAME.mesh.glb (`crowdbake mesh` of it). Prints JSON.
+// DIR holds NAME.glb (the source; or SOURCE, a path under DIR) and NAME.mesh.glb (`crowdbake mesh`
+// of it). Prints JSON.
 import path from 'node:path';
 import { withPage, RUNTIMES } from './driver.mjs';
 
@@ -84,8 +85,9 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
             return group;
         };
         const out = {};
-        for (const name of names) {
-            const source = primitives(await new GLTFLoader().loadAsync(`/check/${name}.glb`));
+        for (const entry of names) {
+            const [name, sourceFile] = entry.split('=');
+            const source = primitives(await new GLTFLoader().loadAsync(`/check/${sourceFile || name + '.glb'}`));
             const mesh = primitives(await new GLTFLoader().loadAsync(`/check/${name}.mesh.glb`));
             const rows = [];
             for (let i = 0; i < Math.max(source.length, mesh.length); ++i) {
@@ -106,6 +108,7 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
                 uvs_same: rows.filter((r) => r.same_uv && r.source.uv > 0).length,
                 textured: rows.filter((r) => r.mesh && r.mesh.map).length,
                 vertex_colours: rows.filter((r) => r.mesh && r.mesh.vertexColors).length,
+                texture_pixels: rows.filter((r) => r.mesh && r.mesh.map).map((r) => r.mesh.map.pixels),
                 distinct_colours: new Set(rows.map((r) => r.mesh && JSON.stringify(r.mesh.color))).size,
                 look: compare(image(drawn, camera), ref), default_material: compare(image(bare, camera), ref),
                 differences: rows.filter((r) => !r.same),
