@@ -61,9 +61,13 @@ bool mentions(const void *haystack, size_t size, const char *needle)
     return false;
 }
 
-bool skip_image(tinygltf::Image *, const int, std::string *, std::string *, int, int, const unsigned char *, int, void *)
+// Images are never decoded; the bytes of one given by uri (a data uri or a file) are kept as
+// they are for `mesh` (an image in a bufferView is read from the buffer, gltf_materials.cpp).
+bool keep_image_bytes(tinygltf::Image *image, const int, std::string *, std::string *, int, int, const unsigned char *bytes,
+                      int size, void *)
 {
-    return true; // images are never decoded
+    if (image->bufferView < 0 && bytes && size > 0) image->image.assign(bytes, bytes + size);
+    return true;
 }
 
 // ---- container checks: clearer messages than the parser gives, before it runs ----
@@ -323,7 +327,7 @@ bool parse_with_tinygltf(const unsigned char *data, size_t size, const char *nam
                          BinInPlace *in_place, TailRead *tail, cb_error *err)
 {
     tinygltf::TinyGLTF loader;
-    loader.SetImageLoader(skip_image, nullptr);
+    loader.SetImageLoader(keep_image_bytes, nullptr);
     loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, fs_state});
     std::string tg_err, tg_warn;
     bool ok;

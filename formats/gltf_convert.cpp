@@ -49,6 +49,7 @@ void doc_from_tinygltf(tinygltf::Model *g, doc::Document *out)
             doc::Primitive to;
             to.attributes.assign(p.attributes.begin(), p.attributes.end());
             to.indices = p.indices;
+            to.material = p.material;
             d.meshes.back().primitives.push_back(std::move(to));
         }
     }
@@ -64,6 +65,7 @@ void doc_from_tinygltf(tinygltf::Model *g, doc::Document *out)
         d.animations.push_back(std::move(to));
     }
     for (const tinygltf::Skin &sk : g->skins) d.skins.push_back({sk.name, sk.joints, sk.skeleton, sk.inverseBindMatrices});
+    materials_from_tinygltf(g, &d);
     *out = std::move(d);
 }
 
@@ -418,6 +420,8 @@ bool convert_primitive(Context &c, size_t node_index, const doc::Primitive &p, s
         if (read_accessor(quiet, *uv, 2, [&] { return where() + " TEXCOORD_0"; }, &texcoords, &nt) && nt == n)
             prim.texcoords = texcoords;
     }
+    if (p.material >= 0 && (uint32_t)p.material < c.model->material_count) prim.material = &c.model->materials[p.material];
+    prim.colors = read_colors(c, p, n);
     if (p.indices >= 0) {
         if (!read_accessor(c, p.indices, 1, [&] { return where() + " indices"; }, &indices, &ni)) return false;
         prim.index_count = (uint32_t)ni;
@@ -434,6 +438,27 @@ bool convert_primitive(Context &c, size_t node_index, const doc::Primitive &p, s
     prim.weights = weights;
     out->push_back(prim);
     return true;
+}
+
+float *read_colors(Context &c, const doc::Primitive &p, size_t vertex_count)
+{
+    const int *color = p.attribute("COLOR_0");
+    if (!color || *color < 0 || (size_t)*color >= c.doc->accessors.size()) return nullptr;
+    int comps = type_components(c.doc->accessors[(size_t)*color].type);
+    if (comps != 3 && comps != 4) return nullptr;
+    float *read, *rgba;
+    size_t n;
+    cb_error quiet_err{}; /* only `mesh` carries it: a broken one is left out, never an error */
+    Context quiet = c;
+    quiet.err = &quiet_err;
+    if (!read_accessor(quiet, *color, comps, [] { return std::string("COLOR_0"); }, &read, &n) || n != vertex_count) return nullptr;
+    if (comps == 4) return read;
+    if (!(rgba = static_cast<float *>(cb_model_alloc(c.model, n * 4, sizeof(float))))) return nullptr;
+    for (size_t v = 0; v < n; ++v) {
+        std::memcpy(rgba + v * 4, read + v * 3, 3 * sizeof(float));
+        rgba[v * 4 + 3] = 1;
+    }
+    return rgba;
 }
 
 bool convert_meshes(Context &c)

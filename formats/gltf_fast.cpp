@@ -267,8 +267,10 @@ void parse_primitive(Value o, doc::Primitive *p)
             }
         } else if (i == 1) {
             p->indices = as_int(v);
+        } else if (i == 2) {
+            p->material = as_int(v);
         } else {
-            as_int(v); // material, mode: not read
+            as_int(v); // mode: not read
         }
     });
     require(seen, 1);
@@ -371,25 +373,76 @@ void parse_scene(Value o, doc::Scene *s)
 }
 
 // Images are never decoded, but tinygltf refuses some: only those it surely takes stay here.
-void check_image(Value o, const doc::Document &g)
+// An image given by uri goes to tinygltf, which reads its bytes (kept for `mesh`).
+void parse_image(Value o, const doc::Document &g, doc::Image *image)
 {
-    static constexpr std::string_view keys[] = {"bufferView", "uri"};
-    int view = -1;
+    static constexpr std::string_view keys[] = {"bufferView", "uri", "mimeType"};
     unsigned seen = members(o, keys, [&](size_t i, Value v) {
-        if (i == 0) view = as_int(v);
-        else if (as_string(v).rfind("data:", 0) == 0) not_fast();
+        if (i == 0) image->bufferView = as_int(v);
+        else if (i == 1) not_fast();
+        else image->mimeType = as_string(v);
     });
-    if (seen == 3 || seen == 0) not_fast();
-    if (seen == 1 && (view < 0 || (size_t)view >= g.bufferViews.size() || g.bufferViews[(size_t)view].buffer < 0 ||
-                      (size_t)g.bufferViews[(size_t)view].buffer >= g.buffers.size()))
+    int view = image->bufferView;
+    if (!(seen & 1) || view < 0 || (size_t)view >= g.bufferViews.size() || g.bufferViews[(size_t)view].buffer < 0 ||
+        (size_t)g.bufferViews[(size_t)view].buffer >= g.buffers.size())
         not_fast();
 }
 
-void check_material(Value o)
+// {"index": i, "texCoord": n}
+void parse_texture_info(Value o, doc::Material *m)
 {
-    static constexpr std::string_view keys[] = {"emissiveFactor"};
-    members(o, keys, [](size_t, Value v) {
-        if (number_array(v).size() != 3) not_fast();
+    static constexpr std::string_view keys[] = {"index", "texCoord"};
+    unsigned seen = members(o, keys, [&](size_t i, Value v) {
+        if (i == 0) m->base_color_texture = as_int(v);
+        else m->base_color_texcoord = as_int(v);
+    });
+    require(seen, 1);
+}
+
+void parse_pbr(Value o, doc::Material *m)
+{
+    static constexpr std::string_view keys[] = {"baseColorFactor", "baseColorTexture", "metallicFactor", "roughnessFactor"};
+    members(o, keys, [&](size_t i, Value v) {
+        if (i == 0) {
+            std::vector<double> f = number_array(v);
+            if (f.size() != 4) not_fast();
+            std::copy(f.begin(), f.end(), m->base_color);
+        } else if (i == 1) {
+            parse_texture_info(v, m);
+        } else {
+            (i == 2 ? m->metallic : m->roughness) = as_number(v);
+        }
+    });
+}
+
+void parse_material(Value o, doc::Material *m)
+{
+    static constexpr std::string_view keys[] = {"emissiveFactor", "name", "pbrMetallicRoughness", "alphaMode", "alphaCutoff",
+                                                "doubleSided"};
+    members(o, keys, [&](size_t i, Value v) {
+        bool b;
+        if (i == 0 && number_array(v).size() != 3) not_fast();
+        if (i == 1) m->name = as_string(v);
+        if (i == 2) parse_pbr(v, m);
+        if (i == 3) m->alpha_mode = as_string(v);
+        if (i == 4) m->alpha_cutoff = as_number(v);
+        if (i == 5 && v.get_bool().get(b)) not_fast();
+        if (i == 5) m->double_sided = b;
+    });
+}
+
+void parse_texture(Value o, doc::Texture *t)
+{
+    static constexpr std::string_view keys[] = {"source", "sampler"};
+    members(o, keys, [&](size_t i, Value v) { (i == 0 ? t->source : t->sampler) = as_int(v); });
+}
+
+void parse_sampler(Value o, doc::Sampler *s)
+{
+    static constexpr std::string_view keys[] = {"magFilter", "minFilter", "wrapS", "wrapT"};
+    members(o, keys, [&](size_t i, Value v) {
+        int *field[] = {&s->magFilter, &s->minFilter, &s->wrapS, &s->wrapT};
+        *field[i] = as_int(v);
     });
 }
 
@@ -432,10 +485,10 @@ void parse_document(Value root, doc::Document *g, size_t *byte_length)
     if (given(9)) g->defaultScene = as_int(later[9]);
     if (given(10)) parse_list(later[10], &g->animations, parse_animation);
     if (given(11)) parse_list(later[11], &g->skins, parse_skin);
-    if (given(13)) each(later[13], [&](Value o) { check_image(o, *g); });
-    if (given(14)) each(later[14], check_material);
-    for (int k = 15; k <= 16; ++k)
-        if (given(k)) each(later[k], [](Value o) { as_object(o); });
+    if (given(13)) parse_list(later[13], &g->images, [&](Value o, doc::Image *image) { parse_image(o, *g, image); });
+    if (given(14)) parse_list(later[14], &g->materials, parse_material);
+    if (given(15)) parse_list(later[15], &g->textures, parse_texture);
+    if (given(16)) parse_list(later[16], &g->samplers, parse_sampler);
     // tinygltf refuses a primitive whose indices accessor, or its view, does not exist.
     for (const doc::Mesh &mesh : g->meshes)
         for (const doc::Primitive &p : mesh.primitives)

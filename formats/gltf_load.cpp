@@ -205,7 +205,8 @@ cb_model *load(const unsigned char *data, size_t size, file_bytes *file, TailRea
         cb_model_free(c.model);
         return nullptr;
     }
-    if (!convert_nodes(c) || !convert_skins(c) || !check_joints_in_scene(c) || !convert_meshes(c) || !convert_animations(c) ||
+    if (!convert_nodes(c) || !convert_skins(c) || !check_joints_in_scene(c) || !convert_materials(c) || !convert_meshes(c) ||
+        !convert_animations(c) ||
         cb_model_validate(c.model, &c.limits, err) != CB_OK || !record_sources(c.model, &source_hash, fs.files)) {
         cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory while loading", name);
         cb_model_free(c.model);

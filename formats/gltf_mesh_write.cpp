@@ -2,7 +2,9 @@
 // vertex gets which joints and weights, and what is quantized, comes from src/mesh.c.
 #include "tinygltf_config.h"
 
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <sstream>
 #include <string>
@@ -52,7 +54,13 @@ struct Writer {
         return (int)g.accessors.size() - 1;
     }
 
-    // Plain data (inverse bind matrices): no target, no padding.
+    // What the parts look like, each material, texture and image written once, in the order
+    // the parts first use them (so the bytes follow the model's primitive order alone).
+    std::vector<const cb_material *> materials;
+    std::vector<const cb_texture *> textures;
+    std::vector<const cb_image *> images;
+
+    // Plain data (inverse bind matrices, images): no target, no padding.
     int data_view(const void *data, size_t bytes)
     {
         while (bin().size() % 4) bin().push_back(0);
@@ -65,6 +73,89 @@ struct Writer {
         return (int)g.bufferViews.size() - 1;
     }
 };
+
+template <class T> int index_of(std::vector<const T *> &list, const T *item)
+{
+    for (size_t i = 0; i < list.size(); ++i)
+        if (list[i] == item) return (int)i;
+    list.push_back(item);
+    return (int)list.size() - 1;
+}
+
+// Only TEXCOORD_0 is carried, so a texture read through another set is left out (the colour
+// factor stays).
+tinygltf::Material material(Writer &w, const cb_material &m)
+{
+    tinygltf::Material out;
+    out.name = m.name;
+    out.pbrMetallicRoughness.baseColorFactor.assign(m.base_color, m.base_color + 4);
+    out.pbrMetallicRoughness.metallicFactor = m.metallic;
+    out.pbrMetallicRoughness.roughnessFactor = m.roughness;
+    if (m.base_color_texture && m.base_color_texcoord == 0)
+        out.pbrMetallicRoughness.baseColorTexture.index = index_of(w.textures, m.base_color_texture);
+    static const char *const modes[] = {"OPAQUE", "MASK", "BLEND"};
+    out.alphaMode = modes[m.alpha_mode <= CB_ALPHA_BLEND ? m.alpha_mode : 0];
+    if (m.alpha_mode == CB_ALPHA_MASK) out.alphaCutoff = m.alpha_cutoff;
+    out.doubleSided = m.double_sided;
+    return out;
+}
+
+// An image's bytes: the model's, or its file's (read now: loading never reads image files).
+bool image_bytes(const cb_image &im, std::vector<unsigned char> *out, std::string *why)
+{
+    if (im.bytes) {
+        out->assign(im.bytes, im.bytes + im.size);
+        return true;
+    }
+    FILE *f = std::fopen(im.path, "rb");
+    if (!f) {
+        *why = std::string(im.path) + ": cannot read the image a material uses (" + std::strerror(errno) +
+               "); put it beside the model, where its uri says";
+        return false;
+    }
+    unsigned char chunk[65536];
+    size_t n;
+    while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) out->insert(out->end(), chunk, chunk + n);
+    bool ok = !std::ferror(f) && !out->empty();
+    std::fclose(f);
+    if (!ok) *why = std::string(im.path) + ": the image a material uses is empty or unreadable; re-export it";
+    return ok;
+}
+
+// glTF wants a type on an image in a bufferView, and a uri gives none.
+std::string mime_type(const cb_image &im, const std::vector<unsigned char> &bytes)
+{
+    static const unsigned char png[4] = {0x89, 'P', 'N', 'G'}, jpeg[3] = {0xFF, 0xD8, 0xFF};
+    if (im.mime_type && im.mime_type[0]) return im.mime_type;
+    if (bytes.size() >= 4 && std::memcmp(bytes.data(), png, 4) == 0) return "image/png";
+    if (bytes.size() >= 3 && std::memcmp(bytes.data(), jpeg, 3) == 0) return "image/jpeg";
+    return "application/octet-stream";
+}
+
+// The textures, one sampler each, and their images embedded in the binary chunk.
+bool add_textures(Writer &w, std::string *why)
+{
+    for (const cb_texture *t : w.textures) {
+        tinygltf::Sampler s;
+        s.magFilter = t->mag_filter ? t->mag_filter : -1;
+        s.minFilter = t->min_filter ? t->min_filter : -1;
+        s.wrapS = t->wrap_s, s.wrapT = t->wrap_t;
+        w.g.samplers.push_back(s);
+        tinygltf::Texture tex;
+        tex.sampler = (int)w.g.samplers.size() - 1;
+        tex.source = index_of(w.images, t->image);
+        w.g.textures.push_back(tex);
+    }
+    for (const cb_image *im : w.images) {
+        std::vector<unsigned char> bytes;
+        if (!image_bytes(*im, &bytes, why)) return false;
+        tinygltf::Image out;
+        out.mimeType = mime_type(*im, bytes);
+        out.bufferView = w.data_view(bytes.data(), bytes.size());
+        w.g.images.push_back(out);
+    }
+    return true;
+}
 
 // The bind pose of a joint: the inverse of its inverse bind matrix (affine).
 void invert_affine(const double m[16], double out[16])
@@ -163,6 +254,9 @@ void add_part(Writer &w, const cb_mesh *m, const cb_mesh_part &p, uint32_t first
     } else {
         prim.attributes["WEIGHTS_0"] = w.accessor(w.view(p.weights, n, 16, true), n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, false);
     }
+    if (p.colors)
+        prim.attributes["COLOR_0"] = w.accessor(w.view(p.colors, n, 16, true), n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, false);
+    if (p.material) prim.material = index_of(w.materials, p.material);
     if (vertex_id_set >= 0) add_vertex_id(w, (uint32_t)vertex_id_set, p, first_id, prim);
     if (p.instance_ids)
         prim.attributes[CB_INSTANCE_ID_ATTRIBUTE] =
@@ -217,6 +311,9 @@ static cb_status write_mesh(const char *path, const cb_mesh *mesh, const cb_mode
         first_id += mesh->parts[i].vertex_count;
     }
     w.g.meshes.push_back(m);
+    for (const cb_material *used : w.materials) w.g.materials.push_back(material(w, *used));
+    std::string why;
+    if (!add_textures(w, &why)) return cb_fail(err, CB_ERR_IO, "%s", why.c_str());
     tinygltf::Node node;
     node.name = "crowd_mesh";
     node.mesh = 0;

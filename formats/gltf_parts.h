@@ -61,6 +61,7 @@ struct Accessor {
 struct Primitive {
     std::vector<std::pair<std::string, int>> attributes; // name, accessor; each name once
     int indices = -1;
+    int material = -1;
     const int *attribute(const char *name) const
     {
         for (const auto &a : attributes)
@@ -106,6 +107,32 @@ struct Scene {
     std::vector<int> nodes;
 };
 
+// What a primitive looks like (kept for `crowdbake mesh`, see gltf_materials.cpp).
+struct Material {
+    std::string name;
+    double base_color[4] = {1, 1, 1, 1};
+    double metallic = 1, roughness = 1;
+    int base_color_texture = -1, base_color_texcoord = 0;
+    std::string alpha_mode = "OPAQUE";
+    double alpha_cutoff = 0.5;
+    bool double_sided = false;
+};
+
+struct Texture {
+    int source = -1, sampler = -1;
+};
+
+struct Image {
+    int bufferView = -1;
+    std::string mimeType;
+    Bytes bytes;     // an image given by a data uri: its bytes, as tinygltf decoded them
+    std::string uri; // an image in a file: its uri (tinygltf reads no external image)
+};
+
+struct Sampler {
+    int magFilter = -1, minFilter = -1, wrapS = 10497, wrapT = 10497;
+};
+
 struct Document {
     std::vector<std::string> extensionsRequired;
     std::vector<Bytes> buffers; // their bytes; an empty one where the BIN chunk is read in place
@@ -117,6 +144,10 @@ struct Document {
     int defaultScene = -1;
     std::vector<Animation> animations;
     std::vector<Skin> skins;
+    std::vector<Material> materials;
+    std::vector<Texture> textures;
+    std::vector<Image> images;
+    std::vector<Sampler> samplers;
 };
 
 } // namespace doc
@@ -264,6 +295,15 @@ bool convert_skins(Context &c);
 bool check_joints_in_scene(Context &c);
 bool convert_meshes(Context &c);
 bool convert_animations(Context &c);
+
+// gltf_materials.cpp
+// tinygltf's materials, textures, images (with the bytes of those given by uri) and samplers.
+void materials_from_tinygltf(tinygltf::Model *gltf, doc::Document *out);
+// The document's materials into the model (before convert_meshes, which points at them). An
+// image that cannot be read leaves its texture without one, never an error: only `mesh` uses it.
+bool convert_materials(Context &c);
+// (gltf_convert.cpp) COLOR_0 of a primitive as RGBA floats, NULL when it has none or it cannot be read.
+float *read_colors(Context &c, const doc::Primitive &p, size_t vertex_count);
 
 } // namespace cbgltf
 

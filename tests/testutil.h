@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "crowdbake/gltf.h"
 
@@ -150,6 +151,28 @@ static inline int run_command(const char *cmd, char *out, size_t out_size)
     if (out && out_size) out[used] = '\0';
     int status = pclose(p);
     return status >= 0 && (status & 0x7f) == 0 ? (status >> 8) & 0xff : -1;
+}
+
+/* run_command on a printf-formatted command line. */
+static inline int run(char *out, size_t size, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static inline int run(char *out, size_t size, const char *fmt, ...)
+{
+    char cmd[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(cmd, sizeof cmd, fmt, ap);
+    va_end(ap);
+    return run_command(cmd, out, size);
+}
+
+static inline bool exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
 }
 
 /* The npm packages of tests/tools/validator (the Khronos glTF validator, ajv), which `make test`

@@ -281,6 +281,7 @@ void cb_report_json(FILE *f, const cb_report *r)
         cb_json_int(&j, "vram_bytes", (long long)r->vram_bytes);
         cb_json_number(&j, "crowd_share", r->crowd_share);
         cb_json_int(&j, "budget_bytes", (long long)r->budget_bytes);
+        report_vertex_rate_json(&j, r);
         cb_json_end(&j);
     }
     cb_json_int(&j, "max_texture_size", r->max_texture_size);
@@ -328,7 +329,7 @@ void cb_report_json(FILE *f, const cb_report *r)
         cb_json_bool(&j, "bones_over_limit", t->bones_over_limit);
         cb_report_runtime_json(&j, &t->runtime);
         report_gaits_json(&j, t);
-        report_herds_json(&j, t);
+        report_herds_json(&j, r, t);
         cb_json_end(&j);
     }
     cb_json_end(&j);

@@ -65,6 +65,10 @@ typedef struct cb_report {
     uint32_t warnings;
     uint32_t failed_types;              /* types that did not bake: the totals leave them out */
     bool single_model;                  /* `report MODEL`: the budget comes from --target, not a catalog */
+    /* The target's vertex rate, skinned vertices a second: an estimate from a figure its maker
+     * states (report_herd.c, docs/budget.md); 0 where the target states none. */
+    double vertex_rate;
+    const char *vertex_rate_source;
 } cb_report;
 
 cb_status cb_report_build(const cb_catalog *catalog, const cb_roster *roster, cb_report *out, cb_error *err);

@@ -29,7 +29,10 @@ void report_warnings_html(FILE *f, const cb_report *r);
 void report_herds_text(FILE *f, const cb_report *r);
 /* A count in three digits and an SI prefix: "83.4 G". */
 const char *report_count_text(double n, char *buf, size_t size);
-void report_herds_json(cb_json *j, const cb_report_type *t);
+void report_herds_json(cb_json *j, const cb_report *r, const cb_report_type *t);
+void report_vertex_rate_json(cb_json *j, const cb_report *r);
+/* The share of the target's estimated vertex rate at 60 Hz that the type's herd skins; 0 where it states none. */
+double report_frame_share(const cb_report *r, const cb_report_type *t);
 /* Writes s with HTML's special characters escaped (report_html.c, report_runtime.c). */
 void report_html_escape(FILE *f, const char *s);
 

@@ -17,7 +17,7 @@
 #define CROWDBAKE_VERSION "0.1.0"
 /* The library's API version: MAJOR changes break callers, MINOR ones add to the API. */
 #define CROWDBAKE_API_VERSION_MAJOR 2
-#define CROWDBAKE_API_VERSION_MINOR 0
+#define CROWDBAKE_API_VERSION_MINOR 1
 #define CROWDBAKE_API_VERSION (CROWDBAKE_API_VERSION_MAJOR * 100 + CROWDBAKE_API_VERSION_MINOR)
 
 #ifdef __cplusplus
@@ -125,6 +125,36 @@ typedef struct cb_skin {
     int32_t skeleton;      /* node index or -1 */
 } cb_skin;
 
+/* What a primitive looks like, kept from the file so `crowdbake mesh` writes it back (API 2.1).
+ * Only the base colour and what decides how it blends are kept: the runtimes draw an unlit or
+ * simply lit base colour. */
+typedef enum cb_alpha_mode { CB_ALPHA_OPAQUE, CB_ALPHA_MASK, CB_ALPHA_BLEND } cb_alpha_mode;
+
+typedef struct cb_image {
+    const char *mime_type;      /* "image/png", "image/jpeg", ...; "" when the file gives none */
+    const unsigned char *bytes; /* the encoded image as stored (never decoded); owned by the model; NULL: see path */
+    uint64_t size;
+    /* An image in a file of its own (a uri beside the model): its path, read by `mesh` when it
+     * writes it (a bake never draws it, so loading never reads it); NULL otherwise. */
+    const char *path;
+} cb_image;
+
+typedef struct cb_texture {
+    const cb_image *image;      /* NULL when the file's image is missing or broken (then the colour factor alone is kept) */
+    int32_t mag_filter, min_filter, wrap_s, wrap_t; /* glTF sampler values; 0 for the filters when unset */
+} cb_texture;
+
+typedef struct cb_material {
+    const char *name;                       /* never NULL; "" when the file has none */
+    float base_color[4];                    /* pbrMetallicRoughness.baseColorFactor, linear RGBA */
+    float metallic, roughness;              /* pbrMetallicRoughness factors */
+    const cb_texture *base_color_texture;   /* NULL: none */
+    uint32_t base_color_texcoord;           /* the TEXCOORD_n it reads (only TEXCOORD_0 is kept) */
+    cb_alpha_mode alpha_mode;
+    float alpha_cutoff;                     /* CB_ALPHA_MASK; 0.5 by default */
+    bool double_sided;
+} cb_material;
+
 typedef struct cb_primitive {
     int32_t node;          /* the mesh node that uses it */
     int32_t skin;          /* index into cb_model.skins */
@@ -140,6 +170,8 @@ typedef struct cb_primitive {
      * primitive, each as the file types it (after Draco/meshopt decoding) and padded to 4 bytes
      * as vertex attributes must be; an index as stored (8-bit indices widen to 16). */
     uint32_t vertex_bytes, index_bytes;
+    const cb_material *material; /* NULL: glTF's default material (API 2.1) */
+    float *colors;               /* COLOR_0 as linear RGBA (alpha 1 for RGB), 4 per vertex, or NULL (API 2.1) */
 } cb_primitive;
 
 typedef enum cb_path { CB_PATH_TRANSLATION, CB_PATH_ROTATION, CB_PATH_SCALE } cb_path;
@@ -195,6 +227,13 @@ typedef struct cb_model {
      * gives the same bytes. NULL: nothing to release. See cb_model_release_clip. */
     void (*release)(void *release_ctx, const cb_byte_range *ranges, size_t count);
     void *release_ctx;
+    /* The file's materials, textures and images, for the primitives' `material` (API 2.1). */
+    uint32_t material_count;
+    cb_material *materials;
+    uint32_t texture_count;
+    cb_texture *textures;
+    uint32_t image_count;
+    cb_image *images;
 } cb_model;
 
 /* Warnings and notes a command shows the user: on stderr, or in its --json output. */

@@ -6,7 +6,11 @@
  * the palette model's inverse bind matrices), so any glTF viewer shows it in its bind pose and
  * a palette runtime reads joint k as bone k. Quantized attributes use KHR_mesh_quantization
  * (normals as normalized BYTE); a batch adds `_INSTANCE_ID`, SCALAR FLOAT, the copy 0..K-1 of
- * each vertex. asset.extras.crowdbake records the options and the measured error. */
+ * each vertex. Each part keeps its material (cb_mesh_part.material: base colour, metallic and
+ * roughness, the base colour texture with its sampler, alpha mode, sides) and COLOR_0; materials,
+ * textures and images are written once each, in the order the parts first use them, the images'
+ * encoded bytes embedded in the binary chunk (API 2.1). asset.extras.crowdbake records the options
+ * and the measured error. */
 #ifndef CB_GLTF_MESH_WRITE_H
 #define CB_GLTF_MESH_WRITE_H
 

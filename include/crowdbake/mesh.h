@@ -38,6 +38,9 @@ typedef struct cb_mesh_part {
     uint16_t *texcoords_u16;  /* quantize, texcoords within 0..1: 2 per vertex */
     uint32_t *indices;
     float *instance_ids;      /* batch > 1: the copy (0..batch-1) of each vertex */
+    /* API 2.1: what the part looks like, as the model's primitive has it. */
+    const cb_material *material; /* the model's (valid while the model lives); NULL: glTF's default */
+    float *colors;               /* COLOR_0, linear RGBA, 4 per vertex, or NULL */
 } cb_mesh_part;
 
 typedef struct cb_mesh {
@@ -59,7 +62,7 @@ CROWDBAKE_API void cb_mesh_free(cb_mesh *mesh);
 /* The bytes a runtime uploads for the mesh in the types the .glb writer gives it, each
  * attribute padded to 4 bytes: positions f32x3; normals i8x3 quantized, else f32x3; texcoords
  * u16x2 quantized (within 0..1), else f32x2; joints u8x4 for palettes of at most 256 bones (no
- * loss), else u16x4; weights u8x4 quantized, else f32x4; the instance id f32. Indices u16 below
+ * loss), else u16x4; weights u8x4 quantized, else f32x4; the instance id f32; colours f32x4. Indices u16 below
  * 65536 vertices per part (65535 is primitive restart), else u32. */
 CROWDBAKE_API void cb_mesh_bytes(const cb_mesh *mesh, uint64_t *vertex_bytes, uint64_t *index_bytes);
 

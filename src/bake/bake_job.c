@@ -91,8 +91,11 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
     if (limits) o.limits = *limits;
     o.fps = s->fps;
     o.layout = s->layout;
-    /* EXR and KTX2 hold half or float; half misses 0.5 mm/m on the samples, so float unless asked. */
+    /* EXR holds half or float; half misses 0.5 mm/m on the samples, so float unless asked. KTX2 takes
+     * the .pal's precision, half for its default u16 (ktx2_half_note says why). */
     o.precision = s->precision_set || format == CB_FORMAT_PAL ? s->precision : CB_PRECISION_FLOAT;
+    if (format == CB_FORMAT_KTX2 && !s->precision_set)
+        o.precision = s->precision == CB_PRECISION_U16 ? CB_PRECISION_HALF : s->precision;
     o.max_texture_size = s->max_texture_size;
     o.root_motion = s->root_motion;
     o.threads = threads ? threads : 1;
@@ -328,6 +331,15 @@ static void bake_notes(const cb_bake_options *o, cb_setting_from from, const cb_
                 "quaternion hemispheres; the shipped shaders flip before blending", p->quat_hemisphere_breaks);
 }
 
+/* The decision a KTX2 output's default precision makes for the user, with its reason. */
+static void ktx2_half_note(const cb_bake_job *job, unsigned format, const cb_bake_options *o, cb_warnings *w)
+{
+    if (format != CB_FORMAT_KTX2 || job->settings.precision_set || o->precision != CB_PRECISION_HALF) return;
+    cb_warn(w, "note", "%s is half (RGBA16F), the float format as wide as the .pal's default u16: KTX2 would hold u16 as "
+            "RGBA16UI, an integer format three.js's KTX2Loader and most engines refuse; --precision float for float texels",
+            output_path(job, format));
+}
+
 static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pal_mapping *mapping, cb_bake_output *out,
                               cb_error *err)
 {
@@ -499,6 +511,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         }
         if (out->output_count == 1)
             bake_notes(&opt, job->settings.from.root_motion, &shared, &out->notes), warn_fixed_rates_over(job, out, &out->notes);
+        ktx2_half_note(job, format, &opt, &out->notes);
         write_output(job, &shared, &mapping, o, err);
     }
     cb_pal_mapping_abort(&mapping); /* a bake that failed: its temporary */

@@ -48,6 +48,7 @@ void cb_quantize_weights(const float weights[4], uint32_t scale, uint16_t out[4]
 
 static void free_part(cb_mesh_part *p)
 {
+    free(p->colors);
     free(p->positions), free(p->normals), free(p->texcoords), free(p->joints), free(p->weights);
     free(p->weights_q), free(p->normals_i8), free(p->texcoords_u16), free(p->indices), free(p->instance_ids);
 }
@@ -128,7 +129,9 @@ static cb_status build_part(const char *source, const cb_primitive *src, const c
         if (src->texcoords) p->texcoords_u16 = malloc(nk * 2 * sizeof(uint16_t));
     }
     if (k > 1) p->instance_ids = malloc(nk * sizeof(float));
-    if (!p->positions || !p->joints || !p->weights || !p->indices || (src->normals && !p->normals) ||
+    if (src->colors) p->colors = malloc(nk * 4 * sizeof(float));
+    p->material = src->material;
+    if ((src->colors && !p->colors) || !p->positions || !p->joints || !p->weights || !p->indices || (src->normals && !p->normals) ||
         (src->texcoords && !p->texcoords) || (o->quantize && (!p->weights_q || (src->normals && !p->normals_i8) ||
                                                               (src->texcoords && !p->texcoords_u16))) ||
         (k > 1 && !p->instance_ids))
@@ -136,6 +139,7 @@ static cb_status build_part(const char *source, const cb_primitive *src, const c
     memcpy(p->positions, src->positions, (size_t)n * 3 * sizeof(float));
     if (src->normals) memcpy(p->normals, src->normals, (size_t)n * 3 * sizeof(float));
     if (src->texcoords) memcpy(p->texcoords, src->texcoords, (size_t)n * 2 * sizeof(float));
+    if (src->colors) memcpy(p->colors, src->colors, (size_t)n * 4 * sizeof(float));
     for (uint32_t v = 0; v < n; ++v) {
         uint16_t bones[4];
         for (int i = 0; i < 4; ++i) {
@@ -164,6 +168,7 @@ static cb_status build_part(const char *source, const cb_primitive *src, const c
     REPEAT(p->weights_q, 4, n, k);
     REPEAT(p->normals_i8, 3, n, k);
     REPEAT(p->texcoords_u16, 2, n, k);
+    REPEAT(p->colors, 4, n, k);
     for (uint32_t c = 1; c < k; ++c)
         for (uint32_t i = 0; i < ic; ++i) p->indices[(size_t)c * ic + i] = p->indices[i] + c * n;
     for (size_t v = 0; k > 1 && v < nk; ++v) p->instance_ids[v] = (float)(v / n);
@@ -203,7 +208,7 @@ void cb_mesh_bytes(const cb_mesh *mesh, uint64_t *vertex_bytes, uint64_t *index_
     for (uint32_t i = 0; i < mesh->part_count; ++i) {
         const cb_mesh_part *p = &mesh->parts[i];
         uint32_t stride = 12 + (p->normals ? (p->normals_i8 ? 4 : 12) : 0) + (p->texcoords ? (p->texcoords_u16 ? 4 : 8) : 0) +
-                          (mesh->bone_count <= 256 ? 4 : 8) + (p->weights_q ? (mesh->weight_scale == 255 ? 4 : 8) : 16) + (p->instance_ids ? 4 : 0);
+                          (mesh->bone_count <= 256 ? 4 : 8) + (p->weights_q ? (mesh->weight_scale == 255 ? 4 : 8) : 16) + (p->instance_ids ? 4 : 0) + (p->colors ? 16 : 0);
         *vertex_bytes += (uint64_t)stride * p->vertex_count;
         *index_bytes += (uint64_t)p->index_count * (p->vertex_count <= 65535 ? 2 : 4);
     }

@@ -26,22 +26,6 @@ static int setup(void **state)
     return system("rm -rf " OUT_DIR " && mkdir -p " OUT_DIR) == 0 ? 0 : -1;
 }
 
-static int run(char *out, size_t size, const char *fmt, ...)
-{
-    char cmd[4096];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(cmd, sizeof cmd, fmt, ap);
-    va_end(ap);
-    return run_command(cmd, out, size);
-}
-
-static bool exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
 static int count_of(const char *text, const char *part)
 {
     int n = 0;

@@ -100,6 +100,8 @@ static void test_exit_code_gate(void **state)
     assert_int_equal(run_command(cmd, text, sizeof text), 0);
     const char *verdict = strstr(text, "\nRoster: ");
     if (!verdict || !strstr(verdict, "crowd_share 0.125 of 8.00 GiB): fits.\nAs VAT (RGBA16F + RGBA8)")) fail_msg("%s", text);
+    /* The desktop profiles name no one GPU, and say they state no vertex rate. */
+    assert_non_null(strstr(text, "(Desktop 8 GiB states no vertex rate: compare with the target's measured draw rate)"));
     for (char *p = text; *p; ++p) *p = (char)tolower((unsigned char)*p);
     assert_null(strstr(text, "over budget"));
     char *err = read_whole_file(TMP "/roomy.err", NULL);
@@ -107,6 +109,13 @@ static void test_exit_code_gate(void **state)
     if (!strstr(err, "crowdbake: [1/7] ") || !strstr(err, "crowdbake: [7/7] ") || !strstr(err, ": runtime meshes measured"))
         fail_msg("stderr: %s", err);
     free(err);
+    /* The herds beside the target's vertex rate: an estimate with its source on a Steam Deck. */
+    cat = write_catalog("deckrate", "target = \"Steam Deck\"\ncrowd_share = 0.25");
+    assert_int_equal(run(text, sizeof text, "%s report %s 2>/dev/null", crowdbake_exe(), cat), 0);
+    if (!strstr(text, "beside Steam Deck's vertex rate at 60 Hz: at most 88.9 M skinned vertices a frame, an estimate "
+                      "(Valve's Steam Deck tech specs: GPU 8 RDNA 2 CUs at 1.0-1.6 GHz, up to 1.6 TFlops FP32, over ~300 FP32 "
+                      "operations a skinned vertex") || !strstr(text, "of the rate (est.)"))
+        fail_msg("%s", text);
     cat = write_catalog("unknown", "target = \"Toaster\"");
     snprintf(cmd, sizeof cmd, "%s report %s 2>&1", crowdbake_exe(), cat);
     assert_int_equal(run_command(cmd, out, sizeof out), EXIT_INPUT);

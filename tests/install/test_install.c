@@ -62,12 +62,6 @@ static bool skip_under_sanitizers(void)
 #endif
 }
 
-static bool exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
 /* The bake the command itself writes at its default settings, to compare the library's bytes with:
  * the speed reference too is decided in the library (locomotion.h), so a program linking it
  * records the same one as the command. */

@@ -31,13 +31,15 @@ static cb_bake_job job_for(const cb_model *m)
     return job;
 }
 
-/* u16 for .pal and float for .exr unless a precision is set; set, it holds for both. */
+/* u16 for .pal, half for .ktx2 and float for .exr unless a precision is set; set, it holds for all. */
 static void test_each_format_gets_its_precision(void **state)
 {
     (void)state;
     cb_bake_settings s = cb_default_bake_settings();
     assert_int_equal(cb_bake_settings_options(&s, CB_FORMAT_PAL, NULL, 1).precision, CB_PRECISION_U16);
     assert_int_equal(cb_bake_settings_options(&s, CB_FORMAT_EXR, NULL, 1).precision, CB_PRECISION_FLOAT);
+    /* KTX2 takes the .pal's, half for its default u16 (its loaders refuse RGBA16UI) */
+    assert_int_equal(cb_bake_settings_options(&s, CB_FORMAT_KTX2, NULL, 1).precision, CB_PRECISION_HALF);
     assert_true(cb_bake_settings_options(&s, CB_FORMAT_PAL, NULL, 1).affine_fallback);
     s.precision = CB_PRECISION_HALF, s.precision_set = true, s.layout = CB_LAYOUT_MAT4, s.layout_set = true;
     assert_int_equal(cb_bake_settings_options(&s, CB_FORMAT_PAL, NULL, 1).precision, CB_PRECISION_HALF);

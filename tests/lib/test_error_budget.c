@@ -28,16 +28,6 @@ static int setup(void **state)
     return system(cmd) == 0 ? 0 : -1;
 }
 
-static int run(char *out, size_t size, const char *fmt, ...)
-{
-    char cmd[4096];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(cmd, sizeof cmd, fmt, ap);
-    va_end(ap);
-    return run_command(cmd, out, size);
-}
-
 static long file_bytes(const char *path)
 {
     struct stat st;

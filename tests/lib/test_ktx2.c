@@ -100,6 +100,36 @@ static void test_u16_is_refused_and_output_repeats(void **state)
     free(x), free(y);
 }
 
+/* With no --precision, KTX2 takes the .pal's: half for the .pal's default u16 (RGBA16UI would be
+ * refused by the loaders), said in a note; --precision float overrides it. */
+static void test_ktx2_defaults_to_half_beside_a_u16_pal(void **state)
+{
+    (void)state;
+    require_ktx2_readers();
+    char quadruped[1024];
+    static char out[1 << 16];
+    sample_path(quadruped, sizeof quadruped, "quadruped");
+    assert_int_equal(run(out, sizeof out, "%s bake %s --fps 30 -o " TMP "/dflt --format pal,ktx2 2>&1", crowdbake_exe(), quadruped), 0);
+    printf("%s", out);
+    assert_non_null(strstr(out, "note: " TMP "/dflt.ktx2 is half (RGBA16F), the float format as wide as the .pal's default u16"));
+    assert_non_null(strstr(out, "RGBA16UI, an integer format three.js's KTX2Loader and most engines refuse; --precision float"));
+    assert_int_equal(run(out, sizeof out, "%s inspect " TMP "/dflt.pal", crowdbake_exe()), 0);
+    assert_non_null(strstr(out, "u16"));
+    /* the same texels as the explicit half bake, read back by ktx-parse and three.js */
+    assert_int_equal(run(out, sizeof out, "node tests/tools/ktx2/check_ktx2.mjs " TMP "/dflt.ktx2 " TMP "/quadruped.pal 2>&1"), 0);
+    printf("%s", out);
+    assert_non_null(strstr(out, "ok   dflt.ktx2: vkFormat 97 for half texels"));
+    assert_non_null(strstr(out, "ok   dflt.ktx2: ktx-parse level 0 is bit-identical to the .pal texels (173840 bytes)"));
+    assert_non_null(strstr(out, "dflt.ktx2: three.js KTX2Loader makes a 82x265 RGBA HalfFloatType texture"));
+    /* overridden: float texels, no note */
+    assert_int_equal(run(out, sizeof out, "%s bake %s --fps 30 -o " TMP "/fl --format pal,ktx2 --precision float 2>&1",
+                         crowdbake_exe(), quadruped), 0);
+    assert_null(strstr(out, "RGBA16F"));
+    assert_int_equal(run(out, sizeof out, "node tests/tools/ktx2/check_ktx2.mjs " TMP "/fl.ktx2 " TMP "/fl.pal 2>&1"), 0);
+    printf("%s", out);
+    assert_non_null(strstr(out, "ok   fl.ktx2: vkFormat 109 for float texels"));
+    assert_non_null(strstr(out, "RGBA FloatType texture"));
+}
 
 /* The output of `crowdbake ARGS` (stdout and stderr) from `from` on, into out; its exit code. */
 static int crowdbake_from(const char *args, const char *from, char *out, size_t size)
@@ -226,6 +256,7 @@ int main(void)
         cmocka_unit_test(test_readers_find_the_pal_texels_bit_for_bit),
         cmocka_unit_test(test_a_changed_texel_is_caught),
         cmocka_unit_test(test_u16_is_refused_and_output_repeats),
+        cmocka_unit_test(test_ktx2_defaults_to_half_beside_a_u16_pal),
         cmocka_unit_test(test_inspect_reads_the_ktx2_as_the_pal),
         cmocka_unit_test(test_verify_reads_the_ktx2_as_the_exr),
         cmocka_unit_test(test_a_broken_ktx2_is_one_line),

@@ -66,9 +66,41 @@ static void same_primitives(const cb_model *x, const cb_model *y)
         same_floats(a->normals, b->normals, n * 3, "normals");
         same_floats(a->texcoords, b->texcoords, n * 2, "texcoords");
         same_floats(a->weights, b->weights, n * 4, "weights");
+        same_floats(a->colors, b->colors, n * 4, "colors");
+        assert_int_equal(a->material ? a->material - x->materials : -1, b->material ? b->material - y->materials : -1);
         assert_memory_equal(a->joints, b->joints, n * 4 * sizeof(uint16_t));
         assert_true((a->indices == NULL) == (b->indices == NULL));
         if (a->indices) assert_memory_equal(a->indices, b->indices, a->index_count * sizeof(uint32_t));
+    }
+}
+
+/* What the primitives look like (kept for `mesh`): the same materials, textures and image bytes. */
+static void same_materials(const cb_model *x, const cb_model *y)
+{
+    assert_int_equal(x->material_count, y->material_count);
+    assert_int_equal(x->texture_count, y->texture_count);
+    assert_int_equal(x->image_count, y->image_count);
+    for (uint32_t i = 0; i < x->image_count; ++i) {
+        const cb_image *a = &x->images[i], *b = &y->images[i];
+        assert_string_equal(a->mime_type, b->mime_type);
+        assert_int_equal(a->size, b->size);
+        if (a->size) assert_memory_equal(a->bytes, b->bytes, a->size);
+    }
+    for (uint32_t i = 0; i < x->texture_count; ++i) {
+        const cb_texture *a = &x->textures[i], *b = &y->textures[i];
+        assert_int_equal(a->image ? a->image - x->images : -1, b->image ? b->image - y->images : -1);
+        assert_true(a->mag_filter == b->mag_filter && a->min_filter == b->min_filter && a->wrap_s == b->wrap_s &&
+                    a->wrap_t == b->wrap_t);
+    }
+    for (uint32_t i = 0; i < x->material_count; ++i) {
+        const cb_material *a = &x->materials[i], *b = &y->materials[i];
+        assert_string_equal(a->name, b->name);
+        assert_memory_equal(a->base_color, b->base_color, sizeof a->base_color);
+        assert_true(a->metallic == b->metallic && a->roughness == b->roughness && a->alpha_mode == b->alpha_mode &&
+                    a->alpha_cutoff == b->alpha_cutoff && a->double_sided == b->double_sided &&
+                    a->base_color_texcoord == b->base_color_texcoord);
+        assert_int_equal(a->base_color_texture ? a->base_color_texture - x->textures : -1,
+                         b->base_color_texture ? b->base_color_texture - y->textures : -1);
     }
 }
 
@@ -168,6 +200,7 @@ static void test_fast_path_equals_tinygltf_on_real_models(void **state)
             same_nodes(m, slow);
             same_skins(m, slow);
             same_primitives(m, slow);
+            same_materials(m, slow);
             same_animations(m, slow);
         }
         assert_true(fast->animation_count + fast->primitive_count > 0);

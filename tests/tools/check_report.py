@@ -124,9 +124,21 @@ if 'budget' in report:
     expect('over budget', report['totals']['over_budget'], totals['palettes'] + totals['meshes'] > b['budget_bytes'])
     # the herd the budget left holds: 64 B an instance (a_instance + a 3x4 transform), palettes and meshes in the total
     left = b['budget_bytes'] - totals['palettes'] - totals['meshes']
+    # the vertex rate: only the Steam Deck's maker states a figure (1.6 TFLOPS FP32, over 300 FLOP a skinned vertex)
+    rate = b.get('vertex_rate')
+    if b['target'] == 'Steam Deck':
+        expect('vertex rate (relative error under 1e-9)', [abs(rate['vertices_per_second'] / (1.6e12 / 300) - 1) < 1e-9,
+               abs(rate['vertices_per_frame'] / (1.6e12 / 300 / 60) - 1) < 1e-9, rate['estimate']], [True, True, True])
+    else:
+        expect('no vertex rate', rate, None)
     for name, (model, owner) in sorted(types.items()):
         t = by_name[name]
         herd = left // 64 if left > 0 else 0
         expect(name + ' herd instances', t['herd']['instances'], herd)
         expect(name + ' herd vertices a frame', t['herd']['vertices_per_frame'], herd * t['vertices'])
+        if rate:
+            share = t['herd']['vertices_per_frame'] / (rate['vertices_per_second'] / 60)
+            expect(name + ' herd share of the vertex rate', abs(t['herd']['share_of_vertex_rate'] - share) <= 1e-8 * share, True)  # %.9g
+        else:
+            expect(name + ' herd share of no vertex rate', t['herd'].get('share_of_vertex_rate'), None)
 print('%d numbers match the formulas' % checks)
