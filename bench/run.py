@@ -31,6 +31,7 @@ through EGL without a window, frames timed with GL timer queries: Mesa's llvmpip
 driver where there is one (--gl-only runs only it; --gl-counts sets the herd sizes).
 """
 import argparse, json, math, os, resource, statistics, subprocess, sys, time
+from bytes import bytes_bench, print_bytes  # issue 43: the default bake's bytes (bench/bytes.py)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BUILD = os.path.join(ROOT, 'build')
@@ -502,8 +503,13 @@ def main():
     ap.add_argument('--instructions', action='store_true', help='also count instructions with valgrind (slow)')
     ap.add_argument('--crowd-only', action='store_true')
     ap.add_argument('--gl-only', action='store_true', help='only the native benchmark (bench_gl)')
+    ap.add_argument('--bytes-only', action='store_true', help='only the bytes of the default bake against --fps 30 (issue 43)')
     ap.add_argument('--gl-counts', help='herd sizes for the native benchmark, e.g. 1000,10000,100000')
     args = ap.parse_args()
+    if args.bytes_only:
+        r = bytes_bench(args.smoke)
+        json.dump({'bytes': r}, sys.stdout, indent=2) if args.json else print_bytes(r)
+        return
     if args.gl_only:
         gl = gl_bench(args.smoke, args.gl_counts)
         if args.json:
@@ -570,6 +576,7 @@ def main():
     report['crowd'] = crowd_bench(args.smoke)
     report['gl'] = gl_bench(args.smoke, args.gl_counts)
     report['att'] = att_bench(args.smoke)
+    report['bytes'] = bytes_bench(args.smoke)
     if args.json:
         json.dump(report, sys.stdout, indent=2)
         print()
@@ -578,6 +585,7 @@ def main():
         print_crowd(report['crowd'])
         print_gl(report['gl'])
         print_att(report['att'])
+        print_bytes(report['bytes'])
 
 
 if __name__ == '__main__':
