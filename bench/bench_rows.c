@@ -12,7 +12,9 @@
  * from its last key back to its first pose), this finds the fewest evenly spaced rows n that keep
  * the blend within the budget at the quarter points of every row interval, skinning every vertex
  * in float64 against the glTF's own skinning (no quantisation: u16 adds 0.03-0.05 mm/m on the
- * shared animals). Sampled rows; fitted rows would halve these errors.
+ * shared animals). Sampled rows; fitted rows would halve these errors. For LINEAR (and cubic)
+ * keys: a STEP-keyed clip is baked as held rows, exact (docs/pal-format.md), not estimated here.
+ * qpos only: a rig with non-uniform scale is refused as the bake refuses it.
  *
  *   bench_rows MODEL [MAX_ERROR_MM_PER_M]   a JSON line for the skin (joints, and those that skin no
  *                                           vertex), then one per clip: key intervals, the rows the map
@@ -154,7 +156,7 @@ static size_t key_times(const cb_animation *a, const cb_clip_info *info, double 
     size_t m = 0;
     for (size_t i = 0; i < n; ++i)
         if (m == 0 || t[i] - t[m - 1] > 1e-4) t[m++] = t[i];
-    if (info->loops && info->t0 + info->duration - t[m - 1] > 1e-4) t[m++] = info->t0 + info->duration;
+    if (m > 0 && info->loops && info->t0 + info->duration - t[m - 1] > 1e-4) t[m++] = info->t0 + info->duration;
     *out = t;
     return m;
 }
@@ -167,6 +169,10 @@ static void clip_rows(rig *r, int32_t anim, double max_error_mm, const char *mod
     const cb_animation *a = &r->m->animations[anim];
     double *t, budget = max_error_mm / 1000 * r->height;
     size_t n = key_times(a, &info, &t);
+    if (n < 2) { /* no interval to place rows in */
+        free(t);
+        return;
+    }
     qpos *x = malloc(r->bones * sizeof *x), *y = malloc(r->bones * sizeof *y);
     int worst_splits = 1;
     size_t map_rows = info.loops ? 0 : 1, fitted_rows = map_rows, shortest = 0;
