@@ -31,7 +31,7 @@ through EGL without a window, frames timed with GL timer queries: Mesa's llvmpip
 driver where there is one (--gl-only runs only it; --gl-counts sets the herd sizes).
 """
 import argparse, json, math, os, resource, statistics, subprocess, sys, time
-from bytes import bytes_bench, print_bytes  # issue 43: the default bake's bytes (bench/bytes.py)
+from bytes_bench import bytes_bench, print_bytes  # issue 43: the default bake's bytes (bench/bytes_bench.py)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BUILD = os.path.join(ROOT, 'build')
