@@ -29,6 +29,9 @@ GPU; the ratio is measured in the same run).
 The native benchmark (bench/bench_gl.c): the same three methods with the shipped GLSL in OpenGL 3.3
 through EGL without a window, frames timed with GL timer queries: Mesa's llvmpipe here, a GPU's
 driver where there is one (--gl-only runs only it; --gl-counts sets the herd sizes).
+
+Last, the default bake's bytes against --fps 30 and what each lever would save (bench/bytes_bench.py,
+bench/bench_rows.c; --bytes-only runs only it).
 """
 import argparse, json, math, os, resource, statistics, subprocess, sys, time
 from bytes_bench import bytes_bench, print_bytes  # issue 43: the default bake's bytes (bench/bytes_bench.py)
