@@ -37,6 +37,7 @@
 #include "budget.h"
 #include "vat.h"
 #include "stride.h"
+#include "locomotion.h"
 #include "socket.h"
 #include "mesh.h"
 #include "gltf_mesh_write.h"
