@@ -540,6 +540,11 @@ $(BUILD)/bench_att: bench/bench_att.c $(BUILD)/libcrowdbake.a
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 
+# Where a palette's rows go, and what rows placed per key interval would need (bench/bench_rows.c).
+$(BUILD)/bench_rows: bench/bench_rows.c $(BUILD)/libcrowdbake.a
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
+	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
+
 # The floor: read + RapidJSON parse of the same file, and crowdbake's load, in the same run
 # (bench/bench_floor.cpp).
 $(BUILD)/bench_floor: bench/bench_floor.cpp $(BUILD)/libcrowdbake.a $(DEPS_STAMP)
@@ -553,7 +558,7 @@ $(BUILD)/bench_gl: bench/bench_gl.c bench/bench_gl_mesh.c bench/bench_gl_mesh.h 
 	$(CC) $(CFLAGS) -c bench/bench_gl_mesh.c -o $@_mesh.o
 	$(CXX) $(SAN) -o $@ $@.o $@_mesh.o $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs egl gl 2>/dev/null)
 
-bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(NODE_DEPS)
+bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(BUILD)/bench_rows $(NODE_DEPS)
 	python3 bench/run.py
 	python3 bench/scale.py --build $(BUILD) --shared $(SHARED) --no-bazel
 
@@ -562,7 +567,7 @@ bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/b
 bench-scale: all $(BUNDLE)/.done
 	python3 bench/scale.py --build $(BUILD) --shared $(SHARED) --counts 10,100 --bazel-types 1000
 
-bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(NODE_DEPS)
+bench-smoke: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(BUILD)/bench_rows $(NODE_DEPS)
 	CROWDBAKE=$(BUILD)/crowdbake python3 bench/run.py --smoke
 
 # The normal and the sanitizer builds and their tests, side by side on every core.

@@ -29,10 +29,14 @@ GPU; the ratio is measured in the same run).
 The native benchmark (bench/bench_gl.c): the same three methods with the shipped GLSL in OpenGL 3.3
 through EGL without a window, frames timed with GL timer queries: Mesa's llvmpipe here, a GPU's
 driver where there is one (--gl-only runs only it; --gl-counts sets the herd sizes).
+
+Last, the default bake's bytes against --fps 30 and what each lever would save (bench/bytes_bench.py,
+bench/bench_rows.c; --bytes-only runs only it).
 """
 import argparse, json, math, os, resource, statistics, subprocess, sys, time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import auto_speed  # noqa: E402  (issue 43 item 2: default / fixed 30 fps on Cow, Husky, Fox)
+from bytes_bench import bytes_bench, print_bytes  # noqa: E402  (issue 43 item 1: the default bake's bytes)
 
 from common import BUILD, EXE, ROOT, SHARED, run
 from crowd import crowd_bench, gl_bench, print_crowd, print_gl
@@ -405,8 +409,13 @@ def main():
     ap.add_argument('--instructions', action='store_true', help='also count instructions with valgrind (slow)')
     ap.add_argument('--crowd-only', action='store_true')
     ap.add_argument('--gl-only', action='store_true', help='only the native benchmark (bench_gl)')
+    ap.add_argument('--bytes-only', action='store_true', help='only the bytes of the default bake against --fps 30 (issue 43)')
     ap.add_argument('--gl-counts', help='herd sizes for the native benchmark, e.g. 1000,10000,100000')
     args = ap.parse_args()
+    if args.bytes_only:
+        r = bytes_bench(args.smoke)
+        json.dump({'bytes': r}, sys.stdout, indent=2) if args.json else print_bytes(r)
+        return
     if args.gl_only:
         gl = gl_bench(args.smoke, args.gl_counts)
         if args.json:
@@ -474,6 +483,7 @@ def main():
     report['crowd'] = crowd_bench(args.smoke)
     report['gl'] = gl_bench(args.smoke, args.gl_counts)
     report['att'] = att_bench(args.smoke)
+    report['bytes'] = bytes_bench(args.smoke)
     if args.json:
         json.dump(report, sys.stdout, indent=2)
         print()
@@ -482,6 +492,7 @@ def main():
         print_crowd(report['crowd'])
         print_gl(report['gl'])
         print_att(report['att'])
+        print_bytes(report['bytes'])
 
 
 if __name__ == '__main__':

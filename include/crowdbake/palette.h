@@ -156,8 +156,9 @@ CROWDBAKE_API void cb_palette_values_to_matrix(const cb_palette *p, uint32_t bon
 CROWDBAKE_API void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, uint32_t row1, double fr,
                                     uint32_t bone, double out[16]);
 
-/* Moves each of `frames` rows (bones x values floats each) outward by half the sagitta of the
- * linear blend over its intervals: mids holds the exact values halfway through each interval
+/* Moves each of `frames` rows (bones x values floats each) outward so that the linear blend
+ * errs about evenly at the rows and halfway between them (about half the sagitta of its
+ * intervals; per value, the offset minimising the worst of the two, src/core/fit.c): mids holds the exact values halfway through each interval
  * (frames of them for a loop, whose last interval wraps to row 0; frames - 1 otherwise). qpos
  * rows (8 values: quaternion, position, scale) keep unit quaternions. */
 CROWDBAKE_API void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones, uint32_t values,

@@ -401,7 +401,9 @@ static void test_catalog_fps_auto(void **state)
     const char *walk = strstr(out, "AnimalArmature|Walk");
     assert_non_null(walk);
     assert_int_equal(sscanf(walk + strlen("AnimalArmature|Walk"), "%*f %*f %*f %*f %lf %lf", &q, &b), 2);
-    assert_true(b <= 1.0 && q <= b); /* Walk's rows are fitted (fewer rows): the fit moves them, within the budget */
+    /* Walk's rows are fitted (fewer rows): the fit moves them, within the budget. It evens the error
+     * out between the rows and the blends, so either may carry the worst (0.563 and 0.506 mm/m). */
+    assert_true(q <= 1.0 && b <= 1.0 && q > 0.1);
     /* A bad value names the file, the line and the fix. */
     snprintf(text, sizeof text, "[animal.cow]\nmodel = \"%s\"\nfps = \"fast\"\n", cow_abs);
     write_text(TMP "/bad-auto.toml", text);
@@ -502,7 +504,8 @@ static void test_fitted_rows_meet_the_goal(void **state)
     printf("  48 fps: visible %.3f mm/m fitted, %.3f sampled; encoding %.3f against %.3f mm/m\n", cb_mm_per_m(worst_fit, h),
            cb_mm_per_m(worst_sampled, h), cb_mm_per_m(fitted.max_error, h), cb_mm_per_m(sampled.max_error, h));
     assert_true(worst_fit < 0.7 * worst_sampled);
-    assert_true(fitted.max_error < fitted.visible_error); /* the rows give up some error, less than fitting wins */
+    /* The rows give up some error, no more than the blend then errs (the fit evens the two out). */
+    assert_true(fitted.max_error > 10 * sampled.max_error && fitted.max_error <= fitted.visible_error);
     cb_palette_free(&fitted), cb_palette_free(&sampled);
     free(plan), free(goals);
     cb_sampler_free(s);
