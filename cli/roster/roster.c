@@ -282,6 +282,15 @@ static void prepare_from_model(roster_run *run, uint32_t i)
         cb_prep_record_encode(t, key, &w->record, &w->record_size), w->record_key = key;
 }
 
+/* The per-clip errors a record holds (NULL: out of memory), for a type prepared again from its
+ * model while its palette stays up to date: only a bake measures them. */
+static double *kept_clip_errors(const cb_roster_type *t)
+{
+    double *e = malloc((t->clip_count ? t->clip_count : 1) * sizeof *e);
+    for (uint32_t c = 0; e && c < t->clip_count; ++c) e[c] = t->clips[c].visible_error_mm;
+    return e;
+}
+
 /* A type's record, when it matches its files, stands in for loading and sampling: an
  * up-to-date type then costs the hashing of its files and the check of its palette. */
 static void prepare_type(roster_run *run, uint32_t i)
@@ -294,7 +303,10 @@ static void prepare_type(roster_run *run, uint32_t i)
     char path[4096];
     bool from_record = !run->opt->force && cb_prep_record_path(an, path, sizeof path) &&
                        cb_prep_record_load(path, an, run->opt->limits, t);
+    double *clip_errors = NULL; /* the bake's per-clip errors, which preparing from the model cannot know */
+    uint64_t record_key = t->key;
     if (from_record && run->opt->measure_vat && !t->vat_measured) { /* a report needs the VAT error too */
+        clip_errors = kept_clip_errors(t);
         cb_prep_clear(t);
         from_record = false;
     }
@@ -307,6 +319,9 @@ static void prepare_type(roster_run *run, uint32_t i)
         t->error = (cb_error){0};
     }
     prepare_from_model(run, i);
+    for (uint32_t c = 0; clip_errors && t->key == record_key && c < t->clip_count; ++c)
+        if (t->clips[c].visible_error_mm < 0) t->clips[c].visible_error_mm = clip_errors[c];
+    free(clip_errors);
 }
 
 /* What preparing a type kept, once it is baked or settled (its model stays: other types share it). */
