@@ -140,21 +140,26 @@ static const char *const resting_words[] = {"idle", "stand", "rest", "breathe", 
 static const char *const once_words[] = {"attack", "hit", "react", "death", "die", "dead", "dying", "punch", "kick",
                                          "headbutt", "hurt", "damage", "stun", "fall", "jump", "spawn"};
 
-/* How restful a state is by its words: 0 for the first resting word, more for later ones;
- * RANK_ONCE for an action done once, RANK_OTHER for words that say neither. The matching word
+/* How restful a state is by its words: RANK_ONCE for an action done once, by its name or any of
+ * its keywords (a hit reaction keyed 'Idle_HitReact_Left' is no resting state, though it says
+ * 'idle'); else the rank of its first resting word, its name's words before its keywords'
+ * (`idle` beats `graze = ["eating"]`); RANK_OTHER for words that say neither. The matching word
  * and where it was found into `why`. */
 enum { RANK_OTHER = 100, RANK_ONCE = 200 };
 static int rest_rank(const cb_catalog_state *st, char *why, size_t size)
 {
     char word[64];
-    size_t n = sizeof resting_words / sizeof *resting_words;
+    size_t n = sizeof resting_words / sizeof *resting_words, once = sizeof once_words / sizeof *once_words;
+    if (cb_name_find_word(st->name, once_words, once, word, sizeof word) >= 0)
+        return snprintf(why, size, "its name says '%s', an action done once", word), RANK_ONCE;
+    for (uint32_t k = 0; k < st->keyword_count; ++k)
+        if (cb_name_find_word(st->keywords[k], once_words, once, word, sizeof word) >= 0)
+            return snprintf(why, size, "its keyword '%s' says '%s', an action done once", st->keywords[k], word), RANK_ONCE;
     int i = cb_name_find_word(st->name, resting_words, n, word, sizeof word);
     if (i >= 0) return snprintf(why, size, "its name says '%s'", word), i;
     for (uint32_t k = 0; k < st->keyword_count; ++k)
         if ((i = cb_name_find_word(st->keywords[k], resting_words, n, word, sizeof word)) >= 0)
-            return snprintf(why, size, "its keyword '%s' says '%s'", st->keywords[k], word), i;
-    if (cb_name_find_word(st->name, once_words, sizeof once_words / sizeof *once_words, word, sizeof word) >= 0)
-        return snprintf(why, size, "its name says '%s', an action done once", word), RANK_ONCE;
+            return snprintf(why, size, "its keyword '%s' says '%s'", st->keywords[k], word), (int)n + i;
     return snprintf(why, size, "no word of its name says it rests"), RANK_OTHER;
 }
 

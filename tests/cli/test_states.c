@@ -126,6 +126,19 @@ static void test_default_state_by_name(void **state)
     printf("  %s\n", cat.animals[0].default_state_from);
     assert_non_null(strstr(cat.animals[0].default_state_from, "alphabetically"));
     cb_catalog_free(&cat);
+    /* An action done once never rests, though a keyword says 'idle'; a resting name beats a
+     * resting keyword, whatever the names' order. */
+    if (cb_catalog_load(cow_catalog("default_hit", "states = { hit = [\"Idle_HitReact_Left\"], eat = [\"Eating\"], "
+                                                   "idle = [\"Idle\"], graze = [\"eating\"] }\n"), &cat, &err))
+        fail_msg("%s", err.message);
+    assert_string_equal(cat.animals[0].default_state, "idle");
+    cb_catalog_free(&cat);
+    if (cb_catalog_load(cow_catalog("default_kw2", "states = { a = [\"Idle_HitReact_Left\"], b = [\"Eating\"] }\n"),
+                        &cat, &err))
+        fail_msg("%s", err.message);
+    assert_string_equal(cat.animals[0].default_state, "b");
+    assert_non_null(strstr(cat.animals[0].default_state_from, "its keyword 'Eating' says 'eating'"));
+    cb_catalog_free(&cat);
     /* The catalog's default_state still wins. */
     if (cb_catalog_load(cow_catalog("default_given", "states = { idle = [\"idle\"], wander = [\"walk\"] }\n"
                                                      "default_state = \"wander\"\n"), &cat, &err))
