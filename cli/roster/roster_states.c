@@ -114,8 +114,8 @@ void roster_warn_foot_slide(cb_roster_type *t)
                                          : "together on average, but each slides back and forth within its stance";
         cb_warn(&t->warnings, "warning",
                 "clip '%s': its planted feet slide %.0f%% of the ground speed on average (worst %.0f%%) at any speed: "
-                "its feet step back at %.3g to %.3g units/s, %s; the asset itself slides (re-time the feet in the "
-                "animation, or accept it)",
+                "its feet step back at %.3g to %.3g units/s, %s; the asset itself slides (plant_feet = true or "
+                "--plant-feet turns its legs at bake time so planted feet stay; or re-time the feet in the animation)",
                 t->clips[c].name, 100 * st->slide_mean, 100 * st->slide_worst, lo, hi, why);
     }
 }
