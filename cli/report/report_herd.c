@@ -38,6 +38,13 @@ double report_frame_share(const cb_report *r, const cb_report_type *t)
     return r->vertex_rate > 0 ? t->herd_vertices / (r->vertex_rate / FRAME_RATE) : 0;
 }
 
+/* The instances the target's vertex rate skins at FRAME_RATE, each skinning all its vertices (an
+ * estimate, as the rate is): what a herd can hold before the GPU, not the memory, runs out. */
+double report_rate_instances(const cb_report *r, const cb_report_type *t)
+{
+    return r->vertex_rate > 0 && t->vertices ? floor(r->vertex_rate / FRAME_RATE / (double)t->vertices) : 0;
+}
+
 void cb_report_fill_herds(cb_report *r)
 {
     find_vertex_rate(r);
@@ -77,14 +84,16 @@ void report_herds_text(FILE *f, const cb_report *r)
     else
         fprintf(f, " (%s states no vertex rate: compare with the target's measured draw rate):\n", r->target);
     fprintf(f, "%-14s %14s %9s %18s%s\n", "type", "instances", "vertices", "vertices a frame",
-            r->vertex_rate > 0 ? "  of the rate (est.)" : "");
+            r->vertex_rate > 0 ? "  of the rate (est.)  instances the rate skins (est.)" : "");
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_type *t = &r->types[i];
         char n[32], v[32];
         report_count_text((double)t->herd_instances, n, sizeof n);
         report_count_text(t->herd_vertices, v, sizeof v);
         fprintf(f, "%-14s %14s %9llu %18s", t->name, n, (unsigned long long)t->vertices, v);
-        if (r->vertex_rate > 0) fprintf(f, "  %17.3g%%", 100 * report_frame_share(r, t));
+        if (r->vertex_rate > 0)
+            fprintf(f, "  %17.3gx  %31s", report_frame_share(r, t),
+                    report_count_text(report_rate_instances(r, t), n, sizeof n));
         fprintf(f, "\n");
     }
 }
@@ -95,7 +104,10 @@ void report_herds_json(cb_json *j, const cb_report *r, const cb_report_type *t)
     cb_json_int(j, "instances", (long long)t->herd_instances);
     cb_json_int(j, "instance_bytes", CB_REPORT_INSTANCE_BYTES);
     cb_json_int(j, "vertices_per_frame", (long long)t->herd_vertices);
-    if (r->vertex_rate > 0) cb_json_number(j, "share_of_vertex_rate", report_frame_share(r, t));
+    if (r->vertex_rate > 0) {
+        cb_json_number(j, "share_of_vertex_rate", report_frame_share(r, t));
+        cb_json_int(j, "instances_at_vertex_rate", (long long)report_rate_instances(r, t));
+    }
     cb_json_end(j);
 }
 

@@ -139,6 +139,8 @@ if 'budget' in report:
         if rate:
             share = t['herd']['vertices_per_frame'] / (rate['vertices_per_second'] / 60)
             expect(name + ' herd share of the vertex rate', abs(t['herd']['share_of_vertex_rate'] - share) <= 1e-8 * share, True)  # %.9g
+            expect(name + ' herd instances at the vertex rate', t['herd']['instances_at_vertex_rate'],
+                   int(rate['vertices_per_second'] / 60 // t['vertices']))
         else:
             expect(name + ' herd share of no vertex rate', t['herd'].get('share_of_vertex_rate'), None)
 print('%d numbers match the formulas' % checks)
