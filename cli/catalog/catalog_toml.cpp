@@ -137,7 +137,7 @@ struct Parser {
     {
         static const std::vector<std::string> k = {"fps", "max_error", "max_fps", "layout", "precision", "format", "out_dir",
                                                    "max_texture_size", "root_motion", "fit_rows", "measure_all",
-                                                   "allow_over_budget"};
+                                                   "allow_over_budget", "row_travel"};
         return k;
     }
 
@@ -205,6 +205,7 @@ struct Parser {
         }
         if (auto *n = t.get("fit_rows")) b->fit_rows = boolean(*n, where + " fit_rows"), b->from.fit_rows = from;
         if (auto *n = t.get("measure_all")) b->measure_all = boolean(*n, where + " measure_all");
+        if (auto *n = t.get("row_travel")) b->row_travel_off = !boolean(*n, where + " row_travel");
         if (auto *n = t.get("allow_over_budget")) b->allow_over_budget = boolean(*n, where + " allow_over_budget");
         /* A fixed fps is checked against a max_error given beside it: an animal's own fps is not
          * held to the max_error [bake] states for error-bounded rates, unless it states its own. */

@@ -49,6 +49,7 @@ bool cb_prep_key(const cb_catalog_animal *an, const cb_limits *limits, char *con
                            b->exr_compression, an->speed_reference, b->fit_rows};
     cbpal_xxh64_update(&h, settings, sizeof settings);
     if (b->measure_all) hash_str(&h, "measure_all"); /* only then: records made before it stay valid */
+    if (b->row_travel_off) hash_str(&h, "row_travel_off"); /* likewise */
     if (b->max_error_given && b->from.max_error == CB_FROM_COMMAND_LINE) hash_str(&h, "max_error from the command line");
     hash_str(&h, b->out_dir);
     cb_limits l = limits ? *limits : cb_default_limits();
