@@ -86,6 +86,17 @@ static int pick_skin(const cb_model *m)
     return m->skin_count ? 0 : -1;
 }
 
+/* A clip's per-row travel as its bake will decide it: the manifest says it, the bake ships it. */
+static cb_status row_travel(const cb_bake_job *job, cb_sampler *s, const cb_clip_info *info, cb_row_travel *out,
+                            cb_error *err)
+{
+    float *offsets = malloc((info->frames ? info->frames : 1) * sizeof *offsets);
+    if (!offsets) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    cb_bake_job_row_travel(job, s, info, offsets, out);
+    free(offsets);
+    return CB_OK;
+}
+
 static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_type *t, cb_error *err)
 {
     cb_sampler *s = cb_sampler_create(w->model, w->skin, err);
@@ -103,6 +114,7 @@ static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_
         c->duration = info.duration;
         c->loops = info.loops, c->step = plan->step;
         cb_measure_ground_speed(s, &info, &c->speed);
+        if (row_travel(&w->job, s, &info, &c->travel, err)) break;
         row += info.frames;
     }
     t->rows = row;

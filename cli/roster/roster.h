@@ -47,6 +47,7 @@ typedef struct cb_roster_clip {
     bool loops;
     bool step;             /* its rows held, not blended (cb_clip_plan.step): the instance's first row is -first - 1 */
     cb_ground_speed speed; /* speed.speed is the clip's ground speed */
+    cb_row_travel travel;  /* its per-row travel offset, as the bake decides it (cb_bake_job_row_travel) */
 } cb_roster_clip;
 
 typedef struct cb_roster_lod {
@@ -116,6 +117,9 @@ cb_status cb_roster_merge(char *const *fragments, uint32_t count, const char *ma
  * a stride, "foot_slide": how much each planted foot slides at the clip's ground speed
  * (fractions of that speed, mean and worst over the foot's stance). */
 void cb_roster_json_stride(cb_json *j, const cb_stride *stride);
+/* A clip's per-row travel (row_travel.h) as the manifest and `info --json` give it: "row_travel"
+ * with "applied", "reason" and, where measured, the slide without and with the offsets. */
+void cb_roster_json_row_travel(cb_json *j, const cb_row_travel *travel);
 /* "sockets": [{name, bone, bind_transform}], as the manifest and `info --json` give them. */
 void cb_roster_json_sockets(cb_json *j, const cb_socket *sockets, uint32_t count);
 

@@ -9,8 +9,8 @@
 
 #include "crowdbake_pal.h"
 
-static const char magic[8] = "CBPREP5"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by
-                                        * their soles; 5: the VAT error */
+static const char magic[8] = "CBPREP6"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by
+                                        * their soles; 5: the VAT error; 6: each clip's row travel */
 
 bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {
@@ -120,6 +120,7 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
         put_f64(&w, c->speed.speed), put_f64(&w, c->speed.root), put_f64(&w, c->speed.feet);
         put_str(&w, c->speed.method);
         put(&w, &c->speed.stride, sizeof c->speed.stride); /* plain numbers and zero-filled strings */
+        put(&w, &c->travel, sizeof c->travel);             /* likewise */
     }
     put_u32(&w, t->animal->state_count);
     for (uint32_t s = 0; s < t->animal->state_count; ++s) put_u32(&w, (uint32_t)t->state_clip[s]);
@@ -236,7 +237,8 @@ static void read_clips(reader *r, cb_roster_type *t)
         c->speed.speed = get_f64(r), c->speed.root = get_f64(r), c->speed.feet = get_f64(r);
         if (get_str(r, method, sizeof method) && !(c->speed.method = known_method(method))) r->failed = true;
         get(r, &c->speed.stride, sizeof c->speed.stride);
-        if (!stride_plausible(&c->speed.stride)) r->failed = true;
+        get(r, &c->travel, sizeof c->travel);
+        if (!stride_plausible(&c->speed.stride) || !memchr(c->travel.why, 0, sizeof c->travel.why)) r->failed = true;
     }
 }
 

@@ -117,7 +117,7 @@ void cb_roster_json_stride(cb_json *j, const cb_stride *st)
     cb_json_object(j, "foot_slide");
     cb_json_number(j, "mean", st->slide_mean);
     cb_json_number(j, "worst", st->slide_worst);
-    cb_json_number(j, "mean_with_per_row_travel", st->slide_mean_varying); /* measured, not shipped (stride.h) */
+    cb_json_number(j, "mean_with_per_row_travel", st->slide_mean_varying); /* stride.h's estimate; row_travel says what ships */
     cb_json_array(j, "feet");
     for (uint32_t k = 0; k < st->foot_count; ++k) {
         const cb_foot *f = &st->feet[k];
@@ -134,6 +134,23 @@ void cb_roster_json_stride(cb_json *j, const cb_stride *st)
     cb_json_end(j);
     cb_json_end(j);
     write_contacts(j, st);
+}
+
+void cb_roster_json_row_travel(cb_json *j, const cb_row_travel *t)
+{
+    cb_json_object(j, "row_travel");
+    cb_json_bool(j, "applied", t->applied); /* the .pal carries the clip's offsets (version 5) */
+    cb_json_string(j, "reason", t->why);
+    if (t->slide_mean > 0) { /* measured: a striding loop in place */
+        cb_json_number(j, "slide_mean", t->slide_mean);
+        cb_json_number(j, "slide_mean_with_offsets", t->slide_with);
+    }
+    if (t->applied) {
+        cb_json_inline_array(j, "heading");
+        for (int k = 0; k < 3; ++k) cb_json_number(j, NULL, t->heading[k]);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
 }
 
 /* `p` as an absolute path without "." or ".." steps or repeated slashes, worked out from the
@@ -227,6 +244,7 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
         cb_json_number(j, "feet_speed", cl->speed.feet);
         cb_json_string(j, "speed_method", cl->speed.method);
         cb_roster_json_stride(j, &cl->speed.stride);
+        cb_roster_json_row_travel(j, &cl->travel);
         cb_json_end(j);
     }
     cb_json_end(j);

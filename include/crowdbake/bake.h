@@ -197,6 +197,11 @@ CROWDBAKE_API void cb_bake_result_free(cb_bake_result *result);
 CROWDBAKE_API bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t clip);
 /* Planned clip i's rate: the one its search chose, else its fixed fps. */
 CROWDBAKE_API double cb_bake_job_clip_fps(const cb_bake_job *job, uint32_t clip);
+/* Planned clip `clip`'s per-row travel as the job's bake decides it (row_travel.h): `info` is the
+ * clip analyzed on `sampler` (cb_clip_analyze), offsets info->frames floats. A front end that
+ * reports the decision before or without baking (a roster's manifest) gets the bake's. */
+CROWDBAKE_API void cb_bake_job_row_travel(const cb_bake_job *job, cb_sampler *sampler, const cb_clip_info *info,
+                                          float *offsets, cb_row_travel *out);
 CROWDBAKE_API void cb_bake_job_free(cb_bake_job *job);
 /* Frees what planning kept only to save the bake work (the poses its rate searches sampled): a
  * planned job waiting its turn then holds its plan alone, and bakes the same bytes, sampling its

@@ -14,6 +14,19 @@ static bool carries_travel(const cb_bake_job *job, const cb_clip_info *info, dou
     return !cb_root_motion_in_place(job->settings.root_motion, info) && cb_clip_travels(info, model_height);
 }
 
+void cb_bake_job_row_travel(const cb_bake_job *job, cb_sampler *s, const cb_clip_info *info, float *offsets,
+                            cb_row_travel *out)
+{
+    double lo[3], hi[3], model_height = cb_skin_rest_bounds(s, lo, hi);
+    if (job->settings.row_travel_off) {
+        memset(out, 0, sizeof *out);
+        memset(offsets, 0, (size_t)info->frames * sizeof *offsets);
+        snprintf(out->why, sizeof out->why, "not applied: turned off (--row-travel off, or the catalog's row_travel = false)");
+        return;
+    }
+    cb_row_travel_measure(s, info, !carries_travel(job, info, model_height), info->frames, offsets, out);
+}
+
 cb_status bake_row_travel(const cb_bake_job *job, cb_sampler *s, cb_palette *p, cb_error *err)
 {
     float *offsets = calloc(p->rows ? p->rows : 1, sizeof *offsets);
@@ -23,19 +36,17 @@ cb_status bake_row_travel(const cb_bake_job *job, cb_sampler *s, cb_palette *p, 
         cb_palette_clip *clip = &p->clips[c];
         cb_row_travel *t = &clip->travel;
         memset(t, 0, sizeof *t);
-        if (job->settings.row_travel_off) {
-            snprintf(t->why, sizeof t->why, "not applied: turned off (--row-travel off, or the catalog's row_travel = false)");
-            continue;
-        }
         cb_clip_info info;
         cb_error ignored = {0};
-        if (cb_clip_analyze(s, job->plan[c].animation, clip->fps, job->plan[c].loop, &job->limits, &info, &ignored)) {
+        if (cb_clip_analyze(s, job->plan[c].animation, cb_bake_job_clip_fps(job, c), job->plan[c].loop, &job->limits, &info, &ignored)) {
             snprintf(t->why, sizeof t->why, "not applied: %.200s", ignored.message);
             continue;
         }
-        info.loops = clip->loops;
-        cb_row_travel_measure(s, &info, !carries_travel(job, &info, p->model_height), clip->frames,
-                              offsets + clip->first_row, t);
+        if (info.frames != clip->frames) { /* framed as baked: the rate the bake chose gives its rows */
+            snprintf(t->why, sizeof t->why, "not applied: %u rows baked, %u analyzed", clip->frames, info.frames);
+            continue;
+        }
+        cb_bake_job_row_travel(job, s, &info, offsets + clip->first_row, t);
         any = any || t->applied;
     }
     if (!any) free(offsets), offsets = NULL;
