@@ -54,9 +54,9 @@ typedef struct cb_bake_settings {
     bool fit_rows;               /* every clip's rows fitted to the runtime's linear blend (cb_bake_options.fit); else
                                   * sampled at a fixed fps, and fitted or sampled per clip with fps = "auto" */
     bool measure_all;            /* errors measured at every row, past the budget too (cb_bake_options.measure_all) */
-    bool row_travel_off;         /* no per-row travel offsets (row_travel.h), where the bake would ship them */
     cb_settings_from from;       /* where fps, max_error, max_fps, fit_rows and root_motion came from (all
                                   * CB_FROM_DEFAULT in cb_default_bake_settings) */
+    bool row_travel_off;         /* no per-row travel offsets (row_travel.h), where the bake would ship them */
 } cb_bake_settings;
 
 /* Which settings an override carries (the command line's bake options over a catalog). */

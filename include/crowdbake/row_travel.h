@@ -42,11 +42,6 @@ typedef struct cb_row_travel {
 CROWDBAKE_API void cb_row_travel_measure(cb_sampler *sampler, const cb_clip_info *clip, bool in_place, uint32_t rows,
                                          float *offsets, cb_row_travel *out);
 
-/* The offset at clip time t (seconds from the clip's start) of a loop of `rows` rows over
- * `duration`, blended linearly between rows and from the last into the first as the shaders
- * blend rows. */
-CROWDBAKE_API double cb_row_travel_at(const float *offsets, uint32_t rows, double duration, double t);
-
 #ifdef __cplusplus
 }
 #endif

@@ -178,13 +178,3 @@ void cb_row_travel_measure(cb_sampler *s, const cb_clip_info *clip, bool in_plac
     }
     free(tr.x), free(tr.down), free(o), free(st);
 }
-
-double cb_row_travel_at(const float *offsets, uint32_t rows, double duration, double t)
-{
-    if (!offsets || rows == 0 || !(duration > 0)) return 0;
-    double x = fmod(t / duration, 1.0) * rows;
-    if (x < 0) x += rows;
-    uint32_t a = (uint32_t)x % rows, b = (a + 1) % rows;
-    double f = x - floor(x);
-    return offsets[a] + (offsets[b] - offsets[a]) * f;
-}
