@@ -113,7 +113,7 @@ static void test_shipped_files_run_in_godot(void **state)
     assert_non_null(strstr(out, "ok   loader parses"));
     assert_non_null(strstr(out, "ok   fill_herd from roster.json"));
     /* The addon (check_addon.gd): its loader, bone_matrix against the reference CSV, the herd. */
-    assert_int_equal(count(out, "\nok   addon: "), 32); /* with the held rows of a STEP-keyed clip */
+    assert_int_equal(count(out, "\nok   addon: "), 33); /* with the held rows of a STEP-keyed clip and a placed gallop's travel */
     /* 12 cases skinned on the CPU within the tolerance (held rows among them), and broken-row-off-by-one missing by far. */
     assert_int_equal(count(out, "\nok   addon: conformance "), 13);
     assert_int_equal(count(out, "\nok   expect-error: addon: "), 3);
