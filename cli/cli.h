@@ -116,11 +116,6 @@ void cli_baked_close(cli_baked *b);
  * neither is given; else malloc'ed, *count entries. Names that are not clips are errors. */
 cb_status cli_select_clips(const cb_model *model, const char *clips, const char *excluded, cb_clip_plan **plan,
                            uint32_t *count, cb_error *err);
-/* A single model's speed reference when --speed-reference is not given, as a catalog animal's
- * is decided with no states: the ground speed of its slowest clip that follows the speed
- * (locomotion, cb_decide_sync), 0 when none does; why in `why`. plan: the clips baked (NULL: all). */
-double cli_speed_reference(const cb_model *model, int32_t skin, const cb_clip_plan *plan, uint32_t count, char *why,
-                           size_t size);
 /* --loop A,B and --one-shot A,B: these clips loop, or play once, whatever their poses say (the
  * bake decides from them otherwise: a clip whose last pose equals its first loops). Sets the
  * plan's loop for each; a plan of every clip in file order is made when *plan is NULL. A name

@@ -199,33 +199,3 @@ void cli_json_warnings(cb_json *j, const cb_warnings *w)
     }
     cb_json_end(j);
 }
-
-double cli_speed_reference(const cb_model *model, int32_t skin, const cb_clip_plan *plan, uint32_t count, char *why,
-                           size_t size)
-{
-    cb_error err = {0};
-    cb_sampler *s = skin >= 0 ? cb_sampler_create(model, skin, &err) : NULL;
-    double best = 0;
-    snprintf(why, size, "none: no clip is locomotion (none follows the speed)");
-    uint32_t n = plan ? count : model->animation_count;
-    cb_ground_speed *speed = malloc(sizeof *speed);
-    cb_limits limits = cb_default_limits();
-    for (uint32_t i = 0; s && speed && i < n; ++i) {
-        int32_t a = plan ? plan[i].animation : (int32_t)i;
-        cb_clip_info info;
-        cb_sync_decision sync;
-        if (cb_clip_analyze(s, a, 30, plan ? plan[i].loop : -1, &limits, &info, &err)) {
-            err = (cb_error){0};
-            continue;
-        }
-        cb_measure_ground_speed(s, &info, speed);
-        cb_decide_sync(NULL, model->animations[a].name, info.loops, speed, false, &sync);
-        if (!sync.speed || speed->speed <= 0 || (best > 0 && speed->speed >= best)) continue;
-        best = speed->speed;
-        snprintf(why, size, "the slowest locomotion clip '%s' (%s); --speed-reference overrides", model->animations[a].name,
-                 speed->method);
-    }
-    free(speed);
-    cb_sampler_free(s);
-    return best;
-}

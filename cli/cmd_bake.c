@@ -104,7 +104,6 @@ typedef struct bake_args {
         *one_shots, *syncs, *default_state, *type, *fragment, *row_travel;
     bool zstd, json, quiet, force, depfile_manifest, fit, measure_all, over_budget;
     cli_output out;
-    char speed_why[192]; /* why the speed reference is what it is, when crowdbake measured it */
 } bake_args;
 
 static double now_seconds(void)
@@ -457,8 +456,8 @@ static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bak
     cb_warnings warnings = {0};
     cb_model_warnings(job->model, a->clips == NULL, &warnings);
     for (uint32_t i = 0; i < r->notes.count; ++i) cb_warn(&warnings, r->notes.items[i].kind, "%s", r->notes.items[i].message);
-    if (a->speed_why[0] && job->speed_reference > 0 && !a->json) /* --json: its own fields */
-        cb_warn(&warnings, "note", "speed reference %.4g units/s recorded: %s", job->speed_reference, a->speed_why);
+    if (job->speed_reference_from[0] && job->speed_reference > 0 && !a->json) /* --json: its own fields */
+        cb_warn(&warnings, "note", "speed reference %.4g units/s recorded: %s", job->speed_reference, job->speed_reference_from);
     report_over_budget(job, r, &warnings);
     double seconds = now_seconds() - t0;
     for (uint32_t i = 0; i < r->output_count; ++i)
@@ -471,7 +470,7 @@ static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bak
         cb_json_object(&j, NULL);
         cb_json_string(&j, "model", a->model);
         cb_json_number(&j, "speed_reference", job->speed_reference);
-        cb_json_string(&j, "speed_reference_from", a->speed_ref ? "the command line" : a->speed_why);
+        cb_json_string(&j, "speed_reference_from", a->speed_ref ? "the command line" : job->speed_reference_from);
         cb_json_array(&j, "outputs");
         for (uint32_t i = 0; i < r->output_count; ++i) json_output(&j, &r->outputs[i], seconds, load);
         cb_json_end(&j);
@@ -530,7 +529,7 @@ int cmd_bake(int argc, char **argv)
     cb_bake_settings settings;
     unsigned fields, threads;
     if ((rc = parse_settings(&a, &settings, &fields)) || (rc = single_model_checks(&a, &settings))) return rc;
-    double speed_ref = 0;
+    double speed_ref = CB_SPEED_REFERENCE_AUTO; /* the job decides it (locomotion.h) */
     if (a.speed_ref && (!cli_parse_double(a.speed_ref, &speed_ref) || speed_ref < 0))
         return cli_usage_error("bake", "--speed-reference wants a non-negative speed in the model's units per second");
     if (parse_threads(a.threads, &threads, "--threads")) return CLI_EXIT_USAGE;
@@ -553,8 +552,6 @@ int cmd_bake(int argc, char **argv)
     if (job.skin >= 0 && !cli_select_clips(m, a.clips, a.excluded, &selection, &job.clip_count, &err) &&
         !cli_override_loops(m, a.loops, a.one_shots, &selection, &job.clip_count, &err)) {
         job.clips = selection;
-        if (!a.speed_ref)
-            job.speed_reference = cli_speed_reference(m, job.skin, selection, job.clip_count, a.speed_why, sizeof a.speed_why);
         cb_bake_job_run(&job, &result, &err);
     }
     if (!err.status) report_bake(&a, &job, &result, t0, load);

@@ -230,14 +230,13 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
         char interp[64];
         interp_list(f->interp_mask, interp, sizeof interp);
         if (f->analyzed) {
-            char why[160];
+            char why[512];
             cb_loop_reason_text(&f->info, why, sizeof why);
             printf("  %-*s %8.4f %9.4f %6llu  %-18s %-8s %7u  (%.4g, %.4g, %.4g) ground %.4g\n", w, anim->name, anim->t0,
                    anim->t1 - anim->t0, (unsigned long long)f->keys, interp, f->info.loops ? "loop" : "one-shot",
                    f->info.frames, f->info.root_velocity[0], f->info.root_velocity[1], f->info.root_velocity[2],
                    f->info.ground_speed);
-            printf("  %-*s %s: %s; ground speed %.4g from %s (root %.4g, planted feet %.4g)\n", w, "",
-                   f->info.loops ? "loops" : "plays once", why, f->speed.speed, f->speed.method, f->speed.root, f->speed.feet);
+            printf("  %-*s %s; ground speed %.4g from %s (root %.4g, planted feet %.4g)\n", w, "", why, f->speed.speed, f->speed.method, f->speed.root, f->speed.feet);
             printf("  %-*s %s: %s\n", w, "", f->sync.speed ? "follows the speed" : "own rate", f->sync.reason);
             if (f->root_motion[0]) printf("  %-*s root motion %s\n", w, "", f->root_motion);
             if (f->speed.stride.stride) print_slide(w, &f->speed.stride), print_contacts(w, &f->speed.stride);
@@ -304,7 +303,7 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, con
             if (f->interp_mask & (1u << i)) cb_json_string(&j, NULL, interp_names[i]);
         cb_json_end(&j);
         if (f->analyzed) {
-            char why[160];
+            char why[512];
             cb_loop_reason_text(&f->info, why, sizeof why);
             cb_json_bool(&j, "loops", f->info.loops);
             cb_json_string(&j, "loop_reason", why);

@@ -2,6 +2,10 @@
 #include "internal/json.h"
 
 #include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 
 void cb_json_init(cb_json *j, FILE *out)
 {
@@ -90,6 +94,22 @@ void cb_json_number(cb_json *j, const char *key, double value)
         fputs("0", j->out); /* no "-0" */
     else
         fprintf(j->out, "%.9g", value);
+}
+
+void cb_json_float32(cb_json *j, const char *key, float value)
+{
+    prefix(j, key);
+    if (!isfinite(value) || value == 0) {
+        fputs(isfinite(value) ? "0" : "null", j->out);
+        return;
+    }
+    char text[32];
+    bool plain = fabsf(value) >= 1e-4f && fabsf(value) < 1e15f; /* written without an exponent: 120, not 1.2e+02 */
+    for (int digits = 1; digits <= 9; ++digits) { /* 9 significant digits round-trip any float32 */
+        snprintf(text, sizeof text, "%.*g", digits, (double)value);
+        if ((float)strtod(text, NULL) == value && (!plain || !strchr(text, 'e'))) break;
+    }
+    fputs(text, j->out);
 }
 
 void cb_json_int(cb_json *j, const char *key, long long value)

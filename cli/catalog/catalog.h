@@ -5,6 +5,7 @@
 #define CB_CATALOG_H
 
 #include "crowdbake/bake.h"
+#include "crowdbake/locomotion.h"
 #include "crowdbake/stride.h"
 
 #ifdef __cplusplus
@@ -54,7 +55,7 @@ typedef struct cb_catalog_animal {
     cb_catalog_state *states;
     uint32_t state_count;
     const char *default_state;
-    const char *default_state_from; /* why: "the catalog's default_state", "the first state written", ... */
+    const char *default_state_from; /* why: "the catalog's default_state", "decided by name ..." (cb_pick_default_state), the command line */
     double speed_reference; /* model units/s; with speed_auto, measured */
     bool speed_auto;
     const char *speed_state; /* speed_reference = "STATE": measure it on that state's clip (unless the default state's is locomotion) */
@@ -102,6 +103,13 @@ bool cb_catalog_formats_valid(unsigned formats);
  * what is up to date (the animals' canonical entries record it). */
 cb_status cb_catalog_override_states(cb_catalog *catalog, const char *syncs, const char *default_state, cb_error *err);
 
+/* The state a herd spawns in when the catalog names none (its index), decided by name and never
+ * by the order the states are written in: the state whose name, else whose keywords, say it
+ * rests (idle, stand, rest, breathe, graze, eat, sit, sleep, in that preference); else one whose
+ * words say it is not an action done once; among equals the first by name (alphabetically).
+ * Why, with "default_state or --default-state overrides", in `why`. */
+uint32_t cb_pick_default_state(const cb_catalog_animal *animal, char *why, size_t size);
+
 /* The one clip-name matcher, for the command line's --clip and a catalog's clips alike: the name
  * exactly, else regardless of case, else the part after an exporter's "Armature|" regardless of
  * case, else the one clip whose name holds it (`walk` for "AnimalArmature|Walk"). names[i] lies
@@ -115,18 +123,8 @@ int cb_match_clip_name(const char *typed, const char *const *names, size_t count
 int cb_match_state(const char *const *clip_names, uint32_t clip_count, const char *const *keywords,
                    uint32_t keyword_count);
 
-/* Ground speed of a clip in model units per second, from two pieces of evidence: the root's
- * horizontal travel and the clip's stride (stride.h: the speed at which its planted feet slide
- * least). The stride's speed where the feet stride (it holds the root's travel too, since the
- * feet are measured in the frame that travel is taken off); else the root's travel where it
- * moves more than 1% of the model's height per second; else 0. */
-typedef struct cb_ground_speed {
-    double speed;       /* the ground speed: what foot-sync uses */
-    double root, feet;  /* both measurements; feet 0 without a stride */
-    const char *method; /* "planted feet", "root motion" or "none" (static strings) */
-    cb_stride stride;   /* the feet: the stride, its ground speed and the feet's slide */
-} cb_ground_speed;
-void cb_measure_ground_speed(cb_sampler *sampler, const cb_clip_info *clip, cb_ground_speed *out);
+/* Ground speed (cb_ground_speed, cb_measure_ground_speed) and the clip-alone locomotion decision: the
+ * library's locomotion.h. */
 
 /* Whether a state's clip follows the instance's speed (foot-sync: its rate is speed times
  * rate_per_speed) or plays at its own rate, and why in one line. Decided from, in order: the

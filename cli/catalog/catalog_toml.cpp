@@ -420,8 +420,9 @@ struct Parser {
                 fail(d->source(), where + " default_state '" + an->default_state + "' is not one of its states (" +
                                       (list.empty() ? "none defined" : list) + ")");
         } else if (an->state_count) {
-            an->default_state = an->states[0].name;
-            an->default_state_from = "the first state written (no default_state given)";
+            char why[512];
+            an->default_state = an->states[cb_pick_default_state(an, why, sizeof why)].name;
+            an->default_state_from = dup(why);
         }
         an->speed_auto = true;
         if (auto *sp = t.get("speed_reference")) {

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "catalog/catalog.h"
+#include "internal/name_words.h"
 #include "internal/plumbing.h"
 
 void cb_catalog_free(cb_catalog *c)
@@ -98,102 +99,19 @@ cb_status cb_catalog_override_states(cb_catalog *cat, const char *syncs, const c
     return oom ? cb_fail(err, CB_ERR_INTERNAL, "out of memory") : CB_OK;
 }
 
-/* ---- ground speed ---- */
-
-static int classify_words(const char *text, char *out, size_t size);
-
-/* A clip whose name says an action done in place (Attack_Kick, Idle_Scratch) is no stride,
- * whatever its feet do: a kick's feet step back while it rears, and its contacts would be
- * footsteps of a walk that is not there. */
-static void no_stride_in_actions(const cb_model *m, const cb_clip_info *clip, cb_stride *st)
-{
-    char word[64];
-    const char *name = m->animations[clip->animation].name;
-    if (!st->stride || classify_words(name, word, sizeof word) >= 0) return;
-    st->stride = false, st->speed = 0, st->slide_mean = st->slide_worst = st->slide_mean_varying = 0;
-    for (uint32_t k = 0; k < st->foot_count; ++k) st->feet[k].strides = false, st->feet[k].stance_count = 0;
-    snprintf(st->why, sizeof st->why, "the clip's name says '%s': an action in place, its feet give no stride", word);
-}
-
-void cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, cb_ground_speed *out)
-{
-    memset(out, 0, sizeof *out);
-    out->method = "none";
-    if (clip->duration <= 0) return;
-    double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
-    cb_stride_measure(s, clip, &out->stride);
-    no_stride_in_actions(cb_sampler_model(s), clip, &out->stride);
-    out->root = clip->ground_speed;
-    out->feet = out->stride.stride ? out->stride.speed : 0;
-    if (out->feet > 0) {
-        out->speed = out->feet;
-        out->method = "planted feet";
-    } else if (out->root > 0.01 * (height > 0 ? height : 1)) { /* under that, root jitter */
-        out->speed = out->root;
-        out->method = "root motion";
-    }
-}
-
 /* ---- speed or time: what a state's words and feet say ---- */
-
-/* Words that name a gait, and words that name an action done in place. A name's words match a
- * stem as themselves or with an ending (walks, walking, trotted, running, swimmer). */
-static const char *const locomotion_words[] = {
-    "walk", "run", "trot", "canter", "gallop", "lope", "amble", "jog", "sprint", "dash", "flee", "wander", "roam",
-    "stroll", "march", "patrol", "migrate", "move", "locomotion", "crawl", "slither", "hop", "swim", "fly", "flight",
-    "glide", "soar", "strafe", "chase", "stride"};
-static const char *const in_place_words[] = {
-    "idle", "stand", "eat", "graze", "drink", "sniff", "attack", "bite", "headbutt", "kick", "punch", "hit", "react",
-    "hurt", "damage", "stun", "death", "die", "dead", "dying", "sit", "sleep", "lie", "rest", "look", "survey",
-    "roar", "howl", "bark", "call", "emote", "dance", "wave", "yes", "no", "spawn", "pose", "scratch", "shake",
-    "groom", "yawn", "breathe", "alert", "cower"};
-
-static bool word_matches(const char *word, size_t n, const char *stem)
-{
-    static const char *const endings[] = {"", "s", "es", "ed", "d", "er", "ing", "ion"};
-    size_t k = strlen(stem);
-    if (n < k || strncmp(word, stem, k) != 0) return false;
-    const char *rest = word + k;
-    size_t r = n - k;
-    if (r > 0 && rest[0] == stem[k - 1] && r > 1) ++rest, --r; /* a doubled consonant: running, trotted */
-    for (size_t e = 0; e < sizeof endings / sizeof *endings; ++e)
-        if (strlen(endings[e]) == r && strncmp(rest, endings[e], r) == 0) return true;
-    return false;
-}
-
-/* The first word of `text` (split at anything not a letter and where a lower-case letter meets
- * an upper-case one: "Idle_HitReact" is idle, hit, react) in either list: *kind 1 for a gait,
- * -1 for an action in place; the matching word, lower-cased, into out. 0 when none. */
-static int classify_words(const char *text, char *out, size_t size)
-{
-    char word[64];
-    for (const char *p = text; *p;) {
-        size_t n = 0;
-        while (*p && !isalpha((unsigned char)*p)) ++p;
-        while (isalpha((unsigned char)*p)) {
-            if (n < sizeof word - 1) word[n++] = (char)tolower((unsigned char)*p);
-            ++p;
-            if (islower((unsigned char)p[-1]) && isupper((unsigned char)*p)) break;
-        }
-        for (size_t i = 0; n && i < sizeof locomotion_words / sizeof *locomotion_words; ++i)
-            if (word_matches(word, n, locomotion_words[i])) return snprintf(out, size, "%.*s", (int)n, word), 1;
-        for (size_t i = 0; n && i < sizeof in_place_words / sizeof *in_place_words; ++i)
-            if (word_matches(word, n, in_place_words[i])) return snprintf(out, size, "%.*s", (int)n, word), -1;
-    }
-    return 0;
-}
 
 /* What the words say: the state's name first, then its keywords, then the clip's name. */
 static int words_say(const cb_catalog_state *st, const char *clip_name, char *out, size_t size)
 {
     char word[64];
     int kind = 0;
-    if (st && (kind = classify_words(st->name, word, sizeof word)))
+    if (st && (kind = cb_name_says_locomotion(st->name, word, sizeof word)))
         return snprintf(out, size, "the state's name '%s' says '%s'", st->name, word), kind;
     for (uint32_t k = 0; st && k < st->keyword_count; ++k)
-        if ((kind = classify_words(st->keywords[k], word, sizeof word)))
+        if ((kind = cb_name_says_locomotion(st->keywords[k], word, sizeof word)))
             return snprintf(out, size, "its keyword '%s' says '%s'", st->keywords[k], word), kind;
-    if ((kind = classify_words(clip_name, word, sizeof word)))
+    if ((kind = cb_name_says_locomotion(clip_name, word, sizeof word)))
         return snprintf(out, size, "the clip's name says '%s'", word), kind;
     return 0;
 }
@@ -202,8 +120,6 @@ void cb_decide_sync(const cb_catalog_state *st, const char *clip_name, bool loop
                     bool speed_given, cb_sync_decision *out)
 {
     char words[200] = "";
-    const cb_stride *feet = &gs->stride;
-    bool measured = gs->speed > 0;
     out->speed = false;
     if (st && st->sync != CB_SYNC_AUTO) {
         out->speed = st->sync == CB_SYNC_SPEED;
@@ -212,31 +128,55 @@ void cb_decide_sync(const cb_catalog_state *st, const char *clip_name, bool loop
         else snprintf(out->reason, sizeof out->reason, "the catalog says sync = \"%s\"", mode);
         return;
     }
-    if (!loops) {
-        snprintf(out->reason, sizeof out->reason, "a one-shot: it plays once at its own rate, also at standstill");
-        return;
+    int kind = loops ? words_say(st, clip_name, words, sizeof words) : 0;
+    out->speed = cb_decide_locomotion(kind, words, loops, gs, speed_given, out->reason, sizeof out->reason);
+}
+
+/* ---- the default state ---- */
+
+/* Words of a state a herd rests in, most restful first. */
+static const char *const resting_words[] = {"idle", "stand", "rest", "breathe", "graze", "eat", "sit", "sleep"};
+/* Words of an action done once: no herd spawns mid-attack. */
+static const char *const once_words[] = {"attack", "hit", "react", "death", "die", "dead", "dying", "punch", "kick",
+                                         "headbutt", "hurt", "damage", "stun", "fall", "jump", "spawn"};
+
+/* How restful a state is by its words: 0 for the first resting word, more for later ones;
+ * RANK_ONCE for an action done once, RANK_OTHER for words that say neither. The matching word
+ * and where it was found into `why`. */
+enum { RANK_OTHER = 100, RANK_ONCE = 200 };
+static int rest_rank(const cb_catalog_state *st, char *why, size_t size)
+{
+    char word[64];
+    size_t n = sizeof resting_words / sizeof *resting_words;
+    int i = cb_name_find_word(st->name, resting_words, n, word, sizeof word);
+    if (i >= 0) return snprintf(why, size, "its name says '%s'", word), i;
+    for (uint32_t k = 0; k < st->keyword_count; ++k)
+        if ((i = cb_name_find_word(st->keywords[k], resting_words, n, word, sizeof word)) >= 0)
+            return snprintf(why, size, "its keyword '%s' says '%s'", st->keywords[k], word), i;
+    if (cb_name_find_word(st->name, once_words, sizeof once_words / sizeof *once_words, word, sizeof word) >= 0)
+        return snprintf(why, size, "its name says '%s', an action done once", word), RANK_ONCE;
+    return snprintf(why, size, "no word of its name says it rests"), RANK_OTHER;
+}
+
+uint32_t cb_pick_default_state(const cb_catalog_animal *an, char *why, size_t size)
+{
+    uint32_t best = 0;
+    int best_rank = RANK_ONCE + 1;
+    char best_why[200] = "", w[200];
+    for (uint32_t s = 0; s < an->state_count; ++s) {
+        int rank = rest_rank(&an->states[s], w, sizeof w);
+        if (rank < best_rank || (rank == best_rank && strcmp(an->states[s].name, an->states[best].name) < 0))
+            best = s, best_rank = rank, memcpy(best_why, w, sizeof w);
     }
-    int kind = words_say(st, clip_name, words, sizeof words);
-    if (kind < 0) {
-        snprintf(out->reason, sizeof out->reason, "in place: %.200s%s; it plays at its own rate at standstill", words,
-                 feet->stride ? " (its feet stride, but the words decide: set sync = \"speed\" to follow speed)" : "");
-    } else if (kind > 0 && (measured || speed_given)) {
-        out->speed = true;
-        snprintf(out->reason, sizeof out->reason, "locomotion: %.200s, and %.250s", words,
-                 feet->stride ? feet->why : measured ? "its root travels" : "the animal gives speed_reference");
-    } else if (kind > 0) {
-        snprintf(out->reason, sizeof out->reason, "plays at its own rate: %.100s, but nothing measures its ground speed "
-                 "(%.200s; no root travel); give the animal a speed_reference to follow speed", words, feet->why);
-    } else if (feet->stride) {
-        out->speed = true;
-        snprintf(out->reason, sizeof out->reason, "locomotion: no word decides, and %.250s", feet->why);
-    } else if (measured) {
-        out->speed = true;
-        snprintf(out->reason, sizeof out->reason, "locomotion: no word decides, and its root travels %.3g units/s",
-                 gs->speed);
-    } else {
-        snprintf(out->reason, sizeof out->reason, "in place: no word decides, and %.250s", feet->why);
-    }
+    if (best_rank < RANK_OTHER)
+        snprintf(why, size, "decided by name (no default_state given): '%s' rests, %s; default_state or "
+                 "--default-state overrides", an->states[best].name, best_why);
+    else
+        snprintf(why, size, "decided by name (no default_state given): no state's words say it rests, so the first "
+                 "by name (alphabetically) %s: '%s'; default_state or --default-state overrides",
+                 best_rank == RANK_OTHER ? "of those that are no action done once" : "(every state is an action done once)",
+                 an->states[best].name);
+    return best;
 }
 
 /* ---- LODs ---- */

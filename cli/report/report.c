@@ -109,12 +109,15 @@ cb_status cb_report_build(const cb_catalog *cat, const cb_roster *roster, cb_rep
 
 void cb_report_add_runtime(const cb_roster *roster, cb_report *r, FILE *progress)
 {
+    /* Types whose models hold the same bytes measure the same meshes: once (without memory: each) */
+    report_mesh_memo memo = {0, calloc(r->type_count ? r->type_count : 1, sizeof *memo.items)};
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_roster_type *t = &roster->types[r->types[i].roster_index];
         cb_error inner = {0}; /* the bake succeeded: a model that cannot be measured again only loses that section */
-        cb_report_runtime_measure(t, &roster->types[t->owner], &r->types[i].runtime, &inner);
+        cb_report_runtime_measure(t, &roster->types[t->owner], memo.items ? &memo : NULL, &r->types[i].runtime, &inner);
         if (progress) fprintf(progress, "crowdbake: [%u/%u] %s: runtime meshes measured\n", i + 1, r->type_count, r->types[i].name);
     }
+    free(memo.items);
 }
 
 void cb_report_free(cb_report *r)

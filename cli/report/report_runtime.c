@@ -7,6 +7,7 @@
 
 #include "crowdbake/mesh.h"
 #include "crowdbake/gltf.h"
+#include "crowdbake_pal.h" /* XXH64 */
 #include "report/report.h"
 #include "report_parts.h"
 
@@ -51,20 +52,28 @@ static void transitions(const cb_roster_type *t, const cb_roster_type *owner, cb
     out->transition_bytes = rows * row_bytes;
 }
 
-cb_status cb_report_runtime_measure(const cb_roster_type *t, const cb_roster_type *owner, cb_report_runtime *out,
-                                    cb_error *err)
+/* What a type's runtime meshes depend on: its model's and LODs' bytes (source hashes), the LODs'
+ * influences and the texels a bone takes. Types of equal keys have equal meshes. */
+static uint64_t meshes_key(const cb_model *m, cb_model *const *lods, const cb_catalog_animal *an, uint32_t tpb)
 {
-    memset(out, 0, sizeof *out);
-    const cb_catalog_animal *an = t->animal;
-    cb_model *m = cb_gltf_load(an->model, NULL, err);
-    if (!m) return err->status;
-    out->meshes = calloc(3 + an->lod_count, sizeof *out->meshes);
-    cb_sampler *s = out->meshes ? cb_sampler_create(m, (int32_t)pick_skin(m), err) : NULL;
-    if (!out->meshes) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    uint32_t tpb = cb_layout_texels_per_bone(owner->layout);
-    for (uint32_t inf = 4; s && inf >= 1 && !err->status; inf /= 2)
+    cbpal_xxh64_state h;
+    cbpal_xxh64_init(&h);
+    uint64_t head[3] = {m->source_hash, tpb, an->lod_count};
+    cbpal_xxh64_update(&h, head, sizeof head);
+    for (uint32_t l = 0; l < an->lod_count; ++l) {
+        uint64_t lod[2] = {lods[l]->source_hash, an->lod_max_influences ? an->lod_max_influences[l] : 4};
+        cbpal_xxh64_update(&h, lod, sizeof lod);
+    }
+    return cbpal_xxh64_digest(&h);
+}
+
+/* The model's meshes at 4, 2 and 1 influences, the batch's bytes and each LOD's mesh. */
+static void measure_meshes(cb_sampler *s, const cb_model *m, cb_model *const *lods, const cb_catalog_animal *an,
+                           uint32_t tpb, cb_report_runtime *out, cb_error *err)
+{
+    for (uint32_t inf = 4; inf >= 1 && !err->status; inf /= 2)
         measure_mesh(s, m, NULL, 0, inf, tpb, &out->meshes[out->mesh_count++], err);
-    if (s && !err->status) { /* the batch, priced on the model's own mesh (4 influences, quantized) */
+    if (!err->status) { /* the batch, priced on the model's own mesh (4 influences, quantized) */
         cb_mesh one;
         cb_mesh_options o = {4, true, out->meshes[0].weight_bits == 16, 1, NULL, m->skins[cb_sampler_skin(s)].joint_count};
         if (!cb_mesh_build(m, cb_sampler_skin(s), &o, &one, err)) {
@@ -76,19 +85,61 @@ cb_status cb_report_runtime_measure(const cb_roster_type *t, const cb_roster_typ
             cb_mesh_free(&one);
         }
     }
-    for (uint32_t l = 0; s && l < an->lod_count && !err->status; ++l) {
-        cb_model *lod = cb_gltf_load(an->lods[l], NULL, err);
-        uint32_t *remap = lod ? calloc(lod->skins[pick_skin(lod)].joint_count, sizeof *remap) : NULL;
+    for (uint32_t l = 0; l < an->lod_count && !err->status; ++l) {
+        const cb_model *lod = lods[l];
+        uint32_t *remap = calloc(lod->skins[pick_skin(lod)].joint_count, sizeof *remap);
         uint32_t inf = an->lod_max_influences ? an->lod_max_influences[l] : 4;
         if (remap && !cb_lod_remap(m, cb_sampler_skin(s), lod, (int32_t)pick_skin(lod), remap, err))
             measure_mesh(s, lod, remap, l + 1, inf, tpb, &out->meshes[out->mesh_count++], err);
-        else if (lod && !remap)
+        else if (!remap)
             cb_fail(err, CB_ERR_INTERNAL, "out of memory");
         free(remap);
-        cb_model_free(lod);
+    }
+}
+
+/* A type measured before with the same key: its meshes copied (true), not measured again. */
+static bool measured_before(report_mesh_memo *memo, uint64_t key, cb_report_runtime *out)
+{
+    for (uint32_t i = 0; memo && i < memo->count; ++i) {
+        const cb_report_runtime *had = memo->items[i].runtime;
+        if (memo->items[i].key != key) continue;
+        memcpy(out->meshes, had->meshes, had->mesh_count * sizeof *out->meshes);
+        out->mesh_count = had->mesh_count, out->batch_bytes = had->batch_bytes;
+        out->instanced_bytes = had->instanced_bytes;
+        return true;
+    }
+    return false;
+}
+
+static cb_status load_lods(const cb_catalog_animal *an, cb_model **lods, cb_error *err)
+{
+    for (uint32_t l = 0; l < an->lod_count && !err->status; ++l) lods[l] = cb_gltf_load(an->lods[l], NULL, err);
+    return err->status;
+}
+
+cb_status cb_report_runtime_measure(const cb_roster_type *t, const cb_roster_type *owner, report_mesh_memo *memo,
+                                    cb_report_runtime *out, cb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    const cb_catalog_animal *an = t->animal;
+    cb_model *m = cb_gltf_load(an->model, NULL, err);
+    if (!m) return err->status;
+    out->meshes = calloc(3 + an->lod_count, sizeof *out->meshes);
+    cb_model **lods = calloc(an->lod_count + 1, sizeof *lods);
+    cb_sampler *s = out->meshes && lods ? cb_sampler_create(m, (int32_t)pick_skin(m), err) : NULL;
+    if (!out->meshes || !lods) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    uint32_t tpb = cb_layout_texels_per_bone(owner->layout);
+    if (s && !load_lods(an, lods, err)) {
+        uint64_t key = meshes_key(m, lods, an, tpb);
+        if (!measured_before(memo, key, out)) {
+            measure_meshes(s, m, lods, an, tpb, out, err);
+            if (memo && !err->status) memo->items[memo->count++] = (report_mesh_memo_item){key, out};
+        }
     }
     transitions(t, owner, out);
     if (s && !err->status && t == owner) report_measure_half_rate(s, owner, out);
+    for (uint32_t l = 0; lods && l < an->lod_count; ++l) cb_model_free(lods[l]);
+    free(lods);
     cb_sampler_free(s);
     cb_model_free(m);
     out->measured = !err->status;

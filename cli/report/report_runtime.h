@@ -48,10 +48,21 @@ typedef struct cb_report_runtime {
 } cb_report_runtime;
 
 struct cb_roster_type;
+/* The types measured so far, by what their meshes depend on (report_runtime.c's meshes_key):
+ * a type whose model and LODs hold the bytes of one measured before copies its meshes. */
+typedef struct report_mesh_memo_item {
+    uint64_t key;
+    const cb_report_runtime *runtime; /* the measured type's (it outlives the memo) */
+} report_mesh_memo_item;
+typedef struct report_mesh_memo {
+    uint32_t count;
+    report_mesh_memo_item *items; /* room for every type */
+} report_mesh_memo;
 /* Measures a type: reloads its model and LODs, builds their quantized runtime meshes and measures
- * them against the palette model's clips at 30 fps. */
+ * them against the palette model's clips at 30 fps (or copies them from `memo`, which may be
+ * NULL, and adds them to it). */
 cb_status cb_report_runtime_measure(const struct cb_roster_type *type, const struct cb_roster_type *owner,
-                                    cb_report_runtime *out, cb_error *err);
+                                    report_mesh_memo *memo, cb_report_runtime *out, cb_error *err);
 void cb_report_runtime_free(cb_report_runtime *rt);
 /* Bakes the owner's clips at half their rates, in its encoding, and records in `out` whether
  * every clip stays within its budget (report_half.c). */

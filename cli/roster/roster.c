@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "crowdbake/babylon.h"
+#include "internal/plumbing.h"
 #include "crowdbake/bake.h"
 #include "crowdbake/gltf.h"
 #include "crowdbake/pool.h"
@@ -32,6 +33,7 @@ typedef struct type_work {
     cb_bake_origin origin;
     unsigned char *record;    /* what preparing found, for the type's record (roster_cache.h) */
     size_t record_size;
+    uint64_t record_key;
 } type_work;
 
 typedef struct roster_run {
@@ -45,6 +47,7 @@ typedef struct roster_run {
     double start;
     uint32_t threads_per_bake;
     roster_models models;     /* each model loaded once */
+    roster_plans plans;       /* each plan worked out once (roster_plans.c) */
 } roster_run;
 
 static double now_seconds(void)
@@ -113,6 +116,9 @@ static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_
         c->fps = info.effective_fps;
         c->duration = info.duration;
         c->loops = info.loops, c->step = plan->step;
+        c->in_place = cb_root_motion_in_place(w->job.settings.root_motion, &info);
+        c->visible_error_mm = -1; /* the bake measures it */
+        cb_loop_reason_text(&info, c->loop_reason, sizeof c->loop_reason);
         cb_measure_ground_speed(s, &info, &c->speed);
         if (row_travel(&w->job, s, &info, &c->travel, err)) break;
         row += info.frames;
@@ -182,10 +188,8 @@ static void list_unloaded_lods(const cb_catalog_animal *an, const type_work *w, 
         if (add_inputs(t, an->lods[l], NULL, &t->error)) break;
 }
 
-/* The type's bake job (bake.h): its clips, settings and outputs; planning it chooses the rates
- * of clips with fps = "auto". */
-static cb_status plan_job(const roster_run *run, const cb_catalog_animal *an, type_work *w, const cb_roster_type *t,
-                          cb_error *err)
+/* The type's bake job (bake.h): its clips, settings and outputs, not yet planned. */
+static void set_up_job(const roster_run *run, const cb_catalog_animal *an, type_work *w, const cb_roster_type *t)
 {
     cb_bake_job *job = &w->job;
     cb_bake_job_init(job);
@@ -198,7 +202,43 @@ static cb_status plan_job(const roster_run *run, const cb_catalog_animal *an, ty
         if (an->bake.formats & cb_output_format_at(k)->format)
             w->outputs[job->output_count++] = (cb_output_path){cb_output_format_at(k)->format, t->paths[k]};
     job->threads = run->threads_per_bake; /* clips whose rates are searched at once */
-    return cb_bake_job_plan(job, err);
+}
+
+/* What sampling the planned clips found, as the type holds it. */
+static roster_plan_facts facts_of(const cb_roster_type *t)
+{
+    return (roster_plan_facts){t->clip_count, t->rows, t->clips, t->model_height, t->socket_count, t->sockets,
+                               t->vat_measured, t->vat_error};
+}
+
+static void take_facts(cb_roster_type *t, const roster_plan_facts *f)
+{
+    free(t->clips), free(t->sockets);
+    t->clips = f->clips, t->rows = f->rows, t->model_height = f->model_height;
+    t->socket_count = f->socket_count, t->sockets = f->sockets;
+    t->vat_measured = f->vat_measured, t->vat_error = f->vat_error;
+}
+
+/* The job planned (its clips with fps = "auto" get their rates) and its clips sampled for the
+ * manifest (and the report's VAT error), once per plan key (roster_plans.c): a type whose key
+ * another type planned copies what that one found, so types that share a palette cost one
+ * planning between them. */
+static cb_status plan_and_sample(roster_run *run, const cb_catalog_animal *an, type_work *w, cb_roster_type *t,
+                                 cb_error *err)
+{
+    set_up_job(run, an, w, t);
+    uint64_t key = roster_plan_key(w->model, w->skin, w->plan, w->clip_requests, t->clip_count, &an->bake);
+    roster_plan *memo = roster_plan_claim(&run->plans, key);
+    roster_plan_facts facts;
+    if (roster_plan_copy(memo, &w->job, &facts)) {
+        take_facts(t, &facts);
+    } else if (!cb_bake_job_plan(&w->job, err) && !analyze_clips(run->opt->limits, w, t, err)) {
+        if (run->opt->measure_vat) measure_vat(an, run->opt->limits, w, t), t->vat_measured = true;
+        facts = facts_of(t);
+        roster_plan_keep(memo, &w->job, &facts);
+    }
+    roster_plan_release(memo);
+    return err->status;
 }
 
 /* Preparing from the model: load, plan, sample what the manifest states, hash. */
@@ -231,8 +271,8 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     t->mesh_bytes = cb_model_skin_mesh_bytes(w->model, w->skin);
     for (uint32_t p = 0; p < w->model->primitive_count; ++p)
         if (w->model->primitives[p].skin == w->skin) t->indices += w->model->primitives[p].index_count;
-    if (roster_plan_clips(run->cat, an, w->model, &w->plan, &w->clip_requests, t, err) || plan_job(run, an, w, t, err) ||
-        analyze_clips(run->opt->limits, w, t, err) || roster_match_states(run->cat, an, t, err) ||
+    if (roster_plan_clips(run->cat, an, w->model, &w->plan, &w->clip_requests, t, err) || plan_and_sample(run, an, w, t, err) ||
+        roster_match_states(run->cat, an, t, err) ||
         roster_decide_states(run->cat, an, t, err) || check_lods(run, an, w, t, err)) {
         list_unloaded_lods(an, w, t);
         return;
@@ -242,13 +282,12 @@ static void prepare_from_model(roster_run *run, uint32_t i)
     w->origin = (cb_bake_origin){t->key, an->canonical, (const cb_model *const *)w->lod_models, an->lod_count};
     w->job.origin = &w->origin;
     t->input_hash = cb_bake_input_hash(&w->job, NULL);
-    if (run->opt->measure_vat) measure_vat(an, run->opt->limits, w, t), t->vat_measured = true;
     /* The rate search's poses would save the bake one sampling pass, but held by every type
      * waiting to bake they made a roster's memory grow with its types: only the plan is kept. */
     cb_bake_job_release_search(&w->job);
     uint64_t key;
     if (cb_prep_key(an, run->opt->limits, t->inputs, t->input_count, &key))
-        cb_prep_record_encode(t, key, &w->record, &w->record_size);
+        cb_prep_record_encode(t, key, &w->record, &w->record_size), w->record_key = key;
 }
 
 /* A type's record, when it matches its files, stands in for loading and sampling: an
@@ -316,6 +355,7 @@ static cb_status bake_files(roster_run *run, const cb_catalog_animal *an, type_w
         t->error_rows_measured = p->error_rows_measured;
         t->palette_bytes = p->texel_bytes;
     }
+    for (uint32_t i = 0; i < r.budget_count && i < t->clip_count; ++i) t->clips[i].visible_error_mm = r.budgets[i].error_mm;
     for (uint32_t i = 0; i < r.notes.count; ++i) cb_warn(&t->warnings, r.notes.items[i].kind, "%s", r.notes.items[i].message);
     cb_bake_budget_notes(&w->job, &r, NULL, &t->warnings); /* in the catalog's words */
     cb_bake_result_free(&r);
@@ -392,7 +432,12 @@ static void log_type(roster_run *run, const cb_roster_type *t)
 static void write_record(roster_run *run, uint32_t i)
 {
     type_work *w = &run->work[i];
+    const cb_roster_type *t = &run->r->types[i];
     char path[4096];
+    if (w->record && t->outcome == CB_TYPE_BAKED) { /* again, with what the bake measured (each clip's error) */
+        free(w->record), w->record = NULL;
+        cb_prep_record_encode(t, w->record_key, &w->record, &w->record_size);
+    }
     if (w->record && cb_prep_record_path(run->r->types[i].animal, path, sizeof path))
         roster_write_record(path, w->record, w->record_size);
 }
@@ -473,8 +518,10 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     uint32_t *order = calloc(cat->animal_count ? cat->animal_count : 1, sizeof *order);
     roster_log_init(&run.log, opt->log, r->type_count); /* without memory, lines print as they come */
     if (!r->types || !run.work || !order || !roster_models_init(&run.models, cat, opt->limits) ||
+        !roster_plans_init(&run.plans, cat->animal_count) ||
         mtx_init(&run.log_lock, mtx_plain) != thrd_success) {
         free(run.work), free(order), roster_log_free(&run.log), roster_models_free(&run.models);
+        roster_plans_free(&run.plans);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
     /* Types are the unit of parallel work; fewer types than threads spread their clips too. */
@@ -502,6 +549,7 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
         if (r->types[i].outcome == CB_TYPE_FAILED && !err->status) *err = r->types[i].error, rc = err->status;
     for (uint32_t i = 0; i < r->type_count; ++i) free_work(&run.work[i]);
     roster_models_free(&run.models);
+    roster_plans_free(&run.plans);
     free(run.work), free(order), roster_log_free(&run.log);
     mtx_destroy(&run.log_lock);
     return rc;

@@ -46,6 +46,11 @@ typedef struct cb_roster_clip {
     double fps, duration;
     bool loops;
     bool step;             /* its rows held, not blended (cb_clip_plan.step): the instance's first row is -first - 1 */
+    char loop_reason[384]; /* why it loops or plays once (cb_loop_reason_text) */
+    double visible_error_mm; /* the worst error a player sees in it, mm per metre of model height (the bake's
+                              * cb_clip_budget.error_mm, kept in the type's record); -1 where no bake measured it
+                              * (a record lost beside an up-to-date palette: the files record only the type's) */
+    bool in_place;         /* its root travel taken out (the job's root motion, cb_root_motion_in_place) */
     cb_ground_speed speed; /* speed.speed is the clip's ground speed */
     cb_row_travel travel;  /* its per-row travel offset, as the bake decides it (cb_bake_job_row_travel) */
 } cb_roster_clip;

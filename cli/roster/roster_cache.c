@@ -9,8 +9,9 @@
 
 #include "crowdbake_pal.h"
 
-static const char magic[8] = "CBPREP6"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by
-                                        * their soles; 5: the VAT error; 6: each clip's row travel */
+static const char magic[8] = "CBPREP7"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by
+                                        * their soles; 5: the VAT error; 6: each clip's root motion (flag bit 2), loop reason and error;
+                                        * 7: each clip's row travel */
 
 bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {
@@ -115,8 +116,10 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
     for (uint32_t i = 0; i < t->clip_count; ++i) {
         const cb_roster_clip *c = &t->clips[i];
         put_str(&w, c->name);
-        put_u32(&w, c->first_row), put_u32(&w, c->frames), put_u32(&w, (c->loops ? 1u : 0u) | (c->step ? 2u : 0u));
+        put_u32(&w, c->first_row), put_u32(&w, c->frames), put_u32(&w, (c->loops ? 1u : 0u) | (c->step ? 2u : 0u) | (c->in_place ? 4u : 0u));
         put_f64(&w, c->fps), put_f64(&w, c->duration);
+        put_str(&w, c->loop_reason);
+        put_f64(&w, c->visible_error_mm);
         put_f64(&w, c->speed.speed), put_f64(&w, c->speed.root), put_f64(&w, c->speed.feet);
         put_str(&w, c->speed.method);
         put(&w, &c->speed.stride, sizeof c->speed.stride); /* plain numbers and zero-filled strings */
@@ -231,9 +234,11 @@ static void read_clips(reader *r, cb_roster_type *t)
         char method[64];
         get_str(r, c->name, sizeof c->name);
         c->first_row = get_u32(r), c->frames = get_u32(r);
-        uint32_t flags = get_u32(r); /* bit 0 loops, bit 1 held rows */
-        c->loops = (flags & 1u) != 0, c->step = (flags & 2u) != 0;
+        uint32_t flags = get_u32(r); /* bit 0 loops, bit 1 held rows, bit 2 in place */
+        c->loops = (flags & 1u) != 0, c->step = (flags & 2u) != 0, c->in_place = (flags & 4u) != 0;
         c->fps = get_f64(r), c->duration = get_f64(r);
+        get_str(r, c->loop_reason, sizeof c->loop_reason);
+        c->visible_error_mm = get_f64(r);
         c->speed.speed = get_f64(r), c->speed.root = get_f64(r), c->speed.feet = get_f64(r);
         if (get_str(r, method, sizeof method) && !(c->speed.method = known_method(method))) r->failed = true;
         get(r, &c->speed.stride, sizeof c->speed.stride);

@@ -196,6 +196,33 @@ static void relative_path(const char *dir, const char *path, char *out, size_t s
     strncat(out, b + common + 1, size - strlen(out) - 1);
 }
 
+/* What the bake did with a clip's root travel, and why: the catalog's or the command line's
+ * root_motion; else, where a loop of the type travels, the loops in place (their velocity
+ * recorded for the game to move the instance) and the one-shots keeping theirs; else nothing
+ * taken out (cb_bake_job_plan decides it so). */
+static void root_motion_reason(const cb_roster_type *t, const cb_roster_clip *c, char *why, size_t size)
+{
+    const cb_bake_settings *b = &t->animal->bake;
+    double travel = c->speed.root * c->duration;
+    cb_clip_info info = {.duration = c->duration, .loops = c->loops, .ground_speed = c->speed.root};
+    bool travels = cb_clip_travels(&info, t->model_height), decided = false;
+    for (uint32_t i = 0; i < t->clip_count; ++i) decided |= t->clips[i].in_place;
+    if (b->from.root_motion != CB_FROM_DEFAULT)
+        snprintf(why, size, "root_motion = \"%s\" (%s)", cb_root_motion_name(b->root_motion), cb_setting_from_name(b->from.root_motion));
+    else if (decided && c->in_place && !travels)
+        snprintf(why, size, "in place with the type's loops that travel (its own root moves %.3g units a loop, under 1%% of "
+                 "the model's height) (root_motion = \"keep\" overrides)", travel);
+    else if (decided && c->in_place)
+        snprintf(why, size, "a loop travelling %.3g units a loop, which its wrap would pull back: in place, its velocity "
+                 "%.3g units/s recorded for the game to move the instance (root_motion = \"keep\" overrides)", travel, c->speed.root);
+    else if (decided)
+        snprintf(why, size, "a one-shot keeps its travel (%.3g units), ending where it moved (root_motion = \"in-place\" "
+                 "overrides)", travel);
+    else
+        snprintf(why, size, "no loop of the type travels%s, so nothing is taken out (root_motion overrides)",
+                 travels ? "" : " and neither does this clip");
+}
+
 static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, const char *manifest_dir)
 {
     const cb_roster_type *owner = &r->types[t->owner];
@@ -235,9 +262,15 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
         cb_json_string(j, "name", cl->name);
         cb_json_int(j, "first_row", cl->first_row);
         cb_json_int(j, "frame_count", cl->frames);
-        cb_json_number(j, "fps", cl->fps);
+        cb_json_float32(j, "fps", (float)cl->fps); /* as the files record it, without float32 noise */
         cb_json_number(j, "duration", cl->duration);
         cb_json_bool(j, "loops", cl->loops);
+        cb_json_string(j, "loop_reason", cl->loop_reason);
+        char why[512];
+        root_motion_reason(t, cl, why, sizeof why);
+        cb_json_string(j, "root_motion", cl->in_place ? "in-place" : "keep");
+        cb_json_string(j, "root_motion_reason", why);
+        if (cl->visible_error_mm >= 0) cb_json_number(j, "visible_error_mm_per_m", cl->visible_error_mm);
         if (cl->step) cb_json_bool(j, "step_rows", true); /* held, not blended: .pal clip flag bit 2 */
         cb_json_number(j, "ground_speed", cl->speed.speed);
         cb_json_number(j, "root_speed", cl->speed.root);

@@ -5,6 +5,7 @@
 
 #include <stdio.h>
 
+#include "crowdbake/bake.h"
 #include "roster/roster.h"
 
 /* "CATALOG:LINE:COLUMN" of a place in the catalog, into buf. */
@@ -43,6 +44,41 @@ bool roster_models_init(roster_models *ms, const cb_catalog *cat, const cb_limit
  * load's error, the same for every type) when it cannot be loaded. Thread-safe. */
 const cb_model *roster_model_get(roster_models *ms, const char *path, cb_error *err);
 void roster_models_free(roster_models *ms);
+
+/* A type's plan worked out once per plan key (roster_plans.c): types whose model bytes, skin,
+ * clips and settings are equal plan the same rates and sample the same facts, so the first type
+ * to need them works them out and the others copy them. */
+typedef struct roster_plan_facts { /* what sampling the planned clips found, for the manifest */
+    uint32_t clip_count, rows;
+    cb_roster_clip *clips;
+    double model_height;
+    uint32_t socket_count;
+    cb_socket *sockets;
+    bool vat_measured;
+    double vat_error;
+} roster_plan_facts;
+typedef struct roster_plan roster_plan;
+typedef struct roster_plans {
+    roster_plan *items;
+    uint32_t count, capacity;
+    mtx_t lock;
+} roster_plans;
+bool roster_plans_init(roster_plans *ps, uint32_t capacity); /* false: no memory */
+void roster_plans_free(roster_plans *ps);
+/* Everything planning reads: the model's source hash (its bytes), the skin, the clips asked for
+ * with their catalog requests, and the settings (not out_dir). */
+uint64_t roster_plan_key(const cb_model *m, int32_t skin, const cb_clip_plan *plan, const cb_clip_request *requests,
+                         uint32_t n, const cb_bake_settings *b);
+/* The plan of `key`, locked (the caller holds it while it plans, so a type of the same key
+ * waits, then copies); NULL when none can be made (the caller plans alone). */
+roster_plan *roster_plan_claim(roster_plans *ps, uint64_t key);
+void roster_plan_release(roster_plan *p); /* NULL: nothing */
+bool roster_plan_known(const roster_plan *p);
+/* Keeps a planned job's plan and its facts (copies) unless the plan is known already. */
+void roster_plan_keep(roster_plan *p, const cb_bake_job *job, const roster_plan_facts *facts);
+/* Sets the job's plan as planned and *facts (arrays of its own) from a known plan; false (the
+ * job untouched) when it is not known or memory ran out. */
+bool roster_plan_copy(const roster_plan *p, cb_bake_job *job, roster_plan_facts *facts);
 
 /* Owners of shared palettes (roster_share.c): among types with equal content keys, the first
  * by name owns the palette, the others' owner is set to it and their outcome to shared. */

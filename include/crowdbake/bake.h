@@ -121,6 +121,9 @@ typedef struct cb_output_path {
     const char *path;
 } cb_output_path;
 
+/* cb_bake_job.speed_reference: decide it from the model's clips (cb_speed_reference). */
+#define CB_SPEED_REFERENCE_AUTO (-1.0)
+
 typedef struct cb_bake_job {
     /* sizeof(cb_bake_job) in the header the caller was compiled with (cb_bake_job_init sets it):
      * the job grows at its end under one soname, and the library reads no further than this. */
@@ -133,7 +136,8 @@ typedef struct cb_bake_job {
     cb_bake_settings settings;
     cb_limits limits;
     uint32_t threads;               /* clips sampled in parallel (0: 1); the bytes do not depend on it */
-    double speed_reference;         /* recorded in the files */
+    double speed_reference;         /* recorded in the files; CB_SPEED_REFERENCE_AUTO (cb_bake_job_init's): decided
+                                     * by cb_bake_job_run (cb_speed_reference), why in speed_reference_from */
     const cb_output_path *outputs;  /* the files to write, each format once, in any order: they are written in
                                      * the order of the table of formats (outputs.h) */
     uint32_t output_count;
@@ -150,6 +154,7 @@ typedef struct cb_bake_job {
     bool planned;
     void *search_poses; /* internal: per clip, the poses its rate search sampled, which the bake samples no
                          * more (cb_bake_job_free frees them) */
+    char speed_reference_from[256]; /* why the speed reference it decided ("" when the caller gave one) */
 } cb_bake_job;
 
 /* One file written. */

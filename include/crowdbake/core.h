@@ -331,6 +331,18 @@ typedef struct cb_clip_info {
     cb_loop_reason loop_reason;
     double key_interval;     /* the clip's key step (the shortest interval between keys), 0 if none */
     double wrap_jump, largest_step; /* pose distances (cb_pose_distance) of the wrap and of the biggest key step */
+    /* The loop decision's evidence, each + for a loop and - for a one-shot; the clip loops when
+     * their sum is above 0 (cb_loop_reason_text says it in words). loop_set: the caller decided
+     * (loop_override), and none of them was weighed. */
+    bool loop_set;
+    double loop_name;        /* its name's words: +2 a cycle (walk, gallop, idle, eat), -3 an action done once
+                              * (attack, hit, death, punch), -1 a jump; a once word outweighs a cycle word */
+    char loop_word[48];      /* the words that decided loop_name, "" when none */
+    double loop_pose;        /* its poses: +2 last = first; log2(neighbour step / wrap) clamped to +-2 */
+    double loop_feet;        /* its feet: +1 when they stride played as a loop, else 0; measured only where it can
+                              * turn the sum (loop_feet_weighed) */
+    bool loop_feet_weighed;
+    uint32_t loop_striding_feet;
     uint32_t steps;          /* N = max(1, round(duration * fps)) */
     uint32_t frames;         /* rows baked: N for loops, N + 1 for one-shots */
     double effective_fps;    /* N / duration; the requested fps for a zero-length clip */

@@ -39,6 +39,7 @@
 #include "vat.h"
 #include "stride.h"
 #include "row_travel.h"
+#include "locomotion.h"
 #include "socket.h"
 #include "mesh.h"
 #include "gltf_mesh_write.h"

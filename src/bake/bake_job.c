@@ -1,5 +1,6 @@
 /* bake_job.c - see bake.h: the one place where a bake's policy is decided. */
 #include "crowdbake/bake.h"
+#include "crowdbake/locomotion.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -216,6 +217,16 @@ void cb_bake_job_init(cb_bake_job *job)
     job->size = sizeof *job;
     job->settings = cb_default_bake_settings();
     job->limits = cb_default_limits();
+    job->speed_reference = CB_SPEED_REFERENCE_AUTO;
+}
+
+/* The speed reference nobody gave: the slowest locomotion clip's ground speed (locomotion.h),
+ * decided here so that every program baking the model records the same one. */
+static void decide_speed_reference(cb_bake_job *job)
+{
+    if (job->speed_reference >= 0) return;
+    job->speed_reference = cb_speed_reference(job->model, job->skin, job->plan, job->plan_count,
+                                              job->speed_reference_from, sizeof job->speed_reference_from);
 }
 
 /* Root motion decided like the rest: a bake nobody told what to do with root travel keeps it,
@@ -448,6 +459,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
 {
     memset(out, 0, sizeof *out);
     if (check_outputs(job, err) || cb_bake_job_plan(job, err)) return err->status;
+    decide_speed_reference(job);
     cb_clip_plan *baked = malloc((job->plan_count ? job->plan_count : 1) * sizeof *baked);
     if (!baked) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     cb_sampler *s = cb_sampler_create(job->model, job->skin, err);

@@ -3,6 +3,7 @@
 #include "crowdbake/core.h"
 #include "sampler.h"
 #include "internal/plumbing.h"
+#include "loop_decide.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -113,22 +114,6 @@ static cb_status judge_loop(cb_sampler *s, cb_clip_info *out, cb_error *err)
     return CB_OK;
 }
 
-void cb_loop_reason_text(const cb_clip_info *c, char *out, size_t size)
-{
-    switch (c->loop_reason) {
-    case CB_LOOP_SET: snprintf(out, size, "set by the catalog"); break;
-    case CB_LOOP_CLOSED: snprintf(out, size, "last pose = first pose"); break;
-    case CB_LOOP_OPEN:
-        snprintf(out, size, "no closing key: wrap %.3g <= its neighbour steps %.3g, period + %.4gs", c->wrap_jump, c->largest_step,
-                 c->key_interval);
-        break;
-    case CB_LOOP_ENDS_ELSEWHERE:
-        if (c->largest_step > 0) snprintf(out, size, "ends elsewhere: wrap %.3g > its neighbour steps %.3g", c->wrap_jump, c->largest_step);
-        else snprintf(out, size, "ends elsewhere: wrap %.3g", c->wrap_jump);
-        break;
-    }
-}
-
 cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop_override, const cb_limits *limits,
                           cb_clip_info *out, cb_error *err)
 {
@@ -161,10 +146,12 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
     out->loop_reason = CB_LOOP_CLOSED; /* a clip of one instant */
     if (span > 0 && judge_loop(s, out, err)) return err->status;
     if (loop_override >= 0) {
-        out->loops = loop_override != 0;
+        out->loops = loop_override != 0, out->loop_set = true;
         if (out->loops != (out->loop_reason == CB_LOOP_CLOSED || out->loop_reason == CB_LOOP_OPEN)) out->loop_reason = CB_LOOP_SET;
+    } else if (span > 0) {
+        cb_loop_decide(s, fps, limits, out);
     } else {
-        out->loops = out->loop_reason == CB_LOOP_CLOSED || out->loop_reason == CB_LOOP_OPEN || span <= 0;
+        out->loops = true;
     }
     /* A loop whose last pose is not its first wraps over one more key interval. */
     bool open = out->loops && out->loop_reason != CB_LOOP_CLOSED && span > 0;

@@ -29,6 +29,9 @@ void cb_json_inline_array(cb_json *j, const char *key);
 void cb_json_end(cb_json *j); /* closes the innermost object or array; a newline after the last */
 void cb_json_string(cb_json *j, const char *key, const char *value);
 void cb_json_number(cb_json *j, const char *key, double value); /* NaN and infinities become null */
+/* The shortest decimal that reads back as the same float32 (24, not 24.0000006): for a value
+ * the files record as float32. */
+void cb_json_float32(cb_json *j, const char *key, float value);
 void cb_json_int(cb_json *j, const char *key, long long value);
 void cb_json_bool(cb_json *j, const char *key, bool value);
 void cb_json_null(cb_json *j, const char *key);

@@ -1,7 +1,8 @@
 /* test_catalog.c - the animal catalog: validation messages with line numbers, state keywords,
  * speed references, characters outside ASCII, the manifest against its schema, shared rigs,
  * LOD remapping, incremental and parallel bakes, the depfile, a failing type that does not
- * stop the others, a missing model's exit code, and the log's order and sizes. */
+ * stop the others, a missing model's exit code, the log's order and sizes, and types of one plan
+ * key planned once yet baking what each bakes alone. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
@@ -504,6 +505,41 @@ static void test_the_log_is_in_catalog_order_with_the_sizes_of_bake_model(void *
     if (!strstr(out, expect)) fail_msg("expected '%s' in:\n%s", expect, out);
 }
 
+/* Types whose plan keys are equal (the same model bytes, here under two file names, the same
+ * clips and settings) are planned once and the others copy the plan (roster_plans.c): what the
+ * one-step bake writes must be what each type baked in a process of its own (`--type`, which
+ * plans alone) merges to, byte for byte; a type with another fps plans its own. */
+static void test_types_of_one_plan_bake_what_each_bakes_alone(void **state)
+{
+    (void)state;
+    char out[8192], args[4096], text[2048];
+    assert_int_equal(system("mkdir -p " TMP "/plans"), 0);
+    snprintf(args, sizeof args, "cp %s/quadruped.glb " TMP "/plans/a.glb && cp %s/quadruped.glb " TMP "/plans/b.glb",
+             samples_abs, samples_abs);
+    assert_int_equal(system(args), 0);
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"out\"\n\n[animal.a1]\nmodel = \"a.glb\"\n\n[animal.a2]\nmodel = "
+             "\"b.glb\"\n\n[animal.a3]\nmodel = \"a.glb\"\nfps = 24\n\n[animal.a4]\nmodel = \"b.glb\"\n");
+    write_text(TMP "/plans/catalog.toml", text);
+    snprintf(args, sizeof args, "bake " TMP "/plans/catalog.toml -q -j 2");
+    assert_int_equal(run_cli(args, out, sizeof out), 0);
+    const char *types[] = {"a1", "a2", "a3", "a4"};
+    for (int i = 0; i < 4; ++i) {
+        snprintf(args, sizeof args, "bake " TMP "/plans/catalog.toml --type %s --out-dir " TMP "/plans/alone -q -j 1",
+                 types[i]);
+        assert_int_equal(run_cli(args, out, sizeof out), 0);
+    }
+    snprintf(args, sizeof args, "roster merge -q -o " TMP "/plans/alone/roster.json " TMP "/plans/alone/a1.fragment " TMP
+             "/plans/alone/a2.fragment " TMP "/plans/alone/a3.fragment " TMP "/plans/alone/a4.fragment");
+    assert_int_equal(run_cli(args, out, sizeof out), 0);
+    assert_int_equal(system("cmp " TMP "/plans/out/roster.json " TMP "/plans/alone/roster.json"), 0);
+    assert_int_equal(system("cmp " TMP "/plans/out/a1.pal " TMP "/plans/alone/a1.pal"), 0);
+    assert_int_equal(system("cmp " TMP "/plans/out/a3.pal " TMP "/plans/alone/a3.pal"), 0);
+    assert_int_not_equal(system("cmp -s " TMP "/plans/out/a1.pal " TMP "/plans/out/a3.pal"), 0);
+    /* a2 and a4 share a1's palette; a3 (24 fps) has its own. */
+    assert_int_equal(run_command("grep -c '\"shares_palette_of\": \"a1\"' " TMP "/plans/out/roster.json", out, sizeof out), 0);
+    assert_int_equal(atoi(out), 2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -521,6 +557,7 @@ int main(void)
         cmocka_unit_test(test_a_failing_type_does_not_stop_the_others),
         cmocka_unit_test(test_a_missing_model_exits_as_on_the_command_line),
         cmocka_unit_test(test_the_log_is_in_catalog_order_with_the_sizes_of_bake_model),
+        cmocka_unit_test(test_types_of_one_plan_bake_what_each_bakes_alone),
     };
     return cmocka_run_group_tests_name("catalog", tests, setup, NULL);
 }

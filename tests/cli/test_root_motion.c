@@ -6,7 +6,9 @@
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
+#include <limits.h>
 #include <math.h>
+#include <stdlib.h>
 
 #include "crowdbake_pal.h"
 
@@ -72,11 +74,70 @@ static void test_one_shots_keep_their_travel(void **state)
     assert_non_null(strstr(log, "root motion kept: a one-shot keeps its travel"));
 }
 
+/* The roster manifest says per clip what the bake did with its root travel and why, and each
+ * clip's visible error; its rates print as the files record them (the shortest decimal that
+ * reads back as the .pal's float32, not "24.0000006"). A second run, up to date, writes the
+ * same manifest: what it says comes from the type's record, not from a bake. */
+static void test_manifest_says_root_motion_per_clip(void **state)
+{
+    (void)state;
+    char cow[1024], cow_abs[4096], text[8192], cmd[8192];
+    static char log[16384];
+    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
+    assert_non_null(realpath(cow, cow_abs));
+    snprintf(text, sizeof text,
+             "[bake]\nout_dir = \"out\"\n[animal.cow]\nmodel = \"%s\"\nclips = [\"AnimalArmature|Death\", "
+             "{ source = \"AnimalArmature|Jump_toIdle\", loop = true }, \"AnimalArmature|Walk\"]\n", cow_abs);
+    assert_int_equal(system("mkdir -p " TMP), 0);
+    write_text(TMP "/cows.toml", text);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/cows.toml 2>&1 && cp " TMP "/out/roster.json " TMP "/first.json && %s bake "
+             TMP "/cows.toml 2>&1 && cmp " TMP "/first.json " TMP "/out/roster.json", crowdbake_exe(), crowdbake_exe());
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s", log);
+    snprintf(cmd, sizeof cmd,
+             "python3 -c \"import json; t = json.load(open('%s/out/roster.json'))['types']['cow']; "
+             "[print(c['name'], c['root_motion'], c['visible_error_mm_per_m'] > 0, '|', c['root_motion_reason'], '|', "
+             "c['loop_reason'][:10]) for c in t['clips']]\"", TMP);
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s", log);
+    printf("%s", log);
+    assert_non_null(strstr(log, "AnimalArmature|Death keep True | a one-shot keeps its travel"));
+    assert_non_null(strstr(log, "AnimalArmature|Jump_toIdle in-place True | a loop travelling"));
+    assert_non_null(strstr(log, "its velocity"));
+    assert_non_null(strstr(log, "AnimalArmature|Walk in-place True | in place with the type's loops that travel"));
+    assert_non_null(strstr(log, "| loops, set"));      /* Jump_toIdle: the catalog's loop */
+    assert_non_null(strstr(log, "| plays once"));       /* Death: decided */
+    /* Each rate: the shortest decimal that reads back as the .pal's float32. */
+    char *json = read_whole_file(TMP "/out/roster.json", NULL);
+    cbpal_file pal;
+    open_pal(TMP "/out/cow.pal", &pal);
+    const char *p = json;
+    for (uint32_t c = 0; c < pal.header.clip_count; ++c) {
+        cbpal_clip clip;
+        cbpal_get_clip(&pal, c, &clip);
+        p = strstr(p, "\"fps\": ");
+        assert_non_null(p);
+        p += 7;
+        char number[32];
+        size_t n = strcspn(p, ",\n}");
+        assert_true(n < sizeof number);
+        memcpy(number, p, n), number[n] = '\0';
+        printf("  %s: fps %s (the file's %.9g)\n", clip.name, number, clip.fps);
+        assert_true(strtof(number, NULL) == clip.fps);
+        size_t digits = strspn(number, "0123456789") + (strchr(number, '.') ? strspn(strchr(number, '.') + 1, "0123456789") : 0);
+        char shorter[320];
+        snprintf(shorter, sizeof shorter, "%.*g", (int)digits - 1, clip.fps);
+        assert_null(strchr(number, 'e'));
+        assert_true(digits <= 1 || strchr(shorter, 'e') || strtof(shorter, NULL) != clip.fps); /* one digit fewer does not */
+    }
+    cbpal_close(&pal);
+    free(json);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_travelling_loop_bakes_in_place),
         cmocka_unit_test(test_one_shots_keep_their_travel),
+        cmocka_unit_test(test_manifest_says_root_motion_per_clip),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

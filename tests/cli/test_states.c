@@ -1,5 +1,5 @@
 /* test_states.c - what a herd's states play (issue 33): the states in the order the catalog
- * writes them and the default state the first of them; which states follow the instance's speed,
+ * writes them and the default state decided by name (never by that order); which states follow the instance's speed,
  * decided from their words and their clips' feet and said why, and overridden in the catalog and
  * on the command line; the speed reference taken from locomotion only; and the planted feet's
  * slide, checked against the feet's own heights and speeds in the independent reference
@@ -75,8 +75,12 @@ static void test_states_keep_the_written_order(void **state)
     const char *written[] = {"wander", "idle", "flee", "attack"};
     assert_int_equal(an->state_count, 4);
     for (int i = 0; i < 4; ++i) assert_string_equal(an->states[i].name, written[i]);
-    assert_string_equal(an->default_state, "wander");
-    assert_non_null(strstr(an->default_state_from, "first state written"));
+    /* No default_state given: decided by name (the state that rests), never by the order written. */
+    assert_string_equal(an->default_state, "idle");
+    printf("  default state: %s (%s)\n", an->default_state, an->default_state_from);
+    assert_non_null(strstr(an->default_state_from, "decided by name"));
+    assert_non_null(strstr(an->default_state_from, "'idle' rests, its name says 'idle'"));
+    assert_non_null(strstr(an->default_state_from, "default_state or --default-state overrides"));
     /* The manifest lists them in that order too. */
     char *json = read_whole_file(TMP "/order/roster.json", NULL);
     const char *states = strstr(json, "\"states\": {");
@@ -97,8 +101,37 @@ static void test_states_keep_the_written_order(void **state)
                  &cat, &r);
     assert_string_equal(cat.animals[0].states[0].name, "hit");
     assert_string_equal(cat.animals[0].states[2].name, "idle");
-    assert_string_equal(cat.animals[0].default_state, "hit");
+    assert_string_equal(cat.animals[0].default_state, "idle");
     cb_roster_free(&r);
+    cb_catalog_free(&cat);
+}
+
+/* The default state by name, whatever the order: a resting word in a keyword counts (graze =
+ * ["eating"]); with none, the first by name of the states that are no action done once. */
+static void test_default_state_by_name(void **state)
+{
+    (void)state;
+    cb_catalog cat;
+    cb_error err = {0};
+    if (cb_catalog_load(cow_catalog("default_kw", "states = { attack = [\"attack\"], wander = [\"walk\"], "
+                                                  "graze = [\"eating\"] }\n"), &cat, &err))
+        fail_msg("%s", err.message);
+    assert_string_equal(cat.animals[0].default_state, "graze");
+    assert_non_null(strstr(cat.animals[0].default_state_from, "its name says 'graze'"));
+    cb_catalog_free(&cat);
+    if (cb_catalog_load(cow_catalog("default_none", "states = { wander = [\"walk\"], attack = [\"attack\"], "
+                                                    "flee = [\"gallop\"] }\n"), &cat, &err))
+        fail_msg("%s", err.message);
+    assert_string_equal(cat.animals[0].default_state, "flee"); /* wander is written first */
+    printf("  %s\n", cat.animals[0].default_state_from);
+    assert_non_null(strstr(cat.animals[0].default_state_from, "alphabetically"));
+    cb_catalog_free(&cat);
+    /* The catalog's default_state still wins. */
+    if (cb_catalog_load(cow_catalog("default_given", "states = { idle = [\"idle\"], wander = [\"walk\"] }\n"
+                                                     "default_state = \"wander\"\n"), &cat, &err))
+        fail_msg("%s", err.message);
+    assert_string_equal(cat.animals[0].default_state, "wander");
+    assert_string_equal(cat.animals[0].default_state_from, "the catalog's default_state");
     cb_catalog_free(&cat);
 }
 
@@ -343,7 +376,8 @@ static void test_info_and_report_say_why(void **state)
     snprintf(cmd, sizeof cmd, "%s info %s", crowdbake_exe(), cow_abs);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     if (!strstr(out, "follows the speed: locomotion: the clip's name says 'walk', and 4 of 4 feet planted") ||
-        !strstr(out, "own rate: in place: the clip's name says 'attack'") ||
+        !strstr(out, "own rate: in place: the clip's name says 'eating'") || /* the attacks play once now */
+        !strstr(out, "own rate: in place: the clip's name says 'idle'") ||
         !strstr(out, "own rate: a one-shot") || !strstr(out, "feet slide 53% of the ground speed"))
         fail_msg("%s", out);
     snprintf(cmd, sizeof cmd,
@@ -364,6 +398,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_states_keep_the_written_order),
+        cmocka_unit_test(test_default_state_by_name),
         cmocka_unit_test(test_cow_every_state),
         cmocka_unit_test(test_sync_from_words_then_feet),
         cmocka_unit_test(test_sync_overrides),

@@ -6,9 +6,12 @@
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
+#include <ctype.h>
 #include <math.h>
+#include <strings.h>
 
 #include "crowdbake_pal.h"
+#include "crowdbake/stride.h"
 
 #define TMP TEST_TMP "/sockets_contacts"
 enum { MAX_FRAMES = 128 };
@@ -154,11 +157,118 @@ static void test_pole_targets_are_not_sockets(void **state)
     assert_non_null(strstr(log, "PoleTargetBack.L_end PoleTarget.L_end PoleTargetBack.R_end PoleTarget.R_end"));
 }
 
+/* Whether a joint's name reads as a rig control, by this test's own reading (not the library's):
+ * an IK bone ("IKBackLeg.L", "Leg_IK", "foot.ik"), a pole or a target, a "ctrl". */
+static bool named_as_control(const char *name)
+{
+    for (size_t i = 0; name[i]; ++i) {
+        bool word_start = i == 0 || !isalpha((unsigned char)name[i - 1]) ||
+                          (islower((unsigned char)name[i - 1]) && isupper((unsigned char)name[i]));
+        if (!word_start) continue;
+        if (strncasecmp(name + i, "ik", 2) == 0 && !islower((unsigned char)name[i + 2])) return true;
+        if (strncasecmp(name + i, "pole", 4) == 0 || strncasecmp(name + i, "target", 6) == 0 ||
+            strncasecmp(name + i, "ctrl", 4) == 0)
+            return true;
+    }
+    return false;
+}
+
+/* The total skin weight each joint carries over the skin's vertices, from the primitives. */
+static void joint_weights(const cb_model *m, int32_t skin, double *weight)
+{
+    memset(weight, 0, m->skins[skin].joint_count * sizeof *weight);
+    for (uint32_t p = 0; p < m->primitive_count; ++p) {
+        const cb_primitive *pr = &m->primitives[p];
+        if (pr->skin != skin || !pr->joints || !pr->weights) continue;
+        for (uint32_t v = 0; v < pr->vertex_count * 4; ++v) weight[pr->joints[v]] += pr->weights[v];
+    }
+}
+
+/* No shared rig names a foot after an IK control: Husky's hind paws are weighted partly to
+ * IKBackLeg.L/.R, yet its feet are named after the deforming leg bones; every foot of every clip
+ * of every shared rig is a joint that carries skin weight and is not named as a control. */
+static void test_no_foot_is_named_after_an_ik_control(void **state)
+{
+    (void)state;
+    static const char *const rigs[] = {"assets/quaternius-husky/Husky.glb", "assets/quaternius-cow/Cow.glb",
+                                       "assets/fox-bevy/Fox.glb", "assets/robot-quaternius-raylib/robot.glb",
+                                       "assets/spider-animated-luanti/gltf_spider_animated.gltf",
+                                       "assets/riggedfigure-raylib/rigged_figure.glb"};
+    uint32_t husky_feet = 0;
+    for (size_t r = 0; r < sizeof rigs / sizeof *rigs; ++r) {
+        cb_model *m = load_shared(rigs[r]);
+        cb_error err = {0};
+        cb_sampler *s = cb_sampler_create(m, 0, &err);
+        assert_non_null(s);
+        double *weight = malloc(m->skins[0].joint_count * sizeof *weight);
+        joint_weights(m, 0, weight);
+        uint32_t feet = 0;
+        for (uint32_t a = 0; a < m->animation_count; ++a) {
+            cb_clip_info info;
+            cb_limits limits = cb_default_limits();
+            if (cb_clip_analyze(s, (int32_t)a, 30, 1, &limits, &info, &err)) fail_msg("%s: %s", rigs[r], err.message);
+            cb_stride st;
+            cb_stride_measure(s, &info, &st);
+            for (uint32_t k = 0; k < st.foot_count; ++k) {
+                if (named_as_control(st.feet[k].name))
+                    fail_msg("%s '%s': a foot is named after the control '%s'", rigs[r], m->animations[a].name, st.feet[k].name);
+                if (!(weight[st.feet[k].joint] > 0))
+                    fail_msg("%s '%s': foot '%s' moves no vertex", rigs[r], m->animations[a].name, st.feet[k].name);
+            }
+            if (st.foot_count > feet) feet = st.foot_count;
+        }
+        printf("  %s: up to %u feet, none named as a control\n", rigs[r], feet);
+        if (r == 0) husky_feet = feet;
+        free(weight);
+        cb_sampler_free(s);
+        cb_model_free(m);
+    }
+    assert_int_equal(husky_feet, 4); /* the hind paws too, where the IK bones carry part of the weight */
+
+    /* The rule bites where the heaviest bone of a paw is named as a control (as on another animal of
+     * the pack, whose hind contacts were named IKBackLeg.L): Husky's hind paw bones (FFB.L, FFB.R)
+     * renamed so, those feet are named after their legs' deforming bones, never the control. */
+    cb_model *m = load_shared(rigs[0]);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_clip_info info;
+    assert_int_equal(cb_clip_analyze(s, cb_model_find_animation(m, "AnimalArmature|Walk"), 30, -1, NULL, &info, &err), CB_OK);
+    cb_stride before, after;
+    cb_stride_measure(s, &info, &before);
+    static char renamed[CB_MAX_FEET][80];
+    const char *own[CB_MAX_FEET];
+    uint32_t hind = 0;
+    for (uint32_t k = 0; k < before.foot_count; ++k) {
+        uint32_t node = m->skins[0].joints[before.feet[k].joint];
+        own[k] = m->nodes[node].name;
+        if (strncmp(own[k], "FFB.", 4) != 0) continue;
+        snprintf(renamed[k], sizeof renamed[k], "IK%s", own[k]);
+        m->nodes[node].name = renamed[k], ++hind;
+    }
+    assert_int_equal(hind, 2);
+    cb_stride_measure(s, &info, &after);
+    for (uint32_t k = 0; k < before.foot_count; ++k) m->nodes[m->skins[0].joints[before.feet[k].joint]].name = own[k];
+    assert_int_equal(after.foot_count, before.foot_count);
+    uint32_t legs = 0;
+    for (uint32_t k = 0; k < after.foot_count; ++k) {
+        printf("  hind paw bones renamed IKFFB.*: a foot is named %s\n", after.feet[k].name);
+        assert_false(named_as_control(after.feet[k].name));
+        legs += strncmp(after.feet[k].name, "BackLowerLeg.", 13) == 0;
+    }
+    assert_int_equal(legs, 2);
+    cb_sampler_free(s);
+    cb_model_free(m);
+    /* The check itself reads controls as controls. */
+    assert_true(named_as_control("IKBackLeg.L") && named_as_control("PoleTarget.L_end") && named_as_control("Leg_IK"));
+    assert_false(named_as_control("BackLeg.L") || named_as_control("Pike") || named_as_control("Kick"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sockets_follow_their_joints),
         cmocka_unit_test(test_pole_targets_are_not_sockets),
+        cmocka_unit_test(test_no_foot_is_named_after_an_ik_control),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -5,6 +5,8 @@
  * as float), the loader parses and loads every layout x precision (zstd too) bit for bit, refuses
  * damaged palettes and mismatched shaders with a message, and fills a herd from a roster manifest (refusing
  * rows that the Compatibility renderer's half-float instance data cannot address, whose premise it measures).
+ * The addon's own cases (check_addon*.gd, check_conformance*.gd) add the herd's look against Godot's own import
+ * of Cow and Husky, the roster import, and the conformance cases on the CPU path and on the herd shader's GPU path.
  * Two deliberately broken shaders (a Godot-language error and a GLSL error only the draw finds)
  * must make Godot log an error, so the log scan is shown to catch both kinds. */
 #define _DEFAULT_SOURCE
@@ -45,6 +47,22 @@ static int setup_cow(void)
     return system(cmd);
 }
 
+/* check_addon_look.gd's second multi-material model: Husky (5 materials) and a roster of one state. */
+static int setup_husky(void)
+{
+    char model[PATH_MAX], rel[PATH_MAX], cmd[4 * PATH_MAX];
+    shared_path(rel, sizeof rel, "assets/quaternius-husky/Husky.glb");
+    if (!realpath(rel, model)) return -1;
+    snprintf(cmd, sizeof cmd, "mkdir -p " TMP "/bakes/husky && cp %s " TMP "/bakes/husky/Husky.glb", model);
+    if (system(cmd)) return -1;
+    FILE *f = fopen(TMP "/bakes/husky/catalog.toml", "w");
+    if (!f) return -1;
+    fprintf(f, "[bake]\nout_dir = \"roster\"\nfps = 30\n\n[animal.husky]\nmodel = \"%s\"\nstates = { wander = [\"Walk\"] }\n", model);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/husky/catalog.toml -q 2>/dev/null", crowdbake_exe());
+    return system(cmd);
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -75,8 +93,9 @@ static int setup(void **state)
     fprintf(f, "[bake]\nout_dir = \"roster\"\nfps = 30\n\n[animal.goat]\nmodel = \"%s\"\nstates = { wander = [\"walk\"] }\n", model);
     fclose(f);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/catalog.toml -q", crowdbake_exe());
-    if (system(cmd) || setup_cow()) return -1;
-    /* The runtime conformance cases, which check_conformance.gd skins with the addon's matrix_at. */
+    if (system(cmd) || setup_cow() || setup_husky()) return -1;
+    /* The runtime conformance cases, which check_conformance.gd skins with the addon's matrix_at and
+     * check_conformance_gpu.gd with the herd's shader. */
     conformance conf;
     conformance_make(&conf, TMP "/bakes/conformance");
     conformance_free(&conf);
@@ -113,11 +132,15 @@ static void test_shipped_files_run_in_godot(void **state)
     assert_non_null(strstr(out, "ok   loader parses"));
     assert_non_null(strstr(out, "ok   fill_herd from roster.json"));
     /* The addon (check_addon.gd): its loader, bone_matrix against the reference CSV, the herd. */
-    assert_int_equal(count(out, "\nok   addon: "), 33); /* with the held rows of a STEP-keyed clip and a placed gallop's travel */
+    /* with the held rows of a STEP-keyed clip, the look on Cow and Husky, the roster import, the GPU conformance, a
+     * placed gallop's travel */
+    assert_int_equal(count(out, "\nok   addon: "), 48);
     /* 12 cases skinned on the CPU within the tolerance (held rows among them), and broken-row-off-by-one missing by far. */
     assert_int_equal(count(out, "\nok   addon: conformance "), 13);
+    /* The same 13 skinned by crowdbake_herd.gdshader's vertex function on the GPU, read back from pixels. */
+    assert_int_equal(count(out, "\nok   addon: gpu conformance "), 13);
     assert_int_equal(count(out, "\nok   expect-error: addon: "), 3);
-    assert_non_null(strstr(out, "godot: 87 cases, 0 failed, exit code 0"));
+    assert_non_null(strstr(out, "godot: 102 cases, 0 failed, exit code 0"));
     /* The log is Godot 4.6's own, on WebGL 2 (the Compatibility renderer). */
     assert_int_equal(run_command("grep -q 'Godot Engine v4.6' " TMP "/godot.log && grep -q 'Compatibility' " TMP "/godot.log",
                                  NULL, 0),

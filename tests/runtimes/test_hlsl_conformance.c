@@ -20,10 +20,7 @@ static bool have_device;
 static int setup(void **state)
 {
     (void)state;
-    char why[256];
-    have_device = vkc_init(&vk, why, sizeof why);
-    if (have_device) printf("  Vulkan on %s\n", vk.name);
-    else printf("  SKIPPED: %s: the HLSL runtime cannot be run here\n", why);
+    have_device = vkc_open_for_tests(&vk, "the HLSL runtime");
     return 0;
 }
 

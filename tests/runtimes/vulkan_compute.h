@@ -7,6 +7,7 @@
 
 #include <dlfcn.h>
 #include <glob.h>
+#include <stdio.h>
 #include <vulkan/vulkan.h>
 
 #define VKC_CHECK(call)                                                                                                \
@@ -100,6 +101,16 @@ static inline void vkc_free_context(vkc_context *c)
     vkDestroyCommandPool(c->device, c->pool, NULL);
     vkDestroyDevice(c->device, NULL);
     vkDestroyInstance(c->instance, NULL);
+}
+
+/* A test group's fixture: opens the device once, or says why `what` cannot run here (the tests then skip). */
+static inline bool vkc_open_for_tests(vkc_context *c, const char *what)
+{
+    char why[256];
+    bool opened = vkc_init(c, why, sizeof why);
+    if (opened) printf("  Vulkan on %s\n", c->name);
+    else printf("  SKIPPED: %s: %s cannot be run here\n", why, what);
+    return opened;
 }
 
 static inline VkDeviceMemory vkc_allocate(vkc_context *c, VkMemoryRequirements req)

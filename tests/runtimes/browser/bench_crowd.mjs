@@ -18,7 +18,7 @@
 // little; the ratio is what compares).
 import fs from 'node:fs';
 import path from 'node:path';
-import { withPage, RUNTIMES } from './driver.mjs';
+import { withPage, RUNTIMES, THREE_PAGE } from './driver.mjs';
 
 const [dir, countsText] = process.argv.slice(2);
 const frames = Number(process.argv[process.argv.indexOf('--frames') + 1] || 5);
@@ -30,8 +30,7 @@ const before = option('--before', null);
 // Where TREE's web/ is: runtimes/ since the move, the tree itself before it.
 const beforeRoot = (tree) => fs.existsSync(path.join(tree, 'runtimes', 'web')) ? path.resolve(tree, 'runtimes') : path.resolve(tree);
 
-const page = `<!DOCTYPE html><script type="importmap">{ "imports": { "three": "/web/node_modules/three/build/three.module.js",
-  "three/addons/": "/web/node_modules/three/examples/jsm/" } }</script><canvas id="c" width="960" height="540"></canvas>`;
+const page = THREE_PAGE + '<canvas id="c" width="960" height="540"></canvas>';
 
 const result = await withPage({ '/': RUNTIMES, '/bench/': path.resolve(dir), ...(before ? { '/before/': beforeRoot(before) } : {}) }, '/__blank.html', async (p) => {
     await p.setContent(page);

@@ -18,6 +18,10 @@ import { chromium } from 'playwright-core';
 export const REPO = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..', '..');
 // What the pages see at '/': the runtimes' folder, so /web/ is runtimes/web and /glsl/ runtimes/glsl.
 export const RUNTIMES = path.join(REPO, 'runtimes');
+// A blank page whose import map finds three.js and its addons where RUNTIMES serves them: the checks
+// that drive three.js set it as their page's content.
+export const THREE_PAGE = `<!DOCTYPE html><script type="importmap">{ "imports": { "three": "/web/node_modules/three/build/three.module.js",
+  "three/addons/": "/web/node_modules/three/examples/jsm/" } }</script>`;
 
 const TYPES = {
     '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.json': 'application/json',

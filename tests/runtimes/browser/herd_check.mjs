@@ -16,14 +16,12 @@
 // DIR holds fox.glb + fox.pal (root motion kept, as three plays it), cow.glb + cow.pal and
 // fish.glb + fish.pal. Prints JSON.
 import path from 'node:path';
-import { withPage, RUNTIMES } from './driver.mjs';
+import { withPage, RUNTIMES, THREE_PAGE } from './driver.mjs';
 
 const [dir] = process.argv.slice(2);
-const page = `<!DOCTYPE html><script type="importmap">{ "imports": { "three": "/web/node_modules/three/build/three.module.js",
-  "three/addons/": "/web/node_modules/three/examples/jsm/" } }</script>`;
 
 const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '/__blank.html', async (p) => {
-    await p.setContent(page);
+    await p.setContent(THREE_PAGE);
     const r = await p.evaluate(async () => {
         const THREE = await import('three');
         const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');

@@ -11,15 +11,13 @@
 // DIR holds NAME.glb and NAME.pal (root motion kept, as three plays it). TIME is moved to the nearest
 // baked row, so that what differs is the look and not the blend of two rows. Prints JSON.
 import path from 'node:path';
-import { withPage, RUNTIMES } from './driver.mjs';
+import { withPage, RUNTIMES, THREE_PAGE } from './driver.mjs';
 
 const [dir, ...cases] = process.argv.slice(2);
-const page = `<!DOCTYPE html><script type="importmap">{ "imports": { "three": "/web/node_modules/three/build/three.module.js",
-  "three/addons/": "/web/node_modules/three/examples/jsm/" } }</script>`;
 const tolerance = 12;
 
 const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '/__blank.html', async (p) => {
-    await p.setContent(page);
+    await p.setContent(THREE_PAGE);
     const r = await p.evaluate(async ({ cases, tolerance }) => {
         const THREE = await import('three');
         const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');

@@ -12,15 +12,13 @@
 //
 // DIR holds model.glb, model.pal (root motion kept, as three plays it) and info.json. Prints JSON.
 import path from 'node:path';
-import { withPage, RUNTIMES } from './driver.mjs';
+import { withPage, RUNTIMES, THREE_PAGE } from './driver.mjs';
 
 const [dir, clip, timesText] = process.argv.slice(2);
 const times = timesText.split(',').map(Number);
-const page = `<!DOCTYPE html><script type="importmap">{ "imports": { "three": "/web/node_modules/three/build/three.module.js",
-  "three/addons/": "/web/node_modules/three/examples/jsm/" } }</script>`;
 
 const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '/__blank.html', async (p) => {
-    await p.setContent(page);
+    await p.setContent(THREE_PAGE);
     const r = await p.evaluate(async ({ clip, times }) => {
         const THREE = await import('three');
         const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');

@@ -30,6 +30,7 @@ func run() -> void:
 	_check_bone_matrix("qpos-u16", 0.02, false)
 	_check_held_rows()
 	load(ROOT + "/check_conformance.gd").new(self).run()
+	await load(ROOT + "/check_conformance_gpu.gd").new(self).run()
 	var mesh := _cow_mesh()
 	if mesh == null:
 		return
@@ -44,9 +45,11 @@ func run() -> void:
 	var look = load(ROOT + "/check_addon_look.gd").new(self)
 	look.check_socket_scale(roster, mesh)
 	await _check_drawing(roster, mesh)
-	await look.check_look(roster, mesh)
+	await look.check_look("cow", COW + "/Cow.glb", COW + "/roster/roster.json", 7)
+	await look.check_look("husky", look.HUSKY + "/Husky.glb", look.HUSKY + "/roster/roster.json", 5)
 	await look.check_demo()
 	look.check_imported_palette()
+	look.check_imported_roster(mesh)
 	await _check_shadow(roster, mesh)
 	_viewport.queue_free()
 

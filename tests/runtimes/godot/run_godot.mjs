@@ -39,6 +39,7 @@ const files = {
   '/crowdbake/check_addon.gd': path.join(here, 'check_addon.gd'),
   '/crowdbake/check_addon_look.gd': path.join(here, 'check_addon_look.gd'),
   '/crowdbake/check_conformance.gd': path.join(here, 'check_conformance.gd'),
+  '/crowdbake/check_conformance_gpu.gd': path.join(here, 'check_conformance_gpu.gd'),
   '/engine/override.cfg': path.join(here, 'override.cfg'),
 };
 

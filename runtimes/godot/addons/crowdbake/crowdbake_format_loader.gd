@@ -4,8 +4,10 @@
 # Godot registers a ResourceFormatLoader that has a class_name by itself (editor and exported game);
 # where scripts carry no global class names, register one by hand:
 #   ResourceLoader.add_resource_format_loader(preload("crowdbake_format_loader.gd").new())
-# An exported game needs the files themselves: add "*.pal, *.json" to the export preset's
-# non-resource files filter.
+# With the plugin enabled, the editor imports .pal and roster.json files (crowdbake_import_palette.gd,
+# crowdbake_import_roster.gd), so load() answers from their imports and exports take them along; this
+# loader is for files outside the project (user://, a mod folder) and projects without the plugin,
+# whose exports need "*.pal, *.json" in the preset's non-resource files filter.
 @tool
 class_name CrowdbakeFormatLoader
 extends ResourceFormatLoader

@@ -3,7 +3,8 @@
 # speed, cross-fades between states, takes a colour and a uniform scale, and reports its footsteps.
 #
 #   var herd := CrowdbakeHerd.new()
-#   herd.setup(ResourceLoader.load("res://roster/roster.json", "CrowdbakeRoster"), "cow", preload("res://cow_mesh.tres"), 100)
+#   herd.setup(load("res://roster/roster.json"), "cow", preload("res://cow_mesh.tres"), 100)  # the plugin's import
+#   (without the plugin: ResourceLoader.load("res://roster/roster.json", "CrowdbakeRoster"))
 #   add_child(herd)
 #   herd.place(7, Transform3D(Basis().scaled(Vector3.ONE * 1.2), Vector3(3, 0, 1)))
 #   herd.set_state(7, "run")      # cross-fades over fade_seconds

@@ -4,8 +4,16 @@
 #
 # Godot draws a MultiMesh once per surface of its mesh, so a 7-surface model would be 7 draw calls.
 # Surfaces whose materials are plain colours (no texture, opaque: Quaternius' animals are all such)
-# are merged into one surface, each one's colour moved into its vertices' colours (linear, as ALBEDO
-# takes them): one draw call for them all. Textured or transparent surfaces stay surfaces of their own.
+# are merged into one surface, each one's colour moved into its vertices' colours: one draw call for
+# them all. Textured or transparent surfaces stay surfaces of their own.
+#
+# The merged colours are the materials' sRGB albedo_color (8 bits a channel, as Godot stores vertex
+# colours), which the shader linearises where the renderer lights in linear space and keeps where it
+# lights in sRGB (the Compatibility renderer): what StandardMaterial3D does with its albedo. (Storing
+# linear colours, as this file once did, drew the Compatibility renderer's herd 58% darker than Godot's
+# own import of the same model: a linear 0.19 shown as is, where the material's sRGB 0.475 is.) A
+# material that multiplies raw (linear) vertex colours in keeps a surface of its own, so that its
+# colours meet the albedo exactly as in StandardMaterial3D.
 extends RefCounted
 
 # Returns { mesh, materials, merged (how many surfaces became one), surfaces (of the source) }.
@@ -45,19 +53,21 @@ static func build(source: Mesh, base: ShaderMaterial) -> Dictionary:
 		mesh.surface_set_material(k, materials[k])
 	return {"mesh": mesh, "materials": materials, "merged": plain.size(), "surfaces": source.get_surface_count()}
 
-# A plain colour: no material, or a BaseMaterial3D without an albedo texture, drawn opaque.
+# A plain colour: no material, or a BaseMaterial3D without an albedo texture, drawn opaque, whose
+# vertex colours (if it uses them) are sRGB like its albedo.
 static func _is_plain(m: Material) -> bool:
 	if m == null:
 		return true
-	return m is BaseMaterial3D and m.albedo_texture == null and m.transparency == BaseMaterial3D.TRANSPARENCY_DISABLED
+	return m is BaseMaterial3D and m.albedo_texture == null and m.transparency == BaseMaterial3D.TRANSPARENCY_DISABLED \
+			and (not m.vertex_color_use_as_albedo or m.vertex_color_is_srgb)
 
 # What the merged surfaces must share: metallic and roughness.
 static func _finish(m: Material) -> Array:
 	return [m.metallic, m.roughness] if m is BaseMaterial3D else [0.0, 1.0]
 
-# The surface's colour in linear space (the material's albedo is sRGB), for vertex colours.
-static func _linear_albedo(m: Material) -> Color:
-	return m.albedo_color.srgb_to_linear() if m is BaseMaterial3D else Color.WHITE
+# The surface's base colour, sRGB (as BaseMaterial3D.albedo_color is), for vertex colours.
+static func _srgb_albedo(m: Material) -> Color:
+	return m.albedo_color if m is BaseMaterial3D else Color.WHITE
 
 # The surfaces `which` of `source` as one: positions, normals, tangents, UVs, bones and weights
 # concatenated, indices offset, and each vertex's colour its surface's (times its own where the
@@ -90,7 +100,7 @@ static func _merged(source: Mesh, which: Array[int]) -> Array:
 		var uv = a[Mesh.ARRAY_TEX_UV]
 		for v in n:
 			uvs.append(uv[v] if uv != null else Vector2.ZERO)
-		var albedo := _linear_albedo(m)
+		var albedo := _srgb_albedo(m)
 		var own_colors = a[Mesh.ARRAY_COLOR] if m is BaseMaterial3D and m.vertex_color_use_as_albedo else null
 		for v in n:
 			colors.append(albedo * own_colors[v] if own_colors != null else albedo)
@@ -120,6 +130,9 @@ static func _look(base: ShaderMaterial, m: Material, merged: bool) -> ShaderMate
 	if m is BaseMaterial3D:
 		look.set_shader_parameter("metallic", m.metallic)
 		look.set_shader_parameter("roughness", m.roughness)
+	# COLOR holds sRGB: the merged colours, the instance colour alone, or vertex colours said to be sRGB.
+	var own_colors: bool = not merged and m is BaseMaterial3D and m.vertex_color_use_as_albedo
+	look.set_shader_parameter("color_is_srgb", m.vertex_color_is_srgb if own_colors else true)
 	if m is BaseMaterial3D and not merged:
 		look.set_shader_parameter("albedo", m.albedo_color)
 		look.set_shader_parameter("albedo_texture", m.albedo_texture)

@@ -4,7 +4,9 @@
 #   var roster: CrowdbakeRoster = ResourceLoader.load("res://roster/roster.json", "CrowdbakeRoster")
 #   var cow: Dictionary = roster.types["cow"]   # palette, states, clips, sockets, default_state
 #
-# Godot's own JSON loader answers a plain load() of a .json; the type hint picks this one.
+# Godot's own JSON loader answers a plain load() of a .json; the type hint picks this one. In the editor
+# the plugin's roster import (crowdbake_import_roster.gd) saves the roster, its palettes resolved, as a
+# resource: then load("res://roster/roster.json") gives it, and exports take it and its palettes along.
 @tool
 class_name CrowdbakeRoster
 extends Resource
@@ -14,7 +16,7 @@ const SCHEMA := "crowdbake-roster/1"
 
 # Type name -> {palette, states (the manifest's), clips (the manifest's, by name: contacts among
 # them when the bake wrote them), sockets (name -> {bone, transform}), default_state, speed_reference}.
-var types := {}
+@export_storage var types := {}
 var error := "" # the last failure, one line
 
 func load_file(path: String) -> bool:
@@ -38,6 +40,20 @@ func load_file(path: String) -> bool:
 				"sockets": _sockets(entry.get("sockets", {})), "default_state": entry.get("default_state", ""),
 				"speed_reference": float(entry.get("speed_reference", palette.speed_reference))}
 	return true
+
+# What the editor's import of the .json at `path` saves (crowdbake_import_roster.gd): a roster manifest
+# as this CrowdbakeRoster, its palettes resolved (in a project each is its own import, referenced; else read
+# from the file and kept inside); any other JSON as the JSON resource Godot's own loader gives for it,
+# so that the project's other .json files load() as before. A String (one line) when it cannot be had.
+func import_file(path: String):
+	var text := FileAccess.get_file_as_string(path)
+	var json := JSON.new()
+	if json.parse(text) != OK:
+		return "%s:%d: %s; fix the JSON" % [path, json.get_error_line(), json.get_error_message()]
+	var data = json.data
+	if not (data is Dictionary and str(data.get("schema", "")).begins_with("crowdbake-roster/")):
+		return json
+	return self if load_file(path) else error
 
 # The palette at `path`: in a project (res://), through load(), which gives the imported resource
 # (crowdbake_import_palette.gd; what an exported game has); elsewhere read from the file. The error

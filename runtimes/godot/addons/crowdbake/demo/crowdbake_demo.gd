@@ -16,7 +16,10 @@ const _Herd := preload("../crowdbake_herd.gd")
 @onready var herd = $Herd
 
 func _ready() -> void:
-	var roster = ResourceLoader.load(roster_path, "CrowdbakeRoster")
+	# The editor's import (a CrowdbakeRoster, with the plugin on), else the file read at run time.
+	var roster = load(roster_path) if ResourceLoader.exists(roster_path) else null
+	if roster == null or roster.get("types") == null:
+		roster = ResourceLoader.load(roster_path, "CrowdbakeRoster", ResourceLoader.CACHE_MODE_IGNORE)
 	var scene := _model_scene()
 	if roster == null or scene == null:
 		push_error("crowdbake demo: set roster_path (a roster.json) and model or model_path (the animal's glTF) on %s" % name)

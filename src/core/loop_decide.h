@@ -1,0 +1,12 @@
+/* loop_decide.h - loop or one-shot from the clip's name, poses and feet (loop_decide.c). */
+#ifndef CB_LOOP_DECIDE_H
+#define CB_LOOP_DECIDE_H
+
+#include "crowdbake/core.h"
+
+/* Weighs a clip judged by its poses (loop_reason, wrap_jump, largest_step set): fills
+ * loop_name, loop_word, loop_pose, loop_feet and loop_striding_feet and sets loops (the sum
+ * above 0). Leaves the sampler's period and the framing for the caller to set again. */
+void cb_loop_decide(cb_sampler *sampler, double fps, const cb_limits *limits, cb_clip_info *out);
+
+#endif

@@ -1,0 +1,199 @@
+# check_conformance_gpu.gd - the runtime conformance cases (tests/runtimes/conformance.h) with the addon's GPU path
+# in Godot 4.6's web build: the vertex function of crowdbake_herd.gdshader as CrowdbakeHerd builds it (its palette's
+# layout and precision, its include inlined), reading each instance's numbers from the herd's instance texture at
+# herd_time, skins every vertex of every instance of every group; what it would hand Godot as VERTEX (the skinned,
+# cross-faded point) is written instead, bit for bit, into the pixels of a SubViewport and read back, as the GL
+# harness reads it back with transform feedback (Godot has none). Run by check_addon.gd (whose case lines it prints).
+#
+# Only the vertex function's last lines (the view transform) and the fragment function are replaced: the point p
+# goes out as a flat varying, each vertex of the case's mesh is a 9x1-pixel quad placed by POSITION, and the
+# fragment writes the 32 bits of p's x, y and z, 4 bits a channel (n x 17 of 255): the Compatibility renderer's
+# unshaded 8-bit output moves a channel by up to 3 of 255 (measured here), which whole bytes do not survive. The worst |got - expected| against the C runtime's CASE.expected must stay within
+# 1e-5 x max(1, model height), like check_conformance.gd's CPU path; broken-row-off-by-one must miss by more than ten
+# times that. Each case runs its two groups (two times), every instance and vertex.
+extends RefCounted
+
+const ROOT := "/crowdbake"
+const ADDON := ROOT + "/addons/crowdbake"
+const DIR := ROOT + "/bakes/conformance"
+const BROKEN := "broken-row-off-by-one"
+const WIDTH := 756 # pixels a row: a multiple of 9, so that no vertex's 9 pixels wrap
+const INSTANCES_PER_ROW := 256 # CrowdbakeHerd's
+
+var addon # check_addon.gd's instance: _begin, _end, _herd_script
+
+func _init(addon_check) -> void:
+	addon = addon_check
+
+func run() -> void:
+	var cases: Array = JSON.parse_string(FileAccess.get_file_as_string(DIR + "/cases.json"))["cases"]
+	var viewport := SubViewport.new()
+	viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS
+	viewport.transparent_bg = true
+	viewport.own_world_3d = true
+	viewport.add_child(Camera3D.new())
+	addon.check.add_child(viewport)
+	for c in cases:
+		if c.has("bone_pass") or (c["broken"] and c["name"] != BROKEN):
+			continue # the bone pass is the shaders' own; the other faults live in GLSL or storage
+		await _check_case(c, viewport)
+	viewport.queue_free()
+
+func _check_case(c: Dictionary, viewport: SubViewport) -> void:
+	var name: String = "gpu conformance " + c["name"]
+	addon._begin(name)
+	var pal = load(ADDON + "/crowdbake_palette.gd").new()
+	if not pal.load_file(DIR + "/" + c["pal"]):
+		return addon._end(name, pal.error)
+	var height := FileAccess.get_file_as_bytes(DIR + "/" + c["pal"]).decode_float(104) # the header's model_height
+	var tolerance := 1e-5 * maxf(1.0, height)
+	var positions := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["positions"]).to_float32_array()
+	var verts := positions.size() / 3
+	var material := _material(pal, verts)
+	if material == null:
+		return addon._end(name, "crowdbake_herd.gdshader's vertex function no longer ends with the view transform")
+	var node := MultiMeshInstance3D.new()
+	node.multimesh = MultiMesh.new()
+	node.multimesh.transform_format = MultiMesh.TRANSFORM_3D
+	node.multimesh.mesh = _mesh(c, positions)
+	node.multimesh.mesh.surface_set_material(0, material)
+	node.multimesh.custom_aabb = AABB(Vector3.ONE * -1e6, Vector3.ONE * 2e6) # never culled: POSITION places it
+	viewport.add_child(node)
+	var expected := FileAccess.get_file_as_bytes(DIR + "/" + c["expected"]).to_float32_array()
+	var worst := 0.0
+	var at := 0
+	for group in c["groups"]:
+		var count: int = group["instances"].size()
+		var rows := ceili(float(count * verts * 9) / WIDTH)
+		viewport.size = Vector2i(WIDTH, rows)
+		material.set_shader_parameter("cb_height", rows)
+		material.set_shader_parameter("herd_time", float(group["time"]))
+		material.set_shader_parameter("instances", _instances(group["instances"]))
+		node.multimesh.instance_count = count
+		await RenderingServer.frame_post_draw
+		await RenderingServer.frame_post_draw
+		var image := viewport.get_texture().get_image()
+		image.convert(Image.FORMAT_RGBA8)
+		var got := _decode(image.get_data(), count * verts)
+		var rgba := image.get_data()
+		for i in got.size():
+			var want := Vector3(expected[at], expected[at + 1], expected[at + 2])
+			var d := (got[i] - want).abs()
+			if maxf(d.x, maxf(d.y, d.z)) > 0.01 and c["name"] == "qpos-float" and at < 3 * 40000:
+				print("DBG %d got %s want %s bytes %s" % [i, got[i], want, rgba.slice(i * 24, i * 24 + 24).hex_encode()])
+			worst = maxf(worst, maxf(d.x, maxf(d.y, d.z))) if got[i].is_finite() else INF
+			at += 3
+	node.queue_free()
+	var ratio := worst / tolerance
+	print("crowdbake-check: %s: worst %s (%s of the tolerance)" % [name, String.num_scientific(worst), String.num(ratio, 3)])
+	var why := ""
+	if at != expected.size():
+		why = "%d of %d expected numbers compared" % [at, expected.size()]
+	elif c["broken"] and ratio <= 10.0:
+		why = "the broken case came within %s of the tolerance" % ratio
+	elif not c["broken"] and not ratio <= 1.0:
+		why = "worst %s, tolerance %s" % [worst, tolerance]
+	addon._end(name, why)
+
+# The herd's material for `pal` (CrowdbakeHerd._material: the shipped shader, defines and uniforms), its output
+# replaced by the capture described at the top.
+func _material(pal, verts: int) -> ShaderMaterial:
+	var herd: MultiMeshInstance3D = addon._herd_script.new()
+	herd.palette = pal
+	var material: ShaderMaterial = herd._material()
+	herd.free()
+	var code: String = material.shader.code
+	var view_transform := code.find("\tVERTEX = (MODELVIEW_MATRIX")
+	var vertex_end := code.find("\n}", view_transform)
+	var fragment := code.find("void fragment()")
+	if view_transform < 0 or vertex_end < 0 or fragment < vertex_end:
+		return null
+	code = code.substr(0, view_transform) + """	cb_p = p;
+	int cb_base = (INSTANCE_ID * cb_vertices + int(UV.x + 0.5)) * 9; // the first of the vertex's 9 pixels
+	cb_x0 = cb_base %% %d;
+	vec2 cb_at = vec2(float(cb_x0) + 9.0 * UV2.x, float(cb_base / %d) + UV2.y);
+	POSITION = vec4(cb_at / vec2(%d.0, float(cb_height)) * 2.0 - 1.0, 0.0, 1.0);
+""" % [WIDTH, WIDTH, WIDTH] + code.substr(vertex_end, fragment - vertex_end) + """void fragment() {
+	int k = int(FRAGCOORD.x) - cb_x0; // 0-2 x, 3-5 y, 6-8 z: bits 0-11, 12-23, 24-31
+	uint bits = floatBitsToUint(k < 3 ? cb_p.x : (k < 6 ? cb_p.y : cb_p.z)) >> uint(12 * (k % 3));
+	ALBEDO = vec3(uvec3(bits, bits >> 4u, bits >> 8u) & uvec3(15u)) * (17.0 / 255.0);
+}
+"""
+	code = code.replace("render_mode skip_vertex_transform;", """render_mode skip_vertex_transform, unshaded, cull_disabled, shadows_disabled;
+varying flat vec3 cb_p;
+varying flat int cb_x0;
+uniform int cb_vertices;
+uniform int cb_height;""")
+	var shader := Shader.new()
+	shader.code = code
+	var capture: ShaderMaterial = material.duplicate()
+	capture.shader = shader
+	capture.set_shader_parameter("cb_vertices", verts)
+	return capture
+
+# The case's mesh as quads: vertex v of the case is 6 vertices (two triangles over its 9 pixels), each with v's
+# position, joints and weights, UV.x = v and UV2 the quad's corner.
+static func _mesh(c: Dictionary, positions: PackedFloat32Array) -> ArrayMesh:
+	var joints := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["joints"])
+	var weights := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["weights"]).to_float32_array()
+	var corners := [Vector2(0, 0), Vector2(1, 0), Vector2(1, 1), Vector2(0, 0), Vector2(1, 1), Vector2(0, 1)]
+	var vertex := PackedVector3Array()
+	var uv := PackedVector2Array()
+	var uv2 := PackedVector2Array()
+	var bones := PackedInt32Array()
+	var bone_weights := PackedFloat32Array()
+	for v in positions.size() / 3:
+		for corner in corners:
+			vertex.append(Vector3(positions[v * 3], positions[v * 3 + 1], positions[v * 3 + 2]))
+			uv.append(Vector2(v, 0))
+			uv2.append(corner)
+			for k in 4:
+				bones.append(joints.decode_u16(v * 8 + k * 2))
+				bone_weights.append(weights[v * 4 + k])
+	var arrays := []
+	arrays.resize(Mesh.ARRAY_MAX)
+	arrays[Mesh.ARRAY_VERTEX] = vertex
+	var normals := PackedVector3Array()
+	normals.resize(vertex.size())
+	normals.fill(Vector3.UP)
+	var tangents := PackedFloat32Array()
+	for v in vertex.size():
+		tangents.append_array([1.0, 0.0, 0.0, 1.0])
+	arrays[Mesh.ARRAY_NORMAL] = normals # the herd's shader skins them too (unused here)
+	arrays[Mesh.ARRAY_TANGENT] = tangents
+	arrays[Mesh.ARRAY_TEX_UV] = uv
+	arrays[Mesh.ARRAY_TEX_UV2] = uv2
+	arrays[Mesh.ARRAY_BONES] = bones
+	arrays[Mesh.ARRAY_WEIGHTS] = bone_weights
+	var mesh := ArrayMesh.new()
+	mesh.add_surface_from_arrays(Mesh.PRIMITIVE_TRIANGLES, arrays)
+	return mesh
+
+# CrowdbakeHerd's instance texture: per instance the clip's four numbers, the previous clip's, the fade's start
+# and length (conformance.h's instance floats 4..13).
+static func _instances(instances: Array) -> ImageTexture:
+	var rows := ceili(float(instances.size()) / INSTANCES_PER_ROW)
+	var texels := PackedFloat32Array()
+	texels.resize(rows * INSTANCES_PER_ROW * 12)
+	for i in instances.size():
+		for k in 10:
+			texels[i * 12 + k] = instances[i][4 + k]
+	return ImageTexture.create_from_image(Image.create_from_data(INSTANCES_PER_ROW * 3, rows, false, Image.FORMAT_RGBAF,
+			texels.to_byte_array()))
+
+# The points the pixels hold: 9 pixels a point, x y z as three pixels each, 4 bits in each of R, G, B (n x 17).
+static func _decode(rgba: PackedByteArray, points: int) -> PackedVector3Array:
+	var out := PackedVector3Array()
+	out.resize(points)
+	var bits := PackedByteArray()
+	bits.resize(4)
+	for i in points:
+		var p := Vector3()
+		for axis in 3:
+			var value := 0
+			for n in 9: # nibbles, lowest first
+				value |= roundi(rgba[(i * 9 + axis * 3 + n / 3) * 4 + n % 3] / 17.0) << (4 * n)
+			bits.encode_u32(0, value & 0xffffffff)
+			p[axis] = bits.decode_float(0)
+		out[i] = p
+	return out
