@@ -494,6 +494,7 @@ func _check_drawing(roster, mesh: Mesh) -> void:
 	_end(name, "" if tinted and white[0].g > 0.05 else "white %s, tinted %s" % [white[0], red[0]])
 	name = "set_state changes the pose drawn"
 	_begin(name)
+	herd.set_state(0, "wander", 0.0) # from a walk: the roster's default state is decided by name now (graze)
 	var walk := await _frame()
 	herd.set_state(0, "wander", 0.0)
 	var same := _differ(walk, await _frame())
