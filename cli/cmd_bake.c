@@ -20,7 +20,7 @@ const char cmd_bake_usage[] =
     "                      [-q|-v] [--sync STATE=speed|time,...] [--default-state STATE]\n"
     "                      [--fps N|auto] [--max-error MM_PER_M] [--max-fps N] [--fit-rows] [--allow-over-budget]\n"
     "                      [--layout L] [--precision P] [--format F] [--zstd]\n"
-    "                      [--max-texture-size N]\n"
+    "                      [--max-texture-size N] [--row-travel auto|off]\n"
     "                      [--root-motion R] [--exr-compression C]\n\n"
     "Bakes every clip of the model's skin into a bone-matrix palette; or every animal type of a\n"
     "catalog (see catalog.example.toml) into palettes and a roster manifest, re-baking only what\n"
@@ -77,6 +77,9 @@ const char cmd_bake_usage[] =
     "                             over 10% of its ground speed, turn each leg's two bones (IK) so a\n"
     "                             planted foot stays where it landed; only the legs change, what\n"
     "                             changed is listed per clip (catalog: plant_feet = true)\n"
+    "  --row-travel auto|off      per-row travel offsets (.pal version 5): auto ships them for the\n"
+    "                             striding loops whose planted feet they keep still (slide cut by a\n"
+    "                             third or more; info and the manifest say why per clip); off: none\n"
     "  --max-texture-size N       never emit a dimension above N (default 16384); rows wrap into\n"
     "                             side-by-side column blocks\n"
     "  --root-motion keep|in-place|loops-in-place  in-place removes the root's average horizontal\n"
@@ -102,7 +105,7 @@ const char cmd_bake_usage[] =
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
         *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir, *loops,
-        *one_shots, *syncs, *default_state, *type, *fragment;
+        *one_shots, *syncs, *default_state, *type, *fragment, *row_travel;
     bool zstd, json, quiet, force, depfile_manifest, fit, measure_all, over_budget, plant_feet;
     cli_output out;
 } bake_args;
@@ -166,6 +169,9 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
     if (a->fit) s->from.fit_rows = CB_FROM_COMMAND_LINE;
     s->measure_all = a->measure_all;
     s->plant_feet = a->plant_feet;
+    if (a->row_travel && strcmp(a->row_travel, "off") != 0 && strcmp(a->row_travel, "auto") != 0)
+        return cli_usage_error("bake", "--row-travel is auto or off, got '%s'", a->row_travel);
+    s->row_travel_off = a->row_travel && strcmp(a->row_travel, "off") == 0;
     s->allow_over_budget = a->over_budget;
     s->max_error_given = a->max_error != NULL;
     if (a->max_error && (!cli_parse_double(a->max_error, &s->max_error_mm) || !(s->max_error_mm > 0)))
@@ -179,7 +185,8 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
               (a->format ? CB_BAKE_FORMATS : 0u) | (a->zstd ? CB_BAKE_ZSTD : 0u) |
               (a->exr_compression ? CB_BAKE_EXR_COMPRESSION : 0u) | (a->fit ? CB_BAKE_FIT_ROWS : 0u) |
               (a->measure_all ? CB_BAKE_MEASURE_ALL : 0u) | (a->over_budget ? CB_BAKE_ALLOW_OVER_BUDGET : 0u) |
-              (a->max_error ? CB_BAKE_MAX_ERROR : 0u) | (a->max_fps ? CB_BAKE_MAX_FPS : 0u) | (a->plant_feet ? CB_BAKE_PLANT_FEET : 0u);
+              (a->max_error ? CB_BAKE_MAX_ERROR : 0u) | (a->max_fps ? CB_BAKE_MAX_FPS : 0u) |
+              (a->plant_feet ? CB_BAKE_PLANT_FEET : 0u) | (a->row_travel ? CB_BAKE_ROW_TRAVEL : 0u);
     return 0;
 }
 
@@ -509,6 +516,7 @@ int cmd_bake(int argc, char **argv)
         {"--loop", "A,B", &a.loops, NULL},         {"--one-shot", "A,B", &a.one_shots, NULL},
         {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest}, {"--fit-rows", NULL, NULL, &a.fit},
         {"--measure-all", NULL, NULL, &a.measure_all}, {"--plant-feet", NULL, NULL, &a.plant_feet},
+        {"--measure-all", NULL, NULL, &a.measure_all}, {"--row-travel", "auto|off", &a.row_travel, NULL},
         {"--allow-over-budget", NULL, NULL, &a.over_budget},
         {"--type", "NAME", &a.type, NULL},        {"--fragment", "FILE", &a.fragment, NULL},
         {"--sync", "STATE=speed|time", &a.syncs, NULL}, {"--default-state", "STATE", &a.default_state, NULL}};

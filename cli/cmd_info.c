@@ -29,6 +29,7 @@ typedef struct clip_facts {
     cb_sync_decision sync; /* as a state of this clip alone would play */
     bool in_place;         /* a bare bake takes its root travel out (cb_bake_job_plan's decision) */
     char root_motion[256]; /* why, for a clip whose root travels; else empty */
+    cb_row_travel travel;  /* its per-row travel offset at this framing, as a bare bake decides it */
 } clip_facts;
 
 /* What a bare bake does with each clip's root travel, and why (cb_bake_job_plan decides it the
@@ -82,6 +83,21 @@ static void interp_list(unsigned mask, char *out, size_t size)
         }
 }
 
+/* Each clip's per-row travel as a bare bake at this framing decides it (cb_bake_job_row_travel):
+ * a job of the default settings, with root motion as decide_root_motion found it. */
+static void measure_row_travel(cb_sampler *s, clip_facts *facts, uint32_t n)
+{
+    cb_bake_job job;
+    cb_bake_job_init(&job);
+    job.settings = cb_default_bake_settings();
+    for (uint32_t a = 0; a < n; ++a) {
+        float *offsets = facts[a].analyzed ? malloc((facts[a].info.frames + 1) * sizeof *offsets) : NULL;
+        job.settings.root_motion = facts[a].in_place ? CB_ROOT_MOTION_IN_PLACE : CB_ROOT_MOTION_KEEP;
+        if (offsets) cb_bake_job_row_travel(&job, s, &facts[a].info, offsets, &facts[a].travel);
+        free(offsets);
+    }
+}
+
 static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits *limits, clip_facts *facts,
                         socket_list *sockets, cb_error *err)
 {
@@ -103,6 +119,7 @@ static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits
     }
     double lo[3], hi[3];
     if (s) decide_root_motion(facts, m->animation_count, cb_skin_rest_bounds(s, lo, hi));
+    if (s && !err->status) measure_row_travel(s, facts, m->animation_count);
     cb_sampler_free(s);
     return err->status;
 }
@@ -114,8 +131,7 @@ static void print_slide(int w, const cb_stride *st)
     for (uint32_t k = 0; k < st->foot_count; ++k)
         if (st->feet[k].strides)
             printf(" %s %.0f%%/%.0f%%", st->feet[k].name, 100 * st->feet[k].slide_mean, 100 * st->feet[k].slide_worst);
-    printf("; travel varied per row would leave %.0f%%%s\n", 100 * st->slide_mean_varying,
-           st->slide_mean > CB_SLIDE_WARN ? " (the asset's feet slide at any rate)" : "");
+    printf("%s\n", st->slide_mean > CB_SLIDE_WARN ? " (the asset's feet slide at any rate)" : "");
 }
 
 /* When each striding foot lands and lifts (the manifest's contacts). */
@@ -225,6 +241,7 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
             printf("  %-*s %s: %s\n", w, "", f->sync.speed ? "follows the speed" : "own rate", f->sync.reason);
             if (f->root_motion[0]) printf("  %-*s root motion %s\n", w, "", f->root_motion);
             if (f->speed.stride.stride) print_slide(w, &f->speed.stride), print_contacts(w, &f->speed.stride);
+            if (f->travel.slide_mean > 0) printf("  %-*s per-row travel %s\n", w, "", f->travel.why);
         } else
             printf("  %-*s %8.4f %9.4f %6llu  %-18s %-8s %7u  -\n", w, anim->name, anim->t0, anim->t1 - anim->t0,
                    (unsigned long long)f->keys, interp, "-", cb_clip_step_count(anim->t1 - anim->t0, fps) + 1);
@@ -310,6 +327,7 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, con
             cb_json_string(&j, "root_motion", f->in_place ? "in-place" : "keep");
             if (f->root_motion[0]) cb_json_string(&j, "root_motion_reason", f->root_motion);
             cb_roster_json_stride(&j, &f->speed.stride);
+            cb_roster_json_row_travel(&j, &f->travel);
         }
         cb_json_end(&j);
     }

@@ -9,7 +9,7 @@ _crowdbake_options()
     case $1 in
     bake) echo "-o --output --format --fps --layout --precision --max-texture-size --root-motion --skin
                 --speed-reference --exr-compression --zstd --json $output -j --threads --force --depfile
-                --manifest --out-dir --depfile-manifest-only --fit-rows --allow-over-budget --measure-all --plant-feet --max-error --max-fps --clip --exclude-clip --loop --one-shot --sync --default-state --type --fragment $limits" ;;
+                --manifest --out-dir --depfile-manifest-only --fit-rows --allow-over-budget --measure-all --plant-feet --row-travel --max-error --max-fps --clip --exclude-clip --loop --one-shot --sync --default-state --type --fragment $limits" ;;
     info) echo "--json --fps --skin --plant-feet $output $limits" ;;
     sample) echo "--json --fps --clip --frame --skin --root-motion $output $limits" ;;
     inspect) echo "--json --clip --frame --no-verify $output" ;;

@@ -236,6 +236,22 @@ static void json_states(cb_json *j, const cb_palette *p, const cb_babylon_write_
     cb_json_end(j);
 }
 
+/* A clip's per-row travel offsets (.pal version 5), one per row of the file's range (a loop's
+ * closing row is its first again), and the heading they lie along: the scene adds
+ * travel[row] x heading to an instance moving at the clip's ground speed (docs/babylon.md). */
+static void json_travel(cb_json *j, const cb_palette *p, uint32_t c)
+{
+    const cb_palette_clip *cl = &p->clips[c];
+    if (!p->row_travel || !cl->travel.applied) return;
+    cb_json_inline_array(j, "travel_heading");
+    for (int k = 0; k < 3; ++k) cb_json_number(j, NULL, cl->travel.heading[k]);
+    cb_json_end(j);
+    cb_json_inline_array(j, "travel");
+    for (uint32_t r = 0; r < cb_babylon_clip_rows(cl->frames, cl->loops); ++r)
+        cb_json_number(j, NULL, p->row_travel[cl->first_row + r % cl->frames]);
+    cb_json_end(j);
+}
+
 /* What follows vertexData: the texture's size and the clip table (rows, rates, loops). */
 static char *tail_json(const cb_palette *p, uint32_t bones, uint32_t height, const cb_babylon_write_options *o)
 {
@@ -262,6 +278,7 @@ static char *tail_json(const cb_palette *p, uint32_t bones, uint32_t height, con
         json_play(&j, p, c); /* a loop's closing row included */
         cb_json_number(&j, "start", cl->start);
         cb_json_bool(&j, "loops", cl->loops);
+        json_travel(&j, p, c);
         cb_json_end(&j);
     }
     cb_json_end(&j);

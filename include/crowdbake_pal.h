@@ -30,7 +30,7 @@
 extern "C" {
 #endif
 
-#define CBPAL_VERSION 4 /* newest known; writers write the oldest version that holds what a file says (pal-format.md) */
+#define CBPAL_VERSION 5 /* newest known; writers write the oldest version that holds what a file says (pal-format.md) */
 #define CBPAL_HEADER_SIZE 256
 #define CBPAL_CLIP_SIZE 80
 #define CBPAL_BONE_SIZE 32
@@ -47,7 +47,12 @@ enum { CBPAL_PRECISION_FLOAT = 0, CBPAL_PRECISION_HALF = 1, CBPAL_PRECISION_U16 
  * than sampled; CBPAL_CLIP_FITTED: this clip's were (a palette may mix fitted and sampled clips;
  * files written before the clip flag set only the header's, and cbpal_get_clip then sets the
  * clip's). Read and blend them as always. */
-enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u, CBPAL_FLAG_FITTED_ROWS = 8u };
+/* CBPAL_FLAG_ROW_TRAVEL (version 5): the file holds a per-row travel offset table (header offset
+ * 192, one f32 per row): a runtime that moves an instance at a clip's ground speed adds
+ * cbpal_travel_offset to its position (rotated and scaled as the instance is), so the planted
+ * feet stay still. Files without it read every offset as 0. */
+enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u, CBPAL_FLAG_FITTED_ROWS = 8u,
+       CBPAL_FLAG_ROW_TRAVEL = 16u };
 /* CBPAL_CLIP_STEP (version 4): the clip's rows are held, not blended - at clip time t the runtime
  * shows row floor(t * fps) alone (a STEP-keyed clip, baked at its key times: exact). */
 enum { CBPAL_CLIP_LOOPS = 1u, CBPAL_CLIP_FITTED = 2u, CBPAL_CLIP_STEP = 4u };
@@ -63,12 +68,14 @@ typedef struct cbpal_header {
     uint64_t input_hash, clip_table_offset, bone_table_offset, strings_offset, strings_size;
     uint64_t payload_offset, payload_size, payload_raw_size, checksum;
     uint64_t offset_table_offset; /* version 3 with relative positions: bone_count x 3 f32 position offsets */
+    uint64_t travel_table_offset; /* version 5 with CBPAL_FLAG_ROW_TRAVEL: rows x f32 travel offsets; else 0 */
 } cbpal_header;
 
 typedef struct cbpal_clip {
     const char *name; /* NUL-terminated, inside the file */
     uint32_t first_row, frames, flags;
     float fps, duration, start, root_velocity[3], bounds_min[3], bounds_max[3];
+    float travel_heading[3]; /* version 5: the direction its rows' travel offsets lie along (0 where it has none) */
 } cbpal_clip;
 
 typedef struct cbpal_bone {
@@ -103,6 +110,14 @@ void cbpal_texel_xy(const cbpal_header *h, uint32_t row, uint32_t bone, uint32_t
  * shipped GLSL blends them (a CBPAL_CLIP_STEP clip's row held, not blended). Attach a prop by composing it with the prop's bind-space transform.
  * Non-zero for a clip or bone that does not exist or a time that is not finite. Uses <math.h>. */
 int cbpal_bone_matrix(const cbpal_file *file, uint32_t clip, double time, uint32_t bone, float out[16]);
+/* A row's travel offset along its clip's heading, model units (0 in files without the table). */
+float cbpal_row_travel(const cbpal_file *file, uint32_t row);
+/* The body's travel offset `time` seconds into the clip, model units in the model's frame: the
+ * rows' offsets blended as the shaders blend the rows, times the clip's heading. An instance
+ * moving at the clip's ground speed is drawn at its position plus this (rotated and scaled as
+ * the instance), and its planted feet stay still. Zero for clips and files without it. Non-zero
+ * return for a clip that does not exist or a time that is not finite. */
+int cbpal_travel_offset(const cbpal_file *file, uint32_t clip, double time, float out[3]);
 
 /* XXH64 (seed 0), streaming: the checksum and input-hash function of the format. */
 typedef struct cbpal_xxh64 {
@@ -285,6 +300,7 @@ static void cbpal__parse_header(const unsigned char *d, cbpal_header *h)
                      &h->payload_offset, &h->payload_size, &h->payload_raw_size, &h->checksum};
     for (int i = 0; i < 9; ++i) *w[i] = cbpal__u64(d + 112 + 8 * i);
     h->offset_table_offset = h->version >= 3 ? cbpal__u64(d + 184) : 0;
+    h->travel_table_offset = h->version >= 5 && (h->flags & CBPAL_FLAG_ROW_TRAVEL) ? cbpal__u64(d + 192) : 0;
 }
 
 static int cbpal__check_string(const cbpal_header *h, const unsigned char *d, uint32_t off, uint32_t len)
@@ -324,6 +340,10 @@ static int cbpal__validate(const unsigned char *d, size_t size, cbpal_header *h,
         (!cbpal__fits(h->offset_table_offset, h->bone_count, 12, size) || h->offset_table_offset < CBPAL_HEADER_SIZE))
         return cbpal__fail(err, es, "position offset table (offset %llu, %u bones) lies outside the file",
                            (unsigned long long)h->offset_table_offset, h->bone_count);
+    if (h->version >= 5 && (h->flags & CBPAL_FLAG_ROW_TRAVEL) &&
+        (!cbpal__fits(h->travel_table_offset, h->rows, 4, size) || h->travel_table_offset < CBPAL_HEADER_SIZE))
+        return cbpal__fail(err, es, "travel offset table (offset %llu, %u rows) lies outside the file",
+                           (unsigned long long)h->travel_table_offset, h->rows);
     if (!cbpal__fits(h->strings_offset, h->strings_size, 1, size) || h->strings_offset < CBPAL_HEADER_SIZE)
         return cbpal__fail(err, es, "string table lies outside the file");
     if (h->payload_offset % CBPAL_PAYLOAD_ALIGN || !cbpal__fits(h->payload_offset, h->payload_size, 1, size) ||
@@ -484,6 +504,7 @@ int cbpal_get_clip(const cbpal_file *f, uint32_t i, cbpal_clip *out)
         out->root_velocity[k] = cbpal__f32(c + 32 + 4 * k);
         out->bounds_min[k] = cbpal__f32(c + 44 + 4 * k);
         out->bounds_max[k] = cbpal__f32(c + 56 + 4 * k);
+        out->travel_heading[k] = f->header.travel_table_offset ? cbpal__f32(c + 68 + 4 * k) : 0.0f;
     }
     return 0;
 }

@@ -93,4 +93,21 @@ int cbpal_bone_matrix(const cbpal_file *f, uint32_t clip, double time, uint32_t 
     return 0;
 }
 
+float cbpal_row_travel(const cbpal_file *f, uint32_t row)
+{
+    const cbpal_header *h = &f->header;
+    return h->travel_table_offset && row < h->rows ? cbpal__f32(f->data + h->travel_table_offset + (uint64_t)row * 4) : 0.0f;
+}
+
+int cbpal_travel_offset(const cbpal_file *f, uint32_t clip, double time, float out[3])
+{
+    cbpal_clip c;
+    uint32_t r0, r1, k;
+    float fr;
+    if (cbpal_get_clip(f, clip, &c) || cbpal__frame(&c, time, &r0, &r1, &fr)) return -1;
+    float a = cbpal_row_travel(f, r0), o = a + (cbpal_row_travel(f, r1) - a) * fr;
+    for (k = 0; k < 3; ++k) out[k] = o * c.travel_heading[k];
+    return 0;
+}
+
 #endif /* CROWDBAKE_PAL_RUNTIME_H */

@@ -89,6 +89,17 @@ static int pick_skin(const cb_model *m)
     return m->skin_count ? 0 : -1;
 }
 
+/* A clip's per-row travel as its bake will decide it: the manifest says it, the bake ships it. */
+static cb_status row_travel(const cb_bake_job *job, cb_sampler *s, const cb_clip_info *info, cb_row_travel *out,
+                            cb_error *err)
+{
+    float *offsets = malloc((info->frames ? info->frames : 1) * sizeof *offsets);
+    if (!offsets) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    cb_bake_job_row_travel(job, s, info, offsets, out);
+    free(offsets);
+    return CB_OK;
+}
+
 static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_type *t, cb_error *err)
 {
     /* The job's model: with plant_feet, the copy whose planted clips' legs were turned (what the
@@ -111,6 +122,7 @@ static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_
         c->visible_error_mm = -1; /* the bake measures it */
         cb_loop_reason_text(&info, c->loop_reason, sizeof c->loop_reason);
         cb_measure_ground_speed(s, &info, &c->speed);
+        if (row_travel(&w->job, s, &info, &c->travel, err)) break;
         row += info.frames;
     }
     t->rows = row;

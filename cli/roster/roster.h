@@ -54,6 +54,7 @@ typedef struct cb_roster_clip {
     bool in_place;         /* its root travel taken out (the job's root motion, cb_root_motion_in_place) */
     cb_ground_speed speed; /* speed.speed is the clip's ground speed */
     cb_plant_clip plant;   /* with plant_feet, what planting its feet changed (plant.planted: it did) */
+    cb_row_travel travel;  /* its per-row travel offset, as the bake decides it (cb_bake_job_row_travel) */
 } cb_roster_clip;
 
 typedef struct cb_roster_lod {
@@ -126,6 +127,9 @@ void cb_roster_json_stride(cb_json *j, const cb_stride *stride);
 /* What planting a clip's feet changed (crowdbake/plant_feet.h), into an open object: the manifest's
  * plant_feet, bake and info --json's. */
 void cb_roster_json_plant(cb_json *j, const cb_plant_clip *plant);
+/* A clip's per-row travel (row_travel.h) as the manifest and `info --json` give it: "row_travel"
+ * with "applied", "reason" and, where measured, the slide without and with the offsets. */
+void cb_roster_json_row_travel(cb_json *j, const cb_row_travel *travel);
 /* "sockets": [{name, bone, bind_transform}], as the manifest and `info --json` give them. */
 void cb_roster_json_sockets(cb_json *j, const cb_socket *sockets, uint32_t count);
 

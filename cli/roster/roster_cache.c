@@ -9,8 +9,9 @@
 
 #include "crowdbake_pal.h"
 
-static const char magic[8] = "CBPREP6"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by
-                                        * their soles; 5: the VAT error; 6: each clip's root motion (flag bit 2), loop reason and error */
+static const char magic[8] = "CBPREP7"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by
+                                        * their soles; 5: the VAT error; 6: each clip's root motion (flag bit 2), loop reason and error;
+                                        * 7: each clip's row travel */
 
 bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {
@@ -50,6 +51,7 @@ bool cb_prep_key(const cb_catalog_animal *an, const cb_limits *limits, char *con
     cbpal_xxh64_update(&h, settings, sizeof settings);
     if (b->measure_all) hash_str(&h, "measure_all"); /* only then: records made before it stay valid */
     if (b->plant_feet) hash_str(&h, "plant_feet");   /* (likewise) */
+    if (b->row_travel_off) hash_str(&h, "row_travel_off"); /* likewise */
     if (b->max_error_given && b->from.max_error == CB_FROM_COMMAND_LINE) hash_str(&h, "max_error from the command line");
     hash_str(&h, b->out_dir);
     cb_limits l = limits ? *limits : cb_default_limits();
@@ -124,6 +126,7 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
         put_str(&w, c->speed.method);
         put(&w, &c->speed.stride, sizeof c->speed.stride); /* plain numbers and zero-filled strings */
         if (c->plant.planted) put(&w, &c->plant, sizeof c->plant); /* (likewise; only then: older records read) */
+        put(&w, &c->travel, sizeof c->travel);             /* likewise */
     }
     put_u32(&w, t->animal->state_count);
     for (uint32_t s = 0; s < t->animal->state_count; ++s) put_u32(&w, (uint32_t)t->state_clip[s]);
@@ -245,6 +248,8 @@ static void read_clips(reader *r, cb_roster_type *t)
         if (!stride_plausible(&c->speed.stride)) r->failed = true;
         if (flags & 8u) get(r, &c->plant, sizeof c->plant);
         if ((flags & 8u) && (!c->plant.planted || !memchr(c->plant.why, 0, sizeof c->plant.why))) r->failed = true;
+        get(r, &c->travel, sizeof c->travel);
+        if (!memchr(c->travel.why, 0, sizeof c->travel.why)) r->failed = true;
     }
 }
 

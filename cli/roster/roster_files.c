@@ -61,7 +61,7 @@ static void write_state(cb_json *j, const cb_roster_type *t, uint32_t s)
     /* < 0: the clip's rows are held, not blended (a STEP-keyed clip), its first row -first_row - 1 */
     cb_json_int(j, "first_row", c->step ? -(long long)c->first_row - 1 : (long long)c->first_row);
     cb_json_int(j, "frame_count", c->loops ? (long long)c->frames : -(long long)c->frames); /* < 0: one-shot, clamps */
-    cb_json_number(j, "rate", c->fps);
+    cb_json_float32(j, "rate", (float)c->fps); /* the clip's fps, written alike */
     cb_json_number(j, "rate_per_speed", sync->speed ? c->fps / state_speed(t, c) : 0);
     cb_json_string(j, "phase", c->loops ? "golden_ratio" : "zero");
     cb_json_end(j);
@@ -131,7 +131,7 @@ void cb_roster_json_stride(cb_json *j, const cb_stride *st)
     cb_json_object(j, "foot_slide");
     cb_json_number(j, "mean", st->slide_mean);
     cb_json_number(j, "worst", st->slide_worst);
-    cb_json_number(j, "mean_with_per_row_travel", st->slide_mean_varying); /* measured, not shipped (stride.h) */
+    cb_json_number(j, "mean_with_per_row_travel", st->slide_mean_varying); /* stride.h's estimate; row_travel says what ships */
     cb_json_array(j, "feet");
     for (uint32_t k = 0; k < st->foot_count; ++k) {
         const cb_foot *f = &st->feet[k];
@@ -148,6 +148,23 @@ void cb_roster_json_stride(cb_json *j, const cb_stride *st)
     cb_json_end(j);
     cb_json_end(j);
     write_contacts(j, st);
+}
+
+void cb_roster_json_row_travel(cb_json *j, const cb_row_travel *t)
+{
+    cb_json_object(j, "row_travel");
+    cb_json_bool(j, "applied", t->applied); /* the .pal carries the clip's offsets (version 5) */
+    cb_json_string(j, "reason", t->why);
+    if (t->slide_mean > 0) { /* measured: a striding loop in place */
+        cb_json_number(j, "slide_mean", t->slide_mean);
+        cb_json_number(j, "slide_mean_with_offsets", t->slide_with);
+    }
+    if (t->applied) {
+        cb_json_inline_array(j, "heading");
+        for (int k = 0; k < 3; ++k) cb_json_number(j, NULL, t->heading[k]);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
 }
 
 /* `p` as an absolute path without "." or ".." steps or repeated slashes, worked out from the
@@ -279,6 +296,7 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
             cb_roster_json_plant(j, &cl->plant);
             cb_json_end(j);
         }
+        cb_roster_json_row_travel(j, &cl->travel);
         cb_json_end(j);
     }
     cb_json_end(j);

@@ -41,7 +41,7 @@ static void hash_settings(cbpal_xxh64_state *h, const cb_bake_settings *b)
                   b->layout, b->precision, b->formats, b->max_texture_size, b->root_motion, b->layout_set,
                   b->precision_set, b->zstd, b->exr_compression, b->fit_rows, b->measure_all,
                   b->from.fps, b->from.max_error, b->from.max_fps, b->from.fit_rows, b->from.root_motion,
-                  b->plant_feet};
+                  b->plant_feet, b->row_travel_off};
     cbpal_xxh64_update(h, v, sizeof v);
 }
 

@@ -57,6 +57,7 @@ typedef struct cb_bake_settings {
     bool plant_feet;             /* feet locked at bake time (plant_feet.h): leg chains turned so planted feet stay */
     cb_settings_from from;       /* where fps, max_error, max_fps, fit_rows and root_motion came from (all
                                   * CB_FROM_DEFAULT in cb_default_bake_settings) */
+    bool row_travel_off;         /* no per-row travel offsets (row_travel.h), where the bake would ship them */
 } cb_bake_settings;
 
 /* Which settings an override carries (the command line's bake options over a catalog). */
@@ -65,7 +66,7 @@ enum {
     CB_BAKE_MAX_TEXTURE_SIZE = 1u << 4, CB_BAKE_ROOT_MOTION = 1u << 5, CB_BAKE_ZSTD = 1u << 6,
     CB_BAKE_EXR_COMPRESSION = 1u << 7, CB_BAKE_OUT_DIR = 1u << 8, CB_BAKE_FIT_ROWS = 1u << 9,
     CB_BAKE_MEASURE_ALL = 1u << 10, CB_BAKE_ALLOW_OVER_BUDGET = 1u << 11, CB_BAKE_MAX_ERROR = 1u << 12,
-    CB_BAKE_MAX_FPS = 1u << 13, CB_BAKE_PLANT_FEET = 1u << 14
+    CB_BAKE_MAX_FPS = 1u << 13, CB_BAKE_PLANT_FEET = 1u << 14, CB_BAKE_ROW_TRAVEL = 1u << 15
 };
 
 /* fps = "auto" within 1 mm/m up to 120 fps (fps, 30, only for a fixed rate), qpos, u16, a .pal,
@@ -204,6 +205,11 @@ CROWDBAKE_API void cb_bake_result_free(cb_bake_result *result);
 CROWDBAKE_API bool cb_bake_job_clip_auto(const cb_bake_job *job, uint32_t clip);
 /* Planned clip i's rate: the one its search chose, else its fixed fps. */
 CROWDBAKE_API double cb_bake_job_clip_fps(const cb_bake_job *job, uint32_t clip);
+/* Planned clip `clip`'s per-row travel as the job's bake decides it (row_travel.h): `info` is the
+ * clip analyzed on `sampler` (cb_clip_analyze), offsets info->frames floats. A front end that
+ * reports the decision before or without baking (a roster's manifest) gets the bake's. */
+CROWDBAKE_API void cb_bake_job_row_travel(const cb_bake_job *job, cb_sampler *sampler, const cb_clip_info *info,
+                                          float *offsets, cb_row_travel *out);
 CROWDBAKE_API void cb_bake_job_free(cb_bake_job *job);
 /* Frees what planning kept only to save the bake work (the poses its rate searches sampled): a
  * planned job waiting its turn then holds its plan alone, and bakes the same bytes, sampling its

@@ -11,6 +11,7 @@
  * clip_settings.h  each clip's settings resolved once, with where each value came from
  * pool.h     the library's threads, for a program that bakes many models at once
  * stride.h, socket.h   what a game hangs on a clip and a rig: planted feet and footsteps, prop sockets
+ * row_travel.h         the per-row travel offset that keeps a gallop's planted feet still (.pal version 5)
  * mesh.h, gltf_mesh_write.h   runtime-ready meshes for a palette (`crowdbake mesh`)
  * gltf.h, pal_write.h, pal_view.h, exr.h, ktx2.h, babylon.h, vat.h, budget.h   files and sizes
  *
@@ -37,6 +38,7 @@
 #include "budget.h"
 #include "vat.h"
 #include "stride.h"
+#include "row_travel.h"
 #include "locomotion.h"
 #include "plant_feet.h"
 #include "socket.h"

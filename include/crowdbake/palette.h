@@ -10,6 +10,7 @@
 #include "export.h"
 
 #include "core.h"
+#include "row_travel.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -77,6 +78,7 @@ typedef struct cb_palette_clip {
     double visible_error;    /* the clip's visible error (cb_palette.visible_error's, for this clip alone), model units */
     bool step;               /* its rows are held, not blended: the runtime shows the row at or before the time (clip
                               * flag bit 2, .pal version 4) */
+    cb_row_travel travel;    /* its per-row travel offset, applied or not and why (row_travel.h; cb_bake_job_run fills it) */
 } cb_palette_clip;
 
 typedef struct cb_palette {
@@ -108,6 +110,8 @@ typedef struct cb_palette {
     uint32_t error_rows_measured;   /* rows the error was measured at: all, or an even subset */
     char fallback_note[512];        /* why qpos fell back to affine, or empty */
     double seconds_sample, seconds_encode, seconds_measure;
+    float *row_travel;              /* rows floats: each row's travel offset along its clip's heading (.pal version 5),
+                                     * 0 in clips without it; NULL when no clip has it (row_travel.h) */
 } cb_palette;
 
 /* Which clips a palette holds, in row order. */

@@ -17,7 +17,7 @@
 // with the npm package fzstd: this module stays dependency-free, and runtimes that never load
 // compressed palettes ship no decoder. Without one, such a file is refused with the fix.
 
-export const PAL_VERSION = 4; // newest known; writers write the oldest version that holds what a file says
+export const PAL_VERSION = 5; // newest known; writers write the oldest version that holds what a file says
 export const HEADER_SIZE = 256;
 export const CLIP_SIZE = 80;
 export const BONE_SIZE = 32;
@@ -32,6 +32,9 @@ export const FLAG_IN_PLACE = 2;
 // the bind position)
 export const FLAG_POSITIONS_RELATIVE = 4;
 export const FLAG_FITTED_ROWS = 8; // every clip's rows fitted to the linear blend between them, not sampled
+// Version 5: a per-row travel offset table (header byte 192, one f32 a row): an instance moved at its clip's ground
+// speed is drawn at its position plus travelOffset (the planted feet then stay still). Files without it read 0.
+export const FLAG_ROW_TRAVEL = 16;
 export const CLIP_LOOPS = 1;
 export const CLIP_FITTED = 2; // this clip's rows fitted to the linear blend (before it: header flag bit 3, every clip)
 // Version 4: this clip's rows are held, not blended (a STEP-keyed clip baked at its key times): the row at or before
@@ -179,6 +182,7 @@ function parseHeader(view) {
         input_hash: u64(112), clip_table_offset: u64(120), bone_table_offset: u64(128), strings_offset: u64(136),
         strings_size: u64(144), payload_offset: u64(152), payload_size: u64(160), payload_raw_size: u64(168),
         checksum: u64(176), offset_table_offset: u32(8) >= 3 ? u64(184) : 0n,
+        travel_table_offset: u32(8) >= 5 && (u32(12) & FLAG_ROW_TRAVEL) ? u64(192) : 0n,
     };
 }
 
@@ -224,6 +228,10 @@ function validateHeader(bytes, view, fail) {
         (!fits(h.offset_table_offset, h.bone_count, 12, n) || h.offset_table_offset < B(HEADER_SIZE)))
         fail(`position offset table (offset_table_offset ${h.offset_table_offset} at byte 184, ${h.bone_count} bones) ` +
              `lies outside the ${size}-byte file`);
+    if (h.version >= 5 && (h.flags & FLAG_ROW_TRAVEL) &&
+        (!fits(h.travel_table_offset, h.rows, 4, n) || h.travel_table_offset < B(HEADER_SIZE)))
+        fail(`travel offset table (travel_table_offset ${h.travel_table_offset} at byte 192, ${h.rows} rows) ` +
+             `lies outside the ${size}-byte file`);
     if (!fits(h.strings_offset, h.strings_size, 1, n) || h.strings_offset < B(HEADER_SIZE))
         fail(`string table (strings_offset ${h.strings_offset} at byte 136, strings_size ${h.strings_size} at byte 144) ` +
              `lies outside the ${size}-byte file`);
@@ -235,7 +243,7 @@ function validateHeader(bytes, view, fail) {
         fail(`payload_size ${h.payload_size} (byte 160) is not the ${h.payload_raw_size} bytes the texture needs`);
     // Every offset and size now lies inside the file: exact as Numbers.
     for (const k of ['clip_table_offset', 'bone_table_offset', 'strings_offset', 'strings_size', 'payload_offset',
-                     'payload_size', 'offset_table_offset'])
+                     'payload_size', 'offset_table_offset', 'travel_table_offset'])
         h[k] = Number(h[k]);
     return h;
 }
@@ -257,6 +265,8 @@ function readClips(bytes, view, h, fail) {
             step: (flags & CLIP_STEP) !== 0,
             root_velocity: [f32(32), f32(36), f32(40)],
             bounds_min: [f32(44), f32(48), f32(52)], bounds_max: [f32(56), f32(60), f32(64)],
+            // version 5: the direction its rows' travel offsets lie along (0 where it has none)
+            travel_heading: h.travel_table_offset ? [f32(68), f32(72), f32(76)] : [0, 0, 0],
         });
     }
     return clips;
@@ -315,9 +325,10 @@ function texelView(raw, precision) {
 
 // Parses a .pal held in `data` (ArrayBuffer or Uint8Array; kept, not copied: the texels are a view
 // into it). options: name (for messages), verifyChecksum, decompress, maxDecompressedBytes.
-// Returns { header, clips, bones, texels, texelBytes }: header has the fields of docs/pal-format.md
+// Returns { header, clips, bones, texels, texelBytes, rowTravel }: header has the fields of docs/pal-format.md
 // by name (input_hash and checksum as BigInt) plus layout_name and precision_name; clips and bones
 // what cbpal_get_clip / cbpal_get_bone give (and loops); texelBytes the payload's raw bytes.
+// rowTravel: version 5's travel offsets (Float32Array, one a row) or null (crowdbake_travel.mjs).
 // Beyond the C reader's checks: a zstd payload over options.maxDecompressedBytes (1 GiB) is refused.
 export function readPal(data, options = {}) {
     const name = options.name ?? 'palette';
@@ -334,7 +345,9 @@ export function readPal(data, options = {}) {
     h.payload_raw_size = Number(h.payload_raw_size); // now the length of a buffer in hand
     h.layout_name = LAYOUTS[h.layout];
     h.precision_name = PRECISIONS[h.precision];
-    return { header: h, clips, bones, texelBytes, texels: texelView(texelBytes, h.precision) };
+    const at = h.travel_table_offset; // copied: a Node Buffer's slice is a view into a shared pool
+    const rowTravel = at ? new Float32Array(new Uint8Array(bytes.subarray(at, at + 4 * h.rows)).buffer) : null;
+    return { header: h, clips, bones, texelBytes, texels: texelView(texelBytes, h.precision), rowTravel };
 }
 
 // Index into `texels` of a bone's first component in a baked row (rows wrap into column blocks).
@@ -582,3 +595,4 @@ export function boneMatrix(pal, clip, time, bone, out) {
     if (!Number.isInteger(clip) || !c) throw new Error(`clip ${clip} is not one of the palette's ${pal.clips.length} clips`);
     return instanceBoneMatrix(pal, [instanceFirstRow(c), c.loops ? c.frames : -c.frames, c.fps, 0], time, bone, out);
 }
+

@@ -11,7 +11,9 @@
 // enough for it to pay (bonePass: 'auto', the default; herd.choice() says which and why).
 //
 // Place instances with place(i, position, { yaw, scale }) or InstancedMesh's setMatrixAt; tint them
-// with setColorAt. The herd casts animated shadows (customDepthMaterial, customDistanceMaterial),
+// with setColorAt. A placed instance moving at a locomotion state's speed is drawn at its place plus
+// the palette's per-row travel offset (.pal version 5: travelOffsetAt), so a gallop's planted feet
+// stay still; instances set with setMatrixAt add travelOffsetAt themselves. The herd casts animated shadows (customDepthMaterial, customDistanceMaterial),
 // is frustum-culled against bounds that hold every baked pose, and motionVectorMaterial() draws
 // its screen-space velocity for TAA or motion blur. `three` is an import-map name (pages) or the
 // npm package (runtimes/web/package.json pins it).
@@ -21,6 +23,7 @@ import { FootstepClock } from './crowdbake_contacts.mjs';
 import { paletteDefines } from './crowdbake_crowd.mjs';
 import { AUTO_BONE_PASS_VERTICES, DEFAULT_LOD, sortInfluences } from './crowdbake_bones.mjs';
 import { BONE_VERTEX_PARS, HerdBonePass } from './crowdbake_three_bones.mjs';
+import { instanceTravelOffset } from './crowdbake_travel.mjs';
 
 // The skinned meshes of a GLTFLoader result that use its first skin, merged in glTF order:
 // positions, normals, joints, weights and indices as the palette's bone indices expect
@@ -207,6 +210,8 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         this.speed = new Float32Array(count);
         this.phase = new Float32Array(count).fill(NaN); // NaN: the state's own phase rule
         this.footsteps = new FootstepClock(type?.clips, count); // the roster's contacts (onContact)
+        this.placed = new Array(count).fill(null); // place()'s position, yaw and scale: travel offsets go on top
+        this.clipAtRow = new Map(pal.clips.map((c) => [instanceFirstRow(c), c]));
         const textures = paletteTextures(pal);
         const uniforms = {
             cb_palette: { value: textures.palette }, cb_bind_positions: { value: textures.bind },
@@ -286,18 +291,48 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // Places instance i at `position` ([x, y, z]), turned `yaw` radians about +y and scaled by
     // `scale`: a locomotion state then plays at speed / (scale x speed reference), feet planted.
     place(i, position, { yaw = 0, scale = 1 } = {}) {
-        const turn = new THREE.Quaternion().setFromAxisAngle(new THREE.Vector3(0, 1, 0), yaw);
-        this.setMatrixAt(i, new THREE.Matrix4().compose(new THREE.Vector3(...position), turn, new THREE.Vector3().setScalar(scale)));
-        this.instanceMatrix.needsUpdate = true;
+        this.placed[i] = { position: new THREE.Vector3(...position), yaw, scale };
+        this.drawPlaced(i);
         const was = this.instanceScale[i];
         this.instanceScale[i] = scale;
         if (was !== scale && this.states[this.instanceState[i]].rate_per_speed > 0) this.setSpeed(i, this.speed[i]); // same frame
+    }
+
+    // Instance i's matrix from its place and, moving at a locomotion state's speed, its travel offset.
+    drawPlaced(i) {
+        const { position, yaw, scale } = this.placed[i];
+        const turn = new THREE.Quaternion().setFromAxisAngle(new THREE.Vector3(0, 1, 0), yaw);
+        const at = this.travelOffsetAt(i).multiplyScalar(scale).applyQuaternion(turn).add(position);
+        super.setMatrixAt(i, new THREE.Matrix4().compose(at, turn, new THREE.Vector3().setScalar(scale)));
+        this.boundingBox = this.boundingSphere = null;
+        this.instanceMatrix.needsUpdate = true;
+    }
+
+    // Instance i's per-row travel offset at the herd's time, in the model's frame (model units): where
+    // the body of a clip with offsets (.pal version 5) is drawn, relative to a point moving at the
+    // state's speed, so its planted feet stay still; cross-fades mix the two clips' offsets as the
+    // shader mixes their poses. Zero for an instance at standstill or in a state that does not follow
+    // the speed, and for palettes without offsets.
+    travelOffsetAt(i, out = new THREE.Vector3()) {
+        const s = this.states[this.instanceState[i]];
+        out.set(0, 0, 0);
+        if (!this.pal.rowTravel || !(s?.rate_per_speed > 0) || !(this.speed[i] > 0)) return out;
+        const a = this.geometry.attributes, at = (attr, n) => attr.array.subarray(i * n, i * n + n);
+        const offset = (inst) => {
+            const clip = this.clipAtRow.get(inst[0]);
+            return clip ? instanceTravelOffset(this.pal, clip, inst, this.time) : [0, 0, 0];
+        };
+        const [start, length] = at(a.cb_fade, 2), to = offset(at(a.cb_inst, 4));
+        const fade = length > 0 ? Math.min(Math.max((this.time - start) / length, 0), 1) : 1;
+        const from = fade < 1 ? offset(at(a.cb_from, 4)) : to;
+        return out.set(...from.map((v, k) => v + (to[k] - v) * fade));
     }
 
     // The herd's bounds follow its instances: computed again (lazily, by three's culling) after
     // setMatrixAt or a write to instanceMatrix flagged needsUpdate (an O(count) pass, once a frame
     // at most).
     setMatrixAt(i, matrix) {
+        if (this.placed) this.placed[i] = null; // the caller's matrix: it adds travelOffsetAt itself
         super.setMatrixAt(i, matrix);
         this.boundingBox = this.boundingSphere = null;
     }
@@ -379,6 +414,8 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         this.footsteps.advance(this.count, time, (i) => [this.states[this.instanceState[i]].clip, inst.subarray(i * 4, i * 4 + 4)]);
         this.time = time;
         this.uniforms.cb_time.value = time;
+        // Placed instances first: the bone pass reads their matrices.
+        if (this.pal.rowTravel) for (let i = 0; i < this.count; ++i) if (this.placed[i]) this.drawPlaced(i);
         this.useBonePass(this.choice(renderer).method === 'bones');
         if (this.bonesOn) this.bones.run(renderer, this.count);
         if (this.instanceMatrix.version !== this.boundsVersion) {

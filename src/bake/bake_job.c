@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include "crowdbake_pal.h" /* XXH64 */
+#include "bake_travel.h"
 #include "outputs.h"
 #include "plant_feet.h"
 #include "../core/palette_bake.h" /* palette_choose_rates, the search's poses kept for the bake */
@@ -154,11 +155,11 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
     if (job->settings.fps_auto)
         snprintf(chosen, sizeof chosen, " auto max_error=%.17g max_fps=%.17g", job->settings.max_error_mm,
                  job->settings.max_fps);
-    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s%s\n",
+    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s%s%s\n",
                      CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
                      o->max_texture_size, (int)o->root_motion, job->skin, job->settings.zstd,
                      job->settings.exr_compression, o->fit ? " fit-rows" : "", o->measure_all ? " measure-all" : "", chosen,
-                     job->settings.plant_feet ? " plant-feet" : "");
+                     job->settings.plant_feet ? " plant-feet" : "", job->settings.row_travel_off ? " row-travel-off" : "");
     cbpal_xxh64_update(&h, opts, (size_t)n);
     cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
     return cbpal_xxh64_digest(&h);
@@ -492,12 +493,14 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
             cb_palette_free(&shared);
             palette_probe kept = {NULL, NULL, job->search_poses}; /* what the rate search sampled */
             resolved_plan(job, baked);
-            if (palette_bake_with_facts(s, &opt, baked, job->plan_count, NULL, &kept, &shared, err)) break;
+            if (palette_bake_with_facts(s, &opt, baked, job->plan_count, NULL, &kept, &shared, err) ||
+                bake_row_travel(job, s, &shared, err))
+                break;
             shared_opt = opt;
         }
         o->palette = shared; /* its facts; the tables and texels stay with `shared` */
         o->palette.clips = NULL, o->palette.bind_positions = NULL, o->palette.texels = NULL;
-        o->palette.position_offsets = NULL;
+        o->palette.position_offsets = NULL, o->palette.row_travel = NULL;
         out->output_count++;
         o->input_hash = cb_bake_input_hash(job, &opt);
         if (out->output_count == 1 && !replanned && (replanned = true) && replan_clips_over(job, s, &shared, err)) {
@@ -510,7 +513,8 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
             break;
         }
         if (out->output_count == 1)
-            bake_notes(&opt, job->settings.from.root_motion, &shared, &out->notes), warn_fixed_rates_over(job, out, &out->notes);
+            bake_notes(&opt, job->settings.from.root_motion, &shared, &out->notes), bake_travel_notes(&shared, &out->notes),
+                warn_fixed_rates_over(job, out, &out->notes);
         ktx2_half_note(job, format, &opt, &out->notes);
         write_output(job, &shared, &mapping, o, err);
     }

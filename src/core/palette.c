@@ -42,6 +42,7 @@ void cb_palette_free(cb_palette *p)
     free(p->clips);
     free(p->bind_positions);
     free(p->position_offsets);
+    free(p->row_travel);
     if (!p->texels_borrowed) free(p->texels);
     memset(p, 0, sizeof *p);
 }

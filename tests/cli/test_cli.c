@@ -363,6 +363,7 @@ static void test_example_catalog_states_the_defaults(void **state)
     assert_true(a->fps_auto == b->fps_auto && a->max_error_mm == b->max_error_mm && a->max_fps == b->max_fps);
     assert_true(a->fit_rows == b->fit_rows && a->allow_over_budget == b->allow_over_budget);
     assert_true(a->measure_all == b->measure_all && a->plant_feet == b->plant_feet);
+    assert_true(a->row_travel_off == b->row_travel_off);
     assert_int_equal(a->layout, b->layout);
     assert_int_equal(a->precision, b->precision);
     assert_int_equal(a->formats, b->formats);

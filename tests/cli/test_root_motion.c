@@ -88,7 +88,7 @@ static void test_manifest_says_root_motion_per_clip(void **state)
     snprintf(text, sizeof text,
              "[bake]\nout_dir = \"out\"\n[animal.cow]\nmodel = \"%s\"\nclips = [\"AnimalArmature|Death\", "
              "{ source = \"AnimalArmature|Jump_toIdle\", loop = true }, \"AnimalArmature|Walk\"]\n", cow_abs);
-    assert_int_equal(system("mkdir -p " TMP), 0);
+    assert_int_equal(system("rm -rf " TMP "/out && mkdir -p " TMP), 0);
     write_text(TMP "/cows.toml", text);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/cows.toml 2>&1 && cp " TMP "/out/roster.json " TMP "/first.json && %s bake "
              TMP "/cows.toml 2>&1 && cmp " TMP "/first.json " TMP "/out/roster.json", crowdbake_exe(), crowdbake_exe());

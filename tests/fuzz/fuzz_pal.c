@@ -1,6 +1,6 @@
 /* fuzz_pal.c - libFuzzer target: the .pal reader (include/crowdbake_pal.h) on arbitrary bytes,
  * with and without checksum verification, then every table entry, every bone's matrix at a few
- * times in every clip (cbpal_bone_matrix), and the palette decoded as
+ * times in every clip (cbpal_bone_matrix) and its travel offset (cbpal_travel_offset), and the palette decoded as
  * `verify`, `view` and the runtimes decode it (cb_palette_view, fuzz_decode.h). */
 #include <stdint.h>
 
@@ -33,6 +33,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                     float m[16];
                     if (cbpal_bone_matrix(&f, i, times[t], j, m) == 0) sink += m[15] == 1.0f;
                 }
+        /* Version 5's travel offsets at the same times (a table the header may point anywhere). */
+        for (uint32_t i = 0; i < f.header.clip_count; ++i)
+            for (int t = 0; t < 3; ++t) {
+                float o[3];
+                if (cbpal_travel_offset(&f, i, times[t], o) == 0) sink += o[0] == 0.0f;
+            }
         (void)sink;
         cb_palette view;
         cb_error e = {0};

@@ -187,6 +187,17 @@ static void test_corruption_is_rejected(void **state)
     memcpy(d, good, size);
     wr64(d + 120, (uint64_t)1 << 40);
     expect_rejected(d, size, "clip table", "bogus clip offset");
+    /* Version 5: Fox's Walk and Run carry travel offsets; their table is checked like the others. */
+    assert_int_equal(rd64(good + 192) != 0, 1);
+    memcpy(d, good, size);
+    wr64(d + 192, size - 3);
+    expect_rejected(d, size, "travel offset table", "travel table past the end");
+    memcpy(d, good, size);
+    wr64(d + 192, 100); /* inside the header */
+    expect_rejected(d, size, "travel offset table", "travel table in the header");
+    memcpy(d, good, size);
+    d[rd64(good + 192) + 5] ^= 0x10;
+    expect_rejected(d, size, "checksum mismatch", "travel table");
     memcpy(d, good, size);
     wr32(d + 8, CBPAL_VERSION + 1);
     expect_rejected(d, size, "newer than this reader", "future version");

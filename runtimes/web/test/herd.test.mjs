@@ -1,6 +1,7 @@
 // CrowdbakeHerd's game hooks without a GPU (three.js objects only): footstep callbacks from the
 // roster's contacts (every crossing, in order, across loop ends, big frames and rate changes, and
-// the feet really are down when they land), and boneMatrixAt through a cross-fade.
+// the feet really are down when they land), boneMatrixAt through a cross-fade, and a placed
+// gallop drawn at its place plus the palette's per-row travel offset.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
@@ -9,6 +10,8 @@ import path from 'node:path';
 import { readPal, readRoster, boneMatrix } from '../crowdbake_pal.mjs';
 import { contactsCrossed } from '../crowdbake_contacts.mjs';
 import { CrowdbakeHerd } from '../crowdbake_three.mjs';
+import { travelOffset } from '../crowdbake_travel.mjs';
+import * as THREE from 'three';
 import { CROWDBAKE, tmpDir } from './support.mjs';
 
 const dir = tmpDir('herd');
@@ -133,4 +136,35 @@ test('boneMatrixAt follows the instance through a cross-fade', () => {
     own.forEach((x, k) => assert.ok(Math.abs(x - after[k]) < 1e-4 * (1 + Math.abs(x)), `[${k}] ${x} ${after[k]}`));
     assert.ok(mid.some((x, k) => Math.abs(x - idle[k]) > 1e-6 && Math.abs(x - after[k]) > 1e-6));
     assert.throws(() => herd.boneMatrixAt(0, pal.header.bone_count), /bone/);
+});
+
+test('a placed instance galloping at speed is drawn at its place plus the travel offset; a walk and a standstill at their place', () => {
+    const herd = herdOf(3), g = pal.clips.findIndex((c) => c.name.endsWith('|Gallop'));
+    assert.ok(pal.rowTravel && pal.clips[g].travel_heading.some((x) => x !== 0), 'the gallop carries offsets');
+    const manifest = cow.clips.find((c) => c.name.endsWith('|Gallop'));
+    assert.ok(manifest); // the manifest says so too (row_travel.applied), checked by the schema test above
+    const yaw = 0.7, scale = 1.5, place = [3, 0, -2], m = new THREE.Matrix4(), p = new THREE.Vector3();
+    herd.setState(0, 'gallop', { fade: 0, phase: 0.25, speed: 6 });
+    herd.setState(1, 'walk', { fade: 0, phase: 0.25, speed: 2 });
+    herd.setState(2, 'gallop', { fade: 0, phase: 0.25, speed: 0 });
+    for (let i = 0; i < 3; ++i) herd.place(i, place, { yaw, scale });
+    let moved = 0;
+    for (const time of [0.1, 0.37, 0.52, 0.9]) {
+        herd.update(time);
+        const inst = herd.geometry.attributes.cb_inst.array;
+        const o = new THREE.Vector3(...travelOffset(pal, g, (time * inst[2] + inst[3] * inst[1]) / pal.clips[g].fps));
+        const want = o.multiplyScalar(scale).applyAxisAngle(new THREE.Vector3(0, 1, 0), yaw).add(new THREE.Vector3(...place));
+        herd.getMatrixAt(0, m), p.setFromMatrixPosition(m);
+        assert.ok(p.distanceTo(want) < 1e-5, `${time}: ${p.toArray()} vs ${want.toArray()}`);
+        moved = Math.max(moved, p.distanceTo(new THREE.Vector3(...place)));
+        for (const i of [1, 2]) { // no offsets (the walk) / at standstill: at its place
+            herd.getMatrixAt(i, m), p.setFromMatrixPosition(m);
+            assert.ok(p.distanceTo(new THREE.Vector3(...place)) < 1e-6, `instance ${i} at ${time}`);
+        }
+    }
+    assert.ok(moved > 0.001 * pal.header.model_height, `offsets up to ${moved}`);
+    herd.setMatrixAt(0, new THREE.Matrix4()); // the caller's matrix is left alone
+    herd.update(1.2);
+    herd.getMatrixAt(0, m);
+    assert.equal(p.setFromMatrixPosition(m).length(), 0);
 });

@@ -120,7 +120,7 @@ func _check_refusals() -> void:
 	var cases := {
 		"truncated": [good.slice(0, good.size() - 100), "truncated"],
 		"not a palette": [FileAccess.get_file_as_bytes(SHIPPED + "/crowdbake_loader.gd"), "not a crowdbake palette"],
-		"version 5": [_patched_u32(good, 8, 5), "version 5 is not supported"],
+		"version 6": [_patched_u32(good, 8, 6), "version 6 is not supported"],
 		"payload offset past the end": [_patched_u32(good, 152, 0x7fffffff), "do not add up"],
 	}
 	for what in cases:

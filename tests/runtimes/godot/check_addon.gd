@@ -37,6 +37,7 @@ func run() -> void:
 	_make_viewport()
 	var roster = ResourceLoader.load(COW + "/roster/roster.json", "CrowdbakeRoster")
 	_check_instance_numbers(roster, mesh)
+	_check_travel(roster, mesh)
 	_check_bounds(roster, mesh)
 	_check_manifest_footsteps(mesh) # before _check_footsteps changes the roster
 	_check_footsteps(roster, mesh)
@@ -269,6 +270,47 @@ func _check_instance_numbers(roster, mesh: Mesh) -> void:
 	herd.queue_free()
 	_end(name, why)
 
+# A placed instance galloping at speed is drawn at its place plus the .pal's per-row travel offset
+# (version 5), read here from the file's bytes (the table at header byte 192, the clip's heading at
+# its entry's byte 68), blended between rows as frame_at picks them; a walk (no offsets) and a
+# gallop at standstill stay at their places.
+func _check_travel(roster, mesh: Mesh) -> void:
+	var name := "a placed gallop is drawn at its place plus the .pal's travel offset; a walk at its place"
+	_begin(name)
+	var herd := _new_herd(roster, mesh, 3)
+	var bytes := FileAccess.get_file_as_bytes(COW + "/roster/" + _manifest["types"]["cow"]["palette"])
+	var table := bytes.decode_u64(192) if bytes.decode_u32(12) & 16 else 0
+	var place := Transform3D(Basis(Vector3.UP, 0.7).scaled(Vector3.ONE * 2.0), Vector3(3, 0, -1))
+	for i in 3:
+		herd.set_state(i, ["run", "wander", "run"][i], 0.0)
+		herd.set_speed(i, [5.0, 2.0, 0.0][i])
+		herd.place(i, place)
+	var why := "" if table != 0 else "the palette has no travel table (version %d)" % bytes.decode_u32(8)
+	var moved := 0.0
+	for step in 5:
+		herd.advance(0.13)
+		var inst: Vector4 = herd.instance_numbers(0)
+		var frame: Array = herd.palette.frame_at(inst, herd.time)
+		var entry := -1
+		for c in bytes.decode_u32(60):
+			if bytes.decode_u32(bytes.decode_u64(120) + c * 80 + 8) == int(inst.x):
+				entry = bytes.decode_u64(120) + c * 80
+		if why.is_empty() and entry >= 0:
+			var heading := Vector3(bytes.decode_float(entry + 68), bytes.decode_float(entry + 72), bytes.decode_float(entry + 76))
+			var o := lerpf(bytes.decode_float(table + 4 * frame[0]), bytes.decode_float(table + 4 * frame[1]), frame[2])
+			var want := place * (heading * o)
+			var got := herd.multimesh.get_instance_transform(0).origin
+			moved = maxf(moved, (got - place.origin).length())
+			if heading == Vector3.ZERO or (got - want).length() > 1e-4:
+				why = "at %s s the gallop is at %s, want %s (heading %s)" % [herd.time, got, want, heading]
+			for i in [1, 2]:
+				if why.is_empty() and (herd.multimesh.get_instance_transform(i).origin - place.origin).length() > 1e-6:
+					why = "instance %d (%s) moved off its place" % [i, ["", "a walk", "a gallop at standstill"][i]]
+	if why.is_empty() and moved < 1e-3:
+		why = "the gallop's offsets moved it only %s" % moved
+	herd.queue_free()
+	_end(name, why)
+
 # The MultiMesh's custom AABB holds every vertex of Cow's mesh skinned at many times, states and
 # places; the clip bounds alone, without the instances' places, would not.
 func _check_bounds(roster, mesh: Mesh) -> void:
@@ -452,6 +494,7 @@ func _check_drawing(roster, mesh: Mesh) -> void:
 	_end(name, "" if tinted and white[0].g > 0.05 else "white %s, tinted %s" % [white[0], red[0]])
 	name = "set_state changes the pose drawn"
 	_begin(name)
+	herd.set_state(0, "wander", 0.0) # from a walk: the roster's default state is decided by name now (graze)
 	var walk := await _frame()
 	herd.set_state(0, "wander", 0.0)
 	var same := _differ(walk, await _frame())

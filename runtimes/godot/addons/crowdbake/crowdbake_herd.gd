@@ -15,6 +15,8 @@
 # herd keeps its look: each surface's material (base colour, texture, vertex colours, alpha scissor)
 # on its own copy of the herd's shader, plain-colour surfaces merged into one (one draw call):
 # crowdbake_herd_mesh.gd.
+# A placed instance moving at a state's speed is drawn at its place plus the palette's per-row travel
+# offset (.pal version 5: travel_offset), so a gallop's planted feet stay still.
 # The instances' clip numbers live in a float texture (crowdbake_herd.gdshader), and the herd keeps
 # its own clock (`time`), so the CPU side (bone_transform_at, sockets, footsteps) sees the pose the
 # GPU draws.
@@ -52,6 +54,8 @@ var _texture: ImageTexture
 var _dirty := false
 var _bounds_dirty := false
 var _has_contacts := false # any clip of the type lists contacts (else advance skips the search)
+var _places: Array[Transform3D] = [] # place()'s transforms: the travel offset goes on top
+var _placed := PackedByteArray() # 1 where place() set the instance's transform
 
 func _ready() -> void:
 	if roster and not animal.is_empty() and mesh and count > 0 and palette == null:
@@ -91,6 +95,9 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	_states.resize(instances)
 	_speeds.resize(instances)
 	_speeds.fill(_type["speed_reference"])
+	_places.resize(instances)
+	_placed.resize(instances)
+	_placed.fill(0)
 	for i in instances:
 		mm.set_instance_transform(i, Transform3D())
 		mm.set_instance_color(i, Color.WHITE)
@@ -124,6 +131,10 @@ func advance(delta: float) -> void:
 	if _has_contacts:
 		for i in count:
 			_raise_contacts(i, before, time)
+	if not palette.row_travel.is_empty():
+		for i in count:
+			if _placed[i]:
+				_draw_placed(i)
 	_upload()
 
 # Puts instance `i` into `state` (a state of the roster type), cross-fading from its current clip
@@ -162,9 +173,28 @@ func set_speed(i: int, speed: float) -> void:
 # Instance `i`'s transform in the herd (a uniform scale is the animal's size); keeps the feet (rate)
 # in step, and the bounds by the next frame (or update_bounds()).
 func place(i: int, xform: Transform3D) -> void:
-	multimesh.set_instance_transform(i, xform)
+	_places[i] = xform
+	_placed[i] = 1
+	_draw_placed(i)
 	_retime(i)
 	_bounds_dirty = true
+
+# Instance `i`'s per-row travel offset now, in the model's frame: where the body of a clip with
+# offsets is drawn relative to a point moving at the state's speed (cross-fades mix the two clips'
+# offsets as the shader mixes their poses). Zero at standstill, in a state that does not follow the
+# speed, and for palettes without offsets. place() adds it; a caller setting the multimesh's
+# transforms itself adds xform * travel_offset(i).
+func travel_offset(i: int) -> Vector3:
+	var inst: Dictionary = _type["states"][_states[i]]["instance"] if not _states[i].is_empty() else {}
+	if palette.row_travel.is_empty() or float(inst.get("rate_per_speed", 0.0)) <= 0.0 or _speeds[i] <= 0.0:
+		return Vector3.ZERO
+	var to: Vector3 = palette.travel_offset_at(instance_numbers(i), time)
+	var fade := _fade(i)
+	return to if fade >= 1.0 else palette.travel_offset_at(instance_numbers(i, true), time).lerp(to, fade)
+
+func _draw_placed(i: int) -> void:
+	var xform := _places[i]
+	multimesh.set_instance_transform(i, Transform3D(xform.basis, xform * travel_offset(i)))
 
 func set_color(i: int, color: Color) -> void:
 	multimesh.set_instance_color(i, color)

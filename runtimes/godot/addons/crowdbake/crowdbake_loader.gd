@@ -66,8 +66,8 @@ func load_palette(path: String) -> Dictionary:
 	var flags := head.decode_u32(12)
 	var layout := head.decode_u32(20)
 	var precision := head.decode_u32(24)
-	if version < 1 or version > 4 or head.decode_u32(16) != HEADER_SIZE:
-		_fail("%s: palette format version %d is not supported (this loader reads versions 1 to 4); use the loader of the crowdbake that baked it"
+	if version < 1 or version > 5 or head.decode_u32(16) != HEADER_SIZE:
+		_fail("%s: palette format version %d is not supported (this loader reads versions 1 to 5); use the loader of the crowdbake that baked it"
 				% [path, version])
 		return {}
 	if layout > 2 or precision > 2:
@@ -81,6 +81,9 @@ func load_palette(path: String) -> Dictionary:
 	var bone_table := head.decode_u64(128)
 	# Version 3 qpos/half: each bone's position offset (what its position texels are relative to).
 	var offset_table := head.decode_u64(184) if version >= 3 and flags & 4 else 0
+	# Version 5: the per-row travel offsets (one float a row), what a herd adds along a clip's heading.
+	var travel_table := head.decode_u64(192) if version >= 5 and flags & 16 else 0
+	var rows := head.decode_u32(40)
 	var payload_offset := head.decode_u64(152)
 	var payload_size := head.decode_u64(160)
 	var raw_size := head.decode_u64(168)
@@ -91,6 +94,7 @@ func load_palette(path: String) -> Dictionary:
 			or head.decode_u32(56) != TEXEL_BYTES[precision] or raw_size != width * height * TEXEL_BYTES[precision] \
 			or bone_table < HEADER_SIZE or bone_table + bones * BONE_ENTRY_SIZE > file_size \
 			or (offset_table != 0 and offset_table + bones * 12 > file_size) or (version >= 3 and flags & 4 and offset_table < HEADER_SIZE) \
+			or (version >= 5 and flags & 16 and (travel_table < HEADER_SIZE or travel_table + rows * 4 > file_size)) \
 			or payload_offset < HEADER_SIZE or payload_size < 1 or payload_offset + payload_size > file_size \
 			or (flags & 1 == 0 and payload_size != raw_size):
 		_fail("%s: the header's sizes do not add up (or the file is truncated to %d bytes); re-bake it" % [path, file_size])
@@ -119,11 +123,16 @@ func load_palette(path: String) -> Dictionary:
 	else:
 		bind.append_array(bind.duplicate())
 	var bind_image := Image.create_from_data(bones, 2, false, Image.FORMAT_RGBAF, bind.to_byte_array())
+	var row_travel := PackedFloat32Array()
+	if travel_table != 0:
+		f.seek(travel_table)
+		row_travel = f.get_buffer(rows * 4).to_float32_array()
 	return {
 		"texture": ImageTexture.create_from_image(image),
 		"image": image,
 		"bind_positions": ImageTexture.create_from_image(bind_image),
 		"bind": bind, # the same, 4 floats per bone and row, for CPU-side lookups
+		"row_travel": row_travel, # version 5: each row's travel offset along its clip's heading; else empty
 		"positions_relative": 1.0 if flags & 4 else 0.0, # qpos/half: position texels hold p less the offset (row 1)
 		"layout": LAYOUTS[layout],
 		"precision": PRECISIONS[precision],

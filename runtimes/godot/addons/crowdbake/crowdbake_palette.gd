@@ -28,8 +28,10 @@ const CLIP_ENTRY_SIZE := 80
 @export_storage var speed_reference := 0.0         # ground speed (m/s) at playback rate 1; 0 when unset
 # One Dictionary per clip: name, first_row, frames, fps (rows per second of clip time), duration,
 # loops, step (rows held, not blended: a STEP-keyed clip, .pal version 4), bounds (AABB of the
-# skinned mesh over the clip).
+# skinned mesh over the clip), travel_heading (version 5: the direction its rows' travel offsets lie
+# along; zero without them).
 @export_storage var clips: Array[Dictionary] = []
+@export_storage var row_travel := PackedFloat32Array() # version 5: per row, the body's offset along its clip's heading
 @export_storage var bone_names := PackedStringArray()
 var error := "" # the last failure, one line
 
@@ -55,6 +57,7 @@ func load_file(path: String) -> bool:
 	_texels_per_bone = _Loader.TEXELS_PER_BONE[_Loader.LAYOUTS.find(layout)]
 	_texel_bytes = _Loader.TEXEL_BYTES[_Loader.PRECISIONS.find(precision)]
 	_bind = pal["bind"]
+	row_travel = pal["row_travel"]
 	return _read_tables(path)
 
 # The clip table and the bone names from the string table (load_palette checked the header's sizes).
@@ -80,7 +83,8 @@ func _read_tables(path: String) -> bool:
 		clips.append({"name": text.call(at), "first_row": bytes.decode_u32(at + 8), "frames": bytes.decode_u32(at + 12),
 				"fps": bytes.decode_float(at + 16), "duration": bytes.decode_float(at + 20),
 				"loops": bytes.decode_u32(at + 28) & 1 == 1, "step": bytes.decode_u32(at + 28) & 4 == 4,
-				"bounds": AABB(low, high - low)})
+				"bounds": AABB(low, high - low), "travel_heading": Vector3(bytes.decode_float(at + 68),
+				bytes.decode_float(at + 72), bytes.decode_float(at + 76)) if not row_travel.is_empty() else Vector3.ZERO})
 	for i in bytes.decode_u32(32):
 		bone_names.append(text.call(bone_table + i * _Loader.BONE_ENTRY_SIZE))
 	return true
@@ -125,6 +129,20 @@ func bone_matrix(clip, time: float, bone: int):
 func matrix_at(inst: Vector4, time: float, bone: int) -> Transform3D:
 	var frame := frame_at(inst, time)
 	return _blend(frame[0], frame[1], frame[2], bone)
+
+# The body's travel offset (.pal version 5) for an instance's four numbers at `time`, in the model's
+# frame: the rows' offsets blended as the shaders blend the rows, along the clip's heading. A herd
+# that moves the instance at the clip's ground speed draws it there (cbpal_travel_offset's numbers);
+# zero for clips and palettes without offsets.
+func travel_offset_at(inst: Vector4, time: float) -> Vector3:
+	if row_travel.is_empty():
+		return Vector3.ZERO
+	var frame := frame_at(inst, time)
+	var first := -inst.x - 1.0 if inst.x < 0.0 else inst.x
+	for c in clips:
+		if c["first_row"] == int(first) and frame[1] < row_travel.size():
+			return c["travel_heading"] * lerpf(row_travel[frame[0]], row_travel[frame[1]], frame[2])
+	return Vector3.ZERO
 
 # cb_frame of crowdbake_palette.gdshaderinc: [row0, row1, weight of row1].
 static func frame_at(inst: Vector4, time: float) -> Array:

@@ -26,7 +26,7 @@ namespace Crowdbake
         public float Fps, SpeedReference, LinearRange, MaxError, ModelHeight, VisibleError;
         public float[] BoundsMin = new float[3], BoundsMax = new float[3];
         public ulong InputHash, ClipTableOffset, BoneTableOffset, StringsOffset, StringsSize;
-        public ulong PayloadOffset, PayloadSize, PayloadRawSize, Checksum, OffsetTableOffset;
+        public ulong PayloadOffset, PayloadSize, PayloadRawSize, Checksum, OffsetTableOffset, TravelTableOffset;
     }
 
     public struct PalClip
@@ -49,7 +49,7 @@ namespace Crowdbake
 
     public sealed partial class PalFile
     {
-        public const uint NewestVersion = 4, HeaderBytes = 256, ClipBytes = 80, BoneBytes = 32, PayloadAlign = 4096;
+        public const uint NewestVersion = 5, HeaderBytes = 256, ClipBytes = 80, BoneBytes = 32, PayloadAlign = 4096;
         public const int ChecksumOffset = 176;
         public const uint FlagZstd = 1, FlagInPlace = 2, FlagPositionsRelative = 4, FlagFittedRows = 8;
         public const uint ClipLoops = 1, ClipFitted = 2, ClipStep = 4; // ClipStep (version 4): rows held, not blended
@@ -136,6 +136,8 @@ namespace Crowdbake
             h.StringsOffset = U64(d, 136); h.StringsSize = U64(d, 144); h.PayloadOffset = U64(d, 152);
             h.PayloadSize = U64(d, 160); h.PayloadRawSize = U64(d, 168); h.Checksum = U64(d, 176);
             h.OffsetTableOffset = h.Version >= 3 ? U64(d, 184) : 0;
+            // Version 5: the per-row travel offsets (docs/pal-format.md), checked here; this runtime does not add them yet.
+            h.TravelTableOffset = h.Version >= 5 && (h.Flags & 16u) != 0 ? U64(d, 192) : 0;
             return h;
         }
 
@@ -170,6 +172,8 @@ namespace Crowdbake
             if (h.Version >= 3 && (h.Flags & FlagPositionsRelative) != 0 &&
                 (!Fits(h.OffsetTableOffset, h.BoneCount, 12, size) || h.OffsetTableOffset < HeaderBytes))
                 throw Fail("position offset table (offset " + h.OffsetTableOffset + ", " + h.BoneCount + " bones) lies outside the file");
+            if (h.Version >= 5 && (h.Flags & 16u) != 0 && (!Fits(h.TravelTableOffset, h.Rows, 4, size) || h.TravelTableOffset < HeaderBytes))
+                throw Fail("travel offset table (offset " + h.TravelTableOffset + ", " + h.Rows + " rows) lies outside the file");
             if (!Fits(h.StringsOffset, h.StringsSize, 1, size) || h.StringsOffset < HeaderBytes)
                 throw Fail("string table lies outside the file");
             if (h.PayloadOffset % PayloadAlign != 0 || !Fits(h.PayloadOffset, h.PayloadSize, 1, size) || h.PayloadOffset < HeaderBytes)

@@ -1,0 +1,65 @@
+/* bake_travel.c - the bake job's per-row travel offsets (bake_travel.h). */
+#include "bake_travel.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal/plumbing.h"
+
+/* Whether a clip carries its own travel in its rows: root motion kept on a clip whose root
+ * travels. A clip animated in place (its root still) is in place whatever the mode says. */
+static bool carries_travel(const cb_bake_job *job, const cb_clip_info *info, double model_height)
+{
+    return !cb_root_motion_in_place(job->settings.root_motion, info) && cb_clip_travels(info, model_height);
+}
+
+void cb_bake_job_row_travel(const cb_bake_job *job, cb_sampler *s, const cb_clip_info *info, float *offsets,
+                            cb_row_travel *out)
+{
+    double lo[3], hi[3], model_height = cb_skin_rest_bounds(s, lo, hi);
+    if (job->settings.row_travel_off) {
+        memset(out, 0, sizeof *out);
+        memset(offsets, 0, (size_t)info->frames * sizeof *offsets);
+        snprintf(out->why, sizeof out->why, "not applied: turned off (--row-travel off, or the catalog's row_travel = false)");
+        return;
+    }
+    cb_row_travel_measure(s, info, !carries_travel(job, info, model_height), info->frames, offsets, out);
+}
+
+cb_status bake_row_travel(const cb_bake_job *job, cb_sampler *s, cb_palette *p, cb_error *err)
+{
+    float *offsets = calloc(p->rows ? p->rows : 1, sizeof *offsets);
+    if (!offsets) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    bool any = false;
+    for (uint32_t c = 0; c < p->clip_count && c < job->plan_count; ++c) {
+        cb_palette_clip *clip = &p->clips[c];
+        cb_row_travel *t = &clip->travel;
+        memset(t, 0, sizeof *t);
+        cb_clip_info info;
+        cb_error ignored = {0};
+        if (cb_clip_analyze(s, job->plan[c].animation, cb_bake_job_clip_fps(job, c), job->plan[c].loop, &job->limits, &info, &ignored)) {
+            snprintf(t->why, sizeof t->why, "not applied: %.200s", ignored.message);
+            continue;
+        }
+        if (info.frames != clip->frames) { /* framed as baked: the rate the bake chose gives its rows */
+            snprintf(t->why, sizeof t->why, "not applied: %u rows baked, %u analyzed", clip->frames, info.frames);
+            continue;
+        }
+        cb_bake_job_row_travel(job, s, &info, offsets + clip->first_row, t);
+        any = any || t->applied;
+    }
+    if (!any) free(offsets), offsets = NULL;
+    free(p->row_travel);
+    p->row_travel = offsets;
+    return CB_OK;
+}
+
+void bake_travel_notes(const cb_palette *p, cb_warnings *w)
+{
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        const cb_row_travel *t = &p->clips[c].travel;
+        if (t->slide_mean > 0) /* measured: a striding loop in place; the others need no word */
+            cb_warn(w, "note", "clip '%s' per-row travel %s", p->clips[c].name, t->why);
+    }
+}

@@ -1,0 +1,15 @@
+/* bake_travel.h - the bake job's per-row travel offsets (row_travel.h): measured per clip of a
+ * baked palette, kept where they help, unless the settings turn them off. */
+#ifndef CB_BAKE_TRAVEL_H
+#define CB_BAKE_TRAVEL_H
+
+#include "crowdbake/bake.h"
+
+/* Fills each clip's cb_palette_clip.travel and, where any clip's offsets are applied,
+ * p->row_travel (rows floats). Fails only when out of memory. */
+cb_status bake_row_travel(const cb_bake_job *job, cb_sampler *s, cb_palette *p, cb_error *err);
+
+/* A note per striding loop: its per-row travel applied or not, and why (the numbers). */
+void bake_travel_notes(const cb_palette *p, cb_warnings *w);
+
+#endif
