@@ -16,8 +16,8 @@
 
 #define CROWDBAKE_VERSION "0.1.0"
 /* The library's API version: MAJOR changes break callers, MINOR ones add to the API. */
-#define CROWDBAKE_API_VERSION_MAJOR 2
-#define CROWDBAKE_API_VERSION_MINOR 1
+#define CROWDBAKE_API_VERSION_MAJOR 3
+#define CROWDBAKE_API_VERSION_MINOR 0
 #define CROWDBAKE_API_VERSION (CROWDBAKE_API_VERSION_MAJOR * 100 + CROWDBAKE_API_VERSION_MINOR)
 
 #ifdef __cplusplus
@@ -125,7 +125,7 @@ typedef struct cb_skin {
     int32_t skeleton;      /* node index or -1 */
 } cb_skin;
 
-/* What a primitive looks like, kept from the file so `crowdbake mesh` writes it back (API 2.1).
+/* What a primitive looks like, kept from the file so `crowdbake mesh` writes it back (API 3.0).
  * Only the base colour and what decides how it blends are kept: the runtimes draw an unlit or
  * simply lit base colour. */
 typedef enum cb_alpha_mode { CB_ALPHA_OPAQUE, CB_ALPHA_MASK, CB_ALPHA_BLEND } cb_alpha_mode;
@@ -170,8 +170,8 @@ typedef struct cb_primitive {
      * primitive, each as the file types it (after Draco/meshopt decoding) and padded to 4 bytes
      * as vertex attributes must be; an index as stored (8-bit indices widen to 16). */
     uint32_t vertex_bytes, index_bytes;
-    const cb_material *material; /* NULL: glTF's default material (API 2.1) */
-    float *colors;               /* COLOR_0 as linear RGBA (alpha 1 for RGB), 4 per vertex, or NULL (API 2.1) */
+    const cb_material *material; /* NULL: glTF's default material (API 3.0) */
+    float *colors;               /* COLOR_0 as linear RGBA (alpha 1 for RGB), 4 per vertex, or NULL (API 3.0) */
 } cb_primitive;
 
 typedef enum cb_path { CB_PATH_TRANSLATION, CB_PATH_ROTATION, CB_PATH_SCALE } cb_path;
@@ -227,7 +227,7 @@ typedef struct cb_model {
      * gives the same bytes. NULL: nothing to release. See cb_model_release_clip. */
     void (*release)(void *release_ctx, const cb_byte_range *ranges, size_t count);
     void *release_ctx;
-    /* The file's materials, textures and images, for the primitives' `material` (API 2.1). */
+    /* The file's materials, textures and images, for the primitives' `material` (API 3.0). */
     uint32_t material_count;
     cb_material *materials;
     uint32_t texture_count;

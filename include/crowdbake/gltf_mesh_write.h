@@ -9,7 +9,7 @@
  * each vertex. Each part keeps its material (cb_mesh_part.material: base colour, metallic and
  * roughness, the base colour texture with its sampler, alpha mode, sides) and COLOR_0; materials,
  * textures and images are written once each, in the order the parts first use them, the images'
- * encoded bytes embedded in the binary chunk (API 2.1). asset.extras.crowdbake records the options
+ * encoded bytes embedded in the binary chunk (API 3.0). asset.extras.crowdbake records the options
  * and the measured error. */
 #ifndef CB_GLTF_MESH_WRITE_H
 #define CB_GLTF_MESH_WRITE_H

@@ -38,7 +38,7 @@ typedef struct cb_mesh_part {
     uint16_t *texcoords_u16;  /* quantize, texcoords within 0..1: 2 per vertex */
     uint32_t *indices;
     float *instance_ids;      /* batch > 1: the copy (0..batch-1) of each vertex */
-    /* API 2.1: what the part looks like, as the model's primitive has it. */
+    /* API 3.0: what the part looks like, as the model's primitive has it. */
     const cb_material *material; /* the model's (valid while the model lives); NULL: glTF's default */
     float *colors;               /* COLOR_0, linear RGBA, 4 per vertex, or NULL */
 } cb_mesh_part;

@@ -6,8 +6,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#if CROWDBAKE_API_VERSION_MAJOR != 2
-#error "written for crowdbake's API 2"
+#if CROWDBAKE_API_VERSION_MAJOR != 3
+#error "written for crowdbake's API 3"
 #endif
 
 int main(int argc, char **argv)

@@ -92,7 +92,7 @@ static void test_destdir_layout(void **state)
            root) != 0)
         fail_msg("%s", out);
     static const char *const files[] = {
-        "bin/crowdbake", "lib/libcrowdbake.a", "lib/libcrowdbake.so", "lib/libcrowdbake.so.2",
+        "bin/crowdbake", "lib/libcrowdbake.a", "lib/libcrowdbake.so", "lib/libcrowdbake.so.3",
         "include/crowdbake/crowdbake.h", "include/crowdbake/bake.h", "include/crowdbake_pal.h",
         "include/crowdbake_pal_runtime.h",
         "lib/pkgconfig/crowdbake.pc", "lib/cmake/crowdbake/crowdbakeConfig.cmake",
@@ -112,12 +112,12 @@ static void test_destdir_layout(void **state)
     if (!strstr(pc, "prefix=/opt/cb\n") || strstr(pc, "stage")) fail_msg("crowdbake.pc:\n%s", pc);
     free(pc);
     /* The shared library names its dependencies, so -lcrowdbake alone links. */
-    assert_int_equal(sh(out, sizeof out, "readelf -d " TMP "/stage/opt/cb/lib/libcrowdbake.so.2"), 0);
-    if (!strstr(out, "(SONAME)") || !strstr(out, "libcrowdbake.so.2") || !strstr(out, "libzstd")) fail_msg("%s", out);
+    assert_int_equal(sh(out, sizeof out, "readelf -d " TMP "/stage/opt/cb/lib/libcrowdbake.so.3"), 0);
+    if (!strstr(out, "(SONAME)") || !strstr(out, "libcrowdbake.so.3") || !strstr(out, "libzstd")) fail_msg("%s", out);
 }
 
 /* The installed shared library exports exactly what its installed headers declare: every
- * CROWDBAKE_API function and object, in the version node CROWDBAKE_2, and nothing else (no C++
+ * CROWDBAKE_API function and object, in the version node CROWDBAKE_3, and nothing else (no C++
  * internals of the glTF adapter or its dependencies, no library-private helpers). */
 static void test_shared_library_exports_only_its_api(void **state)
 {
@@ -125,7 +125,7 @@ static void test_shared_library_exports_only_its_api(void **state)
     if (skip_under_sanitizers()) skip();
     static char out[65536];
     if (sh(out, sizeof out,
-           "python3 tests/tools/abi_symbols.py %s/lib/libcrowdbake.so.2 %s/include/crowdbake %s/include/crowdbake_pal.h",
+           "python3 tests/tools/abi_symbols.py %s/lib/libcrowdbake.so.3 %s/include/crowdbake %s/include/crowdbake_pal.h",
            prefix, prefix, prefix) != 0)
         fail_msg("%s", out);
     unsigned exported = 0;
@@ -134,8 +134,9 @@ static void test_shared_library_exports_only_its_api(void **state)
      * its table of outputs, runtime, VAT and budget), about 120 functions and three tables. The
      * library exported 700 symbols before its visibility was set, 411 of them C++ (tinygltf,
      * Draco, RapidJSON, cbgltf::), and 157 functions before the tool's plumbing (the JSON writer,
-     * atomic files, arenas, name parsers and lookups, sentences) became internal (src/internal/). */
-    if (exported < 100 || exported > 150) fail_msg("%u exported symbols: %s", exported, out);
+     * atomic files, arenas, name parsers and lookups, sentences) became internal (src/internal/).
+     * API 3.0 added the locomotion decisions, planting feet and the per-row travel (153). */
+    if (exported < 100 || exported > 170) fail_msg("%u exported symbols: %s", exported, out);
 }
 
 /* A program outside the tree, through pkg-config: the same bytes as the command. It runs as
@@ -151,14 +152,14 @@ static void test_pkg_config_program_bakes_fox(void **state)
                 "env -u LD_LIBRARY_PATH " TMP "/bake_model %s " TMP "/pkg.pal",
                 prefix, fox);
     if (rc != 0) fail_msg("%s", out);
-    /* The default bake: error-bounded, Fox's clips at 24, 96 and 120 fps (289 rows). */
-    if (!strstr(out, "289 rows, 24 bones, qpos/u16") || !strstr(out, "read back: 48x289 texels")) fail_msg("%s", out);
+    /* The default bake: error-bounded, Fox's three clips in 272 rows. */
+    if (!strstr(out, "272 rows, 24 bones, qpos/u16") || !strstr(out, "read back: 48x272 texels")) fail_msg("%s", out);
     reference_bake(TMP "/reference.pal", "");
     assert_same_file(TMP "/pkg.pal", TMP "/reference.pal");
     /* It is the installed library that ran, not one from the build tree. */
     assert_int_equal(sh(out, sizeof out, "ldd " TMP "/bake_model"), 0);
     char want[PATH_MAX * 2];
-    snprintf(want, sizeof want, "%s/lib/libcrowdbake.so.2", prefix);
+    snprintf(want, sizeof want, "%s/lib/libcrowdbake.so.3", prefix);
     if (!strstr(out, want)) fail_msg("bake_model does not use %s:\n%s", want, out);
 }
 
@@ -186,7 +187,7 @@ static void test_tool_links_against_the_installed_library(void **state)
                 BUILD_DIR, BUILD_DIR, prefix, prefix, prefix, fox);
     if (rc != 0) fail_msg("%s", out);
     char want[PATH_MAX * 2];
-    snprintf(want, sizeof want, "%s/lib/libcrowdbake.so.2", prefix);
+    snprintf(want, sizeof want, "%s/lib/libcrowdbake.so.3", prefix);
     if (!strstr(out, want)) fail_msg("the command does not use %s:\n%s", want, out);
     reference_bake(TMP "/reference-shared.pal", "");
     assert_same_file(TMP "/shared.pal", TMP "/reference-shared.pal");

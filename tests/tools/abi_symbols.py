@@ -7,7 +7,7 @@ Reads LIBRARY's defined dynamic symbols (nm -D --defined-only) and every functio
 headers under HEADER_DIR declare (a cb_/cbpal_ name followed by '(' or declared extern), and
 fails, naming them, on a symbol no header declares (an internal leaking into the ABI) and on a
 declared function the library does not export (a declaration missing CROWDBAKE_API). Symbol
-versions (name@@CROWDBAKE_2) must be the one node the version script names."""
+versions (name@@CROWDBAKE_3) must be the one node the version script names."""
 import glob
 import os
 import re
@@ -17,7 +17,7 @@ import sys
 DECLARED_FUNCTION = re.compile(r'\b((?:cb|cbpal)_[A-Za-z0-9_]+)\s*\(')
 DECLARED_OBJECT = re.compile(r'^\s*(?:CROWDBAKE_API\s+)?extern\s+const\s+[A-Za-z0-9_ ]+?\b((?:cb|cbpal)_[A-Za-z0-9_]+)\s*[\[;]',
                              re.M)
-VERSION_NODE = 'CROWDBAKE_2'
+VERSION_NODE = 'CROWDBAKE_3'
 
 
 def strip_comments(text):
