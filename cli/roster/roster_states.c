@@ -102,9 +102,12 @@ void roster_warn_foot_slide(cb_roster_type *t)
     const cb_catalog_animal *an = t->animal;
     for (uint32_t c = 0; c < t->clip_count; ++c) {
         const cb_stride *st = &t->clips[c].speed.stride;
+        const cb_row_travel *travel = &t->clips[c].travel;
         bool synced = false;
         for (uint32_t s = 0; s < an->state_count; ++s) synced |= t->state_clip[s] == (int)c && t->state_sync[s].speed;
-        if (!synced || !st->stride || st->slide_mean <= CB_SLIDE_WARN) continue;
+        /* What remains is what a herd shows: with the per-row travel, the slide it leaves. */
+        double slide = travel->applied ? travel->slide_with : st->slide_mean;
+        if (!synced || !st->stride || slide <= CB_SLIDE_WARN) continue;
         double lo = INFINITY, hi = 0;
         for (uint32_t k = 0; k < st->foot_count; ++k)
             if (st->feet[k].strides) lo = fmin(lo, st->feet[k].step_speed), hi = fmax(hi, st->feet[k].step_speed);
@@ -112,11 +115,14 @@ void roster_warn_foot_slide(cb_roster_type *t)
          * be planted by one rate; feet that agree on average slide within each stance instead. */
         const char *why = hi > 1.25 * lo ? "so no one rate plants them all"
                                          : "together on average, but each slides back and forth within its stance";
+        char how[64]; /* the worst moment is measured without the travel */
+        if (travel->applied) snprintf(how, sizeof how, " with its per-row travel");
+        else snprintf(how, sizeof how, " (worst %.0f%%)", 100 * st->slide_worst);
         cb_warn(&t->warnings, "warning",
-                "clip '%s': its planted feet slide %.0f%% of the ground speed on average (worst %.0f%%) at any speed: "
+                "clip '%s': its planted feet slide %.0f%% of the ground speed on average%s at any speed: "
                 "its feet step back at %.3g to %.3g units/s, %s; the asset itself slides (plant_feet = true or "
                 "--plant-feet turns its legs at bake time so planted feet stay; or re-time the feet in the animation)",
-                t->clips[c].name, 100 * st->slide_mean, 100 * st->slide_worst, lo, hi, why);
+                t->clips[c].name, 100 * slide, how, lo, hi, why);
     }
 }
 

@@ -213,12 +213,36 @@ static void test_row_travel_off(void **state)
     assert_non_null(strstr(log, "--row-travel is auto or off"));
 }
 
+/* A catalog warns of the slide a herd shows: with the per-row travel, what it leaves (Husky's
+ * Gallop, 32% without, under the 25% warning with); the walk, which gets none, still warns. */
+static void test_slide_warning_counts_the_travel(void **state)
+{
+    (void)state;
+    char model[1024], model_abs[4096], text[8192], cmd[8192];
+    static char log[65536];
+    shared_path(model, sizeof model, "assets/quaternius-husky/Husky.glb");
+    assert_non_null(realpath(model, model_abs));
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"herd\"\n[animal.husky]\nmodel = \"%s\"\n"
+             "states = { idle = [\"Idle\"], walk = [\"Walk\"], gallop = [\"Gallop\"] }\n", model_abs);
+    assert_int_equal(system("mkdir -p " TMP), 0);
+    write_text(TMP "/herd.toml", text);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/herd.toml --force 2>&1", crowdbake_exe());
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s", log);
+    if (!strstr(log, "clip 'AnimalArmature|Walk': its planted feet slide") ||
+        strstr(log, "clip 'AnimalArmature|Gallop': its planted feet slide"))
+        fail_msg("%s", log);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/herd.toml --force --row-travel off 2>&1", crowdbake_exe());
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s", log);
+    if (!strstr(log, "clip 'AnimalArmature|Gallop': its planted feet slide")) fail_msg("%s", log);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cow),
         cmocka_unit_test(test_husky),
         cmocka_unit_test(test_row_travel_off),
+        cmocka_unit_test(test_slide_warning_counts_the_travel),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
