@@ -20,7 +20,9 @@ typedef struct cb_report_gait {
     char clip[128];
     double ground_speed;            /* model units/s at rate 1 */
     bool stride;                    /* measured on planted feet (else the root's travel) */
-    double slide_mean, slide_worst; /* shares of the ground speed */
+    double slide_mean, slide_worst; /* shares of the ground speed; the mean after the per-row travel where it has one */
+    bool row_travel;                /* the clip carries per-row travel offsets */
+    double slide_without;           /* with row_travel: the mean slide without them */
     bool slides;                    /* slide_mean > CB_SLIDE_WARN: the asset's feet slide at any rate */
 } cb_report_gait;
 

@@ -19,6 +19,8 @@ void report_fill_gaits(const cb_roster_type *rt, cb_report_type *t)
         g->ground_speed = c->speed.speed > 0 ? c->speed.speed : rt->speed_reference;
         g->stride = c->speed.stride.stride;
         g->slide_mean = c->speed.stride.slide_mean, g->slide_worst = c->speed.stride.slide_worst;
+        if ((g->row_travel = c->travel.applied)) /* what a herd shows: the slide the offsets leave */
+            g->slide_without = g->slide_mean, g->slide_mean = c->travel.slide_with;
         g->slides = g->stride && g->slide_mean > CB_SLIDE_WARN;
     }
 }
@@ -30,10 +32,13 @@ uint32_t report_gait_warnings(const cb_report_type *t)
     return n;
 }
 
-/* "49% (worst 235%)", or why nothing is measured. */
+/* "49% (worst 235%)", "12% with its per-row travel (35% without)", or why nothing is measured. */
 static const char *slide_text(const cb_report_gait *g, char *buf, size_t size)
 {
     if (!g->stride) snprintf(buf, size, "not measured (no stride: its speed is its root's travel)");
+    else if (g->row_travel)
+        snprintf(buf, size, "%.0f%% with its per-row travel (%.0f%% without)%s", 100 * g->slide_mean,
+                 100 * g->slide_without, g->slides ? ": FEET SLIDE AT ANY RATE" : "");
     else snprintf(buf, size, "%.0f%% (worst %.0f%%)%s", 100 * g->slide_mean, 100 * g->slide_worst,
                   g->slides ? ": FEET SLIDE AT ANY RATE" : "");
     return buf;
@@ -82,6 +87,8 @@ void report_gaits_json(cb_json *j, const cb_report_type *t)
         if (g->stride) {
             cb_json_number(j, "slide_mean", g->slide_mean);
             cb_json_number(j, "slide_worst", g->slide_worst);
+            cb_json_bool(j, "row_travel", g->row_travel);
+            if (g->row_travel) cb_json_number(j, "slide_mean_without_row_travel", g->slide_without);
         }
         cb_json_bool(j, "feet_slide_at_any_rate", g->slides);
         cb_json_end(j);

@@ -98,6 +98,24 @@ void report_herds_text(FILE *f, const cb_report *r)
     }
 }
 
+/* The page's line on the vertex rate: per type, the instances the target's rate skins a frame. */
+void report_herds_html(FILE *f, const cb_report *r)
+{
+    if (!r->has_budget || r->failed_types || !r->type_count || r->vertex_rate <= 0) return;
+    char n[32];
+    fprintf(f, "<p>Memory is not what runs out first: %s's vertex rate skins at most <b>%s vertices</b> a frame at %d Hz, "
+               "an estimate (", r->target, report_count_text(r->vertex_rate / FRAME_RATE, n, sizeof n), FRAME_RATE);
+    report_html_escape(f, r->vertex_rate_source);
+    fprintf(f, ", over ~%d FP32 operations a skinned vertex; fragments share the same units, so expect less): ",
+            SKINNED_VERTEX_FLOP);
+    for (uint32_t i = 0; i < r->type_count; ++i) {
+        fputs(i ? ", " : "", f);
+        report_html_escape(f, r->types[i].name);
+        fprintf(f, " <b>%s</b>", report_count_text(report_rate_instances(r, &r->types[i]), n, sizeof n));
+    }
+    fputs(" instances, each type alone.</p>\n", f);
+}
+
 void report_herds_json(cb_json *j, const cb_report *r, const cb_report_type *t)
 {
     cb_json_object(j, "herd");

@@ -222,6 +222,7 @@ static void html_chart(FILE *f, const cb_report *r)
         fprintf(f, "<p>Instances draw from their type's palette and mesh and add only their own data (%d B: the shader's "
                    "<code>a_instance</code> and a 3×4 transform): the %s left holds <b>%llu instances</b>.</p>\n",
                 INSTANCE_BYTES, left, (unsigned long long)((r->budget_bytes - r->total) / INSTANCE_BYTES));
+        report_herds_html(f, r);
     }
     fputs("<div class=\"chart\"><div class=\"row head\"><span class=\"name\"></span><span class=\"kind\"></span>", f);
     html_axis(f, &a);

@@ -34,6 +34,7 @@ void report_vertex_rate_json(cb_json *j, const cb_report *r);
 /* The share of the target's estimated vertex rate at 60 Hz that the type's herd skins; 0 where it states none. */
 double report_frame_share(const cb_report *r, const cb_report_type *t);
 double report_rate_instances(const cb_report *r, const cb_report_type *t);
+void report_herds_html(FILE *f, const cb_report *r);
 /* Writes s with HTML's special characters escaped (report_html.c, report_runtime.c). */
 void report_html_escape(FILE *f, const char *s);
 
