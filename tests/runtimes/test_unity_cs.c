@@ -61,7 +61,7 @@ static double compare_pal(const char *pal_path, unsigned *matrices)
     snprintf(args, sizeof args, "pal %s", pal_path);
     FILE *f = run_check(args, TMP "/pal.txt");
     double worst = 0;
-    unsigned header = 0, clips = 0, bones = 0;
+    unsigned header = 0, clips = 0, bones = 0, offsets = 0, travelled = 0;
     while (fgets(line, sizeof line, f)) {
         if (line[0] == 'H') {
             unsigned v, fl, lay, prec, bc, rows, w, h, blocks, cc;
@@ -106,6 +106,15 @@ static double compare_pal(const char *pal_path, unsigned *matrices)
             assert_int_equal(cbpal_bone_matrix(&pal, clip, t, bone, want), 0);
             for (int k = 0; k < 16; ++k) check_close("bone matrix", m[k], want[k], 1e-6, &worst);
             ++*matrices;
+        } else if (line[0] == 'T') { /* the per-row travel offset, version 5 */
+            unsigned clip;
+            double t;
+            float o[3], want[3];
+            assert_int_equal(sscanf(line, "T %u %lf %f %f %f", &clip, &t, &o[0], &o[1], &o[2]), 5);
+            assert_int_equal(cbpal_travel_offset(&pal, clip, t, want), 0);
+            for (int k = 0; k < 3; ++k) check_close("travel offset", o[k], want[k], 1e-6, &worst);
+            travelled += want[0] != 0 || want[2] != 0;
+            ++offsets;
         } else {
             fail_msg("%s: unexpected line from CrowdbakeCheck: %s", pal_path, line);
         }
@@ -115,6 +124,9 @@ static double compare_pal(const char *pal_path, unsigned *matrices)
     assert_int_equal(clips, pal.header.clip_count);
     assert_int_equal(bones, pal.header.bone_count);
     assert_int_equal(*matrices, pal.header.clip_count * 11 * pal.header.bone_count);
+    assert_int_equal(offsets, pal.header.clip_count * 11);
+    if (pal.header.travel_table_offset && !travelled) fail_msg("%s: no travel offset read from its table", pal_path);
+    if (pal.header.travel_table_offset) printf("  %u travel offsets (version 5), %u of them moving\n", offsets, travelled);
     cbpal_close(&pal);
     return worst;
 }

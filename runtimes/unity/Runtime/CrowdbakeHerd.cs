@@ -174,11 +174,15 @@ namespace Crowdbake
         void Draw(float now)
         {
             Matrix4x4 herd = transform.localToWorldMatrix;
+            var travel = new float[3];
             for (int b = 0; b < batches.Length; ++b) {
                 Batch batch = batches[b];
                 for (int k = 0; k < batch.matrices.Length; ++k) {
                     int i = b * BatchSize + k;
-                    batch.matrices[k] = herd * placement[i];
+                    // The body's per-row travel (a gallop's), in the model's frame, mirrored as the mesh is.
+                    state.TravelOffsetAt(i, travel);
+                    var offset = new Vector3(meshMirroredX ? -travel[0] : travel[0], travel[1], travel[2]);
+                    batch.matrices[k] = herd * placement[i] * Matrix4x4.Translate(offset);
                     batch.inst[k] = new Vector4(state.Inst[i * 4], state.Inst[i * 4 + 1], state.Inst[i * 4 + 2], state.Inst[i * 4 + 3]);
                     batch.from[k] = new Vector4(state.From[i * 4], state.From[i * 4 + 1], state.From[i * 4 + 2], state.From[i * 4 + 3]);
                     batch.fade[k] = new Vector4(state.Fade[i * 2], state.Fade[i * 2 + 1], 0, 0);

@@ -49,6 +49,7 @@ static class CrowdbakeCheck
                  b.PositionOffset[2]);
         }
         var m = new float[16];
+        var o = new float[3];
         for (uint c = 0; c < pal.Clips.Length; ++c)
             for (int k = -1; k <= 9; ++k) {
                 // grid times, between rows, before the start and past the end (loops wrap, one-shots clamp)
@@ -57,6 +58,8 @@ static class CrowdbakeCheck
                     if (!pal.BoneMatrix(c, t, bone, m)) throw new Exception("BoneMatrix refused clip " + c + " bone " + bone);
                     Matrix("M", c, t, bone, m);
                 }
+                if (!pal.TravelOffset(c, t, o)) throw new Exception("TravelOffset refused clip " + c);
+                Line("T", c, t, o[0], o[1], o[2]);
             }
     }
 

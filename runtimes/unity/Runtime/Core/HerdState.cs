@@ -166,6 +166,27 @@ namespace Crowdbake
             return true;
         }
 
+        // Instance i's per-row travel offset at the herd's time, model units in the model's frame: where
+        // its body is drawn relative to the point the game moves at the state's speed, so the planted
+        // feet of a clip with offsets (.pal version 5, a gallop) stay still; a cross-fade mixes the two
+        // clips' offsets as the shader mixes their poses (crowdbake_three.mjs travelOffsetAt). Zero at
+        // standstill, in a state that does not follow the speed, and for palettes without offsets.
+        public void TravelOffsetAt(int i, float[] o)
+        {
+            Array.Clear(o, 0, 3);
+            RosterState s = Find(StateOf[i]);
+            if (pal.Header.TravelTableOffset == 0 || s == null || !(s.ratePerSpeed > 0) || !(Speed[i] > 0)) return;
+            var inst = new float[4];
+            Array.Copy(Inst, i * 4, inst, 0, 4);
+            pal.InstanceTravelOffset(inst, Time, o);
+            float fade = FadeWeight(i, Time);
+            if (fade >= 1) return;
+            var from = new float[3];
+            Array.Copy(From, i * 4, inst, 0, 4);
+            pal.InstanceTravelOffset(inst, Time, from);
+            for (int k = 0; k < 3; ++k) o[k] = from[k] + (o[k] - from[k]) * fade;
+        }
+
         // Instance i's unwrapped row position at `time` (crowdbake_contacts.mjs rowPosition).
         double RowPosition(int i, double time) { return time * Inst[i * 4 + 2] + Inst[i * 4 + 3] * Math.Abs((double)Inst[i * 4 + 1]); }
 

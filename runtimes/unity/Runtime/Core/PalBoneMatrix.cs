@@ -123,6 +123,44 @@ namespace Crowdbake
             return true;
         }
 
+        // A row's travel offset along its clip's heading, model units (0 in files without the table).
+        public float RowTravel(uint row)
+        {
+            return Header.TravelTableOffset != 0 && row < Header.Rows ? F32(data, Header.TravelTableOffset + (ulong)row * 4) : 0;
+        }
+
+        // The body's travel offset `time` seconds into clip `clip`, model units in the model's frame:
+        // the rows' offsets blended as the shaders blend the rows, along the clip's heading
+        // (cbpal_travel_offset). False for a clip that does not exist or a time that is not finite.
+        public bool TravelOffset(uint clip, double time, float[] o)
+        {
+            uint r0, r1;
+            float fr;
+            Array.Clear(o, 0, 3);
+            if (clip >= Clips.Length || !ClipFrame(Clips[clip], time, out r0, out r1, out fr)) return false;
+            AlongHeading(Clips[clip], r0, r1, fr, o);
+            return true;
+        }
+
+        // The same for an instance's four numbers at `time`, its clip found by its first row.
+        public bool InstanceTravelOffset(float[] inst, double time, float[] o)
+        {
+            uint r0, r1;
+            float fr;
+            Array.Clear(o, 0, 3);
+            if (!InstanceFrame(inst, time, out r0, out r1, out fr)) return false;
+            double first = inst[0] < 0 ? -(double)inst[0] - 1 : inst[0];
+            foreach (PalClip c in Clips)
+                if (c.FirstRow == first) AlongHeading(c, r0, r1, fr, o);
+            return true;
+        }
+
+        void AlongHeading(PalClip c, uint r0, uint r1, float fr, float[] o)
+        {
+            float a = RowTravel(r0), v = a + (RowTravel(r1) - a) * fr;
+            for (int k = 0; k < 3; ++k) o[k] = v * c.TravelHeading[k];
+        }
+
         // Two rows blended into the joint matrix M (cbpal_bone_matrix's body).
         public void RowsMatrix(uint r0, uint r1, float fr, uint bone, float[] m)
         {

@@ -35,6 +35,7 @@ namespace Crowdbake
         public uint FirstRow, Frames, Flags;
         public float Fps, Duration, Start;
         public float[] RootVelocity, BoundsMin, BoundsMax;
+        public float[] TravelHeading; // version 5: the direction its rows' travel offsets lie along (0 where it has none)
         public bool Loops { get { return (Flags & PalFile.ClipLoops) != 0; } }
         // Its rows are held, not blended (a STEP-keyed clip): the instance's first row is -FirstRow - 1.
         public bool Step { get { return (Flags & PalFile.ClipStep) != 0; } }
@@ -136,7 +137,7 @@ namespace Crowdbake
             h.StringsOffset = U64(d, 136); h.StringsSize = U64(d, 144); h.PayloadOffset = U64(d, 152);
             h.PayloadSize = U64(d, 160); h.PayloadRawSize = U64(d, 168); h.Checksum = U64(d, 176);
             h.OffsetTableOffset = h.Version >= 3 ? U64(d, 184) : 0;
-            // Version 5: the per-row travel offsets (docs/pal-format.md), checked here; this runtime does not add them yet.
+            // Version 5: the per-row travel offsets (docs/pal-format.md), which HerdState.TravelOffsetAt adds.
             h.TravelTableOffset = h.Version >= 5 && (h.Flags & 16u) != 0 ? U64(d, 192) : 0;
             return h;
         }
@@ -207,12 +208,13 @@ namespace Crowdbake
                 Name = StringAt(U32(data, c), U32(data, c + 4)), FirstRow = U32(data, c + 8), Frames = U32(data, c + 12),
                 Fps = F32(data, c + 16), Duration = F32(data, c + 20), Start = F32(data, c + 24),
                 Flags = U32(data, c + 28) | ((Header.Flags & FlagFittedRows) != 0 ? ClipFitted : 0u),
-                RootVelocity = new float[3], BoundsMin = new float[3], BoundsMax = new float[3]
+                RootVelocity = new float[3], BoundsMin = new float[3], BoundsMax = new float[3], TravelHeading = new float[3]
             };
             for (uint k = 0; k < 3; ++k) {
                 clip.RootVelocity[k] = F32(data, c + 32 + 4 * k);
                 clip.BoundsMin[k] = F32(data, c + 44 + 4 * k);
                 clip.BoundsMax[k] = F32(data, c + 56 + 4 * k);
+                clip.TravelHeading[k] = Header.TravelTableOffset != 0 ? F32(data, c + 68 + 4 * k) : 0;
             }
             return clip;
         }

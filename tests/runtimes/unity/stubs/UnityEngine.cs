@@ -136,6 +136,7 @@ namespace UnityEngine
     {
         public static Matrix4x4 identity { get { return default(Matrix4x4); } }
         public static Matrix4x4 TRS(Vector3 pos, Quaternion q, Vector3 s) { return default(Matrix4x4); }
+        public static Matrix4x4 Translate(Vector3 vector) { return default(Matrix4x4); }
         public float this[int row, int column] { get { return 0; } set { } }
         public Quaternion rotation { get { return default(Quaternion); } }
         public Vector3 MultiplyPoint3x4(Vector3 point) { return point; }
