@@ -3,6 +3,7 @@
  * strings as a u32 length and their bytes. Doubles are stored bit for bit, so a manifest
  * written from a record is byte-identical to one written after loading the model. */
 #include "roster_cache.h"
+#include "record_io.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -67,84 +68,51 @@ bool cb_prep_key(const cb_catalog_animal *an, const cb_limits *limits, char *con
 
 /* ---- writing ---- */
 
-typedef struct writer {
-    unsigned char *data;
-    size_t size, cap;
-    bool failed;
-} writer;
-
-static void put(writer *w, const void *p, size_t n)
-{
-    if (w->failed || n == 0) return;
-    if (w->size + n > w->cap) {
-        size_t cap = w->cap ? w->cap * 2 : 4096;
-        while (cap < w->size + n) cap *= 2;
-        unsigned char *grown = realloc(w->data, cap);
-        if (!grown) {
-            w->failed = true;
-            return;
-        }
-        w->data = grown, w->cap = cap;
-    }
-    memcpy(w->data + w->size, p, n);
-    w->size += n;
-}
-
-static void put_u32(writer *w, uint32_t v) { put(w, &v, sizeof v); }
-static void put_u64(writer *w, uint64_t v) { put(w, &v, sizeof v); }
-static void put_f64(writer *w, double v) { put(w, &v, sizeof v); }
-static void put_str(writer *w, const char *s)
-{
-    uint32_t n = (uint32_t)strlen(s);
-    put_u32(w, n);
-    put(w, s, n);
-}
-
 bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char **data, size_t *size)
 {
-    writer w = {0};
-    put(&w, magic, sizeof magic);
-    put_u64(&w, key);
-    put_u64(&w, 0), put_u64(&w, 0); /* body length and hash, filled in below */
+    record_writer w = {0};
+    rec_put(&w, magic, sizeof magic);
+    rec_put_u64(&w, key);
+    rec_put_u64(&w, 0), rec_put_u64(&w, 0); /* body length and hash, filled in below */
     size_t body = w.size;
-    put_u64(&w, t->key), put_u64(&w, t->input_hash);
-    put_u32(&w, t->bones), put_u32(&w, t->rows);
-    put_u64(&w, t->vertices), put_u64(&w, t->indices), put_u64(&w, t->mesh_bytes);
-    put_f64(&w, t->model_height), put_f64(&w, t->speed_reference);
-    put_str(&w, t->speed_reference_from);
-    put_u32(&w, t->vat_measured), put_f64(&w, t->vat_error);
-    put_u32(&w, t->clip_count);
+    rec_put_u64(&w, t->key), rec_put_u64(&w, t->input_hash);
+    rec_put_u32(&w, t->bones), rec_put_u32(&w, t->rows);
+    rec_put_u64(&w, t->vertices), rec_put_u64(&w, t->indices), rec_put_u64(&w, t->mesh_bytes);
+    rec_put_f64(&w, t->model_height), rec_put_f64(&w, t->speed_reference);
+    rec_put_str(&w, t->speed_reference_from);
+    rec_put_u32(&w, t->vat_measured), rec_put_f64(&w, t->vat_error);
+    rec_put_u32(&w, t->clip_count);
     for (uint32_t i = 0; i < t->clip_count; ++i) {
         const cb_roster_clip *c = &t->clips[i];
-        put_str(&w, c->name);
-        put_u32(&w, c->first_row), put_u32(&w, c->frames);
-        put_u32(&w, (c->loops ? 1u : 0u) | (c->step ? 2u : 0u) | (c->in_place ? 4u : 0u) | (c->plant.planted ? 8u : 0u));
-        put_f64(&w, c->fps), put_f64(&w, c->duration);
-        put_str(&w, c->loop_reason);
-        put_f64(&w, c->visible_error_mm);
-        put_f64(&w, c->speed.speed), put_f64(&w, c->speed.root), put_f64(&w, c->speed.feet);
-        put_str(&w, c->speed.method);
-        put(&w, &c->speed.stride, sizeof c->speed.stride); /* plain numbers and zero-filled strings */
-        if (c->plant.planted) put(&w, &c->plant, sizeof c->plant); /* (likewise; only then: older records read) */
-        put(&w, &c->travel, sizeof c->travel);             /* likewise */
+        rec_put_str(&w, c->name);
+        rec_put_u32(&w, c->first_row), rec_put_u32(&w, c->frames);
+        rec_put_u32(&w, (c->loops ? 1u : 0u) | (c->step ? 2u : 0u) | (c->in_place ? 4u : 0u) | (c->plant.planted ? 8u : 0u));
+        rec_put_f64(&w, c->fps), rec_put_f64(&w, c->duration);
+        rec_put_str(&w, c->loop_reason);
+        rec_put_f64(&w, c->visible_error_mm);
+        rec_put_f64(&w, c->speed.speed), rec_put_f64(&w, c->speed.root), rec_put_f64(&w, c->speed.feet);
+        rec_put_str(&w, c->speed.method);
+        rec_put(&w, &c->speed.stride, sizeof c->speed.stride); /* plain numbers and zero-filled strings */
+        if (c->plant.planted) rec_put(&w, &c->plant, sizeof c->plant); /* (likewise; only then: older records read) */
+        rec_put(&w, &c->travel, sizeof c->travel);             /* likewise */
     }
-    put_u32(&w, t->animal->state_count);
-    for (uint32_t s = 0; s < t->animal->state_count; ++s) put_u32(&w, (uint32_t)t->state_clip[s]);
-    put_u32(&w, t->lod_count);
+    rec_put_u32(&w, t->animal->state_count);
+    for (uint32_t s = 0; s < t->animal->state_count; ++s) rec_put_u32(&w, (uint32_t)t->state_clip[s]);
+    rec_put_u32(&w, t->lod_count);
     for (uint32_t l = 0; l < t->lod_count; ++l) {
         const cb_roster_lod *lod = &t->lods[l];
-        put_u32(&w, lod->joint_count);
-        put(&w, lod->remap, (size_t)lod->joint_count * sizeof *lod->remap);
-        put_u64(&w, lod->vertices), put_u64(&w, lod->indices);
+        rec_put_u32(&w, lod->joint_count);
+        rec_put(&w, lod->remap, (size_t)lod->joint_count * sizeof *lod->remap);
+        rec_put_u64(&w, lod->vertices), rec_put_u64(&w, lod->indices);
     }
-    put_u32(&w, t->socket_count);
-    put(&w, t->sockets, (size_t)t->socket_count * sizeof *t->sockets); /* plain numbers and zero-filled names */
-    put_u32(&w, t->input_count);
-    for (uint32_t i = 0; i < t->input_count; ++i) put_str(&w, t->inputs[i]);
-    put_u32(&w, t->warnings.count);
+    rec_put_u32(&w, t->socket_count);
+    rec_put(&w, t->sockets, (size_t)t->socket_count * sizeof *t->sockets); /* plain numbers and zero-filled names */
+    rec_put_u32(&w, t->input_count);
+    for (uint32_t i = 0; i < t->input_count; ++i) rec_put_str(&w, t->inputs[i]);
+    rec_put_u32(&w, t->warnings.count);
     for (uint32_t i = 0; i < t->warnings.count; ++i) {
-        put_str(&w, t->warnings.items[i].kind);
-        put_str(&w, t->warnings.items[i].message);
+        rec_put_str(&w, t->warnings.items[i].kind);
+        rec_put_str(&w, t->warnings.items[i].message);
     }
     if (w.failed) {
         free(w.data);
@@ -159,48 +127,8 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
 
 /* ---- reading ---- */
 
-typedef struct reader {
-    const unsigned char *p, *end;
-    bool failed;
-} reader;
-
-static void get(reader *r, void *out, size_t n)
-{
-    if (n == 0) return;
-    if (r->failed || (size_t)(r->end - r->p) < n) {
-        r->failed = true;
-        memset(out, 0, n);
-        return;
-    }
-    memcpy(out, r->p, n);
-    r->p += n;
-}
-
-static uint32_t get_u32(reader *r) { uint32_t v; get(r, &v, sizeof v); return v; }
-static uint64_t get_u64(reader *r) { uint64_t v; get(r, &v, sizeof v); return v; }
-static double get_f64(reader *r) { double v; get(r, &v, sizeof v); return v; }
-
-/* A string into buf (truncation fails the record); NULL buf: a malloc'ed copy. */
-static char *get_str(reader *r, char *buf, size_t size)
-{
-    uint32_t n = get_u32(r);
-    if (r->failed || (size_t)(r->end - r->p) < n || (buf && n >= size)) {
-        r->failed = true;
-        return NULL;
-    }
-    char *s = buf ? buf : malloc((size_t)n + 1);
-    if (!s) {
-        r->failed = true;
-        return NULL;
-    }
-    memcpy(s, r->p, n);
-    s[n] = '\0';
-    r->p += n;
-    return s;
-}
-
 /* Counts are checked against what is left of the record before anything is allocated. */
-static bool plausible(reader *r, uint64_t count, size_t min_bytes_each)
+static bool plausible(record_reader *r, uint64_t count, size_t min_bytes_each)
 {
     if (r->failed || count > (uint64_t)(r->end - r->p) / (min_bytes_each ? min_bytes_each : 1)) r->failed = true;
     return !r->failed;
@@ -224,9 +152,9 @@ static bool stride_plausible(const cb_stride *s)
     return ok;
 }
 
-static void read_clips(reader *r, cb_roster_type *t)
+static void read_clips(record_reader *r, cb_roster_type *t)
 {
-    uint32_t n = get_u32(r);
+    uint32_t n = rec_get_u32(r);
     if (!plausible(r, n, 64) || !(t->clips = calloc(n ? n : 1, sizeof *t->clips))) {
         r->failed = true;
         return;
@@ -235,50 +163,50 @@ static void read_clips(reader *r, cb_roster_type *t)
     for (uint32_t i = 0; i < n && !r->failed; ++i) {
         cb_roster_clip *c = &t->clips[i];
         char method[64];
-        get_str(r, c->name, sizeof c->name);
-        c->first_row = get_u32(r), c->frames = get_u32(r);
-        uint32_t flags = get_u32(r); /* bit 0 loops, bit 1 held rows, bit 2 in place, bit 3 a planting follows */
+        rec_get_str(r, c->name, sizeof c->name);
+        c->first_row = rec_get_u32(r), c->frames = rec_get_u32(r);
+        uint32_t flags = rec_get_u32(r); /* bit 0 loops, bit 1 held rows, bit 2 in place, bit 3 a planting follows */
         c->loops = (flags & 1u) != 0, c->step = (flags & 2u) != 0, c->in_place = (flags & 4u) != 0;
-        c->fps = get_f64(r), c->duration = get_f64(r);
-        get_str(r, c->loop_reason, sizeof c->loop_reason);
-        c->visible_error_mm = get_f64(r);
-        c->speed.speed = get_f64(r), c->speed.root = get_f64(r), c->speed.feet = get_f64(r);
-        if (get_str(r, method, sizeof method) && !(c->speed.method = known_method(method))) r->failed = true;
-        get(r, &c->speed.stride, sizeof c->speed.stride);
+        c->fps = rec_get_f64(r), c->duration = rec_get_f64(r);
+        rec_get_str(r, c->loop_reason, sizeof c->loop_reason);
+        c->visible_error_mm = rec_get_f64(r);
+        c->speed.speed = rec_get_f64(r), c->speed.root = rec_get_f64(r), c->speed.feet = rec_get_f64(r);
+        if (rec_get_str(r, method, sizeof method) && !(c->speed.method = known_method(method))) r->failed = true;
+        rec_get(r, &c->speed.stride, sizeof c->speed.stride);
         if (!stride_plausible(&c->speed.stride)) r->failed = true;
-        if (flags & 8u) get(r, &c->plant, sizeof c->plant);
+        if (flags & 8u) rec_get(r, &c->plant, sizeof c->plant);
         if ((flags & 8u) && (!c->plant.planted || !memchr(c->plant.why, 0, sizeof c->plant.why))) r->failed = true;
-        get(r, &c->travel, sizeof c->travel);
+        rec_get(r, &c->travel, sizeof c->travel);
         if (!memchr(c->travel.why, 0, sizeof c->travel.why)) r->failed = true;
     }
 }
 
 /* Sockets as written: names terminated, bones inside the rig. */
-static void read_sockets(reader *r, cb_roster_type *t)
+static void read_sockets(record_reader *r, cb_roster_type *t)
 {
-    uint32_t n = get_u32(r);
+    uint32_t n = rec_get_u32(r);
     if (r->failed || !plausible(r, n, sizeof *t->sockets) || (n && !(t->sockets = calloc(n, sizeof *t->sockets)))) {
         r->failed = true;
         return;
     }
     t->socket_count = n;
-    get(r, t->sockets, (size_t)n * sizeof *t->sockets);
+    rec_get(r, t->sockets, (size_t)n * sizeof *t->sockets);
     for (uint32_t i = 0; i < n && !r->failed; ++i)
         r->failed = !memchr(t->sockets[i].name, 0, sizeof t->sockets[i].name) || t->sockets[i].bone >= t->bones;
 }
 
-static void read_states_and_lods(reader *r, const cb_catalog_animal *an, cb_roster_type *t)
+static void read_states_and_lods(record_reader *r, const cb_catalog_animal *an, cb_roster_type *t)
 {
-    uint32_t states = get_u32(r);
+    uint32_t states = rec_get_u32(r);
     if (r->failed || states != an->state_count || !(t->state_clip = calloc(states ? states : 1, sizeof *t->state_clip))) {
         r->failed = true;
         return;
     }
     for (uint32_t s = 0; s < states; ++s) {
-        t->state_clip[s] = (int)get_u32(r);
+        t->state_clip[s] = (int)rec_get_u32(r);
         if (t->state_clip[s] < 0 || (uint32_t)t->state_clip[s] >= t->clip_count) r->failed = true;
     }
-    uint32_t lods = get_u32(r);
+    uint32_t lods = rec_get_u32(r);
     if (r->failed || lods != an->lod_count || !(t->lods = calloc(lods ? lods : 1, sizeof *t->lods))) {
         r->failed = true;
         return;
@@ -287,33 +215,33 @@ static void read_states_and_lods(reader *r, const cb_catalog_animal *an, cb_rost
     for (uint32_t l = 0; l < lods && !r->failed; ++l) {
         cb_roster_lod *lod = &t->lods[l];
         lod->path = an->lods[l];
-        uint32_t joints = get_u32(r);
+        uint32_t joints = rec_get_u32(r);
         if (!plausible(r, joints, sizeof *lod->remap) || !(lod->remap = malloc((joints ? joints : 1) * sizeof *lod->remap))) {
             r->failed = true;
             return;
         }
         lod->joint_count = joints;
-        get(r, lod->remap, (size_t)joints * sizeof *lod->remap);
+        rec_get(r, lod->remap, (size_t)joints * sizeof *lod->remap);
         for (uint32_t k = 0; k < joints; ++k)
             if (lod->remap[k] >= t->bones) r->failed = true;
-        lod->vertices = get_u64(r), lod->indices = get_u64(r);
+        lod->vertices = rec_get_u64(r), lod->indices = rec_get_u64(r);
     }
 }
 
-static void read_inputs_and_warnings(reader *r, cb_roster_type *t)
+static void read_inputs_and_warnings(record_reader *r, cb_roster_type *t)
 {
-    uint32_t n = get_u32(r);
+    uint32_t n = rec_get_u32(r);
     if (!plausible(r, n, 4) || !(t->inputs = calloc(n ? n : 1, sizeof *t->inputs))) {
         r->failed = true;
         return;
     }
     for (uint32_t i = 0; i < n && !r->failed; ++i)
-        if ((t->inputs[i] = get_str(r, NULL, 0))) t->input_count = i + 1;
-    uint32_t warnings = get_u32(r);
+        if ((t->inputs[i] = rec_get_str(r, NULL, 0))) t->input_count = i + 1;
+    uint32_t warnings = rec_get_u32(r);
     if (!plausible(r, warnings, 8)) return;
     for (uint32_t i = 0; i < warnings && !r->failed; ++i) {
         char kind[16];
-        char *message = get_str(r, kind, sizeof kind) ? get_str(r, NULL, 0) : NULL;
+        char *message = rec_get_str(r, kind, sizeof kind) ? rec_get_str(r, NULL, 0) : NULL;
         if (message) cb_warn(&t->warnings, strcmp(kind, "warning") == 0 ? "warning" : "note", "%s", message);
         free(message);
     }
@@ -322,19 +250,19 @@ static void read_inputs_and_warnings(reader *r, cb_roster_type *t)
 bool cb_prep_record_decode(const unsigned char *data, size_t size, const cb_catalog_animal *an, cb_roster_type *t,
                            uint64_t *key)
 {
-    reader r = {data, data + size, false};
+    record_reader r = {data, data + size, false};
     char head[8];
-    get(&r, head, sizeof head);
-    uint64_t record_key = get_u64(&r), length = get_u64(&r), hash = get_u64(&r);
+    rec_get(&r, head, sizeof head);
+    uint64_t record_key = rec_get_u64(&r), length = rec_get_u64(&r), hash = rec_get_u64(&r);
     if (r.failed || memcmp(head, magic, sizeof magic) != 0 || length != (uint64_t)(r.end - r.p) ||
         cbpal_xxh64(r.p, length) != hash)
         return false;
-    t->key = get_u64(&r), t->input_hash = get_u64(&r);
-    t->bones = get_u32(&r), t->rows = get_u32(&r);
-    t->vertices = get_u64(&r), t->indices = get_u64(&r), t->mesh_bytes = get_u64(&r);
-    t->model_height = get_f64(&r), t->speed_reference = get_f64(&r);
-    get_str(&r, t->speed_reference_from, sizeof t->speed_reference_from);
-    t->vat_measured = get_u32(&r) != 0, t->vat_error = get_f64(&r);
+    t->key = rec_get_u64(&r), t->input_hash = rec_get_u64(&r);
+    t->bones = rec_get_u32(&r), t->rows = rec_get_u32(&r);
+    t->vertices = rec_get_u64(&r), t->indices = rec_get_u64(&r), t->mesh_bytes = rec_get_u64(&r);
+    t->model_height = rec_get_f64(&r), t->speed_reference = rec_get_f64(&r);
+    rec_get_str(&r, t->speed_reference_from, sizeof t->speed_reference_from);
+    t->vat_measured = rec_get_u32(&r) != 0, t->vat_error = rec_get_f64(&r);
     read_clips(&r, t);
     read_states_and_lods(&r, an, t);
     read_sockets(&r, t);

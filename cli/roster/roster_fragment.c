@@ -7,9 +7,9 @@
  * error, its output paths and palette facts, then its prep record (roster_cache.h), which holds
  * everything else the manifest says of it. Strings are a u32 length and their bytes. Paths are
  * as the command line and catalog gave them: relative in, relative out. */
-#define _GNU_SOURCE /* open_memstream */
 #include "roster_cache.h"
 #include "roster_files.h"
+#include "record_io.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -18,30 +18,19 @@
 
 static const char fragment_magic[8] = "CBFRAG1";
 
-static void put_str(FILE *f, const char *s)
+static void put_type(record_writer *w, const cb_roster_type *t)
 {
-    uint32_t n = s ? (uint32_t)strlen(s) : 0;
-    fwrite(&n, sizeof n, 1, f);
-    fwrite(s ? s : "", 1, n, f);
-}
-
-static void put_u32(FILE *f, uint32_t v) { fwrite(&v, sizeof v, 1, f); }
-static void put_u64(FILE *f, uint64_t v) { fwrite(&v, sizeof v, 1, f); }
-static void put_f32(FILE *f, float v) { fwrite(&v, sizeof v, 1, f); }
-
-static void put_type(FILE *f, const cb_roster_type *t)
-{
-    put_str(f, t->animal->name);
-    put_u32(f, t->animal->bake.formats);
-    put_u32(f, t->outcome == CB_TYPE_FAILED);
-    put_u32(f, (uint32_t)t->error.status), put_u32(f, (uint32_t)t->error.setting);
-    put_str(f, t->error.message);
-    put_u32(f, cb_output_format_count()); /* a path per row of the table of formats (outputs.h) */
-    for (uint32_t k = 0; k < cb_output_format_count(); ++k) put_str(f, t->paths[k]);
-    put_u32(f, t->layout), put_u32(f, t->precision);
-    put_u32(f, t->width), put_u32(f, t->height), put_u32(f, t->blocks);
-    put_f32(f, t->max_error), put_f32(f, t->visible_error);
-    put_u64(f, t->palette_bytes), put_u64(f, t->file_bytes);
+    rec_put_str(w, t->animal->name);
+    rec_put_u32(w, t->animal->bake.formats);
+    rec_put_u32(w, t->outcome == CB_TYPE_FAILED);
+    rec_put_u32(w, (uint32_t)t->error.status), rec_put_u32(w, (uint32_t)t->error.setting);
+    rec_put_str(w, t->error.message);
+    rec_put_u32(w, cb_output_format_count()); /* a path per row of the table of formats (outputs.h) */
+    for (uint32_t k = 0; k < cb_output_format_count(); ++k) rec_put_str(w, t->paths[k]);
+    rec_put_u32(w, t->layout), rec_put_u32(w, t->precision);
+    rec_put_u32(w, t->width), rec_put_u32(w, t->height), rec_put_u32(w, t->blocks);
+    rec_put_f32(w, t->max_error), rec_put_f32(w, t->visible_error);
+    rec_put_u64(w, t->palette_bytes), rec_put_u64(w, t->file_bytes);
 }
 
 cb_status roster_write_fragment(const cb_roster *r, const cb_roster_fragment *fragment, cb_error *err)
@@ -52,68 +41,29 @@ cb_status roster_write_fragment(const cb_roster *r, const cb_roster_fragment *fr
     size_t record_size = 0;
     if (t->outcome != CB_TYPE_FAILED && !cb_prep_record_encode(t, 0, &record, &record_size))
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    char *buf = NULL;
-    size_t size = 0;
-    FILE *f = open_memstream(&buf, &size);
-    if (!f) return free(record), cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    fwrite(fragment_magic, 1, sizeof fragment_magic, f);
-    put_str(f, r->catalog->path);
-    put_str(f, fragment->syncs), put_str(f, fragment->default_state);
-    put_type(f, t);
-    put_u64(f, record_size);
-    fwrite(record ? (const void *)record : "", 1, record_size, f);
-    bool failed = ferror(f);
-    fclose(f);
+    record_writer w = {0};
+    rec_put(&w, fragment_magic, sizeof fragment_magic);
+    rec_put_str(&w, r->catalog->path);
+    rec_put_str(&w, fragment->syncs), rec_put_str(&w, fragment->default_state);
+    put_type(&w, t);
+    rec_put_u64(&w, record_size);
+    rec_put(&w, record, record_size);
     free(record);
     bool written;
-    cb_status rc = failed ? cb_fail(err, CB_ERR_INTERNAL, "out of memory")
-                          : roster_write_if_changed(fragment->path, buf, size, &written, err);
-    free(buf);
+    cb_status rc = w.failed ? cb_fail(err, CB_ERR_INTERNAL, "out of memory")
+                            : roster_write_if_changed(fragment->path, (const char *)w.data, w.size, &written, err);
+    free(w.data);
     return rc;
 }
 
 /* ---- reading ---- */
-
-typedef struct frag_reader {
-    const unsigned char *p, *end;
-    bool failed;
-} frag_reader;
-
-static void get(frag_reader *r, void *out, size_t n)
-{
-    if (r->failed || (size_t)(r->end - r->p) < n) {
-        r->failed = true;
-        memset(out, 0, n);
-        return;
-    }
-    memcpy(out, r->p, n);
-    r->p += n;
-}
-
-static uint32_t get_u32(frag_reader *r) { uint32_t v; get(r, &v, sizeof v); return v; }
-static uint64_t get_u64(frag_reader *r) { uint64_t v; get(r, &v, sizeof v); return v; }
-static float get_f32(frag_reader *r) { float v; get(r, &v, sizeof v); return v; }
-
-/* A string into buf (size bytes, NUL-terminated); too long for it reads as damage. */
-static void get_str(frag_reader *r, char *buf, size_t size)
-{
-    uint32_t n = get_u32(r);
-    if (r->failed || n >= size || (size_t)(r->end - r->p) < n) {
-        r->failed = true;
-        buf[0] = '\0';
-        return;
-    }
-    memcpy(buf, r->p, n);
-    buf[n] = '\0';
-    r->p += n;
-}
 
 typedef struct fragment {
     char path[4096];         /* the file, for messages */
     unsigned char *data;
     size_t size;
     char catalog[4096], syncs[1024], default_state[256], name[256];
-    frag_reader rest;        /* past the header: the type's facts and record */
+    record_reader rest;        /* past the header: the type's facts and record */
 } fragment;
 
 static cb_status read_fragment(const char *path, fragment *fr, cb_error *err)
@@ -126,13 +76,13 @@ static cb_status read_fragment(const char *path, fragment *fr, cb_error *err)
         fread(fr->data, 1, (size_t)end, f) == (size_t)end)
         fr->size = (size_t)end;
     fclose(f);
-    frag_reader r = {fr->data, fr->data + fr->size, fr->size == 0};
+    record_reader r = {fr->data, fr->data + fr->size, fr->size == 0};
     char head[8];
-    get(&r, head, sizeof head);
-    get_str(&r, fr->catalog, sizeof fr->catalog);
-    get_str(&r, fr->syncs, sizeof fr->syncs);
-    get_str(&r, fr->default_state, sizeof fr->default_state);
-    get_str(&r, fr->name, sizeof fr->name);
+    rec_get(&r, head, sizeof head);
+    rec_get_str(&r, fr->catalog, sizeof fr->catalog);
+    rec_get_str(&r, fr->syncs, sizeof fr->syncs);
+    rec_get_str(&r, fr->default_state, sizeof fr->default_state);
+    rec_get_str(&r, fr->name, sizeof fr->name);
     if (r.failed || memcmp(head, fragment_magic, sizeof head) != 0)
         return cb_fail(err, CB_ERR_INPUT, "%s: not a crowdbake %s manifest fragment, or damaged; bake its type again "
                        "(crowdbake bake CATALOG --type NAME)", path, CROWDBAKE_VERSION);
@@ -143,19 +93,19 @@ static cb_status read_fragment(const char *path, fragment *fr, cb_error *err)
 /* The type's facts and record, into t (t->animal set). */
 static cb_status read_type(fragment *fr, const cb_catalog *cat, cb_catalog_animal *an, cb_roster_type *t, cb_error *err)
 {
-    frag_reader *r = &fr->rest;
+    record_reader *r = &fr->rest;
     /* The formats it was baked in (--format may have replaced the catalog's). */
-    an->bake.formats = get_u32(r);
-    bool failed = get_u32(r);
-    t->error.status = (cb_status)get_u32(r), t->error.setting = (cb_setting)get_u32(r);
-    get_str(r, t->error.message, sizeof t->error.message);
-    if (get_u32(r) != cb_output_format_count()) r->failed = true; /* another crowdbake's table */
-    for (uint32_t k = 0; k < cb_output_format_count(); ++k) get_str(r, t->paths[k], sizeof t->paths[k]);
-    t->layout = (cb_layout)get_u32(r), t->precision = (cb_precision)get_u32(r);
-    t->width = get_u32(r), t->height = get_u32(r), t->blocks = get_u32(r);
-    t->max_error = get_f32(r), t->visible_error = get_f32(r);
-    t->palette_bytes = get_u64(r), t->file_bytes = get_u64(r);
-    uint64_t record_size = get_u64(r), key;
+    an->bake.formats = rec_get_u32(r);
+    bool failed = rec_get_u32(r);
+    t->error.status = (cb_status)rec_get_u32(r), t->error.setting = (cb_setting)rec_get_u32(r);
+    rec_get_str(r, t->error.message, sizeof t->error.message);
+    if (rec_get_u32(r) != cb_output_format_count()) r->failed = true; /* another crowdbake's table */
+    for (uint32_t k = 0; k < cb_output_format_count(); ++k) rec_get_str(r, t->paths[k], sizeof t->paths[k]);
+    t->layout = (cb_layout)rec_get_u32(r), t->precision = (cb_precision)rec_get_u32(r);
+    t->width = rec_get_u32(r), t->height = rec_get_u32(r), t->blocks = rec_get_u32(r);
+    t->max_error = rec_get_f32(r), t->visible_error = rec_get_f32(r);
+    t->palette_bytes = rec_get_u64(r), t->file_bytes = rec_get_u64(r);
+    uint64_t record_size = rec_get_u64(r), key;
     bool intact = !r->failed && record_size == (uint64_t)(r->end - r->p) && (failed || record_size > 0);
     if (intact && !failed) intact = cb_prep_record_decode(r->p, record_size, t->animal, t, &key);
     if (!intact)
