@@ -162,10 +162,12 @@ $(BUILD)/obj/formats/tinygltf_impl.o: CXXFLAGS += $(if $(SAN),-O0)
 # wherever they are served from (the source tree, `make install`'s share/crowdbake/web, a copy of
 # the folder in an npm-style layout): an import, not a fetch of a path relative to the module.
 WEB_GLSL := runtimes/web/crowdbake_palette_glsl.mjs
+# In the source tree, so the normal and the sanitizer builds of `make check` may write it at once:
+# each through its own temporary (the shell's PID), renamed over it whole.
 $(WEB_GLSL): runtimes/glsl/crowdbake_palette.glsl
 	python3 -c "import json, sys; d = open(sys.argv[1], encoding='utf-8').read(); \
 	print('// generated from ' + sys.argv[1] + ' by make: the shipped GLSL, as crowdbake_crowd.mjs imports it'); \
-	print('export const PALETTE_GLSL = ' + json.dumps(d) + ';')" $< > $@.tmp && mv $@.tmp $@
+	print('export const PALETTE_GLSL = ' + json.dumps(d) + ';')" $< > $@.$$$$.tmp && mv $@.$$$$.tmp $@
 all: $(WEB_GLSL)
 
 # The shipped GLSL, embedded so `crowdbake preview` renders with exactly what runtimes get.
@@ -263,7 +265,8 @@ GODOT_DEMO := $(GODOT_DEMO_DIR)/roster.json
 # the demo as it is); the bake's caches (.prep) are not part of the addon.
 $(GODOT_DEMO): runtimes/godot/addons/crowdbake/demo/herd.toml $(wildcard $(BUILD)/crowdbake)
 	$(MAKE) --no-print-directory $(BUILD)/crowdbake $(BUILD)/samples/quadruped.glb
-	mkdir -p $(@D) && cp $(BUILD)/samples/quadruped.glb $(@D)/quadruped.glb
+	mkdir -p $(@D) && cp $(BUILD)/samples/quadruped.glb $(@D)/quadruped.glb.$$$$.tmp && \
+	  mv $(@D)/quadruped.glb.$$$$.tmp $(@D)/quadruped.glb # whole, as the other build of make check may read it
 	$(BUILD)/crowdbake bake $< -q && rm -f $(@D)/.*.prep
 $(GODOT_DEMO_DIR)/quadruped.glb $(GODOT_DEMO_DIR)/goat.pal: $(GODOT_DEMO)
 all: $(GODOT_DEMO)
