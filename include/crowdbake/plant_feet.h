@@ -18,13 +18,11 @@
 #include "export.h"
 
 #include "core.h"
+#include "herd_slide.h" /* CB_PLANT_SLIDE_GOAL: which clips are planted */
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* A clip's mean slide above this fraction of its ground speed is planted; below, left as is. */
-#define CB_PLANT_SLIDE_GOAL 0.10
 
 /* What planting did to one clip. Slides are fractions of the ground speed (stride.h). */
 typedef struct cb_plant_clip {

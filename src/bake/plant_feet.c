@@ -107,7 +107,9 @@ static void plant_one(cb_sampler *s, const cb_bake_job *job, uint32_t i, plant_s
         return;
     }
     pc->speed = st.speed, pc->slide_before = st.slide_mean, pc->slide_worst_before = st.slide_worst;
-    if (st.slide_mean <= CB_PLANT_SLIDE_GOAL) {
+    cb_herd_slide slide; /* no per-row travel yet: the bake measures the planted clip's, after */
+    cb_herd_slide_decide(&st, NULL, &slide);
+    if (!slide.plant) {
         snprintf(pc->why, sizeof pc->why, "left as is: its feet slide %.0f%% of the ground speed, within the %.0f%% goal",
                  100 * st.slide_mean, 100 * CB_PLANT_SLIDE_GOAL);
         return;
