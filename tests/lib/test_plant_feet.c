@@ -289,7 +289,10 @@ static void compare_knees(const cbpal_file *plain, const cbpal_file *planted, do
     }
 }
 
-static void check_model(const char *rel, double plane_bound)
+/* plane_bound: how far the knees' planes may turn (degrees); held: the clip whose feet are held a row
+ * interval about each stance (plant_feet.c), whose worst moment then stays under a third of the
+ * ground speed (without the hold: Husky's Gallop 110%, Cow's Walk 102%; with it 24% and 26%). */
+static void check_model(const char *rel, double plane_bound, const char *held)
 {
     char model[1024];
     shared_path(model, sizeof model, rel);
@@ -312,6 +315,7 @@ static void check_model(const char *rel, double plane_bound)
                       rel, clips[c], 100 * mean, speed, 100 * worst, 100 * before, 100 * after, turn);
         assert_true(mean <= 0.10);
         assert_true(before > 0.10); /* it slid before */
+        if (strcmp(clips[c], held) == 0) assert_true(worst <= 0.33);
     }
     cbpal_close(&f);
     bake(model, "plain30.pal", "--fps 30 --precision float --layout mat4 -q");
@@ -404,13 +408,13 @@ static void test_catalog_and_info(void **state)
 static void test_husky_planted(void **state)
 {
     (void)state;
-    check_model("assets/quaternius-husky/Husky.glb", 2.5);
+    check_model("assets/quaternius-husky/Husky.glb", 2.5, "AnimalArmature|Gallop");
 }
 
 static void test_cow_planted(void **state)
 {
     (void)state;
-    check_model("assets/quaternius-cow/Cow.glb", 1.0);
+    check_model("assets/quaternius-cow/Cow.glb", 1.0, "AnimalArmature|Walk");
 }
 
 int main(void)
