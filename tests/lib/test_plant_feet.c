@@ -238,7 +238,16 @@ static void joint_at(const cbpal_file *f, const double (*m)[16], int b, double o
 static void knee_of(const cbpal_file *f, const double (*m)[16], const int chain[3], double normal[3], double *angle)
 {
     double p[3][3], u[3], v[3];
-    for (int i = 0; i < 3; ++i) joint_at(f, m, chain[i], p[i]);
+    for (int i = 0; i < 2; ++i) joint_at(f, m, chain[i], p[i]);
+    /* The ankle as the shin carries it (the shin's matrix on the ankle's bind place), not the
+     * ankle bone's own: the front paw's bone (FF) is an IK bone the foot carries, moved with the
+     * paw and not turned with the shin, so near a straight knee its own place would swing the
+     * triangle's normal (up to 21.6 deg on Cow) with no turn of the leg at all. */
+    cbpal_bone ankle;
+    assert_int_equal(cbpal_get_bone(f, (uint32_t)chain[2], &ankle), 0);
+    const float *x = ankle.bind_position;
+    const double *s = m[chain[1]];
+    for (int k = 0; k < 3; ++k) p[2][k] = s[k] * x[0] + s[4 + k] * x[1] + s[8 + k] * x[2] + s[12 + k];
     for (int k = 0; k < 3; ++k) u[k] = p[0][k] - p[1][k], v[k] = p[2][k] - p[1][k];
     normal[0] = u[1] * v[2] - u[2] * v[1], normal[1] = u[2] * v[0] - u[0] * v[2], normal[2] = u[0] * v[1] - u[1] * v[0];
     double n = sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
@@ -280,7 +289,10 @@ static void compare_knees(const cbpal_file *plain, const cbpal_file *planted, do
     }
 }
 
-static void check_model(const char *rel)
+/* plane_bound: how far the knees' planes may turn (degrees); held: the clip whose feet are held a row
+ * interval about each stance (plant_feet.c), whose worst moment then stays under a third of the
+ * ground speed (without the hold: Husky's Gallop 110%, Cow's Walk 102%; with it 24% and 26%). */
+static void check_model(const char *rel, double plane_bound, const char *held)
 {
     char model[1024];
     shared_path(model, sizeof model, rel);
@@ -303,6 +315,7 @@ static void check_model(const char *rel)
                       rel, clips[c], 100 * mean, speed, 100 * worst, 100 * before, 100 * after, turn);
         assert_true(mean <= 0.10);
         assert_true(before > 0.10); /* it slid before */
+        if (strcmp(clips[c], held) == 0) assert_true(worst <= 0.33);
     }
     cbpal_close(&f);
     bake(model, "plain30.pal", "--fps 30 --precision float --layout mat4 -q");
@@ -318,11 +331,12 @@ static void check_model(const char *rel)
     compare_knees(&plain, &planted, &plane, &jump_plain, &jump_planted);
     print_message("%s: knee planes turn up to %.1f deg; a knee's angle changes up to %.1f deg a row (%.1f unplanted)\n", rel,
                   plane, jump_planted, jump_plain);
-    /* No pop: no knee bends faster from row to row than the clip's own knees do (Husky 42.1 deg
-     * against 50.9, Cow 24.3 against 23.1); the knee's plane turns with the leg's swing onto the
-     * planted place, not over (Husky 13.0 deg, Cow 21.6). */
+    /* No pop: no knee bends faster from row to row than the clip's own knees do (Husky 43.4 deg
+     * against 52.8, Cow 22.7 against 21.4). The knee keeps its plane: it turns only as far as the
+     * planted place leaves it (leg_ik.h; the most it leaves it is 2.28 deg on Husky's Walk, whose
+     * splayed hind legs swing 0.55 units back, 0.61 on Cow's Gallop): Husky 2.3 deg, Cow 0.7. */
     assert_true(jump_planted <= 1.1 * jump_plain);
-    assert_true(plane <= 25);
+    assert_true(plane <= plane_bound);
     cbpal_close(&plain), cbpal_close(&planted);
     cb_model_free(m);
 }
@@ -394,13 +408,13 @@ static void test_catalog_and_info(void **state)
 static void test_husky_planted(void **state)
 {
     (void)state;
-    check_model("assets/quaternius-husky/Husky.glb");
+    check_model("assets/quaternius-husky/Husky.glb", 2.5, "AnimalArmature|Gallop");
 }
 
 static void test_cow_planted(void **state)
 {
     (void)state;
-    check_model("assets/quaternius-cow/Cow.glb");
+    check_model("assets/quaternius-cow/Cow.glb", 1.0, "AnimalArmature|Walk");
 }
 
 int main(void)
