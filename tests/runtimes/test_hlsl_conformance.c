@@ -14,22 +14,7 @@
 #define TMP TEST_TMP "/hlsl-conformance"
 #define LIBRARY "runtimes/hlsl/crowdbake_palette.hlsl"
 
-static vkc_context vk;
-static bool have_device;
-
-static int setup(void **state)
-{
-    (void)state;
-    have_device = vkc_open_for_tests(&vk, "the HLSL runtime");
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    if (have_device) vkc_free_context(&vk);
-    return 0;
-}
+VKC_TEST_DEVICE("the HLSL runtime")
 
 /* The globals form, bound where the harness puts them; one invocation per (instance, vertex). */
 static char *case_source(const cb_palette *p, const char *library)
@@ -63,8 +48,9 @@ static char *case_source(const cb_palette *p, const char *library)
 }
 
 /* Every instance of every group of a case: the skinned positions, in the expected file's order. */
-static float *gpu_case(const conformance *c, const conf_case *k, const char *library)
+static float *gpu_case(const conformance *c, const conf_case *k, const char *library, void *ctx)
 {
+    (void)ctx;
     const conf_palette *p = &c->palettes[k->palette];
     const cb_primitive *prim = &p->model->primitives[0];
     size_t verts = prim->vertex_count, total = conf_positions(c, k), n = total / verts, at = 0;
@@ -108,22 +94,7 @@ static void test_conformance_cases(void **state)
     conformance conf;
     conformance_make(&conf, TMP);
     char *lib = read_whole_file(LIBRARY, NULL);
-    int ran = 0, caught = 0;
-    for (int i = 0; i < conf.case_count; ++i) {
-        const conf_case *k = &conf.cases[i];
-        if (k->bone_pass) continue;
-        char *source = k->glsl_marker ? break_shader(lib, k->glsl_marker, k->glsl_line) : lib;
-        float *got = gpu_case(&conf, k, source);
-        double units, ratio = conformance_compare(&conf, k, got, &units);
-        printf("  %-26s %7zu positions: GPU vs C runtime %.2g (%.2f of the tolerance)\n", k->name, conf_positions(&conf, k),
-               units, ratio);
-        if (k->broken) assert_true(ratio > 10), ++caught;
-        else assert_true(ratio <= 1);
-        ++ran;
-        free(got);
-        if (source != lib) free(source);
-    }
-    assert_true(ran >= 15 && caught >= 4);
+    conformance_check_shader(&conf, lib, gpu_case, NULL);
     free(lib);
     conformance_free(&conf);
 }

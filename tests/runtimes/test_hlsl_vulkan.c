@@ -11,22 +11,7 @@
 
 #define LIBRARY "runtimes/hlsl/crowdbake_palette.hlsl"
 
-static vkc_context vk;
-static bool have_device;
-
-static int setup(void **state)
-{
-    (void)state;
-    have_device = vkc_open_for_tests(&vk, "the HLSL runtime");
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    if (have_device) vkc_free_context(&vk);
-    return 0;
-}
+VKC_TEST_DEVICE("the HLSL runtime")
 
 #define REQUIRE_DEVICE()                                                                                               \
     do {                                                                                                               \
