@@ -355,7 +355,7 @@ TEST_BINS += $(BUILD)/tests/standalone_pal_reader
 
 # Fuzz targets, replayed over their regression inputs (and the samples) by every test run.
 FUZZ_TARGETS := gltf pal exr ktx2 catalog
-$(BUILD)/tests/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c $(TOOL_A) $(BUILD)/libcrowdbake.a
+$(BUILD)/tests/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c tests/fuzz/fuzz_decode.h $(TOOL_A) $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TOOL_INC) -c tests/fuzz/fuzz_$*.c -o $@.fuzz.o
 	$(CC) $(CFLAGS) -c tests/fuzz/replay.c -o $@.main.o
