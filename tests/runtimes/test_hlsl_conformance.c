@@ -20,11 +20,10 @@ VKC_TEST_DEVICE("the HLSL runtime")
 static char *case_source(const cb_palette *p, const char *library)
 {
     static char src[1 << 17];
-    snprintf(src, sizeof src,
-             "#define %s\n#define %s\n%s#define CB_TEXTURES_DECLARED\n#define CB_HEADER_DECLARED\n"
-             "[[vk::binding(0)]] Texture2D<%s> cb_palette;\n"
-             "[[vk::binding(1)]] Texture2D<float4> cb_bind_positions;\n"
-             "[[vk::binding(2)]] cbuffer cb_test_header { " HEADER_CBUFFER " };\n%s\n" HARNESS_BUFFERS
+    hlsl_globals_prefix(src, sizeof src, p, false, "");
+    size_t used = strlen(src);
+    snprintf(src + used, sizeof src - used,
+             "%s\n" HARNESS_BUFFERS
              "struct cb_conf_instance { float4 clip; float4 from_clip; float4 fade_time; };\n"
              "[[vk::binding(3)]] StructuredBuffer<cb_test_vertex> cb_vertices;\n"
              "[[vk::binding(4)]] StructuredBuffer<cb_conf_instance> cb_instances;\n"
@@ -41,9 +40,7 @@ static char *case_source(const cb_palette *p, const char *library)
              "    cb_skinned[id.x] = float4(cb_skin_position_crossfade(v.position.xyz, v.joints, v.weights, k.from_clip,\n"
              "                                                          k.clip, fade, time), 1.0);\n"
              "}\n",
-             layout_define[p->layout], precision_define[p->precision],
-             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "",
-             p->precision == CB_PRECISION_U16 ? "uint4" : "float4", library);
+             library);
     return src;
 }
 
