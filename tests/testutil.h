@@ -169,6 +169,23 @@ static inline int run(char *out, size_t size, const char *fmt, ...)
     return run_command(cmd, out, size);
 }
 
+/* Runs `crowdbake ARGS 2>&1`, ARGS printf-formatted; returns its exit status, its output in `out` if given. */
+static inline int run_crowdbake(char *out, size_t size, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static inline int run_crowdbake(char *out, size_t size, const char *fmt, ...)
+{
+    char args[2048], cmd[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(args, sizeof args, fmt, ap);
+    va_end(ap);
+    snprintf(cmd, sizeof cmd, "%s %s 2>&1", crowdbake_exe(), args);
+    return run_command(cmd, out, size);
+}
+
 static inline bool exists(const char *path)
 {
     struct stat st;

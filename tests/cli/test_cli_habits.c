@@ -28,17 +28,8 @@ static int setup(void **state)
     return system("rm -rf " TMP " && mkdir -p " TMP);
 }
 
-/* Runs `crowdbake ARGS 2>&1`; returns the exit code, the output in out. */
-static int crowdbake(const char *fmt, ...)
-{
-    char args[2048], cmd[4096];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(args, sizeof args, fmt, ap);
-    va_end(ap);
-    snprintf(cmd, sizeof cmd, "%s %s 2>&1", crowdbake_exe(), args);
-    return run_command(cmd, out, sizeof out);
-}
+/* Runs `crowdbake ARGS 2>&1` (printf-formatted); returns the exit code, the output in out. */
+#define crowdbake(...) run_crowdbake(out, sizeof out, __VA_ARGS__)
 
 static void assert_contains(const char *needle)
 {
