@@ -1,7 +1,7 @@
 /* test_plant_feet.c - `--plant-feet` (feet locked at bake time) on Husky and Cow, measured
  * independently of crowdbake's pose code: the baked .pal is read through the one-header C reader
  * (include/crowdbake_pal.h, rows blended as a runtime blends them) and the model's own sole
- * vertices are skinned with its matrices. A foot is the sole a quadruped stands on (the
+ * vertices are skinned with its matrices (reference_soles.h). A foot is the sole a quadruped stands on (the
  * vertices in the lowest 3% of the height of Idle's first pose, split into four by side and
  * end); it is planted while its vertices' mean is within 2% of the height of its lowest. Its
  * slide is |u + v d| / v over the planted intervals, u its velocity in the baked (in-place)
@@ -19,14 +19,10 @@
 #include <stdlib.h>
 
 #include "crowdbake_pal.h"
+#include "reference_soles.h"
 
 #define TMP TEST_TMP "/plant_feet"
-enum { SAMPLES = 240, MAX_BONES = 64, MAX_SOLE = 1024 };
-
-typedef struct sole {
-    uint32_t count;
-    uint32_t prim[MAX_SOLE], vertex[MAX_SOLE];
-} sole;
+enum { SAMPLES = 240, MAX_BONES = 64 };
 
 static void open_pal(const char *path, cbpal_file *f)
 {
@@ -52,54 +48,8 @@ static void pose_at(const cbpal_file *f, uint32_t clip, double t, double (*mats)
     }
 }
 
-static void skin_vertex(const cb_primitive *p, uint32_t v, const double (*mats)[16], double out[3])
-{
-    const float *x = p->positions + (size_t)v * 3;
-    out[0] = out[1] = out[2] = 0;
-    for (int i = 0; i < 4; ++i) {
-        double w = p->weights[(size_t)v * 4 + i];
-        const double *m = mats[p->joints[(size_t)v * 4 + i]];
-        for (int k = 0; k < 3; ++k) out[k] += w * (m[k] * x[0] + m[4 + k] * x[1] + m[8 + k] * x[2] + m[12 + k]);
-    }
-}
-
-/* The four soles of a pose, and the model's height there. */
-static double find_soles(const cb_model *m, const double (*pose)[16], sole feet[4])
-{
-    double lo = INFINITY, hi = -INFINITY, p[3], cx = 0, cz = 0;
-    uint32_t n = 0;
-    for (uint32_t pi = 0; pi < m->primitive_count; ++pi)
-        for (uint32_t v = 0; v < m->primitives[pi].vertex_count; ++v)
-            skin_vertex(&m->primitives[pi], v, pose, p), lo = fmin(lo, p[1]), hi = fmax(hi, p[1]);
-    double height = hi - lo;
-    memset(feet, 0, 4 * sizeof *feet);
-    for (int pass = 0; pass < 2; ++pass)
-        for (uint32_t pi = 0; pi < m->primitive_count; ++pi)
-            for (uint32_t v = 0; v < m->primitives[pi].vertex_count; ++v) {
-                skin_vertex(&m->primitives[pi], v, pose, p);
-                if (p[1] > lo + 0.03 * height) continue;
-                if (pass == 0) {
-                    cx += p[0], cz += p[2], ++n;
-                    continue;
-                }
-                sole *f = &feet[(p[0] > cx / n) * 2 + (p[2] > cz / n)];
-                if (f->count < MAX_SOLE) f->prim[f->count] = pi, f->vertex[f->count++] = v;
-            }
-    return height;
-}
-
-static void sole_at(const cb_model *m, const sole *f, const double (*mats)[16], double out[3])
-{
-    double p[3];
-    out[0] = out[1] = out[2] = 0;
-    for (uint32_t i = 0; i < f->count; ++i) {
-        skin_vertex(&m->primitives[f->prim[i]], f->vertex[i], mats, p);
-        for (int k = 0; k < 3; ++k) out[k] += p[k] / f->count;
-    }
-}
-
 /* The mean and worst slide of the four feet over one clip, as fractions of `speed`. */
-static void measure_slide(const cb_model *m, const cbpal_file *f, const char *clip, const sole feet[4], double height,
+static void measure_slide(const cb_model *m, const cbpal_file *f, const char *clip, const ref_sole feet[4], double height,
                           double speed, double *mean, double *worst)
 {
     cbpal_clip c;
@@ -108,7 +58,7 @@ static void measure_slide(const cb_model *m, const cbpal_file *f, const char *cl
     double dt = c.duration / SAMPLES, lo[4] = {INFINITY, INFINITY, INFINITY, INFINITY}, dx = 0, dz = 0;
     for (uint32_t i = 0; i <= SAMPLES; ++i) {
         pose_at(f, ci, i * dt, mats);
-        for (int k = 0; k < 4; ++k) sole_at(m, &feet[k], (const double (*)[16])mats, p[k][i]), lo[k] = fmin(lo[k], p[k][i][1]);
+        for (int k = 0; k < 4; ++k) ref_sole_at(m, &feet[k], (const double (*)[16])mats, p[k][i]), lo[k] = fmin(lo[k], p[k][i][1]);
     }
     for (int pass = 0; pass < 2; ++pass) {
         double sum = 0, len = hypot(dx, dz);
@@ -304,8 +254,8 @@ static void check_model(const char *rel, double plane_bound, const char *held)
     cbpal_clip idle;
     static double pose[MAX_BONES][16];
     pose_at(&f, clip_named(&f, "AnimalArmature|Idle", &idle), 0, pose);
-    sole feet[4];
-    double height = find_soles(m, (const double (*)[16])pose, feet);
+    ref_sole feet[4];
+    double height = ref_find_soles(m, (const double (*)[16])pose, feet);
     const char *clips[] = {"AnimalArmature|Walk", "AnimalArmature|Gallop"};
     for (int c = 0; c < 2; ++c) {
         double speed, before, after, turn, mean, worst;
