@@ -75,6 +75,21 @@ static inline uint32_t cb_find_key(const float *times, uint32_t key_count, doubl
     return *hint = lo;
 }
 
+/* Some of a skin's joints, sampled alone: the nodes they hang from (parents first) and the
+ * joints (indices into the skin's). What reads a few joints of a big rig (a foot's sole on the
+ * 200-joint bench rig reads 2 joints of 200) samples only their chains. */
+typedef struct cb_joint_subset {
+    bool *relevant;      /* per node: a wanted joint or an ancestor of one */
+    uint32_t *order, count;
+    uint32_t *joints, joint_count;
+} cb_joint_subset;
+/* wanted: per skin joint. NULL when out of memory. */
+cb_joint_subset *cb_joint_subset_create(const cb_sampler *s, const bool *wanted);
+void cb_joint_subset_free(cb_joint_subset *sub);
+/* cb_sample_joint_matrices for the subset's joints only, the same bits: their 16 doubles in `out`
+ * (a whole skin's array; the other joints' are left as they were). */
+void cb_sample_joint_subset(cb_sampler *s, int32_t animation, double t, const cb_joint_subset *sub, double *out);
+
 /* One channel at time t (sample.c): the reference every lane must equal bit for bit. */
 void cb_channel_eval_at(const cb_channel *ch, double t, double out[4], uint32_t *hint, const cb_wrap *wrap);
 
