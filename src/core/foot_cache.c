@@ -92,7 +92,7 @@ void foot_cache_stride(foot_cache *c, cb_sampler *s, const cb_clip_info *clip, c
     if (e) {
         c->reused++;
         if (e->rows != clip->steps) stride_varying_at(&e->stride, &e->tracks, clip->steps), e->rows = clip->steps;
-        *out = e->stride;
+        memcpy(out, &e->stride, sizeof *out); /* padding too: a copy is the measured bytes */
         return;
     }
     e = add(c, &key);
@@ -103,7 +103,7 @@ void foot_cache_stride(foot_cache *c, cb_sampler *s, const cb_clip_info *clip, c
     c->measured++;
     stride_measure_feet(s, clip, &c->feet, &e->stride, &e->tracks);
     e->rows = clip->steps;
-    *out = e->stride;
+    memcpy(out, &e->stride, sizeof *out);
 }
 
 const stride_feet *foot_cache_feet(foot_cache *c, cb_sampler *s) { return cache_feet(c, s) ? &c->feet : NULL; }
