@@ -9,6 +9,7 @@
 #include "crowdbake/stride.h"
 #include "foot_cache.h"
 #include "foot_sole.h"
+#include "sampler.h" /* CB_SAMPLE_BATCH */
 #include "stride_feet.h"
 
 /* A foot is planted while its sole is within 2% of the model's height of its lowest, as
@@ -29,7 +30,8 @@ static bool track_feet(foot_cache *cache, cb_sampler *s, const cb_clip_info *cli
 {
     const cb_model *m = cb_sampler_model(s);
     uint32_t n = tr->samples;
-    double *mats = malloc((size_t)m->skins[cb_sampler_skin(s)].joint_count * 16 * sizeof(double));
+    size_t bones = m->skins[cb_sampler_skin(s)].joint_count;
+    double *mats = malloc(bones * 16 * CB_SAMPLE_BATCH * sizeof(double)), times[CB_SAMPLE_BATCH];
     double *h = malloc((size_t)tr->feet * (n + 1) * sizeof(double));
     const stride_feet *cached = foot_cache_feet(cache, s);
     stride_feet own;
@@ -38,14 +40,19 @@ static bool track_feet(foot_cache *cache, cb_sampler *s, const cb_clip_info *cli
     const stride_feet *feet = cached ? cached : &own;
     ok = ok && feet->count == st->foot_count && feet->size > 0;
     double dt = clip->duration / n, span = clip->t1 - clip->t0;
-    for (uint32_t i = 0; ok && i <= n; ++i) {
-        double t = i * dt, tau = cb_root_travel_time(t, span, clip->duration, clip->loops), xz[2];
-        stride_feet_sample(s, feet, clip->animation, clip->t0 + (i == n ? 0 : t), mats); /* the loop ends on its start */
-        if (i == n) tau = 0;
-        for (uint32_t k = 0; k < tr->feet; ++k) {
-            foot_sole_at(&feet->soles[k], mats, &h[(size_t)k * (n + 1) + i], xz);
-            double *x = tr->x + ((size_t)k * (n + 1) + i) * 2;
-            x[0] = xz[0] - clip->root_velocity[0] * tau, x[1] = xz[1] - clip->root_velocity[2] * tau;
+    for (uint32_t first = 0; ok && first <= n; first += CB_SAMPLE_BATCH) {
+        uint32_t count = n + 1 - first < CB_SAMPLE_BATCH ? n + 1 - first : CB_SAMPLE_BATCH;
+        for (uint32_t b = 0; b < count; ++b) /* the loop ends on its start */
+            times[b] = clip->t0 + (first + b == n ? 0 : (first + b) * dt);
+        stride_feet_sample_batch(s, feet, clip->animation, times, count, mats);
+        for (uint32_t b = 0; b < count; ++b) {
+            uint32_t i = first + b;
+            double t = i * dt, tau = i == n ? 0 : cb_root_travel_time(t, span, clip->duration, clip->loops), xz[2];
+            for (uint32_t k = 0; k < tr->feet; ++k) {
+                foot_sole_at(&feet->soles[k], mats + b * bones * 16, &h[(size_t)k * (n + 1) + i], xz);
+                double *x = tr->x + ((size_t)k * (n + 1) + i) * 2;
+                x[0] = xz[0] - clip->root_velocity[0] * tau, x[1] = xz[1] - clip->root_velocity[2] * tau;
+            }
         }
     }
     for (uint32_t k = 0; ok && k < tr->feet; ++k) {

@@ -395,47 +395,6 @@ void cb_sample_joint_matrices(cb_sampler *s, int32_t animation, double t, double
     }
 }
 
-cb_joint_subset *cb_joint_subset_create(const cb_sampler *s, const bool *wanted)
-{
-    const cb_model *m = s->model;
-    const cb_skin *skin = &m->skins[s->skin];
-    cb_joint_subset *sub = calloc(1, sizeof *sub);
-    if (!sub) return NULL;
-    sub->relevant = calloc(m->node_count + 1, sizeof *sub->relevant);
-    sub->order = malloc((m->node_count + 1) * sizeof *sub->order);
-    sub->joints = malloc((skin->joint_count + 1) * sizeof *sub->joints);
-    if (!sub->relevant || !sub->order || !sub->joints) return cb_joint_subset_free(sub), NULL;
-    for (uint32_t j = 0; j < skin->joint_count; ++j) {
-        if (!wanted[j]) continue;
-        sub->joints[sub->joint_count++] = j;
-        for (int32_t n = skin->joints[j]; n >= 0 && !sub->relevant[n]; n = m->nodes[n].parent) sub->relevant[n] = true;
-    }
-    for (uint32_t k = 0; k < m->node_count; ++k) /* s->order: parents first */
-        if (sub->relevant[s->order[k]]) sub->order[sub->count++] = s->order[k];
-    return sub;
-}
-
-void cb_joint_subset_free(cb_joint_subset *sub)
-{
-    if (!sub) return;
-    free(sub->relevant), free(sub->order), free(sub->joints);
-    free(sub);
-}
-
-void cb_sample_joint_subset(cb_sampler *s, int32_t animation, double t, const cb_joint_subset *sub, double *out)
-{
-    sample_nodes(s, animation, t, sub->order, sub->count, sub->relevant);
-    const cb_skin *skin = &s->model->skins[s->skin];
-    for (uint32_t k = 0; k < sub->joint_count; ++k) { /* as cb_sample_joint_matrices multiplies each */
-        uint32_t j = sub->joints[k];
-        const double *ibm = skin->inverse_bind + (size_t)j * 16;
-        if (s->affine_ibm)
-            cb_mat4_mul_affine(out + (size_t)j * 16, s->globals + (size_t)skin->joints[j] * 16, ibm);
-        else
-            cb_mat4_mul(out + (size_t)j * 16, s->globals + (size_t)skin->joints[j] * 16, ibm);
-    }
-}
-
 uint32_t cb_skin_root_joint(const cb_model *model, int32_t skin_index)
 {
     const cb_skin *skin = &model->skins[skin_index];

@@ -382,4 +382,23 @@ void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*o
     else
         lerp_lanes(ch, &sp, times, &hint, NULL, out);
 }
+CB_TARGET_CLONES
+void cb_channel_lanes_at(const cb_channel *ch, const double *times, uint32_t *hint, const cb_wrap *wrap,
+                         double (*out)[B])
+{
+    if (!lane_channel(ch)) { /* STEP, CUBICSPLINE, a single key: time by time */
+        for (int i = 0; i < B; ++i) {
+            double v[4] = {0, 0, 0, 0};
+            cb_channel_eval_at(ch, times[i], v, hint, wrap);
+            for (int c = 0; c < 4; ++c) out[c][i] = v[c];
+        }
+        return;
+    }
+    cb_key_spans sp;
+    find_spans(ch->times, ch->key_count, times, hint, &sp);
+    if (ch->path == CB_PATH_ROTATION)
+        rotation_lanes(ch, &sp, times, hint, wrap, out);
+    else
+        lerp_lanes(ch, &sp, times, hint, wrap, out);
+}
 #undef B

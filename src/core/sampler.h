@@ -75,20 +75,27 @@ static inline uint32_t cb_find_key(const float *times, uint32_t key_count, doubl
     return *hint = lo;
 }
 
-/* Some of a skin's joints, sampled alone: the nodes they hang from (parents first) and the
- * joints (indices into the skin's). What reads a few joints of a big rig (a foot's sole on the
- * 200-joint bench rig reads 2 joints of 200) samples only their chains. */
+/* Some of a skin's joints, sampled alone (sample_subset.c): the nodes they hang from (parents
+ * first) and the joints (indices into the skin's), with room for a batch's lanes. What reads a
+ * few joints of a big rig (the soles of a foot analysis) samples only their chains. */
 typedef struct cb_joint_subset {
-    bool *relevant;      /* per node: a wanted joint or an ancestor of one */
-    uint32_t *order, count;
+    bool *relevant;          /* per node: a wanted joint or an ancestor of one */
+    uint32_t *order, count;  /* those nodes, parents first */
+    uint32_t *slot;          /* per node: its place in order */
     uint32_t *joints, joint_count;
+    bool *animated;          /* per node, while sampling a batch: a channel sets it */
+    double *channel_lanes;   /* per channel of a clip: 4 x CB_SAMPLE_BATCH values */
+    double *node_lanes;      /* per node of order: TRS and global matrix, 26 x CB_SAMPLE_BATCH */
 } cb_joint_subset;
 /* wanted: per skin joint. NULL when out of memory. */
 cb_joint_subset *cb_joint_subset_create(const cb_sampler *s, const bool *wanted);
 void cb_joint_subset_free(cb_joint_subset *sub);
-/* cb_sample_joint_matrices for the subset's joints only, the same bits: their 16 doubles in `out`
- * (a whole skin's array; the other joints' are left as they were). */
-void cb_sample_joint_subset(cb_sampler *s, int32_t animation, double t, const cb_joint_subset *sub, double *out);
+/* cb_sample_joint_matrices for the subset's joints only, at 1..CB_SAMPLE_BATCH times at once, the
+ * same bits: time i's matrices at out + i * joint_count * 16 (a whole skin's array each; the
+ * other joints' left as they were). Each channel is evaluated over the times together
+ * (cb_channel_lanes_at), then the hierarchy over them side by side. */
+bool cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
+                                  cb_joint_subset *sub, double *out);
 
 /* One channel at time t (sample.c): the reference every lane must equal bit for bit. */
 void cb_channel_eval_at(const cb_channel *ch, double t, double out[4], uint32_t *hint, const cb_wrap *wrap);
@@ -106,5 +113,10 @@ void cb_sample_joint_lanes(cb_sampler *s, int32_t animation, const double *times
 void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
                          cb_root_motion root_motion, double *out);
 void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*out)[CB_SAMPLE_BATCH]);
+/* Any channel at CB_SAMPLE_BATCH times, with its cursor and its clip's wrap as the sampler
+ * samples it: out[c][i] is component c (3 or 4; a 4th of 3 undefined) at times[i], the bits of
+ * cb_channel_eval_at (the lanes where they can, time by time where they cannot). */
+void cb_channel_lanes_at(const cb_channel *ch, const double *times, uint32_t *hint, const cb_wrap *wrap,
+                         double (*out)[CB_SAMPLE_BATCH]);
 
 #endif

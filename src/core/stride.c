@@ -39,18 +39,23 @@ typedef struct track {
 static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const stride_feet *feet, uint32_t n, track *tr)
 {
     const cb_model *m = cb_sampler_model(s);
-    uint32_t bones = m->skins[cb_sampler_skin(s)].joint_count;
-    double *mats = malloc((size_t)bones * 16 * sizeof(double));
+    size_t bones = m->skins[cb_sampler_skin(s)].joint_count;
+    double *mats = malloc(bones * 16 * CB_SAMPLE_BATCH * sizeof(double));
     double *x = malloc((size_t)n * (STRIDE_SAMPLES + 1) * 2 * sizeof(double));
     bool ok = mats && x;
-    double dt = clip->duration / STRIDE_SAMPLES, span = clip->t1 - clip->t0;
-    for (uint32_t i = 0; ok && i <= STRIDE_SAMPLES; ++i) {
-        double t = i * dt, tau = cb_root_travel_time(t, span, clip->duration, clip->loops), xz[2];
-        stride_feet_sample(s, feet, clip->animation, clip->t0 + t, mats);
-        for (uint32_t k = 0; k < n; ++k) {
-            foot_sole_at(&feet->soles[k], mats, &tr[k].h[i], xz);
-            x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2] = xz[0] - clip->root_velocity[0] * tau;
-            x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2 + 1] = xz[1] - clip->root_velocity[2] * tau;
+    double dt = clip->duration / STRIDE_SAMPLES, span = clip->t1 - clip->t0, times[CB_SAMPLE_BATCH];
+    for (uint32_t first = 0; ok && first <= STRIDE_SAMPLES; first += CB_SAMPLE_BATCH) {
+        uint32_t count = STRIDE_SAMPLES + 1 - first < CB_SAMPLE_BATCH ? STRIDE_SAMPLES + 1 - first : CB_SAMPLE_BATCH;
+        for (uint32_t b = 0; b < count; ++b) times[b] = clip->t0 + (first + b) * dt;
+        stride_feet_sample_batch(s, feet, clip->animation, times, count, mats);
+        for (uint32_t b = 0; b < count; ++b) {
+            uint32_t i = first + b;
+            double t = i * dt, tau = cb_root_travel_time(t, span, clip->duration, clip->loops), xz[2];
+            for (uint32_t k = 0; k < n; ++k) {
+                foot_sole_at(&feet->soles[k], mats + b * bones * 16, &tr[k].h[i], xz);
+                x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2] = xz[0] - clip->root_velocity[0] * tau;
+                x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2 + 1] = xz[1] - clip->root_velocity[2] * tau;
+            }
         }
     }
     for (uint32_t k = 0; ok && k < n; ++k)
@@ -292,10 +297,12 @@ void stride_feet_free(stride_feet *feet)
     feet->count = 0, feet->joints = NULL;
 }
 
-void stride_feet_sample(cb_sampler *s, const stride_feet *feet, int32_t animation, double t, double *mats)
+void stride_feet_sample_batch(cb_sampler *s, const stride_feet *feet, int32_t animation, const double *times,
+                              uint32_t count, double *mats)
 {
-    if (feet->joints) cb_sample_joint_subset(s, animation, t, feet->joints, mats);
-    else cb_sample_joint_matrices(s, animation, t, mats);
+    if (feet->joints && cb_sample_joint_subset_batch(s, animation, times, count, feet->joints, mats)) return;
+    size_t bones = cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count;
+    for (uint32_t i = 0; i < count; ++i) cb_sample_joint_matrices(s, animation, times[i], mats + i * bones * 16);
 }
 
 void stride_tracks_free(stride_tracks *t)

@@ -24,9 +24,11 @@ typedef struct stride_feet {
 bool stride_feet_find(cb_sampler *sampler, stride_feet *feet);
 void stride_feet_free(stride_feet *feet);
 
-/* The joint matrices the soles read at time t of `animation` (cb_sample_joint_matrices' bits for
- * those joints; the others' left as they were). mats: the skin's joint count x 16. */
-void stride_feet_sample(cb_sampler *sampler, const stride_feet *feet, int32_t animation, double t, double *mats);
+/* The joint matrices the soles read at `count` (1..CB_SAMPLE_BATCH) times of `animation`
+ * (cb_sample_joint_matrices' bits for those joints; the others' left as they were): time i's
+ * at mats + i * joint_count * 16. */
+void stride_feet_sample_batch(cb_sampler *sampler, const stride_feet *feet, int32_t animation, const double *times,
+                              uint32_t count, double *mats);
 
 /* The sampled feet of one clip: heights, velocities and planted flags, per foot. */
 typedef struct stride_tracks {

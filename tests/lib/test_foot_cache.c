@@ -130,32 +130,55 @@ static void test_speed_reference_skips_only_what_cannot_matter(void **state)
     }
 }
 
-/* The sole joints alone, sampled at every 30 fps row of every clip: each one's 16 doubles are
+/* The sole joints alone, sampled at every 30 fps row of every clip, one time at a time and in
+ * batches (the channels evaluated over the batch's times together): each one's 16 doubles are
  * cb_sample_joint_matrices' bits. */
 static void test_sole_joints_alone_have_the_same_bits(void **state)
 {
     (void)state;
-    cb_model *m = load_shared(models[1]);
-    cb_error err = {0};
-    cb_sampler *s = cb_sampler_create(m, 0, &err);
-    stride_feet feet;
-    assert_true(stride_feet_find(s, &feet));
-    assert_non_null(feet.joints);
-    uint32_t bones = m->skins[0].joint_count;
-    assert_true(feet.joints->joint_count >= 4 && feet.joints->joint_count < bones);
-    double *all = malloc(bones * 16 * sizeof(double)), *some = malloc(bones * 16 * sizeof(double));
-    for (uint32_t a = 0; a < m->animation_count; ++a)
-        for (double t = m->animations[a].t0; t <= m->animations[a].t1; t += 1.0 / 30) {
-            cb_sample_joint_matrices(s, (int32_t)a, t, all);
-            stride_feet_sample(s, &feet, (int32_t)a, t, some);
-            for (uint32_t k = 0; k < feet.joints->joint_count; ++k)
-                assert_memory_equal(all + feet.joints->joints[k] * 16, some + feet.joints->joints[k] * 16, 16 * sizeof(double));
+    for (size_t mi = 0; mi < sizeof models / sizeof *models; ++mi) {
+        cb_model *m = load_shared(models[mi]);
+        cb_error err = {0};
+        cb_sampler *s = cb_sampler_create(m, 0, &err);
+        stride_feet feet;
+        assert_true(stride_feet_find(s, &feet));
+        assert_non_null(feet.joints);
+        size_t bones = m->skins[0].joint_count, checked = 0;
+        assert_true(feet.joints->joint_count >= 2 && feet.joints->joint_count < bones);
+        double *all = malloc(bones * 16 * sizeof(double)), *one = malloc(bones * 16 * sizeof(double));
+        double *batch = malloc(bones * 16 * CB_SAMPLE_BATCH * sizeof(double)), times[CB_SAMPLE_BATCH];
+        for (uint32_t a = 0; a < m->animation_count; ++a) {
+            cb_clip_info info;
+            assert_int_equal(cb_clip_analyze(s, (int32_t)a, 30, -1, NULL, &info, &err), CB_OK); /* its wrap */
+            uint32_t count = 0;
+            for (uint32_t f = 0; f <= info.frames; ++f) {
+                double t = info.t0 + f * info.duration / info.frames;
+                times[count++] = t;
+                cb_sample_joint_matrices(s, (int32_t)a, t, all);
+                assert_true(cb_sample_joint_subset_batch(s, (int32_t)a, &t, 1, feet.joints, one));
+                for (uint32_t k = 0; k < feet.joints->joint_count; ++k) {
+                    size_t j = feet.joints->joints[k];
+                    assert_memory_equal(all + j * 16, one + j * 16, 16 * sizeof(double));
+                }
+                if (count < CB_SAMPLE_BATCH && f < info.frames) continue;
+                assert_true(cb_sample_joint_subset_batch(s, (int32_t)a, times, count, feet.joints, batch));
+                for (uint32_t i = 0; i < count; ++i) {
+                    cb_sample_joint_matrices(s, (int32_t)a, times[i], all);
+                    for (uint32_t k = 0; k < feet.joints->joint_count; ++k, ++checked) {
+                        size_t j = feet.joints->joints[k];
+                        assert_memory_equal(all + j * 16, batch + (i * bones + j) * 16, 16 * sizeof(double));
+                    }
+                }
+                count = 0;
+            }
         }
-    printf("  %u of %u joints sampled for the soles, over %u nodes\n", feet.joints->joint_count, bones, feet.joints->count);
-    free(all), free(some);
-    stride_feet_free(&feet);
-    cb_sampler_free(s);
-    cb_model_free(m);
+        printf("  %s: %u of %zu joints sampled for the soles, over %u nodes; %zu matrices checked\n", models[mi],
+               feet.joints->joint_count, bones, feet.joints->count, checked);
+        free(all), free(one), free(batch);
+        stride_feet_free(&feet);
+        cb_sampler_free(s);
+        cb_model_free(m);
+    }
 }
 
 int main(void)
