@@ -28,30 +28,31 @@ typedef struct feet_track {
 
 static bool track_feet(foot_cache *cache, cb_sampler *s, const cb_clip_info *clip, const cb_stride *st, feet_track *tr)
 {
-    const cb_model *m = cb_sampler_model(s);
     uint32_t n = tr->samples;
-    size_t bones = m->skins[cb_sampler_skin(s)].joint_count;
-    double *mats = malloc(bones * 16 * CB_SAMPLE_BATCH * sizeof(double)), times[CB_SAMPLE_BATCH];
-    double *h = malloc((size_t)tr->feet * (n + 1) * sizeof(double));
+    double *h = malloc((size_t)tr->feet * (n + 1) * sizeof(double)), times[CB_SAMPLE_BATCH];
     const stride_feet *cached = foot_cache_feet(cache, s);
     stride_feet own;
     memset(&own, 0, sizeof own);
-    bool ok = mats && h && tr->x && tr->down && (cached || stride_feet_find(s, &own)); /* the bake's, or found here */
+    bool ok = h && tr->x && tr->down && (cached || stride_feet_find(s, &own)); /* the bake's, or found here */
     const stride_feet *feet = cached ? cached : &own;
     ok = ok && feet->count == st->foot_count && feet->size > 0;
+    double *lanes = ok ? malloc(((size_t)feet->joints->joint_count + 1) * 16 * CB_SAMPLE_BATCH * sizeof(double)) : NULL;
+    ok = ok && lanes;
     double dt = clip->duration / n, span = clip->t1 - clip->t0;
     for (uint32_t first = 0; ok && first <= n; first += CB_SAMPLE_BATCH) {
         uint32_t count = n + 1 - first < CB_SAMPLE_BATCH ? n + 1 - first : CB_SAMPLE_BATCH;
         for (uint32_t b = 0; b < count; ++b) /* the loop ends on its start */
             times[b] = clip->t0 + (first + b == n ? 0 : (first + b) * dt);
-        stride_feet_sample_batch(s, feet, clip->animation, times, count, mats);
-        for (uint32_t b = 0; b < count; ++b) {
-            uint32_t i = first + b;
-            double t = i * dt, tau = i == n ? 0 : cb_root_travel_time(t, span, clip->duration, clip->loops), xz[2];
-            for (uint32_t k = 0; k < tr->feet; ++k) {
-                foot_sole_at(&feet->soles[k], mats + b * bones * 16, &h[(size_t)k * (n + 1) + i], xz);
+        cb_sample_joint_subset_batch(s, clip->animation, times, count, feet->joints, lanes);
+        for (uint32_t k = 0; k < tr->feet; ++k) {
+            double fh[CB_SAMPLE_BATCH], gx[CB_SAMPLE_BATCH], gz[CB_SAMPLE_BATCH];
+            foot_sole_at_lanes(&feet->soles[k], feet->joints, lanes, fh, gx, gz);
+            for (uint32_t b = 0; b < count; ++b) {
+                uint32_t i = first + b;
+                double tau = i == n ? 0 : cb_root_travel_time(i * dt, span, clip->duration, clip->loops);
                 double *x = tr->x + ((size_t)k * (n + 1) + i) * 2;
-                x[0] = xz[0] - clip->root_velocity[0] * tau, x[1] = xz[1] - clip->root_velocity[2] * tau;
+                h[(size_t)k * (n + 1) + i] = fh[b];
+                x[0] = gx[b] - clip->root_velocity[0] * tau, x[1] = gz[b] - clip->root_velocity[2] * tau;
             }
         }
     }
@@ -63,7 +64,7 @@ static bool track_feet(foot_cache *cache, cb_sampler *s, const cb_clip_info *cli
             tr->down[(size_t)k * n + i] = st->feet[k].strides && fmax(hk[i], hk[i + 1]) <= lo + PLANTED_BAND * feet->size;
     }
     stride_feet_free(&own);
-    free(mats), free(h);
+    free(lanes), free(h);
     return ok;
 }
 

@@ -31,10 +31,13 @@ cb_joint_subset *cb_joint_subset_create(const cb_sampler *s, const bool *wanted)
     sub->slot = malloc((m->node_count + 1) * sizeof *sub->slot);
     sub->animated = malloc((m->node_count + 1) * sizeof *sub->animated);
     sub->joints = malloc((skin->joint_count + 1) * sizeof *sub->joints);
+    sub->joint_slot = malloc((skin->joint_count + 1) * sizeof *sub->joint_slot);
     sub->channel_lanes = malloc((size_t)channels * 4 * B * sizeof(double));
-    if (!sub->relevant || !sub->order || !sub->slot || !sub->animated || !sub->joints || !sub->channel_lanes)
+    if (!sub->relevant || !sub->order || !sub->slot || !sub->animated || !sub->joints || !sub->joint_slot ||
+        !sub->channel_lanes)
         return cb_joint_subset_free(sub), NULL;
     for (uint32_t j = 0; j < skin->joint_count; ++j) {
+        sub->joint_slot[j] = wanted[j] ? sub->joint_count : UINT32_MAX;
         if (!wanted[j]) continue;
         sub->joints[sub->joint_count++] = j;
         for (int32_t n = skin->joints[j]; n >= 0 && !sub->relevant[n]; n = m->nodes[n].parent) sub->relevant[n] = true;
@@ -49,7 +52,7 @@ cb_joint_subset *cb_joint_subset_create(const cb_sampler *s, const bool *wanted)
 void cb_joint_subset_free(cb_joint_subset *sub)
 {
     if (!sub) return;
-    free(sub->relevant), free(sub->order), free(sub->slot), free(sub->animated), free(sub->joints);
+    free(sub->relevant), free(sub->order), free(sub->slot), free(sub->animated), free(sub->joints), free(sub->joint_slot);
     free(sub->channel_lanes), free(sub->node_lanes);
     free(sub);
 }
@@ -136,7 +139,34 @@ static void global_lanes(const cb_sampler *s, cb_joint_subset *sub)
     }
 }
 
-bool cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
+/* Each wanted joint's matrix, its global times its inverse bind matrix: cb_mat4_mul_affine's
+ * operations lane by lane, or cb_mat4_mul time by time where an inverse bind matrix is not affine. */
+CB_TARGET_CLONES
+static void joint_matrix_lanes(const cb_sampler *s, const cb_joint_subset *sub, double *out)
+{
+    const cb_skin *skin = &s->model->skins[s->skin];
+    for (uint32_t k = 0; k < sub->joint_count; ++k) {
+        uint32_t j = sub->joints[k];
+        const double *ibm = skin->inverse_bind + (size_t)j * 16;
+        const double(*g)[B] = (const double(*)[B])node_lanes(sub, sub->slot[skin->joints[j]], TRS_LANES);
+        double(*m)[B] = (double(*)[B])(out + (size_t)k * 16 * B);
+        if (s->affine_ibm) {
+            double b[16][B];
+            for (int c = 0; c < 16; ++c)
+                for (int i = 0; i < B; ++i) b[c][i] = ibm[c];
+            mul_affine_lanes(m, g, (const double(*)[B])b);
+            continue;
+        }
+        for (int i = 0; i < B; ++i) {
+            double gi[16], mi[16];
+            for (int c = 0; c < 16; ++c) gi[c] = g[c][i];
+            cb_mat4_mul(mi, gi, ibm);
+            for (int c = 0; c < 16; ++c) m[c][i] = mi[c];
+        }
+    }
+}
+
+void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
                                   cb_joint_subset *sub, double *out)
 {
     const cb_model *m = s->model;
@@ -149,18 +179,6 @@ bool cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double
                                 (double(*)[B])(sub->channel_lanes + (size_t)c * 4 * B));
     trs_lanes(s, anim, sub);
     global_lanes(s, sub);
-    const cb_skin *skin = &m->skins[s->skin];
-    for (uint32_t i = 0; i < count; ++i)
-        for (uint32_t k = 0; k < sub->joint_count; ++k) { /* as cb_sample_joint_matrices multiplies each */
-            uint32_t j = sub->joints[k];
-            double g[16], *to = out + ((size_t)i * skin->joint_count + j) * 16;
-            const double *ibm = skin->inverse_bind + (size_t)j * 16;
-            for (int c = 0; c < 16; ++c) g[c] = node_lanes(sub, sub->slot[skin->joints[j]], TRS_LANES + c)[i];
-            if (s->affine_ibm)
-                cb_mat4_mul_affine(to, g, ibm);
-            else
-                cb_mat4_mul(to, g, ibm);
-        }
-    return true;
+    joint_matrix_lanes(s, sub, out);
 }
 #undef B

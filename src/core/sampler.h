@@ -83,6 +83,7 @@ typedef struct cb_joint_subset {
     uint32_t *order, count;  /* those nodes, parents first */
     uint32_t *slot;          /* per node: its place in order */
     uint32_t *joints, joint_count;
+    uint32_t *joint_slot;    /* per skin joint: its place in joints, or UINT32_MAX */
     bool *animated;          /* per node, while sampling a batch: a channel sets it */
     double *channel_lanes;   /* per channel of a clip: 4 x CB_SAMPLE_BATCH values */
     double *node_lanes;      /* per node of order: TRS and global matrix, 26 x CB_SAMPLE_BATCH */
@@ -91,10 +92,11 @@ typedef struct cb_joint_subset {
 cb_joint_subset *cb_joint_subset_create(const cb_sampler *s, const bool *wanted);
 void cb_joint_subset_free(cb_joint_subset *sub);
 /* cb_sample_joint_matrices for the subset's joints only, at 1..CB_SAMPLE_BATCH times at once, the
- * same bits: time i's matrices at out + i * joint_count * 16 (a whole skin's array each; the
- * other joints' left as they were). Each channel is evaluated over the times together
- * (cb_channel_lanes_at), then the hierarchy over them side by side. */
-bool cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
+ * same bits, as lanes: component c of the k-th wanted joint's matrix (sub->joints[k]) at times[i]
+ * is out[(k * 16 + c) * CB_SAMPLE_BATCH + i] (lanes past `count` repeat the last time). Each
+ * channel is evaluated over the times together (cb_channel_lanes_at), then the hierarchy over
+ * them side by side. */
+void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
                                   cb_joint_subset *sub, double *out);
 
 /* One channel at time t (sample.c): the reference every lane must equal bit for bit. */

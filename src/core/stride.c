@@ -38,23 +38,23 @@ typedef struct track {
  * horizontal travel taken off as an in-place bake does (cb_root_travel_time). */
 static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const stride_feet *feet, uint32_t n, track *tr)
 {
-    const cb_model *m = cb_sampler_model(s);
-    size_t bones = m->skins[cb_sampler_skin(s)].joint_count;
-    double *mats = malloc(bones * 16 * CB_SAMPLE_BATCH * sizeof(double));
+    double *lanes = malloc(((size_t)feet->joints->joint_count + 1) * 16 * CB_SAMPLE_BATCH * sizeof(double));
     double *x = malloc((size_t)n * (STRIDE_SAMPLES + 1) * 2 * sizeof(double));
-    bool ok = mats && x;
+    bool ok = lanes && x;
     double dt = clip->duration / STRIDE_SAMPLES, span = clip->t1 - clip->t0, times[CB_SAMPLE_BATCH];
     for (uint32_t first = 0; ok && first <= STRIDE_SAMPLES; first += CB_SAMPLE_BATCH) {
         uint32_t count = STRIDE_SAMPLES + 1 - first < CB_SAMPLE_BATCH ? STRIDE_SAMPLES + 1 - first : CB_SAMPLE_BATCH;
         for (uint32_t b = 0; b < count; ++b) times[b] = clip->t0 + (first + b) * dt;
-        stride_feet_sample_batch(s, feet, clip->animation, times, count, mats);
-        for (uint32_t b = 0; b < count; ++b) {
-            uint32_t i = first + b;
-            double t = i * dt, tau = cb_root_travel_time(t, span, clip->duration, clip->loops), xz[2];
-            for (uint32_t k = 0; k < n; ++k) {
-                foot_sole_at(&feet->soles[k], mats + b * bones * 16, &tr[k].h[i], xz);
-                x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2] = xz[0] - clip->root_velocity[0] * tau;
-                x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2 + 1] = xz[1] - clip->root_velocity[2] * tau;
+        cb_sample_joint_subset_batch(s, clip->animation, times, count, feet->joints, lanes);
+        for (uint32_t k = 0; k < n; ++k) {
+            double h[CB_SAMPLE_BATCH], gx[CB_SAMPLE_BATCH], gz[CB_SAMPLE_BATCH];
+            foot_sole_at_lanes(&feet->soles[k], feet->joints, lanes, h, gx, gz);
+            for (uint32_t b = 0; b < count; ++b) {
+                uint32_t i = first + b;
+                double tau = cb_root_travel_time(i * dt, span, clip->duration, clip->loops);
+                tr[k].h[i] = h[b];
+                x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2] = gx[b] - clip->root_velocity[0] * tau;
+                x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2 + 1] = gz[b] - clip->root_velocity[2] * tau;
             }
         }
     }
@@ -63,7 +63,7 @@ static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const stride_
             const double *a = x + ((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2;
             tr[k].u[i * 2] = (a[2] - a[0]) / dt, tr[k].u[i * 2 + 1] = (a[3] - a[1]) / dt;
         }
-    free(mats), free(x);
+    free(lanes), free(x);
     return ok;
 }
 
@@ -285,9 +285,10 @@ bool stride_feet_find(cb_sampler *s, stride_feet *feet)
             for (int w = 0; w < 4; ++w) /* the joints foot_sole_at reads */
                 if (feet->soles[k].v[v].weight[w] != 0 && feet->soles[k].v[v].joint[w] < bones)
                     wanted[feet->soles[k].v[v].joint[w]] = true;
-    feet->joints = wanted ? cb_joint_subset_create(s, wanted) : NULL; /* NULL: every joint, as fast as before */
+    feet->joints = wanted ? cb_joint_subset_create(s, wanted) : NULL;
     free(wanted);
-    return true;
+    if (!feet->joints) stride_feet_free(feet);
+    return feet->joints != NULL;
 }
 
 void stride_feet_free(stride_feet *feet)
@@ -295,14 +296,6 @@ void stride_feet_free(stride_feet *feet)
     foot_soles_free(feet->soles, feet->count);
     cb_joint_subset_free(feet->joints);
     feet->count = 0, feet->joints = NULL;
-}
-
-void stride_feet_sample_batch(cb_sampler *s, const stride_feet *feet, int32_t animation, const double *times,
-                              uint32_t count, double *mats)
-{
-    if (feet->joints && cb_sample_joint_subset_batch(s, animation, times, count, feet->joints, mats)) return;
-    size_t bones = cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count;
-    for (uint32_t i = 0; i < count; ++i) cb_sample_joint_matrices(s, animation, times[i], mats + i * bones * 16);
 }
 
 void stride_tracks_free(stride_tracks *t)

@@ -17,18 +17,12 @@ typedef struct stride_feet {
     foot_sole soles[CB_MAX_FEET];
     uint32_t count;
     double size;
-    struct cb_joint_subset *joints; /* NULL: every joint sampled */
+    struct cb_joint_subset *joints; /* the joints the soles read (cb_sample_joint_subset_batch) */
 } stride_feet;
 
 /* False when out of memory. stride_feet_free releases the soles. */
 bool stride_feet_find(cb_sampler *sampler, stride_feet *feet);
 void stride_feet_free(stride_feet *feet);
-
-/* The joint matrices the soles read at `count` (1..CB_SAMPLE_BATCH) times of `animation`
- * (cb_sample_joint_matrices' bits for those joints; the others' left as they were): time i's
- * at mats + i * joint_count * 16. */
-void stride_feet_sample_batch(cb_sampler *sampler, const stride_feet *feet, int32_t animation, const double *times,
-                              uint32_t count, double *mats);
 
 /* The sampled feet of one clip: heights, velocities and planted flags, per foot. */
 typedef struct stride_tracks {
