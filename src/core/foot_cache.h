@@ -11,6 +11,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "crowdbake/locomotion.h"
+#include "crowdbake/row_travel.h"
 #include "crowdbake/stride.h"
 #include "foot_sole.h"
 
@@ -33,8 +35,6 @@ void foot_cache_counts(const foot_cache *cache, uint32_t *measured, uint32_t *re
 
 /* The analyses that share it, each as its public function (which measures with a cache of its
  * own) with the cache given (NULL: uncached). */
-#include "crowdbake/locomotion.h"
-#include "crowdbake/row_travel.h"
 void row_travel_measure_cached(foot_cache *cache, cb_sampler *sampler, const cb_clip_info *clip, bool in_place,
                                uint32_t rows, float *offsets, cb_row_travel *out); /* row_travel.c */
 void ground_speed_cached(foot_cache *cache, cb_sampler *sampler, const cb_clip_info *clip,
