@@ -173,10 +173,21 @@ void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double
     const cb_animation *anim = animation >= 0 && animation < (int32_t)m->animation_count ? &m->animations[animation] : NULL;
     double padded[B]; /* the unused lanes repeat the last time */
     for (uint32_t i = 0; i < B; ++i) padded[i] = times[i < count ? i : count - 1];
-    for (uint32_t c = 0; anim && c < anim->channel_count; ++c)
-        if (sub->relevant[anim->channels[c].node])
-            cb_channel_lanes_at(&anim->channels[c], padded, &s->cursor[s->cursor_base[animation] + c], &s->wraps[animation],
-                                (double(*)[B])(sub->channel_lanes + (size_t)c * 4 * B));
+    /* Channels that share their key times (one input accessor for many, as exporters write
+     * them) share one key search: the spans are the same whatever the channel. */
+    cb_key_spans spans;
+    const float *spans_of = NULL;
+    uint32_t spans_keys = 0;
+    for (uint32_t c = 0; anim && c < anim->channel_count; ++c) {
+        const cb_channel *ch = &anim->channels[c];
+        if (!sub->relevant[ch->node]) continue;
+        uint32_t *cursor = &s->cursor[s->cursor_base[animation] + c];
+        bool lanes = cb_channel_in_lanes(ch);
+        if (lanes && (ch->times != spans_of || ch->key_count != spans_keys))
+            cb_find_spans(ch->times, ch->key_count, padded, cursor, &spans), spans_of = ch->times, spans_keys = ch->key_count;
+        cb_channel_lanes_at(ch, padded, cursor, &s->wraps[animation], lanes ? &spans : NULL,
+                            (double(*)[B])(sub->channel_lanes + (size_t)c * 4 * B));
+    }
     trs_lanes(s, anim, sub);
     global_lanes(s, sub);
     joint_matrix_lanes(s, sub, out);

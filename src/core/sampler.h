@@ -117,8 +117,15 @@ void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t
 void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*out)[CB_SAMPLE_BATCH]);
 /* Any channel at CB_SAMPLE_BATCH times, with its cursor and its clip's wrap as the sampler
  * samples it: out[c][i] is component c (3 or 4; a 4th of 3 undefined) at times[i], the bits of
- * cb_channel_eval_at (the lanes where they can, time by time where they cannot). */
+ * cb_channel_eval_at (the lanes where they can, time by time where they cannot). spans: where
+ * the times fall among the channel's keys when the caller found them for another channel of the
+ * same key times (cb_find_spans; only for a cb_channel_in_lanes channel), else NULL. */
 void cb_channel_lanes_at(const cb_channel *ch, const double *times, uint32_t *hint, const cb_wrap *wrap,
-                         double (*out)[CB_SAMPLE_BATCH]);
+                         const cb_key_spans *spans, double (*out)[CB_SAMPLE_BATCH]);
+/* Whether cb_channel_lanes_at evaluates a channel in lanes (LINEAR, two keys or more). */
+bool cb_channel_in_lanes(const cb_channel *ch);
+/* Where CB_SAMPLE_BATCH times fall among key times (channel_eval's key and fraction; the answer
+ * does not depend on the hint). */
+void cb_find_spans(const float *key_times, uint32_t key_count, const double *times, uint32_t *hint, cb_key_spans *out);
 
 #endif
