@@ -14,6 +14,7 @@
 #include "plant_feet.h"
 #include "../core/palette_bake.h" /* palette_choose_rates, the search's poses kept for the bake */
 #include "../core/pose_cache.h"
+#include "../core/foot_cache.h"
 #include "internal/plumbing.h"
 #include "internal/bake_words.h"
 
@@ -225,12 +226,13 @@ void cb_bake_job_init(cb_bake_job *job)
 }
 
 /* The speed reference nobody gave: the slowest locomotion clip's ground speed (locomotion.h),
- * decided here so that every program baking the model records the same one. */
-static void decide_speed_reference(cb_bake_job *job)
+ * decided here so that every program baking the model records the same one. Its clips' strides
+ * go into the run's foot analyses, which the per-row travel reads again. */
+static void decide_speed_reference(cb_bake_job *job, foot_cache *feet)
 {
     if (job->speed_reference >= 0) return;
-    job->speed_reference = cb_speed_reference(job->model, job->skin, job->plan, job->plan_count,
-                                              job->speed_reference_from, sizeof job->speed_reference_from);
+    job->speed_reference = speed_reference_cached(feet, job->model, job->skin, job->plan, job->plan_count,
+                                                  job->speed_reference_from, sizeof job->speed_reference_from);
 }
 
 /* Root motion decided like the rest: a bake nobody told what to do with root travel keeps it,
@@ -466,11 +468,14 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
 {
     memset(out, 0, sizeof *out);
     if (check_outputs(job, err) || cb_bake_job_plan(job, err)) return err->status;
-    decide_speed_reference(job);
+    /* Each clip's feet measured once for the whole run (the speed reference and the per-row
+     * travel ask the same), freed with it. */
+    foot_cache *feet = foot_cache_create();
+    decide_speed_reference(job, feet);
     cb_clip_plan *baked = malloc((job->plan_count ? job->plan_count : 1) * sizeof *baked);
-    if (!baked) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    cb_sampler *s = cb_sampler_create(job->model, job->skin, err);
-    if (!s) return free(baked), err->status;
+    cb_sampler *s = baked ? cb_sampler_create(job->model, job->skin, err) : NULL;
+    if (!baked) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    if (!s) return foot_cache_free(feet), free(baked), err->status;
     cb_release_free_memory(); /* before the palette's buffers: the load's freed memory */
     cb_palette shared = {0}; /* the last palette baked, written again by a format of the same options */
     cb_bake_options shared_opt = {0};
@@ -494,7 +499,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
             palette_probe kept = {NULL, NULL, job->search_poses}; /* what the rate search sampled */
             resolved_plan(job, baked);
             if (palette_bake_with_facts(s, &opt, baked, job->plan_count, NULL, &kept, &shared, err) ||
-                bake_row_travel(job, s, &shared, err))
+                bake_row_travel(job, feet, s, &shared, err))
                 break;
             shared_opt = opt;
         }
@@ -521,6 +526,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     cb_pal_mapping_abort(&mapping); /* a bake that failed: its temporary */
     cb_palette_free(&shared);
     cb_sampler_free(s);
+    foot_cache_free(feet);
     free(baked); /* after the palette, which references it */
     return err->status;
 }

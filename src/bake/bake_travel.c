@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "internal/plumbing.h"
+#include "../core/foot_cache.h"
 
 /* Whether a clip carries its own travel in its rows: root motion kept on a clip whose root
  * travels. A clip animated in place (its root still) is in place whatever the mode says. */
@@ -14,8 +15,9 @@ static bool carries_travel(const cb_bake_job *job, const cb_clip_info *info, dou
     return !cb_root_motion_in_place(job->settings.root_motion, info) && cb_clip_travels(info, model_height);
 }
 
-void cb_bake_job_row_travel(const cb_bake_job *job, cb_sampler *s, const cb_clip_info *info, float *offsets,
-                            cb_row_travel *out)
+/* cb_bake_job_row_travel with the bake's foot analyses (feet: NULL measures them here). */
+static void job_row_travel(const cb_bake_job *job, foot_cache *feet, cb_sampler *s, const cb_clip_info *info,
+                           float *offsets, cb_row_travel *out)
 {
     double lo[3], hi[3], model_height = cb_skin_rest_bounds(s, lo, hi);
     if (job->settings.row_travel_off) {
@@ -24,10 +26,16 @@ void cb_bake_job_row_travel(const cb_bake_job *job, cb_sampler *s, const cb_clip
         snprintf(out->why, sizeof out->why, "not applied: turned off (--row-travel off, or the catalog's row_travel = false)");
         return;
     }
-    cb_row_travel_measure(s, info, !carries_travel(job, info, model_height), info->frames, offsets, out);
+    row_travel_measure_cached(feet, s, info, !carries_travel(job, info, model_height), info->frames, offsets, out);
 }
 
-cb_status bake_row_travel(const cb_bake_job *job, cb_sampler *s, cb_palette *p, cb_error *err)
+void cb_bake_job_row_travel(const cb_bake_job *job, cb_sampler *s, const cb_clip_info *info, float *offsets,
+                            cb_row_travel *out)
+{
+    job_row_travel(job, NULL, s, info, offsets, out);
+}
+
+cb_status bake_row_travel(const cb_bake_job *job, struct foot_cache *feet, cb_sampler *s, cb_palette *p, cb_error *err)
 {
     float *offsets = calloc(p->rows ? p->rows : 1, sizeof *offsets);
     if (!offsets) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
@@ -46,7 +54,7 @@ cb_status bake_row_travel(const cb_bake_job *job, cb_sampler *s, cb_palette *p, 
             snprintf(t->why, sizeof t->why, "not applied: %u rows baked, %u analyzed", clip->frames, info.frames);
             continue;
         }
-        cb_bake_job_row_travel(job, s, &info, offsets + clip->first_row, t);
+        job_row_travel(job, feet, s, &info, offsets + clip->first_row, t);
         any = any || t->applied;
     }
     if (!any) free(offsets), offsets = NULL;

@@ -5,9 +5,12 @@
 
 #include "crowdbake/bake.h"
 
+struct foot_cache;
+
 /* Fills each clip's cb_palette_clip.travel and, where any clip's offsets are applied,
- * p->row_travel (rows floats). Fails only when out of memory. */
-cb_status bake_row_travel(const cb_bake_job *job, cb_sampler *s, cb_palette *p, cb_error *err);
+ * p->row_travel (rows floats), with the run's foot analyses (`feet`, foot_cache.h; NULL: measured
+ * here). Fails only when out of memory. */
+cb_status bake_row_travel(const cb_bake_job *job, struct foot_cache *feet, cb_sampler *s, cb_palette *p, cb_error *err);
 
 /* A note per striding loop: its per-row travel applied or not, and why (the numbers). */
 void bake_travel_notes(const cb_palette *p, cb_warnings *w);

@@ -1,6 +1,7 @@
 /* locomotion.c - ground speed, the locomotion decision and the speed reference (locomotion.h). */
 #include "crowdbake/locomotion.h"
 #include "internal/name_words.h"
+#include "../core/foot_cache.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -37,13 +38,13 @@ static void no_stride_in_actions(const cb_model *m, const cb_clip_info *clip, cb
     snprintf(st->why, sizeof st->why, "the clip's name says '%s': an action in place, its feet give no stride", word);
 }
 
-void cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, cb_ground_speed *out)
+void ground_speed_cached(foot_cache *feet, cb_sampler *s, const cb_clip_info *clip, cb_ground_speed *out)
 {
     memset(out, 0, sizeof *out);
     out->method = "none";
     if (clip->duration <= 0) return;
     double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
-    cb_stride_measure(s, clip, &out->stride);
+    foot_cache_stride(feet, s, clip, &out->stride);
     no_stride_in_actions(cb_sampler_model(s), clip, &out->stride);
     out->root = clip->ground_speed;
     out->feet = out->stride.stride ? out->stride.speed : 0;
@@ -54,6 +55,11 @@ void cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, cb_ground_
         out->speed = out->root;
         out->method = "root motion";
     }
+}
+
+void cb_measure_ground_speed(cb_sampler *s, const cb_clip_info *clip, cb_ground_speed *out)
+{
+    ground_speed_cached(NULL, s, clip, out);
 }
 
 bool cb_decide_locomotion(int kind, const char *words, bool loops, const cb_ground_speed *gs, bool speed_given,
@@ -93,16 +99,15 @@ bool cb_decide_locomotion(int kind, const char *words, bool loops, const cb_grou
 }
 
 /* Whether a clip alone (no catalog state) follows the speed: its name's words, then its feet. */
-static bool clip_follows_speed(const char *name, bool loops, const cb_ground_speed *gs)
+static bool clip_follows_speed(int kind, const char *word, bool loops, const cb_ground_speed *gs)
 {
-    char word[64], words[160] = "", reason[512];
-    int kind = cb_name_says_locomotion(name, word, sizeof word);
+    char words[160] = "", reason[512];
     if (kind) snprintf(words, sizeof words, "the clip's name says '%s'", word);
     return cb_decide_locomotion(kind, words, loops, gs, false, reason, sizeof reason);
 }
 
-double cb_speed_reference(const cb_model *model, int32_t skin, const cb_clip_plan *plan, uint32_t count, char *why,
-                          size_t size)
+double speed_reference_cached(foot_cache *feet, const cb_model *model, int32_t skin, const cb_clip_plan *plan,
+                              uint32_t count, char *why, size_t size)
 {
     cb_error err = {0};
     cb_sampler *s = skin >= 0 ? cb_sampler_create(model, skin, &err) : NULL;
@@ -114,13 +119,17 @@ double cb_speed_reference(const cb_model *model, int32_t skin, const cb_clip_pla
     for (uint32_t i = 0; s && speed && i < n; ++i) {
         int32_t a = plan ? plan[i].animation : (int32_t)i;
         cb_clip_info info;
+        char word[64];
         if (cb_clip_analyze(s, a, 30, plan ? plan[i].loop : -1, &limits, &info, &err)) {
             err = (cb_error){0};
             continue;
         }
-        cb_measure_ground_speed(s, &info, speed);
-        if (!clip_follows_speed(model->animations[a].name, info.loops, speed) || speed->speed <= 0 ||
-            (best > 0 && speed->speed >= best))
+        /* A one-shot, or a clip whose name says an action, never follows the speed
+         * (cb_decide_locomotion), whatever its feet do: they are not measured. */
+        int kind = cb_name_says_locomotion(model->animations[a].name, word, sizeof word);
+        if (!info.loops || kind < 0) continue;
+        ground_speed_cached(feet, s, &info, speed);
+        if (!clip_follows_speed(kind, word, info.loops, speed) || speed->speed <= 0 || (best > 0 && speed->speed >= best))
             continue;
         best = speed->speed;
         snprintf(why, size, "the slowest locomotion clip '%s' (%s); --speed-reference overrides", model->animations[a].name,
@@ -128,5 +137,14 @@ double cb_speed_reference(const cb_model *model, int32_t skin, const cb_clip_pla
     }
     free(speed);
     cb_sampler_free(s);
+    return best;
+}
+
+double cb_speed_reference(const cb_model *model, int32_t skin, const cb_clip_plan *plan, uint32_t count, char *why,
+                          size_t size)
+{
+    foot_cache *feet = foot_cache_create(); /* the feet found once for every clip */
+    double best = speed_reference_cached(feet, model, skin, plan, count, why, size);
+    foot_cache_free(feet);
     return best;
 }

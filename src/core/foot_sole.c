@@ -7,7 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cb_math.h"       /* CB_TARGET_CLONES */
 #include "palette_bake.h" /* palette_bind_positions */
+#include "sampler.h"      /* cb_joint_subset, CB_SAMPLE_BATCH */
 
 /* A sole vertex lies in the lowest 3% of the model's height in the rest pose; vertices within 8%
  * of the height of each other (side by side) stand on one foot: a human's feet stand 14% apart,
@@ -257,4 +259,29 @@ void foot_sole_at(const foot_sole *f, const double *mats, double *height, double
     }
     *height = f->count ? y / f->count : 0;
     xz[0] = f->count ? x / f->count : 0, xz[1] = f->count ? z / f->count : 0;
+}
+
+CB_TARGET_CLONES
+void foot_sole_at_lanes(const foot_sole *f, const cb_joint_subset *sub, const double *lanes, double *height, double *x,
+                        double *z)
+{
+    enum { B = CB_SAMPLE_BATCH };
+    double sx[B] = {0}, sy[B] = {0}, sz[B] = {0};
+    for (uint32_t v = 0; v < f->count; ++v) {
+        const sole_vertex *sv = &f->v[v];
+        double r[3][B] = {{0}};
+        for (int k = 0; k < 4; ++k) {
+            if (sv->weight[k] == 0) continue;
+            const double(*m)[B] = (const double(*)[B])(lanes + (size_t)sub->joint_slot[sv->joint[k]] * 16 * B);
+            double w = sv->weight[k], p0 = sv->p[0], p1 = sv->p[1], p2 = sv->p[2];
+            for (int c = 0; c < 3; ++c)
+                for (int i = 0; i < B; ++i)
+                    r[c][i] += w * (m[c][i] * p0 + m[4 + c][i] * p1 + m[8 + c][i] * p2 + m[12 + c][i]);
+        }
+        for (int i = 0; i < B; ++i) sy[i] += r[1][i], sx[i] += r[0][i], sz[i] += r[2][i];
+    }
+    for (int i = 0; i < B; ++i) {
+        height[i] = f->count ? sy[i] / f->count : 0;
+        x[i] = f->count ? sx[i] / f->count : 0, z[i] = f->count ? sz[i] / f->count : 0;
+    }
 }

@@ -42,4 +42,11 @@ void foot_soles_free(foot_sole *f, uint32_t n);
  * with the step. */
 void foot_sole_at(const foot_sole *f, const double *mats, double *height, double xz[2]);
 
+/* foot_sole_at at CB_SAMPLE_BATCH times at once, the same operations per time in their order
+ * (the same bits): `lanes` the wanted joints' matrices as cb_sample_joint_subset_batch gives them
+ * (every joint the sole reads among `sub`'s). height, x, z: CB_SAMPLE_BATCH each. */
+struct cb_joint_subset;
+void foot_sole_at_lanes(const foot_sole *f, const struct cb_joint_subset *sub, const double *lanes, double *height,
+                        double *x, double *z);
+
 #endif

@@ -7,8 +7,11 @@
 #include <string.h>
 
 #include "crowdbake/stride.h"
+#include "foot_cache.h"
 #include "foot_sole.h"
 #include "loop_decide.h"
+#include "sampler.h" /* CB_SAMPLE_BATCH */
+#include "stride_feet.h"
 
 /* A foot is planted while its sole is within 2% of the model's height of its lowest, as
  * cb_stride_measure plants it (stride.c's STANCE_BAND): the offsets keep still what it calls planted. */
@@ -24,29 +27,34 @@ typedef struct feet_track {
     bool *down;  /* feet x samples */
 } feet_track;
 
-static bool track_feet(cb_sampler *s, const cb_clip_info *clip, const cb_stride *st, feet_track *tr)
+static bool track_feet(foot_cache *cache, cb_sampler *s, const cb_clip_info *clip, const cb_stride *st, feet_track *tr)
 {
-    const cb_model *m = cb_sampler_model(s);
-    uint32_t bones = m->skins[cb_sampler_skin(s)].joint_count, n = tr->samples;
-    double *mats = malloc((size_t)bones * 16 * sizeof(double)), size = 0;
-    double *h = malloc((size_t)tr->feet * (n + 1) * sizeof(double));
-    foot_sole soles[CB_MAX_FEET] = {{0}};
-    uint32_t found = 0;
-    bool ok = mats && h && tr->x && tr->down;
-    if (ok) {
-        cb_sample_joint_matrices(s, -1, 0, mats);
-        found = foot_soles_find(s, mats, soles, CB_MAX_FEET, &size);
-        ok = found == st->foot_count && size > 0;
-    }
+    uint32_t n = tr->samples;
+    double *h = malloc((size_t)tr->feet * (n + 1) * sizeof(double)), times[CB_SAMPLE_BATCH];
+    const stride_feet *cached = foot_cache_feet(cache, s);
+    stride_feet own;
+    memset(&own, 0, sizeof own);
+    bool ok = h && tr->x && tr->down && (cached || stride_feet_find(s, &own)); /* the bake's, or found here */
+    const stride_feet *feet = cached ? cached : &own;
+    ok = ok && feet->count == st->foot_count && feet->size > 0;
+    double *lanes = ok ? malloc(((size_t)feet->joints->joint_count + 1) * 16 * CB_SAMPLE_BATCH * sizeof(double)) : NULL;
+    ok = ok && lanes;
     double dt = clip->duration / n, span = clip->t1 - clip->t0;
-    for (uint32_t i = 0; ok && i <= n; ++i) {
-        double t = i * dt, tau = cb_root_travel_time(t, span, clip->duration, clip->loops), xz[2];
-        cb_sample_joint_matrices(s, clip->animation, clip->t0 + (i == n ? 0 : t), mats); /* the loop ends on its start */
-        if (i == n) tau = 0;
+    for (uint32_t first = 0; ok && first <= n; first += CB_SAMPLE_BATCH) {
+        uint32_t count = n + 1 - first < CB_SAMPLE_BATCH ? n + 1 - first : CB_SAMPLE_BATCH;
+        for (uint32_t b = 0; b < count; ++b) /* the loop ends on its start */
+            times[b] = clip->t0 + (first + b == n ? 0 : (first + b) * dt);
+        cb_sample_joint_subset_batch(s, clip->animation, times, count, feet->joints, lanes);
         for (uint32_t k = 0; k < tr->feet; ++k) {
-            foot_sole_at(&soles[k], mats, &h[(size_t)k * (n + 1) + i], xz);
-            double *x = tr->x + ((size_t)k * (n + 1) + i) * 2;
-            x[0] = xz[0] - clip->root_velocity[0] * tau, x[1] = xz[1] - clip->root_velocity[2] * tau;
+            double fh[CB_SAMPLE_BATCH], gx[CB_SAMPLE_BATCH], gz[CB_SAMPLE_BATCH];
+            foot_sole_at_lanes(&feet->soles[k], feet->joints, lanes, fh, gx, gz);
+            for (uint32_t b = 0; b < count; ++b) {
+                uint32_t i = first + b;
+                double tau = i == n ? 0 : cb_root_travel_time(i * dt, span, clip->duration, clip->loops);
+                double *x = tr->x + ((size_t)k * (n + 1) + i) * 2;
+                h[(size_t)k * (n + 1) + i] = fh[b];
+                x[0] = gx[b] - clip->root_velocity[0] * tau, x[1] = gz[b] - clip->root_velocity[2] * tau;
+            }
         }
     }
     for (uint32_t k = 0; ok && k < tr->feet; ++k) {
@@ -54,10 +62,10 @@ static bool track_feet(cb_sampler *s, const cb_clip_info *clip, const cb_stride 
         double lo = INFINITY;
         for (uint32_t i = 0; i <= n; ++i) lo = fmin(lo, hk[i]);
         for (uint32_t i = 0; i < n; ++i)
-            tr->down[(size_t)k * n + i] = st->feet[k].strides && fmax(hk[i], hk[i + 1]) <= lo + PLANTED_BAND * size;
+            tr->down[(size_t)k * n + i] = st->feet[k].strides && fmax(hk[i], hk[i + 1]) <= lo + PLANTED_BAND * feet->size;
     }
-    foot_soles_free(soles, found);
-    free(mats), free(h);
+    stride_feet_free(&own);
+    free(lanes), free(h);
     return ok;
 }
 
@@ -150,8 +158,8 @@ static void decide(const cb_stride *st, const char *name, cb_row_travel *out)
              100 * out->slide_mean, 100 * out->slide_with, 100 * cut, cause);
 }
 
-void cb_row_travel_measure(cb_sampler *s, const cb_clip_info *clip, bool in_place, uint32_t rows, float *offsets,
-                           cb_row_travel *out)
+void row_travel_measure_cached(foot_cache *feet, cb_sampler *s, const cb_clip_info *clip, bool in_place, uint32_t rows,
+                               float *offsets, cb_row_travel *out)
 {
     memset(out, 0, sizeof *out);
     memset(offsets, 0, (size_t)rows * sizeof *offsets);
@@ -166,7 +174,7 @@ void cb_row_travel_measure(cb_sampler *s, const cb_clip_info *clip, bool in_plac
     }
     cb_stride *st = malloc(sizeof *st);
     if (!st) return;
-    cb_stride_measure(s, clip, st);
+    foot_cache_stride(feet, s, clip, st);
     if (!st->stride || !(st->speed > 0)) {
         snprintf(out->why, sizeof out->why, "not applied: no stride (%.200s)", st->why);
         free(st);
@@ -178,7 +186,7 @@ void cb_row_travel_measure(cb_sampler *s, const cb_clip_info *clip, bool in_plac
     tr.x = malloc((size_t)tr.feet * (tr.samples + 1) * 2 * sizeof(double));
     tr.down = malloc((size_t)tr.feet * tr.samples * sizeof(bool));
     double *o = malloc((size_t)(rows + 1) * sizeof(double)), dt = clip->duration / tr.samples;
-    if (o && track_feet(s, clip, st, &tr)) {
+    if (o && track_feet(feet, s, clip, st, &tr)) {
         integrate_offsets(&tr, st, dt, rows, o);
         out->slide_mean = mean_slide(&tr, st, dt, rows, NULL);
         out->slide_with = mean_slide(&tr, st, dt, rows, o);
@@ -188,4 +196,12 @@ void cb_row_travel_measure(cb_sampler *s, const cb_clip_info *clip, bool in_plac
         snprintf(out->why, sizeof out->why, "not applied: out of memory measuring it");
     }
     free(tr.x), free(tr.down), free(o), free(st);
+}
+
+void cb_row_travel_measure(cb_sampler *s, const cb_clip_info *clip, bool in_place, uint32_t rows, float *offsets,
+                           cb_row_travel *out)
+{
+    foot_cache *feet = foot_cache_create(); /* this clip's stride and its track share the feet found */
+    row_travel_measure_cached(feet, s, clip, in_place, rows, offsets, out);
+    foot_cache_free(feet);
 }

@@ -382,4 +382,30 @@ void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*o
     else
         lerp_lanes(ch, &sp, times, &hint, NULL, out);
 }
+bool cb_channel_in_lanes(const cb_channel *ch) { return lane_channel(ch); }
+
+void cb_find_spans(const float *key_times, uint32_t key_count, const double *times, uint32_t *hint, cb_key_spans *out)
+{
+    find_spans(key_times, key_count, times, hint, out);
+}
+
+CB_TARGET_CLONES
+void cb_channel_lanes_at(const cb_channel *ch, const double *times, uint32_t *hint, const cb_wrap *wrap,
+                         const cb_key_spans *spans, double (*out)[B])
+{
+    if (!lane_channel(ch)) { /* STEP, CUBICSPLINE, a single key: time by time */
+        for (int i = 0; i < B; ++i) {
+            double v[4] = {0, 0, 0, 0};
+            cb_channel_eval_at(ch, times[i], v, hint, wrap);
+            for (int c = 0; c < 4; ++c) out[c][i] = v[c];
+        }
+        return;
+    }
+    cb_key_spans own;
+    if (!spans) find_spans(ch->times, ch->key_count, times, hint, &own), spans = &own;
+    if (ch->path == CB_PATH_ROTATION)
+        rotation_lanes(ch, spans, times, hint, wrap, out);
+    else
+        lerp_lanes(ch, spans, times, hint, wrap, out);
+}
 #undef B

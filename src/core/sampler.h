@@ -75,6 +75,30 @@ static inline uint32_t cb_find_key(const float *times, uint32_t key_count, doubl
     return *hint = lo;
 }
 
+/* Some of a skin's joints, sampled alone (sample_subset.c): the nodes they hang from (parents
+ * first) and the joints (indices into the skin's), with room for a batch's lanes. What reads a
+ * few joints of a big rig (the soles of a foot analysis) samples only their chains. */
+typedef struct cb_joint_subset {
+    bool *relevant;          /* per node: a wanted joint or an ancestor of one */
+    uint32_t *order, count;  /* those nodes, parents first */
+    uint32_t *slot;          /* per node: its place in order */
+    uint32_t *joints, joint_count;
+    uint32_t *joint_slot;    /* per skin joint: its place in joints, or UINT32_MAX */
+    bool *animated;          /* per node, while sampling a batch: a channel sets it */
+    double *channel_lanes;   /* per channel of a clip: 4 x CB_SAMPLE_BATCH values */
+    double *node_lanes;      /* per node of order: TRS and global matrix, 26 x CB_SAMPLE_BATCH */
+} cb_joint_subset;
+/* wanted: per skin joint. NULL when out of memory. */
+cb_joint_subset *cb_joint_subset_create(const cb_sampler *s, const bool *wanted);
+void cb_joint_subset_free(cb_joint_subset *sub);
+/* cb_sample_joint_matrices for the subset's joints only, at 1..CB_SAMPLE_BATCH times at once, the
+ * same bits, as lanes: component c of the k-th wanted joint's matrix (sub->joints[k]) at times[i]
+ * is out[(k * 16 + c) * CB_SAMPLE_BATCH + i] (lanes past `count` repeat the last time). Each
+ * channel is evaluated over the times together (cb_channel_lanes_at), then the hierarchy over
+ * them side by side. */
+void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
+                                  cb_joint_subset *sub, double *out);
+
 /* One channel at time t (sample.c): the reference every lane must equal bit for bit. */
 void cb_channel_eval_at(const cb_channel *ch, double t, double out[4], uint32_t *hint, const cb_wrap *wrap);
 
@@ -91,5 +115,17 @@ void cb_sample_joint_lanes(cb_sampler *s, int32_t animation, const double *times
 void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
                          cb_root_motion root_motion, double *out);
 void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*out)[CB_SAMPLE_BATCH]);
+/* Any channel at CB_SAMPLE_BATCH times, with its cursor and its clip's wrap as the sampler
+ * samples it: out[c][i] is component c (3 or 4; a 4th of 3 undefined) at times[i], the bits of
+ * cb_channel_eval_at (the lanes where they can, time by time where they cannot). spans: where
+ * the times fall among the channel's keys when the caller found them for another channel of the
+ * same key times (cb_find_spans; only for a cb_channel_in_lanes channel), else NULL. */
+void cb_channel_lanes_at(const cb_channel *ch, const double *times, uint32_t *hint, const cb_wrap *wrap,
+                         const cb_key_spans *spans, double (*out)[CB_SAMPLE_BATCH]);
+/* Whether cb_channel_lanes_at evaluates a channel in lanes (LINEAR, two keys or more). */
+bool cb_channel_in_lanes(const cb_channel *ch);
+/* Where CB_SAMPLE_BATCH times fall among key times (channel_eval's key and fraction; the answer
+ * does not depend on the hint). */
+void cb_find_spans(const float *key_times, uint32_t key_count, const double *times, uint32_t *hint, cb_key_spans *out);
 
 #endif

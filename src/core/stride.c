@@ -7,6 +7,8 @@
 #include <string.h>
 
 #include "foot_sole.h"
+#include "sampler.h" /* cb_joint_subset */
+#include "stride_feet.h"
 
 /* Samples over one clip: 240 over a Cow's 1.2 s walk is 5 ms apart, well inside a stance. */
 enum { STRIDE_SAMPLES = 240 };
@@ -34,21 +36,26 @@ typedef struct track {
 
 /* Every foot's sole height and velocity over the clip, in the game's frame: the root's average
  * horizontal travel taken off as an in-place bake does (cb_root_travel_time). */
-static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const foot_sole *soles, uint32_t n, track *tr)
+static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const stride_feet *feet, uint32_t n, track *tr)
 {
-    const cb_model *m = cb_sampler_model(s);
-    uint32_t bones = m->skins[cb_sampler_skin(s)].joint_count;
-    double *mats = malloc((size_t)bones * 16 * sizeof(double));
+    double *lanes = malloc(((size_t)feet->joints->joint_count + 1) * 16 * CB_SAMPLE_BATCH * sizeof(double));
     double *x = malloc((size_t)n * (STRIDE_SAMPLES + 1) * 2 * sizeof(double));
-    bool ok = mats && x;
-    double dt = clip->duration / STRIDE_SAMPLES, span = clip->t1 - clip->t0;
-    for (uint32_t i = 0; ok && i <= STRIDE_SAMPLES; ++i) {
-        double t = i * dt, tau = cb_root_travel_time(t, span, clip->duration, clip->loops), xz[2];
-        cb_sample_joint_matrices(s, clip->animation, clip->t0 + t, mats);
+    bool ok = lanes && x;
+    double dt = clip->duration / STRIDE_SAMPLES, span = clip->t1 - clip->t0, times[CB_SAMPLE_BATCH];
+    for (uint32_t first = 0; ok && first <= STRIDE_SAMPLES; first += CB_SAMPLE_BATCH) {
+        uint32_t count = STRIDE_SAMPLES + 1 - first < CB_SAMPLE_BATCH ? STRIDE_SAMPLES + 1 - first : CB_SAMPLE_BATCH;
+        for (uint32_t b = 0; b < count; ++b) times[b] = clip->t0 + (first + b) * dt;
+        cb_sample_joint_subset_batch(s, clip->animation, times, count, feet->joints, lanes);
         for (uint32_t k = 0; k < n; ++k) {
-            foot_sole_at(&soles[k], mats, &tr[k].h[i], xz);
-            x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2] = xz[0] - clip->root_velocity[0] * tau;
-            x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2 + 1] = xz[1] - clip->root_velocity[2] * tau;
+            double h[CB_SAMPLE_BATCH], gx[CB_SAMPLE_BATCH], gz[CB_SAMPLE_BATCH];
+            foot_sole_at_lanes(&feet->soles[k], feet->joints, lanes, h, gx, gz);
+            for (uint32_t b = 0; b < count; ++b) {
+                uint32_t i = first + b;
+                double tau = cb_root_travel_time(i * dt, span, clip->duration, clip->loops);
+                tr[k].h[i] = h[b];
+                x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2] = gx[b] - clip->root_velocity[0] * tau;
+                x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2 + 1] = gz[b] - clip->root_velocity[2] * tau;
+            }
         }
     }
     for (uint32_t k = 0; ok && k < n; ++k)
@@ -56,7 +63,7 @@ static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const foot_so
             const double *a = x + ((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2;
             tr[k].u[i * 2] = (a[2] - a[0]) / dt, tr[k].u[i * 2 + 1] = (a[3] - a[1]) / dt;
         }
-    free(mats), free(x);
+    free(lanes), free(x);
     return ok;
 }
 
@@ -262,35 +269,73 @@ static void explain(cb_stride *st, const cb_clip_info *clip, const foot_verdict 
     }
 }
 
-void cb_stride_measure(cb_sampler *s, const cb_clip_info *clip, cb_stride *out)
+bool stride_feet_find(cb_sampler *s, stride_feet *feet)
+{
+    memset(feet, 0, sizeof *feet);
+    const cb_model *m = cb_sampler_model(s);
+    double *rest = malloc((size_t)m->skins[cb_sampler_skin(s)].joint_count * 16 * sizeof(double));
+    if (!rest) return false;
+    cb_sample_joint_matrices(s, -1, 0, rest);
+    feet->count = foot_soles_find(s, rest, feet->soles, CB_MAX_FEET, &feet->size);
+    free(rest);
+    uint32_t bones = m->skins[cb_sampler_skin(s)].joint_count;
+    bool *wanted = calloc(bones ? bones : 1, sizeof *wanted);
+    for (uint32_t k = 0; wanted && k < feet->count; ++k)
+        for (uint32_t v = 0; v < feet->soles[k].count; ++v)
+            for (int w = 0; w < 4; ++w) /* the joints foot_sole_at reads */
+                if (feet->soles[k].v[v].weight[w] != 0 && feet->soles[k].v[v].joint[w] < bones)
+                    wanted[feet->soles[k].v[v].joint[w]] = true;
+    feet->joints = wanted ? cb_joint_subset_create(s, wanted) : NULL;
+    free(wanted);
+    if (!feet->joints) stride_feet_free(feet);
+    return feet->joints != NULL;
+}
+
+void stride_feet_free(stride_feet *feet)
+{
+    foot_soles_free(feet->soles, feet->count);
+    cb_joint_subset_free(feet->joints);
+    feet->count = 0, feet->joints = NULL;
+}
+
+void stride_tracks_free(stride_tracks *t)
+{
+    free(t->buf), free(t->down);
+    memset(t, 0, sizeof *t);
+}
+
+/* The per-foot tracks over one buffer of heights and velocities and one of planted flags. */
+static void tracks_view(const stride_tracks *t, track *tr)
+{
+    for (uint32_t k = 0; k < t->feet; ++k) {
+        tr[k] = (track){.h = t->buf + (size_t)k * (STRIDE_SAMPLES * 3 + 1), .down = t->down + (size_t)k * STRIDE_SAMPLES};
+        tr[k].u = tr[k].h + STRIDE_SAMPLES + 1;
+    }
+}
+
+void stride_measure_feet(cb_sampler *s, const cb_clip_info *clip, const stride_feet *feet, cb_stride *out,
+                         stride_tracks *keep)
 {
     memset(out, 0, sizeof *out);
+    memset(keep, 0, sizeof *keep);
     const cb_model *m = cb_sampler_model(s);
-    uint32_t bones = m->skins[cb_sampler_skin(s)].joint_count;
-    double *rest = malloc((size_t)bones * 16 * sizeof(double)), size = 0;
-    foot_sole soles[CB_MAX_FEET] = {{0}};
+    uint32_t n = out->foot_count = clip->duration > 0 ? feet->count : 0;
+    const foot_sole *soles = feet->soles;
     track tr[CB_MAX_FEET];
-    double *buf = NULL;
-    bool *down = NULL;
-    if (rest) {
-        cb_sample_joint_matrices(s, -1, 0, rest);
-        out->foot_count = clip->duration > 0 ? foot_soles_find(s, rest, soles, CB_MAX_FEET, &size) : 0;
-    }
-    uint32_t n = out->foot_count;
-    buf = malloc((size_t)(n ? n : 1) * (STRIDE_SAMPLES * 3 + 1) * sizeof(double));
-    down = malloc((size_t)(n ? n : 1) * STRIDE_SAMPLES * sizeof(bool));
-    for (uint32_t k = 0; buf && down && k < n; ++k) {
-        tr[k] = (track){.h = buf + (size_t)k * (STRIDE_SAMPLES * 3 + 1), .down = down + (size_t)k * STRIDE_SAMPLES};
-        tr[k].u = tr[k].h + STRIDE_SAMPLES + 1;
+    keep->buf = malloc((size_t)(n ? n : 1) * (STRIDE_SAMPLES * 3 + 1) * sizeof(double));
+    keep->down = malloc((size_t)(n ? n : 1) * STRIDE_SAMPLES * sizeof(bool));
+    keep->feet = keep->buf && keep->down ? n : 0;
+    tracks_view(keep, tr);
+    for (uint32_t k = 0; k < n; ++k) {
         out->feet[k].joint = soles[k].joint;
         snprintf(out->feet[k].name, sizeof out->feet[k].name, "%s", m->nodes[m->skins[cb_sampler_skin(s)].joints[soles[k].joint]].name);
     }
     uint32_t striding = 0;
     foot_verdict verdicts[CB_MAX_FEET] = {FOOT_STILL};
-    if (n && buf && down && sample_tracks(s, clip, soles, n, tr)) {
+    if (n && keep->feet && sample_tracks(s, clip, feet, n, tr)) {
         double means[CB_MAX_FEET][2];
         for (uint32_t k = 0; k < n; ++k) {
-            verdicts[k] = foot_stance(&tr[k], size, &out->feet[k], means[k]);
+            verdicts[k] = foot_stance(&tr[k], feet->size, &out->feet[k], means[k]);
             if (clip->loops) find_stances(&tr[k], clip->duration, &out->feet[k]);
         }
         striding = clip->loops ? agree_on_heading(out, means, verdicts) : 0;
@@ -299,6 +344,26 @@ void cb_stride_measure(cb_sampler *s, const cb_clip_info *clip, cb_stride *out)
     }
     for (uint32_t k = 0; !out->stride && k < n; ++k) out->feet[k].strides = false; /* one foot is no stride */
     explain(out, clip, verdicts, striding);
-    foot_soles_free(soles, n);
-    free(rest), free(buf), free(down);
+}
+
+void stride_varying_at(cb_stride *st, const stride_tracks *kept, uint32_t rows)
+{
+    track tr[CB_MAX_FEET];
+    if (!st->stride || kept->feet != st->foot_count) return;
+    tracks_view(kept, tr);
+    measure_varying_travel(st, tr, rows);
+}
+
+void cb_stride_measure(cb_sampler *s, const cb_clip_info *clip, cb_stride *out)
+{
+    stride_feet feet;
+    stride_tracks tracks;
+    if (!(clip->duration > 0 ? stride_feet_find(s, &feet) : (memset(&feet, 0, sizeof feet), true))) {
+        memset(out, 0, sizeof *out);
+        explain(out, clip, (foot_verdict[CB_MAX_FEET]){FOOT_STILL}, 0);
+        return;
+    }
+    stride_measure_feet(s, clip, &feet, out, &tracks);
+    stride_tracks_free(&tracks);
+    stride_feet_free(&feet);
 }

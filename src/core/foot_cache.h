@@ -1,0 +1,45 @@
+/* foot_cache.h - one bake's foot analyses, each measured once: a model's feet (its soles) and
+ * each clip's stride (cb_stride_measure), shared by everything in the bake that asks about the
+ * same clip framed the same way (the speed reference, the per-row travel). A stride depends on
+ * the clip's framing (its animation, span, period, whether it loops and its root travel), not
+ * on its rate: only slide_mean_varying reads the row count, and it is worked out again from the
+ * kept tracks for another. The cache belongs to its creator (a bake run creates one and frees it
+ * when done) and serves one model and skin: a sampler of another is measured uncached. */
+#ifndef CB_FOOT_CACHE_H
+#define CB_FOOT_CACHE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "crowdbake/locomotion.h"
+#include "crowdbake/row_travel.h"
+#include "crowdbake/stride.h"
+#include "foot_sole.h"
+
+typedef struct foot_cache foot_cache;
+
+/* NULL when out of memory (every call below then measures uncached). */
+foot_cache *foot_cache_create(void);
+void foot_cache_free(foot_cache *cache);
+
+/* cb_stride_measure(sampler, clip, out), bit for bit, measured at most once per framing. */
+void foot_cache_stride(foot_cache *cache, cb_sampler *sampler, const cb_clip_info *clip, cb_stride *out);
+
+/* The model's feet as cb_stride_measure finds them (the rest pose's soles), found once; NULL
+ * when the sampler is not the cache's model (or out of memory): the caller finds its own. */
+struct stride_feet;
+const struct stride_feet *foot_cache_feet(foot_cache *cache, cb_sampler *sampler);
+
+/* How many strides were measured and how many answered from the cache (for tests). */
+void foot_cache_counts(const foot_cache *cache, uint32_t *measured, uint32_t *reused);
+
+/* The analyses that share it, each as its public function (which measures with a cache of its
+ * own) with the cache given (NULL: uncached). */
+void row_travel_measure_cached(foot_cache *cache, cb_sampler *sampler, const cb_clip_info *clip, bool in_place,
+                               uint32_t rows, float *offsets, cb_row_travel *out); /* row_travel.c */
+void ground_speed_cached(foot_cache *cache, cb_sampler *sampler, const cb_clip_info *clip,
+                         cb_ground_speed *out); /* locomotion.c */
+double speed_reference_cached(foot_cache *cache, const cb_model *model, int32_t skin, const cb_clip_plan *plan,
+                              uint32_t count, char *why, size_t size); /* locomotion.c */
+
+#endif

@@ -1,0 +1,195 @@
+/* sample_subset.c - some of a skin's joints sampled alone, at a batch of times at once
+ * (sampler.h: cb_joint_subset). The 4x4 matrix sampler's operations (sample.c's sample_nodes and
+ * cb_sample_joint_matrices), in their order, each over the batch's times side by side: the same
+ * bits, at a fraction of the work where the joints wanted hang from a few of the rig's nodes. */
+#include "cb_math.h"
+#include "sampler.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define B CB_SAMPLE_BATCH
+/* Per node of the subset, its lanes: translation, rotation, scale (10), then its global matrix (16). */
+enum { TRS_LANES = 10, NODE_LANES = 26 };
+
+static double *node_lanes(const cb_joint_subset *sub, uint32_t slot, int c)
+{
+    return sub->node_lanes + ((size_t)slot * NODE_LANES + (size_t)c) * B;
+}
+
+cb_joint_subset *cb_joint_subset_create(const cb_sampler *s, const bool *wanted)
+{
+    const cb_model *m = s->model;
+    const cb_skin *skin = &m->skins[s->skin];
+    cb_joint_subset *sub = calloc(1, sizeof *sub);
+    if (!sub) return NULL;
+    uint32_t channels = 1;
+    for (uint32_t a = 0; a < m->animation_count; ++a)
+        if (m->animations[a].channel_count > channels) channels = m->animations[a].channel_count;
+    sub->relevant = calloc(m->node_count + 1, sizeof *sub->relevant);
+    sub->order = malloc((m->node_count + 1) * sizeof *sub->order);
+    sub->slot = malloc((m->node_count + 1) * sizeof *sub->slot);
+    sub->animated = malloc((m->node_count + 1) * sizeof *sub->animated);
+    sub->joints = malloc((skin->joint_count + 1) * sizeof *sub->joints);
+    sub->joint_slot = malloc((skin->joint_count + 1) * sizeof *sub->joint_slot);
+    sub->channel_lanes = malloc((size_t)channels * 4 * B * sizeof(double));
+    if (!sub->relevant || !sub->order || !sub->slot || !sub->animated || !sub->joints || !sub->joint_slot ||
+        !sub->channel_lanes)
+        return cb_joint_subset_free(sub), NULL;
+    for (uint32_t j = 0; j < skin->joint_count; ++j) {
+        sub->joint_slot[j] = wanted[j] ? sub->joint_count : UINT32_MAX;
+        if (!wanted[j]) continue;
+        sub->joints[sub->joint_count++] = j;
+        for (int32_t n = skin->joints[j]; n >= 0 && !sub->relevant[n]; n = m->nodes[n].parent) sub->relevant[n] = true;
+    }
+    for (uint32_t k = 0; k < m->node_count; ++k) /* s->order: parents first */
+        if (sub->relevant[s->order[k]]) sub->slot[s->order[k]] = sub->count, sub->order[sub->count++] = s->order[k];
+    sub->node_lanes = malloc(((size_t)sub->count + 1) * NODE_LANES * B * sizeof(double));
+    if (!sub->node_lanes) return cb_joint_subset_free(sub), NULL;
+    return sub;
+}
+
+void cb_joint_subset_free(cb_joint_subset *sub)
+{
+    if (!sub) return;
+    free(sub->relevant), free(sub->order), free(sub->slot), free(sub->animated), free(sub->joints), free(sub->joint_slot);
+    free(sub->channel_lanes), free(sub->node_lanes);
+    free(sub);
+}
+
+/* Each node's rest TRS in every lane, then each channel's values over it (in channel order, as
+ * sample_nodes writes them). */
+static void trs_lanes(const cb_sampler *s, const cb_animation *anim, cb_joint_subset *sub)
+{
+    const cb_model *m = s->model;
+    for (uint32_t k = 0; k < sub->count; ++k) {
+        const cb_node *n = &m->nodes[sub->order[k]];
+        const double *rest[TRS_LANES] = {&n->translation[0], &n->translation[1], &n->translation[2], &n->rotation[0],
+                                         &n->rotation[1],    &n->rotation[2],    &n->rotation[3],    &n->scale[0],
+                                         &n->scale[1],       &n->scale[2]};
+        for (int c = 0; c < TRS_LANES; ++c) {
+            double v = *rest[c], *lane = node_lanes(sub, k, c);
+            for (int i = 0; i < B; ++i) lane[i] = v;
+        }
+        sub->animated[sub->order[k]] = false;
+    }
+    for (uint32_t c = 0; anim && c < anim->channel_count; ++c) {
+        const cb_channel *ch = &anim->channels[c];
+        if (!sub->relevant[ch->node]) continue;
+        int offset = ch->path == CB_PATH_TRANSLATION ? 0 : ch->path == CB_PATH_ROTATION ? 3 : 7;
+        for (int k = 0; k < (ch->path == CB_PATH_ROTATION ? 4 : 3); ++k)
+            memcpy(node_lanes(sub, sub->slot[ch->node], offset + k), sub->channel_lanes + ((size_t)c * 4 + k) * B,
+                   B * sizeof(double));
+        sub->animated[ch->node] = true;
+    }
+}
+
+/* cb_mat4_from_trs lane by lane, the same operations in the same order. */
+static CB_CLONE_INLINE void matrix_from_trs_lanes(const double *t, double (*m)[B])
+{
+    const double *tx = t, *ty = t + B, *tz = t + 2 * B, *qx = t + 3 * B, *qy = t + 4 * B, *qz = t + 5 * B,
+                 *qw = t + 6 * B, *sx = t + 7 * B, *sy = t + 8 * B, *sz = t + 9 * B;
+    for (int i = 0; i < B; ++i) {
+        double x = qx[i], y = qy[i], z = qz[i], w = qw[i];
+        double xx = x * x, yy = y * y, zz = z * z;
+        double xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
+        m[0][i] = (1 - 2 * (yy + zz)) * sx[i], m[1][i] = (2 * (xy + wz)) * sx[i], m[2][i] = (2 * (xz - wy)) * sx[i];
+        m[4][i] = (2 * (xy - wz)) * sy[i], m[5][i] = (1 - 2 * (xx + zz)) * sy[i], m[6][i] = (2 * (yz + wx)) * sy[i];
+        m[8][i] = (2 * (xz + wy)) * sz[i], m[9][i] = (2 * (yz - wx)) * sz[i], m[10][i] = (1 - 2 * (xx + yy)) * sz[i];
+        m[12][i] = tx[i], m[13][i] = ty[i], m[14][i] = tz[i];
+        m[3][i] = m[7][i] = m[11][i] = 0, m[15][i] = 1;
+    }
+}
+
+/* cb_mat4_mul_affine lane by lane, the same operations in the same order. */
+static CB_CLONE_INLINE void mul_affine_lanes(double (*restrict out)[B], const double (*restrict a)[B],
+                                             const double (*restrict b)[B])
+{
+    for (int c = 0; c < 4; ++c) {
+        for (int r = 0; r < 3; ++r)
+            for (int i = 0; i < B; ++i)
+                out[c * 4 + r][i] = a[r][i] * b[c * 4][i] + a[4 + r][i] * b[c * 4 + 1][i] + a[8 + r][i] * b[c * 4 + 2][i];
+        for (int i = 0; i < B; ++i) out[c * 4 + 3][i] = 0.0;
+    }
+    for (int r = 12; r < 15; ++r)
+        for (int i = 0; i < B; ++i) out[r][i] += a[r][i];
+    for (int i = 0; i < B; ++i) out[15][i] = 1.0;
+}
+
+/* Each node's global matrix, parents first: sample_nodes' local_matrix and product per lane. */
+CB_TARGET_CLONES
+static void global_lanes(const cb_sampler *s, cb_joint_subset *sub)
+{
+    const cb_model *m = s->model;
+    double local[16][B];
+    for (uint32_t k = 0; k < sub->count; ++k) {
+        uint32_t node = sub->order[k];
+        const cb_node *n = &m->nodes[node];
+        if (n->has_matrix && !sub->animated[node])
+            for (int c = 0; c < 16; ++c)
+                for (int i = 0; i < B; ++i) local[c][i] = n->matrix[c];
+        else
+            matrix_from_trs_lanes(node_lanes(sub, k, 0), local);
+        double(*global)[B] = (double(*)[B])node_lanes(sub, k, TRS_LANES);
+        if (n->parent < 0)
+            memcpy(global, local, sizeof local);
+        else
+            mul_affine_lanes(global, (const double(*)[B])node_lanes(sub, sub->slot[n->parent], TRS_LANES),
+                             (const double(*)[B])local);
+    }
+}
+
+/* Each wanted joint's matrix, its global times its inverse bind matrix: cb_mat4_mul_affine's
+ * operations lane by lane, or cb_mat4_mul time by time where an inverse bind matrix is not affine. */
+CB_TARGET_CLONES
+static void joint_matrix_lanes(const cb_sampler *s, const cb_joint_subset *sub, double *out)
+{
+    const cb_skin *skin = &s->model->skins[s->skin];
+    for (uint32_t k = 0; k < sub->joint_count; ++k) {
+        uint32_t j = sub->joints[k];
+        const double *ibm = skin->inverse_bind + (size_t)j * 16;
+        const double(*g)[B] = (const double(*)[B])node_lanes(sub, sub->slot[skin->joints[j]], TRS_LANES);
+        double(*m)[B] = (double(*)[B])(out + (size_t)k * 16 * B);
+        if (s->affine_ibm) {
+            double b[16][B];
+            for (int c = 0; c < 16; ++c)
+                for (int i = 0; i < B; ++i) b[c][i] = ibm[c];
+            mul_affine_lanes(m, g, (const double(*)[B])b);
+            continue;
+        }
+        for (int i = 0; i < B; ++i) {
+            double gi[16], mi[16];
+            for (int c = 0; c < 16; ++c) gi[c] = g[c][i];
+            cb_mat4_mul(mi, gi, ibm);
+            for (int c = 0; c < 16; ++c) m[c][i] = mi[c];
+        }
+    }
+}
+
+void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
+                                  cb_joint_subset *sub, double *out)
+{
+    const cb_model *m = s->model;
+    const cb_animation *anim = animation >= 0 && animation < (int32_t)m->animation_count ? &m->animations[animation] : NULL;
+    double padded[B]; /* the unused lanes repeat the last time */
+    for (uint32_t i = 0; i < B; ++i) padded[i] = times[i < count ? i : count - 1];
+    /* Channels that share their key times (one input accessor for many, as exporters write
+     * them) share one key search: the spans are the same whatever the channel. */
+    cb_key_spans spans;
+    const float *spans_of = NULL;
+    uint32_t spans_keys = 0;
+    for (uint32_t c = 0; anim && c < anim->channel_count; ++c) {
+        const cb_channel *ch = &anim->channels[c];
+        if (!sub->relevant[ch->node]) continue;
+        uint32_t *cursor = &s->cursor[s->cursor_base[animation] + c];
+        bool lanes = cb_channel_in_lanes(ch);
+        if (lanes && (ch->times != spans_of || ch->key_count != spans_keys))
+            cb_find_spans(ch->times, ch->key_count, padded, cursor, &spans), spans_of = ch->times, spans_keys = ch->key_count;
+        cb_channel_lanes_at(ch, padded, cursor, &s->wraps[animation], lanes ? &spans : NULL,
+                            (double(*)[B])(sub->channel_lanes + (size_t)c * 4 * B));
+    }
+    trs_lanes(s, anim, sub);
+    global_lanes(s, sub);
+    joint_matrix_lanes(s, sub, out);
+}
+#undef B
