@@ -4,6 +4,14 @@
 
 #include "crowdbake/core.h"
 
+/* A wrap at most this part of the clip's largest key step is its closing key slightly off, not
+ * a missing one: a missing closing key makes the wrap about one key step; a closing key
+ * slightly off, a small part of one. Over every clip of the shared skinned models whose wrap is
+ * no bigger than its neighbour steps, wrap / largest key step is 0.025 to 0.136 for the closing
+ * keys slightly off (Cow's and Husky's Gallop_Jump, and two attacks) and 0.261 to 0.590 for the
+ * missing ones (the gallops, Husky's Walk): 0.19 sits about x1.4 from both (docs/loops.md). */
+#define CB_LOOP_CORRECTABLE 0.19
+
 /* Weighs a clip judged by its poses (loop_reason, wrap_jump, largest_step set): fills
  * loop_name, loop_word, loop_pose, loop_feet and loop_striding_feet and sets loops (the sum
  * above 0). Leaves the sampler's period and the framing for the caller to set again. */
