@@ -14,6 +14,7 @@
 
 #include "crowdbake_pal.h"
 #include "../../src/core/loop_decide.h"
+#include "internal/plumbing.h"
 
 #define TMP TEST_TMP "/loop_close"
 enum { MAX_JOINTS = 64, MAX_FRAMES = 128 };
@@ -277,6 +278,42 @@ static void check_baked(const char *asset, const char *csv, double reported)
     cb_model_free(m);
 }
 
+/* --one-shot (or a catalog's loop = false) plays it as it is, once; --loop keeps it closed. The
+ * reason is said in info (text and --json) and in the bake's note, with the deviation. */
+static void overrides_and_reasons(void **state)
+{
+    (void)state;
+    cb_model *m = load_shared("assets/quaternius-cow/Cow.glb");
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    int32_t a = cb_model_find_animation(m, "AnimalArmature|Gallop_Jump");
+    cb_clip_info once, looped;
+    assert_int_equal(cb_clip_analyze(s, a, 30, 0, NULL, &once, &err), CB_OK);
+    assert_true(!once.loops && once.loop_reason == CB_LOOP_SET && once.loop_correction_mm_per_m == 0);
+    assert_true(once.duration == once.t1 - once.t0 && once.frames == once.steps + 1);
+    assert_int_equal(cb_clip_analyze(s, a, 30, 1, NULL, &looped, &err), CB_OK);
+    assert_true(looped.loops && looped.loop_reason == CORRECTED && looped.loop_correction_mm_per_m > 5);
+    char why[512];
+    cb_loop_reason_text(&looped, why, sizeof why);
+    assert_non_null(strstr(why, "set by the catalog or --loop/--one-shot (the poses say: closing key slightly off: wrap"));
+    assert_null(strstr(why, "period +"));
+    cb_sampler_free(s);
+    cb_model_free(m);
+
+    char model[1024], cmd[4096], out[1 << 16];
+    shared_path(model, sizeof model, "assets/quaternius-cow/Cow.glb");
+    snprintf(cmd, sizeof cmd, "%s info %s --json", crowdbake_exe(), model);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    assert_non_null(strstr(out, "the name says 'gallop' and 'jump' (+1), closing key slightly off: wrap 10.1 <= 0.19 x its "
+                                "largest key step 74.2, spread over the cycle (moves the source up to 10.1 mm/m)"));
+    assert_non_null(strstr(out, "\"loop_correction_mm_per_m\": 10.1"));
+    snprintf(cmd, sizeof cmd, "%s bake %s --clip Gallop_Jump,Gallop -o " TMP "/note.pal 2>&1", crowdbake_exe(), model);
+    assert_int_equal(run_command(cmd, out, sizeof out), 0);
+    assert_non_null(strstr(out, "note: clip 'AnimalArmature|Gallop_Jump' ends a small part of a key step from its first "
+                                "pose (wrap 10.1, under 0.19 of its largest key step 74.2)"));
+    assert_null(strstr(out, "clip 'AnimalArmature|Gallop' ends a small part"));
+}
+
 static void gallop_jump(void **state)
 {
     (void)state;
@@ -289,6 +326,7 @@ static void gallop_jump(void **state)
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(decisions), cmocka_unit_test(gallop_jump)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(decisions), cmocka_unit_test(gallop_jump),
+                                       cmocka_unit_test(overrides_and_reasons)};
     return cmocka_run_group_tests(tests, setup, NULL);
 }
