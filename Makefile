@@ -339,7 +339,7 @@ demo: all $(if $(shell command -v npm 2>/dev/null),runtimes/web/node_modules/.pa
 # sanitizer passes run side by side.
 TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(TOOL_INC) -Itests $(shell pkg-config --cflags cmocka 2>/dev/null)
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
-$(BUILD)/tests/%: %.c tests/testutil.h tests/view_server.h $(wildcard tests/runtimes/*.h) $(TOOL_A) $(BUILD)/libcrowdbake.a
+$(BUILD)/tests/%: %.c $(wildcard tests/*.h) $(wildcard tests/runtimes/*.h) $(TOOL_A) $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TEST_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(TEST_EXTRA_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
@@ -355,7 +355,7 @@ TEST_BINS += $(BUILD)/tests/standalone_pal_reader
 
 # Fuzz targets, replayed over their regression inputs (and the samples) by every test run.
 FUZZ_TARGETS := gltf pal exr ktx2 catalog
-$(BUILD)/tests/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c $(TOOL_A) $(BUILD)/libcrowdbake.a
+$(BUILD)/tests/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c tests/fuzz/fuzz_decode.h $(TOOL_A) $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TOOL_INC) -c tests/fuzz/fuzz_$*.c -o $@.fuzz.o
 	$(CC) $(CFLAGS) -c tests/fuzz/replay.c -o $@.main.o
@@ -539,12 +539,12 @@ $(BUILD)/bench_core: bench/bench_core.c $(BUILD)/libcrowdbake.a
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 
 # crowdbake's qpos palettes against AnimToTexture's bone-mode encoding, bytes and error (bench/bench_att.c).
-$(BUILD)/bench_att: bench/bench_att.c $(BUILD)/libcrowdbake.a
+$(BUILD)/bench_att: bench/bench_att.c bench/bench_model.h $(BUILD)/libcrowdbake.a
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 
 # Where a palette's rows go, and what rows placed per key interval would need (bench/bench_rows.c).
-$(BUILD)/bench_rows: bench/bench_rows.c $(BUILD)/libcrowdbake.a
+$(BUILD)/bench_rows: bench/bench_rows.c bench/bench_model.h $(BUILD)/libcrowdbake.a
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 

@@ -15,13 +15,7 @@
  *
  *   bench_att MODEL [FPS]     one JSON line per encoding: bytes, worst and mean error in mm per
  *                             metre of the model's height, over every vertex of every row */
-#include <math.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
-#include "crowdbake/gltf.h"
-#include "crowdbake/runtime.h"
+#include "bench_model.h"
 
 #define PI 3.14159265358979323846
 
@@ -30,11 +24,6 @@ typedef struct frame_ref {
     double time;  /* clip time of the row */
     uint32_t row; /* the palette row */
 } frame_ref;
-
-typedef struct errors {
-    double worst, sum;
-    size_t count;
-} errors;
 
 /* Every row of the palette with the clip time it was sampled at (root motion kept: the glTF's own poses). */
 static frame_ref *palette_frames(cb_sampler *s, const cb_palette *p, double fps, uint32_t *count)
@@ -56,23 +45,6 @@ static frame_ref *palette_frames(cb_sampler *s, const cb_palette *p, double fps,
     return f;
 }
 
-/* Skins every primitive of the skin with `mats` and with `exact`; adds |difference| per vertex. */
-static void measure(const cb_model *m, int32_t skin, const double *mats, const double *exact, errors *e)
-{
-    for (uint32_t i = 0; i < m->primitive_count; ++i) {
-        const cb_primitive *prim = &m->primitives[i];
-        if (prim->skin != skin) continue;
-        double *a = malloc(prim->vertex_count * 3 * sizeof(double)), *b = malloc(prim->vertex_count * 3 * sizeof(double));
-        cb_skin_positions(prim, mats, a);
-        cb_skin_positions(prim, exact, b);
-        for (uint32_t v = 0; v < prim->vertex_count; ++v) {
-            double d = hypot(hypot(a[v * 3] - b[v * 3], a[v * 3 + 1] - b[v * 3 + 1]), a[v * 3 + 2] - b[v * 3 + 2]);
-            e->worst = fmax(e->worst, d), e->sum += d, e->count++;
-        }
-        free(a), free(b);
-    }
-}
-
 /* ---- AnimToTexture's bone mode, as modelled above ---- */
 
 static double quantize(double x, int bits)
@@ -85,25 +57,8 @@ static double quantize(double x, int bits)
 /* A column-major 4x4's rotation (its 3x3 with unit columns) as a unit quaternion (x, y, z, w), w >= 0. */
 static void rotation_of(const double *g, double q[4])
 {
-    double r[9];
-    for (int c = 0; c < 3; ++c) {
-        double len = sqrt(g[c * 4] * g[c * 4] + g[c * 4 + 1] * g[c * 4 + 1] + g[c * 4 + 2] * g[c * 4 + 2]);
-        for (int k = 0; k < 3; ++k) r[c * 3 + k] = g[c * 4 + k] / len; /* r[col * 3 + row] */
-    }
-    double t = r[0] + r[4] + r[8];
-    if (t > 0) {
-        double s = sqrt(t + 1) * 2;
-        q[3] = s / 4, q[0] = (r[5] - r[7]) / s, q[1] = (r[6] - r[2]) / s, q[2] = (r[1] - r[3]) / s;
-    } else if (r[0] > r[4] && r[0] > r[8]) {
-        double s = sqrt(1 + r[0] - r[4] - r[8]) * 2;
-        q[3] = (r[5] - r[7]) / s, q[0] = s / 4, q[1] = (r[3] + r[1]) / s, q[2] = (r[6] + r[2]) / s;
-    } else if (r[4] > r[8]) {
-        double s = sqrt(1 + r[4] - r[0] - r[8]) * 2;
-        q[3] = (r[6] - r[2]) / s, q[0] = (r[3] + r[1]) / s, q[1] = s / 4, q[2] = (r[7] + r[5]) / s;
-    } else {
-        double s = sqrt(1 + r[8] - r[0] - r[4]) * 2;
-        q[3] = (r[1] - r[3]) / s, q[0] = (r[6] + r[2]) / s, q[1] = (r[7] + r[5]) / s, q[2] = s / 4;
-    }
+    double columns[3];
+    bench_quat_of(g, q, columns);
     double len = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]) * (q[3] < 0 ? -1 : 1);
     for (int k = 0; k < 4; ++k) q[k] /= len;
 }
@@ -228,7 +183,7 @@ static void att_bbox(cb_sampler *s, const cb_model *m, const cb_skin *skin, cons
     for (int k = 0; k < 3; ++k) bbox[k] = lo[k], bbox[3 + k] = fmax(hi[k] - lo[k], 1e-9);
 }
 
-static void report(const char *model, const char *encoding, size_t bytes, const errors *e, double height, uint32_t rows,
+static void report(const char *model, const char *encoding, size_t bytes, const bench_errors *e, double height, uint32_t rows,
                    uint32_t bones)
 {
     printf("{\"model\": \"%s\", \"encoding\": \"%s\", \"bytes\": %zu, \"worst_mm_per_m\": %.4f, \"mean_mm_per_m\": %.4f, "
@@ -243,56 +198,44 @@ int main(int argc, char **argv)
         return 2;
     }
     double fps = argc > 2 ? atof(argv[2]) : 30;
-    const char *name = strrchr(argv[1], '/') ? strrchr(argv[1], '/') + 1 : argv[1];
-    cb_error err = {0};
-    cb_model *m = cb_gltf_load(argv[1], NULL, &err);
-    if (!m) {
-        fprintf(stderr, "bench_att: %s\n", err.message);
-        return 1;
-    }
-    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    bench_model model = bench_load("bench_att", argv[1]);
+    cb_model *m = model.m;
+    cb_sampler *s = model.s;
     const cb_skin *skin = &m->skins[cb_sampler_skin(s)];
-    size_t mat_bytes = skin->joint_count * 16 * sizeof(double);
+    size_t mat_bytes = skin->joint_count * 16 * sizeof(double), vertex_bytes = model.vertices * 3 * sizeof(double) + 1;
     double *joint = malloc(mat_bytes), *decoded = malloc(mat_bytes), bbox[6];
+    double *skinned = malloc(vertex_bytes), *exact = malloc(vertex_bytes);
     cb_palette pal[2];
     const cb_precision precisions[2] = {CB_PRECISION_U16, CB_PRECISION_HALF};
-    for (int k = 0; k < 2; ++k) {
-        cb_bake_options o = cb_default_bake_options();
-        o.layout = CB_LAYOUT_QPOS, o.precision = precisions[k], o.fps = fps, o.root_motion = CB_ROOT_MOTION_KEEP;
-        if (cb_palette_bake(s, &o, NULL, 0, &pal[k], &err) != CB_OK) {
-            fprintf(stderr, "bench_att: %s\n", err.message);
-            return 1;
-        }
-    }
+    for (int k = 0; k < 2; ++k) bench_bake_qpos("bench_att", s, precisions[k], fps, &pal[k]);
     uint32_t n;
     frame_ref *f = palette_frames(s, &pal[0], fps, &n);
     double height = pal[0].model_height;
-    errors e[4] = {{0}};
+    bench_errors e[4] = {{0}};
     att_bbox(s, m, skin, f, n, joint, bbox);
     for (uint32_t i = 0; i < n; ++i) {
         cb_sample_joint_matrices(s, f[i].animation, f[i].time, joint);
         for (int k = 0; k < 2; ++k) { /* crowdbake: the row as the runtime decodes it */
             cb_instance at_row = {f[i].row, 1, 0, 0};
             cb_runtime_matrices(&pal[k], pal[k].texels, &at_row, 0, decoded);
-            measure(m, cb_sampler_skin(s), decoded, joint, &e[k]);
+            bench_skin_errors(m, cb_sampler_skin(s), decoded, joint, skinned, exact, &e[k]);
         }
         double a[16];
         armature(s, m, skin, f[i].animation, f[i].time, a);
         for (int k = 0; k < 2; ++k) {
             att_matrices(skin, joint, a, bbox, k ? 16 : 8, decoded);
-            measure(m, cb_sampler_skin(s), decoded, joint, &e[2 + k]);
+            bench_skin_errors(m, cb_sampler_skin(s), decoded, joint, skinned, exact, &e[2 + k]);
         }
     }
     uint32_t bones = skin->joint_count;
     for (int k = 0; k < 2; ++k) /* the palette and its bind-position texture (bones x 2 RGBA32F) */
-        report(name, k ? "crowdbake qpos/half" : "crowdbake qpos/u16", pal[k].texel_bytes + (size_t)bones * 2 * 16, &e[k],
+        report(model.name, k ? "crowdbake qpos/half" : "crowdbake qpos/u16", pal[k].texel_bytes + (size_t)bones * 2 * 16, &e[k],
                height, n, bones);
     for (int k = 0; k < 2; ++k) /* position + rotation texel per bone and frame, frame 0 the reference pose */
-        report(name, k ? "AnimToTexture bone 16-bit" : "AnimToTexture bone 8-bit", (size_t)(n + 1) * bones * 2 * (k ? 8 : 4),
+        report(model.name, k ? "AnimToTexture bone 16-bit" : "AnimToTexture bone 8-bit", (size_t)(n + 1) * bones * 2 * (k ? 8 : 4),
                &e[2 + k], height, n, bones);
     for (int k = 0; k < 2; ++k) cb_palette_free(&pal[k]);
-    free(f), free(joint), free(decoded);
-    cb_sampler_free(s);
-    cb_model_free(m);
+    free(f), free(joint), free(decoded), free(skinned), free(exact);
+    bench_free(&model);
     return 0;
 }

@@ -19,13 +19,7 @@
  *   bench_rows MODEL [MAX_ERROR_MM_PER_M]   a JSON line for the skin (joints, and those that skin no
  *                                           vertex), then one per clip: key intervals, the rows the map
  *                                           needs, the rows one key-aligned uniform rate needs */
-#include <math.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
-#include "crowdbake/gltf.h"
-#include "crowdbake/runtime.h"
+#include "bench_model.h"
 
 enum { MOST_SPLITS = 16 }; /* an interval needing more counts as this many (the auto bake caps rates too) */
 
@@ -47,26 +41,9 @@ typedef struct rig {
 static qpos qpos_of(const double *g, const float *b)
 {
     qpos out;
-    double len[3], r[9];
-    for (int c = 0; c < 3; ++c) {
-        len[c] = sqrt(g[c * 4] * g[c * 4] + g[c * 4 + 1] * g[c * 4 + 1] + g[c * 4 + 2] * g[c * 4 + 2]);
-        for (int k = 0; k < 3; ++k) r[c * 3 + k] = g[c * 4 + k] / len[c];
-    }
+    double len[3];
+    bench_quat_of(g, out.q, len);
     out.s = (len[0] + len[1] + len[2]) / 3;
-    double t = r[0] + r[4] + r[8], *q = out.q;
-    if (t > 0) {
-        double s = sqrt(t + 1) * 2;
-        q[3] = s / 4, q[0] = (r[5] - r[7]) / s, q[1] = (r[6] - r[2]) / s, q[2] = (r[1] - r[3]) / s;
-    } else if (r[0] > r[4] && r[0] > r[8]) {
-        double s = sqrt(1 + r[0] - r[4] - r[8]) * 2;
-        q[3] = (r[5] - r[7]) / s, q[0] = s / 4, q[1] = (r[3] + r[1]) / s, q[2] = (r[6] + r[2]) / s;
-    } else if (r[4] > r[8]) {
-        double s = sqrt(1 + r[4] - r[0] - r[8]) * 2;
-        q[3] = (r[6] - r[2]) / s, q[0] = (r[3] + r[1]) / s, q[1] = s / 4, q[2] = (r[7] + r[5]) / s;
-    } else {
-        double s = sqrt(1 + r[8] - r[0] - r[4]) * 2;
-        q[3] = (r[1] - r[3]) / s, q[0] = (r[6] + r[2]) / s, q[1] = (r[7] + r[5]) / s, q[2] = s / 4;
-    }
     for (int k = 0; k < 3; ++k) out.p[k] = g[k] * b[0] + g[4 + k] * b[1] + g[8 + k] * b[2] + g[12 + k];
     return out;
 }
@@ -100,16 +77,9 @@ static void sample_qpos(rig *r, int32_t anim, double t, qpos *out)
 /* The worst vertex distance between the skin under r->blended and under r->exact. */
 static double skin_distance(rig *r)
 {
-    double worst = 0;
-    for (uint32_t i = 0; i < r->m->primitive_count; ++i) {
-        const cb_primitive *prim = &r->m->primitives[i];
-        if (prim->skin != cb_sampler_skin(r->s)) continue;
-        cb_skin_positions(prim, r->blended, r->a);
-        cb_skin_positions(prim, r->exact, r->b);
-        for (uint32_t v = 0; v < prim->vertex_count * 3; v += 3)
-            worst = fmax(worst, hypot(hypot(r->a[v] - r->b[v], r->a[v + 1] - r->b[v + 1]), r->a[v + 2] - r->b[v + 2]));
-    }
-    return worst;
+    bench_errors e = {0};
+    bench_skin_errors(r->m, cb_sampler_skin(r->s), r->blended, r->exact, r->a, r->b, &e);
+    return e.worst;
 }
 
 /* The worst error of rows at t0 and t1 blended, at the quarter points between them. */
@@ -217,29 +187,18 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: bench_rows MODEL.glb [MAX_ERROR_MM_PER_M]\n");
         return 2;
     }
-    const char *name = strrchr(argv[1], '/') ? strrchr(argv[1], '/') + 1 : argv[1];
-    cb_error err = {0};
-    rig r = {0};
-    r.m = cb_gltf_load(argv[1], NULL, &err);
-    if (r.m) r.s = cb_sampler_create(r.m, 0, &err);
+    bench_model model = bench_load("bench_rows", argv[1]);
+    rig r = {.m = model.m, .s = model.s, .vertices = model.vertices};
     cb_palette pal = {0};
-    cb_bake_options o = cb_default_bake_options();
-    o.layout = CB_LAYOUT_QPOS, o.precision = CB_PRECISION_FLOAT, o.fps = 2, o.root_motion = CB_ROOT_MOTION_KEEP;
-    if (!r.s || cb_palette_bake(r.s, &o, NULL, 0, &pal, &err) != CB_OK) {
-        fprintf(stderr, "bench_rows: %s\n", err.message);
-        return 1;
-    }
+    bench_bake_qpos("bench_rows", r.s, CB_PRECISION_FLOAT, 2, &pal);
     r.bones = pal.bone_count, r.bind = pal.bind_positions, r.height = pal.model_height;
-    for (uint32_t i = 0; i < r.m->primitive_count; ++i)
-        r.vertices = r.m->primitives[i].vertex_count > r.vertices ? r.m->primitives[i].vertex_count : r.vertices;
     r.exact = malloc(r.bones * 16 * sizeof(double)), r.blended = malloc(r.bones * 16 * sizeof(double));
     r.a = malloc(r.vertices * 3 * sizeof(double) + 1), r.b = malloc(r.vertices * 3 * sizeof(double) + 1);
-    printf("{\"model\": \"%s\", \"bones\": %u, \"bones_skinning_nothing\": %u}\n", name, r.bones,
+    printf("{\"model\": \"%s\", \"bones\": %u, \"bones_skinning_nothing\": %u}\n", model.name, r.bones,
            joints_skinning_nothing(&r));
-    for (uint32_t c = 0; c < r.m->animation_count; ++c) clip_rows(&r, (int32_t)c, argc > 2 ? atof(argv[2]) : 1, name);
+    for (uint32_t c = 0; c < r.m->animation_count; ++c) clip_rows(&r, (int32_t)c, argc > 2 ? atof(argv[2]) : 1, model.name);
     free(r.exact), free(r.blended), free(r.a), free(r.b);
     cb_palette_free(&pal);
-    cb_sampler_free(r.s);
-    cb_model_free(r.m);
+    bench_free(&model);
     return 0;
 }

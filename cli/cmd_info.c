@@ -7,6 +7,7 @@
 #include "catalog/catalog.h"
 #include "roster/roster.h"
 #include "crowdbake/bake.h"
+#include "crowdbake/herd_slide.h"
 #include "cli.h"
 #include "internal/plumbing.h"
 
@@ -124,14 +125,17 @@ static int gather_clips(const cb_model *m, int skin, double fps, const cb_limits
     return err->status;
 }
 
-/* How far the planted feet slide at the clip's ground speed, foot by foot. */
-static void print_slide(int w, const cb_stride *st)
+/* How far the planted feet slide at the clip's ground speed, foot by foot; whether a herd shows it
+ * (herd_slide.h: after the per-row travel a bare bake ships). */
+static void print_slide(int w, const cb_stride *st, const cb_row_travel *travel)
 {
+    cb_herd_slide slide;
+    cb_herd_slide_decide(st, travel, &slide);
     printf("  %-*s feet slide %.0f%% of the ground speed (worst %.0f%%):", w, "", 100 * st->slide_mean, 100 * st->slide_worst);
     for (uint32_t k = 0; k < st->foot_count; ++k)
         if (st->feet[k].strides)
             printf(" %s %.0f%%/%.0f%%", st->feet[k].name, 100 * st->feet[k].slide_mean, 100 * st->feet[k].slide_worst);
-    printf("%s\n", st->slide_mean > CB_SLIDE_WARN ? " (the asset's feet slide at any rate)" : "");
+    printf("%s\n", slide.warn ? " (the asset's feet slide at any rate)" : "");
 }
 
 /* When each striding foot lands and lifts (the manifest's contacts). */
@@ -240,7 +244,7 @@ static void print_text(const cb_model *m, int skin, const clip_facts *facts, dou
             printf("  %-*s %s; ground speed %.4g from %s (root %.4g, planted feet %.4g)\n", w, "", why, f->speed.speed, f->speed.method, f->speed.root, f->speed.feet);
             printf("  %-*s %s: %s\n", w, "", f->sync.speed ? "follows the speed" : "own rate", f->sync.reason);
             if (f->root_motion[0]) printf("  %-*s root motion %s\n", w, "", f->root_motion);
-            if (f->speed.stride.stride) print_slide(w, &f->speed.stride), print_contacts(w, &f->speed.stride);
+            if (f->speed.stride.stride) print_slide(w, &f->speed.stride, &f->travel), print_contacts(w, &f->speed.stride);
             if (f->travel.slide_mean > 0) printf("  %-*s per-row travel %s\n", w, "", f->travel.why);
         } else
             printf("  %-*s %8.4f %9.4f %6llu  %-18s %-8s %7u  -\n", w, anim->name, anim->t0, anim->t1 - anim->t0,

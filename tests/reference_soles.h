@@ -1,15 +1,17 @@
-/* reference_soles.h - a quadruped's feet measured independently of crowdbake's pose code: the
- * reference joint matrices (the fps30.csv files of ../shared/reference, sampled by another implementation)
- * skinning the mesh's own sole vertices. A sole is the vertices in the lowest 3% of the height of
- * Idle's first pose, split into four by which side and end of the body they stand at; a foot is
- * tracked by its sole's mean position. Used by test_row_travel.c (tests/lib/test_feet.c keeps
- * its own copy of the same steps). Include after testutil.h. */
+/* reference_soles.h - a quadruped's feet measured independently of crowdbake's pose code: joint
+ * matrices (the reference's fps30.csv files of ../shared/reference, sampled by another
+ * implementation and read by ref_read_clip; or a baked .pal's rows through the one-header C
+ * reader) skinning the mesh's own sole vertices. A sole is the vertices in the lowest
+ * 3% of the height of Idle's first pose, split into four by which side and end of the body they
+ * stand at; a foot is tracked by its sole's mean position. Used by test_feet.c, test_plant_feet.c
+ * and test_row_travel.c; test_sockets_contacts.c reads the reference through ref_read_clip.
+ * Include after testutil.h. */
 #ifndef CB_REFERENCE_SOLES_H
 #define CB_REFERENCE_SOLES_H
 
 #include <math.h>
 
-enum { REF_MAX_FRAMES = 160, REF_MAX_BONES = 64, REF_SOLE_MAX = 512 };
+enum { REF_MAX_FRAMES = 160, REF_MAX_BONES = 64, REF_SOLE_MAX = 1024 };
 
 /* All joints' reference matrices over one clip's frames (t from the clip's start). */
 typedef struct ref_clip {
@@ -70,6 +72,7 @@ static inline double ref_find_soles(const cb_model *m, const double (*pose)[16],
         for (uint32_t v = 0; v < m->primitives[pi].vertex_count; ++v)
             ref_skin_vertex(&m->primitives[pi], v, pose, p), lo = fmin(lo, p[1]), hi = fmax(hi, p[1]);
     double height = hi - lo;
+    memset(feet, 0, 4 * sizeof *feet);
     for (int pass = 0; pass < 2; ++pass)
         for (uint32_t pi = 0; pi < m->primitive_count; ++pi)
             for (uint32_t v = 0; v < m->primitives[pi].vertex_count; ++v) {

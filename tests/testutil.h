@@ -169,10 +169,56 @@ static inline int run(char *out, size_t size, const char *fmt, ...)
     return run_command(cmd, out, size);
 }
 
+/* Runs `crowdbake ARGS 2>&1`, ARGS printf-formatted; returns its exit status, its output in `out` if given. */
+static inline int run_crowdbake(char *out, size_t size, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static inline int run_crowdbake(char *out, size_t size, const char *fmt, ...)
+{
+    char args[2048], cmd[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(args, sizeof args, fmt, ap);
+    va_end(ap);
+    snprintf(cmd, sizeof cmd, "%s %s 2>&1", crowdbake_exe(), args);
+    return run_command(cmd, out, size);
+}
+
 static inline bool exists(const char *path)
 {
     struct stat st;
     return stat(path, &st) == 0;
+}
+
+/* DIR/NAME.glb, a link to the model at `path` (by its real path: a relative one would not hold from
+ * DIR). The browser checks serve DIR, the model and its bakes side by side. */
+static inline void link_model(const char *path, const char *dir, const char *name)
+{
+    char out[1024];
+    if (run(out, sizeof out, "ln -s \"$(realpath %s)\" %s/%s.glb 2>&1", path, dir, name) != 0)
+        fail_msg("cannot link %s as %s/%s.glb: %s", path, dir, name, out);
+}
+
+/* The number after the next "key": from `at`, in a check's JSON output (the browser checks print one
+ * JSON line). */
+static inline double json_number_after(const char *at, const char *key)
+{
+    char pattern[96];
+    snprintf(pattern, sizeof pattern, "\"%s\":", key);
+    if (!(at = strstr(at, pattern))) fail_msg("no \"%s\" in the rest of the check's output", key);
+    return atof(at + strlen(pattern));
+}
+
+/* The number after "key": inside the object that follows "section": in a check's JSON output. */
+static inline double json_number_in(const char *json, const char *section, const char *key)
+{
+    char pattern[96];
+    snprintf(pattern, sizeof pattern, "\"%s\":", section);
+    const char *at = strstr(json, pattern);
+    if (!at) fail_msg("no \"%s\" in the check's output: %.2000s", section, json);
+    return json_number_after(at + strlen(pattern), key);
 }
 
 /* The npm packages of tests/tools/validator (the Khronos glTF validator, ajv), which `make test`

@@ -23,7 +23,7 @@ typedef struct cb_report_gait {
     double slide_mean, slide_worst; /* shares of the ground speed; the mean after the per-row travel where it has one */
     bool row_travel;                /* the clip carries per-row travel offsets */
     double slide_without;           /* with row_travel: the mean slide without them */
-    bool slides;                    /* slide_mean > CB_SLIDE_WARN: the asset's feet slide at any rate */
+    bool slides;                    /* cb_herd_slide.warn: the asset's feet slide at any rate */
 } cb_report_gait;
 
 typedef struct cb_report_type {

@@ -1,7 +1,8 @@
 /* report_gaits.c - the report's foot-sync section: each state that follows the instance's speed,
  * its ground speed and how far its planted feet slide there (cb_stride), as a share of that
- * speed; a gait whose feet slide past CB_SLIDE_WARN at any rate is a warning. */
+ * speed; a gait whose feet slide past CB_SLIDE_WARN at any rate is a warning (herd_slide.h decides both). */
 #include "report_parts.h"
+#include "crowdbake/herd_slide.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -17,11 +18,11 @@ void report_fill_gaits(const cb_roster_type *rt, cb_report_type *t)
         g->state = an->states[s].name;
         snprintf(g->clip, sizeof g->clip, "%s", c->name);
         g->ground_speed = c->speed.speed > 0 ? c->speed.speed : rt->speed_reference;
-        g->stride = c->speed.stride.stride;
-        g->slide_mean = c->speed.stride.slide_mean, g->slide_worst = c->speed.stride.slide_worst;
-        if ((g->row_travel = c->travel.applied)) /* what a herd shows: the slide the offsets leave */
-            g->slide_without = g->slide_mean, g->slide_mean = c->travel.slide_with;
-        g->slides = g->stride && g->slide_mean > CB_SLIDE_WARN;
+        cb_herd_slide slide; /* what a herd shows: the slide the offsets leave, where they ship */
+        cb_herd_slide_decide(&c->speed.stride, &c->travel, &slide);
+        g->stride = slide.measured;
+        g->slide_mean = slide.mean, g->slide_worst = slide.worst, g->slides = slide.warn;
+        if ((g->row_travel = slide.with_travel)) g->slide_without = slide.without;
     }
 }
 

@@ -1,6 +1,7 @@
 /* roster_states.c - what a type's states play: each state's clip, whether it follows the
  * instance's speed (and why), the speed reference, and the feet that slide whatever the rate. */
 #include "roster_files.h"
+#include "crowdbake/herd_slide.h"
 #include "crowdbake/plant_feet.h"
 
 #include <math.h>
@@ -102,12 +103,11 @@ void roster_warn_foot_slide(cb_roster_type *t)
     const cb_catalog_animal *an = t->animal;
     for (uint32_t c = 0; c < t->clip_count; ++c) {
         const cb_stride *st = &t->clips[c].speed.stride;
-        const cb_row_travel *travel = &t->clips[c].travel;
+        cb_herd_slide slide; /* what a herd shows: with the per-row travel, the slide it leaves */
+        cb_herd_slide_decide(st, &t->clips[c].travel, &slide);
         bool synced = false;
         for (uint32_t s = 0; s < an->state_count; ++s) synced |= t->state_clip[s] == (int)c && t->state_sync[s].speed;
-        /* What remains is what a herd shows: with the per-row travel, the slide it leaves. */
-        double slide = travel->applied ? travel->slide_with : st->slide_mean;
-        if (!synced || !st->stride || slide <= CB_SLIDE_WARN) continue;
+        if (!synced || !slide.warn) continue;
         double lo = INFINITY, hi = 0;
         for (uint32_t k = 0; k < st->foot_count; ++k)
             if (st->feet[k].strides) lo = fmin(lo, st->feet[k].step_speed), hi = fmax(hi, st->feet[k].step_speed);
@@ -116,13 +116,13 @@ void roster_warn_foot_slide(cb_roster_type *t)
         const char *why = hi > 1.25 * lo ? "so no one rate plants them all"
                                          : "together on average, but each slides back and forth within its stance";
         char how[64]; /* the worst moment is measured without the travel */
-        if (travel->applied) snprintf(how, sizeof how, " with its per-row travel");
-        else snprintf(how, sizeof how, " (worst %.0f%%)", 100 * st->slide_worst);
+        if (slide.with_travel) snprintf(how, sizeof how, " with its per-row travel");
+        else snprintf(how, sizeof how, " (worst %.0f%%)", 100 * slide.worst);
         cb_warn(&t->warnings, "warning",
                 "clip '%s': its planted feet slide %.0f%% of the ground speed on average%s at any speed: "
                 "its feet step back at %.3g to %.3g units/s, %s; the asset itself slides (plant_feet = true or "
                 "--plant-feet turns its legs at bake time so planted feet stay; or re-time the feet in the animation)",
-                t->clips[c].name, 100 * slide, how, lo, hi, why);
+                t->clips[c].name, 100 * slide.mean, how, lo, hi, why);
     }
 }
 

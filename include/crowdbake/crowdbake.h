@@ -39,6 +39,7 @@
 #include "vat.h"
 #include "stride.h"
 #include "row_travel.h"
+#include "herd_slide.h"
 #include "locomotion.h"
 #include "plant_feet.h"
 #include "socket.h"

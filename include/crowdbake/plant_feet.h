@@ -7,7 +7,9 @@
  * keep their lengths, the knee bends in its own plane) so that while a foot is planted its sole
  * stays where it landed in a world the body crosses at the clip's ground speed; the change
  * fades in before the landing and out after the lift (a tenth, a quarter or two fifths of the
- * swing each, whichever leaves the least slide), so nothing pops. Only the leg chains (hip and
+ * swing each, whichever leaves the least slide), so nothing pops; where the knees then bend no
+ * faster than without it, the foot is also held a 30 fps row interval before it lands and after it
+ * lifts, so the row that holds the landing does not blend swing into stance. Only the leg chains (hip and
  * knee bones, the foot bone's rotation that keeps the foot's world orientation, and rig bones
  * that carry the sole, e.g. an IK control the paw is weighted to) change; every other joint
  * keeps its keys. The bake samples a copy of the model with the new keys; the caller's model is
@@ -18,13 +20,11 @@
 #include "export.h"
 
 #include "core.h"
+#include "herd_slide.h" /* CB_PLANT_SLIDE_GOAL: which clips are planted */
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* A clip's mean slide above this fraction of its ground speed is planted; below, left as is. */
-#define CB_PLANT_SLIDE_GOAL 0.10
 
 /* What planting did to one clip. Slides are fractions of the ground speed (stride.h). */
 typedef struct cb_plant_clip {

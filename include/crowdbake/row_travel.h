@@ -10,7 +10,8 @@
  * cycle (a gallop: the body is fastest after the hind feet push off); it cannot help where feet
  * planted at the same moment step back at different speeds (a walk whose front and hind feet
  * disagree): no one body speed plants both, and the bake leaves such a clip without it, saying
- * why. The decision is the bake's, per clip (cb_row_travel.why), and `--row-travel off`
+ * why. Nor does a loop whose name says an action done once (attack, hit...: the loop decision's
+ * words) get it: runtimes move an instance only in states that follow the speed. The decision is the bake's, per clip (cb_row_travel.why), and `--row-travel off`
  * overrides it. */
 #ifndef CB_ROW_TRAVEL_H
 #define CB_ROW_TRAVEL_H

@@ -28,10 +28,6 @@ typedef struct cb_stance {
     double land, lift;
 } cb_stance;
 
-/* A mean slide above a quarter of the ground speed reads as skating from a game's camera: the
- * roster warns about such a locomotion clip, whose feet no playback rate can plant. */
-#define CB_SLIDE_WARN 0.25
-
 /* One contact point: the skinned vertices at the bottom of the rest pose that one joint moves. */
 typedef struct cb_foot {
     uint32_t joint;     /* index into the skin's joints */

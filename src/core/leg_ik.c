@@ -9,6 +9,9 @@ static cb_vec3 unit(cb_vec3 v)
     return n > 0 ? cb_vec3_scale(v, 1 / n) : v;
 }
 
+/* v with its part along the unit direction u taken off. */
+static cb_vec3 across(cb_vec3 v, cb_vec3 u) { return cb_vec3_sub(v, cb_vec3_scale(u, cb_vec3_dot(v, u))); }
+
 cb_quat leg_ik_turn(cb_vec3 u, cb_vec3 v)
 {
     u = unit(u), v = unit(v);
@@ -23,6 +26,24 @@ cb_quat leg_ik_turn(cb_vec3 u, cb_vec3 v)
 
 static double clamp(double x, double lo, double hi) { return x < lo ? lo : x > hi ? hi : x; }
 
+/* The turn about the unit axis t that takes p to q (both across t). */
+static cb_quat turn_about(cb_vec3 t, cb_vec3 p, cb_vec3 q)
+{
+    double half = 0.5 * atan2(cb_vec3_dot(cross(p, q), t), cb_vec3_dot(p, q)), s = sin(half);
+    return (cb_quat){t.x * s, t.y * s, t.z * s, cos(half)};
+}
+
+/* The knee's side in the new plane: of the planes that hold the hip-target line t, the one whose
+ * normal is nearest the old plane's normal n (n with its part along t taken off), so the plane
+ * turns by exactly the angle the target leaves it, and not at all for a target in it. A target
+ * straight across the old plane leaves no nearest plane: the old side, taken across t, then. */
+static cb_vec3 new_side(cb_vec3 n, cb_vec3 m, cb_vec3 t)
+{
+    cb_vec3 kept = across(n, t);
+    if (cb_vec3_length(kept) > 1e-9) return unit(cross(kept, t));
+    return unit(across(m, t));
+}
+
 cb_vec3 leg_ik_solve(cb_vec3 a, cb_vec3 b, cb_vec3 c, cb_vec3 target, cb_vec3 pole, cb_quat *hip, cb_quat *knee)
 {
     double l1 = cb_vec3_length(cb_vec3_sub(b, a)), l2 = cb_vec3_length(cb_vec3_sub(c, b));
@@ -33,22 +54,23 @@ cb_vec3 leg_ik_solve(cb_vec3 a, cb_vec3 b, cb_vec3 c, cb_vec3 target, cb_vec3 po
     /* The reach kept a hair inside straight and folded: at the limits the knee's angle changes
      * fastest with the reach (a pop), and its plane is undefined. */
     double slack = 1e-4 * (l1 + l2), reach = clamp(cb_vec3_length(at), fabs(l1 - l2) + slack, l1 + l2 - slack);
-    cb_vec3 u = cb_vec3_scale(ac, 1 / d);
-    /* The knee's side of the hip-ankle line, in the plane it bends in. */
-    cb_vec3 ab = cb_vec3_sub(b, a), side = cb_vec3_sub(ab, cb_vec3_scale(u, cb_vec3_dot(ab, u)));
-    if (cb_vec3_length(side) < 1e-9 * l1) side = cb_vec3_sub(pole, cb_vec3_scale(u, cb_vec3_dot(pole, u)));
-    cb_vec3 m = unit(side);
-    /* The bend: the hip's angle to the ankle for the new reach (law of cosines), in the plane. */
+    cb_vec3 u = cb_vec3_scale(ac, 1 / d), t = unit(at);
+    /* The knee's side of the hip-ankle line, in the plane it bends in (u, m; normal n). */
+    cb_vec3 ab = cb_vec3_sub(b, a), side = across(ab, u);
+    if (cb_vec3_length(side) < 1e-9 * l1) side = across(pole, u);
+    cb_vec3 m = unit(side), n = cross(u, m);
+    /* The bend in the old plane: the hip's angle to the ankle for the new reach (law of cosines). */
     double cos_hip = clamp((l1 * l1 + reach * reach - l2 * l2) / (2 * l1 * reach), -1, 1);
     double sin_hip = sqrt(1 - cos_hip * cos_hip);
     cb_vec3 b1 = cb_vec3_add(a, cb_vec3_add(cb_vec3_scale(u, l1 * cos_hip), cb_vec3_scale(m, l1 * sin_hip)));
     cb_vec3 c1 = cb_vec3_add(a, cb_vec3_scale(u, reach));
     cb_quat bend_hip = leg_ik_turn(ab, cb_vec3_sub(b1, a));
     cb_quat bend_knee = leg_ik_turn(cb_quat_rotate(bend_hip, cb_vec3_sub(c, b)), cb_vec3_sub(c1, b1));
-    /* The swing: the whole bent chain about the hip onto the target (the shortest turn, so the
-     * knee's plane turns with the leg and nothing twists). */
-    cb_quat swing = leg_ik_turn(u, at);
+    /* The swing: the bent chain's plane (u, m) carried onto the new one (t, its side): u onto t
+     * by the shortest turn, then about t until the side is the new plane's. */
+    cb_quat onto = leg_ik_turn(u, t);
+    cb_quat swing = cb_quat_normalize(cb_quat_mul(turn_about(t, cb_quat_rotate(onto, m), new_side(n, m, t)), onto));
     *hip = cb_quat_normalize(cb_quat_mul(swing, bend_hip));
     *knee = cb_quat_normalize(cb_quat_mul(swing, cb_quat_mul(bend_knee, cb_quat_normalize((cb_quat){-swing.x, -swing.y, -swing.z, swing.w}))));
-    return cb_vec3_add(a, cb_quat_rotate(swing, cb_vec3_scale(u, reach)));
+    return cb_vec3_add(a, cb_vec3_scale(t, reach));
 }

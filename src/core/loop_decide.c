@@ -41,18 +41,23 @@ static int find(const char *name, const char *const *words, size_t count, char *
 }
 #define FIND(name, list, word) find(name, list, sizeof list / sizeof *list, word, sizeof word)
 
+bool cb_name_says_once(const char *name, char *word, size_t size)
+{
+    char gait[20];
+    return find(name, once_words, sizeof once_words / sizeof *once_words, word, size) >= 0 ||
+           (find(name, leap_words, sizeof leap_words / sizeof *leap_words, word, size) >= 0 && FIND(name, gait_words, gait) < 0);
+}
+
 static void weigh_name(const char *name, cb_clip_info *out)
 {
     char once[20], leap[20], gait[20], cycle[20]; /* four fit loop_word: "gait' and 'leap" */
     char *w = out->loop_word;
     size_t size = sizeof out->loop_word;
     bool is_gait = FIND(name, gait_words, gait) >= 0, is_cycle = FIND(name, cycle_words, cycle) >= 0;
-    if (FIND(name, once_words, once) >= 0)
+    if (cb_name_says_once(name, once, sizeof once))
         out->loop_name = NAME_ONCE, snprintf(w, size, "%s", once);
     else if (FIND(name, leap_words, leap) >= 0 && is_gait)
         out->loop_name = NAME_LEAP_IN_GAIT, snprintf(w, size, "%s' and '%s", gait, leap);
-    else if (FIND(name, leap_words, leap) >= 0)
-        out->loop_name = NAME_ONCE, snprintf(w, size, "%s", leap);
     else if (is_gait || is_cycle)
         out->loop_name = NAME_CYCLE, snprintf(w, size, "%s", is_gait ? gait : cycle);
     else

@@ -8,6 +8,7 @@
 
 #include "crowdbake/stride.h"
 #include "foot_sole.h"
+#include "loop_decide.h"
 
 /* A foot is planted while its sole is within 2% of the model's height of its lowest, as
  * cb_stride_measure plants it (stride.c's STANCE_BAND): the offsets keep still what it calls planted. */
@@ -118,9 +119,19 @@ static void step_speed_range(const cb_stride *st, double *lo, double *hi)
         if (st->feet[k].strides) *lo = fmin(*lo, st->feet[k].step_speed), *hi = fmax(*hi, st->feet[k].step_speed);
 }
 
-static void decide(const cb_stride *st, cb_row_travel *out)
+/* Ships where it cuts the slide by a third, unless the clip's name says an action done once: a
+ * runtime moves an instance at the clip's speed only in states that follow the speed, which an
+ * attack or a hit reaction never does, so its offsets would never be drawn as travel. */
+static void decide(const cb_stride *st, const char *name, cb_row_travel *out)
 {
     double cut = out->slide_mean > 0 ? 1 - out->slide_with / out->slide_mean : 0, lo, hi;
+    char action[20];
+    if (cb_name_says_once(name, action, sizeof action)) {
+        snprintf(out->why, sizeof out->why, "not applied: the clip's name says '%s', an action, which no runtime moves at "
+                 "the ground speed (they add the travel only to states that follow the speed); it would cut the planted "
+                 "feet's mean slide from %.0f%% to %.0f%%", action, 100 * out->slide_mean, 100 * out->slide_with);
+        return;
+    }
     out->applied = cut >= CB_ROW_TRAVEL_MIN_CUT;
     if (out->applied) {
         snprintf(out->why, sizeof out->why, "applied: the body's travel varied per row cuts the planted feet's mean slide "
@@ -171,7 +182,7 @@ void cb_row_travel_measure(cb_sampler *s, const cb_clip_info *clip, bool in_plac
         integrate_offsets(&tr, st, dt, rows, o);
         out->slide_mean = mean_slide(&tr, st, dt, rows, NULL);
         out->slide_with = mean_slide(&tr, st, dt, rows, o);
-        decide(st, out);
+        decide(st, cb_sampler_model(s)->animations[clip->animation].name, out);
         for (uint32_t r = 0; out->applied && r < rows; ++r) offsets[r] = (float)o[r];
     } else {
         snprintf(out->why, sizeof out->why, "not applied: out of memory measuring it");

@@ -28,18 +28,6 @@ static int setup(void **state)
     return system("rm -rf " TMP " && mkdir -p " TMP);
 }
 
-/* Runs `crowdbake ARGS 2>&1`; returns the exit code, the output in out. */
-static int crowdbake(char *out, size_t size, const char *fmt, ...)
-{
-    char args[2048], cmd[4096];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(args, sizeof args, fmt, ap);
-    va_end(ap);
-    snprintf(cmd, sizeof cmd, "%s %s 2>&1", crowdbake_exe(), args);
-    return run_command(cmd, out, size);
-}
-
 static void assert_contains(const char *hay, const char *needle)
 {
     if (!strstr(hay, needle)) fail_msg("expected \"%s\" in:\n%s", needle, hay);
@@ -54,7 +42,7 @@ static void test_report_of_one_model(void **state)
     assert_int_equal(run_command("mkdir -p " TMP "/tmpdir", NULL, 0), 0);
     setenv("TMPDIR", TMP "/tmpdir", 1);
     /* It used to parse the GLB as TOML ("expected '=', saw '\u0002'"). */
-    assert_int_equal(crowdbake(out, sizeof out, "report %s --target steam-deck --json > " TMP "/fox.json", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "report %s --target steam-deck --json > " TMP "/fox.json", fox), 0);
     size_t n;
     char *json = read_whole_file(TMP "/fox.json", &n);
     assert_contains(json, "\"target\": \"Steam Deck\"");
@@ -63,25 +51,25 @@ static void test_report_of_one_model(void **state)
      * rows at 24 fps, Walk 51 fitted at 72, Run 139 at 120; 159 rows at a fixed 30 fps). */
     assert_contains(json, "\"bytes\": 104448");
     free(json);
-    assert_int_equal(crowdbake(out, sizeof out, "report %s", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "report %s", fox), 0);
     assert_contains(out, "no budget to check (give --target NAME)");
-    assert_int_equal(crowdbake(out, sizeof out, "report %s --target toaster", fox), EXIT_USAGE);
+    assert_int_equal(run_crowdbake(out, sizeof out, "report %s --target toaster", fox), EXIT_USAGE);
     assert_contains(out, "--target \"toaster\" is not a built-in profile");
     /* A broken model is reported as itself, not as an entry of a catalog, and not as TOML. */
     char cmd[2048];
     snprintf(cmd, sizeof cmd, "head -c 3000 %s > " TMP "/broken.glb && echo hello > " TMP "/text.glb", fox);
     assert_int_equal(run_command(cmd, NULL, 0), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "report " TMP "/broken.glb"), EXIT_INPUT);
+    assert_int_equal(run_crowdbake(out, sizeof out, "report " TMP "/broken.glb"), EXIT_INPUT);
     assert_contains(out, "crowdbake: " TMP "/broken.glb: truncated GLB");
     assert_true(strstr(out, "[animal") == NULL && strstr(out, "type ") == NULL);
-    assert_int_equal(crowdbake(out, sizeof out, "report " TMP "/text.glb"), EXIT_INPUT);
+    assert_int_equal(run_crowdbake(out, sizeof out, "report " TMP "/text.glb"), EXIT_INPUT);
     assert_contains(out, "text.glb: not a GLB file");
     /* TMPDIR is relative here, as it is for every test: the bake went to MODEL'S FOLDER/TMPDIR
      * (the catalog made for the model resolves out_dir from there) and stayed there, which left
      * build/tmp-tests/cli/tmpdir/crowdbake-report-* folders in ../shared/assets/fox-bevy. */
     snprintf(cmd, sizeof cmd, "rm -rf " TMP "/model && mkdir " TMP "/model && cp %s " TMP "/model/", fox);
     assert_int_equal(run_command(cmd, NULL, 0), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "report " TMP "/model/Fox.glb"), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "report " TMP "/model/Fox.glb"), 0);
     assert_int_equal(run_command("ls -A " TMP "/model", out, sizeof out), 0);
     assert_string_equal(out, "Fox.glb\n");
     /* Nothing is left in the temporary folder's place, and nothing beside the model. */
@@ -94,27 +82,27 @@ static void test_verify_and_preview_take_the_exr(void **state)
 {
     (void)state;
     static char out[1 << 16];
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/fox.exr -q", fox), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/fox.exr --json > " TMP "/v.json", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/fox.exr -q", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "verify %s " TMP "/fox.exr --json > " TMP "/v.json", fox), 0);
     /* The EXR's float texels verify as the float .pal of the same bake does. */
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/foxf.pal --precision float -q", fox), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/foxf.pal --json > " TMP "/vp.json", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/foxf.pal --precision float -q", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "verify %s " TMP "/foxf.pal --json > " TMP "/vp.json", fox), 0);
     char *a = read_whole_file(TMP "/v.json", NULL), *b = read_whole_file(TMP "/vp.json", NULL);
     assert_string_equal(strstr(a, "\"clips\""), strstr(b, "\"clips\""));
     free(a), free(b);
-    assert_int_equal(crowdbake(out, sizeof out, "preview %s " TMP "/fox.exr -o " TMP "/sheet.png --cell 64", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "preview %s " TMP "/fox.exr -o " TMP "/sheet.png --cell 64", fox), 0);
     assert_contains(out, "3 clips x 6 frames");
     /* The old order (PALETTE MODEL) still works, with a note; the wrong kinds of file are named. */
-    assert_int_equal(crowdbake(out, sizeof out, "preview " TMP "/fox.exr %s -o " TMP "/old.png --cell 64", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "preview " TMP "/fox.exr %s -o " TMP "/old.png --cell 64", fox), 0);
     assert_contains(out, "is the old order, still accepted; write 'crowdbake preview MODEL PALETTE'");
     assert_contains(out, "3 clips x 6 frames");
-    assert_int_equal(crowdbake(out, sizeof out, "preview %s %s -o " TMP "/x.png", fox, fox), EXIT_USAGE);
+    assert_int_equal(run_crowdbake(out, sizeof out, "preview %s %s -o " TMP "/x.png", fox, fox), EXIT_USAGE);
     assert_contains(out, "is a glTF model, not a palette");
-    assert_int_equal(crowdbake(out, sizeof out, "verify %s catalog.example.toml", fox), EXIT_USAGE);
+    assert_int_equal(run_crowdbake(out, sizeof out, "verify %s catalog.example.toml", fox), EXIT_USAGE);
     assert_contains(out, "catalog.example.toml: is neither a palette nor glTF, not a palette");
     /* An EXR that is not a crowdbake palette header. */
-    assert_int_equal(crowdbake(out, sizeof out, "vat %s -o " TMP "/vat.exr", fox), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/vat.exr", fox), EXIT_INPUT);
+    assert_int_equal(run_crowdbake(out, sizeof out, "vat %s -o " TMP "/vat.exr", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "verify %s " TMP "/vat.exr", fox), EXIT_INPUT);
     assert_contains(out, "vat.exr: not a crowdbake palette");
 }
 
@@ -123,7 +111,7 @@ static void test_exr_palette_matches_the_pal(void **state)
 {
     (void)state;
     char out[4096];
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/both.pal --format pal,exr --precision half -q "
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/both.pal --format pal,exr --precision half -q "
                                                 "--root-motion in-place", fox), 0);
     cbpal_file f;
     char msg[256];
@@ -160,17 +148,17 @@ static void test_format_pal_exr_keeps_each_precision(void **state)
 {
     (void)state;
     char out[4096];
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/one.pal -q", fox), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/one.exr -q", fox), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/two.pal --format pal,exr", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/one.pal -q", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/one.exr -q", fox), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/two.pal --format pal,exr", fox), 0);
     assert_contains(out, "two.pal: 59.6 KiB texture, 63.6 KiB file"); /* was 123.2 KiB: the EXR's float */
     assert_contains(out, "qpos/u16");
     /* Byte for byte the files each single-format bake writes. */
     assert_int_equal(run_command("cmp " TMP "/one.pal " TMP "/two.pal && cmp " TMP "/one.exr " TMP "/two.exr", NULL, 0), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/fox.png", fox), EXIT_USAGE);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/fox.png", fox), EXIT_USAGE);
     assert_contains(out, "unknown output extension '.png'");
     assert_int_equal(run_command("test ! -e " TMP "/fox.png", NULL, 0), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/f --format pal,exrs", fox), EXIT_USAGE);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/f --format pal,exrs", fox), EXIT_USAGE);
     assert_contains(out, "--format is pal, exr or pal,exr");
 }
 
@@ -178,20 +166,20 @@ static void test_messages(void **state)
 {
     (void)state;
     char out[8192];
-    assert_int_equal(crowdbake(out, sizeof out, "bakee x.glb"), EXIT_USAGE);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bakee x.glb"), EXIT_USAGE);
     assert_contains(out, "unknown command 'bakee'; did you mean 'bake'?");
-    assert_int_equal(crowdbake(out, sizeof out, "verfy"), EXIT_USAGE);
+    assert_int_equal(run_crowdbake(out, sizeof out, "verfy"), EXIT_USAGE);
     assert_contains(out, "did you mean 'verify'?");
-    assert_int_equal(crowdbake(out, sizeof out, "zebra"), EXIT_USAGE);
+    assert_int_equal(run_crowdbake(out, sizeof out, "zebra"), EXIT_USAGE);
     assert_true(strstr(out, "did you mean") == NULL);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s -o x.pal --precison half", fox), EXIT_USAGE);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s -o x.pal --precison half", fox), EXIT_USAGE);
     assert_contains(out, "did you mean '--precision'?");
     /* One clip, one type: no "1 clips". */
     char fish[1024];
     sample_path(fish, sizeof fish, "fish");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/fish.pal", fish), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/fish.pal", fish), 0);
     assert_contains(out, " 1 clip, ");
-    assert_int_equal(crowdbake(out, sizeof out, "report %s", fish), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "report %s", fish), 0);
     assert_contains(out, "type ");
     FILE *f = fopen(TMP "/one.toml", "w");
     assert_non_null(f);
@@ -199,11 +187,11 @@ static void test_messages(void **state)
     assert_non_null(realpath(fish, fish_abs)); /* the catalog's folder is as deep as the build's */
     fprintf(f, "[bake]\nout_dir = \"one\"\nfps = 30\n[animal.fish]\nmodel = \"%s\"\n", fish_abs);
     fclose(f);
-    assert_int_equal(crowdbake(out, sizeof out, "bake " TMP "/one.toml"), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake " TMP "/one.toml"), 0);
     assert_contains(out, "baking 1 animal type from");
     assert_contains(out, "1 type in 1 palette");
     /* verify: the two mm/m columns say which is which. */
-    assert_int_equal(crowdbake(out, sizeof out, "verify %s " TMP "/fish.pal", fish), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "verify %s " TMP "/fish.pal", fish), 0);
     assert_contains(out, "rows mm/m");
     assert_contains(out, "between mm/m");
 }
@@ -215,21 +203,21 @@ static void test_inspect_in_place_velocity(void **state)
     static char out[1 << 14];
     char q[1024];
     sample_path(q, sizeof q, "quadruped");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/q.pal --root-motion in-place -q", q), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/q.pal"), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/q.pal --root-motion in-place -q", q), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "inspect " TMP "/q.pal"), 0);
     assert_contains(out, "root velocity removed (units/s)");
     assert_contains(out, "(0, 0, 1.2), speed 1.2");
     assert_contains(out, "(0, 0, 4), speed 4");
     const char *table = strstr(out, "idle"); /* no float noise (-9.797e-18) as velocities */
     assert_true(strstr(table, "e-0") == NULL && strstr(table, "e-1") == NULL && strstr(table, "e-2") == NULL);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/qk.pal --root-motion keep -q", q), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/qk.pal"), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/qk.pal --root-motion keep -q", q), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "inspect " TMP "/qk.pal"), 0);
     assert_contains(out, "walk");
     assert_contains(out, "in the rows");
     assert_true(strstr(out, "(0, 0, 0)") == NULL); /* a kept walk does not claim to stand still */
     /* A bare bake: its loops travel, so they go in place; the one-shot (death) keeps its travel. */
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/qd.pal -q", q), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/qd.pal"), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/qd.pal -q", q), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "inspect " TMP "/qd.pal"), 0);
     assert_contains(out, "(0, 0, 1.2), speed 1.2");
     const char *death = strstr(out, "death");
     assert_non_null(death);
@@ -245,12 +233,12 @@ static void test_single_model_speed_reference(void **state)
     static char out[1 << 14];
     char husky[1024];
     shared_path(husky, sizeof husky, "assets/quaternius-husky/Husky.glb");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/husky.pal", husky), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/husky.pal", husky), 0);
     assert_contains(out, "speed reference 1.405 units/s recorded: the slowest locomotion clip 'AnimalArmature|Walk'");
-    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/husky.pal"), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "inspect " TMP "/husky.pal"), 0);
     assert_contains(out, "speed reference 1.40");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/husky2.pal --speed-reference 2 -q", husky), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/husky2.pal"), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/husky2.pal --speed-reference 2 -q", husky), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "inspect " TMP "/husky2.pal"), 0);
     assert_contains(out, "speed reference 2 units/s");
 }
 
@@ -262,8 +250,8 @@ static void test_inspect_aligns_long_clip_names(void **state)
     static char out[1 << 14];
     char cow[1024];
     shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/cow.pal -q", cow), 0);
-    assert_int_equal(crowdbake(out, sizeof out, "inspect " TMP "/cow.pal"), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/cow.pal -q", cow), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "inspect " TMP "/cow.pal"), 0);
     const char *title = strstr(out, "first row");
     assert_non_null(title);
     const char *line = title;
@@ -307,27 +295,27 @@ static void test_loop_and_one_shot_overrule_the_poses(void **state)
     char cow[1024];
     shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
     const char *headbutt = "AnimalArmature|Attack_Headbutt", *death = "AnimalArmature|Death", *walk = "AnimalArmature|Walk";
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/found.pal -q", cow), 0);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/found.pal -q", cow), 0);
     assert_int_equal(clip_loops(TMP "/found.pal", headbutt), 0);
     assert_int_equal(clip_loops(TMP "/found.pal", death), 0);
     assert_int_equal(clip_loops(TMP "/found.pal", walk), 1);
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/told.pal -q --one-shot '%s' --loop '%s,%s'", cow, walk,
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/told.pal -q --one-shot '%s' --loop '%s,%s'", cow, walk,
                                headbutt, death), 0);
     assert_int_equal(clip_loops(TMP "/told.pal", headbutt), 1);
     assert_int_equal(clip_loops(TMP "/told.pal", death), 1);
     assert_int_equal(clip_loops(TMP "/told.pal", walk), 0);
     assert_int_equal(clip_loops(TMP "/told.pal", "AnimalArmature|Gallop"), 1); /* the others as decided */
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/some.pal -q --clip '%s,%s' --one-shot '%s'", cow, walk,
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/some.pal -q --clip '%s,%s' --one-shot '%s'", cow, walk,
                                headbutt, headbutt), 0);
     assert_int_equal(clip_loops(TMP "/some.pal", headbutt), 0);
     assert_int_equal(clip_loops(TMP "/some.pal", death), -1);
 
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/bad.pal -q --loop Gallopp", cow), EXIT_USAGE);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/bad.pal -q --loop Gallopp", cow), EXIT_USAGE);
     assert_contains(out, "--loop Gallopp: no clip 'Gallopp'; did you mean 'AnimalArmature|Gallop'?");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/bad.pal -q --loop '%s' --one-shot '%s'", cow, death,
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/bad.pal -q --loop '%s' --one-shot '%s'", cow, death,
                                death), EXIT_USAGE);
     assert_contains(out, "'AnimalArmature|Death' is given to both --loop and --one-shot");
-    assert_int_equal(crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/bad.pal -q --clip '%s' --one-shot '%s'", cow, walk,
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --fps 30 -o " TMP "/bad.pal -q --clip '%s' --one-shot '%s'", cow, walk,
                                death), EXIT_USAGE);
     assert_contains(out, "the clip is not among those baked");
     assert_int_equal(access(TMP "/bad.pal", F_OK), -1);

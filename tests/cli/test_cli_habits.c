@@ -28,17 +28,8 @@ static int setup(void **state)
     return system("rm -rf " TMP " && mkdir -p " TMP);
 }
 
-/* Runs `crowdbake ARGS 2>&1`; returns the exit code, the output in out. */
-static int crowdbake(const char *fmt, ...)
-{
-    char args[2048], cmd[4096];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(args, sizeof args, fmt, ap);
-    va_end(ap);
-    snprintf(cmd, sizeof cmd, "%s %s 2>&1", crowdbake_exe(), args);
-    return run_command(cmd, out, sizeof out);
-}
+/* Runs `crowdbake ARGS 2>&1` (printf-formatted); returns the exit code, the output in out. */
+#define crowdbake(...) run_crowdbake(out, sizeof out, __VA_ARGS__)
 
 static void assert_contains(const char *needle)
 {
@@ -183,6 +174,16 @@ static void test_clip_names_match_by_case_and_part(void **state)
     assert_true(!strstr(out, "fps 30,") && !strstr(out, " m/s"));
 }
 
+/* samples/catalog.toml copied to `toml`, baking into TMP/`out_dir` and its models from this build's samples. */
+static void sample_catalog(const char *out_dir, const char *toml)
+{
+    char cwd[PATH_MAX], samples[PATH_MAX];
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    assert_non_null(realpath(samples_dir(), samples));
+    assert_int_equal(run(NULL, 0, "sed -e 's|^out_dir = .*|out_dir = \"%s/" TMP "/%s\"|' -e 's|\"../build/samples/|\"%s/|' "
+                         "samples/catalog.toml > %s", cwd, out_dir, samples, toml), 0);
+}
+
 /* report bakes for seconds: a line per type on stderr with -v (and on a terminal), none with
  * -q or when stderr is not a terminal; stdout keeps only the report, so --json still parses.
  * The types are samples/catalog.toml's (a copy baking into this test's folder). */
@@ -190,13 +191,8 @@ static void test_report_progress(void **state)
 {
     (void)state;
     static char err[1 << 16];
-    char cmd[4 * PATH_MAX], cwd[PATH_MAX], samples[PATH_MAX];
-    /* The catalog's copy bakes into this test's folder, the models from this build's samples. */
-    assert_non_null(getcwd(cwd, sizeof cwd));
-    assert_non_null(realpath(samples_dir(), samples));
-    snprintf(cmd, sizeof cmd, "sed -e 's|^out_dir = .*|out_dir = \"%s/" TMP "/roster\"|' -e 's|\"../build/samples/|\"%s/|' "
-             "samples/catalog.toml > " TMP "/catalog.toml", cwd, samples);
-    assert_int_equal(system(cmd), 0);
+    char cmd[4 * PATH_MAX];
+    sample_catalog("roster", TMP "/catalog.toml");
     snprintf(cmd, sizeof cmd, "%s report " TMP "/catalog.toml --json -v 2>&1 >" TMP "/report.json", crowdbake_exe());
     assert_int_equal(run_command(cmd, err, sizeof err), 0);
     static const char *const types[] = {"  bird ", "  fish ", "  goat ", "  sheep "};
@@ -333,12 +329,8 @@ static void test_quiet_and_verbose_everywhere(void **state)
 static void test_catalog_bake_progress(void **state)
 {
     (void)state;
-    char cmd[4 * PATH_MAX], cwd[PATH_MAX], samples[PATH_MAX];
-    assert_non_null(getcwd(cwd, sizeof cwd));
-    assert_non_null(realpath(samples_dir(), samples));
-    snprintf(cmd, sizeof cmd, "sed -e 's|^out_dir = .*|out_dir = \"%s/" TMP "/progress\"|' -e 's|\"../build/samples/|\"%s/|' "
-             "samples/catalog.toml > " TMP "/progress.toml", cwd, samples);
-    assert_int_equal(system(cmd), 0);
+    char cmd[4 * PATH_MAX];
+    sample_catalog("progress", TMP "/progress.toml");
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/progress.toml --force --json -v 2>&1 >" TMP "/bake.json", crowdbake_exe());
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     /* samples/catalog.toml: bird, fish and goat baked, sheep sharing goat's palette */

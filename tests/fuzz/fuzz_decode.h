@@ -3,16 +3,33 @@
  * bone (cb_palette_decode), and each clip played back the way a runtime blends it
  * (cb_runtime_matrices). A header that passes the checks but lies about the texels reads past
  * them, which the sanitizers report. Rows are thinned evenly past ROW_BUDGET decoded bones, the
- * first and last of each range always kept, so a run stays in the milliseconds. */
+ * first and last of each range always kept, so a run stays in the milliseconds. And, for the
+ * readers that read files (EXR, KTX2), the input written to a per-process temporary file. */
 #ifndef FUZZ_DECODE_H
 #define FUZZ_DECODE_H
 
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 #include "crowdbake/palette.h"
 #include "crowdbake/runtime.h"
 
 #define ROW_BUDGET (1u << 14)
+
+/* The input as /tmp/crowdbake-fuzz-PID.EXT (its name into `path`), for a reader of files; false
+ * when it cannot be written. The caller unlinks it. */
+static inline bool fuzz_input_file(const uint8_t *data, size_t size, const char *ext, char path[64])
+{
+    snprintf(path, 64, "/tmp/crowdbake-fuzz-%d.%s", (int)getpid(), ext);
+    FILE *f = fopen(path, "wb");
+    if (!f) return false;
+    fwrite(data, 1, size, f);
+    fclose(f);
+    return true;
+}
 
 static volatile double fuzz_sink;
 

@@ -4,7 +4,6 @@
  * (fuzz_decode.h). The reader reads files, so each input goes through a per-process temporary. */
 #define _POSIX_C_SOURCE 200809L
 #include <stdint.h>
-#include <stdio.h>
 #include <unistd.h>
 
 #include "crowdbake/ktx2.h"
@@ -13,11 +12,7 @@
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     char path[64];
-    snprintf(path, sizeof path, "/tmp/crowdbake-fuzz-%d.ktx2", (int)getpid());
-    FILE *f = fopen(path, "wb");
-    if (!f) return 0;
-    fwrite(data, 1, size, f);
-    fclose(f);
+    if (!fuzz_input_file(data, size, "ktx2", path)) return 0;
     cb_ktx2_palette pal;
     cb_error err = {0};
     if (cb_ktx2_read_palette(path, &pal, &err) == CB_OK) {

@@ -4,7 +4,7 @@
  * implementation) skinning the mesh's own vertices (Cow.fps30.csv, Husky.fps30.csv). Here a foot is the sole a quadruped stands
  * on: the vertices in the lowest 3% of the height of Idle's first pose, split into four by
  * which side and end of the body they stand at; it is planted while its vertices' mean height is
- * within 2% of the height of its lowest. For each clip `crowdbake info --json` calls a stride:
+ * within 2% of the height of its lowest (the soles and the reference's reader: reference_soles.h). For each clip `crowdbake info --json` calls a stride:
  * each foot's stance fraction, its landings and lifts (within two frames at 30 fps) and its
  * speed backwards while planted (within 10%), and the ground speed from all four. */
 #define _DEFAULT_SOURCE
@@ -12,96 +12,13 @@
 
 #include <math.h>
 
+#include "reference_soles.h"
+
 #define TMP TEST_TMP "/feet"
-enum { MAX_FRAMES = 160, MAX_BONES = 64, MAX_ROWS = 64 };
-
-/* All joints' reference matrices over one clip's frames (t from the clip's start). */
-typedef struct ref_clip {
-    uint32_t frames, bones;
-    double t[MAX_FRAMES];
-    double (*m)[MAX_BONES][16];
-} ref_clip;
-
-static void read_reference(const char *csv, const char *clip, ref_clip *out)
-{
-    FILE *f = fopen(csv, "r");
-    assert_non_null(f);
-    char line[4096], quoted[160];
-    snprintf(quoted, sizeof quoted, ",\"%.140s\",", clip);
-    out->frames = out->bones = 0;
-    double t0 = 0;
-    while (fgets(line, sizeof line, f)) {
-        char *at = strstr(line, quoted);
-        if (line[0] == '#' || !at) continue;
-        unsigned frame, frames, skin, j;
-        double time, m[16];
-        if (sscanf(at + strlen(quoted), "%u,%u,%lf,%u,%u,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &frame,
-                   &frames, &time, &skin, &j, &m[0], &m[1], &m[2], &m[3], &m[4], &m[5], &m[6], &m[7], &m[8], &m[9], &m[10], &m[11],
-                   &m[12], &m[13], &m[14], &m[15]) != 21 || frame >= MAX_FRAMES || j >= MAX_BONES)
-            continue;
-        if (frame == 0 && j == 0) t0 = time;
-        out->t[frame] = time - t0;
-        memcpy(out->m[frame][j], m, sizeof m);
-        if (frame + 1 > out->frames) out->frames = frame + 1;
-        if (j + 1 > out->bones) out->bones = j + 1;
-    }
-    fclose(f);
-}
-
-/* One sole vertex: its primitive and index. */
-typedef struct sole {
-    uint32_t count;
-    uint32_t prim[512], vertex[512];
-} sole;
-
-static void skin_vertex(const cb_primitive *p, uint32_t v, const double (*mats)[16], double out[3])
-{
-    const float *x = p->positions + (size_t)v * 3;
-    out[0] = out[1] = out[2] = 0;
-    for (int i = 0; i < 4; ++i) {
-        double w = p->weights[(size_t)v * 4 + i];
-        const double *m = mats[p->joints[(size_t)v * 4 + i]];
-        for (int k = 0; k < 3; ++k) out[k] += w * (m[k] * x[0] + m[4 + k] * x[1] + m[8 + k] * x[2] + m[12 + k]);
-    }
-}
-
-/* The four soles of Idle's first pose, and the model's height there. */
-static double find_soles(const cb_model *m, const double (*idle)[16], sole feet[4])
-{
-    double lo = INFINITY, hi = -INFINITY, p[3], cx = 0, cz = 0;
-    uint32_t n = 0;
-    for (uint32_t pi = 0; pi < m->primitive_count; ++pi)
-        for (uint32_t v = 0; v < m->primitives[pi].vertex_count; ++v)
-            skin_vertex(&m->primitives[pi], v, idle, p), lo = fmin(lo, p[1]), hi = fmax(hi, p[1]);
-    double height = hi - lo;
-    for (int pass = 0; pass < 2; ++pass)
-        for (uint32_t pi = 0; pi < m->primitive_count; ++pi)
-            for (uint32_t v = 0; v < m->primitives[pi].vertex_count; ++v) {
-                skin_vertex(&m->primitives[pi], v, idle, p);
-                if (p[1] > lo + 0.03 * height) continue;
-                if (pass == 0) {
-                    cx += p[0], cz += p[2], ++n;
-                    continue;
-                }
-                sole *f = &feet[(p[0] > cx / n) * 2 + (p[2] > cz / n)];
-                if (f->count < 512) f->prim[f->count] = pi, f->vertex[f->count++] = v;
-            }
-    return height;
-}
-
-/* A sole's mean position at one frame. */
-static void sole_at(const cb_model *m, const sole *f, const double (*mats)[16], double out[3])
-{
-    double p[3];
-    out[0] = out[1] = out[2] = 0;
-    for (uint32_t i = 0; i < f->count; ++i) {
-        skin_vertex(&m->primitives[f->prim[i]], f->vertex[i], mats, p);
-        for (int k = 0; k < 3; ++k) out[k] += p[k] / f->count;
-    }
-}
+enum { MAX_ROWS = 64 };
 
 /* Which sole carries the most weight on a joint. */
-static int sole_of_bone(const cb_model *m, const sole feet[4], uint32_t bone)
+static int sole_of_bone(const cb_model *m, const ref_sole feet[4], uint32_t bone)
 {
     int best = -1;
     double top = 0;
@@ -155,10 +72,10 @@ static uint32_t info_rows(const char *model, row *out)
 /* One foot over a clip, measured from the reference: heights and ground-plane positions per frame. */
 typedef struct foot_track {
     uint32_t frames;
-    double t[MAX_FRAMES + 1], h[MAX_FRAMES + 1], x[MAX_FRAMES + 1], z[MAX_FRAMES + 1], band;
+    double t[REF_MAX_FRAMES + 1], h[REF_MAX_FRAMES + 1], x[REF_MAX_FRAMES + 1], z[REF_MAX_FRAMES + 1], band;
 } foot_track;
 
-static void track_foot(const cb_model *m, const sole *f, const ref_clip *ref, double period, double height, foot_track *tr)
+static void track_foot(const cb_model *m, const ref_sole *f, const ref_clip *ref, double period, double height, foot_track *tr)
 {
     uint32_t n = ref->frames;
     /* A loop whose last frame is its first pose again (a closing key) ends there; one without a
@@ -166,7 +83,7 @@ static void track_foot(const cb_model *m, const sole *f, const ref_clip *ref, do
     if (n > 1 && fabs(ref->t[n - 1] - period) < 1e-4) --n;
     double lo = INFINITY, p[3];
     for (uint32_t i = 0; i < n; ++i) {
-        sole_at(m, f, (const double (*)[16])ref->m[i], p);
+        ref_sole_at(m, f, (const double (*)[16])ref->m[i], p);
         tr->t[i] = ref->t[i], tr->h[i] = p[1], tr->x[i] = p[0], tr->z[i] = p[2], lo = fmin(lo, p[1]);
     }
     tr->t[n] = period, tr->h[n] = tr->h[0], tr->x[n] = tr->x[0], tr->z[n] = tr->z[0];
@@ -210,12 +127,12 @@ static void check_model(const char *asset, const char *reference, uint32_t *walk
     shared_path(model, sizeof model, asset);
     shared_path(csv, sizeof csv, reference);
     cb_model *m = load_or_fail(model);
-    ref_clip ref = {.m = calloc(MAX_FRAMES, sizeof *ref.m)};
+    ref_clip ref = {.m = calloc(REF_MAX_FRAMES, sizeof *ref.m)};
     assert_non_null(ref.m);
-    read_reference(csv, "AnimalArmature|Idle", &ref);
+    ref_read_clip(csv, "AnimalArmature|Idle", &ref);
     assert_true(ref.frames > 0 && ref.bones == m->skins[0].joint_count);
-    sole feet[4] = {{0}};
-    double height = find_soles(m, (const double (*)[16])ref.m[0], feet);
+    ref_sole feet[4];
+    double height = ref_find_soles(m, (const double (*)[16])ref.m[0], feet);
     for (int s = 0; s < 4; ++s) assert_true(feet[s].count >= 4);
     static row rows[MAX_ROWS];
     uint32_t n = info_rows(model, rows);
@@ -233,7 +150,7 @@ static void check_model(const char *asset, const char *reference, uint32_t *walk
             }
             if (i == n) break;
             snprintf(clip, sizeof clip, "%s", rows[i].clip);
-            read_reference(csv, clip, &ref);
+            ref_read_clip(csv, clip, &ref);
             speed_sum = stance_sum = 0, speeds = 0;
         }
         int s = sole_of_bone(m, feet, rows[i].bone);

@@ -13,11 +13,11 @@
 #include <math.h>
 
 #include "crowdbake_pal.h"
+#include "reference_soles.h"
 #include "../../src/core/loop_decide.h"
 #include "internal/plumbing.h"
 
 #define TMP TEST_TMP "/loop_close"
-enum { MAX_JOINTS = 64, MAX_FRAMES = 128 };
 
 static int setup(void **state)
 {
@@ -186,43 +186,6 @@ static void check_seam(const char *asset, double *reported)
     cb_model_free(m);
 }
 
-/* The reference's rows of one clip: frames x joints matrices, and its times. */
-typedef struct ref_clip {
-    uint32_t frames, joints;
-    double t[MAX_FRAMES];
-    double (*m)[16];
-} ref_clip;
-
-static void read_reference(const char *csv, int clip, ref_clip *out)
-{
-    char path[1024];
-    shared_path(path, sizeof path, csv);
-    FILE *f = fopen(path, "r");
-    assert_non_null(f);
-    memset(out, 0, sizeof *out);
-    out->m = calloc((size_t)MAX_FRAMES * MAX_JOINTS, sizeof *out->m);
-    char line[4096];
-    bool header = false;
-    while (fgets(line, sizeof line, f)) {
-        if (line[0] == '#' || !header) {
-            header = header || line[0] != '#';
-            continue;
-        }
-        char *p = line;
-        if ((int)strtol(p, &p, 10) != clip) continue;
-        p = strchr(p + 1, ',');
-        long frame = strtol(p + 1, &p, 10), frames = strtol(p + 1, &p, 10);
-        double t = strtod(p + 1, &p);
-        long skin = strtol(p + 1, &p, 10), joint = strtol(p + 1, &p, 10);
-        assert_true(skin == 0 && frame < MAX_FRAMES && joint < MAX_JOINTS);
-        out->frames = (uint32_t)frames, out->t[frame] = t;
-        if ((uint32_t)joint + 1 > out->joints) out->joints = (uint32_t)joint + 1;
-        for (int k = 0; k < 16; ++k) out->m[frame * MAX_JOINTS + joint][k] = strtod(p + 1, &p);
-    }
-    fclose(f);
-    assert_true(out->frames > 2);
-}
-
 /* Bakes the clip at 30 fps (its travel kept, as the reference has it) and reads it back through
  * the C reader: its period is the reference's key span; every row is within the reported
  * deviation of the source (plus the encoding); the wrap step from the last row to the first is
@@ -240,25 +203,28 @@ static void check_baked(const char *asset, const char *csv, double reported)
     if (cbpal_open(pal, CBPAL_VERIFY_CHECKSUM, &f, msg, sizeof msg)) fail_msg("%s: %s", pal, msg);
     cbpal_clip clip;
     assert_int_equal(cbpal_get_clip(&f, 0, &clip), 0);
-    ref_clip ref;
-    read_reference(csv, cb_model_find_animation(m, "AnimalArmature|Gallop_Jump"), &ref);
-    double span = ref.t[ref.frames - 1] - ref.t[0];
+    ref_clip ref = {.m = calloc(REF_MAX_FRAMES, sizeof *ref.m)};
+    char csv_path[1024];
+    shared_path(csv_path, sizeof csv_path, csv);
+    ref_read_clip(csv_path, "AnimalArmature|Gallop_Jump", &ref);
+    assert_true(ref.frames > 2);
+    double span = ref.t[ref.frames - 1];
     assert_true(fabs(clip.duration - span) < 1e-5); /* before: span + one key interval */
     assert_int_equal(clip.frames, ref.frames - 1); /* a loop keeps rows 0..N-1 of the reference's 0..N */
     uint32_t bones = f.header.bone_count;
-    assert_int_equal(bones, ref.joints);
+    assert_int_equal(bones, ref.bones);
     double(*row)[16] = calloc((size_t)(clip.frames + 1) * bones, sizeof *row), zero[3] = {0, 0, 0};
     double lo[3], hi[3], worst = 0, mean = 0, seam = 0, steps = 0;
     cb_sampler *s = cb_sampler_create(m, 0, NULL);
     double height = cb_skin_rest_bounds(s, lo, hi);
     for (uint32_t i = 0; i <= clip.frames; ++i) { /* row N: the reader at the period */
         float b[16];
-        double t = i < clip.frames ? ref.t[i] - ref.t[0] : clip.duration;
+        double t = i < clip.frames ? ref.t[i] : clip.duration;
         for (uint32_t j = 0; j < bones; ++j) {
             assert_int_equal(cbpal_bone_matrix(&f, 0, t, j, b), 0);
             for (int k = 0; k < 16; ++k) row[i * bones + j][k] = b[k];
         }
-        double d = cb_mm_per_m(vertex_distance(m, ref.m[i * MAX_JOINTS], row[i * bones], zero), height);
+        double d = cb_mm_per_m(vertex_distance(m, ref.m[i][0], row[i * bones], zero), height);
         worst = fmax(worst, d), mean += d / (clip.frames + 1);
         if (i == clip.frames) seam = cb_mm_per_m(vertex_distance(m, row[0], row[i * bones], zero), height);
         else if (i > 0) steps = fmax(steps, cb_mm_per_m(vertex_distance(m, row[(i - 1) * bones], row[i * bones], zero), height));

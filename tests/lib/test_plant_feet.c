@@ -1,7 +1,7 @@
 /* test_plant_feet.c - `--plant-feet` (feet locked at bake time) on Husky and Cow, measured
  * independently of crowdbake's pose code: the baked .pal is read through the one-header C reader
  * (include/crowdbake_pal.h, rows blended as a runtime blends them) and the model's own sole
- * vertices are skinned with its matrices. A foot is the sole a quadruped stands on (the
+ * vertices are skinned with its matrices (reference_soles.h). A foot is the sole a quadruped stands on (the
  * vertices in the lowest 3% of the height of Idle's first pose, split into four by side and
  * end); it is planted while its vertices' mean is within 2% of the height of its lowest. Its
  * slide is |u + v d| / v over the planted intervals, u its velocity in the baked (in-place)
@@ -19,14 +19,10 @@
 #include <stdlib.h>
 
 #include "crowdbake_pal.h"
+#include "reference_soles.h"
 
 #define TMP TEST_TMP "/plant_feet"
-enum { SAMPLES = 240, MAX_BONES = 64, MAX_SOLE = 1024 };
-
-typedef struct sole {
-    uint32_t count;
-    uint32_t prim[MAX_SOLE], vertex[MAX_SOLE];
-} sole;
+enum { SAMPLES = 240, MAX_BONES = 64 };
 
 static void open_pal(const char *path, cbpal_file *f)
 {
@@ -52,54 +48,8 @@ static void pose_at(const cbpal_file *f, uint32_t clip, double t, double (*mats)
     }
 }
 
-static void skin_vertex(const cb_primitive *p, uint32_t v, const double (*mats)[16], double out[3])
-{
-    const float *x = p->positions + (size_t)v * 3;
-    out[0] = out[1] = out[2] = 0;
-    for (int i = 0; i < 4; ++i) {
-        double w = p->weights[(size_t)v * 4 + i];
-        const double *m = mats[p->joints[(size_t)v * 4 + i]];
-        for (int k = 0; k < 3; ++k) out[k] += w * (m[k] * x[0] + m[4 + k] * x[1] + m[8 + k] * x[2] + m[12 + k]);
-    }
-}
-
-/* The four soles of a pose, and the model's height there. */
-static double find_soles(const cb_model *m, const double (*pose)[16], sole feet[4])
-{
-    double lo = INFINITY, hi = -INFINITY, p[3], cx = 0, cz = 0;
-    uint32_t n = 0;
-    for (uint32_t pi = 0; pi < m->primitive_count; ++pi)
-        for (uint32_t v = 0; v < m->primitives[pi].vertex_count; ++v)
-            skin_vertex(&m->primitives[pi], v, pose, p), lo = fmin(lo, p[1]), hi = fmax(hi, p[1]);
-    double height = hi - lo;
-    memset(feet, 0, 4 * sizeof *feet);
-    for (int pass = 0; pass < 2; ++pass)
-        for (uint32_t pi = 0; pi < m->primitive_count; ++pi)
-            for (uint32_t v = 0; v < m->primitives[pi].vertex_count; ++v) {
-                skin_vertex(&m->primitives[pi], v, pose, p);
-                if (p[1] > lo + 0.03 * height) continue;
-                if (pass == 0) {
-                    cx += p[0], cz += p[2], ++n;
-                    continue;
-                }
-                sole *f = &feet[(p[0] > cx / n) * 2 + (p[2] > cz / n)];
-                if (f->count < MAX_SOLE) f->prim[f->count] = pi, f->vertex[f->count++] = v;
-            }
-    return height;
-}
-
-static void sole_at(const cb_model *m, const sole *f, const double (*mats)[16], double out[3])
-{
-    double p[3];
-    out[0] = out[1] = out[2] = 0;
-    for (uint32_t i = 0; i < f->count; ++i) {
-        skin_vertex(&m->primitives[f->prim[i]], f->vertex[i], mats, p);
-        for (int k = 0; k < 3; ++k) out[k] += p[k] / f->count;
-    }
-}
-
 /* The mean and worst slide of the four feet over one clip, as fractions of `speed`. */
-static void measure_slide(const cb_model *m, const cbpal_file *f, const char *clip, const sole feet[4], double height,
+static void measure_slide(const cb_model *m, const cbpal_file *f, const char *clip, const ref_sole feet[4], double height,
                           double speed, double *mean, double *worst)
 {
     cbpal_clip c;
@@ -108,7 +58,7 @@ static void measure_slide(const cb_model *m, const cbpal_file *f, const char *cl
     double dt = c.duration / SAMPLES, lo[4] = {INFINITY, INFINITY, INFINITY, INFINITY}, dx = 0, dz = 0;
     for (uint32_t i = 0; i <= SAMPLES; ++i) {
         pose_at(f, ci, i * dt, mats);
-        for (int k = 0; k < 4; ++k) sole_at(m, &feet[k], (const double (*)[16])mats, p[k][i]), lo[k] = fmin(lo[k], p[k][i][1]);
+        for (int k = 0; k < 4; ++k) ref_sole_at(m, &feet[k], (const double (*)[16])mats, p[k][i]), lo[k] = fmin(lo[k], p[k][i][1]);
     }
     for (int pass = 0; pass < 2; ++pass) {
         double sum = 0, len = hypot(dx, dz);
@@ -238,7 +188,16 @@ static void joint_at(const cbpal_file *f, const double (*m)[16], int b, double o
 static void knee_of(const cbpal_file *f, const double (*m)[16], const int chain[3], double normal[3], double *angle)
 {
     double p[3][3], u[3], v[3];
-    for (int i = 0; i < 3; ++i) joint_at(f, m, chain[i], p[i]);
+    for (int i = 0; i < 2; ++i) joint_at(f, m, chain[i], p[i]);
+    /* The ankle as the shin carries it (the shin's matrix on the ankle's bind place), not the
+     * ankle bone's own: the front paw's bone (FF) is an IK bone the foot carries, moved with the
+     * paw and not turned with the shin, so near a straight knee its own place would swing the
+     * triangle's normal (up to 21.6 deg on Cow) with no turn of the leg at all. */
+    cbpal_bone ankle;
+    assert_int_equal(cbpal_get_bone(f, (uint32_t)chain[2], &ankle), 0);
+    const float *x = ankle.bind_position;
+    const double *s = m[chain[1]];
+    for (int k = 0; k < 3; ++k) p[2][k] = s[k] * x[0] + s[4 + k] * x[1] + s[8 + k] * x[2] + s[12 + k];
     for (int k = 0; k < 3; ++k) u[k] = p[0][k] - p[1][k], v[k] = p[2][k] - p[1][k];
     normal[0] = u[1] * v[2] - u[2] * v[1], normal[1] = u[2] * v[0] - u[0] * v[2], normal[2] = u[0] * v[1] - u[1] * v[0];
     double n = sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
@@ -280,7 +239,10 @@ static void compare_knees(const cbpal_file *plain, const cbpal_file *planted, do
     }
 }
 
-static void check_model(const char *rel)
+/* plane_bound: how far the knees' planes may turn (degrees); held: the clip whose feet are held a row
+ * interval about each stance (plant_feet.c), whose worst moment then stays under a third of the
+ * ground speed (without the hold: Husky's Gallop 110%, Cow's Walk 102%; with it 24% and 26%). */
+static void check_model(const char *rel, double plane_bound, const char *held)
 {
     char model[1024];
     shared_path(model, sizeof model, rel);
@@ -292,8 +254,8 @@ static void check_model(const char *rel)
     cbpal_clip idle;
     static double pose[MAX_BONES][16];
     pose_at(&f, clip_named(&f, "AnimalArmature|Idle", &idle), 0, pose);
-    sole feet[4];
-    double height = find_soles(m, (const double (*)[16])pose, feet);
+    ref_sole feet[4];
+    double height = ref_find_soles(m, (const double (*)[16])pose, feet);
     const char *clips[] = {"AnimalArmature|Walk", "AnimalArmature|Gallop"};
     for (int c = 0; c < 2; ++c) {
         double speed, before, after, turn, mean, worst;
@@ -303,6 +265,7 @@ static void check_model(const char *rel)
                       rel, clips[c], 100 * mean, speed, 100 * worst, 100 * before, 100 * after, turn);
         assert_true(mean <= 0.10);
         assert_true(before > 0.10); /* it slid before */
+        if (strcmp(clips[c], held) == 0) assert_true(worst <= 0.33);
     }
     cbpal_close(&f);
     bake(model, "plain30.pal", "--fps 30 --precision float --layout mat4 -q");
@@ -318,11 +281,12 @@ static void check_model(const char *rel)
     compare_knees(&plain, &planted, &plane, &jump_plain, &jump_planted);
     print_message("%s: knee planes turn up to %.1f deg; a knee's angle changes up to %.1f deg a row (%.1f unplanted)\n", rel,
                   plane, jump_planted, jump_plain);
-    /* No pop: no knee bends faster from row to row than the clip's own knees do (Husky 42.1 deg
-     * against 50.9, Cow 24.3 against 23.1); the knee's plane turns with the leg's swing onto the
-     * planted place, not over (Husky 13.0 deg, Cow 21.6). */
+    /* No pop: no knee bends faster from row to row than the clip's own knees do (Husky 43.4 deg
+     * against 52.8, Cow 22.7 against 21.4). The knee keeps its plane: it turns only as far as the
+     * planted place leaves it (leg_ik.h; the most it leaves it is 2.28 deg on Husky's Walk, whose
+     * splayed hind legs swing 0.55 units back, 0.61 on Cow's Gallop): Husky 2.3 deg, Cow 0.7. */
     assert_true(jump_planted <= 1.1 * jump_plain);
-    assert_true(plane <= 25);
+    assert_true(plane <= plane_bound);
     cbpal_close(&plain), cbpal_close(&planted);
     cb_model_free(m);
 }
@@ -394,13 +358,13 @@ static void test_catalog_and_info(void **state)
 static void test_husky_planted(void **state)
 {
     (void)state;
-    check_model("assets/quaternius-husky/Husky.glb");
+    check_model("assets/quaternius-husky/Husky.glb", 2.5, "AnimalArmature|Gallop");
 }
 
 static void test_cow_planted(void **state)
 {
     (void)state;
-    check_model("assets/quaternius-cow/Cow.glb");
+    check_model("assets/quaternius-cow/Cow.glb", 1.0, "AnimalArmature|Walk");
 }
 
 int main(void)

@@ -12,37 +12,9 @@
 
 #include "crowdbake_pal.h"
 #include "crowdbake/stride.h"
+#include "reference_soles.h"
 
 #define TMP TEST_TMP "/sockets_contacts"
-enum { MAX_FRAMES = 128 };
-
-/* The joint's reference matrix at each frame of a clip (times from the clip's start). */
-static uint32_t reference_matrices(const char *csv, const char *clip, uint32_t joint, double *t, double (*mats)[16])
-{
-    FILE *f = fopen(csv, "r");
-    assert_non_null(f);
-    char line[4096], quoted[160];
-    snprintf(quoted, sizeof quoted, ",\"%.140s\",", clip);
-    uint32_t n = 0;
-    double t0 = 0;
-    while (fgets(line, sizeof line, f)) {
-        char *at = strstr(line, quoted);
-        if (line[0] == '#' || !at) continue;
-        unsigned frame, frames, skin, j;
-        double time, m[16];
-        if (sscanf(at + strlen(quoted), "%u,%u,%lf,%u,%u,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &frame,
-                   &frames, &time, &skin, &j, &m[0], &m[1], &m[2], &m[3], &m[4], &m[5], &m[6], &m[7], &m[8], &m[9], &m[10], &m[11],
-                   &m[12], &m[13], &m[14], &m[15]) != 21 || j != joint || frame >= MAX_FRAMES)
-            continue;
-        if (frame == 0) t0 = time;
-        t[frame] = time - t0;
-        memcpy(mats[frame], m, sizeof m);
-        if (frame + 1 > n) n = frame + 1;
-    }
-    fclose(f);
-    return n;
-}
-
 /* The point whose image under the affine matrix a (column-major) is q: the joint's bind position
  * for q = 0 and a its inverse bind matrix. */
 static void solve_affine(const double *a, const double q[3], double out[3])
@@ -110,6 +82,8 @@ static void test_sockets_follow_their_joints(void **state)
     /* At the rows the encoding's error is all there is: the bake's max_error, with room for a tip off the mesh. */
     double worst = 0, bound = 2 * pal.header.max_error + 1e-4 * pal.header.model_height;
     uint32_t clips_compared = 0;
+    ref_clip ref = {.m = calloc(REF_MAX_FRAMES, sizeof *ref.m)}; /* every joint's reference matrices over a clip */
+    assert_non_null(ref.m);
     for (uint32_t i = 0; i < n; ++i) {
         /* The reference: the node's own translation under its parent joint, J(t) IBM^-1 T. */
         const cb_node *node = NULL;
@@ -124,16 +98,16 @@ static void test_sockets_follow_their_joints(void **state)
             cbpal_get_clip(&pal, c, &clip);
             /* A loop closed over its key span (Gallop_Jump) moves off the source by what it reports. */
             double closing = loop_correction(m, clip.name) / 1000 * pal.header.model_height;
-            double t[MAX_FRAMES], mats[MAX_FRAMES][16];
-            uint32_t frames = reference_matrices(csv, clip.name, sockets[i].bone, t, mats), at_rows = 0;
-            for (uint32_t f = 0; f < frames; ++f) {
+            ref_read_clip(csv, clip.name, &ref);
+            uint32_t at_rows = 0;
+            for (uint32_t f = 0; f < ref.frames; ++f) {
                 /* The reference's frames that are rows (a loop given a wrap interval, or baked at 29.76 fps, has its
                  * frames between rows, in the blend). */
-                if (fabs(t[f] * clip.fps - round(t[f] * clip.fps)) > 1e-3) continue;
+                if (fabs(ref.t[f] * clip.fps - round(ref.t[f] * clip.fps)) > 1e-3) continue;
                 ++at_rows;
                 float b[16];
-                assert_int_equal(cbpal_bone_matrix(&pal, c, t[f], sockets[i].bone, b), 0);
-                const double *o = sockets[i].origin, *r = mats[f];
+                assert_int_equal(cbpal_bone_matrix(&pal, c, ref.t[f], sockets[i].bone, b), 0);
+                const double *o = sockets[i].origin, *r = ref.m[f][sockets[i].bone];
                 double d2 = 0;
                 for (int k = 0; k < 3; ++k) {
                     double ours = b[12 + k] + b[k] * o[0] + b[4 + k] * o[1] + b[8 + k] * o[2];
@@ -142,7 +116,7 @@ static void test_sockets_follow_their_joints(void **state)
                 }
                 worst = fmax(worst, sqrt(d2) - closing);
             }
-            clips_compared += i == 0 && at_rows >= frames / 2;
+            clips_compared += i == 0 && at_rows >= ref.frames / 2;
         }
     }
     printf("  10 sockets, the reference frames at rows of %u clips: worst %.3g (%.3g mm/m; beyond a closed loop's reported "
@@ -150,6 +124,7 @@ static void test_sockets_follow_their_joints(void **state)
            1000 * worst / pal.header.model_height, bound);
     assert_true(clips_compared >= 8);
     assert_true(worst <= bound);
+    free(ref.m);
     cb_model_free(m);
     cbpal_close(&pal);
 }

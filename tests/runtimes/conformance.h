@@ -29,6 +29,7 @@
 #include "crowdbake_pal.h"
 #include "crowdbake/pal_view.h"
 #include "crowdbake/runtime.h"
+#include "runtimes/shader_source.h"
 
 #define CONF_TIMES 2
 #define CONF_PER_CLIP 7 /* instances per clip and time */
@@ -282,6 +283,34 @@ static inline double conformance_compare(const conformance *c, const conf_case *
     free(want);
     *units = worst;
     return worst / (1e-5 * fmax(1.0, c->palettes[k->palette].view.model_height));
+}
+
+/* What a shader runtime's GPU skins for a case from `source` (its library, broken where the case
+ * says): conf_positions(c, k) positions, 3 floats each, for the caller to free. */
+typedef float *(*conf_gpu_case)(const conformance *c, const conf_case *k, const char *source, void *ctx);
+
+/* Every case a shader runtime can express (all but the bone pass's) through `gpu`, from the
+ * library `lib` (a broken case's line replaced at its marker, which the GLSL and the HLSL share):
+ * each within the tolerance, each broken one off by more than 10 times it; at least 15 run and 4
+ * broken ones caught. */
+static inline void conformance_check_shader(const conformance *c, const char *lib, conf_gpu_case gpu, void *ctx)
+{
+    int ran = 0, caught = 0;
+    for (int i = 0; i < c->case_count; ++i) {
+        const conf_case *k = &c->cases[i];
+        if (k->bone_pass) continue;
+        char *broken = k->glsl_marker ? break_shader(lib, k->glsl_marker, k->glsl_line) : NULL;
+        float *got = gpu(c, k, broken ? broken : lib, ctx);
+        double units, ratio = conformance_compare(c, k, got, &units);
+        printf("  %-26s %7zu positions: GPU vs C runtime %.2g (%.2f of the tolerance)\n", k->name, conf_positions(c, k), units,
+               ratio);
+        if (k->broken) assert_true(ratio > 10), ++caught;
+        else assert_true(ratio <= 1);
+        ++ran;
+        free(got);
+        free(broken);
+    }
+    assert_true(ran >= 15 && caught >= 4);
 }
 
 static inline void conformance_free(conformance *c)

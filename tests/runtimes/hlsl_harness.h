@@ -237,4 +237,20 @@ static inline vkc_resource upload_vertices(vkc_context *c, const cb_primitive *p
     "struct cb_test_vertex { float4 position; float4 normal; int4 joints; float4 weights; };\n"                       \
     "struct cb_test_sample { float4 inst; float4 from_inst; float4 fade_time_dt_mode; };\n"
 
+/* The globals form's declarations, bound where the harness puts them (the library declares them
+ * itself unless told, with no bindings: Unity assigns its own): the palette's defines, CB_U16_UNORM
+ * where `unorm` says, then `extra`. */
+static inline void hlsl_globals_prefix(char *out, size_t size, const cb_palette *p, bool unorm, const char *extra)
+{
+    snprintf(out, size,
+             "#define %s\n#define %s\n%s%s%s"
+             "#define CB_TEXTURES_DECLARED\n#define CB_HEADER_DECLARED\n"
+             "[[vk::binding(0)]] Texture2D<%s> cb_palette;\n"
+             "[[vk::binding(1)]] Texture2D<float4> cb_bind_positions;\n"
+             "[[vk::binding(2)]] cbuffer cb_test_header { " HEADER_CBUFFER " };\n",
+             layout_define[p->layout], precision_define[p->precision],
+             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "", unorm ? "#define CB_U16_UNORM\n" : "", extra,
+             p->precision == CB_PRECISION_U16 && !unorm ? "uint4" : "float4");
+}
+
 #endif

@@ -97,30 +97,23 @@ static float *gpu_case(const conformance *c, const conf_case *k, GLuint prog)
     return result;
 }
 
+/* The GLSL library's cross-fade on Mesa, its output captured by transform feedback. */
+static float *gl_case(const conformance *c, const conf_case *k, const char *source, void *ctx)
+{
+    (void)ctx;
+    GLuint prog = compile_crossfade(&c->palettes[k->palette].view, source);
+    float *got = gpu_case(c, k, prog);
+    glDeleteProgram(prog);
+    return got;
+}
+
 static void test_conformance_cases(void **state)
 {
     (void)state;
     conformance conf;
     conformance_make(&conf, TMP);
     char *lib = read_whole_file(GLSL_PATH, NULL);
-    int ran = 0, caught = 0;
-    for (int i = 0; i < conf.case_count; ++i) {
-        const conf_case *k = &conf.cases[i];
-        if (k->bone_pass) continue;
-        char *source = k->glsl_marker ? break_shader(lib, k->glsl_marker, k->glsl_line) : lib;
-        GLuint prog = compile_crossfade(&conf.palettes[k->palette].view, source);
-        float *got = gpu_case(&conf, k, prog);
-        double units, ratio = conformance_compare(&conf, k, got, &units);
-        printf("  %-26s %7zu positions: GPU vs C runtime %.2g (%.2f of the tolerance)\n", k->name,
-               conf_positions(&conf, k), units, ratio);
-        if (k->broken) assert_true(ratio > 10), ++caught;
-        else assert_true(ratio <= 1);
-        ++ran;
-        free(got);
-        glDeleteProgram(prog);
-        if (source != lib) free(source);
-    }
-    assert_true(ran >= 15 && caught >= 4);
+    conformance_check_shader(&conf, lib, gl_case, NULL);
     free(lib);
     conformance_free(&conf);
 }

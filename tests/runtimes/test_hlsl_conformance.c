@@ -14,32 +14,16 @@
 #define TMP TEST_TMP "/hlsl-conformance"
 #define LIBRARY "runtimes/hlsl/crowdbake_palette.hlsl"
 
-static vkc_context vk;
-static bool have_device;
-
-static int setup(void **state)
-{
-    (void)state;
-    have_device = vkc_open_for_tests(&vk, "the HLSL runtime");
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    if (have_device) vkc_free_context(&vk);
-    return 0;
-}
+VKC_TEST_DEVICE("the HLSL runtime")
 
 /* The globals form, bound where the harness puts them; one invocation per (instance, vertex). */
 static char *case_source(const cb_palette *p, const char *library)
 {
     static char src[1 << 17];
-    snprintf(src, sizeof src,
-             "#define %s\n#define %s\n%s#define CB_TEXTURES_DECLARED\n#define CB_HEADER_DECLARED\n"
-             "[[vk::binding(0)]] Texture2D<%s> cb_palette;\n"
-             "[[vk::binding(1)]] Texture2D<float4> cb_bind_positions;\n"
-             "[[vk::binding(2)]] cbuffer cb_test_header { " HEADER_CBUFFER " };\n%s\n" HARNESS_BUFFERS
+    hlsl_globals_prefix(src, sizeof src, p, false, "");
+    size_t used = strlen(src);
+    snprintf(src + used, sizeof src - used,
+             "%s\n" HARNESS_BUFFERS
              "struct cb_conf_instance { float4 clip; float4 from_clip; float4 fade_time; };\n"
              "[[vk::binding(3)]] StructuredBuffer<cb_test_vertex> cb_vertices;\n"
              "[[vk::binding(4)]] StructuredBuffer<cb_conf_instance> cb_instances;\n"
@@ -56,15 +40,14 @@ static char *case_source(const cb_palette *p, const char *library)
              "    cb_skinned[id.x] = float4(cb_skin_position_crossfade(v.position.xyz, v.joints, v.weights, k.from_clip,\n"
              "                                                          k.clip, fade, time), 1.0);\n"
              "}\n",
-             layout_define[p->layout], precision_define[p->precision],
-             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "",
-             p->precision == CB_PRECISION_U16 ? "uint4" : "float4", library);
+             library);
     return src;
 }
 
 /* Every instance of every group of a case: the skinned positions, in the expected file's order. */
-static float *gpu_case(const conformance *c, const conf_case *k, const char *library)
+static float *gpu_case(const conformance *c, const conf_case *k, const char *library, void *ctx)
 {
+    (void)ctx;
     const conf_palette *p = &c->palettes[k->palette];
     const cb_primitive *prim = &p->model->primitives[0];
     size_t verts = prim->vertex_count, total = conf_positions(c, k), n = total / verts, at = 0;
@@ -108,22 +91,7 @@ static void test_conformance_cases(void **state)
     conformance conf;
     conformance_make(&conf, TMP);
     char *lib = read_whole_file(LIBRARY, NULL);
-    int ran = 0, caught = 0;
-    for (int i = 0; i < conf.case_count; ++i) {
-        const conf_case *k = &conf.cases[i];
-        if (k->bone_pass) continue;
-        char *source = k->glsl_marker ? break_shader(lib, k->glsl_marker, k->glsl_line) : lib;
-        float *got = gpu_case(&conf, k, source);
-        double units, ratio = conformance_compare(&conf, k, got, &units);
-        printf("  %-26s %7zu positions: GPU vs C runtime %.2g (%.2f of the tolerance)\n", k->name, conf_positions(&conf, k),
-               units, ratio);
-        if (k->broken) assert_true(ratio > 10), ++caught;
-        else assert_true(ratio <= 1);
-        ++ran;
-        free(got);
-        if (source != lib) free(source);
-    }
-    assert_true(ran >= 15 && caught >= 4);
+    conformance_check_shader(&conf, lib, gpu_case, NULL);
     free(lib);
     conformance_free(&conf);
 }

@@ -11,42 +11,12 @@
 
 #define LIBRARY "runtimes/hlsl/crowdbake_palette.hlsl"
 
-static vkc_context vk;
-static bool have_device;
-
-static int setup(void **state)
-{
-    (void)state;
-    have_device = vkc_open_for_tests(&vk, "the HLSL runtime");
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    if (have_device) vkc_free_context(&vk);
-    return 0;
-}
+VKC_TEST_DEVICE("the HLSL runtime")
 
 #define REQUIRE_DEVICE()                                                                                               \
     do {                                                                                                               \
         if (!have_device) skip();                                                                                      \
     } while (0)
-
-/* The globals form's declarations, bound where the harness puts them (the library declares them
- * itself unless told, with no bindings: Unity assigns its own). */
-static void globals_prefix(char *out, size_t size, const cb_palette *p, bool unorm, const char *extra)
-{
-    snprintf(out, size,
-             "#define %s\n#define %s\n%s%s%s"
-             "#define CB_TEXTURES_DECLARED\n#define CB_HEADER_DECLARED\n"
-             "[[vk::binding(0)]] Texture2D<%s> cb_palette;\n"
-             "[[vk::binding(1)]] Texture2D<float4> cb_bind_positions;\n"
-             "[[vk::binding(2)]] cbuffer cb_test_header { " HEADER_CBUFFER " };\n",
-             layout_define[p->layout], precision_define[p->precision],
-             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "", unorm ? "#define CB_U16_UNORM\n" : "", extra,
-             p->precision == CB_PRECISION_U16 && !unorm ? "uint4" : "float4");
-}
 
 /* Calls every skinning function of the globals form, as the sample's mode says. */
 static const char *skin_main =
@@ -128,7 +98,7 @@ static double run_case(const char *model, cb_layout l, cb_precision pr, bool fit
     sample samples[64];
     uint32_t n = make_samples(&f.palette, samples, 64);
     static char src[1 << 17];
-    globals_prefix(src, sizeof src, &f.palette, v.unorm, "");
+    hlsl_globals_prefix(src, sizeof src, &f.palette, v.unorm, "");
     size_t used = strlen(src);
     snprintf(src + used, sizeof src - used, "%s\n%s", library, skin_main);
     snprintf(name, sizeof name, "hlsl_%s_%s%s", cb_layout_name(l), cb_precision_name(pr), v.unorm ? "_unorm" : "");
@@ -264,12 +234,12 @@ static float *gpu_bone_pass(const cb_palette *p, const cb_primitive *prim, const
     static char src[2][1 << 17];
     char extra[512];
     snprintf(extra, sizeof extra, "static const float cb_bone_rows = %d;\n", BONE_ROWS);
-    globals_prefix(src[0], sizeof src[0], p, false, extra);
+    hlsl_globals_prefix(src[0], sizeof src[0], p, false, extra);
     size_t used = strlen(src[0]);
     snprintf(src[0] + used, sizeof src[0] - used, "%s\n%s", library, bone_pass_main);
     strcat(extra, "#define CB_BONE_TEXTURE\n[[vk::binding(3)]] Texture2D<float4> cb_bones0;\n"
                   "[[vk::binding(4)]] Texture2D<float4> cb_bones1;\n[[vk::binding(5)]] Texture2D<float4> cb_bones2;\n");
-    globals_prefix(src[1], sizeof src[1], p, false, extra);
+    hlsl_globals_prefix(src[1], sizeof src[1], p, false, extra);
     used = strlen(src[1]);
     snprintf(src[1] + used, sizeof src[1] - used, "%s\n%s", library, bone_skin_main);
     size_t bytes[2], verts = prim->vertex_count;

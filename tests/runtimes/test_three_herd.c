@@ -14,34 +14,6 @@
 
 #define TMP TEST_TMP "/three_herd"
 
-/* The number after "key": inside the object that follows "section": in the check's JSON. */
-static double number_in(const char *out, const char *section, const char *key)
-{
-    char pattern[96];
-    snprintf(pattern, sizeof pattern, "\"%s\":", section);
-    const char *at = strstr(out, pattern);
-    if (!at) fail_msg("no \"%s\" in the check's output", section);
-    snprintf(pattern, sizeof pattern, "\"%s\":", key);
-    if (!(at = strstr(at, pattern))) fail_msg("no \"%s\" after \"%s\" in the check's output", key, section);
-    return atof(at + strlen(pattern));
-}
-
-/* The number after the next "key": from `at`. */
-static double number_after(const char *at, const char *key)
-{
-    char pattern[96];
-    snprintf(pattern, sizeof pattern, "\"%s\":", key);
-    if (!(at = strstr(at, pattern))) fail_msg("no \"%s\" in the rest of the check's output", key);
-    return atof(at + strlen(pattern));
-}
-
-static void link_asset(const char *path, const char *name)
-{
-    char cmd[3 * PATH_MAX];
-    snprintf(cmd, sizeof cmd, "ln -s \"$(realpath %s)\" " TMP "/%s.glb", path, name);
-    assert_int_equal(system(cmd), 0);
-}
-
 static void bake(const char *name, const char *more)
 {
     char cmd[2 * PATH_MAX];
@@ -59,9 +31,9 @@ static int setup(void **state)
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
     shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
     sample_path(fish, sizeof fish, "fish");
-    link_asset(fox, "fox");
-    link_asset(cow, "cow");
-    link_asset(fish, "fish");
+    link_model(fox, TMP, "fox");
+    link_model(cow, TMP, "cow");
+    link_model(fish, TMP, "fish");
     bake("fox", "");                          /* root motion kept: three plays the clip with its travel */
     bake("cow", "--root-motion in-place");    /* as a herd the game moves */
     bake("fish", "--root-motion in-place");
@@ -83,15 +55,15 @@ static void test_shadows_move_with_the_animation(void **state)
         assert_non_null(at = strstr(out, key));
         for (int i = 0; i < 2; ++i) {
             assert_non_null(at = strstr(at + 1, "\"shadow_pixels\":"));
-            double pixels = number_after(at, "shadow_pixels"), herd = number_after(at, "herd");
-            double unskinned = number_after(at, "unskinned");
+            double pixels = json_number_after(at, "shadow_pixels"), herd = json_number_after(at, "herd");
+            double unskinned = json_number_after(at, "unskinned");
             printf("  %s light, time %d: %.0f shadow pixels; herd vs three.js skinning %.2f%%, unskinned depth %.0f%%\n",
                    light, i, pixels, 100 * herd, 100 * unskinned);
             assert_true(pixels > 300);
             assert_true(herd < 0.02);
             assert_true(unskinned > 0.1);
         }
-        double moved = number_after(at, "between_times");
+        double moved = json_number_after(at, "between_times");
         printf("  %s light: the herd's shadow differs on %.0f%% of its pixels between the two times\n", light, 100 * moved);
         assert_true(moved > 0.1);
     }
@@ -100,19 +72,19 @@ static void test_shadows_move_with_the_animation(void **state)
 static void test_culling_uses_the_animated_bounds(void **state)
 {
     (void)state;
-    double in_view = number_in(out, "culling", "in_view"), behind = number_in(out, "culling", "behind"),
-           moved = number_in(out, "culling", "moved_into_view");
+    double in_view = json_number_in(out, "culling", "in_view"), behind = json_number_in(out, "culling", "behind"),
+           moved = json_number_in(out, "culling", "moved_into_view");
     printf("  draw calls: in view %.0f, behind the camera %.0f, an instance moved back into view %.0f\n", in_view, behind,
            moved);
     assert_true(in_view == 1 && behind == 0 && moved == 1);
     assert_non_null(strstr(out, "\"frustum_culled\":true"));
     for (int m = 0; m < 2; ++m) {
         const char *name = m ? "fish" : "cow";
-        double box = number_in(out, name, "worst_outside_box"), sphere = number_in(out, name, "worst_outside_sphere");
-        double bind = number_in(out, name, "outside_bind_pose_box");
+        double box = json_number_in(out, name, "worst_outside_box"), sphere = json_number_in(out, name, "worst_outside_sphere");
+        double bind = json_number_in(out, name, "outside_bind_pose_box");
         printf("  %s: %.0f vertices x %.0f rows and mid-rows x 3 placements; the vertex nearest the bounds lies %.2f model "
                "heights inside the box, %.2f inside the sphere; the geometry's own box misses %.0f\n", name,
-               number_in(out, name, "vertices"), number_in(out, name, "instances"), -box, -sphere, bind);
+               json_number_in(out, name, "vertices"), json_number_in(out, name, "instances"), -box, -sphere, bind);
         assert_true(box <= 0 && sphere <= 0);
         assert_true(bind > 1000); /* what three would cull with, without the clip table */
     }
@@ -121,9 +93,9 @@ static void test_culling_uses_the_animated_bounds(void **state)
 static void test_tints_and_scale_per_instance(void **state)
 {
     (void)state;
-    double red = number_in(out, "red", "pixels"), red_left = number_in(out, "red", "left");
-    double blue = number_in(out, "blue", "pixels"), blue_left = number_in(out, "blue", "left");
-    double red_h = number_in(out, "red", "height"), blue_h = number_in(out, "blue", "height");
+    double red = json_number_in(out, "red", "pixels"), red_left = json_number_in(out, "red", "left");
+    double blue = json_number_in(out, "blue", "pixels"), blue_left = json_number_in(out, "blue", "left");
+    double red_h = json_number_in(out, "red", "height"), blue_h = json_number_in(out, "blue", "height");
     printf("  red instance %.0f pixels (%.0f on its side's left), blue %.0f (%.0f); heights %.0f and %.0f px (scale 2)\n",
            red, red_left, blue, blue_left, red_h, blue_h);
     assert_true(red > 20 && red_left == red && blue > 20 && blue_left == 0);
@@ -133,11 +105,12 @@ static void test_tints_and_scale_per_instance(void **state)
         char got[32], want[32];
         snprintf(got, sizeof got, "rate_scale_%s", scales[i]);
         snprintf(want, sizeof want, "expected_rate_scale_%s", scales[i]);
-        double g = number_in(out, "variety", got), w = number_in(out, "variety", want);
+        double g = json_number_in(out, "variety", got), w = json_number_in(out, "variety", want);
         printf("  scale %s at 80 units/s: %.4g rows/s (fps x speed / (scale x speed reference) = %.4g)\n", scales[i], g, w);
         assert_true(fabs(g - w) <= 1e-5 * w);
     }
-    double before = number_in(out, "variety", "frame_before_rescale"), after = number_in(out, "variety", "frame_after_rescale");
+    double before = json_number_in(out, "variety", "frame_before_rescale");
+    double after = json_number_in(out, "variety", "frame_after_rescale");
     printf("  grown from scale 2 to 4 while walking: frame %.4f before, %.4f after\n", before, after);
     assert_true(fabs(before - after) < 1e-3);
 }
@@ -145,8 +118,8 @@ static void test_tints_and_scale_per_instance(void **state)
 static void test_motion_vectors_are_the_finite_difference(void **state)
 {
     (void)state;
-    double herd = number_in(out, "motion", "error"), px = number_in(out, "motion", "mean_velocity_px");
-    double none = number_in(out, "no_previous_frame", "error"), wrong = number_in(out, "wrong_direction", "error");
+    double herd = json_number_in(out, "motion", "error"), px = json_number_in(out, "motion", "mean_velocity_px");
+    double none = json_number_in(out, "no_previous_frame", "error"), wrong = json_number_in(out, "wrong_direction", "error");
     printf("  velocity (mean %.2f px a frame) vs three.js skinning's finite difference: error %.2f%% of it; previous time "
            "= now %.0f%%, t + dt %.0f%%\n", px, 100 * herd, 100 * none, 100 * wrong);
     assert_true(px > 0.5);

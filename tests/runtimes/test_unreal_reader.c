@@ -47,6 +47,33 @@ static void test_reader_and_herd_equal_the_c_reader(void **state)
     }
 }
 
+/* The herd component's footsteps and travel, outside Unreal: a Cow catalog with a walk, a gallop
+ * (per-row travel) and a one-shot; the roster as Python's json reads it; the herd logic at several
+ * speeds and across cross-fades. Each footstep falls on a contact of its state's clip, in order, and
+ * each travel offset is the C reader's (tests/runtimes/unreal/reader_check.cpp `herd`). */
+static void test_herd_footsteps_and_travel(void **state)
+{
+    (void)state;
+    static char log[8192];
+    char cow[1024], cmd[4096], toml[2048];
+    build_reader_check();
+    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
+    char *abs_cow = realpath(cow, NULL);
+    assert_non_null(abs_cow);
+    snprintf(toml, sizeof toml,
+             "[bake]\nout_dir = \"roster\"\n[animal.cow]\nmodel = \"%s\"\n"
+             "states = { idle = [\"idle\"], wander = [\"walk\"], flee = [\"gallop\"], kick = [\"Attack_Kick\"] }\n", abs_cow);
+    free(abs_cow);
+    run_or_fail("mkdir -p " TMP, log, sizeof log);
+    write_text(TMP "/cow.toml", toml);
+    snprintf(cmd, sizeof cmd,
+             "%s bake %s/cow.toml -q 2>&1 && python3 tests/runtimes/unity/roster_lines.py %s/roster/roster.json > %s/roster.txt && "
+             "%s/reader_check herd %s/roster/cow.pal %s/roster.txt cow 2>&1",
+             crowdbake_exe(), TMP, TMP, TMP, TMP, TMP, TMP);
+    run_or_fail(cmd, log, sizeof log);
+    printf("  %s", strstr(log, "herd of") ? strstr(log, "herd of") : log);
+}
+
 /* A damaged file: the factory's message is the C reader's, with the file's name. */
 static void test_bad_file_message(void **state)
 {
@@ -98,6 +125,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reader_and_herd_equal_the_c_reader),
+        cmocka_unit_test(test_herd_footsteps_and_travel),
         cmocka_unit_test(test_bad_file_message),
         cmocka_unit_test(test_vertex_ids_and_skin_texture),
     };

@@ -18,22 +18,7 @@
 #define SHADERS "runtimes/unreal/Crowdbake/Shaders"
 #define SKIN_WIDTH 128 /* vertices a row of the skin texture: the test's mesh wraps */
 
-static vkc_context vk;
-static bool have_device;
-
-static int setup(void **state)
-{
-    (void)state;
-    have_device = vkc_open_for_tests(&vk, "the Unreal shader");
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    if (have_device) vkc_free_context(&vk);
-    return 0;
-}
+VKC_TEST_DEVICE("the Unreal shader")
 
 static void test_the_plugin_carries_the_hlsl_runtime_unchanged(void **state)
 {

@@ -113,6 +113,25 @@ static inline bool vkc_open_for_tests(vkc_context *c, const char *what)
     return opened;
 }
 
+/* A test program's device, shared by its cases: defines `vk` and `have_device`, and the group's
+ * `setup` (vkc_open_for_tests: where none opens, the cases skip) and `teardown` for
+ * cmocka_run_group_tests_name. `what` names what the program runs, for the line saying why not. */
+#define VKC_TEST_DEVICE(what)                                                                                          \
+    static vkc_context vk;                                                                                             \
+    static bool have_device;                                                                                           \
+    static int setup(void **state)                                                                                     \
+    {                                                                                                                  \
+        (void)state;                                                                                                   \
+        have_device = vkc_open_for_tests(&vk, what);                                                                   \
+        return 0;                                                                                                      \
+    }                                                                                                                  \
+    static int teardown(void **state)                                                                                  \
+    {                                                                                                                  \
+        (void)state;                                                                                                   \
+        if (have_device) vkc_free_context(&vk);                                                                        \
+        return 0;                                                                                                      \
+    }
+
 static inline VkDeviceMemory vkc_allocate(vkc_context *c, VkMemoryRequirements req)
 {
     VkMemoryPropertyFlags want = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;

@@ -23,6 +23,13 @@ export const RUNTIMES = path.join(REPO, 'runtimes');
 export const THREE_PAGE = `<!DOCTYPE html><script type="importmap">{ "imports": { "three": "/web/node_modules/three/build/three.module.js",
   "three/addons/": "/web/node_modules/three/examples/jsm/" } }</script>`;
 
+// The routes of a check that draws the models of a folder: the runtimes at '/', DIR at '/check/' and
+// this folder at '/tests/', where the page imports page_draw.mjs (the drawing and pixel compares the
+// checks share).
+export function checkRoutes(dir) {
+    return { '/': RUNTIMES, '/check/': path.resolve(dir), '/tests/': path.dirname(fileURLToPath(import.meta.url)) };
+}
+
 const TYPES = {
     '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.json': 'application/json',
     '.glsl': 'text/plain', '.png': 'image/png', '.wasm': 'application/wasm', '.css': 'text/css',

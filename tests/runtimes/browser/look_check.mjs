@@ -11,12 +11,12 @@
 // DIR holds NAME.glb and NAME.pal (root motion kept, as three plays it). TIME is moved to the nearest
 // baked row, so that what differs is the look and not the blend of two rows. Prints JSON.
 import path from 'node:path';
-import { withPage, RUNTIMES, THREE_PAGE } from './driver.mjs';
+import { withPage, checkRoutes, THREE_PAGE } from './driver.mjs';
 
 const [dir, ...cases] = process.argv.slice(2);
 const tolerance = 12;
 
-const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '/__blank.html', async (p) => {
+const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
     await p.setContent(THREE_PAGE);
     const r = await p.evaluate(async ({ cases, tolerance }) => {
         const THREE = await import('three');
@@ -25,32 +25,9 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
         const { loadPaletteGLSL } = await import('/web/crowdbake_crowd.mjs');
         const { CrowdbakeHerd } = await import('/web/crowdbake_three.mjs');
         const glsl = await loadPaletteGLSL();
-        const size = 320, renderer = new THREE.WebGLRenderer({ antialias: false });
-        renderer.setSize(size, size);
-        const target = new THREE.WebGLRenderTarget(size, size);
-        const image = (object, camera) => {
-            const scene = new THREE.Scene();
-            scene.add(new THREE.HemisphereLight(0xffffff, 0x404040, 1.5));
-            const sun = new THREE.DirectionalLight(0xffffff, 2.5);
-            sun.position.set(1, 2, 1.5);
-            scene.add(sun, object);
-            renderer.setRenderTarget(target);
-            renderer.setClearColor(0x000000, 0);
-            renderer.render(scene, camera);
-            scene.remove(object);
-            const px = new Uint8Array(size * size * 4);
-            renderer.readRenderTargetPixels(target, 0, 0, size, size, px);
-            return px;
-        };
-        const compare = (a, b) => { // covered: drawn in either; differ: any channel (or coverage) off by > tolerance
-            let covered = 0, differ = 0;
-            for (let i = 0; i < a.length; i += 4) {
-                if (!a[i + 3] && !b[i + 3]) continue;
-                covered++;
-                differ += [0, 1, 2, 3].some((k) => Math.abs(a[i + k] - b[i + k]) > tolerance);
-            }
-            return { covered, share: differ / Math.max(covered, 1) };
-        };
+        const { offscreen, clipBox, cameraOn, compareColours } = await import('/tests/page_draw.mjs');
+        const { renderer, image } = offscreen(320);
+        const compare = (a, b) => compareColours(a, b, tolerance);
         const distinct = (px) => { // colours seen (quantized to 4 bits a channel): a one-colour herd has few
             const seen = new Set();
             for (let i = 0; i < px.length; i += 4) if (px[i + 3]) seen.add((px[i] >> 4) << 8 | (px[i + 1] >> 4) << 4 | px[i + 2] >> 4);
@@ -75,11 +52,8 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
             };
             const herd = herdOf(undefined);
             const beige = herdOf(new THREE.MeshLambertMaterial({ color: 0xd8c8a8 })); // the old look
-            const lo = new THREE.Vector3(...c.bounds_min), hi = new THREE.Vector3(...c.bounds_max);
-            const center = lo.clone().add(hi).multiplyScalar(0.5), extent = hi.clone().sub(lo).length();
-            const camera = new THREE.PerspectiveCamera(30, 1, extent * 0.05, extent * 20);
-            camera.position.copy(center).add(new THREE.Vector3(extent * 1.3, extent * 0.4, extent * 1.1));
-            camera.lookAt(center);
+            const { center, extent } = clipBox(c);
+            const camera = cameraOn(center, extent);
             mixer.setTime(t);
             gltf.scene.updateMatrixWorld(true);
             const reference = image(gltf.scene, camera), drawn = image(herd, camera);

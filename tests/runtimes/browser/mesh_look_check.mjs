@@ -13,44 +13,19 @@
 // DIR holds NAME.glb (the source; or SOURCE, a path under DIR) and NAME.mesh.glb (`crowdbake mesh`
 // of it). Prints JSON.
 import path from 'node:path';
-import { withPage, RUNTIMES } from './driver.mjs';
+import { withPage, checkRoutes, THREE_PAGE } from './driver.mjs';
 
 const [dir, ...names] = process.argv.slice(2);
-const page = `<!DOCTYPE html><script type="importmap">{ "imports": { "three": "/web/node_modules/three/build/three.module.js",
-  "three/addons/": "/web/node_modules/three/examples/jsm/" } }</script>`;
 const tolerance = 12;
 
-const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '/__blank.html', async (p) => {
-    await p.setContent(page);
+const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
+    await p.setContent(THREE_PAGE);
     const r = await p.evaluate(async ({ names, tolerance }) => {
         const THREE = await import('three');
         const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
-        const size = 320, renderer = new THREE.WebGLRenderer({ antialias: false });
-        renderer.setSize(size, size);
-        const target = new THREE.WebGLRenderTarget(size, size);
-        const image = (object, camera) => {
-            const scene = new THREE.Scene();
-            scene.add(new THREE.HemisphereLight(0xffffff, 0x404040, 1.5));
-            const sun = new THREE.DirectionalLight(0xffffff, 2.5);
-            sun.position.set(1, 2, 1.5);
-            scene.add(sun, object);
-            renderer.setRenderTarget(target);
-            renderer.setClearColor(0x000000, 0);
-            renderer.render(scene, camera);
-            scene.remove(object);
-            const px = new Uint8Array(size * size * 4);
-            renderer.readRenderTargetPixels(target, 0, 0, size, size, px);
-            return px;
-        };
-        const compare = (a, b) => {
-            let covered = 0, differ = 0;
-            for (let i = 0; i < a.length; i += 4) {
-                if (!a[i + 3] && !b[i + 3]) continue;
-                covered++;
-                differ += [0, 1, 2, 3].some((k) => Math.abs(a[i + k] - b[i + k]) > tolerance);
-            }
-            return { covered, share: differ / Math.max(covered, 1) };
-        };
+        const { offscreen, cameraOn, compareColours } = await import('/tests/page_draw.mjs');
+        const { image } = offscreen(320);
+        const compare = (a, b) => compareColours(a, b, tolerance);
         const pixelsHash = async (img) => { // the decoded texture, as the page sees it
             const canvas = new OffscreenCanvas(img.width, img.height), g = canvas.getContext('2d');
             g.drawImage(img, 0, 0);
@@ -99,9 +74,7 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
             const reference = plain(source), drawn = plain(mesh), bare = plain(mesh, new THREE.MeshStandardMaterial());
             const box = new THREE.Box3().setFromObject(reference), center = box.getCenter(new THREE.Vector3());
             const extent = box.getSize(new THREE.Vector3()).length();
-            const camera = new THREE.PerspectiveCamera(30, 1, extent * 0.05, extent * 20);
-            camera.position.copy(center).add(new THREE.Vector3(extent * 1.3, extent * 0.4, extent * 1.1));
-            camera.lookAt(center);
+            const camera = cameraOn(center, extent);
             const ref = image(reference, camera);
             out[name] = {
                 primitives: rows.length, materials_same: rows.filter((r) => r.same).length,

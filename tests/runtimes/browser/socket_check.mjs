@@ -12,12 +12,12 @@
 //
 // DIR holds model.glb, model.pal (root motion kept, as three plays it) and info.json. Prints JSON.
 import path from 'node:path';
-import { withPage, RUNTIMES, THREE_PAGE } from './driver.mjs';
+import { withPage, checkRoutes, THREE_PAGE } from './driver.mjs';
 
 const [dir, clip, timesText] = process.argv.slice(2);
 const times = timesText.split(',').map(Number);
 
-const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '/__blank.html', async (p) => {
+const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
     await p.setContent(THREE_PAGE);
     const r = await p.evaluate(async ({ clip, times }) => {
         const THREE = await import('three');
@@ -28,9 +28,8 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
         const pal = readPal(new Uint8Array(await (await fetch('/check/model.pal')).arrayBuffer()));
         const sockets = (await (await fetch('/check/info.json')).json()).sockets;
         const gltf = await new GLTFLoader().loadAsync('/check/model.glb');
-        const size = 512, renderer = new THREE.WebGLRenderer({ antialias: false });
-        renderer.setSize(size, size);
-        const target = new THREE.WebGLRenderTarget(size, size);
+        const { offscreen, clipBox, cameraOn, compareMasks } = await import('/tests/page_draw.mjs');
+        const view = offscreen(512);
         const mixer = new THREE.AnimationMixer(gltf.scene);
         mixer.clipAction(gltf.animations.find((a) => a.name === clip)).play();
         const full = meshFromGLTF(gltf);
@@ -58,24 +57,10 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
             a.needsUpdate = true;
         };
         const c = pal.clips.find((k) => k.name === clip);
-        const lo = new THREE.Vector3(...c.bounds_min), hi = new THREE.Vector3(...c.bounds_max);
-        const center = lo.clone().add(hi).multiplyScalar(0.5), extent = hi.clone().sub(lo).length();
-        const camera = new THREE.PerspectiveCamera(35, 1, extent * 0.05, extent * 20);
-        camera.position.copy(center).add(new THREE.Vector3(extent * 1.2, extent * 0.5, extent * 1.4));
-        camera.lookAt(center);
-        const mask = (scene) => {
-            renderer.setRenderTarget(target);
-            renderer.setClearColor(0x000000, 1);
-            renderer.render(scene, camera);
-            const px = new Uint8Array(size * size * 4);
-            renderer.readRenderTargetPixels(target, 0, 0, size, size, px);
-            return Array.from({ length: size * size }, (_, i) => px[i * 4] > 127);
-        };
-        const differ = (a, b) => {
-            let covered = 0, n = 0;
-            for (let i = 0; i < a.length; ++i) covered += a[i] || b[i], n += a[i] !== b[i];
-            return n / Math.max(covered, 1);
-        };
+        const { center, extent } = clipBox(c);
+        const camera = cameraOn(center, extent, { fov: 35, offset: [1.2, 0.5, 1.4] });
+        const mask = (scene) => view.mask(scene, camera);
+        const differ = (a, b) => compareMasks(a, b).share;
         const out = [];
         for (const t of times) {
             mixer.setTime(t);

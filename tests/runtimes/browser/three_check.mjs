@@ -13,12 +13,12 @@
 //
 // DIR holds model.glb and model.pal (baked with root motion kept, as three plays it). Prints JSON.
 import path from 'node:path';
-import { withPage, RUNTIMES, THREE_PAGE } from './driver.mjs';
+import { withPage, checkRoutes, THREE_PAGE } from './driver.mjs';
 
 const [dir, clip, timesText] = process.argv.slice(2);
 const times = timesText.split(',').map(Number);
 
-const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '/__blank.html', async (p) => {
+const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
     await p.setContent(THREE_PAGE);
     const r = await p.evaluate(async ({ clip, times }) => {
         const THREE = await import('three');
@@ -29,10 +29,8 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
         const pal = readPal(new Uint8Array(await (await fetch('/check/model.pal')).arrayBuffer()), { verifyChecksum: true });
         const glsl = await loadPaletteGLSL();
         const gltf = await new GLTFLoader().loadAsync('/check/model.glb');
-        const size = 256;
-        const renderer = new THREE.WebGLRenderer({ antialias: false });
-        renderer.setSize(size, size);
-        const target = new THREE.WebGLRenderTarget(size, size);
+        const { offscreen, clipBox, cameraOn, compareMasks } = await import('/tests/page_draw.mjs');
+        const size = 256, view = offscreen(size), renderer = view.renderer;
         const white = new THREE.MeshBasicMaterial({ color: 0xffffff });
         // The reference: three's own skinning of the glTF.
         const reference = new THREE.Scene();
@@ -56,24 +54,10 @@ const result = await withPage({ '/': RUNTIMES, '/check/': path.resolve(dir) }, '
             herds[name] = { scene, herd };
         }
         const c = pal.clips.find((k) => k.name === clip);
-        const lo = new THREE.Vector3(...c.bounds_min), hi = new THREE.Vector3(...c.bounds_max);
-        const center = lo.clone().add(hi).multiplyScalar(0.5), extent = hi.clone().sub(lo).length();
-        const camera = new THREE.PerspectiveCamera(35, 1, extent * 0.05, extent * 20);
-        camera.position.copy(center).add(new THREE.Vector3(extent * 1.2, extent * 0.5, extent * 1.4));
-        camera.lookAt(center);
-        const mask = (scene) => {
-            renderer.setRenderTarget(target);
-            renderer.setClearColor(0x000000, 1);
-            renderer.render(scene, camera);
-            const px = new Uint8Array(size * size * 4);
-            renderer.readRenderTargetPixels(target, 0, 0, size, size, px);
-            return Array.from({ length: size * size }, (_, i) => px[i * 4] > 127);
-        };
-        const compare = (a, b) => {
-            let covered = 0, differ = 0;
-            for (let i = 0; i < a.length; ++i) covered += a[i] || b[i], differ += a[i] !== b[i];
-            return { covered, differ, share: differ / Math.max(covered, 1) };
-        };
+        const { center, extent } = clipBox(c);
+        const camera = cameraOn(center, extent, { fov: 35, offset: [1.2, 0.5, 1.4] });
+        const mask = (scene) => view.mask(scene, camera);
+        const compare = compareMasks;
         // The WebGL2 Crowd: one instance at the origin, the clip from its start, drawn lit on black.
         const canvas = document.createElement('canvas');
         canvas.width = canvas.height = size;

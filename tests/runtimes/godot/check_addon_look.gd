@@ -1,7 +1,8 @@
 # check_addon_look.gd - the addon's look, sockets, demo and import in Godot 4.6's web build, run by
 # check_addon.gd (whose viewport, camera, herds and case lines it uses): the herd against Godot's own
 # skinned import of Cow.glb and Husky.glb in colour, Cow's sockets at a prop's own size, the demo scene's herd, and
-# a palette saved as a resource (what the editor's .pal import does) loading back whole.
+# what the editor's .pal and roster.json importers save (their own _import, run on copies extending RefCounted)
+# loading back whole.
 extends RefCounted
 
 const ROOT := "/crowdbake"
@@ -162,7 +163,32 @@ func check_demo() -> void:
 	demo.queue_free()
 	addon._end(name, why)
 
-# What the editor's .pal import does (crowdbake_import_palette.gd: CrowdbakePalette.load_file, then
+# The editor's importer `script` (crowdbake_import_palette.gd or crowdbake_import_roster.gd) as the web
+# build can run it: EditorImportPlugin is an editor class that the export does not have, so the
+# importer and its base (crowdbake_import_base.gd) are copied to user:// reading "extends RefCounted",
+# their preloads pointed at the addon. What its _import does (read, refuse, save) is the shipped code.
+func _importer(script: String) -> Object:
+	DirAccess.make_dir_recursive_absolute("user://importers")
+	for file in ["crowdbake_import_base.gd", script]:
+		var text := FileAccess.get_file_as_string(ADDON + "/" + file)
+		text = text.replace("extends EditorImportPlugin", "extends RefCounted").replace("preload(\"", "preload(\"%s/" % ADDON)
+		var out := FileAccess.open("user://importers/" + file, FileAccess.WRITE)
+		out.store_string(text)
+		out.close()
+	return load("user://importers/" + script).new()
+
+# What the importer `script` saves of `source` (its _import, called as the editor calls it, saving to
+# `saved` + its extension), loaded back; or why not, a String.
+func _import_with(script: String, source: String, saved: String) -> Variant:
+	var none: Array[String] = []
+	var importer = _importer(script)
+	var err: int = importer._import(source, saved, {}, none, none)
+	if err != OK:
+		return "%s: the import failed (%s)" % [script, error_string(err)]
+	var back = ResourceLoader.load(saved + ".res", "", ResourceLoader.CACHE_MODE_IGNORE)
+	return back if back != null else "%s: what it saved did not load back" % script
+
+# The editor's .pal import (crowdbake_import_palette.gd: CrowdbakePalette.load_file, then
 # ResourceSaver.save) and what load() of the imported palette then gives: every bone matrix of every
 # clip as the palette read from the file gives it, and the same texture.
 func check_imported_palette() -> void:
@@ -170,12 +196,11 @@ func check_imported_palette() -> void:
 	addon._begin(name)
 	var palette = load(ADDON + "/crowdbake_palette.gd").new()
 	var why := "" if palette.load_file(COW + "/qpos-u16.pal") else str(palette.error)
-	var saved := "user://crowdbake_imported_palette.res"
-	if why.is_empty() and ResourceSaver.save(palette, saved) != OK:
-		why = "ResourceSaver could not save it"
-	var back = ResourceLoader.load(saved, "", ResourceLoader.CACHE_MODE_IGNORE) if why.is_empty() else null
-	if why.is_empty() and back == null:
-		why = "it did not load back"
+	var back = null
+	if why.is_empty():
+		back = _import_with("crowdbake_import_palette.gd", COW + "/qpos-u16.pal", "user://crowdbake_imported_palette")
+	if back is String:
+		why = back
 	var worst := 0.0
 	var compared := 0
 	if why.is_empty():
@@ -189,11 +214,11 @@ func check_imported_palette() -> void:
 			why = "the texture differs"
 		elif compared == 0 or worst > 0.0:
 			why = "%d matrices compared, off by up to %s" % [compared, worst]
-	print("crowdbake-check: the saved palette: %d bone matrices compared, off by %s" % [compared, worst])
+	print("crowdbake-check: the palette crowdbake_import_palette.gd saved: %d bone matrices compared, off by %s" % [compared, worst])
 	addon._end(name, why)
 
-# What the editor's roster.json import does (crowdbake_import_roster.gd: CrowdbakeRoster.import_file,
-# then ResourceSaver.save) and what load() of the imported roster then gives: Cow's types, states,
+# The editor's roster.json import (crowdbake_import_roster.gd: CrowdbakeRoster.import_file, then
+# ResourceSaver.save) and what load() of the imported roster then gives: Cow's types, states,
 # clips and sockets as the manifest has them, its palette resolved and whole (the same texture), a herd
 # set up from it drawing the same bone matrices as a herd of the roster read at run time (afresh: the
 # other checks change the one they share); any other
@@ -203,15 +228,12 @@ func check_imported_roster(mesh: Mesh) -> void:
 	var name := "a roster.json saved as a resource (the roster import) loads back with its palette, and a herd takes it"
 	addon._begin(name)
 	var roster = ResourceLoader.load(COW + "/roster/roster.json", "CrowdbakeRoster", ResourceLoader.CACHE_MODE_IGNORE)
-	var importer := load(ADDON + "/crowdbake_roster.gd")
-	var imported = importer.new().import_file(COW + "/roster/roster.json")
-	var why := "" if not imported is String and imported.get("types") != null else "not a roster: %s" % imported
-	var saved := "user://crowdbake_imported_roster.res"
-	if why.is_empty() and ResourceSaver.save(imported, saved) != OK:
-		why = "ResourceSaver could not save it"
-	var back = ResourceLoader.load(saved, "", ResourceLoader.CACHE_MODE_IGNORE) if why.is_empty() else null
-	if why.is_empty() and (back == null or back.get_script() == null or back.types.keys() != roster.types.keys()):
+	var back = _import_with("crowdbake_import_roster.gd", COW + "/roster/roster.json", "user://crowdbake_imported_roster")
+	var why: String = back if back is String else ""
+	if why.is_empty() and (back.get_script() == null or back.get("types") == null or back.types.keys() != roster.types.keys()):
 		why = "it did not load back as a roster: %s" % back
+	if not why.is_empty():
+		back = null
 	var worst := 0.0
 	if why.is_empty():
 		var cow: Dictionary = back.types["cow"]
@@ -238,20 +260,20 @@ func check_imported_roster(mesh: Mesh) -> void:
 		if worst > 0.0:
 			why += "the herds' bone matrices differ by %s" % worst
 	var other := _imported_other_json()
-	print("crowdbake-check: the imported roster: types %s, herd bone matrices off by %s; %s"
+	print("crowdbake-check: the roster crowdbake_import_roster.gd saved: types %s, herd bone matrices off by %s; %s"
 			% [back.types.keys() if back else [], worst, other if not other.is_empty() else "other JSON imported as JSON, a broken file refused"])
 	addon._end(name, why + other)
 
-# Any other JSON imports as Godot's own JSON resource (its data whole after a save and a load), and a
-# file that is not JSON is refused with a line naming it. "" when both hold, else what failed.
+# Any other JSON imports as Godot's own JSON resource (its data whole after the import's save and a
+# load), and a file that is not JSON is refused with a line naming it (by the roster's reader: the
+# importer would log the line as an error). "" when both hold, else what failed.
 func _imported_other_json() -> String:
 	var importer := load(ADDON + "/crowdbake_roster.gd")
 	var cases := ROOT + "/bakes/conformance/cases.json"
-	var json = importer.new().import_file(cases)
-	if not json is JSON or ResourceSaver.save(json, "user://crowdbake_imported_json.res") != OK:
-		return "cases.json did not import as JSON: %s" % json
-	var back = ResourceLoader.load("user://crowdbake_imported_json.res", "", ResourceLoader.CACHE_MODE_IGNORE)
-	if not back is JSON or back.data != JSON.parse_string(FileAccess.get_file_as_string(cases)):
+	var back = _import_with("crowdbake_import_roster.gd", cases, "user://crowdbake_imported_json")
+	if not back is JSON:
+		return "cases.json did not import as JSON: %s" % back
+	if back.data != JSON.parse_string(FileAccess.get_file_as_string(cases)):
 		return "cases.json's data did not load back whole"
 	var bad := "user://crowdbake_not_json.json"
 	FileAccess.open(bad, FileAccess.WRITE).store_string("{\"schema\": \"crowdbake-roster/1\",")

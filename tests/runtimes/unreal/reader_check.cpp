@@ -4,11 +4,17 @@
 // reader's, and a herd's custom data gives the C reader's bone matrices (mid-fade included) for
 // the states made from the clips. tests/runtimes/test_unreal_reader.c runs it on Fox and Cow in every
 // layout x precision. Prints one summary line; exit status 1 with the first difference.
+// `reader_check herd FILE.pal ROSTER_LINES TYPE`: a herd of the roster type's states (the lines of
+// tests/runtimes/unity/roster_lines.py, Python's reading of roster.json) moving at several speeds
+// and changing state: every footstep it raises falls on a contact of its state's clip, and its
+// travel offsets are the C reader's cbpal_travel_offset, mixed over a cross-fade.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "CrowdbakeHerdLogic.h"
@@ -52,10 +58,127 @@ int Skin(const char *path)
     return 0;
 }
 
+// The roster type's states, their clips' fps and contacts, from roster_lines.py's lines:
+// S type state clip first_row frame_count rate rate_per_speed phase; L type clip first_row frame_count
+// fps ...; K type clip foot bone time lift.
+std::vector<crowdbake::HerdStateInfo> RosterStates(const char *path, const std::string &type)
+{
+    std::ifstream in(path);
+    std::vector<std::vector<std::string>> rows;
+    for (std::string line; std::getline(in, line);) {
+        std::istringstream f(line);
+        std::vector<std::string> row;
+        for (std::string word; f >> word;) row.push_back(word);
+        if (row.size() >= 3 && row[1] == type) rows.push_back(row);
+    }
+    std::vector<crowdbake::HerdStateInfo> states;
+    std::vector<std::string> clip_of;
+    for (const auto &r : rows) {
+        if (r[0] != "S" || r.size() < 9) continue;
+        crowdbake::HerdStateInfo s;
+        s.name = r[2], s.first_row = std::stoi(r[4]), s.frame_count = std::stoi(r[5]);
+        s.rate = std::stof(r[6]), s.rate_per_speed = std::stof(r[7]), s.golden_ratio_phase = r[8] == "golden_ratio";
+        states.push_back(s);
+        clip_of.push_back(r[3]);
+    }
+    for (const auto &r : rows)
+        for (size_t i = 0; i < states.size(); ++i) {
+            if (r[2] != clip_of[i]) continue;
+            if (r[0] == "L" && r.size() >= 6) states[i].clip_fps = std::stof(r[5]);
+            if (r[0] == "K" && r.size() >= 7) states[i].contacts.push_back({r[3], std::stoi(r[4]), std::stof(r[5]), std::stof(r[6])});
+        }
+    return states;
+}
+
+// The C reader's travel offset for an instance's four numbers at `now` (zero for no clip).
+void ExpectedTravel(const cbpal_file &pal, const float inst[4], double now, float out[3])
+{
+    out[0] = out[1] = out[2] = 0;
+    for (uint32_t c = 0; c < pal.header.clip_count; ++c) {
+        cbpal_clip clip;
+        cbpal_get_clip(&pal, c, &clip);
+        if (clip.first_row != (uint32_t)inst[0] || clip.frames != (uint32_t)std::fabs(inst[1])) continue;
+        cbpal_travel_offset(&pal, c, (now * inst[2] + inst[3] * std::fabs((double)inst[1])) / clip.fps, out);
+    }
+}
+
+// Whether a footstep at `time` falls on a contact of the instance's state: its row position then,
+// wrapped to the clip for a loop, is a contact's landing or lifting row.
+bool OnAContact(const crowdbake::HerdStateInfo &s, const float inst[4], const crowdbake::Footstep &e)
+{
+    double frames = std::fabs((double)inst[1]), row = e.time * inst[2] + inst[3] * frames;
+    for (const crowdbake::HerdContact &k : s.contacts) {
+        if (k.bone != e.bone) continue;
+        double at = (e.lands ? k.time : k.lift) * s.clip_fps, d = std::fmod(std::fabs(row - at), frames);
+        if ((s.frame_count > 0 ? std::fmin(d, frames - d) : std::fabs(row - at)) < 1e-3) return true;
+    }
+    return false;
+}
+
+const crowdbake::HerdStateInfo &StateNamed(const std::vector<crowdbake::HerdStateInfo> &states, const std::string &name)
+{
+    for (const crowdbake::HerdStateInfo &s : states)
+        if (s.name == name) return s;
+    return states[0];
+}
+
+int Herd(const char *pal_path, const char *lines, const char *type)
+{
+    std::ifstream in(pal_path, std::ios::binary);
+    std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    cbpal_file pal;
+    char err[256];
+    if (cbpal_open_memory(bytes.data(), bytes.size(), 0, &pal, err, sizeof err)) return Fail(err);
+    std::vector<crowdbake::HerdStateInfo> states = RosterStates(lines, type);
+    if (states.empty()) return Fail("the roster lines hold no state of that type");
+    const int count = 8;
+    crowdbake::HerdLogic herd(states, count, 0.4f);
+    std::vector<crowdbake::Footstep> steps;
+    for (int i = 0; i < count; ++i) herd.SetState(i, states[(size_t)i % states.size()].name, 0.5, 0.0f, 0.5f + 0.25f * i);
+    unsigned footsteps = 0, moving = 0, offsets = 0, faded = 0;
+    double worst = 0, last_time[count];
+    for (double &t : last_time) t = 0.5;
+    for (int step = 1; step <= 40; ++step) {
+        double now = 0.5 + step * 0.05;
+        steps.clear();
+        herd.Advance(now, steps);
+        for (const crowdbake::Footstep &e : steps) {
+            const float *d = herd.CustomData(e.instance);
+            if (!OnAContact(StateNamed(states, herd.StateOf(e.instance)), d, e) || e.time > now + 1e-9 || e.time < last_time[e.instance] - 1e-9)
+                return Fail("a footstep at no contact of its clip, or out of order");
+            last_time[e.instance] = e.time;
+            ++footsteps;
+        }
+        for (int i = 0; i < count; ++i) {
+            float got[3], want[3], from[3];
+            herd.TravelOffsetAt(bytes.data(), bytes.size(), i, now, got);
+            const float *d = herd.CustomData(i);
+            ExpectedTravel(pal, d, now, want);
+            float fade = herd.FadeWeight(i, now);
+            if (fade < 1) {
+                ExpectedTravel(pal, d + 4, now, from);
+                for (int k = 0; k < 3; ++k) want[k] = from[k] + (want[k] - from[k]) * fade;
+                faded += want[0] != 0 || want[1] != 0 || want[2] != 0;
+            }
+            if (!(StateNamed(states, herd.StateOf(i)).rate_per_speed > 0)) want[0] = want[1] = want[2] = 0; // a state that does not follow the speed
+            for (int k = 0; k < 3; ++k) worst = std::fmax(worst, std::fabs(got[k] - want[k]));
+            moving += got[0] != 0 || got[1] != 0 || got[2] != 0;
+            ++offsets;
+        }
+        if (step == 10)
+            for (int i = 0; i < count; i += 2) herd.SetState(i, states[(size_t)(i / 2 + 1) % states.size()].name, now, 0.4f);
+    }
+    cbpal_close(&pal);
+    std::printf("herd of %zu states: %u footsteps on their clips' contacts, in order; %u travel offsets (%u moving, %u mid-fade) "
+                "worst %.3g from the C reader's\n", states.size(), footsteps, offsets, moving, faded, worst);
+    return footsteps > 10 && moving > 0 && worst <= 1e-6 ? 0 : Fail("too few footsteps or moving offsets, or offsets differ");
+}
+
 int main(int argc, char **argv)
 {
     if (argc == 3 && std::strcmp(argv[1], "skin") == 0) return Skin(argv[2]);
-    if (argc != 2) return Fail("usage: reader_check FILE.pal | skin FILE.cbskin");
+    if (argc == 5 && std::strcmp(argv[1], "herd") == 0) return Herd(argv[2], argv[3], argv[4]);
+    if (argc != 2) return Fail("usage: reader_check FILE.pal | skin FILE.cbskin | herd FILE.pal ROSTER_LINES TYPE");
     std::ifstream in(argv[1], std::ios::binary);
     std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     crowdbake::PalContents pc;

@@ -8,9 +8,10 @@
 #
 # Godot picks an importer by the file's extension, so this one is offered every .json of the project:
 # any other JSON is saved as the JSON resource Godot's own loader gives for it (load() works as before).
-# A manifest the loader refuses, or a file that is not JSON, fails its import with one line.
+# A manifest the loader refuses, or a file that is not JSON, fails its import with one line (the
+# preset, the save and the refusal: crowdbake_import_base.gd).
 @tool
-extends EditorImportPlugin
+extends "crowdbake_import_base.gd"
 
 const _Roster := preload("crowdbake_roster.gd")
 
@@ -23,35 +24,9 @@ func _get_visible_name() -> String:
 func _get_recognized_extensions() -> PackedStringArray:
 	return PackedStringArray(["json"])
 
-func _get_save_extension() -> String:
-	return "res"
-
-func _get_resource_type() -> String:
-	return "Resource"
-
-func _get_priority() -> float:
-	return 1.0
-
 # After the palettes (order 0), whose imports the roster references.
 func _get_import_order() -> int:
 	return 1
 
-func _get_preset_count() -> int:
-	return 1
-
-func _get_preset_name(_preset: int) -> String:
-	return "Default"
-
-func _get_import_options(_path: String, _preset: int) -> Array[Dictionary]:
-	return []
-
-func _get_option_visibility(_path: String, _option: StringName, _options: Dictionary) -> bool:
-	return true
-
-func _import(source_file: String, save_path: String, _options: Dictionary, _platform_variants: Array[String],
-		_gen_files: Array[String]) -> Error:
-	var imported = _Roster.new().import_file(source_file)
-	if imported is String:
-		push_error(imported)
-		return ERR_FILE_CORRUPT
-	return ResourceSaver.save(imported, "%s.%s" % [save_path, _get_save_extension()])
+func _read(source_file: String) -> Variant:
+	return _Roster.new().import_file(source_file)

@@ -21,6 +21,7 @@ const FMatrix GltfToUnreal(FPlane(100, 0, 0, 0), FPlane(0, 0, 100, 0), FPlane(0,
 UCrowdbakeHerdComponent::UCrowdbakeHerdComponent()
 {
     NumCustomDataFloats = crowdbake::HerdLogic::kCustomDataFloats;
+    PrimaryComponentTick.bCanEverTick = true; // footsteps and travel offsets
 }
 
 double UCrowdbakeHerdComponent::Now() const
@@ -28,6 +29,33 @@ double UCrowdbakeHerdComponent::Now() const
     const UWorld *World = GetWorld();
     return World ? World->GetTimeSeconds() : 0.0; // the material's Time node: the world's game time
 }
+
+namespace
+{
+// The state's clip's fps and contacts, from the type's `clips` (docs/roster.md).
+void LoadContacts(const TArray<TSharedPtr<FJsonValue>> *Clips, const FString &ClipName, crowdbake::HerdStateInfo &Info)
+{
+    if (!Clips) return;
+    for (const TSharedPtr<FJsonValue> &Value : *Clips) {
+        const TSharedPtr<FJsonObject> Clip = Value->AsObject();
+        if (!Clip.IsValid() || Clip->GetStringField(TEXT("name")) != ClipName) continue;
+        Info.clip_fps = (float)Clip->GetNumberField(TEXT("fps"));
+        const TArray<TSharedPtr<FJsonValue>> *Contacts;
+        if (!Clip->TryGetArrayField(TEXT("contacts"), Contacts)) return;
+        for (const TSharedPtr<FJsonValue> &C : *Contacts) {
+            const TSharedPtr<FJsonObject> K = C->AsObject();
+            if (!K.IsValid()) continue;
+            crowdbake::HerdContact Contact;
+            Contact.foot = TCHAR_TO_UTF8(*K->GetStringField(TEXT("foot")));
+            Contact.bone = (int32_t)K->GetNumberField(TEXT("bone"));
+            Contact.time = (float)K->GetNumberField(TEXT("time"));
+            Contact.lift = (float)K->GetNumberField(TEXT("lift"));
+            Info.contacts.push_back(Contact);
+        }
+        return;
+    }
+}
+} // namespace
 
 void UCrowdbakeHerdComponent::LoadStates(std::vector<crowdbake::HerdStateInfo> &States, FString &DefaultState) const
 {
@@ -41,6 +69,8 @@ void UCrowdbakeHerdComponent::LoadStates(std::vector<crowdbake::HerdStateInfo> &
         !(*TypeObject)->TryGetObjectField(TEXT("states"), StateMap))
         return;
     (*TypeObject)->TryGetStringField(TEXT("default_state"), DefaultState);
+    const TArray<TSharedPtr<FJsonValue>> *Clips = nullptr;
+    (*TypeObject)->TryGetArrayField(TEXT("clips"), Clips);
     for (const auto &Entry : (*StateMap)->Values) {
         const TSharedPtr<FJsonObject> State = Entry.Value->AsObject();
         const TSharedPtr<FJsonObject> *Inst;
@@ -52,6 +82,7 @@ void UCrowdbakeHerdComponent::LoadStates(std::vector<crowdbake::HerdStateInfo> &
         Info.rate = (float)(*Inst)->GetNumberField(TEXT("rate"));
         Info.rate_per_speed = (float)(*Inst)->GetNumberField(TEXT("rate_per_speed"));
         Info.golden_ratio_phase = (*Inst)->GetStringField(TEXT("phase")) == TEXT("golden_ratio");
+        LoadContacts(Clips, State->GetStringField(TEXT("clip")), Info);
         States.push_back(Info);
     }
 }
@@ -62,15 +93,15 @@ void UCrowdbakeHerdComponent::SpawnHerd(int32 Count)
     std::vector<crowdbake::HerdStateInfo> States;
     FString DefaultState;
     LoadStates(States, DefaultState);
-    if (States.empty()) {
-        crowdbake::PalContents Pal;
-        std::string Error;
-        if (!crowdbake::ReadPal(Palette->PalBytes.GetData(), (size_t)Palette->PalBytes.Num(), "palette", Pal, Error)) return;
-        States = crowdbake::StatesFromClips(Pal);
-    }
+    crowdbake::PalContents Pal;
+    std::string Error;
+    if (!crowdbake::ReadPal(Palette->PalBytes.GetData(), (size_t)Palette->PalBytes.Num(), "palette", Pal, Error)) return;
+    if (States.empty()) States = crowdbake::StatesFromClips(Pal);
+    bTravels = Pal.row_travel;
     Logic = MakeUnique<crowdbake::HerdLogic>(States, Count, FadeSeconds);
     ClearInstances();
     SetNumCustomDataFloats(crowdbake::HerdLogic::kCustomDataFloats);
+    Placed.Init(FTransform::Identity, Count);
     for (int32 I = 0; I < Count; ++I) AddInstance(FTransform::Identity);
     for (int32 I = 0; I < Count; ++I) {
         if (!DefaultState.IsEmpty()) Logic->SetState(I, TCHAR_TO_UTF8(*DefaultState), Now(), 0.f);
@@ -123,10 +154,38 @@ void UCrowdbakeHerdComponent::SetSpeed(int32 Index, float Speed)
 
 void UCrowdbakeHerdComponent::Place(int32 Index, FVector Location, float YawDegrees, float Scale)
 {
-    UpdateInstanceTransform(Index, FTransform(FRotator(0, YawDegrees, 0), Location, FVector(Scale)), false, true);
+    if (!Placed.IsValidIndex(Index)) return;
+    Placed[Index] = FTransform(FRotator(0, YawDegrees, 0), Location, FVector(Scale));
+    UpdateInstanceTransform(Index, Placed[Index], false, true);
     if (!Logic) return;
     Logic->SetScale(Index, Scale, Now());
     WriteCustomData(Index);
+}
+
+void UCrowdbakeHerdComponent::TickComponent(float DeltaTime, ELevelTick TickType, FActorComponentTickFunction *ThisTickFunction)
+{
+    Super::TickComponent(DeltaTime, TickType, ThisTickFunction);
+    if (!Logic) return;
+    if (OnFootstep.IsBound()) {
+        std::vector<crowdbake::Footstep> Steps;
+        Logic->Advance(Now(), Steps);
+        for (const crowdbake::Footstep &S : Steps) OnFootstep.Broadcast(S.instance, S.bone, S.lands, (float)S.time);
+    }
+    if (bTravels) ApplyTravel();
+}
+
+// Each instance drawn at its place plus its travel offset (glTF model units, rotated and scaled as
+// the instance is: GltfToUnreal, then the place's transform).
+void UCrowdbakeHerdComponent::ApplyTravel()
+{
+    const double T = Now();
+    for (int32 I = 0; I < Placed.Num(); ++I) {
+        float O[3];
+        Logic->TravelOffsetAt(Palette->PalBytes.GetData(), (size_t)Palette->PalBytes.Num(), I, T, O);
+        FTransform Drawn = Placed[I];
+        Drawn.AddToTranslation(Placed[I].TransformVector(GltfToUnreal.TransformVector(FVector(O[0], O[1], O[2]))));
+        UpdateInstanceTransform(I, Drawn, false, I == Placed.Num() - 1, true);
+    }
 }
 
 FMatrix UCrowdbakeHerdComponent::BoneMatrixAt(int32 Index, int32 Bone) const

@@ -22,10 +22,34 @@ std::vector<HerdStateInfo> StatesFromClips(const PalContents &pal)
     return states;
 }
 
+std::vector<ContactCrossing> ContactsCrossed(const HerdStateInfo &s, double from, double to)
+{
+    std::vector<ContactCrossing> out;
+    if (!(to > from) || s.contacts.empty()) return out;
+    double frames = std::fabs((double)s.frame_count);
+    if (s.frame_count < 0) { // one-shot: clamped to its rows
+        from = std::min(std::max(from, 0.0), frames - 1);
+        to = std::min(std::max(to, 0.0), frames - 1);
+    }
+    for (size_t c = 0; c < s.contacts.size(); ++c)
+        for (bool lands : {true, false}) {
+            double row = (double)(lands ? s.contacts[c].time : s.contacts[c].lift) * s.clip_fps;
+            if (s.frame_count < 0) {
+                if (from < row && row <= to) out.push_back({c, lands, row});
+                continue;
+            }
+            for (double k = std::floor((from - row) / frames) + 1; row + k * frames <= to; ++k) out.push_back({c, lands, row + k * frames});
+        }
+    std::stable_sort(out.begin(), out.end(), [](const ContactCrossing &a, const ContactCrossing &b) {
+        return a.at != b.at ? a.at < b.at : a.contact != b.contact ? a.contact < b.contact : a.lands && !b.lands;
+    });
+    return out;
+}
+
 HerdLogic::HerdLogic(std::vector<HerdStateInfo> states, int count, float default_fade)
     : states_(std::move(states)), count_(std::max(count, 0)), default_fade_(default_fade),
       data_((size_t)count_ * kCustomDataFloats, 0.0f), speed_((size_t)count_, 0.0f), scale_((size_t)count_, 1.0f),
-      state_((size_t)count_)
+      state_((size_t)count_), position_((size_t)count_, std::nan(""))
 {
     for (int i = 0; i < count_ && !states_.empty(); ++i) SetState(i, states_[0].name, 0.0, 0.0f);
 }
@@ -71,7 +95,41 @@ bool HerdLogic::SetState(int i, const std::string &state, double now, float fade
     d[9] = fade;
     state_[(size_t)i] = state;
     speed_[(size_t)i] = speed;
+    position_[(size_t)i] = RowPosition(i, now); // what the new numbers have passed is behind the instance
     return true;
+}
+
+// Instance i's unwrapped row position at `now` (crowdbake_contacts.mjs rowPosition).
+double HerdLogic::RowPosition(int i, double now) const
+{
+    const float *d = CustomData(i);
+    return now * d[2] + d[3] * std::fabs((double)d[1]);
+}
+
+void HerdLogic::Advance(double now, std::vector<Footstep> &out)
+{
+    for (int i = 0; i < count_; ++i) {
+        double to = RowPosition(i, now), from = position_[(size_t)i], rate = CustomData(i)[2];
+        position_[(size_t)i] = to;
+        const HerdStateInfo *s = Find(state_[(size_t)i]);
+        if (!s || std::isnan(from) || !(rate > 0)) continue;
+        for (const ContactCrossing &c : ContactsCrossed(*s, from, to)) {
+            const HerdContact &k = s->contacts[c.contact];
+            out.push_back({i, k.foot, k.bone, c.lands, now - (to - c.at) / rate});
+        }
+    }
+}
+
+void HerdLogic::TravelOffsetAt(const uint8_t *pal, size_t size, int i, double now, float out[3]) const
+{
+    out[0] = out[1] = out[2] = 0;
+    const HerdStateInfo *s = Find(state_[(size_t)i]);
+    if (!s || !(s->rate_per_speed > 0) || !(speed_[(size_t)i] > 0)) return;
+    const float *d = CustomData(i);
+    InstanceTravelOffset(pal, size, d, now, out);
+    float fade = FadeWeight(i, now), from[3];
+    if (fade >= 1 || !InstanceTravelOffset(pal, size, d + 4, now, from)) return;
+    for (int k = 0; k < 3; ++k) out[k] = from[k] + (out[k] - from[k]) * fade;
 }
 
 void HerdLogic::SetSpeed(int i, float speed, double now)

@@ -52,6 +52,7 @@ bool ReadPal(const uint8_t *data, size_t size, const std::string &name, PalConte
     const cbpal_header &h = pal.header;
     out = PalContents();
     out.layout = h.layout, out.precision = h.precision, out.flags = h.flags, out.bone_count = h.bone_count;
+    out.row_travel = (h.flags & CBPAL_FLAG_ROW_TRAVEL) != 0;
     out.width = h.width, out.height = h.height, out.row_texels = h.row_texels, out.linear_range = h.linear_range;
     out.model_height = h.model_height, out.speed_reference = h.speed_reference;
     std::memcpy(out.bounds_min, h.bounds_min, sizeof out.bounds_min);
@@ -98,21 +99,46 @@ bool ReadSkin(const uint8_t *data, size_t size, const std::string &name, SkinCon
     return true;
 }
 
+namespace
+{
+// The clip an instance's four numbers point at (first row, frame count), and the clip time they give
+// at `time`: rows played over the clip's rows per second. False for numbers that point at no clip.
+bool InstanceClip(const cbpal_file &pal, const float inst[4], double time, uint32_t &clip_index, double &clip_time)
+{
+    double first = inst[0] < 0 ? -(double)inst[0] - 1 : inst[0]; // < 0: held rows (CBPAL_CLIP_STEP)
+    for (uint32_t c = 0; c < pal.header.clip_count; ++c) {
+        cbpal_clip clip;
+        cbpal_get_clip(&pal, c, &clip);
+        if (clip.first_row != (uint32_t)first || clip.frames != (uint32_t)std::fabs(inst[1])) continue;
+        clip_index = c;
+        clip_time = (time * inst[2] + inst[3] * std::fabs((double)inst[1])) / clip.fps;
+        return true;
+    }
+    return false;
+}
+} // namespace
+
 bool InstanceBoneMatrix(const uint8_t *data, size_t size, const float inst[4], double time, uint32_t bone, float out[16])
 {
     cbpal_file pal;
     char err[256];
     if (cbpal_open_memory(data, size, 0, &pal, err, sizeof err) != 0) return false;
-    bool found = false;
-    for (uint32_t c = 0; c < pal.header.clip_count && !found; ++c) {
-        cbpal_clip clip;
-        cbpal_get_clip(&pal, c, &clip);
-        double first = inst[0] < 0 ? -(double)inst[0] - 1 : inst[0]; // < 0: held rows (CBPAL_CLIP_STEP)
-        if (clip.first_row != (uint32_t)first || clip.frames != (uint32_t)std::fabs(inst[1])) continue;
-        // the clip time the numbers give: rows played over the clip's rows per second
-        double rows = time * inst[2] + inst[3] * std::fabs((double)inst[1]);
-        found = cbpal_bone_matrix(&pal, c, rows / clip.fps, bone, out) == 0;
-    }
+    uint32_t c;
+    double t;
+    bool found = InstanceClip(pal, inst, time, c, t) && cbpal_bone_matrix(&pal, c, t, bone, out) == 0;
+    cbpal_close(&pal);
+    return found;
+}
+
+bool InstanceTravelOffset(const uint8_t *data, size_t size, const float inst[4], double time, float out[3])
+{
+    cbpal_file pal;
+    char err[256];
+    out[0] = out[1] = out[2] = 0;
+    if (cbpal_open_memory(data, size, 0, &pal, err, sizeof err) != 0) return false;
+    uint32_t c;
+    double t;
+    bool found = InstanceClip(pal, inst, time, c, t) && cbpal_travel_offset(&pal, c, t, out) == 0;
     cbpal_close(&pal);
     return found;
 }

@@ -9,6 +9,11 @@
 //     Herd->SetState(7, TEXT("flee"), 0.3f);
 //     Herd->SetSpeed(7, 9.9f);           // model units/s (metres for a glTF model): feet planted
 //     FMatrix Head = Herd->BoneMatrixAt(7, 8);   // component space, for a prop
+//     Herd->OnFootstep.AddDynamic(this, &AMyActor::Dust); // (Index, Bone, bLands, Time): the roster's contacts
+//
+// Each tick raises the footsteps the instances crossed and, for a palette with per-row travel
+// (CBPAL_FLAG_ROW_TRAVEL), draws each moving instance at its place plus the travel offset, so its
+// planted feet stay still while the game moves it at the state's speed.
 #pragma once
 
 #include "Components/InstancedStaticMeshComponent.h"
@@ -20,6 +25,8 @@
 
 class UCrowdbakePalette;
 class UMaterialInstanceDynamic;
+
+DECLARE_DYNAMIC_MULTICAST_DELEGATE_FourParams(FCrowdbakeFootstep, int32, Index, int32, Bone, bool, bLands, float, Time);
 
 UCLASS(ClassGroup = (Rendering), meta = (BlueprintSpawnableComponent))
 class CROWDBAKE_API UCrowdbakeHerdComponent : public UInstancedStaticMeshComponent
@@ -46,13 +53,21 @@ public:
     UFUNCTION(BlueprintCallable, Category = "Crowdbake") void Place(int32 Index, FVector Location, float YawDegrees = 0.f, float Scale = 1.f);
     // The bone's skinning matrix for the instance now, in the component's space (Unreal units and axes).
     UFUNCTION(BlueprintCallable, Category = "Crowdbake") FMatrix BoneMatrixAt(int32 Index, int32 Bone) const;
+    // A foot of an instance landed (bLands) or lifted: the roster's contacts, raised each tick in the
+    // order crossed; Time is the world time of the crossing.
+    UPROPERTY(BlueprintAssignable, Category = "Crowdbake") FCrowdbakeFootstep OnFootstep;
+
+    virtual void TickComponent(float DeltaTime, ELevelTick TickType, FActorComponentTickFunction *ThisTickFunction) override;
 
 private:
     void ApplyMaterial();
+    void ApplyTravel();
     void LoadStates(std::vector<crowdbake::HerdStateInfo> &States, FString &DefaultState) const;
     void WriteCustomData(int32 Index);
     double Now() const;
 
     TUniquePtr<crowdbake::HerdLogic> Logic;
+    TArray<FTransform> Placed; // each instance's place (Place), which the travel offset is added to
+    bool bTravels = false;     // the palette carries per-row travel offsets
     UPROPERTY(Transient) TObjectPtr<UMaterialInstanceDynamic> Material;
 };

@@ -13,13 +13,43 @@
 
 namespace crowdbake
 {
+// One of a clip's foot contacts (docs/roster.md `contacts`): the foot lands `time` seconds into the
+// clip and lifts at `lift`.
+struct HerdContact {
+    std::string foot;
+    int32_t bone = 0;
+    float time = 0, lift = 0;
+};
+
 // A roster state (docs/roster.md): its clip's rows and how fast they play.
 struct HerdStateInfo {
     std::string name;
     int32_t first_row = 0, frame_count = 0; // frame_count < 0: a one-shot
     float rate = 0, rate_per_speed = 0;     // rows/s; rows per model unit travelled (0: plays at `rate`)
     bool golden_ratio_phase = true;         // else "zero": a one-shot starts on its first row
+    float clip_fps = 0;                     // the clip's rows per second of clip time (contacts' rows)
+    std::vector<HerdContact> contacts;      // the clip's (none without a roster)
 };
+
+// A foot landing or lifting that an instance's clock crossed: `time` is the herd clock's moment of it.
+struct Footstep {
+    int instance = 0;
+    std::string foot;
+    int32_t bone = 0;
+    bool lands = true;
+    double time = 0;
+};
+
+// The state's contacts crossed as an unwrapped row position (time * rate + phase * frames) moves
+// from `from` (exclusive) to `to` (inclusive): {contact index, lands, row crossed}, in the order
+// crossed. A loop crosses each contact once a cycle however far it moves; a one-shot clamps to its
+// rows and crosses each at most once; nothing is crossed backwards (crowdbake_contacts.mjs).
+struct ContactCrossing {
+    size_t contact = 0;
+    bool lands = true;
+    double at = 0;
+};
+std::vector<ContactCrossing> ContactsCrossed(const HerdStateInfo &s, double from, double to);
 
 // A state per clip of a palette without a roster.
 std::vector<HerdStateInfo> StatesFromClips(const PalContents &pal);
@@ -43,17 +73,27 @@ public:
     float FadeWeight(int i, double now) const;
     // The bone's skinning matrix for instance i at `now`, cross-fade included (the file's bytes).
     bool BoneMatrixAt(const uint8_t *pal, size_t size, int i, uint32_t bone, double now, float out[16]) const;
+    // The body's travel offset for instance i at `now` (CBPAL_FLAG_ROW_TRAVEL: glTF model units in the
+    // model's frame, to be rotated and scaled as the instance is and added to its place), the two
+    // clips' offsets mixed as the cross-fade mixes their poses. Zero at standstill, in a state that
+    // does not follow the speed, and for palettes without offsets (crowdbake_three.mjs travelOffsetAt).
+    void TravelOffsetAt(const uint8_t *pal, size_t size, int i, double now, float out[3]) const;
+    // Appends the footsteps every instance crossed since the last call (or since its state was
+    // set), instance by instance, each instance's in the order crossed.
+    void Advance(double now, std::vector<Footstep> &out);
     const std::string &StateOf(int i) const { return state_[(size_t)i]; }
     std::string StateNames() const;
 
 private:
     const HerdStateInfo *Find(const std::string &name) const;
     void InstanceNumbers(const HerdStateInfo &s, double speed, int i, double start, float out[4]) const;
+    double RowPosition(int i, double now) const;
 
     std::vector<HerdStateInfo> states_;
     int count_;
     float default_fade_;
     std::vector<float> data_, speed_, scale_;
     std::vector<std::string> state_;
+    std::vector<double> position_; // per instance: the row position its footsteps were last raised at
 };
 } // namespace crowdbake

@@ -28,6 +28,7 @@ struct PalContents {
     uint32_t layout = 0, precision = 0, flags = 0, bone_count = 0, width = 0, height = 0, row_texels = 0;
     float linear_range = 0, bounds_min[3] = {0, 0, 0}, bounds_max[3] = {0, 0, 0};
     float model_height = 0, speed_reference = 0;
+    bool row_travel = false;          // CBPAL_FLAG_ROW_TRAVEL: moving instances add InstanceTravelOffset
     PalPixelFormat format = PalPixelFormat::Rgba32Float;
     std::vector<uint8_t> texels;      // width x height texels of 16 or 8 bytes, rows from y = 0
     std::vector<float> bind_texels;   // bone_count x 2 RGBA32F: bind positions, then position offsets
@@ -55,4 +56,9 @@ bool ReadSkin(const uint8_t *data, size_t size, const std::string &name, SkinCon
 // instance's four numbers (first row, frame count: negative for a one-shot, rate, phase) at `time`:
 // the clip they point at, through cbpal_bone_matrix. False for a bone or clip that does not exist.
 bool InstanceBoneMatrix(const uint8_t *data, size_t size, const float inst[4], double time, uint32_t bone, float out[16]);
+
+// The body's travel offset (glTF model units, the model's frame) for an instance's four numbers at
+// `time`, through cbpal_travel_offset: zero for palettes without per-row travel. False for a clip
+// that does not exist.
+bool InstanceTravelOffset(const uint8_t *data, size_t size, const float inst[4], double time, float out[3]);
 } // namespace crowdbake
