@@ -313,6 +313,8 @@ static void print_json(const cb_model *m, int skin, const clip_facts *facts, con
             cb_loop_reason_text(&f->info, why, sizeof why);
             cb_json_bool(&j, "loops", f->info.loops);
             cb_json_string(&j, "loop_reason", why);
+            if (f->info.loops && f->info.loop_reason == CB_LOOP_CLOSED_CORRECTED) /* the closing key slightly off */
+                cb_json_number(&j, "loop_correction_mm_per_m", f->info.loop_correction_mm_per_m);
             cb_json_number(&j, "period", f->info.duration);
             cb_json_int(&j, "frames", f->info.frames);
             cb_json_number(&j, "effective_fps", f->info.effective_fps);

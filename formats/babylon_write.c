@@ -197,7 +197,7 @@ static double *loop_end_poses(const cb_palette *p, const cb_model *m, int32_t sk
         const cb_palette_clip *cl = &p->clips[c];
         int32_t a = cb_model_find_animation(m, cl->name);
         if (!cl->loops || a < 0) continue;
-        cb_sampler_set_period(s, a, cl->duration);
+        cb_sampler_set_baked_loop(s, a, true, cl->start, cl->duration); /* out of memory: its end unclosed */
         cb_sample_joint_matrices(s, a, cl->start + cl->duration, ends + (size_t)c * p->bone_count * 16);
     }
     if (s) cb_sampler_free(s);

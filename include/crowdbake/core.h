@@ -359,7 +359,10 @@ typedef enum cb_loop_reason {
     CB_LOOP_SET,          /* the caller said (a catalog's loop = true/false) */
     CB_LOOP_CLOSED,       /* the last pose is the first: a loop over the key span */
     CB_LOOP_OPEN,         /* no closing key: the first pose comes round one key step after the last */
-    CB_LOOP_ENDS_ELSEWHERE /* the wrap from the last pose to the first is a jump: a one-shot */
+    CB_LOOP_ENDS_ELSEWHERE, /* the wrap from the last pose to the first is a jump: a one-shot */
+    CB_LOOP_CLOSED_CORRECTED /* the last key is the closing key slightly off (a wrap well under its neighbour
+                              * steps): a loop over the key span, its mismatch spread over the cycle
+                              * (cb_sampler_set_loop) */
 } cb_loop_reason;
 
 typedef struct cb_clip_info {
@@ -369,7 +372,8 @@ typedef struct cb_clip_info {
     bool loops;
     cb_loop_reason loop_reason;
     double key_interval;     /* the clip's key step (the shortest interval between keys), 0 if none */
-    double wrap_jump, largest_step; /* pose distances (cb_pose_distance) of the wrap and of the biggest key step */
+    double wrap_jump, largest_step; /* pose distances (cb_pose_distance) of the wrap and of the bigger of its
+                                     * neighbour key steps (the first and the last) */
     /* The loop decision's evidence, each + for a loop and - for a one-shot; the clip loops when
      * their sum is above 0 (cb_loop_reason_text says it in words). loop_set: the caller decided
      * (loop_override), and none of them was weighed. */
@@ -388,6 +392,15 @@ typedef struct cb_clip_info {
     double root_displacement[3]; /* root joint travel from t0 to t1, scene units */
     double root_velocity[3];     /* average velocity (displacement / duration); y is kept */
     double ground_speed;         /* |velocity.xz| */
+    /* CB_LOOP_CLOSED_CORRECTED: the largest distance of any vertex from where the source puts it
+     * that the loop-closing correction makes (at the clip's ends, where it is half the mismatch),
+     * in mm per metre of the mesh's rest height; 0 for any other clip. Appended in API 3.0. */
+    double loop_correction_mm_per_m;
+    /* The biggest pose step between keys over the whole clip (cb_pose_distance), measured where
+     * the wrap is no bigger than its neighbour steps (CB_LOOP_OPEN or CB_LOOP_CLOSED_CORRECTED),
+     * else 0: a wrap under CB_LOOP_CORRECTABLE of it is a closing key slightly off. Appended in
+     * API 3.0. */
+    double largest_key_step;
 } cb_clip_info;
 
 /* Whether a clip is baked in place under a root motion mode. */
@@ -412,6 +425,19 @@ CROWDBAKE_API double cb_clip_frame_time(const cb_clip_info *clip, uint32_t frame
  * -1 (decide from the poses), 0 or 1. */
 CROWDBAKE_API cb_status cb_clip_analyze(cb_sampler *sampler, int32_t animation, double fps, int loop_override,
                                         const cb_limits *limits, cb_clip_info *out, cb_error *err);
+/* Sets the sampler up to play an analyzed clip as cb_clip_analyze framed it: its period
+ * (cb_sampler_set_period: the clip's duration for a loop, 0 for a one-shot) and, for a loop whose
+ * last key is its closing key slightly off (CB_LOOP_CLOSED_CORRECTED), the loop-closing
+ * correction: each channel's mismatch between its last and first key spread linearly over the
+ * key span, half at each end (rotations by the delta's slerp), the root's horizontal travel
+ * kept. Every sampler that samples the clip (bake, verify, a writer's own) needs it set. False
+ * when out of memory (the clip then plays uncorrected). */
+CROWDBAKE_API bool cb_sampler_set_loop(cb_sampler *sampler, const cb_clip_info *clip);
+/* The same for a clip as a bake wrote it (a .pal's loops, start and duration, its model's
+ * animation): a loop over exactly its key span is judged again, and closed when the bake
+ * closed it. verify and writers that sample a baked palette's clips use it. */
+CROWDBAKE_API bool cb_sampler_set_baked_loop(cb_sampler *sampler, int32_t animation, bool loops, double start,
+                                             double duration);
 /* An analyzed clip framed at another fps (steps, frames, effective_fps), as cb_clip_analyze at
  * that fps frames it, without analyzing it again: a clip baked at many rates (--fps auto's
  * search) is analyzed once. */

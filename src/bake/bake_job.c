@@ -519,7 +519,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         }
         if (out->output_count == 1)
             bake_notes(&opt, job->settings.from.root_motion, &shared, &out->notes), bake_travel_notes(&shared, &out->notes),
-                warn_fixed_rates_over(job, out, &out->notes);
+                bake_loop_notes(job, s, &shared, &out->notes), warn_fixed_rates_over(job, out, &out->notes);
         ktx2_half_note(job, format, &opt, &out->notes);
         write_output(job, &shared, &mapping, o, err);
     }

@@ -15,4 +15,8 @@ cb_status bake_row_travel(const cb_bake_job *job, struct foot_cache *feet, cb_sa
 /* A note per striding loop: its per-row travel applied or not, and why (the numbers). */
 void bake_travel_notes(const cb_palette *p, cb_warnings *w);
 
+/* A note per loop closed over its key span with its mismatch spread (CB_LOOP_CLOSED_CORRECTED):
+ * how far that moves the poses off the source, and the override (bake_loop_notes.c). */
+void bake_loop_notes(const cb_bake_job *job, cb_sampler *s, const cb_palette *p, cb_warnings *w);
+
 #endif

@@ -79,13 +79,37 @@ double cb_animation_key_interval(const cb_animation *anim)
     return isfinite(min_dt) ? min_dt : 0;
 }
 
+/* The biggest step between the clip's poses one key interval apart, over its whole span (its
+ * travel per step taken off); a and b: room for one pose each. */
+static double largest_key_step(cb_sampler *s, const cb_clip_info *clip, double *a, double *b, cb_vec3 travel,
+                               double extent)
+{
+    const cb_model *m = cb_sampler_model(s);
+    uint32_t joints = m->skins[cb_sampler_skin(s)].joint_count;
+    double D = clip->t1 - clip->t0, largest = 0;
+    uint32_t steps = (uint32_t)fmax(1, floor(D / clip->key_interval + 0.5));
+    cb_vec3 step_travel = {travel.x / steps, 0, travel.z / steps};
+    cb_sample_joint_matrices(s, clip->animation, clip->t0, a);
+    for (uint32_t i = 1; i <= steps; ++i) {
+        cb_sample_joint_matrices(s, clip->animation, clip->t0 + D * i / steps, b);
+        largest = fmax(largest, pose_distance(a, b, joints, step_travel, extent));
+        double *swap = a;
+        a = b, b = swap;
+    }
+    return largest;
+}
+
 /* Loop or one-shot, from the poses. Equal first and last poses close a loop over the key span.
  * Many exporters (FBX2glTF, anything that bakes keys on [0, D)) leave out the closing key: the
  * first pose comes round one key step after the last key. Such a clip is a loop over D plus one
  * key interval when the wrap from its last pose to its first is no bigger than the key steps on
  * either side of it (the first and the last), so the wrap is as smooth as its neighbours; a clip
  * that comes to rest, or ends in another pose, has a jump there. Two steps at least: a two-key
- * clip's only step is its jump. */
+ * clip's only step is its jump.
+ * A wrap that small is also what a closing key slightly off gives: its last pose a small part
+ * of a step from its first. A missing closing key makes the wrap about one key step, so a wrap
+ * under CB_LOOP_CORRECTABLE of the clip's largest key step is the closing key, corrected
+ * (loop_close.c), and the loop lasts the key span. */
 static cb_status judge_loop(cb_sampler *s, cb_clip_info *out, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
@@ -108,7 +132,11 @@ static cb_status judge_loop(cb_sampler *s, cb_clip_info *out, cb_error *err)
         cb_sample_joint_matrices(s, out->animation, out->t1 - h, pose + 2 * n);
         out->largest_step = fmax(pose_distance(pose, pose + n, joints, step_travel, extent),
                                  pose_distance(pose + 2 * n, pose + 3 * n, joints, step_travel, extent));
-        if (out->wrap_jump <= out->largest_step) out->loop_reason = CB_LOOP_OPEN;
+        if (out->wrap_jump <= out->largest_step) {
+            out->loop_reason = CB_LOOP_OPEN;
+            out->largest_key_step = largest_key_step(s, out, pose, pose + n, travel, extent);
+            if (out->wrap_jump <= CB_LOOP_CORRECTABLE * out->largest_key_step) out->loop_reason = CB_LOOP_CLOSED_CORRECTED;
+        }
     }
     free(pose);
     return CB_OK;
@@ -126,6 +154,7 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
         return cb_fail(err, CB_ERR_SETTINGS, "fps must be a number between 0 and %g, got %g", CB_FPS_LIMIT, fps);
     const cb_animation *anim = &m->animations[animation];
     int32_t skin = cb_sampler_skin(s);
+    cb_sampler_open_clip(s, animation); /* judged as the source has it, not as a loop closed before */
     memset(out, 0, sizeof *out);
     out->animation = animation;
     out->t0 = anim->t0;
@@ -145,18 +174,22 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
 
     out->loop_reason = CB_LOOP_CLOSED; /* a clip of one instant */
     if (span > 0 && judge_loop(s, out, err)) return err->status;
+    bool closes = out->loop_reason == CB_LOOP_CLOSED || out->loop_reason == CB_LOOP_CLOSED_CORRECTED;
     if (loop_override >= 0) {
         out->loops = loop_override != 0, out->loop_set = true;
-        if (out->loops != (out->loop_reason == CB_LOOP_CLOSED || out->loop_reason == CB_LOOP_OPEN)) out->loop_reason = CB_LOOP_SET;
+        if (out->loops != (closes || out->loop_reason == CB_LOOP_OPEN)) out->loop_reason = CB_LOOP_SET;
     } else if (span > 0) {
         cb_loop_decide(s, fps, limits, out);
     } else {
         out->loops = true;
     }
-    /* A loop whose last pose is not its first wraps over one more key interval. */
-    bool open = out->loops && out->loop_reason != CB_LOOP_CLOSED && span > 0;
+    /* A loop whose last key is not its closing key wraps over one more key interval. */
+    bool open = out->loops && !closes && span > 0;
     out->duration = span + (open ? out->key_interval : 0);
-    cb_sampler_set_period(s, animation, out->loops ? out->duration : 0);
+    if (!cb_sampler_set_loop(s, out))
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory closing the loop of clip '%s'", anim->name);
+    if (out->loops && out->loop_reason == CB_LOOP_CLOSED_CORRECTED && cb_loop_correction_measure(s, out))
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring the loop of clip '%s'", anim->name);
     return cb_clip_frame_at(m, fps, limits, out, err);
 }
 

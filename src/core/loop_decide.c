@@ -68,7 +68,7 @@ static void weigh_name(const char *name, cb_clip_info *out)
  * big as its neighbour steps, 0; each doubling beyond that, -1 more, down to -2. */
 static double weigh_pose(const cb_clip_info *c)
 {
-    if (c->loop_reason == CB_LOOP_CLOSED) return POSE_RANGE;
+    if (c->loop_reason == CB_LOOP_CLOSED || c->loop_reason == CB_LOOP_CLOSED_CORRECTED) return POSE_RANGE;
     if (!(c->largest_step > 0) || !(c->wrap_jump > 0)) return -POSE_RANGE;
     double w = log2(c->largest_step / c->wrap_jump);
     return w > POSE_RANGE ? POSE_RANGE : w < -POSE_RANGE ? -POSE_RANGE : w;
@@ -80,8 +80,9 @@ static double weigh_feet(cb_sampler *s, double fps, const cb_limits *limits, cb_
 {
     double span = out->t1 - out->t0;
     out->loops = true;
-    out->duration = span + (out->loop_reason != CB_LOOP_CLOSED ? out->key_interval : 0);
-    cb_sampler_set_period(s, out->animation, out->duration);
+    bool closes = out->loop_reason == CB_LOOP_CLOSED || out->loop_reason == CB_LOOP_CLOSED_CORRECTED;
+    out->duration = span + (closes ? 0 : out->key_interval);
+    cb_sampler_set_loop(s, out); /* out of memory: measured uncorrected, which only weighs the feet */
     cb_error ignored = {0};
     out->loop_striding_feet = 0;
     if (cb_clip_frame_at(cb_sampler_model(s), fps, limits, out, &ignored)) return 0;
@@ -106,9 +107,17 @@ void cb_loop_decide(cb_sampler *s, double fps, const cb_limits *limits, cb_clip_
 
 void cb_loop_reason_text(const cb_clip_info *c, char *out, size_t size)
 {
-    char pose[160];
+    char pose[224];
     switch (c->loop_reason) {
     case CB_LOOP_CLOSED: snprintf(pose, sizeof pose, "last pose = first pose"); break;
+    case CB_LOOP_CLOSED_CORRECTED: {
+        int n = snprintf(pose, sizeof pose, "closing key slightly off: wrap %.3g <= %g x its largest key step %.3g",
+                         c->wrap_jump, CB_LOOP_CORRECTABLE, c->largest_key_step);
+        if (c->loops && n > 0 && (size_t)n < sizeof pose)
+            snprintf(pose + n, sizeof pose - n, ", spread over the cycle (moves the source up to %.3g mm/m)",
+                     c->loop_correction_mm_per_m);
+        break;
+    }
     case CB_LOOP_OPEN:
         snprintf(pose, sizeof pose, "no closing key: wrap %.3g <= its neighbour steps %.3g", c->wrap_jump, c->largest_step);
         break;
@@ -129,7 +138,7 @@ void cb_loop_reason_text(const cb_clip_info *c, char *out, size_t size)
     double total = c->loop_name + c->loop_pose + c->loop_feet;
     snprintf(out, size, "%s (%+.2f): %s, %s (%+.2f), %s; --loop/--one-shot or a catalog's loop overrides",
              c->loops ? "loops" : "plays once", total, name, pose, c->loop_pose, feet);
-    if (c->loops && c->loop_reason != CB_LOOP_CLOSED) {
+    if (c->loops && c->loop_reason != CB_LOOP_CLOSED && c->loop_reason != CB_LOOP_CLOSED_CORRECTED) {
         size_t n = strlen(out);
         snprintf(out + n, size - n, "; period + %.4gs", c->key_interval);
     }

@@ -162,18 +162,20 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     (void)stride;
     worker w = {0};
     cb_error *err0 = &st->errors[first < st->p->clip_count ? first : 0];
+    bool closed = true;
     if (jb->samples) {
         w.sampler = st->lent ? st->lent : cb_sampler_create(st->model, st->skin, err0);
-        /* Loops without a closing key wrap. (One-shots never sample past their last key: a clip
-         * planned twice, as a loop and as a one-shot, keeps its loop's period.) */
+        /* Loops without a closing key wrap; those whose closing key is slightly off are closed.
+         * (One-shots never sample past their last key: a clip planned twice, as a loop and as a
+         * one-shot, keeps its loop's period.) */
         for (uint32_t c = 0; w.sampler && c < st->p->clip_count; ++c)
-            if (st->infos[c].loops) cb_sampler_set_period(w.sampler, st->infos[c].animation, st->infos[c].duration);
+            if (st->infos[c].loops) closed = cb_sampler_set_loop(w.sampler, &st->infos[c]) && closed;
         w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
         w.lanes = malloc((size_t)st->p->bone_count * 8 * CB_SAMPLE_BATCH * sizeof(double));
         w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
         w.first = malloc((size_t)st->p->bone_count * 4 * sizeof(float));
     }
-    if (jb->samples && (!w.sampler || !w.mats || !w.lanes || !w.prev || !w.first)) {
+    if (jb->samples && (!w.sampler || !closed || !w.mats || !w.lanes || !w.prev || !w.first)) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
         for (uint32_t c = atomic_fetch_add(&jb->next, 1); c < jb->count; c = atomic_fetch_add(&jb->next, 1))

@@ -89,8 +89,8 @@ static cb_status analyze_clips(const bake_state *st, cb_sampler *sampler, const 
                                  &infos[i], err);
         else if (a.errors[i].status)
             *err = a.errors[i], rc = err->status;
-        else
-            cb_sampler_set_period(sampler, one.animation, infos[i].loops ? infos[i].duration : 0); /* as analyzing it here */
+        else if (!cb_sampler_set_loop(sampler, &infos[i])) /* as analyzing it here */
+            rc = cb_fail(err, CB_ERR_INTERNAL, "out of memory closing the loop of clip '%s'", m->animations[one.animation].name);
     }
     free(a.errors), free(a.first_use), free(a.done);
     return rc;

@@ -259,7 +259,8 @@ cb_sampler *cb_sampler_create(const cb_model *model, int32_t skin, cb_error *err
     }
     s->cursor = calloc(channels + 1, sizeof *s->cursor);
     s->wraps = calloc(model->animation_count + 1, sizeof *s->wraps);
-    if (!s->cursor_base || !s->cursor || !s->wraps) {
+    s->closed = calloc(model->animation_count + 1, sizeof *s->closed);
+    if (!s->cursor_base || !s->cursor || !s->wraps || !s->closed) {
         free(depth);
         cb_sampler_free(s);
         cb_fail(err, CB_ERR_INTERNAL, "out of memory creating a sampler for %s", model->source);
@@ -307,6 +308,8 @@ void cb_sampler_free(cb_sampler *s)
     free(s->cursor);
     free(s->cursor_base);
     free(s->wraps);
+    for (uint32_t a = 0; s->closed && a < s->model->animation_count; ++a) cb_sampler_open_clip(s, (int32_t)a);
+    free(s->closed);
     free(s);
 }
 
@@ -351,7 +354,7 @@ static void sample_nodes(cb_sampler *s, int32_t animation, double t, const uint3
         s->animated[i] = false;
     }
     if (animation >= 0 && animation < (int32_t)m->animation_count) {
-        const cb_animation *anim = &m->animations[animation];
+        const cb_animation *anim = cb_sampler_clip(s, animation);
         for (uint32_t c = 0; c < anim->channel_count; ++c) {
             const cb_channel *ch = &anim->channels[c];
             if (relevant && !relevant[ch->node]) continue;

@@ -329,7 +329,7 @@ static void sample_batch(cb_sampler *s, int32_t animation, const double *times, 
     for (uint32_t k = 0; k < s->relevant_count; ++k)
         rest_lanes(&s->sim_rest[s->relevant_order[k]], paths ? paths[k] : 0, &lanes[k]);
     if (animated) {
-        const cb_animation *anim = &m->animations[animation];
+        const cb_animation *anim = cb_sampler_clip(s, animation);
         uint32_t base = s->group_base[animation];
         for (uint32_t g = base; g < s->group_base[animation + 1]; ++g)
             find_spans(s->group_times[g], s->group_keys[g], padded, &s->group_cursor[g], &s->spans[g - base]);

@@ -170,7 +170,7 @@ void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double
                                   cb_joint_subset *sub, double *out)
 {
     const cb_model *m = s->model;
-    const cb_animation *anim = animation >= 0 && animation < (int32_t)m->animation_count ? &m->animations[animation] : NULL;
+    const cb_animation *anim = animation >= 0 && animation < (int32_t)m->animation_count ? cb_sampler_clip(s, animation) : NULL;
     double padded[B]; /* the unused lanes repeat the last time */
     for (uint32_t i = 0; i < B; ++i) padded[i] = times[i < count ? i : count - 1];
     /* Channels that share their key times (one input accessor for many, as exporters write

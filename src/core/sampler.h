@@ -19,6 +19,7 @@ struct cb_sampler {
     uint32_t *cursor;    /* per channel of every clip: the key interval of the last sample */
     uint32_t *cursor_base; /* per clip: its channels' first cursor */
     cb_wrap *wraps;      /* per clip: where a loop without a closing key comes round (cb_sampler_set_period) */
+    cb_animation **closed; /* per clip: its channels closed onto their first pose (loop_close.c), or NULL */
     /* The similarity path (cb_sampler_is_similarity) visits only the joints and their ancestors. */
     bool similar;
     bool *relevant;              /* per node: a joint or an ancestor of one */
@@ -98,6 +99,19 @@ void cb_joint_subset_free(cb_joint_subset *sub);
  * them side by side. */
 void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
                                   cb_joint_subset *sub, double *out);
+/* The channels a clip is sampled with: its own, or their loop-closed copy (loop_close.c). */
+static inline const cb_animation *cb_sampler_clip(const cb_sampler *s, int32_t animation)
+{
+    return s->closed[animation] ? s->closed[animation] : &s->model->animations[animation];
+}
+/* loop_close.c: plays `animation` with every channel's mismatch between its last and first key
+ * spread over the key span (travel, scene space: the root's travel kept); false when out of
+ * memory (the clip then plays as it is). open: plays it as it is again. */
+bool cb_sampler_close_clip(cb_sampler *s, int32_t animation, const double travel[3]);
+void cb_sampler_open_clip(cb_sampler *s, int32_t animation);
+/* loop_close.c: a closed clip's loop_correction_mm_per_m, sampled at its ends and between; 1
+ * when out of memory. */
+int cb_loop_correction_measure(cb_sampler *s, cb_clip_info *clip);
 
 /* One channel at time t (sample.c): the reference every lane must equal bit for bit. */
 void cb_channel_eval_at(const cb_channel *ch, double t, double out[4], uint32_t *hint, const cb_wrap *wrap);

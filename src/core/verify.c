@@ -75,9 +75,10 @@ cb_status cb_verify_clip(cb_sampler *s, const cb_palette *p, const void *texels,
     c.run_m = malloc((size_t)p->bone_count * 16 * sizeof(double));
     c.exact_v = malloc((size_t)(c.verts ? c.verts : 1) * 3 * sizeof(double));
     c.run_v = malloc((size_t)(c.verts ? c.verts : 1) * 3 * sizeof(double));
-    if (c.exact_m && c.run_m && c.exact_v && c.run_v) {
+    /* a loop without a closing key wraps; one whose closing key is slightly off is closed */
+    bool closed = cb_sampler_set_baked_loop(s, animation, c.clip->loops, c.clip->start, c.clip->duration);
+    if (closed && c.exact_m && c.run_m && c.exact_v && c.run_v) {
         const cb_palette_clip *cl = c.clip;
-        cb_sampler_set_period(s, animation, cl->loops ? cl->duration : 0); /* a loop without a closing key wraps */
         uint32_t steps = cl->loops ? cl->frames : cl->frames - 1; /* row intervals */
         double dt = cl->fps > 0 ? 1 / cl->fps : 0, qsum = 0, isum = 0;
         uint64_t v, qn = 0, in = 0;

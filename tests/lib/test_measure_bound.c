@@ -294,7 +294,9 @@ static void test_measure_all_past_the_budget(void **state)
         fail_msg("%s: measured %.17g / %.17g at every row, every row skinned %.17g / %.17g", rel, all.max_error,
                  all.visible_error, quant, fmax(quant, blend));
     assert_true(subset.max_error <= quant && subset.visible_error <= all.visible_error);
-    assert_true(subset.max_error < quant && subset.visible_error < all.visible_error); /* on rows it skips */
+    /* On rows it skips: the blend's worst. (The worst row's encoding error falls in the subset since Gallop_Jump
+     * lost its extra key interval, 1,483 rows: 751 measured.) */
+    assert_true(subset.visible_error < all.visible_error);
 
     /* The command line: the bake line says when a subset was measured. */
     char model[PATH_MAX], model_abs[PATH_MAX], cmd[2 * PATH_MAX], text[PATH_MAX + 128], line[128];

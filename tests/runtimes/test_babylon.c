@@ -44,10 +44,14 @@ static void test_babylon_bakes_the_same_matrices_and_draws_the_same_herd(void **
     int rc = run_command(cmd, out, sizeof out);
     printf("%s", out);
     assert_int_equal(rc, 0);
-    /* Babylon's skeleton of Cow: 42 joints and 2 non-joint ancestors (RootNode, AnimalArmature). 752 rows: 753
-     * while Attack_Headbutt and Idle_HitReact_Left were taken for loops (issue 45: they play once). */
-    assert_non_null(strstr(out, "ok   cow.bvat.json: 180x752 texels, as Babylon's bake of 44 bones (+1) and 752 rows"));
+    /* Babylon's skeleton of Cow: 42 joints and 2 non-joint ancestors (RootNode, AnimalArmature). 751 rows: 753
+     * while Attack_Headbutt and Idle_HitReact_Left were taken for loops (issue 45: they play once), 752 while
+     * Gallop_Jump got one more key interval. Its 44 rows and closing row are left out of the comparison: its
+     * closing key's mismatch is spread over the cycle, which Babylon plays as it is (test_loop_close checks
+     * those rows against the reference matrices). */
+    assert_non_null(strstr(out, "ok   cow.bvat.json: 180x751 texels, as Babylon's bake of 44 bones (+1) and 751 rows"));
     assert_non_null(strstr(out, "ok   cow.bvat.json: worst difference from Babylon's VertexAnimationBaker"));
+    assert_non_null(strstr(out, "and 45 rows of loops closed over their key span"));
     assert_non_null(strstr(out, "ok   cow.bvat.json: thin instances through BakedVertexAnimationManager: 0 of"));
     assert_non_null(strstr(out, "ok   control reversed-bones fails"));
     assert_non_null(strstr(out, "ok   control mirrored-handedness fails"));
@@ -148,7 +152,7 @@ static void test_a_catalog_writes_each_animal_its_bvat_json_with_its_states(void
     int rc = run_command(cmd, out, sizeof out);
     printf("%s", out);
     assert_int_equal(rc, 0);
-    assert_non_null(strstr(out, "ok   cow.bvat.json: 180x752 texels, as Babylon's bake of 44 bones (+1) and 752 rows"));
+    assert_non_null(strstr(out, "ok   cow.bvat.json: 180x751 texels, as Babylon's bake of 44 bones (+1) and 751 rows"));
     static const char *const states[] = {"wander", "flee", "graze", "die"};
     for (size_t i = 0; i < COUNT_OF(states); ++i) {
         char agree[128], baked[128];
