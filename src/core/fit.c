@@ -57,31 +57,32 @@ static CB_CLONE_INLINE double best_offset(double c, double a, double b)
 #if defined(__GNUC__)
 /* best_offset on four values at once (GCC's vector types, lanes.h): the same IEEE operations in
  * the same order, a lane's choice made by masks where best_offset branches, so each lane is
- * best_offset's bits. A NaN candidate (no interval on that side) has a NaN worst, which no
- * comparison takes: best_offset's skip. Macros and pointers, not helpers taking vectors: a
+ * best_offset's bits. max_of(w, x) is x > w ? x : w (one max instruction) here: the two differ
+ * only where w is NaN, and w = |c| is NaN only with c, which makes x NaN too. A side with no
+ * interval (a or b NaN) makes its x NaN, which no comparison takes: row_worst's skip. So does a
+ * NaN candidate's worst: best_offset's skip. Macros and pointers, not helpers taking vectors: a
  * 32-byte vector argument changes the ABI of the clone without AVX. */
 #define SELECT4(take, x, y) ((v4df)(((v4di)(x) & (take)) | ((v4di)(y) & ~(take))))
 #define ABS4(x) ((v4df)((v4di)(x) & (v4di){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}))
-#define MAX4(w, x) SELECT4(((w) != (w)) | ((x) > (w)), x, w) /* max_of */
+#define MAX4(w, x) SELECT4((x) > (w), x, w)
 
-static CB_CLONE_INLINE void row_worst4(v4df *w, const v4df *c, const v4df *a, const v4df *b, const v4di *no_a,
-                                       const v4di *no_b)
+static CB_CLONE_INLINE void row_worst4(v4df *w, const v4df *c, const v4df *a, const v4df *b)
 {
     const v4df half = {0.5, 0.5, 0.5, 0.5};
-    v4df x = ABS4(*c), ta = ABS4(*a - half * *c), tb = ABS4(*b - half * *c);
-    x = SELECT4(*no_a, x, MAX4(x, ta));
-    *w = SELECT4(*no_b, x, MAX4(x, tb));
+    v4df x = ABS4(*c), h = half * *c, ta = ABS4(*a - h), tb = ABS4(*b - h);
+    x = MAX4(x, ta);
+    *w = MAX4(x, tb);
 }
 
 static CB_CLONE_INLINE void best_offset4(v4df *c, const v4df *a, const v4df *b)
 {
     const v4df two = {2, 2, 2, 2}, three = {3, 3, 3, 3}, minus_two = {-2, -2, -2, -2};
     v4df cand[8] = {{0, 0, 0, 0}, two * *a / three, minus_two * *a, two * *a, two * *b / three, minus_two * *b, two * *b, *a + *b};
-    v4di no_a = *a != *a, no_b = *b != *b;
     v4df best = *c, worst, w;
-    row_worst4(&worst, c, a, b, &no_a, &no_b);
+    row_worst4(&worst, c, a, b);
+#pragma GCC unroll 8
     for (int k = 0; k < 8; ++k) {
-        row_worst4(&w, &cand[k], a, b, &no_a, &no_b);
+        row_worst4(&w, &cand[k], a, b);
         v4di take = w < worst;
         best = SELECT4(take, cand[k], best), worst = SELECT4(take, w, worst);
     }
