@@ -10,6 +10,7 @@
  * ranges - is settled after, in frame order, so it comes out as before too. */
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "palette_bake.h"
@@ -138,6 +139,65 @@ cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, 
     }
     if (kept && p->layout == CB_LAYOUT_QPOS) kept[0] = 1; /* every joint's derived: the next probe takes them */
     return CB_OK;
+}
+
+/* ---- a probe's fitted rows, kept for the bake after the search (palette_bake.h) ---- */
+
+typedef struct kept_fit {
+    cb_clip_info framing; /* the clip's info (what of it frames and moves the rows: fit_matches) */
+    cb_layout layout;
+    cb_root_motion root_motion;
+    uint32_t bones;
+    extent bounds;
+    float rows[]; /* framing.frames rows of bones * CANON(layout) */
+} kept_fit;
+
+static bool fit_matches(const kept_fit *k, const bake_state *st, uint32_t c)
+{
+    const cb_clip_info *a = &k->framing, *b = &st->infos[c];
+    return k->layout == st->p->layout && k->root_motion == st->opt->root_motion && k->bones == st->p->bone_count &&
+           a->animation == b->animation && a->t0 == b->t0 && a->t1 == b->t1 && a->duration == b->duration &&
+           a->steps == b->steps && a->frames == b->frames && a->loops == b->loops &&
+           a->root_velocity[0] == b->root_velocity[0] && a->root_velocity[1] == b->root_velocity[1] &&
+           a->root_velocity[2] == b->root_velocity[2];
+}
+
+static size_t fit_floats(const bake_state *st, uint32_t c)
+{
+    return (size_t)st->infos[c].frames * st->p->bone_count * CANON(st->p->layout);
+}
+
+void palette_keep_fit(bake_state *st, uint32_t c, const float *rows, const extent *bounds)
+{
+    if (!st->poses) return; /* no search: nothing to keep them with */
+    free(st->pending);
+    st->pending = malloc(sizeof *st->pending + fit_floats(st, c) * sizeof(float));
+    if (!st->pending) return; /* out of memory: the bake after samples and fits them again */
+    *st->pending = (kept_fit){st->infos[c], st->p->layout, st->opt->root_motion, st->p->bone_count, *bounds};
+    memcpy(st->pending->rows, rows, fit_floats(st, c) * sizeof(float));
+}
+
+void palette_settle_fit(bake_state *st, double error)
+{
+    double goal = st->opt->error_goal;
+    if (st->pending && st->poses && (!(goal > 0) || error <= goal)) pose_cache_attach(st->poses, st->pending);
+    else free(st->pending);
+    st->pending = NULL;
+}
+
+bool palette_take_fit(bake_state *st, uint32_t c, float *rows, extent *bounds)
+{
+    pose_cache *poses = st->clip_poses && !st->poses ? st->clip_poses[c] : NULL;
+    const kept_fit *k = poses ? pose_cache_attached(poses) : NULL;
+    if (!k || !fit_matches(k, st, c)) return false;
+    memcpy(rows, k->rows, fit_floats(st, c) * sizeof(float));
+    *bounds = k->bounds;
+    range_reset(&st->ranges[c]); /* the fitted values' range, as fit_clip finds it */
+    for (size_t b = 0; b < (size_t)st->infos[c].frames * st->p->bone_count; ++b) {
+        if (st->p->layout == CB_LAYOUT_QPOS) range_grow_qpos(&st->ranges[c], rows + b * 8);
+        else range_grow_affine(&st->ranges[c], rows + b * 12);
+    }
+    return true;
 }
 
 /* The exact values halfway through each row interval of clip c (the clip framed at twice the
