@@ -65,15 +65,6 @@ static CB_CLONE_INLINE void qpos_store(const double q[5], const cb_quat *prev, f
     out[7] = (float)q[4];
 }
 
-static cb_status qpos_canon(const double m[16], float out[8], const cb_model *model, const cb_skin *skin, uint32_t bone,
-                            const char *clip, uint32_t frame, cb_quat *prev, cb_error *err)
-{
-    double q[5];
-    if (qpos_similarity(m, q, model, skin, bone, clip, frame, err)) return err->status;
-    qpos_store(q, prev, out);
-    return CB_OK;
-}
-
 /* A probe pose's extra doubles (pose_cache.h): 1 when its joints' qpos_similarity follows (5
  * doubles a joint), NaN before. */
 #define KEPT_QPOS(bones) (1 + 5 * (bones))
@@ -210,7 +201,9 @@ cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *r
     framing.steps *= 2;
     uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
     for (uint32_t i = 0; i < intervals; ++i) {
-        const double *mats = palette_frame_matrices(st, w, c, &framing, 2 * i + 1, NULL);
+        double *kept; /* the pose's qpos_similarity, where a search keeps it (as palette_matrix_row) */
+        const double *mats = palette_frame_matrices(st, w, c, &framing, 2 * i + 1, &kept);
+        bool derived = kept && kept[0] == 1;
         float *out = mids + (size_t)i * p->bone_count * vals;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             const double *M = mats + (size_t)j * 16;
@@ -222,11 +215,14 @@ cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *r
             }
             const float *prev = rows + ((size_t)i * p->bone_count + j) * vals, *b = p->bind_positions + (size_t)j * 3;
             cb_quat q = {prev[0], prev[1], prev[2], prev[3]};
-            if (qpos_canon(M, o, st->model, &st->model->skins[st->skin], j, p->clips[c].name, i, &q, err))
+            double fresh[5], *d = kept ? kept + 1 + (size_t)j * 5 : fresh;
+            if (!derived && qpos_similarity(M, d, st->model, &st->model->skins[st->skin], j, p->clips[c].name, i, err))
                 return err->status;
+            qpos_store(d, &q, o);
             cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
             o[4] = (float)pos.x, o[5] = (float)pos.y, o[6] = (float)pos.z;
         }
+        if (kept && p->layout == CB_LAYOUT_QPOS) kept[0] = 1; /* every joint's derived: the next probe takes them */
     }
     return CB_OK;
 }
