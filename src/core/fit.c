@@ -11,8 +11,12 @@
 #include "crowdbake/palette.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "cb_math.h" /* CB_TARGET_CLONES */
+#include "lanes.h"   /* v4df */
 
 /* A row's first offset from the sagittas of the intervals before and after it: half the larger
  * where both bend the same way (a fast interval beside a slow one keeps its half, which the
@@ -26,17 +30,19 @@ static double row_offset(double before, double after)
 /* The worst of a row's own error |c| and its two intervals' errors halfway, |a - c/2| and
  * |b - c/2| (a, b: each interval's sagitta less half its other row's offset; NAN: no such
  * interval). */
-static double row_worst(double c, double a, double b)
+static CB_CLONE_INLINE double max_of(double w, double x) { return isnan(w) || x > w ? x : w; } /* fmax, inlined */
+
+static CB_CLONE_INLINE double row_worst(double c, double a, double b)
 {
     double w = fabs(c);
-    if (!isnan(a)) w = fmax(w, fabs(a - 0.5 * c));
-    if (!isnan(b)) w = fmax(w, fabs(b - 0.5 * c));
+    if (!isnan(a)) w = max_of(w, fabs(a - 0.5 * c));
+    if (!isnan(b)) w = max_of(w, fabs(b - 0.5 * c));
     return w;
 }
 
 /* The offset that minimises row_worst: a convex piecewise-linear function of c, lowest where
  * two of its lines cross or at a line's zero, so the best of those points. */
-static double best_offset(double c, double a, double b)
+static CB_CLONE_INLINE double best_offset(double c, double a, double b)
 {
     double cand[9] = {c, 0, 2 * a / 3, -2 * a, 2 * a, 2 * b / 3, -2 * b, 2 * b, a + b};
     double best = c, worst = row_worst(c, a, b);
@@ -48,26 +54,99 @@ static double best_offset(double c, double a, double b)
     return best;
 }
 
+#if defined(__GNUC__)
+/* best_offset on four values at once (GCC's vector types, lanes.h): the same IEEE operations in
+ * the same order, a lane's choice made by masks where best_offset branches, so each lane is
+ * best_offset's bits. max_of(w, x) is x > w ? x : w (one max instruction) here: the two differ
+ * only where w is NaN, and w = |c| is NaN only with c, which makes x NaN too. A side with no
+ * interval (a or b NaN) makes its x NaN, which no comparison takes: row_worst's skip. So does a
+ * NaN candidate's worst: best_offset's skip. Macros and pointers, not helpers taking vectors: a
+ * 32-byte vector argument changes the ABI of the clone without AVX. */
+#define SELECT4(take, x, y) ((v4df)(((v4di)(x) & (take)) | ((v4di)(y) & ~(take))))
+#define ABS4(x) ((v4df)((v4di)(x) & (v4di){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}))
+#define MAX4(w, x) SELECT4((x) > (w), x, w)
+
+static CB_CLONE_INLINE void row_worst4(v4df *w, const v4df *c, const v4df *a, const v4df *b)
+{
+    const v4df half = {0.5, 0.5, 0.5, 0.5};
+    v4df x = ABS4(*c), h = half * *c, ta = ABS4(*a - h), tb = ABS4(*b - h);
+    x = MAX4(x, ta);
+    *w = MAX4(x, tb);
+}
+
+static CB_CLONE_INLINE void best_offset4(v4df *c, const v4df *a, const v4df *b)
+{
+    const v4df two = {2, 2, 2, 2}, three = {3, 3, 3, 3}, minus_two = {-2, -2, -2, -2};
+    v4df cand[8] = {{0, 0, 0, 0}, two * *a / three, minus_two * *a, two * *a, two * *b / three, minus_two * *b, two * *b, *a + *b};
+    v4df best = *c, worst, w;
+    row_worst4(&worst, c, a, b);
+#pragma GCC unroll 8
+    for (int k = 0; k < 8; ++k) {
+        row_worst4(&w, &cand[k], a, b);
+        v4di take = w < worst;
+        best = SELECT4(take, cand[k], best), worst = SELECT4(take, w, worst);
+    }
+    *c = best;
+}
+#endif
+
 /* Sweeps over the rows, each row's offsets moved to the best for its neighbours' (coordinate
  * descent): no step raises the worst error of a value's rows and intervals, and a few sweeps
- * carry a fast interval's need to its neighbours. */
-enum { FIT_SWEEPS = 8 };
+ * carry a fast interval's need to its neighbours. Each value's offsets depend on that value's
+ * alone, so values are swept a block at a time (REFINE_BLOCK: a cache line of them) and a block
+ * stops at the first sweep that moves none of its offsets: the next would see the same inputs
+ * and move none either, so stopping there gives the same bits as all FIT_SWEEPS. */
+enum { FIT_SWEEPS = 8, REFINE_BLOCK = 8 };
+
+/* Values v0 .. v1 - 1 of row f moved to their best offsets; true when one moved. `prev` and
+ * `next` are the rows beside it, dp and dn the intervals before and after it (NULL: none). */
+static CB_CLONE_INLINE bool settle_row(double *c, const double *prev, const double *next, const double *dp,
+                                       const double *dn, uint32_t v0, uint32_t v1)
+{
+    bool moved = false;
+    uint32_t v = v0;
+#if defined(__GNUC__)
+    const v4df half = {0.5, 0.5, 0.5, 0.5}, none = {NAN, NAN, NAN, NAN};
+    for (; v + 4 <= v1; v += 4) {
+        v4df cv, pv, nv, dpv, dnv, a = none, b = none;
+        memcpy(&cv, c + v, sizeof cv);
+        if (dp) memcpy(&pv, prev + v, sizeof pv), memcpy(&dpv, dp + v, sizeof dpv), a = dpv - half * pv;
+        if (dn) memcpy(&nv, next + v, sizeof nv), memcpy(&dnv, dn + v, sizeof dnv), b = dnv - half * nv;
+        v4df best = cv;
+        best_offset4(&best, &a, &b);
+        v4di changed = (v4di)best ^ (v4di)cv;
+        if (changed[0] | changed[1] | changed[2] | changed[3]) moved = true, memcpy(c + v, &best, sizeof best);
+    }
+#endif
+    for (; v < v1; ++v) {
+        double a = dp ? dp[v] - 0.5 * prev[v] : NAN, b = dn ? dn[v] - 0.5 * next[v] : NAN;
+        double best = best_offset(c[v], a, b);
+        if (memcmp(&best, &c[v], sizeof best)) moved = true, c[v] = best;
+    }
+    return moved;
+}
+
+CB_TARGET_CLONES static bool sweep_block(double *c, const double *d, uint32_t frames, uint32_t intervals, uint32_t stride,
+                                         bool loops, uint32_t v0, uint32_t v1)
+{
+    bool moved = false;
+    for (uint32_t f = 0; f < frames; ++f) {
+        bool has_prev = loops || f > 0, has_next = loops || f + 1 < frames;
+        const double *prev = c + (size_t)((f + frames - 1) % frames) * stride, *next = c + (size_t)((f + 1) % frames) * stride;
+        const double *dp = has_prev ? d + (size_t)((f + intervals - 1) % intervals) * stride : NULL;
+        const double *dn = has_next ? d + (size_t)(f % intervals) * stride : NULL;
+        if (settle_row(c + (size_t)f * stride, prev, next, dp, dn, v0, v1)) moved = true;
+    }
+    return moved;
+}
 
 static void refine_offsets(double *c, const double *d, uint32_t frames, uint32_t intervals, uint32_t stride, bool loops)
 {
-    for (int sweep = 0; sweep < FIT_SWEEPS; ++sweep)
-        for (uint32_t f = 0; f < frames; ++f) {
-            bool has_prev = loops || f > 0, has_next = loops || f + 1 < frames;
-            uint32_t prev_row = (f + frames - 1) % frames, next_row = (f + 1) % frames;
-            const double *dp = has_prev ? d + (size_t)((f + intervals - 1) % intervals) * stride : NULL;
-            const double *dn = has_next ? d + (size_t)(f % intervals) * stride : NULL;
-            for (uint32_t v = 0; v < stride; ++v) {
-                double a = dp ? dp[v] - 0.5 * c[(size_t)prev_row * stride + v] : NAN;
-                double b = dn ? dn[v] - 0.5 * c[(size_t)next_row * stride + v] : NAN;
-                double *cv = &c[(size_t)f * stride + v];
-                *cv = best_offset(*cv, a, b);
-            }
+    for (uint32_t v0 = 0; v0 < stride; v0 += REFINE_BLOCK) {
+        uint32_t v1 = v0 + REFINE_BLOCK < stride ? v0 + REFINE_BLOCK : stride;
+        for (int sweep = 0; sweep < FIT_SWEEPS && sweep_block(c, d, frames, intervals, stride, loops, v0, v1); ++sweep) {
         }
+    }
 }
 
 void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones, uint32_t values, bool loops, bool qpos)

@@ -115,13 +115,16 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
     float *rows = w->rows;
     for (uint32_t f0 = 0; f0 < info->frames; f0 += chunk) {
         uint32_t n = info->frames - f0 < chunk ? info->frames - f0 : chunk;
-        for (uint32_t f = f0; similar && f < f0 + n; f += CB_SAMPLE_BATCH) {
+        /* A fitted clip's rows as its search's probe fitted them (the whole clip: f0 is 0), or made. */
+        bool made = !(fit && palette_take_fit(st, c, rows, &bounds));
+        for (uint32_t f = f0; made && similar && f < f0 + n; f += CB_SAMPLE_BATCH) {
             uint32_t count = f0 + n - f < CB_SAMPLE_BATCH ? f0 + n - f : CB_SAMPLE_BATCH;
             palette_similarity_rows(st, w, c, f, count, rows + (f - f0) * row_floats, &bounds);
         }
-        for (uint32_t f = f0; !similar && f < f0 + n; ++f)
+        for (uint32_t f = f0; made && !similar && f < f0 + n; ++f)
             if (palette_matrix_row(st, w, c, f, rows + (f - f0) * row_floats, &bounds, err)) return err->status;
-        if (fit && fit_clip(st, w, c, rows, err)) return err->status;
+        if (made && fit && fit_clip(st, w, c, rows, err)) return err->status;
+        if (made && fit) palette_keep_fit(st, c, rows, &bounds);
         for (uint32_t j = 0; f0 == 0 && j < p->bone_count; ++j) memcpy(w->first + j * 4, rows + j * qv, 4 * sizeof(float));
         if (p->layout == CB_LAYOUT_QPOS && info->loops && info->frames > 1 && f0 + n == info->frames) {
             /* The wrap from the last row to the first: a full turn over the loop ends on -q. */
@@ -243,7 +246,7 @@ static void free_bake_state(bake_state *st)
 {
     cb_pool_free(st->pool);
     free(st->stash), free(st->breaks), free(st->errors), free(st->clip_error), free(st->clip_blend_error), free(st->ranges);
-    free(st->encode_seconds);
+    free(st->encode_seconds), free(st->pending);
 }
 
 /* The first error in clip order, so the message does not depend on the thread count. */
@@ -360,6 +363,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
                                       ((p->clips[c].frames - 1) % st.error_stride != 0);
         }
     }
+    palette_settle_fit(&st, p->visible_error); /* a probe's fitted rows, kept when within its goal */
     double t3 = seconds_now();
     p->seconds_sample = t1 - t0 - encoded_while_sampling;
     p->seconds_encode = t2 - t1 + encoded_while_sampling;

@@ -95,6 +95,7 @@ typedef struct bake_state {
     const cb_clip_info *analysis; /* the only clip analyzed before the bake, or NULL */
     cb_sampler *lent;       /* the caller's sampler, for the one worker of a probe's bake; or NULL */
     struct cb_pool *pool;   /* the threads every pass runs on, or NULL for the caller's alone */
+    struct kept_fit *pending; /* a probe's fitted rows, until its measurement says whether to keep them */
 } bake_state;
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
@@ -133,6 +134,16 @@ void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, 
  * similarity), growing the clip's bounds and value range. */
 cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row, extent *bounds,
                              cb_error *err);
+/* palette_rows.c: a search's fitted rows reused by the bake after it. A probe that fits its
+ * clip's rows keeps them (palette_keep_fit, into st->pending); once measured, rows within its
+ * goal (or measured without one) go with the clip's poses (palette_settle_fit), replacing the
+ * last kept: a search's last fitted probe within the goal is the lowest such rate, its answer
+ * when fitted rows win. The bake after the search takes them for a fitted clip framed alike
+ * (palette_take_fit: the same times, root travel, layout), the same floats a fit gives, so
+ * neither its rows nor its mid-rows are sampled and fitted again. */
+void palette_keep_fit(bake_state *st, uint32_t c, const float *rows, const extent *bounds);
+void palette_settle_fit(bake_state *st, double error);
+bool palette_take_fit(bake_state *st, uint32_t c, float *rows, extent *bounds);
 /* palette_rows.c: the exact values halfway through each row interval of clip c (the clip framed
  * at twice the steps, odd frames), into mids; quaternions on the side of the row before. */
 cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *rows, float *mids, cb_error *err);

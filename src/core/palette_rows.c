@@ -10,6 +10,7 @@
  * ranges - is settled after, in frame order, so it comes out as before too. */
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "palette_bake.h"
@@ -62,15 +63,6 @@ static CB_CLONE_INLINE void qpos_store(const double q[5], const cb_quat *prev, f
     }
     out[0] = (float)rot.x, out[1] = (float)rot.y, out[2] = (float)rot.z, out[3] = (float)rot.w;
     out[7] = (float)q[4];
-}
-
-static cb_status qpos_canon(const double m[16], float out[8], const cb_model *model, const cb_skin *skin, uint32_t bone,
-                            const char *clip, uint32_t frame, cb_quat *prev, cb_error *err)
-{
-    double q[5];
-    if (qpos_similarity(m, q, model, skin, bone, clip, frame, err)) return err->status;
-    qpos_store(q, prev, out);
-    return CB_OK;
 }
 
 /* A probe pose's extra doubles (pose_cache.h): 1 when its joints' qpos_similarity follows (5
@@ -140,6 +132,65 @@ cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, 
     return CB_OK;
 }
 
+/* ---- a probe's fitted rows, kept for the bake after the search (palette_bake.h) ---- */
+
+typedef struct kept_fit {
+    cb_clip_info framing; /* the clip's info (what of it frames and moves the rows: fit_matches) */
+    cb_layout layout;
+    cb_root_motion root_motion;
+    uint32_t bones;
+    extent bounds;
+    float rows[]; /* framing.frames rows of bones * CANON(layout) */
+} kept_fit;
+
+static bool fit_matches(const kept_fit *k, const bake_state *st, uint32_t c)
+{
+    const cb_clip_info *a = &k->framing, *b = &st->infos[c];
+    return k->layout == st->p->layout && k->root_motion == st->opt->root_motion && k->bones == st->p->bone_count &&
+           a->animation == b->animation && a->t0 == b->t0 && a->t1 == b->t1 && a->duration == b->duration &&
+           a->steps == b->steps && a->frames == b->frames && a->loops == b->loops &&
+           a->root_velocity[0] == b->root_velocity[0] && a->root_velocity[1] == b->root_velocity[1] &&
+           a->root_velocity[2] == b->root_velocity[2];
+}
+
+static size_t fit_floats(const bake_state *st, uint32_t c)
+{
+    return (size_t)st->infos[c].frames * st->p->bone_count * CANON(st->p->layout);
+}
+
+void palette_keep_fit(bake_state *st, uint32_t c, const float *rows, const extent *bounds)
+{
+    if (!st->poses) return; /* no search: nothing to keep them with */
+    free(st->pending);
+    st->pending = malloc(sizeof *st->pending + fit_floats(st, c) * sizeof(float));
+    if (!st->pending) return; /* out of memory: the bake after samples and fits them again */
+    *st->pending = (kept_fit){st->infos[c], st->p->layout, st->opt->root_motion, st->p->bone_count, *bounds};
+    memcpy(st->pending->rows, rows, fit_floats(st, c) * sizeof(float));
+}
+
+void palette_settle_fit(bake_state *st, double error)
+{
+    double goal = st->opt->error_goal;
+    if (st->pending && st->poses && (!(goal > 0) || error <= goal)) pose_cache_attach(st->poses, st->pending);
+    else free(st->pending);
+    st->pending = NULL;
+}
+
+bool palette_take_fit(bake_state *st, uint32_t c, float *rows, extent *bounds)
+{
+    pose_cache *poses = st->clip_poses && !st->poses ? st->clip_poses[c] : NULL;
+    const kept_fit *k = poses ? pose_cache_attached(poses) : NULL;
+    if (!k || !fit_matches(k, st, c)) return false;
+    memcpy(rows, k->rows, fit_floats(st, c) * sizeof(float));
+    *bounds = k->bounds;
+    range_reset(&st->ranges[c]); /* the fitted values' range, as fit_clip finds it */
+    for (size_t b = 0; b < (size_t)st->infos[c].frames * st->p->bone_count; ++b) {
+        if (st->p->layout == CB_LAYOUT_QPOS) range_grow_qpos(&st->ranges[c], rows + b * 8);
+        else range_grow_affine(&st->ranges[c], rows + b * 12);
+    }
+    return true;
+}
+
 /* The exact values halfway through each row interval of clip c (the clip framed at twice the
  * steps, odd frames), into mids; quaternions on the side of the row before. */
 cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *rows, float *mids, cb_error *err)
@@ -150,7 +201,9 @@ cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *r
     framing.steps *= 2;
     uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
     for (uint32_t i = 0; i < intervals; ++i) {
-        const double *mats = palette_frame_matrices(st, w, c, &framing, 2 * i + 1, NULL);
+        double *kept; /* the pose's qpos_similarity, where a search keeps it (as palette_matrix_row) */
+        const double *mats = palette_frame_matrices(st, w, c, &framing, 2 * i + 1, &kept);
+        bool derived = kept && kept[0] == 1;
         float *out = mids + (size_t)i * p->bone_count * vals;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             const double *M = mats + (size_t)j * 16;
@@ -162,11 +215,14 @@ cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *r
             }
             const float *prev = rows + ((size_t)i * p->bone_count + j) * vals, *b = p->bind_positions + (size_t)j * 3;
             cb_quat q = {prev[0], prev[1], prev[2], prev[3]};
-            if (qpos_canon(M, o, st->model, &st->model->skins[st->skin], j, p->clips[c].name, i, &q, err))
+            double fresh[5], *d = kept ? kept + 1 + (size_t)j * 5 : fresh;
+            if (!derived && qpos_similarity(M, d, st->model, &st->model->skins[st->skin], j, p->clips[c].name, i, err))
                 return err->status;
+            qpos_store(d, &q, o);
             cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
             o[4] = (float)pos.x, o[5] = (float)pos.y, o[6] = (float)pos.z;
         }
+        if (kept && p->layout == CB_LAYOUT_QPOS) kept[0] = 1; /* every joint's derived: the next probe takes them */
     }
     return CB_OK;
 }

@@ -23,6 +23,7 @@ struct pose_cache {
     uint32_t capacity;      /* table entries, a power of two, at least twice count */
     double **blocks;        /* block_poses poses each */
     uint32_t block_count, block_poses;
+    void *attached;         /* its user's block for the same clip (pose_cache_attach), or NULL */
 };
 
 /* No time's bits: the pattern of a NaN with a payload no arithmetic produces. */
@@ -74,7 +75,7 @@ void pose_cache_free(pose_cache *c)
 {
     if (!c) return;
     for (uint32_t b = 0; b < c->block_count; ++b) free(c->blocks[b]);
-    free(c->blocks), free(c->keys), free(c->slots), free(c);
+    free(c->attached), free(c->blocks), free(c->keys), free(c->slots), free(c);
 }
 
 const double *pose_cache_find(const pose_cache *c, double t)
@@ -136,6 +137,15 @@ void pose_cache_clear(pose_cache *c)
 {
     c->count = 0;
     memset(c->keys, 0xFF, c->capacity * sizeof *c->keys);
+    free(c->attached), c->attached = NULL;
 }
+
+void pose_cache_attach(pose_cache *c, void *block)
+{
+    free(c->attached);
+    c->attached = block;
+}
+
+void *pose_cache_attached(const pose_cache *c) { return c->attached; }
 
 uint32_t pose_cache_count(const pose_cache *c) { return c->count; }

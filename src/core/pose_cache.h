@@ -30,6 +30,12 @@ double *pose_cache_add(pose_cache *c, double t);
  * fresh). */
 void pose_cache_clear(pose_cache *c);
 
+/* One malloc'ed block its user keeps beside the poses of the same clip (palette.c: a probe's
+ * fitted rows), replacing and freeing the one before; freed with the cache and by
+ * pose_cache_clear. NULL when none. */
+void pose_cache_attach(pose_cache *c, void *block);
+void *pose_cache_attached(const pose_cache *c);
+
 /* Poses kept. */
 uint32_t pose_cache_count(const pose_cache *c);
 

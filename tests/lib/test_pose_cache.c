@@ -4,7 +4,9 @@
  * refuses more and still finds what it holds; a cleared one finds nothing and is filled again;
  * a pose's extra doubles (qpos's derivation, for the search) stay with it, NaN until written.
  * And times coincide as the search counts on: row f at `steps` is row 2f at 2 x steps, the
- * same double. */
+ * same double. A block attached beside the poses (a probe's fitted rows) is found until another
+ * replaces it (the one before freed: ASan's leak check holds it to that) or the cache is
+ * cleared, and goes with the cache. */
 #include "testutil.h"
 
 #include <math.h>
@@ -120,6 +122,27 @@ static void test_rows_of_twice_the_steps_are_the_same_times(void **state)
     }
 }
 
+static void test_an_attached_block_goes_with_the_poses(void **state)
+{
+    (void)state;
+    pose_cache *c = pose_cache_create(BONES, 0, (size_t)1 << 20);
+    assert_non_null(c);
+    assert_null(pose_cache_attached(c));
+    int *first = malloc(sizeof *first), *second = malloc(sizeof *second);
+    assert_non_null(first), assert_non_null(second);
+    *first = 1, *second = 2;
+    pose_cache_attach(c, first);
+    assert_ptr_equal(pose_cache_attached(c), first);
+    pose_cache_attach(c, second); /* frees the first */
+    assert_int_equal(*(int *)pose_cache_attached(c), 2);
+    pose_cache_clear(c); /* another clip's: frees the second */
+    assert_null(pose_cache_attached(c));
+    int *third = malloc(sizeof *third);
+    assert_non_null(third);
+    pose_cache_attach(c, third);
+    pose_cache_free(c); /* frees the third */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -128,6 +151,7 @@ int main(void)
         cmocka_unit_test(test_full_and_cleared),
         cmocka_unit_test(test_extra_doubles_follow_the_pose),
         cmocka_unit_test(test_rows_of_twice_the_steps_are_the_same_times),
+        cmocka_unit_test(test_an_attached_block_goes_with_the_poses),
     };
     return cmocka_run_group_tests_name("pose_cache", tests, NULL, NULL);
 }
