@@ -26,7 +26,9 @@ typedef enum cb_setting_from {
     CB_FROM_COMMAND_LINE, /* the options given for one run */
     CB_FROM_CLIP,         /* a catalog's clip entry */
     CB_FROM_RIG,          /* the rig: a skin with no skinned mesh has no error to bound, so a fixed fps */
-    CB_FROM_TRAVEL        /* root_motion: a loop travels, so loops go in place (cb_bake_job_plan) */
+    CB_FROM_TRAVEL,       /* root_motion: a loop travels, so loops go in place (cb_bake_job_plan) */
+    CB_FROM_TRANSIENT     /* max_fps: a fast transient the default max_error is out of reach for at the default
+                           * max_fps, searched on up to CB_TRANSIENT_MAX_FPS (cb_bake_job_plan) */
 } cb_setting_from;
 
 /* "default", "catalog [bake]", "catalog animal", "command line", "catalog clip", "rig: no skinned mesh". */

@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include "crowdbake_pal.h" /* XXH64 */
+#include "bake_transients.h"
 #include "bake_travel.h"
 #include "outputs.h"
 #include "plant_feet.h"
@@ -293,7 +294,8 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
         cb_sampler *s = cb_sampler_create(job->model, job->skin, err); /* planted feet: the copy */
         cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
         job->search_poses = calloc(n ? n : 1, sizeof(pose_cache *)); /* NULL: nothing kept, as slow */
-        if (s) palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_poses, err);
+        if (s && !palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_poses, err))
+            bake_reach_for_transients(job, s, &o, err);
         cb_sampler_free(s);
     }
     free(goals);

@@ -46,6 +46,10 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
         snprintf(buf, size, "%g fps, %s: a fixed fps%s", fps, rows, fitted ? " (fit_rows)" : "");
     } else if (!r->met) {
         snprintf(buf, size, "%g fps, %s: over its budget even at max_fps (%.3g mm/m)", fps, rows, r->error_mm);
+    } else if (cs->from.max_fps == CB_FROM_TRANSIENT) {
+        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m), above the default max_fps %g: a fast "
+                 "transient no rate up to it brings within the default max_error (a stated max_fps caps it)", fps, rows,
+                 r->error_mm, job->settings.max_fps);
     } else if (cs->fit_rows) {
         snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m), every clip fitted (fit_rows)", fps, rows,
                  r->error_mm);

@@ -50,6 +50,7 @@ const char *cb_setting_from_name(cb_setting_from from)
     case CB_FROM_CLIP: return "catalog clip";
     case CB_FROM_RIG: return "rig: no skinned mesh";
     case CB_FROM_TRAVEL: return "a loop travels";
+    case CB_FROM_TRANSIENT: return "a fast transient: the default max_error is out of reach at the default max_fps";
     default: return "default";
     }
 }
