@@ -102,6 +102,7 @@ void UCrowdbakeHerdComponent::SpawnHerd(int32 Count)
     ClearInstances();
     SetNumCustomDataFloats(crowdbake::HerdLogic::kCustomDataFloats);
     Placed.Init(FTransform::Identity, Count);
+    DrawnOffset.Init(FVector::ZeroVector, Count);
     for (int32 I = 0; I < Count; ++I) AddInstance(FTransform::Identity);
     for (int32 I = 0; I < Count; ++I) {
         if (!DefaultState.IsEmpty()) Logic->SetState(I, TCHAR_TO_UTF8(*DefaultState), Now(), 0.f);
@@ -156,6 +157,7 @@ void UCrowdbakeHerdComponent::Place(int32 Index, FVector Location, float YawDegr
 {
     if (!Placed.IsValidIndex(Index)) return;
     Placed[Index] = FTransform(FRotator(0, YawDegrees, 0), Location, FVector(Scale));
+    DrawnOffset[Index] = FVector::ZeroVector; // drawn at the place itself until the next tick adds the offset
     UpdateInstanceTransform(Index, Placed[Index], false, true);
     if (!Logic) return;
     Logic->SetScale(Index, Scale, Now());
@@ -175,17 +177,24 @@ void UCrowdbakeHerdComponent::TickComponent(float DeltaTime, ELevelTick TickType
 }
 
 // Each instance drawn at its place plus its travel offset (glTF model units, rotated and scaled as
-// the instance is: GltfToUnreal, then the place's transform).
+// the instance is: GltfToUnreal, then the place's transform). Only instances whose offset changed
+// are moved (a standing or non-locomotion instance keeps offset 0 and costs no transform update).
 void UCrowdbakeHerdComponent::ApplyTravel()
 {
     const double T = Now();
+    bool Moved = false;
     for (int32 I = 0; I < Placed.Num(); ++I) {
         float O[3];
         Logic->TravelOffsetAt(Palette->PalBytes.GetData(), (size_t)Palette->PalBytes.Num(), I, T, O);
+        const FVector Offset(O[0], O[1], O[2]);
+        if (Offset == DrawnOffset[I]) continue;
+        DrawnOffset[I] = Offset;
         FTransform Drawn = Placed[I];
-        Drawn.AddToTranslation(Placed[I].TransformVector(GltfToUnreal.TransformVector(FVector(O[0], O[1], O[2]))));
-        UpdateInstanceTransform(I, Drawn, false, I == Placed.Num() - 1, true);
+        Drawn.AddToTranslation(Placed[I].TransformVector(GltfToUnreal.TransformVector(Offset)));
+        UpdateInstanceTransform(I, Drawn, false, false, true);
+        Moved = true;
     }
+    if (Moved) MarkRenderStateDirty();
 }
 
 FMatrix UCrowdbakeHerdComponent::BoneMatrixAt(int32 Index, int32 Bone) const

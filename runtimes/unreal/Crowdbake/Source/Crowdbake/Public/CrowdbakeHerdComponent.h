@@ -68,6 +68,7 @@ private:
 
     TUniquePtr<crowdbake::HerdLogic> Logic;
     TArray<FTransform> Placed; // each instance's place (Place), which the travel offset is added to
+    TArray<FVector> DrawnOffset; // the offset each instance is drawn with now (glTF model units)
     bool bTravels = false;     // the palette carries per-row travel offsets
     UPROPERTY(Transient) TObjectPtr<UMaterialInstanceDynamic> Material;
 };
