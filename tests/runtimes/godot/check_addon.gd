@@ -47,6 +47,7 @@ func run() -> void:
 	await _check_drawing(roster, mesh)
 	await look.check_look("cow", COW + "/Cow.glb", COW + "/roster/roster.json", 7)
 	await look.check_look("husky", look.HUSKY + "/Husky.glb", look.HUSKY + "/roster/roster.json", 5)
+	await look.check_lod(roster, mesh)
 	await look.check_demo()
 	look.check_imported_palette()
 	look.check_imported_roster(mesh)

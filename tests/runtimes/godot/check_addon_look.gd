@@ -279,3 +279,52 @@ func _imported_other_json() -> String:
 	FileAccess.open(bad, FileAccess.WRITE).store_string("{\"schema\": \"crowdbake-roster/1\",")
 	var refused = importer.new().import_file(bad)
 	return "" if refused is String and refused.begins_with(bad + ":") else "a broken .json gave %s" % refused
+
+# The animation LOD (CrowdbakeHerd.lod): a far instance draws as crowdbake mesh --max-influences 1 wrote
+# Cow's mesh (Cow_inf1.glb, its largest weight alone), read by Godot's own importer and drawn with the LOD
+# off; a near one, or the LOD off, draws every influence. Compared pixel for pixel in the grazing pose.
+func check_lod(roster, mesh: Mesh) -> void:
+	var name := "animation LOD: a far instance draws as crowdbake mesh --max-influences 1's mesh, a near one every influence"
+	addon._begin(name)
+	var doc := GLTFDocument.new()
+	var state := GLTFState.new()
+	doc.append_from_file(COW + "/Cow_inf1.glb", state)
+	var scene: Node = doc.generate_scene(state)
+	var one: Mesh = addon._herd_script.skinned_mesh_in(scene) if scene else null
+	if scene:
+		scene.free()
+	if one == null:
+		return addon._end(name, "Cow_inf1.glb has no skinned mesh")
+	addon._viewport.size = Vector2i(128, 128)
+	var near := await _grazing(roster, mesh, Vector2(24, 12), 1.0) # about 110 pixels long: every influence
+	var all := await _grazing(roster, mesh, Vector2.ZERO, 1.0)
+	var forced := await _grazing(roster, mesh, Vector2(1e9, 1e9), 1.0) # every instance far: one influence
+	var written := await _grazing(roster, one, Vector2.ZERO, 1.0)
+	var far := await _grazing(roster, mesh, Vector2(24, 12), 0.09) # about 10 pixels long: one influence
+	var far_written := await _grazing(roster, one, Vector2.ZERO, 0.09)
+	addon._viewport.size = Vector2i(64, 64)
+	var numbers := [addon._differ(near, all), addon._differ(forced, written), addon._differ(forced, all),
+			addon._differ(far, far_written), addon._covered(far)[1]]
+	print("crowdbake-check: pixels that differ: near (default LOD) / every influence %d; one influence / the 1-influence mesh %d; one influence / every influence %d; far (default LOD, %d pixels covered) / the 1-influence mesh %d"
+			% [numbers[0], numbers[1], numbers[2], numbers[4], numbers[3]])
+	var ok: bool = numbers[0] == 0 and numbers[1] == 0 and numbers[2] > 0 and numbers[3] == 0 and numbers[4] > 10
+	addon._end(name, "" if ok else "see the numbers above")
+
+# A frame of one Cow grazing (2.5 s in), side on and `scale` units tall, at the camera's place for a
+# unit-tall Cow filling the view.
+func _grazing(roster, mesh: Mesh, lod: Vector2, scale: float) -> Image:
+	var herd: MultiMeshInstance3D = addon._herd_script.new()
+	herd.playing = false
+	addon._viewport.add_child(herd)
+	herd.setup(roster, "cow", mesh, 1)
+	herd.lod = lod
+	var bounds: AABB = herd.palette.largest_bounds()
+	var xform := Transform3D(Basis(Vector3.UP, PI / 2).scaled(Vector3.ONE / bounds.size.y), Vector3.ZERO)
+	var box := xform * bounds
+	addon._camera.transform = Transform3D(Basis(), box.get_center() + Vector3(0, 0, 0.75 * maxf(box.size.x, box.size.y)))
+	herd.place(0, Transform3D(xform.basis.scaled(Vector3.ONE * scale), xform.origin + box.get_center() * (1.0 - scale)))
+	herd.set_state(0, "graze", 0.0)
+	herd.advance(2.5)
+	var image: Image = await addon._frame()
+	herd.queue_free()
+	return image

@@ -39,6 +39,15 @@ const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade sta
 @export var count := 0
 @export var fade_seconds := 0.25 # set_state's cross-fade
 @export var playing := true # advance the clock in _process
+# Animation LOD: an instance under lod.x pixels tall on screen is skinned with its 2 largest bone
+# weights, under lod.y with its largest alone (the kept weights scaled to sum to 1): the rule crowdbake
+# mesh --max-influences 2|1 applies to a far LOD mesh, and the web runtimes' default (at 24 pixels a
+# pixel is 4% of the animal). Vector2.ZERO: every influence at any size. Its size: the largest extent
+# of the clips' animated bounds, times the instance's scale.
+@export var lod := Vector2(24, 12):
+	set(value):
+		lod = value
+		_set_lod()
 
 var time := 0.0 # the herd's clock, seconds (the shader's herd_time)
 var palette # the type's CrowdbakePalette
@@ -64,6 +73,7 @@ func _ready() -> void:
 func _process(delta: float) -> void:
 	if palette == null:
 		return
+	_set_lod() # the camera may have moved
 	if playing:
 		advance(delta)
 	elif _dirty or _bounds_dirty:
@@ -84,6 +94,7 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	var look := _HERD_MESH.build(mesh, _material())
 	materials = look["materials"]
 	surfaces_merged = look["merged"]
+	_set_lod()
 	var mm := MultiMesh.new()
 	mm.transform_format = MultiMesh.TRANSFORM_3D
 	mm.use_colors = true
@@ -316,6 +327,19 @@ func _upload() -> void:
 		_set_all("instances", _texture)
 	_set_all("herd_time", time)
 	_dirty = false
+
+# The animation LOD's uniforms for the viewport's camera as it is now (none: every influence).
+func _set_lod() -> void:
+	var camera := get_viewport().get_camera_3d() if is_inside_tree() else null
+	if palette == null:
+		return
+	if camera == null or lod == Vector2.ZERO:
+		_set_all("animation_lod", Vector3.ZERO)
+		return
+	var projection := camera.get_camera_projection()
+	var unit: float = palette.largest_bounds().get_longest_axis_size() * 0.5 * get_viewport().get_visible_rect().size.y * projection.y.y
+	_set_all("animation_lod", Vector3(unit, lod.x, lod.y))
+	_set_all("lod_view_projection", projection * Projection(camera.global_transform.affine_inverse()))
 
 # A shader parameter of every surface's material.
 func _set_all(key: String, value) -> void:

@@ -38,7 +38,9 @@ static func build(source: Mesh, base: ShaderMaterial) -> Dictionary:
 	var materials: Array[ShaderMaterial] = []
 	var flags: int = Mesh.ARRAY_FLAG_USE_8_BONE_WEIGHTS if influences == 8 else 0
 	if not plain.is_empty():
-		mesh.add_surface_from_arrays(Mesh.PRIMITIVE_TRIANGLES, _merged(source, plain), [], {}, flags)
+		var merged := _merged(source, plain)
+		_largest_first(merged, influences)
+		mesh.add_surface_from_arrays(Mesh.PRIMITIVE_TRIANGLES, merged, [], {}, flags)
 		materials.append(_look(base, source.surface_get_material(plain[0]), true))
 	for s in own:
 		var arrays := source.surface_get_arrays(s)
@@ -46,12 +48,32 @@ static func build(source: Mesh, base: ShaderMaterial) -> Dictionary:
 		if not (m is BaseMaterial3D and m.vertex_color_use_as_albedo):
 			arrays[Mesh.ARRAY_COLOR] = null # COLOR is the instance's tint alone
 		var per_vertex: int = arrays[Mesh.ARRAY_BONES].size() / maxi(1, arrays[Mesh.ARRAY_VERTEX].size())
+		_largest_first(arrays, per_vertex)
 		mesh.add_surface_from_arrays(source.surface_get_primitive_type(s), arrays, [], {},
 				Mesh.ARRAY_FLAG_USE_8_BONE_WEIGHTS if per_vertex == 8 else 0)
 		materials.append(_look(base, m, false))
 	for k in materials.size():
 		mesh.surface_set_material(k, materials[k])
 	return {"mesh": mesh, "materials": materials, "merged": plain.size(), "surfaces": source.get_surface_count()}
+
+# Each vertex's influences ordered by weight, largest first (ties keep their order), as the animation
+# LOD expects: the shader keeps a far instance's first one or two (crowdbake_herd.gdshader).
+static func _largest_first(arrays: Array, per_vertex: int) -> void:
+	var bones: PackedInt32Array = arrays[Mesh.ARRAY_BONES]
+	var weights: PackedFloat32Array = arrays[Mesh.ARRAY_WEIGHTS]
+	for base in range(0, weights.size(), per_vertex):
+		for i in range(base + 1, base + per_vertex): # insertion sort: 4 or 8 influences
+			var w := weights[i]
+			var b := bones[i]
+			var j := i
+			while j > base and weights[j - 1] < w:
+				weights[j] = weights[j - 1]
+				bones[j] = bones[j - 1]
+				j -= 1
+			weights[j] = w
+			bones[j] = b
+	arrays[Mesh.ARRAY_BONES] = bones
+	arrays[Mesh.ARRAY_WEIGHTS] = weights
 
 # A plain colour: no material, or a BaseMaterial3D without an albedo texture, drawn opaque, whose
 # vertex colours (if it uses them) are sRGB like its albedo.
