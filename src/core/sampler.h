@@ -86,6 +86,10 @@ typedef struct cb_joint_subset {
     uint32_t *joints, joint_count;
     uint32_t *joint_slot;    /* per skin joint: its place in joints, or UINT32_MAX */
     bool *animated;          /* per node, while sampling a batch: a channel sets it */
+    uint8_t *paths;          /* per node of order, while sampling a batch: the TRS components channels set */
+    bool filled;             /* the rest lanes hold filled_clip's (channels of animation filled_animation) */
+    int32_t filled_animation;
+    const struct cb_animation *filled_clip;
     double *channel_lanes;   /* per channel of a clip: 4 x CB_SAMPLE_BATCH values */
     double *node_lanes;      /* per node of order: TRS and global matrix, 26 x CB_SAMPLE_BATCH */
 } cb_joint_subset;

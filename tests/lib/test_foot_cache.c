@@ -73,7 +73,7 @@ static void test_row_travel_from_the_cache_is_the_same(void **state)
         cb_sampler *s = cb_sampler_create(m, 0, &err);
         foot_cache *cache = foot_cache_create();
         char why[256];
-        double ref = speed_reference_cached(cache, m, 0, NULL, 0, why, sizeof why);
+        double ref = speed_reference_cached(cache, m, 0, NULL, 0, 1, why, sizeof why);
         assert_true(ref > 0);
         for (uint32_t a = 0; a < m->animation_count; ++a) {
             cb_clip_info info;
