@@ -131,31 +131,47 @@ static CB_CLONE_INLINE void mul_affine_lanes(double (*restrict out)[B], const do
 }
 
 #if defined(__GNUC__)
+/* Row r of one column of mul_affine_lanes' product at lanes i .. i + 3, the column's three
+ * values given (b0, b1, b2), then the parent's translation added for the fourth column (`add`). */
+static CB_CLONE_INLINE void product_row(const double (*restrict a)[B], int r, int i, const v4df *b0, const v4df *b1,
+                                        const v4df *b2, const double *add, double *dst)
+{
+    v4df ar, ar4, ar8;
+    memcpy(&ar, &a[r][i], sizeof ar), memcpy(&ar4, &a[4 + r][i], sizeof ar4), memcpy(&ar8, &a[8 + r][i], sizeof ar8);
+    v4df o = ar * *b0 + ar4 * *b1 + ar8 * *b2;
+    if (add) {
+        v4df t;
+        memcpy(&t, add, sizeof t);
+        o += t;
+    }
+    memcpy(dst, &o, sizeof o);
+}
+
 /* matrix_from_trs_lanes, then mul_affine_lanes with the parent's global `a`, four lanes at a
  * time without storing the local matrix: each lane the same operations in the same order (no
  * contraction: -ffp-contract=off), so the same bits. */
 static CB_CLONE_INLINE void trs_global_lanes(const double *t, const double (*restrict a)[B], double (*restrict out)[B])
 {
     const v4df one = {1, 1, 1, 1}, two = {2, 2, 2, 2}, zero = {0, 0, 0, 0};
-    for (int i = 0; i < B; i += 4) {
-        v4df v[TRS_LANES], p[16], b[16];
+    for (int i = 0; i < B; i += 4) { /* unrolled within: the values stay in registers */
+        v4df v[TRS_LANES];
+#pragma GCC unroll 10
         for (int c = 0; c < TRS_LANES; ++c) memcpy(&v[c], t + (size_t)c * B + i, sizeof v[c]);
-        for (int c = 0; c < 15; ++c) memcpy(&p[c], &a[c][i], sizeof p[c]);
         v4df x = v[3], y = v[4], z = v[5], w = v[6];
         v4df xx = x * x, yy = y * y, zz = z * z;
         v4df xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
-        b[0] = (one - two * (yy + zz)) * v[7], b[1] = (two * (xy + wz)) * v[7], b[2] = (two * (xz - wy)) * v[7];
-        b[4] = (two * (xy - wz)) * v[8], b[5] = (one - two * (xx + zz)) * v[8], b[6] = (two * (yz + wx)) * v[8];
-        b[8] = (two * (xz + wy)) * v[9], b[9] = (two * (yz - wx)) * v[9], b[10] = (one - two * (xx + yy)) * v[9];
-        b[12] = v[0], b[13] = v[1], b[14] = v[2];
+        const v4df m[12] = {(one - two * (yy + zz)) * v[7], (two * (xy + wz)) * v[7], (two * (xz - wy)) * v[7],
+                            (two * (xy - wz)) * v[8], (one - two * (xx + zz)) * v[8], (two * (yz + wx)) * v[8],
+                            (two * (xz + wy)) * v[9], (two * (yz - wx)) * v[9], (one - two * (xx + yy)) * v[9],
+                            v[0], v[1], v[2]};
+#pragma GCC unroll 4
         for (int c = 0; c < 4; ++c)
-            for (int r = 0; r < 3; ++r) {
-                v4df o = p[r] * b[c * 4] + p[4 + r] * b[c * 4 + 1] + p[8 + r] * b[c * 4 + 2];
-                if (c == 3) o += p[12 + r];
-                memcpy(&out[c * 4 + r][i], &o, sizeof o);
-            }
-        for (int c = 0; c < 3; ++c) memcpy(&out[c * 4 + 3][i], &zero, sizeof zero);
-        memcpy(&out[15][i], &one, sizeof one);
+#pragma GCC unroll 3
+            for (int r = 0; r < 3; ++r)
+                product_row(a, r, i, &m[c * 3], &m[c * 3 + 1], &m[c * 3 + 2], c == 3 ? &a[12 + r][i] : NULL,
+                            &out[c * 4 + r][i]);
+        memcpy(&out[3][i], &zero, sizeof zero), memcpy(&out[7][i], &zero, sizeof zero);
+        memcpy(&out[11][i], &zero, sizeof zero), memcpy(&out[15][i], &one, sizeof one);
     }
 }
 #endif
