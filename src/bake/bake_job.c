@@ -233,7 +233,7 @@ static void decide_speed_reference(cb_bake_job *job, foot_cache *feet)
 {
     if (job->speed_reference >= 0) return;
     job->speed_reference = speed_reference_cached(feet, job->model, job->skin, job->plan, job->plan_count,
-                                                  job->speed_reference_from, sizeof job->speed_reference_from);
+                                                  job->threads ? job->threads : 1, job->speed_reference_from, sizeof job->speed_reference_from);
 }
 
 /* Root motion decided like the rest: a bake nobody told what to do with root travel keeps it,

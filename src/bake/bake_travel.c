@@ -19,13 +19,13 @@ static bool carries_travel(const cb_bake_job *job, const cb_clip_info *info, dou
 static void job_row_travel(const cb_bake_job *job, foot_cache *feet, cb_sampler *s, const cb_clip_info *info,
                            float *offsets, cb_row_travel *out)
 {
-    double lo[3], hi[3], model_height = cb_skin_rest_bounds(s, lo, hi);
     if (job->settings.row_travel_off) {
         memset(out, 0, sizeof *out);
         memset(offsets, 0, (size_t)info->frames * sizeof *offsets);
         snprintf(out->why, sizeof out->why, "not applied: turned off (--row-travel off, or the catalog's row_travel = false)");
         return;
     }
+    double model_height = foot_cache_rest_height(feet, s);
     row_travel_measure_cached(feet, s, info, !carries_travel(job, info, model_height), info->frames, offsets, out);
 }
 

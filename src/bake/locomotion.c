@@ -43,7 +43,7 @@ void ground_speed_cached(foot_cache *feet, cb_sampler *s, const cb_clip_info *cl
     memset(out, 0, sizeof *out);
     out->method = "none";
     if (clip->duration <= 0) return;
-    double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
+    double height = foot_cache_rest_height(feet, s);
     foot_cache_stride(feet, s, clip, &out->stride);
     no_stride_in_actions(cb_sampler_model(s), clip, &out->stride);
     out->root = clip->ground_speed;
@@ -106,36 +106,50 @@ static bool clip_follows_speed(int kind, const char *word, bool loops, const cb_
     return cb_decide_locomotion(kind, words, loops, gs, false, reason, sizeof reason);
 }
 
+/* Clip i of the plan (or the model's clip i) analyzed at 30 fps; false when it cannot be, or when
+ * it never follows the speed: a one-shot, or a clip whose name says an action
+ * (cb_decide_locomotion), whatever its feet do: those are not measured. */
+static bool clip_to_measure(cb_sampler *s, const cb_clip_plan *plan, uint32_t i, cb_clip_info *info, int *kind,
+                            char *word, size_t size)
+{
+    const cb_model *model = cb_sampler_model(s);
+    int32_t a = plan ? plan[i].animation : (int32_t)i;
+    cb_error err = {0};
+    cb_limits limits = cb_default_limits();
+    if (cb_clip_analyze(s, a, 30, plan ? plan[i].loop : -1, &limits, info, &err)) return false;
+    *kind = cb_name_says_locomotion(model->animations[a].name, word, size);
+    return info->loops && *kind >= 0;
+}
+
 double speed_reference_cached(foot_cache *feet, const cb_model *model, int32_t skin, const cb_clip_plan *plan,
-                              uint32_t count, char *why, size_t size)
+                              uint32_t count, uint32_t threads, char *why, size_t size)
 {
     cb_error err = {0};
     cb_sampler *s = skin >= 0 ? cb_sampler_create(model, skin, &err) : NULL;
     double best = 0;
     snprintf(why, size, "none: no clip is locomotion (none follows the speed)");
-    uint32_t n = plan ? count : model->animation_count;
+    uint32_t n = plan ? count : model->animation_count, measured = 0;
     cb_ground_speed *speed = malloc(sizeof *speed);
-    cb_limits limits = cb_default_limits();
-    for (uint32_t i = 0; s && speed && i < n; ++i) {
-        int32_t a = plan ? plan[i].animation : (int32_t)i;
-        cb_clip_info info;
-        char word[64];
-        if (cb_clip_analyze(s, a, 30, plan ? plan[i].loop : -1, &limits, &info, &err)) {
-            err = (cb_error){0};
-            continue;
-        }
-        /* A one-shot, or a clip whose name says an action, never follows the speed
-         * (cb_decide_locomotion), whatever its feet do: they are not measured. */
-        int kind = cb_name_says_locomotion(model->animations[a].name, word, sizeof word);
-        if (!info.loops || kind < 0) continue;
-        ground_speed_cached(feet, s, &info, speed);
-        if (!clip_follows_speed(kind, word, info.loops, speed) || speed->speed <= 0 || (best > 0 && speed->speed >= best))
+    cb_clip_info *infos = malloc((n ? n : 1) * sizeof *infos);
+    int *kinds = malloc((n ? n : 1) * sizeof *kinds);
+    char(*words)[64] = malloc((n ? n : 1) * sizeof *words);
+    /* Every clip analyzed first, so that their strides are measured side by side on the threads. */
+    for (uint32_t i = 0; s && infos && kinds && words && i < n; ++i)
+        if (clip_to_measure(s, plan, i, &infos[measured], &kinds[measured], words[measured], sizeof *words))
+            ++measured;
+    foot_cache_measure_clips(feet, s, infos, measured, threads);
+    for (uint32_t i = 0; speed && i < measured; ++i) {
+        const cb_clip_info *info = &infos[i];
+        cb_sampler_set_loop(s, info); /* as analyzing it left it: a stride not cached is sampled so */
+        ground_speed_cached(feet, s, info, speed);
+        if (!clip_follows_speed(kinds[i], words[i], info->loops, speed) || speed->speed <= 0 ||
+            (best > 0 && speed->speed >= best))
             continue;
         best = speed->speed;
-        snprintf(why, size, "the slowest locomotion clip '%s' (%s); --speed-reference overrides", model->animations[a].name,
-                 speed->method);
+        snprintf(why, size, "the slowest locomotion clip '%s' (%s); --speed-reference overrides",
+                 model->animations[info->animation].name, speed->method);
     }
-    free(speed);
+    free(speed), free(infos), free(kinds), free(words);
     cb_sampler_free(s);
     return best;
 }
@@ -144,7 +158,7 @@ double cb_speed_reference(const cb_model *model, int32_t skin, const cb_clip_pla
                           size_t size)
 {
     foot_cache *feet = foot_cache_create(); /* the feet found once for every clip */
-    double best = speed_reference_cached(feet, model, skin, plan, count, why, size);
+    double best = speed_reference_cached(feet, model, skin, plan, count, 1, why, size);
     foot_cache_free(feet);
     return best;
 }

@@ -33,9 +33,18 @@ static cb_vec3 root_position(cb_sampler *s, const cb_model *m, int32_t skin, uin
     return (cb_vec3){g[12], g[13], g[14]};
 }
 
-/* Size of the skeleton in the rest pose: the diagonal of its joints' bounding box. */
+/* The root joint's position in the globals the sampler holds (its last sample's). */
+static cb_vec3 root_in_globals(const cb_sampler *s, const cb_model *m, int32_t skin, uint32_t root)
+{
+    const double *g = s->globals + (size_t)m->skins[skin].joints[root] * 16;
+    return (cb_vec3){g[12], g[13], g[14]};
+}
+
+/* Size of the skeleton in the rest pose: the diagonal of its joints' bounding box. The rest pose
+ * is the sampler's for good: worked out once (every clip analyzed asks). */
 static double skeleton_extent(cb_sampler *s, const cb_model *m, int32_t skin)
 {
+    if (s->rest_extent > 0) return s->rest_extent;
     const double *g = cb_sample_globals(s, -1, 0);
     const cb_skin *sk = &m->skins[skin];
     cb_vec3 lo = {INFINITY, INFINITY, INFINITY}, hi = {-INFINITY, -INFINITY, -INFINITY};
@@ -45,7 +54,7 @@ static double skeleton_extent(cb_sampler *s, const cb_model *m, int32_t skin)
         hi.x = fmax(hi.x, p[0]), hi.y = fmax(hi.y, p[1]), hi.z = fmax(hi.z, p[2]);
     }
     double e = cb_vec3_length(cb_vec3_sub(hi, lo));
-    return e > 1e-9 ? e : 1.0;
+    return s->rest_extent = e > 1e-9 ? e : 1.0;
 }
 
 /* How far apart two poses are: the largest difference of any joint matrix's rotation terms,
@@ -110,19 +119,15 @@ static double largest_key_step(cb_sampler *s, const cb_clip_info *clip, double *
  * of a step from its first. A missing closing key makes the wrap about one key step, so a wrap
  * under CB_LOOP_CORRECTABLE of the clip's largest key step is the closing key, corrected
  * (loop_close.c), and the loop lasts the key span. */
-static cb_status judge_loop(cb_sampler *s, cb_clip_info *out, cb_error *err)
+static void judge_loop(cb_sampler *s, cb_clip_info *out, double *pose)
 {
     const cb_model *m = cb_sampler_model(s);
     int32_t skin = cb_sampler_skin(s);
     uint32_t joints = m->skins[skin].joint_count;
     double extent = skeleton_extent(s, m, skin), D = out->t1 - out->t0, h = out->key_interval;
     size_t n = (size_t)joints * 16;
-    double *pose = malloc(4 * n * sizeof(double)); /* at t0, t0 + h, t1 - h, t1 */
-    if (!pose) return cb_fail(err, CB_ERR_INTERNAL, "out of memory analysing clip '%s'", m->animations[out->animation].name);
     /* Horizontal root travel does not break a loop. */
     cb_vec3 travel = {out->root_displacement[0], 0, out->root_displacement[2]};
-    cb_sample_joint_matrices(s, out->animation, out->t0, pose);
-    cb_sample_joint_matrices(s, out->animation, out->t1, pose + 3 * n);
     out->wrap_jump = pose_distance(pose, pose + 3 * n, joints, travel, extent);
     out->loop_reason = out->wrap_jump <= CB_LOOP_TOLERANCE ? CB_LOOP_CLOSED : CB_LOOP_ENDS_ELSEWHERE;
     if (out->loop_reason == CB_LOOP_ENDS_ELSEWHERE && h > 0 && D >= 2 * h - 1e-6) {
@@ -138,8 +143,6 @@ static cb_status judge_loop(cb_sampler *s, cb_clip_info *out, cb_error *err)
             if (out->wrap_jump <= CB_LOOP_CORRECTABLE * out->largest_key_step) out->loop_reason = CB_LOOP_CLOSED_CORRECTED;
         }
     }
-    free(pose);
-    return CB_OK;
 }
 
 cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop_override, const cb_limits *limits,
@@ -163,8 +166,22 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
     double span = anim->t1 - anim->t0;
 
     uint32_t root = cb_skin_root_joint(m, skin);
-    cb_vec3 p0 = root_position(s, m, skin, root, animation, out->t0);
-    cb_vec3 p1 = root_position(s, m, skin, root, animation, out->t1);
+    /* The poses judge_loop compares, at t0, t0 + h, t1 - h and t1; the root's position at the
+     * ends read from the globals those ends were sampled through (the same bits as sampling
+     * every node again). */
+    size_t n = (size_t)m->skins[skin].joint_count * 16;
+    double *pose = span > 0 ? malloc(4 * n * sizeof(double)) : NULL;
+    if (span > 0 && !pose) return cb_fail(err, CB_ERR_INTERNAL, "out of memory analysing clip '%s'", anim->name);
+    cb_vec3 p0, p1;
+    if (pose) {
+        cb_sample_joint_matrices(s, animation, out->t0, pose);
+        p0 = root_in_globals(s, m, skin, root);
+        cb_sample_joint_matrices(s, animation, out->t1, pose + 3 * n);
+        p1 = root_in_globals(s, m, skin, root);
+    } else {
+        p0 = root_position(s, m, skin, root, animation, out->t0);
+        p1 = root_position(s, m, skin, root, animation, out->t1);
+    }
     cb_vec3 d = cb_vec3_sub(p1, p0);
     out->root_displacement[0] = d.x, out->root_displacement[1] = d.y, out->root_displacement[2] = d.z;
     if (span > 0) {
@@ -173,7 +190,8 @@ cb_status cb_clip_analyze(cb_sampler *s, int32_t animation, double fps, int loop
     }
 
     out->loop_reason = CB_LOOP_CLOSED; /* a clip of one instant */
-    if (span > 0 && judge_loop(s, out, err)) return err->status;
+    if (span > 0) judge_loop(s, out, pose);
+    free(pose);
     bool closes = out->loop_reason == CB_LOOP_CLOSED || out->loop_reason == CB_LOOP_CLOSED_CORRECTED;
     if (loop_override >= 0) {
         out->loops = loop_override != 0, out->loop_set = true;

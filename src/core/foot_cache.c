@@ -4,6 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "crowdbake/pool.h"
+#include "sampler.h" /* cb_joint_subset */
 #include "stride_feet.h"
 
 /* What a stride reads of its clip: two framings equal in these measure the same. */
@@ -25,6 +27,9 @@ struct foot_cache {
     int32_t skin;
     bool feet_found;
     stride_feet feet;
+    const cb_model *height_model; /* the rest pose's height, of this model and skin */
+    int32_t height_skin;
+    double height;
     entry *entries;
     uint32_t count, cap, measured, reused;
 };
@@ -104,6 +109,101 @@ void foot_cache_stride(foot_cache *c, cb_sampler *s, const cb_clip_info *clip, c
     stride_measure_feet(s, clip, &c->feet, &e->stride, &e->tracks);
     e->rows = clip->steps;
     memcpy(out, &e->stride, sizeof *out);
+}
+
+double foot_cache_rest_height(foot_cache *c, cb_sampler *s)
+{
+    double lo[3], hi[3];
+    if (!c) return cb_skin_rest_bounds(s, lo, hi);
+    if (c->height_model != cb_sampler_model(s) || c->height_skin != cb_sampler_skin(s))
+        c->height = cb_skin_rest_bounds(s, lo, hi), c->height_model = cb_sampler_model(s), c->height_skin = cb_sampler_skin(s);
+    return c->height;
+}
+
+/* ---- strides measured on several threads ---- */
+
+/* The clips of one foot_cache_measure_clips whose strides are not cached yet, and what each
+ * thread measured of them. */
+typedef struct prefetch {
+    const cb_model *model;
+    int32_t skin;
+    const stride_feet *feet;
+    const cb_clip_info **clips;
+    uint32_t count;
+    cb_stride *strides;
+    stride_tracks *tracks;
+    bool *done;
+} prefetch;
+
+/* The same joints as `like`, for another sampler of the model (a subset holds its lanes). */
+static cb_joint_subset *subset_like(const cb_sampler *s, const cb_joint_subset *like)
+{
+    uint32_t joints = s->model->skins[s->skin].joint_count;
+    bool *wanted = malloc((joints ? joints : 1) * sizeof *wanted);
+    if (!wanted) return NULL;
+    for (uint32_t j = 0; j < joints; ++j) wanted[j] = like->joint_slot[j] != UINT32_MAX;
+    cb_joint_subset *sub = cb_joint_subset_create(s, wanted);
+    free(wanted);
+    return sub;
+}
+
+/* Thread t's share: every threads-th clip, on a sampler and joint lanes of its own, the clip's
+ * loop set on it as cb_clip_analyze left it on the caller's (which samples it so). */
+static void measure_share(void *ctx, uint32_t t, uint32_t threads)
+{
+    prefetch *p = ctx;
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(p->model, p->skin, &err);
+    stride_feet own = *p->feet; /* its soles read, not written */
+    own.joints = s ? subset_like(s, p->feet->joints) : NULL;
+    for (uint32_t i = t; own.joints && i < p->count; i += threads) {
+        if (!cb_sampler_set_loop(s, p->clips[i])) continue;
+        stride_measure_feet(s, p->clips[i], &own, &p->strides[i], &p->tracks[i]);
+        p->done[i] = true;
+    }
+    cb_joint_subset_free(own.joints);
+    cb_sampler_free(s);
+}
+
+/* The clips of `clips` a stride is measured for and not cached (nor listed before), into `out`. */
+static uint32_t clips_to_measure(foot_cache *c, const cb_clip_info *clips, uint32_t count, const cb_clip_info **out)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        framing key = framing_of(&clips[i]);
+        bool listed = !(clips[i].duration > 0) || find(c, &key);
+        for (uint32_t k = 0; k < n && !listed; ++k) {
+            framing other = framing_of(out[k]);
+            listed = !memcmp(&other, &key, sizeof key);
+        }
+        if (!listed) out[n++] = &clips[i];
+    }
+    return n;
+}
+
+void foot_cache_measure_clips(foot_cache *c, cb_sampler *s, const cb_clip_info *clips, uint32_t count, uint32_t threads)
+{
+    if (threads < 2 || count < 2 || !cache_feet(c, s)) return;
+    prefetch p = {cb_sampler_model(s), cb_sampler_skin(s), &c->feet, NULL, 0, NULL, NULL, NULL};
+    p.clips = malloc(count * sizeof *p.clips);
+    p.strides = malloc(count * sizeof *p.strides);
+    p.tracks = calloc(count, sizeof *p.tracks);
+    p.done = calloc(count, sizeof *p.done);
+    if (p.clips && p.strides && p.tracks && p.done && (p.count = clips_to_measure(c, clips, count, p.clips)) >= 2)
+        cb_pool_run(threads < p.count ? threads : p.count, measure_share, &p);
+    /* Into the cache in the clips' order; one a thread could not measure is measured when asked. */
+    for (uint32_t i = 0; i < p.count; ++i) {
+        framing key = framing_of(p.clips[i]);
+        entry *e = p.done[i] ? add(c, &key) : NULL;
+        if (!e) {
+            stride_tracks_free(&p.tracks[i]);
+            continue;
+        }
+        memcpy(&e->stride, &p.strides[i], sizeof e->stride); /* padding too */
+        e->tracks = p.tracks[i], e->rows = p.clips[i]->steps;
+        c->measured++;
+    }
+    free(p.clips), free(p.strides), free(p.tracks), free(p.done);
 }
 
 const stride_feet *foot_cache_feet(foot_cache *c, cb_sampler *s) { return cache_feet(c, s) ? &c->feet : NULL; }

@@ -25,6 +25,17 @@ void foot_cache_free(foot_cache *cache);
 /* cb_stride_measure(sampler, clip, out), bit for bit, measured at most once per framing. */
 void foot_cache_stride(foot_cache *cache, cb_sampler *sampler, const cb_clip_info *clip, cb_stride *out);
 
+/* The strides of `clips` not cached yet, measured on `threads` threads at once (each on a
+ * sampler of its own, the clip's loop set on it as cb_clip_analyze sets it) and cached: each
+ * as foot_cache_stride would measure it, bit for bit. With one thread, or one clip to measure,
+ * nothing is done here (foot_cache_stride measures them when asked). */
+void foot_cache_measure_clips(foot_cache *cache, cb_sampler *sampler, const cb_clip_info *clips, uint32_t count,
+                              uint32_t threads);
+
+/* cb_skin_rest_bounds's height for the sampler's model and skin, worked out once (cache NULL:
+ * every time). */
+double foot_cache_rest_height(foot_cache *cache, cb_sampler *sampler);
+
 /* The model's feet as cb_stride_measure finds them (the rest pose's soles), found once; NULL
  * when the sampler is not the cache's model (or out of memory): the caller finds its own. */
 struct stride_feet;
@@ -39,7 +50,8 @@ void row_travel_measure_cached(foot_cache *cache, cb_sampler *sampler, const cb_
                                uint32_t rows, float *offsets, cb_row_travel *out); /* row_travel.c */
 void ground_speed_cached(foot_cache *cache, cb_sampler *sampler, const cb_clip_info *clip,
                          cb_ground_speed *out); /* locomotion.c */
+/* threads: the clips' strides measured on so many at once (foot_cache_measure_clips). */
 double speed_reference_cached(foot_cache *cache, const cb_model *model, int32_t skin, const cb_clip_plan *plan,
-                              uint32_t count, char *why, size_t size); /* locomotion.c */
+                              uint32_t count, uint32_t threads, char *why, size_t size); /* locomotion.c */
 
 #endif

@@ -3,6 +3,7 @@
  * cb_sample_joint_matrices), in their order, each over the batch's times side by side: the same
  * bits, at a fraction of the work where the joints wanted hang from a few of the rig's nodes. */
 #include "cb_math.h"
+#include "lanes.h"
 #include "sampler.h"
 
 #include <stdlib.h>
@@ -11,6 +12,14 @@
 #define B CB_SAMPLE_BATCH
 /* Per node of the subset, its lanes: translation, rotation, scale (10), then its global matrix (16). */
 enum { TRS_LANES = 10, NODE_LANES = 26 };
+
+/* A channel's component of a node's TRS: 0 translation (lanes 0-2), 1 rotation (3-6), 2 scale (7-9). */
+static int channel_component(const cb_channel *ch)
+{
+    return ch->path == CB_PATH_TRANSLATION ? 0 : ch->path == CB_PATH_ROTATION ? 1 : 2;
+}
+static int component_of_lane(int c) { return c < 3 ? 0 : c < 7 ? 1 : 2; }
+static const int component_first_lane[3] = {0, 3, 7};
 
 static double *node_lanes(const cb_joint_subset *sub, uint32_t slot, int c)
 {
@@ -30,10 +39,11 @@ cb_joint_subset *cb_joint_subset_create(const cb_sampler *s, const bool *wanted)
     sub->order = malloc((m->node_count + 1) * sizeof *sub->order);
     sub->slot = malloc((m->node_count + 1) * sizeof *sub->slot);
     sub->animated = malloc((m->node_count + 1) * sizeof *sub->animated);
+    sub->paths = malloc((m->node_count + 1) * sizeof *sub->paths);
     sub->joints = malloc((skin->joint_count + 1) * sizeof *sub->joints);
     sub->joint_slot = malloc((skin->joint_count + 1) * sizeof *sub->joint_slot);
     sub->channel_lanes = malloc((size_t)channels * 4 * B * sizeof(double));
-    if (!sub->relevant || !sub->order || !sub->slot || !sub->animated || !sub->joints || !sub->joint_slot ||
+    if (!sub->relevant || !sub->order || !sub->slot || !sub->animated || !sub->paths || !sub->joints || !sub->joint_slot ||
         !sub->channel_lanes)
         return cb_joint_subset_free(sub), NULL;
     for (uint32_t j = 0; j < skin->joint_count; ++j) {
@@ -52,35 +62,39 @@ cb_joint_subset *cb_joint_subset_create(const cb_sampler *s, const bool *wanted)
 void cb_joint_subset_free(cb_joint_subset *sub)
 {
     if (!sub) return;
-    free(sub->relevant), free(sub->order), free(sub->slot), free(sub->animated), free(sub->joints), free(sub->joint_slot);
+    free(sub->relevant), free(sub->order), free(sub->slot), free(sub->animated), free(sub->paths), free(sub->joints), free(sub->joint_slot);
     free(sub->channel_lanes), free(sub->node_lanes);
     free(sub);
 }
 
-/* Each node's rest TRS in every lane, then each channel's values over it (in channel order, as
- * sample_nodes writes them). */
-static void trs_lanes(const cb_sampler *s, const cb_animation *anim, cb_joint_subset *sub)
+/* The TRS components (bit 0 translation, 1 rotation, 2 scale) a relevant channel of the clip
+ * sets, per node of the subset, into sub->paths; and which nodes a channel animates. */
+static void animated_paths(const cb_animation *anim, cb_joint_subset *sub)
+{
+    for (uint32_t k = 0; k < sub->count; ++k) sub->paths[k] = 0, sub->animated[sub->order[k]] = false;
+    for (uint32_t c = 0; anim && c < anim->channel_count; ++c) {
+        const cb_channel *ch = &anim->channels[c];
+        if (!sub->relevant[ch->node]) continue;
+        sub->paths[sub->slot[ch->node]] |= (uint8_t)(1u << channel_component(ch));
+        sub->animated[ch->node] = true;
+    }
+}
+
+/* Each node's rest TRS in every lane of the components no channel sets (the others are the
+ * channels' values, written over them before as after). */
+static void rest_lanes(const cb_sampler *s, cb_joint_subset *sub)
 {
     const cb_model *m = s->model;
     for (uint32_t k = 0; k < sub->count; ++k) {
         const cb_node *n = &m->nodes[sub->order[k]];
-        const double *rest[TRS_LANES] = {&n->translation[0], &n->translation[1], &n->translation[2], &n->rotation[0],
-                                         &n->rotation[1],    &n->rotation[2],    &n->rotation[3],    &n->scale[0],
-                                         &n->scale[1],       &n->scale[2]};
+        const double rest[TRS_LANES] = {n->translation[0], n->translation[1], n->translation[2], n->rotation[0],
+                                        n->rotation[1],    n->rotation[2],    n->rotation[3],    n->scale[0],
+                                        n->scale[1],       n->scale[2]};
         for (int c = 0; c < TRS_LANES; ++c) {
-            double v = *rest[c], *lane = node_lanes(sub, k, c);
-            for (int i = 0; i < B; ++i) lane[i] = v;
+            if (sub->paths[k] >> component_of_lane(c) & 1u) continue;
+            double *lane = node_lanes(sub, k, c);
+            for (int i = 0; i < B; ++i) lane[i] = rest[c];
         }
-        sub->animated[sub->order[k]] = false;
-    }
-    for (uint32_t c = 0; anim && c < anim->channel_count; ++c) {
-        const cb_channel *ch = &anim->channels[c];
-        if (!sub->relevant[ch->node]) continue;
-        int offset = ch->path == CB_PATH_TRANSLATION ? 0 : ch->path == CB_PATH_ROTATION ? 3 : 7;
-        for (int k = 0; k < (ch->path == CB_PATH_ROTATION ? 4 : 3); ++k)
-            memcpy(node_lanes(sub, sub->slot[ch->node], offset + k), sub->channel_lanes + ((size_t)c * 4 + k) * B,
-                   B * sizeof(double));
-        sub->animated[ch->node] = true;
     }
 }
 
@@ -116,6 +130,52 @@ static CB_CLONE_INLINE void mul_affine_lanes(double (*restrict out)[B], const do
     for (int i = 0; i < B; ++i) out[15][i] = 1.0;
 }
 
+#if defined(__GNUC__)
+/* Row r of one column of mul_affine_lanes' product at lanes i .. i + 3, the column's three
+ * values given (b0, b1, b2), then the parent's translation added for the fourth column (`add`). */
+static CB_CLONE_INLINE void product_row(const double (*restrict a)[B], int r, int i, const v4df *b0, const v4df *b1,
+                                        const v4df *b2, const double *add, double *dst)
+{
+    v4df ar, ar4, ar8;
+    memcpy(&ar, &a[r][i], sizeof ar), memcpy(&ar4, &a[4 + r][i], sizeof ar4), memcpy(&ar8, &a[8 + r][i], sizeof ar8);
+    v4df o = ar * *b0 + ar4 * *b1 + ar8 * *b2;
+    if (add) {
+        v4df t;
+        memcpy(&t, add, sizeof t);
+        o += t;
+    }
+    memcpy(dst, &o, sizeof o);
+}
+
+/* matrix_from_trs_lanes, then mul_affine_lanes with the parent's global `a`, four lanes at a
+ * time without storing the local matrix: each lane the same operations in the same order (no
+ * contraction: -ffp-contract=off), so the same bits. */
+static CB_CLONE_INLINE void trs_global_lanes(const double *t, const double (*restrict a)[B], double (*restrict out)[B])
+{
+    const v4df one = {1, 1, 1, 1}, two = {2, 2, 2, 2}, zero = {0, 0, 0, 0};
+    for (int i = 0; i < B; i += 4) { /* unrolled within: the values stay in registers */
+        v4df v[TRS_LANES];
+#pragma GCC unroll 10
+        for (int c = 0; c < TRS_LANES; ++c) memcpy(&v[c], t + (size_t)c * B + i, sizeof v[c]);
+        v4df x = v[3], y = v[4], z = v[5], w = v[6];
+        v4df xx = x * x, yy = y * y, zz = z * z;
+        v4df xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
+        const v4df m[12] = {(one - two * (yy + zz)) * v[7], (two * (xy + wz)) * v[7], (two * (xz - wy)) * v[7],
+                            (two * (xy - wz)) * v[8], (one - two * (xx + zz)) * v[8], (two * (yz + wx)) * v[8],
+                            (two * (xz + wy)) * v[9], (two * (yz - wx)) * v[9], (one - two * (xx + yy)) * v[9],
+                            v[0], v[1], v[2]};
+#pragma GCC unroll 4
+        for (int c = 0; c < 4; ++c)
+#pragma GCC unroll 3
+            for (int r = 0; r < 3; ++r)
+                product_row(a, r, i, &m[c * 3], &m[c * 3 + 1], &m[c * 3 + 2], c == 3 ? &a[12 + r][i] : NULL,
+                            &out[c * 4 + r][i]);
+        memcpy(&out[3][i], &zero, sizeof zero), memcpy(&out[7][i], &zero, sizeof zero);
+        memcpy(&out[11][i], &zero, sizeof zero), memcpy(&out[15][i], &one, sizeof one);
+    }
+}
+#endif
+
 /* Each node's global matrix, parents first: sample_nodes' local_matrix and product per lane. */
 CB_TARGET_CLONES
 static void global_lanes(const cb_sampler *s, cb_joint_subset *sub)
@@ -125,6 +185,13 @@ static void global_lanes(const cb_sampler *s, cb_joint_subset *sub)
     for (uint32_t k = 0; k < sub->count; ++k) {
         uint32_t node = sub->order[k];
         const cb_node *n = &m->nodes[node];
+#if defined(__GNUC__)
+        if (n->parent >= 0 && !(n->has_matrix && !sub->animated[node])) {
+            trs_global_lanes(node_lanes(sub, k, 0), (const double(*)[B])node_lanes(sub, sub->slot[n->parent], TRS_LANES),
+                             (double(*)[B])node_lanes(sub, k, TRS_LANES));
+            continue;
+        }
+#endif
         if (n->has_matrix && !sub->animated[node])
             for (int c = 0; c < 16; ++c)
                 for (int i = 0; i < B; ++i) local[c][i] = n->matrix[c];
@@ -173,8 +240,17 @@ void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double
     const cb_animation *anim = animation >= 0 && animation < (int32_t)m->animation_count ? cb_sampler_clip(s, animation) : NULL;
     double padded[B]; /* the unused lanes repeat the last time */
     for (uint32_t i = 0; i < B; ++i) padded[i] = times[i < count ? i : count - 1];
+    /* The rest lanes no channel sets stay as filled from one batch of a clip to the next. */
+    if (!sub->filled || sub->filled_animation != animation || sub->filled_clip != anim) {
+        animated_paths(anim, sub);
+        rest_lanes(s, sub);
+        sub->filled = true, sub->filled_animation = animation, sub->filled_clip = anim;
+    }
     /* Channels that share their key times (one input accessor for many, as exporters write
-     * them) share one key search: the spans are the same whatever the channel. */
+     * them) share one key search: the spans are the same whatever the channel. A channel the
+     * lanes interpolate writes its rows (3, or 4 for a rotation) straight into its node's; one
+     * evaluated time by time writes 4, so through channel_lanes. Either way in channel order:
+     * of two channels of one component, the last one's values stay. */
     cb_key_spans spans;
     const float *spans_of = NULL;
     uint32_t spans_keys = 0;
@@ -185,10 +261,13 @@ void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double
         bool lanes = cb_channel_in_lanes(ch);
         if (lanes && (ch->times != spans_of || ch->key_count != spans_keys))
             cb_find_spans(ch->times, ch->key_count, padded, cursor, &spans), spans_of = ch->times, spans_keys = ch->key_count;
+        int component = channel_component(ch);
+        double *node = node_lanes(sub, sub->slot[ch->node], component_first_lane[component]);
+        double *scratch = sub->channel_lanes + (size_t)c * 4 * B;
         cb_channel_lanes_at(ch, padded, cursor, &s->wraps[animation], lanes ? &spans : NULL,
-                            (double(*)[B])(sub->channel_lanes + (size_t)c * 4 * B));
+                            (double(*)[B])(lanes ? node : scratch));
+        if (!lanes) memcpy(node, scratch, (component == 1 ? 4 : 3) * B * sizeof(double));
     }
-    trs_lanes(s, anim, sub);
     global_lanes(s, sub);
     joint_matrix_lanes(s, sub, out);
 }

@@ -20,6 +20,7 @@ struct cb_sampler {
     uint32_t *cursor_base; /* per clip: its channels' first cursor */
     cb_wrap *wraps;      /* per clip: where a loop without a closing key comes round (cb_sampler_set_period) */
     cb_animation **closed; /* per clip: its channels closed onto their first pose (loop_close.c), or NULL */
+    double rest_extent;  /* the rest pose's joint box diagonal (clip.c), 0 until worked out */
     /* The similarity path (cb_sampler_is_similarity) visits only the joints and their ancestors. */
     bool similar;
     bool *relevant;              /* per node: a joint or an ancestor of one */
@@ -86,6 +87,10 @@ typedef struct cb_joint_subset {
     uint32_t *joints, joint_count;
     uint32_t *joint_slot;    /* per skin joint: its place in joints, or UINT32_MAX */
     bool *animated;          /* per node, while sampling a batch: a channel sets it */
+    uint8_t *paths;          /* per node of order, while sampling a batch: the TRS components channels set */
+    bool filled;             /* the rest lanes hold filled_clip's (channels of animation filled_animation) */
+    int32_t filled_animation;
+    const struct cb_animation *filled_clip;
     double *channel_lanes;   /* per channel of a clip: 4 x CB_SAMPLE_BATCH values */
     double *node_lanes;      /* per node of order: TRS and global matrix, 26 x CB_SAMPLE_BATCH */
 } cb_joint_subset;

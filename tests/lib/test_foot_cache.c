@@ -3,7 +3,8 @@
  * Fox) and the robot, every clip's stride asked of the cache (framed at 30 fps, then at another
  * rate) equals cb_stride_measure's, field for field; the per-row travel with the cache the speed
  * reference filled equals the uncached one; the joints a sole reads, sampled alone, have the bits
- * of the whole skin's; and the speed reference that skips one-shots and action-named clips picks
+ * of the whole skin's (also on the 200-joint bench rig); strides measured side by side on
+ * threads equal those measured one by one; and the speed reference that skips one-shots and action-named clips picks
  * what measuring every clip picks. */
 #include "testutil.h"
 
@@ -73,7 +74,7 @@ static void test_row_travel_from_the_cache_is_the_same(void **state)
         cb_sampler *s = cb_sampler_create(m, 0, &err);
         foot_cache *cache = foot_cache_create();
         char why[256];
-        double ref = speed_reference_cached(cache, m, 0, NULL, 0, why, sizeof why);
+        double ref = speed_reference_cached(cache, m, 0, NULL, 0, 1, why, sizeof why);
         assert_true(ref > 0);
         for (uint32_t a = 0; a < m->animation_count; ++a) {
             cb_clip_info info;
@@ -158,39 +159,115 @@ static void check_batch(cb_sampler *s, int32_t a, const stride_feet *feet, const
     }
 }
 
+/* The 200-joint rig `make bench` measures (gen_samples --bench, 4 clips of 2 s): its soles hang
+ * from 20-joint limbs, so their joints are sampled over most of its nodes. */
+static cb_model *bench_rig(void)
+{
+    char gen[1100], cmd[2400];
+    snprintf(gen, sizeof gen, "%s", crowdbake_exe());
+    *strrchr(gen, '/') = 0;
+    snprintf(cmd, sizeof cmd, "mkdir -p " TEST_TMP "/foot_cache && %s/gen_samples --bench " TEST_TMP "/foot_cache 200 4 2 >/dev/null", gen);
+    assert_int_equal(system(cmd), 0);
+    cb_error err = {0};
+    cb_model *m = cb_gltf_load(TEST_TMP "/foot_cache/bench_j200_c4_s2.glb", NULL, &err);
+    if (!m) fail_msg("%s", err.message);
+    return m;
+}
+
+static void check_sole_bits(cb_model *m, const char *name)
+{
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    stride_feet feet;
+    assert_true(stride_feet_find(s, &feet));
+    size_t bones = m->skins[0].joint_count, checked = 0;
+    assert_true(feet.joints->joint_count >= 2 && feet.joints->joint_count < bones);
+    double *all = malloc(bones * 16 * sizeof(double));
+    double *lanes = malloc(feet.joints->joint_count * 16 * CB_SAMPLE_BATCH * sizeof(double)), times[CB_SAMPLE_BATCH];
+    for (uint32_t a = 0; a < m->animation_count; ++a) {
+        cb_clip_info info;
+        assert_int_equal(cb_clip_analyze(s, (int32_t)a, 30, -1, NULL, &info, &err), CB_OK); /* its wrap */
+        uint32_t count = 0;
+        for (uint32_t f = 0; f <= info.frames; ++f) {
+            double t = info.t0 + f * info.duration / info.frames;
+            check_batch(s, (int32_t)a, &feet, &t, 1, lanes, all, &checked);
+            times[count++] = t;
+            if (count < CB_SAMPLE_BATCH && f < info.frames) continue;
+            check_batch(s, (int32_t)a, &feet, times, count, lanes, all, &checked);
+            count = 0;
+        }
+    }
+    printf("  %s: %u of %zu joints sampled for %u soles, over %u nodes; %zu matrices checked\n", name,
+           feet.joints->joint_count, bones, feet.count, feet.joints->count, checked);
+    free(all), free(lanes);
+    stride_feet_free(&feet);
+    cb_sampler_free(s);
+}
+
+/* Batches of one clip after another, of a single time between them: the rest lanes kept from
+ * one batch of a clip to the next, the channels written into their nodes' lanes and the local
+ * and global matrices composed four lanes at a time give cb_sample_joint_matrices' bits. */
 static void test_sole_joints_alone_have_the_same_bits(void **state)
 {
     (void)state;
     for (size_t mi = 0; mi < sizeof models / sizeof *models; ++mi) {
         cb_model *m = load_shared(models[mi]);
-        cb_error err = {0};
-        cb_sampler *s = cb_sampler_create(m, 0, &err);
-        stride_feet feet;
-        assert_true(stride_feet_find(s, &feet));
-        size_t bones = m->skins[0].joint_count, checked = 0;
-        assert_true(feet.joints->joint_count >= 2 && feet.joints->joint_count < bones);
-        double *all = malloc(bones * 16 * sizeof(double));
-        double *lanes = malloc(feet.joints->joint_count * 16 * CB_SAMPLE_BATCH * sizeof(double)), times[CB_SAMPLE_BATCH];
-        for (uint32_t a = 0; a < m->animation_count; ++a) {
-            cb_clip_info info;
-            assert_int_equal(cb_clip_analyze(s, (int32_t)a, 30, -1, NULL, &info, &err), CB_OK); /* its wrap */
-            uint32_t count = 0;
-            for (uint32_t f = 0; f <= info.frames; ++f) {
-                double t = info.t0 + f * info.duration / info.frames;
-                check_batch(s, (int32_t)a, &feet, &t, 1, lanes, all, &checked);
-                times[count++] = t;
-                if (count < CB_SAMPLE_BATCH && f < info.frames) continue;
-                check_batch(s, (int32_t)a, &feet, times, count, lanes, all, &checked);
-                count = 0;
-            }
-        }
-        printf("  %s: %u of %zu joints sampled for %u soles, over %u nodes; %zu matrices checked\n", models[mi],
-               feet.joints->joint_count, bones, feet.count, feet.joints->count, checked);
-        free(all), free(lanes);
-        stride_feet_free(&feet);
-        cb_sampler_free(s);
+        check_sole_bits(m, models[mi]);
         cb_model_free(m);
     }
+    cb_model *rig = bench_rig();
+    check_sole_bits(rig, "the 200-joint bench rig");
+    cb_model_free(rig);
+}
+
+/* Every clip's stride measured side by side on 4 threads (foot_cache_measure_clips), each on a
+ * sampler of its own, is cb_stride_measure's field for field, answered from the cache without
+ * measuring again; and the speed reference on 4 threads is the one on 1, with the same words. */
+static void check_threaded_strides(cb_model *m, const char *name)
+{
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_clip_info *infos = calloc(m->animation_count, sizeof *infos);
+    for (uint32_t a = 0; a < m->animation_count; ++a)
+        assert_int_equal(cb_clip_analyze(s, (int32_t)a, 30, -1, NULL, &infos[a], &err), CB_OK);
+    foot_cache *cache = foot_cache_create();
+    foot_cache_measure_clips(cache, s, infos, m->animation_count, 4);
+    uint32_t measured, reused;
+    foot_cache_counts(cache, &measured, &reused);
+    assert_int_equal(measured, m->animation_count); /* every clip, before any is asked */
+    for (uint32_t a = 0; a < m->animation_count; ++a) {
+        cb_stride alone, cached;
+        cb_stride_measure(s, &infos[a], &alone);
+        foot_cache_stride(cache, s, &infos[a], &cached);
+        assert_same_stride(&alone, &cached, m->animations[a].name);
+    }
+    foot_cache_counts(cache, &measured, &reused);
+    assert_int_equal(measured, m->animation_count);
+    assert_int_equal(reused, m->animation_count);
+    foot_cache_free(cache);
+    char why1[256], why4[256];
+    foot_cache *c1 = foot_cache_create(), *c4 = foot_cache_create();
+    double one = speed_reference_cached(c1, m, 0, NULL, 0, 1, why1, sizeof why1);
+    double four = speed_reference_cached(c4, m, 0, NULL, 0, 4, why4, sizeof why4);
+    printf("  %s: %u strides on 4 threads; speed reference %.9g (%s)\n", name, m->animation_count, four, why4);
+    assert_memory_equal(&one, &four, sizeof one);
+    assert_string_equal(why1, why4);
+    foot_cache_free(c1), foot_cache_free(c4);
+    free(infos);
+    cb_sampler_free(s);
+}
+
+static void test_strides_on_threads_are_measured_ones(void **state)
+{
+    (void)state;
+    for (size_t mi = 0; mi < sizeof models / sizeof *models; ++mi) {
+        cb_model *m = load_shared(models[mi]);
+        check_threaded_strides(m, models[mi]);
+        cb_model_free(m);
+    }
+    cb_model *rig = bench_rig();
+    check_threaded_strides(rig, "the 200-joint bench rig");
+    cb_model_free(rig);
 }
 
 int main(void)
@@ -200,6 +277,7 @@ int main(void)
         cmocka_unit_test(test_row_travel_from_the_cache_is_the_same),
         cmocka_unit_test(test_speed_reference_skips_only_what_cannot_matter),
         cmocka_unit_test(test_sole_joints_alone_have_the_same_bits),
+        cmocka_unit_test(test_strides_on_threads_are_measured_ones),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
