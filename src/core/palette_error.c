@@ -133,13 +133,13 @@ static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out,
         }
 }
 
-/* Values 0-7 of the rows x[i] + at as lanes, v[k][i] = x[i][at + k]: four rows and four values
- * at a time, four 32-byte loads and a transpose, where value by value took a load and a store
- * each. */
-static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, double (*v)[B])
+/* Values 0 .. n - 1 (n: 8, or 16 for a matrix) of the rows x[i] + at as lanes, v[k][i] =
+ * x[i][at + k]: four rows and four values at a time, four 32-byte loads and a transpose, where
+ * value by value took a load and a store each. */
+static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, int n, double (*v)[B])
 {
     for (int first = 0; first < B; first += 4)
-        for (int h = 0; h < 8; h += 4) {
+        for (int h = 0; h < n; h += 4) {
             v4df r0, r1, r2, r3; /* named, not an array: they stay in registers */
             memcpy(&r0, x[first] + at + h, 32), memcpy(&r1, x[first + 1] + at + h, 32);
             memcpy(&r2, x[first + 2] + at + h, 32), memcpy(&r3, x[first + 3] + at + h, 32);
@@ -155,10 +155,10 @@ static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out,
             for (int r = 0; r < 4; ++r) out[i * stride + 4 * c + r] = r < 3 ? d[3 * c + r][i] : 0;
 }
 
-static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, double (*v)[B])
+static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, int n, double (*v)[B])
 {
     for (int i = 0; i < B; ++i)
-        for (int k = 0; k < 8; ++k) v[k][i] = x[i][at + k];
+        for (int k = 0; k < n; ++k) v[k][i] = x[i][at + k];
 }
 #endif
 
@@ -177,11 +177,11 @@ static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, co
                                              const double *const *mats, const double *const *a, const double *const *b,
                                              uint32_t count, double fr, double *diff, cb_joint_error *joints, bool *finite)
 {
-    double v[8][B], exact[15][B], decoded[15][B], len2[B];
-    values_to_lanes(a, (size_t)j * 16, v); /* the rows' values as lanes */
+    double v[8][B], exact[16][B], decoded[15][B], len2[B];
+    values_to_lanes(a, (size_t)j * 16, 8, v); /* the rows' values as lanes */
     if (b) {
         double w[8][B];
-        values_to_lanes(b, (size_t)j * 16, w);
+        values_to_lanes(b, (size_t)j * 16, 8, w);
         double sign[B];
         for (int i = 0; i < B; ++i) { /* the shorter way between the rows */
             double dot = v[0][i] * w[0][i] + v[1][i] * w[1][i] + v[2][i] * w[2][i] + v[3][i] * w[3][i];
@@ -199,9 +199,8 @@ static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, co
         for (int i = 0; i < B; ++i) v[k][i] = len2[i] == 0 ? (k == 3 ? 1 : 0) : v[k][i] * inv[i];
     if (sim) {
         trs_lanes(exact, sim + 4, sim, sim[7]);
-    } else { /* elements 3, 7, 11 and 15 are read by nothing a difference feeds (error_bound.h, skinning) */
-        for (int k = 0; k < 15; ++k)
-            for (int i = 0; k % 4 != 3 && i < B; ++i) exact[k][i] = mats[i][(size_t)j * 16 + k];
+    } else { /* (elements 3, 7, 11 and 15 are read by nothing a difference feeds: error_bound.h, skinning) */
+        values_to_lanes(mats, (size_t)j * 16, 16, exact);
     }
     trs_lanes(decoded, v + 4, v, v[7]); /* t = p for now: t = p - A b below */
     const float *bind = p->bind_positions + (size_t)j * 3;
