@@ -74,15 +74,34 @@ static CB_CLONE_INLINE void row_worst4(v4df *w, const v4df *c, const v4df *a, co
     *w = MAX4(x, tb);
 }
 
+/* The candidates at 0 and +-2a, +-2b need none of row_worst4's arithmetic but what the others
+ * share, with the same bits:
+ * - at 0: half of it is 0, a - 0 is a: max(max(0, |a|), |b|);
+ * - at -2a: half of it is -a (halving a doubled value is exact), a - (-a) is a + a = 2a
+ *   exactly and b - (-a) is b + a, which is a + b: max(max(|2a|, |2a|), |a + b|) =
+ *   max(|2a|, |a + b|) (where 2a overflows, |2a| is infinite and so is either worst);
+ * - at 2a: a - a is 0 (NaN where a is not finite) and b - a is -(a - b) exactly:
+ *   max(max(|2a|, 0), |a - b|) = max(|2a|, |a - b|) (a NaN |2a| stays NaN, an infinite one
+ *   stays itself past the NaN), and alike at -2b and 2b.
+ * A NaN a or b (no such interval) gives the same NaNs and the same skipped terms as
+ * row_worst4's. */
 static CB_CLONE_INLINE void best_offset4(v4df *c, const v4df *a, const v4df *b)
 {
-    const v4df two = {2, 2, 2, 2}, three = {3, 3, 3, 3}, minus_two = {-2, -2, -2, -2};
-    v4df cand[8] = {{0, 0, 0, 0}, two * *a / three, minus_two * *a, two * *a, two * *b / three, minus_two * *b, two * *b, *a + *b};
+    const v4df two = {2, 2, 2, 2}, three = {3, 3, 3, 3}, minus_two = {-2, -2, -2, -2}, zero = {0, 0, 0, 0};
+    v4df a2 = two * *a, b2 = two * *b, sum = *a + *b;
+    v4df abs_a2 = ABS4(a2), abs_b2 = ABS4(b2), abs_sum = ABS4(sum), abs_diff = ABS4(*a - *b);
+    v4df shared[5], cand[8] = {zero, a2 / three, minus_two * *a, a2, b2 / three, minus_two * *b, b2, sum};
+    v4df w0 = MAX4(zero, ABS4(*a));
+    shared[0] = MAX4(w0, ABS4(*b));
+    shared[1] = MAX4(abs_a2, abs_sum), shared[2] = MAX4(abs_a2, abs_diff);
+    shared[3] = MAX4(abs_b2, abs_sum), shared[4] = MAX4(abs_b2, abs_diff);
+    static const int short_cut[8] = {0, -1, 1, 2, -1, 3, 4, -1}; /* cand[k]'s worst in shared, or -1: row_worst4 */
     v4df best = *c, worst, w;
     row_worst4(&worst, c, a, b);
 #pragma GCC unroll 8
     for (int k = 0; k < 8; ++k) {
-        row_worst4(&w, &cand[k], a, b);
+        if (short_cut[k] >= 0) w = shared[short_cut[k]];
+        else row_worst4(&w, &cand[k], a, b);
         v4di take = w < worst;
         best = SELECT4(take, cand[k], best), worst = SELECT4(take, w, worst);
     }
