@@ -498,7 +498,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
         if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout) {
             cb_palette_free(&shared);
-            palette_probe kept = {NULL, NULL, job->search_poses}; /* what the rate search sampled */
+            palette_probe kept = {NULL, NULL, job->search_poses, NULL}; /* what the rate search sampled */
             resolved_plan(job, baked);
             if (palette_bake_with_facts(s, &opt, baked, job->plan_count, NULL, &kept, &shared, err) ||
                 bake_row_travel(job, feet, s, &shared, err))

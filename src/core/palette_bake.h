@@ -55,6 +55,11 @@ static inline void range_grow_affine(value_range *r, const float *v)
             if (fabsf(v[i * 4 + k]) > r->linear) r->linear = fabsf(v[i * 4 + k]);
 }
 
+/* pose_batch.c: what samples a skin's every joint at a batch of times at once, for one thread. */
+typedef struct pose_batch pose_batch;
+pose_batch *pose_batch_create(const cb_sampler *sampler); /* NULL: out of memory */
+void pose_batch_free(pose_batch *b);
+
 /* Per-thread scratch: each worker samples its own clips with its own sampler. */
 typedef struct worker {
     cb_sampler *sampler;
@@ -66,6 +71,7 @@ typedef struct worker {
     uint32_t rows_held;  /* the rows `rows` has room for */
     float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
     struct measure_scratch *measure; /* palette_error.c's, made by the worker's first measurement job */
+    pose_batch *batch;   /* its batches of poses (palette_prefetch_poses), made when first needed */
 } worker;
 
 typedef struct bake_state {
@@ -96,6 +102,7 @@ typedef struct bake_state {
     cb_sampler *lent;       /* the caller's sampler, for the one worker of a probe's bake; or NULL */
     struct cb_pool *pool;   /* the threads every pass runs on, or NULL for the caller's alone */
     struct kept_fit *pending; /* a probe's fitted rows, until its measurement says whether to keep them */
+    pose_batch *batch;      /* the probe's, for its one worker (on st->lent); or NULL: each worker's own */
 } bake_state;
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
@@ -224,6 +231,11 @@ void palette_skin_facts_free(palette_skin_facts *f);
  * worker's next call. extra (optional): the kept pose's extra doubles, NULL where not kept. */
 const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, uint32_t frame,
                                      double **extra);
+/* pose_batch.c: clip c's poses at `frames` (1..CB_SAMPLE_BATCH, increasing) of framing, those its
+ * pose cache (st->poses or the clip's st->clip_poses) lacks sampled together and kept, the
+ * bits palette_frame_matrices samples them with; nothing where no cache keeps them. */
+void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
+                            uint32_t count);
 /* palette_rows.c: a pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
  * from its matrices alone too (a probe's rows are rows of the others). */
 pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes);
@@ -237,6 +249,7 @@ typedef struct palette_probe {
                                     * the poses its search sampled (entries may be NULL), or NULL. The bake
                                     * samples again only the times no probe did (Cow's default bake: 43% of
                                     * its final bake); a clip's measurement then stays on one worker. */
+    pose_batch *batch;             /* the search thread's batches of poses (on the probe's sampler), or NULL */
 } palette_probe;
 
 /* cb_choose_rates keeping what each clip's search sampled: kept[i] (NULL: none yet) gets clip

@@ -269,6 +269,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     if (lanes) {
         const double *mats[B] = {NULL};
         if (similar) cb_clip_frame_lanes(w->sampler, &framing, times, count, st->opt->root_motion, w->lanes);
+        else palette_prefetch_poses(st, w, c, &framing, times, count); /* the rows' poses at once, where kept */
         for (uint32_t i = 0; !similar && i < count; ++i)
             mats[i] = exact_matrices(st, w, c, &framing, times[i], s->exact + (size_t)i * p->bone_count * 16);
         for (uint32_t i = count; !similar && i < B; ++i) mats[i] = mats[count - 1];

@@ -201,6 +201,11 @@ cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *r
     framing.steps *= 2;
     uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
     for (uint32_t i = 0; i < intervals; ++i) {
+        if (i % CB_SAMPLE_BATCH == 0) { /* the next mid-rows' poses, a batch at once where they are kept */
+            uint32_t next[CB_SAMPLE_BATCH], k = 0;
+            for (; k < CB_SAMPLE_BATCH && i + k < intervals; ++k) next[k] = 2 * (i + k) + 1;
+            palette_prefetch_poses(st, w, c, &framing, next, k);
+        }
         double *kept; /* the pose's qpos_similarity, where a search keeps it (as palette_matrix_row) */
         const double *mats = palette_frame_matrices(st, w, c, &framing, 2 * i + 1, &kept);
         bool derived = kept && kept[0] == 1;
