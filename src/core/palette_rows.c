@@ -44,8 +44,9 @@ static cb_status qpos_similarity(const double m[16], double q[5], const cb_model
                                "qpos layout cannot represent; use the affine or the mat4 layout",
                        model->source, model->nodes[skin->joints[bone]].name, why, l[0], l[1], l[2], frame, clip);
     double r[16], inv = 1 / s;
-    memcpy(r, m, sizeof r);
-    for (int i = 0; i < 12; ++i) r[i] *= inv;
+#pragma GCC unroll 12 /* not a copy, then a loop of products: -O2 leaves that a loop */
+    for (int i = 0; i < 12; ++i) r[i] = m[i] * inv;
+    r[12] = m[12], r[13] = m[13], r[14] = m[14], r[15] = m[15];
     cb_quat rot = cb_quat_from_mat4(r);
     q[0] = rot.x, q[1] = rot.y, q[2] = rot.z, q[3] = rot.w, q[4] = s;
     return CB_OK;
