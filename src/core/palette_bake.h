@@ -184,6 +184,11 @@ void palette_merge_ranges(cb_palette *p, const value_range *clips);
  * each joint's bind-pose position, and the texels no row covers set to zero. */
 cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
                               cb_clip_info **infos_out, cb_error *err);
+/* palette_plan.c: a rate search's analysis of a clip (at `fps`, with the plan's loop override
+ * `loop`) kept with the clip's poses, for the bake after the search: it frames the analysis at
+ * its own rate instead of analyzing the clip again (palette_frame_clips), where that gives what
+ * analyzing it gives. Out of memory: not kept. */
+void palette_keep_analysis(pose_cache *poses, const cb_clip_info *analysis, double fps, int loop);
 cb_status palette_plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err);
 void palette_bind_positions(const cb_skin *skin, float *bind);
 void palette_zero_padding(cb_palette *p);

@@ -256,6 +256,7 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
     clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts,
                       .probe = {.poses = poses, .analysis = analyzed ? &analysis : NULL, .batch = batch}};
     if (poses && fresh) pose_cache_clear(poses); /* another clip's times */
+    if (poses && !fresh && analyzed) palette_keep_analysis(poses, &analysis, common_rates[0], clip->loop); /* for the bake */
     return choose_clip(&cs, &f, rows, max_error, c, err);
 }
 
