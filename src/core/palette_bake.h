@@ -189,6 +189,17 @@ cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip
  * its own rate instead of analyzing the clip again (palette_frame_clips), where that gives what
  * analyzing it gives. Out of memory: not kept. */
 void palette_keep_analysis(pose_cache *poses, const cb_clip_info *analysis, double fps, int loop);
+/* palette_plan.c: whether `poses` keep an analysis of `animation` with loop override `loop` that
+ * stands in for analyzing it at fps; palette_take_kept_analysis: that analysis into *out as
+ * cb_clip_analyze (same sampler model and skin) gives it at fps, the clip's loop set on the
+ * sampler as analyzing it sets it (false: analyze it). */
+bool palette_kept_analysis(const pose_cache *poses, int32_t animation, int loop, double fps, const cb_limits *limits);
+bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, int loop, double fps, const cb_limits *limits,
+                                cb_clip_info *out, int32_t animation);
+/* rate_search.c: an analysis of clip i made before the search (at fps, loop override loop) kept
+ * for it: kept[i] made where it is NULL (a search's pose cache), the analysis attached. */
+void palette_seed_analysis(pose_cache **kept, uint32_t i, const cb_sampler *sampler, const cb_clip_info *analysis,
+                           double fps, int loop);
 cb_status palette_plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err);
 void palette_bind_positions(const cb_skin *skin, float *bind);
 void palette_zero_padding(cb_palette *p);

@@ -106,16 +106,29 @@ static bool take_analysis(const bake_state *st, const cb_clip_plan *plan, uint32
 {
     cb_clip_plan one = plan_entry(plan, i);
     pose_cache *poses = plan && st->clip_poses ? st->clip_poses[i] : NULL;
-    const kept_analysis *k = poses ? pose_cache_analysis(poses) : NULL;
     double fps = cb_clip_plan_fps(&one, st->opt->fps);
-    if (!k || k->loop != one.loop || k->info.animation != one.animation ||
-        !feet_weighed_alike(&k->info, k->fps, fps, &st->opt->limits))
-        return false;
+    if (!poses || !palette_kept_analysis(poses, one.animation, one.loop, fps, &st->opt->limits)) return false;
     for (uint32_t c = 0; c < count; ++c)
         if (c != i && plan_entry(plan, c).animation == one.animation) return false;
-    *out = k->info;
+    *out = ((const kept_analysis *)pose_cache_analysis(poses))->info;
     cb_clip_frame_at(st->model, fps, &st->opt->limits, out, err);
     return true;
+}
+
+bool palette_kept_analysis(const pose_cache *poses, int32_t animation, int loop, double fps, const cb_limits *limits)
+{
+    const kept_analysis *k = pose_cache_analysis(poses);
+    return k && k->loop == loop && k->info.animation == animation && feet_weighed_alike(&k->info, k->fps, fps, limits);
+}
+
+bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, int loop, double fps, const cb_limits *limits,
+                                cb_clip_info *out, int32_t animation)
+{
+    cb_error ignored = {0};
+    if (!palette_kept_analysis(poses, animation, loop, fps, limits)) return false;
+    *out = ((const kept_analysis *)pose_cache_analysis(poses))->info;
+    /* As analyzing it ends: framed at fps, the clip's loop set on the sampler. */
+    return !cb_clip_frame_at(cb_sampler_model(sampler), fps, limits, out, &ignored) && cb_sampler_set_loop(sampler, out);
 }
 
 /* The clips' analyses into infos, on opt->threads threads where there are clips to share (or

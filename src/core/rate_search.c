@@ -252,7 +252,10 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
      * probe analyzes the clip itself and fails as it would. */
     cb_clip_info analysis;
     cb_error unanalyzed = {0};
-    bool analyzed = !cb_clip_analyze(s, clip->animation, common_rates[0], clip->loop, &o->limits, &analysis, &unanalyzed);
+    /* (or its analysis from before the search, kept with its poses, framed at that rate) */
+    bool analyzed = (poses && !fresh &&
+                     palette_take_kept_analysis(poses, s, clip->loop, common_rates[0], &o->limits, &analysis, clip->animation)) ||
+                    !cb_clip_analyze(s, clip->animation, common_rates[0], clip->loop, &o->limits, &analysis, &unanalyzed);
     clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts,
                       .probe = {.poses = poses, .analysis = analyzed ? &analysis : NULL, .batch = batch}};
     if (poses && fresh) pose_cache_clear(poses); /* another clip's times */
@@ -263,6 +266,13 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
 static pose_cache *search_pose_cache(const cb_sampler *s)
 {
     return palette_probe_poses(cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count, SEARCH_POSE_BYTES);
+}
+
+void palette_seed_analysis(pose_cache **kept, uint32_t i, const cb_sampler *s, const cb_clip_info *analysis, double fps,
+                           int loop)
+{
+    if (kept && !kept[i]) kept[i] = search_pose_cache(s);
+    if (kept && kept[i]) palette_keep_analysis(kept[i], analysis, fps, loop);
 }
 
 double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,

@@ -5,7 +5,8 @@
  * every shared model with a skin, Cow, Husky and the samples, every clip, with its loop decided
  * by the analysis, forced on and forced off, analyzed at 2 fps and framed at 24, 30, 48, 90 and
  * 120 fps equals the clip analyzed at that rate, field for field (the analysis clears the
- * whole struct first, so bytes compare). */
+ * whole struct first, so bytes compare), and the other way (the search takes the analysis the
+ * root motion's decision made at the bake's fps, framed at 2). */
 #include "testutil.h"
 
 #include <string.h>
@@ -39,7 +40,13 @@ static uint32_t compare_model(cb_model *m)
                 if (memcmp(&framed, &analyzed, sizeof framed))
                     fail_msg("%s: clip '%s' (loop %d) framed at %g fps differs from its analysis there", m->source,
                              m->animations[a].name, loop, rates[r]);
-                ++compared;
+                /* and back: the root motion's analysis (at the bake's fps) framed for the search */
+                cb_clip_info back = analyzed;
+                assert_int_equal(cb_clip_frame_at(m, 2, NULL, &back, &e1), CB_OK);
+                if (memcmp(&back, &searched, sizeof back))
+                    fail_msg("%s: clip '%s' (loop %d) analyzed at %g fps and framed at 2 differs from its analysis at 2",
+                             m->source, m->animations[a].name, loop, rates[r]);
+                compared += 2;
             }
         }
     cb_sampler_free(s);
