@@ -172,6 +172,23 @@ static void refine_offsets(double *c, const double *d, uint32_t frames, uint32_t
     }
 }
 
+/* A bone's sagittas over one interval: the exact mid-row (aj, bj its rows, mj the mid-row) less
+ * the rows' mean, a qpos quaternion's scaled to the mean's length on the blend's side. Inline,
+ * so that qpos's 8 values a bone are a constant its loops unroll on. */
+static inline __attribute__((always_inline)) void interval_sagitta(const float *aj, const float *bj, const float *mj,
+                                                                   double *dj, uint32_t values, bool qpos)
+{
+    double mean[16], scale = 1;
+    for (uint32_t k = 0; k < values; ++k) mean[k] = 0.5 * ((double)aj[k] + bj[k]);
+    if (qpos) {
+        double dot = 0, mm = 0;
+        for (int k = 0; k < 4; ++k) dot += mean[k] * mj[k], mm += (double)mj[k] * mj[k];
+        double ml = sqrt(mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2] + mean[3] * mean[3]);
+        scale = mm > 0 ? ml / sqrt(mm) * (dot < 0 ? -1 : 1) : 1; /* the exact direction, on the blend's side */
+    }
+    for (uint32_t k = 0; k < values; ++k) dj[k] = (qpos && k < 4 ? mj[k] * scale : mj[k]) - mean[k];
+}
+
 void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones, uint32_t values, bool loops, bool qpos)
 {
     uint32_t intervals = loops ? frames : frames - 1, stride = bones * values;
@@ -183,16 +200,9 @@ void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones
         const float *m = mids + (size_t)i * stride;
         double *di = d + (size_t)i * stride;
         for (uint32_t j = 0; j < bones; ++j) {
-            const float *aj = a + (size_t)j * values, *bj = b + (size_t)j * values, *mj = m + (size_t)j * values;
-            double *dj = di + (size_t)j * values, mean[16], scale = 1;
-            for (uint32_t k = 0; k < values; ++k) mean[k] = 0.5 * ((double)aj[k] + bj[k]);
-            if (qpos) {
-                double dot = 0, mm = 0;
-                for (int k = 0; k < 4; ++k) dot += mean[k] * mj[k], mm += (double)mj[k] * mj[k];
-                double ml = sqrt(mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2] + mean[3] * mean[3]);
-                scale = mm > 0 ? ml / sqrt(mm) * (dot < 0 ? -1 : 1) : 1; /* the exact direction, on the blend's side */
-            }
-            for (uint32_t k = 0; k < values; ++k) dj[k] = (qpos && k < 4 ? mj[k] * scale : mj[k]) - mean[k];
+            size_t at = (size_t)j * values;
+            if (qpos && values == 8) interval_sagitta(a + at, b + at, m + at, di + at, 8, true); /* unrolled */
+            else interval_sagitta(a + at, b + at, m + at, di + at, values, qpos);
         }
     }
     double *c = malloc((size_t)frames * stride * sizeof(double));
