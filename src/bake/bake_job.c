@@ -236,11 +236,6 @@ static void decide_speed_reference(cb_bake_job *job, foot_cache *feet)
                                                   job->speed_reference_from, sizeof job->speed_reference_from);
 }
 
-/* Root motion decided like the rest: a bake nobody told what to do with root travel keeps it,
- * unless a loop travels: its wrap would pull the body back at any rate, and what a crowd wants
- * is the loop in place with its velocity recorded, the game moving the instance. Then the loops
- * go in place and the one-shots keep their travel (a fall ends where it falls); bake_notes says
- * so, and --root-motion (or the catalog's root_motion) overrides. */
 /* A clip's analysis made while planning, kept for its rate search (palette_seed_analysis). */
 typedef struct early_analysis {
     cb_clip_info info;
@@ -249,7 +244,12 @@ typedef struct early_analysis {
     bool made; /* info holds it */
 } early_analysis;
 
-/* The clips it analyzes go into early[] (each clip's slot). */
+/* Root motion decided like the rest: a bake nobody told what to do with root travel keeps it,
+ * unless a loop travels: its wrap would pull the body back at any rate, and what a crowd wants
+ * is the loop in place with its velocity recorded, the game moving the instance. Then the loops
+ * go in place and the one-shots keep their travel (a fall ends where it falls); bake_notes says
+ * so, and --root-motion (or the catalog's root_motion) overrides. The clips it analyzes go into
+ * early[] (each clip's slot), for their rate searches. */
 static void decide_root_motion(cb_bake_job *job, early_analysis *early)
 {
     if (job->settings.from.root_motion != CB_FROM_DEFAULT || job->settings.root_motion != CB_ROOT_MOTION_KEEP) return;

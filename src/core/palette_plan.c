@@ -121,8 +121,8 @@ bool palette_kept_analysis(const pose_cache *poses, int32_t animation, int loop,
     return k && k->loop == loop && k->info.animation == animation && feet_weighed_alike(&k->info, k->fps, fps, limits);
 }
 
-bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, int loop, double fps, const cb_limits *limits,
-                                cb_clip_info *out, int32_t animation)
+bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, int32_t animation, int loop, double fps,
+                                const cb_limits *limits, cb_clip_info *out)
 {
     cb_error ignored = {0};
     if (!palette_kept_analysis(poses, animation, loop, fps, limits)) return false;

@@ -254,7 +254,7 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
     cb_error unanalyzed = {0};
     /* (or its analysis from before the search, kept with its poses, framed at that rate) */
     bool analyzed = (poses && !fresh &&
-                     palette_take_kept_analysis(poses, s, clip->loop, common_rates[0], &o->limits, &analysis, clip->animation)) ||
+                     palette_take_kept_analysis(poses, s, clip->animation, clip->loop, common_rates[0], &o->limits, &analysis)) ||
                     !cb_clip_analyze(s, clip->animation, common_rates[0], clip->loop, &o->limits, &analysis, &unanalyzed);
     clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts,
                       .probe = {.poses = poses, .analysis = analyzed ? &analysis : NULL, .batch = batch}};
