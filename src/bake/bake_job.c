@@ -236,12 +236,21 @@ static void decide_speed_reference(cb_bake_job *job, foot_cache *feet)
                                                   job->threads ? job->threads : 1, job->speed_reference_from, sizeof job->speed_reference_from);
 }
 
+/* A clip's analysis made while planning, kept for its rate search (palette_seed_analysis). */
+typedef struct early_analysis {
+    cb_clip_info info;
+    double fps;
+    int loop;  /* the plan's loop override it was made with */
+    bool made; /* info holds it */
+} early_analysis;
+
 /* Root motion decided like the rest: a bake nobody told what to do with root travel keeps it,
  * unless a loop travels: its wrap would pull the body back at any rate, and what a crowd wants
  * is the loop in place with its velocity recorded, the game moving the instance. Then the loops
  * go in place and the one-shots keep their travel (a fall ends where it falls); bake_notes says
- * so, and --root-motion (or the catalog's root_motion) overrides. */
-static void decide_root_motion(cb_bake_job *job)
+ * so, and --root-motion (or the catalog's root_motion) overrides. The clips it analyzes go into
+ * early[] (each clip's slot), for their rate searches. */
+static void decide_root_motion(cb_bake_job *job, early_analysis *early)
 {
     if (job->settings.from.root_motion != CB_FROM_DEFAULT || job->settings.root_motion != CB_ROOT_MOTION_KEEP) return;
     cb_error e = {0};
@@ -250,11 +259,11 @@ static void decide_root_motion(cb_bake_job *job)
     double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi);
     bool travels = false;
     for (uint32_t i = 0; i < job->plan_count && !travels; ++i) {
-        cb_clip_info info;
+        early_analysis *a = &early[i];
         cb_error ce = {0};
-        double fps = cb_clip_plan_fps(&job->plan[i], job->settings.fps);
-        if (!cb_clip_analyze(s, job->plan[i].animation, fps, job->plan[i].loop, &job->limits, &info, &ce))
-            travels = info.loops && cb_clip_travels(&info, height);
+        a->fps = cb_clip_plan_fps(&job->plan[i], job->settings.fps), a->loop = job->plan[i].loop;
+        a->made = !cb_clip_analyze(s, job->plan[i].animation, a->fps, a->loop, &job->limits, &a->info, &ce);
+        travels = a->made && a->info.loops && cb_clip_travels(&a->info, height);
     }
     cb_sampler_free(s);
     if (travels) job->settings.root_motion = CB_ROOT_MOTION_LOOPS_IN_PLACE, job->settings.from.root_motion = CB_FROM_TRAVEL;
@@ -286,19 +295,27 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
     for (uint32_t i = 0; i < n; ++i) job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false};
     job->plan_count = n;
     if (job->settings.plant_feet && !job->planted && plant_feet_apply(job, err)) return free(goals), err->status;
-    decide_root_motion(job);
+    early_analysis *early = calloc(n ? n : 1, sizeof *early);
+    bool *searched = calloc(n ? n : 1, sizeof *searched);
+    if (!early || !searched) return free(goals), free(early), free(searched), cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    decide_root_motion(job, early);
     resolve_clips(job);
     for (uint32_t i = 0; i < n; ++i) plan_step_rows(job, i);
-    for (uint32_t i = 0; i < n; ++i) any |= clip_goal(job, i, &goals[i]);
+    for (uint32_t i = 0; i < n; ++i) any |= searched[i] = clip_goal(job, i, &goals[i]);
     if (any) {
         cb_sampler *s = cb_sampler_create(job->model, job->skin, err); /* planted feet: the copy */
         cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
         job->search_poses = calloc(n ? n : 1, sizeof(pose_cache *)); /* NULL: nothing kept, as slow */
+        /* Each searched clip's analysis from the root motion's decision, kept for its search
+         * (which takes it where it stands in for its own: palette_take_kept_analysis). */
+        for (uint32_t i = 0; s && i < n; ++i)
+            if (searched[i] && early[i].made)
+                palette_seed_analysis(job->search_poses, i, s, &early[i].info, early[i].fps, early[i].loop);
         if (s && !palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_poses, err))
             bake_reach_for_transients(job, s, &o, err);
         cb_sampler_free(s);
     }
-    free(goals);
+    free(goals), free(early), free(searched);
     job->planned = !err->status;
     return err->status;
 }
@@ -498,7 +515,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
         if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout) {
             cb_palette_free(&shared);
-            palette_probe kept = {NULL, NULL, job->search_poses}; /* what the rate search sampled */
+            palette_probe kept = {NULL, NULL, job->search_poses, NULL}; /* what the rate search sampled */
             resolved_plan(job, baked);
             if (palette_bake_with_facts(s, &opt, baked, job->plan_count, NULL, &kept, &shared, err) ||
                 bake_row_travel(job, feet, s, &shared, err))

@@ -74,15 +74,34 @@ static CB_CLONE_INLINE void row_worst4(v4df *w, const v4df *c, const v4df *a, co
     *w = MAX4(x, tb);
 }
 
+/* The candidates at 0 and +-2a, +-2b need none of row_worst4's arithmetic but what the others
+ * share, with the same bits:
+ * - at 0: half of it is 0, a - 0 is a: max(max(0, |a|), |b|);
+ * - at -2a: half of it is -a (halving a doubled value is exact), a - (-a) is a + a = 2a
+ *   exactly and b - (-a) is b + a, which is a + b: max(max(|2a|, |2a|), |a + b|) =
+ *   max(|2a|, |a + b|) (where 2a overflows, |2a| is infinite and so is either worst);
+ * - at 2a: a - a is 0 (NaN where a is not finite) and b - a is -(a - b) exactly:
+ *   max(max(|2a|, 0), |a - b|) = max(|2a|, |a - b|) (a NaN |2a| stays NaN, an infinite one
+ *   stays itself past the NaN), and alike at -2b and 2b.
+ * A NaN a or b (no such interval) gives the same NaNs and the same skipped terms as
+ * row_worst4's. */
 static CB_CLONE_INLINE void best_offset4(v4df *c, const v4df *a, const v4df *b)
 {
-    const v4df two = {2, 2, 2, 2}, three = {3, 3, 3, 3}, minus_two = {-2, -2, -2, -2};
-    v4df cand[8] = {{0, 0, 0, 0}, two * *a / three, minus_two * *a, two * *a, two * *b / three, minus_two * *b, two * *b, *a + *b};
+    const v4df two = {2, 2, 2, 2}, three = {3, 3, 3, 3}, minus_two = {-2, -2, -2, -2}, zero = {0, 0, 0, 0};
+    v4df a2 = two * *a, b2 = two * *b, sum = *a + *b;
+    v4df abs_a2 = ABS4(a2), abs_b2 = ABS4(b2), abs_sum = ABS4(sum), abs_diff = ABS4(*a - *b);
+    v4df shared[5], cand[8] = {zero, a2 / three, minus_two * *a, a2, b2 / three, minus_two * *b, b2, sum};
+    v4df w0 = MAX4(zero, ABS4(*a));
+    shared[0] = MAX4(w0, ABS4(*b));
+    shared[1] = MAX4(abs_a2, abs_sum), shared[2] = MAX4(abs_a2, abs_diff);
+    shared[3] = MAX4(abs_b2, abs_sum), shared[4] = MAX4(abs_b2, abs_diff);
+    static const int short_cut[8] = {0, -1, 1, 2, -1, 3, 4, -1}; /* cand[k]'s worst in shared, or -1: row_worst4 */
     v4df best = *c, worst, w;
     row_worst4(&worst, c, a, b);
 #pragma GCC unroll 8
     for (int k = 0; k < 8; ++k) {
-        row_worst4(&w, &cand[k], a, b);
+        if (short_cut[k] >= 0) w = shared[short_cut[k]];
+        else row_worst4(&w, &cand[k], a, b);
         v4di take = w < worst;
         best = SELECT4(take, cand[k], best), worst = SELECT4(take, w, worst);
     }
@@ -93,10 +112,14 @@ static CB_CLONE_INLINE void best_offset4(v4df *c, const v4df *a, const v4df *b)
 /* Sweeps over the rows, each row's offsets moved to the best for its neighbours' (coordinate
  * descent): no step raises the worst error of a value's rows and intervals, and a few sweeps
  * carry a fast interval's need to its neighbours. Each value's offsets depend on that value's
- * alone, so values are swept a block at a time (REFINE_BLOCK: a cache line of them) and a block
- * stops at the first sweep that moves none of its offsets: the next would see the same inputs
- * and move none either, so stopping there gives the same bits as all FIT_SWEEPS. */
-enum { FIT_SWEEPS = 8, REFINE_BLOCK = 8 };
+ * alone, so values are swept a block at a time (REFINE_BLOCK: two cache lines of them) and a
+ * block stops at the first sweep that moves none of its offsets: the next would see the same
+ * inputs and move none either, so stopping there gives the same bits as all FIT_SWEEPS. Most
+ * blocks of the shared models take all eight sweeps (their values settle slowly), so a wider
+ * block, fewer rows' worth of bookkeeping, costs less than it loses to blocks that stop later:
+ * Husky's default bake 891 -> 881 M instructions from 8 values to 16, 877 M at 32 (but Fox's
+ * more); 4 values, 913 M. */
+enum { FIT_SWEEPS = 8, REFINE_BLOCK = 16 };
 
 /* Values v0 .. v1 - 1 of row f moved to their best offsets; true when one moved. `prev` and
  * `next` are the rows beside it, dp and dn the intervals before and after it (NULL: none). */
@@ -149,6 +172,23 @@ static void refine_offsets(double *c, const double *d, uint32_t frames, uint32_t
     }
 }
 
+/* A bone's sagittas over one interval: the exact mid-row (aj, bj its rows, mj the mid-row) less
+ * the rows' mean, a qpos quaternion's scaled to the mean's length on the blend's side. Inline,
+ * so that qpos's 8 values a bone are a constant its loops unroll on. */
+static inline __attribute__((always_inline)) void interval_sagitta(const float *aj, const float *bj, const float *mj,
+                                                                   double *dj, uint32_t values, bool qpos)
+{
+    double mean[16], scale = 1;
+    for (uint32_t k = 0; k < values; ++k) mean[k] = 0.5 * ((double)aj[k] + bj[k]);
+    if (qpos) {
+        double dot = 0, mm = 0;
+        for (int k = 0; k < 4; ++k) dot += mean[k] * mj[k], mm += (double)mj[k] * mj[k];
+        double ml = sqrt(mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2] + mean[3] * mean[3]);
+        scale = mm > 0 ? ml / sqrt(mm) * (dot < 0 ? -1 : 1) : 1; /* the exact direction, on the blend's side */
+    }
+    for (uint32_t k = 0; k < values; ++k) dj[k] = (qpos && k < 4 ? mj[k] * scale : mj[k]) - mean[k];
+}
+
 void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones, uint32_t values, bool loops, bool qpos)
 {
     uint32_t intervals = loops ? frames : frames - 1, stride = bones * values;
@@ -160,16 +200,9 @@ void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones
         const float *m = mids + (size_t)i * stride;
         double *di = d + (size_t)i * stride;
         for (uint32_t j = 0; j < bones; ++j) {
-            const float *aj = a + (size_t)j * values, *bj = b + (size_t)j * values, *mj = m + (size_t)j * values;
-            double *dj = di + (size_t)j * values, mean[16], scale = 1;
-            for (uint32_t k = 0; k < values; ++k) mean[k] = 0.5 * ((double)aj[k] + bj[k]);
-            if (qpos) {
-                double dot = 0, mm = 0;
-                for (int k = 0; k < 4; ++k) dot += mean[k] * mj[k], mm += (double)mj[k] * mj[k];
-                double ml = sqrt(mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2] + mean[3] * mean[3]);
-                scale = mm > 0 ? ml / sqrt(mm) * (dot < 0 ? -1 : 1) : 1; /* the exact direction, on the blend's side */
-            }
-            for (uint32_t k = 0; k < values; ++k) dj[k] = (qpos && k < 4 ? mj[k] * scale : mj[k]) - mean[k];
+            size_t at = (size_t)j * values;
+            if (qpos && values == 8) interval_sagitta(a + at, b + at, m + at, di + at, 8, true); /* unrolled */
+            else interval_sagitta(a + at, b + at, m + at, di + at, values, qpos);
         }
     }
     double *c = malloc((size_t)frames * stride * sizeof(double));

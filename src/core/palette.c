@@ -121,8 +121,14 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
             uint32_t count = f0 + n - f < CB_SAMPLE_BATCH ? f0 + n - f : CB_SAMPLE_BATCH;
             palette_similarity_rows(st, w, c, f, count, rows + (f - f0) * row_floats, &bounds);
         }
-        for (uint32_t f = f0; made && !similar && f < f0 + n; ++f)
+        for (uint32_t f = f0; made && !similar && f < f0 + n; ++f) {
+            if ((f - f0) % CB_SAMPLE_BATCH == 0) { /* the next rows' poses, a batch at once where they are kept */
+                uint32_t next[CB_SAMPLE_BATCH], k = 0;
+                for (; k < CB_SAMPLE_BATCH && f + k < f0 + n; ++k) next[k] = f + k;
+                palette_prefetch_poses(st, w, c, info, next, k);
+            }
             if (palette_matrix_row(st, w, c, f, rows + (f - f0) * row_floats, &bounds, err)) return err->status;
+        }
         if (made && fit && fit_clip(st, w, c, rows, err)) return err->status;
         if (made && fit) palette_keep_fit(st, c, rows, &bounds);
         for (uint32_t j = 0; f0 == 0 && j < p->bone_count; ++j) memcpy(w->first + j * 4, rows + j * qv, 4 * sizeof(float));
@@ -191,6 +197,7 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     free(w.first);
     free(w.rows);
     palette_measure_scratch_free(w.measure);
+    pose_batch_free(w.batch);
 }
 
 static uint32_t threads_used(const bake_state *st, uint32_t jobs)
@@ -288,7 +295,8 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     cb_clip_info *infos = NULL;
     st.facts = facts, st.radius = facts->reach, st.groups = &facts->groups;
     if (probe && plan && plan_count == 1 && opt->threads <= 1) /* one clip's, one thread's */
-        st.poses = probe->poses, st.analysis = probe->analysis, st.lent = sampler; /* no sampler made per pass */
+        st.poses = probe->poses, st.analysis = probe->analysis, st.lent = sampler, /* no sampler made per pass */
+        st.batch = probe->batch;
     if (probe) st.clip_poses = probe->clip_poses;
     if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;

@@ -55,6 +55,11 @@ static inline void range_grow_affine(value_range *r, const float *v)
             if (fabsf(v[i * 4 + k]) > r->linear) r->linear = fabsf(v[i * 4 + k]);
 }
 
+/* pose_batch.c: what samples a skin's every joint at a batch of times at once, for one thread. */
+typedef struct pose_batch pose_batch;
+pose_batch *pose_batch_create(const cb_sampler *sampler); /* NULL: out of memory */
+void pose_batch_free(pose_batch *b);
+
 /* Per-thread scratch: each worker samples its own clips with its own sampler. */
 typedef struct worker {
     cb_sampler *sampler;
@@ -66,6 +71,7 @@ typedef struct worker {
     uint32_t rows_held;  /* the rows `rows` has room for */
     float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
     struct measure_scratch *measure; /* palette_error.c's, made by the worker's first measurement job */
+    pose_batch *batch;   /* its batches of poses (palette_prefetch_poses), made when first needed */
 } worker;
 
 typedef struct bake_state {
@@ -96,6 +102,7 @@ typedef struct bake_state {
     cb_sampler *lent;       /* the caller's sampler, for the one worker of a probe's bake; or NULL */
     struct cb_pool *pool;   /* the threads every pass runs on, or NULL for the caller's alone */
     struct kept_fit *pending; /* a probe's fitted rows, until its measurement says whether to keep them */
+    pose_batch *batch;      /* the probe's, for its one worker (on st->lent); or NULL: each worker's own */
 } bake_state;
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
@@ -177,6 +184,22 @@ void palette_merge_ranges(cb_palette *p, const value_range *clips);
  * each joint's bind-pose position, and the texels no row covers set to zero. */
 cb_status palette_frame_clips(bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
                               cb_clip_info **infos_out, cb_error *err);
+/* palette_plan.c: a rate search's analysis of a clip (at `fps`, with the plan's loop override
+ * `loop`) kept with the clip's poses, for the bake after the search: it frames the analysis at
+ * its own rate instead of analyzing the clip again (palette_frame_clips), where that gives what
+ * analyzing it gives. Out of memory: not kept. */
+void palette_keep_analysis(pose_cache *poses, const cb_clip_info *analysis, double fps, int loop);
+/* palette_plan.c: whether `poses` keep an analysis of `animation` with loop override `loop` that
+ * stands in for analyzing it at fps; palette_take_kept_analysis: that analysis into *out as
+ * cb_clip_analyze (same sampler model and skin) gives it at fps, the clip's loop set on the
+ * sampler as analyzing it sets it (false: analyze it). */
+bool palette_kept_analysis(const pose_cache *poses, int32_t animation, int loop, double fps, const cb_limits *limits);
+bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, int32_t animation, int loop, double fps,
+                                const cb_limits *limits, cb_clip_info *out);
+/* rate_search.c: an analysis of clip i made before the search (at fps, loop override loop) kept
+ * for it: kept[i] made where it is NULL (a search's pose cache), the analysis attached. */
+void palette_seed_analysis(pose_cache **kept, uint32_t i, const cb_sampler *sampler, const cb_clip_info *analysis,
+                           double fps, int loop);
 cb_status palette_plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err);
 void palette_bind_positions(const cb_skin *skin, float *bind);
 void palette_zero_padding(cb_palette *p);
@@ -224,6 +247,11 @@ void palette_skin_facts_free(palette_skin_facts *f);
  * worker's next call. extra (optional): the kept pose's extra doubles, NULL where not kept. */
 const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, uint32_t frame,
                                      double **extra);
+/* pose_batch.c: clip c's poses at `frames` (1..CB_SAMPLE_BATCH, increasing) of framing, those its
+ * pose cache (st->poses or the clip's st->clip_poses) lacks sampled together and kept, the
+ * bits palette_frame_matrices samples them with; nothing where no cache keeps them. */
+void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
+                            uint32_t count);
 /* palette_rows.c: a pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
  * from its matrices alone too (a probe's rows are rows of the others). */
 pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes);
@@ -237,6 +265,7 @@ typedef struct palette_probe {
                                     * the poses its search sampled (entries may be NULL), or NULL. The bake
                                     * samples again only the times no probe did (Cow's default bake: 43% of
                                     * its final bake); a clip's measurement then stays on one worker. */
+    pose_batch *batch;             /* the search thread's batches of poses (on the probe's sampler), or NULL */
 } palette_probe;
 
 /* cb_choose_rates keeping what each clip's search sampled: kept[i] (NULL: none yet) gets clip

@@ -20,6 +20,7 @@ struct measure_scratch {
     double *group_bounds;              /* groups */
     cb_bounded_row *rows;              /* the clip's frames */
     cb_bounded_row *baked;             /* the clip's frames: the baked rows measured with the blends */
+    double *exact;                     /* CB_SAMPLE_BATCH rows of bones * 16: exact matrices no pose cache kept */
     double *values;                    /* VALUE_SLOTS * bones * 16: decoded palette rows */
     uint32_t value_row[VALUE_SLOTS];   /* which row each slot holds (UINT32_MAX: none) */
     uint64_t value_read[VALUE_SLOTS];  /* when each slot was last read (0: never) */
@@ -132,13 +133,13 @@ static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out,
         }
 }
 
-/* Values 0-7 of the rows x[i] + at as lanes, v[k][i] = x[i][at + k]: four rows and four values
- * at a time, four 32-byte loads and a transpose, where value by value took a load and a store
- * each. */
-static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, double (*v)[B])
+/* Values 0 .. n - 1 (n: 8, or 16 for a matrix) of the rows x[i] + at as lanes, v[k][i] =
+ * x[i][at + k]: four rows and four values at a time, four 32-byte loads and a transpose, where
+ * value by value took a load and a store each. */
+static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, int n, double (*v)[B])
 {
     for (int first = 0; first < B; first += 4)
-        for (int h = 0; h < 8; h += 4) {
+        for (int h = 0; h < n; h += 4) {
             v4df r0, r1, r2, r3; /* named, not an array: they stay in registers */
             memcpy(&r0, x[first] + at + h, 32), memcpy(&r1, x[first + 1] + at + h, 32);
             memcpy(&r2, x[first + 2] + at + h, 32), memcpy(&r3, x[first + 3] + at + h, 32);
@@ -154,15 +155,17 @@ static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out,
             for (int r = 0; r < 4; ++r) out[i * stride + 4 * c + r] = r < 3 ? d[3 * c + r][i] : 0;
 }
 
-static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, double (*v)[B])
+static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, int n, double (*v)[B])
 {
     for (int i = 0; i < B; ++i)
-        for (int k = 0; k < 8; ++k) v[k][i] = x[i][at + k];
+        for (int k = 0; k < n; ++k) v[k][i] = x[i][at + k];
 }
 #endif
 
 /* Bone j of the batch's rows, measured against similarities: lane i's exact matrix from the
- * sampler's lanes `sim` (cb_similarity_matrix's operations), its decoded one from rows a[i]
+ * sampler's lanes `sim` (cb_similarity_matrix's operations), or from the joint matrices mats[i]
+ * where sim is NULL (a rig that is not made of similarities: the exact matrices as sampled, the
+ * decoding and the differences as the row by row path computes them), its decoded one from rows a[i]
  * (blended towards b[i] by fr when b: palette_blend_values's operations; B of each, those past
  * count repeating the last) as
  * cb_palette_values_to_matrix builds a qpos bone, and their difference into row i's diff
@@ -171,14 +174,14 @@ static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, d
  * are finite into finite[i]. The same operations in the same order as one matrix at a time, so
  * the same bits, but over the lanes they vectorize. */
 static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, const double (*sim)[B],
-                                             const double *const *a, const double *const *b, uint32_t count, double fr,
-                                             double *diff, cb_joint_error *joints, bool *finite)
+                                             const double *const *mats, const double *const *a, const double *const *b,
+                                             uint32_t count, double fr, double *diff, cb_joint_error *joints, bool *finite)
 {
-    double v[8][B], exact[15][B], decoded[15][B], len2[B];
-    values_to_lanes(a, (size_t)j * 16, v); /* the rows' values as lanes */
+    double v[8][B], exact[16][B], decoded[15][B], len2[B];
+    values_to_lanes(a, (size_t)j * 16, 8, v); /* the rows' values as lanes */
     if (b) {
         double w[8][B];
-        values_to_lanes(b, (size_t)j * 16, w);
+        values_to_lanes(b, (size_t)j * 16, 8, w);
         double sign[B];
         for (int i = 0; i < B; ++i) { /* the shorter way between the rows */
             double dot = v[0][i] * w[0][i] + v[1][i] * w[1][i] + v[2][i] * w[2][i] + v[3][i] * w[3][i];
@@ -194,7 +197,11 @@ static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, co
     }
     for (int k = 0; k < 4; ++k)
         for (int i = 0; i < B; ++i) v[k][i] = len2[i] == 0 ? (k == 3 ? 1 : 0) : v[k][i] * inv[i];
-    trs_lanes(exact, sim + 4, sim, sim[7]);
+    if (sim) {
+        trs_lanes(exact, sim + 4, sim, sim[7]);
+    } else { /* (elements 3, 7, 11 and 15 are read by nothing a difference feeds: error_bound.h, skinning) */
+        values_to_lanes(mats, (size_t)j * 16, 16, exact);
+    }
     trs_lanes(decoded, v + 4, v, v[7]); /* t = p for now: t = p - A b below */
     const float *bind = p->bind_positions + (size_t)j * 3;
     double bx = bind[0], by = bind[1], bz = bind[2];
@@ -224,6 +231,18 @@ static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, co
     }
 }
 
+/* Clip c's joint matrices at `frame` of framing (palette_frame_matrices), where they stay until
+ * the measurement's next batch: a pose cache's, or copied into `room` (the worker's matrices
+ * are sampled over at its next call). */
+static const double *exact_matrices(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, uint32_t frame,
+                                    double *room)
+{
+    const double *mats = palette_frame_matrices(st, w, c, framing, frame, NULL);
+    if (mats != w->mats) return mats;
+    memcpy(room, mats, (size_t)st->p->bone_count * 16 * sizeof(double));
+    return room;
+}
+
 /* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
  * the next at fraction sub / parts, blended as the runtime does, or `worst` when none exceeds
  * it; with `bounds`, each row's bound, and the worst of the row with the largest where that is
@@ -244,10 +263,16 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     for (uint32_t i = 0; i < count; ++i) times[i] = parts * frames[i] + sub;
     framing.steps *= parts;
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
+    /* qpos rows: every row's differences at once, over the lanes (bone_differences) */
+    bool lanes = p->layout == CB_LAYOUT_QPOS;
     bool blend = sub && !clip->step; /* a stepped clip's runtime holds row f until row f + 1 */
-    if (similar) {
-        double *lanes = w->lanes;
-        cb_clip_frame_lanes(w->sampler, &framing, times, count, st->opt->root_motion, lanes);
+    if (lanes) {
+        const double *mats[B] = {NULL};
+        if (similar) cb_clip_frame_lanes(w->sampler, &framing, times, count, st->opt->root_motion, w->lanes);
+        else palette_prefetch_poses(st, w, c, &framing, times, count); /* the rows' poses at once, where kept */
+        for (uint32_t i = 0; !similar && i < count; ++i)
+            mats[i] = exact_matrices(st, w, c, &framing, times[i], s->exact + (size_t)i * p->bone_count * 16);
+        for (uint32_t i = count; !similar && i < B; ++i) mats[i] = mats[count - 1];
         const double *a[B], *b[B]; /* at most 2 B rows: all in the slots at once */
         for (uint32_t i = 0; i < count; ++i) {
             a[i] = row_values(p, s, clip->first_row + frames[i]);
@@ -256,13 +281,13 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         for (uint32_t i = count; i < B; ++i) a[i] = a[count - 1], b[i] = b[count - 1]; /* lanes past count repeat the last */
         for (uint32_t i = 0; i < count; ++i) s->finite[i] = true;
         for (uint32_t j = 0; j < p->bone_count; ++j)
-            bone_differences(p, j, (const double(*)[B])(lanes + (size_t)j * 8 * B), a, blend ? b : NULL, count,
-                             (double)sub / parts, s->diff, s->joints, s->finite);
+            bone_differences(p, j, similar ? (const double(*)[B])(w->lanes + (size_t)j * 8 * B) : NULL, mats, a,
+                             blend ? b : NULL, count, (double)sub / parts, s->diff, s->joints, s->finite);
     }
     for (uint32_t i = 0; i < count; ++i) {
-        double *diff = similar ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
-        const cb_joint_error *joints = similar ? s->joints + (size_t)i * p->bone_count : s->joints;
-        if (!similar) {
+        double *diff = lanes ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
+        const cb_joint_error *joints = lanes ? s->joints + (size_t)i * p->bone_count : s->joints;
+        if (!lanes) {
             const double *mats = palette_frame_matrices(st, w, c, &framing, times[i], NULL);
             uint32_t row = clip->first_row + frames[i], next = clip->first_row + (frames[i] + 1) % clip->frames;
             const double *a = row_values(p, s, row), *b = blend ? row_values(p, s, next) : NULL;
@@ -274,19 +299,20 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
                 for (int k = 0; k < 16; ++k) d[k] = exact[k] - decoded[k];
             }
         }
-        bool finite = similar ? s->finite[i] : cb_joint_errors(diff, p->bone_count, p->bind_positions, s->joints);
+        bool finite = lanes ? s->finite[i] : cb_joint_errors(diff, p->bone_count, p->bind_positions, s->joints);
         if (bounds) bounds[i] = row_bound(st, joints, finite, worst);
         else worst = skin_row(st, s, diff, joints, finite, worst);
     }
-    /* The rows' likeliest worst skinned at once where that costs no sampling (rows of
-     * similarities: every row's differences are in hand), and with a goal (a row above it ends
-     * the clip; rows of matrices sampled again). Its bound becomes the worst after it, which
-     * holds its error, so it is not measured again. */
+    /* The rows' likeliest worst skinned at once where that costs no sampling (qpos rows: every
+     * row's differences are in hand), and with a goal (a row above it ends
+     * the clip; rows of other layouts sampled again). Its bound becomes the worst after it, which
+     * holds its error, so it is not measured again. Without a goal the order rows are skinned in
+     * does not change the maximum (a row skipped cannot exceed the worst). */
     uint32_t top = 0;
     for (uint32_t i = 1; bounds && i < count; ++i) top = bounds[i] > bounds[top] ? i : top;
-    if (bounds && bounds[top] > worst && (similar || st->opt->error_goal > 0)) {
+    if (bounds && bounds[top] > worst && (lanes || st->opt->error_goal > 0)) {
         size_t at = (size_t)top * p->bone_count;
-        worst = similar ? skin_row(st, s, s->diff + at * 16, s->joints + at, s->finite[top], worst)
+        worst = lanes ? skin_row(st, s, s->diff + at * 16, s->joints + at, s->finite[top], worst)
                         : measure_rows(st, w, c, frames + top, 1, sub, parts, s, NULL, worst);
         bounds[top] = worst;
     }
@@ -412,12 +438,12 @@ static measure_scratch *worker_scratch(const bake_state *st, worker *w)
 {
     if (w->measure) return begin_job(w->measure);
     const cb_palette *p = st->p;
-    size_t matrices = (size_t)p->bone_count * 16 * sizeof(double), sizes[6] = {
+    size_t matrices = (size_t)p->bone_count * 16 * sizeof(double), sizes[7] = {
         CB_SAMPLE_BATCH * matrices, VALUE_SLOTS * matrices, CB_SAMPLE_BATCH * p->bone_count * sizeof(cb_joint_error),
         (st->groups->group_count + 1) * sizeof(double), st->max_clip_frames * sizeof(cb_bounded_row),
-        st->max_clip_frames * sizeof(cb_bounded_row)};
+        st->max_clip_frames * sizeof(cb_bounded_row), CB_SAMPLE_BATCH * matrices};
     size_t total = 0;
-    for (int i = 0; i < 6; ++i) total += (sizes[i] + 63) / 64 * 64;
+    for (int i = 0; i < 7; ++i) total += (sizes[i] + 63) / 64 * 64;
     measure_scratch *s = calloc(1, sizeof *s);
     if (s) s->block = cb_alloc_large(total);
     if (!s || !s->block) {
@@ -428,6 +454,7 @@ static measure_scratch *worker_scratch(const bake_state *st, worker *w)
     s->diff = carve(s->block, &at, sizes[0]), s->values = carve(s->block, &at, sizes[1]);
     s->joints = carve(s->block, &at, sizes[2]), s->group_bounds = carve(s->block, &at, sizes[3]);
     s->rows = carve(s->block, &at, sizes[4]), s->baked = carve(s->block, &at, sizes[5]);
+    s->exact = carve(s->block, &at, sizes[6]);
     return begin_job(w->measure = s);
 }
 

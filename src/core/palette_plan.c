@@ -67,7 +67,72 @@ static void analyze_share(void *arg, uint32_t thread, uint32_t threads)
     cb_sampler_free(s); /* a share without a sampler leaves its clips to the caller */
 }
 
-/* The clips' analyses into infos, on opt->threads threads where there are clips to share. */
+/* ---- a rate search's analyses, framed again ---- */
+
+typedef struct kept_analysis {
+    cb_clip_info info; /* as cb_clip_analyze gave it at `fps` */
+    double fps;
+    int loop;          /* the loop override it was analyzed with */
+} kept_analysis;
+
+void palette_keep_analysis(pose_cache *poses, const cb_clip_info *analysis, double fps, int loop)
+{
+    kept_analysis *k = malloc(sizeof *k);
+    if (k) *k = (kept_analysis){*analysis, fps, loop};
+    pose_cache_attach_analysis(poses, k); /* NULL: none (the bake analyzes the clip) */
+}
+
+/* Whether weigh_feet (loop_decide.c) framed the clip as a loop at both rates or at neither (its
+ * cb_clip_frame_at fails past max_frames, and then the feet weigh nothing): the one way a clip's
+ * analysis depends on the rate it is analyzed at, but for the framing at its end. */
+static bool feet_weighed_alike(const cb_clip_info *c, double a, double b, const cb_limits *limits)
+{
+    if (!c->loop_feet_weighed) return true;
+    bool closes = c->loop_reason == CB_LOOP_CLOSED || c->loop_reason == CB_LOOP_CLOSED_CORRECTED;
+    double span = c->t1 - c->t0, duration = span + (closes ? 0 : c->key_interval); /* weigh_feet's */
+    bool at_a = a > 0 && isfinite(a) && a <= CB_FPS_LIMIT && !(duration * a > (double)limits->max_frames);
+    bool at_b = b > 0 && isfinite(b) && b <= CB_FPS_LIMIT && !(duration * b > (double)limits->max_frames);
+    return at_a == at_b;
+}
+
+/* Clip i's analysis from its rate search (kept with its poses), framed at the bake's rate, into
+ * *out: what analyzing it at that rate gives (cb_clip_analyze depends on its rate through its
+ * framing and feet_weighed_alike alone), so the bake after a search (Husky: 21 M instructions)
+ * does not analyze its clips again. Only for a clip whose animation no other clip of the plan
+ * bakes (analyze_clips orders those); false where none is kept or it cannot stand in, and then
+ * the clip is analyzed. err: the framing's failure, as analyzing would end with it. */
+static bool take_analysis(const bake_state *st, const cb_clip_plan *plan, uint32_t count, uint32_t i,
+                          cb_clip_info *out, cb_error *err)
+{
+    cb_clip_plan one = plan_entry(plan, i);
+    pose_cache *poses = plan && st->clip_poses ? st->clip_poses[i] : NULL;
+    double fps = cb_clip_plan_fps(&one, st->opt->fps);
+    if (!poses || !palette_kept_analysis(poses, one.animation, one.loop, fps, &st->opt->limits)) return false;
+    for (uint32_t c = 0; c < count; ++c)
+        if (c != i && plan_entry(plan, c).animation == one.animation) return false;
+    *out = ((const kept_analysis *)pose_cache_analysis(poses))->info;
+    cb_clip_frame_at(st->model, fps, &st->opt->limits, out, err);
+    return true;
+}
+
+bool palette_kept_analysis(const pose_cache *poses, int32_t animation, int loop, double fps, const cb_limits *limits)
+{
+    const kept_analysis *k = pose_cache_analysis(poses);
+    return k && k->loop == loop && k->info.animation == animation && feet_weighed_alike(&k->info, k->fps, fps, limits);
+}
+
+bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, int32_t animation, int loop, double fps,
+                                const cb_limits *limits, cb_clip_info *out)
+{
+    cb_error ignored = {0};
+    if (!palette_kept_analysis(poses, animation, loop, fps, limits)) return false;
+    *out = ((const kept_analysis *)pose_cache_analysis(poses))->info;
+    /* As analyzing it ends: framed at fps, the clip's loop set on the sampler. */
+    return !cb_clip_frame_at(cb_sampler_model(sampler), fps, limits, out, &ignored) && cb_sampler_set_loop(sampler, out);
+}
+
+/* The clips' analyses into infos, on opt->threads threads where there are clips to share (or
+ * from their rate searches, take_analysis). */
 static cb_status analyze_clips(const bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t count,
                                cb_clip_info *infos, cb_error *err)
 {
@@ -76,9 +141,10 @@ static cb_status analyze_clips(const bake_state *st, cb_sampler *sampler, const 
     analyses a = {st, plan, count, infos, calloc(n, sizeof(cb_error)), calloc(n, sizeof(bool)), calloc(n, sizeof(bool)), 0};
     cb_status rc = a.errors && a.first_use && a.done ? CB_OK : cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     uint32_t threads = st->opt->threads < count ? st->opt->threads : count;
+    for (uint32_t i = 0; !rc && i < count; ++i) a.done[i] = take_analysis(st, plan, count, i, &infos[i], &a.errors[i]);
     for (uint32_t i = 0; !rc && threads > 1 && i < count; ++i) {
         int32_t anim = plan_entry(plan, i).animation;
-        a.first_use[i] = anim >= 0 && anim < (int32_t)m->animation_count;
+        a.first_use[i] = anim >= 0 && anim < (int32_t)m->animation_count && !a.done[i];
         for (uint32_t k = 0; a.first_use[i] && k < i; ++k) a.first_use[i] = plan_entry(plan, k).animation != anim;
     }
     if (!rc && threads > 1) cb_pool_run(threads, analyze_share, &a);

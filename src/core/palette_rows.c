@@ -44,8 +44,9 @@ static cb_status qpos_similarity(const double m[16], double q[5], const cb_model
                                "qpos layout cannot represent; use the affine or the mat4 layout",
                        model->source, model->nodes[skin->joints[bone]].name, why, l[0], l[1], l[2], frame, clip);
     double r[16], inv = 1 / s;
-    memcpy(r, m, sizeof r);
-    for (int i = 0; i < 12; ++i) r[i] *= inv;
+#pragma GCC unroll 12 /* not a copy, then a loop of products: -O2 leaves that a loop */
+    for (int i = 0; i < 12; ++i) r[i] = m[i] * inv;
+    r[12] = m[12], r[13] = m[13], r[14] = m[14], r[15] = m[15];
     cb_quat rot = cb_quat_from_mat4(r);
     q[0] = rot.x, q[1] = rot.y, q[2] = rot.z, q[3] = rot.w, q[4] = s;
     return CB_OK;
@@ -93,9 +94,13 @@ const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, cons
 /* |A| for the reach: the Frobenius norm of the 3x3, at least its largest stretch. */
 static double frobenius3(const double *M)
 {
+    /* The nine squares summed in element order, written out: a loop that skips every fourth
+     * element was not unrolled, and its test cost more than the sum (the same additions in the
+     * same order, so the same bits). */
     double norm = 0;
-    for (int k = 0; k < 12; ++k)
-        if (k % 4 != 3) norm += M[k] * M[k];
+    norm += M[0] * M[0], norm += M[1] * M[1], norm += M[2] * M[2];
+    norm += M[4] * M[4], norm += M[5] * M[5], norm += M[6] * M[6];
+    norm += M[8] * M[8], norm += M[9] * M[9], norm += M[10] * M[10];
     return sqrt(norm);
 }
 
@@ -201,6 +206,11 @@ cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *r
     framing.steps *= 2;
     uint32_t intervals = info->loops ? info->frames : info->frames - 1, vals = CANON(p->layout);
     for (uint32_t i = 0; i < intervals; ++i) {
+        if (i % CB_SAMPLE_BATCH == 0) { /* the next mid-rows' poses, a batch at once where they are kept */
+            uint32_t next[CB_SAMPLE_BATCH], k = 0;
+            for (; k < CB_SAMPLE_BATCH && i + k < intervals; ++k) next[k] = 2 * (i + k) + 1;
+            palette_prefetch_poses(st, w, c, &framing, next, k);
+        }
         double *kept; /* the pose's qpos_similarity, where a search keeps it (as palette_matrix_row) */
         const double *mats = palette_frame_matrices(st, w, c, &framing, 2 * i + 1, &kept);
         bool derived = kept && kept[0] == 1;

@@ -24,6 +24,7 @@ struct pose_cache {
     double **blocks;        /* block_poses poses each */
     uint32_t block_count, block_poses;
     void *attached;         /* its user's block for the same clip (pose_cache_attach), or NULL */
+    void *analysis;         /* and the clip's analysis (pose_cache_attach_analysis), or NULL */
 };
 
 /* No time's bits: the pattern of a NaN with a payload no arithmetic produces. */
@@ -75,7 +76,7 @@ void pose_cache_free(pose_cache *c)
 {
     if (!c) return;
     for (uint32_t b = 0; b < c->block_count; ++b) free(c->blocks[b]);
-    free(c->attached), free(c->blocks), free(c->keys), free(c->slots), free(c);
+    free(c->attached), free(c->analysis), free(c->blocks), free(c->keys), free(c->slots), free(c);
 }
 
 const double *pose_cache_find(const pose_cache *c, double t)
@@ -138,6 +139,7 @@ void pose_cache_clear(pose_cache *c)
     c->count = 0;
     memset(c->keys, 0xFF, c->capacity * sizeof *c->keys);
     free(c->attached), c->attached = NULL;
+    free(c->analysis), c->analysis = NULL;
 }
 
 void pose_cache_attach(pose_cache *c, void *block)
@@ -147,5 +149,11 @@ void pose_cache_attach(pose_cache *c, void *block)
 }
 
 void *pose_cache_attached(const pose_cache *c) { return c->attached; }
+void pose_cache_attach_analysis(pose_cache *c, void *block)
+{
+    free(c->analysis);
+    c->analysis = block;
+}
+void *pose_cache_analysis(const pose_cache *c) { return c->analysis; }
 
 uint32_t pose_cache_count(const pose_cache *c) { return c->count; }

@@ -35,6 +35,10 @@ void pose_cache_clear(pose_cache *c);
  * pose_cache_clear. NULL when none. */
 void pose_cache_attach(pose_cache *c, void *block);
 void *pose_cache_attached(const pose_cache *c);
+/* The same for a second block, the clip's analysis (rate_search.c: the search's, which the bake
+ * after it frames instead of analyzing the clip again). */
+void pose_cache_attach_analysis(pose_cache *c, void *block);
+void *pose_cache_analysis(const pose_cache *c);
 
 /* Poses kept. */
 uint32_t pose_cache_count(const pose_cache *c);

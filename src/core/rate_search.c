@@ -244,7 +244,7 @@ static double choose_clip(clip_search *cs, const rate_families *f, cb_rows rows,
 
 static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
                               double max_fps, cb_rows rows, cb_rate_choice *c, const palette_skin_facts *facts,
-                              pose_cache *poses, bool fresh, cb_error *err)
+                              pose_cache *poses, bool fresh, pose_batch *batch, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
     rate_families f = families_of(&m->animations[clip->animation], max_fps);
@@ -252,10 +252,14 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
      * probe analyzes the clip itself and fails as it would. */
     cb_clip_info analysis;
     cb_error unanalyzed = {0};
-    bool analyzed = !cb_clip_analyze(s, clip->animation, common_rates[0], clip->loop, &o->limits, &analysis, &unanalyzed);
+    /* (or its analysis from before the search, kept with its poses, framed at that rate) */
+    bool analyzed = (poses && !fresh &&
+                     palette_take_kept_analysis(poses, s, clip->animation, clip->loop, common_rates[0], &o->limits, &analysis)) ||
+                    !cb_clip_analyze(s, clip->animation, common_rates[0], clip->loop, &o->limits, &analysis, &unanalyzed);
     clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts,
-                      .probe = {.poses = poses, .analysis = analyzed ? &analysis : NULL}};
+                      .probe = {.poses = poses, .analysis = analyzed ? &analysis : NULL, .batch = batch}};
     if (poses && fresh) pose_cache_clear(poses); /* another clip's times */
+    if (poses && !fresh && analyzed) palette_keep_analysis(poses, &analysis, common_rates[0], clip->loop); /* for the bake */
     return choose_clip(&cs, &f, rows, max_error, c, err);
 }
 
@@ -264,19 +268,28 @@ static pose_cache *search_pose_cache(const cb_sampler *s)
     return palette_probe_poses(cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count, SEARCH_POSE_BYTES);
 }
 
+void palette_seed_analysis(pose_cache **kept, uint32_t i, const cb_sampler *s, const cb_clip_info *analysis, double fps,
+                           int loop)
+{
+    if (kept && !kept[i]) kept[i] = search_pose_cache(s);
+    if (kept && kept[i]) palette_keep_analysis(kept[i], analysis, fps, loop);
+}
+
 double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
                           double max_fps, bool *met, double *error, cb_error *err)
 {
     palette_skin_facts facts;
     pose_cache *poses = search_pose_cache(s); /* NULL (out of memory): sampled as without */
+    pose_batch *batch = pose_batch_create(s); /* NULL (out of memory): poses sampled one at a time */
     double fps = max_fps;
     cb_rate_choice c = {0};
     c.error = INFINITY;
     if (!palette_skin_facts_build(s, &facts, err))
         fps = choose_clip_fps(s, o, clip, max_error, max_fps, o->fit || clip->fit ? CB_ROWS_FITTED : CB_ROWS_SAMPLED, &c,
-                              &facts, poses, true, err);
+                              &facts, poses, true, batch, err);
     palette_skin_facts_free(&facts);
     pose_cache_free(poses);
+    pose_batch_free(batch);
     *met = c.met, *error = err->status ? INFINITY : c.error;
     return fps;
 }
@@ -355,6 +368,7 @@ static int rate_worker(void *arg)
     cb_error fail = {0};
     cb_sampler *s = cb_sampler_create(rs->model, rs->skin, &fail);
     pose_cache *poses = s && !rs->kept ? search_pose_cache(s) : NULL; /* this thread's, for each clip in turn */
+    pose_batch *batch = s ? pose_batch_create(s) : NULL; /* this thread's batches of poses (NULL: one at a time) */
     for (;;) {
         uint32_t n = atomic_fetch_add(&rs->next, 1);
         if (n >= rs->count) break;
@@ -367,12 +381,13 @@ static int rate_worker(void *arg)
         cb_rate_choice *c = &rs->choices[i];
         rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
                                           max_fps_of(&rs->goals[i]), rs->o->fit ? CB_ROWS_FITTED : rs->goals[i].rows, c,
-                                          rs->facts, clip_cache(rs, i, poses, s), !rs->kept, &rs->errors[i]);
+                                          rs->facts, clip_cache(rs, i, poses, s), !rs->kept, batch, &rs->errors[i]);
         settle_kept(rs, i);
         rs->plan[i].fit = c->fitted;
         c->error_mm = cb_mm_per_m(c->error, rs->height);
     }
     pose_cache_free(poses);
+    pose_batch_free(batch);
     cb_sampler_free(s);
     return 0;
 }

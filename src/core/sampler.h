@@ -133,6 +133,11 @@ void cb_sample_joint_lanes(cb_sampler *s, int32_t animation, const double *times
  * cb_clip_frame_similarities frames them (the root's travel taken off in place). */
 void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
                          cb_root_motion root_motion, double *out);
+/* clip.c: cb_clip_frame_matrices at 1..CB_SAMPLE_BATCH frames of a clip at once, through `all`
+ * (a subset of every joint of the skin; lanes: its joints x 16 x CB_SAMPLE_BATCH doubles of
+ * scratch): the same bits, into out[i] for frames[i] (out[i] NULL: not wanted). */
+void cb_clip_frame_matrices_batch(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
+                                  cb_root_motion root_motion, cb_joint_subset *all, double *lanes, double *const *out);
 void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*out)[CB_SAMPLE_BATCH]);
 /* Any channel at CB_SAMPLE_BATCH times, with its cursor and its clip's wrap as the sampler
  * samples it: out[c][i] is component c (3 or 4; a 4th of 3 undefined) at times[i], the bits of

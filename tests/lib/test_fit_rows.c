@@ -11,7 +11,8 @@
  * And the fit's fast path (four values a vector, a block of values stopping once a sweep moves
  * none) against the plain algorithm written out here: every row, every value, all eight sweeps,
  * one value at a time with fmax - the same bits for loops and one-shots, for values that fill
- * whole vectors and for those left over. */
+ * whole vectors and for those left over, signed zeros and the largest floats included (the fast
+ * path weighs the candidates at 0, +-2a and +-2b from terms the others share). */
 #include "testutil.h"
 
 #include <math.h>
@@ -129,11 +130,13 @@ static float motion(uint32_t *state, uint32_t f, uint32_t v)
 {
     *state = *state * 1664525u + 1013904223u;
     double noise = (double)(*state >> 8) / (1u << 24) - 0.5;
-    switch (v % 5) {
+    switch (v % 7) {
     case 0: return 0.25f; /* still */
     case 1: return (float)sin(0.3 * f + v);
     case 2: return (float)(f % 7 == 3 ? 5 * noise : 0.01 * noise); /* a fast interval now and then */
     case 3: return (float)(1000 * noise);
+    case 5: return noise < 0 ? -0.0f : 0.0f; /* signed zeros: ties between candidates */
+    case 6: return (float)(noise * 6e38); /* the largest floats: the candidates' doubling stays exact */
     default: return (float)(f * 0.5);
     }
 }
