@@ -59,40 +59,35 @@ export const LOD_POSES = 64;      // 'auto': poses measured, spread evenly over 
 // poses } (worst: fractions of `size`; a tier that moves nothing gets 1e6 pixels).
 export function lodThresholds(pal, mesh, size, { pixelError = LOD_PIXEL_ERROR, poses = LOD_POSES } = {}) {
     const bones = pal.header.bone_count, verts = mesh.positions.length / 3, m = new Float64Array(bones * 16), b = new Array(16);
-    const rows = pal.clips.reduce((n, c) => n + c.frames, 0), worst = [0, 0], q = [[0, 0, 0], [0, 0, 0]];
+    const rows = pal.clips.reduce((n, c) => n + c.frames, 0), worst = [0, 0], p = new Float64Array(12);
     const { joints, weights } = sortInfluences(mesh.joints, mesh.weights);
     const x = mesh.positions;
-    let measured = 0;
     for (let k = 0; k < poses; ++k) {
         let row = Math.floor((k + 0.5) * rows / poses), clip = 0; // the k-th of `poses` rows spread over every clip
         while (row >= pal.clips[clip].frames) row -= pal.clips[clip++].frames;
-        const c = pal.clips[clip];
-        for (let j = 0; j < bones; ++j) m.set(boneMatrix(pal, clip, row / c.fps, j, b), j * 16);
-        ++measured;
+        for (let j = 0; j < bones; ++j) m.set(boneMatrix(pal, clip, row / pal.clips[clip].fps, j, b), j * 16);
         for (let v = 0; v < verts; ++v) {
-            const full = [0, 0, 0], part = [[0, 0, 0], [0, 0, 0]], sum = [0, 0];
-            for (let i = 0; i < 4; ++i) {
-                const w = weights[v * 4 + i];
-                if (!w) break;
-                const o = joints[v * 4 + i] * 16, px = x[v * 3], py = x[v * 3 + 1], pz = x[v * 3 + 2];
-                for (let r = 0; r < 3; ++r) {
-                    const p = m[o + r] * px + m[o + 4 + r] * py + m[o + 8 + r] * pz + m[o + 12 + r];
-                    full[r] += w * p;
-                    if (i < 2) part[1][r] += w * p;
-                    if (i < 1) part[0][r] += w * p;
-                }
-                if (i < 2) sum[1] += w;
-                if (i < 1) sum[0] += w;
+            const px = x[v * 3], py = x[v * 3 + 1], pz = x[v * 3 + 2];
+            let n = 0; // p: each influence's skinned point, 3 numbers each
+            for (; n < 4 && weights[v * 4 + n]; ++n) {
+                const o = joints[v * 4 + n] * 16;
+                for (let r = 0; r < 3; ++r) p[n * 3 + r] = m[o + r] * px + m[o + 4 + r] * py + m[o + 8 + r] * pz + m[o + 12 + r];
             }
-            for (let t = 0; t < 2; ++t) {
-                for (let r = 0; r < 3; ++r) q[t][r] = part[t][r] / sum[t] - full[r];
-                worst[t] = Math.max(worst[t], Math.hypot(...q[t]) / size);
+            if (!n) continue; // no weight: nothing skins it
+            const w0 = weights[v * 4], w1 = n > 1 ? weights[v * 4 + 1] : 0, kept2 = w0 + w1;
+            let d1 = 0, d2 = 0;
+            for (let r = 0; r < 3; ++r) {
+                let full = 0;
+                for (let i = 0; i < n; ++i) full += weights[v * 4 + i] * p[i * 3 + r];
+                const one = p[r] - full, two = (w0 * p[r] + w1 * p[3 + r]) / kept2 - full;
+                d1 += one * one, d2 += two * two;
             }
+            worst[0] = Math.max(worst[0], Math.sqrt(d1) / size), worst[1] = Math.max(worst[1], Math.sqrt(d2) / size);
         }
     }
     const pixels = (f) => (f > pixelError / 1e6 ? pixelError / f : 1e6);
     const one = pixels(worst[0]);
-    return { two: Math.max(pixels(worst[1]), one), one, worst: { two: worst[1], one: worst[0] }, poses: measured, pixelError };
+    return { two: Math.max(pixels(worst[1]), one), one, worst: { two: worst[1], one: worst[0] }, poses, pixelError };
 }
 
 // The LOD to draw with and why: lod as given ('auto': lodThresholds), as { lod, reason }.
