@@ -344,10 +344,12 @@ uniform int cb_bone_rows;                          // instances per column block
 void cb_skin_bone_pass_influences(vec3 v, vec3 n, ivec4 joints, vec4 weights, int instance, int influences,
                                   out vec3 p, out vec3 skinned_n)
 {
-    // cb:bone-block - the column block by a float division: exact for every instance count a texture holds
-    // ((i + 0.5) / rows stays 0.5 / rows from an integer), where a CPU rasteriser divides integers lane by lane.
-    int block = int((float(instance) + 0.5) / float(cb_bone_rows));
-    int x0 = block * (cb_row_texels / CB_TEXELS_PER_BONE), y = instance - block * cb_bone_rows;
+    // cb:bone-block - the column block by a float division (a CPU rasteriser divides integers lane by lane),
+    // (i + 0.5) / rows, half a row from any integer; the remainder then corrects a quotient off by one.
+    int block = int((float(instance) + 0.5) / float(cb_bone_rows)), y = instance - block * cb_bone_rows;
+    block += y < 0 ? -1 : y >= cb_bone_rows ? 1 : 0;
+    y = instance - block * cb_bone_rows;
+    int x0 = block * (cb_row_texels / CB_TEXELS_PER_BONE);
     vec4 c0, c1, c2;
     int count = min(influences, cb_influence_count(weights)); // cb_influence_count says why a loop
     if (count == 1) { // the largest bone alone (a far instance's LOD, or a vertex of one bone): no blend

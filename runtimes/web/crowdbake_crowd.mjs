@@ -154,7 +154,7 @@ export class Crowd {
     // render to float textures), true (always; or { rows }), false (never); crowdbake_bones.mjs.
     // lod: the bone pass's animation LOD ('auto', the default: fewer influences under the sizes where
     // the model's worst vertex moves at most a pixel, crowdbake_bones.mjs's lodThresholds; or { two, one }
-    // pixels tall, or false). crowd.lodReason() says which thresholds and why.
+    // pixels tall, or false). crowd.lodChoice() says which thresholds and why.
     // crowd.choice(n) says which a herd of n gets, and why.
     constructor(gl, options) {
         const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false, bonePass = 'auto' } = options;
