@@ -5,8 +5,10 @@
  * (GL_TIME_ELAPSED). OpenGL 3.3 core through EGL without a window: Mesa's llvmpipe here
  * (EGL_PLATFORM=surfaceless), a GPU's driver through EGL's device platform elsewhere, unchanged.
  *
- *   bench_gl MODEL.glb N1,N2,... [--frames K]   JSON: per count and method, median and min frame ms
+ *   bench_gl MODEL.glb N1,N2,... [--frames K] [--lod]   JSON: per count and method, median and min frame ms
  *   bench_gl MODEL.glb --check                    the three images of 16 instances must agree
+ * --lod: the bone pass with the runtimes' animation LOD (lod 'auto'); BENCH_GL_BONES_GLSL=FILE: the bone pass and its
+ * draw from another library, the palette and the VAT from the shipped one (weighs a change in one run).
  *
  * The palette and the VAT are baked here from MODEL.glb alike (qpos/u16 and RGBA16F, 30 fps, in
  * place), so both play the same frames. Methods alternate within a count (a change of the
@@ -191,7 +193,9 @@ typedef struct scene {
     GLuint palette_tex, bind_tex, vat_pos, vat_nrm, bone_tex[3], bone_fbo, bone_rows, bone_width;
     GLuint prog[METHODS], pass, vao, pass_vao, instance_vbo;
     GLsizei index_count;
-    bool lod; /* --lod: the bone pass's animation LOD, as the WebGL2 Crowd's default (24 and 12 pixels) */
+    bool lod; /* --lod: the bone pass's animation LOD, as the WebGL2 Crowd's default (lod 'auto') */
+    float lod_pixels[2]; /* its thresholds: 1 influence under [0] pixels tall, 2 under [1] (bench_lod_thresholds) */
+    cb_sampler *sampler;
 } scene;
 
 static void upload_palette(scene *s)
@@ -233,6 +237,15 @@ static void bone_targets(scene *s, uint32_t capacity)
     if (glCheckFramebufferStatus(GL_DRAW_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) die("the bone textures are not renderable");
 }
 
+/* The largest side of any clip's animated bounds: the grid's spacing and the LOD's size of an instance. */
+static float herd_size(const cb_palette *p)
+{
+    float size = 0;
+    for (uint32_t c = 0; c < p->clip_count; ++c)
+        for (int k = 0; k < 3; ++k) size = fmaxf(size, p->clips[c].bounds_max[k] - p->clips[c].bounds_min[k]);
+    return size;
+}
+
 /* ---- the mesh: every primitive of the first skin, in the VAT's vertex order ---- */
 
 static void upload_mesh(scene *s, const cb_model *m, uint32_t capacity)
@@ -254,6 +267,8 @@ static void upload_mesh(scene *s, const cb_model *m, uint32_t capacity)
         v0 += p->vertex_count, i0 += p->index_count;
     }
     bench_sort_influences(j, w, verts); /* as the WebGL2 Crowd: every method draws the same order */
+    if (s->lod) /* as lod 'auto' of the runtimes: where the worst vertex of 64 poses moves at most a pixel */
+        bench_lod_thresholds(s->sampler, s->pal, pos, j, w, verts, herd_size(s->pal), 1.0, 64, s->lod_pixels);
     bench_sort_triangles(idx, indices, w);
     glGenVertexArrays(1, &s->vao);
     glBindVertexArray(s->vao);
@@ -325,15 +340,6 @@ static void run_bone_pass(const scene *s, uint32_t n, float time)
     glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)n);
 }
 
-/* The largest side of any clip's animated bounds: the grid's spacing and the LOD's size of an instance. */
-static float herd_size(const cb_palette *p)
-{
-    float size = 0;
-    for (uint32_t c = 0; c < p->clip_count; ++c)
-        for (int k = 0; k < 3; ++k) size = fmaxf(size, p->clips[c].bounds_max[k] - p->clips[c].bounds_min[k]);
-    return size;
-}
-
 static void draw(const scene *s, int method, uint32_t n, float time, const float *view_projection, GLuint target)
 {
     if (method == 1) run_bone_pass(s, n, time);
@@ -365,7 +371,7 @@ static void draw(const scene *s, int method, uint32_t n, float time, const float
         }
         glUniform1i(glGetUniformLocation(prog, "cb_bone_rows"), (GLint)s->bone_rows);
         float pixels = herd_size(s->pal) * 0.5f * HEIGHT * hypotf(hypotf(view_projection[1], view_projection[5]), view_projection[9]);
-        glUniform3f(glGetUniformLocation(prog, "u_lod"), pixels, s->lod ? 24.0f : 0.0f, s->lod ? 12.0f : 0.0f);
+        glUniform3f(glGetUniformLocation(prog, "u_lod"), pixels, s->lod ? s->lod_pixels[1] : 0.0f, s->lod ? s->lod_pixels[0] : 0.0f);
     }
     glUniform1f(glGetUniformLocation(prog, "u_time"), time);
     glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, view_projection);
@@ -434,9 +440,6 @@ static double now_ms(void)
     return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
 }
 
-/* Milliseconds of one frame on the GPU, as GL_TIME_ELAPSED measures from the clear to the draw's
- * end; *wall: from the clear's call to glFinish's return (llvmpipe rasterizes at the flush, which
- * its timer query may leave out). */
 /* The process's CPU time (ms): llvmpipe rasterises on this process's threads, and on a machine shared
  * with other work a frame's CPU time is its own where its wall time is also the others' load. */
 static double cpu_ms(void)
@@ -446,6 +449,8 @@ static double cpu_ms(void)
     return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
 }
 
+/* Milliseconds of one frame on the GPU, as GL_TIME_ELAPSED measures from the clear to the draw's end; *wall:
+ * from the clear's call to glFinish's return (llvmpipe rasterizes at the flush, which its query may leave out). */
 static double timed_frame(const scene *s, int method, uint32_t n, float time, const float *vp, GLuint target, double *wall,
                           double *cpu)
 {
@@ -466,9 +471,11 @@ static double timed_frame(const scene *s, int method, uint32_t n, float time, co
 static void bench_counts(const scene *s, const char *counts, int frames, GLuint target)
 {
     printf("{\"renderer\": \"%s\", \"version\": \"%s\", \"vertices\": %llu, \"palette_bytes\": %llu, \"vat_bytes\": %llu, "
-           "\"frames\": %d, \"counts\": {", (const char *)glGetString(GL_RENDERER), (const char *)glGetString(GL_VERSION),
+           "\"frames\": %d, \"lod_two_pixels\": %.1f, \"lod_one_pixels\": %.1f, \"counts\": {", (const char *)glGetString(GL_RENDERER),
+           (const char *)glGetString(GL_VERSION),
            (unsigned long long)s->vat->vertices, (unsigned long long)s->pal->width * s->pal->height * 8,
-           (unsigned long long)s->vat->geometry.width * s->vat->geometry.height * 16, frames);
+           (unsigned long long)s->vat->geometry.width * s->vat->geometry.height * 16, frames, s->lod ? s->lod_pixels[1] : 0.0,
+           s->lod ? s->lod_pixels[0] : 0.0);
     const char *c = counts;
     for (int first = 1; *c; first = 0) {
         uint32_t n = (uint32_t)strtoul(c, (char **)&c, 10);
@@ -505,21 +512,6 @@ static void bench_counts(const scene *s, const char *counts, int frames, GLuint 
     printf("}}\n");
 }
 
-/* Share of the pixels covered in either image whose colours differ by more than 8 of 255. */
-static double image_difference(const unsigned char *a, const unsigned char *b, long *covered)
-{
-    long differ = 0;
-    *covered = 0;
-    for (size_t i = 0; i < (size_t)WIDTH * HEIGHT * 4; i += 4) {
-        bool ca = a[i] | a[i + 1] | a[i + 2], cb = b[i] | b[i + 1] | b[i + 2];
-        if (!ca && !cb) continue;
-        ++*covered;
-        for (int k = 0; k < 3; ++k)
-            if (abs(a[i + k] - b[i + k]) > 8) { ++differ; break; }
-    }
-    return *covered ? (double)differ / *covered : 1;
-}
-
 /* 16 instances drawn by each method at the same time must give the same image; the VAT a
  * quarter second later (a runtime playing the wrong rows) must not. */
 static int check_images(const scene *s, GLuint target)
@@ -534,8 +526,8 @@ static int check_images(const scene *s, GLuint target)
         glReadPixels(0, 0, WIDTH, HEIGHT, GL_RGBA, GL_UNSIGNED_BYTE, img[m]);
     }
     long covered;
-    double late = image_difference(img[0], img[3], &covered), bones = image_difference(img[0], img[1], &covered),
-           vat = image_difference(img[0], img[2], &covered);
+    double late = bench_image_difference(img[0], img[3], WIDTH, HEIGHT, &covered), bones = bench_image_difference(img[0], img[1], WIDTH, HEIGHT, &covered),
+           vat = bench_image_difference(img[0], img[2], WIDTH, HEIGHT, &covered);
     printf("16 instances on %s, %ld pixels covered: palette vs bone pass %.4f, palette vs VAT %.4f of the pixels differ; "
            "the VAT 0.25 s late %.4f\n", (const char *)glGetString(GL_RENDERER), covered, bones, vat, late);
     for (int m = 0; m <= METHODS; ++m) free(img[m]);
@@ -570,17 +562,22 @@ int main(int argc, char **argv)
             capacity = n > capacity ? n : capacity;
             if (!*c) break;
         }
-    scene s = {.pal = &pal, .vat = &vat};
+    scene s = {.pal = &pal, .vat = &vat, .sampler = sampler};
     for (int a = 3; a < argc; ++a) s.lod |= !strcmp(argv[a], "--lod");
     upload_palette(&s);
     bone_targets(&s, capacity);
     upload_mesh(&s, model, capacity);
     const char *skins[METHODS] = {SKIN_PALETTE, SKIN_BONES, SKIN_VAT};
+    const char *bones_path = getenv("BENCH_GL_BONES_GLSL"); /* another library for the bone pass and its draw: weighs a change */
+    char *bones_glsl = bones_path ? bench_read_text(bones_path) : NULL;
+    if (bones_path && !bones_glsl) die("BENCH_GL_BONES_GLSL: cannot read that file (a GLSL library in place of the shipped one)");
+    const char *bones_lib = bones_glsl ? bones_glsl : cb_palette_glsl;
     for (int m = 0; m < METHODS; ++m) {
         const char *vs[3] = {MAIN_HEAD, skins[m], MAIN_TAIL};
-        s.prog[m] = program(cb_palette_glsl, &pal, m == 1, vs, m == 1 ? 2 : 3, NULL, 0);
+        s.prog[m] = program(m == 1 ? bones_lib : cb_palette_glsl, &pal, m == 1, vs, m == 1 ? 2 : 3, NULL, 0);
     }
-    s.pass = program(cb_palette_glsl, &pal, false, &PASS_VERTEX, 1, &PASS_FRAGMENT, 1);
+    s.pass = program(bones_lib, &pal, false, &PASS_VERTEX, 1, &PASS_FRAGMENT, 1);
+    free(bones_glsl);
     GLuint target = offscreen_target();
     int rc = check ? check_images(&s, target) : (bench_counts(&s, argv[2], frames, target), 0);
     cb_vat_free(&vat);

@@ -65,6 +65,8 @@ def print_methods(r, title, key='_ms', methods=CROWD_METHODS, pairs=True):
         print('memory per instance: ' + ', '.join('%s %d bytes' % (m, b) for m, b in r['bytes_per_instance'].items()
                                                   if m in methods) + ' (the VAT\'s: its instance row; the bone pass adds '
               '48 bytes a bone)')
+    if r.get('lod_choice'):
+        print('animation LOD: ' + r['lod_choice'])
     for n, c in sorted((r.get('auto_choice') or {}).items(), key=lambda kv: int(kv[0])):
         print('auto at %s: %s (%s)' % (n, c['method'], c['reason']))
 
@@ -77,7 +79,7 @@ def print_crowd(results):
 
 # The native benchmark (bench/bench_gl.c, OpenGL through EGL): llvmpipe here, where a whole frame of
 # 100,000 Cows takes minutes; on a GPU: python3 bench/run.py --gl-only --gl-counts 1000,3000,10000,30000,100000,300000
-# (model, counts, frames, --lod: the bone pass with the WebGL2 Crowd's default animation LOD in place of every influence)
+# (model, counts, frames, --lod: the bone pass with the runtimes' default animation LOD, lod 'auto', in place of every influence)
 GL_RUNS = (('Cow', '1000', 5, False), ('Cow', '1000', 5, True), ('Husky', '1000', 5, False), ('Husky', '1000', 5, True),
            ('fish', '100,1000,10000,100000', 3, False))
 GL_METHODS = ('palette', 'bones', 'lod', 'vat')
@@ -103,3 +105,6 @@ def print_gl(results):
             r['input'], r['vertices'], r['version'], r['renderer'], r['frames'])
         print_methods(r, head + 'GL_TIME_ELAPSED)', methods=GL_METHODS, pairs=False)
         print_methods(r, head + 'wall time to glFinish)', '_wall_ms', methods=GL_METHODS)
+        if r.get('lod_one_pixels'):
+            print('lod (the runtimes\' lod \'auto\'): 2 influences under %.1f pixels tall, 1 under %.1f: there the worst vertex of '
+                  '64 poses moves at most a pixel' % (r['lod_two_pixels'], r['lod_one_pixels']))

@@ -344,20 +344,32 @@ uniform int cb_bone_rows;                          // instances per column block
 void cb_skin_bone_pass_influences(vec3 v, vec3 n, ivec4 joints, vec4 weights, int instance, int influences,
                                   out vec3 p, out vec3 skinned_n)
 {
-    int block = instance / cb_bone_rows;
-    int x0 = block * (cb_row_texels / CB_TEXELS_PER_BONE), y = instance - block * cb_bone_rows;
-    vec4 c0 = vec4(0.0), c1 = vec4(0.0), c2 = vec4(0.0);
-    float sum = 0.0;
+    // cb:bone-block - the column block by a float division (a CPU rasteriser divides integers lane by lane),
+    // (i + 0.5) / rows, half a row from any integer; the remainder then corrects a quotient off by one.
+    int block = int((float(instance) + 0.5) / float(cb_bone_rows)), y = instance - block * cb_bone_rows;
+    block += y < 0 ? -1 : y >= cb_bone_rows ? 1 : 0;
+    y = instance - block * cb_bone_rows;
+    int x0 = block * (cb_row_texels / CB_TEXELS_PER_BONE);
+    vec4 c0, c1, c2;
     int count = min(influences, cb_influence_count(weights)); // cb_influence_count says why a loop
-    for (int i = 0; i < count; ++i) {
-        ivec2 xy = ivec2(x0 + joints[i], y);
-        c0 += weights[i] * texelFetch(cb_bones0, xy, 0);
-        c1 += weights[i] * texelFetch(cb_bones1, xy, 0);
-        c2 += weights[i] * texelFetch(cb_bones2, xy, 0);
-        sum += weights[i];
-    }
-    if (influences < CB_INFLUENCES) { // cb:lod-weights - the kept weights sum to 1
-        c0 /= sum, c1 /= sum, c2 /= sum;
+    if (count == 1) { // the largest bone alone (a far instance's LOD, or a vertex of one bone): no blend
+        ivec2 xy = ivec2(x0 + joints[0], y);
+        float w = influences < CB_INFLUENCES ? 1.0 : weights[0]; // the kept weight scaled to 1
+        c0 = w * texelFetch(cb_bones0, xy, 0), c1 = w * texelFetch(cb_bones1, xy, 0), c2 = w * texelFetch(cb_bones2, xy, 0);
+    } else {
+        c0 = vec4(0.0), c1 = vec4(0.0), c2 = vec4(0.0);
+        float sum = 0.0;
+        for (int i = 0; i < count; ++i) {
+            ivec2 xy = ivec2(x0 + joints[i], y);
+            c0 += weights[i] * texelFetch(cb_bones0, xy, 0);
+            c1 += weights[i] * texelFetch(cb_bones1, xy, 0);
+            c2 += weights[i] * texelFetch(cb_bones2, xy, 0);
+            sum += weights[i];
+        }
+        if (influences < CB_INFLUENCES) { // cb:lod-weights - the kept weights sum to 1 (one division, not twelve)
+            float r = 1.0 / sum;
+            c0 *= r, c1 *= r, c2 *= r;
+        }
     }
     mat3 a = mat3(c0.xyz, c1.xyz, c2.xyz); // cb:bone-columns
     p = a * v + vec3(c0.w, c1.w, c2.w);

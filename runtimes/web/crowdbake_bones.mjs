@@ -8,6 +8,7 @@
 // CB_BONE_TEXTURE), straight to world space. It needs
 // EXT_color_buffer_float (render to float textures), which WebGL2 on desktop GPUs and SwiftShader have.
 import { compileProgram, paletteDefines } from './crowdbake_crowd.mjs';
+import { boneMatrix } from './crowdbake_pal.mjs';
 
 const PASS_VERTEX = `
 in vec4 a_place; in vec4 a_inst; in vec4 a_from; in vec4 a_fade;
@@ -43,8 +44,62 @@ export const AUTO_BONE_PASS_VERTICES = 50000;
 // Animation LOD, on by default: an instance whose animated bounds span fewer than `two` pixels on
 // screen is skinned with its 2 largest bone weights, fewer than `one` pixels with its largest alone
 // (the kept weights scaled to sum to 1), the rule crowdbake mesh --max-influences 2|1 applies to a far
-// LOD mesh: at 24 pixels a pixel is 4% of the animal. lod: false, or { two, one } (0: never).
+// LOD mesh. lod: 'auto' (the default: lodThresholds, from the model's own error), false, or { two, one }
+// (0: never). DEFAULT_LOD is what 'auto' was before it (at 24 pixels a pixel is 4% of the animal).
 export const DEFAULT_LOD = { two: 24, one: 12 };
+export const LOD_PIXEL_ERROR = 1; // 'auto': the most a vertex may move, in pixels, for the LOD's fewer influences
+export const LOD_POSES = 64;      // 'auto': poses measured, spread evenly over every clip's rows
+
+// The animation LOD's thresholds for a model (lod: 'auto'): the sizes on screen (pixels, as lodUniform
+// measures them: `size` tall) under which skinning with the 2 largest weights, or the largest alone,
+// moves no vertex more than `pixelError` pixels from its full skin - the worst vertex over `poses` poses
+// spread over every clip's rows. A vertex's error scales with the instance's size on screen, so a
+// tier whose worst vertex is off by a fraction f of `size` is within `pixelError` below pixelError / f
+// pixels. mesh: positions, joints, weights (as Crowd takes them). Returns { two, one, worst: { two, one },
+// poses } (worst: fractions of `size`; a tier that moves nothing gets 1e6 pixels).
+export function lodThresholds(pal, mesh, size, { pixelError = LOD_PIXEL_ERROR, poses = LOD_POSES } = {}) {
+    const bones = pal.header.bone_count, verts = mesh.positions.length / 3, m = new Float64Array(bones * 16), b = new Array(16);
+    const rows = pal.clips.reduce((n, c) => n + c.frames, 0), worst = [0, 0], p = new Float64Array(12);
+    const { joints, weights } = sortInfluences(mesh.joints, mesh.weights);
+    const x = mesh.positions;
+    for (let k = 0; k < poses; ++k) {
+        let row = Math.floor((k + 0.5) * rows / poses), clip = 0; // the k-th of `poses` rows spread over every clip
+        while (row >= pal.clips[clip].frames) row -= pal.clips[clip++].frames;
+        for (let j = 0; j < bones; ++j) m.set(boneMatrix(pal, clip, row / pal.clips[clip].fps, j, b), j * 16);
+        for (let v = 0; v < verts; ++v) {
+            const px = x[v * 3], py = x[v * 3 + 1], pz = x[v * 3 + 2];
+            let n = 0; // p: each influence's skinned point, 3 numbers each
+            for (; n < 4 && weights[v * 4 + n]; ++n) {
+                const o = joints[v * 4 + n] * 16;
+                for (let r = 0; r < 3; ++r) p[n * 3 + r] = m[o + r] * px + m[o + 4 + r] * py + m[o + 8 + r] * pz + m[o + 12 + r];
+            }
+            if (!n) continue; // no weight: nothing skins it
+            const w0 = weights[v * 4], w1 = n > 1 ? weights[v * 4 + 1] : 0, kept2 = w0 + w1;
+            let d1 = 0, d2 = 0;
+            for (let r = 0; r < 3; ++r) {
+                let full = 0;
+                for (let i = 0; i < n; ++i) full += weights[v * 4 + i] * p[i * 3 + r];
+                const one = p[r] - full, two = (w0 * p[r] + w1 * p[3 + r]) / kept2 - full;
+                d1 += one * one, d2 += two * two;
+            }
+            worst[0] = Math.max(worst[0], Math.sqrt(d1) / size), worst[1] = Math.max(worst[1], Math.sqrt(d2) / size);
+        }
+    }
+    const pixels = (f) => (f > pixelError / 1e6 ? pixelError / f : 1e6);
+    const one = pixels(worst[0]);
+    return { two: Math.max(pixels(worst[1]), one), one, worst: { two: worst[1], one: worst[0] }, poses, pixelError };
+}
+
+// The LOD to draw with and why: lod as given ('auto': lodThresholds), as { lod, reason }.
+export function resolveLod(lod, pal, mesh, size) {
+    if (lod === false) return { lod: false, reason: 'lod: false: every influence at every size' };
+    if (lod !== 'auto') return { lod, reason: `lod: { two: ${lod.two ?? 0}, one: ${lod.one ?? 0} } as given` };
+    const t = lodThresholds(pal, mesh, size);
+    return { lod: { two: t.two, one: t.one }, thresholds: t,
+             reason: `lod 'auto': 2 influences under ${t.two.toFixed(1)} pixels tall, 1 under ${t.one.toFixed(1)}: there the ` +
+                     `worst vertex of ${t.poses} poses moves at most ${t.pixelError} pixel (${(t.worst.two * 100).toFixed(2)}% ` +
+                     `and ${(t.worst.one * 100).toFixed(2)}% of the animal's size); lod: { two, one } or false overrides` };
+}
 
 // The vertex main that skins from the bone pass straight to world space (the pass placed each bone).
 export const MAIN_BONES = `

@@ -14,7 +14,7 @@
 // expect: positions (3 floats a vertex), normals (3, optional), joints (4 integers), weights (4
 // floats), indices (optional).
 
-import { AUTO_BONE_PASS_VERTICES, BonePass, DEFAULT_LOD, MAIN_BONES, boneShaderSource, lodUniform, sortInfluences,
+import { AUTO_BONE_PASS_VERTICES, BonePass, MAIN_BONES, resolveLod, boneShaderSource, lodUniform, sortInfluences,
          sortTrianglesByInfluences } from './crowdbake_bones.mjs';
 
 import { PALETTE_GLSL } from './crowdbake_palette_glsl.mjs';
@@ -152,8 +152,9 @@ export class Crowd {
     // bonePass: 'auto' (the default: the bone pass from bonePassVertices skinned vertices a frame,
     // AUTO_BONE_PASS_VERTICES unless given; per-vertex blending below it or where WebGL2 cannot
     // render to float textures), true (always; or { rows }), false (never); crowdbake_bones.mjs.
-    // lod: the bone pass's animation LOD (DEFAULT_LOD: fewer influences under so many pixels tall, or
-    // { two, one }, or false).
+    // lod: the bone pass's animation LOD ('auto', the default: fewer influences under the sizes where
+    // the model's worst vertex moves at most a pixel, crowdbake_bones.mjs's lodThresholds; or { two, one }
+    // pixels tall, or false). crowd.lodChoice() says which thresholds and why.
     // crowd.choice(n) says which a herd of n gets, and why.
     constructor(gl, options) {
         const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false, bonePass = 'auto' } = options;
@@ -164,7 +165,8 @@ export class Crowd {
         this.count = 0;
         this.vertexCount = mesh.positions.length / 3;
         this.bonePassVertices = bonePass === 'auto' ? options.bonePassVertices ?? AUTO_BONE_PASS_VERTICES : bonePass ? 0 : Infinity;
-        this.lod = options.lod === undefined ? DEFAULT_LOD : options.lod;
+        this.lodOption = options.lod === undefined ? 'auto' : options.lod;
+        this.lodMesh = mesh; // lod 'auto' measures its error on first use
         this.size = Math.max(1e-6, ...pal.clips.flatMap((c) => [0, 1, 2].map((k) => c.bounds_max[k] - c.bounds_min[k])));
         this.textures = this.upload(options);
         const varyings = captureWorld ? ['v_world'] : null;
@@ -312,9 +314,21 @@ export class Crowd {
         gl.uniform1f(u('cb_linear_range'), h.linear_range);
     }
 
+    // The animation LOD's thresholds ({ two, one } pixels tall, or false), measured on first use under 'auto'.
+    get lod() {
+        return this.lodChoice().lod;
+    }
+
+    // { lod, reason }: the LOD the bone pass's draw uses and why (the thresholds, the error they keep within,
+    // the option that overrides them).
+    lodChoice() {
+        this.lodResolved ??= resolveLod(this.lodOption, this.pal, this.lodMesh, this.size);
+        return this.lodResolved;
+    }
+
     // Binds the program, textures and uniforms for a draw at `time` seconds (lod: false draws every
     // instance with all its influences, as capture does).
-    bind(viewProjection, time, lod = this.lod) {
+    bind(viewProjection, time, lod) {
         const gl = this.gl, bones = this.choice().method === 'bones', p = bones ? this.bonesProgram : this.program;
         if (this.dirty) {
             gl.bindBuffer(gl.ARRAY_BUFFER, this.instanceBuffer);
@@ -328,7 +342,7 @@ export class Crowd {
         this.bindTextures(u);
         if (bones) {
             this.bones.bindTargets(u);
-            gl.uniform3fv(u('u_lod'), lodUniform(lod, this.size, viewProjection, gl.getParameter(gl.VIEWPORT)[3]));
+            gl.uniform3fv(u('u_lod'), lodUniform(lod ?? this.lod, this.size, viewProjection, gl.getParameter(gl.VIEWPORT)[3]));
         }
         gl.uniform1f(u('u_time'), time);
         gl.uniformMatrix4fv(u('u_view_projection'), false, viewProjection);

@@ -21,7 +21,7 @@ import * as THREE from 'three';
 import { instanceData, instanceBoneMatrix, instanceFirstRow } from './crowdbake_pal.mjs';
 import { FootstepClock } from './crowdbake_contacts.mjs';
 import { paletteDefines } from './crowdbake_crowd.mjs';
-import { AUTO_BONE_PASS_VERTICES, DEFAULT_LOD, sortInfluences } from './crowdbake_bones.mjs';
+import { AUTO_BONE_PASS_VERTICES, resolveLod, sortInfluences } from './crowdbake_bones.mjs';
 import { BONE_VERTEX_PARS, HerdBonePass } from './crowdbake_three_bones.mjs';
 import { instanceTravelOffset } from './crowdbake_travel.mjs';
 
@@ -172,9 +172,10 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // looks like the model), fade (cross-fade seconds, 0.25), bonePass ('auto': the bone pass from
     // bonePassVertices skinned vertices a frame, AUTO_BONE_PASS_VERTICES unless given, when update()
     // is given the renderer; true: always then; false: never).
-    // lod: with the bone pass, the animation LOD of crowdbake_bones.mjs (DEFAULT_LOD, { two, one } or false).
+    // lod: with the bone pass, the animation LOD of crowdbake_bones.mjs ('auto': from the model's own error,
+    // lodThresholds; { two, one } or false); herd.lodChoice() says which and why.
     constructor(gltf, pal, type, { count = 1000, glsl, material, fade = 0.25, bonePass = 'auto', bonePassVertices,
-                                   lod = DEFAULT_LOD } = {}) {
+                                   lod = 'auto' } = {}) {
         if (!glsl) throw new Error('CrowdbakeHerd: options.glsl is the shipped library (await loadPaletteGLSL())');
         const mesh = gltf.positions ? gltf : meshFromGLTF(gltf);
         const geometry = new THREE.BufferGeometry();
@@ -223,7 +224,8 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         this.uniforms = uniforms;
         const defines = Object.fromEntries(paletteDefines(pal.header).map((d) => [d, '']));
         this.bonePassVertices = bonePass === 'auto' ? bonePassVertices ?? AUTO_BONE_PASS_VERTICES : bonePass ? 0 : Infinity;
-        this.lod = lod;
+        this.lodOption = lod;
+        this.lodMesh = mesh; // lod 'auto' measures its error on first use
         this.lodSize = Math.max(...[0, 1, 2].map((k) => bounds.box.max.getComponent(k) - bounds.box.min.getComponent(k)));
         this.bones = null;
         this.bonesOn = false;
@@ -357,11 +359,17 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         return m;
     }
 
+    // { lod, reason }: the bone pass's animation LOD and why (measured on first use under 'auto').
+    lodChoice() {
+        this.lodResolved ??= resolveLod(this.lodOption, this.pal, this.lodMesh, this.lodSize);
+        return this.lodResolved;
+    }
+
     onBeforeRender(renderer, scene, camera) {
         if (this.bonesOn) { // the LOD's scale: pixels tall at w = 1 (size x half the viewport's height x P[1][1])
-            const viewport = renderer.getCurrentViewport(new THREE.Vector4());
+            const viewport = renderer.getCurrentViewport(new THREE.Vector4()), lod = this.lodChoice().lod;
             this.uniforms.cb_lod.value.set(this.lodSize * 0.5 * viewport.w * camera.projectionMatrix.elements[5],
-                                           this.lod ? this.lod.two ?? 0 : 0, this.lod ? this.lod.one ?? 0 : 0);
+                                           lod ? lod.two ?? 0 : 0, lod ? lod.one ?? 0 : 0);
         }
         const before = this.uniforms.cb_previous_view_projection.value;
         if (this.previousViewProjection) before.copy(this.previousViewProjection);

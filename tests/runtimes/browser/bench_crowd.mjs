@@ -136,7 +136,8 @@ void main() {
                  vertices: mesh.positions.length / 3, palette_bytes: crowds.palette?.textures.bytes,
                  vat_bytes: crowds.vat?.textures.bytes, bone_pass_bytes: crowds.bones?.bones.bytes,
                  bytes_per_instance: perInstance,
-                 auto_choice: crowds.auto ? Object.fromEntries(counts.map((n) => [n, crowds.auto.choice(n)])) : undefined };
+                 auto_choice: crowds.auto ? Object.fromEntries(counts.map((n) => [n, crowds.auto.choice(n)])) : undefined,
+                 lod_choice: crowds.auto?.lodChoice().reason ?? crowds.lod?.lodChoice().reason };
     }, { counts, methods });
     r.times = {};
     r.cpu = {};
@@ -160,6 +161,7 @@ void main() {
 const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
 const report = { renderer: result.renderer, vertices: result.vertices, palette_bytes: result.palette_bytes,
                  vat_bytes: result.vat_bytes, bone_pass_bytes: result.bone_pass_bytes, bytes_per_instance: result.bytes_per_instance,
+                 lod_choice: result.lod_choice,
                  auto_choice: result.auto_choice, frames, methods, counts: {} };
 for (const [n, m] of Object.entries(result.times)) {
     const c = report.counts[n] = {};
