@@ -41,9 +41,9 @@ const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade sta
 @export var playing := true # advance the clock in _process
 # Animation LOD: an instance under lod.x pixels tall on screen is skinned with its 2 largest bone
 # weights, under lod.y with its largest alone (the kept weights scaled to sum to 1): the rule crowdbake
-# mesh --max-influences 2|1 applies to a far LOD mesh, and the web runtimes' default (at 24 pixels a
-# pixel is 4% of the animal). Vector2.ZERO: every influence at any size. Its size: the largest extent
-# of the clips' animated bounds, times the instance's scale.
+# mesh --max-influences 2|1 applies to a far LOD mesh (at 24 pixels a pixel is 4% of the animal; the
+# web runtimes measure the thresholds per model, README). Vector2.ZERO: every influence at any size.
+# Its size: the largest extent of the clips' animated bounds, times the instance's scale.
 @export var lod := Vector2(24, 12):
 	set(value):
 		lod = value
