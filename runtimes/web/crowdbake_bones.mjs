@@ -45,7 +45,8 @@ export const AUTO_BONE_PASS_VERTICES = 50000;
 // screen is skinned with its 2 largest bone weights, fewer than `one` pixels with its largest alone
 // (the kept weights scaled to sum to 1), the rule crowdbake mesh --max-influences 2|1 applies to a far
 // LOD mesh. lod: 'auto' (the default: lodThresholds, from the model's own error), false, or { two, one }
-// (0: never). DEFAULT_LOD is what 'auto' was before it (at 24 pixels a pixel is 4% of the animal).
+// (0: never). DEFAULT_LOD: fixed thresholds, what 'auto' was before it and the Godot herd's default (at 24
+// pixels a pixel is 4% of the animal): pass it as lod to draw as a Godot herd does.
 export const DEFAULT_LOD = { two: 24, one: 12 };
 export const LOD_PIXEL_ERROR = 1; // 'auto': the most a vertex may move, in pixels, for the LOD's fewer influences
 export const LOD_POSES = 64;      // 'auto': poses measured, spread evenly over every clip's rows
