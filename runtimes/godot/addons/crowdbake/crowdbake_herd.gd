@@ -65,6 +65,7 @@ var _bounds_dirty := false
 var _has_contacts := false # any clip of the type lists contacts (else advance skips the search)
 var _places: Array[Transform3D] = [] # place()'s transforms: the travel offset goes on top
 var _placed := PackedByteArray() # 1 where place() set the instance's transform
+var _lod_size := 0.0 # the animation LOD's measure of the animal: its clips' largest animated extent
 
 func _ready() -> void:
 	if roster and not animal.is_empty() and mesh and count > 0 and palette == null:
@@ -90,6 +91,7 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 		return _fail("%s: no animal type '%s' in the roster; see roster.json's types" % [name, type])
 	_type = roster.types[type]
 	palette = _type["palette"]
+	_lod_size = palette.largest_bounds().get_longest_axis_size()
 	_has_contacts = _type["clips"].values().any(func(clip): return not clip.get("contacts", []).is_empty())
 	var look := _HERD_MESH.build(mesh, _material())
 	materials = look["materials"]
@@ -337,7 +339,7 @@ func _set_lod() -> void:
 		_set_all("animation_lod", Vector3.ZERO)
 		return
 	var projection := camera.get_camera_projection()
-	var unit: float = palette.largest_bounds().get_longest_axis_size() * 0.5 * get_viewport().get_visible_rect().size.y * projection.y.y
+	var unit := _lod_size * 0.5 * get_viewport().get_visible_rect().size.y * projection.y.y
 	_set_all("animation_lod", Vector3(unit, lod.x, lod.y))
 	_set_all("lod_view_projection", projection * Projection(camera.global_transform.affine_inverse()))
 
