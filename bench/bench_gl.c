@@ -7,8 +7,10 @@
  *
  *   bench_gl MODEL.glb N1,N2,... [--frames K] [--lod]   JSON: per count and method, median and min frame ms
  *   bench_gl MODEL.glb --check                    the three images of 16 instances must agree
- * --lod: the bone pass with the runtimes' animation LOD (lod 'auto'); BENCH_GL_BONES_GLSL=FILE: the bone pass and its
- * draw from another library, the palette and the VAT from the shipped one (weighs a change in one run).
+ * --lod: the bone pass with the runtimes' animation LOD (lod 'auto'), its tiers drawn apart (instances sorted by tier
+ * on the CPU, a program each, compiled with CB_INFLUENCES 1, 2, 4; --lod-single: one draw, the tier found per vertex);
+ * BENCH_GL_BONES_GLSL=FILE: the bone pass and its draw from another library, the palette and the VAT from the shipped
+ * one (weighs a change in one run).
  *
  * The palette and the VAT are baked here from MODEL.glb alike (qpos/u16 and RGBA16F, 30 fps, in
  * place), so both play the same frames. Methods alternate within a count (a change of the
@@ -25,7 +27,9 @@
 #include <time.h>
 
 #include "crowdbake/crowdbake.h"
+#include "bench_gl_context.h"
 #include "bench_gl_mesh.h"
+#include "bench_gl_tiers.h"
 
 /* runtimes/glsl/crowdbake_palette.glsl, embedded by the build (build/gen/palette_glsl.c). */
 extern const char cb_palette_glsl[];
@@ -34,54 +38,6 @@ extern const char cb_palette_glsl[];
 #define HEIGHT 540
 #define METHODS 3
 static const char *const method_names[METHODS] = {"palette", "bones", "vat"}; /* bones is "lod" with --lod */
-
-static void die(const char *what)
-{
-    fprintf(stderr, "bench_gl: %s\n", what);
-    exit(1);
-}
-
-/* EGL's first device that is a GPU (not Mesa's software one), else its first; NULL when it lists none. */
-static EGLDeviceEXT first_device(void)
-{
-    PFNEGLQUERYDEVICESEXTPROC query_devices = (PFNEGLQUERYDEVICESEXTPROC)eglGetProcAddress("eglQueryDevicesEXT");
-    PFNEGLQUERYDEVICESTRINGEXTPROC query_string =
-        (PFNEGLQUERYDEVICESTRINGEXTPROC)eglGetProcAddress("eglQueryDeviceStringEXT");
-    EGLDeviceEXT devices[8];
-    EGLint n = 0;
-    if (!query_devices || !query_string || !query_devices(8, devices, &n) || !n) return NULL;
-    for (EGLint i = 0; i < n; ++i) {
-        const char *ext = query_string(devices[i], EGL_EXTENSIONS);
-        if (!ext || !strstr(ext, "EGL_MESA_device_software")) return devices[i];
-    }
-    return devices[0];
-}
-
-/* An OpenGL 3.3 core context without a surface: EGL's device platform when it has one (a GPU's
- * driver, or Mesa's llvmpipe), else the default display (Mesa with EGL_PLATFORM=surfaceless,
- * which also skips the devices). */
-static void open_context(void)
-{
-    EGLDisplay dpy = EGL_NO_DISPLAY;
-    PFNEGLGETPLATFORMDISPLAYEXTPROC platform_display =
-        (PFNEGLGETPLATFORMDISPLAYEXTPROC)eglGetProcAddress("eglGetPlatformDisplayEXT");
-    EGLDeviceEXT device = getenv("EGL_PLATFORM") || !platform_display ? NULL : first_device();
-    if (device) dpy = platform_display(EGL_PLATFORM_DEVICE_EXT, device, NULL);
-    if (dpy == EGL_NO_DISPLAY || !eglInitialize(dpy, NULL, NULL)) {
-        dpy = eglGetDisplay(EGL_DEFAULT_DISPLAY);
-        if (dpy == EGL_NO_DISPLAY || !eglInitialize(dpy, NULL, NULL)) die("no EGL display (Mesa: EGL_PLATFORM=surfaceless)");
-    }
-    const EGLint config_attrs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_NONE};
-    EGLConfig config;
-    EGLint configs = 0;
-    if (!eglChooseConfig(dpy, config_attrs, &config, 1, &configs) || !configs) die("no EGL config for desktop OpenGL");
-    if (!eglBindAPI(EGL_OPENGL_API)) die("EGL cannot bind desktop OpenGL");
-    const EGLint ctx_attrs[] = {EGL_CONTEXT_MAJOR_VERSION, 3, EGL_CONTEXT_MINOR_VERSION, 3, EGL_CONTEXT_OPENGL_PROFILE_MASK,
-                                EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
-    EGLContext ctx = eglCreateContext(dpy, config, EGL_NO_CONTEXT, ctx_attrs);
-    if (ctx == EGL_NO_CONTEXT || !eglMakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, ctx))
-        die("no OpenGL 3.3 core context without a surface (EGL_KHR_surfaceless_context)");
-}
 
 /* ---- shaders: the shipped library, then a main ---- */
 
@@ -103,6 +59,11 @@ static const char *SKIN_BONES = /* the pass placed each bone: world space straig
     "void main() {\n    vec3 p, n;\n    float pixels = u_lod.x / (u_view_projection * vec4(a_place.xyz, 1.0)).w;\n"
     "    cb_skin_bone_pass_influences(a_position, a_normal, a_joints, a_weights, gl_InstanceID,\n"
     "                                 cb_lod_influences(pixels, u_lod.y, u_lod.z), p, n);\n"
+    "    v_normal = n;\n    gl_Position = u_view_projection * vec4(p, 1.0);\n}\n";
+static const char *SKIN_TIER = /* one LOD tier, compiled in: a_bone_instance is the instance's row in the pass */
+    "in int a_bone_instance;\n"
+    "void main() {\n    vec3 p, n;\n"
+    "    cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, a_bone_instance, p, n);\n"
     "    v_normal = n;\n    gl_Position = u_view_projection * vec4(p, 1.0);\n}\n";
 static const char *SKIN_VAT =
     "uniform sampler2D u_vat_positions, u_vat_normals; uniform int u_frame_width, u_rows_per_frame, u_vat_rows;\n"
@@ -132,69 +93,46 @@ static const char *PASS_FRAGMENT =
     "layout(location = 0) out vec4 o_c0; layout(location = 1) out vec4 o_c1; layout(location = 2) out vec4 o_c2;\n"
     "void main() { cb_bone_pass_placed(int(gl_FragCoord.x) - v_x0, v_inst, v_inst, 1.0, u_time, v_place, 1.0, o_c0, o_c1, o_c2); }\n";
 
-static GLuint shader(GLenum type, const char *const *parts, int n)
-{
-    GLuint s = glCreateShader(type);
-    glShaderSource(s, n, parts, NULL);
-    glCompileShader(s);
-    GLint ok;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[4096];
-        glGetShaderInfoLog(s, sizeof log, NULL, log);
-        fprintf(stderr, "bench_gl: a shader does not compile: %s\n", log);
-        exit(1);
-    }
-    return s;
-}
-
-/* The shipped library with the palette's defines (and CB_BONE_TEXTURE for `bones`) before each stage's main. */
-static GLuint program(const char *library, const cb_palette *p, bool bones, const char *const *vs, int vs_n,
+/* The shipped library with the palette's defines (and CB_BONE_TEXTURE for `bones`, CB_INFLUENCES for `influences`
+ * other than 0) before each stage's main. */
+static GLuint program(const char *library, const cb_palette *p, bool bones, int influences, const char *const *vs, int vs_n,
                       const char *const *fs, int fs_n)
 {
     static const char *layouts[] = {"CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS"};
     static const char *precisions[] = {"CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16"};
-    char defines[256];
-    snprintf(defines, sizeof defines, "#version 330 core\n#define %s\n#define %s\n%s%s", layouts[p->layout],
+    char defines[256], count[32] = "";
+    if (influences) snprintf(count, sizeof count, "#define CB_INFLUENCES %d\n", influences);
+    snprintf(defines, sizeof defines, "#version 330 core\n#define %s\n#define %s\n%s%s%s", layouts[p->layout],
              precisions[p->precision], p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "",
-             bones ? "#define CB_BONE_TEXTURE\n" : "");
+             bones ? "#define CB_BONE_TEXTURE\n" : "", count);
     const char *v[8] = {defines, library}, *f[8] = {defines, library};
     for (int i = 0; i < vs_n; ++i) v[2 + i] = vs[i];
     for (int i = 0; i < fs_n; ++i) f[2 + i] = fs[i];
     GLuint prog = glCreateProgram();
-    glAttachShader(prog, shader(GL_VERTEX_SHADER, v, 2 + vs_n));
-    glAttachShader(prog, fs_n ? shader(GL_FRAGMENT_SHADER, f, 2 + fs_n) : shader(GL_FRAGMENT_SHADER, &FRAGMENT, 1));
-    const char *attrs[] = {"a_position", "a_normal", "a_joints", "a_weights", "a_place", "a_inst"};
-    for (GLuint a = 0; a < 6; ++a) glBindAttribLocation(prog, a, attrs[a]);
+    glAttachShader(prog, bench_shader(GL_VERTEX_SHADER, v, 2 + vs_n));
+    glAttachShader(prog, fs_n ? bench_shader(GL_FRAGMENT_SHADER, f, 2 + fs_n) : bench_shader(GL_FRAGMENT_SHADER, &FRAGMENT, 1));
+    const char *attrs[] = {"a_position", "a_normal", "a_joints", "a_weights", "a_place", "a_inst", "a_bone_instance"};
+    for (GLuint a = 0; a < 7; ++a) glBindAttribLocation(prog, a, attrs[a]);
     glLinkProgram(prog);
     GLint ok;
     glGetProgramiv(prog, GL_LINK_STATUS, &ok);
-    if (!ok) die("a program does not link");
+    if (!ok) bench_die("a program does not link");
     return prog;
 }
 
 /* ---- textures ---- */
 
-static GLuint texture(GLint internal, GLsizei w, GLsizei h, GLenum format, GLenum type, const void *data)
-{
-    GLuint t;
-    glGenTextures(1, &t);
-    glBindTexture(GL_TEXTURE_2D, t);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage2D(GL_TEXTURE_2D, 0, internal, w, h, 0, format, type, data);
-    return t;
-}
-
 typedef struct scene {
     const cb_palette *pal;
     const cb_vat *vat;
     GLuint palette_tex, bind_tex, vat_pos, vat_nrm, bone_tex[3], bone_fbo, bone_rows, bone_width;
-    GLuint prog[METHODS], pass, vao, pass_vao, instance_vbo;
+    GLuint prog[METHODS], tier_prog[3], pass, vao, pass_vao, instance_vbo, tier_vbo;
     GLsizei index_count;
     bool lod; /* --lod: the bone pass's animation LOD, as the WebGL2 Crowd's default (lod 'auto') */
+    bool tiers; /* its tiers drawn apart (tier_prog), not found per vertex (prog[1]; --lod-single) */
     float lod_pixels[2]; /* its thresholds: 1 influence under [0] pixels tall, 2 under [1] (bench_lod_thresholds) */
+    float *instances; /* the herd's 8 floats an instance (place, inst), kept for the tiers' sort */
+    int32_t *order;   /* the instances by tier, a frame's (bench_sort_by_tier) */
     cb_sampler *sampler;
 } scene;
 
@@ -203,18 +141,18 @@ static void upload_palette(scene *s)
     const cb_palette *p = s->pal;
     static const GLint internal[] = {GL_RGBA32F, GL_RGBA16F, GL_RGBA16UI};
     static const GLenum format[] = {GL_RGBA, GL_RGBA, GL_RGBA_INTEGER}, type[] = {GL_FLOAT, GL_HALF_FLOAT, GL_UNSIGNED_SHORT};
-    s->palette_tex = texture(internal[p->precision], (GLsizei)p->width, (GLsizei)p->height, format[p->precision],
+    s->palette_tex = bench_texture(internal[p->precision], (GLsizei)p->width, (GLsizei)p->height, format[p->precision],
                              type[p->precision], p->texels);
     float *rgba = calloc((size_t)p->bone_count * 8, sizeof(float)); /* row 0: bind positions; row 1: position offsets */
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         memcpy(rgba + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
         if (p->positions_relative) memcpy(rgba + (p->bone_count + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
     }
-    s->bind_tex = texture(GL_RGBA32F, (GLsizei)p->bone_count, 2, GL_RGBA, GL_FLOAT, rgba);
+    s->bind_tex = bench_texture(GL_RGBA32F, (GLsizei)p->bone_count, 2, GL_RGBA, GL_FLOAT, rgba);
     free(rgba);
-    s->vat_pos = texture(GL_RGBA16F, (GLsizei)s->vat->geometry.width, (GLsizei)s->vat->geometry.height, GL_RGBA,
+    s->vat_pos = bench_texture(GL_RGBA16F, (GLsizei)s->vat->geometry.width, (GLsizei)s->vat->geometry.height, GL_RGBA,
                          GL_HALF_FLOAT, s->vat->positions);
-    s->vat_nrm = texture(GL_RGBA16F, (GLsizei)s->vat->geometry.width, (GLsizei)s->vat->geometry.height, GL_RGBA,
+    s->vat_nrm = bench_texture(GL_RGBA16F, (GLsizei)s->vat->geometry.width, (GLsizei)s->vat->geometry.height, GL_RGBA,
                          GL_HALF_FLOAT, s->vat->normals);
 }
 
@@ -225,16 +163,16 @@ static void bone_targets(scene *s, uint32_t capacity)
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max);
     s->bone_rows = capacity < (uint32_t)max ? capacity : (uint32_t)max;
     s->bone_width = (capacity + s->bone_rows - 1) / s->bone_rows * s->pal->bone_count;
-    if (s->bone_width > (uint32_t)max) die("too many instances for the bone pass's textures");
+    if (s->bone_width > (uint32_t)max) bench_die("too many instances for the bone pass's textures");
     glGenFramebuffers(1, &s->bone_fbo);
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, s->bone_fbo);
     for (int k = 0; k < 3; ++k) {
-        s->bone_tex[k] = texture(GL_RGBA32F, (GLsizei)s->bone_width, (GLsizei)s->bone_rows, GL_RGBA, GL_FLOAT, NULL);
+        s->bone_tex[k] = bench_texture(GL_RGBA32F, (GLsizei)s->bone_width, (GLsizei)s->bone_rows, GL_RGBA, GL_FLOAT, NULL);
         glFramebufferTexture2D(GL_DRAW_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + (GLenum)k, GL_TEXTURE_2D, s->bone_tex[k], 0);
     }
     const GLenum buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
     glDrawBuffers(3, buffers);
-    if (glCheckFramebufferStatus(GL_DRAW_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) die("the bone textures are not renderable");
+    if (glCheckFramebufferStatus(GL_DRAW_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) bench_die("the bone textures are not renderable");
 }
 
 /* The largest side of any clip's animated bounds: the grid's spacing and the LOD's size of an instance. */
@@ -296,8 +234,15 @@ static void upload_mesh(scene *s, const cb_model *m, uint32_t capacity)
         glVertexAttribPointer(a, 4, GL_FLOAT, GL_FALSE, 32, (const void *)(uintptr_t)((a - 4) * 16));
         glVertexAttribDivisor(a, 1);
     }
+    glGenBuffers(1, &s->tier_vbo); /* a_bone_instance: the tiers' order, pointed at a tier's first by each draw */
+    glBindBuffer(GL_ARRAY_BUFFER, s->tier_vbo);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)capacity * 4, NULL, GL_STREAM_DRAW);
+    glEnableVertexAttribArray(6);
+    glVertexAttribIPointer(6, 1, GL_INT, 4, 0);
+    glVertexAttribDivisor(6, 1);
     glGenVertexArrays(1, &s->pass_vao);
     glBindVertexArray(s->pass_vao);
+    glBindBuffer(GL_ARRAY_BUFFER, s->instance_vbo);
     for (GLuint a = 4; a < 6; ++a) { /* the pass places each bone: it reads a_place too */
         glEnableVertexAttribArray(a);
         glVertexAttribPointer(a, 4, GL_FLOAT, GL_FALSE, 32, (const void *)(uintptr_t)((a - 4) * 16));
@@ -340,6 +285,40 @@ static void run_bone_pass(const scene *s, uint32_t n, float time)
     glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)n);
 }
 
+/* The bone pass's textures for a draw that skins from them. */
+static void bind_bones(const scene *s, GLuint prog)
+{
+    for (int k = 0; k < 3; ++k) {
+        char name[16];
+        snprintf(name, sizeof name, "cb_bones%d", k);
+        glActiveTexture(GL_TEXTURE2 + (GLenum)k);
+        glBindTexture(GL_TEXTURE_2D, s->bone_tex[k]);
+        glUniform1i(glGetUniformLocation(prog, name), 2 + k);
+    }
+    glUniform1i(glGetUniformLocation(prog, "cb_bone_rows"), (GLint)s->bone_rows);
+}
+
+/* The LOD's tiers drawn apart: the instances sorted by tier (lod: pixels tall at w = 1, the 2- and 1-influence
+ * thresholds), then one draw a tier with its own program, a_bone_instance pointed at the tier's first. */
+static void draw_tiers(const scene *s, uint32_t n, const float *view_projection, const float lod[3])
+{
+    bench_tiers tiers;
+    bench_sort_by_tier(s->instances, 8, n, view_projection, lod, s->order, &tiers);
+    glBindVertexArray(s->vao);
+    glBindBuffer(GL_ARRAY_BUFFER, s->tier_vbo);
+    glBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)n * 4, s->order);
+    for (int k = 0; k < 3; ++k) {
+        if (!tiers.count[k]) continue;
+        GLuint prog = s->tier_prog[k];
+        glUseProgram(prog);
+        bind_palette(s, prog);
+        bind_bones(s, prog);
+        glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, view_projection);
+        glVertexAttribIPointer(6, 1, GL_INT, 4, (const void *)(uintptr_t)(tiers.first[k] * 4));
+        glDrawElementsInstanced(GL_TRIANGLES, s->index_count, GL_UNSIGNED_INT, 0, (GLsizei)tiers.count[k]);
+    }
+}
+
 static void draw(const scene *s, int method, uint32_t n, float time, const float *view_projection, GLuint target)
 {
     if (method == 1) run_bone_pass(s, n, time);
@@ -361,17 +340,15 @@ static void draw(const scene *s, int method, uint32_t n, float time, const float
         glUniform1i(glGetUniformLocation(prog, "u_rows_per_frame"), (GLint)s->vat->rows_per_frame);
         glUniform1i(glGetUniformLocation(prog, "u_vat_rows"), (GLint)s->vat->geometry.height);
     } else bind_palette(s, prog);
+    float lod[3] = {herd_size(s->pal) * 0.5f * HEIGHT * hypotf(hypotf(view_projection[1], view_projection[5]), view_projection[9]),
+                    s->lod ? s->lod_pixels[1] : 0.0f, s->lod ? s->lod_pixels[0] : 0.0f};
+    if (method == 1 && s->lod && s->tiers) {
+        draw_tiers(s, n, view_projection, lod);
+        return;
+    }
     if (method == 1) {
-        for (int k = 0; k < 3; ++k) {
-            char name[16];
-            snprintf(name, sizeof name, "cb_bones%d", k);
-            glActiveTexture(GL_TEXTURE2 + (GLenum)k);
-            glBindTexture(GL_TEXTURE_2D, s->bone_tex[k]);
-            glUniform1i(glGetUniformLocation(prog, name), 2 + k);
-        }
-        glUniform1i(glGetUniformLocation(prog, "cb_bone_rows"), (GLint)s->bone_rows);
-        float pixels = herd_size(s->pal) * 0.5f * HEIGHT * hypotf(hypotf(view_projection[1], view_projection[5]), view_projection[9]);
-        glUniform3f(glGetUniformLocation(prog, "u_lod"), pixels, s->lod ? s->lod_pixels[1] : 0.0f, s->lod ? s->lod_pixels[0] : 0.0f);
+        bind_bones(s, prog);
+        glUniform3fv(glGetUniformLocation(prog, "u_lod"), 1, lod);
     }
     glUniform1f(glGetUniformLocation(prog, "u_time"), time);
     glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, view_projection);
@@ -388,7 +365,7 @@ static void place_herd(const scene *s, uint32_t n, float view_projection[16])
         if (p->clips[c].loops) { clip = &p->clips[c]; break; }
     float size = herd_size(p);
     uint32_t g = (uint32_t)ceil(sqrt((double)n));
-    float *inst = malloc((size_t)n * 32);
+    float *inst = s->instances;
     for (uint32_t i = 0; i < n; ++i) {
         float v[8] = {((float)(i % g) - (float)g / 2) * size * 1.5f, 0, ((float)(i / g) - (float)g / 2) * size * 1.5f,
                       (float)i * 2.4f, (float)clip->first_row, clip->loops ? (float)clip->frames : -(float)clip->frames,
@@ -397,39 +374,10 @@ static void place_herd(const scene *s, uint32_t n, float view_projection[16])
     }
     glBindBuffer(GL_ARRAY_BUFFER, s->instance_vbo);
     glBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)n * 32, inst);
-    free(inst);
-    /* perspective(50 degrees, 960/540) x lookAt(eye (0, 0.8, 0.7) x side, the origin), column-major */
-    double side = g * size * 1.5, f = 1 / tan(25 * acos(-1.0) / 180), near = side * 0.01, far = side * 10, a = (double)WIDTH / HEIGHT;
-    double eye[3] = {0, side * 0.8, side * 0.7}, len = sqrt(eye[1] * eye[1] + eye[2] * eye[2]);
-    double zc[3] = {0, eye[1] / len, eye[2] / len}, xc[3] = {1, 0, 0}, yc[3] = {0, zc[2], -zc[1]};
-    double view[16] = {xc[0], yc[0], zc[0], 0, xc[1], yc[1], zc[1], 0, xc[2], yc[2], zc[2], 0,
-                       0, -(yc[1] * eye[1] + yc[2] * eye[2]), -(zc[1] * eye[1] + zc[2] * eye[2]), 1};
-    double proj[16] = {f / a, 0, 0, 0, 0, f, 0, 0, 0, 0, (far + near) / (near - far), -1, 0, 0, 2 * far * near / (near - far), 0};
-    for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) {
-            double sum = 0;
-            for (int k = 0; k < 4; ++k) sum += proj[k * 4 + r] * view[c * 4 + k];
-            view_projection[c * 4 + r] = (float)sum;
-        }
+    bench_herd_view(g * size * 1.5, (double)WIDTH / HEIGHT, view_projection);
 }
 
 /* ---- the offscreen target, timing and the image check ---- */
-
-static GLuint offscreen_target(void)
-{
-    GLuint fbo, rb[2];
-    glGenFramebuffers(1, &fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-    glGenRenderbuffers(2, rb);
-    glBindRenderbuffer(GL_RENDERBUFFER, rb[0]);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, WIDTH, HEIGHT);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
-    glBindRenderbuffer(GL_RENDERBUFFER, rb[1]);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, WIDTH, HEIGHT);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
-    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) die("the 960x540 target is not renderable");
-    return fbo;
-}
 
 static int by_value(const void *a, const void *b) { return (*(const double *)a > *(const double *)b) - (*(const double *)a < *(const double *)b); }
 
@@ -512,6 +460,36 @@ static void bench_counts(const scene *s, const char *counts, int frames, GLuint 
     printf("}}\n");
 }
 
+/* The LOD's tiers drawn apart against one draw finding each vertex's tier (the same decision: thresholds that put a
+ * third of the 16 instances on each tier, far from any of them): the bytes of the two images that differ (*bytes, 0
+ * for the same image), and the share of pixels where the LOD's image differs from every influence's (`all`). */
+static double check_tiers(const scene *s, GLuint target, const float *vp, const unsigned char *all, long *bytes)
+{
+    scene t = *s;
+    float lod[3] = {herd_size(s->pal) * 0.5f * HEIGHT * hypotf(hypotf(vp[1], vp[5]), vp[9]), 0, 0};
+    bench_split_tiers(s->instances, 8, 16, vp, lod);
+    t.lod = true, t.lod_pixels[1] = lod[1], t.lod_pixels[0] = lod[2];
+    unsigned char *img[2];
+    for (int k = 0; k < 2; ++k) {
+        t.tiers = k == 1;
+        img[k] = malloc((size_t)WIDTH * HEIGHT * 4);
+        draw(&t, 1, 16, 0.77f, vp, target);
+        glBindFramebuffer(GL_READ_FRAMEBUFFER, target);
+        glReadPixels(0, 0, WIDTH, HEIGHT, GL_RGBA, GL_UNSIGNED_BYTE, img[k]);
+    }
+    *bytes = 0;
+    for (size_t i = 0; i < (size_t)WIDTH * HEIGHT * 4; ++i) *bytes += img[0][i] != img[1][i];
+    bench_tiers tiers;
+    bench_sort_by_tier(s->instances, 8, 16, vp, lod, s->order, &tiers);
+    long covered;
+    double vs_all = bench_image_difference(all, img[1], WIDTH, HEIGHT, &covered);
+    printf("the LOD's tiers (%u / %u / %u instances on 1 / 2 / 4 influences, under %.1f / %.1f pixels tall) drawn apart vs "
+           "in one draw: %ld bytes differ; vs every influence %.4f of the pixels differ\n", tiers.count[0], tiers.count[1],
+           tiers.count[2], lod[2], lod[1], *bytes, vs_all);
+    free(img[0]), free(img[1]);
+    return vs_all;
+}
+
 /* 16 instances drawn by each method at the same time must give the same image; the VAT a
  * quarter second later (a runtime playing the wrong rows) must not. */
 static int check_images(const scene *s, GLuint target)
@@ -530,18 +508,22 @@ static int check_images(const scene *s, GLuint target)
            vat = bench_image_difference(img[0], img[2], WIDTH, HEIGHT, &covered);
     printf("16 instances on %s, %ld pixels covered: palette vs bone pass %.4f, palette vs VAT %.4f of the pixels differ; "
            "the VAT 0.25 s late %.4f\n", (const char *)glGetString(GL_RENDERER), covered, bones, vat, late);
+    long tier_bytes = 0;
+    double tiers_vs_all = check_tiers(s, target, vp, img[1], &tier_bytes);
     for (int m = 0; m <= METHODS; ++m) free(img[m]);
-    bool ok = covered > 1000 && bones <= 0.01 && vat <= 0.01 && late > 0.05 && glGetError() == GL_NO_ERROR;
-    if (!ok) fprintf(stderr, "bench_gl: the images disagree (limits: 0.01 alike, > 0.05 0.25 s late)\n");
+    bool ok = covered > 1000 && bones <= 0.01 && vat <= 0.01 && late > 0.05 && tier_bytes == 0 && tiers_vs_all > 0 &&
+              glGetError() == GL_NO_ERROR;
+    if (!ok) fprintf(stderr, "bench_gl: the images disagree (limits: 0.01 alike, > 0.05 0.25 s late, the LOD's tiers drawn "
+                             "apart the same bytes as in one draw, some pixels off every influence's)\n");
     return ok ? 0 : 1;
 }
 
 int main(int argc, char **argv)
 {
-    if (argc < 3) die("usage: bench_gl MODEL.glb N1,N2,... [--frames K] [--lod] | bench_gl MODEL.glb --check");
+    if (argc < 3) bench_die("usage: bench_gl MODEL.glb N1,N2,... [--frames K] [--lod | --lod-single] | bench_gl MODEL.glb --check");
     bool check = !strcmp(argv[2], "--check");
     int frames = argc > 4 && !strcmp(argv[3], "--frames") ? atoi(argv[4]) : 5;
-    if (frames < 1 || frames > 64) die("--frames: 1 to 64");
+    if (frames < 1 || frames > 64) bench_die("--frames: 1 to 64");
     cb_error err = {0};
     cb_model *model = cb_gltf_load(argv[1], NULL, &err);
     cb_sampler *sampler = model ? cb_sampler_create(model, 0, &err) : NULL;
@@ -554,7 +536,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "bench_gl: %s\n", err.message);
         return 1;
     }
-    open_context();
+    bench_open_context();
     uint32_t capacity = 16;
     for (const char *c = argv[2]; !check && *c; ++c)
         if (*c >= '0' && *c <= '9') {
@@ -562,24 +544,31 @@ int main(int argc, char **argv)
             capacity = n > capacity ? n : capacity;
             if (!*c) break;
         }
-    scene s = {.pal = &pal, .vat = &vat, .sampler = sampler};
-    for (int a = 3; a < argc; ++a) s.lod |= !strcmp(argv[a], "--lod");
+    scene s = {.pal = &pal, .vat = &vat, .sampler = sampler, .tiers = true};
+    for (int a = 3; a < argc; ++a) {
+        s.lod |= !strcmp(argv[a], "--lod") || !strcmp(argv[a], "--lod-single");
+        s.tiers &= strcmp(argv[a], "--lod-single") != 0;
+    }
+    s.instances = malloc((size_t)capacity * 32), s.order = malloc((size_t)capacity * 4);
     upload_palette(&s);
     bone_targets(&s, capacity);
     upload_mesh(&s, model, capacity);
     const char *skins[METHODS] = {SKIN_PALETTE, SKIN_BONES, SKIN_VAT};
     const char *bones_path = getenv("BENCH_GL_BONES_GLSL"); /* another library for the bone pass and its draw: weighs a change */
     char *bones_glsl = bones_path ? bench_read_text(bones_path) : NULL;
-    if (bones_path && !bones_glsl) die("BENCH_GL_BONES_GLSL: cannot read that file (a GLSL library in place of the shipped one)");
+    if (bones_path && !bones_glsl) bench_die("BENCH_GL_BONES_GLSL: cannot read that file (a GLSL library in place of the shipped one)");
     const char *bones_lib = bones_glsl ? bones_glsl : cb_palette_glsl;
     for (int m = 0; m < METHODS; ++m) {
         const char *vs[3] = {MAIN_HEAD, skins[m], MAIN_TAIL};
-        s.prog[m] = program(m == 1 ? bones_lib : cb_palette_glsl, &pal, m == 1, vs, m == 1 ? 2 : 3, NULL, 0);
+        s.prog[m] = program(m == 1 ? bones_lib : cb_palette_glsl, &pal, m == 1, 0, vs, m == 1 ? 2 : 3, NULL, 0);
     }
-    s.pass = program(bones_lib, &pal, false, &PASS_VERTEX, 1, &PASS_FRAGMENT, 1);
+    const char *tier_vs[2] = {MAIN_HEAD, SKIN_TIER};
+    for (int k = 0; k < 3; ++k) s.tier_prog[k] = program(bones_lib, &pal, true, 1 << k, tier_vs, 2, NULL, 0);
+    s.pass = program(bones_lib, &pal, false, 0, &PASS_VERTEX, 1, &PASS_FRAGMENT, 1);
     free(bones_glsl);
-    GLuint target = offscreen_target();
+    GLuint target = bench_offscreen_target(WIDTH, HEIGHT);
     int rc = check ? check_images(&s, target) : (bench_counts(&s, argv[2], frames, target), 0);
+    free(s.instances), free(s.order);
     cb_vat_free(&vat);
     cb_palette_free(&pal);
     cb_sampler_free(sampler);

@@ -113,3 +113,19 @@ double bench_image_difference(const unsigned char *a, const unsigned char *b, in
     }
     return *covered ? (double)differ / *covered : 1;
 }
+
+void bench_herd_view(double side, double a, float view_projection[16])
+{
+    double f = 1 / tan(25 * acos(-1.0) / 180), near = side * 0.01, far = side * 10;
+    double eye[3] = {0, side * 0.8, side * 0.7}, len = sqrt(eye[1] * eye[1] + eye[2] * eye[2]);
+    double zc[3] = {0, eye[1] / len, eye[2] / len}, xc[3] = {1, 0, 0}, yc[3] = {0, zc[2], -zc[1]};
+    double view[16] = {xc[0], yc[0], zc[0], 0, xc[1], yc[1], zc[1], 0, xc[2], yc[2], zc[2], 0,
+                       0, -(yc[1] * eye[1] + yc[2] * eye[2]), -(zc[1] * eye[1] + zc[2] * eye[2]), 1};
+    double proj[16] = {f / a, 0, 0, 0, 0, f, 0, 0, 0, 0, (far + near) / (near - far), -1, 0, 0, 2 * far * near / (near - far), 0};
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) {
+            double sum = 0;
+            for (int k = 0; k < 4; ++k) sum += proj[k * 4 + r] * view[c * 4 + k];
+            view_projection[c * 4 + r] = (float)sum;
+        }
+}

@@ -24,6 +24,10 @@ void bench_sort_triangles(uint32_t *indices, uint32_t index_count, const float *
 void bench_lod_thresholds(cb_sampler *sampler, const cb_palette *pal, const float *positions, const int32_t *joints,
                           const float *weights, uint32_t vertices, double size, double pixel_error, int poses, float out[2]);
 
+/* The herd's camera: perspective(50 degrees, aspect a) x lookAt(eye (0, 0.8, 0.7) x side, the origin), column-major:
+ * a grid `side` wide seen whole from above. */
+void bench_herd_view(double side, double a, float view_projection[16]);
+
 /* A whole text file, NUL-terminated, for the caller to free; NULL when it cannot be read. */
 char *bench_read_text(const char *path);
 

@@ -5,7 +5,9 @@
 //   #define CB_PRECISION_FLOAT | CB_PRECISION_HALF | CB_PRECISION_U16 (its precision)
 //   #define CB_POSITIONS_RELATIVE   when the header's flags have bit 2 (4: a half palette, version 2 or 3)
 //   #define CB_INFLUENCES 1|2       optional, for a mesh written with `crowdbake mesh --max-influences 1|2`:
-//                                   only that many bones per vertex are read (a far LOD's cheaper shader)
+//                                   only that many bones per vertex are read (a far LOD's cheaper shader);
+//                                   with CB_BONE_TEXTURE also the animation LOD's far tiers drawn apart
+//                                   (the kept weights then scaled to sum to 1, as the run-time tier does)
 //
 // Textures: cb_palette is the .pal payload as is - RGBA32F, RGBA16F, or RGBA16UI (u16, read as
 // usampler2D) - width x height from the header. For qpos and CB_POSITIONS_RELATIVE,
@@ -337,10 +339,13 @@ uniform sampler2D cb_bones0, cb_bones1, cb_bones2; // the bone pass's three targ
 uniform int cb_bone_rows;                          // instances per column block of them
 
 // The position and the normal (normalized) of a vertex of instance `instance`, from the bone pass,
-// reading its first `influences` bones (animation LOD: fewer for a far instance; its weights are
-// then scaled to sum to 1, so the influences must come largest first, as crowdbake mesh writes them
+// reading its first `influences` bones (animation LOD: fewer for a far instance; fewer than 4 are
+// scaled to sum to 1, so the influences must come largest first, as crowdbake mesh writes them
 // and the runtimes sort them). The influences' transforms are blended first and applied once
 // (12 multiply-adds an influence, not 24, and the instance's column block found once a vertex).
+// At most CB_INFLUENCES are read: a program compiled with CB_INFLUENCES 1 or 2 draws the LOD's far
+// tiers apart (cb_skin_bone_pass, the instances sorted by tier on the CPU by cb_lod_influences's rule), the same
+// pixels as the run-time tier without paying for it per vertex.
 void cb_skin_bone_pass_influences(vec3 v, vec3 n, ivec4 joints, vec4 weights, int instance, int influences,
                                   out vec3 p, out vec3 skinned_n)
 {
@@ -351,10 +356,16 @@ void cb_skin_bone_pass_influences(vec3 v, vec3 n, ivec4 joints, vec4 weights, in
     y = instance - block * cb_bone_rows;
     int x0 = block * (cb_row_texels / CB_TEXELS_PER_BONE);
     vec4 c0, c1, c2;
+#if CB_INFLUENCES == 1
+    // cb:tier-one - one influence compiled in (a far LOD tier drawn apart, or a mesh of one influence): its bone
+    // alone, its weight taken as 1 - no count, no loop, no test a vertex (what the run-time tier pays for).
+    ivec2 xy = ivec2(x0 + joints[0], y);
+    c0 = texelFetch(cb_bones0, xy, 0), c1 = texelFetch(cb_bones1, xy, 0), c2 = texelFetch(cb_bones2, xy, 0);
+#else
     int count = min(influences, cb_influence_count(weights)); // cb_influence_count says why a loop
     if (count == 1) { // the largest bone alone (a far instance's LOD, or a vertex of one bone): no blend
         ivec2 xy = ivec2(x0 + joints[0], y);
-        float w = influences < CB_INFLUENCES ? 1.0 : weights[0]; // the kept weight scaled to 1
+        float w = influences < 4 ? 1.0 : weights[0]; // the kept weight scaled to 1
         c0 = w * texelFetch(cb_bones0, xy, 0), c1 = w * texelFetch(cb_bones1, xy, 0), c2 = w * texelFetch(cb_bones2, xy, 0);
     } else {
         c0 = vec4(0.0), c1 = vec4(0.0), c2 = vec4(0.0);
@@ -366,11 +377,12 @@ void cb_skin_bone_pass_influences(vec3 v, vec3 n, ivec4 joints, vec4 weights, in
             c2 += weights[i] * texelFetch(cb_bones2, xy, 0);
             sum += weights[i];
         }
-        if (influences < CB_INFLUENCES) { // cb:lod-weights - the kept weights sum to 1 (one division, not twelve)
+        if (influences < 4) { // cb:lod-weights - the kept weights sum to 1 (one division, not twelve)
             float r = 1.0 / sum;
             c0 *= r, c1 *= r, c2 *= r;
         }
     }
+#endif
     mat3 a = mat3(c0.xyz, c1.xyz, c2.xyz); // cb:bone-columns
     p = a * v + vec3(c0.w, c1.w, c2.w);
     skinned_n = normalize(a * n);
