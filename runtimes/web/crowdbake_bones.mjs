@@ -116,6 +116,93 @@ void main() {
 }
 `;
 
+// The LOD's tiers drawn apart (Crowd's lodTiers, the default): each frame every instance's tier is found once on the
+// CPU (lodTier, the rule MAIN_BONES applies per vertex), the instances are bucketed by tier, and each tier draws with
+// a program compiled for its influences (CB_INFLUENCES 1, 2, 4: no influence count, loop or size test a vertex on the
+// far tiers). a_bone_instance: the instance's row in the bone pass (the tier's order, pointed at its first).
+export const TIER_INFLUENCES = [1, 2, 4];
+export const MAIN_BONE_TIER = `
+in vec3 a_position; in vec3 a_normal; in ivec4 a_joints; in vec4 a_weights; in int a_bone_instance;
+uniform mat4 u_view_projection;
+out vec3 v_world; out vec3 v_normal;
+void main() {
+    cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, a_bone_instance, v_world, v_normal);
+    gl_Position = u_view_projection * vec4(v_world, 1.0);
+}
+`;
+
+// The tier (0: 1 influence, 1: 2, 2: every one) of an instance at place (x, y, z) and scale, for u (lodUniform's):
+// MAIN_BONES's cb_lod_influences on the same size on screen (in double precision: an instance within a rounding
+// of a threshold may take the other side of it).
+export function lodTier(viewProjection, u, x, y, z, scale) {
+    const m = viewProjection, pixels = (u[0] * scale) / (m[3] * x + m[7] * y + m[11] * z + m[15]);
+    return pixels < u[2] ? 0 : pixels < u[1] ? 1 : 2;
+}
+
+export class LodTiers {
+    // fragment: the draw's fragment shader; makeVertexArray(program): the crowd's mesh and instance attributes.
+    constructor(gl, { glsl, header, fragment, capacity, makeVertexArray }) {
+        this.gl = gl;
+        this.programs = TIER_INFLUENCES.map((k) => compileProgram(gl, boneShaderSource(glsl, header, MAIN_BONE_TIER,
+            ['CB_BONE_TEXTURE', `CB_INFLUENCES ${k}`]), fragment));
+        this.order = new Int32Array(capacity); // the instances by tier, the frame's
+        this.first = [0, 0, 0];
+        this.count = [0, 0, 0];
+        this.next = [0, 0, 0];
+        this.buffer = gl.createBuffer();
+        gl.bindBuffer(gl.ARRAY_BUFFER, this.buffer);
+        gl.bufferData(gl.ARRAY_BUFFER, this.order.byteLength, gl.DYNAMIC_DRAW);
+        this.arrays = this.programs.map((p) => {
+            const vao = makeVertexArray(p), loc = gl.getAttribLocation(p, 'a_bone_instance');
+            gl.bindVertexArray(vao);
+            gl.bindBuffer(gl.ARRAY_BUFFER, this.buffer);
+            gl.enableVertexAttribArray(loc);
+            gl.vertexAttribIPointer(loc, 1, gl.INT, 4, 0);
+            gl.vertexAttribDivisor(loc, 1);
+            gl.bindVertexArray(null);
+            return { vao, loc };
+        });
+    }
+
+    // Buckets instances 0..n-1 by tier, stable (instances: `stride` floats a row, place x, y, z first, the scale at
+    // `scaleAt`), into this.order: tier k is order[first[k] .. first[k] + count[k]). No allocation.
+    sort(instances, stride, scaleAt, n, viewProjection, u) {
+        const { order, first, count, next } = this, tier = (i) => lodTier(viewProjection, u, instances[i * stride],
+            instances[i * stride + 1], instances[i * stride + 2], instances[i * stride + scaleAt]);
+        count.fill(0);
+        for (let i = 0; i < n; ++i) ++count[tier(i)];
+        first[0] = next[0] = 0, first[1] = next[1] = count[0], first[2] = next[2] = count[0] + count[1];
+        for (let i = 0; i < n; ++i) order[next[tier(i)]++] = i; // the tier again, not stored: nothing to allocate
+    }
+
+    // One draw a nonempty tier of the sorted n: bind(program) sets its textures and uniforms, draw(count) draws.
+    draw(n, bind, draw) {
+        const gl = this.gl;
+        gl.bindBuffer(gl.ARRAY_BUFFER, this.buffer);
+        gl.bufferSubData(gl.ARRAY_BUFFER, 0, this.order, 0, n);
+        let draws = 0;
+        for (let k = 0; k < 3; ++k) {
+            if (!this.count[k]) continue;
+            gl.useProgram(this.programs[k]);
+            gl.bindVertexArray(this.arrays[k].vao);
+            bind(this.programs[k]);
+            gl.bindBuffer(gl.ARRAY_BUFFER, this.buffer);
+            gl.vertexAttribIPointer(this.arrays[k].loc, 1, gl.INT, 4, this.first[k] * 4);
+            draw(this.count[k]);
+            ++draws;
+        }
+        gl.bindVertexArray(null);
+        return draws;
+    }
+
+    dispose() {
+        const gl = this.gl;
+        this.programs.forEach((p) => gl.deleteProgram(p));
+        this.arrays.forEach((a) => gl.deleteVertexArray(a.vao));
+        gl.deleteBuffer(this.buffer);
+    }
+}
+
 // u_lod for a draw: the instance's size on screen is size x scale x (viewport height / 2) x P[1][1] / w,
 // and P[1][1] is the length of the view-projection's second row (the view's rotation keeps lengths).
 export function lodUniform(lod, size, viewProjection, viewportHeight) {

@@ -14,7 +14,7 @@
 // expect: positions (3 floats a vertex), normals (3, optional), joints (4 integers), weights (4
 // floats), indices (optional).
 
-import { AUTO_BONE_PASS_VERTICES, BonePass, MAIN_BONES, resolveLod, boneShaderSource, lodUniform, sortInfluences,
+import { AUTO_BONE_PASS_VERTICES, BonePass, LodTiers, MAIN_BONES, resolveLod, boneShaderSource, lodUniform, sortInfluences,
          sortTrianglesByInfluences } from './crowdbake_bones.mjs';
 
 import { PALETTE_GLSL } from './crowdbake_palette_glsl.mjs';
@@ -154,7 +154,10 @@ export class Crowd {
     // render to float textures), true (always; or { rows }), false (never); crowdbake_bones.mjs.
     // lod: the bone pass's animation LOD ('auto', the default: fewer influences under the sizes where
     // the model's worst vertex moves at most a pixel, crowdbake_bones.mjs's lodThresholds; or { two, one }
-    // pixels tall, or false). crowd.lodChoice() says which thresholds and why.
+    // pixels tall, or false). crowd.lodChoice() says which thresholds and why. lodTiers: true (the default) draws the
+    // LOD's tiers apart - the instances sorted by tier on the CPU each frame, one draw a tier, its program compiled for
+    // its influences, the same pixels without a size test and influence loop a vertex; false: one draw, each vertex
+    // finding its tier.
     // crowd.choice(n) says which a herd of n gets, and why.
     constructor(gl, options) {
         const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false, bonePass = 'auto' } = options;
@@ -206,6 +209,13 @@ export class Crowd {
         this.vao = this.makeVertexArray(this.program);
         if (this.bonesProgram) {
             this.bonesVao = this.makeVertexArray(this.bonesProgram);
+            try {
+                if (options.lodTiers ?? true)
+                    this.tiers = new LodTiers(gl, { glsl, header: pal.header, fragment: FRAGMENT, capacity,
+                                                    makeVertexArray: (p) => this.makeVertexArray(p) });
+            } catch (e) {
+                if (bonePass !== 'auto') throw e; // 'auto' draws the LOD in one draw, as lodTiers: false
+            }
             // Forced, the pass is made now for the whole capacity (its errors thrown); 'auto' makes it when
             // a herd first takes it, for that herd (grown by powers of two): memory follows the herd.
             this.makeBonePass = (n) => new BonePass(gl, { glsl, header: pal.header, capacity: n, instanceBuffer: this.instanceBuffer,
@@ -269,8 +279,9 @@ export class Crowd {
 
     // Bytes per instance on the GPU: its row of the instance buffer, and the bone pass's three texels
     // a bone when that pass is used (a VAT's instance costs its row alone; its texture is shared).
+    // (and with the LOD's tiers drawn apart, the instance's place in the frame's order, 4 bytes).
     bytesPerInstance(method = this.choice().method) {
-        return INSTANCE_FLOATS * 4 + (method === 'bones' ? 48 * this.pal.header.bone_count : 0);
+        return INSTANCE_FLOATS * 4 + (method === 'bones' ? 48 * this.pal.header.bone_count + (this.tiers ? 4 : 0) : 0);
     }
 
     // Instance i: position [x, y, z], yaw (radians), scale, inst (the four numbers of
@@ -330,12 +341,7 @@ export class Crowd {
     // instance with all its influences, as capture does).
     bind(viewProjection, time, lod) {
         const gl = this.gl, bones = this.choice().method === 'bones', p = bones ? this.bonesProgram : this.program;
-        if (this.dirty) {
-            gl.bindBuffer(gl.ARRAY_BUFFER, this.instanceBuffer);
-            gl.bufferSubData(gl.ARRAY_BUFFER, 0, this.instances, 0, this.count * INSTANCE_FLOATS);
-            this.dirty = false;
-        }
-        if (bones) this.bonePassFor(this.count).run(this.count, time, (u) => this.bindTextures(u));
+        this.prepare(bones, time);
         gl.useProgram(p);
         gl.bindVertexArray(bones ? this.bonesVao : this.vao);
         const u = (name) => gl.getUniformLocation(p, name);
@@ -349,10 +355,39 @@ export class Crowd {
         gl.uniform3fv(u('u_color'), this.color);
     }
 
-    // Every instance with one instanced draw call.
+    // The instance rows uploaded when changed, and with the bone pass, the pass run at `time`.
+    prepare(bones, time) {
+        const gl = this.gl;
+        if (this.dirty) {
+            gl.bindBuffer(gl.ARRAY_BUFFER, this.instanceBuffer);
+            gl.bufferSubData(gl.ARRAY_BUFFER, 0, this.instances, 0, this.count * INSTANCE_FLOATS);
+            this.dirty = false;
+        }
+        if (bones) this.bonePassFor(this.count).run(this.count, time, (u) => this.bindTextures(u));
+    }
+
+    // The LOD's tiers drawn apart (lodTiers): the bone pass, the instances sorted by tier, one draw a tier.
+    drawTiers(viewProjection, time) {
+        const gl = this.gl, u = lodUniform(this.lod, this.size, viewProjection, gl.getParameter(gl.VIEWPORT)[3]);
+        this.prepare(true, time);
+        this.tiers.sort(this.instances, INSTANCE_FLOATS, 14, this.count, viewProjection, u); // a_fade.z: the scale
+        return this.tiers.draw(this.count, (p) => {
+            const at = (name) => gl.getUniformLocation(p, name);
+            this.bindTextures(at);
+            this.bones.bindTargets(at);
+            gl.uniformMatrix4fv(at('u_view_projection'), false, viewProjection);
+            gl.uniform3fv(at('u_color'), this.color);
+        }, (count) => {
+            if (this.indexCount) gl.drawElementsInstanced(gl.TRIANGLES, this.indexCount, this.indexType, 0, count);
+            else gl.drawArraysInstanced(gl.TRIANGLES, 0, this.vertexCount, count);
+        });
+    }
+
+    // Every instance with one instanced draw call (the LOD's tiers drawn apart: one a tier it has); the draws made.
     draw(viewProjection, time) {
         const gl = this.gl;
         if (!this.count) return 0;
+        if (this.tiers && this.lod && this.choice().method === 'bones') return this.drawTiers(viewProjection, time);
         this.bind(viewProjection, time);
         if (this.indexCount) gl.drawElementsInstanced(gl.TRIANGLES, this.indexCount, this.indexType, 0, this.count);
         else gl.drawArraysInstanced(gl.TRIANGLES, 0, this.vertexCount, this.count);
@@ -387,6 +422,7 @@ export class Crowd {
     }
 
     get vramBytes() {
-        return this.textures.bytes + this.meshBytes + this.instances.byteLength + (this.bones?.bytes ?? 0);
+        return this.textures.bytes + this.meshBytes + this.instances.byteLength + (this.bones?.bytes ?? 0) +
+               (this.tiers?.order.byteLength ?? 0);
     }
 }

@@ -7,7 +7,10 @@
 // (runtimes/web/crowdbake_crowd.mjs), its own canvas, the same camera: per-vertex blending, the bone
 // pass, the herd-size choice (bonePass: 'auto' below and above its threshold: which it picked, and its
 // pixels) and the animation LOD (forced on at this size: the 2 largest weights, the largest alone; and at its default,
-// where an instance this large on screen keeps every influence).
+// where an instance this large on screen keeps every influence). And the LOD's tiers drawn apart (Crowd's lodTiers, the
+// default) against one draw finding each vertex's tier, on the same decision (9 Foxes, a third on each tier): the bytes
+// of the two images that differ (0: the same image), and, to show the check can fail, those that differ from every
+// instance on every influence and from every instance on the far tier.
 //
 //   node tests/runtimes/browser/three_check.mjs DIR CLIP T1,T2,...
 //
@@ -78,7 +81,7 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
         for (const [k, h] of Object.entries(herds)) choices[k] = h.herd.choice(renderer);
         camera.updateMatrixWorld();
         const vp = new THREE.Matrix4().multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse).elements;
-        const crowdMask = (crowd, t) => {
+        const crowdPixels = (crowd, t) => {
             gl.viewport(0, 0, size, size);
             gl.enable(gl.DEPTH_TEST);
             gl.clearColor(0, 0, 0, 1);
@@ -86,8 +89,30 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
             crowd.draw(vp, t);
             const px = new Uint8Array(size * size * 4);
             gl.readPixels(0, 0, size, size, gl.RGBA, gl.UNSIGNED_BYTE, px);
+            return px;
+        };
+        const crowdMask = (crowd, t) => {
+            const px = crowdPixels(crowd, t);
             return Array.from({ length: size * size }, (_, i) => px[i * 4] + px[i * 4 + 1] + px[i * 4 + 2] > 0);
         };
+        // The LOD's tiers drawn apart (lodTiers, the default) against one draw finding each vertex's tier, on the same
+        // decision: 9 small Foxes of 9 sizes in a grid, the thresholds half way between sizes so that 3 take each tier.
+        const { lodTier, lodUniform } = await import('/web/crowdbake_bones.mjs');
+        const nine = Array.from({ length: 9 }, (_, i) => ({
+            position: [center.x + ((i % 3) - 1) * extent * 0.3, center.y - extent * 0.3, center.z + (Math.floor(i / 3) - 1) * extent * 0.3],
+            yaw: i * 0.7, scale: 0.3 + 0.02 * ((i * 4) % 9), inst: [c.first_row, c.loops ? c.frames : -c.frames, c.fps, i / 9] }));
+        const herdOf = (options) => {
+            const crowd = new Crowd(gl, { pal, glsl, mesh, capacity: 9, bonePass: true, ...options });
+            nine.forEach((o, i) => crowd.setInstance(i, o));
+            return crowd;
+        };
+        const every = herdOf({ lod: false }), u0 = lodUniform({}, every.size, vp, size)[0]; // pixels tall at w = 1, scale 1
+        const sizes = nine.map((o) => (u0 * o.scale) / (vp[3] * o.position[0] + vp[7] * o.position[1] + vp[11] * o.position[2] + vp[15]));
+        const sorted = [...sizes].sort((a, b) => a - b), split = { one: (sorted[2] + sorted[3]) / 2, two: (sorted[5] + sorted[6]) / 2 };
+        const tierCrowds = { apart: herdOf({ lod: split }), one_draw: herdOf({ lod: split, lodTiers: false }), every,
+                             far: herdOf({ lod: { one: 1e6 } }) };
+        const tierCounts = [0, 0, 0];
+        for (const o of nine) ++tierCounts[lodTier(vp, [u0, split.two, split.one], ...o.position, o.scale)];
         const out = [];
         for (const t of times) {
             mixer.setTime(t);
@@ -102,6 +127,12 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
                 const got = name === 'bones' ? bones : crowdMask(crowd, t);
                 row[`crowd_${name}`] = { ...compare(want, got), vs_bones: compare(bones, got).differ };
             }
+            const apart = crowdPixels(tierCrowds.apart, t), oneDraw = crowdPixels(tierCrowds.one_draw, t);
+            const every = crowdPixels(tierCrowds.every, t), far = crowdPixels(tierCrowds.far, t);
+            row.tiers = { counts: tierCounts, draws: tierCrowds.apart.draw(vp, t), bytes_differ: apart.reduce((n, v, i) => n + (v !== oneDraw[i]), 0),
+                          vs_every_influence: apart.reduce((n, v, i) => n + (v !== every[i]), 0),
+                          vs_all_far: apart.reduce((n, v, i) => n + (v !== far[i]), 0),
+                          covered: apart.reduce((n, v, i) => n + (i % 4 === 0 && v + apart[i + 1] + apart[i + 2] > 0), 0) };
             out.push(row);
         }
         return { clip, frames: c.frames, fps: c.fps, three: THREE.REVISION, choices, results: out };
