@@ -23,6 +23,7 @@ import { FootstepClock } from './crowdbake_contacts.mjs';
 import { paletteDefines } from './crowdbake_crowd.mjs';
 import { AUTO_BONE_PASS_VERTICES, resolveLod, sortInfluences } from './crowdbake_bones.mjs';
 import { BONE_VERTEX_PARS, HerdBonePass } from './crowdbake_three_bones.mjs';
+import { HerdTiers, TIER_VERTEX_PARS } from './crowdbake_three_tiers.mjs';
 import { instanceTravelOffset } from './crowdbake_travel.mjs';
 
 // The skinned meshes of a GLTFLoader result that use its first skin, merged in glTF order:
@@ -173,9 +174,11 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // bonePassVertices skinned vertices a frame, AUTO_BONE_PASS_VERTICES unless given, when update()
     // is given the renderer; true: always then; false: never).
     // lod: with the bone pass, the animation LOD of crowdbake_bones.mjs ('auto': from the model's own error,
-    // lodThresholds; { two, one } or false); herd.lodChoice() says which and why.
+    // lodThresholds; { two, one } or false); herd.lodChoice() says which and why. lodTiers (true): given the camera
+    // (update(time, renderer, camera)), the LOD's tiers drawn apart (crowdbake_three_tiers.mjs), the same pixels
+    // without a size test and influence loop a vertex; false, or no camera: one draw, each vertex finding its tier.
     constructor(gltf, pal, type, { count = 1000, glsl, material, fade = 0.25, bonePass = 'auto', bonePassVertices,
-                                   lod = 'auto' } = {}) {
+                                   lod = 'auto', lodTiers = true } = {}) {
         if (!glsl) throw new Error('CrowdbakeHerd: options.glsl is the shipped library (await loadPaletteGLSL())');
         const mesh = gltf.positions ? gltf : meshFromGLTF(gltf);
         const geometry = new THREE.BufferGeometry();
@@ -225,6 +228,8 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         const defines = Object.fromEntries(paletteDefines(pal.header).map((d) => [d, '']));
         this.bonePassVertices = bonePass === 'auto' ? bonePassVertices ?? AUTO_BONE_PASS_VERTICES : bonePass ? 0 : Infinity;
         this.lodOption = lod;
+        this.lodTiers = lodTiers;
+        this.tiers = null;
         this.lodMesh = mesh; // lod 'auto' measures its error on first use
         this.lodSize = Math.max(...[0, 1, 2].map((k) => bounds.box.max.getComponent(k) - bounds.box.min.getComponent(k)));
         this.bones = null;
@@ -234,7 +239,8 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         this.makeBonePass = () => new HerdBonePass({ glsl, header: pal.header, capacity: count, geometry, uniforms });
         const onBeforeCompile = (shader) => {
             Object.assign(shader.uniforms, uniforms);
-            const pars = 'CB_BONE_TEXTURE' in shader.defines ? BONE_VERTEX_PARS : VERTEX_PARS;
+            const pars = 'CB_HERD_TIER' in shader.defines ? TIER_VERTEX_PARS : 'CB_BONE_TEXTURE' in shader.defines ? BONE_VERTEX_PARS
+                                                                                                      : VERTEX_PARS;
             shader.vertexShader = shader.vertexShader
                 .replace('#include <common>', `#include <common>\n${glsl}\n${VERTEX_INPUTS}${pars}`)
                 .replace('#include <beginnormal_vertex>', 'vec3 objectNormal = cb_herd_normal(position, normal);')
@@ -246,6 +252,9 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
             return Object.assign(m, { defines: { ...m.defines, ...defines }, onBeforeCompile, customProgramCacheKey });
         };
         this.skinnedLike = skinnedLike; // one skinning patch for every primitive's colour, shadow depth and motion vectors
+        this.tierLike = (m, k) => Object.assign(m.clone(), { // a LOD tier's copy of a patched material (HerdTiers)
+            defines: { ...m.defines, CB_BONE_TEXTURE: '', CB_HERD_TIER: '', CB_INFLUENCES: k }, onBeforeCompile,
+            customProgramCacheKey: () => `crowdbake-${paletteDefines(pal.header).join('-')}-tier${k}` });
         (Array.isArray(material) ? material : [material]).forEach(skinnedLike);
         this.customDepthMaterial = skinnedLike(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }));
         this.customDistanceMaterial = skinnedLike(new THREE.MeshDistanceMaterial());
@@ -409,14 +418,17 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     }
 
     // GPU bytes per instance: its matrix, colour slot and four crowdbake rows (14 + 16 + 4 floats
-    // with a colour), and the bone pass's 48 bytes a bone when it runs.
+    // with a colour), the bone pass's 48 bytes a bone when it runs, and with the LOD's tiers drawn apart, the tier's
+    // copy of its matrix and its row in the pass (17 floats).
     bytesPerInstance() {
-        return (16 + 4 + 4 + 2 + (this.instanceColor ? 3 : 0)) * 4 + (this.bonesOn ? 48 * this.pal.header.bone_count : 0);
+        return (16 + 4 + 4 + 2 + (this.instanceColor ? 3 : 0)) * 4 + (this.bonesOn ? 48 * this.pal.header.bone_count : 0) +
+               (this.tiers?.meshes[0].layers.mask ? 17 * 4 : 0);
     }
 
     // The clock the shader plays every instance at, in seconds; the time it replaces is the
-    // motion vectors' previous frame. With the renderer, the bone pass runs here when chosen.
-    update(time, renderer = null) {
+    // motion vectors' previous frame. With the renderer, the bone pass runs here when chosen; with the camera too,
+    // the LOD's tiers are sorted here for it (lodTiers), at the renderer's current viewport.
+    update(time, renderer = null, camera = null) {
         this.uniforms.cb_previous_time.value = this.time;
         const inst = this.geometry.attributes.cb_inst.array;
         this.footsteps.advance(this.count, time, (i) => [this.states[this.instanceState[i]].clip, inst.subarray(i * 4, i * 4 + 4)]);
@@ -426,6 +438,12 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         if (this.pal.rowTravel) for (let i = 0; i < this.count; ++i) if (this.placed[i]) this.drawPlaced(i);
         this.useBonePass(this.choice(renderer).method === 'bones');
         if (this.bonesOn) this.bones.run(renderer, this.count);
+        const lod = this.bonesOn && this.lodTiers && camera ? this.lodChoice().lod : false;
+        if (lod) { // the LOD's scale, as onBeforeRender sets cb_lod.x
+            const viewport = renderer.getCurrentViewport(new THREE.Vector4());
+            this.tiers ??= new HerdTiers(this, this.tierLike);
+            this.tiers.sort(camera, lod, this.lodSize * 0.5 * viewport.w * camera.projectionMatrix.elements[5]);
+        } else this.tiers?.off();
         if (this.instanceMatrix.version !== this.boundsVersion) {
             this.boundsVersion = this.instanceMatrix.version;
             this.boundingBox = this.boundingSphere = null;

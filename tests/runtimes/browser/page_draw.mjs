@@ -32,6 +32,10 @@ export function offscreen(size) {
             scene.remove(object);
             return px;
         },
+        // `scene` on black: RGBA bytes.
+        pixels(scene, camera) {
+            return draw(scene, camera, 1);
+        },
         // `scene` on black: per pixel, whether its red is over half (a white silhouette).
         mask(scene, camera) {
             const px = draw(scene, camera, 1);

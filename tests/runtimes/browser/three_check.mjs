@@ -10,7 +10,8 @@
 // where an instance this large on screen keeps every influence). And the LOD's tiers drawn apart (Crowd's lodTiers, the
 // default) against one draw finding each vertex's tier, on the same decision (9 Foxes, a third on each tier): the bytes
 // of the two images that differ (0: the same image), and, to show the check can fail, those that differ from every
-// instance on every influence and from every instance on the far tier.
+// instance on every influence and from every instance on the far tier; the same for CrowdbakeHerd's tiers drawn apart
+// (update(time, renderer, camera)) against its one draw (update(time, renderer)).
 //
 //   node tests/runtimes/browser/three_check.mjs DIR CLIP T1,T2,...
 //
@@ -134,6 +135,33 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
                           vs_all_far: apart.reduce((n, v, i) => n + (v !== far[i]), 0),
                           covered: apart.reduce((n, v, i) => n + (i % 4 === 0 && v + apart[i + 1] + apart[i + 2] > 0), 0) };
             out.push(row);
+        }
+        // The herd's LOD tiers drawn apart (update given the camera) against its one draw (update without it): the same
+        // 9 Foxes lit, the same image's bytes; to show the check can fail, those that differ from every Fox on every
+        // influence and from every Fox on the far tier.
+        const herdTiers = (tiersOn, lod) => {
+            const scene = new THREE.Scene(), sun = new THREE.DirectionalLight(0xffffff, 2.5);
+            sun.position.set(center.x + extent, center.y + extent * 2, center.z + extent * 0.5);
+            const herd = new CrowdbakeHerd(gltf, pal, null, { count: 9, glsl, bonePass: true, lod });
+            nine.forEach((o, i) => {
+                herd.setState(i, clip, { phase: o.inst[3], fade: 0 });
+                herd.place(i, o.position, { yaw: o.yaw, scale: o.scale });
+            });
+            scene.add(new THREE.HemisphereLight(0xffffff, 0x404040, 1.5), sun, herd);
+            return { scene, herd, tiersOn };
+        };
+        const herdCases = { apart: herdTiers(true, split), one_draw: herdTiers(false, split), every: herdTiers(true, false),
+                            far: herdTiers(true, { one: 1e6 }) };
+        const draw = (h, t) => {
+            h.herd.update(t, renderer, h.tiersOn ? camera : null);
+            return view.pixels(h.scene, camera);
+        };
+        for (const [k, t] of times.entries()) {
+            const differ = (a, b) => { const x = draw(herdCases[a], t), y = draw(herdCases[b], t); return x.reduce((n, v, i) => n + (v !== y[i]), 0); };
+            const same = differ('apart', 'one_draw');
+            out[k].herd_tiers = { counts: [...herdCases.apart.herd.tiers.count], bytes_differ: same,
+                                  vs_every_influence: differ('apart', 'every'), vs_all_far: differ('apart', 'far'),
+                                  bytes_per_instance: [herdCases.apart.herd.bytesPerInstance(), herdCases.one_draw.herd.bytesPerInstance()] };
         }
         return { clip, frames: c.frames, fps: c.fps, three: THREE.REVISION, choices, results: out };
     }, { clip, times });
