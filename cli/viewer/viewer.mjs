@@ -39,7 +39,9 @@ async function loadType(view, entry, glsl) {
                                                         decompress: (b, n) => decompress(b, new Uint8Array(n)) });
     const gltf = await new GLTFLoader().loadAsync(`/${entry.model}`);
     const mesh = meshFromGLTF(gltf);
-    const crowd = new Crowd(gl, { pal, glsl, mesh, capacity: MAX, color: [0.86, 0.78, 0.62] });
+    // lodTiers: false - one draw call per herd, as the panel states and compares with the VAT's (the tiers drawn
+    // apart would add one a tier).
+    const crowd = new Crowd(gl, { pal, glsl, mesh, capacity: MAX, color: [0.86, 0.78, 0.62], lodTiers: false });
     let vat = null, vatNote = 'no VAT for this type';
     if (entry.vat) {
         try {
