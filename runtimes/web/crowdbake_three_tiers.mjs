@@ -5,7 +5,8 @@
 // by tier (stable, into arrays made once), into three child InstancedMeshes that share the herd's vertex buffers. Each
 // child's materials (colour, shadow depth and distance) are the herd's compiled with CB_INFLUENCES 1, 2 or 4 and skin
 // from the bone pass's row cb_bone_instance: no size test or influence loop a vertex on the far tiers, the same pixels.
-// The herd itself is then left out of the render lists (its layers emptied; three still draws its children).
+// The herd itself is then left out of the render lists (its layers emptied; three still draws its children, and the
+// first tier's raycast answers for the herd's instances).
 import * as THREE from 'three';
 import { TIER_INFLUENCES } from './crowdbake_bones.mjs';
 
@@ -55,7 +56,8 @@ export class HerdTiers {
             mesh.customDepthMaterial = tierLike(herd.customDepthMaterial, k);
             mesh.customDistanceMaterial = tierLike(herd.customDistanceMaterial, k);
             mesh.frustumCulled = false; // the herd's bounds hold every instance; each tier draws what it has
-            mesh.raycast = () => {};    // the herd answers for its instances
+            mesh.raycast = k === 1 // the herd answers for its instances, through one tier while it is out of the layers
+                ? (raycaster, intersects) => { if (herd.layers.mask === 0) herd.raycast(raycaster, intersects); } : () => {};
             mesh.count = 0;
             mesh.layers.mask = 0;
             mesh.name = `crowdbake LOD tier: ${k} influence${k > 1 ? 's' : ''}`;

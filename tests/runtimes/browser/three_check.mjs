@@ -159,7 +159,13 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
         for (const [k, t] of times.entries()) {
             const differ = (a, b) => { const x = draw(herdCases[a], t), y = draw(herdCases[b], t); return x.reduce((n, v, i) => n + (v !== y[i]), 0); };
             const same = differ('apart', 'one_draw');
+            const hits = (h) => { // a ray from the camera to the middle Fox's body: the instances it meets, tiers or not
+                const body = new THREE.Vector3(...nine[4].position).add(new THREE.Vector3(0, c.bounds_max[1] * nine[4].scale * 0.4, 0));
+                const ray = new THREE.Raycaster(camera.position, body.sub(camera.position).normalize());
+                return ray.intersectObject(h.scene, true).map((x) => `${x.object === h.herd}:${x.instanceId}`).join(' ');
+            };
             out[k].herd_tiers = { counts: [...herdCases.apart.herd.tiers.count], bytes_differ: same,
+                                  raycast: [hits(herdCases.apart), hits(herdCases.one_draw)],
                                   vs_every_influence: differ('apart', 'every'), vs_all_far: differ('apart', 'far'),
                                   bytes_per_instance: [herdCases.apart.herd.bytesPerInstance(), herdCases.one_draw.herd.bytesPerInstance()] };
         }
