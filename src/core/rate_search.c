@@ -19,6 +19,7 @@
 typedef struct probe {
     double fps, goal, error;
     bool fit;
+    int family; /* FAMILY_KEYS or FAMILY_COMMON: the law it stands for (predicted_law) */
 } probe;
 typedef struct clip_search {
     cb_sampler *s;
@@ -29,7 +30,6 @@ typedef struct clip_search {
     probe done[64];
     uint32_t count;
     int family;                      /* the family of rates searched now: FAMILY_KEYS or FAMILY_COMMON */
-    double law[2][2];                /* [fit][family]: the largest error x fps^2 probed (rate_error) */
     const palette_skin_facts *facts; /* the skin's, settled once for every bake of the search */
     palette_probe probe;             /* the clip's analysis and exact poses, for every probe */
 } clip_search;
@@ -87,7 +87,7 @@ static double probe_error(clip_search *cs, double fps, double goal, cb_error *er
     if (fps == cs->max_fps) goal = 0;
     double e = clip_error_at(cs, fps, goal, err);
     if (!err->status && cs->count < sizeof cs->done / sizeof cs->done[0])
-        cs->done[cs->count++] = (probe){fps, goal, e, cs->fit};
+        cs->done[cs->count++] = (probe){fps, goal, e, cs->fit, cs->family};
     return e;
 }
 
@@ -98,40 +98,50 @@ enum { FAMILY_KEYS, FAMILY_COMMON };
 /* The blend's error falls as the square of the row spacing (a chord under an arc): a clip that
  * errs e at f fps errs about e (f / g)^2 at g fps, within a few percent on Cow and Fox (Walk,
  * sampled: 0.0185 at 24 fps, 0.00466 at 48, 0.00209 at 72), and fitted rows err at best half of
- * what sampled ones do at the same rate (0.54-0.71 of it on Cow). So the largest error x fps^2
- * probed so far, per kind of rows and family of rates, predicts a lower bound for a rate not yet
- * baked: for fitted rows, also half of what the sampled ones predict; for a common rate not yet
- * probed, what the key rates predict (rows between keys err more). A rate predicted over one and
- * a half times the goal is taken as a miss without baking it. Every rate chosen is still one
- * that was baked and met its goal; the prediction only spares bakes that would miss, and
- * fitted bakes cost several sampled ones (they sample every mid-row to fit the rows). max_fps is
- * always baked: its exact error is what an unmet goal reports. */
+ * what sampled ones do at the same rate (0.50-0.71 of it on Cow and Husky). So the probe nearest
+ * in rate, per kind of rows and family of rates, predicts through its error x fps^2 a lower bound
+ * for a rate not yet baked: for fitted rows, also half of what the sampled ones predict; for a
+ * common rate with no common probe yet, what the key rates predict (rows between keys err
+ * more). The nearest probe, not the largest error x fps^2 of any: the law holds locally, and
+ * slow clips' errors fall slower than it at low rates (the sample bird's glide, sampled: 1.4e-4
+ * at 20 fps, 3.4e-4 at 10, not 5.7e-4), so a far probe would rule out a rate that meets. A rate
+ * predicted over one and a half times the goal is taken as a miss without baking it. Every rate
+ * chosen is still one that was baked and met its goal; the prediction only spares bakes that
+ * would miss, and fitted bakes cost several sampled ones (they sample every mid-row to fit the
+ * rows). max_fps is always baked: its exact error is what an unmet goal reports. */
 #define PREDICTED_MISS 1.5
 
-static double predicted_law(const clip_search *cs, bool fit, int family)
+/* The error x fps^2 of the probe of this kind and family nearest to fps (ties: the larger), 0
+ * when there is none. */
+static double nearest_law(const clip_search *cs, bool fit, int family, double fps)
 {
-    double law = cs->law[fit][family] > 0 ? cs->law[fit][family] : cs->law[fit][FAMILY_KEYS];
-    return fit ? fmax(law, 0.5 * predicted_law(cs, false, family)) : law;
+    double law = 0, distance = INFINITY;
+    for (uint32_t i = 0; i < cs->count; ++i) {
+        const probe *d = &cs->done[i];
+        if (d->fit != fit || d->family != family || !isfinite(d->error)) continue;
+        double far = fabs(log(d->fps / fps)), here = d->error * d->fps * d->fps;
+        if (far < distance || (far == distance && here > law)) law = here, distance = far;
+    }
+    return law;
+}
+
+static double predicted_law(const clip_search *cs, bool fit, int family, double fps)
+{
+    double law = nearest_law(cs, fit, family, fps);
+    if (!(law > 0)) law = nearest_law(cs, fit, FAMILY_KEYS, fps);
+    return fit ? fmax(law, 0.5 * predicted_law(cs, false, family, fps)) : law;
 }
 
 static bool predicted_miss(const clip_search *cs, double fps, double max_error)
 {
-    return fps < cs->max_fps && predicted_law(cs, cs->fit, cs->family) / (fps * fps) > PREDICTED_MISS * max_error;
-}
-
-/* probe_error, its error x fps^2 kept as its family's law. */
-static double measured_error(clip_search *cs, double fps, double max_error, cb_error *err)
-{
-    double e = probe_error(cs, fps, max_error, err), *law = &cs->law[cs->fit][cs->family];
-    if (isfinite(e) && e * fps * fps > *law) *law = e * fps * fps;
-    return e;
+    return fps < cs->max_fps && predicted_law(cs, cs->fit, cs->family, fps) / (fps * fps) > PREDICTED_MISS * max_error;
 }
 
 static double rate_error(clip_search *cs, double fps, double max_error, cb_error *err)
 {
     double known;
     if (probed(cs, fps, fps == cs->max_fps ? 0 : max_error, &known)) return known;
-    return predicted_miss(cs, fps, max_error) ? INFINITY : measured_error(cs, fps, max_error, err);
+    return predicted_miss(cs, fps, max_error) ? INFINITY : probe_error(cs, fps, max_error, err);
 }
 
 /* The lowest of the increasing `rates` (up to max_fps, and under `below` unless it is 0) at
@@ -229,7 +239,7 @@ static double rate_meets(clip_search *cs, cb_rows rows, candidate c, double max_
         cs->fit = true; /* sampled rows ruled out by the law: baked only where fitted rows are not */
         if (predicted_miss(cs, c.fps, max_error)) continue;
         cs->fit = false;
-        if ((e = measured_error(cs, c.fps, max_error, err)) <= max_error) return *error = e, c.fps;
+        if ((e = probe_error(cs, c.fps, max_error, err)) <= max_error) return *error = e, c.fps;
     }
     return 0;
 }
