@@ -110,6 +110,7 @@ enum { FAMILY_KEYS, FAMILY_COMMON };
  * would miss, and fitted bakes cost several sampled ones (they sample every mid-row to fit the
  * rows). max_fps is always baked: its exact error is what an unmet goal reports. */
 #define PREDICTED_MISS 1.5
+#define FITTED_AT_BEST 0.5 /* fitted rows' error over sampled rows' at the same rate, at best */
 
 /* The error x fps^2 of the probe of this kind and family nearest to fps (ties: the larger), 0
  * when there is none. */
@@ -129,7 +130,7 @@ static double predicted_law(const clip_search *cs, bool fit, int family, double 
 {
     double law = nearest_law(cs, fit, family, fps);
     if (!(law > 0)) law = nearest_law(cs, fit, FAMILY_KEYS, fps);
-    return fit ? fmax(law, 0.5 * predicted_law(cs, false, family, fps)) : law;
+    return fit ? fmax(law, FITTED_AT_BEST * predicted_law(cs, false, family, fps)) : law;
 }
 
 static bool predicted_miss(const clip_search *cs, double fps, double max_error)
@@ -217,6 +218,7 @@ static size_t merged_rates(const rate_families *f, double max_fps, candidate *ou
         if (c.fps > max_fps || (n > 0 && out[n - 1].fps == c.fps)) continue; /* a rate in both: the keys' (first) */
         out[n++] = c;
     }
+    if (n == 0 || out[n - 1].fps < max_fps) out[n++] = (candidate){max_fps, FAMILY_COMMON}; /* always a candidate */
     return n;
 }
 
@@ -227,19 +229,28 @@ static size_t merged_rates(const rate_families *f, double max_fps, candidate *ou
  * but not fitted ones, the sampled rows are baked first, and their error at this very rate
  * (rather than the law's, from other rates) decides whether the fitted probe is worth making.
  * (Cow's Gallop at 40 fps: the law from 24 fps put fitted rows at 1.1 times the goal; sampled rows
- * there err 4 times it, off the key grid.) */
-static double rate_meets(clip_search *cs, cb_rows rows, candidate c, double max_error, double *error, cb_error *err)
+ * there err 4 times it, off the key grid.) Walking up (not `eager`), fitted rows are baked only
+ * where even their best case, half the sampled rows' error there, meets the goal: a rate that only
+ * the law's margin leaves open is baked by the walk down, and only when it is under the answer
+ * (the robot's Dance at 48 fps: sampled 1.9 times the goal, fitted 2.1 times). max_fps is baked
+ * both ways: its exact errors are what an unmet goal reports. */
+static double rate_meets(clip_search *cs, cb_rows rows, candidate c, double max_error, double *error, bool eager,
+                         cb_error *err)
 {
+    double sampled = INFINITY;
     for (int fit = rows == CB_ROWS_FITTED; fit <= (rows != CB_ROWS_SAMPLED) && !err->status; ++fit) {
         cs->fit = fit, cs->family = c.family;
+        if (fit && !eager && c.fps < cs->max_fps && rows == CB_ROWS_BEST && !(sampled * FITTED_AT_BEST <= max_error))
+            continue;
         double e = rate_error(cs, c.fps, max_error, err);
         if (e <= max_error) return *error = e, c.fps;
+        sampled = e;
         double known;
         if (fit || rows != CB_ROWS_BEST || probed(cs, c.fps, max_error, &known)) continue;
         cs->fit = true; /* sampled rows ruled out by the law: baked only where fitted rows are not */
         if (predicted_miss(cs, c.fps, max_error)) continue;
         cs->fit = false;
-        if ((e = probe_error(cs, c.fps, max_error, err)) <= max_error) return *error = e, c.fps;
+        if ((e = sampled = probe_error(cs, c.fps, max_error, err)) <= max_error) return *error = e, c.fps;
     }
     return 0;
 }
@@ -257,18 +268,18 @@ static double rate_meets(clip_search *cs, cb_rows rows, candidate c, double max_
 static double lowest_rate_walk(clip_search *cs, const rate_families *f, cb_rows rows, double max_error, double *error,
                                cb_error *err)
 {
-    candidate rates[sizeof common_rates / sizeof common_rates[0] + 16];
+    candidate rates[sizeof common_rates / sizeof common_rates[0] + 17];
     size_t n = merged_rates(f, cs->max_fps, rates), at = 0;
     double key = f->n_aligned > f->key ? f->aligned[f->key] : common_rates[COMMON_FIRST], found = 0;
     while (at + 1 < n && rates[at + 1].fps <= key) ++at; /* the highest rate up to the key rate */
     for (; at < n && found == 0 && !err->status; ++at) /* up from the key rate until one kind meets */
-        found = rate_meets(cs, rows, rates[at], max_error, error, err);
+        found = rate_meets(cs, rows, rates[at], max_error, error, false, err);
     if (found == 0) return 0;
     bool left[2] = {false, false}; /* [family]: a rate of it where both kinds missed */
     for (size_t i = at - 1; i-- > 0 && !(left[FAMILY_KEYS] && left[FAMILY_COMMON]) && !err->status;) {
         if (left[rates[i].family]) continue;
         bool fit = cs->fit; /* the answer's kind so far */
-        double e = 0, r = rate_meets(cs, rows, rates[i], max_error, &e, err);
+        double e = 0, r = rate_meets(cs, rows, rates[i], max_error, &e, true, err);
         if (r > 0) found = r, *error = e;
         else cs->fit = fit, left[rates[i].family] = true;
     }
