@@ -331,13 +331,22 @@ static CB_CLONE_INLINE void rest_lanes(const cb_similarity *rest, unsigned paths
         for (int i = 0; i < B; ++i) n[7][i] = v[7];
 }
 
-/* One batch: 1..B times. Without `out`, each joint's lanes into joints[j]; with it, as rows of
- * similarities, out[i * joint_count + j] for the first `count`, through one set of lanes
- * (joints[0]). */
+/* Where a batch's joints go: each joint's lanes into joints[j]; or, with `out`, as rows of
+ * similarities, out[i * joint_count + j] for the first `count`; or, with `sink`, handed to it.
+ * The last two through one set of lanes (joints[0]). */
+typedef struct batch_out {
+    lane_set *joints;
+    cb_similarity *out;
+    cb_joint_lanes_sink sink;
+    void *ctx;
+} batch_out;
+
+/* One batch: 1..B times, its joints to `to`. */
 CB_TARGET_CLONES
-static void sample_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count, lane_set *joints,
-                         cb_similarity *out)
+static void sample_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count, const batch_out *to)
 {
+    lane_set *joints = to->joints;
+    cb_similarity *out = to->out;
     const cb_model *m = s->model;
     lane_set *lanes = (lane_set *)s->lanes;
     double padded[B]; /* the unused lanes repeat the last time */
@@ -367,8 +376,9 @@ static void sample_batch(cb_sampler *s, int32_t animation, const double *times, 
     }
     const cb_skin *skin = &m->skins[s->skin];
     for (uint32_t j = 0; j < skin->joint_count; ++j) {
-        lane_set *joint = out ? joints : &joints[j];
+        lane_set *joint = out || to->sink ? joints : &joints[j];
         joint_lanes(&lanes[s->slot[skin->joints[j]]], &s->sim_ibm[j], joint);
+        if (to->sink) to->sink(to->ctx, j, *joint);
         const double(*r)[B] = *joint;
         for (uint32_t i = 0; out && i < count; ++i)
             out[i * skin->joint_count + j] =
@@ -382,12 +392,20 @@ void cb_sample_joint_similarities_batch(cb_sampler *s, int32_t animation, const 
     size_t joints = s->model->skins[s->skin].joint_count;
     lane_set one; /* each joint's lanes in turn: its rows are all that is kept */
     for (uint32_t first = 0; first < count; first += B)
-        sample_batch(s, animation, times + first, count - first < B ? count - first : B, &one, out + first * joints);
+        sample_batch(s, animation, times + first, count - first < B ? count - first : B,
+                     &(batch_out){&one, out + first * joints, NULL, NULL});
 }
 
 void cb_sample_joint_lanes(cb_sampler *s, int32_t animation, const double *times, uint32_t count, double *out)
 {
-    sample_batch(s, animation, times, count, (lane_set *)out, NULL);
+    sample_batch(s, animation, times, count, &(batch_out){(lane_set *)out, NULL, NULL, NULL});
+}
+
+void cb_sample_joint_lanes_each(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
+                                cb_joint_lanes_sink sink, void *ctx)
+{
+    lane_set one; /* each joint's lanes in turn */
+    sample_batch(s, animation, times, count, &(batch_out){&one, NULL, sink, ctx});
 }
 
 void cb_channel_eval_lanes(const cb_channel *ch, const double *times, double (*out)[B])
