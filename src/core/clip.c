@@ -1,6 +1,7 @@
 /* clip.c - clip framing (how many rows, at which times), loop detection and root motion. */
 #include "cb_math.h"
 #include "crowdbake/core.h"
+#include "lanes.h"
 #include "sampler.h"
 #include "internal/plumbing.h"
 #include "loop_decide.h"
@@ -308,15 +309,25 @@ void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t
  * taken off each joint (the same subtraction as cb_clip_frame_lanes). */
 typedef struct travel_sink {
     double dx[CB_SAMPLE_BATCH], dz[CB_SAMPLE_BATCH];
-    bool in_place;
     cb_joint_lanes_sink sink;
     void *ctx;
 } travel_sink;
 
+CB_TARGET_CLONES
 static void take_off_travel(void *ctx, uint32_t joint, double (*lanes)[CB_SAMPLE_BATCH])
 {
-    travel_sink *t = ctx;
-    for (uint32_t i = 0; t->in_place && i < CB_SAMPLE_BATCH; ++i) lanes[4][i] -= t->dx[i], lanes[6][i] -= t->dz[i];
+    const travel_sink *t = ctx;
+#if defined(__GNUC__) /* four lanes a subtraction (-O2 leaves the plain loop scalar) */
+    for (int i = 0; i < CB_SAMPLE_BATCH; i += 4) {
+        v4df x, z, dx, dz;
+        memcpy(&x, &lanes[4][i], sizeof x), memcpy(&z, &lanes[6][i], sizeof z);
+        memcpy(&dx, &t->dx[i], sizeof dx), memcpy(&dz, &t->dz[i], sizeof dz);
+        x -= dx, z -= dz;
+        memcpy(&lanes[4][i], &x, sizeof x), memcpy(&lanes[6][i], &z, sizeof z);
+    }
+#else
+    for (int i = 0; i < CB_SAMPLE_BATCH; ++i) lanes[4][i] -= t->dx[i], lanes[6][i] -= t->dz[i];
+#endif
     t->sink(t->ctx, joint, lanes);
 }
 
@@ -325,8 +336,12 @@ void cb_clip_frame_lanes_each(cb_sampler *s, const cb_clip_info *clip, const uin
 {
     double times[CB_SAMPLE_BATCH];
     for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) times[i] = cb_clip_frame_time(clip, frames[i < count ? i : count - 1]);
-    travel_sink t = {.in_place = cb_root_motion_in_place(root_motion, clip), .sink = sink, .ctx = ctx};
-    for (uint32_t i = 0; t.in_place && i < CB_SAMPLE_BATCH; ++i) root_travel(clip, times[i], &t.dx[i], &t.dz[i]);
+    if (!cb_root_motion_in_place(root_motion, clip)) {
+        cb_sample_joint_lanes_each(s, clip->animation, times, count, sink, ctx);
+        return;
+    }
+    travel_sink t = {.sink = sink, .ctx = ctx};
+    for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) root_travel(clip, times[i], &t.dx[i], &t.dz[i]);
     cb_sample_joint_lanes_each(s, clip->animation, times, count, take_off_travel, &t);
 }
 
