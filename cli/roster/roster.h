@@ -7,6 +7,7 @@
 
 #include "catalog/catalog.h"
 #include "internal/json.h"
+#include "crowdbake/mesh.h"
 #include "crowdbake/socket.h"
 #include "crowdbake/plant_feet.h"
 
@@ -91,6 +92,7 @@ typedef struct cb_roster_type {
     cb_roster_lod *lods;
     uint32_t socket_count;
     cb_socket *sockets;       /* where props attach (socket.h) */
+    cb_lod_error lod_error;   /* what skinning with fewer influences costs (mesh.h), for the runtimes' animation LOD */
     uint32_t input_count;
     char **inputs;            /* every file read for it: model, LODs, their external buffers */
     cb_warnings warnings;     /* clips skipped at load, the layout's fallback, ... */

@@ -10,9 +10,9 @@
 
 #include "crowdbake_pal.h"
 
-static const char magic[8] = "CBPREP7"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by
+static const char magic[8] = "CBPREP8"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by
                                         * their soles; 5: the VAT error; 6: each clip's root motion (flag bit 2), loop reason and error;
-                                        * 7: each clip's row travel */
+                                        * 7: each clip's row travel; 8: the LOD's error */
 
 bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {
@@ -107,6 +107,7 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
     }
     rec_put_u32(&w, t->socket_count);
     rec_put(&w, t->sockets, (size_t)t->socket_count * sizeof *t->sockets); /* plain numbers and zero-filled names */
+    rec_put(&w, &t->lod_error, sizeof t->lod_error);                        /* plain numbers */
     rec_put_u32(&w, t->input_count);
     for (uint32_t i = 0; i < t->input_count; ++i) rec_put_str(&w, t->inputs[i]);
     rec_put_u32(&w, t->warnings.count);
@@ -266,6 +267,7 @@ bool cb_prep_record_decode(const unsigned char *data, size_t size, const cb_cata
     read_clips(&r, t);
     read_states_and_lods(&r, an, t);
     read_sockets(&r, t);
+    rec_get(&r, &t->lod_error, sizeof t->lod_error);
     read_inputs_and_warnings(&r, t);
     *key = record_key;
     return !r.failed && r.p == r.end && t->input_count > 0;

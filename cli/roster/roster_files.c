@@ -237,6 +237,17 @@ static void root_motion_reason(const cb_roster_type *t, const cb_roster_clip *c,
                  travels ? "" : " and neither does this clip");
 }
 
+/* "animation_lod": what a far instance's fewer influences cost, for every runtime's LOD thresholds
+ * (docs/roster.md). */
+static void write_lod_error(cb_json *j, const cb_lod_error *e)
+{
+    cb_json_object(j, "animation_lod");
+    cb_json_number(j, "two_influences_error", e->two);
+    cb_json_number(j, "one_influence_error", e->one);
+    cb_json_int(j, "frames", e->frames);
+    cb_json_end(j);
+}
+
 static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, const char *manifest_dir)
 {
     const cb_roster_type *owner = &r->types[t->owner];
@@ -315,6 +326,7 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
     }
     cb_json_end(j);
     cb_roster_json_sockets(j, t->sockets, t->socket_count);
+    write_lod_error(j, &t->lod_error);
     cb_json_end(j);
 }
 

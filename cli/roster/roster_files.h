@@ -59,6 +59,7 @@ typedef struct roster_plan_facts { /* what sampling the planned clips found, for
     cb_socket *sockets;
     bool vat_measured;
     double vat_error;
+    cb_lod_error lod_error;
 } roster_plan_facts;
 typedef struct roster_plan roster_plan;
 typedef struct roster_plans {

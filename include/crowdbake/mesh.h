@@ -103,6 +103,24 @@ CROWDBAKE_API cb_status cb_mesh_measure(cb_sampler *palette_sampler, const cb_mo
                                         const cb_mesh *mesh, const uint32_t *remap, double fps, cb_mesh_error *out,
                                         cb_error *err);
 
+/* The animation LOD's cost (src/core/lod_error.c): how far a vertex moves when skinned with its 2
+ * largest weights, or its largest alone (renormalized, as cb_reduce_influences keeps them and the
+ * runtimes' LOD skins a far instance), instead of all of them, at its worst over every frame at `fps`
+ * of the listed animations (count 0: every animation of the sampler's model), the frames cb_mesh_measure
+ * skins. A runtime drawing an
+ * instance whose size on screen is P pixels for S model units may skin it with k influences where
+ * error_k / S x P is within its pixel budget. */
+typedef struct cb_lod_error {
+    double two, one;          /* model units */
+    double height;            /* the skin's rest height (cb_skin_rest_bounds) */
+    uint32_t frames;          /* frames measured */
+    int32_t worst_animation;  /* where `one` is reached: the animation, -1 the rest pose */
+    double worst_time;
+} cb_lod_error;
+
+CROWDBAKE_API cb_status cb_measure_lod_error(cb_sampler *sampler, double fps, const int32_t *animations, uint32_t count,
+                                             cb_lod_error *out, cb_error *err);
+
 #ifdef __cplusplus
 }
 #endif

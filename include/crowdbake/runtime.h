@@ -83,13 +83,14 @@ typedef struct cb_rate_choice {
     bool met;               /* the error is within the goal */
     double error, error_mm; /* at the chosen rate: model units, and mm per metre of height */
     bool fitted;            /* the rows chosen: fitted (else sampled) */
-    double other_fps;       /* fitted rows chosen: the rate sampled rows need (0: none up to max_fps); sampled rows
-                             * chosen: 0 (fitted rows are searched under their rate only) */
+    double other_fps;       /* 0: the search stops at the fewest rows (fitted rows chosen: sampled rows miss at
+                             * that rate; sampled rows chosen: fitted rows miss under it). Kept for callers. */
     double fps_needed;      /* not met: the lowest rate up to CB_FPS_LIMIT that meets it (0: none does) */
 } cb_rate_choice;
-/* Sets plan[i].fps and plan[i].fit for every clip with a goal: per clip, sampled rows searched
- * first, then fitted rows under that rate; the fewer rows win, sampled on a tie (they are the
- * exact poses). Rates the probes so far predict far over the goal are not baked (runtime.c).
+/* Sets plan[i].fps and plan[i].fit for every clip with a goal: per clip, the lowest rate within
+ * the goal, sampled rows tried before fitted rows at each rate (a tie goes to sampled rows, the
+ * exact poses), walked from the key rate (rate_search.c). Rates the probes so far predict far
+ * over the goal are not baked.
  * out (optional) says what each choice reached. */
 CROWDBAKE_API cb_status cb_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan,
                                         uint32_t count, const cb_rate_goal *goals, cb_rate_choice *out, cb_error *err);

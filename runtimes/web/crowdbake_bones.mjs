@@ -91,14 +91,28 @@ export function lodThresholds(pal, mesh, size, { pixelError = LOD_PIXEL_ERROR, p
     return { two: Math.max(pixels(worst[1]), one), one, worst: { two: worst[1], one: worst[0] }, poses, pixelError };
 }
 
-// The LOD to draw with and why: lod as given ('auto': lodThresholds), as { lod, reason }.
-export function resolveLod(lod, pal, mesh, size) {
+// The thresholds of lod 'auto' from what the bake measured: a roster type's animation_lod (each tier's worst vertex
+// error in model units over every frame of its clips at 30 fps, docs/roster.md), for an animal `size` units tall
+// on screen: under pixelError x size / error pixels no vertex moves more than pixelError pixels. The shape
+// lodThresholds returns (poses: the frames the bake measured); null without a usable measure.
+export function lodThresholdsMeasured(measured, size, { pixelError = LOD_PIXEL_ERROR } = {}) {
+    const one = measured?.one_influence_error, two = measured?.two_influences_error;
+    if (!(one >= 0 && two >= 0 && size > 0)) return null;
+    const pixels = (e) => (e > 0 ? pixelError * size / e : 1e6), worst = { two: two / size, one: one / size };
+    return { two: Math.max(pixels(two), pixels(one)), one: pixels(one), worst, poses: measured.frames ?? 0, pixelError,
+             from: 'animation_lod' };
+}
+
+// The LOD to draw with and why: lod as given ('auto': the roster type's animation_lod when given, `measured`, else
+// lodThresholds measured here), as { lod, reason }.
+export function resolveLod(lod, pal, mesh, size, measured) {
     if (lod === false) return { lod: false, reason: 'lod: false: every influence at every size' };
     if (lod !== 'auto') return { lod, reason: `lod: { two: ${lod.two ?? 0}, one: ${lod.one ?? 0} } as given` };
-    const t = lodThresholds(pal, mesh, size);
+    const fromRoster = lodThresholdsMeasured(measured, size), t = fromRoster ?? lodThresholds(pal, mesh, size);
+    const where = fromRoster ? `the roster's animation_lod, ${t.poses} frames` : `${t.poses} poses measured here`;
     return { lod: { two: t.two, one: t.one }, thresholds: t,
              reason: `lod 'auto': 2 influences under ${t.two.toFixed(1)} pixels tall, 1 under ${t.one.toFixed(1)}: there the ` +
-                     `worst vertex of ${t.poses} poses moves at most ${t.pixelError} pixel (${(t.worst.two * 100).toFixed(2)}% ` +
+                     `worst vertex (${where}) moves at most ${t.pixelError} pixel (${(t.worst.two * 100).toFixed(2)}% ` +
                      `and ${(t.worst.one * 100).toFixed(2)}% of the animal's size); lod: { two, one } or false overrides` };
 }
 

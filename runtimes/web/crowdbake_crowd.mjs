@@ -153,11 +153,12 @@ export class Crowd {
     // AUTO_BONE_PASS_VERTICES unless given; per-vertex blending below it or where WebGL2 cannot
     // render to float textures), true (always; or { rows }), false (never); crowdbake_bones.mjs.
     // lod: the bone pass's animation LOD ('auto', the default: fewer influences under the sizes where
-    // the model's worst vertex moves at most a pixel, crowdbake_bones.mjs's lodThresholds; or { two, one }
-    // pixels tall, or false). crowd.lodChoice() says which thresholds and why. lodTiers: true (the default) draws the
-    // LOD's tiers apart - the instances sorted by tier on the CPU each frame, one draw a tier, its program compiled for
-    // its influences, the same pixels without a size test and influence loop a vertex; false: one draw, each vertex
-    // finding its tier.
+    // the model's worst vertex moves at most a pixel: from animationLod, a roster type's animation_lod, when
+    // given, else crowdbake_bones.mjs's lodThresholds; or { two, one } pixels tall, or false).
+    // crowd.lodChoice() says which thresholds and why.
+    // lodTiers: true (the default) draws the LOD's tiers apart - the instances sorted by tier on the CPU each frame,
+    // one draw a tier, its program compiled for its influences, the same pixels without a size test and influence loop
+    // a vertex; false: one draw, each vertex finding its tier.
     // crowd.choice(n) says which a herd of n gets, and why.
     constructor(gl, options) {
         const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false, bonePass = 'auto' } = options;
@@ -169,7 +170,8 @@ export class Crowd {
         this.vertexCount = mesh.positions.length / 3;
         this.bonePassVertices = bonePass === 'auto' ? options.bonePassVertices ?? AUTO_BONE_PASS_VERTICES : bonePass ? 0 : Infinity;
         this.lodOption = options.lod === undefined ? 'auto' : options.lod;
-        this.lodMesh = mesh; // lod 'auto' measures its error on first use
+        this.animationLod = options.animationLod; // lod 'auto': the bake's measure (a roster type's animation_lod)
+        this.lodMesh = mesh; // else lod 'auto' measures its error on first use
         this.size = Math.max(1e-6, ...pal.clips.flatMap((c) => [0, 1, 2].map((k) => c.bounds_max[k] - c.bounds_min[k])));
         this.textures = this.upload(options);
         const varyings = captureWorld ? ['v_world'] : null;
@@ -333,7 +335,7 @@ export class Crowd {
     // { lod, reason }: the LOD the bone pass's draw uses and why (the thresholds, the error they keep within,
     // the option that overrides them).
     lodChoice() {
-        this.lodResolved ??= resolveLod(this.lodOption, this.pal, this.lodMesh, this.size);
+        this.lodResolved ??= resolveLod(this.lodOption, this.pal, this.lodMesh, this.size, this.animationLod);
         return this.lodResolved;
     }
 

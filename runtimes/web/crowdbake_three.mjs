@@ -173,10 +173,11 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // looks like the model), fade (cross-fade seconds, 0.25), bonePass ('auto': the bone pass from
     // bonePassVertices skinned vertices a frame, AUTO_BONE_PASS_VERTICES unless given, when update()
     // is given the renderer; true: always then; false: never).
-    // lod: with the bone pass, the animation LOD of crowdbake_bones.mjs ('auto': from the model's own error,
-    // lodThresholds; { two, one } or false); herd.lodChoice() says which and why. lodTiers (true): given the camera
-    // (update(time, renderer, camera)), the LOD's tiers drawn apart (crowdbake_three_tiers.mjs), the same pixels
-    // without a size test and influence loop a vertex; false, or no camera: one draw, each vertex finding its tier.
+    // lod: with the bone pass, the animation LOD of crowdbake_bones.mjs ('auto': from the model's own error, the
+    // roster type's animation_lod or else lodThresholds; { two, one } or false); herd.lodChoice() says which and why.
+    // lodTiers (true): given the camera (update(time, renderer, camera)), the LOD's tiers drawn apart
+    // (crowdbake_three_tiers.mjs), the same pixels without a size test and influence loop a vertex; false, or no
+    // camera: one draw, each vertex finding its tier.
     constructor(gltf, pal, type, { count = 1000, glsl, material, fade = 0.25, bonePass = 'auto', bonePassVertices,
                                    lod = 'auto', lodTiers = true } = {}) {
         if (!glsl) throw new Error('CrowdbakeHerd: options.glsl is the shipped library (await loadPaletteGLSL())');
@@ -230,7 +231,8 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         this.lodOption = lod;
         this.lodTiers = lodTiers;
         this.tiers = null;
-        this.lodMesh = mesh; // lod 'auto' measures its error on first use
+        this.animationLod = type?.animation_lod; // lod 'auto': the bake's measure, when the roster has it
+        this.lodMesh = mesh; // else lod 'auto' measures its error on first use
         this.lodSize = Math.max(...[0, 1, 2].map((k) => bounds.box.max.getComponent(k) - bounds.box.min.getComponent(k)));
         this.bones = null;
         this.bonesOn = false;
@@ -370,7 +372,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
 
     // { lod, reason }: the bone pass's animation LOD and why (measured on first use under 'auto').
     lodChoice() {
-        this.lodResolved ??= resolveLod(this.lodOption, this.pal, this.lodMesh, this.lodSize);
+        this.lodResolved ??= resolveLod(this.lodOption, this.pal, this.lodMesh, this.lodSize, this.animationLod);
         return this.lodResolved;
     }
 

@@ -56,9 +56,9 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
     } else if (fitted && r->other_fps > 0) {
         snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); sampled rows need %g fps", fps, rows,
                  r->error_mm, r->other_fps);
-    } else if (fitted) {
-        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); sampled rows do not meet it up to %g fps",
-                 fps, rows, r->error_mm, cs->max_fps);
+    } else if (fitted) { /* the search stops at the fewest rows: sampled rows missed at this rate */
+        snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); sampled rows need more than %g fps",
+                 fps, rows, r->error_mm, fps);
     } else {
         snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows do not meet it at a lower "
                  "rate", fps, rows, r->error_mm);

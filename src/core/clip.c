@@ -1,6 +1,7 @@
 /* clip.c - clip framing (how many rows, at which times), loop detection and root motion. */
 #include "cb_math.h"
 #include "crowdbake/core.h"
+#include "lanes.h"
 #include "sampler.h"
 #include "internal/plumbing.h"
 #include "loop_decide.h"
@@ -293,14 +294,55 @@ void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t
     double times[CB_SAMPLE_BATCH];
     for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) times[i] = cb_clip_frame_time(clip, frames[i < count ? i : count - 1]);
     cb_sample_joint_lanes(s, clip->animation, times, count, out);
-    for (uint32_t i = 0; cb_root_motion_in_place(root_motion, clip) && i < CB_SAMPLE_BATCH; ++i) {
-        double dx, dz;
-        root_travel(clip, times[i], &dx, &dz);
-        for (uint32_t j = 0; j < joints; ++j) {
-            out[((size_t)j * 8 + 4) * CB_SAMPLE_BATCH + i] -= dx;
-            out[((size_t)j * 8 + 6) * CB_SAMPLE_BATCH + i] -= dz;
-        }
+    if (!cb_root_motion_in_place(root_motion, clip)) return;
+    double dx[CB_SAMPLE_BATCH], dz[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) root_travel(clip, times[i], &dx[i], &dz[i]);
+    /* Joint by joint, a lane row at a time (one subtraction per value, so the order of the
+     * loops changes no bit): contiguous, where time by time strode over every joint's lanes. */
+    for (uint32_t j = 0; j < joints; ++j) {
+        double *x = out + ((size_t)j * 8 + 4) * CB_SAMPLE_BATCH, *z = out + ((size_t)j * 8 + 6) * CB_SAMPLE_BATCH;
+        for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) x[i] -= dx[i], z[i] -= dz[i];
     }
+}
+
+/* cb_clip_frame_lanes_each's sink between the sampler and the caller's: the root's travel
+ * taken off each joint (the same subtraction as cb_clip_frame_lanes). */
+typedef struct travel_sink {
+    double dx[CB_SAMPLE_BATCH], dz[CB_SAMPLE_BATCH];
+    cb_joint_lanes_sink sink;
+    void *ctx;
+} travel_sink;
+
+CB_TARGET_CLONES
+static void take_off_travel(void *ctx, uint32_t joint, double (*lanes)[CB_SAMPLE_BATCH])
+{
+    const travel_sink *t = ctx;
+#if defined(__GNUC__) /* four lanes a subtraction (-O2 leaves the plain loop scalar) */
+    for (int i = 0; i < CB_SAMPLE_BATCH; i += 4) {
+        v4df x, z, dx, dz;
+        memcpy(&x, &lanes[4][i], sizeof x), memcpy(&z, &lanes[6][i], sizeof z);
+        memcpy(&dx, &t->dx[i], sizeof dx), memcpy(&dz, &t->dz[i], sizeof dz);
+        x -= dx, z -= dz;
+        memcpy(&lanes[4][i], &x, sizeof x), memcpy(&lanes[6][i], &z, sizeof z);
+    }
+#else
+    for (int i = 0; i < CB_SAMPLE_BATCH; ++i) lanes[4][i] -= t->dx[i], lanes[6][i] -= t->dz[i];
+#endif
+    t->sink(t->ctx, joint, lanes);
+}
+
+void cb_clip_frame_lanes_each(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
+                              cb_root_motion root_motion, cb_joint_lanes_sink sink, void *ctx)
+{
+    double times[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) times[i] = cb_clip_frame_time(clip, frames[i < count ? i : count - 1]);
+    if (!cb_root_motion_in_place(root_motion, clip)) {
+        cb_sample_joint_lanes_each(s, clip->animation, times, count, sink, ctx);
+        return;
+    }
+    travel_sink t = {.sink = sink, .ctx = ctx};
+    for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) root_travel(clip, times[i], &t.dx[i], &t.dz[i]);
+    cb_sample_joint_lanes_each(s, clip->animation, times, count, take_off_travel, &t);
 }
 
 void cb_clip_frame_matrices_batch(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,

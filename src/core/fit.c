@@ -149,8 +149,24 @@ static CB_CLONE_INLINE bool settle_row(double *c, const double *prev, const doub
     return moved;
 }
 
+/* A looping clip whose bone turns a full circle ends in the quaternion hemisphere opposite its
+ * first row's, and the runtime's blend across the wrap flips the first row's quaternion
+ * (cb:hemisphere). Seen from the first row, that interval's sagitta and the last row's offsets
+ * change sign on those values (and the last row sees the first row's offsets flipped): `sign`
+ * is -1 on them and 1 elsewhere, `d0` the wrap's sagittas signed for row 0, `view` scratch. */
+typedef struct {
+    const double *sign, *d0;
+    double *view;
+} wrap_flip;
+
+static const double *flipped(const wrap_flip *wf, const double *c, uint32_t v0, uint32_t v1)
+{
+    for (uint32_t v = v0; v < v1; ++v) wf->view[v] = wf->sign[v] * c[v];
+    return wf->view;
+}
+
 CB_TARGET_CLONES static bool sweep_block(double *c, const double *d, uint32_t frames, uint32_t intervals, uint32_t stride,
-                                         bool loops, uint32_t v0, uint32_t v1)
+                                         bool loops, const wrap_flip *wf, uint32_t v0, uint32_t v1)
 {
     bool moved = false;
     for (uint32_t f = 0; f < frames; ++f) {
@@ -158,16 +174,19 @@ CB_TARGET_CLONES static bool sweep_block(double *c, const double *d, uint32_t fr
         const double *prev = c + (size_t)((f + frames - 1) % frames) * stride, *next = c + (size_t)((f + 1) % frames) * stride;
         const double *dp = has_prev ? d + (size_t)((f + intervals - 1) % intervals) * stride : NULL;
         const double *dn = has_next ? d + (size_t)(f % intervals) * stride : NULL;
+        if (wf && f == 0) prev = flipped(wf, prev, v0, v1), dp = wf->d0;
+        else if (wf && f + 1 == frames) next = flipped(wf, next, v0, v1);
         if (settle_row(c + (size_t)f * stride, prev, next, dp, dn, v0, v1)) moved = true;
     }
     return moved;
 }
 
-static void refine_offsets(double *c, const double *d, uint32_t frames, uint32_t intervals, uint32_t stride, bool loops)
+static void refine_offsets(double *c, const double *d, uint32_t frames, uint32_t intervals, uint32_t stride, bool loops,
+                           const wrap_flip *wf)
 {
     for (uint32_t v0 = 0; v0 < stride; v0 += REFINE_BLOCK) {
         uint32_t v1 = v0 + REFINE_BLOCK < stride ? v0 + REFINE_BLOCK : stride;
-        for (int sweep = 0; sweep < FIT_SWEEPS && sweep_block(c, d, frames, intervals, stride, loops, v0, v1); ++sweep) {
+        for (int sweep = 0; sweep < FIT_SWEEPS && sweep_block(c, d, frames, intervals, stride, loops, wf, v0, v1); ++sweep) {
         }
     }
 }
@@ -189,36 +208,68 @@ static inline __attribute__((always_inline)) void interval_sagitta(const float *
     for (uint32_t k = 0; k < values; ++k) dj[k] = (qpos && k < 4 ? mj[k] * scale : mj[k]) - mean[k];
 }
 
+/* The wrap's signs (wrap_flip): -1 on the quaternion of each bone whose last and first rows the
+ * runtime's blend flips between (their dot below 0, as the shader tests it), 1 elsewhere; NULL
+ * where none flips (or out of memory: the wrap is then fitted unflipped, as before). */
+static double dot4(const float *a, const float *b)
+{
+    return (double)a[0] * b[0] + (double)a[1] * b[1] + (double)a[2] * b[2] + (double)a[3] * b[3];
+}
+
+static double *wrap_signs(const float *rows, uint32_t frames, uint32_t bones, uint32_t values)
+{
+    const float *last = rows + (size_t)(frames - 1) * bones * values;
+    bool any = false;
+    for (uint32_t j = 0; j < bones && !any; ++j) any = dot4(last + (size_t)j * values, rows + (size_t)j * values) < 0;
+    double *sign = any ? malloc((size_t)bones * values * sizeof(double)) : NULL;
+    for (uint32_t j = 0; sign && j < bones; ++j) {
+        bool flip = dot4(last + (size_t)j * values, rows + (size_t)j * values) < 0;
+        for (uint32_t k = 0; k < values; ++k) sign[(size_t)j * values + k] = flip && k < 4 ? -1 : 1;
+    }
+    return sign;
+}
+
 void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones, uint32_t values, bool loops, bool qpos)
 {
     uint32_t intervals = loops ? frames : frames - 1, stride = bones * values;
     if (frames < 2 || intervals == 0) return;
     double *d = malloc((size_t)intervals * stride * sizeof(double));
     if (!d) return; /* out of memory: the rows stay sampled, which is correct, only less precise between them */
+    double *sign = loops && qpos ? wrap_signs(rows, frames, bones, values) : NULL;
     for (uint32_t i = 0; i < intervals; ++i) {
         const float *a = rows + (size_t)i * stride, *b = rows + (size_t)((i + 1) % frames) * stride;
         const float *m = mids + (size_t)i * stride;
         double *di = d + (size_t)i * stride;
         for (uint32_t j = 0; j < bones; ++j) {
             size_t at = (size_t)j * values;
-            if (qpos && values == 8) interval_sagitta(a + at, b + at, m + at, di + at, 8, true); /* unrolled */
-            else interval_sagitta(a + at, b + at, m + at, di + at, values, qpos);
+            float bj[16];
+            const float *b_as_blended = b + at;
+            if (sign && i + 1 == frames && sign[at] < 0) { /* the wrap, blended towards the flipped first row */
+                for (uint32_t k = 0; k < values; ++k) bj[k] = k < 4 ? -b[at + k] : b[at + k];
+                b_as_blended = bj;
+            }
+            if (qpos && values == 8) interval_sagitta(a + at, b_as_blended, m + at, di + at, 8, true); /* unrolled */
+            else interval_sagitta(a + at, b_as_blended, m + at, di + at, values, qpos);
         }
     }
     double *c = malloc((size_t)frames * stride * sizeof(double));
-    if (!c) { /* as above: the rows stay sampled */
-        free(d);
+    double *wrap = sign ? malloc((size_t)2 * stride * sizeof(double)) : NULL;
+    if (!c || (sign && !wrap)) { /* as above: the rows stay sampled */
+        free(wrap), free(sign), free(c), free(d);
         return;
     }
+    wrap_flip wf = {sign, wrap, wrap + stride};
+    for (uint32_t v = 0; sign && v < stride; ++v) wrap[v] = sign[v] * d[(size_t)(intervals - 1) * stride + v];
     for (uint32_t f = 0; f < frames; ++f) {
         /* The intervals on either side of row f; a one-shot's end rows have one. */
         bool has_prev = loops || f > 0, has_next = loops || f + 1 < frames;
         const double *dp = has_prev ? d + (size_t)((f + intervals - 1) % intervals) * stride : NULL;
         const double *dn = has_next ? d + (size_t)(f % intervals) * stride : NULL;
+        if (sign && f == 0) dp = wf.d0;
         for (uint32_t v = 0; v < stride; ++v)
             c[(size_t)f * stride + v] = dp && dn ? row_offset(dp[v], dn[v]) : 0.5 * (dp ? dp[v] : dn[v]);
     }
-    refine_offsets(c, d, frames, intervals, stride, loops);
+    refine_offsets(c, d, frames, intervals, stride, loops, sign ? &wf : NULL);
     for (uint32_t f = 0; f < frames; ++f) {
         float *r = rows + (size_t)f * stride;
         for (uint32_t v = 0; v < stride; ++v) r[v] = (float)(r[v] + c[(size_t)f * stride + v]);
@@ -228,6 +279,8 @@ void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones
             for (int k = 0; k < 4 && n > 0; ++k) q[k] = (float)(q[k] / n);
         }
     }
+    free(wrap);
+    free(sign);
     free(c);
     free(d);
 }

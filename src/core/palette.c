@@ -180,11 +180,10 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
         for (uint32_t c = 0; w.sampler && c < st->p->clip_count; ++c)
             if (st->infos[c].loops) closed = cb_sampler_set_loop(w.sampler, &st->infos[c]) && closed;
         w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
-        w.lanes = malloc((size_t)st->p->bone_count * 8 * CB_SAMPLE_BATCH * sizeof(double));
         w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
         w.first = malloc((size_t)st->p->bone_count * 4 * sizeof(float));
     }
-    if (jb->samples && (!w.sampler || !closed || !w.mats || !w.lanes || !w.prev || !w.first)) {
+    if (jb->samples && (!w.sampler || !closed || !w.mats || !w.prev || !w.first)) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
         for (uint32_t c = atomic_fetch_add(&jb->next, 1); c < jb->count; c = atomic_fetch_add(&jb->next, 1))
@@ -192,7 +191,6 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     }
     if (w.sampler != st->lent) cb_sampler_free(w.sampler);
     free(w.mats);
-    free(w.lanes);
     free(w.prev);
     free(w.first);
     free(w.rows);

@@ -64,8 +64,6 @@ void pose_batch_free(pose_batch *b);
 typedef struct worker {
     cb_sampler *sampler;
     double *mats;        /* bones * 16 */
-    double *lanes;       /* bones * 8 lanes of CB_SAMPLE_BATCH: the joints' similarities (cb_clip_frame_lanes), for
-                          * qpos rows of similarity rigs and their measurement */
     cb_quat *prev;       /* bones: the previous row's quaternion (qpos) */
     float *rows;         /* pre-encoding rows: CB_SAMPLE_BATCH of them, or a whole clip's for a fitted one */
     uint32_t rows_held;  /* the rows `rows` has room for */
@@ -132,8 +130,8 @@ static inline double row_position(const float *c, const float *b, int r)
 }
 
 /* palette_rows.c: `count` (at most CB_SAMPLE_BATCH) qpos rows of clip c from the joint
- * similarities of frames f, f + 1, ... (sampled into w->lanes), into rows (row f's
- * first); grows the clip's bounds and st->ranges[c]. */
+ * similarities of frames f, f + 1, ... (each joint's lanes as the sampler makes them), into rows
+ * (row f's first); grows the clip's bounds and st->ranges[c]. */
 void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
                              extent *clip_bounds);
 

@@ -231,6 +231,25 @@ static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, co
     }
 }
 
+/* What bone_differences takes besides the joint and its lanes, for a batch of rows. */
+typedef struct differences {
+    const cb_palette *p;
+    const double *const *mats, *const *a, *const *b;
+    uint32_t count;
+    double fr;
+    measure_scratch *s;
+} differences;
+
+/* Joint j's differences from its similarities' lanes, or from the matrices where lanes is NULL;
+ * the sampler's sink (cb_clip_frame_lanes_each) for rigs of similarities. */
+CB_TARGET_CLONES
+static void joint_differences(void *ctx, uint32_t j, double (*lanes)[B])
+{
+    const differences *d = ctx;
+    bone_differences(d->p, j, (const double(*)[B])lanes, d->mats, d->a, d->b, d->count, d->fr, d->s->diff,
+                     d->s->joints, d->s->finite);
+}
+
 /* Clip c's joint matrices at `frame` of framing (palette_frame_matrices), where they stay until
  * the measurement's next batch: a pose cache's, or copied into `room` (the worker's matrices
  * are sampled over at its next call). */
@@ -268,8 +287,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     bool blend = sub && !clip->step; /* a stepped clip's runtime holds row f until row f + 1 */
     if (lanes) {
         const double *mats[B] = {NULL};
-        if (similar) cb_clip_frame_lanes(w->sampler, &framing, times, count, st->opt->root_motion, w->lanes);
-        else palette_prefetch_poses(st, w, c, &framing, times, count); /* the rows' poses at once, where kept */
+        if (!similar) palette_prefetch_poses(st, w, c, &framing, times, count); /* the rows' poses at once, where kept */
         for (uint32_t i = 0; !similar && i < count; ++i)
             mats[i] = exact_matrices(st, w, c, &framing, times[i], s->exact + (size_t)i * p->bone_count * 16);
         for (uint32_t i = count; !similar && i < B; ++i) mats[i] = mats[count - 1];
@@ -280,9 +298,10 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         }
         for (uint32_t i = count; i < B; ++i) a[i] = a[count - 1], b[i] = b[count - 1]; /* lanes past count repeat the last */
         for (uint32_t i = 0; i < count; ++i) s->finite[i] = true;
-        for (uint32_t j = 0; j < p->bone_count; ++j)
-            bone_differences(p, j, similar ? (const double(*)[B])(w->lanes + (size_t)j * 8 * B) : NULL, mats, a,
-                             blend ? b : NULL, count, (double)sub / parts, s->diff, s->joints, s->finite);
+        differences d = {p, mats, a, blend ? b : NULL, count, (double)sub / parts, s};
+        if (similar) /* each joint measured as soon as the sampler has it, as the bake's rows are made */
+            cb_clip_frame_lanes_each(w->sampler, &framing, times, count, st->opt->root_motion, joint_differences, &d);
+        for (uint32_t j = 0; !similar && j < p->bone_count; ++j) joint_differences(&d, j, NULL);
     }
     for (uint32_t i = 0; i < count; ++i) {
         double *diff = lanes ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;

@@ -407,25 +407,40 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
 CB_TARGET_CLONES
 void palette_row_signs(const double *dot, bool flip, float *sign) { row_signs(dot, flip, sign); }
 
+/* A batch's rows in the making: what bone_lanes takes besides a joint's lanes. */
+typedef struct rows_in_making {
+    bake_state *st;
+    worker *w;
+    uint32_t f, count;
+    float *rows;
+    lane_extent x;
+} rows_in_making;
+
+/* The sampler's sink (cb_clip_frame_lanes_each): each joint into the rows as it is sampled,
+ * its lanes still in cache, in joint order as before. */
+CB_TARGET_CLONES
+static void joint_into_rows(void *ctx, uint32_t j, double (*lanes)[B])
+{
+    rows_in_making *r = ctx;
+    bone_lanes(r->st, r->w, j, r->f, r->count, (const double(*)[B])lanes, r->rows, &r->x);
+}
+
 CB_TARGET_CLONES
 void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
                              extent *clip_bounds)
 {
-    uint32_t bones = st->p->bone_count;
-    /* The joints' similarities as lanes (the sampler's layout: no transposing on either side). */
-    double *lanes = w->lanes;
+    /* The joints' similarities as lanes (the sampler's layout: no transposing on either side),
+     * each joint into the rows as soon as it is sampled (joint_into_rows). */
     uint32_t frames[B];
     for (uint32_t i = 0; i < count; ++i) frames[i] = f + i;
-    cb_clip_frame_lanes(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, lanes);
-    lane_extent x;
-    lane_extent_reset(&x);
-    for (uint32_t j = 0; j < bones; ++j)
-        bone_lanes(st, w, j, f, count, (const double(*)[B])(lanes + (size_t)j * 8 * B), rows, &x);
+    rows_in_making r = {.st = st, .w = w, .f = f, .count = count, .rows = rows};
+    lane_extent_reset(&r.x);
+    cb_clip_frame_lanes_each(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, joint_into_rows, &r);
     /* Bounds and ranges in frame order, as one row at a time grows them (of +0 and -0, the
      * minimum is the one met first). Locals, kept in registers. */
     extent bounds = *clip_bounds;
     value_range range = st->ranges[c];
-    fold_lanes(&x, count, &bounds, &range);
+    fold_lanes(&r.x, count, &bounds, &range);
     *clip_bounds = bounds;
     st->ranges[c] = range;
 }

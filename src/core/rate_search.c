@@ -19,6 +19,7 @@
 typedef struct probe {
     double fps, goal, error;
     bool fit;
+    int family; /* FAMILY_KEYS or FAMILY_COMMON: the law it stands for (predicted_law) */
 } probe;
 typedef struct clip_search {
     cb_sampler *s;
@@ -29,7 +30,6 @@ typedef struct clip_search {
     probe done[64];
     uint32_t count;
     int family;                      /* the family of rates searched now: FAMILY_KEYS or FAMILY_COMMON */
-    double law[2][2];                /* [fit][family]: the largest error x fps^2 probed (rate_error) */
     const palette_skin_facts *facts; /* the skin's, settled once for every bake of the search */
     palette_probe probe;             /* the clip's analysis and exact poses, for every probe */
 } clip_search;
@@ -65,20 +65,29 @@ static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *
     return worst;
 }
 
+/* A probe already made answers as probe_error would (a measurement, not a prediction). */
+static bool probed(const clip_search *cs, double fps, double goal, double *error)
+{
+    for (uint32_t i = 0; i < cs->count; ++i) {
+        const probe *d = &cs->done[i];
+        if (d->fps == fps && d->fit == cs->fit && (d->goal == goal || d->goal == 0 || d->error <= d->goal))
+            return *error = d->error, true;
+    }
+    return false;
+}
+
 /* clip_error_at, once per rate and kind of rows. A value measured exactly (no goal, or within
  * its goal) answers any goal; one above its goal only the same goal. max_fps is measured
  * exactly at once: when it is probed every lower common rate failed, and a clip that fails it
  * too needs its exact error there anyway (choose_clip's last lines). */
 static double probe_error(clip_search *cs, double fps, double goal, cb_error *err)
 {
-    for (uint32_t i = 0; i < cs->count; ++i) {
-        const probe *d = &cs->done[i];
-        if (d->fps == fps && d->fit == cs->fit && (d->goal == goal || d->goal == 0 || d->error <= d->goal)) return d->error;
-    }
+    double known;
+    if (probed(cs, fps, goal, &known)) return known;
     if (fps == cs->max_fps) goal = 0;
     double e = clip_error_at(cs, fps, goal, err);
     if (!err->status && cs->count < sizeof cs->done / sizeof cs->done[0])
-        cs->done[cs->count++] = (probe){fps, goal, e, cs->fit};
+        cs->done[cs->count++] = (probe){fps, goal, e, cs->fit, cs->family};
     return e;
 }
 
@@ -89,29 +98,51 @@ enum { FAMILY_KEYS, FAMILY_COMMON };
 /* The blend's error falls as the square of the row spacing (a chord under an arc): a clip that
  * errs e at f fps errs about e (f / g)^2 at g fps, within a few percent on Cow and Fox (Walk,
  * sampled: 0.0185 at 24 fps, 0.00466 at 48, 0.00209 at 72), and fitted rows err at best half of
- * what sampled ones do at the same rate (0.54-0.71 of it on Cow). So the largest error x fps^2
- * probed so far, per kind of rows and family of rates, predicts a lower bound for a rate not yet
- * baked: for fitted rows, also half of what the sampled ones predict; for a common rate not yet
- * probed, what the key rates predict (rows between keys err more). A rate predicted over one and
- * a half times the goal is taken as a miss without baking it. Every rate chosen is still one
- * that was baked and met its goal; the prediction only spares bakes that would miss, and
- * fitted bakes cost several sampled ones (they sample every mid-row to fit the rows). max_fps is
- * always baked: its exact error is what an unmet goal reports. */
+ * what sampled ones do at the same rate (0.50-0.71 of it on Cow and Husky). So the probe nearest
+ * in rate, per kind of rows and family of rates, predicts through its error x fps^2 a lower bound
+ * for a rate not yet baked: for fitted rows, also half of what the sampled ones predict; for a
+ * common rate with no common probe yet, what the key rates predict (rows between keys err
+ * more). The nearest probe, not the largest error x fps^2 of any: the law holds locally, and
+ * slow clips' errors fall slower than it at low rates (the sample bird's glide, sampled: 1.4e-4
+ * at 20 fps, 3.4e-4 at 10, not 5.7e-4), so a far probe would rule out a rate that meets. A rate
+ * predicted over one and a half times the goal is taken as a miss without baking it. Every rate
+ * chosen is still one that was baked and met its goal; the prediction only spares bakes that
+ * would miss, and fitted bakes cost several sampled ones (they sample every mid-row to fit the
+ * rows). max_fps is always baked: its exact error is what an unmet goal reports. */
 #define PREDICTED_MISS 1.5
+#define FITTED_AT_BEST 0.5 /* fitted rows' error over sampled rows' at the same rate, at best */
 
-static double predicted_law(const clip_search *cs, bool fit, int family)
+/* The error x fps^2 of the probe of this kind and family nearest to fps (ties: the larger), 0
+ * when there is none. */
+static double nearest_law(const clip_search *cs, bool fit, int family, double fps)
 {
-    double law = cs->law[fit][family] > 0 ? cs->law[fit][family] : cs->law[fit][FAMILY_KEYS];
-    return fit ? fmax(law, 0.5 * predicted_law(cs, false, family)) : law;
+    double law = 0, distance = INFINITY;
+    for (uint32_t i = 0; i < cs->count; ++i) {
+        const probe *d = &cs->done[i];
+        if (d->fit != fit || d->family != family || !isfinite(d->error)) continue;
+        double far = fabs(log(d->fps / fps)), here = d->error * d->fps * d->fps;
+        if (far < distance || (far == distance && here > law)) law = here, distance = far;
+    }
+    return law;
+}
+
+static double predicted_law(const clip_search *cs, bool fit, int family, double fps)
+{
+    double law = nearest_law(cs, fit, family, fps);
+    if (!(law > 0)) law = nearest_law(cs, fit, FAMILY_KEYS, fps);
+    return fit ? fmax(law, FITTED_AT_BEST * predicted_law(cs, false, family, fps)) : law;
+}
+
+static bool predicted_miss(const clip_search *cs, double fps, double max_error)
+{
+    return fps < cs->max_fps && predicted_law(cs, cs->fit, cs->family, fps) / (fps * fps) > PREDICTED_MISS * max_error;
 }
 
 static double rate_error(clip_search *cs, double fps, double max_error, cb_error *err)
 {
-    if (fps < cs->max_fps && predicted_law(cs, cs->fit, cs->family) / (fps * fps) > PREDICTED_MISS * max_error)
-        return INFINITY;
-    double e = probe_error(cs, fps, max_error, err), *law = &cs->law[cs->fit][cs->family];
-    if (isfinite(e) && e * fps * fps > *law) *law = e * fps * fps;
-    return e;
+    double known;
+    if (probed(cs, fps, fps == cs->max_fps ? 0 : max_error, &known)) return known;
+    return predicted_miss(cs, fps, max_error) ? INFINITY : probe_error(cs, fps, max_error, err);
 }
 
 /* The lowest of the increasing `rates` (up to max_fps, and under `below` unless it is 0) at
@@ -171,23 +202,88 @@ static rate_families families_of(const cb_animation *a, double max_fps)
     return f;
 }
 
-/* The lowest rate within max_error for the rows cs->fit says, under `below` (0: none), over both
- * families, 0 when none is, with its error. The key rate's family first: rows that land on keys
- * blend what the keys interpolate, so its error is far lower than its neighbours' in the common
- * family (Cow's Idle: 0.78 mm/m at its 24 fps key rate, 3.4 at 20 and 30) and it is usually the
- * answer; the common rates are then searched under it. The two are searched each on its own:
- * the error does not fall steadily across both. */
-static double lowest_rate_of_rows(clip_search *cs, const rate_families *f, double below, double max_error, double *error,
-                                  cb_error *err)
+/* Both families' rates up to max_fps, merged in increasing order, each with its family (a rate
+ * in both is the keys': its rows land on keys, and the keys' law predicts it); returns how many. */
+typedef struct candidate {
+    double fps;
+    int family;
+} candidate;
+
+static size_t merged_rates(const rate_families *f, double max_fps, candidate *out)
 {
-    double e_aligned = INFINITY, e_common = INFINITY;
-    cs->family = FAMILY_KEYS;
-    double a = lowest_rate(cs, f->aligned, f->n_aligned, f->key, below, max_error, &e_aligned, err);
-    cs->family = FAMILY_COMMON;
-    double b = lowest_rate(cs, f->common, f->n_common, COMMON_FIRST, a > 0 ? a : below, max_error, &e_common, err);
-    if (err->status || (a == 0 && b == 0)) return 0;
-    *error = b > 0 ? e_common : e_aligned;
-    return b > 0 ? b : a;
+    size_t n = 0, a = 0, b = 0;
+    while (a < f->n_aligned || b < f->n_common) {
+        bool take_aligned = b >= f->n_common || (a < f->n_aligned && f->aligned[a] <= f->common[b]);
+        candidate c = take_aligned ? (candidate){f->aligned[a++], FAMILY_KEYS} : (candidate){f->common[b++], FAMILY_COMMON};
+        if (c.fps > max_fps || (n > 0 && out[n - 1].fps == c.fps)) continue; /* a rate in both: the keys' (first) */
+        out[n++] = c;
+    }
+    if (n == 0 || out[n - 1].fps < max_fps) out[n++] = (candidate){max_fps, FAMILY_COMMON}; /* always a candidate */
+    return n;
+}
+
+/* The rate `c` when the clip meets max_error there with sampled rows, else with fitted rows (of
+ * the kinds `rows` allows; cs->fit says which, *error its error), 0 when neither does. Fitted
+ * rows err at least half what sampled rows do at the same rate, and a fitted probe costs several
+ * sampled ones (it samples every mid-row and fits them): where the law rules out sampled rows
+ * but not fitted ones, the sampled rows are baked first, and their error at this very rate
+ * (rather than the law's, from other rates) decides whether the fitted probe is worth making.
+ * (Cow's Gallop at 40 fps: the law from 24 fps put fitted rows at 1.1 times the goal; sampled rows
+ * there err 4 times it, off the key grid.) Walking up (not `eager`), fitted rows are baked only
+ * where even their best case, half the sampled rows' error there, meets the goal: a rate that only
+ * the law's margin leaves open is baked by the walk down, and only when it is under the answer
+ * (the robot's Dance at 48 fps: sampled 1.9 times the goal, fitted 2.1 times). max_fps is baked
+ * both ways: its exact errors are what an unmet goal reports. */
+static double rate_meets(clip_search *cs, cb_rows rows, candidate c, double max_error, double *error, bool eager,
+                         cb_error *err)
+{
+    double sampled = INFINITY;
+    for (int fit = rows == CB_ROWS_FITTED; fit <= (rows != CB_ROWS_SAMPLED) && !err->status; ++fit) {
+        cs->fit = fit, cs->family = c.family;
+        if (fit && !eager && c.fps < cs->max_fps && rows == CB_ROWS_BEST && !(sampled * FITTED_AT_BEST <= max_error))
+            continue;
+        double e = rate_error(cs, c.fps, max_error, err);
+        if (e <= max_error) return *error = e, c.fps;
+        sampled = e;
+        double known;
+        if (fit || rows != CB_ROWS_BEST || probed(cs, c.fps, max_error, &known)) continue;
+        cs->fit = true; /* sampled rows ruled out by the law: baked only where fitted rows are not */
+        if (predicted_miss(cs, c.fps, max_error)) continue;
+        cs->fit = false;
+        if ((e = sampled = probe_error(cs, c.fps, max_error, err)) <= max_error) return *error = e, c.fps;
+    }
+    return 0;
+}
+
+/* The clip's lowest rate and kind of rows within max_error, up to max_fps (0 when none is), with
+ * its error into *error and the kind into cs->fit: one walk over both families' rates together,
+ * sampled rows then fitted rows at each rate (sampled rows win a tie). It starts at the key rate
+ * (the likeliest answer; 30 fps without one), and goes up from there while both kinds miss, or
+ * down from where one meets. Going down, a family of rates is left at its first rate where both
+ * kinds miss (within a family the error falls as the rate rises: nothing lower in it meets), and
+ * the walk ends when both are. The 1/fps^2 law (rate_error) rules out, without baking them, rates
+ * that would miss by far. (Searching sampled rows to their answer first, then fitted rows under
+ * it, baked both kinds' answers and the rates between: Husky's Gallop probed 96, 90 and 120 fps
+ * sampled and 96 fitted before 72 fitted won.) `rows` allows one kind or both. */
+static double lowest_rate_walk(clip_search *cs, const rate_families *f, cb_rows rows, double max_error, double *error,
+                               cb_error *err)
+{
+    candidate rates[sizeof common_rates / sizeof common_rates[0] + 17];
+    size_t n = merged_rates(f, cs->max_fps, rates), at = 0;
+    double key = f->n_aligned > f->key ? f->aligned[f->key] : common_rates[COMMON_FIRST], found = 0;
+    while (at + 1 < n && rates[at + 1].fps <= key) ++at; /* the highest rate up to the key rate */
+    for (; at < n && found == 0 && !err->status; ++at) /* up from the key rate until one kind meets */
+        found = rate_meets(cs, rows, rates[at], max_error, error, false, err);
+    if (found == 0) return 0;
+    bool left[2] = {false, false}; /* [family]: a rate of it where both kinds missed */
+    for (size_t i = at - 1; i-- > 0 && !(left[FAMILY_KEYS] && left[FAMILY_COMMON]) && !err->status;) {
+        if (left[rates[i].family]) continue;
+        bool fit = cs->fit; /* the answer's kind so far */
+        double e = 0, r = rate_meets(cs, rows, rates[i], max_error, &e, true, err);
+        if (r > 0) found = r, *error = e;
+        else cs->fit = fit, left[rates[i].family] = true;
+    }
+    return err->status ? 0 : found;
 }
 
 /* A clip over its goal at max_fps: the lowest rate up to CB_FPS_LIMIT (a ladder of multiples of
@@ -207,26 +303,19 @@ static double rate_that_meets(clip_search *cs, double max_error, cb_error *err)
     return fps;
 }
 
-/* One clip's rate and rows: the fewest rows within max_error. Sampled rows first, then fitted
- * rows under that rate: sampled rows win ties, being the exact poses themselves (nearest-row
- * playback and anything reading a row alone sees no fitting error), and fitted rows, which
- * halve the blend's error, are searched only where they would save rows. `rows` forces one kind.
- * Over the goal even at max_fps: the kind with the lower error there, and the rate that would
- * meet it (c->fps_needed). */
+/* One clip's rate and rows: the fewest rows within max_error (lowest_rate_walk; sampled rows win
+ * ties, being the exact poses themselves: nearest-row playback and anything reading a row alone
+ * sees no fitting error). `rows` forces one kind. Over the goal even at max_fps: the kind with
+ * the lower error there, and the rate that would meet it (c->fps_needed). */
 static double choose_clip(clip_search *cs, const rate_families *f, cb_rows rows, double max_error, cb_rate_choice *c,
                           cb_error *err)
 {
-    double e_fit = INFINITY, e_sampled = INFINITY, r_fit = 0, r_sampled = 0;
-    if (rows != CB_ROWS_FITTED) cs->fit = false, r_sampled = lowest_rate_of_rows(cs, f, 0, max_error, &e_sampled, err);
-    if (rows != CB_ROWS_SAMPLED && !err->status)
-        cs->fit = true, r_fit = lowest_rate_of_rows(cs, f, r_sampled, max_error, &e_fit, err);
+    double e = INFINITY, r = lowest_rate_walk(cs, f, rows, max_error, &e, err);
     memset(c, 0, sizeof *c);
     if (err->status) return cs->max_fps;
-    if (r_sampled > 0 || r_fit > 0) {
-        bool fitted = r_fit > 0;
-        c->met = true, c->fitted = fitted, c->error = fitted ? e_fit : e_sampled;
-        c->other_fps = fitted ? r_sampled : 0; /* fitted won: the rate sampled rows need (0: none up to max_fps) */
-        return fitted ? r_fit : r_sampled;
+    if (r > 0) { /* other_fps stays 0: sampled rows miss at r (the walk stops at the fewest rows) */
+        c->met = true, c->fitted = cs->fit, c->error = e;
+        return r;
     }
     /* None met: the exact error at max_fps of each kind allowed, the lower one taken. */
     cs->fit = rows != CB_ROWS_SAMPLED;

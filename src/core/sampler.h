@@ -129,10 +129,20 @@ bool cb_sampler_prepare_spans(cb_sampler *s);
  * bits) as lanes: component c (rotation x y z w, translation x y z, scale) of joint j at
  * times[i] is out[(j * 8 + c) * CB_SAMPLE_BATCH + i]; lanes past `count` repeat the last time. */
 void cb_sample_joint_lanes(cb_sampler *s, int32_t animation, const double *times, uint32_t count, double *out);
+/* The same joints' lanes handed over one joint at a time, in joint order, as each is made:
+ * sink(ctx, j, lanes) with joint j's 8 x CB_SAMPLE_BATCH values, valid until it returns. A bake
+ * that turns each joint into rows at once keeps one joint's lanes in cache, not every joint's. */
+typedef void (*cb_joint_lanes_sink)(void *ctx, uint32_t joint, double (*lanes)[CB_SAMPLE_BATCH]);
+void cb_sample_joint_lanes_each(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
+                                cb_joint_lanes_sink sink, void *ctx);
 /* clip.c: the same for 1..CB_SAMPLE_BATCH increasing frames of a clip, as
  * cb_clip_frame_similarities frames them (the root's travel taken off in place). */
 void cb_clip_frame_lanes(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
                          cb_root_motion root_motion, double *out);
+/* cb_clip_frame_lanes's joints handed to `sink` one at a time (cb_sample_joint_lanes_each), the
+ * root's travel taken off each: the same bits. */
+void cb_clip_frame_lanes_each(cb_sampler *s, const cb_clip_info *clip, const uint32_t *frames, uint32_t count,
+                              cb_root_motion root_motion, cb_joint_lanes_sink sink, void *ctx);
 /* clip.c: cb_clip_frame_matrices at 1..CB_SAMPLE_BATCH frames of a clip at once, through `all`
  * (a subset of every joint of the skin; lanes: its joints x 16 x CB_SAMPLE_BATCH doubles of
  * scratch): the same bits, into out[i] for frames[i] (out[i] NULL: not wanted). */

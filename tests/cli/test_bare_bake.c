@@ -1,7 +1,8 @@
 /* test_bare_bake.c - a bare `crowdbake bake` succeeds (issue 43, item 0), through the command
  * as a new user runs it: the default max_error is a goal, not a promise - the shared robot's
  * punch, which no rate up to the default max_fps (120) brings within 1 mm/m, is searched on to
- * 240 fps for that clip alone and meets it there (said in its line, measured again by `verify`);
+ * 240 fps for that clip alone and meets it there (said in its line, measured again by `verify`),
+ * and the whole robot within 2x the bytes of its 30 fps bake;
  * under a max_fps the user gives (--max-fps 120) it is written at the best the bake reached with
  * one warning line (exit 0), while a budget the user states (--max-error, catalog max_error)
  * still fails the bake and writes nothing (exit 6); every shared model with a skin
@@ -63,15 +64,17 @@ static void test_the_robot_bakes_bare_and_a_stated_budget_is_a_promise(void **st
     /* Every clip within 1 mm/m as `verify` measures the file (its own sampling of the model). */
     rc = run(out, sizeof out, "%s verify %s %s/robot.pal --max-error 1 2>&1", crowdbake_exe(), robot, OUT_DIR);
     if (rc != 0) fail_msg("verify exit %d:\n%s", rc, out);
-    /* Bytes against its fixed 30 fps bake (same layout, precision): the goal is 2x; the rate alone
-     * reaches 2.11x (1,246 rows against 591: the punch at 216 fps where 120 made it 1.97x), so this
-     * pins what it reaches, and a time -> row map is what would bring it under 2x. */
+    /* Bytes against its fixed 30 fps bake (same layout, precision): the goal is 2x. 1,165 rows
+     * against 591 (1.97x): the punch at 216 fps fitted, and Robot_Dance, a loop one of whose bones
+     * turns a full circle, fitted at 72 fps - its fit across the wrap blends towards the first
+     * row's flipped quaternion as the shaders do (before, 2.11x: that fit missed at the wrap's
+     * rows, so Dance took 96 fps sampled). */
     rc = run(out, sizeof out, "%s bake %s --fps 30 -o %s/robot30.pal 2>&1", crowdbake_exe(), robot, OUT_DIR);
     if (rc != 0) fail_msg("%s", out);
     uint32_t rows = texture_rows(OUT_DIR "/robot.pal"), rows30 = texture_rows(OUT_DIR "/robot30.pal");
     printf("robot: %u rows bare, %u at 30 fps (%.3fx)\n", rows, rows30, (double)rows / rows30);
     assert_int_equal(rows30, 591);
-    assert_true(rows <= 1246 && rows > 2 * rows30);
+    assert_true(rows <= 2 * rows30);
     /* A max_fps the user gives caps it: one line per clip over the goal, saying what meets it. */
     rc = run(out, sizeof out, "%s bake %s -o %s/robot120.pal --max-fps 120 2>&1", crowdbake_exe(), robot, OUT_DIR);
     printf("%s", strstr(out, "crowdbake: warning") ? strstr(out, "crowdbake: warning") : out);

@@ -3,7 +3,8 @@
  * bones as the source's (a LOD's remap applied), the weights and normals it states, and skins
  * within the error it states: re-skinning the written file independently with the palette
  * model's joint matrices gives the same worst error against the source's own 4-influence
- * skinning. Fewer influences cost more (1 > 2 > 4 = 0 on Cow and Fox). */
+ * skinning. Fewer influences cost more (1 > 2 > 4 = 0 on Cow and Fox). A catalog's roster states
+ * the same 1- and 2-influence errors (animation_lod) for Cow and Husky. */
 #define _GNU_SOURCE /* memmem, M_PI */
 #include "testutil.h"
 
@@ -273,6 +274,42 @@ static void test_batch_and_catalog_lod(void **state)
     assert_null(fopen(TMP "/bad.glb", "rb"));
 }
 
+/* The roster's animation_lod (every runtime's LOD thresholds come from it) states the errors
+ * `crowdbake mesh --max-influences 2|1` states for the meshes it writes, which the test above
+ * re-skins independently: the same frames (every clip at 30 fps), the same worst vertex. On Cow
+ * and Husky (own rig, IK-weighted paws). */
+static void test_the_roster_states_the_lod_tiers_errors(void **state)
+{
+    (void)state;
+    const char *models[] = {"assets/quaternius-cow/Cow.glb", "assets/quaternius-husky/Husky.glb"};
+    for (int mi = 0; mi < 2; ++mi) {
+        char model[1024], abs_model[PATH_MAX], cat[PATH_MAX + 128], cmd[8192], args[4096], out[8192];
+        shared_path(model, sizeof model, models[mi]);
+        assert_non_null(realpath(model, abs_model));
+        snprintf(cat, sizeof cat, "[bake]\nout_dir = \"lod%d\"\nfps = 30\n[animal.a]\nmodel = \"%s\"\n", mi, abs_model);
+        snprintf(args, sizeof args, TMP "/lod%d.toml", mi);
+        write_text(args, cat);
+        snprintf(cmd, sizeof cmd, "%s bake %s -q 2>&1", crowdbake_exe(), args);
+        assert_int_equal(run_command(cmd, out, sizeof out), 0);
+        snprintf(args, sizeof args, TMP "/lod%d/roster.json", mi);
+        size_t size;
+        char *manifest = read_whole_file(args, &size);
+        double stated[2];
+        for (uint32_t inf = 1; inf <= 2; ++inf) {
+            snprintf(args, sizeof args, "%s -o " TMP "/lod%d-%u.glb --max-influences %u", model, mi, inf, inf);
+            stated[inf - 1] = mesh_json(args, "error");
+        }
+        double one = json_number_in(manifest, "animation_lod", "one_influence_error");
+        double two = json_number_in(manifest, "animation_lod", "two_influences_error");
+        printf("  %s: animation_lod one %.6g two %.6g, crowdbake mesh states %.6g and %.6g\n", models[mi], one, two,
+               stated[0], stated[1]);
+        assert_true(fabs(one - stated[0]) <= 1e-6 * fmax(1, stated[0]));
+        assert_true(fabs(two - stated[1]) <= 1e-6 * fmax(1, stated[1]));
+        assert_true(one > two && two > 0);
+        free(manifest);
+    }
+}
+
 /* --quantize keeps u8 weights only where they add at most --max-quantization-error: Cow at 4
  * influences loses 1.25 mm/m with u8 weights, so it gets u16 (and 0.004 mm/m) by default. */
 static void test_weights_are_quantized_where_the_error_allows(void **state)
@@ -394,6 +431,7 @@ int main(void)
         cmocka_unit_test(test_fewer_influences_skin_within_their_stated_error),
         cmocka_unit_test(test_a_lod_is_remapped_to_palette_bones_and_quantized),
         cmocka_unit_test(test_batch_and_catalog_lod),
+        cmocka_unit_test(test_the_roster_states_the_lod_tiers_errors),
         cmocka_unit_test(test_report_counts_runtime_meshes_batches_and_transitions),
         cmocka_unit_test(test_weights_are_quantized_where_the_error_allows),
         cmocka_unit_test(test_bad_input_is_refused_with_the_fix),

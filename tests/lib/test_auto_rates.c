@@ -1,8 +1,12 @@
 /* test_auto_rates.c - a bake without --fps chooses each clip's rate and rows by error, baking
- * each candidate rate once per clip and kind of rows (src/core/runtime.c keeps its probes): its
- * choices must be those of the plain rule applied here to the clip baked afresh at each rate -
- * exactly at max_fps, elsewhere measured only as far as the goal needs, as the search measures
- * it. The rule: sampled rows first, then fitted rows under that rate (a tie goes to the exact
+ * each candidate rate once per clip and kind of rows (src/core/rate_search.c keeps its probes):
+ * its choices must be those of the plain rule applied here to the clip baked afresh at each rate
+ * - exactly at max_fps, elsewhere measured only as far as the goal needs, as the search measures
+ * it. The rule is the search as it was before its walk (issue 43: one walk over both families
+ * and kinds of rows from the key rate, stopping at the fewest rows, the law taken from the
+ * nearest probe; tests/lib/test_rate_walk.c checks its answers against every lower rate): on
+ * these models the walk bakes fewer probes and must still choose exactly what the rule does,
+ * error for error. The rule: sampled rows first, then fitted rows under that rate (a tie goes to the exact
  * poses); for each, the key rate's family walked from the key rate (down while rates meet the
  * goal, else up), then the common rates under its answer (from the highest under it; with no
  * answer, walked from 30 fps); a rate whose error the probes so far predict (error x fps^2, per

@@ -7,7 +7,10 @@
  * - every interval bending alike by d: c = d / 2 everywhere, worst d / 2;
  * - one fast interval (sagitta D) between still ones: its two rows c = D / 2, worst D / 2, where
  *   the mean of the half-sagittas (the fit before issue 43) gave its rows D / 4 and left 3D / 4;
- * - a loop of one fast interval and still ones: the same, the wrap included.
+ * - a loop of one fast interval and still ones: the same, the wrap included;
+ * - a qpos bone turning a full circle at an even speed over a loop: the blend's normalized midpoint
+ *   of two unit quaternions is the exact (slerp) midpoint, so no row moves - the wrap included,
+ *   where the last row and the first lie in opposite hemispheres and the blend flips the first.
  * And the fit's fast path (four values a vector, a block of values stopping once a sweep moves
  * none) against the plain algorithm written out here: every row, every value, all eight sweeps,
  * one value at a time with fmax - the same bits for loops and one-shots, for values that fill
@@ -162,6 +165,33 @@ static void test_the_fast_fit_is_the_plain_one_bit_for_bit(void **state)
         }
 }
 
+/* One bone (qpos: quaternion, position, scale) turning about y by 360 / frames degrees a row; its
+ * rows continue one another's hemisphere, as the bake stores them, so the last and the first are
+ * opposite. */
+static void full_turn(float *rows, float *mids, uint32_t frames)
+{
+    const double pi = 3.14159265358979323846;
+    for (uint32_t f = 0; f < 2 * frames; ++f) {
+        double half = pi * f / (2.0 * frames); /* half the angle at row f / 2 */
+        float *q = f % 2 ? mids + (f / 2) * 8 : rows + (f / 2) * 8;
+        const float value[8] = {0, (float)sin(half), 0, (float)cos(half), 0, 0, 0, 1};
+        memcpy(q, value, sizeof value);
+    }
+}
+
+static void test_a_full_turn_loop_keeps_its_rows_across_the_wrap(void **state)
+{
+    (void)state;
+    enum { FRAMES = 12 };
+    float rows[FRAMES * 8], sampled[FRAMES * 8], mids[FRAMES * 8];
+    full_turn(sampled, mids, FRAMES);
+    const float *last = sampled + (FRAMES - 1) * 8;
+    assert_true(last[1] * sampled[1] + last[3] * sampled[3] < 0); /* the wrap flips */
+    memcpy(rows, sampled, sizeof rows);
+    cb_fit_rows(rows, mids, FRAMES, 1, 8, true, true);
+    for (uint32_t v = 0; v < FRAMES * 8; ++v) assert_float_equal(rows[v], sampled[v], 1e-6);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -169,6 +199,7 @@ int main(void)
         cmocka_unit_test(test_a_fast_interval_keeps_half_its_sagitta),
         cmocka_unit_test(test_the_fit_leaves_a_straight_line),
         cmocka_unit_test(test_the_fast_fit_is_the_plain_one_bit_for_bit),
+        cmocka_unit_test(test_a_full_turn_loop_keeps_its_rows_across_the_wrap),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

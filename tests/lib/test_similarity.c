@@ -312,8 +312,37 @@ static void test_lanes_give_the_bits_of_the_scalar_path(void **state)
     }
 }
 
+/* What cb_clip_frame_lanes_each hands over: each joint's lanes where cb_clip_frame_lanes puts
+ * them, and whether they came in joint order, each once. */
+typedef struct handed_lanes {
+    double *lanes;
+    uint32_t next; /* the joint expected next */
+    bool in_order;
+} handed_lanes;
+
+static void keep_handed(void *ctx, uint32_t joint, double (*lanes)[CB_SAMPLE_BATCH])
+{
+    handed_lanes *h = ctx;
+    h->in_order = h->in_order && joint == h->next++;
+    memcpy(h->lanes + (size_t)joint * 8 * CB_SAMPLE_BATCH, lanes, 8 * CB_SAMPLE_BATCH * sizeof(double));
+}
+
+/* The joints handed over one at a time (the bake's path) against the lanes of them all. */
+static void expect_handed_lanes_match(const char *what, cb_sampler *s, const cb_clip_info *info, const uint32_t *frames,
+                                      uint32_t n, const double *lanes, uint32_t joints)
+{
+    handed_lanes h = {malloc((size_t)joints * 8 * CB_SAMPLE_BATCH * sizeof(double)), 0, true};
+    assert_non_null(h.lanes);
+    cb_clip_frame_lanes_each(s, info, frames, n, CB_ROOT_MOTION_IN_PLACE, keep_handed, &h);
+    if (!h.in_order || h.next != joints) fail_msg("%s: %u joints handed over, not each once in order", what, h.next);
+    if (memcmp(h.lanes, lanes, (size_t)joints * 8 * CB_SAMPLE_BATCH * sizeof(double)) != 0)
+        fail_msg("%s: clip %d frame %u: the joints handed over differ from the lanes", what, info->animation, frames[0]);
+    free(h.lanes);
+}
+
 /* The joints' similarities as lanes (what qpos rows and the measurement read) against
- * cb_clip_frame_similarities, frame by frame: the same bits, the root's travel included. */
+ * cb_clip_frame_similarities, frame by frame: the same bits, the root's travel included; and
+ * handed over joint by joint (what the bake's rows read) the same bits again. */
 static void expect_frame_lanes_match_rows(const char *what, cb_model *m)
 {
     cb_error err = {0};
@@ -331,6 +360,7 @@ static void expect_frame_lanes_match_rows(const char *what, cb_model *m)
             while (n < count && f + n < info.frames) frames[n] = f + n, ++n;
             cb_clip_frame_similarities(s, &info, frames, n, CB_ROOT_MOTION_IN_PLACE, rows);
             cb_clip_frame_lanes(s, &info, frames, n, CB_ROOT_MOTION_IN_PLACE, lanes);
+            expect_handed_lanes_match(what, s, &info, frames, n, lanes, joints);
             for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) /* lanes past n repeat the last frame */
                 for (uint32_t j = 0; j < joints; ++j) {
                     const cb_similarity *r = &rows[(i < n ? i : n - 1) * joints + j];

@@ -2,14 +2,15 @@
 // --max-influences 1|2 --json` states each tier's worst extra vertex error over every frame of every clip at 30 fps,
 // from the model's own poses in double precision (an independent measure). Measured at every row of a 30 fps palette
 // (the same times), the web runtime must find the same worst error within the palette's own, and its thresholds must
-// put that error at one pixel.
+// put that error at one pixel. A roster's animation_lod (the bake's measure) gives the same errors, and lod 'auto'
+// takes it when the herd is given it.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
-import { readFileSync } from 'node:fs';
+import { readFileSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
 import { readPal } from '../crowdbake_pal.mjs';
-import { lodThresholds, LOD_POSES } from '../crowdbake_bones.mjs';
+import { lodThresholds, lodThresholdsMeasured, resolveLod, LOD_POSES } from '../crowdbake_bones.mjs';
 import { CROWDBAKE, tmpDir, bake } from './support.mjs';
 
 const COW = '../shared/assets/quaternius-cow/Cow.glb';
@@ -74,4 +75,27 @@ test('Cow: lod auto measures the 1- and 2-influence tiers as crowdbake mesh does
                   `${LOD_POSES} poses find ${found} of the ${tier} tier's ${every.worst[tier]}`);
     }
     assert.ok(Math.abs(sampled.one - 1 / sampled.worst.one) < 1e-9);
+});
+
+test("Cow: lod 'auto' from a roster's animation_lod takes the bake's errors, which crowdbake mesh states, at a pixel", () => {
+    // A catalog of Cow with every clip: its roster measures each tier over every clip at 30 fps.
+    const catalog = path.join(dir, 'cow.toml');
+    writeFileSync(catalog, `[bake]\nout_dir = "roster"\n[animal.cow]\nmodel = "${path.resolve(COW)}"\n`);
+    execFileSync(CROWDBAKE, ['bake', catalog, '-q'], { stdio: ['ignore', 'ignore', 'pipe'] });
+    const measured = JSON.parse(readFileSync(path.join(dir, 'roster', 'roster.json'), 'utf8')).types.cow.animation_lod;
+    for (const [tier, influences] of [['one', 1], ['two', 2]]) {
+        const want = meshError(influences), got = measured[tier === 'one' ? 'one_influence_error' : 'two_influences_error'];
+        assert.ok(Math.abs(got - want) <= 1e-6 * want, `${tier}: the roster's ${got} against crowdbake mesh's ${want}`);
+    }
+    const size = 13.5, t = lodThresholdsMeasured(measured, size);
+    assert.equal(t.one, size / measured.one_influence_error);
+    assert.equal(t.two, Math.max(size / measured.two_influences_error, t.one));
+    assert.equal(t.poses, measured.frames);
+    // resolveLod prefers it under 'auto' and says so; a given lod and false still override it; none: measured here.
+    const auto = resolveLod('auto', null, null, size, measured);
+    assert.deepEqual(auto.lod, { two: t.two, one: t.one });
+    assert.match(auto.reason, /the roster's animation_lod, \d+ frames/);
+    assert.deepEqual(resolveLod({ two: 30, one: 10 }, null, null, size, measured).lod, { two: 30, one: 10 });
+    assert.equal(resolveLod(false, null, null, size, measured).lod, false);
+    assert.equal(lodThresholdsMeasured(undefined, size), null);
 });

@@ -302,22 +302,56 @@ func check_lod(roster, mesh: Mesh) -> void:
 	var written := await _grazing(roster, one, Vector2.ZERO, 1.0)
 	var far := await _grazing(roster, mesh, Vector2(24, 12), 0.09) # about 10 pixels long: one influence
 	var far_written := await _grazing(roster, one, Vector2.ZERO, 0.09)
+	var near_auto := await _grazing(roster, mesh, null, 1.0) # lod_auto, the default: the bake's thresholds
+	var far_auto := await _grazing(roster, mesh, null, 0.09)
 	addon._viewport.size = Vector2i(64, 64)
 	var numbers := [addon._differ(near, all), addon._differ(forced, written), addon._differ(forced, all),
-			addon._differ(far, far_written), addon._covered(far)[1]]
-	print("crowdbake-check: pixels that differ: near (default LOD) / every influence %d; one influence / the 1-influence mesh %d; one influence / every influence %d; far (default LOD, %d pixels covered) / the 1-influence mesh %d"
-			% [numbers[0], numbers[1], numbers[2], numbers[4], numbers[3]])
+			addon._differ(far, far_written), addon._covered(far)[1], addon._differ(near_auto, all),
+			addon._differ(far_auto, far_written)]
+	print("crowdbake-check: pixels that differ: near (lod 24, 12) / every influence %d; one influence / the 1-influence mesh %d; one influence / every influence %d; far (lod 24, 12, %d pixels covered) / the 1-influence mesh %d; lod_auto near / every influence %d, far / the 1-influence mesh %d"
+			% [numbers[0], numbers[1], numbers[2], numbers[4], numbers[3], numbers[5], numbers[6]])
 	var ok: bool = numbers[0] == 0 and numbers[1] == 0 and numbers[2] > 0 and numbers[3] == 0 and numbers[4] > 10
+	ok = ok and numbers[5] == 0 and numbers[6] == 0
 	addon._end(name, "" if ok else "see the numbers above")
+	_check_lod_auto(roster, mesh)
+
+# lod_auto takes the thresholds from the roster's animation_lod (the bake's measure of each tier's
+# worst vertex, model units): S / e pixels for an animal S units long; setting lod overrides it.
+func _check_lod_auto(roster, mesh: Mesh) -> void:
+	var name := "animation LOD: lod_auto's thresholds are the bake's animation_lod at one pixel; setting lod overrides them"
+	addon._begin(name)
+	var herd: MultiMeshInstance3D = addon._herd_script.new()
+	addon._viewport.add_child(herd)
+	herd.setup(roster, "cow", mesh, 1)
+	var measured: Dictionary = roster.types["cow"]["animation_lod"]
+	var size: float = herd.palette.largest_bounds().get_longest_axis_size()
+	var want := Vector2(size / float(measured["two_influences_error"]), size / float(measured["one_influence_error"]))
+	var auto_lod: Vector2 = herd.lod
+	var auto_on: bool = herd.lod_auto
+	print("crowdbake-check: %s" % herd.lod_reason)
+	herd.lod = Vector2(30, 10)
+	var given_off: bool = not herd.lod_auto and herd.lod == Vector2(30, 10) and herd.lod_reason.contains("as given")
+	herd.lod_auto = true
+	var back: bool = herd.lod.is_equal_approx(want)
+	herd.queue_free()
+	var why := ""
+	if not auto_on or not auto_lod.is_equal_approx(want):
+		why = "lod_auto gave %s, the roster's animation_lod %s" % [auto_lod, want]
+	elif not (want.x > want.y and want.y > 12.0 and want.x < 100.0):
+		why = "thresholds %s out of the range the web runtime measures for Cow (~39, ~21 pixels)" % [want]
+	elif not given_off or not back:
+		why = "setting lod did not override lod_auto, or lod_auto = true did not restore it"
+	addon._end(name, why)
 
 # A frame of one Cow grazing (2.5 s in), side on and `scale` units tall, at the camera's place for a
-# unit-tall Cow filling the view.
-func _grazing(roster, mesh: Mesh, lod: Vector2, scale: float) -> Image:
+# unit-tall Cow filling the view; lod null: the herd's default (lod_auto).
+func _grazing(roster, mesh: Mesh, lod, scale: float) -> Image: # lod null: lod_auto
 	var herd: MultiMeshInstance3D = addon._herd_script.new()
 	herd.playing = false
 	addon._viewport.add_child(herd)
 	herd.setup(roster, "cow", mesh, 1)
-	herd.lod = lod
+	if lod != null:
+		herd.lod = lod
 	var bounds: AABB = herd.palette.largest_bounds()
 	var xform := Transform3D(Basis(Vector3.UP, PI / 2).scaled(Vector3.ONE / bounds.size.y), Vector3.ZERO)
 	var box := xform * bounds

@@ -41,13 +41,26 @@ const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade sta
 @export var playing := true # advance the clock in _process
 # Animation LOD: an instance under lod.x pixels tall on screen is skinned with its 2 largest bone
 # weights, under lod.y with its largest alone (the kept weights scaled to sum to 1): the rule crowdbake
-# mesh --max-influences 2|1 applies to a far LOD mesh (at 24 pixels a pixel is 4% of the animal; the
-# web runtimes measure the thresholds per model, README). Vector2.ZERO: every influence at any size.
-# Its size: the largest extent of the clips' animated bounds, times the instance's scale.
-@export var lod := Vector2(24, 12):
+# mesh --max-influences 2|1 applies to a far LOD mesh. Its size: the largest extent of the clips' animated
+# bounds, times the instance's scale. lod_auto (the default): the thresholds from what the bake measured
+# (the roster's animation_lod), the sizes under which no vertex moves more than LOD_PIXEL_ERROR pixels;
+# setting lod gives thresholds of your own (and turns lod_auto off). Vector2.ZERO: every influence at any
+# size. lod_reason says which thresholds are in use and why.
+const LOD_PIXEL_ERROR := 1.0
+const FIXED_LOD := Vector2(24, 12) # a roster without animation_lod (older crowdbake): at 24 pixels a pixel is 4% of the animal
+@export var lod_auto := true:
+	set(value):
+		lod_auto = value
+		_resolve_lod()
+@export var lod := FIXED_LOD:
 	set(value):
 		lod = value
+		if not _resolving_lod:
+			lod_auto = false
+			lod_reason = "lod = %s as given" % [value]
 		_set_lod()
+var lod_reason := ""
+var _resolving_lod := false
 
 var time := 0.0 # the herd's clock, seconds (the shader's herd_time)
 var palette # the type's CrowdbakePalette
@@ -92,6 +105,7 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	_type = roster.types[type]
 	palette = _type["palette"]
 	_lod_size = palette.largest_bounds().get_longest_axis_size()
+	_resolve_lod()
 	_has_contacts = _type["clips"].values().any(func(clip): return not clip.get("contacts", []).is_empty())
 	var look := _HERD_MESH.build(mesh, _material())
 	materials = look["materials"]
@@ -331,6 +345,25 @@ func _upload() -> void:
 	_dirty = false
 
 # The animation LOD's uniforms for the viewport's camera as it is now (none: every influence).
+# lod_auto: the thresholds from the roster's animation_lod (a tier's worst vertex error, model units) and
+# the measure of the animal: at size S for an error e, S / e pixels tall moves a vertex one pixel.
+func _resolve_lod() -> void:
+	if not lod_auto or _type.is_empty():
+		return
+	var measured: Dictionary = _type.get("animation_lod", {})
+	var one := float(measured.get("one_influence_error", 0.0))
+	var two := float(measured.get("two_influences_error", 0.0))
+	var pixels := func(e: float) -> float: return LOD_PIXEL_ERROR * _lod_size / e if e > 0.0 else 1e6
+	_resolving_lod = true
+	if measured.is_empty() or _lod_size <= 0.0:
+		lod = FIXED_LOD
+		lod_reason = "lod_auto: the roster has no animation_lod (an older crowdbake): the fixed %s" % [FIXED_LOD]
+	else:
+		lod = Vector2(maxf(pixels.call(two), pixels.call(one)), pixels.call(one))
+		lod_reason = ("lod_auto: 2 influences under %.1f pixels tall, 1 under %.1f: there no vertex moves more than %s pixel (the bake's animation_lod: %.4f and %.4f model units over %d frames, the animal %.3f units long); set lod to override"
+				% [lod.x, lod.y, LOD_PIXEL_ERROR, two, one, int(measured.get("frames", 0)), _lod_size])
+	_resolving_lod = false
+
 func _set_lod() -> void:
 	var camera := get_viewport().get_camera_3d() if is_inside_tree() else null
 	if palette == null:

@@ -38,7 +38,8 @@ func load_file(path: String) -> bool:
 			clips[clip["name"]] = clip
 		types[name] = {"palette": palette, "states": entry.get("states", {}), "clips": clips,
 				"sockets": _sockets(entry.get("sockets", {})), "default_state": entry.get("default_state", ""),
-				"speed_reference": float(entry.get("speed_reference", palette.speed_reference))}
+				"speed_reference": float(entry.get("speed_reference", palette.speed_reference)),
+				"animation_lod": entry.get("animation_lod", {})}
 	return true
 
 # What the editor's import of the .json at `path` saves (crowdbake_import_roster.gd): a roster manifest

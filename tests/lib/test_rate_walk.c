@@ -1,0 +1,125 @@
+/* test_rate_walk.c - the rate search's walk (src/core/rate_search.c: one walk over both families
+ * of rates and both kinds of rows from the key rate, the 1/fps^2 law ruling out far misses
+ * unbaked) against fresh measurements that share nothing with it but the bake: on Fox, Cow and
+ * Husky at the default goal (1 mm/m) and cap (120 fps), every clip's choice, cb_choose_rates on
+ * 1 and 2 threads, must be
+ * - within the goal, its stated error equal to the clip baked afresh alone at that rate and kind
+ *   of rows and measured in full (every row, every blend; no goal to stop at);
+ * - the fewest rows: every lower rate of either family (the key rate's multiples and fractions,
+ *   the common rates), baked afresh with sampled and with fitted rows, misses the goal, and so do
+ *   sampled rows at the chosen rate where fitted rows were chosen (a tie goes to sampled rows).
+ * So no rate the law ruled out unbaked would have met the goal, and no probe's remembered error
+ * stands in for another rate's or kind's. */
+#include "testutil.h"
+
+#include <math.h>
+
+#include "crowdbake/palette.h"
+#include "crowdbake/runtime.h"
+
+/* The clip baked alone at fps, its visible error measured in full (goal 0), or with goal > 0
+ * only until a blend exceeds it (then a lower bound, still above the goal). */
+static double fresh_error(cb_sampler *s, int32_t animation, double fps, bool fit, double goal)
+{
+    cb_bake_options o = cb_default_bake_options();
+    o.fps = fps;
+    o.error_goal = goal;
+    cb_clip_plan plan = {animation, NULL, -1, fps, fit, false};
+    cb_palette p;
+    cb_error err = {0};
+    assert_int_equal(cb_palette_bake(s, &o, &plan, 1, &p, &err), CB_OK);
+    double e = p.visible_error;
+    cb_palette_free(&p);
+    return e;
+}
+
+/* Every rate either family offers the clip under `below` (see families_of in rate_search.c,
+ * restated here): the key rate's 1/4 .. 4 multiples and the common rates. */
+static size_t rates_under(const cb_animation *a, double below, double *out)
+{
+    static const double common[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120};
+    static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
+    double key = cb_animation_key_interval(a);
+    size_t n = 0;
+    for (size_t i = 0; i < sizeof common / sizeof common[0]; ++i)
+        if (common[i] < below) out[n++] = common[i];
+    for (size_t i = 0; key > 0 && i < 6; ++i) {
+        double r = round(factors[i] / key * 1000) / 1000;
+        if (r < below) out[n++] = r;
+    }
+    return n;
+}
+
+static void expect_fewest_rows_within(const char *asset)
+{
+    cb_model *m = load_shared(asset);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    assert_non_null(s);
+    double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi), goal = 1.0 / 1000 * height;
+    uint32_t n = m->animation_count, fitted = 0, lower = 0;
+    assert_true(n <= 64);
+    cb_clip_plan plan[2][64];
+    cb_rate_choice choices[2][64];
+    for (uint32_t threads = 1; threads <= 2; ++threads) {
+        cb_rate_goal goals[64];
+        for (uint32_t c = 0; c < n; ++c)
+            plan[threads - 1][c] = (cb_clip_plan){(int32_t)c, NULL, -1, 0, false, false},
+            goals[c] = (cb_rate_goal){1, CB_AUTO_MAX_FPS, CB_ROWS_BEST};
+        cb_bake_options o = cb_default_bake_options();
+        o.threads = threads;
+        assert_int_equal(cb_choose_rates(s, &o, plan[threads - 1], n, goals, choices[threads - 1], &err), CB_OK);
+    }
+    for (uint32_t c = 0; c < n; ++c) {
+        const cb_clip_plan *p = &plan[0][c];
+        const cb_rate_choice *ch = &choices[0][c];
+        assert_true(plan[1][c].fps == p->fps && plan[1][c].fit == p->fit && choices[1][c].error == ch->error);
+        assert_true(ch->met && ch->fitted == p->fit);
+        double full = fresh_error(s, (int32_t)c, p->fps, p->fit, 0);
+        if (!(full <= goal) || full != ch->error)
+            fail_msg("%s clip %u: chose %g fps %s rows, stated error %.17g; baked afresh and measured in full %.17g "
+                     "(goal %.17g)", asset, c, p->fps, p->fit ? "fitted" : "sampled", ch->error, full, goal);
+        if (p->fit && !(fresh_error(s, (int32_t)c, p->fps, false, goal) > goal))
+            fail_msg("%s clip %u: fitted rows chosen at %g fps, where sampled rows meet the goal", asset, c, p->fps);
+        double under[32];
+        size_t k = rates_under(&m->animations[c], p->fps, under);
+        for (size_t i = 0; i < k; ++i)
+            for (int fit = 0; fit <= 1; ++fit, ++lower)
+                if (!(fresh_error(s, (int32_t)c, under[i], fit, goal) > goal))
+                    fail_msg("%s clip %u: chose %g fps, but %g fps with %s rows meets the goal", asset, c, p->fps, under[i],
+                             fit ? "fitted" : "sampled");
+        fitted += p->fit;
+    }
+    assert_true(fitted > 0 && fitted < n); /* both kinds chosen: the walk's both branches are checked */
+    assert_true(lower > 2 * n);            /* and rates under every answer */
+    cb_sampler_free(s);
+    cb_model_free(m);
+}
+
+static void test_fox_fewest_rows_within_the_goal(void **state)
+{
+    (void)state;
+    expect_fewest_rows_within("assets/fox-bevy/Fox.glb");
+}
+
+static void test_cow_fewest_rows_within_the_goal(void **state)
+{
+    (void)state;
+    expect_fewest_rows_within("assets/quaternius-cow/Cow.glb");
+}
+
+static void test_husky_fewest_rows_within_the_goal(void **state)
+{
+    (void)state;
+    expect_fewest_rows_within("assets/quaternius-husky/Husky.glb");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_fox_fewest_rows_within_the_goal),
+        cmocka_unit_test(test_cow_fewest_rows_within_the_goal),
+        cmocka_unit_test(test_husky_fewest_rows_within_the_goal),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
