@@ -14,6 +14,7 @@
 #include <sys/stat.h>
 
 #include "crowdbake/gltf.h"
+#include "crowdbake/palette.h"
 
 /* The build being tested (the Makefile passes its BUILD): each build's tests write their files
  * under TEST_TMP, so the normal and the sanitizer passes can run side by side. */
@@ -228,6 +229,23 @@ static inline void require_node_validators(void)
     FILE *f = fopen("tests/tools/validator/node_modules/.package-lock.json", "r");
     if (!f) fail_msg("tests/tools/validator: npm packages not installed (make test installs them; or: cd tests/tools/validator && npm ci)");
     fclose(f);
+}
+
+/* The visible error (cb_palette.visible_error) of `animation` baked alone at `fps`, its rows fitted
+ * or sampled: measured in full with goal 0; with goal > 0 only as far as the goal needs (exact
+ * within it, a lower bound, still above it, past it). */
+static inline double clip_visible_error(cb_sampler *s, int32_t animation, double fps, bool fit, double goal)
+{
+    cb_bake_options o = cb_default_bake_options();
+    o.fps = fps;
+    o.error_goal = goal;
+    cb_clip_plan plan = {animation, NULL, -1, fps, fit, false};
+    cb_palette p;
+    cb_error err = {0};
+    assert_int_equal(cb_palette_bake(s, &o, &plan, 1, &p, &err), CB_OK);
+    double e = p.visible_error;
+    cb_palette_free(&p);
+    return e;
 }
 
 #endif

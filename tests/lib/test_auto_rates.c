@@ -24,25 +24,10 @@
 #include "crowdbake/palette.h"
 #include "crowdbake/runtime.h"
 
-/* The clip baked alone at fps (its rows fitted or sampled), its visible error measured in full,
- * or with goal > 0 only as far as the goal needs (exact within it, a lower bound above it). */
-static double baked_error(cb_sampler *s, int32_t animation, double fps, bool fit, double goal)
-{
-    cb_bake_options o = cb_default_bake_options();
-    o.fps = fps;
-    o.error_goal = goal;
-    cb_clip_plan plan = {animation, NULL, -1, fps, fit, false};
-    cb_palette p;
-    cb_error err = {0};
-    assert_int_equal(cb_palette_bake(s, &o, &plan, 1, &p, &err), CB_OK);
-    double e = p.visible_error;
-    cb_palette_free(&p);
-    return e;
-}
-
+/* The clip baked alone at fps, its visible error measured in full. */
 static double exact_error(cb_sampler *s, int32_t animation, double fps, bool fit)
 {
-    return baked_error(s, animation, fps, fit, 0);
+    return clip_visible_error(s, animation, fps, fit, 0);
 }
 
 /* The rule's search of one clip (see the top of the file). */
@@ -62,7 +47,7 @@ static double rule_law(const rule *r, bool fit, int family)
 static double rule_error(rule *r, double fps, bool fit, int family)
 {
     if (fps < r->max_fps && rule_law(r, fit, family) / (fps * fps) > 1.5 * r->goal) return INFINITY;
-    double e = baked_error(r->s, r->animation, fps, fit, fps == r->max_fps ? 0 : r->goal);
+    double e = clip_visible_error(r->s, r->animation, fps, fit, fps == r->max_fps ? 0 : r->goal);
     if (isfinite(e) && e * fps * fps > r->law[fit][family]) r->law[fit][family] = e * fps * fps;
     return e;
 }

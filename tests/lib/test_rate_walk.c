@@ -17,22 +17,6 @@
 #include "crowdbake/palette.h"
 #include "crowdbake/runtime.h"
 
-/* The clip baked alone at fps, its visible error measured in full (goal 0), or with goal > 0
- * only until a blend exceeds it (then a lower bound, still above the goal). */
-static double fresh_error(cb_sampler *s, int32_t animation, double fps, bool fit, double goal)
-{
-    cb_bake_options o = cb_default_bake_options();
-    o.fps = fps;
-    o.error_goal = goal;
-    cb_clip_plan plan = {animation, NULL, -1, fps, fit, false};
-    cb_palette p;
-    cb_error err = {0};
-    assert_int_equal(cb_palette_bake(s, &o, &plan, 1, &p, &err), CB_OK);
-    double e = p.visible_error;
-    cb_palette_free(&p);
-    return e;
-}
-
 /* Every rate either family offers the clip under `below` (see families_of in rate_search.c,
  * restated here): the key rate's 1/4 .. 4 multiples and the common rates. */
 static size_t rates_under(const cb_animation *a, double below, double *out)
@@ -75,17 +59,17 @@ static void expect_fewest_rows_within(const char *asset)
         const cb_rate_choice *ch = &choices[0][c];
         assert_true(plan[1][c].fps == p->fps && plan[1][c].fit == p->fit && choices[1][c].error == ch->error);
         assert_true(ch->met && ch->fitted == p->fit);
-        double full = fresh_error(s, (int32_t)c, p->fps, p->fit, 0);
+        double full = clip_visible_error(s, (int32_t)c, p->fps, p->fit, 0);
         if (!(full <= goal) || full != ch->error)
             fail_msg("%s clip %u: chose %g fps %s rows, stated error %.17g; baked afresh and measured in full %.17g "
                      "(goal %.17g)", asset, c, p->fps, p->fit ? "fitted" : "sampled", ch->error, full, goal);
-        if (p->fit && !(fresh_error(s, (int32_t)c, p->fps, false, goal) > goal))
+        if (p->fit && !(clip_visible_error(s, (int32_t)c, p->fps, false, goal) > goal))
             fail_msg("%s clip %u: fitted rows chosen at %g fps, where sampled rows meet the goal", asset, c, p->fps);
         double under[32];
         size_t k = rates_under(&m->animations[c], p->fps, under);
         for (size_t i = 0; i < k; ++i)
             for (int fit = 0; fit <= 1; ++fit, ++lower)
-                if (!(fresh_error(s, (int32_t)c, under[i], fit, goal) > goal))
+                if (!(clip_visible_error(s, (int32_t)c, under[i], fit, goal) > goal))
                     fail_msg("%s clip %u: chose %g fps, but %g fps with %s rows meets the goal", asset, c, p->fps, under[i],
                              fit ? "fitted" : "sampled");
         fitted += p->fit;
