@@ -41,7 +41,8 @@ async function loadType(view, entry, glsl) {
     const mesh = meshFromGLTF(gltf);
     // lodTiers: false - one draw call per herd, as the panel states and compares with the VAT's (the tiers drawn
     // apart would add one a tier).
-    const crowd = new Crowd(gl, { pal, glsl, mesh, capacity: MAX, color: [0.86, 0.78, 0.62], lodTiers: false });
+    const crowd = new Crowd(gl, { pal, glsl, mesh, capacity: MAX, color: [0.86, 0.78, 0.62], lodTiers: false,
+                                  animationLod: rosterType?.animation_lod });
     let vat = null, vatNote = 'no VAT for this type';
     if (entry.vat) {
         try {

@@ -99,8 +99,7 @@ export function lodThresholdsMeasured(measured, size, { pixelError = LOD_PIXEL_E
     const one = measured?.one_influence_error, two = measured?.two_influences_error;
     if (!(one >= 0 && two >= 0 && size > 0)) return null;
     const pixels = (e) => (e > 0 ? pixelError * size / e : 1e6), worst = { two: two / size, one: one / size };
-    return { two: Math.max(pixels(two), pixels(one)), one: pixels(one), worst, poses: measured.frames ?? 0, pixelError,
-             from: 'animation_lod' };
+    return { two: Math.max(pixels(two), pixels(one)), one: pixels(one), worst, poses: measured.frames ?? 0, pixelError };
 }
 
 // The LOD to draw with and why: lod as given ('auto': the roster type's animation_lod when given, `measured`, else

@@ -362,7 +362,8 @@ export function texelIndex(header, row, bone) {
 // Parses a roster manifest (its text, or the object JSON.parse made) and checks what a runtime
 // uses. Returns { generator, catalog, types: { NAME: { palette, palette_exr, shares_palette_of,
 // layout, precision, bones, rows, width, height, blocks, speed_reference, default_state, clips (with contacts),
-// states: { STATE: { clip, first_row, frame_count, rate, rate_per_speed, phase } }, lods, sockets } }, failed }.
+// states: { STATE: { clip, first_row, frame_count, rate, rate_per_speed, phase } }, lods, sockets, animation_lod } },
+// failed }.
 // Paths stay relative to the manifest's directory.
 export function readRoster(json, options = {}) {
     const name = options.name ?? 'roster.json';
@@ -483,7 +484,19 @@ export function readRoster(json, options = {}) {
                                      '16 numbers'),
             });
         });
-        if (!has(type.states, type.default_state))
+        // What the animation LOD's fewer influences cost (older manifests: none): lod 'auto' takes its thresholds from it.
+        const lod = optional(t, at, 'animation_lod', isObject, 'an object');
+        if (lod) {
+            const w = `${at}.animation_lod`;
+            type.animation_lod = {
+                two_influences_error: need(lod, w, 'two_influences_error', isNonNegative, 'a number >= 0'),
+                one_influence_error: need(lod, w, 'one_influence_error', isNonNegative, 'a number >= 0'),
+                frames: need(lod, w, 'frames', isIndex, 'an integer >= 0'),
+            };
+        }
+        // A type without states (a catalog animal that names none: every clip baked) has default_state "".
+        const stateless = Object.keys(type.states).length === 0 && type.default_state === '';
+        if (!stateless && !has(type.states, type.default_state))
             fail(`${at}.default_state`, `"${type.default_state}" is not one of the type's states`);
         put(out.types, typeName, type);
     }

@@ -98,9 +98,10 @@ export function paletteTextures(pal) {
     return { palette, bind };
 }
 
-// States of a roster type (readRoster(...).types.NAME), or made from the palette's clips.
+// States of a roster type (readRoster(...).types.NAME), or made from the palette's clips (no type, or one
+// without states).
 function statesOf(pal, type) {
-    if (type) return type.states;
+    if (type && Object.keys(type.states).length) return type.states; // a type without states plays its clips
     const states = Object.create(null); // clip names are data: '__proto__' is a clip like any other
     for (const c of pal.clips)
         states[c.name] = { clip: c.name, first_row: instanceFirstRow(c), frame_count: c.loops ? c.frames : -c.frames, rate: c.fps,

@@ -9,7 +9,7 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFileSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
-import { readPal } from '../crowdbake_pal.mjs';
+import { readPal, readRoster } from '../crowdbake_pal.mjs';
 import { lodThresholds, lodThresholdsMeasured, resolveLod, LOD_POSES } from '../crowdbake_bones.mjs';
 import { CROWDBAKE, tmpDir, bake } from './support.mjs';
 
@@ -82,7 +82,8 @@ test("Cow: lod 'auto' from a roster's animation_lod takes the bake's errors, whi
     const catalog = path.join(dir, 'cow.toml');
     writeFileSync(catalog, `[bake]\nout_dir = "roster"\n[animal.cow]\nmodel = "${path.resolve(COW)}"\n`);
     execFileSync(CROWDBAKE, ['bake', catalog, '-q'], { stdio: ['ignore', 'ignore', 'pipe'] });
-    const measured = JSON.parse(readFileSync(path.join(dir, 'roster', 'roster.json'), 'utf8')).types.cow.animation_lod;
+    const text = readFileSync(path.join(dir, 'roster', 'roster.json'), 'utf8'), measured = JSON.parse(text).types.cow.animation_lod;
+    assert.deepEqual(readRoster(text).types.cow.animation_lod, measured); // what CrowdbakeHerd takes from its type
     for (const [tier, influences] of [['one', 1], ['two', 2]]) {
         const want = meshError(influences), got = measured[tier === 'one' ? 'one_influence_error' : 'two_influences_error'];
         assert.ok(Math.abs(got - want) <= 1e-6 * want, `${tier}: the roster's ${got} against crowdbake mesh's ${want}`);

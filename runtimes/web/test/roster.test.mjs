@@ -101,6 +101,9 @@ test('broken manifests are refused with the field that is wrong', () => {
             new RegExp(`states\\.die\\.instance: rows 240\\.\\.${240 + Math.abs(good.types.goat.states.die.instance.frame_count)} outside`)],
         [(d) => { d.types.goat.states.idle.instance.phase = 'random'; }, /states\.idle\.instance\.phase: expected/],
         [(d) => { d.types.goat.default_state = 'sleep'; }, /types\.goat\.default_state: "sleep" is not one of the type's states/],
+        [(d) => { d.types.goat.default_state = ''; }, /types\.goat\.default_state: "" is not one of the type's states/],
+        [(d) => { d.types.goat.animation_lod = { two_influences_error: -1, one_influence_error: 1, frames: 3 }; },
+            /types\.goat\.animation_lod\.two_influences_error: expected a number >= 0/],
         [(d) => { d.types.goat.lods[0].joint_remap[2] = 41; }, /types\.goat\.lods\[0\]\.joint_remap: expected an array of bone indices below 41/],
         [(d) => { d.failed = { eel: { model: 'eel.glb' } }; }, /failed\.eel\.error: missing/],
         // Names from the file are not Object.prototype's members (the reader returned a type whose
@@ -137,4 +140,14 @@ test('broken manifests are refused with the field that is wrong', () => {
     // A failed type is reported, not an error: the others still load.
     const withFailure = readRoster({ ...good, failed: { eel: { model: 'eel.glb', error: 'not a GLB file' } } });
     assert.deepEqual(withFailure.failed, { eel: { model: 'eel.glb', error: 'not a GLB file' } });
+});
+
+test('a type without states (a catalog animal naming none) reads with default_state "", its animation_lod kept', () => {
+    const d = JSON.parse(manifestText);
+    d.types.goat.states = {};
+    d.types.goat.default_state = '';
+    d.types.goat.animation_lod = { two_influences_error: 0.25, one_influence_error: 0.5, frames: 90 };
+    const goat = readRoster(d).types.goat;
+    assert.deepEqual(Object.keys(goat.states), []);
+    assert.deepEqual(goat.animation_lod, { two_influences_error: 0.25, one_influence_error: 0.5, frames: 90 });
 });

@@ -344,7 +344,6 @@ func _upload() -> void:
 	_set_all("herd_time", time)
 	_dirty = false
 
-# The animation LOD's uniforms for the viewport's camera as it is now (none: every influence).
 # lod_auto: the thresholds from the roster's animation_lod (a tier's worst vertex error, model units) and
 # the measure of the animal: at size S for an error e, S / e pixels tall moves a vertex one pixel.
 func _resolve_lod() -> void:
@@ -364,6 +363,7 @@ func _resolve_lod() -> void:
 				% [lod.x, lod.y, LOD_PIXEL_ERROR, two, one, int(measured.get("frames", 0)), _lod_size])
 	_resolving_lod = false
 
+# The animation LOD's uniforms for the viewport's camera as it is now (none: every influence).
 func _set_lod() -> void:
 	var camera := get_viewport().get_camera_3d() if is_inside_tree() else null
 	if palette == null:
