@@ -10,35 +10,35 @@
 #include <stdbool.h>
 #include <stdlib.h>
 
-/* A vertex as the three skins read it: its influences (a joint outside the skin as joint 0, as
- * cb_mesh_measure takes it) and, worked out once, the tiers' kept slots and weights. */
+/* A vertex as the three skins read it: its weighted influences (a joint outside the skin as joint
+ * 0, as cb_mesh_measure takes it) and, worked out once, the slots the tiers keep. */
 typedef struct lod_vertex {
     const float *x;
     uint32_t joints[4];
     float weights[4];
-    uint8_t count;      /* influences with weight */
-    uint8_t first, second; /* the slots of the largest and second-largest weight */
-    float one_second_share; /* tier 2: the second's share of what it keeps (0: it keeps one) */
+    uint8_t count;          /* influences with weight */
+    uint8_t first, second;  /* the largest weight's slot and the next's (first on a tie, as cb_reduce_influences) */
+    double one_second_share; /* tier 2: the second's share of the two (0: one influence) */
 } lod_vertex;
 
 static bool vertex_of(const cb_primitive *prim, uint32_t v, uint32_t joint_count, lod_vertex *out)
 {
     const uint16_t *j = prim->joints + (size_t)v * 4;
     const float *w = prim->weights + (size_t)v * 4;
-    uint16_t kept[4];
-    float kw[4];
-    cb_reduce_influences(j, w, 2, kept, kw); /* the tier's rule, largest first */
-    *out = (lod_vertex){prim->positions + (size_t)v * 3, {0}, {0}, 0, 0, 0, kw[1]};
-    bool found[2] = {false, false};
-    for (int i = 0; i < 4; ++i) {
-        if (w[i] == 0) continue;
-        uint8_t k = out->count++;
-        out->joints[k] = j[i] < joint_count ? j[i] : 0, out->weights[k] = w[i];
-        /* the kept joints' slots: the first slot holding each (cb_reduce_influences keeps file order on ties) */
-        if (!found[0] && j[i] == kept[0] && kw[0] > 0) found[0] = true, out->first = k;
-        else if (!found[1] && j[i] == kept[1] && kw[1] > 0) found[1] = true, out->second = k;
+    *out = (lod_vertex){.x = prim->positions + (size_t)v * 3};
+    for (int i = 0; i < 4; ++i)
+        if (w[i] > 0) out->joints[out->count] = j[i] < joint_count ? j[i] : 0, out->weights[out->count++] = w[i];
+    if (!out->count) return false; /* no weight: nothing skins it */
+    for (uint8_t k = 1; k < out->count; ++k)
+        if (out->weights[k] > out->weights[out->first]) out->first = k;
+    int second = -1;
+    for (uint8_t k = 0; k < out->count; ++k)
+        if (k != out->first && (second < 0 || out->weights[k] > out->weights[second])) second = k;
+    if (second >= 0) {
+        out->second = (uint8_t)second;
+        out->one_second_share = out->weights[second] / ((double)out->weights[out->first] + out->weights[second]);
     }
-    return out->count > 0 && found[0];
+    return true;
 }
 
 /* One frame: every vertex's influence points once, the three skins from them. */
