@@ -1,4 +1,5 @@
 /* cli.c - option parsing and the helpers every subcommand shares. */
+#define _DEFAULT_SOURCE /* readlink */
 #include "cli.h"
 #include "internal/plumbing.h"
 
@@ -7,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <unistd.h>
 
 int cli_exit_code(cb_status status)
 {
@@ -382,4 +384,10 @@ cb_status cli_open_baked(const cli_output *out, const char *command, const char 
                 b->model->skins[b->skin].joint_count, palette_path, b->view.bone_count);
     if (err->status) cli_baked_close(b);
     return err->status;
+}
+
+void cli_executable(char *path, size_t size)
+{
+    ssize_t n = size ? readlink("/proc/self/exe", path, size - 1) : 0;
+    if (size) path[n > 0 ? n : 0] = 0;
 }

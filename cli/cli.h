@@ -83,6 +83,8 @@ void cli_verbose(const cli_output *out, const char *fmt, ...)
     ;
 bool cli_progress(const cli_output *out);
 double cli_seconds(void); /* monotonic, for -v's timings */
+/* The running crowdbake executable's absolute path into path; "" where the system does not say. */
+void cli_executable(char *path, size_t size);
 
 /* Loads a model within `limits`; with -v, says what it read and how long it took (out may be NULL). */
 cb_model *cli_load_model(const cli_output *out, const char *path, const cb_limits *limits, cb_error *err);

@@ -97,6 +97,9 @@ int cmd_bake_catalog(const cli_catalog_bake *o)
                 jobs == 1 ? "" : "s");
     opt.depfile = o->depfile;
     opt.depfile_manifest_only = o->depfile_manifest_only;
+    char tool[4096];
+    cli_executable(tool, sizeof tool);
+    opt.tool = tool;
     opt.manifest = o->manifest;
     opt.limits = o->limits;
     cb_roster r;

@@ -111,8 +111,7 @@ static void find_web_folders(view_paths *v)
         return;
     }
     char exe[PATH_MAX], probe[PATH_MAX + 64];
-    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    exe[n > 0 ? n : 0] = 0;
+    cli_executable(exe, sizeof exe);
     char *slash = strrchr(exe, '/');
     if (slash) *slash = 0;
     static const web_layout beside[] = {{"../share/crowdbake/", "viewer", "web", "glsl"},

@@ -581,8 +581,8 @@ cb_status cb_roster_bake(const cb_catalog *cat, const cb_roster_options *opt, cb
     cb_status rc = roster_make_parent_directories(r->manifest_path, err);
     if (!rc && opt->fragment) rc = roster_write_fragment(r, opt->fragment, err);
     else if (!rc) rc = roster_write_manifest(cat, r, r->manifest_path, err);
-    if (!rc && opt->depfile && !(rc = roster_make_parent_directories(opt->depfile, err))) rc = roster_write_depfile(cat, r, opt->depfile, opt->depfile_manifest_only, err);
-    if (!rc) roster_settle_times(r);
+    if (!rc && opt->depfile && !(rc = roster_make_parent_directories(opt->depfile, err))) rc = roster_write_depfile(cat, r, opt, err);
+    if (!rc) roster_settle_times(r, opt->tool);
     for (uint32_t i = 0; i < r->type_count && !rc; ++i)
         if (r->types[i].outcome == CB_TYPE_FAILED && !err->status) *err = r->types[i].error, rc = err->status;
     for (uint32_t i = 0; i < r->type_count; ++i) free_work(&run.work[i]);

@@ -33,6 +33,8 @@ typedef struct cb_roster_options {
     const char *manifest;   /* roster.json path; NULL: OUT_DIR/roster.json */
     const char *depfile;    /* Make/Ninja depfile, or NULL */
     bool depfile_manifest_only; /* the depfile's one rule is the manifest's (Ninja's `depfile` without `deps = gcc`) */
+    const char *tool;       /* the crowdbake executable, or NULL: an input of every output in the depfile, so that a
+                             * new build of the tool re-runs the bake (which decides per type what it changes) */
     const cb_roster_fragment *fragment; /* write this fragment instead of the manifest, or NULL */
     const cb_limits *limits; /* for loading and baking; NULL: the defaults */
     bool measure_vat;       /* also measure each type's VAT error (half-float positions) for the report */

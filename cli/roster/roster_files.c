@@ -414,9 +414,11 @@ static void depfile_path(FILE *f, const char *p)
     }
 }
 
+static void depfile_input(FILE *f, const char *path) { fputs(" \\\n  ", f), depfile_path(f, path); }
+
 static void depfile_inputs(FILE *f, const cb_roster_type *t)
 {
-    for (uint32_t i = 0; i < t->input_count; ++i) fputs(" \\\n  ", f), depfile_path(f, t->inputs[i]);
+    for (uint32_t i = 0; i < t->input_count; ++i) depfile_input(f, t->inputs[i]);
 }
 
 /* Whether input k of type i was already listed by an earlier input or type. */
@@ -428,30 +430,36 @@ static bool listed_before(const cb_roster *r, uint32_t i, uint32_t k)
     return false;
 }
 
+/* A rule's target and what every rule depends on: the catalog, and the executable (an upgrade
+ * re-runs the bake, which rebakes what the new version would bake differently: its version is
+ * in every type's key). */
+static void depfile_rule(FILE *f, const char *target, const cb_catalog *cat, const char *tool)
+{
+    depfile_path(f, target);
+    fputs(":", f);
+    fputc(' ', f), depfile_path(f, cat->path);
+    if (tool && tool[0]) depfile_input(f, tool);
+}
+
 /* One rule per output: Make and Ninja both read it. */
-cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, bool manifest_only,
-                               cb_error *err)
+cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const cb_roster_options *opt, cb_error *err)
 {
     char *buf = NULL;
     size_t size = 0;
     FILE *f = open_memstream(&buf, &size);
     if (!f) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    for (uint32_t i = 0; i < r->type_count && !manifest_only; ++i) {
+    for (uint32_t i = 0; i < r->type_count && !opt->depfile_manifest_only; ++i) {
         const cb_roster_type *t = &r->types[i];
         if (t->owner != i) continue; /* failed types too: their inputs keep the build out of date */
         for (uint32_t k = 0; k < cb_output_format_count(); ++k) {
             if (!(t->animal->bake.formats & cb_output_format_at(k)->format)) continue;
-            depfile_path(f, t->paths[k]);
-            fputs(":", f);
-            fputc(' ', f), depfile_path(f, cat->path);
+            depfile_rule(f, t->paths[k], cat, opt->tool);
             for (uint32_t k = 0; k < r->type_count; ++k) /* every type sharing this palette */
                 if (r->types[k].owner == i) depfile_inputs(f, &r->types[k]);
             fputc('\n', f);
         }
     }
-    depfile_path(f, r->manifest_path);
-    fputs(":", f);
-    fputc(' ', f), depfile_path(f, cat->path);
+    depfile_rule(f, r->manifest_path, cat, opt->tool);
     for (uint32_t i = 0; i < r->type_count; ++i) depfile_inputs(f, &r->types[i]);
     fputc('\n', f);
     /* An empty rule per input (as gcc -MP writes): a deleted or renamed model makes Make run the
@@ -459,9 +467,10 @@ cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const 
     for (uint32_t i = 0; i < r->type_count; ++i)
         for (uint32_t k = 0; k < r->types[i].input_count; ++k)
             if (!listed_before(r, i, k)) fputc('\n', f), depfile_path(f, r->types[i].inputs[k]), fputs(":\n", f);
+    if (opt->tool && opt->tool[0]) fputc('\n', f), depfile_path(f, opt->tool), fputs(":\n", f);
     fclose(f);
     bool written;
-    cb_status rc = roster_write_if_changed(path, buf, size, &written, err);
+    cb_status rc = roster_write_if_changed(opt->depfile, buf, size, &written, err);
     free(buf);
     return rc;
 }
@@ -487,7 +496,7 @@ static bool newer_than(const struct stat *a, const struct stat *b)
  * input, so the next build runs the bake again, however often it is run, until the inputs are
  * fixed. After a success it is never older than an input, even when its contents did not
  * change (else Make would run the bake on every build). */
-void roster_settle_times(const cb_roster *r)
+void roster_settle_times(const cb_roster *r, const char *tool)
 {
     static const struct timespec epoch[2] = {{0, 0}, {0, 0}};
     if (r->failed) {
@@ -505,7 +514,8 @@ void roster_settle_times(const cb_roster *r)
     }
     struct stat manifest, in;
     if (stat(r->manifest_path, &manifest) != 0) return;
-    bool stale = stat(r->catalog->path, &in) == 0 && newer_than(&in, &manifest);
+    bool stale = (stat(r->catalog->path, &in) == 0 && newer_than(&in, &manifest)) ||
+                 (tool && tool[0] && stat(tool, &in) == 0 && newer_than(&in, &manifest));
     for (uint32_t i = 0; i < r->type_count && !stale; ++i)
         for (uint32_t k = 0; k < r->types[i].input_count && !stale; ++k)
             stale = stat(r->types[i].inputs[k], &in) == 0 && newer_than(&in, &manifest);

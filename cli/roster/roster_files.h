@@ -100,16 +100,17 @@ cb_status roster_make_parent_directories(const char *file, cb_error *err);
 cb_status roster_write_if_changed(const char *path, const char *data, size_t size, bool *written, cb_error *err);
 /* roster.json (docs/roster.schema.json), rewritten only when its bytes change (r->manifest_written). */
 cb_status roster_write_manifest(const cb_catalog *cat, cb_roster *r, const char *path, cb_error *err);
-/* One rule per output, Make and Ninja both read it; or (manifest_only) one rule, the manifest's,
- * as Ninja wants it for a rule with `depfile` but no `deps = gcc` (CMake's DEPFILE). */
-cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const char *path, bool manifest_only,
-                               cb_error *err);
+/* opt->depfile: one rule per output, Make and Ninja both read it; or (opt->depfile_manifest_only)
+ * one rule, the manifest's, as Ninja wants it for a rule with `depfile` but no `deps = gcc`
+ * (CMake's DEPFILE). Each rule names the catalog, the models' files and opt->tool. */
+cb_status roster_write_depfile(const cb_catalog *cat, const cb_roster *r, const cb_roster_options *opt, cb_error *err);
 /* A type's prep record (roster_cache.h), rewritten only when its bytes change; a failure is
  * ignored (the next run prepares the type again). */
 void roster_write_record(const char *path, const unsigned char *data, size_t size);
 /* After a failure the manifest and the failed palettes get the epoch (the next build runs
- * again); after a success the manifest is never older than an input. */
-void roster_settle_times(const cb_roster *r);
+ * again); after a success the manifest is never older than an input, nor than `tool` (the
+ * executable the depfile names; NULL: none). */
+void roster_settle_times(const cb_roster *r, const char *tool);
 /* order[0..type_count): the types, the longest (a guess) first (roster_order.c). */
 void roster_order_types(const cb_catalog *cat, const cb_roster *r, bool prepared, uint32_t *order);
 

@@ -37,7 +37,7 @@ static int run_in(const char *dir, const char *cmd, char *out, size_t size)
 
 static void copy_file(const char *from, const char *to)
 {
-    char cmd[2 * PATH_MAX + 16];
+    char cmd[3 * PATH_MAX];
     snprintf(cmd, sizeof cmd, "cp %s %s", from, to);
     assert_int_equal(system(cmd), 0);
 }
@@ -119,7 +119,9 @@ static void build_cycle(const char *dir, const char *tool)
     snprintf(path, sizeof path, "%s/build/roster.d", dir);
     if (strcmp(tool, "make") == 0) {
         char *deps = read_whole_file(path, NULL);
-        if (!strstr(deps, "build/roster/eel.pal: catalog.toml \\\n  eel.glb\n") || !strstr(deps, "\neel.glb:\n"))
+        char want[PATH_MAX + 64];
+        snprintf(want, sizeof want, "build/roster/eel.pal: catalog.toml \\\n  %s \\\n  eel.glb\n", exe);
+        if (!strstr(deps, want) || !strstr(deps, "\neel.glb:\n"))
             fail_msg("depfile after a failed type:\n%s", deps);
         free(deps);
     }
@@ -158,6 +160,32 @@ static void test_make_with_delete_on_error(void **state)
 {
     (void)state;
     make_cycle("make-delete-on-error", true);
+}
+
+/* The depfile names the crowdbake executable: a new build of the tool runs the bake again (which
+ * decides per type what the new version changes), and the build after that is up to date, not a
+ * bake on every build. The project runs its own copy of the tool, so that it can be touched. */
+static void test_make_reruns_when_the_tool_changes(void **state)
+{
+    (void)state;
+    char dir[] = TMP "/upgrade", tool[PATH_MAX], path[PATH_MAX + 16], text[PATH_MAX + 512];
+    make_project(dir);
+    snprintf(path, sizeof path, "%s/bin-crowdbake", dir);
+    copy_file(exe, path);
+    assert_non_null(realpath(path, tool)); /* as the depfile names it */
+    write_text(TMP "/upgrade/Makefile", "CROWDBAKE = ./bin-crowdbake\n\nbuild/roster/roster.json: catalog.toml\n"
+               "\t$(CROWDBAKE) bake catalog.toml --depfile build/roster.d -q\n\n-include build/roster.d\n");
+    build_expect(dir, "make", true, true);
+    build_expect(dir, "make", true, false);
+    age_files(dir);
+    snprintf(path, sizeof path, "touch %s", tool); /* as an upgrade leaves it: newer than the outputs */
+    assert_int_equal(system(path), 0);
+    build_expect(dir, "make", true, true);
+    build_expect(dir, "make", true, false);
+    char *deps = read_whole_file(TMP "/upgrade/build/roster.d", NULL);
+    snprintf(text, sizeof text, "\n%s:\n", tool);
+    if (!strstr(deps, text)) fail_msg("depfile without the tool's empty rule:\n%s", deps);
+    free(deps);
 }
 
 static void test_ninja_stays_red_until_the_model_is_fixed(void **state)
@@ -316,6 +344,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_make_stays_red_until_the_model_is_fixed),
         cmocka_unit_test(test_make_with_delete_on_error),
+        cmocka_unit_test(test_make_reruns_when_the_tool_changes),
         cmocka_unit_test(test_ninja_stays_red_until_the_model_is_fixed),
         cmocka_unit_test(test_default_output_folder_is_created),
         cmocka_unit_test(test_report_with_a_failed_type_passes_no_budget),
