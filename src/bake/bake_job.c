@@ -311,9 +311,10 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
         for (uint32_t i = 0; s && i < n; ++i)
             if (searched[i] && early[i].made)
                 palette_seed_analysis(job->search_poses, i, s, &early[i].info, early[i].fps, early[i].loop);
-        if (s && !palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_poses, err))
-            bake_reach_for_transients(job, s, &o, err);
-        cb_sampler_free(s);
+        bool *later = bake_transient_candidates(job); /* NULL: none left for later */
+        if (s && !palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_poses, later, err))
+            bake_reach_for_transients(job, s, &o, later, err);
+        cb_sampler_free(s), free(later);
     }
     free(goals), free(early), free(searched);
     job->planned = !err->status;
@@ -468,7 +469,7 @@ static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette 
     }
     if (any) {
         cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
-        palette_choose_rates(s, &o, job->plan, n, goals, fresh, job->search_poses, err);
+        palette_choose_rates(s, &o, job->plan, n, goals, fresh, job->search_poses, NULL, err);
         for (uint32_t i = 0; i < n && !err->status; ++i)
             if (goals[i].max_error_mm > 0) job->rates[i] = fresh[i];
     }

@@ -268,9 +268,13 @@ typedef struct palette_probe {
 
 /* cb_choose_rates keeping what each clip's search sampled: kept[i] (NULL: none yet) gets clip
  * i's pose cache, made or added to, while all the caches together stay under a budget (past it
- * a clip's is freed and left NULL); NULL kept: none kept. The caller frees the caches. */
+ * a clip's is freed and left NULL); NULL kept: none kept. The caller frees the caches.
+ * needed_later[i] (NULL: none): the caller searches clip i on past its max_fps where it misses
+ * its goal there, so its fps_needed is not searched for (left 0): the caller searches this one
+ * again without it where it needs it (bake_transients.c). */
 cb_status palette_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan, uint32_t count,
-                               const cb_rate_goal *goals, cb_rate_choice *out, pose_cache **kept, cb_error *err);
+                               const cb_rate_goal *goals, cb_rate_choice *out, pose_cache **kept,
+                               const bool *needed_later, cb_error *err);
 
 /* cb_palette_bake with the skin's facts settled by the caller (palette_skin_facts_build, same
  * sampler model and skin; NULL: settled here), and a probe's aids (or NULL), used when the bake

@@ -32,6 +32,7 @@ typedef struct clip_search {
     int family;                      /* the family of rates searched now: FAMILY_KEYS or FAMILY_COMMON */
     const palette_skin_facts *facts; /* the skin's, settled once for every bake of the search */
     palette_probe probe;             /* the clip's analysis and exact poses, for every probe */
+    bool needed_later;               /* a clip over its goal at max_fps: its caller searches on (fps_needed unset) */
 } clip_search;
 
 /* A search thread's pose cache holds at most this much (Cow's longest clip, 6 s of 42 joints,
@@ -327,13 +328,13 @@ static double choose_clip(clip_search *cs, const rate_families *f, cb_rows rows,
         at_max = fmin(at_max, sampled);
     }
     c->fitted = cs->fit, c->error = at_max, c->met = at_max <= max_error;
-    if (!err->status && !c->met) c->fps_needed = rate_that_meets(cs, max_error, err);
+    if (!err->status && !c->met && !cs->needed_later) c->fps_needed = rate_that_meets(cs, max_error, err);
     return cs->max_fps;
 }
 
 static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
                               double max_fps, cb_rows rows, cb_rate_choice *c, const palette_skin_facts *facts,
-                              pose_cache *poses, bool fresh, pose_batch *batch, cb_error *err)
+                              pose_cache *poses, bool fresh, pose_batch *batch, bool needed_later, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
     rate_families f = families_of(&m->animations[clip->animation], max_fps);
@@ -346,7 +347,8 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
                      palette_take_kept_analysis(poses, s, clip->animation, clip->loop, common_rates[0], &o->limits, &analysis)) ||
                     !cb_clip_analyze(s, clip->animation, common_rates[0], clip->loop, &o->limits, &analysis, &unanalyzed);
     clip_search cs = {.s = s, .o = o, .clip = clip, .max_fps = max_fps, .facts = facts,
-                      .probe = {.poses = poses, .analysis = analyzed ? &analysis : NULL, .batch = batch}};
+                      .probe = {.poses = poses, .analysis = analyzed ? &analysis : NULL, .batch = batch},
+                      .needed_later = needed_later};
     if (poses && fresh) pose_cache_clear(poses); /* another clip's times */
     if (poses && !fresh && analyzed) palette_keep_analysis(poses, &analysis, common_rates[0], clip->loop); /* for the bake */
     return choose_clip(&cs, &f, rows, max_error, c, err);
@@ -375,7 +377,7 @@ double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip
     c.error = INFINITY;
     if (!palette_skin_facts_build(s, &facts, err))
         fps = choose_clip_fps(s, o, clip, max_error, max_fps, o->fit || clip->fit ? CB_ROWS_FITTED : CB_ROWS_SAMPLED, &c,
-                              &facts, poses, true, batch, err);
+                              &facts, poses, true, batch, false, err);
     palette_skin_facts_free(&facts);
     pose_cache_free(poses);
     pose_batch_free(batch);
@@ -403,6 +405,7 @@ typedef struct rate_search {
     atomic_uint next;
     pose_cache **kept;     /* per clip, or NULL: the poses each clip's search sampled, for the bake after */
     atomic_size_t kept_bytes;
+    const bool *needed_later; /* per clip, or NULL: clips whose caller searches on where they miss */
 } rate_search;
 
 /* What the caches kept for a bake may hold together (past it a clip's is freed): Cow's twelve
@@ -470,7 +473,8 @@ static int rate_worker(void *arg)
         cb_rate_choice *c = &rs->choices[i];
         rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
                                           max_fps_of(&rs->goals[i]), rs->o->fit ? CB_ROWS_FITTED : rs->goals[i].rows, c,
-                                          rs->facts, clip_cache(rs, i, poses, s), !rs->kept, batch, &rs->errors[i]);
+                                          rs->facts, clip_cache(rs, i, poses, s), !rs->kept, batch,
+                                          rs->needed_later && rs->needed_later[i], &rs->errors[i]);
         settle_kept(rs, i);
         rs->plan[i].fit = c->fitted;
         c->error_mm = cb_mm_per_m(c->error, rs->height);
@@ -484,11 +488,12 @@ static int rate_worker(void *arg)
 cb_status cb_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
                           const cb_rate_goal *goals, cb_rate_choice *out, cb_error *err)
 {
-    return palette_choose_rates(s, o, plan, count, goals, out, NULL, err);
+    return palette_choose_rates(s, o, plan, count, goals, out, NULL, NULL, err);
 }
 
 cb_status palette_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
-                               const cb_rate_goal *goals, cb_rate_choice *out, pose_cache **kept, cb_error *err)
+                               const cb_rate_goal *goals, cb_rate_choice *out, pose_cache **kept,
+                               const bool *needed_later, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
     bool any = false;
@@ -510,7 +515,7 @@ cb_status palette_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_
                        m->source);
     }
     rate_search rs = {m, cb_sampler_skin(s), o, plan, count, goals, calloc(count, sizeof(cb_rate_choice)),
-                      calloc(count, sizeof(cb_error)), facts.height, &facts, NULL, 0, kept, 0};
+                      calloc(count, sizeof(cb_error)), facts.height, &facts, NULL, 0, kept, 0, needed_later};
     uint32_t *order = malloc(count * sizeof *order);
     rs.order = order;
     if (rs.choices && rs.errors && order) {

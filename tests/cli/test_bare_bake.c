@@ -107,6 +107,34 @@ static void test_the_robot_bakes_bare_and_a_stated_budget_is_a_promise(void **st
     assert_null(strstr(out, "warning: clip"));
 }
 
+/* A clip out of reach even past the default cap (the robot's death made to loop: its last pose
+ * wraps back to its first) keeps its answer at 120 fps, with one warning line naming the rate
+ * that would meet it. That rate is past 240 fps (the search past the cap missed up to there) and
+ * meets 1 mm/m as a promise (--max-error 1 --max-fps N: exit 0), where 240 fps cannot (exit 6).
+ * The first search leaves that rate to the search past the cap and, only where that one misses
+ * too, searches the clip again for it (bake_transients.c): the same line as before it did. */
+static void test_a_clip_out_of_reach_says_what_meets_it(void **state)
+{
+    (void)state;
+    static char out[1 << 16];
+    char robot[1024];
+    shared_path(robot, sizeof robot, "assets/robot-quaternius-raylib/robot.glb");
+    int rc = run(out, sizeof out, "%s bake %s -o %s/death.pal --loop Robot_Death 2>&1", crowdbake_exe(), robot, OUT_DIR);
+    if (rc != 0) fail_msg("bare bake exit %d:\n%s", rc, out);
+    assert_int_equal(count_of(out, "warning: clip"), 1);
+    const char *line = strstr(out, "warning: clip 'Robot_Death' reaches "), *meets = line ? strstr(line, "it meets it at ") : NULL;
+    double needed = 0;
+    if (!line || !strstr(line, " at 120 fps") || !meets || sscanf(meets, "it meets it at %lf fps", &needed) != 1)
+        fail_msg("%s", out);
+    printf("Robot_Death as a loop: %g fps meets 1 mm/m\n", needed);
+    assert_true(needed > 240);
+    const char *clip = "--loop Robot_Death --clip Robot_Death --max-error 1";
+    rc = run(out, sizeof out, "%s bake %s -o %s/death_n.pal %s --max-fps %g 2>&1", crowdbake_exe(), robot, OUT_DIR, clip, needed);
+    if (rc != 0) fail_msg("--max-fps %g exit %d:\n%s", needed, rc, out);
+    rc = run(out, sizeof out, "%s bake %s -o %s/death_240.pal %s --max-fps 240 2>&1", crowdbake_exe(), robot, OUT_DIR, clip);
+    assert_int_equal(rc, EXIT_VERIFY);
+}
+
 /* The Skins column of MANIFEST.md's row for `rel` ("assets/..."), -1 without a row; *valid
  * when the Khronos validator found no errors ("0E"). */
 static int manifest_skins(const char *manifest, const char *rel, bool *valid)
@@ -257,6 +285,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_the_robot_bakes_bare_and_a_stated_budget_is_a_promise),
+        cmocka_unit_test(test_a_clip_out_of_reach_says_what_meets_it),
         cmocka_unit_test(test_every_shared_model_with_a_skin_bakes_bare),
         cmocka_unit_test(test_step_keys_are_exact),
     };
