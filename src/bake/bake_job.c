@@ -15,6 +15,7 @@
 #include "plant_feet.h"
 #include "../core/palette_bake.h" /* palette_choose_rates, the search's poses kept for the bake */
 #include "../core/pose_cache.h"
+#include "../core/clip_memo.h"
 #include "../core/foot_cache.h"
 #include "internal/plumbing.h"
 #include "internal/bake_words.h"
@@ -229,10 +230,10 @@ void cb_bake_job_init(cb_bake_job *job)
 /* The speed reference nobody gave: the slowest locomotion clip's ground speed (locomotion.h),
  * decided here so that every program baking the model records the same one. Its clips' strides
  * go into the run's foot analyses, which the per-row travel reads again. */
-static void decide_speed_reference(cb_bake_job *job, foot_cache *feet)
+static void decide_speed_reference(cb_bake_job *job, foot_cache *feet, clip_memo *memo)
 {
     if (job->speed_reference >= 0) return;
-    job->speed_reference = speed_reference_cached(feet, job->model, job->skin, job->plan, job->plan_count,
+    job->speed_reference = speed_reference_cached(feet, memo, job->model, job->skin, job->plan, job->plan_count,
                                                   job->threads ? job->threads : 1, job->speed_reference_from, sizeof job->speed_reference_from);
 }
 
@@ -488,14 +489,15 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
 {
     memset(out, 0, sizeof *out);
     if (check_outputs(job, err) || cb_bake_job_plan(job, err)) return err->status;
-    /* Each clip's feet measured once for the whole run (the speed reference and the per-row
-     * travel ask the same), freed with it. */
+    /* Each clip's feet measured and each clip analyzed once for the whole run (the speed
+     * reference, the palette, the per-row travel and the loop notes ask the same), freed with it. */
     foot_cache *feet = foot_cache_create();
-    decide_speed_reference(job, feet);
+    clip_memo *memo = clip_memo_create();
+    decide_speed_reference(job, feet, memo);
     cb_clip_plan *baked = malloc((job->plan_count ? job->plan_count : 1) * sizeof *baked);
     cb_sampler *s = baked ? cb_sampler_create(job->model, job->skin, err) : NULL;
     if (!baked) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    if (!s) return foot_cache_free(feet), free(baked), err->status;
+    if (!s) return foot_cache_free(feet), clip_memo_free(memo), free(baked), err->status;
     cb_release_free_memory(); /* before the palette's buffers: the load's freed memory */
     cb_palette shared = {0}; /* the last palette baked, written again by a format of the same options */
     cb_bake_options shared_opt = {0};
@@ -516,10 +518,10 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
         if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout) {
             cb_palette_free(&shared);
-            palette_probe kept = {NULL, NULL, job->search_poses, NULL}; /* what the rate search sampled */
+            palette_probe kept = {NULL, NULL, job->search_poses, NULL, memo}; /* what the rate search sampled */
             resolved_plan(job, baked);
             if (palette_bake_with_facts(s, &opt, baked, job->plan_count, NULL, &kept, &shared, err) ||
-                bake_row_travel(job, feet, s, &shared, err))
+                bake_row_travel(job, feet, memo, s, &shared, err))
                 break;
             shared_opt = opt;
         }
@@ -539,7 +541,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         }
         if (out->output_count == 1)
             bake_notes(&opt, job->settings.from.root_motion, &shared, &out->notes), bake_travel_notes(&shared, &out->notes),
-                bake_loop_notes(job, s, &shared, &out->notes), warn_fixed_rates_over(job, out, &out->notes);
+                bake_loop_notes(job, memo, s, &shared, &out->notes), warn_fixed_rates_over(job, out, &out->notes);
         ktx2_half_note(job, format, &opt, &out->notes);
         write_output(job, &shared, &mapping, o, err);
     }
@@ -547,6 +549,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     cb_palette_free(&shared);
     cb_sampler_free(s);
     foot_cache_free(feet);
+    clip_memo_free(memo);
     free(baked); /* after the palette, which references it */
     return err->status;
 }

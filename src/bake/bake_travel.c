@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "internal/plumbing.h"
+#include "../core/clip_memo.h"
 #include "../core/foot_cache.h"
 
 /* Whether a clip carries its own travel in its rows: root motion kept on a clip whose root
@@ -35,7 +36,8 @@ void cb_bake_job_row_travel(const cb_bake_job *job, cb_sampler *s, const cb_clip
     job_row_travel(job, NULL, s, info, offsets, out);
 }
 
-cb_status bake_row_travel(const cb_bake_job *job, struct foot_cache *feet, cb_sampler *s, cb_palette *p, cb_error *err)
+cb_status bake_row_travel(const cb_bake_job *job, struct foot_cache *feet, struct clip_memo *memo, cb_sampler *s,
+                          cb_palette *p, cb_error *err)
 {
     float *offsets = calloc(p->rows ? p->rows : 1, sizeof *offsets);
     if (!offsets) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
@@ -46,7 +48,8 @@ cb_status bake_row_travel(const cb_bake_job *job, struct foot_cache *feet, cb_sa
         memset(t, 0, sizeof *t);
         cb_clip_info info;
         cb_error ignored = {0};
-        if (cb_clip_analyze(s, job->plan[c].animation, cb_bake_job_clip_fps(job, c), job->plan[c].loop, &job->limits, &info, &ignored)) {
+        if (clip_memo_analyze(memo, s, job->plan[c].animation, cb_bake_job_clip_fps(job, c), job->plan[c].loop, &job->limits,
+                              &info, &ignored)) {
             snprintf(t->why, sizeof t->why, "not applied: %.200s", ignored.message);
             continue;
         }

@@ -1,6 +1,7 @@
 /* locomotion.c - ground speed, the locomotion decision and the speed reference (locomotion.h). */
 #include "crowdbake/locomotion.h"
 #include "internal/name_words.h"
+#include "../core/clip_memo.h"
 #include "../core/foot_cache.h"
 
 #include <stdio.h>
@@ -109,20 +110,20 @@ static bool clip_follows_speed(int kind, const char *word, bool loops, const cb_
 /* Clip i of the plan (or the model's clip i) analyzed at 30 fps; false when it cannot be, or when
  * it never follows the speed: a one-shot, or a clip whose name says an action
  * (cb_decide_locomotion), whatever its feet do: those are not measured. */
-static bool clip_to_measure(cb_sampler *s, const cb_clip_plan *plan, uint32_t i, cb_clip_info *info, int *kind,
-                            char *word, size_t size)
+static bool clip_to_measure(clip_memo *memo, cb_sampler *s, const cb_clip_plan *plan, uint32_t i, cb_clip_info *info,
+                            int *kind, char *word, size_t size)
 {
     const cb_model *model = cb_sampler_model(s);
     int32_t a = plan ? plan[i].animation : (int32_t)i;
     cb_error err = {0};
     cb_limits limits = cb_default_limits();
-    if (cb_clip_analyze(s, a, 30, plan ? plan[i].loop : -1, &limits, info, &err)) return false;
+    if (clip_memo_analyze(memo, s, a, 30, plan ? plan[i].loop : -1, &limits, info, &err)) return false;
     *kind = cb_name_says_locomotion(model->animations[a].name, word, size);
     return info->loops && *kind >= 0;
 }
 
-double speed_reference_cached(foot_cache *feet, const cb_model *model, int32_t skin, const cb_clip_plan *plan,
-                              uint32_t count, uint32_t threads, char *why, size_t size)
+double speed_reference_cached(foot_cache *feet, clip_memo *memo, const cb_model *model, int32_t skin,
+                              const cb_clip_plan *plan, uint32_t count, uint32_t threads, char *why, size_t size)
 {
     cb_error err = {0};
     cb_sampler *s = skin >= 0 ? cb_sampler_create(model, skin, &err) : NULL;
@@ -135,7 +136,7 @@ double speed_reference_cached(foot_cache *feet, const cb_model *model, int32_t s
     char(*words)[64] = malloc((n ? n : 1) * sizeof *words);
     /* Every clip analyzed first, so that their strides are measured side by side on the threads. */
     for (uint32_t i = 0; s && infos && kinds && words && i < n; ++i)
-        if (clip_to_measure(s, plan, i, &infos[measured], &kinds[measured], words[measured], sizeof *words))
+        if (clip_to_measure(memo, s, plan, i, &infos[measured], &kinds[measured], words[measured], sizeof *words))
             ++measured;
     foot_cache_measure_clips(feet, s, infos, measured, threads);
     for (uint32_t i = 0; speed && i < measured; ++i) {
@@ -158,7 +159,7 @@ double cb_speed_reference(const cb_model *model, int32_t skin, const cb_clip_pla
                           size_t size)
 {
     foot_cache *feet = foot_cache_create(); /* the feet found once for every clip */
-    double best = speed_reference_cached(feet, model, skin, plan, count, 1, why, size);
+    double best = speed_reference_cached(feet, NULL, model, skin, plan, count, 1, why, size);
     foot_cache_free(feet);
     return best;
 }

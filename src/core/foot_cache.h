@@ -50,8 +50,11 @@ void row_travel_measure_cached(foot_cache *cache, cb_sampler *sampler, const cb_
                                uint32_t rows, float *offsets, cb_row_travel *out); /* row_travel.c */
 void ground_speed_cached(foot_cache *cache, cb_sampler *sampler, const cb_clip_info *clip,
                          cb_ground_speed *out); /* locomotion.c */
-/* threads: the clips' strides measured on so many at once (foot_cache_measure_clips). */
-double speed_reference_cached(foot_cache *cache, const cb_model *model, int32_t skin, const cb_clip_plan *plan,
-                              uint32_t count, uint32_t threads, char *why, size_t size); /* locomotion.c */
+/* threads: the clips' strides measured on so many at once (foot_cache_measure_clips); memo: the run's
+ * clip analyses (clip_memo.h), or NULL. */
+struct clip_memo;
+double speed_reference_cached(foot_cache *cache, struct clip_memo *memo, const cb_model *model, int32_t skin,
+                              const cb_clip_plan *plan, uint32_t count, uint32_t threads, char *why,
+                              size_t size); /* locomotion.c */
 
 #endif

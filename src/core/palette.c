@@ -295,7 +295,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (probe && plan && plan_count == 1 && opt->threads <= 1) /* one clip's, one thread's */
         st.poses = probe->poses, st.analysis = probe->analysis, st.lent = sampler, /* no sampler made per pass */
         st.batch = probe->batch;
-    if (probe) st.clip_poses = probe->clip_poses;
+    if (probe) st.clip_poses = probe->clip_poses, st.memo = probe->memo;
     if (palette_frame_clips(&st, sampler, plan, plan_count, &infos, err) || palette_plan_texture(p, opt->max_texture_size, m->source, err))
         goto fail;
     p->fitted = p->clip_count > 0;

@@ -101,6 +101,7 @@ typedef struct bake_state {
     struct cb_pool *pool;   /* the threads every pass runs on, or NULL for the caller's alone */
     struct kept_fit *pending; /* a probe's fitted rows, until its measurement says whether to keep them */
     pose_batch *batch;      /* the probe's, for its one worker (on st->lent); or NULL: each worker's own */
+    struct clip_memo *memo; /* the run's analyses (palette_probe.memo), or NULL */
 } bake_state;
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
@@ -264,6 +265,8 @@ typedef struct palette_probe {
                                     * samples again only the times no probe did (Cow's default bake: 43% of
                                     * its final bake); a clip's measurement then stays on one worker. */
     pose_batch *batch;             /* the search thread's batches of poses (on the probe's sampler), or NULL */
+    struct clip_memo *memo;        /* the bake run's clip analyses (clip_memo.h): the clips are framed from those
+                                    * and their own analyses kept there; or NULL */
 } palette_probe;
 
 /* cb_choose_rates keeping what each clip's search sampled: kept[i] (NULL: none yet) gets clip

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "crowdbake/budget.h"
+#include "clip_memo.h"
 #include "palette_bake.h"
 #include "pool.h"
 
@@ -82,19 +83,6 @@ void palette_keep_analysis(pose_cache *poses, const cb_clip_info *analysis, doub
     pose_cache_attach_analysis(poses, k); /* NULL: none (the bake analyzes the clip) */
 }
 
-/* Whether weigh_feet (loop_decide.c) framed the clip as a loop at both rates or at neither (its
- * cb_clip_frame_at fails past max_frames, and then the feet weigh nothing): the one way a clip's
- * analysis depends on the rate it is analyzed at, but for the framing at its end. */
-static bool feet_weighed_alike(const cb_clip_info *c, double a, double b, const cb_limits *limits)
-{
-    if (!c->loop_feet_weighed) return true;
-    bool closes = c->loop_reason == CB_LOOP_CLOSED || c->loop_reason == CB_LOOP_CLOSED_CORRECTED;
-    double span = c->t1 - c->t0, duration = span + (closes ? 0 : c->key_interval); /* weigh_feet's */
-    bool at_a = a > 0 && isfinite(a) && a <= CB_FPS_LIMIT && !(duration * a > (double)limits->max_frames);
-    bool at_b = b > 0 && isfinite(b) && b <= CB_FPS_LIMIT && !(duration * b > (double)limits->max_frames);
-    return at_a == at_b;
-}
-
 /* Clip i's analysis from its rate search (kept with its poses), framed at the bake's rate, into
  * *out: what analyzing it at that rate gives (cb_clip_analyze depends on its rate through its
  * framing and feet_weighed_alike alone), so the bake after a search (Husky: 21 M instructions)
@@ -118,7 +106,7 @@ static bool take_analysis(const bake_state *st, const cb_clip_plan *plan, uint32
 bool palette_kept_analysis(const pose_cache *poses, int32_t animation, int loop, double fps, const cb_limits *limits)
 {
     const kept_analysis *k = pose_cache_analysis(poses);
-    return k && k->loop == loop && k->info.animation == animation && feet_weighed_alike(&k->info, k->fps, fps, limits);
+    return k && k->loop == loop && k->info.animation == animation && clip_feet_weighed_alike(&k->info, k->fps, fps, limits);
 }
 
 bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, int32_t animation, int loop, double fps,
@@ -129,6 +117,15 @@ bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, in
     *out = ((const kept_analysis *)pose_cache_analysis(poses))->info;
     /* As analyzing it ends: framed at fps, the clip's loop set on the sampler. */
     return !cb_clip_frame_at(cb_sampler_model(sampler), fps, limits, out, &ignored) && cb_sampler_set_loop(sampler, out);
+}
+
+/* Clip i's analysis from the run's memo (an earlier analysis of the bake standing in), framed
+ * at the bake's rate, its loop set on the caller's sampler: true where the memo had one. */
+static bool take_memo(const bake_state *st, cb_sampler *sampler, const cb_clip_plan *plan, uint32_t i, cb_clip_info *out)
+{
+    cb_clip_plan one = plan_entry(plan, i);
+    return clip_memo_take(st->memo, sampler, one.animation, cb_clip_plan_fps(&one, st->opt->fps), one.loop,
+                          &st->opt->limits, out);
 }
 
 /* The clips' analyses into infos, on opt->threads threads where there are clips to share (or
@@ -142,6 +139,7 @@ static cb_status analyze_clips(const bake_state *st, cb_sampler *sampler, const 
     cb_status rc = a.errors && a.first_use && a.done ? CB_OK : cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     uint32_t threads = st->opt->threads < count ? st->opt->threads : count;
     for (uint32_t i = 0; !rc && i < count; ++i) a.done[i] = take_analysis(st, plan, count, i, &infos[i], &a.errors[i]);
+    for (uint32_t i = 0; !rc && i < count; ++i) a.done[i] = a.done[i] || take_memo(st, sampler, plan, i, &infos[i]);
     for (uint32_t i = 0; !rc && threads > 1 && i < count; ++i) {
         int32_t anim = plan_entry(plan, i).animation;
         a.first_use[i] = anim >= 0 && anim < (int32_t)m->animation_count && !a.done[i];
@@ -157,6 +155,7 @@ static cb_status analyze_clips(const bake_state *st, cb_sampler *sampler, const 
             *err = a.errors[i], rc = err->status;
         else if (!cb_sampler_set_loop(sampler, &infos[i])) /* as analyzing it here */
             rc = cb_fail(err, CB_ERR_INTERNAL, "out of memory closing the loop of clip '%s'", m->animations[one.animation].name);
+        if (!rc) clip_memo_keep(st->memo, sampler, &infos[i], cb_clip_plan_fps(&one, st->opt->fps), one.loop, &st->opt->limits);
     }
     free(a.errors), free(a.first_use), free(a.done);
     return rc;

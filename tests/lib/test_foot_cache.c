@@ -74,7 +74,7 @@ static void test_row_travel_from_the_cache_is_the_same(void **state)
         cb_sampler *s = cb_sampler_create(m, 0, &err);
         foot_cache *cache = foot_cache_create();
         char why[256];
-        double ref = speed_reference_cached(cache, m, 0, NULL, 0, 1, why, sizeof why);
+        double ref = speed_reference_cached(cache, NULL, m, 0, NULL, 0, 1, why, sizeof why);
         assert_true(ref > 0);
         for (uint32_t a = 0; a < m->animation_count; ++a) {
             cb_clip_info info;
@@ -247,8 +247,8 @@ static void check_threaded_strides(cb_model *m, const char *name)
     foot_cache_free(cache);
     char why1[256], why4[256];
     foot_cache *c1 = foot_cache_create(), *c4 = foot_cache_create();
-    double one = speed_reference_cached(c1, m, 0, NULL, 0, 1, why1, sizeof why1);
-    double four = speed_reference_cached(c4, m, 0, NULL, 0, 4, why4, sizeof why4);
+    double one = speed_reference_cached(c1, NULL, m, 0, NULL, 0, 1, why1, sizeof why1);
+    double four = speed_reference_cached(c4, NULL, m, 0, NULL, 0, 4, why4, sizeof why4);
     printf("  %s: %u strides on 4 threads; speed reference %.9g (%s)\n", name, m->animation_count, four, why4);
     assert_memory_equal(&one, &four, sizeof one);
     assert_string_equal(why1, why4);

@@ -1,0 +1,90 @@
+/* clip_memo.c - one bake run's clip analyses, each made once (clip_memo.h). */
+#include "clip_memo.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* One analysis and what it was made with. */
+typedef struct memo_entry {
+    const cb_model *model;
+    int32_t skin;
+    int loop;             /* the loop override */
+    uint32_t max_frames;  /* the one limit an analysis reads */
+    double fps;
+    cb_clip_info info;    /* as cb_clip_analyze gave it at fps */
+} memo_entry;
+
+struct clip_memo {
+    memo_entry *entries;
+    uint32_t count, cap;
+};
+
+clip_memo *clip_memo_create(void) { return calloc(1, sizeof(clip_memo)); }
+
+void clip_memo_free(clip_memo *memo)
+{
+    if (!memo) return;
+    free(memo->entries);
+    free(memo);
+}
+
+bool clip_feet_weighed_alike(const cb_clip_info *c, double a, double b, const cb_limits *limits)
+{
+    if (!c->loop_feet_weighed) return true;
+    bool closes = c->loop_reason == CB_LOOP_CLOSED || c->loop_reason == CB_LOOP_CLOSED_CORRECTED;
+    double span = c->t1 - c->t0, duration = span + (closes ? 0 : c->key_interval); /* weigh_feet's */
+    bool at_a = a > 0 && isfinite(a) && a <= CB_FPS_LIMIT && !(duration * a > (double)limits->max_frames);
+    bool at_b = b > 0 && isfinite(b) && b <= CB_FPS_LIMIT && !(duration * b > (double)limits->max_frames);
+    return at_a == at_b;
+}
+
+static uint32_t max_frames_of(const cb_limits *limits) { return limits ? limits->max_frames : cb_default_limits().max_frames; }
+
+/* The entry that stands in for analyzing `animation` at fps with this loop override, or NULL. */
+static const memo_entry *find(const clip_memo *memo, const cb_sampler *s, int32_t animation, double fps, int loop,
+                              const cb_limits *limits)
+{
+    cb_limits l = limits ? *limits : cb_default_limits();
+    for (uint32_t i = 0; memo && i < memo->count; ++i) {
+        const memo_entry *e = &memo->entries[i];
+        if (e->model == cb_sampler_model(s) && e->skin == cb_sampler_skin(s) && e->info.animation == animation &&
+            e->loop == loop && e->max_frames == l.max_frames && clip_feet_weighed_alike(&e->info, e->fps, fps, &l))
+            return e;
+    }
+    return NULL;
+}
+
+bool clip_memo_take(clip_memo *memo, cb_sampler *s, int32_t animation, double fps, int loop, const cb_limits *limits,
+                    cb_clip_info *out)
+{
+    const memo_entry *e = find(memo, s, animation, fps, loop, limits);
+    if (!e) return false;
+    cb_clip_info info = e->info;
+    cb_error ignored = {0};
+    /* As analyzing ends: the clip's loop set on the sampler, then framed at fps. */
+    if (cb_clip_frame_at(cb_sampler_model(s), fps, limits, &info, &ignored) || !cb_sampler_set_loop(s, &info)) return false;
+    *out = info;
+    return true;
+}
+
+void clip_memo_keep(clip_memo *memo, const cb_sampler *s, const cb_clip_info *info, double fps, int loop,
+                    const cb_limits *limits)
+{
+    if (!memo || find(memo, s, info->animation, fps, loop, limits)) return;
+    if (memo->count == memo->cap) {
+        uint32_t cap = memo->cap ? memo->cap * 2 : 16;
+        memo_entry *grown = realloc(memo->entries, cap * sizeof *grown);
+        if (!grown) return; /* not kept: analyzed again when asked */
+        memo->entries = grown, memo->cap = cap;
+    }
+    memo->entries[memo->count++] = (memo_entry){cb_sampler_model(s), cb_sampler_skin(s), loop, max_frames_of(limits), fps, *info};
+}
+
+cb_status clip_memo_analyze(clip_memo *memo, cb_sampler *s, int32_t animation, double fps, int loop,
+                            const cb_limits *limits, cb_clip_info *out, cb_error *err)
+{
+    if (clip_memo_take(memo, s, animation, fps, loop, limits, out)) return CB_OK;
+    cb_status rc = cb_clip_analyze(s, animation, fps, loop, limits, out, err);
+    if (!rc) clip_memo_keep(memo, s, out, fps, loop, limits);
+    return rc;
+}
