@@ -2,7 +2,10 @@
 #include "clip_memo.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
+
+#include "crowdbake/pool.h"
 
 /* One analysis and what it was made with. */
 typedef struct memo_entry {
@@ -87,4 +90,64 @@ cb_status clip_memo_analyze(clip_memo *memo, cb_sampler *s, int32_t animation, d
     cb_status rc = cb_clip_analyze(s, animation, fps, loop, limits, out, err);
     if (!rc) clip_memo_keep(memo, s, out, fps, loop, limits);
     return rc;
+}
+
+/* ---- analyses made side by side ---- */
+
+typedef struct prefetch {
+    const cb_model *model;
+    int32_t skin;
+    const clip_ask *asks;
+    const uint32_t *todo; /* indices into asks */
+    uint32_t count;
+    const cb_limits *limits;
+    cb_clip_info *infos;  /* per todo entry */
+    bool *made;
+    atomic_uint next;
+} prefetch;
+
+static void prefetch_share(void *ctx, uint32_t thread, uint32_t threads)
+{
+    (void)thread, (void)threads;
+    prefetch *p = ctx;
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(p->model, p->skin, &err);
+    for (uint32_t i = atomic_fetch_add(&p->next, 1); s && i < p->count; i = atomic_fetch_add(&p->next, 1)) {
+        const clip_ask *a = &p->asks[p->todo[i]];
+        cb_error ignored = {0};
+        p->made[i] = !cb_clip_analyze(s, a->animation, a->fps, a->loop, p->limits, &p->infos[i], &ignored);
+    }
+    cb_sampler_free(s); /* a share without a sampler leaves its clips to clip_memo_analyze */
+}
+
+/* The asks with no stand-in in the memo nor an equal ask before them, into todo. */
+static uint32_t asks_to_analyze(const clip_memo *memo, const cb_sampler *s, const clip_ask *asks, uint32_t count,
+                                const cb_limits *limits, uint32_t *todo)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        bool listed = find(memo, s, asks[i].animation, asks[i].fps, asks[i].loop, limits) != NULL;
+        for (uint32_t k = 0; k < n && !listed; ++k) {
+            const clip_ask *o = &asks[todo[k]];
+            listed = o->animation == asks[i].animation && o->fps == asks[i].fps && o->loop == asks[i].loop;
+        }
+        if (!listed) todo[n++] = i;
+    }
+    return n;
+}
+
+void clip_memo_prefetch(clip_memo *memo, const cb_sampler *s, const clip_ask *asks, uint32_t count,
+                        const cb_limits *limits, uint32_t threads)
+{
+    if (!memo || threads < 2 || count < 2) return;
+    prefetch p = {cb_sampler_model(s), cb_sampler_skin(s), asks, NULL, 0, limits, NULL, NULL, 0};
+    uint32_t *todo = malloc(count * sizeof *todo);
+    p.infos = malloc(count * sizeof *p.infos), p.made = calloc(count, sizeof *p.made);
+    if (todo && p.infos && p.made && (p.count = asks_to_analyze(memo, s, asks, count, limits, todo)) >= 2) {
+        p.todo = todo;
+        cb_pool_run(threads < p.count ? threads : p.count, prefetch_share, &p);
+    }
+    for (uint32_t i = 0; i < p.count; ++i) /* kept in the asks' order */
+        if (p.made[i]) clip_memo_keep(memo, s, &p.infos[i], asks[todo[i]].fps, asks[todo[i]].loop, limits);
+    free(todo), free(p.infos), free(p.made);
 }

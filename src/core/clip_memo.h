@@ -37,6 +37,20 @@ bool clip_memo_take(clip_memo *memo, cb_sampler *sampler, int32_t animation, dou
 void clip_memo_keep(clip_memo *memo, const cb_sampler *sampler, const cb_clip_info *info, double fps, int loop,
                     const cb_limits *limits);
 
+/* One analysis asked for (clip_memo_prefetch). */
+typedef struct clip_ask {
+    int32_t animation;
+    double fps;
+    int loop; /* the loop override */
+} clip_ask;
+
+/* The asks the memo has no stand-in for, analyzed side by side on `threads` threads (each on a
+ * sampler of its own, of `sampler`'s model and skin, which is not touched) and kept, so that
+ * clip_memo_analyze takes each after. With one thread, or one clip to analyze, nothing is done
+ * here (clip_memo_analyze analyzes them when asked); one that fails is left to it too. */
+void clip_memo_prefetch(clip_memo *memo, const cb_sampler *sampler, const clip_ask *asks, uint32_t count,
+                        const cb_limits *limits, uint32_t threads);
+
 /* Whether weigh_feet (loop_decide.c) framed the clip as a loop at both rates or at neither (its
  * cb_clip_frame_at fails past max_frames, and then the feet weigh nothing): the one way a clip's
  * analysis depends on the rate it is analyzed at, but for the framing at its end. */

@@ -1,7 +1,7 @@
 /* test_validate_keys.c - cb_model_validate's key pre-scan (src/core/key_scan.c) decides as the key-by-key
  * checks do: whole-channel scans against plain scalar references at every length and every
  * position of a bad key, and whole models whose clips are kept, normalized or skipped with the
- * same messages as before, on one thread and (from 2 M keys) on several. */
+ * same messages as before, on one thread and (from 256 K keys) on several. */
 #include "testutil.h"
 
 #include <float.h>
@@ -240,7 +240,7 @@ static void test_models_decide_as_before(void **state)
     for (uint32_t n = 3; n <= 19; ++n) check_models(n, 1);
 }
 
-/* 2 M keys and more are scanned on several threads (scan_keys): the same decisions. */
+/* 256 K keys and more are scanned on several threads (scan_keys): the same decisions. */
 static void test_models_decide_as_before_when_scanned_on_threads(void **state)
 {
     (void)state;
