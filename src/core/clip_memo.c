@@ -41,6 +41,8 @@ bool clip_feet_weighed_alike(const cb_clip_info *c, double a, double b, const cb
     return at_a == at_b;
 }
 
+uint32_t clip_memo_count(const clip_memo *memo) { return memo ? memo->count : 0; }
+
 static uint32_t max_frames_of(const cb_limits *limits) { return limits ? limits->max_frames : cb_default_limits().max_frames; }
 
 /* The entry that stands in for analyzing `animation` at fps with this loop override, or NULL. */

@@ -51,6 +51,9 @@ typedef struct clip_ask {
 void clip_memo_prefetch(clip_memo *memo, const cb_sampler *sampler, const clip_ask *asks, uint32_t count,
                         const cb_limits *limits, uint32_t threads);
 
+/* How many analyses the memo holds (for tests). */
+uint32_t clip_memo_count(const clip_memo *memo);
+
 /* Whether weigh_feet (loop_decide.c) framed the clip as a loop at both rates or at neither (its
  * cb_clip_frame_at fails past max_frames, and then the feet weigh nothing): the one way a clip's
  * analysis depends on the rate it is analyzed at, but for the framing at its end. */
