@@ -261,27 +261,48 @@ void foot_sole_at(const foot_sole *f, const double *mats, double *height, double
     xz[0] = f->count ? x / f->count : 0, xz[1] = f->count ? z / f->count : 0;
 }
 
+/* Each sole vertex's first weighted part is set, not added to 0 as foot_sole_at does: 0 + t is t
+ * but for a zero's sign (0 + -0 is +0), and the sign of a zero added to the sums is lost there
+ * (they start at +0, and a sum from +0 never becomes -0: x + -x is +0), so the sums and the
+ * result have foot_sole_at's bits. A vertex with no weight adds 0, which changes no sum: skipped;
+ * one with a single weighted joint (most soles: a foot's vertices hang from the foot) adds its one
+ * part straight to the sums, which is adding the same r. (Zeroing every vertex's 48 lanes, then
+ * adding them up again, was two fifths of the function.) */
+enum { SOLE_B = CB_SAMPLE_BATCH };
+
+/* One weighted joint's part of a sole vertex in each lane, w (M p), added to `to` (or set). */
+static inline void sole_part(double (*restrict to)[SOLE_B], const double (*restrict m)[SOLE_B], double w,
+                             const double p[3], bool add)
+{
+    double p0 = p[0], p1 = p[1], p2 = p[2];
+    for (int c = 0; c < 3; ++c)
+        for (int i = 0; i < SOLE_B; ++i) {
+            double t = w * (m[c][i] * p0 + m[4 + c][i] * p1 + m[8 + c][i] * p2 + m[12 + c][i]);
+            to[c][i] = add ? to[c][i] + t : t;
+        }
+}
+
 CB_TARGET_CLONES
 void foot_sole_at_lanes(const foot_sole *f, const cb_joint_subset *sub, const double *lanes, double *height, double *x,
                         double *z)
 {
-    enum { B = CB_SAMPLE_BATCH };
-    double sx[B] = {0}, sy[B] = {0}, sz[B] = {0};
+    enum { B = SOLE_B };
+    double sum[3][B] = {{0}}; /* x, y, z */
     for (uint32_t v = 0; v < f->count; ++v) {
         const sole_vertex *sv = &f->v[v];
-        double r[3][B] = {{0}};
-        for (int k = 0; k < 4; ++k) {
+        int weighted = (sv->weight[0] != 0) + (sv->weight[1] != 0) + (sv->weight[2] != 0) + (sv->weight[3] != 0);
+        double r[3][B];
+        for (int k = 0, parts = 0; k < 4; ++k) {
             if (sv->weight[k] == 0) continue;
             const double(*m)[B] = (const double(*)[B])(lanes + (size_t)sub->joint_slot[sv->joint[k]] * 16 * B);
-            double w = sv->weight[k], p0 = sv->p[0], p1 = sv->p[1], p2 = sv->p[2];
-            for (int c = 0; c < 3; ++c)
-                for (int i = 0; i < B; ++i)
-                    r[c][i] += w * (m[c][i] * p0 + m[4 + c][i] * p1 + m[8 + c][i] * p2 + m[12 + c][i]);
+            if (weighted == 1) sole_part(sum, m, sv->weight[k], sv->p, true);
+            else sole_part(r, m, sv->weight[k], sv->p, parts++ > 0);
         }
-        for (int i = 0; i < B; ++i) sy[i] += r[1][i], sx[i] += r[0][i], sz[i] += r[2][i];
+        for (int c = 0; weighted > 1 && c < 3; ++c)
+            for (int i = 0; i < B; ++i) sum[c][i] += r[c][i];
     }
     for (int i = 0; i < B; ++i) {
-        height[i] = f->count ? sy[i] / f->count : 0;
-        x[i] = f->count ? sx[i] / f->count : 0, z[i] = f->count ? sz[i] / f->count : 0;
+        height[i] = f->count ? sum[1][i] / f->count : 0;
+        x[i] = f->count ? sum[0][i] / f->count : 0, z[i] = f->count ? sum[2][i] / f->count : 0;
     }
 }
