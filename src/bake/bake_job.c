@@ -13,7 +13,6 @@
 #include "bake_travel.h"
 #include "outputs.h"
 #include "plant_feet.h"
-#include "speed_task.h"
 #include "../core/palette_bake.h" /* palette_choose_rates, the search's poses kept for the bake */
 #include "../core/pose_cache.h"
 #include "../core/clip_memo.h"
@@ -226,6 +225,16 @@ void cb_bake_job_init(cb_bake_job *job)
     job->settings = cb_default_bake_settings();
     job->limits = cb_default_limits();
     job->speed_reference = CB_SPEED_REFERENCE_AUTO;
+}
+
+/* The speed reference nobody gave: the slowest locomotion clip's ground speed (locomotion.h),
+ * decided here so that every program baking the model records the same one. Its clips' strides
+ * go into the run's foot analyses, which the per-row travel reads again. */
+static void decide_speed_reference(cb_bake_job *job, foot_cache *feet, clip_memo *memo)
+{
+    if (job->speed_reference >= 0) return;
+    job->speed_reference = speed_reference_cached(feet, memo, job->model, job->skin, job->plan, job->plan_count,
+                                                  job->threads ? job->threads : 1, job->speed_reference_from, sizeof job->speed_reference_from);
 }
 
 /* A clip's analysis made while planning, kept for its rate search (palette_seed_analysis). */
@@ -480,19 +489,15 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
 {
     memset(out, 0, sizeof *out);
     if (check_outputs(job, err) || cb_bake_job_plan(job, err)) return err->status;
+    /* Each clip's feet measured and each clip analyzed once for the whole run (the speed
+     * reference, the palette, the per-row travel and the loop notes ask the same), freed with it. */
+    foot_cache *feet = foot_cache_create();
+    clip_memo *memo = clip_memo_create();
+    decide_speed_reference(job, feet, memo);
     cb_clip_plan *baked = malloc((job->plan_count ? job->plan_count : 1) * sizeof *baked);
     cb_sampler *s = baked ? cb_sampler_create(job->model, job->skin, err) : NULL;
     if (!baked) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    if (!s) return free(baked), err->status;
-    /* Each clip's feet measured and each clip analyzed once for the whole run (the speed
-     * reference, the palette, the per-row travel and the loop notes ask the same), freed with it.
-     * The speed reference nobody gave (the slowest locomotion clip's ground speed, locomotion.h)
-     * is decided here, so that every program baking the model records the same one; its strides
-     * are measured while the palette bakes (speed_task.h). */
-    foot_cache *feet = foot_cache_create();
-    clip_memo *memo = clip_memo_create();
-    speed_task speed;
-    speed_task_start(job, feet, memo, &speed);
+    if (!s) return foot_cache_free(feet), clip_memo_free(memo), free(baked), err->status;
     cb_release_free_memory(); /* before the palette's buffers: the load's freed memory */
     cb_palette shared = {0}; /* the last palette baked, written again by a format of the same options */
     cb_bake_options shared_opt = {0};
@@ -516,7 +521,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
             palette_probe kept = {NULL, NULL, job->search_poses, NULL, memo}; /* what the rate search sampled */
             resolved_plan(job, baked);
             if (palette_bake_with_facts(s, &opt, baked, job->plan_count, NULL, &kept, &shared, err) ||
-                (speed_task_finish(job, &speed), bake_row_travel(job, feet, memo, s, &shared, err)))
+                bake_row_travel(job, feet, memo, s, &shared, err))
                 break;
             shared_opt = opt;
         }
@@ -543,7 +548,6 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     cb_pal_mapping_abort(&mapping); /* a bake that failed: its temporary */
     cb_palette_free(&shared);
     cb_sampler_free(s);
-    speed_task_finish(job, &speed); /* before the cache it measures into goes */
     foot_cache_free(feet);
     clip_memo_free(memo);
     free(baked); /* after the palette, which references it */

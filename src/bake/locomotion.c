@@ -135,72 +135,38 @@ static void prefetch_analyses(clip_memo *memo, const cb_sampler *s, const cb_cli
     free(asks);
 }
 
-/* What the speed reference has analyzed of the clips, until it decides (foot_cache.h). */
-struct speed_survey {
-    foot_cache *feet;
-    const cb_model *model;
-    cb_sampler *s;
-    uint32_t measured, threads;
-    cb_clip_info *infos; /* the clips to measure */
-    int *kinds;
-    char (*words)[64];
-};
-
-speed_survey *speed_survey_begin(foot_cache *feet, clip_memo *memo, const cb_model *model, int32_t skin,
-                                 const cb_clip_plan *plan, uint32_t count, uint32_t threads)
+double speed_reference_cached(foot_cache *feet, clip_memo *memo, const cb_model *model, int32_t skin,
+                              const cb_clip_plan *plan, uint32_t count, uint32_t threads, char *why, size_t size)
 {
-    speed_survey *sv = calloc(1, sizeof *sv);
-    if (!sv) return NULL;
     cb_error err = {0};
-    uint32_t n = plan ? count : model->animation_count;
-    sv->feet = feet, sv->model = model, sv->threads = threads;
-    sv->s = skin >= 0 ? cb_sampler_create(model, skin, &err) : NULL;
-    sv->infos = malloc((n ? n : 1) * sizeof *sv->infos);
-    sv->kinds = malloc((n ? n : 1) * sizeof *sv->kinds);
-    sv->words = malloc((n ? n : 1) * sizeof *sv->words);
-    /* Every clip analyzed first, so that their strides are measured side by side on the threads. */
-    prefetch_analyses(memo, sv->s, plan, n, threads);
-    for (uint32_t i = 0; sv->s && sv->infos && sv->kinds && sv->words && i < n; ++i)
-        if (clip_to_measure(memo, sv->s, plan, i, &sv->infos[sv->measured], &sv->kinds[sv->measured],
-                            sv->words[sv->measured], sizeof *sv->words))
-            ++sv->measured;
-    return sv;
-}
-
-void speed_survey_measure(speed_survey *sv)
-{
-    if (sv) foot_cache_measure_clips(sv->feet, sv->s, sv->infos, sv->measured, sv->threads);
-}
-
-double speed_survey_end(speed_survey *sv, char *why, size_t size)
-{
+    cb_sampler *s = skin >= 0 ? cb_sampler_create(model, skin, &err) : NULL;
     double best = 0;
     snprintf(why, size, "none: no clip is locomotion (none follows the speed)");
-    if (!sv) return best;
+    uint32_t n = plan ? count : model->animation_count, measured = 0;
     cb_ground_speed *speed = malloc(sizeof *speed);
-    for (uint32_t i = 0; speed && i < sv->measured; ++i) {
-        const cb_clip_info *info = &sv->infos[i];
-        cb_sampler_set_loop(sv->s, info); /* as analyzing it left it: a stride not cached is sampled so */
-        ground_speed_cached(sv->feet, sv->s, info, speed);
-        if (!clip_follows_speed(sv->kinds[i], sv->words[i], info->loops, speed) || speed->speed <= 0 ||
+    cb_clip_info *infos = malloc((n ? n : 1) * sizeof *infos);
+    int *kinds = malloc((n ? n : 1) * sizeof *kinds);
+    char(*words)[64] = malloc((n ? n : 1) * sizeof *words);
+    /* Every clip analyzed first, so that their strides are measured side by side on the threads. */
+    prefetch_analyses(memo, s, plan, n, threads);
+    for (uint32_t i = 0; s && infos && kinds && words && i < n; ++i)
+        if (clip_to_measure(memo, s, plan, i, &infos[measured], &kinds[measured], words[measured], sizeof *words))
+            ++measured;
+    foot_cache_measure_clips(feet, s, infos, measured, threads);
+    for (uint32_t i = 0; speed && i < measured; ++i) {
+        const cb_clip_info *info = &infos[i];
+        cb_sampler_set_loop(s, info); /* as analyzing it left it: a stride not cached is sampled so */
+        ground_speed_cached(feet, s, info, speed);
+        if (!clip_follows_speed(kinds[i], words[i], info->loops, speed) || speed->speed <= 0 ||
             (best > 0 && speed->speed >= best))
             continue;
         best = speed->speed;
         snprintf(why, size, "the slowest locomotion clip '%s' (%s); --speed-reference overrides",
-                 sv->model->animations[info->animation].name, speed->method);
+                 model->animations[info->animation].name, speed->method);
     }
-    free(speed), free(sv->infos), free(sv->kinds), free(sv->words);
-    cb_sampler_free(sv->s);
-    free(sv);
+    free(speed), free(infos), free(kinds), free(words);
+    cb_sampler_free(s);
     return best;
-}
-
-double speed_reference_cached(foot_cache *feet, clip_memo *memo, const cb_model *model, int32_t skin,
-                              const cb_clip_plan *plan, uint32_t count, uint32_t threads, char *why, size_t size)
-{
-    speed_survey *sv = speed_survey_begin(feet, memo, model, skin, plan, count, threads);
-    speed_survey_measure(sv);
-    return speed_survey_end(sv, why, size);
 }
 
 double cb_speed_reference(const cb_model *model, int32_t skin, const cb_clip_plan *plan, uint32_t count, char *why,

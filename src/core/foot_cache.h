@@ -57,15 +57,4 @@ double speed_reference_cached(foot_cache *cache, struct clip_memo *memo, const c
                               const cb_clip_plan *plan, uint32_t count, uint32_t threads, char *why,
                               size_t size); /* locomotion.c */
 
-/* speed_reference_cached in its three steps (locomotion.c), so that the strides can be measured
- * while the caller does other work: begin analyzes the clips (on the caller's thread: it reads
- * and keeps the memo); measure measures their strides on `threads` threads into the cache (on
- * any one thread, while nothing else touches the cache or the survey); end reads the ground
- * speeds, decides, frees the survey and gives what speed_reference_cached gives, bit for bit. */
-typedef struct speed_survey speed_survey;
-speed_survey *speed_survey_begin(foot_cache *cache, struct clip_memo *memo, const cb_model *model, int32_t skin,
-                                 const cb_clip_plan *plan, uint32_t count, uint32_t threads); /* NULL: out of memory */
-void speed_survey_measure(speed_survey *survey);
-double speed_survey_end(speed_survey *survey, char *why, size_t size);
-
 #endif
