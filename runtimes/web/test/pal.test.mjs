@@ -136,6 +136,22 @@ test('zstd: refused with the fix without a decoder; with one, the texels of the 
     }
 });
 
+test('zstd: a damaged payload is refused by its checksum before a decoder sees it, verifyChecksum or not', () => {
+    // The fuzz finding that kept fzstd 0.1.1 busy 13 s (its sequences copy past the output's end),
+    // and a real bake's compressed payload with one byte flipped.
+    const flipped = new Uint8Array(readFileSync(path.join(dir, `zstd-${path.basename(FOX)}.pal`)));
+    flipped[flipped.length - 5] ^= 1;
+    const finding = readFileSync('tests/fuzz/regressions/web/pal-zstd-frame-fzstd-copies-past-its-output.pal');
+    for (const [what, bytes] of [['flipped', flipped], ['finding', finding]]) {
+        let decoded = 0;
+        const counting = (b, n) => (++decoded, decompress(b, n));
+        for (const verifyChecksum of [false, true])
+            assert.match(assertRefused(() => readPal(bytes, { name: 'z.pal', verifyChecksum, decompress: counting }), 'z.pal', what),
+                         /checksum mismatch/);
+        assert.equal(decoded, 0, `${what}: the decoder was called`);
+    }
+});
+
 test('rows wrapped into column blocks (--max-texture-size) are addressed as the C reader does', () => {
     const file = path.join(dir, 'wrapped.pal');
     const pal = readPal(bake(QUADRUPED, file, ['--layout', 'qpos', '--precision', 'float', '--max-texture-size', '200']),
