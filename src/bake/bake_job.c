@@ -314,7 +314,7 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
                 palette_seed_analysis(job->search_poses, i, s, &early[i].info, early[i].fps, early[i].loop);
         bool *later = bake_transient_candidates(job); /* NULL: none left for later */
         if (s && !palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_poses, later, err))
-            bake_reach_for_transients(job, s, &o, later, err);
+            bake_reach_for_transients(job, s, &o, err);
         cb_sampler_free(s), free(later);
     }
     free(goals), free(early), free(searched);

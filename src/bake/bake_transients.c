@@ -28,68 +28,42 @@ bool *bake_transient_candidates(const cb_bake_job *job)
     return later;
 }
 
-/* The clips that missed the goal even past the default cap keep their first answer, which the
- * first search left without the rate that would meet it (`deferred`): searched again as the
- * first search searched them, this time to that rate (the same choice, the search being
- * deterministic, and its fps_needed). Only a clip out of reach pays for it. */
-static void first_answers_again(cb_bake_job *job, cb_sampler *s, const cb_bake_options *o, const bool *again,
-                                cb_error *err)
+/* The second search's answers taken where they meet the goal. A clip still over it keeps its
+ * first answer (fewer rows) with the rate the second search found would meet it, from past
+ * CB_TRANSIENT_MAX_FPS: the first search left that rate to it (bake_transient_candidates). */
+static void take_answers(cb_bake_job *job, const cb_rate_goal *goals, const cb_rate_choice *fresh,
+                         const cb_clip_plan *before)
 {
-    uint32_t n = job->plan_count;
-    cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
-    cb_rate_choice *first = calloc(n ? n : 1, sizeof *first);
-    if (!goals || !first) {
-        cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    } else {
-        for (uint32_t i = 0; i < n; ++i)
-            if (again[i]) goals[i] = (cb_rate_goal){job->clip_settings[i].max_error_mm, job->clip_settings[i].max_fps, CB_ROWS_BEST};
-        palette_choose_rates(s, o, job->plan, n, goals, first, job->search_poses, NULL, err);
-        for (uint32_t i = 0; i < n && !err->status; ++i)
-            if (again[i]) job->rates[i] = first[i];
-    }
-    free(goals), free(first);
-}
-
-/* The second search's answers taken where they meet the goal; true into again[i] where clip i
- * keeps its first answer and `deferred` left that answer's fps_needed out. */
-static bool take_answers(cb_bake_job *job, const cb_rate_goal *goals, const cb_rate_choice *fresh,
-                         const cb_clip_plan *before, const bool *deferred, bool *again, const cb_error *err)
-{
-    bool any = false;
     for (uint32_t i = 0; i < job->plan_count; ++i) {
         if (!(goals[i].max_error_mm > 0)) continue;
-        if (err->status || !fresh[i].met) { /* still over the goal: its first answer, fewer rows */
+        if (!fresh[i].met) {
             job->plan[i] = before[i];
-            any |= again[i] = deferred && deferred[i];
+            job->rates[i].fps_needed = fresh[i].fps_needed;
             continue;
         }
         job->rates[i] = fresh[i];
         job->clip_settings[i].max_fps = CB_TRANSIENT_MAX_FPS;
         job->clip_settings[i].from.max_fps = CB_FROM_TRANSIENT;
     }
-    return any;
 }
 
-cb_status bake_reach_for_transients(cb_bake_job *job, cb_sampler *s, const cb_bake_options *o, const bool *deferred,
-                                    cb_error *err)
+cb_status bake_reach_for_transients(cb_bake_job *job, cb_sampler *s, const cb_bake_options *o, cb_error *err)
 {
     uint32_t n = job->plan_count;
     cb_rate_goal *goals = calloc(n ? n : 1, sizeof *goals);
     cb_rate_choice *fresh = calloc(n ? n : 1, sizeof *fresh);
     cb_clip_plan *before = malloc((n ? n : 1) * sizeof *before);
-    bool *again = calloc(n ? n : 1, sizeof *again);
     bool any = false;
-    for (uint32_t i = 0; goals && fresh && before && again && i < n; ++i)
+    for (uint32_t i = 0; goals && fresh && before && i < n; ++i)
         if (reaches_on(job, i))
             goals[i] = (cb_rate_goal){job->clip_settings[i].max_error_mm, CB_TRANSIENT_MAX_FPS, CB_ROWS_BEST}, any = true;
     if (any) {
         memcpy(before, job->plan, n * sizeof *before);
-        palette_choose_rates(s, o, job->plan, n, goals, fresh, job->search_poses, NULL, err);
-        if (take_answers(job, goals, fresh, before, deferred, again, err) && !err->status)
-            first_answers_again(job, s, o, again, err);
-    } else if (!goals || !fresh || !before || !again) {
+        if (!palette_choose_rates(s, o, job->plan, n, goals, fresh, job->search_poses, NULL, err))
+            take_answers(job, goals, fresh, before);
+    } else if (!goals || !fresh || !before) {
         cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
-    free(goals), free(fresh), free(before), free(again);
+    free(goals), free(fresh), free(before);
     return err->status;
 }

@@ -273,8 +273,8 @@ typedef struct palette_probe {
  * i's pose cache, made or added to, while all the caches together stay under a budget (past it
  * a clip's is freed and left NULL); NULL kept: none kept. The caller frees the caches.
  * needed_later[i] (NULL: none): the caller searches clip i on past its max_fps where it misses
- * its goal there, so its fps_needed is not searched for (left 0): the caller searches this one
- * again without it where it needs it (bake_transients.c). */
+ * its goal there, so its fps_needed is not searched for (left 0): the caller's search finds it
+ * from past that search's cap (bake_transients.c). */
 cb_status palette_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan, uint32_t count,
                                const cb_rate_goal *goals, cb_rate_choice *out, pose_cache **kept,
                                const bool *needed_later, cb_error *err);

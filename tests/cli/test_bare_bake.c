@@ -111,8 +111,8 @@ static void test_the_robot_bakes_bare_and_a_stated_budget_is_a_promise(void **st
  * wraps back to its first) keeps its answer at 120 fps, with one warning line naming the rate
  * that would meet it. That rate is past 240 fps (the search past the cap missed up to there) and
  * meets 1 mm/m as a promise (--max-error 1 --max-fps N: exit 0), where 240 fps cannot (exit 6).
- * The first search leaves that rate to the search past the cap and, only where that one misses
- * too, searches the clip again for it (bake_transients.c): the same line as before it did. */
+ * The first search leaves that rate to the search past the cap, which finds it from past its own
+ * 240 fps (bake_transients.c). */
 static void test_a_clip_out_of_reach_says_what_meets_it(void **state)
 {
     (void)state;
