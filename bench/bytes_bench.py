@@ -62,7 +62,9 @@ def one_model(name, model):
             'goal': GOALS.get(name), 'quantisation_mm': fixed['encoding_mm'] - fixed_float['encoding_mm'],
             'bones': skin['bones'], 'bones_skinning_nothing': skin['bones_skinning_nothing'],
             'map_rows': total('map_rows'), 'map_rows_fitted_estimate': total('map_rows_fitted_estimate'),
-            'rows_30fps': total('rows_30fps'), 'clips': clips}
+            'rows_30fps': total('rows_30fps'), 'clips': clips,
+            'blends': {kind: {'uniform_rows': total(prefix + 'uniform_rows'), 'map_rows': total(prefix + 'map_rows')}
+                       for kind, prefix in (('chord', ''), ('dual', 'dual_'), ('local', 'local_'))}}
 
 
 def bytes_bench(smoke):
@@ -88,6 +90,17 @@ def print_bytes(results):
           'back of the 1 mm/m budget); map rows: a time -> row map, rows per key interval as its motion needs '
           '(sampled; fitted~ estimated at twice the blend budget), and its ratio to --fps 30\'s rows; unskinned: joints '
           'no vertex is weighted to, and the fitted map\'s ratio with their texels left out too')
+    print('\nthe blend between two rows, weighed (bench_rows, sampled rows, every clip within 1 mm/m): rows at one '
+          'key-aligned rate per clip | placed per key interval, against --fps 30\'s rows')
+    print('%-6s %15s %15s %15s' % ('model', 'global (today)', 'dual quat', 'local composed'))
+    for r in results:
+        b, n = r['blends'], r['rows_30fps']
+        print('%-6s %s' % (r['model'], ' '.join('%6.2fx |%5.2fx' % (b[k]['uniform_rows'] / n, b[k]['map_rows'] / n)
+                                                 for k in ('chord', 'dual', 'local'))))
+    print('  global: the rows hold each joint\'s global rotation and pivot, blended as they are (the shipped runtimes); '
+          'dual quat: the same rows blended as dual quaternions (a screw between them); local composed: the rows hold '
+          'each joint\'s transform in its parent joint\'s frame, blended joint by joint (nlerp, lerp) and composed down '
+          'the skeleton, as a bone pass could: at rows on the keys, the glTF\'s own interpolation')
     for r in results:
         worst = sorted(r['clips'], key=lambda c: c['map_rows'] / max(1, c['key_intervals']), reverse=True)[:3]
         print('  %s, rows a map needs per key interval, most first: %s' % (r['model'], ', '.join(
