@@ -233,10 +233,11 @@ static size_t merged_rates(const rate_families *f, double max_fps, candidate *ou
  * there err 4 times it, off the key grid.) Fitted rows are baked only where even their best case,
  * half the sampled rows' error there, meets the goal, walking up and walking down alike. (The walk
  * down baked them wherever the law's 1.5x margin left them open, sampled rows up to 3 times the
- * goal: every such probe on Cow, Husky, Fox and the robot missed, fitted rows erring 0.52-0.94 of
- * what sampled rows do at the same rate there, and they were a sixth of Fox's bake and a tenth of
- * the robot's; speed43e.) max_fps is baked both ways: its exact errors are what an unmet goal
- * reports. */
+ * goal: every such probe on Cow, Husky, Fox and the robot missed, fitted rows erring 0.50-0.94 of
+ * what sampled rows do at the same rate there, measured in full, and they were a sixth of Fox's
+ * bake and a tenth of the robot's; speed43e.) A sampled miss's error is where its measurement
+ * stopped, at most its maximum, so the test is no looser than the best case it stands for. max_fps
+ * is baked both ways: its exact errors are what an unmet goal reports. */
 static double rate_meets(clip_search *cs, cb_rows rows, candidate c, double max_error, double *error, cb_error *err)
 {
     double sampled = INFINITY;
