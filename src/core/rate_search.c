@@ -230,18 +230,20 @@ static size_t merged_rates(const rate_families *f, double max_fps, candidate *ou
  * but not fitted ones, the sampled rows are baked first, and their error at this very rate
  * (rather than the law's, from other rates) decides whether the fitted probe is worth making.
  * (Cow's Gallop at 40 fps: the law from 24 fps put fitted rows at 1.1 times the goal; sampled rows
- * there err 4 times it, off the key grid.) Walking up (not `eager`), fitted rows are baked only
- * where even their best case, half the sampled rows' error there, meets the goal: a rate that only
- * the law's margin leaves open is baked by the walk down, and only when it is under the answer
- * (the robot's Dance at 48 fps: sampled 1.9 times the goal, fitted 2.1 times). max_fps is baked
- * both ways: its exact errors are what an unmet goal reports. */
-static double rate_meets(clip_search *cs, cb_rows rows, candidate c, double max_error, double *error, bool eager,
-                         cb_error *err)
+ * there err 4 times it, off the key grid.) Fitted rows are baked only where even their best case,
+ * half the sampled rows' error there, meets the goal, walking up and walking down alike. (The walk
+ * down baked them wherever the law's 1.5x margin left them open, sampled rows up to 3 times the
+ * goal: every such probe on Cow, Husky, Fox and the robot missed, fitted rows erring 0.50-0.94 of
+ * what sampled rows do at the same rate there, measured in full, and they were a sixth of Fox's
+ * bake and a tenth of the robot's; speed43e.) A sampled miss's error is where its measurement
+ * stopped, at most its maximum, so the test is no looser than the best case it stands for. max_fps
+ * is baked both ways: its exact errors are what an unmet goal reports. */
+static double rate_meets(clip_search *cs, cb_rows rows, candidate c, double max_error, double *error, cb_error *err)
 {
     double sampled = INFINITY;
     for (int fit = rows == CB_ROWS_FITTED; fit <= (rows != CB_ROWS_SAMPLED) && !err->status; ++fit) {
         cs->fit = fit, cs->family = c.family;
-        if (fit && !eager && c.fps < cs->max_fps && rows == CB_ROWS_BEST && !(sampled * FITTED_AT_BEST <= max_error))
+        if (fit && c.fps < cs->max_fps && rows == CB_ROWS_BEST && !(sampled * FITTED_AT_BEST <= max_error))
             continue;
         double e = rate_error(cs, c.fps, max_error, err);
         if (e <= max_error) return *error = e, c.fps;
@@ -274,13 +276,13 @@ static double lowest_rate_walk(clip_search *cs, const rate_families *f, cb_rows 
     double key = f->n_aligned > f->key ? f->aligned[f->key] : common_rates[COMMON_FIRST], found = 0;
     while (at + 1 < n && rates[at + 1].fps <= key) ++at; /* the highest rate up to the key rate */
     for (; at < n && found == 0 && !err->status; ++at) /* up from the key rate until one kind meets */
-        found = rate_meets(cs, rows, rates[at], max_error, error, false, err);
+        found = rate_meets(cs, rows, rates[at], max_error, error, err);
     if (found == 0) return 0;
     bool left[2] = {false, false}; /* [family]: a rate of it where both kinds missed */
     for (size_t i = at - 1; i-- > 0 && !(left[FAMILY_KEYS] && left[FAMILY_COMMON]) && !err->status;) {
         if (left[rates[i].family]) continue;
         bool fit = cs->fit; /* the answer's kind so far */
-        double e = 0, r = rate_meets(cs, rows, rates[i], max_error, &e, true, err);
+        double e = 0, r = rate_meets(cs, rows, rates[i], max_error, &e, err);
         if (r > 0) found = r, *error = e;
         else cs->fit = fit, left[rates[i].family] = true;
     }

@@ -9,7 +9,10 @@
  *   the common rates), baked afresh with sampled and with fitted rows, misses the goal, and so do
  *   sampled rows at the chosen rate where fitted rows were chosen (a tie goes to sampled rows).
  * So no rate the law ruled out unbaked would have met the goal, and no probe's remembered error
- * stands in for another rate's or kind's. */
+ * stands in for another rate's or kind's, nor did the walk skip fitted rows that meet it where
+ * sampled rows err over twice the goal (speed43e: fitted rows err at best half what sampled rows
+ * do). The robot too, where that skip spares the most probes (6 of 76): its punch misses the goal
+ * even at 120 fps (a fast transient the bake searches on past the cap), the rest must meet it. */
 #include "testutil.h"
 
 #include <math.h>
@@ -34,14 +37,14 @@ static size_t rates_under(const cb_animation *a, double below, double *out)
     return n;
 }
 
-static void expect_fewest_rows_within(const char *asset)
+static void expect_fewest_rows_within(const char *asset, uint32_t out_of_reach)
 {
     cb_model *m = load_shared(asset);
     cb_error err = {0};
     cb_sampler *s = cb_sampler_create(m, 0, &err);
     assert_non_null(s);
     double lo[3], hi[3], height = cb_skin_rest_bounds(s, lo, hi), goal = 1.0 / 1000 * height;
-    uint32_t n = m->animation_count, fitted = 0, lower = 0;
+    uint32_t n = m->animation_count, fitted = 0, lower = 0, unmet = 0;
     assert_true(n <= 64);
     cb_clip_plan plan[2][64];
     cb_rate_choice choices[2][64];
@@ -58,7 +61,12 @@ static void expect_fewest_rows_within(const char *asset)
         const cb_clip_plan *p = &plan[0][c];
         const cb_rate_choice *ch = &choices[0][c];
         assert_true(plan[1][c].fps == p->fps && plan[1][c].fit == p->fit && choices[1][c].error == ch->error);
-        assert_true(ch->met && ch->fitted == p->fit);
+        assert_true(ch->fitted == p->fit);
+        if (!ch->met) { /* over the goal even at max_fps: the kind with the lower error there */
+            assert_true(p->fps == CB_AUTO_MAX_FPS && !(ch->error <= goal));
+            ++unmet;
+            continue;
+        }
         double full = clip_visible_error(s, (int32_t)c, p->fps, p->fit, 0);
         if (!(full <= goal) || full != ch->error)
             fail_msg("%s clip %u: chose %g fps %s rows, stated error %.17g; baked afresh and measured in full %.17g "
@@ -74,6 +82,7 @@ static void expect_fewest_rows_within(const char *asset)
                              fit ? "fitted" : "sampled");
         fitted += p->fit;
     }
+    assert_int_equal(unmet, out_of_reach);
     assert_true(fitted > 0 && fitted < n); /* both kinds chosen: the walk's both branches are checked */
     assert_true(lower > 2 * n);            /* and rates under every answer */
     cb_sampler_free(s);
@@ -83,19 +92,25 @@ static void expect_fewest_rows_within(const char *asset)
 static void test_fox_fewest_rows_within_the_goal(void **state)
 {
     (void)state;
-    expect_fewest_rows_within("assets/fox-bevy/Fox.glb");
+    expect_fewest_rows_within("assets/fox-bevy/Fox.glb", 0);
 }
 
 static void test_cow_fewest_rows_within_the_goal(void **state)
 {
     (void)state;
-    expect_fewest_rows_within("assets/quaternius-cow/Cow.glb");
+    expect_fewest_rows_within("assets/quaternius-cow/Cow.glb", 0);
 }
 
 static void test_husky_fewest_rows_within_the_goal(void **state)
 {
     (void)state;
-    expect_fewest_rows_within("assets/quaternius-husky/Husky.glb");
+    expect_fewest_rows_within("assets/quaternius-husky/Husky.glb", 0);
+}
+
+static void test_robot_fewest_rows_within_the_goal(void **state)
+{
+    (void)state;
+    expect_fewest_rows_within("assets/robot-quaternius-raylib/robot.glb", 1);
 }
 
 int main(void)
@@ -104,6 +119,7 @@ int main(void)
         cmocka_unit_test(test_fox_fewest_rows_within_the_goal),
         cmocka_unit_test(test_cow_fewest_rows_within_the_goal),
         cmocka_unit_test(test_husky_fewest_rows_within_the_goal),
+        cmocka_unit_test(test_robot_fewest_rows_within_the_goal),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
