@@ -87,24 +87,32 @@ static CB_CLONE_INLINE void row_worst4(v4df *w, const v4df *c, const v4df *a, co
  * row_worst4's. */
 static CB_CLONE_INLINE void best_offset4(v4df *c, const v4df *a, const v4df *b)
 {
-    const v4df two = {2, 2, 2, 2}, three = {3, 3, 3, 3}, minus_two = {-2, -2, -2, -2}, zero = {0, 0, 0, 0};
+    const v4df two = {2, 2, 2, 2}, three = {3, 3, 3, 3}, zero = {0, 0, 0, 0};
+    const v4di sign = {INT64_MIN, INT64_MIN, INT64_MIN, INT64_MIN};
     v4df a2 = two * *a, b2 = two * *b, sum = *a + *b;
     v4df abs_a2 = ABS4(a2), abs_b2 = ABS4(b2), abs_sum = ABS4(sum), abs_diff = ABS4(*a - *b);
-    v4df shared[5], cand[8] = {zero, a2 / three, minus_two * *a, a2, b2 / three, minus_two * *b, b2, sum};
-    v4df w0 = MAX4(zero, ABS4(*a));
-    shared[0] = MAX4(w0, ABS4(*b));
-    shared[1] = MAX4(abs_a2, abs_sum), shared[2] = MAX4(abs_a2, abs_diff);
-    shared[3] = MAX4(abs_b2, abs_sum), shared[4] = MAX4(abs_b2, abs_diff);
-    static const int short_cut[8] = {0, -1, 1, 2, -1, 3, 4, -1}; /* cand[k]'s worst in shared, or -1: row_worst4 */
-    v4df best = *c, worst, w;
+    v4df best = *c, worst, w, cand;
     row_worst4(&worst, c, a, b);
-#pragma GCC unroll 8
-    for (int k = 0; k < 8; ++k) {
-        if (short_cut[k] >= 0) w = shared[short_cut[k]];
-        else row_worst4(&w, &cand[k], a, b);
-        v4di take = w < worst;
-        best = SELECT4(take, cand[k], best), worst = SELECT4(take, w, worst);
-    }
+    /* Each candidate weighed as soon as it is made, in best_offset's order; -2a is 2a with its
+     * sign flipped, the same bits as -2 * a. */
+#define CONSIDER(candidate, its_worst)                                                                                 \
+    do {                                                                                                               \
+        v4di take = (its_worst) < worst;                                                                               \
+        best = SELECT4(take, candidate, best), worst = SELECT4(take, its_worst, worst);                                \
+    } while (0)
+    w = MAX4(MAX4(zero, ABS4(*a)), ABS4(*b));
+    CONSIDER(zero, w);
+    cand = a2 / three, row_worst4(&w, &cand, a, b);
+    CONSIDER(cand, w);
+    CONSIDER((v4df)((v4di)a2 ^ sign), MAX4(abs_a2, abs_sum));
+    CONSIDER(a2, MAX4(abs_a2, abs_diff));
+    cand = b2 / three, row_worst4(&w, &cand, a, b);
+    CONSIDER(cand, w);
+    CONSIDER((v4df)((v4di)b2 ^ sign), MAX4(abs_b2, abs_sum));
+    CONSIDER(b2, MAX4(abs_b2, abs_diff));
+    row_worst4(&w, &sum, a, b);
+    CONSIDER(sum, w);
+#undef CONSIDER
     *c = best;
 }
 #endif
@@ -130,6 +138,19 @@ static CB_CLONE_INLINE bool settle_row(double *c, const double *prev, const doub
     uint32_t v = v0;
 #if defined(__GNUC__)
     const v4df half = {0.5, 0.5, 0.5, 0.5}, none = {NAN, NAN, NAN, NAN};
+    v4di changed = {0, 0, 0, 0};
+    /* Every group stored, moved or not (an unmoved one is the same bits), and the moves gathered
+     * for one test a row. The rows with both intervals, all but a one-shot's ends, without the
+     * tests for a missing one. */
+    for (; dp && dn && v + 4 <= v1; v += 4) {
+        v4df cv, pv, nv, dpv, dnv;
+        memcpy(&cv, c + v, sizeof cv), memcpy(&pv, prev + v, sizeof pv), memcpy(&nv, next + v, sizeof nv);
+        memcpy(&dpv, dp + v, sizeof dpv), memcpy(&dnv, dn + v, sizeof dnv);
+        v4df a = dpv - half * pv, b = dnv - half * nv, best = cv;
+        best_offset4(&best, &a, &b);
+        changed |= (v4di)best ^ (v4di)cv;
+        memcpy(c + v, &best, sizeof best);
+    }
     for (; v + 4 <= v1; v += 4) {
         v4df cv, pv, nv, dpv, dnv, a = none, b = none;
         memcpy(&cv, c + v, sizeof cv);
@@ -137,9 +158,10 @@ static CB_CLONE_INLINE bool settle_row(double *c, const double *prev, const doub
         if (dn) memcpy(&nv, next + v, sizeof nv), memcpy(&dnv, dn + v, sizeof dnv), b = dnv - half * nv;
         v4df best = cv;
         best_offset4(&best, &a, &b);
-        v4di changed = (v4di)best ^ (v4di)cv;
-        if (changed[0] | changed[1] | changed[2] | changed[3]) moved = true, memcpy(c + v, &best, sizeof best);
+        changed |= (v4di)best ^ (v4di)cv;
+        memcpy(c + v, &best, sizeof best);
     }
+    moved = (changed[0] | changed[1] | changed[2] | changed[3]) != 0;
 #endif
     for (; v < v1; ++v) {
         double a = dp ? dp[v] - 0.5 * prev[v] : NAN, b = dn ? dn[v] - 0.5 * next[v] : NAN;
