@@ -213,6 +213,41 @@ static void refine_offsets(double *c, const double *d, uint32_t frames, uint32_t
     }
 }
 
+/* Row f's first offsets (row_offset, or half the one interval's sagitta at a one-shot's ends);
+ * four values at a time where both intervals are there, each lane row_offset's operations. */
+CB_TARGET_CLONES static void first_offsets(double *c, const double *dp, const double *dn, uint32_t stride)
+{
+    uint32_t v = 0;
+#if defined(__GNUC__)
+    const v4df zero = {0, 0, 0, 0}, quarter = {0.25, 0.25, 0.25, 0.25}, half = {0.5, 0.5, 0.5, 0.5};
+    for (; dp && dn && v + 4 <= stride; v += 4) {
+        v4df before, after;
+        memcpy(&before, dp + v, sizeof before), memcpy(&after, dn + v, sizeof after);
+        v4df larger = SELECT4(ABS4(before) > ABS4(after), before, after);
+        v4df offset = SELECT4(before * after <= zero, quarter * (before + after), half * larger);
+        memcpy(c + v, &offset, sizeof offset);
+    }
+#endif
+    for (; v < stride; ++v) c[v] = dp && dn ? row_offset(dp[v], dn[v]) : 0.5 * (dp ? dp[v] : dn[v]);
+}
+
+/* A row's offsets added: each value widened, summed in double and rounded back to float. */
+CB_TARGET_CLONES static void add_offsets(float *r, const double *c, uint32_t stride)
+{
+    uint32_t v = 0;
+#if defined(__GNUC__)
+    typedef float v4sf __attribute__((vector_size(16)));
+    for (; v + 4 <= stride; v += 4) {
+        v4sf value;
+        v4df offset;
+        memcpy(&value, r + v, sizeof value), memcpy(&offset, c + v, sizeof offset);
+        value = __builtin_convertvector(__builtin_convertvector(value, v4df) + offset, v4sf);
+        memcpy(r + v, &value, sizeof value);
+    }
+#endif
+    for (; v < stride; ++v) r[v] = (float)(r[v] + c[v]);
+}
+
 /* A bone's sagittas over one interval: the exact mid-row (aj, bj its rows, mj the mid-row) less
  * the rows' mean, a qpos quaternion's scaled to the mean's length on the blend's side. Inline,
  * so that qpos's 8 values a bone are a constant its loops unroll on. */
@@ -288,13 +323,12 @@ void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones
         const double *dp = has_prev ? d + (size_t)((f + intervals - 1) % intervals) * stride : NULL;
         const double *dn = has_next ? d + (size_t)(f % intervals) * stride : NULL;
         if (sign && f == 0) dp = wf.d0;
-        for (uint32_t v = 0; v < stride; ++v)
-            c[(size_t)f * stride + v] = dp && dn ? row_offset(dp[v], dn[v]) : 0.5 * (dp ? dp[v] : dn[v]);
+        first_offsets(c + (size_t)f * stride, dp, dn, stride);
     }
     refine_offsets(c, d, frames, intervals, stride, loops, sign ? &wf : NULL);
     for (uint32_t f = 0; f < frames; ++f) {
         float *r = rows + (size_t)f * stride;
-        for (uint32_t v = 0; v < stride; ++v) r[v] = (float)(r[v] + c[(size_t)f * stride + v]);
+        add_offsets(r, c + (size_t)f * stride, stride);
         for (uint32_t j = 0; qpos && j < bones; ++j) { /* a stored quaternion stays a unit one */
             float *q = r + (size_t)j * values;
             double n = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
