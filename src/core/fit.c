@@ -265,6 +265,34 @@ static inline __attribute__((always_inline)) void interval_sagitta(const float *
     for (uint32_t k = 0; k < values; ++k) dj[k] = (qpos && k < 4 ? mj[k] * scale : mj[k]) - mean[k];
 }
 
+/* interval_sagitta on every bone of a qpos interval (8 values a bone) with no flip: the means
+ * and the differences four values at a time, each lane interval_sagitta's operations; the
+ * quaternion's dot, lengths and scale as there, one value after another. */
+CB_TARGET_CLONES static void qpos_sagittas(const float *a, const float *b, const float *m, double *d, uint32_t bones)
+{
+    for (uint32_t j = 0; j < bones; ++j, a += 8, b += 8, m += 8, d += 8) {
+#if defined(__GNUC__)
+        typedef float v4sf __attribute__((vector_size(16)));
+        const v4df half = {0.5, 0.5, 0.5, 0.5};
+        v4sf a0, a1, b0, b1, m0, m1;
+        memcpy(&a0, a, sizeof a0), memcpy(&a1, a + 4, sizeof a1), memcpy(&b0, b, sizeof b0);
+        memcpy(&b1, b + 4, sizeof b1), memcpy(&m0, m, sizeof m0), memcpy(&m1, m + 4, sizeof m1);
+        v4df mean0 = half * (__builtin_convertvector(a0, v4df) + __builtin_convertvector(b0, v4df));
+        v4df mean1 = half * (__builtin_convertvector(a1, v4df) + __builtin_convertvector(b1, v4df));
+        double mean[4], dot = 0, mm = 0;
+        memcpy(mean, &mean0, sizeof mean);
+        for (int k = 0; k < 4; ++k) dot += mean[k] * m[k], mm += (double)m[k] * m[k];
+        double ml = sqrt(mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2] + mean[3] * mean[3]);
+        double scale = mm > 0 ? ml / sqrt(mm) * (dot < 0 ? -1 : 1) : 1;
+        v4df by = {scale, scale, scale, scale};
+        v4df d0 = __builtin_convertvector(m0, v4df) * by - mean0, d1 = __builtin_convertvector(m1, v4df) - mean1;
+        memcpy(d, &d0, sizeof d0), memcpy(d + 4, &d1, sizeof d1);
+#else
+        interval_sagitta(a, b, m, d, 8, true);
+#endif
+    }
+}
+
 /* The wrap's signs (wrap_flip): -1 on the quaternion of each bone whose last and first rows the
  * runtime's blend flips between (their dot below 0, as the shader tests it), 1 elsewhere; NULL
  * where none flips (or out of memory: the wrap is then fitted unflipped, as before). */
@@ -297,6 +325,11 @@ void cb_fit_rows(float *rows, const float *mids, uint32_t frames, uint32_t bones
         const float *a = rows + (size_t)i * stride, *b = rows + (size_t)((i + 1) % frames) * stride;
         const float *m = mids + (size_t)i * stride;
         double *di = d + (size_t)i * stride;
+        bool flips = sign && i + 1 == frames;
+        if (qpos && values == 8 && !flips) {
+            qpos_sagittas(a, b, m, di, bones);
+            continue;
+        }
         for (uint32_t j = 0; j < bones; ++j) {
             size_t at = (size_t)j * values;
             float bj[16];
