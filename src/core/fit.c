@@ -120,14 +120,17 @@ static CB_CLONE_INLINE void best_offset4(v4df *c, const v4df *a, const v4df *b)
 /* Sweeps over the rows, each row's offsets moved to the best for its neighbours' (coordinate
  * descent): no step raises the worst error of a value's rows and intervals, and a few sweeps
  * carry a fast interval's need to its neighbours. Each value's offsets depend on that value's
- * alone, so values are swept a block at a time (REFINE_BLOCK: two cache lines of them) and a
+ * alone, so values are swept a block at a time (REFINE_BLOCK: eight cache lines of them) and a
  * block stops at the first sweep that moves none of its offsets: the next would see the same
- * inputs and move none either, so stopping there gives the same bits as all FIT_SWEEPS. Most
- * blocks of the shared models take all eight sweeps (their values settle slowly), so a wider
- * block, fewer rows' worth of bookkeeping, costs less than it loses to blocks that stop later:
- * Husky's default bake 891 -> 881 M instructions from 8 values to 16, 877 M at 32 (but Fox's
- * more); 4 values, 913 M. */
-enum { FIT_SWEEPS = 8, REFINE_BLOCK = 16 };
+ * inputs and move none either, so stopping there gives the same bits as all FIT_SWEEPS (so the
+ * block's width moves no output). Most blocks of the shared models take all eight sweeps (92%
+ * of Cow's groups of four values move in a sweep), so a wider block, fewer rows' worth of
+ * bookkeeping, costs less than it loses to blocks that stop later. Since a row's moves are
+ * tested once a row (speed43f), callgrind -j 1, default bakes, 16 -> 32 -> 64 -> 128 values:
+ * Cow 562.7 -> 559.1 -> 556.7 -> 556.3 M, robot 698.4 -> 685.8 -> 680.0 -> 676.6 M, Husky
+ * 470.5 -> 466.2 -> 464.7 -> 463.5 M, Fox 69.45 -> 69.46 -> 69.15 -> 69.04 M (8 values: Cow
+ * 574.2 M); 64 keeps a block's offsets and sagittas within 1 KiB a row. */
+enum { FIT_SWEEPS = 8, REFINE_BLOCK = 64 };
 
 /* Values v0 .. v1 - 1 of row f moved to their best offsets; true when one moved. `prev` and
  * `next` are the rows beside it, dp and dn the intervals before and after it (NULL: none). */
