@@ -20,9 +20,11 @@
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && !defined(CB_GENERIC_ONLY)
 #define CB_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
 #define CB_CLONE_INLINE inline __attribute__((always_inline))
+#define CB_CLONES 1 /* an AVX2 copy exists: code that dispatches by hand (fit.c) takes it too */
 #else
 #define CB_TARGET_CLONES
 #define CB_CLONE_INLINE inline
+#define CB_CLONES 0
 #endif
 
 typedef struct { double x, y, z; } cb_vec3;
