@@ -69,7 +69,7 @@ static CB_CLONE_INLINE double best_offset(double c, double a, double b)
  * block's width moves no output). Most blocks of the shared models take all eight sweeps (92%
  * of Cow's groups of four values move in a sweep), so a wider block, fewer rows' worth of
  * bookkeeping, costs less than it loses to blocks that stop later. Since a row's moves are
- * tested once a row (speed43f), callgrind -j 1, default bakes, 16 -> 32 -> 64 -> 128 values:
+ * tested once a row (speed43f), callgrind -j 1, default bakes (no -q), 16 -> 32 -> 64 -> 128 values:
  * Cow 562.7 -> 559.1 -> 556.7 -> 556.3 M, robot 698.4 -> 685.8 -> 680.0 -> 676.6 M, Husky
  * 470.5 -> 466.2 -> 464.7 -> 463.5 M, Fox 69.45 -> 69.46 -> 69.15 -> 69.04 M (8 values: Cow
  * 574.2 M); 64 keeps a block's offsets and sagittas within 1 KiB a row. */
@@ -95,7 +95,7 @@ static const double *flipped(const wrap_flip *wf, const double *c, uint32_t v0, 
  * CPU has AVX2 with a max as one vmaxpd. MAXPD(x, w) is x > w ? x : w for every input, NaN
  * and signed zeros included (it returns its second operand unless the first is greater), so
  * both give MAX4's bits; fewer instructions and registers let the AVX2 sweep keep its values
- * in registers (speed43f: Cow's sweeps 72.2 -> 47.8 M instructions). A target_clones copy cannot
+ * in registers (speed43f: Cow's sweeps 72.2 -> 58.1 M instructions). A target_clones copy cannot
  * name the AVX intrinsic in its baseline twin, hence two functions and a test of the CPU, the
  * one the clones' resolver makes. */
 typedef bool sweep_fn(double *c, const double *d, uint32_t frames, uint32_t intervals, uint32_t stride, bool loops,
