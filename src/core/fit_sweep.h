@@ -67,8 +67,8 @@ SWEEP_HELPER void SWEEP(best_offset4)(v4df *c, const v4df *a, const v4df *b)
 
 /* Values v0 .. v1 - 1 of row f moved to their best offsets; true when one moved. `prev` and
  * `next` are the rows beside it, dp and dn the intervals before and after it (NULL: none). */
-SWEEP_HELPER bool SWEEP(settle_row)(double *c, const double *prev, const double *next, const double *dp, const double *dn,
-                                    uint32_t v0, uint32_t v1)
+SWEEP_HELPER bool SWEEP(settle_row)(double *c, const double *prev, const double *next, const double *dp,
+                                    const double *dn, uint32_t v0, uint32_t v1)
 {
     bool moved = false;
     uint32_t v = v0;
