@@ -254,6 +254,10 @@ void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip
 /* palette_rows.c: a pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
  * from its matrices alone too (a probe's rows are rows of the others). */
 pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes);
+/* qpos_lanes.c: qpos_similarity's quaternion and scale of every joint of a pose (mats: 16 doubles a
+ * joint) into out (5 a joint), four joints at a time, the same bits; false, with out partly
+ * written, where a joint is no similarity (qpos_similarity then says which). */
+bool palette_qpos_similarity_pose(const double *mats, uint32_t bones, double *out);
 
 /* What a search that bakes one clip at many rates (runtime.c) keeps across its bakes. */
 typedef struct palette_probe {

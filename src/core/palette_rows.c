@@ -113,6 +113,8 @@ cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, 
     double *kept; /* the pose's qpos_similarity, where a search keeps it (1 + 5 a joint) */
     const double *mats = palette_frame_matrices(st, w, c, &st->infos[c], f, &kept);
     bool derived = kept && kept[0] == 1;
+    if (kept && !derived && p->layout == CB_LAYOUT_QPOS) /* a new pose: every joint's at once where it can */
+        derived = palette_qpos_similarity_pose(mats, p->bone_count, kept + 1);
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         const double *M = mats + (size_t)j * 16;
         const float *b = p->bind_positions + (size_t)j * 3;
@@ -214,6 +216,8 @@ cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *r
         double *kept; /* the pose's qpos_similarity, where a search keeps it (as palette_matrix_row) */
         const double *mats = palette_frame_matrices(st, w, c, &framing, 2 * i + 1, &kept);
         bool derived = kept && kept[0] == 1;
+        if (kept && !derived && p->layout == CB_LAYOUT_QPOS)
+            derived = palette_qpos_similarity_pose(mats, p->bone_count, kept + 1);
         float *out = mids + (size_t)i * p->bone_count * vals;
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             const double *M = mats + (size_t)j * 16;
