@@ -384,8 +384,8 @@ void stride_measure_feet(cb_sampler *s, const cb_clip_info *clip, const stride_f
     uint32_t striding = 0;
     foot_verdict verdicts[CB_MAX_FEET] = {FOOT_STILL};
     bool may_stride = true, sampled = n && keep->feet && sample_tracks(s, clip, feet, n, tr, screen, &may_stride);
-    if (sampled && !may_stride) {
-        keep->feet = 0; /* a quarter sampled: nothing to measure again from */
+    if (sampled && !may_stride) { /* a quarter sampled: nothing to measure again from */
+        stride_tracks_free(keep); /* now, for the next clip's to reuse */
         explain_screened(out);
         return;
     }
