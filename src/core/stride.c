@@ -61,11 +61,11 @@ static void sample_feet_at(cb_sampler *s, const cb_clip_info *clip, const stride
 }
 
 /* The screen (stride_measure_feet's `screen`): every SCREEN_EVERY-th sample first. A foot planted
- * for STANCE_MIN of the cycle (20 of the 240 intervals) in at most four stretches is planted on at
+ * for STANCE_MIN of the cycle (20 of the 240 intervals) in at most five stretches is planted on at
  * least SCREEN_PLANTED of them: r planted samples in a row hold at least floor(r / 4) of them, the
- * planted samples number at least 20 + R in R stretches, so at least (20 - 2 R) / 4 = 3 for R = 4. What
- * is planted among all the samples is planted among these (their lowest is no lower, so their band
- * is no lower). A stride needs two such feet. */
+ * planted samples number at least 20 + R in R stretches, so at least (20 - 2 R) / 4, which is more
+ * than 2 for R <= 5. What is planted among all the samples is planted among these (their lowest is
+ * no lower, so their band is no lower). A stride needs two such feet. */
 enum { SCREEN_EVERY = 4, SCREEN_PLANTED = 3 };
 
 /* Whether two feet or more are planted on SCREEN_PLANTED of the screen's samples or more, within

@@ -37,7 +37,7 @@ void stride_tracks_free(stride_tracks *tracks);
  * clip on which fewer than two feet could be planted for long enough to stride (stride.c's
  * feet_may_stride) is answered from them: no stride, with a why of its own, its feet's stances
  * and speeds left 0, no tracks kept. Whenever cb_stride_measure finds a stride whose feet are
- * each planted in at most four stretches of the cycle, the screen passes the clip on, and the
+ * each planted in at most five stretches of the cycle, the screen passes the clip on, and the
  * answer is cb_stride_measure's, bit for bit. */
 void stride_measure_feet(cb_sampler *sampler, const cb_clip_info *clip, const stride_feet *feet, bool screen,
                          cb_stride *out, stride_tracks *keep);

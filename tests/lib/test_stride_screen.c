@@ -117,11 +117,35 @@ static void test_screen_answers_the_bench_rig(void **state)
     cb_model_free(m);
 }
 
+/* The screen's arithmetic (stride.c): a foot planted for 20 of the 240 intervals in R stretches
+ * of r samples each (r - 1 intervals) is planted on at least floor(r / 4) of every 4th sample in
+ * each, however the stretches fall; over every such foot of up to five stretches, at least 3 in
+ * all, and six stretches can leave it 2 (7, 7, 3, 3, 3, 3). Stretches in non-decreasing length. */
+static uint32_t fewest_seen(uint32_t stretches, uint32_t from, uint32_t intervals, uint32_t seen)
+{
+    if (intervals >= 20) return seen;
+    if (!stretches) return UINT32_MAX; /* not planted for long enough: not such a foot */
+    uint32_t best = UINT32_MAX;
+    for (uint32_t r = from; r <= 21; ++r) {
+        uint32_t got = fewest_seen(stretches - 1, r, intervals + r - 1, seen + r / 4);
+        best = got < best ? got : best;
+    }
+    return best;
+}
+
+static void test_screen_arithmetic(void **state)
+{
+    (void)state;
+    for (uint32_t stretches = 1; stretches <= 5; ++stretches) assert_true(fewest_seen(stretches, 1, 0, 0) >= 3);
+    assert_int_equal(fewest_seen(6, 1, 0, 0), 2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_screen_passes_every_stride_on),
         cmocka_unit_test(test_screen_answers_the_bench_rig),
+        cmocka_unit_test(test_screen_arithmetic),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
