@@ -492,6 +492,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     /* Each clip's feet measured and each clip analyzed once for the whole run (the speed
      * reference, the palette, the per-row travel and the loop notes ask the same), freed with it. */
     foot_cache *feet = foot_cache_create();
+    foot_cache_screen_strides(feet); /* of a clip that does not stride, a bake reads only that it does not */
     clip_memo *memo = clip_memo_create();
     decide_speed_reference(job, feet, memo);
     cb_clip_plan *baked = malloc((job->plan_count ? job->plan_count : 1) * sizeof *baked);

@@ -1,6 +1,7 @@
 /* foot_cache.c - one bake's foot analyses, measured once (foot_cache.h). */
 #include "foot_cache.h"
 
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -26,15 +27,21 @@ struct foot_cache {
     const cb_model *model;
     int32_t skin;
     bool feet_found;
+    bool screen; /* strides screened first (foot_cache_screen_strides) */
     stride_feet feet;
     const cb_model *height_model; /* the rest pose's height, of this model and skin */
     int32_t height_skin;
     double height;
     entry *entries;
-    uint32_t count, cap, measured, reused;
+    uint32_t count, cap, measured, reused, screened;
 };
 
 foot_cache *foot_cache_create(void) { return calloc(1, sizeof(foot_cache)); }
+
+void foot_cache_screen_strides(foot_cache *c)
+{
+    if (c) c->screen = true;
+}
 
 void foot_cache_free(foot_cache *c)
 {
@@ -106,7 +113,8 @@ void foot_cache_stride(foot_cache *c, cb_sampler *s, const cb_clip_info *clip, c
         return;
     }
     c->measured++;
-    stride_measure_feet(s, clip, &c->feet, &e->stride, &e->tracks);
+    stride_measure_feet(s, clip, &c->feet, c->screen, &e->stride, &e->tracks);
+    c->screened += c->screen && !e->tracks.feet && e->stride.foot_count;
     e->rows = clip->steps;
     memcpy(out, &e->stride, sizeof *out);
 }
@@ -128,11 +136,13 @@ typedef struct prefetch {
     const cb_model *model;
     int32_t skin;
     const stride_feet *feet;
+    bool screen;
     const cb_clip_info **clips;
     uint32_t count;
     cb_stride *strides;
     stride_tracks *tracks;
     bool *done;
+    atomic_uint next; /* the next clip a thread takes */
 } prefetch;
 
 /* The same joints as `like`, for another sampler of the model (a subset holds its lanes). */
@@ -147,18 +157,21 @@ static cb_joint_subset *subset_like(const cb_sampler *s, const cb_joint_subset *
     return sub;
 }
 
-/* Thread t's share: every threads-th clip, on a sampler and joint lanes of its own, the clip's
- * loop set on it as cb_clip_analyze left it on the caller's (which samples it so). */
+/* A thread's share: the next clip not taken yet, until none is left (a screened clip costs a
+ * quarter of one measured in full, so a fixed share would leave one thread waiting on the other),
+ * on a sampler and joint lanes of its own, the clip's loop set on it as cb_clip_analyze left it on
+ * the caller's (which samples it so). Each clip's stride is the same whichever thread measures it. */
 static void measure_share(void *ctx, uint32_t t, uint32_t threads)
 {
+    (void)t, (void)threads;
     prefetch *p = ctx;
     cb_error err = {0};
     cb_sampler *s = cb_sampler_create(p->model, p->skin, &err);
     stride_feet own = *p->feet; /* its soles read, not written */
     own.joints = s ? subset_like(s, p->feet->joints) : NULL;
-    for (uint32_t i = t; own.joints && i < p->count; i += threads) {
+    for (uint32_t i = atomic_fetch_add(&p->next, 1); own.joints && i < p->count; i = atomic_fetch_add(&p->next, 1)) {
         if (!cb_sampler_set_loop(s, p->clips[i])) continue;
-        stride_measure_feet(s, p->clips[i], &own, &p->strides[i], &p->tracks[i]);
+        stride_measure_feet(s, p->clips[i], &own, p->screen, &p->strides[i], &p->tracks[i]);
         p->done[i] = true;
     }
     cb_joint_subset_free(own.joints);
@@ -184,7 +197,7 @@ static uint32_t clips_to_measure(foot_cache *c, const cb_clip_info *clips, uint3
 void foot_cache_measure_clips(foot_cache *c, cb_sampler *s, const cb_clip_info *clips, uint32_t count, uint32_t threads)
 {
     if (threads < 2 || count < 2 || !cache_feet(c, s)) return;
-    prefetch p = {cb_sampler_model(s), cb_sampler_skin(s), &c->feet, NULL, 0, NULL, NULL, NULL};
+    prefetch p = {cb_sampler_model(s), cb_sampler_skin(s), &c->feet, c->screen, NULL, 0, NULL, NULL, NULL, 0};
     p.clips = malloc(count * sizeof *p.clips);
     p.strides = malloc(count * sizeof *p.strides);
     p.tracks = calloc(count, sizeof *p.tracks);
@@ -202,6 +215,7 @@ void foot_cache_measure_clips(foot_cache *c, cb_sampler *s, const cb_clip_info *
         memcpy(&e->stride, &p.strides[i], sizeof e->stride); /* padding too */
         e->tracks = p.tracks[i], e->rows = p.clips[i]->steps;
         c->measured++;
+        c->screened += c->screen && !e->tracks.feet && e->stride.foot_count;
     }
     free(p.clips), free(p.strides), free(p.tracks), free(p.done);
 }
@@ -212,3 +226,5 @@ void foot_cache_counts(const foot_cache *c, uint32_t *measured, uint32_t *reused
 {
     *measured = c ? c->measured : 0, *reused = c ? c->reused : 0;
 }
+
+uint32_t foot_cache_screened(const foot_cache *c) { return c ? c->screened : 0; }

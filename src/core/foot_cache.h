@@ -22,7 +22,16 @@ typedef struct foot_cache foot_cache;
 foot_cache *foot_cache_create(void);
 void foot_cache_free(foot_cache *cache);
 
-/* cb_stride_measure(sampler, clip, out), bit for bit, measured at most once per framing. */
+/* From now on, each stride the cache measures is screened first (stride_measure_feet's
+ * `screen`): a clip whose feet rule a stride out on a quarter of the samples is answered "no
+ * stride" from them, its feet's stances and speeds not measured. For a bake, which reads of a
+ * clip that does not stride only that it does not (the speed reference then takes the root's
+ * speed, the per-row travel is not applied); `crowdbake info` and the roster, which report
+ * every foot, measure in full. */
+void foot_cache_screen_strides(foot_cache *cache);
+
+/* cb_stride_measure(sampler, clip, out), bit for bit, measured at most once per framing
+ * (screened: the same wherever the clip strides, stride_feet.h). */
 void foot_cache_stride(foot_cache *cache, cb_sampler *sampler, const cb_clip_info *clip, cb_stride *out);
 
 /* The strides of `clips` not cached yet, measured on `threads` threads at once (each on a
@@ -43,6 +52,8 @@ const struct stride_feet *foot_cache_feet(foot_cache *cache, cb_sampler *sampler
 
 /* How many strides were measured and how many answered from the cache (for tests). */
 void foot_cache_counts(const foot_cache *cache, uint32_t *measured, uint32_t *reused);
+/* How many of those measured the screen answered (for tests). */
+uint32_t foot_cache_screened(const foot_cache *cache);
 
 /* The analyses that share it, each as its public function (which measures with a cache of its
  * own) with the cache given (NULL: uncached). */

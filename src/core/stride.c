@@ -34,23 +34,23 @@ typedef struct track {
     bool *down; /* per interval: planted */
 } track;
 
-/* Every foot's sole height and velocity over the clip, in the game's frame: the root's average
- * horizontal travel taken off as an in-place bake does (cb_root_travel_time). */
-static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const stride_feet *feet, uint32_t n, track *tr)
+/* Where the feet are at samples idx[0 .. count) of the clip (ascending): each foot's sole height
+ * into its track, its ground position (x, z) into x, in the game's frame: the root's average
+ * horizontal travel taken off as an in-place bake does (cb_root_travel_time). Each sample's lane
+ * is worked out alone, so the samples a batch holds do not change its bits. */
+static void sample_feet_at(cb_sampler *s, const cb_clip_info *clip, const stride_feet *feet, uint32_t n,
+                           const uint32_t *idx, uint32_t count, double *lanes, track *tr, double *x)
 {
-    double *lanes = malloc(((size_t)feet->joints->joint_count + 1) * 16 * CB_SAMPLE_BATCH * sizeof(double));
-    double *x = malloc((size_t)n * (STRIDE_SAMPLES + 1) * 2 * sizeof(double));
-    bool ok = lanes && x;
     double dt = clip->duration / STRIDE_SAMPLES, span = clip->t1 - clip->t0, times[CB_SAMPLE_BATCH];
-    for (uint32_t first = 0; ok && first <= STRIDE_SAMPLES; first += CB_SAMPLE_BATCH) {
-        uint32_t count = STRIDE_SAMPLES + 1 - first < CB_SAMPLE_BATCH ? STRIDE_SAMPLES + 1 - first : CB_SAMPLE_BATCH;
-        for (uint32_t b = 0; b < count; ++b) times[b] = clip->t0 + (first + b) * dt;
-        cb_sample_joint_subset_batch(s, clip->animation, times, count, feet->joints, lanes);
+    for (uint32_t first = 0; first < count; first += CB_SAMPLE_BATCH) {
+        uint32_t batch = count - first < CB_SAMPLE_BATCH ? count - first : CB_SAMPLE_BATCH;
+        for (uint32_t b = 0; b < batch; ++b) times[b] = clip->t0 + idx[first + b] * dt;
+        cb_sample_joint_subset_batch(s, clip->animation, times, batch, feet->joints, lanes);
         for (uint32_t k = 0; k < n; ++k) {
             double h[CB_SAMPLE_BATCH], gx[CB_SAMPLE_BATCH], gz[CB_SAMPLE_BATCH];
             foot_sole_at_lanes(&feet->soles[k], feet->joints, lanes, h, gx, gz);
-            for (uint32_t b = 0; b < count; ++b) {
-                uint32_t i = first + b;
+            for (uint32_t b = 0; b < batch; ++b) {
+                uint32_t i = idx[first + b];
                 double tau = cb_root_travel_time(i * dt, span, clip->duration, clip->loops);
                 tr[k].h[i] = h[b];
                 x[((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2] = gx[b] - clip->root_velocity[0] * tau;
@@ -58,7 +58,49 @@ static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const stride_
             }
         }
     }
-    for (uint32_t k = 0; ok && k < n; ++k)
+}
+
+/* The screen (stride_measure_feet's `screen`): every SCREEN_EVERY-th sample first. A foot planted
+ * for STANCE_MIN of the cycle (20 of the 240 intervals) in at most five stretches is planted on at
+ * least SCREEN_PLANTED of them: r planted samples in a row hold at least floor(r / 4) of them, the
+ * planted samples number at least 20 + R in R stretches, so at least (20 - 2 R) / 4, which is more
+ * than 2 for R <= 5. What is planted among all the samples is planted among these (their lowest is
+ * no lower, so their band is no lower). A stride needs two such feet. */
+enum { SCREEN_EVERY = 4, SCREEN_PLANTED = 3 };
+
+/* Whether two feet or more are planted on SCREEN_PLANTED of the screen's samples or more, within
+ * the stance band of the lowest of them: false rules a stride out (see above). */
+static bool feet_may_stride(const track *tr, uint32_t n, double size)
+{
+    uint32_t may = 0;
+    for (uint32_t k = 0; k < n; ++k) {
+        double lo = INFINITY;
+        for (uint32_t i = 0; i <= STRIDE_SAMPLES; i += SCREEN_EVERY) lo = fmin(lo, tr[k].h[i]);
+        uint32_t planted = 0;
+        for (uint32_t i = 0; i <= STRIDE_SAMPLES; i += SCREEN_EVERY) planted += tr[k].h[i] <= lo + STANCE_BAND * size;
+        may += planted >= SCREEN_PLANTED;
+    }
+    return may >= 2;
+}
+
+/* Every foot's sole height and velocity over the clip, the screen's samples first; with
+ * `screen`, false in *strides when they rule a stride out, and the other samples not taken. */
+static bool sample_tracks(cb_sampler *s, const cb_clip_info *clip, const stride_feet *feet, uint32_t n, track *tr,
+                          bool screen, bool *strides)
+{
+    double *lanes = malloc(((size_t)feet->joints->joint_count + 1) * 16 * CB_SAMPLE_BATCH * sizeof(double));
+    double *x = malloc((size_t)n * (STRIDE_SAMPLES + 1) * 2 * sizeof(double));
+    uint32_t idx[STRIDE_SAMPLES + 1], screened = 0, rest = 0;
+    bool ok = lanes && x;
+    for (uint32_t i = 0; i <= STRIDE_SAMPLES; ++i) /* the screen's, then the others, each in order */
+        if (i % SCREEN_EVERY == 0) idx[screened++] = i;
+    for (uint32_t i = 0; i <= STRIDE_SAMPLES; ++i)
+        if (i % SCREEN_EVERY) idx[screened + rest++] = i;
+    if (ok) sample_feet_at(s, clip, feet, n, idx, screened, lanes, tr, x);
+    *strides = !ok || !screen || feet_may_stride(tr, n, feet->size);
+    if (ok && *strides) sample_feet_at(s, clip, feet, n, idx + screened, rest, lanes, tr, x);
+    double dt = clip->duration / STRIDE_SAMPLES;
+    for (uint32_t k = 0; ok && *strides && k < n; ++k)
         for (uint32_t i = 0; i < STRIDE_SAMPLES; ++i) {
             const double *a = x + ((size_t)k * (STRIDE_SAMPLES + 1) + i) * 2;
             tr[k].u[i * 2] = (a[2] - a[0]) / dt, tr[k].u[i * 2 + 1] = (a[3] - a[1]) / dt;
@@ -313,7 +355,16 @@ static void tracks_view(const stride_tracks *t, track *tr)
     }
 }
 
-void stride_measure_feet(cb_sampler *s, const cb_clip_info *clip, const stride_feet *feet, cb_stride *out,
+/* A clip the screen ruled out: no stride, and why; its feet's stances and speeds not measured. */
+static void explain_screened(cb_stride *st)
+{
+    snprintf(st->why, sizeof st->why, "no stride: fewer than two of its %u feet are planted (within %.0f%% of the model's "
+             "height of their lowest) on %d or more of %d evenly spaced samples of the cycle, as a foot planted for %.0f%% "
+             "of it would be; the feet were measured no further", st->foot_count, 100 * STANCE_BAND, SCREEN_PLANTED,
+             STRIDE_SAMPLES / SCREEN_EVERY + 1, 100 * STANCE_MIN);
+}
+
+void stride_measure_feet(cb_sampler *s, const cb_clip_info *clip, const stride_feet *feet, bool screen, cb_stride *out,
                          stride_tracks *keep)
 {
     memset(out, 0, sizeof *out);
@@ -332,7 +383,13 @@ void stride_measure_feet(cb_sampler *s, const cb_clip_info *clip, const stride_f
     }
     uint32_t striding = 0;
     foot_verdict verdicts[CB_MAX_FEET] = {FOOT_STILL};
-    if (n && keep->feet && sample_tracks(s, clip, feet, n, tr)) {
+    bool may_stride = true, sampled = n && keep->feet && sample_tracks(s, clip, feet, n, tr, screen, &may_stride);
+    if (sampled && !may_stride) { /* a quarter sampled: nothing to measure again from */
+        stride_tracks_free(keep); /* now, for the next clip's to reuse */
+        explain_screened(out);
+        return;
+    }
+    if (sampled) {
         double means[CB_MAX_FEET][2];
         for (uint32_t k = 0; k < n; ++k) {
             verdicts[k] = foot_stance(&tr[k], feet->size, &out->feet[k], means[k]);
@@ -363,7 +420,7 @@ void cb_stride_measure(cb_sampler *s, const cb_clip_info *clip, cb_stride *out)
         explain(out, clip, (foot_verdict[CB_MAX_FEET]){FOOT_STILL}, 0);
         return;
     }
-    stride_measure_feet(s, clip, &feet, out, &tracks);
+    stride_measure_feet(s, clip, &feet, false, out, &tracks);
     stride_tracks_free(&tracks);
     stride_feet_free(&feet);
 }

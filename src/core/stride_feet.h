@@ -33,9 +33,14 @@ typedef struct stride_tracks {
 void stride_tracks_free(stride_tracks *tracks);
 
 /* cb_stride_measure with the feet given: the same result, bit for bit. `keep` receives the
- * tracks (stride_tracks_free). */
-void stride_measure_feet(cb_sampler *sampler, const cb_clip_info *clip, const stride_feet *feet, cb_stride *out,
-                         stride_tracks *keep);
+ * tracks (stride_tracks_free). With `screen`, a quarter of the samples are taken first, and a
+ * clip on which fewer than two feet could be planted for long enough to stride (stride.c's
+ * feet_may_stride) is answered from them: no stride, with a why of its own, its feet's stances
+ * and speeds left 0, no tracks kept. Whenever cb_stride_measure finds a stride whose feet are
+ * each planted in at most five stretches of the cycle, the screen passes the clip on, and the
+ * answer is cb_stride_measure's, bit for bit. */
+void stride_measure_feet(cb_sampler *sampler, const cb_clip_info *clip, const stride_feet *feet, bool screen,
+                         cb_stride *out, stride_tracks *keep);
 
 /* st->slide_mean_varying again for `rows` rows, from the tracks it was measured with. */
 void stride_varying_at(cb_stride *st, const stride_tracks *kept, uint32_t rows);
