@@ -187,9 +187,11 @@ static bool prepare_similarity(cb_sampler *s)
     s->relevant = calloc(n, sizeof *s->relevant);
     s->relevant_order = calloc(n, sizeof *s->relevant_order);
     s->slot = calloc(n, sizeof *s->slot);
+    s->parent_slot = calloc(n, sizeof *s->parent_slot);
     s->sim_rest = calloc(n, sizeof *s->sim_rest);
     s->sim_ibm = calloc(sk->joint_count ? sk->joint_count : 1, sizeof *s->sim_ibm);
-    if (!s->relevant || !s->relevant_order || !s->slot || !s->sim_rest || !s->sim_ibm) return false;
+    if (!s->relevant || !s->relevant_order || !s->slot || !s->parent_slot || !s->sim_rest || !s->sim_ibm)
+        return false;
     for (uint32_t j = 0; j < sk->joint_count; ++j)
         for (int32_t p = sk->joints[j]; p >= 0 && !s->relevant[p]; p = m->nodes[p].parent) s->relevant[p] = true;
     for (uint32_t k = 0; k < m->node_count; ++k)
@@ -197,6 +199,10 @@ static bool prepare_similarity(cb_sampler *s)
             s->slot[s->order[k]] = s->relevant_count;
             s->relevant_order[s->relevant_count++] = s->order[k];
         }
+    for (uint32_t k = 0; k < s->relevant_count; ++k) { /* a relevant node's parent is relevant, and before it */
+        int32_t p = m->nodes[s->relevant_order[k]].parent;
+        s->parent_slot[k] = p >= 0 ? (int32_t)s->slot[p] : -1;
+    }
     s->similar = rig_is_similar(s);
     if (s->similar) {
         s->lanes = malloc((s->relevant_count ? s->relevant_count : 1) * sizeof(double) * 8 * CB_SAMPLE_BATCH);
@@ -291,6 +297,7 @@ void cb_sampler_free(cb_sampler *s)
     free(s->relevant);
     free(s->relevant_order);
     free(s->slot);
+    free(s->parent_slot);
     free(s->sim_rest);
     free(s->sim_ibm);
     free(s->lanes);

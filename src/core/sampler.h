@@ -27,6 +27,8 @@ struct cb_sampler {
     uint32_t relevant_count;
     uint32_t *relevant_order;    /* the relevant nodes, parents first */
     uint32_t *slot;              /* per node: its place in relevant_order */
+    int32_t *parent_slot;        /* per place in relevant_order: its parent's place, or -1 for a root (a
+                                  * batch reads this, not the nodes' structs: a cache line a node) */
     cb_similarity *sim_rest;     /* per node: its rest transform */
     cb_similarity *sim_ibm;      /* per joint: its inverse bind matrix */
     /* Per relevant node, its transform at each time of a batch, as 8 lanes of CB_SAMPLE_BATCH
