@@ -177,27 +177,17 @@ static CB_CLONE_INLINE void prefetch_next_batch(const cb_channel *ch, const cb_k
 #endif
 }
 
-/* The keys channel c of the clip (when its lanes come from its group's spans, `base` the clip's
- * first group) reads in this batch, asked of the memory while the channels before it are
- * interpolated: a clip's keys (770 KB on the big rig) outgrow the L2 cache, so what a batch
- * ahead fetched (prefetch_next_batch) has mostly left again by the time it is read. A hint: it
- * changes no value. */
+/* The keys channel c of the clip reads in this batch (when its lanes come from its group's
+ * spans, `base` the clip's first group), asked for ahead of it (cb_prefetch_keys): what a batch
+ * ahead fetched (prefetch_next_batch) has mostly left the cache again by the time it is read. */
 static CB_CLONE_INLINE void prefetch_channel_keys(const cb_sampler *s, const cb_animation *anim, int32_t animation,
                                                   uint32_t c, uint32_t base)
 {
-#if defined(__GNUC__)
     if (c >= anim->channel_count) return;
     const cb_channel *ch = &anim->channels[c];
     int32_t g = s->span_group[s->cursor_base[animation] + c];
-    if (g < 0 || s->group_times[g] != ch->times || s->group_keys[g] != ch->key_count) return;
-    const cb_key_spans *sp = &s->spans[g - base];
-    uint32_t first = sp->key[0], last = sp->key[B - 1] > first ? sp->key[B - 1] : first;
-    size_t bytes = (ch->path == CB_PATH_ROTATION ? 4 : 3) * sizeof(float);
-    size_t from = first * bytes, to = (size_t)(last + 2 < ch->key_count ? last + 2 : ch->key_count) * bytes;
-    for (size_t at = from & ~(size_t)63; at < to; at += 64) __builtin_prefetch((const char *)ch->values + at);
-#else
-    (void)s, (void)anim, (void)animation, (void)c, (void)base;
-#endif
+    if (g >= 0 && s->group_times[g] == ch->times && s->group_keys[g] == ch->key_count)
+        cb_prefetch_keys(ch, &s->spans[g - base]);
 }
 
 /* A linear rotation channel at the batch's times into out[4][B]. */

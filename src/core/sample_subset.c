@@ -233,6 +233,9 @@ static void joint_matrix_lanes(const cb_sampler *s, const cb_joint_subset *sub, 
     }
 }
 
+/* How many channels ahead of the one interpolated its keys are asked for (as sample_lanes.c's). */
+#define KEYS_AHEAD 2
+
 void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
                                   cb_joint_subset *sub, double *out)
 {
@@ -261,6 +264,10 @@ void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double
         bool lanes = cb_channel_in_lanes(ch);
         if (lanes && (ch->times != spans_of || ch->key_count != spans_keys))
             cb_find_spans(ch->times, ch->key_count, padded, cursor, &spans), spans_of = ch->times, spans_keys = ch->key_count;
+        const cb_channel *ahead = c + KEYS_AHEAD < anim->channel_count ? &anim->channels[c + KEYS_AHEAD] : NULL;
+        if (lanes && ahead && sub->relevant[ahead->node] && ahead->times == spans_of && ahead->key_count == spans_keys &&
+            cb_channel_in_lanes(ahead))
+            cb_prefetch_keys(ahead, &spans); /* its keys, while this channel is interpolated */
         int component = channel_component(ch);
         double *node = node_lanes(sub, sub->slot[ch->node], component_first_lane[component]);
         double *scratch = sub->channel_lanes + (size_t)c * 4 * B;

@@ -60,6 +60,22 @@ typedef struct cb_key_spans {
     bool any_edge;
 } cb_key_spans;
 
+/* Asks the memory for the keys the lanes of `sp` read of channel `ch` (whose key times the spans
+ * were found among): key[0] to key[last] + 1, 3 or 4 floats a key. A clip's keys outgrow the L2
+ * cache on a big rig, so a channel's keys are asked for while the channels before it are
+ * interpolated. A hint: it changes no value. */
+static inline void cb_prefetch_keys(const cb_channel *ch, const cb_key_spans *sp)
+{
+#if defined(__GNUC__)
+    uint32_t first = sp->key[0], last = sp->key[CB_SAMPLE_BATCH - 1] > first ? sp->key[CB_SAMPLE_BATCH - 1] : first;
+    size_t bytes = (ch->path == CB_PATH_ROTATION ? 4 : 3) * sizeof(float);
+    size_t from = first * bytes, to = (size_t)(last + 2 < ch->key_count ? last + 2 : ch->key_count) * bytes;
+    for (size_t at = from & ~(size_t)63; at < to; at += 64) __builtin_prefetch((const char *)ch->values + at);
+#else
+    (void)ch, (void)sp;
+#endif
+}
+
 /* Index of the last key with times[k] <= t (0 when t is before the first key). `hint` holds the
  * previous answer: frames are sampled in order, so the answer is usually it or the next key.
  * The answer does not depend on the hint (times increase strictly). */
