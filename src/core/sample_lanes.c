@@ -161,25 +161,11 @@ static CB_CLONE_INLINE void gather_key_pairs(const float *values, const uint32_t
 }
 #endif
 
-/* The 256 bytes after a batch's last key pair (`comps` floats a key), which the channel's next
- * batch most likely reads - batches go forward in time: a clip's rows, a stride's samples -
- * asked of the memory a batch ahead. A batch reads the keys of each of a clip's channels in turn
- * (about 200 on the big rig): more streams than the hardware prefetcher follows, so without this
- * every channel of every batch starts with a cache miss. A hint: it changes no value. */
-static CB_CLONE_INLINE void prefetch_next_batch(const cb_channel *ch, const cb_key_spans *sp, size_t comps)
-{
-#if defined(__GNUC__)
-    size_t last = (sp->key[B - 1] + 1) * comps * sizeof(float), end = ch->key_count * comps * sizeof(float);
-    for (size_t at = last + 64; at < end && at <= last + 256; at += 64)
-        __builtin_prefetch((const char *)ch->values + at);
-#else
-    (void)ch, (void)sp, (void)comps;
-#endif
-}
-
 /* The keys channel c of the clip reads in this batch (when its lanes come from its group's
- * spans, `base` the clip's first group), asked for ahead of it (cb_prefetch_keys): what a batch
- * ahead fetched (prefetch_next_batch) has mostly left the cache again by the time it is read. */
+ * spans, `base` the clip's first group), asked for ahead of it (cb_prefetch_keys). A batch reads
+ * the keys of each of a clip's channels in turn (about 200 on the big rig): more streams than the
+ * hardware prefetcher follows. Asking a batch ahead for the keys after its last pair (as was done)
+ * fetched them too early: the clip's other keys and the lanes pushed them out again. */
 static CB_CLONE_INLINE void prefetch_channel_keys(const cb_sampler *s, const cb_animation *anim, int32_t animation,
                                                   uint32_t c, uint32_t base)
 {
@@ -196,7 +182,6 @@ static CB_CLONE_INLINE void rotation_lanes(const cb_channel *ch, const cb_key_sp
 {
     double a[4][B], b[4][B];
     double redo[B]; /* 1 or 0; a double, as SSE2 has no 64-bit integer compares to vectorize */
-    prefetch_next_batch(ch, sp, 4);
     gather_key_pairs(ch->values, sp->key, a, b);
     slerp_lanes((const double(*)[B])a, (const double(*)[B])b, sp->s, out, redo);
     if (!any_lane(sp->edge, redo)) return;
@@ -214,7 +199,6 @@ static CB_CLONE_INLINE void lerp_lanes(const cb_channel *ch, const cb_key_spans 
                                        uint32_t *hint, const cb_wrap *wrap, double (*out)[B])
 {
     double a[3][B], b[3][B];
-    prefetch_next_batch(ch, sp, 3);
     for (int i = 0; i < B; ++i) {
         const float *ka = ch->values + (size_t)sp->key[i] * 3, *kb = ka + 3;
         for (int c = 0; c < 3; ++c) a[c][i] = ka[c], b[c][i] = kb[c];
