@@ -1,13 +1,14 @@
 /* measure_lanes.c - see measure_lanes.h.
  *
  * Measuring a search's probes takes every bone of every measured row: exact less decoded,
- * then the difference's bound terms (Cow's default bake: 388 K bones, 79 M instructions, at -O2
+ * then the difference's bound terms (Cow's default bake: 388 K bone-rows, 79 M instructions, at -O2
  * about 200 a bone, the blend, the normalisation and the differences one element at a time).
  * Here four rows are the lanes of GCC's vector types (lanes.h) and each lane runs the scalar
  * operations in their order - the blend, cb_quat_normalize's, cb_mat4_from_trs's, the
  * differences and cb_joint_error_terms's (selects for its compares, a lane's own branch) - so
- * its values are the same bits (speed43g). Compilers without vector types take the same
- * operations one lane at a time. */
+ * its values are the same bits (speed43g: 79 -> 46 M on Cow, with the small loops unrolled so the
+ * vectors stay in registers). Compilers without vector types take the same operations one lane
+ * at a time. */
 #include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
