@@ -33,8 +33,8 @@ bool cb_joint_errors(const double *diff, uint32_t bones, const float *bind, cb_j
 static CB_CLONE_INLINE double combine(const cb_vertex_groups *g, const cb_vertex_group *grp, const cb_joint_error *joints, bool centred)
 {
     double most = 0, sum = 0;
-    for (uint32_t k = 0; k < grp->joint_count; ++k) {
-        const cb_group_joint *gj = &g->joints[grp->joint_first + k];
+    const cb_group_joint *gj = g->joints + grp->joint_first, *end = gj + grp->joint_count;
+    for (; gj < end; ++gj) { /* by pointer: an index took 5 instructions a joint to address */
         const cb_joint_error *je = &joints[gj->joint];
         double e = je->at_bind + je->stretch * gj->reach * (1 + 2e-9) + je->slack_fixed;
         if (centred) {

@@ -27,6 +27,43 @@ static CB_CLONE_INLINE void cb_rows_to_lanes4(const v4df *r, double (*out)[CB_SA
     memcpy(&out[0][i], &x, sizeof x), memcpy(&out[1][i], &y, sizeof y);
     memcpy(&out[2][i], &z, sizeof z), memcpy(&out[3][i], &w, sizeof w);
 }
+
+#define CB_SPLAT4(x) ((v4df){x, x, x, x})
+
+/* Vertex v of prim skinned with the joint matrices mats (cb_skin_positions's arithmetic in its
+ * order): the matrices' four rows are the lanes, a column a 32-byte load, so an influence is
+ * four multiplies and adds of vectors where the scalar code took twelve of each (the fourth
+ * row, lane 3, is computed and dropped). Zero weights skipped as there. */
+static CB_CLONE_INLINE void cb_skin_vertex(const cb_primitive *prim, uint32_t v, const double *mats, double r[3])
+{
+    const float *p = prim->positions + (size_t)v * 3;
+    const v4df x = CB_SPLAT4((double)p[0]), y = CB_SPLAT4((double)p[1]), z = CB_SPLAT4((double)p[2]);
+    v4df sum = {0, 0, 0, 0};
+    for (int i = 0; i < 4; ++i) {
+        double w = prim->weights[(size_t)v * 4 + i];
+        if (w == 0) continue;
+        const double *m = mats + (size_t)prim->joints[(size_t)v * 4 + i] * 16;
+        v4df c0, c1, c2, c3;
+        memcpy(&c0, m, 32), memcpy(&c1, m + 4, 32), memcpy(&c2, m + 8, 32), memcpy(&c3, m + 12, 32);
+        sum = sum + CB_SPLAT4(w) * (c0 * x + c1 * y + c2 * z + c3);
+    }
+    r[0] = sum[0], r[1] = sum[1], r[2] = sum[2];
+}
+#else
+static CB_CLONE_INLINE void cb_skin_vertex(const cb_primitive *prim, uint32_t v, const double *mats, double r[3])
+{
+    const float *p = prim->positions + (size_t)v * 3;
+    double x = p[0], y = p[1], z = p[2];
+    r[0] = r[1] = r[2] = 0;
+    for (int i = 0; i < 4; ++i) {
+        double w = prim->weights[(size_t)v * 4 + i];
+        if (w == 0) continue;
+        const double *m = mats + (size_t)prim->joints[(size_t)v * 4 + i] * 16;
+        r[0] += w * (m[0] * x + m[4] * y + m[8] * z + m[12]);
+        r[1] += w * (m[1] * x + m[5] * y + m[9] * z + m[13]);
+        r[2] += w * (m[2] * x + m[6] * y + m[10] * z + m[14]);
+    }
+}
 #endif
 
 #endif

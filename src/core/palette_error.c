@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "error_bound.h"
-#include "lanes.h"
+#include "measure_lanes.h"
 #include "palette_bake.h"
 #include "sampler.h"
 #include "internal/plumbing.h"
@@ -98,140 +98,7 @@ static double skin_row(const bake_state *st, measure_scratch *s, const double *d
 
 #define B CB_SAMPLE_BATCH
 
-/* cb_mat4_from_trs over the lanes: m[k][i] is lane i's m[k], with m[12..14] = t and the
- * scale s on all three axes (the constant elements, 0 and 1, are left out). */
-static CB_CLONE_INLINE void trs_lanes(double m[15][B], const double (*t)[B], const double (*q)[B], const double *s)
-{
-    for (int i = 0; i < B; ++i) {
-        double x = q[0][i], y = q[1][i], z = q[2][i], w = q[3][i];
-        double xx = x * x, yy = y * y, zz = z * z;
-        double xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
-        m[0][i] = (1 - 2 * (yy + zz)) * s[i], m[1][i] = (2 * (xy + wz)) * s[i], m[2][i] = (2 * (xz - wy)) * s[i];
-        m[4][i] = (2 * (xy - wz)) * s[i], m[5][i] = (1 - 2 * (xx + zz)) * s[i], m[6][i] = (2 * (yz + wx)) * s[i];
-        m[8][i] = (2 * (xz + wy)) * s[i], m[9][i] = (2 * (yz - wx)) * s[i], m[10][i] = (1 - 2 * (xx + yy)) * s[i];
-        m[12][i] = t[0][i], m[13][i] = t[1][i], m[14][i] = t[2][i];
-    }
-}
-
-#if defined(__GNUC__) /* GCC and clang: vector types (lanes.h) and __builtin_shufflevector */
-/* Lane i's difference matrix into out + i * stride, from its 12 elements as lanes d[k] (column c
- * is d[3c .. 3c + 2], then a 0): each column of four lanes a 4x4 transpose of shuffles and four
- * 32-byte stores, where element by element takes 16 scattered stores a lane. */
-static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out, size_t stride)
-{
-    const v4df zero = {0, 0, 0, 0};
-    for (int first = 0; first < B; first += 4)
-        for (int c = 0; c < 4; ++c) {
-            v4df r0, r1, r2;
-            memcpy(&r0, &d[3 * c][first], 32), memcpy(&r1, &d[3 * c + 1][first], 32), memcpy(&r2, &d[3 * c + 2][first], 32);
-            v4df t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
-            v4df t2 = __builtin_shufflevector(r2, zero, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, zero, 1, 5, 3, 7);
-            v4df l0 = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), l1 = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
-            v4df l2 = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), l3 = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
-            double *o = out + (size_t)first * stride + 4 * c;
-            memcpy(o, &l0, 32), memcpy(o + stride, &l1, 32), memcpy(o + 2 * stride, &l2, 32), memcpy(o + 3 * stride, &l3, 32);
-        }
-}
-
-/* Values 0 .. n - 1 (n: 8, or 16 for a matrix) of the rows x[i] + at as lanes, v[k][i] =
- * x[i][at + k]: four rows and four values at a time, four 32-byte loads and a transpose, where
- * value by value took a load and a store each. */
-static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, int n, double (*v)[B])
-{
-    for (int first = 0; first < B; first += 4)
-        for (int h = 0; h < n; h += 4) {
-            v4df r0, r1, r2, r3; /* named, not an array: they stay in registers */
-            memcpy(&r0, x[first] + at + h, 32), memcpy(&r1, x[first + 1] + at + h, 32);
-            memcpy(&r2, x[first + 2] + at + h, 32), memcpy(&r3, x[first + 3] + at + h, 32);
-            const v4df r[4] = {r0, r1, r2, r3};
-            cb_rows_to_lanes4(r, v + h, first);
-        }
-}
-#else
-static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out, size_t stride)
-{
-    for (int i = 0; i < B; ++i)
-        for (int c = 0; c < 4; ++c)
-            for (int r = 0; r < 4; ++r) out[i * stride + 4 * c + r] = r < 3 ? d[3 * c + r][i] : 0;
-}
-
-static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, int n, double (*v)[B])
-{
-    for (int i = 0; i < B; ++i)
-        for (int k = 0; k < n; ++k) v[k][i] = x[i][at + k];
-}
-#endif
-
-/* Bone j of the batch's rows, measured against similarities: lane i's exact matrix from the
- * sampler's lanes `sim` (cb_similarity_matrix's operations), or from the joint matrices mats[i]
- * where sim is NULL (a rig that is not made of similarities: the exact matrices as sampled, the
- * decoding and the differences as the row by row path computes them), its decoded one from rows a[i]
- * (blended towards b[i] by fr when b: palette_blend_values's operations; B of each, those past
- * count repeating the last) as
- * cb_palette_values_to_matrix builds a qpos bone, and their difference into row i's diff
- * (diff + i * bones * 16: B rows, those past count repeat the last); the difference's bound
- * terms (cb_joint_errors's) into row i's joints, for the first `count` rows, and whether they
- * are finite into finite[i]. The same operations in the same order as one matrix at a time, so
- * the same bits, but over the lanes they vectorize. */
-static CB_CLONE_INLINE void bone_differences(const cb_palette *p, uint32_t j, const double (*sim)[B],
-                                             const double *const *mats, const double *const *a, const double *const *b,
-                                             uint32_t count, double fr, double *diff, cb_joint_error *joints, bool *finite)
-{
-    double v[8][B], exact[16][B], decoded[15][B], len2[B];
-    values_to_lanes(a, (size_t)j * 16, 8, v); /* the rows' values as lanes */
-    if (b) {
-        double w[8][B];
-        values_to_lanes(b, (size_t)j * 16, 8, w);
-        double sign[B];
-        for (int i = 0; i < B; ++i) { /* the shorter way between the rows */
-            double dot = v[0][i] * w[0][i] + v[1][i] * w[1][i] + v[2][i] * w[2][i] + v[3][i] * w[3][i];
-            sign[i] = dot < 0 ? -1 : 1;
-        }
-        for (int k = 0; k < 8; ++k)
-            for (int i = 0; i < B; ++i) v[k][i] = v[k][i] * (1 - fr) + (k < 4 ? sign[i] * w[k][i] : w[k][i]) * fr;
-    }
-    double inv[B];
-    for (int i = 0; i < B; ++i) { /* cb_quat_normalize: a zero quaternion is the identity */
-        len2[i] = v[0][i] * v[0][i] + v[1][i] * v[1][i] + v[2][i] * v[2][i] + v[3][i] * v[3][i];
-        inv[i] = 1 / sqrt(len2[i]);
-    }
-    for (int k = 0; k < 4; ++k)
-        for (int i = 0; i < B; ++i) v[k][i] = len2[i] == 0 ? (k == 3 ? 1 : 0) : v[k][i] * inv[i];
-    if (sim) {
-        trs_lanes(exact, sim + 4, sim, sim[7]);
-    } else { /* (elements 3, 7, 11 and 15 are read by nothing a difference feeds: error_bound.h, skinning) */
-        values_to_lanes(mats, (size_t)j * 16, 16, exact);
-    }
-    trs_lanes(decoded, v + 4, v, v[7]); /* t = p for now: t = p - A b below */
-    const float *bind = p->bind_positions + (size_t)j * 3;
-    double bx = bind[0], by = bind[1], bz = bind[2];
-    for (int i = 0; i < B; ++i) {
-        double abx = decoded[0][i] * bx + decoded[4][i] * by + decoded[8][i] * bz;
-        double aby = decoded[1][i] * bx + decoded[5][i] * by + decoded[9][i] * bz;
-        double abz = decoded[2][i] * bx + decoded[6][i] * by + decoded[10][i] * bz;
-        decoded[12][i] = v[4][i] - abx, decoded[13][i] = v[5][i] - aby, decoded[14][i] = v[6][i] - abz;
-    }
-    double d[12][B]; /* the differences' elements 0-2, 4-6, 8-10, 12-14 (3, 7, 11, 15 are 0 - 0, 1 - 1) */
-    for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 3; ++r)
-            for (int i = 0; i < B; ++i) d[3 * c + r][i] = exact[4 * c + r][i] - decoded[4 * c + r][i];
-    store_differences((const double(*)[B])d, diff + (size_t)j * 16, (size_t)p->bone_count * 16);
-    /* Each row's bound terms for the bone (cb_joint_errors's, over the lanes). */
-    double terms[4][B], sum[B];
-    for (int i = 0; i < B; ++i) {
-        double t[4], D[16] = {d[0][i], d[1][i], d[2][i],  0, d[3][i], d[4][i],  d[5][i],  0,
-                              d[6][i], d[7][i], d[8][i], 0, d[9][i], d[10][i], d[11][i], 0};
-        sum[i] = cb_joint_error_terms(D, bx, by, bz, t);
-        terms[0][i] = t[0], terms[1][i] = t[1], terms[2][i] = t[2], terms[3][i] = t[3];
-    }
-    for (uint32_t i = 0; i < count; ++i) {
-        size_t at = (size_t)i * p->bone_count + j;
-        joints[at] = (cb_joint_error){terms[0][i], terms[1][i], terms[2][i], terms[3][i], diff + at * 16};
-        finite[i] &= isfinite(sum[i]);
-    }
-}
-
-/* What bone_differences takes besides the joint and its lanes, for a batch of rows. */
+/* What palette_bone_differences takes besides the joint and its lanes, for a batch of rows. */
 typedef struct differences {
     const cb_palette *p;
     const double *const *mats, *const *a, *const *b;
@@ -242,12 +109,11 @@ typedef struct differences {
 
 /* Joint j's differences from its similarities' lanes, or from the matrices where lanes is NULL;
  * the sampler's sink (cb_clip_frame_lanes_each) for rigs of similarities. */
-CB_TARGET_CLONES
 static void joint_differences(void *ctx, uint32_t j, double (*lanes)[B])
 {
     const differences *d = ctx;
-    bone_differences(d->p, j, (const double(*)[B])lanes, d->mats, d->a, d->b, d->count, d->fr, d->s->diff,
-                     d->s->joints, d->s->finite);
+    palette_bone_differences(d->p, j, (const double(*)[B])lanes, d->mats, d->a, d->b, d->count, d->fr, d->s->diff,
+                             d->s->joints, d->s->finite);
 }
 
 /* Clip c's joint matrices at `frame` of framing (palette_frame_matrices), where they stay until
@@ -268,7 +134,7 @@ static const double *exact_matrices(bake_state *st, worker *w, uint32_t c, const
  * cheap (see the end; the others are left for later). Skinning is linear in the matrices, so
  * one skinning with (exact - decoded) gives each vertex's error directly: half the work of
  * skinning twice, and no cancellation. Rows baked from similarities are measured against those, sampled
- * together like the bake did, every row's differences at once (bone_differences). */
+ * together like the bake did, every row's differences at once (palette_bone_differences). */
 CB_TARGET_CLONES
 static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t *frames, uint32_t count,
                            uint32_t sub, uint32_t parts, measure_scratch *s, double *bounds, double worst)
@@ -282,7 +148,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     for (uint32_t i = 0; i < count; ++i) times[i] = parts * frames[i] + sub;
     framing.steps *= parts;
     bool similar = p->layout == CB_LAYOUT_QPOS && cb_sampler_is_similarity(w->sampler);
-    /* qpos rows: every row's differences at once, over the lanes (bone_differences) */
+    /* qpos rows: every row's differences at once, over the lanes (palette_bone_differences) */
     bool lanes = p->layout == CB_LAYOUT_QPOS;
     bool blend = sub && !clip->step; /* a stepped clip's runtime holds row f until row f + 1 */
     if (lanes) {

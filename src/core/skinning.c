@@ -4,27 +4,16 @@
 #include <stdlib.h>
 
 #include "cb_math.h"
+#include "lanes.h"
 #include "crowdbake/core.h"
 
 /* The matrix products run on 4 lanes (the 4th, the matrices' last row, is dropped): one AVX2
- * vector each where the CPU has it, with the scalar code's operations in its order. */
+ * vector each where the CPU has it, with the scalar code's operations in its order
+ * (cb_skin_vertex, lanes.h). */
 CB_TARGET_CLONES
 void cb_skin_positions(const cb_primitive *prim, const double *joint_mats, double *out)
 {
-    for (uint32_t v = 0; v < prim->vertex_count; ++v) {
-        const float *p = prim->positions + (size_t)v * 3;
-        double x = p[0], y = p[1], z = p[2], r[4] = {0, 0, 0, 0};
-        for (int i = 0; i < 4; ++i) {
-            double w = prim->weights[(size_t)v * 4 + i];
-            if (w == 0) continue;
-            const double *m = joint_mats + (size_t)prim->joints[(size_t)v * 4 + i] * 16;
-            r[0] += w * (m[0] * x + m[4] * y + m[8] * z + m[12]);
-            r[1] += w * (m[1] * x + m[5] * y + m[9] * z + m[13]);
-            r[2] += w * (m[2] * x + m[6] * y + m[10] * z + m[14]);
-            r[3] += w * (m[3] * x + m[7] * y + m[11] * z + m[15]);
-        }
-        out[(size_t)v * 3] = r[0], out[(size_t)v * 3 + 1] = r[1], out[(size_t)v * 3 + 2] = r[2];
-    }
+    for (uint32_t v = 0; v < prim->vertex_count; ++v) cb_skin_vertex(prim, v, joint_mats, out + (size_t)v * 3);
 }
 
 double cb_skin_rest_bounds(cb_sampler *sampler, double min[3], double max[3])

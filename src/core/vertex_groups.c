@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "cb_math.h"
+#include "lanes.h" /* cb_skin_vertex */
 
 /* A vertex as grouping sorts it: by main joint, then along a Z-order curve through the
  * primitive's box, so that a group's vertices lie close together. */
@@ -202,18 +203,8 @@ double cb_skin_group_worst(const cb_primitive *prim, const uint32_t *vertices, u
 {
     double worst = 0;
     for (uint32_t k = 0; k < count; ++k) {
-        uint32_t v = vertices[k];
-        const float *p = prim->positions + (size_t)v * 3;
-        double x = p[0], y = p[1], z = p[2], r[4] = {0, 0, 0, 0};
-        for (int i = 0; i < 4; ++i) {
-            double w = prim->weights[(size_t)v * 4 + i];
-            if (w == 0) continue;
-            const double *m = mats + (size_t)prim->joints[(size_t)v * 4 + i] * 16;
-            r[0] += w * (m[0] * x + m[4] * y + m[8] * z + m[12]);
-            r[1] += w * (m[1] * x + m[5] * y + m[9] * z + m[13]);
-            r[2] += w * (m[2] * x + m[6] * y + m[10] * z + m[14]);
-            r[3] += w * (m[3] * x + m[7] * y + m[11] * z + m[15]);
-        }
+        double r[3];
+        cb_skin_vertex(prim, vertices[k], mats, r);
         double d2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
         worst = d2 > worst ? d2 : worst;
     }

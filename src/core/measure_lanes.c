@@ -1,0 +1,266 @@
+/* measure_lanes.c - see measure_lanes.h.
+ *
+ * Measuring a search's probes takes every bone of every measured row: exact less decoded,
+ * then the difference's bound terms (Cow's default bake: 388 K bone-rows, 79 M instructions, at -O2
+ * about 200 a bone, the blend, the normalisation and the differences one element at a time).
+ * Here four rows are the lanes of GCC's vector types (lanes.h) and each lane runs the scalar
+ * operations in their order - the blend, cb_quat_normalize's, cb_mat4_from_trs's, the
+ * differences and cb_joint_error_terms's (selects for its compares, a lane's own branch) - so
+ * its values are the same bits (speed43g: 79 -> 46 M on Cow, with the small loops unrolled so the
+ * vectors stay in registers). Compilers without vector types take the same operations one lane
+ * at a time. */
+#include <math.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "cb_math.h"
+#include "lanes.h" /* v4df, v4di */
+#include "measure_lanes.h"
+
+#define B CB_SAMPLE_BATCH
+
+#if defined(__GNUC__)
+#define SEL4(take, x, y) ((v4df)(((v4di)(x) & (take)) | ((v4di)(y) & ~(take))))
+#define ABS4(x) ((v4df)((v4di)(x) & (v4di){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}))
+#define SPLAT4(x) ((v4df){x, x, x, x})
+
+/* sqrt on each lane (a loop GCC turns into one vsqrtpd). (Vectors by pointer: by value,
+ * 32-byte vectors change the calling convention of the clone without AVX.) */
+static CB_CLONE_INLINE void sqrt4(v4df *x)
+{
+    v4df r = *x;
+    for (int i = 0; i < 4; ++i) r[i] = sqrt(r[i]);
+    *x = r;
+}
+
+/* Values at .. at + n - 1 (n: 8 or 16) of the rows x[0 .. 3] as lanes: v[k][l] = x[l][at + k],
+ * four values at a time by four 32-byte loads and a 4x4 transpose (cb_rows_to_lanes4's). */
+static CB_CLONE_INLINE void load_lanes4(const double *const *x, size_t at, int n, v4df *v)
+{
+    #pragma GCC unroll 16
+    for (int h = 0; h < n; h += 4) {
+        v4df r0, r1, r2, r3;
+        memcpy(&r0, x[0] + at + h, 32), memcpy(&r1, x[1] + at + h, 32);
+        memcpy(&r2, x[2] + at + h, 32), memcpy(&r3, x[3] + at + h, 32);
+        v4df t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
+        v4df t2 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
+        v[h] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), v[h + 1] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+        v[h + 2] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), v[h + 3] = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+    }
+}
+
+/* cb_mat4_from_trs over four lanes: m[k] is element k, with m[12 .. 14] = t and the scale s on
+ * all three axes (the constant elements, 0 and 1, are left out). */
+static CB_CLONE_INLINE void trs4(const v4df *t, const v4df *q, const v4df *scale, v4df *m)
+{
+    const v4df s = *scale;
+    const v4df one = SPLAT4(1.0), two = SPLAT4(2.0);
+    v4df x = q[0], y = q[1], z = q[2], w = q[3];
+    v4df xx = x * x, yy = y * y, zz = z * z;
+    v4df xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
+    m[0] = (one - two * (yy + zz)) * s, m[1] = (two * (xy + wz)) * s, m[2] = (two * (xz - wy)) * s;
+    m[4] = (two * (xy - wz)) * s, m[5] = (one - two * (xx + zz)) * s, m[6] = (two * (yz + wx)) * s;
+    m[8] = (two * (xz + wy)) * s, m[9] = (two * (yz - wx)) * s, m[10] = (one - two * (xx + yy)) * s;
+    m[12] = t[0], m[13] = t[1], m[14] = t[2];
+}
+
+/* Each lane's difference matrix into out + l * stride, from its 12 elements d (column c is
+ * d[3c .. 3c + 2], then a 0): a transpose of shuffles and 32-byte stores a column. */
+static CB_CLONE_INLINE void store_differences4(const v4df *d, double *out, size_t stride)
+{
+    const v4df zero = SPLAT4(0.0);
+    #pragma GCC unroll 16
+    for (int c = 0; c < 4; ++c) {
+        v4df r0 = d[3 * c], r1 = d[3 * c + 1], r2 = d[3 * c + 2];
+        v4df t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
+        v4df t2 = __builtin_shufflevector(r2, zero, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, zero, 1, 5, 3, 7);
+        v4df l0 = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), l1 = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+        v4df l2 = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), l3 = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+        double *o = out + 4 * c;
+        memcpy(o, &l0, 32), memcpy(o + stride, &l1, 32), memcpy(o + 2 * stride, &l2, 32), memcpy(o + 3 * stride, &l3, 32);
+    }
+}
+
+/* cb_joint_error_terms over four lanes, from the differences' elements d (as store_differences4
+ * takes them: D[4c + r] is d[3c + r]); `bind` is sqrt(bx^2 + by^2 + bz^2), the same for every
+ * lane. Its operations in its order; its compares and selects as masks. *sum: at_bind +
+ * slack_fixed. */
+static CB_CLONE_INLINE void joint_error_terms4(const v4df *d, double bx, double by, double bz, double bind, v4df *terms,
+                                               v4df *sum)
+{
+    const v4df x = SPLAT4(bx), y = SPLAT4(by), z = SPLAT4(bz);
+    v4df ex = d[0] * x + d[3] * y + d[6] * z + d[9];
+    v4df ey = d[1] * x + d[4] * y + d[7] * z + d[10];
+    v4df ez = d[2] * x + d[5] * y + d[8] * z + d[11];
+    const v4df *c0 = d, *c1 = d + 3, *c2 = d + 6; /* columns of A */
+    v4df g00 = c0[0] * c0[0] + c0[1] * c0[1] + c0[2] * c0[2], g11 = c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2];
+    v4df g22 = c2[0] * c2[0] + c2[1] * c2[1] + c2[2] * c2[2];
+    v4df g01 = ABS4(c0[0] * c1[0] + c0[1] * c1[1] + c0[2] * c1[2]);
+    v4df g02 = ABS4(c0[0] * c2[0] + c0[1] * c2[1] + c0[2] * c2[2]);
+    v4df g12 = ABS4(c1[0] * c2[0] + c1[1] * c2[1] + c1[2] * c2[2]);
+    v4df r0 = g00 + g01 + g02, r1 = g01 + g11 + g12, r2 = g02 + g12 + g22;
+    v4df r = SEL4(r0 > r1, r0, r1);
+    v4df a = SEL4(r > r2, r, r2), t = d[9] * d[9] + d[10] * d[10] + d[11] * d[11], e = ex * ex + ey * ey + ez * ez;
+    sqrt4(&a), sqrt4(&t), sqrt4(&e);
+    a = a * SPLAT4(1 + 1e-9);
+    terms[0] = e;
+    terms[1] = a;
+    terms[2] = SPLAT4(1e-9) * (a * SPLAT4(bind) + t);
+    terms[3] = t;
+    *sum = terms[0] + terms[2];
+}
+
+/* Lanes first .. first + 3 of palette_bone_differences: their differences stored, their terms
+ * and sums (at_bind + slack_fixed) into terms[k][first ..] and sum[first ..]. */
+static CB_CLONE_INLINE void differences4(const cb_palette *p, uint32_t j, const double (*sim)[B], const double *const *mats,
+                                         const double *const *a, const double *const *b, double fr, int first,
+                                         double *diff, double (*terms)[B], double *sum)
+{
+    v4df v[8], exact[16], decoded[15];
+    load_lanes4(a + first, (size_t)j * 16, 8, v); /* the rows' values as lanes */
+    if (b) {
+        v4df w[8];
+        load_lanes4(b + first, (size_t)j * 16, 8, w);
+        v4df dot = v[0] * w[0] + v[1] * w[1] + v[2] * w[2] + v[3] * w[3]; /* the shorter way between the rows */
+        v4df sign = SEL4(dot < SPLAT4(0.0), SPLAT4(-1.0), SPLAT4(1.0)), keep = SPLAT4(1 - fr), take = SPLAT4(fr);
+        #pragma GCC unroll 16
+        for (int k = 0; k < 8; ++k) v[k] = v[k] * keep + (k < 4 ? sign * w[k] : w[k]) * take;
+    }
+    /* cb_quat_normalize: a zero quaternion is the identity */
+    v4df len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3], norm = len2;
+    sqrt4(&norm);
+    v4df inv = SPLAT4(1.0) / norm;
+    v4di empty = len2 == SPLAT4(0.0);
+    #pragma GCC unroll 16
+    for (int k = 0; k < 4; ++k) v[k] = SEL4(empty, SPLAT4(k == 3 ? 1.0 : 0.0), v[k] * inv);
+    if (sim) {
+        v4df s[8];
+        #pragma GCC unroll 16
+        for (int k = 0; k < 8; ++k) memcpy(&s[k], &sim[k][first], 32);
+        trs4(s + 4, s, &s[7], exact);
+    } else { /* (elements 3, 7, 11 and 15 are read by nothing a difference feeds: error_bound.h, skinning) */
+        load_lanes4(mats + first, (size_t)j * 16, 16, exact);
+    }
+    trs4(v + 4, v, &v[7], decoded); /* t = p for now: t = p - A b below */
+    const float *bind = p->bind_positions + (size_t)j * 3;
+    double bx = bind[0], by = bind[1], bz = bind[2];
+    const v4df x = SPLAT4(bx), y = SPLAT4(by), z = SPLAT4(bz);
+    decoded[12] = v[4] - (decoded[0] * x + decoded[4] * y + decoded[8] * z);
+    decoded[13] = v[5] - (decoded[1] * x + decoded[5] * y + decoded[9] * z);
+    decoded[14] = v[6] - (decoded[2] * x + decoded[6] * y + decoded[10] * z);
+    v4df d[12]; /* the differences' elements 0-2, 4-6, 8-10, 12-14 (3, 7, 11, 15 are 0 - 0, 1 - 1) */
+    #pragma GCC unroll 16
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 3; ++r) d[3 * c + r] = exact[4 * c + r] - decoded[4 * c + r];
+    size_t stride = (size_t)p->bone_count * 16;
+    store_differences4(d, diff + (size_t)first * stride + (size_t)j * 16, stride);
+    v4df t[4], total;
+    joint_error_terms4(d, bx, by, bz, sqrt(bx * bx + by * by + bz * bz), t, &total);
+    #pragma GCC unroll 16
+    for (int k = 0; k < 4; ++k) memcpy(&terms[k][first], &t[k], 32);
+    memcpy(sum + first, &total, 32);
+}
+
+CB_TARGET_CLONES
+void palette_bone_differences(const cb_palette *p, uint32_t j, const double (*sim)[B], const double *const *mats,
+                              const double *const *a, const double *const *b, uint32_t count, double fr, double *diff,
+                              cb_joint_error *joints, bool *finite)
+{
+    double terms[4][B], sum[B];
+    /* the lanes past count are read by nothing: only groups of four that hold a row are made */
+    for (uint32_t first = 0; first < count; first += 4) differences4(p, j, sim, mats, a, b, fr, (int)first, diff, terms, sum);
+    for (uint32_t i = 0; i < count; ++i) {
+        size_t at = (size_t)i * p->bone_count + j;
+        joints[at] = (cb_joint_error){terms[0][i], terms[1][i], terms[2][i], terms[3][i], diff + at * 16};
+        finite[i] &= isfinite(sum[i]);
+    }
+}
+#else
+/* The scalar operations, one lane at a time. */
+/* cb_mat4_from_trs over the lanes: m[k][i] is lane i's m[k], with m[12..14] = t and the
+ * scale s on all three axes (the constant elements, 0 and 1, are left out). */
+static CB_CLONE_INLINE void trs_lanes(double m[15][B], const double (*t)[B], const double (*q)[B], const double *s)
+{
+    for (int i = 0; i < B; ++i) {
+        double x = q[0][i], y = q[1][i], z = q[2][i], w = q[3][i];
+        double xx = x * x, yy = y * y, zz = z * z;
+        double xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
+        m[0][i] = (1 - 2 * (yy + zz)) * s[i], m[1][i] = (2 * (xy + wz)) * s[i], m[2][i] = (2 * (xz - wy)) * s[i];
+        m[4][i] = (2 * (xy - wz)) * s[i], m[5][i] = (1 - 2 * (xx + zz)) * s[i], m[6][i] = (2 * (yz + wx)) * s[i];
+        m[8][i] = (2 * (xz + wy)) * s[i], m[9][i] = (2 * (yz - wx)) * s[i], m[10][i] = (1 - 2 * (xx + yy)) * s[i];
+        m[12][i] = t[0][i], m[13][i] = t[1][i], m[14][i] = t[2][i];
+    }
+}
+static CB_CLONE_INLINE void store_differences(const double (*d)[B], double *out, size_t stride)
+{
+    for (int i = 0; i < B; ++i)
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 4; ++r) out[i * stride + 4 * c + r] = r < 3 ? d[3 * c + r][i] : 0;
+}
+
+static CB_CLONE_INLINE void values_to_lanes(const double *const *x, size_t at, int n, double (*v)[B])
+{
+    for (int i = 0; i < B; ++i)
+        for (int k = 0; k < n; ++k) v[k][i] = x[i][at + k];
+}
+
+CB_TARGET_CLONES
+void palette_bone_differences(const cb_palette *p, uint32_t j, const double (*sim)[B], const double *const *mats,
+                              const double *const *a, const double *const *b, uint32_t count, double fr, double *diff,
+                              cb_joint_error *joints, bool *finite)
+{
+    double v[8][B], exact[16][B], decoded[15][B], len2[B];
+    values_to_lanes(a, (size_t)j * 16, 8, v); /* the rows' values as lanes */
+    if (b) {
+        double w[8][B];
+        values_to_lanes(b, (size_t)j * 16, 8, w);
+        double sign[B];
+        for (int i = 0; i < B; ++i) { /* the shorter way between the rows */
+            double dot = v[0][i] * w[0][i] + v[1][i] * w[1][i] + v[2][i] * w[2][i] + v[3][i] * w[3][i];
+            sign[i] = dot < 0 ? -1 : 1;
+        }
+        for (int k = 0; k < 8; ++k)
+            for (int i = 0; i < B; ++i) v[k][i] = v[k][i] * (1 - fr) + (k < 4 ? sign[i] * w[k][i] : w[k][i]) * fr;
+    }
+    double inv[B];
+    for (int i = 0; i < B; ++i) { /* cb_quat_normalize: a zero quaternion is the identity */
+        len2[i] = v[0][i] * v[0][i] + v[1][i] * v[1][i] + v[2][i] * v[2][i] + v[3][i] * v[3][i];
+        inv[i] = 1 / sqrt(len2[i]);
+    }
+    for (int k = 0; k < 4; ++k)
+        for (int i = 0; i < B; ++i) v[k][i] = len2[i] == 0 ? (k == 3 ? 1 : 0) : v[k][i] * inv[i];
+    if (sim) {
+        trs_lanes(exact, sim + 4, sim, sim[7]);
+    } else { /* (elements 3, 7, 11 and 15 are read by nothing a difference feeds: error_bound.h, skinning) */
+        values_to_lanes(mats, (size_t)j * 16, 16, exact);
+    }
+    trs_lanes(decoded, v + 4, v, v[7]); /* t = p for now: t = p - A b below */
+    const float *bind = p->bind_positions + (size_t)j * 3;
+    double bx = bind[0], by = bind[1], bz = bind[2];
+    for (int i = 0; i < B; ++i) {
+        double abx = decoded[0][i] * bx + decoded[4][i] * by + decoded[8][i] * bz;
+        double aby = decoded[1][i] * bx + decoded[5][i] * by + decoded[9][i] * bz;
+        double abz = decoded[2][i] * bx + decoded[6][i] * by + decoded[10][i] * bz;
+        decoded[12][i] = v[4][i] - abx, decoded[13][i] = v[5][i] - aby, decoded[14][i] = v[6][i] - abz;
+    }
+    double d[12][B]; /* the differences' elements 0-2, 4-6, 8-10, 12-14 (3, 7, 11, 15 are 0 - 0, 1 - 1) */
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 3; ++r)
+            for (int i = 0; i < B; ++i) d[3 * c + r][i] = exact[4 * c + r][i] - decoded[4 * c + r][i];
+    store_differences((const double(*)[B])d, diff + (size_t)j * 16, (size_t)p->bone_count * 16);
+    /* Each row's bound terms for the bone (cb_joint_errors's, over the lanes). */
+    double terms[4][B], sum[B];
+    for (int i = 0; i < B; ++i) {
+        double t[4], D[16] = {d[0][i], d[1][i], d[2][i],  0, d[3][i], d[4][i],  d[5][i],  0,
+                              d[6][i], d[7][i], d[8][i], 0, d[9][i], d[10][i], d[11][i], 0};
+        sum[i] = cb_joint_error_terms(D, bx, by, bz, t);
+        terms[0][i] = t[0], terms[1][i] = t[1], terms[2][i] = t[2], terms[3][i] = t[3];
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+        size_t at = (size_t)i * p->bone_count + j;
+        joints[at] = (cb_joint_error){terms[0][i], terms[1][i], terms[2][i], terms[3][i], diff + at * 16};
+        finite[i] &= isfinite(sum[i]);
+    }
+}
+#endif
