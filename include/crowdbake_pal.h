@@ -211,11 +211,12 @@ void cbpal_xxh64_init(cbpal_xxh64_state *s)
 /* Asks for the bytes 2 KB ahead while a stripe is hashed: a large palette or model file is read
  * from memory, not cache, and the hardware's prefetcher alone leaves the hash waiting on it (29 MB
  * hashed in 4.4 ms without, 3.2 ms with, on an EPYC VM). A hint: it never faults, past the end
- * either, and does not change a bit of the hash. */
+ * either (an address computed as an integer, not a pointer past the buffer), and does not change
+ * a bit of the hash. */
 #if defined(__GNUC__) || defined(__clang__)
-#define CBPAL__PREFETCH(p) __builtin_prefetch(p)
+#define CBPAL__PREFETCH(p, ahead) __builtin_prefetch((const void *)((uintptr_t)(p) + (ahead)))
 #else
-#define CBPAL__PREFETCH(p) ((void)0)
+#define CBPAL__PREFETCH(p, ahead) ((void)0)
 #endif
 
 static void cbpal__stripe(uint64_t v[4], const unsigned char *p)
@@ -240,7 +241,7 @@ void cbpal_xxh64_update(cbpal_xxh64_state *s, const void *data, size_t size)
     }
     uint64_t v[4] = {s->v[0], s->v[1], s->v[2], s->v[3]};
     for (; size >= 32; p += 32, size -= 32) {
-        CBPAL__PREFETCH(p + 2048);
+        CBPAL__PREFETCH(p, 2048);
         cbpal__stripe(v, p);
     }
     memcpy(s->v, v, sizeof v);
