@@ -147,8 +147,8 @@ static void take_kept_row(bake_state *st, worker *w, uint32_t c, uint32_t f, con
         float *out = row + (size_t)j * 8;
         cb_quat rot = {q[0], q[1], q[2], q[3]};
         bool flip = f ? cb_quat_dot(rot, w->prev[j]) < 0 : rot.w < 0;
-        for (int i = 0; i < 4; ++i) out[i] = flip ? -v[i] : v[i];
-        out[4] = v[4], out[5] = v[5], out[6] = v[6], out[7] = v[7];
+        memcpy(out, v, 8 * sizeof *out);
+        if (flip) out[0] = -out[0], out[1] = -out[1], out[2] = -out[2], out[3] = -out[3];
         w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
     }
     merge_bounds(bounds, &k->bounds);
