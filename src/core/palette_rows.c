@@ -78,7 +78,9 @@ enum { DERIVED_QPOS = 1, ROW_KEPT = 2 };
  * a float's sign flips exactly, so the copy is the same bits. The bounds and range are the
  * pose's own, grown from empty in bone order; merged into the clip's with the same compares they
  * give the same extremes as growing it bone by bone (a compare keeps the first of equal values,
- * and the pose's first extreme comes before every later one). */
+ * and the pose's first extreme comes before every later one). Besides the pose, the row reads
+ * the skin's facts (bind positions, reaches), which every bake that shares the cache builds alike
+ * from the same skin (the search's and the bake after it). */
 typedef struct kept_row {
     extent bounds;      /* grow_bounds over the joints, from empty */
     value_range range;  /* range_grow_qpos over the joints, from empty (linear from -INFINITY) */
