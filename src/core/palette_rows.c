@@ -66,13 +66,31 @@ static CB_CLONE_INLINE void qpos_store(const double q[5], const cb_quat *prev, f
     out[7] = (float)q[4];
 }
 
-/* A probe pose's extra doubles (pose_cache.h): 1 when its joints' qpos_similarity follows (5
- * doubles a joint), NaN before. */
-#define KEPT_QPOS(bones) (1 + 5 * (bones))
+/* A probe pose's extra doubles (pose_cache.h): its state first - NaN before anything is
+ * derived, DERIVED_QPOS when its joints' qpos_similarity follows (5 doubles a joint), ROW_KEPT
+ * when its qpos row follows those too (kept_row). */
+enum { DERIVED_QPOS = 1, ROW_KEPT = 2 };
+#define KEPT_ROW_AT(bones) (1 + 5 * (size_t)(bones))
+
+/* What a qpos row takes of its pose alone, kept so that a probe at another rate that has the pose
+ * again copies it (Husky: half the search's rows are poses a probe before made a row of). Only
+ * each quaternion's hemisphere depends on the rows before: kept as qpos_similarity gives it, and
+ * a float's sign flips exactly, so the copy is the same bits. The bounds and range are the
+ * pose's own, grown from empty in bone order; merged into the clip's with the same compares they
+ * give the same extremes as growing it bone by bone (a compare keeps the first of equal values,
+ * and the pose's first extreme comes before every later one). Besides the pose, the row reads
+ * the skin's facts (bind positions, reaches), which every bake that shares the cache builds alike
+ * from the same skin (the search's and the bake after it). */
+typedef struct kept_row {
+    extent bounds;      /* grow_bounds over the joints, from empty */
+    value_range range;  /* range_grow_qpos over the joints, from empty (linear from -INFINITY) */
+    float values[];     /* bones x 8: the row, quaternions unflipped */
+} kept_row;
+#define KEPT_ROW_DOUBLES(bones) ((sizeof(kept_row) + sizeof(double) - 1) / sizeof(double) + 4 * (size_t)(bones))
 
 pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes)
 {
-    return pose_cache_create(bones, KEPT_QPOS(bones), max_bytes);
+    return pose_cache_create(bones, (uint32_t)(KEPT_ROW_AT(bones) + KEPT_ROW_DOUBLES(bones)), max_bytes);
 }
 
 const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, uint32_t frame,
@@ -104,24 +122,64 @@ static double frobenius3(const double *M)
     return sqrt(norm);
 }
 
+static void merge_bounds(extent *into, const extent *e)
+{
+    for (int k = 0; k < 3; ++k) {
+        into->lo[k] = e->lo[k] < into->lo[k] ? e->lo[k] : into->lo[k];
+        into->hi[k] = e->hi[k] > into->hi[k] ? e->hi[k] : into->hi[k];
+    }
+}
+
+static void merge_range(value_range *into, const value_range *r)
+{
+    for (int k = 0; k < 3; ++k) {
+        into->lo[k] = r->lo[k] < into->lo[k] ? r->lo[k] : into->lo[k];
+        into->hi[k] = r->hi[k] > into->hi[k] ? r->hi[k] : into->hi[k];
+    }
+    into->linear = r->linear > into->linear ? r->linear : into->linear;
+}
+
+/* A kept pose's qpos row (kept_row) as palette_matrix_row makes it: each quaternion on the side
+ * qpos_store picks, from the same doubles q. */
+static void take_kept_row(bake_state *st, worker *w, uint32_t c, uint32_t f, const double *q, const kept_row *k,
+                          float *row, extent *bounds)
+{
+    for (uint32_t j = 0; j < st->p->bone_count; ++j, q += 5) {
+        const float *v = k->values + (size_t)j * 8;
+        float *out = row + (size_t)j * 8;
+        cb_quat rot = {q[0], q[1], q[2], q[3]};
+        bool flip = f ? cb_quat_dot(rot, w->prev[j]) < 0 : rot.w < 0;
+        memcpy(out, v, 8 * sizeof *out);
+        if (flip) out[0] = -out[0], out[1] = -out[1], out[2] = -out[2], out[3] = -out[3];
+        w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
+    }
+    merge_bounds(bounds, &k->bounds);
+    merge_range(&st->ranges[c], &k->range);
+}
+
 /* One row from joint matrices: any layout; qpos checks each matrix is a similarity. */
 cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row, extent *bounds,
                              cb_error *err)
 {
     cb_palette *p = st->p;
     cb_palette_clip *clip = &p->clips[c];
-    double *kept; /* the pose's qpos_similarity, where a search keeps it (1 + 5 a joint) */
+    double *kept; /* the pose's qpos_similarity, where a search keeps it (1 + 5 a joint), and its row */
     const double *mats = palette_frame_matrices(st, w, c, &st->infos[c], f, &kept);
-    bool derived = kept && kept[0] == 1;
-    if (kept && !derived && p->layout == CB_LAYOUT_QPOS) /* a new pose: every joint's at once where it can */
+    bool qpos = p->layout == CB_LAYOUT_QPOS;
+    kept_row *keep = kept && qpos ? (kept_row *)(kept + KEPT_ROW_AT(p->bone_count)) : NULL;
+    if (keep && kept[0] == ROW_KEPT) return take_kept_row(st, w, c, f, kept + 1, keep, row, bounds), CB_OK;
+    bool derived = kept && kept[0] >= DERIVED_QPOS;
+    if (kept && !derived && qpos) /* a new pose: every joint's at once where it can */
         derived = palette_qpos_similarity_pose(mats, p->bone_count, kept + 1);
+    extent pose = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+    value_range range = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}, -INFINITY};
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         const double *M = mats + (size_t)j * 16;
         const float *b = p->bind_positions + (size_t)j * 3;
         float *out = row + (size_t)j * CANON(p->layout);
         cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]}); /* the joint now: M b */
-        if (st->radius[j] >= 0) grow_bounds(bounds, pos, st->radius[j] * frobenius3(M));
-        if (p->layout != CB_LAYOUT_QPOS) {
+        if (st->radius[j] >= 0) grow_bounds(&pose, pos, st->radius[j] * frobenius3(M));
+        if (!qpos) {
             for (int r = 0; r < 3; ++r)
                 for (int k = 0; k < 4; ++k) out[r * 4 + k] = (float)M[k * 4 + r];
             range_grow_affine(&st->ranges[c], out);
@@ -133,9 +191,19 @@ cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, 
         qpos_store(q, f ? &w->prev[j] : NULL, out);
         w->prev[j] = (cb_quat){out[0], out[1], out[2], out[3]};
         out[4] = (float)pos.x, out[5] = (float)pos.y, out[6] = (float)pos.z;
-        range_grow_qpos(&st->ranges[c], out);
+        if (keep) { /* the row as this pose alone gives it: the quaternion as q has it */
+            float *v = keep->values + (size_t)j * 8;
+            v[0] = (float)q[0], v[1] = (float)q[1], v[2] = (float)q[2], v[3] = (float)q[3];
+            v[4] = out[4], v[5] = out[5], v[6] = out[6], v[7] = out[7];
+        }
+        range_grow_qpos(&range, out);
     }
-    if (kept && p->layout == CB_LAYOUT_QPOS) kept[0] = 1; /* every joint's derived: the next probe takes them */
+    merge_bounds(bounds, &pose);
+    if (qpos) merge_range(&st->ranges[c], &range);
+    if (keep) { /* every joint's derived, and the row: the next probe takes them */
+        keep->bounds = pose, keep->range = range;
+        kept[0] = ROW_KEPT;
+    }
     return CB_OK;
 }
 
@@ -215,7 +283,7 @@ cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *r
         }
         double *kept; /* the pose's qpos_similarity, where a search keeps it (as palette_matrix_row) */
         const double *mats = palette_frame_matrices(st, w, c, &framing, 2 * i + 1, &kept);
-        bool derived = kept && kept[0] == 1;
+        bool derived = kept && kept[0] >= DERIVED_QPOS;
         if (kept && !derived && p->layout == CB_LAYOUT_QPOS)
             derived = palette_qpos_similarity_pose(mats, p->bone_count, kept + 1);
         float *out = mids + (size_t)i * p->bone_count * vals;
@@ -236,7 +304,8 @@ cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *r
             cb_vec3 pos = cb_mat4_transform_point(M, (cb_vec3){b[0], b[1], b[2]});
             o[4] = (float)pos.x, o[5] = (float)pos.y, o[6] = (float)pos.z;
         }
-        if (kept && p->layout == CB_LAYOUT_QPOS) kept[0] = 1; /* every joint's derived: the next probe takes them */
+        if (kept && p->layout == CB_LAYOUT_QPOS && !(kept[0] >= DERIVED_QPOS))
+            kept[0] = DERIVED_QPOS; /* every joint's derived: the next probe takes them */
     }
     return CB_OK;
 }
