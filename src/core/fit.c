@@ -54,12 +54,6 @@ static CB_CLONE_INLINE double best_offset(double c, double a, double b)
     return best;
 }
 
-#if defined(__GNUC__)
-/* Four lanes at a time (fit_sweep.h and the helpers below): a select by a mask, |x|. */
-#define SELECT4(take, x, y) ((v4df)(((v4di)(x) & (take)) | ((v4di)(y) & ~(take))))
-#define ABS4(x) ((v4df)((v4di)(x) & (v4di){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}))
-#endif
-
 /* Sweeps over the rows, each row's offsets moved to the best for its neighbours' (coordinate
  * descent): no step raises the worst error of a value's rows and intervals, and a few sweeps
  * carry a fast interval's need to its neighbours. Each value's offsets depend on that value's
@@ -102,7 +96,7 @@ typedef bool sweep_fn(double *c, const double *d, uint32_t frames, uint32_t inte
                       const wrap_flip *wf, uint32_t v0, uint32_t v1);
 #define SWEEP(name) name##_base
 #define SWEEP_TARGET
-#define MAX4(w, x) SELECT4((x) > (w), x, w)
+#define MAX4(w, x) CB_SELECT4((x) > (w), x, w)
 #include "fit_sweep.h"
 #if CB_CLONES
 #include <immintrin.h>
@@ -136,8 +130,8 @@ CB_TARGET_CLONES static void first_offsets(double *c, const double *dp, const do
     for (; dp && dn && v + 4 <= stride; v += 4) {
         v4df before, after;
         memcpy(&before, dp + v, sizeof before), memcpy(&after, dn + v, sizeof after);
-        v4df larger = SELECT4(ABS4(before) > ABS4(after), before, after);
-        v4df offset = SELECT4(before * after <= zero, quarter * (before + after), half * larger);
+        v4df larger = CB_SELECT4(CB_ABS4(before) > CB_ABS4(after), before, after);
+        v4df offset = CB_SELECT4(before * after <= zero, quarter * (before + after), half * larger);
         memcpy(c + v, &offset, sizeof offset);
     }
 #endif

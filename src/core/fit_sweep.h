@@ -17,7 +17,7 @@
 SWEEP_HELPER void SWEEP(row_worst4)(v4df *w, const v4df *c, const v4df *a, const v4df *b)
 {
     const v4df half = {0.5, 0.5, 0.5, 0.5};
-    v4df x = ABS4(*c), h = half * *c, ta = ABS4(*a - h), tb = ABS4(*b - h);
+    v4df x = CB_ABS4(*c), h = half * *c, ta = CB_ABS4(*a - h), tb = CB_ABS4(*b - h);
     x = MAX4(x, ta);
     *w = MAX4(x, tb);
 }
@@ -38,7 +38,7 @@ SWEEP_HELPER void SWEEP(best_offset4)(v4df *c, const v4df *a, const v4df *b)
     const v4df two = {2, 2, 2, 2}, three = {3, 3, 3, 3}, zero = {0, 0, 0, 0};
     const v4di sign = {INT64_MIN, INT64_MIN, INT64_MIN, INT64_MIN};
     v4df a2 = two * *a, b2 = two * *b, sum = *a + *b;
-    v4df abs_a2 = ABS4(a2), abs_b2 = ABS4(b2), abs_sum = ABS4(sum), abs_diff = ABS4(*a - *b);
+    v4df abs_a2 = CB_ABS4(a2), abs_b2 = CB_ABS4(b2), abs_sum = CB_ABS4(sum), abs_diff = CB_ABS4(*a - *b);
     v4df best = *c, worst, w, cand;
     SWEEP(row_worst4)(&worst, c, a, b);
     /* Each candidate weighed as soon as it is made, in best_offset's order; -2a is 2a with its
@@ -46,9 +46,9 @@ SWEEP_HELPER void SWEEP(best_offset4)(v4df *c, const v4df *a, const v4df *b)
 #define CONSIDER(candidate, its_worst)                                                                                 \
     do {                                                                                                               \
         v4di take = (its_worst) < worst;                                                                               \
-        best = SELECT4(take, candidate, best), worst = SELECT4(take, its_worst, worst);                                \
+        best = CB_SELECT4(take, candidate, best), worst = CB_SELECT4(take, its_worst, worst);                                \
     } while (0)
-    w = MAX4(MAX4(zero, ABS4(*a)), ABS4(*b));
+    w = MAX4(MAX4(zero, CB_ABS4(*a)), CB_ABS4(*b));
     CONSIDER(zero, w);
     cand = a2 / three, SWEEP(row_worst4)(&w, &cand, a, b);
     CONSIDER(cand, w);

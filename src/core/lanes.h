@@ -4,6 +4,7 @@
 #ifndef CB_LANES_H
 #define CB_LANES_H
 
+#include <math.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -28,7 +29,19 @@ static CB_CLONE_INLINE void cb_rows_to_lanes4(const v4df *r, double (*out)[CB_SA
     memcpy(&out[2][i], &z, sizeof z), memcpy(&out[3][i], &w, sizeof w);
 }
 
+/* Four lanes at a time: x on every lane, a select by a mask (take's lanes from x, the others
+ * from y), |x| (the sign bit cleared), and sqrt on each lane (a loop GCC turns into one vsqrtpd;
+ * the vector by pointer, as above). */
 #define CB_SPLAT4(x) ((v4df){x, x, x, x})
+#define CB_SELECT4(take, x, y) ((v4df)(((v4di)(x) & (take)) | ((v4di)(y) & ~(take))))
+#define CB_ABS4(x) ((v4df)((v4di)(x) & (v4di){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}))
+
+static CB_CLONE_INLINE void cb_sqrt4(v4df *x)
+{
+    v4df r = *x;
+    for (int i = 0; i < 4; ++i) r[i] = sqrt(r[i]);
+    *x = r;
+}
 
 /* Vertex v of prim skinned with the joint matrices mats (cb_skin_positions's arithmetic in its
  * order): the matrices' four rows are the lanes, a column a 32-byte load, so an influence is

@@ -21,19 +21,6 @@
 #define B CB_SAMPLE_BATCH
 
 #if defined(__GNUC__)
-#define SEL4(take, x, y) ((v4df)(((v4di)(x) & (take)) | ((v4di)(y) & ~(take))))
-#define ABS4(x) ((v4df)((v4di)(x) & (v4di){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}))
-#define SPLAT4(x) ((v4df){x, x, x, x})
-
-/* sqrt on each lane (a loop GCC turns into one vsqrtpd). (Vectors by pointer: by value,
- * 32-byte vectors change the calling convention of the clone without AVX.) */
-static CB_CLONE_INLINE void sqrt4(v4df *x)
-{
-    v4df r = *x;
-    for (int i = 0; i < 4; ++i) r[i] = sqrt(r[i]);
-    *x = r;
-}
-
 /* Values at .. at + n - 1 (n: 8 or 16) of the rows x[0 .. 3] as lanes: v[k][l] = x[l][at + k],
  * four values at a time by four 32-byte loads and a 4x4 transpose (cb_rows_to_lanes4's). */
 static CB_CLONE_INLINE void load_lanes4(const double *const *x, size_t at, int n, v4df *v)
@@ -55,7 +42,7 @@ static CB_CLONE_INLINE void load_lanes4(const double *const *x, size_t at, int n
 static CB_CLONE_INLINE void trs4(const v4df *t, const v4df *q, const v4df *scale, v4df *m)
 {
     const v4df s = *scale;
-    const v4df one = SPLAT4(1.0), two = SPLAT4(2.0);
+    const v4df one = CB_SPLAT4(1.0), two = CB_SPLAT4(2.0);
     v4df x = q[0], y = q[1], z = q[2], w = q[3];
     v4df xx = x * x, yy = y * y, zz = z * z;
     v4df xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
@@ -69,7 +56,7 @@ static CB_CLONE_INLINE void trs4(const v4df *t, const v4df *q, const v4df *scale
  * d[3c .. 3c + 2], then a 0): a transpose of shuffles and 32-byte stores a column. */
 static CB_CLONE_INLINE void store_differences4(const v4df *d, double *out, size_t stride)
 {
-    const v4df zero = SPLAT4(0.0);
+    const v4df zero = CB_SPLAT4(0.0);
     #pragma GCC unroll 16
     for (int c = 0; c < 4; ++c) {
         v4df r0 = d[3 * c], r1 = d[3 * c + 1], r2 = d[3 * c + 2];
@@ -89,24 +76,24 @@ static CB_CLONE_INLINE void store_differences4(const v4df *d, double *out, size_
 static CB_CLONE_INLINE void joint_error_terms4(const v4df *d, double bx, double by, double bz, double bind, v4df *terms,
                                                v4df *sum)
 {
-    const v4df x = SPLAT4(bx), y = SPLAT4(by), z = SPLAT4(bz);
+    const v4df x = CB_SPLAT4(bx), y = CB_SPLAT4(by), z = CB_SPLAT4(bz);
     v4df ex = d[0] * x + d[3] * y + d[6] * z + d[9];
     v4df ey = d[1] * x + d[4] * y + d[7] * z + d[10];
     v4df ez = d[2] * x + d[5] * y + d[8] * z + d[11];
     const v4df *c0 = d, *c1 = d + 3, *c2 = d + 6; /* columns of A */
     v4df g00 = c0[0] * c0[0] + c0[1] * c0[1] + c0[2] * c0[2], g11 = c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2];
     v4df g22 = c2[0] * c2[0] + c2[1] * c2[1] + c2[2] * c2[2];
-    v4df g01 = ABS4(c0[0] * c1[0] + c0[1] * c1[1] + c0[2] * c1[2]);
-    v4df g02 = ABS4(c0[0] * c2[0] + c0[1] * c2[1] + c0[2] * c2[2]);
-    v4df g12 = ABS4(c1[0] * c2[0] + c1[1] * c2[1] + c1[2] * c2[2]);
+    v4df g01 = CB_ABS4(c0[0] * c1[0] + c0[1] * c1[1] + c0[2] * c1[2]);
+    v4df g02 = CB_ABS4(c0[0] * c2[0] + c0[1] * c2[1] + c0[2] * c2[2]);
+    v4df g12 = CB_ABS4(c1[0] * c2[0] + c1[1] * c2[1] + c1[2] * c2[2]);
     v4df r0 = g00 + g01 + g02, r1 = g01 + g11 + g12, r2 = g02 + g12 + g22;
-    v4df r = SEL4(r0 > r1, r0, r1);
-    v4df a = SEL4(r > r2, r, r2), t = d[9] * d[9] + d[10] * d[10] + d[11] * d[11], e = ex * ex + ey * ey + ez * ez;
-    sqrt4(&a), sqrt4(&t), sqrt4(&e);
-    a = a * SPLAT4(1 + 1e-9);
+    v4df r = CB_SELECT4(r0 > r1, r0, r1);
+    v4df a = CB_SELECT4(r > r2, r, r2), t = d[9] * d[9] + d[10] * d[10] + d[11] * d[11], e = ex * ex + ey * ey + ez * ez;
+    cb_sqrt4(&a), cb_sqrt4(&t), cb_sqrt4(&e);
+    a = a * CB_SPLAT4(1 + 1e-9);
     terms[0] = e;
     terms[1] = a;
-    terms[2] = SPLAT4(1e-9) * (a * SPLAT4(bind) + t);
+    terms[2] = CB_SPLAT4(1e-9) * (a * CB_SPLAT4(bind) + t);
     terms[3] = t;
     *sum = terms[0] + terms[2];
 }
@@ -123,17 +110,17 @@ static CB_CLONE_INLINE void differences4(const cb_palette *p, uint32_t j, const 
         v4df w[8];
         load_lanes4(b + first, (size_t)j * 16, 8, w);
         v4df dot = v[0] * w[0] + v[1] * w[1] + v[2] * w[2] + v[3] * w[3]; /* the shorter way between the rows */
-        v4df sign = SEL4(dot < SPLAT4(0.0), SPLAT4(-1.0), SPLAT4(1.0)), keep = SPLAT4(1 - fr), take = SPLAT4(fr);
+        v4df sign = CB_SELECT4(dot < CB_SPLAT4(0.0), CB_SPLAT4(-1.0), CB_SPLAT4(1.0)), keep = CB_SPLAT4(1 - fr), take = CB_SPLAT4(fr);
         #pragma GCC unroll 16
         for (int k = 0; k < 8; ++k) v[k] = v[k] * keep + (k < 4 ? sign * w[k] : w[k]) * take;
     }
     /* cb_quat_normalize: a zero quaternion is the identity */
     v4df len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3], norm = len2;
-    sqrt4(&norm);
-    v4df inv = SPLAT4(1.0) / norm;
-    v4di empty = len2 == SPLAT4(0.0);
+    cb_sqrt4(&norm);
+    v4df inv = CB_SPLAT4(1.0) / norm;
+    v4di empty = len2 == CB_SPLAT4(0.0);
     #pragma GCC unroll 16
-    for (int k = 0; k < 4; ++k) v[k] = SEL4(empty, SPLAT4(k == 3 ? 1.0 : 0.0), v[k] * inv);
+    for (int k = 0; k < 4; ++k) v[k] = CB_SELECT4(empty, CB_SPLAT4(k == 3 ? 1.0 : 0.0), v[k] * inv);
     if (sim) {
         v4df s[8];
         #pragma GCC unroll 16
@@ -145,7 +132,7 @@ static CB_CLONE_INLINE void differences4(const cb_palette *p, uint32_t j, const 
     trs4(v + 4, v, &v[7], decoded); /* t = p for now: t = p - A b below */
     const float *bind = p->bind_positions + (size_t)j * 3;
     double bx = bind[0], by = bind[1], bz = bind[2];
-    const v4df x = SPLAT4(bx), y = SPLAT4(by), z = SPLAT4(bz);
+    const v4df x = CB_SPLAT4(bx), y = CB_SPLAT4(by), z = CB_SPLAT4(bz);
     decoded[12] = v[4] - (decoded[0] * x + decoded[4] * y + decoded[8] * z);
     decoded[13] = v[5] - (decoded[1] * x + decoded[5] * y + decoded[9] * z);
     decoded[14] = v[6] - (decoded[2] * x + decoded[6] * y + decoded[10] * z);

@@ -22,41 +22,29 @@
 #define QPOS_TOLERANCE_LANES 1e-4 /* palette_rows.c's QPOS_TOLERANCE */
 
 #if defined(__GNUC__)
-#define SEL4(take, x, y) ((v4df)(((v4di)(x) & (take)) | ((v4di)(y) & ~(take))))
-#define ABS4(x) ((v4df)((v4di)(x) & (v4di){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}))
-#define SPLAT4(x) ((v4df){x, x, x, x})
-
-/* sqrt on each lane (a loop GCC turns into one vsqrtpd). */
-static CB_CLONE_INLINE void sqrt4(v4df *x)
-{
-    v4df r = *x;
-    for (int i = 0; i < 4; ++i) r[i] = sqrt(r[i]);
-    *x = r;
-}
-
 /* The quaternion of the rotation r (elements 0 .. 10 of four joint matrices, a lane each) as
  * cb_quat_from_mat4 then cb_quat_normalize make it, into q[0 .. 3] (x, y, z, w). */
 static CB_CLONE_INLINE void quat_lanes(const v4df *r, v4df *q)
 {
-    const v4df one = SPLAT4(1.0), zero = SPLAT4(0.0);
+    const v4df one = CB_SPLAT4(1.0), zero = CB_SPLAT4(0.0);
     v4df m00 = r[0], m11 = r[5], m22 = r[10], trace = m00 + m11 + m22;
     v4di a = trace > zero, b = ~a & (m00 > m11) & (m00 > m22), c = ~a & ~b & (m11 > m22); /* else the last case */
-    v4df root = SEL4(a, trace + one,
-                     SEL4(b, one + m00 - m11 - m22, SEL4(c, one + m11 - m00 - m22, one + m22 - m00 - m11)));
-    sqrt4(&root);
-    v4df s = root * SPLAT4(2.0), inv = one / s, quarter = SPLAT4(0.25) * s;
+    v4df root = CB_SELECT4(a, trace + one,
+                     CB_SELECT4(b, one + m00 - m11 - m22, CB_SELECT4(c, one + m11 - m00 - m22, one + m22 - m00 - m11)));
+    cb_sqrt4(&root);
+    v4df s = root * CB_SPLAT4(2.0), inv = one / s, quarter = CB_SPLAT4(0.25) * s;
     v4df d69 = (r[6] - r[9]) * inv, d82 = (r[8] - r[2]) * inv, d14 = (r[1] - r[4]) * inv;
     v4df s41 = (r[4] + r[1]) * inv, s82 = (r[8] + r[2]) * inv, s96 = (r[9] + r[6]) * inv;
-    v4df w = SEL4(a, quarter, SEL4(b, d69, SEL4(c, d82, d14)));
-    v4df x = SEL4(a, d69, SEL4(b, quarter, SEL4(c, s41, s82)));
-    v4df y = SEL4(a, d82, SEL4(b, s41, SEL4(c, quarter, s96)));
-    v4df z = SEL4(a, d14, SEL4(b, s82, SEL4(c, s96, quarter)));
+    v4df w = CB_SELECT4(a, quarter, CB_SELECT4(b, d69, CB_SELECT4(c, d82, d14)));
+    v4df x = CB_SELECT4(a, d69, CB_SELECT4(b, quarter, CB_SELECT4(c, s41, s82)));
+    v4df y = CB_SELECT4(a, d82, CB_SELECT4(b, s41, CB_SELECT4(c, quarter, s96)));
+    v4df z = CB_SELECT4(a, d14, CB_SELECT4(b, s82, CB_SELECT4(c, s96, quarter)));
     v4df len2 = x * x + y * y + z * z + w * w, norm = len2;
-    sqrt4(&norm);
+    cb_sqrt4(&norm);
     norm = one / norm;
     v4di empty = len2 == zero;
-    q[0] = SEL4(empty, zero, x * norm), q[1] = SEL4(empty, zero, y * norm), q[2] = SEL4(empty, zero, z * norm);
-    q[3] = SEL4(empty, one, w * norm);
+    q[0] = CB_SELECT4(empty, zero, x * norm), q[1] = CB_SELECT4(empty, zero, y * norm), q[2] = CB_SELECT4(empty, zero, z * norm);
+    q[3] = CB_SELECT4(empty, one, w * norm);
 }
 
 /* Joints j .. j + 3 (a short last pass repeats joint j in its spare lanes): false where one is
@@ -69,17 +57,17 @@ static CB_CLONE_INLINE bool similarity4(const double *mats, uint32_t j, uint32_t
     for (int k = 0; k < 11; ++k) m[k] = (v4df){M[0][k], M[1][k], M[2][k], M[3][k]};
     v4df l0 = m[0] * m[0] + m[1] * m[1] + m[2] * m[2], l1 = m[4] * m[4] + m[5] * m[5] + m[6] * m[6];
     v4df l2 = m[8] * m[8] + m[9] * m[9] + m[10] * m[10];
-    sqrt4(&l0), sqrt4(&l1), sqrt4(&l2);
-    *s = (l0 + l1 + l2) / SPLAT4(3.0);
+    cb_sqrt4(&l0), cb_sqrt4(&l1), cb_sqrt4(&l2);
+    *s = (l0 + l1 + l2) / CB_SPLAT4(3.0);
     v4df det = m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) +
                m[8] * (m[1] * m[6] - m[5] * m[2]);
     v4df d01 = m[0] * m[4] + m[1] * m[5] + m[2] * m[6], d02 = m[0] * m[8] + m[1] * m[9] + m[2] * m[10];
     v4df d12 = m[4] * m[8] + m[5] * m[9] + m[6] * m[10];
-    v4df tol = SPLAT4(QPOS_TOLERANCE_LANES) * *s, tol2 = tol * *s;
-    v4di fails = (det <= SPLAT4(0.0)) | (ABS4(l0 - *s) > tol) | (ABS4(l1 - *s) > tol) | (ABS4(l2 - *s) > tol) |
-                 (ABS4(d01) > tol2) | (ABS4(d02) > tol2) | (ABS4(d12) > tol2);
+    v4df tol = CB_SPLAT4(QPOS_TOLERANCE_LANES) * *s, tol2 = tol * *s;
+    v4di fails = (det <= CB_SPLAT4(0.0)) | (CB_ABS4(l0 - *s) > tol) | (CB_ABS4(l1 - *s) > tol) | (CB_ABS4(l2 - *s) > tol) |
+                 (CB_ABS4(d01) > tol2) | (CB_ABS4(d02) > tol2) | (CB_ABS4(d12) > tol2);
     if (fails[0] | fails[1] | fails[2] | fails[3]) return false;
-    v4df inv = SPLAT4(1.0) / *s, r[11];
+    v4df inv = CB_SPLAT4(1.0) / *s, r[11];
     for (int k = 0; k < 11; ++k) r[k] = m[k] * inv;
     quat_lanes(r, q);
     return true;
