@@ -212,9 +212,7 @@ static bool clip_goal(const cb_bake_job *job, uint32_t i, cb_rate_goal *goal)
 
 static void free_search_poses(cb_bake_job *job)
 {
-    pose_cache **poses = job->search_poses;
-    for (uint32_t i = 0; poses && i < job->plan_count; ++i) pose_cache_free(poses[i]);
-    free(poses);
+    search_keep_free(job->search_poses); /* a search_keep: the poses and the skin's facts */
     job->search_poses = NULL;
 }
 
@@ -306,12 +304,13 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
     if (any) {
         cb_sampler *s = cb_sampler_create(job->model, job->skin, err); /* planted feet: the copy */
         cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
-        job->search_poses = calloc(n ? n : 1, sizeof(pose_cache *)); /* NULL: nothing kept, as slow */
+        search_keep *keep = search_keep_create(n); /* NULL: nothing kept, as slow */
+        job->search_poses = keep;
         /* Each searched clip's analysis from the root motion's decision, kept for its search
          * (which takes it where it stands in for its own: palette_take_kept_analysis). */
-        for (uint32_t i = 0; s && i < n; ++i)
+        for (uint32_t i = 0; s && keep && i < n; ++i)
             if (searched[i] && early[i].made)
-                palette_seed_analysis(job->search_poses, i, s, &early[i].info, early[i].fps, early[i].loop);
+                palette_seed_analysis(keep->poses, i, s, &early[i].info, early[i].fps, early[i].loop);
         bool *later = bake_transient_candidates(job); /* NULL: none left for later */
         if (s && !palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_poses, later, err))
             bake_reach_for_transients(job, s, &o, err);
@@ -519,9 +518,10 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
         if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout) {
             cb_palette_free(&shared);
-            palette_probe kept = {NULL, NULL, job->search_poses, NULL, memo}; /* what the rate search sampled */
+            search_keep *keep = job->search_poses; /* what the rate search sampled, and the skin's facts */
+            palette_probe kept = {NULL, NULL, keep ? keep->poses : NULL, NULL, memo};
             resolved_plan(job, baked);
-            if (palette_bake_with_facts(s, &opt, baked, job->plan_count, NULL, &kept, &shared, err) ||
+            if (palette_bake_with_facts(s, &opt, baked, job->plan_count, search_kept_facts(keep, s), &kept, &shared, err) ||
                 bake_row_travel(job, feet, memo, s, &shared, err))
                 break;
             shared_opt = opt;

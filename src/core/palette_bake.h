@@ -273,14 +273,40 @@ typedef struct palette_probe {
                                     * and their own analyses kept there; or NULL */
 } palette_probe;
 
-/* cb_choose_rates keeping what each clip's search sampled: kept[i] (NULL: none yet) gets clip
- * i's pose cache, made or added to, while all the caches together stay under a budget (past it
- * a clip's is freed and left NULL); NULL kept: none kept. The caller frees the caches.
+/* What a bake job's rate searches keep for the searches after them and the bake: each clip's
+ * pose cache (poses[i], NULL: none) and the skin's facts, settled by the first search that
+ * needs them for `model` and `skin` (a job's searches and its bake all measure that skin: its
+ * facts were built once for the searches and once again for the bake, 1.8 M of Fox's 62.1 M
+ * instructions; speed43j). search_keep_create: n clips, nothing kept yet (NULL: out of
+ * memory); search_keep_free frees the caches and the facts. */
+typedef struct search_keep {
+    const cb_model *model;
+    int32_t skin;
+    bool has_facts;
+    palette_skin_facts facts;
+    uint32_t count;
+    pose_cache *poses[];
+} search_keep;
+search_keep *search_keep_create(uint32_t n);
+void search_keep_free(search_keep *keep);
+/* palette_plan.c: the facts of the sampler's skin: keep's, built there the first time (keep
+ * NULL, or kept for another model or skin: built into *own, which the caller frees with
+ * palette_skin_facts_free; *own is zeroed either way); NULL on failure (err set). */
+const palette_skin_facts *search_keep_facts(search_keep *keep, cb_sampler *sampler, palette_skin_facts *own,
+                                            cb_error *err);
+/* keep's facts where they were built for the sampler's model and skin, else NULL (the bake
+ * settles its own). */
+const palette_skin_facts *search_kept_facts(const search_keep *keep, const cb_sampler *sampler);
+
+/* cb_choose_rates keeping what each clip's search sampled: keep->poses[i] (NULL: none yet) gets
+ * clip i's pose cache, made or added to, while all the caches together stay under a budget (past
+ * it a clip's is freed and left NULL), and keep the skin's facts (search_keep_facts); NULL keep:
+ * nothing kept. The caller frees them (search_keep_free).
  * needed_later[i] (NULL: none): the caller searches clip i on past its max_fps where it misses
  * its goal there, so its fps_needed is not searched for (left 0): the caller's search finds it
  * from past that search's cap (bake_transients.c). */
 cb_status palette_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan, uint32_t count,
-                               const cb_rate_goal *goals, cb_rate_choice *out, pose_cache **kept,
+                               const cb_rate_goal *goals, cb_rate_choice *out, search_keep *keep,
                                const bool *needed_later, cb_error *err);
 
 /* cb_palette_bake with the skin's facts settled by the caller (palette_skin_facts_build, same

@@ -261,6 +261,39 @@ void palette_skin_facts_free(palette_skin_facts *f)
     memset(f, 0, sizeof *f);
 }
 
+search_keep *search_keep_create(uint32_t n)
+{
+    search_keep *keep = calloc(1, sizeof *keep + (n ? n : 1) * sizeof(pose_cache *));
+    if (keep) keep->count = n;
+    return keep;
+}
+
+void search_keep_free(search_keep *keep)
+{
+    for (uint32_t i = 0; keep && i < keep->count; ++i) pose_cache_free(keep->poses[i]);
+    if (keep && keep->has_facts) palette_skin_facts_free(&keep->facts);
+    free(keep);
+}
+
+const palette_skin_facts *search_kept_facts(const search_keep *keep, const cb_sampler *sampler)
+{
+    bool same = keep && keep->has_facts && keep->model == cb_sampler_model(sampler) && keep->skin == cb_sampler_skin(sampler);
+    return same ? &keep->facts : NULL;
+}
+
+const palette_skin_facts *search_keep_facts(search_keep *keep, cb_sampler *sampler, palette_skin_facts *own,
+                                            cb_error *err)
+{
+    memset(own, 0, sizeof *own);
+    const palette_skin_facts *kept = search_kept_facts(keep, sampler);
+    if (kept) return kept;
+    bool keeps = keep && !keep->has_facts; /* the first search of the job settles them for the rest */
+    palette_skin_facts *into = keeps ? &keep->facts : own;
+    if (palette_skin_facts_build(sampler, into, err)) return palette_skin_facts_free(into), NULL;
+    if (keeps) keep->has_facts = true, keep->model = cb_sampler_model(sampler), keep->skin = cb_sampler_skin(sampler);
+    return into;
+}
+
 /* The texels no row covers, which stay zero: in the last block the rows past the last baked
  * one. (Every row's texels are written by the encoder.) */
 void palette_zero_padding(cb_palette *p)

@@ -494,7 +494,7 @@ cb_status cb_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan 
 }
 
 cb_status palette_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
-                               const cb_rate_goal *goals, cb_rate_choice *out, pose_cache **kept,
+                               const cb_rate_goal *goals, cb_rate_choice *out, search_keep *keep,
                                const bool *needed_later, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
@@ -506,18 +506,17 @@ cb_status palette_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_
             return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_MAX_FPS, "%s: clip %u's rate search goes up to max_fps "
                                    "%g; give it 2..%g (a bake's default: %g)", m->source, i, goals[i].max_fps,
                                    CB_FPS_LIMIT, CB_AUTO_MAX_FPS);
-    palette_skin_facts facts;
-    if (palette_skin_facts_build(s, &facts, err)) {
-        palette_skin_facts_free(&facts);
-        return err->status;
-    }
-    if (!(facts.height > 0)) {
-        palette_skin_facts_free(&facts);
+    palette_skin_facts own;
+    const palette_skin_facts *facts = search_keep_facts(keep, s, &own, err);
+    if (!facts) return err->status;
+    if (!(facts->height > 0)) {
+        palette_skin_facts_free(&own);
         return cb_fail(err, CB_ERR_INPUT, "%s: has no skinned mesh to measure errors on; give the clips a fixed fps",
                        m->source);
     }
     rate_search rs = {m, cb_sampler_skin(s), o, plan, count, goals, calloc(count, sizeof(cb_rate_choice)),
-                      calloc(count, sizeof(cb_error)), facts.height, &facts, NULL, 0, kept, 0, needed_later};
+                      calloc(count, sizeof(cb_error)), facts->height, facts, NULL, 0, keep ? keep->poses : NULL, 0,
+                      needed_later};
     uint32_t *order = malloc(count * sizeof *order);
     rs.order = order;
     if (rs.choices && rs.errors && order) {
@@ -537,6 +536,6 @@ cb_status palette_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_
         cb_fail(err, CB_ERR_INTERNAL, "out of memory choosing frame rates for %s", m->source);
     }
     free(rs.choices), free(rs.errors), free(order);
-    palette_skin_facts_free(&facts);
+    palette_skin_facts_free(&own);
     return err->status;
 }
