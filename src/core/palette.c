@@ -112,25 +112,27 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
             return w->rows_held = 0, cb_fail(err, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
         w->rows_held = room;
     }
-    float *rows = w->rows;
-    for (uint32_t f0 = 0; f0 < info->frames; f0 += chunk) {
+    /* The clip's rows as its search's probe made (and fitted) them, or made (a probe's into the
+     * block it keeps them in: no copy either way). */
+    const float *taken = palette_take_rows(st, c, fit, &bounds);
+    float *keep = taken ? NULL : palette_keep_rows(st, c, fit);
+    for (uint32_t f0 = 0; f0 < info->frames; f0 += chunk) { /* a fitted clip's in one chunk */
         uint32_t n = info->frames - f0 < chunk ? info->frames - f0 : chunk;
-        /* A fitted clip's rows as its search's probe fitted them (the whole clip: f0 is 0), or made. */
-        bool made = !(fit && palette_take_fit(st, c, rows, &bounds));
-        for (uint32_t f = f0; made && similar && f < f0 + n; f += CB_SAMPLE_BATCH) {
+        float *made_at = keep ? keep + f0 * row_floats : w->rows;
+        const float *rows = taken ? taken + f0 * row_floats : made_at;
+        for (uint32_t f = f0; !taken && similar && f < f0 + n; f += CB_SAMPLE_BATCH) {
             uint32_t count = f0 + n - f < CB_SAMPLE_BATCH ? f0 + n - f : CB_SAMPLE_BATCH;
-            palette_similarity_rows(st, w, c, f, count, rows + (f - f0) * row_floats, &bounds);
+            palette_similarity_rows(st, w, c, f, count, made_at + (f - f0) * row_floats, &bounds);
         }
-        for (uint32_t f = f0; made && !similar && f < f0 + n; ++f) {
+        for (uint32_t f = f0; !taken && !similar && f < f0 + n; ++f) {
             if ((f - f0) % CB_SAMPLE_BATCH == 0) { /* the next rows' poses, a batch at once where they are kept */
                 uint32_t next[CB_SAMPLE_BATCH], k = 0;
                 for (; k < CB_SAMPLE_BATCH && f + k < f0 + n; ++k) next[k] = f + k;
                 palette_prefetch_poses(st, w, c, info, next, k);
             }
-            if (palette_matrix_row(st, w, c, f, rows + (f - f0) * row_floats, &bounds, err)) return err->status;
+            if (palette_matrix_row(st, w, c, f, made_at + (f - f0) * row_floats, &bounds, err)) return err->status;
         }
-        if (made && fit && fit_clip(st, w, c, rows, err)) return err->status;
-        if (made && fit) palette_keep_fit(st, c, rows, &bounds);
+        if (!taken && fit && fit_clip(st, w, c, made_at, err)) return err->status;
         for (uint32_t j = 0; f0 == 0 && j < p->bone_count; ++j) memcpy(w->first + j * 4, rows + j * qv, 4 * sizeof(float));
         if (p->layout == CB_LAYOUT_QPOS && info->loops && info->frames > 1 && f0 + n == info->frames) {
             /* The wrap from the last row to the first: a full turn over the loop ends on -q. */
@@ -142,6 +144,7 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
         }
         emit_rows(st, c, rows, f0, n);
     }
+    if (keep) palette_kept_rows_done(st, c, &bounds);
     bool empty = !(bounds.lo[0] <= bounds.hi[0]); /* no skinned vertex */
     for (int k = 0; k < 3; ++k) {
         clip->bounds_min[k] = empty ? 0 : (float)bounds.lo[k];

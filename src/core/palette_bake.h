@@ -140,16 +140,21 @@ void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, 
  * similarity), growing the clip's bounds and value range. */
 cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, float *row, extent *bounds,
                              cb_error *err);
-/* palette_rows.c: a search's fitted rows reused by the bake after it. A probe that fits its
- * clip's rows keeps them (palette_keep_fit, into st->pending); once measured, rows within its
- * goal (or measured without one) go with the clip's poses (palette_settle_fit), replacing the
- * last kept: a search's last fitted probe within the goal is the lowest such rate, its answer
- * when fitted rows win. The bake after the search takes them for a fitted clip framed alike
- * (palette_take_fit: the same times, root travel, layout), the same floats a fit gives, so
- * neither its rows nor its mid-rows are sampled and fitted again. */
-void palette_keep_fit(bake_state *st, uint32_t c, const float *rows, const extent *bounds);
+/* palette_rows.c: a search's rows reused by the bake after it. A probe makes (and fits) its
+ * clip's rows into the block palette_keep_rows gives (NULL: no search to keep them with, or out
+ * of memory; st->pending) and records its bounds and value range once they are made
+ * (palette_kept_rows_done); once measured, rows within its goal (or measured without one) go
+ * with the clip's poses (palette_settle_fit), replacing the last kept of their kind: a search's
+ * last probe within the goal is the lowest such rate of its kind, its answer when that kind
+ * wins. The bake after the search takes them for a clip of that kind framed alike
+ * (palette_take_rows, NULL: none kept: the same times, root travel, layout), the same floats
+ * making them gives, with its bounds into *bounds and its value range into st->ranges[c], so
+ * neither its rows nor a fitted clip's mid-rows are sampled (and fitted) again. Sampled rows too
+ * since speed43j: a similarity rig's rows (Fox) had no per-pose copy (palette_matrix_row's). */
+float *palette_keep_rows(bake_state *st, uint32_t c, bool fitted);
+void palette_kept_rows_done(bake_state *st, uint32_t c, const extent *bounds);
 void palette_settle_fit(bake_state *st, double error);
-bool palette_take_fit(bake_state *st, uint32_t c, float *rows, extent *bounds);
+const float *palette_take_rows(bake_state *st, uint32_t c, bool fitted, extent *bounds);
 /* palette_rows.c: the exact values halfway through each row interval of clip c (the clip framed
  * at twice the steps, odd frames), into mids; quaternions on the side of the row before. */
 cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *rows, float *mids, cb_error *err);

@@ -207,15 +207,17 @@ cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, 
     return CB_OK;
 }
 
-/* ---- a probe's fitted rows, kept for the bake after the search (palette_bake.h) ---- */
+/* ---- a probe's rows, kept for the bake after the search (palette_bake.h) ---- */
 
 typedef struct kept_fit {
     cb_clip_info framing; /* the clip's info (what of it frames and moves the rows: fit_matches) */
     cb_layout layout;
     cb_root_motion root_motion;
     uint32_t bones;
-    extent bounds;
-    float rows[]; /* framing.frames rows of bones * CANON(layout) */
+    bool fitted;       /* fitted rows (pose cache slot 1), or sampled ones (slot 0) */
+    extent bounds;     /* the clip's bounds and value range as making (and fitting) its rows left them */
+    value_range range;
+    float rows[];      /* framing.frames rows of bones * CANON(layout) */
 } kept_fit;
 
 static bool fit_matches(const kept_fit *k, const bake_state *st, uint32_t c)
@@ -233,37 +235,39 @@ static size_t fit_floats(const bake_state *st, uint32_t c)
     return (size_t)st->infos[c].frames * st->p->bone_count * CANON(st->p->layout);
 }
 
-void palette_keep_fit(bake_state *st, uint32_t c, const float *rows, const extent *bounds)
+float *palette_keep_rows(bake_state *st, uint32_t c, bool fitted)
 {
-    if (!st->poses) return; /* no search: nothing to keep them with */
-    free(st->pending);
+    free(st->pending), st->pending = NULL;
+    if (!st->poses) return NULL; /* no search: nothing to keep them with */
     st->pending = malloc(sizeof *st->pending + fit_floats(st, c) * sizeof(float));
-    if (!st->pending) return; /* out of memory: the bake after samples and fits them again */
-    *st->pending = (kept_fit){st->infos[c], st->p->layout, st->opt->root_motion, st->p->bone_count, *bounds};
-    memcpy(st->pending->rows, rows, fit_floats(st, c) * sizeof(float));
+    if (!st->pending) return NULL; /* out of memory: the bake after makes them again */
+    *st->pending = (kept_fit){.framing = st->infos[c], .layout = st->p->layout, .root_motion = st->opt->root_motion,
+                              .bones = st->p->bone_count, .fitted = fitted};
+    return st->pending->rows;
+}
+
+void palette_kept_rows_done(bake_state *st, uint32_t c, const extent *bounds)
+{
+    if (st->pending) st->pending->bounds = *bounds, st->pending->range = st->ranges[c];
 }
 
 void palette_settle_fit(bake_state *st, double error)
 {
     double goal = st->opt->error_goal;
-    if (st->pending && st->poses && (!(goal > 0) || error <= goal)) pose_cache_attach(st->poses, st->pending);
-    else free(st->pending);
+    if (st->pending && st->poses && (!(goal > 0) || error <= goal))
+        pose_cache_attach(st->poses, st->pending->fitted, st->pending);
+    else
+        free(st->pending);
     st->pending = NULL;
 }
 
-bool palette_take_fit(bake_state *st, uint32_t c, float *rows, extent *bounds)
+const float *palette_take_rows(bake_state *st, uint32_t c, bool fitted, extent *bounds)
 {
     pose_cache *poses = st->clip_poses && !st->poses ? st->clip_poses[c] : NULL;
-    const kept_fit *k = poses ? pose_cache_attached(poses) : NULL;
-    if (!k || !fit_matches(k, st, c)) return false;
-    memcpy(rows, k->rows, fit_floats(st, c) * sizeof(float));
-    *bounds = k->bounds;
-    range_reset(&st->ranges[c]); /* the fitted values' range, as fit_clip finds it */
-    for (size_t b = 0; b < (size_t)st->infos[c].frames * st->p->bone_count; ++b) {
-        if (st->p->layout == CB_LAYOUT_QPOS) range_grow_qpos(&st->ranges[c], rows + b * 8);
-        else range_grow_affine(&st->ranges[c], rows + b * 12);
-    }
-    return true;
+    const kept_fit *k = poses ? pose_cache_attached(poses, fitted) : NULL;
+    if (!k || !fit_matches(k, st, c)) return NULL;
+    *bounds = k->bounds, st->ranges[c] = k->range;
+    return k->rows;
 }
 
 /* The exact values halfway through each row interval of clip c (the clip framed at twice the

@@ -23,7 +23,7 @@ struct pose_cache {
     uint32_t capacity;      /* table entries, a power of two, at least twice count */
     double **blocks;        /* block_poses poses each */
     uint32_t block_count, block_poses;
-    void *attached;         /* its user's block for the same clip (pose_cache_attach), or NULL */
+    void *attached[POSE_CACHE_SLOTS]; /* its user's blocks for the same clip (pose_cache_attach), or NULL */
     void *analysis;         /* and the clip's analysis (pose_cache_attach_analysis), or NULL */
 };
 
@@ -76,7 +76,8 @@ void pose_cache_free(pose_cache *c)
 {
     if (!c) return;
     for (uint32_t b = 0; b < c->block_count; ++b) free(c->blocks[b]);
-    free(c->attached), free(c->analysis), free(c->blocks), free(c->keys), free(c->slots), free(c);
+    for (int k = 0; k < POSE_CACHE_SLOTS; ++k) free(c->attached[k]);
+    free(c->analysis), free(c->blocks), free(c->keys), free(c->slots), free(c);
 }
 
 const double *pose_cache_find(const pose_cache *c, double t)
@@ -138,17 +139,17 @@ void pose_cache_clear(pose_cache *c)
 {
     c->count = 0;
     memset(c->keys, 0xFF, c->capacity * sizeof *c->keys);
-    free(c->attached), c->attached = NULL;
+    for (int k = 0; k < POSE_CACHE_SLOTS; ++k) free(c->attached[k]), c->attached[k] = NULL;
     free(c->analysis), c->analysis = NULL;
 }
 
-void pose_cache_attach(pose_cache *c, void *block)
+void pose_cache_attach(pose_cache *c, int slot, void *block)
 {
-    free(c->attached);
-    c->attached = block;
+    free(c->attached[slot]);
+    c->attached[slot] = block;
 }
 
-void *pose_cache_attached(const pose_cache *c) { return c->attached; }
+void *pose_cache_attached(const pose_cache *c, int slot) { return c->attached[slot]; }
 void pose_cache_attach_analysis(pose_cache *c, void *block)
 {
     free(c->analysis);

@@ -30,11 +30,13 @@ double *pose_cache_add(pose_cache *c, double t);
  * fresh). */
 void pose_cache_clear(pose_cache *c);
 
-/* One malloc'ed block its user keeps beside the poses of the same clip (palette.c: a probe's
- * fitted rows), replacing and freeing the one before; freed with the cache and by
+/* Malloc'ed blocks its user keeps beside the poses of the same clip, one in each of
+ * POSE_CACHE_SLOTS slots (palette_rows.c: a probe's sampled rows in slot 0, its fitted rows in
+ * slot 1), each replacing and freeing the one before in its slot; freed with the cache and by
  * pose_cache_clear. NULL when none. */
-void pose_cache_attach(pose_cache *c, void *block);
-void *pose_cache_attached(const pose_cache *c);
+enum { POSE_CACHE_SLOTS = 2 };
+void pose_cache_attach(pose_cache *c, int slot, void *block);
+void *pose_cache_attached(const pose_cache *c, int slot);
 /* The same for a second block, the clip's analysis (rate_search.c: the search's, which the bake
  * after it frames instead of analyzing the clip again). */
 void pose_cache_attach_analysis(pose_cache *c, void *block);

@@ -127,20 +127,26 @@ static void test_an_attached_block_goes_with_the_poses(void **state)
     (void)state;
     pose_cache *c = pose_cache_create(BONES, 0, (size_t)1 << 20);
     assert_non_null(c);
-    assert_null(pose_cache_attached(c));
-    int *first = malloc(sizeof *first), *second = malloc(sizeof *second);
-    assert_non_null(first), assert_non_null(second);
-    *first = 1, *second = 2;
-    pose_cache_attach(c, first);
-    assert_ptr_equal(pose_cache_attached(c), first);
-    pose_cache_attach(c, second); /* frees the first */
-    assert_int_equal(*(int *)pose_cache_attached(c), 2);
-    pose_cache_clear(c); /* another clip's: frees the second */
-    assert_null(pose_cache_attached(c));
-    int *third = malloc(sizeof *third);
-    assert_non_null(third);
-    pose_cache_attach(c, third);
-    pose_cache_free(c); /* frees the third */
+    assert_null(pose_cache_attached(c, 0));
+    assert_null(pose_cache_attached(c, 1));
+    int *first = malloc(sizeof *first), *second = malloc(sizeof *second), *other = malloc(sizeof *other);
+    assert_non_null(first), assert_non_null(second), assert_non_null(other);
+    *first = 1, *second = 2, *other = 3;
+    pose_cache_attach(c, 1, first);
+    assert_ptr_equal(pose_cache_attached(c, 1), first);
+    assert_null(pose_cache_attached(c, 0)); /* each slot its own (a probe's sampled and fitted rows) */
+    pose_cache_attach(c, 0, other);
+    pose_cache_attach(c, 1, second); /* frees the first, leaves the other slot's */
+    assert_int_equal(*(int *)pose_cache_attached(c, 1), 2);
+    assert_int_equal(*(int *)pose_cache_attached(c, 0), 3);
+    pose_cache_clear(c); /* another clip's: frees both */
+    assert_null(pose_cache_attached(c, 0));
+    assert_null(pose_cache_attached(c, 1));
+    int *third = malloc(sizeof *third), *fourth = malloc(sizeof *fourth);
+    assert_non_null(third), assert_non_null(fourth);
+    pose_cache_attach(c, 0, third);
+    pose_cache_attach(c, 1, fourth);
+    pose_cache_free(c); /* frees the third and the fourth */
 }
 
 int main(void)
