@@ -120,11 +120,13 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
         uint32_t n = info->frames - f0 < chunk ? info->frames - f0 : chunk;
         float *made_at = keep ? keep + f0 * row_floats : w->rows;
         const float *rows = taken ? taken + f0 * row_floats : made_at;
-        for (uint32_t f = f0; !taken && similar && f < f0 + n; f += CB_SAMPLE_BATCH) {
+        /* A fitted probe's rows before the fit: a sampled probe's at the same rate, where one was. */
+        bool ready = taken || (fit && palette_take_sampled_for_fit(st, c, made_at, &bounds));
+        for (uint32_t f = f0; !ready && similar && f < f0 + n; f += CB_SAMPLE_BATCH) {
             uint32_t count = f0 + n - f < CB_SAMPLE_BATCH ? f0 + n - f : CB_SAMPLE_BATCH;
             palette_similarity_rows(st, w, c, f, count, made_at + (f - f0) * row_floats, &bounds);
         }
-        for (uint32_t f = f0; !taken && !similar && f < f0 + n; ++f) {
+        for (uint32_t f = f0; !ready && !similar && f < f0 + n; ++f) {
             if ((f - f0) % CB_SAMPLE_BATCH == 0) { /* the next rows' poses, a batch at once where they are kept */
                 uint32_t next[CB_SAMPLE_BATCH], k = 0;
                 for (; k < CB_SAMPLE_BATCH && f + k < f0 + n; ++k) next[k] = f + k;
@@ -372,7 +374,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
                                       ((p->clips[c].frames - 1) % st.error_stride != 0);
         }
     }
-    palette_settle_fit(&st, p->visible_error); /* a probe's fitted rows, kept when within its goal */
+    palette_settle_fit(&st, p->visible_error); /* a probe's rows, kept by how they met its goal */
     double t3 = seconds_now();
     p->seconds_sample = t1 - t0 - encoded_while_sampling;
     p->seconds_encode = t2 - t1 + encoded_while_sampling;

@@ -155,6 +155,11 @@ float *palette_keep_rows(bake_state *st, uint32_t c, bool fitted);
 void palette_kept_rows_done(bake_state *st, uint32_t c, const extent *bounds);
 void palette_settle_fit(bake_state *st, double error);
 const float *palette_take_rows(bake_state *st, uint32_t c, bool fitted, extent *bounds);
+/* A probe's sampled rows kept by the probe before it, met or missed (palette_settle_fit keeps
+ * the last missed ones too), framed as clip c: copied into rows (the whole clip), its bounds into
+ * *bounds and its value range into st->ranges[c], where a fitted probe at the rate of a sampled
+ * one starts (false: none; rows made). */
+bool palette_take_sampled_for_fit(bake_state *st, uint32_t c, float *rows, extent *bounds);
 /* palette_rows.c: the exact values halfway through each row interval of clip c (the clip framed
  * at twice the steps, odd frames), into mids; quaternions on the side of the row before. */
 cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *rows, float *mids, cb_error *err);

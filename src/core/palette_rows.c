@@ -214,7 +214,7 @@ typedef struct kept_fit {
     cb_layout layout;
     cb_root_motion root_motion;
     uint32_t bones;
-    bool fitted;       /* fitted rows (pose cache slot 1), or sampled ones (slot 0) */
+    bool fitted;       /* fitted rows, or sampled ones */
     extent bounds;     /* the clip's bounds and value range as making (and fitting) its rows left them */
     value_range range;
     float rows[];      /* framing.frames rows of bones * CANON(layout) */
@@ -251,23 +251,53 @@ void palette_kept_rows_done(bake_state *st, uint32_t c, const extent *bounds)
     if (st->pending) st->pending->bounds = *bounds, st->pending->range = st->ranges[c];
 }
 
+/* The pose cache's slots for a probe's rows: sampled rows within their goal (a search's answer
+ * when sampled rows win), fitted rows within theirs, and the last sampled rows that missed (a
+ * fitted probe at the same rate starts from them). */
+enum { SLOT_SAMPLED, SLOT_FITTED, SLOT_SAMPLED_MISS };
+
 void palette_settle_fit(bake_state *st, double error)
 {
     double goal = st->opt->error_goal;
-    if (st->pending && st->poses && (!(goal > 0) || error <= goal))
-        pose_cache_attach(st->poses, st->pending->fitted, st->pending);
+    bool met = !(goal > 0) || error <= goal;
+    kept_fit *k = st->pending;
+    if (k && st->poses && (met || !k->fitted))
+        pose_cache_attach(st->poses, k->fitted ? SLOT_FITTED : met ? SLOT_SAMPLED : SLOT_SAMPLED_MISS, k);
     else
-        free(st->pending);
+        free(k);
     st->pending = NULL;
+}
+
+/* The kept rows of `poses` in `slot` framed as clip c of st, or NULL. */
+static const kept_fit *kept_in(const pose_cache *poses, int slot, const bake_state *st, uint32_t c)
+{
+    const kept_fit *k = poses ? pose_cache_attached(poses, slot) : NULL;
+    return k && fit_matches(k, st, c) ? k : NULL;
+}
+
+/* Rows framed alike are the same floats whether their probe met its goal or not. */
+static const kept_fit *kept_sampled(const pose_cache *poses, const bake_state *st, uint32_t c)
+{
+    const kept_fit *k = kept_in(poses, SLOT_SAMPLED, st, c);
+    return k ? k : kept_in(poses, SLOT_SAMPLED_MISS, st, c);
 }
 
 const float *palette_take_rows(bake_state *st, uint32_t c, bool fitted, extent *bounds)
 {
     pose_cache *poses = st->clip_poses && !st->poses ? st->clip_poses[c] : NULL;
-    const kept_fit *k = poses ? pose_cache_attached(poses, fitted) : NULL;
-    if (!k || !fit_matches(k, st, c)) return NULL;
+    const kept_fit *k = fitted ? kept_in(poses, SLOT_FITTED, st, c) : kept_sampled(poses, st, c);
+    if (!k) return NULL;
     *bounds = k->bounds, st->ranges[c] = k->range;
     return k->rows;
+}
+
+bool palette_take_sampled_for_fit(bake_state *st, uint32_t c, float *rows, extent *bounds)
+{
+    const kept_fit *k = kept_sampled(st->poses, st, c);
+    if (!k) return false;
+    memcpy(rows, k->rows, fit_floats(st, c) * sizeof(float));
+    *bounds = k->bounds, st->ranges[c] = k->range;
+    return true;
 }
 
 /* The exact values halfway through each row interval of clip c (the clip framed at twice the

@@ -31,10 +31,9 @@ double *pose_cache_add(pose_cache *c, double t);
 void pose_cache_clear(pose_cache *c);
 
 /* Malloc'ed blocks its user keeps beside the poses of the same clip, one in each of
- * POSE_CACHE_SLOTS slots (palette_rows.c: a probe's sampled rows in slot 0, its fitted rows in
- * slot 1), each replacing and freeing the one before in its slot; freed with the cache and by
- * pose_cache_clear. NULL when none. */
-enum { POSE_CACHE_SLOTS = 2 };
+ * POSE_CACHE_SLOTS slots (palette_rows.c: a probe's rows), each replacing and freeing the one
+ * before in its slot; freed with the cache and by pose_cache_clear. NULL when none. */
+enum { POSE_CACHE_SLOTS = 3 };
 void pose_cache_attach(pose_cache *c, int slot, void *block);
 void *pose_cache_attached(const pose_cache *c, int slot);
 /* The same for a second block, the clip's analysis (rate_search.c: the search's, which the bake
