@@ -212,6 +212,49 @@ static void test_catalog_out_dir_and_manifest_depfile(void **state)
     assert_int_equal(WEXITSTATUS(system(cmd)), EXIT_USAGE);
 }
 
+/* What a job's rate search keeps for its bake (the skin's facts, each clip's poses, a probe's
+ * sampled and fitted rows: speed43j) stands in for making them again, bit for bit: the same job
+ * with its search released before the bake (cb_bake_job_release_search, as the roster does) bakes
+ * every row afresh, and writes the same bytes. Fox's rows come from its joints' similarities,
+ * Husky's from their matrices; both default bakes have sampled and fitted answers. */
+static void bake_bytes(const cb_model *m, bool release, const char *path, char **bytes, size_t *size,
+                       uint32_t *fitted)
+{
+    cb_bake_job job = job_for(m);
+    job.outputs = &(cb_output_path){CB_FORMAT_PAL, path}, job.output_count = 1;
+    cb_bake_result r;
+    cb_error err = {0};
+    assert_int_equal(cb_bake_job_plan(&job, &err), CB_OK);
+    if (release) cb_bake_job_release_search(&job);
+    assert_int_equal(cb_bake_job_run(&job, &r, &err), CB_OK);
+    *fitted = 0;
+    for (uint32_t i = 0; i < job.plan_count; ++i) *fitted += job.rates[i].fitted;
+    cb_bake_result_free(&r);
+    cb_bake_job_free(&job);
+    *bytes = read_whole_file(path, size);
+    assert_non_null(*bytes);
+}
+
+static void test_kept_search_bakes_the_same_bytes(void **state)
+{
+    (void)state;
+    static const char *models[] = {"assets/fox-bevy/Fox.glb", "assets/quaternius-husky/Husky.glb"};
+    for (int k = 0; k < 2; ++k) {
+        cb_model *m = load_shared(models[k]);
+        char *kept, *fresh;
+        size_t kept_size, fresh_size;
+        uint32_t kept_fitted, fresh_fitted;
+        bake_bytes(m, false, TMP "/kept.pal", &kept, &kept_size, &kept_fitted);
+        bake_bytes(m, true, TMP "/fresh.pal", &fresh, &fresh_size, &fresh_fitted);
+        assert_true(kept_fitted > 0); /* a fitted answer, and (fewer than all clips) sampled ones */
+        assert_int_equal(kept_fitted, fresh_fitted);
+        assert_int_equal(kept_size, fresh_size);
+        assert_memory_equal(kept, fresh, kept_size);
+        free(kept), free(fresh);
+        cb_model_free(m);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -221,6 +264,7 @@ int main(void)
         cmocka_unit_test(test_clip_settings_override_the_job),
         cmocka_unit_test(test_catalog_and_single_bake_agree),
         cmocka_unit_test(test_catalog_out_dir_and_manifest_depfile),
+        cmocka_unit_test(test_kept_search_bakes_the_same_bytes),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
