@@ -153,8 +153,9 @@ typedef struct cb_bake_job {
     cb_clip_settings *clip_settings; /* per planned clip, its settings resolved (cb_resolve_clip_settings): what
                                       * planning, the bake, its checks and its words read */
     bool planned;
-    void *search_poses; /* internal: per clip, the poses its rate search sampled, which the bake samples no
-                         * more (cb_bake_job_free frees them) */
+    void *search_poses; /* internal: what its rate searches kept for the bake (per clip, the poses and rows
+                         * they made; the skin's facts), which the bake makes no more (cb_bake_job_free
+                         * frees them) */
     char speed_reference_from[256]; /* why the speed reference it decided ("" when the caller gave one) */
     void *planted;      /* internal: with settings.plant_feet, the model copy with the planted leg keys (model
                          * points at it until cb_bake_job_free) and its report (cb_bake_job_plant_report) */

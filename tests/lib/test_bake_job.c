@@ -1,7 +1,8 @@
 /* test_bake_job.c - the one bake pipeline (include/crowdbake/bake.h): each format's precision,
  * the qpos -> affine fallback acted on by status code, per-clip rates from one settings struct,
- * and a catalog type baking to the very texels of `bake MODEL` with the same settings (the two
- * paths share every decision; only the recorded input hash tells them apart). */
+ * a catalog type baking to the very texels of `bake MODEL` with the same settings (the two
+ * paths share every decision; only the recorded input hash tells them apart), and what a rate
+ * search keeps for its bake baking the bytes the bake makes without it. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
