@@ -26,6 +26,7 @@ struct measure_scratch {
     uint64_t value_read[VALUE_SLOTS];  /* when each slot was last read (0: never) */
     uint64_t reads;                    /* the reads so far: the clock of value_read */
     bool finite[CB_SAMPLE_BATCH];      /* per row: every difference finite (else no bound holds) */
+    uint32_t worst_frame, worst_sub;   /* the blend that last raised a measurement's worst (sub 0: none) */
     unsigned char *block;              /* what the arrays above lie in */
 };
 typedef struct measure_scratch measure_scratch;
@@ -94,6 +95,14 @@ static double skin_row(const bake_state *st, measure_scratch *s, const double *d
         worst = error > worst ? error : worst;
     }
     return worst;
+}
+
+/* `now`, the worst after a blend's row `frame` at `sub` was skinned against `was`: where it
+ * rose, that blend is noted (a probe's worst point, pose_cache_note_worst). */
+static double note_worst(measure_scratch *s, uint32_t frame, uint32_t sub, double was, double now)
+{
+    if (sub && now > was) s->worst_frame = frame, s->worst_sub = sub;
+    return now;
 }
 
 #define B CB_SAMPLE_BATCH
@@ -186,7 +195,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         }
         bool finite = lanes ? s->finite[i] : cb_joint_errors(diff, p->bone_count, p->bind_positions, s->joints);
         if (bounds) bounds[i] = row_bound(st, joints, finite, worst);
-        else worst = skin_row(st, s, diff, joints, finite, worst);
+        else worst = note_worst(s, frames[i], sub, worst, skin_row(st, s, diff, joints, finite, worst));
     }
     /* The rows' likeliest worst skinned at once where that costs no sampling (qpos rows: every
      * row's differences are in hand), and with a goal (a row above it ends
@@ -197,8 +206,8 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     for (uint32_t i = 1; bounds && i < count; ++i) top = bounds[i] > bounds[top] ? i : top;
     if (bounds && bounds[top] > worst && (lanes || st->opt->error_goal > 0)) {
         size_t at = (size_t)top * p->bone_count;
-        worst = lanes ? skin_row(st, s, s->diff + at * 16, s->joints + at, s->finite[top], worst)
-                        : measure_rows(st, w, c, frames + top, 1, sub, parts, s, NULL, worst);
+        worst = lanes ? note_worst(s, frames[top], sub, worst, skin_row(st, s, s->diff + at * 16, s->joints + at, s->finite[top], worst))
+                      : measure_rows(st, w, c, frames + top, 1, sub, parts, s, NULL, worst);
         bounds[top] = worst;
     }
     return worst;
@@ -313,6 +322,7 @@ static measure_scratch *begin_job(measure_scratch *s)
 {
     for (uint32_t i = 0; i < VALUE_SLOTS; ++i) s->value_row[i] = UINT32_MAX, s->value_read[i] = 0;
     s->reads = 0;
+    s->worst_sub = 0;
     return s;
 }
 
@@ -343,6 +353,32 @@ static measure_scratch *worker_scratch(const bake_state *st, worker *w)
     return begin_job(w->measure = s);
 }
 
+/* A probe of clip c (a search's bake of it alone, with a goal) measured its blends exactly: where
+ * their worst was, for the bake after the search (blend_floor). */
+static void keep_worst_point(bake_state *st, uint32_t c, uint32_t parts, const measure_scratch *s, double blend)
+{
+    if (st->poses && s->worst_sub && blend <= st->opt->error_goal)
+        pose_cache_note_worst(st->poses, (pose_worst){st->p->clips[c].frames, parts, s->worst_frame, s->worst_sub});
+}
+
+/* A floor for clip c's blends: the worst of the one blend where its rate search's probe of the
+ * same rows found its worst, measured in this palette (0 when none). u16 quantizes every clip
+ * in the file's box, so the bake's errors are not the probe's; but the probe's worst point
+ * mostly stays the worst, and measured first it lets the bounds skip nearly every other row.
+ * Exact: the point is one of those the measurement takes (measured_frames), measured by the
+ * same code (a row's lanes are its own, whatever the batch), so the maximum is the same bits. */
+static double blend_floor(bake_state *st, worker *w, uint32_t c, uint32_t parts, measure_scratch *s)
+{
+    const cb_palette_clip *clip = &st->p->clips[c];
+    const pose_cache *poses = st->clip_poses && !st->poses ? st->clip_poses[c] : NULL;
+    pose_worst at;
+    if (!poses || !pose_cache_worst(poses, clip->frames, parts, &at)) return 0;
+    uint32_t frames = clip->loops ? clip->frames : clip->frames - 1; /* a one-shot's last row has no next */
+    bool measured = at.frame % st->error_stride == 0 || at.frame + 1 == frames;
+    if (!at.sub || at.sub >= parts || at.frame >= frames || !measured) return 0;
+    return measure_rows(st, w, c, &at.frame, 1, at.sub, parts, s, NULL, 0);
+}
+
 void palette_measure_job(bake_state *st, worker *w, uint32_t k)
 {
     const cb_palette *p = st->p;
@@ -359,10 +395,12 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     } else if (goal > 0) { /* the blends, then only the baked rows that could exceed them */
         for (uint32_t sub = 1; sub < parts && !(blend > goal); ++sub)
             blend = measure_clip_rows(st, w, c, sub, parts, blend, s, NULL);
+        keep_worst_point(st, c, parts, s, blend);
         st->clip_blend_error[c] = blend;
         double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, s, NULL);
         st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
     } else if (blends) { /* each fraction's rows only count where they exceed the worst blend so far */
+        blend = blend_floor(st, w, c, parts, s);
         for (uint32_t sub = 1; sub < parts; ++sub)
             blend = measure_clip_rows(st, w, c, sub, parts, blend, s, rows && sub == 1 ? &baked : NULL);
         st->clip_blend_error[c] = blend;
