@@ -125,6 +125,23 @@ static void joint_differences(void *ctx, uint32_t j, double (*lanes)[B])
                              d->s->joints, d->s->finite);
 }
 
+/* The order a batch's rows are skinned in, into order: with `by_cap` (their differences in hand),
+ * the largest cap on a row's error first (cb_row_error_cap; a row with a difference not finite
+ * before all), so that the worst rises early and the rows after skip more groups; else as they
+ * come. The maximum is the same in any order: a row or group skipped cannot exceed it. */
+static void rows_by_cap(const bake_state *st, const measure_scratch *s, uint32_t count, bool by_cap, uint32_t *order)
+{
+    double cap[B];
+    for (uint32_t i = 0; i < count; ++i) {
+        const cb_joint_error *joints = s->joints + (size_t)i * st->p->bone_count;
+        cap[i] = !by_cap ? 0 : !s->finite[i] ? INFINITY
+                             : cb_row_error_cap(joints, st->p->bone_count, st->facts->group_reach, st->facts->weight_sum);
+        uint32_t k = i;
+        for (; k > 0 && cap[order[k - 1]] < cap[i]; --k) order[k] = order[k - 1];
+        order[k] = i;
+    }
+}
+
 /* Clip c's joint matrices at `frame` of framing (palette_frame_matrices), where they stay until
  * the measurement's next batch: a pose cache's, or copied into `room` (the worker's matrices
  * are sampled over at its next call). */
@@ -178,7 +195,10 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
             cb_clip_frame_lanes_each(w->sampler, &framing, times, count, st->opt->root_motion, joint_differences, &d);
         for (uint32_t j = 0; !similar && j < p->bone_count; ++j) joint_differences(&d, j, NULL);
     }
-    for (uint32_t i = 0; i < count; ++i) {
+    uint32_t order[B];
+    rows_by_cap(st, s, count, lanes && !bounds, order);
+    for (uint32_t n = 0; n < count; ++n) {
+        uint32_t i = order[n];
         double *diff = lanes ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
         const cb_joint_error *joints = lanes ? s->joints + (size_t)i * p->bone_count : s->joints;
         if (!lanes) {
@@ -353,11 +373,12 @@ static measure_scratch *worker_scratch(const bake_state *st, worker *w)
     return begin_job(w->measure = s);
 }
 
-/* A probe of clip c (a search's bake of it alone, with a goal) measured its blends exactly: where
- * their worst was, for the bake after the search (blend_floor). */
+/* A probe of clip c (a search's bake of it alone) measured its blends: where their worst was, for
+ * the bake after the search (blend_floor), where the value is exact (no goal, or within it). */
 static void keep_worst_point(bake_state *st, uint32_t c, uint32_t parts, const measure_scratch *s, double blend)
 {
-    if (st->poses && s->worst_sub && blend <= st->opt->error_goal)
+    double goal = st->opt->error_goal;
+    if (st->poses && s->worst_sub && (!(goal > 0) || blend <= goal))
         pose_cache_note_worst(st->poses, (pose_worst){st->p->clips[c].frames, parts, s->worst_frame, s->worst_sub});
 }
 
@@ -403,6 +424,7 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
         blend = blend_floor(st, w, c, parts, s);
         for (uint32_t sub = 1; sub < parts; ++sub)
             blend = measure_clip_rows(st, w, c, sub, parts, blend, s, rows && sub == 1 ? &baked : NULL);
+        keep_worst_point(st, c, parts, s, blend);
         st->clip_blend_error[c] = blend;
         if (rows) st->clip_error[c] = baked;
     } else {
