@@ -12,6 +12,11 @@
 /* Decoded palette rows a measurement keeps: a batch's rows and the rows after them, so that
  * the baked rows of a batch and the blends between them and their next decode each row once. */
 enum { VALUE_SLOTS = 2 * CB_SAMPLE_BATCH };
+/* Or, in a bake of many clips (not a search's probe, whose scratch is fresh memory each bake),
+ * every row of the clip in hand, where that takes at most this much: the passes over a clip
+ * (each quarter point of fitted rows, the baked rows, the rows sorted by bound) read its rows
+ * about 7 times (Cow's final bake: 6,915 decodes of 1,014 rows), each decoded once instead. */
+#define VALUE_TABLE_BYTES ((size_t)4 << 20)
 
 /* A measurement's scratch: one row's differences, their bound terms and its group bounds. */
 struct measure_scratch {
@@ -21,7 +26,9 @@ struct measure_scratch {
     cb_bounded_row *rows;              /* the clip's frames */
     cb_bounded_row *baked;             /* the clip's frames: the baked rows measured with the blends */
     double *exact;                     /* CB_SAMPLE_BATCH rows of bones * 16: exact matrices no pose cache kept */
-    double *values;                    /* VALUE_SLOTS * bones * 16: decoded palette rows */
+    double *values;                    /* VALUE_SLOTS (or table_rows) * bones * 16: decoded palette rows */
+    uint32_t table_rows, table_first;  /* > 0: values holds row table_first + k at k (the clip's), else slots */
+    unsigned char *table_decoded;      /* table_rows flags: row k decoded */
     uint32_t value_row[VALUE_SLOTS];   /* which row each slot holds (UINT32_MAX: none) */
     uint64_t value_read[VALUE_SLOTS];  /* when each slot was last read (0: never) */
     uint64_t reads;                    /* the reads so far: the clock of value_read */
@@ -42,6 +49,12 @@ static const double *read_slot(const cb_palette *p, measure_scratch *s, uint32_t
  * least recently: never the other row of the blend in hand, read just before. */
 static const double *row_values(const cb_palette *p, measure_scratch *s, uint32_t row)
 {
+    if (s->table_rows) { /* every row of the clip: decoded at its first read */
+        uint32_t k = row - s->table_first;
+        double *values = s->values + (size_t)k * p->bone_count * 16;
+        if (!s->table_decoded[k]) palette_decode_row_values(p, row, values), s->table_decoded[k] = 1;
+        return values;
+    }
     uint32_t oldest = 0;
     for (uint32_t k = 0; k < VALUE_SLOTS; ++k) {
         if (s->value_row[k] == row) return read_slot(p, s, k);
@@ -337,10 +350,12 @@ static void *carve(unsigned char *block, size_t *at, size_t bytes)
     return p;
 }
 
-/* The values a scratch holds forgotten: a job's rows are not the last job's. */
-static measure_scratch *begin_job(measure_scratch *s)
+/* The values a scratch holds forgotten: a job's rows (clip c's) are not the last job's. */
+static measure_scratch *begin_job(const bake_state *st, measure_scratch *s, uint32_t c)
 {
     for (uint32_t i = 0; i < VALUE_SLOTS; ++i) s->value_row[i] = UINT32_MAX, s->value_read[i] = 0;
+    if (s->table_rows) memset(s->table_decoded, 0, s->table_rows);
+    s->table_first = st->p->clips[c].first_row;
     s->reads = 0;
     s->worst_sub = 0;
     return s;
@@ -349,16 +364,19 @@ static measure_scratch *begin_job(measure_scratch *s)
 /* The worker's scratch for a job, made by its first job for the longest clip; NULL when out of
  * memory. One block for all of it (cb_alloc_large: 1.4 MB for 200 bones is a whole huge page,
  * where six blocks of 4 KB pages took 350 page faults of fresh memory a thread). */
-static measure_scratch *worker_scratch(const bake_state *st, worker *w)
+static measure_scratch *worker_scratch(const bake_state *st, worker *w, uint32_t c)
 {
-    if (w->measure) return begin_job(w->measure);
+    if (w->measure) return begin_job(st, w->measure, c);
     const cb_palette *p = st->p;
-    size_t matrices = (size_t)p->bone_count * 16 * sizeof(double), sizes[7] = {
-        CB_SAMPLE_BATCH * matrices, VALUE_SLOTS * matrices, CB_SAMPLE_BATCH * p->bone_count * sizeof(cb_joint_error),
+    size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
+    bool table = !st->poses && st->max_clip_frames > VALUE_SLOTS && st->max_clip_frames * matrices <= VALUE_TABLE_BYTES;
+    uint32_t slots = table ? st->max_clip_frames : VALUE_SLOTS;
+    size_t sizes[8] = {
+        CB_SAMPLE_BATCH * matrices, slots * matrices, CB_SAMPLE_BATCH * p->bone_count * sizeof(cb_joint_error),
         (st->groups->group_count + 1) * sizeof(double), st->max_clip_frames * sizeof(cb_bounded_row),
-        st->max_clip_frames * sizeof(cb_bounded_row), CB_SAMPLE_BATCH * matrices};
+        st->max_clip_frames * sizeof(cb_bounded_row), CB_SAMPLE_BATCH * matrices, table ? slots : 0};
     size_t total = 0;
-    for (int i = 0; i < 7; ++i) total += (sizes[i] + 63) / 64 * 64;
+    for (int i = 0; i < 8; ++i) total += (sizes[i] + 63) / 64 * 64;
     measure_scratch *s = calloc(1, sizeof *s);
     if (s) s->block = cb_alloc_large(total);
     if (!s || !s->block) {
@@ -369,8 +387,9 @@ static measure_scratch *worker_scratch(const bake_state *st, worker *w)
     s->diff = carve(s->block, &at, sizes[0]), s->values = carve(s->block, &at, sizes[1]);
     s->joints = carve(s->block, &at, sizes[2]), s->group_bounds = carve(s->block, &at, sizes[3]);
     s->rows = carve(s->block, &at, sizes[4]), s->baked = carve(s->block, &at, sizes[5]);
-    s->exact = carve(s->block, &at, sizes[6]);
-    return begin_job(w->measure = s);
+    s->exact = carve(s->block, &at, sizes[6]), s->table_decoded = carve(s->block, &at, sizes[7]);
+    s->table_rows = table ? slots : 0;
+    return begin_job(st, w->measure = s, c);
 }
 
 /* A probe of clip c (a search's bake of it alone) measured its blends: where their worst was, for
@@ -407,7 +426,7 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     bool split = measure_split(st);
     uint32_t c = split ? k / 2 : k;
     bool blends = !split || k % 2 == 0, rows = !split || k % 2 == 1; /* what this job measures */
-    measure_scratch *s = worker_scratch(st, w);
+    measure_scratch *s = worker_scratch(st, w, c);
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
      * ways, so their quarter points are measured too. */
     uint32_t parts = p->clips[c].fitted ? 4 : 2;
