@@ -239,8 +239,12 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     for (uint32_t i = 1; bounds && i < count; ++i) top = bounds[i] > bounds[top] ? i : top;
     if (bounds && bounds[top] > worst && (lanes || st->opt->error_goal > 0)) {
         size_t at = (size_t)top * p->bone_count;
-        worst = lanes ? note_worst(s, frames[top], sub, worst, skin_row(st, s, s->diff + at * 16, s->joints + at, s->finite[top], worst))
-                      : measure_rows(st, w, c, frames + top, 1, sub, parts, s, NULL, worst);
+        if (lanes) {
+            double skinned = skin_row(st, s, s->diff + at * 16, s->joints + at, s->finite[top], worst);
+            worst = note_worst(s, frames[top], sub, worst, skinned);
+        } else {
+            worst = measure_rows(st, w, c, frames + top, 1, sub, parts, s, NULL, worst);
+        }
         bounds[top] = worst;
     }
     return worst;
