@@ -12,8 +12,8 @@
 /* Decoded palette rows a measurement keeps: a batch's rows and the rows after them, so that
  * the baked rows of a batch and the blends between them and their next decode each row once. */
 enum { VALUE_SLOTS = 2 * CB_SAMPLE_BATCH };
-/* Or, in a bake of many clips (not a search's probe, whose scratch is fresh memory each bake),
- * every row of the clip in hand, where that takes at most this much: the passes over a clip
+/* Or every row of the clip in hand, where that takes at most this much (in a bake of many clips,
+ * and in a search's probes, whose scratch the search thread keeps): the passes over a clip
  * (each quarter point of fitted rows, the baked rows, the rows sorted by bound) read its rows
  * about 7 times (Cow's final bake: 6,915 decodes of 1,014 rows), each decoded once instead. */
 #define VALUE_TABLE_BYTES ((size_t)4 << 20)
@@ -29,6 +29,7 @@ struct measure_scratch {
     double *values;                    /* VALUE_SLOTS (or table_rows) * bones * 16: decoded palette rows */
     uint32_t table_rows, table_first;  /* > 0: values holds row table_first + k at k (the clip's), else slots */
     unsigned char *table_decoded;      /* table_rows flags: row k decoded */
+    uint32_t bones, groups, frames;    /* what it has room for: bones, vertex groups, a clip's rows */
     uint32_t value_row[VALUE_SLOTS];   /* which row each slot holds (UINT32_MAX: none) */
     uint64_t value_read[VALUE_SLOTS];  /* when each slot was last read (0: never) */
     uint64_t reads;                    /* the reads so far: the clock of value_read */
@@ -365,20 +366,32 @@ static measure_scratch *begin_job(const bake_state *st, measure_scratch *s, uint
     return s;
 }
 
-/* The worker's scratch for a job, made by its first job for the longest clip; NULL when out of
- * memory. One block for all of it (cb_alloc_large: 1.4 MB for 200 bones is a whole huge page,
- * where six blocks of 4 KB pages took 350 page faults of fresh memory a thread). */
+/* Whether scratch s has room for st's measurement: a search thread's is kept across its probes,
+ * whose clips and rates differ. */
+static bool scratch_fits(const bake_state *st, const measure_scratch *s)
+{
+    return s->bones == st->p->bone_count && s->groups == st->groups->group_count && s->frames >= st->max_clip_frames;
+}
+
+/* The worker's scratch for a job, made by its first job for the longest clip; in a search's probe
+ * (st->batch, one worker), the search thread's, kept across its probes with its batches of poses
+ * and made again only for more rows (room for twice as many: its later probes bake higher rates).
+ * NULL when out of memory. One block for all of it (cb_alloc_large: 1.4 MB for 200 bones is a
+ * whole huge page, where six blocks of 4 KB pages took 350 page faults of fresh memory a thread). */
 static measure_scratch *worker_scratch(const bake_state *st, worker *w, uint32_t c)
 {
-    if (w->measure) return begin_job(st, w->measure, c);
+    measure_scratch **kept = st->batch ? pose_batch_measure(st->batch) : &w->measure;
+    if (*kept && scratch_fits(st, *kept)) return begin_job(st, *kept, c);
+    palette_measure_scratch_free(*kept), *kept = NULL;
     const cb_palette *p = st->p;
     size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
-    bool table = !st->poses && st->max_clip_frames > VALUE_SLOTS && st->max_clip_frames * matrices <= VALUE_TABLE_BYTES;
-    uint32_t slots = table ? st->max_clip_frames : VALUE_SLOTS;
+    uint32_t frames = st->batch ? 2 * st->max_clip_frames : st->max_clip_frames;
+    bool table = (st->batch || !st->poses) && frames > VALUE_SLOTS && frames * matrices <= VALUE_TABLE_BYTES;
+    uint32_t slots = table ? frames : VALUE_SLOTS;
     size_t sizes[8] = {
         CB_SAMPLE_BATCH * matrices, slots * matrices, CB_SAMPLE_BATCH * p->bone_count * sizeof(cb_joint_error),
-        (st->groups->group_count + 1) * sizeof(double), st->max_clip_frames * sizeof(cb_bounded_row),
-        st->max_clip_frames * sizeof(cb_bounded_row), CB_SAMPLE_BATCH * matrices, table ? slots : 0};
+        (st->groups->group_count + 1) * sizeof(double), frames * sizeof(cb_bounded_row),
+        frames * sizeof(cb_bounded_row), CB_SAMPLE_BATCH * matrices, table ? slots : 0};
     size_t total = 0;
     for (int i = 0; i < 8; ++i) total += (sizes[i] + 63) / 64 * 64;
     measure_scratch *s = calloc(1, sizeof *s);
@@ -393,7 +406,8 @@ static measure_scratch *worker_scratch(const bake_state *st, worker *w, uint32_t
     s->rows = carve(s->block, &at, sizes[4]), s->baked = carve(s->block, &at, sizes[5]);
     s->exact = carve(s->block, &at, sizes[6]), s->table_decoded = carve(s->block, &at, sizes[7]);
     s->table_rows = table ? slots : 0;
-    return begin_job(st, w->measure = s, c);
+    s->bones = p->bone_count, s->groups = st->groups->group_count, s->frames = frames;
+    return begin_job(st, *kept = s, c);
 }
 
 /* A probe of clip c (a search's bake of it alone) measured its blends: where their worst was, for
