@@ -58,7 +58,11 @@ static inline void range_grow_affine(value_range *r, const float *v)
 /* pose_batch.c: what samples a skin's every joint at a batch of times at once, for one thread. */
 typedef struct pose_batch pose_batch;
 pose_batch *pose_batch_create(const cb_sampler *sampler); /* NULL: out of memory */
-void pose_batch_free(pose_batch *b);
+void pose_batch_free(pose_batch *b); /* and the measurement scratch it keeps */
+/* The slot for the measurement scratch a search thread keeps across its probes (palette_error.c),
+ * freed with b: a probe's measurement reads every row of its clip several times (palette_error.c's
+ * table), and a scratch made afresh for each probe would be fresh memory each time. */
+struct measure_scratch **pose_batch_measure(pose_batch *b);
 
 /* Per-thread scratch: each worker samples its own clips with its own sampler. */
 typedef struct worker {

@@ -12,6 +12,11 @@
 /* Decoded palette rows a measurement keeps: a batch's rows and the rows after them, so that
  * the baked rows of a batch and the blends between them and their next decode each row once. */
 enum { VALUE_SLOTS = 2 * CB_SAMPLE_BATCH };
+/* Or every row of the clip in hand, where that takes at most this much (in a bake of many clips,
+ * and in a search's probes, whose scratch the search thread keeps): the passes over a clip
+ * (each quarter point of fitted rows, the baked rows, the rows sorted by bound) read its rows
+ * about 7 times (Cow's final bake: 6,915 decodes of 1,014 rows), each decoded once instead. */
+#define VALUE_TABLE_BYTES ((size_t)4 << 20)
 
 /* A measurement's scratch: one row's differences, their bound terms and its group bounds. */
 struct measure_scratch {
@@ -21,11 +26,15 @@ struct measure_scratch {
     cb_bounded_row *rows;              /* the clip's frames */
     cb_bounded_row *baked;             /* the clip's frames: the baked rows measured with the blends */
     double *exact;                     /* CB_SAMPLE_BATCH rows of bones * 16: exact matrices no pose cache kept */
-    double *values;                    /* VALUE_SLOTS * bones * 16: decoded palette rows */
+    double *values;                    /* VALUE_SLOTS (or table_rows) * bones * 16: decoded palette rows */
+    uint32_t table_rows, table_first;  /* > 0: values holds row table_first + k at k (the clip's), else slots */
+    unsigned char *table_decoded;      /* table_rows flags: row k decoded */
+    uint32_t bones, groups, frames;    /* what it has room for: bones, vertex groups, a clip's rows */
     uint32_t value_row[VALUE_SLOTS];   /* which row each slot holds (UINT32_MAX: none) */
     uint64_t value_read[VALUE_SLOTS];  /* when each slot was last read (0: never) */
     uint64_t reads;                    /* the reads so far: the clock of value_read */
     bool finite[CB_SAMPLE_BATCH];      /* per row: every difference finite (else no bound holds) */
+    uint32_t worst_frame, worst_sub;   /* the blend that last raised a measurement's worst (sub 0: none) */
     unsigned char *block;              /* what the arrays above lie in */
 };
 typedef struct measure_scratch measure_scratch;
@@ -41,6 +50,12 @@ static const double *read_slot(const cb_palette *p, measure_scratch *s, uint32_t
  * least recently: never the other row of the blend in hand, read just before. */
 static const double *row_values(const cb_palette *p, measure_scratch *s, uint32_t row)
 {
+    if (s->table_rows) { /* every row of the clip: decoded at its first read */
+        uint32_t k = row - s->table_first;
+        double *values = s->values + (size_t)k * p->bone_count * 16;
+        if (!s->table_decoded[k]) palette_decode_row_values(p, row, values), s->table_decoded[k] = 1;
+        return values;
+    }
     uint32_t oldest = 0;
     for (uint32_t k = 0; k < VALUE_SLOTS; ++k) {
         if (s->value_row[k] == row) return read_slot(p, s, k);
@@ -96,6 +111,14 @@ static double skin_row(const bake_state *st, measure_scratch *s, const double *d
     return worst;
 }
 
+/* `now`, the worst after a blend's row `frame` at `sub` was skinned against `was`: where it
+ * rose, that blend is noted (a probe's worst point, pose_cache_note_worst). */
+static double note_worst(measure_scratch *s, uint32_t frame, uint32_t sub, double was, double now)
+{
+    if (sub && now > was) s->worst_frame = frame, s->worst_sub = sub;
+    return now;
+}
+
 #define B CB_SAMPLE_BATCH
 
 /* What palette_bone_differences takes besides the joint and its lanes, for a batch of rows. */
@@ -114,6 +137,23 @@ static void joint_differences(void *ctx, uint32_t j, double (*lanes)[B])
     const differences *d = ctx;
     palette_bone_differences(d->p, j, (const double(*)[B])lanes, d->mats, d->a, d->b, d->count, d->fr, d->s->diff,
                              d->s->joints, d->s->finite);
+}
+
+/* The order a batch's rows are skinned in, into order: with `by_cap` (their differences in hand),
+ * the largest cap on a row's error first (cb_row_error_cap; a row with a difference not finite
+ * before all), so that the worst rises early and the rows after skip more groups; else as they
+ * come. The maximum is the same in any order: a row or group skipped cannot exceed it. */
+static void rows_by_cap(const bake_state *st, const measure_scratch *s, uint32_t count, bool by_cap, uint32_t *order)
+{
+    double cap[B];
+    for (uint32_t i = 0; i < count; ++i) {
+        const cb_joint_error *joints = s->joints + (size_t)i * st->p->bone_count;
+        cap[i] = !by_cap ? 0 : !s->finite[i] ? INFINITY
+                             : cb_row_error_cap(joints, st->p->bone_count, st->facts->group_reach, st->facts->weight_sum);
+        uint32_t k = i;
+        for (; k > 0 && cap[order[k - 1]] < cap[i]; --k) order[k] = order[k - 1];
+        order[k] = i;
+    }
 }
 
 /* Clip c's joint matrices at `frame` of framing (palette_frame_matrices), where they stay until
@@ -169,7 +209,10 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
             cb_clip_frame_lanes_each(w->sampler, &framing, times, count, st->opt->root_motion, joint_differences, &d);
         for (uint32_t j = 0; !similar && j < p->bone_count; ++j) joint_differences(&d, j, NULL);
     }
-    for (uint32_t i = 0; i < count; ++i) {
+    uint32_t order[B];
+    rows_by_cap(st, s, count, lanes && !bounds, order);
+    for (uint32_t n = 0; n < count; ++n) {
+        uint32_t i = order[n];
         double *diff = lanes ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
         const cb_joint_error *joints = lanes ? s->joints + (size_t)i * p->bone_count : s->joints;
         if (!lanes) {
@@ -186,7 +229,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         }
         bool finite = lanes ? s->finite[i] : cb_joint_errors(diff, p->bone_count, p->bind_positions, s->joints);
         if (bounds) bounds[i] = row_bound(st, joints, finite, worst);
-        else worst = skin_row(st, s, diff, joints, finite, worst);
+        else worst = note_worst(s, frames[i], sub, worst, skin_row(st, s, diff, joints, finite, worst));
     }
     /* The rows' likeliest worst skinned at once where that costs no sampling (qpos rows: every
      * row's differences are in hand), and with a goal (a row above it ends
@@ -197,8 +240,12 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     for (uint32_t i = 1; bounds && i < count; ++i) top = bounds[i] > bounds[top] ? i : top;
     if (bounds && bounds[top] > worst && (lanes || st->opt->error_goal > 0)) {
         size_t at = (size_t)top * p->bone_count;
-        worst = lanes ? skin_row(st, s, s->diff + at * 16, s->joints + at, s->finite[top], worst)
-                        : measure_rows(st, w, c, frames + top, 1, sub, parts, s, NULL, worst);
+        if (lanes) {
+            double skinned = skin_row(st, s, s->diff + at * 16, s->joints + at, s->finite[top], worst);
+            worst = note_worst(s, frames[top], sub, worst, skinned);
+        } else {
+            worst = measure_rows(st, w, c, frames + top, 1, sub, parts, s, NULL, worst);
+        }
         bounds[top] = worst;
     }
     return worst;
@@ -308,27 +355,45 @@ static void *carve(unsigned char *block, size_t *at, size_t bytes)
     return p;
 }
 
-/* The values a scratch holds forgotten: a job's rows are not the last job's. */
-static measure_scratch *begin_job(measure_scratch *s)
+/* The values a scratch holds forgotten: a job's rows (clip c's) are not the last job's. */
+static measure_scratch *begin_job(const bake_state *st, measure_scratch *s, uint32_t c)
 {
     for (uint32_t i = 0; i < VALUE_SLOTS; ++i) s->value_row[i] = UINT32_MAX, s->value_read[i] = 0;
+    if (s->table_rows) memset(s->table_decoded, 0, s->table_rows);
+    s->table_first = st->p->clips[c].first_row;
     s->reads = 0;
+    s->worst_sub = 0;
     return s;
 }
 
-/* The worker's scratch for a job, made by its first job for the longest clip; NULL when out of
- * memory. One block for all of it (cb_alloc_large: 1.4 MB for 200 bones is a whole huge page,
- * where six blocks of 4 KB pages took 350 page faults of fresh memory a thread). */
-static measure_scratch *worker_scratch(const bake_state *st, worker *w)
+/* Whether scratch s has room for st's measurement: a search thread's is kept across its probes,
+ * whose clips and rates differ. */
+static bool scratch_fits(const bake_state *st, const measure_scratch *s)
 {
-    if (w->measure) return begin_job(w->measure);
+    return s->bones == st->p->bone_count && s->groups == st->groups->group_count && s->frames >= st->max_clip_frames;
+}
+
+/* The worker's scratch for a job, made by its first job for the longest clip; in a search's probe
+ * (st->batch, one worker), the search thread's, kept across its probes with its batches of poses
+ * and made again only for more rows (room for twice as many: its later probes bake higher rates).
+ * NULL when out of memory. One block for all of it (cb_alloc_large: 1.4 MB for 200 bones is a
+ * whole huge page, where six blocks of 4 KB pages took 350 page faults of fresh memory a thread). */
+static measure_scratch *worker_scratch(const bake_state *st, worker *w, uint32_t c)
+{
+    measure_scratch **kept = st->batch ? pose_batch_measure(st->batch) : &w->measure;
+    if (*kept && scratch_fits(st, *kept)) return begin_job(st, *kept, c);
+    palette_measure_scratch_free(*kept), *kept = NULL;
     const cb_palette *p = st->p;
-    size_t matrices = (size_t)p->bone_count * 16 * sizeof(double), sizes[7] = {
-        CB_SAMPLE_BATCH * matrices, VALUE_SLOTS * matrices, CB_SAMPLE_BATCH * p->bone_count * sizeof(cb_joint_error),
-        (st->groups->group_count + 1) * sizeof(double), st->max_clip_frames * sizeof(cb_bounded_row),
-        st->max_clip_frames * sizeof(cb_bounded_row), CB_SAMPLE_BATCH * matrices};
+    size_t matrices = (size_t)p->bone_count * 16 * sizeof(double);
+    uint32_t frames = st->batch ? 2 * st->max_clip_frames : st->max_clip_frames;
+    bool table = (st->batch || !st->poses) && frames > VALUE_SLOTS && frames * matrices <= VALUE_TABLE_BYTES;
+    uint32_t slots = table ? frames : VALUE_SLOTS;
+    size_t sizes[8] = {
+        CB_SAMPLE_BATCH * matrices, slots * matrices, CB_SAMPLE_BATCH * p->bone_count * sizeof(cb_joint_error),
+        (st->groups->group_count + 1) * sizeof(double), frames * sizeof(cb_bounded_row),
+        frames * sizeof(cb_bounded_row), CB_SAMPLE_BATCH * matrices, table ? slots : 0};
     size_t total = 0;
-    for (int i = 0; i < 7; ++i) total += (sizes[i] + 63) / 64 * 64;
+    for (int i = 0; i < 8; ++i) total += (sizes[i] + 63) / 64 * 64;
     measure_scratch *s = calloc(1, sizeof *s);
     if (s) s->block = cb_alloc_large(total);
     if (!s || !s->block) {
@@ -339,8 +404,37 @@ static measure_scratch *worker_scratch(const bake_state *st, worker *w)
     s->diff = carve(s->block, &at, sizes[0]), s->values = carve(s->block, &at, sizes[1]);
     s->joints = carve(s->block, &at, sizes[2]), s->group_bounds = carve(s->block, &at, sizes[3]);
     s->rows = carve(s->block, &at, sizes[4]), s->baked = carve(s->block, &at, sizes[5]);
-    s->exact = carve(s->block, &at, sizes[6]);
-    return begin_job(w->measure = s);
+    s->exact = carve(s->block, &at, sizes[6]), s->table_decoded = carve(s->block, &at, sizes[7]);
+    s->table_rows = table ? slots : 0;
+    s->bones = p->bone_count, s->groups = st->groups->group_count, s->frames = frames;
+    return begin_job(st, *kept = s, c);
+}
+
+/* A probe of clip c (a search's bake of it alone) measured its blends: where their worst was, for
+ * the bake after the search (blend_floor), where the value is exact (no goal, or within it). */
+static void keep_worst_point(bake_state *st, uint32_t c, uint32_t parts, const measure_scratch *s, double blend)
+{
+    double goal = st->opt->error_goal;
+    if (st->poses && s->worst_sub && (!(goal > 0) || blend <= goal))
+        pose_cache_note_worst(st->poses, (pose_worst){st->p->clips[c].frames, parts, s->worst_frame, s->worst_sub});
+}
+
+/* A floor for clip c's blends: the worst of the one blend where its rate search's probe of the
+ * same rows found its worst, measured in this palette (0 when none). u16 quantizes every clip
+ * in the file's box, so the bake's errors are not the probe's; but the probe's worst point
+ * mostly stays the worst, and measured first it lets the bounds skip nearly every other row.
+ * Exact: the point is one of those the measurement takes (measured_frames), measured by the
+ * same code (a row's lanes are its own, whatever the batch), so the maximum is the same bits. */
+static double blend_floor(bake_state *st, worker *w, uint32_t c, uint32_t parts, measure_scratch *s)
+{
+    const cb_palette_clip *clip = &st->p->clips[c];
+    const pose_cache *poses = st->clip_poses && !st->poses ? st->clip_poses[c] : NULL;
+    pose_worst at;
+    if (!poses || !pose_cache_worst(poses, clip->frames, parts, &at)) return 0;
+    uint32_t frames = clip->loops ? clip->frames : clip->frames - 1; /* a one-shot's last row has no next */
+    bool measured = at.frame % st->error_stride == 0 || at.frame + 1 == frames;
+    if (!at.sub || at.sub >= parts || at.frame >= frames || !measured) return 0;
+    return measure_rows(st, w, c, &at.frame, 1, at.sub, parts, s, NULL, 0);
 }
 
 void palette_measure_job(bake_state *st, worker *w, uint32_t k)
@@ -350,7 +444,7 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     bool split = measure_split(st);
     uint32_t c = split ? k / 2 : k;
     bool blends = !split || k % 2 == 0, rows = !split || k % 2 == 1; /* what this job measures */
-    measure_scratch *s = worker_scratch(st, w);
+    measure_scratch *s = worker_scratch(st, w, c);
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
      * ways, so their quarter points are measured too. */
     uint32_t parts = p->clips[c].fitted ? 4 : 2;
@@ -359,12 +453,15 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     } else if (goal > 0) { /* the blends, then only the baked rows that could exceed them */
         for (uint32_t sub = 1; sub < parts && !(blend > goal); ++sub)
             blend = measure_clip_rows(st, w, c, sub, parts, blend, s, NULL);
+        keep_worst_point(st, c, parts, s, blend);
         st->clip_blend_error[c] = blend;
         double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, s, NULL);
         st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
     } else if (blends) { /* each fraction's rows only count where they exceed the worst blend so far */
+        blend = blend_floor(st, w, c, parts, s);
         for (uint32_t sub = 1; sub < parts; ++sub)
             blend = measure_clip_rows(st, w, c, sub, parts, blend, s, rows && sub == 1 ? &baked : NULL);
+        keep_worst_point(st, c, parts, s, blend);
         st->clip_blend_error[c] = blend;
         if (rows) st->clip_error[c] = baked;
     } else {

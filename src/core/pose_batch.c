@@ -13,6 +13,7 @@
 struct pose_batch {
     cb_joint_subset *joints; /* every joint of the skin */
     double *lanes;           /* joints x 16 x CB_SAMPLE_BATCH */
+    struct measure_scratch *measure; /* the thread's measurement scratch, kept across its probes (or NULL) */
 };
 
 pose_batch *pose_batch_create(const cb_sampler *s)
@@ -32,8 +33,11 @@ void pose_batch_free(pose_batch *b)
 {
     if (!b) return;
     cb_joint_subset_free(b->joints);
+    palette_measure_scratch_free(b->measure);
     free(b->lanes), free(b);
 }
+
+struct measure_scratch **pose_batch_measure(pose_batch *b) { return &b->measure; }
 
 /* Fewer poses missing than this are left to palette_frame_matrices, one at a time: a batch
  * samples all its lanes whatever it fills. */

@@ -12,6 +12,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Worst points kept (a search probes a clip at a handful of rates and kinds of rows). */
+enum { POSE_WORST_KEPT = 16 };
+
 #define BLOCK_BYTES ((size_t)2 << 20) /* a huge page */
 
 struct pose_cache {
@@ -25,6 +28,8 @@ struct pose_cache {
     uint32_t block_count, block_poses;
     void *attached[POSE_CACHE_SLOTS]; /* its user's blocks for the same clip (pose_cache_attach), or NULL */
     void *analysis;         /* and the clip's analysis (pose_cache_attach_analysis), or NULL */
+    pose_worst worst[POSE_WORST_KEPT]; /* pose_cache_note_worst's, the newest at worst_count - 1 (mod) */
+    uint32_t worst_count;
 };
 
 /* No time's bits: the pattern of a NaN with a payload no arithmetic produces. */
@@ -141,6 +146,7 @@ void pose_cache_clear(pose_cache *c)
     memset(c->keys, 0xFF, c->capacity * sizeof *c->keys);
     for (int k = 0; k < POSE_CACHE_SLOTS; ++k) free(c->attached[k]), c->attached[k] = NULL;
     free(c->analysis), c->analysis = NULL;
+    c->worst_count = 0;
 }
 
 void pose_cache_attach(pose_cache *c, int slot, void *block)
@@ -158,3 +164,26 @@ void pose_cache_attach_analysis(pose_cache *c, void *block)
 void *pose_cache_analysis(const pose_cache *c) { return c->analysis; }
 
 uint32_t pose_cache_count(const pose_cache *c) { return c->count; }
+
+/* The slot of the point kept for frames and parts, or POSE_WORST_KEPT. */
+static uint32_t worst_slot(const pose_cache *c, uint32_t frames, uint32_t parts)
+{
+    uint32_t kept = c->worst_count < POSE_WORST_KEPT ? c->worst_count : POSE_WORST_KEPT;
+    for (uint32_t i = 0; i < kept; ++i)
+        if (c->worst[i].frames == frames && c->worst[i].parts == parts) return i;
+    return POSE_WORST_KEPT;
+}
+
+void pose_cache_note_worst(pose_cache *c, pose_worst at)
+{
+    uint32_t i = worst_slot(c, at.frames, at.parts);
+    if (i == POSE_WORST_KEPT) i = c->worst_count++ % POSE_WORST_KEPT;
+    c->worst[i] = at;
+}
+
+bool pose_cache_worst(const pose_cache *c, uint32_t frames, uint32_t parts, pose_worst *at)
+{
+    uint32_t i = worst_slot(c, frames, parts);
+    if (i < POSE_WORST_KEPT) *at = c->worst[i];
+    return i < POSE_WORST_KEPT;
+}

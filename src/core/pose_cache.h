@@ -7,6 +7,7 @@
 #ifndef CB_POSE_CACHE_H
 #define CB_POSE_CACHE_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -40,6 +41,17 @@ void *pose_cache_attached(const pose_cache *c, int slot);
  * after it frames instead of analyzing the clip again). */
 void pose_cache_attach_analysis(pose_cache *c, void *block);
 void *pose_cache_analysis(const pose_cache *c);
+
+/* Where a measurement of the clip found its blends' worst (palette_error.c): the row interval
+ * `frame` at fraction sub / parts, in a bake of the clip in `frames` rows. A bake after the
+ * search measures that point of its own palette first (an exact floor for its maximum). */
+typedef struct pose_worst {
+    uint32_t frames, parts, frame, sub;
+} pose_worst;
+/* Keeps `at`, replacing the one of the same frames and parts (past 16 kept, the oldest). */
+void pose_cache_note_worst(pose_cache *c, pose_worst at);
+/* The point kept for a bake in `frames` rows measured in `parts`, into *at; false when none. */
+bool pose_cache_worst(const pose_cache *c, uint32_t frames, uint32_t parts, pose_worst *at);
 
 /* Poses kept. */
 uint32_t pose_cache_count(const pose_cache *c);

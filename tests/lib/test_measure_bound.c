@@ -14,6 +14,8 @@
 
 #include "crowdbake_pal.h"
 #include "../../src/core/error_bound.h"
+#include "../../src/core/palette_bake.h" /* palette_choose_rates, palette_bake_with_facts */
+#include "../../src/core/pose_cache.h"
 #include "../../src/core/vertex_groups.h"
 #include "crowdbake/palette.h"
 #include "crowdbake/runtime.h"
@@ -373,6 +375,54 @@ static void test_auto_rates_do_not_depend_on_threads(void **state)
     cb_model_free(m);
 }
 
+/* The bake after a rate search measures each clip's blends from a floor its probes hand it: the
+ * final palette's own error at the blend where the probe of the same rows found its worst
+ * (pose_cache_note_worst). Every maximum stays the bits a bake of the same plan with nothing kept
+ * (no floor: every blend measured from 0) finds, as do the texels; and the floor is really
+ * taken (a point kept for most clips' rows), else this would test nothing. */
+static void expect_floors_keep_the_maxima(const char *rel, uint32_t min_floored)
+{
+    cb_model *m = load_shared(rel);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    uint32_t n = m->animation_count, floored = 0;
+    assert_true(n <= 32);
+    cb_clip_plan plan[32];
+    cb_rate_goal goals[32];
+    cb_rate_choice out[32];
+    pose_cache *kept[32] = {NULL};
+    cb_bake_options o = cb_default_bake_options();
+    o.threads = 2;
+    for (uint32_t i = 0; i < n; ++i)
+        plan[i] = (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false}, goals[i] = (cb_rate_goal){1, 120, CB_ROWS_BEST};
+    assert_int_equal(palette_choose_rates(s, &o, plan, n, goals, out, kept, NULL, &err), CB_OK);
+    palette_probe probe = {NULL, NULL, kept, NULL, NULL};
+    cb_palette floors, fresh;
+    assert_int_equal(palette_bake_with_facts(s, &o, plan, n, NULL, &probe, &floors, &err), CB_OK);
+    assert_int_equal(cb_palette_bake(s, &o, plan, n, &fresh, &err), CB_OK);
+    for (uint32_t c = 0; c < n; ++c) {
+        pose_worst at;
+        floored += kept[c] && pose_cache_worst(kept[c], floors.clips[c].frames, floors.clips[c].fitted ? 4 : 2, &at);
+        if (floors.clips[c].visible_error != fresh.clips[c].visible_error)
+            fail_msg("%s clip %u: %.17g from the probe's floor, %.17g from none", rel, c, floors.clips[c].visible_error,
+                     fresh.clips[c].visible_error);
+    }
+    assert_true(floors.max_error == fresh.max_error && floors.visible_error == fresh.visible_error);
+    assert_true(floors.texel_bytes == fresh.texel_bytes && !memcmp(floors.texels, fresh.texels, fresh.texel_bytes));
+    if (floored < min_floored) fail_msg("%s: a floor for %u of %u clips, expected %u", rel, floored, n, min_floored);
+    for (uint32_t i = 0; i < n; ++i) pose_cache_free(kept[i]);
+    cb_palette_free(&floors), cb_palette_free(&fresh);
+    cb_sampler_free(s);
+    cb_model_free(m);
+}
+
+static void test_floors_from_the_probes_keep_the_maxima(void **state)
+{
+    (void)state;
+    expect_floors_keep_the_maxima("assets/quaternius-cow/Cow.glb", 10);
+    expect_floors_keep_the_maxima("assets/fox-bevy/Fox.glb", 3);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -380,6 +430,7 @@ int main(void)
         cmocka_unit_test(test_maxima_equal_every_row_skinned),
         cmocka_unit_test(test_measure_all_past_the_budget),
         cmocka_unit_test(test_auto_rates_do_not_depend_on_threads),
+        cmocka_unit_test(test_floors_from_the_probes_keep_the_maxima),
     };
     return cmocka_run_group_tests_name("measure_bound", tests, NULL, NULL);
 }

@@ -6,7 +6,8 @@
  * And times coincide as the search counts on: row f at `steps` is row 2f at 2 x steps, the
  * same double. A block attached beside the poses (a probe's fitted rows) is found until another
  * replaces it (the one before freed: ASan's leak check holds it to that) or the cache is
- * cleared, and goes with the cache. */
+ * cleared, and goes with the cache. A probe's worst point is found by its rows' count and parts,
+ * replaced by the next for the same, the oldest forgotten past 16, all of them by a clear. */
 #include "testutil.h"
 
 #include <math.h>
@@ -149,6 +150,29 @@ static void test_an_attached_block_goes_with_the_poses(void **state)
     pose_cache_free(c); /* frees the third and the fourth */
 }
 
+static void test_worst_points_by_rows_and_parts(void **state)
+{
+    (void)state;
+    pose_cache *c = pose_cache_create(BONES, 0, (size_t)1 << 20);
+    assert_non_null(c);
+    pose_worst at;
+    assert_false(pose_cache_worst(c, 73, 2, &at));
+    pose_cache_note_worst(c, (pose_worst){73, 2, 40, 1});
+    pose_cache_note_worst(c, (pose_worst){73, 4, 12, 3}); /* fitted rows at the same rate: another key */
+    assert_true(pose_cache_worst(c, 73, 2, &at) && at.frame == 40 && at.sub == 1);
+    assert_true(pose_cache_worst(c, 73, 4, &at) && at.frame == 12 && at.sub == 3);
+    assert_false(pose_cache_worst(c, 37, 2, &at));
+    pose_cache_note_worst(c, (pose_worst){73, 2, 41, 1}); /* the same rows measured again: replaced */
+    assert_true(pose_cache_worst(c, 73, 2, &at) && at.frame == 41);
+    for (uint32_t f = 100; f < 115; ++f) pose_cache_note_worst(c, (pose_worst){f, 2, f / 2, 1}); /* 17 in all */
+    assert_false(pose_cache_worst(c, 73, 2, &at)); /* the oldest, forgotten */
+    assert_true(pose_cache_worst(c, 73, 4, &at) && at.frame == 12);
+    assert_true(pose_cache_worst(c, 114, 2, &at) && at.frame == 57);
+    pose_cache_clear(c); /* another clip's */
+    assert_false(pose_cache_worst(c, 73, 4, &at) || pose_cache_worst(c, 114, 2, &at));
+    pose_cache_free(c);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -158,6 +182,7 @@ int main(void)
         cmocka_unit_test(test_extra_doubles_follow_the_pose),
         cmocka_unit_test(test_rows_of_twice_the_steps_are_the_same_times),
         cmocka_unit_test(test_an_attached_block_goes_with_the_poses),
+        cmocka_unit_test(test_worst_points_by_rows_and_parts),
     };
     return cmocka_run_group_tests_name("pose_cache", tests, NULL, NULL);
 }
