@@ -390,12 +390,14 @@ static void expect_floors_keep_the_maxima(const char *rel, uint32_t min_floored)
     cb_clip_plan plan[32];
     cb_rate_goal goals[32];
     cb_rate_choice out[32];
-    pose_cache *kept[32] = {NULL};
+    search_keep *keep = search_keep_create(n);
+    assert_non_null(keep);
+    pose_cache **kept = keep->poses;
     cb_bake_options o = cb_default_bake_options();
     o.threads = 2;
     for (uint32_t i = 0; i < n; ++i)
         plan[i] = (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false}, goals[i] = (cb_rate_goal){1, 120, CB_ROWS_BEST};
-    assert_int_equal(palette_choose_rates(s, &o, plan, n, goals, out, kept, NULL, &err), CB_OK);
+    assert_int_equal(palette_choose_rates(s, &o, plan, n, goals, out, keep, NULL, &err), CB_OK);
     palette_probe probe = {NULL, NULL, kept, NULL, NULL};
     cb_palette floors, fresh;
     assert_int_equal(palette_bake_with_facts(s, &o, plan, n, NULL, &probe, &floors, &err), CB_OK);
@@ -410,7 +412,7 @@ static void expect_floors_keep_the_maxima(const char *rel, uint32_t min_floored)
     assert_true(floors.max_error == fresh.max_error && floors.visible_error == fresh.visible_error);
     assert_true(floors.texel_bytes == fresh.texel_bytes && !memcmp(floors.texels, fresh.texels, fresh.texel_bytes));
     if (floored < min_floored) fail_msg("%s: a floor for %u of %u clips, expected %u", rel, floored, n, min_floored);
-    for (uint32_t i = 0; i < n; ++i) pose_cache_free(kept[i]);
+    search_keep_free(keep);
     cb_palette_free(&floors), cb_palette_free(&fresh);
     cb_sampler_free(s);
     cb_model_free(m);
