@@ -251,6 +251,12 @@ static void scalar_lanes(const cb_channel *ch, const double *times, uint32_t *hi
                          lane_set *node)
 {
     for (int i = 0; i < B; ++i) {
+        if (time_repeats(times, i)) { /* the lane before's value of this channel's components, as stored */
+            int first = ch->path == CB_PATH_ROTATION ? 0 : ch->path == CB_PATH_TRANSLATION ? 4 : 7;
+            int last = ch->path == CB_PATH_ROTATION ? 3 : ch->path == CB_PATH_TRANSLATION ? 6 : 7;
+            for (int c = first; c <= last; ++c) (*node)[c][i] = (*node)[c][i - 1];
+            continue;
+        }
         double v[4];
         cb_channel_eval_at(ch, times[i], v, hint, wrap);
         if (ch->path == CB_PATH_ROTATION)
