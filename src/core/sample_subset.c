@@ -301,18 +301,21 @@ static CB_CLONE_INLINE void lanes_to_poses4(const v4df *v, double *const *dst, s
 /* joint_matrix_lanes' affine product (mul_affine_lanes with the inverse bind matrix in every
  * lane: each lane the same operations in the same order, no contraction) four lanes at a time,
  * each lane's matrix stored straight into its pose: no lanes written and read back. A lane not
- * wanted (past count, or its pose NULL) is stored into `dump`, so that every store is made. */
+ * wanted (past count, or its pose NULL) is stored into `dump` (room for a pose), so that every
+ * store is made. */
 CB_TARGET_CLONES
-static void joint_matrix_poses(const cb_sampler *s, const cb_joint_subset *sub, uint32_t count, double *const *pose)
+static void joint_matrix_poses(const cb_sampler *s, const cb_joint_subset *sub, uint32_t count, double *const *pose,
+                               double *dump)
 {
     const cb_skin *skin = &s->model->skins[s->skin];
     const v4df zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
-    double dump[16], *dst[B];
+    double *base[B], *dst[B];
+    for (uint32_t i = 0; i < B; ++i) base[i] = i < count && pose[i] ? pose[i] : dump;
     for (uint32_t k = 0; k < sub->joint_count; ++k) {
         uint32_t j = sub->joints[k];
         const double *ibm = skin->inverse_bind + (size_t)j * 16;
         const double(*g)[B] = (const double(*)[B])node_lanes(sub, sub->slot[skin->joints[j]], TRS_LANES);
-        for (uint32_t i = 0; i < B; ++i) dst[i] = i < count && pose[i] ? pose[i] + (size_t)j * 16 : dump;
+        for (uint32_t i = 0; i < B; ++i) dst[i] = base[i] + (size_t)j * 16;
         for (uint32_t i = 0; i < count; i += 4) {
             v4df a[12];
 #pragma GCC unroll 3
@@ -342,7 +345,7 @@ void cb_sample_joint_subset_poses(cb_sampler *s, int32_t animation, const double
     subset_globals(s, animation, times, count, sub);
 #if defined(__GNUC__)
     if (s->affine_ibm) {
-        joint_matrix_poses(s, sub, count, pose);
+        joint_matrix_poses(s, sub, count, pose, lanes); /* the lanes' room, unused here, as the dump */
         return;
     }
 #endif
