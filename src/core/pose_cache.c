@@ -26,7 +26,6 @@ struct pose_cache {
     void *attached;         /* its user's block for the same clip (pose_cache_attach), or NULL */
     void *analysis;         /* and the clip's analysis (pose_cache_attach_analysis), or NULL */
     pose_cache *companion;  /* the same clip's poses in another form (pose_cache_companion), or NULL */
-    size_t max_bytes;
 };
 
 /* No time's bits: the pattern of a NaN with a payload no arithmetic produces. */
@@ -63,7 +62,7 @@ pose_cache *pose_cache_create(uint32_t bones, uint32_t extra, size_t max_bytes)
 {
     pose_cache *c = calloc(1, sizeof *c);
     if (!c) return NULL;
-    c->bones = bones, c->extra = extra, c->max_bytes = max_bytes;
+    c->bones = bones, c->extra = extra;
     c->stride = (size_t)bones * 16 + extra;
     if (c->stride == 0) c->stride = 1;
     size_t pose_bytes = c->stride * sizeof(double);
@@ -153,9 +152,9 @@ void pose_cache_clear(pose_cache *c)
     if (c->companion) pose_cache_clear(c->companion);
 }
 
-pose_cache *pose_cache_companion(pose_cache *c, uint32_t doubles)
+pose_cache *pose_cache_companion(pose_cache *c, uint32_t doubles, size_t max_bytes)
 {
-    if (!c->companion) c->companion = pose_cache_create(0, doubles, c->max_bytes);
+    if (!c->companion) c->companion = pose_cache_create(0, doubles, max_bytes);
     return c->companion;
 }
 

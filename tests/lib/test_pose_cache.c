@@ -152,9 +152,9 @@ static void test_the_companion_keeps_its_own_poses(void **state)
     pose_cache *c = pose_cache_create(BONES, 0, (size_t)1 << 20);
     assert_non_null(c);
     assert_true(pose_cache_companion_bytes(c) == 0);
-    pose_cache *lanes = pose_cache_companion(c, 8 * BONES);
+    pose_cache *lanes = pose_cache_companion(c, 8 * BONES, (size_t)1 << 20);
     assert_non_null(lanes);
-    assert_ptr_equal(pose_cache_companion(c, 8 * BONES), lanes); /* made once */
+    assert_ptr_equal(pose_cache_companion(c, 8 * BONES, (size_t)1 << 20), lanes); /* made once */
     fill(pose_cache_add(c, 0.5), 0.5);
     double *kept = pose_cache_add(lanes, 0.5);
     assert_non_null(kept);
