@@ -251,12 +251,6 @@ const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, cons
  * bits palette_frame_matrices samples them with; nothing where no cache keeps them. */
 void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
                             uint32_t count);
-/* pose_batch.c: cb_clip_frame_lanes_each for clip c (a rig of similarities), where a search keeps
- * its poses: each pose's lanes kept by time as sampled (pose_cache_companion), and a batch whose
- * every time is kept handed to the sink from there, the same bits, without sampling. */
-void palette_frame_lanes_each(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
-                              uint32_t count, void (*sink)(void *ctx, uint32_t joint, double (*lanes)[CB_SAMPLE_BATCH]),
-                              void *ctx); /* sink: a cb_joint_lanes_sink (sampler.h) */
 /* palette_rows.c: a pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
  * from its matrices alone too (a probe's rows are rows of the others). */
 pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes);

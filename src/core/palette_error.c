@@ -166,7 +166,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         for (uint32_t i = 0; i < count; ++i) s->finite[i] = true;
         differences d = {p, mats, a, blend ? b : NULL, count, (double)sub / parts, s};
         if (similar) /* each joint measured as soon as the sampler has it, as the bake's rows are made */
-            palette_frame_lanes_each(st, w, c, &framing, times, count, joint_differences, &d);
+            cb_clip_frame_lanes_each(w->sampler, &framing, times, count, st->opt->root_motion, joint_differences, &d);
         for (uint32_t j = 0; !similar && j < p->bone_count; ++j) joint_differences(&d, j, NULL);
     }
     for (uint32_t i = 0; i < count; ++i) {

@@ -508,7 +508,7 @@ void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, 
     for (uint32_t i = 0; i < count; ++i) frames[i] = f + i;
     rows_in_making r = {.st = st, .w = w, .f = f, .count = count, .rows = rows};
     lane_extent_reset(&r.x);
-    palette_frame_lanes_each(st, w, c, &st->infos[c], frames, count, joint_into_rows, &r);
+    cb_clip_frame_lanes_each(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, joint_into_rows, &r);
     /* Bounds and ranges in frame order, as one row at a time grows them (of +0 and -0, the
      * minimum is the one met first). Locals, kept in registers. */
     extent bounds = *clip_bounds;

@@ -25,7 +25,6 @@ struct pose_cache {
     uint32_t block_count, block_poses;
     void *attached;         /* its user's block for the same clip (pose_cache_attach), or NULL */
     void *analysis;         /* and the clip's analysis (pose_cache_attach_analysis), or NULL */
-    pose_cache *companion;  /* the same clip's poses in another form (pose_cache_companion), or NULL */
 };
 
 /* No time's bits: the pattern of a NaN with a payload no arithmetic produces. */
@@ -62,9 +61,8 @@ pose_cache *pose_cache_create(uint32_t bones, uint32_t extra, size_t max_bytes)
 {
     pose_cache *c = calloc(1, sizeof *c);
     if (!c) return NULL;
-    c->bones = bones, c->extra = extra;
-    c->stride = (size_t)bones * 16 + extra;
-    if (c->stride == 0) c->stride = 1;
+    c->bones = bones ? bones : 1, c->extra = extra;
+    c->stride = (size_t)c->bones * 16 + extra;
     size_t pose_bytes = c->stride * sizeof(double);
     size_t limit = max_bytes / pose_bytes;
     c->block_poses = (uint32_t)((BLOCK_BYTES + pose_bytes - 1) / pose_bytes); /* at least a huge page */
@@ -84,7 +82,6 @@ void pose_cache_free(pose_cache *c)
 {
     if (!c) return;
     for (uint32_t b = 0; b < c->block_count; ++b) free(c->blocks[b]);
-    pose_cache_free(c->companion);
     free(c->attached), free(c->analysis), free(c->blocks), free(c->keys), free(c->slots), free(c);
 }
 
@@ -149,13 +146,6 @@ void pose_cache_clear(pose_cache *c)
     memset(c->keys, 0xFF, c->capacity * sizeof *c->keys);
     free(c->attached), c->attached = NULL;
     free(c->analysis), c->analysis = NULL;
-    if (c->companion) pose_cache_clear(c->companion);
-}
-
-pose_cache *pose_cache_companion(pose_cache *c, uint32_t doubles, size_t max_bytes)
-{
-    if (!c->companion) c->companion = pose_cache_create(0, doubles, max_bytes);
-    return c->companion;
 }
 
 void pose_cache_attach(pose_cache *c, void *block)
@@ -173,7 +163,3 @@ void pose_cache_attach_analysis(pose_cache *c, void *block)
 void *pose_cache_analysis(const pose_cache *c) { return c->analysis; }
 
 uint32_t pose_cache_count(const pose_cache *c) { return c->count; }
-size_t pose_cache_companion_bytes(const pose_cache *c)
-{
-    return c->companion ? (size_t)c->companion->count * c->companion->stride * sizeof(double) : 0;
-}

@@ -40,13 +40,7 @@ void *pose_cache_attached(const pose_cache *c);
 void pose_cache_attach_analysis(pose_cache *c, void *block);
 void *pose_cache_analysis(const pose_cache *c);
 
-/* A second cache beside this one, for the same clip's poses in another form (`doubles` a pose,
- * no matrices: pose_batch.c keeps a rig of similarities' lanes there), made on first use with
- * its own limit, cleared and freed with this one; NULL when out of memory. */
-pose_cache *pose_cache_companion(pose_cache *c, uint32_t doubles, size_t max_bytes);
-
-/* Poses kept; and the bytes the companion's take (0 without one). */
+/* Poses kept. */
 uint32_t pose_cache_count(const pose_cache *c);
-size_t pose_cache_companion_bytes(const pose_cache *c);
 
 #endif

@@ -428,8 +428,7 @@ static void settle_kept(rate_search *rs, uint32_t i)
 {
     if (!rs->kept || !rs->kept[i]) return;
     uint32_t bones = rs->model->skins[rs->skin].joint_count;
-    size_t bytes = (size_t)pose_cache_count(rs->kept[i]) * (16 * bones + 1 + 5 * bones) * sizeof(double) +
-                   pose_cache_companion_bytes(rs->kept[i]); /* a rig of similarities' lanes (pose_batch.c) */
+    size_t bytes = (size_t)pose_cache_count(rs->kept[i]) * (16 * bones + 1 + 5 * bones) * sizeof(double);
     if (atomic_fetch_add(&rs->kept_bytes, bytes) + bytes > KEPT_POSE_BYTES) pose_cache_free(rs->kept[i]), rs->kept[i] = NULL;
 }
 

@@ -6,9 +6,7 @@
  * And times coincide as the search counts on: row f at `steps` is row 2f at 2 x steps, the
  * same double. A block attached beside the poses (a probe's fitted rows) is found until another
  * replaces it (the one before freed: ASan's leak check holds it to that) or the cache is
- * cleared, and goes with the cache. The companion cache (a rig of similarities' lanes) is made once,
- * keeps its own poses apart from the matrices' (the same time finds each in its own), is cleared
- * with its cache and freed with it. And times that are short binary fractions of a second (all
+ * cleared, and goes with the cache. And times that are short binary fractions of a second (all
  * their low bits zero: they once shared one table entry) each find their own pose. */
 #include "testutil.h"
 
@@ -146,31 +144,6 @@ static void test_an_attached_block_goes_with_the_poses(void **state)
     pose_cache_free(c); /* frees the third */
 }
 
-static void test_the_companion_keeps_its_own_poses(void **state)
-{
-    (void)state;
-    pose_cache *c = pose_cache_create(BONES, 0, (size_t)1 << 20);
-    assert_non_null(c);
-    assert_true(pose_cache_companion_bytes(c) == 0);
-    pose_cache *lanes = pose_cache_companion(c, 8 * BONES, (size_t)1 << 20);
-    assert_non_null(lanes);
-    assert_ptr_equal(pose_cache_companion(c, 8 * BONES, (size_t)1 << 20), lanes); /* made once */
-    fill(pose_cache_add(c, 0.5), 0.5);
-    double *kept = pose_cache_add(lanes, 0.5);
-    assert_non_null(kept);
-    for (int k = 0; k < 8 * BONES; ++k) kept[k] = -k;
-    expect_pose(pose_cache_find(c, 0.5), 0.5); /* each cache its own pose for the time */
-    const double *found = pose_cache_find(lanes, 0.5);
-    assert_ptr_equal(found, kept);
-    assert_true(pose_cache_count(lanes) == 1 && pose_cache_companion_bytes(c) == 8 * BONES * sizeof(double));
-    pose_cache_clear(c); /* both forget */
-    assert_null(pose_cache_find(c, 0.5));
-    assert_null(pose_cache_find(lanes, 0.5));
-    assert_true(pose_cache_companion_bytes(c) == 0);
-    assert_non_null(pose_cache_add(lanes, 0.25)); /* filled again; freed with c (ASan's leak check) */
-    pose_cache_free(c);
-}
-
 static void test_binary_fractions_find_their_poses(void **state)
 {
     (void)state;
@@ -191,7 +164,6 @@ int main(void)
         cmocka_unit_test(test_extra_doubles_follow_the_pose),
         cmocka_unit_test(test_rows_of_twice_the_steps_are_the_same_times),
         cmocka_unit_test(test_an_attached_block_goes_with_the_poses),
-        cmocka_unit_test(test_the_companion_keeps_its_own_poses),
         cmocka_unit_test(test_binary_fractions_find_their_poses),
     };
     return cmocka_run_group_tests_name("pose_cache", tests, NULL, NULL);
