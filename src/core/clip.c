@@ -351,17 +351,10 @@ void cb_clip_frame_matrices_batch(cb_sampler *s, const cb_clip_info *clip, const
     uint32_t joints = all->joint_count;
     double times[CB_SAMPLE_BATCH];
     for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) times[i] = cb_clip_frame_time(clip, frames[i < count ? i : count - 1]);
-    cb_sample_joint_subset_batch(s, clip->animation, times, count, all, lanes);
+    cb_sample_joint_subset_poses(s, clip->animation, times, count, all, lanes, out);
     bool in_place = cb_root_motion_in_place(root_motion, clip);
     for (uint32_t i = 0; i < count; ++i) {
-        if (!out[i]) continue;
-        for (uint32_t k = 0; k < joints; ++k) {
-            double *to = out[i] + (size_t)all->joints[k] * 16;
-            const double *from = lanes + (size_t)k * 16 * CB_SAMPLE_BATCH + i;
-#pragma GCC unroll 16 /* -O2 leaves it a loop of six instructions a value */
-            for (int c = 0; c < 16; ++c) to[c] = from[c * CB_SAMPLE_BATCH];
-        }
-        if (!in_place) continue;
+        if (!out[i] || !in_place) continue;
         double dx, dz; /* as cb_clip_frame_matrices takes it off */
         root_travel(clip, times[i], &dx, &dz);
         for (uint32_t j = 0; j < joints; ++j) out[i][(size_t)j * 16 + 12] -= dx, out[i][(size_t)j * 16 + 14] -= dz;

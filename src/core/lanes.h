@@ -29,6 +29,15 @@ static CB_CLONE_INLINE void cb_rows_to_lanes4(const v4df *r, double (*out)[CB_SA
     memcpy(&out[2][i], &z, sizeof z), memcpy(&out[3][i], &w, sizeof w);
 }
 
+/* The 4x4 transpose alone: out[c][l] = r[l][c] (rows to lanes, or lanes back to rows). */
+static CB_CLONE_INLINE void cb_transpose4(const v4df *r, v4df *out)
+{
+    v4df t0 = __builtin_shufflevector(r[0], r[1], 0, 4, 2, 6), t1 = __builtin_shufflevector(r[0], r[1], 1, 5, 3, 7);
+    v4df t2 = __builtin_shufflevector(r[2], r[3], 0, 4, 2, 6), t3 = __builtin_shufflevector(r[2], r[3], 1, 5, 3, 7);
+    out[0] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), out[1] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+    out[2] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), out[3] = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+}
+
 /* Four lanes at a time: x on every lane, a select by a mask (take's lanes from x, the others
  * from y), |x| (the sign bit cleared), and sqrt on each lane (a loop GCC turns into one vsqrtpd;
  * the vector by pointer, as above). */

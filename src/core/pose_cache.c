@@ -45,8 +45,14 @@ static uint64_t time_bits(double t)
 /* The table entry holding bits, or the empty one where it would go. */
 static uint32_t probe_entry(const pose_cache *c, uint64_t bits)
 {
-    uint64_t h = bits * UINT64_C(0x9E3779B97F4A7C15); /* times differ in their low bits: spread them */
-    uint32_t mask = c->capacity - 1, i = (uint32_t)(h >> 32) & mask;
+    /* Every bit of the time into the index: a product's bits 32 and up (as this took) see only
+     * the time's bits below them, and a time that is a short binary fraction (0.5, 0.75, ...)
+     * has none set there, so such times all fell on one entry and a find walked long runs
+     * (Cow's search: 190 instructions a find). MurmurHash3's finalizer mixes both ways. */
+    uint64_t h = bits ^ bits >> 33;
+    h *= UINT64_C(0xFF51AFD7ED558CCD);
+    h ^= h >> 33;
+    uint32_t mask = c->capacity - 1, i = (uint32_t)h & mask;
     while (c->keys[i] != bits && c->keys[i] != EMPTY) i = (i + 1) & mask;
     return i;
 }

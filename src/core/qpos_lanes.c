@@ -51,10 +51,16 @@ static CB_CLONE_INLINE void quat_lanes(const v4df *r, v4df *q)
  * no similarity, else their quaternions and scales into q and s. */
 static CB_CLONE_INLINE bool similarity4(const double *mats, uint32_t j, uint32_t n, v4df *q, v4df *s)
 {
-    const double *M[4];
-    for (uint32_t i = 0; i < 4; ++i) M[i] = mats + (size_t)(j + (i < n ? i : 0)) * 16;
-    v4df m[11];
-    for (int k = 0; k < 11; ++k) m[k] = (v4df){M[0][k], M[1][k], M[2][k], M[3][k]};
+    const double *first = mats + (size_t)j * 16;
+    const double *M[4] = {first, n > 1 ? first + 16 : first, n > 2 ? first + 32 : first, n > 3 ? first + 48 : first};
+    v4df m[12]; /* elements 0 .. 11 of the four matrices: three 4x4 transposes of 32-byte loads */
+#pragma GCC unroll 3
+    for (int k = 0; k < 12; k += 4) {
+        v4df rows[4];
+        memcpy(&rows[0], M[0] + k, 32), memcpy(&rows[1], M[1] + k, 32), memcpy(&rows[2], M[2] + k, 32),
+            memcpy(&rows[3], M[3] + k, 32);
+        cb_transpose4(rows, m + k);
+    }
     v4df l0 = m[0] * m[0] + m[1] * m[1] + m[2] * m[2], l1 = m[4] * m[4] + m[5] * m[5] + m[6] * m[6];
     v4df l2 = m[8] * m[8] + m[9] * m[9] + m[10] * m[10];
     cb_sqrt4(&l0), cb_sqrt4(&l1), cb_sqrt4(&l2);
@@ -81,9 +87,11 @@ CB_TARGET_CLONES bool palette_qpos_similarity_pose(const double *mats, uint32_t 
         uint32_t n = bones - j < 4 ? bones - j : 4;
         v4df q[4], s;
         if (!similarity4(mats, j, n, q, &s)) return false;
+        v4df per_joint[4]; /* lane i: joint j + i's quaternion */
+        cb_transpose4(q, per_joint);
         for (uint32_t i = 0; i < n; ++i) {
             double *o = out + (size_t)(j + i) * 5;
-            o[0] = q[0][i], o[1] = q[1][i], o[2] = q[2][i], o[3] = q[3][i], o[4] = s[i];
+            memcpy(o, &per_joint[i], sizeof per_joint[i]), o[4] = s[i];
         }
     }
     return true;

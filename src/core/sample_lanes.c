@@ -104,6 +104,16 @@ static CB_CLONE_INLINE bool any_lane(const double *edge, const double *redo)
 
 /* ---- channels ---- */
 
+/* Whether lane i's time is lane i - 1's, bit for bit: a batch's lanes past its count repeat its
+ * last time. A channel's value depends on the time alone (the hint speeds the key search but
+ * never changes its answer), so such a lane takes the lane before's value, however that was
+ * made, instead of evaluating it again time by time (the last time of a clip is at or past its
+ * last key: every padded lane would be an edge). */
+static CB_CLONE_INLINE bool time_repeats(const double *times, int i)
+{
+    return i > 0 && memcmp(&times[i], &times[i - 1], sizeof times[i]) == 0;
+}
+
 /* Spherical interpolation of key pairs, lane by lane: cb_quat_slerp's small-angle branch
  * (half chord below 0.1) with the same operations in the same order, so the same bits. Lanes
  * needing its other branches are marked in `redo`. */
@@ -187,6 +197,10 @@ static CB_CLONE_INLINE void rotation_lanes(const cb_channel *ch, const cb_key_sp
     if (!any_lane(sp->edge, redo)) return;
     for (int i = 0; i < B; ++i) {
         if (!sp->edge[i] && !redo[i]) continue;
+        if (time_repeats(times, i)) {
+            for (int c = 0; c < 4; ++c) out[c][i] = out[c][i - 1];
+            continue;
+        }
         double v[4];
         cb_channel_eval_at(ch, times[i], v, hint, wrap); /* before or after the keys, or a wide angle */
         for (int c = 0; c < 4; ++c) out[c][i] = v[c];
@@ -207,6 +221,10 @@ static CB_CLONE_INLINE void lerp_lanes(const cb_channel *ch, const cb_key_spans 
         for (int i = 0; i < B; ++i) out[c][i] = a[c][i] + (b[c][i] - a[c][i]) * sp->s[i];
     for (int i = 0; sp->any_edge && i < B; ++i) {
         if (!sp->edge[i]) continue;
+        if (time_repeats(times, i)) {
+            for (int c = 0; c < 3; ++c) out[c][i] = out[c][i - 1];
+            continue;
+        }
         double v[4];
         cb_channel_eval_at(ch, times[i], v, hint, wrap); /* before or after the keys */
         for (int c = 0; c < 3; ++c) out[c][i] = v[c];
@@ -233,6 +251,12 @@ static void scalar_lanes(const cb_channel *ch, const double *times, uint32_t *hi
                          lane_set *node)
 {
     for (int i = 0; i < B; ++i) {
+        if (time_repeats(times, i)) { /* the lane before's value of this channel's components, as stored */
+            int first = ch->path == CB_PATH_ROTATION ? 0 : ch->path == CB_PATH_TRANSLATION ? 4 : 7;
+            int last = ch->path == CB_PATH_ROTATION ? 3 : ch->path == CB_PATH_TRANSLATION ? 6 : 7;
+            for (int c = first; c <= last; ++c) (*node)[c][i] = (*node)[c][i - 1];
+            continue;
+        }
         double v[4];
         cb_channel_eval_at(ch, times[i], v, hint, wrap);
         if (ch->path == CB_PATH_ROTATION)
@@ -435,7 +459,10 @@ void cb_channel_lanes_at(const cb_channel *ch, const double *times, uint32_t *hi
     if (!lane_channel(ch)) { /* STEP, CUBICSPLINE, a single key: time by time */
         for (int i = 0; i < B; ++i) {
             double v[4] = {0, 0, 0, 0};
-            cb_channel_eval_at(ch, times[i], v, hint, wrap);
+            if (time_repeats(times, i))
+                for (int c = 0; c < 4; ++c) v[c] = out[c][i - 1];
+            else
+                cb_channel_eval_at(ch, times[i], v, hint, wrap);
             for (int c = 0; c < 4; ++c) out[c][i] = v[c];
         }
         return;

@@ -236,8 +236,8 @@ static void joint_matrix_lanes(const cb_sampler *s, const cb_joint_subset *sub, 
 /* How many channels ahead of the one interpolated its keys are asked for (as sample_lanes.c's). */
 #define KEYS_AHEAD 2
 
-void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
-                                  cb_joint_subset *sub, double *out)
+/* Every node of the subset at the batch's times: its channels, then each global matrix. */
+static void subset_globals(cb_sampler *s, int32_t animation, const double *times, uint32_t count, cb_joint_subset *sub)
 {
     const cb_model *m = s->model;
     const cb_animation *anim = animation >= 0 && animation < (int32_t)m->animation_count ? cb_sampler_clip(s, animation) : NULL;
@@ -276,6 +276,88 @@ void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double
         if (!lanes) memcpy(node, scratch, (component == 1 ? 4 : 3) * B * sizeof(double));
     }
     global_lanes(s, sub);
+}
+
+void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
+                                  cb_joint_subset *sub, double *out)
+{
+    subset_globals(s, animation, times, count, sub);
     joint_matrix_lanes(s, sub, out);
+}
+
+#if defined(__GNUC__)
+/* Four lanes of four components (v[c]: component c at lanes i .. i + 3) stored as each lane's
+ * four values at dst[l] + at: the 4x4 transpose of cb_rows_to_lanes4. */
+static CB_CLONE_INLINE void lanes_to_poses4(const v4df *v, double *const *dst, size_t at)
+{
+    v4df t0 = __builtin_shufflevector(v[0], v[1], 0, 4, 2, 6), t1 = __builtin_shufflevector(v[0], v[1], 1, 5, 3, 7);
+    v4df t2 = __builtin_shufflevector(v[2], v[3], 0, 4, 2, 6), t3 = __builtin_shufflevector(v[2], v[3], 1, 5, 3, 7);
+    const v4df r0 = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), r1 = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+    const v4df r2 = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), r3 = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+    memcpy(dst[0] + at, &r0, sizeof r0), memcpy(dst[1] + at, &r1, sizeof r1);
+    memcpy(dst[2] + at, &r2, sizeof r2), memcpy(dst[3] + at, &r3, sizeof r3);
+}
+
+/* joint_matrix_lanes' affine product (mul_affine_lanes with the inverse bind matrix in every
+ * lane: each lane the same operations in the same order, no contraction) four lanes at a time,
+ * each lane's matrix stored straight into its pose: no lanes written and read back. A lane not
+ * wanted (past count, or its pose NULL) is stored into `dump` (room for a pose), so that every
+ * store is made. */
+CB_TARGET_CLONES
+static void joint_matrix_poses(const cb_sampler *s, const cb_joint_subset *sub, uint32_t count, double *const *pose,
+                               double *dump)
+{
+    const cb_skin *skin = &s->model->skins[s->skin];
+    const v4df zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
+    double *base[B], *dst[B];
+    for (uint32_t i = 0; i < B; ++i) base[i] = i < count && pose[i] ? pose[i] : dump;
+    for (uint32_t k = 0; k < sub->joint_count; ++k) {
+        uint32_t j = sub->joints[k];
+        const double *ibm = skin->inverse_bind + (size_t)j * 16;
+        const double(*g)[B] = (const double(*)[B])node_lanes(sub, sub->slot[skin->joints[j]], TRS_LANES);
+        for (uint32_t i = 0; i < B; ++i) dst[i] = base[i] + (size_t)j * 16;
+        for (uint32_t i = 0; i < count; i += 4) {
+            v4df a[12];
+#pragma GCC unroll 3
+            for (int r = 0; r < 3; ++r)
+                memcpy(&a[r], &g[r][i], 32), memcpy(&a[3 + r], &g[4 + r][i], 32), memcpy(&a[6 + r], &g[8 + r][i], 32),
+                    memcpy(&a[9 + r], &g[12 + r][i], 32);
+#pragma GCC unroll 4
+            for (int c = 0; c < 4; ++c) {
+                const v4df b0 = CB_SPLAT4(ibm[c * 4]), b1 = CB_SPLAT4(ibm[c * 4 + 1]), b2 = CB_SPLAT4(ibm[c * 4 + 2]);
+                v4df col[4];
+#pragma GCC unroll 3
+                for (int r = 0; r < 3; ++r) {
+                    col[r] = a[r] * b0 + a[3 + r] * b1 + a[6 + r] * b2;
+                    if (c == 3) col[r] += a[9 + r];
+                }
+                col[3] = c == 3 ? one : zero;
+                lanes_to_poses4(col, dst + i, (size_t)c * 4);
+            }
+        }
+    }
+}
+#endif
+
+void cb_sample_joint_subset_poses(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
+                                  cb_joint_subset *sub, double *lanes, double *const *pose)
+{
+    subset_globals(s, animation, times, count, sub);
+#if defined(__GNUC__)
+    if (s->affine_ibm) {
+        joint_matrix_poses(s, sub, count, pose, lanes); /* the lanes' room, unused here, as the dump */
+        return;
+    }
+#endif
+    joint_matrix_lanes(s, sub, lanes);
+    for (uint32_t i = 0; i < count; ++i) {
+        if (!pose[i]) continue;
+        for (uint32_t k = 0; k < sub->joint_count; ++k) {
+            double *to = pose[i] + (size_t)sub->joints[k] * 16;
+            const double *from = lanes + (size_t)k * 16 * B + i;
+#pragma GCC unroll 16 /* -O2 leaves it a loop of six instructions a value */
+            for (int c = 0; c < 16; ++c) to[c] = from[c * B];
+        }
+    }
 }
 #undef B

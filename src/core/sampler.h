@@ -122,6 +122,11 @@ void cb_joint_subset_free(cb_joint_subset *sub);
  * them side by side. */
 void cb_sample_joint_subset_batch(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
                                   cb_joint_subset *sub, double *out);
+/* The same matrices written straight into one pose a time: joint sub->joints[k]'s at times[i]
+ * into pose[i] + sub->joints[k] * 16 (pose[i] NULL: not wanted). lanes: scratch as `out` above
+ * and room for one pose (the skin's joints x 16 doubles: what lanes not wanted are stored into). */
+void cb_sample_joint_subset_poses(cb_sampler *s, int32_t animation, const double *times, uint32_t count,
+                                  cb_joint_subset *sub, double *lanes, double *const *pose);
 /* The channels a clip is sampled with: its own, or their loop-closed copy (loop_close.c). */
 static inline const cb_animation *cb_sampler_clip(const cb_sampler *s, int32_t animation)
 {

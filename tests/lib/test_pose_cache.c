@@ -7,7 +7,9 @@
  * same double. A block attached beside the poses (a probe's fitted rows) is found until another
  * replaces it (the one before freed: ASan's leak check holds it to that) or the cache is
  * cleared, and goes with the cache. A probe's worst point is found by its rows' count and parts,
- * replaced by the next for the same, the oldest forgotten past 16, all of them by a clear. */
+ * replaced by the next for the same, the oldest forgotten past 16, all of them by a clear. And
+ * times that are short binary fractions of a second (all their low bits zero: they once shared
+ * one table entry) each find their own pose. */
 #include "testutil.h"
 
 #include <math.h>
@@ -173,6 +175,17 @@ static void test_worst_points_by_rows_and_parts(void **state)
     pose_cache_free(c);
 }
 
+static void test_binary_fractions_find_their_poses(void **state)
+{
+    (void)state;
+    pose_cache *c = pose_cache_create(BONES, 0, (size_t)4 << 20);
+    assert_non_null(c);
+    for (int k = 0; k < 512; ++k) fill(pose_cache_add(c, k / 64.0), k / 64.0); /* 1/64 s apart: exact */
+    for (int k = 0; k < 512; ++k) expect_pose(pose_cache_find(c, k / 64.0), k / 64.0);
+    assert_null(pose_cache_find(c, 1.0 / 128));
+    pose_cache_free(c);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -183,6 +196,7 @@ int main(void)
         cmocka_unit_test(test_rows_of_twice_the_steps_are_the_same_times),
         cmocka_unit_test(test_an_attached_block_goes_with_the_poses),
         cmocka_unit_test(test_worst_points_by_rows_and_parts),
+        cmocka_unit_test(test_binary_fractions_find_their_poses),
     };
     return cmocka_run_group_tests_name("pose_cache", tests, NULL, NULL);
 }
