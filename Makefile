@@ -433,10 +433,12 @@ $(BUILD)/tests/bake_hashes.run: all | $(RESULTS)/pending
 	$(call record_run,bake_hashes,python3 tests/tools/bake_hashes.py --build $(BUILD) --shared $(SHARED))
 bake-hashes: all
 	python3 tests/tools/bake_hashes.py --write --build $(BUILD) --shared $(SHARED)
-# The native crowd benchmark's images, not its times: palette, bone pass and VAT draw the same herd.
+# The native crowd benchmark's images, not its times: palette, bone pass and VAT draw the same herd; and the bone
+# pass that composes local rows up each chain (bench/bones_local.glsl, issue 43 item 1's lever) the same image.
 $(BUILD)/tests/bench_gl_images.run: all $(BUILD)/bench_gl | $(RESULTS)/pending
 	$(call record_run,bench_gl_images,for m in fish quadruped; do EGL_PLATFORM=surfaceless $(BUILD)/bench_gl \
-	  $(BUILD)/samples/$$m.glb --check || exit 1; done)
+	  $(BUILD)/samples/$$m.glb --check || exit 1; done && EGL_PLATFORM=surfaceless \
+	  BENCH_GL_PASS_GLSL=bench/bones_local.glsl $(BUILD)/bench_gl $(BUILD)/samples/quadruped.glb --check --local-rows)
 $(BUILD)/tests/web_reader.run: all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test runtimes/web/test/)
 # The Bazel rules (bazel/, docs/bazel.md) against the one-step bake, the disk and HTTP caches and

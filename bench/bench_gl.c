@@ -10,8 +10,8 @@
  * --lod: the bone pass with the runtimes' animation LOD (lod 'auto'), its tiers drawn apart (instances sorted by tier
  * on the CPU, a program each, compiled with CB_INFLUENCES 1, 2, 4; --lod-single: one draw, the tier found per vertex);
  * BENCH_GL_BONES_GLSL=FILE: the bone pass and its draw from another library, the palette and the VAT from the shipped
- * one (weighs a change in one run); BENCH_GL_PASS_GLSL=FILE: the bone pass's fragment main from FILE, after the library;
- * --local-rows: that pass reads local rows (bench_gl_local.h; bench/bones_local.glsl composes them up each chain).
+ * one (weighs a change in one run); BENCH_GL_PASS_GLSL=FILE: the bone pass's fragment main from FILE, after it;
+ * --local-rows: the pass reads local rows (bench_gl_local.h, bench/bones_local.glsl); --pass-only: `bones` is the pass.
  *
  * The palette and the VAT are baked here from MODEL.glb alike (qpos/u16 and RGBA16F, 30 fps, in
  * place), so both play the same frames. Methods alternate within a count (a change of the
@@ -132,6 +132,7 @@ typedef struct scene {
     GLuint prog[METHODS], tier_prog[3], pass, vao, pass_vao, instance_vbo, tier_vbo;
     GLsizei index_count;
     bool lod; /* --lod: the bone pass's animation LOD, as the WebGL2 Crowd's default (lod 'auto') */
+    bool pass_only; /* --pass-only: `bones` times the bone pass alone (no draw) */
     bool tiers; /* its tiers drawn apart (tier_prog), not found per vertex (prog[1]; --lod-single) */
     float lod_pixels[2]; /* its thresholds: 1 influence under [0] pixels tall, 2 under [1] (bench_lod_thresholds) */
     float *instances; /* the herd's 8 floats an instance (place, inst), kept for the tiers' sort */
@@ -331,6 +332,7 @@ static void draw_tiers(const scene *s, uint32_t n, const float *view_projection,
 static void draw(const scene *s, int method, uint32_t n, float time, const float *view_projection, GLuint target)
 {
     if (method == 1) run_bone_pass(s, n, time);
+    if (method == 1 && s->pass_only) return;
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, target);
     glViewport(0, 0, WIDTH, HEIGHT);
     glEnable(GL_DEPTH_TEST);
@@ -529,7 +531,7 @@ static int check_images(const scene *s, GLuint target)
 
 int main(int argc, char **argv)
 {
-    if (argc < 3) bench_die("usage: bench_gl MODEL.glb N1,N2,... [--frames K] [--lod | --lod-single] [--local-rows] | bench_gl MODEL.glb --check");
+    if (argc < 3) bench_die("usage: bench_gl MODEL.glb N1,N2,... [--frames K] [--lod | --lod-single] [--local-rows] [--pass-only] | bench_gl MODEL.glb --check");
     bool check = !strcmp(argv[2], "--check");
     int frames = argc > 4 && !strcmp(argv[3], "--frames") ? atoi(argv[4]) : 5;
     if (frames < 1 || frames > 64) bench_die("--frames: 1 to 64");
@@ -554,18 +556,16 @@ int main(int argc, char **argv)
             if (!*c) break;
         }
     scene s = {.pal = &pal, .pass_pal = &pal, .vat = &vat, .sampler = sampler, .tiers = true};
-    int32_t *parents = malloc(pal.bone_count * 8), max_depth;
+    int32_t *parents = malloc(pal.bone_count * 4);
     float *meta = calloc(pal.bone_count * 8, sizeof(float));
-    double mean_depth;
-    bench_joint_parents(model, 0, parents, parents + pal.bone_count, &max_depth, &mean_depth);
-    for (uint32_t j = 0; j < pal.bone_count; ++j) meta[j * 4 + 3] = (float)parents[j];
+    bench_joint_parents(model, 0, parents, meta); /* and the chains' depths, on stderr */
     s.bone_meta = meta;
-    fprintf(stderr, "bench_gl: %u bones, chains to the root %d deep at most, %.2f on average\n", pal.bone_count, max_depth, mean_depth);
     cb_palette local = {0};
     for (int a = 3; a < argc; ++a) {
         if (!strcmp(argv[a], "--local-rows") && !local.texels) bench_local_palette(&pal, parents, &local, meta), s.pass_pal = &local;
         s.lod |= !strcmp(argv[a], "--lod") || !strcmp(argv[a], "--lod-single");
         s.tiers &= strcmp(argv[a], "--lod-single") != 0;
+        s.pass_only |= !strcmp(argv[a], "--pass-only");
     }
     s.instances = malloc((size_t)capacity * 32), s.order = malloc((size_t)capacity * 4);
     upload_palette(&s);

@@ -2,11 +2,11 @@
 #include "bench_gl_local.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-void bench_joint_parents(const cb_model *m, uint32_t skin, int32_t *parents, int32_t *depths, int *max_depth,
-                         double *mean_depth)
+void bench_joint_parents(const cb_model *m, uint32_t skin, int32_t *parents, float *meta)
 {
     const cb_skin *sk = &m->skins[skin];
     for (uint32_t j = 0; j < sk->joint_count; ++j) {
@@ -14,14 +14,16 @@ void bench_joint_parents(const cb_model *m, uint32_t skin, int32_t *parents, int
         for (int32_t n = m->nodes[sk->joints[j]].parent; n >= 0 && parents[j] < 0; n = m->nodes[n].parent)
             for (uint32_t k = 0; k < sk->joint_count; ++k)
                 if (sk->joints[k] == n) { parents[j] = (int32_t)k; break; }
+        meta[j * 4 + 3] = (float)parents[j];
     }
-    *max_depth = 0, *mean_depth = 0;
+    int depth_max = 0, depth_sum = 0;
     for (uint32_t j = 0; j < sk->joint_count; ++j) {
-        depths[j] = 0;
-        for (int32_t p = parents[j]; p >= 0; p = parents[p]) ++depths[j];
-        *max_depth = depths[j] > *max_depth ? depths[j] : *max_depth;
-        *mean_depth += depths[j] / (double)sk->joint_count;
+        int depth = 0;
+        for (int32_t p = parents[j]; p >= 0; p = parents[p]) ++depth;
+        depth_max = depth > depth_max ? depth : depth_max, depth_sum += depth;
     }
+    fprintf(stderr, "bench_gl: %u bones, chains to the root %d deep at most, %.2f on average (ancestors a bone walks)\n",
+            sk->joint_count, depth_max, (double)depth_sum / sk->joint_count);
 }
 
 static void quat_mul(const double a[4], const double b[4], double out[4])
@@ -71,6 +73,10 @@ static void bone_ranges(const double *values, size_t count, uint32_t bones, floa
 
 void bench_local_palette(const cb_palette *global, const int32_t *parents, cb_palette *local, float *meta)
 {
+    if (global->layout != CB_LAYOUT_QPOS || global->precision != CB_PRECISION_U16) {
+        fprintf(stderr, "bench_gl: --local-rows needs a qpos/u16 palette (the default bake's)\n");
+        exit(1);
+    }
     uint32_t bones = global->bone_count;
     size_t count = (size_t)global->rows * bones;
     double *decoded = malloc(count * 16 * sizeof(double)), *values = malloc(count * 8 * sizeof(double));

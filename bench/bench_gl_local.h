@@ -10,9 +10,8 @@
 #include "crowdbake/crowdbake.h"
 
 /* Each joint's nearest ancestor that is a joint of skin `skin` (-1: none), as pal_write.c's bone table writes it,
- * and its depth (0: no parent); *max_depth and *mean_depth over the joints. */
-void bench_joint_parents(const cb_model *m, uint32_t skin, int32_t *parents, int32_t *depths, int *max_depth,
-                         double *mean_depth);
+ * into parents and into meta's w (8 floats a joint: cb_bind_positions rows 2 and 3); the chains' depths on stderr. */
+void bench_joint_parents(const cb_model *m, uint32_t skin, int32_t *parents, float *meta);
 
 /* A qpos/u16 palette `global` rewritten with local rows (q_L = conj(q_p) q_j, s_L = s_j / s_p,
  * p_L = b_p + rotate(conj(q_p), p_j - p_p) / s_p, from the decoded rows; absolute positions, no offsets), quantized
