@@ -10,7 +10,8 @@
  * --lod: the bone pass with the runtimes' animation LOD (lod 'auto'), its tiers drawn apart (instances sorted by tier
  * on the CPU, a program each, compiled with CB_INFLUENCES 1, 2, 4; --lod-single: one draw, the tier found per vertex);
  * BENCH_GL_BONES_GLSL=FILE: the bone pass and its draw from another library, the palette and the VAT from the shipped
- * one (weighs a change in one run).
+ * one (weighs a change in one run); BENCH_GL_PASS_GLSL=FILE: the bone pass's fragment main from FILE, after it;
+ * --local-rows: the pass reads local rows (bench_gl_local.h, bench/bones_local.glsl); --pass-only: `bones` is the pass.
  *
  * The palette and the VAT are baked here from MODEL.glb alike (qpos/u16 and RGBA16F, 30 fps, in
  * place), so both play the same frames. Methods alternate within a count (a change of the
@@ -28,6 +29,7 @@
 
 #include "crowdbake/crowdbake.h"
 #include "bench_gl_context.h"
+#include "bench_gl_local.h"
 #include "bench_gl_mesh.h"
 #include "bench_gl_tiers.h"
 
@@ -123,12 +125,14 @@ static GLuint program(const char *library, const cb_palette *p, bool bones, int 
 /* ---- textures ---- */
 
 typedef struct scene {
-    const cb_palette *pal;
+    const cb_palette *pal, *pass_pal; /* pass_pal: what the bone pass reads (--local-rows: local rows), else pal */
     const cb_vat *vat;
-    GLuint palette_tex, bind_tex, vat_pos, vat_nrm, bone_tex[3], bone_fbo, bone_rows, bone_width;
+    const float *bone_meta; /* cb_bind_positions rows 2 and 3 (8 floats a bone): row 2's w the parent (bench_gl_local.h) */
+    GLuint pass_tex, palette_tex, bind_tex, vat_pos, vat_nrm, bone_tex[3], bone_fbo, bone_rows, bone_width;
     GLuint prog[METHODS], tier_prog[3], pass, vao, pass_vao, instance_vbo, tier_vbo;
     GLsizei index_count;
     bool lod; /* --lod: the bone pass's animation LOD, as the WebGL2 Crowd's default (lod 'auto') */
+    bool pass_only; /* --pass-only: `bones` times the bone pass alone (no draw) */
     bool tiers; /* its tiers drawn apart (tier_prog), not found per vertex (prog[1]; --lod-single) */
     float lod_pixels[2]; /* its thresholds: 1 influence under [0] pixels tall, 2 under [1] (bench_lod_thresholds) */
     float *instances; /* the herd's 8 floats an instance (place, inst), kept for the tiers' sort */
@@ -141,14 +145,19 @@ static void upload_palette(scene *s)
     const cb_palette *p = s->pal;
     static const GLint internal[] = {GL_RGBA32F, GL_RGBA16F, GL_RGBA16UI};
     static const GLenum format[] = {GL_RGBA, GL_RGBA, GL_RGBA_INTEGER}, type[] = {GL_FLOAT, GL_HALF_FLOAT, GL_UNSIGNED_SHORT};
-    s->palette_tex = bench_texture(internal[p->precision], (GLsizei)p->width, (GLsizei)p->height, format[p->precision],
-                             type[p->precision], p->texels);
-    float *rgba = calloc((size_t)p->bone_count * 8, sizeof(float)); /* row 0: bind positions; row 1: position offsets */
+    for (int k = 0; k < 2; ++k) {
+        const cb_palette *t = k ? s->pass_pal : p;
+        GLuint tex = bench_texture(internal[t->precision], (GLsizei)t->width, (GLsizei)t->height, format[t->precision],
+                                   type[t->precision], t->texels);
+        *(k ? &s->pass_tex : &s->palette_tex) = tex;
+    }
+    float *rgba = calloc((size_t)p->bone_count * 16, sizeof(float)); /* row 0: bind positions; 1: position offsets; 2, 3 */
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         memcpy(rgba + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
         if (p->positions_relative) memcpy(rgba + (p->bone_count + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
     }
-    s->bind_tex = bench_texture(GL_RGBA32F, (GLsizei)p->bone_count, 2, GL_RGBA, GL_FLOAT, rgba);
+    memcpy(rgba + p->bone_count * 8, s->bone_meta, p->bone_count * 8 * sizeof(float));
+    s->bind_tex = bench_texture(GL_RGBA32F, (GLsizei)p->bone_count, 4, GL_RGBA, GL_FLOAT, rgba);
     free(rgba);
     s->vat_pos = bench_texture(GL_RGBA16F, (GLsizei)s->vat->geometry.width, (GLsizei)s->vat->geometry.height, GL_RGBA,
                          GL_HALF_FLOAT, s->vat->positions);
@@ -254,11 +263,10 @@ static void upload_mesh(scene *s, const cb_model *m, uint32_t capacity)
 
 /* ---- a frame ---- */
 
-static void bind_palette(const scene *s, GLuint prog)
+static void bind_rows(const scene *s, GLuint prog, const cb_palette *p, GLuint rows)
 {
-    const cb_palette *p = s->pal;
     glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, s->palette_tex);
+    glBindTexture(GL_TEXTURE_2D, rows);
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, s->bind_tex);
     glUniform1i(glGetUniformLocation(prog, "cb_palette"), 0);
@@ -270,6 +278,8 @@ static void bind_palette(const scene *s, GLuint prog)
     glUniform1f(glGetUniformLocation(prog, "cb_linear_range"), p->linear_range);
 }
 
+static void bind_palette(const scene *s, GLuint prog) { bind_rows(s, prog, s->pal, s->palette_tex); }
+
 /* The bone pass: every instance's bones blended once into the three targets. */
 static void run_bone_pass(const scene *s, uint32_t n, float time)
 {
@@ -277,7 +287,7 @@ static void run_bone_pass(const scene *s, uint32_t n, float time)
     glViewport(0, 0, (GLsizei)s->bone_width, (GLsizei)s->bone_rows);
     glDisable(GL_DEPTH_TEST);
     glUseProgram(s->pass);
-    bind_palette(s, s->pass);
+    bind_rows(s, s->pass, s->pass_pal, s->pass_tex);
     glUniform1f(glGetUniformLocation(s->pass, "u_time"), time);
     glUniform1i(glGetUniformLocation(s->pass, "u_rows"), (GLint)s->bone_rows);
     glUniform2f(glGetUniformLocation(s->pass, "u_size"), (float)s->bone_width, (float)s->bone_rows);
@@ -322,6 +332,7 @@ static void draw_tiers(const scene *s, uint32_t n, const float *view_projection,
 static void draw(const scene *s, int method, uint32_t n, float time, const float *view_projection, GLuint target)
 {
     if (method == 1) run_bone_pass(s, n, time);
+    if (method == 1 && s->pass_only) return;
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, target);
     glViewport(0, 0, WIDTH, HEIGHT);
     glEnable(GL_DEPTH_TEST);
@@ -520,7 +531,7 @@ static int check_images(const scene *s, GLuint target)
 
 int main(int argc, char **argv)
 {
-    if (argc < 3) bench_die("usage: bench_gl MODEL.glb N1,N2,... [--frames K] [--lod | --lod-single] | bench_gl MODEL.glb --check");
+    if (argc < 3) bench_die("usage: bench_gl MODEL.glb N1,N2,... [--frames K] [--lod | --lod-single] [--local-rows] [--pass-only] | bench_gl MODEL.glb --check");
     bool check = !strcmp(argv[2], "--check");
     int frames = argc > 4 && !strcmp(argv[3], "--frames") ? atoi(argv[4]) : 5;
     if (frames < 1 || frames > 64) bench_die("--frames: 1 to 64");
@@ -544,10 +555,17 @@ int main(int argc, char **argv)
             capacity = n > capacity ? n : capacity;
             if (!*c) break;
         }
-    scene s = {.pal = &pal, .vat = &vat, .sampler = sampler, .tiers = true};
+    scene s = {.pal = &pal, .pass_pal = &pal, .vat = &vat, .sampler = sampler, .tiers = true};
+    int32_t *parents = malloc(pal.bone_count * 4);
+    float *meta = calloc(pal.bone_count * 8, sizeof(float));
+    bench_joint_parents(model, 0, parents, meta); /* and the chains' depths, on stderr */
+    s.bone_meta = meta;
+    cb_palette local = {0};
     for (int a = 3; a < argc; ++a) {
+        if (!strcmp(argv[a], "--local-rows") && !local.texels) bench_local_palette(&pal, parents, &local, meta), s.pass_pal = &local;
         s.lod |= !strcmp(argv[a], "--lod") || !strcmp(argv[a], "--lod-single");
         s.tiers &= strcmp(argv[a], "--lod-single") != 0;
+        s.pass_only |= !strcmp(argv[a], "--pass-only");
     }
     s.instances = malloc((size_t)capacity * 32), s.order = malloc((size_t)capacity * 4);
     upload_palette(&s);
@@ -564,11 +582,15 @@ int main(int argc, char **argv)
     }
     const char *tier_vs[2] = {MAIN_HEAD, SKIN_TIER};
     for (int k = 0; k < 3; ++k) s.tier_prog[k] = program(bones_lib, &pal, true, 1 << k, tier_vs, 2, NULL, 0);
-    s.pass = program(bones_lib, &pal, false, 0, &PASS_VERTEX, 1, &PASS_FRAGMENT, 1);
-    free(bones_glsl);
+    const char *pass_path = getenv("BENCH_GL_PASS_GLSL"); /* another fragment main for the bone pass */
+    char *pass_glsl = pass_path ? bench_read_text(pass_path) : NULL;
+    if (pass_path && !pass_glsl) bench_die("BENCH_GL_PASS_GLSL: cannot read that file (a bone pass's fragment main)");
+    const char *pass_fragment = pass_glsl ? pass_glsl : PASS_FRAGMENT;
+    s.pass = program(bones_lib, s.pass_pal, false, 0, &PASS_VERTEX, 1, &pass_fragment, 1);
+    free(bones_glsl), free(pass_glsl);
     GLuint target = bench_offscreen_target(WIDTH, HEIGHT);
     int rc = check ? check_images(&s, target) : (bench_counts(&s, argv[2], frames, target), 0);
-    free(s.instances), free(s.order);
+    free(s.instances), free(s.order), free(parents), free(meta), free(local.texels);
     cb_vat_free(&vat);
     cb_palette_free(&pal);
     cb_sampler_free(sampler);
