@@ -273,6 +273,32 @@ static double measure_batch(bake_state *st, worker *w, uint32_t c, const cb_boun
     return measure_rows(st, w, c, batch, count, sub, parts, s, bounds, worst);
 }
 
+/* The rows that could exceed `worst` (bound above it) moved to the front, in order of bound
+ * (cb_sort_bounded_rows' order); returns how many. The walk over them (measure_clip_rows) stops
+ * at the first row whose bound is within the worst, which only rises: sorting every row put
+ * these first in this same order (bounds ordered, ties by frame, and each frame once: one order
+ * whatever the sort), and the rest are never read. Cow's search sorted every row of its probes
+ * for a handful it measured. A NaN bound orders nothing: every row sorted, as before. */
+static uint32_t sort_rows_over(cb_bounded_row *rows, uint32_t n, double worst)
+{
+    for (uint32_t i = 0; i < n; ++i)
+        if (isnan(rows[i].bound)) return cb_sort_bounded_rows(rows, n), n;
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i)
+        if (rows[i].bound > worst) {
+            cb_bounded_row r = rows[i];
+            rows[i] = rows[m], rows[m++] = r;
+        }
+    if (m > 32) return cb_sort_bounded_rows(rows, m), m;
+    for (uint32_t x = 1; x < m; ++x) /* by_bound's order: larger bound first, then lower frame */
+        for (uint32_t y = x; y > 0 && (rows[y - 1].bound < rows[y].bound ||
+                                       (rows[y - 1].bound == rows[y].bound && rows[y - 1].frame > rows[y].frame)); --y) {
+            cb_bounded_row r = rows[y];
+            rows[y] = rows[y - 1], rows[y - 1] = r;
+        }
+    return m;
+}
+
 /* The worst vertex error of clip c over every error_stride-th row and the last (sub > 0: at
  * fraction sub / parts from each of those rows to the next, as the runtime blends them; a
  * one-shot's last row has no next). Rows that cannot exceed `floor` are not measured (0 when
@@ -312,7 +338,7 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
         for (uint32_t k = 0; k < count; ++k) rows[i + k].bound = bounds[k];
         if (goal > 0 && worst > goal) return worst;
     }
-    cb_sort_bounded_rows(rows, n);
+    n = sort_rows_over(rows, n, worst);
     /* Batches of 1, 2, 4, ... rows: often the first few rows settle it. */
     for (uint32_t i = 0, size = 1; i < n && rows[i].bound > worst && !(goal > 0 && worst > goal); size *= 2) {
         uint32_t count = 0;
