@@ -84,7 +84,7 @@ static bool probed(const clip_search *cs, double fps, double goal, double *error
  * where fitted rows miss at max_fps too (choose_clip's last lines, through probed) or where the
  * 1/fps^2 law takes it as a nearest probe (nearest_law): both measure it then (defer_exact),
  * the same bits as measured at once; where fitted rows meet at max_fps, nothing reads it (Cow's
- * Gallop: 120 fps sampled rows measured in full, 7.5 M instructions, for nothing). */
+ * Attack_Kick: 120 fps sampled rows measured in full, 7.5 M instructions, for nothing). */
 static bool defer_exact(const clip_search *cs, double fps)
 {
     return fps == cs->max_fps && !cs->fit && cs->fitted_follow;
