@@ -1,8 +1,9 @@
 /* fit_sweep.h - the fit's sweeps over a block of values (sweep_block and its helpers), included
  * by fit.c once for each instruction set it is compiled for: SWEEP(name) names this copy's
- * functions, SWEEP_TARGET is its target attribute and MAX4(w, x) its x > w ? x : w on four
- * lanes. Each copy runs the same IEEE operations in the same order, so the same bits. No
- * include guard, on purpose; the three macros are undefined at the end. Internal. */
+ * functions, SWEEP_TARGET is its target attribute, MAX4(w, x) its x > w ? x : w on four
+ * lanes, ABS4(x) and NEG4(x) its sign bit cleared and flipped. Each copy runs the same IEEE
+ * operations in the same order, so the same bits. No include guard, on purpose; the five macros
+ * are undefined at the end. Internal. */
 
 #define SWEEP_HELPER static inline __attribute__((always_inline)) SWEEP_TARGET /* part of each copy */
 
@@ -17,7 +18,7 @@
 SWEEP_HELPER void SWEEP(row_worst4)(v4df *w, const v4df *c, const v4df *a, const v4df *b)
 {
     const v4df half = {0.5, 0.5, 0.5, 0.5};
-    v4df x = CB_ABS4(*c), h = half * *c, ta = CB_ABS4(*a - h), tb = CB_ABS4(*b - h);
+    v4df x = ABS4(*c), h = half * *c, ta = ABS4(*a - h), tb = ABS4(*b - h);
     x = MAX4(x, ta);
     *w = MAX4(x, tb);
 }
@@ -36,9 +37,8 @@ SWEEP_HELPER void SWEEP(row_worst4)(v4df *w, const v4df *c, const v4df *a, const
 SWEEP_HELPER void SWEEP(best_offset4)(v4df *c, const v4df *a, const v4df *b)
 {
     const v4df two = {2, 2, 2, 2}, three = {3, 3, 3, 3}, zero = {0, 0, 0, 0};
-    const v4di sign = {INT64_MIN, INT64_MIN, INT64_MIN, INT64_MIN};
     v4df a2 = two * *a, b2 = two * *b, sum = *a + *b;
-    v4df abs_a2 = CB_ABS4(a2), abs_b2 = CB_ABS4(b2), abs_sum = CB_ABS4(sum), abs_diff = CB_ABS4(*a - *b);
+    v4df abs_a2 = ABS4(a2), abs_b2 = ABS4(b2), abs_sum = ABS4(sum), abs_diff = ABS4(*a - *b);
     v4df best = *c, worst, w, cand;
     SWEEP(row_worst4)(&worst, c, a, b);
     /* Each candidate weighed as soon as it is made, in best_offset's order; -2a is 2a with its
@@ -48,15 +48,15 @@ SWEEP_HELPER void SWEEP(best_offset4)(v4df *c, const v4df *a, const v4df *b)
         v4di take = (its_worst) < worst;                                                                               \
         best = CB_SELECT4(take, candidate, best), worst = CB_SELECT4(take, its_worst, worst);                                \
     } while (0)
-    w = MAX4(MAX4(zero, CB_ABS4(*a)), CB_ABS4(*b));
+    w = MAX4(MAX4(zero, ABS4(*a)), ABS4(*b));
     CONSIDER(zero, w);
     cand = a2 / three, SWEEP(row_worst4)(&w, &cand, a, b);
     CONSIDER(cand, w);
-    CONSIDER((v4df)((v4di)a2 ^ sign), MAX4(abs_a2, abs_sum));
+    CONSIDER(NEG4(a2), MAX4(abs_a2, abs_sum));
     CONSIDER(a2, MAX4(abs_a2, abs_diff));
     cand = b2 / three, SWEEP(row_worst4)(&w, &cand, a, b);
     CONSIDER(cand, w);
-    CONSIDER((v4df)((v4di)b2 ^ sign), MAX4(abs_b2, abs_sum));
+    CONSIDER(NEG4(b2), MAX4(abs_b2, abs_sum));
     CONSIDER(b2, MAX4(abs_b2, abs_diff));
     SWEEP(row_worst4)(&w, &sum, a, b);
     CONSIDER(sum, w);
@@ -127,3 +127,5 @@ SWEEP_TARGET static bool SWEEP(sweep_block)(double *c, const double *d, uint32_t
 #undef SWEEP
 #undef SWEEP_TARGET
 #undef MAX4
+#undef ABS4
+#undef NEG4

@@ -66,14 +66,22 @@ static const double *row_values(const cb_palette *p, measure_scratch *s, uint32_
     return read_slot(p, s, oldest);
 }
 
+/* A row's cap on its group bounds (cb_row_error_cap): `known` where a caller has it already (NaN:
+ * not known, worked out here; the cap itself NaN is worked out again, to the same NaN). */
+static double row_cap(const bake_state *st, const cb_joint_error *joints, double known)
+{
+    return !isnan(known) ? known : cb_row_error_cap(joints, st->p->bone_count, st->facts->group_reach, st->facts->weight_sum);
+}
+
 /* A row's bound, from its differences' terms `joints`: its largest group bound (infinite when a
  * difference is not finite), or its cap on them all where that is within `worst` (the row
  * cannot exceed the worst either way, and the cap takes O(bones) where the groups take
- * O(their joints)). */
-static double row_bound(const bake_state *st, const cb_joint_error *joints, bool finite, double worst)
+ * O(their joints)). The cap into *cap (NaN where not finite), for skin_row. */
+static double row_bound(const bake_state *st, const cb_joint_error *joints, bool finite, double worst, double *cap_out)
 {
+    *cap_out = NAN;
     if (!finite) return INFINITY;
-    double cap = cb_row_error_cap(joints, st->p->bone_count, st->facts->group_reach, st->facts->weight_sum);
+    double cap = *cap_out = row_cap(st, joints, NAN);
     if (cap <= worst) return cap;
     double most = 0;
     for (uint32_t k = 0; k < st->groups->group_count; ++k) {
@@ -89,11 +97,10 @@ static double row_bound(const bake_state *st, const cb_joint_error *joints, bool
  * skinning every vertex gives, bit for bit. A row whose cap on all the group bounds is within
  * the worst skips them all (a baked row against the blends' worst: its encoding errs far less). */
 static double skin_row(const bake_state *st, measure_scratch *s, const double *diff, const cb_joint_error *joints,
-                       bool finite, double worst)
+                       bool finite, double worst, double cap)
 {
     const cb_vertex_groups *g = st->groups;
-    if (finite && cb_row_error_cap(joints, st->p->bone_count, st->facts->group_reach, st->facts->weight_sum) <= worst)
-        return worst;
+    if (finite && row_cap(st, joints, cap) <= worst) return worst;
     uint32_t top = 0;
     for (uint32_t k = 0; k < g->group_count; ++k) {
         s->group_bounds[k] = finite ? cb_group_error_bound(g, k, joints, worst) : INFINITY;
@@ -143,13 +150,14 @@ static void joint_differences(void *ctx, uint32_t j, double (*lanes)[B])
  * the largest cap on a row's error first (cb_row_error_cap; a row with a difference not finite
  * before all), so that the worst rises early and the rows after skip more groups; else as they
  * come. The maximum is the same in any order: a row or group skipped cannot exceed it. */
-static void rows_by_cap(const bake_state *st, const measure_scratch *s, uint32_t count, bool by_cap, uint32_t *order)
+static void rows_by_cap(const bake_state *st, const measure_scratch *s, uint32_t count, bool by_cap, uint32_t *order,
+                        double *caps)
 {
     double cap[B];
     for (uint32_t i = 0; i < count; ++i) {
         const cb_joint_error *joints = s->joints + (size_t)i * st->p->bone_count;
-        cap[i] = !by_cap ? 0 : !s->finite[i] ? INFINITY
-                             : cb_row_error_cap(joints, st->p->bone_count, st->facts->group_reach, st->facts->weight_sum);
+        cap[i] = !by_cap ? 0 : !s->finite[i] ? INFINITY : row_cap(st, joints, NAN);
+        caps[i] = by_cap && s->finite[i] ? cap[i] : NAN; /* skin_row's, not worked out twice */
         uint32_t k = i;
         for (; k > 0 && cap[order[k - 1]] < cap[i]; --k) order[k] = order[k - 1];
         order[k] = i;
@@ -210,7 +218,8 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         for (uint32_t j = 0; !similar && j < p->bone_count; ++j) joint_differences(&d, j, NULL);
     }
     uint32_t order[B];
-    rows_by_cap(st, s, count, lanes && !bounds, order);
+    double caps[B]; /* each row's cap where in hand (NaN: not) */
+    rows_by_cap(st, s, count, lanes && !bounds, order, caps);
     for (uint32_t n = 0; n < count; ++n) {
         uint32_t i = order[n];
         double *diff = lanes ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
@@ -228,8 +237,8 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
             }
         }
         bool finite = lanes ? s->finite[i] : cb_joint_errors(diff, p->bone_count, p->bind_positions, s->joints);
-        if (bounds) bounds[i] = row_bound(st, joints, finite, worst);
-        else worst = note_worst(s, frames[i], sub, worst, skin_row(st, s, diff, joints, finite, worst));
+        if (bounds) bounds[i] = row_bound(st, joints, finite, worst, &caps[i]);
+        else worst = note_worst(s, frames[i], sub, worst, skin_row(st, s, diff, joints, finite, worst, caps[i]));
     }
     /* The rows' likeliest worst skinned at once where that costs no sampling (qpos rows: every
      * row's differences are in hand), and with a goal (a row above it ends
@@ -241,7 +250,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     if (bounds && bounds[top] > worst && (lanes || st->opt->error_goal > 0)) {
         size_t at = (size_t)top * p->bone_count;
         if (lanes) {
-            double skinned = skin_row(st, s, s->diff + at * 16, s->joints + at, s->finite[top], worst);
+            double skinned = skin_row(st, s, s->diff + at * 16, s->joints + at, s->finite[top], worst, caps[top]);
             worst = note_worst(s, frames[top], sub, worst, skinned);
         } else {
             worst = measure_rows(st, w, c, frames + top, 1, sub, parts, s, NULL, worst);
@@ -271,6 +280,32 @@ static double measure_batch(bake_state *st, worker *w, uint32_t c, const cb_boun
     uint32_t batch[CB_SAMPLE_BATCH], count = n - i < CB_SAMPLE_BATCH ? n - i : CB_SAMPLE_BATCH;
     for (uint32_t k = 0; k < count; ++k) batch[k] = rows[i + k].frame;
     return measure_rows(st, w, c, batch, count, sub, parts, s, bounds, worst);
+}
+
+/* The rows that could exceed `worst` (bound above it) moved to the front, in order of bound
+ * (cb_sort_bounded_rows' order); returns how many. The walk over them (measure_clip_rows) stops
+ * at the first row whose bound is within the worst, which only rises: sorting every row put
+ * these first in this same order (bounds ordered, ties by frame, and each frame once: one order
+ * whatever the sort), and the rest are never read. Cow's search sorted every row of its probes
+ * for a handful it measured. A NaN bound orders nothing: every row sorted, as before. */
+static uint32_t sort_rows_over(cb_bounded_row *rows, uint32_t n, double worst)
+{
+    for (uint32_t i = 0; i < n; ++i)
+        if (isnan(rows[i].bound)) return cb_sort_bounded_rows(rows, n), n;
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i)
+        if (rows[i].bound > worst) {
+            cb_bounded_row r = rows[i];
+            rows[i] = rows[m], rows[m++] = r;
+        }
+    if (m > 32) return cb_sort_bounded_rows(rows, m), m;
+    for (uint32_t x = 1; x < m; ++x) /* by_bound's order: larger bound first, then lower frame */
+        for (uint32_t y = x; y > 0 && (rows[y - 1].bound < rows[y].bound ||
+                                       (rows[y - 1].bound == rows[y].bound && rows[y - 1].frame > rows[y].frame)); --y) {
+            cb_bounded_row r = rows[y];
+            rows[y] = rows[y - 1], rows[y - 1] = r;
+        }
+    return m;
 }
 
 /* The worst vertex error of clip c over every error_stride-th row and the last (sub > 0: at
@@ -312,7 +347,7 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
         for (uint32_t k = 0; k < count; ++k) rows[i + k].bound = bounds[k];
         if (goal > 0 && worst > goal) return worst;
     }
-    cb_sort_bounded_rows(rows, n);
+    n = sort_rows_over(rows, n, worst);
     /* Batches of 1, 2, 4, ... rows: often the first few rows settle it. */
     for (uint32_t i = 0, size = 1; i < n && rows[i].bound > worst && !(goal > 0 && worst > goal); size *= 2) {
         uint32_t count = 0;

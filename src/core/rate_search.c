@@ -20,6 +20,7 @@ typedef struct probe {
     double fps, goal, error;
     bool fit;
     int family; /* FAMILY_KEYS or FAMILY_COMMON: the law it stands for (predicted_law) */
+    bool deferred; /* sampled rows at max_fps missing their goal: its exact error not yet measured (defer_exact) */
 } probe;
 typedef struct clip_search {
     cb_sampler *s;
@@ -33,6 +34,7 @@ typedef struct clip_search {
     const palette_skin_facts *facts; /* the skin's, settled once for every bake of the search */
     palette_probe probe;             /* the clip's analysis and exact poses, for every probe */
     bool needed_later;               /* a clip over its goal at max_fps: its caller searches on (fps_needed unset) */
+    bool fitted_follow;              /* fitted rows are probed after sampled ones at each rate (CB_ROWS_BEST) */
 } clip_search;
 
 /* A search thread's pose cache holds at most this much (Cow's longest clip, 6 s of 42 joints,
@@ -77,19 +79,55 @@ static bool probed(const clip_search *cs, double fps, double goal, double *error
     return false;
 }
 
+/* Whether a probe at fps measures with its goal though main's rule measures max_fps exactly at
+ * once: sampled rows at max_fps where fitted rows follow them. Their exact error is read only
+ * where fitted rows miss at max_fps too (choose_clip's last lines, through probed) or where the
+ * 1/fps^2 law takes it as a nearest probe (nearest_law): both measure it then (defer_exact),
+ * the same bits as measured at once; where fitted rows meet at max_fps, nothing reads it (Cow's
+ * Attack_Kick: 120 fps sampled rows measured in full, 7.5 M instructions, for nothing). */
+static bool defer_exact(const clip_search *cs, double fps)
+{
+    return fps == cs->max_fps && !cs->fit && cs->fitted_follow;
+}
+
+/* A probe's record: a new one, or the exact error of a deferred one in its place (the probes in
+ * the same order as measured at once). */
+static void record_probe(clip_search *cs, probe made)
+{
+    for (uint32_t i = 0; i < cs->count; ++i)
+        if (cs->done[i].deferred && cs->done[i].fps == made.fps && cs->done[i].fit == made.fit) {
+            made.family = cs->done[i].family; /* the walk's family when first probed */
+            cs->done[i] = made;
+            return;
+        }
+    if (cs->count < sizeof cs->done / sizeof cs->done[0]) cs->done[cs->count++] = made;
+}
+
 /* clip_error_at, once per rate and kind of rows. A value measured exactly (no goal, or within
  * its goal) answers any goal; one above its goal only the same goal. max_fps is measured
  * exactly at once: when it is probed every lower common rate failed, and a clip that fails it
- * too needs its exact error there anyway (choose_clip's last lines). */
+ * too needs its exact error there anyway (choose_clip's last lines); but for sampled rows that
+ * fitted rows follow, which measure with the goal and leave the exact error for when it is
+ * read (defer_exact). */
 static double probe_error(clip_search *cs, double fps, double goal, cb_error *err)
 {
     double known;
     if (probed(cs, fps, goal, &known)) return known;
-    if (fps == cs->max_fps) goal = 0;
+    bool defer = defer_exact(cs, fps) && goal > 0;
+    if (fps == cs->max_fps && !defer) goal = 0;
     double e = clip_error_at(cs, fps, goal, err);
-    if (!err->status && cs->count < sizeof cs->done / sizeof cs->done[0])
-        cs->done[cs->count++] = (probe){fps, goal, e, cs->fit, cs->family};
+    if (!err->status) record_probe(cs, (probe){fps, goal, e, cs->fit, cs->family, defer && !(e <= goal)});
     return e;
+}
+
+/* A deferred probe's exact error, measured now (as probe_error would have at once). */
+static void settle_deferred(clip_search *cs, probe *d, cb_error *err)
+{
+    bool fit = cs->fit;
+    cs->fit = d->fit;
+    double e = clip_error_at(cs, d->fps, 0, err);
+    cs->fit = fit;
+    if (!err->status) d->goal = 0, d->error = e, d->deferred = false;
 }
 
 /* The two families of rates a clip may bake at: its key rate's multiples and fractions, whose
@@ -114,10 +152,21 @@ enum { FAMILY_KEYS, FAMILY_COMMON };
 #define FITTED_AT_BEST 0.5 /* fitted rows' error over sampled rows' at the same rate, at best */
 
 /* The error x fps^2 of the probe of this kind and family nearest to fps (ties: the larger), 0
- * when there is none. */
-static double nearest_law(const clip_search *cs, bool fit, int family, double fps)
+ * when there is none. A deferred probe that is nearest (or tied) has its exact error measured
+ * first, so the law is the one of probes measured at once. */
+static double nearest_law(clip_search *cs, bool fit, int family, double fps, cb_error *err)
 {
     double law = 0, distance = INFINITY;
+    for (uint32_t i = 0; i < cs->count; ++i) {
+        const probe *d = &cs->done[i];
+        if (d->fit == fit && d->family == family && isfinite(d->error)) distance = fmin(distance, fabs(log(d->fps / fps)));
+    }
+    for (uint32_t i = 0; i < cs->count && !err->status; ++i) {
+        probe *d = &cs->done[i];
+        if (d->deferred && d->fit == fit && d->family == family && fabs(log(d->fps / fps)) == distance)
+            settle_deferred(cs, d, err);
+    }
+    distance = INFINITY;
     for (uint32_t i = 0; i < cs->count; ++i) {
         const probe *d = &cs->done[i];
         if (d->fit != fit || d->family != family || !isfinite(d->error)) continue;
@@ -127,23 +176,25 @@ static double nearest_law(const clip_search *cs, bool fit, int family, double fp
     return law;
 }
 
-static double predicted_law(const clip_search *cs, bool fit, int family, double fps)
+static double predicted_law(clip_search *cs, bool fit, int family, double fps, cb_error *err)
 {
-    double law = nearest_law(cs, fit, family, fps);
-    if (!(law > 0)) law = nearest_law(cs, fit, FAMILY_KEYS, fps);
-    return fit ? fmax(law, FITTED_AT_BEST * predicted_law(cs, false, family, fps)) : law;
+    double law = nearest_law(cs, fit, family, fps, err);
+    if (!(law > 0)) law = nearest_law(cs, fit, FAMILY_KEYS, fps, err);
+    return fit ? fmax(law, FITTED_AT_BEST * predicted_law(cs, false, family, fps, err)) : law;
 }
 
-static bool predicted_miss(const clip_search *cs, double fps, double max_error)
+static bool predicted_miss(clip_search *cs, double fps, double max_error, cb_error *err)
 {
-    return fps < cs->max_fps && predicted_law(cs, cs->fit, cs->family, fps) / (fps * fps) > PREDICTED_MISS * max_error;
+    return fps < cs->max_fps &&
+           predicted_law(cs, cs->fit, cs->family, fps, err) / (fps * fps) > PREDICTED_MISS * max_error;
 }
 
 static double rate_error(clip_search *cs, double fps, double max_error, cb_error *err)
 {
     double known;
     if (probed(cs, fps, fps == cs->max_fps ? 0 : max_error, &known)) return known;
-    return predicted_miss(cs, fps, max_error) ? INFINITY : probe_error(cs, fps, max_error, err);
+    bool miss = predicted_miss(cs, fps, max_error, err);
+    return err->status ? INFINITY : miss ? INFINITY : probe_error(cs, fps, max_error, err);
 }
 
 /* The lowest of the increasing `rates` (up to max_fps, and under `below` unless it is 0) at
@@ -251,7 +302,7 @@ static double rate_meets(clip_search *cs, cb_rows rows, candidate c, double max_
         double known;
         if (fit || rows != CB_ROWS_BEST || probed(cs, c.fps, max_error, &known)) continue;
         cs->fit = true; /* sampled rows ruled out by the law: baked only where fitted rows are not */
-        if (predicted_miss(cs, c.fps, max_error)) continue;
+        if (predicted_miss(cs, c.fps, max_error, err) || err->status) continue;
         cs->fit = false;
         if ((e = sampled = probe_error(cs, c.fps, max_error, err)) <= max_error) return *error = e, c.fps;
     }
@@ -300,9 +351,10 @@ static double rate_that_meets(clip_search *cs, double max_error, cb_error *err)
     for (size_t i = 0; i < 8 && cs->max_fps * steps[i] <= CB_FPS_LIMIT; ++i) ladder[n++] = ceil(cs->max_fps * steps[i]);
     if (n == 0 || ladder[n - 1] < CB_FPS_LIMIT) ladder[n++] = CB_FPS_LIMIT;
     double ignored = 0, cap = cs->max_fps;
-    cs->max_fps = CB_FPS_LIMIT, cs->family = FAMILY_COMMON;
+    bool follow = cs->fitted_follow;
+    cs->max_fps = CB_FPS_LIMIT, cs->family = FAMILY_COMMON, cs->fitted_follow = false; /* one kind: exact at its top */
     double fps = lowest_rate(cs, ladder, n, 0, 0, max_error, &ignored, err);
-    cs->max_fps = cap;
+    cs->max_fps = cap, cs->fitted_follow = follow;
     return fps;
 }
 
@@ -313,6 +365,7 @@ static double rate_that_meets(clip_search *cs, double max_error, cb_error *err)
 static double choose_clip(clip_search *cs, const rate_families *f, cb_rows rows, double max_error, cb_rate_choice *c,
                           cb_error *err)
 {
+    cs->fitted_follow = rows == CB_ROWS_BEST;
     double e = INFINITY, r = lowest_rate_walk(cs, f, rows, max_error, &e, err);
     memset(c, 0, sizeof *c);
     if (err->status) return cs->max_fps;

@@ -266,7 +266,8 @@ cb_sampler *cb_sampler_create(const cb_model *model, int32_t skin, cb_error *err
     s->cursor = calloc(channels + 1, sizeof *s->cursor);
     s->wraps = calloc(model->animation_count + 1, sizeof *s->wraps);
     s->closed = calloc(model->animation_count + 1, sizeof *s->closed);
-    if (!s->cursor_base || !s->cursor || !s->wraps || !s->closed) {
+    s->closed_with = calloc((size_t)(model->animation_count + 1) * 5, sizeof *s->closed_with);
+    if (!s->cursor_base || !s->cursor || !s->wraps || !s->closed || !s->closed_with) {
         free(depth);
         cb_sampler_free(s);
         cb_fail(err, CB_ERR_INTERNAL, "out of memory creating a sampler for %s", model->source);
@@ -317,6 +318,7 @@ void cb_sampler_free(cb_sampler *s)
     free(s->wraps);
     for (uint32_t a = 0; s->closed && a < s->model->animation_count; ++a) cb_sampler_open_clip(s, (int32_t)a);
     free(s->closed);
+    free(s->closed_with);
     free(s);
 }
 

@@ -20,6 +20,7 @@ struct cb_sampler {
     uint32_t *cursor_base; /* per clip: its channels' first cursor */
     cb_wrap *wraps;      /* per clip: where a loop without a closing key comes round (cb_sampler_set_period) */
     cb_animation **closed; /* per clip: its channels closed onto their first pose (loop_close.c), or NULL */
+    double *closed_with;   /* per clip, 5: the travel and the wrap its closed copy was made with (cb_sampler_set_loop) */
     double rest_extent;  /* the rest pose's joint box diagonal (clip.c), 0 until worked out */
     /* The similarity path (cb_sampler_is_similarity) visits only the joints and their ancestors. */
     bool similar;

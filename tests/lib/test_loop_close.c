@@ -290,9 +290,50 @@ static void gallop_jump(void **state)
     check_baked("assets/quaternius-husky/Husky.glb", "reference/Husky.fps30.csv", husky_dev);
 }
 
+/* A loop set again on a sampler that closed it keeps its closed copy only for the same travel and
+ * wrap (cb_sampler_set_loop: a search's probes set their clip's loop each time): the matrices are
+ * the bits of a fresh sampler's closed with the same clip, and another travel closes it anew. */
+static void set_again_keeps_only_the_same_closing(void **state)
+{
+    (void)state;
+    cb_model *m = load_shared("assets/quaternius-cow/Cow.glb");
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    assert_non_null(s);
+    int32_t a = cb_model_find_animation(m, "AnimalArmature|Gallop_Jump");
+    cb_clip_info info;
+    assert_int_equal(cb_clip_analyze(s, a, 30, -1, NULL, &info, &err), CB_OK);
+    assert_int_equal(info.loop_reason, CORRECTED);
+    cb_clip_info moved = info;
+    moved.root_displacement[0] += 0.25, moved.root_displacement[2] -= 0.125;
+    size_t n = (size_t)m->skins[0].joint_count * 16;
+    double *got = malloc(n * sizeof(double)), *want = malloc(n * sizeof(double));
+    double t = info.t0 + 0.37 * (info.t1 - info.t0);
+    const cb_clip_info *order[] = {&info, &info, &moved, &moved, &info};
+    for (int i = 0; i < 5; ++i) {
+        cb_sampler *fresh = cb_sampler_create(m, 0, &err);
+        assert_non_null(fresh);
+        assert_true(cb_sampler_set_loop(s, order[i]) && cb_sampler_set_loop(fresh, order[i]));
+        cb_sample_joint_matrices(s, a, t, got);
+        cb_sample_joint_matrices(fresh, a, t, want);
+        if (memcmp(got, want, n * sizeof(double))) fail_msg("setting %d: the loop set again is not a fresh one's", i);
+        if (i == 2) { /* another travel: the seam moved */
+            cb_sample_joint_matrices(fresh, a, info.t1, want);
+            cb_sampler_set_loop(fresh, &info);
+            cb_sample_joint_matrices(fresh, a, info.t1, got);
+            assert_true(memcmp(got, want, n * sizeof(double)) != 0);
+        }
+        cb_sampler_free(fresh);
+    }
+    free(got), free(want);
+    cb_sampler_free(s);
+    cb_model_free(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(decisions), cmocka_unit_test(gallop_jump),
-                                       cmocka_unit_test(overrides_and_reasons)};
+                                       cmocka_unit_test(overrides_and_reasons),
+                                       cmocka_unit_test(set_again_keeps_only_the_same_closing)};
     return cmocka_run_group_tests(tests, setup, NULL);
 }
