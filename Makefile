@@ -560,13 +560,16 @@ $(BUILD)/bench_floor: bench/bench_floor.cpp $(BUILD)/libcrowdbake.a $(DEPS_STAMP
 # It draws with the shipped GLSL, embedded as the command's preview embeds it (gen/palette_glsl.o).
 $(BUILD)/bench_gl: bench/bench_gl.c bench/bench_gl_mesh.c bench/bench_gl_mesh.h bench/bench_gl_tiers.c bench/bench_gl_tiers.h \
                   bench/bench_gl_context.c bench/bench_gl_context.h bench/bench_gl_local.c bench/bench_gl_local.h \
+                  bench/bench_gl_scene.c bench/bench_gl_scene.h bench/bench_gl_check.c bench/bench_gl_check.h \
                   $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CC) $(CFLAGS) -c bench/bench_gl_context.c -o $@_context.o
 	$(CC) $(CFLAGS) -c bench/bench_gl_mesh.c -o $@_mesh.o
 	$(CC) $(CFLAGS) -c bench/bench_gl_tiers.c -o $@_tiers.o
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c bench/bench_gl_local.c -o $@_local.o
-	$(CXX) $(SAN) -o $@ $@.o $@_mesh.o $@_tiers.o $@_local.o $@_context.o $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs egl gl 2>/dev/null)
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c bench/bench_gl_scene.c -o $@_scene.o
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c bench/bench_gl_check.c -o $@_check.o
+	$(CXX) $(SAN) -o $@ $@.o $@_mesh.o $@_tiers.o $@_local.o $@_context.o $@_scene.o $@_check.o $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs egl gl 2>/dev/null)
 
 bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(BUILD)/bench_rows $(NODE_DEPS)
 	python3 bench/run.py
