@@ -45,12 +45,13 @@ static const char *const method_names[METHODS] = {"palette", "bones", "vat"}; /*
 static const char *MAIN_HEAD =
     "in vec3 a_position; in vec3 a_normal; in ivec4 a_joints; in vec4 a_weights; in vec4 a_place; in vec4 a_inst;\n"
     "uniform float u_time; uniform mat4 u_view_projection;\n"
-    "out vec3 v_normal;\n";
+    "out vec3 v_normal; out vec3 v_world;\n";
 static const char *MAIN_TAIL =
     "    float c = cos(a_place.w), s = sin(a_place.w);\n"
     "    mat3 yaw = mat3(c, 0.0, -s, 0.0, 1.0, 0.0, s, 0.0, c);\n"
     "    v_normal = yaw * n;\n"
-    "    gl_Position = u_view_projection * vec4(a_place.xyz + yaw * p, 1.0);\n"
+    "    v_world = a_place.xyz + yaw * p;\n"
+    "    gl_Position = u_view_projection * vec4(v_world, 1.0);\n"
     "}\n";
 static const char *SKIN_PALETTE =
     "void main() {\n    vec3 p, n;\n"
@@ -60,12 +61,12 @@ static const char *SKIN_BONES = /* the pass placed each bone: world space straig
     "void main() {\n    vec3 p, n;\n    float pixels = u_lod.x / (u_view_projection * vec4(a_place.xyz, 1.0)).w;\n"
     "    cb_skin_bone_pass_influences(a_position, a_normal, a_joints, a_weights, gl_InstanceID,\n"
     "                                 cb_lod_influences(pixels, u_lod.y, u_lod.z), p, n);\n"
-    "    v_normal = n;\n    gl_Position = u_view_projection * vec4(p, 1.0);\n}\n";
+    "    v_normal = n, v_world = p;\n    gl_Position = u_view_projection * vec4(p, 1.0);\n}\n";
 static const char *SKIN_TIER = /* one LOD tier, compiled in: a_bone_instance is the instance's row in the pass */
     "in int a_bone_instance;\n"
     "void main() {\n    vec3 p, n;\n"
     "    cb_skin_bone_pass(a_position, a_normal, a_joints, a_weights, a_bone_instance, p, n);\n"
-    "    v_normal = n;\n    gl_Position = u_view_projection * vec4(p, 1.0);\n}\n";
+    "    v_normal = n, v_world = p;\n    gl_Position = u_view_projection * vec4(p, 1.0);\n}\n";
 static const char *SKIN_VAT =
     "uniform sampler2D u_vat_positions, u_vat_normals; uniform int u_frame_width, u_rows_per_frame, u_vat_rows;\n"
     "vec3 vat_fetch(sampler2D t, int frame) {\n"
@@ -75,9 +76,12 @@ static const char *SKIN_VAT =
     "void main() {\n    int row0, row1; float fr;\n    cb_frame(a_inst, u_time, row0, row1, fr);\n"
     "    vec3 p = mix(vat_fetch(u_vat_positions, row0), vat_fetch(u_vat_positions, row1), fr);\n"
     "    vec3 n = normalize(mix(vat_fetch(u_vat_normals, row0), vat_fetch(u_vat_normals, row1), fr));\n";
+/* A model without normals (Fox.glb): glTF asks for flat normals, the triangle's own, as the skinned zero normal (or
+ * its normalize's NaN) would shade every method's image alike black. */
 static const char *FRAGMENT =
-    "#version 330 core\nin vec3 v_normal; out vec4 o_color;\n"
-    "void main() { float l = 0.35 + 0.65 * max(dot(normalize(v_normal), normalize(vec3(0.4, 0.8, 0.3))), 0.0);\n"
+    "#version 330 core\nin vec3 v_normal; in vec3 v_world; out vec4 o_color;\n"
+    "void main() { vec3 n = dot(v_normal, v_normal) > 1e-12 ? v_normal : cross(dFdx(v_world), dFdy(v_world));\n"
+    "              float l = 0.35 + 0.65 * max(dot(normalize(n), normalize(vec3(0.4, 0.8, 0.3))), 0.0);\n"
     "              o_color = vec4(vec3(0.8, 0.7, 0.55) * l, 1.0); }\n";
 static const char *PASS_VERTEX =
     "in vec4 a_place; in vec4 a_inst; uniform float u_time; uniform int u_rows; uniform vec2 u_size;\n"

@@ -70,11 +70,15 @@ float bench_herd_size(const cb_palette *p)
 
 /* ---- the mesh: every primitive of the first skin, in the VAT's vertex order ---- */
 
+/* A primitive's triangle corners: its indices, or its vertices in order where it has none (glTF's non-indexed
+ * primitive, as Fox.glb's: drawn with no indices it drew nothing). */
+static uint32_t primitive_indices(const cb_primitive *p) { return p->indices ? p->index_count : p->vertex_count; }
+
 void bench_upload_mesh(scene *s, const cb_model *m, uint32_t capacity)
 {
     uint32_t verts = 0, indices = 0;
     for (uint32_t i = 0; i < m->primitive_count; ++i)
-        if (m->primitives[i].skin == 0) verts += m->primitives[i].vertex_count, indices += m->primitives[i].index_count;
+        if (m->primitives[i].skin == 0) verts += m->primitives[i].vertex_count, indices += primitive_indices(&m->primitives[i]);
     float *pos = malloc(verts * 12), *nrm = calloc(verts, 12), *w = malloc(verts * 16);
     int32_t *j = malloc(verts * 16);
     uint32_t *idx = malloc(indices * 4), v0 = 0, i0 = 0;
@@ -85,8 +89,8 @@ void bench_upload_mesh(scene *s, const cb_model *m, uint32_t capacity)
         if (p->normals) memcpy(nrm + v0 * 3, p->normals, p->vertex_count * 12);
         memcpy(w + v0 * 4, p->weights, p->vertex_count * 16);
         for (uint32_t k = 0; k < p->vertex_count * 4; ++k) j[v0 * 4 + k] = p->joints[k];
-        for (uint32_t k = 0; k < p->index_count; ++k) idx[i0 + k] = v0 + p->indices[k];
-        v0 += p->vertex_count, i0 += p->index_count;
+        for (uint32_t k = 0; k < primitive_indices(p); ++k) idx[i0 + k] = v0 + (p->indices ? p->indices[k] : k);
+        v0 += p->vertex_count, i0 += primitive_indices(p);
     }
     bench_sort_influences(j, w, verts); /* as the WebGL2 Crowd: every method draws the same order */
     if (s->lod) /* as lod 'auto' of the runtimes: where the worst vertex of 64 poses moves at most a pixel */
