@@ -222,6 +222,7 @@ int main(int argc, char **argv)
      * units, 11% of its height, and its palette and VAT differed by 0.3-2.2% of the pixels with the time; at the
      * auto rate's ceiling (the rate fps "auto" may ship) 0.017 units, and 0.3-0.6% (bench/RESULTS.txt gl43). */
     if (check) o.fps = CB_AUTO_MAX_FPS;
+    o.affine_fallback = true; /* as the command's bake: a rig qpos cannot hold (the spider's non-uniform scale) in affine */
     cb_palette pal;
     cb_vat vat;
     if (!sampler || cb_palette_bake(sampler, &o, NULL, 0, &pal, &err) != CB_OK ||

@@ -65,9 +65,9 @@ int bench_check_images(const scene *s, GLuint target)
     long tier_bytes = 0;
     double tiers_vs_all = check_tiers(s, target, vp, img[1], &tier_bytes);
     for (int m = 0; m <= METHODS; ++m) free(img[m]);
-    bool ok = covered > 1000 && bones <= 0.01 && vat <= 0.01 && late > 0.05 && tier_bytes == 0 && tiers_vs_all > 0 &&
+    bool ok = covered > 1000 && bones <= 0.01 && vat <= 0.01 && late > 0.05 && tier_bytes == 0 && (tiers_vs_all > 0 || !s->blended) &&
               glGetError() == GL_NO_ERROR;
     if (!ok) fprintf(stderr, "bench_gl: the images disagree (limits: 0.01 alike, > 0.05 0.25 s late, the LOD's tiers drawn "
-                             "apart the same bytes as in one draw, some pixels off every influence's)\n");
+                             "apart the same bytes as in one draw, some pixels off every influence's where a vertex blends)\n");
     return ok ? 0 : 1;
 }

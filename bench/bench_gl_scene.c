@@ -93,6 +93,7 @@ void bench_upload_mesh(scene *s, const cb_model *m, uint32_t capacity)
         v0 += p->vertex_count, i0 += primitive_indices(p);
     }
     bench_sort_influences(j, w, verts); /* as the WebGL2 Crowd: every method draws the same order */
+    for (uint32_t v = 0; v < verts && !s->blended; ++v) s->blended = w[v * 4 + 1] > 0;
     if (s->lod) /* as lod 'auto' of the runtimes: where the worst vertex of 64 poses moves at most a pixel */
         bench_lod_thresholds(s->sampler, s->pal, pos, j, w, verts, bench_herd_size(s->pal), 1.0, 64, s->lod_pixels);
     bench_sort_triangles(idx, indices, w);

@@ -23,6 +23,7 @@ typedef struct scene {
     bool lod; /* --lod: the bone pass's animation LOD, as the WebGL2 Crowd's default (lod 'auto') */
     bool pass_only; /* --pass-only: `bones` times the bone pass alone (no draw) */
     bool tiers; /* its tiers drawn apart (tier_prog), not found per vertex (prog[1]; --lod-single) */
+    bool blended; /* some vertex reads more than one influence: the LOD has something to drop */
     float lod_pixels[2]; /* its thresholds: 1 influence under [0] pixels tall, 2 under [1] (bench_lod_thresholds) */
     float *instances; /* the herd's 8 floats an instance (place, inst), kept for the tiers' sort */
     int32_t *order;   /* the instances by tier, a frame's (bench_sort_by_tier) */
