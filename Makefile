@@ -433,11 +433,17 @@ $(BUILD)/tests/bake_hashes.run: all | $(RESULTS)/pending
 	$(call record_run,bake_hashes,python3 tests/tools/bake_hashes.py --build $(BUILD) --shared $(SHARED))
 bake-hashes: all
 	python3 tests/tools/bake_hashes.py --write --build $(BUILD) --shared $(SHARED)
-# The native crowd benchmark's images, not its times: palette, bone pass and VAT draw the same herd; and the bone
-# pass that composes local rows up each chain (bench/bones_local.glsl, issue 43 item 1's lever) the same image.
+# The native crowd benchmark's images, not its times: palette, bone pass and VAT draw the same herd (the samples and
+# the shared models it can afford: Fox non-indexed without normals, the robot's 14 meshes, Cow, Husky, the rigged
+# figure, the spider's affine fallback); and the bone pass that composes local rows up each chain
+# (bench/bones_local.glsl, issue 43 item 1's lever) the same image.
+BENCH_GL_MODELS = $(BUILD)/samples/fish.glb $(BUILD)/samples/quadruped.glb $(SHARED)/assets/fox-bevy/Fox.glb \
+  $(SHARED)/assets/robot-quaternius-raylib/robot.glb $(SHARED)/assets/quaternius-cow/Cow.glb \
+  $(SHARED)/assets/quaternius-husky/Husky.glb $(SHARED)/assets/riggedfigure-raylib/rigged_figure.glb \
+  $(SHARED)/assets/spider-animated-luanti/gltf_spider_animated.gltf
 $(BUILD)/tests/bench_gl_images.run: all $(BUILD)/bench_gl | $(RESULTS)/pending
-	$(call record_run,bench_gl_images,for m in fish quadruped; do EGL_PLATFORM=surfaceless $(BUILD)/bench_gl \
-	  $(BUILD)/samples/$$m.glb --check || exit 1; done && EGL_PLATFORM=surfaceless \
+	$(call record_run,bench_gl_images,for m in $(BENCH_GL_MODELS); do EGL_PLATFORM=surfaceless $(BUILD)/bench_gl \
+	  $$m --check || exit 1; done && EGL_PLATFORM=surfaceless \
 	  BENCH_GL_PASS_GLSL=bench/bones_local.glsl $(BUILD)/bench_gl $(BUILD)/samples/quadruped.glb --check --local-rows)
 $(BUILD)/tests/web_reader.run: all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test runtimes/web/test/)
@@ -560,13 +566,16 @@ $(BUILD)/bench_floor: bench/bench_floor.cpp $(BUILD)/libcrowdbake.a $(DEPS_STAMP
 # It draws with the shipped GLSL, embedded as the command's preview embeds it (gen/palette_glsl.o).
 $(BUILD)/bench_gl: bench/bench_gl.c bench/bench_gl_mesh.c bench/bench_gl_mesh.h bench/bench_gl_tiers.c bench/bench_gl_tiers.h \
                   bench/bench_gl_context.c bench/bench_gl_context.h bench/bench_gl_local.c bench/bench_gl_local.h \
+                  bench/bench_gl_scene.c bench/bench_gl_scene.h bench/bench_gl_check.c bench/bench_gl_check.h \
                   $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CC) $(CFLAGS) -c bench/bench_gl_context.c -o $@_context.o
 	$(CC) $(CFLAGS) -c bench/bench_gl_mesh.c -o $@_mesh.o
 	$(CC) $(CFLAGS) -c bench/bench_gl_tiers.c -o $@_tiers.o
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c bench/bench_gl_local.c -o $@_local.o
-	$(CXX) $(SAN) -o $@ $@.o $@_mesh.o $@_tiers.o $@_local.o $@_context.o $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs egl gl 2>/dev/null)
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c bench/bench_gl_scene.c -o $@_scene.o
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c bench/bench_gl_check.c -o $@_check.o
+	$(CXX) $(SAN) -o $@ $@.o $@_mesh.o $@_tiers.o $@_local.o $@_context.o $@_scene.o $@_check.o $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs egl gl 2>/dev/null)
 
 bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(BUILD)/bench_rows $(NODE_DEPS)
 	python3 bench/run.py
