@@ -374,7 +374,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
                                       ((p->clips[c].frames - 1) % st.error_stride != 0);
         }
     }
-    palette_settle_fit(&st, p->visible_error); /* a probe's rows, kept by how they met its goal */
+    palette_settle_rows(&st, p->visible_error); /* a probe's rows, kept by how they met its goal */
     double t3 = seconds_now();
     p->seconds_sample = t1 - t0 - encoded_while_sampling;
     p->seconds_encode = t2 - t1 + encoded_while_sampling;

@@ -103,7 +103,7 @@ typedef struct bake_state {
     const cb_clip_info *analysis; /* the only clip analyzed before the bake, or NULL */
     cb_sampler *lent;       /* the caller's sampler, for the one worker of a probe's bake; or NULL */
     struct cb_pool *pool;   /* the threads every pass runs on, or NULL for the caller's alone */
-    struct kept_fit *pending; /* a probe's fitted rows, until its measurement says whether to keep them */
+    struct kept_rows *pending; /* a probe's rows (fitted or sampled), until its measurement says whether to keep them */
     pose_batch *batch;      /* the probe's, for its one worker (on st->lent); or NULL: each worker's own */
     struct clip_memo *memo; /* the run's analyses (palette_probe.memo), or NULL */
 } bake_state;
@@ -148,7 +148,7 @@ cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, 
  * clip's rows into the block palette_keep_rows gives (NULL: no search to keep them with, or out
  * of memory; st->pending) and records its bounds and value range once they are made
  * (palette_kept_rows_done); once measured, rows within its goal (or measured without one) go
- * with the clip's poses (palette_settle_fit), replacing the last kept of their kind: a search's
+ * with the clip's poses (palette_settle_rows), replacing the last kept of their kind: a search's
  * last probe within the goal is the lowest such rate of its kind, its answer when that kind
  * wins. The bake after the search takes them for a clip of that kind framed alike
  * (palette_take_rows, NULL: none kept: the same times, root travel, layout), the same floats
@@ -157,9 +157,9 @@ cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, 
  * since speed43j: a similarity rig's rows (Fox) had no per-pose copy (palette_matrix_row's). */
 float *palette_keep_rows(bake_state *st, uint32_t c, bool fitted);
 void palette_kept_rows_done(bake_state *st, uint32_t c, const extent *bounds);
-void palette_settle_fit(bake_state *st, double error);
+void palette_settle_rows(bake_state *st, double error);
 const float *palette_take_rows(bake_state *st, uint32_t c, bool fitted, extent *bounds);
-/* A probe's sampled rows kept by the probe before it, met or missed (palette_settle_fit keeps
+/* A probe's sampled rows kept by the probe before it, met or missed (palette_settle_rows keeps
  * the last missed ones too), framed as clip c: copied into rows (the whole clip), its bounds into
  * *bounds and its value range into st->ranges[c], where a fitted probe at the rate of a sampled
  * one starts (false: none; rows made). */

@@ -209,8 +209,8 @@ cb_status palette_matrix_row(bake_state *st, worker *w, uint32_t c, uint32_t f, 
 
 /* ---- a probe's rows, kept for the bake after the search (palette_bake.h) ---- */
 
-typedef struct kept_fit {
-    cb_clip_info framing; /* the clip's info (what of it frames and moves the rows: fit_matches) */
+typedef struct kept_rows {
+    cb_clip_info framing; /* the clip's info (what of it frames and moves the rows: rows_match) */
     cb_layout layout;
     cb_root_motion root_motion;
     uint32_t bones;
@@ -218,9 +218,9 @@ typedef struct kept_fit {
     extent bounds;     /* the clip's bounds and value range as making (and fitting) its rows left them */
     value_range range;
     float rows[];      /* framing.frames rows of bones * CANON(layout) */
-} kept_fit;
+} kept_rows;
 
-static bool fit_matches(const kept_fit *k, const bake_state *st, uint32_t c)
+static bool rows_match(const kept_rows *k, const bake_state *st, uint32_t c)
 {
     const cb_clip_info *a = &k->framing, *b = &st->infos[c];
     return k->layout == st->p->layout && k->root_motion == st->opt->root_motion && k->bones == st->p->bone_count &&
@@ -230,7 +230,7 @@ static bool fit_matches(const kept_fit *k, const bake_state *st, uint32_t c)
            a->root_velocity[2] == b->root_velocity[2];
 }
 
-static size_t fit_floats(const bake_state *st, uint32_t c)
+static size_t kept_floats(const bake_state *st, uint32_t c)
 {
     return (size_t)st->infos[c].frames * st->p->bone_count * CANON(st->p->layout);
 }
@@ -239,9 +239,9 @@ float *palette_keep_rows(bake_state *st, uint32_t c, bool fitted)
 {
     free(st->pending), st->pending = NULL;
     if (!st->poses) return NULL; /* no search: nothing to keep them with */
-    st->pending = malloc(sizeof *st->pending + fit_floats(st, c) * sizeof(float));
+    st->pending = malloc(sizeof *st->pending + kept_floats(st, c) * sizeof(float));
     if (!st->pending) return NULL; /* out of memory: the bake after makes them again */
-    *st->pending = (kept_fit){.framing = st->infos[c], .layout = st->p->layout, .root_motion = st->opt->root_motion,
+    *st->pending = (kept_rows){.framing = st->infos[c], .layout = st->p->layout, .root_motion = st->opt->root_motion,
                               .bones = st->p->bone_count, .fitted = fitted};
     return st->pending->rows;
 }
@@ -256,11 +256,11 @@ void palette_kept_rows_done(bake_state *st, uint32_t c, const extent *bounds)
  * fitted probe at the same rate starts from them). */
 enum { SLOT_SAMPLED, SLOT_FITTED, SLOT_SAMPLED_MISS };
 
-void palette_settle_fit(bake_state *st, double error)
+void palette_settle_rows(bake_state *st, double error)
 {
     double goal = st->opt->error_goal;
     bool met = !(goal > 0) || error <= goal;
-    kept_fit *k = st->pending;
+    kept_rows *k = st->pending;
     if (k && st->poses && (met || !k->fitted))
         pose_cache_attach(st->poses, k->fitted ? SLOT_FITTED : met ? SLOT_SAMPLED : SLOT_SAMPLED_MISS, k);
     else
@@ -269,23 +269,23 @@ void palette_settle_fit(bake_state *st, double error)
 }
 
 /* The kept rows of `poses` in `slot` framed as clip c of st, or NULL. */
-static const kept_fit *kept_in(const pose_cache *poses, int slot, const bake_state *st, uint32_t c)
+static const kept_rows *kept_in(const pose_cache *poses, int slot, const bake_state *st, uint32_t c)
 {
-    const kept_fit *k = poses ? pose_cache_attached(poses, slot) : NULL;
-    return k && fit_matches(k, st, c) ? k : NULL;
+    const kept_rows *k = poses ? pose_cache_attached(poses, slot) : NULL;
+    return k && rows_match(k, st, c) ? k : NULL;
 }
 
 /* Rows framed alike are the same floats whether their probe met its goal or not. */
-static const kept_fit *kept_sampled(const pose_cache *poses, const bake_state *st, uint32_t c)
+static const kept_rows *kept_sampled(const pose_cache *poses, const bake_state *st, uint32_t c)
 {
-    const kept_fit *k = kept_in(poses, SLOT_SAMPLED, st, c);
+    const kept_rows *k = kept_in(poses, SLOT_SAMPLED, st, c);
     return k ? k : kept_in(poses, SLOT_SAMPLED_MISS, st, c);
 }
 
 const float *palette_take_rows(bake_state *st, uint32_t c, bool fitted, extent *bounds)
 {
     pose_cache *poses = st->clip_poses && !st->poses ? st->clip_poses[c] : NULL;
-    const kept_fit *k = fitted ? kept_in(poses, SLOT_FITTED, st, c) : kept_sampled(poses, st, c);
+    const kept_rows *k = fitted ? kept_in(poses, SLOT_FITTED, st, c) : kept_sampled(poses, st, c);
     if (!k) return NULL;
     *bounds = k->bounds, st->ranges[c] = k->range;
     return k->rows;
@@ -293,9 +293,9 @@ const float *palette_take_rows(bake_state *st, uint32_t c, bool fitted, extent *
 
 bool palette_take_sampled_for_fit(bake_state *st, uint32_t c, float *rows, extent *bounds)
 {
-    const kept_fit *k = kept_sampled(st->poses, st, c);
+    const kept_rows *k = kept_sampled(st->poses, st, c);
     if (!k) return false;
-    memcpy(rows, k->rows, fit_floats(st, c) * sizeof(float));
+    memcpy(rows, k->rows, kept_floats(st, c) * sizeof(float));
     *bounds = k->bounds, st->ranges[c] = k->range;
     return true;
 }
