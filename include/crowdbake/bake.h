@@ -153,7 +153,7 @@ typedef struct cb_bake_job {
     cb_clip_settings *clip_settings; /* per planned clip, its settings resolved (cb_resolve_clip_settings): what
                                       * planning, the bake, its checks and its words read */
     bool planned;
-    void *search_poses; /* internal: what its rate searches kept for the bake (per clip, the poses and rows
+    void *search_kept; /* internal: what its rate searches kept for the bake (per clip, the poses and rows
                          * they made; the skin's facts), which the bake makes no more (cb_bake_job_free
                          * frees them) */
     char speed_reference_from[256]; /* why the speed reference it decided ("" when the caller gave one) */

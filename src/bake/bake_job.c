@@ -210,10 +210,10 @@ static bool clip_goal(const cb_bake_job *job, uint32_t i, cb_rate_goal *goal)
     return true;
 }
 
-static void free_search_poses(cb_bake_job *job)
+static void free_search_kept(cb_bake_job *job)
 {
-    search_keep_free(job->search_poses); /* a search_keep: the poses and the skin's facts */
-    job->search_poses = NULL;
+    search_keep_free(job->search_kept); /* a search_keep: the poses and the skin's facts */
+    job->search_kept = NULL;
 }
 
 void cb_bake_job_init(cb_bake_job *job)
@@ -280,7 +280,7 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
     if (job->planned) return CB_OK;
     const cb_model *m = job->model;
     uint32_t n = job->clips ? job->clip_count : m->animation_count;
-    free_search_poses(job);
+    free_search_kept(job);
     free(job->plan), free(job->rates), free(job->clip_settings);
     job->plan = calloc(n ? n : 1, sizeof *job->plan);
     job->rates = calloc(n ? n : 1, sizeof *job->rates);
@@ -305,14 +305,14 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
         cb_sampler *s = cb_sampler_create(job->model, job->skin, err); /* planted feet: the copy */
         cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
         search_keep *keep = search_keep_create(n); /* NULL: nothing kept, as slow */
-        job->search_poses = keep;
+        job->search_kept = keep;
         /* Each searched clip's analysis from the root motion's decision, kept for its search
          * (which takes it where it stands in for its own: palette_take_kept_analysis). */
         for (uint32_t i = 0; s && keep && i < n; ++i)
             if (searched[i] && early[i].made)
                 palette_seed_analysis(keep->poses, i, s, &early[i].info, early[i].fps, early[i].loop);
         bool *later = bake_transient_candidates(job); /* NULL: none left for later */
-        if (s && !palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_poses, later, err))
+        if (s && !palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_kept, later, err))
             bake_reach_for_transients(job, s, &o, err);
         cb_sampler_free(s), free(later);
     }
@@ -469,7 +469,7 @@ static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette 
     }
     if (any) {
         cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
-        palette_choose_rates(s, &o, job->plan, n, goals, fresh, job->search_poses, NULL, err);
+        palette_choose_rates(s, &o, job->plan, n, goals, fresh, job->search_kept, NULL, err);
         for (uint32_t i = 0; i < n && !err->status; ++i)
             if (goals[i].max_error_mm > 0) job->rates[i] = fresh[i];
     }
@@ -518,7 +518,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
         if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout) {
             cb_palette_free(&shared);
-            search_keep *keep = job->search_poses; /* what the rate search sampled, and the skin's facts */
+            search_keep *keep = job->search_kept; /* what the rate search sampled, and the skin's facts */
             palette_probe kept = {NULL, NULL, keep ? keep->poses : NULL, NULL, memo};
             resolved_plan(job, baked);
             if (palette_bake_with_facts(s, &opt, baked, job->plan_count, search_kept_facts(keep, s), &kept, &shared, err) ||
@@ -563,11 +563,11 @@ void cb_bake_result_free(cb_bake_result *r)
     memset(r, 0, sizeof *r);
 }
 
-void cb_bake_job_release_search(cb_bake_job *job) { free_search_poses(job); }
+void cb_bake_job_release_search(cb_bake_job *job) { free_search_kept(job); }
 
 void cb_bake_job_free(cb_bake_job *job)
 {
-    free_search_poses(job);
+    free_search_kept(job);
     plant_feet_release(job);
     free(job->plan), free(job->rates), free(job->clip_settings);
     job->plan = NULL, job->rates = NULL, job->clip_settings = NULL;

@@ -59,7 +59,7 @@ cb_status bake_reach_for_transients(cb_bake_job *job, cb_sampler *s, const cb_ba
             goals[i] = (cb_rate_goal){job->clip_settings[i].max_error_mm, CB_TRANSIENT_MAX_FPS, CB_ROWS_BEST}, any = true;
     if (any) {
         memcpy(before, job->plan, n * sizeof *before);
-        if (!palette_choose_rates(s, o, job->plan, n, goals, fresh, job->search_poses, NULL, err))
+        if (!palette_choose_rates(s, o, job->plan, n, goals, fresh, job->search_kept, NULL, err))
             take_answers(job, goals, fresh, before);
     } else if (!goals || !fresh || !before) {
         cb_fail(err, CB_ERR_INTERNAL, "out of memory");
