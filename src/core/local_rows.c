@@ -172,7 +172,8 @@ static void local_ranges(cb_palette *p, const double *values)
     p->linear_range = 0;
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         const float *e = p->bone_ranges + (size_t)j * 8;
-        for (int k = 0; k < 3; ++k) p->bounds_min[k] = fminf(p->bounds_min[k], e[k]), p->bounds_max[k] = fmaxf(p->bounds_max[k], e[4 + k]);
+        for (int k = 0; k < 3; ++k)
+            p->bounds_min[k] = fminf(p->bounds_min[k], e[k]), p->bounds_max[k] = fmaxf(p->bounds_max[k], e[4 + k]);
         p->linear_range = fmaxf(p->linear_range, e[3]);
     }
 }
@@ -283,7 +284,8 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
     cb_status rc = palette_bake_with_facts(sampler, &global, sampled, plan_count, facts, probe, p, err);
     free(sampled);
     if (rc || p->layout != CB_LAYOUT_QPOS) return rc; /* fell back to affine: a rig qpos cannot hold stays global */
-    if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, err)) && cb_model_skin_vertex_count(m, cb_sampler_skin(sampler)) > 0)
+    int32_t skin = cb_sampler_skin(sampler);
+    if (!(rc = convert_palette(p, m, skin, opt->precision, err)) && cb_model_skin_vertex_count(m, skin) > 0)
         rc = measure_local(sampler, plan, p, err);
     if (rc) cb_palette_free(p);
     return rc;
