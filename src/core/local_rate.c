@@ -27,6 +27,7 @@
 
 #include "cb_math.h"
 #include "error_bound.h"
+#include "sampler.h"
 
 /* A bone in a row: rotation q, the position p of its pivot b (p = M b) and a uniform scale s,
  * so that v' = p + s rotate(q, v - b): the palette's qpos. */
@@ -164,43 +165,86 @@ typedef struct probe_ctx {
     const local_skeleton *k;
     const cb_clip_info *clip;
     const cb_model *m;
-    bool similar;             /* cb_sampler_is_similarity: sampled as similarities, 16 times at once */
+    cb_root_motion root_motion; /* the bake's: its poses framed as the bake frames them */
+    pose_cache *keep;         /* the bake's cache of this clip's poses, or NULL (matrix rigs only) */
+    bool similar;             /* cb_sampler_is_similarity: sampled as similarities */
+    cb_joint_subset *all;     /* not similar: every joint, sampled a batch of times at once */
+    double *lanes;            /* its lanes */
+    double *pose_room;        /* CB_SAMPLE_BATCH x bones x 16: the poses no cache keeps */
+    const double *mats[CB_SAMPLE_BATCH]; /* not similar: each pose's joint matrices */
+    double *qs;               /* bones x 5: a pose's quaternions and scales (palette_qpos_similarity_pose) */
     bone_qpos *poses;         /* CB_SAMPLE_BATCH x bones: global rows at a batch's times */
     bone_qpos *rows[2];       /* bones each: the local rows either side of the interval in hand */
     bone_qpos *blended;       /* bones: the blend composed */
     cb_similarity *sims;      /* CB_SAMPLE_BATCH x bones */
-    double *mats;             /* bones x 16: a pose's joint matrices (not similar) */
     double *diff;             /* bones x 16: exact less blended */
     cb_joint_error *joints;   /* bones */
     void *block;
 } probe_ctx;
 
+static void probe_ctx_free(probe_ctx *c)
+{
+    cb_joint_subset_free(c->all);
+    free(c->block);
+}
+
 static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *k,
-                           const cb_clip_info *clip)
+                           const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep)
 {
     size_t n = k->bones ? k->bones : 1;
     size_t sizes[] = {CB_SAMPLE_BATCH * n * sizeof(bone_qpos), n * sizeof(bone_qpos), n * sizeof(bone_qpos),
                       n * sizeof(bone_qpos), CB_SAMPLE_BATCH * n * sizeof(cb_similarity), n * 16 * sizeof(double),
-                      n * 16 * sizeof(double), n * sizeof(cb_joint_error)};
+                      n * sizeof(cb_joint_error), n * 5 * sizeof(double),
+                      (CB_SAMPLE_BATCH + 1) * (n * 16 + 1) * sizeof(double), CB_SAMPLE_BATCH * n * 16 * sizeof(double)};
     size_t total = 0;
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) total += (sizes[i] + 63) / 64 * 64;
-    *c = (probe_ctx){.s = s, .facts = facts, .k = k, .clip = clip, .m = cb_sampler_model(s),
-                     .similar = cb_sampler_is_similarity(s), .block = malloc(total)};
+    bool similar = cb_sampler_is_similarity(s);
+    *c = (probe_ctx){.s = s, .facts = facts, .k = k, .clip = clip, .m = cb_sampler_model(s), .root_motion = root_motion,
+                     .keep = similar ? NULL : keep, .similar = similar, .block = malloc(total)};
     if (!c->block) return false;
     char *at = c->block;
     void **parts[] = {(void **)&c->poses, (void **)&c->rows[0], (void **)&c->rows[1], (void **)&c->blended,
-                      (void **)&c->sims, (void **)&c->mats, (void **)&c->diff, (void **)&c->joints};
+                      (void **)&c->sims, (void **)&c->diff, (void **)&c->joints, (void **)&c->qs, (void **)&c->lanes,
+                      (void **)&c->pose_room};
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) *parts[i] = at, at += (sizes[i] + 63) / 64 * 64;
-    return true;
+    if (similar) return true;
+    bool *every = malloc(n * sizeof *every);
+    for (uint32_t j = 0; every && j < k->bones; ++j) every[j] = true;
+    c->all = every ? cb_joint_subset_create(s, every) : NULL;
+    free(every);
+    if (!c->all) probe_ctx_free(c);
+    return c->all != NULL;
 }
 
-/* The global rows of every bone at `count` increasing times into c->poses. */
-static void sample_poses(probe_ctx *c, const double *times, uint32_t count)
+/* Pose i's global rows from its joint matrices (c->mats[i]): rotation and scale four joints at
+ * a time (palette_qpos_similarity_pose, the bake's), the pivot's position p = M b. */
+static void rows_of_matrices(probe_ctx *c, uint32_t i)
 {
     uint32_t bones = c->k->bones;
     const float *bind = c->facts->bind_positions;
+    const double *mats = c->mats[i];
+    bone_qpos *out = c->poses + (size_t)i * bones;
+    if (!palette_qpos_similarity_pose(mats, bones, c->qs)) { /* a joint no similarity: the bake refuses the rig */
+        for (uint32_t j = 0; j < bones; ++j) out[j] = qpos_of_matrix(mats + 16 * (size_t)j, bind_of(bind, j));
+        return;
+    }
+    for (uint32_t j = 0; j < bones; ++j) {
+        const double *q = c->qs + 5 * (size_t)j;
+        out[j] = (bone_qpos){{q[0], q[1], q[2], q[3]}, cb_mat4_transform_point(mats + 16 * (size_t)j, bind_of(bind, j)), q[4]};
+    }
+}
+
+/* The global rows at `count` increasing frames of `framing` into c->poses, framed as the bake
+ * frames them (its root motion). A matrix rig's poses at the frames `kept` says (the bake's rows
+ * and the midpoints its measurement reads) go into the bake's pose cache, where the bake finds
+ * them instead of sampling them again; poses the cache has already are read from it. */
+static void sample_frames(probe_ctx *c, const cb_clip_info *framing, const uint32_t *frames, uint32_t count,
+                          const bool *kept)
+{
+    uint32_t bones = c->k->bones;
     if (c->similar) {
-        cb_sample_joint_similarities_batch(c->s, c->clip->animation, times, count, c->sims);
+        cb_clip_frame_similarities(c->s, framing, frames, count, c->root_motion, c->sims);
+        const float *bind = c->facts->bind_positions;
         for (uint32_t i = 0; i < count; ++i)
             for (uint32_t j = 0; j < bones; ++j) {
                 const cb_similarity *x = &c->sims[(size_t)i * bones + j];
@@ -211,25 +255,37 @@ static void sample_poses(probe_ctx *c, const double *times, uint32_t count)
             }
         return;
     }
+    uint32_t missing[CB_SAMPLE_BATCH], n = 0;
+    double *room[CB_SAMPLE_BATCH];
     for (uint32_t i = 0; i < count; ++i) {
-        cb_sample_joint_matrices(c->s, c->clip->animation, times[i], c->mats);
-        for (uint32_t j = 0; j < bones; ++j) c->poses[(size_t)i * bones + j] = qpos_of_matrix(c->mats + 16 * (size_t)j, bind_of(bind, j));
+        double t = cb_clip_frame_time(framing, frames[i]);
+        const double *found = c->keep && kept[i] ? pose_cache_find(c->keep, t) : NULL;
+        double *add = found || !c->keep || !kept[i] ? NULL : pose_cache_add(c->keep, t); /* NULL: full */
+        if (!found) {
+            room[n] = add ? add : c->pose_room + (size_t)i * bones * 16;
+            missing[n++] = frames[i];
+        }
+        c->mats[i] = found ? found : room[n - 1];
     }
+    if (n) cb_clip_frame_matrices_batch(c->s, framing, missing, n, c->root_motion, c->all, c->lanes, room);
+    for (uint32_t i = 0; i < count; ++i) rows_of_matrices(c, i);
 }
 
-/* The worst vertex error of the blended pose (c->blended) against the exact one, or `worst`
- * when no vertex exceeds it; above `goal` it stops at the first group over it (any value over
- * the goal decides alike). Skinned only where a vertex group's bound (error_bound.h) exceeds the
- * worst so far: the maximum skinning every vertex gives. */
-static double point_error(probe_ctx *c, const bone_qpos *exact, double worst, double goal)
+/* The worst vertex error of the blended pose (c->blended) against pose i of the batch, or
+ * `worst` when no vertex exceeds it; above `goal` it stops at the first group over it (any value
+ * over the goal decides alike). Skinned only where a vertex group's bound (error_bound.h)
+ * exceeds the worst so far: the maximum skinning every vertex gives. */
+static double point_error(probe_ctx *c, uint32_t i, double worst, double goal)
 {
     const palette_skin_facts *f = c->facts;
     uint32_t bones = c->k->bones;
+    const bone_qpos *exact = c->poses + (size_t)i * bones;
     for (uint32_t j = 0; j < bones; ++j) {
         double e[16], b[16];
-        qpos_matrix(&exact[j], bind_of(f->bind_positions, j), e);
+        const double *exact_matrix = c->similar ? e : c->mats[i] + 16 * (size_t)j;
+        if (c->similar) qpos_matrix(&exact[j], bind_of(f->bind_positions, j), e);
         qpos_matrix(&c->blended[j], bind_of(f->bind_positions, j), b);
-        for (int i = 0; i < 16; ++i) c->diff[j * 16 + i] = e[i] - b[i];
+        for (int k = 0; k < 16; ++k) c->diff[j * 16 + k] = exact_matrix[k] - b[k];
     }
     if (!cb_joint_errors(c->diff, bones, f->bind_positions, c->joints)) return INFINITY;
     if (cb_row_error_cap(c->joints, bones, f->group_reach, f->weight_sum) <= worst) return worst;
@@ -243,34 +299,32 @@ static double point_error(probe_ctx *c, const bone_qpos *exact, double worst, do
     return worst;
 }
 
-/* The worst error of the clip's local rows at `fps` (the bake's framing: N = round(D fps) steps,
- * row i at t0 + i D / N; a loop's last interval ends on its first row, sampled at t0 + D where
- * the sampler's period wraps to it) at the quarter points of every row interval. Stops above
- * `goal` (INFINITY: in full). */
+/* The worst error of the clip's local rows at `fps` at the quarter points of every row interval,
+ * framed as the bake frames them: N = round(D fps) steps, row i at t0 + i D / N. The points are
+ * frames of the clip framed at 4N steps (row i is frame 4i, the same double; its midpoint, where
+ * the bake measures, frame 4i + 2); a loop's last interval ends on frame 4N, t0 + D, where the
+ * sampler's period wraps to its first pose. Stops above `goal` (INFINITY: in full). */
 static double probe(probe_ctx *c, double fps, double goal)
 {
-    const cb_clip_info *clip = c->clip;
-    uint32_t steps = cb_clip_step_count(clip->duration, fps), bones = c->k->bones;
+    cb_clip_info framing = *c->clip;
+    uint32_t steps = cb_clip_step_count(c->clip->duration, fps), bones = c->k->bones, row0 = 0;
+    framing.steps = POINTS * steps;
     const float *bind = c->facts->bind_positions;
-    double worst = 0, times[CB_SAMPLE_BATCH];
-    sample_poses(c, &clip->t0, 1);
+    const bool row_kept = true;
+    double worst = 0;
+    sample_frames(c, &framing, &row0, 1, &row_kept);
     to_local(c->k, bind, c->poses, c->rows[0]);
     for (uint32_t first = 0; first < steps && !(worst > goal); first += INTERVALS_A_BATCH) {
-        uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH;
-        for (uint32_t i = 0; i < count; ++i) {
-            /* cb_clip_frame_time's rows */
-            double t = clip->t0 + (double)(first + i) * clip->duration / steps;
-            double end = clip->t0 + (double)(first + i + 1) * clip->duration / steps;
-            for (int q = 1; q < POINTS; ++q) times[i * POINTS + q - 1] = t + q * (end - t) / POINTS;
-            times[i * POINTS + POINTS - 1] = end;
-        }
-        sample_poses(c, times, count * POINTS);
+        uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH];
+        bool kept[CB_SAMPLE_BATCH];
+        for (uint32_t i = 0; i < count * POINTS; ++i) /* the quarter points are the bake's neither rows nor midpoints */
+            frames[i] = POINTS * first + i + 1, kept[i] = (i + 1) % 2 == 0;
+        sample_frames(c, &framing, frames, count * POINTS, kept);
         for (uint32_t i = 0; i < count && !(worst > goal); ++i) {
-            const bone_qpos *at = c->poses + (size_t)i * POINTS * bones;
-            to_local(c->k, bind, at + (size_t)(POINTS - 1) * bones, c->rows[1]);
-            for (int q = 1; q < POINTS && !(worst > goal); ++q) {
+            to_local(c->k, bind, c->poses + (size_t)(i * POINTS + POINTS - 1) * bones, c->rows[1]);
+            for (uint32_t q = 1; q < POINTS && !(worst > goal); ++q) {
                 blend_compose(c->k, bind, c->rows[0], c->rows[1], (double)q / POINTS, c->blended);
-                worst = point_error(c, at + (size_t)(q - 1) * bones, worst, goal);
+                worst = point_error(c, i * POINTS + q - 1, worst, goal);
             }
             bone_qpos *swap = c->rows[0];
             c->rows[0] = c->rows[1], c->rows[1] = swap;
@@ -357,14 +411,15 @@ static bool on_key_grid(double fps, double key_fps)
 }
 
 cb_status local_clip_rate(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
-                          const cb_clip_info *clip, double max_error, double max_fps, local_rate *out, cb_error *err)
+                          const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep, double max_error,
+                          double max_fps, local_rate *out, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
     double rates[MOST_CANDIDATES];
     memset(out, 0, sizeof *out);
     uint32_t n = candidates(&m->animations[clip->animation], clip, max_fps, rates, &out->key_fps);
     probe_ctx c;
-    if (!probe_ctx_init(&c, s, facts, skeleton, clip))
+    if (!probe_ctx_init(&c, s, facts, skeleton, clip, root_motion, keep))
         return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory choosing clip %d's rate for local rows", m->source,
                        clip->animation);
     cb_sampler_set_loop(s, clip); /* out of memory: sampled uncorrected, a measurement's detail */
@@ -383,7 +438,7 @@ cb_status local_clip_rate(cb_sampler *s, const palette_skin_facts *facts, const 
         }
     out->error_mm = cb_mm_per_m(out->error, facts->height);
     out->on_keys = on_key_grid(out->fps, out->key_fps);
-    free(c.block);
+    probe_ctx_free(&c);
     return CB_OK;
 }
 
@@ -391,12 +446,12 @@ double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const lo
                         const cb_clip_info *clip, double fps, cb_error *err)
 {
     probe_ctx c;
-    if (!probe_ctx_init(&c, s, facts, skeleton, clip)) {
+    if (!probe_ctx_init(&c, s, facts, skeleton, clip, CB_ROOT_MOTION_KEEP, NULL)) {
         cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring local rows");
         return INFINITY;
     }
     cb_sampler_set_loop(s, clip);
     double e = clip->duration > 0 ? probe(&c, fps, INFINITY) : 0;
-    free(c.block);
+    probe_ctx_free(&c);
     return e;
 }

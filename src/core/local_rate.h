@@ -41,7 +41,10 @@ bool local_skeleton_build(const cb_model *m, int32_t skin, local_skeleton *out);
 void local_skeleton_free(local_skeleton *k);
 
 /* Clip `clip` (analyzed on this sampler: cb_clip_analyze) baked as local rows: its lowest rate
- * within max_error (model units) up to max_fps (2..CB_FPS_LIMIT). Candidates, lowest first: the
+ * within max_error (model units) up to max_fps (2..CB_FPS_LIMIT). The poses are framed with the
+ * bake's root_motion; keep (or NULL): the clip's pose cache for the bake after (palette_probe_poses),
+ * which gets the poses at the rows and the row midpoints of every rate measured (a matrix rig's:
+ * the bake of a similarity rig samples its own), so the bake samples none of them again. Candidates, lowest first: the
  * key rate and its multiples x1, 2, 3, 4, 6, 8, 12, 16, ... up to max_fps, then max_fps itself;
  * a clip without a key grid (no key step, or a key rate over max_fps) walks the common rates of
  * rate_search.c. Each is measured as the runtime plays it (local rows sampled at the bake's row
@@ -49,10 +52,12 @@ void local_skeleton_free(local_skeleton *k);
  * group whose bound can exceed the worst so far skinned, at the quarter points of every row
  * interval. Fails (err set) only when out of memory. */
 cb_status local_clip_rate(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
-                          const cb_clip_info *clip, double max_error, double max_fps, local_rate *out, cb_error *err);
+                          const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep, double max_error,
+                          double max_fps, local_rate *out, cb_error *err);
 
 /* The worst vertex error of clip `clip` baked as local rows at `fps` (model units), measured as
- * local_clip_rate measures a candidate, in full (no goal to stop at). For tests and benchmarks. */
+ * local_clip_rate measures a candidate, in full (no goal to stop at), root motion kept. For tests
+ * and benchmarks. */
 double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
                         const cb_clip_info *clip, double fps, cb_error *err);
 

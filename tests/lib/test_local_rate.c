@@ -41,7 +41,7 @@ static void choose_all(chosen *c, const char *asset)
     for (uint32_t a = 0; a < c->m->animation_count; ++a) {
         assert_int_equal(cb_clip_analyze(c->s, (int32_t)a, 30, -1, NULL, &c->info[a], &err), CB_OK);
         double goal = 1.0 / 1000 * c->facts.height;
-        assert_int_equal(local_clip_rate(c->s, &c->facts, &c->skeleton, &c->info[a], goal, CB_AUTO_MAX_FPS, &c->rate[a], &err),
+        assert_int_equal(local_clip_rate(c->s, &c->facts, &c->skeleton, &c->info[a], CB_ROOT_MOTION_KEEP, NULL, goal, CB_AUTO_MAX_FPS, &c->rate[a], &err),
                          CB_OK);
         const local_rate *r = &c->rate[a];
         print_message("%s %s: %g fps (keys %g), %.3f mm/m, %u probes\n", asset, c->m->animations[a].name, r->fps, r->key_fps,
