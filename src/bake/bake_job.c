@@ -108,6 +108,9 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
     o.measure_all = s->measure_all;
     /* Babylon.js's baked vertex animation texture holds Float32 4x4 matrices: bake them exactly so. */
     if (format == CB_FORMAT_BABYLON) o.layout = CB_LAYOUT_MAT4, o.precision = CB_PRECISION_FLOAT, o.affine_fallback = false;
+    /* Local rows go only in a .pal (EXR, KTX2 and Babylon have no place for the parents): every other
+     * format is baked global (bake_notes says so). The rate search takes it from here too. */
+    o.bone_space = format == CB_FORMAT_PAL ? s->bone_space : CB_BONE_SPACE_GLOBAL;
     return o;
 }
 
@@ -497,13 +500,6 @@ static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette 
     return any;
 }
 
-/* Local rows go only in a .pal (EXR, KTX2 and Babylon have no place for the parents): every other
- * format is baked global (bake_notes says so). */
-static cb_bone_space job_bone_space(const cb_bake_job *job, unsigned format)
-{
-    return format == CB_FORMAT_PAL ? job->settings.bone_space : CB_BONE_SPACE_GLOBAL;
-}
-
 /* The plan as baked: every clip at its resolved rate (the palette's "0: the options' fps" is for
  * callers without a job), into `baked` (plan_count entries). */
 static void resolved_plan(const cb_bake_job *job, cb_clip_plan *baked)
@@ -542,7 +538,6 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         o->format = format;
         o->path = output_path(job, format);
         cb_bake_options opt = cb_bake_settings_options(&job->settings, format, &job->limits, job->threads);
-        opt.bone_space = job_bone_space(job, format);
         if (mapped && opt.bone_space == CB_BONE_SPACE_GLOBAL) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
         if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout ||
             shared_opt.bone_space != opt.bone_space) {

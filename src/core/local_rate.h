@@ -61,4 +61,13 @@ cb_status local_clip_rate(cb_sampler *s, const palette_skin_facts *facts, const 
 double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
                         const cb_clip_info *clip, double fps, cb_error *err);
 
+/* local_rate_search.c: palette_choose_rates for options->bone_space local (the goals' max_fps
+ * checked, the skin's facts settled and skinned): every clip with a goal at local_clip_rate's
+ * rate (plan[i].fps; plan[i].fit false: local rows are sampled) and what it reached into out[i]
+ * (fitted false, other_fps 0; fps_needed where it misses at its max_fps), on options->threads
+ * threads. keep (or NULL): each clip's pose cache for the bake, with its analysis. */
+cb_status local_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan, uint32_t count,
+                             const cb_rate_goal *goals, cb_rate_choice *out, search_keep *keep,
+                             const palette_skin_facts *facts, cb_error *err);
+
 #endif
