@@ -168,6 +168,7 @@ typedef struct probe_ctx {
     cb_root_motion root_motion; /* the bake's: its poses framed as the bake frames them */
     pose_cache *keep;         /* the bake's cache of this clip's poses, or NULL (matrix rigs only) */
     bool similar;             /* cb_sampler_is_similarity: sampled as similarities */
+    bool not_qpos;            /* a pose had a joint that is no similarity (local_rate.not_qpos) */
     cb_joint_subset *all;     /* not similar: every joint, sampled a batch of times at once */
     double *lanes;            /* its lanes */
     double *pose_room;        /* CB_SAMPLE_BATCH x bones x 16: the poses no cache keeps */
@@ -224,7 +225,8 @@ static void rows_of_matrices(probe_ctx *c, uint32_t i)
     const float *bind = c->facts->bind_positions;
     const double *mats = c->mats[i];
     bone_qpos *out = c->poses + (size_t)i * bones;
-    if (!palette_qpos_similarity_pose(mats, bones, c->qs)) { /* a joint no similarity: the bake refuses the rig */
+    if (!palette_qpos_similarity_pose(mats, bones, c->qs)) { /* a joint no similarity: the bake falls back */
+        c->not_qpos = true;
         for (uint32_t j = 0; j < bones; ++j) out[j] = qpos_of_matrix(mats + 16 * (size_t)j, bind_of(bind, j));
         return;
     }
@@ -346,16 +348,17 @@ static bool on_grid(double t, double step)
     return fabs(steps - round(steps)) < 1e-3;
 }
 
-/* Whether every key of the clip and its end (t0 + D, where a loop's last row blends into its
- * first) lies on t0 + i step. Channels that share their times are read once. */
-static bool keys_on_grid(const cb_animation *a, const cb_clip_info *clip, double step)
+/* Whether every key of the clip lies on t0 + i step, and its end t0 + duration (where a loop's
+ * last row blends into its first; duration <= 0: not asked). Channels that share their times are
+ * read once. */
+static bool keys_on_grid(const cb_animation *a, double t0, double duration, double step)
 {
-    if (!on_grid(clip->duration, step)) return false;
+    if (duration > 0 && !on_grid(duration, step)) return false;
     for (uint32_t c = 0; c < a->channel_count; ++c) {
         const cb_channel *ch = &a->channels[c];
         if (c > 0 && ch->times == a->channels[c - 1].times) continue;
         for (uint32_t k = 0; k < ch->key_count; ++k)
-            if (!on_grid(ch->times[k] - clip->t0, step)) return false;
+            if (!on_grid(ch->times[k] - t0, step)) return false;
     }
     return true;
 }
@@ -365,16 +368,18 @@ static bool keys_on_grid(const cb_animation *a, const cb_clip_info *clip, double
  * rate off that grid cut LINEAR keys' corners, an error that falls only as 1 / fps: Fox's Run
  * keys every 1/24 s, but after a gap of 0.2 s on times 1/30 s off that grid, so its rows land on
  * every key only at 120 fps (24 fps rows: 10.8 mm/m, 96 fps: 2.7). */
-static double key_grid_fps(const cb_animation *a, const cb_clip_info *clip, double max_fps)
+static double key_grid_fps(const cb_animation *a, double t0, double duration, double max_fps)
 {
     double shortest = cb_animation_key_interval(a);
     for (double m = 1; shortest > 0; ++m) { /* rates rounded to 1e-3 fps, as rate_search.c's */
         double rate = round(m / shortest * 1000) / 1000;
         if (rate > max_fps) break;
-        if (keys_on_grid(a, clip, 1 / rate)) return rate;
+        if (keys_on_grid(a, t0, duration, 1 / rate)) return rate;
     }
     return 0;
 }
+
+double local_key_fps(const cb_animation *a, double max_fps) { return key_grid_fps(a, a->t0, 0, max_fps); }
 
 /* The rates a clip may take up to CB_FPS_LIMIT, increasing, max_fps among them; *key_fps its key
  * rate (key_grid_fps; 0: none, the common rates instead). Multiples of the key rate: 1, 2, 3, 4,
@@ -382,7 +387,7 @@ static double key_grid_fps(const cb_animation *a, const cb_clip_info *clip, doub
  * twice its keys is a few probes. */
 static uint32_t candidates(const cb_animation *a, const cb_clip_info *clip, double max_fps, double *out, double *key_fps)
 {
-    double k = *key_fps = key_grid_fps(a, clip, max_fps);
+    double k = *key_fps = key_grid_fps(a, clip->t0, clip->duration, max_fps);
     uint32_t n = 0;
     if (k > 0) {
         double before = 1, next = 2; /* the last multiple taken and the next */
@@ -438,6 +443,7 @@ cb_status local_clip_rate(cb_sampler *s, const palette_skin_facts *facts, const 
         }
     out->error_mm = cb_mm_per_m(out->error, facts->height);
     out->on_keys = on_key_grid(out->fps, out->key_fps);
+    out->not_qpos = c.not_qpos;
     probe_ctx_free(&c);
     return CB_OK;
 }

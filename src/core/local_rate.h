@@ -25,6 +25,8 @@ typedef struct local_rate {
     bool on_keys;     /* fps is the key rate or a multiple of it (its rows land on keys) */
     double fps_needed; /* not met: the lowest candidate past max_fps up to CB_FPS_LIMIT within max_error (0: none) */
     uint32_t probes;  /* rates measured */
+    bool not_qpos;    /* a joint of a pose is no similarity: qpos cannot hold the rig, whose bake falls back to
+                       * global affine rows (palette.c), which this rate is not for */
 } local_rate;
 
 /* The skeleton as local rows see it: each bone's parent bone (the nearest ancestor node that is
@@ -55,6 +57,12 @@ cb_status local_clip_rate(cb_sampler *s, const palette_skin_facts *facts, const 
                           const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep, double max_error,
                           double max_fps, local_rate *out, cb_error *err);
 
+/* The rate of the coarsest grid first key + i / rate that holds every key of the animation (its
+ * shortest key step divided by 1, 2, 3, ...), 0 when none is within max_fps: the rate local rows
+ * start from, and what a bake's words call its keys. (A loop's end lies on that grid too: its
+ * closing key, or its last key plus a key step.) */
+double local_key_fps(const cb_animation *animation, double max_fps);
+
 /* The worst vertex error of clip `clip` baked as local rows at `fps` (model units), measured as
  * local_clip_rate measures a candidate, in full (no goal to stop at), root motion kept. For tests
  * and benchmarks. */
@@ -65,9 +73,11 @@ double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const lo
  * checked, the skin's facts settled and skinned): every clip with a goal at local_clip_rate's
  * rate (plan[i].fps; plan[i].fit false: local rows are sampled) and what it reached into out[i]
  * (fitted false, other_fps 0; fps_needed where it misses at its max_fps), on options->threads
- * threads. keep (or NULL): each clip's pose cache for the bake, with its analysis. */
+ * threads. keep (or NULL): each clip's pose cache for the bake, with its analysis. A rig qpos
+ * cannot hold (local_rate.not_qpos), whose bake falls back to global affine rows: the rates of
+ * palette_choose_rates with bone space global instead (needed_later is its). */
 cb_status local_choose_rates(cb_sampler *sampler, const cb_bake_options *options, cb_clip_plan *plan, uint32_t count,
                              const cb_rate_goal *goals, cb_rate_choice *out, search_keep *keep,
-                             const palette_skin_facts *facts, cb_error *err);
+                             const palette_skin_facts *facts, const bool *needed_later, cb_error *err);
 
 #endif

@@ -31,6 +31,7 @@ typedef struct local_search {
     const palette_skin_facts *facts;
     local_skeleton skeleton;
     search_keep *keep; /* or NULL */
+    atomic_bool not_qpos; /* some clip's pose had a joint that is no similarity */
     atomic_uint next;
     atomic_size_t kept_bytes;
 } local_search;
@@ -70,6 +71,7 @@ static cb_status choose_clip(local_search *ls, cb_sampler *s, uint32_t i, cb_err
                         goal->max_fps, &r, err))
         return err->status;
     settle_kept(ls, i);
+    if (r.not_qpos) atomic_store(&ls->not_qpos, true);
     plan->fps = r.fps, plan->fit = false; /* local rows are the sampled poses, converted */
     ls->choices[i] = (cb_rate_choice){.met = r.met, .error = r.error, .error_mm = r.error_mm, .fps_needed = r.fps_needed};
     return CB_OK;
@@ -91,7 +93,7 @@ static int worker(void *arg)
 
 cb_status local_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
                              const cb_rate_goal *goals, cb_rate_choice *out, search_keep *keep,
-                             const palette_skin_facts *facts, cb_error *err)
+                             const palette_skin_facts *facts, const bool *needed_later, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
     local_search ls = {.model = m, .skin = cb_sampler_skin(s), .o = o, .plan = plan, .count = count, .goals = goals,
@@ -114,5 +116,9 @@ cb_status local_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_pl
         if (goals[i].max_error_mm > 0) out[i] = ls.choices[i];
     local_skeleton_free(&ls.skeleton);
     free(ls.choices), free(ls.errors);
-    return err->status;
+    if (keep && !err->status) keep->local_rates = !atomic_load(&ls.not_qpos);
+    if (err->status || !atomic_load(&ls.not_qpos)) return err->status;
+    cb_bake_options global = *o; /* baked global (affine): chosen for global rows (the poses kept serve it too) */
+    global.bone_space = CB_BONE_SPACE_GLOBAL;
+    return palette_choose_rates(s, &global, plan, count, goals, out, keep, needed_later, err);
 }
