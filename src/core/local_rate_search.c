@@ -77,7 +77,7 @@ static cb_status choose_clip(local_search *ls, cb_sampler *s, uint32_t i, cb_err
     return CB_OK;
 }
 
-static int worker(void *arg)
+static int choose_share(void *arg)
 {
     local_search *ls = arg;
     cb_error fail = {0};
@@ -107,8 +107,8 @@ cb_status local_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_pl
     if (threads > count) threads = count;
     thrd_t ids[64];
     for (uint32_t t = 1; t < threads; ++t)
-        if (thrd_create(&ids[started], worker, &ls) == thrd_success) ++started;
-    worker(&ls);
+        if (thrd_create(&ids[started], choose_share, &ls) == thrd_success) ++started;
+    choose_share(&ls);
     for (uint32_t t = 0; t < started; ++t) thrd_join(ids[t], NULL);
     for (uint32_t i = 0; i < count && !err->status; ++i) /* the first failure in clip order */
         if (ls.errors[i].status) *err = ls.errors[i];
