@@ -319,8 +319,8 @@ static double probe(probe_ctx *c, double fps, double goal)
     for (uint32_t first = 0; first < steps && !(worst > goal); first += INTERVALS_A_BATCH) {
         uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH];
         bool kept[CB_SAMPLE_BATCH];
-        for (uint32_t i = 0; i < count * POINTS; ++i) /* the quarter points are the bake's neither rows nor midpoints */
-            frames[i] = POINTS * first + i + 1, kept[i] = (i + 1) % 2 == 0;
+        for (uint32_t i = 0; i < count * POINTS; ++i) /* all kept: the bake reads rows and midpoints, its measure all */
+            frames[i] = POINTS * first + i + 1, kept[i] = true;
         sample_frames(c, &framing, frames, count * POINTS, kept);
         for (uint32_t i = 0; i < count && !(worst > goal); ++i) {
             to_local(c->k, bind, c->poses + (size_t)(i * POINTS + POINTS - 1) * bones, c->rows[1]);
@@ -460,4 +460,81 @@ double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const lo
     double e = clip->duration > 0 ? probe(&c, fps, INFINITY) : 0;
     probe_ctx_free(&c);
     return e;
+}
+
+/* ---- a finished local palette, measured ---- */
+
+/* Palette row r's local rows of every bone, decoded as the runtime decodes them. */
+static void decode_row(const cb_palette *p, uint32_t r, bone_qpos *out)
+{
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        double v[16];
+        cb_palette_decode_values(p, p->texels, r, j, v);
+        out[j] = (bone_qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]};
+    }
+}
+
+/* Pose i of the batch against the palette's rows x and y blended at f, composed: the worst so far. */
+static double palette_point(probe_ctx *c, const cb_palette *p, const bone_qpos *x, const bone_qpos *y, double f, uint32_t i,
+                            double worst)
+{
+    blend_compose(c->k, p->bind_positions, x, y, f, c->blended);
+    return point_error(c, i, worst, INFINITY);
+}
+
+/* The clip's rows (frames 4i of framing) and quarter points (4i + 1 .. 3) measured interval by
+ * interval, four at a time, each row decoded once. */
+static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palette_clip *pc, const cb_clip_info *framing,
+                              uint32_t steps, double *at_rows, double *between)
+{
+    uint32_t row0 = 0;
+    const bool all = true;
+    bool kept[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) kept[i] = true; /* the bake after a replan reads them again */
+    decode_row(p, pc->first_row, c->rows[0]);
+    sample_frames(c, framing, &row0, 1, &all);
+    *at_rows = palette_point(c, p, c->rows[0], c->rows[0], 0, 0, *at_rows);
+    for (uint32_t first = 0; first < steps; first += INTERVALS_A_BATCH) {
+        uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH];
+        for (uint32_t i = 0; i < count * POINTS; ++i) frames[i] = POINTS * first + i + 1;
+        sample_frames(c, framing, frames, count * POINTS, kept);
+        for (uint32_t i = 0; i < count; ++i) {
+            uint32_t next = first + i + 1;
+            bool wrap = next == pc->frames; /* a loop's last interval ends on its first row */
+            decode_row(p, pc->first_row + (wrap ? 0 : next), c->rows[1]);
+            const bone_qpos *to = pc->step ? c->rows[0] : c->rows[1]; /* held rows: the row alone */
+            for (uint32_t q = 1; q < POINTS; ++q)
+                *between = palette_point(c, p, c->rows[0], to, (double)q / POINTS, i * POINTS + q - 1, *between);
+            if (!wrap) *at_rows = palette_point(c, p, c->rows[1], c->rows[1], 0, i * POINTS + POINTS - 1, *at_rows);
+            bone_qpos *swap = c->rows[0];
+            c->rows[0] = c->rows[1], c->rows[1] = swap;
+        }
+    }
+}
+
+cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, const cb_palette *p, uint32_t clip,
+                               int32_t animation, pose_cache *keep, double *at_rows, double *between, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(s);
+    const cb_palette_clip *pc = &p->clips[clip];
+    const cb_animation *a = &m->animations[animation];
+    uint32_t steps = pc->loops ? pc->frames : pc->frames - 1;
+    /* As the bake framed it (cb_verify_clip's reading of the palette's clip): rows at start + i D / N,
+     * in-place travel at the clip's recorded velocity (zero where it was kept). */
+    cb_clip_info framing = {.animation = animation, .t0 = pc->start, .t1 = pc->start + (a->t1 - a->t0),
+                            .duration = pc->duration, .loops = pc->loops, .steps = POINTS * (steps ? steps : 1)};
+    for (int k = 0; k < 3; ++k) framing.root_velocity[k] = pc->root_velocity[k];
+    local_skeleton k; /* the palette's parents: the same nearest ancestor joints */
+    probe_ctx c;
+    *at_rows = *between = 0;
+    if (!local_skeleton_build(m, cb_sampler_skin(s), &k) ||
+        !probe_ctx_init(&c, s, facts, &k, &framing, CB_ROOT_MOTION_IN_PLACE, keep)) {
+        local_skeleton_free(&k);
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring %s's local rows", m->source);
+    }
+    cb_sampler_set_baked_loop(s, animation, pc->loops, pc->start, pc->duration);
+    palette_intervals(&c, p, pc, &framing, pc->duration > 0 ? steps : 0, at_rows, between);
+    probe_ctx_free(&c);
+    local_skeleton_free(&k);
+    return CB_OK;
 }

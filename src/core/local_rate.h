@@ -69,6 +69,15 @@ double local_key_fps(const cb_animation *animation, double max_fps);
 double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
                         const cb_clip_info *clip, double fps, cb_error *err);
 
+/* The worst vertex error of clip `clip` of a finished local palette p (its texels as the runtime
+ * decodes them, blended and composed), against `animation`'s exact poses framed as the bake framed
+ * them: at its rows into *at_rows, and at the quarter points between them into *between (held
+ * rows: the row alone), where nlerp's lag peaks (a midpoint alone misses it: nlerp equals slerp
+ * there). Poses the clip's pose cache `keep` holds (the rows and midpoints a search sampled; or
+ * NULL) are read from it; the vertex groups' bounds skip what cannot raise the worst. */
+cb_status local_palette_errors(cb_sampler *sampler, const palette_skin_facts *facts, const cb_palette *p, uint32_t clip,
+                               int32_t animation, pose_cache *keep, double *at_rows, double *between, cb_error *err);
+
 /* local_rate_search.c: palette_choose_rates for options->bone_space local (the goals' max_fps
  * checked, the skin's facts settled and skinned): every clip with a goal at local_clip_rate's
  * rate (plan[i].fps; plan[i].fit false: local rows are sampled) and what it reached into out[i]
