@@ -15,6 +15,7 @@
 
 #include <math.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "../../src/core/cb_math.h"
 #include "../../src/core/local_rate.h"
@@ -248,6 +249,31 @@ static void measurement_equals_brute_force(void **state)
     free_chosen(&c);
 }
 
+static size_t count_of(const char *text, const char *needle)
+{
+    size_t n = 0;
+    for (const char *at = strstr(text, needle); at; at = strstr(at + 1, needle)) ++n;
+    return n;
+}
+
+/* The bake wired: `bake --bone-space local` (fps auto, the default) chooses each clip's rate here,
+ * says why in --json, and its palette, measured as the runtime plays it (quarter points), stays
+ * within the default goal. */
+static void local_bake_states_its_rates(void **state)
+{
+    (void)state;
+    static char out[1 << 18];
+    char model[1024];
+    shared_path(model, sizeof model, "assets/quaternius-husky/Husky.glb");
+    mkdir(TEST_TMP, 0755);
+    assert_int_equal(run_crowdbake(out, sizeof out, "bake %s --bone-space local --json -q -o " TEST_TMP "/husky_local.pal",
+                                   model), 0);
+    assert_int_equal(count_of(out, "\"why\": \"24 fps, local rows (its keys): the fewest within its budget"), 9);
+    assert_int_equal(count_of(out, "\"why\": \"48 fps, local rows (2 x its keys' 24 fps: nlerp's lag at fewer)"), 3);
+    for (const char *at = strstr(out, "\"visible_error_mm_per_m\": "); at; at = strstr(at + 1, "\"visible_error_mm_per_m\": "))
+        assert_true(atof(at + strlen("\"visible_error_mm_per_m\": ")) <= 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -255,6 +281,7 @@ int main(void)
         cmocka_unit_test(husky_gallops_at_twice_its_keys),
         cmocka_unit_test(fox_run_on_its_key_grid),
         cmocka_unit_test(measurement_equals_brute_force),
+        cmocka_unit_test(local_bake_states_its_rates),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
