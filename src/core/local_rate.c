@@ -284,6 +284,10 @@ static double point_error(probe_ctx *c, uint32_t i, double worst, double goal)
     const bone_qpos *exact = c->poses + (size_t)i * bones;
     for (uint32_t j = 0; j < bones; ++j) {
         double e[16], b[16];
+        if (f->reach[j] < 0) { /* it moves no vertex: no group reads its difference (its children are composed) */
+            memset(c->diff + 16 * (size_t)j, 0, 16 * sizeof(double));
+            continue;
+        }
         const double *exact_matrix = c->similar ? e : c->mats[i] + 16 * (size_t)j;
         if (c->similar) qpos_matrix(&exact[j], bind_of(f->bind_positions, j), e);
         qpos_matrix(&c->blended[j], bind_of(f->bind_positions, j), b);
