@@ -6,6 +6,7 @@
 #include "core/local_rate.h" /* local_key_fps; search_keep's local_rates */
 
 #include <math.h>
+#include <string.h>
 #include <stdio.h>
 
 static const char *clip_name(const cb_bake_job *job, uint32_t i)
@@ -65,12 +66,13 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
     double fps = cb_bake_job_clip_fps(job, i);
     bool fitted = c->fit || cs->fit_rows;
     const char *rows = fitted ? "fitted rows" : "sampled rows";
+    bool local_chosen = job->search_kept && ((const search_keep *)job->search_kept)->local_rates; /* local_rate.c's */
     if (c->step) {
         snprintf(buf, size, "%g fps, step rows: keyed with STEP, rows at its key times, held not blended (exact; a fixed "
                  "fps bakes it blended)", fps);
     } else if (!cs->fps_auto) {
         snprintf(buf, size, "%g fps, %s: a fixed fps%s", fps, rows, fitted ? " (fit_rows)" : "");
-    } else if (job->search_kept && ((const search_keep *)job->search_kept)->local_rates) {
+    } else if (local_chosen) {
         local_reason(job, i, fps, buf, size);
     } else if (!r->met) {
         snprintf(buf, size, "%g fps, %s: over its budget even at max_fps (%.3g mm/m)", fps, rows, r->error_mm);
@@ -91,6 +93,9 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
         snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows do not meet it at a lower "
                  "rate", fps, rows, r->error_mm);
     }
+    size_t n = strlen(buf); /* a fixed rate's local rows (an auto rate's said so above) */
+    if (job->settings.bone_space == CB_BONE_SPACE_LOCAL && !c->step && !(cs->fps_auto && local_chosen) && n < size)
+        snprintf(buf + n, size - n, "; baked as local rows, sampled");
 }
 
 void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, uint32_t i,
