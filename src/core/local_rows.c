@@ -14,6 +14,7 @@
 #include "cb_math.h"
 #include "crowdbake/runtime.h"
 #include "internal/plumbing.h"
+#include "local_rate.h" /* local_palette_errors */
 #include "palette_bake.h"
 
 /* A qpos transform v -> p + s rotate(q, v - b), b the bone's bind position. */
@@ -245,25 +246,25 @@ static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin,
     return CB_OK;
 }
 
-/* The errors measured composed: at every row (max_error), and between every two (visible_error)
- * halfway and at LOCAL_TIMES_PER_ROW fixed-seed times a row, on every skinned vertex against the
- * exact pose, as `verify` measures. Halfway alone is not enough: at the keys' rate the local nlerp
- * meets the source's slerp exactly halfway and errs most near a quarter (Husky at 24 fps: 0.11
- * mm/m halfway, 2.1 at its worst time). */
-#define LOCAL_TIMES_PER_ROW 4
-static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, cb_palette *p, cb_error *err)
+/* The errors measured composed: at every row (max_error) and at the quarter points between every
+ * two (visible_error), on every skinned vertex group that can raise the worst, against the exact
+ * pose (local_rate.c: the quarter points, where nlerp's lag peaks; the rows and midpoints the rate
+ * search sampled read from its pose caches). */
+static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, const palette_skin_facts *facts,
+                               const palette_probe *probe, cb_palette *p, cb_error *err)
 {
     p->max_error = p->visible_error = 0;
     p->error_rows_measured = p->rows;
-    for (uint32_t c = 0; c < p->clip_count; ++c) {
-        cb_clip_error e;
-        int32_t animation = plan ? plan[c].animation : (int32_t)c;
-        if (cb_verify_clip(s, p, p->texels, c, animation, LOCAL_TIMES_PER_ROW * p->clips[c].frames, &e, err)) return err->status;
-        p->max_error = fmax(p->max_error, e.quant_max);
-        p->clips[c].visible_error = fmax(e.quant_max, e.interp_max);
+    for (uint32_t c = 0; c < p->clip_count && !err->status; ++c) {
+        double rows = 0, between = 0;
+        pose_cache *kept = probe && probe->clip_poses ? probe->clip_poses[c] : NULL;
+        if (local_palette_errors(s, facts, p, c, plan ? plan[c].animation : (int32_t)c, kept, &rows, &between, err))
+            break;
+        p->max_error = fmax(p->max_error, rows);
+        p->clips[c].visible_error = fmax(rows, between);
         p->visible_error = fmax(p->visible_error, p->clips[c].visible_error);
     }
-    return CB_OK;
+    return err->status;
 }
 
 cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
@@ -281,12 +282,25 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
     cb_clip_plan *sampled = plan ? malloc(plan_count * sizeof *sampled) : NULL;
     if (plan && !sampled) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     for (uint32_t i = 0; sampled && i < plan_count; ++i) sampled[i] = plan[i], sampled[i].fit = false;
-    cb_status rc = palette_bake_with_facts(sampler, &global, sampled, plan_count, facts, probe, p, err);
+    palette_skin_facts own = {0}, unmeasured;
+    cb_status rc = facts ? CB_OK : palette_skin_facts_build(sampler, &own, err);
+    if (!facts) facts = &own;
+    /* The global rows' own errors are not the local rows': measured composed below, not here. */
+    unmeasured = *facts, unmeasured.skinned = false;
+    if (!rc) rc = palette_bake_with_facts(sampler, &global, sampled, plan_count, &unmeasured, probe, p, err);
+    if (rc) return free(sampled), palette_skin_facts_free(&own), rc;
+    if (p->layout != CB_LAYOUT_QPOS) { /* fell back to affine: a rig qpos cannot hold stays global, as asked */
+        cb_palette_free(p);
+        global = *opt, global.bone_space = CB_BONE_SPACE_GLOBAL;
+        rc = palette_bake_with_facts(sampler, &global, plan, plan_count, facts, probe, p, err);
+        free(sampled), palette_skin_facts_free(&own);
+        return rc;
+    }
     free(sampled);
-    if (rc || p->layout != CB_LAYOUT_QPOS) return rc; /* fell back to affine: a rig qpos cannot hold stays global */
-    int32_t skin = cb_sampler_skin(sampler);
-    if (!(rc = convert_palette(p, m, skin, opt->precision, err)) && cb_model_skin_vertex_count(m, skin) > 0)
-        rc = measure_local(sampler, plan, p, err);
+    if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, err)) &&
+        cb_model_skin_vertex_count(m, cb_sampler_skin(sampler)) > 0)
+        rc = measure_local(sampler, plan, facts, probe, p, err);
+    palette_skin_facts_free(&own);
     if (rc) cb_palette_free(p);
     return rc;
 }

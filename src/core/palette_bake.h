@@ -298,6 +298,7 @@ typedef struct search_keep {
     int32_t skin;
     bool has_facts;
     palette_skin_facts facts;
+    bool local_rates; /* the rates were chosen for local rows (local_rate_search.c), not for global ones */
     uint32_t count;
     pose_cache *poses[];
 } search_keep;
