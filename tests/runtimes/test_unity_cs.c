@@ -427,7 +427,15 @@ static void test_shader_glue_compiles(void **state)
                      TMP, layouts[l], precisions[p], p == 1 ? "-DCB_POSITIONS_RELATIVE" : "", TMP, TMP);
             run_or_fail(cmd);
         }
-    printf("  Unity shader glue: 9 encodings compile (glslang, HLSL) and validate (spirv-val)\n");
+    /* Local rows (.pal version 6): qpos, u16 or float, CB_LOCAL_ROWS. */
+    for (int p = 0; p < 3; p += 2) {
+        snprintf(cmd, sizeof cmd,
+                 "glslangValidator -D -V -S vert -e main -DCB_LAYOUT_QPOS -DCB_PRECISION_%s -DCB_LOCAL_ROWS -o %s/glue.spv "
+                 "tests/runtimes/unity/unity_glue.hlsl 2>&1 && spirv-val %s/glue.spv 2>&1",
+                 precisions[p], TMP, TMP);
+        run_or_fail(cmd);
+    }
+    printf("  Unity shader glue: 9 encodings and local rows (qpos u16, float) compile (glslang, HLSL) and validate (spirv-val)\n");
 }
 
 int main(void)
