@@ -182,6 +182,7 @@ namespace Crowdbake
                 throw Fail("position offset table (offset " + h.OffsetTableOffset + ", " + h.BoneCount + " bones) lies outside the file");
             if (h.Version >= 5 && (h.Flags & 16u) != 0 && (!Fits(h.TravelTableOffset, h.Rows, 4, size) || h.TravelTableOffset < HeaderBytes))
                 throw Fail("travel offset table (offset " + h.TravelTableOffset + ", " + h.Rows + " rows) lies outside the file");
+            ValidateLocalRows(h, d);
             if (!Fits(h.StringsOffset, h.StringsSize, 1, size) || h.StringsOffset < HeaderBytes)
                 throw Fail("string table lies outside the file");
             if (h.PayloadOffset % PayloadAlign != 0 || !Fits(h.PayloadOffset, h.PayloadSize, 1, size) || h.PayloadOffset < HeaderBytes)
@@ -200,7 +201,7 @@ namespace Crowdbake
                 if (!CheckString(h, d, U32(d, b), U32(d, b + 4)) || parent < -1 || parent >= (int)h.BoneCount)
                     throw Fail("bone " + i + " has a bad name or parent");
             }
-            ValidateLocalRows(h, d);
+            ValidateParents(h, d);
             return h;
         }
 

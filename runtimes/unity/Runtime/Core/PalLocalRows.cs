@@ -1,8 +1,9 @@
 // PalLocalRows.cs - .pal version 6's local rows (header flag bit 5): each row holds a bone in its
 // parent's frame, L_j = M_p^-1 M_j, as qpos. The reader checks the bone range table as the C reader
 // does; a bone's matrix blends its own two rows and every ancestor's (cross-fades too), then composes
-// them from the root down (q_j = q_p q_L, s_j = s_p s_L, p_j = p_p + s_p rotate(q_p, p_L - b_p)),
-// walking each bone's chain: a parent may come after its child in the bone table.
+// them (q_j = q_p q_L, s_j = s_p s_L, p_j = p_p + s_p rotate(q_p, p_L - b_p)) walking each bone's chain
+// upwards as the C reader does (associative, so the same as from the root down): a parent may come
+// after its child in the bone table.
 using System;
 
 namespace Crowdbake
@@ -38,24 +39,46 @@ namespace Crowdbake
 
         static bool Finite(float v) { return !float.IsNaN(v) && !float.IsInfinity(v); }
 
-        // The bone range table: inside the file, 4-byte aligned; each range finite, min <= max,
-        // scale_max > 0, reserved 0. Local rows need qpos and u16 or float.
+        // Local rows (flag bit 5, cbpal__validate_local): version 6, qpos with u16 or float, no relative
+        // positions, and a bone range table inside the file whose every entry is finite, min <= max,
+        // scale_max > 0, reserved 0.
         static void ValidateLocalRows(PalHeader h, byte[] d)
         {
-            if (h.BoneRangeTableOffset == 0) return;
-            if (h.Layout != (uint)PalLayout.Qpos || h.Precision == (uint)PalPrecision.Half)
-                throw Fail("local rows need qpos and u16 or float");
+            if ((h.Flags & FlagLocalRows) == 0) return;
+            if (h.Version < 6) throw Fail("flag bit 5 (local rows) in a version " + h.Version + " file; local rows are version 6");
+            if (h.Layout != (uint)PalLayout.Qpos || h.Precision == (uint)PalPrecision.Half || (h.Flags & FlagPositionsRelative) != 0)
+                throw Fail("local rows need qpos and u16 or float (layout " + h.Layout + ", precision " + h.Precision + ", flags 0x" +
+                           h.Flags.ToString("x") + ")");
             ulong at = h.BoneRangeTableOffset;
-            if (at % 4 != 0 || !Fits(at, h.BoneCount, BoneRangeBytes, (ulong)d.Length) || at < HeaderBytes)
+            if (!Fits(at, h.BoneCount, BoneRangeBytes, (ulong)d.Length) || at < HeaderBytes || at % 4 != 0)
                 throw Fail("bone range table (offset " + at + ", " + h.BoneCount + " bones) lies outside the file");
             for (uint i = 0; i < h.BoneCount; ++i) {
-                ulong r = at + (ulong)i * BoneRangeBytes;
-                bool good = Finite(F32(d, r + 12)) && F32(d, r + 12) > 0 && U32(d, r + 28) == 0;
-                for (uint k = 0; k < 3; ++k) {
-                    float lo = F32(d, r + 4 * k), hi = F32(d, r + 16 + 4 * k);
-                    good = good && Finite(lo) && Finite(hi) && lo <= hi;
+                ulong e = at + (ulong)i * BoneRangeBytes;
+                var v = new float[7];
+                bool ok = U32(d, e + 28) == 0;
+                for (uint k = 0; k < 7; ++k) {
+                    v[k] = F32(d, e + 4 * k);
+                    ok = ok && Finite(v[k]);
                 }
-                if (!good) throw Fail("bone " + i + " has a bad range (not finite, min above max, scale not above 0 or reserved not 0)");
+                for (int k = 0; k < 3; ++k) ok = ok && v[k] <= v[4 + k];
+                if (!ok || !(v[3] > 0))
+                    throw Fail("bone " + i + "'s range (table entry at " + e + ") is not finite, min > max, scale_max <= 0 or its " +
+                               "reserved word is not 0");
+            }
+        }
+
+        // Local rows compose along the parents: a cycle is refused (cbpal__parent_cycle: each chain
+        // walked at most bone_count steps).
+        static void ValidateParents(PalHeader h, byte[] d)
+        {
+            if ((h.Flags & FlagLocalRows) == 0) return;
+            for (uint i = 0; i < h.BoneCount; ++i) {
+                int a = (int)i;
+                for (uint steps = 0; a >= 0; ++steps) {
+                    if (steps > h.BoneCount)
+                        throw Fail("local rows: bone " + i + " is its own ancestor (the bone table's parents form a cycle)");
+                    a = (int)U32(d, h.BoneTableOffset + (ulong)a * BoneBytes + 8);
+                }
             }
         }
 
@@ -70,69 +93,58 @@ namespace Crowdbake
             bone.ScaleMax = F32(data, r + 12);
         }
 
-        // A local bone as qpos: q (x, y, z, w) 0-3, p 4-6, s 7.
+        // A local bone as qpos: q (x, y, z, w) 0-3, p 4-6, s 7. a and b mixed with weight w on b: the
+        // rotation the shorter way, normalised (nlerp), position and scale linearly.
         static void QposMix(float[] a, float[] b, float w, float[] o)
         {
-            bool flip = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0; // the shorter way
+            bool flip = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0;
             for (int i = 0; i < 8; ++i) o[i] = a[i] + ((flip && i < 4 ? -b[i] : b[i]) - a[i]) * w;
             float n = (float)Math.Sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2] + o[3] * o[3]);
-            for (int i = 0; i < 4; ++i) o[i] /= n;
+            for (int i = 0; i < 4; ++i) o[i] = n > 0 ? o[i] / n : (i == 3 ? 1.0f : 0.0f);
         }
 
-        // Bone j's local row blended between rows r0 and r1, as the shaders blend a qpos row.
-        void LocalRow(uint r0, uint r1, float fr, uint bone, float[] o)
+        // Bone j's local row blended between rows r0 and r1 (cbpal__local), cross-faded from rows
+        // (f0, f1, ffr) by `fade` (1: the clip alone), as the shaders blend local rows.
+        void LocalRow(uint[] rows, float[] frs, float fade, uint bone, float[] o)
         {
             var a = new float[8];
-            var b = new float[8];
             var t = new float[4];
-            Texel(r0, bone, 0, t); Array.Copy(t, 0, a, 0, 4);
-            Texel(r0, bone, 1, t); Array.Copy(t, 0, a, 4, 4);
-            Texel(r1, bone, 0, t); Array.Copy(t, 0, b, 0, 4);
-            Texel(r1, bone, 1, t); Array.Copy(t, 0, b, 4, 4);
-            QposMix(a, b, fr, o);
+            Mix(rows[0], rows[1], frs[0], bone, 0, t); Array.Copy(t, 0, a, 0, 4);
+            Mix(rows[0], rows[1], frs[0], bone, 1, t); Array.Copy(t, 0, a, 4, 4);
+            QposMix(a, a, 0, o); // normalises q
+            if (fade >= 1) return;
+            var f = new float[8];
+            Mix(rows[2], rows[3], frs[1], bone, 0, t); Array.Copy(t, 0, a, 0, 4);
+            Mix(rows[2], rows[3], frs[1], bone, 1, t); Array.Copy(t, 0, a, 4, 4);
+            QposMix(a, a, 0, f);
+            QposMix(f, (float[])o.Clone(), fade, o);
         }
 
-        // Parent p's composed qpos in front of its child's local one: the child's composed qpos.
-        void Compose(float[] p, uint parent, float[] local, float[] o)
+        // Bone `bone`'s composed qpos: its blended local row, then each ancestor's in front of it up to
+        // the root (cbpal__composed: composition is associative; q = q_a q, s = s_a s,
+        // p = p_a + s_a rotate(q_a, p - b_a)), q normalised by the caller. At most BoneCount steps
+        // (the reader refused cycles).
+        void ComposedBone(uint[] rows, float[] frs, float fade, uint bone, float[] t)
         {
-            float[] b = Bones[parent].BindPosition;
-            float qx = p[0], qy = p[1], qz = p[2], qw = p[3];
-            float lx = local[0], ly = local[1], lz = local[2], lw = local[3];
-            float[] q = { qw * lx + lw * qx + qy * lz - qz * ly, qw * ly + lw * qy + qz * lx - qx * lz,
-                          qw * lz + lw * qz + qx * ly - qy * lx, qw * lw - qx * lx - qy * ly - qz * lz };
-            float n = (float)Math.Sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-            float vx = local[4] - b[0], vy = local[5] - b[1], vz = local[6] - b[2];
-            float tx = 2 * (qy * vz - qz * vy), ty = 2 * (qz * vx - qx * vz), tz = 2 * (qx * vy - qy * vx); // rotate(q_p, v)
-            float rx = vx + qw * tx + (qy * tz - qz * ty), ry = vy + qw * ty + (qz * tx - qx * tz), rz = vz + qw * tz + (qx * ty - qy * tx);
-            o[4] = p[4] + p[7] * rx; o[5] = p[5] + p[7] * ry; o[6] = p[6] + p[7] * rz;
-            o[7] = p[7] * local[7];
-            for (int i = 0; i < 4; ++i) o[i] = q[i] / n;
-        }
-
-        // Bone `bone`'s composed qpos: rows (r0, r1, fr) of the clip, cross-faded from (f0, f1, ffr)
-        // by `fade` (1: the clip alone). False for a chain longer than the bone count (a loop).
-        bool ComposedBone(uint[] rows, float[] frs, float fade, uint bone, float[] o)
-        {
-            var chain = new uint[Bones.Length];
-            int n = 0;
-            for (int j = (int)bone; j >= 0; j = Bones[j].Parent) {
-                if (n == chain.Length) return false;
-                chain[n++] = (uint)j;
+            var a = new float[8];
+            LocalRow(rows, frs, fade, bone, t);
+            int parent = Bones[bone].Parent;
+            for (uint steps = 0; parent >= 0 && steps < Header.BoneCount; ++steps) {
+                uint up = (uint)parent;
+                LocalRow(rows, frs, fade, up, a);
+                float[] b = Bones[up].BindPosition;
+                parent = Bones[up].Parent;
+                float[] v = { t[4] - b[0], t[5] - b[1], t[6] - b[2] };
+                float[] u = { a[1] * v[2] - a[2] * v[1], a[2] * v[0] - a[0] * v[2], a[0] * v[1] - a[1] * v[0] }; // q.xyz x v
+                float[] uu = { a[1] * u[2] - a[2] * u[1], a[2] * u[0] - a[0] * u[2], a[0] * u[1] - a[1] * u[0] };
+                float x = t[0], y = t[1], z = t[2], w = t[3];
+                for (int i = 0; i < 3; ++i) t[4 + i] = a[4 + i] + a[7] * (v[i] + 2 * (a[3] * u[i] + uu[i]));
+                t[7] *= a[7];
+                t[0] = a[3] * x + a[0] * w + a[1] * z - a[2] * y;
+                t[1] = a[3] * y - a[0] * z + a[1] * w + a[2] * x;
+                t[2] = a[3] * z + a[0] * y - a[1] * x + a[2] * w;
+                t[3] = a[3] * w - a[0] * x - a[1] * y - a[2] * z;
             }
-            var local = new float[8];
-            var from = new float[8];
-            var composed = new float[8];
-            for (int k = n - 1; k >= 0; --k) { // the root first
-                LocalRow(rows[0], rows[1], frs[0], chain[k], local);
-                if (fade < 1) {
-                    LocalRow(rows[2], rows[3], frs[1], chain[k], from);
-                    QposMix((float[])from.Clone(), (float[])local.Clone(), fade, local);
-                }
-                if (k == n - 1) Array.Copy(local, composed, 8);
-                else Compose((float[])composed.Clone(), chain[k + 1], local, composed);
-            }
-            Array.Copy(composed, o, 8);
-            return true;
         }
 
         // The composed bone as the joint matrix: s R(q) about the bind position, column-major.
@@ -141,8 +153,9 @@ namespace Crowdbake
             var c = new float[8];
             Array.Clear(m, 0, 16);
             m[15] = 1.0f;
-            if (!ComposedBone(rows, frs, fade, bone, c)) return;
-            float x = c[0], y = c[1], z = c[2], w = c[3];
+            ComposedBone(rows, frs, fade, bone, c);
+            float n = (float)Math.Sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2] + c[3] * c[3]);
+            float x = c[0] / n, y = c[1] / n, z = c[2] / n, w = c[3] / n;
             float[] r = { 1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y),
                           2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x),
                           2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y) };
