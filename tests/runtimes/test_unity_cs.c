@@ -10,6 +10,7 @@
 #include <math.h>
 
 #include "crowdbake_pal.h"
+#include "runtimes/conformance.h"
 
 #define TMP TEST_TMP "/unity_cs"
 #define CHECK_EXE TMP "/CrowdbakeCheck.exe"
@@ -438,6 +439,38 @@ static void test_shader_glue_compiles(void **state)
     printf("  Unity shader glue: 9 encodings and local rows (qpos u16, float) compile (glslang, HLSL) and validate (spirv-val)\n");
 }
 
+/* The runtime conformance cases of local rows (.pal version 6: conformance.h's local_*): the C#
+ * reader's composed bone matrices (PalFile.InstanceBoneMatrix, cross-faded as the herd does) skin
+ * every instance of every group within the cases' tolerance of the C runtime's expected positions. */
+static void test_local_conformance_cases(void **state)
+{
+    (void)state;
+    build_check();
+    conformance conf;
+    conformance_make(&conf, TMP "/conformance");
+    int ran = 0;
+    for (int i = 0; i < conf.case_count; ++i) {
+        const conf_case *k = &conf.cases[i];
+        if (strncmp(k->name, "local", 5) != 0 || k->bone_pass || k->glsl_marker || k->transpose) continue;
+        char args[1024], out[512];
+        snprintf(out, sizeof out, TMP "/conformance/%s.cs.out", k->name);
+        snprintf(args, sizeof args, "conformance " TMP "/conformance %s %s", k->name, out);
+        fclose(run_check(args, TMP "/conformance.txt"));
+        size_t size = 0;
+        float *got = (float *)read_whole_file(out, &size);
+        assert_non_null(got);
+        assert_int_equal(size, conf_positions(&conf, k) * 12);
+        double units, ratio = conformance_compare(&conf, k, got, &units);
+        printf("  %-26s %7zu positions: C# vs C runtime %.2g (%.2f of the tolerance)\n", k->name, conf_positions(&conf, k), units, ratio);
+        if (k->broken) assert_true(ratio > 10);
+        else assert_true(ratio <= 1);
+        free(got);
+        ++ran;
+    }
+    conformance_free(&conf);
+    assert_true(ran >= 3);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -447,6 +480,7 @@ int main(void)
         cmocka_unit_test(test_herd_equals_the_c_reader),
         cmocka_unit_test(test_unity_facing_code_compiles),
         cmocka_unit_test(test_shader_glue_compiles),
+        cmocka_unit_test(test_local_conformance_cases),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
