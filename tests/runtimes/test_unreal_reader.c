@@ -44,6 +44,14 @@ static void test_reader_and_herd_equal_the_c_reader(void **state)
                 run_or_fail(cmd, log, sizeof log);
                 printf("  %s %s/%s: %s", models[m] + 7, layouts[l], precisions[p], strstr(log, ": ") ? strstr(log, ": ") + 2 : log);
             }
+        for (int p = 0; p < 3; p += 2) { /* local rows (.pal version 6): qpos, u16 or float */
+            snprintf(cmd, sizeof cmd,
+                     "%s bake %s -o %s/x.pal --bone-space local --layout qpos --precision %s -q 2>&1 && %s/reader_check %s/x.pal 2>&1",
+                     crowdbake_exe(), model, TMP, precisions[p], TMP, TMP);
+            run_or_fail(cmd, log, sizeof log);
+            printf("  %s local qpos/%s: %s", models[m] + 7, precisions[p], strstr(log, ": ") ? strstr(log, ": ") + 2 : log);
+            if (!strstr(log, "CB_LOCAL_ROWS=1")) fail_msg("local rows: no CB_LOCAL_ROWS=1 define: %s", log);
+        }
     }
 }
 
