@@ -154,29 +154,20 @@ static void test_reader_equals_the_c_reader(void **state)
     }
 }
 
-/* Damaged files: the same verdict as cbpal_open_memory, word for word; zstd is refused with the fix. */
-static void test_reader_verdicts_match(void **state)
+/* Each damaged copy of `good` (a byte of each poke flipped low, then high; three cuts): the C#
+ * reader's verdict equals cbpal_open_memory's, word for word, checksum verified and not. Returns how
+ * many the tables' checks refused. */
+static unsigned compare_verdicts(const unsigned char *good, size_t size, const size_t *pokes, size_t npokes, unsigned *compared)
 {
-    (void)state;
-    build_check();
-    char fox[1024], cmd[4096], line[1024], want[600], err[512];
-    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
-    snprintf(cmd, sizeof cmd, "%s bake %s -o %s/v.pal --layout qpos --precision half -q 2>&1", crowdbake_exe(), fox, TMP);
-    run_or_fail(cmd);
-    size_t size;
-    unsigned char *good = (unsigned char *)read_whole_file(TMP "/v.pal", &size);
-    assert_non_null(good);
-    /* offsets into the header and the first clip and bone entries, and lengths to cut the file to */
-    const size_t pokes[] = {0, 8, 16, 20, 24, 28, 32, 36, 40, 44, 48, 52, 56, 60, 120, 128, 136, 144, 152, 160, 168, 176, 184, 256 + 8,
-                            256 + 12, 256 + 4};
+    char line[1024], want[600], err[512];
     unsigned char *bad = malloc(size);
     assert_non_null(bad);
-    unsigned compared = 0, refused = 0;
-    for (size_t i = 0; i < COUNT_OF(pokes) * 2 + 3; ++i) {
+    unsigned refused = 0;
+    for (size_t i = 0; i < npokes * 2 + 3; ++i) {
         size_t len = size;
         memcpy(bad, good, size);
-        if (i < COUNT_OF(pokes) * 2) bad[pokes[i / 2] + (i % 2 ? 3 : 0)] ^= i % 2 ? 0x80 : 0x01;
-        else len = i == COUNT_OF(pokes) * 2 ? 100 : i == COUNT_OF(pokes) * 2 + 1 ? 4096 : size - 1;
+        if (i < npokes * 2) bad[pokes[i / 2] + (i % 2 ? 3 : 0)] ^= i % 2 ? 0x80 : 0x01;
+        else len = i == npokes * 2 ? 100 : i == npokes * 2 + 1 ? 4096 : size - 1;
         FILE *f = fopen(TMP "/bad.pal", "wb");
         assert_non_null(f);
         assert_int_equal(fwrite(bad, 1, len, f), len);
@@ -197,8 +188,52 @@ static void test_reader_verdicts_match(void **state)
             if (!flags) break;
         }
         fclose(out);
-        ++compared;
+        ++*compared;
     }
+    free(bad);
+    return refused;
+}
+
+static unsigned char *bake_bytes(const char *model, const char *options, size_t *size)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s/v.pal %s -q 2>&1", crowdbake_exe(), model, TMP, options);
+    run_or_fail(cmd);
+    unsigned char *bytes = (unsigned char *)read_whole_file(TMP "/v.pal", size);
+    assert_non_null(bytes);
+    return bytes;
+}
+
+static uint64_t le64(const unsigned char *p)
+{
+    uint64_t v = 0;
+    for (int i = 7; i >= 0; --i) v = v << 8 | p[i];
+    return v;
+}
+
+/* Damaged files: the same verdict as cbpal_open_memory, word for word; zstd is refused with the fix;
+ * and a local-rows file (.pal version 6) damaged in its flags, its range table's offset and entries,
+ * and its parents. */
+static void test_reader_verdicts_match(void **state)
+{
+    (void)state;
+    build_check();
+    char fox[1024], cmd[4096], line[1024];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    size_t size;
+    unsigned char *good = bake_bytes(fox, "--layout qpos --precision half", &size);
+    /* offsets into the header and the first clip and bone entries, and lengths to cut the file to */
+    const size_t pokes[] = {0, 8, 16, 20, 24, 28, 32, 36, 40, 44, 48, 52, 56, 60, 120, 128, 136, 144, 152, 160, 168, 176, 184, 256 + 8,
+                            256 + 12, 256 + 4};
+    unsigned compared = 0, refused = compare_verdicts(good, size, pokes, COUNT_OF(pokes), &compared);
+    free(good);
+    good = bake_bytes(fox, "--bone-space local --layout qpos --precision u16", &size);
+    assert_true(good[12] & 32); /* flag bit 5 */
+    size_t ranges = (size_t)le64(good + 200), bones = (size_t)le64(good + 128);
+    const size_t local[] = {8, 12, 20, 24, 200, 204, bones + 8, bones + 32 + 8, ranges, ranges + 12, ranges + 16, ranges + 28,
+                            ranges + 32 + 4, ranges + 32 + 24};
+    unsigned local_compared = 0, local_refused = compare_verdicts(good, size, local, COUNT_OF(local), &local_compared);
+    free(good);
     snprintf(cmd, sizeof cmd, "%s bake %s -o %s/z.pal --zstd -q 2>&1", crowdbake_exe(), fox, TMP);
     run_or_fail(cmd);
     FILE *out = run_check("bad " TMP "/z.pal", TMP "/bad.txt");
@@ -206,10 +241,8 @@ static void test_reader_verdicts_match(void **state)
     fclose(out);
     if (!strstr(line, "zstd-compressed") || !strstr(line, "without --zstd")) fail_msg("zstd palette: %s", line);
     printf("  %u damaged files: C# and C give the same verdicts, checksum verified and not (%u refused by the tables' checks); "
-           "zstd refused: %s", compared, refused, line);
-    assert_true(refused >= 20);
-    free(bad);
-    free(good);
+           "local rows: %u damaged, %u refused; zstd refused: %s", compared, refused, local_compared, local_refused, line);
+    assert_true(refused >= 20 && local_refused >= 10);
 }
 
 /* A catalog bake of Cow: what a Unity roster import needs. */
