@@ -158,7 +158,7 @@ float4 cb_decode_local(CB_TEXTURE2D bind_positions, uint4 u, int bone, int k)
 {
     if (k == 0) return cb_snorm(u);
     float4 lo = CB_LOAD(bind_positions, int2(bone, 3)), hi = CB_LOAD(bind_positions, int2(bone, 4));
-    return float4(lo.xyz + (hi.xyz - lo.xyz) * (float3(u.xyz) / 65535.0), lo.w * float(u.w) / 65535.0); // cb:bone-range
+    return float4(lo.xyz + (hi.xyz - lo.xyz) * (float3(u.xyz) / 65535.0), lo.w * float(u.w) / 65535.0); // cb:local-ranges
 }
 #endif
 
@@ -323,7 +323,7 @@ cb_qpos cb_local_bone(CB_PALETTE_PARAMS, int4 rows, float2 frs, float fade, int 
         float4 fs0 = cb_texel(CB_PALETTE_ARGS, rows.z, bone, 1), fs1 = cb_texel(CB_PALETTE_ARGS, rows.w, bone, 1);
         cb_qpos f = cb_qpos_mix(cb_make_qpos(cb_texel(CB_PALETTE_ARGS, rows.z, bone, 0), fs0.xyz, fs0.w),
                                 cb_make_qpos(cb_texel(CB_PALETTE_ARGS, rows.w, bone, 0), fs1.xyz, fs1.w), frs.y);
-        m = cb_qpos_mix(f, m, fade); // cross-faded local rows, before composing
+        m = cb_qpos_mix(f, m, fade); // cb:local-fade - cross-faded local rows, before composing
     }
     return m;
 }
@@ -339,8 +339,8 @@ cb_affine cb_composed_affine(CB_PALETTE_PARAMS, int4 rows, float2 frs, float fad
 {
     cb_qpos m = cb_local_bone(CB_PALETTE_ARGS, rows, frs, fade, bone);
     int a = cb_parent(bind_positions, bone);
-    for (int depth = 0; a >= 0 && depth < CB_MAX_CHAIN; ++depth) {
-        m = cb_qpos_compose(cb_local_bone(CB_PALETTE_ARGS, rows, frs, fade, a), CB_LOAD(bind_positions, int2(a, 0)).xyz, m); // cb:walk
+    for (int depth = 0; a >= 0 && depth < CB_MAX_CHAIN; ++depth) { // cb:local-walk
+        m = cb_qpos_compose(cb_local_bone(CB_PALETTE_ARGS, rows, frs, fade, a), CB_LOAD(bind_positions, int2(a, 0)).xyz, m); // cb:local-compose
         a = cb_parent(bind_positions, a);
     }
     float3x3 lin = m.s * cb_quat_matrix(m.q); // v -> p + s R (v - b)

@@ -368,8 +368,8 @@ static void test_broken_local_variants_are_caught(void **state)
 {
     (void)state;
     REQUIRE_DEVICE();
-    double no_walk = broken_local("cb:walk", "");
-    double no_range = broken_local("cb:bone-range", "    return float4(float3(u.xyz) / 65535.0, lo.w * float(u.w) / 65535.0);");
+    double no_walk = broken_local("cb:local-compose", "");
+    double no_range = broken_local("cb:local-ranges", "    return float4(float3(u.xyz) / 65535.0, lo.w * float(u.w) / 65535.0);");
     printf("  local rows, error / tolerance: no chain walk %.0f, positions outside the bone's box %.0f\n", no_walk, no_range);
     assert_true(no_walk > 10 && no_range > 10);
 }
