@@ -139,7 +139,7 @@ static void test_every_layout_and_precision_matches_the_c_runtime(void **state)
         for (int pr = 0; pr < 3; ++pr)
             for (int unorm = 0; unorm < (pr == CB_PRECISION_U16 ? 2 : 1); ++unorm) {
                 double normals, positions = run_case("quadruped.glb", (cb_layout)l, (cb_precision)pr, false, lib,
-                                                     (variant){unorm != 0, false, 0}, &normals, true);
+                                                     (variant){.unorm = unorm != 0}, &normals, true);
                 assert_true(positions <= 1 && normals <= 1);
             }
     free(lib);
@@ -176,8 +176,8 @@ static void test_broken_variants_are_caught(void **state)
 {
     (void)state;
     REQUIRE_DEVICE();
-    double transposed = broken("quadruped.glb", CB_LAYOUT_MAT4, CB_PRECISION_FLOAT, NULL, NULL, (variant){false, true, 0});
-    double off_by_one = broken("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16, NULL, NULL, (variant){false, false, 1});
+    double transposed = broken("quadruped.glb", CB_LAYOUT_MAT4, CB_PRECISION_FLOAT, NULL, NULL, (variant){.transpose = true});
+    double off_by_one = broken("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16, NULL, NULL, (variant){.row_offset = 1});
     double no_wrap = broken("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_HALF, "cb:wrap", "        f1 = f0 + 1.0;", (variant){0});
     char multitrack[1024];
     shared_path(multitrack, sizeof multitrack, "assets/multitrack-luanti/gltf_multi_track_1.glb");
