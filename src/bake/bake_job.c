@@ -10,6 +10,7 @@
 
 #include "crowdbake_pal.h" /* XXH64 */
 #include "bake_transients.h"
+#include "bake_local.h"
 #include "bake_travel.h"
 #include "outputs.h"
 #include "plant_feet.h"
@@ -158,11 +159,12 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
     if (job->settings.fps_auto)
         snprintf(chosen, sizeof chosen, " auto max_error=%.17g max_fps=%.17g", job->settings.max_error_mm,
                  job->settings.max_fps);
-    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s%s%s\n",
+    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s%s%s%s\n",
                      CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
                      o->max_texture_size, (int)o->root_motion, job->skin, job->settings.zstd,
                      job->settings.exr_compression, o->fit ? " fit-rows" : "", o->measure_all ? " measure-all" : "", chosen,
-                     job->settings.plant_feet ? " plant-feet" : "", job->settings.row_travel_off ? " row-travel-off" : "");
+                     job->settings.plant_feet ? " plant-feet" : "", job->settings.row_travel_off ? " row-travel-off" : "",
+                     o->bone_space == CB_BONE_SPACE_LOCAL ? " bone-space=local" : "");
     cbpal_xxh64_update(&h, opts, (size_t)n);
     cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
     return cbpal_xxh64_digest(&h);
@@ -393,7 +395,7 @@ static cb_status check_outputs(const cb_bake_job *job, cb_error *err)
             return cb_fail(err, CB_ERR_SETTINGS, "%s: a %s file holds no %s/%s texels; choose another precision or "
                            "layout", o->path, f->name, cb_layout_name(opt.layout), cb_precision_name(opt.precision));
     }
-    return CB_OK;
+    return bake_check_bone_space(job, seen, err);
 }
 
 /* Every clip against its budget in the palette baked: what a player sees of each. An
@@ -515,8 +517,10 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         o->format = format;
         o->path = output_path(job, format);
         cb_bake_options opt = cb_bake_settings_options(&job->settings, format, &job->limits, job->threads);
-        if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
-        if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout) {
+        opt.bone_space = bake_bone_space(job, format);
+        if (mapped && opt.bone_space == CB_BONE_SPACE_GLOBAL) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
+        if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout ||
+            shared_opt.bone_space != opt.bone_space) {
             cb_palette_free(&shared);
             search_keep *keep = job->search_kept; /* what the rate search sampled, and the skin's facts */
             palette_probe kept = {NULL, NULL, keep ? keep->poses : NULL, NULL, memo};
@@ -528,7 +532,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         }
         o->palette = shared; /* its facts; the tables and texels stay with `shared` */
         o->palette.clips = NULL, o->palette.bind_positions = NULL, o->palette.texels = NULL;
-        o->palette.position_offsets = NULL, o->palette.row_travel = NULL;
+        o->palette.position_offsets = NULL, o->palette.row_travel = NULL, o->palette.parents = NULL, o->palette.bone_ranges = NULL;
         out->output_count++;
         o->input_hash = cb_bake_input_hash(job, &opt);
         if (out->output_count == 1 && !replanned && (replanned = true) && replan_clips_over(job, s, &shared, err)) {
@@ -542,6 +546,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         }
         if (out->output_count == 1)
             bake_notes(&opt, job->settings.from.root_motion, &shared, &out->notes), bake_travel_notes(&shared, &out->notes),
+                bake_local_notes(job, &shared, &out->notes),
                 bake_loop_notes(job, memo, s, &shared, &out->notes), warn_fixed_rates_over(job, out, &out->notes);
         ktx2_half_note(job, format, &opt, &out->notes);
         write_output(job, &shared, &mapping, o, err);
