@@ -61,6 +61,7 @@ typedef struct variant {
     bool unorm, transpose;
     double row_offset;
     bool local;      /* local rows (.pal version 6): CB_LOCAL_ROWS */
+    bool reversed;   /* local: the bone order reversed, every parent after its children (reverse_bones) */
     double *seconds; /* when set: adds the dispatch's wall time (lavapipe), for the cost of the chain walk */
 } variant;
 
@@ -69,6 +70,44 @@ static double now_seconds(void)
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec + t.tv_nsec * 1e-9;
+}
+
+static void reverse_floats(float *v, uint32_t n, size_t each)
+{
+    for (uint32_t j = 0; j < n / 2; ++j)
+        for (size_t k = 0; k < each; ++k) {
+            float t = v[j * each + k];
+            v[j * each + k] = v[(n - 1 - j) * each + k], v[(n - 1 - j) * each + k] = t;
+        }
+}
+
+/* A local palette and its mesh with the bone order reversed (bone j becomes n - 1 - j): every parent
+ * then comes after its children, which no shared model does. Texels, bind positions, parents,
+ * ranges and the mesh's joints renumbered; what is skinned is unchanged. */
+static void reverse_bones(cb_palette *p, cb_primitive *prim)
+{
+    uint32_t n = p->bone_count, x, y;
+    size_t bone_bytes = cb_layout_texels_per_bone(p->layout) * cb_precision_texel_bytes(p->precision);
+    unsigned char *t = malloc(p->texel_bytes), *from = p->texels;
+    memcpy(t, from, p->texel_bytes);
+    for (uint32_t r = 0; r < p->rows; ++r)
+        for (uint32_t j = 0; j < n; ++j) {
+            cb_palette_texel_xy(p, r, j, &x, &y);
+            size_t at = ((size_t)y * p->width + x) * cb_precision_texel_bytes(p->precision);
+            cb_palette_texel_xy(p, r, n - 1 - j, &x, &y);
+            memcpy(t + ((size_t)y * p->width + x) * cb_precision_texel_bytes(p->precision), from + at, bone_bytes);
+        }
+    memcpy(p->texels, t, p->texel_bytes);
+    free(t);
+    reverse_floats(p->bind_positions, n, 3), reverse_floats(p->position_offsets, n, 3), reverse_floats(p->bone_ranges, n, 8);
+    int32_t *parents = malloc(n * sizeof *parents);
+    for (uint32_t j = 0; j < n; ++j) parents[n - 1 - j] = p->parents[j] < 0 ? -1 : (int32_t)n - 1 - p->parents[j];
+    memcpy(p->parents, parents, n * sizeof *parents);
+    free(parents);
+    for (size_t i = 0; i < (size_t)prim->vertex_count * 4; ++i) prim->joints[i] = (uint16_t)(n - 1 - prim->joints[i]);
+    bool after = false;
+    for (uint32_t j = 0; j < n; ++j) after |= p->parents[j] > (int32_t)j;
+    assert_true(after);
 }
 
 /* Runs the compute shader `src` over every (sample, vertex); returns 12 floats per pair. */
@@ -108,6 +147,7 @@ static double run_case(const char *model, cb_layout l, cb_precision pr, bool fit
     fixture f;
     bake_space(path, l, pr, fit, v.local ? CB_BONE_SPACE_LOCAL : CB_BONE_SPACE_GLOBAL, &f);
     if (fit) assert_true(f.palette.fitted);
+    if (v.reversed) reverse_bones(&f.palette, &f.model->primitives[0]);
     sample samples[64];
     uint32_t n = make_samples(&f.palette, samples, 64);
     static char src[1 << 17];
@@ -121,8 +161,9 @@ static double run_case(const char *model, cb_layout l, cb_precision pr, bool fit
     double pe, ne, tol = tolerance(&f);
     compare(&f.palette, prim, samples, n, gpu, &pe, &ne);
     if (print)
-        printf("  %-6s %-5s%-6s%-7s%s %u instances x %zu vertices: positions %.2g, normals %.2g (tolerance %.2g, %.2g)\n",
-               cb_layout_name(l), cb_precision_name(pr), v.unorm ? " unorm" : "", fit ? " fitted" : "", v.local ? " local" : "", n,
+        printf("  %-6s %-5s%-6s%-7s%s%s %u instances x %zu vertices: positions %.2g, normals %.2g (tolerance %.2g, %.2g)\n",
+               cb_layout_name(l), cb_precision_name(pr), v.unorm ? " unorm" : "", fit ? " fitted" : "", v.local ? " local" : "",
+               v.reversed ? ", bones reversed" : "", n,
                (size_t)prim->vertex_count, pe, ne, tol, 1e-5);
     if (normal_ratio) *normal_ratio = ne / 1e-5;
     free(gpu);
@@ -350,6 +391,11 @@ static void test_local_rows_match_the_c_runtime(void **state)
     positions = run_case(cow, CB_LAYOUT_QPOS, CB_PRECISION_U16, false, lib, local_rows, &normals, true);
     assert_true(positions <= 1 && normals <= 1);
     positions = bone_pass_case(CB_LAYOUT_QPOS, CB_PRECISION_U16, true, lib, &normals);
+    assert_true(positions <= 1 && normals <= 1);
+    /* Every parent after its children (the bone order reversed): the walk assumes no order. */
+    variant reversed = local_rows;
+    reversed.reversed = true;
+    positions = run_case("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16, false, lib, reversed, &normals, true);
     assert_true(positions <= 1 && normals <= 1);
     free(lib);
 }
