@@ -59,8 +59,9 @@ void bake_local_notes(const cb_bake_job *job, const cb_palette *p, cb_warnings *
             "frame (.pal version 6), blended bone by bone and composed by the runtime, the glTF's own interpolation; "
             "rows sampled, not fitted (a fit is to the global blend); errors measured composed", pal_path(job));
     if (job->settings.fps_auto)
-        cb_warn(w, "note", "%s: local rows at the rates the search chose for global rows, whose blend errs more between "
-                "rows, so the local rows meet the goal there too: %s", pal_path(job), rates);
+        cb_warn(w, "note", "%s: local rows at the rates the search chose measuring global rows (no search measures local "
+                "rows yet); their visible error, measured composed, is held to the budget as any bake's: %s", pal_path(job),
+                rates);
     for (uint32_t i = 0; i < job->output_count; ++i)
         if (job->outputs[i].format != CB_FORMAT_PAL)
             cb_warn(w, "note", "%s is baked global: only a .pal holds local rows (no place for the parents)", job->outputs[i].path);
