@@ -216,6 +216,28 @@ static void test_local_rows_refuse_what_cannot_hold_them(void **state)
     }
 }
 
+/* The decision said: inspect's line and range table, bake --json's bone_space and its reason, the log's
+ * note; a global bake says none of it. */
+static void test_local_rows_are_stated(void **state)
+{
+    (void)state;
+    char model[1024], log[16384];
+    sample_path(model, sizeof model, "quadruped");
+    assert_int_equal(run_crowdbake(log, sizeof log, "bake %s --bone-space local --fps 30 -o " TEST_TMP "/stated.pal --json",
+                                   model), 0);
+    assert_non_null(strstr(log, "\"bone_space\": \"local\""));
+    assert_non_null(strstr(log, "bone space local: each row holds every bone's transform in its parent's frame"));
+    assert_int_equal(run_crowdbake(log, sizeof log, "inspect " TEST_TMP "/stated.pal"), 0);
+    assert_non_null(strstr(log, "crowdbake palette v6"));
+    assert_non_null(strstr(log, "bones: local (composed by the runtime); range table: 41 bones"));
+    assert_int_equal(run_crowdbake(log, sizeof log, "inspect " TEST_TMP "/stated.pal --json"), 0);
+    assert_non_null(strstr(log, "\"bone_ranges\""));
+    assert_int_equal(run_crowdbake(log, sizeof log, "bake %s --fps 30 -o " TEST_TMP "/stated.pal --json", model), 0);
+    assert_null(strstr(log, "bone_space"));
+    assert_int_equal(run_crowdbake(log, sizeof log, "inspect " TEST_TMP "/stated.pal"), 0);
+    assert_null(strstr(log, "bones: local"));
+}
+
 int main(void)
 {
     mkdir(TEST_TMP, 0755);
@@ -223,6 +245,7 @@ int main(void)
         cmocka_unit_test(test_cow_local_rows),
         cmocka_unit_test(test_husky_local_rows),
         cmocka_unit_test(test_local_rows_refuse_what_cannot_hold_them),
+        cmocka_unit_test(test_local_rows_are_stated),
     };
     return cmocka_run_group_tests_name("local_rows", tests, NULL, NULL);
 }

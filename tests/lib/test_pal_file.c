@@ -230,7 +230,7 @@ static void test_local_corruption_is_rejected(void **state)
         {ranges + 12, 0, 4, "range", "scale_max 0"},
         {ranges + 16, 0xff7fffffu, 4, "range", "pos_max below pos_min"},
         {ranges + 28, 1, 4, "range", "reserved word not 0"},
-        {8, 5, 4, "local rows are version 6", "bit 5 in a version 5 file"},
+        {8, 5, 4, "flag bit 5 (local rows) in a version 5 file", "bit 5 in a version 5 file"},
         {24, 1, 4, "local rows need qpos and u16 or float", "precision half"},
         {bones + 8, 0, 4, "its own ancestor", "bone 0 its own parent"},
     };
