@@ -45,7 +45,7 @@ namespace Crowdbake
         static void ValidateLocalRows(PalHeader h, byte[] d)
         {
             if ((h.Flags & FlagLocalRows) == 0) return;
-            if (h.Version < 6) throw Fail("flag bit 5 (local rows) in a version " + h.Version + " file; local rows are version 6");
+            if (h.Version < 6) throw Fail("flag bit 5 (local rows) in a version " + h.Version + " file; local rows are v6");
             if (h.Layout != (uint)PalLayout.Qpos || h.Precision == (uint)PalPrecision.Half || (h.Flags & FlagPositionsRelative) != 0)
                 throw Fail("local rows need qpos and u16 or float (layout " + h.Layout + ", precision " + h.Precision + ", flags 0x" +
                            h.Flags.ToString("x") + ")");
@@ -62,8 +62,7 @@ namespace Crowdbake
                 }
                 for (int k = 0; k < 3; ++k) ok = ok && v[k] <= v[4 + k];
                 if (!ok || !(v[3] > 0))
-                    throw Fail("bone " + i + "'s range (table entry at " + e + ") is not finite, min > max, scale_max <= 0 or its " +
-                               "reserved word is not 0");
+                    throw Fail("bone " + i + "'s range (at " + e + "): not finite, min > max, scale_max <= 0 or reserved not 0");
             }
         }
 
