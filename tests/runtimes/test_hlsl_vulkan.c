@@ -9,6 +9,7 @@
 
 #include <time.h>
 
+#include "bone_order.h"
 #include "hlsl_harness.h"
 
 #define LIBRARY "runtimes/hlsl/crowdbake_palette.hlsl"
@@ -70,44 +71,6 @@ static double now_seconds(void)
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec + t.tv_nsec * 1e-9;
-}
-
-static void reverse_floats(float *v, uint32_t n, size_t each)
-{
-    for (uint32_t j = 0; j < n / 2; ++j)
-        for (size_t k = 0; k < each; ++k) {
-            float t = v[j * each + k];
-            v[j * each + k] = v[(n - 1 - j) * each + k], v[(n - 1 - j) * each + k] = t;
-        }
-}
-
-/* A local palette and its mesh with the bone order reversed (bone j becomes n - 1 - j): every parent
- * then comes after its children, which no shared model does. Texels, bind positions, parents,
- * ranges and the mesh's joints renumbered; what is skinned is unchanged. */
-static void reverse_bones(cb_palette *p, cb_primitive *prim)
-{
-    uint32_t n = p->bone_count, x, y;
-    size_t bone_bytes = cb_layout_texels_per_bone(p->layout) * cb_precision_texel_bytes(p->precision);
-    unsigned char *t = malloc(p->texel_bytes), *from = p->texels;
-    memcpy(t, from, p->texel_bytes);
-    for (uint32_t r = 0; r < p->rows; ++r)
-        for (uint32_t j = 0; j < n; ++j) {
-            cb_palette_texel_xy(p, r, j, &x, &y);
-            size_t at = ((size_t)y * p->width + x) * cb_precision_texel_bytes(p->precision);
-            cb_palette_texel_xy(p, r, n - 1 - j, &x, &y);
-            memcpy(t + ((size_t)y * p->width + x) * cb_precision_texel_bytes(p->precision), from + at, bone_bytes);
-        }
-    memcpy(p->texels, t, p->texel_bytes);
-    free(t);
-    reverse_floats(p->bind_positions, n, 3), reverse_floats(p->position_offsets, n, 3), reverse_floats(p->bone_ranges, n, 8);
-    int32_t *parents = malloc(n * sizeof *parents);
-    for (uint32_t j = 0; j < n; ++j) parents[n - 1 - j] = p->parents[j] < 0 ? -1 : (int32_t)n - 1 - p->parents[j];
-    memcpy(p->parents, parents, n * sizeof *parents);
-    free(parents);
-    for (size_t i = 0; i < (size_t)prim->vertex_count * 4; ++i) prim->joints[i] = (uint16_t)(n - 1 - prim->joints[i]);
-    bool after = false;
-    for (uint32_t j = 0; j < n; ++j) after |= p->parents[j] > (int32_t)j;
-    assert_true(after);
 }
 
 /* Runs the compute shader `src` over every (sample, vertex); returns 12 floats per pair. */

@@ -10,6 +10,7 @@
 #include <math.h>
 
 #include "crowdbake_pal.h"
+#include "runtimes/bone_order.h"
 #include "runtimes/local_conformance.h"
 
 #define TMP TEST_TMP "/unity_cs"
@@ -515,6 +516,40 @@ static void test_local_conformance_cases(void **state)
     assert_int_equal(ran, 3);
 }
 
+/* Local rows whose every parent comes after its children (the spec: do not assume parent < child):
+ * the C# composed matrices equal the C reader's, and bone n - 1 - j's equal bone j's of the same
+ * bake in the model's order. */
+static void test_parents_after_children(void **state)
+{
+    (void)state;
+    build_check();
+    write_local_quadruped(TMP "/ordered.pal", false);
+    write_local_quadruped(TMP "/reversed.pal", true);
+    unsigned matrices = 0;
+    double worst = compare_pal(TMP "/reversed.pal", &matrices);
+    cbpal_file a, b;
+    char err[256];
+    if (cbpal_open(TMP "/ordered.pal", 0, &a, err, sizeof err) || cbpal_open(TMP "/reversed.pal", 0, &b, err, sizeof err))
+        fail_msg("%s", err);
+    uint32_t n = a.header.bone_count, after = 0;
+    double moved = 0;
+    for (uint32_t j = 0; j < n; ++j) {
+        cbpal_bone bone;
+        cbpal_get_bone(&b, j, &bone);
+        after += bone.parent > (int32_t)j;
+        for (uint32_t c = 0; c < a.header.clip_count; ++c) {
+            float m[16], r[16];
+            assert_int_equal(cbpal_bone_matrix(&a, c, 0.37 * (c + 1), j, m), 0);
+            assert_int_equal(cbpal_bone_matrix(&b, c, 0.37 * (c + 1), n - 1 - j, r), 0);
+            for (int k = 0; k < 16; ++k) moved = fmax(moved, fabs((double)m[k] - r[k]));
+        }
+    }
+    cbpal_close(&a), cbpal_close(&b);
+    printf("  quadruped local u16, bones reversed (%u of %u parents after their child): %u C# matrices, worst relative "
+           "difference C# vs C %.3g; bone n-1-j vs bone j of the ordered bake %.3g\n", after, n, matrices, worst, moved);
+    assert_true(after > 0 && moved < 1e-5);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -525,6 +560,7 @@ int main(void)
         cmocka_unit_test(test_unity_facing_code_compiles),
         cmocka_unit_test(test_shader_glue_compiles),
         cmocka_unit_test(test_local_conformance_cases),
+        cmocka_unit_test(test_parents_after_children),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
