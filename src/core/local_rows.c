@@ -40,7 +40,7 @@ static cb_vec3 bind_of(const cb_palette *p, uint32_t bone)
     return (cb_vec3){b[0], b[1], b[2]};
 }
 
-static qpos qpos_of_values(const double v[16]) { return (qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]}; }
+static qpos qpos_of_values(const double v[8]) { return (qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]}; }
 
 /* a after b: the parent's transform a (about bind position ba) applied to its child's b. */
 static qpos compose(qpos a, cb_vec3 ba, qpos b)
@@ -65,21 +65,27 @@ static void values_of_qpos(qpos t, double v[16])
     memcpy(v, out, sizeof out);
 }
 
-/* One bone's local values at a row, or blended between two (flip, lerp, q normalised), as the
- * runtime blends them. */
+/* b blended into a by f as the runtime blends two rows: the quaternion's hemisphere flipped to a's,
+ * every term lerped, the quaternion normalised (nlerp). */
+static qpos blend_qpos(qpos a, qpos b, double f)
+{
+    double x[8] = {a.q.x, a.q.y, a.q.z, a.q.w, a.p.x, a.p.y, a.p.z, a.s}, y[8] = {b.q.x, b.q.y, b.q.z, b.q.w, b.p.x, b.p.y, b.p.z, b.s};
+    double sign = x[0] * y[0] + x[1] * y[1] + x[2] * y[2] + x[3] * y[3] < 0 ? -1 : 1;
+    for (int k = 0; k < 8; ++k) x[k] = x[k] * (1 - f) + (k < 4 ? sign : 1) * y[k] * f;
+    qpos t = qpos_of_values(x);
+    t.q = cb_quat_normalize(t.q);
+    return t;
+}
+
+/* One bone's local values at a row, or blended between two, as the runtime blends them. */
 static qpos local_at(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, uint32_t bone)
 {
     double a[16], b[16];
     cb_palette_decode_values(p, texels, r0, bone, a);
-    if (r1 != r0 || fr != 0) {
-        cb_palette_decode_values(p, texels, r1, bone, b);
-        double sign = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0 ? -1 : 1;
-        for (int k = 0; k < 4; ++k) a[k] = a[k] * (1 - fr) + sign * b[k] * fr;
-        for (int k = 4; k < 8; ++k) a[k] = a[k] * (1 - fr) + b[k] * fr;
-    }
     qpos t = qpos_of_values(a);
-    t.q = cb_quat_normalize(t.q);
-    return t;
+    if (r1 == r0 && fr == 0) return t.q = cb_quat_normalize(t.q), t;
+    cb_palette_decode_values(p, texels, r1, bone, b);
+    return blend_qpos(t, qpos_of_values(b), fr);
 }
 
 /* The bone's composed (global) values: its local transform composed with each ancestor's, walked
@@ -98,14 +104,19 @@ void palette_local_composed(const cb_palette *p, const void *texels, uint32_t r0
 }
 
 /* Every bone's composed matrix at once (16 doubles a bone into out): each bone's local rows blended
- * once, then composed in passes, a bone once its parent is (as many passes as the deepest chain),
- * where composing each bone's chain alone blends every ancestor again. */
-bool palette_local_matrices(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, double *out)
+ * once (and, in a cross-fade, blended from the other clip's by fade: local rows, as the spec's
+ * runtimes fade them), then composed in passes, a bone once its parent is (as many passes as the
+ * deepest chain), where composing each bone's chain alone blends every ancestor again. */
+bool palette_local_matrices(const cb_palette *p, const void *texels, const palette_frame *to,
+                            const palette_frame *from, double fade, double *out)
 {
     qpos *pose = malloc((size_t)p->bone_count * sizeof *pose);
     unsigned char *done = calloc(p->bone_count ? p->bone_count : 1, 1);
     if (!pose || !done) return free(pose), free(done), false;
-    for (uint32_t j = 0; j < p->bone_count; ++j) pose[j] = local_at(p, texels, r0, r1, fr, j);
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        pose[j] = local_at(p, texels, to->row0, to->row1, to->fr, j);
+        if (from) pose[j] = blend_qpos(local_at(p, texels, from->row0, from->row1, from->fr, j), pose[j], fade);
+    }
     bool progress = true;
     for (uint32_t pass = 0; progress && pass <= p->bone_count; ++pass) {
         progress = false;
