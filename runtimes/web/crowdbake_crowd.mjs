@@ -17,6 +17,7 @@
 import { AUTO_BONE_PASS_VERTICES, BonePass, LodTiers, MAIN_BONES, resolveLod, boneShaderSource, lodUniform, sortInfluences,
          sortTrianglesByInfluences } from './crowdbake_bones.mjs';
 
+import { hasLocalRows } from './crowdbake_pal.mjs';
 import { PALETTE_GLSL } from './crowdbake_palette_glsl.mjs';
 
 // Where the source tree keeps the GLSL file, relative to this module (the viewer's site has it there).
@@ -31,11 +32,29 @@ export async function loadPaletteGLSL(url) {
     return response.text();
 }
 
-// The defines that select the library's layout and precision for a .pal header.
+// The defines that select the library's layout and precision for a .pal header; CB_LOCAL_ROWS for local rows
+// (version 6: each bone blended in its parent's frame, then composed down its chain).
 export function paletteDefines(header) {
     const defines = [`CB_LAYOUT_${header.layout_name.toUpperCase()}`, `CB_PRECISION_${header.precision_name.toUpperCase()}`];
     if (header.flags & 4) defines.push('CB_POSITIONS_RELATIVE');
+    if (hasLocalRows(header)) defines.push('CB_LOCAL_ROWS');
     return defines;
+}
+
+// The per-bone texels of cb_bind_positions (RGBA32F, one texel a bone): row 0 xyz the bind position, row 1 xyz the
+// position offset; local rows add row 2 (the parent's index as a float, -1 for a root), row 3 (pos_min, scale_max)
+// and row 4 (pos_max, 0), what the shader walks chains and decodes u16 with. Returns { data, rows }.
+export function bonePositionTexels(pal) {
+    const n = pal.header.bone_count, rows = hasLocalRows(pal.header) ? 5 : 2, data = new Float32Array(n * rows * 4);
+    pal.bones.forEach((b, j) => {
+        data.set(b.bind_position, j * 4);
+        data.set(b.position_offset, (n + j) * 4);
+        if (rows < 5) return;
+        data[(2 * n + j) * 4] = b.parent;
+        data.set([...b.range.pos_min, b.range.scale_max], (3 * n + j) * 4);
+        data.set(b.range.pos_max, (4 * n + j) * 4);
+    });
+    return { data, rows };
 }
 
 // The texture format of a palette's payload, taken as is: RGBA32F, RGBA16F, or RGBA16UI
@@ -57,7 +76,7 @@ function texture(gl, internalFormat, width, height, format, type, data) {
 }
 
 // Uploads the palette (and, for qpos or a half palette, its bind positions and position offsets
-// as two RGBA32F rows). Returns the textures and the bytes they take on the GPU.
+// as two RGBA32F rows; five for local rows: bonePositionTexels). Returns the textures and the bytes they take on the GPU.
 export function uploadPalette(gl, pal) {
     const h = pal.header, f = paletteTextureFormat(gl, h);
     const max = gl.getParameter(gl.MAX_TEXTURE_SIZE);
@@ -66,13 +85,9 @@ export function uploadPalette(gl, pal) {
     const palette = texture(gl, f.internalFormat, h.width, h.height, f.format, f.type, pal.texels);
     let bind = null, bytes = h.width * h.height * h.texel_bytes;
     if (h.layout === 2 || h.flags & 4) {
-        const rgba = new Float32Array(h.bone_count * 8); // row 0: bind positions; row 1: position offsets
-        pal.bones.forEach((b, j) => {
-            rgba.set(b.bind_position, j * 4);
-            rgba.set(b.position_offset, (h.bone_count + j) * 4);
-        });
-        bind = texture(gl, gl.RGBA32F, h.bone_count, 2, gl.RGBA, gl.FLOAT, rgba);
-        bytes += rgba.byteLength;
+        const { data, rows } = bonePositionTexels(pal);
+        bind = texture(gl, gl.RGBA32F, h.bone_count, rows, gl.RGBA, gl.FLOAT, data);
+        bytes += data.byteLength;
     }
     return { palette, bind, bytes, format: f.name };
 }
@@ -164,6 +179,7 @@ export class Crowd {
         const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false, bonePass = 'auto' } = options;
         this.gl = gl;
         this.pal = pal;
+        this.localRows = hasLocalRows(pal.header); // CB_LOCAL_ROWS: each bone composed down its chain, both paths
         this.color = color;
         this.capacity = capacity;
         this.count = 0;

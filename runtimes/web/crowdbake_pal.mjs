@@ -140,9 +140,10 @@ function validateHeader(bytes, view, fail) {
         (!fits(h.travel_table_offset, h.rows, 4, n) || h.travel_table_offset < B(HEADER_SIZE)))
         fail(`travel offset table (travel_table_offset ${h.travel_table_offset} at byte 192, ${h.rows} rows) ` +
              `lies outside the ${size}-byte file`);
-    const local = h.version >= 6 && (h.flags & FLAG_LOCAL_ROWS) !== 0;
+    const local = (h.flags & FLAG_LOCAL_ROWS) !== 0;
+    if (local && h.version < 6) fail(`flags bit 5 (local rows, byte 12) in a version ${h.version} file; local rows are version 6`);
     if (local && (!fits(h.range_table_offset, h.bone_count, BONE_RANGE_SIZE, n) ||
-                                 h.range_table_offset < B(HEADER_SIZE)))
+                  h.range_table_offset < B(HEADER_SIZE) || h.range_table_offset % 4n !== 0n))
         fail(`bone range table (range_table_offset ${h.range_table_offset} at byte 200, ${h.bone_count} bones) ` +
              `lies outside the ${size}-byte file`);
     if (local && (h.layout !== 2 || h.precision === 1 || h.flags & FLAG_POSITIONS_RELATIVE))
