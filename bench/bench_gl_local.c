@@ -14,7 +14,7 @@ void bench_joint_parents(const cb_model *m, uint32_t skin, int32_t *parents, flo
         for (int32_t n = m->nodes[sk->joints[j]].parent; n >= 0 && parents[j] < 0; n = m->nodes[n].parent)
             for (uint32_t k = 0; k < sk->joint_count; ++k)
                 if (sk->joints[k] == n) { parents[j] = (int32_t)k; break; }
-        meta[j * 4 + 3] = (float)parents[j];
+        meta[j * 4] = (float)parents[j];
     }
     int depth_max = 0, depth_sum = 0;
     for (uint32_t j = 0; j < sk->joint_count; ++j) {
@@ -56,8 +56,8 @@ static void local_values(const cb_palette *g, const double *vj, const double *vp
 static uint16_t unorm16(double x) { return (uint16_t)lround(fmin(fmax(x, 0.0), 1.0) * 65535.0); }
 static uint16_t snorm16(double x) { return (uint16_t)(int16_t)lround(fmin(fmax(x, -1.0), 1.0) * 32767.0); }
 
-/* Each bone's box of local positions and its largest local scale, over every row, into meta (rows 2 and 3 of
- * cb_bind_positions: min xyz; extent xyz, scale range; row 2's w, the parent, left as it is). */
+/* Each bone's box of local positions and its largest local scale, over every row, into meta (cb_bind_positions rows
+ * 3 and 4, the spec's bone range table: pos_min xyz, scale_max; pos_max xyz, 0). */
 static void bone_ranges(const double *values, size_t count, uint32_t bones, float *meta)
 {
     for (uint32_t j = 0; j < bones; ++j) {
@@ -66,7 +66,7 @@ static void bone_ranges(const double *values, size_t count, uint32_t bones, floa
             for (int k = 0; k < 3; ++k) lo[k] = fmin(lo[k], values[i * 8 + 4 + k]), hi[k] = fmax(hi[k], values[i * 8 + 4 + k]);
             scale = fmax(scale, values[i * 8 + 7]);
         }
-        for (int k = 0; k < 3; ++k) meta[j * 4 + k] = (float)lo[k], meta[(bones + j) * 4 + k] = (float)(hi[k] - lo[k]);
+        for (int k = 0; k < 3; ++k) meta[(bones + j) * 4 + k] = (float)lo[k], meta[(2 * bones + j) * 4 + k] = (float)hi[k];
         meta[(bones + j) * 4 + 3] = (float)scale;
     }
 }
@@ -89,18 +89,16 @@ void bench_local_palette(const cb_palette *global, const int32_t *parents, cb_pa
     bone_ranges(values, count, bones, meta);
     *local = *global;
     local->positions_relative = false;
-    for (int k = 0; k < 3; ++k) local->bounds_min[k] = 0, local->bounds_max[k] = 1; /* the unit box: meta scales it */
-    local->linear_range = 1;
     local->texels = calloc((size_t)global->width * global->height * 4, sizeof(uint16_t));
     for (size_t i = 0; i < count; ++i) {
         const double *o = values + i * 8;
-        const float *lo = meta + (i % bones) * 4, *extent = meta + (bones + i % bones) * 4;
+        const float *lo = meta + (bones + i % bones) * 4, *hi = meta + (2 * bones + i % bones) * 4;
         uint32_t x, y;
         cb_palette_texel_xy(local, (uint32_t)(i / bones), (uint32_t)(i % bones), &x, &y);
         uint16_t *t = (uint16_t *)local->texels + ((size_t)y * local->width + x) * 4;
         for (int k = 0; k < 4; ++k) t[k] = snorm16(o[k]);
-        for (int k = 0; k < 3; ++k) t[4 + k] = unorm16(extent[k] > 0 ? (o[4 + k] - lo[k]) / extent[k] : 0.0);
-        t[7] = unorm16(extent[3] > 0 ? o[7] / extent[3] : 0.0);
+        for (int k = 0; k < 3; ++k) t[4 + k] = unorm16(hi[k] > lo[k] ? (o[4 + k] - lo[k]) / (hi[k] - lo[k]) : 0.0);
+        t[7] = unorm16(lo[3] > 0 ? o[7] / lo[3] : 0.0);
     }
     free(decoded), free(values);
 }
