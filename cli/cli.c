@@ -44,6 +44,7 @@ const char *cli_setting_flag(cb_setting setting)
     case CB_SETTING_MAX_FPS: return "--max-fps";
     case CB_SETTING_MAX_ERROR: return "--max-error";
     case CB_SETTING_ALLOW_OVER_BUDGET: return "--allow-over-budget";
+    case CB_SETTING_BONE_SPACE: return "--bone-space";
     case CB_SETTING_NONE: break;
     }
     return NULL;

@@ -20,7 +20,7 @@ const char cmd_bake_usage[] =
     "                      [-q|-v] [--sync STATE=speed|time,...] [--default-state STATE]\n"
     "                      [--fps N|auto] [--max-error MM_PER_M] [--max-fps N] [--fit-rows] [--allow-over-budget]\n"
     "                      [--layout L] [--precision P] [--format F] [--zstd]\n"
-    "                      [--max-texture-size N] [--row-travel auto|off]\n"
+    "                      [--max-texture-size N] [--row-travel auto|off] [--bone-space global|local]\n"
     "                      [--root-motion R] [--exr-compression C]\n\n"
     "Bakes every clip of the model's skin into a bone-matrix palette; or every animal type of a\n"
     "catalog (see catalog.example.toml) into palettes and a roster manifest, re-baking only what\n"
@@ -82,6 +82,11 @@ const char cmd_bake_usage[] =
     "  --row-travel auto|off      per-row travel offsets (.pal version 5): auto ships them for the\n"
     "                             striding loops whose planted feet they keep still (slide cut by a\n"
     "                             third or more; info and the manifest say why per clip); off: none\n"
+    "  --bone-space global|local  what a .pal row holds per bone: global (default) its skinning\n"
+    "                             transform; local its transform in its parent's frame (.pal version\n"
+    "                             6), blended bone by bone and composed by the runtime: the glTF's own\n"
+    "                             interpolation, fewer rows for the same error. qpos, u16 or float only;\n"
+    "                             other formats beside the .pal are baked global (catalog: bone_space)\n"
     "  --max-texture-size N       never emit a dimension above N (default 16384); rows wrap into\n"
     "                             side-by-side column blocks\n"
     "  --root-motion keep|in-place|loops-in-place  in-place removes the root's average horizontal\n"
@@ -107,7 +112,7 @@ const char cmd_bake_usage[] =
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
         *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir, *loops,
-        *one_shots, *syncs, *default_state, *type, *fragment, *row_travel;
+        *one_shots, *syncs, *default_state, *type, *fragment, *row_travel, *bone_space;
     bool zstd, json, quiet, force, depfile_manifest, fit, measure_all, over_budget, plant_feet;
     cli_output out;
 } bake_args;
@@ -174,6 +179,8 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
     if (a->row_travel && strcmp(a->row_travel, "off") != 0 && strcmp(a->row_travel, "auto") != 0)
         return cli_usage_error("bake", "--row-travel is auto or off, got '%s'", a->row_travel);
     s->row_travel_off = a->row_travel && strcmp(a->row_travel, "off") == 0;
+    if (a->bone_space && !cb_bone_space_parse(a->bone_space, &s->bone_space))
+        return cli_usage_error("bake", "--bone-space is global or local, got '%s'", a->bone_space);
     s->allow_over_budget = a->over_budget;
     s->max_error_given = a->max_error != NULL;
     if (a->max_error && (!cli_parse_double(a->max_error, &s->max_error_mm) || !(s->max_error_mm > 0)))
@@ -188,7 +195,8 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
               (a->exr_compression ? CB_BAKE_EXR_COMPRESSION : 0u) | (a->fit ? CB_BAKE_FIT_ROWS : 0u) |
               (a->measure_all ? CB_BAKE_MEASURE_ALL : 0u) | (a->over_budget ? CB_BAKE_ALLOW_OVER_BUDGET : 0u) |
               (a->max_error ? CB_BAKE_MAX_ERROR : 0u) | (a->max_fps ? CB_BAKE_MAX_FPS : 0u) |
-              (a->plant_feet ? CB_BAKE_PLANT_FEET : 0u) | (a->row_travel ? CB_BAKE_ROW_TRAVEL : 0u);
+              (a->plant_feet ? CB_BAKE_PLANT_FEET : 0u) | (a->row_travel ? CB_BAKE_ROW_TRAVEL : 0u) |
+              (a->bone_space ? CB_BAKE_BONE_SPACE : 0u);
     return 0;
 }
 
@@ -519,6 +527,7 @@ int cmd_bake(int argc, char **argv)
         {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest}, {"--fit-rows", NULL, NULL, &a.fit},
         {"--measure-all", NULL, NULL, &a.measure_all}, {"--plant-feet", NULL, NULL, &a.plant_feet},
         {"--measure-all", NULL, NULL, &a.measure_all}, {"--row-travel", "auto|off", &a.row_travel, NULL},
+        {"--bone-space", "global|local", &a.bone_space, NULL},
         {"--allow-over-budget", NULL, NULL, &a.over_budget},
         {"--type", "NAME", &a.type, NULL},        {"--fragment", "FILE", &a.fragment, NULL},
         {"--sync", "STATE=speed|time", &a.syncs, NULL}, {"--default-state", "STATE", &a.default_state, NULL}};

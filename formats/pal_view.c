@@ -30,7 +30,10 @@ cb_status cb_palette_view(const cbpal_file *f, cb_palette *p, cb_error *err)
     p->bind_positions = malloc(sizeof(float) * 3 * h->bone_count);
     p->position_offsets = malloc(sizeof(float) * 3 * h->bone_count);
     p->clips = calloc(h->clip_count ? h->clip_count : 1, sizeof *p->clips);
-    if (!p->bind_positions || !p->position_offsets || !p->clips) {
+    p->parents = malloc(sizeof(int32_t) * h->bone_count);
+    p->bone_space = h->range_table_offset ? CB_BONE_SPACE_LOCAL : CB_BONE_SPACE_GLOBAL;
+    p->bone_ranges = h->range_table_offset ? malloc(sizeof(float) * 8 * h->bone_count) : NULL;
+    if (!p->bind_positions || !p->position_offsets || !p->clips || !p->parents || (h->range_table_offset && !p->bone_ranges)) {
         cb_palette_view_free(p);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
@@ -39,6 +42,9 @@ cb_status cb_palette_view(const cbpal_file *f, cb_palette *p, cb_error *err)
         cbpal_get_bone(f, j, &b);
         memcpy(p->bind_positions + 3 * j, b.bind_position, sizeof b.bind_position);
         memcpy(p->position_offsets + 3 * j, b.position_offset, sizeof b.position_offset);
+        p->parents[j] = b.parent;
+        float range[8] = {b.pos_min[0], b.pos_min[1], b.pos_min[2], b.scale_max, b.pos_max[0], b.pos_max[1], b.pos_max[2], 0};
+        if (p->bone_ranges) memcpy(p->bone_ranges + 8 * j, range, sizeof range);
     }
     p->clip_count = h->clip_count;
     for (uint32_t i = 0; i < h->clip_count; ++i) {
@@ -66,5 +72,7 @@ void cb_palette_view_free(cb_palette *p)
     free(p->bind_positions);
     free(p->position_offsets);
     free(p->clips);
+    free(p->parents);
+    free(p->bone_ranges);
     memset(p, 0, sizeof *p);
 }

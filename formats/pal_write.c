@@ -37,7 +37,7 @@ static int32_t joint_parent(const cb_model *m, const cb_skin *skin, uint32_t j)
 }
 
 typedef struct layout_plan {
-    uint64_t clips, bones, offsets, travel, strings, strings_size, payload, payload_size;
+    uint64_t clips, bones, offsets, travel, ranges, strings, strings_size, payload, payload_size;
 } layout_plan;
 
 static size_t strings_size(const cb_palette *p, const cb_model *m, const cb_skin *skin)
@@ -48,20 +48,24 @@ static size_t strings_size(const cb_palette *p, const cb_model *m, const cb_skin
     return n;
 }
 
+static bool local(const cb_palette *p) { return p->bone_space == CB_BONE_SPACE_LOCAL; }
+
 static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_write_options *opt, const layout_plan *lp)
 {
     static const unsigned char magic[8] = {'C', 'B', 'P', 'A', 'L', '\r', '\n', 0x1a};
     memcpy(d, magic, 8);
     uint32_t flags = (opt->zstd ? CBPAL_FLAG_ZSTD : 0) | (opt->in_place ? CBPAL_FLAG_IN_PLACE : 0) |
                      (p->positions_relative ? CBPAL_FLAG_POSITIONS_RELATIVE : 0) |
-                     (p->fitted ? CBPAL_FLAG_FITTED_ROWS : 0) | (p->row_travel ? CBPAL_FLAG_ROW_TRAVEL : 0);
+                     (p->fitted ? CBPAL_FLAG_FITTED_ROWS : 0) | (p->row_travel ? CBPAL_FLAG_ROW_TRAVEL : 0) |
+                     (local(p) ? CBPAL_FLAG_LOCAL_ROWS : 0);
     /* A version only where its meaning differs from the one before: readers of version 1 keep
      * reading the rest. Version 4: held rows (a clip's step flag), which an older reader would
      * blend, so it must refuse them (docs/pal-format.md). Version 5: a per-row travel table,
-     * which an older reader would leave out, sliding the feet it plants. */
+     * which an older reader would leave out, sliding the feet it plants. Version 6: local rows,
+     * which an older reader would draw uncomposed. */
     bool held = false;
     for (uint32_t c = 0; c < p->clip_count; ++c) held = held || p->clips[c].step;
-    uint32_t version = p->row_travel ? 5 : held ? 4 : p->positions_relative ? 3 : 1;
+    uint32_t version = local(p) ? 6 : p->row_travel ? 5 : held ? 4 : p->positions_relative ? 3 : 1;
     uint32_t u[14] = {version, flags, CBPAL_HEADER_SIZE, (uint32_t)p->layout, (uint32_t)p->precision,
                       p->texels_per_bone, p->bone_count, p->row_texels, p->rows, p->width, p->height, p->blocks,
                       cb_precision_texel_bytes(p->precision), p->clip_count};
@@ -78,6 +82,7 @@ static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_wri
     for (int i = 0; i < 9; ++i) put64(d + 112 + 8 * i, w[i]);
     if (p->positions_relative) put64(d + 184, lp->offsets);
     if (p->row_travel) put64(d + 192, lp->travel);
+    if (local(p)) put64(d + 200, lp->ranges);
 }
 
 static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *m, const cb_skin *skin, const layout_plan *lp)
@@ -103,6 +108,8 @@ static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *
         }
     }
     for (uint32_t r = 0; p->row_travel && r < p->rows; ++r) putf(d + lp->travel + 4 * (uint64_t)r, p->row_travel[r]);
+    for (uint32_t i = 0; local(p) && i < p->bone_count * 8; ++i) /* the bone range table; its reserved word 0.0f is 0 */
+        putf(d + lp->ranges + 4 * (uint64_t)i, p->bone_ranges[i]);
     for (uint32_t j = 0; j < skin->joint_count; ++j) {
         unsigned char *e = d + lp->bones + (uint64_t)j * CBPAL_BONE_SIZE;
         const char *name = m->nodes[skin->joints[j]].name;
@@ -126,7 +133,8 @@ static layout_plan plan_layout(const cb_palette *p, const cb_model *m, const cb_
     lp.bones = lp.clips + (uint64_t)p->clip_count * CBPAL_CLIP_SIZE;
     lp.offsets = lp.bones + (uint64_t)p->bone_count * CBPAL_BONE_SIZE;
     lp.travel = lp.offsets + (p->positions_relative ? (uint64_t)p->bone_count * 12 : 0);
-    lp.strings = lp.travel + (p->row_travel ? (uint64_t)p->rows * 4 : 0);
+    lp.ranges = lp.travel + (p->row_travel ? (uint64_t)p->rows * 4 : 0);
+    lp.strings = lp.ranges + (local(p) ? (uint64_t)p->bone_count * 32 : 0);
     lp.strings_size = strings_size(p, m, skin);
     lp.payload = (lp.strings + lp.strings_size + CBPAL_PAYLOAD_ALIGN - 1) / CBPAL_PAYLOAD_ALIGN * CBPAL_PAYLOAD_ALIGN;
     lp.payload_size = payload_size;

@@ -30,7 +30,7 @@
 extern "C" {
 #endif
 
-#define CBPAL_VERSION 5 /* newest known; writers write the oldest version that holds what a file says (pal-format.md) */
+#define CBPAL_VERSION 6 /* newest known; writers write the oldest version that holds what a file says (pal-format.md) */
 #define CBPAL_HEADER_SIZE 256
 #define CBPAL_CLIP_SIZE 80
 #define CBPAL_BONE_SIZE 32
@@ -51,8 +51,14 @@ enum { CBPAL_PRECISION_FLOAT = 0, CBPAL_PRECISION_HALF = 1, CBPAL_PRECISION_U16 
  * 192, one f32 per row): a runtime that moves an instance at a clip's ground speed adds
  * cbpal_travel_offset to its position (rotated and scaled as the instance is), so the planted
  * feet stay still. Files without it read every offset as 0. */
+/* CBPAL_FLAG_LOCAL_ROWS (version 6): each row holds every bone's transform in its parent's frame
+ * (qpos, u16 or float), with a bone range table (header offset 200; cbpal_bone's pos_min, pos_max,
+ * scale_max decode u16 positions and scales). A runtime blends each bone's two rows, then composes
+ * from the root: q = q_p q_L, s = s_p s_L, p = p_p + s_p rotate(q_p, p_L - b_p) (cbpal_bone_matrix
+ * does). A parent may come after its child in bone order. */
 enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u, CBPAL_FLAG_FITTED_ROWS = 8u,
-       CBPAL_FLAG_ROW_TRAVEL = 16u };
+       CBPAL_FLAG_ROW_TRAVEL = 16u, CBPAL_FLAG_LOCAL_ROWS = 32u };
+#define CBPAL_RANGE_SIZE 32 /* a bone range table entry */
 /* CBPAL_CLIP_STEP (version 4): the clip's rows are held, not blended - at clip time t the runtime
  * shows row floor(t * fps) alone (a STEP-keyed clip, baked at its key times: exact). */
 enum { CBPAL_CLIP_LOOPS = 1u, CBPAL_CLIP_FITTED = 2u, CBPAL_CLIP_STEP = 4u };
@@ -69,6 +75,7 @@ typedef struct cbpal_header {
     uint64_t payload_offset, payload_size, payload_raw_size, checksum;
     uint64_t offset_table_offset; /* version 3 with relative positions: bone_count x 3 f32 position offsets */
     uint64_t travel_table_offset; /* version 5 with CBPAL_FLAG_ROW_TRAVEL: rows x f32 travel offsets; else 0 */
+    uint64_t range_table_offset;  /* version 6 with CBPAL_FLAG_LOCAL_ROWS: bone_count x 32-byte bone ranges; else 0 */
 } cbpal_header;
 
 typedef struct cbpal_clip {
@@ -80,9 +87,13 @@ typedef struct cbpal_clip {
 
 typedef struct cbpal_bone {
     const char *name;
-    int32_t parent;
+    int32_t parent;           /* the nearest ancestor bone, -1 for a root (local rows compose onto it) */
     float bind_position[3];
     float position_offset[3]; /* with CBPAL_FLAG_POSITIONS_RELATIVE: added to the position texel; else 0 */
+    /* With CBPAL_FLAG_LOCAL_ROWS, the bone range table's entry: the box of its stored local positions
+     * and its largest stored scale (u16 decodes position axis a as pos_min[a] + (pos_max[a] -
+     * pos_min[a]) u / 65535 and the scale as scale_max u / 65535); else 0. */
+    float pos_min[3], pos_max[3], scale_max;
 } cbpal_bone;
 
 typedef struct cbpal_file {
@@ -315,11 +326,51 @@ static void cbpal__parse_header(const unsigned char *d, cbpal_header *h)
     for (int i = 0; i < 9; ++i) *w[i] = cbpal__u64(d + 112 + 8 * i);
     h->offset_table_offset = h->version >= 3 ? cbpal__u64(d + 184) : 0;
     h->travel_table_offset = h->version >= 5 && (h->flags & CBPAL_FLAG_ROW_TRAVEL) ? cbpal__u64(d + 192) : 0;
+    h->range_table_offset = h->version >= 6 && (h->flags & CBPAL_FLAG_LOCAL_ROWS) ? cbpal__u64(d + 200) : 0;
 }
 
 static int cbpal__check_string(const cbpal_header *h, const unsigned char *d, uint32_t off, uint32_t len)
 {
     return (uint64_t)off + len < h->strings_size && d[h->strings_offset + off + len] == 0;
+}
+
+/* Local rows (flag bit 5): version 6, qpos with u16 or float, no relative positions, and a bone
+ * range table inside the file whose every entry is finite, min <= max, scale_max > 0, reserved 0. */
+static int cbpal__validate_local(const unsigned char *d, size_t size, const cbpal_header *h, char *err, size_t es)
+{
+    if (!(h->flags & CBPAL_FLAG_LOCAL_ROWS)) return 0;
+    if (h->version < 6) return cbpal__fail(err, es, "flag bit 5 (local rows) in a version %u file; local rows are version 6", h->version);
+    if (h->layout != CBPAL_LAYOUT_QPOS || h->precision == CBPAL_PRECISION_HALF || (h->flags & CBPAL_FLAG_POSITIONS_RELATIVE))
+        return cbpal__fail(err, es, "local rows need qpos and u16 or float (layout %u, precision %u, flags 0x%x)", h->layout,
+                           h->precision, h->flags);
+    if (!cbpal__fits(h->range_table_offset, h->bone_count, CBPAL_RANGE_SIZE, size) || h->range_table_offset < CBPAL_HEADER_SIZE ||
+        h->range_table_offset % 4)
+        return cbpal__fail(err, es, "bone range table (offset %llu, %u bones) lies outside the file",
+                           (unsigned long long)h->range_table_offset, h->bone_count);
+    for (uint32_t i = 0; i < h->bone_count; ++i) {
+        const unsigned char *e = d + h->range_table_offset + (uint64_t)i * CBPAL_RANGE_SIZE;
+        float v[7];
+        int ok = cbpal__u32(e + 28) == 0;
+        for (int k = 0; k < 7; ++k) v[k] = cbpal__f32(e + 4 * k), ok = ok && isfinite(v[k]);
+        for (int k = 0; k < 3; ++k) ok = ok && v[k] <= v[4 + k];
+        if (!ok || !(v[3] > 0))
+            return cbpal__fail(err, es, "bone %u's range (table entry at %llu) is not finite, min > max, scale_max <= 0 or its "
+                               "reserved word is not 0", i, (unsigned long long)(h->range_table_offset + (uint64_t)i * CBPAL_RANGE_SIZE));
+    }
+    return 0;
+}
+
+/* 1 + a bone on a cycle of parents, or 0: each chain walked at most bone_count steps. */
+static uint32_t cbpal__parent_cycle(const unsigned char *d, const cbpal_header *h)
+{
+    for (uint32_t i = 0; i < h->bone_count; ++i) {
+        int32_t a = (int32_t)i;
+        for (uint32_t steps = 0; a >= 0; ++steps) {
+            if (steps > h->bone_count) return i + 1;
+            a = (int32_t)cbpal__u32(d + h->bone_table_offset + (uint64_t)a * CBPAL_BONE_SIZE + 8);
+        }
+    }
+    return 0;
 }
 
 static int cbpal__validate(const unsigned char *d, size_t size, cbpal_header *h, char *err, size_t es)
@@ -358,6 +409,7 @@ static int cbpal__validate(const unsigned char *d, size_t size, cbpal_header *h,
         (!cbpal__fits(h->travel_table_offset, h->rows, 4, size) || h->travel_table_offset < CBPAL_HEADER_SIZE))
         return cbpal__fail(err, es, "travel offset table (offset %llu, %u rows) lies outside the file",
                            (unsigned long long)h->travel_table_offset, h->rows);
+    if (cbpal__validate_local(d, size, h, err, es)) return -1;
     if (!cbpal__fits(h->strings_offset, h->strings_size, 1, size) || h->strings_offset < CBPAL_HEADER_SIZE)
         return cbpal__fail(err, es, "string table lies outside the file");
     if (h->payload_offset % CBPAL_PAYLOAD_ALIGN || !cbpal__fits(h->payload_offset, h->payload_size, 1, size) ||
@@ -381,6 +433,9 @@ static int cbpal__validate(const unsigned char *d, size_t size, cbpal_header *h,
         if (!cbpal__check_string(h, d, cbpal__u32(b), cbpal__u32(b + 4)) || parent < -1 || parent >= (int32_t)h->bone_count)
             return cbpal__fail(err, es, "bone %u has a bad name or parent", i);
     }
+    if ((h->flags & CBPAL_FLAG_LOCAL_ROWS) && cbpal__parent_cycle(d, h))
+        return cbpal__fail(err, es, "local rows: bone %u is its own ancestor (the bone table's parents form a cycle)",
+                           cbpal__parent_cycle(d, h) - 1);
     return 0;
 }
 
@@ -531,11 +586,15 @@ int cbpal_get_bone(const cbpal_file *f, uint32_t i, cbpal_bone *out)
     out->parent = (int32_t)cbpal__u32(b + 8);
     const cbpal_header *h = &f->header;
     const unsigned char *o = f->data + h->offset_table_offset + (uint64_t)i * 12;
+    const unsigned char *e = h->range_table_offset ? f->data + h->range_table_offset + (uint64_t)i * CBPAL_RANGE_SIZE : NULL;
     for (int k = 0; k < 3; ++k) {
         out->bind_position[k] = cbpal__f32(b + 16 + 4 * k);
         out->position_offset[k] = !(h->flags & CBPAL_FLAG_POSITIONS_RELATIVE) ? 0.0f
                                   : h->version >= 3 ? cbpal__f32(o + 4 * k) : out->bind_position[k];
+        out->pos_min[k] = e ? cbpal__f32(e + 4 * k) : 0.0f;
+        out->pos_max[k] = e ? cbpal__f32(e + 16 + 4 * k) : 0.0f;
     }
+    out->scale_max = e ? cbpal__f32(e + 12) : 0.0f;
     return 0;
 }
 

@@ -30,6 +30,12 @@ static void cbpal__texel(const cbpal_file *f, uint32_t row, uint32_t bone, uint3
     if (h->precision == CBPAL_PRECISION_FLOAT) memcpy(t, p, 16);
     for (i = 0; i < 4 && h->precision == CBPAL_PRECISION_HALF; ++i) t[i] = cbpal__half(u[i]);
     if (h->precision != CBPAL_PRECISION_U16) return;
+    if (h->range_table_offset && k == 1) { /* local rows: the bone's own ranges */
+        const unsigned char *e = f->data + h->range_table_offset + (uint64_t)bone * CBPAL_RANGE_SIZE;
+        for (i = 0; i < 3; ++i) t[i] = cbpal__f32(e + 4 * i) + (cbpal__f32(e + 16 + 4 * i) - cbpal__f32(e + 4 * i)) * ((float)u[i] / 65535.0f);
+        t[3] = cbpal__f32(e + 12) * (float)u[3] / 65535.0f;
+        return;
+    }
     for (i = 0; i < 3; ++i) t[i] = box ? lo[i] + (hi[i] - lo[i]) * ((float)u[i] / 65535.0f) : cbpal__snorm(u[i]) * scale;
     if (h->layout == CBPAL_LAYOUT_QPOS) t[3] = k == 0 ? cbpal__snorm(u[3]) : range * (float)u[3] / 65535.0f;
     else if (h->layout == CBPAL_LAYOUT_AFFINE) t[3] = lo[k] + (hi[k] - lo[k]) * ((float)u[3] / 65535.0f);
@@ -62,6 +68,41 @@ static int cbpal__frame(const cbpal_clip *c, double time, uint32_t *r0, uint32_t
     return 0;
 }
 
+/* Local rows: a bone's two texels blended (the quaternion normalised: nlerp). */
+static void cbpal__local(const cbpal_file *f, uint32_t r0, uint32_t r1, float fr, uint32_t bone, float t[2][4])
+{
+    cbpal__mix(f, r0, r1, fr, bone, 0, t[0]);
+    cbpal__mix(f, r0, r1, fr, bone, 1, t[1]);
+    float n = sqrtf(t[0][0] * t[0][0] + t[0][1] * t[0][1] + t[0][2] * t[0][2] + t[0][3] * t[0][3]);
+    for (int i = 0; i < 4; ++i) t[0][i] = n > 0 ? t[0][i] / n : (i == 3 ? 1.0f : 0.0f);
+}
+
+/* Local rows: the bone's blended local transform composed with each ancestor's, walking up its
+ * chain (composition is associative: acc = A_parent after acc, A about the parent's bind position
+ * b: q = q_a q, s = s_a s, p = p_a + s_a rotate(q_a, p - b)). Into t as a global qpos bone's
+ * texels. At most bone_count steps (the reader refused cycles). */
+static void cbpal__composed(const cbpal_file *f, uint32_t r0, uint32_t r1, float fr, uint32_t bone, float t[2][4])
+{
+    cbpal_bone b;
+    float a[2][4];
+    cbpal__local(f, r0, r1, fr, bone, t);
+    cbpal_get_bone(f, bone, &b);
+    for (uint32_t steps = 0; b.parent >= 0 && steps < f->header.bone_count; ++steps) {
+        uint32_t up = (uint32_t)b.parent;
+        cbpal__local(f, r0, r1, fr, up, a);
+        cbpal_get_bone(f, up, &b);
+        const float *q = a[0];
+        float v[3] = {t[1][0] - b.bind_position[0], t[1][1] - b.bind_position[1], t[1][2] - b.bind_position[2]};
+        float u[3] = {q[1] * v[2] - q[2] * v[1], q[2] * v[0] - q[0] * v[2], q[0] * v[1] - q[1] * v[0]}; /* q.xyz x v */
+        float uu[3] = {q[1] * u[2] - q[2] * u[1], q[2] * u[0] - q[0] * u[2], q[0] * u[1] - q[1] * u[0]};
+        float x = t[0][0], y = t[0][1], z = t[0][2], w = t[0][3];
+        for (int i = 0; i < 3; ++i) t[1][i] = a[1][i] + a[1][3] * (v[i] + 2 * (q[3] * u[i] + uu[i]));
+        t[1][3] *= a[1][3];
+        t[0][0] = q[3] * x + q[0] * w + q[1] * z - q[2] * y, t[0][1] = q[3] * y - q[0] * z + q[1] * w + q[2] * x;
+        t[0][2] = q[3] * z + q[0] * y - q[1] * x + q[2] * w, t[0][3] = q[3] * w - q[0] * x - q[1] * y - q[2] * z;
+    }
+}
+
 int cbpal_bone_matrix(const cbpal_file *f, uint32_t clip, double time, uint32_t bone, float m[16])
 {
     cbpal_clip c;
@@ -69,7 +110,8 @@ int cbpal_bone_matrix(const cbpal_file *f, uint32_t clip, double time, uint32_t 
     uint32_t r0, r1, k;
     float fr, t[4][4] = {{0}}, p[3];
     if (cbpal_get_clip(f, clip, &c) || cbpal_get_bone(f, bone, &b) || cbpal__frame(&c, time, &r0, &r1, &fr)) return -1;
-    for (k = 0; k < f->header.texels_per_bone; ++k) cbpal__mix(f, r0, r1, fr, bone, k, t[k]);
+    if (f->header.range_table_offset) cbpal__composed(f, r0, r1, fr, bone, t); /* normalised below */
+    for (k = 0; !f->header.range_table_offset && k < f->header.texels_per_bone; ++k) cbpal__mix(f, r0, r1, fr, bone, k, t[k]);
     memset(m, 0, 16 * sizeof *m), m[15] = 1.0f;
     if (f->header.layout == CBPAL_LAYOUT_QPOS) {
         float n = sqrtf(t[0][0] * t[0][0] + t[0][1] * t[0][1] + t[0][2] * t[0][2] + t[0][3] * t[0][3]);

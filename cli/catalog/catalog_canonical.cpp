@@ -65,6 +65,7 @@ std::string catalog_canonical_words(const char *dir, const cb_catalog_animal *an
     if (b.measure_all) c += " measure_all";
     if (b.plant_feet) c += " plant_feet";
     if (b.row_travel_off) c += " row_travel_off";
+    if (b.bone_space == CB_BONE_SPACE_LOCAL) c += " bone_space=local"; /* global keeps every key it had */
     if (b.max_error_given) c += " max_error_given";
     if (b.allow_over_budget) c += " allow_over_budget";
     c += std::string(" default=") + (an->default_state ? an->default_state : "");

@@ -138,7 +138,7 @@ struct Parser {
         static const std::vector<std::string> k = {"fps", "max_error", "max_fps", "layout", "precision", "format", "out_dir",
                                                    "max_texture_size", "root_motion", "fit_rows", "measure_all",
                                                    "allow_over_budget", "plant_feet",
-                                                   "row_travel"};
+                                                   "row_travel", "bone_space"};
         return k;
     }
 
@@ -207,6 +207,9 @@ struct Parser {
         if (auto *n = t.get("fit_rows")) b->fit_rows = boolean(*n, where + " fit_rows"), b->from.fit_rows = from;
         if (auto *n = t.get("measure_all")) b->measure_all = boolean(*n, where + " measure_all");
         if (auto *n = t.get("row_travel")) b->row_travel_off = !boolean(*n, where + " row_travel");
+        if (auto *n = t.get("bone_space"))
+            if (!cb_bone_space_parse(str(*n, where + " bone_space").c_str(), &b->bone_space))
+                fail(n->source(), where + " bone_space must be \"global\" or \"local\"");
         if (auto *n = t.get("allow_over_budget")) b->allow_over_budget = boolean(*n, where + " allow_over_budget");
         if (auto *n = t.get("plant_feet")) b->plant_feet = boolean(*n, where + " plant_feet");
         /* A fixed fps is checked against a max_error given beside it: an animal's own fps is not

@@ -60,7 +60,8 @@ typedef enum cb_setting {
     CB_SETTING_FPS,                /* cb_bake_settings.fps (fixed) */
     CB_SETTING_MAX_FPS,            /* cb_bake_settings.max_fps */
     CB_SETTING_MAX_ERROR,          /* cb_bake_settings.max_error_mm */
-    CB_SETTING_ALLOW_OVER_BUDGET   /* cb_bake_settings.allow_over_budget */
+    CB_SETTING_ALLOW_OVER_BUDGET,  /* cb_bake_settings.allow_over_budget */
+    CB_SETTING_BONE_SPACE          /* cb_bake_settings.bone_space */
 } cb_setting;
 
 typedef struct cb_error {

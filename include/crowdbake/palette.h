@@ -18,9 +18,14 @@ extern "C" {
 
 typedef enum cb_layout { CB_LAYOUT_MAT4 = 0, CB_LAYOUT_AFFINE = 1, CB_LAYOUT_QPOS = 2 } cb_layout;
 typedef enum cb_precision { CB_PRECISION_FLOAT = 0, CB_PRECISION_HALF = 1, CB_PRECISION_U16 = 2 } cb_precision;
+/* What a row holds for each bone: its global skinning transform (every file before version 6),
+ * or its transform in its parent's frame, which the runtime blends bone by bone and then composes
+ * down the skeleton (.pal version 6, header flag bit 5; qpos with u16 or float only). */
+typedef enum cb_bone_space { CB_BONE_SPACE_GLOBAL = 0, CB_BONE_SPACE_LOCAL = 1 } cb_bone_space;
 
 CROWDBAKE_API const char *cb_layout_name(cb_layout layout);
 CROWDBAKE_API const char *cb_precision_name(cb_precision precision);
+CROWDBAKE_API const char *cb_bone_space_name(cb_bone_space bone_space); /* "global", "local" */
 CROWDBAKE_API uint32_t cb_layout_texels_per_bone(cb_layout layout);
 CROWDBAKE_API uint32_t cb_precision_texel_bytes(cb_precision precision); /* 16, 8, 8 */
 
@@ -53,6 +58,8 @@ typedef struct cb_bake_options {
     cb_texel_memory texel_memory; /* {NULL}: the bake allocates the texels */
     bool measure_all;     /* the errors measured at every row and between every two, however many (else past
                            * CB_ERROR_ROWS and CB_ERROR_BUDGET, at an even subset of them) */
+    cb_bone_space bone_space; /* local: rows in each bone's parent frame (qpos, u16 or float; src/core/local_rows.c),
+                               * sampled (never fitted: a fit is to the global blend), errors measured composed */
 } cb_bake_options;
 
 /* A bake measures its errors at every row while it has at most CB_ERROR_ROWS rows or at most
@@ -112,6 +119,10 @@ typedef struct cb_palette {
     double seconds_sample, seconds_encode, seconds_measure;
     float *row_travel;              /* rows floats: each row's travel offset along its clip's heading (.pal version 5),
                                      * 0 in clips without it; NULL when no clip has it (row_travel.h) */
+    cb_bone_space bone_space;       /* local: row r of bone j holds L_j = M_parent^-1 M_j as qpos (.pal version 6) */
+    int32_t *parents;               /* local: per bone, the nearest ancestor joint (the .pal bone table's), -1 a root */
+    float *bone_ranges;             /* local: per bone 8 floats as the file's range table: pos_min[3], scale_max,
+                                     * pos_max[3], 0 (u16 decodes with them) */
 } cb_palette;
 
 /* Which clips a palette holds, in row order. */

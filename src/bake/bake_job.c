@@ -158,11 +158,12 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
     if (job->settings.fps_auto)
         snprintf(chosen, sizeof chosen, " auto max_error=%.17g max_fps=%.17g", job->settings.max_error_mm,
                  job->settings.max_fps);
-    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s%s%s\n",
+    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s%s%s%s\n",
                      CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
                      o->max_texture_size, (int)o->root_motion, job->skin, job->settings.zstd,
                      job->settings.exr_compression, o->fit ? " fit-rows" : "", o->measure_all ? " measure-all" : "", chosen,
-                     job->settings.plant_feet ? " plant-feet" : "", job->settings.row_travel_off ? " row-travel-off" : "");
+                     job->settings.plant_feet ? " plant-feet" : "", job->settings.row_travel_off ? " row-travel-off" : "",
+                     o->bone_space == CB_BONE_SPACE_LOCAL ? " bone-space=local" : "");
     cbpal_xxh64_update(&h, opts, (size_t)n);
     cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
     return cbpal_xxh64_digest(&h);
@@ -375,6 +376,25 @@ static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pa
 }
 
 /* Every output a known format, once, with a path, able to hold what the settings bake for it. */
+/* Local rows: a .pal among the outputs, qpos, u16 or float (half's 2^-11 compounds down a chain). */
+static cb_status check_bone_space(const cb_bake_job *job, unsigned formats, cb_error *err)
+{
+    const cb_bake_settings *s = &job->settings;
+    if (s->bone_space != CB_BONE_SPACE_LOCAL) return CB_OK;
+    if (!(formats & CB_FORMAT_PAL))
+        return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_BONE_SPACE, "%s: bone_space local: only a .pal holds local rows "
+                               "(EXR, KTX2 and Babylon have no place for the parents); add pal to the formats or use bone "
+                               "space global", job->outputs[0].path);
+    if (s->layout != CB_LAYOUT_QPOS)
+        return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_BONE_SPACE, "%s: bone_space local needs layout qpos, not %s; "
+                               "use layout qpos or bone space global", output_path(job, CB_FORMAT_PAL), cb_layout_name(s->layout));
+    if (s->precision == CB_PRECISION_HALF)
+        return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_BONE_SPACE, "%s: bone_space local needs precision u16 or float, "
+                               "not half (its 2^-11 compounds down a chain); use precision u16 or bone space global",
+                               output_path(job, CB_FORMAT_PAL));
+    return CB_OK;
+}
+
 static cb_status check_outputs(const cb_bake_job *job, cb_error *err)
 {
     if (!job->output_count) return cb_fail(err, CB_ERR_SETTINGS, "%s: the bake job lists no output", job->model->source);
@@ -393,7 +413,7 @@ static cb_status check_outputs(const cb_bake_job *job, cb_error *err)
             return cb_fail(err, CB_ERR_SETTINGS, "%s: a %s file holds no %s/%s texels; choose another precision or "
                            "layout", o->path, f->name, cb_layout_name(opt.layout), cb_precision_name(opt.precision));
     }
-    return CB_OK;
+    return check_bone_space(job, seen, err);
 }
 
 /* Every clip against its budget in the palette baked: what a player sees of each. An
@@ -477,6 +497,13 @@ static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette 
     return any;
 }
 
+/* Local rows go only in a .pal (EXR, KTX2 and Babylon have no place for the parents): every other
+ * format is baked global (bake_notes says so). */
+static cb_bone_space job_bone_space(const cb_bake_job *job, unsigned format)
+{
+    return format == CB_FORMAT_PAL ? job->settings.bone_space : CB_BONE_SPACE_GLOBAL;
+}
+
 /* The plan as baked: every clip at its resolved rate (the palette's "0: the options' fps" is for
  * callers without a job), into `baked` (plan_count entries). */
 static void resolved_plan(const cb_bake_job *job, cb_clip_plan *baked)
@@ -515,8 +542,10 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         o->format = format;
         o->path = output_path(job, format);
         cb_bake_options opt = cb_bake_settings_options(&job->settings, format, &job->limits, job->threads);
-        if (mapped) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
-        if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout) {
+        opt.bone_space = job_bone_space(job, format);
+        if (mapped && opt.bone_space == CB_BONE_SPACE_GLOBAL) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
+        if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout ||
+            shared_opt.bone_space != opt.bone_space) {
             cb_palette_free(&shared);
             search_keep *keep = job->search_kept; /* what the rate search sampled, and the skin's facts */
             palette_probe kept = {NULL, NULL, keep ? keep->poses : NULL, NULL, memo};
@@ -528,7 +557,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         }
         o->palette = shared; /* its facts; the tables and texels stay with `shared` */
         o->palette.clips = NULL, o->palette.bind_positions = NULL, o->palette.texels = NULL;
-        o->palette.position_offsets = NULL, o->palette.row_travel = NULL;
+        o->palette.position_offsets = NULL, o->palette.row_travel = NULL, o->palette.parents = NULL, o->palette.bone_ranges = NULL;
         out->output_count++;
         o->input_hash = cb_bake_input_hash(job, &opt);
         if (out->output_count == 1 && !replanned && (replanned = true) && replan_clips_over(job, s, &shared, err)) {

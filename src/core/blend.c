@@ -26,6 +26,11 @@ void cb_palette_blend(const cb_palette *p, const void *texels, uint32_t row0, ui
                       double out[16])
 {
     double a[16], b[16];
+    if (p->bone_space == CB_BONE_SPACE_LOCAL) { /* blend the local rows, then compose (local_rows.c) */
+        palette_local_composed(p, texels, row0, row1, fr, bone, a);
+        cb_palette_values_to_matrix(p, bone, a, out);
+        return;
+    }
     cb_palette_decode_values(p, texels, row0, bone, a);
     cb_palette_decode_values(p, texels, row1, bone, b);
     palette_blend_values(p, bone, a, b, fr, out);

@@ -43,6 +43,8 @@ void cb_palette_free(cb_palette *p)
     free(p->bind_positions);
     free(p->position_offsets);
     free(p->row_travel);
+    free(p->parents);
+    free(p->bone_ranges);
     if (!p->texels_borrowed) free(p->texels);
     memset(p, 0, sizeof *p);
 }
@@ -410,6 +412,7 @@ cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *op
                                   uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
                                   cb_palette *p, cb_error *err)
 {
+    if (opt->bone_space == CB_BONE_SPACE_LOCAL) return palette_bake_local(sampler, opt, plan, plan_count, facts, probe, p, err);
     if (facts) return bake_with_fallback(sampler, opt, plan, plan_count, facts, probe, p, err);
     palette_skin_facts own;
     cb_status rc = palette_skin_facts_build(sampler, &own, err);

@@ -330,6 +330,19 @@ cb_status palette_choose_rates(cb_sampler *sampler, const cb_bake_options *optio
 cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
                                   uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
                                   cb_palette *p, cb_error *err);
+/* local_rows.c: a bake with opt->bone_space local (palette_bake_with_facts sends it there): the
+ * clips baked global in float and sampled, converted to local rows in opt's precision, their
+ * errors measured composed. CB_ERR_SETTINGS for a layout or precision local rows cannot take; a
+ * rig qpos cannot hold falls back to affine and stays global (p->bone_space says which). */
+cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                             uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
+                             cb_palette *p, cb_error *err);
+/* local_rows.c: each joint's nearest ancestor joint in the skin (-1: a root), the .pal bone table's parent. */
+void palette_local_parents(const cb_model *m, const cb_skin *skin, int32_t *parents);
+/* local_rows.c: a local palette's bone composed down its chain, as qpos values (q, position, scale: 8
+ * of the 16), its rows r0 and r1 blended by fr bone by bone first (r0 == r1, fr 0: the row). */
+void palette_local_composed(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, uint32_t bone,
+                            double v[16]);
 /* palette_error.c: bind-space distance from each joint's bind position (bind: 3 floats a
  * joint) to the farthest vertex it moves; -1 for joints that move none. False when no vertex
  * is skinned. */

@@ -357,6 +357,13 @@ bool palette_position_offsets(cb_palette *p, const unsigned char *stash)
 /* One bone's values from its texels at d; kinds[i] is u16_kind of value i (u16 only). */
 static void decode_bone(const cb_palette *p, const unsigned char *d, const int *kinds, uint32_t bone, double v[16])
 {
+    if (p->precision == CB_PRECISION_U16 && p->bone_space == CB_BONE_SPACE_LOCAL) { /* the bone's own ranges */
+        const float *e = p->bone_ranges + (size_t)bone * 8;
+        for (int i = 0; i < 4; ++i) v[i] = snorm16_decode(load_le16(d + i * 2));
+        for (int i = 0; i < 3; ++i) v[4 + i] = unorm16_decode(load_le16(d + 8 + i * 2), e[i], e[4 + i]);
+        v[7] = unorm16_decode(load_le16(d + 14), 0, e[3]);
+        return;
+    }
     if (p->precision == CB_PRECISION_U16 && p->layout == CB_LAYOUT_QPOS) {
         /* The default encoding, written out (decode_u16's arithmetic for kinds 4, 1..3 and 5). */
         for (int i = 0; i < 4; ++i) v[i] = snorm16_decode(load_le16(d + i * 2));
@@ -442,7 +449,7 @@ void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values
     value_kinds(p->layout, kinds);
     cb_palette_texel_xy(p, row, 0, &x, &y); /* a row's bones lie side by side */
     const unsigned char *d = (const unsigned char *)p->texels + ((size_t)y * p->width + x) * tb;
-    if (p->precision == CB_PRECISION_U16 && p->layout == CB_LAYOUT_QPOS) {
+    if (p->precision == CB_PRECISION_U16 && p->layout == CB_LAYOUT_QPOS && p->bone_space == CB_BONE_SPACE_GLOBAL) {
         decode_qpos_u16_row(p, d, values);
         return;
     }
@@ -452,7 +459,8 @@ void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values
 void cb_palette_decode(const cb_palette *p, const void *texels, uint32_t row, uint32_t bone, double out[16])
 {
     double v[16];
-    cb_palette_decode_values(p, texels, row, bone, v);
+    if (p->bone_space == CB_BONE_SPACE_LOCAL) palette_local_composed(p, texels, row, row, 0, bone, v); /* composed */
+    else cb_palette_decode_values(p, texels, row, bone, v);
     cb_palette_values_to_matrix(p, bone, v, out);
 }
 

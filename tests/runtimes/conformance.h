@@ -11,7 +11,10 @@
  * [[16 floats], ...]}], expected, out, transpose, glsl_break: {marker, line}, bone_pass, broken}]}. An
  * instance is 16 floats: [4..7] the clip (first row, frames - negative for a one-shot -, fps x rate,
  * phase), [8..11] the clip it cross-fades from, [12] the fade's start time and [13] its length (0: no
- * fade). A case marked broken carries the fault a runtime applies to show its test catches it:
+ * fade). A case marked local (local_qpos_u16, local_qpos_float, local_blocks: .pal version 6, the
+ * quadruped baked --bone-space local --fps 30) holds local rows: the runtime blends each bone's rows
+ * and composes down the skeleton (docs/pal-format.md); a shader runtime runs them once its library
+ * knows CB_LOCAL_ROWS. A case marked broken carries the fault a runtime applies to show its test catches it:
  * transpose (each mat4 bone stored transposed), a row offset (in the instances: rows one off), or
  * glsl_break (the line of the shipped shader holding `marker` replaced by `line`); its expected
  * positions are the right ones, which the broken runtime must miss by far.
@@ -33,8 +36,8 @@
 
 #define CONF_TIMES 2
 #define CONF_PER_CLIP 7 /* instances per clip and time */
-#define CONF_PALETTES 12
-#define CONF_MAX_CASES 24
+#define CONF_PALETTES 16
+#define CONF_MAX_CASES 32
 
 static const double conf_times[CONF_TIMES] = {0.77, 2.31};
 static const char *const conf_layouts[] = {"mat4", "affine", "qpos"};
@@ -52,7 +55,7 @@ typedef struct conf_case {
     char name[40];
     int palette;       /* index into conformance.palettes */
     double row_offset; /* broken: the instances' rows shifted */
-    bool transpose, broken;
+    bool transpose, broken, local; /* local: local rows (.pal version 6), composed by the runtime */
     const char *glsl_marker, *glsl_line, *bone_pass; /* bone_pass: Crowd's bonePass option, as JSON */
 } conf_case;
 
@@ -168,6 +171,7 @@ static inline void conf_write_case(FILE *f, const conformance *c, const conf_cas
     fprintf(f, "%s\n{\"name\": \"%s\", \"pal\": \"%s\", \"expected\": \"%s.expected\", \"out\": \"%s.out\", "
                "\"broken\": %s, \"transpose\": %s,\n", first ? "" : ",", k->name, p->file, k->name, k->name,
             k->broken ? "true" : "false", k->transpose ? "true" : "false");
+    if (k->local) fprintf(f, " \"local\": true,\n");
     fprintf(f, " \"mesh\": {\"positions\": \"%s.positions\", \"joints\": \"%s.joints\", \"weights\": \"%s.weights\"},\n",
             p->mesh, p->mesh, p->mesh);
     if (k->glsl_marker) fprintf(f, " \"glsl_break\": {\"marker\": \"%s\", \"line\": \"%s\"},\n", k->glsl_marker, k->glsl_line);
@@ -217,6 +221,26 @@ static inline void conf_define_cases(conformance *c, int all[9], int spin, int w
     k->glsl_line = "    mat3 a = transpose(mat3(c0.xyz, c1.xyz, c2.xyz));";
 }
 
+/* Local rows (.pal version 6): the quadruped at 30 fps in qpos u16 and float, and u16 wrapped into
+ * two column blocks; expected positions from the C runtime, which composes. */
+static inline void conf_define_local_cases(conformance *c, const char *quadruped)
+{
+    static const char *const names[3] = {"local_qpos_u16", "local_qpos_float", "local_blocks"};
+    static const char *const options[3] = {
+        "--bone-space local --fps 30 --layout qpos --precision u16",
+        "--bone-space local --fps 30 --layout qpos --precision float",
+        "--bone-space local --fps 30 --layout qpos --precision u16 --max-texture-size 200"};
+    for (int i = 0; i < 3; ++i) {
+        char file[40];
+        snprintf(file, sizeof file, "%s.pal", names[i]);
+        int at = conf_bake(c, quadruped, file, "quadruped", options[i]);
+        assert_int_equal(c->palettes[at].pal.header.version, 6);
+        assert_true(c->palettes[at].view.bone_space == CB_BONE_SPACE_LOCAL);
+        if (i == 2) assert_int_equal(c->palettes[at].view.blocks, 2);
+        conf_add(c, names[i], at)->local = true;
+    }
+}
+
 /* Bakes the palettes and writes every file the runtimes' tests read into `dir` (emptied first). */
 static inline void conformance_make(conformance *c, const char *dir)
 {
@@ -245,6 +269,7 @@ static inline void conformance_make(conformance *c, const char *dir)
     int held = conf_bake(c, step, "held.pal", "step", "--layout qpos --precision u16");
     assert_true(c->palettes[held].view.clips[0].step);
     conf_define_cases(c, all, spin, wrapped, held);
+    conf_define_local_cases(c, quadruped);
     char path[PATH_MAX];
     snprintf(path, sizeof path, "%s/cases.json", dir);
     FILE *f = fopen(path, "w");
@@ -298,7 +323,7 @@ static inline void conformance_check_shader(const conformance *c, const char *li
     int ran = 0, caught = 0;
     for (int i = 0; i < c->case_count; ++i) {
         const conf_case *k = &c->cases[i];
-        if (k->bone_pass) continue;
+        if (k->bone_pass || (k->local && !strstr(lib, "CB_LOCAL_ROWS"))) continue; /* local: once the library composes */
         char *broken = k->glsl_marker ? break_shader(lib, k->glsl_marker, k->glsl_line) : NULL;
         float *got = gpu(c, k, broken ? broken : lib, ctx);
         double units, ratio = conformance_compare(c, k, got, &units);

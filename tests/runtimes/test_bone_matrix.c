@@ -156,7 +156,10 @@ static void test_between_rows_is_the_shaders_blend(void **state)
     (void)state;
     static const char *variants[] = {"--fps 30 --layout mat4 --precision half", "--fps 30 --layout affine --precision u16",
                                      "--fps 30 --layout qpos --precision u16", "--fps 30 --layout qpos --precision half",
-                                     "--fps 30 --one-shot Walk --layout qpos --precision float"};
+                                     "--fps 30 --one-shot Walk --layout qpos --precision float",
+                                     /* local rows (.pal version 6): the header composes in float, the runtime in double */
+                                     "--fps 30 --bone-space local --layout qpos --precision u16",
+                                     "--fps 30 --bone-space local --one-shot Walk --layout qpos --precision float"};
     for (size_t v = 0; v < COUNT_OF(variants); ++v) {
         cbpal_file f;
         cb_palette view;

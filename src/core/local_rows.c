@@ -1,0 +1,257 @@
+/* local_rows.c - local rows (.pal version 6, docs/pal-format.md "Local rows"): each bone's
+ * transform in its parent's frame, which the runtime blends bone by bone and composes down the
+ * skeleton. Blending local rows is the glTF's own interpolation (conjugated by constants), where
+ * blending global rows cuts a swung child's arc as a chord.
+ *
+ * A local bake is a global qpos bake in float (the sampled rows, exact to float), converted here
+ * row by row in double precision and encoded in the precision asked for, u16 with per-bone
+ * ranges; its errors are then measured composed, as the runtime plays it (cb_verify_clip through
+ * cb_runtime_matrices, which composes). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cb_math.h"
+#include "crowdbake/runtime.h"
+#include "internal/plumbing.h"
+#include "palette_bake.h"
+
+/* A qpos transform v -> p + s rotate(q, v - b), b the bone's bind position. */
+typedef struct qpos {
+    cb_quat q;
+    cb_vec3 p;
+    double s;
+} qpos;
+
+void palette_local_parents(const cb_model *m, const cb_skin *skin, int32_t *parents)
+{
+    for (uint32_t j = 0; j < skin->joint_count; ++j) {
+        parents[j] = -1;
+        for (int32_t n = m->nodes[skin->joints[j]].parent; n >= 0 && parents[j] < 0; n = m->nodes[n].parent)
+            for (uint32_t k = 0; k < skin->joint_count; ++k)
+                if (skin->joints[k] == n) parents[j] = (int32_t)k;
+    }
+}
+
+static cb_vec3 bind_of(const cb_palette *p, uint32_t bone)
+{
+    const float *b = p->bind_positions + (size_t)bone * 3;
+    return (cb_vec3){b[0], b[1], b[2]};
+}
+
+static qpos qpos_of_values(const double v[16]) { return (qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]}; }
+
+/* a after b: the parent's transform a (about bind position ba) applied to its child's b. */
+static qpos compose(qpos a, cb_vec3 ba, qpos b)
+{
+    cb_vec3 d = cb_quat_rotate(a.q, cb_vec3_sub(b.p, ba));
+    return (qpos){cb_quat_mul(a.q, b.q), {a.p.x + a.s * d.x, a.p.y + a.s * d.y, a.p.z + a.s * d.z}, a.s * b.s};
+}
+
+/* The spec's conversion of a global child j under its global parent p (bind position bp). */
+static qpos localize(qpos parent, cb_vec3 bp, qpos child)
+{
+    cb_quat inv = {-parent.q.x, -parent.q.y, -parent.q.z, parent.q.w};
+    cb_vec3 d = cb_quat_rotate(inv, cb_vec3_sub(child.p, parent.p));
+    double k = parent.s != 0 ? 1 / parent.s : 0;
+    return (qpos){cb_quat_mul(inv, child.q), {bp.x + d.x * k, bp.y + d.y * k, bp.z + d.z * k}, child.s * k};
+}
+
+static void values_of_qpos(qpos t, double v[16])
+{
+    cb_quat q = cb_quat_normalize(t.q);
+    double out[8] = {q.x, q.y, q.z, q.w, t.p.x, t.p.y, t.p.z, t.s};
+    memcpy(v, out, sizeof out);
+}
+
+/* One bone's local values at a row, or blended between two (flip, lerp, q normalised), as the
+ * runtime blends them. */
+static qpos local_at(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, uint32_t bone)
+{
+    double a[16], b[16];
+    cb_palette_decode_values(p, texels, r0, bone, a);
+    if (r1 != r0 || fr != 0) {
+        cb_palette_decode_values(p, texels, r1, bone, b);
+        double sign = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0 ? -1 : 1;
+        for (int k = 0; k < 4; ++k) a[k] = a[k] * (1 - fr) + sign * b[k] * fr;
+        for (int k = 4; k < 8; ++k) a[k] = a[k] * (1 - fr) + b[k] * fr;
+    }
+    qpos t = qpos_of_values(a);
+    t.q = cb_quat_normalize(t.q);
+    return t;
+}
+
+/* The bone's composed (global) values: its local transform composed with each ancestor's, walked
+ * up the chain (a parent may come after its child in bone order). Composition is associative, so
+ * the walk needs no stack. At most bone_count steps, whatever the table says. */
+void palette_local_composed(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, uint32_t bone,
+                            double v[16])
+{
+    qpos acc = local_at(p, texels, r0, r1, fr, bone);
+    int32_t a = p->parents[bone];
+    for (uint32_t steps = 0; a >= 0 && (uint32_t)a < p->bone_count && steps < p->bone_count; ++steps) {
+        acc = compose(local_at(p, texels, r0, r1, fr, (uint32_t)a), bind_of(p, (uint32_t)a), acc);
+        a = p->parents[a];
+    }
+    values_of_qpos(acc, v);
+}
+
+/* ---- the conversion of a global float qpos palette ---- */
+
+static qpos global_at(const cb_palette *p, uint32_t row, uint32_t bone)
+{
+    double v[16];
+    cb_palette_decode_values(p, p->texels, row, bone, v);
+    return qpos_of_values(v);
+}
+
+/* Every row's local values (8 doubles a bone), each bone's quaternion kept on the side of the
+ * row before within its clip. */
+static void local_rows(const cb_palette *g, double *out)
+{
+    for (uint32_t c = 0; c < g->clip_count; ++c)
+        for (uint32_t f = 0; f < g->clips[c].frames; ++f) {
+            uint32_t r = g->clips[c].first_row + f;
+            for (uint32_t j = 0; j < g->bone_count; ++j) {
+                qpos t = global_at(g, r, j);
+                int32_t a = g->parents[j];
+                if (a >= 0) t = localize(global_at(g, r, (uint32_t)a), bind_of(g, (uint32_t)a), t);
+                double *v = out + ((size_t)r * g->bone_count + j) * 8, *before = v - (size_t)g->bone_count * 8;
+                double w[8] = {t.q.x, t.q.y, t.q.z, t.q.w, t.p.x, t.p.y, t.p.z, t.s};
+                if (f > 0 && w[0] * before[0] + w[1] * before[1] + w[2] * before[2] + w[3] * before[3] < 0)
+                    for (int k = 0; k < 4; ++k) w[k] = -w[k];
+                memcpy(v, w, sizeof w);
+            }
+        }
+}
+
+/* Each bone's range table entry (pos_min, scale_max, pos_max, 0) over every row, and the header's
+ * informative union of them. */
+static void local_ranges(cb_palette *p, const double *values)
+{
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        float *e = p->bone_ranges + (size_t)j * 8;
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, smax = 0;
+        for (uint32_t r = 0; r < p->rows; ++r) {
+            const double *v = values + ((size_t)r * p->bone_count + j) * 8;
+            for (int k = 0; k < 3; ++k) lo[k] = fmin(lo[k], v[4 + k]), hi[k] = fmax(hi[k], v[4 + k]);
+            smax = fmax(smax, v[7]);
+        }
+        for (int k = 0; k < 3; ++k) e[k] = p->rows ? (float)lo[k] : 0, e[4 + k] = p->rows ? (float)hi[k] : 0;
+        e[3] = smax > 0 ? (float)smax : 1, e[7] = 0;
+    }
+    for (int k = 0; k < 3; ++k) p->bounds_min[k] = INFINITY, p->bounds_max[k] = -INFINITY;
+    p->linear_range = 0;
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        const float *e = p->bone_ranges + (size_t)j * 8;
+        for (int k = 0; k < 3; ++k) p->bounds_min[k] = fminf(p->bounds_min[k], e[k]), p->bounds_max[k] = fmaxf(p->bounds_max[k], e[4 + k]);
+        p->linear_range = fmaxf(p->linear_range, e[3]);
+    }
+}
+
+static void put16(unsigned char *d, long v) { d[0] = (unsigned char)(v & 0xff), d[1] = (unsigned char)((v >> 8) & 0xff); }
+
+static long unorm16(double v, double lo, double hi)
+{
+    double x = hi > lo ? (v - lo) / (hi - lo) : 0;
+    return lrint((x < 0 ? 0 : x > 1 ? 1 : x) * 65535);
+}
+
+/* One bone's 8 values into its two texels. */
+static void encode_bone(const cb_palette *p, uint32_t bone, const double *v, unsigned char *d)
+{
+    if (p->precision == CB_PRECISION_FLOAT) {
+        for (int i = 0; i < 8; ++i) {
+            float f = (float)v[i];
+            memcpy(d + i * 4, &f, 4); /* little-endian hosts (pal_write.c writes the texels as they are) */
+        }
+        return;
+    }
+    const float *e = p->bone_ranges + (size_t)bone * 8;
+    for (int i = 0; i < 4; ++i) put16(d + i * 2, lrint((v[i] < -1 ? -1 : v[i] > 1 ? 1 : v[i]) * 32767));
+    for (int k = 0; k < 3; ++k) put16(d + 8 + k * 2, unorm16(v[4 + k], e[k], e[4 + k]));
+    put16(d + 14, unorm16(v[7], 0, e[3]));
+}
+
+static void encode_local(cb_palette *p, const double *values)
+{
+    uint32_t tb = cb_precision_texel_bytes(p->precision);
+    for (uint32_t r = 0; r < p->rows; ++r)
+        for (uint32_t j = 0; j < p->bone_count; ++j) {
+            uint32_t x, y;
+            cb_palette_texel_xy(p, r, j, &x, &y);
+            encode_bone(p, j, values + ((size_t)r * p->bone_count + j) * 8,
+                        (unsigned char *)p->texels + ((size_t)y * p->width + x) * tb);
+        }
+}
+
+/* The global float palette g converted in place to local rows in `precision`. */
+static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin, cb_precision precision, cb_error *err)
+{
+    size_t values_size = (size_t)g->rows * g->bone_count * 8 * sizeof(double);
+    double *values = malloc(values_size ? values_size : 1);
+    g->parents = malloc((size_t)g->bone_count * sizeof *g->parents);
+    g->bone_ranges = calloc((size_t)g->bone_count * 8, sizeof *g->bone_ranges);
+    if (!values || !g->parents || !g->bone_ranges) {
+        free(values);
+        return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for local rows", m->source);
+    }
+    palette_local_parents(m, &m->skins[skin], g->parents);
+    local_rows(g, values);
+    void *global_texels = g->texels;
+    bool borrowed = g->texels_borrowed;
+    g->precision = precision;
+    g->texel_bytes = (size_t)g->width * g->height * cb_precision_texel_bytes(precision);
+    g->texels = calloc(g->texel_bytes ? g->texel_bytes : 1, 1);
+    g->texels_borrowed = false;
+    if (!borrowed) free(global_texels);
+    if (!g->texels) {
+        free(values);
+        return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for local rows", m->source);
+    }
+    g->bone_space = CB_BONE_SPACE_LOCAL;
+    local_ranges(g, values);
+    encode_local(g, values);
+    free(values);
+    return CB_OK;
+}
+
+/* The errors measured composed: at every row (max_error) and halfway between every two
+ * (visible_error), on every skinned vertex against the exact pose, as `verify` measures. */
+static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, cb_palette *p, cb_error *err)
+{
+    p->max_error = p->visible_error = 0;
+    p->error_rows_measured = p->rows;
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        cb_clip_error e;
+        if (cb_verify_clip(s, p, p->texels, c, plan ? plan[c].animation : (int32_t)c, 0, &e, err)) return err->status;
+        p->max_error = fmax(p->max_error, e.quant_max);
+        p->clips[c].visible_error = fmax(e.quant_max, e.interp_max);
+        p->visible_error = fmax(p->visible_error, p->clips[c].visible_error);
+    }
+    return CB_OK;
+}
+
+cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                             uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
+                             cb_palette *p, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(sampler);
+    if (opt->layout != CB_LAYOUT_QPOS || opt->precision == CB_PRECISION_HALF)
+        return cb_fail(err, CB_ERR_SETTINGS, "%s: local rows need layout qpos and precision u16 or float (half's "
+                       "2^-11 compounds down a chain); use layout qpos with precision u16, or bone space global",
+                       m->source);
+    cb_bake_options global = *opt;
+    global.bone_space = CB_BONE_SPACE_GLOBAL, global.precision = CB_PRECISION_FLOAT, global.fit = false;
+    global.texel_memory = (cb_texel_memory){0}, global.error_goal = 0;
+    cb_clip_plan *sampled = plan ? malloc(plan_count * sizeof *sampled) : NULL;
+    if (plan && !sampled) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+    for (uint32_t i = 0; sampled && i < plan_count; ++i) sampled[i] = plan[i], sampled[i].fit = false;
+    cb_status rc = palette_bake_with_facts(sampler, &global, sampled, plan_count, facts, probe, p, err);
+    free(sampled);
+    if (rc || p->layout != CB_LAYOUT_QPOS) return rc; /* fell back to affine: a rig qpos cannot hold stays global */
+    if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, err)) && cb_model_skin_vertex_count(m, cb_sampler_skin(sampler)) > 0)
+        rc = measure_local(sampler, plan, p, err);
+    if (rc) cb_palette_free(p);
+    return rc;
+}
