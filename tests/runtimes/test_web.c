@@ -16,12 +16,13 @@
 
 #define TMP TEST_TMP "/web"
 
-/* Largest |browser - C runtime| over a conformance case, in tolerances (conformance.h). */
-static double compare(const conformance *c, const char *name, double *units)
+/* Largest |browser - C runtime| over a conformance case, in tolerances (conformance.h); `variant` names another
+ * run of the case (skin_check.mjs: "bones", "nocompose" for local rows) or is "". */
+static double compare_run(const conformance *c, const char *name, const char *variant, double *units)
 {
     const conf_case *k = conformance_case(c, name);
     char path[PATH_MAX];
-    snprintf(path, sizeof path, TMP "/%s.out", name);
+    snprintf(path, sizeof path, TMP "/%s.out%s%s", name, *variant ? "." : "", variant);
     size_t size = 0;
     float *got = (float *)read_whole_file(path, &size);
     if (!got) fail_msg("%s: the browser wrote no result", name);
@@ -29,6 +30,54 @@ static double compare(const conformance *c, const char *name, double *units)
     double ratio = conformance_compare(c, k, got, units);
     free(got);
     return ratio;
+}
+
+static double compare(const conformance *c, const char *name, double *units)
+{
+    return compare_run(c, name, "", units);
+}
+
+/* Largest |browser - C runtime| of a local case's instances, in tolerances: [0] the steady ones, [1] the cross-fading
+ * one of each clip and time (conf_instance's last). The spec blends a local cross-fade's two local poses before
+ * composing; conf_expected mixes the two composed skins (what global rows do): those are compared with the reader's
+ * own composition on the CPU by browser/local_check.mjs (test_web_local.c) instead, and only reported here. */
+static void compare_local(const conformance *c, const char *name, const char *variant, double ratio[2])
+{
+    const conf_case *k = conformance_case(c, name);
+    const conf_palette *p = &c->palettes[k->palette];
+    char path[PATH_MAX];
+    size_t size = 0, n = conf_positions(c, k) * 3, verts = p->model->primitives[0].vertex_count;
+    snprintf(path, sizeof path, TMP "/%s.out%s%s", name, *variant ? "." : "", variant);
+    float *got = (float *)read_whole_file(path, &size);
+    if (!got) fail_msg("%s: the browser wrote no result", path);
+    assert_int_equal(size, n * sizeof(float));
+    snprintf(path, sizeof path, TMP "/%s.expected", name);
+    float *want = (float *)read_whole_file(path, &size);
+    assert_non_null(want);
+    ratio[0] = ratio[1] = 0;
+    for (size_t i = 0; i < n; ++i) {
+        int fading = (i / (verts * 3)) % CONF_PER_CLIP == CONF_PER_CLIP - 1;
+        ratio[fading] = fmax(ratio[fading], fabs((double)want[i] - got[i]) / (1e-5 * fmax(1.0, p->view.model_height)));
+    }
+    free(got), free(want);
+}
+
+/* Local rows (.pal version 6): each bone blended in its parent's frame and composed down the skeleton, per vertex
+ * and in the bone pass, as the C runtime composes; with the shader's compose step skipped, far off. */
+static void check_local_cases(const conformance *conf, const char *out)
+{
+    static const char *const names[] = {"local_qpos_u16", "local_qpos_float", "local_blocks"};
+    for (int i = 0; i < 3; ++i) {
+        double direct[2], bones[2], skipped[2];
+        compare_local(conf, names[i], "", direct), compare_local(conf, names[i], "bones", bones);
+        compare_local(conf, names[i], "nocompose", skipped);
+        printf("  %-16s local rows: browser vs C runtime %.2f (per vertex), %.2f (bone pass) of the tolerance; compose "
+               "skipped: %.0f; cross-fades (local poses blended, not the skins): %.0f\n", names[i], direct[0], bones[0],
+               skipped[0], direct[1]);
+        assert_true(direct[0] <= 1 && bones[0] <= 1 && skipped[0] > 10);
+    }
+    assert_non_null(strstr(out, "ran  local_qpos_u16 (bone pass): "));
+    assert_non_null(strstr(strstr(out, "ran  local_qpos_u16 (bone pass): "), "with the bone pass"));
 }
 
 static void test_runtime_in_chromium_matches_the_cpu(void **state)
@@ -82,6 +131,7 @@ static void test_runtime_in_chromium_matches_the_cpu(void **state)
            "tolerance; its columns read as rows: %.0f\n", bones_qpos, bones_mat4, bones_broken);
     assert_true(strstr(out, "ran  bones-qpos-u16: ") && strstr(out, "with the bone pass"));
     assert_true(bones_qpos <= 1 && bones_mat4 <= 1 && bones_broken > 10);
+    check_local_cases(&conf, out);
     conformance_free(&conf);
 }
 

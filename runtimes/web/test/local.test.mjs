@@ -5,8 +5,9 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import path from 'node:path';
-import { readPal, instanceBoneMatrix, instanceBoneMatrixCrossfade, hasLocalRows, xxh64 } from '../crowdbake_pal.mjs';
-import { SAMPLES, tmpDir, bake } from './support.mjs';
+import { writeFileSync } from 'node:fs';
+import { readPal, boneMatrix, instanceBoneMatrix, instanceBoneMatrixCrossfade, hasLocalRows, xxh64 } from '../crowdbake_pal.mjs';
+import { SAMPLES, tmpDir, bake, inspect, cReaderAccepts } from './support.mjs';
 import { makeLocalPal, poseMatrix, matMul } from './local_support.mjs';
 
 const dir = tmpDir('local');
@@ -133,4 +134,58 @@ test('a damaged range table, parent loop or layout is refused with a one-line me
         assert.ok(error, `${what}: accepted`);
         assert.ok(error.constructor === Error && error.message.startsWith('l.pal: ') && !error.message.includes('\n'), error.message);
     }
+});
+
+// ---- the C writer's local bakes (crowdbake bake --bone-space local) ----
+
+const bakedU16 = path.join(dir, 'baked-local-u16.pal');
+const baked = bake(path.join(SAMPLES, 'quadruped.glb'), bakedU16, ['--layout', 'qpos', '--precision', 'u16', '--bone-space', 'local']);
+
+test('a local bake of the C writer: its composed bones as crowdbake inspect --frame gives them (the C reader composes)', () => {
+    for (const [file, bytes] of [[bakedU16, baked],
+        [path.join(dir, 'baked-local-float.pal'), bake(path.join(SAMPLES, 'quadruped.glb'), path.join(dir, 'baked-local-float.pal'),
+                                                       ['--layout', 'qpos', '--precision', 'float', '--bone-space', 'local'])]]) {
+        const pal = readPal(bytes, { name: file, verifyChecksum: true });
+        assert.ok(hasLocalRows(pal.header) && pal.header.version === 6);
+        let worst = 0;
+        for (const [c, clip] of pal.clips.entries())
+            for (const f of [0, clip.frames - 1]) {
+                const joints = inspect(file, ['--clip', clip.name, '--frame', String(f)]).joints;
+                for (let j = 0; j < pal.header.bone_count; ++j)
+                    worst = Math.max(worst, difference(instanceBoneMatrix(pal, [clip.first_row, clip.loops ? clip.frames : -clip.frames, 1, 0], f, j), joints[j]));
+            }
+        assert.ok(worst < 2e-5, `${path.basename(file)}: ${worst} from the C reader's composed matrices`);
+        console.log(`  ${path.basename(file)}: within ${worst.toExponential(2)} of crowdbake inspect --frame`);
+    }
+});
+
+test('single-field corruptions of a local bake\'s range table and its offset: refused exactly when the C reader refuses them', () => {
+    const view = new DataView(baked.buffer, baked.byteOffset, baked.byteLength);
+    const at = Number(view.getBigUint64(200, true)), last = at + (view.getUint32(32, true) - 1) * 32;
+    const file = path.join(dir, 'corrupt-local.pal');
+    const f32 = [0, -1, 1e30, NaN, Infinity, -Infinity];
+    const cases = [...[0n, 1n, 255n, 4097n, BigInt(at + 2), BigInt(baked.length - 8), 0xffffffffffffffffn].map((v) => ['offset', 200, 'u64', v]),
+        ['flags', 12, 'u32', view.getUint32(12, true) & ~32], ['flags', 12, 'u32', view.getUint32(12, true) | 4], ['version', 8, 'u32', 5],
+        ['precision', 24, 'u32', 1]];
+    for (const base of [at, last])
+        for (let k = 0; k < 8; ++k) for (const v of k === 7 ? [1, 0xffffffff] : f32) cases.push([`entry ${base} word ${k}`, base + 4 * k, k === 7 ? 'u32' : 'f32', v]);
+    let refused = 0;
+    for (const [what, offset, type, value] of cases) {
+        const bytes = new Uint8Array(baked), v = new DataView(bytes.buffer);
+        if (type === 'u64') v.setBigUint64(offset, value, true);
+        else if (type === 'u32') v.setUint32(offset, value, true);
+        else v.setFloat32(offset, value, true);
+        writeFileSync(file, bytes);
+        let js = true;
+        try {
+            readPal(bytes, { name: 'c.pal' });
+        } catch (e) {
+            assert.ok(e.constructor === Error && !e.message.includes('\n'), e.message);
+            js = false;
+        }
+        assert.equal(js, cReaderAccepts(file), `${what} = ${value}: the web reader ${js ? 'accepts' : 'refuses'}, the C reader does not`);
+        refused += !js;
+    }
+    assert.ok(refused > 30, `${refused} of ${cases.length} refused by both`);
+    console.log(`  ${cases.length} corruptions, ${refused} refused by both readers, the rest read by both`);
 });
