@@ -14,7 +14,7 @@
 // expect: positions (3 floats a vertex), normals (3, optional), joints (4 integers), weights (4
 // floats), indices (optional).
 
-import { AUTO_BONE_PASS_VERTICES, BonePass, LodTiers, MAIN_BONES, resolveLod, boneShaderSource, lodUniform, sortInfluences,
+import { autoBonePassVertices, BonePass, LodTiers, MAIN_BONES, resolveLod, boneShaderSource, lodUniform, sortInfluences,
          sortTrianglesByInfluences } from './crowdbake_bones.mjs';
 
 import { hasLocalRows } from './crowdbake_pal.mjs';
@@ -165,8 +165,8 @@ export class Crowd {
     // options: pal (readPal), glsl (the library's text), mesh, capacity (instances), color,
     // captureWorld (link v_world for transform feedback: tests read skinned positions back),
     // bonePass: 'auto' (the default: the bone pass from bonePassVertices skinned vertices a frame,
-    // AUTO_BONE_PASS_VERTICES unless given; per-vertex blending below it or where WebGL2 cannot
-    // render to float textures), true (always; or { rows }), false (never); crowdbake_bones.mjs.
+    // AUTO_BONE_PASS_VERTICES (local rows: AUTO_BONE_PASS_VERTICES_LOCAL) unless given; per-vertex blending
+    // below it or where WebGL2 cannot render to float textures), true (always; or { rows }), false (never); crowdbake_bones.mjs.
     // lod: the bone pass's animation LOD ('auto', the default: fewer influences under the sizes where
     // the model's worst vertex moves at most a pixel: from animationLod, a roster type's animation_lod, when
     // given, else crowdbake_bones.mjs's lodThresholds; or { two, one } pixels tall, or false).
@@ -184,7 +184,9 @@ export class Crowd {
         this.capacity = capacity;
         this.count = 0;
         this.vertexCount = mesh.positions.length / 3;
-        this.bonePassVertices = bonePass === 'auto' ? options.bonePassVertices ?? AUTO_BONE_PASS_VERTICES : bonePass ? 0 : Infinity;
+        const auto = autoBonePassVertices(pal.header, options.bonePassVertices);
+        this.bonePassVertices = bonePass === 'auto' ? auto.vertices : bonePass ? 0 : Infinity;
+        this.bonePassWhy = bonePass === 'auto' ? auto.why : ''; // the threshold's reason where it is not the usual one
         this.lodOption = options.lod === undefined ? 'auto' : options.lod;
         this.animationLod = options.animationLod; // lod 'auto': the bake's measure (a roster type's animation_lod)
         this.lodMesh = mesh; // else lod 'auto' measures its error on first use
@@ -279,11 +281,11 @@ export class Crowd {
         const vertices = n * this.vertexCount;
         if (this.bonesProgram && !this.bonesUnavailable && vertices >= this.bonePassVertices)
             return { method: 'bones', reason: this.bonePassVertices ? `${vertices} skinned vertices a frame >= ${this.bonePassVertices}: ` +
-                'each bone blended once per instance (bonePass: false draws per vertex)' : 'bonePass: true' };
+                `each bone blended once per instance (bonePass: false draws per vertex)${this.bonePassWhy}` : 'bonePass: true' };
         if (this.bonesUnavailable) return { method: 'palette', reason: `no bone pass here: ${this.bonesUnavailable}` };
         if (this.bonePassVertices === Infinity) return { method: 'palette', reason: 'bonePass: false' };
         return { method: 'palette', reason: `${vertices} skinned vertices a frame < ${this.bonePassVertices}: the bone pass ` +
-            'would not pay for its extra pass (bonePass: true forces it)' };
+            `would not pay for its extra pass (bonePass: true forces it)${this.bonePassWhy}` };
     }
 
     // The bone pass, large enough for n instances (made or grown here under bonePass: 'auto').

@@ -270,6 +270,8 @@ function texelView(raw, precision) {
 // by name (input_hash and checksum as BigInt) plus layout_name and precision_name; clips and bones
 // what cbpal_get_clip / cbpal_get_bone give (and loops); texelBytes the payload's raw bytes.
 // rowTravel: version 5's travel offsets (Float32Array, one a row) or null (crowdbake_travel.mjs).
+// Local rows (version 6, hasLocalRows(header)): each bone also has `range` { pos_min, pos_max, scale_max }, its entry of
+// the bone range table (u16 decodes with it), and boneMatrix composes each bone down its chain (crowdbake_pose.mjs).
 // Beyond the C reader's checks: a zstd payload over options.maxDecompressedBytes (1 GiB) is refused,
 // and one whose checksum does not match is refused before it is decoded, verifyChecksum or not.
 export function readPal(data, options = {}) {

@@ -21,7 +21,7 @@ import * as THREE from 'three';
 import { hasLocalRows, instanceData, instanceBoneMatrix, instanceBoneMatrixCrossfade, instanceFirstRow } from './crowdbake_pal.mjs';
 import { FootstepClock } from './crowdbake_contacts.mjs';
 import { bonePositionTexels, paletteDefines } from './crowdbake_crowd.mjs';
-import { AUTO_BONE_PASS_VERTICES, resolveLod, sortInfluences } from './crowdbake_bones.mjs';
+import { autoBonePassVertices, resolveLod, sortInfluences } from './crowdbake_bones.mjs';
 import { BONE_VERTEX_PARS, HerdBonePass } from './crowdbake_three_bones.mjs';
 import { HerdTiers, TIER_VERTEX_PARS } from './crowdbake_three_tiers.mjs';
 import { instanceTravelOffset } from './crowdbake_travel.mjs';
@@ -169,7 +169,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // (the library's text: loadPaletteGLSL()), material (one three.js material, or an array with one
     // per primitive, to patch; default: a clone of each primitive's own glTF material, so the herd
     // looks like the model), fade (cross-fade seconds, 0.25), bonePass ('auto': the bone pass from
-    // bonePassVertices skinned vertices a frame, AUTO_BONE_PASS_VERTICES unless given, when update()
+    // bonePassVertices skinned vertices a frame, AUTO_BONE_PASS_VERTICES (local rows: _LOCAL) unless given, when update()
     // is given the renderer; true: always then; false: never).
     // lod: with the bone pass, the animation LOD of crowdbake_bones.mjs ('auto': from the model's own error, the
     // roster type's animation_lod or else lodThresholds; { two, one } or false); herd.lodChoice() says which and why.
@@ -226,7 +226,9 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         };
         this.uniforms = uniforms;
         const defines = Object.fromEntries(paletteDefines(pal.header).map((d) => [d, '']));
-        this.bonePassVertices = bonePass === 'auto' ? bonePassVertices ?? AUTO_BONE_PASS_VERTICES : bonePass ? 0 : Infinity;
+        const auto = autoBonePassVertices(pal.header, bonePassVertices); // local rows: a lower threshold, and why
+        this.bonePassVertices = bonePass === 'auto' ? auto.vertices : bonePass ? 0 : Infinity;
+        this.bonePassWhy = bonePass === 'auto' ? auto.why : '';
         this.lodOption = lod;
         this.lodTiers = lodTiers;
         this.tiers = null;
@@ -400,9 +402,9 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
             return { method: 'palette', reason: 'this WebGL2 cannot render to float textures (no EXT_color_buffer_float)' };
         if (vertices < this.bonePassVertices)
             return { method: 'palette', reason: `${vertices} skinned vertices a frame < ${this.bonePassVertices}: the bone pass ` +
-                     'would not pay for its extra pass (bonePass: true forces it)' };
+                     `would not pay for its extra pass (bonePass: true forces it)${this.bonePassWhy}` };
         return { method: 'bones', reason: this.bonePassVertices ? `${vertices} skinned vertices a frame >= ${this.bonePassVertices}` +
-                 ': each bone blended once per instance (bonePass: false draws per vertex)' : 'bonePass: true' };
+                 `: each bone blended once per instance (bonePass: false draws per vertex)${this.bonePassWhy}` : 'bonePass: true' };
     }
 
     // Switches every patched material (colour, shadow depth, motion vectors) to the bone pass or back:
