@@ -278,6 +278,11 @@ static void json_output(cb_json *j, const cb_bake_output *out, double seconds, d
     cb_json_string(j, "layout", cb_layout_name(p->layout));
     cb_json_string(j, "precision", cb_precision_name(p->precision));
     cb_json_bool(j, "fitted_rows", p->fitted);
+    if (p->bone_space == CB_BONE_SPACE_LOCAL) { /* absent: global rows, as in every bake before version 6 */
+        cb_json_string(j, "bone_space", "local");
+        cb_json_string(j, "bone_space_why", "--bone-space local: rows in each bone's parent frame, blended bone by bone and "
+                       "composed by the runtime (.pal version 6); errors measured composed");
+    }
     cb_json_number(j, "max_error", p->max_error);
     cb_json_number(j, "model_height", p->model_height);
     cb_json_number(j, "max_error_mm_per_m", cb_mm_per_m(p->max_error, p->model_height));

@@ -50,6 +50,23 @@ static const char *clip_rates(const cb_palette *p, char *buf, size_t size)
     return buf;
 }
 
+/* Local rows (.pal version 6): what the runtime does with them, and the bone range table in brief:
+ * the widest box of local positions and the scales stored. */
+static void print_local_text(const cb_palette *p)
+{
+    uint32_t widest = 0;
+    double span = -1, smin = INFINITY, smax = 0;
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        const float *e = p->bone_ranges + (size_t)j * 8;
+        double s = fmax(fmax(e[4] - e[0], e[5] - e[1]), e[6] - e[2]);
+        if (s > span) span = s, widest = j;
+        smin = fmin(smin, e[3]), smax = fmax(smax, e[3]);
+    }
+    printf("  bones: local (composed by the runtime); range table: %u bones, positions within (%g, %g, %g)..(%g, %g, %g), "
+           "widest %g (bone %u), scale_max %g..%g\n", p->bone_count, p->bounds_min[0], p->bounds_min[1], p->bounds_min[2],
+           p->bounds_max[0], p->bounds_max[1], p->bounds_max[2], span, widest, smin, smax);
+}
+
 static void print_header_text(const inspected *in)
 {
     const cb_palette *p = in->view;
@@ -76,6 +93,7 @@ static void print_header_text(const inspected *in)
     if (in->pal) printf(", checksum %016llx", (unsigned long long)in->pal->header.checksum);
     printf("%s%s\n", in->in_place ? ", root motion removed" : "",
            p->fitted ? ", every clip's rows fitted to the linear blend" : "");
+    if (p->bone_space == CB_BONE_SPACE_LOCAL) print_local_text(p);
 }
 
 static void print_clip_table(const inspected *in)
@@ -147,6 +165,19 @@ static void print_frame_json(cb_json *j, const inspected *in, int clip, long fra
     cb_json_end(j);
 }
 
+static void print_local_json(cb_json *j, const cb_palette *p)
+{
+    cb_json_string(j, "bone_space", "local");
+    cb_json_array(j, "bone_ranges"); /* the range table: per bone pos_min, pos_max, scale_max */
+    for (uint32_t b = 0; b < p->bone_count; ++b) {
+        const float *e = p->bone_ranges + (size_t)b * 8;
+        cb_json_inline_array(j, NULL);
+        for (int k = 0; k < 7; ++k) cb_json_number(j, NULL, e[k < 3 ? k : k < 6 ? k + 1 : 3]);
+        cb_json_end(j);
+    }
+    cb_json_end(j);
+}
+
 /* The same keys for a .pal and a .ktx2, in the same order; version, zstd and payload_* are the
  * .pal container's own. */
 static void print_json(const inspected *in, int clip, long frame)
@@ -166,6 +197,7 @@ static void print_json(const inspected *in, int clip, long frame)
     cb_json_int(&j, "width", p->width);
     cb_json_int(&j, "height", p->height);
     cb_json_int(&j, "blocks", p->blocks);
+    if (p->bone_space == CB_BONE_SPACE_LOCAL) print_local_json(&j, p); /* absent: global, as every file before v6 */
     if (h) cb_json_bool(&j, "zstd", (h->flags & CBPAL_FLAG_ZSTD) != 0);
     cb_json_string(&j, "root_motion", cb_root_motion_name(in->in_place ? CB_ROOT_MOTION_IN_PLACE : CB_ROOT_MOTION_KEEP));
     cb_json_bool(&j, "fitted_rows", p->fitted); /* every clip fitted; each clip says its own below */

@@ -51,11 +51,8 @@ enum { CBPAL_PRECISION_FLOAT = 0, CBPAL_PRECISION_HALF = 1, CBPAL_PRECISION_U16 
  * 192, one f32 per row): a runtime that moves an instance at a clip's ground speed adds
  * cbpal_travel_offset to its position (rotated and scaled as the instance is), so the planted
  * feet stay still. Files without it read every offset as 0. */
-/* CBPAL_FLAG_LOCAL_ROWS (version 6): each row holds every bone's transform in its parent's frame
- * (qpos, u16 or float), with a bone range table (header offset 200; cbpal_bone's pos_min, pos_max,
- * scale_max decode u16 positions and scales). A runtime blends each bone's two rows, then composes
- * from the root: q = q_p q_L, s = s_p s_L, p = p_p + s_p rotate(q_p, p_L - b_p) (cbpal_bone_matrix
- * does). A parent may come after its child in bone order. */
+/* CBPAL_FLAG_LOCAL_ROWS (version 6): rows hold each bone in its parent's frame, with a bone range table
+ * (header offset 200): blend each bone's rows, then compose down the skeleton (pal-format.md "Local rows"). */
 enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u, CBPAL_FLAG_FITTED_ROWS = 8u,
        CBPAL_FLAG_ROW_TRAVEL = 16u, CBPAL_FLAG_LOCAL_ROWS = 32u };
 #define CBPAL_RANGE_SIZE 32 /* a bone range table entry */
@@ -90,10 +87,7 @@ typedef struct cbpal_bone {
     int32_t parent;           /* the nearest ancestor bone, -1 for a root (local rows compose onto it) */
     float bind_position[3];
     float position_offset[3]; /* with CBPAL_FLAG_POSITIONS_RELATIVE: added to the position texel; else 0 */
-    /* With CBPAL_FLAG_LOCAL_ROWS, the bone range table's entry: the box of its stored local positions
-     * and its largest stored scale (u16 decodes position axis a as pos_min[a] + (pos_max[a] -
-     * pos_min[a]) u / 65535 and the scale as scale_max u / 65535); else 0. */
-    float pos_min[3], pos_max[3], scale_max;
+    float pos_min[3], pos_max[3], scale_max; /* CBPAL_FLAG_LOCAL_ROWS: its range table entry (u16 decodes with it); else 0 */
 } cbpal_bone;
 
 typedef struct cbpal_file {
@@ -339,23 +333,20 @@ static int cbpal__check_string(const cbpal_header *h, const unsigned char *d, ui
 static int cbpal__validate_local(const unsigned char *d, size_t size, const cbpal_header *h, char *err, size_t es)
 {
     if (!(h->flags & CBPAL_FLAG_LOCAL_ROWS)) return 0;
-    if (h->version < 6) return cbpal__fail(err, es, "flag bit 5 (local rows) in a version %u file; local rows are version 6", h->version);
+    if (h->version < 6) return cbpal__fail(err, es, "flag bit 5 (local rows) in a version %u file; local rows are v6", h->version);
     if (h->layout != CBPAL_LAYOUT_QPOS || h->precision == CBPAL_PRECISION_HALF || (h->flags & CBPAL_FLAG_POSITIONS_RELATIVE))
         return cbpal__fail(err, es, "local rows need qpos and u16 or float (layout %u, precision %u, flags 0x%x)", h->layout,
                            h->precision, h->flags);
-    if (!cbpal__fits(h->range_table_offset, h->bone_count, CBPAL_RANGE_SIZE, size) || h->range_table_offset < CBPAL_HEADER_SIZE ||
-        h->range_table_offset % 4)
-        return cbpal__fail(err, es, "bone range table (offset %llu, %u bones) lies outside the file",
-                           (unsigned long long)h->range_table_offset, h->bone_count);
-    for (uint32_t i = 0; i < h->bone_count; ++i) {
-        const unsigned char *e = d + h->range_table_offset + (uint64_t)i * CBPAL_RANGE_SIZE;
-        float v[7];
-        int ok = cbpal__u32(e + 28) == 0;
-        for (int k = 0; k < 7; ++k) v[k] = cbpal__f32(e + 4 * k), ok = ok && isfinite(v[k]);
-        for (int k = 0; k < 3; ++k) ok = ok && v[k] <= v[4 + k];
-        if (!ok || !(v[3] > 0))
-            return cbpal__fail(err, es, "bone %u's range (table entry at %llu) is not finite, min > max, scale_max <= 0 or its "
-                               "reserved word is not 0", i, (unsigned long long)(h->range_table_offset + (uint64_t)i * CBPAL_RANGE_SIZE));
+    uint64_t at = h->range_table_offset;
+    if (!cbpal__fits(at, h->bone_count, CBPAL_RANGE_SIZE, size) || at < CBPAL_HEADER_SIZE || at % 4)
+        return cbpal__fail(err, es, "bone range table (offset %llu, %u bones) lies outside the file", (unsigned long long)at,
+                           h->bone_count);
+    for (uint32_t i = 0; i < h->bone_count; ++i, at += CBPAL_RANGE_SIZE) {
+        int ok = cbpal__u32(d + at + 28) == 0 && cbpal__f32(d + at + 12) > 0;
+        for (int k = 0; k < 7; ++k) /* finite, and pos_min <= pos_max */
+            ok = ok && isfinite(cbpal__f32(d + at + 4 * k)) && (k > 2 || cbpal__f32(d + at + 4 * k) <= cbpal__f32(d + at + 16 + 4 * k));
+        if (!ok) return cbpal__fail(err, es, "bone %u's range (at %llu): not finite, min > max, scale_max <= 0 or reserved not 0",
+                                    i, (unsigned long long)at);
     }
     return 0;
 }
@@ -363,13 +354,9 @@ static int cbpal__validate_local(const unsigned char *d, size_t size, const cbpa
 /* 1 + a bone on a cycle of parents, or 0: each chain walked at most bone_count steps. */
 static uint32_t cbpal__parent_cycle(const unsigned char *d, const cbpal_header *h)
 {
-    for (uint32_t i = 0; i < h->bone_count; ++i) {
-        int32_t a = (int32_t)i;
-        for (uint32_t steps = 0; a >= 0; ++steps) {
-            if (steps > h->bone_count) return i + 1;
-            a = (int32_t)cbpal__u32(d + h->bone_table_offset + (uint64_t)a * CBPAL_BONE_SIZE + 8);
-        }
-    }
+    for (uint32_t i = 0; i < h->bone_count; ++i)
+        for (uint32_t a = i, steps = 0; a != 0xffffffffu; a = cbpal__u32(d + h->bone_table_offset + (uint64_t)a * CBPAL_BONE_SIZE + 8))
+            if (steps++ > h->bone_count) return i + 1;
     return 0;
 }
 

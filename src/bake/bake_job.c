@@ -10,6 +10,7 @@
 
 #include "crowdbake_pal.h" /* XXH64 */
 #include "bake_transients.h"
+#include "bake_local.h"
 #include "bake_travel.h"
 #include "outputs.h"
 #include "plant_feet.h"
@@ -376,25 +377,6 @@ static cb_status write_output(const cb_bake_job *job, const cb_palette *p, cb_pa
 }
 
 /* Every output a known format, once, with a path, able to hold what the settings bake for it. */
-/* Local rows: a .pal among the outputs, qpos, u16 or float (half's 2^-11 compounds down a chain). */
-static cb_status check_bone_space(const cb_bake_job *job, unsigned formats, cb_error *err)
-{
-    const cb_bake_settings *s = &job->settings;
-    if (s->bone_space != CB_BONE_SPACE_LOCAL) return CB_OK;
-    if (!(formats & CB_FORMAT_PAL))
-        return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_BONE_SPACE, "%s: bone_space local: only a .pal holds local rows "
-                               "(EXR, KTX2 and Babylon have no place for the parents); add pal to the formats or use bone "
-                               "space global", job->outputs[0].path);
-    if (s->layout != CB_LAYOUT_QPOS)
-        return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_BONE_SPACE, "%s: bone_space local needs layout qpos, not %s; "
-                               "use layout qpos or bone space global", output_path(job, CB_FORMAT_PAL), cb_layout_name(s->layout));
-    if (s->precision == CB_PRECISION_HALF)
-        return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_BONE_SPACE, "%s: bone_space local needs precision u16 or float, "
-                               "not half (its 2^-11 compounds down a chain); use precision u16 or bone space global",
-                               output_path(job, CB_FORMAT_PAL));
-    return CB_OK;
-}
-
 static cb_status check_outputs(const cb_bake_job *job, cb_error *err)
 {
     if (!job->output_count) return cb_fail(err, CB_ERR_SETTINGS, "%s: the bake job lists no output", job->model->source);
@@ -413,7 +395,7 @@ static cb_status check_outputs(const cb_bake_job *job, cb_error *err)
             return cb_fail(err, CB_ERR_SETTINGS, "%s: a %s file holds no %s/%s texels; choose another precision or "
                            "layout", o->path, f->name, cb_layout_name(opt.layout), cb_precision_name(opt.precision));
     }
-    return check_bone_space(job, seen, err);
+    return bake_check_bone_space(job, seen, err);
 }
 
 /* Every clip against its budget in the palette baked: what a player sees of each. An
@@ -497,13 +479,6 @@ static bool replan_clips_over(cb_bake_job *job, cb_sampler *s, const cb_palette 
     return any;
 }
 
-/* Local rows go only in a .pal (EXR, KTX2 and Babylon have no place for the parents): every other
- * format is baked global (bake_notes says so). */
-static cb_bone_space job_bone_space(const cb_bake_job *job, unsigned format)
-{
-    return format == CB_FORMAT_PAL ? job->settings.bone_space : CB_BONE_SPACE_GLOBAL;
-}
-
 /* The plan as baked: every clip at its resolved rate (the palette's "0: the options' fps" is for
  * callers without a job), into `baked` (plan_count entries). */
 static void resolved_plan(const cb_bake_job *job, cb_clip_plan *baked)
@@ -542,7 +517,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         o->format = format;
         o->path = output_path(job, format);
         cb_bake_options opt = cb_bake_settings_options(&job->settings, format, &job->limits, job->threads);
-        opt.bone_space = job_bone_space(job, format);
+        opt.bone_space = bake_bone_space(job, format);
         if (mapped && opt.bone_space == CB_BONE_SPACE_GLOBAL) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
         if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout ||
             shared_opt.bone_space != opt.bone_space) {
@@ -571,6 +546,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         }
         if (out->output_count == 1)
             bake_notes(&opt, job->settings.from.root_motion, &shared, &out->notes), bake_travel_notes(&shared, &out->notes),
+                bake_local_notes(job, &shared, &out->notes),
                 bake_loop_notes(job, memo, s, &shared, &out->notes), warn_fixed_rates_over(job, out, &out->notes);
         ktx2_half_note(job, format, &opt, &out->notes);
         write_output(job, &shared, &mapping, o, err);

@@ -5,6 +5,7 @@
 #include "internal/bake_words.h"
 
 #include <math.h>
+#include <string.h>
 #include <stdio.h>
 
 static const char *clip_name(const cb_bake_job *job, uint32_t i)
@@ -63,6 +64,9 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
         snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows do not meet it at a lower "
                  "rate", fps, rows, r->error_mm);
     }
+    size_t n = strlen(buf); /* local rows are sampled at the rate chosen for global rows (bake_local.c) */
+    if (job->settings.bone_space == CB_BONE_SPACE_LOCAL && !c->step && n < size)
+        snprintf(buf + n, size - n, "; baked as local rows, sampled");
 }
 
 void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, uint32_t i,

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "cb_math.h"
+#include "palette_bake.h" /* palette_local_matrices */
 
 void cb_runtime_frame(const cb_instance *in, double time, uint32_t *row0, uint32_t *row1, double *fr)
 {
@@ -39,5 +40,6 @@ void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_insta
     uint32_t r0, r1;
     double fr;
     cb_runtime_frame(in, time, &r0, &r1, &fr);
+    if (p->bone_space == CB_BONE_SPACE_LOCAL && palette_local_matrices(p, texels, r0, r1, fr, out)) return;
     for (uint32_t j = 0; j < p->bone_count; ++j) cb_palette_blend(p, texels, r0, r1, fr, j, out + (size_t)j * 16);
 }

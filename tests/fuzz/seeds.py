@@ -4,7 +4,7 @@
   gltf     every shared model under 400 kB, the samples; every .gltf that names files, with
            them appended (fuzz_gltf.c's FILE_MARKER), and the same with its uris led outside
            its folder ("../", absolute, missing), the named file put there
-  pal      bakes of the samples in every layout x precision, plain and zstd
+  pal      bakes of the samples in every layout x precision, plain and zstd, and local rows (u16, float)
   exr      bakes in both EXR precisions x every EXR compression
   ktx2     bakes of the samples in every layout x half and float, and one in place
   catalog  the catalogs
@@ -101,6 +101,8 @@ def palette_seeds(build, pal, exr):
                 bake(build, model, f'{pal}/{s}-{layout}-{precision}.pal', ['--layout', layout, '--precision', precision])
                 bake(build, model, f'{pal}/{s}-{layout}-{precision}-zstd.pal',
                      ['--layout', layout, '--precision', precision, '--zstd'])
+        for precision in ['float', 'u16']:  # local rows (.pal version 6): the range table and the parents
+            bake(build, model, f'{pal}/{s}-local-{precision}.pal', ['--bone-space', 'local', '--precision', precision])
     for precision in ['float', 'half']:
         for compression in EXR_COMPRESSIONS:
             bake(build, f'{build}/samples/fish.glb', f'{exr}/fish-{precision}-{compression}.exr',

@@ -207,6 +207,42 @@ static void test_corruption_is_rejected(void **state)
     free(good), free(d);
 }
 
+/* Local rows (version 6, flag bit 5): the range table and what bit 5 needs, each refused with its own
+ * message before the checksum is looked at. */
+static void test_local_corruption_is_rejected(void **state)
+{
+    (void)state;
+    char fox[1024];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    bake(fox, TMP "/local.pal", "--bone-space local");
+    size_t size;
+    unsigned char *good = read_all(TMP "/local.pal", &size), *d = malloc(size);
+    char err[256];
+    assert_null(reader_error(good, size, err, sizeof err));
+    uint64_t ranges = rd64(good + 200), bones = rd64(good + 128);
+    assert_true(ranges >= CBPAL_HEADER_SIZE && ranges % 4 == 0);
+    struct { uint64_t at; uint32_t value; int width; const char *needle, *what; } cases[] = {
+        {200, 0, 8, "bone range table", "range table offset 0"},
+        {200, 100, 8, "bone range table", "range table in the header"},
+        {200, (uint32_t)size - 8, 8, "bone range table", "range table past the end"},
+        {ranges, 0x7fc00000u, 4, "range", "pos_min NaN"},
+        {ranges + 4, 0x7f800000u, 4, "range", "pos_min infinite"},
+        {ranges + 12, 0, 4, "range", "scale_max 0"},
+        {ranges + 16, 0xff7fffffu, 4, "range", "pos_max below pos_min"},
+        {ranges + 28, 1, 4, "range", "reserved word not 0"},
+        {8, 5, 4, "flag bit 5 (local rows) in a version 5 file", "bit 5 in a version 5 file"},
+        {24, 1, 4, "local rows need qpos and u16 or float", "precision half"},
+        {bones + 8, 0, 4, "its own ancestor", "bone 0 its own parent"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        memcpy(d, good, size);
+        if (cases[i].width == 8) wr64(d + cases[i].at, cases[i].value);
+        else wr32(d + cases[i].at, cases[i].value);
+        expect_rejected(d, size, cases[i].needle, cases[i].what);
+    }
+    free(good), free(d);
+}
+
 static void test_zstd_payload_reads_back_identical(void **state)
 {
     (void)state;
@@ -227,12 +263,11 @@ static void test_zstd_payload_reads_back_identical(void **state)
     cbpal_close(&a), cbpal_close(&b);
 }
 
-static void test_inspect_frame_matches_sample(void **state)
+static void inspect_frame_matches_sample(const char *options)
 {
-    (void)state;
     char fox[1024], cmd[4096], out[256];
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
-    bake(fox, TMP "/f.pal", "--layout mat4 --precision float");
+    bake(fox, TMP "/f.pal", options);
     snprintf(cmd, sizeof cmd,
              "%s inspect %s/f.pal --clip Walk --frame 7 > %s/inspect.json && "
              "%s sample %s --fps 30 --clip Walk --frame 7 --json > %s/sample.json && python3 -c \"import json; "
@@ -245,7 +280,15 @@ static void test_inspect_frame_matches_sample(void **state)
     assert_int_equal(sscanf(out, "%d %d %lf", &na, &nb, &worst), 3);
     assert_int_equal(na, 24);
     assert_int_equal(nb, 24);
+    printf("  %s: worst %.3g\n", options, worst);
     assert_true(worst < 1e-4); /* float32 storage of matrices whose terms reach ~100 */
+}
+
+static void test_inspect_frame_matches_sample(void **state)
+{
+    (void)state;
+    inspect_frame_matches_sample("--layout mat4 --precision float");
+    inspect_frame_matches_sample("--bone-space local --precision float"); /* local rows: inspect composes them */
 }
 
 static void test_failed_bake_leaves_no_file_and_keeps_the_old_one(void **state)
@@ -279,6 +322,7 @@ int main(void)
         cmocka_unit_test(test_exr_reads_back_bit_identical_and_opens_in_openexr_tools),
         cmocka_unit_test(test_u16_is_refused_for_exr),
         cmocka_unit_test(test_corruption_is_rejected),
+        cmocka_unit_test(test_local_corruption_is_rejected),
         cmocka_unit_test(test_zstd_payload_reads_back_identical),
         cmocka_unit_test(test_inspect_frame_matches_sample),
         cmocka_unit_test(test_failed_bake_leaves_no_file_and_keeps_the_old_one),

@@ -3,8 +3,8 @@
 
 Bakes every bundled sample and every shared asset in several formats (.pal, .pal with zstd,
 .exr, mat4/half, affine/float; --fps auto and .pal + .exr + .ktx2 on the samples and Fox; .bvat.json on
-the samples, Fox and Cow), `inspect --json` of each
-default .pal, and the sample catalog (palettes, roster.json, depfile, with a --format pal,exr and a --format pal,babylon
+the samples, Fox and Cow; --bone-space local on the samples, Fox, Cow and Husky), `inspect --json` of each
+default and local .pal, and the sample catalog (palettes, roster.json, depfile, with a --format pal,exr and a --format pal,babylon
 override too), then compares the sha256 of every file with tests/bake_hashes.txt. A model that
 does not bake is recorded by its exit code. `make check` runs this (normal build only), so a
 refactoring that changes one output byte fails.
@@ -31,6 +31,7 @@ VARIANTS = [
 ]
 KTX2 = ('pal-exr-ktx2', ['-o', '{out}.pal', '--format', 'pal,exr,ktx2', '--precision', 'half', '--fps', '30'])
 BABYLON = ('babylon', ['-o', '{out}.bvat.json', '--fps', '30'])  # Babylon.js's baked vertex animation data
+LOCAL = ('local.pal', ['-o', '{out}.pal', '--fps', '30', '--bone-space', 'local'])  # local rows, .pal version 6
 # The default bake (no --fps: error-bounded within 1 mm/m, rows fitted or sampled per clip), kept
 # and in place; a model whose clips cannot meet the budget is recorded by its exit code (6), and
 # the other variants still run.
@@ -65,6 +66,7 @@ def bake_models(crowdbake, build, shared, tmp, out):
         key = key_of(model, shared)
         variants = VARIANTS + ([KTX2] if key.startswith('samples/') or key.endswith('fox-bevy/Fox.glb') else [])
         variants += [BABYLON] if key.startswith('samples/') or key.endswith(('Fox.glb', 'Cow.glb')) else []
+        variants += [LOCAL] if key.startswith('samples/') or key.endswith(('Fox.glb', 'Cow.glb', 'Husky.glb')) else []
         for name, args in variants + ERROR_BOUNDED:
             d = os.path.join(tmp, key.replace('/', '_'), name)
             os.makedirs(d)
@@ -77,7 +79,7 @@ def bake_models(crowdbake, build, shared, tmp, out):
                 break  # a model that does not bake fails the same way in every variant
             for f in sorted(os.listdir(d)):
                 out.append('%s %s %s %s' % (key, name, f, sha(os.path.join(d, f))))
-            if name == 'default.pal':
+            if name in ('default.pal', 'local.pal'):
                 p = run([crowdbake, 'inspect', 'out.pal', '--json'], cwd=d)  # no absolute path in what is hashed
                 out.append('%s %s inspect-json %s' % (key, name, hashlib.sha256(p.stdout).hexdigest()))
 

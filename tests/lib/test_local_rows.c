@@ -1,0 +1,251 @@
+/* test_local_rows.c - local rows (.pal version 6, header flag bit 5; docs/pal-format.md "Local rows")
+ * on real rigs, Cow and Husky at 30 fps, u16:
+ * - at the rows, the composed bone matrices (cbpal_bone_matrix, the one-header reader composing in
+ *   float) equal the joint matrices another implementation sampled (../shared/reference) to within
+ *   the u16 encoding, as the global bake's do;
+ * - between the rows, at the keys' rate (24 fps) the composed blend errs a fraction of the global
+ *   bake's blend at the same rate; at 30 fps, off the keys, about as much (both measured on every
+ *   skinned vertex against exact skinning, cb_verify_clip);
+ * - the header says version 6 only with bit 5; a global bake keeps its version;
+ * - local rows refuse half, mat4 and an EXR alone with a one-line error and write nothing. */
+#include "testutil.h"
+
+#include <math.h>
+
+#include "crowdbake_pal.h"
+#include "crowdbake/pal_view.h"
+#include "crowdbake/runtime.h"
+
+typedef struct ref_row {
+    char clip[96];
+    int frame, joint;
+    double t, m[16];
+} ref_row;
+
+/* Every row of a reference CSV (see ../shared/reference/README.md); skin 0 only. */
+static ref_row *read_reference(const char *path, size_t *count)
+{
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    size_t cap = 4096, n = 0;
+    ref_row *rows = malloc(cap * sizeof *rows);
+    char line[4096];
+    bool header = false;
+    while (fgets(line, sizeof line, f)) {
+        if (line[0] == '#' || !header) {
+            header = header || line[0] != '#';
+            continue;
+        }
+        if (n == cap) rows = realloc(rows, (cap *= 2) * sizeof *rows);
+        ref_row *r = &rows[n];
+        char *p = strchr(line, ',') + 1, *end = strchr(p, ',');
+        bool quoted = *p == '"'; /* names are quoted */
+        snprintf(r->clip, sizeof r->clip, "%.*s", (int)(end - p) - 2 * quoted, p + quoted);
+        r->frame = (int)strtol(end + 1, &p, 10);
+        strtol(p + 1, &p, 10);   /* frames */
+        r->t = strtod(p + 1, &p);
+        int skin = (int)strtol(p + 1, &p, 10);
+        r->joint = (int)strtol(p + 1, &p, 10);
+        for (int k = 0; k < 16; ++k) r->m[k] = strtod(p + 1, &p);
+        n += skin == 0;
+    }
+    fclose(f);
+    *count = n;
+    return rows;
+}
+
+/* Largest distance between where two matrices put the joint's bind position and points `reach`
+ * from it on each axis (bind space). */
+static double point_distance(const float *a, const double *b, const float *bind, double reach)
+{
+    double worst = 0;
+    for (int i = 0; i < 7; ++i) {
+        double p[3] = {bind[0], bind[1], bind[2]};
+        if (i) p[(i - 1) / 2] += (i % 2 ? reach : -reach);
+        double d2 = 0;
+        for (int r = 0; r < 3; ++r) {
+            double x = a[12 + r] - b[12 + r];
+            for (int c = 0; c < 3; ++c) x += (a[c * 4 + r] - b[c * 4 + r]) * p[c];
+            d2 += x * x;
+        }
+        worst = fmax(worst, sqrt(d2));
+    }
+    return worst;
+}
+
+/* The worst point distance at every row of every one-shot the reference holds at the same time, as the
+ * header reader gives the rows. */
+static double worst_at_rows(const cbpal_file *f, const ref_row *ref, size_t count)
+{
+    double worst = 0, reach = 0.1 * f->header.model_height;
+    size_t compared = 0;
+    for (size_t i = 0; i < count; ++i) {
+        for (uint32_t c = 0; c < f->header.clip_count; ++c) {
+            cbpal_clip clip;
+            cbpal_get_clip(f, c, &clip);
+            /* one-shots, whose rows lie at the reference's times (a loop is closed: its poses move by the
+             * mismatch spread over it, docs/usage.md), at the same time */
+            if (strcmp(clip.name, ref[i].clip) != 0 || (clip.flags & CBPAL_CLIP_LOOPS) || (uint32_t)ref[i].frame >= clip.frames ||
+                fabs(clip.start + ref[i].frame / (double)clip.fps - ref[i].t) > 1e-5)
+                continue;
+            float m[16];
+            cbpal_bone bone;
+            cbpal_get_bone(f, (uint32_t)ref[i].joint, &bone);
+            assert_int_equal(cbpal_bone_matrix(f, c, ((double)ref[i].frame + 1e-9) / clip.fps, (uint32_t)ref[i].joint, m), 0);
+            const double *c0 = ref[i].m; /* a tenth of the height in bind space: the rigs scale their bind space */
+            double d = point_distance(m, ref[i].m, bone.bind_position, reach / sqrt(c0[0] * c0[0] + c0[1] * c0[1] + c0[2] * c0[2]));
+            worst = fmax(worst, d);
+            ++compared;
+        }
+    }
+    assert_true(compared > 1000);
+    return worst;
+}
+
+/* The worst vertex error halfway between rows and at random times, every clip (cb_verify_clip). */
+static double worst_between(const char *model_path, const cbpal_file *f)
+{
+    cb_model *m = load_or_fail(model_path);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_palette view;
+    assert_non_null(s);
+    assert_int_equal(cb_palette_view(f, &view, &err), CB_OK);
+    double worst = 0;
+    for (uint32_t c = 0; c < view.clip_count; ++c) {
+        int32_t a = -1;
+        for (uint32_t k = 0; k < m->animation_count; ++k)
+            if (!strcmp(m->animations[k].name, view.clips[c].name)) a = (int32_t)k;
+        assert_true(a >= 0);
+        cb_clip_error e;
+        assert_int_equal(cb_verify_clip(s, &view, f->texels, c, a, 16, &e, &err), CB_OK);
+        worst = fmax(worst, e.interp_max);
+    }
+    cb_palette_view_free(&view);
+    cb_sampler_free(s);
+    cb_model_free(m);
+    return worst;
+}
+
+static void bake(const char *model, const char *options, const char *out, cbpal_file *f)
+{
+    char log[8192], err[256];
+    int rc = run_crowdbake(log, sizeof log, "bake %s -o %s --layout qpos --precision u16 -q %s", model, out, options);
+    if (rc) fail_msg("bake failed (%d): %s", rc, log);
+    if (cbpal_open(out, CBPAL_VERIFY_CHECKSUM, f, err, sizeof err)) fail_msg("%s", err);
+}
+
+/* Between rows at `fps`: the worst vertex error of the local and the global bake (model units). */
+static void between_rows(const char *model, const char *stem, int fps, double *local_error, double *global_error)
+{
+    char path[2][256], options[2][64];
+    for (int i = 0; i < 2; ++i) {
+        cbpal_file f;
+        snprintf(path[i], sizeof path[i], TEST_TMP "/local_rows_%s_%s%d.pal", stem, i ? "global" : "local", fps);
+        snprintf(options[i], sizeof options[i], "--fps %d%s", fps, i ? "" : " --bone-space local");
+        bake(model, options[i], path[i], &f);
+        assert_int_equal(f.header.version >= 6, i == 0); /* version 6 only with local rows, */
+        assert_int_equal((f.header.flags & CBPAL_FLAG_LOCAL_ROWS) != 0, i == 0); /* which bit 5 says */
+        *(i ? global_error : local_error) = worst_between(model, &f);
+        cbpal_close(&f);
+    }
+}
+
+static void check_model(const char *asset, const char *reference, const char *stem)
+{
+    char model[1024], csv[1024], local_path[256], global_path[256];
+    shared_path(model, sizeof model, asset);
+    shared_path(csv, sizeof csv, reference);
+    snprintf(local_path, sizeof local_path, TEST_TMP "/local_rows_%s_local.pal", stem);
+    snprintf(global_path, sizeof global_path, TEST_TMP "/local_rows_%s_global.pal", stem);
+    cbpal_file local, global;
+    bake(model, "--fps 30 --bone-space local", local_path, &local);
+    bake(model, "--fps 30", global_path, &global);
+    assert_int_equal(local.header.rows, global.header.rows); /* the same rate, the same rows */
+    size_t count = 0;
+    ref_row *ref = read_reference(csv, &count);
+    double h = local.header.model_height;
+    double rows_local = worst_at_rows(&local, ref, count), rows_global = worst_at_rows(&global, ref, count);
+    double mid30[2], mid24[2];
+    between_rows(model, stem, 30, &mid30[0], &mid30[1]);
+    between_rows(model, stem, 24, &mid24[0], &mid24[1]);
+    printf("  %s: at the rows vs the reference (30 fps): local %.3g mm/m, global %.3g mm/m; between rows, local vs "
+           "global: 30 fps %.3g vs %.3g mm/m, 24 fps (the keys' rate) %.3g vs %.3g mm/m\n", stem, 1000 * rows_local / h,
+           1000 * rows_global / h, 1000 * mid30[0] / h, 1000 * mid30[1] / h, 1000 * mid24[0] / h, 1000 * mid24[1] / h);
+    assert_true(rows_local < 1e-3 * h);        /* the u16 encoding composed down the chain: under 1 mm/m */
+    assert_true(rows_local < 10 * rows_global); /* and of the order of the global rows' */
+    /* At the keys' rate the local blend is the source's own interpolation: a fraction of the global
+     * blend's chords. Off it (30 fps over 24 fps keys) both cut the keys' kinks, about alike. */
+    assert_true(mid24[0] < 0.2 * mid24[1]);
+    assert_true(mid30[0] < 1.5 * mid30[1]);
+    free(ref);
+    cbpal_close(&local);
+    cbpal_close(&global);
+}
+
+static void test_cow_local_rows(void **state)
+{
+    (void)state;
+    check_model("assets/quaternius-cow/Cow.glb", "reference/Cow.fps30.csv", "cow");
+}
+
+static void test_husky_local_rows(void **state)
+{
+    (void)state;
+    check_model("assets/quaternius-husky/Husky.glb", "reference/Husky.fps30.csv", "husky");
+}
+
+/* Local rows need qpos and u16 or float, and a .pal: each refusal one line, exit 2, nothing written. */
+static void test_local_rows_refuse_what_cannot_hold_them(void **state)
+{
+    (void)state;
+    char model[1024], log[4096];
+    sample_path(model, sizeof model, "quadruped");
+    static const char *const refused[][2] = {{"--precision half", "half"}, {"--layout mat4", "qpos"},
+                                             {"--format exr", "only a .pal"}};
+    for (size_t i = 0; i < sizeof refused / sizeof refused[0]; ++i) {
+        remove(TEST_TMP "/local_refused.pal"), remove(TEST_TMP "/local_refused.exr");
+        int rc = run_crowdbake(log, sizeof log, "bake %s --bone-space local %s -o " TEST_TMP "/local_refused.pal", model,
+                               refused[i][0]);
+        printf("  %s: %s", refused[i][0], log);
+        assert_int_equal(rc, EXIT_USAGE);
+        assert_non_null(strstr(log, refused[i][1]));
+        assert_non_null(strstr(log, "--bone-space"));
+        assert_null(strchr(log, '\n') == log + strlen(log) - 1 ? NULL : log); /* one line */
+        assert_false(exists(TEST_TMP "/local_refused.pal") || exists(TEST_TMP "/local_refused.exr"));
+    }
+}
+
+/* The decision said: inspect's line and range table, bake --json's bone_space and its reason, the log's
+ * note; a global bake says none of it. */
+static void test_local_rows_are_stated(void **state)
+{
+    (void)state;
+    char model[1024], log[16384];
+    sample_path(model, sizeof model, "quadruped");
+    assert_int_equal(run_crowdbake(log, sizeof log, "bake %s --bone-space local --fps 30 -o " TEST_TMP "/stated.pal --json",
+                                   model), 0);
+    assert_non_null(strstr(log, "\"bone_space\": \"local\""));
+    assert_non_null(strstr(log, "bone space local: each row holds every bone's transform in its parent's frame"));
+    assert_int_equal(run_crowdbake(log, sizeof log, "inspect " TEST_TMP "/stated.pal"), 0);
+    assert_non_null(strstr(log, "crowdbake palette v6"));
+    assert_non_null(strstr(log, "bones: local (composed by the runtime); range table: 41 bones"));
+    assert_int_equal(run_crowdbake(log, sizeof log, "inspect " TEST_TMP "/stated.pal --json"), 0);
+    assert_non_null(strstr(log, "\"bone_ranges\""));
+    assert_int_equal(run_crowdbake(log, sizeof log, "bake %s --fps 30 -o " TEST_TMP "/stated.pal --json", model), 0);
+    assert_null(strstr(log, "bone_space"));
+    assert_int_equal(run_crowdbake(log, sizeof log, "inspect " TEST_TMP "/stated.pal"), 0);
+    assert_null(strstr(log, "bones: local"));
+}
+
+int main(void)
+{
+    mkdir(TEST_TMP, 0755);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cow_local_rows),
+        cmocka_unit_test(test_husky_local_rows),
+        cmocka_unit_test(test_local_rows_refuse_what_cannot_hold_them),
+        cmocka_unit_test(test_local_rows_are_stated),
+    };
+    return cmocka_run_group_tests_name("local_rows", tests, NULL, NULL);
+}
