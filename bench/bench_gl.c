@@ -11,8 +11,8 @@
  * on the CPU, a program each, compiled with CB_INFLUENCES 1, 2, 4; --lod-single: one draw, the tier found per vertex);
  * BENCH_GL_BONES_GLSL=FILE: the bone pass and its draw from another library, the palette and the VAT from the shipped
  * one (weighs a change in one run); BENCH_GL_PASS_GLSL=FILE: the bone pass's fragment main from FILE, after it;
- * --local-rows: the palette and the pass read local rows (bench_gl_local.h; the shipped GLSL with CB_LOCAL_ROWS, the
- * direct path and the bone pass walking each bone's chain); --pass-only: `bones` is the pass.
+ * --local-rows: the palette baked with local rows (--bone-space local, bench_gl_local.h; the shipped GLSL with
+ * CB_LOCAL_ROWS, the direct path and the bone pass walking each bone's chain); --pass-only: `bones` is the pass.
  *
  * The palette and the VAT are baked here from MODEL.glb alike (qpos/u16 and RGBA16F, 30 fps; --check 120, in
  * place), so both play the same frames. Methods alternate within a count (a change of the
@@ -224,9 +224,12 @@ int main(int argc, char **argv)
      * auto rate's ceiling (the rate fps "auto" may ship) 0.017 units, and 0.3-0.6% (bench/RESULTS.txt gl43). */
     if (check) o.fps = CB_AUTO_MAX_FPS;
     o.affine_fallback = true; /* as the command's bake: a rig qpos cannot hold (the spider's non-uniform scale) in affine */
+    cb_bake_options palette_options = o;
+    for (int a = 3; a < argc; ++a)
+        if (!strcmp(argv[a], "--local-rows")) palette_options.bone_space = CB_BONE_SPACE_LOCAL;
     cb_palette pal;
     cb_vat vat;
-    if (!sampler || cb_palette_bake(sampler, &o, NULL, 0, &pal, &err) != CB_OK ||
+    if (!sampler || cb_palette_bake(sampler, &palette_options, NULL, 0, &pal, &err) != CB_OK ||
         cb_vat_bake(sampler, &o, NULL, 0, true, &vat, &err) != CB_OK) {
         fprintf(stderr, "bench_gl: %s\n", err.message);
         return 1;
@@ -240,14 +243,11 @@ int main(int argc, char **argv)
             if (!*c) break;
         }
     scene s = {.pal = &pal, .pass_pal = &pal, .vat = &vat, .sampler = sampler, .tiers = true};
-    int32_t *parents = malloc(pal.bone_count * 4);
     float *meta = calloc(pal.bone_count * 12, sizeof(float));
-    bench_joint_parents(model, 0, parents, meta); /* and the chains' depths, on stderr */
+    s.local_rows = pal.bone_space == CB_BONE_SPACE_LOCAL;
+    if (s.local_rows) bench_local_rows(&pal, meta); /* and the chains' depths, on stderr */
     s.bone_meta = meta;
-    cb_palette local = {0};
     for (int a = 3; a < argc; ++a) {
-        if (!strcmp(argv[a], "--local-rows") && !local.texels)
-            bench_local_palette(&pal, parents, &local, meta), s.pal = s.pass_pal = &local, s.local_rows = true;
         s.lod |= !strcmp(argv[a], "--lod") || !strcmp(argv[a], "--lod-single");
         s.tiers &= strcmp(argv[a], "--lod-single") != 0;
         s.pass_only |= !strcmp(argv[a], "--pass-only");
@@ -275,7 +275,7 @@ int main(int argc, char **argv)
     free(bones_glsl), free(pass_glsl);
     GLuint target = bench_offscreen_target(WIDTH, HEIGHT);
     int rc = check ? bench_check_images(&s, target) : (bench_counts(&s, argv[2], frames, target), 0);
-    free(s.instances), free(s.order), free(parents), free(meta), free(local.texels);
+    free(s.instances), free(s.order), free(meta);
     cb_vat_free(&vat);
     cb_palette_free(&pal);
     cb_sampler_free(sampler);

@@ -14,7 +14,7 @@
 #define METHODS 3
 
 typedef struct scene {
-    const cb_palette *pal, *pass_pal; /* pass_pal: what the bone pass reads, pal (both the local rows with --local-rows) */
+    const cb_palette *pal, *pass_pal; /* pass_pal: what the bone pass reads (pal itself; --local-rows: both local) */
     const cb_vat *vat;
     const float *bone_meta; /* cb_bind_positions rows 2..4 of local rows (12 floats a bone, bench_gl_local.h) */
     bool local_rows; /* --local-rows: the palette's rows are local (CB_LOCAL_ROWS) */
