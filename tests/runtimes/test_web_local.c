@@ -9,7 +9,10 @@
  * - Images: the Crowd (per vertex, bone pass, the LOD's tiers drawn apart) and CrowdbakeHerd (three.js: per vertex,
  *   bone pass) drawing the local palette against the same drawing of the global one: the share of covered pixels
  *   that differ; the local rows drawn as global: most of them.
- * - Sockets: CrowdbakeHerd.boneMatrixAt places every joint of the local palette within 1 mm/m of the global one's. */
+ * - Sockets: CrowdbakeHerd.boneMatrixAt places every joint of the local palette within 1 mm/m of the global one's.
+ * - `crowdbake view` of a catalog of Cow and Husky with bone_space = "local" (browser/view_check.mjs, 1,000 animals):
+ *   it serves version 6 palettes, and the palette half covers the VAT half's pixels (exact skinning of the same
+ *   frames) as closely as the global catalog's does. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
@@ -100,6 +103,52 @@ static void check_model(const char *name)
     }
 }
 
+/* Header bytes 8 (version) and 12 (flags) of a .pal. */
+static void pal_version_flags(const char *path, uint32_t *version, uint32_t *flags)
+{
+    unsigned char h[16] = {0};
+    FILE *f = fopen(path, "rb");
+    if (!f) fail_msg("%s: not written", path);
+    assert_int_equal(fread(h, 1, sizeof h, f), sizeof h);
+    fclose(f);
+    *version = h[8] | h[9] << 8 | (uint32_t)h[10] << 16 | (uint32_t)h[11] << 24;
+    *flags = h[12] | h[13] << 8 | (uint32_t)h[14] << 16 | (uint32_t)h[15] << 24;
+}
+
+/* `crowdbake view` of Cow and Husky with bone_space `space`: the palette half's pixels against the VAT half's. */
+static double view_mismatch(const char *space)
+{
+    char cow[PATH_MAX], husky[PATH_MAX], dir[PATH_MAX];
+    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
+    shared_path(husky, sizeof husky, "assets/quaternius-husky/Husky.glb");
+    snprintf(dir, sizeof dir, TMP "/view-%s", space);
+    assert_int_equal(run(NULL, 0, "mkdir -p %s && cat > %s/herd.toml <<EOF\n[bake]\nbone_space = \"%s\"\nroot_motion = \"in-place\"\n"
+                         "[animal.cow]\nmodel = \"$(realpath %s)\"\nstates = { idle = [\"AnimalArmature|Idle\"], walk = "
+                         "[\"AnimalArmature|Walk\"], gallop = [\"AnimalArmature|Gallop\"] }\n[animal.husky]\nmodel = \"$(realpath %s)\"\n"
+                         "states = { idle = [\"AnimalArmature|Idle\"], walk = [\"AnimalArmature|Walk\"] }\nEOF", dir, dir, space, cow, husky), 0);
+    static char view[1 << 17];
+    int rc = run(view, sizeof view, "node tests/runtimes/browser/view_check.mjs %s %s/herd.toml %s/cache %s/view.png 1000 "
+                 "2>&1", crowdbake_exe(), dir, dir, dir);
+    if (rc) fail_msg("view_check.mjs failed (%d): %.2000s", rc, view);
+    assert_non_null(strstr(view, "\"console_errors\":[]"));
+    assert_non_null(strstr(view, "\"exit\":{\"code\":0"));
+    char pal[PATH_MAX + 64];
+    uint32_t version, flags;
+    snprintf(pal, sizeof pal, "%s/cache/site/data/cow.pal", dir);
+    pal_version_flags(pal, &version, &flags);
+    assert_true(strcmp(space, "local") ? !(flags & 32) : version == 6 && (flags & 32));
+    return json_number_after(view, "palette_vs_vat_mismatch");
+}
+
+static void test_view_draws_a_local_catalog(void **state)
+{
+    (void)state;
+    double local = view_mismatch("local"), global = view_mismatch("global");
+    printf("  crowdbake view, 1,000 Cows: the palette half and the VAT half differ on %.3f%% of the covered pixels "
+           "(bone_space local), %.3f%% (global)\n", 100 * local, 100 * global);
+    assert_true(local <= 0.01 && local <= global + 0.001);
+}
+
 static void test_cow(void **state)
 {
     (void)state;
@@ -117,6 +166,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cow),
         cmocka_unit_test(test_husky),
+        cmocka_unit_test(test_view_draws_a_local_catalog),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
