@@ -6,7 +6,7 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFileSync } from 'node:fs';
 import path from 'node:path';
-import { readPal, boneMatrix, instanceFrame, LAYOUTS, PRECISIONS, CLIP_STEP } from '../crowdbake_pal.mjs';
+import { readPal, boneMatrix, hasLocalRows, instanceFrame, LAYOUTS, PRECISIONS, CLIP_STEP } from '../crowdbake_pal.mjs';
 import { CROWDBAKE, FOX, tmpDir, bake, jointMatrix } from './support.mjs';
 
 const dir = tmpDir('sockets');
@@ -47,6 +47,27 @@ for (const layout of LAYOUTS) {
             assert.ok(worst <= bound, `${layout} ${precision}: ${worst} over ${bound}`);
         });
     }
+}
+
+// Local rows (bake --bone-space local): each bone's rows hold it in its parent's frame; boneMatrix composes the chain,
+// and at the rows that must give the exact joint matrices as well as a global bake does.
+for (const precision of ['u16', 'float']) {
+    test(`local rows: boneMatrix composes to crowdbake sample at the rows: qpos ${precision}`, () => {
+        const pal = readPal(bake(FOX, path.join(dir, `local-${precision}.pal`), ['--layout', 'qpos', '--precision', precision,
+                                                                                  '--bone-space', 'local', '--max-error', '1000']));
+        const h = pal.header, reach = 0.1 * h.model_height;
+        assert.ok(hasLocalRows(h), 'baked as local rows');
+        let worst = 0;
+        pal.clips.forEach((clip, c) => {
+            for (const s of sampled.clips[c].samples)
+                for (let j = 0; j < h.bone_count; ++j)
+                    worst = Math.max(worst, pointDistance(boneMatrix(pal, c, s.frame / clip.fps, j), s.joints[j],
+                                                          pal.bones[j].bind_position, reach));
+        });
+        const bound = precision === 'float' ? 1e-5 * h.model_height : 2 * h.max_error + 1e-4 * h.model_height;
+        assert.ok(worst <= bound, `local ${precision}: ${worst} over ${bound}`);
+        console.log(`  local ${precision}: sockets within ${worst.toExponential(2)} of crowdbake sample (height ${h.model_height})`);
+    });
 }
 
 test('boneMatrix between rows is the blend of the two rows the GLSL computes', () => {
