@@ -1,5 +1,6 @@
 // crowdbake_pal.mjs - reader for crowdbake .pal bone-matrix palettes and the roster manifest.
-// An ES module with no dependencies, for browsers and Node. Public domain / MIT-0.
+// An ES module with no third-party dependencies (beside it: crowdbake_pose.mjs, crowdbake_xxh64.mjs), for browsers
+// and Node. Public domain / MIT-0.
 //
 //     import { readPal, readRoster } from './crowdbake_pal.mjs';
 //     const pal = readPal(new Uint8Array(await (await fetch('goat.pal')).arrayBuffer()),

@@ -1,7 +1,7 @@
 // crowdbake_pose.mjs - a bone's skinning matrix at a time, decoded and blended as
 // runtimes/glsl/crowdbake_palette.glsl does it (sockets, the LOD's measure, tests), and the local rows of
 // .pal version 6 composed down the skeleton (docs/pal-format.md). crowdbake_pal.mjs re-exports these.
-// An ES module with no dependencies beyond crowdbake_pal.mjs. Public domain / MIT-0.
+// No third-party dependencies; it imports crowdbake_pal.mjs's constants (which re-exports it). Public domain / MIT-0.
 
 import { FLAG_POSITIONS_RELATIVE, FLAG_LOCAL_ROWS } from './crowdbake_pal.mjs';
 
