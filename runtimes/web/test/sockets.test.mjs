@@ -136,6 +136,22 @@ test('a STEP-keyed clip (version 4) holds its rows: its row alone between rows, 
     assert.ok(compared > 100 && worst < 1e-4, `${compared} times, worst ${worst}`);
 });
 
+test('local rows hold a STEP-keyed clip\'s rows too: the reference between its keys, composed', () => {
+    const model = '../shared/assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf';
+    const pal = readPal(bake(model, path.join(dir, 'step-local.pal'), ['--fps', 'auto', '--bone-space', 'local']));
+    const clip = pal.clips[0];
+    assert.ok(hasLocalRows(pal.header) && clip.step);
+    let worst = 0, compared = 0;
+    for (const f of referenceFrames('../shared/reference/gltf_simple_skin_step.fps30.csv')) {
+        const t = f.t + 1 / 60;
+        if (Math.floor(f.t * 2 + 1e-6) !== Math.floor(t * 2 - 1e-6)) continue;
+        f.joints.forEach((ref, j) => boneMatrix(pal, 0, t, j).forEach((x, e) => { worst = Math.max(worst, Math.abs(x - ref[e])); }));
+        ++compared;
+    }
+    assert.ok(compared > 100 && worst < 1e-4, `${compared} times, worst ${worst}`);
+    console.log(`  held local rows: ${compared} times between keys within ${worst.toExponential(2)} of the reference`);
+});
+
 test('boneMatrix refuses a clip, bone or time that does not exist', () => {
     const pal = readPal(bake(FOX, path.join(dir, 'bad.pal'), ['--max-error', '1000']));
     assert.equal(boneMatrix(pal, 0, 0.1, 0).length, 16);
