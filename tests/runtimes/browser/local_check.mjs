@@ -11,7 +11,7 @@
 //   same way; two broken runtimes the same way: the local rows drawn as global ('no_local': CB_LOCAL_ROWS and the
 //   bind texture's rows 2..4 left out) and the shader's compose step skipped ('no_compose');
 // - image: the eight steady ones drawn lit (Crowd: direct, bone pass, the LOD's tiers drawn apart; CrowdbakeHerd: per vertex and bone
-//   pass) against the global palette's image: the share of covered pixels that differ;
+//   pass, the LOD's tiers drawn apart) against the global palette's image: the share of covered pixels that differ;
 // - sockets: CrowdbakeHerd.boneMatrixAt of every bone (cross-fades included) against the global palette's.
 // Errors are in model heights (the palette header's model_height). Prints JSON; tests/runtimes/test_web_local.c judges.
 import { withPage, checkRoutes, THREE_PAGE } from './driver.mjs';
@@ -101,7 +101,8 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
                 return herd;
             };
             const herds = { global: herdOf(global, { bonePass: false }), direct: herdOf(local, { bonePass: false }),
-                            bones: herdOf(local, { bonePass: true }), global_bones: herdOf(global, { bonePass: true }) };
+                            bones: herdOf(local, { bonePass: true }), global_bones: herdOf(global, { bonePass: true }),
+                            tiers: herdOf(local, { bonePass: true, lodTiers: true }), global_tiers: herdOf(global, { bonePass: true, lodTiers: true }) };
             const rows = [];
             for (const t of [0.4, 1.3]) {
                 const row = { time: t, capture: {}, image: {}, herd: {} };
@@ -125,11 +126,12 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
                         a.cb_inst.array.set(o.inst, i * 4), a.cb_from.array.set(o.inst, i * 4);
                         a.cb_inst.needsUpdate = a.cb_from.needsUpdate = true;
                     });
-                    herd.update(t, view.renderer);
+                    herd.update(t, view.renderer, what.endsWith('tiers') ? camera : undefined); // the camera: tiers drawn apart
                     images[what] = view.image(herd, camera);
                 }
                 row.herd.direct = compareColours(images.global, images.direct, 24);
                 row.herd.bones = compareColours(images.global_bones, images.bones, 24);
+                row.herd.tiers = compareColours(images.global_tiers, images.tiers, 24);
                 // Each joint where boneMatrixAt puts it (the bone's matrix at its bind position), local against global.
                 let socket = 0;
                 for (let i = 0; i < 8; ++i)
