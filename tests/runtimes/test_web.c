@@ -17,13 +17,12 @@
 
 #define TMP TEST_TMP "/web"
 
-/* Largest |browser - C runtime| over a conformance case, in tolerances (conformance.h); `variant` names another
- * run of the case (skin_check.mjs: "bones", "nocompose" for local rows) or is "". */
-static double compare_run(const conformance *c, const char *name, const char *variant, double *units)
+/* Largest |browser - C runtime| over a conformance case, in tolerances (conformance.h). */
+static double compare(const conformance *c, const char *name, double *units)
 {
     const conf_case *k = conformance_case(c, name);
     char path[PATH_MAX];
-    snprintf(path, sizeof path, TMP "/%s.out%s%s", name, *variant ? "." : "", variant);
+    snprintf(path, sizeof path, TMP "/%s.out", name);
     size_t size = 0;
     float *got = (float *)read_whole_file(path, &size);
     if (!got) fail_msg("%s: the browser wrote no result", name);
@@ -31,11 +30,6 @@ static double compare_run(const conformance *c, const char *name, const char *va
     double ratio = conformance_compare(c, k, got, units);
     free(got);
     return ratio;
-}
-
-static double compare(const conformance *c, const char *name, double *units)
-{
-    return compare_run(c, name, "", units);
 }
 
 /* A local case's run by the browser (`variant`: "" as given, "bones" through the bone pass, "nocompose" broken), in
