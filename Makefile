@@ -435,8 +435,8 @@ bake-hashes: all
 	python3 tests/tools/bake_hashes.py --write --build $(BUILD) --shared $(SHARED)
 # The native crowd benchmark's images, not its times: palette, bone pass and VAT draw the same herd (the samples and
 # the shared models it can afford: Fox non-indexed without normals, the robot's 14 meshes, Cow, Husky, the rigged
-# figure, the spider's affine fallback); and the bone pass that composes local rows up each chain
-# (bench/bones_local.glsl, issue 43 item 1's lever) the same image.
+# figure, the spider's affine fallback); and local rows (the shipped GLSL's CB_LOCAL_ROWS: the direct path and the
+# bone pass composing each bone's chain, issue 43 item 1) the same image.
 BENCH_GL_MODELS = $(BUILD)/samples/fish.glb $(BUILD)/samples/quadruped.glb $(SHARED)/assets/fox-bevy/Fox.glb \
   $(SHARED)/assets/robot-quaternius-raylib/robot.glb $(SHARED)/assets/quaternius-cow/Cow.glb \
   $(SHARED)/assets/quaternius-husky/Husky.glb $(SHARED)/assets/riggedfigure-raylib/rigged_figure.glb \
@@ -444,7 +444,7 @@ BENCH_GL_MODELS = $(BUILD)/samples/fish.glb $(BUILD)/samples/quadruped.glb $(SHA
 $(BUILD)/tests/bench_gl_images.run: all $(BUILD)/bench_gl | $(RESULTS)/pending
 	$(call record_run,bench_gl_images,for m in $(BENCH_GL_MODELS); do EGL_PLATFORM=surfaceless $(BUILD)/bench_gl \
 	  $$m --check || exit 1; done && EGL_PLATFORM=surfaceless \
-	  BENCH_GL_PASS_GLSL=bench/bones_local.glsl $(BUILD)/bench_gl $(BUILD)/samples/quadruped.glb --check --local-rows)
+	  $(BUILD)/bench_gl $(BUILD)/samples/quadruped.glb --check --local-rows)
 $(BUILD)/tests/web_reader.run: all $(NODE_DEPS) | $(RESULTS)/pending
 	$(call record_run,web_reader,CROWDBAKE=$(BUILD)/crowdbake SAMPLES=$(BUILD)/samples node --test runtimes/web/test/)
 # The Bazel rules (bazel/, docs/bazel.md) against the one-step bake, the disk and HTTP caches and

@@ -11,7 +11,8 @@
  * on the CPU, a program each, compiled with CB_INFLUENCES 1, 2, 4; --lod-single: one draw, the tier found per vertex);
  * BENCH_GL_BONES_GLSL=FILE: the bone pass and its draw from another library, the palette and the VAT from the shipped
  * one (weighs a change in one run); BENCH_GL_PASS_GLSL=FILE: the bone pass's fragment main from FILE, after it;
- * --local-rows: the pass reads local rows (bench_gl_local.h, bench/bones_local.glsl); --pass-only: `bones` is the pass.
+ * --local-rows: the palette baked with local rows (--bone-space local, bench_gl_local.h; the shipped GLSL with
+ * CB_LOCAL_ROWS, the direct path and the bone pass walking each bone's chain); --pass-only: `bones` is the pass.
  *
  * The palette and the VAT are baked here from MODEL.glb alike (qpos/u16 and RGBA16F, 30 fps; --check 120, in
  * place), so both play the same frames. Methods alternate within a count (a change of the
@@ -100,16 +101,16 @@ static const char *PASS_FRAGMENT =
 
 /* The shipped library with the palette's defines (and CB_BONE_TEXTURE for `bones`, CB_INFLUENCES for `influences`
  * other than 0) before each stage's main. */
-static GLuint program(const char *library, const cb_palette *p, bool bones, int influences, const char *const *vs, int vs_n,
-                      const char *const *fs, int fs_n)
+static GLuint program(const char *library, const cb_palette *p, bool local_rows, bool bones, int influences,
+                      const char *const *vs, int vs_n, const char *const *fs, int fs_n)
 {
     static const char *layouts[] = {"CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS"};
     static const char *precisions[] = {"CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16"};
     char defines[256], count[32] = "";
     if (influences) snprintf(count, sizeof count, "#define CB_INFLUENCES %d\n", influences);
-    snprintf(defines, sizeof defines, "#version 330 core\n#define %s\n#define %s\n%s%s%s", layouts[p->layout],
+    snprintf(defines, sizeof defines, "#version 330 core\n#define %s\n#define %s\n%s%s%s%s", layouts[p->layout],
              precisions[p->precision], p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "",
-             bones ? "#define CB_BONE_TEXTURE\n" : "", count);
+             local_rows ? "#define CB_LOCAL_ROWS\n" : "", bones ? "#define CB_BONE_TEXTURE\n" : "", count);
     const char *v[8] = {defines, library}, *f[8] = {defines, library};
     for (int i = 0; i < vs_n; ++i) v[2 + i] = vs[i];
     for (int i = 0; i < fs_n; ++i) f[2 + i] = fs[i];
@@ -223,9 +224,12 @@ int main(int argc, char **argv)
      * auto rate's ceiling (the rate fps "auto" may ship) 0.017 units, and 0.3-0.6% (bench/RESULTS.txt gl43). */
     if (check) o.fps = CB_AUTO_MAX_FPS;
     o.affine_fallback = true; /* as the command's bake: a rig qpos cannot hold (the spider's non-uniform scale) in affine */
+    cb_bake_options palette_options = o;
+    for (int a = 3; a < argc; ++a)
+        if (!strcmp(argv[a], "--local-rows")) palette_options.bone_space = CB_BONE_SPACE_LOCAL;
     cb_palette pal;
     cb_vat vat;
-    if (!sampler || cb_palette_bake(sampler, &o, NULL, 0, &pal, &err) != CB_OK ||
+    if (!sampler || cb_palette_bake(sampler, &palette_options, NULL, 0, &pal, &err) != CB_OK ||
         cb_vat_bake(sampler, &o, NULL, 0, true, &vat, &err) != CB_OK) {
         fprintf(stderr, "bench_gl: %s\n", err.message);
         return 1;
@@ -239,13 +243,11 @@ int main(int argc, char **argv)
             if (!*c) break;
         }
     scene s = {.pal = &pal, .pass_pal = &pal, .vat = &vat, .sampler = sampler, .tiers = true};
-    int32_t *parents = malloc(pal.bone_count * 4);
-    float *meta = calloc(pal.bone_count * 8, sizeof(float));
-    bench_joint_parents(model, 0, parents, meta); /* and the chains' depths, on stderr */
+    float *meta = calloc(pal.bone_count * 12, sizeof(float));
+    s.local_rows = pal.bone_space == CB_BONE_SPACE_LOCAL;
+    if (s.local_rows) bench_local_rows(&pal, meta); /* and the chains' depths, on stderr */
     s.bone_meta = meta;
-    cb_palette local = {0};
     for (int a = 3; a < argc; ++a) {
-        if (!strcmp(argv[a], "--local-rows") && !local.texels) bench_local_palette(&pal, parents, &local, meta), s.pass_pal = &local;
         s.lod |= !strcmp(argv[a], "--lod") || !strcmp(argv[a], "--lod-single");
         s.tiers &= strcmp(argv[a], "--lod-single") != 0;
         s.pass_only |= !strcmp(argv[a], "--pass-only");
@@ -261,19 +263,19 @@ int main(int argc, char **argv)
     const char *bones_lib = bones_glsl ? bones_glsl : cb_palette_glsl;
     for (int m = 0; m < METHODS; ++m) {
         const char *vs[3] = {MAIN_HEAD, skins[m], MAIN_TAIL};
-        s.prog[m] = program(m == 1 ? bones_lib : cb_palette_glsl, &pal, m == 1, 0, vs, m == 1 ? 2 : 3, NULL, 0);
+        s.prog[m] = program(m == 1 ? bones_lib : cb_palette_glsl, s.pal, s.local_rows, m == 1, 0, vs, m == 1 ? 2 : 3, NULL, 0);
     }
     const char *tier_vs[2] = {MAIN_HEAD, SKIN_TIER};
-    for (int k = 0; k < 3; ++k) s.tier_prog[k] = program(bones_lib, &pal, true, 1 << k, tier_vs, 2, NULL, 0);
+    for (int k = 0; k < 3; ++k) s.tier_prog[k] = program(bones_lib, s.pal, s.local_rows, true, 1 << k, tier_vs, 2, NULL, 0);
     const char *pass_path = getenv("BENCH_GL_PASS_GLSL"); /* another fragment main for the bone pass */
     char *pass_glsl = pass_path ? bench_read_text(pass_path) : NULL;
     if (pass_path && !pass_glsl) bench_die("BENCH_GL_PASS_GLSL: cannot read that file (a bone pass's fragment main)");
     const char *pass_fragment = pass_glsl ? pass_glsl : PASS_FRAGMENT;
-    s.pass = program(bones_lib, s.pass_pal, false, 0, &PASS_VERTEX, 1, &pass_fragment, 1);
+    s.pass = program(bones_lib, s.pass_pal, s.local_rows, false, 0, &PASS_VERTEX, 1, &pass_fragment, 1);
     free(bones_glsl), free(pass_glsl);
     GLuint target = bench_offscreen_target(WIDTH, HEIGHT);
     int rc = check ? bench_check_images(&s, target) : (bench_counts(&s, argv[2], frames, target), 0);
-    free(s.instances), free(s.order), free(parents), free(meta), free(local.texels);
+    free(s.instances), free(s.order), free(meta);
     cb_vat_free(&vat);
     cb_palette_free(&pal);
     cb_sampler_free(sampler);

@@ -1,43 +1,30 @@
 #!/usr/bin/env python3
-"""Issue 43 item 1's lever, weighed at draw time: a bone pass that composes local rows up each chain
-(bench/bones_local.glsl, bench_gl --local-rows) against today's pass of global rows, on llvmpipe through EGL.
+"""Issue 43 item 1, weighed at draw time: local rows (the shipped GLSL's CB_LOCAL_ROWS, bench_gl --local-rows: the
+bone pass and the direct path each walking a bone's chain) against global rows, on llvmpipe through EGL.
 
     python3 bench/local_walk.py [--rounds R] [--frames K] [--count N] [--models Cow,Husky]
 
-Each round runs, per model, bench_gl N --lod with today's pass and with the walking pass in turns (the order
-alternating round by round), and the same two with --pass-only (the pass alone). Reported: medians over the rounds
-of each run's VAT / lod frame-time ratio (bench_gl pairs each frame's VAT with the same moment's lod frame: a change
-of load hits both), wall and CPU, of the frame CPU ms, and of the pass's own CPU ms; the load average around them."""
+Each round runs, per model, bench_gl N --lod with global and with local rows in turns (the order alternating round
+by round), and the same two with --pass-only (the pass alone). Reported: medians over the rounds of each run's VAT /
+lod frame-time ratio (bench_gl pairs each frame's VAT with the same moment's lod frame: a change of load hits both),
+wall and CPU, of the frame CPU ms (palette: the direct path), and of the pass's own CPU ms; the load average."""
 import argparse
 import json
 import os
 import statistics
-import tempfile
 
 from common import BUILD, SHARED, run
 
 MODELS = {'Cow': os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb'),
           'Husky': os.path.join(SHARED, 'assets', 'quaternius-husky', 'Husky.glb'),
           'fish': os.path.join(BUILD, 'samples', 'fish.glb')}
-VARIANTS = ('global', 'walk')
-
-
-def pass_glsl(variant):
-    """bones_local.glsl for 'walk'; for 'levels', the same with CB_LEVEL_PROXY defined (a temporary copy)."""
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'bones_local.glsl')
-    if variant == 'walk':
-        return path
-    proxy = os.path.join(tempfile.gettempdir(), 'bones_levels_%d.glsl' % os.getpid())
-    with open(path) as f, open(proxy, 'w') as out:
-        out.write('#define CB_LEVEL_PROXY\n' + f.read())
-    return proxy
+VARIANTS = ('global', 'local')
 
 
 def bench(model, variant, count, frames, pass_only):
     env = dict(os.environ, EGL_PLATFORM=os.environ.get('EGL_PLATFORM', 'surfaceless'))
     args = [os.path.join(BUILD, 'bench_gl'), MODELS[model], str(count), '--frames', str(frames), '--lod']
     if variant != 'global':
-        env['BENCH_GL_PASS_GLSL'] = pass_glsl(variant)
         args.append('--local-rows')
     if pass_only:
         args.append('--pass-only')
@@ -51,22 +38,20 @@ def main():
     ap.add_argument('--frames', type=int, default=5)
     ap.add_argument('--count', type=int, default=1000)
     ap.add_argument('--models', default='Cow,Husky')
-    ap.add_argument('--levels', action='store_true', help='also the pass alone with CB_LEVEL_PROXY (bones_local.glsl)')
     a = ap.parse_args()
     keys = ('vat_over_lod', 'cpu_vat_over_lod', 'lod_cpu_ms', 'vat_cpu_ms', 'palette_cpu_ms', 'pass_cpu_ms')
     got = {}
     loads = []
-    variants = VARIANTS + (('levels',) if a.levels else ())
+    variants = VARIANTS
     for m, v in [(m, v) for m in a.models.split(',') for v in variants]:
         got[(m, v)] = {k: [] for k in keys}
     for r in range(a.rounds):
         for m in a.models.split(','):
             for v in (variants if r % 2 == 0 else variants[::-1]):
                 loads.append(os.getloadavg()[0])
-                if v != 'levels':  # the proxy's pixels are wrong: its pass alone only
-                    frame = bench(m, v, a.count, a.frames, False)
-                    for k in keys[:5]:
-                        got[(m, v)][k].append(frame[k])
+                frame = bench(m, v, a.count, a.frames, False)
+                for k in keys[:5]:
+                    got[(m, v)][k].append(frame[k])
                 got[(m, v)]['pass_cpu_ms'].append(bench(m, v, a.count, 3, True)['lod_cpu_ms'])
         print('round %d done, load %.2f' % (r + 1, loads[-1]), flush=True)
     print('%d instances a model (--lod), %d rounds of %d frames, load average %.2f-%.2f' % (

@@ -4,6 +4,9 @@
 //   #define CB_LAYOUT_MAT4 | CB_LAYOUT_AFFINE | CB_LAYOUT_QPOS        (the .pal header's layout)
 //   #define CB_PRECISION_FLOAT | CB_PRECISION_HALF | CB_PRECISION_U16 (its precision)
 //   #define CB_POSITIONS_RELATIVE   when the header's flags have bit 2 (4: a half palette, version 2 or 3)
+//   #define CB_LOCAL_ROWS           when the header's flags have bit 5 (32: local rows, .pal version 6; qpos and
+//                                   u16 or float): each row holds a bone in its parent's frame, and every bone
+//                                   read is composed by walking its chain to the root (below)
 //   #define CB_INFLUENCES 1|2       optional, for a mesh written with `crowdbake mesh --max-influences 1|2`:
 //                                   only that many bones per vertex are read (a far LOD's cheaper shader);
 //                                   with CB_BONE_TEXTURE also the animation LOD's far tiers drawn apart
@@ -16,6 +19,12 @@
 // version 3's offset table, the bind position in version 2), which CB_POSITIONS_RELATIVE adds to
 // the stored position (qpos texel 1; mat4 and affine: the translation, which then holds the
 // joint's position p = M b, skinned as A (v - b) + p).
+//
+// Local rows (CB_LOCAL_ROWS): cb_bind_positions has 5 rows: row 2 x = the bone's parent (the bone table's
+// `parent`, a float, -1 for a root), row 3 = (pos_min.xyz, scale_max) and row 4 = (pos_max.xyz, 0) from the
+// file's bone range table (u16 positions and scales decode with the bone's own ranges; float files ignore them).
+// A bone's two rows are blended in its parent's frame, then composed with each ancestor's, blended alike, up to
+// the root - in the direct path per influence and vertex, in the bone pass once per instance and bone.
 //
 // Per-instance data, the roster manifest's four numbers: inst.x first row (negative for a clip
 // whose rows are held, not blended - .pal clip flag bit 2, a STEP-keyed clip: its first row is
@@ -55,6 +64,13 @@ precision highp usampler2D;
 
 #ifndef CB_INFLUENCES
 #define CB_INFLUENCES 4
+#endif
+
+#if defined(CB_LOCAL_ROWS) && (!defined(CB_LAYOUT_QPOS) || defined(CB_PRECISION_HALF) || defined(CB_POSITIONS_RELATIVE))
+#error "CB_LOCAL_ROWS: local rows need CB_LAYOUT_QPOS and CB_PRECISION_U16 or CB_PRECISION_FLOAT (.pal flag bit 5)"
+#endif
+#ifndef CB_MAX_CHAIN
+#define CB_MAX_CHAIN 64 // ancestors a local bone's walk visits at most (the shared models' deepest chain: 11)
 #endif
 
 #if defined(CB_LAYOUT_MAT4)
@@ -213,6 +229,83 @@ cb_affine cb_affine_mix(cb_affine f, cb_affine m, float fade)
     return cb_affine(m.a * fade + f.a * (1.0 - fade), mix(f.t, m.t, fade));
 }
 
+#ifdef CB_LOCAL_ROWS
+// ---- Local rows: a bone in its parent's frame (q, p, s: v -> p + s R(q) (v - b_bone)), composed up its chain ----
+
+struct cb_local {
+    vec4 q;
+    vec3 p;
+    float s;
+};
+
+// Texel 1 (position, scale) of a local bone between two rows. u16: blended as stored, then scaled once into the
+// bone's own ranges (cb_bind_positions rows 3 and 4; linear, so the same as decoding each row first).
+vec4 cb_local_position_scale(int row0, int row1, float fr, int bone)
+{
+    int block0 = row0 / cb_rows_per_block, block1 = row1 / cb_rows_per_block, x = bone * CB_TEXELS_PER_BONE + 1;
+    ivec2 xy0 = ivec2(block0 * cb_row_texels + x, row0 - block0 * cb_rows_per_block);
+    ivec2 xy1 = ivec2(block1 * cb_row_texels + x, row1 - block1 * cb_rows_per_block);
+#ifdef CB_PRECISION_U16
+    vec4 u = mix(vec4(texelFetch(cb_palette, xy0, 0)), vec4(texelFetch(cb_palette, xy1, 0)), fr) / 65535.0;
+    vec4 lo = texelFetch(cb_bind_positions, ivec2(bone, 3), 0), hi = texelFetch(cb_bind_positions, ivec2(bone, 4), 0);
+    return vec4(lo.xyz + (hi.xyz - lo.xyz) * u.xyz, lo.w * u.w); // cb:local-ranges - pos_min..pos_max, 0..scale_max
+#else
+    return mix(texelFetch(cb_palette, xy0, 0), texelFetch(cb_palette, xy1, 0), fr);
+#endif
+}
+
+// A bone's local row blended between row0 and row1, as cb_bone_affine blends a global qpos row.
+cb_local cb_local_blend(int row0, int row1, float fr, int bone)
+{
+    vec4 q0 = cb_texel(row0, bone, 0), q1 = cb_texel(row1, bone, 0);
+    if (dot(q0, q1) < 0.0) q1 = -q1; // the shorter way between the rows
+    vec4 ps = cb_local_position_scale(row0, row1, fr, bone);
+    return cb_local(normalize(mix(q0, q1, fr)), ps.xyz, ps.w);
+}
+
+// A cross-fade of two blended local rows, from f (fade 0) to m (fade 1), blended as two rows are.
+cb_local cb_local_mix(cb_local f, cb_local m, float fade)
+{
+    if (dot(f.q, m.q) < 0.0) m.q = -m.q;
+    return cb_local(normalize(mix(f.q, m.q, fade)), mix(f.p, m.p, fade), mix(f.s, m.s, fade));
+}
+
+// A bone's local transform at this moment: its rows blended, and cross-faded from the other clip's (fade < 1).
+cb_local cb_local_at(ivec2 rows, float fr, ivec2 from_rows, float from_fr, float fade, int bone)
+{
+    cb_local m = cb_local_blend(rows.x, rows.y, fr, bone);
+    if (fade < 1.0) m = cb_local_mix(cb_local_blend(from_rows.x, from_rows.y, from_fr, bone), m, fade); // cb:local-fade
+    return m;
+}
+
+int cb_parent(int bone) { return int(texelFetch(cb_bind_positions, ivec2(bone, 2), 0).x); }
+
+vec4 cb_quat_mul(vec4 a, vec4 b) { return vec4(a.w * b.xyz + b.w * a.xyz + cross(a.xyz, b.xyz), a.w * b.w - dot(a.xyz, b.xyz)); }
+
+vec3 cb_quat_rotate(vec4 q, vec3 v)
+{
+    vec3 t = 2.0 * cross(q.xyz, v);
+    return v + q.w * t + cross(q.xyz, t);
+}
+
+// The composed (skinning) transform of a bone of local rows: its own local transform, then each ancestor's put in
+// front, q = q_a q, s = s_a s, p = p_a + s_a rotate(q_a, p - b_a) - associative, so the walk goes up the chain
+// with no stack and no parent-first order (a parent may come after its child in the bone table).
+cb_affine cb_bone_local(ivec2 rows, float fr, ivec2 from_rows, float from_fr, float fade, int bone)
+{
+    cb_local m = cb_local_at(rows, fr, from_rows, from_fr, fade, bone);
+    int a = cb_parent(bone);
+    for (int depth = 0; a >= 0 && depth < CB_MAX_CHAIN; ++depth) { // cb:local-walk (the bound: a loader checked the table)
+        cb_local up = cb_local_at(rows, fr, from_rows, from_fr, fade, a);
+        vec3 b = texelFetch(cb_bind_positions, ivec2(a, 0), 0).xyz;
+        m = cb_local(cb_quat_mul(up.q, m.q), up.p + up.s * cb_quat_rotate(up.q, m.p - b), up.s * m.s); // cb:local-compose
+        a = cb_parent(a);
+    }
+    mat3 lin = m.s * cb_quat_matrix(normalize(m.q)); // v -> p + s R (v - b), as cb_bone_affine
+    return cb_affine(lin, m.p - lin * texelFetch(cb_bind_positions, ivec2(bone, 0), 0).xyz);
+}
+#endif
+
 // How many of a vertex's influences to read: up to its last nonzero weight, at most CB_INFLUENCES.
 // CPU rasterisers (SwiftShader, llvmpipe) shade several vertices at once and run a masked-off `if`
 // all the same, but leave a loop once none of their vertices goes on: a loop this long reads
@@ -237,8 +330,12 @@ void cb_skin_both(vec3 v, vec3 n, ivec4 joints, vec4 weights, vec4 from_inst, ve
     // cb:influences - up to the last nonzero weight (crowdbake mesh puts the largest first), a loop and
     // not an `if` per influence, which a CPU rasteriser's vertex lanes would all pay for.
     for (int i = 0; i < cb_influence_count(weights); ++i) {
+#ifdef CB_LOCAL_ROWS
+        cb_affine m = cb_bone_local(ivec2(row0, row1), fr, ivec2(from0, from1), from_fr, fade, joints[i]);
+#else
         cb_affine m = cb_bone_affine(row0, row1, fr, joints[i]);
         if (fade < 1.0) m = cb_affine_mix(cb_bone_affine(from0, from1, from_fr, joints[i]), m, fade);
+#endif
         p += weights[i] * (m.a * v + m.t);
         skinned_n += weights[i] * (m.a * n);
     }
@@ -312,11 +409,18 @@ void cb_bone_pass(int bone, vec4 from_inst, vec4 inst, float fade, float time, o
     int row0, row1;
     float fr;
     cb_frame(inst, time, row0, row1, fr);
+#ifdef CB_LOCAL_ROWS
+    int from0, from1;
+    float from_fr;
+    cb_frame(from_inst, time, from0, from1, from_fr);
+    cb_affine m = cb_bone_local(ivec2(row0, row1), fr, ivec2(from0, from1), from_fr, fade, bone); // its chain composed
+#else
     cb_affine m = cb_bone_affine(row0, row1, fr, bone);
     if (fade < 1.0) {
         cb_frame(from_inst, time, row0, row1, fr);
         m = cb_affine_mix(cb_bone_affine(row0, row1, fr, bone), m, fade);
     }
+#endif
     c0 = vec4(m.a[0], m.t.x), c1 = vec4(m.a[1], m.t.y), c2 = vec4(m.a[2], m.t.z);
 }
 

@@ -1,9 +1,11 @@
 /* test_gl_conformance.c - the runtime conformance cases (conformance.h: the one set every runtime's
  * test reads) through the shipped GLSL on a real OpenGL, Mesa's llvmpipe: every case's instances,
- * cross-fades included, skinned by cb_skin_position_crossfade and captured with transform feedback,
- * against the C runtime's expected positions within 1e-5 of the model's height; every broken case
- * that GL can express (bones transposed, rows off by one, a shader line broken) misses by far. The
- * bone-pass cases are the web runtime's (runtimes/web/crowdbake_bones.mjs) and are run there. */
+ * cross-fades included, skinned by cb_skin_position_crossfade (the direct path) and by cb_bone_pass (the bone
+ * pass's function, called per vertex) and captured with transform feedback, against the C runtime's expected
+ * positions within 1e-5 of the model's height; local rows (CB_LOCAL_ROWS) composed both ways, their cross-fades
+ * held to the spec's (local_conformance.h); every broken case that GL can express (bones transposed, rows off
+ * by one, a shader line broken, local rows not composed) misses by far. The bone-pass cases (its textures) are
+ * the web runtime's (runtimes/web/crowdbake_bones.mjs) and are run there. */
 #define _DEFAULT_SOURCE
 #define GL_GLEXT_PROTOTYPES
 #include "testutil.h"
@@ -12,22 +14,41 @@
 
 #include "runtimes/conformance.h"
 #include "runtimes/gl_harness.h"
+#include "runtimes/local_conformance.h"
 
 #define TMP TEST_TMP "/gl-conformance"
+#define LOCAL_ROWS_DEFINE(p) ((p)->bone_space == CB_BONE_SPACE_LOCAL ? "#define CB_LOCAL_ROWS\n" : "")
 
-static GLuint compile_crossfade(const cb_palette *p, const char *library)
+/* How a case's vertices are skinned: the direct path (cb_skin_position_crossfade), or each influence's bone from
+ * cb_bone_pass (the bone pass's fragment function, called here per vertex: the columns it would write to the bone
+ * texture, applied as cb_skin_bone_pass applies them), which composes local rows per bone where the direct path
+ * composes them per influence. */
+typedef enum { PATH_DIRECT, PATH_BONE_PASS } skin_path;
+
+static const char *const SKIN_DIRECT =
+    "    v_skinned = cb_skin_position_crossfade(a_position, a_joints, a_weights, a_from, a_instance, fade, a_time);\n";
+static const char *const SKIN_BONE_PASS =
+    "    v_skinned = vec3(0.0);\n"
+    "    for (int i = 0; i < 4; ++i) {\n"
+    "        if (a_weights[i] == 0.0) continue;\n"
+    "        vec4 c0, c1, c2;\n"
+    "        cb_bone_pass(a_joints[i], a_from, a_instance, fade, a_time, c0, c1, c2);\n"
+    "        v_skinned += a_weights[i] * (mat3(c0.xyz, c1.xyz, c2.xyz) * a_position + vec3(c0.w, c1.w, c2.w));\n"
+    "    }\n";
+
+static GLuint compile_crossfade(const cb_palette *p, const char *library, skin_path path)
 {
-    static char src[1 << 16];
+    static char src[1 << 17];
     snprintf(src, sizeof src,
-             "#version 330 core\n#define %s\n#define %s\n%s%s\n"
+             "#version 330 core\n#define %s\n#define %s\n%s%s%s\n"
              "in vec3 a_position; in ivec4 a_joints; in vec4 a_weights; in vec4 a_instance; in float a_time;\n"
              "layout(location = 6) in vec4 a_from; layout(location = 7) in vec2 a_fade;\nout vec3 v_skinned;\n"
              "void main() {\n"
-             "    float fade = a_fade.y > 0.0 ? clamp((a_time - a_fade.x) / a_fade.y, 0.0, 1.0) : 1.0;\n"
-             "    v_skinned = cb_skin_position_crossfade(a_position, a_joints, a_weights, a_from, a_instance, fade, a_time);\n"
+             "    float fade = a_fade.y > 0.0 ? clamp((a_time - a_fade.x) / a_fade.y, 0.0, 1.0) : 1.0;\n%s"
              "    gl_Position = vec4(0.0);\n}\n",
              layout_define[p->layout], precision_define[p->precision],
-             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "", library);
+             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "", LOCAL_ROWS_DEFINE(p), library,
+             path == PATH_BONE_PASS ? SKIN_BONE_PASS : SKIN_DIRECT);
     return link_program(src, false); /* a_from and a_fade at the locations their layout names */
 }
 
@@ -97,14 +118,73 @@ static float *gpu_case(const conformance *c, const conf_case *k, GLuint prog)
     return result;
 }
 
-/* The GLSL library's cross-fade on Mesa, its output captured by transform feedback. */
+/* The GLSL library's cross-fade on Mesa (ctx: the skin_path), its output captured by transform feedback. */
 static float *gl_case(const conformance *c, const conf_case *k, const char *source, void *ctx)
 {
-    (void)ctx;
-    GLuint prog = compile_crossfade(&c->palettes[k->palette].view, source);
+    GLuint prog = compile_crossfade(&c->palettes[k->palette].view, source, *(const skin_path *)ctx);
     float *got = gpu_case(c, k, prog);
     glDeleteProgram(prog);
     return got;
+}
+
+/* Every case that is not broken (nor the web runtime's bone pass) through cb_bone_pass, global ones only: the same
+ * tolerance. */
+static void check_bone_pass(const conformance *c, const char *lib)
+{
+    skin_path path = PATH_BONE_PASS;
+    int ran = 0;
+    for (int i = 0; i < c->case_count; ++i) {
+        const conf_case *k = &c->cases[i];
+        if (k->bone_pass || k->broken || k->local) continue;
+        float *got = gl_case(c, k, lib, &path);
+        double units, ratio = conformance_compare(c, k, got, &units);
+        printf("  %-26s %7zu positions: cb_bone_pass vs C runtime %.2g (%.2f of the tolerance)\n", k->name,
+               conf_positions(c, k), units, ratio);
+        assert_true(ratio <= 1);
+        ++ran;
+        free(got);
+    }
+    assert_true(ran >= 12);
+}
+
+/* The local cases (.pal version 6) in the direct path and through cb_bone_pass: steady instances within the
+ * tolerance of the C runtime's positions, cross-fading ones of the spec's (local_conformance.h: the two clips' local
+ * rows blended before composing, where conf_expected mixes composed skins); with the compose line removed from the
+ * library (each bone its local row alone) both paths must miss by far. */
+static void check_local(const conformance *c, const char *lib)
+{
+    static const char *const names[2] = {"direct", "cb_bone_pass"};
+    char *skipped = break_shader(lib, "cb:local-compose", "");
+    int ran = 0;
+    for (int i = 0; i < c->case_count; ++i) {
+        const conf_case *k = &c->cases[i];
+        if (!k->local) continue;
+        for (skin_path path = PATH_DIRECT; path <= PATH_BONE_PASS; path = (skin_path)(path + 1)) {
+            double ratio[3], broken[3];
+            float *got = gl_case(c, k, lib, &path), *bad = gl_case(c, k, skipped, &path);
+            local_conformance_ratios(c, k, got, ratio);
+            local_conformance_ratios(c, k, bad, broken);
+            printf("  %-18s %-12s steady %.2f, cross-fades %.2f of the tolerance (mixing composed skins: %.0f); "
+                   "compose skipped: %.0f\n", k->name, names[path], ratio[0], ratio[1], ratio[2], broken[0]);
+            assert_true(ratio[0] <= 1 && ratio[1] <= 1);
+            assert_true(broken[0] > 10);
+            free(got), free(bad);
+        }
+        ++ran;
+    }
+    free(skipped);
+    assert_int_equal(ran, 3);
+}
+
+/* conformance.h's cases less the local ones (check_local's), for conformance_check_shader. */
+static conformance *global_cases(const conformance *c)
+{
+    conformance *g = malloc(sizeof *g);
+    *g = *c;
+    g->case_count = 0;
+    for (int i = 0; i < c->case_count; ++i)
+        if (!c->cases[i].local) g->cases[g->case_count++] = c->cases[i];
+    return g;
 }
 
 static void test_conformance_cases(void **state)
@@ -113,7 +193,12 @@ static void test_conformance_cases(void **state)
     conformance conf;
     conformance_make(&conf, TMP);
     char *lib = read_whole_file(GLSL_PATH, NULL);
-    conformance_check_shader(&conf, lib, gl_case, NULL);
+    skin_path direct = PATH_DIRECT;
+    conformance *global = global_cases(&conf);
+    conformance_check_shader(global, lib, gl_case, &direct);
+    check_bone_pass(&conf, lib);
+    check_local(&conf, lib);
+    free(global);
     free(lib);
     conformance_free(&conf);
 }

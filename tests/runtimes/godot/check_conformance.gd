@@ -39,7 +39,9 @@ func _check_case(c: Dictionary) -> void:
 	var positions := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["positions"]).to_float32_array()
 	var joints := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["joints"])
 	var weights := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["weights"]).to_float32_array()
-	var expected := FileAccess.get_file_as_bytes(DIR + "/" + c["expected"]).to_float32_array()
+	# local rows: cross-fades held to the spec's (local rows blended per bone, then composed; test_godot.c)
+	var expected_file: String = c["name"] + ".local_expected" if c.get("local", false) else c["expected"]
+	var expected := FileAccess.get_file_as_bytes(DIR + "/" + expected_file).to_float32_array()
 	var group: Dictionary = c["groups"][0]
 	var time: float = group["time"]
 	var verts := positions.size() / 3
@@ -48,7 +50,10 @@ func _check_case(c: Dictionary) -> void:
 	for v in group["instances"]:
 		var to := _skin(pal, Vector4(v[4], v[5], v[6], v[7]), time, positions, joints, weights)
 		var fade := clampf((time - v[12]) / v[13], 0.0, 1.0) if v[13] > 0.0 else 1.0
-		if fade < 1.0: # blending positions linearly is blending the bones linearly
+		if fade < 1.0 and pal.local_rows: # local rows fade bone by bone before they are composed
+			to = _skin_faded(pal, Vector4(v[8], v[9], v[10], v[11]), Vector4(v[4], v[5], v[6], v[7]), fade, time, positions,
+					joints, weights)
+		elif fade < 1.0: # blending positions linearly is blending the bones linearly
 			var from := _skin(pal, Vector4(v[8], v[9], v[10], v[11]), time, positions, joints, weights)
 			for i in verts:
 				to[i] = from[i].lerp(to[i], fade)
@@ -73,6 +78,18 @@ static func _skin(pal, inst: Vector4, time: float, positions: PackedFloat32Array
 	var bones: Array[Transform3D] = []
 	for bone in pal.bone_names.size():
 		bones.append(pal.matrix_at(inst, time, bone))
+	return _skin_by(bones, positions, joints, weights)
+
+# The same cross-faded from instance `from` by the addon's matrix_crossfade_at (local rows: the fade per bone).
+static func _skin_faded(pal, from: Vector4, inst: Vector4, fade: float, time: float, positions: PackedFloat32Array,
+		joints: PackedByteArray, weights: PackedFloat32Array) -> PackedVector3Array:
+	var bones: Array[Transform3D] = []
+	for bone in pal.bone_names.size():
+		bones.append(pal.matrix_crossfade_at(from, inst, fade, time, bone))
+	return _skin_by(bones, positions, joints, weights)
+
+static func _skin_by(bones: Array[Transform3D], positions: PackedFloat32Array, joints: PackedByteArray,
+		weights: PackedFloat32Array) -> PackedVector3Array:
 	var out := PackedVector3Array()
 	out.resize(positions.size() / 3)
 	for i in out.size():

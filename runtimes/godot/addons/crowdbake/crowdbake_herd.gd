@@ -144,7 +144,8 @@ func _material() -> ShaderMaterial:
 	shader.code = code
 	var material := ShaderMaterial.new()
 	material.shader = shader
-	for key in ["bind_positions", "positions_relative", "row_texels", "rows_per_block", "bounds_min", "bounds_max", "linear_range"]:
+	for key in ["bind_positions", "positions_relative", "row_texels", "rows_per_block", "bounds_min", "bounds_max", "linear_range",
+			"local_rows"]:
 		material.set_shader_parameter(key, palette.get(key))
 	material.set_shader_parameter("palette", palette.texture)
 	material.set_shader_parameter("instances_per_row", INSTANCES_PER_ROW)

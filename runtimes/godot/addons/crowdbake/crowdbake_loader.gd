@@ -28,6 +28,8 @@ const HEADER_SIZE := 256
 # (Godot 4.6: custom data 3001 reads 3000 in the shader), which hold integers exactly only up to 2048.
 const COMPATIBILITY_MAX_ROW := 2048
 const BONE_ENTRY_SIZE := 32
+const RANGE_ENTRY_SIZE := 32 # version 6's bone range table (local rows): pos_min, scale_max, pos_max, reserved
+const LOCAL_ROWS := 32       # header flag bit 5: each row holds a bone in its parent's frame (version 6)
 
 var roster: Dictionary = {}
 var error := "" # the last failure, one line
@@ -51,7 +53,7 @@ func load_roster(path: String) -> bool:
 	return true
 
 # Reads a .pal: {texture, image (the texels, for CPU-side lookups), bind_positions, layout, precision,
-# row_texels, rows_per_block, bounds_min, bounds_max, linear_range}, or {} with `error` set.
+# row_texels, rows_per_block, bounds_min, bounds_max, linear_range, local_rows}, or {} with `error` set.
 func load_palette(path: String) -> Dictionary:
 	var f := FileAccess.open(path, FileAccess.READ)
 	if f == null:
@@ -66,8 +68,8 @@ func load_palette(path: String) -> Dictionary:
 	var flags := head.decode_u32(12)
 	var layout := head.decode_u32(20)
 	var precision := head.decode_u32(24)
-	if version < 1 or version > 5 or head.decode_u32(16) != HEADER_SIZE:
-		_fail("%s: palette format version %d is not supported (this loader reads versions 1 to 5); use the loader of the crowdbake that baked it"
+	if version < 1 or version > 6 or head.decode_u32(16) != HEADER_SIZE:
+		_fail("%s: palette format version %d is not supported (this loader reads versions 1 to 6); use the loader of the crowdbake that baked it"
 				% [path, version])
 		return {}
 	if layout > 2 or precision > 2:
@@ -83,6 +85,12 @@ func load_palette(path: String) -> Dictionary:
 	var offset_table := head.decode_u64(184) if version >= 3 and flags & 4 else 0
 	# Version 5: the per-row travel offsets (one float a row), what a herd adds along a clip's heading.
 	var travel_table := head.decode_u64(192) if version >= 5 and flags & 16 else 0
+	# Version 6: local rows (flag bit 5), each bone's ranges in the bone range table (header byte 200).
+	var local_rows := version >= 6 and flags & LOCAL_ROWS != 0
+	var range_table := head.decode_u64(200) if local_rows else 0
+	if local_rows and (layout != 2 or precision == 1):
+		_fail("%s: local rows need qpos and u16 or float, not %s/%s; the file is damaged, re-bake it" % [path, LAYOUTS[layout], PRECISIONS[precision]])
+		return {}
 	var rows := head.decode_u32(40)
 	var payload_offset := head.decode_u64(152)
 	var payload_size := head.decode_u64(160)
@@ -95,6 +103,7 @@ func load_palette(path: String) -> Dictionary:
 			or bone_table < HEADER_SIZE or bone_table + bones * BONE_ENTRY_SIZE > file_size \
 			or (offset_table != 0 and offset_table + bones * 12 > file_size) or (version >= 3 and flags & 4 and offset_table < HEADER_SIZE) \
 			or (version >= 5 and flags & 16 and (travel_table < HEADER_SIZE or travel_table + rows * 4 > file_size)) \
+			or (local_rows and (range_table < HEADER_SIZE or range_table % 4 != 0 or range_table + bones * RANGE_ENTRY_SIZE > file_size)) \
 			or payload_offset < HEADER_SIZE or payload_size < 1 or payload_offset + payload_size > file_size \
 			or (flags & 1 == 0 and payload_size != raw_size):
 		_fail("%s: the header's sizes do not add up (or the file is truncated to %d bytes); re-bake it" % [path, file_size])
@@ -122,7 +131,13 @@ func load_palette(path: String) -> Dictionary:
 			bind.append_array([offsets.decode_float(i * 12), offsets.decode_float(i * 12 + 4), offsets.decode_float(i * 12 + 8), 0.0])
 	else:
 		bind.append_array(bind.duplicate())
-	var bind_image := Image.create_from_data(bones, 2, false, Image.FORMAT_RGBAF, bind.to_byte_array())
+	if local_rows: # rows 2..4 of the shaders' bone texture: the parent; pos_min, scale_max; pos_max, 0
+		f.seek(range_table)
+		var local := _local_bone_rows(path, table, f.get_buffer(bones * RANGE_ENTRY_SIZE), bones)
+		if local.is_empty():
+			return {}
+		bind.append_array(local)
+	var bind_image := Image.create_from_data(bones, bind.size() / (bones * 4), false, Image.FORMAT_RGBAF, bind.to_byte_array())
 	var row_travel := PackedFloat32Array()
 	if travel_table != 0:
 		f.seek(travel_table)
@@ -132,6 +147,7 @@ func load_palette(path: String) -> Dictionary:
 		"image": image,
 		"bind_positions": ImageTexture.create_from_image(bind_image),
 		"bind": bind, # the same, 4 floats per bone and row, for CPU-side lookups
+		"local_rows": local_rows, # version 6 flag bit 5: rows in each bone's parent's frame, composed down its chain
 		"row_travel": row_travel, # version 5: each row's travel offset along its clip's heading; else empty
 		"positions_relative": 1.0 if flags & 4 else 0.0, # qpos/half: position texels hold p less the offset (row 1)
 		"layout": LAYOUTS[layout],
@@ -142,6 +158,44 @@ func load_palette(path: String) -> Dictionary:
 		"bounds_min": Vector3(head.decode_float(76), head.decode_float(80), head.decode_float(84)),
 		"bounds_max": Vector3(head.decode_float(88), head.decode_float(92), head.decode_float(96)),
 	}
+
+# bind_positions rows 2..4 of a file of local rows (docs/pal-format.md, version 6), 12 floats a bone after the
+# bone table's parents and the bone range table are checked as include/crowdbake_pal.h checks them (parents in
+# range and no chain that loops - the shaders walk each chain to its root; ranges finite, min <= max,
+# scale_max > 0, reserved 0); empty with `error` set when one fails.
+func _local_bone_rows(path: String, bone_table: PackedByteArray, ranges: PackedByteArray, bones: int) -> PackedFloat32Array:
+	var parents := PackedInt32Array()
+	for i in bones:
+		parents.append(bone_table.decode_s32(i * BONE_ENTRY_SIZE + 8))
+	for i in bones:
+		var steps := 0
+		var p := parents[i]
+		while p >= 0 and p < bones and steps <= bones:
+			p = parents[p]
+			steps += 1
+		if p < -1 or p >= bones or steps > bones:
+			_fail("%s: bone %d's parent chain leaves the bone table or loops; the file is damaged, re-bake it" % [path, i])
+			return PackedFloat32Array()
+	var rows := PackedFloat32Array()
+	rows.resize(bones * 12)
+	for i in bones:
+		var at := i * RANGE_ENTRY_SIZE
+		var low := Vector3(ranges.decode_float(at), ranges.decode_float(at + 4), ranges.decode_float(at + 8))
+		var scale_max := ranges.decode_float(at + 12)
+		var high := Vector3(ranges.decode_float(at + 16), ranges.decode_float(at + 20), ranges.decode_float(at + 24))
+		if not (low.is_finite() and high.is_finite() and is_finite(scale_max)) or scale_max <= 0.0 \
+				or low.x > high.x or low.y > high.y or low.z > high.z or ranges.decode_u32(at + 28) != 0:
+			_fail("%s: bone %d's entry of the bone range table is not finite, min > max or scale_max <= 0; the file is damaged, re-bake it" % [path, i])
+			return PackedFloat32Array()
+		rows[i * 4] = float(parents[i])
+		rows[(bones + i) * 4] = low.x
+		rows[(bones + i) * 4 + 1] = low.y
+		rows[(bones + i) * 4 + 2] = low.z
+		rows[(bones + i) * 4 + 3] = scale_max
+		rows[(2 * bones + i) * 4] = high.x
+		rows[(2 * bones + i) * 4 + 1] = high.y
+		rows[(2 * bones + i) * 4 + 2] = high.z
+	return rows
 
 # The value of `#define NAME n` in a shader's source, or -1.
 static func _shader_define(code: String, name: String) -> int:
@@ -159,7 +213,7 @@ func apply_palette(material: ShaderMaterial, pal: Dictionary, what: String) -> b
 	if _shader_define(code, "CB_LAYOUT") != layout or _shader_define(code, "CB_U16") != u16:
 		return _fail("%s: the palette is %s/%s; set `#define CB_LAYOUT %d` and `#define CB_U16 %d` at the top of %s" %
 				[what, pal["layout"], pal["precision"], layout, u16, material.shader.resource_path])
-	for name in ["bind_positions", "positions_relative", "row_texels", "rows_per_block"]:
+	for name in ["bind_positions", "positions_relative", "row_texels", "rows_per_block", "local_rows"]:
 		material.set_shader_parameter(name, pal[name])
 	material.set_shader_parameter("palette", pal["texture"])
 	if u16:

@@ -17,6 +17,8 @@ const CLIP_ENTRY_SIZE := 80
 
 @export_storage var texture: ImageTexture          # the payload as baked: RGBA16UI (u16), RGBAH (half) or RGBAF (float)
 @export_storage var bind_positions: ImageTexture   # row 0 the bones' bind positions, row 1 their position offsets
+                                                   # (local rows: rows 2..4, the parents and each bone's ranges)
+@export_storage var local_rows := false            # version 6 flag bit 5: rows hold each bone in its parent's frame
 @export_storage var positions_relative := 0.0
 @export_storage var layout := ""                   # mat4, affine, qpos
 @export_storage var precision := ""                # float, half, u16
@@ -36,7 +38,7 @@ const CLIP_ENTRY_SIZE := 80
 var error := "" # the last failure, one line
 
 @export_storage var _payload := PackedByteArray() # the texels, for bone_matrix
-@export_storage var _bind := PackedFloat32Array() # 4 floats per bone: row 0 then row 1 of bind_positions
+@export_storage var _bind := PackedFloat32Array() # 4 floats per bone: row 0, row 1 (local rows: to row 4) of bind_positions
 @export_storage var _width := 0
 @export_storage var _texel_bytes := 0
 @export_storage var _texels_per_bone := 0
@@ -49,7 +51,7 @@ func load_file(path: String) -> bool:
 		error = loader.error
 		return false
 	for key in ["texture", "bind_positions", "positions_relative", "layout", "precision", "row_texels",
-			"rows_per_block", "linear_range", "bounds_min", "bounds_max"]:
+			"rows_per_block", "linear_range", "bounds_min", "bounds_max", "local_rows"]:
 		set(key, pal[key])
 	var image: Image = pal["image"]
 	_payload = image.get_data()
@@ -125,10 +127,26 @@ func bone_matrix(clip, time: float, bone: int):
 		return null
 	return matrix_at(clip_instance(index), time, bone)
 
-# The skinning matrix of `bone` for an instance's four numbers at `time`: cb_frame, then cb_bone.
+# The skinning matrix of `bone` for an instance's four numbers at `time`: cb_frame, then cb_bone (local rows:
+# composed down the bone's chain).
 func matrix_at(inst: Vector4, time: float, bone: int) -> Transform3D:
 	var frame := frame_at(inst, time)
+	if local_rows:
+		return _composed(frame, frame, 1.0, bone)
 	return _blend(frame[0], frame[1], frame[2], bone)
+
+# The skinning matrix of `bone` cross-faded from instance `from` (fade 0) to `inst` (fade 1) at `time`, as the
+# shaders fade: global rows, the two matrices blended linearly; local rows, each bone's two blended local rows
+# blended again (nlerp, lerp) before they are composed.
+func matrix_crossfade_at(from: Vector4, inst: Vector4, fade: float, time: float, bone: int) -> Transform3D:
+	var frame := frame_at(inst, time)
+	var from_frame := frame_at(from, time)
+	if local_rows:
+		return _composed(frame, from_frame, fade, bone)
+	var a := _blend(from_frame[0], from_frame[1], from_frame[2], bone)
+	var b := _blend(frame[0], frame[1], frame[2], bone)
+	return Transform3D(Basis(a.basis.x.lerp(b.basis.x, fade), a.basis.y.lerp(b.basis.y, fade), a.basis.z.lerp(b.basis.z, fade)),
+			a.origin.lerp(b.origin, fade))
 
 # The body's travel offset (.pal version 5) for an instance's four numbers at `time`, in the model's
 # frame: the rows' offsets blended as the shaders blend the rows, along the clip's heading. A herd
@@ -163,6 +181,49 @@ static func frame_at(inst: Vector4, time: float) -> Array:
 	if held:
 		return [int(first + f0), int(first + f0), 0.0]
 	return [int(first + f0), int(first + f1), fpos - f0]
+
+# ---- local rows (.pal version 6): [q (Vector4 x, y, z, w), p, s], v -> p + s R(q) (v - b_bone) ----
+
+# A bone's local row blended between a frame's two rows (cb_local_blend of the GLSL).
+func _local_blend(frame: Array, bone: int) -> Array:
+	var q0 := _texel(frame[0], bone, 0)
+	var q1 := _texel(frame[1], bone, 0)
+	if q0.dot(q1) < 0.0:
+		q1 = -q1 # the shorter way between the rows
+	var ps := _texel(frame[0], bone, 1).lerp(_texel(frame[1], bone, 1), frame[2])
+	return [q0.lerp(q1, frame[2]).normalized(), Vector3(ps.x, ps.y, ps.z), ps.w]
+
+# A bone's local transform at this moment: its rows blended, cross-faded from from_frame's (fade < 1).
+func _local_at(frame: Array, from_frame: Array, fade: float, bone: int) -> Array:
+	var m := _local_blend(frame, bone)
+	if fade >= 1.0:
+		return m
+	var f := _local_blend(from_frame, bone)
+	var q: Vector4 = m[0]
+	if f[0].dot(q) < 0.0:
+		q = -q
+	return [f[0].lerp(q, fade).normalized(), f[1].lerp(m[1], fade), lerpf(f[2], m[2], fade)]
+
+# The composed skinning matrix of a bone of local rows: its local transform with each ancestor's put in front, up
+# its chain (q = q_a q, s = s_a s, p = p_a + s_a rotate(q_a, p - b_a)), q normalised at the end.
+func _composed(frame: Array, from_frame: Array, fade: float, bone: int) -> Transform3D:
+	var m := _local_at(frame, from_frame, fade, bone)
+	var q := Quaternion(m[0].x, m[0].y, m[0].z, m[0].w)
+	var p: Vector3 = m[1]
+	var s: float = m[2]
+	var a := int(_bind[bone * 4 + 2 * bone_names.size() * 4])
+	while a >= 0:
+		var up := _local_at(frame, from_frame, fade, a)
+		var qa := Quaternion(up[0].x, up[0].y, up[0].z, up[0].w)
+		p = up[1] + up[2] * (qa * (p - _bind_position(a)))
+		q = qa * q
+		s *= up[2]
+		a = int(_bind[a * 4 + 2 * bone_names.size() * 4])
+	var basis := Basis(q.normalized()).scaled(Vector3.ONE * s)
+	return Transform3D(basis, p - basis * _bind_position(bone))
+
+func _bind_position(bone: int) -> Vector3:
+	return Vector3(_bind[bone * 4], _bind[bone * 4 + 1], _bind[bone * 4 + 2])
 
 # cb_bone as a matrix: the transform of points (w = 1), whose basis alone turns directions.
 func _blend(row0: int, row1: int, fr: float, bone: int) -> Transform3D:
@@ -202,6 +263,14 @@ func _texel(row: int, bone: int, k: int) -> Vector4:
 	if precision == "half":
 		return Vector4(_payload.decode_half(at), _payload.decode_half(at + 2), _payload.decode_half(at + 4), _payload.decode_half(at + 6))
 	var u := Vector4(_payload.decode_u16(at), _payload.decode_u16(at + 2), _payload.decode_u16(at + 4), _payload.decode_u16(at + 6))
+	if local_rows and k == 1: # the bone's own ranges (bind_positions rows 3 and 4)
+		var at_low := 3 * bone_names.size() * 4 + bone * 4 # bind_positions row 3, then row 4
+		var at_high := at_low + bone_names.size() * 4
+		var low := Vector4(_bind[at_low], _bind[at_low + 1], _bind[at_low + 2], 0.0)
+		var high := Vector4(_bind[at_high], _bind[at_high + 1], _bind[at_high + 2], 0.0)
+		var scale_max := _bind[at_low + 3]
+		var box := low + (high - low) * (u / 65535.0)
+		return Vector4(box.x, box.y, box.z, scale_max * u.w / 65535.0)
 	return _decode_u16(u, k)
 
 # cb_decode: crowdbake's u16 precision (docs/pal-format.md).
