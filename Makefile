@@ -556,6 +556,11 @@ $(BUILD)/bench_rows: bench/bench_rows.c bench/bench_model.h $(BUILD)/libcrowdbak
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 
+# Each clip's rate for local rows and its rows against --fps 30's (bench/bench_local_rate.c).
+$(BUILD)/bench_local_rate: bench/bench_local_rate.c bench/bench_model.h src/core/local_rate.h $(BUILD)/libcrowdbake.a
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
+	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
+
 # The floor: read + RapidJSON parse of the same file, and crowdbake's load, in the same run
 # (bench/bench_floor.cpp).
 $(BUILD)/bench_floor: bench/bench_floor.cpp $(BUILD)/libcrowdbake.a $(DEPS_STAMP)
@@ -577,7 +582,7 @@ $(BUILD)/bench_gl: bench/bench_gl.c bench/bench_gl_mesh.c bench/bench_gl_mesh.h 
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c bench/bench_gl_check.c -o $@_check.o
 	$(CXX) $(SAN) -o $@ $@.o $@_mesh.o $@_tiers.o $@_local.o $@_context.o $@_scene.o $@_check.o $(BUILD)/obj/gen/palette_glsl.o $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(shell pkg-config --libs egl gl 2>/dev/null)
 
-bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(BUILD)/bench_rows $(NODE_DEPS)
+bench: all $(BUILD)/bench_core $(BUILD)/bench_floor $(BUILD)/bench_gl $(BUILD)/bench_att $(BUILD)/bench_rows $(BUILD)/bench_local_rate $(NODE_DEPS)
 	python3 bench/run.py
 	python3 bench/scale.py --build $(BUILD) --shared $(SHARED) --no-bazel
 

@@ -8,37 +8,45 @@ import subprocess
 from common import BUILD, EXE, ROOT, SHARED, run
 
 
-def crowd_input(name, model):
-    """model.glb, model.pal (the default qpos/u16) and model.exr (its VAT) in build/bench/crowd-NAME."""
+def crowd_input(name, model, local=False):
+    """model.glb, model.pal (the default qpos/u16) and model.exr (its VAT) in build/bench/crowd-NAME; local: also
+    model-local.pal, the model baked --bone-space local (local rows, composed by the runtime)."""
     out = os.path.join(BUILD, 'bench', 'crowd-' + name)
     os.makedirs(out, exist_ok=True)
     subprocess.run(['cp', model, os.path.join(out, 'model.glb')], check=True)
     subprocess.run([EXE, 'bake', model, '-o', os.path.join(out, 'model.pal'), '-q', '--root-motion', 'in-place'], check=True)
+    if local:
+        subprocess.run([EXE, 'bake', model, '-o', os.path.join(out, 'model-local.pal'), '-q', '--root-motion', 'in-place',
+                        '--bone-space', 'local'], check=True)
     subprocess.run([EXE, 'vat', model, '-o', os.path.join(out, 'model.exr'), '--root-motion', 'in-place',
                     '--exr-compression', 'none'], check=True, stdout=subprocess.DEVNULL)
     return out
 
 
 CROWD_METHODS = ('palette', 'bones', 'lod', 'auto', 'vat')
+# Local rows (web43): the same herd drawn from the model baked --bone-space local, per vertex and through the bone pass,
+# beside the global palette's and the VAT's frames in the same run (Cow and Husky).
+LOCAL_METHODS = ('palette', 'bones', 'lod', 'auto', 'local_palette', 'local_bones', 'local_lod', 'local_auto', 'vat')
 
 
 def crowd_bench(smoke):
     runs = [('fish', os.path.join(BUILD, 'samples', 'fish.glb'), '10' if smoke else '10,30,100,1000,10000,100000',
-             1 if smoke else 3)]
+             1 if smoke else 3, CROWD_METHODS)]
     if not smoke:
-        runs.append(('Cow', os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb'), '100,1000', 5))
-        runs.append(('Husky', os.path.join(SHARED, 'assets', 'quaternius-husky', 'Husky.glb'), '1000', 5))
+        runs.append(('Cow', os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb'), '100,1000', 5, LOCAL_METHODS))
+        runs.append(('Husky', os.path.join(SHARED, 'assets', 'quaternius-husky', 'Husky.glb'), '1000', 5, LOCAL_METHODS))
     results = []
-    for name, model, counts, frames in runs:
-        _, out = run(['node', os.path.join(ROOT, 'tests', 'runtimes', 'browser', 'bench_crowd.mjs'), crowd_input(name, model),
-                      counts, '--frames', str(frames), '--methods', ','.join(CROWD_METHODS)])
+    for name, model, counts, frames, methods in runs:
+        local = any(m.startswith('local_') for m in methods)
+        _, out = run(['node', os.path.join(ROOT, 'tests', 'runtimes', 'browser', 'bench_crowd.mjs'), crowd_input(name, model, local),
+                      counts, '--frames', str(frames), '--methods', ','.join(methods)])
         r = json.loads(out.strip().split('\n')[-1])
         r['input'] = name
         results.append(r)
     return results
 
 
-def print_methods(r, title, key='_ms', methods=CROWD_METHODS, pairs=True):
+def print_methods(r, title, key='_ms', methods=LOCAL_METHODS, pairs=True):
     """A crowd table: frame ms of each method (palette: per-vertex blending; bones: the bone pass, every influence;
     lod: the bone pass with animation LOD; auto: Crowd's default choice; vat) and the VAT's speed over each: the
     median of the pairs' ratios where each frame drew every method in turns, else the ratio of the medians."""
@@ -65,6 +73,10 @@ def print_methods(r, title, key='_ms', methods=CROWD_METHODS, pairs=True):
         print('memory per instance: ' + ', '.join('%s %d bytes' % (m, b) for m, b in r['bytes_per_instance'].items()
                                                   if m in methods) + ' (the VAT\'s: its instance row; the bone pass adds '
               '48 bytes a bone)')
+    if r.get('local_palette_bytes'):
+        print('local rows: palette %d bytes (global %d)' % (r['local_palette_bytes'], r['palette_bytes']))
+    for n, c in sorted((r.get('local_auto_choice') or {}).items(), key=lambda kv: int(kv[0])):
+        print('local auto at %s: %s (%s)' % (n, c['method'], c['reason']))
     if r.get('lod_choice'):
         print('animation LOD: ' + r['lod_choice'])
     for n, c in sorted((r.get('auto_choice') or {}).items(), key=lambda kv: int(kv[0])):

@@ -32,6 +32,13 @@ CROWDBAKE_API void cb_runtime_frame(const cb_instance *in, double time, uint32_t
 CROWDBAKE_API void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_instance *in, double time,
                                        double *out);
 
+/* A cross-fade from one instance's clip to another's, fade 0 (from) to 1 (to), as the shaders fade:
+ * global rows' bone transforms mixed term by term (the same as mixing the skinned positions); a
+ * local palette's (.pal version 6) bones' blended local values faded, then composed. False: out of
+ * memory (out untouched). */
+CROWDBAKE_API bool cb_runtime_matrices_crossfade(const cb_palette *p, const void *texels, const cb_instance *from,
+                                                 const cb_instance *to, double fade, double time, double *out);
+
 /* Verification of one clip: the runtime's skinned mesh against exact skinning from the model. */
 typedef struct cb_clip_error {
     double quant_max, quant_mean;   /* at the baked rows: the encoding's error */

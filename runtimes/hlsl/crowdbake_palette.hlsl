@@ -10,6 +10,8 @@
 //   #define CB_INFLUENCES 1|2       for a mesh written with `crowdbake mesh --max-influences 1|2`
 //   #define CB_BATCH K              a `crowdbake mesh --batch K` mesh (globals: cb_batch_instances[K])
 //   #define CB_BONE_TEXTURE         skin from the bone pass's three textures (cb_skin_bone_pass)
+//   #define CB_LOCAL_ROWS           the header's flags have bit 5 (.pal version 6, qpos, u16 or float): rows hold
+//                                   each bone in its parent's frame; cb_bind_positions has 5 rows (see below)
 // HLSL only:
 //   #define CB_U16_UNORM            a u16 palette bound as RGBA16 UNORM (a float texture; engines whose
 //                                   texture assets have no RGBA16UI: Unreal's PF_R16G16B16A16_UNORM,
@@ -34,6 +36,10 @@
 //       header = cb_make_header(row_texels, rows_per_block, bounds_min, bounds_max, linear_range)
 // bind_positions (RGBA32F, one texel per bone, two rows: the bone table's bind positions, then the
 // bones' position offsets) is read by qpos and CB_POSITIONS_RELATIVE only; bind any texture otherwise.
+// With CB_LOCAL_ROWS it has five rows: row 2 = (parent index, -1 for a root; 0; 0; 0), row 3 = the bone
+// range table's (pos_min.xyz, scale_max), row 4 = (pos_max.xyz, 0). Each skinned bone then walks its
+// chain to the root: its two rows and every ancestor's blended (cross-faded too) and composed
+// (docs/pal-format.md, "local rows"); the bone pass does that walk once per bone instead of per vertex.
 //
 // Per-instance data, the roster manifest's four numbers: inst.x first row (negative for a clip whose
 // rows are held, not blended - .pal version 4's clip flag bit 2: its first row is -inst.x - 1), inst.y frame count
@@ -49,6 +55,16 @@
 
 #ifndef CB_INFLUENCES
 #define CB_INFLUENCES 4
+#endif
+
+#if defined(CB_LOCAL_ROWS) && !defined(CB_LAYOUT_QPOS)
+#error "CB_LOCAL_ROWS: local rows need layout qpos (and precision u16 or float)"
+#endif
+#if defined(CB_LOCAL_ROWS) && defined(CB_PRECISION_HALF)
+#error "CB_LOCAL_ROWS: local rows need precision u16 or float, not half"
+#endif
+#ifndef CB_MAX_CHAIN
+#define CB_MAX_CHAIN 256 // the longest chain walked: a bound, so a bad parent table cannot hang the GPU
 #endif
 
 #if defined(CB_LAYOUT_MAT4)
@@ -135,12 +151,25 @@ float4 cb_decode(cb_header h, uint4 u, int k)
 }
 #endif
 
+#if defined(CB_PRECISION_U16) && defined(CB_LOCAL_ROWS)
+// Texel k of a local row, u16: positions in this bone's own box and scale in its own range (rows 3 and
+// 4 of bind_positions, the bone range table), not the header's.
+float4 cb_decode_local(CB_TEXTURE2D bind_positions, uint4 u, int bone, int k)
+{
+    if (k == 0) return cb_snorm(u);
+    float4 lo = CB_LOAD(bind_positions, int2(bone, 3)), hi = CB_LOAD(bind_positions, int2(bone, 4));
+    return float4(lo.xyz + (hi.xyz - lo.xyz) * (float3(u.xyz) / 65535.0), lo.w * float(u.w) / 65535.0); // cb:local-ranges
+}
+#endif
+
 // Texel k of a bone in a baked row: rows wrap into column blocks of rows_per_block rows.
 float4 cb_texel(CB_PALETTE_PARAMS, int row, int bone, int k)
 {
     int block = row / h.rows_per_block;
     int2 xy = int2(block * h.row_texels + bone * CB_TEXELS_PER_BONE + k, row - block * h.rows_per_block);
-#ifdef CB_PRECISION_U16
+#if defined(CB_PRECISION_U16) && defined(CB_LOCAL_ROWS)
+    return cb_decode_local(bind_positions, CB_LOAD_PALETTE(palette, xy), bone, k);
+#elif defined(CB_PRECISION_U16)
     return cb_decode(h, CB_LOAD_PALETTE(palette, xy), k);
 #else
     return CB_LOAD_PALETTE(palette, xy);
@@ -239,6 +268,86 @@ cb_affine cb_affine_mix(cb_affine f, cb_affine m, float fade)
     return cb_make_affine(m.a * fade + f.a * (1.0 - fade), lerp(f.t, m.t, fade));
 }
 
+#ifdef CB_LOCAL_ROWS
+// ---- Local rows: each bone in its parent's frame, blended bone by bone, then composed ----
+// A bone as qpos: v -> p + s rotate(q, v - b), b its bind position; q (x, y, z, w).
+struct cb_qpos {
+    float4 q;
+    float3 p;
+    float s;
+};
+
+cb_qpos cb_make_qpos(float4 q, float3 p, float s)
+{
+    cb_qpos m;
+    m.q = q;
+    m.p = p;
+    m.s = s;
+    return m;
+}
+
+float4 cb_quat_mul(float4 a, float4 b)
+{
+    return float4(a.w * b.xyz + b.w * a.xyz + cross(a.xyz, b.xyz), a.w * b.w - dot(a.xyz, b.xyz));
+}
+
+float3 cb_quat_rotate(float4 q, float3 v)
+{
+    float3 t = 2.0 * cross(q.xyz, v);
+    return v + q.w * t + cross(q.xyz, t);
+}
+
+// Two local bones blended as two rows are: the rotation the shorter way, renormalised; position and
+// scale linearly (weight w on b).
+cb_qpos cb_qpos_mix(cb_qpos a, cb_qpos b, float w)
+{
+    if (dot(a.q, b.q) < 0.0) b.q = -b.q; // cb:local-hemisphere
+    return cb_make_qpos(normalize(lerp(a.q, b.q, w)), lerp(a.p, b.p, w), lerp(a.s, b.s, w));
+}
+
+// Bone a (its bind position b_a) in front of m, a bone in a's frame: q = q_a q, s = s_a s,
+// p = p_a + s_a rotate(q_a, p - b_a). Associative, so a chain composes upwards with no stack.
+cb_qpos cb_qpos_compose(cb_qpos a, float3 b_a, cb_qpos m)
+{
+    return cb_make_qpos(normalize(cb_quat_mul(a.q, m.q)), a.p + a.s * cb_quat_rotate(a.q, m.p - b_a), a.s * m.s);
+}
+
+// A bone's local row blended between its two rows, and cross-faded from the other clip's two
+// (rows: row0, row1, from0, from1; frs: their weights).
+cb_qpos cb_local_bone(CB_PALETTE_PARAMS, int4 rows, float2 frs, float fade, int bone)
+{
+    float4 ps0 = cb_texel(CB_PALETTE_ARGS, rows.x, bone, 1), ps1 = cb_texel(CB_PALETTE_ARGS, rows.y, bone, 1);
+    cb_qpos m = cb_qpos_mix(cb_make_qpos(cb_texel(CB_PALETTE_ARGS, rows.x, bone, 0), ps0.xyz, ps0.w),
+                            cb_make_qpos(cb_texel(CB_PALETTE_ARGS, rows.y, bone, 0), ps1.xyz, ps1.w), frs.x);
+    if (fade < 1.0) {
+        float4 fs0 = cb_texel(CB_PALETTE_ARGS, rows.z, bone, 1), fs1 = cb_texel(CB_PALETTE_ARGS, rows.w, bone, 1);
+        cb_qpos f = cb_qpos_mix(cb_make_qpos(cb_texel(CB_PALETTE_ARGS, rows.z, bone, 0), fs0.xyz, fs0.w),
+                                cb_make_qpos(cb_texel(CB_PALETTE_ARGS, rows.w, bone, 0), fs1.xyz, fs1.w), frs.y);
+        m = cb_qpos_mix(f, m, fade); // cb:local-fade - cross-faded local rows, before composing
+    }
+    return m;
+}
+
+int cb_parent(CB_TEXTURE2D bind_positions, int bone)
+{
+    return int(floor(CB_LOAD(bind_positions, int2(bone, 2)).x + 0.5)); // -1: a root
+}
+
+// A bone's skinning transform from local rows: its blended local row, then each ancestor's blended
+// and composed in front of it, up to the root.
+cb_affine cb_composed_affine(CB_PALETTE_PARAMS, int4 rows, float2 frs, float fade, int bone)
+{
+    cb_qpos m = cb_local_bone(CB_PALETTE_ARGS, rows, frs, fade, bone);
+    int a = cb_parent(bind_positions, bone);
+    for (int depth = 0; a >= 0 && depth < CB_MAX_CHAIN; ++depth) { // cb:local-walk
+        m = cb_qpos_compose(cb_local_bone(CB_PALETTE_ARGS, rows, frs, fade, a), CB_LOAD(bind_positions, int2(a, 0)).xyz, m); // cb:local-compose
+        a = cb_parent(bind_positions, a);
+    }
+    float3x3 lin = m.s * cb_quat_matrix(m.q); // v -> p + s R (v - b)
+    return cb_make_affine(lin, m.p - mul(lin, CB_LOAD(bind_positions, int2(bone, 0)).xyz));
+}
+#endif
+
 // Skins a position v and a normal n (not normalized) in one pass over the influences, cross-faded
 // from from_inst (fade 0 -> 1; 1: inst alone): each bone's texels are fetched once for both.
 void cb_skin_both(CB_PALETTE_PARAMS, float3 v, float3 n, int4 joints, float4 weights, float4 from_inst, float4 inst,
@@ -252,8 +361,12 @@ void cb_skin_both(CB_PALETTE_PARAMS, float3 v, float3 n, int4 joints, float4 wei
     skinned_n = float3(0.0, 0.0, 0.0);
     for (int i = 0; i < CB_INFLUENCES; ++i) // cb:influences - crowdbake mesh puts the largest weights first
         if (weights[i] != 0.0) {
+#ifdef CB_LOCAL_ROWS
+            cb_affine m = cb_composed_affine(CB_PALETTE_ARGS, int4(row0, row1, from0, from1), float2(fr, from_fr), fade, joints[i]);
+#else
             cb_affine m = cb_bone_affine(CB_PALETTE_ARGS, row0, row1, fr, joints[i]);
             if (fade < 1.0) m = cb_affine_mix(cb_bone_affine(CB_PALETTE_ARGS, from0, from1, from_fr, joints[i]), m, fade);
+#endif
             p += weights[i] * (mul(m.a, v) + m.t);
             skinned_n += weights[i] * mul(m.a, n);
         }
@@ -314,17 +427,25 @@ float3 cb_skin_normal_crossfade(CB_PALETTE_PARAMS, float3 n, int4 joints, float4
 // loads an influence, no decoding and no blending.
 
 // Bone `bone` of an instance: the columns of its transform, translation in w (the GLSL's layout).
+// CB_LOCAL_ROWS: the bone's chain composed here, once per bone, so skinning reads composed bones.
 void cb_bone_pass(CB_PALETTE_PARAMS, int bone, float4 from_inst, float4 inst, float fade, float time,
                   out float4 c0, out float4 c1, out float4 c2)
 {
     int row0, row1;
     float fr;
     cb_frame(inst, time, row0, row1, fr);
+#ifdef CB_LOCAL_ROWS
+    int from0, from1;
+    float from_fr;
+    cb_frame(from_inst, time, from0, from1, from_fr);
+    cb_affine m = cb_composed_affine(CB_PALETTE_ARGS, int4(row0, row1, from0, from1), float2(fr, from_fr), fade, bone);
+#else
     cb_affine m = cb_bone_affine(CB_PALETTE_ARGS, row0, row1, fr, bone);
     if (fade < 1.0) {
         cb_frame(from_inst, time, row0, row1, fr);
         m = cb_affine_mix(cb_bone_affine(CB_PALETTE_ARGS, row0, row1, fr, bone), m, fade);
     }
+#endif
     float3x3 columns = transpose(m.a);
     c0 = float4(columns[0], m.t.x);
     c1 = float4(columns[1], m.t.y);

@@ -8,7 +8,7 @@
 // CB_BONE_TEXTURE), straight to world space. It needs
 // EXT_color_buffer_float (render to float textures), which WebGL2 on desktop GPUs and SwiftShader have.
 import { compileProgram, paletteDefines } from './crowdbake_crowd.mjs';
-import { boneMatrix } from './crowdbake_pal.mjs';
+import { boneMatrix, hasLocalRows } from './crowdbake_pal.mjs';
 
 const PASS_VERTEX = `
 in vec4 a_place; in vec4 a_inst; in vec4 a_from; in vec4 a_fade;
@@ -40,6 +40,19 @@ void main() {
 // every influence's bone at every vertex, the bone pass once per instance and bone (bench/run.py's
 // crowd benchmark measures both: the bone pass is ahead from 100 Cows, 500 k vertices).
 export const AUTO_BONE_PASS_VERTICES = 50000;
+// The same for local rows (.pal version 6): their per-vertex path walks each influence's chain to the root (Cow: up to
+// 11 bones, each decoded and blended), so the bone pass pays back far sooner. Measured (web43, bench_crowd.mjs,
+// SwiftShader, local palettes, medians of interleaved frames): 1 fish (336 vertices) per vertex 4.1 ms, bone pass
+// 8.9; 3 fish (1,008) 5.0 and 5.1; 10 fish (3,360) 7.8 and 5.6; 1 Cow (4,970) 40.4 and 9.5; 2 Cows 34.3 and 11.3.
+export const AUTO_BONE_PASS_VERTICES_LOCAL = 3000;
+
+// The bonePass: 'auto' threshold for a palette: { vertices, why } (a given bonePassVertices wins).
+export function autoBonePassVertices(header, given) {
+    if (given !== undefined) return { vertices: given, why: '' };
+    if (!hasLocalRows(header)) return { vertices: AUTO_BONE_PASS_VERTICES, why: '' };
+    return { vertices: AUTO_BONE_PASS_VERTICES_LOCAL, why: ` (local rows: the per-vertex path walks each influence's chain, ` +
+        `so 'auto' takes the pass from ${AUTO_BONE_PASS_VERTICES_LOCAL}, not ${AUTO_BONE_PASS_VERTICES})` };
+}
 
 // Animation LOD, on by default: an instance whose animated bounds span fewer than `two` pixels on
 // screen is skinned with its 2 largest bone weights, fewer than `one` pixels with its largest alone

@@ -14,9 +14,10 @@
 // expect: positions (3 floats a vertex), normals (3, optional), joints (4 integers), weights (4
 // floats), indices (optional).
 
-import { AUTO_BONE_PASS_VERTICES, BonePass, LodTiers, MAIN_BONES, resolveLod, boneShaderSource, lodUniform, sortInfluences,
+import { autoBonePassVertices, BonePass, LodTiers, MAIN_BONES, resolveLod, boneShaderSource, lodUniform, sortInfluences,
          sortTrianglesByInfluences } from './crowdbake_bones.mjs';
 
+import { hasLocalRows } from './crowdbake_pal.mjs';
 import { PALETTE_GLSL } from './crowdbake_palette_glsl.mjs';
 
 // Where the source tree keeps the GLSL file, relative to this module (the viewer's site has it there).
@@ -31,11 +32,29 @@ export async function loadPaletteGLSL(url) {
     return response.text();
 }
 
-// The defines that select the library's layout and precision for a .pal header.
+// The defines that select the library's layout and precision for a .pal header; CB_LOCAL_ROWS for local rows
+// (version 6: each bone blended in its parent's frame, then composed down its chain).
 export function paletteDefines(header) {
     const defines = [`CB_LAYOUT_${header.layout_name.toUpperCase()}`, `CB_PRECISION_${header.precision_name.toUpperCase()}`];
     if (header.flags & 4) defines.push('CB_POSITIONS_RELATIVE');
+    if (hasLocalRows(header)) defines.push('CB_LOCAL_ROWS');
     return defines;
+}
+
+// The per-bone texels of cb_bind_positions (RGBA32F, one texel a bone): row 0 xyz the bind position, row 1 xyz the
+// position offset; local rows add row 2 (the parent's index as a float, -1 for a root), row 3 (pos_min, scale_max)
+// and row 4 (pos_max, 0), what the shader walks chains and decodes u16 with. Returns { data, rows }.
+export function bonePositionTexels(pal) {
+    const n = pal.header.bone_count, rows = hasLocalRows(pal.header) ? 5 : 2, data = new Float32Array(n * rows * 4);
+    pal.bones.forEach((b, j) => {
+        data.set(b.bind_position, j * 4);
+        data.set(b.position_offset, (n + j) * 4);
+        if (rows < 5) return;
+        data[(2 * n + j) * 4] = b.parent;
+        data.set([...b.range.pos_min, b.range.scale_max], (3 * n + j) * 4);
+        data.set(b.range.pos_max, (4 * n + j) * 4);
+    });
+    return { data, rows };
 }
 
 // The texture format of a palette's payload, taken as is: RGBA32F, RGBA16F, or RGBA16UI
@@ -57,7 +76,7 @@ function texture(gl, internalFormat, width, height, format, type, data) {
 }
 
 // Uploads the palette (and, for qpos or a half palette, its bind positions and position offsets
-// as two RGBA32F rows). Returns the textures and the bytes they take on the GPU.
+// as two RGBA32F rows; five for local rows: bonePositionTexels). Returns the textures and the bytes they take on the GPU.
 export function uploadPalette(gl, pal) {
     const h = pal.header, f = paletteTextureFormat(gl, h);
     const max = gl.getParameter(gl.MAX_TEXTURE_SIZE);
@@ -66,13 +85,9 @@ export function uploadPalette(gl, pal) {
     const palette = texture(gl, f.internalFormat, h.width, h.height, f.format, f.type, pal.texels);
     let bind = null, bytes = h.width * h.height * h.texel_bytes;
     if (h.layout === 2 || h.flags & 4) {
-        const rgba = new Float32Array(h.bone_count * 8); // row 0: bind positions; row 1: position offsets
-        pal.bones.forEach((b, j) => {
-            rgba.set(b.bind_position, j * 4);
-            rgba.set(b.position_offset, (h.bone_count + j) * 4);
-        });
-        bind = texture(gl, gl.RGBA32F, h.bone_count, 2, gl.RGBA, gl.FLOAT, rgba);
-        bytes += rgba.byteLength;
+        const { data, rows } = bonePositionTexels(pal);
+        bind = texture(gl, gl.RGBA32F, h.bone_count, rows, gl.RGBA, gl.FLOAT, data);
+        bytes += data.byteLength;
     }
     return { palette, bind, bytes, format: f.name };
 }
@@ -150,8 +165,8 @@ export class Crowd {
     // options: pal (readPal), glsl (the library's text), mesh, capacity (instances), color,
     // captureWorld (link v_world for transform feedback: tests read skinned positions back),
     // bonePass: 'auto' (the default: the bone pass from bonePassVertices skinned vertices a frame,
-    // AUTO_BONE_PASS_VERTICES unless given; per-vertex blending below it or where WebGL2 cannot
-    // render to float textures), true (always; or { rows }), false (never); crowdbake_bones.mjs.
+    // AUTO_BONE_PASS_VERTICES (local rows: AUTO_BONE_PASS_VERTICES_LOCAL) unless given; per-vertex blending
+    // below it or where WebGL2 cannot render to float textures), true (always; or { rows }), false (never); crowdbake_bones.mjs.
     // lod: the bone pass's animation LOD ('auto', the default: fewer influences under the sizes where
     // the model's worst vertex moves at most a pixel: from animationLod, a roster type's animation_lod, when
     // given, else crowdbake_bones.mjs's lodThresholds; or { two, one } pixels tall, or false).
@@ -164,11 +179,14 @@ export class Crowd {
         const { pal, glsl, mesh, capacity = 1024, color = [0.8, 0.7, 0.55], captureWorld = false, bonePass = 'auto' } = options;
         this.gl = gl;
         this.pal = pal;
+        this.localRows = hasLocalRows(pal.header); // CB_LOCAL_ROWS: each bone composed down its chain, both paths
         this.color = color;
         this.capacity = capacity;
         this.count = 0;
         this.vertexCount = mesh.positions.length / 3;
-        this.bonePassVertices = bonePass === 'auto' ? options.bonePassVertices ?? AUTO_BONE_PASS_VERTICES : bonePass ? 0 : Infinity;
+        const auto = autoBonePassVertices(pal.header, options.bonePassVertices);
+        this.bonePassVertices = bonePass === 'auto' ? auto.vertices : bonePass ? 0 : Infinity;
+        this.bonePassWhy = bonePass === 'auto' ? auto.why : ''; // the threshold's reason where it is not the usual one
         this.lodOption = options.lod === undefined ? 'auto' : options.lod;
         this.animationLod = options.animationLod; // lod 'auto': the bake's measure (a roster type's animation_lod)
         this.lodMesh = mesh; // else lod 'auto' measures its error on first use
@@ -263,11 +281,11 @@ export class Crowd {
         const vertices = n * this.vertexCount;
         if (this.bonesProgram && !this.bonesUnavailable && vertices >= this.bonePassVertices)
             return { method: 'bones', reason: this.bonePassVertices ? `${vertices} skinned vertices a frame >= ${this.bonePassVertices}: ` +
-                'each bone blended once per instance (bonePass: false draws per vertex)' : 'bonePass: true' };
+                `each bone blended once per instance (bonePass: false draws per vertex)${this.bonePassWhy}` : 'bonePass: true' };
         if (this.bonesUnavailable) return { method: 'palette', reason: `no bone pass here: ${this.bonesUnavailable}` };
         if (this.bonePassVertices === Infinity) return { method: 'palette', reason: 'bonePass: false' };
         return { method: 'palette', reason: `${vertices} skinned vertices a frame < ${this.bonePassVertices}: the bone pass ` +
-            'would not pay for its extra pass (bonePass: true forces it)' };
+            `would not pay for its extra pass (bonePass: true forces it)${this.bonePassWhy}` };
     }
 
     // The bone pass, large enough for n instances (made or grown here under bonePass: 'auto').

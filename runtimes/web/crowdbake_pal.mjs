@@ -1,5 +1,6 @@
 // crowdbake_pal.mjs - reader for crowdbake .pal bone-matrix palettes and the roster manifest.
-// An ES module with no dependencies, for browsers and Node. Public domain / MIT-0.
+// An ES module with no third-party dependencies (beside it: crowdbake_pose.mjs, crowdbake_xxh64.mjs), for browsers
+// and Node. Public domain / MIT-0.
 //
 //     import { readPal, readRoster } from './crowdbake_pal.mjs';
 //     const pal = readPal(new Uint8Array(await (await fetch('goat.pal')).arrayBuffer()),
@@ -17,7 +18,7 @@
 // with the npm package fzstd: this module stays dependency-free, and runtimes that never load
 // compressed palettes ship no decoder. Without one, such a file is refused with the fix.
 
-export const PAL_VERSION = 5; // newest known; writers write the oldest version that holds what a file says
+export const PAL_VERSION = 6; // newest known; writers write the oldest version that holds what a file says
 export const HEADER_SIZE = 256;
 export const CLIP_SIZE = 80;
 export const BONE_SIZE = 32;
@@ -35,11 +36,23 @@ export const FLAG_FITTED_ROWS = 8; // every clip's rows fitted to the linear ble
 // Version 5: a per-row travel offset table (header byte 192, one f32 a row): an instance moved at its clip's ground
 // speed is drawn at its position plus travelOffset (the planted feet then stay still). Files without it read 0.
 export const FLAG_ROW_TRAVEL = 16;
+// Version 6: local rows (docs/pal-format.md): row r of bone j holds its transform in its parent's frame (qpos, u16 or
+// float), and a bone range table (header byte 200, 32 bytes a bone) gives each bone's u16 position box and scale.
+// Runtimes blend each bone's rows, then compose from the root (crowdbake_pose.mjs).
+export const FLAG_LOCAL_ROWS = 32;
+export const BONE_RANGE_SIZE = 32;
 export const CLIP_LOOPS = 1;
 export const CLIP_FITTED = 2; // this clip's rows fitted to the linear blend (before it: header flag bit 3, every clip)
 // Version 4: this clip's rows are held, not blended (a STEP-keyed clip baked at its key times): the row at or before
 // the time alone. Its instance numbers say so with a negative first row, -first_row - 1 (instanceFirstRow).
 export const CLIP_STEP = 4;
+
+import { xxh64 } from './crowdbake_xxh64.mjs';
+import { texelIndex } from './crowdbake_pose.mjs';
+
+export { xxh64 } from './crowdbake_xxh64.mjs';
+export { texelIndex, hasLocalRows, instanceFirstRow, instanceFrame, instanceBoneMatrix, instanceBoneMatrixCrossfade,
+         boneMatrix } from './crowdbake_pose.mjs';
 
 const MAGIC = [0x43, 0x42, 0x50, 0x41, 0x4c, 0x0d, 0x0a, 0x1a]; // "CBPAL\r\n\x1a"
 const TEXELS_PER_BONE = [4, 3, 2]; // by layout
@@ -49,111 +62,6 @@ const TEXEL_BYTES = [16, 8, 8]; // by precision
 const DEFAULT_MAX_DECOMPRESSED_BYTES = 1 << 30;
 // Typed arrays use the host's byte order; the texels are little-endian, as on every engine in use.
 const HOST_IS_LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 1;
-
-// ---- XXH64 (seed 0), from the algorithm's specification ----
-// On 32-bit halves (hi, lo): BigInt arithmetic allocates per operation and hashes at about 1 MB/s.
-
-const P1H = 0x9e3779b1, P1L = 0x85ebca87, P2H = 0xc2b2ae3d, P2L = 0x27d4eb4f, P3H = 0x165667b1, P3L = 0x9e3779f9;
-const P4H = 0x85ebca77, P4L = 0xc2b2ae63, P5H = 0x27d4eb2f, P5L = 0x165667c5;
-
-// XXH64 of `parts`, an array of Uint8Arrays hashed as if concatenated (the checksum hashes the
-// file with its checksum field read as zero without copying the file). Returns a BigInt.
-export function xxh64(parts) {
-    if (parts instanceof Uint8Array) parts = [parts];
-    let rh = 0, rl = 0; // the result register of the helpers below
-    const mul = (ah, al, bh, bl) => { // low 64 bits of a * b
-        const a0 = al & 0xffff, a1 = al >>> 16, b0 = bl & 0xffff, b1 = bl >>> 16;
-        const p00 = a0 * b0, p01 = a0 * b1, p10 = a1 * b0;
-        const mid = (p00 >>> 16) + (p01 & 0xffff) + (p10 & 0xffff);
-        rl = (((mid & 0xffff) << 16) | (p00 & 0xffff)) >>> 0;
-        const carry = a1 * b1 + (p01 >>> 16) + (p10 >>> 16) + (mid >>> 16);
-        rh = (carry + Math.imul(al, bh) + Math.imul(ah, bl)) >>> 0;
-    };
-    const add = (ah, al, bh, bl) => {
-        const lo = al + bl;
-        rl = lo >>> 0;
-        rh = (ah + bh + (lo > 0xffffffff ? 1 : 0)) >>> 0;
-    };
-    const rotl = (h, l, r) => { // 0 < r < 32
-        rh = ((h << r) | (l >>> (32 - r))) >>> 0;
-        rl = ((l << r) | (h >>> (32 - r))) >>> 0;
-    };
-    const round = (ah, al, ih, il) => { // rotl(acc + input * P2, 31) * P1
-        mul(ih, il, P2H, P2L);
-        add(ah, al, rh, rl);
-        rotl(rh, rl, 31);
-        mul(rh, rl, P1H, P1L);
-    };
-    let total = 0;
-    for (const p of parts) total += p.length;
-    const v = new Uint32Array([0x60ea27ee, 0xadc0b5d6, P2H, P2L, 0, 0, 0x61c8864e, 0x7a143579]); // P1+P2, P2, 0, -P1
-    const consume = (view, o) => {
-        for (let k = 0; k < 4; ++k) {
-            round(v[2 * k], v[2 * k + 1], view.getUint32(o + 8 * k + 4, true), view.getUint32(o + 8 * k, true));
-            v[2 * k] = rh, v[2 * k + 1] = rl;
-        }
-    };
-    const stripe = new Uint8Array(32); // carries bytes across part boundaries
-    const stripeView = new DataView(stripe.buffer);
-    let buffered = 0;
-    for (const p of parts) {
-        const view = new DataView(p.buffer, p.byteOffset, p.byteLength);
-        let i = 0;
-        if (buffered) {
-            const take = Math.min(32 - buffered, p.length);
-            stripe.set(p.subarray(0, take), buffered);
-            buffered += take, i = take;
-            if (buffered < 32) continue;
-            consume(stripeView, 0);
-            buffered = 0;
-        }
-        for (; i + 32 <= p.length; i += 32) consume(view, i);
-        stripe.set(p.subarray(i), 0);
-        buffered = p.length - i;
-    }
-    let hh, hl;
-    if (total >= 32) {
-        rotl(v[0], v[1], 1); hh = rh, hl = rl;
-        for (const [k, r] of [[1, 7], [2, 12], [3, 18]]) {
-            const sh = hh, sl = hl;
-            rotl(v[2 * k], v[2 * k + 1], r);
-            add(sh, sl, rh, rl); hh = rh, hl = rl;
-        }
-        for (let k = 0; k < 4; ++k) { // h = (h ^ round(0, v_k)) * P1 + P4
-            round(0, 0, v[2 * k], v[2 * k + 1]);
-            mul((hh ^ rh) >>> 0, (hl ^ rl) >>> 0, P1H, P1L);
-            add(rh, rl, P4H, P4L); hh = rh, hl = rl;
-        }
-    } else {
-        hh = P5H, hl = P5L;
-    }
-    add(hh, hl, Math.floor(total / 0x100000000), total >>> 0); hh = rh, hl = rl;
-    let o = 0;
-    for (; o + 8 <= buffered; o += 8) { // h = rotl(h ^ round(0, lane), 27) * P1 + P4
-        round(0, 0, stripeView.getUint32(o + 4, true), stripeView.getUint32(o, true));
-        rotl((hh ^ rh) >>> 0, (hl ^ rl) >>> 0, 27);
-        mul(rh, rl, P1H, P1L);
-        add(rh, rl, P4H, P4L); hh = rh, hl = rl;
-    }
-    if (o + 4 <= buffered) { // h = rotl(h ^ (u32 * P1), 23) * P2 + P3
-        mul(0, stripeView.getUint32(o, true), P1H, P1L);
-        rotl((hh ^ rh) >>> 0, (hl ^ rl) >>> 0, 23);
-        mul(rh, rl, P2H, P2L);
-        add(rh, rl, P3H, P3L); hh = rh, hl = rl;
-        o += 4;
-    }
-    for (; o < buffered; ++o) { // h = rotl(h ^ (byte * P5), 11) * P1
-        mul(0, stripe[o], P5H, P5L);
-        rotl((hh ^ rh) >>> 0, (hl ^ rl) >>> 0, 11);
-        mul(rh, rl, P1H, P1L); hh = rh, hl = rl;
-    }
-    hl = (hl ^ (hh >>> 1)) >>> 0; // h ^= h >> 33
-    mul(hh, hl, P2H, P2L); hh = rh, hl = rl;
-    hl = (hl ^ ((hl >>> 29) | (hh << 3))) >>> 0, hh = (hh ^ (hh >>> 29)) >>> 0; // h ^= h >> 29
-    mul(hh, hl, P3H, P3L); hh = rh, hl = rl;
-    hl = (hl ^ hh) >>> 0; // h ^= h >> 32
-    return (BigInt(hh) << 32n) | BigInt(hl);
-}
 
 // ---- .pal ----
 
@@ -183,6 +91,7 @@ function parseHeader(view) {
         strings_size: u64(144), payload_offset: u64(152), payload_size: u64(160), payload_raw_size: u64(168),
         checksum: u64(176), offset_table_offset: u32(8) >= 3 ? u64(184) : 0n,
         travel_table_offset: u32(8) >= 5 && (u32(12) & FLAG_ROW_TRAVEL) ? u64(192) : 0n,
+        range_table_offset: u32(8) >= 6 && (u32(12) & FLAG_LOCAL_ROWS) ? u64(200) : 0n,
     };
 }
 
@@ -232,6 +141,15 @@ function validateHeader(bytes, view, fail) {
         (!fits(h.travel_table_offset, h.rows, 4, n) || h.travel_table_offset < B(HEADER_SIZE)))
         fail(`travel offset table (travel_table_offset ${h.travel_table_offset} at byte 192, ${h.rows} rows) ` +
              `lies outside the ${size}-byte file`);
+    const local = (h.flags & FLAG_LOCAL_ROWS) !== 0;
+    if (local && h.version < 6) fail(`flags bit 5 (local rows, byte 12) in a version ${h.version} file; local rows are version 6`);
+    if (local && (!fits(h.range_table_offset, h.bone_count, BONE_RANGE_SIZE, n) ||
+                  h.range_table_offset < B(HEADER_SIZE) || h.range_table_offset % 4n !== 0n))
+        fail(`bone range table (range_table_offset ${h.range_table_offset} at byte 200, ${h.bone_count} bones) ` +
+             `lies outside the ${size}-byte file`);
+    if (local && (h.layout !== 2 || h.precision === 1 || h.flags & FLAG_POSITIONS_RELATIVE))
+        fail(`local rows (flags bit 5, byte 12) with layout ${LAYOUTS[h.layout]} and precision ${PRECISIONS[h.precision]}` +
+             `${h.flags & FLAG_POSITIONS_RELATIVE ? ' and relative positions' : ''}: local rows need qpos and u16 or float`);
     if (!fits(h.strings_offset, h.strings_size, 1, n) || h.strings_offset < B(HEADER_SIZE))
         fail(`string table (strings_offset ${h.strings_offset} at byte 136, strings_size ${h.strings_size} at byte 144) ` +
              `lies outside the ${size}-byte file`);
@@ -243,7 +161,7 @@ function validateHeader(bytes, view, fail) {
         fail(`payload_size ${h.payload_size} (byte 160) is not the ${h.payload_raw_size} bytes the texture needs`);
     // Every offset and size now lies inside the file: exact as Numbers.
     for (const k of ['clip_table_offset', 'bone_table_offset', 'strings_offset', 'strings_size', 'payload_offset',
-                     'payload_size', 'offset_table_offset', 'travel_table_offset'])
+                     'payload_size', 'offset_table_offset', 'travel_table_offset', 'range_table_offset'])
         h[k] = Number(h[k]);
     return h;
 }
@@ -286,8 +204,32 @@ function readBones(bytes, view, h, fail) {
         const position_offset = !relative ? [0, 0, 0] : h.version >= 3
             ? [0, 4, 8].map((o) => view.getFloat32(h.offset_table_offset + i * 12 + o, true)) : bind_position.slice();
         bones.push({ name, parent, bind_position, position_offset });
+        if (h.range_table_offset) bones[i].range = readRange(view, h.range_table_offset + i * BONE_RANGE_SIZE, i, fail);
     }
+    if (h.range_table_offset) checkChains(bones, h, fail);
     return bones;
+}
+
+// A bone's entry in the range table (version 6, local rows): the box of its stored positions and its largest scale,
+// what its u16 texels decode into (written for float files too).
+function readRange(view, at, bone, fail) {
+    const f32 = (o) => view.getFloat32(at + o, true);
+    const range = { pos_min: [f32(0), f32(4), f32(8)], scale_max: f32(12), pos_max: [f32(16), f32(20), f32(24)] };
+    const finite = [...range.pos_min, ...range.pos_max, range.scale_max].every(Number.isFinite);
+    if (!finite || range.pos_min.some((v, k) => v > range.pos_max[k]) || !(range.scale_max > 0) || view.getUint32(at + 28, true))
+        fail(`bone range ${bone} (byte ${at}) is not finite, has a min above its max, a scale_max <= 0 or a non-zero ` +
+             'reserved word');
+    return range;
+}
+
+// Local rows compose each bone under its parent: every chain must reach a root (a loop would never end).
+function checkChains(bones, h, fail) {
+    for (let i = 0; i < bones.length; ++i) {
+        let j = i, steps = 0;
+        for (; j >= 0 && steps <= bones.length; ++steps) j = bones[j].parent;
+        if (j >= 0) fail(`bone ${i} (byte ${h.bone_table_offset + i * BONE_SIZE}): its parents loop, and local rows ` +
+                         'compose each bone under its parent');
+    }
 }
 
 function checksumOf(bytes, end) {
@@ -329,6 +271,8 @@ function texelView(raw, precision) {
 // by name (input_hash and checksum as BigInt) plus layout_name and precision_name; clips and bones
 // what cbpal_get_clip / cbpal_get_bone give (and loops); texelBytes the payload's raw bytes.
 // rowTravel: version 5's travel offsets (Float32Array, one a row) or null (crowdbake_travel.mjs).
+// Local rows (version 6, hasLocalRows(header)): each bone also has `range` { pos_min, pos_max, scale_max }, its entry of
+// the bone range table (u16 decodes with it), and boneMatrix composes each bone down its chain (crowdbake_pose.mjs).
 // Beyond the C reader's checks: a zstd payload over options.maxDecompressedBytes (1 GiB) is refused,
 // and one whose checksum does not match is refused before it is decoded, verifyChecksum or not.
 export function readPal(data, options = {}) {
@@ -355,12 +299,6 @@ export function readPal(data, options = {}) {
     return { header: h, clips, bones, texelBytes, texels: texelView(texelBytes, h.precision), rowTravel };
 }
 
-// Index into `texels` of a bone's first component in a baked row (rows wrap into column blocks).
-export function texelIndex(header, row, bone) {
-    const x = Math.floor(row / header.height) * header.row_texels + bone * header.texels_per_bone;
-    const y = row % header.height;
-    return (y * header.width + x) * 4;
-}
 
 // ---- roster.json (docs/roster.md, docs/roster.schema.json) ----
 
@@ -522,95 +460,5 @@ export function instanceData(state, groundSpeed = 0, index = 0, startTime = 0) {
     const golden = index * 0.6180339887;
     const phase = state.phase === 'golden_ratio' ? golden - Math.floor(golden) : (-startTime * rate) / frames;
     return [state.first_row, state.frame_count, rate, phase];
-}
-
-// ---- a bone's matrix at a time (sockets), decoded and blended as runtimes/glsl/crowdbake_palette.glsl ----
-
-const halfToFloat = (h) => { // exponent rebiased; zero and subnormals are m 2^-24
-    const e = (h >> 10) & 0x1f, m = h & 0x3ff, sign = h & 0x8000 ? -1 : 1;
-    if (e === 0) return sign * m * 2 ** -24;
-    return e === 31 ? (m ? NaN : sign * Infinity) : sign * (1 + m / 1024) * 2 ** (e - 15);
-};
-const snorm = (u) => Math.max((u >= 32768 ? u - 65536 : u) / 32767, -1);
-
-// Texel k of a bone in a row, as the GLSL's cb_texel decodes it.
-function decodeTexel(pal, row, bone, k) {
-    const h = pal.header, i = texelIndex(h, row, bone) + 4 * k, t = pal.texels;
-    if (h.precision === 0) return [t[i], t[i + 1], t[i + 2], t[i + 3]];
-    if (h.precision === 1) return [0, 1, 2, 3].map((c) => halfToFloat(t[i + c]));
-    const lo = h.bounds_min, hi = h.bounds_max, range = h.linear_range, u = [t[i], t[i + 1], t[i + 2], t[i + 3]];
-    const box = (h.layout === 2 && k === 1) || (h.layout === 0 && k === 3);
-    const out = [0, 1, 2].map((c) => (box ? lo[c] + (hi[c] - lo[c]) * (u[c] / 65535) : snorm(u[c]) * (h.layout === 2 ? 1 : range)));
-    if (h.layout === 2) out.push(k === 0 ? snorm(u[3]) : (range * u[3]) / 65535);
-    else if (h.layout === 1) out.push(lo[k] + (hi[k] - lo[k]) * (u[3] / 65535));
-    else out.push(k === 3 ? 1 : 0);
-    return out;
-}
-
-// A clip's first row as the per-instance numbers hold it: negative for held rows (CLIP_STEP), -first_row - 1.
-export const instanceFirstRow = (clip) => (clip.step ? -clip.first_row - 1 : clip.first_row);
-
-// The two rows to blend for the four per-instance numbers at `time`, and the weight of the second (cb_frame);
-// held rows (a negative first row) give their row alone.
-export function instanceFrame(inst, time) {
-    const held = inst[0] < 0, first = held ? -inst[0] - 1 : inst[0];
-    const frames = Math.abs(inst[1]);
-    let fpos = time * inst[2] + inst[3] * frames, f1;
-    if (inst[1] > 0) fpos -= frames * Math.floor(fpos / frames);
-    else fpos = Math.min(Math.max(fpos, 0), frames - 1);
-    if (!(fpos >= 0 && fpos < frames)) fpos = 0; // rounding at the wrap
-    const f0 = Math.floor(fpos);
-    if (inst[1] > 0) f1 = f0 + 1 < frames ? f0 + 1 : 0; // a loop's last row blends into its first
-    else f1 = Math.min(f0 + 1, frames - 1);
-    if (held) return { row0: first + f0, row1: first + f0, fr: 0 }; // no blend across a step
-    return { row0: first + f0, row1: first + f1, fr: fpos - f0 };
-}
-
-// The bone's skinning matrix (column-major, 16 numbers: the glTF joint matrix, bind space to the
-// posed model) for an instance's four numbers (instanceData's) at `time` seconds. A prop on the
-// bone is placed at boneMatrix x the prop's bind-space transform (a roster socket's bind_transform).
-export function instanceBoneMatrix(pal, inst, time, bone, out = new Array(16)) {
-    const h = pal.header;
-    if (!Number.isInteger(bone) || bone < 0 || bone >= h.bone_count)
-        throw new Error(`bone ${bone} is not one of the palette's ${h.bone_count} bones`);
-    if (!inst.every(Number.isFinite) || !Number.isFinite(time) || !Number.isFinite(time * inst[2] + inst[3]))
-        throw new Error(`time ${time} or instance numbers ${inst} are not finite numbers`);
-    const { row0, row1, fr } = instanceFrame(inst, time);
-    if (row1 >= h.rows || row0 >= h.rows) throw new Error(`rows ${row0}, ${row1} lie past the palette's ${h.rows} rows`);
-    const t = [];
-    for (let k = 0; k < h.texels_per_bone; ++k) {
-        const a = decodeTexel(pal, row0, bone, k), b = decodeTexel(pal, row1, bone, k);
-        const flip = h.layout === 2 && k === 0 && a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0 ? -1 : 1;
-        t.push(a.map((x, c) => x + (flip * b[c] - x) * fr)); // cb:hemisphere for the rotation
-    }
-    out.fill(0);
-    out[15] = 1;
-    let p;
-    if (h.layout === 2) {
-        const n = Math.hypot(...t[0]), [x, y, z, w] = t[0].map((c) => c / n), s = t[1][3];
-        const r = [1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y),
-                   2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x),
-                   2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)]; // columns
-        for (let k = 0; k < 9; ++k) out[Math.floor(k / 3) * 4 + (k % 3)] = s * r[k];
-        p = t[1].slice(0, 3);
-    } else {
-        const affine = h.layout === 1; // affine: texel k is row k; mat4: texel k is column k
-        for (let c = 0; c < 3; ++c) for (let r = 0; r < 3; ++r) out[c * 4 + r] = affine ? t[r][c] : t[c][r];
-        p = affine ? [t[0][3], t[1][3], t[2][3]] : t[3].slice(0, 3);
-    }
-    // qpos and relative positions: A (v - b) + p, with p stored less the bone's position offset.
-    const { bind_position: bp, position_offset: off } = pal.bones[bone];
-    const aboutBind = h.layout === 2 || (h.flags & FLAG_POSITIONS_RELATIVE) !== 0;
-    for (let k = 0; k < 3; ++k)
-        out[12 + k] = p[k] + off[k] - (aboutBind ? out[k] * bp[0] + out[4 + k] * bp[1] + out[8 + k] * bp[2] : 0);
-    return out;
-}
-
-// The bone's skinning matrix `time` seconds into clip `clip` (an index into pal.clips): loops
-// wrap, one-shots clamp; the same numbers as cbpal_bone_matrix in include/crowdbake_pal.h.
-export function boneMatrix(pal, clip, time, bone, out) {
-    const c = pal.clips[clip];
-    if (!Number.isInteger(clip) || !c) throw new Error(`clip ${clip} is not one of the palette's ${pal.clips.length} clips`);
-    return instanceBoneMatrix(pal, [instanceFirstRow(c), c.loops ? c.frames : -c.frames, c.fps, 0], time, bone, out);
 }
 

@@ -18,10 +18,10 @@
 // its screen-space velocity for TAA or motion blur. `three` is an import-map name (pages) or the
 // npm package (runtimes/web/package.json pins it).
 import * as THREE from 'three';
-import { instanceData, instanceBoneMatrix, instanceFirstRow } from './crowdbake_pal.mjs';
+import { hasLocalRows, instanceData, instanceBoneMatrix, instanceBoneMatrixCrossfade, instanceFirstRow } from './crowdbake_pal.mjs';
 import { FootstepClock } from './crowdbake_contacts.mjs';
-import { paletteDefines } from './crowdbake_crowd.mjs';
-import { AUTO_BONE_PASS_VERTICES, resolveLod, sortInfluences } from './crowdbake_bones.mjs';
+import { bonePositionTexels, paletteDefines } from './crowdbake_crowd.mjs';
+import { autoBonePassVertices, resolveLod, sortInfluences } from './crowdbake_bones.mjs';
 import { BONE_VERTEX_PARS, HerdBonePass } from './crowdbake_three_bones.mjs';
 import { HerdTiers, TIER_VERTEX_PARS } from './crowdbake_three_tiers.mjs';
 import { instanceTravelOffset } from './crowdbake_travel.mjs';
@@ -75,7 +75,8 @@ export function meshFromGLTF(gltf) {
 }
 
 // The palette as three.js textures: RGBA32F, RGBA16F or RGBA16UI (usampler2D), and the bind
-// positions (row 0) and position offsets (row 1, half palettes) the shader reads.
+// positions (row 0) and position offsets (row 1, half palettes) the shader reads (local rows: rows 2..4 too,
+// bonePositionTexels).
 export function paletteTextures(pal) {
     const h = pal.header;
     const types = [[THREE.RGBAFormat, THREE.FloatType, 'RGBA32F'], [THREE.RGBAFormat, THREE.HalfFloatType, 'RGBA16F'],
@@ -83,12 +84,8 @@ export function paletteTextures(pal) {
     const [format, type, internal] = types[h.precision];
     const palette = new THREE.DataTexture(pal.texels, h.width, h.height, format, type);
     palette.internalFormat = internal;
-    const bindData = new Float32Array(h.bone_count * 8); // row 0: bind positions; row 1: position offsets
-    pal.bones.forEach((b, j) => {
-        bindData.set(b.bind_position, j * 4);
-        bindData.set(b.position_offset, (h.bone_count + j) * 4);
-    });
-    const bind = new THREE.DataTexture(bindData, h.bone_count, 2, THREE.RGBAFormat, THREE.FloatType);
+    const { data, rows } = bonePositionTexels(pal);
+    const bind = new THREE.DataTexture(data, h.bone_count, rows, THREE.RGBAFormat, THREE.FloatType);
     for (const t of [palette, bind]) {
         t.minFilter = t.magFilter = THREE.NearestFilter;
         t.generateMipmaps = false;
@@ -172,7 +169,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // (the library's text: loadPaletteGLSL()), material (one three.js material, or an array with one
     // per primitive, to patch; default: a clone of each primitive's own glTF material, so the herd
     // looks like the model), fade (cross-fade seconds, 0.25), bonePass ('auto': the bone pass from
-    // bonePassVertices skinned vertices a frame, AUTO_BONE_PASS_VERTICES unless given, when update()
+    // bonePassVertices skinned vertices a frame, AUTO_BONE_PASS_VERTICES (local rows: _LOCAL) unless given, when update()
     // is given the renderer; true: always then; false: never).
     // lod: with the bone pass, the animation LOD of crowdbake_bones.mjs ('auto': from the model's own error, the
     // roster type's animation_lod or else lodThresholds; { two, one } or false); herd.lodChoice() says which and why.
@@ -209,6 +206,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         this.boundsVersion = this.instanceMatrix.version;
         this.instanceScale = new Float32Array(count).fill(1);
         this.pal = pal;
+        this.localRows = hasLocalRows(pal.header); // CB_LOCAL_ROWS: each bone composed down its chain
         this.states = statesOf(pal, type);
         this.fade = fade;
         this.time = 0;
@@ -228,7 +226,9 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         };
         this.uniforms = uniforms;
         const defines = Object.fromEntries(paletteDefines(pal.header).map((d) => [d, '']));
-        this.bonePassVertices = bonePass === 'auto' ? bonePassVertices ?? AUTO_BONE_PASS_VERTICES : bonePass ? 0 : Infinity;
+        const auto = autoBonePassVertices(pal.header, bonePassVertices); // local rows: a lower threshold, and why
+        this.bonePassVertices = bonePass === 'auto' ? auto.vertices : bonePass ? 0 : Infinity;
+        this.bonePassWhy = bonePass === 'auto' ? auto.why : '';
         this.lodOption = lod;
         this.lodTiers = lodTiers;
         this.tiers = null;
@@ -402,9 +402,9 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
             return { method: 'palette', reason: 'this WebGL2 cannot render to float textures (no EXT_color_buffer_float)' };
         if (vertices < this.bonePassVertices)
             return { method: 'palette', reason: `${vertices} skinned vertices a frame < ${this.bonePassVertices}: the bone pass ` +
-                     'would not pay for its extra pass (bonePass: true forces it)' };
+                     `would not pay for its extra pass (bonePass: true forces it)${this.bonePassWhy}` };
         return { method: 'bones', reason: this.bonePassVertices ? `${vertices} skinned vertices a frame >= ${this.bonePassVertices}` +
-                 ': each bone blended once per instance (bonePass: false draws per vertex)' : 'bonePass: true' };
+                 `: each bone blended once per instance (bonePass: false draws per vertex)${this.bonePassWhy}` : 'bonePass: true' };
     }
 
     // Switches every patched material (colour, shadow depth, motion vectors) to the bone pass or back:
@@ -467,12 +467,10 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         const a = this.geometry.attributes, at = (attr, n) => attr.array.subarray(i * n, i * n + n);
         const [start, length] = at(a.cb_fade, 2);
         const fade = length > 0 ? Math.min(Math.max((this.time - start) / length, 0), 1) : 1;
-        const m = instanceBoneMatrix(this.pal, at(a.cb_inst, 4), this.time, bone);
-        if (fade < 1) { // the shader mixes the two skinned positions: the same as mixing the matrices
-            const from = instanceBoneMatrix(this.pal, at(a.cb_from, 4), this.time, bone);
-            for (let k = 0; k < 16; ++k) m[k] = from[k] + (m[k] - from[k]) * fade;
-        }
-        return out.fromArray(m);
+        // A cross-fade as the shader blends it (global rows: the two matrices mixed; local rows: each bone's two
+        // local poses blended, then composed).
+        return out.fromArray(fade < 1 ? instanceBoneMatrixCrossfade(this.pal, at(a.cb_from, 4), at(a.cb_inst, 4), fade, this.time, bone)
+            : instanceBoneMatrix(this.pal, at(a.cb_inst, 4), this.time, bone));
     }
 
     // Where a prop attached to a socket (a roster socket: { bone, bind_transform }) of instance i is

@@ -109,6 +109,9 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
     o.measure_all = s->measure_all;
     /* Babylon.js's baked vertex animation texture holds Float32 4x4 matrices: bake them exactly so. */
     if (format == CB_FORMAT_BABYLON) o.layout = CB_LAYOUT_MAT4, o.precision = CB_PRECISION_FLOAT, o.affine_fallback = false;
+    /* Local rows go only in a .pal (EXR, KTX2 and Babylon have no place for the parents): every other
+     * format is baked global (bake_notes says so). The rate search takes it from here too. */
+    o.bone_space = format == CB_FORMAT_PAL ? s->bone_space : CB_BONE_SPACE_GLOBAL;
     return o;
 }
 
@@ -517,7 +520,6 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         o->format = format;
         o->path = output_path(job, format);
         cb_bake_options opt = cb_bake_settings_options(&job->settings, format, &job->limits, job->threads);
-        opt.bone_space = bake_bone_space(job, format);
         if (mapped && opt.bone_space == CB_BONE_SPACE_GLOBAL) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
         if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout ||
             shared_opt.bone_space != opt.bone_space) {

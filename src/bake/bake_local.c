@@ -8,7 +8,7 @@
 
 cb_bone_space bake_bone_space(const cb_bake_job *job, unsigned format)
 {
-    return format == CB_FORMAT_PAL ? job->settings.bone_space : CB_BONE_SPACE_GLOBAL;
+    return cb_bake_settings_options(&job->settings, format, NULL, 1).bone_space; /* decided there, for the search too */
 }
 
 static const char *pal_path(const cb_bake_job *job)
@@ -59,9 +59,9 @@ void bake_local_notes(const cb_bake_job *job, const cb_palette *p, cb_warnings *
             "frame (.pal version 6), blended bone by bone and composed by the runtime, the glTF's own interpolation; "
             "rows sampled, not fitted (a fit is to the global blend); errors measured composed", pal_path(job));
     if (job->settings.fps_auto)
-        cb_warn(w, "note", "%s: local rows at the rates the search chose measuring global rows (no search measures local "
-                "rows yet); their visible error, measured composed, is held to the budget as any bake's: %s", pal_path(job),
-                rates);
+        cb_warn(w, "note", "%s: local rows at each clip's key rate, or its lowest multiple within max_error measured "
+                "blended and composed as the runtime plays them (a clip whose keys lie on no grid up to max_fps: the "
+                "common rates); each clip's reason says which: %s", pal_path(job), rates);
     for (uint32_t i = 0; i < job->output_count; ++i)
         if (job->outputs[i].format != CB_FORMAT_PAL)
             cb_warn(w, "note", "%s is baked global: only a .pal holds local rows (no place for the parents)", job->outputs[i].path);

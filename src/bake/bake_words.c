@@ -3,6 +3,7 @@
 #include "crowdbake/bake.h"
 #include "internal/plumbing.h"
 #include "internal/bake_words.h"
+#include "core/local_rate.h" /* local_key_fps; search_keep's local_rates */
 
 #include <math.h>
 #include <string.h>
@@ -32,6 +33,31 @@ static double budget_above(double error_mm)
     return up > error_mm ? up : up + unit;
 }
 
+/* An auto clip's rate chosen for local rows (local_rate.c): its key rate's lowest multiple whose
+ * rows, blended and composed as the runtime plays them, stay within its budget. */
+static void local_reason(const cb_bake_job *job, uint32_t i, double fps, char *buf, size_t size)
+{
+    const cb_rate_choice *r = &job->rates[i];
+    double keys = local_key_fps(&job->model->animations[job->plan[i].animation], CB_FPS_LIMIT);
+    double multiple = keys > 0 ? fps / keys : 0;
+    bool on_keys = keys > 0 && fabs(multiple - round(multiple)) < 1e-6;
+    char why[160];
+    if (!on_keys && keys > 0)
+        snprintf(why, sizeof why, "its keys lie every 1/%g s, over max_fps %g: the common rates", keys,
+                 job->clip_settings[i].max_fps);
+    else if (!on_keys)
+        snprintf(why, sizeof why, "its keys lie on no grid: the common rates");
+    else if (multiple < 1.5)
+        snprintf(why, sizeof why, "its keys");
+    else
+        snprintf(why, sizeof why, "%g x its keys' %g fps: nlerp's lag at fewer", round(multiple), keys);
+    if (!r->met)
+        snprintf(buf, size, "%g fps, local rows (%s): over its budget even at max_fps (%.3g mm/m)", fps, why, r->error_mm);
+    else
+        snprintf(buf, size, "%g fps, local rows (%s): the fewest within its budget (%.3g mm/m, blended and composed as the "
+                 "runtime plays them)", fps, why, r->error_mm);
+}
+
 void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t size)
 {
     const cb_clip_plan *c = &job->plan[i];
@@ -40,11 +66,14 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
     double fps = cb_bake_job_clip_fps(job, i);
     bool fitted = c->fit || cs->fit_rows;
     const char *rows = fitted ? "fitted rows" : "sampled rows";
+    bool local_chosen = job->search_kept && ((const search_keep *)job->search_kept)->local_rates; /* local_rate.c's */
     if (c->step) {
         snprintf(buf, size, "%g fps, step rows: keyed with STEP, rows at its key times, held not blended (exact; a fixed "
                  "fps bakes it blended)", fps);
     } else if (!cs->fps_auto) {
         snprintf(buf, size, "%g fps, %s: a fixed fps%s", fps, rows, fitted ? " (fit_rows)" : "");
+    } else if (local_chosen) {
+        local_reason(job, i, fps, buf, size);
     } else if (!r->met) {
         snprintf(buf, size, "%g fps, %s: over its budget even at max_fps (%.3g mm/m)", fps, rows, r->error_mm);
     } else if (cs->from.max_fps == CB_FROM_TRANSIENT) {
@@ -64,8 +93,8 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
         snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows do not meet it at a lower "
                  "rate", fps, rows, r->error_mm);
     }
-    size_t n = strlen(buf); /* local rows are sampled at the rate chosen for global rows (bake_local.c) */
-    if (job->settings.bone_space == CB_BONE_SPACE_LOCAL && !c->step && n < size)
+    size_t n = strlen(buf); /* a fixed rate's local rows (an auto rate's said so above) */
+    if (job->settings.bone_space == CB_BONE_SPACE_LOCAL && !c->step && !(cs->fps_auto && local_chosen) && n < size)
         snprintf(buf + n, size - n, "; baked as local rows, sampled");
 }
 

@@ -14,6 +14,7 @@
 #include "cb_math.h"
 #include "crowdbake/runtime.h"
 #include "internal/plumbing.h"
+#include "local_rate.h" /* local_palette_errors */
 #include "palette_bake.h"
 
 /* A qpos transform v -> p + s rotate(q, v - b), b the bone's bind position. */
@@ -39,7 +40,7 @@ static cb_vec3 bind_of(const cb_palette *p, uint32_t bone)
     return (cb_vec3){b[0], b[1], b[2]};
 }
 
-static qpos qpos_of_values(const double v[16]) { return (qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]}; }
+static qpos qpos_of_values(const double v[8]) { return (qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]}; }
 
 /* a after b: the parent's transform a (about bind position ba) applied to its child's b. */
 static qpos compose(qpos a, cb_vec3 ba, qpos b)
@@ -64,21 +65,27 @@ static void values_of_qpos(qpos t, double v[16])
     memcpy(v, out, sizeof out);
 }
 
-/* One bone's local values at a row, or blended between two (flip, lerp, q normalised), as the
- * runtime blends them. */
+/* b blended into a by f as the runtime blends two rows: the quaternion's hemisphere flipped to a's,
+ * every term lerped, the quaternion normalised (nlerp). */
+static qpos blend_qpos(qpos a, qpos b, double f)
+{
+    double x[8] = {a.q.x, a.q.y, a.q.z, a.q.w, a.p.x, a.p.y, a.p.z, a.s}, y[8] = {b.q.x, b.q.y, b.q.z, b.q.w, b.p.x, b.p.y, b.p.z, b.s};
+    double sign = x[0] * y[0] + x[1] * y[1] + x[2] * y[2] + x[3] * y[3] < 0 ? -1 : 1;
+    for (int k = 0; k < 8; ++k) x[k] = x[k] * (1 - f) + (k < 4 ? sign : 1) * y[k] * f;
+    qpos t = qpos_of_values(x);
+    t.q = cb_quat_normalize(t.q);
+    return t;
+}
+
+/* One bone's local values at a row, or blended between two, as the runtime blends them. */
 static qpos local_at(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, uint32_t bone)
 {
     double a[16], b[16];
     cb_palette_decode_values(p, texels, r0, bone, a);
-    if (r1 != r0 || fr != 0) {
-        cb_palette_decode_values(p, texels, r1, bone, b);
-        double sign = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0 ? -1 : 1;
-        for (int k = 0; k < 4; ++k) a[k] = a[k] * (1 - fr) + sign * b[k] * fr;
-        for (int k = 4; k < 8; ++k) a[k] = a[k] * (1 - fr) + b[k] * fr;
-    }
     qpos t = qpos_of_values(a);
-    t.q = cb_quat_normalize(t.q);
-    return t;
+    if (r1 == r0 && fr == 0) return t.q = cb_quat_normalize(t.q), t;
+    cb_palette_decode_values(p, texels, r1, bone, b);
+    return blend_qpos(t, qpos_of_values(b), fr);
 }
 
 /* The bone's composed (global) values: its local transform composed with each ancestor's, walked
@@ -97,14 +104,19 @@ void palette_local_composed(const cb_palette *p, const void *texels, uint32_t r0
 }
 
 /* Every bone's composed matrix at once (16 doubles a bone into out): each bone's local rows blended
- * once, then composed in passes, a bone once its parent is (as many passes as the deepest chain),
- * where composing each bone's chain alone blends every ancestor again. */
-bool palette_local_matrices(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, double *out)
+ * once (and, in a cross-fade, blended from the other clip's by fade: local rows, as the spec's
+ * runtimes fade them), then composed in passes, a bone once its parent is (as many passes as the
+ * deepest chain), where composing each bone's chain alone blends every ancestor again. */
+bool palette_local_matrices(const cb_palette *p, const void *texels, const palette_frame *to,
+                            const palette_frame *from, double fade, double *out)
 {
     qpos *pose = malloc((size_t)p->bone_count * sizeof *pose);
     unsigned char *done = calloc(p->bone_count ? p->bone_count : 1, 1);
     if (!pose || !done) return free(pose), free(done), false;
-    for (uint32_t j = 0; j < p->bone_count; ++j) pose[j] = local_at(p, texels, r0, r1, fr, j);
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        pose[j] = local_at(p, texels, to->row0, to->row1, to->fr, j);
+        if (from) pose[j] = blend_qpos(local_at(p, texels, from->row0, from->row1, from->fr, j), pose[j], fade);
+    }
     bool progress = true;
     for (uint32_t pass = 0; progress && pass <= p->bone_count; ++pass) {
         progress = false;
@@ -245,25 +257,25 @@ static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin,
     return CB_OK;
 }
 
-/* The errors measured composed: at every row (max_error), and between every two (visible_error)
- * halfway and at LOCAL_TIMES_PER_ROW fixed-seed times a row, on every skinned vertex against the
- * exact pose, as `verify` measures. Halfway alone is not enough: at the keys' rate the local nlerp
- * meets the source's slerp exactly halfway and errs most near a quarter (Husky at 24 fps: 0.11
- * mm/m halfway, 2.1 at its worst time). */
-#define LOCAL_TIMES_PER_ROW 4
-static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, cb_palette *p, cb_error *err)
+/* The errors measured composed: at every row (max_error) and at the quarter points between every
+ * two (visible_error), on every skinned vertex group that can raise the worst, against the exact
+ * pose (local_rate.c: the quarter points, where nlerp's lag peaks; the rows and midpoints the rate
+ * search sampled read from its pose caches). */
+static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, const palette_skin_facts *facts,
+                               const palette_probe *probe, cb_palette *p, cb_error *err)
 {
     p->max_error = p->visible_error = 0;
     p->error_rows_measured = p->rows;
-    for (uint32_t c = 0; c < p->clip_count; ++c) {
-        cb_clip_error e;
-        int32_t animation = plan ? plan[c].animation : (int32_t)c;
-        if (cb_verify_clip(s, p, p->texels, c, animation, LOCAL_TIMES_PER_ROW * p->clips[c].frames, &e, err)) return err->status;
-        p->max_error = fmax(p->max_error, e.quant_max);
-        p->clips[c].visible_error = fmax(e.quant_max, e.interp_max);
+    for (uint32_t c = 0; c < p->clip_count && !err->status; ++c) {
+        double rows = 0, between = 0;
+        pose_cache *kept = probe && probe->clip_poses ? probe->clip_poses[c] : NULL;
+        if (local_palette_errors(s, facts, p, c, plan ? plan[c].animation : (int32_t)c, kept, &rows, &between, err))
+            break;
+        p->max_error = fmax(p->max_error, rows);
+        p->clips[c].visible_error = fmax(rows, between);
         p->visible_error = fmax(p->visible_error, p->clips[c].visible_error);
     }
-    return CB_OK;
+    return err->status;
 }
 
 cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
@@ -281,12 +293,25 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
     cb_clip_plan *sampled = plan ? malloc(plan_count * sizeof *sampled) : NULL;
     if (plan && !sampled) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     for (uint32_t i = 0; sampled && i < plan_count; ++i) sampled[i] = plan[i], sampled[i].fit = false;
-    cb_status rc = palette_bake_with_facts(sampler, &global, sampled, plan_count, facts, probe, p, err);
+    palette_skin_facts own = {0}, unmeasured;
+    cb_status rc = facts ? CB_OK : palette_skin_facts_build(sampler, &own, err);
+    if (!facts) facts = &own;
+    /* The global rows' own errors are not the local rows': measured composed below, not here. */
+    unmeasured = *facts, unmeasured.skinned = false;
+    if (!rc) rc = palette_bake_with_facts(sampler, &global, sampled, plan_count, &unmeasured, probe, p, err);
+    if (rc) return free(sampled), palette_skin_facts_free(&own), rc;
+    if (p->layout != CB_LAYOUT_QPOS) { /* fell back to affine: a rig qpos cannot hold stays global, as asked */
+        cb_palette_free(p);
+        global = *opt, global.bone_space = CB_BONE_SPACE_GLOBAL;
+        rc = palette_bake_with_facts(sampler, &global, plan, plan_count, facts, probe, p, err);
+        free(sampled), palette_skin_facts_free(&own);
+        return rc;
+    }
     free(sampled);
-    if (rc || p->layout != CB_LAYOUT_QPOS) return rc; /* fell back to affine: a rig qpos cannot hold stays global */
-    int32_t skin = cb_sampler_skin(sampler);
-    if (!(rc = convert_palette(p, m, skin, opt->precision, err)) && cb_model_skin_vertex_count(m, skin) > 0)
-        rc = measure_local(sampler, plan, p, err);
+    if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, err)) &&
+        cb_model_skin_vertex_count(m, cb_sampler_skin(sampler)) > 0)
+        rc = measure_local(sampler, plan, facts, probe, p, err);
+    palette_skin_facts_free(&own);
     if (rc) cb_palette_free(p);
     return rc;
 }

@@ -298,6 +298,7 @@ typedef struct search_keep {
     int32_t skin;
     bool has_facts;
     palette_skin_facts facts;
+    bool local_rates; /* the rates were chosen for local rows (local_rate_search.c), not for global ones */
     uint32_t count;
     pose_cache *poses[];
 } search_keep;
@@ -343,9 +344,16 @@ void palette_local_parents(const cb_model *m, const cb_skin *skin, int32_t *pare
  * of the 16), its rows r0 and r1 blended by fr bone by bone first (r0 == r1, fr 0: the row). */
 void palette_local_composed(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, uint32_t bone,
                             double v[16]);
+/* Two rows and the second's weight, as cb_runtime_frame gives them. */
+typedef struct palette_frame {
+    uint32_t row0, row1;
+    double fr;
+} palette_frame;
 /* local_rows.c: every bone of a local palette composed (as palette_local_composed, 16 doubles a
- * bone: matrices), each bone's rows blended once; false: out of memory (nothing written). */
-bool palette_local_matrices(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, double *out);
+ * bone: matrices), each bone's rows blended once; with `from`, a cross-fade: each bone's blended
+ * local values faded from from's by fade before composing. False: out of memory (nothing written). */
+bool palette_local_matrices(const cb_palette *p, const void *texels, const palette_frame *to,
+                            const palette_frame *from, double fade, double *out);
 /* palette_error.c: bind-space distance from each joint's bind position (bind: 3 floats a
  * joint) to the farthest vertex it moves; -1 for joints that move none. False when no vertex
  * is skinned. */

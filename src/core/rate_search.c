@@ -9,6 +9,7 @@
 #include <threads.h>
 
 #include "cb_math.h"
+#include "local_rate.h"   /* local rows' rates */
 #include "palette_bake.h" /* palette_bake_with_facts */
 
 /* ---- error-driven frame rate ---- */
@@ -567,6 +568,9 @@ cb_status palette_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_
         return cb_fail(err, CB_ERR_INPUT, "%s: has no skinned mesh to measure errors on; give the clips a fixed fps",
                        m->source);
     }
+    if (o->bone_space == CB_BONE_SPACE_LOCAL) /* its key rate's multiples, measured composed (local_rate.c) */
+        return local_choose_rates(s, o, plan, count, goals, out, keep, facts, needed_later, err), palette_skin_facts_free(&own),
+               err->status;
     rate_search rs = {m, cb_sampler_skin(s), o, plan, count, goals, calloc(count, sizeof(cb_rate_choice)),
                       calloc(count, sizeof(cb_error)), facts->height, facts, NULL, 0, keep ? keep->poses : NULL, 0,
                       needed_later};

@@ -3,6 +3,7 @@
 #include "crowdbake/runtime.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cb_math.h"
@@ -37,9 +38,27 @@ cb_instance cb_instance_of(const cb_palette_clip *clip)
 
 void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_instance *in, double time, double *out)
 {
-    uint32_t r0, r1;
-    double fr;
-    cb_runtime_frame(in, time, &r0, &r1, &fr);
-    if (p->bone_space == CB_BONE_SPACE_LOCAL && palette_local_matrices(p, texels, r0, r1, fr, out)) return;
-    for (uint32_t j = 0; j < p->bone_count; ++j) cb_palette_blend(p, texels, r0, r1, fr, j, out + (size_t)j * 16);
+    palette_frame f;
+    cb_runtime_frame(in, time, &f.row0, &f.row1, &f.fr);
+    if (p->bone_space == CB_BONE_SPACE_LOCAL && palette_local_matrices(p, texels, &f, NULL, 1, out)) return;
+    for (uint32_t j = 0; j < p->bone_count; ++j) cb_palette_blend(p, texels, f.row0, f.row1, f.fr, j, out + (size_t)j * 16);
+}
+
+bool cb_runtime_matrices_crossfade(const cb_palette *p, const void *texels, const cb_instance *from,
+                                   const cb_instance *to, double fade, double time, double *out)
+{
+    if (fade >= 1) return cb_runtime_matrices(p, texels, to, time, out), true;
+    if (p->bone_space == CB_BONE_SPACE_LOCAL) { /* local rows faded before they are composed */
+        palette_frame a, b;
+        cb_runtime_frame(from, time, &a.row0, &a.row1, &a.fr);
+        cb_runtime_frame(to, time, &b.row0, &b.row1, &b.fr);
+        return palette_local_matrices(p, texels, &b, &a, fade, out);
+    }
+    double *other = malloc((size_t)p->bone_count * 16 * sizeof *other);
+    if (!other) return false;
+    cb_runtime_matrices(p, texels, from, time, other);
+    cb_runtime_matrices(p, texels, to, time, out);
+    for (size_t k = 0; k < (size_t)p->bone_count * 16; ++k) out[k] = other[k] + (out[k] - other[k]) * fade;
+    free(other);
+    return true;
 }

@@ -134,8 +134,9 @@ static inline conf_case *conf_add(conformance *c, const char *name, int palette)
     return k;
 }
 
-/* The positions the C runtime gives every instance of a case (cross-fades blended as the shaders
- * blend them: linearly, which is the same as blending the bones), float32. */
+/* The positions the C runtime gives every instance of a case, float32. Cross-fades as the shaders
+ * fade: global rows' skins mixed linearly (the same as mixing the bones); local rows' bones faded
+ * before they compose (cb_runtime_matrices_crossfade). */
 static inline float *conf_expected(const conformance *c, const conf_case *k)
 {
     const conf_palette *p = &c->palettes[k->palette];
@@ -151,9 +152,15 @@ static inline float *conf_expected(const conformance *c, const conf_case *k)
                 float v[16];
                 conf_instance(&p->view.clips[cl], conf_times[t], i, 0, v); /* the right rows, always */
                 cb_instance in = {v[4], v[5], v[6], v[7]}, fi = {v[8], v[9], v[10], v[11]};
-                cb_runtime_matrices(&p->view, p->pal.texels, &in, (float)conf_times[t], mats);
-                cb_skin_positions(prim, mats, to);
                 double fade = v[13] > 0 ? fmin(fmax((conf_times[t] - v[12]) / v[13], 0), 1) : 1;
+                if (k->local) { /* local rows fade before they compose: not a mix of the two skins */
+                    assert_true(cb_runtime_matrices_crossfade(&p->view, p->pal.texels, &fi, &in, fade, (float)conf_times[t], mats));
+                    cb_skin_positions(prim, mats, to);
+                    fade = 1;
+                } else {
+                    cb_runtime_matrices(&p->view, p->pal.texels, &in, (float)conf_times[t], mats);
+                    cb_skin_positions(prim, mats, to);
+                }
                 if (fade < 1) {
                     cb_runtime_matrices(&p->view, p->pal.texels, &fi, (float)conf_times[t], mats);
                     cb_skin_positions(prim, mats, from);

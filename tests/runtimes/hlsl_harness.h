@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 
 #include "crowdbake/runtime.h"
+#include "local_reference.h"
 #include "vulkan_compute.h"
 #include "runtimes/shader_source.h"
 
@@ -35,16 +36,23 @@ typedef struct fixture {
     cb_palette palette;
 } fixture;
 
-/* Bakes the model's first skin, every clip, in place, as test_gl does; fitted rows when `fit`. */
-static inline void bake(const char *path, cb_layout l, cb_precision pr, bool fit, fixture *f)
+/* Bakes the model's first skin, every clip, in place, as test_gl does; fitted rows when `fit`;
+ * local rows (.pal version 6) when `space` says. */
+static inline void bake_space(const char *path, cb_layout l, cb_precision pr, bool fit, cb_bone_space space, fixture *f)
 {
     f->model = load_or_fail(path);
     cb_error err = {0};
     cb_sampler *s = cb_sampler_create(f->model, 0, &err);
     cb_bake_options o = cb_default_bake_options();
-    o.layout = l, o.precision = pr, o.root_motion = CB_ROOT_MOTION_IN_PLACE, o.fit = fit;
+    o.layout = l, o.precision = pr, o.root_motion = CB_ROOT_MOTION_IN_PLACE, o.fit = fit, o.bone_space = space;
     assert_int_equal(cb_palette_bake(s, &o, NULL, 0, &f->palette, &err), CB_OK);
+    assert_int_equal(f->palette.bone_space, space);
     cb_sampler_free(s);
+}
+
+static inline void bake(const char *path, cb_layout l, cb_precision pr, bool fit, fixture *f)
+{
+    bake_space(path, l, pr, fit, CB_BONE_SPACE_GLOBAL, f);
 }
 
 static inline void release(fixture *f)
@@ -78,15 +86,22 @@ static inline vkc_resource upload_palette(vkc_context *c, const cb_palette *p, b
     return r;
 }
 
-/* One texel per bone, two rows: the bind positions, then the position offsets (RGBA32F). */
+/* One texel per bone, two rows: the bind positions, then the position offsets (RGBA32F); local
+ * rows add row 2 (the parent, -1 a root), row 3 (pos_min, scale_max) and row 4 (pos_max, 0). */
 static inline vkc_resource upload_bind_positions(vkc_context *c, const cb_palette *p)
 {
-    float *rgba = calloc((size_t)p->bone_count * 8, sizeof(float));
-    for (uint32_t j = 0; j < p->bone_count; ++j) {
+    bool local = p->bone_space == CB_BONE_SPACE_LOCAL;
+    uint32_t n = p->bone_count, rows = local ? 5 : 2;
+    float *rgba = calloc((size_t)n * rows * 4, sizeof(float));
+    for (uint32_t j = 0; j < n; ++j) {
         memcpy(rgba + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
-        if (p->positions_relative) memcpy(rgba + (p->bone_count + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
+        if (p->positions_relative) memcpy(rgba + (n + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
+        if (!local) continue;
+        rgba[(2 * n + j) * 4] = (float)p->parents[j];
+        memcpy(rgba + (3 * n + j) * 4, p->bone_ranges + j * 8, 4 * sizeof(float)); /* pos_min, scale_max */
+        memcpy(rgba + (4 * n + j) * 4, p->bone_ranges + j * 8 + 4, 4 * sizeof(float)); /* pos_max, 0 */
     }
-    vkc_resource r = vkc_image(c, VK_FORMAT_R32G32B32A32_SFLOAT, p->bone_count, 2, 16, rgba, false);
+    vkc_resource r = vkc_image(c, VK_FORMAT_R32G32B32A32_SFLOAT, n, rows, 16, rgba, false);
     free(rgba);
     return r;
 }
@@ -162,9 +177,14 @@ static inline gpu_sample *gpu_samples(const sample *s, uint32_t n, double row_of
 }
 
 /* The C runtime's bone matrices of a sample at time t: the two clips' matrices blended by the
- * fade, term by term (what blending the transforms in the shader is). */
+ * fade, term by term (what blending the transforms in the shader is). Local rows cross-fade the two
+ * clips' local rows before composing (local_reference.h). */
 static inline void cpu_matrices(const cb_palette *p, const sample *s, double t, double *mats, double *from)
 {
+    if (s->fade < 1 && p->bone_space == CB_BONE_SPACE_LOCAL) {
+        local_matrices(p, &s->inst, &s->from, s->fade, t, mats);
+        return;
+    }
     cb_runtime_matrices(p, p->texels, &s->inst, t, mats);
     if (s->fade >= 1) return;
     cb_runtime_matrices(p, p->texels, &s->from, t, from);
@@ -243,13 +263,14 @@ static inline vkc_resource upload_vertices(vkc_context *c, const cb_primitive *p
 static inline void hlsl_globals_prefix(char *out, size_t size, const cb_palette *p, bool unorm, const char *extra)
 {
     snprintf(out, size,
-             "#define %s\n#define %s\n%s%s%s"
+             "#define %s\n#define %s\n%s%s%s%s"
              "#define CB_TEXTURES_DECLARED\n#define CB_HEADER_DECLARED\n"
              "[[vk::binding(0)]] Texture2D<%s> cb_palette;\n"
              "[[vk::binding(1)]] Texture2D<float4> cb_bind_positions;\n"
              "[[vk::binding(2)]] cbuffer cb_test_header { " HEADER_CBUFFER " };\n",
              layout_define[p->layout], precision_define[p->precision],
-             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "", unorm ? "#define CB_U16_UNORM\n" : "", extra,
+             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "",
+             p->bone_space == CB_BONE_SPACE_LOCAL ? "#define CB_LOCAL_ROWS\n" : "", unorm ? "#define CB_U16_UNORM\n" : "", extra,
              p->precision == CB_PRECISION_U16 && !unorm ? "uint4" : "float4");
 }
 

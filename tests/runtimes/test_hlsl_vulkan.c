@@ -7,6 +7,9 @@
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
+#include <time.h>
+
+#include "bone_order.h"
 #include "hlsl_harness.h"
 
 #define LIBRARY "runtimes/hlsl/crowdbake_palette.hlsl"
@@ -58,7 +61,17 @@ static const char *skin_main =
 typedef struct variant {
     bool unorm, transpose;
     double row_offset;
+    bool local;      /* local rows (.pal version 6): CB_LOCAL_ROWS */
+    bool reversed;   /* local: the bone order reversed, every parent after its children (reverse_bones) */
+    double *seconds; /* when set: adds the dispatch's wall time (lavapipe), for the cost of the chain walk */
 } variant;
+
+static double now_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + t.tv_nsec * 1e-9;
+}
 
 /* Runs the compute shader `src` over every (sample, vertex); returns 12 floats per pair. */
 static float *gpu_skin(const cb_palette *p, const cb_primitive *prim, const sample *s, uint32_t n, const char *src,
@@ -75,7 +88,9 @@ static float *gpu_skin(const cb_palette *p, const cb_primitive *prim, const samp
     vkc_pipeline pipe = vkc_compute(&vk, spv, spv_bytes, r, 6);
     VkCommandBuffer cmd = vkc_begin(&vk);
     vkc_dispatch(cmd, &pipe, (uint32_t)((n * verts + 63) / 64));
+    double start = now_seconds();
     vkc_submit(&vk, cmd);
+    if (v.seconds) *v.seconds += now_seconds() - start;
     float *out = malloc(n * verts * 48);
     vkc_read(&vk, &r[5], out);
     vkc_free_pipeline(&vk, &pipe);
@@ -93,22 +108,25 @@ static double run_case(const char *model, cb_layout l, cb_precision pr, bool fit
     if (strchr(model, '/')) snprintf(path, sizeof path, "%s", model);
     else snprintf(path, sizeof path, "%s/%s", samples_dir(), model);
     fixture f;
-    bake(path, l, pr, fit, &f);
+    bake_space(path, l, pr, fit, v.local ? CB_BONE_SPACE_LOCAL : CB_BONE_SPACE_GLOBAL, &f);
     if (fit) assert_true(f.palette.fitted);
+    if (v.reversed) reverse_bones(&f.palette, &f.model->primitives[0]);
     sample samples[64];
     uint32_t n = make_samples(&f.palette, samples, 64);
     static char src[1 << 17];
     hlsl_globals_prefix(src, sizeof src, &f.palette, v.unorm, "");
     size_t used = strlen(src);
     snprintf(src + used, sizeof src - used, "%s\n%s", library, skin_main);
-    snprintf(name, sizeof name, "hlsl_%s_%s%s", cb_layout_name(l), cb_precision_name(pr), v.unorm ? "_unorm" : "");
+    snprintf(name, sizeof name, "hlsl_%s_%s%s%s", cb_layout_name(l), cb_precision_name(pr), v.unorm ? "_unorm" : "",
+             v.local ? "_local" : "");
     const cb_primitive *prim = &f.model->primitives[0];
     float *gpu = gpu_skin(&f.palette, prim, samples, n, src, name, v);
     double pe, ne, tol = tolerance(&f);
     compare(&f.palette, prim, samples, n, gpu, &pe, &ne);
     if (print)
-        printf("  %-6s %-5s%-6s%-7s %u instances x %zu vertices: positions %.2g, normals %.2g (tolerance %.2g, %.2g)\n",
-               cb_layout_name(l), cb_precision_name(pr), v.unorm ? " unorm" : "", fit ? " fitted" : "", n,
+        printf("  %-6s %-5s%-6s%-7s%s%s %u instances x %zu vertices: positions %.2g, normals %.2g (tolerance %.2g, %.2g)\n",
+               cb_layout_name(l), cb_precision_name(pr), v.unorm ? " unorm" : "", fit ? " fitted" : "", v.local ? " local" : "",
+               v.reversed ? ", bones reversed" : "", n,
                (size_t)prim->vertex_count, pe, ne, tol, 1e-5);
     if (normal_ratio) *normal_ratio = ne / 1e-5;
     free(gpu);
@@ -125,7 +143,7 @@ static void test_every_layout_and_precision_matches_the_c_runtime(void **state)
         for (int pr = 0; pr < 3; ++pr)
             for (int unorm = 0; unorm < (pr == CB_PRECISION_U16 ? 2 : 1); ++unorm) {
                 double normals, positions = run_case("quadruped.glb", (cb_layout)l, (cb_precision)pr, false, lib,
-                                                     (variant){unorm != 0, false, 0}, &normals, true);
+                                                     (variant){.unorm = unorm != 0}, &normals, true);
                 assert_true(positions <= 1 && normals <= 1);
             }
     free(lib);
@@ -162,8 +180,8 @@ static void test_broken_variants_are_caught(void **state)
 {
     (void)state;
     REQUIRE_DEVICE();
-    double transposed = broken("quadruped.glb", CB_LAYOUT_MAT4, CB_PRECISION_FLOAT, NULL, NULL, (variant){false, true, 0});
-    double off_by_one = broken("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16, NULL, NULL, (variant){false, false, 1});
+    double transposed = broken("quadruped.glb", CB_LAYOUT_MAT4, CB_PRECISION_FLOAT, NULL, NULL, (variant){.transpose = true});
+    double off_by_one = broken("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16, NULL, NULL, (variant){.row_offset = 1});
     double no_wrap = broken("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_HALF, "cb:wrap", "        f1 = f0 + 1.0;", (variant){0});
     char multitrack[1024];
     shared_path(multitrack, sizeof multitrack, "assets/multitrack-luanti/gltf_multi_track_1.glb");
@@ -271,12 +289,12 @@ static float *gpu_bone_pass(const cb_palette *p, const cb_primitive *prim, const
     return out;
 }
 
-static double bone_pass_case(cb_layout l, cb_precision pr, const char *library, double *normal_ratio)
+static double bone_pass_case(cb_layout l, cb_precision pr, bool local, const char *library, double *normal_ratio)
 {
     char path[1024];
     snprintf(path, sizeof path, "%s/quadruped.glb", samples_dir());
     fixture f;
-    bake(path, l, pr, false, &f);
+    bake_space(path, l, pr, false, local ? CB_BONE_SPACE_LOCAL : CB_BONE_SPACE_GLOBAL, &f);
     sample samples[64];
     uint32_t n = make_samples(&f.palette, samples, 64);
     for (uint32_t i = 0; i < n; ++i) samples[i].dt = 0;
@@ -284,8 +302,8 @@ static double bone_pass_case(cb_layout l, cb_precision pr, const char *library, 
     float *gpu = gpu_bone_pass(&f.palette, prim, samples, n, library);
     double pe, ne;
     compare(&f.palette, prim, samples, n, gpu, &pe, &ne);
-    printf("  bone pass %-6s %-5s %u instances (%d a block) x %u vertices: positions %.2g, normals %.2g (tolerance %.2g)\n",
-           cb_layout_name(l), cb_precision_name(pr), n, BONE_ROWS, prim->vertex_count, pe, ne, tolerance(&f));
+    printf("  bone pass %-6s %-5s%s %u instances (%d a block) x %u vertices: positions %.2g, normals %.2g (tolerance %.2g)\n",
+           cb_layout_name(l), cb_precision_name(pr), local ? " local" : "", n, BONE_ROWS, prim->vertex_count, pe, ne, tolerance(&f));
     *normal_ratio = ne / 1e-5;
     pe /= tolerance(&f);
     free(gpu);
@@ -300,16 +318,95 @@ static void test_the_bone_pass_matches_the_c_runtime(void **state)
     char *lib = read_whole_file(LIBRARY, NULL);
     double normals;
     for (int l = 0; l < 3; ++l) {
-        double positions = bone_pass_case((cb_layout)l, l == CB_LAYOUT_QPOS ? CB_PRECISION_U16 : CB_PRECISION_FLOAT, lib, &normals);
+        double positions = bone_pass_case((cb_layout)l, l == CB_LAYOUT_QPOS ? CB_PRECISION_U16 : CB_PRECISION_FLOAT, false, lib, &normals);
         assert_true(positions <= 1 && normals <= 1);
     }
     /* Broken variant: the bone textures' columns read as rows. */
     char *b = break_shader(lib, "cb:bone-columns",
                            "    return cb_make_affine(float3x3(c0.xyz, c1.xyz, c2.xyz), float3(c0.w, c1.w, c2.w));");
-    double rows_for_columns = bone_pass_case(CB_LAYOUT_QPOS, CB_PRECISION_U16, b, &normals);
+    double rows_for_columns = bone_pass_case(CB_LAYOUT_QPOS, CB_PRECISION_U16, false, b, &normals);
     printf("  bone pass with columns read as rows: error / tolerance %.0f\n", rows_for_columns);
     assert_true(rows_for_columns > 10);
     free(b), free(lib);
+}
+
+/* ---- local rows (.pal version 6): every skinning function walks each influence's chain, the bone
+ * pass each bone's; held to the C runtime (cb_runtime_matrices, composing) and, mid-fade, to
+ * local_reference.h (the two clips' local rows blended before composing) ---- */
+
+static const variant local_rows = {.local = true};
+
+static void test_local_rows_match_the_c_runtime(void **state)
+{
+    (void)state;
+    REQUIRE_DEVICE();
+    char *lib = read_whole_file(LIBRARY, NULL), cow[1024];
+    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
+    double normals, positions;
+    for (int pr = 0; pr < 3; pr += 2) { /* u16 (each bone's ranges) and float; half is refused */
+        positions = run_case("quadruped.glb", CB_LAYOUT_QPOS, (cb_precision)pr, false, lib, local_rows, &normals, true);
+        assert_true(positions <= 1 && normals <= 1);
+    }
+    variant unorm = local_rows;
+    unorm.unorm = true;
+    positions = run_case("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16, false, lib, unorm, &normals, true);
+    assert_true(positions <= 1 && normals <= 1);
+    positions = run_case(cow, CB_LAYOUT_QPOS, CB_PRECISION_U16, false, lib, local_rows, &normals, true);
+    assert_true(positions <= 1 && normals <= 1);
+    positions = bone_pass_case(CB_LAYOUT_QPOS, CB_PRECISION_U16, true, lib, &normals);
+    assert_true(positions <= 1 && normals <= 1);
+    /* Every parent after its children (the bone order reversed): the walk assumes no order. */
+    variant reversed = local_rows;
+    reversed.reversed = true;
+    positions = run_case("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16, false, lib, reversed, &normals, true);
+    assert_true(positions <= 1 && normals <= 1);
+    free(lib);
+}
+
+static double broken_local(const char *marker, const char *line)
+{
+    char *lib = read_whole_file(LIBRARY, NULL), *b = break_shader(lib, marker, line);
+    double worst = run_case("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16, false, b, local_rows, NULL, false);
+    free(lib), free(b);
+    return worst;
+}
+
+/* The broken local variants: no chain walk (each bone's local row skinned as if global), and u16
+ * positions decoded in the unit box instead of the bone's own. */
+static void test_broken_local_variants_are_caught(void **state)
+{
+    (void)state;
+    REQUIRE_DEVICE();
+    double no_walk = broken_local("cb:local-compose", "");
+    double no_range = broken_local("cb:local-ranges", "    return float4(float3(u.xyz) / 65535.0, lo.w * float(u.w) / 65535.0);");
+    printf("  local rows, error / tolerance: no chain walk %.0f, positions outside the bone's box %.0f\n", no_walk, no_range);
+    assert_true(no_walk > 10 && no_range > 10);
+}
+
+/* What the per-vertex walk costs on lavapipe: the same quadruped samples through the global and the
+ * local qpos/u16 library, dispatches interleaved (global, local, ...) three times; the SPIR-V size
+ * of each. Printed, not asserted: a measurement, not a threshold. */
+static void test_local_walk_cost(void **state)
+{
+    (void)state;
+    REQUIRE_DEVICE();
+    char *lib = read_whole_file(LIBRARY, NULL);
+    double seconds[2] = {0, 0};
+    for (int round = 0; round < 3; ++round)
+        for (int local = 0; local < 2; ++local) {
+            variant v = {.local = local != 0, .seconds = &seconds[local]};
+            assert_true(run_case("quadruped.glb", CB_LAYOUT_QPOS, CB_PRECISION_U16, false, lib, v, NULL, false) <= 1);
+        }
+    size_t bytes[2];
+    for (int local = 0; local < 2; ++local) {
+        char path[256];
+        snprintf(path, sizeof path, "%s/hlsl_qpos_u16%s.spv", TEST_TMP, local ? "_local" : "");
+        free(read_whole_file(path, &bytes[local]));
+    }
+    printf("  per-vertex chain walk (quadruped qpos/u16, every skinning function, lavapipe): dispatch time local / global "
+           "%.2f (%.3f s / %.3f s over 3 interleaved runs); SPIR-V %zu / %zu bytes\n",
+           seconds[1] / seconds[0], seconds[1], seconds[0], bytes[1], bytes[0]);
+    free(lib);
 }
 
 int main(void)
@@ -319,6 +416,9 @@ int main(void)
         cmocka_unit_test(test_fitted_rows_and_one_shots_match),
         cmocka_unit_test(test_broken_variants_are_caught),
         cmocka_unit_test(test_the_bone_pass_matches_the_c_runtime),
+        cmocka_unit_test(test_local_rows_match_the_c_runtime),
+        cmocka_unit_test(test_broken_local_variants_are_caught),
+        cmocka_unit_test(test_local_walk_cost),
     };
     return cmocka_run_group_tests_name("hlsl_vulkan", tests, setup, teardown);
 }

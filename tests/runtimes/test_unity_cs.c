@@ -10,6 +10,8 @@
 #include <math.h>
 
 #include "crowdbake_pal.h"
+#include "runtimes/bone_order.h"
+#include "runtimes/local_conformance.h"
 
 #define TMP TEST_TMP "/unity_cs"
 #define CHECK_EXE TMP "/CrowdbakeCheck.exe"
@@ -150,32 +152,32 @@ static void test_reader_equals_the_c_reader(void **state)
                 printf("  %s %s/%s: %u bone matrices, worst relative difference C# vs C %.3g\n", models[m] + 7, layouts[l],
                        precisions[p], matrices, worst);
             }
+        for (int p = 0; p < 3; p += 2) { /* local rows (.pal version 6): each bone composed down its chain */
+            snprintf(cmd, sizeof cmd, "%s bake %s -o %s/x.pal --bone-space local --layout qpos --precision %s -q 2>&1", crowdbake_exe(),
+                     model, TMP, precisions[p]);
+            run_or_fail(cmd);
+            unsigned matrices = 0;
+            double worst = compare_pal(TMP "/x.pal", &matrices);
+            printf("  %s local qpos/%s: %u composed bone matrices, worst relative difference C# vs C %.3g\n", models[m] + 7,
+                   precisions[p], matrices, worst);
+        }
     }
 }
 
-/* Damaged files: the same verdict as cbpal_open_memory, word for word; zstd is refused with the fix. */
-static void test_reader_verdicts_match(void **state)
+/* Each damaged copy of `good` (a byte of each poke flipped low, then high; three cuts): the C#
+ * reader's verdict equals cbpal_open_memory's, word for word, checksum verified and not. Returns how
+ * many the tables' checks refused. */
+static unsigned compare_verdicts(const unsigned char *good, size_t size, const size_t *pokes, size_t npokes, unsigned *compared)
 {
-    (void)state;
-    build_check();
-    char fox[1024], cmd[4096], line[1024], want[600], err[512];
-    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
-    snprintf(cmd, sizeof cmd, "%s bake %s -o %s/v.pal --layout qpos --precision half -q 2>&1", crowdbake_exe(), fox, TMP);
-    run_or_fail(cmd);
-    size_t size;
-    unsigned char *good = (unsigned char *)read_whole_file(TMP "/v.pal", &size);
-    assert_non_null(good);
-    /* offsets into the header and the first clip and bone entries, and lengths to cut the file to */
-    const size_t pokes[] = {0, 8, 16, 20, 24, 28, 32, 36, 40, 44, 48, 52, 56, 60, 120, 128, 136, 144, 152, 160, 168, 176, 184, 256 + 8,
-                            256 + 12, 256 + 4};
+    char line[1024], want[600], err[512];
     unsigned char *bad = malloc(size);
     assert_non_null(bad);
-    unsigned compared = 0, refused = 0;
-    for (size_t i = 0; i < COUNT_OF(pokes) * 2 + 3; ++i) {
+    unsigned refused = 0;
+    for (size_t i = 0; i < npokes * 2 + 3; ++i) {
         size_t len = size;
         memcpy(bad, good, size);
-        if (i < COUNT_OF(pokes) * 2) bad[pokes[i / 2] + (i % 2 ? 3 : 0)] ^= i % 2 ? 0x80 : 0x01;
-        else len = i == COUNT_OF(pokes) * 2 ? 100 : i == COUNT_OF(pokes) * 2 + 1 ? 4096 : size - 1;
+        if (i < npokes * 2) bad[pokes[i / 2] + (i % 2 ? 3 : 0)] ^= i % 2 ? 0x80 : 0x01;
+        else len = i == npokes * 2 ? 100 : i == npokes * 2 + 1 ? 4096 : size - 1;
         FILE *f = fopen(TMP "/bad.pal", "wb");
         assert_non_null(f);
         assert_int_equal(fwrite(bad, 1, len, f), len);
@@ -196,8 +198,52 @@ static void test_reader_verdicts_match(void **state)
             if (!flags) break;
         }
         fclose(out);
-        ++compared;
+        ++*compared;
     }
+    free(bad);
+    return refused;
+}
+
+static unsigned char *bake_bytes(const char *model, const char *options, size_t *size)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s/v.pal %s -q 2>&1", crowdbake_exe(), model, TMP, options);
+    run_or_fail(cmd);
+    unsigned char *bytes = (unsigned char *)read_whole_file(TMP "/v.pal", size);
+    assert_non_null(bytes);
+    return bytes;
+}
+
+static uint64_t le64(const unsigned char *p)
+{
+    uint64_t v = 0;
+    for (int i = 7; i >= 0; --i) v = v << 8 | p[i];
+    return v;
+}
+
+/* Damaged files: the same verdict as cbpal_open_memory, word for word; zstd is refused with the fix;
+ * and a local-rows file (.pal version 6) damaged in its flags, its range table's offset and entries,
+ * and its parents. */
+static void test_reader_verdicts_match(void **state)
+{
+    (void)state;
+    build_check();
+    char fox[1024], cmd[4096], line[1024];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    size_t size;
+    unsigned char *good = bake_bytes(fox, "--layout qpos --precision half", &size);
+    /* offsets into the header and the first clip and bone entries, and lengths to cut the file to */
+    const size_t pokes[] = {0, 8, 16, 20, 24, 28, 32, 36, 40, 44, 48, 52, 56, 60, 120, 128, 136, 144, 152, 160, 168, 176, 184, 256 + 8,
+                            256 + 12, 256 + 4};
+    unsigned compared = 0, refused = compare_verdicts(good, size, pokes, COUNT_OF(pokes), &compared);
+    free(good);
+    good = bake_bytes(fox, "--bone-space local --layout qpos --precision u16", &size);
+    assert_true(good[12] & 32); /* flag bit 5 */
+    size_t ranges = (size_t)le64(good + 200), bones = (size_t)le64(good + 128);
+    const size_t local[] = {8, 20, 24, 200, 204, bones + 8, bones + 32 + 8, ranges, ranges + 12, ranges + 16, ranges + 28,
+                            ranges + 32 + 4, ranges + 32 + 24};
+    unsigned local_compared = 0, local_refused = compare_verdicts(good, size, local, COUNT_OF(local), &local_compared);
+    free(good);
     snprintf(cmd, sizeof cmd, "%s bake %s -o %s/z.pal --zstd -q 2>&1", crowdbake_exe(), fox, TMP);
     run_or_fail(cmd);
     FILE *out = run_check("bad " TMP "/z.pal", TMP "/bad.txt");
@@ -205,10 +251,8 @@ static void test_reader_verdicts_match(void **state)
     fclose(out);
     if (!strstr(line, "zstd-compressed") || !strstr(line, "without --zstd")) fail_msg("zstd palette: %s", line);
     printf("  %u damaged files: C# and C give the same verdicts, checksum verified and not (%u refused by the tables' checks); "
-           "zstd refused: %s", compared, refused, line);
-    assert_true(refused >= 20);
-    free(bad);
-    free(good);
+           "local rows: %u damaged, %u refused; zstd refused: %s", compared, refused, local_compared, local_refused, line);
+    assert_true(refused >= 20 && local_refused >= 10);
 }
 
 /* A catalog bake of Cow: what a Unity roster import needs. */
@@ -427,7 +471,83 @@ static void test_shader_glue_compiles(void **state)
                      TMP, layouts[l], precisions[p], p == 1 ? "-DCB_POSITIONS_RELATIVE" : "", TMP, TMP);
             run_or_fail(cmd);
         }
-    printf("  Unity shader glue: 9 encodings compile (glslang, HLSL) and validate (spirv-val)\n");
+    /* Local rows (.pal version 6): qpos, u16 or float, CB_LOCAL_ROWS. */
+    for (int p = 0; p < 3; p += 2) {
+        snprintf(cmd, sizeof cmd,
+                 "glslangValidator -D -V -S vert -e main -DCB_LAYOUT_QPOS -DCB_PRECISION_%s -DCB_LOCAL_ROWS -o %s/glue.spv "
+                 "tests/runtimes/unity/unity_glue.hlsl 2>&1 && spirv-val %s/glue.spv 2>&1",
+                 precisions[p], TMP, TMP);
+        run_or_fail(cmd);
+    }
+    printf("  Unity shader glue: 9 encodings and local rows (qpos u16, float) compile (glslang, HLSL) and validate (spirv-val)\n");
+}
+
+/* The runtime conformance cases of local rows (.pal version 6: conformance.h's local_*): the C#
+ * reader's composed bone matrices (PalFile.InstanceBoneMatrix, cross-faded as the herd does) skin
+ * every instance of every group within the cases' tolerance: steady ones of the C runtime's expected
+ * positions, cross-fading ones of the spec's (local_conformance.h says why not conf_expected's). */
+static void test_local_conformance_cases(void **state)
+{
+    (void)state;
+    build_check();
+    conformance conf;
+    conformance_make(&conf, TMP "/conformance");
+    int ran = 0;
+    for (int i = 0; i < conf.case_count; ++i) {
+        const conf_case *k = &conf.cases[i];
+        if (!k->local) continue;
+        char args[1024], out[512];
+        snprintf(out, sizeof out, TMP "/conformance/%s.cs.out", k->name);
+        snprintf(args, sizeof args, "conformance " TMP "/conformance %s %s", k->name, out);
+        fclose(run_check(args, TMP "/conformance.txt"));
+        size_t size = 0;
+        float *got = (float *)read_whole_file(out, &size);
+        assert_non_null(got);
+        assert_int_equal(size, conf_positions(&conf, k) * 12);
+        double ratio[3];
+        local_conformance_ratios(&conf, k, got, ratio);
+        printf("  %-18s %7zu positions: C# vs C runtime %.3f of the tolerance (steady), cross-fades vs the spec's local blend "
+               "%.3f\n", k->name, conf_positions(&conf, k), ratio[0], ratio[1]);
+        assert_true(ratio[0] <= 1 && ratio[1] <= 1);
+        free(got);
+        ++ran;
+    }
+    conformance_free(&conf);
+    assert_int_equal(ran, 3);
+}
+
+/* Local rows whose every parent comes after its children (the spec: do not assume parent < child):
+ * the C# composed matrices equal the C reader's, and bone n - 1 - j's equal bone j's of the same
+ * bake in the model's order. */
+static void test_parents_after_children(void **state)
+{
+    (void)state;
+    build_check();
+    write_local_quadruped(TMP "/ordered.pal", false);
+    write_local_quadruped(TMP "/reversed.pal", true);
+    unsigned matrices = 0;
+    double worst = compare_pal(TMP "/reversed.pal", &matrices);
+    cbpal_file a, b;
+    char err[256];
+    if (cbpal_open(TMP "/ordered.pal", 0, &a, err, sizeof err) || cbpal_open(TMP "/reversed.pal", 0, &b, err, sizeof err))
+        fail_msg("%s", err);
+    uint32_t n = a.header.bone_count, after = 0;
+    double moved = 0;
+    for (uint32_t j = 0; j < n; ++j) {
+        cbpal_bone bone;
+        cbpal_get_bone(&b, j, &bone);
+        after += bone.parent > (int32_t)j;
+        for (uint32_t c = 0; c < a.header.clip_count; ++c) {
+            float m[16], r[16];
+            assert_int_equal(cbpal_bone_matrix(&a, c, 0.37 * (c + 1), j, m), 0);
+            assert_int_equal(cbpal_bone_matrix(&b, c, 0.37 * (c + 1), n - 1 - j, r), 0);
+            for (int k = 0; k < 16; ++k) moved = fmax(moved, fabs((double)m[k] - r[k]));
+        }
+    }
+    cbpal_close(&a), cbpal_close(&b);
+    printf("  quadruped local u16, bones reversed (%u of %u parents after their child): %u C# matrices, worst relative "
+           "difference C# vs C %.3g; bone n-1-j vs bone j of the ordered bake %.3g\n", after, n, matrices, worst, moved);
+    assert_true(after > 0 && moved < 1e-5);
 }
 
 int main(void)
@@ -439,6 +559,8 @@ int main(void)
         cmocka_unit_test(test_herd_equals_the_c_reader),
         cmocka_unit_test(test_unity_facing_code_compiles),
         cmocka_unit_test(test_shader_glue_compiles),
+        cmocka_unit_test(test_local_conformance_cases),
+        cmocka_unit_test(test_parents_after_children),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

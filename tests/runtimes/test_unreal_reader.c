@@ -7,6 +7,8 @@
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
+#include "runtimes/bone_order.h"
+
 #define TMP TEST_TMP "/unreal_reader"
 #define SRC "runtimes/unreal/Crowdbake/Source/Crowdbake"
 
@@ -44,7 +46,28 @@ static void test_reader_and_herd_equal_the_c_reader(void **state)
                 run_or_fail(cmd, log, sizeof log);
                 printf("  %s %s/%s: %s", models[m] + 7, layouts[l], precisions[p], strstr(log, ": ") ? strstr(log, ": ") + 2 : log);
             }
+        for (int p = 0; p < 3; p += 2) { /* local rows (.pal version 6): qpos, u16 or float */
+            snprintf(cmd, sizeof cmd,
+                     "%s bake %s -o %s/x.pal --bone-space local --layout qpos --precision %s -q 2>&1 && %s/reader_check %s/x.pal 2>&1",
+                     crowdbake_exe(), model, TMP, precisions[p], TMP, TMP);
+            run_or_fail(cmd, log, sizeof log);
+            printf("  %s local qpos/%s: %s", models[m] + 7, precisions[p], strstr(log, ": ") ? strstr(log, ": ") + 2 : log);
+            if (!strstr(log, "CB_LOCAL_ROWS=1")) fail_msg("local rows: no CB_LOCAL_ROWS=1 define: %s", log);
+        }
     }
+}
+
+/* Local rows whose every parent comes after its children (runtimes/bone_order.h): the reader's bind
+ * texture rows and the herd's composed matrices still equal the C reader's. */
+static void test_parents_after_children(void **state)
+{
+    (void)state;
+    static char log[8192];
+    build_reader_check();
+    run_or_fail("mkdir -p " TMP, log, sizeof log);
+    write_local_quadruped(TMP "/reversed.pal", true);
+    run_or_fail(TMP "/reader_check " TMP "/reversed.pal 2>&1", log, sizeof log);
+    printf("  quadruped local u16, bones reversed: %s", strstr(log, ": ") ? strstr(log, ": ") + 2 : log);
 }
 
 /* The herd component's footsteps and travel, outside Unreal: a Cow catalog with a walk, a gallop
@@ -125,6 +148,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reader_and_herd_equal_the_c_reader),
+        cmocka_unit_test(test_parents_after_children),
         cmocka_unit_test(test_herd_footsteps_and_travel),
         cmocka_unit_test(test_bad_file_message),
         cmocka_unit_test(test_vertex_ids_and_skin_texture),

@@ -37,7 +37,7 @@ static void test_the_plugin_carries_the_hlsl_runtime_unchanged(void **state)
 static void unreal_source(char *out, size_t size, const cb_palette *p, const char *node_code)
 {
     snprintf(out, size,
-             "#define %s 1\n#define %s 1\n%s"
+             "#define %s 1\n#define %s 1\n%s%s"
              "#include \"unreal_stub.ush\"\n"
              "#include \"/Plugin/Crowdbake/Private/Crowdbake.ush\"\n"
              "MaterialFloat3 CustomExpression0(FMaterialVertexParameters Parameters, Texture2D Palette, SamplerState PaletteSampler,\n"
@@ -79,7 +79,8 @@ static void unreal_source(char *out, size_t size, const cb_palette *p, const cha
              "    cb_skinned[id.x * 3 + 2] = float4(v.position.xyz + before, 1.0);\n"
              "}\n",
              layout_define[p->layout], precision_define[p->precision],
-             p->positions_relative ? "#define CB_POSITIONS_RELATIVE 1\n" : "", node_code);
+             p->positions_relative ? "#define CB_POSITIONS_RELATIVE 1\n" : "",
+             p->bone_space == CB_BONE_SPACE_LOCAL ? "#define CB_LOCAL_ROWS 1\n" : "", node_code);
 }
 
 /* glTF (x, y, z) metres -> Unreal (100 x, 100 z, 100 y), as Crowdbake.ush assumes by default. */
@@ -126,7 +127,8 @@ static float *gpu_unreal(const cb_palette *p, const cb_primitive *prim, const sa
     unlink(TEST_TMP "/unreal/Plugin/Crowdbake");
     assert_int_equal(symlink(link, TEST_TMP "/unreal/Plugin/Crowdbake"), 0);
     snprintf(includes, sizeof includes, "-I%s/tests/runtimes -I%s/%s/unreal", cwd, cwd, TEST_TMP);
-    snprintf(name, sizeof name, "unreal_%s_%s", cb_layout_name(p->layout), cb_precision_name(p->precision));
+    snprintf(name, sizeof name, "unreal_%s_%s%s", cb_layout_name(p->layout), cb_precision_name(p->precision),
+             p->bone_space == CB_BONE_SPACE_LOCAL ? "_local" : "");
     size_t spv_bytes, verts = prim->vertex_count;
     uint32_t *spv = compile_hlsl(src, name, includes, &spv_bytes);
     header_block h = header_of(p, (uint32_t)verts, n);
@@ -154,11 +156,13 @@ static float *gpu_unreal(const cb_palette *p, const cb_primitive *prim, const sa
     return out;
 }
 
-/* Worst position error / tolerance of the node code on a bake of `path`; normals' in *normal_ratio. */
-static double run_node(const char *path, cb_layout l, cb_precision pr, const char *node, double *normal_ratio, bool print)
+/* Worst position error / tolerance of the node code on a bake of `path` (local rows when `space`
+ * says); normals' in *normal_ratio. */
+static double run_node(const char *path, cb_layout l, cb_precision pr, cb_bone_space space, const char *node, double *normal_ratio,
+                       bool print)
 {
     fixture f;
-    bake(path, l, pr, false, &f);
+    bake_space(path, l, pr, false, space, &f);
     sample samples[48];
     uint32_t n = make_samples(&f.palette, samples, 48);
     const cb_primitive *prim = &f.model->primitives[0];
@@ -166,8 +170,8 @@ static double run_node(const char *path, cb_layout l, cb_precision pr, const cha
     double pe, ne, tol = tolerance(&f);
     compare(&f.palette, prim, samples, n, gpu, &pe, &ne);
     if (print)
-        printf("  Cow %-6s %-5s %u instances x %u vertices: positions %.2g, normals %.2g (tolerance %.2g, %.2g)\n",
-               cb_layout_name(l), cb_precision_name(pr), n, prim->vertex_count, pe, ne, tol, 1e-5);
+        printf("  Cow %-6s %-5s%s %u instances x %u vertices: positions %.2g, normals %.2g (tolerance %.2g, %.2g)\n",
+               cb_layout_name(l), cb_precision_name(pr), space == CB_BONE_SPACE_LOCAL ? " local" : "", n, prim->vertex_count, pe, ne, tol, 1e-5);
     *normal_ratio = ne / 1e-5;
     free(gpu);
     release(&f);
@@ -182,15 +186,19 @@ static void test_the_custom_node_matches_the_c_runtime(void **state)
     shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
     for (int l = 0; l < 3; ++l)
         for (int pr = 0; pr < 3; ++pr) {
-            double normals, positions = run_node(cow, (cb_layout)l, (cb_precision)pr, node, &normals, true);
+            double normals, positions = run_node(cow, (cb_layout)l, (cb_precision)pr, CB_BONE_SPACE_GLOBAL, node, &normals, true);
             assert_true(positions <= 1 && normals <= 1);
         }
+    for (int pr = 0; pr < 3; pr += 2) { /* local rows (.pal version 6): qpos, u16 (as UNORM16) and float */
+        double normals, positions = run_node(cow, CB_LAYOUT_QPOS, (cb_precision)pr, CB_BONE_SPACE_LOCAL, node, &normals, true);
+        assert_true(positions <= 1 && normals <= 1);
+    }
     /* Broken variant: the node with its two clips swapped (a cross-fade played backwards). */
     const char *call = "Clip, FromClip, Fade";
     char *at = strstr(node, call), *swapped = malloc(strlen(node) + 1);
     assert_non_null(at);
     sprintf(swapped, "%.*sFromClip, Clip, Fade%s", (int)(at - node), node, at + strlen(call));
-    double normals, backwards = run_node(cow, CB_LAYOUT_QPOS, CB_PRECISION_U16, swapped, &normals, false);
+    double normals, backwards = run_node(cow, CB_LAYOUT_QPOS, CB_PRECISION_U16, CB_BONE_SPACE_GLOBAL, swapped, &normals, false);
     printf("  the node with its clips swapped: error / tolerance %.0f\n", backwards);
     assert_true(backwards > 10);
     free(node), free(swapped);

@@ -8,9 +8,11 @@ namespace Crowdbake
     public sealed class CrowdbakePaletteAsset : ScriptableObject
     {
         public Texture2D palette;       // RGBA32F, RGBA16F or RGBA64 (u16 as UNORM16: the shader's CB_U16_UNORM)
-        public Texture2D bindPositions; // RGBA32F, bones x 2: bind positions, then position offsets
+        public Texture2D bindPositions; // RGBA32F, bones x 2: bind positions, then position offsets; local rows:
+                                        // bones x 5, rows 2-4 the parents and each bone's ranges
         public int layout, precision, rowTexels, rowsPerBlock;
         public bool positionsRelative;
+        public bool localRows;               // .pal version 6 flag bit 5: the shader's CB_LOCAL_ROWS composes each bone
         public Vector3 boundsMin, boundsMax; // u16: the box positions are quantized in
         public float linearRange;
         public Bounds animatedBounds;        // every clip's skinned mesh at every baked row, model space
@@ -34,8 +36,10 @@ namespace Crowdbake
             get {
                 string[] layouts = { "CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS" };
                 string[] precisions = { "CB_PRECISION_FLOAT", "CB_PRECISION_HALF", "CB_PRECISION_U16" };
-                return positionsRelative ? new[] { layouts[layout], precisions[precision], "CB_POSITIONS_RELATIVE" }
-                                         : new[] { layouts[layout], precisions[precision] };
+                var keywords = new System.Collections.Generic.List<string> { layouts[layout], precisions[precision] };
+                if (positionsRelative) keywords.Add("CB_POSITIONS_RELATIVE");
+                if (localRows) keywords.Add("CB_LOCAL_ROWS");
+                return keywords.ToArray();
             }
         }
 
@@ -53,6 +57,7 @@ namespace Crowdbake
             asset.rowTexels = (int)h.RowTexels;
             asset.rowsPerBlock = (int)h.Height;
             asset.positionsRelative = (h.Flags & PalFile.FlagPositionsRelative) != 0;
+            asset.localRows = pal.LocalRows;
             asset.boundsMin = new Vector3(h.BoundsMin[0], h.BoundsMin[1], h.BoundsMin[2]);
             asset.boundsMax = new Vector3(h.BoundsMax[0], h.BoundsMax[1], h.BoundsMax[2]);
             asset.linearRange = h.LinearRange;
@@ -84,16 +89,12 @@ namespace Crowdbake
             return t;
         }
 
+        // One texel per bone: row 0 the bind positions, row 1 the position offsets; for local rows also
+        // row 2 the parent (-1: a root), row 3 (pos_min, scale_max), row 4 (pos_max, 0) (PalFile.BindTexels).
         static Texture2D BindTexture(PalFile pal, string assetName)
         {
-            int bones = pal.Bones.Length;
-            var texels = new float[bones * 8];
-            for (int j = 0; j < bones; ++j)
-                for (int k = 0; k < 3; ++k) {
-                    texels[j * 4 + k] = pal.Bones[j].BindPosition[k];
-                    texels[(bones + j) * 4 + k] = pal.Bones[j].PositionOffset[k];
-                }
-            var t = new Texture2D(bones, 2, TextureFormat.RGBAFloat, false, true);
+            float[] texels = pal.BindTexels();
+            var t = new Texture2D(pal.Bones.Length, texels.Length / (pal.Bones.Length * 4), TextureFormat.RGBAFloat, false, true);
             t.name = assetName + " bind positions";
             t.filterMode = FilterMode.Point;
             t.wrapMode = TextureWrapMode.Clamp;

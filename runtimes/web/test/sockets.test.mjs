@@ -6,7 +6,7 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFileSync } from 'node:fs';
 import path from 'node:path';
-import { readPal, boneMatrix, instanceFrame, LAYOUTS, PRECISIONS, CLIP_STEP } from '../crowdbake_pal.mjs';
+import { readPal, boneMatrix, hasLocalRows, instanceFrame, LAYOUTS, PRECISIONS, CLIP_STEP } from '../crowdbake_pal.mjs';
 import { CROWDBAKE, FOX, tmpDir, bake, jointMatrix } from './support.mjs';
 
 const dir = tmpDir('sockets');
@@ -47,6 +47,27 @@ for (const layout of LAYOUTS) {
             assert.ok(worst <= bound, `${layout} ${precision}: ${worst} over ${bound}`);
         });
     }
+}
+
+// Local rows (bake --bone-space local): each bone's rows hold it in its parent's frame; boneMatrix composes the chain,
+// and at the rows that must give the exact joint matrices as well as a global bake does.
+for (const precision of ['u16', 'float']) {
+    test(`local rows: boneMatrix composes to crowdbake sample at the rows: qpos ${precision}`, () => {
+        const pal = readPal(bake(FOX, path.join(dir, `local-${precision}.pal`), ['--layout', 'qpos', '--precision', precision,
+                                                                                  '--bone-space', 'local', '--max-error', '1000']));
+        const h = pal.header, reach = 0.1 * h.model_height;
+        assert.ok(hasLocalRows(h), 'baked as local rows');
+        let worst = 0;
+        pal.clips.forEach((clip, c) => {
+            for (const s of sampled.clips[c].samples)
+                for (let j = 0; j < h.bone_count; ++j)
+                    worst = Math.max(worst, pointDistance(boneMatrix(pal, c, s.frame / clip.fps, j), s.joints[j],
+                                                          pal.bones[j].bind_position, reach));
+        });
+        const bound = precision === 'float' ? 1e-5 * h.model_height : 2 * h.max_error + 1e-4 * h.model_height;
+        assert.ok(worst <= bound, `local ${precision}: ${worst} over ${bound}`);
+        console.log(`  local ${precision}: sockets within ${worst.toExponential(2)} of crowdbake sample (height ${h.model_height})`);
+    });
 }
 
 test('boneMatrix between rows is the blend of the two rows the GLSL computes', () => {
@@ -113,6 +134,22 @@ test('a STEP-keyed clip (version 4) holds its rows: its row alone between rows, 
         ++compared;
     }
     assert.ok(compared > 100 && worst < 1e-4, `${compared} times, worst ${worst}`);
+});
+
+test('local rows hold a STEP-keyed clip\'s rows too: the reference between its keys, composed', () => {
+    const model = '../shared/assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf';
+    const pal = readPal(bake(model, path.join(dir, 'step-local.pal'), ['--fps', 'auto', '--bone-space', 'local']));
+    const clip = pal.clips[0];
+    assert.ok(hasLocalRows(pal.header) && clip.step);
+    let worst = 0, compared = 0;
+    for (const f of referenceFrames('../shared/reference/gltf_simple_skin_step.fps30.csv')) {
+        const t = f.t + 1 / 60;
+        if (Math.floor(f.t * 2 + 1e-6) !== Math.floor(t * 2 - 1e-6)) continue;
+        f.joints.forEach((ref, j) => boneMatrix(pal, 0, t, j).forEach((x, e) => { worst = Math.max(worst, Math.abs(x - ref[e])); }));
+        ++compared;
+    }
+    assert.ok(compared > 100 && worst < 1e-4, `${compared} times, worst ${worst}`);
+    console.log(`  held local rows: ${compared} times between keys within ${worst.toExponential(2)} of the reference`);
 });
 
 test('boneMatrix refuses a clip, bone or time that does not exist', () => {

@@ -7,7 +7,9 @@
 //
 // Methods: palette (per-vertex blending), bones (Crowd's bonePass: each instance's bones blended
 // once, crowdbake_bones.mjs, every influence), lod (the bone pass with its animation LOD), auto (Crowd's
-// default: bone pass or not by herd size, LOD on), vat, rest (the mesh unskinned: the floor every method
+// default: bone pass or not by herd size, LOD on), local_palette, local_bones, local_lod, local_auto (the same four
+// drawing DIR/model-local.pal, the model baked --bone-space local: each bone composed down its chain, per vertex
+// and influence or once an instance and bone in the bone pass), vat, rest (the mesh unskinned: the floor every method
 // pays), before (the palette runtime of another tree TREE - its runtimes/web
 // and runtimes/glsl, or an older tree's web/ and samples/shaders/ - e.g. `git worktree add` of an
 // older commit: a before/after in one page).
@@ -81,6 +83,7 @@ void main() {
         const bytes = async (u) => new Uint8Array(await (await fetch(u)).arrayBuffer());
         const gl = document.getElementById('c').getContext('webgl2', { antialias: false });
         const pal = readPal(await bytes('/bench/model.pal'));
+        const localPal = methods.some((m) => m.startsWith('local_')) ? readPal(await bytes('/bench/model-local.pal')) : null;
         const vat = readVat(await bytes('/bench/model.exr'));
         const mesh = meshFromGLTF(await new GLTFLoader().loadAsync('/bench/model.glb'));
         const glsl = await loadPaletteGLSL();
@@ -92,6 +95,10 @@ void main() {
             auto: () => new Crowd(gl, { pal, glsl, mesh, capacity: max }),
             rest: () => new RestCrowd(gl, { pal, glsl, mesh, capacity: max, bonePass: false }),
             vat: () => new VatCrowd(gl, { pal, vat, glsl, mesh, capacity: max }),
+            local_palette: () => new Crowd(gl, { pal: localPal, glsl, mesh, capacity: max, bonePass: false }),
+            local_bones: () => new Crowd(gl, { pal: localPal, glsl, mesh, capacity: max, bonePass: true, lod: false }),
+            local_lod: () => new Crowd(gl, { pal: localPal, glsl, mesh, capacity: max, bonePass: true }),
+            local_auto: () => new Crowd(gl, { pal: localPal, glsl, mesh, capacity: max }),
             before: async () => {
                 const old = await import('/before/web/crowdbake_crowd.mjs');
                 return new old.Crowd(gl, { pal, glsl: await old.loadPaletteGLSL(), mesh, capacity: max });
@@ -99,15 +106,20 @@ void main() {
         };
         const crowds = {};
         for (const m of methods) crowds[m] = await make[m]();
-        const clip = pal.clips.find((c) => c.loops) ?? pal.clips[0];
-        const state = { first_row: clip.first_row, frame_count: clip.loops ? clip.frames : -clip.frames, rate: clip.fps,
-                        rate_per_speed: 0, phase: 'golden_ratio' };
+        // Each crowd plays its own palette's rows (a local bake may choose other rates) of the same clip.
+        const name = (pal.clips.find((c) => c.loops) ?? pal.clips[0]).name;
+        const stateOf = (p) => {
+            const clip = p.clips.find((c) => c.name === name);
+            return { first_row: clip.first_row, frame_count: clip.loops ? clip.frames : -clip.frames, rate: clip.fps,
+                     rate_per_speed: 0, phase: 'golden_ratio' };
+        };
         const size = Math.max(...[0, 1, 2].map((k) => Math.max(...pal.clips.map((c) => c.bounds_max[k] - c.bounds_min[k]))));
         const pixel = new Uint8Array(4);
         let vp = null;
         window.benchPlace = (n) => {
             const g = Math.ceil(Math.sqrt(n)), side = g * size * 1.5;
             for (const c of Object.values(crowds)) {
+                const state = stateOf(c.pal ?? pal);
                 c.count = 0;
                 for (let i = 0; i < n; ++i)
                     c.setInstance(i, { position: [((i % g) - g / 2) * size * 1.5, 0, (Math.floor(i / g) - g / 2) * size * 1.5],
@@ -130,13 +142,15 @@ void main() {
             return performance.now() - t0;
         };
         const ext = gl.getExtension('WEBGL_debug_renderer_info');
-        const perInstance = Object.fromEntries(Object.entries(crowds).map(([m, c]) => [m, c.bytesPerInstance(m === 'palette' ? 'palette'
+        const perInstance = Object.fromEntries(Object.entries(crowds).map(([m, c]) => [m, c.bytesPerInstance(m.endsWith('palette') ? 'palette'
             : m === 'vat' || m === 'rest' ? 'vat' : c.choice(max).method)]));
         return { renderer: ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER),
                  vertices: mesh.positions.length / 3, palette_bytes: crowds.palette?.textures.bytes,
                  vat_bytes: crowds.vat?.textures.bytes, bone_pass_bytes: crowds.bones?.bones.bytes,
+                 local_palette_bytes: crowds.local_palette?.textures.bytes,
                  bytes_per_instance: perInstance,
                  auto_choice: crowds.auto ? Object.fromEntries(counts.map((n) => [n, crowds.auto.choice(n)])) : undefined,
+                 local_auto_choice: crowds.local_auto ? Object.fromEntries(counts.map((n) => [n, crowds.local_auto.choice(n)])) : undefined,
                  lod_choice: crowds.auto?.lodChoice().reason ?? crowds.lod?.lodChoice().reason };
     }, { counts, methods });
     r.times = {};
@@ -161,6 +175,7 @@ void main() {
 const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
 const report = { renderer: result.renderer, vertices: result.vertices, palette_bytes: result.palette_bytes,
                  vat_bytes: result.vat_bytes, bone_pass_bytes: result.bone_pass_bytes, bytes_per_instance: result.bytes_per_instance,
+                 local_palette_bytes: result.local_palette_bytes, local_auto_choice: result.local_auto_choice,
                  lod_choice: result.lod_choice,
                  auto_choice: result.auto_choice, frames, methods, counts: {} };
 for (const [n, m] of Object.entries(result.times)) {

@@ -11,7 +11,8 @@
 // v_world of every instance and vertex lands in JOB_DIR/OUT as float32, group after group. The C
 // test compares them with its CPU skinning. A case can break the runtime on purpose: transpose
 // (each mat4 bone stored transposed, the reference runtime's shipped bug) or glsl_break (the
-// line of the shipped shader holding `marker` replaced by `line`).
+// line of the shipped shader holding `marker` replaced by `line`). A case of local rows (local: true) is run twice
+// more: through the bone pass (OUT.bones) and with the shader's compose step skipped (OUT.nocompose, broken).
 import fs from 'node:fs';
 import path from 'node:path';
 import { withPage, REPO, RUNTIMES } from './driver.mjs';
@@ -20,8 +21,13 @@ const dir = path.resolve(process.argv[2]);
 const jobs = JSON.parse(fs.readFileSync(path.join(dir, 'cases.json'), 'utf8'));
 
 const hostileDir = path.join(REPO, 'tests/fuzz/regressions/pal');
+// Each case as given, and a local case also through the bone pass and with its composition skipped.
+const runs = jobs.cases.flatMap((c) => (!c.local ? [c] : [c, { ...c, name: `${c.name} (bone pass)`, out: `${c.out}.bones`, bone_pass: true },
+    { ...c, name: `${c.name} (compose skipped)`, out: `${c.out}.nocompose`,
+      glsl_break: { marker: 'cb:local-compose', line: '        // compose skipped (a broken runtime)' } }]));
+
 const failures = await withPage({ '/': RUNTIMES, '/job/': dir, '/hostile/': hostileDir }, '/__blank.html', async (page) => {
-    for (const c of jobs.cases) {
+    for (const c of runs) {
         const result = await page.evaluate(async (c) => {
             const { readPal } = await import('/web/crowdbake_pal.mjs');
             const { Crowd, loadPaletteGLSL } = await import('/web/crowdbake_crowd.mjs');

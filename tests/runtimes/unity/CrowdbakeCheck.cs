@@ -5,6 +5,8 @@
 //   mono CrowdbakeCheck.exe bad FILE.pal          the reader's verdicts, checksum verified and not: "ok" or the error
 //   mono CrowdbakeCheck.exe roster roster.json    the manifest's types, clips, contacts, states, sockets
 //   mono CrowdbakeCheck.exe herd FILE.pal roster.json TYPE   a herd's matrices, cross-fades, speeds, footsteps
+//   mono CrowdbakeCheck.exe conformance DIR CASE OUT  a runtime conformance case (tests/runtimes/conformance.h):
+//                                                     every instance's skinned positions, float32, into OUT
 using System;
 using System.Globalization;
 using System.IO;
@@ -131,6 +133,67 @@ static class CrowdbakeCheck
         }
     }
 
+    static float[] Floats(string path)
+    {
+        byte[] b = File.ReadAllBytes(path);
+        var f = new float[b.Length / 4];
+        Buffer.BlockCopy(b, 0, f, 0, f.Length * 4);
+        return f;
+    }
+
+    // A conformance case through the C# reader: each instance's bone matrices (PalFile.InstanceBoneMatrix,
+    // cross-faded as the herd does) skin the case's mesh, positions in the expected file's order.
+    static void Conformance(string dir, string name, string outPath)
+    {
+        var doc = (JsonObject)MiniJson.Parse(File.ReadAllText(Path.Combine(dir, "cases.json")));
+        JsonObject k = null;
+        foreach (object c in (System.Collections.Generic.List<object>)doc.Get("cases"))
+            if ((string)((JsonObject)c).Get("name") == name) k = (JsonObject)c;
+        if (k == null) throw new Exception("no conformance case " + name);
+        PalFile pal = PalFile.Read(Path.Combine(dir, (string)k.Get("pal")), true);
+        var mesh = (JsonObject)k.Get("mesh");
+        float[] positions = Floats(Path.Combine(dir, (string)mesh.Get("positions")));
+        float[] weights = Floats(Path.Combine(dir, (string)mesh.Get("weights")));
+        byte[] joints = File.ReadAllBytes(Path.Combine(dir, (string)mesh.Get("joints")));
+        int verts = positions.Length / 3, bones = pal.Bones.Length;
+        var mats = new float[bones * 16];
+        var m = new float[16];
+        var output = new MemoryStream();
+        var writer = new BinaryWriter(output);
+        foreach (object g in (System.Collections.Generic.List<object>)k.Get("groups")) {
+            var group = (JsonObject)g;
+            double time = (double)group.Get("time");
+            foreach (object o in (System.Collections.Generic.List<object>)group.Get("instances")) {
+                var v = (System.Collections.Generic.List<object>)o;
+                float[] inst = new float[4], from = new float[4];
+                for (int i = 0; i < 4; ++i) {
+                    inst[i] = (float)(double)v[4 + i];
+                    from[i] = (float)(double)v[8 + i];
+                }
+                double length = (double)v[13];
+                float fade = length > 0 ? (float)Math.Min(Math.Max((time - (double)v[12]) / length, 0), 1) : 1;
+                for (uint bone = 0; bone < bones; ++bone) {
+                    if (!pal.InstanceBoneMatrix(inst, from, fade, time, bone, m)) throw new Exception("InstanceBoneMatrix refused bone " + bone);
+                    Array.Copy(m, 0, mats, bone * 16, 16);
+                }
+                for (int x = 0; x < verts; ++x) {
+                    double[] p = new double[3];
+                    for (int i = 0; i < 4; ++i) {
+                        float w = weights[x * 4 + i];
+                        if (w == 0) continue;
+                        int j = joints[(x * 4 + i) * 2] | joints[(x * 4 + i) * 2 + 1] << 8;
+                        for (int c = 0; c < 3; ++c)
+                            p[c] += w * ((double)mats[j * 16 + c] * positions[x * 3] + (double)mats[j * 16 + 4 + c] * positions[x * 3 + 1] +
+                                         (double)mats[j * 16 + 8 + c] * positions[x * 3 + 2] + mats[j * 16 + 12 + c]);
+                    }
+                    for (int c = 0; c < 3; ++c) writer.Write((float)p[c]);
+                }
+            }
+        }
+        writer.Flush();
+        File.WriteAllBytes(outPath, output.ToArray());
+    }
+
     static int Main(string[] args)
     {
         try {
@@ -138,8 +201,9 @@ static class CrowdbakeCheck
             else if (args.Length == 2 && args[0] == "bad") Bad(args[1]);
             else if (args.Length == 2 && args[0] == "roster") RosterLines(args[1]);
             else if (args.Length == 4 && args[0] == "herd") Herd(args[1], args[2], args[3]);
+            else if (args.Length == 4 && args[0] == "conformance") Conformance(args[1], args[2], args[3]);
             else {
-                Console.Error.WriteLine("usage: CrowdbakeCheck.exe pal|bad FILE.pal | roster roster.json | herd FILE.pal roster.json TYPE");
+                Console.Error.WriteLine("usage: CrowdbakeCheck.exe pal|bad FILE.pal | roster roster.json | herd FILE.pal roster.json TYPE | conformance DIR CASE OUT");
                 return 2;
             }
         } catch (Exception e) {

@@ -200,7 +200,17 @@ int main(int argc, char **argv)
         for (int k = 0; k < 3; ++k)
             if (pc.bind_texels[j * 4 + k] != b.bind_position[k] || pc.bind_texels[(h.bone_count + j) * 4 + k] != b.position_offset[k])
                 return Fail("bind positions differ");
+        if (!pc.local_rows) continue;
+        // Local rows: row 2 the parent, row 3 (pos_min, scale_max), row 4 (pos_max, 0), as the shader reads them.
+        const float *row2 = &pc.bind_texels[(2 * h.bone_count + j) * 4], *row3 = row2 + h.bone_count * 4, *row4 = row3 + h.bone_count * 4;
+        bool same = row2[0] == (float)b.parent && row3[3] == b.scale_max && row4[3] == 0;
+        for (int k = 0; k < 3; ++k) same = same && row3[k] == b.pos_min[k] && row4[k] == b.pos_max[k];
+        if (!same) return Fail("local rows: the bind texture's parents or bone ranges differ from the file's");
     }
+    bool local = (h.flags & CBPAL_FLAG_LOCAL_ROWS) != 0;
+    if (pc.local_rows != local || pc.bind_rows != (local ? 5u : 2u) || pc.bind_texels.size() != (size_t)h.bone_count * pc.bind_rows * 4 ||
+        local != (pc.defines.back() == "CB_LOCAL_ROWS=1"))
+        return Fail("local rows: the bind texture's height or the CB_LOCAL_ROWS define does not match the file's flag bit 5");
     for (uint32_t c = 0; c < h.clip_count; ++c) {
         cbpal_clip clip;
         cbpal_get_clip(&pal, c, &clip);
@@ -242,6 +252,7 @@ int main(int argc, char **argv)
     drift = std::fmin(drift, frames - drift);
     cbpal_close(&pal);
     std::printf("%s: texels, bind positions, %zu clips equal; %u herd matrices (%u mid-fade) worst %.3g; SetSpeed drift %.3g rows; "
-                "defines %s %s\n", argv[1], pc.clips.size(), matrices, faded, worst, drift, pc.defines[0].c_str(), pc.defines[1].c_str());
+                "defines %s %s%s\n", argv[1], pc.clips.size(), matrices, faded, worst, drift, pc.defines[0].c_str(), pc.defines[1].c_str(),
+                local ? " CB_LOCAL_ROWS=1" : "");
     return worst <= 1e-6 && drift < 1e-3 && faded > 0 ? 0 : Fail("herd matrices or SetSpeed differ");
 }

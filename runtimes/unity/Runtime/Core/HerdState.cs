@@ -154,16 +154,10 @@ namespace Crowdbake
         public bool BoneMatrixAt(int i, int bone, float[] m)
         {
             var inst = new float[4];
-            Array.Copy(Inst, i * 4, inst, 0, 4);
-            if (!pal.InstanceBoneMatrix(inst, Time, (uint)bone, m)) return false;
-            float fade = FadeWeight(i, Time);
-            if (fade >= 1) return true;
             var from = new float[4];
-            var f = new float[16];
+            Array.Copy(Inst, i * 4, inst, 0, 4);
             Array.Copy(From, i * 4, from, 0, 4);
-            if (!pal.InstanceBoneMatrix(from, Time, (uint)bone, f)) return false;
-            for (int k = 0; k < 16; ++k) m[k] = f[k] + (m[k] - f[k]) * fade; // mixing the positions = mixing the matrices
-            return true;
+            return pal.InstanceBoneMatrix(inst, from, FadeWeight(i, Time), Time, (uint)bone, m);
         }
 
         // Instance i's per-row travel offset at the herd's time, model units in the model's frame: where

@@ -40,6 +40,11 @@ namespace Crowdbake
             }
             float[] lo = h.BoundsMin, hi = h.BoundsMax;
             float range = h.LinearRange;
+            if (LocalRows) { // local rows: positions in the bone's own box, scale in its own range
+                lo = Bones[bone].RangeMin;
+                hi = Bones[bone].RangeMax;
+                range = Bones[bone].ScaleMax;
+            }
             bool qpos = h.Layout == (uint)PalLayout.Qpos;
             bool box = (qpos && k == 1) || (h.Layout == (uint)PalLayout.Mat4 && k == 3);
             float scale = qpos ? 1.0f : range; // quaternions are plain snorm
@@ -165,6 +170,10 @@ namespace Crowdbake
         public void RowsMatrix(uint r0, uint r1, float fr, uint bone, float[] m)
         {
             PalHeader h = Header;
+            if (LocalRows) { // the bone's chain blended and composed (PalLocalRows.cs)
+                LocalMatrix(new[] { r0, r1, r0, r1 }, new[] { fr, fr }, 1, bone, m);
+                return;
+            }
             var t = new float[4][];
             for (uint k = 0; k < 4; ++k) t[k] = new float[4];
             for (uint k = 0; k < h.TexelsPerBone; ++k) Mix(r0, r1, fr, bone, k, t[k]);

@@ -27,6 +27,7 @@ namespace Crowdbake
         public float[] BoundsMin = new float[3], BoundsMax = new float[3];
         public ulong InputHash, ClipTableOffset, BoneTableOffset, StringsOffset, StringsSize;
         public ulong PayloadOffset, PayloadSize, PayloadRawSize, Checksum, OffsetTableOffset, TravelTableOffset;
+        public ulong BoneRangeTableOffset; // version 6 with flag bit 5 (local rows): bone_count x 32 bytes
     }
 
     public struct PalClip
@@ -46,13 +47,17 @@ namespace Crowdbake
         public string Name;
         public int Parent;
         public float[] BindPosition, PositionOffset;
+        // Version 6, local rows: the box of this bone's stored positions and its largest stored scale
+        // (u16 rows decode with them); zero in other files.
+        public float[] RangeMin, RangeMax;
+        public float ScaleMax;
     }
 
     public sealed partial class PalFile
     {
-        public const uint NewestVersion = 5, HeaderBytes = 256, ClipBytes = 80, BoneBytes = 32, PayloadAlign = 4096;
+        public const uint NewestVersion = 6, HeaderBytes = 256, ClipBytes = 80, BoneBytes = 32, PayloadAlign = 4096;
         public const int ChecksumOffset = 176;
-        public const uint FlagZstd = 1, FlagInPlace = 2, FlagPositionsRelative = 4, FlagFittedRows = 8;
+        public const uint FlagZstd = 1, FlagInPlace = 2, FlagPositionsRelative = 4, FlagFittedRows = 8, FlagLocalRows = 32;
         public const uint ClipLoops = 1, ClipFitted = 2, ClipStep = 4; // ClipStep (version 4): rows held, not blended
         static readonly byte[] Magic = { 0x43, 0x42, 0x50, 0x41, 0x4C, 0x0D, 0x0A, 0x1A };
 
@@ -139,6 +144,8 @@ namespace Crowdbake
             h.OffsetTableOffset = h.Version >= 3 ? U64(d, 184) : 0;
             // Version 5: the per-row travel offsets (docs/pal-format.md), which HerdState.TravelOffsetAt adds.
             h.TravelTableOffset = h.Version >= 5 && (h.Flags & 16u) != 0 ? U64(d, 192) : 0;
+            // Version 6: each bone's range, for local rows (PalLocalRows.cs).
+            h.BoneRangeTableOffset = h.Version >= 6 && (h.Flags & FlagLocalRows) != 0 ? U64(d, 200) : 0;
             return h;
         }
 
@@ -175,6 +182,7 @@ namespace Crowdbake
                 throw Fail("position offset table (offset " + h.OffsetTableOffset + ", " + h.BoneCount + " bones) lies outside the file");
             if (h.Version >= 5 && (h.Flags & 16u) != 0 && (!Fits(h.TravelTableOffset, h.Rows, 4, size) || h.TravelTableOffset < HeaderBytes))
                 throw Fail("travel offset table (offset " + h.TravelTableOffset + ", " + h.Rows + " rows) lies outside the file");
+            ValidateLocalRows(h, d);
             if (!Fits(h.StringsOffset, h.StringsSize, 1, size) || h.StringsOffset < HeaderBytes)
                 throw Fail("string table lies outside the file");
             if (h.PayloadOffset % PayloadAlign != 0 || !Fits(h.PayloadOffset, h.PayloadSize, 1, size) || h.PayloadOffset < HeaderBytes)
@@ -193,6 +201,7 @@ namespace Crowdbake
                 if (!CheckString(h, d, U32(d, b), U32(d, b + 4)) || parent < -1 || parent >= (int)h.BoneCount)
                     throw Fail("bone " + i + " has a bad name or parent");
             }
+            ValidateParents(h, d);
             return h;
         }
 
@@ -225,8 +234,9 @@ namespace Crowdbake
             ulong b = h.BoneTableOffset + (ulong)i * BoneBytes, o = h.OffsetTableOffset + (ulong)i * 12;
             var bone = new PalBone {
                 Name = StringAt(U32(data, b), U32(data, b + 4)), Parent = (int)U32(data, b + 8),
-                BindPosition = new float[3], PositionOffset = new float[3]
+                BindPosition = new float[3], PositionOffset = new float[3], RangeMin = new float[3], RangeMax = new float[3]
             };
+            ReadBoneRange(i, ref bone);
             bool relative = (h.Flags & FlagPositionsRelative) != 0;
             for (uint k = 0; k < 3; ++k) {
                 bone.BindPosition[k] = F32(data, b + 16 + 4 * k);

@@ -19,6 +19,7 @@ Shader "Crowdbake/Herd URP"
         #pragma multi_compile_local CB_LAYOUT_MAT4 CB_LAYOUT_AFFINE CB_LAYOUT_QPOS
         #pragma multi_compile_local CB_PRECISION_FLOAT CB_PRECISION_HALF CB_PRECISION_U16
         #pragma multi_compile_local _ CB_POSITIONS_RELATIVE
+        #pragma multi_compile_local _ CB_LOCAL_ROWS
         #include "Packages/com.unity.render-pipelines.universal/ShaderLibrary/Core.hlsl"
         #include "CrowdbakeUnity.hlsl"
 

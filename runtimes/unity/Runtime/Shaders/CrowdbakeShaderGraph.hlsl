@@ -6,7 +6,8 @@
 // vertex id (CrowdbakeHerd builds it from the mesh's own bone weights, in Unity's vertex order).
 // Add the palette's encoding as the graph's keywords (Boolean or Enum, Shader Feature Local or
 // Multi Compile Local, exactly these references): CB_LAYOUT_MAT4 / CB_LAYOUT_AFFINE / CB_LAYOUT_QPOS,
-// CB_PRECISION_FLOAT / CB_PRECISION_HALF / CB_PRECISION_U16, CB_POSITIONS_RELATIVE; and tick the
+// CB_PRECISION_FLOAT / CB_PRECISION_HALF / CB_PRECISION_U16, CB_POSITIONS_RELATIVE, CB_LOCAL_ROWS (a .pal
+// version 6 palette of local rows: the asset's Keywords say which); and tick the
 // material's Enable GPU Instancing. Set the node's Precision to Float (a palette needs float math).
 #ifndef CROWDBAKE_SHADER_GRAPH_HLSL
 #define CROWDBAKE_SHADER_GRAPH_HLSL

@@ -7,7 +7,7 @@
 //                         Space Normal off
 //   Include File Paths    /Plugin/Crowdbake/Private/Crowdbake.ush
 //   Additional Defines    CB_LAYOUT_QPOS = 1, CB_PRECISION_U16 = 1 (the palette's; the palette asset
-//                         says which), CB_POSITIONS_RELATIVE = 1 when it says so
+//                         says which), CB_POSITIONS_RELATIVE = 1 and CB_LOCAL_ROWS = 1 when it says so
 //   Inputs                Palette, BindPositions, Skin (Texture Object parameters from the palette
 //                         asset); Header (float3: row texels, rows per block, linear range),
 //                         BoundsMin, BoundsMax (float3); VertexIdUV (TexCoord[N]: the UV channel

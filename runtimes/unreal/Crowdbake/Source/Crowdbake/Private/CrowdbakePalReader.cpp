@@ -17,15 +17,24 @@ const char *const kPrecisions[] = {"CB_PRECISION_FLOAT=1", "CB_PRECISION_HALF=1"
 void ReadTables(const cbpal_file &pal, PalContents &out)
 {
     const cbpal_header &h = pal.header;
-    out.bind_texels.assign((size_t)h.bone_count * 8, 0.0f);
+    out.bind_rows = out.local_rows ? 5 : 2;
+    out.bind_texels.assign((size_t)h.bone_count * out.bind_rows * 4, 0.0f);
     for (uint32_t j = 0; j < h.bone_count; ++j) {
         cbpal_bone b;
         cbpal_get_bone(&pal, j, &b);
         out.bones.emplace_back(b.name);
+        float *row[5];
+        for (uint32_t r = 0; r < out.bind_rows; ++r) row[r] = &out.bind_texels[((size_t)r * h.bone_count + j) * 4];
         for (int k = 0; k < 3; ++k) {
-            out.bind_texels[(size_t)j * 4 + k] = b.bind_position[k];
-            out.bind_texels[((size_t)h.bone_count + j) * 4 + k] = b.position_offset[k];
+            row[0][k] = b.bind_position[k];
+            row[1][k] = b.position_offset[k];
+            if (!out.local_rows) continue;
+            row[3][k] = b.pos_min[k];
+            row[4][k] = b.pos_max[k];
         }
+        if (!out.local_rows) continue;
+        row[2][0] = (float)b.parent; // the shader walks each bone's chain by it
+        row[3][3] = b.scale_max;
     }
     for (uint32_t i = 0; i < h.clip_count; ++i) {
         cbpal_clip c;
@@ -53,6 +62,7 @@ bool ReadPal(const uint8_t *data, size_t size, const std::string &name, PalConte
     out = PalContents();
     out.layout = h.layout, out.precision = h.precision, out.flags = h.flags, out.bone_count = h.bone_count;
     out.row_travel = (h.flags & CBPAL_FLAG_ROW_TRAVEL) != 0;
+    out.local_rows = h.range_table_offset != 0;
     out.width = h.width, out.height = h.height, out.row_texels = h.row_texels, out.linear_range = h.linear_range;
     out.model_height = h.model_height, out.speed_reference = h.speed_reference;
     std::memcpy(out.bounds_min, h.bounds_min, sizeof out.bounds_min);
@@ -65,6 +75,7 @@ bool ReadPal(const uint8_t *data, size_t size, const std::string &name, PalConte
     ReadTables(pal, out);
     out.defines = {kLayouts[h.layout], kPrecisions[h.precision]};
     if (h.flags & CBPAL_FLAG_POSITIONS_RELATIVE) out.defines.emplace_back("CB_POSITIONS_RELATIVE=1");
+    if (out.local_rows) out.defines.emplace_back("CB_LOCAL_ROWS=1");
     cbpal_close(&pal);
     return true;
 }

@@ -77,7 +77,7 @@ void UCrowdbakePalette::BuildTextures()
         const EPixelFormat Formats[] = {PF_A32B32G32R32F, PF_FloatRGBA, PF_R16G16B16A16_UNORM};
         PaletteTexture = RawTexture(this, (int32)Pal.width, (int32)Pal.height, Formats[Pal.precision], Pal.texels.data(),
                                     (int64)Pal.texels.size());
-        BindPositionsTexture = RawTexture(this, (int32)Pal.bone_count, 2, PF_A32B32G32R32F, Pal.bind_texels.data(),
+        BindPositionsTexture = RawTexture(this, (int32)Pal.bone_count, (int32)Pal.bind_rows, PF_A32B32G32R32F, Pal.bind_texels.data(),
                                           (int64)Pal.bind_texels.size() * 4);
     }
     crowdbake::SkinContents Skin;

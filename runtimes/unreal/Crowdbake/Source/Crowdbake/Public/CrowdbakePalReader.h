@@ -29,9 +29,12 @@ struct PalContents {
     float linear_range = 0, bounds_min[3] = {0, 0, 0}, bounds_max[3] = {0, 0, 0};
     float model_height = 0, speed_reference = 0;
     bool row_travel = false;          // CBPAL_FLAG_ROW_TRAVEL: moving instances add InstanceTravelOffset
+    bool local_rows = false;          // CBPAL_FLAG_LOCAL_ROWS (version 6): the shader's CB_LOCAL_ROWS composes each bone
     PalPixelFormat format = PalPixelFormat::Rgba32Float;
     std::vector<uint8_t> texels;      // width x height texels of 16 or 8 bytes, rows from y = 0
-    std::vector<float> bind_texels;   // bone_count x 2 RGBA32F: bind positions, then position offsets
+    std::vector<float> bind_texels;   // bone_count x bind_rows RGBA32F: bind positions, then position offsets; local
+                                      // rows: row 2 the parents (-1: a root), 3 (pos_min, scale_max), 4 (pos_max, 0)
+    uint32_t bind_rows = 2;           // 2, or 5 for local rows
     std::vector<std::string> bones;
     std::vector<PalClipInfo> clips;
     // The material's Additional Defines for this encoding: "CB_LAYOUT_QPOS=1" ...

@@ -1,0 +1,544 @@
+/* local_rate.c - see local_rate.h: a clip's rate for local rows, its key rate's lowest multiple
+ * whose rows, blended and composed as the runtime does, stay within the error budget.
+ *
+ * Why these candidates: a local row is each bone's transform in its parent's frame, which is the
+ * glTF node's own TRS conjugated by constants (the parent's bind and the bone's inverse bind). On
+ * the clip's keys, lerping its position is the glTF's LINEAR translation exactly and nlerping its
+ * rotation differs from the glTF's slerp only by nlerp's lag, which grows with the angle a key
+ * step turns. So the key rate itself meets a millimetre per metre on most clips (bench_rows: every
+ * clip of Cow and the fish) and twice it where single key steps turn far (Husky's Gallop, Fox's
+ * Run): one or two probes a clip, each sampling the clip once.
+ *
+ * Why the quarter points: nlerp equals slerp at both rows and, by symmetry, halfway between them;
+ * its lag peaks near a quarter of the way from either row. A measurement at the midpoints alone
+ * would see only the lerp of the positions (exact on the keys) and miss nlerp's lag entirely. The
+ * quarter points see both (bench_rows measures there too). The rows themselves are not measured:
+ * composed from exact local rows they are the exact pose to rounding; the bake's own measurement
+ * of the finished palette adds what quantisation costs.
+ *
+ * Root motion is left out of the measurement: an in-place bake takes the same horizontal offset
+ * off every bone's global transform, which leaves every local row but the root's unchanged and
+ * moves the root's linearly between rows (its lerp is exact), so the error is the same. */
+#include "local_rate.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cb_math.h"
+#include "error_bound.h"
+#include "sampler.h"
+
+/* A bone in a row: rotation q, the position p of its pivot b (p = M b) and a uniform scale s,
+ * so that v' = p + s rotate(q, v - b): the palette's qpos. */
+typedef struct bone_qpos {
+    cb_quat q;
+    cb_vec3 p;
+    double s;
+} bone_qpos;
+
+/* ---- the skeleton ---- */
+
+bool local_skeleton_build(const cb_model *m, int32_t skin, local_skeleton *out)
+{
+    const cb_skin *sk = &m->skins[skin];
+    uint32_t n = sk->joint_count;
+    memset(out, 0, sizeof *out);
+    out->bones = n;
+    out->parent = malloc((n ? n : 1) * sizeof *out->parent);
+    out->order = malloc((n ? n : 1) * sizeof *out->order);
+    int32_t *joint_of = malloc((m->node_count ? m->node_count : 1) * sizeof *joint_of);
+    uint32_t *depth = calloc(n ? n : 1, sizeof *depth);
+    bool ok = out->parent && out->order && joint_of && depth;
+    for (uint32_t i = 0; ok && i < m->node_count; ++i) joint_of[i] = -1;
+    for (uint32_t j = 0; ok && j < n; ++j) joint_of[sk->joints[j]] = (int32_t)j;
+    for (uint32_t j = 0; ok && j < n; ++j) { /* the nearest ancestor node that is a joint */
+        out->parent[j] = -1;
+        for (int32_t node = m->nodes[sk->joints[j]].parent; node >= 0 && out->parent[j] < 0; node = m->nodes[node].parent)
+            out->parent[j] = joint_of[node];
+    }
+    uint32_t deepest = 0;
+    for (uint32_t j = 0; ok && j < n; ++j) {
+        for (int32_t a = out->parent[j]; a >= 0; a = out->parent[a]) ++depth[j];
+        deepest = depth[j] > deepest ? depth[j] : deepest;
+    }
+    uint32_t k = 0; /* by depth: every parent before its children */
+    for (uint32_t d = 0; ok && d <= deepest; ++d)
+        for (uint32_t j = 0; j < n; ++j)
+            if (depth[j] == d) out->order[k++] = j;
+    free(joint_of), free(depth);
+    if (!ok) local_skeleton_free(out);
+    return ok;
+}
+
+void local_skeleton_free(local_skeleton *k)
+{
+    free(k->parent), free(k->order);
+    memset(k, 0, sizeof *k);
+}
+
+/* ---- rows as the runtime blends and composes them ---- */
+
+static cb_vec3 bind_of(const float *bind, uint32_t j)
+{
+    return (cb_vec3){bind[j * 3], bind[j * 3 + 1], bind[j * 3 + 2]};
+}
+
+static cb_quat quat_conj(cb_quat q) { return (cb_quat){-q.x, -q.y, -q.z, q.w}; }
+
+/* The local row of every bone from the global ones (the spec's conversion, exact in double):
+ *   q_L = conj(q_p) q_j,   s_L = s_j / s_p,   p_L = b_p + rotate(conj(q_p), p_j - p_p) / s_p. */
+static void to_local(const local_skeleton *k, const float *bind, const bone_qpos *global, bone_qpos *local)
+{
+    for (uint32_t j = 0; j < k->bones; ++j) {
+        int32_t p = k->parent[j];
+        if (p < 0) {
+            local[j] = global[j];
+            continue;
+        }
+        const bone_qpos *g = &global[j], *pg = &global[p];
+        cb_quat inverse = quat_conj(pg->q);
+        local[j].q = cb_quat_mul(inverse, g->q);
+        local[j].s = g->s / pg->s;
+        cb_vec3 offset = cb_quat_rotate(inverse, cb_vec3_sub(g->p, pg->p));
+        local[j].p = cb_vec3_add(bind_of(bind, (uint32_t)p), cb_vec3_scale(offset, 1 / pg->s));
+    }
+}
+
+/* The runtime's blend of two local rows of each bone (q1 flipped into q0's hemisphere, nlerp;
+ * lerp of position and scale), composed from the root (the spec's step 3, q normalised after
+ * composing), into global rows. */
+static void blend_compose(const local_skeleton *k, const float *bind, const bone_qpos *x, const bone_qpos *y,
+                          double f, bone_qpos *out)
+{
+    for (uint32_t i = 0; i < k->bones; ++i) {
+        uint32_t j = k->order[i];
+        const bone_qpos *a = &x[j], *b = &y[j];
+        double sign = cb_quat_dot(a->q, b->q) < 0 ? -1 : 1;
+        cb_quat q = {a->q.x + f * (sign * b->q.x - a->q.x), a->q.y + f * (sign * b->q.y - a->q.y),
+                     a->q.z + f * (sign * b->q.z - a->q.z), a->q.w + f * (sign * b->q.w - a->q.w)};
+        bone_qpos l = {cb_quat_normalize(q), cb_vec3_add(a->p, cb_vec3_scale(cb_vec3_sub(b->p, a->p), f)),
+                       a->s + f * (b->s - a->s)};
+        int32_t p = k->parent[j];
+        if (p < 0) {
+            out[j] = l;
+            continue;
+        }
+        const bone_qpos *pg = &out[p]; /* composed already: parents come first in k->order */
+        out[j].q = cb_quat_normalize(cb_quat_mul(pg->q, l.q));
+        out[j].s = pg->s * l.s;
+        cb_vec3 arm = cb_quat_rotate(pg->q, cb_vec3_sub(l.p, bind_of(bind, (uint32_t)p)));
+        out[j].p = cb_vec3_add(pg->p, cb_vec3_scale(arm, pg->s));
+    }
+}
+
+/* The joint matrix of a row: v' = p + s R (v - b), column-major. */
+static void qpos_matrix(const bone_qpos *r, cb_vec3 b, double m[16])
+{
+    cb_mat4_from_trs(m, (cb_vec3){0, 0, 0}, r->q, (cb_vec3){r->s, r->s, r->s});
+    cb_vec3 rb = cb_mat4_transform_dir(m, b);
+    m[12] = r->p.x - rb.x, m[13] = r->p.y - rb.y, m[14] = r->p.z - rb.z;
+}
+
+/* A joint matrix as a row about its pivot b: its rotation from the normalised columns, the
+ * columns' mean length as the scale (qpos holds similarities; the bake refuses local rows for a
+ * rig that is none). */
+static bone_qpos qpos_of_matrix(const double *m, cb_vec3 b)
+{
+    double unit[16], len[3];
+    memcpy(unit, m, sizeof unit);
+    for (int c = 0; c < 3; ++c) {
+        len[c] = sqrt(m[c * 4] * m[c * 4] + m[c * 4 + 1] * m[c * 4 + 1] + m[c * 4 + 2] * m[c * 4 + 2]);
+        for (int r = 0; r < 3; ++r) unit[c * 4 + r] = len[c] > 0 ? m[c * 4 + r] / len[c] : 0;
+    }
+    return (bone_qpos){cb_quat_from_mat4(unit), cb_mat4_transform_point(m, b), (len[0] + len[1] + len[2]) / 3};
+}
+
+/* ---- a probe: the clip at one rate ---- */
+
+/* Times sampled together: four row intervals, each its three quarter points and its end row. */
+enum { POINTS = 4, INTERVALS_A_BATCH = CB_SAMPLE_BATCH / POINTS };
+
+typedef struct probe_ctx {
+    cb_sampler *s;
+    const palette_skin_facts *facts;
+    const local_skeleton *k;
+    const cb_clip_info *clip;
+    const cb_model *m;
+    cb_root_motion root_motion; /* the bake's: its poses framed as the bake frames them */
+    pose_cache *keep;         /* the bake's cache of this clip's poses, or NULL (matrix rigs only) */
+    bool similar;             /* cb_sampler_is_similarity: sampled as similarities */
+    bool not_qpos;            /* a pose had a joint that is no similarity (local_rate.not_qpos) */
+    cb_joint_subset *all;     /* not similar: every joint, sampled a batch of times at once */
+    double *lanes;            /* its lanes */
+    double *pose_room;        /* CB_SAMPLE_BATCH x bones x 16: the poses no cache keeps */
+    const double *mats[CB_SAMPLE_BATCH]; /* not similar: each pose's joint matrices */
+    double *qs;               /* bones x 5: a pose's quaternions and scales (palette_qpos_similarity_pose) */
+    bone_qpos *poses;         /* CB_SAMPLE_BATCH x bones: global rows at a batch's times */
+    bone_qpos *rows[2];       /* bones each: the local rows either side of the interval in hand */
+    bone_qpos *blended;       /* bones: the blend composed */
+    cb_similarity *sims;      /* CB_SAMPLE_BATCH x bones */
+    double *diff;             /* bones x 16: exact less blended */
+    cb_joint_error *joints;   /* bones */
+    void *block;
+} probe_ctx;
+
+static void probe_ctx_free(probe_ctx *c)
+{
+    cb_joint_subset_free(c->all);
+    free(c->block);
+}
+
+static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *k,
+                           const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep)
+{
+    size_t n = k->bones ? k->bones : 1;
+    size_t sizes[] = {CB_SAMPLE_BATCH * n * sizeof(bone_qpos), n * sizeof(bone_qpos), n * sizeof(bone_qpos),
+                      n * sizeof(bone_qpos), CB_SAMPLE_BATCH * n * sizeof(cb_similarity), n * 16 * sizeof(double),
+                      n * sizeof(cb_joint_error), n * 5 * sizeof(double),
+                      (CB_SAMPLE_BATCH + 1) * (n * 16 + 1) * sizeof(double), CB_SAMPLE_BATCH * n * 16 * sizeof(double)};
+    size_t total = 0;
+    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) total += (sizes[i] + 63) / 64 * 64;
+    bool similar = cb_sampler_is_similarity(s);
+    *c = (probe_ctx){.s = s, .facts = facts, .k = k, .clip = clip, .m = cb_sampler_model(s), .root_motion = root_motion,
+                     .keep = similar ? NULL : keep, .similar = similar, .block = malloc(total)};
+    if (!c->block) return false;
+    char *at = c->block;
+    void **parts[] = {(void **)&c->poses, (void **)&c->rows[0], (void **)&c->rows[1], (void **)&c->blended,
+                      (void **)&c->sims, (void **)&c->diff, (void **)&c->joints, (void **)&c->qs, (void **)&c->lanes,
+                      (void **)&c->pose_room};
+    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) *parts[i] = at, at += (sizes[i] + 63) / 64 * 64;
+    if (similar) return true;
+    bool *every = malloc(n * sizeof *every);
+    for (uint32_t j = 0; every && j < k->bones; ++j) every[j] = true;
+    c->all = every ? cb_joint_subset_create(s, every) : NULL;
+    free(every);
+    if (!c->all) probe_ctx_free(c);
+    return c->all != NULL;
+}
+
+/* Pose i's global rows from its joint matrices (c->mats[i]): rotation and scale four joints at
+ * a time (palette_qpos_similarity_pose, the bake's), the pivot's position p = M b. */
+static void rows_of_matrices(probe_ctx *c, uint32_t i)
+{
+    uint32_t bones = c->k->bones;
+    const float *bind = c->facts->bind_positions;
+    const double *mats = c->mats[i];
+    bone_qpos *out = c->poses + (size_t)i * bones;
+    if (!palette_qpos_similarity_pose(mats, bones, c->qs)) { /* a joint no similarity: the bake falls back */
+        c->not_qpos = true;
+        for (uint32_t j = 0; j < bones; ++j) out[j] = qpos_of_matrix(mats + 16 * (size_t)j, bind_of(bind, j));
+        return;
+    }
+    for (uint32_t j = 0; j < bones; ++j) {
+        const double *q = c->qs + 5 * (size_t)j;
+        out[j] = (bone_qpos){{q[0], q[1], q[2], q[3]}, cb_mat4_transform_point(mats + 16 * (size_t)j, bind_of(bind, j)), q[4]};
+    }
+}
+
+/* The global rows at `count` increasing frames of `framing` into c->poses, framed as the bake
+ * frames them (its root motion). A matrix rig's poses at the frames `kept` says (the bake's rows
+ * and the midpoints its measurement reads) go into the bake's pose cache, where the bake finds
+ * them instead of sampling them again; poses the cache has already are read from it. */
+static void sample_frames(probe_ctx *c, const cb_clip_info *framing, const uint32_t *frames, uint32_t count,
+                          const bool *kept)
+{
+    uint32_t bones = c->k->bones;
+    if (c->similar) {
+        cb_clip_frame_similarities(c->s, framing, frames, count, c->root_motion, c->sims);
+        const float *bind = c->facts->bind_positions;
+        for (uint32_t i = 0; i < count; ++i)
+            for (uint32_t j = 0; j < bones; ++j) {
+                const cb_similarity *x = &c->sims[(size_t)i * bones + j];
+                cb_quat q = {x->rotation[0], x->rotation[1], x->rotation[2], x->rotation[3]};
+                cb_vec3 t = {x->translation[0], x->translation[1], x->translation[2]};
+                cb_vec3 p = cb_vec3_add(t, cb_vec3_scale(cb_quat_rotate(q, bind_of(bind, j)), x->scale));
+                c->poses[(size_t)i * bones + j] = (bone_qpos){q, p, x->scale};
+            }
+        return;
+    }
+    uint32_t missing[CB_SAMPLE_BATCH], n = 0;
+    double *room[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < count; ++i) {
+        double t = cb_clip_frame_time(framing, frames[i]);
+        const double *found = c->keep && kept[i] ? pose_cache_find(c->keep, t) : NULL;
+        double *add = found || !c->keep || !kept[i] ? NULL : pose_cache_add(c->keep, t); /* NULL: full */
+        if (!found) {
+            room[n] = add ? add : c->pose_room + (size_t)i * bones * 16;
+            missing[n++] = frames[i];
+        }
+        c->mats[i] = found ? found : room[n - 1];
+    }
+    if (n) cb_clip_frame_matrices_batch(c->s, framing, missing, n, c->root_motion, c->all, c->lanes, room);
+    for (uint32_t i = 0; i < count; ++i) rows_of_matrices(c, i);
+}
+
+/* The worst vertex error of the blended pose (c->blended) against pose i of the batch, or
+ * `worst` when no vertex exceeds it; above `goal` it stops at the first group over it (any value
+ * over the goal decides alike). Skinned only where a vertex group's bound (error_bound.h)
+ * exceeds the worst so far: the maximum skinning every vertex gives. */
+static double point_error(probe_ctx *c, uint32_t i, double worst, double goal)
+{
+    const palette_skin_facts *f = c->facts;
+    uint32_t bones = c->k->bones;
+    const bone_qpos *exact = c->poses + (size_t)i * bones;
+    for (uint32_t j = 0; j < bones; ++j) {
+        double e[16], b[16];
+        if (f->reach[j] < 0) { /* it moves no vertex: no group reads its difference (its children are composed) */
+            memset(c->diff + 16 * (size_t)j, 0, 16 * sizeof(double));
+            continue;
+        }
+        const double *exact_matrix = c->similar ? e : c->mats[i] + 16 * (size_t)j;
+        if (c->similar) qpos_matrix(&exact[j], bind_of(f->bind_positions, j), e);
+        qpos_matrix(&c->blended[j], bind_of(f->bind_positions, j), b);
+        for (int k = 0; k < 16; ++k) c->diff[j * 16 + k] = exact_matrix[k] - b[k];
+    }
+    if (!cb_joint_errors(c->diff, bones, f->bind_positions, c->joints)) return INFINITY;
+    if (cb_row_error_cap(c->joints, bones, f->group_reach, f->weight_sum) <= worst) return worst;
+    const cb_vertex_groups *g = &f->groups;
+    for (uint32_t k = 0; k < g->group_count && !(worst > goal); ++k) {
+        if (cb_group_error_bound(g, k, c->joints, worst) <= worst) continue;
+        const cb_vertex_group *grp = &g->groups[k];
+        double e = sqrt(cb_skin_group_worst(&c->m->primitives[grp->primitive], g->vertices + grp->first, grp->count, c->diff));
+        worst = e > worst ? e : worst; /* a NaN error leaves it: cb_joint_errors let only finite differences by */
+    }
+    return worst;
+}
+
+/* The worst error of the clip's local rows at `fps` at the quarter points of every row interval,
+ * framed as the bake frames them: N = round(D fps) steps, row i at t0 + i D / N. The points are
+ * frames of the clip framed at 4N steps (row i is frame 4i, the same double; its midpoint, where
+ * the bake measures, frame 4i + 2); a loop's last interval ends on frame 4N, t0 + D, where the
+ * sampler's period wraps to its first pose. Stops above `goal` (INFINITY: in full). */
+static double probe(probe_ctx *c, double fps, double goal)
+{
+    cb_clip_info framing = *c->clip;
+    uint32_t steps = cb_clip_step_count(c->clip->duration, fps), bones = c->k->bones, row0 = 0;
+    framing.steps = POINTS * steps;
+    const float *bind = c->facts->bind_positions;
+    const bool row_kept = true;
+    double worst = 0;
+    sample_frames(c, &framing, &row0, 1, &row_kept);
+    to_local(c->k, bind, c->poses, c->rows[0]);
+    for (uint32_t first = 0; first < steps && !(worst > goal); first += INTERVALS_A_BATCH) {
+        uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH];
+        bool kept[CB_SAMPLE_BATCH];
+        for (uint32_t i = 0; i < count * POINTS; ++i) /* all kept: the bake reads rows and midpoints, its measure all */
+            frames[i] = POINTS * first + i + 1, kept[i] = true;
+        sample_frames(c, &framing, frames, count * POINTS, kept);
+        for (uint32_t i = 0; i < count && !(worst > goal); ++i) {
+            to_local(c->k, bind, c->poses + (size_t)(i * POINTS + POINTS - 1) * bones, c->rows[1]);
+            for (uint32_t q = 1; q < POINTS && !(worst > goal); ++q) {
+                blend_compose(c->k, bind, c->rows[0], c->rows[1], (double)q / POINTS, c->blended);
+                worst = point_error(c, i * POINTS + q - 1, worst, goal);
+            }
+            bone_qpos *swap = c->rows[0];
+            c->rows[0] = c->rows[1], c->rows[1] = swap;
+        }
+    }
+    return worst;
+}
+
+/* ---- the candidates ---- */
+
+/* The common rates rate_search.c walks for a clip with no key grid. */
+static const double ladder[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120, 180, 240, 360, 480, 720, 960};
+enum { MOST_CANDIDATES = 48 };
+
+/* Whether t lies on the grid of `step` (within 1e-3 of a step, as a STEP clip's keys are judged). */
+static bool on_grid(double t, double step)
+{
+    double steps = t / step;
+    return fabs(steps - round(steps)) < 1e-3;
+}
+
+/* Whether every key of the clip lies on t0 + i step, and its end t0 + duration (where a loop's
+ * last row blends into its first; duration <= 0: not asked). Channels that share their times are
+ * read once. */
+static bool keys_on_grid(const cb_animation *a, double t0, double duration, double step)
+{
+    if (duration > 0 && !on_grid(duration, step)) return false;
+    for (uint32_t c = 0; c < a->channel_count; ++c) {
+        const cb_channel *ch = &a->channels[c];
+        if (c > 0 && ch->times == a->channels[c - 1].times) continue;
+        for (uint32_t k = 0; k < ch->key_count; ++k)
+            if (!on_grid(ch->times[k] - t0, step)) return false;
+    }
+    return true;
+}
+
+/* The clip's key rate: that of the coarsest grid t0 + i / rate holding every key and the clip's
+ * end, its shortest key step divided by 1, 2, 3, ...; 0 when none is within max_fps. Rows at a
+ * rate off that grid cut LINEAR keys' corners, an error that falls only as 1 / fps: Fox's Run
+ * keys every 1/24 s, but after a gap of 0.2 s on times 1/30 s off that grid, so its rows land on
+ * every key only at 120 fps (24 fps rows: 10.8 mm/m, 96 fps: 2.7). */
+static double key_grid_fps(const cb_animation *a, double t0, double duration, double max_fps)
+{
+    double shortest = cb_animation_key_interval(a);
+    for (double m = 1; shortest > 0; ++m) { /* rates rounded to 1e-3 fps, as rate_search.c's */
+        double rate = round(m / shortest * 1000) / 1000;
+        if (rate > max_fps) break;
+        if (keys_on_grid(a, t0, duration, 1 / rate)) return rate;
+    }
+    return 0;
+}
+
+double local_key_fps(const cb_animation *a, double max_fps) { return key_grid_fps(a, a->t0, 0, max_fps); }
+
+/* The rates a clip may take up to CB_FPS_LIMIT, increasing, max_fps among them; *key_fps its key
+ * rate (key_grid_fps; 0: none, the common rates instead). Multiples of the key rate: 1, 2, 3, 4,
+ * 6, 8, 12, 16, ... (each twice the one two before), so a clip whose nlerp lag needs more than
+ * twice its keys is a few probes. */
+static uint32_t candidates(const cb_animation *a, const cb_clip_info *clip, double max_fps, double *out, double *key_fps)
+{
+    double k = *key_fps = key_grid_fps(a, clip->t0, clip->duration, max_fps);
+    uint32_t n = 0;
+    if (k > 0) {
+        double before = 1, next = 2; /* the last multiple taken and the next */
+        out[n++] = k;
+        while (n + 1 < MOST_CANDIDATES && next * k <= CB_FPS_LIMIT) {
+            out[n++] = round(next * k * 1000) / 1000;
+            double after = next == 2 ? 3 : 2 * before;
+            before = next, next = after;
+        }
+    } else {
+        for (size_t i = 0; i < sizeof ladder / sizeof ladder[0] && ladder[i] <= CB_FPS_LIMIT; ++i) out[n++] = ladder[i];
+    }
+    uint32_t at = 0; /* max_fps in its place (once) */
+    while (at < n && out[at] < max_fps) ++at;
+    if (at == n || out[at] != max_fps) {
+        memmove(out + at + 1, out + at, (n - at) * sizeof *out);
+        out[at] = max_fps, ++n;
+    }
+    return n;
+}
+
+static bool on_key_grid(double fps, double key_fps)
+{
+    double multiple = fps / key_fps;
+    return key_fps > 0 && fabs(multiple - round(multiple)) < 1e-6;
+}
+
+cb_status local_clip_rate(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
+                          const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep, double max_error,
+                          double max_fps, local_rate *out, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(s);
+    double rates[MOST_CANDIDATES];
+    memset(out, 0, sizeof *out);
+    uint32_t n = candidates(&m->animations[clip->animation], clip, max_fps, rates, &out->key_fps);
+    probe_ctx c;
+    if (!probe_ctx_init(&c, s, facts, skeleton, clip, root_motion, keep))
+        return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory choosing clip %d's rate for local rows", m->source,
+                       clip->animation);
+    cb_sampler_set_loop(s, clip); /* out of memory: sampled uncorrected, a measurement's detail */
+    bool still = !(clip->duration > 0); /* one pose: every rate is exact */
+    uint32_t i = 0;
+    for (; i < n && rates[i] <= max_fps; ++i) {
+        out->fps = rates[i], ++out->probes;
+        /* max_fps in full: where nothing meets the goal its error is what the bake reports */
+        out->error = still ? 0 : probe(&c, rates[i], rates[i] == max_fps ? INFINITY : max_error);
+        if ((out->met = out->error <= max_error)) break;
+    }
+    for (uint32_t k = i; !out->met && !still && k < n; ++k) /* what it would take: for the message */
+        if (probe(&c, rates[k], max_error) <= max_error) {
+            out->fps_needed = rates[k];
+            break;
+        }
+    out->error_mm = cb_mm_per_m(out->error, facts->height);
+    out->on_keys = on_key_grid(out->fps, out->key_fps);
+    out->not_qpos = c.not_qpos;
+    probe_ctx_free(&c);
+    return CB_OK;
+}
+
+double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
+                        const cb_clip_info *clip, double fps, cb_error *err)
+{
+    probe_ctx c;
+    if (!probe_ctx_init(&c, s, facts, skeleton, clip, CB_ROOT_MOTION_KEEP, NULL)) {
+        cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring local rows");
+        return INFINITY;
+    }
+    cb_sampler_set_loop(s, clip);
+    double e = clip->duration > 0 ? probe(&c, fps, INFINITY) : 0;
+    probe_ctx_free(&c);
+    return e;
+}
+
+/* ---- a finished local palette, measured ---- */
+
+/* Palette row r's local rows of every bone, decoded as the runtime decodes them. */
+static void decode_row(const cb_palette *p, uint32_t r, bone_qpos *out)
+{
+    for (uint32_t j = 0; j < p->bone_count; ++j) {
+        double v[16];
+        cb_palette_decode_values(p, p->texels, r, j, v);
+        out[j] = (bone_qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]};
+    }
+}
+
+/* Pose i of the batch against the palette's rows x and y blended at f, composed: the worst so far. */
+static double palette_point(probe_ctx *c, const cb_palette *p, const bone_qpos *x, const bone_qpos *y, double f, uint32_t i,
+                            double worst)
+{
+    blend_compose(c->k, p->bind_positions, x, y, f, c->blended);
+    return point_error(c, i, worst, INFINITY);
+}
+
+/* The clip's rows (frames 4i of framing) and quarter points (4i + 1 .. 3) measured interval by
+ * interval, four at a time, each row decoded once. */
+static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palette_clip *pc, const cb_clip_info *framing,
+                              uint32_t steps, double *at_rows, double *between)
+{
+    uint32_t row0 = 0;
+    const bool all = true;
+    bool kept[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) kept[i] = true; /* the bake after a replan reads them again */
+    decode_row(p, pc->first_row, c->rows[0]);
+    sample_frames(c, framing, &row0, 1, &all);
+    *at_rows = palette_point(c, p, c->rows[0], c->rows[0], 0, 0, *at_rows);
+    for (uint32_t first = 0; first < steps; first += INTERVALS_A_BATCH) {
+        uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH];
+        for (uint32_t i = 0; i < count * POINTS; ++i) frames[i] = POINTS * first + i + 1;
+        sample_frames(c, framing, frames, count * POINTS, kept);
+        for (uint32_t i = 0; i < count; ++i) {
+            uint32_t next = first + i + 1;
+            bool wrap = next == pc->frames; /* a loop's last interval ends on its first row */
+            decode_row(p, pc->first_row + (wrap ? 0 : next), c->rows[1]);
+            const bone_qpos *to = pc->step ? c->rows[0] : c->rows[1]; /* held rows: the row alone */
+            for (uint32_t q = 1; q < POINTS; ++q)
+                *between = palette_point(c, p, c->rows[0], to, (double)q / POINTS, i * POINTS + q - 1, *between);
+            if (!wrap) *at_rows = palette_point(c, p, c->rows[1], c->rows[1], 0, i * POINTS + POINTS - 1, *at_rows);
+            bone_qpos *swap = c->rows[0];
+            c->rows[0] = c->rows[1], c->rows[1] = swap;
+        }
+    }
+}
+
+cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, const cb_palette *p, uint32_t clip,
+                               int32_t animation, pose_cache *keep, double *at_rows, double *between, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(s);
+    const cb_palette_clip *pc = &p->clips[clip];
+    const cb_animation *a = &m->animations[animation];
+    uint32_t steps = pc->loops ? pc->frames : pc->frames - 1;
+    /* As the bake framed it (cb_verify_clip's reading of the palette's clip): rows at start + i D / N,
+     * in-place travel at the clip's recorded velocity (zero where it was kept). */
+    cb_clip_info framing = {.animation = animation, .t0 = pc->start, .t1 = pc->start + (a->t1 - a->t0),
+                            .duration = pc->duration, .loops = pc->loops, .steps = POINTS * (steps ? steps : 1)};
+    for (int k = 0; k < 3; ++k) framing.root_velocity[k] = pc->root_velocity[k];
+    local_skeleton k; /* the palette's parents: the same nearest ancestor joints */
+    probe_ctx c;
+    *at_rows = *between = 0;
+    if (!local_skeleton_build(m, cb_sampler_skin(s), &k) ||
+        !probe_ctx_init(&c, s, facts, &k, &framing, CB_ROOT_MOTION_IN_PLACE, keep)) {
+        local_skeleton_free(&k);
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring %s's local rows", m->source);
+    }
+    cb_sampler_set_baked_loop(s, animation, pc->loops, pc->start, pc->duration);
+    palette_intervals(&c, p, pc, &framing, pc->duration > 0 ? steps : 0, at_rows, between);
+    probe_ctx_free(&c);
+    local_skeleton_free(&k);
+    return CB_OK;
+}

@@ -1,0 +1,124 @@
+/* local_rate_search.c - see local_rate.h: a bake's rate choice for every clip when its rows are
+ * local (palette_choose_rates hands it the clips: every rate decision of a bake is made there).
+ * Each clip's rate is local_clip_rate's; clips are chosen on options->threads threads at a time,
+ * each with its own sampler, each answer in its own slot, so the choices depend neither on the
+ * thread count nor on the order the clips are taken in. */
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <threads.h>
+
+#include "local_rate.h"
+
+/* The analysis the clip is framed from (rate_search.c's: the lowest common rate, the likeliest
+ * within the frame limit). */
+#define ANALYSIS_FPS 2.0
+/* A clip's pose cache for the bake after the choice holds at most this much, and all of them
+ * together at most KEPT_BYTES (past it a clip's is freed: the bake samples that clip again). The
+ * same budgets as rate_search.c's. */
+#define CLIP_POSE_BYTES ((size_t)32 << 20)
+#define KEPT_BYTES ((size_t)128 << 20)
+
+typedef struct local_search {
+    const cb_model *model;
+    int32_t skin;
+    const cb_bake_options *o;
+    cb_clip_plan *plan;
+    uint32_t count;
+    const cb_rate_goal *goals;
+    cb_rate_choice *choices;
+    cb_error *errors; /* per clip */
+    const palette_skin_facts *facts;
+    local_skeleton skeleton;
+    search_keep *keep; /* or NULL */
+    atomic_bool not_qpos; /* some clip's pose had a joint that is no similarity */
+    atomic_uint next;
+    atomic_size_t kept_bytes;
+} local_search;
+
+/* Clip i's pose cache for the bake (keep's, made where it has none yet), or NULL. */
+static pose_cache *clip_cache(local_search *ls, uint32_t i)
+{
+    if (!ls->keep) return NULL;
+    if (!ls->keep->poses[i]) ls->keep->poses[i] = palette_probe_poses(ls->skeleton.bones, CLIP_POSE_BYTES);
+    return ls->keep->poses[i];
+}
+
+/* A kept cache past the budget is freed: the bake samples that clip again (the same bits). */
+static void settle_kept(local_search *ls, uint32_t i)
+{
+    if (!ls->keep || !ls->keep->poses[i]) return;
+    size_t bytes = (size_t)pose_cache_count(ls->keep->poses[i]) * (16 * ls->skeleton.bones + 1 + 5 * ls->skeleton.bones) *
+                   sizeof(double);
+    if (atomic_fetch_add(&ls->kept_bytes, bytes) + bytes > KEPT_BYTES)
+        pose_cache_free(ls->keep->poses[i]), ls->keep->poses[i] = NULL;
+}
+
+static cb_status choose_clip(local_search *ls, cb_sampler *s, uint32_t i, cb_error *err)
+{
+    cb_clip_plan *plan = &ls->plan[i];
+    pose_cache *cache = clip_cache(ls, i);
+    cb_clip_info info;
+    /* The analysis kept from before the choice (root motion's decision) where it stands in for
+     * one; the bake after frames the clip from it too. */
+    if (!(cache && palette_take_kept_analysis(cache, s, plan->animation, plan->loop, ANALYSIS_FPS, &ls->o->limits, &info)) &&
+        cb_clip_analyze(s, plan->animation, ANALYSIS_FPS, plan->loop, &ls->o->limits, &info, err))
+        return err->status;
+    if (cache) palette_keep_analysis(cache, &info, ANALYSIS_FPS, plan->loop);
+    local_rate r;
+    const cb_rate_goal *goal = &ls->goals[i];
+    if (local_clip_rate(s, ls->facts, &ls->skeleton, &info, ls->o->root_motion, cache, goal->max_error_mm / 1000 * ls->facts->height,
+                        goal->max_fps, &r, err))
+        return err->status;
+    settle_kept(ls, i);
+    if (r.not_qpos) atomic_store(&ls->not_qpos, true);
+    plan->fps = r.fps, plan->fit = false; /* local rows are the sampled poses, converted */
+    ls->choices[i] = (cb_rate_choice){.met = r.met, .error = r.error, .error_mm = r.error_mm, .fps_needed = r.fps_needed};
+    return CB_OK;
+}
+
+static int choose_share(void *arg)
+{
+    local_search *ls = arg;
+    cb_error fail = {0};
+    cb_sampler *s = cb_sampler_create(ls->model, ls->skin, &fail);
+    for (uint32_t n; (n = atomic_fetch_add(&ls->next, 1)) < ls->count;) {
+        if (!(ls->goals[n].max_error_mm > 0)) continue;
+        if (!s) ls->errors[n] = fail;
+        else choose_clip(ls, s, n, &ls->errors[n]);
+    }
+    cb_sampler_free(s);
+    return 0;
+}
+
+cb_status local_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
+                             const cb_rate_goal *goals, cb_rate_choice *out, search_keep *keep,
+                             const palette_skin_facts *facts, const bool *needed_later, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(s);
+    local_search ls = {.model = m, .skin = cb_sampler_skin(s), .o = o, .plan = plan, .count = count, .goals = goals,
+                       .choices = calloc(count ? count : 1, sizeof(cb_rate_choice)),
+                       .errors = calloc(count ? count : 1, sizeof(cb_error)), .facts = facts, .keep = keep};
+    if (!ls.choices || !ls.errors || !local_skeleton_build(m, ls.skin, &ls.skeleton)) {
+        free(ls.choices), free(ls.errors);
+        return cb_fail(err, CB_ERR_INTERNAL, "out of memory choosing frame rates for %s", m->source);
+    }
+    uint32_t threads = o->threads < 1 ? 1 : o->threads > 64 ? 64 : o->threads, started = 0;
+    if (threads > count) threads = count;
+    thrd_t ids[64];
+    for (uint32_t t = 1; t < threads; ++t)
+        if (thrd_create(&ids[started], choose_share, &ls) == thrd_success) ++started;
+    choose_share(&ls);
+    for (uint32_t t = 0; t < started; ++t) thrd_join(ids[t], NULL);
+    for (uint32_t i = 0; i < count && !err->status; ++i) /* the first failure in clip order */
+        if (ls.errors[i].status) *err = ls.errors[i];
+    for (uint32_t i = 0; out && i < count; ++i)
+        if (goals[i].max_error_mm > 0) out[i] = ls.choices[i];
+    local_skeleton_free(&ls.skeleton);
+    free(ls.choices), free(ls.errors);
+    if (keep && !err->status) keep->local_rates = !atomic_load(&ls.not_qpos);
+    if (err->status || !atomic_load(&ls.not_qpos)) return err->status;
+    cb_bake_options global = *o; /* baked global (affine): chosen for global rows (the poses kept serve it too) */
+    global.bone_space = CB_BONE_SPACE_GLOBAL;
+    return palette_choose_rates(s, &global, plan, count, goals, out, keep, needed_later, err);
+}
