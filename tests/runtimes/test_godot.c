@@ -12,44 +12,10 @@
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 #include "runtimes/conformance.h"
-#include "runtimes/local_conformance.h"
 
 #include <limits.h>
 
 #define TMP TEST_TMP "/godot"
-
-/* The local cases' (.pal version 6) expected positions with each cross-fading instance's replaced by the spec's
- * (local_conformance.h: the two clips' local rows blended, then composed; conf_expected mixes the composed skins,
- * right for global rows only), as NAME.local_expected, which check_conformance*.gd read for a local case. */
-static int write_local_expected(const conformance *c)
-{
-    for (int i = 0; i < c->case_count; ++i) {
-        const conf_case *k = &c->cases[i];
-        if (!k->local) continue;
-        const conf_palette *p = &c->palettes[k->palette];
-        size_t verts = p->model->primitives[0].vertex_count, size = 0, at = 0;
-        char path[PATH_MAX];
-        snprintf(path, sizeof path, "%s/%s.expected", c->dir, k->name);
-        float *want = (float *)read_whole_file(path, &size);
-        double *fading = malloc(verts * 3 * sizeof(double));
-        for (int t = 0; t < CONF_TIMES; ++t)
-            for (uint32_t cl = 0; cl < p->view.clip_count; ++cl)
-                for (int n = 0; n < CONF_PER_CLIP; ++n, at += verts * 3) {
-                    if (n != CONF_PER_CLIP - 1) continue; /* conf_instance's last fades */
-                    float v[16];
-                    conf_instance(&p->view.clips[cl], conf_times[t], n, 0, v);
-                    local_fade_expected(p, v, conf_times[t], fading);
-                    for (size_t j = 0; j < verts * 3; ++j) want[at + j] = (float)fading[j];
-                }
-        snprintf(path, sizeof path, "%s/%s.local_expected", c->dir, k->name);
-        FILE *f = fopen(path, "wb");
-        bool ok = f && at * sizeof(float) == size && fwrite(want, 1, size, f) == size;
-        if (f) ok &= fclose(f) == 0;
-        free(want), free(fading);
-        if (!ok) return -1;
-    }
-    return 0;
-}
 
 /* The addon's tests (check.gd's "addon:" cases) on Cow: a mat4/float and a default qpos/u16 palette at
  * 30 fps with the root motion kept (the reference CSV's frames), a roster of three states, the model
@@ -134,9 +100,8 @@ static int setup(void **state)
      * check_conformance_gpu.gd with the herd's shader. */
     conformance conf;
     conformance_make(&conf, TMP "/bakes/conformance");
-    int rc = write_local_expected(&conf);
     conformance_free(&conf);
-    return rc;
+    return 0;
 }
 
 static int count(const char *hay, const char *needle)

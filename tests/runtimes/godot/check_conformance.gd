@@ -39,9 +39,7 @@ func _check_case(c: Dictionary) -> void:
 	var positions := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["positions"]).to_float32_array()
 	var joints := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["joints"])
 	var weights := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["weights"]).to_float32_array()
-	# local rows: cross-fades held to the spec's (local rows blended per bone, then composed; test_godot.c)
-	var expected_file: String = c["name"] + ".local_expected" if c.get("local", false) else c["expected"]
-	var expected := FileAccess.get_file_as_bytes(DIR + "/" + expected_file).to_float32_array()
+	var expected := FileAccess.get_file_as_bytes(DIR + "/" + c["expected"]).to_float32_array()
 	var group: Dictionary = c["groups"][0]
 	var time: float = group["time"]
 	var verts := positions.size() / 3

@@ -63,9 +63,7 @@ func _check_case(c: Dictionary, viewport: SubViewport) -> void:
 	node.multimesh.mesh.surface_set_material(0, material)
 	node.multimesh.custom_aabb = AABB(Vector3.ONE * -1e6, Vector3.ONE * 2e6) # never culled: POSITION places it
 	viewport.add_child(node)
-	# local rows: cross-fades held to the spec's (local rows blended per bone, then composed; test_godot.c)
-	var expected_file: String = c["name"] + ".local_expected" if c.get("local", false) else c["expected"]
-	var expected := FileAccess.get_file_as_bytes(DIR + "/" + expected_file).to_float32_array()
+	var expected := FileAccess.get_file_as_bytes(DIR + "/" + c["expected"]).to_float32_array()
 	var worst := 0.0
 	var at := 0
 	for group in c["groups"]:
