@@ -6,9 +6,9 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
-#include <threads.h>
 
 #include "local_rate.h"
+#include "pool.h"
 
 /* The analysis the clip is framed from (rate_search.c's: the lowest common rate, the likeliest
  * within the frame limit). */
@@ -77,8 +77,9 @@ static cb_status choose_clip(local_search *ls, cb_sampler *s, uint32_t i, cb_err
     return CB_OK;
 }
 
-static int choose_share(void *arg)
+static void choose_share(void *arg, uint32_t thread, uint32_t threads)
 {
+    (void)thread, (void)threads; /* clips are taken from a shared counter */
     local_search *ls = arg;
     cb_error fail = {0};
     cb_sampler *s = cb_sampler_create(ls->model, ls->skin, &fail);
@@ -88,7 +89,6 @@ static int choose_share(void *arg)
         else choose_clip(ls, s, n, &ls->errors[n]);
     }
     cb_sampler_free(s);
-    return 0;
 }
 
 cb_status local_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_plan *plan, uint32_t count,
@@ -103,13 +103,8 @@ cb_status local_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_pl
         free(ls.choices), free(ls.errors);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory choosing frame rates for %s", m->source);
     }
-    uint32_t threads = o->threads < 1 ? 1 : o->threads > 64 ? 64 : o->threads, started = 0;
-    if (threads > count) threads = count;
-    thrd_t ids[64];
-    for (uint32_t t = 1; t < threads; ++t)
-        if (thrd_create(&ids[started], choose_share, &ls) == thrd_success) ++started;
-    choose_share(&ls);
-    for (uint32_t t = 0; t < started; ++t) thrd_join(ids[t], NULL);
+    uint32_t threads = o->threads < 1 ? 1 : o->threads;
+    cb_pool_run(threads > count ? count : threads, choose_share, &ls);
     for (uint32_t i = 0; i < count && !err->status; ++i) /* the first failure in clip order */
         if (ls.errors[i].status) *err = ls.errors[i];
     for (uint32_t i = 0; out && i < count; ++i)
