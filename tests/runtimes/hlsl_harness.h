@@ -1,7 +1,8 @@
 /* hlsl_harness.h - what the HLSL runtime's tests share: compiling HLSL with glslang's HLSL front
  * end (and validating the SPIR-V with spirv-val), a palette as Vulkan textures, bakes of the
  * sample models, the instances and times to skin at, and the C runtime's answer for them
- * (cb_runtime_matrices, which `crowdbake verify` compares with exact skinning). */
+ * (cb_runtime_matrices_crossfade; its matrices are cb_runtime_matrices', which `crowdbake verify`
+ * compares with exact skinning). */
 #ifndef CB_HLSL_HARNESS_H
 #define CB_HLSL_HARNESS_H
 
@@ -9,7 +10,6 @@
 #include <sys/stat.h>
 
 #include "crowdbake/runtime.h"
-#include "local_reference.h"
 #include "vulkan_compute.h"
 #include "runtimes/shader_source.h"
 
@@ -176,19 +176,12 @@ static inline gpu_sample *gpu_samples(const sample *s, uint32_t n, double row_of
     return g;
 }
 
-/* The C runtime's bone matrices of a sample at time t: the two clips' matrices blended by the
- * fade, term by term (what blending the transforms in the shader is). Local rows cross-fade the two
- * clips' local rows before composing (local_reference.h). */
-static inline void cpu_matrices(const cb_palette *p, const sample *s, double t, double *mats, double *from)
+/* The C runtime's bone matrices of a sample at time t, cross-faded as the shaders fade
+ * (cb_runtime_matrices_crossfade: global rows' matrices mixed term by term, local rows faded before
+ * they compose). */
+static inline void cpu_matrices(const cb_palette *p, const sample *s, double t, double *mats)
 {
-    if (s->fade < 1 && p->bone_space == CB_BONE_SPACE_LOCAL) {
-        local_matrices(p, &s->inst, &s->from, s->fade, t, mats);
-        return;
-    }
-    cb_runtime_matrices(p, p->texels, &s->inst, t, mats);
-    if (s->fade >= 1) return;
-    cb_runtime_matrices(p, p->texels, &s->from, t, from);
-    for (size_t i = 0; i < (size_t)p->bone_count * 16; ++i) mats[i] = mats[i] * s->fade + from[i] * (1 - s->fade);
+    if (!cb_runtime_matrices_crossfade(p, p->texels, &s->from, &s->inst, s->fade, t, mats)) fail_msg("out of memory");
 }
 
 /* Skinned normals (normalized), as src/core/vat.c skins them. */
@@ -215,12 +208,12 @@ static inline void compare(const cb_palette *p, const cb_primitive *prim, const 
                     double *position_error, double *normal_error)
 {
     size_t verts = prim->vertex_count;
-    double *mats = malloc(p->bone_count * 16 * sizeof(double)), *from = malloc(p->bone_count * 16 * sizeof(double));
+    double *mats = malloc(p->bone_count * 16 * sizeof(double));
     double *pos = malloc(verts * 3 * sizeof(double)), *nrm = malloc(verts * 3 * sizeof(double));
     *position_error = *normal_error = 0;
     for (uint32_t i = 0; i < n; ++i)
         for (int before = 0; before < 2; ++before) {
-            cpu_matrices(p, &s[i], s[i].time - (before ? s[i].dt : 0), mats, from);
+            cpu_matrices(p, &s[i], s[i].time - (before ? s[i].dt : 0), mats);
             cb_skin_positions(prim, mats, pos);
             cpu_normals(prim, mats, nrm);
             for (size_t v = 0; v < verts; ++v)
@@ -230,7 +223,7 @@ static inline void compare(const cb_palette *p, const cb_primitive *prim, const 
                     if (!before) *normal_error = fmax(*normal_error, fabs(nrm[v * 3 + k] - g[4 + k]));
                 }
         }
-    free(mats), free(from), free(pos), free(nrm);
+    free(mats), free(pos), free(nrm);
 }
 
 /* A primitive's vertices as the test shaders read them: position, normal, joints, weights (float4 each). */

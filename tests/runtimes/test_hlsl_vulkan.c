@@ -331,8 +331,8 @@ static void test_the_bone_pass_matches_the_c_runtime(void **state)
 }
 
 /* ---- local rows (.pal version 6): every skinning function walks each influence's chain, the bone
- * pass each bone's; held to the C runtime (cb_runtime_matrices, composing) and, mid-fade, to
- * local_reference.h (the two clips' local rows blended before composing) ---- */
+ * pass each bone's; held to the C runtime (cb_runtime_matrices_crossfade: composing, and mid-fade the
+ * two clips' local rows blended before composing) ---- */
 
 static const variant local_rows = {.local = true};
 
