@@ -27,15 +27,8 @@
 
 #include "cb_math.h"
 #include "error_bound.h"
+#include "local_pose.h"
 #include "sampler.h"
-
-/* A bone in a row: rotation q, the position p of its pivot b (p = M b) and a uniform scale s,
- * so that v' = p + s rotate(q, v - b): the palette's qpos. */
-typedef struct bone_qpos {
-    cb_quat q;
-    cb_vec3 p;
-    double s;
-} bone_qpos;
 
 /* ---- the skeleton ---- */
 
@@ -47,16 +40,9 @@ bool local_skeleton_build(const cb_model *m, int32_t skin, local_skeleton *out)
     out->bones = n;
     out->parent = malloc((n ? n : 1) * sizeof *out->parent);
     out->order = malloc((n ? n : 1) * sizeof *out->order);
-    int32_t *joint_of = malloc((m->node_count ? m->node_count : 1) * sizeof *joint_of);
     uint32_t *depth = calloc(n ? n : 1, sizeof *depth);
-    bool ok = out->parent && out->order && joint_of && depth;
-    for (uint32_t i = 0; ok && i < m->node_count; ++i) joint_of[i] = -1;
-    for (uint32_t j = 0; ok && j < n; ++j) joint_of[sk->joints[j]] = (int32_t)j;
-    for (uint32_t j = 0; ok && j < n; ++j) { /* the nearest ancestor node that is a joint */
-        out->parent[j] = -1;
-        for (int32_t node = m->nodes[sk->joints[j]].parent; node >= 0 && out->parent[j] < 0; node = m->nodes[node].parent)
-            out->parent[j] = joint_of[node];
-    }
+    bool ok = out->parent && out->order && depth;
+    if (ok) palette_local_parents(m, sk, out->parent); /* the .pal bone table's parents */
     uint32_t deepest = 0;
     for (uint32_t j = 0; ok && j < n; ++j) {
         for (int32_t a = out->parent[j]; a >= 0; a = out->parent[a]) ++depth[j];
@@ -66,7 +52,7 @@ bool local_skeleton_build(const cb_model *m, int32_t skin, local_skeleton *out)
     for (uint32_t d = 0; ok && d <= deepest; ++d)
         for (uint32_t j = 0; j < n; ++j)
             if (depth[j] == d) out->order[k++] = j;
-    free(joint_of), free(depth);
+    free(depth);
     if (!ok) local_skeleton_free(out);
     return ok;
 }
@@ -84,56 +70,33 @@ static cb_vec3 bind_of(const float *bind, uint32_t j)
     return (cb_vec3){bind[j * 3], bind[j * 3 + 1], bind[j * 3 + 2]};
 }
 
-static cb_quat quat_conj(cb_quat q) { return (cb_quat){-q.x, -q.y, -q.z, q.w}; }
-
 /* The local row of every bone from the global ones (the spec's conversion, exact in double):
  *   q_L = conj(q_p) q_j,   s_L = s_j / s_p,   p_L = b_p + rotate(conj(q_p), p_j - p_p) / s_p. */
-static void to_local(const local_skeleton *k, const float *bind, const bone_qpos *global, bone_qpos *local)
+static void to_local(const local_skeleton *k, const float *bind, const local_qpos *global, local_qpos *local)
 {
     for (uint32_t j = 0; j < k->bones; ++j) {
         int32_t p = k->parent[j];
-        if (p < 0) {
-            local[j] = global[j];
-            continue;
-        }
-        const bone_qpos *g = &global[j], *pg = &global[p];
-        cb_quat inverse = quat_conj(pg->q);
-        local[j].q = cb_quat_mul(inverse, g->q);
-        local[j].s = g->s / pg->s;
-        cb_vec3 offset = cb_quat_rotate(inverse, cb_vec3_sub(g->p, pg->p));
-        local[j].p = cb_vec3_add(bind_of(bind, (uint32_t)p), cb_vec3_scale(offset, 1 / pg->s));
+        local[j] = p < 0 ? global[j] : local_qpos_localize(global[p], bind_of(bind, (uint32_t)p), global[j]);
     }
 }
 
 /* The runtime's blend of two local rows of each bone (q1 flipped into q0's hemisphere, nlerp;
  * lerp of position and scale), composed from the root (the spec's step 3, q normalised after
  * composing), into global rows. */
-static void blend_compose(const local_skeleton *k, const float *bind, const bone_qpos *x, const bone_qpos *y,
-                          double f, bone_qpos *out)
+static void blend_compose(const local_skeleton *k, const float *bind, const local_qpos *x, const local_qpos *y,
+                          double f, local_qpos *out)
 {
     for (uint32_t i = 0; i < k->bones; ++i) {
         uint32_t j = k->order[i];
-        const bone_qpos *a = &x[j], *b = &y[j];
-        double sign = cb_quat_dot(a->q, b->q) < 0 ? -1 : 1;
-        cb_quat q = {a->q.x + f * (sign * b->q.x - a->q.x), a->q.y + f * (sign * b->q.y - a->q.y),
-                     a->q.z + f * (sign * b->q.z - a->q.z), a->q.w + f * (sign * b->q.w - a->q.w)};
-        bone_qpos l = {cb_quat_normalize(q), cb_vec3_add(a->p, cb_vec3_scale(cb_vec3_sub(b->p, a->p), f)),
-                       a->s + f * (b->s - a->s)};
         int32_t p = k->parent[j];
-        if (p < 0) {
-            out[j] = l;
-            continue;
-        }
-        const bone_qpos *pg = &out[p]; /* composed already: parents come first in k->order */
-        out[j].q = cb_quat_normalize(cb_quat_mul(pg->q, l.q));
-        out[j].s = pg->s * l.s;
-        cb_vec3 arm = cb_quat_rotate(pg->q, cb_vec3_sub(l.p, bind_of(bind, (uint32_t)p)));
-        out[j].p = cb_vec3_add(pg->p, cb_vec3_scale(arm, pg->s));
+        local_qpos l = local_qpos_blend(x[j], y[j], f); /* parents come first in k->order: out[p] is composed */
+        out[j] = p < 0 ? l : local_qpos_compose(out[p], bind_of(bind, (uint32_t)p), l);
+        out[j].q = cb_quat_normalize(out[j].q);
     }
 }
 
 /* The joint matrix of a row: v' = p + s R (v - b), column-major. */
-static void qpos_matrix(const bone_qpos *r, cb_vec3 b, double m[16])
+static void qpos_matrix(const local_qpos *r, cb_vec3 b, double m[16])
 {
     cb_mat4_from_trs(m, (cb_vec3){0, 0, 0}, r->q, (cb_vec3){r->s, r->s, r->s});
     cb_vec3 rb = cb_mat4_transform_dir(m, b);
@@ -143,7 +106,7 @@ static void qpos_matrix(const bone_qpos *r, cb_vec3 b, double m[16])
 /* A joint matrix as a row about its pivot b: its rotation from the normalised columns, the
  * columns' mean length as the scale (qpos holds similarities; the bake refuses local rows for a
  * rig that is none). */
-static bone_qpos qpos_of_matrix(const double *m, cb_vec3 b)
+static local_qpos qpos_of_matrix(const double *m, cb_vec3 b)
 {
     double unit[16], len[3];
     memcpy(unit, m, sizeof unit);
@@ -151,7 +114,7 @@ static bone_qpos qpos_of_matrix(const double *m, cb_vec3 b)
         len[c] = sqrt(m[c * 4] * m[c * 4] + m[c * 4 + 1] * m[c * 4 + 1] + m[c * 4 + 2] * m[c * 4 + 2]);
         for (int r = 0; r < 3; ++r) unit[c * 4 + r] = len[c] > 0 ? m[c * 4 + r] / len[c] : 0;
     }
-    return (bone_qpos){cb_quat_from_mat4(unit), cb_mat4_transform_point(m, b), (len[0] + len[1] + len[2]) / 3};
+    return (local_qpos){cb_quat_from_mat4(unit), cb_mat4_transform_point(m, b), (len[0] + len[1] + len[2]) / 3};
 }
 
 /* ---- a probe: the clip at one rate ---- */
@@ -174,9 +137,9 @@ typedef struct probe_ctx {
     double *pose_room;        /* CB_SAMPLE_BATCH x bones x 16: the poses no cache keeps */
     const double *mats[CB_SAMPLE_BATCH]; /* not similar: each pose's joint matrices */
     double *qs;               /* bones x 5: a pose's quaternions and scales (palette_qpos_similarity_pose) */
-    bone_qpos *poses;         /* CB_SAMPLE_BATCH x bones: global rows at a batch's times */
-    bone_qpos *rows[2];       /* bones each: the local rows either side of the interval in hand */
-    bone_qpos *blended;       /* bones: the blend composed */
+    local_qpos *poses;         /* CB_SAMPLE_BATCH x bones: global rows at a batch's times */
+    local_qpos *rows[2];       /* bones each: the local rows either side of the interval in hand */
+    local_qpos *blended;       /* bones: the blend composed */
     cb_similarity *sims;      /* CB_SAMPLE_BATCH x bones */
     double *diff;             /* bones x 16: exact less blended */
     cb_joint_error *joints;   /* bones */
@@ -193,8 +156,8 @@ static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts
                            const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep)
 {
     size_t n = k->bones ? k->bones : 1;
-    size_t sizes[] = {CB_SAMPLE_BATCH * n * sizeof(bone_qpos), n * sizeof(bone_qpos), n * sizeof(bone_qpos),
-                      n * sizeof(bone_qpos), CB_SAMPLE_BATCH * n * sizeof(cb_similarity), n * 16 * sizeof(double),
+    size_t sizes[] = {CB_SAMPLE_BATCH * n * sizeof(local_qpos), n * sizeof(local_qpos), n * sizeof(local_qpos),
+                      n * sizeof(local_qpos), CB_SAMPLE_BATCH * n * sizeof(cb_similarity), n * 16 * sizeof(double),
                       n * sizeof(cb_joint_error), n * 5 * sizeof(double),
                       (CB_SAMPLE_BATCH + 1) * (n * 16 + 1) * sizeof(double), CB_SAMPLE_BATCH * n * 16 * sizeof(double)};
     size_t total = 0;
@@ -224,7 +187,7 @@ static void rows_of_matrices(probe_ctx *c, uint32_t i)
     uint32_t bones = c->k->bones;
     const float *bind = c->facts->bind_positions;
     const double *mats = c->mats[i];
-    bone_qpos *out = c->poses + (size_t)i * bones;
+    local_qpos *out = c->poses + (size_t)i * bones;
     if (!palette_qpos_similarity_pose(mats, bones, c->qs)) { /* a joint no similarity: the bake falls back */
         c->not_qpos = true;
         for (uint32_t j = 0; j < bones; ++j) out[j] = qpos_of_matrix(mats + 16 * (size_t)j, bind_of(bind, j));
@@ -232,7 +195,7 @@ static void rows_of_matrices(probe_ctx *c, uint32_t i)
     }
     for (uint32_t j = 0; j < bones; ++j) {
         const double *q = c->qs + 5 * (size_t)j;
-        out[j] = (bone_qpos){{q[0], q[1], q[2], q[3]}, cb_mat4_transform_point(mats + 16 * (size_t)j, bind_of(bind, j)), q[4]};
+        out[j] = (local_qpos){{q[0], q[1], q[2], q[3]}, cb_mat4_transform_point(mats + 16 * (size_t)j, bind_of(bind, j)), q[4]};
     }
 }
 
@@ -253,7 +216,7 @@ static void sample_frames(probe_ctx *c, const cb_clip_info *framing, const uint3
                 cb_quat q = {x->rotation[0], x->rotation[1], x->rotation[2], x->rotation[3]};
                 cb_vec3 t = {x->translation[0], x->translation[1], x->translation[2]};
                 cb_vec3 p = cb_vec3_add(t, cb_vec3_scale(cb_quat_rotate(q, bind_of(bind, j)), x->scale));
-                c->poses[(size_t)i * bones + j] = (bone_qpos){q, p, x->scale};
+                c->poses[(size_t)i * bones + j] = (local_qpos){q, p, x->scale};
             }
         return;
     }
@@ -281,7 +244,7 @@ static double point_error(probe_ctx *c, uint32_t i, double worst, double goal)
 {
     const palette_skin_facts *f = c->facts;
     uint32_t bones = c->k->bones;
-    const bone_qpos *exact = c->poses + (size_t)i * bones;
+    const local_qpos *exact = c->poses + (size_t)i * bones;
     for (uint32_t j = 0; j < bones; ++j) {
         double e[16], b[16];
         if (f->reach[j] < 0) { /* it moves no vertex: no group reads its difference (its children are composed) */
@@ -332,7 +295,7 @@ static double probe(probe_ctx *c, double fps, double goal)
                 blend_compose(c->k, bind, c->rows[0], c->rows[1], (double)q / POINTS, c->blended);
                 worst = point_error(c, i * POINTS + q - 1, worst, goal);
             }
-            bone_qpos *swap = c->rows[0];
+            local_qpos *swap = c->rows[0];
             c->rows[0] = c->rows[1], c->rows[1] = swap;
         }
     }
@@ -469,17 +432,17 @@ double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const lo
 /* ---- a finished local palette, measured ---- */
 
 /* Palette row r's local rows of every bone, decoded as the runtime decodes them. */
-static void decode_row(const cb_palette *p, uint32_t r, bone_qpos *out)
+static void decode_row(const cb_palette *p, uint32_t r, local_qpos *out)
 {
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         double v[16];
         cb_palette_decode_values(p, p->texels, r, j, v);
-        out[j] = (bone_qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]};
+        out[j] = (local_qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]};
     }
 }
 
 /* Pose i of the batch against the palette's rows x and y blended at f, composed: the worst so far. */
-static double palette_point(probe_ctx *c, const cb_palette *p, const bone_qpos *x, const bone_qpos *y, double f, uint32_t i,
+static double palette_point(probe_ctx *c, const cb_palette *p, const local_qpos *x, const local_qpos *y, double f, uint32_t i,
                             double worst)
 {
     blend_compose(c->k, p->bind_positions, x, y, f, c->blended);
@@ -506,11 +469,11 @@ static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palett
             uint32_t next = first + i + 1;
             bool wrap = next == pc->frames; /* a loop's last interval ends on its first row */
             decode_row(p, pc->first_row + (wrap ? 0 : next), c->rows[1]);
-            const bone_qpos *to = pc->step ? c->rows[0] : c->rows[1]; /* held rows: the row alone */
+            const local_qpos *to = pc->step ? c->rows[0] : c->rows[1]; /* held rows: the row alone */
             for (uint32_t q = 1; q < POINTS; ++q)
                 *between = palette_point(c, p, c->rows[0], to, (double)q / POINTS, i * POINTS + q - 1, *between);
             if (!wrap) *at_rows = palette_point(c, p, c->rows[1], c->rows[1], 0, i * POINTS + POINTS - 1, *at_rows);
-            bone_qpos *swap = c->rows[0];
+            local_qpos *swap = c->rows[0];
             c->rows[0] = c->rows[1], c->rows[1] = swap;
         }
     }

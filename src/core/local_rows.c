@@ -14,15 +14,9 @@
 #include "cb_math.h"
 #include "crowdbake/runtime.h"
 #include "internal/plumbing.h"
+#include "local_pose.h"
 #include "local_rate.h" /* local_palette_errors */
 #include "palette_bake.h"
-
-/* A qpos transform v -> p + s rotate(q, v - b), b the bone's bind position. */
-typedef struct qpos {
-    cb_quat q;
-    cb_vec3 p;
-    double s;
-} qpos;
 
 void palette_local_parents(const cb_model *m, const cb_skin *skin, int32_t *parents)
 {
@@ -40,52 +34,24 @@ static cb_vec3 bind_of(const cb_palette *p, uint32_t bone)
     return (cb_vec3){b[0], b[1], b[2]};
 }
 
-static qpos qpos_of_values(const double v[8]) { return (qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]}; }
+static local_qpos qpos_of_values(const double v[8]) { return (local_qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]}; }
 
-/* a after b: the parent's transform a (about bind position ba) applied to its child's b. */
-static qpos compose(qpos a, cb_vec3 ba, qpos b)
-{
-    cb_vec3 d = cb_quat_rotate(a.q, cb_vec3_sub(b.p, ba));
-    return (qpos){cb_quat_mul(a.q, b.q), {a.p.x + a.s * d.x, a.p.y + a.s * d.y, a.p.z + a.s * d.z}, a.s * b.s};
-}
-
-/* The spec's conversion of a global child j under its global parent p (bind position bp). */
-static qpos localize(qpos parent, cb_vec3 bp, qpos child)
-{
-    cb_quat inv = {-parent.q.x, -parent.q.y, -parent.q.z, parent.q.w};
-    cb_vec3 d = cb_quat_rotate(inv, cb_vec3_sub(child.p, parent.p));
-    double k = parent.s != 0 ? 1 / parent.s : 0;
-    return (qpos){cb_quat_mul(inv, child.q), {bp.x + d.x * k, bp.y + d.y * k, bp.z + d.z * k}, child.s * k};
-}
-
-static void values_of_qpos(qpos t, double v[16])
+static void values_of_qpos(local_qpos t, double v[16])
 {
     cb_quat q = cb_quat_normalize(t.q);
     double out[8] = {q.x, q.y, q.z, q.w, t.p.x, t.p.y, t.p.z, t.s};
     memcpy(v, out, sizeof out);
 }
 
-/* b blended into a by f as the runtime blends two rows: the quaternion's hemisphere flipped to a's,
- * every term lerped, the quaternion normalised (nlerp). */
-static qpos blend_qpos(qpos a, qpos b, double f)
-{
-    double x[8] = {a.q.x, a.q.y, a.q.z, a.q.w, a.p.x, a.p.y, a.p.z, a.s}, y[8] = {b.q.x, b.q.y, b.q.z, b.q.w, b.p.x, b.p.y, b.p.z, b.s};
-    double sign = x[0] * y[0] + x[1] * y[1] + x[2] * y[2] + x[3] * y[3] < 0 ? -1 : 1;
-    for (int k = 0; k < 8; ++k) x[k] = x[k] * (1 - f) + (k < 4 ? sign : 1) * y[k] * f;
-    qpos t = qpos_of_values(x);
-    t.q = cb_quat_normalize(t.q);
-    return t;
-}
-
 /* One bone's local values at a row, or blended between two, as the runtime blends them. */
-static qpos local_at(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, uint32_t bone)
+static local_qpos local_at(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, uint32_t bone)
 {
     double a[16], b[16];
     cb_palette_decode_values(p, texels, r0, bone, a);
-    qpos t = qpos_of_values(a);
+    local_qpos t = qpos_of_values(a);
     if (r1 == r0 && fr == 0) return t.q = cb_quat_normalize(t.q), t;
     cb_palette_decode_values(p, texels, r1, bone, b);
-    return blend_qpos(t, qpos_of_values(b), fr);
+    return local_qpos_blend(t, qpos_of_values(b), fr);
 }
 
 /* The bone's composed (global) values: its local transform composed with each ancestor's, walked
@@ -94,10 +60,10 @@ static qpos local_at(const cb_palette *p, const void *texels, uint32_t r0, uint3
 void palette_local_composed(const cb_palette *p, const void *texels, uint32_t r0, uint32_t r1, double fr, uint32_t bone,
                             double v[16])
 {
-    qpos acc = local_at(p, texels, r0, r1, fr, bone);
+    local_qpos acc = local_at(p, texels, r0, r1, fr, bone);
     int32_t a = p->parents[bone];
     for (uint32_t steps = 0; a >= 0 && (uint32_t)a < p->bone_count && steps < p->bone_count; ++steps) {
-        acc = compose(local_at(p, texels, r0, r1, fr, (uint32_t)a), bind_of(p, (uint32_t)a), acc);
+        acc = local_qpos_compose(local_at(p, texels, r0, r1, fr, (uint32_t)a), bind_of(p, (uint32_t)a), acc);
         a = p->parents[a];
     }
     values_of_qpos(acc, v);
@@ -110,12 +76,12 @@ void palette_local_composed(const cb_palette *p, const void *texels, uint32_t r0
 bool palette_local_matrices(const cb_palette *p, const void *texels, const palette_frame *to,
                             const palette_frame *from, double fade, double *out)
 {
-    qpos *pose = malloc((size_t)p->bone_count * sizeof *pose);
+    local_qpos *pose = malloc((size_t)p->bone_count * sizeof *pose);
     unsigned char *done = calloc(p->bone_count ? p->bone_count : 1, 1);
     if (!pose || !done) return free(pose), free(done), false;
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         pose[j] = local_at(p, texels, to->row0, to->row1, to->fr, j);
-        if (from) pose[j] = blend_qpos(local_at(p, texels, from->row0, from->row1, from->fr, j), pose[j], fade);
+        if (from) pose[j] = local_qpos_blend(local_at(p, texels, from->row0, from->row1, from->fr, j), pose[j], fade);
     }
     bool progress = true;
     for (uint32_t pass = 0; progress && pass <= p->bone_count; ++pass) {
@@ -123,7 +89,7 @@ bool palette_local_matrices(const cb_palette *p, const void *texels, const palet
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             int32_t a = p->parents[j];
             if (done[j] || (a >= 0 && !done[a])) continue;
-            if (a >= 0) pose[j] = compose(pose[a], bind_of(p, (uint32_t)a), pose[j]);
+            if (a >= 0) pose[j] = local_qpos_compose(pose[a], bind_of(p, (uint32_t)a), pose[j]);
             done[j] = 1, progress = true;
         }
     }
@@ -138,7 +104,7 @@ bool palette_local_matrices(const cb_palette *p, const void *texels, const palet
 
 /* ---- the conversion of a global float qpos palette ---- */
 
-static qpos global_at(const cb_palette *p, uint32_t row, uint32_t bone)
+static local_qpos global_at(const cb_palette *p, uint32_t row, uint32_t bone)
 {
     double v[16];
     cb_palette_decode_values(p, p->texels, row, bone, v);
@@ -153,9 +119,9 @@ static void local_rows(const cb_palette *g, double *out)
         for (uint32_t f = 0; f < g->clips[c].frames; ++f) {
             uint32_t r = g->clips[c].first_row + f;
             for (uint32_t j = 0; j < g->bone_count; ++j) {
-                qpos t = global_at(g, r, j);
+                local_qpos t = global_at(g, r, j);
                 int32_t a = g->parents[j];
-                if (a >= 0) t = localize(global_at(g, r, (uint32_t)a), bind_of(g, (uint32_t)a), t);
+                if (a >= 0) t = local_qpos_localize(global_at(g, r, (uint32_t)a), bind_of(g, (uint32_t)a), t);
                 double *v = out + ((size_t)r * g->bone_count + j) * 8, *before = v - (size_t)g->bone_count * 8;
                 double w[8] = {t.q.x, t.q.y, t.q.z, t.q.w, t.p.x, t.p.y, t.p.z, t.s};
                 if (f > 0 && w[0] * before[0] + w[1] * before[1] + w[2] * before[2] + w[3] * before[3] < 0)
