@@ -32,6 +32,7 @@ cb_bake_options cb_default_bake_options(void)
     o.error_goal = 0;
     o.fit = false;
     o.measure_all = false;
+    o.bone_space = CB_BONE_SPACE_GLOBAL;
     o.texel_memory = (cb_texel_memory){NULL, NULL};
     return o;
 }
