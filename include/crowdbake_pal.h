@@ -572,12 +572,12 @@ int cbpal_get_bone(const cbpal_file *f, uint32_t i, cbpal_bone *out)
     out->name = (const char *)f->data + f->header.strings_offset + cbpal__u32(b);
     out->parent = (int32_t)cbpal__u32(b + 8);
     const cbpal_header *h = &f->header;
-    const unsigned char *o = f->data + h->offset_table_offset + (uint64_t)i * 12;
+    int relative = (h->flags & CBPAL_FLAG_POSITIONS_RELATIVE) != 0; /* else the offset table's offset is unchecked */
+    const unsigned char *o = relative && h->version >= 3 ? f->data + h->offset_table_offset + (uint64_t)i * 12 : NULL;
     const unsigned char *e = h->range_table_offset ? f->data + h->range_table_offset + (uint64_t)i * CBPAL_RANGE_SIZE : NULL;
     for (int k = 0; k < 3; ++k) {
         out->bind_position[k] = cbpal__f32(b + 16 + 4 * k);
-        out->position_offset[k] = !(h->flags & CBPAL_FLAG_POSITIONS_RELATIVE) ? 0.0f
-                                  : h->version >= 3 ? cbpal__f32(o + 4 * k) : out->bind_position[k];
+        out->position_offset[k] = !relative ? 0.0f : o ? cbpal__f32(o + 4 * k) : out->bind_position[k];
         out->pos_min[k] = e ? cbpal__f32(e + 4 * k) : 0.0f;
         out->pos_max[k] = e ? cbpal__f32(e + 16 + 4 * k) : 0.0f;
     }
