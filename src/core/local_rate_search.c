@@ -13,11 +13,6 @@
 /* The analysis the clip is framed from (rate_search.c's: the lowest common rate, the likeliest
  * within the frame limit). */
 #define ANALYSIS_FPS 2.0
-/* A clip's pose cache for the bake after the choice holds at most this much, and all of them
- * together at most KEPT_BYTES (past it a clip's is freed: the bake samples that clip again). The
- * same budgets as rate_search.c's. */
-#define CLIP_POSE_BYTES ((size_t)32 << 20)
-#define KEPT_BYTES ((size_t)128 << 20)
 
 typedef struct local_search {
     const cb_model *model;
@@ -40,18 +35,8 @@ typedef struct local_search {
 static pose_cache *clip_cache(local_search *ls, uint32_t i)
 {
     if (!ls->keep) return NULL;
-    if (!ls->keep->poses[i]) ls->keep->poses[i] = palette_probe_poses(ls->skeleton.bones, CLIP_POSE_BYTES);
+    if (!ls->keep->poses[i]) ls->keep->poses[i] = palette_probe_poses(ls->skeleton.bones, SEARCH_CLIP_POSE_BYTES);
     return ls->keep->poses[i];
-}
-
-/* A kept cache past the budget is freed: the bake samples that clip again (the same bits). */
-static void settle_kept(local_search *ls, uint32_t i)
-{
-    if (!ls->keep || !ls->keep->poses[i]) return;
-    size_t bytes = (size_t)pose_cache_count(ls->keep->poses[i]) * (16 * ls->skeleton.bones + 1 + 5 * ls->skeleton.bones) *
-                   sizeof(double);
-    if (atomic_fetch_add(&ls->kept_bytes, bytes) + bytes > KEPT_BYTES)
-        pose_cache_free(ls->keep->poses[i]), ls->keep->poses[i] = NULL;
 }
 
 static cb_status choose_clip(local_search *ls, cb_sampler *s, uint32_t i, cb_error *err)
@@ -70,7 +55,7 @@ static cb_status choose_clip(local_search *ls, cb_sampler *s, uint32_t i, cb_err
     if (local_clip_rate(s, ls->facts, &ls->skeleton, &info, ls->o->root_motion, cache, goal->max_error_mm / 1000 * ls->facts->height,
                         goal->max_fps, &r, err))
         return err->status;
-    settle_kept(ls, i);
+    if (ls->keep) search_keep_settle(&ls->keep->poses[i], ls->skeleton.bones, &ls->kept_bytes);
     if (r.not_qpos) atomic_store(&ls->not_qpos, true);
     plan->fps = r.fps, plan->fit = false; /* local rows are the sampled poses, converted */
     ls->choices[i] = (cb_rate_choice){.met = r.met, .error = r.error, .error_mm = r.error_mm, .fps_needed = r.fps_needed};

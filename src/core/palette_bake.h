@@ -6,6 +6,7 @@
 #define CB_PALETTE_BAKE_H
 
 #include <math.h>
+#include <stdatomic.h>
 
 #include "crowdbake/palette.h"
 #include "cb_math.h"
@@ -304,6 +305,16 @@ typedef struct search_keep {
 } search_keep;
 search_keep *search_keep_create(uint32_t n);
 void search_keep_free(search_keep *keep);
+/* What a rate search (rate_search.c, local_rate_search.c) samples a clip's poses into: one clip's
+ * cache holds at most SEARCH_CLIP_POSE_BYTES (Cow's longest clip, 6 s of 42 joints, keeps 912
+ * poses: 6.4 MB with their qpos derivations; 32 MB is 950 poses of 200 joints; past it, probes
+ * sample the times it has no room for as without one), and the caches kept for the bake all
+ * together at most SEARCH_KEPT_POSE_BYTES (Cow's twelve clips keep about 50 MB, and spare its bake
+ * 150 M of its 750 M instructions). search_keep_settle adds a finished clip's cache to
+ * *kept_bytes and frees it (NULL) past that budget: the bake samples that clip again, the same bits. */
+#define SEARCH_CLIP_POSE_BYTES ((size_t)32 << 20)
+#define SEARCH_KEPT_POSE_BYTES ((size_t)128 << 20)
+void search_keep_settle(pose_cache **cache, uint32_t bones, atomic_size_t *kept_bytes);
 /* palette_plan.c: the facts of the sampler's skin: keep's, built there the first time (keep
  * NULL, or kept for another model or skin: built into *own, which the caller frees with
  * palette_skin_facts_free; *own is zeroed either way); NULL on failure (err set). */

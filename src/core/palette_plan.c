@@ -275,6 +275,13 @@ void search_keep_free(search_keep *keep)
     free(keep);
 }
 
+void search_keep_settle(pose_cache **cache, uint32_t bones, atomic_size_t *kept_bytes)
+{
+    if (!*cache) return;
+    size_t bytes = (size_t)pose_cache_count(*cache) * (16 * bones + 1 + 5 * bones) * sizeof(double);
+    if (atomic_fetch_add(kept_bytes, bytes) + bytes > SEARCH_KEPT_POSE_BYTES) pose_cache_free(*cache), *cache = NULL;
+}
+
 const palette_skin_facts *search_kept_facts(const search_keep *keep, const cb_sampler *sampler)
 {
     bool same = keep && keep->has_facts && keep->model == cb_sampler_model(sampler) && keep->skin == cb_sampler_skin(sampler);

@@ -38,11 +38,6 @@ typedef struct clip_search {
     bool fitted_follow;              /* fitted rows are probed after sampled ones at each rate (CB_ROWS_BEST) */
 } clip_search;
 
-/* A search thread's pose cache holds at most this much (Cow's longest clip, 6 s of 42 joints,
- * keeps 912 poses: 6.4 MB with their qpos derivations; 32 MB is 950 poses of 200 joints); past
- * it, probes sample the times it has no room for as without one. */
-#define SEARCH_POSE_BYTES ((size_t)32 << 20)
-
 /* The visible error of the clip baked alone at `fps` with the rows cs->fit says: the bake
  * measures it (the encoding, and the blend halfway between every two rows; fitted rows at the
  * quarter points too). goal > 0: exact when within it; above it, the measurement may stop early
@@ -412,7 +407,7 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
 
 static pose_cache *search_pose_cache(const cb_sampler *s)
 {
-    return palette_probe_poses(cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count, SEARCH_POSE_BYTES);
+    return palette_probe_poses(cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count, SEARCH_CLIP_POSE_BYTES);
 }
 
 void palette_seed_analysis(pose_cache **kept, uint32_t i, const cb_sampler *s, const cb_clip_info *analysis, double fps,
@@ -464,10 +459,6 @@ typedef struct rate_search {
     const bool *needed_later; /* per clip, or NULL: clips whose caller searches on where they miss */
 } rate_search;
 
-/* What the caches kept for a bake may hold together (past it a clip's is freed): Cow's twelve
- * clips keep about 50 MB, and spare its bake 150 M of its 750 M instructions. */
-#define KEPT_POSE_BYTES ((size_t)128 << 20)
-
 /* The cache clip i's search samples into: the thread's own (`mine`, emptied for each clip), or,
  * when the caller keeps them, the clip's own. */
 static pose_cache *clip_cache(rate_search *rs, uint32_t i, pose_cache *mine, const cb_sampler *s)
@@ -475,15 +466,6 @@ static pose_cache *clip_cache(rate_search *rs, uint32_t i, pose_cache *mine, con
     if (!rs->kept) return mine;
     if (!rs->kept[i]) rs->kept[i] = search_pose_cache(s);
     return rs->kept[i];
-}
-
-/* A kept cache past the budget is freed: the bake samples that clip again. */
-static void settle_kept(rate_search *rs, uint32_t i)
-{
-    if (!rs->kept || !rs->kept[i]) return;
-    uint32_t bones = rs->model->skins[rs->skin].joint_count;
-    size_t bytes = (size_t)pose_cache_count(rs->kept[i]) * (16 * bones + 1 + 5 * bones) * sizeof(double);
-    if (atomic_fetch_add(&rs->kept_bytes, bytes) + bytes > KEPT_POSE_BYTES) pose_cache_free(rs->kept[i]), rs->kept[i] = NULL;
 }
 
 /* The highest rate the search may probe a clip at: its goal's, checked by palette_choose_rates
@@ -531,7 +513,7 @@ static int rate_worker(void *arg)
                                           max_fps_of(&rs->goals[i]), rs->o->fit ? CB_ROWS_FITTED : rs->goals[i].rows, c,
                                           rs->facts, clip_cache(rs, i, poses, s), !rs->kept, batch,
                                           rs->needed_later && rs->needed_later[i], &rs->errors[i]);
-        settle_kept(rs, i);
+        if (rs->kept) search_keep_settle(&rs->kept[i], rs->model->skins[rs->skin].joint_count, &rs->kept_bytes);
         rs->plan[i].fit = c->fitted;
         c->error_mm = cb_mm_per_m(c->error, rs->height);
     }
