@@ -110,6 +110,20 @@ function referenceFrames(csv) {
     return frames;
 }
 
+// Half a reference frame past each of the STEP-keyed SimpleSkin's reference times with no key between (its keys lie
+// every 0.5 s), the palette's matrices are the reference's: a STEP channel holds its value there.
+function stepReferenceHeld(pal) {
+    let worst = 0, compared = 0;
+    for (const f of referenceFrames('../shared/reference/gltf_simple_skin_step.fps30.csv')) {
+        const t = f.t + 1 / 60;
+        if (Math.floor(f.t * 2 + 1e-6) !== Math.floor(t * 2 - 1e-6)) continue;
+        f.joints.forEach((ref, j) => boneMatrix(pal, 0, t, j).forEach((x, e) => { worst = Math.max(worst, Math.abs(x - ref[e])); }));
+        ++compared;
+    }
+    assert.ok(compared > 100 && worst < 1e-4, `${compared} times, worst ${worst}`);
+    return { compared, worst };
+}
+
 test('a STEP-keyed clip (version 4) holds its rows: its row alone between rows, and the reference between its keys', () => {
     const model = '../shared/assets/simpleskin-step-luanti/gltf_simple_skin_step.gltf';
     const pal = readPal(bake(model, path.join(dir, 'step.pal'), ['--fps', 'auto'])); // auto: rows at its key times
@@ -124,16 +138,7 @@ test('a STEP-keyed clip (version 4) holds its rows: its row alone between rows, 
             row.forEach((x, e) => assert.ok(Math.abs(m[e] - x) < 1e-6, `row ${r} bone ${j} [${e}]`));
         }
     }
-    // Half a reference frame past each of its times with no key between (the keys lie every 0.5 s), the matrices are
-    // the reference's: a STEP channel holds its value there.
-    let worst = 0, compared = 0;
-    for (const f of referenceFrames('../shared/reference/gltf_simple_skin_step.fps30.csv')) {
-        const t = f.t + 1 / 60;
-        if (Math.floor(f.t * 2 + 1e-6) !== Math.floor(t * 2 - 1e-6)) continue;
-        f.joints.forEach((ref, j) => boneMatrix(pal, 0, t, j).forEach((x, e) => { worst = Math.max(worst, Math.abs(x - ref[e])); }));
-        ++compared;
-    }
-    assert.ok(compared > 100 && worst < 1e-4, `${compared} times, worst ${worst}`);
+    stepReferenceHeld(pal);
 });
 
 test('local rows hold a STEP-keyed clip\'s rows too: the reference between its keys, composed', () => {
@@ -141,14 +146,7 @@ test('local rows hold a STEP-keyed clip\'s rows too: the reference between its k
     const pal = readPal(bake(model, path.join(dir, 'step-local.pal'), ['--fps', 'auto', '--bone-space', 'local']));
     const clip = pal.clips[0];
     assert.ok(hasLocalRows(pal.header) && clip.step);
-    let worst = 0, compared = 0;
-    for (const f of referenceFrames('../shared/reference/gltf_simple_skin_step.fps30.csv')) {
-        const t = f.t + 1 / 60;
-        if (Math.floor(f.t * 2 + 1e-6) !== Math.floor(t * 2 - 1e-6)) continue;
-        f.joints.forEach((ref, j) => boneMatrix(pal, 0, t, j).forEach((x, e) => { worst = Math.max(worst, Math.abs(x - ref[e])); }));
-        ++compared;
-    }
-    assert.ok(compared > 100 && worst < 1e-4, `${compared} times, worst ${worst}`);
+    const { compared, worst } = stepReferenceHeld(pal);
     console.log(`  held local rows: ${compared} times between keys within ${worst.toExponential(2)} of the reference`);
 });
 
