@@ -114,6 +114,8 @@ all: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(SAMPLE_GLB)
 # ---- dependencies --------------------------------------------------------------------
 DEPS_STAMP := $(BUILD)/.deps-ok
 deps: $(DEPS_STAMP)
+# apt-get waits for dpkg's lock: under make -j a recursive make of this tree (the Godot demo's) may
+# be installing the same packages, and apt-get would otherwise fail at once ("Could not get lock").
 $(DEPS_STAMP): Makefile
 	@missing=$$(for p in $(DEB_PACKAGES); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q 'install ok installed' || echo $$p; done); \
 	missing=$$(echo $$missing); \
@@ -121,8 +123,9 @@ $(DEPS_STAMP): Makefile
 	  if [ "$$(id -u)" = 0 ]; then \
 	    echo "crowdbake: installing $$missing"; \
 	    export DEBIAN_FRONTEND=noninteractive; \
-	    apt-get install -y --no-install-recommends $$missing >/dev/null 2>&1 || \
-	      { apt-get update -qq && apt-get install -y --no-install-recommends $$missing; } || exit 1; \
+	    lock='-o DPkg::Lock::Timeout=900'; \
+	    apt-get install $$lock -y --no-install-recommends $$missing >/dev/null 2>&1 || \
+	      { apt-get update $$lock -qq && apt-get install $$lock -y --no-install-recommends $$missing; } || exit 1; \
 	  else \
 	    echo "crowdbake: these Debian packages are missing; install them as root, then run make again:" >&2; \
 	    if command -v sudo >/dev/null; then echo "sudo apt-get install -y --no-install-recommends $$missing" >&2; \
