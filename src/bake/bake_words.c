@@ -154,15 +154,20 @@ void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result, 
                           cb_warnings *notes)
 {
     uint32_t chosen = 0, fitted = 0;
-    double lo = INFINITY, hi = 0;
+    double lo = INFINITY, hi = 0, tightest = INFINITY, loosest = 0; /* rates; budgets (a clip may have its own) */
     for (uint32_t i = 0; i < result->budget_count && i < job->plan_count; ++i) {
         if (!cb_bake_job_clip_auto(job, i)) continue;
-        chosen++, fitted += result->budgets[i].fitted;
-        lo = fmin(lo, result->budgets[i].fps), hi = fmax(hi, result->budgets[i].fps);
+        const cb_clip_budget *b = &result->budgets[i];
+        chosen++, fitted += b->fitted;
+        lo = fmin(lo, b->fps), hi = fmax(hi, b->fps);
+        tightest = fmin(tightest, b->max_error_mm), loosest = fmax(loosest, b->max_error_mm);
     }
+    char budget[64];
+    if (tightest == loosest) snprintf(budget, sizeof budget, "%g mm/m", tightest);
+    else snprintf(budget, sizeof budget, "%g-%g mm/m, per clip", tightest, loosest);
     if (chosen)
-        cb_warn(notes, "note", "%u clip%s error-bounded (max_error %g mm/m): %.3g-%.3g fps, %u with fitted rows, %u sampled",
-                chosen, chosen == 1 ? "" : "s", job->settings.max_error_mm, lo, hi, fitted, chosen - fitted);
+        cb_warn(notes, "note", "%u clip%s error-bounded (max_error %s): %.3g-%.3g fps, %u with fitted rows, %u sampled",
+                chosen, chosen == 1 ? "" : "s", budget, lo, hi, fitted, chosen - fitted);
     for (uint32_t i = 0; i < result->budget_count; ++i) {
         const cb_clip_budget *b = &result->budgets[i];
         if (!b->over) continue;

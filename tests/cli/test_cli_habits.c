@@ -343,6 +343,8 @@ static void test_catalog_bake_progress(void **state)
         assert_contains(counted);
     }
     assert_int_equal(system("python3 -c 'import json; json.load(open(\"" TMP "/bake.json\"))'"), 0);
+    /* The goat's death has its own budget (max_error = 2): the note gives the range, not the bake's 1 alone. */
+    assert_int_equal(run_command("grep -c 'error-bounded (max_error 1-2 mm/m, per clip)' " TMP "/bake.json", NULL, 0), 0);
     static const char *const silent[] = {"--json", "--json -q", "-q", "--json -v -q"};
     for (size_t i = 0; i < COUNT_OF(silent); ++i) {
         snprintf(cmd, sizeof cmd, "bake " TMP "/progress.toml --force %s", silent[i]);
