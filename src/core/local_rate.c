@@ -16,9 +16,11 @@
  * composed from exact local rows they are the exact pose to rounding; the bake's own measurement
  * of the finished palette adds what quantisation costs.
  *
- * Root motion is left out of the measurement: an in-place bake takes the same horizontal offset
- * off every bone's global transform, which leaves every local row but the root's unchanged and
- * moves the root's linearly between rows (its lerp is exact), so the error is the same. */
+ * The poses are framed as the bake frames them (its root motion): an in-place bake takes the same
+ * horizontal offset off every bone's global transform, which leaves every local row but the
+ * root's unchanged and moves the root's linearly between rows (its lerp is exact), so the error
+ * is the same within an interval; but a loop that keeps its travel ends away from its first row,
+ * which its last interval blends into (probe). */
 #include "local_rate.h"
 
 #include <math.h>
@@ -139,6 +141,7 @@ typedef struct probe_ctx {
     double *qs;               /* bones x 5: a pose's quaternions and scales (palette_qpos_similarity_pose) */
     local_qpos *poses;         /* CB_SAMPLE_BATCH x bones: global rows at a batch's times */
     local_qpos *rows[2];       /* bones each: the local rows either side of the interval in hand */
+    local_qpos *first_row;     /* bones: the clip's first row, where a loop's last interval ends */
     local_qpos *blended;       /* bones: the blend composed */
     cb_similarity *sims;      /* CB_SAMPLE_BATCH x bones */
     double *diff;             /* bones x 16: exact less blended */
@@ -157,8 +160,8 @@ static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts
 {
     size_t n = k->bones ? k->bones : 1;
     size_t sizes[] = {CB_SAMPLE_BATCH * n * sizeof(local_qpos), n * sizeof(local_qpos), n * sizeof(local_qpos),
-                      n * sizeof(local_qpos), CB_SAMPLE_BATCH * n * sizeof(cb_similarity), n * 16 * sizeof(double),
-                      n * sizeof(cb_joint_error), n * 5 * sizeof(double),
+                      n * sizeof(local_qpos), n * sizeof(local_qpos), CB_SAMPLE_BATCH * n * sizeof(cb_similarity),
+                      n * 16 * sizeof(double), n * sizeof(cb_joint_error), n * 5 * sizeof(double),
                       (CB_SAMPLE_BATCH + 1) * (n * 16 + 1) * sizeof(double), CB_SAMPLE_BATCH * n * 16 * sizeof(double)};
     size_t total = 0;
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) total += (sizes[i] + 63) / 64 * 64;
@@ -167,9 +170,9 @@ static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts
                      .keep = similar ? NULL : keep, .similar = similar, .block = malloc(total)};
     if (!c->block) return false;
     char *at = c->block;
-    void **parts[] = {(void **)&c->poses, (void **)&c->rows[0], (void **)&c->rows[1], (void **)&c->blended,
-                      (void **)&c->sims, (void **)&c->diff, (void **)&c->joints, (void **)&c->qs, (void **)&c->lanes,
-                      (void **)&c->pose_room};
+    void **parts[] = {(void **)&c->poses, (void **)&c->rows[0], (void **)&c->rows[1], (void **)&c->first_row,
+                      (void **)&c->blended, (void **)&c->sims, (void **)&c->diff, (void **)&c->joints, (void **)&c->qs,
+                      (void **)&c->lanes, (void **)&c->pose_room};
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) *parts[i] = at, at += (sizes[i] + 63) / 64 * 64;
     if (similar) return true;
     bool *every = malloc(n * sizeof *every);
@@ -271,8 +274,15 @@ static double point_error(probe_ctx *c, uint32_t i, double worst, double goal)
 /* The worst error of the clip's local rows at `fps` at the quarter points of every row interval,
  * framed as the bake frames them: N = round(D fps) steps, row i at t0 + i D / N. The points are
  * frames of the clip framed at 4N steps (row i is frame 4i, the same double; its midpoint, where
- * the bake measures, frame 4i + 2); a loop's last interval ends on frame 4N, t0 + D, where the
- * sampler's period wraps to its first pose. Stops above `goal` (INFINITY: in full). */
+ * the bake measures, frame 4i + 2). A loop's last interval blends into its first row, as the
+ * bake ships it (its rows are frames 0 .. 4N - 4): the pose at frame 4N, t0 + D, is the first
+ * pose only where the sampler wraps (a loop without a closing key). A closed loop ends on its
+ * closing key, and with its travel kept (root motion keep, or a loop correction that keeps a
+ * drift too small to take it in place) that pose is the first moved by the travel: the palette
+ * pulls the body back over the last interval, which blending into the pose at t0 + D missed
+ * (Cow's Gallop_Jump: 0.256 mm/m chosen, 0.531 measured in the float palette; its 3.2 mm drift,
+ * 0.71 mm/m, reaches 3/4 of it at the last quarter point). Stops above `goal` (INFINITY: in
+ * full). */
 static double probe(probe_ctx *c, double fps, double goal)
 {
     cb_clip_info framing = *c->clip;
@@ -283,6 +293,7 @@ static double probe(probe_ctx *c, double fps, double goal)
     double worst = 0;
     sample_frames(c, &framing, &row0, 1, &row_kept);
     to_local(c->k, bind, c->poses, c->rows[0]);
+    memcpy(c->first_row, c->rows[0], bones * sizeof *c->first_row);
     for (uint32_t first = 0; first < steps && !(worst > goal); first += INTERVALS_A_BATCH) {
         uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH];
         bool kept[CB_SAMPLE_BATCH];
@@ -290,7 +301,10 @@ static double probe(probe_ctx *c, double fps, double goal)
             frames[i] = POINTS * first + i + 1, kept[i] = true;
         sample_frames(c, &framing, frames, count * POINTS, kept);
         for (uint32_t i = 0; i < count && !(worst > goal); ++i) {
-            to_local(c->k, bind, c->poses + (size_t)(i * POINTS + POINTS - 1) * bones, c->rows[1]);
+            if (c->clip->loops && first + i + 1 == steps) /* the wrap: into the first row */
+                memcpy(c->rows[1], c->first_row, bones * sizeof *c->rows[1]);
+            else
+                to_local(c->k, bind, c->poses + (size_t)(i * POINTS + POINTS - 1) * bones, c->rows[1]);
             for (uint32_t q = 1; q < POINTS && !(worst > goal); ++q) {
                 blend_compose(c->k, bind, c->rows[0], c->rows[1], (double)q / POINTS, c->blended);
                 worst = point_error(c, i * POINTS + q - 1, worst, goal);
