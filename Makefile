@@ -346,8 +346,9 @@ $(BUILD)/tests/%: %.c $(wildcard tests/*.h) $(wildcard tests/runtimes/*.h) $(TOO
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TEST_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(TEST_EXTRA_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
-# The HLSL runtime's tests drive Vulkan (Mesa's lavapipe) and run glslangValidator and spirv-val.
-$(BUILD)/tests/test_hlsl_vulkan $(BUILD)/tests/test_hlsl_conformance $(BUILD)/tests/test_unreal_shader: TEST_EXTRA_LIBS := -lvulkan
+# The HLSL runtime's tests drive Vulkan (Mesa's lavapipe) and run glslangValidator and spirv-val; so does the Unity
+# package's (its bone pass kernel).
+$(BUILD)/tests/test_hlsl_vulkan $(BUILD)/tests/test_hlsl_conformance $(BUILD)/tests/test_unreal_shader $(BUILD)/tests/test_unity_cs: TEST_EXTRA_LIBS := -lvulkan
 
 # The reader header alone, strict C99, as an engine would compile it: no libcrowdbake.
 $(BUILD)/tests/standalone_pal_reader: tests/runtimes/standalone_pal_reader.c include/crowdbake_pal.h include/crowdbake_pal_runtime.h $(DEPS_STAMP)

@@ -3,7 +3,11 @@
  * reader (include/crowdbake_pal.h) on Fox and Cow in every layout x precision, and Python's json on
  * the Cow roster; its herd's matrices, cross-fades, speed changes and footsteps equal what the C
  * reader gives for the same instance numbers; the Unity-facing code compiles against stubs of the
- * Unity API it calls (tests/runtimes/unity/stubs, each signature as Unity documents it). */
+ * Unity API it calls (tests/runtimes/unity/stubs, each signature as Unity documents it); the herd's bone
+ * pass (its compute kernel and the shaders' CB_BONE_TEXTURE variant) compiles with glslang and validates,
+ * its kernel runs on Mesa's lavapipe (Vulkan) equal to the C runtime, and its rule and layout
+ * (Runtime/Core/BonePass.cs) take the WebGL2 runtime's thresholds and decisions. No Unity Editor runs
+ * here: nothing of this is drawn by Unity. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
@@ -12,10 +16,13 @@
 #include "crowdbake_pal.h"
 #include "runtimes/bone_order.h"
 #include "runtimes/conformance.h"
+#include "runtimes/hlsl_harness.h"
 
 #define TMP TEST_TMP "/unity_cs"
 #define CHECK_EXE TMP "/CrowdbakeCheck.exe"
 #define PKG "runtimes/unity"
+
+VKC_TEST_DEVICE("the Unity bone pass kernel")
 
 static void run_or_fail(const char *cmd)
 {
@@ -446,11 +453,14 @@ static void test_unity_facing_code_compiles(void **state)
 {
     (void)state;
     char cmd[2048];
-    snprintf(cmd, sizeof cmd,
-             "mkdir -p %s && mcs -langversion:7.2 -warnaserror -nologo -target:library -out:%s/Crowdbake.Unity.dll tests/runtimes/unity/stubs/*.cs "
-             "%s/Runtime/*.cs %s/Runtime/Core/*.cs %s/Editor/*.cs '%s/Samples~/Herd/'*.cs 2>&1",
-             TMP, TMP, PKG, PKG, PKG, PKG);
-    run_or_fail(cmd);
+    /* As a player build, then as the Editor compiles it (UNITY_EDITOR: CrowdbakeHerd.Reset finds the bone pass kernel). */
+    for (int editor = 0; editor < 2; ++editor) {
+        snprintf(cmd, sizeof cmd,
+                 "mkdir -p %s && mcs -langversion:7.2 -warnaserror -nologo %s -target:library -out:%s/Crowdbake.Unity.dll "
+                 "tests/runtimes/unity/stubs/*.cs %s/Runtime/*.cs %s/Runtime/Core/*.cs %s/Editor/*.cs '%s/Samples~/Herd/'*.cs 2>&1",
+                 TMP, editor ? "-define:UNITY_EDITOR" : "", TMP, PKG, PKG, PKG, PKG);
+        run_or_fail(cmd);
+    }
 }
 
 /* The shader glue (CrowdbakeUnity.hlsl, CrowdbakeShaderGraph.hlsl) over the shared HLSL runtime:
@@ -480,6 +490,156 @@ static void test_shader_glue_compiles(void **state)
         run_or_fail(cmd);
     }
     printf("  Unity shader glue: 9 encodings and local rows (qpos u16, float) compile (glslang, HLSL) and validate (spirv-val)\n");
+}
+
+/* How many lines of `text` contain `needle`. */
+static unsigned count_lines_with(const char *text, const char *needle)
+{
+    unsigned n = 0;
+    for (const char *p = text; (p = strstr(p, needle)) != NULL; p += strlen(needle)) ++n;
+    return n;
+}
+
+/* glslangValidator -D -V -S STAGE -e ENTRY DEFINES FILE, then spirv-val; returns how many OpImageWrite the SPIR-V
+ * has (spirv-dis): the bone pass kernel's three stores must survive. */
+static unsigned compile_and_validate(const char *stage, const char *entry, const char *defines, const char *file)
+{
+    char cmd[2048], log[256];
+    snprintf(cmd, sizeof cmd, "glslangValidator -D -V -S %s -e %s %s -o %s/bone.spv %s 2>&1 && spirv-val %s/bone.spv 2>&1", stage, entry,
+             defines, TMP, file, TMP);
+    run_or_fail(cmd);
+    snprintf(cmd, sizeof cmd, "spirv-dis %s/bone.spv | grep -c OpImageWrite || true", TMP);
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s:\n%s", cmd, log);
+    return (unsigned)strtoul(log, NULL, 10);
+}
+
+/* The bone pass's shaders: the compute kernel (CrowdbakeBonePass.compute, including the shared runtime as the
+ * package does) in every encoding and for local rows, its three texture stores kept; the draw's CB_BONE_TEXTURE
+ * variant of the glue (the .shader files' CrowdbakeSkin and Shader Graph's) likewise; and the keywords: the kernel
+ * compiles the palette's encodings as the shaders do, and both shaders (every pass: the keyword is in the built-in
+ * shader's CGPROGRAM, which addshadow reuses, and in URP's HLSLINCLUDE) have the CB_BONE_TEXTURE variant. */
+static void test_bone_pass_shaders_compile(void **state)
+{
+    (void)state;
+    run_or_fail("mkdir -p " TMP);
+    const char *layouts[] = {"MAT4", "AFFINE", "QPOS"}, *precisions[] = {"FLOAT", "HALF", "U16"};
+    const char *kernel = PKG "/Runtime/Shaders/CrowdbakeBonePass.compute", *glue = "tests/runtimes/unity/unity_glue.hlsl";
+    char defines[256];
+    unsigned kernels = 0, variants = 0;
+    for (int l = 0; l < 3; ++l)
+        for (int p = 0; p < 3; ++p) {
+            snprintf(defines, sizeof defines, "-DCB_LAYOUT_%s -DCB_PRECISION_%s %s", layouts[l], precisions[p],
+                     p == 1 ? "-DCB_POSITIONS_RELATIVE" : "");
+            assert_int_equal(compile_and_validate("comp", "CrowdbakeBonePass", defines, kernel), 3);
+            ++kernels;
+            strcat(defines, " -DCB_BONE_TEXTURE");
+            compile_and_validate("vert", "main", defines, glue);
+            ++variants;
+        }
+    for (int p = 0; p < 3; p += 2) { /* local rows: the kernel composes each bone's chain */
+        snprintf(defines, sizeof defines, "-DCB_LAYOUT_QPOS -DCB_PRECISION_%s -DCB_LOCAL_ROWS", precisions[p]);
+        assert_int_equal(compile_and_validate("comp", "CrowdbakeBonePass", defines, kernel), 3);
+        ++kernels;
+        strcat(defines, " -DCB_BONE_TEXTURE");
+        compile_and_validate("vert", "main", defines, glue);
+        ++variants;
+    }
+    char *compute = read_whole_file(kernel, NULL), *builtin = read_whole_file(PKG "/Runtime/Shaders/CrowdbakeHerd.shader", NULL),
+         *urp = read_whole_file(PKG "/Runtime/Shaders/CrowdbakeHerdURP.shader", NULL);
+    assert_non_null(compute), assert_non_null(builtin), assert_non_null(urp);
+    const char *encodings[] = {"#pragma multi_compile_local CB_LAYOUT_MAT4 CB_LAYOUT_AFFINE CB_LAYOUT_QPOS\n",
+                               "#pragma multi_compile_local CB_PRECISION_FLOAT CB_PRECISION_HALF CB_PRECISION_U16\n",
+                               "#pragma multi_compile_local _ CB_POSITIONS_RELATIVE\n", "#pragma multi_compile_local _ CB_LOCAL_ROWS\n"};
+    for (size_t k = 0; k < COUNT_OF(encodings); ++k)
+        if (count_lines_with(compute, encodings[k]) != 1 || count_lines_with(builtin, encodings[k]) != 1 ||
+            count_lines_with(urp, encodings[k]) != 1)
+            fail_msg("the kernel and both shaders must each have once: %s", encodings[k]);
+    const char *bone_texture = "#pragma multi_compile_local _ CB_BONE_TEXTURE";
+    assert_int_equal(count_lines_with(builtin, bone_texture), 1);
+    assert_int_equal(count_lines_with(urp, bone_texture), 1);
+    char *hlslinclude = strstr(urp, "HLSLINCLUDE"), *first_pass = strstr(urp, "Pass\n");
+    assert_true(hlslinclude && first_pass && strstr(hlslinclude, bone_texture) < first_pass); /* every URP pass */
+    free(compute), free(builtin), free(urp);
+    printf("  bone pass: the kernel in %u encodings (local rows too) and the glue's CB_BONE_TEXTURE variant in %u compile "
+           "(glslang, HLSL) and validate (spirv-val), 3 texture stores each kernel; keywords alike in the kernel and both shaders\n",
+           kernels, variants);
+}
+
+/* A number after `name = ` in `text` (an `export const` of the web runtime). */
+static long web_constant(const char *text, const char *name)
+{
+    char key[128];
+    snprintf(key, sizeof key, "export const %s = ", name);
+    const char *p = strstr(text, key);
+    if (!p) fail_msg("runtimes/web/crowdbake_bones.mjs has no '%s'", key);
+    return strtol(p + strlen(key), NULL, 10);
+}
+
+/* Core/BonePass.cs against the WebGL2 runtime: its thresholds are crowdbake_bones.mjs's AUTO_BONE_PASS_VERTICES(_LOCAL),
+ * and every choice for herds around them, global and local, each mode and a given threshold, is Crowd.choice's rule
+ * (skinned vertices a frame >= the threshold) with its reason; the layout is the web BonePass's (rows = min(herd,
+ * texture size), blocks side by side, refused past the texture's width) and the kernel's dispatch covers every
+ * (instance, bone) once, at the texel cb_passed_bone reads. */
+static void test_bone_pass_rule_matches_the_web(void **state)
+{
+    (void)state;
+    build_check();
+    char *bones = read_whole_file("runtimes/web/crowdbake_bones.mjs", NULL), *crowd = read_whole_file("runtimes/web/crowdbake_crowd.mjs", NULL);
+    assert_non_null(bones), assert_non_null(crowd);
+    long web_global = web_constant(bones, "AUTO_BONE_PASS_VERTICES"), web_local = web_constant(bones, "AUTO_BONE_PASS_VERTICES_LOCAL");
+    if (!strstr(crowd, "vertices >= this.bonePassVertices")) fail_msg("crowdbake_crowd.mjs's choice() no longer takes the pass at >= its threshold");
+    free(bones), free(crowd);
+    FILE *f = run_check("bonepass", TMP "/bonepass.txt");
+    char line[1024];
+    unsigned decisions = 0, taken = 0, layouts = 0, refused = 0, unavailable = 0;
+    while (fgets(line, sizeof line, f)) {
+        line[strcspn(line, "\n")] = 0;
+        if (line[0] == 'T') {
+            long g, l;
+            assert_int_equal(sscanf(line, "T %ld %ld", &g, &l), 2);
+            if (g != web_global || l != web_local) fail_msg("C# thresholds %ld/%ld, the web's %ld/%ld", g, l, web_global, web_local);
+        } else if (line[0] == 'D') {
+            int mode, local, given, n, v, pass, threshold, at;
+            assert_int_equal(sscanf(line, "D %d %d %d %d %d %d %d %n", &mode, &local, &given, &n, &v, &pass, &threshold, &at), 7);
+            const char *reason = line + at;
+            long want_threshold = mode == 1 ? 0 : mode == 2 ? 2147483647L : given > 0 ? given : local ? web_local : web_global;
+            int want = mode == 1 || (mode == 0 && (long)n * v >= want_threshold);
+            if (pass != want || threshold != want_threshold) fail_msg("%s: want pass %d threshold %ld", line, want, want_threshold);
+            if (mode == 0 && !strstr(reason, pass ? " skinned vertices a frame >= " : " skinned vertices a frame < "))
+                fail_msg("%s: the reason does not give the count against the threshold", line);
+            if (mode == 0 && (strstr(reason, "local rows") != NULL) != (local && given == 0))
+                fail_msg("%s: the reason must name local rows exactly when their threshold is the rule's", line);
+            ++decisions, taken += pass;
+        } else if (line[0] == 'U') {
+            int pass;
+            assert_int_equal(sscanf(line, "U %*d %d", &pass), 1);
+            if (pass || !strstr(line, "no bone pass here: no compute shaders")) fail_msg("%s: should skin per vertex, saying why", line);
+            ++unavailable;
+        } else if (line[0] == 'L') {
+            long n, b, max, rows, blocks, width, gx, gy, bytes, per, threads, once, misplaced;
+            assert_int_equal(sscanf(line, "L %ld %ld %ld %ld %ld %ld %ld %ld %ld %ld %ld %ld %ld", &n, &b, &max, &rows, &blocks, &width, &gx,
+                                    &gy, &bytes, &per, &threads, &once, &misplaced), 13);
+            long want_rows = n < max ? n : max, want_blocks = (n + want_rows - 1) / want_rows;
+            if (rows != want_rows || blocks != want_blocks || width != want_blocks * b || width > max || gx != (width + 7) / 8 ||
+                gy != (rows + 7) / 8 || bytes != width * rows * 48 || per != b * 48 + 48)
+                fail_msg("%s: the web's layout has %ld rows, %ld blocks", line, want_rows, want_blocks);
+            if (threads != n * b || once != n * b || misplaced) fail_msg("%s: the dispatch must write each (instance, bone) once, in place", line);
+            ++layouts;
+        } else if (line[0] == 'E') {
+            long n, b, max;
+            assert_int_equal(sscanf(line, "E %ld %ld %ld", &n, &b, &max), 3);
+            long rows = n < max ? n : max;
+            if ((n + rows - 1) / rows * b <= max) fail_msg("%s: refused, yet it fits", line);
+            ++refused;
+        } else {
+            fail_msg("unexpected line from CrowdbakeCheck bonepass: %s", line);
+        }
+    }
+    fclose(f);
+    printf("  bone pass rule: thresholds %ld (global) and %ld (local rows) as the web's; %u choices (%u take the pass) as the web's "
+           "rule; %u layouts whose dispatch writes every (instance, bone) once in place, %u refused as too wide; %u unavailable\n",
+           web_global, web_local, decisions, taken, layouts, refused, unavailable);
+    assert_true(decisions == 3 * 2 * 2 * 10 * 4 && taken > 0 && taken < decisions && layouts >= 8 && refused >= 2 && unavailable == 2);
 }
 
 /* The runtime conformance cases of local rows (.pal version 6: conformance.h's local_*): the C#
@@ -549,6 +709,202 @@ static void test_parents_after_children(void **state)
     assert_true(after > 0 && moved < 1e-5);
 }
 
+/* ---- the bone pass kernel itself (CrowdbakeBonePass.compute, as the package has it) on Mesa's lavapipe ---- */
+
+#define UNITY_BONE_ROWS 7 /* the herd's rows if SystemInfo.maxTextureSize were 7: several blocks, the last one part full */
+
+/* The kernel's source as the package has it, its resources given the bindings Unity gives them by name
+ * (SetBuffer, SetTexture, SetFloat, SetInt): each declaration must be found once. */
+static char *unity_kernel_source(const char *prefix, const char *const broken[2])
+{
+    char *kernel = read_whole_file(PKG "/Runtime/Shaders/CrowdbakeBonePass.compute", NULL);
+    assert_non_null(kernel);
+    if (broken) { /* a planted mistake: broken[0]'s line replaced by broken[1] */
+        char *b = break_shader(kernel, broken[0], broken[1]);
+        free(kernel);
+        kernel = b;
+    }
+    const char *from[] = {"StructuredBuffer<float4> _CbInstances;", "RWTexture2D<float4> _CbBonesOut0;", "RWTexture2D<float4> _CbBonesOut1;",
+                          "RWTexture2D<float4> _CbBonesOut2;", "float _CbTime;\nint _CbCount;\nint _CbBoneRows;"};
+    const char *to[] = {"[[vk::binding(3)]] StructuredBuffer<float4> _CbInstances;",
+                        "[[vk::binding(4)]] [[vk::image_format(\"rgba32f\")]] RWTexture2D<float4> _CbBonesOut0;",
+                        "[[vk::binding(5)]] [[vk::image_format(\"rgba32f\")]] RWTexture2D<float4> _CbBonesOut1;",
+                        "[[vk::binding(6)]] [[vk::image_format(\"rgba32f\")]] RWTexture2D<float4> _CbBonesOut2;",
+                        "[[vk::binding(7)]] cbuffer unity_kernel { float _CbTime; int _CbCount; int _CbBoneRows; };"};
+    size_t size = strlen(prefix) + strlen(kernel) + 4096;
+    char *src = malloc(size);
+    snprintf(src, size, "%s", prefix);
+    const char *rest = kernel;
+    for (size_t k = 0; k < COUNT_OF(from); ++k) {
+        const char *at = strstr(rest, from[k]);
+        if (!at || strstr(at + 1, from[k])) fail_msg("CrowdbakeBonePass.compute: '%s' must be declared once, in this order", from[k]);
+        strncat(src, rest, (size_t)(at - rest));
+        strcat(src, to[k]);
+        rest = at + strlen(from[k]);
+    }
+    strcat(src, rest);
+    free(kernel);
+    return src;
+}
+
+/* glslang (entry CrowdbakeBonePass, named main as the harness runs it; the package's include path: CrowdbakePalette.hlsl reaches the shared runtime) and spirv-val. */
+static uint32_t *compile_unity_kernel(const char *src, size_t *bytes)
+{
+    char cmd[2048], log[8192];
+    write_text(TMP "/unity_bone_pass.hlsl", src);
+    snprintf(cmd, sizeof cmd, "glslangValidator -V -D -S comp -e main --source-entrypoint CrowdbakeBonePass --target-env vulkan1.1 -I%s/Runtime/Shaders -o %s "
+             "%s 2>&1 && spirv-val --target-env vulkan1.1 %s 2>&1", PKG, TMP "/unity_bone_pass.spv", TMP "/unity_bone_pass.hlsl",
+             TMP "/unity_bone_pass.spv");
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s:\n%s", cmd, log);
+    uint32_t *spv = (uint32_t *)read_whole_file(TMP "/unity_bone_pass.spv", bytes);
+    assert_non_null(spv);
+    return spv;
+}
+
+/* The per-instance data CrowdbakeHerd uploads (inst, from, fade = (start, length, 0, 0)) for the harness's samples, at one
+ * herd clock `now` as a herd has: each phase moved so that `now` plays the sample's moment, the fade started so that
+ * its weight at `now` is the sample's. */
+static float *unity_instances(const sample *s, uint32_t n, double now)
+{
+    float *d = calloc((size_t)n * 12, sizeof *d);
+    for (uint32_t i = 0; i < n; ++i) {
+        const cb_instance *c[2] = {&s[i].inst, &s[i].from};
+        for (int k = 0; k < 2; ++k) {
+            double frames = fabs(c[k]->frame_count);
+            float v[4] = {(float)c[k]->first_row, (float)c[k]->frame_count, (float)c[k]->rate,
+                          (float)(c[k]->phase + (s[i].time - now) * c[k]->rate / frames)};
+            memcpy(d + i * 12 + k * 4, v, sizeof v);
+        }
+        d[i * 12 + 8] = (float)(now - s[i].fade); /* weight saturate((now - start) / 1) = the sample's */
+        d[i * 12 + 9] = 1;
+    }
+    return d;
+}
+
+/* cb_skin_bone_pass from the kernel's textures, one invocation per (instance, vertex), as test_hlsl_vulkan reads them. */
+static const char *unity_skin_main =
+    HARNESS_BUFFERS
+    "[[vk::binding(6)]] StructuredBuffer<cb_test_vertex> cb_vertices;\n"
+    "[[vk::binding(7)]] RWStructuredBuffer<float4> cb_skinned;\n"
+    "[numthreads(64, 1, 1)]\n"
+    "void main(uint3 id : SV_DispatchThreadID)\n"
+    "{\n"
+    "    uint s = id.x / cb_vertex_count, i = id.x - s * cb_vertex_count;\n"
+    "    if (s >= cb_sample_count) return;\n"
+    "    cb_test_vertex v = cb_vertices[i];\n"
+    "    float3 p, n;\n"
+    "    cb_skin_bone_pass(v.position.xyz, v.normal.xyz, v.joints, v.weights, int(s), p, n);\n"
+    "    cb_skinned[id.x * 3] = float4(p, 1.0);\n"
+    "    cb_skinned[id.x * 3 + 1] = float4(n, 0.0);\n"
+    "    cb_skinned[id.x * 3 + 2] = float4(p, 1.0);\n"
+    "}\n";
+
+/* Runs the package's kernel over the samples (dispatched as CrowdbakeHerd dispatches it: BonePassLayout's groups of
+ * 8 x 8 over the textures), then skins from its textures; returns the harness's 12 floats per (sample, vertex). */
+static float *gpu_unity_bone_pass(const cb_palette *p, const cb_primitive *prim, const sample *s, uint32_t n, const char *library,
+                                  const char *const broken[2])
+{
+    bool u16 = p->precision == CB_PRECISION_U16; /* Unity's RGBA64: UNORM16, the kernel's own CB_U16_UNORM */
+    static char prefix[4096], skin_src[1 << 17];
+    hlsl_globals_prefix(prefix, sizeof prefix, p, u16, "");
+    char *own = strstr(prefix, "#define CB_U16_UNORM\n");
+    if (own) memmove(own, own + strlen("#define CB_U16_UNORM\n"), strlen(own + strlen("#define CB_U16_UNORM\n")) + 1);
+    char *kernel_src = unity_kernel_source(prefix, broken);
+    size_t bytes[2];
+    uint32_t *spv[2] = {compile_unity_kernel(kernel_src, &bytes[0]), NULL};
+    char extra[512];
+    snprintf(extra, sizeof extra, "static const float cb_bone_rows = %d;\n#define CB_BONE_TEXTURE\n[[vk::binding(3)]] Texture2D<float4> cb_bones0;\n"
+             "[[vk::binding(4)]] Texture2D<float4> cb_bones1;\n[[vk::binding(5)]] Texture2D<float4> cb_bones2;\n", UNITY_BONE_ROWS);
+    hlsl_globals_prefix(skin_src, sizeof skin_src, p, u16, extra);
+    size_t used = strlen(skin_src);
+    snprintf(skin_src + used, sizeof skin_src - used, "%s\n%s", library, unity_skin_main);
+    spv[1] = compile_hlsl(skin_src, "unity_bone_skin", "", &bytes[1]);
+    uint32_t rows = UNITY_BONE_ROWS, blocks = (n + rows - 1) / rows, width = blocks * p->bone_count, verts = prim->vertex_count;
+    struct { float time; int32_t count, rows, pad; } clock = {0.5f, (int32_t)n, (int32_t)rows, 0};
+    float *instances = unity_instances(s, n, clock.time);
+    header_block h = header_of(p, verts, n);
+    vkc_resource r[8] = {upload_palette(&vk, p, u16, false), upload_bind_positions(&vk, p),
+                         vkc_buffer(&vk, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, &h, sizeof h),
+                         vkc_buffer(&vk, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, instances, (size_t)n * 48)};
+    for (int k = 0; k < 3; ++k) r[4 + k] = vkc_image(&vk, VK_FORMAT_R32G32B32A32_SFLOAT, width, rows, 16, NULL, true);
+    r[7] = vkc_buffer(&vk, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, &clock, sizeof clock);
+    vkc_pipeline pass = vkc_compute(&vk, spv[0], bytes[0], r, 8);
+    vkc_resource skin[8] = {r[0], r[1], r[2], r[4], r[5], r[6], upload_vertices(&vk, prim),
+                            vkc_buffer(&vk, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, NULL, (size_t)n * verts * 48)};
+    for (int k = 3; k < 6; ++k) skin[k].type = VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE; /* written by the kernel, read here */
+    vkc_pipeline skinning = vkc_compute(&vk, spv[1], bytes[1], skin, 8);
+    VkCommandBuffer cmd = vkc_begin(&vk);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.pipeline);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.layout, 0, 1, &pass.set, 0, NULL);
+    vkCmdDispatch(cmd, (width + 7) / 8, (rows + 7) / 8, 1); /* BonePassLayout.ThreadGroupsX, ThreadGroupsY */
+    vkc_barrier(cmd);
+    vkc_dispatch(cmd, &skinning, (uint32_t)(((size_t)n * verts + 63) / 64));
+    vkc_submit(&vk, cmd);
+    float *out = malloc((size_t)n * verts * 48);
+    vkc_read(&vk, &skin[7], out);
+    vkc_free_pipeline(&vk, &pass), vkc_free_pipeline(&vk, &skinning);
+    for (int i = 0; i < 8; ++i) vkc_free(&vk, &r[i]);
+    vkc_free(&vk, &skin[6]), vkc_free(&vk, &skin[7]);
+    free(spv[0]), free(spv[1]), free(kernel_src), free(instances);
+    return out;
+}
+
+/* Worst position error / tolerance of the package's kernel (broken as `broken` says, or not) on the quadruped sample;
+ * the normals' / 1e-5 in *normal_ratio. */
+static double unity_kernel_case(cb_layout l, cb_precision pr, bool local, const char *library, const char *const broken[2],
+                                double *normal_ratio)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/quadruped.glb", samples_dir());
+    fixture f;
+    bake_space(path, l, pr, false, local ? CB_BONE_SPACE_LOCAL : CB_BONE_SPACE_GLOBAL, &f);
+    sample samples[64];
+    uint32_t n = make_samples(&f.palette, samples, 64), faded = 0;
+    for (uint32_t i = 0; i < n; ++i) samples[i].dt = 0, faded += samples[i].fade < 1;
+    assert_true(faded > 0);
+    const cb_primitive *prim = &f.model->primitives[0];
+    float *gpu = gpu_unity_bone_pass(&f.palette, prim, samples, n, library, broken);
+    double pe, ne, tol = tolerance(&f);
+    compare(&f.palette, prim, samples, n, gpu, &pe, &ne);
+    if (!broken)
+        printf("  Unity kernel %-6s %-5s%s: %u instances (%u mid-fade, %d a block) x %u vertices: positions %.2g (%.3f of the "
+               "tolerance), normals %.2g\n", cb_layout_name(l), cb_precision_name(pr), local ? " local" : "", n, faded, UNITY_BONE_ROWS,
+               prim->vertex_count, pe, pe / tol, ne);
+    *normal_ratio = ne / 1e-5;
+    free(gpu);
+    release(&f);
+    return pe / tol;
+}
+
+/* The package's kernel on lavapipe, fed as CrowdbakeHerd feeds it (one herd clock, its instance buffer, blocks of rows,
+ * BonePassLayout's dispatch): the quadruped sample's instances skinned from its textures equal the C runtime
+ * (cb_runtime_matrices_crossfade, which `crowdbake verify` compares with exact skinning) within test_gl's tolerance,
+ * cross-fades included, global and local rows; a kernel whose fade runs backwards, or whose threads take the wrong
+ * instance, misses by far. */
+static void test_bone_pass_kernel_matches_the_c_runtime(void **state)
+{
+    (void)state;
+    if (!have_device) skip();
+    run_or_fail("mkdir -p " TMP);
+    char *lib = read_whole_file("runtimes/hlsl/crowdbake_palette.hlsl", NULL);
+    assert_non_null(lib);
+    struct { cb_layout l; cb_precision p; bool local; } cases[] = {{CB_LAYOUT_QPOS, CB_PRECISION_U16, false}, {CB_LAYOUT_MAT4, CB_PRECISION_FLOAT, false},
+        {CB_LAYOUT_AFFINE, CB_PRECISION_HALF, false}, {CB_LAYOUT_QPOS, CB_PRECISION_U16, true}, {CB_LAYOUT_QPOS, CB_PRECISION_FLOAT, true}};
+    double normals;
+    for (size_t c = 0; c < COUNT_OF(cases); ++c) {
+        double positions = unity_kernel_case(cases[c].l, cases[c].p, cases[c].local, lib, NULL, &normals);
+        assert_true(positions <= 1 && normals <= 1);
+    }
+    static const char *const backwards[2] = {"cb:unity-fade",
+        "    float weight = fade.y > 0.0 ? saturate((fade.x - _CbTime) / fade.y) : 1.0;"};
+    static const char *const wrong_instance[2] = {"cb:unity-instance", "    int instance = block * (_CbBoneRows + 1) + int(id.y);"};
+    double a = unity_kernel_case(CB_LAYOUT_QPOS, CB_PRECISION_U16, false, lib, backwards, &normals);
+    double b = unity_kernel_case(CB_LAYOUT_QPOS, CB_PRECISION_U16, true, lib, wrong_instance, &normals);
+    printf("  Unity kernel broken: fade backwards %.0f tolerances, the wrong instance a block %.0f\n", a, b);
+    assert_true(a > 10 && b > 10);
+    free(lib);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -558,8 +914,11 @@ int main(void)
         cmocka_unit_test(test_herd_equals_the_c_reader),
         cmocka_unit_test(test_unity_facing_code_compiles),
         cmocka_unit_test(test_shader_glue_compiles),
+        cmocka_unit_test(test_bone_pass_shaders_compile),
+        cmocka_unit_test(test_bone_pass_rule_matches_the_web),
+        cmocka_unit_test(test_bone_pass_kernel_matches_the_c_runtime),
         cmocka_unit_test(test_local_conformance_cases),
         cmocka_unit_test(test_parents_after_children),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, setup, teardown);
 }

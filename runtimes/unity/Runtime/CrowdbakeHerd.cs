@@ -2,6 +2,10 @@
 // Graphics.RenderMeshInstanced in batches of up to 1023, each instance's clip, rate, phase,
 // cross-fade and tint as per-instance shader data (the Crowdbake/Herd shaders). The state logic is
 // HerdState's (Runtime/Core, tested under mono): the herd of runtimes/web/crowdbake_three.mjs, in Unity.
+// Large herds take the bone pass (as the WebGL2 runtime's Crowd does, by the same rule: Core/BonePass.cs): each frame a
+// compute kernel (CrowdbakeBonePass.compute) blends every instance's bones once into three RGBA32F textures, and the
+// draw skins from them (the shaders' CB_BONE_TEXTURE variant) instead of blending the palette's rows at every vertex.
+// BonePassReason says which path the herd took and why.
 //
 //     herd.SetState(7, "flee", 0.3f);      // cross-fade into a roster state over 0.3 s
 //     herd.SetSpeed(7, 9.9f);              // locomotion plays at the speed, feet planted, no pop
@@ -29,6 +33,12 @@ namespace Crowdbake
         // left-handed one by mirroring X. True: the shader and BoneMatrixAt mirror X around the palette, so
         // the herd matches the mesh. False for a mesh kept in glTF space.
         public bool meshMirroredX = true;
+        // The bone pass: Auto takes it from bonePassVertices skinned vertices a frame (count x mesh vertices; 0: the
+        // WebGL2 runtime's rule, 50,000, or 3,000 for local rows, BonePassRule), On always, Off never. It needs compute
+        // shaders, RGBA32F random-write textures and bonePassShader; without them the herd skins per vertex and says why.
+        public BonePassMode bonePass = BonePassMode.Auto;
+        public int bonePassVertices = 0;
+        public ComputeShader bonePassShader; // Runtime/Shaders/CrowdbakeBonePass.compute (set by Reset in the Editor)
 
         const int BatchSize = 1023; // instanced property arrays hold up to 1023 per draw
         HerdState state;
@@ -40,6 +50,13 @@ namespace Crowdbake
         Batch[] batches;
         bool boundsDirty = true;
         float clockStart;
+        BonePassChoice bonePassChoice;
+        BonePassLayout boneLayout;
+        RenderTexture[] boneTextures;  // the pass's three targets: each bone's columns, translation in w
+        ComputeBuffer boneInstances;   // 3 float4 an instance: inst, from, fade (start, length, 0, 0)
+        float[] boneInstanceData;
+        int boneKernel;
+        const string BonePassShaderPath = "Packages/com.crowdbake.palette/Runtime/Shaders/CrowdbakeBonePass.compute";
 
         sealed class Batch
         {
@@ -51,6 +68,14 @@ namespace Crowdbake
 
         public HerdState State { get { return state; } }
         public int Count { get { return state != null ? state.Count : 0; } }
+        // Whether the herd skins from the bone pass, and why it does or does not (like the web's crowd.choice().reason).
+        public bool UsesBonePass { get { Ready(); return bonePassChoice.bonePass; } }
+        public string BonePassReason { get { Ready(); return bonePassChoice.reason; } }
+
+#if UNITY_EDITOR
+        // When the component is added in the Editor: the package's bone pass kernel.
+        void Reset() { bonePassShader = UnityEditor.AssetDatabase.LoadAssetAtPath<ComputeShader>(BonePassShaderPath); }
+#endif
 
         // Footsteps (the roster's contacts) crossed since the last frame, in order.
         public event Action<Footstep> Footstep
@@ -79,7 +104,11 @@ namespace Crowdbake
                 placement[i] = Matrix4x4.identity;
                 tint[i] = Color.white;
             }
+            bonePassChoice = ChooseBonePass();
+            if (bonePass == BonePassMode.On && !bonePassChoice.bonePass)
+                Debug.LogWarning("CrowdbakeHerd '" + name + "': " + bonePassChoice.reason);
             drawMaterial = palette.MaterialFor(material);
+            if (bonePassChoice.bonePass) drawMaterial.EnableKeyword("CB_BONE_TEXTURE");
             skin = SkinTexture(mesh);
             batches = new Batch[(state.Count + BatchSize - 1) / BatchSize];
             for (int b = 0; b < batches.Length; ++b) {
@@ -88,6 +117,10 @@ namespace Crowdbake
                                          tint = new Vector4[n], block = new MaterialPropertyBlock() };
                 palette.SetProperties(batches[b].block);
                 batches[b].block.SetTexture("cb_skin", skin);
+                if (bonePassChoice.bonePass) {
+                    for (int k = 0; k < 3; ++k) batches[b].block.SetTexture("cb_bones" + k, boneTextures[k]);
+                    batches[b].block.SetFloat("cb_bone_rows", boneLayout.rows);
+                }
             }
             clockStart = Time.time;
             return state;
@@ -168,7 +201,74 @@ namespace Crowdbake
             if (state == null) return;
             float now = Time.time - clockStart;
             state.Update(now);
+            if (bonePassChoice.bonePass) RunBonePass(now);
             Draw(now);
+        }
+
+        // The rule (BonePassRule, the web's) on what this machine can do; the pass's textures made when it is taken.
+        BonePassChoice ChooseBonePass()
+        {
+            string unavailable = !SystemInfo.supportsComputeShaders ? "this graphics API has no compute shaders (SystemInfo.supportsComputeShaders)"
+                : !SystemInfo.SupportsRenderTextureFormat(RenderTextureFormat.ARGBFloat) ? "no RGBA32F render textures (RenderTextureFormat.ARGBFloat)"
+                : bonePassShader == null ? "bonePassShader is not set (" + BonePassShaderPath + ")" : null;
+            BonePassChoice c = BonePassRule.Choose(bonePass, bonePassVertices, palette.localRows, state.Count, mesh.vertexCount, unavailable);
+            if (!c.bonePass) return c;
+            try {
+                boneLayout = BonePassLayout.For(state.Count, palette.Pal.Bones.Length, SystemInfo.maxTextureSize);
+            } catch (ArgumentException e) {
+                return BonePassRule.Choose(bonePass, bonePassVertices, palette.localRows, state.Count, mesh.vertexCount, e.Message);
+            }
+            boneTextures = new RenderTexture[3];
+            for (int k = 0; k < 3; ++k) {
+                boneTextures[k] = new RenderTexture(boneLayout.width, boneLayout.rows, 0, RenderTextureFormat.ARGBFloat, RenderTextureReadWrite.Linear);
+                boneTextures[k].name = name + " bones" + k;
+                boneTextures[k].enableRandomWrite = true; // before Create: the kernel writes it
+                boneTextures[k].filterMode = FilterMode.Point;
+                boneTextures[k].wrapMode = TextureWrapMode.Clamp;
+                if (!boneTextures[k].Create()) {
+                    ReleaseBonePass();
+                    return BonePassRule.Choose(bonePass, bonePassVertices, palette.localRows, state.Count, mesh.vertexCount,
+                                               "the bone textures (" + boneLayout.width + " x " + boneLayout.rows + " RGBA32F) could not be created");
+                }
+            }
+            boneInstanceData = new float[state.Count * BonePassLayout.InstanceFloats];
+            boneInstances = new ComputeBuffer(state.Count * 3, 16);
+            boneKernel = bonePassShader.FindKernel("CrowdbakeBonePass");
+            return c;
+        }
+
+        void ReleaseBonePass()
+        {
+            if (boneTextures != null)
+                foreach (RenderTexture t in boneTextures)
+                    if (t != null) {
+                        t.Release();
+                        Destroy(t);
+                    }
+            if (boneInstances != null) boneInstances.Release();
+            boneTextures = null;
+            boneInstances = null;
+        }
+
+        // Every instance's bones blended at the herd's clock, before this frame's draws read them.
+        void RunBonePass(float now)
+        {
+            for (int i = 0; i < state.Count; ++i) {
+                int o = i * BonePassLayout.InstanceFloats;
+                Array.Copy(state.Inst, i * 4, boneInstanceData, o, 4);
+                Array.Copy(state.From, i * 4, boneInstanceData, o + 4, 4);
+                boneInstanceData[o + 8] = state.Fade[i * 2];
+                boneInstanceData[o + 9] = state.Fade[i * 2 + 1];
+            }
+            boneInstances.SetData(boneInstanceData);
+            ComputeShader cs = bonePassShader;
+            palette.SetComputeProperties(cs, boneKernel); // keywords too: the kernel asset is shared by every herd
+            cs.SetBuffer(boneKernel, "_CbInstances", boneInstances);
+            for (int k = 0; k < 3; ++k) cs.SetTexture(boneKernel, "_CbBonesOut" + k, boneTextures[k]);
+            cs.SetFloat("_CbTime", now);
+            cs.SetInt("_CbCount", state.Count);
+            cs.SetInt("_CbBoneRows", boneLayout.rows);
+            cs.Dispatch(boneKernel, boneLayout.ThreadGroupsX, boneLayout.ThreadGroupsY, 1);
         }
 
         void Draw(float now)
@@ -185,7 +285,7 @@ namespace Crowdbake
                     batch.matrices[k] = herd * placement[i] * Matrix4x4.Translate(offset);
                     batch.inst[k] = new Vector4(state.Inst[i * 4], state.Inst[i * 4 + 1], state.Inst[i * 4 + 2], state.Inst[i * 4 + 3]);
                     batch.from[k] = new Vector4(state.From[i * 4], state.From[i * 4 + 1], state.From[i * 4 + 2], state.From[i * 4 + 3]);
-                    batch.fade[k] = new Vector4(state.Fade[i * 2], state.Fade[i * 2 + 1], 0, 0);
+                    batch.fade[k] = new Vector4(state.Fade[i * 2], state.Fade[i * 2 + 1], i, 0); // z: its index, the bone pass instance it skins from
                     batch.tint[k] = tint[i];
                 }
                 if (boundsDirty || transform.hasChanged) batch.bounds = BatchBounds(batch);
@@ -246,8 +346,10 @@ namespace Crowdbake
         {
             if (drawMaterial != null) Destroy(drawMaterial);
             if (skin != null) Destroy(skin);
+            ReleaseBonePass();
             drawMaterial = null;
             skin = null;
+            bonePassChoice = new BonePassChoice();
             state = null;
         }
     }

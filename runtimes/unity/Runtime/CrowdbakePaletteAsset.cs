@@ -115,6 +115,27 @@ namespace Crowdbake
             block.SetFloat("cb_linear_range", linearRange);
         }
 
+        // The bone pass kernel's palette (CrowdbakeBonePass.compute): the textures and numbers SetProperties binds, and
+        // this palette's keywords on, every other one of the encoding's off (the kernel asset is shared: set before
+        // each dispatch, which takes the keywords as they are when it is issued).
+        public void SetComputeProperties(ComputeShader cs, int kernel)
+        {
+            var on = new System.Collections.Generic.List<string>(Keywords);
+            foreach (string k in AllKeywords)
+                if (on.Contains(k)) cs.EnableKeyword(k);
+                else cs.DisableKeyword(k);
+            cs.SetTexture(kernel, "cb_palette", palette);
+            cs.SetTexture(kernel, "cb_bind_positions", bindPositions);
+            cs.SetFloat("cb_row_texels", rowTexels);
+            cs.SetFloat("cb_rows_per_block", rowsPerBlock);
+            cs.SetVector("cb_bounds_min", boundsMin);
+            cs.SetVector("cb_bounds_max", boundsMax);
+            cs.SetFloat("cb_linear_range", linearRange);
+        }
+
+        static readonly string[] AllKeywords = { "CB_LAYOUT_MAT4", "CB_LAYOUT_AFFINE", "CB_LAYOUT_QPOS", "CB_PRECISION_FLOAT",
+                                                 "CB_PRECISION_HALF", "CB_PRECISION_U16", "CB_POSITIONS_RELATIVE", "CB_LOCAL_ROWS" };
+
         // A copy of `material` with this palette's keywords on (the shader's multi_compile sets).
         public Material MaterialFor(Material material)
         {

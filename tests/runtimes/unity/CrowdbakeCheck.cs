@@ -7,6 +7,7 @@
 //   mono CrowdbakeCheck.exe herd FILE.pal roster.json TYPE   a herd's matrices, cross-fades, speeds, footsteps
 //   mono CrowdbakeCheck.exe conformance DIR CASE OUT  a runtime conformance case (tests/runtimes/conformance.h):
 //                                                     every instance's skinned positions, float32, into OUT
+//   mono CrowdbakeCheck.exe bonepass                  the bone pass rule's choices and layouts (Core/BonePass.cs)
 using System;
 using System.Globalization;
 using System.IO;
@@ -194,6 +195,56 @@ static class CrowdbakeCheck
         File.WriteAllBytes(outPath, output.ToArray());
     }
 
+    // The bone pass rule for herd sizes around the thresholds, global and local, each mode, a given threshold, and
+    // unavailable; then layouts: every thread of the dispatch mapped to its (instance, bone), which must cover each
+    // pair once at the texel cb_passed_bone reads. D lines: mode local given instances vertices -> pass threshold reason.
+    static void BonePassLines()
+    {
+        Line("T", BonePassRule.AutoVertices, BonePassRule.AutoVerticesLocal);
+        int[] instances = { 1, 3, 9, 10, 11, 20, 50, 100, 1000, 4000 };
+        int[] vertices = { 336, 1000, 1128, 4970 }; // a fish, a round number (3, 20, 50 of it: on a threshold), the quadruped sample, Cow
+        foreach (BonePassMode mode in new[] { BonePassMode.Auto, BonePassMode.On, BonePassMode.Off })
+            foreach (bool local in new[] { false, true })
+                foreach (int given in new[] { 0, 20000 })
+                    foreach (int n in instances)
+                        foreach (int v in vertices) {
+                            BonePassChoice c = BonePassRule.Choose(mode, given, local, n, v, null);
+                            Line("D", (int)mode, local ? 1 : 0, given, n, v, c.bonePass ? 1 : 0, c.threshold, c.reason);
+                        }
+        foreach (BonePassMode mode in new[] { BonePassMode.Auto, BonePassMode.On }) {
+            BonePassChoice c = BonePassRule.Choose(mode, 0, true, 4000, 4970, "no compute shaders");
+            Line("U", (int)mode, c.bonePass ? 1 : 0, c.reason);
+        }
+        int[,] layouts = { { 1, 1, 16384 }, { 7, 41, 16384 }, { 100, 17, 16384 }, { 1023, 41, 16384 }, { 4000, 17, 1024 },
+                           { 10000, 41, 4096 }, { 65, 3, 8 }, { 9, 2, 4 }, { 9, 2, 8 }, { 65, 3, 16 }, { 200, 41, 8192 }, { 100000, 41, 16384 }, { 9, 3, 4 } };
+        for (int k = 0; k < layouts.GetLength(0); ++k) {
+            int n = layouts[k, 0], bones = layouts[k, 1], max = layouts[k, 2];
+            BonePassLayout l;
+            try {
+                l = BonePassLayout.For(n, bones, max);
+            } catch (ArgumentException e) {
+                Line("E", n, bones, max, e.Message);
+                continue;
+            }
+            var seen = new int[n * bones];
+            int threads = 0, misplaced = 0;
+            int tx = l.ThreadGroupsX * BonePassLayout.ThreadGroupSize, ty = l.ThreadGroupsY * BonePassLayout.ThreadGroupSize;
+            for (int y = 0; y < ty; ++y)
+                for (int x = 0; x < tx; ++x) {
+                    int i, j, px, py;
+                    if (!l.ThreadTexel(x, y, out i, out j)) continue;
+                    ++threads;
+                    ++seen[i * bones + j];
+                    l.Texel(i, j, out px, out py);
+                    if (px != x || py != y || j < 0 || j >= bones) ++misplaced;
+                }
+            int once = 0;
+            foreach (int c in seen) once += c == 1 ? 1 : 0;
+            Line("L", n, bones, max, l.rows, l.blocks, l.width, l.ThreadGroupsX, l.ThreadGroupsY, l.TextureBytes,
+                 BonePassLayout.BytesPerInstance(bones), threads, once, misplaced);
+        }
+    }
+
     static int Main(string[] args)
     {
         try {
@@ -202,8 +253,9 @@ static class CrowdbakeCheck
             else if (args.Length == 2 && args[0] == "roster") RosterLines(args[1]);
             else if (args.Length == 4 && args[0] == "herd") Herd(args[1], args[2], args[3]);
             else if (args.Length == 4 && args[0] == "conformance") Conformance(args[1], args[2], args[3]);
+            else if (args.Length == 1 && args[0] == "bonepass") BonePassLines();
             else {
-                Console.Error.WriteLine("usage: CrowdbakeCheck.exe pal|bad FILE.pal | roster roster.json | herd FILE.pal roster.json TYPE | conformance DIR CASE OUT");
+                Console.Error.WriteLine("usage: CrowdbakeCheck.exe pal|bad FILE.pal | roster roster.json | herd FILE.pal roster.json TYPE | conformance DIR CASE OUT | bonepass");
                 return 2;
             }
         } catch (Exception e) {

@@ -1,7 +1,8 @@
 // Crowdbake/Herd - the built-in render pipeline's shader for CrowdbakeHerd: a Lambert surface
 // shader whose vertex function skins each instance from the palette (position and normal in one
 // pass, cross-fades included), with shadows (addshadow runs the same vertex function), tint per
-// instance. The palette's encoding picks a variant; CrowdbakeHerd turns the keywords on.
+// instance. The palette's encoding picks a variant; CrowdbakeHerd turns the keywords on (CB_BONE_TEXTURE when it
+// takes the bone pass: the vertex function, shadow pass included, reads the pass's bone textures).
 Shader "Crowdbake/Herd"
 {
     Properties
@@ -20,6 +21,7 @@ Shader "Crowdbake/Herd"
         #pragma multi_compile_local CB_PRECISION_FLOAT CB_PRECISION_HALF CB_PRECISION_U16
         #pragma multi_compile_local _ CB_POSITIONS_RELATIVE
         #pragma multi_compile_local _ CB_LOCAL_ROWS
+        #pragma multi_compile_local _ CB_BONE_TEXTURE // the herd's bone pass: skin from its three textures
         #include "CrowdbakeUnity.hlsl"
 
         sampler2D _MainTex;

@@ -1,7 +1,8 @@
 // Crowdbake/Herd URP - the Universal Render Pipeline's shader for CrowdbakeHerd: Lambert lighting
 // from the main light (with its shadows) and ambient, a shadow caster and a depth pass, each skinning
-// the instance from the palette in its vertex function. Same keywords and per-instance data as
-// Crowdbake/Herd (CrowdbakeUnity.hlsl).
+// the instance from the palette in its vertex function (or, CB_BONE_TEXTURE, from the herd's bone
+// pass: the keywords are in HLSLINCLUDE, so every pass has the variant). Same keywords and per-instance
+// data as Crowdbake/Herd (CrowdbakeUnity.hlsl).
 Shader "Crowdbake/Herd URP"
 {
     Properties
@@ -20,6 +21,7 @@ Shader "Crowdbake/Herd URP"
         #pragma multi_compile_local CB_PRECISION_FLOAT CB_PRECISION_HALF CB_PRECISION_U16
         #pragma multi_compile_local _ CB_POSITIONS_RELATIVE
         #pragma multi_compile_local _ CB_LOCAL_ROWS
+        #pragma multi_compile_local _ CB_BONE_TEXTURE // the herd's bone pass: skin from its three textures
         #include "Packages/com.unity.render-pipelines.universal/ShaderLibrary/Core.hlsl"
         #include "CrowdbakeUnity.hlsl"
 

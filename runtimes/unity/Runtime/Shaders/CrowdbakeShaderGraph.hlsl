@@ -7,7 +7,9 @@
 // Add the palette's encoding as the graph's keywords (Boolean or Enum, Shader Feature Local or
 // Multi Compile Local, exactly these references): CB_LAYOUT_MAT4 / CB_LAYOUT_AFFINE / CB_LAYOUT_QPOS,
 // CB_PRECISION_FLOAT / CB_PRECISION_HALF / CB_PRECISION_U16, CB_POSITIONS_RELATIVE, CB_LOCAL_ROWS (a .pal
-// version 6 palette of local rows: the asset's Keywords say which); and tick the
+// version 6 palette of local rows: the asset's Keywords say which), CB_BONE_TEXTURE (the herd's bone pass:
+// CrowdbakeHerd.bonePassReason says whether it took it; a graph without the keyword skins per vertex all the same,
+// so set bonePass Off there to skip the dispatch); and tick the
 // material's Enable GPU Instancing. Set the node's Precision to Float (a palette needs float math).
 #ifndef CROWDBAKE_SHADER_GRAPH_HLSL
 #define CROWDBAKE_SHADER_GRAPH_HLSL

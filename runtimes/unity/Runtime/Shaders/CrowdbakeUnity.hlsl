@@ -6,7 +6,10 @@
 // CrowdbakeHerd sets, per draw (MaterialPropertyBlock): cb_palette, cb_bind_positions, cb_skin and
 // the header numbers (cb_row_texels ...), _CbTime (the herd's clock, seconds); per instance:
 // _CbInst (first row, frame count, rate, phase), _CbFrom (the clip it fades from), _CbFade (start,
-// length), _CbTint (colour).
+// length, the instance's index in the herd, 0), _CbTint (colour).
+// CB_BONE_TEXTURE (the herd's bone pass, CrowdbakeBonePass.compute): the vertex skins from cb_bones0..2 (the
+// pass's three RGBA32F textures, bones blended once per instance and frame) at row _CbFade.z, and CrowdbakeHerd
+// sets cb_bones0..2 and cb_bone_rows per draw; the palette itself is not read.
 #ifndef CROWDBAKE_UNITY_HLSL
 #define CROWDBAKE_UNITY_HLSL
 
@@ -38,11 +41,16 @@ float CrowdbakeFadeWeight(float4 fade)
 void CrowdbakeSkin(float3 v, float3 n, int4 joints, float4 weights, out float3 p, out float3 skinned_n)
 {
 #if defined(UNITY_INSTANCING_ENABLED) || defined(INSTANCING_ON)
+    float3 mirror = float3(_CbMirrorX < 0.0 ? -1.0 : 1.0, 1.0, 1.0); // into the palette's (glTF's) space and back
+#if defined(CB_BONE_TEXTURE)
+    int instance = int(UNITY_ACCESS_INSTANCED_PROP(Crowdbake, _CbFade).z + 0.5); // its row in the bone pass (exact in a float)
+    cb_skin_bone_pass(v * mirror, n * mirror, joints, weights, instance, p, skinned_n);
+#else
     float4 inst = UNITY_ACCESS_INSTANCED_PROP(Crowdbake, _CbInst);
     float4 from = UNITY_ACCESS_INSTANCED_PROP(Crowdbake, _CbFrom);
     float fade = CrowdbakeFadeWeight(UNITY_ACCESS_INSTANCED_PROP(Crowdbake, _CbFade));
-    float3 mirror = float3(_CbMirrorX < 0.0 ? -1.0 : 1.0, 1.0, 1.0); // into the palette's (glTF's) space and back
     cb_skin_position_normal_crossfade(v * mirror, n * mirror, joints, weights, from, inst, fade, _CbTime, p, skinned_n);
+#endif
     p *= mirror;
     skinned_n *= mirror;
 #else

@@ -23,6 +23,7 @@ public sealed class HerdSample : MonoBehaviour
             herd.SetSpeed(i, 0.8f + 0.6f * (float)random.NextDouble());
         }
         herd.Footstep += (e) => { if (e.instance == 0) Debug.Log("cow 0: " + e.foot + (e.lands ? " lands" : " lifts") + " at " + e.time); };
+        Debug.Log("herd: " + herd.BonePassReason); // 400 cows: the bone pass, where this machine has compute shaders
     }
 
     void Update()

@@ -41,6 +41,7 @@ namespace UnityEngine
     public sealed class Mesh : Object
     {
         public BoneWeight[] boneWeights { get { return null; } set { } }
+        public int vertexCount { get { return 0; } }
     }
 
     public struct BoneWeight
@@ -66,6 +67,45 @@ namespace UnityEngine
         public Texture2D(int width, int height, TextureFormat textureFormat, bool mipChain, bool linear) { }
         public void SetPixelData<T>(T[] data, int mipLevel, int sourceDataStartIndex = 0) { }
         public void Apply(bool updateMipmaps, bool makeNoLongerReadable) { }
+    }
+
+    public class RenderTexture : Texture
+    {
+        public RenderTexture(int width, int height, int depth, RenderTextureFormat format, RenderTextureReadWrite readWrite) { }
+        public bool enableRandomWrite { get; set; }
+        public bool Create() { return true; }
+        public void Release() { }
+    }
+
+    public enum RenderTextureFormat { ARGBFloat = 11 }
+    public enum RenderTextureReadWrite { Default = 0, Linear = 1, sRGB = 2 }
+
+    public sealed class ComputeBuffer : IDisposable
+    {
+        public ComputeBuffer(int count, int stride) { }
+        public void SetData(Array data) { }
+        public void Release() { }
+        public void Dispose() { }
+    }
+
+    public sealed class ComputeShader : Object
+    {
+        public int FindKernel(string name) { return 0; }
+        public void SetTexture(int kernelIndex, string name, Texture texture) { }
+        public void SetBuffer(int kernelIndex, string name, ComputeBuffer buffer) { }
+        public void SetFloat(string name, float val) { }
+        public void SetInt(string name, int val) { }
+        public void SetVector(string name, Vector4 val) { }
+        public void EnableKeyword(string keyword) { }
+        public void DisableKeyword(string keyword) { }
+        public void Dispatch(int kernelIndex, int threadGroupsX, int threadGroupsY, int threadGroupsZ) { }
+    }
+
+    public static class SystemInfo
+    {
+        public static bool supportsComputeShaders { get { return false; } }
+        public static int maxTextureSize { get { return 0; } }
+        public static bool SupportsRenderTextureFormat(RenderTextureFormat format) { return false; }
     }
 
     public enum TextureFormat { RGBAFloat = 20, RGBAHalf = 17, RGBA64 = 74 }
@@ -167,6 +207,7 @@ namespace UnityEngine
     public static class Debug
     {
         public static void Log(object message) { }
+        public static void LogWarning(object message) { }
     }
 
     [AttributeUsage(AttributeTargets.Field)]
