@@ -513,7 +513,12 @@ cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, c
         local_skeleton_free(&k);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring %s's local rows", m->source);
     }
-    cb_sampler_set_baked_loop(s, animation, pc->loops, pc->start, pc->duration);
+    /* The loop as the bake played it: from the analysis its rate choice kept (judged once). */
+    const cb_clip_info *judged = palette_kept_analysis_info(keep);
+    if (judged && judged->animation == animation)
+        sampler_set_baked_loop_judged(s, judged, pc->loops, pc->start, pc->duration);
+    else
+        cb_sampler_set_baked_loop(s, animation, pc->loops, pc->start, pc->duration);
     palette_intervals(&c, p, pc, &framing, pc->duration > 0 ? steps : 0, at_rows, between);
     probe_ctx_free(&c);
     local_skeleton_free(&k);

@@ -210,6 +210,9 @@ void palette_keep_analysis(pose_cache *poses, const cb_clip_info *analysis, doub
 bool palette_kept_analysis(const pose_cache *poses, int32_t animation, int loop, double fps, const cb_limits *limits);
 bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, int32_t animation, int loop, double fps,
                                 const cb_limits *limits, cb_clip_info *out);
+/* palette_plan.c: the analysis kept with `poses` as it was kept (any rate, any loop override), or
+ * NULL (none, or poses NULL). */
+const cb_clip_info *palette_kept_analysis_info(const pose_cache *poses);
 /* rate_search.c: an analysis of clip i made before the search (at fps, loop override loop) kept
  * for it: kept[i] made where it is NULL (a search's pose cache), the analysis attached. */
 void palette_seed_analysis(pose_cache **kept, uint32_t i, const cb_sampler *sampler, const cb_clip_info *analysis,
