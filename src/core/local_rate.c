@@ -134,6 +134,8 @@ typedef struct probe_ctx {
     pose_cache *keep;         /* the bake's cache of this clip's poses, or NULL (matrix rigs only) */
     bool similar;             /* cb_sampler_is_similarity: sampled as similarities */
     bool not_qpos;            /* a pose had a joint that is no similarity (local_rate.not_qpos) */
+    bool global_rows;         /* not similar: the poses' global rows wanted (the choice's, for its local rows) */
+    bool kept[CB_SAMPLE_BATCH]; /* not similar: pose i is the cache's (its qpos derivation kept with it) */
     cb_joint_subset *all;     /* not similar: every joint, sampled a batch of times at once */
     double *lanes;            /* its lanes */
     double *pose_room;        /* CB_SAMPLE_BATCH x bones x 16: the poses no cache keeps */
@@ -167,7 +169,7 @@ static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) total += (sizes[i] + 63) / 64 * 64;
     bool similar = cb_sampler_is_similarity(s);
     *c = (probe_ctx){.s = s, .facts = facts, .k = k, .clip = clip, .m = cb_sampler_model(s), .root_motion = root_motion,
-                     .keep = similar ? NULL : keep, .similar = similar, .block = malloc(total)};
+                     .keep = similar ? NULL : keep, .similar = similar, .global_rows = true, .block = malloc(total)};
     if (!c->block) return false;
     char *at = c->block;
     void **parts[] = {(void **)&c->poses, (void **)&c->rows[0], (void **)&c->rows[1], (void **)&c->first_row,
@@ -184,20 +186,23 @@ static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts
 }
 
 /* Pose i's global rows from its joint matrices (c->mats[i]): rotation and scale four joints at
- * a time (palette_qpos_similarity_pose, the bake's), the pivot's position p = M b. */
+ * a time (palette_qpos_similarity_pose, the bake's; a cached pose's derived once and kept with
+ * it, where the bake's rows and later probes take it), the pivot's position p = M b. */
 static void rows_of_matrices(probe_ctx *c, uint32_t i)
 {
     uint32_t bones = c->k->bones;
     const float *bind = c->facts->bind_positions;
     const double *mats = c->mats[i];
     local_qpos *out = c->poses + (size_t)i * bones;
-    if (!palette_qpos_similarity_pose(mats, bones, c->qs)) { /* a joint no similarity: the bake falls back */
+    const double *qs = c->kept[i] ? palette_kept_qpos(mats, bones)
+                                  : palette_qpos_similarity_pose(mats, bones, c->qs) ? c->qs : NULL;
+    if (!qs) { /* a joint no similarity: the bake falls back */
         c->not_qpos = true;
         for (uint32_t j = 0; j < bones; ++j) out[j] = qpos_of_matrix(mats + 16 * (size_t)j, bind_of(bind, j));
         return;
     }
     for (uint32_t j = 0; j < bones; ++j) {
-        const double *q = c->qs + 5 * (size_t)j;
+        const double *q = qs + 5 * (size_t)j;
         out[j] = (local_qpos){{q[0], q[1], q[2], q[3]}, cb_mat4_transform_point(mats + 16 * (size_t)j, bind_of(bind, j)), q[4]};
     }
 }
@@ -234,9 +239,10 @@ static void sample_frames(probe_ctx *c, const cb_clip_info *framing, const uint3
             missing[n++] = frames[i];
         }
         c->mats[i] = found ? found : room[n - 1];
+        c->kept[i] = found || add;
     }
     if (n) cb_clip_frame_matrices_batch(c->s, framing, missing, n, c->root_motion, c->all, c->lanes, room);
-    for (uint32_t i = 0; i < count; ++i) rows_of_matrices(c, i);
+    for (uint32_t i = 0; c->global_rows && i < count; ++i) rows_of_matrices(c, i);
 }
 
 /* The worst vertex error of the blended pose (c->blended) against pose i of the batch, or
@@ -519,6 +525,7 @@ cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, c
         sampler_set_baked_loop_judged(s, judged, pc->loops, pc->start, pc->duration);
     else
         cb_sampler_set_baked_loop(s, animation, pc->loops, pc->start, pc->duration);
+    c.global_rows = false; /* a matrix rig's poses are measured as matrices: its rows are the palette's */
     palette_intervals(&c, p, pc, &framing, pc->duration > 0 ? steps : 0, at_rows, between);
     probe_ctx_free(&c);
     local_skeleton_free(&k);
