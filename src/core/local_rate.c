@@ -126,6 +126,7 @@ typedef struct probe_ctx {
     cb_similarity *sims;      /* CB_SAMPLE_BATCH x bones */
     double *diff;             /* 4 x bones x 16: each of four points' exact less blended */
     cb_joint_error *joints;   /* 4 x bones */
+    double *values;           /* bones x 16: a palette row's values (palette_decode_row_values) */
     void *block;
 } probe_ctx;
 
@@ -142,7 +143,8 @@ static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts
     size_t sizes[] = {CB_SAMPLE_BATCH * n * sizeof(local_qpos), (INTERVALS_A_BATCH + 1) * n * sizeof(local_qpos),
                       n * sizeof(local_qpos), n * 32 * sizeof(double), CB_SAMPLE_BATCH * n * sizeof(cb_similarity),
                       4 * n * 16 * sizeof(double), 4 * n * sizeof(cb_joint_error), n * 5 * sizeof(double),
-                      (CB_SAMPLE_BATCH + 1) * (n * 16 + 1) * sizeof(double), CB_SAMPLE_BATCH * n * 16 * sizeof(double)};
+                      (CB_SAMPLE_BATCH + 1) * (n * 16 + 1) * sizeof(double), CB_SAMPLE_BATCH * n * 16 * sizeof(double),
+                      n * 16 * sizeof(double)};
     size_t total = 0;
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) total += (sizes[i] + 63) / 64 * 64;
     bool similar = cb_sampler_is_similarity(s);
@@ -152,7 +154,7 @@ static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts
     char *at = (char *)c->block + (64 - (uintptr_t)c->block % 64) % 64; /* every part 64-byte aligned: lanes */
     void **parts[] = {(void **)&c->poses, (void **)&c->rows, (void **)&c->first_row, (void **)&c->composed,
                       (void **)&c->sims, (void **)&c->diff, (void **)&c->joints, (void **)&c->qs,
-                      (void **)&c->lanes, (void **)&c->pose_room};
+                      (void **)&c->lanes, (void **)&c->pose_room, (void **)&c->values};
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) *parts[i] = at, at += (sizes[i] + 63) / 64 * 64;
     if (similar) return true;
     bool *every = malloc(n * sizeof *every);
@@ -459,11 +461,11 @@ double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const lo
 /* ---- a finished local palette, measured ---- */
 
 /* Palette row r's local rows of every bone, decoded as the runtime decodes them. */
-static void decode_row(const cb_palette *p, uint32_t r, local_qpos *out)
+static void decode_row(probe_ctx *c, const cb_palette *p, uint32_t r, local_qpos *out)
 {
+    palette_decode_row_values(p, r, c->values);
     for (uint32_t j = 0; j < p->bone_count; ++j) {
-        double v[16];
-        cb_palette_decode_values(p, p->texels, r, j, v);
+        const double *v = c->values + (size_t)j * 16;
         out[j] = (local_qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]};
     }
 }
@@ -477,7 +479,7 @@ static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palett
     const bool all = true;
     bool kept[CB_SAMPLE_BATCH];
     for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) kept[i] = true; /* the bake after a replan reads them again */
-    decode_row(p, pc->first_row, c->rows);
+    decode_row(c, p, pc->first_row, c->rows);
     sample_frames(c, framing, &row0, 1, &all);
     point start = {c->rows, c->rows, 0, 0, at_rows};
     measure_points(c, p->bind_positions, &start, 1, INFINITY);
@@ -490,7 +492,7 @@ static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palett
             uint32_t next = first + i + 1;
             bool wrap = next == pc->frames; /* a loop's last interval ends on its first row */
             local_qpos *from = c->rows + (size_t)i * bones, *end = from + bones;
-            decode_row(p, pc->first_row + (wrap ? 0 : next), end);
+            decode_row(c, p, pc->first_row + (wrap ? 0 : next), end);
             const local_qpos *to = pc->step ? from : end; /* held rows: the row alone */
             for (uint32_t q = 1; q < POINTS; ++q) pts[n++] = (point){from, to, (double)q / POINTS, i * POINTS + q - 1, between};
             if (!wrap) pts[n++] = (point){end, end, 0, i * POINTS + POINTS - 1, at_rows};
