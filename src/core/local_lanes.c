@@ -3,13 +3,14 @@
  * Measuring local rows takes, at every point, every bone's blend of two local rows, its
  * composition with its parent's, its matrix and its difference from the exact one, then the
  * difference's bound terms: Husky's local bake did that at 4,016 points, 49 bones each, about
- * 800 instructions a bone one point at a time (blend_compose 61 M, qpos_matrix 19 M, the
- * differences 31 M, cb_joint_errors 24 M). Here four points are the lanes of GCC's vector types
+ * 700 instructions a bone one point at a time (the blends and compositions 61 M, the matrices
+ * 19 M, the differences 31 M, their terms 24 M). Here four points are the lanes of GCC's vector types
  * (lanes.h), bone by bone in the skeleton's order, and each lane runs the scalar operations in
  * their order - local_qpos_blend's, cb_quat_normalize's, local_qpos_compose's (cb_quat_rotate's,
  * cb_quat_mul's), cb_mat4_from_trs's, the differences and cb_joint_error_terms's - so its values
  * are the same bits (measure_lanes.c does the same for global rows). Compilers without vector
- * types take the scalar functions one lane at a time. */
+ * types take the scalar functions one lane at a time. tests/lib/test_local_lanes.c holds the lanes
+ * to the scalar operations, bit for bit. */
 #include <math.h>
 #include <string.h>
 
