@@ -130,7 +130,8 @@ void local_points4(const local_skeleton *k, const float *compose_bind, const flo
         v4df t[4], sum;
         joint_error_terms4(d, bj.x, bj.y, bj.z, sqrt(bj.x * bj.x + bj.y * bj.y + bj.z * bj.z), t, &sum);
         for (int l = 0; l < 4; ++l) {
-            joints[(size_t)l * k->bones + j] = (cb_joint_error){t[0][l], t[1][l], t[2][l], t[3][l], diff + l * stride + (size_t)j * 16};
+            double *dl = diff + l * stride + (size_t)j * 16;
+            joints[(size_t)l * k->bones + j] = (cb_joint_error){t[0][l], t[1][l], t[2][l], t[3][l], dl};
             ok[l] &= isfinite(sum[l]);
         }
     }

@@ -58,7 +58,10 @@ static uint64_t next_random(uint64_t *state)
     return *state >> 11;
 }
 
-static double uniform(uint64_t *state, double lo, double hi) { return lo + (hi - lo) * (double)next_random(state) / (double)(1ull << 53); }
+static double uniform(uint64_t *state, double lo, double hi)
+{
+    return lo + (hi - lo) * (double)next_random(state) / (double)(1ull << 53);
+}
 
 /* Local rows near each bone's rest: a turn of up to ~0.6 rad, the position within 0.1 of the
  * bind position, the scale 0.9 .. 1.1; every quaternion on a random side. */
@@ -140,7 +143,8 @@ static void lanes_equal_scalar(const char *asset, bool as_matrices)
     { /* a zero quaternion (normalised to the identity) and a NaN (no bound holds) in two lanes */
         rows[6 * n + n / 2].q = (cb_quat){0, 0, 0, 0};
         rows[7 * n + n - 1].p.x = NAN;
-        const local_qpos *a[4] = {rows + 6 * n, rows + 7 * n, rows, rows + 6 * n}, *b[4] = {rows + 6 * n, rows, rows + n, rows + 7 * n};
+        const local_qpos *a[4] = {rows + 6 * n, rows + 7 * n, rows, rows + 6 * n};
+        const local_qpos *b[4] = {rows + 6 * n, rows, rows + n, rows + 7 * n};
         const double f[4] = {0.75, 0.25, 0.5, 0};
         check_lanes(&k, facts.bind_positions, facts.reach, a, b, f, use, ex);
     }
