@@ -71,6 +71,82 @@ static CB_CLONE_INLINE void cb_skin_vertex(const cb_primitive *prim, uint32_t v,
     }
     r[0] = sum[0], r[1] = sum[1], r[2] = sum[2];
 }
+/* Values at .. at + n - 1 (n: 8 or 16) of the rows x[0 .. 3] as lanes: v[k][l] = x[l][at + k],
+ * four values at a time by four 32-byte loads and a 4x4 transpose (cb_rows_to_lanes4's). */
+static CB_CLONE_INLINE void load_lanes4(const double *const *x, size_t at, int n, v4df *v)
+{
+    #pragma GCC unroll 16
+    for (int h = 0; h < n; h += 4) {
+        v4df r0, r1, r2, r3;
+        memcpy(&r0, x[0] + at + h, 32), memcpy(&r1, x[1] + at + h, 32);
+        memcpy(&r2, x[2] + at + h, 32), memcpy(&r3, x[3] + at + h, 32);
+        v4df t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
+        v4df t2 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
+        v[h] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), v[h + 1] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+        v[h + 2] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), v[h + 3] = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+    }
+}
+
+/* cb_mat4_from_trs over four lanes: m[k] is element k, with m[12 .. 14] = t and the scale s on
+ * all three axes (the constant elements, 0 and 1, are left out). */
+static CB_CLONE_INLINE void trs4(const v4df *t, const v4df *q, const v4df *scale, v4df *m)
+{
+    const v4df s = *scale;
+    const v4df one = CB_SPLAT4(1.0), two = CB_SPLAT4(2.0);
+    v4df x = q[0], y = q[1], z = q[2], w = q[3];
+    v4df xx = x * x, yy = y * y, zz = z * z;
+    v4df xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
+    m[0] = (one - two * (yy + zz)) * s, m[1] = (two * (xy + wz)) * s, m[2] = (two * (xz - wy)) * s;
+    m[4] = (two * (xy - wz)) * s, m[5] = (one - two * (xx + zz)) * s, m[6] = (two * (yz + wx)) * s;
+    m[8] = (two * (xz + wy)) * s, m[9] = (two * (yz - wx)) * s, m[10] = (one - two * (xx + yy)) * s;
+    m[12] = t[0], m[13] = t[1], m[14] = t[2];
+}
+
+/* Each lane's difference matrix into out + l * stride, from its 12 elements d (column c is
+ * d[3c .. 3c + 2], then a 0): a transpose of shuffles and 32-byte stores a column. */
+static CB_CLONE_INLINE void store_differences4(const v4df *d, double *out, size_t stride)
+{
+    const v4df zero = CB_SPLAT4(0.0);
+    #pragma GCC unroll 16
+    for (int c = 0; c < 4; ++c) {
+        v4df r0 = d[3 * c], r1 = d[3 * c + 1], r2 = d[3 * c + 2];
+        v4df t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
+        v4df t2 = __builtin_shufflevector(r2, zero, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, zero, 1, 5, 3, 7);
+        v4df l0 = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), l1 = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+        v4df l2 = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), l3 = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+        double *o = out + 4 * c;
+        memcpy(o, &l0, 32), memcpy(o + stride, &l1, 32), memcpy(o + 2 * stride, &l2, 32), memcpy(o + 3 * stride, &l3, 32);
+    }
+}
+
+/* cb_joint_error_terms over four lanes, from the differences' elements d (as store_differences4
+ * takes them: D[4c + r] is d[3c + r]); `bind` is sqrt(bx^2 + by^2 + bz^2), the same for every
+ * lane. Its operations in its order; its compares and selects as masks. *sum: at_bind +
+ * slack_fixed. */
+static CB_CLONE_INLINE void joint_error_terms4(const v4df *d, double bx, double by, double bz, double bind, v4df *terms,
+                                               v4df *sum)
+{
+    const v4df x = CB_SPLAT4(bx), y = CB_SPLAT4(by), z = CB_SPLAT4(bz);
+    v4df ex = d[0] * x + d[3] * y + d[6] * z + d[9];
+    v4df ey = d[1] * x + d[4] * y + d[7] * z + d[10];
+    v4df ez = d[2] * x + d[5] * y + d[8] * z + d[11];
+    const v4df *c0 = d, *c1 = d + 3, *c2 = d + 6; /* columns of A */
+    v4df g00 = c0[0] * c0[0] + c0[1] * c0[1] + c0[2] * c0[2], g11 = c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2];
+    v4df g22 = c2[0] * c2[0] + c2[1] * c2[1] + c2[2] * c2[2];
+    v4df g01 = CB_ABS4(c0[0] * c1[0] + c0[1] * c1[1] + c0[2] * c1[2]);
+    v4df g02 = CB_ABS4(c0[0] * c2[0] + c0[1] * c2[1] + c0[2] * c2[2]);
+    v4df g12 = CB_ABS4(c1[0] * c2[0] + c1[1] * c2[1] + c1[2] * c2[2]);
+    v4df r0 = g00 + g01 + g02, r1 = g01 + g11 + g12, r2 = g02 + g12 + g22;
+    v4df r = CB_SELECT4(r0 > r1, r0, r1);
+    v4df a = CB_SELECT4(r > r2, r, r2), t = d[9] * d[9] + d[10] * d[10] + d[11] * d[11], e = ex * ex + ey * ey + ez * ez;
+    cb_sqrt4(&a), cb_sqrt4(&t), cb_sqrt4(&e);
+    a = a * CB_SPLAT4(1 + 1e-9);
+    terms[0] = e;
+    terms[1] = a;
+    terms[2] = CB_SPLAT4(1e-9) * (a * CB_SPLAT4(bind) + t);
+    terms[3] = t;
+    *sum = terms[0] + terms[2];
+}
 #else
 static CB_CLONE_INLINE void cb_skin_vertex(const cb_primitive *prim, uint32_t v, const double *mats, double r[3])
 {

@@ -29,6 +29,7 @@
 
 #include "cb_math.h"
 #include "error_bound.h"
+#include "local_lanes.h"
 #include "local_pose.h"
 #include "sampler.h"
 
@@ -82,29 +83,6 @@ static void to_local(const local_skeleton *k, const float *bind, const local_qpo
     }
 }
 
-/* The runtime's blend of two local rows of each bone (q1 flipped into q0's hemisphere, nlerp;
- * lerp of position and scale), composed from the root (the spec's step 3, q normalised after
- * composing), into global rows. */
-static void blend_compose(const local_skeleton *k, const float *bind, const local_qpos *x, const local_qpos *y,
-                          double f, local_qpos *out)
-{
-    for (uint32_t i = 0; i < k->bones; ++i) {
-        uint32_t j = k->order[i];
-        int32_t p = k->parent[j];
-        local_qpos l = local_qpos_blend(x[j], y[j], f); /* parents come first in k->order: out[p] is composed */
-        out[j] = p < 0 ? l : local_qpos_compose(out[p], bind_of(bind, (uint32_t)p), l);
-        out[j].q = cb_quat_normalize(out[j].q);
-    }
-}
-
-/* The joint matrix of a row: v' = p + s R (v - b), column-major. */
-static void qpos_matrix(const local_qpos *r, cb_vec3 b, double m[16])
-{
-    cb_mat4_from_trs(m, (cb_vec3){0, 0, 0}, r->q, (cb_vec3){r->s, r->s, r->s});
-    cb_vec3 rb = cb_mat4_transform_dir(m, b);
-    m[12] = r->p.x - rb.x, m[13] = r->p.y - rb.y, m[14] = r->p.z - rb.z;
-}
-
 /* A joint matrix as a row about its pivot b: its rotation from the normalised columns, the
  * columns' mean length as the scale (qpos holds similarities; the bake refuses local rows for a
  * rig that is none). */
@@ -134,18 +112,21 @@ typedef struct probe_ctx {
     pose_cache *keep;         /* the bake's cache of this clip's poses, or NULL (matrix rigs only) */
     bool similar;             /* cb_sampler_is_similarity: sampled as similarities */
     bool not_qpos;            /* a pose had a joint that is no similarity (local_rate.not_qpos) */
+    bool global_rows;         /* not similar: the poses' global rows wanted (the choice's, for its local rows) */
+    bool kept[CB_SAMPLE_BATCH]; /* not similar: pose i is the cache's (its qpos derivation kept with it) */
     cb_joint_subset *all;     /* not similar: every joint, sampled a batch of times at once */
     double *lanes;            /* its lanes */
     double *pose_room;        /* CB_SAMPLE_BATCH x bones x 16: the poses no cache keeps */
     const double *mats[CB_SAMPLE_BATCH]; /* not similar: each pose's joint matrices */
     double *qs;               /* bones x 5: a pose's quaternions and scales (palette_qpos_similarity_pose) */
     local_qpos *poses;         /* CB_SAMPLE_BATCH x bones: global rows at a batch's times */
-    local_qpos *rows[2];       /* bones each: the local rows either side of the interval in hand */
+    local_qpos *rows;          /* (INTERVALS_A_BATCH + 1) x bones: the local rows that bound a batch's intervals */
     local_qpos *first_row;     /* bones: the clip's first row, where a loop's last interval ends */
-    local_qpos *blended;       /* bones: the blend composed */
+    double *composed;         /* bones x 32: four points' blends composed, as lanes (local_points4) */
     cb_similarity *sims;      /* CB_SAMPLE_BATCH x bones */
-    double *diff;             /* bones x 16: exact less blended */
-    cb_joint_error *joints;   /* bones */
+    double *diff;             /* 4 x bones x 16: each of four points' exact less blended */
+    cb_joint_error *joints;   /* 4 x bones */
+    double *values;           /* bones x 16: a palette row's values (palette_decode_row_values) */
     void *block;
 } probe_ctx;
 
@@ -159,20 +140,21 @@ static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts
                            const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep)
 {
     size_t n = k->bones ? k->bones : 1;
-    size_t sizes[] = {CB_SAMPLE_BATCH * n * sizeof(local_qpos), n * sizeof(local_qpos), n * sizeof(local_qpos),
-                      n * sizeof(local_qpos), n * sizeof(local_qpos), CB_SAMPLE_BATCH * n * sizeof(cb_similarity),
-                      n * 16 * sizeof(double), n * sizeof(cb_joint_error), n * 5 * sizeof(double),
-                      (CB_SAMPLE_BATCH + 1) * (n * 16 + 1) * sizeof(double), CB_SAMPLE_BATCH * n * 16 * sizeof(double)};
+    size_t sizes[] = {CB_SAMPLE_BATCH * n * sizeof(local_qpos), (INTERVALS_A_BATCH + 1) * n * sizeof(local_qpos),
+                      n * sizeof(local_qpos), n * 32 * sizeof(double), CB_SAMPLE_BATCH * n * sizeof(cb_similarity),
+                      4 * n * 16 * sizeof(double), 4 * n * sizeof(cb_joint_error), n * 5 * sizeof(double),
+                      (CB_SAMPLE_BATCH + 1) * (n * 16 + 1) * sizeof(double), CB_SAMPLE_BATCH * n * 16 * sizeof(double),
+                      n * 16 * sizeof(double)};
     size_t total = 0;
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) total += (sizes[i] + 63) / 64 * 64;
     bool similar = cb_sampler_is_similarity(s);
     *c = (probe_ctx){.s = s, .facts = facts, .k = k, .clip = clip, .m = cb_sampler_model(s), .root_motion = root_motion,
-                     .keep = similar ? NULL : keep, .similar = similar, .block = malloc(total)};
+                     .keep = similar ? NULL : keep, .similar = similar, .global_rows = true, .block = malloc(total + 63)};
     if (!c->block) return false;
-    char *at = c->block;
-    void **parts[] = {(void **)&c->poses, (void **)&c->rows[0], (void **)&c->rows[1], (void **)&c->first_row,
-                      (void **)&c->blended, (void **)&c->sims, (void **)&c->diff, (void **)&c->joints, (void **)&c->qs,
-                      (void **)&c->lanes, (void **)&c->pose_room};
+    char *at = (char *)c->block + (64 - (uintptr_t)c->block % 64) % 64; /* every part 64-byte aligned: lanes */
+    void **parts[] = {(void **)&c->poses, (void **)&c->rows, (void **)&c->first_row, (void **)&c->composed,
+                      (void **)&c->sims, (void **)&c->diff, (void **)&c->joints, (void **)&c->qs,
+                      (void **)&c->lanes, (void **)&c->pose_room, (void **)&c->values};
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) *parts[i] = at, at += (sizes[i] + 63) / 64 * 64;
     if (similar) return true;
     bool *every = malloc(n * sizeof *every);
@@ -184,20 +166,23 @@ static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts
 }
 
 /* Pose i's global rows from its joint matrices (c->mats[i]): rotation and scale four joints at
- * a time (palette_qpos_similarity_pose, the bake's), the pivot's position p = M b. */
+ * a time (palette_qpos_similarity_pose, the bake's; a cached pose's derived once and kept with
+ * it, where the bake's rows and later probes take it), the pivot's position p = M b. */
 static void rows_of_matrices(probe_ctx *c, uint32_t i)
 {
     uint32_t bones = c->k->bones;
     const float *bind = c->facts->bind_positions;
     const double *mats = c->mats[i];
     local_qpos *out = c->poses + (size_t)i * bones;
-    if (!palette_qpos_similarity_pose(mats, bones, c->qs)) { /* a joint no similarity: the bake falls back */
+    const double *qs = c->kept[i] ? palette_kept_qpos(mats, bones)
+                                  : palette_qpos_similarity_pose(mats, bones, c->qs) ? c->qs : NULL;
+    if (!qs) { /* a joint no similarity: the bake falls back */
         c->not_qpos = true;
         for (uint32_t j = 0; j < bones; ++j) out[j] = qpos_of_matrix(mats + 16 * (size_t)j, bind_of(bind, j));
         return;
     }
     for (uint32_t j = 0; j < bones; ++j) {
-        const double *q = c->qs + 5 * (size_t)j;
+        const double *q = qs + 5 * (size_t)j;
         out[j] = (local_qpos){{q[0], q[1], q[2], q[3]}, cb_mat4_transform_point(mats + 16 * (size_t)j, bind_of(bind, j)), q[4]};
     }
 }
@@ -234,41 +219,72 @@ static void sample_frames(probe_ctx *c, const cb_clip_info *framing, const uint3
             missing[n++] = frames[i];
         }
         c->mats[i] = found ? found : room[n - 1];
+        c->kept[i] = found || add;
     }
     if (n) cb_clip_frame_matrices_batch(c->s, framing, missing, n, c->root_motion, c->all, c->lanes, room);
-    for (uint32_t i = 0; i < count; ++i) rows_of_matrices(c, i);
+    for (uint32_t i = 0; c->global_rows && i < count; ++i) rows_of_matrices(c, i);
 }
 
-/* The worst vertex error of the blended pose (c->blended) against pose i of the batch, or
+/* A point measured: the local rows a and b blended by f against pose `pose` of the batch, its
+ * worst error into *worst. */
+typedef struct point {
+    const local_qpos *a, *b;
+    double f;
+    uint32_t pose;
+    double *worst;
+} point;
+
+/* The worst vertex error of lane l of local_points4 (c->joints, c->diff) against `worst`, or
  * `worst` when no vertex exceeds it; above `goal` it stops at the first group over it (any value
  * over the goal decides alike). Skinned only where a vertex group's bound (error_bound.h)
  * exceeds the worst so far: the maximum skinning every vertex gives. */
-static double point_error(probe_ctx *c, uint32_t i, double worst, double goal)
+static double lane_error(probe_ctx *c, int l, bool finite, double worst, double goal)
 {
     const palette_skin_facts *f = c->facts;
     uint32_t bones = c->k->bones;
-    const local_qpos *exact = c->poses + (size_t)i * bones;
-    for (uint32_t j = 0; j < bones; ++j) {
-        double e[16], b[16];
-        if (f->reach[j] < 0) { /* it moves no vertex: no group reads its difference (its children are composed) */
-            memset(c->diff + 16 * (size_t)j, 0, 16 * sizeof(double));
-            continue;
-        }
-        const double *exact_matrix = c->similar ? e : c->mats[i] + 16 * (size_t)j;
-        if (c->similar) qpos_matrix(&exact[j], bind_of(f->bind_positions, j), e);
-        qpos_matrix(&c->blended[j], bind_of(f->bind_positions, j), b);
-        for (int k = 0; k < 16; ++k) c->diff[j * 16 + k] = exact_matrix[k] - b[k];
-    }
-    if (!cb_joint_errors(c->diff, bones, f->bind_positions, c->joints)) return INFINITY;
-    if (cb_row_error_cap(c->joints, bones, f->group_reach, f->weight_sum) <= worst) return worst;
+    const cb_joint_error *joints = c->joints + (size_t)l * bones;
+    const double *diff = c->diff + (size_t)l * bones * 16;
+    if (!finite) return INFINITY;
+    if (cb_row_error_cap(joints, bones, f->group_reach, f->weight_sum) <= worst) return worst;
     const cb_vertex_groups *g = &f->groups;
     for (uint32_t k = 0; k < g->group_count && !(worst > goal); ++k) {
-        if (cb_group_error_bound(g, k, c->joints, worst) <= worst) continue;
+        if (cb_group_error_bound(g, k, joints, worst) <= worst) continue;
         const cb_vertex_group *grp = &g->groups[k];
-        double e = sqrt(cb_skin_group_worst(&c->m->primitives[grp->primitive], g->vertices + grp->first, grp->count, c->diff));
+        double e = sqrt(cb_skin_group_worst(&c->m->primitives[grp->primitive], g->vertices + grp->first, grp->count, diff));
         worst = e > worst ? e : worst; /* a NaN error leaves it: cb_joint_errors let only finite differences by */
     }
     return worst;
+}
+
+/* The points' errors into their worsts, four at a time (local_points4), in order: a point's
+ * measurement starts from the worst the points before it left. Stops after the four where a
+ * worst passes `goal` (a maximum is the same whatever the order: it only ever grows, and a
+ * group's bound only skips what cannot raise it). compose_bind: where the rows are composed
+ * about (the palette's bind positions, or the skin's). */
+static void measure_points(probe_ctx *c, const float *compose_bind, const point *pts, uint32_t n, double goal)
+{
+    uint32_t bones = c->k->bones;
+    for (uint32_t at = 0; at < n; at += 4) {
+        uint32_t lanes = n - at < 4 ? n - at : 4;
+        const local_qpos *a[4], *b[4], *exact[4];
+        const double *mats[4];
+        double f[4];
+        bool finite[4], past = false;
+        for (uint32_t l = 0; l < 4; ++l) { /* lanes past the points repeat the first: computed, not read */
+            const point *pt = &pts[at + (l < lanes ? l : 0)];
+            a[l] = pt->a, b[l] = pt->b, f[l] = pt->f;
+            exact[l] = c->poses + (size_t)pt->pose * bones;
+            mats[l] = c->similar ? NULL : c->mats[pt->pose];
+        }
+        local_points4(c->k, compose_bind, c->facts->bind_positions, c->facts->reach, a, b, f, c->similar ? NULL : mats,
+                      exact, c->composed, c->diff, c->joints, finite);
+        for (uint32_t l = 0; l < lanes; ++l) {
+            double *worst = pts[at + l].worst;
+            *worst = lane_error(c, (int)l, finite[l], *worst, goal);
+            past = past || *worst > goal;
+        }
+        if (past) return;
+    }
 }
 
 /* The worst error of the clip's local rows at `fps` at the quarter points of every row interval,
@@ -292,26 +308,25 @@ static double probe(probe_ctx *c, double fps, double goal)
     const bool row_kept = true;
     double worst = 0;
     sample_frames(c, &framing, &row0, 1, &row_kept);
-    to_local(c->k, bind, c->poses, c->rows[0]);
-    memcpy(c->first_row, c->rows[0], bones * sizeof *c->first_row);
+    to_local(c->k, bind, c->poses, c->rows);
+    memcpy(c->first_row, c->rows, bones * sizeof *c->first_row);
     for (uint32_t first = 0; first < steps && !(worst > goal); first += INTERVALS_A_BATCH) {
-        uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH];
+        uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH], n = 0;
         bool kept[CB_SAMPLE_BATCH];
         for (uint32_t i = 0; i < count * POINTS; ++i) /* all kept: the bake reads rows and midpoints, its measure all */
             frames[i] = POINTS * first + i + 1, kept[i] = true;
         sample_frames(c, &framing, frames, count * POINTS, kept);
-        for (uint32_t i = 0; i < count && !(worst > goal); ++i) {
+        point pts[INTERVALS_A_BATCH * (POINTS - 1)];
+        for (uint32_t i = 0; i < count; ++i) {
+            local_qpos *from = c->rows + (size_t)i * bones, *to = from + bones;
             if (c->clip->loops && first + i + 1 == steps) /* the wrap: into the first row */
-                memcpy(c->rows[1], c->first_row, bones * sizeof *c->rows[1]);
+                memcpy(to, c->first_row, bones * sizeof *to);
             else
-                to_local(c->k, bind, c->poses + (size_t)(i * POINTS + POINTS - 1) * bones, c->rows[1]);
-            for (uint32_t q = 1; q < POINTS && !(worst > goal); ++q) {
-                blend_compose(c->k, bind, c->rows[0], c->rows[1], (double)q / POINTS, c->blended);
-                worst = point_error(c, i * POINTS + q - 1, worst, goal);
-            }
-            local_qpos *swap = c->rows[0];
-            c->rows[0] = c->rows[1], c->rows[1] = swap;
+                to_local(c->k, bind, c->poses + (size_t)(i * POINTS + POINTS - 1) * bones, to);
+            for (uint32_t q = 1; q < POINTS; ++q) pts[n++] = (point){from, to, (double)q / POINTS, i * POINTS + q - 1, &worst};
         }
+        measure_points(c, bind, pts, n, goal);
+        memcpy(c->rows, c->rows + (size_t)count * bones, bones * sizeof *c->rows); /* the next batch's first */
     }
     return worst;
 }
@@ -446,50 +461,44 @@ double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const lo
 /* ---- a finished local palette, measured ---- */
 
 /* Palette row r's local rows of every bone, decoded as the runtime decodes them. */
-static void decode_row(const cb_palette *p, uint32_t r, local_qpos *out)
+static void decode_row(probe_ctx *c, const cb_palette *p, uint32_t r, local_qpos *out)
 {
+    palette_decode_row_values(p, r, c->values);
     for (uint32_t j = 0; j < p->bone_count; ++j) {
-        double v[16];
-        cb_palette_decode_values(p, p->texels, r, j, v);
+        const double *v = c->values + (size_t)j * 16;
         out[j] = (local_qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]};
     }
 }
 
-/* Pose i of the batch against the palette's rows x and y blended at f, composed: the worst so far. */
-static double palette_point(probe_ctx *c, const cb_palette *p, const local_qpos *x, const local_qpos *y, double f, uint32_t i,
-                            double worst)
-{
-    blend_compose(c->k, p->bind_positions, x, y, f, c->blended);
-    return point_error(c, i, worst, INFINITY);
-}
-
 /* The clip's rows (frames 4i of framing) and quarter points (4i + 1 .. 3) measured interval by
- * interval, four at a time, each row decoded once. */
+ * interval, a batch of four intervals at a time, each row decoded once. */
 static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palette_clip *pc, const cb_clip_info *framing,
                               uint32_t steps, double *at_rows, double *between)
 {
-    uint32_t row0 = 0;
+    uint32_t row0 = 0, bones = c->k->bones;
     const bool all = true;
     bool kept[CB_SAMPLE_BATCH];
     for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) kept[i] = true; /* the bake after a replan reads them again */
-    decode_row(p, pc->first_row, c->rows[0]);
+    decode_row(c, p, pc->first_row, c->rows);
     sample_frames(c, framing, &row0, 1, &all);
-    *at_rows = palette_point(c, p, c->rows[0], c->rows[0], 0, 0, *at_rows);
+    point start = {c->rows, c->rows, 0, 0, at_rows};
+    measure_points(c, p->bind_positions, &start, 1, INFINITY);
     for (uint32_t first = 0; first < steps; first += INTERVALS_A_BATCH) {
-        uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH];
+        uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH], n = 0;
         for (uint32_t i = 0; i < count * POINTS; ++i) frames[i] = POINTS * first + i + 1;
         sample_frames(c, framing, frames, count * POINTS, kept);
+        point pts[INTERVALS_A_BATCH * POINTS];
         for (uint32_t i = 0; i < count; ++i) {
             uint32_t next = first + i + 1;
             bool wrap = next == pc->frames; /* a loop's last interval ends on its first row */
-            decode_row(p, pc->first_row + (wrap ? 0 : next), c->rows[1]);
-            const local_qpos *to = pc->step ? c->rows[0] : c->rows[1]; /* held rows: the row alone */
-            for (uint32_t q = 1; q < POINTS; ++q)
-                *between = palette_point(c, p, c->rows[0], to, (double)q / POINTS, i * POINTS + q - 1, *between);
-            if (!wrap) *at_rows = palette_point(c, p, c->rows[1], c->rows[1], 0, i * POINTS + POINTS - 1, *at_rows);
-            local_qpos *swap = c->rows[0];
-            c->rows[0] = c->rows[1], c->rows[1] = swap;
+            local_qpos *from = c->rows + (size_t)i * bones, *end = from + bones;
+            decode_row(c, p, pc->first_row + (wrap ? 0 : next), end);
+            const local_qpos *to = pc->step ? from : end; /* held rows: the row alone */
+            for (uint32_t q = 1; q < POINTS; ++q) pts[n++] = (point){from, to, (double)q / POINTS, i * POINTS + q - 1, between};
+            if (!wrap) pts[n++] = (point){end, end, 0, i * POINTS + POINTS - 1, at_rows};
         }
+        measure_points(c, p->bind_positions, pts, n, INFINITY);
+        memcpy(c->rows, c->rows + (size_t)count * bones, bones * sizeof *c->rows); /* the next batch's first */
     }
 }
 
@@ -513,7 +522,13 @@ cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, c
         local_skeleton_free(&k);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring %s's local rows", m->source);
     }
-    cb_sampler_set_baked_loop(s, animation, pc->loops, pc->start, pc->duration);
+    /* The loop as the bake played it: from the analysis its rate choice kept (judged once). */
+    const cb_clip_info *judged = palette_kept_analysis_info(keep);
+    if (judged && judged->animation == animation)
+        sampler_set_baked_loop_judged(s, judged, pc->loops, pc->start, pc->duration);
+    else
+        cb_sampler_set_baked_loop(s, animation, pc->loops, pc->start, pc->duration);
+    c.global_rows = false; /* a matrix rig's poses are measured as matrices: its rows are the palette's */
     palette_intervals(&c, p, pc, &framing, pc->duration > 0 ? steps : 0, at_rows, between);
     probe_ctx_free(&c);
     local_skeleton_free(&k);

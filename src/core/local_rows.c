@@ -104,24 +104,19 @@ bool palette_local_matrices(const cb_palette *p, const void *texels, const palet
 
 /* ---- the conversion of a global float qpos palette ---- */
 
-static local_qpos global_at(const cb_palette *p, uint32_t row, uint32_t bone)
-{
-    double v[16];
-    cb_palette_decode_values(p, p->texels, row, bone, v);
-    return qpos_of_values(v);
-}
-
 /* Every row's local values (8 doubles a bone), each bone's quaternion kept on the side of the
- * row before within its clip. */
-static void local_rows(const cb_palette *g, double *out)
+ * row before within its clip; row: room for a row's decoded values (bones x 16), each row of g
+ * decoded once (palette_decode_row_values: cb_palette_decode_values's doubles). */
+static void local_rows(const cb_palette *g, double *row, double *out)
 {
     for (uint32_t c = 0; c < g->clip_count; ++c)
         for (uint32_t f = 0; f < g->clips[c].frames; ++f) {
             uint32_t r = g->clips[c].first_row + f;
+            palette_decode_row_values(g, r, row);
             for (uint32_t j = 0; j < g->bone_count; ++j) {
-                local_qpos t = global_at(g, r, j);
+                local_qpos t = qpos_of_values(row + (size_t)j * 16);
                 int32_t a = g->parents[j];
-                if (a >= 0) t = local_qpos_localize(global_at(g, r, (uint32_t)a), bind_of(g, (uint32_t)a), t);
+                if (a >= 0) t = local_qpos_localize(qpos_of_values(row + (size_t)a * 16), bind_of(g, (uint32_t)a), t);
                 double *v = out + ((size_t)r * g->bone_count + j) * 8, *before = v - (size_t)g->bone_count * 8;
                 double w[8] = {t.q.x, t.q.y, t.q.z, t.q.w, t.p.x, t.p.y, t.p.z, t.s};
                 if (f > 0 && w[0] * before[0] + w[1] * before[1] + w[2] * before[2] + w[3] * before[3] < 0)
@@ -196,15 +191,16 @@ static void encode_local(cb_palette *p, const double *values)
 static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin, cb_precision precision, cb_error *err)
 {
     size_t values_size = (size_t)g->rows * g->bone_count * 8 * sizeof(double);
-    double *values = malloc(values_size ? values_size : 1);
+    double *values = malloc(values_size ? values_size : 1), *row = malloc((g->bone_count ? g->bone_count : 1) * 16 * sizeof *row);
     g->parents = malloc((size_t)g->bone_count * sizeof *g->parents);
     g->bone_ranges = calloc((size_t)g->bone_count * 8, sizeof *g->bone_ranges);
-    if (!values || !g->parents || !g->bone_ranges) {
-        free(values);
+    if (!values || !row || !g->parents || !g->bone_ranges) {
+        free(values), free(row);
         return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for local rows", m->source);
     }
     palette_local_parents(m, &m->skins[skin], g->parents);
-    local_rows(g, values);
+    local_rows(g, row, values);
+    free(row);
     void *global_texels = g->texels;
     bool borrowed = g->texels_borrowed;
     g->precision = precision;

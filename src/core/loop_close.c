@@ -216,14 +216,25 @@ int cb_loop_correction_measure(cb_sampler *s, cb_clip_info *clip)
  * within this (seconds). */
 #define CB_BAKED_SPAN_TOLERANCE 1e-4
 
-bool cb_sampler_set_baked_loop(cb_sampler *s, int32_t animation, bool loops, double start, double duration)
+/* cb_sampler_set_baked_loop, judged from `judged` where given (a loop's analysis of the clip). */
+static bool set_baked_loop(cb_sampler *s, int32_t animation, bool loops, double start, double duration,
+                           const cb_clip_info *judged)
 {
     cb_sampler_set_period(s, animation, loops ? duration : 0);
     if (animation < 0 || animation >= (int32_t)s->model->animation_count) return true;
-    cb_sampler_open_clip(s, animation);
     const cb_animation *a = &s->model->animations[animation];
-    if (!loops || fabs(start - a->t0) > CB_BAKED_SPAN_TOLERANCE || fabs(duration - (a->t1 - a->t0)) > CB_BAKED_SPAN_TOLERANCE)
-        return true;
+    bool over_span = loops && !(fabs(start - a->t0) > CB_BAKED_SPAN_TOLERANCE) &&
+                     !(fabs(duration - (a->t1 - a->t0)) > CB_BAKED_SPAN_TOLERANCE);
+    bool closes = over_span && judged && judged->loop_reason == CB_LOOP_CLOSED_CORRECTED;
+    if (!closes) cb_sampler_open_clip(s, animation); /* a copy closed alike is kept: cb_sampler_set_loop */
+    if (!over_span) return true;
+    if (judged) {
+        /* As analyzing it as a loop leaves it: closed with its travel at the period of its span
+         * (a closed loop's duration), then the period baked. */
+        bool ok = !closes || cb_sampler_set_loop(s, judged);
+        cb_sampler_set_period(s, animation, duration);
+        return ok;
+    }
     /* Judged again as the bake judged it (as a loop, at any rate: framing does not matter). */
     cb_clip_info info;
     cb_error e = {0};
@@ -231,4 +242,14 @@ bool cb_sampler_set_baked_loop(cb_sampler *s, int32_t animation, bool loops, dou
     cb_sampler_set_period(s, animation, duration);
     if (rc || info.loop_reason != CB_LOOP_CLOSED_CORRECTED) cb_sampler_open_clip(s, animation);
     return rc != CB_ERR_INTERNAL;
+}
+
+bool cb_sampler_set_baked_loop(cb_sampler *s, int32_t animation, bool loops, double start, double duration)
+{
+    return set_baked_loop(s, animation, loops, start, duration, NULL);
+}
+
+bool sampler_set_baked_loop_judged(cb_sampler *s, const cb_clip_info *judged, bool loops, double start, double duration)
+{
+    return set_baked_loop(s, judged->animation, loops, start, duration, judged->loops ? judged : NULL);
 }

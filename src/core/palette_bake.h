@@ -210,6 +210,9 @@ void palette_keep_analysis(pose_cache *poses, const cb_clip_info *analysis, doub
 bool palette_kept_analysis(const pose_cache *poses, int32_t animation, int loop, double fps, const cb_limits *limits);
 bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, int32_t animation, int loop, double fps,
                                 const cb_limits *limits, cb_clip_info *out);
+/* palette_plan.c: the analysis kept with `poses` as it was kept (any rate, any loop override), or
+ * NULL (none, or poses NULL). */
+const cb_clip_info *palette_kept_analysis_info(const pose_cache *poses);
 /* rate_search.c: an analysis of clip i made before the search (at fps, loop override loop) kept
  * for it: kept[i] made where it is NULL (a search's pose cache), the analysis attached. */
 void palette_seed_analysis(pose_cache **kept, uint32_t i, const cb_sampler *sampler, const cb_clip_info *analysis,
@@ -269,6 +272,10 @@ void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip
 /* palette_rows.c: a pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
  * from its matrices alone too (a probe's rows are rows of the others). */
 pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes);
+/* palette_rows.c: palette_qpos_similarity_pose of a pose kept in such a cache (mats: its matrices,
+ * as pose_cache_find or pose_cache_add gave them), derived once and kept with it, where the
+ * bake's rows take it too; NULL, nothing kept, where a joint is no similarity. */
+const double *palette_kept_qpos(const double *mats, uint32_t bones);
 /* qpos_lanes.c: qpos_similarity's quaternion and scale of every joint of a pose (mats: 16 doubles a
  * joint) into out (5 a joint), four joints at a time, the same bits; false, with out partly
  * written, where a joint is no similarity (qpos_similarity then says which). */

@@ -109,6 +109,12 @@ bool palette_kept_analysis(const pose_cache *poses, int32_t animation, int loop,
     return k && k->loop == loop && k->info.animation == animation && clip_feet_weighed_alike(&k->info, k->fps, fps, limits);
 }
 
+const cb_clip_info *palette_kept_analysis_info(const pose_cache *poses)
+{
+    const kept_analysis *k = poses ? pose_cache_analysis(poses) : NULL;
+    return k ? &k->info : NULL;
+}
+
 bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, int32_t animation, int loop, double fps,
                                 const cb_limits *limits, cb_clip_info *out)
 {

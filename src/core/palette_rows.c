@@ -93,6 +93,15 @@ pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes)
     return pose_cache_create(bones, (uint32_t)(KEPT_ROW_AT(bones) + KEPT_ROW_DOUBLES(bones)), max_bytes);
 }
 
+const double *palette_kept_qpos(const double *mats, uint32_t bones)
+{
+    double *kept = (double *)mats + (size_t)bones * 16; /* the pose's extra doubles: the cache's, writable */
+    if (kept[0] >= DERIVED_QPOS) return kept + 1;
+    if (!palette_qpos_similarity_pose(mats, bones, kept + 1)) return NULL;
+    kept[0] = DERIVED_QPOS;
+    return kept + 1;
+}
+
 const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, uint32_t frame,
                                      double **extra)
 {

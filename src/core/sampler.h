@@ -138,6 +138,14 @@ static inline const cb_animation *cb_sampler_clip(const cb_sampler *s, int32_t a
  * memory (the clip then plays as it is). open: plays it as it is again. */
 bool cb_sampler_close_clip(cb_sampler *s, int32_t animation, const double travel[3]);
 void cb_sampler_open_clip(cb_sampler *s, int32_t animation);
+/* loop_close.c: cb_sampler_set_baked_loop for `judged`'s animation without judging it again:
+ * judged is cb_clip_analyze's analysis of it (any rate and loop override) on a sampler of the
+ * same model and skin. A clip analyzed as a loop (judged->loops) is judged alike by any analysis
+ * as a loop (its loop_reason comes from its poses alone; the override keeps
+ * CB_LOOP_CLOSED_CORRECTED for a loop, and so does the loop's decision), and closed with the same
+ * travel, which the analysis measured from the same poses; a one-shot's analysis is no judgement
+ * of it as a loop: then judged again. */
+bool sampler_set_baked_loop_judged(cb_sampler *s, const cb_clip_info *judged, bool loops, double start, double duration);
 /* loop_close.c: a closed clip's loop_correction_mm_per_m, sampled at its ends and between; 1
  * when out of memory. */
 int cb_loop_correction_measure(cb_sampler *s, cb_clip_info *clip);
