@@ -159,6 +159,15 @@ float *palette_keep_rows(bake_state *st, uint32_t c, bool fitted);
 void palette_kept_rows_done(bake_state *st, uint32_t c, const extent *bounds);
 void palette_settle_rows(bake_state *st, double error);
 const float *palette_take_rows(bake_state *st, uint32_t c, bool fitted, extent *bounds);
+/* The same rows' blends bounded, for the bake after the search to skip those that cannot reach
+ * its worst. A probe's measurement notes each blend's bound (an upper bound of that blend's
+ * error in the probe's palette) into the array palette_pending_point_bounds gives for its
+ * pending rows (3 x frames: fraction sub of `parts` at (sub - 1) x frames + interval; NULL:
+ * nothing to note), and the bake that took those rows (palette_take_rows) reads them back
+ * (palette_taken_point_bounds, NULL: none for clip c measured in `parts`) with *shift, how much
+ * the palette's own u16 box can move any vertex's error from the probe's (u16 qpos only). */
+double *palette_pending_point_bounds(bake_state *st, uint32_t parts);
+const double *palette_taken_point_bounds(const bake_state *st, uint32_t c, uint32_t parts, double *shift);
 /* A probe's sampled rows kept by the probe before it, met or missed (palette_settle_rows keeps
  * the last missed ones too), framed as clip c: copied into rows (the whole clip), its bounds into
  * *bounds and its value range into st->ranges[c], where a fitted probe at the rate of a sampled

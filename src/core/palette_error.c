@@ -308,12 +308,34 @@ static uint32_t sort_rows_over(cb_bounded_row *rows, uint32_t n, double worst)
     return m;
 }
 
+/* A measurement's blends bounded before (kept, with the shift any blend's error may have moved by
+ * since: palette_taken_point_bounds), or to bound for the bake after (note: a probe's,
+ * palette_pending_point_bounds): one fraction's bound per row interval, each NULL for none. */
+typedef struct point_bounds {
+    const double *kept;
+    double shift;
+    double *note;
+} point_bounds;
+
+/* The rows whose kept bound, moved by the shift, is within `floor` left out of rows[0 .. n):
+ * their error in this palette cannot exceed it (it is at most the probe's plus the shift). The
+ * others keep their order; returns how many. */
+static uint32_t drop_bounded(cb_bounded_row *rows, uint32_t n, const point_bounds *pb, double floor)
+{
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i)
+        if (!(pb->kept[rows[i].frame] + pb->shift <= floor)) rows[m++] = rows[i];
+    return m;
+}
+
 /* The worst vertex error of clip c over every error_stride-th row and the last (sub > 0: at
  * fraction sub / parts from each of those rows to the next, as the runtime blends them; a
  * one-shot's last row has no next). Rows that cannot exceed `floor` are not measured (0 when
  * none may be skipped): the result is exact when above it. With an error goal, measuring also
  * stops once the worst exceeds it. With `baked` (sub > 0, no goal), the baked rows' worst error
  * too, into *baked: their batches measured along the blends' bounds, which decode the same rows.
+ * With pb (sub > 0), the blends' bounds noted once every row has one, and the blends whose kept
+ * bound cannot reach `floor` left out before any is sampled (drop_bounded).
  *
  * Blends err most where the motion is fastest, so their rows' bounds differ widely: branch and
  * bound - every row's bound first, then the rows in order of bound, largest first, until no row
@@ -321,10 +343,11 @@ static uint32_t sort_rows_over(cb_bounded_row *rows, uint32_t n, double worst)
  * much the same on every row, and so are their bounds: those rows are measured in one pass in
  * frame order, each skinning only its groups that could exceed the worst so far. */
 static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t sub, uint32_t parts, double floor,
-                                measure_scratch *s, double *baked)
+                                measure_scratch *s, double *baked, const point_bounds *pb)
 {
     cb_bounded_row *rows = s->rows;
     uint32_t n = measured_frames(st, c, sub, rows), batch[CB_SAMPLE_BATCH];
+    if (sub && pb && pb->kept) n = drop_bounded(rows, n, pb, floor);
     double bounds[CB_SAMPLE_BATCH], worst = floor, goal = st->opt->error_goal;
     for (uint32_t i = 0; i < n && !sub && !(goal > 0 && worst > goal); i += CB_SAMPLE_BATCH)
         worst = measure_batch(st, w, c, rows, i, n, 0, 1, s, NULL, worst);
@@ -347,6 +370,7 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
         for (uint32_t k = 0; k < count; ++k) rows[i + k].bound = bounds[k];
         if (goal > 0 && worst > goal) return worst;
     }
+    for (uint32_t k = 0; pb && pb->note && k < n; ++k) pb->note[rows[k].frame] = rows[k].bound; /* every row bounded */
     n = sort_rows_over(rows, n, worst);
     /* Batches of 1, 2, 4, ... rows: often the first few rows settle it. */
     for (uint32_t i = 0, size = 1; i < n && rows[i].bound > worst && !(goal > 0 && worst > goal); size *= 2) {
@@ -486,21 +510,29 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     if (!s) {
         cb_fail(&st->errors[blends ? c : p->clip_count + c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
     } else if (goal > 0) { /* the blends, then only the baked rows that could exceed them */
-        for (uint32_t sub = 1; sub < parts && !(blend > goal); ++sub)
-            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, NULL);
+        double *note = palette_pending_point_bounds(st, parts); /* a probe's, for the bake after */
+        for (uint32_t sub = 1; sub < parts && !(blend > goal); ++sub) {
+            point_bounds pb = {NULL, 0, note ? note + (size_t)(sub - 1) * p->clips[c].frames : NULL};
+            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, NULL, &pb);
+        }
         keep_worst_point(st, c, parts, s, blend);
         st->clip_blend_error[c] = blend;
-        double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, s, NULL);
+        double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, s, NULL, NULL);
         st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
     } else if (blends) { /* each fraction's rows only count where they exceed the worst blend so far */
+        double *note = palette_pending_point_bounds(st, parts), shift = 0;
+        const double *kept = note ? NULL : palette_taken_point_bounds(st, c, parts, &shift);
         blend = blend_floor(st, w, c, parts, s);
-        for (uint32_t sub = 1; sub < parts; ++sub)
-            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, rows && sub == 1 ? &baked : NULL);
+        for (uint32_t sub = 1; sub < parts; ++sub) {
+            size_t at = (size_t)(sub - 1) * p->clips[c].frames;
+            point_bounds pb = {kept ? kept + at : NULL, shift, note ? note + at : NULL};
+            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, rows && sub == 1 ? &baked : NULL, &pb);
+        }
         keep_worst_point(st, c, parts, s, blend);
         st->clip_blend_error[c] = blend;
         if (rows) st->clip_error[c] = baked;
     } else {
-        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, s, NULL);
+        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, s, NULL, NULL);
     }
     cb_model_release_clip(st->model, st->infos[c].animation); /* measured: the keys are not read again */
 }

@@ -377,9 +377,11 @@ static void test_auto_rates_do_not_depend_on_threads(void **state)
 
 /* The bake after a rate search measures each clip's blends from a floor its probes hand it: the
  * final palette's own error at the blend where the probe of the same rows found its worst
- * (pose_cache_note_worst). Every maximum stays the bits a bake of the same plan with nothing kept
- * (no floor: every blend measured from 0) finds, as do the texels; and the floor is really
- * taken (a point kept for most clips' rows), else this would test nothing. */
+ * (pose_cache_note_worst); and it leaves out the blends whose bound in that probe, moved by what
+ * the file's u16 box can change (palette_taken_point_bounds), is within that floor. Every
+ * maximum stays the bits a bake of the same plan with nothing kept (no floor: every blend
+ * measured from 0) finds, as do the texels; and the floor is really taken (a point kept for
+ * most clips' rows), else this would test nothing. */
 static void expect_floors_keep_the_maxima(const char *rel, uint32_t min_floored)
 {
     cb_model *m = load_shared(rel);
@@ -423,6 +425,8 @@ static void test_floors_from_the_probes_keep_the_maxima(void **state)
     (void)state;
     expect_floors_keep_the_maxima("assets/quaternius-cow/Cow.glb", 10);
     expect_floors_keep_the_maxima("assets/fox-bevy/Fox.glb", 3);
+    expect_floors_keep_the_maxima("assets/quaternius-husky/Husky.glb", 10);
+    expect_floors_keep_the_maxima("assets/robot-quaternius-raylib/robot.glb", 6);
 }
 
 int main(void)
