@@ -35,6 +35,7 @@ struct measure_scratch {
     uint64_t reads;                    /* the reads so far: the clock of value_read */
     bool finite[CB_SAMPLE_BATCH];      /* per row: every difference finite (else no bound holds) */
     uint32_t worst_frame, worst_sub;   /* the blend that last raised a measurement's worst (sub 0: none) */
+    double *note_caps;                 /* a probe's baked rows measured: each row's cap noted here by frame, or NULL */
     unsigned char *block;              /* what the arrays above lie in */
 };
 typedef struct measure_scratch measure_scratch;
@@ -220,6 +221,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     uint32_t order[B];
     double caps[B]; /* each row's cap where in hand (NaN: not) */
     rows_by_cap(st, s, count, lanes && !bounds, order, caps);
+    for (uint32_t i = 0; !sub && s->note_caps && i < count; ++i) s->note_caps[frames[i]] = caps[i]; /* NaN: none */
     for (uint32_t n = 0; n < count; ++n) {
         uint32_t i = order[n];
         double *diff = lanes ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
@@ -317,14 +319,17 @@ typedef struct point_bounds {
     double *note;
 } point_bounds;
 
-/* The rows whose kept bound, moved by the shift, is within `floor` left out of rows[0 .. n):
- * their error in this palette cannot exceed it (it is at most the probe's plus the shift). The
- * others keep their order; returns how many. */
-static uint32_t drop_bounded(cb_bounded_row *rows, uint32_t n, const point_bounds *pb, double floor)
+/* Whether a point's kept bound, moved by the shift, is within `floor`: its error in this palette
+ * cannot exceed it (it is at most the probe's plus the shift). A NaN bound is never within. */
+static bool bounded_within(double kept, double shift, double floor) { return kept + shift <= floor; }
+
+/* The rows bounded within `floor` left out of rows[0 .. n), the others in their order; returns
+ * how many are left. */
+static uint32_t drop_bounded(cb_bounded_row *rows, uint32_t n, const double *kept, double shift, double floor)
 {
     uint32_t m = 0;
     for (uint32_t i = 0; i < n; ++i)
-        if (!(pb->kept[rows[i].frame] + pb->shift <= floor)) rows[m++] = rows[i];
+        if (!bounded_within(kept[rows[i].frame], shift, floor)) rows[m++] = rows[i];
     return m;
 }
 
@@ -347,7 +352,7 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
 {
     cb_bounded_row *rows = s->rows;
     uint32_t n = measured_frames(st, c, sub, rows), batch[CB_SAMPLE_BATCH];
-    if (sub && pb && pb->kept) n = drop_bounded(rows, n, pb, floor);
+    if (sub && pb && pb->kept) n = drop_bounded(rows, n, pb->kept, pb->shift, floor);
     double bounds[CB_SAMPLE_BATCH], worst = floor, goal = st->opt->error_goal;
     for (uint32_t i = 0; i < n && !sub && !(goal > 0 && worst > goal); i += CB_SAMPLE_BATCH)
         worst = measure_batch(st, w, c, rows, i, n, 0, 1, s, NULL, worst);
@@ -496,6 +501,58 @@ static double blend_floor(bake_state *st, worker *w, uint32_t c, uint32_t parts,
     return measure_rows(st, w, c, &at.frame, 1, at.sub, parts, s, NULL, 0);
 }
 
+/* Clip c's baked rows whose kept caps (moved by the shift) are not within `within` but are within
+ * `taken` (INFINITY: every one), measured from `worst`: the rows left out cannot exceed `within`.
+ * The bake after a search leaves out those within the clip's blends, which cannot raise its
+ * visible error, then measures those of them that could still exceed every baked row measured
+ * (palette_measure_rest), which could raise the palette's max_error. */
+static double measure_baked_rows(bake_state *st, worker *w, uint32_t c, measure_scratch *s, const double *caps,
+                                 double shift, double within, double taken, double worst)
+{
+    cb_bounded_row *rows = s->baked;
+    uint32_t n = measured_frames(st, c, 0, rows), m = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        double cap = caps[rows[i].frame];
+        if (!bounded_within(cap, shift, within) && (taken == INFINITY || bounded_within(cap, shift, taken))) rows[m++] = rows[i];
+    }
+    for (uint32_t i = 0; i < m; i += CB_SAMPLE_BATCH) worst = measure_batch(st, w, c, rows, i, m, 0, 1, s, NULL, worst);
+    return worst;
+}
+
+/* Clip c's baked rows' caps kept by its probe, and their shift; NULL when none (or measured apart
+ * from the blends: a probe's, or a bake that splits its jobs). */
+static const double *kept_caps(const bake_state *st, uint32_t c, double *shift)
+{
+    uint32_t parts = st->p->clips[c].fitted ? 4 : 2;
+    if (st->opt->error_goal > 0 || measure_split(st) || st->pending) return NULL;
+    const double *kept = palette_taken_point_bounds(st, c, parts, shift);
+    return kept ? kept + (size_t)3 * st->p->clips[c].frames : NULL;
+}
+
+bool palette_measure_rest(bake_state *st)
+{
+    const cb_palette *p = st->p;
+    bool rest = false;
+    st->baked_worst = 0;
+    for (uint32_t c = 0; c < p->clip_count; ++c) st->baked_worst = fmax(st->baked_worst, st->clip_error[c]);
+    for (uint32_t c = 0; c < p->clip_count && !rest; ++c) {
+        double shift;
+        const double *caps = kept_caps(st, c, &shift);
+        for (uint32_t f = 0; caps && f < p->clips[c].frames && !rest; ++f)
+            rest = bounded_within(caps[f], shift, st->clip_blend_error[c]) && !bounded_within(caps[f], shift, st->baked_worst);
+    }
+    return rest;
+}
+
+void palette_measure_rest_job(bake_state *st, worker *w, uint32_t c)
+{
+    double shift;
+    const double *caps = kept_caps(st, c, &shift);
+    measure_scratch *s = caps ? worker_scratch(st, w, c) : NULL;
+    if (caps && !s) cb_fail(&st->errors[st->p->clip_count + c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
+    if (s) st->clip_error[c] = measure_baked_rows(st, w, c, s, caps, shift, st->baked_worst, st->clip_blend_error[c], st->clip_error[c]);
+}
+
 void palette_measure_job(bake_state *st, worker *w, uint32_t k)
 {
     const cb_palette *p = st->p;
@@ -517,22 +574,30 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
         }
         keep_worst_point(st, c, parts, s, blend);
         st->clip_blend_error[c] = blend;
+        s->note_caps = note ? note + (size_t)3 * p->clips[c].frames : NULL;
         double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, s, NULL, NULL);
+        s->note_caps = NULL;
         st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
     } else if (blends) { /* each fraction's rows only count where they exceed the worst blend so far */
         double *note = palette_pending_point_bounds(st, parts), shift = 0;
         const double *kept = note ? NULL : palette_taken_point_bounds(st, c, parts, &shift);
         blend = blend_floor(st, w, c, parts, s);
+        /* Baked rows whose caps are kept: measured after the blends, those within them left out */
+        bool later = rows && kept;
         for (uint32_t sub = 1; sub < parts; ++sub) {
             size_t at = (size_t)(sub - 1) * p->clips[c].frames;
             point_bounds pb = {kept ? kept + at : NULL, shift, note ? note + at : NULL};
-            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, rows && sub == 1 ? &baked : NULL, &pb);
+            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, rows && !later && sub == 1 ? &baked : NULL, &pb);
         }
         keep_worst_point(st, c, parts, s, blend);
         st->clip_blend_error[c] = blend;
+        if (later) baked = measure_baked_rows(st, w, c, s, kept + (size_t)3 * p->clips[c].frames, shift, blend, INFINITY, 0);
         if (rows) st->clip_error[c] = baked;
     } else {
+        s->note_caps = palette_pending_point_bounds(st, parts);
+        if (s->note_caps) s->note_caps += (size_t)3 * p->clips[c].frames;
         st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, s, NULL, NULL);
+        s->note_caps = NULL;
     }
     cb_model_release_clip(st->model, st->infos[c].animation); /* measured: the keys are not read again */
 }

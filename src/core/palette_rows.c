@@ -222,7 +222,8 @@ typedef struct kept_rows {
      * box its u16 positions and scales were quantized in. parts 0: none. */
     uint32_t parts;
     double box_lo[4], box_hi[4]; /* positions x y z, then the scale (lo 0) */
-    double *point_bounds;        /* 3 x framing.frames, after the rows in the same block */
+    double *point_bounds;        /* 4 x framing.frames, after the rows in the same block: the blends',
+                                  * then each baked row's cap (the same, at 3 x frames) */
     float rows[];      /* framing.frames rows of bones * CANON(layout) */
 } kept_rows;
 
@@ -246,7 +247,7 @@ float *palette_keep_rows(bake_state *st, uint32_t c, bool fitted)
     free(st->pending), st->pending = NULL;
     if (!st->poses) return NULL; /* no search: nothing to keep them with */
     size_t rows_bytes = (kept_floats(st, c) * sizeof(float) + sizeof(double) - 1) / sizeof(double) * sizeof(double);
-    size_t bounds = (size_t)3 * st->infos[c].frames;
+    size_t bounds = (size_t)4 * st->infos[c].frames;
     st->pending = malloc(sizeof *st->pending + rows_bytes + bounds * sizeof(double));
     if (!st->pending) return NULL; /* out of memory: the bake after makes them again */
     *st->pending = (kept_rows){.framing = st->infos[c], .layout = st->p->layout, .root_motion = st->opt->root_motion,
