@@ -513,7 +513,8 @@ static double measure_baked_rows(bake_state *st, worker *w, uint32_t c, measure_
     uint32_t n = measured_frames(st, c, 0, rows), m = 0;
     for (uint32_t i = 0; i < n; ++i) {
         double cap = caps[rows[i].frame];
-        if (!bounded_within(cap, shift, within) && (taken == INFINITY || bounded_within(cap, shift, taken))) rows[m++] = rows[i];
+        if (!bounded_within(cap, shift, within) && (taken == INFINITY || bounded_within(cap, shift, taken)))
+            rows[m++] = rows[i];
     }
     for (uint32_t i = 0; i < m; i += CB_SAMPLE_BATCH) worst = measure_batch(st, w, c, rows, i, m, 0, 1, s, NULL, worst);
     return worst;
@@ -539,7 +540,8 @@ bool palette_measure_rest(bake_state *st)
         double shift;
         const double *caps = kept_caps(st, c, &shift);
         for (uint32_t f = 0; caps && f < p->clips[c].frames && !rest; ++f)
-            rest = bounded_within(caps[f], shift, st->clip_blend_error[c]) && !bounded_within(caps[f], shift, st->baked_worst);
+            rest = bounded_within(caps[f], shift, st->clip_blend_error[c]) &&
+                   !bounded_within(caps[f], shift, st->baked_worst);
     }
     return rest;
 }
@@ -549,8 +551,11 @@ void palette_measure_rest_job(bake_state *st, worker *w, uint32_t c)
     double shift;
     const double *caps = kept_caps(st, c, &shift);
     measure_scratch *s = caps ? worker_scratch(st, w, c) : NULL;
-    if (caps && !s) cb_fail(&st->errors[st->p->clip_count + c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
-    if (s) st->clip_error[c] = measure_baked_rows(st, w, c, s, caps, shift, st->baked_worst, st->clip_blend_error[c], st->clip_error[c]);
+    if (caps && !s)
+        cb_fail(&st->errors[st->p->clip_count + c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
+    if (s)
+        st->clip_error[c] =
+            measure_baked_rows(st, w, c, s, caps, shift, st->baked_worst, st->clip_blend_error[c], st->clip_error[c]);
 }
 
 void palette_measure_job(bake_state *st, worker *w, uint32_t k)
@@ -591,7 +596,8 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
         }
         keep_worst_point(st, c, parts, s, blend);
         st->clip_blend_error[c] = blend;
-        if (later) baked = measure_baked_rows(st, w, c, s, kept + (size_t)3 * p->clips[c].frames, shift, blend, INFINITY, 0);
+        if (later)
+            baked = measure_baked_rows(st, w, c, s, kept + (size_t)3 * p->clips[c].frames, shift, blend, INFINITY, 0);
         if (rows) st->clip_error[c] = baked;
     } else {
         s->note_caps = palette_pending_point_bounds(st, parts);

@@ -354,7 +354,8 @@ const double *palette_taken_point_bounds(const bake_state *st, uint32_t c, uint3
         double d = u16_reach(k->box_lo[a], k->box_hi[a]) + u16_reach(p->bounds_min[a], p->bounds_max[a]);
         dp += d * d;
     }
-    for (uint32_t j = 0; j < p->bone_count; ++j) reach = st->facts->group_reach[j] > reach ? st->facts->group_reach[j] : reach;
+    for (uint32_t j = 0; j < p->bone_count; ++j)
+        reach = st->facts->group_reach[j] > reach ? st->facts->group_reach[j] : reach;
     *shift = st->facts->weight_sum * (sqrt(dp) + ds * reach) * (1 + 1e-6) + 1e-9 * st->facts->height;
     return isfinite(*shift) ? k->point_bounds : NULL;
 }

@@ -399,7 +399,8 @@ static void expect_floors_keep_the_maxima_of(const char *rel, uint32_t first, ui
     cb_bake_options o = cb_default_bake_options();
     o.threads = 2;
     for (uint32_t i = 0; i < n; ++i)
-        plan[i] = (cb_clip_plan){(int32_t)(first + i), NULL, -1, 0, false, false}, goals[i] = (cb_rate_goal){1, 120, CB_ROWS_BEST};
+        plan[i] = (cb_clip_plan){(int32_t)(first + i), NULL, -1, 0, false, false},
+        goals[i] = (cb_rate_goal){1, 120, CB_ROWS_BEST};
     assert_int_equal(palette_choose_rates(s, &o, plan, n, goals, out, keep, NULL, &err), CB_OK);
     palette_probe probe = {NULL, NULL, kept, NULL, NULL};
     cb_palette floors, fresh;
