@@ -10,6 +10,7 @@
  * ranges - is settled after, in frame order, so it comes out as before too. */
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -226,6 +227,7 @@ typedef struct kept_rows {
                                   * then each baked row's cap (the same, at 3 x frames) */
     float rows[];      /* framing.frames rows of bones * CANON(layout) */
 } kept_rows;
+_Static_assert(offsetof(kept_rows, rows) % sizeof(double) == 0, "point_bounds follow the rows, aligned for doubles");
 
 static bool rows_match(const kept_rows *k, const bake_state *st, uint32_t c)
 {
