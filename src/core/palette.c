@@ -369,6 +369,8 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     if (facts->skinned) {
         for_each_clip(&st, palette_measure_job, true, palette_measure_jobs(&st));
         if (first_clip_error(&st, err)) goto fail;
+        if (palette_measure_rest(&st)) for_each_clip(&st, palette_measure_rest_job, true, 0);
+        if (first_clip_error(&st, err)) goto fail;
         for (uint32_t c = 0; c < p->clip_count; ++c) {
             p->max_error = fmax(p->max_error, st.clip_error[c]);
             p->clips[c].visible_error = fmax(st.clip_error[c], st.clip_blend_error[c]);

@@ -107,6 +107,7 @@ typedef struct bake_state {
     struct kept_rows *pending; /* a probe's rows (fitted or sampled), until its measurement says whether to keep them */
     pose_batch *batch;      /* the probe's, for its one worker (on st->lent); or NULL: each worker's own */
     struct clip_memo *memo; /* the run's analyses (palette_probe.memo), or NULL */
+    double baked_worst;     /* palette_measure_rest's: the worst baked row every clip's job measured */
 } bake_state;
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
@@ -160,6 +161,16 @@ float *palette_keep_rows(bake_state *st, uint32_t c, bool fitted);
 void palette_kept_rows_done(bake_state *st, uint32_t c, const extent *bounds);
 void palette_settle_rows(bake_state *st, double error);
 const float *palette_take_rows(bake_state *st, uint32_t c, bool fitted, extent *bounds);
+/* The same rows' errors bounded, for the bake after the search to skip the points that cannot
+ * reach its worst. A probe's measurement notes each blend's bound and each baked row's cap (upper
+ * bounds of their errors in the probe's palette) into the array palette_pending_point_bounds
+ * gives for its pending rows (4 x frames: fraction sub of `parts` at (sub - 1) x frames + row
+ * interval, baked row f at 3 x frames + f; INFINITY where not noted; NULL: nothing to note), and
+ * the bake that took those rows (palette_take_rows) reads them back (palette_taken_point_bounds,
+ * NULL: none for clip c measured in `parts`) with *shift, how much the palette's own u16 box can
+ * move any vertex's error from the probe's (u16 qpos only). */
+double *palette_pending_point_bounds(bake_state *st, uint32_t parts);
+const double *palette_taken_point_bounds(const bake_state *st, uint32_t c, uint32_t parts, double *shift);
 /* A probe's sampled rows kept by the probe before it, met or missed (palette_settle_rows keeps
  * the last missed ones too), framed as clip c: copied into rows (the whole clip), its bounds into
  * *bounds and its value range into st->ranges[c], where a fitted probe at the rate of a sampled
@@ -232,6 +243,11 @@ void palette_blend_values(const cb_palette *p, uint32_t bone, const double a[16]
  * the clip's, then the rows' after every clip's); one a clip with an error goal, where the
  * rows only count above the blends. */
 uint32_t palette_measure_jobs(const bake_state *st);
+/* After every palette_measure_job: the baked rows a job left out as within its clip's blends
+ * (their probe's caps) that might still exceed every baked row measured (the palette's
+ * max_error), measured by palette_measure_rest_job for each clip; returns whether any is left. */
+bool palette_measure_rest(bake_state *st);
+void palette_measure_rest_job(bake_state *st, worker *w, uint32_t c);
 /* Measurement job k: the worst vertex errors of its clip at its rows and/or between them
  * (st->clip_error, st->clip_blend_error). */
 void palette_measure_job(bake_state *st, worker *w, uint32_t k);

@@ -35,6 +35,7 @@ struct measure_scratch {
     uint64_t reads;                    /* the reads so far: the clock of value_read */
     bool finite[CB_SAMPLE_BATCH];      /* per row: every difference finite (else no bound holds) */
     uint32_t worst_frame, worst_sub;   /* the blend that last raised a measurement's worst (sub 0: none) */
+    double *note_caps;                 /* a probe's baked rows measured: each row's cap noted here by frame, or NULL */
     unsigned char *block;              /* what the arrays above lie in */
 };
 typedef struct measure_scratch measure_scratch;
@@ -220,6 +221,7 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     uint32_t order[B];
     double caps[B]; /* each row's cap where in hand (NaN: not) */
     rows_by_cap(st, s, count, lanes && !bounds, order, caps);
+    for (uint32_t i = 0; !sub && s->note_caps && i < count; ++i) s->note_caps[frames[i]] = caps[i]; /* NaN: none */
     for (uint32_t n = 0; n < count; ++n) {
         uint32_t i = order[n];
         double *diff = lanes ? s->diff + (size_t)i * p->bone_count * 16 : s->diff;
@@ -308,12 +310,37 @@ static uint32_t sort_rows_over(cb_bounded_row *rows, uint32_t n, double worst)
     return m;
 }
 
+/* A measurement's blends bounded before (kept, with the shift any blend's error may have moved by
+ * since: palette_taken_point_bounds), or to bound for the bake after (note: a probe's,
+ * palette_pending_point_bounds): one fraction's bound per row interval, each NULL for none. */
+typedef struct point_bounds {
+    const double *kept;
+    double shift;
+    double *note;
+} point_bounds;
+
+/* Whether a point's kept bound, moved by the shift, is within `floor`: its error in this palette
+ * cannot exceed it (it is at most the probe's plus the shift). A NaN bound is never within. */
+static bool bounded_within(double kept, double shift, double floor) { return kept + shift <= floor; }
+
+/* The rows bounded within `floor` left out of rows[0 .. n), the others in their order; returns
+ * how many are left. */
+static uint32_t drop_bounded(cb_bounded_row *rows, uint32_t n, const double *kept, double shift, double floor)
+{
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i)
+        if (!bounded_within(kept[rows[i].frame], shift, floor)) rows[m++] = rows[i];
+    return m;
+}
+
 /* The worst vertex error of clip c over every error_stride-th row and the last (sub > 0: at
  * fraction sub / parts from each of those rows to the next, as the runtime blends them; a
  * one-shot's last row has no next). Rows that cannot exceed `floor` are not measured (0 when
  * none may be skipped): the result is exact when above it. With an error goal, measuring also
  * stops once the worst exceeds it. With `baked` (sub > 0, no goal), the baked rows' worst error
  * too, into *baked: their batches measured along the blends' bounds, which decode the same rows.
+ * With pb (sub > 0), the blends' bounds noted once every row has one, and the blends whose kept
+ * bound cannot reach `floor` left out before any is sampled (drop_bounded).
  *
  * Blends err most where the motion is fastest, so their rows' bounds differ widely: branch and
  * bound - every row's bound first, then the rows in order of bound, largest first, until no row
@@ -321,10 +348,11 @@ static uint32_t sort_rows_over(cb_bounded_row *rows, uint32_t n, double worst)
  * much the same on every row, and so are their bounds: those rows are measured in one pass in
  * frame order, each skinning only its groups that could exceed the worst so far. */
 static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t sub, uint32_t parts, double floor,
-                                measure_scratch *s, double *baked)
+                                measure_scratch *s, double *baked, const point_bounds *pb)
 {
     cb_bounded_row *rows = s->rows;
     uint32_t n = measured_frames(st, c, sub, rows), batch[CB_SAMPLE_BATCH];
+    if (sub && pb && pb->kept) n = drop_bounded(rows, n, pb->kept, pb->shift, floor);
     double bounds[CB_SAMPLE_BATCH], worst = floor, goal = st->opt->error_goal;
     for (uint32_t i = 0; i < n && !sub && !(goal > 0 && worst > goal); i += CB_SAMPLE_BATCH)
         worst = measure_batch(st, w, c, rows, i, n, 0, 1, s, NULL, worst);
@@ -347,6 +375,7 @@ static double measure_clip_rows(bake_state *st, worker *w, uint32_t c, uint32_t 
         for (uint32_t k = 0; k < count; ++k) rows[i + k].bound = bounds[k];
         if (goal > 0 && worst > goal) return worst;
     }
+    for (uint32_t k = 0; pb && pb->note && k < n; ++k) pb->note[rows[k].frame] = rows[k].bound; /* every row bounded */
     n = sort_rows_over(rows, n, worst);
     /* Batches of 1, 2, 4, ... rows: often the first few rows settle it. */
     for (uint32_t i = 0, size = 1; i < n && rows[i].bound > worst && !(goal > 0 && worst > goal); size *= 2) {
@@ -472,6 +501,63 @@ static double blend_floor(bake_state *st, worker *w, uint32_t c, uint32_t parts,
     return measure_rows(st, w, c, &at.frame, 1, at.sub, parts, s, NULL, 0);
 }
 
+/* Clip c's baked rows whose kept caps (moved by the shift) are not within `within` but are within
+ * `taken` (INFINITY: every one), measured from `worst`: the rows left out cannot exceed `within`.
+ * The bake after a search leaves out those within the clip's blends, which cannot raise its
+ * visible error, then measures those of them that could still exceed every baked row measured
+ * (palette_measure_rest), which could raise the palette's max_error. */
+static double measure_baked_rows(bake_state *st, worker *w, uint32_t c, measure_scratch *s, const double *caps,
+                                 double shift, double within, double taken, double worst)
+{
+    cb_bounded_row *rows = s->baked;
+    uint32_t n = measured_frames(st, c, 0, rows), m = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        double cap = caps[rows[i].frame];
+        if (!bounded_within(cap, shift, within) && (taken == INFINITY || bounded_within(cap, shift, taken)))
+            rows[m++] = rows[i];
+    }
+    for (uint32_t i = 0; i < m; i += CB_SAMPLE_BATCH) worst = measure_batch(st, w, c, rows, i, m, 0, 1, s, NULL, worst);
+    return worst;
+}
+
+/* Clip c's baked rows' caps kept by its probe, and their shift; NULL when none (or measured apart
+ * from the blends: a probe's, or a bake that splits its jobs). */
+static const double *kept_caps(const bake_state *st, uint32_t c, double *shift)
+{
+    uint32_t parts = st->p->clips[c].fitted ? 4 : 2;
+    if (st->opt->error_goal > 0 || measure_split(st) || st->pending) return NULL;
+    const double *kept = palette_taken_point_bounds(st, c, parts, shift);
+    return kept ? kept + (size_t)3 * st->p->clips[c].frames : NULL;
+}
+
+bool palette_measure_rest(bake_state *st)
+{
+    const cb_palette *p = st->p;
+    bool rest = false;
+    st->baked_worst = 0;
+    for (uint32_t c = 0; c < p->clip_count; ++c) st->baked_worst = fmax(st->baked_worst, st->clip_error[c]);
+    for (uint32_t c = 0; c < p->clip_count && !rest; ++c) {
+        double shift;
+        const double *caps = kept_caps(st, c, &shift);
+        for (uint32_t f = 0; caps && f < p->clips[c].frames && !rest; ++f)
+            rest = bounded_within(caps[f], shift, st->clip_blend_error[c]) &&
+                   !bounded_within(caps[f], shift, st->baked_worst);
+    }
+    return rest;
+}
+
+void palette_measure_rest_job(bake_state *st, worker *w, uint32_t c)
+{
+    double shift;
+    const double *caps = kept_caps(st, c, &shift);
+    measure_scratch *s = caps ? worker_scratch(st, w, c) : NULL;
+    if (caps && !s)
+        cb_fail(&st->errors[st->p->clip_count + c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
+    if (s)
+        st->clip_error[c] =
+            measure_baked_rows(st, w, c, s, caps, shift, st->baked_worst, st->clip_blend_error[c], st->clip_error[c]);
+}
+
 void palette_measure_job(bake_state *st, worker *w, uint32_t k)
 {
     const cb_palette *p = st->p;
@@ -486,21 +572,38 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     if (!s) {
         cb_fail(&st->errors[blends ? c : p->clip_count + c], CB_ERR_INTERNAL, "out of memory measuring %s", st->model->source);
     } else if (goal > 0) { /* the blends, then only the baked rows that could exceed them */
-        for (uint32_t sub = 1; sub < parts && !(blend > goal); ++sub)
-            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, NULL);
+        double *note = palette_pending_point_bounds(st, parts); /* a probe's, for the bake after */
+        for (uint32_t sub = 1; sub < parts && !(blend > goal); ++sub) {
+            point_bounds pb = {NULL, 0, note ? note + (size_t)(sub - 1) * p->clips[c].frames : NULL};
+            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, NULL, &pb);
+        }
         keep_worst_point(st, c, parts, s, blend);
         st->clip_blend_error[c] = blend;
-        double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, s, NULL);
+        s->note_caps = note ? note + (size_t)3 * p->clips[c].frames : NULL;
+        double both = blend > goal ? blend : measure_clip_rows(st, w, c, 0, 1, blend, s, NULL, NULL);
+        s->note_caps = NULL;
         st->clip_error[c] = both > blend ? both : 0; /* exact when above the blend; else only <= it */
     } else if (blends) { /* each fraction's rows only count where they exceed the worst blend so far */
+        double *note = palette_pending_point_bounds(st, parts), shift = 0;
+        const double *kept = note ? NULL : palette_taken_point_bounds(st, c, parts, &shift);
         blend = blend_floor(st, w, c, parts, s);
-        for (uint32_t sub = 1; sub < parts; ++sub)
-            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, rows && sub == 1 ? &baked : NULL);
+        /* Baked rows whose caps are kept: measured after the blends, those within them left out */
+        bool later = rows && kept;
+        for (uint32_t sub = 1; sub < parts; ++sub) {
+            size_t at = (size_t)(sub - 1) * p->clips[c].frames;
+            point_bounds pb = {kept ? kept + at : NULL, shift, note ? note + at : NULL};
+            blend = measure_clip_rows(st, w, c, sub, parts, blend, s, rows && !later && sub == 1 ? &baked : NULL, &pb);
+        }
         keep_worst_point(st, c, parts, s, blend);
         st->clip_blend_error[c] = blend;
+        if (later)
+            baked = measure_baked_rows(st, w, c, s, kept + (size_t)3 * p->clips[c].frames, shift, blend, INFINITY, 0);
         if (rows) st->clip_error[c] = baked;
     } else {
-        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, s, NULL);
+        s->note_caps = palette_pending_point_bounds(st, parts);
+        if (s->note_caps) s->note_caps += (size_t)3 * p->clips[c].frames;
+        st->clip_error[c] = measure_clip_rows(st, w, c, 0, 1, 0, s, NULL, NULL);
+        s->note_caps = NULL;
     }
     cb_model_release_clip(st->model, st->infos[c].animation); /* measured: the keys are not read again */
 }

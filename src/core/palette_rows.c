@@ -10,6 +10,7 @@
  * ranges - is settled after, in frame order, so it comes out as before too. */
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -226,8 +227,16 @@ typedef struct kept_rows {
     bool fitted;       /* fitted rows, or sampled ones */
     extent bounds;     /* the clip's bounds and value range as making (and fitting) its rows left them */
     value_range range;
+    /* What the probe's measurement bounded (palette_pending_point_bounds): each blend's bound, per
+     * fraction sub / parts (1 .. parts - 1) and row interval, INFINITY where not bounded, and the
+     * box its u16 positions and scales were quantized in. parts 0: none. */
+    uint32_t parts;
+    double box_lo[4], box_hi[4]; /* positions x y z, then the scale (lo 0) */
+    double *point_bounds;        /* 4 x framing.frames, after the rows in the same block: the blends',
+                                  * then each baked row's cap (the same, at 3 x frames) */
     float rows[];      /* framing.frames rows of bones * CANON(layout) */
 } kept_rows;
+_Static_assert(offsetof(kept_rows, rows) % sizeof(double) == 0, "point_bounds follow the rows, aligned for doubles");
 
 static bool rows_match(const kept_rows *k, const bake_state *st, uint32_t c)
 {
@@ -248,10 +257,14 @@ float *palette_keep_rows(bake_state *st, uint32_t c, bool fitted)
 {
     free(st->pending), st->pending = NULL;
     if (!st->poses) return NULL; /* no search: nothing to keep them with */
-    st->pending = malloc(sizeof *st->pending + kept_floats(st, c) * sizeof(float));
+    size_t rows_bytes = (kept_floats(st, c) * sizeof(float) + sizeof(double) - 1) / sizeof(double) * sizeof(double);
+    size_t bounds = (size_t)4 * st->infos[c].frames;
+    st->pending = malloc(sizeof *st->pending + rows_bytes + bounds * sizeof(double));
     if (!st->pending) return NULL; /* out of memory: the bake after makes them again */
     *st->pending = (kept_rows){.framing = st->infos[c], .layout = st->p->layout, .root_motion = st->opt->root_motion,
                               .bones = st->p->bone_count, .fitted = fitted};
+    st->pending->point_bounds = (double *)((unsigned char *)st->pending->rows + rows_bytes);
+    for (size_t i = 0; i < bounds; ++i) st->pending->point_bounds[i] = INFINITY;
     return st->pending->rows;
 }
 
@@ -298,6 +311,64 @@ const float *palette_take_rows(bake_state *st, uint32_t c, bool fitted, extent *
     if (!k) return NULL;
     *bounds = k->bounds, st->ranges[c] = k->range;
     return k->rows;
+}
+
+/* Whether a palette's blends of kept rows can be bounded from their probe's: global qpos rows in
+ * u16 (each value's decoding is then the same function of the same float but for the position
+ * box and the scale range), every range more than a point. */
+static bool bounds_carry(const cb_palette *p)
+{
+    if (p->layout != CB_LAYOUT_QPOS || p->precision != CB_PRECISION_U16 || p->bone_space != CB_BONE_SPACE_GLOBAL ||
+        p->positions_relative || !(p->linear_range > 0))
+        return false;
+    for (int a = 0; a < 3; ++a)
+        if (!(p->bounds_max[a] > p->bounds_min[a])) return false;
+    return true;
+}
+
+double *palette_pending_point_bounds(bake_state *st, uint32_t parts)
+{
+    kept_rows *k = st->pending;
+    const cb_palette *p = st->p;
+    if (!k || parts < 2 || parts > 4 || !bounds_carry(p)) return NULL;
+    k->parts = parts;
+    for (int a = 0; a < 3; ++a) k->box_lo[a] = p->bounds_min[a], k->box_hi[a] = p->bounds_max[a];
+    k->box_lo[3] = 0, k->box_hi[3] = p->linear_range;
+    return k->point_bounds;
+}
+
+/* The kept rows clip c of the bake after the search took (palette_take_rows), or NULL. */
+static const kept_rows *taken_rows(const bake_state *st, uint32_t c)
+{
+    pose_cache *poses = st->clip_poses && !st->poses ? st->clip_poses[c] : NULL;
+    return st->p->clips[c].fitted ? kept_in(poses, SLOT_FITTED, st, c) : kept_sampled(poses, st, c);
+}
+
+/* How far u16 moves a value from the float it encodes, at most, in the range [lo, hi]: half a
+ * step, with room for the rounding of the decode's few operations. */
+static double u16_reach(double lo, double hi)
+{
+    return (hi - lo) / 131070 * (1 + 1e-6) + 1e-12 * (fabs(lo) + fabs(hi));
+}
+
+const double *palette_taken_point_bounds(const bake_state *st, uint32_t c, uint32_t parts, double *shift)
+{
+    const cb_palette *p = st->p;
+    const kept_rows *k = taken_rows(st, c);
+    if (!k || k->parts != parts || !bounds_carry(p)) return NULL;
+    /* A vertex v skinned by bone j decodes to p_j + s_j R_j (v - b_j), R_j the same in both
+     * palettes (quaternions need no range): it moves by at most |dp| + |ds| |v - b_j|, and
+     * |v - b_j| is within the joint's largest group reach; blends lerp both, and a vertex's
+     * weights sum to at most weight_sum. */
+    double dp = 0, ds = u16_reach(k->box_lo[3], k->box_hi[3]) + u16_reach(0, p->linear_range), reach = 0;
+    for (int a = 0; a < 3; ++a) {
+        double d = u16_reach(k->box_lo[a], k->box_hi[a]) + u16_reach(p->bounds_min[a], p->bounds_max[a]);
+        dp += d * d;
+    }
+    for (uint32_t j = 0; j < p->bone_count; ++j)
+        reach = st->facts->group_reach[j] > reach ? st->facts->group_reach[j] : reach;
+    *shift = st->facts->weight_sum * (sqrt(dp) + ds * reach) * (1 + 1e-6) + 1e-9 * st->facts->height;
+    return isfinite(*shift) ? k->point_bounds : NULL;
 }
 
 bool palette_take_sampled_for_fit(bake_state *st, uint32_t c, float *rows, extent *bounds)
