@@ -3,7 +3,8 @@
 #include "crowdbake/bake.h"
 #include "internal/plumbing.h"
 #include "internal/bake_words.h"
-#include "core/local_rate.h" /* local_key_fps; search_keep's local_rates */
+#include "core/key_grid.h"   /* cb_key_grid_fps */
+#include "core/local_rate.h" /* search_keep's local_rates */
 
 #include <math.h>
 #include <string.h>
@@ -38,7 +39,8 @@ static double budget_above(double error_mm)
 static void local_reason(const cb_bake_job *job, uint32_t i, double fps, char *buf, size_t size)
 {
     const cb_rate_choice *r = &job->rates[i];
-    double keys = local_key_fps(&job->model->animations[job->plan[i].animation], CB_FPS_LIMIT);
+    const cb_animation *a = &job->model->animations[job->plan[i].animation];
+    double keys = cb_key_grid_fps(a, a->t0, 0, CB_FPS_LIMIT);
     double multiple = keys > 0 ? fps / keys : 0;
     bool on_keys = keys > 0 && fabs(multiple - round(multiple)) < 1e-6;
     char why[160];

@@ -29,6 +29,7 @@
 
 #include "cb_math.h"
 #include "error_bound.h"
+#include "key_grid.h"
 #include "local_lanes.h"
 #include "local_pose.h"
 #include "sampler.h"
@@ -337,53 +338,13 @@ static double probe(probe_ctx *c, double fps, double goal)
 static const double ladder[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120, 180, 240, 360, 480, 720, 960};
 enum { MOST_CANDIDATES = 48 };
 
-/* Whether t lies on the grid of `step` (within 1e-3 of a step, as a STEP clip's keys are judged). */
-static bool on_grid(double t, double step)
-{
-    double steps = t / step;
-    return fabs(steps - round(steps)) < 1e-3;
-}
-
-/* Whether every key of the clip lies on t0 + i step, and its end t0 + duration (where a loop's
- * last row blends into its first; duration <= 0: not asked). Channels that share their times are
- * read once. */
-static bool keys_on_grid(const cb_animation *a, double t0, double duration, double step)
-{
-    if (duration > 0 && !on_grid(duration, step)) return false;
-    for (uint32_t c = 0; c < a->channel_count; ++c) {
-        const cb_channel *ch = &a->channels[c];
-        if (c > 0 && ch->times == a->channels[c - 1].times) continue;
-        for (uint32_t k = 0; k < ch->key_count; ++k)
-            if (!on_grid(ch->times[k] - t0, step)) return false;
-    }
-    return true;
-}
-
-/* The clip's key rate: that of the coarsest grid t0 + i / rate holding every key and the clip's
- * end, its shortest key step divided by 1, 2, 3, ...; 0 when none is within max_fps. Rows at a
- * rate off that grid cut LINEAR keys' corners, an error that falls only as 1 / fps: Fox's Run
- * keys every 1/24 s, but after a gap of 0.2 s on times 1/30 s off that grid, so its rows land on
- * every key only at 120 fps (24 fps rows: 10.8 mm/m, 96 fps: 2.7). */
-static double key_grid_fps(const cb_animation *a, double t0, double duration, double max_fps)
-{
-    double shortest = cb_animation_key_interval(a);
-    for (double m = 1; shortest > 0; ++m) { /* rates rounded to 1e-3 fps, as rate_search.c's */
-        double rate = round(m / shortest * 1000) / 1000;
-        if (rate > max_fps) break;
-        if (keys_on_grid(a, t0, duration, 1 / rate)) return rate;
-    }
-    return 0;
-}
-
-double local_key_fps(const cb_animation *a, double max_fps) { return key_grid_fps(a, a->t0, 0, max_fps); }
-
 /* The rates a clip may take up to CB_FPS_LIMIT, increasing, max_fps among them; *key_fps its key
- * rate (key_grid_fps; 0: none, the common rates instead). Multiples of the key rate: 1, 2, 3, 4,
+ * rate (cb_key_grid_fps; 0: none, the common rates instead). Multiples of the key rate: 1, 2, 3, 4,
  * 6, 8, 12, 16, ... (each twice the one two before), so a clip whose nlerp lag needs more than
  * twice its keys is a few probes. */
 static uint32_t candidates(const cb_animation *a, const cb_clip_info *clip, double max_fps, double *out, double *key_fps)
 {
-    double k = *key_fps = key_grid_fps(a, clip->t0, clip->duration, max_fps);
+    double k = *key_fps = cb_key_grid_fps(a, clip->t0, clip->duration, max_fps);
     uint32_t n = 0;
     if (k > 0) {
         double before = 1, next = 2; /* the last multiple taken and the next */

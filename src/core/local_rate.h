@@ -57,12 +57,6 @@ cb_status local_clip_rate(cb_sampler *s, const palette_skin_facts *facts, const 
                           const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep, double max_error,
                           double max_fps, local_rate *out, cb_error *err);
 
-/* The rate of the coarsest grid first key + i / rate that holds every key of the animation (its
- * shortest key step divided by 1, 2, 3, ...), 0 when none is within max_fps: the rate local rows
- * start from, and what a bake's words call its keys. (A loop's end lies on that grid too: its
- * closing key, or its last key plus a key step.) */
-double local_key_fps(const cb_animation *animation, double max_fps);
-
 /* The worst vertex error of clip `clip` baked as local rows at `fps` (model units), measured as
  * local_clip_rate measures a candidate, in full (no goal to stop at), root motion kept. For tests
  * and benchmarks. */

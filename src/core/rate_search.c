@@ -9,6 +9,7 @@
 #include <threads.h>
 
 #include "cb_math.h"
+#include "key_grid.h"
 #include "local_rate.h"   /* local rows' rates */
 #include "palette_bake.h" /* palette_bake_with_facts */
 
@@ -240,13 +241,19 @@ static void add_high_multiples(rate_families *f, double key_rate, double max_fps
         if (k * key_rate > top) f->aligned[f->n_aligned++] = round(k * key_rate * 1000) / 1000;
 }
 
+/* The key family: fractions and multiples of the clip's key rate, the coarsest grid within max_fps
+ * that holds every key (key_grid.h), else its shortest key gap's (Fox's Run: keys every 1/24 s,
+ * then on a grid 1/120 s off it; its family is 30, 60, 120 fps, whose 120 is its answer, not
+ * 24, 48, 96, which miss it). */
 static rate_families families_of(const cb_animation *a, double max_fps)
 {
     static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
     rate_families f = {common_rates, sizeof common_rates / sizeof common_rates[0], 0, {0}, 2};
     double key = cb_animation_key_interval(a);
-    for (size_t i = 0; key > 0 && i < 6; ++i) f.aligned[f.n_aligned++] = round(factors[i] / key * 1000) / 1000;
-    if (key > 0) add_high_multiples(&f, 1 / key, max_fps);
+    uint32_t m = cb_key_grid_divisions(a, a->t0, 0, max_fps);
+    double step = key / (m ? m : 1);
+    for (size_t i = 0; key > 0 && i < 6; ++i) f.aligned[f.n_aligned++] = round(factors[i] / step * 1000) / 1000;
+    if (key > 0) add_high_multiples(&f, 1 / step, max_fps);
     return f;
 }
 

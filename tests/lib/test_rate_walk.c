@@ -21,20 +21,41 @@
 #include "crowdbake/palette.h"
 #include "crowdbake/runtime.h"
 
+/* The steps whose grid holds every key of the clip, from the first key (a key within 1e-3 of a
+ * step of it lies on it): the shortest key gap divided by m, the smallest m up to 8 that does, 0
+ * when none does (key_grid.c's rule, restated here). */
+static double key_grid_step(const cb_animation *a, double gap)
+{
+    for (int m = 1; gap > 0 && m <= 8; ++m) {
+        bool all = true;
+        for (uint32_t c = 0; c < a->channel_count && all; ++c)
+            for (uint32_t k = 0; k < a->channels[c].key_count && all; ++k) {
+                double at = ((double)a->channels[c].times[k] - a->t0) / (gap / m);
+                all = fabs(at - round(at)) < 1e-3;
+            }
+        if (all) return gap / m;
+    }
+    return 0;
+}
+
 /* Every rate either family offers the clip under `below` (see families_of in rate_search.c,
- * restated here): the key rate's 1/4 .. 4 multiples and the common rates. */
+ * restated here): the key rate's 1/4 .. 4 multiples and the common rates; and the 1/4 .. 4
+ * multiples of its shortest key gap's rate too where its keys' grid is finer (Fox's Run: keys
+ * every 1/24 s, then on a grid 1/120 s off it; rows at 24, 48 or 96 fps must miss as well). */
 static size_t rates_under(const cb_animation *a, double below, double *out)
 {
     static const double common[] = {2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 24, 30, 40, 48, 60, 90, 120};
     static const double factors[] = {0.25, 0.5, 1, 2, 3, 4};
-    double key = cb_animation_key_interval(a);
+    double gap = cb_animation_key_interval(a), grid = key_grid_step(a, gap);
+    double steps[2] = {gap, grid};
     size_t n = 0;
     for (size_t i = 0; i < sizeof common / sizeof common[0]; ++i)
         if (common[i] < below) out[n++] = common[i];
-    for (size_t i = 0; key > 0 && i < 6; ++i) {
-        double r = round(factors[i] / key * 1000) / 1000;
-        if (r < below) out[n++] = r;
-    }
+    for (int g = 0; g < (grid > 0 && grid != gap ? 2 : 1); ++g)
+        for (size_t i = 0; steps[g] > 0 && i < 6; ++i) {
+            double r = round(factors[i] / steps[g] * 1000) / 1000;
+            if (r < below) out[n++] = r;
+        }
     return n;
 }
 
@@ -81,7 +102,7 @@ static void expect_fewest_rows_within(const char *asset, uint32_t out_of_reach)
                      "(goal %.17g)", asset, c, p->fps, p->fit ? "fitted" : "sampled", ch->error, full, goal);
         if (p->fit && !(clip_visible_error(s, (int32_t)c, p->fps, false, goal) > goal))
             fail_msg("%s clip %u: fitted rows chosen at %g fps, where sampled rows meet the goal", asset, c, p->fps);
-        double under[32];
+        double under[48];
         size_t k = rates_under(&m->animations[c], p->fps, under);
         for (size_t i = 0; i < k; ++i)
             for (int fit = 0; fit <= 1; ++fit, ++lower)
