@@ -250,6 +250,25 @@ static inline vkc_resource upload_vertices(vkc_context *c, const cb_primitive *p
     "struct cb_test_vertex { float4 position; float4 normal; int4 joints; float4 weights; };\n"                       \
     "struct cb_test_sample { float4 inst; float4 from_inst; float4 fade_time_dt_mode; };\n"
 
+/* The skinning half of the bone pass's check: one invocation per (sample, vertex) skins the vertex
+ * from the pass's textures (cb_skin_bone_pass), into the harness's 12 floats per (sample, vertex). */
+#define HARNESS_BONE_SKIN_MAIN                                                                                         \
+    HARNESS_BUFFERS                                                                                                    \
+    "[[vk::binding(6)]] StructuredBuffer<cb_test_vertex> cb_vertices;\n"                                               \
+    "[[vk::binding(7)]] RWStructuredBuffer<float4> cb_skinned;\n"                                                      \
+    "[numthreads(64, 1, 1)]\n"                                                                                         \
+    "void main(uint3 id : SV_DispatchThreadID)\n"                                                                      \
+    "{\n"                                                                                                              \
+    "    uint s = id.x / cb_vertex_count, i = id.x - s * cb_vertex_count;\n"                                           \
+    "    if (s >= cb_sample_count) return;\n"                                                                          \
+    "    cb_test_vertex v = cb_vertices[i];\n"                                                                         \
+    "    float3 p, n;\n"                                                                                               \
+    "    cb_skin_bone_pass(v.position.xyz, v.normal.xyz, v.joints, v.weights, int(s), p, n);\n"                        \
+    "    cb_skinned[id.x * 3] = float4(p, 1.0);\n"                                                                     \
+    "    cb_skinned[id.x * 3 + 1] = float4(n, 0.0);\n"                                                                 \
+    "    cb_skinned[id.x * 3 + 2] = float4(p, 1.0);\n"                                                                 \
+    "}\n"
+
 /* The globals form's declarations, bound where the harness puts them (the library declares them
  * itself unless told, with no bindings: Unity assigns its own): the palette's defines, CB_U16_UNORM
  * where `unorm` says, then `extra`. */

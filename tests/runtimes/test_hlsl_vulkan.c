@@ -229,23 +229,6 @@ static const char *bone_pass_main =
     "    cb_out2[xy] = c2;\n"
     "}\n";
 
-static const char *bone_skin_main =
-    HARNESS_BUFFERS
-    "[[vk::binding(6)]] StructuredBuffer<cb_test_vertex> cb_vertices;\n"
-    "[[vk::binding(7)]] RWStructuredBuffer<float4> cb_skinned;\n"
-    "[numthreads(64, 1, 1)]\n"
-    "void main(uint3 id : SV_DispatchThreadID)\n"
-    "{\n"
-    "    uint s = id.x / cb_vertex_count, i = id.x - s * cb_vertex_count;\n"
-    "    if (s >= cb_sample_count) return;\n"
-    "    cb_test_vertex v = cb_vertices[i];\n"
-    "    float3 p, n;\n"
-    "    cb_skin_bone_pass(v.position.xyz, v.normal.xyz, v.joints, v.weights, int(s), p, n);\n"
-    "    cb_skinned[id.x * 3] = float4(p, 1.0);\n"
-    "    cb_skinned[id.x * 3 + 1] = float4(n, 0.0);\n"
-    "    cb_skinned[id.x * 3 + 2] = float4(p, 1.0);\n"
-    "}\n";
-
 /* Both passes of the bone pass over every sample (an instance each; dt 0: no previous frame). */
 static float *gpu_bone_pass(const cb_palette *p, const cb_primitive *prim, const sample *s, uint32_t n, const char *library)
 {
@@ -259,7 +242,7 @@ static float *gpu_bone_pass(const cb_palette *p, const cb_primitive *prim, const
                   "[[vk::binding(4)]] Texture2D<float4> cb_bones1;\n[[vk::binding(5)]] Texture2D<float4> cb_bones2;\n");
     hlsl_globals_prefix(src[1], sizeof src[1], p, false, extra);
     used = strlen(src[1]);
-    snprintf(src[1] + used, sizeof src[1] - used, "%s\n%s", library, bone_skin_main);
+    snprintf(src[1] + used, sizeof src[1] - used, "%s\n%s", library, HARNESS_BONE_SKIN_MAIN);
     size_t bytes[2], verts = prim->vertex_count;
     uint32_t *spv[2] = {compile_hlsl(src[0], "hlsl_bone_pass", "", &bytes[0]),
                         compile_hlsl(src[1], "hlsl_bone_skin", "", &bytes[1])};

@@ -781,24 +781,6 @@ static float *unity_instances(const sample *s, uint32_t n, double now)
     return d;
 }
 
-/* cb_skin_bone_pass from the kernel's textures, one invocation per (instance, vertex), as test_hlsl_vulkan reads them. */
-static const char *unity_skin_main =
-    HARNESS_BUFFERS
-    "[[vk::binding(6)]] StructuredBuffer<cb_test_vertex> cb_vertices;\n"
-    "[[vk::binding(7)]] RWStructuredBuffer<float4> cb_skinned;\n"
-    "[numthreads(64, 1, 1)]\n"
-    "void main(uint3 id : SV_DispatchThreadID)\n"
-    "{\n"
-    "    uint s = id.x / cb_vertex_count, i = id.x - s * cb_vertex_count;\n"
-    "    if (s >= cb_sample_count) return;\n"
-    "    cb_test_vertex v = cb_vertices[i];\n"
-    "    float3 p, n;\n"
-    "    cb_skin_bone_pass(v.position.xyz, v.normal.xyz, v.joints, v.weights, int(s), p, n);\n"
-    "    cb_skinned[id.x * 3] = float4(p, 1.0);\n"
-    "    cb_skinned[id.x * 3 + 1] = float4(n, 0.0);\n"
-    "    cb_skinned[id.x * 3 + 2] = float4(p, 1.0);\n"
-    "}\n";
-
 /* Runs the package's kernel over the samples (dispatched as CrowdbakeHerd dispatches it: BonePassLayout's groups of
  * 8 x 8 over the textures), then skins from its textures; returns the harness's 12 floats per (sample, vertex). */
 static float *gpu_unity_bone_pass(const cb_palette *p, const cb_primitive *prim, const sample *s, uint32_t n, const char *library,
@@ -817,7 +799,7 @@ static float *gpu_unity_bone_pass(const cb_palette *p, const cb_primitive *prim,
              "[[vk::binding(4)]] Texture2D<float4> cb_bones1;\n[[vk::binding(5)]] Texture2D<float4> cb_bones2;\n", UNITY_BONE_ROWS);
     hlsl_globals_prefix(skin_src, sizeof skin_src, p, u16, extra);
     size_t used = strlen(skin_src);
-    snprintf(skin_src + used, sizeof skin_src - used, "%s\n%s", library, unity_skin_main);
+    snprintf(skin_src + used, sizeof skin_src - used, "%s\n%s", library, HARNESS_BONE_SKIN_MAIN);
     spv[1] = compile_hlsl(skin_src, "unity_bone_skin", "", &bytes[1]);
     uint32_t rows = UNITY_BONE_ROWS, blocks = (n + rows - 1) / rows, width = blocks * p->bone_count, verts = prim->vertex_count;
     struct { float time; int32_t count, rows, pad; } clock = {0.5f, (int32_t)n, (int32_t)rows, 0};
