@@ -52,6 +52,17 @@ static CB_CLONE_INLINE void cb_sqrt4(v4df *x)
     *x = r;
 }
 
+/* cb_quat_normalize over four lanes (a zero quaternion is the identity). */
+static CB_CLONE_INLINE void cb_normalize4(v4df *q)
+{
+    v4df len2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3], norm = len2;
+    cb_sqrt4(&norm);
+    v4df inv = CB_SPLAT4(1.0) / norm;
+    v4di empty = len2 == CB_SPLAT4(0.0);
+    #pragma GCC unroll 4
+    for (int k = 0; k < 4; ++k) q[k] = CB_SELECT4(empty, CB_SPLAT4(k == 3 ? 1.0 : 0.0), q[k] * inv);
+}
+
 /* Vertex v of prim skinned with the joint matrices mats (cb_skin_positions's arithmetic in its
  * order): the matrices' four rows are the lanes, a column a 32-byte load, so an influence is
  * four multiplies and adds of vectors where the scalar code took twelve of each (the fourth

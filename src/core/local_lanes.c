@@ -34,17 +34,6 @@ static CB_CLONE_INLINE void load_bone4(const local_qpos *const *x, uint32_t j, v
     load_lanes4(rows, 0, 8, v);
 }
 
-/* cb_quat_normalize over four lanes (a zero quaternion is the identity). */
-static CB_CLONE_INLINE void normalize4(v4df *q)
-{
-    v4df len2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3], norm = len2;
-    cb_sqrt4(&norm);
-    v4df inv = CB_SPLAT4(1.0) / norm;
-    v4di empty = len2 == CB_SPLAT4(0.0);
-    #pragma GCC unroll 4
-    for (int k = 0; k < 4; ++k) q[k] = CB_SELECT4(empty, CB_SPLAT4(k == 3 ? 1.0 : 0.0), q[k] * inv);
-}
-
 /* local_qpos_blend over four lanes, into x: y's quaternion flipped into x's hemisphere, every
  * term x (1 - f) + y f, the quaternion normalised. */
 static CB_CLONE_INLINE void blend4(v4df *x, const v4df *y, const v4df *f)
@@ -53,7 +42,7 @@ static CB_CLONE_INLINE void blend4(v4df *x, const v4df *y, const v4df *f)
     v4df sign = CB_SELECT4(dot < CB_SPLAT4(0.0), CB_SPLAT4(-1.0), CB_SPLAT4(1.0)), keep = CB_SPLAT4(1.0) - *f, take = *f;
     #pragma GCC unroll 8
     for (int k = 0; k < 8; ++k) x[k] = x[k] * keep + (k < 4 ? sign * y[k] : y[k]) * take;
-    normalize4(x);
+    cb_normalize4(x);
 }
 
 /* local_qpos_compose over four lanes: the parent's transform P (about its bind position bp)
@@ -104,7 +93,7 @@ void local_points4(const local_skeleton *k, const float *compose_bind, const flo
         blend4(x, y, &fraction);
         if (p < 0) memcpy(c, x, sizeof x); /* parents come first in k->order: out[p] is composed */
         else compose4(out + (size_t)p * 8, bind_at(compose_bind, (uint32_t)p), x, c);
-        normalize4(c);
+        cb_normalize4(c);
         if (reach[j] < 0) { /* it moves no vertex: no group reads its difference (its children are composed) */
             for (int l = 0; l < 4; ++l) {
                 double *d = diff + l * stride + (size_t)j * 16;

@@ -39,13 +39,7 @@ static CB_CLONE_INLINE void differences4(const cb_palette *p, uint32_t j, const 
         #pragma GCC unroll 16
         for (int k = 0; k < 8; ++k) v[k] = v[k] * keep + (k < 4 ? sign * w[k] : w[k]) * take;
     }
-    /* cb_quat_normalize: a zero quaternion is the identity */
-    v4df len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3], norm = len2;
-    cb_sqrt4(&norm);
-    v4df inv = CB_SPLAT4(1.0) / norm;
-    v4di empty = len2 == CB_SPLAT4(0.0);
-    #pragma GCC unroll 16
-    for (int k = 0; k < 4; ++k) v[k] = CB_SELECT4(empty, CB_SPLAT4(k == 3 ? 1.0 : 0.0), v[k] * inv);
+    cb_normalize4(v); /* the quaternion */
     if (sim) {
         v4df s[8];
         #pragma GCC unroll 16
