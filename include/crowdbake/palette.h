@@ -86,6 +86,11 @@ typedef struct cb_palette_clip {
     bool step;               /* its rows are held, not blended: the runtime shows the row at or before the time (clip
                               * flag bit 2, .pal version 4) */
     cb_row_travel travel;    /* its per-row travel offset, applied or not and why (row_travel.h; cb_bake_job_run fills it) */
+    bool timed;              /* its rows lie on cells of a grid and the runtime reads which two it blends from the map
+                              * rows before first_row (clip flag bit 3, .pal version 7; docs/pal-format.md "Timed rows") */
+    uint32_t cells;          /* timed: the grid's steps over the clip (a loop wraps at cell `cells`) */
+    uint32_t map_rows;       /* timed: the map's rows, just before first_row (cb_timed_map_rows) */
+    double cell_rate;        /* timed: cells per second of clip time */
 } cb_palette_clip;
 
 typedef struct cb_palette {
@@ -153,6 +158,8 @@ CROWDBAKE_API cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_optio
 CROWDBAKE_API void cb_palette_free(cb_palette *palette);
 
 /* Texel coordinates of a bone's first texel in a baked row. */
+/* The rows a timed clip's map takes: one texel per cell, ceil(cells / row_texels). */
+CROWDBAKE_API uint32_t cb_timed_map_rows(uint32_t cells, uint32_t row_texels);
 CROWDBAKE_API void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint32_t *x, uint32_t *y);
 
 /* Decodes one bone of one row back to a 4x4 column-major matrix. texels points at the

@@ -15,7 +15,9 @@ extern "C" {
 
 /* The four per-instance numbers. A negative frame_count marks a one-shot of -frame_count rows:
  * it clamps at its ends instead of wrapping. A negative first_row marks a clip whose rows are
- * held, not blended (cb_palette_clip.step), its first row -first_row - 1 (cb_instance_of). */
+ * held, not blended (cb_palette_clip.step), its first row -first_row - 1 (cb_instance_of). A
+ * negative rate marks a timed clip (cb_palette_clip.timed): frame_count counts its cells, -rate
+ * is cells per second, and its map says which rows to blend (cb_runtime_frame_in). */
 typedef struct cb_instance {
     double first_row, frame_count, rate, phase;
 } cb_instance;
@@ -26,6 +28,10 @@ CROWDBAKE_API cb_instance cb_instance_of(const cb_palette_clip *clip);
 /* fpos = time * rate + phase * frames, wrapped (loops) or clamped (one-shots) to the clip; the
  * two rows blended and the weight of the second. */
 CROWDBAKE_API void cb_runtime_frame(const cb_instance *in, double time, uint32_t *row0, uint32_t *row1, double *fr);
+/* The same for any instance, a timed one's (rate < 0) through its map in the palette's texels
+ * (docs/pal-format.md "Timed rows": what every runtime's frame function does). */
+CROWDBAKE_API void cb_runtime_frame_in(const cb_palette *p, const void *texels, const cb_instance *in, double time,
+                                       uint32_t *row0, uint32_t *row1, double *fr);
 
 /* The bone transforms at `time` (16 doubles per bone): the two rows' values blended - matrices
  * term by term, qpos quaternions by normalized lerp after a hemisphere flip - then as matrices. */

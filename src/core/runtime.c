@@ -8,6 +8,7 @@
 
 #include "cb_math.h"
 #include "palette_bake.h" /* palette_local_matrices */
+#include "timed_rows.h"
 
 void cb_runtime_frame(const cb_instance *in, double time, uint32_t *row0, uint32_t *row1, double *fr)
 {
@@ -30,16 +31,46 @@ void cb_runtime_frame(const cb_instance *in, double time, uint32_t *row0, uint32
     *row1 = (uint32_t)(first + f1);
 }
 
+/* A timed clip (rate < 0): its cell at `time`, and the map's texel there (docs/pal-format.md). */
+static void timed_frame(const cb_palette *p, const void *texels, const cb_instance *in, double time, uint32_t *row0,
+                        uint32_t *row1, double *fr)
+{
+    bool held = in->first_row < 0;
+    double first = held ? -in->first_row - 1 : in->first_row;
+    double cells = fabs(in->frame_count), u = time * -in->rate + in->phase * cells, c;
+    if (in->frame_count > 0) {
+        u = fmod(u, cells);
+        if (u < 0) u += cells;
+        c = floor(u);
+    } else {
+        u = u < 0 ? 0 : u > cells ? cells : u;
+        c = fmin(floor(u), cells - 1);
+    }
+    double m[4];
+    timed_map_read(p, texels, (uint32_t)first, (uint32_t)cells, (uint32_t)c, m);
+    *row0 = (uint32_t)(first + m[0]);
+    *row1 = held ? *row0 : (uint32_t)(first + m[1]);
+    *fr = held ? 0 : m[2] + (m[3] - m[2]) * (u - c);
+}
+
+void cb_runtime_frame_in(const cb_palette *p, const void *texels, const cb_instance *in, double time, uint32_t *row0,
+                         uint32_t *row1, double *fr)
+{
+    if (in->rate < 0) timed_frame(p, texels, in, time, row0, row1, fr);
+    else cb_runtime_frame(in, time, row0, row1, fr);
+}
+
 cb_instance cb_instance_of(const cb_palette_clip *clip)
 {
     double first = clip->step ? -(double)clip->first_row - 1 : clip->first_row;
+    if (clip->timed) return (cb_instance){first, clip->loops ? clip->cells : -(double)clip->cells, -clip->cell_rate, 0};
     return (cb_instance){first, clip->loops ? clip->frames : -(double)clip->frames, clip->fps, 0};
 }
 
 void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_instance *in, double time, double *out)
 {
     palette_frame f;
-    cb_runtime_frame(in, time, &f.row0, &f.row1, &f.fr);
+    cb_runtime_frame_in(p, texels, in, time, &f.row0, &f.row1, &f.fr);
     if (p->bone_space == CB_BONE_SPACE_LOCAL && palette_local_matrices(p, texels, &f, NULL, 1, out)) return;
     for (uint32_t j = 0; j < p->bone_count; ++j) cb_palette_blend(p, texels, f.row0, f.row1, f.fr, j, out + (size_t)j * 16);
 }
@@ -50,8 +81,8 @@ bool cb_runtime_matrices_crossfade(const cb_palette *p, const void *texels, cons
     if (fade >= 1) return cb_runtime_matrices(p, texels, to, time, out), true;
     if (p->bone_space == CB_BONE_SPACE_LOCAL) { /* local rows faded before they are composed */
         palette_frame a, b;
-        cb_runtime_frame(from, time, &a.row0, &a.row1, &a.fr);
-        cb_runtime_frame(to, time, &b.row0, &b.row1, &b.fr);
+        cb_runtime_frame_in(p, texels, from, time, &a.row0, &a.row1, &a.fr);
+        cb_runtime_frame_in(p, texels, to, time, &b.row0, &b.row1, &b.fr);
         return palette_local_matrices(p, texels, &b, &a, fade, out);
     }
     double *other = malloc((size_t)p->bone_count * 16 * sizeof *other);
