@@ -87,7 +87,7 @@ static cb_status include(const char *name, void *ctx)
     if (a < 0) return s->err->status;
     if (s->chosen[a]) return cb_fail(s->err, CB_ERR_SETTINGS, "%s: --clip names '%s' twice", s->model->source, name);
     s->chosen[a] = true;
-    s->plan[s->count++] = (cb_clip_plan){a, NULL, -1, 0, false, false};
+    s->plan[s->count++] = (cb_clip_plan){a, NULL, -1, 0, false, false, 0, NULL};
     return CB_OK;
 }
 
@@ -114,7 +114,7 @@ cb_status cli_select_clips(const cb_model *m, const char *clips, const char *exc
     else if (clips) cli_for_each_name(clips, include, &s);
     else if (!cli_for_each_name(excluded, exclude, &s))
         for (uint32_t a = 0; a < m->animation_count; ++a)
-            if (!s.chosen[a]) s.plan[s.count++] = (cb_clip_plan){(int32_t)a, NULL, -1, 0, false, false};
+            if (!s.chosen[a]) s.plan[s.count++] = (cb_clip_plan){(int32_t)a, NULL, -1, 0, false, false, 0, NULL};
     if (!err->status && s.count == 0)
         cb_fail(err, CB_ERR_SETTINGS, "%s: no clip left to bake after %s", m->source, s.option);
     free(s.chosen);
@@ -160,7 +160,7 @@ cb_status cli_override_loops(const cb_model *m, const char *loops, const char *o
     if (!loops && !one_shots) return CB_OK;
     if (!*plan) { /* every clip, in file order, as a bake without a plan takes them */
         if (!(*plan = calloc(m->animation_count + 1, sizeof **plan))) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-        for (uint32_t a = 0; a < m->animation_count; ++a) (*plan)[a] = (cb_clip_plan){(int32_t)a, NULL, -1, 0, false, false};
+        for (uint32_t a = 0; a < m->animation_count; ++a) (*plan)[a] = (cb_clip_plan){(int32_t)a, NULL, -1, 0, false, false, 0, NULL};
         *count = m->animation_count;
     }
     loop_override o = {m, *plan, *count, 1, "--loop", one_shots, err};

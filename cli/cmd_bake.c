@@ -87,6 +87,10 @@ const char cmd_bake_usage[] =
     "                             6), blended bone by bone and composed by the runtime: the glTF's own\n"
     "                             interpolation, fewer rows for the same error. qpos, u16 or float only;\n"
     "                             other formats beside the .pal are baked global (catalog: bone_space)\n"
+    "  --timed-rows auto|on|off   local rows of an auto rate on the clip's key times, a map saying\n"
+    "                             which two rows each moment blends (.pal version 7): auto (default)\n"
+    "                             where that takes fewer bytes than one uniform rate, on wherever the\n"
+    "                             keys allow, off never (catalog: timed_rows)\n"
     "  --max-texture-size N       never emit a dimension above N (default 16384); rows wrap into\n"
     "                             side-by-side column blocks\n"
     "  --root-motion keep|in-place|loops-in-place  in-place removes the root's average horizontal\n"
@@ -112,7 +116,7 @@ const char cmd_bake_usage[] =
 typedef struct bake_args {
     const char *model, *output, *format, *fps, *layout, *precision, *max_size, *root_motion, *skin, *speed_ref,
         *exr_compression, *threads, *depfile, *manifest, *max_error, *max_fps, *clips, *excluded, *out_dir, *loops,
-        *one_shots, *syncs, *default_state, *type, *fragment, *row_travel, *bone_space;
+        *one_shots, *syncs, *default_state, *type, *fragment, *row_travel, *bone_space, *timed_rows;
     bool zstd, json, quiet, force, depfile_manifest, fit, measure_all, over_budget, plant_feet;
     cli_output out;
 } bake_args;
@@ -181,6 +185,8 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
     s->row_travel_off = a->row_travel && strcmp(a->row_travel, "off") == 0;
     if (a->bone_space && !cb_bone_space_parse(a->bone_space, &s->bone_space))
         return cli_usage_error("bake", "--bone-space is global or local, got '%s'", a->bone_space);
+    if (a->timed_rows && !cb_timed_rows_parse(a->timed_rows, &s->timed_rows))
+        return cli_usage_error("bake", "--timed-rows is auto, on or off, got '%s'", a->timed_rows);
     s->allow_over_budget = a->over_budget;
     s->max_error_given = a->max_error != NULL;
     if (a->max_error && (!cli_parse_double(a->max_error, &s->max_error_mm) || !(s->max_error_mm > 0)))
@@ -196,7 +202,7 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
               (a->measure_all ? CB_BAKE_MEASURE_ALL : 0u) | (a->over_budget ? CB_BAKE_ALLOW_OVER_BUDGET : 0u) |
               (a->max_error ? CB_BAKE_MAX_ERROR : 0u) | (a->max_fps ? CB_BAKE_MAX_FPS : 0u) |
               (a->plant_feet ? CB_BAKE_PLANT_FEET : 0u) | (a->row_travel ? CB_BAKE_ROW_TRAVEL : 0u) |
-              (a->bone_space ? CB_BAKE_BONE_SPACE : 0u);
+              (a->bone_space ? CB_BAKE_BONE_SPACE : 0u) | (a->timed_rows ? CB_BAKE_TIMED_ROWS : 0u);
     return 0;
 }
 
@@ -532,7 +538,7 @@ int cmd_bake(int argc, char **argv)
         {"--depfile-manifest-only", NULL, NULL, &a.depfile_manifest}, {"--fit-rows", NULL, NULL, &a.fit},
         {"--measure-all", NULL, NULL, &a.measure_all}, {"--plant-feet", NULL, NULL, &a.plant_feet},
         {"--measure-all", NULL, NULL, &a.measure_all}, {"--row-travel", "auto|off", &a.row_travel, NULL},
-        {"--bone-space", "global|local", &a.bone_space, NULL},
+        {"--bone-space", "global|local", &a.bone_space, NULL}, {"--timed-rows", "auto|on|off", &a.timed_rows, NULL},
         {"--allow-over-budget", NULL, NULL, &a.over_budget},
         {"--type", "NAME", &a.type, NULL},        {"--fragment", "FILE", &a.fragment, NULL},
         {"--sync", "STATE=speed|time", &a.syncs, NULL}, {"--default-state", "STATE", &a.default_state, NULL}};

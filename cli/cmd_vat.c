@@ -40,7 +40,7 @@ static cb_status plan_like(const cb_model *m, const char *palette, cb_clip_plan 
         if (a < 0)
             cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' is not a clip of %s; --like wants a palette baked from this model",
                     palette, c.name, m->source);
-        else (*plan)[i] = (cb_clip_plan){a, m->animations[a].name, (c.flags & CBPAL_CLIP_LOOPS) ? 1 : 0, c.fps, false, false};
+        else (*plan)[i] = (cb_clip_plan){a, m->animations[a].name, (c.flags & CBPAL_CLIP_LOOPS) ? 1 : 0, c.fps, false, false, 0, NULL};
         *count = i + 1;
     }
     cbpal_close(&f);

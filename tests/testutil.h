@@ -239,7 +239,7 @@ static inline double clip_visible_error(cb_sampler *s, int32_t animation, double
     cb_bake_options o = cb_default_bake_options();
     o.fps = fps;
     o.error_goal = goal;
-    cb_clip_plan plan = {animation, NULL, -1, fps, fit, false};
+    cb_clip_plan plan = {animation, NULL, -1, fps, fit, false, 0, NULL};
     cb_palette p;
     cb_error err = {0};
     assert_int_equal(cb_palette_bake(s, &o, &plan, 1, &p, &err), CB_OK);

@@ -66,6 +66,7 @@ std::string catalog_canonical_words(const char *dir, const cb_catalog_animal *an
     if (b.plant_feet) c += " plant_feet";
     if (b.row_travel_off) c += " row_travel_off";
     if (b.bone_space == CB_BONE_SPACE_LOCAL) c += " bone_space=local"; /* global keeps every key it had */
+    if (b.timed_rows != CB_TIMED_ROWS_AUTO) c += std::string(" timed_rows=") + cb_timed_rows_name(b.timed_rows);
     if (b.max_error_given) c += " max_error_given";
     if (b.allow_over_budget) c += " allow_over_budget";
     c += std::string(" default=") + (an->default_state ? an->default_state : "");

@@ -138,7 +138,7 @@ struct Parser {
         static const std::vector<std::string> k = {"fps", "max_error", "max_fps", "layout", "precision", "format", "out_dir",
                                                    "max_texture_size", "root_motion", "fit_rows", "measure_all",
                                                    "allow_over_budget", "plant_feet",
-                                                   "row_travel", "bone_space"};
+                                                   "row_travel", "bone_space", "timed_rows"};
         return k;
     }
 
@@ -210,6 +210,9 @@ struct Parser {
         if (auto *n = t.get("bone_space"))
             if (!cb_bone_space_parse(str(*n, where + " bone_space").c_str(), &b->bone_space))
                 fail(n->source(), where + " bone_space must be \"global\" or \"local\"");
+        if (auto *n = t.get("timed_rows"))
+            if (!cb_timed_rows_parse(str(*n, where + " timed_rows").c_str(), &b->timed_rows))
+                fail(n->source(), where + " timed_rows must be \"auto\", \"on\" or \"off\"");
         if (auto *n = t.get("allow_over_budget")) b->allow_over_budget = boolean(*n, where + " allow_over_budget");
         if (auto *n = t.get("plant_feet")) b->plant_feet = boolean(*n, where + " plant_feet");
         /* A fixed fps is checked against a max_error given beside it: an animal's own fps is not

@@ -39,7 +39,7 @@ void report_measure_half_rate(cb_sampler *s, const cb_roster_type *owner, cb_rep
     if (!plan || !owner->clip_count) return free(plan);
     for (uint32_t i = 0; i < owner->clip_count; ++i) {
         const cb_roster_clip *c = &owner->clips[i];
-        plan[i] = (cb_clip_plan){clip_animation(m, an, c->name), c->name, c->loops ? 1 : 0, c->fps / 2, false, false};
+        plan[i] = (cb_clip_plan){clip_animation(m, an, c->name), c->name, c->loops ? 1 : 0, c->fps / 2, false, false, 0, NULL};
         if (plan[i].animation < 0) return free(plan); /* not measurable: no advice */
     }
     cb_bake_options o = cb_bake_settings_options(&an->bake, CB_FORMAT_PAL, NULL, 1);

@@ -53,6 +53,7 @@ bool cb_prep_key(const cb_catalog_animal *an, const cb_limits *limits, char *con
     if (b->measure_all) hash_str(&h, "measure_all"); /* only then: records made before it stay valid */
     if (b->plant_feet) hash_str(&h, "plant_feet");   /* (likewise) */
     if (b->row_travel_off) hash_str(&h, "row_travel_off"); /* likewise */
+    if (b->timed_rows != CB_TIMED_ROWS_AUTO) hash_str(&h, cb_timed_rows_name(b->timed_rows)); /* likewise */
     if (b->max_error_given && b->from.max_error == CB_FROM_COMMAND_LINE) hash_str(&h, "max_error from the command line");
     hash_str(&h, b->out_dir);
     cb_limits l = limits ? *limits : cb_default_limits();

@@ -32,7 +32,7 @@ static int32_t find_entry(const cb_catalog *cat, const cb_catalog_animal *an, co
 static void plan_entry(const cb_model *m, const cb_catalog_clip *c, int32_t a, cb_clip_plan *p, cb_clip_request *req)
 {
     const char *name = c->name == c->source ? m->animations[a].name : c->name;
-    *p = (cb_clip_plan){a, name, c->loop, c->fps, false, false};
+    *p = (cb_clip_plan){a, name, c->loop, c->fps, false, false, 0, NULL};
     *req = (cb_clip_request){c->fps_auto, c->max_error_mm};
 }
 
@@ -89,7 +89,7 @@ static cb_status plan_from_states(const cb_catalog *cat, const cb_catalog_animal
         for (uint32_t a = 0; a < m->animation_count; ++a) {
             if (!chosen[a]) continue;
             if (extra[a]) plan_entry(m, &an->extra_clips[extra[a] - 1], (int32_t)a, &plan[*n], &req[*n]);
-            else plan[*n] = (cb_clip_plan){(int32_t)a, m->animations[a].name, -1, 0, false, false}, req[*n] = (cb_clip_request){-1, 0};
+            else plan[*n] = (cb_clip_plan){(int32_t)a, m->animations[a].name, -1, 0, false, false, 0, NULL}, req[*n] = (cb_clip_request){-1, 0};
             ++*n;
         }
         note_left_out(m, chosen, *n, &t->warnings);
@@ -122,7 +122,7 @@ cb_status roster_plan_clips(const cb_catalog *cat, const cb_catalog_animal *an, 
         if (plan_from_states(cat, an, m, *plan, *requests, &n, t, err)) return err->status;
     } else {
         for (uint32_t i = 0; i < n; ++i)
-            (*plan)[i] = (cb_clip_plan){(int32_t)i, m->animations[i].name, -1, 0, false, false}, (*requests)[i] = (cb_clip_request){-1, 0};
+            (*plan)[i] = (cb_clip_plan){(int32_t)i, m->animations[i].name, -1, 0, false, false, 0, NULL}, (*requests)[i] = (cb_clip_request){-1, 0};
     }
     t->clip_count = n;
     return CB_OK;

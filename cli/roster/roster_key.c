@@ -19,6 +19,7 @@ uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
     if (b->measure_all) hash_str(&h, "measure_all"); /* (likewise: the header's errors may differ) */
     if (b->plant_feet) hash_str(&h, "plant_feet");   /* (likewise: the legs' rows differ) */
     if (b->row_travel_off) hash_str(&h, "row_travel_off"); /* (likewise: the travel table may go) */
+    if (b->timed_rows != CB_TIMED_ROWS_AUTO) hash_str(&h, cb_timed_rows_name(b->timed_rows)); /* (likewise) */
     if (b->allow_over_budget) hash_str(&h, "allow_over_budget"); /* a palette written over budget is not one that met it */
     /* A budget the command line gave (the catalog's own is in the canonical entry): a palette
      * checked against it is not one baked unchecked, nor one checked against another. */

@@ -60,6 +60,8 @@ typedef struct cb_bake_settings {
     bool row_travel_off;         /* no per-row travel offsets (row_travel.h), where the bake would ship them */
     cb_bone_space bone_space;    /* local: a .pal's rows in each bone's parent frame (.pal version 6; qpos, u16 or
                                   * float); other formats are baked global. Default global */
+    cb_timed_rows timed_rows;    /* local rows of an auto rate on its clip's key times (.pal version 7): auto (default)
+                                  * where that costs fewer bytes, on wherever the keys allow, off never */
 } cb_bake_settings;
 
 /* Which settings an override carries (the command line's bake options over a catalog). */
@@ -69,7 +71,7 @@ enum {
     CB_BAKE_EXR_COMPRESSION = 1u << 7, CB_BAKE_OUT_DIR = 1u << 8, CB_BAKE_FIT_ROWS = 1u << 9,
     CB_BAKE_MEASURE_ALL = 1u << 10, CB_BAKE_ALLOW_OVER_BUDGET = 1u << 11, CB_BAKE_MAX_ERROR = 1u << 12,
     CB_BAKE_MAX_FPS = 1u << 13, CB_BAKE_PLANT_FEET = 1u << 14, CB_BAKE_ROW_TRAVEL = 1u << 15,
-    CB_BAKE_BONE_SPACE = 1u << 16
+    CB_BAKE_BONE_SPACE = 1u << 16, CB_BAKE_TIMED_ROWS = 1u << 17
 };
 
 /* fps = "auto" within 1 mm/m up to 120 fps (fps, 30, only for a fixed rate), qpos, u16, a .pal,

@@ -41,6 +41,10 @@ typedef struct cb_texel_memory {
     void *ctx;
 } cb_texel_memory;
 
+/* Whether a rate search may place a clip's rows on its key times (docs/pal-format.md "Timed rows"). */
+typedef enum cb_timed_rows { CB_TIMED_ROWS_AUTO = 0, CB_TIMED_ROWS_ON = 1, CB_TIMED_ROWS_OFF = 2 } cb_timed_rows;
+CROWDBAKE_API const char *cb_timed_rows_name(cb_timed_rows t); /* "auto", "on", "off" */
+
 typedef struct cb_bake_options {
     double fps;
     cb_layout layout;
@@ -60,6 +64,8 @@ typedef struct cb_bake_options {
                            * CB_ERROR_ROWS and CB_ERROR_BUDGET, at an even subset of them) */
     cb_bone_space bone_space; /* local: rows in each bone's parent frame (qpos, u16 or float; src/core/local_rows.c),
                                * sampled (never fitted: a fit is to the global blend), errors measured composed */
+    cb_timed_rows timed_rows; /* an auto rate's rows on its clip's key times (timed rows, .pal version 7) where that
+                               * costs fewer bytes (auto), wherever its keys allow (on), or never (off); local rows only */
 } cb_bake_options;
 
 /* A bake measures its errors at every row while it has at most CB_ERROR_ROWS rows or at most
@@ -139,7 +145,15 @@ typedef struct cb_clip_plan {
     bool fit;           /* its rows fitted to the runtime's linear blend (as cb_bake_options.fit does for every clip) */
     bool step;          /* its rows are held, not blended (.pal clip flag bit 2): a STEP-keyed clip at the rate of its
                          * key grid (cb_clip_step_grid), exact */
+    /* Timed rows (the rate search's choice, docs/pal-format.md "Timed rows"): fps is then the cell rate, and the clip
+     * keeps only the rows on row_cells (timed_rows of them, increasing from 0; a one-shot's last at its last cell).
+     * row_cells is owned by whoever chose it: cb_bake_job_free frees its plan's (cb_clip_plan_release). */
+    uint32_t timed_rows;  /* 0: uniform rows */
+    uint32_t *row_cells;
 } cb_clip_plan;
+
+/* Frees a plan entry's timed rows (row_cells), leaving it uniform. */
+CROWDBAKE_API void cb_clip_plan_release(cb_clip_plan *plan);
 
 /* Whether animation `animation` is keyed with STEP on one grid: every channel with two keys or
  * more is STEP, and every key time lies on start + k / fps (to 1e-3 of a step) for the lowest

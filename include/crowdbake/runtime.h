@@ -99,6 +99,13 @@ typedef struct cb_rate_choice {
     double other_fps;       /* 0: the search stops at the fewest rows (fitted rows chosen: sampled rows miss at
                              * that rate; sampled rows chosen: fitted rows miss under it). Kept for callers. */
     double fps_needed;      /* not met: the lowest rate up to CB_FPS_LIMIT that meets it (0: none does) */
+    /* Timed rows (local rows; cb_bake_options.timed_rows): weighed where its keys lie on a grid, taken (the plan's
+     * timed_rows) where they cost fewer bytes or were asked for. */
+    bool timed_weighed;     /* rows on its keys were measured and within its budget */
+    uint32_t timed_rows, timed_map_rows, timed_cells; /* what they take: rows, map rows, cells of the map */
+    double timed_cell_rate;
+    uint32_t uniform_rows;  /* what the uniform rate chosen (uniform_fps) takes */
+    double uniform_fps;
 } cb_rate_choice;
 /* Sets plan[i].fps and plan[i].fit for every clip with a goal: per clip, the lowest rate within
  * the goal, sampled rows tried before fitted rows at each rate (a tie goes to sampled rows, the

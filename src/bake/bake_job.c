@@ -43,6 +43,7 @@ cb_bake_settings cb_default_bake_settings(void)
     s.formats = CB_FORMAT_PAL;
     s.max_texture_size = 16384;
     s.root_motion = CB_ROOT_MOTION_KEEP;
+    s.timed_rows = CB_TIMED_ROWS_AUTO;
     return s;
 }
 
@@ -112,6 +113,7 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
     /* Local rows go only in a .pal (EXR, KTX2 and Babylon have no place for the parents): every other
      * format is baked global (bake_notes says so). The rate search takes it from here too. */
     o.bone_space = format == CB_FORMAT_PAL ? s->bone_space : CB_BONE_SPACE_GLOBAL;
+    o.timed_rows = format == CB_FORMAT_PAL ? s->timed_rows : CB_TIMED_ROWS_OFF; /* only a .pal has a map */
     return o;
 }
 
@@ -158,16 +160,18 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
             cbpal_xxh64_update(&h, &g->lods[i]->source_hash, sizeof g->lods[i]->source_hash);
         return cbpal_xxh64_digest(&h);
     }
-    char opts[320], chosen[96] = ""; /* error-bounded rates: the goal chooses them (a fixed fps: as before it) */
+    char opts[360], chosen[96] = ""; /* error-bounded rates: the goal chooses them (a fixed fps: as before it) */
     if (job->settings.fps_auto)
         snprintf(chosen, sizeof chosen, " auto max_error=%.17g max_fps=%.17g", job->settings.max_error_mm,
                  job->settings.max_fps);
-    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s%s%s%s\n",
+    int n = snprintf(opts, sizeof opts, "crowdbake %s fps=%.17g layout=%s precision=%s max=%u root=%d skin=%d zstd=%d exr=%d%s%s%s%s%s%s%s%s\n",
                      CROWDBAKE_VERSION, o->fps, cb_layout_name(o->layout), cb_precision_name(o->precision),
                      o->max_texture_size, (int)o->root_motion, job->skin, job->settings.zstd,
                      job->settings.exr_compression, o->fit ? " fit-rows" : "", o->measure_all ? " measure-all" : "", chosen,
                      job->settings.plant_feet ? " plant-feet" : "", job->settings.row_travel_off ? " row-travel-off" : "",
-                     o->bone_space == CB_BONE_SPACE_LOCAL ? " bone-space=local" : "");
+                     o->bone_space == CB_BONE_SPACE_LOCAL ? " bone-space=local" : "",
+                     o->timed_rows != CB_TIMED_ROWS_AUTO ? " timed-rows=" : "", /* auto: the hash as before */
+                     o->timed_rows != CB_TIMED_ROWS_AUTO ? cb_timed_rows_name(o->timed_rows) : "");
     cbpal_xxh64_update(&h, opts, (size_t)n);
     cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
     return cbpal_xxh64_digest(&h);
@@ -286,6 +290,7 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
     const cb_model *m = job->model;
     uint32_t n = job->clips ? job->clip_count : m->animation_count;
     free_search_kept(job);
+    for (uint32_t i = 0; job->plan && i < job->plan_count; ++i) cb_clip_plan_release(&job->plan[i]);
     free(job->plan), free(job->rates), free(job->clip_settings);
     job->plan = calloc(n ? n : 1, sizeof *job->plan);
     job->rates = calloc(n ? n : 1, sizeof *job->rates);
@@ -296,7 +301,7 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
     bool any = false;
-    for (uint32_t i = 0; i < n; ++i) job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false};
+    for (uint32_t i = 0; i < n; ++i) job->plan[i] = job->clips ? job->clips[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false, 0, NULL};
     job->plan_count = n;
     if (job->settings.plant_feet && !job->planted && plant_feet_apply(job, err)) return free(goals), err->status;
     early_analysis *early = calloc(n ? n : 1, sizeof *early);

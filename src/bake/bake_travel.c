@@ -53,11 +53,22 @@ cb_status bake_row_travel(const cb_bake_job *job, struct foot_cache *feet, struc
             snprintf(t->why, sizeof t->why, "not applied: %.200s", ignored.message);
             continue;
         }
-        if (info.frames != clip->frames) { /* framed as baked: the rate the bake chose gives its rows */
+        const cb_clip_plan *plan = &job->plan[c];
+        bool timed = clip->timed && plan->timed_rows == clip->frames; /* its rows: cells of the rate's framing */
+        if (info.frames != clip->frames && !timed) { /* framed as baked: the rate the bake chose gives its rows */
             snprintf(t->why, sizeof t->why, "not applied: %u rows baked, %u analyzed", clip->frames, info.frames);
             continue;
         }
-        job_row_travel(job, feet, s, &info, offsets + clip->first_row, t);
+        if (timed) { /* measured at every cell, kept at the rows' */
+            float *cells = calloc(info.frames, sizeof *cells);
+            if (!cells) return free(offsets), cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+            job_row_travel(job, feet, s, &info, cells, t);
+            for (uint32_t k = 0; k < clip->frames; ++k)
+                offsets[clip->first_row + k] = plan->row_cells[k] < info.frames ? cells[plan->row_cells[k]] : 0;
+            free(cells);
+        } else {
+            job_row_travel(job, feet, s, &info, offsets + clip->first_row, t);
+        }
         any = any || t->applied;
     }
     if (!any) free(offsets), offsets = NULL;

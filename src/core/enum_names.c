@@ -11,6 +11,7 @@ static const char *const layout_names[] = {"mat4", "affine", "qpos"};
 static const char *const precision_names[] = {"float", "half", "u16"};
 static const char *const root_motion_names[] = {"keep", "in-place", "loops-in-place"}; /* cb_root_motion's order */
 static const char *const bone_space_names[] = {"global", "local"}; /* cb_bone_space's order */
+static const char *const timed_rows_names[] = {"auto", "on", "off"}; /* cb_timed_rows' order */
 
 /* The index of `text` among `count` names, or -1. */
 static int name_index(const char *text, const char *const *names, int count)
@@ -34,6 +35,14 @@ bool cb_precision_parse(const char *text, cb_precision *out)
 {
     int i = name_index(text, precision_names, 3);
     return i >= 0 && (*out = (cb_precision)i, true);
+}
+
+const char *cb_timed_rows_name(cb_timed_rows t) { return (unsigned)t < 3 ? timed_rows_names[t] : "?"; }
+
+bool cb_timed_rows_parse(const char *text, cb_timed_rows *out)
+{
+    int i = name_index(text, timed_rows_names, 3);
+    return i >= 0 && (*out = (cb_timed_rows)i, true);
 }
 
 const char *cb_bone_space_name(cb_bone_space b) { return (unsigned)b < 2 ? bone_space_names[b] : "?"; }

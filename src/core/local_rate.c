@@ -33,6 +33,7 @@
 #include "local_lanes.h"
 #include "local_pose.h"
 #include "sampler.h"
+#include "timed_rows.h"
 
 /* ---- the skeleton ---- */
 
@@ -405,6 +406,142 @@ cb_status local_clip_rate(cb_sampler *s, const palette_skin_facts *facts, const 
     return CB_OK;
 }
 
+/* ---- timed rows: rows on the keys ---- */
+
+enum { MOST_SPLITS = 4, FINE = 12 /* lcm(1..MOST_SPLITS): every split's rows lie on a FINE-th of a key step */ };
+
+/* The steps of the key grid (key_fps, G steps over the clip) where some channel has a key, 0
+ * always, a one-shot's end G too (a loop's G is its wrap, no row), increasing, into *count. */
+static uint32_t *key_steps(const cb_animation *a, const cb_clip_info *clip, double key_fps, uint32_t G, uint32_t *count)
+{
+    bool *on = calloc((size_t)G + 1, sizeof *on);
+    uint32_t *out = malloc(((size_t)G + 1) * sizeof *out), n = 0;
+    if (!on || !out) return free(on), free(out), NULL;
+    on[0] = true, on[G] = !clip->loops;
+    for (uint32_t c = 0; c < a->channel_count; ++c) {
+        const cb_channel *ch = &a->channels[c];
+        if (c > 0 && ch->times == a->channels[c - 1].times) continue;
+        for (uint32_t k = 0; k < ch->key_count; ++k) {
+            double g = round((ch->times[k] - clip->t0) * key_fps);
+            if (g >= 0 && g < G) on[(uint32_t)g] = true;
+        }
+    }
+    for (uint32_t g = 0; g <= G; ++g)
+        if (on[g]) out[n++] = g;
+    free(on);
+    *count = n;
+    return out;
+}
+
+/* The worst error over the fine steps [from, to) (FINE a key step; `fine` frames the clip at
+ * POINTS x FINE steps a key step) with rows at s equal parts of it, exact local rows blended and
+ * composed at the quarter points of each (wraps: a loop's last interval, into its first row,
+ * c->first_row). Stops above goal. */
+static double split_error(probe_ctx *c, const cb_clip_info *fine, uint32_t from, uint32_t to, uint32_t s, bool wraps,
+                          double goal)
+{
+    uint32_t bones = c->k->bones, d = (to - from) / s, frames[CB_SAMPLE_BATCH], n = 0, start = POINTS * from;
+    const float *bind = c->facts->bind_positions;
+    bool kept[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) kept[i] = true;
+    sample_frames(c, fine, &start, 1, kept); /* the first row alone: with 4 splits, 17 times */
+    to_local(c->k, bind, c->poses, c->rows);
+    for (uint32_t j = 0; j < s; ++j) {
+        for (uint32_t q = 1; q <= POINTS; ++q)
+            if (q < POINTS || !(wraps && j + 1 == s)) frames[n++] = POINTS * (from + j * d) + q * d;
+    }
+    sample_frames(c, fine, frames, n, kept);
+    double worst = 0;
+    point pts[MOST_SPLITS * (POINTS - 1)];
+    for (uint32_t j = 0; j < s; ++j) {
+        local_qpos *to_row = c->rows + (size_t)(j + 1) * bones;
+        if (wraps && j + 1 == s) memcpy(to_row, c->first_row, bones * sizeof *to_row);
+        else to_local(c->k, bind, c->poses + (size_t)(POINTS * j + POINTS - 1) * bones, to_row);
+        for (uint32_t q = 1; q < POINTS; ++q)
+            pts[j * (POINTS - 1) + q - 1] = (point){c->rows + (size_t)j * bones, to_row, (double)q / POINTS, POINTS * j + q - 1, &worst};
+    }
+    measure_points(c, bind, pts, s * (POINTS - 1), goal);
+    return worst;
+}
+
+/* The fewest divisions L of a key step (1, 2, 3, 4, 6, 12) on which every key interval's splits
+ * land: steps[i] x L a multiple of split[i]. */
+static uint32_t cell_divisions(const uint32_t *steps, const uint32_t *split, uint32_t n)
+{
+    static const uint32_t divisions[] = {1, 2, 3, 4, 6, FINE};
+    for (size_t d = 0; d < sizeof divisions / sizeof divisions[0]; ++d) {
+        bool all = true;
+        for (uint32_t i = 0; all && i < n; ++i) all = steps[i] * divisions[d] % split[i] == 0;
+        if (all) return divisions[d];
+    }
+    return FINE;
+}
+
+/* The splits found (split[i] for the key interval from keys[i], steps[i] key steps) as cells. */
+static bool timed_cells(const cb_clip_info *clip, const uint32_t *keys, const uint32_t *steps, const uint32_t *split,
+                        uint32_t n, uint32_t G, uint32_t row_texels, local_timed *out)
+{
+    uint32_t L = cell_divisions(steps, split, n), rows = clip->loops ? 0 : 1;
+    out->cell_rate = round(out->key_fps * L * 1000) / 1000;
+    out->cells = G * L;
+    if (cb_clip_step_count(clip->duration, out->cell_rate) != out->cells) return false; /* the bake frames it so */
+    for (uint32_t i = 0; i < n; ++i) rows += split[i];
+    if (!(out->row_cells = malloc(rows * sizeof *out->row_cells))) return false;
+    uint32_t r = 0;
+    for (uint32_t i = 0; i < n; ++i)
+        for (uint32_t j = 0; j < split[i]; ++j) out->row_cells[r++] = keys[i] * L + j * steps[i] * L / split[i];
+    if (!clip->loops) out->row_cells[r++] = out->cells;
+    out->rows = rows;
+    out->map_rows = cb_timed_map_rows(out->cells, row_texels);
+    return true;
+}
+
+cb_status local_clip_timed(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
+                           const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep, double max_error,
+                           uint32_t row_texels, local_timed *out, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(s);
+    const cb_animation *a = &m->animations[clip->animation];
+    memset(out, 0, sizeof *out);
+    if (!(clip->duration > 0) || !((out->key_fps = cb_key_grid_fps(a, clip->t0, clip->duration, CB_FPS_LIMIT)) > 0))
+        return CB_OK;
+    uint32_t G = cb_clip_step_count(clip->duration, out->key_fps), count = 0;
+    if ((uint64_t)G * POINTS * FINE > UINT32_MAX / 2) return CB_OK;
+    uint32_t *keys = key_steps(a, clip, out->key_fps, G, &count);
+    uint32_t n = keys ? (clip->loops ? count : count - 1) : 0;
+    uint32_t *steps = calloc(n ? n : 1, sizeof *steps), *split = calloc(n ? n : 1, sizeof *split);
+    probe_ctx c;
+    bool ready = keys && steps && split && probe_ctx_init(&c, s, facts, skeleton, clip, root_motion, keep);
+    if (!ready) {
+        free(keys), free(steps), free(split);
+        return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory choosing clip %d's timed rows", m->source, clip->animation);
+    }
+    cb_sampler_set_loop(s, clip);
+    cb_clip_info fine = *clip;
+    fine.steps = POINTS * FINE * G;
+    uint32_t row0 = 0;
+    const bool kept = true;
+    sample_frames(&c, &fine, &row0, 1, &kept);
+    to_local(c.k, facts->bind_positions, c.poses, c.first_row);
+    bool ok = n > 0;
+    for (uint32_t i = 0; ok && i < n; ++i) {
+        uint32_t end = i + 1 < count ? keys[i + 1] : G;
+        steps[i] = end - keys[i];
+        double e = INFINITY;
+        for (split[i] = 1; split[i] <= MOST_SPLITS; ++split[i])
+            if ((e = split_error(&c, &fine, FINE * keys[i], FINE * end, split[i], i + 1 == count, max_error)) <= max_error) break;
+        ok = e <= max_error;
+        out->error = fmax(out->error, e);
+        out->split = split[i] > out->split ? split[i] : out->split;
+    }
+    out->intervals = n;
+    out->possible = ok && timed_cells(clip, keys, steps, split, n, G, row_texels, out);
+    if (!out->possible) free(out->row_cells), out->row_cells = NULL;
+    probe_ctx_free(&c);
+    free(keys), free(steps), free(split);
+    return CB_OK;
+}
+
 double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
                         const cb_clip_info *clip, double fps, cb_error *err)
 {
@@ -431,12 +568,23 @@ static void decode_row(probe_ctx *c, const cb_palette *p, uint32_t r, local_qpos
     }
 }
 
-/* The clip's rows (frames 4i of framing) and quarter points (4i + 1 .. 3) measured interval by
- * interval, a batch of four intervals at a time, each row decoded once. */
-static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palette_clip *pc, const cb_clip_info *framing,
-                              uint32_t steps, double *at_rows, double *between)
+/* The runtime's weight of row r1 at cell position u of a timed clip (its map's texel, as
+ * cb_runtime_frame_in reads it). */
+static double timed_weight(const cb_palette *p, const cb_palette_clip *pc, double u)
 {
-    uint32_t row0 = 0, bones = c->k->bones;
+    double v[4], cell = floor(u);
+    if (cell > pc->cells - 1) cell = pc->cells - 1;
+    timed_map_read(p, p->texels, pc->first_row, pc->cells, (uint32_t)cell, v);
+    return v[2] + (v[3] - v[2]) * (u - cell);
+}
+
+/* The clip's rows (frames 4 c_k of framing: c_k = k, or a timed clip's row_cells) and the quarter
+ * points between them (4 c_k + q (c_k+1 - c_k)) measured interval by interval, a batch of four
+ * intervals at a time, each row decoded once; a timed clip's weights as its map gives them. */
+static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palette_clip *pc, const cb_clip_info *framing,
+                              uint32_t steps, const uint32_t *row_cells, double *at_rows, double *between)
+{
+    uint32_t row0 = 0, bones = c->k->bones, end_cell = row_cells ? pc->cells : pc->frames;
     const bool all = true;
     bool kept[CB_SAMPLE_BATCH];
     for (uint32_t i = 0; i < CB_SAMPLE_BATCH; ++i) kept[i] = true; /* the bake after a replan reads them again */
@@ -446,7 +594,11 @@ static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palett
     measure_points(c, p->bind_positions, &start, 1, INFINITY);
     for (uint32_t first = 0; first < steps; first += INTERVALS_A_BATCH) {
         uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH], n = 0;
-        for (uint32_t i = 0; i < count * POINTS; ++i) frames[i] = POINTS * first + i + 1;
+        for (uint32_t i = 0; i < count; ++i) {
+            uint32_t k = first + i, from = row_cells ? row_cells[k] : k;
+            uint32_t to = k + 1 == pc->frames ? end_cell : row_cells ? row_cells[k + 1] : k + 1;
+            for (uint32_t q = 1; q <= POINTS; ++q) frames[i * POINTS + q - 1] = POINTS * from + q * (to - from);
+        }
         sample_frames(c, framing, frames, count * POINTS, kept);
         point pts[INTERVALS_A_BATCH * POINTS];
         for (uint32_t i = 0; i < count; ++i) {
@@ -455,11 +607,27 @@ static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palett
             local_qpos *from = c->rows + (size_t)i * bones, *end = from + bones;
             decode_row(c, p, pc->first_row + (wrap ? 0 : next), end);
             const local_qpos *to = pc->step ? from : end; /* held rows: the row alone */
-            for (uint32_t q = 1; q < POINTS; ++q) pts[n++] = (point){from, to, (double)q / POINTS, i * POINTS + q - 1, between};
+            for (uint32_t q = 1; q < POINTS; ++q) {
+                double f = (double)q / POINTS;
+                if (row_cells) f = timed_weight(p, pc, (frames[i * POINTS + q - 1]) / (double)POINTS);
+                pts[n++] = (point){from, to, f, i * POINTS + q - 1, between};
+            }
             if (!wrap) pts[n++] = (point){end, end, 0, i * POINTS + POINTS - 1, at_rows};
         }
         measure_points(c, p->bind_positions, pts, n, INFINITY);
         memcpy(c->rows, c->rows + (size_t)count * bones, bones * sizeof *c->rows); /* the next batch's first */
+    }
+}
+
+/* A timed clip's row cells read back from its map (the cell where each row's interval starts,
+ * weight 0; a one-shot's last row at its last cell), into out (frames of them). */
+static void timed_row_cells(const cb_palette *p, const cb_palette_clip *pc, uint32_t *out)
+{
+    for (uint32_t k = 0; k < pc->frames; ++k) out[k] = pc->cells;
+    for (uint32_t cell = 0; cell < pc->cells; ++cell) {
+        double v[4];
+        timed_map_read(p, p->texels, pc->first_row, pc->cells, cell, v);
+        if (v[2] == 0 && v[0] < pc->frames) out[(uint32_t)v[0]] = cell;
     }
 }
 
@@ -473,14 +641,18 @@ cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, c
     /* As the bake framed it (cb_verify_clip's reading of the palette's clip): rows at start + i D / N,
      * in-place travel at the clip's recorded velocity (zero where it was kept). */
     cb_clip_info framing = {.animation = animation, .t0 = pc->start, .t1 = pc->start + (a->t1 - a->t0),
-                            .duration = pc->duration, .loops = pc->loops, .steps = POINTS * (steps ? steps : 1)};
+                            .duration = pc->duration, .loops = pc->loops,
+                            .steps = POINTS * (pc->timed ? pc->cells : steps ? steps : 1)};
+    uint32_t *row_cells = pc->timed ? malloc(pc->frames * sizeof *row_cells) : NULL;
+    if (pc->timed && !row_cells) return cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring %s's local rows", m->source);
+    if (row_cells) timed_row_cells(p, pc, row_cells);
     for (int k = 0; k < 3; ++k) framing.root_velocity[k] = pc->root_velocity[k];
     local_skeleton k; /* the palette's parents: the same nearest ancestor joints */
     probe_ctx c;
     *at_rows = *between = 0;
     if (!local_skeleton_build(m, cb_sampler_skin(s), &k) ||
         !probe_ctx_init(&c, s, facts, &k, &framing, CB_ROOT_MOTION_IN_PLACE, keep)) {
-        local_skeleton_free(&k);
+        local_skeleton_free(&k), free(row_cells);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring %s's local rows", m->source);
     }
     /* The loop as the bake played it: from the analysis its rate choice kept (judged once). */
@@ -490,8 +662,9 @@ cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, c
     else
         cb_sampler_set_baked_loop(s, animation, pc->loops, pc->start, pc->duration);
     c.global_rows = false; /* a matrix rig's poses are measured as matrices: its rows are the palette's */
-    palette_intervals(&c, p, pc, &framing, pc->duration > 0 ? steps : 0, at_rows, between);
+    palette_intervals(&c, p, pc, &framing, pc->duration > 0 ? steps : 0, row_cells, at_rows, between);
     probe_ctx_free(&c);
+    free(row_cells);
     local_skeleton_free(&k);
     return CB_OK;
 }

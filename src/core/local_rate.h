@@ -57,6 +57,31 @@ cb_status local_clip_rate(cb_sampler *s, const palette_skin_facts *facts, const 
                           const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep, double max_error,
                           double max_fps, local_rate *out, cb_error *err);
 
+/* A clip's rows on its key times (timed rows, docs/pal-format.md "Timed rows"), as local_clip_timed
+ * found them. */
+typedef struct local_timed {
+    bool possible;        /* its keys lie on a grid, and each key interval meets max_error split in at most 4 */
+    double key_fps;       /* the grid of its keys (cb_key_grid_fps) */
+    double cell_rate;     /* the map's grid: key_fps times the fewest divisions its splits need */
+    uint32_t cells;       /* round(duration x cell_rate) */
+    uint32_t rows;        /* its rows: each key interval's splits (and a one-shot's end) */
+    uint32_t map_rows;    /* cb_timed_map_rows(cells, row_texels) */
+    uint32_t *row_cells;  /* rows: each row's cell (malloc'd: the caller's), NULL where not possible */
+    uint32_t intervals;   /* key intervals (a loop's wrap one of them) */
+    uint32_t split;       /* the most rows any key interval needed */
+    double error;         /* the worst error measured (model units, float64 rows, before quantisation) */
+} local_timed;
+
+/* Clip `clip` (analyzed on this sampler) baked as timed local rows: rows at its key times (every
+ * channel's keys merged, and a one-shot's end), each key interval split into the fewest equal
+ * parts s = 1..4 whose rows, blended and composed as the runtime plays them, stay within
+ * max_error at the quarter points of every row interval (local_clip_rate's measurement). Its
+ * cost is rows + map_rows rows of row_texels texels. Nothing possible (out->possible false): a
+ * still clip, keys on no grid, or an interval over max_error split in 4. Fails only out of memory. */
+cb_status local_clip_timed(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
+                           const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep, double max_error,
+                           uint32_t row_texels, local_timed *out, cb_error *err);
+
 /* The worst vertex error of clip `clip` baked as local rows at `fps` (model units), measured as
  * local_clip_rate measures a candidate, in full (no goal to stop at), root motion kept. For tests
  * and benchmarks. */

@@ -39,6 +39,35 @@ static pose_cache *clip_cache(local_search *ls, uint32_t i)
     return ls->keep->poses[i];
 }
 
+/* Clip i's rows on its keys (local_clip_timed), weighed against the uniform rate r chose: taken
+ * where they cost fewer rows (their map's rows counted), or wherever possible with timed_rows on
+ * (the plan's timed_rows and row_cells, its fps the map's cell rate). Only for a job's search
+ * (keep: cb_choose_rates's callers own plans that nothing frees), never with timed_rows off. */
+static cb_status choose_timed(local_search *ls, cb_sampler *s, uint32_t i, const cb_clip_info *info, pose_cache *cache,
+                              const cb_rate_goal *goal, const local_rate *r, cb_error *err)
+{
+    cb_rate_choice *choice = &ls->choices[i];
+    choice->uniform_fps = r->fps;
+    choice->uniform_rows = cb_clip_step_count(info->duration, r->fps) + (info->loops ? 0 : 1);
+    if (ls->o->timed_rows == CB_TIMED_ROWS_OFF || !ls->keep || ls->plan[i].step) return CB_OK;
+    local_timed t;
+    double max_error = goal->max_error_mm / 1000 * ls->facts->height;
+    if (local_clip_timed(s, ls->facts, &ls->skeleton, info, ls->o->root_motion, cache, max_error,
+                         ls->skeleton.bones * cb_layout_texels_per_bone(CB_LAYOUT_QPOS), &t, err))
+        return err->status;
+    if (!t.possible) return CB_OK;
+    choice->timed_weighed = true;
+    choice->timed_rows = t.rows, choice->timed_map_rows = t.map_rows, choice->timed_cells = t.cells;
+    choice->timed_cell_rate = t.cell_rate;
+    bool fewer = t.rows + t.map_rows < choice->uniform_rows;
+    if (!fewer && ls->o->timed_rows != CB_TIMED_ROWS_ON) return free(t.row_cells), CB_OK;
+    cb_clip_plan *plan = &ls->plan[i];
+    plan->fps = t.cell_rate, plan->timed_rows = t.rows, plan->row_cells = t.row_cells;
+    choice->met = true, choice->error = t.error, choice->error_mm = cb_mm_per_m(t.error, ls->facts->height);
+    choice->fps_needed = 0;
+    return CB_OK;
+}
+
 static cb_status choose_clip(local_search *ls, cb_sampler *s, uint32_t i, cb_error *err)
 {
     cb_clip_plan *plan = &ls->plan[i];
@@ -55,10 +84,12 @@ static cb_status choose_clip(local_search *ls, cb_sampler *s, uint32_t i, cb_err
     if (local_clip_rate(s, ls->facts, &ls->skeleton, &info, ls->o->root_motion, cache, goal->max_error_mm / 1000 * ls->facts->height,
                         goal->max_fps, &r, err))
         return err->status;
-    if (ls->keep) search_keep_settle(&ls->keep->poses[i], ls->skeleton.bones, &ls->kept_bytes);
-    if (r.not_qpos) atomic_store(&ls->not_qpos, true);
+    cb_clip_plan_release(plan); /* an earlier search's */
     plan->fps = r.fps, plan->fit = false; /* local rows are the sampled poses, converted */
     ls->choices[i] = (cb_rate_choice){.met = r.met, .error = r.error, .error_mm = r.error_mm, .fps_needed = r.fps_needed};
+    if (!r.not_qpos && choose_timed(ls, s, i, &info, cache, goal, &r, err)) return err->status;
+    if (ls->keep) search_keep_settle(&ls->keep->poses[i], ls->skeleton.bones, &ls->kept_bytes);
+    if (r.not_qpos) atomic_store(&ls->not_qpos, true);
     return CB_OK;
 }
 

@@ -17,6 +17,7 @@
 #include "local_pose.h"
 #include "local_rate.h" /* local_palette_errors */
 #include "palette_bake.h"
+#include "timed_rows.h"
 
 void palette_local_parents(const cb_model *m, const cb_skin *skin, int32_t *parents)
 {
@@ -133,11 +134,12 @@ static void local_ranges(cb_palette *p, const double *values)
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         float *e = p->bone_ranges + (size_t)j * 8;
         double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, smax = 0;
-        for (uint32_t r = 0; r < p->rows; ++r) {
-            const double *v = values + ((size_t)r * p->bone_count + j) * 8;
-            for (int k = 0; k < 3; ++k) lo[k] = fmin(lo[k], v[4 + k]), hi[k] = fmax(hi[k], v[4 + k]);
-            smax = fmax(smax, v[7]);
-        }
+        for (uint32_t c = 0; c < p->clip_count; ++c) /* the clips' rows: a timed clip's map rows hold no bone */
+            for (uint32_t r = p->clips[c].first_row; r < p->clips[c].first_row + p->clips[c].frames; ++r) {
+                const double *v = values + ((size_t)r * p->bone_count + j) * 8;
+                for (int k = 0; k < 3; ++k) lo[k] = fmin(lo[k], v[4 + k]), hi[k] = fmax(hi[k], v[4 + k]);
+                smax = fmax(smax, v[7]);
+            }
         for (int k = 0; k < 3; ++k) e[k] = p->rows ? (float)lo[k] : 0, e[4 + k] = p->rows ? (float)hi[k] : 0;
         e[3] = smax > 0 ? (float)smax : 1, e[7] = 0;
     }
@@ -178,7 +180,8 @@ static void encode_bone(const cb_palette *p, uint32_t bone, const double *v, uns
 static void encode_local(cb_palette *p, const double *values)
 {
     uint32_t tb = cb_precision_texel_bytes(p->precision);
-    for (uint32_t r = 0; r < p->rows; ++r)
+    for (uint32_t c = 0; c < p->clip_count; ++c)
+    for (uint32_t r = p->clips[c].first_row; r < p->clips[c].first_row + p->clips[c].frames; ++r)
         for (uint32_t j = 0; j < p->bone_count; ++j) {
             uint32_t x, y;
             cb_palette_texel_xy(p, r, j, &x, &y);
@@ -187,11 +190,78 @@ static void encode_local(cb_palette *p, const double *values)
         }
 }
 
+/* ---- timed clips: the rows on their cells kept, their maps made room for ---- */
+
+static bool any_timed(const cb_clip_plan *plan, uint32_t count)
+{
+    for (uint32_t i = 0; plan && i < count; ++i)
+        if (plan[i].timed_rows) return true;
+    return false;
+}
+
+/* The global float palette g, baked uniform at each timed clip's cell rate (plan[c].fps), laid
+ * out again: a timed clip keeps only the rows on its row_cells, after its map's rows (left 0,
+ * filled once its rows are encoded: fill_maps); other clips' rows as they were. */
+static cb_status keep_timed_rows(cb_palette *g, const cb_clip_plan *plan, uint32_t max_texture_size, const char *source,
+                                 cb_error *err)
+{
+    cb_palette old = *g; /* the uniform rows' geometry, to read them */
+    uint32_t rows = 0, *old_first = malloc((g->clip_count ? g->clip_count : 1) * sizeof *old_first);
+    if (!old_first) return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for timed rows", source);
+    for (uint32_t c = 0; c < g->clip_count; ++c) {
+        cb_palette_clip *clip = &g->clips[c];
+        old_first[c] = clip->first_row;
+        const cb_clip_plan *pl = &plan[c];
+        if (pl->timed_rows) {
+            uint32_t cells = cb_clip_step_count(clip->duration, pl->fps);
+            if (clip->frames != cells + (clip->loops ? 0 : 1) || pl->row_cells[pl->timed_rows - 1] > cells)
+                return free(old_first), cb_fail(err, CB_ERR_INTERNAL, "%s: clip '%s' framed at %u rows, not on its %u cells", source,
+                               clip->name, clip->frames, cells);
+            clip->timed = true, clip->cells = cells, clip->cell_rate = pl->fps;
+            clip->map_rows = cb_timed_map_rows(cells, g->row_texels);
+            clip->frames = pl->timed_rows;
+            clip->fps = clip->duration > 0 ? clip->frames / clip->duration : clip->fps;
+            rows += clip->map_rows;
+        }
+        clip->first_row = rows;
+        rows += clip->frames;
+    }
+    g->rows = rows;
+    if (palette_plan_texture(g, max_texture_size, source, err)) return free(old_first), err->status;
+    size_t tb = cb_precision_texel_bytes(g->precision), bone_bytes = g->texels_per_bone * tb;
+    g->texel_bytes = (size_t)g->width * g->height * tb;
+    g->texels = calloc(g->texel_bytes ? g->texel_bytes : 1, 1);
+    if (!g->texels) return free(old_first), g->texels = old.texels, cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for timed rows", source);
+    for (uint32_t c = 0; c < g->clip_count; ++c) {
+        const cb_palette_clip *clip = &g->clips[c];
+        for (uint32_t k = 0; k < clip->frames; ++k) {
+            uint32_t from = old_first[c] + (clip->timed ? plan[c].row_cells[k] : k), x0, y0, x1, y1;
+            for (uint32_t j = 0; j < g->bone_count; ++j) {
+                cb_palette_texel_xy(&old, from, j, &x0, &y0);
+                cb_palette_texel_xy(g, clip->first_row + k, j, &x1, &y1);
+                memcpy((unsigned char *)g->texels + ((size_t)y1 * g->width + x1) * tb,
+                       (const unsigned char *)old.texels + ((size_t)y0 * old.width + x0) * tb, bone_bytes);
+            }
+        }
+    }
+    if (!old.texels_borrowed) free(old.texels);
+    g->texels_borrowed = false;
+    free(old_first);
+    return CB_OK;
+}
+
+/* Each timed clip's map, from the cells its rows lie on (timed_rows.c), in the palette's precision. */
+static void fill_maps(cb_palette *p, const cb_clip_plan *plan)
+{
+    for (uint32_t c = 0; c < p->clip_count; ++c)
+        if (p->clips[c].timed) timed_map_fill(p, &p->clips[c], plan[c].row_cells);
+}
+
 /* The global float palette g converted in place to local rows in `precision`. */
 static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin, cb_precision precision, cb_error *err)
 {
     size_t values_size = (size_t)g->rows * g->bone_count * 8 * sizeof(double);
-    double *values = malloc(values_size ? values_size : 1), *row = malloc((g->bone_count ? g->bone_count : 1) * 16 * sizeof *row);
+    double *values = calloc(values_size ? values_size : 1, 1), *row = malloc((g->bone_count ? g->bone_count : 1) * 16 * sizeof *row);
     g->parents = malloc((size_t)g->bone_count * sizeof *g->parents);
     g->bone_ranges = calloc((size_t)g->bone_count * 8, sizeof *g->bone_ranges);
     if (!values || !row || !g->parents || !g->bone_ranges) {
@@ -270,7 +340,13 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
         return rc;
     }
     free(sampled);
-    if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, err)) &&
+    bool timed = any_timed(plan, plan_count);
+    if (timed && (rc = keep_timed_rows(p, plan, opt->max_texture_size, m->source, err))) {
+        palette_skin_facts_free(&own), cb_palette_free(p);
+        return rc;
+    }
+    if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, err)) && timed) fill_maps(p, plan);
+    if (!rc &&
         cb_model_skin_vertex_count(m, cb_sampler_skin(sampler)) > 0)
         rc = measure_local(sampler, plan, facts, probe, p, err);
     palette_skin_facts_free(&own);

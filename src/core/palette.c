@@ -33,8 +33,15 @@ cb_bake_options cb_default_bake_options(void)
     o.fit = false;
     o.measure_all = false;
     o.bone_space = CB_BONE_SPACE_GLOBAL;
+    o.timed_rows = CB_TIMED_ROWS_AUTO;
     o.texel_memory = (cb_texel_memory){NULL, NULL};
     return o;
+}
+
+void cb_clip_plan_release(cb_clip_plan *plan)
+{
+    free(plan->row_cells);
+    plan->row_cells = NULL, plan->timed_rows = 0;
 }
 
 void cb_palette_free(cb_palette *p)

@@ -49,7 +49,7 @@ typedef struct analyses {
 
 static cb_clip_plan plan_entry(const cb_clip_plan *plan, uint32_t i)
 {
-    return plan ? plan[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false};
+    return plan ? plan[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false, 0, NULL};
 }
 
 static void analyze_share(void *arg, uint32_t thread, uint32_t threads)

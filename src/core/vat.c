@@ -45,7 +45,7 @@ static cb_status frame_plan(cb_sampler *s, const cb_bake_options *o, const cb_cl
     if (!*infos) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     uint64_t total = 0;
     for (uint32_t i = 0; i < count; ++i) {
-        cb_clip_plan one = plan ? plan[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false};
+        cb_clip_plan one = plan ? plan[i] : (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false, 0, NULL};
         if (cb_clip_analyze(s, one.animation, cb_clip_plan_fps(&one, o->fps), one.loop, &o->limits, &(*infos)[i], err))
             return err->status;
         total += (*infos)[i].frames;

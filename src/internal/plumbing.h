@@ -49,6 +49,7 @@ void cb_loop_reason_text(const cb_clip_info *clip, char *out, size_t size);
 /* "mat4", "affine", "qpos"; "float", "half", "u16"; exr.h's lossless codes by name. */
 bool cb_layout_parse(const char *text, cb_layout *out);
 bool cb_bone_space_parse(const char *text, cb_bone_space *out);
+bool cb_timed_rows_parse(const char *text, cb_timed_rows *out);
 bool cb_precision_parse(const char *text, cb_precision *out);
 bool cb_exr_compression_parse(const char *text, int *out);
 /* "keep", "in-place" or "loops-in-place". */

@@ -137,7 +137,7 @@ static void expect_reference_choices(const char *asset, double max_error_mm, dou
         cb_rate_choice choices[64];
         assert_true(n <= 64);
         for (uint32_t c = 0; c < n; ++c)
-            plan[c] = (cb_clip_plan){(int32_t)c, NULL, -1, 0, false, false}, goals[c] = (cb_rate_goal){max_error_mm, max_fps, CB_ROWS_BEST};
+            plan[c] = (cb_clip_plan){(int32_t)c, NULL, -1, 0, false, false, 0, NULL}, goals[c] = (cb_rate_goal){max_error_mm, max_fps, CB_ROWS_BEST};
         cb_bake_options o = cb_default_bake_options();
         o.threads = threads;
         assert_int_equal(cb_choose_rates(s, &o, plan, n, goals, choices, &err), CB_OK);

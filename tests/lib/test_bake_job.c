@@ -118,7 +118,7 @@ static void test_clip_settings_override_the_job(void **state)
 {
     (void)state;
     cb_model *m = load_shared("assets/fox-bevy/Fox.glb");
-    cb_clip_plan clips[3] = {{0, NULL, -1, 0, false, false}, {1, NULL, -1, 12, false, false}, {2, NULL, -1, 0, false, false}};
+    cb_clip_plan clips[3] = {{0, NULL, -1, 0, false, false, 0, NULL}, {1, NULL, -1, 12, false, false, 0, NULL}, {2, NULL, -1, 0, false, false, 0, NULL}};
     cb_clip_request per_clip[3] = {{-1, 0}, {0, 0}, {-1, 0}};
     cb_bake_job job = job_for(m);
     job.clips = clips, job.clip_count = 3, job.clip_requests = per_clip;

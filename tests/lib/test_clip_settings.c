@@ -52,7 +52,7 @@ static cb_clip_settings resolve(const char *bake_keys, const char *animal_keys, 
     if (o) override(&cat, o);
     const cb_catalog_animal *an = &cat.animals[0];
     const cb_catalog_clip *c = &an->clips[0];
-    cb_clip_plan plan = {0, c->name, c->loop, c->fps, false, false};
+    cb_clip_plan plan = {0, c->name, c->loop, c->fps, false, false, 0, NULL};
     cb_clip_request request = {c->fps_auto, c->max_error_mm};
     cb_clip_settings s;
     cb_resolve_clip_settings(&an->bake, &plan, &request, CB_FROM_CLIP, measurable, &s);
@@ -189,7 +189,7 @@ static void test_rate_search_wants_a_concrete_max_fps(void **state)
     cb_sampler *s = cb_sampler_create(m, 0, &err);
     assert_non_null(s);
     cb_bake_options o = cb_default_bake_options();
-    cb_clip_plan plan = {0, NULL, -1, 0, false, false};
+    cb_clip_plan plan = {0, NULL, -1, 0, false, false, 0, NULL};
     cb_rate_goal goal = {1, 0, CB_ROWS_BEST};
     assert_int_equal(cb_choose_rates(s, &o, &plan, 1, &goal, NULL, &err), CB_ERR_SETTINGS);
     assert_int_equal(err.setting, CB_SETTING_MAX_FPS);

@@ -185,8 +185,8 @@ static void test_library_decides_the_speed_reference(void **state)
     cb_bake_job_init(&job);
     assert_true(job.speed_reference < 0); /* decided by the job unless given */
     job.model = m, job.skin = 0, job.threads = 2;
-    cb_clip_plan clips[2] = {{cb_model_find_animation(m, "AnimalArmature|Walk"), NULL, -1, 30, false, false},
-                             {cb_model_find_animation(m, "AnimalArmature|Gallop"), NULL, -1, 30, false, false}};
+    cb_clip_plan clips[2] = {{cb_model_find_animation(m, "AnimalArmature|Walk"), NULL, -1, 30, false, false, 0, NULL},
+                             {cb_model_find_animation(m, "AnimalArmature|Gallop"), NULL, -1, 30, false, false, 0, NULL}};
     job.clips = clips, job.clip_count = 2;
     job.settings.fps_auto = false, job.settings.fps = 30;
     cb_output_path out = {CB_FORMAT_PAL, TMP "/library.pal"};

@@ -362,7 +362,7 @@ static void test_auto_rates_do_not_depend_on_threads(void **state)
     for (int run = 0; run < 2; ++run) {
         cb_bake_options o = cb_default_bake_options();
         o.threads = run ? 3 : 1;
-        for (uint32_t i = 0; i < n; ++i) plan[run][i] = (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false}, goals[i] = (cb_rate_goal){1, 60, CB_ROWS_SAMPLED};
+        for (uint32_t i = 0; i < n; ++i) plan[run][i] = (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false, 0, NULL}, goals[i] = (cb_rate_goal){1, 60, CB_ROWS_SAMPLED};
         assert_int_equal(cb_choose_rates(s, &o, plan[run], n, goals, out[run], &err), CB_OK);
     }
     bool varied = false;
@@ -399,7 +399,7 @@ static void expect_floors_keep_the_maxima_of(const char *rel, uint32_t first, ui
     cb_bake_options o = cb_default_bake_options();
     o.threads = 2;
     for (uint32_t i = 0; i < n; ++i)
-        plan[i] = (cb_clip_plan){(int32_t)(first + i), NULL, -1, 0, false, false},
+        plan[i] = (cb_clip_plan){(int32_t)(first + i), NULL, -1, 0, false, false, 0, NULL},
         goals[i] = (cb_rate_goal){1, 120, CB_ROWS_BEST};
     assert_int_equal(palette_choose_rates(s, &o, plan, n, goals, out, keep, NULL, &err), CB_OK);
     palette_probe probe = {NULL, NULL, kept, NULL, NULL};

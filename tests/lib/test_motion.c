@@ -460,7 +460,7 @@ static void test_fitted_rows_meet_the_goal(void **state)
     uint32_t n = m->animation_count;
     cb_clip_plan *plan = calloc(n, sizeof *plan);
     cb_rate_goal *goals = calloc(n, sizeof *goals);
-    for (uint32_t i = 0; i < n; ++i) plan[i] = (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false}, goals[i] = (cb_rate_goal){1.0, 120, CB_ROWS_FITTED};
+    for (uint32_t i = 0; i < n; ++i) plan[i] = (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false, 0, NULL}, goals[i] = (cb_rate_goal){1.0, 120, CB_ROWS_FITTED};
     assert_int_equal(cb_choose_rates(s, &o, plan, n, goals, NULL, &err), CB_OK);
     cb_palette fitted, sampled, at30;
     assert_int_equal(cb_palette_bake(s, &o, plan, n, &fitted, &err), CB_OK);

@@ -73,7 +73,7 @@ static void expect_fewest_rows_within(const char *asset, uint32_t out_of_reach)
     for (uint32_t threads = 1; threads <= 2; ++threads) {
         cb_rate_goal goals[64];
         for (uint32_t c = 0; c < n; ++c)
-            plan[threads - 1][c] = (cb_clip_plan){(int32_t)c, NULL, -1, 0, false, false},
+            plan[threads - 1][c] = (cb_clip_plan){(int32_t)c, NULL, -1, 0, false, false, 0, NULL},
             goals[c] = (cb_rate_goal){1, CB_AUTO_MAX_FPS, CB_ROWS_BEST};
         cb_bake_options o = cb_default_bake_options();
         o.threads = threads;

@@ -118,7 +118,7 @@ static void bake(const char *path, cb_layout l, cb_precision pr, fixture *f)
     cb_sampler *s = cb_sampler_create(f->model, 0, &err);
     cb_bake_options o = cb_default_bake_options();
     o.layout = l, o.precision = pr, o.root_motion = CB_ROOT_MOTION_IN_PLACE;
-    cb_clip_plan step = {0, NULL, -1, 0, false, true}; /* a STEP-keyed clip: rows held, as bakes plan it */
+    cb_clip_plan step = {0, NULL, -1, 0, false, true, 0, NULL}; /* a STEP-keyed clip: rows held, as bakes plan it */
     bool held = f->model->animation_count == 1 && cb_clip_step_grid(f->model, 0, &step.fps);
     assert_int_equal(cb_palette_bake(s, &o, held ? &step : NULL, held ? 1 : 0, &f->palette, &err), CB_OK);
     cb_sampler_free(s);

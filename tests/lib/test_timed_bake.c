@@ -1,0 +1,187 @@
+/* test_timed_bake.c - the bake's choice of timed rows (docs/pal-format.md "Timed rows", issue 43
+ * item 1) for local rows, on Fox (Run keys 1/24 s apart but for one gap off that grid: uniform
+ * rows need 120 fps there) and Husky, in memory (cb_bake_job_plan, then cb_palette_bake of its plan):
+ * - auto (the default) takes rows on the keys where they cost fewer rows than the uniform rate,
+ *   map rows counted, and says so in the clip's reason; off never; on wherever the keys allow;
+ * - the timed palette's every clip within the 1 mm/m budget: its own measurement, cb_verify_clip
+ *   (exact skinning halfway between rows and at random times, through the map), and at the
+ *   one-shots' reference times (../shared/reference, another implementation's joint matrices)
+ *   the runtime's matrices (cb_runtime_matrices, which follows the map) to within the encoding. */
+#include "testutil.h"
+
+#include <math.h>
+
+#include "crowdbake/bake.h"
+#include "crowdbake/runtime.h"
+#include "internal/bake_words.h"
+
+typedef struct baked {
+    cb_model *m;
+    cb_bake_job job;
+    cb_palette p;
+    uint32_t timed, rows;
+} baked;
+
+static void bake_local(const char *asset, cb_timed_rows timed, baked *b)
+{
+    char path[1024];
+    cb_error err = {0};
+    shared_path(path, sizeof path, asset);
+    b->m = load_or_fail(path);
+    cb_bake_job_init(&b->job);
+    b->job.model = b->m, b->job.skin = 0, b->job.threads = 2;
+    b->job.settings.bone_space = CB_BONE_SPACE_LOCAL;
+    b->job.settings.timed_rows = timed;
+    if (cb_bake_job_plan(&b->job, &err)) fail_msg("%s", err.message);
+    cb_sampler *s = cb_sampler_create(b->m, 0, &err);
+    assert_non_null(s);
+    cb_bake_options o = cb_bake_settings_options(&b->job.settings, CB_FORMAT_PAL, NULL, 2);
+    if (cb_palette_bake(s, &o, b->job.plan, b->job.plan_count, &b->p, &err)) fail_msg("%s", err.message);
+    b->timed = 0;
+    for (uint32_t c = 0; c < b->p.clip_count; ++c) b->timed += b->p.clips[c].timed;
+    b->rows = b->p.rows;
+    cb_sampler_free(s);
+}
+
+static void baked_free(baked *b)
+{
+    cb_palette_free(&b->p);
+    cb_bake_job_free(&b->job);
+    cb_model_free(b->m);
+}
+
+/* Every clip's error by cb_verify_clip (model units): the worst of its rows and between them. */
+static double verified(const baked *b)
+{
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(b->m, 0, &err);
+    double worst = 0;
+    for (uint32_t c = 0; c < b->p.clip_count; ++c) {
+        cb_clip_error e;
+        assert_int_equal(cb_verify_clip(s, &b->p, b->p.texels, c, b->job.plan[c].animation, 16, &e, &err), CB_OK);
+        worst = fmax(worst, fmax(e.interp_max, e.quant_max));
+    }
+    cb_sampler_free(s);
+    return worst;
+}
+
+/* The worst distance, at the reference times where the clip has rows (a loop's end aside: the row
+ * there is its first), between where the runtime's matrices and
+ * the reference's put each joint's bind position and points 0.1 model heights from it. */
+static double against_reference(const baked *b, const char *reference, bool loops, uint32_t *compared)
+{
+    char path[1024], line[4096];
+    shared_path(path, sizeof path, reference);
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    double worst = 0, reach = 0.1 * b->p.model_height, *mats = malloc((size_t)b->p.bone_count * 16 * sizeof *mats);
+    bool header = false;
+    *compared = 0;
+    while (fgets(line, sizeof line, f)) {
+        if (line[0] == '#' || !header) {
+            header = header || line[0] != '#';
+            continue;
+        }
+        char *p = strchr(line, ',') + 1, *end = strchr(p, ','), clip[96];
+        bool quoted = *p == '"';
+        snprintf(clip, sizeof clip, "%.*s", (int)(end - p) - 2 * quoted, p + quoted);
+        strtol(end + 1, &p, 10), strtol(p + 1, &p, 10);
+        double t = strtod(p + 1, &p), m[16];
+        int skin = (int)strtol(p + 1, &p, 10), joint = (int)strtol(p + 1, &p, 10);
+        for (int k = 0; k < 16; ++k) m[k] = strtod(p + 1, &p);
+        for (uint32_t c = 0; skin == 0 && c < b->p.clip_count; ++c) {
+            const cb_palette_clip *pc = &b->p.clips[c];
+            if (strcmp(pc->name, clip) != 0 || (pc->loops && (!loops || t >= pc->start + pc->duration - 1e-6)))
+                continue; /* a travelling loop is closed: its poses move */
+            cb_instance in = cb_instance_of(pc);
+            uint32_t r0, r1;
+            double fr;
+            cb_runtime_frame_in(&b->p, b->p.texels, &in, t - pc->start, &r0, &r1, &fr);
+            if (fr > 1e-4 && fr < 1 - 1e-4) continue; /* at its rows: between them cb_verify_clip measures */
+            cb_runtime_matrices(&b->p, b->p.texels, &in, t - pc->start, mats);
+            const float *bind = b->p.bind_positions + 3 * joint;
+            const double *a = mats + 16 * joint;
+            for (int i = 0; i < 7; ++i) {
+                double q[3] = {bind[0], bind[1], bind[2]}, d2 = 0;
+                if (i) q[(i - 1) / 2] += i % 2 ? reach : -reach;
+                for (int r = 0; r < 3; ++r) {
+                    double x = a[12 + r] - m[12 + r];
+                    for (int k = 0; k < 3; ++k) x += (a[k * 4 + r] - m[k * 4 + r]) * q[k];
+                    d2 += x * x;
+                }
+                worst = fmax(worst, sqrt(d2));
+            }
+            ++*compared;
+        }
+    }
+    fclose(f);
+    free(mats);
+    return worst;
+}
+
+static void check_rig(const char *asset, const char *reference, bool loops, const char *timed_clip)
+{
+    baked aut, off, on;
+    bake_local(asset, CB_TIMED_ROWS_AUTO, &aut);
+    bake_local(asset, CB_TIMED_ROWS_OFF, &off);
+    bake_local(asset, CB_TIMED_ROWS_ON, &on);
+    double h = aut.p.model_height, budget = 1e-3 * h;
+    char why[512];
+    printf("  %s: rows auto %u (%u timed clips), off %u, on %u (%u timed)\n", asset, aut.rows, aut.timed, off.rows,
+           on.rows, on.timed);
+    for (uint32_t c = 0; c < aut.p.clip_count; ++c) {
+        cb_bake_clip_reason(&aut.job, c, why, sizeof why);
+        printf("    %s: %s\n", aut.p.clips[c].name, why);
+        bool stated = strstr(why, "rows on its keys (a map of") != NULL;
+        assert_int_equal(stated, aut.p.clips[c].timed); /* the choice is stated */
+        if (!strcmp(aut.p.clips[c].name, timed_clip)) assert_true(aut.p.clips[c].timed);
+        if (aut.p.clips[c].timed) { /* fewer rows, its map's counted */
+            assert_true(aut.p.clips[c].frames + aut.p.clips[c].map_rows < off.p.clips[c].frames);
+            assert_int_equal(aut.p.clips[c].map_rows, cb_timed_map_rows(aut.p.clips[c].cells, aut.p.row_texels));
+        }
+        cb_bake_clip_reason(&off.job, c, why, sizeof why);
+        assert_null(strstr(why, "rows on its keys (a map of"));
+        assert_non_null(strstr(why, "not weighed (timed rows off)"));
+    }
+    assert_true(aut.timed > 0);
+    assert_int_equal(off.timed, 0);
+    assert_true(on.timed >= aut.timed);
+    assert_true(aut.rows < off.rows);
+    double v = verified(&aut);
+    uint32_t compared = 0;
+    double ref = against_reference(&aut, reference, loops, &compared);
+    printf("    auto: visible error %.3g mm/m (bake), %.3g mm/m (cb_verify_clip); vs the reference at %u joint-times "
+           "%.3g mm/m\n", 1000 * aut.p.visible_error / h, 1000 * v / h, compared, 1000 * ref / h);
+    assert_true(aut.p.visible_error <= budget * 1.05); /* the bake's own measurement: float64 choice, u16 rows */
+    assert_true(v <= budget * 1.05);
+    uint32_t compared_off = 0;
+    double ref_off = against_reference(&off, reference, loops, &compared_off);
+    printf("    off: vs the reference %.3g mm/m (%u)\n", 1000 * ref_off / h, compared_off);
+    assert_true(compared > 100);
+    /* At its rows a timed clip is as close to the reference as the uniform bake's rows (the same
+     * poses, encoded alike): Fox's 0.078 mm/m both; Husky's one-shots 1.72 mm/m both, points a tenth
+     * of the height off each joint (not its vertices) at 24 fps rows of a 30 fps reference. */
+    assert_true(ref <= 1.05 * ref_off + 0.05 * budget);
+    baked_free(&aut), baked_free(&off), baked_free(&on);
+}
+
+static void test_fox_timed_rows(void **state)
+{
+    (void)state;
+    check_rig("assets/fox-bevy/Fox.glb", "reference/Fox.fps24.csv", true, "Run");
+}
+
+static void test_husky_timed_rows(void **state)
+{
+    (void)state;
+    check_rig("assets/quaternius-husky/Husky.glb", "reference/Husky.fps30.csv", false, "AnimalArmature|Jump_ToIdle");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_fox_timed_rows),
+        cmocka_unit_test(test_husky_timed_rows),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
