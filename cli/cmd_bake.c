@@ -390,6 +390,11 @@ static void json_clips(cb_json *j, const cb_bake_job *job, const cb_bake_result 
         cb_json_number(j, "visible_error_mm_per_m", b->error_mm);
         cb_json_number(j, "max_error_mm_per_m", b->max_error_mm);
         cb_json_string(j, "why", why);
+        if (job->plan[i].timed_rows) { /* rows on its keys: fps is its map's cell rate (absent: uniform rows) */
+            cb_json_int(j, "timed_rows", job->plan[i].timed_rows);
+            cb_json_int(j, "map_rows", job->rates[i].timed_map_rows);
+            cb_json_int(j, "cells", job->rates[i].timed_cells);
+        }
         cb_json_string(j, "settings", settings);
         cb_json_end(j);
     }

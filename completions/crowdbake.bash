@@ -9,7 +9,7 @@ _crowdbake_options()
     case $1 in
     bake) echo "-o --output --format --fps --layout --precision --max-texture-size --root-motion --skin
                 --speed-reference --exr-compression --zstd --json $output -j --threads --force --depfile
-                --manifest --out-dir --depfile-manifest-only --fit-rows --allow-over-budget --measure-all --plant-feet --row-travel --bone-space --max-error --max-fps --clip --exclude-clip --loop --one-shot --sync --default-state --type --fragment $limits" ;;
+                --manifest --out-dir --depfile-manifest-only --fit-rows --allow-over-budget --measure-all --plant-feet --row-travel --bone-space --timed-rows --max-error --max-fps --clip --exclude-clip --loop --one-shot --sync --default-state --type --fragment $limits" ;;
     info) echo "--json --fps --skin --plant-feet $output $limits" ;;
     sample) echo "--json --fps --clip --frame --skin --root-motion $output $limits" ;;
     inspect) echo "--json --clip --frame --no-verify $output" ;;
@@ -49,6 +49,7 @@ _crowdbake()
     --max-influences) COMPREPLY=($(compgen -W "1 2 4" -- "$cur")); return ;;
     --root-motion) COMPREPLY=($(compgen -W "keep in-place loops-in-place" -- "$cur")); return ;;
     --bone-space) COMPREPLY=($(compgen -W "global local" -- "$cur")); return ;;
+    --timed-rows) COMPREPLY=($(compgen -W "auto on off" -- "$cur")); return ;;
     --exr-compression) COMPREPLY=($(compgen -W "none rle zips zip piz" -- "$cur")); return ;;
     --fps) COMPREPLY=($(compgen -W "24 30 60 auto" -- "$cur")); return ;;
     -o|--output|--depfile|--manifest|--html|--fragment) COMPREPLY=($(compgen -f -- "$cur")); return ;;

@@ -160,7 +160,9 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
             cbpal_xxh64_update(&h, &g->lods[i]->source_hash, sizeof g->lods[i]->source_hash);
         return cbpal_xxh64_digest(&h);
     }
-    char opts[360], chosen[96] = ""; /* error-bounded rates: the goal chooses them (a fixed fps: as before it) */
+    char opts[360], chosen[96] = "";
+    /* Timed rows other than auto (the hash as before it) where they change a file: local rows' .pal. */
+    bool timed_asked = o->timed_rows != CB_TIMED_ROWS_AUTO && o->bone_space == CB_BONE_SPACE_LOCAL; /* error-bounded rates: the goal chooses them (a fixed fps: as before it) */
     if (job->settings.fps_auto)
         snprintf(chosen, sizeof chosen, " auto max_error=%.17g max_fps=%.17g", job->settings.max_error_mm,
                  job->settings.max_fps);
@@ -170,8 +172,7 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
                      job->settings.exr_compression, o->fit ? " fit-rows" : "", o->measure_all ? " measure-all" : "", chosen,
                      job->settings.plant_feet ? " plant-feet" : "", job->settings.row_travel_off ? " row-travel-off" : "",
                      o->bone_space == CB_BONE_SPACE_LOCAL ? " bone-space=local" : "",
-                     o->timed_rows != CB_TIMED_ROWS_AUTO ? " timed-rows=" : "", /* auto: the hash as before */
-                     o->timed_rows != CB_TIMED_ROWS_AUTO ? cb_timed_rows_name(o->timed_rows) : "");
+                     timed_asked ? " timed-rows=" : "", timed_asked ? cb_timed_rows_name(o->timed_rows) : "");
     cbpal_xxh64_update(&h, opts, (size_t)n);
     cbpal_xxh64_update(&h, &m->source_hash, sizeof m->source_hash);
     return cbpal_xxh64_digest(&h);

@@ -55,7 +55,8 @@ static cb_status choose_timed(local_search *ls, cb_sampler *s, uint32_t i, const
     if (local_clip_timed(s, ls->facts, &ls->skeleton, info, ls->o->root_motion, cache, max_error,
                          ls->skeleton.bones * cb_layout_texels_per_bone(CB_LAYOUT_QPOS), &t, err))
         return err->status;
-    if (!t.possible) return CB_OK;
+    /* A half map holds row numbers exactly only below 2049 (docs/pal-format.md). */
+    if (!t.possible || (ls->o->precision == CB_PRECISION_HALF && t.rows > 2048)) return free(t.row_cells), CB_OK;
     choice->timed_weighed = true;
     choice->timed_rows = t.rows, choice->timed_map_rows = t.map_rows, choice->timed_cells = t.cells;
     choice->timed_cell_rate = t.cell_rate;
