@@ -69,7 +69,7 @@ static void local_reason(const cb_bake_job *job, uint32_t i, double fps, char *b
         snprintf(buf, size, "%g fps, local rows (%s): the fewest within its budget (%.3g mm/m, blended and composed as the "
                  "runtime plays them)", fps, why, r->error_mm);
     if (r->timed_weighed && (n = strlen(buf)) < size) /* rows on its keys weighed and not taken */
-        snprintf(buf + n, size - n, "; on its keys %u rows and a map of %u rows, no fewer bytes", r->timed_rows,
+        snprintf(buf + n, size - n, "; on its keys at least %u rows and a map of %u rows, no fewer bytes", r->timed_rows,
                  r->timed_map_rows);
     else if (job->settings.timed_rows == CB_TIMED_ROWS_OFF && (n = strlen(buf)) < size)
         snprintf(buf + n, size - n, "; rows on its keys not weighed (timed rows off)");

@@ -498,7 +498,7 @@ static bool timed_cells(const cb_clip_info *clip, const uint32_t *keys, const ui
 
 cb_status local_clip_timed(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
                            const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep, double max_error,
-                           uint32_t row_texels, local_timed *out, cb_error *err)
+                           uint32_t row_texels, uint32_t most_rows, local_timed *out, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
     const cb_animation *a = &m->animations[clip->animation];
@@ -508,7 +508,14 @@ cb_status local_clip_timed(cb_sampler *s, const palette_skin_facts *facts, const
     uint32_t G = cb_clip_step_count(clip->duration, out->key_fps), count = 0;
     if ((uint64_t)G * POINTS * FINE > UINT32_MAX / 2) return CB_OK;
     uint32_t *keys = key_steps(a, clip, out->key_fps, G, &count);
-    uint32_t n = keys ? (clip->loops ? count : count - 1) : 0;
+    uint32_t n = keys ? (clip->loops ? count : count - 1) : 0, end_row = clip->loops ? 0 : 1;
+    /* The least they can take: a row a key interval, the map at the key grid's cells. */
+    uint32_t least = n + end_row + cb_timed_map_rows(G, row_texels);
+    if (keys && most_rows && least >= most_rows) {
+        out->too_many = true, out->rows = n + end_row, out->map_rows = cb_timed_map_rows(G, row_texels);
+        free(keys);
+        return CB_OK;
+    }
     uint32_t *steps = calloc(n ? n : 1, sizeof *steps), *split = calloc(n ? n : 1, sizeof *split);
     probe_ctx c;
     bool ready = keys && steps && split && probe_ctx_init(&c, s, facts, skeleton, clip, root_motion, keep);
@@ -533,6 +540,11 @@ cb_status local_clip_timed(cb_sampler *s, const palette_skin_facts *facts, const
         ok = e <= max_error;
         out->error = fmax(out->error, e);
         out->split = split[i] > out->split ? split[i] : out->split;
+        least += split[i] - 1; /* this interval's rows past its one */
+        if (ok && most_rows && least >= most_rows) { /* fewer rows cannot come of it now */
+            out->too_many = true, ok = false;
+            out->rows = least - cb_timed_map_rows(G, row_texels), out->map_rows = cb_timed_map_rows(G, row_texels);
+        }
     }
     out->intervals = n;
     out->possible = ok && timed_cells(clip, keys, steps, split, n, G, row_texels, out);

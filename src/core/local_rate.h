@@ -70,6 +70,8 @@ typedef struct local_timed {
     uint32_t intervals;   /* key intervals (a loop's wrap one of them) */
     uint32_t split;       /* the most rows any key interval needed */
     double error;         /* the worst error measured (model units, float64 rows, before quantisation) */
+    bool too_many;        /* not possible: rows + map rows could not come under the caller's most_rows (rows and
+                           * map_rows then say the least they would take, as far as measured) */
 } local_timed;
 
 /* Clip `clip` (analyzed on this sampler) baked as timed local rows: rows at its key times (every
@@ -77,10 +79,13 @@ typedef struct local_timed {
  * parts s = 1..4 whose rows, blended and composed as the runtime plays them, stay within
  * max_error at the quarter points of every row interval (local_clip_rate's measurement). Its
  * cost is rows + map_rows rows of row_texels texels. Nothing possible (out->possible false): a
- * still clip, keys on no grid, or an interval over max_error split in 4. Fails only out of memory. */
+ * still clip, keys on no grid, an interval over max_error split in 4, or (most_rows > 0) rows +
+ * map rows that cannot come under most_rows, given up as soon as that is sure: a clip whose keys
+ * fill its key grid, already its uniform rate's rows, is not measured at all (Cow). Fails only
+ * out of memory. */
 cb_status local_clip_timed(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
                            const cb_clip_info *clip, cb_root_motion root_motion, pose_cache *keep, double max_error,
-                           uint32_t row_texels, local_timed *out, cb_error *err);
+                           uint32_t row_texels, uint32_t most_rows, local_timed *out, cb_error *err);
 
 /* The worst vertex error of clip `clip` baked as local rows at `fps` (model units), measured as
  * local_clip_rate measures a candidate, in full (no goal to stop at), root motion kept. For tests

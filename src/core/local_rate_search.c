@@ -52,9 +52,15 @@ static cb_status choose_timed(local_search *ls, cb_sampler *s, uint32_t i, const
     if (ls->o->timed_rows == CB_TIMED_ROWS_OFF || !ls->keep || ls->plan[i].step) return CB_OK;
     local_timed t;
     double max_error = goal->max_error_mm / 1000 * ls->facts->height;
+    bool asked = ls->o->timed_rows == CB_TIMED_ROWS_ON; /* auto: only while they may come to fewer rows */
     if (local_clip_timed(s, ls->facts, &ls->skeleton, info, ls->o->root_motion, cache, max_error,
-                         ls->skeleton.bones * cb_layout_texels_per_bone(CB_LAYOUT_QPOS), &t, err))
+                         ls->skeleton.bones * cb_layout_texels_per_bone(CB_LAYOUT_QPOS), asked ? 0 : choice->uniform_rows,
+                         &t, err))
         return err->status;
+    if (t.too_many) { /* stated as weighed: at least that many */
+        choice->timed_weighed = true, choice->timed_rows = t.rows, choice->timed_map_rows = t.map_rows;
+        return CB_OK;
+    }
     /* A half map holds row numbers exactly only below 2049 (docs/pal-format.md). */
     if (!t.possible || (ls->o->precision == CB_PRECISION_HALF && t.rows > 2048)) return free(t.row_cells), CB_OK;
     choice->timed_weighed = true;
