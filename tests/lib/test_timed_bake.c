@@ -11,7 +11,9 @@
 
 #include <math.h>
 
+#include "crowdbake_pal.h"
 #include "crowdbake/bake.h"
+#include "crowdbake/pal_view.h"
 #include "crowdbake/runtime.h"
 #include "internal/bake_words.h"
 
@@ -165,6 +167,50 @@ static void check_rig(const char *asset, const char *reference, bool loops, cons
     baked_free(&aut), baked_free(&off), baked_free(&on);
 }
 
+/* The files: `crowdbake bake --bone-space local` writes Fox's timed Run (.pal version 7, flag bit
+ * 6; --timed-rows off: version 6, no timed clip), and the file read back verifies within the budget
+ * (cb_palette_view, cb_verify_clip: every clip's rows and between them through the file's map). */
+static void test_fox_timed_file(void **state)
+{
+    (void)state;
+    char model[1024], log[8192], errs[256];
+    shared_path(model, sizeof model, "assets/fox-bevy/Fox.glb");
+    const char *modes[2] = {"auto", "off"};
+    for (int i = 0; i < 2; ++i) {
+        char out[256];
+        snprintf(out, sizeof out, TEST_TMP "/timed_fox_%s.pal", modes[i]);
+        int rc = run_crowdbake(log, sizeof log, "bake %s -o %s --bone-space local --timed-rows %s", model, out, modes[i]);
+        if (rc) fail_msg("bake failed (%d): %s", rc, log);
+        assert_true((strstr(log, "25 rows on its keys (a map of 139 cells at 120 Hz, 3 rows) instead of 139 at 120 fps") != NULL) == (i == 0));
+        cbpal_file f;
+        if (cbpal_open(out, CBPAL_VERIFY_CHECKSUM, &f, errs, sizeof errs)) fail_msg("%s", errs);
+        assert_int_equal(f.header.version, i == 0 ? 7 : 6);
+        assert_int_equal((f.header.flags & CBPAL_FLAG_TIMED_ROWS) != 0, i == 0);
+        cb_model *m = load_or_fail(model);
+        cb_error err = {0};
+        cb_sampler *s = cb_sampler_create(m, 0, &err);
+        cb_palette view;
+        assert_int_equal(cb_palette_view(&f, &view, &err), CB_OK);
+        double worst = 0, budget = 1e-3 * view.model_height;
+        uint32_t timed = 0;
+        for (uint32_t c = 0; c < view.clip_count; ++c) {
+            cb_clip_error e;
+            assert_int_equal(cb_verify_clip(s, &view, f.texels, c, cb_model_find_animation(m, view.clips[c].name), 16, &e, &err),
+                             CB_OK);
+            worst = fmax(worst, fmax(e.interp_max, e.quant_max));
+            timed += view.clips[c].timed;
+        }
+        printf("  Fox, --timed-rows %s: %u rows, %u timed clips, verified %.3g mm/m\n", modes[i], view.rows, timed,
+               1000 * worst / view.model_height);
+        assert_int_equal(timed, i == 0 ? 1 : 0);
+        assert_true(worst <= 1.05 * budget);
+        cb_palette_view_free(&view);
+        cb_sampler_free(s);
+        cb_model_free(m);
+        cbpal_close(&f);
+    }
+}
+
 static void test_fox_timed_rows(void **state)
 {
     (void)state;
@@ -182,6 +228,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fox_timed_rows),
         cmocka_unit_test(test_husky_timed_rows),
+        cmocka_unit_test(test_fox_timed_file),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
