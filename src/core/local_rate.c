@@ -631,18 +631,6 @@ static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palett
     }
 }
 
-/* A timed clip's row cells read back from its map (the cell where each row's interval starts,
- * weight 0; a one-shot's last row at its last cell), into out (frames of them). */
-static void timed_row_cells(const cb_palette *p, const cb_palette_clip *pc, uint32_t *out)
-{
-    for (uint32_t k = 0; k < pc->frames; ++k) out[k] = pc->cells;
-    for (uint32_t cell = 0; cell < pc->cells; ++cell) {
-        double v[4];
-        timed_map_read(p, p->texels, pc->first_row, pc->cells, cell, v);
-        if (v[2] == 0 && v[0] < pc->frames) out[(uint32_t)v[0]] = cell;
-    }
-}
-
 cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, const cb_palette *p, uint32_t clip,
                                int32_t animation, pose_cache *keep, double *at_rows, double *between, cb_error *err)
 {
@@ -657,7 +645,7 @@ cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, c
                             .steps = POINTS * (pc->timed ? pc->cells : steps ? steps : 1)};
     uint32_t *row_cells = pc->timed ? malloc(pc->frames * sizeof *row_cells) : NULL;
     if (pc->timed && !row_cells) return cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring %s's local rows", m->source);
-    if (row_cells) timed_row_cells(p, pc, row_cells);
+    if (row_cells) timed_map_row_cells(p, p->texels, pc, row_cells);
     for (int k = 0; k < 3; ++k) framing.root_velocity[k] = pc->root_velocity[k];
     local_skeleton k; /* the palette's parents: the same nearest ancestor joints */
     probe_ctx c;

@@ -63,6 +63,16 @@ void timed_map_fill(cb_palette *p, const cb_palette_clip *c, const uint32_t *row
     }
 }
 
+void timed_map_row_cells(const cb_palette *p, const void *texels, const cb_palette_clip *c, uint32_t *out)
+{
+    for (uint32_t k = 0; k < c->frames; ++k) out[k] = c->cells;
+    for (uint32_t cell = 0; cell < c->cells; ++cell) {
+        double v[4];
+        timed_map_read(p, texels, c->first_row, c->cells, cell, v);
+        if (v[2] == 0 && v[0] < c->frames) out[(uint32_t)v[0]] = cell;
+    }
+}
+
 void timed_map_read(const cb_palette *p, const void *texels, uint32_t first_row, uint32_t cells, uint32_t cell,
                     double v[4])
 {

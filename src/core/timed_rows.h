@@ -13,4 +13,8 @@ void timed_map_fill(cb_palette *p, const cb_palette_clip *c, const uint32_t *row
 void timed_map_read(const cb_palette *p, const void *texels, uint32_t first_row, uint32_t cells, uint32_t cell,
                     double v[4]);
 
+/* The cells a timed clip's rows lie on, read back from its map (each row's interval starts at the
+ * cell whose start weight is 0; a one-shot's last row at cell `cells`): c->frames of them into out. */
+void timed_map_row_cells(const cb_palette *p, const void *texels, const cb_palette_clip *c, uint32_t *out);
+
 #endif

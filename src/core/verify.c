@@ -9,6 +9,7 @@
 
 #include "cb_math.h"
 #include "palette_bake.h" /* palette_bake_with_facts */
+#include "timed_rows.h"     /* a timed clip's rows */
 
 /* ---- verification ---- */
 
@@ -82,8 +83,18 @@ cb_status cb_verify_clip(cb_sampler *s, const cb_palette *p, const void *texels,
         uint32_t steps = cl->loops ? cl->frames : cl->frames - 1; /* row intervals */
         double dt = cl->fps > 0 ? 1 / cl->fps : 0, qsum = 0, isum = 0;
         uint64_t v, qn = 0, in = 0;
-        for (uint32_t f = 0; f < cl->frames; ++f, ++qn) record(out, false, compare_at(&c, f * dt, &qsum, &v), v, f * dt);
-        for (uint32_t f = 0; f < steps; ++f, ++in) record(out, true, compare_at(&c, (f + 0.5) * dt, &isum, &v), v, (f + 0.5) * dt);
+        /* A timed clip's rows lie on the cells its map says (NULL: row f at f dt). */
+        uint32_t *cells = cl->timed ? malloc((size_t)cl->frames * sizeof *cells) : NULL;
+        if (cells) timed_map_row_cells(p, texels, cl, cells), dt = cl->duration / steps;
+        for (uint32_t f = 0; f < cl->frames; ++f, ++qn) {
+            double t = cells ? cells[f] / cl->cell_rate : f * dt;
+            record(out, false, compare_at(&c, t, &qsum, &v), v, t);
+        }
+        for (uint32_t f = 0; f < steps; ++f, ++in) {
+            double t = cells ? (cells[f] + (f + 1 < cl->frames ? cells[f + 1] : cl->cells)) / (2 * cl->cell_rate) : (f + 0.5) * dt;
+            record(out, true, compare_at(&c, t, &isum, &v), v, t);
+        }
+        free(cells);
         uint64_t state = 0x9E3779B97F4A7C15ull ^ clip;
         for (uint32_t i = 0; i < random_times && steps > 0; ++i, ++in) {
             state ^= state << 13, state ^= state >> 7, state ^= state << 17; /* xorshift64 */
