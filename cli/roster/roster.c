@@ -130,9 +130,15 @@ static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_
         if (cb_clip_analyze(s, plan->animation, cb_bake_job_clip_fps(&w->job, i), plan->loop, limits, &info, err)) break;
         cb_roster_clip *c = &t->clips[i];
         snprintf(c->name, sizeof c->name, "%s", plan->name);
+        if (plan->timed_rows) { /* rows on its keys (local rows: qpos), its map before them */
+            c->cells = info.loops ? info.frames : info.frames - 1, c->cell_rate = cb_bake_job_clip_fps(&w->job, i);
+            c->map_rows = cb_timed_map_rows(c->cells, w->job.model->skins[w->skin].joint_count *
+                                                          cb_layout_texels_per_bone(CB_LAYOUT_QPOS));
+            row += c->map_rows;
+        }
         c->first_row = row;
-        c->frames = info.frames;
-        c->fps = info.effective_fps;
+        c->frames = plan->timed_rows ? plan->timed_rows : info.frames;
+        c->fps = plan->timed_rows && info.duration > 0 ? c->frames / info.duration : info.effective_fps;
         c->duration = info.duration;
         c->loops = info.loops, c->step = plan->step;
         c->in_place = cb_root_motion_in_place(w->job.settings.root_motion, &info);
@@ -140,7 +146,7 @@ static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_
         cb_loop_reason_text(&info, c->loop_reason, sizeof c->loop_reason);
         cb_measure_ground_speed(s, &info, &c->speed);
         if (row_travel(&w->job, s, &info, &c->travel, err)) break;
-        row += info.frames;
+        row += c->frames;
     }
     t->rows = row;
     double lo[3], hi[3];

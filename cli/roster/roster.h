@@ -58,6 +58,9 @@ typedef struct cb_roster_clip {
     cb_ground_speed speed; /* speed.speed is the clip's ground speed */
     cb_plant_clip plant;   /* with plant_feet, what planting its feet changed (plant.planted: it did) */
     cb_row_travel travel;  /* its per-row travel offset, as the bake decides it (cb_bake_job_row_travel) */
+    uint32_t cells, map_rows; /* timed rows (cells > 0; docs/pal-format.md "Timed rows"): its map's cells and rows,
+                               * the map just before first_row; frames counts its rows */
+    double cell_rate;
 } cb_roster_clip;
 
 typedef struct cb_roster_lod {

@@ -87,7 +87,8 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
         const cb_roster_clip *c = &t->clips[i];
         rec_put_str(&w, c->name);
         rec_put_u32(&w, c->first_row), rec_put_u32(&w, c->frames);
-        rec_put_u32(&w, (c->loops ? 1u : 0u) | (c->step ? 2u : 0u) | (c->in_place ? 4u : 0u) | (c->plant.planted ? 8u : 0u));
+        rec_put_u32(&w, (c->loops ? 1u : 0u) | (c->step ? 2u : 0u) | (c->in_place ? 4u : 0u) | (c->plant.planted ? 8u : 0u) |
+                            (c->cells ? 16u : 0u));
         rec_put_f64(&w, c->fps), rec_put_f64(&w, c->duration);
         rec_put_str(&w, c->loop_reason);
         rec_put_f64(&w, c->visible_error_mm);
@@ -96,6 +97,7 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
         rec_put(&w, &c->speed.stride, sizeof c->speed.stride); /* plain numbers and zero-filled strings */
         if (c->plant.planted) rec_put(&w, &c->plant, sizeof c->plant); /* (likewise; only then: older records read) */
         rec_put(&w, &c->travel, sizeof c->travel);             /* likewise */
+        if (c->cells) rec_put_u32(&w, c->cells), rec_put_u32(&w, c->map_rows), rec_put_f64(&w, c->cell_rate); /* timed */
     }
     rec_put_u32(&w, t->animal->state_count);
     for (uint32_t s = 0; s < t->animal->state_count; ++s) rec_put_u32(&w, (uint32_t)t->state_clip[s]);
@@ -180,6 +182,7 @@ static void read_clips(record_reader *r, cb_roster_type *t)
         if ((flags & 8u) && (!c->plant.planted || !memchr(c->plant.why, 0, sizeof c->plant.why))) r->failed = true;
         rec_get(r, &c->travel, sizeof c->travel);
         if (!memchr(c->travel.why, 0, sizeof c->travel.why)) r->failed = true;
+        if (flags & 16u) c->cells = rec_get_u32(r), c->map_rows = rec_get_u32(r), c->cell_rate = rec_get_f64(r); /* timed */
     }
 }
 

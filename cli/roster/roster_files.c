@@ -60,9 +60,12 @@ static void write_state(cb_json *j, const cb_roster_type *t, uint32_t s)
     cb_json_object(j, "instance");
     /* < 0: the clip's rows are held, not blended (a STEP-keyed clip), its first row -first_row - 1 */
     cb_json_int(j, "first_row", c->step ? -(long long)c->first_row - 1 : (long long)c->first_row);
-    cb_json_int(j, "frame_count", c->loops ? (long long)c->frames : -(long long)c->frames); /* < 0: one-shot, clamps */
-    cb_json_float32(j, "rate", (float)c->fps); /* the clip's fps, written alike */
-    cb_json_number(j, "rate_per_speed", sync->speed ? c->fps / state_speed(t, c) : 0);
+    /* A timed clip (docs/pal-format.md "Timed rows"): its cells where rows were, and minus its cell rate. */
+    long long frames = c->cells ? (long long)c->cells : (long long)c->frames;
+    double rate = c->cells ? -c->cell_rate : c->fps;
+    cb_json_int(j, "frame_count", c->loops ? frames : -frames); /* < 0: one-shot, clamps */
+    cb_json_float32(j, "rate", (float)rate); /* the clip's fps, written alike */
+    cb_json_number(j, "rate_per_speed", sync->speed ? rate / state_speed(t, c) : 0);
     cb_json_string(j, "phase", c->loops ? "golden_ratio" : "zero");
     cb_json_end(j);
     if (t->animal->bake.formats & CB_FORMAT_BABYLON) roster_json_babylon_play(j, t, (uint32_t)t->state_clip[s]);
@@ -302,6 +305,13 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
         cb_json_string(j, "root_motion_reason", why);
         if (cl->visible_error_mm >= 0) cb_json_number(j, "visible_error_mm_per_m", cl->visible_error_mm);
         if (cl->step) cb_json_bool(j, "step_rows", true); /* held, not blended: .pal clip flag bit 2 */
+        if (cl->cells) { /* timed rows (.pal clip flag bit 3): the map's cells, rate and rows before first_row */
+            cb_json_object(j, "timed_rows");
+            cb_json_int(j, "cells", cl->cells);
+            cb_json_number(j, "cell_rate", cl->cell_rate);
+            cb_json_int(j, "map_rows", cl->map_rows);
+            cb_json_end(j);
+        }
         cb_json_number(j, "ground_speed", cl->speed.speed);
         cb_json_number(j, "root_speed", cl->speed.root);
         cb_json_number(j, "feet_speed", cl->speed.feet);

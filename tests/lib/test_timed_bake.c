@@ -10,6 +10,7 @@
 #include "testutil.h"
 
 #include <math.h>
+#include <unistd.h>
 
 #include "crowdbake_pal.h"
 #include "crowdbake/bake.h"
@@ -211,6 +212,40 @@ static void test_fox_timed_file(void **state)
     }
 }
 
+/* The catalog's timed_rows: Fox's roster manifest says Run's map (cells, cell rate, map rows) and
+ * places its rows after the map (first_row 99 + 3); timed_rows = "off" bakes it uniform. */
+static void test_fox_timed_catalog(void **state)
+{
+    (void)state;
+    char relative[1024], cwd[1024], model[2100], tmp[1100], log[8192];
+    shared_path(relative, sizeof relative, "assets/fox-bevy/Fox.glb");
+    assert_non_null(getcwd(cwd, sizeof cwd)); /* a catalog's paths are relative to it: absolute ones */
+    snprintf(model, sizeof model, "%s%s%s", relative[0] == '/' ? "" : cwd, relative[0] == '/' ? "" : "/", relative);
+    snprintf(tmp, sizeof tmp, "%s%s%s", TEST_TMP[0] == '/' ? "" : cwd, TEST_TMP[0] == '/' ? "" : "/", TEST_TMP);
+    const char *modes[2] = {"auto", "off"};
+    for (int i = 0; i < 2; ++i) {
+        char catalog[256], manifest[256], text[1 << 16];
+        snprintf(catalog, sizeof catalog, TEST_TMP "/timed_%s.toml", modes[i]);
+        FILE *f = fopen(catalog, "w");
+        assert_non_null(f);
+        fprintf(f, "[bake]\nbone_space = \"local\"\ntimed_rows = \"%s\"\nout_dir = \"%s/timed_roster_%s\"\n"
+                   "[animal.fox]\nmodel = \"%s\"\n", modes[i], tmp, modes[i], model);
+        fclose(f);
+        int rc = run_crowdbake(log, sizeof log, "bake %s", catalog);
+        if (rc) fail_msg("catalog bake failed (%d): %s", rc, log);
+        snprintf(manifest, sizeof manifest, TEST_TMP "/timed_roster_%s/roster.json", modes[i]);
+        f = fopen(manifest, "r");
+        assert_non_null(f);
+        size_t n = fread(text, 1, sizeof text - 1, f);
+        text[n] = 0;
+        fclose(f);
+        const char *run = strstr(text, "\"name\": \"Run\"");
+        assert_non_null(run);
+        assert_int_equal(strstr(run, "\"timed_rows\"") != NULL, i == 0);
+        assert_non_null(strstr(run, i == 0 ? "\"first_row\": 102" : "\"first_row\": 99"));
+    }
+}
+
 static void test_fox_timed_rows(void **state)
 {
     (void)state;
@@ -229,6 +264,7 @@ int main(void)
         cmocka_unit_test(test_fox_timed_rows),
         cmocka_unit_test(test_husky_timed_rows),
         cmocka_unit_test(test_fox_timed_file),
+        cmocka_unit_test(test_fox_timed_catalog),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
