@@ -41,8 +41,14 @@ static void clip_rates(const cb_palette *p, char *out, size_t size)
 {
     size_t n = 0;
     out[0] = 0;
-    for (uint32_t c = 0; c < p->clip_count && n < size; ++c)
-        n += (size_t)snprintf(out + n, size - n, "%s%s %g fps", c ? ", " : "", p->clips[c].name, (float)p->clips[c].fps);
+    for (uint32_t c = 0; c < p->clip_count && n < size; ++c) {
+        const cb_palette_clip *k = &p->clips[c];
+        if (k->timed) /* its rows on its keys: the map's grid, not a rate */
+            n += (size_t)snprintf(out + n, size - n, "%s%s %u rows on its keys (a %g Hz map)", c ? ", " : "", k->name,
+                                  k->frames, (float)k->cell_rate);
+        else
+            n += (size_t)snprintf(out + n, size - n, "%s%s %g fps", c ? ", " : "", k->name, (float)k->fps);
+    }
 }
 
 void bake_local_notes(const cb_bake_job *job, const cb_palette *p, cb_warnings *w)
@@ -61,7 +67,8 @@ void bake_local_notes(const cb_bake_job *job, const cb_palette *p, cb_warnings *
     if (job->settings.fps_auto)
         cb_warn(w, "note", "%s: local rows at each clip's key rate, or its lowest multiple within max_error measured "
                 "blended and composed as the runtime plays them (a clip whose keys lie on no grid up to max_fps: the "
-                "common rates); each clip's reason says which: %s", pal_path(job), rates);
+                "common rates), or on its keys where that takes fewer rows (timed rows, .pal version 7); each clip's reason "
+                "says which: %s", pal_path(job), rates);
     for (uint32_t i = 0; i < job->output_count; ++i)
         if (job->outputs[i].format != CB_FORMAT_PAL)
             cb_warn(w, "note", "%s is baked global: only a .pal holds local rows (no place for the parents)", job->outputs[i].path);
