@@ -59,7 +59,9 @@ static void local_reason(const cb_bake_job *job, uint32_t i, double fps, char *b
         snprintf(buf, size, "%u rows on its keys (a map of %u cells at %g Hz, %u rows) instead of %u at %g fps, local "
                  "rows: %s within its budget (%.3g mm/m, blended and composed as the runtime plays them)", c->timed_rows,
                  r->timed_cells, r->timed_cell_rate, r->timed_map_rows, r->uniform_rows, r->uniform_fps,
-                 r->timed_rows + r->timed_map_rows < r->uniform_rows ? "fewer bytes" : "asked for (timed rows on)",
+                 r->timed_rows + r->timed_map_rows < r->uniform_rows ? "fewer bytes"
+                 : job->settings.timed_rows == CB_TIMED_ROWS_ON     ? "asked for (timed rows on)"
+                                                                    : "the uniform rate over its budget",
                  r->error_mm);
         return;
     }

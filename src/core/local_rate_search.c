@@ -40,7 +40,8 @@ static pose_cache *clip_cache(local_search *ls, uint32_t i)
 }
 
 /* Clip i's rows on its keys (local_clip_timed), weighed against the uniform rate r chose: taken
- * where they cost fewer rows (their map's rows counted), or wherever possible with timed_rows on
+ * where they cost fewer rows (their map's rows counted) or meet the budget the uniform rate misses
+ * at max_fps, or wherever possible with timed_rows on
  * (the plan's timed_rows and row_cells, its fps the map's cell rate). Only for a job's search
  * (keep: cb_choose_rates's callers own plans that nothing frees), never with timed_rows off. */
 static cb_status choose_timed(local_search *ls, cb_sampler *s, uint32_t i, const cb_clip_info *info, pose_cache *cache,
@@ -52,7 +53,8 @@ static cb_status choose_timed(local_search *ls, cb_sampler *s, uint32_t i, const
     if (ls->o->timed_rows == CB_TIMED_ROWS_OFF || !ls->keep || ls->plan[i].step) return CB_OK;
     local_timed t;
     double max_error = goal->max_error_mm / 1000 * ls->facts->height;
-    bool asked = ls->o->timed_rows == CB_TIMED_ROWS_ON; /* auto: only while they may come to fewer rows */
+    /* auto: only while they may come to fewer rows, or where the uniform rate misses the budget */
+    bool asked = ls->o->timed_rows == CB_TIMED_ROWS_ON || !r->met;
     if (local_clip_timed(s, ls->facts, &ls->skeleton, info, ls->o->root_motion, cache, max_error,
                          ls->skeleton.bones * cb_layout_texels_per_bone(CB_LAYOUT_QPOS), asked ? 0 : choice->uniform_rows,
                          &t, err))
@@ -67,7 +69,7 @@ static cb_status choose_timed(local_search *ls, cb_sampler *s, uint32_t i, const
     choice->timed_rows = t.rows, choice->timed_map_rows = t.map_rows, choice->timed_cells = t.cells;
     choice->timed_cell_rate = t.cell_rate;
     bool fewer = t.rows + t.map_rows < choice->uniform_rows;
-    if (!fewer && ls->o->timed_rows != CB_TIMED_ROWS_ON) return free(t.row_cells), CB_OK;
+    if (!fewer && r->met && ls->o->timed_rows != CB_TIMED_ROWS_ON) return free(t.row_cells), CB_OK;
     cb_clip_plan *plan = &ls->plan[i];
     plan->fps = t.cell_rate, plan->timed_rows = t.rows, plan->row_cells = t.row_cells;
     choice->met = true, choice->error = t.error, choice->error_mm = cb_mm_per_m(t.error, ls->facts->height);
