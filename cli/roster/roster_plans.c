@@ -108,8 +108,28 @@ static void free_facts(roster_plan_facts *f)
     f->clips = NULL, f->sockets = NULL;
 }
 
+/* Each entry's timed rows' cells copied (plans are copied whole: each copy owns its cells);
+ * false: out of memory (those not copied left uniform, the plan unusable). */
+static bool copy_cells(cb_clip_plan *plan, uint32_t n)
+{
+    bool ok = true;
+    for (uint32_t i = 0; plan && i < n; ++i) {
+        if (!plan[i].row_cells) continue;
+        uint32_t *cells = copy_of(plan[i].row_cells, plan[i].timed_rows * sizeof *cells);
+        plan[i].row_cells = cells, plan[i].timed_rows = cells ? plan[i].timed_rows : 0;
+        ok = ok && cells;
+    }
+    return ok;
+}
+
+static void release_cells(cb_clip_plan *plan, uint32_t n)
+{
+    for (uint32_t i = 0; plan && i < n; ++i) cb_clip_plan_release(&plan[i]);
+}
+
 static void free_plan(roster_plan *p)
 {
+    release_cells(p->plan, p->plan_count);
     free(p->plan), free(p->rates), free(p->clip_settings);
     p->plan = NULL, p->rates = NULL, p->clip_settings = NULL;
     free_facts(&p->facts);
@@ -133,10 +153,11 @@ void roster_plan_keep(roster_plan *p, const cb_bake_job *job, const roster_plan_
     uint32_t n = job->plan_count;
     p->plan_count = n;
     p->plan = copy_of(job->plan, n * sizeof *job->plan);
+    bool cells = copy_cells(p->plan, n);
     p->rates = copy_of(job->rates, n * sizeof *job->rates);
     p->clip_settings = copy_of(job->clip_settings, n * sizeof *job->clip_settings);
     p->root_motion = job->settings.root_motion, p->root_motion_from = job->settings.from.root_motion;
-    p->done = p->plan && p->rates && p->clip_settings && copy_facts(&p->facts, facts);
+    p->done = p->plan && cells && p->rates && p->clip_settings && copy_facts(&p->facts, facts);
     if (!p->done) free_plan(p); /* out of memory: the next type plans alone */
 }
 
@@ -146,13 +167,16 @@ bool roster_plan_copy(const roster_plan *p, cb_bake_job *job, roster_plan_facts 
 {
     if (!roster_plan_known(p) || (job->clips ? job->clip_count : job->model->animation_count) != p->plan_count) return false;
     cb_clip_plan *plan = copy_of(p->plan, p->plan_count * sizeof *p->plan);
+    bool cells = copy_cells(plan, plan ? p->plan_count : 0);
     cb_rate_choice *rates = copy_of(p->rates, p->plan_count * sizeof *p->rates);
     cb_clip_settings *settings = copy_of(p->clip_settings, p->plan_count * sizeof *p->clip_settings);
-    if (!plan || !rates || !settings || !copy_facts(facts, &p->facts)) {
+    if (!plan || !cells || !rates || !settings || !copy_facts(facts, &p->facts)) {
+        release_cells(plan, plan ? p->plan_count : 0);
         free(plan), free(rates), free(settings);
         return false;
     }
     for (uint32_t i = 0; i < p->plan_count && job->clips; ++i) plan[i].name = job->clips[i].name; /* its own (equal) names */
+    release_cells(job->plan, job->plan_count);
     free(job->plan), free(job->rates), free(job->clip_settings);
     job->plan = plan, job->rates = rates, job->clip_settings = settings;
     job->plan_count = p->plan_count;

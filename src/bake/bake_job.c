@@ -582,6 +582,7 @@ void cb_bake_job_free(cb_bake_job *job)
 {
     free_search_kept(job);
     plant_feet_release(job);
+    for (uint32_t i = 0; job->plan && i < job->plan_count; ++i) cb_clip_plan_release(&job->plan[i]);
     free(job->plan), free(job->rates), free(job->clip_settings);
     job->plan = NULL, job->rates = NULL, job->clip_settings = NULL;
     job->plan_count = 0;

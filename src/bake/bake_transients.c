@@ -28,16 +28,26 @@ bool *bake_transient_candidates(const cb_bake_job *job)
     return later;
 }
 
+/* A copy of a plan entry's timed rows' cells (NULL: out of memory). */
+static uint32_t *plan_cells_copy(const cb_clip_plan *plan)
+{
+    uint32_t *cells = malloc((plan->timed_rows ? plan->timed_rows : 1) * sizeof *cells);
+    if (cells) memcpy(cells, plan->row_cells, plan->timed_rows * sizeof *cells);
+    return cells;
+}
+
 /* The second search's answers taken where they meet the goal. A clip still over it keeps its
  * first answer (fewer rows) with the rate the second search found would meet it, from past
  * CB_TRANSIENT_MAX_FPS: the first search left that rate to it (bake_transient_candidates). */
 static void take_answers(cb_bake_job *job, const cb_rate_goal *goals, const cb_rate_choice *fresh,
-                         const cb_clip_plan *before)
+                         cb_clip_plan *before)
 {
     for (uint32_t i = 0; i < job->plan_count; ++i) {
         if (!(goals[i].max_error_mm > 0)) continue;
         if (!fresh[i].met) {
+            cb_clip_plan_release(&job->plan[i]); /* the second search's timed rows, if any */
             job->plan[i] = before[i];
+            before[i].row_cells = NULL;           /* now the plan's */
             job->rates[i].fps_needed = fresh[i].fps_needed;
             continue;
         }
@@ -59,8 +69,12 @@ cb_status bake_reach_for_transients(cb_bake_job *job, cb_sampler *s, const cb_ba
             goals[i] = (cb_rate_goal){job->clip_settings[i].max_error_mm, CB_TRANSIENT_MAX_FPS, CB_ROWS_BEST}, any = true;
     if (any) {
         memcpy(before, job->plan, n * sizeof *before);
-        if (!palette_choose_rates(s, o, job->plan, n, goals, fresh, job->search_kept, NULL, err))
+        for (uint32_t i = 0; i < n; ++i) /* the second search releases the plan's timed rows: its own copy */
+            if (before[i].row_cells && !(before[i].row_cells = plan_cells_copy(&job->plan[i])))
+                before[i].timed_rows = 0, cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+        if (!err->status && !palette_choose_rates(s, o, job->plan, n, goals, fresh, job->search_kept, NULL, err))
             take_answers(job, goals, fresh, before);
+        for (uint32_t i = 0; i < n; ++i) cb_clip_plan_release(&before[i]); /* the copies not taken back */
     } else if (!goals || !fresh || !before) {
         cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     }
