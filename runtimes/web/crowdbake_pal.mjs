@@ -160,10 +160,10 @@ function validateHeader(bytes, view, fail) {
              `${h.flags & FLAG_POSITIONS_RELATIVE ? ' and relative positions' : ''}: local rows need qpos and u16 or float`);
     const timed = (h.flags & FLAG_TIMED_ROWS) !== 0;
     if (timed && h.version < 7) fail(`flags bit 6 (timed rows, byte 12) in a version ${h.version} file; timed rows are version 7`);
-    if (timed && (!fits(h.timed_table_offset, h.clip_count, TIMED_CLIP_SIZE, h.payload_offset) ||
-                  h.timed_table_offset < B(HEADER_SIZE)))
+    if (timed && (!fits(h.timed_table_offset, h.clip_count, TIMED_CLIP_SIZE, n) ||
+                  h.timed_table_offset < B(HEADER_SIZE) || h.timed_table_offset % 4n !== 0n))
         fail(`timed clip table (timed_table_offset ${h.timed_table_offset} at byte 208, ${h.clip_count} clips) ` +
-             `lies outside the ${size}-byte file before its payload (payload_offset ${h.payload_offset})`);
+             `lies outside the ${size}-byte file`);
     if (!fits(h.strings_offset, h.strings_size, 1, n) || h.strings_offset < B(HEADER_SIZE))
         fail(`string table (strings_offset ${h.strings_offset} at byte 136, strings_size ${h.strings_size} at byte 144) ` +
              `lies outside the ${size}-byte file`);
@@ -207,7 +207,8 @@ function readClips(bytes, view, h, fail) {
 
 // A clip's entry in the timed clip table (version 7): { timed, cells, cell_rate, map_rows }, all 0 for an untimed
 // clip. Checked as docs/pal-format.md says: clip flag bit 3 exactly when the entry is not all 0, cells >= 1, cell_rate
-// > 0 and finite, map_rows = ceil(cells / row_texels), at most first_row (the map lies before the clip's rows).
+// > 0 and finite, map_rows = ceil(cells / row_texels), at most first_row (the map lies before the clip's rows),
+// reserved 0 (as the C reader, include/crowdbake_pal.h).
 function readTimed(view, h, i, flags, first_row, fail) {
     const timed = (flags & CLIP_TIMED) !== 0;
     if (!h.timed_table_offset) {
@@ -223,22 +224,24 @@ function readTimed(view, h, i, flags, first_row, fail) {
         return { timed: false, cells: 0, cell_rate: 0, map_rows: 0 };
     }
     if (cells < 1 || !(cell_rate > 0) || !Number.isFinite(cell_rate) || map_rows !== Math.ceil(cells / h.row_texels) ||
-        map_rows > first_row)
-        fail(`timed clip entry ${i} (byte ${at}): cells ${cells}, cell_rate ${cell_rate}, map_rows ${map_rows} with ` +
-             `${h.row_texels} texels a row and first row ${first_row}: needs cells >= 1, cell_rate > 0 and finite, ` +
-             'map_rows = ceil(cells / row_texels) <= first row');
+        map_rows > first_row || u32(12) !== 0)
+        fail(`timed clip entry ${i} (byte ${at}): cells ${cells}, cell_rate ${cell_rate}, map_rows ${map_rows}, reserved ` +
+             `${u32(12)} with ${h.row_texels} texels a row and first row ${first_row}: needs cells >= 1, cell_rate > 0 and ` +
+             'finite, map_rows = ceil(cells / row_texels) <= first row, reserved 0');
     return { timed: true, cells, cell_rate, map_rows };
 }
 
-// Every timed clip's map texel: rows below its clip's rows, weights within [0, 1], f0 <= f1 (once the texels are in hand).
+// Every timed clip's map texel: rows whole and below its clip's rows, weights within [0, 1], f0 <= f1 (once the texels
+// are in hand).
 function checkMaps(pal, fail) {
     pal.clips.forEach((c, i) => {
         if (!c.timed) return;
         for (let cell = 0; cell < c.cells; ++cell) {
             const [r0, r1, f0, f1] = timedMapTexel(pal, c.first_row, c.cells, cell);
-            if (!(r0 >= 0 && r0 < c.frames && r1 >= 0 && r1 < c.frames && f0 >= 0 && f0 <= f1 && f1 <= 1))
+            const row = (r) => Number.isInteger(r) && r >= 0 && r < c.frames;
+            if (!(row(r0) && row(r1) && f0 >= 0 && f0 <= f1 && f1 <= 1))
                 fail(`clip ${i} (${c.name}): map texel of cell ${cell} (row ${c.first_row - c.map_rows + Math.floor(cell / pal.header.row_texels)}) ` +
-                     `holds rows ${r0}, ${r1} and weights ${f0}, ${f1}: needs rows below its ${c.frames} and 0 <= f0 <= f1 <= 1`);
+                     `holds rows ${r0}, ${r1} and weights ${f0}, ${f1}: needs whole rows below its ${c.frames} and 0 <= f0 <= f1 <= 1`);
         }
     });
 }

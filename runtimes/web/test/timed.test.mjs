@@ -12,7 +12,8 @@ import { readPal, xxh64, clipInstance, instanceFrame, boneMatrix, hasTimedRows, 
          TIMED_STILL_RATE } from '../crowdbake_pal.mjs';
 import { travelOffset } from '../crowdbake_travel.mjs';
 import { contactsCrossed } from '../crowdbake_contacts.mjs';
-import { SAMPLES, tmpDir, bake } from './support.mjs';
+import { writeFileSync } from 'node:fs';
+import { SAMPLES, tmpDir, bake, cReaderAccepts } from './support.mjs';
 
 const dir = tmpDir('timed');
 
@@ -201,19 +202,26 @@ for (const precision of ['float', 'half', 'u16']) {
     });
 }
 
-test('every check the spec asks of a timed file refuses it with a clear message', () => {
+test('every check the spec asks of a timed file refuses it with a clear message, as the C reader refuses it', () => {
     const { bytes } = timedQuadruped('u16');
     const view = new DataView(bytes.buffer), table = Number(view.getBigUint64(208, true));
     const pal = readPal(bytes), row = pal.clips[1].first_row - 1, h = pal.header;
     const mapTexel = h.payload_offset + ((row % h.height) * h.width + Math.floor(row / h.height) * h.row_texels + 3) * 8;
+    const file = path.join(dir, 'bad.pal');
+    writeFileSync(file, bytes);
+    assert.ok(cReaderAccepts(file), 'the C reader opens the good file');
     const broken = (change, message) => {
         const b = bytes.slice(), v = new DataView(b.buffer);
         change(v);
         assert.throws(() => readPal(sealed(b), { name: 'bad.pal' }), (e) => e.message.startsWith('bad.pal: ') &&
                       message.test(e.message) && !e.message.includes('\n'), message.source);
+        writeFileSync(file, b);
+        assert.ok(!cReaderAccepts(file), `the C reader opens what readPal refuses (${message.source})`);
     };
     broken((v) => v.setUint32(8, 6, true), /flags bit 6 \(timed rows, byte 12\) in a version 6 file/);
-    broken((v) => v.setBigUint64(208, BigInt(h.payload_offset - 8), true), /timed clip table .* lies outside/);
+    broken((v) => v.setBigUint64(208, BigInt(bytes.length - 8), true), /timed clip table .* lies outside/);
+    broken((v) => v.setBigUint64(208, BigInt(table + 2), true), /timed clip table .* lies outside/);
+    broken((v) => v.setUint32(table + 28, 1, true), /timed clip entry 1 .*reserved 1/);
     broken((v) => v.setBigUint64(208, 100n, true), /timed clip table .* lies outside/);
     broken((v) => v.setUint32(table + 24, 2, true), /timed clip entry 1 .*map_rows 2/);
     broken((v) => v.setFloat32(table + 20, 0, true), /timed clip entry 1 .*cell_rate 0/);
@@ -225,10 +233,23 @@ test('every check the spec asks of a timed file refuses it with a clear message'
     broken((v) => v.setUint32(h.clip_table_offset + 28, u32(v, h.clip_table_offset + 28) | 8, true),
            /timed clip entry 0 .*cells 0/);
     broken((v) => v.setUint16(mapTexel, 999, true), /clip 1 \(.*\): map texel of cell 3 .*rows 999, 2/);
-    broken((v) => v.setUint16(mapTexel + 2, pal.clips[1].frames, true), /map texel of cell 3 .*needs rows below/);
+    broken((v) => v.setUint16(mapTexel + 2, pal.clips[1].frames, true), /map texel of cell 3 .*needs whole rows below/);
     broken((v) => { v.setUint16(mapTexel + 4, 60000, true); v.setUint16(mapTexel + 6, 100, true); }, /map texel of cell 3 .*f0 <= f1/);
     // A timed clip in a file without flag bit 6 (nor the table): refused, not played as rows.
     const plain = bytes.slice(), pv = new DataView(plain.buffer);
     pv.setUint32(12, u32(pv, 12) & ~64, true);
     assert.throws(() => readPal(sealed(plain), { name: 'bad.pal' }), /clip 1 .* is timed \(clip flag bit 3\) in a file without timed rows/);
+    writeFileSync(file, plain);
+    assert.ok(!cReaderAccepts(file));
+});
+
+test('a float map\'s rows must be whole numbers (refused as the C reader refuses them)', () => {
+    const { bytes } = timedQuadruped('float');
+    const pal = readPal(bytes), h = pal.header, row = pal.clips[1].first_row - 1;
+    const at = h.payload_offset + ((row % h.height) * h.width + Math.floor(row / h.height) * h.row_texels + 3) * 16;
+    new DataView(bytes.buffer).setFloat32(at, 1.5, true);
+    assert.throws(() => readPal(sealed(bytes), { name: 'float.pal' }), /^Error: float.pal: clip 1 .*map texel of cell 3 .*rows 1.5, 2/);
+    const file = path.join(dir, 'fraction.pal');
+    writeFileSync(file, bytes);
+    assert.ok(!cReaderAccepts(file));
 });
