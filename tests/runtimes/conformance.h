@@ -14,8 +14,12 @@
  * fade). A case marked local (local_qpos_u16, local_qpos_float, local_blocks: .pal version 6, the
  * quadruped baked --bone-space local --fps 30) holds local rows: the runtime blends each bone's rows
  * and composes down the skeleton (docs/pal-format.md); a shader runtime runs them once its library
- * knows CB_LOCAL_ROWS. A case marked broken carries the fault a runtime applies to show its test catches it:
- * transpose (each mat4 bone stored transposed), a row offset (in the instances: rows one off), or
+ * knows CB_LOCAL_ROWS. A case marked timed (timed_*, broken-timed-map-ignored: .pal version 7, made from
+ * uniform bakes by timed_subset.h) holds timed clips, whose instances are (first row, +-cells, -cell_rate x rate,
+ * phase): the runtime reads each cell's rows and weights from the clip's map (docs/pal-format.md "Timed rows");
+ * a runtime that does not know them fails these cases. A case marked broken carries the fault a runtime applies to show its test catches it:
+ * transpose (each mat4 bone stored transposed), a row offset (in the instances: rows one off), the timed map
+ * ignored (in the instances: +-frames and a positive rate, the rows played uniform), or
  * glsl_break (the line of the shipped shader holding `marker` replaced by `line`); its expected
  * positions are the right ones, which the broken runtime must miss by far.
  *
