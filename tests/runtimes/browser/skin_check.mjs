@@ -81,7 +81,8 @@ const failures = await withPage({ '/': RUNTIMES, '/job/': dir, '/hostile/': host
         console.log(`ran  ${c.name}: ${result.values.length / 3} vertices on ${result.format}${result.bones ? ' with the bone pass' : ''} (${result.renderer})`);
     }
     // The hostile palettes the fuzzers found, read in the page with the decoder a page would use:
-    // each must be refused with a one-line Error naming the file, the page left working.
+    // each must be refused with a one-line Error naming the file, the page left working (a valid file kept there as the
+    // fuzzer's seed, timed-held.pal, is opened: ACCEPTED, which test_web.c holds to the C reader's verdict).
     const hostile = fs.readdirSync(hostileDir);
     const verdicts = await page.evaluate(async (files) => {
         const { readPal } = await import('/web/crowdbake_pal.mjs');
