@@ -29,7 +29,10 @@
 // Per-instance data, the roster manifest's four numbers: inst.x first row (negative for a clip
 // whose rows are held, not blended - .pal clip flag bit 2, a STEP-keyed clip: its first row is
 // -inst.x - 1), inst.y frame count (negative for a one-shot: it clamps instead of wrapping),
-// inst.z rate in rows per second, inst.w phase in 0..1. Time in seconds.
+// inst.z rate in rows per second, inst.w phase in 0..1. Time in seconds. A timed clip (.pal version 7, clip flag
+// bit 3) has inst.y its cells (negative for a one-shot) and inst.z = -(cells per second x rate): negative marks it,
+// and cb_frame reads which two rows to blend, and their weight, from the clip's map rows in cb_palette itself (the
+// texel of its cell in the rows just before its first; docs/pal-format.md "Timed rows").
 //
 //   vec3 p, n;
 //   cb_skin_position_normal(a_position, a_normal, a_joints, a_weights, inst, time, p, n);  // both, each texel read once
@@ -133,11 +136,17 @@ vec4 cb_decode(uvec4 u, int k)
 }
 #endif
 
-// Texel k of a bone in a baked row: rows wrap into column blocks of cb_rows_per_block rows.
-vec4 cb_texel(int row, int bone, int k)
+// Where texel x of a row lies (x < cb_row_texels): rows wrap into column blocks of cb_rows_per_block rows.
+ivec2 cb_texel_xy(int row, int x)
 {
     int block = row / cb_rows_per_block;
-    ivec2 xy = ivec2(block * cb_row_texels + bone * CB_TEXELS_PER_BONE + k, row - block * cb_rows_per_block);
+    return ivec2(block * cb_row_texels + x, row - block * cb_rows_per_block);
+}
+
+// Texel k of a bone in a baked row.
+vec4 cb_texel(int row, int bone, int k)
+{
+    ivec2 xy = cb_texel_xy(row, bone * CB_TEXELS_PER_BONE + k);
 #ifdef CB_PRECISION_U16
     return cb_decode(texelFetch(cb_palette, xy, 0), k);
 #else
@@ -145,25 +154,50 @@ vec4 cb_texel(int row, int bone, int k)
 #endif
 }
 
-// The two rows to blend at `time`, and the weight of the second.
+// A timed clip's map texel of cell `cell`: (r0, r1, f0, f1), the two rows blended in the cell (relative to the clip's
+// first row) and the second's weight at the cell's start and end. The map's ceil(cells / cb_row_texels) rows lie just
+// before the first row, one texel a cell; u16 holds the rows as integers and the weights as f x 65535, never decoded
+// through a bone's range (docs/pal-format.md "Timed rows").
+vec4 cb_timed_map(int first, int cells, int cell)
+{
+    int map_rows = (cells + cb_row_texels - 1) / cb_row_texels, line = cell / cb_row_texels;
+    ivec2 xy = cb_texel_xy(first - map_rows + line, cell - line * cb_row_texels);
+#ifdef CB_PRECISION_U16
+    uvec4 u = texelFetch(cb_palette, xy, 0);
+    return vec4(vec2(u.xy), vec2(u.zw) / 65535.0);
+#else
+    return texelFetch(cb_palette, xy, 0);
+#endif
+}
+
+// The two rows to blend at `time`, and the weight of the second: the rows either side of time x rate (a loop's last
+// blending into its first), or for a timed clip (inst.z < 0) the two its map names for the cell at time x |rate|.
 void cb_frame(vec4 inst, float time, out int row0, out int row1, out float fr)
 {
     bool held = inst.x < 0.0; // a stepped clip: its row alone, no blend across a step
     float first = held ? -inst.x - 1.0 : inst.x;
-    float frames = abs(inst.y);
-    float fpos = time * inst.z + inst.w * frames;
+    float frames = abs(inst.y); // rows; a timed clip's cells
+    float fpos = time * abs(inst.z) + inst.w * frames;
     float f0, f1;
-    if (inst.y > 0.0) {
-        fpos = mod(fpos, frames);
-        f0 = floor(fpos);
-        f1 = mod(f0 + 1.0, frames); // cb:wrap - a loop's last row blends into its first
+    if (inst.z < 0.0) { // a timed clip: its cell's map texel
+        fpos = inst.y > 0.0 ? mod(fpos, frames) : clamp(fpos, 0.0, frames);
+        float cell = min(floor(fpos), frames - 1.0); // a one-shot's end (and a loop's rounding onto n): the last cell's end
+        vec4 m = cb_timed_map(int(first), int(frames), int(cell)); // cb:timed-map
+        f0 = m.x, f1 = m.y;
+        fr = m.z + (m.w - m.z) * (fpos - cell); // linear in the cell, so exact between rows
     } else {
-        fpos = clamp(fpos, 0.0, frames - 1.0);
-        f0 = floor(fpos);
-        f1 = min(f0 + 1.0, frames - 1.0);
+        if (inst.y > 0.0) {
+            fpos = mod(fpos, frames);
+            f0 = floor(fpos);
+            f1 = mod(f0 + 1.0, frames); // cb:wrap - a loop's last row blends into its first
+        } else {
+            fpos = clamp(fpos, 0.0, frames - 1.0);
+            f0 = floor(fpos);
+            f1 = min(f0 + 1.0, frames - 1.0);
+        }
+        fr = fpos - f0;
     }
-    if (held) { f1 = f0; fpos = f0; } // cb:held - no blend across a step
-    fr = fpos - f0;
+    if (held) { f1 = f0; fr = 0.0; } // cb:held - no blend across a step
     row0 = int(first + f0);
     row1 = int(first + f1);
 }
@@ -242,9 +276,8 @@ struct cb_local {
 // bone's own ranges (cb_bind_positions rows 3 and 4; linear, so the same as decoding each row first).
 vec4 cb_local_position_scale(int row0, int row1, float fr, int bone)
 {
-    int block0 = row0 / cb_rows_per_block, block1 = row1 / cb_rows_per_block, x = bone * CB_TEXELS_PER_BONE + 1;
-    ivec2 xy0 = ivec2(block0 * cb_row_texels + x, row0 - block0 * cb_rows_per_block);
-    ivec2 xy1 = ivec2(block1 * cb_row_texels + x, row1 - block1 * cb_rows_per_block);
+    int x = bone * CB_TEXELS_PER_BONE + 1;
+    ivec2 xy0 = cb_texel_xy(row0, x), xy1 = cb_texel_xy(row1, x);
 #ifdef CB_PRECISION_U16
     vec4 u = mix(vec4(texelFetch(cb_palette, xy0, 0)), vec4(texelFetch(cb_palette, xy1, 0)), fr) / 65535.0;
     vec4 lo = texelFetch(cb_bind_positions, ivec2(bone, 3), 0), hi = texelFetch(cb_bind_positions, ivec2(bone, 4), 0);

@@ -8,7 +8,7 @@
 // CB_BONE_TEXTURE), straight to world space. It needs
 // EXT_color_buffer_float (render to float textures), which WebGL2 on desktop GPUs and SwiftShader have.
 import { compileProgram, paletteDefines } from './crowdbake_crowd.mjs';
-import { boneMatrix, hasLocalRows } from './crowdbake_pal.mjs';
+import { rowBoneMatrix, hasLocalRows } from './crowdbake_pal.mjs';
 
 const PASS_VERTEX = `
 in vec4 a_place; in vec4 a_inst; in vec4 a_from; in vec4 a_fade;
@@ -79,7 +79,8 @@ export function lodThresholds(pal, mesh, size, { pixelError = LOD_PIXEL_ERROR, p
     for (let k = 0; k < poses; ++k) {
         let row = Math.floor((k + 0.5) * rows / poses), clip = 0; // the k-th of `poses` rows spread over every clip
         while (row >= pal.clips[clip].frames) row -= pal.clips[clip++].frames;
-        for (let j = 0; j < bones; ++j) m.set(boneMatrix(pal, clip, row / pal.clips[clip].fps, j, b), j * 16);
+        const at = pal.clips[clip].first_row + row; // the row itself: a timed clip's rows lie at no fixed rate
+        for (let j = 0; j < bones; ++j) m.set(rowBoneMatrix(pal, at, j, b), j * 16);
         for (let v = 0; v < verts; ++v) {
             const px = x[v * 3], py = x[v * 3 + 1], pz = x[v * 3 + 2];
             let n = 0; // p: each influence's skinned point, 3 numbers each

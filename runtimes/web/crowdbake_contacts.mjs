@@ -4,25 +4,28 @@
 // onContact callbacks from it, and any runtime holding the four per-instance numbers can do the same.
 //
 // Positions are in rows, unwrapped: time * rate + phase * frames, as the shader computes before it
-// wraps a loop. A contact at t seconds sits at row t * fps and again every `frames` rows in a loop.
+// wraps a loop. A contact at t seconds sits at row t * fps and again every `frames` rows in a loop. A timed clip's
+// instance (a negative rate, .pal version 7) counts cells instead: time * |rate| + phase * cells, a contact at cell
+// t * cells / duration.
 
-// An instance's unwrapped row position at `time` (the four numbers of instanceData).
-export const rowPosition = (inst, time) => time * inst[2] + inst[3] * Math.abs(inst[1]);
+// An instance's unwrapped row (or cell) position at `time` (the four numbers of instanceData).
+export const rowPosition = (inst, time) => time * Math.abs(inst[2]) + inst[3] * Math.abs(inst[1]);
 
 // The contacts crossed as a row position moves from `from` (exclusive) to `to` (inclusive), in the
 // order they are crossed: [{ contact, kind: 'land' | 'lift', at }], `at` the row position crossed.
 // A loop (frameCount > 0) crosses each contact once a cycle however far it moves; a one-shot clamps
-// to its rows and crosses each at most once. Nothing is crossed moving backwards.
-export function contactsCrossed(clip, frameCount, from, to) {
+// to its rows and crosses each at most once. Nothing is crossed moving backwards. timed: frameCount counts the
+// clip's cells (a timed clip's instance), over its duration.
+export function contactsCrossed(clip, frameCount, from, to, timed = false) {
     const out = [];
     if (!(to > from) || !clip?.contacts?.length) return out;
-    const frames = Math.abs(frameCount);
+    const frames = Math.abs(frameCount), end = timed ? frames : frames - 1, perSecond = timed ? frames / clip.duration : clip.fps;
     if (frameCount < 0) { // one-shot: clamped to its rows
-        from = Math.min(Math.max(from, 0), frames - 1), to = Math.min(Math.max(to, 0), frames - 1);
+        from = Math.min(Math.max(from, 0), end), to = Math.min(Math.max(to, 0), end);
     }
     clip.contacts.forEach((contact, order) => {
         for (const kind of ['land', 'lift']) {
-            const row = (kind === 'land' ? contact.time : contact.lift) * clip.fps;
+            const row = (kind === 'land' ? contact.time : contact.lift) * perSecond;
             if (frameCount < 0) {
                 if (from < row && row <= to) out.push({ contact, kind, at: row, order });
                 continue;
@@ -59,10 +62,11 @@ export class FootstepClock {
             const to = rowPosition(inst, time), from = this.position[i];
             this.position[i] = to;
             const clip = this.clips.get(name);
-            if (!clip || Number.isNaN(from) || !(inst[2] > 0)) continue;
-            for (const e of contactsCrossed(clip, inst[1], from, to)) {
+            const rate = Math.abs(inst[2]);
+            if (!clip || Number.isNaN(from) || !(rate > 0)) continue;
+            for (const e of contactsCrossed(clip, inst[1], from, to, inst[2] < 0)) {
                 const event = { instance: i, foot: e.contact.foot, bone: e.contact.bone, kind: e.kind,
-                                time: time - (to - e.at) / inst[2] };
+                                time: time - (to - e.at) / rate };
                 for (const listener of this.listeners) listener(event);
             }
         }

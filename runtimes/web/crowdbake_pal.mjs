@@ -18,7 +18,7 @@
 // with the npm package fzstd: this module stays dependency-free, and runtimes that never load
 // compressed palettes ship no decoder. Without one, such a file is refused with the fix.
 
-export const PAL_VERSION = 6; // newest known; writers write the oldest version that holds what a file says
+export const PAL_VERSION = 7; // newest known; writers write the oldest version that holds what a file says
 export const HEADER_SIZE = 256;
 export const CLIP_SIZE = 80;
 export const BONE_SIZE = 32;
@@ -46,13 +46,20 @@ export const CLIP_FITTED = 2; // this clip's rows fitted to the linear blend (be
 // Version 4: this clip's rows are held, not blended (a STEP-keyed clip baked at its key times): the row at or before
 // the time alone. Its instance numbers say so with a negative first row, -first_row - 1 (instanceFirstRow).
 export const CLIP_STEP = 4;
+// Version 7: timed rows (docs/pal-format.md "Timed rows"): a timed clip's rows lie on cells of a grid, and its map (one
+// texel a cell, in the rows just before its first) says which two rows each cell blends and with what weight. The
+// timed clip table (header byte 208, 16 bytes a clip) gives each clip's cells, cell_rate and map_rows. Its instance
+// numbers say so with a negative rate (clipInstance); instanceFrame reads the map.
+export const FLAG_TIMED_ROWS = 64;
+export const CLIP_TIMED = 8;
+export const TIMED_CLIP_SIZE = 16;
 
 import { xxh64 } from './crowdbake_xxh64.mjs';
-import { texelIndex } from './crowdbake_pose.mjs';
+import { texelIndex, timedMapTexel } from './crowdbake_pose.mjs';
 
 export { xxh64 } from './crowdbake_xxh64.mjs';
-export { texelIndex, hasLocalRows, instanceFirstRow, instanceFrame, instanceBoneMatrix, instanceBoneMatrixCrossfade,
-         boneMatrix } from './crowdbake_pose.mjs';
+export { texelIndex, hasLocalRows, hasTimedRows, instanceFirstRow, clipInstance, instanceFrame, timedMapTexel,
+         instanceBoneMatrix, instanceBoneMatrixCrossfade, boneMatrix, rowBoneMatrix } from './crowdbake_pose.mjs';
 
 const MAGIC = [0x43, 0x42, 0x50, 0x41, 0x4c, 0x0d, 0x0a, 0x1a]; // "CBPAL\r\n\x1a"
 const TEXELS_PER_BONE = [4, 3, 2]; // by layout
@@ -92,6 +99,7 @@ function parseHeader(view) {
         checksum: u64(176), offset_table_offset: u32(8) >= 3 ? u64(184) : 0n,
         travel_table_offset: u32(8) >= 5 && (u32(12) & FLAG_ROW_TRAVEL) ? u64(192) : 0n,
         range_table_offset: u32(8) >= 6 && (u32(12) & FLAG_LOCAL_ROWS) ? u64(200) : 0n,
+        timed_table_offset: u32(8) >= 7 && (u32(12) & FLAG_TIMED_ROWS) ? u64(208) : 0n,
     };
 }
 
@@ -150,6 +158,12 @@ function validateHeader(bytes, view, fail) {
     if (local && (h.layout !== 2 || h.precision === 1 || h.flags & FLAG_POSITIONS_RELATIVE))
         fail(`local rows (flags bit 5, byte 12) with layout ${LAYOUTS[h.layout]} and precision ${PRECISIONS[h.precision]}` +
              `${h.flags & FLAG_POSITIONS_RELATIVE ? ' and relative positions' : ''}: local rows need qpos and u16 or float`);
+    const timed = (h.flags & FLAG_TIMED_ROWS) !== 0;
+    if (timed && h.version < 7) fail(`flags bit 6 (timed rows, byte 12) in a version ${h.version} file; timed rows are version 7`);
+    if (timed && (!fits(h.timed_table_offset, h.clip_count, TIMED_CLIP_SIZE, n) ||
+                  h.timed_table_offset < B(HEADER_SIZE) || h.timed_table_offset % 4n !== 0n))
+        fail(`timed clip table (timed_table_offset ${h.timed_table_offset} at byte 208, ${h.clip_count} clips) ` +
+             `lies outside the ${size}-byte file`);
     if (!fits(h.strings_offset, h.strings_size, 1, n) || h.strings_offset < B(HEADER_SIZE))
         fail(`string table (strings_offset ${h.strings_offset} at byte 136, strings_size ${h.strings_size} at byte 144) ` +
              `lies outside the ${size}-byte file`);
@@ -161,7 +175,7 @@ function validateHeader(bytes, view, fail) {
         fail(`payload_size ${h.payload_size} (byte 160) is not the ${h.payload_raw_size} bytes the texture needs`);
     // Every offset and size now lies inside the file: exact as Numbers.
     for (const k of ['clip_table_offset', 'bone_table_offset', 'strings_offset', 'strings_size', 'payload_offset',
-                     'payload_size', 'offset_table_offset', 'travel_table_offset', 'range_table_offset'])
+                     'payload_size', 'offset_table_offset', 'travel_table_offset', 'range_table_offset', 'timed_table_offset'])
         h[k] = Number(h[k]);
     return h;
 }
@@ -185,9 +199,51 @@ function readClips(bytes, view, h, fail) {
             bounds_min: [f32(44), f32(48), f32(52)], bounds_max: [f32(56), f32(60), f32(64)],
             // version 5: the direction its rows' travel offsets lie along (0 where it has none)
             travel_heading: h.travel_table_offset ? [f32(68), f32(72), f32(76)] : [0, 0, 0],
+            ...readTimed(view, h, i, flags, first_row, fail),
         });
     }
     return clips;
+}
+
+// A clip's entry in the timed clip table (version 7): { timed, cells, cell_rate, map_rows }, all 0 for an untimed
+// clip. Checked as docs/pal-format.md says: clip flag bit 3 exactly when the entry is not all 0, cells >= 1, cell_rate
+// > 0 and finite, map_rows = ceil(cells / row_texels), at most first_row (the map lies before the clip's rows),
+// reserved 0 (as the C reader, include/crowdbake_pal.h).
+function readTimed(view, h, i, flags, first_row, fail) {
+    const timed = (flags & CLIP_TIMED) !== 0;
+    if (!h.timed_table_offset) {
+        if (timed) fail(`clip ${i} (byte ${h.clip_table_offset + i * CLIP_SIZE}) is timed (clip flag bit 3) in a file ` +
+                        'without timed rows (header flags bit 6, byte 12)');
+        return { timed: false, cells: 0, cell_rate: 0, map_rows: 0 };
+    }
+    const at = h.timed_table_offset + i * TIMED_CLIP_SIZE, u32 = (o) => view.getUint32(at + o, true);
+    const cells = u32(0), cell_rate = view.getFloat32(at + 4, true), map_rows = u32(8);
+    const zero = cells === 0 && u32(4) === 0 && map_rows === 0 && u32(12) === 0;
+    if (!timed) {
+        if (!zero) fail(`timed clip entry ${i} (byte ${at}) is not all 0 for a clip without clip flag bit 3 (timed)`);
+        return { timed: false, cells: 0, cell_rate: 0, map_rows: 0 };
+    }
+    if (cells < 1 || !(cell_rate > 0) || !Number.isFinite(cell_rate) || map_rows !== Math.ceil(cells / h.row_texels) ||
+        map_rows > first_row || u32(12) !== 0)
+        fail(`timed clip entry ${i} (byte ${at}): cells ${cells}, cell_rate ${cell_rate}, map_rows ${map_rows}, reserved ` +
+             `${u32(12)} with ${h.row_texels} texels a row and first row ${first_row}: needs cells >= 1, cell_rate > 0 and ` +
+             'finite, map_rows = ceil(cells / row_texels) <= first row, reserved 0');
+    return { timed: true, cells, cell_rate, map_rows };
+}
+
+// Every timed clip's map texel: rows whole and below its clip's rows, weights within [0, 1], f0 <= f1 (once the texels
+// are in hand).
+function checkMaps(pal, fail) {
+    pal.clips.forEach((c, i) => {
+        if (!c.timed) return;
+        for (let cell = 0; cell < c.cells; ++cell) {
+            const [r0, r1, f0, f1] = timedMapTexel(pal, c.first_row, c.cells, cell);
+            const row = (r) => Number.isInteger(r) && r >= 0 && r < c.frames;
+            if (!(row(r0) && row(r1) && f0 >= 0 && f0 <= f1 && f1 <= 1))
+                fail(`clip ${i} (${c.name}): map texel of cell ${cell} (row ${c.first_row - c.map_rows + Math.floor(cell / pal.header.row_texels)}) ` +
+                     `holds rows ${r0}, ${r1} and weights ${f0}, ${f1}: needs whole rows below its ${c.frames} and 0 <= f0 <= f1 <= 1`);
+        }
+    });
 }
 
 function readBones(bytes, view, h, fail) {
@@ -273,6 +329,8 @@ function texelView(raw, precision) {
 // rowTravel: version 5's travel offsets (Float32Array, one a row) or null (crowdbake_travel.mjs).
 // Local rows (version 6, hasLocalRows(header)): each bone also has `range` { pos_min, pos_max, scale_max }, its entry of
 // the bone range table (u16 decodes with it), and boneMatrix composes each bone down its chain (crowdbake_pose.mjs).
+// Timed rows (version 7, hasTimedRows(header)): every clip has timed, cells, cell_rate and map_rows (0 untimed), its
+// map checked; clipInstance gives its instance numbers and instanceFrame reads its map.
 // Beyond the C reader's checks: a zstd payload over options.maxDecompressedBytes (1 GiB) is refused,
 // and one whose checksum does not match is refused before it is decoded, verifyChecksum or not.
 export function readPal(data, options = {}) {
@@ -296,7 +354,9 @@ export function readPal(data, options = {}) {
     h.precision_name = PRECISIONS[h.precision];
     const at = h.travel_table_offset; // copied: a Node Buffer's slice is a view into a shared pool
     const rowTravel = at ? new Float32Array(new Uint8Array(bytes.subarray(at, at + 4 * h.rows)).buffer) : null;
-    return { header: h, clips, bones, texelBytes, texels: texelView(texelBytes, h.precision), rowTravel };
+    const pal = { header: h, clips, bones, texelBytes, texels: texelView(texelBytes, h.precision), rowTravel };
+    checkMaps(pal, fail);
+    return pal;
 }
 
 
@@ -451,14 +511,19 @@ export function readRoster(json, options = {}) {
     return out;
 }
 
-// The four per-instance floats of docs/roster.md for an instance in `state` (from readRoster),
-// moving at `groundSpeed` model units/s, with instance index `index`; a one-shot started at
-// `startTime` seconds.
+// The rate a timed clip's instance plays at standstill: its rate must stay negative to mark it timed (a rate of -0
+// reads as an untimed clip's, its cells taken for rows), and this one moves it a cell in 3e22 years.
+export const TIMED_STILL_RATE = 1e-30;
+
+// The four per-instance floats of docs/roster.md for an instance in `state` (from readRoster, or made from a clip's
+// clipInstance numbers: a negative rate, a timed clip's cells per second, keeps its sign), moving at `groundSpeed`
+// model units/s, with instance index `index`; a one-shot started at `startTime` seconds.
 export function instanceData(state, groundSpeed = 0, index = 0, startTime = 0) {
-    const rate = state.rate_per_speed > 0 ? state.rate_per_speed * groundSpeed : state.rate;
+    const speed = state.rate_per_speed > 0 ? state.rate_per_speed * groundSpeed : Math.abs(state.rate);
+    const rate = state.rate < 0 ? -Math.max(speed, TIMED_STILL_RATE) : speed;
     const frames = Math.abs(state.frame_count);
     const golden = index * 0.6180339887;
-    const phase = state.phase === 'golden_ratio' ? golden - Math.floor(golden) : (-startTime * rate) / frames;
+    const phase = state.phase === 'golden_ratio' ? golden - Math.floor(golden) : (-startTime * speed) / frames;
     return [state.first_row, state.frame_count, rate, phase];
 }
 

@@ -1,9 +1,10 @@
 // crowdbake_pose.mjs - a bone's skinning matrix at a time, decoded and blended as
-// runtimes/glsl/crowdbake_palette.glsl does it (sockets, the LOD's measure, tests), and the local rows of
-// .pal version 6 composed down the skeleton (docs/pal-format.md). crowdbake_pal.mjs re-exports these.
+// runtimes/glsl/crowdbake_palette.glsl does it (sockets, the LOD's measure, tests), the local rows of
+// .pal version 6 composed down the skeleton, and the timed rows of version 7 found through their clip's map
+// (docs/pal-format.md). crowdbake_pal.mjs re-exports these.
 // No third-party dependencies; it imports crowdbake_pal.mjs's constants (which re-exports it). Public domain / MIT-0.
 
-import { FLAG_POSITIONS_RELATIVE, FLAG_LOCAL_ROWS } from './crowdbake_pal.mjs';
+import { FLAG_POSITIONS_RELATIVE, FLAG_LOCAL_ROWS, FLAG_TIMED_ROWS } from './crowdbake_pal.mjs';
 
 // Index into `texels` of a bone's first component in a baked row (rows wrap into column blocks).
 export function texelIndex(header, row, bone) {
@@ -14,6 +15,9 @@ export function texelIndex(header, row, bone) {
 
 // Whether a palette's rows hold each bone in its parent's frame (version 6, flag bit 5): its bones compose.
 export const hasLocalRows = (header) => header.version >= 6 && (header.flags & FLAG_LOCAL_ROWS) !== 0;
+// Whether a palette has timed clips (version 7, flag bit 6): their rows lie on cells and a map before them says which
+// two to blend.
+export const hasTimedRows = (header) => header.version >= 7 && (header.flags & FLAG_TIMED_ROWS) !== 0;
 
 const halfToFloat = (h) => { // exponent rebiased; zero and subnormals are m 2^-24
     const e = (h >> 10) & 0x1f, m = h & 0x3ff, sign = h & 0x8000 ? -1 : 1;
@@ -42,12 +46,43 @@ function decodeTexel(pal, row, bone, k) {
 // A clip's first row as the per-instance numbers hold it: negative for held rows (CLIP_STEP), -first_row - 1.
 export const instanceFirstRow = (clip) => (clip.step ? -clip.first_row - 1 : clip.first_row);
 
-// The two rows to blend for the four per-instance numbers at `time`, and the weight of the second (cb_frame);
-// held rows (a negative first row) give their row alone.
-export function instanceFrame(inst, time) {
+// The four per-instance numbers of a clip (a pal.clips entry) played at `rate` from `phase` (cb_instance_of): first
+// row (instanceFirstRow), its rows (negative for a one-shot) and rows per second; a timed clip's cells (negative for a
+// one-shot) and -(cells per second x rate), the negative rate marking it.
+export function clipInstance(clip, rate = 1, phase = 0) {
+    const steps = clip.timed ? clip.cells : clip.frames;
+    return [instanceFirstRow(clip), clip.loops ? steps : -steps, clip.timed ? -clip.cell_rate * rate : clip.fps * rate, phase];
+}
+
+// Cell `cell`'s texel of the map of the timed clip whose rows start at `first` (cells: its cells): [r0, r1, f0, f1],
+// the rows blended in the cell relative to first and the second's weight at the cell's start and end. The map's
+// ceil(cells / row_texels) rows lie just before the first, one texel a cell; u16 holds rows as integers and weights
+// as f x 65535, never through a bone's range (docs/pal-format.md "Timed rows").
+export function timedMapTexel(pal, first, cells, cell) {
+    const h = pal.header, line = Math.floor(cell / h.row_texels), t = pal.texels;
+    const i = texelIndex(h, first - Math.ceil(cells / h.row_texels) + line, 0) + 4 * (cell - line * h.row_texels);
+    if (h.precision === 0) return [t[i], t[i + 1], t[i + 2], t[i + 3]];
+    if (h.precision === 1) return [0, 1, 2, 3].map((c) => halfToFloat(t[i + c]));
+    return [t[i], t[i + 1], t[i + 2] / 65535, t[i + 3] / 65535];
+}
+
+// The two rows to blend for the four per-instance numbers at `time`, and the weight of the second (the GLSL's cb_frame,
+// the C runtime's cb_runtime_frame_in); held rows (a negative first row) give their row alone. A timed instance (a
+// negative rate) needs the palette `pal`, whose map says which rows its cell blends.
+export function instanceFrame(inst, time, pal) {
     const held = inst[0] < 0, first = held ? -inst[0] - 1 : inst[0];
-    const frames = Math.abs(inst[1]);
-    let fpos = time * inst[2] + inst[3] * frames, f1;
+    const frames = Math.abs(inst[1]); // rows; a timed clip's cells
+    let fpos = time * Math.abs(inst[2]) + inst[3] * frames, f1;
+    if (inst[2] < 0) { // timed: the cell's map texel
+        if (!pal) throw new Error('a timed instance (a negative rate) needs its palette: instanceFrame(inst, time, pal)');
+        if (inst[1] > 0) fpos -= frames * Math.floor(fpos / frames);
+        else fpos = Math.min(Math.max(fpos, 0), frames);
+        if (!(fpos >= 0 && fpos <= frames)) fpos = 0;
+        const cell = Math.min(Math.floor(fpos), frames - 1); // a one-shot's end, or a loop's rounding onto n: its end
+        const [r0, r1, w0, w1] = timedMapTexel(pal, first, frames, cell);
+        if (held) return { row0: first + r0, row1: first + r0, fr: 0 };
+        return { row0: first + r0, row1: first + r1, fr: w0 + (w1 - w0) * (fpos - cell) };
+    }
     if (inst[1] > 0) fpos -= frames * Math.floor(fpos / frames);
     else fpos = Math.min(Math.max(fpos, 0), frames - 1);
     if (!(fpos >= 0 && fpos < frames)) fpos = 0; // rounding at the wrap
@@ -65,7 +100,12 @@ function checkedFrame(pal, inst, time, bone) {
         throw new Error(`bone ${bone} is not one of the palette's ${h.bone_count} bones`);
     if (!inst.every(Number.isFinite) || !Number.isFinite(time) || !Number.isFinite(time * inst[2] + inst[3]))
         throw new Error(`time ${time} or instance numbers ${inst} are not finite numbers`);
-    const frame = instanceFrame(inst, time);
+    const first = inst[0] < 0 ? -inst[0] - 1 : inst[0], cells = Math.abs(inst[1]);
+    if (inst[2] < 0 && !(Number.isInteger(first) && Number.isInteger(cells) && cells >= 1 &&
+                         first >= Math.ceil(cells / h.row_texels) && first < h.rows))
+        throw new Error(`instance numbers ${inst}: a timed clip's map rows (before row ${first}, ${cells} cells) lie outside ` +
+                        `the palette's ${h.rows} rows`);
+    const frame = instanceFrame(inst, time, pal);
     if (frame.row1 >= h.rows || frame.row0 >= h.rows)
         throw new Error(`rows ${frame.row0}, ${frame.row1} lie past the palette's ${h.rows} rows`);
     return frame;
@@ -168,9 +208,23 @@ function texelMatrix(pal, bone, t, out) {
 // bone is placed at boneMatrix x the prop's bind-space transform (a roster socket's bind_transform).
 // Local rows (version 6): every bone of the chain blended in its parent's frame, then composed from the root.
 export function instanceBoneMatrix(pal, inst, time, bone, out = new Array(16)) {
-    const frame = checkedFrame(pal, inst, time, bone);
+    return frameBoneMatrix(pal, checkedFrame(pal, inst, time, bone), bone, out);
+}
+
+// The bone's skinning matrix at two rows blended ({ row0, row1, fr }, instanceFrame's).
+function frameBoneMatrix(pal, frame, bone, out) {
     if (!hasLocalRows(pal.header)) return texelMatrix(pal, bone, blendedTexels(pal, frame, bone), out);
     return qposMatrix(pal, bone, composedPose(pal, bone, (j) => qposOf(blendedTexels(pal, frame, j))), out);
+}
+
+// The bone's skinning matrix at one baked row (`row` of the texture), no blend: a pose the bake stored, whatever
+// the clip's rows' times (the LOD's measure spreads its poses over the rows).
+export function rowBoneMatrix(pal, row, bone, out = new Array(16)) {
+    if (!Number.isInteger(row) || row < 0 || row >= pal.header.rows || !Number.isInteger(bone) || bone < 0 ||
+        bone >= pal.header.bone_count)
+        throw new Error(`row ${row} or bone ${bone} is not one of the palette's ${pal.header.rows} rows and ` +
+                        `${pal.header.bone_count} bones`);
+    return frameBoneMatrix(pal, { row0: row, row1: row, fr: 0 }, bone, out);
 }
 
 // The same for an instance cross-fading from `fromInst` to `inst` (fade 0 -> 1), as the shaders blend it:
@@ -192,5 +246,5 @@ export function instanceBoneMatrixCrossfade(pal, fromInst, inst, fade, time, bon
 export function boneMatrix(pal, clip, time, bone, out) {
     const c = pal.clips[clip];
     if (!Number.isInteger(clip) || !c) throw new Error(`clip ${clip} is not one of the palette's ${pal.clips.length} clips`);
-    return instanceBoneMatrix(pal, [instanceFirstRow(c), c.loops ? c.frames : -c.frames, c.fps, 0], time, bone, out);
+    return instanceBoneMatrix(pal, clipInstance(c), time, bone, out);
 }

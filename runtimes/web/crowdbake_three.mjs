@@ -18,7 +18,7 @@
 // its screen-space velocity for TAA or motion blur. `three` is an import-map name (pages) or the
 // npm package (runtimes/web/package.json pins it).
 import * as THREE from 'three';
-import { hasLocalRows, instanceData, instanceBoneMatrix, instanceBoneMatrixCrossfade, instanceFirstRow } from './crowdbake_pal.mjs';
+import { clipInstance, hasLocalRows, instanceData, instanceBoneMatrix, instanceBoneMatrixCrossfade, instanceFirstRow } from './crowdbake_pal.mjs';
 import { FootstepClock } from './crowdbake_contacts.mjs';
 import { bonePositionTexels, paletteDefines } from './crowdbake_crowd.mjs';
 import { autoBonePassVertices, resolveLod, sortInfluences } from './crowdbake_bones.mjs';
@@ -100,9 +100,10 @@ export function paletteTextures(pal) {
 function statesOf(pal, type) {
     if (type && Object.keys(type.states).length) return type.states; // a type without states plays its clips
     const states = Object.create(null); // clip names are data: '__proto__' is a clip like any other
-    for (const c of pal.clips)
-        states[c.name] = { clip: c.name, first_row: instanceFirstRow(c), frame_count: c.loops ? c.frames : -c.frames, rate: c.fps,
-                           rate_per_speed: 0, phase: c.loops ? 'golden_ratio' : 'zero' };
+    for (const c of pal.clips) { // a timed clip's: its cells and a negative rate (clipInstance)
+        const [first_row, frame_count, rate] = clipInstance(c);
+        states[c.name] = { clip: c.name, first_row, frame_count, rate, rate_per_speed: 0, phase: c.loops ? 'golden_ratio' : 'zero' };
+    }
     return states;
 }
 
@@ -296,8 +297,8 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     // A new speed, keeping the frame it is on (no pop): the phase absorbs the change of rate.
     setSpeed(i, speed) {
         const [, count, rate, phase] = this.geometry.attributes.cb_inst.array.subarray(i * 4, i * 4 + 4);
-        const frames = Math.abs(count), fpos = this.time * rate + phase * frames;
-        const next = instanceData(this.states[this.instanceState[i]], speed / this.instanceScale[i], i, this.time)[2];
+        const frames = Math.abs(count), fpos = this.time * Math.abs(rate) + phase * frames; // a timed clip's rate < 0
+        const next = Math.abs(instanceData(this.states[this.instanceState[i]], speed / this.instanceScale[i], i, this.time)[2]);
         const p = (fpos - this.time * next) / frames;
         this.setState(i, this.instanceState[i], { speed, phase: p - Math.floor(p), fade: 0 });
     }

@@ -2,7 +2,7 @@
  * Mesa's llvmpipe through OSMesa, no GPU. Transform feedback captures the skinned positions of
  * many instances at many times; they must match the CPU runtime (src/core/runtime.c, which verify
  * compares with exact skinning). Deliberately broken variants - transposed matrices, rows off
- * by one, a wrong wrap, no hemisphere flip - must fail the same comparison. */
+ * by one, a wrong wrap, no hemisphere flip, a timed clip's map ignored - must fail the same comparison. */
 #define _DEFAULT_SOURCE
 #define GL_GLEXT_PROTOTYPES
 #include "testutil.h"
@@ -11,6 +11,7 @@
 
 #include "runtimes/gl_harness.h"
 
+#include "core/timed_rows.h" /* timed_map_fill: a timed palette made here, before the bake makes them */
 #include "crowdbake/mesh.h"
 #include "crowdbake/runtime.h"
 
@@ -415,6 +416,128 @@ static void test_held_rows_match_the_cpu(void **state)
     assert_true(blended > 100);
 }
 
+/* ---- timed rows (.pal version 7): each clip's rows on cells of a grid, the map before them says which two blend ---- */
+
+/* A timed copy of `src`: each clip's rows kept at cells 0, 1, 3, 6, 7, 9, 12, ... (steps of 1, 2 and 3 in turn) of a
+ * grid at its own rate, a one-shot's last row at its end, with the map rows before them (timed_map_fill), in column
+ * blocks of `height` rows (0: one block); `held` marks the first clip's rows held. Its clips and texels are its own;
+ * the rest is src's (free with timed_release). */
+static void timed_copy(const cb_palette *src, uint32_t height, bool held, cb_palette *dst)
+{
+    *dst = *src;
+    dst->row_travel = NULL;
+    dst->clips = calloc(src->clip_count, sizeof *dst->clips);
+    uint32_t *cells = calloc(src->rows, sizeof *cells), *from = calloc(src->rows, sizeof *from), rows = 0;
+    for (uint32_t c = 0; c < src->clip_count; ++c) {
+        cb_palette_clip *k = &dst->clips[c];
+        *k = src->clips[c];
+        k->timed = true, k->step = held && c == 0, k->cell_rate = k->fps;
+        k->cells = k->loops ? k->frames : k->frames - 1;
+        k->map_rows = cb_timed_map_rows(k->cells, src->row_texels);
+        k->first_row = rows + k->map_rows;
+        k->frames = 0;
+        for (uint32_t cell = 0, step = 0; cell < k->cells; cell += 1 + step++ % 3) {
+            cells[k->first_row + k->frames] = cell;
+            from[k->first_row + k->frames++] = src->clips[c].first_row + cell;
+        }
+        if (!k->loops) { /* a one-shot ends on its last row, at cell `cells` */
+            cells[k->first_row + k->frames] = k->cells;
+            from[k->first_row + k->frames++] = src->clips[c].first_row + k->cells;
+        }
+        rows = k->first_row + k->frames;
+    }
+    dst->rows = rows, dst->height = height ? height : rows, dst->blocks = (rows + dst->height - 1) / dst->height;
+    dst->width = dst->blocks * src->row_texels;
+    size_t tb = cb_precision_texel_bytes(src->precision);
+    dst->texel_bytes = (size_t)dst->width * dst->height * tb;
+    dst->texels = calloc(1, dst->texel_bytes);
+    for (uint32_t c = 0; c < dst->clip_count; ++c) {
+        const cb_palette_clip *k = &dst->clips[c];
+        for (uint32_t r = k->first_row; r < k->first_row + k->frames; ++r) {
+            uint32_t sx, sy, dx, dy;
+            cb_palette_texel_xy(src, from[r], 0, &sx, &sy);
+            cb_palette_texel_xy(dst, r, 0, &dx, &dy);
+            memcpy((unsigned char *)dst->texels + ((size_t)dy * dst->width + dx) * tb,
+                   (const unsigned char *)src->texels + ((size_t)sy * src->width + sx) * tb, src->row_texels * tb);
+        }
+        timed_map_fill(dst, k, cells + k->first_row);
+    }
+    free(cells), free(from);
+}
+
+static void timed_release(cb_palette *p) { free(p->clips), free(p->texels); }
+
+/* Instances of every timed clip: cell interiors, cell starts, the loop seam, past a one-shot's ends, golden phases,
+ * at rates 1 and 1.37. */
+static uint32_t timed_samples(const cb_palette *p, sample *out, uint32_t cap)
+{
+    uint32_t n = 0;
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        const cb_palette_clip *k = &p->clips[c];
+        cb_instance in = cb_instance_of(k);
+        double cell = 1 / k->cell_rate, span = k->cells * cell;
+        double times[] = {0.3 * cell, 2.5 * cell, 4 * cell, span * 0.37, span - 0.4 * cell /* the seam */, span * 1.5,
+                          -cell, span};
+        for (int t = 0; t < 8 && n < cap; ++t) out[n++] = (sample){in, times[t]};
+        for (int t = 0; t < 3 && n < cap; ++t) {
+            cb_instance phased = in;
+            phased.phase = fmod((t + 1) * 0.6180339887, 1.0), phased.rate *= 1.37;
+            out[n++] = (sample){phased, 0.77 * (t + 1)};
+        }
+    }
+    return n;
+}
+
+/* |GPU - CPU runtime| / tolerance over a timed copy of the quadruped in `l` x `pr` (the library broken at `marker`). */
+static double timed_error(cb_layout l, cb_precision pr, uint32_t height, bool held, const char *marker, const char *line)
+{
+    char *lib = read_whole_file("runtimes/glsl/crowdbake_palette.glsl", NULL), path[1024];
+    if (marker) {
+        char *b = break_shader(lib, marker, line);
+        free(lib);
+        lib = b;
+    }
+    snprintf(path, sizeof path, "%s/quadruped.glb", samples_dir());
+    fixture f;
+    bake(path, l, pr, &f);
+    cb_palette timed;
+    timed_copy(&f.palette, height, held, &timed);
+    if (height) assert_true(timed.blocks >= 2);
+    sample samples[64];
+    uint32_t n = timed_samples(&timed, samples, 64);
+    GLuint prog = compile(&timed, lib, false);
+    float *gpu = gpu_skin(&timed, &f.model->primitives[0], samples, n, prog, false, 0);
+    double worst = compare(&timed, &f.model->primitives[0], samples, n, gpu) / tolerance(&f);
+    glDeleteProgram(prog);
+    free(gpu), free(lib);
+    timed_release(&timed);
+    release(&f);
+    return worst;
+}
+
+/* Timed rows through the shader's cb_frame (the map texel read from the palette texture) against the C runtime's
+ * cb_runtime_frame_in, every precision, wrapped into column blocks, held; with the map ignored (the cell taken as
+ * the row, as an untimed clip's), far off. */
+static void test_timed_rows_match_the_cpu(void **state)
+{
+    (void)state;
+    double worst = 0;
+    for (int pr = 0; pr < 3; ++pr) {
+        double e = timed_error(CB_LAYOUT_QPOS, (cb_precision)pr, 0, false, NULL, NULL);
+        printf("  timed qpos %-5s: GPU vs CPU %.2f of the tolerance\n", cb_precision_name((cb_precision)pr), e);
+        worst = fmax(worst, e);
+    }
+    double mat4 = timed_error(CB_LAYOUT_MAT4, CB_PRECISION_HALF, 0, false, NULL, NULL);
+    double blocks = timed_error(CB_LAYOUT_AFFINE, CB_PRECISION_U16, 64, false, NULL, NULL);
+    double held = timed_error(CB_LAYOUT_QPOS, CB_PRECISION_U16, 0, true, NULL, NULL);
+    double ignored = timed_error(CB_LAYOUT_QPOS, CB_PRECISION_U16, 0, false, "cb:timed-map",
+                                 "        vec4 m = vec4(cell, cell + 1.0, 0.0, 1.0);");
+    printf("  timed mat4 half %.2f, affine u16 in column blocks of 64 rows %.2f, held %.2f of the tolerance; map "
+           "ignored: %.0f\n", mat4, blocks, held, ignored);
+    assert_true(worst <= 1 && mat4 <= 1 && blocks <= 1 && held <= 1);
+    assert_true(ignored > 10);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -423,6 +546,7 @@ int main(void)
         cmocka_unit_test(test_a_batch_in_one_draw_equals_instances),
         cmocka_unit_test(test_fewer_influences_read_fewer_bones),
         cmocka_unit_test(test_held_rows_match_the_cpu),
+        cmocka_unit_test(test_timed_rows_match_the_cpu),
     };
     return cmocka_run_group_tests_name("gl", tests, setup, teardown);
 }

@@ -3,9 +3,10 @@
  * cross-fades included, skinned by cb_skin_position_crossfade (the direct path) and by cb_bone_pass (the bone
  * pass's function, called per vertex) and captured with transform feedback, against the C runtime's expected
  * positions within 1e-5 of the model's height; local rows (CB_LOCAL_ROWS) composed both ways, cross-fades faded
- * before composing (cb_runtime_matrices_crossfade); every broken case that GL can express (bones transposed, rows off
- * by one, a shader line broken, local rows not composed) misses by far. The bone-pass cases (its textures) are
- * the web runtime's (runtimes/web/crowdbake_bones.mjs) and are run there. */
+ * before composing (cb_runtime_matrices_crossfade); timed rows (.pal version 7) through their maps; every broken
+ * case that GL can express (bones transposed, rows off by one, a shader line broken, local rows not composed, a timed
+ * clip's map ignored or its read skipped) misses by far. The bone-pass cases (its textures) are the web runtime's
+ * (runtimes/web/crowdbake_bones.mjs) and are run there. */
 #define _DEFAULT_SOURCE
 #define GL_GLEXT_PROTOTYPES
 #include "testutil.h"
@@ -165,7 +166,30 @@ static void check_local_not_composed(const conformance *c, const char *lib)
         ++ran;
     }
     free(skipped);
-    assert_int_equal(ran, 3);
+    assert_int_equal(ran, 4); /* local_qpos_u16, local_qpos_float, local_blocks, timed_local */
+}
+
+/* The timed cases (.pal version 7) with the shader's map read replaced by the cell taken as a row (its map ignored,
+ * as a runtime that knows no timed rows would play the cells): the direct path and cb_bone_pass must both miss by far. */
+static void check_timed_map_skipped(const conformance *c, const char *lib)
+{
+    static const char *const names[2] = {"direct", "cb_bone_pass"};
+    char *skipped = break_shader(lib, "cb:timed-map", "        vec4 m = vec4(cell, cell + 1.0, 0.0, 1.0);");
+    int ran = 0;
+    for (int i = 0; i < c->case_count; ++i) {
+        const conf_case *k = &c->cases[i];
+        if (!k->timed || k->broken) continue;
+        for (skin_path path = PATH_DIRECT; path <= PATH_BONE_PASS; path = (skin_path)(path + 1)) {
+            float *got = gl_case(c, k, skipped, &path);
+            double units, ratio = conformance_compare(c, k, got, &units);
+            printf("  %-18s %-12s map skipped: %.0f tolerances off\n", k->name, names[path], ratio);
+            assert_true(ratio > 10);
+            free(got);
+        }
+        ++ran;
+    }
+    free(skipped);
+    assert_true(ran >= 7);
 }
 
 static void test_conformance_cases(void **state)
@@ -178,6 +202,7 @@ static void test_conformance_cases(void **state)
     conformance_check_shader(&conf, lib, gl_case, &direct); /* local cases too: the library knows CB_LOCAL_ROWS */
     check_bone_pass(&conf, lib);
     check_local_not_composed(&conf, lib);
+    check_timed_map_skipped(&conf, lib);
     free(lib);
     conformance_free(&conf);
 }

@@ -183,11 +183,14 @@ test('checksum: one flipped payload byte is refused with verifyChecksum', () => 
 test('every fuzz regression is refused with a clean Error, as the C reader refuses it', () => {
     const regressions = 'tests/fuzz/regressions/pal';
     const files = readdirSync(regressions);
-    assert.ok(files.length >= 8);
+    let refused = 0;
     for (const f of files) {
         const bytes = readFileSync(path.join(regressions, f));
-        assertRefused(() => readPal(bytes, { name: f, verifyChecksum: true, decompress }), f, f);
+        // A valid file kept there as the fuzzer's seed (timed-held.pal, a timed file): opened where the C reader opens it.
+        if (cReaderAccepts(path.join(regressions, f))) readPal(bytes, { name: f, verifyChecksum: true, decompress });
+        else assertRefused(() => readPal(bytes, { name: f, verifyChecksum: true, decompress }), f, f), ++refused;
     }
+    assert.ok(refused >= 8);
 });
 
 test('truncations at every 64-byte boundary are refused', () => {

@@ -60,7 +60,7 @@ const result = await withPage({ '/': RUNTIMES, '/bench/': path.resolve(dir), ...
     const r = await p.evaluate(async ({ counts, methods }) => {
         const THREE = await import('three');
         const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
-        const { readPal, instanceData } = await import('/web/crowdbake_pal.mjs');
+        const { readPal, instanceData, clipInstance } = await import('/web/crowdbake_pal.mjs');
         const { Crowd, loadPaletteGLSL, compileProgram } = await import('/web/crowdbake_crowd.mjs');
         // The floor every method pays (triangle setup, rasterisation, the instance's placement): the
         // mesh at rest, no skinning.
@@ -109,9 +109,8 @@ void main() {
         // Each crowd plays its own palette's rows (a local bake may choose other rates) of the same clip.
         const name = (pal.clips.find((c) => c.loops) ?? pal.clips[0]).name;
         const stateOf = (p) => {
-            const clip = p.clips.find((c) => c.name === name);
-            return { first_row: clip.first_row, frame_count: clip.loops ? clip.frames : -clip.frames, rate: clip.fps,
-                     rate_per_speed: 0, phase: 'golden_ratio' };
+            const [first_row, frame_count, rate] = clipInstance(p.clips.find((c) => c.name === name)); // timed too
+            return { first_row, frame_count, rate, rate_per_speed: 0, phase: 'golden_ratio' };
         };
         const size = Math.max(...[0, 1, 2].map((k) => Math.max(...pal.clips.map((c) => c.bounds_max[k] - c.bounds_min[k]))));
         const pixel = new Uint8Array(4);

@@ -26,7 +26,7 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
         out[model.name] = await p.evaluate(async ({ name, clip, from }) => {
             const THREE = await import('three');
             const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
-            const { readPal, instanceBoneMatrix, instanceBoneMatrixCrossfade } = await import('/web/crowdbake_pal.mjs');
+            const { readPal, clipInstance, instanceBoneMatrix, instanceBoneMatrixCrossfade } = await import('/web/crowdbake_pal.mjs');
             const { Crowd, loadPaletteGLSL } = await import('/web/crowdbake_crowd.mjs');
             const { CrowdbakeHerd, meshFromGLTF } = await import('/web/crowdbake_three.mjs');
             const { offscreen, clipBox, cameraOn, compareColours } = await import('/tests/page_draw.mjs');
@@ -36,7 +36,7 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
             const mesh = meshFromGLTF(gltf), height = local.header.model_height;
             // Each palette's own rows for the clips (the two bakes may choose different rates).
             const clipOf = (pal, n) => pal.clips.find((k) => k.name === n);
-            const instOf = (k, phase) => [k.first_row, k.loops ? k.frames : -k.frames, k.fps, phase];
+            const instOf = (k, phase) => clipInstance(k, 1, phase); // a timed clip's too (.pal version 7)
             const { center, extent } = clipBox(clipOf(global, clip));
             const place = (i) => [center.x + ((i % 5) - 2) * extent * 0.45, 0, (Math.floor(i / 5) - 0.5) * extent * 0.6];
             // Eight steady instances, then (fading) two cross-fading from FROM_CLIP: a local cross-fade blends each bone's

@@ -12,7 +12,9 @@
 // test compares them with its CPU skinning. A case can break the runtime on purpose: transpose
 // (each mat4 bone stored transposed, the reference runtime's shipped bug) or glsl_break (the
 // line of the shipped shader holding `marker` replaced by `line`). A case of local rows (local: true) is run twice
-// more: through the bone pass (OUT.bones) and with the shader's compose step skipped (OUT.nocompose, broken).
+// more: through the bone pass (OUT.bones) and with the shader's compose step skipped (OUT.nocompose, broken); a case
+// of timed rows (timed: true, .pal version 7) also twice more: through the bone pass (OUT.bones) and with the
+// shader's map read skipped, the cell taken as a row (OUT.nomap, broken).
 import fs from 'node:fs';
 import path from 'node:path';
 import { withPage, REPO, RUNTIMES } from './driver.mjs';
@@ -22,9 +24,13 @@ const jobs = JSON.parse(fs.readFileSync(path.join(dir, 'cases.json'), 'utf8'));
 
 const hostileDir = path.join(REPO, 'tests/fuzz/regressions/pal');
 // Each case as given, and a local case also through the bone pass and with its composition skipped.
-const runs = jobs.cases.flatMap((c) => (!c.local ? [c] : [c, { ...c, name: `${c.name} (bone pass)`, out: `${c.out}.bones`, bone_pass: true },
-    { ...c, name: `${c.name} (compose skipped)`, out: `${c.out}.nocompose`,
-      glsl_break: { marker: 'cb:local-compose', line: '        // compose skipped (a broken runtime)' } }]));
+const bonePass = (c) => ({ ...c, name: `${c.name} (bone pass)`, out: `${c.out}.bones`, bone_pass: true });
+const runs = jobs.cases.flatMap((c) => [c,
+    ...(c.local || (c.timed && !c.broken) ? [bonePass(c)] : []),
+    ...(c.local ? [{ ...c, name: `${c.name} (compose skipped)`, out: `${c.out}.nocompose`,
+                     glsl_break: { marker: 'cb:local-compose', line: '        // compose skipped (a broken runtime)' } }] : []),
+    ...(c.timed && !c.broken ? [{ ...c, name: `${c.name} (map skipped)`, out: `${c.out}.nomap`,
+                                  glsl_break: { marker: 'cb:timed-map', line: '        vec4 m = vec4(cell, cell + 1.0, 0.0, 1.0);' } }] : [])]);
 
 const failures = await withPage({ '/': RUNTIMES, '/job/': dir, '/hostile/': hostileDir }, '/__blank.html', async (page) => {
     for (const c of runs) {
@@ -75,7 +81,8 @@ const failures = await withPage({ '/': RUNTIMES, '/job/': dir, '/hostile/': host
         console.log(`ran  ${c.name}: ${result.values.length / 3} vertices on ${result.format}${result.bones ? ' with the bone pass' : ''} (${result.renderer})`);
     }
     // The hostile palettes the fuzzers found, read in the page with the decoder a page would use:
-    // each must be refused with a one-line Error naming the file, the page left working.
+    // each must be refused with a one-line Error naming the file, the page left working (a valid file kept there as the
+    // fuzzer's seed, timed-held.pal, is opened: ACCEPTED, which test_web.c holds to the C reader's verdict).
     const hostile = fs.readdirSync(hostileDir);
     const verdicts = await page.evaluate(async (files) => {
         const { readPal } = await import('/web/crowdbake_pal.mjs');

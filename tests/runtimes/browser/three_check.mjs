@@ -27,7 +27,7 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
     const r = await p.evaluate(async ({ clip, times }) => {
         const THREE = await import('three');
         const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
-        const { readPal } = await import('/web/crowdbake_pal.mjs');
+        const { readPal, clipInstance } = await import('/web/crowdbake_pal.mjs');
         const { Crowd, loadPaletteGLSL } = await import('/web/crowdbake_crowd.mjs');
         const { CrowdbakeHerd, meshFromGLTF } = await import('/web/crowdbake_three.mjs');
         const pal = readPal(new Uint8Array(await (await fetch('/check/model.pal')).arrayBuffer()), { verifyChecksum: true });
@@ -69,7 +69,7 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
         const mesh = meshFromGLTF(gltf);
         const crowdOf = (options) => {
             const crowd = new Crowd(gl, { pal, glsl, mesh, capacity: 1, ...options });
-            crowd.setInstance(0, { inst: [c.first_row, c.loops ? c.frames : -c.frames, c.fps, 0] });
+            crowd.setInstance(0, { inst: clipInstance(c) }); // a timed clip's numbers too (.pal version 7)
             return crowd;
         };
         const crowds = {
@@ -101,7 +101,7 @@ const result = await withPage(checkRoutes(dir), '/__blank.html', async (p) => {
         const { lodTier, lodUniform } = await import('/web/crowdbake_bones.mjs');
         const nine = Array.from({ length: 9 }, (_, i) => ({
             position: [center.x + ((i % 3) - 1) * extent * 0.3, center.y - extent * 0.3, center.z + (Math.floor(i / 3) - 1) * extent * 0.3],
-            yaw: i * 0.7, scale: 0.3 + 0.02 * ((i * 4) % 9), inst: [c.first_row, c.loops ? c.frames : -c.frames, c.fps, i / 9] }));
+            yaw: i * 0.7, scale: 0.3 + 0.02 * ((i * 4) % 9), inst: clipInstance(c, 1, i / 9) }));
         const herdOf = (options) => {
             const crowd = new Crowd(gl, { pal, glsl, mesh, capacity: 9, bonePass: true, ...options });
             nine.forEach((o, i) => crowd.setInstance(i, o));
