@@ -9,7 +9,7 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { decompress } from 'fzstd';
-import { readPal, readRoster, instanceData, instanceFirstRow } from '../web/crowdbake_pal.mjs';
+import { readPal, readRoster, instanceData, clipInstance } from '../web/crowdbake_pal.mjs';
 import { Crowd, GLSL_URL, loadPaletteGLSL } from '../web/crowdbake_crowd.mjs';
 import { VatCrowd, readVat } from '../web/crowdbake_vat.mjs';
 import { meshFromGLTF } from '../web/crowdbake_three.mjs';
@@ -53,11 +53,12 @@ async function loadType(view, entry, glsl) {
             vatNote = `VAT not shown: ${e.message}`;
         }
     }
-    const states = rosterType ? rosterType.states : Object.fromEntries(pal.clips.map((c) => [c.name, {
-        clip: c.name, first_row: instanceFirstRow(c), frame_count: c.loops ? c.frames : -c.frames, rate: c.fps, rate_per_speed: 0,
-        phase: c.loops ? 'golden_ratio' : 'zero' }]));
+    const states = rosterType ? rosterType.states : Object.fromEntries(pal.clips.map((c) => {
+        const [first_row, frame_count, rate] = clipInstance(c); // a timed clip: its cells, a negative rate
+        return [c.name, { clip: c.name, first_row, frame_count, rate, rate_per_speed: 0, phase: c.loops ? 'golden_ratio' : 'zero' }];
+    }));
     // Ground speed of a state: its clip's (roster), so locomotion plays with planted feet.
-    const speedOf = (s) => (s.rate_per_speed > 0 ? (rosterType.clips.find((c) => c.name === s.clip)?.ground_speed ?? 0) : 0);
+    const speedOf = (s) => (s.rate_per_speed !== 0 ? (rosterType.clips.find((c) => c.name === s.clip)?.ground_speed ?? 0) : 0);
     // The skinned size (the clips' bounds): the mesh's own units may differ (a scaled skeleton).
     const lo = [0, 1, 2].map((k) => Math.min(...pal.clips.map((c) => c.bounds_min[k])));
     const hi = [0, 1, 2].map((k) => Math.max(...pal.clips.map((c) => c.bounds_max[k])));

@@ -395,6 +395,12 @@ export function readRoster(json, options = {}) {
     const isCount = (v) => Number.isInteger(v) && v >= 1;
     const isIndex = (v) => Number.isInteger(v) && v >= 0;
     const isNonNegative = (v) => typeof v === 'number' && Number.isFinite(v) && v >= 0;
+    const isNumber = (v) => typeof v === 'number' && Number.isFinite(v);
+    const timedRows = (t, where) => t && {
+        cells: need(t, where, 'cells', isCount, 'an integer >= 1'),
+        cell_rate: need(t, where, 'cell_rate', (v) => isNumber(v) && v > 0, 'a number > 0'),
+        map_rows: need(t, where, 'map_rows', isCount, 'an integer >= 1'),
+    };
 
     if (!isObject(doc)) fail('top level', 'expected an object');
     const schema = need(doc, 'top level', 'schema', isString, 'a string');
@@ -435,6 +441,8 @@ export function readRoster(json, options = {}) {
                 first_row: need(c, w, 'first_row', isIndex, 'an integer >= 0'),
                 frame_count: need(c, w, 'frame_count', isCount, 'an integer >= 1'),
                 step_rows: optional(c, w, 'step_rows', (v) => typeof v === 'boolean', 'true or false') ?? false,
+                // Timed rows (.pal version 7; older manifests: none): its map's cells, their rate and its map rows.
+                timed_rows: timedRows(optional(c, w, 'timed_rows', isObject, 'an object'), `${w}.timed_rows`),
                 fps: need(c, w, 'fps', (v) => typeof v === 'number' && v > 0, 'a number > 0'),
                 duration: need(c, w, 'duration', isNonNegative, 'a number >= 0'),
                 loops: need(c, w, 'loops', (v) => typeof v === 'boolean', 'true or false'),
@@ -462,13 +470,21 @@ export function readRoster(json, options = {}) {
                 // < 0: held rows (a STEP-keyed clip), the first -first_row - 1
                 first_row: need(inst, wi, 'first_row', Number.isInteger, 'an integer'),
                 frame_count: need(inst, wi, 'frame_count', (v) => Number.isInteger(v) && v !== 0, 'a non-zero integer'),
-                rate: need(inst, wi, 'rate', isNonNegative, 'a number >= 0'),
-                rate_per_speed: need(inst, wi, 'rate_per_speed', isNonNegative, 'a number >= 0'),
+                // < 0: a timed clip (its cells per second, and per unit of speed, negated: docs/roster.md)
+                rate: need(inst, wi, 'rate', isNumber, 'a number'),
+                rate_per_speed: need(inst, wi, 'rate_per_speed', isNumber, 'a number'),
                 phase: need(inst, wi, 'phase', (v) => v === 'golden_ratio' || v === 'zero', '"golden_ratio" or "zero"'),
             };
+            const timed = type.clips.find((c) => c.name === clip).timed_rows;
+            if ((state.rate < 0) !== (timed !== undefined) || state.rate_per_speed * state.rate < 0)
+                fail(`${wi}.rate`, timed ? `clip "${clip}" has timed rows: rate and rate_per_speed must be negative`
+                                         : 'expected a number >= 0, and rate_per_speed too');
+            if (timed && Math.abs(state.frame_count) !== timed.cells)
+                fail(`${wi}.frame_count`, `clip "${clip}" has ${timed.cells} cells, got ${state.frame_count}`);
             const first = state.first_row < 0 ? -state.first_row - 1 : state.first_row;
-            if (first + Math.abs(state.frame_count) > type.rows)
-                fail(wi, `rows ${first}..${first + Math.abs(state.frame_count)} outside the type's ${type.rows} rows`);
+            const rows = timed ? type.clips.find((c) => c.name === clip).frame_count : Math.abs(state.frame_count);
+            if (first + rows > type.rows || (timed && timed.map_rows > first))
+                fail(wi, `rows ${first}..${first + rows} outside the type's ${type.rows} rows`);
             put(type.states, stateName, state);
         }
         need(t, at, 'lods', Array.isArray, 'an array').forEach((l, i) => {
@@ -519,7 +535,7 @@ export const TIMED_STILL_RATE = 1e-30;
 // clipInstance numbers: a negative rate, a timed clip's cells per second, keeps its sign), moving at `groundSpeed`
 // model units/s, with instance index `index`; a one-shot started at `startTime` seconds.
 export function instanceData(state, groundSpeed = 0, index = 0, startTime = 0) {
-    const speed = state.rate_per_speed > 0 ? state.rate_per_speed * groundSpeed : Math.abs(state.rate);
+    const speed = state.rate_per_speed !== 0 ? Math.abs(state.rate_per_speed) * groundSpeed : Math.abs(state.rate);
     const rate = state.rate < 0 ? -Math.max(speed, TIMED_STILL_RATE) : speed;
     const frames = Math.abs(state.frame_count);
     const golden = index * 0.6180339887;

@@ -310,7 +310,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
         this.drawPlaced(i);
         const was = this.instanceScale[i];
         this.instanceScale[i] = scale;
-        if (was !== scale && this.states[this.instanceState[i]].rate_per_speed > 0) this.setSpeed(i, this.speed[i]); // same frame
+        if (was !== scale && this.states[this.instanceState[i]].rate_per_speed !== 0) this.setSpeed(i, this.speed[i]); // same frame
     }
 
     // Instance i's matrix from its place and, moving at a locomotion state's speed, its travel offset.
@@ -331,7 +331,7 @@ export class CrowdbakeHerd extends THREE.InstancedMesh {
     travelOffsetAt(i, out = new THREE.Vector3()) {
         const s = this.states[this.instanceState[i]];
         out.set(0, 0, 0);
-        if (!this.pal.rowTravel || !(s?.rate_per_speed > 0) || !(this.speed[i] > 0)) return out;
+        if (!this.pal.rowTravel || !s?.rate_per_speed || !(this.speed[i] > 0)) return out;
         const a = this.geometry.attributes, at = (attr, n) => attr.array.subarray(i * n, i * n + n);
         const offset = (inst) => {
             const clip = this.clipAtRow.get(inst[0]);

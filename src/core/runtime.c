@@ -40,12 +40,11 @@ static void timed_frame(const cb_palette *p, const void *texels, const cb_instan
     double cells = fabs(in->frame_count), u = time * -in->rate + in->phase * cells, c;
     if (in->frame_count > 0) {
         u = fmod(u, cells);
-        if (u < 0) u += cells;
-        c = floor(u);
+        if (u < 0) u += cells; /* may round onto `cells`: the last cell below, as a GPU's mod may */
     } else {
         u = u < 0 ? 0 : u > cells ? cells : u;
-        c = fmin(floor(u), cells - 1);
     }
+    c = fmin(floor(u), cells - 1);
     double m[4];
     timed_map_read(p, texels, (uint32_t)first, (uint32_t)cells, (uint32_t)c, m);
     *row0 = (uint32_t)(first + m[0]);

@@ -151,3 +151,38 @@ test('a type without states (a catalog animal naming none) reads with default_st
     assert.deepEqual(Object.keys(goat.states), []);
     assert.deepEqual(goat.animation_lod, { two_influences_error: 0.25, one_influence_error: 0.5, frames: 90 });
 });
+
+test('a timed clip\'s states count cells and play at a negative rate (docs/roster.md), standing still too', () => {
+    const local = path.join(dir, 'timed.toml');
+    writeFileSync(local, catalog.replace('out_dir = "roster"', 'out_dir = "timed"\nbone_space = "local"\ntimed_rows = "on"'));
+    execFileSync(CROWDBAKE, ['bake', local, '-q'], { stdio: ['ignore', 'ignore', 'pipe'] });
+    const file = path.join(dir, 'timed', 'roster.json');
+    const roster = readRoster(readFileSync(file, 'utf8'), { name: file });
+    let timedStates = 0;
+    for (const type of Object.values(roster.types)) {
+        const pal = readPal(readFileSync(path.join(dir, 'timed', type.palette)), { name: type.palette });
+        for (const state of Object.values(type.states)) {
+            const c = pal.clips.find((p) => p.name === state.clip);
+            if (!c.timed) continue;
+            timedStates++;
+            const clip = type.clips.find((k) => k.name === state.clip);
+            assert.deepEqual([clip.timed_rows.cells, Math.fround(clip.timed_rows.cell_rate), clip.timed_rows.map_rows],
+                             [c.cells, c.cell_rate, c.map_rows]);
+            assert.equal(Math.abs(state.frame_count), c.cells);
+            assert.ok(state.rate < 0 && state.rate_per_speed <= 0);
+            const still = instanceData(state, 0, 1), moving = instanceData(state, 2, 1);
+            assert.ok(still[2] < 0 && moving[2] < 0, 'z < 0 marks a timed instance, standing still too');
+            if (state.rate_per_speed !== 0) assert.ok(Math.abs(moving[2] + Math.abs(state.rate_per_speed) * 2) < 1e-9);
+            else assert.equal(moving[2], state.rate);
+        }
+    }
+    assert.ok(timedStates > 0, 'timed_rows = "on" gave no timed state');
+    // A timed state's frame_count other than its clip's cells is refused.
+    const doc = JSON.parse(readFileSync(file, 'utf8'));
+    const [typeName, type] = Object.entries(doc.types).find(([, t]) => t.clips.some((c) => c.timed_rows));
+    const timedClip = type.clips.find((c) => c.timed_rows).name;
+    const [stateName] = Object.entries(type.states).find(([, s]) => s.clip === timedClip);
+    const broken = structuredClone(doc);
+    broken.types[typeName].states[stateName].instance.frame_count += 1;
+    assert.throws(() => readRoster(JSON.stringify(broken), { name: 'broken.json' }), /cells/);
+});
