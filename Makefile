@@ -565,6 +565,11 @@ $(BUILD)/bench_local_rate: bench/bench_local_rate.c bench/bench_model.h src/core
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
 	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
 
+# Timed rows for global rows, measured as the bake measures a sampled clip (bench/bench_timed_global.c).
+$(BUILD)/bench_timed_global: bench/bench_timed_global.c bench/bench_model.h $(BUILD)/libcrowdbake.a
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@.o
+	$(CXX) $(SAN) -o $@ $@.o $(BUILD)/libcrowdbake.a $(PKG_LIBS)
+
 # The floor: read + RapidJSON parse of the same file, and crowdbake's load, in the same run
 # (bench/bench_floor.cpp).
 $(BUILD)/bench_floor: bench/bench_floor.cpp $(BUILD)/libcrowdbake.a $(DEPS_STAMP)
