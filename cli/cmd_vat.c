@@ -22,7 +22,8 @@ const char cmd_vat_usage[] =
     "default palette of the same frames. --clip and --exclude-clip select clips as for 'bake'; a clip\n"
     "that cannot be sampled is skipped with a warning unless --clip names it. --like PALETTE.pal: the\n"
     "palette's clips at its clips' own rates (a default bake chooses a rate per clip), so the VAT's\n"
-    "frames are the palette's rows one for one.\n";
+    "frames are the palette's rows one for one; a timed clip (.pal version 7) at its map's cell rate,\n"
+    "one frame a cell, since a VAT has no map.\n";
 
 /* --like PALETTE: the palette's clips, each at its own rate and loop, so the VAT's frames are
  * the palette's rows one for one (an error-bounded bake chooses a rate per clip). */
@@ -40,7 +41,9 @@ static cb_status plan_like(const cb_model *m, const char *palette, cb_clip_plan 
         if (a < 0)
             cb_fail(err, CB_ERR_INPUT, "%s: clip '%s' is not a clip of %s; --like wants a palette baked from this model",
                     palette, c.name, m->source);
-        else (*plan)[i] = (cb_clip_plan){a, m->animations[a].name, (c.flags & CBPAL_CLIP_LOOPS) ? 1 : 0, c.fps, false, false, 0, NULL};
+        else /* a timed clip at its cells' rate: what a VAT, which has no map, needs to play it as the palette does */
+            (*plan)[i] = (cb_clip_plan){a, m->animations[a].name, (c.flags & CBPAL_CLIP_LOOPS) ? 1 : 0,
+                                        (c.flags & CBPAL_CLIP_TIMED) ? c.cell_rate : c.fps, false, false, 0, NULL};
         *count = i + 1;
     }
     cbpal_close(&f);

@@ -47,6 +47,7 @@ async function loadType(view, entry, glsl) {
     if (entry.vat) {
         try {
             const v = readVat(await bytesOf(`/${entry.vat}`), entry.vat);
+            if (pal.clips.some((c) => c.timed)) throw new Error('the palette has timed clips, which a VAT has no map for');
             if (v.frames !== pal.header.rows) throw new Error(`${v.frames} VAT frames, ${pal.header.rows} palette rows`);
             vat = new VatCrowd(gl, { pal, vat: v, glsl, mesh, capacity: MAX, color: [0.62, 0.74, 0.86] });
         } catch (e) {

@@ -62,7 +62,7 @@ void bake_local_notes(const cb_bake_job *job, const cb_palette *p, cb_warnings *
     char rates[400];
     clip_rates(p, rates, sizeof rates);
     cb_warn(w, "note", "%s: bone space local: each row holds every bone's transform in its parent's "
-            "frame (.pal version 6), blended bone by bone and composed by the runtime, the glTF's own interpolation; "
+            "frame (.pal version 6; 7 with timed rows), blended bone by bone and composed by the runtime, the glTF's own interpolation; "
             "rows sampled, not fitted (a fit is to the global blend); errors measured composed", pal_path(job));
     if (job->settings.fps_auto)
         cb_warn(w, "note", "%s: local rows at each clip's key rate, or its lowest multiple within max_error measured "

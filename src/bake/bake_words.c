@@ -56,9 +56,10 @@ static void local_reason(const cb_bake_job *job, uint32_t i, double fps, char *b
     const cb_clip_plan *c = &job->plan[i];
     size_t n;
     if (c->timed_rows) { /* rows on its keys (local_rate_search.c's choose_timed) */
-        snprintf(buf, size, "%u rows on its keys (a map of %u cells at %g Hz, %u rows) instead of %u at %g fps, local "
+        snprintf(buf, size, "%u rows on its keys (a map of %u cells at %g Hz, %u row%s) instead of %u at %g fps, local "
                  "rows: %s within its budget (%.3g mm/m, blended and composed as the runtime plays them)", c->timed_rows,
-                 r->timed_cells, r->timed_cell_rate, r->timed_map_rows, r->uniform_rows, r->uniform_fps,
+                 r->timed_cells, r->timed_cell_rate, r->timed_map_rows, r->timed_map_rows == 1 ? "" : "s", r->uniform_rows,
+                 r->uniform_fps,
                  r->timed_rows + r->timed_map_rows < r->uniform_rows ? "fewer bytes"
                  : job->settings.timed_rows == CB_TIMED_ROWS_ON     ? "asked for (timed rows on)"
                                                                     : "the uniform rate over its budget",
@@ -71,8 +72,8 @@ static void local_reason(const cb_bake_job *job, uint32_t i, double fps, char *b
         snprintf(buf, size, "%g fps, local rows (%s): the fewest within its budget (%.3g mm/m, blended and composed as the "
                  "runtime plays them)", fps, why, r->error_mm);
     if (r->timed_weighed && (n = strlen(buf)) < size) /* rows on its keys weighed and not taken */
-        snprintf(buf + n, size - n, "; on its keys at least %u rows and a map of %u rows, no fewer bytes", r->timed_rows,
-                 r->timed_map_rows);
+        snprintf(buf + n, size - n, "; on its keys at least %u rows and a map of %u row%s, no fewer bytes", r->timed_rows,
+                 r->timed_map_rows, r->timed_map_rows == 1 ? "" : "s");
     else if (job->settings.timed_rows == CB_TIMED_ROWS_OFF && (n = strlen(buf)) < size)
         snprintf(buf + n, size - n, "; rows on its keys not weighed (timed rows off)");
 }
