@@ -416,9 +416,12 @@ static func skinned_mesh_in(root: Node) -> Mesh:
 
 # ---- the bone pass (crowdbake_bone_pass.gdshader) ----
 
-# Skinned vertices a frame from which "auto" takes the bone pass: measured in Godot 4.6's web build on
-# SwiftShader (bench/godot_crowd.py; the numbers in the addon's README).
-const AUTO_BONE_PASS_VERTICES := 50000
+# Skinned vertices a frame from which "auto" takes the bone pass, between where it ties and where it wins: measured
+# in Godot 4.6's web build on SwiftShader (bench/godot_crowd.py, walking Cows, medians of frames in turns), 1 Cow
+# (4,970 vertices) a tie (bone pass 93 ms a frame, per vertex 98), 10 Cows (49,700) ahead (269 against 449; 284 against 311 in a
+# quieter run), 1,000 Cows 19.0 s against 32.6 (the numbers in the addon's README). Below, the pass's SubViewport
+# and 2 KB a Cow buy nothing.
+const AUTO_BONE_PASS_VERTICES := 20000
 const BONE_TEXTURE_WIDTH := 4096 # texels a row at most (WebGL 2 promises 4096)
 const BONE_TEXTURE_ROWS := 4096
 
