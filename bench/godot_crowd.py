@@ -113,8 +113,8 @@ def print_table(r, methods=('palette', 'bones', 'vat')):
     print('Godot 4.6 web build (Compatibility, SwiftShader), walking Cows (%d bones, %d vertices), frame ms (median):'
           % (r['bones'], r['vertices']))
     print('%10s' % 'instances' + ''.join('%12s' % (m + ' ms') for m in methods) + '   auto chose')
-    for n, c in sorted(r['counts'].items(), key=lambda kv: int(kv[0])):
-        print('%10s' % n + ''.join('%12.1f' % c[m + '_ms'] for m in methods) + '   ' + ('bones' if c['auto_bone_pass'] else 'palette'))
+    for n, c in sorted(r['counts'].items(), key=lambda kv: float(kv[0])):
+        print("%10d" % float(n) + ''.join('%12.1f' % c[m + '_ms'] for m in methods) + '   ' + ('bones' if c['auto_bone_pass'] else 'palette'))
     print('bytes per instance beside its MultiMesh row: ' + ', '.join('%s %d' % kv for kv in r['bytes_per_instance'].items()))
 
 
