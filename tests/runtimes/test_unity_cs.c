@@ -675,6 +675,46 @@ static void test_local_conformance_cases(void **state)
     assert_int_equal(ran, 3);
 }
 
+/* Timed rows (.pal version 7) made by hand from the quadruped's untimed bakes, until the bake writes them:
+ * CrowdbakeCheck's MakeTimed gives each clip a grid twice as fine as its rows (row k on cell 2k) and its map
+ * over the rows before it; the reader takes the table and the map, and the timed clip's bone matrices
+ * (PalFile.BoneMatrix, the herd's BoneMatrixAt, travel offsets) equal the untimed clip's; the same numbers
+ * read without the map are far off; a map naming a row past its clip is refused. */
+static void test_timed_rows_by_hand(void **state)
+{
+    (void)state;
+    build_check();
+    const char *options[] = {"--layout qpos --precision float", "--layout qpos --precision half", "--layout qpos --precision u16",
+                             "--layout mat4 --precision half", "--layout affine --precision u16"};
+    char quadruped[1024], cmd[4096], line[1024];
+    sample_path(quadruped, sizeof quadruped, "quadruped");
+    unsigned clips = 0;
+    for (int o = 0; o < 5; ++o) {
+        snprintf(cmd, sizeof cmd, "%s bake %s -o %s/timed.pal --root-motion in-place -q %s 2>&1", crowdbake_exe(), quadruped, TMP,
+                 options[o]);
+        run_or_fail(cmd);
+        FILE *f = run_check("timed " TMP "/timed.pal", TMP "/timed.txt");
+        double worst = 0, without = INFINITY;
+        unsigned here = 0, refused = 0;
+        while (fgets(line, sizeof line, f)) {
+            unsigned clip, cells;
+            double d, travel, w;
+            if (sscanf(line, "T %u %u %lf %lf %lf", &clip, &cells, &d, &travel, &w) == 5) {
+                worst = fmax(worst, fmax(d, travel)), without = fmin(without, w), ++here;
+                continue;
+            }
+            assert_true(strncmp(line, "V badmap: clip 1's map, cell ", 29) == 0);
+            ++refused;
+        }
+        fclose(f);
+        printf("  quadruped %s, %u clips made timed: bone matrices vs untimed %.3g, without the map %.3g; bad map refused\n",
+               options[o], here, worst, without);
+        assert_true(here >= 3 && refused == 1 && worst <= 1e-5 && without > 0.1);
+        clips += here;
+    }
+    assert_true(clips >= 15);
+}
+
 /* Local rows whose every parent comes after its children (the spec: do not assume parent < child):
  * the C# composed matrices equal the C reader's, and bone n - 1 - j's equal bone j's of the same
  * bake in the model's order. */
@@ -900,6 +940,7 @@ int main(void)
         cmocka_unit_test(test_bone_pass_rule_matches_the_web),
         cmocka_unit_test(test_bone_pass_kernel_matches_the_c_runtime),
         cmocka_unit_test(test_local_conformance_cases),
+        cmocka_unit_test(test_timed_rows_by_hand),
         cmocka_unit_test(test_parents_after_children),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
