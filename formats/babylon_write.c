@@ -307,6 +307,9 @@ static cb_status write_rows(cb_atomic_file *f, const cb_palette *p, const babylo
 cb_status cb_babylon_write(const char *path, const cb_palette *p, const cb_model *m, int32_t skin,
                            const cb_babylon_write_options *o, cb_error *err)
 {
+    if (cb_palette_timed_clip(p))
+        return cb_fail(err, CB_ERR_INPUT, "%s: clip %s has timed rows, and timed rows need a .pal (Babylon has no place "
+                       "for their map): write a .pal, or bake it at a fixed --fps", path, cb_palette_timed_clip(p)->name);
     const cb_skin *s = &m->skins[skin];
     int32_t skeleton = skeleton_node(m, s);
     bool *bone = calloc(m->node_count ? m->node_count : 1, sizeof *bone);

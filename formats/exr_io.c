@@ -175,6 +175,9 @@ cb_status cb_exr_write(const char *path, const cb_palette *p, const cb_model *m,
     if (p->precision == CB_PRECISION_U16)
         return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_PRECISION,
                                "%s: EXR stores half or float texels; bake half or float precision, or write a .pal for u16", path);
+    if (cb_palette_timed_clip(p))
+        return cb_fail(err, CB_ERR_INPUT, "%s: clip %s has timed rows, and timed rows need a .pal (EXR has no place for "
+                       "their map): write a .pal, or bake it at a fixed --fps", path, cb_palette_timed_clip(p)->name);
     if (p->width > INT32_MAX || p->height > INT32_MAX) return cb_fail(err, CB_ERR_INPUT, "%s: palette too large", path);
     int16_t bytes = p->precision == CB_PRECISION_FLOAT ? 4 : 2;
     int32_t stride = 4 * bytes, line = (int32_t)(p->width * 4 * bytes);

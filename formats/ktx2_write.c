@@ -167,6 +167,9 @@ cb_status cb_ktx2_write_zstd(const char *path, const cb_palette *p, const cb_mod
         return cb_fail_setting(err, CB_ERR_SETTINGS, CB_SETTING_PRECISION,
                                "%s: KTX2 palettes are RGBA16F or RGBA32F; a u16 palette would be RGBA16UI, which three.js's "
                                "KTX2Loader and most KTX2 loaders refuse: bake it with half or float precision", path);
+    if (cb_palette_timed_clip(p))
+        return cb_fail(err, CB_ERR_INPUT, "%s: clip %s has timed rows, and timed rows need a .pal (KTX2 has no place for "
+                       "their map): write a .pal, or bake it at a fixed --fps", path, cb_palette_timed_clip(p)->name);
     uint32_t texel = cb_precision_texel_bytes(p->precision), bits = texel * 2;
     char *clips = clips_json(p), *meta = palette_json(p, model, skin, input_hash, speed_reference, in_place);
     if (!clips || !meta) {

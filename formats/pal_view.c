@@ -60,6 +60,10 @@ cb_status cb_palette_view(const cbpal_file *f, cb_palette *p, cb_error *err)
         d->loops = (c.flags & CBPAL_CLIP_LOOPS) != 0;
         d->fitted = (c.flags & CBPAL_CLIP_FITTED) != 0;
         d->step = (c.flags & CBPAL_CLIP_STEP) != 0;
+        d->timed = (c.flags & CBPAL_CLIP_TIMED) != 0; /* cbpal_open checked its entry and map */
+        d->cells = c.cells;
+        d->cell_rate = c.cell_rate;
+        d->map_rows = c.map_rows;
         memcpy(d->root_velocity, c.root_velocity, sizeof d->root_velocity);
         memcpy(d->bounds_min, c.bounds_min, sizeof d->bounds_min);
         memcpy(d->bounds_max, c.bounds_max, sizeof d->bounds_max);

@@ -37,7 +37,7 @@ static int32_t joint_parent(const cb_model *m, const cb_skin *skin, uint32_t j)
 }
 
 typedef struct layout_plan {
-    uint64_t clips, bones, offsets, travel, ranges, strings, strings_size, payload, payload_size;
+    uint64_t clips, bones, offsets, travel, ranges, timed, strings, strings_size, payload, payload_size;
 } layout_plan;
 
 static size_t strings_size(const cb_palette *p, const cb_model *m, const cb_skin *skin)
@@ -50,6 +50,13 @@ static size_t strings_size(const cb_palette *p, const cb_model *m, const cb_skin
 
 static bool local(const cb_palette *p) { return p->bone_space == CB_BONE_SPACE_LOCAL; }
 
+static bool timed(const cb_palette *p)
+{
+    for (uint32_t c = 0; c < p->clip_count; ++c)
+        if (p->clips[c].timed) return true;
+    return false;
+}
+
 static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_write_options *opt, const layout_plan *lp)
 {
     static const unsigned char magic[8] = {'C', 'B', 'P', 'A', 'L', '\r', '\n', 0x1a};
@@ -57,15 +64,16 @@ static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_wri
     uint32_t flags = (opt->zstd ? CBPAL_FLAG_ZSTD : 0) | (opt->in_place ? CBPAL_FLAG_IN_PLACE : 0) |
                      (p->positions_relative ? CBPAL_FLAG_POSITIONS_RELATIVE : 0) |
                      (p->fitted ? CBPAL_FLAG_FITTED_ROWS : 0) | (p->row_travel ? CBPAL_FLAG_ROW_TRAVEL : 0) |
-                     (local(p) ? CBPAL_FLAG_LOCAL_ROWS : 0);
+                     (local(p) ? CBPAL_FLAG_LOCAL_ROWS : 0) | (timed(p) ? CBPAL_FLAG_TIMED_ROWS : 0);
     /* A version only where its meaning differs from the one before: readers of version 1 keep
      * reading the rest. Version 4: held rows (a clip's step flag), which an older reader would
      * blend, so it must refuse them (docs/pal-format.md). Version 5: a per-row travel table,
      * which an older reader would leave out, sliding the feet it plants. Version 6: local rows,
-     * which an older reader would draw uncomposed. */
+     * which an older reader would draw uncomposed. Version 7: timed rows, whose map an older reader
+     * would draw as rows and whose rows it would play at a uniform rate. */
     bool held = false;
     for (uint32_t c = 0; c < p->clip_count; ++c) held = held || p->clips[c].step;
-    uint32_t version = local(p) ? 6 : p->row_travel ? 5 : held ? 4 : p->positions_relative ? 3 : 1;
+    uint32_t version = timed(p) ? 7 : local(p) ? 6 : p->row_travel ? 5 : held ? 4 : p->positions_relative ? 3 : 1;
     uint32_t u[14] = {version, flags, CBPAL_HEADER_SIZE, (uint32_t)p->layout, (uint32_t)p->precision,
                       p->texels_per_bone, p->bone_count, p->row_texels, p->rows, p->width, p->height, p->blocks,
                       cb_precision_texel_bytes(p->precision), p->clip_count};
@@ -83,6 +91,7 @@ static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_wri
     if (p->positions_relative) put64(d + 184, lp->offsets);
     if (p->row_travel) put64(d + 192, lp->travel);
     if (local(p)) put64(d + 200, lp->ranges);
+    if (timed(p)) put64(d + 208, lp->timed);
 }
 
 static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *m, const cb_skin *skin, const layout_plan *lp)
@@ -99,7 +108,11 @@ static void write_tables(unsigned char *d, const cb_palette *p, const cb_model *
         put32(e + 8, clip->first_row), put32(e + 12, clip->frames);
         putf(e + 16, (float)clip->fps), putf(e + 20, (float)clip->duration), putf(e + 24, (float)clip->start);
         put32(e + 28, (clip->loops ? CBPAL_CLIP_LOOPS : 0) | (clip->fitted ? CBPAL_CLIP_FITTED : 0) |
-                          (clip->step ? CBPAL_CLIP_STEP : 0));
+                          (clip->step ? CBPAL_CLIP_STEP : 0) | (clip->timed ? CBPAL_CLIP_TIMED : 0));
+        if (timed(p) && clip->timed) { /* an untimed clip's entry stays 0 */
+            unsigned char *t = d + lp->timed + (uint64_t)c * CBPAL_TIMED_SIZE;
+            put32(t, clip->cells), putf(t + 4, (float)clip->cell_rate), put32(t + 8, clip->map_rows);
+        }
         for (int k = 0; k < 3; ++k) {
             putf(e + 32 + 4 * k, clip->root_velocity[k]);
             putf(e + 44 + 4 * k, clip->bounds_min[k]);
@@ -134,7 +147,8 @@ static layout_plan plan_layout(const cb_palette *p, const cb_model *m, const cb_
     lp.offsets = lp.bones + (uint64_t)p->bone_count * CBPAL_BONE_SIZE;
     lp.travel = lp.offsets + (p->positions_relative ? (uint64_t)p->bone_count * 12 : 0);
     lp.ranges = lp.travel + (p->row_travel ? (uint64_t)p->rows * 4 : 0);
-    lp.strings = lp.ranges + (local(p) ? (uint64_t)p->bone_count * 32 : 0);
+    lp.timed = lp.ranges + (local(p) ? (uint64_t)p->bone_count * 32 : 0);
+    lp.strings = lp.timed + (timed(p) ? (uint64_t)p->clip_count * CBPAL_TIMED_SIZE : 0);
     lp.strings_size = strings_size(p, m, skin);
     lp.payload = (lp.strings + lp.strings_size + CBPAL_PAYLOAD_ALIGN - 1) / CBPAL_PAYLOAD_ALIGN * CBPAL_PAYLOAD_ALIGN;
     lp.payload_size = payload_size;
@@ -209,9 +223,26 @@ static cb_status checksum(cb_atomic_file *f, const cb_palette *p, const unsigned
     return rc;
 }
 
+/* A timed clip as a reader accepts it (docs/pal-format.md "Timed rows"): its map rows before its
+ * first row, cells and a rate; the map's texels are the bake's (timed_map_fill). */
+static cb_status check_timed(const char *path, const cb_palette *p, cb_error *err)
+{
+    for (uint32_t c = 0; c < p->clip_count; ++c) {
+        const cb_palette_clip *clip = &p->clips[c];
+        if (clip->timed && (clip->cells == 0 || !(clip->cell_rate > 0) || clip->map_rows > clip->first_row ||
+                            clip->map_rows != cb_timed_map_rows(clip->cells, p->row_texels)))
+            return cb_fail(err, CB_ERR_INTERNAL, "%s: clip %s's timed rows are inconsistent (cells %u, cell rate %g, %u map "
+                           "rows before row %u): a bug in what built the palette", path, clip->name, clip->cells,
+                           clip->cell_rate, clip->map_rows, clip->first_row);
+    }
+    return CB_OK;
+}
+
 cb_status cb_pal_write(const char *path, const cb_palette *p, const cb_model *m, int32_t skin,
                        const cb_pal_write_options *opt, cb_error *err)
 {
+    cb_status bad = check_timed(path, p, err);
+    if (bad) return bad;
     size_t meta_size = 0;
     uint64_t payload_size = p->texel_bytes, sum = 0;
     unsigned char *meta = build_meta(p, m, skin, opt, payload_size, &meta_size);
@@ -284,6 +315,11 @@ bool cb_pal_mapping_holds(const cb_pal_mapping *mp, const cb_palette *p)
 
 cb_status cb_pal_write_mapped(cb_pal_mapping *mp, const cb_palette *p, const cb_pal_write_options *opt, cb_error *err)
 {
+    cb_status bad = check_timed(mp->path, p, err);
+    if (bad) {
+        cb_pal_mapping_abort(mp);
+        return bad;
+    }
     size_t meta_size = 0;
     uint64_t sum = 0;
     unsigned char *meta = build_meta(p, mp->model, mp->skin, opt, p->texel_bytes, &meta_size);

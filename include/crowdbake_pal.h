@@ -30,7 +30,7 @@
 extern "C" {
 #endif
 
-#define CBPAL_VERSION 6 /* newest known; writers write the oldest version that holds what a file says (pal-format.md) */
+#define CBPAL_VERSION 7 /* newest known; writers write the oldest version that holds what a file says (pal-format.md) */
 #define CBPAL_HEADER_SIZE 256
 #define CBPAL_CLIP_SIZE 80
 #define CBPAL_BONE_SIZE 32
@@ -53,12 +53,18 @@ enum { CBPAL_PRECISION_FLOAT = 0, CBPAL_PRECISION_HALF = 1, CBPAL_PRECISION_U16 
  * feet stay still. Files without it read every offset as 0. */
 /* CBPAL_FLAG_LOCAL_ROWS (version 6): rows hold each bone in its parent's frame, with a bone range table
  * (header offset 200): blend each bone's rows, then compose down the skeleton (pal-format.md "Local rows"). */
+/* CBPAL_FLAG_TIMED_ROWS (version 7): some clip is timed (CBPAL_CLIP_TIMED), with a timed clip table
+ * (header offset 208, 16 bytes a clip): its rows lie on cells of a grid and map rows just before
+ * its first row say which two rows each cell blends (pal-format.md "Timed rows"). */
 enum { CBPAL_FLAG_ZSTD = 1u, CBPAL_FLAG_IN_PLACE = 2u, CBPAL_FLAG_POSITIONS_RELATIVE = 4u, CBPAL_FLAG_FITTED_ROWS = 8u,
-       CBPAL_FLAG_ROW_TRAVEL = 16u, CBPAL_FLAG_LOCAL_ROWS = 32u };
+       CBPAL_FLAG_ROW_TRAVEL = 16u, CBPAL_FLAG_LOCAL_ROWS = 32u, CBPAL_FLAG_TIMED_ROWS = 64u };
 #define CBPAL_RANGE_SIZE 32 /* a bone range table entry */
+#define CBPAL_TIMED_SIZE 16 /* a timed clip table entry: u32 cells, f32 cell_rate, u32 map_rows, u32 reserved */
 /* CBPAL_CLIP_STEP (version 4): the clip's rows are held, not blended - at clip time t the runtime
  * shows row floor(t * fps) alone (a STEP-keyed clip, baked at its key times: exact). */
-enum { CBPAL_CLIP_LOOPS = 1u, CBPAL_CLIP_FITTED = 2u, CBPAL_CLIP_STEP = 4u };
+/* CBPAL_CLIP_TIMED (version 7): the clip's rows are timed (cbpal_clip.cells, cell_rate, map_rows);
+ * cbpal_bone_matrix and cbpal_travel_offset follow its map. */
+enum { CBPAL_CLIP_LOOPS = 1u, CBPAL_CLIP_FITTED = 2u, CBPAL_CLIP_STEP = 4u, CBPAL_CLIP_TIMED = 8u };
 /* cbpal_open flags */
 enum { CBPAL_VERIFY_CHECKSUM = 1u };
 
@@ -73,6 +79,7 @@ typedef struct cbpal_header {
     uint64_t offset_table_offset; /* version 3 with relative positions: bone_count x 3 f32 position offsets */
     uint64_t travel_table_offset; /* version 5 with CBPAL_FLAG_ROW_TRAVEL: rows x f32 travel offsets; else 0 */
     uint64_t range_table_offset;  /* version 6 with CBPAL_FLAG_LOCAL_ROWS: bone_count x 32-byte bone ranges; else 0 */
+    uint64_t timed_table_offset;  /* version 7 with CBPAL_FLAG_TIMED_ROWS: clip_count x 16-byte timed entries; else 0 */
 } cbpal_header;
 
 typedef struct cbpal_clip {
@@ -80,6 +87,11 @@ typedef struct cbpal_clip {
     uint32_t first_row, frames, flags;
     float fps, duration, start, root_velocity[3], bounds_min[3], bounds_max[3];
     float travel_heading[3]; /* version 5: the direction its rows' travel offsets lie along (0 where it has none) */
+    /* version 7, CBPAL_CLIP_TIMED (else 0): the grid's steps over the clip, cells per second of clip
+     * time, and the map's rows (ceil(cells / row_texels), just before first_row). frames counts
+     * its rows, not the map's. Its instance numbers: (first_row, +-cells, -cell_rate x rate, phase). */
+    uint32_t cells, map_rows;
+    float cell_rate;
 } cbpal_clip;
 
 typedef struct cbpal_bone {
@@ -110,6 +122,13 @@ int cbpal_get_clip(const cbpal_file *file, uint32_t index, cbpal_clip *out);
 int cbpal_get_bone(const cbpal_file *file, uint32_t index, cbpal_bone *out);
 /* Texel coordinates of a bone's first texel in a baked row (rows wrap into column blocks). */
 void cbpal_texel_xy(const cbpal_header *h, uint32_t row, uint32_t bone, uint32_t *x, uint32_t *y);
+/* Cell `cell` of a timed clip's map: the rows it blends relative to first_row (r0, r1) and the
+ * weights at the cell's start and end (f0, f1). Non-zero for an untimed clip or a cell >= cells. */
+int cbpal_timed_map(const cbpal_file *file, uint32_t clip, uint32_t cell, float out[4]);
+/* The two rows a clip shows `time` seconds into it and the weight of the second, as every runtime
+ * picks them (loops wrap, one-shots clamp; held rows not blended; a timed clip through its map).
+ * Non-zero for a clip that does not exist or a time that is not finite. */
+int cbpal_clip_frame(const cbpal_file *file, uint32_t clip, double time, uint32_t *row0, uint32_t *row1, float *fr);
 /* The bone's skinning matrix (column-major 4x4: the glTF joint matrix, bind space to the posed
  * model) `time` seconds into the clip (loops wrap, one-shots clamp), the two rows blended as the
  * shipped GLSL blends them (a CBPAL_CLIP_STEP clip's row held, not blended). Attach a prop by composing it with the prop's bind-space transform.
@@ -321,6 +340,7 @@ static void cbpal__parse_header(const unsigned char *d, cbpal_header *h)
     h->offset_table_offset = h->version >= 3 ? cbpal__u64(d + 184) : 0;
     h->travel_table_offset = h->version >= 5 && (h->flags & CBPAL_FLAG_ROW_TRAVEL) ? cbpal__u64(d + 192) : 0;
     h->range_table_offset = h->version >= 6 && (h->flags & CBPAL_FLAG_LOCAL_ROWS) ? cbpal__u64(d + 200) : 0;
+    h->timed_table_offset = h->version >= 7 && (h->flags & CBPAL_FLAG_TIMED_ROWS) ? cbpal__u64(d + 208) : 0;
 }
 
 static int cbpal__check_string(const cbpal_header *h, const unsigned char *d, uint32_t off, uint32_t len)
@@ -347,6 +367,52 @@ static int cbpal__validate_local(const unsigned char *d, size_t size, const cbpa
             ok = ok && isfinite(cbpal__f32(d + at + 4 * k)) && (k > 2 || cbpal__f32(d + at + 4 * k) <= cbpal__f32(d + at + 16 + 4 * k));
         if (!ok) return cbpal__fail(err, es, "bone %u's range (at %llu): not finite, min > max, scale_max <= 0 or reserved not 0",
                                     i, (unsigned long long)at);
+    }
+    return 0;
+}
+
+/* Timed rows (flag bit 6): version 7 and a timed clip table inside the file. */
+static int cbpal__validate_timed_table(size_t size, const cbpal_header *h, char *err, size_t es)
+{
+    if (!(h->flags & CBPAL_FLAG_TIMED_ROWS)) return 0;
+    if (h->version < 7) return cbpal__fail(err, es, "flag bit 6 (timed rows) in a version %u file; timed rows are v7", h->version);
+    uint64_t at = h->timed_table_offset;
+    if (!cbpal__fits(at, h->clip_count, CBPAL_TIMED_SIZE, size) || at < CBPAL_HEADER_SIZE || at % 4)
+        return cbpal__fail(err, es, "timed clip table (offset %llu, %u clips) lies outside the file; the file is truncated "
+                           "or corrupt: re-bake it", (unsigned long long)at, h->clip_count);
+    return 0;
+}
+
+/* Every clip: clip flag bit 3 if and only if a timed table entry is nonzero; a timed one's cells
+ * >= 1, cell_rate > 0 and finite, map_rows = ceil(cells / row_texels) <= first_row, reserved 0.
+ * Its map's texels are checked once the texels are at hand (cbpal__validate_maps). Called after
+ * the table's place and the clips' names were checked. */
+static int cbpal__validate_timed(const unsigned char *d, const cbpal_header *h, char *err, size_t es)
+{
+    for (uint32_t i = 0; !(h->flags & CBPAL_FLAG_TIMED_ROWS) && i < h->clip_count; ++i) {
+        const unsigned char *c = d + h->clip_table_offset + (uint64_t)i * CBPAL_CLIP_SIZE;
+        if (cbpal__u32(c + 28) & CBPAL_CLIP_TIMED)
+            return cbpal__fail(err, es, "clip %u (%s) is marked timed (clip flag bit 3) in a file without timed rows "
+                               "(header flag bit 6); the file is corrupt: re-bake it", i, (const char *)d + h->strings_offset + cbpal__u32(c));
+    }
+    if (!(h->flags & CBPAL_FLAG_TIMED_ROWS)) return 0;
+    uint64_t at = h->timed_table_offset;
+    for (uint32_t i = 0; i < h->clip_count; ++i, at += CBPAL_TIMED_SIZE) {
+        const unsigned char *c = d + h->clip_table_offset + (uint64_t)i * CBPAL_CLIP_SIZE, *e = d + at;
+        const char *name = (const char *)d + h->strings_offset + cbpal__u32(c);
+        uint32_t cells = cbpal__u32(e), map_rows = cbpal__u32(e + 8), first = cbpal__u32(c + 8);
+        float rate = cbpal__f32(e + 4);
+        int timed = (cbpal__u32(c + 28) & CBPAL_CLIP_TIMED) != 0;
+        int entry = cells || cbpal__u32(e + 4) || map_rows || cbpal__u32(e + 12);
+        uint64_t want = ((uint64_t)cells + h->row_texels - 1) / h->row_texels;
+        if (timed != entry)
+            return cbpal__fail(err, es, "clip %u (%s): clip flag bit 3 (timed) is %s but its timed table entry is %s; the file "
+                               "is corrupt: re-bake it", i, name, timed ? "set" : "clear", entry ? "not 0" : "0");
+        if (timed && (cells == 0 || !(rate > 0) || !isfinite(rate) || cbpal__u32(e + 12) != 0 || map_rows != want ||
+                      map_rows > first))
+            return cbpal__fail(err, es, "clip %u (%s): bad timed entry (cells %u, cell_rate %g, map_rows %u for ceil(cells / "
+                               "%u) = %llu, first row %u); the file is corrupt: re-bake it", i, name, cells, (double)rate,
+                               map_rows, h->row_texels, (unsigned long long)want, first);
     }
     return 0;
 }
@@ -396,7 +462,7 @@ static int cbpal__validate(const unsigned char *d, size_t size, cbpal_header *h,
         (!cbpal__fits(h->travel_table_offset, h->rows, 4, size) || h->travel_table_offset < CBPAL_HEADER_SIZE))
         return cbpal__fail(err, es, "travel offset table (offset %llu, %u rows) lies outside the file",
                            (unsigned long long)h->travel_table_offset, h->rows);
-    if (cbpal__validate_local(d, size, h, err, es)) return -1;
+    if (cbpal__validate_local(d, size, h, err, es) || cbpal__validate_timed_table(size, h, err, es)) return -1;
     if (!cbpal__fits(h->strings_offset, h->strings_size, 1, size) || h->strings_offset < CBPAL_HEADER_SIZE)
         return cbpal__fail(err, es, "string table lies outside the file");
     if (h->payload_offset % CBPAL_PAYLOAD_ALIGN || !cbpal__fits(h->payload_offset, h->payload_size, 1, size) ||
@@ -420,6 +486,7 @@ static int cbpal__validate(const unsigned char *d, size_t size, cbpal_header *h,
         if (!cbpal__check_string(h, d, cbpal__u32(b), cbpal__u32(b + 4)) || parent < -1 || parent >= (int32_t)h->bone_count)
             return cbpal__fail(err, es, "bone %u has a bad name or parent", i);
     }
+    if (cbpal__validate_timed(d, h, err, es)) return -1;
     if ((h->flags & CBPAL_FLAG_LOCAL_ROWS) && cbpal__parent_cycle(d, h))
         return cbpal__fail(err, es, "local rows: bone %u is its own ancestor (the bone table's parents form a cycle)",
                            cbpal__parent_cycle(d, h) - 1);
@@ -437,6 +504,43 @@ static uint64_t cbpal__checksum(const unsigned char *d, uint64_t end)
     return cbpal_xxh64_digest(&s);
 }
 
+static float cbpal__half(uint16_t h); /* crowdbake_pal_runtime.h */
+
+/* Texel `cell` of a timed clip's map (rows first_row - map_rows on), decoded: (r0, r1, f0, f1). */
+static void cbpal__map_texel(const cbpal_file *f, uint32_t first_row, uint32_t map_rows, uint32_t cell, float v[4])
+{
+    const cbpal_header *h = &f->header;
+    uint32_t x, y, k = cell % h->row_texels;
+    cbpal_texel_xy(h, first_row - map_rows + cell / h->row_texels, 0, &x, &y);
+    const unsigned char *t = (const unsigned char *)f->texels + ((size_t)y * h->width + x + k) * h->texel_bytes;
+    for (int i = 0; i < 4; ++i) {
+        uint16_t u = (uint16_t)(t[2 * i] | t[2 * i + 1] << 8);
+        if (h->precision == CBPAL_PRECISION_FLOAT) v[i] = cbpal__f32(t + 4 * i);
+        else v[i] = h->precision == CBPAL_PRECISION_HALF ? cbpal__half(u) : i < 2 ? (float)u : (float)u / 65535.0f;
+    }
+}
+
+/* Every timed clip's map: each cell's rows whole numbers below the clip's frames, its weights
+ * within [0, 1] with f0 <= f1. Needs the texels (decompressed). */
+static int cbpal__validate_maps(const cbpal_file *f, char *err, size_t es)
+{
+    for (uint32_t i = 0; f->header.timed_table_offset && i < f->header.clip_count; ++i) {
+        cbpal_clip c;
+        cbpal_get_clip(f, i, &c);
+        for (uint32_t cell = 0; c.cells && cell < c.cells; ++cell) {
+            float v[4];
+            cbpal__map_texel(f, c.first_row, c.map_rows, cell, v);
+            int ok = v[0] >= 0 && v[0] < (float)c.frames && v[0] == floorf(v[0]) && v[1] >= 0 && v[1] < (float)c.frames &&
+                     v[1] == floorf(v[1]) && v[2] >= 0 && v[2] <= v[3] && v[3] <= 1;
+            if (!ok)
+                return cbpal__fail(err, es, "clip %u (%s): its map's cell %u reads rows %g, %g and weights %g, %g (rows must be "
+                                   "whole and below its %u frames, weights 0 <= f0 <= f1 <= 1); the file is corrupt: re-bake it",
+                                   i, c.name, cell, (double)v[0], (double)v[1], (double)v[2], (double)v[3], c.frames);
+        }
+    }
+    return 0;
+}
+
 static int cbpal__attach(cbpal_file *f, unsigned flags, char *err, size_t es)
 {
     cbpal_header *h = &f->header;
@@ -447,7 +551,7 @@ static int cbpal__attach(cbpal_file *f, unsigned flags, char *err, size_t es)
     f->texels_size = (size_t)h->payload_raw_size;
     if (!(h->flags & CBPAL_FLAG_ZSTD)) {
         f->texels = payload;
-        return 0;
+        return cbpal__validate_maps(f, err, es);
     }
 #ifdef CBPAL_WITH_ZSTD
     void *out = malloc(f->texels_size ? f->texels_size : 1);
@@ -459,7 +563,7 @@ static int cbpal__attach(cbpal_file *f, unsigned flags, char *err, size_t es)
     }
     f->owned_ = out; /* replaces nothing: read() buffers are freed through map_ below */
     f->texels = out;
-    return 0;
+    return cbpal__validate_maps(f, err, es);
 #else
     return cbpal__fail(err, es, "payload is zstd-compressed; build the reader with CBPAL_WITH_ZSTD and -lzstd");
 #endif
@@ -562,6 +666,10 @@ int cbpal_get_clip(const cbpal_file *f, uint32_t i, cbpal_clip *out)
         out->bounds_max[k] = cbpal__f32(c + 56 + 4 * k);
         out->travel_heading[k] = f->header.travel_table_offset ? cbpal__f32(c + 68 + 4 * k) : 0.0f;
     }
+    const unsigned char *e = f->header.timed_table_offset ? f->data + f->header.timed_table_offset + (uint64_t)i * CBPAL_TIMED_SIZE : NULL;
+    out->cells = e ? cbpal__u32(e) : 0;
+    out->cell_rate = e ? cbpal__f32(e + 4) : 0.0f;
+    out->map_rows = e ? cbpal__u32(e + 8) : 0;
     return 0;
 }
 

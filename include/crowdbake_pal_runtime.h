@@ -53,10 +53,34 @@ static void cbpal__mix(const cbpal_file *f, uint32_t r0, uint32_t r1, float fr, 
     for (int i = 0; i < 4; ++i) t[i] = a[i] + ((flip ? -b[i] : b[i]) - a[i]) * fr;
 }
 
-/* The rows at `time` and the weight of the second, as the GLSL's cb_frame picks them: a
- * CBPAL_CLIP_STEP clip's row alone (weight 0 on the same row). */
-static int cbpal__frame(const cbpal_clip *c, double time, uint32_t *r0, uint32_t *r1, float *fr)
+/* A timed clip's rows at `time` (pal-format.md "Timed rows", as cb_runtime_frame_in): its cell on
+ * the grid, and the two rows and weights the map holds there, the weight linear within the cell. */
+static int cbpal__timed_frame(const cbpal_file *f, const cbpal_clip *c, double time, uint32_t *r0, uint32_t *r1, float *fr)
 {
+    double n = c->cells, u = time * c->cell_rate, cell;
+    float m[4];
+    if (!isfinite(u)) return -1;
+    if (c->flags & CBPAL_CLIP_LOOPS) {
+        u -= n * floor(u / n);
+        if (!(u >= 0 && u < n)) u = 0; /* rounding at the wrap */
+        cell = floor(u);
+    } else {
+        u = u < 0 ? 0 : u > n ? n : u;
+        cell = fmin(floor(u), n - 1);
+    }
+    cbpal__map_texel(f, c->first_row, c->map_rows, (uint32_t)cell, m);
+    int held = (c->flags & CBPAL_CLIP_STEP) != 0; /* the map's r0 alone */
+    *r0 = c->first_row + (uint32_t)m[0];
+    *r1 = held ? *r0 : c->first_row + (uint32_t)m[1];
+    *fr = held ? 0.0f : (float)(m[2] + (m[3] - m[2]) * (u - cell));
+    return 0;
+}
+
+/* The rows at `time` and the weight of the second, as the GLSL's cb_frame picks them: a
+ * CBPAL_CLIP_STEP clip's row alone (weight 0 on the same row); a timed clip's through its map. */
+static int cbpal__frame(const cbpal_file *f, const cbpal_clip *c, double time, uint32_t *r0, uint32_t *r1, float *fr)
+{
+    if (c->flags & CBPAL_CLIP_TIMED) return cbpal__timed_frame(f, c, time, r0, r1, fr);
     double frames = c->frames, fpos = time * c->fps, f0, f1;
     if (!isfinite(fpos)) return -1;
     if (c->flags & CBPAL_CLIP_LOOPS) fpos -= frames * floor(fpos / frames);
@@ -109,7 +133,7 @@ int cbpal_bone_matrix(const cbpal_file *f, uint32_t clip, double time, uint32_t 
     cbpal_bone b;
     uint32_t r0, r1, k;
     float fr, t[4][4] = {{0}}, p[3];
-    if (cbpal_get_clip(f, clip, &c) || cbpal_get_bone(f, bone, &b) || cbpal__frame(&c, time, &r0, &r1, &fr)) return -1;
+    if (cbpal_get_clip(f, clip, &c) || cbpal_get_bone(f, bone, &b) || cbpal__frame(f, &c, time, &r0, &r1, &fr)) return -1;
     if (f->header.range_table_offset) cbpal__composed(f, r0, r1, fr, bone, t); /* normalised below */
     for (k = 0; !f->header.range_table_offset && k < f->header.texels_per_bone; ++k) cbpal__mix(f, r0, r1, fr, bone, k, t[k]);
     memset(m, 0, 16 * sizeof *m), m[15] = 1.0f;
@@ -135,6 +159,20 @@ int cbpal_bone_matrix(const cbpal_file *f, uint32_t clip, double time, uint32_t 
     return 0;
 }
 
+int cbpal_timed_map(const cbpal_file *f, uint32_t clip, uint32_t cell, float out[4])
+{
+    cbpal_clip c;
+    if (cbpal_get_clip(f, clip, &c) || !(c.flags & CBPAL_CLIP_TIMED) || cell >= c.cells) return -1;
+    cbpal__map_texel(f, c.first_row, c.map_rows, cell, out);
+    return 0;
+}
+
+int cbpal_clip_frame(const cbpal_file *f, uint32_t clip, double time, uint32_t *row0, uint32_t *row1, float *fr)
+{
+    cbpal_clip c;
+    return cbpal_get_clip(f, clip, &c) || cbpal__frame(f, &c, time, row0, row1, fr) ? -1 : 0;
+}
+
 float cbpal_row_travel(const cbpal_file *f, uint32_t row)
 {
     const cbpal_header *h = &f->header;
@@ -146,7 +184,7 @@ int cbpal_travel_offset(const cbpal_file *f, uint32_t clip, double time, float o
     cbpal_clip c;
     uint32_t r0, r1, k;
     float fr;
-    if (cbpal_get_clip(f, clip, &c) || cbpal__frame(&c, time, &r0, &r1, &fr)) return -1;
+    if (cbpal_get_clip(f, clip, &c) || cbpal__frame(f, &c, time, &r0, &r1, &fr)) return -1;
     float a = cbpal_row_travel(f, r0), o = a + (cbpal_row_travel(f, r1) - a) * fr;
     for (k = 0; k < 3; ++k) out[k] = o * c.travel_heading[k];
     return 0;

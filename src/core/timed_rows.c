@@ -12,6 +12,13 @@ uint32_t cb_timed_map_rows(uint32_t cells, uint32_t row_texels)
     return row_texels ? (uint32_t)(((uint64_t)cells + row_texels - 1) / row_texels) : 0;
 }
 
+const cb_palette_clip *cb_palette_timed_clip(const cb_palette *p)
+{
+    for (uint32_t c = 0; c < p->clip_count; ++c)
+        if (p->clips[c].timed) return &p->clips[c];
+    return NULL;
+}
+
 static unsigned char *map_texel(const cb_palette *p, const void *texels, uint32_t first_row, uint32_t cells,
                                 uint32_t cell)
 {

@@ -3,11 +3,17 @@
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
+#include <math.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include "crowdbake_pal.h"
+#include "crowdbake/babylon.h"
 #include "crowdbake/exr.h"
+#include "crowdbake/ktx2.h"
+#include "crowdbake/pal_view.h"
+#include "crowdbake/runtime.h"
+#include "timed_subset.h"
 
 #define TMP TEST_TMP "/pal_file"
 
@@ -243,6 +249,174 @@ static void test_local_corruption_is_rejected(void **state)
     free(good), free(d);
 }
 
+/* Fox baked uniform at 30 fps with `options`, its Walk and Run made timed (timed_subset.h: rows kept
+ * at intervals of 1, 2 and 3 cells), Survey left untimed, written by the library's writer to `out`.
+ * The uniform file stays open in *uniform and its view in *view (timed borrows them): the caller closes them. */
+static void write_timed_fox(const char *options, const char *out, cbpal_file *uniform, cb_palette *view, cb_palette *timed)
+{
+    char fox[1024], err[256];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    bake(fox, TMP "/uniform.pal", options);
+    if (cbpal_open(TMP "/uniform.pal", CBPAL_VERIFY_CHECKSUM, uniform, err, sizeof err)) fail_msg("%s", err);
+    cb_error e = {0};
+    assert_int_equal(cb_palette_view(uniform, view, &e), CB_OK);
+    cb_model *m = load_or_fail(fox);
+    assert_true(timed_subset_make(uniform, view, 0, 0, timed)); /* borrows the view's bones */
+    if (timed_subset_write(out, timed, uniform, m, &e)) fail_msg("%s", e.message);
+    cb_model_free(m);
+}
+
+/* Timed rows (version 7): written only with a timed clip, read back with the same texels and clip
+ * fields, the frame the reader picks the C runtime's (cb_runtime_frame_in) at every time, and the
+ * kept rows' matrices and travel offsets the uniform file's at their cells. */
+static void test_timed_rows_round_trip(void **state)
+{
+    (void)state;
+    static const char *const variants[] = {"--precision half", "--precision u16 --layout qpos", "--precision float --layout mat4"};
+    for (size_t v = 0; v < COUNT_OF(variants); ++v) {
+        cbpal_file uni, f;
+        cb_palette t, view, uview;
+        cb_error e = {0};
+        char err[256];
+        write_timed_fox(variants[v], TMP "/timed.pal", &uni, &uview, &t);
+        if (cbpal_open(TMP "/timed.pal", CBPAL_VERIFY_CHECKSUM, &f, err, sizeof err)) fail_msg("%s", err);
+        assert_int_equal(uni.header.version, 5); /* Fox's travel offsets */
+        assert_int_equal(f.header.version, 7);
+        assert_true((f.header.flags & CBPAL_FLAG_TIMED_ROWS) && f.header.timed_table_offset >= CBPAL_HEADER_SIZE);
+        assert_true(f.header.travel_table_offset != 0);
+        assert_int_equal(f.texels_size, t.texel_bytes);
+        assert_memory_equal(f.texels, t.texels, t.texel_bytes);
+        assert_int_equal(cb_palette_view(&f, &view, &e), CB_OK);
+        double worst = 0, worst_travel = 0, h = f.header.model_height;
+        for (uint32_t c = 0; c < f.header.clip_count; ++c) {
+            cbpal_clip clip, u;
+            cbpal_get_clip(&f, c, &clip), cbpal_get_clip(&uni, c, &u);
+            const cb_palette_clip *vc = &view.clips[c];
+            assert_int_equal(!!(clip.flags & CBPAL_CLIP_TIMED), c != 0);
+            assert_int_equal(vc->timed, c != 0);
+            assert_int_equal(clip.cells, t.clips[c].cells);
+            assert_int_equal(vc->cells, t.clips[c].cells);
+            assert_int_equal(vc->map_rows, t.clips[c].map_rows);
+            assert_true(vc->cell_rate == (float)t.clips[c].cell_rate);
+            assert_int_equal(clip.frames, t.clips[c].frames);
+            cb_instance in = cb_instance_of(vc);
+            double step = 1 / (7.0 * (vc->timed ? vc->cell_rate : vc->fps));
+            for (double time = -0.2; time < vc->duration + 0.3; time += step) {
+                uint32_t a0, a1, b0, b1;
+                double afr;
+                float bfr;
+                cb_runtime_frame_in(&view, f.texels, &in, time, &a0, &a1, &afr);
+                assert_int_equal(cbpal_clip_frame(&f, c, time, &b0, &b1, &bfr), 0);
+                assert_int_equal(a0, b0);
+                assert_int_equal(a1, b1);
+                assert_true(fabs(afr - bfr) < 1e-6);
+            }
+            uint32_t kept[512];
+            uint32_t n = vc->timed ? timed_subset_cells(vc->cells, vc->loops, kept) : 0;
+            for (uint32_t k = 0; k < n; ++k) { /* row k of a timed clip is the uniform row at its cell */
+                double time = kept[k] / vc->cell_rate;
+                float a[16], b[16], ta[3], tb[3];
+                for (uint32_t j = 0; j < f.header.bone_count; ++j) {
+                    assert_int_equal(cbpal_bone_matrix(&f, c, time, j, a), 0);
+                    assert_int_equal(cbpal_bone_matrix(&uni, c, time, j, b), 0);
+                    for (int i = 0; i < 16; ++i) worst = fmax(worst, fabs(a[i] - b[i]) * (i % 4 == 3 ? 1 : h));
+                }
+                assert_int_equal(cbpal_travel_offset(&f, c, time, ta), 0);
+                assert_int_equal(cbpal_travel_offset(&uni, c, time, tb), 0);
+                for (int i = 0; i < 3; ++i) worst_travel = fmax(worst_travel, fabs(ta[i] - tb[i]));
+            }
+            (void)u;
+        }
+        printf("  %s: timed rows against the uniform ones at their cells: matrices %.3g, travel %.3g (height %.3g)\n",
+               variants[v], worst, worst_travel, h);
+        assert_true(worst < 1e-4 * h && worst_travel < 1e-4 * h);
+        /* Only a .pal holds timed rows. */
+        cb_babylon_write_options bo = {0};
+        const char *other[] = {TMP "/timed.exr", TMP "/timed.ktx2", TMP "/timed.babylon"};
+        for (int i = 0; i < 3; ++i) {
+            e = (cb_error){0};
+            cb_status rc = i == 0   ? cb_exr_write(other[i], &t, NULL, 0, 0, 0, 0, &e)
+                           : i == 1 ? cb_ktx2_write(other[i], &t, NULL, 0, 0, 0, false, &e)
+                                    : cb_babylon_write(other[i], &t, NULL, 0, &bo, &e);
+            assert_int_not_equal(rc, CB_OK);
+            if (v != 1 || i == 2) assert_non_null(strstr(e.message, "timed rows need a .pal")); /* EXR, KTX2 refuse u16 first */
+            assert_int_not_equal(access(other[i], F_OK), 0);
+        }
+        cb_palette_view_free(&view), cb_palette_view_free(&uview);
+        timed_subset_free(&t);
+        cbpal_close(&f), cbpal_close(&uni);
+    }
+}
+
+/* The checksum of a copy whose bytes were changed on purpose, so the reader's own checks speak. */
+static void fix_checksum(unsigned char *d)
+{
+    uint64_t end = rd64(d + 152) + rd64(d + 160);
+    wr64(d + CBPAL_CHECKSUM_OFFSET, 0);
+    wr64(d + CBPAL_CHECKSUM_OFFSET, cbpal_xxh64(d, (size_t)end));
+}
+
+/* Timed rows' tables and maps, each fault refused with a one-line message naming the clip. */
+static void test_timed_corruption_is_rejected(void **state)
+{
+    (void)state;
+    cbpal_file uni, f;
+    cb_palette t, uview;
+    char err[256];
+    write_timed_fox("--precision float --layout qpos", TMP "/timed.pal", &uni, &uview, &t);
+    size_t size;
+    unsigned char *good = read_all(TMP "/timed.pal", &size), *d = malloc(size);
+    assert_null(reader_error(good, size, err, sizeof err));
+    assert_int_equal(cbpal_open_memory(good, size, 0, &f, err, sizeof err), 0);
+    uint64_t table = rd64(good + 208), clips = rd64(good + 120), payload = rd64(good + 152);
+    cbpal_clip walk;
+    cbpal_get_clip(&f, 1, &walk);
+    uint32_t x, y;
+    cbpal_texel_xy(&f.header, walk.first_row - walk.map_rows, 0, &x, &y);
+    uint64_t map = payload + ((uint64_t)y * f.header.width + x) * 16 + 16 * 6; /* Walk's cell 6: rows kept at cells 5 and 8 */
+    uint64_t walk_entry = table + 16, walk_flags = clips + CBPAL_CLIP_SIZE + 28;
+    uint32_t flags = (uint32_t)good[walk_flags];
+    struct { uint64_t at; uint32_t value; int width; const char *needle, *what; } cases[] = {
+        {208, 0, 8, "timed clip table", "table offset 0"},
+        {208, 100, 8, "timed clip table", "table in the header"},
+        {208, (uint32_t)size - 8, 8, "timed clip table", "table past the end"},
+        {8, 6, 4, "flag bit 6 (timed rows) in a version 6 file", "bit 6 in a version 6 file"},
+        {walk_entry, 0, 4, "bad timed entry", "cells 0"},
+        {walk_entry + 4, 0x7fc00000u, 4, "bad timed entry", "cell rate NaN"},
+        {walk_entry + 4, 0xbf800000u, 4, "bad timed entry", "cell rate -1"},
+        {walk_entry + 8, walk.map_rows + 1, 4, "bad timed entry", "map rows one too many"},
+        {walk_entry + 12, 1, 4, "bad timed entry", "reserved word not 0"},
+        {clips + CBPAL_CLIP_SIZE + 8, walk.map_rows - 1, 4, "bad timed entry", "map rows before row 0"},
+        {walk_flags, flags & ~(uint32_t)CBPAL_CLIP_TIMED, 4, "clip flag bit 3", "timed entry, clip flag clear"},
+        {clips + 28, (uint32_t)good[clips + 28] | CBPAL_CLIP_TIMED, 4, "clip flag bit 3", "clip flag set, entry 0"},
+        {12, (uint32_t)rd64(good + 12) & ~(uint32_t)CBPAL_FLAG_TIMED_ROWS, 4, "without timed rows", "header flag clear"},
+        {map, 0x447a0000u, 4, "its map's cell 6", "map row 1000"},
+        {map, 0x3fc00000u, 4, "its map's cell 6", "map row 1.5"},
+        {map + 4, 0xbf800000u, 4, "its map's cell 6", "map row -1"},
+        {map + 8, 0x3fc00000u, 4, "its map's cell 6", "weight 1.5"},
+        {map + 8, 0x7fc00000u, 4, "its map's cell 6", "weight NaN"},
+        {map + 12, 0, 4, "its map's cell 6", "f1 below f0"},
+    };
+    for (size_t i = 0; i < COUNT_OF(cases); ++i) {
+        memcpy(d, good, size);
+        if (cases[i].width == 8) wr64(d + cases[i].at, cases[i].value);
+        else wr32(d + cases[i].at, cases[i].value);
+        fix_checksum(d);
+        expect_rejected(d, size, cases[i].needle, cases[i].what);
+        const char *msg = reader_error(d, size, err, sizeof err);
+        assert_null(strchr(msg, '\n'));
+        bool files = strstr(cases[i].needle, "timed clip table") || strstr(cases[i].needle, "version");
+        if (!files && !strstr(msg, "Walk") && !strstr(msg, "Survey")) fail_msg("%s: '%s' names no clip", cases[i].what, msg);
+        if (!files && !strstr(msg, "re-bake")) fail_msg("%s: '%s' says no fix", cases[i].what, msg);
+    }
+    /* Truncated inside the timed table: the table lies outside the file before anything is read. */
+    for (uint64_t cut = table; cut < table + 3 * 16; cut += 7) expect_rejected(good, (size_t)cut, "outside the file", "truncated");
+    timed_subset_free(&t);
+    cb_palette_view_free(&uview);
+    cbpal_close(&f), cbpal_close(&uni);
+    free(good), free(d);
+}
+
 static void test_zstd_payload_reads_back_identical(void **state)
 {
     (void)state;
@@ -323,6 +497,8 @@ int main(void)
         cmocka_unit_test(test_u16_is_refused_for_exr),
         cmocka_unit_test(test_corruption_is_rejected),
         cmocka_unit_test(test_local_corruption_is_rejected),
+        cmocka_unit_test(test_timed_rows_round_trip),
+        cmocka_unit_test(test_timed_corruption_is_rejected),
         cmocka_unit_test(test_zstd_payload_reads_back_identical),
         cmocka_unit_test(test_inspect_frame_matches_sample),
         cmocka_unit_test(test_failed_bake_leaves_no_file_and_keeps_the_old_one),
