@@ -8,6 +8,8 @@
 #include "testutil.h"
 
 #include "runtimes/bone_order.h"
+#include "crowdbake/pal_view.h"
+#include "timed_subset.h"
 
 #define TMP TEST_TMP "/unreal_reader"
 #define SRC "runtimes/unreal/Crowdbake/Source/Crowdbake"
@@ -55,6 +57,41 @@ static void test_reader_and_herd_equal_the_c_reader(void **state)
             if (!strstr(log, "CB_LOCAL_ROWS=1")) fail_msg("local rows: no CB_LOCAL_ROWS=1 define: %s", log);
         }
     }
+}
+
+/* Timed rows (.pal version 7): Fox baked uniform, Walk and Run made timed (timed_subset.h: rows kept at intervals
+ * of 1, 2 and 3 cells, their maps before them), Survey left uniform. The plugin's clip table carries cells and
+ * cell_rate, its herd's states of the timed clips carry -cell_rate, and its bone matrices (mid-fade and after,
+ * through its instance numbers) equal the C reader's, which follows the map; SetSpeed keeps the sign and the cell. */
+static void test_timed_rows(void **state)
+{
+    (void)state;
+    static char log[8192];
+    static const char *const variants[] = {"--precision half", "--precision u16 --layout qpos", "--precision float --layout mat4",
+                                           "--precision u16 --layout affine --max-texture-size 200"};
+    char fox[1024], cmd[4096], err[256];
+    build_reader_check();
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    cb_model *m = load_or_fail(fox);
+    for (size_t v = 0; v < COUNT_OF(variants); ++v) {
+        snprintf(cmd, sizeof cmd, "%s bake %s -o %s/uniform.pal --fps 30 -q %s 2>&1", crowdbake_exe(), fox, TMP, variants[v]);
+        run_or_fail(cmd, log, sizeof log);
+        cbpal_file uniform;
+        cb_palette view, timed;
+        cb_error e = {0};
+        if (cbpal_open(TMP "/uniform.pal", CBPAL_VERIFY_CHECKSUM, &uniform, err, sizeof err)) fail_msg("%s", err);
+        assert_int_equal(cb_palette_view(&uniform, &view, &e), CB_OK);
+        assert_true(timed_subset_make(&uniform, &view, 0, v == 3 ? 200 : 0, &timed));
+        if (timed_subset_write(TMP "/timed.pal", &timed, &uniform, m, &e)) fail_msg("%s", e.message);
+        timed_subset_free(&timed);
+        cb_palette_view_free(&view);
+        cbpal_close(&uniform);
+        snprintf(cmd, sizeof cmd, "%s/reader_check %s/timed.pal 2>&1", TMP, TMP);
+        run_or_fail(cmd, log, sizeof log);
+        printf("  Fox timed %s: %s", variants[v], strstr(log, ": ") ? strstr(log, ": ") + 2 : log);
+        if (!strstr(log, "(2 timed)")) fail_msg("expected 2 timed clips: %s", log);
+    }
+    cb_model_free(m);
 }
 
 /* Local rows whose every parent comes after its children (runtimes/bone_order.h): the reader's bind
@@ -149,6 +186,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reader_and_herd_equal_the_c_reader),
         cmocka_unit_test(test_parents_after_children),
+        cmocka_unit_test(test_timed_rows),
         cmocka_unit_test(test_herd_footsteps_and_travel),
         cmocka_unit_test(test_bad_file_message),
         cmocka_unit_test(test_vertex_ids_and_skin_texture),

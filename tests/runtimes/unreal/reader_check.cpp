@@ -30,15 +30,18 @@ int Fail(const char *what)
 }
 
 // The C reader's matrix for the state of clip `c` entered by instance i at `start`, at `now`: a loop
-// spread by the golden ratio, a one-shot from its first row at `start` (docs/roster.md).
+// spread by the golden ratio, a one-shot from its first row at `start` (docs/roster.md). A timed clip
+// (version 7) counts cells at cell_rate instead of rows at fps; cbpal_bone_matrix follows its map.
 void Expected(const cbpal_file &pal, uint32_t c, int i, double start, double now, uint32_t bone, float m[16])
 {
     cbpal_clip clip;
     cbpal_get_clip(&pal, c, &clip);
+    bool timed = (clip.flags & CBPAL_CLIP_TIMED) != 0;
+    double fps = timed ? clip.cell_rate : clip.fps, frames = timed ? clip.cells : clip.frames;
     double golden = i * 0.6180339887;
-    double phase = (clip.flags & CBPAL_CLIP_LOOPS) ? golden - std::floor(golden) : -start * clip.fps / clip.frames;
-    double rows = now * (double)clip.fps + (double)(float)phase * clip.frames;
-    cbpal_bone_matrix(&pal, c, rows / clip.fps, bone, m);
+    double phase = (clip.flags & CBPAL_CLIP_LOOPS) ? golden - std::floor(golden) : -start * fps / frames;
+    double rows = now * fps + (double)(float)phase * frames;
+    cbpal_bone_matrix(&pal, c, rows / fps, bone, m);
 }
 } // namespace
 
@@ -97,8 +100,10 @@ void ExpectedTravel(const cbpal_file &pal, const float inst[4], double now, floa
     for (uint32_t c = 0; c < pal.header.clip_count; ++c) {
         cbpal_clip clip;
         cbpal_get_clip(&pal, c, &clip);
-        if (clip.first_row != (uint32_t)inst[0] || clip.frames != (uint32_t)std::fabs(inst[1])) continue;
-        cbpal_travel_offset(&pal, c, (now * inst[2] + inst[3] * std::fabs((double)inst[1])) / clip.fps, out);
+        bool timed = (clip.flags & CBPAL_CLIP_TIMED) != 0;
+        if (clip.first_row != (uint32_t)inst[0] || (timed ? clip.cells : clip.frames) != (uint32_t)std::fabs(inst[1])) continue;
+        cbpal_travel_offset(&pal, c, (now * std::fabs(inst[2]) + inst[3] * std::fabs((double)inst[1])) / (timed ? clip.cell_rate : clip.fps),
+                            out);
     }
 }
 
@@ -216,7 +221,8 @@ int main(int argc, char **argv)
         cbpal_get_clip(&pal, c, &clip);
         const crowdbake::PalClipInfo &x = pc.clips[c];
         if (x.name != clip.name || x.first_row != clip.first_row || x.frames != clip.frames || x.fps != clip.fps ||
-            x.loops != ((clip.flags & CBPAL_CLIP_LOOPS) != 0))
+            x.loops != ((clip.flags & CBPAL_CLIP_LOOPS) != 0) || x.timed != ((clip.flags & CBPAL_CLIP_TIMED) != 0) ||
+            x.cells != clip.cells || x.cell_rate != clip.cell_rate)
             return Fail("clip table differs");
     }
     // A herd: instance i in the state of clip i % clips; half of them cross-fade into the next clip.
@@ -244,15 +250,18 @@ int main(int argc, char **argv)
             }
     // SetSpeed keeps the frame: the row position before and after are the same.
     const float *d = herd.CustomData(1);
-    double before = 1.7 * d[2] + d[3] * std::fabs((double)d[1]);
+    double before = 1.7 * std::fabs(d[2]) + d[3] * std::fabs((double)d[1]); // |rate|: a timed clip's is negative
     herd.SetSpeed(1, 2.5f, 1.7);
     d = herd.CustomData(1);
-    double after = 1.7 * d[2] + d[3] * std::fabs((double)d[1]), frames = std::fabs((double)d[1]);
+    double after = 1.7 * std::fabs(d[2]) + d[3] * std::fabs((double)d[1]), frames = std::fabs((double)d[1]);
     double drift = std::fmod(std::fabs(before - after), frames);
     drift = std::fmin(drift, frames - drift);
     cbpal_close(&pal);
-    std::printf("%s: texels, bind positions, %zu clips equal; %u herd matrices (%u mid-fade) worst %.3g; SetSpeed drift %.3g rows; "
-                "defines %s %s%s\n", argv[1], pc.clips.size(), matrices, faded, worst, drift, pc.defines[0].c_str(), pc.defines[1].c_str(),
+    unsigned timed = 0;
+    for (const crowdbake::PalClipInfo &x : pc.clips) timed += x.timed;
+    if (timed && (herd.CustomData(1)[2] < 0) != pc.clips[1 % pc.clips.size()].timed) return Fail("SetSpeed lost a timed clip's sign");
+    std::printf("%s: texels, bind positions, %zu clips (%u timed) equal; %u herd matrices (%u mid-fade) worst %.3g; SetSpeed drift %.3g rows; "
+                "defines %s %s%s\n", argv[1], pc.clips.size(), timed, matrices, faded, worst, drift, pc.defines[0].c_str(), pc.defines[1].c_str(),
                 local ? " CB_LOCAL_ROWS=1" : "");
     return worst <= 1e-6 && drift < 1e-3 && faded > 0 ? 0 : Fail("herd matrices or SetSpeed differ");
 }
