@@ -97,7 +97,9 @@ namespace Crowdbake
                     throw new PalException("checksum mismatch: the file is corrupted");
                 if ((h.Flags & FlagZstd) != 0)
                     throw new PalException("payload is zstd-compressed, which this reader does not decompress; bake it again without --zstd");
-                return new PalFile(bytes, h);
+                var pal = new PalFile(bytes, h);
+                pal.ValidateMaps(); // the texels at hand, after the checksum (include/crowdbake_pal.h's order)
+                return pal;
             } catch (PalException e) {
                 throw new PalException(name + ": " + e.Message);
             }
@@ -211,8 +213,8 @@ namespace Crowdbake
                 if (!CheckString(h, d, U32(d, b), U32(d, b + 4)) || parent < -1 || parent >= (int)h.BoneCount)
                     throw Fail("bone " + i + " has a bad name or parent");
             }
-            ValidateParents(h, d);
             ValidateTimedClips(h, d);
+            ValidateParents(h, d);
             return h;
         }
 

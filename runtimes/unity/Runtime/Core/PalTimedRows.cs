@@ -53,54 +53,76 @@ namespace Crowdbake
             return true;
         }
 
-        // The timed clip table (flag bit 6, header offset 208): version 7, inside the file before the payload,
-        // clip_count entries of 16 bytes.
+        // C's %g of a float, for messages equal to the C reader's word for word.
+        static string G(double v)
+        {
+            return v.ToString("G6", System.Globalization.CultureInfo.InvariantCulture).Replace("E", "e");
+        }
+
+        static string NameOf(PalHeader h, byte[] d, ulong clipAt)
+        {
+            ulong at = h.StringsOffset + U32(d, clipAt);
+            int end = (int)at;
+            while (end < d.Length && d[end] != 0) ++end;
+            return System.Text.Encoding.UTF8.GetString(d, (int)at, end - (int)at);
+        }
+
+        // The timed clip table (flag bit 6, header offset 208): version 7, clip_count entries of 16 bytes inside the
+        // file (cbpal__validate_timed_table).
         static void ValidateTimedTable(PalHeader h, byte[] d)
         {
             if ((h.Flags & FlagTimedRows) == 0) return;
             if (h.Version < 7) throw Fail("flag bit 6 (timed rows) in a version " + h.Version + " file; timed rows are v7");
             ulong at = h.TimedTableOffset;
-            if (!Fits(at, h.ClipCount, TimedEntryBytes, h.PayloadOffset) || at < HeaderBytes || at % 4 != 0)
-                throw Fail("timed clip table (offset " + at + ", " + h.ClipCount + " clips) lies outside the file");
+            if (!Fits(at, h.ClipCount, TimedEntryBytes, (ulong)d.Length) || at < HeaderBytes || at % 4 != 0)
+                throw Fail("timed clip table (offset " + at + ", " + h.ClipCount + " clips) lies outside the file; the file is truncated " +
+                           "or corrupt: re-bake it");
         }
 
-        // Each clip's entry: clip flag bit 3 <=> a nonzero entry, cells >= 1, cell_rate > 0 and finite,
-        // map_rows = ceil(cells / row_texels) <= first_row, reserved 0; then (uncompressed payloads) every map
-        // texel's rows below the clip's frames and weights within [0, 1] with f0 <= f1.
+        // Each clip (cbpal__validate_timed): clip flag bit 3 <=> a nonzero entry; a timed one's cells >= 1, cell_rate > 0
+        // and finite, reserved 0, map_rows = ceil(cells / row_texels) <= first_row.
         static void ValidateTimedClips(PalHeader h, byte[] d)
         {
-            for (uint i = 0; i < h.ClipCount; ++i) {
+            for (uint i = 0; (h.Flags & FlagTimedRows) == 0 && i < h.ClipCount; ++i) {
                 ulong c = h.ClipTableOffset + (ulong)i * ClipBytes;
-                bool timed = (U32(d, c + 28) & ClipTimed) != 0;
-                if ((h.Flags & FlagTimedRows) == 0) {
-                    if (timed) throw Fail("clip " + i + " is timed (clip flag bit 3) in a file without timed rows (flag bit 6)");
-                    continue;
-                }
-                ulong e = h.TimedTableOffset + (ulong)i * TimedEntryBytes;
+                if ((U32(d, c + 28) & ClipTimed) != 0)
+                    throw Fail("clip " + i + " (" + NameOf(h, d, c) + ") is marked timed (clip flag bit 3) in a file without timed rows " +
+                               "(header flag bit 6); the file is corrupt: re-bake it");
+            }
+            if ((h.Flags & FlagTimedRows) == 0) return;
+            for (uint i = 0; i < h.ClipCount; ++i) {
+                ulong c = h.ClipTableOffset + (ulong)i * ClipBytes, e = h.TimedTableOffset + (ulong)i * TimedEntryBytes;
                 uint cells = U32(d, e), mapRows = U32(d, e + 8), first = U32(d, c + 8);
                 float rate = F32(d, e + 4);
-                bool zero = cells == 0 && U32(d, e + 4) == 0 && mapRows == 0 && U32(d, e + 12) == 0;
-                if (!timed) {
-                    if (!zero) throw Fail("clip " + i + " is not timed but has a timed clip table entry");
-                    continue;
-                }
-                if (cells < 1 || !(rate > 0) || float.IsInfinity(rate) || mapRows != TimedMapRows(cells, h.RowTexels) ||
-                    mapRows > first || U32(d, e + 12) != 0)
-                    throw Fail("clip " + i + " has a bad timed entry (" + cells + " cells at " + rate + " a second, " + mapRows +
-                               " map rows before row " + first + ")");
-                if ((h.Flags & FlagZstd) == 0) ValidateMap(h, d, i, first, cells, U32(d, c + 12));
+                bool timed = (U32(d, c + 28) & ClipTimed) != 0;
+                bool entry = cells != 0 || U32(d, e + 4) != 0 || mapRows != 0 || U32(d, e + 12) != 0;
+                ulong want = ((ulong)cells + h.RowTexels - 1) / h.RowTexels;
+                if (timed != entry)
+                    throw Fail("clip " + i + " (" + NameOf(h, d, c) + "): clip flag bit 3 (timed) is " + (timed ? "set" : "clear") +
+                               " but its timed table entry is " + (entry ? "not 0" : "0") + "; the file is corrupt: re-bake it");
+                if (timed && (cells == 0 || !(rate > 0) || float.IsInfinity(rate) || U32(d, e + 12) != 0 || mapRows != want || mapRows > first))
+                    throw Fail("clip " + i + " (" + NameOf(h, d, c) + "): bad timed entry (cells " + cells + ", cell_rate " + G(rate) +
+                               ", map_rows " + mapRows + " for ceil(cells / " + h.RowTexels + ") = " + want + ", first row " + first +
+                               "); the file is corrupt: re-bake it");
             }
         }
 
-        static void ValidateMap(PalHeader h, byte[] d, uint clip, uint first, uint cells, uint frames)
+        // Every timed clip's map (cbpal__validate_maps, once the texels are at hand: after the checksum): each cell's
+        // rows whole and below the clip's frames, its weights 0 <= f0 <= f1 <= 1.
+        void ValidateMaps()
         {
             var m = new double[4];
-            for (uint cell = 0; cell < cells; ++cell) {
-                DecodeMapTexel(h, d, MapTexelAt(h, first, cells, cell), m);
-                if (!(m[0] >= 0 && m[0] < frames && m[1] >= 0 && m[1] < frames && m[0] == Math.Floor(m[0]) && m[1] == Math.Floor(m[1]) &&
-                      m[2] >= 0 && m[3] <= 1 && m[2] <= m[3]))
-                    throw Fail("clip " + clip + "'s map, cell " + cell + ": rows " + m[0] + ", " + m[1] + " of " + frames + ", weights " +
-                               m[2] + ".." + m[3]);
+            for (uint i = 0; i < Clips.Length; ++i) {
+                PalClip c = Clips[i];
+                for (uint cell = 0; c.Cells != 0 && cell < c.Cells; ++cell) {
+                    DecodeMapTexel(Header, data, MapTexelAt(Header, c.FirstRow, c.Cells, cell), m);
+                    for (int k = 0; k < 4; ++k) m[k] = (float)m[k]; // the C reader's floats
+                    if (!(m[0] >= 0 && m[0] < c.Frames && m[0] == Math.Floor(m[0]) && m[1] >= 0 && m[1] < c.Frames && m[1] == Math.Floor(m[1]) &&
+                          m[2] >= 0 && m[2] <= m[3] && m[3] <= 1))
+                        throw Fail("clip " + i + " (" + c.Name + "): its map's cell " + cell + " reads rows " + G(m[0]) + ", " + G(m[1]) +
+                                   " and weights " + G(m[2]) + ", " + G(m[3]) + " (rows must be whole and below its " + c.Frames +
+                                   " frames, weights 0 <= f0 <= f1 <= 1); the file is corrupt: re-bake it");
+                }
             }
         }
     }
