@@ -125,6 +125,11 @@ static void print_clip_table(const inspected *in)
             v[k] = fabs(c->root_velocity[k]) <= 1e-6 * fmax(scale, 1) ? 0 : c->root_velocity[k];
         printf("(%.4g, %.4g, %.4g), speed %.4g\n", v[0], v[1], v[2], sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
     }
+    for (uint32_t i = 0; i < p->clip_count; ++i) /* timed rows (.pal version 7): the grid and the map */
+        if (p->clips[i].timed)
+            printf("  %s: timed, %u rows on %u cells at %g cells/s (the map: %u row%s before row %u)\n", p->clips[i].name,
+                   p->clips[i].frames, p->clips[i].cells, (float)p->clips[i].cell_rate, p->clips[i].map_rows,
+                   p->clips[i].map_rows == 1 ? "" : "s", p->clips[i].first_row);
 }
 
 static void print_clips_json(cb_json *j, const cb_palette *p)
@@ -141,6 +146,12 @@ static void print_clips_json(cb_json *j, const cb_palette *p)
         cb_json_bool(j, "loops", c->loops);
         cb_json_bool(j, "fitted_rows", c->fitted);
         if (c->step) cb_json_bool(j, "step_rows", true); /* held, not blended (clip flag bit 2); absent: blended */
+        if (c->timed) { /* timed rows (clip flag bit 3); absent: uniform */
+            cb_json_bool(j, "timed_rows", true);
+            cb_json_int(j, "cells", c->cells);
+            cb_json_number(j, "cell_rate", (float)c->cell_rate);
+            cb_json_int(j, "map_rows", c->map_rows);
+        }
         cb_json_inline_array(j, "root_velocity");
         for (int k = 0; k < 3; ++k) cb_json_number(j, NULL, c->root_velocity[k]);
         cb_json_end(j);

@@ -224,11 +224,15 @@ static cb_status checksum(cb_atomic_file *f, const cb_palette *p, const unsigned
 }
 
 /* A timed clip as a reader accepts it (docs/pal-format.md "Timed rows"): its map rows before its
- * first row, cells and a rate; the map's texels are the bake's (timed_map_fill). */
+ * first row, cells and a rate, and in half floats rows its map can name exactly (integers to
+ * 2048); the map's texels are the bake's (timed_map_fill). */
 static cb_status check_timed(const char *path, const cb_palette *p, cb_error *err)
 {
     for (uint32_t c = 0; c < p->clip_count; ++c) {
         const cb_palette_clip *clip = &p->clips[c];
+        if (clip->timed && p->precision == CB_PRECISION_HALF && clip->frames > 2048)
+            return cb_fail(err, CB_ERR_INTERNAL, "%s: clip %s has %u timed rows, more than a half float map can name (2048): "
+                           "a bug in what built the palette", path, clip->name, clip->frames);
         if (clip->timed && (clip->cells == 0 || !(clip->cell_rate > 0) || clip->map_rows > clip->first_row ||
                             clip->map_rows != cb_timed_map_rows(clip->cells, p->row_texels)))
             return cb_fail(err, CB_ERR_INTERNAL, "%s: clip %s's timed rows are inconsistent (cells %u, cell rate %g, %u map "

@@ -60,6 +60,8 @@ static void fuzz_decode_palette(const cb_palette *p, const void *texels)
         /* as the roster starts it (a loop or a one-shot), at a few times: the game's numbers, not the file's */
         cb_instance in = {c->first_row, c->loops ? c->frames : -(double)c->frames, 30, 0.25};
         for (double t = 0.0; t < 40.0; t += 13.37) cb_runtime_matrices(p, texels, &in, t, matrices);
+        cb_instance own = cb_instance_of(c); /* a timed clip's through its map (the reader checked it) */
+        for (double t = -1.0; c->timed && t < 40.0; t += 7.77) cb_runtime_matrices(p, texels, &own, t, matrices);
         fuzz_sink += matrices[0];
     }
     free(matrices);

@@ -1,6 +1,7 @@
 /* fuzz_pal.c - libFuzzer target: the .pal reader (include/crowdbake_pal.h) on arbitrary bytes,
  * with and without checksum verification, then every table entry, every bone's matrix at a few
- * times in every clip (cbpal_bone_matrix) and its travel offset (cbpal_travel_offset), and the palette decoded as
+ * times in every clip (cbpal_bone_matrix), its travel offset (cbpal_travel_offset) and rows (cbpal_clip_frame, a timed
+ * clip's map: cbpal_timed_map), and the palette decoded as
  * `verify`, `view` and the runtimes decode it (cb_palette_view, fuzz_decode.h). */
 #include <stdint.h>
 
@@ -33,6 +34,20 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                     float m[16];
                     if (cbpal_bone_matrix(&f, i, times[t], j, m) == 0) sink += m[15] == 1.0f;
                 }
+        /* Version 7's timed clips: the rows each picks through its map, and every map texel. */
+        for (uint32_t i = 0; i < f.header.clip_count; ++i) {
+            cbpal_clip c;
+            cbpal_get_clip(&f, i, &c);
+            for (int t = 0; t < 3; ++t) {
+                uint32_t r0, r1;
+                float fr;
+                if (cbpal_clip_frame(&f, i, times[t], &r0, &r1, &fr) == 0) sink += r0 + r1 + (fr > 0.5f);
+            }
+            for (uint32_t cell = 0; cell < c.cells && cell < 4096; ++cell) {
+                float v[4];
+                if (cbpal_timed_map(&f, i, cell, v) == 0) sink += v[0] > 0;
+            }
+        }
         /* Version 5's travel offsets at the same times (a table the header may point anywhere). */
         for (uint32_t i = 0; i < f.header.clip_count; ++i)
             for (int t = 0; t < 3; ++t) {

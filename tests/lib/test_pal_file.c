@@ -342,6 +342,12 @@ static void test_timed_rows_round_trip(void **state)
             if (v != 1 || i == 2) assert_non_null(strstr(e.message, "timed rows need a .pal")); /* EXR, KTX2 refuse u16 first */
             assert_int_not_equal(access(other[i], F_OK), 0);
         }
+        /* The writer refuses a timed clip a reader would refuse. */
+        t.clips[1].map_rows += 1;
+        e = (cb_error){0};
+        assert_int_not_equal(cb_pal_write(TMP "/inconsistent.pal", &t, NULL, 0, &(cb_pal_write_options){0}, &e), CB_OK);
+        assert_non_null(strstr(e.message, "timed rows are inconsistent"));
+        assert_int_not_equal(access(TMP "/inconsistent.pal", F_OK), 0);
         cb_palette_view_free(&view), cb_palette_view_free(&uview);
         timed_subset_free(&t);
         cbpal_close(&f), cbpal_close(&uni);

@@ -14,8 +14,12 @@
  * fade). A case marked local (local_qpos_u16, local_qpos_float, local_blocks: .pal version 6, the
  * quadruped baked --bone-space local --fps 30) holds local rows: the runtime blends each bone's rows
  * and composes down the skeleton (docs/pal-format.md); a shader runtime runs them once its library
- * knows CB_LOCAL_ROWS. A case marked broken carries the fault a runtime applies to show its test catches it:
- * transpose (each mat4 bone stored transposed), a row offset (in the instances: rows one off), or
+ * knows CB_LOCAL_ROWS. A case marked timed (timed_*, broken-timed-map-ignored: .pal version 7, made from
+ * uniform bakes by timed_subset.h) holds timed clips, whose instances are (first row, +-cells, -cell_rate x rate,
+ * phase): the runtime reads each cell's rows and weights from the clip's map (docs/pal-format.md "Timed rows");
+ * a runtime that does not know them fails these cases. A case marked broken carries the fault a runtime applies to show its test catches it:
+ * transpose (each mat4 bone stored transposed), a row offset (in the instances: rows one off), the timed map
+ * ignored (in the instances: +-frames and a positive rate, the rows played uniform), or
  * glsl_break (the line of the shipped shader holding `marker` replaced by `line`); its expected
  * positions are the right ones, which the broken runtime must miss by far.
  *
@@ -33,11 +37,12 @@
 #include "crowdbake/pal_view.h"
 #include "crowdbake/runtime.h"
 #include "runtimes/shader_source.h"
+#include "timed_subset.h"
 
 #define CONF_TIMES 2
 #define CONF_PER_CLIP 7 /* instances per clip and time */
-#define CONF_PALETTES 16
-#define CONF_MAX_CASES 32
+#define CONF_PALETTES 32
+#define CONF_MAX_CASES 40
 
 static const double conf_times[CONF_TIMES] = {0.77, 2.31};
 static const char *const conf_layouts[] = {"mat4", "affine", "qpos"};
@@ -45,7 +50,7 @@ static const char *const conf_precisions[] = {"float", "half", "u16"};
 
 /* A baked palette opened as the C runtime reads it, and its model. */
 typedef struct conf_palette {
-    char file[32], mesh[16];
+    char file[48], mesh[16];
     cb_model *model;
     cbpal_file pal;
     cb_palette view;
@@ -56,6 +61,9 @@ typedef struct conf_case {
     int palette;       /* index into conformance.palettes */
     double row_offset; /* broken: the instances' rows shifted */
     bool transpose, broken, local; /* local: local rows (.pal version 6), composed by the runtime */
+    bool timed;        /* timed rows (.pal version 7): some clips' rows through their map */
+    int right;         /* broken-timed-map-ignored: the palette whose clips are timed (palette: the same file, its
+                        * clips read as untimed), which the expected positions come from */
     const char *glsl_marker, *glsl_line, *bone_pass; /* bone_pass: Crowd's bonePass option, as JSON */
 } conf_case;
 
@@ -66,8 +74,27 @@ typedef struct conformance {
     int palette_count, case_count;
 } conformance;
 
+/* A timed clip's instance k (cb_instance_of: first row, +-cells, -cell_rate, phase) at `time`: cells'
+ * interiors (0.3, 2.5, 37%), the loop's seam or a one-shot's last cell, a one-shot past its end (a
+ * loop: a golden-ratio spread), one cross-fading from the same clip at another phase (a 0.5 fade at
+ * `time`), and the last as every clip's (from its first row held). */
+static inline void conf_timed_instance(const cb_palette_clip *c, double time, int k, float v[16])
+{
+    double n = c->cells, rate = c->cell_rate;
+    double targets[] = {0.3, 2.5, n * 0.37, n - 0.4, c->loops ? 0.618034 * n : n + 2, 0.236068 * n};
+    double phase = k < 6 ? (targets[k] - time * rate) / n : fmod((k - 3) * 0.6180339887, 1.0);
+    if (c->loops) phase -= floor(phase);
+    v[5] = (float)(c->loops ? n : -n), v[6] = (float)-rate, v[7] = (float)phase;
+    if (k == 5) { /* from: the same clip, timed, at another phase */
+        double from = c->loops ? 0.7 : (0.55 * n - time * rate) / n; /* a one-shot's: 55% through at `time` */
+        v[8] = v[4], v[9] = v[5], v[10] = v[6], v[11] = (float)from;
+        v[12] = (float)(time - 0.25), v[13] = 0.5f;
+    }
+}
+
 /* Instance k of a clip at `time`: phases that land on mid-frames, the loop seam and golden-ratio
- * spreads; the last one cross-fades from the clip's first row held (a 0.5 fade at `time`). */
+ * spreads; the last one cross-fades from the clip's first row held (a 0.5 fade at `time`). A timed
+ * clip's: conf_timed_instance. */
 static inline void conf_instance(const cb_palette_clip *c, double time, int k, double row_offset, float out[16])
 {
     double frames = c->frames, rate = c->fps;
@@ -77,6 +104,11 @@ static inline void conf_instance(const cb_palette_clip *c, double time, int k, d
     double first = c->step ? -(double)c->first_row - 1 : c->first_row; /* held rows: -first - 1 (cb_instance_of) */
     float v[16] = {0, 0, 0, 0, (float)(first + row_offset), (float)(c->loops ? frames : -frames), (float)rate,
                    (float)phase, 0, 0, 0, 0, 0, 0, 1, 0};
+    if (c->timed || c->cells) conf_timed_instance(c, time, k, v);
+    if (!c->timed && c->cells) { /* conf_map_ignored's: the same clip times, its rows played uniform */
+        v[5] = v[9] = (float)(c->loops ? frames : -frames), v[6] = v[10] = (float)rate;
+        if (k != 5) v[9] = v[10] = 0;
+    }
     if (k == CONF_PER_CLIP - 1) { /* from: the first row, still; fade 0.5 at `time` */
         v[8] = (float)(c->first_row + row_offset), v[9] = 1, v[10] = 0, v[11] = 0;
         v[12] = (float)(time - 0.25), v[13] = 0.5f;
@@ -139,7 +171,7 @@ static inline conf_case *conf_add(conformance *c, const char *name, int palette)
  * before they compose (cb_runtime_matrices_crossfade). */
 static inline float *conf_expected(const conformance *c, const conf_case *k)
 {
-    const conf_palette *p = &c->palettes[k->palette];
+    const conf_palette *p = &c->palettes[k->right ? k->right : k->palette]; /* timed map ignored: the right clips */
     const cb_primitive *prim = &p->model->primitives[0];
     uint32_t verts = prim->vertex_count;
     float *out = malloc(conf_positions(c, k) * 3 * sizeof(float));
@@ -179,6 +211,7 @@ static inline void conf_write_case(FILE *f, const conformance *c, const conf_cas
                "\"broken\": %s, \"transpose\": %s,\n", first ? "" : ",", k->name, p->file, k->name, k->name,
             k->broken ? "true" : "false", k->transpose ? "true" : "false");
     if (k->local) fprintf(f, " \"local\": true,\n");
+    if (k->timed) fprintf(f, " \"timed\": true,\n");
     fprintf(f, " \"mesh\": {\"positions\": \"%s.positions\", \"joints\": \"%s.joints\", \"weights\": \"%s.weights\"},\n",
             p->mesh, p->mesh, p->mesh);
     if (k->glsl_marker) fprintf(f, " \"glsl_break\": {\"marker\": \"%s\", \"line\": \"%s\"},\n", k->glsl_marker, k->glsl_line);
@@ -248,6 +281,95 @@ static inline void conf_define_local_cases(conformance *c, const char *quadruped
     }
 }
 
+/* Timed rows (.pal version 7) without the bake choosing them (timed_subset.h): `model` baked
+ * uniform with `options`, every clip but `untimed` (TIMED_KEEP_ALL: none) kept at intervals of 1, 2
+ * and 3 cells with its map, texture wrapped into `blocks` column blocks, written by the library's
+ * writer to dir/FILE and opened. */
+static inline int conf_timed(conformance *c, const char *model, const char *file, const char *mesh, const char *options,
+                             uint32_t untimed, uint32_t blocks)
+{
+    char uniform[64], path[PATH_MAX], err[512];
+    snprintf(uniform, sizeof uniform, "uniform-%s", file);
+    int at = conf_bake(c, model, uniform, mesh, options);
+    conf_palette *p = &c->palettes[at];
+    cb_palette t;
+    cb_error e = {0};
+    uint32_t rows = 0; /* rows after the subset: for a texture limit that wraps them into `blocks` */
+    assert_true(timed_subset_make(&p->pal, &p->view, untimed, 0, &t));
+    rows = t.rows;
+    if (blocks > 1) {
+        timed_subset_free(&t);
+        uint32_t max = (rows + blocks - 1) / blocks;
+        if (max < blocks * p->view.row_texels) max = blocks * p->view.row_texels;
+        assert_true(timed_subset_make(&p->pal, &p->view, untimed, max, &t));
+    }
+    assert_int_equal(t.blocks, blocks);
+    snprintf(path, sizeof path, "%s/%s", c->dir, file);
+    if (timed_subset_write(path, &t, &p->pal, p->model, &e)) fail_msg("%s", e.message);
+    timed_subset_free(&t);
+    cb_palette_view_free(&p->view);
+    cbpal_close(&p->pal);
+    snprintf(p->file, sizeof p->file, "%s", file);
+    if (cbpal_open(path, CBPAL_VERIFY_CHECKSUM, &p->pal, err, sizeof err)) fail_msg("%s", err);
+    if (cb_palette_view(&p->pal, &p->view, &e)) fail_msg("%s", e.message);
+    assert_int_equal(p->pal.header.version, 7);
+    snprintf(path, sizeof path, "%s/%s", c->dir, uniform);
+    unlink(path);
+    return at;
+}
+
+/* The same file as palette `right`, its timed clips read as if untimed: their rows played at a
+ * uniform rate (frames / duration), the map ignored: the broken runtime's clips. They keep their
+ * cells, which conf_instance reads as this mark: each instance the right one with its second and
+ * third numbers made (+-frames, a positive rate), at the same clip time. */
+static inline int conf_map_ignored(conformance *c, int right, const char *model)
+{
+    conf_palette *p = &c->palettes[c->palette_count], *r = &c->palettes[right];
+    char path[PATH_MAX], err[512];
+    *p = *r;
+    snprintf(path, sizeof path, "%s/%s", c->dir, r->file);
+    p->model = load_or_fail(model);
+    if (cbpal_open(path, CBPAL_VERIFY_CHECKSUM, &p->pal, err, sizeof err)) fail_msg("%s", err);
+    cb_error e = {0};
+    if (cb_palette_view(&p->pal, &p->view, &e)) fail_msg("%s", e.message);
+    for (uint32_t i = 0; i < p->view.clip_count; ++i) {
+        cb_palette_clip *k = &p->view.clips[i];
+        if (k->timed) k->timed = false, k->fps = (k->frames - !k->loops) / k->duration;
+    }
+    return c->palette_count++;
+}
+
+/* Timed rows (.pal version 7; conf_timed): the quadruped at 48 fps in qpos u16 (walk left untimed),
+ * qpos float, affine half, mat4 float (death, a one-shot, left untimed), local rows (u16), qpos
+ * half wrapped into two column blocks (the maps too), and the STEP SimpleSkin's held rows timed;
+ * and the broken runtime that ignores the maps. */
+static inline void conf_define_timed_cases(conformance *c, const char *quadruped, const char *step)
+{
+    static const struct { const char *name, *options; uint32_t untimed, blocks; } cases[] = {
+        {"timed_qpos_u16", "--fps 48 --layout qpos --precision u16", 1, 1},
+        {"timed_qpos_float", "--fps 48 --layout qpos --precision float", TIMED_KEEP_ALL, 1},
+        {"timed_affine_half", "--fps 48 --layout affine --precision half", TIMED_KEEP_ALL, 1},
+        {"timed_mat4_float", "--fps 48 --layout mat4 --precision float", 4, 1},
+        {"timed_local", "--fps 48 --bone-space local --layout qpos --precision u16", TIMED_KEEP_ALL, 1},
+        {"timed_blocks", "--fps 48 --layout qpos --precision half", TIMED_KEEP_ALL, 2},
+        {"timed_held", "--layout qpos --precision u16", TIMED_KEEP_ALL, 1},
+    };
+    int first = -1;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        char file[48];
+        bool held = !strcmp(cases[i].name, "timed_held");
+        snprintf(file, sizeof file, "%s.pal", cases[i].name);
+        int at = conf_timed(c, held ? step : quadruped, file, held ? "step" : "quadruped", cases[i].options,
+                            cases[i].untimed, cases[i].blocks);
+        if (held) assert_true(c->palettes[at].view.clips[0].step && c->palettes[at].view.clips[0].timed);
+        conf_case *k = conf_add(c, cases[i].name, at);
+        k->timed = true, k->local = strstr(cases[i].options, "local") != NULL;
+        if (first < 0) first = at;
+    }
+    conf_case *k = conf_add(c, "broken-timed-map-ignored", conf_map_ignored(c, first, quadruped));
+    k->broken = k->timed = true, k->right = first;
+}
+
 /* Bakes the palettes and writes every file the runtimes' tests read into `dir` (emptied first). */
 static inline void conformance_make(conformance *c, const char *dir)
 {
@@ -277,6 +399,7 @@ static inline void conformance_make(conformance *c, const char *dir)
     assert_true(c->palettes[held].view.clips[0].step);
     conf_define_cases(c, all, spin, wrapped, held);
     conf_define_local_cases(c, quadruped);
+    conf_define_timed_cases(c, quadruped, step);
     char path[PATH_MAX];
     snprintf(path, sizeof path, "%s/cases.json", dir);
     FILE *f = fopen(path, "w");

@@ -10,6 +10,7 @@
 #include "crowdbake_pal.h"
 #include "crowdbake/pal_view.h"
 #include "crowdbake/runtime.h"
+#include "runtimes/conformance.h"
 
 #define TMP TEST_TMP "/bone_matrix"
 
@@ -206,6 +207,63 @@ static void test_bad_clip_bone_or_time_fails(void **state)
     cbpal_close(&f);
 }
 
+/* The conformance cases' timed rows (.pal version 7): the reader's matrices at each instance's clip
+ * time skin the quadruped (and the held SimpleSkin) where the C runtime does, every precision,
+ * local rows and wrapped maps; the cross-fading instances are the runtimes' to check. The broken
+ * case (the maps ignored, rows played uniform) misses the right positions by far. */
+static void test_timed_conformance_cases(void **state)
+{
+    (void)state;
+    conformance conf;
+    conformance_make(&conf, TMP "/conformance");
+    int timed = 0;
+    for (int i = 0; i < conf.case_count; ++i) {
+        const conf_case *k = &conf.cases[i];
+        if (!k->timed) continue;
+        const conf_palette *p = &conf.palettes[k->palette];
+        const cb_primitive *prim = &p->model->primitives[0];
+        size_t verts = prim->vertex_count, n = conf_positions(&conf, k), at = 0;
+        float *got = calloc(n * 3, sizeof(float)), *want = calloc(n * 3, sizeof(float));
+        double *mats = malloc(sizeof(double) * 16 * p->view.bone_count), *pos = malloc(sizeof(double) * 3 * verts);
+        char path[PATH_MAX];
+        size_t size = 0;
+        snprintf(path, sizeof path, "%s/%s.expected", conf.dir, k->name);
+        float *expected = (float *)read_whole_file(path, &size);
+        uint32_t compared = 0;
+        for (int t = 0; t < CONF_TIMES; ++t)
+            for (uint32_t cl = 0; cl < p->view.clip_count; ++cl)
+                for (int j = 0; j < CONF_PER_CLIP; ++j, at += verts * 3) {
+                    float v[16];
+                    conf_instance(&p->view.clips[cl], conf_times[t], j, k->row_offset, v);
+                    if (v[13] > 0 && !k->broken) continue; /* a cross-fade */
+                    cb_instance in = {v[4], v[5], v[6], v[7]};
+                    if (k->broken) { /* what the broken runtime draws: its instances through the C runtime */
+                        cb_runtime_matrices(&p->view, p->pal.texels, &in, (float)conf_times[t], mats);
+                    } else { /* the reader at the instance's clip time */
+                        double clip_time = (float)conf_times[t] + v[7] * fabs(v[5]) / fabs(v[6]);
+                        for (uint32_t b = 0; b < p->view.bone_count; ++b) {
+                            float m[16];
+                            assert_int_equal(cbpal_bone_matrix(&p->pal, cl, clip_time, b, m), 0);
+                            for (int e = 0; e < 16; ++e) mats[b * 16 + e] = m[e];
+                        }
+                    }
+                    cb_skin_positions(prim, mats, pos);
+                    for (size_t e = 0; e < verts * 3; ++e) got[at + e] = (float)pos[e], want[at + e] = expected[at + e];
+                    if (v[13] > 0) memcpy(got + at, expected + at, verts * 3 * sizeof(float)); /* broken: fades left out */
+                    ++compared;
+                }
+        double worst = 0;
+        for (size_t e = 0; e < n * 3; ++e) worst = fmax(worst, fabs((double)got[e] - want[e]));
+        double ratio = worst / (1e-5 * fmax(1.0, p->view.model_height));
+        printf("  %-26s %4u instances: reader vs C runtime %.2g (%.2f of the tolerance)\n", k->name, compared, worst, ratio);
+        if (k->broken) assert_true(ratio > 10);
+        else assert_true(ratio <= 1), ++timed;
+        free(got), free(want), free(mats), free(pos), free(expected);
+    }
+    assert_true(timed >= 7);
+    conformance_free(&conf);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -213,6 +271,7 @@ int main(void)
         cmocka_unit_test(test_fitted_rows_stay_within_their_encoding),
         cmocka_unit_test(test_between_rows_is_the_shaders_blend),
         cmocka_unit_test(test_bad_clip_bone_or_time_fails),
+        cmocka_unit_test(test_timed_conformance_cases),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
