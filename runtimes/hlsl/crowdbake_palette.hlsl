@@ -220,8 +220,8 @@ void cb_frame(CB_PALETTE_PARAMS, float4 inst, float time, out int row0, out int 
         f1 = min(f0 + 1.0, frames - 1.0);
     }
     fr = fpos - f0;
-    if (timed) { // cb:timed - the cell's two rows from the map, the weight across the cell
-        float4 m = cb_map_texel(CB_PALETTE_ARGS, int(first), int(frames), int(f0));
+    if (timed) { // the cell's two rows from the map, the weight across the cell
+        float4 m = cb_map_texel(CB_PALETTE_ARGS, int(first), int(frames), int(f0)); // cb:timed-map
         f0 = m.x;
         f1 = m.y;
         fr = lerp(m.z, m.w, fr);
