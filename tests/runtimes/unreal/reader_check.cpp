@@ -179,8 +179,63 @@ int Herd(const char *pal_path, const char *lines, const char *type)
     return footsteps > 10 && moving > 0 && worst <= 1e-6 ? 0 : Fail("too few footsteps or moving offsets, or offsets differ");
 }
 
+std::vector<uint8_t> ReadBytes(const std::string &path)
+{
+    std::ifstream in(path, std::ios::binary);
+    return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// `reader_check conformance FILE.pal MESH INSTANCES OUT`: a runtime conformance case (tests/runtimes/conformance.h)
+// through the plugin's InstanceBoneMatrix: MESH.positions/.joints/.weights skinned for each line of INSTANCES
+// ("time clip4 from4 fade"), cross-faded as the herd fades (matrices mixed), float32 positions into OUT.
+int Conformance(const char *pal_path, const std::string &mesh, const char *instances, const char *out_path)
+{
+    std::vector<uint8_t> pal = ReadBytes(pal_path), pos = ReadBytes(mesh + ".positions"), joints = ReadBytes(mesh + ".joints"),
+                         weights = ReadBytes(mesh + ".weights");
+    size_t verts = pos.size() / 12;
+    std::ifstream in(instances);
+    std::ofstream out(out_path, std::ios::binary);
+    double time;
+    float inst[4], from[4], fade, m[16], f[16];
+    std::vector<float> mats;
+    uint32_t bones = 0;
+    while (in >> time >> inst[0] >> inst[1] >> inst[2] >> inst[3] >> from[0] >> from[1] >> from[2] >> from[3] >> fade) {
+        mats.clear();
+        for (uint32_t bone = 0;; ++bone) {
+            if (!crowdbake::InstanceBoneMatrix(pal.data(), pal.size(), inst, time, bone, m)) break;
+            if (fade < 1) {
+                if (!crowdbake::InstanceBoneMatrix(pal.data(), pal.size(), from, time, bone, f)) return Fail("the from clip refused");
+                for (int k = 0; k < 16; ++k) m[k] = f[k] + (m[k] - f[k]) * fade; // mixing positions = mixing matrices
+            }
+            mats.insert(mats.end(), m, m + 16);
+        }
+        if (mats.empty() || (bones && mats.size() / 16 != bones)) return Fail("InstanceBoneMatrix refused an instance");
+        bones = (uint32_t)(mats.size() / 16);
+        for (size_t v = 0; v < verts; ++v) {
+            double p[3] = {0, 0, 0};
+            float x[3];
+            std::memcpy(x, &pos[v * 12], 12);
+            for (int i = 0; i < 4; ++i) {
+                float w;
+                std::memcpy(&w, &weights[(v * 4 + i) * 4], 4);
+                if (w == 0) continue;
+                uint32_t j = joints[(v * 4 + i) * 2] | joints[(v * 4 + i) * 2 + 1] << 8;
+                const float *a = &mats[(size_t)j * 16];
+                for (int c = 0; c < 3; ++c)
+                    p[c] += w * ((double)a[c] * x[0] + (double)a[4 + c] * x[1] + (double)a[8 + c] * x[2] + a[12 + c]);
+            }
+            for (int c = 0; c < 3; ++c) {
+                float y = (float)p[c];
+                out.write(reinterpret_cast<const char *>(&y), 4);
+            }
+        }
+    }
+    return out.good() ? 0 : Fail("cannot write the positions");
+}
+
 int main(int argc, char **argv)
 {
+    if (argc == 6 && std::strcmp(argv[1], "conformance") == 0) return Conformance(argv[2], argv[3], argv[4], argv[5]);
     if (argc == 3 && std::strcmp(argv[1], "skin") == 0) return Skin(argv[2]);
     if (argc == 5 && std::strcmp(argv[1], "herd") == 0) return Herd(argv[2], argv[3], argv[4]);
     if (argc != 2) return Fail("usage: reader_check FILE.pal | skin FILE.cbskin | herd FILE.pal ROSTER_LINES TYPE");
