@@ -187,7 +187,7 @@ float4 cb_texel(CB_PALETTE_PARAMS, int row, int bone, int k)
 // A timed clip's map texel of `cell` (docs/pal-format.md, "Timed rows"): (r0, r1, f0, f1), the two rows
 // blended in the cell relative to the clip's first row, and the weights at the cell's start and end. The map
 // rows lie just before the clip's first row, one texel per cell, never decoded through a bone's range.
-float4 cb_map_texel(CB_PALETTE_PARAMS, int first, int cells, int cell)
+float4 cb_timed_map(CB_PALETTE_PARAMS, int first, int cells, int cell)
 {
     int map_row = cell / h.row_texels;
     int2 xy = cb_texel_xy(h, first - (cells + h.row_texels - 1) / h.row_texels + map_row, cell - map_row * h.row_texels);
@@ -221,7 +221,7 @@ void cb_frame(CB_PALETTE_PARAMS, float4 inst, float time, out int row0, out int 
     }
     fr = fpos - f0;
     if (timed) { // the cell's two rows from the map, the weight across the cell
-        float4 m = cb_map_texel(CB_PALETTE_ARGS, int(first), int(frames), int(f0)); // cb:timed-map
+        float4 m = cb_timed_map(CB_PALETTE_ARGS, int(first), int(frames), int(f0)); // cb:timed-map
         f0 = m.x;
         f1 = m.y;
         fr = lerp(m.z, m.w, fr);

@@ -9,7 +9,7 @@
  * The local cases (.pal version 6, CB_LOCAL_ROWS) run through the same check, cross-fades included (conf_expected
  * fades local rows before composing, cb_runtime_matrices_crossfade); with the library's compose line removed they
  * miss by far. The timed cases (.pal version 7) read each cell's map texel from the palette (cb_frame's
- * cb_map_texel); broken-timed-map-ignored, and every timed case with the library's map read skipped, miss by far. */
+ * cb_timed_map); broken-timed-map-ignored, and every timed case with the library's map read skipped, miss by far. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
