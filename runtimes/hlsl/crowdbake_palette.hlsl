@@ -212,7 +212,7 @@ void cb_frame(CB_PALETTE_PARAMS, float4 inst, float time, out int row0, out int 
     float f0, f1;
     if (inst.y > 0.0) {
         fpos = cb_mod(fpos, frames);
-        f0 = floor(fpos);
+        f0 = min(floor(fpos), frames - 1.0); // a float mod's rounding onto `frames`: the last row's (cell's) end
         f1 = cb_mod(f0 + 1.0, frames); // cb:wrap - a loop's last row blends into its first
     } else {
         fpos = clamp(fpos, 0.0, timed ? frames : frames - 1.0); // a timed one-shot ends at its last cell's end
