@@ -44,7 +44,9 @@
 // Per-instance data, the roster manifest's four numbers: inst.x first row (negative for a clip whose
 // rows are held, not blended - .pal version 4's clip flag bit 2: its first row is -inst.x - 1), inst.y frame count
 // (negative: a one-shot, clamped instead of wrapped), inst.z rate in rows per second, inst.w phase
-// in 0..1. Time in seconds. Motion vectors: one more call at time - dt (see the GLSL's comment).
+// in 0..1. A timed clip (.pal version 7, clip flag bit 3) has inst.y = +-cells and inst.z = -cell_rate x rate
+// (negative marks it): cb_frame reads the cell's map texel from the palette itself (docs/pal-format.md).
+// Time in seconds. Motion vectors: one more call at time - dt (see the GLSL's comment).
 //
 // GLSL -> HLSL: vec/ivec/uvec/mat3 -> float/int/uint/float3x3 (cb_affine.a holds the transform's
 // ROWS: mul(a, v)); mix -> lerp; mod -> cb_mod (floored, as GLSL's; HLSL's fmod truncates);
@@ -162,11 +164,17 @@ float4 cb_decode_local(CB_TEXTURE2D bind_positions, uint4 u, int bone, int k)
 }
 #endif
 
-// Texel k of a bone in a baked row: rows wrap into column blocks of rows_per_block rows.
-float4 cb_texel(CB_PALETTE_PARAMS, int row, int bone, int k)
+// Where texel k of a row lies: rows wrap into column blocks of rows_per_block rows.
+int2 cb_texel_xy(cb_header h, int row, int k)
 {
     int block = row / h.rows_per_block;
-    int2 xy = int2(block * h.row_texels + bone * CB_TEXELS_PER_BONE + k, row - block * h.rows_per_block);
+    return int2(block * h.row_texels + k, row - block * h.rows_per_block);
+}
+
+// Texel k of a bone in a baked row.
+float4 cb_texel(CB_PALETTE_PARAMS, int row, int bone, int k)
+{
+    int2 xy = cb_texel_xy(h, row, bone * CB_TEXELS_PER_BONE + k);
 #if defined(CB_PRECISION_U16) && defined(CB_LOCAL_ROWS)
     return cb_decode_local(bind_positions, CB_LOAD_PALETTE(palette, xy), bone, k);
 #elif defined(CB_PRECISION_U16)
@@ -176,25 +184,49 @@ float4 cb_texel(CB_PALETTE_PARAMS, int row, int bone, int k)
 #endif
 }
 
-// The two rows to blend at `time`, and the weight of the second.
-void cb_frame(float4 inst, float time, out int row0, out int row1, out float fr)
+// A timed clip's map texel of `cell` (docs/pal-format.md, "Timed rows"): (r0, r1, f0, f1), the two rows
+// blended in the cell relative to the clip's first row, and the weights at the cell's start and end. The map
+// rows lie just before the clip's first row, one texel per cell, never decoded through a bone's range.
+float4 cb_timed_map(CB_PALETTE_PARAMS, int first, int cells, int cell)
+{
+    int map_row = cell / h.row_texels;
+    int2 xy = cb_texel_xy(h, first - (cells + h.row_texels - 1) / h.row_texels + map_row, cell - map_row * h.row_texels);
+#if defined(CB_PRECISION_U16)
+    uint4 m = CB_LOAD_PALETTE(palette, xy);
+    return float4(float2(m.xy), float2(m.zw) / 65535.0); // u16: rows as integers, weights round(f x 65535)
+#else
+    return CB_LOAD_PALETTE(palette, xy);
+#endif
+}
+
+// The two rows to blend at `time`, and the weight of the second. inst.y counts rows, or with inst.z < 0
+// (a timed clip, .pal version 7) the cells of its grid, at -inst.z cells a second: the cell's map texel
+// names the two rows and the weight runs linearly from its f0 to its f1 across the cell.
+void cb_frame(CB_PALETTE_PARAMS, float4 inst, float time, out int row0, out int row1, out float fr)
 {
     bool held = inst.x < 0.0; // a stepped clip: its row alone, no blend across a step
+    bool timed = inst.z < 0.0;
     float first = held ? -inst.x - 1.0 : inst.x;
-    float frames = abs(inst.y);
-    float fpos = time * inst.z + inst.w * frames;
+    float frames = abs(inst.y); // rows, or a timed clip's cells
+    float fpos = time * abs(inst.z) + inst.w * frames;
     float f0, f1;
     if (inst.y > 0.0) {
         fpos = cb_mod(fpos, frames);
-        f0 = floor(fpos);
+        f0 = min(floor(fpos), frames - 1.0); // a float mod's rounding onto `frames`: the last row's (cell's) end
         f1 = cb_mod(f0 + 1.0, frames); // cb:wrap - a loop's last row blends into its first
     } else {
-        fpos = clamp(fpos, 0.0, frames - 1.0);
-        f0 = floor(fpos);
+        fpos = clamp(fpos, 0.0, timed ? frames : frames - 1.0); // a timed one-shot ends at its last cell's end
+        f0 = min(floor(fpos), frames - 1.0);
         f1 = min(f0 + 1.0, frames - 1.0);
     }
-    if (held) { f1 = f0; fpos = f0; } // cb:held - no blend across a step
     fr = fpos - f0;
+    if (timed) { // the cell's two rows from the map, the weight across the cell
+        float4 m = cb_timed_map(CB_PALETTE_ARGS, int(first), int(frames), int(f0)); // cb:timed-map
+        f0 = m.x;
+        f1 = m.y;
+        fr = lerp(m.z, m.w, fr);
+    }
+    if (held) { f1 = f0; fr = 0.0; } // cb:held - no blend across a step
     row0 = int(first + f0);
     row1 = int(first + f1);
 }
@@ -355,8 +387,8 @@ void cb_skin_both(CB_PALETTE_PARAMS, float3 v, float3 n, int4 joints, float4 wei
 {
     int row0, row1, from0, from1;
     float fr, from_fr;
-    cb_frame(inst, time, row0, row1, fr);
-    cb_frame(from_inst, time, from0, from1, from_fr);
+    cb_frame(CB_PALETTE_ARGS, inst, time, row0, row1, fr);
+    cb_frame(CB_PALETTE_ARGS, from_inst, time, from0, from1, from_fr);
     p = float3(0.0, 0.0, 0.0);
     skinned_n = float3(0.0, 0.0, 0.0);
     for (int i = 0; i < CB_INFLUENCES; ++i) // cb:influences - crowdbake mesh puts the largest weights first
@@ -433,16 +465,16 @@ void cb_bone_pass(CB_PALETTE_PARAMS, int bone, float4 from_inst, float4 inst, fl
 {
     int row0, row1;
     float fr;
-    cb_frame(inst, time, row0, row1, fr);
+    cb_frame(CB_PALETTE_ARGS, inst, time, row0, row1, fr);
 #ifdef CB_LOCAL_ROWS
     int from0, from1;
     float from_fr;
-    cb_frame(from_inst, time, from0, from1, from_fr);
+    cb_frame(CB_PALETTE_ARGS, from_inst, time, from0, from1, from_fr);
     cb_affine m = cb_composed_affine(CB_PALETTE_ARGS, int4(row0, row1, from0, from1), float2(fr, from_fr), fade, bone);
 #else
     cb_affine m = cb_bone_affine(CB_PALETTE_ARGS, row0, row1, fr, bone);
     if (fade < 1.0) {
-        cb_frame(from_inst, time, row0, row1, fr);
+        cb_frame(CB_PALETTE_ARGS, from_inst, time, row0, row1, fr);
         m = cb_affine_mix(cb_bone_affine(CB_PALETTE_ARGS, row0, row1, fr, bone), m, fade);
     }
 #endif
@@ -517,6 +549,11 @@ cb_header cb_global_header()
 }
 
 #define CB_GLOBAL_ARGS cb_palette, cb_bind_positions, cb_global_header()
+
+void cb_frame(float4 inst, float time, out int row0, out int row1, out float fr)
+{
+    cb_frame(CB_GLOBAL_ARGS, inst, time, row0, row1, fr);
+}
 
 float3 cb_skin_position(float3 v, int4 joints, float4 weights, float4 inst, float time)
 {

@@ -127,7 +127,7 @@ static void test_shipped_files_run_in_godot(void **state)
     assert_int_equal(count(out, "\nok   u16 draws as float: "), 6);
     assert_int_equal(count(out, "\nok   half draws as float: "), 6);
     assert_int_equal(count(out, "\nok   palette "), 10);
-    assert_int_equal(count(out, "\nok   expect-error: refuses "), 6); /* local rows without their range table among them */
+    assert_int_equal(count(out, "\nok   expect-error: refuses "), 7); /* local rows without their range table, timed rows before v7 among them */
     assert_non_null(strstr(out, "ok   expect-error: fill_herd refuses rows the Compatibility renderer cannot address"));
     assert_non_null(strstr(out, "ok   Compatibility renderer rounds INSTANCE_CUSTOM to half floats"));
     assert_int_equal(count(out, "\nok   broken: "), 2);
@@ -138,11 +138,11 @@ static void test_shipped_files_run_in_godot(void **state)
      * placed gallop's travel */
     assert_int_equal(count(out, "\nok   addon: "), 73); /* the animation LOD, lod_auto and the bone pass among them */
     /* 12 cases skinned on the CPU within the tolerance (held rows among them), and broken-row-off-by-one missing by far. */
-    assert_int_equal(count(out, "\nok   addon: conformance "), 16); /* local_qpos_u16, local_qpos_float, local_blocks among them */
-    /* The same 16 skinned by crowdbake_herd.gdshader's vertex function on the GPU, read back from pixels, per vertex
+    assert_int_equal(count(out, "\nok   addon: conformance "), 24); /* local_*, timed_* and broken-timed-map-ignored among them */
+    /* The same 24 skinned by crowdbake_herd.gdshader's vertex function on the GPU, read back from pixels, per vertex
      * and from the herd's bone pass (whose points must also lie within the tolerance of the per-vertex path's). */
-    assert_int_equal(count(out, "\nok   addon: gpu conformance "), 32);
-    assert_int_equal(count(out, "\nok   addon: gpu conformance bone pass "), 16);
+    assert_int_equal(count(out, "\nok   addon: gpu conformance "), 48);
+    assert_int_equal(count(out, "\nok   addon: gpu conformance bone pass "), 24);
     assert_non_null(strstr(out, "ok   addon: bone pass: floats packed into 8-bit texels come back bit for bit"));
     assert_int_equal(count(out, "\nok   expect-error: addon: "), 3);
     assert_non_null(strstr(out, "godot: 128 cases, 0 failed, exit code 0"));

@@ -8,7 +8,8 @@
  *
  * The local cases (.pal version 6, CB_LOCAL_ROWS) run through the same check, cross-fades included (conf_expected
  * fades local rows before composing, cb_runtime_matrices_crossfade); with the library's compose line removed they
- * miss by far. */
+ * miss by far. The timed cases (.pal version 7) read each cell's map texel from the palette (cb_frame's
+ * cb_timed_map); broken-timed-map-ignored, and every timed case with the library's map read skipped, miss by far. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
@@ -104,7 +105,27 @@ static void check_local_not_composed(const conformance *c, const char *lib)
         ++ran;
     }
     free(no_compose);
-    assert_int_equal(ran, 3);
+    assert_int_equal(ran, 4); /* local_qpos_u16, local_qpos_float, local_blocks, timed_local */
+}
+
+/* The timed cases (.pal version 7) with the library's map read replaced by the cell taken as a row (the map ignored,
+ * as a runtime that knows no timed rows would play the cells): far off, every one. */
+static void check_timed_map_skipped(const conformance *c, const char *lib)
+{
+    char *skipped = break_shader(lib, "cb:timed-map", "        float4 m = float4(f0, f0 + 1.0, 0.0, 1.0);");
+    int ran = 0;
+    for (int i = 0; i < c->case_count; ++i) {
+        const conf_case *k = &c->cases[i];
+        if (!k->timed || k->broken) continue;
+        float *got = gpu_case(c, k, skipped, NULL);
+        double units, ratio = conformance_compare(c, k, got, &units);
+        printf("  %-26s timed rows, map read skipped: %.0f tolerances off\n", k->name, ratio);
+        assert_true(ratio > 10);
+        free(got);
+        ++ran;
+    }
+    free(skipped);
+    assert_true(ran >= 7);
 }
 
 static void test_conformance_cases(void **state)
@@ -116,6 +137,7 @@ static void test_conformance_cases(void **state)
     char *lib = read_whole_file(LIBRARY, NULL);
     conformance_check_shader(&conf, lib, gpu_case, NULL); /* local cases too: the library knows CB_LOCAL_ROWS */
     check_local_not_composed(&conf, lib);
+    check_timed_map_skipped(&conf, lib);
     free(lib);
     conformance_free(&conf);
 }

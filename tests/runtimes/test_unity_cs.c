@@ -17,6 +17,7 @@
 #include "runtimes/bone_order.h"
 #include "runtimes/conformance.h"
 #include "runtimes/hlsl_harness.h"
+#include "timed_subset.h"
 
 #define TMP TEST_TMP "/unity_cs"
 #define CHECK_EXE TMP "/CrowdbakeCheck.exe"
@@ -140,6 +141,8 @@ static double compare_pal(const char *pal_path, unsigned *matrices)
     return worst;
 }
 
+static unsigned char *timed_fox_bytes(const char *fox, size_t *size);
+
 static void test_reader_equals_the_c_reader(void **state)
 {
     (void)state;
@@ -169,6 +172,13 @@ static void test_reader_equals_the_c_reader(void **state)
                    precisions[p], matrices, worst);
         }
     }
+    /* timed rows (.pal version 7): Fox's Walk and Run through their maps, C# InstanceFrame against cbpal_bone_matrix */
+    size_t size;
+    shared_path(model, sizeof model, models[0]);
+    free(timed_fox_bytes(model, &size));
+    unsigned matrices = 0;
+    double worst = compare_pal(TMP "/timed-fox.pal", &matrices);
+    printf("  fox-bevy/Fox.glb timed (half, 2 of 3 clips): %u bone matrices, worst relative difference C# vs C %.3g\n", matrices, worst);
 }
 
 /* Each damaged copy of `good` (a byte of each poke flipped low, then high; three cuts): the C#
@@ -231,6 +241,30 @@ static uint64_t le64(const unsigned char *p)
 /* Damaged files: the same verdict as cbpal_open_memory, word for word; zstd is refused with the fix;
  * and a local-rows file (.pal version 6) damaged in its flags, its range table's offset and entries,
  * and its parents. */
+/* Fox (half) with Walk and Run made timed (tests/timed_subset.h), written by the library's writer: the file's bytes. */
+static unsigned char *timed_fox_bytes(const char *fox, size_t *size)
+{
+    char cmd[4096], err[256];
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s/uniform.pal --precision half --fps 30 -q 2>&1", crowdbake_exe(), fox, TMP);
+    run_or_fail(cmd);
+    cbpal_file uniform;
+    cb_palette view, timed;
+    cb_error e = {0};
+    if (cbpal_open(TMP "/uniform.pal", CBPAL_VERIFY_CHECKSUM, &uniform, err, sizeof err)) fail_msg("%s", err);
+    assert_int_equal(cb_palette_view(&uniform, &view, &e), CB_OK);
+    assert_true(timed_subset_make(&uniform, &view, 0, 0, &timed));
+    cb_model *m = load_or_fail(fox);
+    if (timed_subset_write(TMP "/timed-fox.pal", &timed, &uniform, m, &e)) fail_msg("%s", e.message);
+    cb_model_free(m);
+    timed_subset_free(&timed);
+    cb_palette_view_free(&view);
+    cbpal_close(&uniform);
+    unsigned char *bytes = (unsigned char *)read_whole_file(TMP "/timed-fox.pal", size);
+    assert_non_null(bytes);
+    assert_int_equal((uint32_t)le64(bytes + 8), 7);
+    return bytes;
+}
+
 static void test_reader_verdicts_match(void **state)
 {
     (void)state;
@@ -251,6 +285,17 @@ static void test_reader_verdicts_match(void **state)
                             ranges + 32 + 4, ranges + 32 + 24};
     unsigned local_compared = 0, local_refused = compare_verdicts(good, size, local, COUNT_OF(local), &local_compared);
     free(good);
+    /* timed rows (.pal version 7, tests/timed_subset.h): the flags, the table's offset and entries, the clips' flags, a map texel */
+    size_t timed_size;
+    unsigned char *timed = timed_fox_bytes(fox, &timed_size);
+    size_t table = (size_t)le64(timed + 208), clips = (size_t)le64(timed + 120);
+    uint32_t map_row = (uint32_t)le64(timed + clips + 80 + 8) - (uint32_t)le64(timed + table + 16 + 8); /* Walk's first map row */
+    uint32_t height = (uint32_t)le64(timed + 48), width = (uint32_t)le64(timed + 44), row_texels = (uint32_t)le64(timed + 36);
+    size_t map = (size_t)le64(timed + 152) + ((size_t)(map_row % height) * width + (map_row / height) * row_texels) * 8 + 8; /* cell 1 */
+    const size_t timed_pokes[] = {8, 208, 212, clips + 28, clips + 80 + 28, table, table + 4, table + 8, table + 12, table + 16,
+                                  table + 19, table + 24, table + 28, map, map + 1, map + 5};
+    unsigned timed_compared = 0, timed_refused = compare_verdicts(timed, timed_size, timed_pokes, COUNT_OF(timed_pokes), &timed_compared);
+    free(timed);
     snprintf(cmd, sizeof cmd, "%s bake %s -o %s/z.pal --zstd -q 2>&1", crowdbake_exe(), fox, TMP);
     run_or_fail(cmd);
     FILE *out = run_check("bad " TMP "/z.pal", TMP "/bad.txt");
@@ -258,8 +303,9 @@ static void test_reader_verdicts_match(void **state)
     fclose(out);
     if (!strstr(line, "zstd-compressed") || !strstr(line, "without --zstd")) fail_msg("zstd palette: %s", line);
     printf("  %u damaged files: C# and C give the same verdicts, checksum verified and not (%u refused by the tables' checks); "
-           "local rows: %u damaged, %u refused; zstd refused: %s", compared, refused, local_compared, local_refused, line);
-    assert_true(refused >= 20 && local_refused >= 10);
+           "local rows: %u damaged, %u refused; timed rows: %u damaged, %u refused; zstd refused: %s", compared, refused,
+           local_compared, local_refused, timed_compared, timed_refused, line);
+    assert_true(refused >= 20 && local_refused >= 10 && timed_refused >= 10);
 }
 
 /* A catalog bake of Cow: what a Unity roster import needs. */
@@ -642,20 +688,21 @@ static void test_bone_pass_rule_matches_the_web(void **state)
     assert_true(decisions == 3 * 2 * 2 * 10 * 4 && taken > 0 && taken < decisions && layouts >= 8 && refused >= 2 && unavailable == 2);
 }
 
-/* The runtime conformance cases of local rows (.pal version 6: conformance.h's local_*): the C#
- * reader's composed bone matrices (PalFile.InstanceBoneMatrix, cross-faded as the herd does) skin
- * every instance of every group within the cases' tolerance of the C runtime's expected positions,
- * cross-fades included (conf_expected fades local rows before composing, cb_runtime_matrices_crossfade). */
-static void test_local_conformance_cases(void **state)
+/* The runtime conformance cases of local rows (.pal version 6: conformance.h's local_*) and timed rows (.pal
+ * version 7: timed_*, broken-timed-map-ignored): the C# reader's bone matrices (PalFile.InstanceBoneMatrix,
+ * cross-faded as the herd does; local rows composed, timed clips through their maps) skin every instance of
+ * every group within the cases' tolerance of the C runtime's expected positions, cross-fades included
+ * (conf_expected fades local rows before composing, cb_runtime_matrices_crossfade); the map ignored misses by far. */
+static void test_local_and_timed_conformance_cases(void **state)
 {
     (void)state;
     build_check();
     conformance conf;
     conformance_make(&conf, TMP "/conformance");
-    int ran = 0;
+    int ran = 0, timed = 0, caught = 0;
     for (int i = 0; i < conf.case_count; ++i) {
         const conf_case *k = &conf.cases[i];
-        if (!k->local) continue;
+        if (!k->local && !k->timed) continue;
         char args[1024], out[512];
         snprintf(out, sizeof out, TMP "/conformance/%s.cs.out", k->name);
         snprintf(args, sizeof args, "conformance " TMP "/conformance %s %s", k->name, out);
@@ -665,14 +712,56 @@ static void test_local_conformance_cases(void **state)
         assert_non_null(got);
         assert_int_equal(size, conf_positions(&conf, k) * 12);
         double units, ratio = conformance_compare(&conf, k, got, &units);
-        printf("  %-18s %7zu positions, cross-fades included: C# vs C runtime %.2g (%.3f of the tolerance)\n", k->name,
+        printf("  %-24s %7zu positions, cross-fades included: C# vs C runtime %.2g (%.3f of the tolerance)\n", k->name,
                conf_positions(&conf, k), units, ratio);
-        assert_true(ratio <= 1);
+        if (k->broken) assert_true(ratio > 10), ++caught;
+        else assert_true(ratio <= 1);
         free(got);
         ++ran;
+        timed += k->timed && !k->broken;
     }
     conformance_free(&conf);
-    assert_int_equal(ran, 3);
+    assert_true(ran >= 11 && timed >= 7 && caught == 1);
+}
+
+/* Timed rows (.pal version 7) made by hand from the quadruped's untimed bakes, until the bake writes them:
+ * CrowdbakeCheck's MakeTimed gives each clip a grid twice as fine as its rows (row k on cell 2k) and its map
+ * over the rows before it; the reader takes the table and the map, and the timed clip's bone matrices
+ * (PalFile.BoneMatrix, the herd's BoneMatrixAt, travel offsets) equal the untimed clip's; the same numbers
+ * read without the map are far off; a map naming a row past its clip is refused. */
+static void test_timed_rows_by_hand(void **state)
+{
+    (void)state;
+    build_check();
+    const char *options[] = {"--layout qpos --precision float", "--layout qpos --precision half", "--layout qpos --precision u16",
+                             "--layout mat4 --precision half", "--layout affine --precision u16"};
+    char quadruped[1024], cmd[4096], line[1024];
+    sample_path(quadruped, sizeof quadruped, "quadruped");
+    unsigned clips = 0;
+    for (int o = 0; o < 5; ++o) {
+        snprintf(cmd, sizeof cmd, "%s bake %s -o %s/timed.pal --root-motion in-place -q %s 2>&1", crowdbake_exe(), quadruped, TMP,
+                 options[o]);
+        run_or_fail(cmd);
+        FILE *f = run_check("timed " TMP "/timed.pal", TMP "/timed.txt");
+        double worst = 0, without = INFINITY;
+        unsigned here = 0, refused = 0;
+        while (fgets(line, sizeof line, f)) {
+            unsigned clip, cells;
+            double d, travel, w;
+            if (sscanf(line, "T %u %u %lf %lf %lf", &clip, &cells, &d, &travel, &w) == 5) {
+                worst = fmax(worst, fmax(d, travel)), without = fmin(without, w), ++here;
+                continue;
+            }
+            if (strncmp(line, "V badmap: clip 1 (", 18) != 0 || !strstr(line, "map's cell")) fail_msg("bad map: %s", line);
+            ++refused;
+        }
+        fclose(f);
+        printf("  quadruped %s, %u clips made timed: bone matrices vs untimed %.3g, without the map %.3g; bad map refused\n",
+               options[o], here, worst, without);
+        assert_true(here >= 3 && refused == 1 && worst <= 1e-5 && without > 0.1);
+        clips += here;
+    }
+    assert_true(clips >= 15);
 }
 
 /* Local rows whose every parent comes after its children (the spec: do not assume parent < child):
@@ -899,7 +988,8 @@ int main(void)
         cmocka_unit_test(test_bone_pass_shaders_compile),
         cmocka_unit_test(test_bone_pass_rule_matches_the_web),
         cmocka_unit_test(test_bone_pass_kernel_matches_the_c_runtime),
-        cmocka_unit_test(test_local_conformance_cases),
+        cmocka_unit_test(test_local_and_timed_conformance_cases),
+        cmocka_unit_test(test_timed_rows_by_hand),
         cmocka_unit_test(test_parents_after_children),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -8,6 +8,9 @@
 #include "testutil.h"
 
 #include "runtimes/bone_order.h"
+#include "runtimes/conformance.h"
+#include "crowdbake/pal_view.h"
+#include "timed_subset.h"
 
 #define TMP TEST_TMP "/unreal_reader"
 #define SRC "runtimes/unreal/Crowdbake/Source/Crowdbake"
@@ -55,6 +58,102 @@ static void test_reader_and_herd_equal_the_c_reader(void **state)
             if (!strstr(log, "CB_LOCAL_ROWS=1")) fail_msg("local rows: no CB_LOCAL_ROWS=1 define: %s", log);
         }
     }
+}
+
+/* Timed rows (.pal version 7): Fox baked uniform, Walk and Run made timed (timed_subset.h: rows kept at intervals
+ * of 1, 2 and 3 cells, their maps before them), Survey left uniform. The plugin's clip table carries cells and
+ * cell_rate, its herd's states of the timed clips carry -cell_rate, and its bone matrices (mid-fade and after,
+ * through its instance numbers) equal the C reader's, which follows the map; SetSpeed keeps the sign and the cell. */
+static void test_timed_rows(void **state)
+{
+    (void)state;
+    static char log[8192];
+    static const char *const variants[] = {"--precision half", "--precision u16 --layout qpos", "--precision float --layout mat4",
+                                           "--precision u16 --layout affine --max-texture-size 200"};
+    char fox[1024], cmd[4096], err[256];
+    build_reader_check();
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    cb_model *m = load_or_fail(fox);
+    for (size_t v = 0; v < COUNT_OF(variants); ++v) {
+        snprintf(cmd, sizeof cmd, "%s bake %s -o %s/uniform.pal --fps 30 -q %s 2>&1", crowdbake_exe(), fox, TMP, variants[v]);
+        run_or_fail(cmd, log, sizeof log);
+        cbpal_file uniform;
+        cb_palette view, timed;
+        cb_error e = {0};
+        if (cbpal_open(TMP "/uniform.pal", CBPAL_VERIFY_CHECKSUM, &uniform, err, sizeof err)) fail_msg("%s", err);
+        assert_int_equal(cb_palette_view(&uniform, &view, &e), CB_OK);
+        assert_true(timed_subset_make(&uniform, &view, 0, v == 3 ? 200 : 0, &timed));
+        if (timed_subset_write(TMP "/timed.pal", &timed, &uniform, m, &e)) fail_msg("%s", e.message);
+        timed_subset_free(&timed);
+        cb_palette_view_free(&view);
+        cbpal_close(&uniform);
+        snprintf(cmd, sizeof cmd, "%s/reader_check %s/timed.pal 2>&1", TMP, TMP);
+        run_or_fail(cmd, log, sizeof log);
+        printf("  Fox timed %s: %s", variants[v], strstr(log, ": ") ? strstr(log, ": ") + 2 : log);
+        if (!strstr(log, "(2 timed)")) fail_msg("expected 2 timed clips: %s", log);
+    }
+    cb_model_free(m);
+}
+
+/* The runtime conformance cases of timed rows (.pal version 7: conformance.h's timed_* but the local one, whose
+ * composing the plugin leaves to the shader, and broken-timed-map-ignored) through the plugin's InstanceBoneMatrix
+ * (reader_check conformance): every instance's skinned positions, cross-fades mixed as the herd mixes them, within the
+ * cases' tolerance of the C runtime's; the map ignored misses by far. The plugin's instance numbers must name a whole
+ * clip (InstanceClip), so the cases' "first row, still" (first, 1, 0, 0) is given as its clip on its first row. */
+static void test_timed_conformance_cases(void **state)
+{
+    (void)state;
+    static char log[8192];
+    build_reader_check();
+    conformance conf;
+    conformance_make(&conf, TMP "/conformance");
+    int ran = 0, caught = 0;
+    for (int i = 0; i < conf.case_count; ++i) {
+        const conf_case *k = &conf.cases[i];
+        if (!k->timed || k->local) continue;
+        const conf_palette *p = &conf.palettes[k->palette];
+        FILE *f = fopen(TMP "/conformance/instances.txt", "w");
+        assert_non_null(f);
+        for (int t = 0; t < CONF_TIMES; ++t)
+            for (uint32_t cl = 0; cl < p->view.clip_count; ++cl)
+                for (int n = 0; n < CONF_PER_CLIP; ++n) {
+                    float v[16];
+                    conf_instance(&p->view.clips[cl], conf_times[t], n, k->row_offset, v);
+                    if (v[9] == 1 && v[10] == 0) { /* "the first row, still" names no clip, which the plugin's numbers must: */
+                        v[9] = v[5], v[10] = v[6];  /* the clip itself, on its first row at this time */
+                        v[11] = (float)((1e-5 - conf_times[t] * fabs(v[6])) / fabs(v[5])); /* 1e-5 in: never wrapped */
+                    }
+                    double fade = v[13] > 0 ? fmin(fmax((conf_times[t] - v[12]) / v[13], 0), 1) : 1;
+                    fprintf(f, "%.9g", conf_times[t]);
+                    for (int j = 4; j < 12; ++j) fprintf(f, " %.9g", v[j]);
+                    fprintf(f, " %.9g\n", (float)fade);
+                }
+        fclose(f);
+        char cmd[4096];
+        snprintf(cmd, sizeof cmd, "%s/reader_check conformance %s/conformance/%s %s/conformance/%s %s/conformance/instances.txt "
+                 "%s/conformance/%s.cpp.out 2>&1", TMP, TMP, p->file, TMP, p->mesh, TMP, TMP, k->name);
+        if (k->broken && run_command(cmd, log, sizeof log) != 0) { /* the map ignored: numbers that name no clip of the file */
+            if (!strstr(log, "refused")) fail_msg("%s", log);
+            printf("  %-24s refused: its instances (+-frames, a positive rate) name no clip of the timed file\n", k->name);
+            ++caught, ++ran;
+            continue;
+        }
+        run_or_fail(cmd, log, sizeof log);
+        snprintf(cmd, sizeof cmd, "%s/conformance/%s.cpp.out", TMP, k->name);
+        size_t size = 0;
+        float *got = (float *)read_whole_file(cmd, &size);
+        assert_non_null(got);
+        assert_int_equal(size, conf_positions(&conf, k) * 12);
+        double units, ratio = conformance_compare(&conf, k, got, &units);
+        printf("  %-24s %7zu positions, cross-fades included: C++ vs C runtime %.2g (%.3f of the tolerance)\n", k->name,
+               conf_positions(&conf, k), units, ratio);
+        if (k->broken) assert_true(ratio > 10), ++caught;
+        else assert_true(ratio <= 1);
+        free(got);
+        ++ran;
+    }
+    conformance_free(&conf);
+    assert_true(ran >= 7 && caught == 1);
 }
 
 /* Local rows whose every parent comes after its children (runtimes/bone_order.h): the reader's bind
@@ -149,6 +248,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reader_and_herd_equal_the_c_reader),
         cmocka_unit_test(test_parents_after_children),
+        cmocka_unit_test(test_timed_rows),
+        cmocka_unit_test(test_timed_conformance_cases),
         cmocka_unit_test(test_herd_footsteps_and_travel),
         cmocka_unit_test(test_bad_file_message),
         cmocka_unit_test(test_vertex_ids_and_skin_texture),

@@ -120,7 +120,9 @@ func _check_refusals() -> void:
 	var cases := {
 		"truncated": [good.slice(0, good.size() - 100), "truncated"],
 		"not a palette": [FileAccess.get_file_as_bytes(SHIPPED + "/crowdbake_loader.gd"), "not a crowdbake palette"],
-		"version 7": [_patched_u32(good, 8, 7), "version 7 is not supported"],
+		"version 8": [_patched_u32(good, 8, 8), "version 8 is not supported"],
+		# flag bit 6 (timed rows) in a file of an older version: timed rows are version 7
+		"timed rows before version 7": [_patched_u32(_patched_u32(good, 8, 6), 12, good.decode_u32(12) | 64), "flag bit 6 (timed rows)"],
 		# version 6 with flag bit 5 (local rows) and no bone range table (header byte 200 left 0)
 		"local rows without their bone range table": [_patched_u32(_patched_u32(good, 8, 6), 12, good.decode_u32(12) | 32), "do not add up"],
 		"payload offset past the end": [_patched_u32(good, 152, 0x7fffffff), "do not add up"],

@@ -10,7 +10,7 @@ extends RefCounted
 const ROOT := "/crowdbake"
 const ADDON := ROOT + "/addons/crowdbake"
 const DIR := ROOT + "/bakes/conformance"
-const BROKEN := "broken-row-off-by-one"
+const BROKEN := ["broken-row-off-by-one", "broken-timed-map-ignored"] # faults in the instances, which the addon plays
 
 var addon # check_addon.gd's instance: _begin, _end
 
@@ -24,7 +24,7 @@ func run() -> void:
 	for c in cases:
 		if c.get("local", false) and not composes:
 			continue
-		if c.has("bone_pass") or (c["broken"] and c["name"] != BROKEN):
+		if c.has("bone_pass") or (c["broken"] and not (c["name"] in BROKEN)):
 			continue # the bone pass is the shaders'; the other faults live in shader code or storage
 		_check_case(c)
 

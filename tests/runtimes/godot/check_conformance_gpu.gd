@@ -16,7 +16,7 @@ extends RefCounted
 const ROOT := "/crowdbake"
 const ADDON := ROOT + "/addons/crowdbake"
 const DIR := ROOT + "/bakes/conformance"
-const BROKEN := "broken-row-off-by-one"
+const BROKEN := ["broken-row-off-by-one", "broken-timed-map-ignored"] # faults in the instances, which the addon plays
 const WIDTH := 756 # pixels a row: a multiple of 9, so that no vertex's 9 pixels wrap
 const INSTANCES_PER_ROW := 256 # CrowdbakeHerd's
 
@@ -39,7 +39,7 @@ func run() -> void:
 	for c in cases:
 		if c.get("local", false) and not composes:
 			continue
-		if c.has("bone_pass") or (c["broken"] and c["name"] != BROKEN):
+		if c.has("bone_pass") or (c["broken"] and not (c["name"] in BROKEN)):
 			continue # the bone pass is the shaders' own; the other faults live in GLSL or storage
 		var per_vertex: PackedVector3Array = await _check_case(c, viewport, false)
 		await _check_case(c, viewport, true, per_vertex)

@@ -8,6 +8,7 @@
 //   mono CrowdbakeCheck.exe conformance DIR CASE OUT  a runtime conformance case (tests/runtimes/conformance.h):
 //                                                     every instance's skinned positions, float32, into OUT
 //   mono CrowdbakeCheck.exe bonepass                  the bone pass rule's choices and layouts (Core/BonePass.cs)
+//   mono CrowdbakeCheck.exe timed FILE.pal            each clip made timed by hand (.pal version 7): matrices vs untimed
 using System;
 using System.Globalization;
 using System.IO;
@@ -245,6 +246,107 @@ static class CrowdbakeCheck
         }
     }
 
+    // ---- A timed palette made by hand (.pal version 7) from an untimed one ----
+    static void Put32(byte[] b, int at, uint v) { for (int i = 0; i < 4; ++i) b[at + i] = (byte)(v >> (8 * i)); }
+    static uint Get32(byte[] b, int at) { return (uint)(b[at] | b[at + 1] << 8 | b[at + 2] << 16 | b[at + 3] << 24); }
+
+    // A half float's bits for a value it holds exactly (0, 0.5, 1, integers below 2048).
+    static ushort ExactHalf(double v)
+    {
+        if (v == 0) return 0;
+        int e = (int)Math.Floor(Math.Log(v, 2));
+        return (ushort)((e + 15) << 10 | (int)Math.Round((v / Math.Pow(2, e) - 1) * 1024));
+    }
+
+    // Clip `clip` of `good` made timed: its grid twice as fine as its rows (cells = 2 x intervals, cell_rate =
+    // 2 fps; row k on cell 2k), its map written over the rows just before it (the previous clip's, no longer
+    // read), the timed table in the padding before the payload. Its matrices then equal the untimed clip's.
+    static byte[] MakeTimed(byte[] good, PalFile pal, uint clip, bool badMap)
+    {
+        PalHeader h = pal.Header;
+        PalClip c = pal.Clips[clip];
+        uint cells = 2 * (c.Loops ? c.Frames : c.Frames - 1), mapRows = PalFile.TimedMapRows(cells, h.RowTexels);
+        if (mapRows > c.FirstRow) throw new Exception("clip " + clip + " has no room for its map");
+        ulong table = (h.PayloadOffset - h.ClipCount * 16) & ~15UL;
+        byte[] b = (byte[])good.Clone();
+        for (ulong at = table; at < h.PayloadOffset; ++at)
+            if (b[at] != 0) throw new Exception("no padding for the timed table");
+        Put32(b, 8, 7);
+        Put32(b, 12, h.Flags | PalFile.FlagTimedRows);
+        Put32(b, 208, (uint)table);
+        int entry = (int)table + (int)clip * 16, clipAt = (int)h.ClipTableOffset + (int)clip * 80;
+        Put32(b, entry, cells);
+        Put32(b, entry + 4, BitConverter.ToUInt32(BitConverter.GetBytes(2 * c.Fps), 0));
+        Put32(b, entry + 8, mapRows);
+        Put32(b, clipAt + 28, Get32(b, clipAt + 28) | PalFile.ClipTimed);
+        for (uint cell = 0; cell < cells; ++cell) {
+            uint k = cell / 2, row = c.FirstRow - mapRows + cell / h.RowTexels;
+            double[] m = { k, k + 1 < c.Frames ? k + 1 : 0, (cell % 2) * 0.5, (cell % 2) * 0.5 + 0.5 };
+            if (badMap && cell == cells / 2) m[1] = c.Frames; // a row past the clip's: the reader refuses it
+            ulong x = (row / h.Height) * h.RowTexels + cell % h.RowTexels, y = row % h.Height;
+            int p = (int)(h.PayloadOffset + (y * h.Width + x) * h.TexelBytes);
+            for (int i = 0; i < 4; ++i) {
+                if (h.Precision == (uint)PalPrecision.Float) Put32(b, p + 4 * i, BitConverter.ToUInt32(BitConverter.GetBytes((float)m[i]), 0));
+                else {
+                    ushort v = h.Precision == (uint)PalPrecision.Half ? ExactHalf(m[i]) : (ushort)(i < 2 ? m[i] : Math.Round(m[i] * 65535));
+                    b[p + 2 * i] = (byte)v;
+                    b[p + 2 * i + 1] = (byte)(v >> 8);
+                }
+            }
+        }
+        return b;
+    }
+
+    static double WorstDifference(float[] a, float[] b, double worst)
+    {
+        for (int k = 0; k < 16; ++k) worst = Math.Max(worst, Math.Abs(a[k] - b[k]) / Math.Max(1.0, Math.Abs(b[k])));
+        return worst;
+    }
+
+    // T lines: clip, its cells, the worst relative difference of the timed clip's bone matrices (BoneMatrix, the
+    // herd's BoneMatrixAt and travel offsets) from the untimed clip's at 23 times, and of the same numbers read
+    // without the map (rate positive: cells taken for rows). V lines: the reader's verdict on a bad map.
+    static void Timed(string path)
+    {
+        byte[] good = File.ReadAllBytes(path);
+        PalFile plain = PalFile.Read(good, "plain", true);
+        for (uint clip = 1; clip < plain.Clips.Length; ++clip) {
+            PalClip c = plain.Clips[clip];
+            uint cells = 2 * (c.Loops ? c.Frames : c.Frames - 1);
+            if (PalFile.TimedMapRows(cells, plain.Header.RowTexels) > c.FirstRow || c.Frames < 2) continue;
+            PalFile timed = PalFile.Read(MakeTimed(good, plain, clip, false), "timed", false);
+            if (timed.Header.Version != 7 || !timed.Clips[clip].Timed || timed.Clips[clip].Cells != cells) throw new Exception("timed clip not read");
+            float[] inst = PalFile.InstanceOf(timed.Clips[clip]), ignored = (float[])inst.Clone();
+            ignored[2] = -ignored[2];
+            var herd = new HerdState(timed, null, 1);
+            herd.SetState(0, c.Name, 0);
+            herd.SetPhase(0, 0);
+            float[] a = new float[16], b = new float[16], h = new float[16], o = new float[3], ot = new float[3];
+            double worst = 0, travel = 0, without = 0;
+            for (int k = -1; k < 22; ++k) {
+                double t = k * c.Duration / 17.0 + 0.0071 * k;
+                herd.Update(t);
+                plain.TravelOffset(clip, t, o);
+                timed.TravelOffset(clip, t, ot);
+                for (int i = 0; i < 3; ++i) travel = Math.Max(travel, Math.Abs(o[i] - ot[i]));
+                for (uint bone = 0; bone < plain.Bones.Length; ++bone) {
+                    if (!plain.BoneMatrix(clip, t, bone, a) || !timed.BoneMatrix(clip, t, bone, b) || !herd.BoneMatrixAt(0, (int)bone, h))
+                        throw new Exception("a bone matrix refused");
+                    worst = WorstDifference(b, a, WorstDifference(h, a, worst));
+                    if (timed.InstanceBoneMatrix(ignored, t, bone, b)) without = WorstDifference(b, a, without);
+                    else without = double.PositiveInfinity; // rows past the texture: refused, as far off as can be
+                }
+            }
+            Line("T", clip, cells, worst, travel, without);
+        }
+        try {
+            PalFile.Read(MakeTimed(good, plain, 1, true), "badmap", false);
+            Line("V", "ok");
+        } catch (PalException e) {
+            Line("V", e.Message);
+        }
+    }
+
     static int Main(string[] args)
     {
         try {
@@ -254,6 +356,7 @@ static class CrowdbakeCheck
             else if (args.Length == 4 && args[0] == "herd") Herd(args[1], args[2], args[3]);
             else if (args.Length == 4 && args[0] == "conformance") Conformance(args[1], args[2], args[3]);
             else if (args.Length == 1 && args[0] == "bonepass") BonePassLines();
+            else if (args.Length == 2 && args[0] == "timed") Timed(args[1]);
             else {
                 Console.Error.WriteLine("usage: CrowdbakeCheck.exe pal|bad FILE.pal | roster roster.json | herd FILE.pal roster.json TYPE | conformance DIR CASE OUT | bonepass");
                 return 2;

@@ -30,15 +30,18 @@ int Fail(const char *what)
 }
 
 // The C reader's matrix for the state of clip `c` entered by instance i at `start`, at `now`: a loop
-// spread by the golden ratio, a one-shot from its first row at `start` (docs/roster.md).
+// spread by the golden ratio, a one-shot from its first row at `start` (docs/roster.md). A timed clip
+// (version 7) counts cells at cell_rate instead of rows at fps; cbpal_bone_matrix follows its map.
 void Expected(const cbpal_file &pal, uint32_t c, int i, double start, double now, uint32_t bone, float m[16])
 {
     cbpal_clip clip;
     cbpal_get_clip(&pal, c, &clip);
+    bool timed = (clip.flags & CBPAL_CLIP_TIMED) != 0;
+    double fps = timed ? clip.cell_rate : clip.fps, frames = timed ? clip.cells : clip.frames;
     double golden = i * 0.6180339887;
-    double phase = (clip.flags & CBPAL_CLIP_LOOPS) ? golden - std::floor(golden) : -start * clip.fps / clip.frames;
-    double rows = now * (double)clip.fps + (double)(float)phase * clip.frames;
-    cbpal_bone_matrix(&pal, c, rows / clip.fps, bone, m);
+    double phase = (clip.flags & CBPAL_CLIP_LOOPS) ? golden - std::floor(golden) : -start * fps / frames;
+    double rows = now * fps + (double)(float)phase * frames;
+    cbpal_bone_matrix(&pal, c, rows / fps, bone, m);
 }
 } // namespace
 
@@ -97,8 +100,10 @@ void ExpectedTravel(const cbpal_file &pal, const float inst[4], double now, floa
     for (uint32_t c = 0; c < pal.header.clip_count; ++c) {
         cbpal_clip clip;
         cbpal_get_clip(&pal, c, &clip);
-        if (clip.first_row != (uint32_t)inst[0] || clip.frames != (uint32_t)std::fabs(inst[1])) continue;
-        cbpal_travel_offset(&pal, c, (now * inst[2] + inst[3] * std::fabs((double)inst[1])) / clip.fps, out);
+        bool timed = (clip.flags & CBPAL_CLIP_TIMED) != 0;
+        if (clip.first_row != (uint32_t)inst[0] || (timed ? clip.cells : clip.frames) != (uint32_t)std::fabs(inst[1])) continue;
+        cbpal_travel_offset(&pal, c, (now * std::fabs(inst[2]) + inst[3] * std::fabs((double)inst[1])) / (timed ? clip.cell_rate : clip.fps),
+                            out);
     }
 }
 
@@ -174,8 +179,63 @@ int Herd(const char *pal_path, const char *lines, const char *type)
     return footsteps > 10 && moving > 0 && worst <= 1e-6 ? 0 : Fail("too few footsteps or moving offsets, or offsets differ");
 }
 
+std::vector<uint8_t> ReadBytes(const std::string &path)
+{
+    std::ifstream in(path, std::ios::binary);
+    return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// `reader_check conformance FILE.pal MESH INSTANCES OUT`: a runtime conformance case (tests/runtimes/conformance.h)
+// through the plugin's InstanceBoneMatrix: MESH.positions/.joints/.weights skinned for each line of INSTANCES
+// ("time clip4 from4 fade"), cross-faded as the herd fades (matrices mixed), float32 positions into OUT.
+int Conformance(const char *pal_path, const std::string &mesh, const char *instances, const char *out_path)
+{
+    std::vector<uint8_t> pal = ReadBytes(pal_path), pos = ReadBytes(mesh + ".positions"), joints = ReadBytes(mesh + ".joints"),
+                         weights = ReadBytes(mesh + ".weights");
+    size_t verts = pos.size() / 12;
+    std::ifstream in(instances);
+    std::ofstream out(out_path, std::ios::binary);
+    double time;
+    float inst[4], from[4], fade, m[16], f[16];
+    std::vector<float> mats;
+    uint32_t bones = 0;
+    while (in >> time >> inst[0] >> inst[1] >> inst[2] >> inst[3] >> from[0] >> from[1] >> from[2] >> from[3] >> fade) {
+        mats.clear();
+        for (uint32_t bone = 0;; ++bone) {
+            if (!crowdbake::InstanceBoneMatrix(pal.data(), pal.size(), inst, time, bone, m)) break;
+            if (fade < 1) {
+                if (!crowdbake::InstanceBoneMatrix(pal.data(), pal.size(), from, time, bone, f)) return Fail("the from clip refused");
+                for (int k = 0; k < 16; ++k) m[k] = f[k] + (m[k] - f[k]) * fade; // mixing positions = mixing matrices
+            }
+            mats.insert(mats.end(), m, m + 16);
+        }
+        if (mats.empty() || (bones && mats.size() / 16 != bones)) return Fail("InstanceBoneMatrix refused an instance");
+        bones = (uint32_t)(mats.size() / 16);
+        for (size_t v = 0; v < verts; ++v) {
+            double p[3] = {0, 0, 0};
+            float x[3];
+            std::memcpy(x, &pos[v * 12], 12);
+            for (int i = 0; i < 4; ++i) {
+                float w;
+                std::memcpy(&w, &weights[(v * 4 + i) * 4], 4);
+                if (w == 0) continue;
+                uint32_t j = joints[(v * 4 + i) * 2] | joints[(v * 4 + i) * 2 + 1] << 8;
+                const float *a = &mats[(size_t)j * 16];
+                for (int c = 0; c < 3; ++c)
+                    p[c] += w * ((double)a[c] * x[0] + (double)a[4 + c] * x[1] + (double)a[8 + c] * x[2] + a[12 + c]);
+            }
+            for (int c = 0; c < 3; ++c) {
+                float y = (float)p[c];
+                out.write(reinterpret_cast<const char *>(&y), 4);
+            }
+        }
+    }
+    return out.good() ? 0 : Fail("cannot write the positions");
+}
+
 int main(int argc, char **argv)
 {
+    if (argc == 6 && std::strcmp(argv[1], "conformance") == 0) return Conformance(argv[2], argv[3], argv[4], argv[5]);
     if (argc == 3 && std::strcmp(argv[1], "skin") == 0) return Skin(argv[2]);
     if (argc == 5 && std::strcmp(argv[1], "herd") == 0) return Herd(argv[2], argv[3], argv[4]);
     if (argc != 2) return Fail("usage: reader_check FILE.pal | skin FILE.cbskin | herd FILE.pal ROSTER_LINES TYPE");
@@ -216,7 +276,8 @@ int main(int argc, char **argv)
         cbpal_get_clip(&pal, c, &clip);
         const crowdbake::PalClipInfo &x = pc.clips[c];
         if (x.name != clip.name || x.first_row != clip.first_row || x.frames != clip.frames || x.fps != clip.fps ||
-            x.loops != ((clip.flags & CBPAL_CLIP_LOOPS) != 0))
+            x.loops != ((clip.flags & CBPAL_CLIP_LOOPS) != 0) || x.timed != ((clip.flags & CBPAL_CLIP_TIMED) != 0) ||
+            x.cells != clip.cells || x.cell_rate != clip.cell_rate)
             return Fail("clip table differs");
     }
     // A herd: instance i in the state of clip i % clips; half of them cross-fade into the next clip.
@@ -244,15 +305,18 @@ int main(int argc, char **argv)
             }
     // SetSpeed keeps the frame: the row position before and after are the same.
     const float *d = herd.CustomData(1);
-    double before = 1.7 * d[2] + d[3] * std::fabs((double)d[1]);
+    double before = 1.7 * std::fabs(d[2]) + d[3] * std::fabs((double)d[1]); // |rate|: a timed clip's is negative
     herd.SetSpeed(1, 2.5f, 1.7);
     d = herd.CustomData(1);
-    double after = 1.7 * d[2] + d[3] * std::fabs((double)d[1]), frames = std::fabs((double)d[1]);
+    double after = 1.7 * std::fabs(d[2]) + d[3] * std::fabs((double)d[1]), frames = std::fabs((double)d[1]);
     double drift = std::fmod(std::fabs(before - after), frames);
     drift = std::fmin(drift, frames - drift);
     cbpal_close(&pal);
-    std::printf("%s: texels, bind positions, %zu clips equal; %u herd matrices (%u mid-fade) worst %.3g; SetSpeed drift %.3g rows; "
-                "defines %s %s%s\n", argv[1], pc.clips.size(), matrices, faded, worst, drift, pc.defines[0].c_str(), pc.defines[1].c_str(),
+    unsigned timed = 0;
+    for (const crowdbake::PalClipInfo &x : pc.clips) timed += x.timed;
+    if (timed && (herd.CustomData(1)[2] < 0) != pc.clips[1 % pc.clips.size()].timed) return Fail("SetSpeed lost a timed clip's sign");
+    std::printf("%s: texels, bind positions, %zu clips (%u timed) equal; %u herd matrices (%u mid-fade) worst %.3g; SetSpeed drift %.3g rows; "
+                "defines %s %s%s\n", argv[1], pc.clips.size(), timed, matrices, faded, worst, drift, pc.defines[0].c_str(), pc.defines[1].c_str(),
                 local ? " CB_LOCAL_ROWS=1" : "");
     return worst <= 1e-6 && drift < 1e-3 && faded > 0 ? 0 : Fail("herd matrices or SetSpeed differ");
 }

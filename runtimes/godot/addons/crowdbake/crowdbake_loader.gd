@@ -68,8 +68,8 @@ func load_palette(path: String) -> Dictionary:
 	var flags := head.decode_u32(12)
 	var layout := head.decode_u32(20)
 	var precision := head.decode_u32(24)
-	if version < 1 or version > 6 or head.decode_u32(16) != HEADER_SIZE:
-		_fail("%s: palette format version %d is not supported (this loader reads versions 1 to 6); use the loader of the crowdbake that baked it"
+	if version < 1 or version > 7 or head.decode_u32(16) != HEADER_SIZE:
+		_fail("%s: palette format version %d is not supported (this loader reads versions 1 to 7); use the loader of the crowdbake that baked it"
 				% [path, version])
 		return {}
 	if layout > 2 or precision > 2:
@@ -88,6 +88,10 @@ func load_palette(path: String) -> Dictionary:
 	# Version 6: local rows (flag bit 5), each bone's ranges in the bone range table (header byte 200).
 	var local_rows := version >= 6 and flags & LOCAL_ROWS != 0
 	var range_table := head.decode_u64(200) if local_rows else 0
+	# Version 7: timed rows (flag bit 6); crowdbake_palette.gd reads and checks the timed clip table (header byte 208).
+	if flags & 64 and version < 7:
+		_fail("%s: flag bit 6 (timed rows) in a version %d file; timed rows are version 7, the file is damaged, re-bake it" % [path, version])
+		return {}
 	if local_rows and (layout != 2 or precision == 1):
 		_fail("%s: local rows need qpos and u16 or float, not %s/%s; the file is damaged, re-bake it" % [path, LAYOUTS[layout], PRECISIONS[precision]])
 		return {}

@@ -14,6 +14,8 @@ extends Resource
 
 const _Loader := preload("crowdbake_loader.gd")
 const CLIP_ENTRY_SIZE := 80
+const TIMED_ENTRY_SIZE := 16 # version 7's timed clip table (header byte 208): cells, cell_rate, map_rows, reserved
+const TIMED_ROWS := 64       # header flag bit 6 (version 7): some clip's rows are timed (clip flag bit 3, 8)
 
 @export_storage var texture: ImageTexture          # the payload as baked: RGBA16UI (u16), RGBAH (half) or RGBAF (float)
 @export_storage var bind_positions: ImageTexture   # row 0 the bones' bind positions, row 1 their position offsets
@@ -31,7 +33,9 @@ const CLIP_ENTRY_SIZE := 80
 # One Dictionary per clip: name, first_row, frames, fps (rows per second of clip time), duration,
 # loops, step (rows held, not blended: a STEP-keyed clip, .pal version 4), bounds (AABB of the
 # skinned mesh over the clip), travel_heading (version 5: the direction its rows' travel offsets lie
-# along; zero without them).
+# along; zero without them), timed, cells, cell_rate (version 7: a timed clip's rows lie on a grid of `cells`
+# steps, `cell_rate` a second, and its map, in the rows just before first_row, says which two rows each cell
+# blends; false, 0, 0 otherwise).
 @export_storage var clips: Array[Dictionary] = []
 @export_storage var row_travel := PackedFloat32Array() # version 5: per row, the body's offset along its clip's heading
 @export_storage var bone_names := PackedStringArray()
@@ -78,6 +82,10 @@ func _read_tables(path: String) -> bool:
 	var text := func(at: int) -> String:
 		var offset := bytes.decode_u32(at)
 		return bytes.slice(strings + offset, strings + offset + bytes.decode_u32(at + 4)).get_string_from_utf8()
+	var version := bytes.decode_u32(8)
+	var timed_table := bytes.decode_u64(208) if version >= 7 and bytes.decode_u32(12) & TIMED_ROWS else 0
+	if timed_table != 0 and (timed_table < 256 or timed_table % 4 != 0 or timed_table + clip_count * TIMED_ENTRY_SIZE > bytes.size()):
+		return _refuse("%s: the timed clip table (offset %d, %d clips) lies outside the file; re-bake it" % [path, timed_table, clip_count])
 	for i in clip_count:
 		var at := clip_table + i * CLIP_ENTRY_SIZE
 		var low := Vector3(bytes.decode_float(at + 44), bytes.decode_float(at + 48), bytes.decode_float(at + 52))
@@ -86,9 +94,45 @@ func _read_tables(path: String) -> bool:
 				"fps": bytes.decode_float(at + 16), "duration": bytes.decode_float(at + 20),
 				"loops": bytes.decode_u32(at + 28) & 1 == 1, "step": bytes.decode_u32(at + 28) & 4 == 4,
 				"bounds": AABB(low, high - low), "travel_heading": Vector3(bytes.decode_float(at + 68),
-				bytes.decode_float(at + 72), bytes.decode_float(at + 76)) if not row_travel.is_empty() else Vector3.ZERO})
+				bytes.decode_float(at + 72), bytes.decode_float(at + 76)) if not row_travel.is_empty() else Vector3.ZERO,
+				"timed": bytes.decode_u32(at + 28) & 8 == 8, "cells": 0, "cell_rate": 0.0})
+		if not _read_timed(path, bytes, timed_table, i):
+			return false
 	for i in bytes.decode_u32(32):
 		bone_names.append(text.call(bone_table + i * _Loader.BONE_ENTRY_SIZE))
+	return true
+
+func _refuse(message: String) -> bool:
+	error = message
+	push_error(error)
+	return false
+
+# Clip i's timed entry (docs/pal-format.md "Timed rows"): clip flag bit 3 if and only if a nonzero entry; cells >= 1,
+# cell_rate > 0 and finite, map_rows = ceil(cells / row_texels) <= first_row, reserved 0; every map texel's rows whole
+# and below the clip's frames, its weights 0 <= f0 <= f1 <= 1 (include/crowdbake_pal.h's checks).
+func _read_timed(path: String, bytes: PackedByteArray, table: int, i: int) -> bool:
+	var c: Dictionary = clips[i]
+	if table == 0:
+		return not c["timed"] or _refuse("%s: clip %d (%s) is timed in a file without timed rows (flag bit 6); re-bake it" % [path, i, c["name"]])
+	var at := table + i * TIMED_ENTRY_SIZE
+	var cells := bytes.decode_u32(at)
+	var rate := bytes.decode_float(at + 4)
+	var map_rows := bytes.decode_u32(at + 8)
+	var entry := cells != 0 or bytes.decode_u32(at + 4) != 0 or map_rows != 0 or bytes.decode_u32(at + 12) != 0
+	if entry != c["timed"]:
+		return _refuse("%s: clip %d (%s): timed flag and timed table entry disagree; re-bake it" % [path, i, c["name"]])
+	if not entry:
+		return true
+	if cells < 1 or not (rate > 0.0) or is_inf(rate) or bytes.decode_u32(at + 12) != 0 \
+			or map_rows != (cells + row_texels - 1) / row_texels or map_rows > c["first_row"]:
+		return _refuse("%s: clip %d (%s): bad timed entry (%d cells at %s a second, %d map rows); re-bake it" % [path, i, c["name"], cells, rate, map_rows])
+	c["cells"] = cells
+	c["cell_rate"] = rate
+	for cell in cells:
+		var m := _map_texel(c["first_row"], cells, cell)
+		if not (m.x >= 0.0 and m.x < c["frames"] and m.x == floorf(m.x) and m.y >= 0.0 and m.y < c["frames"] and m.y == floorf(m.y) \
+				and m.z >= 0.0 and m.z <= m.w and m.w <= 1.0):
+			return _refuse("%s: clip %d (%s): its map's cell %d reads %s; re-bake it" % [path, i, c["name"], cell, m])
 	return true
 
 # A clip's index by name (or an index passed through), -1 when there is none.
@@ -103,10 +147,13 @@ func clip_index(clip) -> int:
 func bone_index(bone_name: String) -> int:
 	return bone_names.find(bone_name)
 
-# The four numbers the shaders take for a clip played at its own rate (rows per second) from `phase`.
+# The four numbers the shaders take for a clip played at its own rate (rows per second; a timed clip: cells per
+# second) from `phase` (cb_instance_of): a timed clip's (first row, +-cells, -cell_rate, phase), negative marking it.
 func clip_instance(clip: int, rate := -1.0, phase := 0.0) -> Vector4:
 	var c: Dictionary = clips[clip]
 	var first: float = -c["first_row"] - 1.0 if c["step"] else c["first_row"] # held rows: negative
+	if c["timed"]:
+		return Vector4(first, c["cells"] if c["loops"] else -c["cells"], -(c["cell_rate"] if rate < 0.0 else rate), phase)
 	return Vector4(first, c["frames"] if c["loops"] else -c["frames"], c["fps"] if rate < 0.0 else rate, phase)
 
 # The largest of the clips' animated bounds: a box every animated vertex of any clip stays in.
@@ -162,12 +209,15 @@ func travel_offset_at(inst: Vector4, time: float) -> Vector3:
 			return c["travel_heading"] * lerpf(row_travel[frame[0]], row_travel[frame[1]], frame[2])
 	return Vector3.ZERO
 
-# cb_frame of crowdbake_palette.gdshaderinc: [row0, row1, weight of row1].
-static func frame_at(inst: Vector4, time: float) -> Array:
+# cb_frame of crowdbake_palette.gdshaderinc: [row0, row1, weight of row1]. inst.y counts rows, or with inst.z < 0
+# (a timed clip, .pal version 7) the cells of its grid at -inst.z a second: the cell's map texel names the two rows
+# and the weight runs from its f0 to its f1 across the cell (cb_runtime_frame_in).
+func frame_at(inst: Vector4, time: float) -> Array:
 	var held := inst.x < 0.0 # a stepped clip: its row alone
+	var timed := inst.z < 0.0
 	var first := -inst.x - 1.0 if held else inst.x
-	var frames := absf(inst.y)
-	var fpos := time * inst.z + inst.w * frames
+	var frames := absf(inst.y) # rows, or a timed clip's cells
+	var fpos := time * absf(inst.z) + inst.w * frames
 	var f0: float
 	var f1: float
 	if inst.y > 0.0:
@@ -175,12 +225,24 @@ static func frame_at(inst: Vector4, time: float) -> Array:
 		f0 = floorf(fpos)
 		f1 = fmod(f0 + 1.0, frames) # a loop's last row blends into its first
 	else:
-		fpos = clampf(fpos, 0.0, frames - 1.0)
-		f0 = floorf(fpos)
+		fpos = clampf(fpos, 0.0, frames if timed else frames - 1.0) # a timed one-shot ends at its last cell's end
+		f0 = minf(floorf(fpos), frames - 1.0)
 		f1 = minf(f0 + 1.0, frames - 1.0)
+	var fr := fpos - f0
+	if timed: # the cell's two rows from the map, the weight across the cell
+		var m := _map_texel(int(first), int(frames), int(f0))
+		f0 = m.x
+		f1 = m.y
+		fr = lerpf(m.z, m.w, fr)
 	if held:
 		return [int(first + f0), int(first + f0), 0.0]
-	return [int(first + f0), int(first + f1), fpos - f0]
+	return [int(first + f0), int(first + f1), fr]
+
+# A timed clip's map texel of `cell`: (r0, r1, f0, f1), rows relative to its first row, weights decoded; texel
+# cell mod row_texels of row first - ceil(cells / row_texels) + cell / row_texels, addressed as any texel.
+func _map_texel(first: int, cells: int, cell: int) -> Vector4:
+	var m := _stored_texel(first - (cells + row_texels - 1) / row_texels + cell / row_texels, cell % row_texels)
+	return Vector4(m.x, m.y, m.z / 65535.0, m.w / 65535.0) if precision == "u16" else m # u16 weights: round(f x 65535)
 
 # ---- local rows (.pal version 6): [q (Vector4 x, y, z, w), p, s], v -> p + s R(q) (v - b_bone) ----
 
@@ -253,16 +315,22 @@ func _blend(row0: int, row1: int, fr: float, bone: int) -> Transform3D:
 	# A half palette's translation holds the joint's position less the bone's offset: A (v - b) + p.
 	return Transform3D(basis, p + positions_relative * (o - basis * b))
 
-# Texel k of a bone in a baked row, decoded as the shader's cb_texel does.
-func _texel(row: int, bone: int, k: int) -> Vector4:
+# Texel k (0 <= k < row_texels) of a row as stored: float and half as floats, u16 as its integers. Rows wrap
+# into column blocks of rows_per_block rows.
+func _stored_texel(row: int, k: int) -> Vector4:
 	var block := row / rows_per_block
-	var x := block * row_texels + bone * _texels_per_bone + k
-	var at := ((row - block * rows_per_block) * _width + x) * _texel_bytes
+	var at := ((row - block * rows_per_block) * _width + block * row_texels + k) * _texel_bytes
 	if precision == "float":
 		return Vector4(_payload.decode_float(at), _payload.decode_float(at + 4), _payload.decode_float(at + 8), _payload.decode_float(at + 12))
 	if precision == "half":
 		return Vector4(_payload.decode_half(at), _payload.decode_half(at + 2), _payload.decode_half(at + 4), _payload.decode_half(at + 6))
-	var u := Vector4(_payload.decode_u16(at), _payload.decode_u16(at + 2), _payload.decode_u16(at + 4), _payload.decode_u16(at + 6))
+	return Vector4(_payload.decode_u16(at), _payload.decode_u16(at + 2), _payload.decode_u16(at + 4), _payload.decode_u16(at + 6))
+
+# Texel k of a bone in a baked row, decoded as the shader's cb_texel does.
+func _texel(row: int, bone: int, k: int) -> Vector4:
+	var u := _stored_texel(row, bone * _texels_per_bone + k)
+	if precision != "u16":
+		return u
 	if local_rows and k == 1: # the bone's own ranges (bind_positions rows 3 and 4)
 		var at_low := 3 * bone_names.size() * 4 + bone * 4 # bind_positions row 3, then row 4
 		var at_high := at_low + bone_names.size() * 4

@@ -60,15 +60,18 @@ namespace Crowdbake
         public IList<RosterState> States { get { return states; } }
 
         // A state per clip, for a palette without a roster: loops spread by the golden ratio,
-        // one-shots start on their first row.
+        // one-shots start on their first row. Its numbers are the clip's (PalFile.InstanceOf): a timed
+        // clip's count is its cells and its rate -cell_rate, negative.
         public static List<RosterState> StatesOf(PalFile pal)
         {
             var list = new List<RosterState>();
-            foreach (PalClip c in pal.Clips)
+            foreach (PalClip c in pal.Clips) {
+                float[] inst = PalFile.InstanceOf(c);
                 list.Add(new RosterState {
-                    name = c.Name, clip = c.Name, firstRow = c.Step ? -(int)c.FirstRow - 1 : (int)c.FirstRow,
-                    frameCount = c.Loops ? (int)c.Frames : -(int)c.Frames, rate = c.Fps, ratePerSpeed = 0, goldenRatioPhase = c.Loops
+                    name = c.Name, clip = c.Name, firstRow = (int)inst[0], frameCount = (int)inst[1], rate = inst[2], ratePerSpeed = 0,
+                    goldenRatioPhase = c.Loops
                 });
+            }
             return list;
         }
 
@@ -80,15 +83,16 @@ namespace Crowdbake
         }
 
         // The four per-instance numbers of docs/roster.md for `state` at ground speed `speed` (model
-        // units/s), instance index `index`; a one-shot started at `startTime`.
+        // units/s), instance index `index`; a one-shot started at `startTime`. A timed state (rate < 0, .pal
+        // version 7) keeps the sign: its rate is -cells a second.
         public static void InstanceData(RosterState state, double speed, int index, double startTime, float[] out4, int at)
         {
-            double rate = state.ratePerSpeed > 0 ? state.ratePerSpeed * speed : state.rate;
+            double rate = state.ratePerSpeed > 0 ? state.ratePerSpeed * speed : Math.Abs(state.rate);
             double frames = Math.Abs(state.frameCount), golden = index * 0.6180339887;
             double phase = state.goldenRatioPhase ? golden - Math.Floor(golden) : -startTime * rate / frames;
             out4[at] = state.firstRow;
             out4[at + 1] = state.frameCount;
-            out4[at + 2] = (float)rate;
+            out4[at + 2] = (float)(state.rate < 0 ? -rate : rate);
             out4[at + 3] = (float)phase;
         }
 
@@ -124,10 +128,10 @@ namespace Crowdbake
         // A new speed, keeping the frame it is on (no pop): the phase absorbs the change of rate.
         public void SetSpeed(int i, float speed)
         {
-            double frames = Math.Abs((double)Inst[i * 4 + 1]), fpos = Time * Inst[i * 4 + 2] + Inst[i * 4 + 3] * frames;
+            double frames = Math.Abs((double)Inst[i * 4 + 1]), fpos = Time * Math.Abs(Inst[i * 4 + 2]) + Inst[i * 4 + 3] * frames;
             var next = new float[4];
             InstanceData(Find(StateOf[i]), speed / Scale[i], i, Time, next, 0);
-            double p = (fpos - Time * next[2]) / frames;
+            double p = (fpos - Time * Math.Abs(next[2])) / frames;
             SetState(i, StateOf[i], speed, (float)(p - Math.Floor(p)), 0);
         }
 

@@ -65,41 +65,41 @@ namespace Crowdbake
             for (int i = 0; i < 4; ++i) t[i] = a[i] + ((flip ? -b[i] : b[i]) - a[i]) * fr;
         }
 
-        // The rows at `time` seconds into a clip and the weight of the second, as the shaders' cb_frame.
-        public static bool ClipFrame(PalClip c, double time, out uint r0, out uint r1, out float fr)
+        // The rows at `time` seconds into a clip and the weight of the second: its instance numbers' frame.
+        public bool ClipFrame(PalClip c, double time, out uint r0, out uint r1, out float fr)
         {
-            double frames = c.Frames, fpos = time * c.Fps, f0, f1;
-            r0 = r1 = 0;
-            fr = 0;
-            if (double.IsNaN(fpos) || double.IsInfinity(fpos)) return false;
-            if (c.Loops) fpos -= frames * Math.Floor(fpos / frames);
-            else fpos = fpos < 0 ? 0 : fpos > frames - 1 ? frames - 1 : fpos;
-            if (!(fpos >= 0 && fpos < frames)) fpos = 0; // rounding at the wrap
-            f0 = Math.Floor(fpos);
-            f1 = f0 + 1 < frames ? f0 + 1 : c.Loops ? 0 : f0; // a loop's last row blends into its first
-            if (c.Step) { f1 = f0; fpos = f0; } // held: no blend across a step
-            fr = (float)(fpos - f0);
-            r0 = c.FirstRow + (uint)f0;
-            r1 = c.FirstRow + (uint)f1;
-            return true;
+            return InstanceFrame(InstanceOf(c), time, out r0, out r1, out fr);
         }
 
-        // The rows for the four per-instance numbers at `time` (docs/roster.md; the herd's clock).
-        public static bool InstanceFrame(float[] inst, double time, out uint r0, out uint r1, out float fr)
+        // The rows for the four per-instance numbers at `time` (docs/roster.md; the herd's clock), as the
+        // shaders' cb_frame and the C runtime's cb_runtime_frame_in: inst[1] counts rows, or with inst[2] < 0 (a
+        // timed clip) the cells of its grid at -inst[2] cells a second, whose map texel names the two rows and
+        // the weight at the cell's ends (linear between). Held rows (inst[0] < 0) take the first row alone.
+        public bool InstanceFrame(float[] inst, double time, out uint r0, out uint r1, out float fr)
         {
-            double frames = Math.Abs((double)inst[1]), fpos = time * inst[2] + inst[3] * frames, f0, f1;
+            bool timed = inst[2] < 0, held = inst[0] < 0, loops = inst[1] > 0;
+            double n = Math.Abs((double)inst[1]), u = time * Math.Abs((double)inst[2]) + inst[3] * n, f0, f1;
             r0 = r1 = 0;
             fr = 0;
-            if (double.IsNaN(fpos) || double.IsInfinity(fpos) || frames < 1) return false;
-            if (inst[1] > 0) fpos -= frames * Math.Floor(fpos / frames);
-            else fpos = Math.Min(Math.Max(fpos, 0), frames - 1);
-            if (!(fpos >= 0 && fpos < frames)) fpos = 0; // rounding at the wrap
-            f0 = Math.Floor(fpos);
-            f1 = inst[1] > 0 ? (f0 + 1 < frames ? f0 + 1 : 0) : Math.Min(f0 + 1, frames - 1);
-            bool held = inst[0] < 0; // a stepped clip: its row alone, its first row -inst[0] - 1
-            double first = held ? -(double)inst[0] - 1 : inst[0];
-            if (held) { f1 = f0; fpos = f0; }
-            fr = (float)(fpos - f0);
+            if (double.IsNaN(u) || double.IsInfinity(u) || n < 1) return false;
+            if (loops) {
+                u -= n * Math.Floor(u / n);
+                if (!(u >= 0 && u < n)) u = 0; // rounding at the wrap
+            } else {
+                u = Math.Min(Math.Max(u, 0), timed ? n : n - 1); // a timed one-shot ends at its last cell's end
+            }
+            f0 = Math.Min(Math.Floor(u), n - 1);
+            f1 = loops ? (f0 + 1 < n ? f0 + 1 : 0) : Math.Min(f0 + 1, n - 1); // a loop's last row blends into its first
+            double w = u - f0, first = held ? -(double)inst[0] - 1 : inst[0];
+            if (timed) { // the cell's map texel: its two rows, the weight across the cell
+                var m = new double[4];
+                if (!MapTexel((uint)first, (uint)n, (uint)f0, m)) return false;
+                f0 = m[0];
+                f1 = m[1];
+                w = m[2] + (m[3] - m[2]) * w;
+            }
+            if (held) { f1 = f0; w = 0; } // a stepped clip: its row alone, no blend across a step
+            fr = (float)w;
             r0 = (uint)first + (uint)f0;
             r1 = (uint)first + (uint)f1;
             return true;

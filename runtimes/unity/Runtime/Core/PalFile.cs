@@ -28,6 +28,7 @@ namespace Crowdbake
         public ulong InputHash, ClipTableOffset, BoneTableOffset, StringsOffset, StringsSize;
         public ulong PayloadOffset, PayloadSize, PayloadRawSize, Checksum, OffsetTableOffset, TravelTableOffset;
         public ulong BoneRangeTableOffset; // version 6 with flag bit 5 (local rows): bone_count x 32 bytes
+        public ulong TimedTableOffset; // version 7 with flag bit 6 (timed rows): clip_count x 16 bytes
     }
 
     public struct PalClip
@@ -37,6 +38,11 @@ namespace Crowdbake
         public float Fps, Duration, Start;
         public float[] RootVelocity, BoundsMin, BoundsMax;
         public float[] TravelHeading; // version 5: the direction its rows' travel offsets lie along (0 where it has none)
+        // Version 7, a timed clip (clip flag bit 3): its rows lie on a grid of Cells steps, CellRate cells a second,
+        // its map in the MapRows rows before FirstRow (PalTimedRows.cs); all 0 for an untimed clip.
+        public uint Cells, MapRows;
+        public float CellRate;
+        public bool Timed { get { return (Flags & PalFile.ClipTimed) != 0; } }
         public bool Loops { get { return (Flags & PalFile.ClipLoops) != 0; } }
         // Its rows are held, not blended (a STEP-keyed clip): the instance's first row is -FirstRow - 1.
         public bool Step { get { return (Flags & PalFile.ClipStep) != 0; } }
@@ -55,10 +61,11 @@ namespace Crowdbake
 
     public sealed partial class PalFile
     {
-        public const uint NewestVersion = 6, HeaderBytes = 256, ClipBytes = 80, BoneBytes = 32, PayloadAlign = 4096;
+        public const uint NewestVersion = 7, HeaderBytes = 256, ClipBytes = 80, BoneBytes = 32, PayloadAlign = 4096;
         public const int ChecksumOffset = 176;
-        public const uint FlagZstd = 1, FlagInPlace = 2, FlagPositionsRelative = 4, FlagFittedRows = 8, FlagLocalRows = 32;
+        public const uint FlagZstd = 1, FlagInPlace = 2, FlagPositionsRelative = 4, FlagFittedRows = 8, FlagLocalRows = 32, FlagTimedRows = 64;
         public const uint ClipLoops = 1, ClipFitted = 2, ClipStep = 4; // ClipStep (version 4): rows held, not blended
+        public const uint ClipTimed = 8; // version 7: rows at cells of a grid, read through the clip's map
         static readonly byte[] Magic = { 0x43, 0x42, 0x50, 0x41, 0x4C, 0x0D, 0x0A, 0x1A };
 
         public readonly PalHeader Header;
@@ -90,7 +97,9 @@ namespace Crowdbake
                     throw new PalException("checksum mismatch: the file is corrupted");
                 if ((h.Flags & FlagZstd) != 0)
                     throw new PalException("payload is zstd-compressed, which this reader does not decompress; bake it again without --zstd");
-                return new PalFile(bytes, h);
+                var pal = new PalFile(bytes, h);
+                pal.ValidateMaps(); // the texels at hand, after the checksum (include/crowdbake_pal.h's order)
+                return pal;
             } catch (PalException e) {
                 throw new PalException(name + ": " + e.Message);
             }
@@ -146,6 +155,8 @@ namespace Crowdbake
             h.TravelTableOffset = h.Version >= 5 && (h.Flags & 16u) != 0 ? U64(d, 192) : 0;
             // Version 6: each bone's range, for local rows (PalLocalRows.cs).
             h.BoneRangeTableOffset = h.Version >= 6 && (h.Flags & FlagLocalRows) != 0 ? U64(d, 200) : 0;
+            // Version 7: the timed clip table (PalTimedRows.cs).
+            h.TimedTableOffset = h.Version >= 7 && (h.Flags & FlagTimedRows) != 0 ? U64(d, 208) : 0;
             return h;
         }
 
@@ -183,6 +194,7 @@ namespace Crowdbake
             if (h.Version >= 5 && (h.Flags & 16u) != 0 && (!Fits(h.TravelTableOffset, h.Rows, 4, size) || h.TravelTableOffset < HeaderBytes))
                 throw Fail("travel offset table (offset " + h.TravelTableOffset + ", " + h.Rows + " rows) lies outside the file");
             ValidateLocalRows(h, d);
+            ValidateTimedTable(h, d);
             if (!Fits(h.StringsOffset, h.StringsSize, 1, size) || h.StringsOffset < HeaderBytes)
                 throw Fail("string table lies outside the file");
             if (h.PayloadOffset % PayloadAlign != 0 || !Fits(h.PayloadOffset, h.PayloadSize, 1, size) || h.PayloadOffset < HeaderBytes)
@@ -201,6 +213,7 @@ namespace Crowdbake
                 if (!CheckString(h, d, U32(d, b), U32(d, b + 4)) || parent < -1 || parent >= (int)h.BoneCount)
                     throw Fail("bone " + i + " has a bad name or parent");
             }
+            ValidateTimedClips(h, d);
             ValidateParents(h, d);
             return h;
         }
@@ -224,6 +237,12 @@ namespace Crowdbake
                 clip.BoundsMin[k] = F32(data, c + 44 + 4 * k);
                 clip.BoundsMax[k] = F32(data, c + 56 + 4 * k);
                 clip.TravelHeading[k] = Header.TravelTableOffset != 0 ? F32(data, c + 68 + 4 * k) : 0;
+            }
+            if (Header.TimedTableOffset != 0) {
+                ulong e = Header.TimedTableOffset + (ulong)i * TimedEntryBytes;
+                clip.Cells = U32(data, e);
+                clip.CellRate = F32(data, e + 4);
+                clip.MapRows = U32(data, e + 8);
             }
             return clip;
         }

@@ -14,8 +14,9 @@ std::vector<HerdStateInfo> StatesFromClips(const PalContents &pal)
         HerdStateInfo s;
         s.name = c.name;
         s.first_row = (int32_t)c.first_row;
-        s.frame_count = c.loops ? (int32_t)c.frames : -(int32_t)c.frames;
-        s.rate = c.fps;
+        int32_t count = (int32_t)(c.timed ? c.cells : c.frames); // a timed clip: its cells at -cell_rate (cbpal_clip)
+        s.frame_count = c.loops ? count : -count;
+        s.rate = c.timed ? -c.cell_rate : c.fps;
         s.golden_ratio_phase = c.loops;
         states.push_back(s);
     }
@@ -69,13 +70,14 @@ std::string HerdLogic::StateNames() const
 }
 
 // docs/roster.md's four numbers: moving at `speed` model units/s, index i, a one-shot started at `start`.
+// A timed state (rate < 0, .pal version 7) keeps the sign: its rate is -cells a second.
 void HerdLogic::InstanceNumbers(const HerdStateInfo &s, double speed, int i, double start, float out[4]) const
 {
-    double rate = s.rate_per_speed > 0 ? s.rate_per_speed * speed : s.rate;
+    double rate = s.rate_per_speed > 0 ? s.rate_per_speed * speed : std::fabs(s.rate);
     double frames = std::fabs((double)s.frame_count), golden = i * 0.6180339887;
     out[0] = (float)s.first_row;
     out[1] = (float)s.frame_count;
-    out[2] = (float)rate;
+    out[2] = (float)(s.rate < 0 ? -rate : rate);
     out[3] = (float)(s.golden_ratio_phase ? golden - std::floor(golden) : -start * rate / frames);
 }
 
@@ -103,7 +105,7 @@ bool HerdLogic::SetState(int i, const std::string &state, double now, float fade
 double HerdLogic::RowPosition(int i, double now) const
 {
     const float *d = CustomData(i);
-    return now * d[2] + d[3] * std::fabs((double)d[1]);
+    return now * std::fabs((double)d[2]) + d[3] * std::fabs((double)d[1]);
 }
 
 void HerdLogic::Advance(double now, std::vector<Footstep> &out)
@@ -135,10 +137,10 @@ void HerdLogic::TravelOffsetAt(const uint8_t *pal, size_t size, int i, double no
 void HerdLogic::SetSpeed(int i, float speed, double now)
 {
     const float *d = CustomData(i);
-    double frames = std::fabs((double)d[1]), rows = now * d[2] + d[3] * frames;
+    double frames = std::fabs((double)d[1]), rows = now * std::fabs((double)d[2]) + d[3] * frames;
     float next[4];
     InstanceNumbers(*Find(state_[(size_t)i]), speed / scale_[(size_t)i], i, now, next);
-    double p = (rows - now * next[2]) / frames;
+    double p = (rows - now * std::fabs((double)next[2])) / frames;
     SetState(i, state_[(size_t)i], now, 0.0f, speed, (float)(p - std::floor(p)));
 }
 

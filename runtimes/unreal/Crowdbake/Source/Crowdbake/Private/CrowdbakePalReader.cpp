@@ -43,6 +43,7 @@ void ReadTables(const cbpal_file &pal, PalContents &out)
         info.name = c.name;
         info.first_row = c.first_row, info.frames = c.frames, info.fps = c.fps, info.duration = c.duration;
         info.loops = (c.flags & CBPAL_CLIP_LOOPS) != 0;
+        info.timed = (c.flags & CBPAL_CLIP_TIMED) != 0, info.cells = c.cells, info.cell_rate = c.cell_rate;
         std::memcpy(info.bounds_min, c.bounds_min, sizeof info.bounds_min);
         std::memcpy(info.bounds_max, c.bounds_max, sizeof info.bounds_max);
         out.clips.push_back(info);
@@ -112,17 +113,22 @@ bool ReadSkin(const uint8_t *data, size_t size, const std::string &name, SkinCon
 
 namespace
 {
-// The clip an instance's four numbers point at (first row, frame count), and the clip time they give
-// at `time`: rows played over the clip's rows per second. False for numbers that point at no clip.
+// The clip an instance's four numbers point at (first row, frame count or a timed clip's cells), and the
+// clip time they give at `time`: rows (cells, for inst[2] < 0: a timed clip) played over the clip's rows
+// (cells) per second; cbpal_bone_matrix then picks the rows (a timed clip's through its map). False for
+// numbers that point at no clip.
 bool InstanceClip(const cbpal_file &pal, const float inst[4], double time, uint32_t &clip_index, double &clip_time)
 {
     double first = inst[0] < 0 ? -(double)inst[0] - 1 : inst[0]; // < 0: held rows (CBPAL_CLIP_STEP)
+    bool timed = inst[2] < 0;
     for (uint32_t c = 0; c < pal.header.clip_count; ++c) {
         cbpal_clip clip;
         cbpal_get_clip(&pal, c, &clip);
-        if (clip.first_row != (uint32_t)first || clip.frames != (uint32_t)std::fabs(inst[1])) continue;
+        if (clip.first_row != (uint32_t)first || ((clip.flags & CBPAL_CLIP_TIMED) != 0) != timed ||
+            (timed ? clip.cells : clip.frames) != (uint32_t)std::fabs(inst[1]))
+            continue;
         clip_index = c;
-        clip_time = (time * inst[2] + inst[3] * std::fabs((double)inst[1])) / clip.fps;
+        clip_time = (time * std::fabs((double)inst[2]) + inst[3] * std::fabs((double)inst[1])) / (timed ? clip.cell_rate : clip.fps);
         return true;
     }
     return false;

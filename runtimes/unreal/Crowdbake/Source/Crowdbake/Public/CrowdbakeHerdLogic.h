@@ -25,7 +25,7 @@ struct HerdContact {
 struct HerdStateInfo {
     std::string name;
     int32_t first_row = 0, frame_count = 0; // frame_count < 0: a one-shot
-    float rate = 0, rate_per_speed = 0;     // rows/s; rows per model unit travelled (0: plays at `rate`)
+    float rate = 0, rate_per_speed = 0;     // rows/s (a timed clip: -cells/s); rows per model unit travelled (0: `rate`)
     bool golden_ratio_phase = true;         // else "zero": a one-shot starts on its first row
     float clip_fps = 0;                     // the clip's rows per second of clip time (contacts' rows)
     std::vector<HerdContact> contacts;      // the clip's (none without a roster)

@@ -21,6 +21,11 @@ struct PalClipInfo {
     uint32_t first_row = 0, frames = 0;
     float fps = 0, duration = 0;
     bool loops = false;
+    // Version 7, a timed clip (CBPAL_CLIP_TIMED): its rows lie on a grid of `cells` steps, `cell_rate` cells a
+    // second, and its instance numbers are (first row, +-cells, -cell_rate x rate, phase); 0 when untimed.
+    bool timed = false;
+    uint32_t cells = 0;
+    float cell_rate = 0;
     float bounds_min[3] = {0, 0, 0}, bounds_max[3] = {0, 0, 0};
 };
 
@@ -56,8 +61,9 @@ struct SkinContents {
 bool ReadSkin(const uint8_t *data, size_t size, const std::string &name, SkinContents &out, std::string &error);
 
 // The bone's skinning matrix (column-major, glTF space: bind space to the posed model) for an
-// instance's four numbers (first row, frame count: negative for a one-shot, rate, phase) at `time`:
-// the clip they point at, through cbpal_bone_matrix. False for a bone or clip that does not exist.
+// instance's four numbers (first row, frame count: negative for a one-shot, rate, phase; a timed clip's:
+// cells and -cell_rate x rate) at `time`: the clip they point at, through cbpal_bone_matrix, which follows
+// a timed clip's map. False for a bone or clip that does not exist.
 bool InstanceBoneMatrix(const uint8_t *data, size_t size, const float inst[4], double time, uint32_t bone, float out[16]);
 
 // The body's travel offset (glTF model units, the model's frame) for an instance's four numbers at
