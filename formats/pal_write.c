@@ -50,12 +50,7 @@ static size_t strings_size(const cb_palette *p, const cb_model *m, const cb_skin
 
 static bool local(const cb_palette *p) { return p->bone_space == CB_BONE_SPACE_LOCAL; }
 
-static bool timed(const cb_palette *p)
-{
-    for (uint32_t c = 0; c < p->clip_count; ++c)
-        if (p->clips[c].timed) return true;
-    return false;
-}
+static bool timed(const cb_palette *p) { return cb_palette_timed_clip(p) != NULL; }
 
 static void write_header(unsigned char *d, const cb_palette *p, const cb_pal_write_options *opt, const layout_plan *lp)
 {

@@ -171,12 +171,12 @@ CROWDBAKE_API cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_optio
                                         uint32_t plan_count, cb_palette *out, cb_error *err);
 CROWDBAKE_API void cb_palette_free(cb_palette *palette);
 
-/* Texel coordinates of a bone's first texel in a baked row. */
 /* The rows a timed clip's map takes: one texel per cell, ceil(cells / row_texels). */
 CROWDBAKE_API uint32_t cb_timed_map_rows(uint32_t cells, uint32_t row_texels);
 /* The palette's first timed clip, or NULL: only a .pal holds timed rows (EXR, KTX2 and Babylon
  * writers refuse them, naming it). */
 CROWDBAKE_API const cb_palette_clip *cb_palette_timed_clip(const cb_palette *p);
+/* Texel coordinates of a bone's first texel in a baked row. */
 CROWDBAKE_API void cb_palette_texel_xy(const cb_palette *p, uint32_t row, uint32_t bone, uint32_t *x, uint32_t *y);
 
 /* Decodes one bone of one row back to a 4x4 column-major matrix. texels points at the

@@ -89,43 +89,25 @@ static float *gpu_case(const conformance *c, const conf_case *k, const char *lib
     return out;
 }
 
-/* The local cases with the compose line removed from the library (each bone its local row alone): far off. */
-static void check_local_not_composed(const conformance *c, const char *lib)
+/* The cases of one kind with a line of the library broken (the line holding `marker` replaced by `line`): far off,
+ * every one. Returns how many cases ran. */
+static int check_broken_line(const conformance *c, const char *lib, const char *marker, const char *line, bool timed,
+                             const char *what)
 {
-    char *no_compose = break_shader(lib, "cb:local-compose", "");
+    char *broken = break_shader(lib, marker, line);
     int ran = 0;
     for (int i = 0; i < c->case_count; ++i) {
         const conf_case *k = &c->cases[i];
-        if (!k->local) continue;
-        float *got = gpu_case(c, k, no_compose, NULL);
+        if (timed ? !k->timed || k->broken : !k->local) continue;
+        float *got = gpu_case(c, k, broken, NULL);
         double units, ratio = conformance_compare(c, k, got, &units);
-        printf("  %-26s local rows, compose line removed: %.0f tolerances off\n", k->name, ratio);
+        printf("  %-26s %s: %.0f tolerances off\n", k->name, what, ratio);
         assert_true(ratio > 10);
         free(got);
         ++ran;
     }
-    free(no_compose);
-    assert_int_equal(ran, 4); /* local_qpos_u16, local_qpos_float, local_blocks, timed_local */
-}
-
-/* The timed cases (.pal version 7) with the library's map read replaced by the cell taken as a row (the map ignored,
- * as a runtime that knows no timed rows would play the cells): far off, every one. */
-static void check_timed_map_skipped(const conformance *c, const char *lib)
-{
-    char *skipped = break_shader(lib, "cb:timed-map", "        float4 m = float4(f0, f0 + 1.0, 0.0, 1.0);");
-    int ran = 0;
-    for (int i = 0; i < c->case_count; ++i) {
-        const conf_case *k = &c->cases[i];
-        if (!k->timed || k->broken) continue;
-        float *got = gpu_case(c, k, skipped, NULL);
-        double units, ratio = conformance_compare(c, k, got, &units);
-        printf("  %-26s timed rows, map read skipped: %.0f tolerances off\n", k->name, ratio);
-        assert_true(ratio > 10);
-        free(got);
-        ++ran;
-    }
-    free(skipped);
-    assert_true(ran >= 7);
+    free(broken);
+    return ran;
 }
 
 static void test_conformance_cases(void **state)
@@ -136,8 +118,13 @@ static void test_conformance_cases(void **state)
     conformance_make(&conf, TMP);
     char *lib = read_whole_file(LIBRARY, NULL);
     conformance_check_shader(&conf, lib, gpu_case, NULL); /* local cases too: the library knows CB_LOCAL_ROWS */
-    check_local_not_composed(&conf, lib);
-    check_timed_map_skipped(&conf, lib);
+    /* Local rows with the compose line removed (each bone its local row alone): local_qpos_u16, local_qpos_float,
+     * local_blocks, timed_local. */
+    assert_int_equal(check_broken_line(&conf, lib, "cb:local-compose", "", false, "local rows, compose line removed"), 4);
+    /* Timed rows (.pal version 7) with the map read replaced by the cell taken as a row (the map ignored, as a
+     * runtime that knows no timed rows would play the cells). */
+    assert_true(check_broken_line(&conf, lib, "cb:timed-map", "        float4 m = float4(f0, f0 + 1.0, 0.0, 1.0);", true,
+                                  "timed rows, map read skipped") >= 7);
     free(lib);
     conformance_free(&conf);
 }
