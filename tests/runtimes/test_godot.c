@@ -46,6 +46,15 @@ static int setup_cow(void)
             model);
     fclose(f);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/cow/catalog.toml -q 2>/dev/null", crowdbake_exe());
+    if (system(cmd)) return -1;
+    /* The same roster with local, timed rows (no fixed fps: each clip its own cells), check_addon.gd's timed roster. */
+    f = fopen(TMP "/bakes/cow/timed.toml", "w");
+    if (!f) return -1;
+    fprintf(f, "[bake]\nout_dir = \"timed\"\nbone_space = \"local\"\ntimed_rows = \"on\"\n\n[animal.cow]\nmodel = \"%s\"\n"
+               "states = { wander = [\"AnimalArmature|Walk\"], graze = [\"AnimalArmature|Eating\"], run = [\"AnimalArmature|Gallop\"] }\n",
+            model);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "%s bake " TMP "/bakes/cow/timed.toml -q 2>/dev/null", crowdbake_exe());
     return system(cmd);
 }
 
@@ -136,7 +145,7 @@ static void test_shipped_files_run_in_godot(void **state)
     /* The addon (check_addon.gd): its loader, bone_matrix against the reference CSV, the herd. */
     /* with the held rows of a STEP-keyed clip, the look on Cow and Husky, the roster import, the GPU conformance, a
      * placed gallop's travel */
-    assert_int_equal(count(out, "\nok   addon: "), 97); /* the animation LOD, lod_auto, the conformance cases and the bone pass among them */
+    assert_int_equal(count(out, "\nok   addon: "), 98); /* the animation LOD, lod_auto, the bone pass and a timed roster among them */
     /* The cases skinned on the CPU within the tolerance (held rows among them), and the broken ones missing by far. */
     assert_int_equal(count(out, "\nok   addon: conformance "), 24); /* local_*, timed_* and broken-timed-map-ignored among them */
     /* The same 24 skinned by crowdbake_herd.gdshader's vertex function on the GPU, read back from pixels, per vertex
@@ -144,8 +153,8 @@ static void test_shipped_files_run_in_godot(void **state)
     assert_int_equal(count(out, "\nok   addon: gpu conformance "), 48);
     assert_int_equal(count(out, "\nok   addon: gpu conformance bone pass "), 24);
     assert_non_null(strstr(out, "ok   addon: bone pass: floats packed into 8-bit texels come back bit for bit"));
-    assert_int_equal(count(out, "\nok   expect-error: addon: "), 3);
-    assert_non_null(strstr(out, "godot: 153 cases, 0 failed, exit code 0"));
+    assert_int_equal(count(out, "\nok   expect-error: addon: "), 4); /* a damaged timed roster state among them */
+    assert_non_null(strstr(out, "godot: 155 cases, 0 failed, exit code 0"));
     /* The log is Godot 4.6's own, on WebGL 2 (the Compatibility renderer). */
     assert_int_equal(run_command("grep -q 'Godot Engine v4.6' " TMP "/godot.log && grep -q 'Compatibility' " TMP "/godot.log",
                                  NULL, 0),

@@ -17,6 +17,7 @@
 #include "runtimes/bone_order.h"
 #include "runtimes/conformance.h"
 #include "runtimes/hlsl_harness.h"
+#include "runtimes/timed_roster.h"
 #include "timed_subset.h"
 
 #define TMP TEST_TMP "/unity_cs"
@@ -379,6 +380,30 @@ static void test_roster_equals_the_manifest(void **state)
     assert_true(contacts >= 8);
 }
 
+
+/* The timed catalog's roster (tests/runtimes/timed_roster.h) through Roster.Parse, equal to Python's json (timed_rows
+ * included), and HerdState.InstanceData's numbers; a damaged timed state refused with one line. */
+static void test_roster_timed_states(void **state)
+{
+    (void)state;
+    build_check();
+    bake_timed_roster(TMP);
+    fclose(run_check("roster " TMP "/timed/roster.json", TMP "/timed_cs.txt"));
+    run_or_fail("python3 tests/runtimes/unity/roster_lines.py " TMP "/timed/roster.json > " TMP "/timed_py.txt 2>&1");
+    unsigned lines = compare_token_files(TMP "/timed_cs.txt", TMP "/timed_py.txt", 1e-7);
+    char log[4096];
+    assert_int_equal(run_command("grep -c '^R ' " TMP "/timed_py.txt", log, sizeof log), 0);
+    printf("  timed catalog roster: %u lines equal, %d timed clips\n", lines, atoi(log));
+    assert_true(atoi(log) > 0);
+    fclose(run_check("instances " TMP "/timed/roster.json", TMP "/instances.txt"));
+    check_timed_instance_lines(TMP "/instances.txt", "Unity");
+    for (size_t d = 0; d < COUNT_OF(timed_roster_damages); ++d) {
+        damage_timed_roster(TMP, timed_roster_damages[d].edit, TMP "/broken.json");
+        if (run_command("mono " CHECK_EXE " roster " TMP "/broken.json 2>&1", log, sizeof log) == 0)
+            fail_msg("a damaged timed state (%s) was read", timed_roster_damages[d].edit);
+        check_timed_refusal(log, d);
+    }
+}
 
 typedef struct roster_contact {
     char state[64];
@@ -982,6 +1007,7 @@ int main(void)
         cmocka_unit_test(test_reader_equals_the_c_reader),
         cmocka_unit_test(test_reader_verdicts_match),
         cmocka_unit_test(test_roster_equals_the_manifest),
+        cmocka_unit_test(test_roster_timed_states),
         cmocka_unit_test(test_herd_equals_the_c_reader),
         cmocka_unit_test(test_unity_facing_code_compiles),
         cmocka_unit_test(test_shader_glue_compiles),

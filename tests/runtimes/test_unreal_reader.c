@@ -9,6 +9,7 @@
 
 #include "runtimes/bone_order.h"
 #include "runtimes/conformance.h"
+#include "runtimes/timed_roster.h"
 #include "crowdbake/pal_view.h"
 #include "timed_subset.h"
 
@@ -196,6 +197,31 @@ static void test_herd_footsteps_and_travel(void **state)
     printf("  %s", strstr(log, "herd of") ? strstr(log, "herd of") : log);
 }
 
+/* The herd component's roster states with timed rows, outside Unreal: the timed catalog's roster (tests/runtimes/
+ * timed_roster.h) as Python's json reads it, each state through CheckRosterState (the component's check) and the herd
+ * logic's four numbers standing still and moving (reader_check.cpp `states`); a damaged timed state refused, one line. */
+static void test_roster_timed_states(void **state)
+{
+    (void)state;
+    static char log[8192];
+    char cmd[2048];
+    build_reader_check();
+    bake_timed_roster(TMP);
+    snprintf(cmd, sizeof cmd,
+             "python3 tests/runtimes/unity/roster_lines.py %s/timed/roster.json > %s/timed.txt && %s/reader_check states %s/timed.txt > "
+             "%s/instances.txt 2>&1",
+             TMP, TMP, TMP, TMP, TMP);
+    run_or_fail(cmd, log, sizeof log);
+    check_timed_instance_lines(TMP "/instances.txt", "Unreal");
+    for (size_t d = 0; d < COUNT_OF(timed_roster_damages); ++d) {
+        damage_timed_roster(TMP, timed_roster_damages[d].edit, TMP "/broken.json");
+        snprintf(cmd, sizeof cmd, "python3 tests/runtimes/unity/roster_lines.py %s/broken.json > %s/broken.txt && %s/reader_check states %s/broken.txt 2>&1",
+                 TMP, TMP, TMP, TMP);
+        if (run_command(cmd, log, sizeof log) == 0) fail_msg("a damaged timed state (%s) was read", timed_roster_damages[d].edit);
+        check_timed_refusal(log, d);
+    }
+}
+
 /* A damaged file: the factory's message is the C reader's, with the file's name. */
 static void test_bad_file_message(void **state)
 {
@@ -251,6 +277,7 @@ int main(void)
         cmocka_unit_test(test_timed_rows),
         cmocka_unit_test(test_timed_conformance_cases),
         cmocka_unit_test(test_herd_footsteps_and_travel),
+        cmocka_unit_test(test_roster_timed_states),
         cmocka_unit_test(test_bad_file_message),
         cmocka_unit_test(test_vertex_ids_and_skin_texture),
     };

@@ -37,6 +37,7 @@ func run() -> void:
 	_make_viewport()
 	var roster = ResourceLoader.load(COW + "/roster/roster.json", "CrowdbakeRoster")
 	_check_instance_numbers(roster, mesh)
+	_check_timed_roster(mesh)
 	_check_travel(roster, mesh)
 	_check_bounds(roster, mesh)
 	_check_manifest_footsteps(mesh) # before _check_footsteps changes the roster
@@ -269,6 +270,61 @@ func _check_instance_numbers(roster, mesh: Mesh) -> void:
 		if herd.instance_numbers(0, true) != from or not got.is_equal_approx(mixed):
 			why = "halfway through a cross-fade: %s, want %s" % [got, mixed]
 	herd.queue_free()
+	_end(name, why)
+
+# The Cow roster baked with local, timed rows (test_godot.c: bakes/cow/timed; docs/roster.md): every clip timed, its
+# states' frame_count its cells and their rates negative. The roster reads; set_state and set_speed write the cells and
+# keep z < 0: -1e-30 standing still, -|rate_per_speed| x speed / scale moving (speed sync kept), a time state its rate.
+# A timed state whose frame_count is not its clip's cells is refused, one line.
+func _check_timed_roster(mesh: Mesh) -> void:
+	var name := "timed roster: cells, z < 0 (-1e-30 standing still), -|rate_per_speed| x speed / scale moving"
+	_begin(name)
+	var path := COW + "/timed/roster.json"
+	var manifest: Dictionary = JSON.parse_string(FileAccess.get_file_as_string(path))
+	var roster = ResourceLoader.load(path, "CrowdbakeRoster", ResourceLoader.CACHE_MODE_IGNORE)
+	var why := "" if roster != null and roster.get("types") != null else "the timed roster did not load"
+	var cow: Dictionary = manifest["types"]["cow"]
+	var timed := 0
+	var synced := 0
+	var herd: MultiMeshInstance3D = _new_herd(roster, mesh, 3) if why.is_empty() else null
+	for state in cow["states"] if herd else []:
+		var inst: Dictionary = cow["states"][state]["instance"]
+		var clip: Dictionary = cow["clips"].filter(func(c): return c["name"] == cow["states"][state]["clip"])[0]
+		var cells := int(clip.get("timed_rows", {}).get("cells", 0))
+		var per_speed: float = inst["rate_per_speed"]
+		herd.set_state(1, state, 0.0)
+		herd.set_speed(1, 0.0)
+		var still: Vector4 = herd.instance_numbers(1)
+		herd.set_speed(1, 2.0)
+		var moving: Vector4 = herd.instance_numbers(1)
+		var want_still: float = inst["rate"] if per_speed == 0.0 else -1e-30
+		var want: float = inst["rate"] if per_speed == 0.0 else -absf(per_speed) * 2.0 / SIZE
+		timed += 1 if cells > 0 else 0
+		synced += 1 if per_speed != 0.0 else 0
+		if cells == 0 or absi(int(inst["frame_count"])) != cells or still.y != inst["frame_count"] or moving.x != inst["first_row"]:
+			why = "%s plays %s; the manifest says %s, its clip %d cells" % [state, moving, inst, cells]
+		elif not (still.z < 0.0 and moving.z < 0.0) or absf(still.z - want_still) > 1e-6 * absf(want_still) \
+				or absf(moving.z - want) > 1e-4 * absf(want):
+			why = "%s: z %s standing still, %s at 2 m/s; want %s and %s (z < 0 marks a timed instance)" % [state, still.z, moving.z, want_still, want]
+		if not why.is_empty():
+			break
+	if herd:
+		herd.queue_free()
+	if why.is_empty() and (timed == 0 or synced == 0):
+		why = "%d timed states, %d that follow the speed: want some of each" % [timed, synced]
+	_end(name, why)
+	name = "expect-error: a timed state whose frame_count is not its clip's cells is refused"
+	_begin(name)
+	var damaged: Dictionary = manifest.duplicate(true)
+	damaged["types"]["cow"]["states"]["wander"]["instance"]["frame_count"] += 1
+	var f := FileAccess.open(COW + "/timed/damaged.json", FileAccess.WRITE)
+	f.store_string(JSON.stringify(damaged))
+	f.close()
+	var refused = load(ADDON + "/crowdbake_roster.gd").new()
+	why = "read" if refused.load_file(COW + "/timed/damaged.json") else ""
+	if why.is_empty() and (not refused.error.contains("types.cow.states.wander.instance.frame_count: clip") \
+			or not refused.error.contains(" cells, got ") or refused.error.contains("\n")):
+		why = "its error: " + refused.error
 	_end(name, why)
 
 # A placed instance galloping at speed is drawn at its place plus the .pal's per-row travel offset

@@ -86,6 +86,7 @@ static class CrowdbakeCheck
             Line("T", t.name, t.palette, t.layout, t.precision, t.bones, t.rows, t.speedReference, t.defaultState);
             foreach (RosterClip c in t.clips) {
                 Line("L", t.name, c.name, c.firstRow, c.frameCount, c.fps, c.duration, c.loops ? 1 : 0, c.groundSpeed);
+                if (c.timedRows != null) Line("R", t.name, c.name, c.timedRows.cells, c.timedRows.cellRate, c.timedRows.mapRows);
                 foreach (RosterContact k in c.contacts) Line("K", t.name, c.name, k.foot, k.bone, k.time, k.lift);
             }
             foreach (RosterState s in t.states)
@@ -97,6 +98,24 @@ static class CrowdbakeCheck
                 Line(parts);
             }
         }
+    }
+
+    // Each state's roster numbers and HerdState.InstanceData's four floats for instance 1 standing still and
+    // at speed 2 (docs/roster.md): a timed state (its clip's timed_rows) counts cells and plays at a negative rate.
+    static void RosterInstances(string path)
+    {
+        Roster roster = Roster.Parse(File.ReadAllText(path), path);
+        var still = new float[4];
+        var moving = new float[4];
+        foreach (RosterType t in roster.types)
+            foreach (RosterState s in t.states) {
+                RosterTimedRows timed = t.Clip(s.clip).timedRows;
+                HerdState.InstanceData(s, 0, 1, 0, still, 0);
+                HerdState.InstanceData(s, 2, 1, 0, moving, 0);
+                Line("D", t.name, s.name, timed != null ? timed.cells : 0, timed != null ? timed.cellRate : 0,
+                     timed != null ? timed.mapRows : 0, s.frameCount, s.rate, s.ratePerSpeed, still[0], still[1], still[2],
+                     still[3], moving[0], moving[1], moving[2], moving[3]);
+            }
     }
 
     // The herd: each instance's matrix with its numbers (the C side recomputes it from the clip the
@@ -353,12 +372,13 @@ static class CrowdbakeCheck
             if (args.Length == 2 && args[0] == "pal") Pal(args[1]);
             else if (args.Length == 2 && args[0] == "bad") Bad(args[1]);
             else if (args.Length == 2 && args[0] == "roster") RosterLines(args[1]);
+            else if (args.Length == 2 && args[0] == "instances") RosterInstances(args[1]);
             else if (args.Length == 4 && args[0] == "herd") Herd(args[1], args[2], args[3]);
             else if (args.Length == 4 && args[0] == "conformance") Conformance(args[1], args[2], args[3]);
             else if (args.Length == 1 && args[0] == "bonepass") BonePassLines();
             else if (args.Length == 2 && args[0] == "timed") Timed(args[1]);
             else {
-                Console.Error.WriteLine("usage: CrowdbakeCheck.exe pal|bad FILE.pal | roster roster.json | herd FILE.pal roster.json TYPE | conformance DIR CASE OUT | bonepass");
+                Console.Error.WriteLine("usage: CrowdbakeCheck.exe pal|bad FILE.pal | roster|instances roster.json | herd FILE.pal roster.json TYPE | conformance DIR CASE OUT | bonepass");
                 return 2;
             }
         } catch (Exception e) {

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""roster_lines.py ROSTER.json - the roster's types, clips, contacts, states and sockets, one line
+"""roster_lines.py ROSTER.json - the roster's types, clips (timed rows), contacts, states and sockets, one line
 each, in the line format of CrowdbakeCheck.exe's `roster` mode: Python's json reads the manifest
 that the Unity package's C# reader must equal (tests/runtimes/test_unity_cs.c)."""
 import json
@@ -15,6 +15,9 @@ def main(path):
         for c in t["clips"]:
             out.append(["L", name, c["name"], c["first_row"], c["frame_count"], c["fps"], c["duration"], int(c["loops"]),
                         c["ground_speed"]])
+            if "timed_rows" in c:  # a timed clip (.pal version 7): its map's cells, their rate, its map rows
+                r = c["timed_rows"]
+                out.append(["R", name, c["name"], r["cells"], r["cell_rate"], r["map_rows"]])
             for k in c.get("contacts", []):
                 out.append(["K", name, c["name"], k["foot"], k["bone"], k["time"], k["lift"]])
         for s, st in t["states"].items():

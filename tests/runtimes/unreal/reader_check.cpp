@@ -8,6 +8,8 @@
 // tests/runtimes/unity/roster_lines.py, Python's reading of roster.json) moving at several speeds
 // and changing state: every footstep it raises falls on a contact of its state's clip, and its
 // travel offsets are the C reader's cbpal_travel_offset, mixed over a cross-fade.
+// `reader_check states ROSTER_LINES`: every state checked against its clip (CheckRosterState: timed rows) and its
+// four numbers standing still and moving (tests/runtimes/timed_roster.h reads them).
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -165,7 +167,7 @@ int Herd(const char *pal_path, const char *lines, const char *type)
                 for (int k = 0; k < 3; ++k) want[k] = from[k] + (want[k] - from[k]) * fade;
                 faded += want[0] != 0 || want[1] != 0 || want[2] != 0;
             }
-            if (!(StateNamed(states, herd.StateOf(i)).rate_per_speed > 0)) want[0] = want[1] = want[2] = 0; // a state that does not follow the speed
+            if (StateNamed(states, herd.StateOf(i)).rate_per_speed == 0) want[0] = want[1] = want[2] = 0; // a state that does not follow the speed
             for (int k = 0; k < 3; ++k) worst = std::fmax(worst, std::fabs(got[k] - want[k]));
             moving += got[0] != 0 || got[1] != 0 || got[2] != 0;
             ++offsets;
@@ -177,6 +179,58 @@ int Herd(const char *pal_path, const char *lines, const char *type)
     std::printf("herd of %zu states: %u footsteps on their clips' contacts, in order; %u travel offsets (%u moving, %u mid-fade) "
                 "worst %.3g from the C reader's\n", states.size(), footsteps, offsets, moving, faded, worst);
     return footsteps > 10 && moving > 0 && worst <= 1e-6 ? 0 : Fail("too few footsteps or moving offsets, or offsets differ");
+}
+
+// `reader_check states ROSTER_LINES`: every type's states through CheckRosterState against their clips (L, and R:
+// timed_rows) and the type's rows, then HerdLogic's four numbers for instance 1 standing still and at speed 2, a line
+// each: D type state cells cell_rate map_rows frame_count rate rate_per_speed still4 moving4 (cells 0: untimed clip).
+// A state that does not fit: its error, one line, and exit 1.
+int StatesCheck(const char *path)
+{
+    std::ifstream in(path);
+    std::vector<std::vector<std::string>> rows;
+    for (std::string line; std::getline(in, line);) {
+        std::istringstream f(line);
+        std::vector<std::string> row;
+        for (std::string word; f >> word;) row.push_back(word);
+        if (row.size() >= 3) rows.push_back(row);
+    }
+    std::string out; // printed once every state passed: a refusal is the one line
+    for (const auto &t : rows) {
+        if (t[0] != "T" || t.size() < 9) continue;
+        const std::string &type = t[1];
+        std::vector<crowdbake::HerdStateInfo> states = RosterStates(path, type);
+        for (crowdbake::HerdStateInfo &s : states) {
+            std::string clip_name;
+            for (const auto &r : rows)
+                if (r[0] == "S" && r[1] == type && r[2] == s.name) clip_name = r[3];
+            crowdbake::HerdClipRows clip;
+            clip.name = clip_name;
+            for (const auto &r : rows) {
+                if (r[1] != type || r[2] != clip_name) continue;
+                if (r[0] == "L") clip.first_row = std::stoi(r[3]), clip.frame_count = std::stoi(r[4]);
+                if (r[0] == "R") clip.cells = std::stoi(r[3]), clip.cell_rate = std::stof(r[4]), clip.map_rows = std::stoi(r[5]);
+            }
+            std::string error;
+            if (!crowdbake::CheckRosterState(s, clip, std::stoi(t[6]), "types." + type + ".states." + s.name + ".instance", error)) {
+                std::printf("%s: %s\n", path, error.c_str());
+                return 1;
+            }
+            crowdbake::HerdLogic herd(states, 2, 0.4f);
+            float still[4], moving[4];
+            herd.SetState(1, s.name, 0.0, 0.0f, 0.0f);
+            std::memcpy(still, herd.CustomData(1), sizeof still);
+            herd.SetState(1, s.name, 0.0, 0.0f, 2.0f);
+            std::memcpy(moving, herd.CustomData(1), sizeof moving);
+            char line[1024];
+            std::snprintf(line, sizeof line, "D %s %s %d %.9g %d %d %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", type.c_str(),
+                          s.name.c_str(), clip.cells, clip.cell_rate, clip.map_rows, s.frame_count, s.rate, s.rate_per_speed, still[0],
+                          still[1], still[2], still[3], moving[0], moving[1], moving[2], moving[3]);
+            out += line;
+        }
+    }
+    std::fputs(out.c_str(), stdout);
+    return 0;
 }
 
 std::vector<uint8_t> ReadBytes(const std::string &path)
@@ -238,6 +292,7 @@ int main(int argc, char **argv)
     if (argc == 6 && std::strcmp(argv[1], "conformance") == 0) return Conformance(argv[2], argv[3], argv[4], argv[5]);
     if (argc == 3 && std::strcmp(argv[1], "skin") == 0) return Skin(argv[2]);
     if (argc == 5 && std::strcmp(argv[1], "herd") == 0) return Herd(argv[2], argv[3], argv[4]);
+    if (argc == 3 && std::strcmp(argv[1], "states") == 0) return StatesCheck(argv[2]);
     if (argc != 2) return Fail("usage: reader_check FILE.pal | skin FILE.cbskin | herd FILE.pal ROSTER_LINES TYPE");
     std::ifstream in(argv[1], std::ios::binary);
     std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -32,6 +32,9 @@ const _HERD_MESH := preload("crowdbake_herd_mesh.gd")
 const _BONE_PASS_SHADER := preload("crowdbake_bone_pass.gdshader")
 const _BONE_PASS_INCLUDE := preload("crowdbake_bone_pass.gdshaderinc")
 const GOLDEN := 0.6180339887
+# The rate a timed instance (rate < 0, .pal version 7) plays at standstill (crowdbake_pal.mjs TIMED_STILL_RATE): it
+# stays negative to mark the instance timed (-0 reads as an untimed clip's, its cells taken for rows).
+const TIMED_STILL_RATE := 1e-30
 const INSTANCES_PER_ROW := 256 # instances per row of the instance texture
 const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade start and length, 2 spare
 
@@ -201,7 +204,7 @@ func set_state(i: int, state: String, fade := -1.0) -> bool:
 	_data[at] = inst["first_row"]
 	_data[at + 1] = frames
 	_data[at + 2] = rate
-	_data[at + 3] = _wrap(start - time * rate / absf(frames), frames)
+	_data[at + 3] = _wrap(start - time * absf(rate) / absf(frames), frames)
 	_dirty = true
 	return true
 
@@ -228,7 +231,7 @@ func place(i: int, xform: Transform3D) -> void:
 # transforms itself adds xform * travel_offset(i).
 func travel_offset(i: int) -> Vector3:
 	var inst: Dictionary = _type["states"][_states[i]]["instance"] if not _states[i].is_empty() else {}
-	if palette.row_travel.is_empty() or float(inst.get("rate_per_speed", 0.0)) <= 0.0 or _speeds[i] <= 0.0:
+	if palette.row_travel.is_empty() or float(inst.get("rate_per_speed", 0.0)) == 0.0 or _speeds[i] <= 0.0:
 		return Vector3.ZERO
 	var to: Vector3 = palette.travel_offset_at(instance_numbers(i), time)
 	var fade := _fade(i)
@@ -285,14 +288,16 @@ func _fade(i: int) -> float:
 	var at := i * FLOATS
 	return clampf((time - _data[at + 8]) / _data[at + 9], 0.0, 1.0) if _data[at + 9] > 0.0 else 1.0
 
-# Rows per second of instance i's state at its speed and scale.
+# Rows per second of instance i's state at its speed and scale; a timed state's (rate < 0) cells per second,
+# negated, and never -0 (docs/roster.md). A state follows the speed when rate_per_speed != 0 (a timed one's < 0).
 func _rate(i: int, state: String) -> float:
 	var inst: Dictionary = _type["states"][state]["instance"]
 	var per_speed := float(inst.get("rate_per_speed", 0.0))
 	if per_speed == 0.0:
 		return inst["rate"]
 	var scale := multimesh.get_instance_transform(i).basis.get_scale().x
-	return per_speed * _speeds[i] / scale
+	var rate := absf(per_speed) * _speeds[i] / scale
+	return -maxf(rate, TIMED_STILL_RATE) if float(inst["rate"]) < 0.0 else rate
 
 # A new rate for instance i with its clip position kept: the phase takes up the difference.
 func _retime(i: int) -> void:
@@ -300,10 +305,10 @@ func _retime(i: int) -> void:
 		return
 	var at := i * FLOATS
 	var frames := absf(_data[at + 1])
-	var fpos := time * _data[at + 2] + _data[at + 3] * frames
+	var fpos := time * absf(_data[at + 2]) + _data[at + 3] * frames # a timed clip's rate is negative: |z| (the shader's)
 	var rate := _rate(i, _states[i])
 	_data[at + 2] = rate
-	_data[at + 3] = _wrap((fpos - time * rate) / frames, _data[at + 1])
+	_data[at + 3] = _wrap((fpos - time * absf(rate)) / frames, _data[at + 1])
 	_dirty = true
 
 static func _wrap(phase: float, frames: float) -> float:

@@ -240,7 +240,11 @@ func fill_herd(node: MultiMeshInstance3D, type: String, state: String, speed: fl
 		return _fail(("%s: state '%s' of '%s' starts at palette row %d; the Compatibility renderer keeps instance data as "
 				+ "half floats, exact only up to row %d: use Forward+ or Mobile, or give that type fewer clips")
 				% [node.name, state, type, inst["first_row"], COMPATIBILITY_MAX_ROW])
-	var rate: float = inst["rate"] if inst["rate_per_speed"] == 0.0 else inst["rate_per_speed"] * speed
+	# A state follows the speed when rate_per_speed != 0; a timed state's rate (< 0, cells per second) stays negative,
+	# -1e-30 standing still, never -0 (docs/roster.md; crowdbake_pal.mjs instanceData).
+	var rate: float = inst["rate"] if inst["rate_per_speed"] == 0.0 else absf(inst["rate_per_speed"]) * speed
+	if inst["rate"] < 0.0 and inst["rate_per_speed"] != 0.0:
+		rate = -maxf(rate, 1e-30)
 	var mm := MultiMesh.new()
 	mm.transform_format = MultiMesh.TRANSFORM_3D
 	mm.use_custom_data = true

@@ -36,11 +36,41 @@ func load_file(path: String) -> bool:
 		var clips := {}
 		for clip in entry.get("clips", []):
 			clips[clip["name"]] = clip
+		for state in entry.get("states", {}):
+			var wrong := _state_error("types.%s.states.%s.instance" % [name, state], entry["states"][state], clips, int(entry.get("rows", -1)))
+			if not wrong.is_empty():
+				return _fail("%s: %s" % [path, wrong])
 		types[name] = {"palette": palette, "states": entry.get("states", {}), "clips": clips,
 				"sockets": _sockets(entry.get("sockets", {})), "default_state": entry.get("default_state", ""),
 				"speed_reference": float(entry.get("speed_reference", palette.speed_reference)),
 				"animation_lod": entry.get("animation_lod", {})}
 	return true
+
+# Why a state does not fit its clip and the type's `rows`, as readRoster (crowdbake_pal.mjs) checks it: a timed clip's
+# (its `timed_rows`, .pal version 7) states count its cells and play at negative rates (rate and rate_per_speed),
+# every other clip's at rates >= 0 (`rows` < 0: not known). "" when it fits; else one line naming the field under `at`.
+static func _state_error(at: String, state: Dictionary, clips: Dictionary, rows: int) -> String:
+	var inst: Dictionary = state.get("instance", {})
+	var clip_name := str(state.get("clip", ""))
+	var clip: Dictionary = clips.get(clip_name, {})
+	var timed_rows: Dictionary = clip.get("timed_rows", {})
+	var timed := not timed_rows.is_empty()
+	var rate := float(inst.get("rate", 0.0))
+	var per_speed := float(inst.get("rate_per_speed", 0.0))
+	var frames := int(inst.get("frame_count", 0))
+	if (rate < 0.0) != timed or per_speed * rate < 0.0:
+		return "%s.rate: %s" % [at, ("clip \"%s\" has timed rows: rate and rate_per_speed must be negative" % clip_name) if timed
+				else "expected a number >= 0, and rate_per_speed too"]
+	if frames == 0:
+		return "%s.frame_count: expected a non-zero integer" % at
+	if timed and absi(frames) != int(timed_rows.get("cells", 0)):
+		return "%s.frame_count: clip \"%s\" has %d cells, got %d" % [at, clip_name, int(timed_rows.get("cells", 0)), frames]
+	var first_row := int(inst.get("first_row", 0))
+	var first := -first_row - 1 if first_row < 0 else first_row # held rows: -first_row - 1
+	var count := int(clip.get("frame_count", 0)) if timed else absi(frames) # a timed state counts cells, not rows
+	if (rows >= 0 and first + count > rows) or (timed and int(timed_rows.get("map_rows", 0)) > first):
+		return "%s: rows %d..%d outside the type's %d rows" % [at, first, first + count, rows]
+	return ""
 
 # What the editor's import of the .json at `path` saves (crowdbake_import_roster.gd): a roster manifest
 # as this CrowdbakeRoster, its palettes resolved (in a project each is its own import, referenced; else read

@@ -59,6 +59,10 @@ namespace Crowdbake
 
         public IList<RosterState> States { get { return states; } }
 
+        // The rate a timed instance plays at standstill (crowdbake_pal.mjs TIMED_STILL_RATE): its rate must stay
+        // negative to mark it timed (-0 reads as an untimed clip's, its cells taken for rows); a cell in 3e22 years.
+        public const double TimedStillRate = 1e-30;
+
         // A state per clip, for a palette without a roster: loops spread by the golden ratio,
         // one-shots start on their first row. Its numbers are the clip's (PalFile.InstanceOf): a timed
         // clip's count is its cells and its rate -cell_rate, negative.
@@ -85,14 +89,16 @@ namespace Crowdbake
         // The four per-instance numbers of docs/roster.md for `state` at ground speed `speed` (model
         // units/s), instance index `index`; a one-shot started at `startTime`. A timed state (rate < 0, .pal
         // version 7) keeps the sign: its rate is -cells a second.
+        // A state follows the speed when its rate_per_speed != 0 (a timed one's is negative, cells per unit of
+        // speed); standing still, a timed instance's rate is -TimedStillRate, never -0, as z < 0 marks it timed.
         public static void InstanceData(RosterState state, double speed, int index, double startTime, float[] out4, int at)
         {
-            double rate = state.ratePerSpeed > 0 ? state.ratePerSpeed * speed : Math.Abs(state.rate);
+            double rate = state.ratePerSpeed != 0 ? Math.Abs(state.ratePerSpeed) * speed : Math.Abs(state.rate);
             double frames = Math.Abs(state.frameCount), golden = index * 0.6180339887;
             double phase = state.goldenRatioPhase ? golden - Math.Floor(golden) : -startTime * rate / frames;
             out4[at] = state.firstRow;
             out4[at + 1] = state.frameCount;
-            out4[at + 2] = (float)(state.rate < 0 ? -rate : rate);
+            out4[at + 2] = (float)(state.rate < 0 ? -Math.Max(rate, TimedStillRate) : rate);
             out4[at + 3] = (float)phase;
         }
 
@@ -141,7 +147,7 @@ namespace Crowdbake
         {
             float was = Scale[i];
             Scale[i] = scale;
-            if (was != scale && Find(StateOf[i]).ratePerSpeed > 0) SetSpeed(i, Speed[i]);
+            if (was != scale && Find(StateOf[i]).ratePerSpeed != 0) SetSpeed(i, Speed[i]);
         }
 
         public void SetPhase(int i, float phase) { SetState(i, StateOf[i], float.NaN, phase, 0); }
@@ -173,7 +179,7 @@ namespace Crowdbake
         {
             Array.Clear(o, 0, 3);
             RosterState s = Find(StateOf[i]);
-            if (pal.Header.TravelTableOffset == 0 || s == null || !(s.ratePerSpeed > 0) || !(Speed[i] > 0)) return;
+            if (pal.Header.TravelTableOffset == 0 || s == null || s.ratePerSpeed == 0 || !(Speed[i] > 0)) return;
             var inst = new float[4];
             Array.Copy(Inst, i * 4, inst, 0, 4);
             pal.InstanceTravelOffset(inst, Time, o);

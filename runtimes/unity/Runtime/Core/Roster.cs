@@ -14,6 +14,14 @@ namespace Crowdbake
         public float time, lift; // seconds into the clip: it lands, it lifts
     }
 
+    // A timed clip's map (.pal version 7, docs/pal-format.md "Timed rows"): its cells, their rate, its map rows.
+    [Serializable]
+    public sealed class RosterTimedRows
+    {
+        public int cells, mapRows;
+        public float cellRate;
+    }
+
     [Serializable]
     public sealed class RosterClip
     {
@@ -21,6 +29,7 @@ namespace Crowdbake
         public int firstRow, frameCount;
         public float fps, duration, groundSpeed;
         public bool loops;
+        public RosterTimedRows timedRows; // null: the clip plays its rows uniformly (no timed rows, .pal version < 7)
         public List<RosterContact> contacts = new List<RosterContact>();
     }
 
@@ -29,7 +38,7 @@ namespace Crowdbake
     {
         public string name, clip;
         public int firstRow, frameCount; // frameCount < 0: a one-shot
-        public float rate, ratePerSpeed;
+        public float rate, ratePerSpeed; // < 0: a timed clip's cells per second, and per unit of speed, negated
         public bool goldenRatioPhase; // else "zero": a one-shot starts on its first row
     }
 
@@ -118,6 +127,12 @@ namespace Crowdbake
                 object v = Need(o, at, key);
                 if (!(v is double) || (exclusive ? !((double)v > min) : !((double)v >= min)))
                     throw Fail(at + "." + key, "expected a number " + (exclusive ? "> " : ">= ") + min);
+                return (double)v;
+            }
+            public double Number(JsonObject o, string at, string key)
+            {
+                object v = Need(o, at, key);
+                if (!(v is double) || double.IsNaN((double)v) || double.IsInfinity((double)v)) throw Fail(at + "." + key, "expected a number");
                 return (double)v;
             }
             public int Int(JsonObject o, string at, string key, long min, long below)
@@ -221,6 +236,14 @@ namespace Crowdbake
                 duration = (float)r.Num(c, w, "duration", 0, false), loops = r.Bool(c, w, "loops"),
                 groundSpeed = (float)r.Num(c, w, "ground_speed", 0, false)
             };
+            if (c.Has("timed_rows")) {
+                string wt = w + ".timed_rows";
+                JsonObject t = r.Obj(c.Get("timed_rows"), wt);
+                clip.timedRows = new RosterTimedRows {
+                    cells = r.Int(t, wt, "cells", 1, int.MaxValue), cellRate = (float)r.Num(t, wt, "cell_rate", 0, true),
+                    mapRows = r.Int(t, wt, "map_rows", 1, int.MaxValue)
+                };
+            }
             List<object> contacts = r.Arr(c, w, "contacts", true);
             for (int j = 0; j < contacts.Count; ++j) {
                 string wc = w + ".contacts[" + j + "]";
@@ -244,14 +267,23 @@ namespace Crowdbake
             var state = new RosterState {
                 name = name, clip = clip, firstRow = r.Int(inst, wi, "first_row", int.MinValue + 1, int.MaxValue), // < 0: held rows
                 frameCount = r.Int(inst, wi, "frame_count", int.MinValue + 1, int.MaxValue),
-                rate = (float)r.Num(inst, wi, "rate", 0, false), ratePerSpeed = (float)r.Num(inst, wi, "rate_per_speed", 0, false),
+                // < 0: a timed clip (its cells per second, and per unit of speed, negated: docs/roster.md)
+                rate = (float)r.Number(inst, wi, "rate"),
+                ratePerSpeed = (float)r.Number(inst, wi, "rate_per_speed"),
                 goldenRatioPhase = r.OneOf(inst, wi, "phase", new[] { "golden_ratio", "zero" }) == "golden_ratio"
             };
             if (state.frameCount == 0) throw r.Fail(wi + ".frame_count", "expected a non-zero integer");
+            RosterClip c = type.Clip(clip);
+            RosterTimedRows timed = c.timedRows;
+            if ((state.rate < 0) != (timed != null) || state.ratePerSpeed * state.rate < 0)
+                throw r.Fail(wi + ".rate", timed != null ? "clip \"" + clip + "\" has timed rows: rate and rate_per_speed must be negative"
+                                                         : "expected a number >= 0, and rate_per_speed too");
+            if (timed != null && Math.Abs((long)state.frameCount) != timed.cells)
+                throw r.Fail(wi + ".frame_count", "clip \"" + clip + "\" has " + timed.cells + " cells, got " + state.frameCount);
             long first = state.firstRow < 0 ? -(long)state.firstRow - 1 : state.firstRow; // held rows: -first_row - 1
-            if (first + Math.Abs((long)state.frameCount) > type.rows)
-                throw r.Fail(wi, "rows " + first + ".." + (first + Math.Abs((long)state.frameCount)) + " outside the type's " +
-                                 type.rows + " rows");
+            long rows = timed != null ? c.frameCount : Math.Abs((long)state.frameCount); // a timed state counts cells, not rows
+            if (first + rows > type.rows || (timed != null && timed.mapRows > first))
+                throw r.Fail(wi, "rows " + first + ".." + (first + rows) + " outside the type's " + type.rows + " rows");
             return state;
         }
 

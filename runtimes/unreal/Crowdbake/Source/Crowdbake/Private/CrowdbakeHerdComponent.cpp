@@ -55,6 +55,28 @@ void LoadContacts(const TArray<TSharedPtr<FJsonValue>> *Clips, const FString &Cl
         return;
     }
 }
+
+// The clip's rows and its timed_rows (docs/roster.md; none: cells 0), from the type's `clips`.
+crowdbake::HerdClipRows ClipRows(const TArray<TSharedPtr<FJsonValue>> *Clips, const FString &ClipName)
+{
+    crowdbake::HerdClipRows Rows;
+    Rows.name = TCHAR_TO_UTF8(*ClipName);
+    if (!Clips) return Rows;
+    for (const TSharedPtr<FJsonValue> &Value : *Clips) {
+        const TSharedPtr<FJsonObject> Clip = Value->AsObject();
+        if (!Clip.IsValid() || Clip->GetStringField(TEXT("name")) != ClipName) continue;
+        Rows.first_row = (int32_t)Clip->GetNumberField(TEXT("first_row"));
+        Rows.frame_count = (int32_t)Clip->GetNumberField(TEXT("frame_count"));
+        const TSharedPtr<FJsonObject> *Timed;
+        if (Clip->TryGetObjectField(TEXT("timed_rows"), Timed)) { // .pal version 7: its states count cells at negative rates
+            Rows.cells = (int32_t)(*Timed)->GetNumberField(TEXT("cells"));
+            Rows.cell_rate = (float)(*Timed)->GetNumberField(TEXT("cell_rate"));
+            Rows.map_rows = (int32_t)(*Timed)->GetNumberField(TEXT("map_rows"));
+        }
+        break;
+    }
+    return Rows;
+}
 } // namespace
 
 void UCrowdbakeHerdComponent::LoadStates(std::vector<crowdbake::HerdStateInfo> &States, FString &DefaultState) const
@@ -83,6 +105,15 @@ void UCrowdbakeHerdComponent::LoadStates(std::vector<crowdbake::HerdStateInfo> &
         Info.rate_per_speed = (float)(*Inst)->GetNumberField(TEXT("rate_per_speed"));
         Info.golden_ratio_phase = (*Inst)->GetStringField(TEXT("phase")) == TEXT("golden_ratio");
         LoadContacts(Clips, State->GetStringField(TEXT("clip")), Info);
+        // A state that does not fit its clip (a timed clip's cells and negative rates) is refused as readRoster refuses it.
+        std::string Error;
+        if (!crowdbake::CheckRosterState(Info, ClipRows(Clips, State->GetStringField(TEXT("clip"))),
+                                         (int32_t)(*TypeObject)->GetNumberField(TEXT("rows")),
+                                         "types." + std::string(TCHAR_TO_UTF8(*Type)) + ".states." + Info.name + ".instance", Error)) {
+            UE_LOG(LogTemp, Error, TEXT("CrowdbakeHerd %s: %s: %s"), *GetName(), *Roster.FilePath, UTF8_TO_TCHAR(Error.c_str()));
+            States.clear();
+            return;
+        }
         States.push_back(Info);
     }
 }

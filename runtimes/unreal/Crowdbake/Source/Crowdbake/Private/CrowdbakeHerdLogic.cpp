@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 
 namespace crowdbake
@@ -21,6 +22,30 @@ std::vector<HerdStateInfo> StatesFromClips(const PalContents &pal)
         states.push_back(s);
     }
     return states;
+}
+
+bool CheckRosterState(const HerdStateInfo &s, const HerdClipRows &clip, int32_t type_rows, const std::string &at, std::string &error)
+{
+    const bool timed = clip.cells > 0;
+    if ((s.rate < 0) != timed || s.rate_per_speed * s.rate < 0) {
+        error = at + ".rate: " + (timed ? "clip \"" + clip.name + "\" has timed rows: rate and rate_per_speed must be negative"
+                                        : std::string("expected a number >= 0, and rate_per_speed too"));
+        return false;
+    }
+    if (s.frame_count == 0 || (timed && std::abs((int64_t)s.frame_count) != clip.cells)) {
+        error = at + ".frame_count: " + (timed ? "clip \"" + clip.name + "\" has " + std::to_string(clip.cells) + " cells, got " +
+                                                     std::to_string(s.frame_count)
+                                               : std::string("expected a non-zero integer"));
+        return false;
+    }
+    int64_t first = s.first_row < 0 ? -(int64_t)s.first_row - 1 : s.first_row; // held rows: -first_row - 1
+    int64_t rows = timed ? clip.frame_count : std::abs((int64_t)s.frame_count); // a timed state counts cells, not rows
+    if (first + rows > type_rows || (timed && clip.map_rows > first)) {
+        error = at + ": rows " + std::to_string(first) + ".." + std::to_string(first + rows) + " outside the type's " +
+                std::to_string(type_rows) + " rows";
+        return false;
+    }
+    return true;
 }
 
 std::vector<ContactCrossing> ContactsCrossed(const HerdStateInfo &s, double from, double to)
@@ -70,14 +95,16 @@ std::string HerdLogic::StateNames() const
 }
 
 // docs/roster.md's four numbers: moving at `speed` model units/s, index i, a one-shot started at `start`.
-// A timed state (rate < 0, .pal version 7) keeps the sign: its rate is -cells a second.
+// A state follows the speed when rate_per_speed != 0 (a timed one's is negative). A timed state (rate < 0,
+// .pal version 7) keeps the sign: its rate is -cells a second, and standing still -kTimedStillRate, never -0,
+// which would read as an untimed clip's (its cells taken for rows).
 void HerdLogic::InstanceNumbers(const HerdStateInfo &s, double speed, int i, double start, float out[4]) const
 {
-    double rate = s.rate_per_speed > 0 ? s.rate_per_speed * speed : std::fabs(s.rate);
+    double rate = s.rate_per_speed != 0 ? std::fabs(s.rate_per_speed) * speed : std::fabs(s.rate);
     double frames = std::fabs((double)s.frame_count), golden = i * 0.6180339887;
     out[0] = (float)s.first_row;
     out[1] = (float)s.frame_count;
-    out[2] = (float)(s.rate < 0 ? -rate : rate);
+    out[2] = (float)(s.rate < 0 ? -std::max(rate, kTimedStillRate) : rate);
     out[3] = (float)(s.golden_ratio_phase ? golden - std::floor(golden) : -start * rate / frames);
 }
 
@@ -126,7 +153,7 @@ void HerdLogic::TravelOffsetAt(const uint8_t *pal, size_t size, int i, double no
 {
     out[0] = out[1] = out[2] = 0;
     const HerdStateInfo *s = Find(state_[(size_t)i]);
-    if (!s || !(s->rate_per_speed > 0) || !(speed_[(size_t)i] > 0)) return;
+    if (!s || s->rate_per_speed == 0 || !(speed_[(size_t)i] > 0)) return;
     const float *d = CustomData(i);
     InstanceTravelOffset(pal, size, d, now, out);
     float fade = FadeWeight(i, now), from[3];
@@ -148,7 +175,7 @@ void HerdLogic::SetScale(int i, float scale, double now)
 {
     float was = scale_[(size_t)i];
     scale_[(size_t)i] = scale;
-    if (was != scale && Find(state_[(size_t)i])->rate_per_speed > 0) SetSpeed(i, speed_[(size_t)i], now);
+    if (was != scale && Find(state_[(size_t)i])->rate_per_speed != 0) SetSpeed(i, speed_[(size_t)i], now);
 }
 
 float HerdLogic::FadeWeight(int i, double now) const

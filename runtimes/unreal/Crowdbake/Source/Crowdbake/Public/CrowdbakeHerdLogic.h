@@ -25,11 +25,26 @@ struct HerdContact {
 struct HerdStateInfo {
     std::string name;
     int32_t first_row = 0, frame_count = 0; // frame_count < 0: a one-shot
-    float rate = 0, rate_per_speed = 0;     // rows/s (a timed clip: -cells/s); rows per model unit travelled (0: `rate`)
+    float rate = 0, rate_per_speed = 0;     // rows/s (a timed clip: -cells/s); rows per model unit travelled (0: `rate`;
+                                            // a timed clip: -cells per unit); != 0: the state follows the speed
     bool golden_ratio_phase = true;         // else "zero": a one-shot starts on its first row
     float clip_fps = 0;                     // the clip's rows per second of clip time (contacts' rows)
     std::vector<HerdContact> contacts;      // the clip's (none without a roster)
 };
+
+// A roster clip's rows (docs/roster.md `clips`) and, for a timed clip (.pal version 7), its `timed_rows`: its map's
+// cells, their rate and its map rows (cells 0: the clip plays its rows uniformly).
+struct HerdClipRows {
+    std::string name;
+    int32_t first_row = 0, frame_count = 0;
+    int32_t cells = 0, map_rows = 0;
+    float cell_rate = 0;
+};
+
+// Whether state `s` fits its clip and the type's `type_rows` rows as readRoster (crowdbake_pal.mjs) checks it: a
+// timed clip's states count its cells and play at negative rates (rate and rate_per_speed), every other clip's at
+// rates >= 0; else false and `error`, one line naming the field under `at` (types.T.states.S.instance).
+bool CheckRosterState(const HerdStateInfo &s, const HerdClipRows &clip, int32_t type_rows, const std::string &at, std::string &error);
 
 // A foot landing or lifting that an instance's clock crossed: `time` is the herd clock's moment of it.
 struct Footstep {
@@ -58,6 +73,9 @@ class HerdLogic
 {
 public:
     static const int kCustomDataFloats = 10; // Crowdbake.ush's CROWDBAKE_CUSTOM_DATA_FLOATS
+    // The rate a timed instance plays at standstill (crowdbake_pal.mjs TIMED_STILL_RATE): it stays negative to mark
+    // the instance timed, and moves it a cell in 3e22 years.
+    static constexpr double kTimedStillRate = 1e-30;
 
     HerdLogic(std::vector<HerdStateInfo> states, int count, float default_fade);
 
