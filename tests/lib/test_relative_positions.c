@@ -127,10 +127,10 @@ static void test_half_positions_relative_to_offsets(void **state)
     cb_palette_view_free(&a), cb_palette_view_free(&b2), cb_palette_view_free(&b1);
     cbpal_close(&g2), cbpal_close(&g1);
     /* A newer version is refused with the fix. */
-    uint32_t seven = 7;
-    memcpy(v1 + 8, &seven, 4);
+    uint32_t eight = 8;
+    memcpy(v1 + 8, &eight, 4);
     assert_int_not_equal(cbpal_open_memory(v1, size, 0, &g1, msg, sizeof msg), 0);
-    assert_non_null(strstr(msg, "version 7 is newer than this reader (version 6); update the reader"));
+    assert_non_null(strstr(msg, "version 8 is newer than this reader (version 7); update the reader"));
     cbpal_close(&f);
     free(v1), free(v2), free(d);
 }
