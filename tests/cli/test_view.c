@@ -90,7 +90,8 @@ static void test_a_broken_palette_shader_is_caught(void **state)
      * texels in the wrong order (quaternion and position swapped, for the default qpos layout). */
     assert_int_equal(system("rm -rf " TMP "/broken && mkdir -p " TMP "/broken/glsl && "
                             "ln -s \"$PWD/cli/viewer\" " TMP "/broken/viewer && ln -s \"$PWD/runtimes/web\" " TMP "/broken/web && "
-                            "sed 's/CB_TEXELS_PER_BONE + k,/CB_TEXELS_PER_BONE + (k ^ 1),/' runtimes/glsl/crowdbake_palette.glsl > "
+                            "sed 's/cb_texel_xy(row, bone \\* CB_TEXELS_PER_BONE + k)/"
+                            "cb_texel_xy(row, bone * CB_TEXELS_PER_BONE + (k ^ 1))/' runtimes/glsl/crowdbake_palette.glsl > "
                             TMP "/broken/glsl/crowdbake_palette.glsl && "
                             "! cmp -s runtimes/glsl/crowdbake_palette.glsl " TMP "/broken/glsl/crowdbake_palette.glsl"),
                      0);
