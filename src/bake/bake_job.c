@@ -160,9 +160,9 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
             cbpal_xxh64_update(&h, &g->lods[i]->source_hash, sizeof g->lods[i]->source_hash);
         return cbpal_xxh64_digest(&h);
     }
-    char opts[360], chosen[96] = "";
+    char opts[360], chosen[96] = ""; /* error-bounded rates: the goal chooses them (a fixed fps: as before it) */
     /* Timed rows other than auto (the hash as before it) where they change a file: local rows' .pal. */
-    bool timed_asked = o->timed_rows != CB_TIMED_ROWS_AUTO && o->bone_space == CB_BONE_SPACE_LOCAL; /* error-bounded rates: the goal chooses them (a fixed fps: as before it) */
+    bool timed_asked = o->timed_rows != CB_TIMED_ROWS_AUTO && o->bone_space == CB_BONE_SPACE_LOCAL;
     if (job->settings.fps_auto)
         snprintf(chosen, sizeof chosen, " auto max_error=%.17g max_fps=%.17g", job->settings.max_error_mm,
                  job->settings.max_fps);

@@ -180,14 +180,14 @@ static void encode_bone(const cb_palette *p, uint32_t bone, const double *v, uns
 static void encode_local(cb_palette *p, const double *values)
 {
     uint32_t tb = cb_precision_texel_bytes(p->precision);
-    for (uint32_t c = 0; c < p->clip_count; ++c)
-    for (uint32_t r = p->clips[c].first_row; r < p->clips[c].first_row + p->clips[c].frames; ++r)
-        for (uint32_t j = 0; j < p->bone_count; ++j) {
-            uint32_t x, y;
-            cb_palette_texel_xy(p, r, j, &x, &y);
-            encode_bone(p, j, values + ((size_t)r * p->bone_count + j) * 8,
-                        (unsigned char *)p->texels + ((size_t)y * p->width + x) * tb);
-        }
+    for (uint32_t c = 0; c < p->clip_count; ++c) /* the clips' rows: a timed clip's map rows hold no bone */
+        for (uint32_t r = p->clips[c].first_row; r < p->clips[c].first_row + p->clips[c].frames; ++r)
+            for (uint32_t j = 0; j < p->bone_count; ++j) {
+                uint32_t x, y;
+                cb_palette_texel_xy(p, r, j, &x, &y);
+                encode_bone(p, j, values + ((size_t)r * p->bone_count + j) * 8,
+                            (unsigned char *)p->texels + ((size_t)y * p->width + x) * tb);
+            }
 }
 
 /* ---- timed clips: the rows on their cells kept, their maps made room for ---- */
@@ -228,20 +228,18 @@ static cb_status keep_timed_rows(cb_palette *g, const cb_clip_plan *plan, uint32
     }
     g->rows = rows;
     if (palette_plan_texture(g, max_texture_size, source, err)) return free(old_first), err->status;
-    size_t tb = cb_precision_texel_bytes(g->precision), bone_bytes = g->texels_per_bone * tb;
+    size_t tb = cb_precision_texel_bytes(g->precision);
     g->texel_bytes = (size_t)g->width * g->height * tb;
     g->texels = calloc(g->texel_bytes ? g->texel_bytes : 1, 1);
     if (!g->texels) return free(old_first), g->texels = old.texels, cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for timed rows", source);
     for (uint32_t c = 0; c < g->clip_count; ++c) {
         const cb_palette_clip *clip = &g->clips[c];
-        for (uint32_t k = 0; k < clip->frames; ++k) {
+        for (uint32_t k = 0; k < clip->frames; ++k) { /* a row's texels lie side by side in its block */
             uint32_t from = old_first[c] + (clip->timed ? plan[c].row_cells[k] : k), x0, y0, x1, y1;
-            for (uint32_t j = 0; j < g->bone_count; ++j) {
-                cb_palette_texel_xy(&old, from, j, &x0, &y0);
-                cb_palette_texel_xy(g, clip->first_row + k, j, &x1, &y1);
-                memcpy((unsigned char *)g->texels + ((size_t)y1 * g->width + x1) * tb,
-                       (const unsigned char *)old.texels + ((size_t)y0 * old.width + x0) * tb, bone_bytes);
-            }
+            cb_palette_texel_xy(&old, from, 0, &x0, &y0);
+            cb_palette_texel_xy(g, clip->first_row + k, 0, &x1, &y1);
+            memcpy((unsigned char *)g->texels + ((size_t)y1 * g->width + x1) * tb,
+                   (const unsigned char *)old.texels + ((size_t)y0 * old.width + x0) * tb, (size_t)g->row_texels * tb);
         }
     }
     if (!old.texels_borrowed) free(old.texels);

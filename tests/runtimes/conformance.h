@@ -440,6 +440,18 @@ static inline double conformance_compare(const conformance *c, const conf_case *
     return worst / (1e-5 * fmax(1.0, c->palettes[k->palette].view.model_height));
 }
 
+/* conformance_compare for the positions a runtime wrote to `path` (float32 x 3, conf_positions of them). */
+static inline double conformance_compare_file(const conformance *c, const conf_case *k, const char *path, double *units)
+{
+    size_t size = 0;
+    float *got = (float *)read_whole_file(path, &size);
+    if (!got) fail_msg("%s: %s wrote no result", k->name, path);
+    assert_int_equal(size, conf_positions(c, k) * 3 * sizeof(float));
+    double ratio = conformance_compare(c, k, got, units);
+    free(got);
+    return ratio;
+}
+
 /* What a shader runtime's GPU skins for a case from `source` (its library, broken where the case
  * says): conf_positions(c, k) positions, 3 floats each, for the caller to free. */
 typedef float *(*conf_gpu_case)(const conformance *c, const conf_case *k, const char *source, void *ctx);

@@ -141,16 +141,11 @@ static void test_timed_conformance_cases(void **state)
         }
         run_or_fail(cmd, log, sizeof log);
         snprintf(cmd, sizeof cmd, "%s/conformance/%s.cpp.out", TMP, k->name);
-        size_t size = 0;
-        float *got = (float *)read_whole_file(cmd, &size);
-        assert_non_null(got);
-        assert_int_equal(size, conf_positions(&conf, k) * 12);
-        double units, ratio = conformance_compare(&conf, k, got, &units);
+        double units, ratio = conformance_compare_file(&conf, k, cmd, &units);
         printf("  %-24s %7zu positions, cross-fades included: C++ vs C runtime %.2g (%.3f of the tolerance)\n", k->name,
                conf_positions(&conf, k), units, ratio);
         if (k->broken) assert_true(ratio > 10), ++caught;
         else assert_true(ratio <= 1);
-        free(got);
         ++ran;
     }
     conformance_free(&conf);

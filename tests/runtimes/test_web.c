@@ -26,13 +26,7 @@ static double compare(const conformance *c, const char *name, double *units)
     const conf_case *k = conformance_case(c, name);
     char path[PATH_MAX];
     snprintf(path, sizeof path, TMP "/%s.out", name);
-    size_t size = 0;
-    float *got = (float *)read_whole_file(path, &size);
-    if (!got) fail_msg("%s: the browser wrote no result", name);
-    assert_int_equal(size, conf_positions(c, k) * 12);
-    double ratio = conformance_compare(c, k, got, units);
-    free(got);
-    return ratio;
+    return conformance_compare_file(c, k, path, units);
 }
 
 /* A local or timed case's run by the browser (`variant`: "" as given, "bones" through the bone pass, "nocompose" or
@@ -42,14 +36,9 @@ static double compare_variant(const conformance *c, const char *name, const char
 {
     const conf_case *k = conformance_case(c, name);
     char path[PATH_MAX];
-    size_t size = 0;
+    double units;
     snprintf(path, sizeof path, TMP "/%s.out%s%s", name, *variant ? "." : "", variant);
-    float *got = (float *)read_whole_file(path, &size);
-    if (!got) fail_msg("%s: the browser wrote no result", path);
-    assert_int_equal(size, conf_positions(c, k) * 12);
-    double units, ratio = conformance_compare(c, k, got, &units);
-    free(got);
-    return ratio;
+    return conformance_compare_file(c, k, path, &units);
 }
 
 /* Local rows (.pal version 6): each bone blended in its parent's frame and composed down the skeleton, per vertex

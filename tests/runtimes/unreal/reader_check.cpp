@@ -66,7 +66,8 @@ int Skin(const char *path)
 // The roster type's states, their clips' fps and contacts, from roster_lines.py's lines:
 // S type state clip first_row frame_count rate rate_per_speed phase; L type clip first_row frame_count
 // fps ...; K type clip foot bone time lift.
-std::vector<crowdbake::HerdStateInfo> RosterStates(const char *path, const std::string &type)
+// roster_lines.py's lines, each as its words (lines of fewer than three words left out).
+static std::vector<std::vector<std::string>> RosterLines(const char *path)
 {
     std::ifstream in(path);
     std::vector<std::vector<std::string>> rows;
@@ -74,8 +75,16 @@ std::vector<crowdbake::HerdStateInfo> RosterStates(const char *path, const std::
         std::istringstream f(line);
         std::vector<std::string> row;
         for (std::string word; f >> word;) row.push_back(word);
-        if (row.size() >= 3 && row[1] == type) rows.push_back(row);
+        if (row.size() >= 3) rows.push_back(row);
     }
+    return rows;
+}
+
+std::vector<crowdbake::HerdStateInfo> RosterStates(const char *path, const std::string &type)
+{
+    std::vector<std::vector<std::string>> rows;
+    for (auto &row : RosterLines(path))
+        if (row[1] == type) rows.push_back(row);
     std::vector<crowdbake::HerdStateInfo> states;
     std::vector<std::string> clip_of;
     for (const auto &r : rows) {
@@ -187,14 +196,7 @@ int Herd(const char *pal_path, const char *lines, const char *type)
 // A state that does not fit: its error, one line, and exit 1.
 int StatesCheck(const char *path)
 {
-    std::ifstream in(path);
-    std::vector<std::vector<std::string>> rows;
-    for (std::string line; std::getline(in, line);) {
-        std::istringstream f(line);
-        std::vector<std::string> row;
-        for (std::string word; f >> word;) row.push_back(word);
-        if (row.size() >= 3) rows.push_back(row);
-    }
+    std::vector<std::vector<std::string>> rows = RosterLines(path);
     std::string out; // printed once every state passed: a refusal is the one line
     for (const auto &t : rows) {
         if (t[0] != "T" || t.size() < 9) continue;
