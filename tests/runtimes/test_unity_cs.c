@@ -309,24 +309,31 @@ static void test_reader_verdicts_match(void **state)
     assert_true(refused >= 20 && local_refused >= 10 && timed_refused >= 10);
 }
 
-/* A catalog bake of Cow: what a Unity roster import needs. */
-static void bake_cow_roster(void)
+/* A catalog bake of Cow into TMP/DIR with the [bake] keys KEYS: what a Unity roster import needs. */
+static void bake_cow_catalog(const char *dir, const char *keys)
 {
-    static int baked;
-    if (baked) return;
     char cow[1024], cmd[4096], toml[2048];
     shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
     char *abs_cow = realpath(cow, NULL);
     assert_non_null(abs_cow);
     snprintf(toml, sizeof toml,
-             "[bake]\nout_dir = \"roster\"\n[animal.cow]\nmodel = \"%s\"\n"
+             "[bake]\nout_dir = \"%s\"\n%s\n[animal.cow]\nmodel = \"%s\"\n"
              "states = { idle = [\"idle\"], wander = [\"walk\"], flee = [\"gallop\"], die = [\"death\"] }\n"
-             "default_state = \"wander\"\n", abs_cow);
+             "default_state = \"wander\"\n", dir, keys, abs_cow);
     free(abs_cow);
+    char path[1024];
+    snprintf(path, sizeof path, TMP "/%s.toml", dir);
     run_or_fail("mkdir -p " TMP);
-    write_text(TMP "/cow.toml", toml);
-    snprintf(cmd, sizeof cmd, "%s bake %s/cow.toml -q 2>&1", crowdbake_exe(), TMP);
+    write_text(path, toml);
+    snprintf(cmd, sizeof cmd, "%s bake %s -q 2>&1", crowdbake_exe(), path);
     run_or_fail(cmd);
+}
+
+/* The Cow catalog bake, once. */
+static void bake_cow_roster(void)
+{
+    static int baked;
+    if (!baked) bake_cow_catalog("roster", "");
     baked = 1;
 }
 
@@ -411,20 +418,22 @@ typedef struct roster_contact {
     double land, lift, fps;
 } roster_contact;
 
-/* The contacts of each state's clip, from Python's lines (S: state -> clip, L: clip fps, K: contacts). */
-static unsigned state_contacts(roster_contact *out, unsigned max)
+/* The contacts of each state's clip, from Python's roster lines at PATH (S: state -> clip, L: clip fps and duration,
+ * R: a timed clip's cells, whose contacts sit at cells / duration a second, K: contacts). */
+static unsigned state_contacts(const char *path, roster_contact *out, unsigned max)
 {
-    FILE *f = fopen(TMP "/roster_py.txt", "r");
+    FILE *f = fopen(path, "r");
     assert_non_null(f);
     char line[8192], states[16][2][256];
     unsigned n = 0, ns = 0;
     while (fgets(line, sizeof line, f))
         if (line[0] == 'S' && ns < 16) assert_int_equal(sscanf(line, "S %*s %255s %255s", states[ns][0], states[ns][1]), 2), ++ns;
     rewind(f);
-    double fps = 0;
+    double fps = 0, duration = 0, cells;
     char clip[256], foot[256];
     while (fgets(line, sizeof line, f)) {
-        if (line[0] == 'L') assert_int_equal(sscanf(line, "L %*s %255s %*d %*d %lf", clip, &fps), 2);
+        if (line[0] == 'L') assert_int_equal(sscanf(line, "L %*s %255s %*d %*d %lf %lf", clip, &fps, &duration), 3);
+        if (line[0] == 'R' && sscanf(line, "R %*s %*s %lf", &cells) == 1) fps = cells / duration;
         unsigned bone;
         double land, lift;
         if (line[0] != 'K' || sscanf(line, "K %*s %*s %255s %u %lf %lf", foot, &bone, &land, &lift) != 4) continue;
@@ -446,26 +455,33 @@ static void instance_matrix(const cbpal_file *pal, const float inst[4], double t
     for (uint32_t c = 0; c < pal->header.clip_count; ++c) {
         cbpal_clip clip;
         cbpal_get_clip(pal, c, &clip);
-        if (clip.first_row != (uint32_t)inst[0] || clip.frames != (uint32_t)fabsf(inst[1])) continue;
-        double fpos = time * inst[2] + inst[3] * fabs((double)inst[1]);
-        assert_int_equal(cbpal_bone_matrix(pal, c, fpos / clip.fps, bone, m), 0);
+        int timed = (clip.flags & CBPAL_CLIP_TIMED) != 0; /* its instance counts cells, at -cell_rate x rate */
+        if (clip.first_row != (uint32_t)inst[0] || (timed ? clip.cells : clip.frames) != (uint32_t)fabsf(inst[1])) continue;
+        double fpos = time * fabs((double)inst[2]) + inst[3] * fabs((double)inst[1]);
+        assert_int_equal(cbpal_bone_matrix(pal, c, fpos / (timed ? clip.cell_rate : clip.fps), bone, m), 0);
         return;
     }
     fail_msg("instance numbers %g %g point at no clip", inst[0], inst[1]);
 }
 
-/* A herd's bone matrices (mid-fade and after), SetSpeed's frame and its footsteps, against the C
- * reader at the same instance numbers and the manifest's contacts. */
-static void test_herd_equals_the_c_reader(void **state)
+/* The herd of the Cow roster in TMP/DIR: its bone matrices (mid-fade and after), SetSpeed's frame and its footsteps,
+ * against the C reader at the same instance numbers and the manifest's contacts (Python's lines at ROSTER_LINES).
+ * Local rows fade before they compose, which the C reader has no call for: those mid-fade matrices against the C
+ * runtime's (cb_runtime_matrices_crossfade, in double where C# and the C reader compute in float: 1e-4). */
+static void check_herd(const char *dir, const char *roster_lines)
 {
-    (void)state;
-    test_roster_equals_the_manifest(state);
     roster_contact contacts[256];
-    unsigned ncontacts = state_contacts(contacts, 256);
+    unsigned ncontacts = state_contacts(roster_lines, contacts, 256);
     cbpal_file pal;
-    char err[256], line[8192], line2[8192];
-    if (cbpal_open(TMP "/roster/cow.pal", 0, &pal, err, sizeof err)) fail_msg("%s", err);
-    FILE *f = run_check("herd " TMP "/roster/cow.pal " TMP "/roster/roster.json cow", TMP "/herd.txt");
+    cb_palette view;
+    cb_error e;
+    char err[256], line[8192], line2[8192], path[1024], args[2048];
+    snprintf(path, sizeof path, TMP "/%s/cow.pal", dir);
+    if (cbpal_open(path, 0, &pal, err, sizeof err)) fail_msg("%s", err);
+    if (cb_palette_view(&pal, &view, &e)) fail_msg("%s", e.message);
+    double *mats = malloc((size_t)view.bone_count * 16 * sizeof *mats);
+    snprintf(args, sizeof args, "herd %s " TMP "/%s/roster.json cow", path, dir);
+    FILE *f = run_check(args, TMP "/herd.txt");
     unsigned matrices = 0, faded = 0, steps = 0, speeds = 0;
     double worst = 0;
     while (fgets(line, sizeof line, f)) {
@@ -480,13 +496,19 @@ static void test_herd_equals_the_c_reader(void **state)
             i2 = (unsigned)strtoul(p, &p, 10), bone2 = (unsigned)strtoul(p, &p, 10), t2 = strtod(p, &p);
             assert_true(line2[0] == 'N' && i2 == i && bone2 == bone && t2 == t);
             for (int k = 0; k < 16; ++k) m[k] = strtof(p, &p);
+            double tol = 1e-5;
             instance_matrix(&pal, inst, t, bone, want);
-            if (fade < 1) {
+            if (fade < 1 && view.bone_space == CB_BONE_SPACE_LOCAL) {
+                cb_instance to = {inst[0], inst[1], inst[2], inst[3]}, before = {from[0], from[1], from[2], from[3]};
+                assert_true(cb_runtime_matrices_crossfade(&view, pal.texels, &before, &to, fade, t, mats));
+                for (int k = 0; k < 16; ++k) want[k] = (float)mats[(size_t)bone * 16 + k];
+                tol = 1e-4;
+            } else if (fade < 1) {
                 instance_matrix(&pal, from, t, bone, was);
                 for (int k = 0; k < 16; ++k) want[k] = was[k] + (want[k] - was[k]) * fade;
-                faded += fade > 0 && memcmp(inst, from, sizeof inst) != 0;
             }
-            for (int k = 0; k < 16; ++k) check_close("herd bone matrix", m[k], want[k], 1e-5, &worst);
+            faded += fade > 0 && fade < 1 && memcmp(inst, from, sizeof inst) != 0;
+            for (int k = 0; k < 16; ++k) check_close("herd bone matrix", m[k], want[k], tol, &worst);
             ++matrices;
         } else if (line[0] == 'P') {
             double before, after, frames;
@@ -500,7 +522,7 @@ static void test_herd_equals_the_c_reader(void **state)
             double t;
             float frames, rate, phase;
             assert_int_equal(sscanf(line, "F %*u %u %15s %lf %f %f %f %255s", &bone, kind, &t, &frames, &rate, &phase, st), 7);
-            double row = t * rate + phase * fabs((double)frames), n = fabs((double)frames);
+            double row = t * fabs((double)rate) + phase * fabs((double)frames), n = fabs((double)frames);
             for (unsigned c = 0; c < ncontacts; ++c) {
                 if (contacts[c].bone != bone || strcmp(contacts[c].state, st) != 0) continue;
                 double at = (strcmp(kind, "land") == 0 ? contacts[c].land : contacts[c].lift) * contacts[c].fps;
@@ -512,10 +534,31 @@ static void test_herd_equals_the_c_reader(void **state)
         }
     }
     fclose(f);
+    free(mats);
+    cb_palette_view_free(&view);
     cbpal_close(&pal);
-    printf("  herd: %u bone matrices (%u mid-fade), worst relative difference %.3g; %u speed change; %u footsteps on the manifest's "
-           "contacts\n", matrices, faded, worst, speeds, steps);
+    printf("  %s herd: %u bone matrices (%u mid-fade), worst relative difference %.3g; %u speed change; %u footsteps on the manifest's "
+           "contacts\n", dir, matrices, faded, worst, speeds, steps);
     assert_true(matrices > 100 && faded > 0 && speeds == 1 && steps > 10);
+}
+
+static void test_herd_equals_the_c_reader(void **state)
+{
+    test_roster_equals_the_manifest(state);
+    check_herd("roster", TMP "/roster_py.txt");
+}
+
+/* The same herd from local, timed rows (every clip timed: its instances count cells, at z < 0; footsteps on cells). */
+static void test_timed_herd_equals_the_c_reader(void **state)
+{
+    (void)state;
+    build_check();
+    bake_cow_catalog("timed-cow", "bone_space = \"local\"\ntimed_rows = \"on\"");
+    run_or_fail("python3 tests/runtimes/unity/roster_lines.py " TMP "/timed-cow/roster.json > " TMP "/timed_cow_py.txt 2>&1");
+    char log[256];
+    assert_int_equal(run_command("grep -c '^R ' " TMP "/timed_cow_py.txt", log, sizeof log), 0);
+    assert_int_equal(atoi(log), 4); /* the four clips its states play */
+    check_herd("timed-cow", TMP "/timed_cow_py.txt");
 }
 
 /* The MonoBehaviour, the importers, the asset types and the sample's script against stubs of the
@@ -1004,6 +1047,7 @@ int main(void)
         cmocka_unit_test(test_roster_equals_the_manifest),
         cmocka_unit_test(test_roster_timed_states),
         cmocka_unit_test(test_herd_equals_the_c_reader),
+        cmocka_unit_test(test_timed_herd_equals_the_c_reader),
         cmocka_unit_test(test_unity_facing_code_compiles),
         cmocka_unit_test(test_shader_glue_compiles),
         cmocka_unit_test(test_bone_pass_shaders_compile),

@@ -166,12 +166,11 @@ static void test_parents_after_children(void **state)
 }
 
 /* The herd component's footsteps and travel, outside Unreal: a Cow catalog with a walk, a gallop
- * (per-row travel) and a one-shot; the roster as Python's json reads it; the herd logic at several
- * speeds and across cross-fades. Each footstep falls on a contact of its state's clip, in order, and
- * each travel offset is the C reader's (tests/runtimes/unreal/reader_check.cpp `herd`). */
-static void test_herd_footsteps_and_travel(void **state)
+ * (per-row travel) and a one-shot, baked with the [bake] keys KEYS into TMP/DIR; the roster as Python's json reads it;
+ * the herd logic at several speeds and across cross-fades. Each footstep falls on a contact of its state's clip, in
+ * order, and each travel offset is the C reader's (tests/runtimes/unreal/reader_check.cpp `herd`). */
+static void check_cow_herd(const char *dir, const char *keys)
 {
-    (void)state;
     static char log[8192];
     char cow[1024], cmd[4096], toml[2048];
     build_reader_check();
@@ -179,17 +178,32 @@ static void test_herd_footsteps_and_travel(void **state)
     char *abs_cow = realpath(cow, NULL);
     assert_non_null(abs_cow);
     snprintf(toml, sizeof toml,
-             "[bake]\nout_dir = \"roster\"\n[animal.cow]\nmodel = \"%s\"\n"
-             "states = { idle = [\"idle\"], wander = [\"walk\"], flee = [\"gallop\"], kick = [\"Attack_Kick\"] }\n", abs_cow);
+             "[bake]\nout_dir = \"%s\"\n%s\n[animal.cow]\nmodel = \"%s\"\n"
+             "states = { idle = [\"idle\"], wander = [\"walk\"], flee = [\"gallop\"], kick = [\"Attack_Kick\"] }\n", dir, keys,
+             abs_cow);
     free(abs_cow);
     run_or_fail("mkdir -p " TMP, log, sizeof log);
-    write_text(TMP "/cow.toml", toml);
+    snprintf(cmd, sizeof cmd, TMP "/%s.toml", dir);
+    write_text(cmd, toml);
     snprintf(cmd, sizeof cmd,
-             "%s bake %s/cow.toml -q 2>&1 && python3 tests/runtimes/unity/roster_lines.py %s/roster/roster.json > %s/roster.txt && "
-             "%s/reader_check herd %s/roster/cow.pal %s/roster.txt cow 2>&1",
-             crowdbake_exe(), TMP, TMP, TMP, TMP, TMP, TMP);
+             "%s bake %s/%s.toml -q 2>&1 && python3 tests/runtimes/unity/roster_lines.py %s/%s/roster.json > %s/%s.txt && "
+             "%s/reader_check herd %s/%s/cow.pal %s/%s.txt cow 2>&1",
+             crowdbake_exe(), TMP, dir, TMP, dir, TMP, dir, TMP, TMP, dir, TMP, dir);
     run_or_fail(cmd, log, sizeof log);
-    printf("  %s", strstr(log, "herd of") ? strstr(log, "herd of") : log);
+    printf("  %s: %s", dir, strstr(log, "herd of") ? strstr(log, "herd of") : log);
+}
+
+static void test_herd_footsteps_and_travel(void **state)
+{
+    (void)state;
+    check_cow_herd("roster", "");
+}
+
+/* The same from local, timed rows: every clip timed, its states counting cells at z < 0, its contacts on cells. */
+static void test_timed_herd_footsteps_and_travel(void **state)
+{
+    (void)state;
+    check_cow_herd("timed-cow", "bone_space = \"local\"\ntimed_rows = \"on\"");
 }
 
 /* The herd component's roster states with timed rows, outside Unreal: the timed catalog's roster (tests/runtimes/
@@ -272,6 +286,7 @@ int main(void)
         cmocka_unit_test(test_timed_rows),
         cmocka_unit_test(test_timed_conformance_cases),
         cmocka_unit_test(test_herd_footsteps_and_travel),
+        cmocka_unit_test(test_timed_herd_footsteps_and_travel),
         cmocka_unit_test(test_roster_timed_states),
         cmocka_unit_test(test_bad_file_message),
         cmocka_unit_test(test_vertex_ids_and_skin_texture),

@@ -40,7 +40,8 @@ func run() -> void:
 	_check_timed_roster(mesh)
 	_check_travel(roster, mesh)
 	_check_bounds(roster, mesh)
-	_check_manifest_footsteps(mesh) # before _check_footsteps changes the roster
+	_check_manifest_footsteps(mesh, "roster") # before _check_footsteps changes the roster
+	_check_manifest_footsteps(mesh, "timed") # timed rows: the contacts on cells
 	_check_footsteps(roster, mesh)
 	_check_sockets(roster, mesh)
 	var look = load(ROOT + "/check_addon_look.gd").new(self)
@@ -447,14 +448,18 @@ func _check_footsteps(roster, mesh: Mesh) -> void:
 	herd.queue_free()
 	_end(name, why)
 
-# The contacts crowdbake wrote for Cow's Gallop (the run state): played at its own rate (speed = its
-# ground speed), two cycles raise each listed landing twice, each on the first 60 Hz frame at or past
-# its time; and the 14 sockets it lists are read by name.
-func _check_manifest_footsteps(mesh: Mesh) -> void:
-	var name := "footsteps at Cow's own contacts (the run state), sockets by name"
+# The contacts crowdbake wrote for Cow's Gallop (the run state) in the roster of COW/`bake` ("roster", or "timed":
+# local, timed rows, whose instance counts cells): played at its own rate (speed = its ground speed), two cycles raise
+# each listed landing twice, each on the first 60 Hz frame at or past its time; and the 14 sockets it lists are read
+# by name.
+func _check_manifest_footsteps(mesh: Mesh, bake: String) -> void:
+	var path := COW + "/" + bake + "/roster.json"
+	var manifest: Dictionary = JSON.parse_string(FileAccess.get_file_as_string(path))
+	var cow: Dictionary = manifest["types"]["cow"]
+	var clip: Dictionary = cow["clips"].filter(func(c): return c["name"] == cow["states"]["run"]["clip"])[0]
+	var name := "footsteps at Cow's own contacts (the run state%s), sockets by name" % (", timed rows" if clip.has("timed_rows") else "")
 	_begin(name)
-	var roster = ResourceLoader.load(COW + "/roster/roster.json", "CrowdbakeRoster", ResourceLoader.CACHE_MODE_IGNORE)
-	var clip: Dictionary = _manifest["types"]["cow"]["clips"].filter(func(c): return c["name"] == _manifest["types"]["cow"]["states"]["run"]["clip"])[0]
+	var roster = ResourceLoader.load(path, "CrowdbakeRoster", ResourceLoader.CACHE_MODE_IGNORE)
 	var contacts: Array = clip.get("contacts", [])
 	var herd := _new_herd(roster, mesh, 1)
 	herd.set_state(0, "run", 0.0)
@@ -471,14 +476,16 @@ func _check_manifest_footsteps(mesh: Mesh) -> void:
 				want.append([c["foot"], int(c["bone"]), c["time"] + cycle * clip["duration"]])
 	want.sort_custom(func(a, b): return a[2] < b[2])
 	var why := ""
-	if contacts.size() < 2 or steps.size() != want.size():
+	if bake == "timed" and not clip.has("timed_rows"):
+		why = "the timed bake's run clip has no timed rows"
+	elif contacts.size() < 2 or steps.size() != want.size():
 		why = "%d footsteps, the manifest's %d contacts make %d: %s" % [steps.size(), contacts.size(), want.size(), steps]
 	else:
 		for k in want.size():
 			if steps[k][0] != want[k][0] or steps[k][1] != want[k][1] or steps[k][2] < want[k][2] - 1e-4 or steps[k][2] > want[k][2] + 1.0 / 60.0 + 1e-4:
 				why = "footstep %d: %s, want %s (time up to a frame later)" % [k, steps[k], want[k]]
 				break
-	var sockets: Array = _manifest["types"]["cow"].get("sockets", [])
+	var sockets: Array = cow.get("sockets", [])
 	if why.is_empty() and (sockets.size() != roster.types["cow"]["sockets"].size() or sockets.is_empty()
 			or herd.socket_transform(0, sockets[0]["name"]) == null):
 		why = "the manifest lists %d sockets, the roster read %d" % [sockets.size(), roster.types["cow"]["sockets"].size()]

@@ -138,9 +138,9 @@ static class CrowdbakeCheck
             if (step == 10) for (int i = 0; i < herd.Count; i += 2) herd.SetState(i, names[i % names.Length], 0.4f);
             if (step == 20) {
                 int i = 1;
-                double before = herd.Time * herd.Inst[6] + herd.Inst[7] * Math.Abs((double)herd.Inst[5]);
+                double before = herd.Time * Math.Abs(herd.Inst[6]) + herd.Inst[7] * Math.Abs((double)herd.Inst[5]);
                 herd.SetSpeed(i, 1.7f);
-                double after = herd.Time * herd.Inst[6] + herd.Inst[7] * Math.Abs((double)herd.Inst[5]);
+                double after = herd.Time * Math.Abs(herd.Inst[6]) + herd.Inst[7] * Math.Abs((double)herd.Inst[5]);
                 Line("P", i, before, after, Math.Abs((double)herd.Inst[5]));
             }
             if (step % 5 != 1 && step != 12) continue;

@@ -87,6 +87,7 @@ std::vector<crowdbake::HerdStateInfo> RosterStates(const char *path, const std::
         if (row[1] == type) rows.push_back(row);
     std::vector<crowdbake::HerdStateInfo> states;
     std::vector<std::string> clip_of;
+    std::vector<double> durations;
     for (const auto &r : rows) {
         if (r[0] != "S" || r.size() < 9) continue;
         crowdbake::HerdStateInfo s;
@@ -94,11 +95,13 @@ std::vector<crowdbake::HerdStateInfo> RosterStates(const char *path, const std::
         s.rate = std::stof(r[6]), s.rate_per_speed = std::stof(r[7]), s.golden_ratio_phase = r[8] == "golden_ratio";
         states.push_back(s);
         clip_of.push_back(r[3]);
+        durations.push_back(0);
     }
     for (const auto &r : rows)
         for (size_t i = 0; i < states.size(); ++i) {
             if (r[2] != clip_of[i]) continue;
-            if (r[0] == "L" && r.size() >= 6) states[i].clip_fps = std::stof(r[5]);
+            if (r[0] == "L" && r.size() >= 7) states[i].clip_fps = std::stof(r[5]), durations[i] = std::stod(r[6]);
+            if (r[0] == "R" && r.size() >= 4) states[i].clip_fps = (float)(std::stod(r[3]) / durations[i]); // timed: cells / duration
             if (r[0] == "K" && r.size() >= 7) states[i].contacts.push_back({r[3], std::stoi(r[4]), std::stof(r[5]), std::stof(r[6])});
         }
     return states;
@@ -122,7 +125,7 @@ void ExpectedTravel(const cbpal_file &pal, const float inst[4], double now, floa
 // wrapped to the clip for a loop, is a contact's landing or lifting row.
 bool OnAContact(const crowdbake::HerdStateInfo &s, const float inst[4], const crowdbake::Footstep &e)
 {
-    double frames = std::fabs((double)inst[1]), row = e.time * inst[2] + inst[3] * frames;
+    double frames = std::fabs((double)inst[1]), row = e.time * std::fabs((double)inst[2]) + inst[3] * frames;
     for (const crowdbake::HerdContact &k : s.contacts) {
         if (k.bone != e.bone) continue;
         double at = (e.lands ? k.time : k.lift) * s.clip_fps, d = std::fmod(std::fabs(row - at), frames);

@@ -322,14 +322,15 @@ func _raise_contacts(i: int, before: float, after: float) -> void:
 		return
 	var inst := instance_numbers(i)
 	var frames := absf(inst.y)
-	var fps := float(clip.get("fps", 0.0))
-	var f0 := before * inst.z + inst.w * frames
-	var f1 := after * inst.z + inst.w * frames
+	# A timed clip's instance (z < 0) counts cells, its contacts at cell time x cells / duration (crowdbake_contacts.mjs).
+	var fps := frames / float(clip["duration"]) if inst.z < 0.0 else float(clip.get("fps", 0.0))
+	var f0 := before * absf(inst.z) + inst.w * frames
+	var f1 := after * absf(inst.z) + inst.w * frames
 	for c in contacts:
 		for key in ["time", "lift"]:
 			if not c.has(key):
 				continue
-			var at: float = float(c[key]) * fps # the contact's row
+			var at: float = float(c[key]) * fps # the contact's row (or cell)
 			var times := _crossings(at, f0, f1, frames, inst.y > 0.0)
 			for n in times:
 				if key == "time":

@@ -192,7 +192,8 @@ namespace Crowdbake
         }
 
         // Instance i's unwrapped row position at `time` (crowdbake_contacts.mjs rowPosition).
-        double RowPosition(int i, double time) { return time * Inst[i * 4 + 2] + Inst[i * 4 + 3] * Math.Abs((double)Inst[i * 4 + 1]); }
+        // A timed instance's (z < 0) counts cells.
+        double RowPosition(int i, double time) { return time * Math.Abs(Inst[i * 4 + 2]) + Inst[i * 4 + 3] * Math.Abs((double)Inst[i * 4 + 1]); }
 
         // The herd's clock, seconds: raises the footsteps every instance crossed since the last call.
         public void Update(double time)
@@ -210,9 +211,9 @@ namespace Crowdbake
             rowPosition[i] = to;
             RosterState s = Find(StateOf[i]);
             RosterClip clip;
-            float rate = Inst[i * 4 + 2];
+            float rate = Math.Abs(Inst[i * 4 + 2]);
             if (s == null || !clips.TryGetValue(s.clip, out clip) || double.IsNaN(from) || !(rate > 0)) return;
-            foreach (Crossing c in Contacts.Crossed(clip, (int)Inst[i * 4 + 1], from, to)) {
+            foreach (Crossing c in Contacts.Crossed(clip, (int)Inst[i * 4 + 1], from, to, Inst[i * 4 + 2] < 0)) {
                 var e = new Footstep { instance = i, foot = c.contact.foot, bone = c.contact.bone, lands = c.lands,
                                        time = time - (to - c.at) / rate };
                 OnFootstep(e);
@@ -233,20 +234,22 @@ namespace Crowdbake
     {
         // The contacts crossed moving from `from` (exclusive) to `to` (inclusive), in the order
         // crossed. A loop (frameCount > 0) crosses each contact once a cycle however far it moves; a
-        // one-shot clamps to its rows and crosses each at most once. Nothing is crossed backwards.
-        public static List<Crossing> Crossed(RosterClip clip, int frameCount, double from, double to)
+        // one-shot clamps to its rows and crosses each at most once. Nothing is crossed backwards. timed: frameCount
+        // counts the clip's cells (a timed clip's instance, z < 0), over its duration.
+        public static List<Crossing> Crossed(RosterClip clip, int frameCount, double from, double to, bool timed = false)
         {
             var list = new List<Crossing>();
             if (!(to > from) || clip == null || clip.contacts.Count == 0) return list;
-            double frames = Math.Abs((double)frameCount);
+            double frames = Math.Abs((double)frameCount), end = timed ? frames : frames - 1;
+            double perSecond = timed ? frames / clip.duration : clip.fps;
             if (frameCount < 0) {
-                from = Math.Min(Math.Max(from, 0), frames - 1);
-                to = Math.Min(Math.Max(to, 0), frames - 1);
+                from = Math.Min(Math.Max(from, 0), end);
+                to = Math.Min(Math.Max(to, 0), end);
             }
             for (int order = 0; order < clip.contacts.Count; ++order) {
                 RosterContact contact = clip.contacts[order];
                 for (int kind = 0; kind < 2; ++kind) {
-                    double row = (double)(kind == 0 ? contact.time : contact.lift) * clip.fps;
+                    double row = (double)(kind == 0 ? contact.time : contact.lift) * perSecond;
                     if (frameCount < 0) {
                         if (from < row && row <= to) list.Add(new Crossing { contact = contact, lands = kind == 0, at = row, order = order });
                         continue;

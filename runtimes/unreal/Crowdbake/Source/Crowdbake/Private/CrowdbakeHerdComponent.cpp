@@ -32,7 +32,7 @@ double UCrowdbakeHerdComponent::Now() const
 
 namespace
 {
-// The state's clip's fps and contacts, from the type's `clips` (docs/roster.md).
+// The state's clip's fps (a timed clip's cells / duration) and contacts, from the type's `clips` (docs/roster.md).
 void LoadContacts(const TArray<TSharedPtr<FJsonValue>> *Clips, const FString &ClipName, crowdbake::HerdStateInfo &Info)
 {
     if (!Clips) return;
@@ -40,6 +40,9 @@ void LoadContacts(const TArray<TSharedPtr<FJsonValue>> *Clips, const FString &Cl
         const TSharedPtr<FJsonObject> Clip = Value->AsObject();
         if (!Clip.IsValid() || Clip->GetStringField(TEXT("name")) != ClipName) continue;
         Info.clip_fps = (float)Clip->GetNumberField(TEXT("fps"));
+        const TSharedPtr<FJsonObject> *Timed;
+        if (Clip->TryGetObjectField(TEXT("timed_rows"), Timed))
+            Info.clip_fps = (float)((*Timed)->GetNumberField(TEXT("cells")) / Clip->GetNumberField(TEXT("duration")));
         const TArray<TSharedPtr<FJsonValue>> *Contacts;
         if (!Clip->TryGetArrayField(TEXT("contacts"), Contacts)) return;
         for (const TSharedPtr<FJsonValue> &C : *Contacts) {

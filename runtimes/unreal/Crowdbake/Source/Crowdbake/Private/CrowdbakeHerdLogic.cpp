@@ -52,10 +52,10 @@ std::vector<ContactCrossing> ContactsCrossed(const HerdStateInfo &s, double from
 {
     std::vector<ContactCrossing> out;
     if (!(to > from) || s.contacts.empty()) return out;
-    double frames = std::fabs((double)s.frame_count);
+    double frames = std::fabs((double)s.frame_count), end = s.rate < 0 ? frames : frames - 1; // a timed state: cells
     if (s.frame_count < 0) { // one-shot: clamped to its rows
-        from = std::min(std::max(from, 0.0), frames - 1);
-        to = std::min(std::max(to, 0.0), frames - 1);
+        from = std::min(std::max(from, 0.0), end);
+        to = std::min(std::max(to, 0.0), end);
     }
     for (size_t c = 0; c < s.contacts.size(); ++c)
         for (bool lands : {true, false}) {
@@ -138,7 +138,7 @@ double HerdLogic::RowPosition(int i, double now) const
 void HerdLogic::Advance(double now, std::vector<Footstep> &out)
 {
     for (int i = 0; i < count_; ++i) {
-        double to = RowPosition(i, now), from = position_[(size_t)i], rate = CustomData(i)[2];
+        double to = RowPosition(i, now), from = position_[(size_t)i], rate = std::fabs((double)CustomData(i)[2]); // timed: z < 0
         position_[(size_t)i] = to;
         const HerdStateInfo *s = Find(state_[(size_t)i]);
         if (!s || std::isnan(from) || !(rate > 0)) continue;

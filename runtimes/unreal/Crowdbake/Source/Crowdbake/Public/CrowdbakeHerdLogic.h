@@ -28,7 +28,8 @@ struct HerdStateInfo {
     float rate = 0, rate_per_speed = 0;     // rows/s (a timed clip: -cells/s); rows per model unit travelled (0: `rate`;
                                             // a timed clip: -cells per unit); != 0: the state follows the speed
     bool golden_ratio_phase = true;         // else "zero": a one-shot starts on its first row
-    float clip_fps = 0;                     // the clip's rows per second of clip time (contacts' rows)
+    float clip_fps = 0;                     // the clip's rows per second of clip time (contacts' rows); a timed clip's
+                                            // cells / duration (its contacts' cells)
     std::vector<HerdContact> contacts;      // the clip's (none without a roster)
 };
 
