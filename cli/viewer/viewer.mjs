@@ -11,7 +11,7 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { decompress } from 'fzstd';
 import { readPal, readRoster, instanceData, clipInstance } from '../web/crowdbake_pal.mjs';
 import { Crowd, GLSL_URL, loadPaletteGLSL } from '../web/crowdbake_crowd.mjs';
-import { VatCrowd, readVat } from '../web/crowdbake_vat.mjs';
+import { VatCrowd, readVat, vatLayout } from '../web/crowdbake_vat.mjs';
 import { meshFromGLTF } from '../web/crowdbake_three.mjs';
 
 const MAX = 100000;
@@ -44,11 +44,11 @@ async function loadType(view, entry, glsl) {
     const crowd = new Crowd(gl, { pal, glsl, mesh, capacity: MAX, color: [0.86, 0.78, 0.62], lodTiers: false,
                                   animationLod: rosterType?.animation_lod });
     let vat = null, vatNote = 'no VAT for this type';
+    const vatFrames = vatLayout(pal); // a timed clip's VAT frames are its cells
     if (entry.vat) {
         try {
             const v = readVat(await bytesOf(`/${entry.vat}`), entry.vat);
-            if (pal.clips.some((c) => c.timed)) throw new Error('the palette has timed clips, which a VAT has no map for');
-            if (v.frames !== pal.header.rows) throw new Error(`${v.frames} VAT frames, ${pal.header.rows} palette rows`);
+            if (v.frames !== vatFrames.frames) throw new Error(`${v.frames} VAT frames, the palette's clips make ${vatFrames.frames}`);
             vat = new VatCrowd(gl, { pal, vat: v, glsl, mesh, capacity: MAX, color: [0.62, 0.74, 0.86] });
         } catch (e) {
             vatNote = `VAT not shown: ${e.message}`;
@@ -64,7 +64,7 @@ async function loadType(view, entry, glsl) {
     const lo = [0, 1, 2].map((k) => Math.min(...pal.clips.map((c) => c.bounds_min[k])));
     const hi = [0, 1, 2].map((k) => Math.max(...pal.clips.map((c) => c.bounds_max[k])));
     const size = Math.max(hi[0] - lo[0], hi[2] - lo[2], hi[1] - lo[1]);
-    return { name: entry.name, pal, crowd, vat, vatNote, states, speedOf, size, height: hi[1] - lo[1],
+    return { name: entry.name, pal, crowd, vat, vatNote, vatInstanceOf: vatFrames.instanceOf, states, speedOf, size, height: hi[1] - lo[1],
              defaultState: rosterType?.default_state ?? Object.keys(states)[0] };
 }
 
@@ -117,9 +117,9 @@ class Herd {
         const prev = this.state[i] && i < t.crowd.count ? t.crowd.instances.slice(i * 16 + 4, i * 16 + 8) : inst;
         this.state[i] = name;
         this.speed[i] = speed;
-        for (const c of [t.crowd, t.vat])
-            if (c) c.setInstance(i, { position: [this.x[i], 0, this.z[i]], yaw: this.heading[i], inst, from: prev,
-                                      fadeStart: this.time, fadeDuration: fade });
+        const place = { position: [this.x[i], 0, this.z[i]], yaw: this.heading[i], fadeStart: this.time, fadeDuration: fade };
+        t.crowd.setInstance(i, { ...place, inst, from: prev });
+        t.vat?.setInstance(i, { ...place, inst: t.vatInstanceOf(inst), from: t.vatInstanceOf(prev) });
     }
 
     step(dt) {
@@ -136,9 +136,10 @@ class Herd {
             c.instances[o] = this.x[i], c.instances[o + 2] = this.z[i], c.instances[o + 3] = this.heading[i];
         }
         c.dirty = true;
-        if (this.type.vat) {
-            this.type.vat.instances.set(c.instances.subarray(0, this.count * 16));
-            this.type.vat.dirty = true;
+        const vat = this.type.vat;
+        if (vat) { // the places move; each instance's numbers stay the VAT's own
+            for (let i = 0; i < this.count; ++i) vat.instances.set(c.instances.subarray(i * 16, i * 16 + 4), i * 16);
+            vat.dirty = true;
         }
     }
 }

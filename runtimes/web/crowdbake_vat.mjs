@@ -4,6 +4,7 @@
 // The frame choice (wrap, clamp, blend) is the palette library's own cb_frame: a VAT frame is
 // a palette row.
 import { Crowd, compileProgram } from './crowdbake_crowd.mjs';
+import { instanceFirstRow } from './crowdbake_pose.mjs';
 
 const HALF = 1, FLOAT = 2;
 
@@ -108,6 +109,27 @@ void main() {
     gl_Position = u_view_projection * vec4(v_world, 1.0);
 }
 `;
+
+// The VAT that `crowdbake vat --like PALETTE` bakes, laid out against the palette: its frames clip after clip, a
+// timed clip (.pal version 7) at its cells' rate, one frame a cell (a one-shot's one more: the end of its last cell),
+// for a VAT has no map; every other clip one frame a row. { frames, instanceOf }: the VAT's frame count and a palette
+// instance's four numbers as the VAT plays the same clip time (the identity without timed clips, whose VAT frames are
+// the palette's rows one for one).
+export function vatLayout(pal) {
+    if (!pal.clips.some((c) => c.timed)) return { frames: pal.header.rows, instanceOf: (inst) => inst };
+    const byFirst = new Map();
+    let frames = 0;
+    for (const c of pal.clips) {
+        const n = c.timed ? c.cells + (c.loops ? 0 : 1) : c.frames;
+        byFirst.set(instanceFirstRow(c), [c.step ? -frames - 1 : frames, n]);
+        frames += n;
+    }
+    const instanceOf = (inst) => {
+        const clip = byFirst.get(inst[0]);
+        return clip ? [clip[0], inst[1] < 0 ? -clip[1] : clip[1], Math.abs(inst[2]), inst[3]] : inst;
+    };
+    return { frames, instanceOf };
+}
 
 // A herd drawn from a VAT: the Crowd API (setInstance, draw, vramBytes) with the skinning
 // replaced by two texel fetches per vertex. `pal` is the palette of the same frames (for its

@@ -5,7 +5,7 @@
  * VAT half (exact skinning, from `crowdbake vat`) cover the same pixels; Ctrl-C stops it with exit
  * 0; ?count=N shows N instances for any N (capped at the viewer's 100,000). The same run with a
  * deliberately broken shader (texels of a bone swapped) must fail the palette-vs-VAT comparison,
- * so the comparison is shown to catch a wrong palette. */
+ * so the comparison is shown to catch a wrong palette. Fox with timed rows is drawn beside its VAT too. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 #include "view_server.h"
@@ -81,6 +81,39 @@ static void test_view_shows_a_moving_herd_of_cows(void **state)
     };
     for (size_t i = 0; i < COUNT_OF(counts); ++i)
         if (!strstr(out, counts[i])) fail_msg("expected %s in the viewer check's output", counts[i]);
+}
+
+/* A palette with timed rows (Fox baked with local rows: its Run on its keys, a map of 139 cells at 120 Hz) beside the
+ * VAT of the same clips (`vat --like`: the Run at its cells' rate, one frame a cell): the VAT's frames are no longer
+ * the palette's rows, and each instance's numbers are the VAT's own (crowdbake_vat.mjs vatLayout). */
+static void test_view_shows_a_vat_beside_timed_rows(void **state)
+{
+    (void)state;
+    char fox[PATH_MAX], toml[2 * PATH_MAX], cmd[4 * PATH_MAX];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    char *abs_fox = realpath(fox, NULL);
+    assert_non_null(abs_fox);
+    assert_int_equal(system("mkdir -p " TMP "/fox"), 0);
+    snprintf(toml, sizeof toml,
+             "[bake]\nout_dir = \"out\"\nbone_space = \"local\"\n[animal.fox]\nmodel = \"%s\"\n"
+             "states = { idle = [\"survey\"], walk = [\"walk\"], run = [\"run\"] }\ndefault_state = \"run\"\n", abs_fox);
+    free(abs_fox);
+    write_text(TMP "/fox/fox.toml", toml);
+    snprintf(cmd, sizeof cmd, "node tests/runtimes/browser/view_check.mjs %s " TMP "/fox/fox.toml " TMP "/fox/cache " TMP
+             "/fox/viewer.png 200 960x540 2>&1", crowdbake_exe());
+    int rc = run_command(cmd, out, sizeof out);
+    printf("%s", out);
+    assert_int_equal(rc, 0);
+    char log[4096];
+    assert_int_equal(run_command("grep -c '\"timed_rows\"' " TMP "/fox/out/roster.json", log, sizeof log), 0);
+    assert_int_equal(atoi(log), 1); /* the Run */
+    assert_non_null(strstr(out, "\"console_errors\":[]"));
+    assert_non_null(strstr(out, "\"error\":\"\""));
+    double mismatch = number("palette_vs_vat_mismatch");
+    printf("  Fox, timed Run: palette and VAT silhouettes differ on %.2f%% of the covered pixels\n", 100 * mismatch);
+    assert_int_equal((int)number("drawCalls"), 2); /* the VAT is drawn beside it */
+    assert_true(number("vatBytes") > 50 * number("paletteBytes"));
+    assert_true(mismatch < 0.02);
 }
 
 static void test_a_broken_palette_shader_is_caught(void **state)
@@ -165,6 +198,7 @@ int main(void)
         cmocka_unit_test_teardown(test_view_answers_only_its_own_host_and_lists_nothing, stop_server),
         cmocka_unit_test(test_view_shows_a_moving_herd_of_cows),
         cmocka_unit_test(test_a_broken_palette_shader_is_caught),
+        cmocka_unit_test(test_view_shows_a_vat_beside_timed_rows),
     };
     return cmocka_run_group_tests_name("view", tests, NULL, NULL);
 }

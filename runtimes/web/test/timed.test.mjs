@@ -12,8 +12,10 @@ import { readPal, xxh64, clipInstance, instanceFrame, boneMatrix, hasTimedRows, 
          TIMED_STILL_RATE } from '../crowdbake_pal.mjs';
 import { travelOffset } from '../crowdbake_travel.mjs';
 import { contactsCrossed } from '../crowdbake_contacts.mjs';
-import { writeFileSync } from 'node:fs';
-import { SAMPLES, tmpDir, bake, cReaderAccepts } from './support.mjs';
+import { readVat, vatLayout } from '../crowdbake_vat.mjs';
+import { execFileSync } from 'node:child_process';
+import { readFileSync, writeFileSync } from 'node:fs';
+import { CROWDBAKE, FOX, SAMPLES, tmpDir, bake, cReaderAccepts } from './support.mjs';
 
 const dir = tmpDir('timed');
 
@@ -252,4 +254,24 @@ test('a float map\'s rows must be whole numbers (refused as the C reader refuses
     const file = path.join(dir, 'fraction.pal');
     writeFileSync(file, bytes);
     assert.ok(!cReaderAccepts(file));
+});
+
+// The VAT beside a timed palette (the viewer's): `crowdbake vat --like` bakes Fox's timed Run at its cells' rate, one
+// frame a cell, so vatLayout's frames are the file's and each clip's instance numbers name its own VAT frames, after
+// the clips before it, at |rate| frames a second (the VAT's frames of the Run and the palette's cells are the same
+// clip times).
+test('vatLayout: the VAT of a timed palette, frame for cell', () => {
+    const palPath = path.join(dir, 'fox_local.pal'), vatPath = path.join(dir, 'fox_local.exr');
+    const pal = readPal(bake(FOX, palPath, ['--fps', 'auto', '--bone-space', 'local']));
+    execFileSync(CROWDBAKE, ['vat', FOX, '--like', palPath, '-o', vatPath, '--exr-compression', 'none'], { stdio: 'ignore' });
+    const vat = readVat(readFileSync(vatPath)), layout = vatLayout(pal);
+    assert.ok(pal.clips.some((c) => c.timed));
+    assert.equal(layout.frames, vat.frames);
+    let frame = 0;
+    for (const c of pal.clips) {
+        const inst = clipInstance(c, 1.5, 0.25), v = layout.instanceOf(inst), n = c.timed ? c.cells : c.frames;
+        assert.deepEqual(v, [frame, c.loops ? n : -(n + 1), Math.abs(inst[2]), 0.25], c.name);
+        frame += c.loops ? n : n + 1;
+    }
+    assert.deepEqual(vatLayout(readPal(bake(FOX, path.join(dir, 'fox.pal')))).instanceOf([1, 2, 3, 0.5]), [1, 2, 3, 0.5]);
 });
