@@ -321,9 +321,8 @@ static cb_status print_saving(const cb_bake_job *job, const cb_bake_result *r, c
     const cb_palette *p = &r->outputs[0].palette;
     uint64_t rows_30 = 0;
     for (uint32_t i = 0; i < job->plan_count && !err->status; ++i) {
-        cb_clip_info fixed;
-        if (!cb_clip_analyze(s, job->plan[i].animation, 30, job->plan[i].loop, &job->limits, &fixed, err))
-            rows_30 += fixed.frames;
+        uint32_t frames;
+        if (!cb_bake_clip_frames_at(job, s, i, 30, &frames, err)) rows_30 += frames;
     }
     if (!err->status) {
         cb_texture_geometry g;

@@ -504,11 +504,14 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     foot_cache *feet = foot_cache_create();
     foot_cache_screen_strides(feet); /* of a clip that does not stride, a bake reads only that it does not */
     clip_memo *memo = clip_memo_create();
-    decide_speed_reference(job, feet, memo);
     cb_clip_plan *baked = malloc((job->plan_count ? job->plan_count : 1) * sizeof *baked);
     cb_sampler *s = baked ? cb_sampler_create(job->model, job->skin, err) : NULL;
     if (!baked) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     if (!s) return foot_cache_free(feet), clip_memo_free(memo), free(baked), err->status;
+    /* The rate searches analyzed their clips: those analyses stand in for the run's */
+    const search_keep *searched = job->search_kept;
+    for (uint32_t i = 0; searched && i < searched->count; ++i) palette_memo_keep_search(memo, s, searched->poses[i], &job->limits);
+    decide_speed_reference(job, feet, memo);
     cb_release_free_memory(); /* before the palette's buffers: the load's freed memory */
     cb_palette shared = {0}; /* the last palette baked, written again by a format of the same options */
     cb_bake_options shared_opt = {0};

@@ -5,6 +5,7 @@
 #include "internal/bake_words.h"
 #include "core/key_grid.h"   /* cb_key_grid_fps */
 #include "core/local_rate.h" /* search_keep's local_rates */
+#include "core/palette_bake.h" /* palette_take_kept_analysis */
 
 #include <math.h>
 #include <string.h>
@@ -197,4 +198,18 @@ void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result, 
         cb_bake_goal_words(b, setting_name, job->settings.allow_over_budget, why, sizeof why);
         cb_warn(notes, written ? "warning" : "error", "%s%s", text, why);
     }
+}
+
+cb_status cb_bake_clip_frames_at(const cb_bake_job *job, cb_sampler *s, uint32_t clip, double fps, uint32_t *frames,
+                                 cb_error *err)
+{
+    const search_keep *keep = job->search_kept;
+    const cb_clip_plan *plan = &job->plan[clip];
+    pose_cache *poses = keep && clip < keep->count ? keep->poses[clip] : NULL;
+    cb_clip_info info;
+    if (!(poses && palette_take_kept_analysis(poses, s, plan->animation, plan->loop, fps, &job->limits, &info)) &&
+        cb_clip_analyze(s, plan->animation, fps, plan->loop, &job->limits, &info, err))
+        return err->status;
+    *frames = info.frames;
+    return CB_OK;
 }

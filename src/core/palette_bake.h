@@ -64,6 +64,9 @@ void pose_batch_free(pose_batch *b); /* and the measurement scratch it keeps */
  * freed with b: a probe's measurement reads every row of its clip several times (palette_error.c's
  * table), and a scratch made afresh for each probe would be fresh memory each time. */
 struct measure_scratch **pose_batch_measure(pose_batch *b);
+/* The slot for the lanes a search thread's probe sampled its rows from (palette_rows.c's
+ * row_lanes), freed with b: a probe's baked rows are measured against those very poses. */
+struct row_lanes **pose_batch_row_lanes(pose_batch *b);
 
 /* Per-thread scratch: each worker samples its own clips with its own sampler. */
 typedef struct worker {
@@ -224,6 +227,11 @@ bool palette_take_kept_analysis(const pose_cache *poses, cb_sampler *sampler, in
 /* palette_plan.c: the analysis kept with `poses` as it was kept (any rate, any loop override), or
  * NULL (none, or poses NULL). */
 const cb_clip_info *palette_kept_analysis_info(const pose_cache *poses);
+/* The analysis a rate search kept with `poses` (if any) kept in a bake run's memo (clip_memo_keep,
+ * with the rate and loop override it was made with): it stands in for the run's analyses of the
+ * clip (the speed reference's, at 30 fps, analyzed each clip again: Cow 19.5 M instructions). */
+void palette_memo_keep_search(struct clip_memo *memo, const cb_sampler *sampler, const pose_cache *poses,
+                              const cb_limits *limits);
 /* rate_search.c: an analysis of clip i made before the search (at fps, loop override loop) kept
  * for it: kept[i] made where it is NULL (a search's pose cache), the analysis attached. */
 void palette_seed_analysis(pose_cache **kept, uint32_t i, const cb_sampler *sampler, const cb_clip_info *analysis,
@@ -254,6 +262,19 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k);
 /* A worker's measurement scratch, kept from job to job (a clip's is about 1.4 MB for 200 bones,
  * fresh memory each time where it was allocated per job). */
 void palette_measure_scratch_free(struct measure_scratch *s);
+/* palette_rows.c: a search's probe of a rig of similarities measures each baked row against the
+ * exact pose its row was made from, which the sampler made moments before: the lanes a probe's
+ * rows were sampled from are kept (in its search thread's pose_batch, up to a few MB), and its
+ * baked rows' measurement (and a fitted probe's after it, whose rows start from them) reads them
+ * instead of sampling them again. The same values, handed to the same code in the same order. */
+void palette_row_lanes_free(struct row_lanes *l);
+/* Where the lanes of clip c's rows f .. f + CB_SAMPLE_BATCH - 1 go as they are sampled (NULL: not kept). */
+double *palette_row_lanes_keep(bake_state *st, uint32_t c, uint32_t f);
+/* Those rows sampled: count of them kept from `at` (palette_row_lanes_keep's). */
+void palette_row_lanes_kept(bake_state *st, uint32_t f, uint32_t count, const double *at);
+/* The kept lanes of clip c's rows `frames` (count of them), or NULL: joint j's 8 x CB_SAMPLE_BATCH
+ * values at j * 8 * CB_SAMPLE_BATCH, as the sampler handed them to the rows. */
+const double *palette_row_lanes_find(const bake_state *st, uint32_t c, const uint32_t *frames, uint32_t count);
 
 /* What a bake needs of the skin alone, whatever the clips and the rate: its joints' bind
  * positions, how far their vertices reach, the vertices grouped for measuring and the rest

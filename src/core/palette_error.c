@@ -214,7 +214,12 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
         for (uint32_t i = count; i < B; ++i) a[i] = a[count - 1], b[i] = b[count - 1]; /* lanes past count repeat the last */
         for (uint32_t i = 0; i < count; ++i) s->finite[i] = true;
         differences d = {p, mats, a, blend ? b : NULL, count, (double)sub / parts, s};
-        if (similar) /* each joint measured as soon as the sampler has it, as the bake's rows are made */
+        /* Baked rows whose lanes their probe kept: the poses the rows were made from, in joint order */
+        const double *kept = similar && !sub && parts == 1 ? palette_row_lanes_find(st, c, frames, count) : NULL;
+        for (uint32_t j = 0; kept && j < p->bone_count; ++j)
+            palette_bone_differences(p, j, (const double(*)[B])(kept + (size_t)j * 8 * B), d.mats, d.a, d.b, d.count,
+                                     d.fr, s->diff, s->joints, s->finite);
+        if (similar && !kept) /* each joint measured as soon as the sampler has it, as the bake's rows are made */
             cb_clip_frame_lanes_each(w->sampler, &framing, times, count, st->opt->root_motion, joint_differences, &d);
         for (uint32_t j = 0; !similar && j < p->bone_count; ++j) joint_differences(&d, j, NULL);
     }

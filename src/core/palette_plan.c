@@ -109,6 +109,13 @@ bool palette_kept_analysis(const pose_cache *poses, int32_t animation, int loop,
     return k && k->loop == loop && k->info.animation == animation && clip_feet_weighed_alike(&k->info, k->fps, fps, limits);
 }
 
+void palette_memo_keep_search(struct clip_memo *memo, const cb_sampler *sampler, const pose_cache *poses,
+                              const cb_limits *limits)
+{
+    const kept_analysis *k = poses ? pose_cache_analysis(poses) : NULL;
+    if (k) clip_memo_keep(memo, sampler, &k->info, k->fps, k->loop, limits);
+}
+
 const cb_clip_info *palette_kept_analysis_info(const pose_cache *poses)
 {
     const kept_analysis *k = poses ? pose_cache_analysis(poses) : NULL;

@@ -238,14 +238,20 @@ typedef struct kept_rows {
 } kept_rows;
 _Static_assert(offsetof(kept_rows, rows) % sizeof(double) == 0, "point_bounds follow the rows, aligned for doubles");
 
-static bool rows_match(const kept_rows *k, const bake_state *st, uint32_t c)
+/* Whether clip framings a and b sample the same poses at their rows (the times, the loop the
+ * sampler is set to, the root travel taken off). */
+static bool framed_alike(const cb_clip_info *a, const cb_clip_info *b)
 {
-    const cb_clip_info *a = &k->framing, *b = &st->infos[c];
-    return k->layout == st->p->layout && k->root_motion == st->opt->root_motion && k->bones == st->p->bone_count &&
-           a->animation == b->animation && a->t0 == b->t0 && a->t1 == b->t1 && a->duration == b->duration &&
+    return a->animation == b->animation && a->t0 == b->t0 && a->t1 == b->t1 && a->duration == b->duration &&
            a->steps == b->steps && a->frames == b->frames && a->loops == b->loops &&
            a->root_velocity[0] == b->root_velocity[0] && a->root_velocity[1] == b->root_velocity[1] &&
            a->root_velocity[2] == b->root_velocity[2];
+}
+
+static bool rows_match(const kept_rows *k, const bake_state *st, uint32_t c)
+{
+    return k->layout == st->p->layout && k->root_motion == st->opt->root_motion && k->bones == st->p->bone_count &&
+           framed_alike(&k->framing, &st->infos[c]);
 }
 
 static size_t kept_floats(const bake_state *st, uint32_t c)
@@ -601,6 +607,7 @@ typedef struct rows_in_making {
     uint32_t f, count;
     float *rows;
     lane_extent x;
+    double *keep; /* where each joint's lanes are kept (palette_row_lanes_keep), or NULL */
 } rows_in_making;
 
 /* The sampler's sink (cb_clip_frame_lanes_each): each joint into the rows as it is sampled,
@@ -610,6 +617,7 @@ static void joint_into_rows(void *ctx, uint32_t j, double (*lanes)[B])
 {
     rows_in_making *r = ctx;
     bone_lanes(r->st, r->w, j, r->f, r->count, (const double(*)[B])lanes, r->rows, &r->x);
+    if (r->keep) memcpy(r->keep + (size_t)j * 8 * B, lanes, 8 * B * sizeof(double));
 }
 
 CB_TARGET_CLONES
@@ -620,9 +628,10 @@ void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, 
      * each joint into the rows as soon as it is sampled (joint_into_rows). */
     uint32_t frames[B];
     for (uint32_t i = 0; i < count; ++i) frames[i] = f + i;
-    rows_in_making r = {.st = st, .w = w, .f = f, .count = count, .rows = rows};
+    rows_in_making r = {.st = st, .w = w, .f = f, .count = count, .rows = rows, .keep = palette_row_lanes_keep(st, c, f)};
     lane_extent_reset(&r.x);
     cb_clip_frame_lanes_each(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, joint_into_rows, &r);
+    if (r.keep) palette_row_lanes_kept(st, f, count, r.keep);
     /* Bounds and ranges in frame order, as one row at a time grows them (of +0 and -0, the
      * minimum is the one met first). Locals, kept in registers. */
     extent bounds = *clip_bounds;
@@ -630,4 +639,77 @@ void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, 
     fold_lanes(&r.x, count, &bounds, &range);
     *clip_bounds = bounds;
     st->ranges[c] = range;
+}
+
+/* ---- a probe's rows' lanes, for its baked rows' measurement (palette_bake.h) ---- */
+
+/* The lanes kept of a search thread's rows, at most this much (Fox's Run at 120 fps: 221 KB). */
+#define ROW_LANES_BYTES ((size_t)4 << 20)
+
+struct row_lanes {
+    cb_clip_info framing;       /* the rows' clip framing (framed_alike) */
+    cb_root_motion root_motion;
+    uint32_t bones, batches;    /* the framing's batches of CB_SAMPLE_BATCH rows */
+    size_t room;                /* the doubles `lanes` holds (and `count` a batch's worth of them) */
+    uint32_t *count;            /* per batch: its rows kept (0: none yet) */
+    double *lanes;              /* per batch, bones x 8 x CB_SAMPLE_BATCH: each joint's lanes */
+};
+
+void palette_row_lanes_free(struct row_lanes *l)
+{
+    if (l) free(l->count), free(l->lanes);
+    free(l);
+}
+
+static bool lanes_match(const struct row_lanes *l, const bake_state *st, uint32_t c)
+{
+    return l->root_motion == st->opt->root_motion && l->bones == st->p->bone_count &&
+           framed_alike(&l->framing, &st->infos[c]);
+}
+
+/* The thread's kept lanes made ready for clip c's framing: those of the same framing stay (the
+ * same poses), another's are forgotten. NULL: not kept (no search, too large, out of memory). */
+static struct row_lanes *row_lanes_for(bake_state *st, uint32_t c)
+{
+    struct row_lanes **slot = pose_batch_row_lanes(st->batch), *l = *slot;
+    if (l && lanes_match(l, st, c)) return l;
+    uint32_t bones = st->p->bone_count, batches = (st->infos[c].frames + B - 1) / B;
+    size_t doubles = (size_t)batches * bones * 8 * B;
+    if (doubles * sizeof(double) > ROW_LANES_BYTES) return NULL;
+    if (!l || l->room < doubles || l->bones != bones) { /* room for these rows (a count for each batch it holds) */
+        palette_row_lanes_free(l);
+        *slot = l = calloc(1, sizeof *l);
+        if (l) l->lanes = malloc(doubles * sizeof(double)), l->count = malloc(batches * sizeof *l->count), l->room = doubles;
+        if (l && (!l->lanes || !l->count)) palette_row_lanes_free(l), *slot = l = NULL;
+        if (!l) return NULL;
+    }
+    l->framing = st->infos[c], l->root_motion = st->opt->root_motion, l->bones = bones, l->batches = batches;
+    memset(l->count, 0, batches * sizeof *l->count);
+    return l;
+}
+
+double *palette_row_lanes_keep(bake_state *st, uint32_t c, uint32_t f)
+{
+    if (!st->batch || f % B) return NULL; /* only a search's probe keeps them */
+    struct row_lanes *l = row_lanes_for(st, c);
+    if (!l || f / B >= l->batches) return NULL;
+    l->count[f / B] = 0; /* until the batch is sampled */
+    return l->lanes + (size_t)(f / B) * l->bones * 8 * B;
+}
+
+void palette_row_lanes_kept(bake_state *st, uint32_t f, uint32_t count, const double *at)
+{
+    struct row_lanes *l = *pose_batch_row_lanes(st->batch);
+    if (l && at == l->lanes + (size_t)(f / B) * l->bones * 8 * B) l->count[f / B] = count;
+}
+
+const double *palette_row_lanes_find(const bake_state *st, uint32_t c, const uint32_t *frames, uint32_t count)
+{
+    const struct row_lanes *l = st->batch ? *pose_batch_row_lanes(st->batch) : NULL;
+    if (!l || count == 0 || frames[0] % B || !lanes_match(l, st, c)) return NULL;
+    uint32_t b = frames[0] / B;
+    if (b >= l->batches || l->count[b] != count) return NULL;
+    for (uint32_t i = 1; i < count; ++i)
+        if (frames[i] != frames[0] + i) return NULL;
+    return l->lanes + (size_t)b * l->bones * 8 * B;
 }

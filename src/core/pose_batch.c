@@ -14,6 +14,7 @@ struct pose_batch {
     cb_joint_subset *joints; /* every joint of the skin */
     double *lanes;           /* joints x 16 x CB_SAMPLE_BATCH */
     struct measure_scratch *measure; /* the thread's measurement scratch, kept across its probes (or NULL) */
+    struct row_lanes *row_lanes;     /* the lanes its last probes' rows were sampled from (or NULL) */
 };
 
 pose_batch *pose_batch_create(const cb_sampler *s)
@@ -34,10 +35,13 @@ void pose_batch_free(pose_batch *b)
     if (!b) return;
     cb_joint_subset_free(b->joints);
     palette_measure_scratch_free(b->measure);
+    palette_row_lanes_free(b->row_lanes);
     free(b->lanes), free(b);
 }
 
 struct measure_scratch **pose_batch_measure(pose_batch *b) { return &b->measure; }
+
+struct row_lanes **pose_batch_row_lanes(pose_batch *b) { return &b->row_lanes; }
 
 /* Fewer poses missing than this are left to palette_frame_matrices, one at a time: a batch
  * samples all its lanes whatever it fills. */

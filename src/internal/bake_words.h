@@ -20,6 +20,12 @@ unsigned cb_formats_parse(const char *text);
 void cb_bake_budget_notes(const cb_bake_job *job, const cb_bake_result *result,
                           const char *(*setting_name)(cb_setting), cb_warnings *notes);
 
+/* Planned clip i's rows at fps, into *frames: what cb_clip_analyze on sampler s (of the job's model
+ * and skin) gives, its loop set on s likewise; from the clip's rate search's kept analysis where it
+ * stands in (the same bits: clip_memo.h), else analyzed (Cow's 12 clips: 19.5 M instructions). */
+cb_status cb_bake_clip_frames_at(const cb_bake_job *job, cb_sampler *s, uint32_t clip, double fps, uint32_t *frames,
+                                 cb_error *err);
+
 /* Why planned clip i has its rate and rows, in words: "72 fps, fitted rows: within 1 mm/m at 45
  * rows, sampled rows need more than 72 fps", "30 fps, sampled rows: the fixed fps". */
 void cb_bake_clip_reason(const cb_bake_job *job, uint32_t clip, char *buf, size_t size);

@@ -256,6 +256,45 @@ static void test_kept_search_bakes_the_same_bytes(void **state)
     }
 }
 
+/* A clip's rows at a rate (cb_bake_clip_frames_at, the command line's "against N rows at a fixed
+ * 30 fps"), from its rate search's kept analysis and, the search released, analyzed: what
+ * cb_clip_analyze gives on a fresh sampler. */
+static void test_clip_rows_at_a_rate_are_the_analyses(void **state)
+{
+    (void)state;
+    static const char *models[] = {"assets/fox-bevy/Fox.glb", "assets/quaternius-cow/Cow.glb"};
+    static const double rates[] = {30, 24, 60};
+    for (int k = 0; k < 2; ++k) {
+        cb_model *m = load_shared(models[k]);
+        cb_bake_job job = job_for(m);
+        job.outputs = &(cb_output_path){CB_FORMAT_PAL, TMP "/rows_at.pal"}, job.output_count = 1;
+        cb_bake_result r;
+        cb_error err = {0};
+        assert_int_equal(cb_bake_job_run(&job, &r, &err), CB_OK);
+        assert_non_null(job.search_kept); /* the stand-ins are there to take */
+        cb_sampler *s = cb_sampler_create(m, 0, &err);
+        assert_non_null(s);
+        for (int released = 0; released < 2; ++released, cb_bake_job_release_search(&job))
+            for (uint32_t i = 0; i < job.plan_count; ++i)
+                for (int f = 0; f < 3; ++f) {
+                    uint32_t frames = 0;
+                    cb_clip_info fresh;
+                    cb_sampler *alone = cb_sampler_create(m, 0, &err);
+                    assert_non_null(alone);
+                    assert_int_equal(cb_bake_clip_frames_at(&job, s, i, rates[f], &frames, &err), CB_OK);
+                    assert_int_equal(cb_clip_analyze(alone, job.plan[i].animation, rates[f], job.plan[i].loop, &job.limits,
+                                                     &fresh, &err), CB_OK);
+                    if (frames != fresh.frames)
+                        fail_msg("%s clip %u at %g fps: %u rows, analyzed %u", models[k], i, rates[f], frames, fresh.frames);
+                    cb_sampler_free(alone);
+                }
+        cb_sampler_free(s);
+        cb_bake_result_free(&r);
+        cb_bake_job_free(&job);
+        cb_model_free(m);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -266,6 +305,7 @@ int main(void)
         cmocka_unit_test(test_catalog_and_single_bake_agree),
         cmocka_unit_test(test_catalog_out_dir_and_manifest_depfile),
         cmocka_unit_test(test_kept_search_bakes_the_same_bytes),
+        cmocka_unit_test(test_clip_rows_at_a_rate_are_the_analyses),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }

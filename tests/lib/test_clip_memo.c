@@ -11,6 +11,8 @@
 #include <string.h>
 
 #include "../../src/core/clip_memo.h"
+#include "../../src/core/palette_bake.h" /* palette_choose_rates, palette_memo_keep_search */
+#include "crowdbake/runtime.h"
 
 static const char *const models[] = {"assets/quaternius-cow/Cow.glb", "assets/quaternius-husky/Husky.glb",
                                      "assets/fox-bevy/Fox.glb", "assets/robot-quaternius-raylib/robot.glb"};
@@ -106,11 +108,55 @@ static void test_prefetched_analyses_are_analyses(void **state)
     }
 }
 
+/* What a bake run's memo takes from its rate searches (palette_memo_keep_search: each clip's
+ * analysis kept with its poses) stands in for analyzing the clip at 30 fps, as the speed
+ * reference asks, bit for bit, and nothing is analyzed again (Cow: the loops corrected too). */
+static void test_search_analyses_stand_in(void **state)
+{
+    (void)state;
+    static const char *const searched[] = {"assets/quaternius-cow/Cow.glb", "assets/fox-bevy/Fox.glb"};
+    for (size_t mi = 0; mi < 2; ++mi) {
+        cb_model *m = load_shared(searched[mi]);
+        cb_error err = {0};
+        cb_sampler *s = cb_sampler_create(m, 0, &err);
+        uint32_t n = m->animation_count;
+        assert_true(n <= 32);
+        cb_clip_plan plan[32];
+        cb_rate_goal goals[32];
+        search_keep *keep = search_keep_create(n);
+        clip_memo *memo = clip_memo_create();
+        assert_non_null(s), assert_non_null(keep), assert_non_null(memo);
+        cb_bake_options o = cb_default_bake_options();
+        for (uint32_t i = 0; i < n; ++i)
+            plan[i] = (cb_clip_plan){(int32_t)i, NULL, -1, 0, false, false, 0, NULL}, goals[i] = (cb_rate_goal){1, 120, CB_ROWS_BEST};
+        assert_int_equal(palette_choose_rates(s, &o, plan, n, goals, NULL, keep, NULL, &err), CB_OK);
+        for (uint32_t i = 0; i < n; ++i) palette_memo_keep_search(memo, s, keep->poses[i], &o.limits);
+        assert_int_equal(clip_memo_count(memo), n);
+        for (uint32_t a = 0; a < n; ++a) {
+            cb_clip_info kept, fresh;
+            memset(&kept, 0, sizeof kept);
+            cb_sampler *alone = cb_sampler_create(m, 0, &err);
+            assert_non_null(alone);
+            assert_int_equal(clip_memo_analyze(memo, s, (int32_t)a, 30, -1, &o.limits, &kept, &err), CB_OK);
+            assert_int_equal(cb_clip_analyze(alone, (int32_t)a, 30, -1, &o.limits, &fresh, &err), CB_OK);
+            if (memcmp(&kept, &fresh, sizeof kept)) fail_msg("%s clip '%s': the search's analysis differs", searched[mi], m->animations[a].name);
+            assert_same_samples(m, s, alone, &fresh);
+            cb_sampler_free(alone);
+        }
+        assert_int_equal(clip_memo_count(memo), n); /* every one taken, none analyzed */
+        clip_memo_free(memo);
+        search_keep_free(keep);
+        cb_sampler_free(s);
+        cb_model_free(m);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_memo_answers_are_analyses),
         cmocka_unit_test(test_prefetched_analyses_are_analyses),
+        cmocka_unit_test(test_search_analyses_stand_in),
     };
     return cmocka_run_group_tests_name("clip memo", tests, NULL, NULL);
 }

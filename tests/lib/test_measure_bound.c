@@ -441,6 +441,61 @@ static void test_floors_from_the_probes_keep_the_maxima(void **state)
     expect_floors_keep_the_maxima_of("assets/quaternius-cow/Cow.glb", 0, 2, 2);
 }
 
+/* One clip of `rel` baked as a search's probe (one thread, its pose cache and batches of poses),
+ * then the same plan baked with nothing kept: the same errors and texels, bit for bit. */
+static void expect_probe_as_fresh(cb_sampler *s, const palette_skin_facts *facts, pose_cache *poses, pose_batch *batch,
+                                  const cb_clip_plan *plan, double goal)
+{
+    cb_bake_options o = cb_default_bake_options();
+    o.threads = 1, o.error_goal = goal;
+    palette_probe probe = {poses, NULL, NULL, batch, NULL};
+    cb_palette kept, fresh;
+    cb_error err = {0};
+    assert_int_equal(palette_bake_with_facts(s, &o, plan, 1, facts, &probe, &kept, &err), CB_OK);
+    assert_int_equal(cb_palette_bake(s, &o, plan, 1, &fresh, &err), CB_OK);
+    if (kept.visible_error != fresh.visible_error || kept.max_error != fresh.max_error)
+        fail_msg("clip %d at %g fps (%s rows, goal %g): errors %.17g / %.17g as a probe, %.17g / %.17g fresh",
+                 plan->animation, plan->fps, plan->fit ? "fitted" : "sampled", goal, kept.visible_error, kept.max_error,
+                 fresh.visible_error, fresh.max_error);
+    assert_true(kept.texel_bytes == fresh.texel_bytes && !memcmp(kept.texels, fresh.texels, fresh.texel_bytes));
+    cb_palette_free(&kept), cb_palette_free(&fresh);
+}
+
+/* A probe of a rig of similarities (Fox) keeps the lanes its rows were sampled from, and its
+ * baked rows (and a fitted probe's after it at the same rate, whose rows start from those) are
+ * measured against them, not sampled again (palette_row_lanes_find): the probes' errors are
+ * those of bakes that sample them again, measured exactly and within a goal. */
+static void test_probes_measure_rows_against_their_lanes(void **state)
+{
+    (void)state;
+    cb_model *m = load_shared("assets/fox-bevy/Fox.glb");
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    assert_non_null(s);
+    assert_true(cb_sampler_is_similarity(s)); /* else the lanes are never kept */
+    palette_skin_facts facts;
+    assert_int_equal(palette_skin_facts_build(s, &facts, &err), CB_OK);
+    pose_batch *batch = pose_batch_create(s);
+    assert_non_null(batch);
+    static const double rates[] = {24, 72, 120};
+    for (uint32_t a = 0; a < m->animation_count; ++a) {
+        pose_cache *poses = palette_probe_poses(m->skins[0].joint_count, (size_t)64 << 20);
+        assert_non_null(poses);
+        for (int r = 0; r < 3; ++r)
+            for (int fit = 0; fit < 2; ++fit) {
+                cb_clip_plan plan = {(int32_t)a, NULL, -1, rates[r], fit, false, 0, NULL};
+                expect_probe_as_fresh(s, &facts, poses, batch, &plan, 0);
+                expect_probe_as_fresh(s, &facts, poses, batch, &plan, 1e9); /* met: the baked rows after the blends */
+                assert_non_null(*pose_batch_row_lanes(batch));
+            }
+        pose_cache_free(poses);
+    }
+    pose_batch_free(batch);
+    palette_skin_facts_free(&facts);
+    cb_sampler_free(s);
+    cb_model_free(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -449,6 +504,7 @@ int main(void)
         cmocka_unit_test(test_measure_all_past_the_budget),
         cmocka_unit_test(test_auto_rates_do_not_depend_on_threads),
         cmocka_unit_test(test_floors_from_the_probes_keep_the_maxima),
+        cmocka_unit_test(test_probes_measure_rows_against_their_lanes),
     };
     return cmocka_run_group_tests_name("measure_bound", tests, NULL, NULL);
 }
