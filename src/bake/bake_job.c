@@ -321,7 +321,7 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
          * (which takes it where it stands in for its own: palette_take_kept_analysis). */
         for (uint32_t i = 0; s && keep && i < n; ++i)
             if (searched[i] && early[i].made)
-                palette_seed_analysis(keep->poses, i, s, &early[i].info, early[i].fps, early[i].loop);
+                palette_seed_analysis(keep, i, s, &early[i].info, early[i].fps, early[i].loop);
         bool *later = bake_transient_candidates(job); /* NULL: none left for later */
         if (s && !palette_choose_rates(s, &o, job->plan, n, goals, job->rates, job->search_kept, later, err))
             bake_reach_for_transients(job, s, &o, err);

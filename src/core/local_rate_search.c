@@ -35,7 +35,7 @@ typedef struct local_search {
 static pose_cache *clip_cache(local_search *ls, uint32_t i)
 {
     if (!ls->keep) return NULL;
-    if (!ls->keep->poses[i]) ls->keep->poses[i] = palette_probe_poses(ls->skeleton.bones, SEARCH_CLIP_POSE_BYTES);
+    if (!ls->keep->poses[i]) ls->keep->poses[i] = palette_probe_poses(ls->keep->arena, ls->skeleton.bones, SEARCH_CLIP_POSE_BYTES);
     return ls->keep->poses[i];
 }
 

@@ -232,9 +232,10 @@ const cb_clip_info *palette_kept_analysis_info(const pose_cache *poses);
  * clip (the speed reference's, at 30 fps, analyzed each clip again: Cow 19.5 M instructions). */
 void palette_memo_keep_search(struct clip_memo *memo, const cb_sampler *sampler, const pose_cache *poses,
                               const cb_limits *limits);
+struct search_keep; /* below */
 /* rate_search.c: an analysis of clip i made before the search (at fps, loop override loop) kept
- * for it: kept[i] made where it is NULL (a search's pose cache), the analysis attached. */
-void palette_seed_analysis(pose_cache **kept, uint32_t i, const cb_sampler *sampler, const cb_clip_info *analysis,
+ * for it: keep->poses[i] made where it is NULL (a search's pose cache), the analysis attached. */
+void palette_seed_analysis(struct search_keep *keep, uint32_t i, const cb_sampler *sampler, const cb_clip_info *analysis,
                            double fps, int loop);
 cb_status palette_plan_texture(cb_palette *p, uint32_t max_size, const char *source, cb_error *err);
 void palette_bind_positions(const cb_skin *skin, float *bind);
@@ -307,8 +308,8 @@ const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, cons
 void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
                             uint32_t count);
 /* palette_rows.c: a pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
- * from its matrices alone too (a probe's rows are rows of the others). */
-pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes);
+ * from its matrices alone too (a probe's rows are rows of the others); its blocks drawn from arena (NULL: its own). */
+pose_cache *palette_probe_poses(pose_arena *arena, uint32_t bones, size_t max_bytes);
 /* palette_rows.c: palette_qpos_similarity_pose of a pose kept in such a cache (mats: its matrices,
  * as pose_cache_find or pose_cache_add gave them), derived once and kept with it, where the
  * bake's rows take it too; NULL, nothing kept, where a joint is no similarity. */
@@ -344,6 +345,7 @@ typedef struct search_keep {
     bool has_facts;
     palette_skin_facts facts;
     bool local_rates; /* the rates were chosen for local rows (local_rate_search.c), not for global ones */
+    pose_arena *arena; /* what poses' blocks come from (NULL: each cache its own), freed after them */
     uint32_t count;
     pose_cache *poses[];
 } search_keep;

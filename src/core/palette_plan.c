@@ -277,13 +277,14 @@ void palette_skin_facts_free(palette_skin_facts *f)
 search_keep *search_keep_create(uint32_t n)
 {
     search_keep *keep = calloc(1, sizeof *keep + (n ? n : 1) * sizeof(pose_cache *));
-    if (keep) keep->count = n;
+    if (keep) keep->count = n, keep->arena = pose_arena_create(); /* NULL: each cache its own blocks */
     return keep;
 }
 
 void search_keep_free(search_keep *keep)
 {
     for (uint32_t i = 0; keep && i < keep->count; ++i) pose_cache_free(keep->poses[i]);
+    if (keep) pose_arena_free(keep->arena);
     if (keep && keep->has_facts) palette_skin_facts_free(&keep->facts);
     free(keep);
 }

@@ -89,9 +89,9 @@ typedef struct kept_row {
 } kept_row;
 #define KEPT_ROW_DOUBLES(bones) ((sizeof(kept_row) + sizeof(double) - 1) / sizeof(double) + 4 * (size_t)(bones))
 
-pose_cache *palette_probe_poses(uint32_t bones, size_t max_bytes)
+pose_cache *palette_probe_poses(pose_arena *arena, uint32_t bones, size_t max_bytes)
 {
-    return pose_cache_create(bones, (uint32_t)(KEPT_ROW_AT(bones) + KEPT_ROW_DOUBLES(bones)), max_bytes);
+    return pose_cache_create_in(arena, bones, (uint32_t)(KEPT_ROW_AT(bones) + KEPT_ROW_DOUBLES(bones)), max_bytes);
 }
 
 const double *palette_kept_qpos(const double *mats, uint32_t bones)

@@ -11,11 +11,21 @@
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
+#include <threads.h>
 
 /* Worst points kept (a search probes a clip at a handful of rates and kinds of rows). */
 enum { POSE_WORST_KEPT = 16 };
 
 #define BLOCK_BYTES ((size_t)2 << 20) /* a huge page */
+#define CHUNK_BYTES ((size_t)256 << 10) /* an arena's block: an eighth of a huge page */
+
+struct pose_arena {
+    mtx_t lock;
+    char *page;          /* the page chunks are cut from, or NULL */
+    size_t used;         /* its bytes handed out */
+    void **pages;        /* every page (and every block too big for one), freed with the arena */
+    uint32_t page_count;
+};
 
 struct pose_cache {
     uint32_t bones, extra;
@@ -25,6 +35,7 @@ struct pose_cache {
     uint32_t *slots;        /* the table: its pose's number */
     uint32_t capacity;      /* table entries, a power of two, at least twice count */
     double **blocks;        /* block_poses poses each */
+    pose_arena *arena;      /* where they come from, or NULL: its own, freed with it */
     uint32_t block_count, block_poses;
     void *attached[POSE_CACHE_SLOTS]; /* its user's blocks for the same clip (pose_cache_attach), or NULL */
     void *analysis;         /* and the clip's analysis (pose_cache_attach_analysis), or NULL */
@@ -62,15 +73,70 @@ static double *pose_at(const pose_cache *c, uint32_t n)
     return c->blocks[n / c->block_poses] + (n % c->block_poses) * c->stride;
 }
 
+pose_arena *pose_arena_create(void)
+{
+    pose_arena *a = calloc(1, sizeof *a);
+    if (a && mtx_init(&a->lock, mtx_plain) != thrd_success) free(a), a = NULL;
+    return a;
+}
+
+void pose_arena_free(pose_arena *a)
+{
+    if (!a) return;
+    for (uint32_t i = 0; i < a->page_count; ++i) free(a->pages[i]);
+    mtx_destroy(&a->lock);
+    free(a->pages), free(a);
+}
+
+/* Keeps block among the arena's pages (freed with them); false, block freed: out of memory. */
+static bool arena_own(pose_arena *a, void *block)
+{
+    void **pages = block ? realloc(a->pages, (a->page_count + 1) * sizeof *pages) : NULL;
+    if (!pages) return free(block), false;
+    a->pages = pages, a->pages[a->page_count++] = block;
+    return true;
+}
+
+/* bytes from the arena's page, a new page where it has too few left (a block over half a page:
+ * its own); NULL when out of memory. */
+static void *arena_take(pose_arena *a, size_t bytes)
+{
+    void *block = NULL;
+    mtx_lock(&a->lock);
+    if (bytes > BLOCK_BYTES / 2) {
+        block = cb_alloc_large(bytes);
+        if (!arena_own(a, block)) block = NULL;
+    } else {
+        if (!a->page || BLOCK_BYTES - a->used < bytes) {
+            char *page = cb_alloc_large(BLOCK_BYTES);
+            if (arena_own(a, page)) a->page = page, a->used = 0;
+        }
+        if (a->page && BLOCK_BYTES - a->used >= bytes) block = a->page + a->used, a->used += bytes;
+    }
+    mtx_unlock(&a->lock);
+    return block;
+}
+
 pose_cache *pose_cache_create(uint32_t bones, uint32_t extra, size_t max_bytes)
+{
+    return pose_cache_create_in(NULL, bones, extra, max_bytes);
+}
+
+pose_cache *pose_cache_create_in(pose_arena *arena, uint32_t bones, uint32_t extra, size_t max_bytes)
 {
     pose_cache *c = calloc(1, sizeof *c);
     if (!c) return NULL;
+    c->arena = arena;
     c->bones = bones ? bones : 1, c->extra = extra;
     c->stride = (size_t)c->bones * 16 + extra;
     size_t pose_bytes = c->stride * sizeof(double);
     size_t limit = max_bytes / pose_bytes;
-    c->block_poses = (uint32_t)((BLOCK_BYTES + pose_bytes - 1) / pose_bytes); /* at least a huge page */
+    /* As many poses as fill a huge page (an arena's chunk) without passing it: a block a pose
+     * over 2 MB took two (cb_alloc_large rounds up), and the few bytes past the first made the
+     * kernel clear all of the second (Cow's search: 12 of its 24 blocks, 24 MB cleared for
+     * 100 KB used). */
+    size_t fit = (arena ? CHUNK_BYTES : BLOCK_BYTES) / pose_bytes;
+    c->block_poses = (uint32_t)(fit ? fit : 1);
     c->limit = limit > UINT32_MAX / 4 ? UINT32_MAX / 4 : (uint32_t)limit;
     c->capacity = 64;
     c->keys = malloc(c->capacity * sizeof *c->keys);
@@ -86,7 +152,7 @@ pose_cache *pose_cache_create(uint32_t bones, uint32_t extra, size_t max_bytes)
 void pose_cache_free(pose_cache *c)
 {
     if (!c) return;
-    for (uint32_t b = 0; b < c->block_count; ++b) free(c->blocks[b]);
+    for (uint32_t b = 0; !c->arena && b < c->block_count; ++b) free(c->blocks[b]);
     for (int k = 0; k < POSE_CACHE_SLOTS; ++k) free(c->attached[k]);
     free(c->analysis), free(c->blocks), free(c->keys), free(c->slots), free(c);
 }
@@ -127,7 +193,8 @@ static bool ensure_block(pose_cache *c, uint32_t n)
     double **blocks = realloc(c->blocks, (c->block_count + 1) * sizeof *blocks);
     if (!blocks) return false;
     c->blocks = blocks;
-    blocks[c->block_count] = cb_alloc_large(c->block_poses * c->stride * sizeof(double));
+    size_t bytes = c->block_poses * c->stride * sizeof(double);
+    blocks[c->block_count] = c->arena ? arena_take(c->arena, bytes) : cb_alloc_large(bytes);
     if (!blocks[c->block_count]) return false;
     c->block_count++;
     return true;

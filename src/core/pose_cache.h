@@ -20,6 +20,18 @@ typedef struct pose_cache pose_cache;
 pose_cache *pose_cache_create(uint32_t bones, uint32_t extra, size_t max_bytes);
 void pose_cache_free(pose_cache *c);
 
+/* Huge pages that the caches of one run share (search_keep: a cache per clip, kept for the bake
+ * after the search), handed out in chunks of about 256 KB: each cache's own blocks left its last
+ * huge page partly used, and the kernel clears all of a huge page on its first touch (Cow's
+ * twelve clips: 25 huge pages, 50 MB cleared, for 36 MB of poses; drawn from an arena, 21).
+ * Any thread may draw on it. NULL when out of memory. */
+typedef struct pose_arena pose_arena;
+pose_arena *pose_arena_create(void);
+/* Frees its pages: after every cache that drew on it is freed. */
+void pose_arena_free(pose_arena *a);
+/* pose_cache_create, its blocks drawn from arena (NULL: its own, as pose_cache_create). */
+pose_cache *pose_cache_create_in(pose_arena *arena, uint32_t bones, uint32_t extra, size_t max_bytes);
+
 /* The matrices kept for time t (their extra doubles from + 16 x bones), or NULL. */
 const double *pose_cache_find(const pose_cache *c, double t);
 /* Room for time t's matrices, which the caller writes before the next find of t; NULL when the

@@ -412,23 +412,23 @@ static double choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_
     return choose_clip(&cs, &f, rows, max_error, c, err);
 }
 
-static pose_cache *search_pose_cache(const cb_sampler *s)
+static pose_cache *search_pose_cache(const cb_sampler *s, pose_arena *arena)
 {
-    return palette_probe_poses(cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count, SEARCH_CLIP_POSE_BYTES);
+    return palette_probe_poses(arena, cb_sampler_model(s)->skins[cb_sampler_skin(s)].joint_count, SEARCH_CLIP_POSE_BYTES);
 }
 
-void palette_seed_analysis(pose_cache **kept, uint32_t i, const cb_sampler *s, const cb_clip_info *analysis, double fps,
+void palette_seed_analysis(search_keep *keep, uint32_t i, const cb_sampler *s, const cb_clip_info *analysis, double fps,
                            int loop)
 {
-    if (kept && !kept[i]) kept[i] = search_pose_cache(s);
-    if (kept && kept[i]) palette_keep_analysis(kept[i], analysis, fps, loop);
+    if (keep && !keep->poses[i]) keep->poses[i] = search_pose_cache(s, keep->arena);
+    if (keep && keep->poses[i]) palette_keep_analysis(keep->poses[i], analysis, fps, loop);
 }
 
 double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip_plan *clip, double max_error,
                           double max_fps, bool *met, double *error, cb_error *err)
 {
     palette_skin_facts facts;
-    pose_cache *poses = search_pose_cache(s); /* NULL (out of memory): sampled as without */
+    pose_cache *poses = search_pose_cache(s, NULL); /* NULL (out of memory): sampled as without */
     pose_batch *batch = pose_batch_create(s); /* NULL (out of memory): poses sampled one at a time */
     double fps = max_fps;
     cb_rate_choice c = {0};
@@ -462,6 +462,7 @@ typedef struct rate_search {
     const uint32_t *order; /* the clips in the order they are taken */
     atomic_uint next;
     pose_cache **kept;     /* per clip, or NULL: the poses each clip's search sampled, for the bake after */
+    pose_arena *arena;     /* what kept's blocks come from, or NULL */
     atomic_size_t kept_bytes;
     const bool *needed_later; /* per clip, or NULL: clips whose caller searches on where they miss */
 } rate_search;
@@ -471,7 +472,7 @@ typedef struct rate_search {
 static pose_cache *clip_cache(rate_search *rs, uint32_t i, pose_cache *mine, const cb_sampler *s)
 {
     if (!rs->kept) return mine;
-    if (!rs->kept[i]) rs->kept[i] = search_pose_cache(s);
+    if (!rs->kept[i]) rs->kept[i] = search_pose_cache(s, rs->arena);
     return rs->kept[i];
 }
 
@@ -504,7 +505,7 @@ static int rate_worker(void *arg)
     rate_search *rs = arg;
     cb_error fail = {0};
     cb_sampler *s = cb_sampler_create(rs->model, rs->skin, &fail);
-    pose_cache *poses = s && !rs->kept ? search_pose_cache(s) : NULL; /* this thread's, for each clip in turn */
+    pose_cache *poses = s && !rs->kept ? search_pose_cache(s, NULL) : NULL; /* this thread's, for each clip in turn */
     pose_batch *batch = s ? pose_batch_create(s) : NULL; /* this thread's batches of poses (NULL: one at a time) */
     for (;;) {
         uint32_t n = atomic_fetch_add(&rs->next, 1);
@@ -561,8 +562,8 @@ cb_status palette_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_
         return local_choose_rates(s, o, plan, count, goals, out, keep, facts, needed_later, err), palette_skin_facts_free(&own),
                err->status;
     rate_search rs = {m, cb_sampler_skin(s), o, plan, count, goals, calloc(count, sizeof(cb_rate_choice)),
-                      calloc(count, sizeof(cb_error)), facts->height, facts, NULL, 0, keep ? keep->poses : NULL, 0,
-                      needed_later};
+                      calloc(count, sizeof(cb_error)), facts->height, facts, NULL, 0, keep ? keep->poses : NULL,
+                      keep ? keep->arena : NULL, 0, needed_later};
     uint32_t *order = malloc(count * sizeof *order);
     rs.order = order;
     if (rs.choices && rs.errors && order) {

@@ -479,7 +479,7 @@ static void test_probes_measure_rows_against_their_lanes(void **state)
     assert_non_null(batch);
     static const double rates[] = {24, 72, 120};
     for (uint32_t a = 0; a < m->animation_count; ++a) {
-        pose_cache *poses = palette_probe_poses(m->skins[0].joint_count, (size_t)64 << 20);
+        pose_cache *poses = palette_probe_poses(NULL, m->skins[0].joint_count, (size_t)64 << 20);
         assert_non_null(poses);
         for (int r = 0; r < 3; ++r)
             for (int fit = 0; fit < 2; ++fit) {

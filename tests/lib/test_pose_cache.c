@@ -9,7 +9,10 @@
  * cleared, and goes with the cache. A probe's worst point is found by its rows' count and parts,
  * replaced by the next for the same, the oldest forgotten past 16, all of them by a clear. And
  * times that are short binary fractions of a second (all their low bits zero: they once shared
- * one table entry) each find their own pose. */
+ * one table entry) each find their own pose. Caches drawing on one arena (a run's kept caches,
+ * sharing huge pages) fill alternately past several chunks and pages, and each finds its own
+ * poses, none written over by the other's; a pose bigger than half a page gets a block of its
+ * own; the caches freed (in either order) before the arena leave nothing behind. */
 #include "testutil.h"
 
 #include <math.h>
@@ -186,6 +189,45 @@ static void test_binary_fractions_find_their_poses(void **state)
     pose_cache_free(c);
 }
 
+/* A pose of `bones` joints whose every value says which time and cache it is for. */
+static void fill_wide(double *pose, uint32_t bones, double t, int cache)
+{
+    for (size_t k = 0; k < (size_t)bones * 16; ++k) pose[k] = t * 1e6 + cache * 1e5 + (double)k;
+}
+
+static bool is_wide(const double *pose, uint32_t bones, double t, int cache)
+{
+    for (size_t k = 0; pose && k < (size_t)bones * 16; ++k)
+        if (pose[k] != t * 1e6 + cache * 1e5 + (double)k) return false;
+    return pose != NULL;
+}
+
+static void test_caches_share_an_arena(void **state)
+{
+    (void)state;
+    /* 3 bones: 384 bytes a pose, 682 a 256 KB chunk: 3,000 a cache span five chunks each, and
+     * the two together more than one 2 MB page. */
+    enum { N = 3000 };
+    pose_arena *arena = pose_arena_create();
+    assert_non_null(arena);
+    pose_cache *c[2] = {pose_cache_create_in(arena, BONES, 0, (size_t)64 << 20),
+                        pose_cache_create_in(arena, BONES, 0, (size_t)64 << 20)};
+    assert_non_null(c[0]), assert_non_null(c[1]);
+    for (uint32_t i = 0; i < N; ++i)
+        for (int k = 0; k < 2; ++k) fill_wide(pose_cache_add(c[k], i / 30.0), BONES, i / 30.0, k);
+    for (uint32_t i = 0; i < N; ++i)
+        for (int k = 0; k < 2; ++k) assert_true(is_wide(pose_cache_find(c[k], i / 30.0), BONES, i / 30.0, k));
+    /* 9,000 joints: 1.15 MB a pose, over half a page: a block of its own each */
+    enum { WIDE = 9000 };
+    pose_cache *wide = pose_cache_create_in(arena, WIDE, 0, (size_t)8 << 20);
+    assert_non_null(wide);
+    for (int i = 0; i < 3; ++i) fill_wide(pose_cache_add(wide, i), WIDE, i, 2);
+    for (int i = 0; i < 3; ++i) assert_true(is_wide(pose_cache_find(wide, i), WIDE, i, 2));
+    assert_true(is_wide(pose_cache_find(c[0], (N - 1) / 30.0), BONES, (N - 1) / 30.0, 0));
+    pose_cache_free(c[1]), pose_cache_free(wide), pose_cache_free(c[0]);
+    pose_arena_free(arena);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -197,6 +239,7 @@ int main(void)
         cmocka_unit_test(test_an_attached_block_goes_with_the_poses),
         cmocka_unit_test(test_worst_points_by_rows_and_parts),
         cmocka_unit_test(test_binary_fractions_find_their_poses),
+        cmocka_unit_test(test_caches_share_an_arena),
     };
     return cmocka_run_group_tests_name("pose_cache", tests, NULL, NULL);
 }
