@@ -3,7 +3,7 @@ Godot 4.6's web build in headless Chromium on SwiftShader (tests/runtimes/godot/
 tests/runtimes/godot/bench_herd.gd), a herd of walking Cows drawn per vertex, through the bone pass, with the
 herd's "auto" choice, and from a VAT of the same frames (crowdbake vat --like the palette).
 
-    python3 bench/godot_crowd.py [N1,N2,...]      (default 10,100,1000; prints a table and the JSON)
+    python3 bench/godot_crowd.py [N1,N2,...] [cow|husky]   (default 10,100,1000 Cows; prints a table and the JSON)
 """
 import json
 import os
@@ -14,6 +14,7 @@ import sys
 from common import BUILD, EXE, ROOT, SHARED
 
 HALF, FLOAT = 1, 2
+ANIMALS = {'cow': ('quaternius-cow/Cow.glb', 'AnimalArmature|Walk'), 'husky': ('quaternius-husky/Husky.glb', 'Walk')}
 
 
 def read_vat(path):
@@ -72,16 +73,17 @@ def read_vat(path):
 
 def godot_input(name='cow'):
     """build/bench/godot-NAME: model.glb, roster/ (a catalog of one walking state), the VAT of its palette's rows."""
-    model = os.path.join(SHARED, 'assets', 'quaternius-cow', 'Cow.glb')
+    asset, walk = ANIMALS[name]
+    model = os.path.join(SHARED, 'assets', asset)
     out = os.path.join(BUILD, 'bench', 'godot-' + name)
     os.makedirs(out, exist_ok=True)
     subprocess.run(['cp', model, os.path.join(out, 'model.glb')], check=True)
     with open(os.path.join(out, 'catalog.toml'), 'w') as f:
-        f.write('[bake]\nout_dir = "roster"\nfps = 30\n\n[animal.cow]\nmodel = "model.glb"\n'
-                'states = { wander = ["AnimalArmature|Walk"] }\n')
+        f.write('[bake]\nout_dir = "roster"\nfps = 30\n\n[animal.%s]\nmodel = "model.glb"\n'
+                'states = { wander = ["%s"] }\n' % (name, walk))
     subprocess.run([EXE, 'bake', 'catalog.toml', '-q'], check=True, cwd=out)
     exr = os.path.join(out, 'vat.exr')
-    subprocess.run([EXE, 'vat', 'model.glb', '-o', exr, '--like', 'roster/cow.pal', '--exr-compression', 'none', '-q'],
+    subprocess.run([EXE, 'vat', 'model.glb', '-o', exr, '--like', 'roster/%s.pal' % name, '--exr-compression', 'none', '-q'],
                    check=True, cwd=out, stdout=subprocess.DEVNULL)
     meta, layers = read_vat(exr)
     os.remove(exr) # run_godot.mjs hands Godot every file of the folder
@@ -93,10 +95,10 @@ def godot_input(name='cow'):
     return out
 
 
-def godot_crowd_bench(counts=(10, 100, 1000), methods=('palette', 'bones', 'vat')):
-    out = godot_input()
+def godot_crowd_bench(counts=(10, 100, 1000), methods=('palette', 'bones', 'vat'), animal='cow'):
+    out = godot_input(animal)
     with open(os.path.join(out, 'bench.json'), 'w') as f:
-        json.dump({'counts': list(counts), 'methods': list(methods), 'animal': 'cow'}, f)
+        json.dump({'counts': list(counts), 'methods': list(methods), 'animal': animal}, f)
     log = os.path.join(BUILD, 'bench', 'godot-crowd.log')
     # Not check=True: run_godot.mjs's 600 s guard against a hung engine can end a run of 1,000 Cows (seconds a frame
     # on two busy cores) after its results are printed; the results line is what counts.
@@ -109,9 +111,9 @@ def godot_crowd_bench(counts=(10, 100, 1000), methods=('palette', 'bones', 'vat'
     return json.loads(line[len('crowdbake-bench: '):])
 
 
-def print_table(r, methods=('palette', 'bones', 'vat')):
-    print('Godot 4.6 web build (Compatibility, SwiftShader), walking Cows (%d bones, %d vertices), frame ms (median):'
-          % (r['bones'], r['vertices']))
+def print_table(r, methods=('palette', 'bones', 'vat'), animal='cow'):
+    print('Godot 4.6 web build (Compatibility, SwiftShader), walking %s (%d bones, %d vertices), frame ms (median):'
+          % (animal, r['bones'], r['vertices']))
     print('%10s' % 'instances' + ''.join('%12s' % (m + ' ms') for m in methods) + '   auto chose')
     for n, c in sorted(r['counts'].items(), key=lambda kv: float(kv[0])):
         print("%10d" % float(n) + ''.join('%12.1f' % c[m + '_ms'] for m in methods) + '   ' + ('bones' if c['auto_bone_pass'] else 'palette'))
@@ -120,6 +122,7 @@ def print_table(r, methods=('palette', 'bones', 'vat')):
 
 if __name__ == '__main__':
     counts = [int(n) for n in sys.argv[1].split(',')] if len(sys.argv) > 1 else [10, 100, 1000]
-    result = godot_crowd_bench(counts)
-    print_table(result)
+    animal = sys.argv[2] if len(sys.argv) > 2 else 'cow'
+    result = godot_crowd_bench(counts, animal=animal)
+    print_table(result, animal=animal)
     print(json.dumps(result))

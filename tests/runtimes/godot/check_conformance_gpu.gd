@@ -236,11 +236,13 @@ static func _decode(rgba: PackedByteArray, points: int) -> PackedVector3Array:
 		out[i] = p
 	return out
 
-# The bone pass's premise: a float's 32 bits written as four bytes (cb_pack_float) into an 8-bit SubViewport come
-# back bit for bit, both read back by the CPU and fetched by a second shader (cb_unpack_float), the way the herd's
-# vertex shader reads them. Hashed bit patterns of finite floats (every exponent from 2^-95 to 2^0) and sines.
+# The bone pass's premise: a use_hdr_2d SubViewport (RGBA16F in the Compatibility renderer) gives a second shader
+# every finite half float written into it bit for bit, and a bone's rows split into hi and lo halves
+# (cb_bone_pass_texel) add back to within 2^-22 of each float (+ 2^-25, half the smallest subnormal half), the
+# way the herd's vertex shader reads them. Columns 0-31: hashed half bit patterns (every exponent but the
+# infinities'); columns 32-61: five bones of hashed floats (exponents 2^-63 to 2^0) and sines, 6 texels each.
 func _check_packing() -> void:
-	var name := "bone pass: floats packed into 8-bit texels come back bit for bit"
+	var name := "bone pass: half floats in an RGBA16F SubViewport come back bit for bit; hi + lo halves within 2^-22"
 	addon._begin(name)
 	var includes := "#define CB_LAYOUT 2\n#define CB_U16 1\n" + FileAccess.get_file_as_string(ADDON + "/crowdbake_palette.gdshaderinc") \
 			+ FileAccess.get_file_as_string(ADDON + "/crowdbake_bone_pass.gdshaderinc")
@@ -251,42 +253,59 @@ uint cb_hash(uint x, uint y) {
 	h *= 3266489917u;
 	return h ^ (h >> 16u);
 }
-float cb_value(ivec2 xy) {
-	return xy.x % 2 == 0 ? uintBitsToFloat((cb_hash(uint(xy.x), uint(xy.y)) & ~0x40000000u) | 0x20000000u)
-			: sin(float(xy.x) * 7.1 + float(xy.y)) * 1234.5678;
+uint cb_half_bits(ivec2 xy, int c) { // a finite half's bits: exponent 31 (infinity, NaN) moved to 15
+	uint h = cb_hash(uint(xy.x * 4 + c), uint(xy.y)) & 65535u;
+	return ((h >> 10u) & 31u) == 31u ? h ^ 0x4000u : h;
+}
+vec4 cb_halves(ivec2 xy) {
+	return vec4(unpackHalf2x16(cb_half_bits(xy, 0)).x, unpackHalf2x16(cb_half_bits(xy, 1)).x, unpackHalf2x16(cb_half_bits(xy, 2)).x,
+			unpackHalf2x16(cb_half_bits(xy, 3)).x);
+}
+float cb_value(int x, int y) {
+	return x % 2 == 0 ? uintBitsToFloat((cb_hash(uint(x), uint(y)) & ~0x40000000u) | 0x20000000u) : sin(float(x) * 7.1 + float(y)) * 1234.5678;
+}
+mat4 cb_matrix(int bone, int y) {
+	mat4 m = mat4(0.0);
+	for (int k = 0; k < 16; k++) {
+		m[k / 4][k % 4] = cb_value(bone * 16 + k, y);
+	}
+	return m;
 }
 """
 	var writer := _canvas("shader_type canvas_item;\nrender_mode unshaded, blend_disabled;\n" + includes + value
-			+ "void fragment() {\n\tCOLOR = cb_pack_float(cb_value(ivec2(FRAGCOORD.xy)));\n}\n")
+			+ "void fragment() {\n\tivec2 xy = ivec2(FRAGCOORD.xy);\n"
+			+ "\tCOLOR = xy.x < 32 ? cb_halves(xy) : cb_bone_pass_affine_texel(cb_matrix((xy.x - 32) / 6, xy.y), (xy.x - 32) % 6);\n}\n", true)
 	var reader := _canvas("shader_type canvas_item;\nrender_mode unshaded, blend_disabled;\n" + includes + value
-			+ "uniform sampler2D written : filter_nearest, repeat_disable;\nvoid fragment() {\n\tivec2 xy = ivec2(FRAGCOORD.xy);\n"
-			+ "\tCOLOR = floatBitsToUint(cb_unpack_float(texelFetch(written, xy, 0))) == floatBitsToUint(cb_value(xy)) ? vec4(0.0, 1.0, 0.0, 1.0) : vec4(1.0, 0.0, 0.0, 1.0);\n}\n")
+			+ "uniform highp sampler2D written : filter_nearest, repeat_disable;\nvoid fragment() {\n\tivec2 xy = ivec2(FRAGCOORD.xy);\n"
+			+ "\tvec4 got = texelFetch(written, xy, 0);\n\tbool ok;\n\tif (xy.x < 32) {\n"
+			+ "\t\tok = uvec4(packHalf2x16(got.xy), packHalf2x16(got.zw), 0u, 0u) == uvec4(packHalf2x16(cb_halves(xy).xy), packHalf2x16(cb_halves(xy).zw), 0u, 0u);\n"
+			+ "\t} else if (xy.x < 62 && (xy.x - 32) % 6 < 3) {\n"
+			+ "\t\tint k = (xy.x - 32) % 6;\n\t\tmat4 m = cb_matrix((xy.x - 32) / 6, xy.y);\n"
+			+ "\t\tvec4 want = vec4(m[0][k], m[1][k], m[2][k], m[3][k]);\n"
+			+ "\t\tok = all(lessThanEqual(abs(got + texelFetch(written, xy + ivec2(3, 0), 0) - want), abs(want) * exp2(-22.0) + exp2(-25.0)));\n"
+			+ "\t} else {\n\t\tok = true;\n\t}\n"
+			+ "\tCOLOR = ok ? vec4(0.0, 1.0, 0.0, 1.0) : vec4(1.0, 0.0, 0.0, 1.0);\n}\n", false)
 	reader.get_child(0).material.set_shader_parameter("written", writer.get_texture())
 	for k in 3:
 		await RenderingServer.frame_post_draw
-	var bytes := writer.get_texture().get_image()
-	bytes.convert(Image.FORMAT_RGBA8)
-	var data := bytes.get_data()
-	var wrong := 0
-	for y in 16:
-		for x in range(0, 64, 2):
-			var h := (_hash(x, y) & ~0x40000000) | 0x20000000
-			for c in 4:
-				wrong += 1 if data[(y * 64 + x) * 4 + c] != (h >> (8 * c)) & 255 else 0
 	var fetched := reader.get_texture().get_image()
 	fetched.convert(Image.FORMAT_RGBA8)
-	var exact := 0
-	for p in 64 * 16:
-		exact += 1 if fetched.get_data()[p * 4 + 1] == 255 and fetched.get_data()[p * 4] == 0 else 0
+	var data := fetched.get_data()
+	var wrong := [0, 0] # half patterns (32 x 16 texels), rows (5 bones x 3 rows x 16)
+	for y in 16:
+		for x in 62:
+			if x < 32 or (x - 32) % 6 < 3:
+				wrong[0 if x < 32 else 1] += 0 if data[(y * 64 + x) * 4 + 1] == 255 and data[(y * 64 + x) * 4] == 0 else 1
 	writer.queue_free()
 	reader.queue_free()
-	print("crowdbake-check: packed floats: %d of 2048 bytes read back differ; %d of 1024 floats fetched bit for bit" % [wrong, exact])
-	addon._end(name, "" if wrong == 0 and exact == 1024 else "%d bytes differ, %d of 1024 floats fetched exactly" % [wrong, exact])
+	print("crowdbake-check: half floats: %d of 512 texels of half bit patterns fetched differ; %d of 240 rows of hi + lo halves off by more than 2^-22" % wrong)
+	addon._end(name, "" if wrong == [0, 0] else "%d texels of half patterns differ, %d rows of hi + lo halves are off" % wrong)
 
-# A 64x16 SubViewport drawn by a canvas_item shader of `code` over a ColorRect, in the tree.
-func _canvas(code: String) -> SubViewport:
+# A 64x16 SubViewport (RGBA16F with `hdr`) drawn by a canvas_item shader of `code` over a ColorRect, in the tree.
+func _canvas(code: String, hdr: bool) -> SubViewport:
 	var viewport := SubViewport.new()
 	viewport.size = Vector2i(64, 16)
+	viewport.use_hdr_2d = hdr
 	viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS
 	viewport.transparent_bg = true
 	viewport.disable_3d = true
@@ -300,9 +319,3 @@ func _canvas(code: String) -> SubViewport:
 	viewport.add_child(rect)
 	addon.check.add_child(viewport)
 	return viewport
-
-static func _hash(x: int, y: int) -> int:
-	var h: int = ((x * 2654435761) & 0xffffffff) ^ ((y * 2246822519 + 12345) & 0xffffffff)
-	h ^= h >> 13
-	h = (h * 3266489917) & 0xffffffff
-	return h ^ (h >> 16)

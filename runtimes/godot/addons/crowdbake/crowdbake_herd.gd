@@ -66,10 +66,10 @@ const FIXED_LOD := Vector2(24, 12) # a roster without animation_lod (older crowd
 		_set_lod()
 var lod_reason := ""
 var _resolving_lod := false
-# The bone pass: each instance's bones blended once a frame into a texture (a SubViewport, 32-bit floats packed
-# into 8-bit texels: the web export's Compatibility renderer has no float render target), which the mesh then
-# skins from with 12 multiply-adds an influence instead of decoding and blending two palette rows at every
-# vertex. "auto" (the default): from AUTO_BONE_PASS_VERTICES skinned vertices a frame (count x the mesh's
+# The bone pass: each instance's bones blended once a frame into a texture (a SubViewport with use_hdr_2d, which
+# the web export's Compatibility renderer makes RGBA16F: each float two halves, 6 texels a bone), which the mesh
+# then skins from with 4 texel fetches an influence (qpos rows: a rotation; 6 for affine rows and cross-fading
+# global qpos ones) instead of decoding and blending two palette rows at every vertex. "auto" (the default): from AUTO_BONE_PASS_VERTICES skinned vertices a frame (count x the mesh's
 # vertices), where it was measured to win; "always", "never". Read at setup; bone_pass_reason says what and why.
 @export_enum("auto", "always", "never") var bone_pass := "auto"
 var uses_bone_pass := false
@@ -423,25 +423,26 @@ static func skinned_mesh_in(root: Node) -> Mesh:
 # ---- the bone pass (crowdbake_bone_pass.gdshader) ----
 
 # Skinned vertices a frame from which "auto" takes the bone pass, between where it ties and where it wins: measured
-# in Godot 4.6's web build on SwiftShader (bench/godot_crowd.py, walking Cows, medians of frames in turns), 1 Cow
-# (4,970 vertices) a tie (bone pass 93 ms a frame, per vertex 98), 10 Cows (49,700) ahead (269 against 449; 284 against 311 in a
-# quieter run), 1,000 Cows 19.0 s against 32.6 (the numbers in the addon's README). Below, the pass's SubViewport
-# and 2 KB a Cow buy nothing.
+# in Godot 4.6's web build on SwiftShader (bench/godot_crowd.py, walking Cows, medians of frames in turns) with the
+# 8-bit pass (12 texels an influence), 1 Cow (4,970 vertices) a tie (bone pass 93 ms a frame, per vertex 98), 10 Cows
+# (49,700) ahead (269 against 449); the half-float pass (4 or 6 texels an influence) wins by more: 1,000 Cows 5.5 s
+# against 13.2 with 6 (the numbers in the addon's README). Below, the pass's SubViewport and 2 KB a Cow buy nothing.
 const AUTO_BONE_PASS_VERTICES := 20000
 const BONE_TEXTURE_WIDTH := 4096 # texels a row at most (WebGL 2 promises 4096)
 const BONE_TEXTURE_ROWS := 4096
+const BONE_TEXELS := 6 # RGBA16F texels a bone (crowdbake_bone_pass.gdshaderinc)
 
 # uses_bone_pass and bone_pass_reason for `bone_pass`, `count` and the mesh.
 func _choose_bone_pass() -> void:
 	var vertices := 0
 	for s in mesh.get_surface_count():
 		vertices += mesh.surface_get_array_len(s)
-	var span: int = palette.bone_names.size() * 12
+	var span: int = palette.bone_names.size() * BONE_TEXELS
 	var rows := ceili(float(count) / maxi(1, BONE_TEXTURE_WIDTH / span))
 	if span > BONE_TEXTURE_WIDTH or rows > BONE_TEXTURE_ROWS:
 		uses_bone_pass = false
 		bone_pass_reason = "no bone pass: %d instances of %d bones need a %d x %d texture, over %d x %d" % [count,
-				span / 12, mini(span, BONE_TEXTURE_WIDTH), rows, BONE_TEXTURE_WIDTH, BONE_TEXTURE_ROWS]
+				span / BONE_TEXELS, mini(span, BONE_TEXTURE_WIDTH), rows, BONE_TEXTURE_WIDTH, BONE_TEXTURE_ROWS]
 	elif bone_pass != "auto":
 		uses_bone_pass = bone_pass == "always"
 		bone_pass_reason = "bone_pass = \"%s\"" % bone_pass
@@ -465,8 +466,9 @@ func _build_bone_pass() -> void:
 	if not uses_bone_pass:
 		return
 	var bones: int = palette.bone_names.size()
-	var per_row := maxi(1, BONE_TEXTURE_WIDTH / (bones * 12))
-	var size := Vector2i(per_row * bones * 12, maxi(1, ceili(float(count) / per_row)))
+	var per_row := maxi(1, BONE_TEXTURE_WIDTH / (bones * BONE_TEXELS))
+	var size := Vector2i(per_row * bones * BONE_TEXELS, maxi(1, ceili(float(count) / per_row)))
+	var unit := _bone_translation_unit()
 	var base := _material() # the palette's uniforms; its code is the pass's
 	var code := _BONE_PASS_SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
 	code = code.replace("#include \"crowdbake_bone_pass.gdshaderinc\"", _BONE_PASS_INCLUDE.code)
@@ -479,8 +481,10 @@ func _build_bone_pass() -> void:
 	_bone_material.set_shader_parameter("bone_count", bones)
 	_bone_material.set_shader_parameter("bone_instances_per_row", per_row)
 	_bone_material.set_shader_parameter("instance_count", count)
+	_bone_material.set_shader_parameter("bone_translation_unit", unit)
 	_bone_viewport = SubViewport.new()
 	_bone_viewport.size = size
+	_bone_viewport.use_hdr_2d = true # RGBA16F in the Compatibility renderer (the halves the pass writes)
 	_bone_viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS
 	_bone_viewport.transparent_bg = true
 	_bone_viewport.disable_3d = true
@@ -493,7 +497,18 @@ func _build_bone_pass() -> void:
 		m.set_shader_parameter("bone_texture", _bone_viewport.get_texture())
 		m.set_shader_parameter("bone_count", bones)
 		m.set_shader_parameter("bone_instances_per_row", per_row)
+		m.set_shader_parameter("bone_translation_unit", unit)
 	_texture = null # _upload hands the instance texture to the pass too
+
+# The model units a translation in the bone texture counts: the power of two at or above the farthest the clips'
+# animated bounds reach from the origin, so that a bone's translation is a few units at most at any model scale (a
+# half float overflows at 65504) and dividing by it and multiplying back are exact.
+func _bone_translation_unit() -> float:
+	var box: AABB = palette.largest_bounds()
+	var a := box.position.abs()
+	var b := box.end.abs()
+	var reach := maxf(maxf(a.x, maxf(a.y, a.z)), maxf(b.x, maxf(b.y, b.z)))
+	return pow(2.0, ceilf(log(reach) / log(2.0))) if reach > 0.0 and is_finite(reach) else 1.0
 
 # A hidden herd's bone pass is not drawn.
 func _notification(what: int) -> void:
@@ -501,6 +516,6 @@ func _notification(what: int) -> void:
 		_bone_viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS if is_visible_in_tree() else SubViewport.UPDATE_DISABLED
 
 # Bytes an instance takes on the GPU beside its MultiMesh row (which every way of drawing a herd has): its three
-# texels of the instance texture (RGBA32F), and with the bone pass its bones' 12 texels (RGBA8, 4 bytes) each.
+# texels of the instance texture (RGBA32F), and with the bone pass its bones' 6 texels (RGBA16F, 8 bytes) each.
 func bytes_per_instance() -> int:
-	return 48 + (48 * palette.bone_names.size() if uses_bone_pass else 0)
+	return 48 + (BONE_TEXELS * 8 * palette.bone_names.size() if uses_bone_pass else 0)
