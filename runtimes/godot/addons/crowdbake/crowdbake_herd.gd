@@ -69,8 +69,9 @@ var _resolving_lod := false
 # The bone pass: each instance's bones blended once a frame into a texture (a SubViewport with use_hdr_2d, which
 # the web export's Compatibility renderer makes RGBA16F: each float two halves, 6 texels a bone), which the mesh
 # then skins from with 4 texel fetches an influence (qpos rows: a rotation; 6 for affine rows and cross-fading
-# global qpos ones) instead of decoding and blending two palette rows at every vertex. "auto" (the default): from AUTO_BONE_PASS_VERTICES skinned vertices a frame (count x the mesh's
-# vertices), where it was measured to win; "always", "never". Read at setup; bone_pass_reason says what and why.
+# global qpos ones) instead of decoding and blending two palette rows at every vertex. "auto" (the default): from
+# AUTO_BONE_PASS_VERTICES skinned vertices a frame (count x the mesh's vertices), where it was measured to win;
+# "always", "never". Read at setup; bone_pass_reason says what and why.
 @export_enum("auto", "always", "never") var bone_pass := "auto"
 var uses_bone_pass := false
 var bone_pass_reason := ""
