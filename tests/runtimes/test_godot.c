@@ -12,24 +12,20 @@
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 #include "runtimes/conformance.h"
+#include "runtimes/timed_roster.h"
 
 #include <limits.h>
 
 #define TMP TEST_TMP "/godot"
 
 /* TMP/bakes/cow/NAME.toml, Cow with three states and `bake_keys` in its [bake] table, baked: 0 when it was. */
-static int bake_cow_roster(const char *model, const char *name, const char *bake_keys)
+static int bake_cow_roster(const char *name, const char *bake_keys)
 {
-    char path[PATH_MAX], cmd[2 * PATH_MAX + 64];
+    char path[PATH_MAX];
     snprintf(path, sizeof path, TMP "/bakes/cow/%s.toml", name);
-    FILE *f = fopen(path, "w");
-    if (!f) return -1;
-    fprintf(f, "[bake]\n%s\n\n[animal.cow]\nmodel = \"%s\"\n"
-               "states = { wander = [\"AnimalArmature|Walk\"], graze = [\"AnimalArmature|Eating\"], run = [\"AnimalArmature|Gallop\"] }\n",
-            bake_keys, model);
-    fclose(f);
-    snprintf(cmd, sizeof cmd, "%s bake %s -q 2>/dev/null", crowdbake_exe(), path);
-    return system(cmd);
+    return bake_cow_catalog(path, bake_keys,
+                            "states = { wander = [\"AnimalArmature|Walk\"], graze = [\"AnimalArmature|Eating\"], "
+                            "run = [\"AnimalArmature|Gallop\"] }");
 }
 
 /* The addon's tests (check.gd's "addon:" cases) on Cow: a mat4/float and a default qpos/u16 palette at
@@ -56,8 +52,8 @@ static int setup_cow(void)
     if (system(cmd)) return -1;
     /* The roster, and the same with local, timed rows (no fixed fps: each clip its own cells), check_addon.gd's
      * timed roster. */
-    return bake_cow_roster(model, "catalog", "out_dir = \"roster\"\nfps = 30") ||
-           bake_cow_roster(model, "timed", "out_dir = \"timed\"\nbone_space = \"local\"\ntimed_rows = \"on\"") ? -1 : 0;
+    return bake_cow_roster("catalog", "out_dir = \"roster\"\nfps = 30") ||
+           bake_cow_roster("timed", "out_dir = \"timed\"\nbone_space = \"local\"\ntimed_rows = \"on\"") ? -1 : 0;
 }
 
 /* check_addon_look.gd's second multi-material model: Husky (5 materials) and a roster of one state. */

@@ -172,23 +172,18 @@ static void test_parents_after_children(void **state)
 static void check_cow_herd(const char *dir, const char *keys)
 {
     static char log[8192];
-    char cow[1024], cmd[4096], toml[2048];
+    char cmd[4096], bake_keys[512];
     build_reader_check();
-    shared_path(cow, sizeof cow, "assets/quaternius-cow/Cow.glb");
-    char *abs_cow = realpath(cow, NULL);
-    assert_non_null(abs_cow);
-    snprintf(toml, sizeof toml,
-             "[bake]\nout_dir = \"%s\"\n%s\n[animal.cow]\nmodel = \"%s\"\n"
-             "states = { idle = [\"idle\"], wander = [\"walk\"], flee = [\"gallop\"], kick = [\"Attack_Kick\"] }\n", dir, keys,
-             abs_cow);
-    free(abs_cow);
     run_or_fail("mkdir -p " TMP, log, sizeof log);
     snprintf(cmd, sizeof cmd, TMP "/%s.toml", dir);
-    write_text(cmd, toml);
+    snprintf(bake_keys, sizeof bake_keys, "out_dir = \"%s\"\n%s", dir, keys);
+    if (bake_cow_catalog(cmd, bake_keys,
+                         "states = { idle = [\"idle\"], wander = [\"walk\"], flee = [\"gallop\"], kick = [\"Attack_Kick\"] }"))
+        fail_msg("%s did not bake", cmd);
     snprintf(cmd, sizeof cmd,
-             "%s bake %s/%s.toml -q 2>&1 && python3 tests/runtimes/unity/roster_lines.py %s/%s/roster.json > %s/%s.txt && "
+             "python3 tests/runtimes/unity/roster_lines.py %s/%s/roster.json > %s/%s.txt && "
              "%s/reader_check herd %s/%s/cow.pal %s/%s.txt cow 2>&1",
-             crowdbake_exe(), TMP, dir, TMP, dir, TMP, dir, TMP, TMP, dir, TMP, dir);
+             TMP, dir, TMP, dir, TMP, TMP, dir, TMP, dir);
     run_or_fail(cmd, log, sizeof log);
     printf("  %s: %s", dir, strstr(log, "herd of") ? strstr(log, "herd of") : log);
 }

@@ -1,21 +1,38 @@
-/* timed_roster.h - a roster with timed states (docs/roster.md, "Filling per-instance data") for the engine runtimes'
- * roster tests (Unity, Unreal): samples/catalog.toml baked with local, timed rows, as runtimes/web/test/roster.test.mjs's
- * last test bakes it; a copy of it with one timed state damaged; and the checks every runtime's instance numbers
- * must pass. Include after testutil.h. */
+/* timed_roster.h - the rosters the engine runtimes' herd tests (Unity, Unreal, Godot) read: a Cow catalog baked with
+ * the [bake] keys a test gives (untimed, or local and timed rows); a roster with timed states (docs/roster.md,
+ * "Filling per-instance data"): samples/catalog.toml baked with local, timed rows, as runtimes/web/test/
+ * roster.test.mjs's last test bakes it; a copy of it with one timed state damaged; and the checks every runtime's
+ * instance numbers must pass. Include after testutil.h. */
 #ifndef CROWDBAKE_TESTS_TIMED_ROSTER_H
 #define CROWDBAKE_TESTS_TIMED_ROSTER_H
 
 #include <math.h>
 #include <stdlib.h>
 
-static void timed_roster_run(const char *cmd)
+static inline void timed_roster_run(const char *cmd)
 {
     static char log[16384];
     if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s:\n%s", cmd, log);
 }
 
+/* TOML (a path ending in .toml), a catalog of the shared Cow with the [bake] keys BAKE_KEYS (out_dir among them) and
+ * the animal keys ANIMAL_KEYS (its states, ...), written and baked: the bake's exit status (0 when it baked). Not a
+ * cmocka assertion, so a group's setup can call it. */
+static inline int bake_cow_catalog(const char *toml, const char *bake_keys, const char *animal_keys)
+{
+    char rel[1024], cmd[2 * 4096 + 64];
+    shared_path(rel, sizeof rel, "assets/quaternius-cow/Cow.glb");
+    char *cow = realpath(rel, NULL);
+    FILE *f = cow ? fopen(toml, "w") : NULL;
+    if (f) fprintf(f, "[bake]\n%s\n\n[animal.cow]\nmodel = \"%s\"\n%s\n", bake_keys, cow, animal_keys);
+    free(cow);
+    if (!f || fclose(f) != 0) return -1;
+    snprintf(cmd, sizeof cmd, "%s bake %s -q 2>&1", crowdbake_exe(), toml);
+    return system(cmd);
+}
+
 /* samples/catalog.toml with bone_space = "local" and timed_rows = "on", baked into DIR/timed (DIR/timed/roster.json). */
-static void bake_timed_roster(const char *dir)
+static inline void bake_timed_roster(const char *dir)
 {
     char cmd[4096], *samples = realpath(samples_dir(), NULL);
     assert_non_null(samples);
@@ -29,7 +46,7 @@ static void bake_timed_roster(const char *dir)
 
 /* DIR/timed/roster.json with the instance of a state of the first timed clip (`s`) changed by the Python statement EDIT,
  * into OUT. */
-static void damage_timed_roster(const char *dir, const char *edit, const char *out)
+static inline void damage_timed_roster(const char *dir, const char *edit, const char *out)
 {
     char cmd[4096];
     snprintf(cmd, sizeof cmd,
@@ -52,7 +69,7 @@ static const struct { const char *edit, *field, *words; } timed_roster_damages[]
 };
 
 /* A reader's error for a damaged timed state: one line, naming the field, in readRoster's words. */
-static void check_timed_refusal(const char *log, size_t damage)
+static inline void check_timed_refusal(const char *log, size_t damage)
 {
     const char *newline = strchr(log, '\n');
     if (!strstr(log, timed_roster_damages[damage].field) || !strstr(log, timed_roster_damages[damage].words) ||
@@ -65,7 +82,7 @@ static void check_timed_refusal(const char *log, size_t damage)
  * untimed clip; still: instance 1 standing, moving: at speed 2): a timed state counts its clip's cells and plays at
  * z < 0, -1e-30 standing still when it follows the speed (rate_per_speed != 0), -|rate_per_speed| x 2 moving, else its
  * rate; an untimed state as ever (rate_per_speed x 2, or rate). Prints and checks the counts. */
-static void check_timed_instance_lines(const char *path, const char *runtime)
+static inline void check_timed_instance_lines(const char *path, const char *runtime)
 {
     FILE *f = fopen(path, "r");
     assert_non_null(f);
