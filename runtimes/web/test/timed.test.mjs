@@ -256,22 +256,36 @@ test('a float map\'s rows must be whole numbers (refused as the C reader refuses
     assert.ok(!cReaderAccepts(file));
 });
 
+// Frame F of a VAT (readVat's): its vertices' half-float positions, in vertex order (VAT_MAIN's vat_fetch).
+function vatFrame(vat, f) {
+    const out = [];
+    for (let v = 0; v < vat.vertices; ++v) {
+        const row = f * vat.rowsPerFrame + Math.floor(v / vat.frameWidth), block = Math.floor(row / vat.height);
+        const t = ((row - block * vat.height) * vat.width + block * vat.frameWidth + v % vat.frameWidth) * 4;
+        out.push(vat.positions[t], vat.positions[t + 1], vat.positions[t + 2]);
+    }
+    return out;
+}
+
 // The VAT beside a timed palette (the viewer's): `crowdbake vat --like` bakes Fox's timed Run at its cells' rate, one
-// frame a cell, so vatLayout's frames are the file's and each clip's instance numbers name its own VAT frames, after
-// the clips before it, at |rate| frames a second (the VAT's frames of the Run and the palette's cells are the same
-// clip times).
+// frame a cell. Judged against VATs of one clip each (`vat --clip NAME --fps RATE`, the clip's rows' or cells' rate):
+// the frames vatLayout gives a clip's instance (its first, its count, at |rate| a second) hold the same positions, bit
+// for bit, as that clip's own VAT.
 test('vatLayout: the VAT of a timed palette, frame for cell', () => {
-    const palPath = path.join(dir, 'fox_local.pal'), vatPath = path.join(dir, 'fox_local.exr');
+    const palPath = path.join(dir, 'fox_local.pal'), vatPath = path.join(dir, 'fox_local.exr'), onePath = path.join(dir, 'one.exr');
     const pal = readPal(bake(FOX, palPath, ['--fps', 'auto', '--bone-space', 'local']));
-    execFileSync(CROWDBAKE, ['vat', FOX, '--like', palPath, '-o', vatPath, '--exr-compression', 'none'], { stdio: 'ignore' });
-    const vat = readVat(readFileSync(vatPath)), layout = vatLayout(pal);
+    const vatOf = (args, out) => {
+        execFileSync(CROWDBAKE, ['vat', FOX, ...args, '-o', out, '--exr-compression', 'none'], { stdio: 'ignore' });
+        return readVat(readFileSync(out));
+    };
+    const vat = vatOf(['--like', palPath], vatPath), layout = vatLayout(pal);
     assert.ok(pal.clips.some((c) => c.timed));
     assert.equal(layout.frames, vat.frames);
-    let frame = 0;
     for (const c of pal.clips) {
-        const inst = clipInstance(c, 1.5, 0.25), v = layout.instanceOf(inst), n = c.timed ? c.cells : c.frames;
-        assert.deepEqual(v, [frame, c.loops ? n : -(n + 1), Math.abs(inst[2]), 0.25], c.name);
-        frame += c.loops ? n : n + 1;
+        const fps = c.timed ? c.cell_rate : c.fps, one = vatOf(['--clip', c.name, '--fps', String(fps)], onePath);
+        const [first, count, rate, phase] = layout.instanceOf(clipInstance(c, 1.5, 0.25));
+        assert.deepEqual([Math.abs(count), rate, phase], [one.frames, fps * 1.5, 0.25], c.name);
+        for (let f = 0; f < one.frames; ++f) assert.deepEqual(vatFrame(vat, first + f), vatFrame(one, f), `${c.name} frame ${f}`);
     }
     assert.deepEqual(vatLayout(readPal(bake(FOX, path.join(dir, 'fox.pal')))).instanceOf([1, 2, 3, 0.5]), [1, 2, 3, 0.5]);
 });
