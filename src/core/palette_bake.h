@@ -307,6 +307,13 @@ const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, cons
  * bits palette_frame_matrices samples them with; nothing where no cache keeps them. */
 void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
                             uint32_t count);
+/* pose_batch.c: clip c's poses at `frames` (1..CB_SAMPLE_BATCH, increasing) of framing into
+ * mats[i] without keeping them: the pose its cache has, else sampled into room + i x bones x 16
+ * (those missing together where there are enough, as palette_prefetch_poses samples them: the
+ * same bits). For poses that no later probe is likely to read: a fitted probe's quarter points
+ * (palette_error.c). */
+void palette_unkept_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
+                          uint32_t count, double *room, const double **mats);
 /* palette_rows.c: a pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
  * from its matrices alone too (a probe's rows are rows of the others); its blocks drawn from arena (NULL: its own). */
 pose_cache *palette_probe_poses(pose_arena *arena, uint32_t bones, size_t max_bytes);
