@@ -307,6 +307,13 @@ const double *palette_frame_matrices(bake_state *st, worker *w, uint32_t c, cons
  * bits palette_frame_matrices samples them with; nothing where no cache keeps them. */
 void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
                             uint32_t count);
+/* pose_batch.c: clip c's poses at `frames` (1..CB_SAMPLE_BATCH, increasing) of framing into
+ * mats[i] without keeping them: the pose its cache has, else sampled into room + i x bones x 16
+ * (those missing together where there are enough, as palette_prefetch_poses samples them: the
+ * same bits). For poses that no later probe is likely to read: a fitted probe's quarter points
+ * (palette_error.c). */
+void palette_unkept_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
+                          uint32_t count, double *room, const double **mats);
 /* palette_rows.c: a pose cache for a search's probes (palette_probe.poses): each pose keeps what qpos derives
  * from its matrices alone too (a probe's rows are rows of the others); its blocks drawn from arena (NULL: its own). */
 pose_cache *palette_probe_poses(pose_arena *arena, uint32_t bones, size_t max_bytes);
@@ -325,9 +332,9 @@ typedef struct palette_probe {
     const cb_clip_info *analysis; /* the clip analyzed once (cb_clip_analyze at any rate, the plan's loop and
                                    * limits, on the bake's sampler), or NULL */
     pose_cache *const *clip_poses; /* a bake of the plan's every clip after their rates were searched: per clip
-                                    * the poses its search sampled (entries may be NULL), or NULL. The bake
-                                    * samples again only the times no probe did (Cow's default bake: 43% of
-                                    * its final bake); a clip's measurement then stays on one worker. */
+                                    * the caches its search kept (entries may be NULL), or NULL: for global
+                                    * rows their attachments, the poses released (search_keep_settle); a
+                                    * clip's measurement then stays on one worker. */
     pose_batch *batch;             /* the search thread's batches of poses (on the probe's sampler), or NULL */
     struct clip_memo *memo;        /* the bake run's clip analyses (clip_memo.h): the clips are framed from those
                                     * and their own analyses kept there; or NULL */
@@ -357,7 +364,13 @@ void search_keep_free(search_keep *keep);
  * sample the times it has no room for as without one), and the caches kept for the bake all
  * together at most SEARCH_KEPT_POSE_BYTES (Cow's twelve clips keep about 50 MB, and spare its bake
  * 150 M of its 750 M instructions). search_keep_settle adds a finished clip's cache to
- * *kept_bytes and frees it (NULL) past that budget: the bake samples that clip again, the same bits. */
+ * *kept_bytes and frees it (NULL) past that budget: the bake samples that clip again, the same bits.
+ * A search for global rows (rate_search.c) then releases the cache's poses to the arena for the
+ * next clip's search, keeping its attachments (the probes' rows, bounds, analysis, worst points;
+ * pose_cache_release_poses): the bake after it takes the probes' rows and reads few poses (Cow:
+ * 101 of the 3,300 kept; Husky 95), and sampling those again costs less than the fresh pages the
+ * kept poses took (the kernel clears each before its first use: Cow's default bake 17 huge pages,
+ * 5 with the poses released). A local-rows bake reads most of its search's poses: kept. */
 #define SEARCH_CLIP_POSE_BYTES ((size_t)32 << 20)
 #define SEARCH_KEPT_POSE_BYTES ((size_t)128 << 20)
 void search_keep_settle(pose_cache **cache, uint32_t bones, atomic_size_t *kept_bytes);

@@ -177,6 +177,18 @@ static const double *exact_matrices(bake_state *st, worker *w, uint32_t c, const
     return room;
 }
 
+/* Whether fraction sub / parts of a row interval is a fitted probe's quarter point (1/4, 3/4).
+ * Such a pose is read by its probe's measurement and seldom again: the probe's mid-rows and
+ * every sampled probe's rows and blends lie on the halves, and a quarter point is a row only of
+ * a probe at 4 times the rate. Kept, they were the search's largest share of fresh memory, which
+ * the kernel clears before its first use (Cow: 1,450 of the 4,751 poses its search kept, 1,290
+ * of them read once; Husky 1,026 of 3,359, 785): they are sampled into the measurement's scratch
+ * instead, and sampled again where read again (the same bits). */
+static bool quarter_point(uint32_t sub, uint32_t parts)
+{
+    return parts == 4 && sub % 2 == 1;
+}
+
 /* The worst vertex error of the given rows of clip c (parts = 1), or between each of them and
  * the next at fraction sub / parts, blended as the runtime does, or `worst` when none exceeds
  * it; with `bounds`, each row's bound, and the worst of the row with the largest where that is
@@ -202,8 +214,10 @@ static double measure_rows(bake_state *st, worker *w, uint32_t c, const uint32_t
     bool blend = sub && !clip->step; /* a stepped clip's runtime holds row f until row f + 1 */
     if (lanes) {
         const double *mats[B] = {NULL};
-        if (!similar) palette_prefetch_poses(st, w, c, &framing, times, count); /* the rows' poses at once, where kept */
-        for (uint32_t i = 0; !similar && i < count; ++i)
+        bool unkept = !similar && quarter_point(sub, parts); /* read once: sampled into the scratch, not kept */
+        if (unkept) palette_unkept_poses(st, w, c, &framing, times, count, s->exact, mats);
+        else if (!similar) palette_prefetch_poses(st, w, c, &framing, times, count); /* the rows' poses at once, where kept */
+        for (uint32_t i = 0; !similar && !unkept && i < count; ++i)
             mats[i] = exact_matrices(st, w, c, &framing, times[i], s->exact + (size_t)i * p->bone_count * 16);
         for (uint32_t i = count; !similar && i < B; ++i) mats[i] = mats[count - 1];
         const double *a[B], *b[B]; /* at most 2 B rows: all in the slots at once */

@@ -47,10 +47,16 @@ struct row_lanes **pose_batch_row_lanes(pose_batch *b) { return &b->row_lanes; }
  * samples all its lanes whatever it fills. */
 enum { BATCH_AT_LEAST = 4 };
 
+/* The pose cache palette_frame_matrices keeps clip c's poses in, or NULL. */
+static pose_cache *clip_cache(const bake_state *st, uint32_t c)
+{
+    return st->poses ? st->poses : st->clip_poses ? st->clip_poses[c] : NULL;
+}
+
 void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
                             uint32_t count)
 {
-    pose_cache *poses = st->poses ? st->poses : st->clip_poses ? st->clip_poses[c] : NULL;
+    pose_cache *poses = clip_cache(st, c);
     if (!poses || count > CB_SAMPLE_BATCH) return;
     uint32_t missing[CB_SAMPLE_BATCH], n = 0;
     for (uint32_t i = 0; i < count; ++i)
@@ -61,4 +67,25 @@ void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip
     double *out[CB_SAMPLE_BATCH];
     for (uint32_t i = 0; i < n; ++i) out[i] = pose_cache_add(poses, cb_clip_frame_time(framing, missing[i])); /* NULL: full */
     cb_clip_frame_matrices_batch(w->sampler, framing, missing, n, st->opt->root_motion, b->joints, b->lanes, out);
+}
+
+void palette_unkept_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
+                          uint32_t count, double *room, const double **mats)
+{
+    pose_cache *poses = clip_cache(st, c);
+    size_t stride = (size_t)st->p->bone_count * 16;
+    uint32_t missing[CB_SAMPLE_BATCH], n = 0;
+    double *out[CB_SAMPLE_BATCH];
+    for (uint32_t i = 0; i < count; ++i) {
+        mats[i] = poses ? pose_cache_find(poses, cb_clip_frame_time(framing, frames[i])) : NULL;
+        if (!mats[i]) mats[i] = out[n] = room + i * stride, missing[n++] = frames[i];
+    }
+    pose_batch *b = n < BATCH_AT_LEAST ? NULL : st->batch ? st->batch : w->batch ? w->batch
+                                                                            : (w->batch = pose_batch_create(w->sampler));
+    if (b) {
+        cb_clip_frame_matrices_batch(w->sampler, framing, missing, n, st->opt->root_motion, b->joints, b->lanes, out);
+        return;
+    }
+    for (uint32_t i = 0; i < n; ++i) /* few, or out of memory: one at a time */
+        cb_clip_frame_matrices(w->sampler, framing, missing[i], st->opt->root_motion, out[i]);
 }

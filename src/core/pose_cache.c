@@ -25,6 +25,9 @@ struct pose_arena {
     size_t used;         /* its bytes handed out */
     void **pages;        /* every page (and every block too big for one), freed with the arena */
     uint32_t page_count;
+    void **spare;        /* chunks handed back (pose_cache_release_poses), each spare_bytes: taken first */
+    size_t spare_bytes;
+    uint32_t spare_count, spare_room;
 };
 
 struct pose_cache {
@@ -85,7 +88,7 @@ void pose_arena_free(pose_arena *a)
     if (!a) return;
     for (uint32_t i = 0; i < a->page_count; ++i) free(a->pages[i]);
     mtx_destroy(&a->lock);
-    free(a->pages), free(a);
+    free(a->spare), free(a->pages), free(a);
 }
 
 /* Keeps block among the arena's pages (freed with them); false, block freed: out of memory. */
@@ -103,7 +106,9 @@ static void *arena_take(pose_arena *a, size_t bytes)
 {
     void *block = NULL;
     mtx_lock(&a->lock);
-    if (bytes > BLOCK_BYTES / 2) {
+    if (a->spare_count && a->spare_bytes == bytes) {
+        block = a->spare[--a->spare_count]; /* touched already: no page to clear */
+    } else if (bytes > BLOCK_BYTES / 2) {
         block = cb_alloc_large(bytes);
         if (!arena_own(a, block)) block = NULL;
     } else {
@@ -115,6 +120,25 @@ static void *arena_take(pose_arena *a, size_t bytes)
     }
     mtx_unlock(&a->lock);
     return block;
+}
+
+/* Keeps a chunk of `bytes` that a cache no longer needs for the next arena_take of as many
+ * (every cache of a run cuts chunks of one size: one skin's poses); one of another size stays
+ * unused until the arena is freed. */
+static void arena_give(pose_arena *a, void *chunk, size_t bytes)
+{
+    mtx_lock(&a->lock);
+    if (a->spare_count && a->spare_bytes != bytes) {
+        mtx_unlock(&a->lock);
+        return;
+    }
+    if (a->spare_count == a->spare_room) {
+        uint32_t room = a->spare_room ? 2 * a->spare_room : 64;
+        void **spare = realloc(a->spare, room * sizeof *spare);
+        if (spare) a->spare = spare, a->spare_room = room;
+    }
+    if (a->spare_count < a->spare_room) a->spare[a->spare_count++] = chunk, a->spare_bytes = bytes;
+    mtx_unlock(&a->lock);
 }
 
 pose_cache *pose_cache_create(uint32_t bones, uint32_t extra, size_t max_bytes)
@@ -220,6 +244,16 @@ void pose_cache_clear(pose_cache *c)
     for (int k = 0; k < POSE_CACHE_SLOTS; ++k) free(c->attached[k]), c->attached[k] = NULL;
     free(c->analysis), c->analysis = NULL;
     c->worst_count = 0;
+}
+
+void pose_cache_release_poses(pose_cache *c)
+{
+    c->count = 0;
+    memset(c->keys, 0xFF, c->capacity * sizeof *c->keys);
+    if (!c->arena) return; /* its own blocks: kept for its next poses */
+    size_t bytes = c->block_poses * c->stride * sizeof(double);
+    for (uint32_t b = 0; b < c->block_count; ++b) arena_give(c->arena, c->blocks[b], bytes);
+    c->block_count = 0;
 }
 
 void pose_cache_attach(pose_cache *c, int slot, void *block)

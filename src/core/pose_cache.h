@@ -43,6 +43,12 @@ double *pose_cache_add(pose_cache *c, double t);
  * fresh). */
 void pose_cache_clear(pose_cache *c);
 
+/* Forgets every pose as pose_cache_clear does, but keeps what is attached and the worst points,
+ * and hands its blocks back to its arena, which gives them to the next cache that needs one
+ * (touched already: the kernel clears no page for them). Pointers to its poses are invalid
+ * after it. */
+void pose_cache_release_poses(pose_cache *c);
+
 /* Malloc'ed blocks its user keeps beside the poses of the same clip, one in each of
  * POSE_CACHE_SLOTS slots (palette_rows.c: a probe's rows), each replacing and freeing the one
  * before in its slot; freed with the cache and by pose_cache_clear. NULL when none. */

@@ -12,7 +12,8 @@
  * one table entry) each find their own pose. Caches drawing on one arena (a run's kept caches,
  * sharing huge pages) fill alternately past several chunks and pages, and each finds its own
  * poses, none written over by the other's; a pose bigger than half a page gets a block of its
- * own; the caches freed (in either order) before the arena leave nothing behind. */
+ * own; the caches freed (in either order) before the arena leave nothing behind. A cache that
+ * releases its poses keeps its attachments and worst points, and its blocks serve the next. */
 #include "testutil.h"
 
 #include <math.h>
@@ -228,6 +229,51 @@ static void test_caches_share_an_arena(void **state)
     pose_arena_free(arena);
 }
 
+/* A cache that releases its poses (a clip's, once its search is done) keeps what is attached and
+ * its worst points, finds none of its poses, and its blocks go to the next cache of the arena
+ * that needs one: the same memory, no fresh page (written over by that cache, not by the first,
+ * which takes fresh blocks for its own next poses). */
+static void test_released_poses_go_to_the_next_cache(void **state)
+{
+    (void)state;
+    enum { N = 1500 }; /* three 256 KB chunks of 3-bone poses */
+    pose_arena *arena = pose_arena_create();
+    assert_non_null(arena);
+    pose_cache *first = pose_cache_create_in(arena, BONES, 0, (size_t)64 << 20);
+    assert_non_null(first);
+    double *chunk_start = NULL;
+    for (uint32_t i = 0; i < N; ++i) {
+        double *pose = pose_cache_add(first, i / 30.0);
+        fill_wide(pose, BONES, i / 30.0, 0);
+        if (i == 0) chunk_start = pose;
+    }
+    int *rows = malloc(sizeof *rows);
+    assert_non_null(rows);
+    pose_cache_attach(first, 0, rows);
+    pose_cache_note_worst(first, (pose_worst){30, 2, 7, 1});
+    pose_cache_release_poses(first);
+    assert_int_equal(pose_cache_count(first), 0);
+    for (uint32_t i = 0; i < N; ++i) assert_null(pose_cache_find(first, i / 30.0));
+    assert_ptr_equal(pose_cache_attached(first, 0), rows);
+    pose_worst at;
+    assert_true(pose_cache_worst(first, 30, 2, &at));
+    assert_int_equal(at.frame, 7);
+    pose_cache *next = pose_cache_create_in(arena, BONES, 0, (size_t)64 << 20);
+    assert_non_null(next);
+    bool reused = false;
+    for (uint32_t i = 0; i < N; ++i) {
+        double *pose = pose_cache_add(next, i / 60.0);
+        reused = reused || pose == chunk_start;
+        fill_wide(pose, BONES, i / 60.0, 1);
+    }
+    assert_true(reused);
+    for (uint32_t i = 0; i < 10; ++i) fill_wide(pose_cache_add(first, i / 30.0), BONES, i / 30.0, 0);
+    for (uint32_t i = 0; i < N; ++i) assert_true(is_wide(pose_cache_find(next, i / 60.0), BONES, i / 60.0, 1));
+    for (uint32_t i = 0; i < 10; ++i) assert_true(is_wide(pose_cache_find(first, i / 30.0), BONES, i / 30.0, 0));
+    pose_cache_free(first), pose_cache_free(next);
+    pose_arena_free(arena);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -240,6 +286,7 @@ int main(void)
         cmocka_unit_test(test_worst_points_by_rows_and_parts),
         cmocka_unit_test(test_binary_fractions_find_their_poses),
         cmocka_unit_test(test_caches_share_an_arena),
+        cmocka_unit_test(test_released_poses_go_to_the_next_cache),
     };
     return cmocka_run_group_tests_name("pose_cache", tests, NULL, NULL);
 }
