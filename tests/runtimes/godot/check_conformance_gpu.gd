@@ -49,8 +49,8 @@ func run() -> void:
 
 # The case's points drawn per vertex, or (bone_pass) through the herd's bone pass, which must also come within the
 # tolerance of `per_vertex` (the per-vertex path's points). Returns the points read back.
-# halves: the bone pass's far tier (every instance under the animation LOD's halves_pixels(), every influence): its
-# hi halves alone, within the herd's halves_error() of the C runtime's points (the bound its threshold assumes),
+# halves: the bone pass's far tier (every instance marked as under the animation LOD's halves_pixels()): the pass
+# draws, and the vertex shader reads, the hi halves alone, within the herd's halves_error() of the C runtime's points (the bound its threshold assumes),
 # and further from them than the full path's tolerance somewhere (the tier took effect).
 func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vertex := PackedVector3Array(), halves := false) -> PackedVector3Array:
 	var name: String = ("gpu conformance bone pass " + ("hi halves " if halves else "") if bone_pass else "gpu conformance ") + c["name"]
@@ -70,8 +70,7 @@ func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vert
 		addon._end(name, "crowdbake_herd.gdshader's vertex function no longer ends with the view transform")
 		return all
 	var full_tolerance := tolerance
-	if halves: # pixels tall = 1 x |scale| / w = 1 (lod_view_projection the identity): under w's threshold, over y and z's
-		material.set_shader_parameter("animation_lod", Vector4(1.0, 0.0, 0.0, 1e30))
+	if halves: # every instance marked far (_instances), as CrowdbakeHerd marks one under halves_pixels() tall
 		tolerance = herd.halves_error()
 	var node := MultiMeshInstance3D.new()
 	node.multimesh = MultiMesh.new()
@@ -93,12 +92,12 @@ func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vert
 		viewport.size = Vector2i(WIDTH, rows)
 		material.set_shader_parameter("cb_height", rows)
 		material.set_shader_parameter("herd_time", float(group["time"]))
-		material.set_shader_parameter("instances", _instances(group["instances"]))
+		material.set_shader_parameter("instances", _instances(group["instances"], halves))
 		if herd != null: # the herd's bone pass for this group's instances, drawn into its SubViewport
 			herd.count = count
 			herd._build_bone_pass()
 			herd._bone_material.set_shader_parameter("herd_time", float(group["time"]))
-			herd._bone_material.set_shader_parameter("instances", _instances(group["instances"]))
+			herd._bone_material.set_shader_parameter("instances", _instances(group["instances"], halves))
 		node.multimesh.instance_count = count
 		await RenderingServer.frame_post_draw
 		await RenderingServer.frame_post_draw
@@ -219,14 +218,15 @@ static func _mesh(c: Dictionary, positions: PackedFloat32Array) -> ArrayMesh:
 	return mesh
 
 # CrowdbakeHerd's instance texture: per instance the clip's four numbers, the previous clip's, the fade's start
-# and length (conformance.h's instance floats 4..13).
-static func _instances(instances: Array) -> ImageTexture:
+# and length (conformance.h's instance floats 4..13); far: every instance in the bone pass's far tier (float 10).
+static func _instances(instances: Array, far := false) -> ImageTexture:
 	var rows := ceili(float(instances.size()) / INSTANCES_PER_ROW)
 	var texels := PackedFloat32Array()
 	texels.resize(rows * INSTANCES_PER_ROW * 12)
 	for i in instances.size():
 		for k in 10:
 			texels[i * 12 + k] = instances[i][4 + k]
+		texels[i * 12 + 10] = 1.0 if far else 0.0
 	return ImageTexture.create_from_image(Image.create_from_data(INSTANCES_PER_ROW * 3, rows, false, Image.FORMAT_RGBAF,
 			texels.to_byte_array()))
 

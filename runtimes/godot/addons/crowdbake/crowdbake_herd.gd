@@ -36,7 +36,7 @@ const GOLDEN := 0.6180339887
 # stays negative to mark the instance timed (-0 reads as an untimed clip's, its cells taken for rows).
 const TIMED_STILL_RATE := 1e-30
 const INSTANCES_PER_ROW := 256 # instances per row of the instance texture
-const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade start and length, 2 spare
+const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade start and length, far tier (1), 1 spare
 
 @export var roster: Resource # a CrowdbakeRoster
 @export var animal := ""
@@ -52,7 +52,8 @@ const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade sta
 # setting lod gives thresholds of your own (and turns lod_auto off). Vector2.ZERO: every influence at any
 # size. lod_reason says which thresholds are in use and why. With the bone pass, an instance under
 # halves_pixels() tall (lod not ZERO) skins from the pass's hi halves alone: 2 texel fetches an influence
-# instead of 4, where that moves no vertex more than LOD_PIXEL_ERROR pixels (halves_error()).
+# instead of 4, and the pass draws half its texels, where that moves no vertex more than LOD_PIXEL_ERROR pixels
+# (halves_error()). Chosen on the CPU each frame (the pass has no instance transforms), one float an instance.
 const LOD_PIXEL_ERROR := 1.0
 const FIXED_LOD := Vector2(24, 12) # a roster without animation_lod (older crowdbake): at 24 pixels a pixel is 4% of the animal
 @export var lod_auto := true:
@@ -393,12 +394,32 @@ func _set_lod() -> void:
 	if palette == null:
 		return
 	if camera == null or lod == Vector2.ZERO:
-		_set_all("animation_lod", Vector4.ZERO)
+		_set_all("animation_lod", Vector3.ZERO)
+		_set_far_tier(Projection(), 0.0)
 		return
 	var projection := camera.get_camera_projection()
 	var unit := _lod_size * 0.5 * get_viewport().get_visible_rect().size.y * projection.y.y
-	_set_all("animation_lod", Vector4(unit, lod.x, lod.y, halves_pixels()))
-	_set_all("lod_view_projection", projection * Projection(camera.global_transform.affine_inverse()))
+	_set_all("animation_lod", Vector3(unit, lod.x, lod.y))
+	var view_projection := projection * Projection(camera.global_transform.affine_inverse())
+	_set_all("lod_view_projection", view_projection)
+	_set_far_tier(view_projection, unit)
+
+# With the bone pass, each instance's far tier (the instance texture's float 10: 1 under halves_pixels() tall, as the
+# shader measures an instance's size for its influences; unit 0: none).
+func _set_far_tier(view_projection: Projection, unit: float) -> void:
+	if not uses_bone_pass or multimesh == null or _data.size() < count * FLOATS:
+		return
+	var under := halves_pixels()
+	var to_world := global_transform if unit > 0.0 else Transform3D()
+	for i in count:
+		var far := 0.0
+		if unit > 0.0:
+			var model := to_world * multimesh.get_instance_transform(i)
+			var w := absf((view_projection * Vector4(model.origin.x, model.origin.y, model.origin.z, 1.0)).w)
+			far = 1.0 if unit * model.basis.x.length() / maxf(w, 1e-6) < under else 0.0
+		if _data[i * FLOATS + 10] != far:
+			_data[i * FLOATS + 10] = far
+			_dirty = true
 
 # A shader parameter of every surface's material (and of the bone pass's, which reads the same instances and clock).
 func _set_all(key: String, value) -> void:
