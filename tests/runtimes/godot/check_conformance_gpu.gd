@@ -43,12 +43,17 @@ func run() -> void:
 			continue # the bone pass is the shaders' own; the other faults live in GLSL or storage
 		var per_vertex: PackedVector3Array = await _check_case(c, viewport, false)
 		await _check_case(c, viewport, true, per_vertex)
+		if not c["broken"]: # a fault's miss says nothing within the far tier's looser bound
+			await _check_case(c, viewport, true, per_vertex, true)
 	viewport.queue_free()
 
 # The case's points drawn per vertex, or (bone_pass) through the herd's bone pass, which must also come within the
 # tolerance of `per_vertex` (the per-vertex path's points). Returns the points read back.
-func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vertex := PackedVector3Array()) -> PackedVector3Array:
-	var name: String = ("gpu conformance bone pass " if bone_pass else "gpu conformance ") + c["name"]
+# halves: the bone pass's far tier (every instance marked as under the animation LOD's halves_pixels()): the pass
+# draws, and the vertex shader reads, the hi halves alone, within the herd's halves_error() of the C runtime's points (the bound its threshold assumes),
+# and further from them than the full path's tolerance somewhere (the tier took effect).
+func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vertex := PackedVector3Array(), halves := false) -> PackedVector3Array:
+	var name: String = ("gpu conformance bone pass " + ("hi halves " if halves else "") if bone_pass else "gpu conformance ") + c["name"]
 	addon._begin(name)
 	var all := PackedVector3Array()
 	var pal = load(ADDON + "/crowdbake_palette.gd").new()
@@ -64,6 +69,9 @@ func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vert
 	if material == null:
 		addon._end(name, "crowdbake_herd.gdshader's vertex function no longer ends with the view transform")
 		return all
+	var full_tolerance := tolerance
+	if halves: # every instance marked far (_instances), as CrowdbakeHerd marks one under halves_pixels() tall
+		tolerance = herd.halves_error()
 	var node := MultiMeshInstance3D.new()
 	node.multimesh = MultiMesh.new()
 	node.multimesh.transform_format = MultiMesh.TRANSFORM_3D
@@ -84,12 +92,12 @@ func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vert
 		viewport.size = Vector2i(WIDTH, rows)
 		material.set_shader_parameter("cb_height", rows)
 		material.set_shader_parameter("herd_time", float(group["time"]))
-		material.set_shader_parameter("instances", _instances(group["instances"]))
+		material.set_shader_parameter("instances", _instances(group["instances"], halves))
 		if herd != null: # the herd's bone pass for this group's instances, drawn into its SubViewport
 			herd.count = count
 			herd._build_bone_pass()
 			herd._bone_material.set_shader_parameter("herd_time", float(group["time"]))
-			herd._bone_material.set_shader_parameter("instances", _instances(group["instances"]))
+			herd._bone_material.set_shader_parameter("instances", _instances(group["instances"], halves))
 		node.multimesh.instance_count = count
 		await RenderingServer.frame_post_draw
 		await RenderingServer.frame_post_draw
@@ -115,7 +123,9 @@ func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vert
 	print("crowdbake-check: %s: worst %s (%s of the tolerance)%s" % [name, String.num_scientific(worst), String.num(ratio, 3),
 			", %s from the per-vertex path (%s of the tolerance)" % [String.num_scientific(apart), String.num(apart / tolerance, 3)] if herd else ""])
 	var why := ""
-	if herd != null and (per_vertex.size() != all.size() or not apart <= tolerance) and not c["broken"]:
+	if halves and not c["broken"] and worst <= full_tolerance:
+		why = "the hi halves came within the full path's tolerance %s (worst %s): the far tier did not take effect" % [full_tolerance, worst]
+	elif herd != null and (per_vertex.size() != all.size() or not apart <= tolerance) and not c["broken"]:
 		why = "the bone pass's points are %s from the per-vertex path's (%d of %d points), tolerance %s" % [apart, all.size(), per_vertex.size(), tolerance]
 	elif at != expected.size():
 		why = "%d of %d expected numbers compared" % [at, expected.size()]
@@ -208,14 +218,15 @@ static func _mesh(c: Dictionary, positions: PackedFloat32Array) -> ArrayMesh:
 	return mesh
 
 # CrowdbakeHerd's instance texture: per instance the clip's four numbers, the previous clip's, the fade's start
-# and length (conformance.h's instance floats 4..13).
-static func _instances(instances: Array) -> ImageTexture:
+# and length (conformance.h's instance floats 4..13); far: every instance in the bone pass's far tier (float 10).
+static func _instances(instances: Array, far := false) -> ImageTexture:
 	var rows := ceili(float(instances.size()) / INSTANCES_PER_ROW)
 	var texels := PackedFloat32Array()
 	texels.resize(rows * INSTANCES_PER_ROW * 12)
 	for i in instances.size():
 		for k in 10:
 			texels[i * 12 + k] = instances[i][4 + k]
+		texels[i * 12 + 10] = 1.0 if far else 0.0
 	return ImageTexture.create_from_image(Image.create_from_data(INSTANCES_PER_ROW * 3, rows, false, Image.FORMAT_RGBAF,
 			texels.to_byte_array()))
 

@@ -36,7 +36,7 @@ const GOLDEN := 0.6180339887
 # stays negative to mark the instance timed (-0 reads as an untimed clip's, its cells taken for rows).
 const TIMED_STILL_RATE := 1e-30
 const INSTANCES_PER_ROW := 256 # instances per row of the instance texture
-const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade start and length, 2 spare
+const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade start and length, far tier (1), 1 spare
 
 @export var roster: Resource # a CrowdbakeRoster
 @export var animal := ""
@@ -50,7 +50,10 @@ const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade sta
 # bounds, times the instance's scale. lod_auto (the default): the thresholds from what the bake measured
 # (the roster's animation_lod), the sizes under which no vertex moves more than LOD_PIXEL_ERROR pixels;
 # setting lod gives thresholds of your own (and turns lod_auto off). Vector2.ZERO: every influence at any
-# size. lod_reason says which thresholds are in use and why.
+# size. lod_reason says which thresholds are in use and why. With the bone pass, an instance under
+# halves_pixels() tall (lod not ZERO) skins from the pass's hi halves alone: 2 texel fetches an influence
+# instead of 4, and the pass draws half its texels, where that moves no vertex more than LOD_PIXEL_ERROR pixels
+# (halves_error()). Chosen on the CPU each frame (the pass has no instance transforms), one float an instance.
 const LOD_PIXEL_ERROR := 1.0
 const FIXED_LOD := Vector2(24, 12) # a roster without animation_lod (older crowdbake): at 24 pixels a pixel is 4% of the animal
 @export var lod_auto := true:
@@ -381,8 +384,8 @@ func _resolve_lod() -> void:
 		lod_reason = "lod_auto: the roster has no animation_lod (an older crowdbake): the fixed %s" % [FIXED_LOD]
 	else:
 		lod = Vector2(maxf(pixels.call(two), pixels.call(one)), pixels.call(one))
-		lod_reason = ("lod_auto: 2 influences under %.1f pixels tall, 1 under %.1f: there no vertex moves more than %s pixel (the bake's animation_lod: %.4f and %.4f model units over %d frames, the animal %.3f units long); set lod to override"
-				% [lod.x, lod.y, LOD_PIXEL_ERROR, two, one, int(measured.get("frames", 0)), _lod_size])
+		lod_reason = ("lod_auto: 2 influences under %.1f pixels tall, 1 under %.1f: there no vertex moves more than %s pixel (the bake's animation_lod: %.4f and %.4f model units over %d frames, the animal %.3f units long); set lod to override; the bone pass's hi halves alone under %.1f"
+				% [lod.x, lod.y, LOD_PIXEL_ERROR, two, one, int(measured.get("frames", 0)), _lod_size, halves_pixels()])
 	_resolving_lod = false
 
 # The animation LOD's uniforms for the viewport's camera as it is now (none: every influence).
@@ -392,11 +395,31 @@ func _set_lod() -> void:
 		return
 	if camera == null or lod == Vector2.ZERO:
 		_set_all("animation_lod", Vector3.ZERO)
+		_set_far_tier(Projection(), 0.0)
 		return
 	var projection := camera.get_camera_projection()
 	var unit := _lod_size * 0.5 * get_viewport().get_visible_rect().size.y * projection.y.y
 	_set_all("animation_lod", Vector3(unit, lod.x, lod.y))
-	_set_all("lod_view_projection", projection * Projection(camera.global_transform.affine_inverse()))
+	var view_projection := projection * Projection(camera.global_transform.affine_inverse())
+	_set_all("lod_view_projection", view_projection)
+	_set_far_tier(view_projection, unit)
+
+# With the bone pass, each instance's far tier (the instance texture's float 10: 1 under halves_pixels() tall, as the
+# shader measures an instance's size for its influences; unit 0: none).
+func _set_far_tier(view_projection: Projection, unit: float) -> void:
+	if not uses_bone_pass or multimesh == null or _data.size() < count * FLOATS:
+		return
+	var under := halves_pixels()
+	var to_world := global_transform if unit > 0.0 else Transform3D()
+	for i in count:
+		var far := 0.0
+		if unit > 0.0:
+			var model := to_world * multimesh.get_instance_transform(i)
+			var w := absf((view_projection * Vector4(model.origin.x, model.origin.y, model.origin.z, 1.0)).w)
+			far = 1.0 if unit * model.basis.x.length() / maxf(w, 1e-6) < under else 0.0
+		if _data[i * FLOATS + 10] != far:
+			_data[i * FLOATS + 10] = far
+			_dirty = true
 
 # A shader parameter of every surface's material (and of the bone pass's, which reads the same instances and clock).
 func _set_all(key: String, value) -> void:
@@ -500,6 +523,19 @@ func _build_bone_pass() -> void:
 		m.set_shader_parameter("bone_instances_per_row", per_row)
 		m.set_shader_parameter("bone_translation_unit", unit)
 	_texture = null # _upload hands the instance texture to the pass too
+
+# The most a vertex moves (model units) skinned from the bone pass's hi halves alone (each number rounded to a
+# half: within 2^-11 of itself): a rotation's quaternion moves its matrix by up to 6 x 2^-11, its scale by 2^-11
+# more, the translation by 2^-11 of itself, so a point s R v + t within 2^-11 (7 |s R v| + |t|); with the rest
+# point's image and the translation within 2 and 4 translation units (bone_translation_unit: the animated
+# bounds' reach, rounded up to a power of two), 18 x 2^-11 units, taken as 1/64 (check_conformance_gpu.gd
+# measures it on every conformance case).
+func halves_error() -> float:
+	return _bone_translation_unit() / 64.0
+
+# The pixels tall under which the bone pass's hi halves alone move no vertex more than LOD_PIXEL_ERROR pixels.
+func halves_pixels() -> float:
+	return LOD_PIXEL_ERROR * _lod_size / halves_error() if palette != null else 0.0
 
 # The model units a translation in the bone texture counts: the power of two at or above the farthest the clips'
 # animated bounds reach from the origin, so that a bone's translation is a few units at most at any model scale (a
