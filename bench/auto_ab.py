@@ -12,20 +12,10 @@ medians of the per-round ratios default/naive for each build, and AFTER/BEFORE o
 bakes, with the 1-minute load before and after.
 """
 import argparse
-import itertools
 import os
 import statistics
-import subprocess
-import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-MODELS = (('Cow', 'quaternius-cow/Cow.glb'), ('Husky', 'quaternius-husky/Husky.glb'), ('Fox', 'fox-bevy/Fox.glb'))
-
-
-def timed(cmd):
-    t0 = time.monotonic()
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.monotonic() - t0
+from auto_speed import MODELS, ROOT, interleaved
 
 
 def median_ratio(a, b):
@@ -36,12 +26,7 @@ def measure(before, after, model, out, repeat):
     base = ['bake', model, '-q', '--root-motion', 'in-place']
     cmds = {'before': [before] + base + ['-o', out + '.before.pal'], 'after': [after] + base + ['-o', out + '.after.pal'],
             'naive': [before] + base + ['-o', out + '.naive.pal', '--fps', '30', '--max-error', '1000']}
-    orders = list(itertools.permutations(sorted(cmds)))
-    times = {k: [] for k in cmds}
-    for i in range(repeat):
-        for k in orders[i % len(orders)]:
-            times[k].append(timed(cmds[k]))
-    return times
+    return interleaved(cmds, repeat)
 
 
 def main():

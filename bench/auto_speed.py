@@ -35,14 +35,20 @@ def timed(cmd):
     return time.monotonic() - t0
 
 
-def measure(exe, model, out, repeat):
-    base = [exe, 'bake', model, '-o', out, '-q', '--root-motion', 'in-place']
-    cmds = {'fixed': base + ['--fps', '30'], 'naive': base + ['--fps', '30', '--max-error', '1000'], 'auto': base}
+def interleaved(cmds, repeat):
+    """Seconds of each named command over `repeat` rounds, each order of them as often as the others."""
     orders = list(itertools.permutations(sorted(cmds)))
     times = {k: [] for k in cmds}
     for i in range(repeat):
         for k in orders[i % len(orders)]:
             times[k].append(timed(cmds[k]))
+    return times
+
+
+def measure(exe, model, out, repeat):
+    base = [exe, 'bake', model, '-o', out, '-q', '--root-motion', 'in-place']
+    cmds = {'fixed': base + ['--fps', '30'], 'naive': base + ['--fps', '30', '--max-error', '1000'], 'auto': base}
+    times = interleaved(cmds, repeat)
     ratio = {k: statistics.median(a / b for a, b in zip(times['auto'], times[k])) for k in ('fixed', 'naive')}
     return {'median_s': {k: statistics.median(v) for k, v in times.items()}, 'auto_vs_fixed': ratio['fixed'],
             'auto_vs_naive': ratio['naive'], 'rounds': repeat}
