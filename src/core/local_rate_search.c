@@ -97,7 +97,7 @@ static cb_status choose_clip(local_search *ls, cb_sampler *s, uint32_t i, cb_err
     plan->fps = r.fps, plan->fit = false; /* local rows are the sampled poses, converted */
     ls->choices[i] = (cb_rate_choice){.met = r.met, .error = r.error, .error_mm = r.error_mm, .fps_needed = r.fps_needed};
     if (!r.not_qpos && choose_timed(ls, s, i, &info, cache, goal, &r, err)) return err->status;
-    if (ls->keep) search_keep_settle(&ls->keep->poses[i], ls->skeleton.bones, &ls->kept_bytes);
+    if (ls->keep) search_keep_settle(&ls->keep->poses[i], ls->skeleton.bones, &ls->kept_bytes, false);
     if (r.not_qpos) atomic_store(&ls->not_qpos, true);
     return CB_OK;
 }

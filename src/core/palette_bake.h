@@ -365,15 +365,15 @@ void search_keep_free(search_keep *keep);
  * together at most SEARCH_KEPT_POSE_BYTES (Cow's twelve clips keep about 50 MB, and spare its bake
  * 150 M of its 750 M instructions). search_keep_settle adds a finished clip's cache to
  * *kept_bytes and frees it (NULL) past that budget: the bake samples that clip again, the same bits.
- * A search for global rows (rate_search.c) then releases the cache's poses to the arena for the
- * next clip's search, keeping its attachments (the probes' rows, bounds, analysis, worst points;
- * pose_cache_release_poses): the bake after it takes the probes' rows and reads few poses (Cow:
+ * With release_poses (a search for global rows, rate_search.c) it hands the cache's poses back to
+ * the arena for the next clip's search, keeping its attachments (the probes' rows, bounds,
+ * analysis, worst points; pose_cache_release_poses): the bake after it takes the probes' rows and reads few poses (Cow:
  * 101 of the 3,300 kept; Husky 95), and sampling those again costs less than the fresh pages the
  * kept poses took (the kernel clears each before its first use: Cow's default bake 17 huge pages,
  * 5 with the poses released). A local-rows bake reads most of its search's poses: kept. */
 #define SEARCH_CLIP_POSE_BYTES ((size_t)32 << 20)
 #define SEARCH_KEPT_POSE_BYTES ((size_t)128 << 20)
-void search_keep_settle(pose_cache **cache, uint32_t bones, atomic_size_t *kept_bytes);
+void search_keep_settle(pose_cache **cache, uint32_t bones, atomic_size_t *kept_bytes, bool release_poses);
 /* palette_plan.c: the facts of the sampler's skin: keep's, built there the first time (keep
  * NULL, or kept for another model or skin: built into *own, which the caller frees with
  * palette_skin_facts_free; *own is zeroed either way); NULL on failure (err set). */

@@ -289,11 +289,12 @@ void search_keep_free(search_keep *keep)
     free(keep);
 }
 
-void search_keep_settle(pose_cache **cache, uint32_t bones, atomic_size_t *kept_bytes)
+void search_keep_settle(pose_cache **cache, uint32_t bones, atomic_size_t *kept_bytes, bool release_poses)
 {
     if (!*cache) return;
     size_t bytes = (size_t)pose_cache_count(*cache) * (16 * bones + 1 + 5 * bones) * sizeof(double);
     if (atomic_fetch_add(kept_bytes, bytes) + bytes > SEARCH_KEPT_POSE_BYTES) pose_cache_free(*cache), *cache = NULL;
+    else if (release_poses) pose_cache_release_poses(*cache);
 }
 
 const palette_skin_facts *search_kept_facts(const search_keep *keep, const cb_sampler *sampler)

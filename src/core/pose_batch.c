@@ -53,6 +53,13 @@ static pose_cache *clip_cache(const bake_state *st, uint32_t c)
     return st->poses ? st->poses : st->clip_poses ? st->clip_poses[c] : NULL;
 }
 
+/* The batch to sample n missing poses with, or NULL: too few to batch, or out of memory (one at a time). */
+static pose_batch *probe_batch(bake_state *st, worker *w, uint32_t n)
+{
+    if (n < BATCH_AT_LEAST) return NULL;
+    return st->batch ? st->batch : w->batch ? w->batch : (w->batch = pose_batch_create(w->sampler));
+}
+
 void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_info *framing, const uint32_t *frames,
                             uint32_t count)
 {
@@ -61,9 +68,8 @@ void palette_prefetch_poses(bake_state *st, worker *w, uint32_t c, const cb_clip
     uint32_t missing[CB_SAMPLE_BATCH], n = 0;
     for (uint32_t i = 0; i < count; ++i)
         if (!pose_cache_find(poses, cb_clip_frame_time(framing, frames[i]))) missing[n++] = frames[i];
-    if (n < BATCH_AT_LEAST) return;
-    pose_batch *b = st->batch ? st->batch : w->batch ? w->batch : (w->batch = pose_batch_create(w->sampler));
-    if (!b) return; /* out of memory: sampled one at a time */
+    pose_batch *b = probe_batch(st, w, n);
+    if (!b) return; /* sampled one at a time */
     double *out[CB_SAMPLE_BATCH];
     for (uint32_t i = 0; i < n; ++i) out[i] = pose_cache_add(poses, cb_clip_frame_time(framing, missing[i])); /* NULL: full */
     cb_clip_frame_matrices_batch(w->sampler, framing, missing, n, st->opt->root_motion, b->joints, b->lanes, out);
@@ -80,8 +86,7 @@ void palette_unkept_poses(bake_state *st, worker *w, uint32_t c, const cb_clip_i
         mats[i] = poses ? pose_cache_find(poses, cb_clip_frame_time(framing, frames[i])) : NULL;
         if (!mats[i]) mats[i] = out[n] = room + i * stride, missing[n++] = frames[i];
     }
-    pose_batch *b = n < BATCH_AT_LEAST ? NULL : st->batch ? st->batch : w->batch ? w->batch
-                                                                            : (w->batch = pose_batch_create(w->sampler));
+    pose_batch *b = probe_batch(st, w, n);
     if (b) {
         cb_clip_frame_matrices_batch(w->sampler, framing, missing, n, st->opt->root_motion, b->joints, b->lanes, out);
         return;

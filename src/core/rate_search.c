@@ -521,8 +521,8 @@ static int rate_worker(void *arg)
                                           max_fps_of(&rs->goals[i]), rs->o->fit ? CB_ROWS_FITTED : rs->goals[i].rows, c,
                                           rs->facts, clip_cache(rs, i, poses, s), !rs->kept, batch,
                                           rs->needed_later && rs->needed_later[i], &rs->errors[i]);
-        if (rs->kept) search_keep_settle(&rs->kept[i], rs->model->skins[rs->skin].joint_count, &rs->kept_bytes);
-        if (rs->kept && rs->kept[i]) pose_cache_release_poses(rs->kept[i]); /* few read again: palette_bake.h */
+        if (rs->kept) /* few of its poses read again: palette_bake.h */
+            search_keep_settle(&rs->kept[i], rs->model->skins[rs->skin].joint_count, &rs->kept_bytes, true);
         rs->plan[i].fit = c->fitted;
         c->error_mm = cb_mm_per_m(c->error, rs->height);
     }
