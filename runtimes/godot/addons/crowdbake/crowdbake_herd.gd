@@ -98,6 +98,12 @@ var _has_contacts := false # any clip of the type lists contacts (else advance s
 var _places: Array[Transform3D] = [] # place()'s transforms: the travel offset goes on top
 var _placed := PackedByteArray() # 1 where place() set the instance's transform
 var _lod_size := 0.0 # the animation LOD's measure of the animal: its clips' largest animated extent
+# The far tier's inputs when _set_far_tier last marked the instances: it marks them again only when one changed.
+var _far_dirty := true # place(), update_bounds() (a caller's own transforms), setup: some instance's placement
+var _far_view_projection := Projection()
+var _far_unit := -1.0
+var _far_to_world := Transform3D()
+var _max_travel := 0.0 # model units: the farthest any row's travel offset puts the body from its placed point
 
 func _ready() -> void:
 	if roster and not animal.is_empty() and mesh and count > 0 and palette == null:
@@ -124,6 +130,13 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	_type = roster.types[type]
 	palette = _type["palette"]
 	_lod_size = palette.largest_bounds().get_longest_axis_size()
+	var heading := 0.0
+	for clip in palette.clips:
+		heading = maxf(heading, clip.get("travel_heading", Vector3.ZERO).length())
+	_max_travel = 0.0
+	for r in palette.row_travel:
+		_max_travel = maxf(_max_travel, absf(r) * heading)
+	_far_dirty = true
 	_resolve_lod()
 	_has_contacts = _type["clips"].values().any(func(clip): return not clip.get("contacts", []).is_empty())
 	_choose_bone_pass()
@@ -227,6 +240,7 @@ func place(i: int, xform: Transform3D) -> void:
 	_draw_placed(i)
 	_retime(i)
 	_bounds_dirty = true
+	_far_dirty = true
 
 # Instance `i`'s per-row travel offset now, in the model's frame: where the body of a clip with
 # offsets is drawn relative to a point moving at the state's speed (cross-fades mix the two clips'
@@ -278,8 +292,10 @@ func socket_transform(i: int, socket: String):
 	return bone_transform_at(i, s["bone"]) * s["transform"]
 
 # The herd's bounds: every instance's box around the largest of the clips' animated bounds (the
-# .pal clip table), so Godot culls the herd as a whole and never clips a walking animal.
+# .pal clip table), so Godot culls the herd as a whole and never clips a walking animal. A caller that sets the
+# multimesh's transforms itself calls it after (it also has the bone pass's far tier measured again).
 func update_bounds() -> void:
+	_far_dirty = true
 	var clip_box: AABB = palette.largest_bounds()
 	var box := AABB()
 	for i in count:
@@ -405,18 +421,31 @@ func _set_lod() -> void:
 	_set_far_tier(view_projection, unit)
 
 # With the bone pass, each instance's far tier (the instance texture's float 10: 1 under halves_pixels() tall, as the
-# shader measures an instance's size for its influences; unit 0: none).
+# shader measures an instance's size for its influences; unit 0: none). Measured again only when the camera's
+# view-projection, the unit, the herd's transform or some instance's placement changed since the last time (not every
+# frame over every instance). A placed instance is measured at its place()'s point, its depth w taken as near as its
+# rows' travel offsets (_max_travel, the body's per-row drift from that point, which moves every frame) can bring it,
+# so that the tier holds for the drawn body at any row; an instance the caller moved itself, at its transform.
 func _set_far_tier(view_projection: Projection, unit: float) -> void:
 	if not uses_bone_pass or multimesh == null or _data.size() < count * FLOATS:
 		return
-	var under := halves_pixels()
 	var to_world := global_transform if unit > 0.0 else Transform3D()
+	if not _far_dirty and unit == _far_unit and view_projection == _far_view_projection and to_world == _far_to_world:
+		return
+	_far_dirty = false
+	_far_unit = unit
+	_far_view_projection = view_projection
+	_far_to_world = to_world
+	var under := halves_pixels()
+	var w_row := Vector3(view_projection.x.w, view_projection.y.w, view_projection.z.w) # w = w_row . p + w.w
 	for i in count:
 		var far := 0.0
 		if unit > 0.0:
-			var model := to_world * multimesh.get_instance_transform(i)
+			var model := to_world * (_places[i] if _placed[i] else multimesh.get_instance_transform(i))
 			var w := absf((view_projection * Vector4(model.origin.x, model.origin.y, model.origin.z, 1.0)).w)
-			far = 1.0 if unit * model.basis.x.length() / maxf(w, 1e-6) < under else 0.0
+			if _placed[i]: # |basis d| <= the basis' Frobenius norm x |d|
+				w -= w_row.length() * Vector3(model.basis.x.length(), model.basis.y.length(), model.basis.z.length()).length() * _max_travel
+			far = 1.0 if w > 0.0 and unit * model.basis.x.length() / w < under else 0.0
 		if _data[i * FLOATS + 10] != far:
 			_data[i * FLOATS + 10] = far
 			_dirty = true
@@ -498,6 +527,7 @@ func _build_bone_pass() -> void:
 	code = code.replace("#include \"crowdbake_bone_pass.gdshaderinc\"", _BONE_PASS_INCLUDE.code)
 	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
 	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
+	code = RegEx.create_from_string("(?m)^#define CB_LOCAL_ROWS \\d+").sub(code, "#define CB_LOCAL_ROWS %d" % (1 if palette.local_rows else 0))
 	var shader := Shader.new()
 	shader.code = code
 	_bone_material = base
