@@ -49,8 +49,8 @@ func run() -> void:
 
 # The case's points drawn per vertex, or (bone_pass) through the herd's bone pass, which must also come within the
 # tolerance of `per_vertex` (the per-vertex path's points). Returns the points read back.
-# halves: the bone pass's far tier (every instance marked as under the animation LOD's halves_pixels()): the pass
-# draws, and the vertex shader reads, the hi halves alone, within the herd's halves_error() of the C runtime's points (the bound its threshold assumes),
+# halves: the bone pass's far tier (every instance marked as under the animation LOD's halves_pixels()), as the herd
+# draws it then: the shader's far-only build (no lo-half fetches) and the pass drawing the hi halves' rows alone, within the herd's halves_error() of the C runtime's points (the bound its threshold assumes),
 # and further from them than the full path's tolerance somewhere (the tier took effect).
 func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vertex := PackedVector3Array(), halves := false) -> PackedVector3Array:
 	var name: String = ("gpu conformance bone pass " + ("hi halves " if halves else "") if bone_pass else "gpu conformance ") + c["name"]
@@ -65,7 +65,7 @@ func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vert
 	var positions := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["positions"]).to_float32_array()
 	var verts := positions.size() / 3
 	var herd: MultiMeshInstance3D = addon._herd_script.new() if bone_pass else null
-	var material := _material(pal, verts, herd)
+	var material := _material(pal, verts, herd, halves)
 	if material == null:
 		addon._end(name, "crowdbake_herd.gdshader's vertex function no longer ends with the view transform")
 		return all
@@ -139,12 +139,13 @@ func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vert
 # The herd's material for `pal` (CrowdbakeHerd._material: the shipped shader, defines and uniforms), its output
 # replaced by the capture described at the top.
 # With `bone_herd` (a herd not yet set up), the material skins from that herd's bone pass (built per group).
-func _material(pal, verts: int, bone_herd: MultiMeshInstance3D = null) -> ShaderMaterial:
+func _material(pal, verts: int, bone_herd: MultiMeshInstance3D = null, far_only := false) -> ShaderMaterial:
 	var herd: MultiMeshInstance3D = bone_herd if bone_herd else addon._herd_script.new()
 	herd.palette = pal
 	herd.playing = false
 	herd.uses_bone_pass = bone_herd != null
-	var material: ShaderMaterial = herd._material()
+	var material: ShaderMaterial = herd._material(far_only)
+	herd._far_only = far_only # its pass (built per group) draws the hi halves' rows alone
 	if bone_herd == null:
 		herd.free()
 	var code: String = material.shader.code

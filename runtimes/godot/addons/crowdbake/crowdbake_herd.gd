@@ -51,8 +51,8 @@ const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade sta
 # (the roster's animation_lod), the sizes under which no vertex moves more than LOD_PIXEL_ERROR pixels;
 # setting lod gives thresholds of your own (and turns lod_auto off). Vector2.ZERO: every influence at any
 # size. lod_reason says which thresholds are in use and why. With the bone pass, an instance under
-# halves_pixels() tall (lod not ZERO) skins from the pass's hi halves alone: 2 texel fetches an influence
-# instead of 4, and the pass draws half its texels, where that moves no vertex more than LOD_PIXEL_ERROR pixels
+# halves_pixels() tall (lod not ZERO) skins from the pass's hi halves alone: 3 texel fetches an influence
+# instead of 6 on a GPU (a CPU rasteriser runs the masked-off fetches all the same), and the pass draws half its texels, where that moves no vertex more than LOD_PIXEL_ERROR pixels
 # (halves_error()). Chosen on the CPU each frame (the pass has no instance transforms), one float an instance.
 const LOD_PIXEL_ERROR := 1.0
 const FIXED_LOD := Vector2(24, 12) # a roster without animation_lod (older crowdbake): at 24 pixels a pixel is 4% of the animal
@@ -70,9 +70,9 @@ const FIXED_LOD := Vector2(24, 12) # a roster without animation_lod (older crowd
 var lod_reason := ""
 var _resolving_lod := false
 # The bone pass: each instance's bones blended once a frame into a texture (a SubViewport with use_hdr_2d, which
-# the web export's Compatibility renderer makes RGBA16F: each float two halves, 6 texels a bone), which the mesh
-# then skins from with 4 texel fetches an influence (qpos rows: a rotation; 6 for affine rows and cross-fading
-# global qpos ones) instead of decoding and blending two palette rows at every vertex. "auto" (the default): from
+# the web export's Compatibility renderer makes RGBA16F: each float two halves, 6 texels a bone: its affine rows),
+# which the mesh then skins from with 6 texel fetches an influence instead of decoding and blending two palette rows
+# at every vertex. "auto" (the default): from
 # AUTO_BONE_PASS_VERTICES skinned vertices a frame (count x the mesh's vertices), where it was measured to win;
 # "always", "never". Read at setup; bone_pass_reason says what and why.
 @export_enum("auto", "always", "never") var bone_pass := "auto"
@@ -80,6 +80,7 @@ var uses_bone_pass := false
 var bone_pass_reason := ""
 var _bone_viewport: SubViewport
 var _bone_material: ShaderMaterial
+var _bone_rect: ColorRect # the pass's quad: both blocks of rows, or the hi halves' alone (_set_far_only)
 
 var time := 0.0 # the herd's clock, seconds (the shader's herd_time)
 var palette # the type's CrowdbakePalette
@@ -104,6 +105,12 @@ var _far_view_projection := Projection()
 var _far_unit := -1.0
 var _far_to_world := Transform3D()
 var _max_travel := 0.0 # model units: the farthest any row's travel offset puts the body from its placed point
+# A CPU rasteriser (SwiftShader under the web export) runs both sides of every `if`, so the far tier's `if` skips no
+# fetch there: while every instance is in the far tier (a large herd seen from afar), the materials take a build of
+# the shader without the lo-half fetches at all (_herd_shader(true)), 3 fetches an influence instead of 6.
+var _mixed_shader: Shader
+var _far_shader: Shader
+var _far_only := false
 
 func _ready() -> void:
 	if roster and not animal.is_empty() and mesh and count > 0 and palette == null:
@@ -142,6 +149,9 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	_choose_bone_pass()
 	var look := _HERD_MESH.build(mesh, _material())
 	materials = look["materials"]
+	_mixed_shader = materials[0].shader if not materials.is_empty() else null
+	_far_shader = null # built when every instance first lands in the far tier
+	_far_only = false
 	surfaces_merged = look["merged"]
 	_set_lod()
 	var mm := MultiMesh.new()
@@ -169,21 +179,26 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	return true
 
 # The herd shader with the palette's layout and precision, its include inlined (so that it also
-# resolves outside res://) and every uniform set.
-func _material() -> ShaderMaterial:
-	var code := _SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
-	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
-	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
-	var shader := Shader.new()
-	shader.code = _with_bone_pass(code)
+# resolves outside res://) and every uniform set. far_only: the bone pass's build for a herd whose every instance is
+# in the far tier (_set_far_tier switches to it while that holds), which has no lo-half fetches at all.
+func _material(far_only := false) -> ShaderMaterial:
 	var material := ShaderMaterial.new()
-	material.shader = shader
+	material.shader = _herd_shader(far_only)
 	for key in ["bind_positions", "positions_relative", "row_texels", "rows_per_block", "bounds_min", "bounds_max", "linear_range",
 			"local_rows"]:
 		material.set_shader_parameter(key, palette.get(key))
 	material.set_shader_parameter("palette", palette.texture)
 	material.set_shader_parameter("instances_per_row", INSTANCES_PER_ROW)
 	return material
+
+func _herd_shader(far_only: bool) -> Shader:
+	var code := _SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
+	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
+	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
+	code = RegEx.create_from_string("(?m)^#define CB_FAR_ONLY \\d+").sub(code, "#define CB_FAR_ONLY %d" % (1 if far_only else 0))
+	var shader := Shader.new()
+	shader.code = _with_bone_pass(code)
+	return shader
 
 # Moves the clock on by `delta` seconds, raising footstep / foot_lifted for every contact an
 # instance's clip time crosses, and hands the GPU what changed.
@@ -438,6 +453,7 @@ func _set_far_tier(view_projection: Projection, unit: float) -> void:
 	_far_to_world = to_world
 	var under := halves_pixels()
 	var w_row := Vector3(view_projection.x.w, view_projection.y.w, view_projection.z.w) # w = w_row . p + w.w
+	var far_count := 0
 	for i in count:
 		var far := 0.0
 		if unit > 0.0:
@@ -446,9 +462,24 @@ func _set_far_tier(view_projection: Projection, unit: float) -> void:
 			if _placed[i]: # |basis d| <= the basis' Frobenius norm x |d|
 				w -= w_row.length() * Vector3(model.basis.x.length(), model.basis.y.length(), model.basis.z.length()).length() * _max_travel
 			far = 1.0 if w > 0.0 and unit * model.basis.x.length() / w < under else 0.0
+		far_count += int(far)
 		if _data[i * FLOATS + 10] != far:
 			_data[i * FLOATS + 10] = far
 			_dirty = true
+	_set_far_only(count > 0 and far_count == count)
+
+# The materials' shader: the far-only build while every instance is in the far tier (the instance texture, uploaded
+# this same frame, says so for each), else the one that reads each instance's tier.
+func _set_far_only(far_only: bool) -> void:
+	if far_only == _far_only or _mixed_shader == null:
+		return
+	_far_only = far_only
+	if far_only and _far_shader == null:
+		_far_shader = _herd_shader(true)
+	for m in materials:
+		m.shader = _far_shader if far_only else _mixed_shader
+	if _bone_rect != null: # the lo halves' block is not drawn while no vertex reads it
+		_bone_rect.size.y = _bone_viewport.size.y / (2 if far_only else 1)
 
 # A shader parameter of every surface's material (and of the bone pass's, which reads the same instances and clock).
 func _set_all(key: String, value) -> void:
@@ -483,19 +514,20 @@ static func skinned_mesh_in(root: Node) -> Mesh:
 const AUTO_BONE_PASS_VERTICES := 20000
 const BONE_TEXTURE_WIDTH := 4096 # texels a row at most (WebGL 2 promises 4096)
 const BONE_TEXTURE_ROWS := 4096
-const BONE_TEXELS := 6 # RGBA16F texels a bone (crowdbake_bone_pass.gdshaderinc)
+const BONE_TEXELS := 6 # RGBA16F texels a bone (crowdbake_bone_pass.gdshaderinc): 3 of hi halves, 3 of lo ones
+const BONE_BLOCK_TEXELS := 3 # a bone's texels in each block of rows (hi above, lo below)
 
 # uses_bone_pass and bone_pass_reason for `bone_pass`, `count` and the mesh.
 func _choose_bone_pass() -> void:
 	var vertices := 0
 	for s in mesh.get_surface_count():
 		vertices += mesh.surface_get_array_len(s)
-	var span: int = palette.bone_names.size() * BONE_TEXELS
-	var rows := ceili(float(count) / maxi(1, BONE_TEXTURE_WIDTH / span))
+	var span: int = palette.bone_names.size() * BONE_BLOCK_TEXELS
+	var rows := 2 * ceili(float(count) / maxi(1, BONE_TEXTURE_WIDTH / span))
 	if span > BONE_TEXTURE_WIDTH or rows > BONE_TEXTURE_ROWS:
 		uses_bone_pass = false
 		bone_pass_reason = "no bone pass: %d instances of %d bones need a %d x %d texture, over %d x %d" % [count,
-				span / BONE_TEXELS, mini(span, BONE_TEXTURE_WIDTH), rows, BONE_TEXTURE_WIDTH, BONE_TEXTURE_ROWS]
+				span / BONE_BLOCK_TEXELS, mini(span, BONE_TEXTURE_WIDTH), rows, BONE_TEXTURE_WIDTH, BONE_TEXTURE_ROWS]
 	elif bone_pass != "auto":
 		uses_bone_pass = bone_pass == "always"
 		bone_pass_reason = "bone_pass = \"%s\"" % bone_pass
@@ -516,11 +548,13 @@ func _build_bone_pass() -> void:
 		_bone_viewport.queue_free()
 		_bone_viewport = null
 		_bone_material = null
+		_bone_rect = null
 	if not uses_bone_pass:
 		return
 	var bones: int = palette.bone_names.size()
-	var per_row := maxi(1, BONE_TEXTURE_WIDTH / (bones * BONE_TEXELS))
-	var size := Vector2i(per_row * bones * BONE_TEXELS, maxi(1, ceili(float(count) / per_row)))
+	var per_row := maxi(1, BONE_TEXTURE_WIDTH / (bones * BONE_BLOCK_TEXELS))
+	var hi_rows := maxi(1, ceili(float(count) / per_row))
+	var size := Vector2i(per_row * bones * BONE_BLOCK_TEXELS, 2 * hi_rows)
 	var unit := _bone_translation_unit()
 	var base := _material() # the palette's uniforms; its code is the pass's
 	var code := _BONE_PASS_SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
@@ -534,6 +568,7 @@ func _build_bone_pass() -> void:
 	_bone_material.shader = shader
 	_bone_material.set_shader_parameter("bone_count", bones)
 	_bone_material.set_shader_parameter("bone_instances_per_row", per_row)
+	_bone_material.set_shader_parameter("bone_lo_rows", hi_rows)
 	_bone_material.set_shader_parameter("instance_count", count)
 	_bone_material.set_shader_parameter("bone_translation_unit", unit)
 	_bone_viewport = SubViewport.new()
@@ -542,24 +577,25 @@ func _build_bone_pass() -> void:
 	_bone_viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS
 	_bone_viewport.transparent_bg = true
 	_bone_viewport.disable_3d = true
-	var rect := ColorRect.new()
-	rect.size = Vector2(size)
-	rect.material = _bone_material
-	_bone_viewport.add_child(rect)
+	_bone_rect = ColorRect.new()
+	_bone_rect.size = Vector2(size.x, hi_rows if _far_only else size.y)
+	_bone_rect.material = _bone_material
+	_bone_viewport.add_child(_bone_rect)
 	add_child(_bone_viewport, false, Node.INTERNAL_MODE_BACK)
 	for m in materials:
 		m.set_shader_parameter("bone_texture", _bone_viewport.get_texture())
 		m.set_shader_parameter("bone_count", bones)
 		m.set_shader_parameter("bone_instances_per_row", per_row)
+		m.set_shader_parameter("bone_lo_rows", hi_rows)
 		m.set_shader_parameter("bone_translation_unit", unit)
 	_texture = null # _upload hands the instance texture to the pass too
 
-# The most a vertex moves (model units) skinned from the bone pass's hi halves alone (each number rounded to a
-# half: within 2^-11 of itself): a rotation's quaternion moves its matrix by up to 6 x 2^-11, its scale by 2^-11
-# more, the translation by 2^-11 of itself, so a point s R v + t within 2^-11 (7 |s R v| + |t|); with the rest
-# point's image and the translation within 2 and 4 translation units (bone_translation_unit: the animated
-# bounds' reach, rounded up to a power of two), 18 x 2^-11 units, taken as 1/64 (check_conformance_gpu.gd
-# measures it on every conformance case).
+# The most a vertex moves (model units) skinned from the bone pass's hi halves alone (each number of the bone's
+# affine rows [L | t] rounded to a half: within 2^-11 of itself): component k of L v + t moves by at most
+# 2^-11 (|row k of L| |v| + |t_k|), the point by 2^-11 (sqrt(3) s |v| + |t|) for L = s R; with the rest point's
+# image within 2 translation units and the translation within 4 (bone_translation_unit: the animated bounds' reach,
+# rounded up to a power of two), under 8 x 2^-11 units (the rotation form this pass once had: 18 x 2^-11), taken as
+# 1/64 (check_conformance_gpu.gd measures it on every conformance case).
 func halves_error() -> float:
 	return _bone_translation_unit() / 64.0
 
