@@ -96,6 +96,10 @@ func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vert
 		if herd != null: # the herd's bone pass for this group's instances, drawn into its SubViewport
 			herd.count = count
 			herd._build_bone_pass()
+			# Where no instance of the group is mid-fade, the pass's still build (no previous clip's bone), as the herd
+			# takes it then (_set_pass_still); else the fading build.
+			if not group["instances"].any(func(inst): return inst[13] > 0.0 and (float(group["time"]) - inst[12]) / inst[13] < 1.0):
+				herd._bone_material.shader = herd._pass_shader(true)
 			herd._bone_material.set_shader_parameter("herd_time", float(group["time"]))
 			herd._bone_material.set_shader_parameter("instances", _instances(group["instances"], halves))
 		node.multimesh.instance_count = count

@@ -81,6 +81,10 @@ var bone_pass_reason := ""
 var _bone_viewport: SubViewport
 var _bone_material: ShaderMaterial
 var _bone_rect: ColorRect # the pass's quad: both blocks of rows, or the hi halves' alone (_set_far_only)
+var _pass_fading_shader: Shader
+var _pass_still_shader: Shader
+var _pass_still := false
+var _fade_until := -1e30 # the herd's clock when the last cross-fade set_state began ends (_set_pass_still)
 
 var time := 0.0 # the herd's clock, seconds (the shader's herd_time)
 var palette # the type's CrowdbakePalette
@@ -229,6 +233,8 @@ func set_state(i: int, state: String, fade := -1.0) -> bool:
 	_data[at + 9] = fade_seconds if fade < 0.0 else fade
 	if _states[i].is_empty():
 		_data[at + 9] = 0.0
+	if _data[at + 9] > 0.0:
+		_fade_until = maxf(_fade_until, time + _data[at + 9])
 	_states[i] = state
 	var frames := float(inst["frame_count"])
 	var rate := _rate(i, state)
@@ -383,6 +389,7 @@ static func _crossings(at: float, f0: float, f1: float, frames: float, loops: bo
 func _upload() -> void:
 	if _bounds_dirty:
 		update_bounds()
+	_set_pass_still()
 	if not _dirty and _texture != null:
 		_set_all("herd_time", time)
 		return
@@ -557,15 +564,11 @@ func _build_bone_pass() -> void:
 	var size := Vector2i(per_row * bones * BONE_BLOCK_TEXELS, 2 * hi_rows)
 	var unit := _bone_translation_unit()
 	var base := _material() # the palette's uniforms; its code is the pass's
-	var code := _BONE_PASS_SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
-	code = code.replace("#include \"crowdbake_bone_pass.gdshaderinc\"", _BONE_PASS_INCLUDE.code)
-	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
-	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
-	code = RegEx.create_from_string("(?m)^#define CB_LOCAL_ROWS \\d+").sub(code, "#define CB_LOCAL_ROWS %d" % (1 if palette.local_rows else 0))
-	var shader := Shader.new()
-	shader.code = code
+	_pass_fading_shader = _pass_shader(false)
+	_pass_still_shader = null # built when no instance is first seen mid-fade
+	_pass_still = false
 	_bone_material = base
-	_bone_material.shader = shader
+	_bone_material.shader = _pass_fading_shader
 	_bone_material.set_shader_parameter("bone_count", bones)
 	_bone_material.set_shader_parameter("bone_instances_per_row", per_row)
 	_bone_material.set_shader_parameter("bone_lo_rows", hi_rows)
@@ -589,6 +592,32 @@ func _build_bone_pass() -> void:
 		m.set_shader_parameter("bone_lo_rows", hi_rows)
 		m.set_shader_parameter("bone_translation_unit", unit)
 	_texture = null # _upload hands the instance texture to the pass too
+
+# The bone pass's shader; still: the build for a herd with no instance mid-fade (_set_pass_still), which has no
+# previous clip's rows and bone to find at all (a CPU rasteriser would run that masked-off work for every texel).
+func _pass_shader(still: bool) -> Shader:
+	var code := _BONE_PASS_SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
+	code = code.replace("#include \"crowdbake_bone_pass.gdshaderinc\"", _BONE_PASS_INCLUDE.code)
+	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
+	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
+	code = RegEx.create_from_string("(?m)^#define CB_LOCAL_ROWS \\d+").sub(code, "#define CB_LOCAL_ROWS %d" % (1 if palette.local_rows else 0))
+	code = RegEx.create_from_string("(?m)^#define CB_NO_FADE \\d+").sub(code, "#define CB_NO_FADE %d" % (1 if still else 0))
+	var shader := Shader.new()
+	shader.code = code
+	return shader
+
+# The pass's build for the herd's clock now: the still build once every fade set_state began has ended. A fade from
+# `start` over `length` is done where the shaders' clamp((herd_time - start) / length) reaches 1, time >= start +
+# length; _fade_until is the latest such end (a clock set back before it brings the fading build back), with a
+# margin for the shaders' 32-bit floats.
+func _set_pass_still() -> void:
+	var still := time >= _fade_until + 1e-5 * (1.0 + absf(_fade_until))
+	if still == _pass_still or _bone_material == null:
+		return
+	_pass_still = still
+	if still and _pass_still_shader == null:
+		_pass_still_shader = _pass_shader(true)
+	_bone_material.shader = _pass_still_shader if still else _pass_fading_shader
 
 # The most a vertex moves (model units) skinned from the bone pass's hi halves alone (each number of the bone's
 # affine rows [L | t] rounded to a half: within 2^-11 of itself): component k of L v + t moves by at most
