@@ -107,8 +107,24 @@ def godot_crowd_bench(counts=(10, 100, 1000), methods=('palette', 'bones', 'vat'
     lines = [l for l in open(log) if l.startswith('crowdbake-bench: ')]
     if not lines:
         sys.exit('bench_herd.gd printed no results; see ' + log)
-    line = lines[-1]
-    return json.loads(line[len('crowdbake-bench: '):])
+    result = json.loads(lines[-1][len('crowdbake-bench: '):])
+    # CPU seconds a frame (run_godot.mjs's count of the browser's process tree between each block's marks): the work a
+    # frame takes whatever else shares the cores, where the wall-clock medians move with the machine's load.
+    cpu, begun = {}, {}
+    for l in open(log):
+        if l.startswith('crowdbake-bench-cpu: '):
+            n, method, edge, seconds = l.split()[1:]
+            if edge == 'begin':
+                begun[(n, method)] = float(seconds)
+            elif (n, method) in begun:
+                c = cpu.setdefault(str(float(n)), {}).setdefault(method, [0.0, 0])
+                c[0] += float(seconds) - begun.pop((n, method))
+                c[1] += 3 # the block's measured frames (bench_herd.gd's BLOCK - 1)
+    for n, methods_cpu in cpu.items():
+        for method, (seconds, frames) in methods_cpu.items():
+            if n in result['counts']:
+                result['counts'][n][method + '_cpu_ms'] = 1000.0 * seconds / frames
+    return result
 
 
 def print_table(r, methods=('palette', 'bones', 'vat'), animal='cow'):
@@ -117,6 +133,8 @@ def print_table(r, methods=('palette', 'bones', 'vat'), animal='cow'):
     print('%10s' % 'instances' + ''.join('%12s' % (m + ' ms') for m in methods) + '   auto chose')
     for n, c in sorted(r['counts'].items(), key=lambda kv: float(kv[0])):
         print("%10d" % float(n) + ''.join('%12.1f' % c[m + '_ms'] for m in methods) + '   ' + ('bones' if c['auto_bone_pass'] else 'palette'))
+        if all(m + '_cpu_ms' in c for m in methods):
+            print('%10s' % 'CPU ms' + ''.join('%12.1f' % c[m + '_cpu_ms'] for m in methods) + "   (the browser's CPU a frame)")
     print('bytes per instance beside its MultiMesh row: ' + ', '.join('%s %d' % kv for kv in r['bytes_per_instance'].items()))
 
 

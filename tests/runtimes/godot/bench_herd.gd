@@ -3,7 +3,8 @@
 # bone pass ("always") and from a VAT of the same frames (the herd's shader with its
 # skinning replaced by two texel fetches a vertex, a bench-only variant: the addon has no VAT path). Every instance
 # walks; each method draws blocks of frames in turns (so the machine's load hits all alike) into a 240x135
-# SubViewport (SwiftShader takes seconds a frame for 1,000 Cows: few frames), and a frame's time is the interval between two frame_post_draw signals. Prints one JSON line:
+# SubViewport (SwiftShader takes seconds a frame for 1,000 Cows: few frames), and a frame's time is the interval between two frame_post_draw signals
+# (and, marked around each block's measured frames, the CPU seconds the browser used: run_godot.mjs). Prints one JSON line:
 #   crowdbake-bench: {"counts": {"N": {"METHOD_ms": median, "auto_bone_pass": what "auto" takes, ...}}, "bytes_per_instance": {...}}
 extends Node
 
@@ -52,12 +53,16 @@ func _ready() -> void:
 					if f >= 1:
 						times[method].append((now - last) / 1000.0)
 					last = now
+					if f == 0 or f == BLOCK - 1: # run_godot.mjs counts the browser's CPU seconds between the two
+						print("crowdbake-bench-mark: %d %s %s" % [n, method, "begin" if f == 0 else "end"])
 				_viewport.remove_child(herds[method])
 		var c := {}
 		var auto: MultiMeshInstance3D = _herd(roster, params["animal"], mesh, int(n), "auto") # what "auto" takes, and why
 		c["auto_reason"] = auto.bone_pass_reason
 		c["auto_bone_pass"] = auto.uses_bone_pass
 		auto.free()
+		if herds.has("bones") and "_far_only" in herds["bones"]: # every instance in the far tier: the far-only build drew
+			c["bones_far_only"] = herds["bones"]._far_only
 		for method in herds:
 			var t: Array = times[method]
 			t.sort()

@@ -36,6 +36,7 @@ func run() -> void:
 	# Local rows (.pal version 6) once the addon composes them (its `local_rows`, docs/pal-format.md).
 	var composes := FileAccess.get_file_as_string(ADDON + "/crowdbake_palette.gdshaderinc").contains("local_rows")
 	await _check_packing()
+	var far_cases := 0
 	for c in cases:
 		if c.get("local", false) and not composes:
 			continue
@@ -43,17 +44,22 @@ func run() -> void:
 			continue # the bone pass is the shaders' own; the other faults live in GLSL or storage
 		var per_vertex: PackedVector3Array = await _check_case(c, viewport, false)
 		await _check_case(c, viewport, true, per_vertex)
-		if not c["broken"]: # a fault's miss says nothing within the far tier's looser bound
-			await _check_case(c, viewport, true, per_vertex, true)
+		if not c["broken"]: # a fault's miss says nothing within the far tier's looser bound; both builds in turns
+			await _check_case(c, viewport, true, per_vertex, true, far_cases % 2 == 1)
+			far_cases += 1
 	viewport.queue_free()
 
 # The case's points drawn per vertex, or (bone_pass) through the herd's bone pass, which must also come within the
 # tolerance of `per_vertex` (the per-vertex path's points). Returns the points read back.
-# halves: the bone pass's far tier (every instance marked as under the animation LOD's halves_pixels()): the pass
-# draws, and the vertex shader reads, the hi halves alone, within the herd's halves_error() of the C runtime's points (the bound its threshold assumes),
-# and further from them than the full path's tolerance somewhere (the tier took effect).
-func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vertex := PackedVector3Array(), halves := false) -> PackedVector3Array:
-	var name: String = ("gpu conformance bone pass " + ("hi halves " if halves else "") if bone_pass else "gpu conformance ") + c["name"]
+# halves: the bone pass's far tier (every instance marked as under the animation LOD's halves_pixels()), as the herd
+# draws it then: the shader's far-only build (no lo-half fetches) and the pass drawing the hi halves' rows alone, within the herd's halves_error() of the C runtime's points (the bound its threshold assumes),
+# and further from them than the full path's tolerance somewhere (the tier took effect). mixed: a herd with near and
+# far instances instead: every other instance (the first of each group among them) marked far, drawn through the
+# build that reads each instance's tier (the pass drawing both blocks), every point within halves_error().
+func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vertex := PackedVector3Array(), halves := false,
+		mixed := false) -> PackedVector3Array:
+	var tier := ("hi halves mixed " if mixed else "hi halves ") if halves else ""
+	var name: String = ("gpu conformance bone pass " + tier if bone_pass else "gpu conformance ") + c["name"]
 	addon._begin(name)
 	var all := PackedVector3Array()
 	var pal = load(ADDON + "/crowdbake_palette.gd").new()
@@ -65,12 +71,12 @@ func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vert
 	var positions := FileAccess.get_file_as_bytes(DIR + "/" + c["mesh"]["positions"]).to_float32_array()
 	var verts := positions.size() / 3
 	var herd: MultiMeshInstance3D = addon._herd_script.new() if bone_pass else null
-	var material := _material(pal, verts, herd)
+	var material := _material(pal, verts, herd, halves and not mixed)
 	if material == null:
 		addon._end(name, "crowdbake_herd.gdshader's vertex function no longer ends with the view transform")
 		return all
 	var full_tolerance := tolerance
-	if halves: # every instance marked far (_instances), as CrowdbakeHerd marks one under halves_pixels() tall
+	if halves: # instances marked far (_instances), as CrowdbakeHerd marks one under halves_pixels() tall
 		tolerance = herd.halves_error()
 	var node := MultiMeshInstance3D.new()
 	node.multimesh = MultiMesh.new()
@@ -92,12 +98,16 @@ func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vert
 		viewport.size = Vector2i(WIDTH, rows)
 		material.set_shader_parameter("cb_height", rows)
 		material.set_shader_parameter("herd_time", float(group["time"]))
-		material.set_shader_parameter("instances", _instances(group["instances"], halves))
+		material.set_shader_parameter("instances", _instances(group["instances"], halves, mixed))
 		if herd != null: # the herd's bone pass for this group's instances, drawn into its SubViewport
 			herd.count = count
 			herd._build_bone_pass()
+			# Where no instance of the group is mid-fade, the pass's still build (no previous clip's bone), as the herd
+			# takes it then (_set_pass_still); else the fading build.
+			if not group["instances"].any(func(inst): return inst[13] > 0.0 and (float(group["time"]) - inst[12]) / inst[13] < 1.0):
+				herd._bone_material.shader = herd._pass_shader(true)
 			herd._bone_material.set_shader_parameter("herd_time", float(group["time"]))
-			herd._bone_material.set_shader_parameter("instances", _instances(group["instances"], halves))
+			herd._bone_material.set_shader_parameter("instances", _instances(group["instances"], halves, mixed))
 		node.multimesh.instance_count = count
 		await RenderingServer.frame_post_draw
 		await RenderingServer.frame_post_draw
@@ -139,12 +149,13 @@ func _check_case(c: Dictionary, viewport: SubViewport, bone_pass: bool, per_vert
 # The herd's material for `pal` (CrowdbakeHerd._material: the shipped shader, defines and uniforms), its output
 # replaced by the capture described at the top.
 # With `bone_herd` (a herd not yet set up), the material skins from that herd's bone pass (built per group).
-func _material(pal, verts: int, bone_herd: MultiMeshInstance3D = null) -> ShaderMaterial:
+func _material(pal, verts: int, bone_herd: MultiMeshInstance3D = null, far_only := false) -> ShaderMaterial:
 	var herd: MultiMeshInstance3D = bone_herd if bone_herd else addon._herd_script.new()
 	herd.palette = pal
 	herd.playing = false
 	herd.uses_bone_pass = bone_herd != null
-	var material: ShaderMaterial = herd._material()
+	var material: ShaderMaterial = herd._material(far_only)
+	herd._far_only = far_only # its pass (built per group) draws the hi halves' rows alone
 	if bone_herd == null:
 		herd.free()
 	var code: String = material.shader.code
@@ -219,14 +230,14 @@ static func _mesh(c: Dictionary, positions: PackedFloat32Array) -> ArrayMesh:
 
 # CrowdbakeHerd's instance texture: per instance the clip's four numbers, the previous clip's, the fade's start
 # and length (conformance.h's instance floats 4..13); far: every instance in the bone pass's far tier (float 10).
-static func _instances(instances: Array, far := false) -> ImageTexture:
+static func _instances(instances: Array, far := false, every_other := false) -> ImageTexture:
 	var rows := ceili(float(instances.size()) / INSTANCES_PER_ROW)
 	var texels := PackedFloat32Array()
 	texels.resize(rows * INSTANCES_PER_ROW * 12)
 	for i in instances.size():
 		for k in 10:
 			texels[i * 12 + k] = instances[i][4 + k]
-		texels[i * 12 + 10] = 1.0 if far else 0.0
+		texels[i * 12 + 10] = 1.0 if far and (not every_other or i % 2 == 0) else 0.0
 	return ImageTexture.create_from_image(Image.create_from_data(INSTANCES_PER_ROW * 3, rows, false, Image.FORMAT_RGBAF,
 			texels.to_byte_array()))
 

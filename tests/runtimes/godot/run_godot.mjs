@@ -67,6 +67,28 @@ const browser = await chromium.launch({
   args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-background-networking',
          '--disable-component-update', '--no-first-run'],
 });
+// A benchmark's CPU count: the CPU seconds this node's process tree (Chromium, its GPU process running SwiftShader,
+// Godot's renderer) has used, read when the script prints "crowdbake-bench-mark: LABEL" and logged as
+// "crowdbake-bench-cpu: LABEL SECONDS", so that a benchmark can count its frames' work apart from whatever else runs on
+// the machine (its wall time shares the cores). /proc's utime + stime, in USER_HZ (100) ticks.
+function treeCpuSeconds() {
+  const parent = new Map();
+  const ticks = new Map();
+  for (const d of fs.readdirSync('/proc')) {
+    if (!/^\d+$/.test(d)) continue;
+    let stat;
+    try { stat = fs.readFileSync(`/proc/${d}/stat`, 'utf8'); } catch { continue; } // it exited meanwhile
+    const f = stat.slice(stat.lastIndexOf(')') + 2).split(' '); // f[0] is field 3 (state)
+    parent.set(+d, +f[1]);
+    ticks.set(+d, +f[11] + +f[12]);
+  }
+  let sum = 0;
+  for (const [pid, t] of ticks) {
+    for (let p = pid; p > 1; p = parent.get(p) ?? 0) if (p === process.pid) { sum += t; break; }
+  }
+  return sum / 100;
+}
+
 // Godot's log reaches node line by line, so that a crash or a hang still leaves the log up to it.
 const lines = [];
 let code;
@@ -79,6 +101,7 @@ try {
   setTimeout(() => finish(`Godot did not exit within ${TIMEOUT_MS / 1000} s`), TIMEOUT_MS).unref();
   await tab.exposeFunction('cbLog', (line) => {
     lines.push(line);
+    if (script && line.startsWith('crowdbake-bench-mark: ')) lines.push(`crowdbake-bench-cpu: ${line.slice(22)} ${treeCpuSeconds()}`);
     // A benchmark (SCRIPT) is done when it says so: its engine's exit, after 1,000 Cows' frames, can abort in the
     // engine's clean-up and never report, which would cost the whole guard's 600 s.
     if (script && line.startsWith('crowdbake-check: done')) { code = 0; finish(null); }

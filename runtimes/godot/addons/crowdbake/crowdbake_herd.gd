@@ -51,8 +51,8 @@ const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade sta
 # (the roster's animation_lod), the sizes under which no vertex moves more than LOD_PIXEL_ERROR pixels;
 # setting lod gives thresholds of your own (and turns lod_auto off). Vector2.ZERO: every influence at any
 # size. lod_reason says which thresholds are in use and why. With the bone pass, an instance under
-# halves_pixels() tall (lod not ZERO) skins from the pass's hi halves alone: 2 texel fetches an influence
-# instead of 4, and the pass draws half its texels, where that moves no vertex more than LOD_PIXEL_ERROR pixels
+# halves_pixels() tall (lod not ZERO) skins from the pass's hi halves alone: 3 texel fetches an influence
+# instead of 6 on a GPU (a CPU rasteriser runs the masked-off fetches all the same), and the pass draws half its texels, where that moves no vertex more than LOD_PIXEL_ERROR pixels
 # (halves_error()). Chosen on the CPU each frame (the pass has no instance transforms), one float an instance.
 const LOD_PIXEL_ERROR := 1.0
 const FIXED_LOD := Vector2(24, 12) # a roster without animation_lod (older crowdbake): at 24 pixels a pixel is 4% of the animal
@@ -70,9 +70,9 @@ const FIXED_LOD := Vector2(24, 12) # a roster without animation_lod (older crowd
 var lod_reason := ""
 var _resolving_lod := false
 # The bone pass: each instance's bones blended once a frame into a texture (a SubViewport with use_hdr_2d, which
-# the web export's Compatibility renderer makes RGBA16F: each float two halves, 6 texels a bone), which the mesh
-# then skins from with 4 texel fetches an influence (qpos rows: a rotation; 6 for affine rows and cross-fading
-# global qpos ones) instead of decoding and blending two palette rows at every vertex. "auto" (the default): from
+# the web export's Compatibility renderer makes RGBA16F: each float two halves, 6 texels a bone: its affine rows),
+# which the mesh then skins from with 6 texel fetches an influence instead of decoding and blending two palette rows
+# at every vertex. "auto" (the default): from
 # AUTO_BONE_PASS_VERTICES skinned vertices a frame (count x the mesh's vertices), where it was measured to win;
 # "always", "never". Read at setup; bone_pass_reason says what and why.
 @export_enum("auto", "always", "never") var bone_pass := "auto"
@@ -80,6 +80,11 @@ var uses_bone_pass := false
 var bone_pass_reason := ""
 var _bone_viewport: SubViewport
 var _bone_material: ShaderMaterial
+var _bone_rect: ColorRect # the pass's quad: both blocks of rows, or the hi halves' alone (_set_far_only)
+var _pass_fading_shader: Shader
+var _pass_still_shader: Shader
+var _pass_still := false
+var _fade_until := -1e30 # the herd's clock when the last cross-fade set_state began ends (_set_pass_still)
 
 var time := 0.0 # the herd's clock, seconds (the shader's herd_time)
 var palette # the type's CrowdbakePalette
@@ -98,6 +103,18 @@ var _has_contacts := false # any clip of the type lists contacts (else advance s
 var _places: Array[Transform3D] = [] # place()'s transforms: the travel offset goes on top
 var _placed := PackedByteArray() # 1 where place() set the instance's transform
 var _lod_size := 0.0 # the animation LOD's measure of the animal: its clips' largest animated extent
+# The far tier's inputs when _set_far_tier last marked the instances: it marks them again only when one changed.
+var _far_dirty := true # place(), update_bounds() (a caller's own transforms), setup: some instance's placement
+var _far_view_projection := Projection()
+var _far_unit := -1.0
+var _far_to_world := Transform3D()
+var _max_travel := 0.0 # model units: the farthest any row's travel offset puts the body from its placed point
+# A CPU rasteriser (SwiftShader under the web export) runs both sides of every `if`, so the far tier's `if` skips no
+# fetch there: while every instance is in the far tier (a large herd seen from afar), the materials take a build of
+# the shader without the lo-half fetches at all (_herd_shader(true)), 3 fetches an influence instead of 6.
+var _mixed_shader: Shader
+var _far_shader: Shader
+var _far_only := false
 
 func _ready() -> void:
 	if roster and not animal.is_empty() and mesh and count > 0 and palette == null:
@@ -124,11 +141,21 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	_type = roster.types[type]
 	palette = _type["palette"]
 	_lod_size = palette.largest_bounds().get_longest_axis_size()
+	var heading := 0.0
+	for clip in palette.clips:
+		heading = maxf(heading, clip.get("travel_heading", Vector3.ZERO).length())
+	_max_travel = 0.0
+	for r in palette.row_travel:
+		_max_travel = maxf(_max_travel, absf(r) * heading)
+	_far_dirty = true
 	_resolve_lod()
 	_has_contacts = _type["clips"].values().any(func(clip): return not clip.get("contacts", []).is_empty())
 	_choose_bone_pass()
 	var look := _HERD_MESH.build(mesh, _material())
 	materials = look["materials"]
+	_mixed_shader = materials[0].shader if not materials.is_empty() else null
+	_far_shader = null # built when every instance first lands in the far tier
+	_far_only = false
 	surfaces_merged = look["merged"]
 	_set_lod()
 	var mm := MultiMesh.new()
@@ -156,21 +183,26 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	return true
 
 # The herd shader with the palette's layout and precision, its include inlined (so that it also
-# resolves outside res://) and every uniform set.
-func _material() -> ShaderMaterial:
-	var code := _SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
-	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
-	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
-	var shader := Shader.new()
-	shader.code = _with_bone_pass(code)
+# resolves outside res://) and every uniform set. far_only: the bone pass's build for a herd whose every instance is
+# in the far tier (_set_far_tier switches to it while that holds), which has no lo-half fetches at all.
+func _material(far_only := false) -> ShaderMaterial:
 	var material := ShaderMaterial.new()
-	material.shader = shader
+	material.shader = _herd_shader(far_only)
 	for key in ["bind_positions", "positions_relative", "row_texels", "rows_per_block", "bounds_min", "bounds_max", "linear_range",
 			"local_rows"]:
 		material.set_shader_parameter(key, palette.get(key))
 	material.set_shader_parameter("palette", palette.texture)
 	material.set_shader_parameter("instances_per_row", INSTANCES_PER_ROW)
 	return material
+
+func _herd_shader(far_only: bool) -> Shader:
+	var code := _SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
+	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
+	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
+	code = RegEx.create_from_string("(?m)^#define CB_FAR_ONLY \\d+").sub(code, "#define CB_FAR_ONLY %d" % (1 if far_only else 0))
+	var shader := Shader.new()
+	shader.code = _with_bone_pass(code)
+	return shader
 
 # Moves the clock on by `delta` seconds, raising footstep / foot_lifted for every contact an
 # instance's clip time crosses, and hands the GPU what changed.
@@ -201,6 +233,8 @@ func set_state(i: int, state: String, fade := -1.0) -> bool:
 	_data[at + 9] = fade_seconds if fade < 0.0 else fade
 	if _states[i].is_empty():
 		_data[at + 9] = 0.0
+	if _data[at + 9] > 0.0:
+		_fade_until = maxf(_fade_until, time + _data[at + 9])
 	_states[i] = state
 	var frames := float(inst["frame_count"])
 	var rate := _rate(i, state)
@@ -227,6 +261,7 @@ func place(i: int, xform: Transform3D) -> void:
 	_draw_placed(i)
 	_retime(i)
 	_bounds_dirty = true
+	_far_dirty = true
 
 # Instance `i`'s per-row travel offset now, in the model's frame: where the body of a clip with
 # offsets is drawn relative to a point moving at the state's speed (cross-fades mix the two clips'
@@ -278,8 +313,10 @@ func socket_transform(i: int, socket: String):
 	return bone_transform_at(i, s["bone"]) * s["transform"]
 
 # The herd's bounds: every instance's box around the largest of the clips' animated bounds (the
-# .pal clip table), so Godot culls the herd as a whole and never clips a walking animal.
+# .pal clip table), so Godot culls the herd as a whole and never clips a walking animal. A caller that sets the
+# multimesh's transforms itself calls it after (it also has the bone pass's far tier measured again).
 func update_bounds() -> void:
+	_far_dirty = true
 	var clip_box: AABB = palette.largest_bounds()
 	var box := AABB()
 	for i in count:
@@ -352,6 +389,7 @@ static func _crossings(at: float, f0: float, f1: float, frames: float, loops: bo
 func _upload() -> void:
 	if _bounds_dirty:
 		update_bounds()
+	_set_pass_still()
 	if not _dirty and _texture != null:
 		_set_all("herd_time", time)
 		return
@@ -405,21 +443,50 @@ func _set_lod() -> void:
 	_set_far_tier(view_projection, unit)
 
 # With the bone pass, each instance's far tier (the instance texture's float 10: 1 under halves_pixels() tall, as the
-# shader measures an instance's size for its influences; unit 0: none).
+# shader measures an instance's size for its influences; unit 0: none). Measured again only when the camera's
+# view-projection, the unit, the herd's transform or some instance's placement changed since the last time (not every
+# frame over every instance). A placed instance is measured at its place()'s point, its depth w taken as near as its
+# rows' travel offsets (_max_travel, the body's per-row drift from that point, which moves every frame) can bring it,
+# so that the tier holds for the drawn body at any row; an instance the caller moved itself, at its transform.
 func _set_far_tier(view_projection: Projection, unit: float) -> void:
 	if not uses_bone_pass or multimesh == null or _data.size() < count * FLOATS:
 		return
-	var under := halves_pixels()
 	var to_world := global_transform if unit > 0.0 else Transform3D()
+	if not _far_dirty and unit == _far_unit and view_projection == _far_view_projection and to_world == _far_to_world:
+		return
+	_far_dirty = false
+	_far_unit = unit
+	_far_view_projection = view_projection
+	_far_to_world = to_world
+	var under := halves_pixels()
+	var w_row := Vector3(view_projection.x.w, view_projection.y.w, view_projection.z.w) # w = w_row . p + w.w
+	var far_count := 0
 	for i in count:
 		var far := 0.0
 		if unit > 0.0:
-			var model := to_world * multimesh.get_instance_transform(i)
+			var model := to_world * (_places[i] if _placed[i] else multimesh.get_instance_transform(i))
 			var w := absf((view_projection * Vector4(model.origin.x, model.origin.y, model.origin.z, 1.0)).w)
-			far = 1.0 if unit * model.basis.x.length() / maxf(w, 1e-6) < under else 0.0
+			if _placed[i]: # |basis d| <= the basis' Frobenius norm x |d|
+				w -= w_row.length() * Vector3(model.basis.x.length(), model.basis.y.length(), model.basis.z.length()).length() * _max_travel
+			far = 1.0 if w > 0.0 and unit * model.basis.x.length() / w < under else 0.0
+		far_count += int(far)
 		if _data[i * FLOATS + 10] != far:
 			_data[i * FLOATS + 10] = far
 			_dirty = true
+	_set_far_only(count > 0 and far_count == count)
+
+# The materials' shader: the far-only build while every instance is in the far tier (the instance texture, uploaded
+# this same frame, says so for each), else the one that reads each instance's tier.
+func _set_far_only(far_only: bool) -> void:
+	if far_only == _far_only or _mixed_shader == null:
+		return
+	_far_only = far_only
+	if far_only and _far_shader == null:
+		_far_shader = _herd_shader(true)
+	for m in materials:
+		m.shader = _far_shader if far_only else _mixed_shader
+	if _bone_rect != null: # the lo halves' block is not drawn while no vertex reads it
+		_bone_rect.size.y = _bone_viewport.size.y / (2 if far_only else 1)
 
 # A shader parameter of every surface's material (and of the bone pass's, which reads the same instances and clock).
 func _set_all(key: String, value) -> void:
@@ -454,19 +521,20 @@ static func skinned_mesh_in(root: Node) -> Mesh:
 const AUTO_BONE_PASS_VERTICES := 20000
 const BONE_TEXTURE_WIDTH := 4096 # texels a row at most (WebGL 2 promises 4096)
 const BONE_TEXTURE_ROWS := 4096
-const BONE_TEXELS := 6 # RGBA16F texels a bone (crowdbake_bone_pass.gdshaderinc)
+const BONE_TEXELS := 6 # RGBA16F texels a bone (crowdbake_bone_pass.gdshaderinc): 3 of hi halves, 3 of lo ones
+const BONE_BLOCK_TEXELS := 3 # a bone's texels in each block of rows (hi above, lo below)
 
 # uses_bone_pass and bone_pass_reason for `bone_pass`, `count` and the mesh.
 func _choose_bone_pass() -> void:
 	var vertices := 0
 	for s in mesh.get_surface_count():
 		vertices += mesh.surface_get_array_len(s)
-	var span: int = palette.bone_names.size() * BONE_TEXELS
-	var rows := ceili(float(count) / maxi(1, BONE_TEXTURE_WIDTH / span))
+	var span: int = palette.bone_names.size() * BONE_BLOCK_TEXELS
+	var rows := 2 * ceili(float(count) / maxi(1, BONE_TEXTURE_WIDTH / span))
 	if span > BONE_TEXTURE_WIDTH or rows > BONE_TEXTURE_ROWS:
 		uses_bone_pass = false
 		bone_pass_reason = "no bone pass: %d instances of %d bones need a %d x %d texture, over %d x %d" % [count,
-				span / BONE_TEXELS, mini(span, BONE_TEXTURE_WIDTH), rows, BONE_TEXTURE_WIDTH, BONE_TEXTURE_ROWS]
+				span / BONE_BLOCK_TEXELS, mini(span, BONE_TEXTURE_WIDTH), rows, BONE_TEXTURE_WIDTH, BONE_TEXTURE_ROWS]
 	elif bone_pass != "auto":
 		uses_bone_pass = bone_pass == "always"
 		bone_pass_reason = "bone_pass = \"%s\"" % bone_pass
@@ -487,23 +555,23 @@ func _build_bone_pass() -> void:
 		_bone_viewport.queue_free()
 		_bone_viewport = null
 		_bone_material = null
+		_bone_rect = null
 	if not uses_bone_pass:
 		return
 	var bones: int = palette.bone_names.size()
-	var per_row := maxi(1, BONE_TEXTURE_WIDTH / (bones * BONE_TEXELS))
-	var size := Vector2i(per_row * bones * BONE_TEXELS, maxi(1, ceili(float(count) / per_row)))
+	var per_row := maxi(1, BONE_TEXTURE_WIDTH / (bones * BONE_BLOCK_TEXELS))
+	var hi_rows := maxi(1, ceili(float(count) / per_row))
+	var size := Vector2i(per_row * bones * BONE_BLOCK_TEXELS, 2 * hi_rows)
 	var unit := _bone_translation_unit()
 	var base := _material() # the palette's uniforms; its code is the pass's
-	var code := _BONE_PASS_SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
-	code = code.replace("#include \"crowdbake_bone_pass.gdshaderinc\"", _BONE_PASS_INCLUDE.code)
-	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
-	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
-	var shader := Shader.new()
-	shader.code = code
+	_pass_fading_shader = _pass_shader(false)
+	_pass_still_shader = null # built when no instance is first seen mid-fade
+	_pass_still = false
 	_bone_material = base
-	_bone_material.shader = shader
+	_bone_material.shader = _pass_fading_shader
 	_bone_material.set_shader_parameter("bone_count", bones)
 	_bone_material.set_shader_parameter("bone_instances_per_row", per_row)
+	_bone_material.set_shader_parameter("bone_lo_rows", hi_rows)
 	_bone_material.set_shader_parameter("instance_count", count)
 	_bone_material.set_shader_parameter("bone_translation_unit", unit)
 	_bone_viewport = SubViewport.new()
@@ -512,24 +580,51 @@ func _build_bone_pass() -> void:
 	_bone_viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS
 	_bone_viewport.transparent_bg = true
 	_bone_viewport.disable_3d = true
-	var rect := ColorRect.new()
-	rect.size = Vector2(size)
-	rect.material = _bone_material
-	_bone_viewport.add_child(rect)
+	_bone_rect = ColorRect.new()
+	_bone_rect.size = Vector2(size.x, hi_rows if _far_only else size.y)
+	_bone_rect.material = _bone_material
+	_bone_viewport.add_child(_bone_rect)
 	add_child(_bone_viewport, false, Node.INTERNAL_MODE_BACK)
 	for m in materials:
 		m.set_shader_parameter("bone_texture", _bone_viewport.get_texture())
 		m.set_shader_parameter("bone_count", bones)
 		m.set_shader_parameter("bone_instances_per_row", per_row)
+		m.set_shader_parameter("bone_lo_rows", hi_rows)
 		m.set_shader_parameter("bone_translation_unit", unit)
 	_texture = null # _upload hands the instance texture to the pass too
 
-# The most a vertex moves (model units) skinned from the bone pass's hi halves alone (each number rounded to a
-# half: within 2^-11 of itself): a rotation's quaternion moves its matrix by up to 6 x 2^-11, its scale by 2^-11
-# more, the translation by 2^-11 of itself, so a point s R v + t within 2^-11 (7 |s R v| + |t|); with the rest
-# point's image and the translation within 2 and 4 translation units (bone_translation_unit: the animated
-# bounds' reach, rounded up to a power of two), 18 x 2^-11 units, taken as 1/64 (check_conformance_gpu.gd
-# measures it on every conformance case).
+# The bone pass's shader; still: the build for a herd with no instance mid-fade (_set_pass_still), which has no
+# previous clip's rows and bone to find at all (a CPU rasteriser would run that masked-off work for every texel).
+func _pass_shader(still: bool) -> Shader:
+	var code := _BONE_PASS_SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
+	code = code.replace("#include \"crowdbake_bone_pass.gdshaderinc\"", _BONE_PASS_INCLUDE.code)
+	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
+	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
+	code = RegEx.create_from_string("(?m)^#define CB_LOCAL_ROWS \\d+").sub(code, "#define CB_LOCAL_ROWS %d" % (1 if palette.local_rows else 0))
+	code = RegEx.create_from_string("(?m)^#define CB_NO_FADE \\d+").sub(code, "#define CB_NO_FADE %d" % (1 if still else 0))
+	var shader := Shader.new()
+	shader.code = code
+	return shader
+
+# The pass's build for the herd's clock now: the still build once every fade set_state began has ended. A fade from
+# `start` over `length` is done where the shaders' clamp((herd_time - start) / length) reaches 1, time >= start +
+# length; _fade_until is the latest such end (a clock set back before it brings the fading build back), with a
+# margin for the shaders' 32-bit floats.
+func _set_pass_still() -> void:
+	var still := time >= _fade_until + 1e-5 * (1.0 + absf(_fade_until))
+	if still == _pass_still or _bone_material == null:
+		return
+	_pass_still = still
+	if still and _pass_still_shader == null:
+		_pass_still_shader = _pass_shader(true)
+	_bone_material.shader = _pass_still_shader if still else _pass_fading_shader
+
+# The most a vertex moves (model units) skinned from the bone pass's hi halves alone (each number of the bone's
+# affine rows [L | t] rounded to a half: within 2^-11 of itself): component k of L v + t moves by at most
+# 2^-11 (|row k of L| |v| + |t_k|), the point by 2^-11 (sqrt(3) s |v| + |t|) for L = s R; with the rest point's
+# image within 2 translation units and the translation within 4 (bone_translation_unit: the animated bounds' reach,
+# rounded up to a power of two), under 8 x 2^-11 units (the rotation form this pass once had: 18 x 2^-11), taken as
+# 1/64 (check_conformance_gpu.gd measures it on every conformance case).
 func halves_error() -> float:
 	return _bone_translation_unit() / 64.0
 
