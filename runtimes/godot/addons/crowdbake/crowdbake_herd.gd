@@ -196,12 +196,19 @@ func _material(far_only := false) -> ShaderMaterial:
 	return material
 
 func _herd_shader(far_only: bool) -> Shader:
-	var code := _SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
-	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
-	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
-	code = RegEx.create_from_string("(?m)^#define CB_FAR_ONLY \\d+").sub(code, "#define CB_FAR_ONLY %d" % (1 if far_only else 0))
+	return _built(_SHADER, {"CB_BONE_PASS": int(uses_bone_pass), "CB_FAR_ONLY": int(far_only)})
+
+# A build of the addon's shader `source`: its includes inlined (so that it also resolves outside res://) and each
+# `#define NAME N` line set, for the palette's layout and precision and the other `defines`.
+func _built(source: Shader, defines: Dictionary) -> Shader:
+	var code := source.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
+	code = code.replace("#include \"crowdbake_bone_pass.gdshaderinc\"", _BONE_PASS_INCLUDE.code)
+	defines["CB_LAYOUT"] = ["mat4", "affine", "qpos"].find(palette.layout)
+	defines["CB_U16"] = int(palette.precision == "u16")
+	for name in defines:
+		code = RegEx.create_from_string("(?m)^#define %s \\d+" % name).sub(code, "#define %s %d" % [name, defines[name]])
 	var shader := Shader.new()
-	shader.code = _with_bone_pass(code)
+	shader.code = code
 	return shader
 
 # Moves the clock on by `delta` seconds, raising footstep / foot_lifted for every contact an
@@ -544,11 +551,6 @@ func _choose_bone_pass() -> void:
 				% [count * vertices, count, vertices, ">=" if uses_bone_pass else "<", AUTO_BONE_PASS_VERTICES,
 				"each bone blended once an instance" if uses_bone_pass else "the bone pass would not pay for its extra pass"])
 
-# The herd's shader code with the bone pass's define set and its include inlined.
-func _with_bone_pass(code: String) -> String:
-	code = code.replace("#include \"crowdbake_bone_pass.gdshaderinc\"", _BONE_PASS_INCLUDE.code)
-	return RegEx.create_from_string("(?m)^#define CB_BONE_PASS \\d+").sub(code, "#define CB_BONE_PASS %d" % (1 if uses_bone_pass else 0))
-
 # The bone pass's SubViewport (an internal child of the herd, drawn before the herd each frame) and its material.
 func _build_bone_pass() -> void:
 	if _bone_viewport != null:
@@ -596,15 +598,7 @@ func _build_bone_pass() -> void:
 # The bone pass's shader; still: the build for a herd with no instance mid-fade (_set_pass_still), which has no
 # previous clip's rows and bone to find at all (a CPU rasteriser would run that masked-off work for every texel).
 func _pass_shader(still: bool) -> Shader:
-	var code := _BONE_PASS_SHADER.code.replace("#include \"crowdbake_palette.gdshaderinc\"", _INCLUDE.code)
-	code = code.replace("#include \"crowdbake_bone_pass.gdshaderinc\"", _BONE_PASS_INCLUDE.code)
-	code = RegEx.create_from_string("(?m)^#define CB_LAYOUT \\d+").sub(code, "#define CB_LAYOUT %d" % ["mat4", "affine", "qpos"].find(palette.layout))
-	code = RegEx.create_from_string("(?m)^#define CB_U16 \\d+").sub(code, "#define CB_U16 %d" % (1 if palette.precision == "u16" else 0))
-	code = RegEx.create_from_string("(?m)^#define CB_LOCAL_ROWS \\d+").sub(code, "#define CB_LOCAL_ROWS %d" % (1 if palette.local_rows else 0))
-	code = RegEx.create_from_string("(?m)^#define CB_NO_FADE \\d+").sub(code, "#define CB_NO_FADE %d" % (1 if still else 0))
-	var shader := Shader.new()
-	shader.code = code
-	return shader
+	return _built(_BONE_PASS_SHADER, {"CB_LOCAL_ROWS": int(palette.local_rows), "CB_NO_FADE": int(still)})
 
 # The pass's build for the herd's clock now: the still build once every fade set_state began has ended. A fade from
 # `start` over `length` is done where the shaders' clamp((herd_time - start) / length) reaches 1, time >= start +
