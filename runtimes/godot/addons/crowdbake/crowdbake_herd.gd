@@ -50,10 +50,11 @@ const FLOATS := 12 # per instance: current clip (4), previous clip (4), fade sta
 # bounds, times the instance's scale. lod_auto (the default): the thresholds from what the bake measured
 # (the roster's animation_lod), the sizes under which no vertex moves more than LOD_PIXEL_ERROR pixels;
 # setting lod gives thresholds of your own (and turns lod_auto off). Vector2.ZERO: every influence at any
-# size. lod_reason says which thresholds are in use and why. With the bone pass, an instance under
-# halves_pixels() tall (lod not ZERO) skins from the pass's hi halves alone: 3 texel fetches an influence
-# instead of 6 on a GPU (a CPU rasteriser runs the masked-off fetches all the same), and the pass draws half its texels, where that moves no vertex more than LOD_PIXEL_ERROR pixels
-# (halves_error()). Chosen on the CPU each frame (the pass has no instance transforms), one float an instance.
+# size. lod_reason says which thresholds are in use and why. With the bone pass, an instance under halves_pixels()
+# tall (lod not ZERO) skins from the pass's hi halves alone: 3 texel fetches an influence instead of 6 on a GPU (a
+# CPU rasteriser runs the masked-off fetches all the same), and the pass draws half its texels, where that moves no
+# vertex more than LOD_PIXEL_ERROR pixels (halves_error()). Chosen on the CPU when the camera or a placement changes
+# (the pass has no instance transforms), one float an instance.
 const LOD_PIXEL_ERROR := 1.0
 const FIXED_LOD := Vector2(24, 12) # a roster without animation_lod (older crowdbake): at 24 pixels a pixel is 4% of the animal
 @export var lod_auto := true:
