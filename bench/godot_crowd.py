@@ -7,6 +7,7 @@ herd's "auto" choice, and from a VAT of the same frames (crowdbake vat --like th
 """
 import json
 import os
+import re
 import struct
 import subprocess
 import sys
@@ -110,6 +111,8 @@ def godot_crowd_bench(counts=(10, 100, 1000), methods=('palette', 'bones', 'vat'
     result = json.loads(lines[-1][len('crowdbake-bench: '):])
     # CPU seconds a frame (run_godot.mjs's count of the browser's process tree between each block's marks): the work a
     # frame takes whatever else shares the cores, where the wall-clock medians move with the machine's load.
+    herd = open(os.path.join(ROOT, 'tests', 'runtimes', 'godot', 'bench_herd.gd')).read()
+    measured = int(re.search(r'^const BLOCK := (\d+)', herd, re.M).group(1)) - 1 # frames between a block's marks
     cpu, begun = {}, {}
     for l in open(log):
         if l.startswith('crowdbake-bench-cpu: '):
@@ -119,7 +122,7 @@ def godot_crowd_bench(counts=(10, 100, 1000), methods=('palette', 'bones', 'vat'
             elif (n, method) in begun:
                 c = cpu.setdefault(str(float(n)), {}).setdefault(method, [0.0, 0])
                 c[0] += float(seconds) - begun.pop((n, method))
-                c[1] += 3 # the block's measured frames (bench_herd.gd's BLOCK - 1)
+                c[1] += measured
     for n, methods_cpu in cpu.items():
         for method, (seconds, frames) in methods_cpu.items():
             if n in result['counts']:
