@@ -112,7 +112,7 @@ def godot_crowd_bench(counts=(10, 100, 1000), methods=('palette', 'bones', 'vat'
     # CPU seconds a frame (run_godot.mjs's count of the browser's process tree between each block's marks): the work a
     # frame takes whatever else shares the cores, where the wall-clock medians move with the machine's load.
     herd = open(os.path.join(ROOT, 'tests', 'runtimes', 'godot', 'bench_herd.gd')).read()
-    measured = int(re.search(r'^const BLOCK := (\d+)', herd, re.M).group(1)) - 1 # frames between a block's marks
+    measured = int(re.search(r'^const BLOCK := (\d+)', herd, re.M).group(1)) - 1  # frames between a block's marks
     cpu, begun = {}, {}
     for l in open(log):
         if l.startswith('crowdbake-bench-cpu: '):
