@@ -367,10 +367,11 @@ void search_keep_free(search_keep *keep);
  * *kept_bytes and frees it (NULL) past that budget: the bake samples that clip again, the same bits.
  * With release_poses (a search for global rows, rate_search.c) it hands the cache's poses back to
  * the arena for the next clip's search, keeping its attachments (the probes' rows, bounds,
- * analysis, worst points; pose_cache_release_poses): the bake after it takes the probes' rows and reads few poses (Cow:
- * 101 of the 3,300 kept; Husky 95), and sampling those again costs less than the fresh pages the
- * kept poses took (the kernel clears each before its first use: Cow's default bake 17 huge pages,
- * 5 with the poses released). A local-rows bake reads most of its search's poses: kept. */
+ * analysis, worst points; pose_cache_release_poses): the bake after it takes the probes' rows
+ * and reads few poses (Cow: 101 of the 3,300 kept; Husky 95), and sampling those again costs
+ * less than the fresh pages the kept poses took (the kernel clears each before its first use:
+ * Cow's default bake 17 huge pages, 5 with the poses released). A local-rows bake reads most of
+ * its search's poses: kept. */
 #define SEARCH_CLIP_POSE_BYTES ((size_t)32 << 20)
 #define SEARCH_KEPT_POSE_BYTES ((size_t)128 << 20)
 void search_keep_settle(pose_cache **cache, uint32_t bones, atomic_size_t *kept_bytes, bool release_poses);

@@ -50,6 +50,7 @@ func run() -> void:
 	await look.check_look("cow", COW + "/Cow.glb", COW + "/roster/roster.json", 7)
 	await look.check_look("husky", look.HUSKY + "/Husky.glb", look.HUSKY + "/roster/roster.json", 5)
 	await look.check_lod(roster, mesh)
+	await look.check_far_tier(roster, mesh)
 	await look.check_demo()
 	look.check_imported_palette()
 	look.check_imported_roster(mesh)

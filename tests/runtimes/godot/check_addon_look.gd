@@ -343,6 +343,43 @@ func _check_lod_auto(roster, mesh: Mesh) -> void:
 		why = "setting lod did not override lod_auto, or lod_auto = true did not restore it"
 	addon._end(name, why)
 
+# The bone pass's far tier as a game meets it: two grazing Cows (bone_pass "always") drawn through the build that
+# reads each instance's tier while they are near, through the far-only build once both are under halves_pixels()
+# tall; that build is the program the herd drew once at setup (_warm_far_build: no compile at the first switch, mid-
+# game), retired after that frame, and it draws the pixels the build that reads each tier draws for far instances.
+func check_far_tier(roster, mesh: Mesh) -> void:
+	var name := "bone pass far tier: the far-only build, drawn once at setup, while every instance is far; the same pixels as the per-instance build"
+	addon._begin(name)
+	addon._viewport.size = Vector2i(128, 128)
+	var herd: MultiMeshInstance3D = addon._herd_script.new()
+	herd.playing = false
+	herd.bone_pass = "always"
+	addon._viewport.add_child(herd)
+	herd.setup(roster, "cow", mesh, 2)
+	var warmed: bool = herd._warm_up != null and herd._warm_up.is_inside_tree() and herd._warm_up.material_override.shader == herd._far_shader
+	var bounds: AABB = herd.palette.largest_bounds()
+	var unit_tall := Basis(Vector3.UP, PI / 2).scaled(Vector3.ONE / bounds.size.y)
+	for i in 2:
+		herd.place(i, Transform3D(unit_tall, Vector3(0.6 * i - 0.3, 0, 0) - unit_tall * bounds.get_center()))
+		herd.set_state(i, "graze", 0.0)
+	herd.advance(2.5)
+	addon._camera.transform = Transform3D(Basis(), Vector3(0, 0, 1.5))
+	await addon._frame()
+	var near: bool = not herd._far_only and herd.materials[0].shader == herd._mixed_shader
+	var retired: bool = herd._warm_up == null
+	addon._camera.transform = Transform3D(Basis(), Vector3(0, 0, 6))
+	var far: Image = await addon._frame()
+	var far_only: bool = herd._far_only and herd.materials[0].shader == herd._far_shader
+	herd._set_far_only(false) # the build that reads each instance's tier, both still marked far
+	var per_instance: Image = await addon._frame()
+	herd.queue_free()
+	addon._viewport.size = Vector2i(64, 64)
+	var covered: int = addon._covered(far)[1]
+	var differ: int = addon._differ(far, per_instance)
+	print("crowdbake-check: far tier: warmed at setup %s, retired after a frame %s, near %s, far-only %s; %d pixels covered far, %d differ from the per-instance build (halves_pixels %.1f)"
+			% [warmed, retired, near, far_only, covered, differ, herd.halves_pixels()])
+	addon._end(name, "" if warmed and retired and near and far_only and covered > 40 and differ == 0 else "see the numbers above")
+
 # A frame of one Cow grazing (2.5 s in), side on and `scale` units tall, at the camera's place for a
 # unit-tall Cow filling the view; lod null: the herd's default (lod_auto).
 func _grazing(roster, mesh: Mesh, lod, scale: float) -> Image: # lod null: lod_auto

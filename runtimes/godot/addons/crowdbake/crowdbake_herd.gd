@@ -82,10 +82,6 @@ var bone_pass_reason := ""
 var _bone_viewport: SubViewport
 var _bone_material: ShaderMaterial
 var _bone_rect: ColorRect # the pass's quad: both blocks of rows, or the hi halves' alone (_set_far_only)
-var _pass_fading_shader: Shader
-var _pass_still_shader: Shader
-var _pass_still := false
-var _fade_until := -1e30 # the herd's clock when the last cross-fade set_state began ends (_set_pass_still)
 
 var time := 0.0 # the herd's clock, seconds (the shader's herd_time)
 var palette # the type's CrowdbakePalette
@@ -116,6 +112,10 @@ var _max_travel := 0.0 # model units: the farthest any row's travel offset puts 
 var _mixed_shader: Shader
 var _far_shader: Shader
 var _far_only := false
+# A renderer compiles a shader's program where it first draws it: the far-only build is drawn once at setup, by one
+# instance shrunk to a point (_warm_far_build), so that the herd's first switch to it mid-game costs no compile.
+var _warm_up: MultiMeshInstance3D
+var _warm_up_frame := -1 # Engine.get_frames_drawn() when the herd was first drawn with _warm_up
 
 func _ready() -> void:
 	if roster and not animal.is_empty() and mesh and count > 0 and palette == null:
@@ -124,6 +124,7 @@ func _ready() -> void:
 func _process(delta: float) -> void:
 	if palette == null:
 		return
+	_retire_warm_up()
 	_set_lod() # the camera may have moved
 	if playing:
 		advance(delta)
@@ -155,7 +156,7 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	var look := _HERD_MESH.build(mesh, _material())
 	materials = look["materials"]
 	_mixed_shader = materials[0].shader if not materials.is_empty() else null
-	_far_shader = null # built when every instance first lands in the far tier
+	_far_shader = _herd_shader(true) if uses_bone_pass else null
 	_far_only = false
 	surfaces_merged = look["merged"]
 	_set_lod()
@@ -180,6 +181,7 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 			return false
 	update_bounds()
 	_build_bone_pass()
+	_warm_far_build(look["mesh"])
 	_upload()
 	return true
 
@@ -241,8 +243,6 @@ func set_state(i: int, state: String, fade := -1.0) -> bool:
 	_data[at + 9] = fade_seconds if fade < 0.0 else fade
 	if _states[i].is_empty():
 		_data[at + 9] = 0.0
-	if _data[at + 9] > 0.0:
-		_fade_until = maxf(_fade_until, time + _data[at + 9])
 	_states[i] = state
 	var frames := float(inst["frame_count"])
 	var rate := _rate(i, state)
@@ -397,7 +397,6 @@ static func _crossings(at: float, f0: float, f1: float, frames: float, loops: bo
 func _upload() -> void:
 	if _bounds_dirty:
 		update_bounds()
-	_set_pass_still()
 	if not _dirty and _texture != null:
 		_set_all("herd_time", time)
 		return
@@ -489,12 +488,45 @@ func _set_far_only(far_only: bool) -> void:
 	if far_only == _far_only or _mixed_shader == null:
 		return
 	_far_only = far_only
-	if far_only and _far_shader == null:
-		_far_shader = _herd_shader(true)
 	for m in materials:
 		m.shader = _far_shader if far_only else _mixed_shader
 	if _bone_rect != null: # the lo halves' block is not drawn while no vertex reads it
 		_bone_rect.size.y = _bone_viewport.size.y / (2 if far_only else 1)
+
+# The far-only build drawn once (one instance of the herd's mesh, its transform a point: no pixel, but the program
+# compiled, in the same variants as the herd's: MultiMesh, colours, shadows), never culled; _retire_warm_up frees it
+# once a frame has been drawn with it.
+func _warm_far_build(herd_mesh: Mesh) -> void:
+	if _warm_up != null:
+		_warm_up.queue_free()
+		_warm_up = null
+	if _far_shader == null:
+		return
+	var mm := MultiMesh.new()
+	mm.transform_format = MultiMesh.TRANSFORM_3D
+	mm.use_colors = true
+	mm.mesh = herd_mesh
+	mm.instance_count = 1
+	mm.set_instance_transform(0, Transform3D(Basis.from_scale(Vector3.ZERO), Vector3.ZERO))
+	var material := ShaderMaterial.new()
+	material.shader = _far_shader
+	_warm_up = MultiMeshInstance3D.new()
+	_warm_up.multimesh = mm
+	_warm_up.material_override = material
+	_warm_up.cast_shadow = cast_shadow
+	_warm_up.custom_aabb = AABB(Vector3.ONE * -1e9, Vector3.ONE * 2e9)
+	_warm_up_frame = -1
+	add_child(_warm_up, false, Node.INTERNAL_MODE_BACK)
+
+func _retire_warm_up() -> void:
+	if _warm_up == null:
+		return
+	if _warm_up_frame < 0:
+		if is_visible_in_tree(): # this frame draws it
+			_warm_up_frame = Engine.get_frames_drawn()
+	elif Engine.get_frames_drawn() > _warm_up_frame:
+		_warm_up.queue_free()
+		_warm_up = null
 
 # A shader parameter of every surface's material (and of the bone pass's, which reads the same instances and clock).
 func _set_all(key: String, value) -> void:
@@ -567,11 +599,8 @@ func _build_bone_pass() -> void:
 	var size := Vector2i(per_row * bones * BONE_BLOCK_TEXELS, 2 * hi_rows)
 	var unit := _bone_translation_unit()
 	var base := _material() # the palette's uniforms; its code is the pass's
-	_pass_fading_shader = _pass_shader(false)
-	_pass_still_shader = null # built when no instance is first seen mid-fade
-	_pass_still = false
 	_bone_material = base
-	_bone_material.shader = _pass_fading_shader
+	_bone_material.shader = _built(_BONE_PASS_SHADER, {"CB_LOCAL_ROWS": int(palette.local_rows)})
 	_bone_material.set_shader_parameter("bone_count", bones)
 	_bone_material.set_shader_parameter("bone_instances_per_row", per_row)
 	_bone_material.set_shader_parameter("bone_lo_rows", hi_rows)
@@ -595,24 +624,6 @@ func _build_bone_pass() -> void:
 		m.set_shader_parameter("bone_lo_rows", hi_rows)
 		m.set_shader_parameter("bone_translation_unit", unit)
 	_texture = null # _upload hands the instance texture to the pass too
-
-# The bone pass's shader; still: the build for a herd with no instance mid-fade (_set_pass_still), which has no
-# previous clip's rows and bone to find at all (a CPU rasteriser would run that masked-off work for every texel).
-func _pass_shader(still: bool) -> Shader:
-	return _built(_BONE_PASS_SHADER, {"CB_LOCAL_ROWS": int(palette.local_rows), "CB_NO_FADE": int(still)})
-
-# The pass's build for the herd's clock now: the still build once every fade set_state began has ended. A fade from
-# `start` over `length` is done where the shaders' clamp((herd_time - start) / length) reaches 1, time >= start +
-# length; _fade_until is the latest such end (a clock set back before it brings the fading build back), with a
-# margin for the shaders' 32-bit floats.
-func _set_pass_still() -> void:
-	var still := time >= _fade_until + 1e-5 * (1.0 + absf(_fade_until))
-	if still == _pass_still or _bone_material == null:
-		return
-	_pass_still = still
-	if still and _pass_still_shader == null:
-		_pass_still_shader = _pass_shader(true)
-	_bone_material.shader = _pass_still_shader if still else _pass_fading_shader
 
 # The most a vertex moves (model units) skinned from the bone pass's hi halves alone (each number of the bone's
 # affine rows [L | t] rounded to a half: within 2^-11 of itself): component k of L v + t moves by at most
