@@ -372,12 +372,13 @@ func check_far_tier(roster, mesh: Mesh) -> void:
 	var far_only: bool = herd._far_only and herd.materials[0].shader == herd._far_shader
 	herd._set_far_only(false) # the build that reads each instance's tier, both still marked far
 	var per_instance: Image = await addon._frame()
+	var halves_pixels: float = herd.halves_pixels()
 	herd.queue_free()
 	addon._viewport.size = Vector2i(64, 64)
 	var covered: int = addon._covered(far)[1]
 	var differ: int = addon._differ(far, per_instance)
 	print("crowdbake-check: far tier: warmed at setup %s, retired after a frame %s, near %s, far-only %s; %d pixels covered far, %d differ from the per-instance build (halves_pixels %.1f)"
-			% [warmed, retired, near, far_only, covered, differ, herd.halves_pixels()])
+			% [warmed, retired, near, far_only, covered, differ, halves_pixels])
 	addon._end(name, "" if warmed and retired and near and far_only and covered > 40 and differ == 0 else "see the numbers above")
 
 # A frame of one Cow grazing (2.5 s in), side on and `scale` units tall, at the camera's place for a
