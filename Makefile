@@ -265,9 +265,11 @@ install: $(BUILD)/crowdbake $(BUILD)/libcrowdbake.a $(BUILD)/$(SONAME) $(GODOT_A
 GODOT_DEMO_DIR := runtimes/godot/addons/crowdbake/demo/herd
 GODOT_DEMO := $(GODOT_DEMO_DIR)/roster.json
 # The command is a prerequisite only where this BUILD has one (a zip made with another BUILD takes
-# the demo as it is); the bake's caches (.prep) are not part of the addon.
-$(GODOT_DEMO): runtimes/godot/addons/crowdbake/demo/herd.toml $(wildcard $(BUILD)/crowdbake)
-	$(MAKE) --no-print-directory $(BUILD)/crowdbake $(BUILD)/samples/quadruped.glb
+# the demo as it is); the bake's caches (.prep) are not part of the addon. The command and the sample
+# are built first by this make (order-only): a recursive make would build the same objects and archive
+# beside this one on a fresh clone, and a test linked against the archive it was rewriting.
+$(GODOT_DEMO): runtimes/godot/addons/crowdbake/demo/herd.toml $(wildcard $(BUILD)/crowdbake) | $(BUILD)/crowdbake \
+               $(BUILD)/samples/quadruped.glb
 	mkdir -p $(@D) && cp $(BUILD)/samples/quadruped.glb $(@D)/quadruped.glb.$$$$.tmp && \
 	  mv $(@D)/quadruped.glb.$$$$.tmp $(@D)/quadruped.glb # whole, as the other build of make check may read it
 	$(BUILD)/crowdbake bake $< -q && rm -f $(@D)/.*.prep

@@ -243,10 +243,8 @@ int main(int argc, char **argv)
             if (!*c) break;
         }
     scene s = {.pal = &pal, .pass_pal = &pal, .vat = &vat, .sampler = sampler, .tiers = true};
-    float *meta = calloc(pal.bone_count * 12, sizeof(float));
     s.local_rows = pal.bone_space == CB_BONE_SPACE_LOCAL;
-    if (s.local_rows) bench_local_rows(&pal, meta); /* and the chains' depths, on stderr */
-    s.bone_meta = meta;
+    if (s.local_rows) bench_local_rows(&pal); /* the chains' depths, on stderr */
     for (int a = 3; a < argc; ++a) {
         s.lod |= !strcmp(argv[a], "--lod") || !strcmp(argv[a], "--lod-single");
         s.tiers &= strcmp(argv[a], "--lod-single") != 0;
@@ -275,7 +273,7 @@ int main(int argc, char **argv)
     free(bones_glsl), free(pass_glsl);
     GLuint target = bench_offscreen_target(WIDTH, HEIGHT);
     int rc = check ? bench_check_images(&s, target) : (bench_counts(&s, argv[2], frames, target), 0);
-    free(s.instances), free(s.order), free(meta);
+    free(s.instances), free(s.order);
     cb_vat_free(&vat);
     cb_palette_free(&pal);
     cb_sampler_free(sampler);

@@ -6,9 +6,8 @@
 
 #include "crowdbake/crowdbake.h"
 
-/* cb_bind_positions rows 2..4 of a palette of local rows into meta (12 floats a bone: row 2 x the parent, row 3
- * pos_min and scale_max, row 4 pos_max and 0, as runtimes/glsl/README.md defines them); the chains' depths (the
- * ancestors a bone walks) on stderr. */
-void bench_local_rows(const cb_palette *p, float *meta);
+/* The chains' depths of a palette of local rows (the ancestors a bone walks), on stderr; cb_bind_texels gives
+ * the shaders' rows 2..4 (parents and ranges). */
+void bench_local_rows(const cb_palette *p);
 
 #endif

@@ -26,12 +26,8 @@ void bench_upload_palette(scene *s)
                                    type[t->precision], t->texels);
         *(k ? &s->pass_tex : &s->palette_tex) = tex;
     }
-    float *rgba = calloc((size_t)p->bone_count * 20, sizeof(float)); /* row 0: bind positions; 1: position offsets; 2..4 */
-    for (uint32_t j = 0; j < p->bone_count; ++j) {
-        memcpy(rgba + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
-        if (p->positions_relative) memcpy(rgba + (p->bone_count + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
-    }
-    memcpy(rgba + p->bone_count * 8, s->bone_meta, p->bone_count * 12 * sizeof(float));
+    float *rgba = calloc((size_t)p->bone_count * 20, sizeof(float)); /* 5 rows, whichever cb_bind_texels fills */
+    cb_bind_texels(p, rgba);
     s->bind_tex = bench_texture(GL_RGBA32F, (GLsizei)p->bone_count, 5, GL_RGBA, GL_FLOAT, rgba);
     free(rgba);
     s->vat_pos = bench_texture(GL_RGBA16F, (GLsizei)s->vat->geometry.width, (GLsizei)s->vat->geometry.height, GL_RGBA,

@@ -16,7 +16,6 @@
 typedef struct scene {
     const cb_palette *pal, *pass_pal; /* pass_pal: what the bone pass reads (pal itself; --local-rows: both local) */
     const cb_vat *vat;
-    const float *bone_meta; /* cb_bind_positions rows 2..4 of local rows (12 floats a bone, bench_gl_local.h) */
     bool local_rows; /* --local-rows: the palette's rows are local (CB_LOCAL_ROWS) */
     GLuint pass_tex, palette_tex, bind_tex, vat_pos, vat_nrm, bone_tex[3], bone_fbo, bone_rows, bone_width;
     GLuint prog[METHODS], tier_prog[3], pass, vao, pass_vao, instance_vbo, tier_vbo;

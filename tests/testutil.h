@@ -231,6 +231,15 @@ static inline void require_node_validators(void)
     fclose(f);
 }
 
+/* A JSON file against its schema (docs/NAME.schema.json, ajv): fails naming what does not match. */
+static inline void assert_schema_valid(const char *schema, const char *file)
+{
+    char cmd[4096], log[4096];
+    require_node_validators();
+    snprintf(cmd, sizeof cmd, "node tests/tools/validator/validate_schema.mjs %s %s 2>&1", schema, file);
+    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s: %s", cmd, log);
+}
+
 /* The visible error (cb_palette.visible_error) of `animation` baked alone at `fps`, its rows fitted
  * or sampled: measured in full with goal 0; with goal > 0 only as far as the goal needs (exact
  * within it, a lower bound, still above it, past it). */

@@ -123,13 +123,14 @@ static GLuint program(const gl_api *gl, const cb_palette *p, cb_error *err)
     char *vs = malloc(n);
     if (!vs) return cb_fail(err, CB_ERR_INTERNAL, "out of memory"), 0;
     snprintf(vs, n,
-             "#version 330 core\n#define %s\n#define %s\n%s%s\n"
+             "#version 330 core\n#define %s\n#define %s\n%s%s%s\n"
              "in vec3 a_position; in ivec4 a_joints; in vec4 a_weights;\n"
              "uniform vec4 u_instance; uniform float u_time; uniform mat4 u_view_projection;\nout vec3 v_world;\n"
              "void main() {\n  v_world = cb_skin_position(a_position, a_joints, a_weights, u_instance, u_time);\n"
              "  gl_Position = u_view_projection * vec4(v_world, 1.0);\n}\n",
              layout_define[p->layout], precision_define[p->precision],
-             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "", cb_palette_glsl);
+             p->positions_relative ? "#define CB_POSITIONS_RELATIVE\n" : "",
+             p->bone_space == CB_BONE_SPACE_LOCAL ? "#define CB_LOCAL_ROWS\n" : "", cb_palette_glsl);
     static const char fs[] = "#version 330 core\nin vec3 v_world; out vec4 color;\n"
                              "void main() {\n  vec3 n = normalize(cross(dFdx(v_world), dFdy(v_world)));\n"
                              "  float light = 0.35 + 0.65 * abs(dot(n, normalize(vec3(0.4, 0.8, 0.45))));\n"
@@ -162,12 +163,10 @@ static GLuint texture(const gl_api *gl, GLenum internal, GLsizei w, GLsizei h, G
 static void bind_palette(const gl_api *gl, const cb_palette *p, const void *texels, GLuint prog, GLuint *tex)
 {
     gl->ActiveTexture(GL_TEXTURE1);
-    float *bind = calloc((size_t)p->bone_count * 8, sizeof(float)); /* rows: bind positions, position offsets */
-    for (uint32_t j = 0; bind && j < p->bone_count; ++j) {
-        memcpy(bind + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
-        if (p->positions_relative) memcpy(bind + (p->bone_count + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
-    }
-    tex[1] = texture(gl, GL_RGBA32F, (GLsizei)p->bone_count, 2, GL_RGBA, GL_FLOAT, bind);
+    uint32_t bind_rows = cb_bind_texels(p, NULL);
+    float *bind = malloc((size_t)p->bone_count * bind_rows * 4 * sizeof(float));
+    if (bind) cb_bind_texels(p, bind);
+    tex[1] = texture(gl, GL_RGBA32F, (GLsizei)p->bone_count, (GLsizei)bind_rows, GL_RGBA, GL_FLOAT, bind);
     free(bind);
     gl->ActiveTexture(GL_TEXTURE0);
     if (p->precision == CB_PRECISION_FLOAT)
@@ -305,7 +304,8 @@ static uint32_t row_top(uint32_t clip, uint32_t cell) { return CB_PREVIEW_HEADER
 /* The time of a clip's k-th cell: loops spread over a cycle, one-shots from first to last row. */
 static double cell_time(const cb_palette_clip *clip, uint32_t k, uint32_t cols)
 {
-    double span = clip->loops ? clip->frames / clip->fps : (clip->frames - 1) / clip->fps;
+    cb_instance in = cb_instance_of(clip); /* a timed clip's steps are its map's cells, not its rows */
+    double steps = fabs(in.frame_count), span = (clip->loops ? steps : steps - 1) / fabs(in.rate);
     return clip->loops ? span * k / cols : cols > 1 ? span * k / (cols - 1) : 0;
 }
 
@@ -335,8 +335,9 @@ static cb_status draw_labels(cb_canvas *cv, const cb_palette *p, const void *tex
     cb_canvas_fill(cv, 0, 0, w, CB_PREVIEW_HEADER, header_bg);
     int header_baseline = (CB_PREVIEW_HEADER + cb_font_ascent(bold) - cb_font_descent(bold)) / 2;
     char error[32];
-    snprintf(text, sizeof text, "   %s/%s, %u bones, %u rows, baked error %s mm/m", cb_layout_name(p->layout),
-             cb_precision_name(p->precision), p->bone_count, p->rows, millimetres(p->max_error * mm, error, sizeof error));
+    snprintf(text, sizeof text, "   %s/%s%s, %u bones, %u rows, baked error %s mm/m", cb_layout_name(p->layout),
+             cb_precision_name(p->precision), p->bone_space == CB_BONE_SPACE_LOCAL ? " local rows" : "", p->bone_count,
+             p->rows, millimetres(p->max_error * mm, error, sizeof error));
     int x = cb_font_draw(bold, cv, 8, header_baseline, w - 4, opt->title ? opt->title : "", white);
     cb_font_draw(small, cv, x, header_baseline, w - 4, text, white);
     for (uint32_t c = 0; c < p->clip_count && !err->status; ++c) {
@@ -348,8 +349,12 @@ static cb_status draw_labels(cb_canvas *cv, const cb_palette *p, const void *tex
         cb_clip_error e;
         bool measured = a >= 0 && !cb_verify_clip(s, p, texels, c, a, 0, &e, err);
         char info[3][128] = {"", "", ""}, rows[2][64], between[2][64], q[32], b[32];
-        snprintf(info[0], sizeof info[0], "   %s, %u rows at %.3g fps, %.3g s", clip->loops ? "loop" : "one-shot",
-                 clip->frames, clip->fps, clip->duration);
+        if (clip->timed)
+            snprintf(info[0], sizeof info[0], "   %s, %u rows on its keys, %.3g s", clip->loops ? "loop" : "one-shot",
+                     clip->frames, clip->duration);
+        else
+            snprintf(info[0], sizeof info[0], "   %s, %u rows at %.3g fps, %.3g s", clip->loops ? "loop" : "one-shot",
+                     clip->frames, clip->fps, clip->duration);
         snprintf(info[1], sizeof info[1], "   %s, %u rows", clip->loops ? "loop" : "one-shot", clip->frames);
         if (measured) {
             millimetres(e.quant_max * mm, q, sizeof q), millimetres(e.interp_max * mm, b, sizeof b);

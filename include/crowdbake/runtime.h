@@ -33,6 +33,13 @@ CROWDBAKE_API void cb_runtime_frame(const cb_instance *in, double time, uint32_t
 CROWDBAKE_API void cb_runtime_frame_in(const cb_palette *p, const void *texels, const cb_instance *in, double time,
                                        uint32_t *row0, uint32_t *row1, double *fr);
 
+/* The cb_bind_positions texture the shipped shaders read: RGBA32F, bone_count texels wide. Row 0 xyz the
+ * bind positions, row 1 xyz the position offsets (CB_POSITIONS_RELATIVE); a local palette's (.pal version
+ * 6, CB_LOCAL_ROWS) also row 2 x the parent (-1 a root), row 3 (pos_min, scale_max) and row 4 (pos_max, 0)
+ * from the bone range table. Returns its rows (2 or 5); fills `rgba` (bone_count x rows x 4 floats) unless
+ * it is NULL. */
+CROWDBAKE_API uint32_t cb_bind_texels(const cb_palette *p, float *rgba);
+
 /* The bone transforms at `time` (16 doubles per bone): the two rows' values blended - matrices
  * term by term, qpos quaternions by normalized lerp after a hemisphere flip - then as matrices. */
 CROWDBAKE_API void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_instance *in, double time,

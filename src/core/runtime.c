@@ -66,6 +66,23 @@ cb_instance cb_instance_of(const cb_palette_clip *clip)
     return (cb_instance){first, clip->loops ? clip->frames : -(double)clip->frames, clip->fps, 0};
 }
 
+uint32_t cb_bind_texels(const cb_palette *p, float *rgba)
+{
+    bool local = p->bone_space == CB_BONE_SPACE_LOCAL;
+    uint32_t n = p->bone_count, rows = local ? 5 : 2;
+    if (!rgba) return rows;
+    memset(rgba, 0, (size_t)n * rows * 4 * sizeof(float));
+    for (uint32_t j = 0; j < n; ++j) {
+        memcpy(rgba + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
+        if (p->positions_relative) memcpy(rgba + (n + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
+        if (!local) continue;
+        rgba[(2 * n + j) * 4] = (float)p->parents[j];
+        memcpy(rgba + (3 * n + j) * 4, p->bone_ranges + j * 8, 4 * sizeof(float)); /* pos_min, scale_max */
+        memcpy(rgba + (4 * n + j) * 4, p->bone_ranges + j * 8 + 4, 4 * sizeof(float)); /* pos_max, 0 */
+    }
+    return rows;
+}
+
 void cb_runtime_matrices(const cb_palette *p, const void *texels, const cb_instance *in, double time, double *out)
 {
     palette_frame f;

@@ -1,4 +1,4 @@
-/* test_verify.c - verification thresholds and the preview sheets. */
+/* test_verify.c - verification thresholds and the preview sheets (global and local rows). */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
@@ -167,6 +167,56 @@ static void test_preview_sheets_of_the_samples(void **state)
     }
 }
 
+/* A sheet's pixels, RGBA, for the caller to free. */
+static unsigned char *read_sheet(const char *png, uint32_t *w, uint32_t *h)
+{
+    png_image img;
+    memset(&img, 0, sizeof img);
+    img.version = PNG_IMAGE_VERSION;
+    assert_true(png_image_begin_read_from_file(&img, png));
+    img.format = PNG_FORMAT_RGBA;
+    unsigned char *px = malloc(PNG_IMAGE_SIZE(img));
+    assert_true(png_image_finish_read(&img, NULL, px, 0, NULL));
+    *w = img.width, *h = img.height;
+    return px;
+}
+
+/* A palette of local rows (.pal version 6; its auto rates put Gallop's rows on its keys, version 7) drawn by the
+ * preview as the runtimes draw it: the shaders' CB_LOCAL_ROWS and the bind texture's parents and ranges (without
+ * them every cell was empty). Husky's loops, cell by cell, are the global bake's sheet: the same poses within
+ * 1 mm/m, so the animal covers the same pixels but for a few on its outline. */
+static void test_preview_of_local_rows(void **state)
+{
+    (void)state;
+    char model[1024], cmd[4096], out[2048];
+    shared_path(model, sizeof model, "assets/quaternius-husky/Husky.glb");
+    const char *clips = "'AnimalArmature|Gallop,AnimalArmature|Walk'", *space[2] = {"local", "global"};
+    unsigned char *px[2];
+    uint32_t w = 0, h = 0;
+    for (int i = 0; i < 2; ++i) {
+        snprintf(cmd, sizeof cmd, "%s bake %s --clip %s --bone-space %s -o " PREVIEWS "/husky_%s.pal -q && %s preview %s "
+                 PREVIEWS "/husky_%s.pal -o " PREVIEWS "/husky_%s.png --columns 6 --cell 96 2>&1", crowdbake_exe(), model,
+                 clips, space[i], space[i], crowdbake_exe(), model, space[i], space[i]);
+        assert_int_equal(run_command(cmd, out, sizeof out), 0);
+        char png[256];
+        snprintf(png, sizeof png, PREVIEWS "/husky_%s.png", space[i]);
+        check_sheet(png, 2, 6, 96);
+        px[i] = read_sheet(png, &w, &h);
+    }
+    uint32_t cells = 0, differ = 0;
+    for (uint32_t r = 0; r < 2; ++r) {
+        uint32_t top = CB_PREVIEW_HEADER + r * (CB_PREVIEW_BAND + 96) + CB_PREVIEW_BAND;
+        for (uint32_t y = top + 16; y < top + 96; ++y) /* below the time labels */
+            for (uint32_t x = 0; x < w; ++x, ++cells) {
+                const unsigned char *a = px[0] + ((size_t)y * w + x) * 4, *b = px[1] + ((size_t)y * w + x) * 4;
+                differ += abs(a[0] - b[0]) + abs(a[1] - b[1]) + abs(a[2] - b[2]) > 60;
+            }
+    }
+    printf("  Husky, local rows against global: %u of %u cell pixels differ\n", differ, cells);
+    assert_true(differ * 200 < cells); /* under 0.5% */
+    free(px[0]), free(px[1]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -174,6 +224,7 @@ int main(void)
         cmocka_unit_test(test_verify_catches_a_transposed_palette),
         cmocka_unit_test(test_verify_exit_code),
         cmocka_unit_test(test_preview_sheets_of_the_samples),
+        cmocka_unit_test(test_preview_of_local_rows),
     };
     return cmocka_run_group_tests_name("verify", tests, NULL, NULL);
 }

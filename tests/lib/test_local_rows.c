@@ -238,6 +238,24 @@ static void test_local_rows_are_stated(void **state)
     assert_null(strstr(log, "bones: local"));
 }
 
+/* bake --json of a local bake with timed clips (Husky's Gallop and Jump_ToIdle: their rows on their keys, .pal
+ * version 7) says each one's map (timed_rows, map_rows, cells), as docs/bake.schema.json defines them. */
+static void test_timed_clips_json_is_valid(void **state)
+{
+    (void)state;
+    char model[1024], log[16384];
+    shared_path(model, sizeof model, "assets/quaternius-husky/Husky.glb");
+    assert_int_equal(run_crowdbake(log, sizeof log, "bake %s --clip 'AnimalArmature|Gallop,AnimalArmature|Jump_ToIdle' "
+                                   "--bone-space local -o " TEST_TMP "/timed.pal --json -q > " TEST_TMP "/timed.json", model), 0);
+    size_t size = 0;
+    char *json = read_whole_file(TEST_TMP "/timed.json", &size);
+    assert_non_null(json);
+    assert_non_null(strstr(json, "\"timed_rows\": "));
+    assert_non_null(strstr(json, "\"map_rows\": "));
+    free(json);
+    assert_schema_valid("docs/bake.schema.json", TEST_TMP "/timed.json");
+}
+
 int main(void)
 {
     mkdir(TEST_TMP, 0755);
@@ -246,6 +264,7 @@ int main(void)
         cmocka_unit_test(test_husky_local_rows),
         cmocka_unit_test(test_local_rows_refuse_what_cannot_hold_them),
         cmocka_unit_test(test_local_rows_are_stated),
+        cmocka_unit_test(test_timed_clips_json_is_valid),
     };
     return cmocka_run_group_tests_name("local_rows", tests, NULL, NULL);
 }

@@ -96,15 +96,6 @@ static void reported(const char *json, const char *clip, double *speed, double *
     assert_string_equal(planted, "True");
 }
 
-/* A file against its schema (docs/NAME.schema.json, ajv). */
-static void valid(const char *schema, const char *file)
-{
-    char cmd[4096], log[4096];
-    require_node_validators();
-    snprintf(cmd, sizeof cmd, "node tests/tools/validator/validate_schema.mjs %s %s", schema, file);
-    if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s: %s", cmd, log);
-}
-
 static void bake(const char *model, const char *out, const char *flags)
 {
     char cmd[4096], log[8192];
@@ -248,7 +239,7 @@ static void check_model(const char *rel, double plane_bound, const char *held)
     shared_path(model, sizeof model, rel);
     cb_model *m = load_or_fail(model);
     bake(model, "planted.pal", "--plant-feet --json > " TMP "/planted.json");
-    valid("docs/bake.schema.json", TMP "/planted.json");
+    assert_schema_valid("docs/bake.schema.json", TMP "/planted.json");
     cbpal_file f;
     open_pal(TMP "/planted.pal", &f);
     cbpal_clip idle;
@@ -335,7 +326,7 @@ static void test_catalog_and_info(void **state)
         int planted = manifest_planted(dir, &before, &after);
         char manifest[1300];
         snprintf(manifest, sizeof manifest, "%s/roster.json", dir);
-        valid("docs/roster.schema.json", manifest);
+        assert_schema_valid("docs/roster.schema.json", manifest);
         print_message("catalog %s: %d clips planted, Walk %.1f%% -> %.1f%%\n", dirs[k], planted, 100 * before, 100 * after);
         assert_int_equal(planted, k < 2 ? 3 : 0); /* Walk, Gallop, Gallop_Jump */
         if (k < 2) assert_true(before > 1 && after <= 0.10);

@@ -12,6 +12,7 @@
 #include <GL/glext.h>
 
 #include "crowdbake/palette.h"
+#include "crowdbake/runtime.h" /* cb_bind_texels */
 
 #define GLSL_PATH "runtimes/glsl/crowdbake_palette.glsl"
 
@@ -120,21 +121,12 @@ static inline GLuint upload(const cb_palette *p, bool transpose)
     return tex;
 }
 
-/* cb_bind_positions: row 0 the bind positions, row 1 the position offsets; local rows (CB_LOCAL_ROWS) also row 2 x
- * the parent, row 3 (pos_min, scale_max), row 4 (pos_max, 0) - the bone range table as the file holds it. */
+/* cb_bind_positions, as cb_bind_texels lays it out (local rows: 5 rows). */
 static inline GLuint upload_bind_positions(const cb_palette *p)
 {
-    bool local = p->bone_space == CB_BONE_SPACE_LOCAL;
-    uint32_t n = p->bone_count, rows = local ? 5 : 2;
-    float *rgba = calloc((size_t)n * rows * 4, sizeof(float));
-    for (uint32_t j = 0; j < n; ++j) {
-        memcpy(rgba + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
-        if (p->positions_relative) memcpy(rgba + (n + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
-        if (!local) continue;
-        rgba[(2 * n + j) * 4] = (float)p->parents[j];
-        memcpy(rgba + (3 * n + j) * 4, p->bone_ranges + j * 8, 4 * sizeof(float)); /* pos_min, scale_max */
-        memcpy(rgba + (4 * n + j) * 4, p->bone_ranges + j * 8 + 4, 4 * sizeof(float));
-    }
+    uint32_t n = p->bone_count, rows = cb_bind_texels(p, NULL);
+    float *rgba = malloc((size_t)n * rows * 4 * sizeof(float));
+    cb_bind_texels(p, rgba);
     GLuint tex;
     glGenTextures(1, &tex);
     glBindTexture(GL_TEXTURE_2D, tex);

@@ -160,11 +160,7 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	_far_only = false
 	surfaces_merged = look["merged"]
 	_set_lod()
-	var mm := MultiMesh.new()
-	mm.transform_format = MultiMesh.TRANSFORM_3D
-	mm.use_colors = true
-	mm.mesh = look["mesh"]
-	mm.instance_count = instances
+	var mm := _new_multimesh(look["mesh"], instances)
 	multimesh = mm
 	_data.resize(instances * FLOATS)
 	_data.fill(0.0)
@@ -493,6 +489,15 @@ func _set_far_only(far_only: bool) -> void:
 	if _bone_rect != null: # the lo halves' block is not drawn while no vertex reads it
 		_bone_rect.size.y = _bone_viewport.size.y / (2 if far_only else 1)
 
+# The herd's MultiMesh layout, which the warm-up shares so that its program is the herd's variant.
+func _new_multimesh(mesh: Mesh, count: int) -> MultiMesh:
+	var mm := MultiMesh.new()
+	mm.transform_format = MultiMesh.TRANSFORM_3D
+	mm.use_colors = true
+	mm.mesh = mesh
+	mm.instance_count = count
+	return mm
+
 # The far-only build drawn once (one instance of the herd's mesh, its transform a point: no pixel, but the program
 # compiled, in the same variants as the herd's: MultiMesh, colours, shadows), never culled; _retire_warm_up frees it
 # once a frame has been drawn with it.
@@ -502,11 +507,7 @@ func _warm_far_build(herd_mesh: Mesh) -> void:
 		_warm_up = null
 	if _far_shader == null:
 		return
-	var mm := MultiMesh.new()
-	mm.transform_format = MultiMesh.TRANSFORM_3D
-	mm.use_colors = true
-	mm.mesh = herd_mesh
-	mm.instance_count = 1
+	var mm := _new_multimesh(herd_mesh, 1)
 	mm.set_instance_transform(0, Transform3D(Basis.from_scale(Vector3.ZERO), Vector3.ZERO))
 	var material := ShaderMaterial.new()
 	material.shader = _far_shader
