@@ -57,6 +57,7 @@ static void fill_type(const cb_roster *roster, uint32_t i, const cb_report *r, c
     t->indices = rt->indices;
     t->layout = owner->layout;
     t->precision = owner->precision;
+    t->local_rows = roster_local_rows(owner);
     t->width = owner->width, t->height = owner->height, t->blocks = owner->blocks;
     t->palette_bytes = owner->palette_bytes;
     for (int l = 0; l < 3; ++l)
@@ -141,6 +142,17 @@ const char *report_limit_warnings(const cb_report_type *t, char *buf, size_t siz
     return buf;
 }
 
+const char *report_encoding(const cb_report_type *t, char *buf, size_t size)
+{
+    snprintf(buf, size, "%s/%s%s", cb_layout_name(t->layout), cb_precision_name(t->precision), t->local_rows ? " local" : "");
+    return buf;
+}
+
+bool report_encoding_holds(const cb_report_type *t, int layout, int precision)
+{
+    return !t->local_rows || (layout == CB_LAYOUT_QPOS && precision != CB_PRECISION_HALF);
+}
+
 const char *report_notes(const cb_report_type *t, char *buf, size_t size)
 {
     char limits[192];
@@ -191,16 +203,16 @@ void report_budget_line(FILE *f, const cb_report *r, const char *bold, const cha
 void cb_report_text(FILE *f, const cb_report *r)
 {
     char a[32], b[32], c[32], note[256];
-    fprintf(f, "%-14s %6s %7s %9s %-12s %10s %10s %7s %10s %9s %9s %9s  %s\n", "type", "bones", "rows", "vertices",
+    fprintf(f, "%-14s %6s %7s %9s %-14s %10s %10s %7s %10s %9s %9s %9s  %s\n", "type", "bones", "rows", "vertices",
             "palette", "bytes", "VAT 16F+8", "VAT/pal", "mesh", "enc mm/m", "seen mm/m", "VAT mm/m", "notes");
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_type *t = &r->types[i];
         char enc[32];
-        snprintf(enc, sizeof enc, "%s/%s", cb_layout_name(t->layout), cb_precision_name(t->precision));
+        report_encoding(t, enc, sizeof enc);
         cb_human_bytes(t->palette_bytes, a, sizeof a);
         cb_human_bytes(t->vat_bytes[0], b, sizeof b);
         cb_human_bytes(t->mesh_bytes, c, sizeof c);
-        fprintf(f, "%-14s %6u %7u %9llu %-12s %10s %10s %6.1fx %10s %9.3f %9.3f %9.3f  %s\n", t->name, t->bones, t->frames,
+        fprintf(f, "%-14s %6u %7u %9llu %-14s %10s %10s %6.1fx %10s %9.3f %9.3f %9.3f  %s\n", t->name, t->bones, t->frames,
                 (unsigned long long)t->vertices, enc, a, b, report_ratio(t->vat_bytes[0], t->palette_bytes), c,
                 cb_mm_per_m(t->palette_error, t->model_height), cb_mm_per_m(t->palette_visible_error, t->model_height),
                 cb_mm_per_m(t->vat_error, t->model_height), report_notes(t, note, sizeof note));
@@ -218,10 +230,16 @@ void cb_report_text(FILE *f, const cb_report *r)
         for (int l = 0; l < 3; ++l)
             for (int p = 0; p < 3; ++p) {
                 cb_human_bytes(r->types[i].encoding_bytes[l][p], a, sizeof a);
-                fprintf(f, " %12s", r->types[i].encoding_bytes[l][p] ? a : "too big");
+                fprintf(f, " %12s", !report_encoding_holds(&r->types[i], l, p) ? "-"
+                                    : r->types[i].encoding_bytes[l][p] ? a : "too big");
             }
         fputc('\n', f);
     }
+    for (uint32_t i = 0; i < r->type_count; ++i)
+        if (r->types[i].local_rows) {
+            fputs("-: local rows (bone_space \"local\") are held in qpos, u16 or float only\n", f);
+            break;
+        }
     cb_human_bytes(r->palettes_total, a, sizeof a);
     cb_human_bytes(r->meshes_total, b, sizeof b);
     fprintf(f, "\nPalettes %s (shared palettes once) + meshes %s. VAT instead of palettes:", a, b);
@@ -249,11 +267,12 @@ void cb_report_markdown(FILE *f, const cb_report *r)
           f);
     for (uint32_t i = 0; i < r->type_count; ++i) {
         const cb_report_type *t = &r->types[i];
+        char enc[32];
         cb_human_bytes(t->palette_bytes, a, sizeof a);
         cb_human_bytes(t->vat_bytes[0], b, sizeof b);
         cb_human_bytes(t->mesh_bytes, c, sizeof c);
-        fprintf(f, "| %s | %u | %u | %llu | %s/%s | %s | %s | %.1f× | %s | %.3f | %.3f | %.3f | %s |\n", t->name, t->bones,
-                t->frames, (unsigned long long)t->vertices, cb_layout_name(t->layout), cb_precision_name(t->precision), a, b,
+        fprintf(f, "| %s | %u | %u | %llu | %s | %s | %s | %.1f× | %s | %.3f | %.3f | %.3f | %s |\n", t->name, t->bones,
+                t->frames, (unsigned long long)t->vertices, report_encoding(t, enc, sizeof enc), a, b,
                 report_ratio(t->vat_bytes[0], t->palette_bytes), c, cb_mm_per_m(t->palette_error, t->model_height),
                 cb_mm_per_m(t->palette_visible_error, t->model_height), cb_mm_per_m(t->vat_error, t->model_height),
                 report_notes(t, note, sizeof note));
@@ -299,6 +318,7 @@ void cb_report_json(FILE *f, const cb_report *r)
         cb_json_object(&j, "palette");
         cb_json_string(&j, "layout", cb_layout_name(t->layout));
         cb_json_string(&j, "precision", cb_precision_name(t->precision));
+        if (t->local_rows) cb_json_string(&j, "bone_space", "local"); /* absent: global */
         cb_json_int(&j, "width", t->width);
         cb_json_int(&j, "height", t->height);
         cb_json_int(&j, "blocks", t->blocks);

@@ -33,6 +33,7 @@ typedef struct cb_report_type {
     uint64_t vertices, indices;
     cb_layout layout;
     cb_precision precision;
+    bool local_rows;                    /* the .pal's rows in each bone's parent frame (bone_space "local") */
     uint32_t width, height, blocks;     /* the palette as written */
     uint64_t palette_bytes;             /* its texture bytes (counted once per file in totals) */
     uint64_t encoding_bytes[3][3];      /* [layout][precision] at the target's texture limit; 0: does not fit */

@@ -133,7 +133,8 @@ static uint64_t smallest_encoding(const cb_report_type *t, char *name, size_t si
     uint64_t best = 0;
     for (int l = 0; l < 3; ++l)
         for (int p = 0; p < 3; ++p)
-            if (t->encoding_bytes[l][p] && (!best || t->encoding_bytes[l][p] <= best)) { /* ties: the later, finer u16 */
+            if (t->encoding_bytes[l][p] && report_encoding_holds(t, l, p) &&
+                (!best || t->encoding_bytes[l][p] <= best)) { /* ties: the later, finer u16 */
                 best = t->encoding_bytes[l][p];
                 snprintf(name, size, "%s/%s", cb_layout_name((cb_layout)l), cb_precision_name((cb_precision)p));
             }
@@ -269,7 +270,8 @@ static void cell_vertices(FILE *f, const cb_report *r, const cb_report_type *t)
 }
 static void cell_encoding(FILE *f, const cb_report *r, const cb_report_type *t)
 {
-    (void)r, fprintf(f, "%s/%s", cb_layout_name(t->layout), cb_precision_name(t->precision));
+    char enc[32];
+    (void)r, fprintf(f, "%s", report_encoding(t, enc, sizeof enc));
 }
 static void cell_bytes(FILE *f, uint64_t bytes)
 {
@@ -352,7 +354,8 @@ static void html_encodings(FILE *f, const cb_report *r)
                 share_text(r, b, label, sizeof label);
                 char *share = strstr(label, " · "); /* bytes above, share below: narrow columns */
                 if (share) *share = '\0', share += strlen(" · ");
-                if (!b) fputs("<td class=\"enc none\">too big</td>", f);
+                if (!report_encoding_holds(t, l, p)) fputs("<td class=\"enc none\">-</td>", f);
+                else if (!b) fputs("<td class=\"enc none\">too big</td>", f);
                 else fprintf(f, "<td class=\"enc%s\"><span class=\"mini\" style=\"width:%.1f%%\"></span>%s%s%s%s</td>",
                              baked ? " baked" : "", axis_position(&a, b), label, share ? "<br><small>" : "",
                              share ? share : "", share ? "</small>" : "");
@@ -360,6 +363,11 @@ static void html_encodings(FILE *f, const cb_report *r)
         fputs("</tr>\n", f);
     }
     fputs("</table></div>\n", f);
+    for (uint32_t i = 0; i < r->type_count; ++i)
+        if (r->types[i].local_rows) {
+            fputs("<p>-: local rows (<code>bone_space = \"local\"</code>) are held in qpos, u16 or float only.</p>\n", f);
+            break;
+        }
 }
 
 /* The roster against every built-in target, and the catalog's own when it is not one. */

@@ -145,6 +145,8 @@ void cb_roster_json_sockets(cb_json *j, const cb_socket *sockets, uint32_t count
  * (roster_fresh.c). */
 const char *roster_output_path(const cb_roster_type *t, unsigned format);
 const char *roster_palette_path(const cb_roster_type *t);
+/* Its .pal holds local rows: bone_space "local" on a qpos palette (a rig qpos cannot hold is baked global). */
+bool roster_local_rows(const cb_roster_type *t);
 
 #ifdef __cplusplus
 }

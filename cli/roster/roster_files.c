@@ -268,7 +268,7 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
     if (t->owner != (uint32_t)(t - r->types)) cb_json_string(j, "shares_palette_of", owner->animal->name);
     cb_json_string(j, "layout", cb_layout_name(owner->layout));
     cb_json_string(j, "precision", cb_precision_name(owner->precision));
-    if (owner->animal->bake.bone_space == CB_BONE_SPACE_LOCAL && owner->layout == CB_LAYOUT_QPOS) { /* absent: global */
+    if (roster_local_rows(owner)) { /* absent: global */
         cb_json_string(j, "bone_space", "local");
         cb_json_string(j, "bone_space_why", "bone_space = \"local\" (catalog or command line): the .pal's rows in each bone's "
                        "parent frame, composed by the runtime (.pal version 6); other formats global");

@@ -19,6 +19,11 @@ const char *roster_palette_path(const cb_roster_type *t)
     return "";
 }
 
+bool roster_local_rows(const cb_roster_type *t)
+{
+    return t->animal->bake.bone_space == CB_BONE_SPACE_LOCAL && t->layout == CB_LAYOUT_QPOS;
+}
+
 /* The rows the file of format f holds for this bake: the palette's, or Babylon's own. */
 static uint32_t rows_expected(const cb_roster_type *t, const cb_output_format *f)
 {

@@ -77,6 +77,44 @@ static void test_numbers_match_the_formulas(void **state)
     check_numbers("small", "target = \"Mobile GLES 3.0\"\nmax_texture_size = 512", 512);
 }
 
+/* A type baked with local rows says so in each form of the report (its palette "qpos/u16 local", --json's
+ * bone_space), and a global one beside it does not. */
+static void test_local_rows_are_named(void **state)
+{
+    (void)state;
+    require_node_validators();
+    FILE *f = fopen(TMP "/local.toml", "w");
+    assert_non_null(f);
+    fprintf(f, "[bake]\nout_dir = \"out-local\"\n\n[animal.goat]\nmodel = \"%s/quadruped.glb\"\nbone_space = \"local\"\n"
+               "[animal.fish]\nmodel = \"%s/fish.glb\"\n", samples_abs, samples_abs);
+    fclose(f);
+    static char out[1 << 16];
+    assert_int_equal(run_crowdbake(out, sizeof out, "report " TMP "/local.toml -q"), 0);
+    const char *goat = strstr(out, "\ngoat "), *fish = strstr(out, "\nfish ");
+    assert_non_null(goat), assert_non_null(fish);
+    assert_true(strncmp(strstr(goat, "qpos/u16"), "qpos/u16 local ", 15) == 0);
+    assert_true(strncmp(strstr(fish, "qpos/u16"), "qpos/u16 ", 9) == 0 && strncmp(strstr(fish, "qpos/u16"), "qpos/u16 local", 14));
+    /* Every encoding: the goat's only in qpos, u16 or float ("-" in the other seven), the fish's in all nine. */
+    const char *table = strstr(out, "Every encoding");
+    assert_non_null(table);
+    char goat_row[512], fish_row[512];
+    sscanf(strstr(table, "\ngoat ") + 1, "%511[^\n]", goat_row), sscanf(strstr(table, "\nfish ") + 1, "%511[^\n]", fish_row);
+    int dashes = 0;
+    for (const char *c = goat_row; (c = strstr(c, " -")); c += 2) dashes += c[2] == ' ' || c[2] == '\0';
+    assert_int_equal(dashes, 7);
+    assert_null(strstr(fish_row, " - ")), assert_non_null(strstr(out, "-: local rows (bone_space \"local\") are held in qpos"));
+    assert_int_equal(run_crowdbake(out, sizeof out, "report " TMP "/local.toml --markdown -q"), 0);
+    assert_non_null(strstr(out, "| goat | 41 |")), assert_non_null(strstr(out, "| qpos/u16 local |"));
+    assert_int_equal(run_crowdbake(out, sizeof out, "report " TMP "/local.toml --json -q > " TMP "/local.json"), 0);
+    char *json = read_whole_file(TMP "/local.json", NULL);
+    assert_non_null(json);
+    const char *first = strstr(json, "\"bone_space\": \"local\"");
+    assert_non_null(first);
+    assert_null(strstr(first + 1, "\"bone_space\"")); /* the goat's alone */
+    free(json);
+    assert_schema_valid("docs/report.schema.json", TMP "/local.json");
+}
+
 static void test_exit_code_gate(void **state)
 {
     (void)state;
@@ -334,6 +372,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_numbers_match_the_formulas),
         cmocka_unit_test(test_exit_code_gate),
+        cmocka_unit_test(test_local_rows_are_named),
         cmocka_unit_test(test_html_page_layout_in_chromium),
         cmocka_unit_test(test_vat_matches_exact_skinning),
     };
