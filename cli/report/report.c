@@ -153,6 +153,13 @@ bool report_encoding_holds(const cb_report_type *t, int layout, int precision)
     return !t->local_rows || (layout == CB_LAYOUT_QPOS && precision != CB_PRECISION_HALF);
 }
 
+bool report_has_local_rows(const cb_report *r)
+{
+    for (uint32_t i = 0; i < r->type_count; ++i)
+        if (r->types[i].local_rows) return true;
+    return false;
+}
+
 const char *report_notes(const cb_report_type *t, char *buf, size_t size)
 {
     char limits[192];
@@ -235,11 +242,7 @@ void cb_report_text(FILE *f, const cb_report *r)
             }
         fputc('\n', f);
     }
-    for (uint32_t i = 0; i < r->type_count; ++i)
-        if (r->types[i].local_rows) {
-            fputs("-: local rows (bone_space \"local\") are held in qpos, u16 or float only\n", f);
-            break;
-        }
+    if (report_has_local_rows(r)) fputs("-: local rows (bone_space \"local\") are held in qpos with u16 or float only\n", f);
     cb_human_bytes(r->palettes_total, a, sizeof a);
     cb_human_bytes(r->meshes_total, b, sizeof b);
     fprintf(f, "\nPalettes %s (shared palettes once) + meshes %s. VAT instead of palettes:", a, b);

@@ -363,11 +363,8 @@ static void html_encodings(FILE *f, const cb_report *r)
         fputs("</tr>\n", f);
     }
     fputs("</table></div>\n", f);
-    for (uint32_t i = 0; i < r->type_count; ++i)
-        if (r->types[i].local_rows) {
-            fputs("<p>-: local rows (<code>bone_space = \"local\"</code>) are held in qpos, u16 or float only.</p>\n", f);
-            break;
-        }
+    if (report_has_local_rows(r))
+        fputs("<p>-: local rows (<code>bone_space = \"local\"</code>) are held in qpos with u16 or float only.</p>\n", f);
 }
 
 /* The roster against every built-in target, and the catalog's own when it is not one. */

@@ -12,8 +12,10 @@ const char *report_limit_warnings(const cb_report_type *t, char *buf, size_t siz
 const char *report_notes(const cb_report_type *t, char *buf, size_t size);
 /* "qpos/u16", "qpos/u16 local": the palette's layout, precision and (local rows) bone space. */
 const char *report_encoding(const cb_report_type *t, char *buf, size_t size);
-/* Whether the type's rows can be held in that encoding: local rows only in qpos, u16 or float. */
+/* Whether the type's rows can be held in that encoding: local rows only in qpos with u16 or float. */
 bool report_encoding_holds(const cb_report_type *t, int layout, int precision);
+/* Some type of the roster has local rows. */
+bool report_has_local_rows(const cb_report *r);
 /* a / b, 0 when b is 0. */
 double report_ratio(uint64_t a, uint64_t b);
 /* The roster's total against its budget: the verdict alone on its line (`bold` wraps it,

@@ -103,21 +103,30 @@ static bool ink(const unsigned char *p, const unsigned char bg[3], int threshold
     return abs(p[0] - bg[0]) + abs(p[1] - bg[1]) + abs(p[2] - bg[2]) > threshold;
 }
 
+/* A sheet's pixels, RGBA, for the caller to free. */
+static unsigned char *read_sheet(const char *png, uint32_t *w, uint32_t *h)
+{
+    png_image img;
+    memset(&img, 0, sizeof img);
+    img.version = PNG_IMAGE_VERSION;
+    assert_true(png_image_begin_read_from_file(&img, png));
+    img.format = PNG_FORMAT_RGBA;
+    unsigned char *px = malloc(PNG_IMAGE_SIZE(img));
+    assert_true(png_image_finish_read(&img, NULL, px, 0, NULL));
+    *w = img.width, *h = img.height;
+    return px;
+}
+
 /* A sheet as preview.h lays it out: every cell shows the animal, and the labels are there, where
  * they should be: the header's text, each clip's band from its left edge across its name and
  * numbers, and each cell's time in its top-left corner. */
 static void check_sheet(const char *png, uint32_t rows, uint32_t cols, uint32_t cell)
 {
     static const unsigned char sheet_bg[3] = {237, 237, 230}, band_bg[3] = {214, 216, 208}, header_bg[3] = {52, 58, 64};
-    png_image img;
-    memset(&img, 0, sizeof img);
-    img.version = PNG_IMAGE_VERSION;
-    assert_true(png_image_begin_read_from_file(&img, png));
-    img.format = PNG_FORMAT_RGBA;
+    struct { uint32_t width, height; } img;
+    unsigned char *px = read_sheet(png, &img.width, &img.height);
     assert_int_equal(img.width, cols * cell);
     assert_int_equal(img.height, CB_PREVIEW_HEADER + rows * (CB_PREVIEW_BAND + cell));
-    unsigned char *px = malloc(PNG_IMAGE_SIZE(img));
-    assert_true(png_image_finish_read(&img, NULL, px, 0, NULL));
 #define PX(x, y) (px + ((size_t)(y) * img.width + (x)) * 4)
     uint32_t header_ink = 0, header_fill = 0;
     for (uint32_t y = 0; y < CB_PREVIEW_HEADER; ++y)
@@ -165,20 +174,6 @@ static void test_preview_sheets_of_the_samples(void **state)
         check_sheet(png, clips[i], 6, 96);
         printf("  %s", out);
     }
-}
-
-/* A sheet's pixels, RGBA, for the caller to free. */
-static unsigned char *read_sheet(const char *png, uint32_t *w, uint32_t *h)
-{
-    png_image img;
-    memset(&img, 0, sizeof img);
-    img.version = PNG_IMAGE_VERSION;
-    assert_true(png_image_begin_read_from_file(&img, png));
-    img.format = PNG_FORMAT_RGBA;
-    unsigned char *px = malloc(PNG_IMAGE_SIZE(img));
-    assert_true(png_image_finish_read(&img, NULL, px, 0, NULL));
-    *w = img.width, *h = img.height;
-    return px;
 }
 
 /* A palette of local rows (.pal version 6; its auto rates put Gallop's rows on its keys, version 7) drawn by the
