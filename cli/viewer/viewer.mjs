@@ -9,7 +9,7 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { decompress } from 'fzstd';
-import { readPal, readRoster, instanceData, clipInstance } from '../web/crowdbake_pal.mjs';
+import { readPal, readRoster, instanceData, clipInstance, hasLocalRows } from '../web/crowdbake_pal.mjs';
 import { Crowd, GLSL_URL, loadPaletteGLSL } from '../web/crowdbake_crowd.mjs';
 import { VatCrowd, readVat, vatLayout } from '../web/crowdbake_vat.mjs';
 import { meshFromGLTF } from '../web/crowdbake_three.mjs';
@@ -188,7 +188,8 @@ async function main() {
         return { frameMs: avg, drawCalls, instances: herd.count, paletteBytes: p, vatBytes: v ?? null,
                  text: `${herd.count} instances, ${drawCalls} draw call${drawCalls === 1 ? '' : 's'} (1 per herd)\n` +
                        (avg ? `frame ${avg.toFixed(2)} ms (${(1000 / avg).toFixed(0)} fps)\n` : 'frame time: paused (a test renders chosen times)\n') +
-                       `palette ${type.pal.header.layout_name}/${type.pal.header.precision_name} ${kib(p)} VRAM` +
+                       `palette ${type.pal.header.layout_name}/${type.pal.header.precision_name}` +
+                       `${hasLocalRows(type.pal.header) ? ' local' : ''} ${kib(p)} VRAM` +
                        (v ? `\nVAT RGBA16F pos+normal ${kib(v)} VRAM (${(v / p).toFixed(1)}x)` : `\n${type.vatNote}`) };
     }
 
