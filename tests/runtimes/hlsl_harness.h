@@ -86,21 +86,12 @@ static inline vkc_resource upload_palette(vkc_context *c, const cb_palette *p, b
     return r;
 }
 
-/* One texel per bone, two rows: the bind positions, then the position offsets (RGBA32F); local
- * rows add row 2 (the parent, -1 a root), row 3 (pos_min, scale_max) and row 4 (pos_max, 0). */
+/* cb_bind_positions, as cb_bind_texels lays it out (local rows: 5 rows). */
 static inline vkc_resource upload_bind_positions(vkc_context *c, const cb_palette *p)
 {
-    bool local = p->bone_space == CB_BONE_SPACE_LOCAL;
-    uint32_t n = p->bone_count, rows = local ? 5 : 2;
-    float *rgba = calloc((size_t)n * rows * 4, sizeof(float));
-    for (uint32_t j = 0; j < n; ++j) {
-        memcpy(rgba + j * 4, p->bind_positions + j * 3, 3 * sizeof(float));
-        if (p->positions_relative) memcpy(rgba + (n + j) * 4, p->position_offsets + j * 3, 3 * sizeof(float));
-        if (!local) continue;
-        rgba[(2 * n + j) * 4] = (float)p->parents[j];
-        memcpy(rgba + (3 * n + j) * 4, p->bone_ranges + j * 8, 4 * sizeof(float)); /* pos_min, scale_max */
-        memcpy(rgba + (4 * n + j) * 4, p->bone_ranges + j * 8 + 4, 4 * sizeof(float)); /* pos_max, 0 */
-    }
+    uint32_t n = p->bone_count, rows = cb_bind_texels(p, NULL);
+    float *rgba = malloc((size_t)n * rows * 4 * sizeof(float));
+    cb_bind_texels(p, rgba);
     vkc_resource r = vkc_image(c, VK_FORMAT_R32G32B32A32_SFLOAT, n, rows, 16, rgba, false);
     free(rgba);
     return r;
