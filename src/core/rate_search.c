@@ -65,12 +65,14 @@ static double clip_error_at(clip_search *cs, double fps, double goal, cb_error *
     return worst;
 }
 
-/* A probe already made answers as probe_error would (a measurement, not a prediction). */
+/* A probe already made answers as probe_error would (a measurement, not a prediction): one
+ * measured exactly (no goal, or within its goal) any goal; one stopped above its goal any goal up
+ * to that one, which it misses alike. */
 static bool probed(const clip_search *cs, double fps, double goal, double *error)
 {
     for (uint32_t i = 0; i < cs->count; ++i) {
         const probe *d = &cs->done[i];
-        if (d->fps == fps && d->fit == cs->fit && (d->goal == goal || d->goal == 0 || d->error <= d->goal))
+        if (d->fps == fps && d->fit == cs->fit && (d->goal == 0 || d->error <= d->goal || (goal > 0 && goal <= d->goal)))
             return *error = d->error, true;
     }
     return false;
@@ -85,6 +87,19 @@ static bool probed(const clip_search *cs, double fps, double goal, double *error
 static bool defer_exact(const clip_search *cs, double fps)
 {
     return fps == cs->max_fps && !cs->fit && cs->fitted_follow;
+}
+
+/* Whether a probe at fps is of sampled rows that fitted rows may follow at the same rate, under
+ * max_fps: where the sampled rows miss, the fitted ones are baked only if half the sampled rows'
+ * error meets the goal (rate_meets). Such a probe measures to twice the goal, not to the goal:
+ * a miss within twice it is exact, and one stopped above it settles that the fitted rows miss
+ * too, without baking them. (Fox's Survey walking down from 24 fps: sampled rows stopped at 1.05
+ * and 1.8 times the goal at 20 and 12 fps, off its keys, and fitted rows were baked at both and
+ * missed, a tenth of the bake; measured in full, the sampled rows err 3.0 and 8.6 mm/m there.) */
+#define FITTED_AT_BEST 0.5 /* fitted rows' error over sampled rows' at the same rate, at best */
+static bool sampled_before_fitted(const clip_search *cs, double fps)
+{
+    return !cs->fit && cs->fitted_follow && fps < cs->max_fps;
 }
 
 /* A probe's record: a new one, or the exact error of a deferred one in its place (the probes in
@@ -112,6 +127,7 @@ static double probe_error(clip_search *cs, double fps, double goal, cb_error *er
     if (probed(cs, fps, goal, &known)) return known;
     bool defer = defer_exact(cs, fps) && goal > 0;
     if (fps == cs->max_fps && !defer) goal = 0;
+    else if (goal > 0 && sampled_before_fitted(cs, fps)) goal /= FITTED_AT_BEST;
     double e = clip_error_at(cs, fps, goal, err);
     if (!err->status) record_probe(cs, (probe){fps, goal, e, cs->fit, cs->family, defer && !(e <= goal)});
     return e;
@@ -146,7 +162,6 @@ enum { FAMILY_KEYS, FAMILY_COMMON };
  * would miss, and fitted bakes cost several sampled ones (they sample every mid-row to fit the
  * rows). max_fps is always baked: its exact error is what an unmet goal reports. */
 #define PREDICTED_MISS 1.5
-#define FITTED_AT_BEST 0.5 /* fitted rows' error over sampled rows' at the same rate, at best */
 
 /* The error x fps^2 of the probe of this kind and family nearest to fps (ties: the larger), 0
  * when there is none. A deferred probe that is nearest (or tied) has its exact error measured
@@ -290,8 +305,10 @@ static size_t merged_rates(const rate_families *f, double max_fps, candidate *ou
  * goal: every such probe on Cow, Husky, Fox and the robot missed, fitted rows erring 0.50-0.94 of
  * what sampled rows do at the same rate there, measured in full, and they were a sixth of Fox's
  * bake and a tenth of the robot's; speed43e.) A sampled miss's error is where its measurement
- * stopped, at most its maximum, so the test is no looser than the best case it stands for. max_fps
- * is baked both ways: its exact errors are what an unmet goal reports. */
+ * stopped, at most its maximum, so the test is no looser than the best case it stands for; the
+ * sampled probe measures to twice the goal (sampled_before_fitted), so that it decides the test
+ * where a probe stopped at the goal could not. max_fps is baked both ways: its exact errors are
+ * what an unmet goal reports. */
 static double rate_meets(clip_search *cs, cb_rows rows, candidate c, double max_error, double *error, cb_error *err)
 {
     double sampled = INFINITY;

@@ -11,7 +11,9 @@
  * So no rate the law ruled out unbaked would have met the goal, and no probe's remembered error
  * stands in for another rate's or kind's, nor did the walk skip fitted rows that meet it where
  * sampled rows err over twice the goal (speed43e: fitted rows err at best half what sampled rows
- * do). The robot too, where that skip spares the most probes (6 of 76): its punch misses the goal
+ * do; a sampled probe that fitted rows may follow measures to twice the goal, and where it stops
+ * above it no fitted rows are baked: Fox's Survey at 20 and 12 fps, Cow's and Husky's misses at
+ * 24-48 fps). The robot too, where that skip spares the most probes (6 of 76): its punch misses the goal
  * even at 120 fps (a fast transient the bake searches on past the cap), the rest must meet it; its
  * stated error there is the lower of both kinds' exact errors, baked afresh. */
 #include "testutil.h"
