@@ -312,6 +312,17 @@ static const char *clip_label(const cb_bake_job *job, uint32_t i)
     return c->name ? c->name : job->model->animations[c->animation].name;
 }
 
+/* The rows' bone space, a decision the bake takes for the user, and why (docs/usage.md, "Local rows"). */
+static void print_bone_space(const cb_palette *p)
+{
+    if (p->bone_space == CB_BONE_SPACE_LOCAL)
+        puts("  local rows (--bone-space local): each bone in its parent's frame, composed by the runtime, which a vertex "
+             "shader without a bone pass does at every vertex");
+    else if (p->layout == CB_LAYOUT_QPOS && p->precision != CB_PRECISION_HALF) /* what local rows can be stored in */
+        puts("  global rows (the default), which any vertex shader skins as they are; --bone-space local, for runtimes "
+             "that compose the bones (a bone pass), usually holds the clips in fewer rows (docs/usage.md)");
+}
+
 /* The rows error-bounded rates took against a fixed 30 fps (the old default). */
 static cb_status print_saving(const cb_bake_job *job, const cb_bake_result *r, cb_error *err)
 {
@@ -330,6 +341,7 @@ static cb_status print_saving(const cb_bake_job *job, const cb_bake_result *r, c
                                                  job->settings.max_texture_size, &g);
         printf("  %u rows, %.1f KiB, against %llu rows, %.1f KiB at a fixed 30 fps (%.2fx the bytes)\n", p->rows,
                p->texel_bytes / 1024.0, (unsigned long long)rows_30, b_30 / 1024.0, b_30 ? (double)p->texel_bytes / b_30 : 0);
+        print_bone_space(p);
     }
     cb_sampler_free(s);
     return err->status;

@@ -10,7 +10,8 @@
  * STEP keys are exact: the shared STEP SimpleSkin bakes its rows at its key times, held, not
  * blended (.pal version 4, clip flag bit 2), and the C reader's bone matrices at every time of
  * the independent reference (../shared/reference, sampled by a JavaScript implementation of the
- * glTF rules) match it - where rows blended across a step miss it by 218 mm/m. */
+ * glTF rules) match it - where rows blended across a step miss it by 218 mm/m. Its summary
+ * states the rows' bone space and why. */
 #define _DEFAULT_SOURCE
 #include "testutil.h"
 
@@ -281,6 +282,28 @@ static void test_step_keys_are_exact(void **state)
     cbpal_close(&f);
 }
 
+/* The rows' bone space is a decision the bake takes for the user, so its summary states it and
+ * why: global by default, with local rows named as the choice for runtimes that compose bones
+ * where a palette can hold them (qpos, u16 or float); local when asked for, with the cost to a
+ * runtime without a bone pass; nothing where local rows are out of reach (an affine layout). */
+static void test_the_bake_states_its_bone_space(void **state)
+{
+    (void)state;
+    static char out[1 << 14];
+    char fox[1024];
+    shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
+    static const char global[] = "  global rows (the default), which any vertex shader skins as they are; "
+                                 "--bone-space local, for runtimes that compose the bones";
+    static const char local[] = "  local rows (--bone-space local): each bone in its parent's frame, composed by the runtime";
+    int rc = run(out, sizeof out, "%s bake %s -o %s/fox.pal 2>/dev/null", crowdbake_exe(), fox, OUT_DIR);
+    if (rc != 0 || count_of(out, global) != 1 || count_of(out, local) != 0) fail_msg("exit %d:\n%s", rc, out);
+    rc = run(out, sizeof out, "%s bake %s -o %s/fox-local.pal --bone-space local 2>/dev/null", crowdbake_exe(), fox, OUT_DIR);
+    if (rc != 0 || count_of(out, local) != 1 || count_of(out, global) != 0) fail_msg("exit %d:\n%s", rc, out);
+    rc = run(out, sizeof out, "%s bake %s -o %s/fox-affine.pal --layout affine 2>/dev/null", crowdbake_exe(), fox, OUT_DIR);
+    if (rc != 0 || count_of(out, "global rows") != 0 || count_of(out, "local rows") != 0 || !strstr(out, "x the bytes)"))
+        fail_msg("exit %d:\n%s", rc, out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -288,6 +311,7 @@ int main(void)
         cmocka_unit_test(test_a_clip_out_of_reach_says_what_meets_it),
         cmocka_unit_test(test_every_shared_model_with_a_skin_bakes_bare),
         cmocka_unit_test(test_step_keys_are_exact),
+        cmocka_unit_test(test_the_bake_states_its_bone_space),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
