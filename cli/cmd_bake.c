@@ -312,7 +312,7 @@ static const char *clip_label(const cb_bake_job *job, uint32_t i)
     return c->name ? c->name : job->model->animations[c->animation].name;
 }
 
-/* The rows' bone space, a decision the bake takes for the user, and why (docs/usage.md, "Local rows"). */
+/* The rows' bone space, a decision the bake takes for the user, and why (docs/usage.md, --bone-space local). */
 static void print_bone_space(const cb_palette *p)
 {
     if (p->bone_space == CB_BONE_SPACE_LOCAL)
