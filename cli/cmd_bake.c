@@ -318,7 +318,7 @@ static void print_bone_space(const cb_palette *p)
     if (p->bone_space == CB_BONE_SPACE_LOCAL)
         puts("  local rows (--bone-space local): each bone in its parent's frame, composed by the runtime, which a vertex "
              "shader without a bone pass does at every vertex");
-    else if (p->layout == CB_LAYOUT_QPOS && p->precision != CB_PRECISION_HALF) /* what local rows can be stored in */
+    else if (cb_holds_local_rows(p->layout, p->precision))
         puts("  global rows (the default), which any vertex shader skins as they are; --bone-space local, for runtimes "
              "that compose the bones (a bone pass), usually holds the clips in fewer rows (docs/usage.md)");
 }

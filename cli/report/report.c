@@ -150,7 +150,7 @@ const char *report_encoding(const cb_report_type *t, char *buf, size_t size)
 
 bool report_encoding_holds(const cb_report_type *t, int layout, int precision)
 {
-    return !t->local_rows || (layout == CB_LAYOUT_QPOS && precision != CB_PRECISION_HALF);
+    return !t->local_rows || cb_holds_local_rows((cb_layout)layout, (cb_precision)precision);
 }
 
 bool report_has_local_rows(const cb_report *r)

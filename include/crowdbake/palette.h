@@ -26,6 +26,9 @@ typedef enum cb_bone_space { CB_BONE_SPACE_GLOBAL = 0, CB_BONE_SPACE_LOCAL = 1 }
 CROWDBAKE_API const char *cb_layout_name(cb_layout layout);
 CROWDBAKE_API const char *cb_precision_name(cb_precision precision);
 CROWDBAKE_API const char *cb_bone_space_name(cb_bone_space bone_space); /* "global", "local" */
+/* Whether rows of this layout and precision can hold local rows: qpos with u16 or float (half's
+ * 2^-11 would compound down each chain). */
+CROWDBAKE_API bool cb_holds_local_rows(cb_layout layout, cb_precision precision);
 CROWDBAKE_API uint32_t cb_layout_texels_per_bone(cb_layout layout);
 CROWDBAKE_API uint32_t cb_precision_texel_bytes(cb_precision precision); /* 16, 8, 8 */
 

@@ -47,6 +47,11 @@ bool cb_timed_rows_parse(const char *text, cb_timed_rows *out)
 
 const char *cb_bone_space_name(cb_bone_space b) { return (unsigned)b < 2 ? bone_space_names[b] : "?"; }
 
+bool cb_holds_local_rows(cb_layout layout, cb_precision precision)
+{
+    return layout == CB_LAYOUT_QPOS && precision != CB_PRECISION_HALF;
+}
+
 bool cb_bone_space_parse(const char *text, cb_bone_space *out)
 {
     int i = name_index(text, bone_space_names, 2);

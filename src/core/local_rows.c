@@ -313,7 +313,7 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
                              cb_palette *p, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(sampler);
-    if (opt->layout != CB_LAYOUT_QPOS || opt->precision == CB_PRECISION_HALF)
+    if (!cb_holds_local_rows(opt->layout, opt->precision))
         return cb_fail(err, CB_ERR_SETTINGS, "%s: local rows need layout qpos and precision u16 or float (half's "
                        "2^-11 compounds down a chain); use layout qpos with precision u16, or bone space global",
                        m->source);

@@ -89,6 +89,8 @@ static bool defer_exact(const clip_search *cs, double fps)
     return fps == cs->max_fps && !cs->fit && cs->fitted_follow;
 }
 
+#define FITTED_AT_BEST 0.5 /* fitted rows' error over sampled rows' at the same rate, at best */
+
 /* Whether a probe at fps is of sampled rows that fitted rows may follow at the same rate, under
  * max_fps: where the sampled rows miss, the fitted ones are baked only if half the sampled rows'
  * error meets the goal (rate_meets). Such a probe measures to twice the goal, not to the goal:
@@ -96,7 +98,6 @@ static bool defer_exact(const clip_search *cs, double fps)
  * too, without baking them. (Fox's Survey walking down from 24 fps: sampled rows stopped at 1.05
  * and 1.8 times the goal at 20 and 12 fps, off its keys, and fitted rows were baked at both and
  * missed, a tenth of the bake; measured in full, the sampled rows err 3.0 and 8.6 mm/m there.) */
-#define FITTED_AT_BEST 0.5 /* fitted rows' error over sampled rows' at the same rate, at best */
 static bool sampled_before_fitted(const clip_search *cs, double fps)
 {
     return !cs->fit && cs->fitted_follow && fps < cs->max_fps;

@@ -285,7 +285,8 @@ static void test_step_keys_are_exact(void **state)
 /* The rows' bone space is a decision the bake takes for the user, so its summary states it and
  * why: global by default, with local rows named as the choice for runtimes that compose bones
  * where a palette can hold them (qpos, u16 or float); local when asked for, with the cost to a
- * runtime without a bone pass; nothing where local rows are out of reach (an affine layout). */
+ * runtime without a bone pass; nothing where local rows are out of reach (an affine layout, half
+ * precision: cb_holds_local_rows). */
 static void test_the_bake_states_its_bone_space(void **state)
 {
     (void)state;
@@ -299,9 +300,12 @@ static void test_the_bake_states_its_bone_space(void **state)
     if (rc != 0 || count_of(out, global) != 1 || count_of(out, local) != 0) fail_msg("exit %d:\n%s", rc, out);
     rc = run(out, sizeof out, "%s bake %s -o %s/fox-local.pal --bone-space local 2>/dev/null", crowdbake_exe(), fox, OUT_DIR);
     if (rc != 0 || count_of(out, local) != 1 || count_of(out, global) != 0) fail_msg("exit %d:\n%s", rc, out);
-    rc = run(out, sizeof out, "%s bake %s -o %s/fox-affine.pal --layout affine 2>/dev/null", crowdbake_exe(), fox, OUT_DIR);
-    if (rc != 0 || count_of(out, "global rows") != 0 || count_of(out, "local rows") != 0 || !strstr(out, "x the bytes)"))
-        fail_msg("exit %d:\n%s", rc, out);
+    static const char *const out_of_reach[] = {"--layout affine", "--precision half"};
+    for (int i = 0; i < 2; ++i) {
+        rc = run(out, sizeof out, "%s bake %s -o %s/fox-other.pal %s 2>/dev/null", crowdbake_exe(), fox, OUT_DIR, out_of_reach[i]);
+        if (rc != 0 || count_of(out, "global rows") != 0 || count_of(out, "local rows") != 0 || !strstr(out, "x the bytes)"))
+            fail_msg("%s: exit %d:\n%s", out_of_reach[i], rc, out);
+    }
 }
 
 int main(void)
