@@ -8,6 +8,7 @@
  * ranges; its errors are then measured composed, as the runtime plays it (cb_verify_clip through
  * cb_runtime_matrices, which composes). */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -17,6 +18,7 @@
 #include "local_pose.h"
 #include "local_rate.h" /* local_palette_errors */
 #include "palette_bake.h"
+#include "pool.h"
 #include "timed_rows.h"
 
 void palette_local_parents(const cb_model *m, const cb_skin *skin, int32_t *parents)
@@ -287,24 +289,68 @@ static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin,
     return CB_OK;
 }
 
+/* One clip's errors measured composed (local_palette_errors), in its own slots. */
+typedef struct clip_errors {
+    double rows, between;
+    cb_error err;
+} clip_errors;
+
+/* The measurement of every clip, shared out clip by clip: each thread with its own sampler (a
+ * sampler's loop state is the clip it measures), the first its caller's; each answer in its
+ * clip's slot, so the errors depend neither on the thread count nor on the order taken. */
+typedef struct measure_share {
+    cb_sampler *s;
+    const cb_clip_plan *plan;
+    const palette_skin_facts *facts;
+    const palette_probe *probe;
+    const cb_palette *p;
+    clip_errors *out;
+    atomic_uint next;
+} measure_share;
+
+static void measure_clips(void *arg, uint32_t thread, uint32_t threads)
+{
+    (void)threads;
+    measure_share *ms = arg;
+    const cb_model *m = cb_sampler_model(ms->s);
+    cb_error fail = {0};
+    cb_sampler *s = thread ? cb_sampler_create(m, cb_sampler_skin(ms->s), &fail) : ms->s;
+    for (uint32_t c; (c = atomic_fetch_add(&ms->next, 1)) < ms->p->clip_count;) {
+        clip_errors *e = &ms->out[c];
+        pose_cache *kept = ms->probe && ms->probe->clip_poses ? ms->probe->clip_poses[c] : NULL;
+        if (!s) e->err = fail;
+        else local_palette_errors(s, ms->facts, ms->p, c, ms->plan ? ms->plan[c].animation : (int32_t)c, kept, &e->rows,
+                                  &e->between, &e->err);
+    }
+    if (thread) cb_sampler_free(s);
+}
+
 /* The errors measured composed: at every row (max_error) and at the quarter points between every
  * two (visible_error), on every skinned vertex group that can raise the worst, against the exact
  * pose (local_rate.c: the quarter points, where nlerp's lag peaks; the rows and midpoints the rate
- * search sampled read from its pose caches). */
+ * search sampled read from its pose caches), on up to `threads` threads. */
 static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, const palette_skin_facts *facts,
-                               const palette_probe *probe, cb_palette *p, cb_error *err)
+                               const palette_probe *probe, uint32_t threads, cb_palette *p, cb_error *err)
 {
+    measure_share ms = {.s = s, .plan = plan, .facts = facts, .probe = probe, .p = p,
+                        .out = calloc(p->clip_count ? p->clip_count : 1, sizeof *ms.out)};
+    if (!ms.out) return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring local rows", cb_sampler_model(s)->source);
+    atomic_init(&ms.next, 0);
+    threads = threads < 1 ? 1 : threads;
+    cb_pool_run(threads > p->clip_count ? p->clip_count : threads, measure_clips, &ms);
     p->max_error = p->visible_error = 0;
     p->error_rows_measured = p->rows;
-    for (uint32_t c = 0; c < p->clip_count && !err->status; ++c) {
-        double rows = 0, between = 0;
-        pose_cache *kept = probe && probe->clip_poses ? probe->clip_poses[c] : NULL;
-        if (local_palette_errors(s, facts, p, c, plan ? plan[c].animation : (int32_t)c, kept, &rows, &between, err))
+    for (uint32_t c = 0; c < p->clip_count && !err->status; ++c) { /* the first failure in clip order */
+        const clip_errors *e = &ms.out[c];
+        if (e->err.status) {
+            *err = e->err;
             break;
-        p->max_error = fmax(p->max_error, rows);
-        p->clips[c].visible_error = fmax(rows, between);
+        }
+        p->max_error = fmax(p->max_error, e->rows);
+        p->clips[c].visible_error = fmax(e->rows, e->between);
         p->visible_error = fmax(p->visible_error, p->clips[c].visible_error);
     }
+    free(ms.out);
     return err->status;
 }
 
@@ -346,7 +392,7 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
     if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, err)) && timed) fill_maps(p, plan);
     if (!rc &&
         cb_model_skin_vertex_count(m, cb_sampler_skin(sampler)) > 0)
-        rc = measure_local(sampler, plan, facts, probe, p, err);
+        rc = measure_local(sampler, plan, facts, probe, opt->threads, p, err);
     palette_skin_facts_free(&own);
     if (rc) cb_palette_free(p);
     return rc;

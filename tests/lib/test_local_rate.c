@@ -278,6 +278,26 @@ static void local_bake_states_its_rates(void **state)
         assert_true(atof(at + strlen("\"visible_error_mm_per_m\": ")) <= 1);
 }
 
+/* A local bake's measurement is shared out clip by clip over the threads (local_rows.c): the
+ * same bytes, errors included, whatever the thread count (Husky: timed clips among them). */
+static void local_bake_is_the_same_on_any_threads(void **state)
+{
+    (void)state;
+    char model[1024], log[4096];
+    shared_path(model, sizeof model, "assets/quaternius-husky/Husky.glb");
+    mkdir(TEST_TMP, 0755);
+    const char *threads[] = {"1", "4"};
+    for (int i = 0; i < 2; ++i)
+        assert_int_equal(run_crowdbake(log, sizeof log, "bake %s --bone-space local -q -j %s -o " TEST_TMP "/husky_j%s.pal",
+                                       model, threads[i], threads[i]), 0);
+    size_t a_size, b_size;
+    char *a = read_whole_file(TEST_TMP "/husky_j1.pal", &a_size), *b = read_whole_file(TEST_TMP "/husky_j4.pal", &b_size);
+    assert_non_null(a), assert_non_null(b);
+    assert_int_equal(a_size, b_size);
+    assert_memory_equal(a, b, a_size);
+    free(a), free(b);
+}
+
 /* A bake of the model's clips as local rows at fps auto (the CLI's defaults otherwise) in
  * `precision`: per clip, what its rate choice measured (job->rates) and what the finished
  * palette's measurement found (local_palette_errors, through the bake's budgets), in mm/m. */
@@ -337,7 +357,7 @@ int main(void)
         cmocka_unit_test(husky_gallops_at_twice_its_keys),
         cmocka_unit_test(fox_run_on_its_key_grid),
         cmocka_unit_test(measurement_equals_brute_force),
-        cmocka_unit_test(local_bake_states_its_rates),
+        cmocka_unit_test(local_bake_states_its_rates), cmocka_unit_test(local_bake_is_the_same_on_any_threads),
         cmocka_unit_test(choice_measures_the_palette),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
