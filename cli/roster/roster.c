@@ -130,7 +130,7 @@ static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_
         if (cb_clip_analyze(s, plan->animation, cb_bake_job_clip_fps(&w->job, i), plan->loop, limits, &info, err)) break;
         cb_roster_clip *c = &t->clips[i];
         snprintf(c->name, sizeof c->name, "%s", plan->name);
-        if (plan->timed_rows) { /* rows on its keys (local rows: qpos), its map before them */
+        if (plan->timed_rows) { /* rows on its keys (qpos rows, local or global), its map before them */
             c->cells = info.loops ? info.frames : info.frames - 1, c->cell_rate = cb_bake_job_clip_fps(&w->job, i);
             c->map_rows = cb_timed_map_rows(c->cells, w->job.model->skins[w->skin].joint_count *
                                                           cb_layout_texels_per_bone(CB_LAYOUT_QPOS));

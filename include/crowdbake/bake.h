@@ -60,8 +60,9 @@ typedef struct cb_bake_settings {
     bool row_travel_off;         /* no per-row travel offsets (row_travel.h), where the bake would ship them */
     cb_bone_space bone_space;    /* local: a .pal's rows in each bone's parent frame (.pal version 6; qpos, u16 or
                                   * float); other formats are baked global. Default global */
-    cb_timed_rows timed_rows;    /* local rows of an auto rate on its clip's key times (.pal version 7): auto (default)
-                                  * where that costs fewer bytes, on wherever the keys allow, off never */
+    cb_timed_rows timed_rows;    /* an auto rate's rows on its clip's key times (.pal version 7). Local rows: auto
+                                  * (default) where that costs fewer bytes, on wherever the keys allow, off never;
+                                  * global rows: on where that costs fewer bytes, auto and off never */
 } cb_bake_settings;
 
 /* Which settings an override carries (the command line's bake options over a catalog). */

@@ -67,8 +67,9 @@ typedef struct cb_bake_options {
                            * CB_ERROR_ROWS and CB_ERROR_BUDGET, at an even subset of them) */
     cb_bone_space bone_space; /* local: rows in each bone's parent frame (qpos, u16 or float; src/core/local_rows.c),
                                * sampled (never fitted: a fit is to the global blend), errors measured composed */
-    cb_timed_rows timed_rows; /* an auto rate's rows on its clip's key times (timed rows, .pal version 7) where that
-                               * costs fewer bytes (auto), wherever its keys allow (on), or never (off); local rows only */
+    cb_timed_rows timed_rows; /* an auto rate's rows on its clip's key times (timed rows, .pal version 7). Local rows:
+                               * where that costs fewer bytes (auto), wherever its keys allow (on), or never (off);
+                               * global qpos rows: where that costs fewer bytes (on), or never (auto, off) */
 } cb_bake_options;
 
 /* A bake measures its errors at every row while it has at most CB_ERROR_ROWS rows or at most

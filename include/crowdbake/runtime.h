@@ -106,8 +106,8 @@ typedef struct cb_rate_choice {
     double other_fps;       /* 0: the search stops at the fewest rows (fitted rows chosen: sampled rows miss at
                              * that rate; sampled rows chosen: fitted rows miss under it). Kept for callers. */
     double fps_needed;      /* not met: the lowest rate up to CB_FPS_LIMIT that meets it (0: none does) */
-    /* Timed rows (local rows; cb_bake_options.timed_rows): weighed where its keys lie on a grid, taken (the plan's
-     * timed_rows) where they cost fewer bytes or were asked for. */
+    /* Timed rows (cb_bake_options.timed_rows): weighed where its keys lie on a grid, taken (the plan's timed_rows)
+     * where they cost fewer bytes or were asked for (local rows). */
     bool timed_weighed;     /* rows on its keys were measured and within its budget */
     uint32_t timed_rows, timed_map_rows, timed_cells; /* what they take: rows, map rows, cells of the map */
     double timed_cell_rate;

@@ -161,8 +161,9 @@ uint64_t cb_bake_input_hash(const cb_bake_job *job, const cb_bake_options *o)
         return cbpal_xxh64_digest(&h);
     }
     char opts[360], chosen[96] = ""; /* error-bounded rates: the goal chooses them (a fixed fps: as before it) */
-    /* Timed rows other than auto (the hash as before it) where they change a file: local rows' .pal. */
-    bool timed_asked = o->timed_rows != CB_TIMED_ROWS_AUTO && o->bone_space == CB_BONE_SPACE_LOCAL;
+    /* Timed rows other than auto (the hash as before it) where they change a file: local rows' .pal (on and off),
+     * global rows' (on: auto and off take none). */
+    bool timed_asked = o->timed_rows == CB_TIMED_ROWS_ON || (o->timed_rows == CB_TIMED_ROWS_OFF && o->bone_space == CB_BONE_SPACE_LOCAL);
     if (job->settings.fps_auto)
         snprintf(chosen, sizeof chosen, " auto max_error=%.17g max_fps=%.17g", job->settings.max_error_mm,
                  job->settings.max_fps);
@@ -529,9 +530,12 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
         o->format = format;
         o->path = output_path(job, format);
         cb_bake_options opt = cb_bake_settings_options(&job->settings, format, &job->limits, job->threads);
-        if (mapped && opt.bone_space == CB_BONE_SPACE_GLOBAL) opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
+        /* (timed rows on: its rows are laid out again once baked, out of the mapping) */
+        if (mapped && opt.bone_space == CB_BONE_SPACE_GLOBAL && opt.timed_rows != CB_TIMED_ROWS_ON)
+            opt.texel_memory = (cb_texel_memory){cb_pal_map_texels, &mapping};
+        /* A format without a map (timed rows off) takes no timed palette: its clips uniform at their cell rate */
         if (!shared.texels || shared_opt.precision != opt.precision || shared_opt.layout != opt.layout ||
-            shared_opt.bone_space != opt.bone_space) {
+            shared_opt.bone_space != opt.bone_space || (cb_palette_timed_clip(&shared) && opt.timed_rows == CB_TIMED_ROWS_OFF)) {
             cb_palette_free(&shared);
             search_keep *keep = job->search_kept; /* what the rate search sampled, and the skin's facts */
             palette_probe kept = {NULL, NULL, keep ? keep->poses : NULL, NULL, memo};

@@ -35,6 +35,30 @@ static double budget_above(double error_mm)
     return up > error_mm ? up : up + unit;
 }
 
+/* A timed clip's reason: its rows on its keys against the uniform rate's, and why they were taken. */
+static void timed_reason(const cb_bake_job *job, uint32_t i, const char *rows, const char *played, char *buf, size_t size)
+{
+    const cb_clip_plan *c = &job->plan[i];
+    const cb_rate_choice *r = &job->rates[i];
+    snprintf(buf, size, "%u rows on its keys (a map of %u cells at %g Hz, %u row%s) instead of %u at %g fps, %s: %s within "
+             "its budget (%.3g mm/m, %s as the runtime plays them)", c->timed_rows, r->timed_cells, r->timed_cell_rate,
+             r->timed_map_rows, r->timed_map_rows == 1 ? "" : "s", r->uniform_rows, r->uniform_fps, rows,
+             r->timed_rows + r->timed_map_rows < r->uniform_rows ? "fewer bytes"
+             : job->settings.timed_rows == CB_TIMED_ROWS_ON     ? "asked for (timed rows on)"
+                                                                : "the uniform rate over its budget",
+             r->error_mm, played);
+}
+
+/* Rows on its keys weighed and not taken, said after the reason in buf; whether they were weighed. */
+static bool timed_not_taken(const cb_rate_choice *r, char *buf, size_t size)
+{
+    size_t n = strlen(buf);
+    if (r->timed_weighed && n < size)
+        snprintf(buf + n, size - n, "; on its keys at least %u rows and a map of %u row%s, no fewer bytes", r->timed_rows,
+                 r->timed_map_rows, r->timed_map_rows == 1 ? "" : "s");
+    return r->timed_weighed;
+}
+
 /* An auto clip's rate chosen for local rows (local_rate.c): its key rate's lowest multiple whose
  * rows, blended and composed as the runtime plays them, stay within its budget. */
 static void local_reason(const cb_bake_job *job, uint32_t i, double fps, char *buf, size_t size)
@@ -57,14 +81,7 @@ static void local_reason(const cb_bake_job *job, uint32_t i, double fps, char *b
     const cb_clip_plan *c = &job->plan[i];
     size_t n;
     if (c->timed_rows) { /* rows on its keys (local_rate_search.c's choose_timed) */
-        snprintf(buf, size, "%u rows on its keys (a map of %u cells at %g Hz, %u row%s) instead of %u at %g fps, local "
-                 "rows: %s within its budget (%.3g mm/m, blended and composed as the runtime plays them)", c->timed_rows,
-                 r->timed_cells, r->timed_cell_rate, r->timed_map_rows, r->timed_map_rows == 1 ? "" : "s", r->uniform_rows,
-                 r->uniform_fps,
-                 r->timed_rows + r->timed_map_rows < r->uniform_rows ? "fewer bytes"
-                 : job->settings.timed_rows == CB_TIMED_ROWS_ON     ? "asked for (timed rows on)"
-                                                                    : "the uniform rate over its budget",
-                 r->error_mm);
+        timed_reason(job, i, "local rows", "blended and composed", buf, size);
         return;
     }
     if (!r->met)
@@ -72,10 +89,7 @@ static void local_reason(const cb_bake_job *job, uint32_t i, double fps, char *b
     else
         snprintf(buf, size, "%g fps, local rows (%s): the fewest within its budget (%.3g mm/m, blended and composed as the "
                  "runtime plays them)", fps, why, r->error_mm);
-    if (r->timed_weighed && (n = strlen(buf)) < size) /* rows on its keys weighed and not taken */
-        snprintf(buf + n, size - n, "; on its keys at least %u rows and a map of %u row%s, no fewer bytes", r->timed_rows,
-                 r->timed_map_rows, r->timed_map_rows == 1 ? "" : "s");
-    else if (job->settings.timed_rows == CB_TIMED_ROWS_OFF && (n = strlen(buf)) < size)
+    if (!timed_not_taken(r, buf, size) && job->settings.timed_rows == CB_TIMED_ROWS_OFF && (n = strlen(buf)) < size)
         snprintf(buf + n, size - n, "; rows on its keys not weighed (timed rows off)");
 }
 
@@ -95,6 +109,8 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
         snprintf(buf, size, "%g fps, %s: a fixed fps%s", fps, rows, fitted ? " (fit_rows)" : "");
     } else if (local_chosen) {
         local_reason(job, i, fps, buf, size);
+    } else if (c->timed_rows) { /* global rows on its keys, asked for (global_timed.c) */
+        timed_reason(job, i, "sampled rows", "blended", buf, size);
     } else if (!r->met) {
         snprintf(buf, size, "%g fps, %s: over its budget even at max_fps (%.3g mm/m)", fps, rows, r->error_mm);
     } else if (cs->from.max_fps == CB_FROM_TRANSIENT) {
@@ -114,6 +130,7 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
         snprintf(buf, size, "%g fps, %s: the fewest within its budget (%.3g mm/m); fitted rows do not meet it at a lower "
                  "rate", fps, rows, r->error_mm);
     }
+    if (cs->fps_auto && !local_chosen && !c->timed_rows && !c->step) timed_not_taken(r, buf, size); /* global rows, on */
     size_t n = strlen(buf); /* a fixed rate's local rows (an auto rate's said so above) */
     if (job->settings.bone_space == CB_BONE_SPACE_LOCAL && !c->step && !(cs->fps_auto && local_chosen) && n < size)
         snprintf(buf + n, size - n, "; baked as local rows, sampled");

@@ -62,6 +62,16 @@ bool local_skeleton_build(const cb_model *m, int32_t skin, local_skeleton *out)
     return ok;
 }
 
+bool local_skeleton_roots(uint32_t bones, local_skeleton *out)
+{
+    out->bones = bones;
+    out->parent = malloc((bones ? bones : 1) * sizeof *out->parent);
+    out->order = malloc((bones ? bones : 1) * sizeof *out->order);
+    if (!out->parent || !out->order) return local_skeleton_free(out), false;
+    for (uint32_t j = 0; j < bones; ++j) out->parent[j] = -1, out->order[j] = j;
+    return true;
+}
+
 void local_skeleton_free(local_skeleton *k)
 {
     free(k->parent), free(k->order);
@@ -547,6 +557,7 @@ cb_status local_clip_timed(cb_sampler *s, const palette_skin_facts *facts, const
         }
     }
     out->intervals = n;
+    out->not_qpos = c.not_qpos;
     out->possible = ok && timed_cells(clip, keys, steps, split, n, G, row_texels, out);
     if (!out->possible) free(out->row_cells), out->row_cells = NULL;
     probe_ctx_free(&c);
@@ -647,10 +658,12 @@ cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, c
     if (pc->timed && !row_cells) return cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring %s's local rows", m->source);
     if (row_cells) timed_map_row_cells(p, p->texels, pc, row_cells);
     for (int k = 0; k < 3; ++k) framing.root_velocity[k] = pc->root_velocity[k];
-    local_skeleton k; /* the palette's parents: the same nearest ancestor joints */
+    local_skeleton k; /* the palette's parents: the same nearest ancestor joints (global rows: roots, composing nothing) */
     probe_ctx c;
     *at_rows = *between = 0;
-    if (!local_skeleton_build(m, cb_sampler_skin(s), &k) ||
+    bool built = p->bone_space == CB_BONE_SPACE_LOCAL ? local_skeleton_build(m, cb_sampler_skin(s), &k)
+                                                      : local_skeleton_roots(p->bone_count, &k);
+    if (!built ||
         !probe_ctx_init(&c, s, facts, &k, &framing, CB_ROOT_MOTION_IN_PLACE, keep)) {
         local_skeleton_free(&k), free(row_cells);
         return cb_fail(err, CB_ERR_INTERNAL, "out of memory measuring %s's local rows", m->source);

@@ -41,6 +41,9 @@ typedef struct local_skeleton {
 /* False: out of memory. local_skeleton_free frees what it holds (also after a failure). */
 bool local_skeleton_build(const cb_model *m, int32_t skin, local_skeleton *out);
 void local_skeleton_free(local_skeleton *k);
+/* A skeleton of `bones` roots, each bone its own parent: its local rows are global rows, blended
+ * as the runtime blends global qpos rows (global_timed.c measures them so). */
+bool local_skeleton_roots(uint32_t bones, local_skeleton *out);
 
 /* Clip `clip` (analyzed on this sampler: cb_clip_analyze) baked as local rows: its lowest rate
  * within max_error (model units) up to max_fps (2..CB_FPS_LIMIT). The poses are framed with the
@@ -72,6 +75,8 @@ typedef struct local_timed {
     double error;         /* the worst error measured (model units, float64 rows, before quantisation) */
     bool too_many;        /* not possible: rows + map rows could not come under the caller's most_rows (rows and
                            * map_rows then say the least they would take, as far as measured) */
+    bool not_qpos;        /* a pose had a joint that is no similarity (local_rate.not_qpos): measured as qpos rows,
+                           * which the palette's are not */
 } local_timed;
 
 /* Clip `clip` (analyzed on this sampler) baked as timed local rows: rows at its key times (every
@@ -93,8 +98,8 @@ cb_status local_clip_timed(cb_sampler *s, const palette_skin_facts *facts, const
 double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const local_skeleton *skeleton,
                         const cb_clip_info *clip, double fps, cb_error *err);
 
-/* The worst vertex error of clip `clip` of a finished local palette p (its texels as the runtime
- * decodes them, blended and composed), against `animation`'s exact poses framed as the bake framed
+/* The worst vertex error of clip `clip` of a finished local palette p, or a global qpos one (its
+ * texels as the runtime decodes them, blended and composed; global rows compose nothing), against `animation`'s exact poses framed as the bake framed
  * them: at its rows into *at_rows, and at the quarter points between them into *between (held
  * rows: the row alone), where nlerp's lag peaks (a midpoint alone misses it: nlerp equals slerp
  * there). Poses the clip's pose cache `keep` holds (the rows and midpoints a search sampled; or

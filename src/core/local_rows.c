@@ -192,71 +192,6 @@ static void encode_local(cb_palette *p, const double *values)
             }
 }
 
-/* ---- timed clips: the rows on their cells kept, their maps made room for ---- */
-
-static bool any_timed(const cb_clip_plan *plan, uint32_t count)
-{
-    for (uint32_t i = 0; plan && i < count; ++i)
-        if (plan[i].timed_rows) return true;
-    return false;
-}
-
-/* The global float palette g, baked uniform at each timed clip's cell rate (plan[c].fps), laid
- * out again: a timed clip keeps only the rows on its row_cells, after its map's rows (left 0,
- * filled once its rows are encoded: fill_maps); other clips' rows as they were. */
-static cb_status keep_timed_rows(cb_palette *g, const cb_clip_plan *plan, uint32_t max_texture_size, const char *source,
-                                 cb_error *err)
-{
-    cb_palette old = *g; /* the uniform rows' geometry, to read them */
-    uint32_t rows = 0, *old_first = malloc((g->clip_count ? g->clip_count : 1) * sizeof *old_first);
-    if (!old_first) return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for timed rows", source);
-    for (uint32_t c = 0; c < g->clip_count; ++c) {
-        cb_palette_clip *clip = &g->clips[c];
-        old_first[c] = clip->first_row;
-        const cb_clip_plan *pl = &plan[c];
-        if (pl->timed_rows) {
-            uint32_t cells = cb_clip_step_count(clip->duration, pl->fps);
-            if (clip->frames != cells + (clip->loops ? 0 : 1) || pl->row_cells[pl->timed_rows - 1] > cells)
-                return free(old_first), cb_fail(err, CB_ERR_INTERNAL, "%s: clip '%s' framed at %u rows, not on its %u cells", source,
-                               clip->name, clip->frames, cells);
-            clip->timed = true, clip->cells = cells, clip->cell_rate = pl->fps;
-            clip->map_rows = cb_timed_map_rows(cells, g->row_texels);
-            clip->frames = pl->timed_rows;
-            clip->fps = clip->duration > 0 ? clip->frames / clip->duration : clip->fps;
-            rows += clip->map_rows;
-        }
-        clip->first_row = rows;
-        rows += clip->frames;
-    }
-    g->rows = rows;
-    if (palette_plan_texture(g, max_texture_size, source, err)) return free(old_first), err->status;
-    size_t tb = cb_precision_texel_bytes(g->precision);
-    g->texel_bytes = (size_t)g->width * g->height * tb;
-    g->texels = calloc(g->texel_bytes ? g->texel_bytes : 1, 1);
-    if (!g->texels) return free(old_first), g->texels = old.texels, cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for timed rows", source);
-    for (uint32_t c = 0; c < g->clip_count; ++c) {
-        const cb_palette_clip *clip = &g->clips[c];
-        for (uint32_t k = 0; k < clip->frames; ++k) { /* a row's texels lie side by side in its block */
-            uint32_t from = old_first[c] + (clip->timed ? plan[c].row_cells[k] : k), x0, y0, x1, y1;
-            cb_palette_texel_xy(&old, from, 0, &x0, &y0);
-            cb_palette_texel_xy(g, clip->first_row + k, 0, &x1, &y1);
-            memcpy((unsigned char *)g->texels + ((size_t)y1 * g->width + x1) * tb,
-                   (const unsigned char *)old.texels + ((size_t)y0 * old.width + x0) * tb, (size_t)g->row_texels * tb);
-        }
-    }
-    if (!old.texels_borrowed) free(old.texels);
-    g->texels_borrowed = false;
-    free(old_first);
-    return CB_OK;
-}
-
-/* Each timed clip's map, from the cells its rows lie on (timed_rows.c), in the palette's precision. */
-static void fill_maps(cb_palette *p, const cb_clip_plan *plan)
-{
-    for (uint32_t c = 0; c < p->clip_count; ++c)
-        if (p->clips[c].timed) timed_map_fill(p, &p->clips[c], plan[c].row_cells);
-}
-
 /* The global float palette g converted in place to local rows in `precision`. */
 static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin, cb_precision precision, cb_error *err)
 {
@@ -368,7 +303,8 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
     global.texel_memory = (cb_texel_memory){0}, global.error_goal = 0;
     cb_clip_plan *sampled = plan ? malloc(plan_count * sizeof *sampled) : NULL;
     if (plan && !sampled) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    for (uint32_t i = 0; sampled && i < plan_count; ++i) sampled[i] = plan[i], sampled[i].fit = false;
+    for (uint32_t i = 0; sampled && i < plan_count; ++i) /* uniform: the timed rows are kept below, before converting */
+        sampled[i] = plan[i], sampled[i].fit = false, sampled[i].timed_rows = 0, sampled[i].row_cells = NULL;
     palette_skin_facts own = {0}, unmeasured;
     cb_status rc = facts ? CB_OK : palette_skin_facts_build(sampler, &own, err);
     if (!facts) facts = &own;
@@ -384,12 +320,12 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
         return rc;
     }
     free(sampled);
-    bool timed = any_timed(plan, plan_count);
-    if (timed && (rc = keep_timed_rows(p, plan, opt->max_texture_size, m->source, err))) {
+    bool timed = timed_any(plan, plan_count);
+    if (timed && (rc = timed_keep_rows(p, plan, opt->max_texture_size, m->source, err))) {
         palette_skin_facts_free(&own), cb_palette_free(p);
         return rc;
     }
-    if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, err)) && timed) fill_maps(p, plan);
+    if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, err)) && timed) timed_fill_maps(p, plan);
     if (!rc &&
         cb_model_skin_vertex_count(m, cb_sampler_skin(sampler)) > 0)
         rc = measure_local(sampler, plan, facts, probe, opt->threads, p, err);

@@ -12,8 +12,10 @@
 #include <string.h>
 #include <time.h>
 
+#include "global_timed.h" /* timed global rows */
 #include "palette_bake.h"
 #include "pool.h"
+#include "timed_rows.h"
 #include "internal/plumbing.h"
 
 
@@ -286,6 +288,27 @@ cb_status cb_palette_bake(cb_sampler *sampler, const cb_bake_options *opt, const
     return palette_bake_with_facts(sampler, opt, plan, plan_count, NULL, NULL, p, err);
 }
 
+/* Whether the bake lays out its plan's timed clips (global_timed.c) once baked uniform at their cell
+ * rate: global rows of a format that holds a map (local rows lay out their own, local_rows.c). */
+static bool lays_out_timed(const cb_bake_options *opt, const cb_clip_plan *plan, uint32_t plan_count)
+{
+    return opt->bone_space == CB_BONE_SPACE_GLOBAL && opt->timed_rows != CB_TIMED_ROWS_OFF && timed_any(plan, plan_count);
+}
+
+/* The rows the palette will hold: a timed clip's (baked here at its cell rate) its rows on its cells and its map's. */
+static uint32_t shipped_rows(const bake_state *st)
+{
+    const cb_palette *p = st->p;
+    uint32_t rows = p->rows;
+    for (uint32_t c = 0; c < p->clip_count; ++c)
+        if (palette_clip_timed(st, c)) {
+            const cb_palette_clip *k = &p->clips[c];
+            uint32_t cells = k->frames - (k->loops ? 0 : 1);
+            rows = rows - k->frames + st->plan[c].timed_rows + cb_timed_map_rows(cells, p->row_texels);
+        }
+    return rows;
+}
+
 static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
                            uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe, cb_palette *p,
                            cb_error *err)
@@ -304,7 +327,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
         return cb_fail(err, CB_ERR_INPUT, "%s: has no animations to bake (export the clips with the model)", m->source);
     double t0 = seconds_now();
     bake_state st = {0};
-    st.p = p, st.model = m, st.skin = skin_index, st.opt = opt;
+    st.p = p, st.model = m, st.skin = skin_index, st.opt = opt, st.plan = lays_out_timed(opt, plan, plan_count) ? plan : NULL;
     cb_clip_info *infos = NULL;
     st.facts = facts, st.radius = facts->reach, st.groups = &facts->groups;
     if (probe && plan && plan_count == 1 && opt->threads <= 1) /* one clip's, one thread's */
@@ -369,8 +392,9 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     p->model_height = facts->height;
     /* Past both CB_ERROR_ROWS rows and ~4M vertex-rows (palette.h says why both), an even subset
      * of rows (always each clip's last) measures the error, unless measure_all. */
-    uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(m, skin_index);
-    bool subset = p->rows > CB_ERROR_ROWS && work > CB_ERROR_BUDGET && !st.opt->measure_all;
+    uint32_t shipped = shipped_rows(&st); /* what the file will hold: a timed clip's rows on its cells and its map */
+    uint64_t work = (uint64_t)shipped * cb_model_skin_vertex_count(m, skin_index);
+    bool subset = shipped > CB_ERROR_ROWS && work > CB_ERROR_BUDGET && !st.opt->measure_all;
     st.error_stride = subset ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
     p->error_rows_measured = 0;
     if (facts->skinned) {
@@ -379,6 +403,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
         if (palette_measure_rest(&st)) for_each_clip(&st, palette_measure_rest_job, true, 0);
         if (first_clip_error(&st, err)) goto fail;
         for (uint32_t c = 0; c < p->clip_count; ++c) {
+            if (palette_clip_timed(&st, c)) continue; /* measured once laid out */
             p->max_error = fmax(p->max_error, st.clip_error[c]);
             p->clips[c].visible_error = fmax(st.clip_error[c], st.clip_blend_error[c]);
             p->visible_error = fmax(p->visible_error, p->clips[c].visible_error);
@@ -423,10 +448,13 @@ cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *op
                                   cb_palette *p, cb_error *err)
 {
     if (opt->bone_space == CB_BONE_SPACE_LOCAL) return palette_bake_local(sampler, opt, plan, plan_count, facts, probe, p, err);
-    if (facts) return bake_with_fallback(sampler, opt, plan, plan_count, facts, probe, p, err);
-    palette_skin_facts own;
-    cb_status rc = palette_skin_facts_build(sampler, &own, err);
-    if (!rc) rc = bake_with_fallback(sampler, opt, plan, plan_count, &own, probe, p, err);
+    palette_skin_facts own = {0};
+    cb_status rc = facts ? CB_OK : palette_skin_facts_build(sampler, &own, err);
+    if (!facts) facts = &own;
+    if (!rc) rc = bake_with_fallback(sampler, opt, plan, plan_count, facts, probe, p, err);
+    /* Timed clips (global_timed.c) were baked uniform at their cell rate: their rows on their cells kept */
+    if (!rc && lays_out_timed(opt, plan, plan_count) && (rc = palette_time_global_rows(sampler, opt, plan, plan_count, facts, probe, p, err)))
+        cb_palette_free(p);
     palette_skin_facts_free(&own);
     return rc;
 }

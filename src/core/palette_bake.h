@@ -111,7 +111,12 @@ typedef struct bake_state {
     pose_batch *batch;      /* the probe's, for its one worker (on st->lent); or NULL: each worker's own */
     struct clip_memo *memo; /* the run's analyses (palette_probe.memo), or NULL */
     double baked_worst;     /* palette_measure_rest's: the worst baked row every clip's job measured */
+    const cb_clip_plan *plan; /* the bake's plan, or NULL: its timed clips, baked here at their cell rate, are measured
+                               * once laid out (global_timed.c), not here */
 } bake_state;
+
+/* Whether clip c is timed in the bake's plan: baked at its cell rate, measured once laid out. */
+static inline bool palette_clip_timed(const bake_state *st, uint32_t c) { return st->plan && st->plan[c].timed_rows; }
 
 /* A clip's bounds while it is sampled, kept in double: rounding the extremes to float at the
  * end gives the floats that rounding every candidate would (rounding is monotonic). */

@@ -584,6 +584,7 @@ void palette_measure_job(bake_state *st, worker *w, uint32_t k)
     bool split = measure_split(st);
     uint32_t c = split ? k / 2 : k;
     bool blends = !split || k % 2 == 0, rows = !split || k % 2 == 1; /* what this job measures */
+    if (palette_clip_timed(st, c)) return; /* measured once laid out (global_timed.c) */
     measure_scratch *s = worker_scratch(st, w, c);
     /* A sampled row interval errs most halfway (a chord under an arc); fitted rows err both
      * ways, so their quarter points are measured too. */

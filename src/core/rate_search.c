@@ -9,6 +9,7 @@
 #include <threads.h>
 
 #include "cb_math.h"
+#include "global_timed.h" /* global rows on their keys, asked for */
 #include "key_grid.h"
 #include "local_rate.h"   /* local rows' rates */
 #include "palette_bake.h" /* palette_bake_with_facts */
@@ -535,14 +536,18 @@ static int rate_worker(void *arg)
             continue;
         }
         cb_rate_choice *c = &rs->choices[i];
+        if (rs->kept) cb_clip_plan_release(&rs->plan[i]); /* a job's earlier search's timed rows (its plan's own) */
         rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
                                           max_fps_of(&rs->goals[i]), rs->o->fit ? CB_ROWS_FITTED : rs->goals[i].rows, c,
                                           rs->facts, clip_cache(rs, i, poses, s), !rs->kept, batch,
                                           rs->needed_later && rs->needed_later[i], &rs->errors[i]);
-        if (rs->kept) /* few of its poses read again: palette_bake.h */
-            search_keep_settle(&rs->kept[i], rs->model->skins[rs->skin].joint_count, &rs->kept_bytes, true);
         rs->plan[i].fit = c->fitted;
         c->error_mm = cb_mm_per_m(c->error, rs->height);
+        if (rs->kept && !rs->errors[i].status && global_timed_asked(rs->o, &rs->plan[i])) /* rows on its keys, asked for */
+            global_clip_timed(s, rs->o, &rs->plan[i], rs->facts, rs->kept[i], rs->goals[i].max_error_mm / 1000 * rs->height, c,
+                              &rs->errors[i]);
+        if (rs->kept) /* few of its poses read again: palette_bake.h */
+            search_keep_settle(&rs->kept[i], rs->model->skins[rs->skin].joint_count, &rs->kept_bytes, true);
     }
     pose_cache_free(poses);
     pose_batch_free(batch);

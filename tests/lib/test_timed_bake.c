@@ -246,6 +246,83 @@ static void test_fox_timed_catalog(void **state)
     }
 }
 
+/* Global rows on their keys (--timed-rows on; global_timed.c), as a user bakes them: Cow and Husky's
+ * files hold fewer rows than the default bake's, each timed clip's reason says so and each clip
+ * that keeps its uniform rate what its keys would take; the file read back verifies within the
+ * budget (cb_verify_clip through the file's map, at its rows, halfway and at random times) and
+ * its clips' errors are the bake's; -j 1 and -j 4 write the same bytes. */
+static void global_timed_file(const char *asset, uint32_t least_timed)
+{
+    char model[1024], log[1 << 16], errs[256], out[2][256], dflt[256];
+    shared_path(model, sizeof model, asset);
+    const char *threads[2] = {"1", "4"};
+    for (int i = 0; i < 2; ++i) {
+        snprintf(out[i], sizeof out[i], TEST_TMP "/global_timed_j%s.pal", threads[i]);
+        int rc = run_crowdbake(log, sizeof log, "bake %s -o %s --timed-rows on -j %s", model, out[i], threads[i]);
+        if (rc) fail_msg("bake failed (%d): %s", rc, log);
+    }
+    snprintf(dflt, sizeof dflt, TEST_TMP "/global_default.pal");
+    char dlog[1 << 14];
+    assert_int_equal(run_crowdbake(dlog, sizeof dlog, "bake %s -o %s -q", model, dflt), 0);
+    size_t a_size, b_size;
+    char *a = read_whole_file(out[0], &a_size), *b = read_whole_file(out[1], &b_size);
+    assert_non_null(a), assert_non_null(b);
+    assert_int_equal(a_size, b_size);
+    assert_memory_equal(a, b, a_size);
+    free(a), free(b);
+    cbpal_file f, d;
+    if (cbpal_open(out[0], CBPAL_VERIFY_CHECKSUM, &f, errs, sizeof errs) || cbpal_open(dflt, 0, &d, errs, sizeof errs))
+        fail_msg("%s", errs);
+    assert_int_equal(f.header.version, 7);
+    assert_true(f.header.flags & CBPAL_FLAG_TIMED_ROWS);
+    assert_true(f.header.rows < d.header.rows); /* fewer rows, the maps' counted */
+    cb_model *m = load_or_fail(model);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    cb_palette view;
+    assert_int_equal(cb_palette_view(&f, &view, &err), CB_OK);
+    assert_int_equal(view.bone_space, CB_BONE_SPACE_GLOBAL);
+    double worst = 0, budget = 1e-3 * view.model_height;
+    uint32_t timed = 0;
+    for (uint32_t c = 0; c < view.clip_count; ++c) {
+        cb_clip_error e;
+        assert_int_equal(cb_verify_clip(s, &view, f.texels, c, cb_model_find_animation(m, view.clips[c].name), 16, &e, &err),
+                         CB_OK);
+        worst = fmax(worst, fmax(e.interp_max, e.quant_max));
+        timed += view.clips[c].timed;
+        /* its line: taken where fewer bytes, else what its keys would take (or nothing, where no split of 4 meets it) */
+        char line[160];
+        snprintf(line, sizeof line, "%s ", view.clips[c].name);
+        const char *at = strstr(log, line);
+        assert_non_null(at);
+        const char *eol = strchr(at, '\n');
+        bool said = strstr(at, "rows on its keys (a map of") && strstr(at, "rows on its keys (a map of") < eol;
+        assert_int_equal(said, view.clips[c].timed);
+        if (said) assert_true(strstr(at, "sampled rows: fewer bytes within its budget") < eol);
+    }
+    printf("  %s --timed-rows on: %u rows (%u timed clips) against the default's %u; verified %.3g mm/m\n", asset,
+           f.header.rows, timed, d.header.rows, 1000 * worst / view.model_height);
+    assert_true(timed >= least_timed);
+    assert_true(worst <= 1.05 * budget);
+    assert_non_null(strstr(log, "no fewer bytes")); /* an idle at its key rate keeps it */
+    cb_palette_view_free(&view);
+    cb_sampler_free(s);
+    cb_model_free(m);
+    cbpal_close(&f), cbpal_close(&d);
+    /* Beside an EXR (no place for a map): the EXR holds the timed clips uniform at their cell rate, within the budget */
+    assert_int_equal(run_crowdbake(log, sizeof log, "bake %s -o " TEST_TMP "/global_timed_both.pal --format pal,exr "
+                                   "--precision half --timed-rows on -q", model), 0);
+    assert_int_equal(run_crowdbake(log, sizeof log, "verify %s " TEST_TMP "/global_timed_both.exr --max-error 1", model), 0);
+    assert_int_equal(run_crowdbake(log, sizeof log, "verify %s " TEST_TMP "/global_timed_both.pal --max-error 1", model), 0);
+}
+
+static void test_global_timed_rows(void **state)
+{
+    (void)state;
+    global_timed_file("assets/quaternius-cow/Cow.glb", 7);
+    global_timed_file("assets/quaternius-husky/Husky.glb", 3);
+}
+
 static void test_fox_timed_rows(void **state)
 {
     (void)state;
@@ -265,6 +342,7 @@ int main(void)
         cmocka_unit_test(test_husky_timed_rows),
         cmocka_unit_test(test_fox_timed_file),
         cmocka_unit_test(test_fox_timed_catalog),
+        cmocka_unit_test(test_global_timed_rows),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
