@@ -75,11 +75,9 @@ cb_status palette_time_global_rows(cb_sampler *s, const cb_bake_options *o, cons
     if (timed_keep_rows(p, plan, o->max_texture_size, m->source, err)) return err->status;
     timed_fill_maps(p, plan);
     if (!facts->skinned) return CB_OK; /* nothing skinned: nothing measured */
-    /* The timed clips measured as their rows were chosen (local_palette_errors on a skeleton of roots:
-     * every row, and the quarter points between every two, through the map), from the poses the
-     * search sampled; the palette's max_error stays the uniform bake's, over every cell's row (a
-     * bound on the rows kept). */
-    p->visible_error = p->max_error;
+    /* The timed clips (which the uniform bake left unmeasured) measured as their rows were chosen
+     * (local_palette_errors on a skeleton of roots: every row, and the quarter points between every
+     * two, through the map), from the poses the search sampled. */
     for (uint32_t c = 0; c < p->clip_count; ++c) {
         cb_palette_clip *clip = &p->clips[c];
         if (clip->timed) {
@@ -95,6 +93,7 @@ cb_status palette_time_global_rows(cb_sampler *s, const cb_bake_options *o, cons
                 rows = e.quant_max, between = e.interp_max;
             }
             clip->visible_error = fmax(rows, between);
+            p->max_error = fmax(p->max_error, rows);
         }
         p->visible_error = fmax(p->visible_error, clip->visible_error);
     }

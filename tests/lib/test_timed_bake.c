@@ -321,6 +321,46 @@ static void test_global_timed_rows(void **state)
     (void)state;
     global_timed_file("assets/quaternius-cow/Cow.glb", 7);
     global_timed_file("assets/quaternius-husky/Husky.glb", 3);
+    /* Rows fitted to the blend (--fit-rows) are kept: timed rows are sampled, so none is timed */
+    char model[1024], log[1 << 14], errs[256];
+    shared_path(model, sizeof model, "assets/quaternius-cow/Cow.glb");
+    assert_int_equal(run_crowdbake(log, sizeof log, "bake %s -o " TEST_TMP "/global_fitted.pal --fit-rows --timed-rows on -q",
+                                   model), 0);
+    cbpal_file f;
+    if (cbpal_open(TEST_TMP "/global_fitted.pal", 0, &f, errs, sizeof errs)) fail_msg("%s", errs);
+    assert_false(f.header.flags & CBPAL_FLAG_TIMED_ROWS);
+    cbpal_close(&f);
+}
+
+/* A catalog's timed_rows = "on" with global rows: the manifest places a timed clip's rows after its map (Cow's
+ * Death: 49 rows on 288 cells at 288 Hz, a map of 4 rows), and an idle at its key rate keeps its uniform rows. */
+static void test_global_timed_catalog(void **state)
+{
+    (void)state;
+    char relative[1024], cwd[1024], model[2100], tmp[1100], log[8192], text[1 << 16];
+    shared_path(relative, sizeof relative, "assets/quaternius-cow/Cow.glb");
+    assert_non_null(getcwd(cwd, sizeof cwd)); /* a catalog's paths are relative to it: absolute ones */
+    snprintf(model, sizeof model, "%s%s%s", relative[0] == '/' ? "" : cwd, relative[0] == '/' ? "" : "/", relative);
+    snprintf(tmp, sizeof tmp, "%s%s%s", TEST_TMP[0] == '/' ? "" : cwd, TEST_TMP[0] == '/' ? "" : "/", TEST_TMP);
+    FILE *f = fopen(TEST_TMP "/global_timed.toml", "w");
+    assert_non_null(f);
+    fprintf(f, "[bake]\ntimed_rows = \"on\"\nout_dir = \"%s/global_timed_roster\"\n[animal.cow]\nmodel = \"%s\"\n"
+               "clips = [\"Death\", \"Idle\"]\n", tmp, model);
+    fclose(f);
+    int rc = run_crowdbake(log, sizeof log, "bake " TEST_TMP "/global_timed.toml");
+    if (rc) fail_msg("catalog bake failed (%d): %s", rc, log);
+    f = fopen(TEST_TMP "/global_timed_roster/roster.json", "r");
+    assert_non_null(f);
+    size_t n = fread(text, 1, sizeof text - 1, f);
+    text[n] = 0;
+    fclose(f);
+    const char *death = strstr(text, "\"name\": \"AnimalArmature|Death\""), *idle = strstr(text, "\"name\": \"AnimalArmature|Idle\"");
+    assert_non_null(death), assert_non_null(idle);
+    assert_true(death < idle); /* in row order: the map's 4 rows, Death's 49, then Idle's */
+    assert_non_null(strstr(death, "\"timed_rows\""));
+    assert_true(strstr(death, "\"timed_rows\"") < idle);
+    assert_null(strstr(idle, "\"timed_rows\""));
+    assert_non_null(strstr(idle, "\"first_row\": 53"));
 }
 
 static void test_fox_timed_rows(void **state)
@@ -343,6 +383,7 @@ int main(void)
         cmocka_unit_test(test_fox_timed_file),
         cmocka_unit_test(test_fox_timed_catalog),
         cmocka_unit_test(test_global_timed_rows),
+        cmocka_unit_test(test_global_timed_catalog),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
