@@ -76,25 +76,18 @@ cb_status palette_time_global_rows(cb_sampler *s, const cb_bake_options *o, cons
     timed_fill_maps(p, plan);
     if (!facts->skinned) return CB_OK; /* nothing skinned: nothing measured */
     /* The timed clips (which the uniform bake left unmeasured) measured as their rows were chosen
-     * (local_palette_errors on a skeleton of roots: every row, and the quarter points between every
-     * two, through the map), from the poses the search sampled. */
-    for (uint32_t c = 0; c < p->clip_count; ++c) {
+     * (on a skeleton of roots: every row, and the quarter points between every two, through the map),
+     * from the poses the search sampled, on the bake's threads. */
+    for (uint32_t c = 0; c < p->clip_count; ++c)
+        if (p->clips[c].timed) p->error_rows_measured += p->clips[c].frames + p->clips[c].map_rows; /* as the file counts */
+    if (p->layout == CB_LAYOUT_QPOS) return palette_measure_composed(s, plan, facts, probe, o->threads, true, p, err);
+    for (uint32_t c = 0; c < p->clip_count; ++c) { /* a rig qpos could not hold after all (baked affine): as `verify` */
         cb_palette_clip *clip = &p->clips[c];
-        if (clip->timed) {
-            double rows, between;
-            int32_t animation = c < count ? plan[c].animation : (int32_t)c;
-            p->error_rows_measured += clip->frames + clip->map_rows; /* every row, as the file counts them */
-            pose_cache *kept = probe && probe->clip_poses ? probe->clip_poses[c] : NULL;
-            if (p->layout == CB_LAYOUT_QPOS) {
-                if (local_palette_errors(s, facts, p, c, animation, kept, &rows, &between, err)) return err->status;
-            } else { /* a rig qpos could not hold after all (baked affine): measured as `verify` measures */
-                cb_clip_error e;
-                if (cb_verify_clip(s, p, p->texels, c, animation, 0, &e, err)) return err->status;
-                rows = e.quant_max, between = e.interp_max;
-            }
-            clip->visible_error = fmax(rows, between);
-            p->max_error = fmax(p->max_error, rows);
-        }
+        cb_clip_error e;
+        if (!clip->timed) continue;
+        if (cb_verify_clip(s, p, p->texels, c, c < count ? plan[c].animation : (int32_t)c, 0, &e, err)) return err->status;
+        clip->visible_error = fmax(e.quant_max, e.interp_max);
+        p->max_error = fmax(p->max_error, e.quant_max);
         p->visible_error = fmax(p->visible_error, clip->visible_error);
     }
     return CB_OK;

@@ -230,7 +230,7 @@ typedef struct clip_errors {
     cb_error err;
 } clip_errors;
 
-/* The measurement of every clip, shared out clip by clip: each thread with its own sampler (a
+/* The measurement of the clips, shared out clip by clip: each thread with its own sampler (a
  * sampler's loop state is the clip it measures), the first its caller's; each answer in its
  * clip's slot, so the errors depend neither on the thread count nor on the order taken. */
 typedef struct measure_share {
@@ -239,6 +239,7 @@ typedef struct measure_share {
     const palette_skin_facts *facts;
     const palette_probe *probe;
     const cb_palette *p;
+    bool timed_only;
     clip_errors *out;
     atomic_uint next;
 } measure_share;
@@ -253,6 +254,7 @@ static void measure_clips(void *arg, uint32_t thread, uint32_t threads)
     for (uint32_t c; (c = atomic_fetch_add(&ms->next, 1)) < ms->p->clip_count;) {
         clip_errors *e = &ms->out[c];
         pose_cache *kept = ms->probe && ms->probe->clip_poses ? ms->probe->clip_poses[c] : NULL;
+        if (ms->timed_only && !ms->p->clips[c].timed) continue;
         if (!s) e->err = fail;
         else local_palette_errors(s, ms->facts, ms->p, c, ms->plan ? ms->plan[c].animation : (int32_t)c, kept, &e->rows,
                                   &e->between, &e->err);
@@ -260,23 +262,18 @@ static void measure_clips(void *arg, uint32_t thread, uint32_t threads)
     if (thread) cb_sampler_free(s);
 }
 
-/* The errors measured composed: at every row (max_error) and at the quarter points between every
- * two (visible_error), on every skinned vertex group that can raise the worst, against the exact
- * pose (local_rate.c: the quarter points, where nlerp's lag peaks; the rows and midpoints the rate
- * search sampled read from its pose caches), on up to `threads` threads. */
-static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, const palette_skin_facts *facts,
-                               const palette_probe *probe, uint32_t threads, cb_palette *p, cb_error *err)
+cb_status palette_measure_composed(cb_sampler *s, const cb_clip_plan *plan, const palette_skin_facts *facts,
+                                   const palette_probe *probe, uint32_t threads, bool timed_only, cb_palette *p, cb_error *err)
 {
-    measure_share ms = {.s = s, .plan = plan, .facts = facts, .probe = probe, .p = p,
+    measure_share ms = {.s = s, .plan = plan, .facts = facts, .probe = probe, .p = p, .timed_only = timed_only,
                         .out = calloc(p->clip_count ? p->clip_count : 1, sizeof *ms.out)};
-    if (!ms.out) return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring local rows", cb_sampler_model(s)->source);
+    if (!ms.out) return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring its rows", cb_sampler_model(s)->source);
     atomic_init(&ms.next, 0);
     threads = threads < 1 ? 1 : threads;
     cb_pool_run(threads > p->clip_count ? p->clip_count : threads, measure_clips, &ms);
-    p->max_error = p->visible_error = 0;
-    p->error_rows_measured = p->rows;
     for (uint32_t c = 0; c < p->clip_count && !err->status; ++c) { /* the first failure in clip order */
         const clip_errors *e = &ms.out[c];
+        if (timed_only && !p->clips[c].timed) continue;
         if (e->err.status) {
             *err = e->err;
             break;
@@ -287,6 +284,18 @@ static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, const pa
     }
     free(ms.out);
     return err->status;
+}
+
+/* The errors measured composed: at every row (max_error) and at the quarter points between every
+ * two (visible_error), on every skinned vertex group that can raise the worst, against the exact
+ * pose (local_rate.c: the quarter points, where nlerp's lag peaks; the rows and midpoints the rate
+ * search sampled read from its pose caches), on up to `threads` threads. */
+static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, const palette_skin_facts *facts,
+                               const palette_probe *probe, uint32_t threads, cb_palette *p, cb_error *err)
+{
+    p->max_error = p->visible_error = 0;
+    p->error_rows_measured = p->rows;
+    return palette_measure_composed(s, plan, facts, probe, threads, false, p, err);
 }
 
 cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
