@@ -168,6 +168,30 @@ static void check_rig(const char *asset, const char *reference, bool loops, cons
     baked_free(&aut), baked_free(&off), baked_free(&on);
 }
 
+/* A .pal file read back as a game reads it (cb_palette_view, left open in *view for the caller's checks) and
+ * every clip verified (cb_verify_clip: its rows, halfway and at 16 random times, through a timed clip's map):
+ * the worst error (model units), and how many clips are timed. */
+static double verified_file(const char *model_path, const cbpal_file *f, cb_palette *view, uint32_t *timed)
+{
+    cb_model *m = load_or_fail(model_path);
+    cb_error err = {0};
+    cb_sampler *s = cb_sampler_create(m, 0, &err);
+    assert_non_null(s);
+    assert_int_equal(cb_palette_view(f, view, &err), CB_OK);
+    double worst = 0;
+    *timed = 0;
+    for (uint32_t c = 0; c < view->clip_count; ++c) {
+        cb_clip_error e;
+        assert_int_equal(cb_verify_clip(s, view, f->texels, c, cb_model_find_animation(m, view->clips[c].name), 16, &e, &err),
+                         CB_OK);
+        worst = fmax(worst, fmax(e.interp_max, e.quant_max));
+        *timed += view->clips[c].timed;
+    }
+    cb_sampler_free(s);
+    cb_model_free(m);
+    return worst;
+}
+
 /* The files: `crowdbake bake --bone-space local` writes Fox's timed Run (.pal version 7, flag bit
  * 6; --timed-rows off: version 6, no timed clip), and the file read back verifies within the budget
  * (cb_palette_view, cb_verify_clip: every clip's rows and between them through the file's map). */
@@ -187,27 +211,14 @@ static void test_fox_timed_file(void **state)
         if (cbpal_open(out, CBPAL_VERIFY_CHECKSUM, &f, errs, sizeof errs)) fail_msg("%s", errs);
         assert_int_equal(f.header.version, i == 0 ? 7 : 6);
         assert_int_equal((f.header.flags & CBPAL_FLAG_TIMED_ROWS) != 0, i == 0);
-        cb_model *m = load_or_fail(model);
-        cb_error err = {0};
-        cb_sampler *s = cb_sampler_create(m, 0, &err);
         cb_palette view;
-        assert_int_equal(cb_palette_view(&f, &view, &err), CB_OK);
-        double worst = 0, budget = 1e-3 * view.model_height;
-        uint32_t timed = 0;
-        for (uint32_t c = 0; c < view.clip_count; ++c) {
-            cb_clip_error e;
-            assert_int_equal(cb_verify_clip(s, &view, f.texels, c, cb_model_find_animation(m, view.clips[c].name), 16, &e, &err),
-                             CB_OK);
-            worst = fmax(worst, fmax(e.interp_max, e.quant_max));
-            timed += view.clips[c].timed;
-        }
+        uint32_t timed;
+        double worst = verified_file(model, &f, &view, &timed), budget = 1e-3 * view.model_height;
         printf("  Fox, --timed-rows %s: %u rows, %u timed clips, verified %.3g mm/m\n", modes[i], view.rows, timed,
                1000 * worst / view.model_height);
         assert_int_equal(timed, i == 0 ? 1 : 0);
         assert_true(worst <= 1.05 * budget);
         cb_palette_view_free(&view);
-        cb_sampler_free(s);
-        cb_model_free(m);
         cbpal_close(&f);
     }
 }
@@ -276,20 +287,11 @@ static void global_timed_file(const char *asset, uint32_t least_timed)
     assert_int_equal(f.header.version, 7);
     assert_true(f.header.flags & CBPAL_FLAG_TIMED_ROWS);
     assert_true(f.header.rows < d.header.rows); /* fewer rows, the maps' counted */
-    cb_model *m = load_or_fail(model);
-    cb_error err = {0};
-    cb_sampler *s = cb_sampler_create(m, 0, &err);
     cb_palette view;
-    assert_int_equal(cb_palette_view(&f, &view, &err), CB_OK);
+    uint32_t timed;
+    double worst = verified_file(model, &f, &view, &timed), budget = 1e-3 * view.model_height;
     assert_int_equal(view.bone_space, CB_BONE_SPACE_GLOBAL);
-    double worst = 0, budget = 1e-3 * view.model_height;
-    uint32_t timed = 0;
     for (uint32_t c = 0; c < view.clip_count; ++c) {
-        cb_clip_error e;
-        assert_int_equal(cb_verify_clip(s, &view, f.texels, c, cb_model_find_animation(m, view.clips[c].name), 16, &e, &err),
-                         CB_OK);
-        worst = fmax(worst, fmax(e.interp_max, e.quant_max));
-        timed += view.clips[c].timed;
         /* its line: taken where fewer bytes, else what its keys would take (or nothing, where no split of 4 meets it) */
         char line[160];
         snprintf(line, sizeof line, "%s ", view.clips[c].name);
@@ -306,8 +308,6 @@ static void global_timed_file(const char *asset, uint32_t least_timed)
     assert_true(worst <= 1.05 * budget);
     assert_non_null(strstr(log, "no fewer bytes")); /* an idle at its key rate keeps it */
     cb_palette_view_free(&view);
-    cb_sampler_free(s);
-    cb_model_free(m);
     cbpal_close(&f), cbpal_close(&d);
     /* Beside an EXR (no place for a map): the EXR holds the timed clips uniform at their cell rate, within the budget */
     assert_int_equal(run_crowdbake(log, sizeof log, "bake %s -o " TEST_TMP "/global_timed_both.pal --format pal,exr "
