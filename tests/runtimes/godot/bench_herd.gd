@@ -63,6 +63,8 @@ func _ready() -> void:
 		auto.free()
 		if herds.has("bones") and "_far_only" in herds["bones"]: # every instance in the far tier: the far-only build drew
 			c["bones_far_only"] = herds["bones"]._far_only
+		if herds.has("bones") and "_one_only" in herds["bones"]: # and in the 1-influence tier: its 1-influence build
+			c["bones_one_only"] = herds["bones"]._one_only
 		for method in herds:
 			var t: Array = times[method]
 			t.sort()

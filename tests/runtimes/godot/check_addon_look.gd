@@ -345,10 +345,12 @@ func _check_lod_auto(roster, mesh: Mesh) -> void:
 
 # The bone pass's far tier as a game meets it: two grazing Cows (bone_pass "always") drawn through the build that
 # reads each instance's tier while they are near, through the far-only build once both are under halves_pixels()
-# tall; that build is the program the herd drew once at setup (_warm_far_build: no compile at the first switch, mid-
-# game), retired after that frame, and it draws the pixels the build that reads each tier draws for far instances.
+# tall, and through its 1-influence build once both are in the animation LOD's 1-influence tier too; those builds are
+# the programs the herd drew once at setup (_warm_far_builds: no compile at the first switch, mid-game), retired after
+# that frame, and each draws the pixels the build that reads each instance's tier (and counts each vertex's
+# influences) draws for those instances.
 func check_far_tier(roster, mesh: Mesh) -> void:
-	var name := "bone pass far tier: the far-only build, drawn once at setup, while every instance is far; the same pixels as the per-instance build"
+	var name := "bone pass far tier: the far-only builds, drawn once at setup, while every instance is far (and in the 1-influence tier); the same pixels as the per-instance build"
 	addon._begin(name)
 	addon._viewport.size = Vector2i(128, 128)
 	var herd: MultiMeshInstance3D = addon._herd_script.new()
@@ -356,7 +358,9 @@ func check_far_tier(roster, mesh: Mesh) -> void:
 	herd.bone_pass = "always"
 	addon._viewport.add_child(herd)
 	herd.setup(roster, "cow", mesh, 2)
-	var warmed: bool = herd._warm_up != null and herd._warm_up.is_inside_tree() and herd._warm_up.material_override.shader == herd._far_shader
+	var warm_shaders: Array = herd._warm_ups.map(func(w): return w.material_override.shader if w.is_inside_tree() else null)
+	var warmed: bool = warm_shaders == [herd._far_shader, herd._far_one_shader]
+	herd.lod = Vector2(2, 1) # every influence over 2 pixels tall: the far tier alone
 	var bounds: AABB = herd.palette.largest_bounds()
 	var unit_tall := Basis(Vector3.UP, PI / 2).scaled(Vector3.ONE / bounds.size.y)
 	for i in 2:
@@ -366,20 +370,28 @@ func check_far_tier(roster, mesh: Mesh) -> void:
 	addon._camera.transform = Transform3D(Basis(), Vector3(0, 0, 1.5))
 	await addon._frame()
 	var near: bool = not herd._far_only and herd.materials[0].shader == herd._mixed_shader
-	var retired: bool = herd._warm_up == null
+	var retired: bool = herd._warm_ups.is_empty()
 	addon._camera.transform = Transform3D(Basis(), Vector3(0, 0, 6))
 	var far: Image = await addon._frame()
-	var far_only: bool = herd._far_only and herd.materials[0].shader == herd._far_shader
+	var far_only: bool = herd._far_only and not herd._one_only and herd.materials[0].shader == herd._far_shader
 	herd._set_far_only(false) # the build that reads each instance's tier, both still marked far
 	var per_instance: Image = await addon._frame()
+	herd.lod = Vector2(1e9, 1e9) # every instance in the 1-influence tier, as a herd seen from afar
+	var one: Image = await addon._frame()
+	var one_only: bool = herd._far_only and herd._one_only and herd.materials[0].shader == herd._far_one_shader
+	herd._set_far_only(false) # the build that counts each vertex's influences (1 at every vertex in this tier)
+	var one_counted: Image = await addon._frame()
 	var halves_pixels: float = herd.halves_pixels()
 	herd.queue_free()
 	addon._viewport.size = Vector2i(64, 64)
 	var covered: int = addon._covered(far)[1]
 	var differ: int = addon._differ(far, per_instance)
-	print("crowdbake-check: far tier: warmed at setup %s, retired after a frame %s, near %s, far-only %s; %d pixels covered far, %d differ from the per-instance build (halves_pixels %.1f)"
-			% [warmed, retired, near, far_only, covered, differ, halves_pixels])
-	addon._end(name, "" if warmed and retired and near and far_only and covered > 40 and differ == 0 else "see the numbers above")
+	var one_covered: int = addon._covered(one)[1]
+	var one_differ: int = addon._differ(one, one_counted)
+	print("crowdbake-check: far tier: warmed at setup %s, retired after a frame %s, near %s, far-only %s, 1-influence %s; %d pixels covered far, %d differ from the per-instance build; %d covered in the 1-influence tier, %d differ from the per-instance build (halves_pixels %.1f)"
+			% [warmed, retired, near, far_only, one_only, covered, differ, one_covered, one_differ, halves_pixels])
+	var ok := warmed and retired and near and far_only and one_only and covered > 40 and differ == 0
+	addon._end(name, "" if ok and one_covered > 40 and one_differ == 0 else "see the numbers above")
 
 # A frame of one Cow grazing (2.5 s in), side on and `scale` units tall, at the camera's place for a
 # unit-tall Cow filling the view; lod null: the herd's default (lod_auto).

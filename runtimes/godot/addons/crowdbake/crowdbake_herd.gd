@@ -104,18 +104,24 @@ var _lod_size := 0.0 # the animation LOD's measure of the animal: its clips' lar
 var _far_dirty := true # place(), update_bounds() (a caller's own transforms), setup: some instance's placement
 var _far_view_projection := Projection()
 var _far_unit := -1.0
+var _far_lod := Vector2(-1, -1)
 var _far_to_world := Transform3D()
 var _max_travel := 0.0 # model units: the farthest any row's travel offset puts the body from its placed point
 # A CPU rasteriser (SwiftShader under the web export) runs both sides of every `if`, so the far tier's `if` skips no
 # fetch there: while every instance is in the far tier (a large herd seen from afar), the materials take a build of
-# the shader without the lo-half fetches at all (_herd_shader(true)), 3 fetches an influence instead of 6.
+# the shader without the lo-half fetches at all (_herd_shader(true)), 3 fetches an influence instead of 6. And it runs
+# a loop until the last vertex of its group leaves it (Cow: 2.5 bones a vertex), so while every instance is also in
+# the animation LOD's 1-influence tier (lod.y), they take the build that reads each vertex's largest bone alone, with
+# no weights, count or loop (_herd_shader(true, true)): the web runtime's 1-influence tier, drawn as one draw.
 var _mixed_shader: Shader
 var _far_shader: Shader
+var _far_one_shader: Shader
 var _far_only := false
-# A renderer compiles a shader's program where it first draws it: the far-only build is drawn once at setup, by one
-# instance shrunk to a point (_warm_far_build), so that the herd's first switch to it mid-game costs no compile.
-var _warm_up: MultiMeshInstance3D
-var _warm_up_frame := -1 # Engine.get_frames_drawn() when the herd was first drawn with _warm_up
+var _one_only := false # with _far_only: every instance in the 1-influence tier too (_far_one_shader)
+# A renderer compiles a shader's program where it first draws it: the far-only builds are drawn once at setup, each by
+# one instance shrunk to a point (_warm_far_builds), so that the herd's first switch to one mid-game costs no compile.
+var _warm_ups: Array[MultiMeshInstance3D] = []
+var _warm_up_frame := -1 # Engine.get_frames_drawn() when the herd was first drawn with _warm_ups
 
 func _ready() -> void:
 	if roster and not animal.is_empty() and mesh and count > 0 and palette == null:
@@ -157,7 +163,9 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 	materials = look["materials"]
 	_mixed_shader = materials[0].shader if not materials.is_empty() else null
 	_far_shader = _herd_shader(true) if uses_bone_pass else null
+	_far_one_shader = _herd_shader(true, true) if uses_bone_pass else null
 	_far_only = false
+	_one_only = false
 	surfaces_merged = look["merged"]
 	_set_lod()
 	var mm := _new_multimesh(look["mesh"], instances)
@@ -177,16 +185,17 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 			return false
 	update_bounds()
 	_build_bone_pass()
-	_warm_far_build(look["mesh"])
+	_warm_far_builds(look["mesh"])
 	_upload()
 	return true
 
 # The herd shader with the palette's layout and precision, its include inlined (so that it also
 # resolves outside res://) and every uniform set. far_only: the bone pass's build for a herd whose every instance is
-# in the far tier (_set_far_tier switches to it while that holds), which has no lo-half fetches at all.
-func _material(far_only := false) -> ShaderMaterial:
+# in the far tier (_set_far_tier switches to it while that holds), which has no lo-half fetches at all; one: and in
+# the 1-influence tier, its largest bone alone.
+func _material(far_only := false, one := false) -> ShaderMaterial:
 	var material := ShaderMaterial.new()
-	material.shader = _herd_shader(far_only)
+	material.shader = _herd_shader(far_only, one)
 	for key in ["bind_positions", "positions_relative", "row_texels", "rows_per_block", "bounds_min", "bounds_max", "linear_range",
 			"local_rows"]:
 		material.set_shader_parameter(key, palette.get(key))
@@ -194,8 +203,8 @@ func _material(far_only := false) -> ShaderMaterial:
 	material.set_shader_parameter("instances_per_row", INSTANCES_PER_ROW)
 	return material
 
-func _herd_shader(far_only: bool) -> Shader:
-	return _built(_SHADER, {"CB_BONE_PASS": int(uses_bone_pass), "CB_FAR_ONLY": int(far_only)})
+func _herd_shader(far_only: bool, one := false) -> Shader:
+	return _built(_SHADER, {"CB_BONE_PASS": int(uses_bone_pass), "CB_FAR_ONLY": int(far_only), "CB_ONE_INFLUENCE": int(one)})
 
 # A build of the addon's shader `source`: its includes inlined (so that it also resolves outside res://) and each
 # `#define NAME N` line set, for the palette's layout and precision and the other `defines`.
@@ -446,24 +455,28 @@ func _set_lod() -> void:
 	_set_far_tier(view_projection, unit)
 
 # With the bone pass, each instance's far tier (the instance texture's float 10: 1 under halves_pixels() tall, as the
-# shader measures an instance's size for its influences; unit 0: none). Measured again only when the camera's
-# view-projection, the unit, the herd's transform or some instance's placement changed since the last time (not every
-# frame over every instance). A placed instance is measured at its place()'s point, its depth w taken as near as its
+# shader measures an instance's size for its influences; unit 0: none), and whether every instance is also in the
+# 1-influence tier (under lod.y tall: the shader's count at every vertex of it). Measured again only when the camera's
+# view-projection, the unit, lod, the herd's transform or some instance's placement changed since the last time (not
+# every frame over every instance). A placed instance is measured at its place()'s point, its depth w taken as near as its
 # rows' travel offsets (_max_travel, the body's per-row drift from that point, which moves every frame) can bring it,
 # so that the tier holds for the drawn body at any row; an instance the caller moved itself, at its transform.
 func _set_far_tier(view_projection: Projection, unit: float) -> void:
 	if not uses_bone_pass or multimesh == null or _data.size() < count * FLOATS:
 		return
 	var to_world := global_transform if unit > 0.0 else Transform3D()
-	if not _far_dirty and unit == _far_unit and view_projection == _far_view_projection and to_world == _far_to_world:
+	if not _far_dirty and unit == _far_unit and view_projection == _far_view_projection and to_world == _far_to_world \
+			and lod == _far_lod:
 		return
 	_far_dirty = false
 	_far_unit = unit
 	_far_view_projection = view_projection
 	_far_to_world = to_world
+	_far_lod = lod
 	var under := halves_pixels()
 	var w_row := Vector3(view_projection.x.w, view_projection.y.w, view_projection.z.w) # w = w_row . p + w.w
 	var far_count := 0
+	var one_count := 0
 	for i in count:
 		var far := 0.0
 		if unit > 0.0:
@@ -471,21 +484,26 @@ func _set_far_tier(view_projection: Projection, unit: float) -> void:
 			var w := absf((view_projection * Vector4(model.origin.x, model.origin.y, model.origin.z, 1.0)).w)
 			if _placed[i]: # |basis d| <= the basis' Frobenius norm x |d|
 				w -= w_row.length() * Vector3(model.basis.x.length(), model.basis.y.length(), model.basis.z.length()).length() * _max_travel
-			far = 1.0 if w > 0.0 and unit * model.basis.x.length() / w < under else 0.0
+			var pixels := unit * model.basis.x.length() / w if w > 0.0 else INF
+			far = 1.0 if pixels < under else 0.0
+			one_count += int(pixels < lod.y)
 		far_count += int(far)
 		if _data[i * FLOATS + 10] != far:
 			_data[i * FLOATS + 10] = far
 			_dirty = true
-	_set_far_only(count > 0 and far_count == count)
+	_set_far_only(count > 0 and far_count == count, count > 0 and one_count == count)
 
 # The materials' shader: the far-only build while every instance is in the far tier (the instance texture, uploaded
-# this same frame, says so for each), else the one that reads each instance's tier.
-func _set_far_only(far_only: bool) -> void:
-	if far_only == _far_only or _mixed_shader == null:
+# this same frame, says so for each), its 1-influence build while every instance is in that tier too, else the one
+# that reads each instance's tier.
+func _set_far_only(far_only: bool, one_only := false) -> void:
+	one_only = far_only and one_only
+	if (far_only == _far_only and one_only == _one_only) or _mixed_shader == null:
 		return
 	_far_only = far_only
+	_one_only = one_only
 	for m in materials:
-		m.shader = _far_shader if far_only else _mixed_shader
+		m.shader = _far_one_shader if one_only else _far_shader if far_only else _mixed_shader
 	if _bone_rect != null: # the lo halves' block is not drawn while no vertex reads it
 		_bone_rect.size.y = _bone_viewport.size.y / (2 if far_only else 1)
 
@@ -498,36 +516,39 @@ func _new_multimesh(mesh: Mesh, count: int) -> MultiMesh:
 	mm.instance_count = count
 	return mm
 
-# The far-only build drawn once (one instance of the herd's mesh, its transform a point: no pixel, but the program
-# compiled, in the same variants as the herd's: MultiMesh, colours, shadows), never culled; _retire_warm_up frees it
-# once a frame has been drawn with it.
-func _warm_far_build(herd_mesh: Mesh) -> void:
-	if _warm_up != null:
-		_warm_up.queue_free()
-		_warm_up = null
+# The far-only builds drawn once (each by one instance of the herd's mesh, its transform a point: no pixel, but the
+# program compiled, in the same variants as the herd's: MultiMesh, colours, shadows), never culled; _retire_warm_up
+# frees them once a frame has been drawn with them.
+func _warm_far_builds(herd_mesh: Mesh) -> void:
+	for warm_up in _warm_ups:
+		warm_up.queue_free()
+	_warm_ups.clear()
+	_warm_up_frame = -1
 	if _far_shader == null:
 		return
 	var mm := _new_multimesh(herd_mesh, 1)
 	mm.set_instance_transform(0, Transform3D(Basis.from_scale(Vector3.ZERO), Vector3.ZERO))
-	var material := ShaderMaterial.new()
-	material.shader = _far_shader
-	_warm_up = MultiMeshInstance3D.new()
-	_warm_up.multimesh = mm
-	_warm_up.material_override = material
-	_warm_up.cast_shadow = cast_shadow
-	_warm_up.custom_aabb = AABB(Vector3.ONE * -1e9, Vector3.ONE * 2e9)
-	_warm_up_frame = -1
-	add_child(_warm_up, false, Node.INTERNAL_MODE_BACK)
+	for shader in [_far_shader, _far_one_shader]:
+		var material := ShaderMaterial.new()
+		material.shader = shader
+		var warm_up := MultiMeshInstance3D.new()
+		warm_up.multimesh = mm
+		warm_up.material_override = material
+		warm_up.cast_shadow = cast_shadow
+		warm_up.custom_aabb = AABB(Vector3.ONE * -1e9, Vector3.ONE * 2e9)
+		_warm_ups.append(warm_up)
+		add_child(warm_up, false, Node.INTERNAL_MODE_BACK)
 
 func _retire_warm_up() -> void:
-	if _warm_up == null:
+	if _warm_ups.is_empty():
 		return
 	if _warm_up_frame < 0:
-		if is_visible_in_tree(): # this frame draws it
+		if is_visible_in_tree(): # this frame draws them
 			_warm_up_frame = Engine.get_frames_drawn()
 	elif Engine.get_frames_drawn() > _warm_up_frame:
-		_warm_up.queue_free()
-		_warm_up = null
+		for warm_up in _warm_ups:
+			warm_up.queue_free()
+		_warm_ups.clear()
 
 # A shader parameter of every surface's material (and of the bone pass's, which reads the same instances and clock).
 func _set_all(key: String, value) -> void:
