@@ -162,7 +162,11 @@ int cmd_report(int argc, char **argv)
     cb_catalog cat;
     char tmp[4096] = "";
     const char *ext = strrchr(path, '.');
-    bool model = cli_file_kind_of(path) == CLI_FILE_MODEL || (ext && (strcasecmp(ext, ".glb") == 0 || strcasecmp(ext, ".gltf") == 0));
+    /* By its first bytes (a model, or a palette that loading a model refuses with the fix), else by its name; the rest
+     * is a catalog (TOML starts with no magic of its own). */
+    cli_file_kind kind = cli_file_kind_of(path);
+    bool model = (kind != CLI_FILE_UNKNOWN && kind != CLI_FILE_MISSING) ||
+                 (ext && (strcasecmp(ext, ".glb") == 0 || strcasecmp(ext, ".gltf") == 0));
     if (model ? open_single_model(path, tmp, sizeof tmp, &cat, &err) : cb_catalog_load(path, &cat, &err))
         return cli_report(&err);
     if (target) apply_target(&cat, target);

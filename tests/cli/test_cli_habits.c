@@ -117,6 +117,33 @@ static void test_other_formats_are_named_with_their_converters(void **state)
     assert_contains("3 clips");
 }
 
+/* crowdbake's own outputs and a catalog, given where a model is wanted, are named with what to give
+ * instead (never "Root element is not a JSON object" for a .pal, nor a TOML error for one `report`
+ * took for a catalog), exit 4, and nothing is written. */
+static void test_own_outputs_are_named_where_a_model_is_wanted(void **state)
+{
+    (void)state;
+    assert_int_equal(crowdbake("bake %s -o " TMP "/own.pal -q", fox), 0);
+    write_text(TMP "/roster.json", "{\n  \"schema\": \"crowdbake-roster/1\",\n  \"types\": {}\n}\n");
+    write_text(TMP "/herd.toml", "[animal.fox]\nmodel = \"fox.glb\"\n");
+    static const char *const files[][2] = {{"own.pal", "not a model but a crowdbake palette (.pal)"},
+                                           {"roster.json", "not a model but a roster manifest"},
+                                           {"herd.toml", "a catalog, not a model"}};
+    static const char *const commands[] = {"info", "bake", "vat", "report"};
+    for (size_t i = 0; i < COUNT_OF(files); ++i)
+        for (size_t c = 0; c < COUNT_OF(commands); ++c) {
+            bool catalog_reader = strcmp(commands[c], "bake") == 0 || strcmp(commands[c], "report") == 0;
+            if (catalog_reader && i == 2) continue; /* they read catalogs */
+            bool writes = strcmp(commands[c], "bake") == 0 || strcmp(commands[c], "vat") == 0;
+            assert_int_equal(crowdbake("%s " TMP "/%s%s", commands[c], files[i][0], writes ? " -o " TMP "/out.pal" : ""),
+                             EXIT_INPUT);
+            assert_contains(files[i][1]);
+            assert_int_equal(strchr(out, '\n'), out + strlen(out) - 1); /* one line */
+            struct stat st;
+            assert_int_not_equal(stat(TMP "/out.pal", &st), 0);
+        }
+}
+
 /* A bake's bytes, to compare two spellings of the same clips. */
 static char *bake_bytes(const char *clips, size_t *n)
 {
@@ -405,6 +432,7 @@ int main(void)
         cmocka_unit_test(test_version_and_help_command),
         cmocka_unit_test(test_output_dash_is_refused),
         cmocka_unit_test(test_other_formats_are_named_with_their_converters),
+        cmocka_unit_test(test_own_outputs_are_named_where_a_model_is_wanted),
         cmocka_unit_test(test_clip_names_match_by_case_and_part),
         cmocka_unit_test(test_info_folds_primitives_and_instances),
         cmocka_unit_test(test_report_progress),
