@@ -1,6 +1,7 @@
 // catalog_toml.cpp - the tomlplusplus adapter: TOML in, a validated cb_catalog out. Every
 // error names the file, line and column, and for unknown keys suggests the nearest known one.
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -549,6 +550,8 @@ extern "C" cb_status cb_catalog_load_checking(const char *path, const char *file
             return cb_fail(err, CB_ERR_INPUT, "%s: larger than 64 MiB; not a catalog", path);
         }
     }
+    int failed = std::ferror(f) ? errno : 0; /* a directory opens, then reads nothing: not an empty catalog */
     std::fclose(f);
+    if (failed) return cb_fail(err, CB_ERR_IO, "%s: cannot read: %s", path, std::strerror(failed));
     return parse(text.data(), text.size(), path, files_of, out, err);
 }

@@ -119,7 +119,7 @@ static void test_other_formats_are_named_with_their_converters(void **state)
 
 /* crowdbake's own outputs and a catalog, given where a model is wanted, are named with what to give
  * instead (never "Root element is not a JSON object" for a .pal, nor a TOML error for one `report`
- * took for a catalog), exit 4, and nothing is written. */
+ * took for a catalog), exit 4, and nothing is written; a folder given as a catalog cannot be read. */
 static void test_own_outputs_are_named_where_a_model_is_wanted(void **state)
 {
     (void)state;
@@ -142,6 +142,13 @@ static void test_own_outputs_are_named_where_a_model_is_wanted(void **state)
             struct stat st;
             assert_int_not_equal(stat(TMP "/out.pal", &st), 0);
         }
+    /* A folder where a catalog is wanted is unreadable, not an empty catalog ("lists no animals") */
+    assert_int_equal(system("mkdir -p " TMP "/folder.toml"), 0);
+    static const char *const folders[] = {"bake " TMP "/folder.toml", "report " TMP "/folder.toml", "report " TMP};
+    for (size_t i = 0; i < COUNT_OF(folders); ++i) {
+        assert_int_equal(crowdbake("%s", folders[i]), EXIT_IO);
+        assert_contains(": cannot read: Is a directory");
+    }
 }
 
 /* A bake's bytes, to compare two spellings of the same clips. */
