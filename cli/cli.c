@@ -250,12 +250,12 @@ cb_model *cli_load_model(const cli_output *out, const char *path, const cb_limit
     return m;
 }
 
-/* What crowdbake itself wrote, given where a model is wanted: a palette (by its first bytes) or a
- * roster manifest (its "schema"); NULL for anything else. Never "not a valid glTF 2.0 file: Root
+/* What crowdbake itself wrote, given where a model is wanted: a palette (kind, by its first bytes) or
+ * a roster manifest (its "schema"); NULL for anything else. Never "not a valid glTF 2.0 file: Root
  * element is not a JSON object" for a bake's own output. */
-static const char *crowdbake_output(const char *path)
+static const char *crowdbake_output(const char *path, cli_file_kind kind)
 {
-    switch (cli_file_kind_of(path)) {
+    switch (kind) {
     case CLI_FILE_PAL: return "a crowdbake palette (.pal)";
     case CLI_FILE_EXR: return "an OpenEXR image (crowdbake writes palettes and VATs as these)";
     case CLI_FILE_KTX2: return "a KTX2 texture (crowdbake writes palettes as these)";
@@ -273,12 +273,13 @@ static const char *crowdbake_output(const char *path)
 
 static cb_model *load_model(const char *path, const cb_limits *limits, cb_error *err)
 {
-    if (cli_file_kind_of(path) == CLI_FILE_UNKNOWN && has_extension(path, ".toml")) {
+    cli_file_kind kind = cli_file_kind_of(path);
+    if (kind == CLI_FILE_UNKNOWN && has_extension(path, ".toml")) {
         cb_fail(err, CB_ERR_INPUT, "%s: a catalog, not a model: this command reads one model (an [animal.NAME]'s model); "
                 "'crowdbake bake' and 'crowdbake report' read catalogs", path);
         return NULL;
     }
-    const char *own = crowdbake_output(path);
+    const char *own = crowdbake_output(path, kind);
     if (own) {
         cb_fail(err, CB_ERR_INPUT, "%s: not a model but %s: give the glTF model it was baked from (.glb or .gltf), or the "
                 "catalog (.toml)", path, own);

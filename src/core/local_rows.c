@@ -252,9 +252,9 @@ static void measure_clips(void *arg, uint32_t thread, uint32_t threads)
     cb_error fail = {0};
     cb_sampler *s = thread ? cb_sampler_create(m, cb_sampler_skin(ms->s), &fail) : ms->s;
     for (uint32_t c; (c = atomic_fetch_add(&ms->next, 1)) < ms->p->clip_count;) {
+        if (ms->timed_only && !ms->p->clips[c].timed) continue;
         clip_errors *e = &ms->out[c];
         pose_cache *kept = ms->probe && ms->probe->clip_poses ? ms->probe->clip_poses[c] : NULL;
-        if (ms->timed_only && !ms->p->clips[c].timed) continue;
         if (!s) e->err = fail;
         else local_palette_errors(s, ms->facts, ms->p, c, ms->plan ? ms->plan[c].animation : (int32_t)c, kept, &e->rows,
                                   &e->between, &e->err);

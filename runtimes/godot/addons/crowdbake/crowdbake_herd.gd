@@ -191,11 +191,10 @@ func setup(roster_resource: Resource, type: String, skinned_mesh: Mesh, instance
 
 # The herd shader with the palette's layout and precision, its include inlined (so that it also
 # resolves outside res://) and every uniform set. far_only: the bone pass's build for a herd whose every instance is
-# in the far tier (_set_far_tier switches to it while that holds), which has no lo-half fetches at all; one: and in
-# the 1-influence tier, its largest bone alone.
-func _material(far_only := false, one := false) -> ShaderMaterial:
+# in the far tier (_set_far_tier switches to it while that holds), which has no lo-half fetches at all.
+func _material(far_only := false) -> ShaderMaterial:
 	var material := ShaderMaterial.new()
-	material.shader = _herd_shader(far_only, one)
+	material.shader = _herd_shader(far_only)
 	for key in ["bind_positions", "positions_relative", "row_texels", "rows_per_block", "bounds_min", "bounds_max", "linear_range",
 			"local_rows"]:
 		material.set_shader_parameter(key, palette.get(key))
