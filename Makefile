@@ -100,7 +100,7 @@ TOOL_A  := $(BUILD)/libcrowdbake_tool.a
 SAMPLES := quadruped fish bird
 SAMPLE_GLB := $(SAMPLES:%=$(BUILD)/samples/%.glb) $(BUILD)/samples/quadruped_lod1.glb
 
-.PHONY: generic bundle bench-scale all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-runs \
+.PHONY: generic bundle bench-scale all install install-web deps demo check check-normal check-asan check-shared check-node test test-asan test-tsan tsan-build test-runs \
         test-lib test-cli test-runtimes test-install test-fuzz readme bake-hashes bench \
         bench-smoke clean samples replay fuzz fuzz-build fuzz-seeds web godot-addon unity-package
 VERSION   := $(shell sed -n 's/^\#define CROWDBAKE_VERSION "\(.*\)"/\1/p' include/crowdbake/core.h)
@@ -414,7 +414,7 @@ RESULTS = $(BUILD)/tests/results
 # The runs of each folder of tests/ (make test-lib, test-cli, test-runtimes, test-install,
 # test-fuzz); the README's example outputs, the pinned bake hashes, the web reader's node tests and
 # the native benchmark's images run once (the sanitizer build need not).
-RUNS_lib      = $(TESTS_lib:%=$(BUILD)/tests/%.run) $(if $(SAN),,$(BUILD)/tests/bake_hashes.run)
+RUNS_lib      = $(TESTS_lib:%=$(BUILD)/tests/%.run) $(if $(SAN),,$(BUILD)/tests/bake_hashes.run $(BUILD)/tests/tsan.run)
 RUNS_cli      = $(TESTS_cli:%=$(BUILD)/tests/%.run) $(if $(SAN),,$(BUILD)/tests/readme_examples.run)
 RUNS_runtimes = $(TESTS_runtimes:%=$(BUILD)/tests/%.run) $(BUILD)/tests/standalone_pal_reader.run \
                 $(if $(SAN),,$(BUILD)/tests/web_reader.run $(BUILD)/tests/bench_gl_images.run)
@@ -501,6 +501,26 @@ $(TEST_GROUPS:%=test-%): test-%: deps check-shared check-node $(NODE_DEPS)
 	@rm -rf $(RESULTS)
 	@$(MAKE) --no-print-directory $(PARALLEL) RUN_SET='$(RUNS_$*)' test-runs || true
 	$(call test_summary,$(BUILD))
+
+# ThreadSanitizer on the threaded paths (tests/tools/tsan_check.py: the library tests below and
+# bakes of the shared models at -j 2 and -j 4), in build/tsan: without the AVX2 clones, whose
+# ifunc resolvers run before the sanitizer's runtime starts, and with C11 threads on POSIX ones
+# preloaded (tests/tools/tsan_threads.c: GCC 12's runtime does not see glibc's). A test of the
+# normal build (make check); `make test-tsan` alone.
+TSAN_BUILD := build/tsan
+TSAN_TESTS := test_pool test_bake_job test_clip_memo
+TSAN := BUILD=$(TSAN_BUILD) OPT=-O1 SAN="-fsanitize=thread -DCB_GENERIC_ONLY"
+$(TSAN_BUILD)/libtsan_threads.so: tests/tools/tsan_threads.c
+	@mkdir -p $(@D)
+	$(CC) -std=c11 -O1 -g $(WARN) -D_POSIX_C_SOURCE=200809L -fPIC -shared $< -o $@ -lpthread
+tsan-build: deps $(TSAN_BUILD)/libtsan_threads.so
+	@$(MAKE) --no-print-directory $(TSAN) $(TSAN_BUILD)/crowdbake $(TSAN_TESTS:%=$(TSAN_BUILD)/tests/%)
+$(BUILD)/tests/tsan.run: all tsan-build | $(RESULTS)/pending
+	$(call record_run,tsan,python3 tests/tools/tsan_check.py --build $(TSAN_BUILD) --samples $(BUILD)/samples \
+	  --shared $(SHARED) $(TSAN_TESTS))
+test-tsan: deps check-shared
+	@rm -f $(RESULTS)/tsan.*
+	@$(MAKE) --no-print-directory RUN_SET=$(BUILD)/tests/tsan.run $(BUILD)/tests/tsan.run
 
 test-asan: deps check-shared check-node $(NODE_DEPS)
 	@rm -rf build/asan/tests/results

@@ -261,8 +261,10 @@ static size_t kept_floats(const bake_state *st, uint32_t c)
 
 float *palette_keep_rows(bake_state *st, uint32_t c, bool fitted)
 {
+    /* No search: nothing to keep them with, and nothing pending. (A bake of many clips on many
+     * threads ends here, before it touches st: its workers' clips all call this at once.) */
+    if (!st->poses) return NULL;
     free(st->pending), st->pending = NULL;
-    if (!st->poses) return NULL; /* no search: nothing to keep them with */
     size_t rows_bytes = (kept_floats(st, c) * sizeof(float) + sizeof(double) - 1) / sizeof(double) * sizeof(double);
     size_t bounds = (size_t)4 * st->infos[c].frames;
     st->pending = malloc(sizeof *st->pending + rows_bytes + bounds * sizeof(double));
