@@ -14,6 +14,7 @@
 #include "bake_travel.h"
 #include "outputs.h"
 #include "plant_feet.h"
+#include "bake_beside.h"
 #include "../core/palette_bake.h" /* palette_choose_rates, the search's poses kept for the bake */
 #include "../core/pose_cache.h"
 #include "../core/clip_memo.h"
@@ -237,11 +238,18 @@ void cb_bake_job_init(cb_bake_job *job)
 }
 
 /* The speed reference nobody gave: the slowest locomotion clip's ground speed (locomotion.h),
- * decided here so that every program baking the model records the same one. Its clips' strides
- * go into the run's foot analyses, which the per-row travel reads again. */
-static void decide_speed_reference(cb_bake_job *job, foot_cache *feet, clip_memo *memo)
+ * decided here so that every program baking the model records the same one - beside the rate
+ * search where there was one (bake_beside.h), else now. Its clips' strides go into the run's
+ * foot analyses, which the per-row travel reads again. */
+static void decide_speed_reference(cb_bake_job *job, foot_cache *feet, clip_memo *memo, bool beside, double speed,
+                                   const char *why)
 {
     if (job->speed_reference >= 0) return;
+    if (beside) {
+        job->speed_reference = speed;
+        snprintf(job->speed_reference_from, sizeof job->speed_reference_from, "%s", why);
+        return;
+    }
     job->speed_reference = speed_reference_cached(feet, memo, job->model, job->skin, job->plan, job->plan_count,
                                                   job->threads ? job->threads : 1, job->speed_reference_from, sizeof job->speed_reference_from);
 }
@@ -318,6 +326,7 @@ cb_status cb_bake_job_plan(cb_bake_job *job, cb_error *err)
         cb_bake_options o = cb_bake_settings_options(&job->settings, first_format(job), &job->limits, job->threads);
         search_keep *keep = search_keep_create(n); /* NULL: nothing kept, as slow */
         job->search_kept = keep;
+        if (keep) keep->beside = bake_beside_create(job); /* the speed reference and travels (NULL: in the run) */
         /* Each searched clip's analysis from the root motion's decision, kept for its search
          * (which takes it where it stands in for its own: palette_take_kept_analysis). */
         for (uint32_t i = 0; s && keep && i < n; ++i)
@@ -502,9 +511,17 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     if (check_outputs(job, err) || cb_bake_job_plan(job, err)) return err->status;
     /* Each clip's feet measured and each clip analyzed once for the whole run (the speed
      * reference, the palette, the per-row travel and the loop notes ask the same), freed with it. */
-    foot_cache *feet = foot_cache_create();
-    foot_cache_screen_strides(feet); /* of a clip that does not stride, a bake reads only that it does not */
-    clip_memo *memo = clip_memo_create();
+    foot_cache *feet;
+    clip_memo *memo;
+    double speed = 0;
+    char why[sizeof job->speed_reference_from];
+    const measured_travel *travel;
+    bool beside = bake_beside_take(job->search_kept, &feet, &memo, &travel, &speed, why, sizeof why);
+    if (!feet) {
+        feet = foot_cache_create();
+        foot_cache_screen_strides(feet); /* of a clip that does not stride, a bake reads only that it does not */
+    }
+    if (!memo) memo = clip_memo_create();
     cb_clip_plan *baked = malloc((job->plan_count ? job->plan_count : 1) * sizeof *baked);
     cb_sampler *s = baked ? cb_sampler_create(job->model, job->skin, err) : NULL;
     if (!baked) cb_fail(err, CB_ERR_INTERNAL, "out of memory");
@@ -512,7 +529,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
     /* The rate searches analyzed their clips: those analyses stand in for the run's */
     const search_keep *searched = job->search_kept;
     for (uint32_t i = 0; searched && i < searched->count; ++i) palette_memo_keep_search(memo, s, searched->poses[i], &job->limits);
-    decide_speed_reference(job, feet, memo);
+    decide_speed_reference(job, feet, memo, beside, speed, why);
     cb_release_free_memory(); /* before the palette's buffers: the load's freed memory */
     cb_palette shared = {0}; /* the last palette baked, written again by a format of the same options */
     cb_bake_options shared_opt = {0};
@@ -541,7 +558,7 @@ cb_status cb_bake_job_run(cb_bake_job *job, cb_bake_result *out, cb_error *err)
             palette_probe kept = {NULL, NULL, keep ? keep->poses : NULL, NULL, memo};
             resolved_plan(job, baked);
             if (palette_bake_with_facts(s, &opt, baked, job->plan_count, search_kept_facts(keep, s), &kept, &shared, err) ||
-                bake_row_travel(job, feet, memo, s, &shared, err))
+                bake_row_travel(job, feet, memo, s, travel, &shared, err))
                 break;
             shared_opt = opt;
         }

@@ -36,40 +36,49 @@ void cb_bake_job_row_travel(const cb_bake_job *job, cb_sampler *s, const cb_clip
     job_row_travel(job, NULL, s, info, offsets, out);
 }
 
+bool bake_clip_travel(const cb_bake_job *job, uint32_t c, struct foot_cache *feet, struct clip_memo *memo, cb_sampler *s,
+                      measured_travel *out)
+{
+    cb_clip_info info;
+    cb_error ignored = {0};
+    *out = (measured_travel){.fps = cb_bake_job_clip_fps(job, c)};
+    if (clip_memo_analyze(memo, s, job->plan[c].animation, out->fps, job->plan[c].loop, &job->limits, &info, &ignored)) {
+        snprintf(out->travel.why, sizeof out->travel.why, "not applied: %.200s", ignored.message);
+        return true;
+    }
+    out->offsets = calloc(info.frames ? info.frames : 1, sizeof *out->offsets);
+    if (!out->offsets) return false;
+    out->cells = info.frames, out->made = true;
+    job_row_travel(job, feet, s, &info, out->offsets, &out->travel);
+    return true;
+}
+
 cb_status bake_row_travel(const cb_bake_job *job, struct foot_cache *feet, struct clip_memo *memo, cb_sampler *s,
-                          cb_palette *p, cb_error *err)
+                          const measured_travel *ahead, cb_palette *p, cb_error *err)
 {
     float *offsets = calloc(p->rows ? p->rows : 1, sizeof *offsets);
     if (!offsets) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
     bool any = false;
     for (uint32_t c = 0; c < p->clip_count && c < job->plan_count; ++c) {
         cb_palette_clip *clip = &p->clips[c];
-        cb_row_travel *t = &clip->travel;
-        memset(t, 0, sizeof *t);
-        cb_clip_info info;
-        cb_error ignored = {0};
-        if (clip_memo_analyze(memo, s, job->plan[c].animation, cb_bake_job_clip_fps(job, c), job->plan[c].loop, &job->limits,
-                              &info, &ignored)) {
-            snprintf(t->why, sizeof t->why, "not applied: %.200s", ignored.message);
-            continue;
-        }
         const cb_clip_plan *plan = &job->plan[c];
+        measured_travel own = {0};
+        const measured_travel *m = ahead && ahead[c].made && ahead[c].fps == cb_bake_job_clip_fps(job, c) ? &ahead[c] : &own;
+        if (m == &own && !bake_clip_travel(job, c, feet, memo, s, &own))
+            return free(offsets), cb_fail(err, CB_ERR_INTERNAL, "out of memory");
+        clip->travel = m->travel;
         bool timed = clip->timed && plan->timed_rows == clip->frames; /* its rows: cells of the rate's framing */
-        if (info.frames != clip->frames && !timed) { /* framed as baked: the rate the bake chose gives its rows */
-            snprintf(t->why, sizeof t->why, "not applied: %u rows baked, %u analyzed", clip->frames, info.frames);
-            continue;
+        if (m->made && m->cells != clip->frames && !timed) { /* framed as baked: the rate the bake chose gives its rows */
+            memset(&clip->travel, 0, sizeof clip->travel);
+            snprintf(clip->travel.why, sizeof clip->travel.why, "not applied: %u rows baked, %u analyzed", clip->frames, m->cells);
+        } else if (m->made) { /* timed: measured at every cell, kept at the rows' */
+            for (uint32_t k = 0; k < clip->frames; ++k) {
+                uint32_t cell = timed ? plan->row_cells[k] : k;
+                offsets[clip->first_row + k] = cell < m->cells ? m->offsets[cell] : 0;
+            }
+            any = any || clip->travel.applied;
         }
-        if (timed) { /* measured at every cell, kept at the rows' */
-            float *cells = calloc(info.frames, sizeof *cells);
-            if (!cells) return free(offsets), cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-            job_row_travel(job, feet, s, &info, cells, t);
-            for (uint32_t k = 0; k < clip->frames; ++k)
-                offsets[clip->first_row + k] = plan->row_cells[k] < info.frames ? cells[plan->row_cells[k]] : 0;
-            free(cells);
-        } else {
-            job_row_travel(job, feet, s, &info, offsets + clip->first_row, t);
-        }
-        any = any || t->applied;
+        free(own.offsets);
     }
     if (!any) free(offsets), offsets = NULL;
     free(p->row_travel);

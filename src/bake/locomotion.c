@@ -107,31 +107,52 @@ static bool clip_follows_speed(int kind, const char *word, bool loops, const cb_
     return cb_decide_locomotion(kind, words, loops, gs, false, reason, sizeof reason);
 }
 
+/* Whether clip i of the plan (or the model's clip i) may follow the speed by its name: not one
+ * whose name says an action (cb_decide_locomotion), whatever its feet do; its kind into *kind. A
+ * clip that is not the model's may (its analysis then fails). */
+static bool name_may_follow(const cb_model *model, const cb_clip_plan *plan, uint32_t i, int *kind, char *word,
+                            size_t size)
+{
+    int32_t a = plan ? plan[i].animation : (int32_t)i;
+    *kind = a >= 0 && (uint32_t)a < model->animation_count ? cb_name_says_locomotion(model->animations[a].name, word, size) : 0;
+    return *kind >= 0;
+}
+
+bool speed_reference_may_measure(const cb_model *model, int32_t animation)
+{
+    int kind;
+    char word[64];
+    cb_clip_plan one = {.animation = animation};
+    return name_may_follow(model, &one, 0, &kind, word, sizeof word);
+}
+
 /* Clip i of the plan (or the model's clip i) analyzed at 30 fps; false when it cannot be, or when
- * it never follows the speed: a one-shot, or a clip whose name says an action
- * (cb_decide_locomotion), whatever its feet do: those are not measured. */
+ * it never follows the speed: a clip whose name says an action (not analyzed: a name decides
+ * first), or a one-shot. Those are not measured. */
 static bool clip_to_measure(clip_memo *memo, cb_sampler *s, const cb_clip_plan *plan, uint32_t i, cb_clip_info *info,
                             int *kind, char *word, size_t size)
 {
-    const cb_model *model = cb_sampler_model(s);
-    int32_t a = plan ? plan[i].animation : (int32_t)i;
     cb_error err = {0};
     cb_limits limits = cb_default_limits();
-    if (clip_memo_analyze(memo, s, a, 30, plan ? plan[i].loop : -1, &limits, info, &err)) return false;
-    *kind = cb_name_says_locomotion(model->animations[a].name, word, size);
-    return info->loops && *kind >= 0;
+    if (!name_may_follow(cb_sampler_model(s), plan, i, kind, word, size)) return false;
+    return !clip_memo_analyze(memo, s, plan ? plan[i].animation : (int32_t)i, 30, plan ? plan[i].loop : -1, &limits,
+                              info, &err) && info->loops;
 }
 
-/* Every clip's analysis as clip_to_measure asks for it, made side by side on the threads first
- * and kept in the run's memo, from which clip_to_measure then takes each. */
+/* The analyses clip_to_measure asks for, made side by side on the threads first and kept in the
+ * run's memo, from which clip_to_measure then takes each. */
 static void prefetch_analyses(clip_memo *memo, const cb_sampler *s, const cb_clip_plan *plan, uint32_t n,
                               uint32_t threads)
 {
     clip_ask *asks = malloc((n ? n : 1) * sizeof *asks);
     cb_limits limits = cb_default_limits();
-    for (uint32_t i = 0; asks && i < n; ++i)
-        asks[i] = (clip_ask){plan ? plan[i].animation : (int32_t)i, 30, plan ? plan[i].loop : -1};
-    if (asks && s) clip_memo_prefetch(memo, s, asks, n, &limits, threads);
+    uint32_t count = 0;
+    int kind;
+    char word[64];
+    for (uint32_t i = 0; asks && s && i < n; ++i)
+        if (name_may_follow(cb_sampler_model(s), plan, i, &kind, word, sizeof word))
+            asks[count++] = (clip_ask){plan ? plan[i].animation : (int32_t)i, 30, plan ? plan[i].loop : -1};
+    if (asks && s) clip_memo_prefetch(memo, s, asks, count, &limits, threads);
     free(asks);
 }
 

@@ -67,5 +67,8 @@ struct clip_memo;
 double speed_reference_cached(foot_cache *cache, struct clip_memo *memo, const cb_model *model, int32_t skin,
                               const cb_clip_plan *plan, uint32_t count, uint32_t threads, char *why,
                               size_t size); /* locomotion.c */
+/* Whether speed_reference_cached analyzes and may measure the model's animation: its name does not
+ * say an action done in place (a clip it cannot analyze at all answers true). */
+bool speed_reference_may_measure(const cb_model *model, int32_t animation); /* locomotion.c */
 
 #endif

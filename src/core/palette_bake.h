@@ -345,12 +345,27 @@ typedef struct palette_probe {
                                     * and their own analyses kept there; or NULL */
 } palette_probe;
 
+struct search_keep;
+/* Work a job runs beside its global rows' rate search (rate_search.c), reading the searches of
+ * the clips reads[i] marks (NULL: none): the first of the search's threads to find all of those
+ * over runs it, once, while the others go on with the clips left - the time a thread otherwise
+ * waits for the longest clip, and no clip's analysis made twice. keep->poses[i] of a clip it
+ * reads is not changed again before the search returns. The keep owns it (search_keep_free calls
+ * release). A search that never takes it (local rows) leaves `taken` false, and its caller does
+ * the work itself. */
+typedef struct search_beside {
+    void (*run)(struct search_beside *self, const struct search_keep *keep);
+    void (*release)(struct search_beside *self);
+    const bool *reads; /* per clip of the keep */
+    atomic_bool taken;
+} search_beside;
+
 /* What a bake job's rate searches keep for the searches after them and the bake: each clip's
  * pose cache (poses[i], NULL: none) and the skin's facts, settled by the first search that
  * needs them for `model` and `skin` (a job's searches and its bake all measure that skin: its
  * facts were built once for the searches and once again for the bake, 1.8 M of Fox's 62.1 M
  * instructions; speed43j). search_keep_create: n clips, nothing kept yet (NULL: out of
- * memory); search_keep_free frees the caches and the facts. */
+ * memory); search_keep_free frees the caches, the facts and the work beside. */
 typedef struct search_keep {
     const cb_model *model;
     int32_t skin;
@@ -358,6 +373,7 @@ typedef struct search_keep {
     palette_skin_facts facts;
     bool local_rates; /* the rates were chosen for local rows (local_rate_search.c), not for global ones */
     pose_arena *arena; /* what poses' blocks come from (NULL: each cache its own), freed after them */
+    search_beside *beside; /* run beside the search, or NULL */
     uint32_t count;
     pose_cache *poses[];
 } search_keep;

@@ -285,6 +285,7 @@ void search_keep_free(search_keep *keep)
 {
     for (uint32_t i = 0; keep && i < keep->count; ++i) pose_cache_free(keep->poses[i]);
     if (keep) pose_arena_free(keep->arena);
+    if (keep && keep->beside) keep->beside->release(keep->beside);
     if (keep && keep->has_facts) palette_skin_facts_free(&keep->facts);
     free(keep);
 }

@@ -466,7 +466,9 @@ double cb_choose_clip_fps(cb_sampler *s, const cb_bake_options *o, const cb_clip
  * sampler (a sampler's scratch is not shared), each clip's answer in its own slot, so the
  * choices do not depend on the thread count nor on the order clips are taken in: the clips
  * with the most work first (search_order), so that no long clip starts last and leaves the
- * other threads waiting (Cow: Eating lasts 6 s, the other clips 0.6-3.3 s). */
+ * other threads waiting (Cow: Eating lasts 6 s, the other clips 0.6-3.3 s). A job's work beside
+ * the search (search_beside: the speed reference, travels) is taken by the first thread to find the
+ * searches it reads over; those clips go first. */
 typedef struct rate_search {
     const cb_model *model;
     int32_t skin;
@@ -484,6 +486,9 @@ typedef struct rate_search {
     pose_arena *arena;     /* what kept's blocks come from, or NULL */
     atomic_size_t kept_bytes;
     const bool *needed_later; /* per clip, or NULL: clips whose caller searches on where they miss */
+    search_beside *beside;    /* the keep's work beside the search, not taken yet, or NULL */
+    const search_keep *keep;
+    atomic_uint unread;       /* the searches it reads not over yet */
 } rate_search;
 
 /* The cache clip i's search samples into: the thread's own (`mine`, emptied for each clip), or,
@@ -507,16 +512,59 @@ static double search_work(const cb_model *m, const cb_clip_plan *plan, const cb_
     return (a->t1 - a->t0) * max_fps_of(goal);
 }
 
-/* The clips in decreasing expected work (ties in clip order), into order. */
-static void search_order(const cb_model *m, const cb_clip_plan *plan, const cb_rate_goal *goals, uint32_t count,
-                         uint32_t *order)
+/* Whether clip a is searched before clip b (a < b), by search_order. */
+static bool searched_before(const cb_model *m, const cb_clip_plan *plan, const cb_rate_goal *goals, const bool *first,
+                            uint32_t a, uint32_t b)
+{
+    bool lead_a = first && first[a], lead_b = first && first[b];
+    return lead_a != lead_b ? lead_a : search_work(m, &plan[a], &goals[a]) >= search_work(m, &plan[b], &goals[b]);
+}
+
+/* The clips in decreasing expected work (ties in clip order), into order; those the work beside
+ * the search reads (first[i], NULL: none) before the others, so that it is ready while clips are
+ * left for the other threads (else the last of them would wait for it). */
+static void search_order(const cb_model *m, const cb_clip_plan *plan, const cb_rate_goal *goals, const bool *first,
+                         uint32_t count, uint32_t *order)
 {
     for (uint32_t i = 0; i < count; ++i) {
-        double work = search_work(m, &plan[i], &goals[i]);
         uint32_t k = i;
-        for (; k > 0 && search_work(m, &plan[order[k - 1]], &goals[order[k - 1]]) < work; --k) order[k] = order[k - 1];
+        for (; k > 0 && !searched_before(m, plan, goals, first, order[k - 1], i); --k) order[k] = order[k - 1];
         order[k] = i;
     }
+}
+
+/* Clip i's search on the thread's sampler s (NULL: it failed, with `fail`), its own cache or the
+ * thread's (poses) and the thread's batches. */
+static void search_clip(rate_search *rs, uint32_t i, cb_sampler *s, const cb_error *fail, pose_cache *poses,
+                        pose_batch *batch)
+{
+    if (!(rs->goals[i].max_error_mm > 0)) return;
+    if (!s) {
+        rs->errors[i] = *fail;
+        return;
+    }
+    cb_rate_choice *c = &rs->choices[i];
+    if (rs->kept) cb_clip_plan_release(&rs->plan[i]); /* a job's earlier search's timed rows (its plan's own) */
+    rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
+                                      max_fps_of(&rs->goals[i]), rs->o->fit ? CB_ROWS_FITTED : rs->goals[i].rows, c,
+                                      rs->facts, clip_cache(rs, i, poses, s), !rs->kept, batch,
+                                      rs->needed_later && rs->needed_later[i], &rs->errors[i]);
+    rs->plan[i].fit = c->fitted;
+    c->error_mm = cb_mm_per_m(c->error, rs->height);
+    if (rs->kept && !rs->errors[i].status && global_timed_asked(rs->o, &rs->plan[i])) /* rows on its keys, asked for */
+        global_clip_timed(s, rs->o, &rs->plan[i], rs->facts, rs->kept[i], rs->goals[i].max_error_mm / 1000 * rs->height, c,
+                          &rs->errors[i]);
+    if (rs->kept) /* few of its poses read again: palette_bake.h */
+        search_keep_settle(&rs->kept[i], rs->model->skins[rs->skin].joint_count, &rs->kept_bytes, true);
+}
+
+/* The work beside the search, run by the first thread to find the searches it reads over
+ * (acquire: their threads' release of `unread` made them visible here). */
+static void take_beside(rate_search *rs)
+{
+    if (rs->beside && atomic_load_explicit(&rs->unread, memory_order_acquire) == 0 &&
+        !atomic_exchange(&rs->beside->taken, true))
+        rs->beside->run(rs->beside, rs->keep);
 }
 
 static int rate_worker(void *arg)
@@ -527,27 +575,13 @@ static int rate_worker(void *arg)
     pose_cache *poses = s && !rs->kept ? search_pose_cache(s, NULL) : NULL; /* this thread's, for each clip in turn */
     pose_batch *batch = s ? pose_batch_create(s) : NULL; /* this thread's batches of poses (NULL: one at a time) */
     for (;;) {
+        take_beside(rs);
         uint32_t n = atomic_fetch_add(&rs->next, 1);
         if (n >= rs->count) break;
         uint32_t i = rs->order[n];
-        if (!(rs->goals[i].max_error_mm > 0)) continue;
-        if (!s) {
-            rs->errors[i] = fail;
-            continue;
-        }
-        cb_rate_choice *c = &rs->choices[i];
-        if (rs->kept) cb_clip_plan_release(&rs->plan[i]); /* a job's earlier search's timed rows (its plan's own) */
-        rs->plan[i].fps = choose_clip_fps(s, rs->o, &rs->plan[i], rs->goals[i].max_error_mm / 1000 * rs->height,
-                                          max_fps_of(&rs->goals[i]), rs->o->fit ? CB_ROWS_FITTED : rs->goals[i].rows, c,
-                                          rs->facts, clip_cache(rs, i, poses, s), !rs->kept, batch,
-                                          rs->needed_later && rs->needed_later[i], &rs->errors[i]);
-        rs->plan[i].fit = c->fitted;
-        c->error_mm = cb_mm_per_m(c->error, rs->height);
-        if (rs->kept && !rs->errors[i].status && global_timed_asked(rs->o, &rs->plan[i])) /* rows on its keys, asked for */
-            global_clip_timed(s, rs->o, &rs->plan[i], rs->facts, rs->kept[i], rs->goals[i].max_error_mm / 1000 * rs->height, c,
-                              &rs->errors[i]);
-        if (rs->kept) /* few of its poses read again: palette_bake.h */
-            search_keep_settle(&rs->kept[i], rs->model->skins[rs->skin].joint_count, &rs->kept_bytes, true);
+        search_clip(rs, i, s, &fail, poses, batch);
+        if (rs->beside && rs->beside->reads && rs->beside->reads[i])
+            atomic_fetch_sub_explicit(&rs->unread, 1, memory_order_release);
     }
     pose_cache_free(poses);
     pose_batch_free(batch);
@@ -587,11 +621,15 @@ cb_status palette_choose_rates(cb_sampler *s, const cb_bake_options *o, cb_clip_
                err->status;
     rate_search rs = {m, cb_sampler_skin(s), o, plan, count, goals, calloc(count, sizeof(cb_rate_choice)),
                       calloc(count, sizeof(cb_error)), facts->height, facts, NULL, 0, keep ? keep->poses : NULL,
-                      keep ? keep->arena : NULL, 0, needed_later};
+                      keep ? keep->arena : NULL, 0, needed_later, NULL, keep, 0};
     uint32_t *order = malloc(count * sizeof *order);
     rs.order = order;
+    if (keep && keep->beside && !atomic_load(&keep->beside->taken) && count == keep->count) { /* (not done yet) */
+        rs.beside = keep->beside;
+        for (uint32_t i = 0; rs.beside->reads && i < count; ++i) rs.unread += rs.beside->reads[i];
+    }
     if (rs.choices && rs.errors && order) {
-        search_order(m, plan, goals, count, order);
+        search_order(m, plan, goals, rs.beside ? rs.beside->reads : NULL, count, order);
         uint32_t threads = o->threads < 1 ? 1 : o->threads > 64 ? 64 : o->threads, started = 0;
         if (threads > count) threads = count;
         thrd_t ids[64];

@@ -14,6 +14,7 @@
 #include "crowdbake/exr.h"
 #include "internal/bake_words.h"
 #include "internal/plumbing.h"
+#include "../../src/core/palette_bake.h" /* search_keep, search_beside: the work beside a search */
 
 #define TMP TEST_TMP "/bake_job"
 
@@ -256,6 +257,61 @@ static void test_kept_search_bakes_the_same_bytes(void **state)
     }
 }
 
+/* What a job decides beside its rate search (bake_beside.c: the speed reference, from the
+ * clips whose names may say a gait, and their per-row travels) is what the run decides after it
+ * alone: the same job with its search released before the run (nothing kept, the beside's work
+ * with it) records the same reference and why, the same notes (the travels applied or not, with
+ * their slides) and writes the same bytes (the travels' offsets are in the rows). Cow and Husky,
+ * whose Walk and Gallop stride; at -j 1 the work beside runs on the search's one thread. */
+static void test_work_beside_the_search_is_the_runs(void **state)
+{
+    (void)state;
+    static const char *models[] = {"assets/quaternius-cow/Cow.glb", "assets/quaternius-husky/Husky.glb"};
+    for (int k = 0; k < 2; ++k) {
+        cb_model *m = load_shared(models[k]);
+        for (uint32_t threads = 1; threads <= 2; ++threads) {
+            double speed[2];
+            char from[2][256], *bytes[2];
+            size_t size[2];
+            cb_warnings notes[2];
+            for (int release = 0; release < 2; ++release) {
+                cb_bake_job job = job_for(m);
+                job.threads = threads;
+                const char *path = release ? TMP "/after.pal" : TMP "/beside.pal";
+                job.outputs = &(cb_output_path){CB_FORMAT_PAL, path}, job.output_count = 1;
+                cb_bake_result r;
+                cb_error err = {0};
+                assert_int_equal(cb_bake_job_plan(&job, &err), CB_OK);
+                const search_keep *keep = job.search_kept;
+                assert_true(keep && keep->beside && atomic_load(&keep->beside->taken)); /* it ran beside the search */
+                if (release) cb_bake_job_release_search(&job);
+                assert_int_equal(cb_bake_job_run(&job, &r, &err), CB_OK);
+                speed[release] = job.speed_reference;
+                snprintf(from[release], sizeof from[release], "%s", job.speed_reference_from);
+                notes[release] = r.notes, r.notes = (cb_warnings){0};
+                cb_bake_result_free(&r);
+                cb_bake_job_free(&job);
+                bytes[release] = read_whole_file(path, &size[release]);
+                assert_non_null(bytes[release]);
+            }
+            assert_true(speed[0] > 0);
+            assert_true(speed[0] == speed[1]);
+            assert_string_equal(from[0], from[1]);
+            assert_int_equal(notes[0].count, notes[1].count);
+            bool travel_noted = false;
+            for (uint32_t i = 0; i < notes[0].count; ++i) {
+                assert_string_equal(notes[0].items[i].message, notes[1].items[i].message);
+                travel_noted |= strstr(notes[0].items[i].message, "per-row travel applied") != NULL;
+            }
+            assert_true(travel_noted); /* a gallop's travel, measured beside the search */
+            assert_int_equal(size[0], size[1]);
+            assert_memory_equal(bytes[0], bytes[1], size[0]);
+            for (int i = 0; i < 2; ++i) free(bytes[i]), cb_warnings_free(&notes[i]);
+        }
+        cb_model_free(m);
+    }
+}
+
 /* A clip's rows at a rate (cb_bake_clip_frames_at, the command line's "against N rows at a fixed
  * 30 fps"), from its rate search's kept analysis and, the search released, analyzed: what
  * cb_clip_analyze gives on a fresh sampler. */
@@ -305,6 +361,7 @@ int main(void)
         cmocka_unit_test(test_catalog_and_single_bake_agree),
         cmocka_unit_test(test_catalog_out_dir_and_manifest_depfile),
         cmocka_unit_test(test_kept_search_bakes_the_same_bytes),
+        cmocka_unit_test(test_work_beside_the_search_is_the_runs),
         cmocka_unit_test(test_clip_rows_at_a_rate_are_the_analyses),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
