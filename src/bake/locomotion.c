@@ -107,13 +107,11 @@ static bool clip_follows_speed(int kind, const char *word, bool loops, const cb_
     return cb_decide_locomotion(kind, words, loops, gs, false, reason, sizeof reason);
 }
 
-/* Whether clip i of the plan (or the model's clip i) may follow the speed by its name: not one
- * whose name says an action (cb_decide_locomotion), whatever its feet do; its kind into *kind. A
- * clip that is not the model's may (its analysis then fails). */
-static bool name_may_follow(const cb_model *model, const cb_clip_plan *plan, uint32_t i, int *kind, char *word,
-                            size_t size)
+/* Whether the model's animation a may follow the speed by its name: not one whose name says an
+ * action (cb_decide_locomotion), whatever its feet do; its kind into *kind. One that is not the
+ * model's may (its analysis then fails). */
+static bool name_may_follow(const cb_model *model, int32_t a, int *kind, char *word, size_t size)
 {
-    int32_t a = plan ? plan[i].animation : (int32_t)i;
     *kind = a >= 0 && (uint32_t)a < model->animation_count ? cb_name_says_locomotion(model->animations[a].name, word, size) : 0;
     return *kind >= 0;
 }
@@ -122,8 +120,7 @@ bool speed_reference_may_measure(const cb_model *model, int32_t animation)
 {
     int kind;
     char word[64];
-    cb_clip_plan one = {.animation = animation};
-    return name_may_follow(model, &one, 0, &kind, word, sizeof word);
+    return name_may_follow(model, animation, &kind, word, sizeof word);
 }
 
 /* Clip i of the plan (or the model's clip i) analyzed at 30 fps; false when it cannot be, or when
@@ -134,9 +131,9 @@ static bool clip_to_measure(clip_memo *memo, cb_sampler *s, const cb_clip_plan *
 {
     cb_error err = {0};
     cb_limits limits = cb_default_limits();
-    if (!name_may_follow(cb_sampler_model(s), plan, i, kind, word, size)) return false;
-    return !clip_memo_analyze(memo, s, plan ? plan[i].animation : (int32_t)i, 30, plan ? plan[i].loop : -1, &limits,
-                              info, &err) && info->loops;
+    int32_t a = plan ? plan[i].animation : (int32_t)i;
+    if (!name_may_follow(cb_sampler_model(s), a, kind, word, size)) return false;
+    return !clip_memo_analyze(memo, s, a, 30, plan ? plan[i].loop : -1, &limits, info, &err) && info->loops;
 }
 
 /* The analyses clip_to_measure asks for, made side by side on the threads first and kept in the
@@ -149,9 +146,11 @@ static void prefetch_analyses(clip_memo *memo, const cb_sampler *s, const cb_cli
     uint32_t count = 0;
     int kind;
     char word[64];
-    for (uint32_t i = 0; asks && s && i < n; ++i)
-        if (name_may_follow(cb_sampler_model(s), plan, i, &kind, word, sizeof word))
-            asks[count++] = (clip_ask){plan ? plan[i].animation : (int32_t)i, 30, plan ? plan[i].loop : -1};
+    for (uint32_t i = 0; asks && s && i < n; ++i) {
+        int32_t a = plan ? plan[i].animation : (int32_t)i;
+        if (name_may_follow(cb_sampler_model(s), a, &kind, word, sizeof word))
+            asks[count++] = (clip_ask){a, 30, plan ? plan[i].loop : -1};
+    }
     if (asks && s) clip_memo_prefetch(memo, s, asks, count, &limits, threads);
     free(asks);
 }
