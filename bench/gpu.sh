@@ -36,8 +36,12 @@ if ldd "$BENCH" 2>/dev/null | grep -q "not found"; then
     say "$BENCH lacks shared libraries here: $(ldd "$BENCH" | grep 'not found' | tr -s ' \t' ' ' | tr '\n' ';')"
     exit 2
 fi
-{ nvidia-smi -L 2>&1; nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm --format=csv 2>&1; } \
-    > "$OUT_DIR/gpu.txt" || true
+if command -v nvidia-smi > /dev/null; then
+    { nvidia-smi -L 2>&1; nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm --format=csv 2>&1; } \
+        > "$OUT_DIR/gpu.txt" || true
+else
+    echo "no nvidia-smi here (not an NVIDIA machine): the driver bench_gl reports below is the one measured" > "$OUT_DIR/gpu.txt"
+fi
 say "model $MODEL; counts $COUNTS; $FRAMES frames each (median); GPU: $(head -1 "$OUT_DIR/gpu.txt")"
 # EGL's device platform is bench_gl's default; EGL_PLATFORM (Mesa's surfaceless) would pick the CPU.
 unset EGL_PLATFORM
