@@ -281,8 +281,10 @@ static cb_model *load_model(const char *path, const cb_limits *limits, cb_error 
     }
     const char *own = crowdbake_output(path, kind);
     if (own) {
+        bool palette = kind == CLI_FILE_PAL || kind == CLI_FILE_KTX2; /* (an EXR may be a VAT: inspect reads palettes) */
         cb_fail(err, CB_ERR_INPUT, "%s: not a model but %s: give the glTF model it was baked from (.glb or .gltf), or the "
-                "catalog (.toml)", path, own);
+                "catalog (.toml)%s%s%s", path, own, palette ? "; 'crowdbake inspect " : "", palette ? path : "",
+                palette ? "' shows what it holds" : "");
         return NULL;
     }
     const char *foreign = foreign_format(path);

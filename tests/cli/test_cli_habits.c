@@ -138,6 +138,7 @@ static void test_own_outputs_are_named_where_a_model_is_wanted(void **state)
             assert_int_equal(crowdbake("%s " TMP "/%s%s", commands[c], files[i][0], writes ? " -o " TMP "/out.pal" : ""),
                              EXIT_INPUT);
             assert_contains(files[i][1]);
+            if (i == 0) assert_contains("'crowdbake inspect " TMP "/own.pal' shows what it holds");
             assert_int_equal(strchr(out, '\n'), out + strlen(out) - 1); /* one line */
             struct stat st;
             assert_int_not_equal(stat(TMP "/out.pal", &st), 0);
