@@ -1,15 +1,16 @@
 #!/bin/sh
 # bench/gpu.sh - the native crowd benchmark (bench/bench_gl.c) unattended on a GPU (issue 43, item 5):
-# the palette (per-vertex blending), the bone pass and the VAT of the same frames, each one instanced
-# draw of 1,000 to 300,000 Cows into a 960x540 offscreen target, timed by GL timer queries; then the
-# largest herd each method draws at 60 fps. OpenGL 3.3 core through EGL's device platform: the GPU's
+# the palette (per-vertex blending), the bone pass, the bone pass with the runtimes' animation LOD (its
+# tiers drawn apart, as the herds ship it) and the VAT of the same frames, each one instanced draw of
+# 1,000 to 300,000 Cows into a 960x540 offscreen target, timed by GL timer queries; then the largest
+# herd each method draws at 60 fps. OpenGL 3.3 core through EGL's device platform: the GPU's
 # own driver (NVIDIA's libEGL_nvidia), no window, no display server.
 #
 #   sh bench/gpu.sh [MODEL.glb] [OUT_DIR]
 #
 # MODEL defaults to the shared Cow (../shared/assets, else shared/assets, else build/samples' quadruped);
 # OUT_DIR to $OUT (the device runner's) or build/gpu-bench. Writes there: gpu.txt (nvidia-smi, the
-# driver's EGL), check.txt (the three methods draw the same image), bench.json (bench_gl's numbers)
+# driver's EGL), check.txt (the methods draw the same image), bench.json (bench_gl's numbers)
 # and summary.txt (frame ms per count and method, and the largest herd at 60 fps). Needs build/bench_gl,
 # built beforehand (make build/bench_gl) since a lent GPU machine may have no compiler or packages:
 # it says which shared library is missing rather than failing later. The counts go up in turn,
@@ -50,16 +51,21 @@ if ! timeout 60 "$BENCH" "$MODEL" --check > "$OUT_DIR/check.txt" 2>&1; then
     exit 1
 fi
 say "$(cat "$OUT_DIR/check.txt")"
-# One bench_gl run per count, so that a count past its limit (or the GPU's memory) keeps the others;
-# all of them within 480 s of now (with the check and the start, under 10 minutes).
+# Two bench_gl runs per count (palette, bone pass and VAT; then the bone pass with LOD and the VAT
+# again, its ratio taken in the same run), so that a count past its limit (or the GPU's memory)
+# keeps the others; all of them within 480 s of now (with the check and the start, under 10 minutes).
 : > "$OUT_DIR/bench.jsonl"
+: > "$OUT_DIR/lod.jsonl"
 DEADLINE=$(( $(date +%s) + ${GPU_BENCH_SECONDS:-480} ))
-for n in $COUNTS; do
+measure() { # COUNT JSONL [--lod]
     LEFT=$(( DEADLINE - $(date +%s) ))
-    if [ "$LEFT" -lt 10 ]; then say "$n instances and up: skipped, out of time"; break; fi
-    if ! timeout "$LEFT" "$BENCH" "$MODEL" "$n" --frames "$FRAMES" >> "$OUT_DIR/bench.jsonl" 2>> "$OUT_DIR/stderr.txt"; then
-        say "$n instances: bench_gl failed or ran past the time left ($LEFT s); larger counts skipped ($(tail -1 "$OUT_DIR/stderr.txt" 2>/dev/null))"
-        break
+    if [ "$LEFT" -lt 10 ]; then say "$1 instances and up: skipped, out of time"; return 1; fi
+    if ! timeout "$LEFT" "$BENCH" "$MODEL" "$1" --frames "$FRAMES" ${3:-} >> "$2" 2>> "$OUT_DIR/stderr.txt"; then
+        say "$1 instances${3:+ ($3)}: bench_gl failed or ran past the time left ($LEFT s); larger counts skipped ($(tail -1 "$OUT_DIR/stderr.txt" 2>/dev/null))"
+        return 1
     fi
+}
+for n in $COUNTS; do
+    measure "$n" "$OUT_DIR/bench.jsonl" && measure "$n" "$OUT_DIR/lod.jsonl" --lod || break
 done
-python3 bench/gpu_summary.py "$OUT_DIR/bench.jsonl" "$OUT_DIR/bench.json" | tee -a "$OUT_DIR/summary.txt"
+python3 bench/gpu_summary.py "$OUT_DIR/bench.jsonl" "$OUT_DIR/bench.json" "$OUT_DIR/lod.jsonl" | tee -a "$OUT_DIR/summary.txt"

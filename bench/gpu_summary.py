@@ -4,14 +4,15 @@ one JSON file, and per method the GPU frame time (median of the frames, GL timer
 size, the ratio against the VAT in the same run, and the largest herd drawn at 60 fps (16.7 ms):
 the largest size measured within it, and between the last size within and the first past it the
 size where the time reaches 16.7 ms, frame time taken as linear in the herd (a draw's cost is its
-instances' vertices).
+instances' vertices). LOD.jsonl (bench_gl --lod runs): the bone pass with the animation LOD beside
+them, its ratio against the VAT of its own run.
 
-    gpu_summary.py BENCH.jsonl BENCH.json
+    gpu_summary.py BENCH.jsonl BENCH.json [LOD.jsonl]
 """
 import json
 import sys
 
-METHODS = ('palette', 'bones', 'vat')
+METHODS = ('palette', 'bones', 'lod', 'vat')
 FRAME_60 = 1000 / 60
 
 
@@ -37,23 +38,35 @@ def main():
     merged = dict(runs[0], counts={})
     for r in runs:
         merged['counts'].update(r['counts'])
+    lod_runs = [json.loads(line) for line in open(sys.argv[3]) if line.strip()] if len(sys.argv) > 3 else []
+    for r in lod_runs:  # the LOD pass's own figures, and its run's VAT as lod_run_vat_ms
+        for c, m in r['counts'].items():
+            if c in merged['counts']:
+                merged['counts'][c].update({k: v for k, v in m.items() if k.startswith('lod_') or k.endswith('_lod')})
+                merged['counts'][c]['lod_run_vat_ms'] = m['vat_ms']
     with open(sys.argv[2], 'w') as f:
         json.dump(merged, f, indent=1)
     counts = sorted(merged['counts'], key=int)
     print(f"{merged['renderer']} ({merged['version']}); {merged['vertices']} vertices an instance; palette "
           f"{merged['palette_bytes'] / 1e6:.2f} MB, VAT {merged['vat_bytes'] / 1e6:.1f} MB; median of "
           f"{merged['frames']} frames, GPU time (GL_TIME_ELAPSED)")
-    print(f"{'instances':>10} {'palette ms':>11} {'bones ms':>9} {'VAT ms':>8} {'VAT/palette':>12} {'VAT/bones':>10}"
-          f"   wall ms (palette, bones, VAT)")
+    print(f"{'instances':>10} {'palette ms':>11} {'bones ms':>9} {'LOD ms':>8} {'VAT ms':>8} {'VAT/palette':>12} "
+          f"{'VAT/bones':>10} {'VAT/LOD':>8}   wall ms (palette, bones, LOD, VAT)")
     for c in counts:
         m = merged['counts'][c]
-        print(f"{int(c):>10} {m['palette_ms']:>11.3f} {m['bones_ms']:>9.3f} {m['vat_ms']:>8.3f} "
-              f"{m['vat_ms'] / m['palette_ms']:>12.2f} {m['vat_ms'] / m['bones_ms']:>10.2f}"
-              f"   {m['palette_wall_ms']:.3f}, {m['bones_wall_ms']:.3f}, {m['vat_wall_ms']:.3f}")
+        lod = 'lod_ms' in m
+        print(f"{int(c):>10} {m['palette_ms']:>11.3f} {m['bones_ms']:>9.3f} "
+              f"{(format(m['lod_ms'], '.3f') if lod else '-'):>8} {m['vat_ms']:>8.3f} "
+              f"{m['vat_ms'] / m['palette_ms']:>12.2f} {m['vat_ms'] / m['bones_ms']:>10.2f} "
+              f"{(format(m['lod_run_vat_ms'] / m['lod_ms'], '.2f') if lod else '-'):>8}"
+              f"   {m['palette_wall_ms']:.3f}, {m['bones_wall_ms']:.3f}, "
+              f"{(format(m['lod_wall_ms'], '.3f') if lod else '-')}, {m['vat_wall_ms']:.3f}")
     for method in METHODS:
-        points = [(int(c), merged['counts'][c][f'{method}_ms']) for c in counts]
+        points = [(int(c), merged['counts'][c][f'{method}_ms']) for c in counts if f'{method}_ms' in merged['counts'][c]]
         measured, estimate = largest_at_60(points)
-        if measured is None:
+        if not points:
+            print(f'{method}: not measured')
+        elif measured is None:
             print(f'{method}: no size measured draws at 60 fps')
         elif estimate is None:
             print(f'{method}: {measured} instances at 60 fps, the largest size tried (more would fit)')
