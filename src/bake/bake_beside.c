@@ -3,7 +3,6 @@
 
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "../core/clip_memo.h"
 #include "../core/foot_cache.h"

@@ -22,7 +22,7 @@ typedef struct measured_travel {
 /* Planned clip c's per-row travel at the rate the job bakes it at now (cb_bake_job_clip_fps),
  * with the run's foot and clip analyses (`feet`, `memo`; NULL: measured here). False only when
  * out of memory. Reads of the job only what its search wrote for clip c, so it may run beside the
- * search once clip c's search is over (speed_beside.c). */
+ * search once clip c's search is over (bake_beside.c). */
 bool bake_clip_travel(const cb_bake_job *job, uint32_t c, struct foot_cache *feet, struct clip_memo *memo, cb_sampler *s,
                       measured_travel *out);
 

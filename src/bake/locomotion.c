@@ -144,12 +144,9 @@ static void prefetch_analyses(clip_memo *memo, const cb_sampler *s, const cb_cli
     clip_ask *asks = malloc((n ? n : 1) * sizeof *asks);
     cb_limits limits = cb_default_limits();
     uint32_t count = 0;
-    int kind;
-    char word[64];
     for (uint32_t i = 0; asks && s && i < n; ++i) {
         int32_t a = plan ? plan[i].animation : (int32_t)i;
-        if (name_may_follow(cb_sampler_model(s), a, &kind, word, sizeof word))
-            asks[count++] = (clip_ask){a, 30, plan ? plan[i].loop : -1};
+        if (speed_reference_may_measure(cb_sampler_model(s), a)) asks[count++] = (clip_ask){a, 30, plan ? plan[i].loop : -1};
     }
     if (asks && s) clip_memo_prefetch(memo, s, asks, count, &limits, threads);
     free(asks);
