@@ -11,8 +11,9 @@ change in the machine's load hits them alike), N rounds:
          warn_fixed_rates_over), so it does more than sample at 30 fps;
   naive  `bake MODEL --fps 30 --max-error 1000`: the same rows with a budget nothing misses, so no
          warning and no search: the naive bake's own work;
-  auto   `bake MODEL`: the default, every clip's rate chosen within 1 mm/m.
-Each round's ratios auto/fixed and auto/naive; the medians of those per-round ratios are printed
+  auto   `bake MODEL`: the default, every clip's rate chosen within 1 mm/m (local rows);
+  gauto, gnaive: the default and the naive bake of global rows (--bone-space global), beside them.
+Each round's ratios auto/fixed, auto/naive, auto/gnaive and gauto/gnaive; the medians of those per-round ratios are printed
 (in place, as crowds are baked: a loop that travels with its root kept meets no budget).
 """
 import argparse
@@ -47,11 +48,14 @@ def interleaved(cmds, repeat):
 
 def measure(exe, model, out, repeat):
     base = [exe, 'bake', model, '-o', out, '-q', '--root-motion', 'in-place']
-    cmds = {'fixed': base + ['--fps', '30'], 'naive': base + ['--fps', '30', '--max-error', '1000'], 'auto': base}
+    glob = ['--bone-space', 'global']
+    cmds = {'fixed': base + ['--fps', '30'], 'naive': base + ['--fps', '30', '--max-error', '1000'], 'auto': base,
+            'gauto': base + glob, 'gnaive': base + ['--fps', '30', '--max-error', '1000'] + glob}
     times = interleaved(cmds, repeat)
-    ratio = {k: statistics.median(a / b for a, b in zip(times['auto'], times[k])) for k in ('fixed', 'naive')}
-    return {'median_s': {k: statistics.median(v) for k, v in times.items()}, 'auto_vs_fixed': ratio['fixed'],
-            'auto_vs_naive': ratio['naive'], 'rounds': repeat}
+    ratio = lambda a, b: statistics.median(x / y for x, y in zip(times[a], times[b]))
+    return {'median_s': {k: statistics.median(v) for k, v in times.items()}, 'auto_vs_fixed': ratio('auto', 'fixed'),
+            'auto_vs_naive': ratio('auto', 'naive'), 'auto_vs_global_naive': ratio('auto', 'gnaive'),
+            'global_vs_global_naive': ratio('gauto', 'gnaive'), 'rounds': repeat}
 
 
 def run_all(exe, shared, repeat):
@@ -63,11 +67,15 @@ def run_all(exe, shared, repeat):
 def print_table(results):
     print('default (error-bounded) bake / fixed 30 fps bake, whole process, medians of per-round ratios (goal <= %gx)'
           % GOAL)
-    print('%-6s %9s %9s %9s %12s %12s' % ('model', 'auto ms', 'fixed ms', 'naive ms', 'auto/fixed', 'auto/naive'))
+    print('%-6s %9s %9s %9s %12s %12s %14s %14s' % ('model', 'auto ms', 'fixed ms', 'naive ms', 'auto/fixed', 'auto/naive',
+                                                   'auto/g.naive', 'global/g.naive'))
     for name, r in results.items():
         m = r['median_s']
-        print('%-6s %9.1f %9.1f %9.1f %11.2fx %11.2fx' % (name, m['auto'] * 1e3, m['fixed'] * 1e3, m['naive'] * 1e3,
-                                                         r['auto_vs_fixed'], r['auto_vs_naive']))
+        print('%-6s %9.1f %9.1f %9.1f %11.2fx %11.2fx %13.2fx %13.2fx' % (
+            name, m['auto'] * 1e3, m['fixed'] * 1e3, m['naive'] * 1e3, r['auto_vs_fixed'], r['auto_vs_naive'],
+            r['auto_vs_global_naive'], r['global_vs_global_naive']))
+    print('  (the default bakes local rows, and its fixed and naive bakes too; g.naive: the naive bake of global rows, '
+          'global: the default bake of global rows, --bone-space global)')
 
 
 def main():

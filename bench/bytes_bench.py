@@ -2,10 +2,10 @@
 the same layout and precision, and what each lever would save, on the shared animals, the fish and the robot.
 
 Every number here is a byte count or an error the bake measures: deterministic, one run. For each model:
-- the texture bytes (the header's payload_raw_size) of the default bake and of --fps 30, and their ratio
-  (issue 43's goal: <= 1.0x on Cow, Husky and Fox, <= 1.5x on the fish); the same for the shipped
-  --bone-space local bake (local rows at their own auto rates, timed where that costs fewer rows), with its
-  visible error, and for the global rows of --timed-rows on (rows on the keys where fewer, asked for);
+- the texture bytes (the header's payload_raw_size) of the default bake (local rows at their auto rates, timed
+  where that costs fewer rows) and of --fps 30, and their ratio (issue 43's goal: <= 1.0x on Cow, Husky and Fox,
+  <= 1.5x on the fish); the same for --bone-space global (global rows, the default before), with its visible
+  error, and for the global rows of --timed-rows on (rows on the keys where fewer, asked for);
 - the budget's split: the encoding error at the rows (u16 quantisation, one box for the file), measured on the
   --fps 30 bake (sampled rows, so it is the quantisation alone), against the float bake's;
 - the levers, from bench_rows (bench/bench_rows.c): the rows a per-clip time -> row map would need (rows placed
@@ -56,14 +56,14 @@ def one_model(name, model):
     os.makedirs(os.path.dirname(out), exist_ok=True)
     auto, fixed = bake(model, out, []), bake(model, out, ['--fps', '30'])
     fixed_float = bake(model, out, ['--fps', '30', '--precision', 'float'])
-    local = bake(model, out, ['--bone-space', 'local'])
-    timed = bake(model, out, ['--timed-rows', 'on'])
+    glob = bake(model, out, ['--bone-space', 'global'])
+    timed = bake(model, out, ['--timed-rows', 'on', '--bone-space', 'global'])
     lines = subprocess.run([os.path.join(BUILD, 'bench_rows'), model], check=True, capture_output=True, text=True).stdout
     rows = [json.loads(line) for line in lines.splitlines() if line.strip()]
     skin, clips = rows[0], rows[1:]
     total = lambda key: sum(c[key] for c in clips)
     return {'model': name, 'auto': auto, 'fixed': fixed, 'ratio': auto['texture_bytes'] / fixed['texture_bytes'],
-            'local': local, 'local_ratio': local['texture_bytes'] / fixed['texture_bytes'],
+            'global': glob, 'global_ratio': glob['texture_bytes'] / fixed['texture_bytes'],
             'timed': timed, 'timed_ratio': timed['texture_bytes'] / fixed['texture_bytes'],
             'goal': GOALS.get(name), 'quantisation_mm': fixed['encoding_mm'] - fixed_float['encoding_mm'],
             'bones': skin['bones'], 'bones_skinning_nothing': skin['bones_skinning_nothing'],
@@ -78,28 +78,29 @@ def bytes_bench(smoke):
 
 
 def print_bytes(results):
-    print('\nbytes (issue 43, item 1): the default bake (1 mm/m, a goal) against --fps 30, same layout and precision; '
-          'texture bytes, one run (deterministic)')
+    print('\nbytes (issue 43, item 1): the default bake (1 mm/m, a goal; local rows) against --fps 30, same layout and '
+          'precision; texture bytes, one run (deterministic)')
     print('%-6s %9s %9s %6s %6s  %15s %6s  %15s %6s  %6s %6s  %8s  %9s %9s  %8s' % (
-        'model', 'default', '--fps 30', 'ratio', 'goal', 'local (ratio)', 'mm/m', 'timed (ratio)', 'mm/m', 'enc', 'quant',
+        'model', 'default', '--fps 30', 'ratio', 'goal', 'global (ratio)', 'mm/m', 'timed (ratio)', 'mm/m', 'enc', 'quant',
         'rows', 'map rows', 'fitted~', 'unskinned'))
     for r in results:
         a, f = r['auto'], r['fixed']
         keep = 1 - r['bones_skinning_nothing'] / r['bones']
-        loc, tim = r['local'], r['timed']
+        loc, tim = r['global'], r['timed']
         print('%-6s %9d %9d %5.2fx %6s  %8d (%4.2fx) %6.3f  %8d (%4.2fx) %6.3f  %6.3f %6.3f  %4d/%-4d %5d %4.2fx %5d %4.2fx  '
               '%2d/%-2d %4.2fx' % (
             r['model'], a['texture_bytes'], f['texture_bytes'], r['ratio'], '<=%.1fx' % r['goal'] if r['goal'] else '-',
-            loc['texture_bytes'], r['local_ratio'], loc['visible_mm'], tim['texture_bytes'], r['timed_ratio'], tim['visible_mm'],
+            loc['texture_bytes'], r['global_ratio'], loc['visible_mm'], tim['texture_bytes'], r['timed_ratio'], tim['visible_mm'],
             a['encoding_mm'], r['quantisation_mm'], a['rows'], f['rows'],
             r['map_rows'], r['map_rows'] / r['rows_30fps'], r['map_rows_fitted_estimate'],
             r['map_rows_fitted_estimate'] / r['rows_30fps'], r['bones_skinning_nothing'], r['bones'],
             r['map_rows_fitted_estimate'] / r['rows_30fps'] * keep))
-    print('  local: --bone-space local, the shipped local rows (.pal version 6, 7 with timed rows) at their auto rates, '
-          'every clip within 1 mm/m (mm/m: its visible error); the runtimes compose them, at global rows\' cost through a '
-          'bone pass; timed: --timed-rows on, global rows on their keys where that takes fewer rows (asked for: weighing '
-          'them costs the default bake\'s time)')
-    print('  enc: the default bake\'s encoding error at its rows (mm/m; fitted rows move out, so it includes the fit); '
+    print('  default: local rows (.pal version 6, 7 with timed rows) at their auto rates, every clip within 1 mm/m; the '
+          'runtimes compose them, at global rows\' cost through a bone pass; global: --bone-space global, each bone\'s '
+          'skinning transform (the default before local rows), mm/m its visible error; timed: --timed-rows on '
+          '--bone-space global, global rows on their keys where that takes fewer rows (asked for: weighing them costs '
+          'the default bake\'s time)')
+    print('  enc: the default bake\'s encoding error at its rows (mm/m); '
           'quant: what u16 adds over float at --fps 30\'s sampled rows (the most a per-clip quantisation box could win '
           'back of the 1 mm/m budget); map rows: a time -> row map, rows per key interval as its motion needs '
           '(sampled; fitted~ estimated at twice the blend budget), and its ratio to --fps 30\'s rows; unskinned: joints '

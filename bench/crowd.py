@@ -9,15 +9,16 @@ from common import BUILD, EXE, ROOT, SHARED, run
 
 
 def crowd_input(name, model, local=False):
-    """model.glb, model.pal (the default qpos/u16) and model.exr (its VAT) in build/bench/crowd-NAME; local: also
-    model-local.pal, the model baked --bone-space local (local rows, composed by the runtime)."""
+    """model.glb, model.pal (qpos/u16 global rows, --bone-space global) and model.exr (its VAT) in
+    build/bench/crowd-NAME; local: also model-local.pal, the default bake (local rows, composed by the runtime)."""
     out = os.path.join(BUILD, 'bench', 'crowd-' + name)
     os.makedirs(out, exist_ok=True)
     subprocess.run(['cp', model, os.path.join(out, 'model.glb')], check=True)
-    subprocess.run([EXE, 'bake', model, '-o', os.path.join(out, 'model.pal'), '-q', '--root-motion', 'in-place'], check=True)
+    subprocess.run([EXE, 'bake', model, '-o', os.path.join(out, 'model.pal'), '-q', '--root-motion', 'in-place',
+                    '--bone-space', 'global'], check=True)
     if local:
-        subprocess.run([EXE, 'bake', model, '-o', os.path.join(out, 'model-local.pal'), '-q', '--root-motion', 'in-place',
-                        '--bone-space', 'local'], check=True)
+        subprocess.run([EXE, 'bake', model, '-o', os.path.join(out, 'model-local.pal'), '-q', '--root-motion', 'in-place'],
+                       check=True)
     subprocess.run([EXE, 'vat', model, '-o', os.path.join(out, 'model.exr'), '--root-motion', 'in-place',
                     '--exr-compression', 'none'], check=True, stdout=subprocess.DEVNULL)
     return out

@@ -82,11 +82,13 @@ const char cmd_bake_usage[] =
     "  --row-travel auto|off      per-row travel offsets (.pal version 5): auto ships them for the\n"
     "                             striding loops whose planted feet they keep still (slide cut by a\n"
     "                             third or more; info and the manifest say why per clip); off: none\n"
-    "  --bone-space global|local  what a .pal row holds per bone: global (default) its skinning\n"
-    "                             transform; local its transform in its parent's frame (.pal version\n"
-    "                             6), blended bone by bone and composed by the runtime: the glTF's own\n"
-    "                             interpolation, fewer rows for the same error. qpos, u16 or float only;\n"
-    "                             other formats beside the .pal are baked global (catalog: bone_space)\n"
+    "  --bone-space global|local  what a .pal row holds per bone: local (default) its transform in\n"
+    "                             its parent's frame (.pal version 6), blended bone by bone and composed\n"
+    "                             by the runtime (a bone pass, once per instance): the glTF's own\n"
+    "                             interpolation, fewer rows for the same error; qpos, u16 or float,\n"
+    "                             sampled rows only (else the default is global). global: each bone's\n"
+    "                             skinning transform, for a vertex shader without a bone pass. Other\n"
+    "                             formats beside the .pal are baked global (catalog: bone_space)\n"
     "  --timed-rows auto|on|off   an auto rate's rows on the clip's key times, a map saying which two\n"
     "                             rows each moment blends (.pal version 7). Local rows: auto (default)\n"
     "                             where that takes fewer bytes than one uniform rate, on wherever the\n"
@@ -186,6 +188,7 @@ static int parse_settings(const bake_args *a, cb_bake_settings *s, unsigned *fie
     s->row_travel_off = a->row_travel && strcmp(a->row_travel, "off") == 0;
     if (a->bone_space && !cb_bone_space_parse(a->bone_space, &s->bone_space))
         return cli_usage_error("bake", "--bone-space is global or local, got '%s'", a->bone_space);
+    s->bone_space_set = a->bone_space != NULL;
     if (a->timed_rows && !cb_timed_rows_parse(a->timed_rows, &s->timed_rows))
         return cli_usage_error("bake", "--timed-rows is auto, on or off, got '%s'", a->timed_rows);
     s->allow_over_budget = a->over_budget;
@@ -268,7 +271,7 @@ static void print_summary(const cb_bake_output *out, double seconds)
                "--measure-all measures every row\n", p->error_rows_measured, p->rows);
 }
 
-static void json_output(cb_json *j, const cb_bake_output *out, double seconds, double load)
+static void json_output(cb_json *j, const cb_bake_settings *settings, const cb_bake_output *out, double seconds, double load)
 {
     const cb_palette *p = &out->palette;
     cb_json_object(j, NULL);
@@ -285,11 +288,10 @@ static void json_output(cb_json *j, const cb_bake_output *out, double seconds, d
     cb_json_string(j, "layout", cb_layout_name(p->layout));
     cb_json_string(j, "precision", cb_precision_name(p->precision));
     cb_json_bool(j, "fitted_rows", p->fitted);
-    if (p->bone_space == CB_BONE_SPACE_LOCAL) { /* absent: global rows, as in every bake before version 6 */
-        cb_json_string(j, "bone_space", "local");
-        cb_json_string(j, "bone_space_why", "--bone-space local: rows in each bone's parent frame, blended bone by bone and "
-                       "composed by the runtime (.pal version 6); errors measured composed");
-    }
+    char why[600];
+    cb_bake_bone_space_why(settings, out->format, p->bone_space, p->fallback_note, why, sizeof why);
+    cb_json_string(j, "bone_space", cb_bone_space_name(p->bone_space));
+    cb_json_string(j, "bone_space_why", why);
     cb_json_number(j, "max_error", p->max_error);
     cb_json_number(j, "model_height", p->model_height);
     cb_json_number(j, "max_error_mm_per_m", cb_mm_per_m(p->max_error, p->model_height));
@@ -313,15 +315,12 @@ static const char *clip_label(const cb_bake_job *job, uint32_t i)
     return c->name ? c->name : job->model->animations[c->animation].name;
 }
 
-/* The rows' bone space, a decision the bake takes for the user, and why (docs/usage.md, --bone-space local). */
-static void print_bone_space(const cb_palette *p)
+/* The rows' bone space, a decision the bake takes for the user, and why (docs/usage.md, --bone-space). */
+static void print_bone_space(const cb_bake_settings *s, const cb_bake_output *out)
 {
-    if (p->bone_space == CB_BONE_SPACE_LOCAL)
-        puts("  local rows (--bone-space local): each bone in its parent's frame, composed by the runtime, which a vertex "
-             "shader without a bone pass does at every vertex");
-    else if (cb_holds_local_rows(p->layout, p->precision))
-        puts("  global rows (the default), which any vertex shader skins as they are; --bone-space local, for runtimes "
-             "that compose the bones (a bone pass), usually holds the clips in fewer rows (docs/usage.md)");
+    char why[600];
+    cb_bake_bone_space_why(s, out->format, out->palette.bone_space, out->palette.fallback_note, why, sizeof why);
+    printf("  %s\n", why);
 }
 
 /* The rows error-bounded rates took against a fixed 30 fps (the old default). */
@@ -342,7 +341,7 @@ static cb_status print_saving(const cb_bake_job *job, const cb_bake_result *r, c
                                                  job->settings.max_texture_size, &g);
         printf("  %u rows, %.1f KiB, against %llu rows, %.1f KiB at a fixed 30 fps (%.2fx the bytes)\n", p->rows,
                p->texel_bytes / 1024.0, (unsigned long long)rows_30, b_30 / 1024.0, b_30 ? (double)p->texel_bytes / b_30 : 0);
-        print_bone_space(p);
+        print_bone_space(&job->settings, &r->outputs[0]);
     }
     cb_sampler_free(s);
     return err->status;
@@ -515,7 +514,7 @@ static void report_bake(const bake_args *a, const cb_bake_job *job, const cb_bak
         cb_json_number(&j, "speed_reference", job->speed_reference);
         cb_json_string(&j, "speed_reference_from", a->speed_ref ? "the command line" : job->speed_reference_from);
         cb_json_array(&j, "outputs");
-        for (uint32_t i = 0; i < r->output_count; ++i) json_output(&j, &r->outputs[i], seconds, load);
+        for (uint32_t i = 0; i < r->output_count; ++i) json_output(&j, &job->settings, &r->outputs[i], seconds, load);
         cb_json_end(&j);
         json_clips(&j, job, r);
         cli_plant_json(&j, job);

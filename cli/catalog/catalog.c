@@ -17,7 +17,7 @@ static void override_settings(cb_bake_settings *b, const cb_bake_settings *v, un
     if (fields & CB_BAKE_MEASURE_ALL) b->measure_all = v->measure_all;
     if (fields & CB_BAKE_PLANT_FEET) b->plant_feet = v->plant_feet;
     if (fields & CB_BAKE_ROW_TRAVEL) b->row_travel_off = v->row_travel_off;
-    if (fields & CB_BAKE_BONE_SPACE) b->bone_space = v->bone_space;
+    if (fields & CB_BAKE_BONE_SPACE) b->bone_space = v->bone_space, b->bone_space_set = true;
     if (fields & CB_BAKE_TIMED_ROWS) b->timed_rows = v->timed_rows;
     if (fields & CB_BAKE_ZSTD) b->zstd = v->zstd;
     if (fields & CB_BAKE_EXR_COMPRESSION) b->exr_compression = v->exr_compression;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "catalog/catalog_canonical.h"
+#include "internal/bake_words.h"
 
 /* A resolved path as seen from the catalog's folder: what the catalog says, whatever folder
  * the catalog was named from, so the input hash holds no absolute path (the same bytes in
@@ -65,7 +66,8 @@ std::string catalog_canonical_words(const char *dir, const cb_catalog_animal *an
     if (b.measure_all) c += " measure_all";
     if (b.plant_feet) c += " plant_feet";
     if (b.row_travel_off) c += " row_travel_off";
-    if (b.bone_space == CB_BONE_SPACE_LOCAL) c += " bone_space=local"; /* global keeps every key it had */
+    /* the catalog's own settings' bone space (a command line's overrides add their words): global keeps its keys */
+    if (cb_bake_settings_bone_space(&b, CB_FORMAT_PAL) == CB_BONE_SPACE_LOCAL) c += " bone_space=local";
     if (b.timed_rows != CB_TIMED_ROWS_AUTO) c += std::string(" timed_rows=") + cb_timed_rows_name(b.timed_rows);
     if (b.max_error_given) c += " max_error_given";
     if (b.allow_over_budget) c += " allow_over_budget";

@@ -208,9 +208,11 @@ struct Parser {
         if (auto *n = t.get("fit_rows")) b->fit_rows = boolean(*n, where + " fit_rows"), b->from.fit_rows = from;
         if (auto *n = t.get("measure_all")) b->measure_all = boolean(*n, where + " measure_all");
         if (auto *n = t.get("row_travel")) b->row_travel_off = !boolean(*n, where + " row_travel");
-        if (auto *n = t.get("bone_space"))
+        if (auto *n = t.get("bone_space")) {
             if (!cb_bone_space_parse(str(*n, where + " bone_space").c_str(), &b->bone_space))
                 fail(n->source(), where + " bone_space must be \"global\" or \"local\"");
+            b->bone_space_set = true;
+        }
         if (auto *n = t.get("timed_rows"))
             if (!cb_timed_rows_parse(str(*n, where + " timed_rows").c_str(), &b->timed_rows))
                 fail(n->source(), where + " timed_rows must be \"auto\", \"on\" or \"off\"");

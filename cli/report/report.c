@@ -242,7 +242,9 @@ void cb_report_text(FILE *f, const cb_report *r)
             }
         fputc('\n', f);
     }
-    if (report_has_local_rows(r)) fputs("-: local rows (bone_space \"local\") are held in qpos with u16 or float only\n", f);
+    if (report_has_local_rows(r))
+        fputs("-: local rows (the default bone space) are held in qpos with u16 or float only; bone_space = \"global\" "
+              "for the others\n", f);
     cb_human_bytes(r->palettes_total, a, sizeof a);
     cb_human_bytes(r->meshes_total, b, sizeof b);
     fprintf(f, "\nPalettes %s (shared palettes once) + meshes %s. VAT instead of palettes:", a, b);
@@ -321,7 +323,7 @@ void cb_report_json(FILE *f, const cb_report *r)
         cb_json_object(&j, "palette");
         cb_json_string(&j, "layout", cb_layout_name(t->layout));
         cb_json_string(&j, "precision", cb_precision_name(t->precision));
-        if (t->local_rows) cb_json_string(&j, "bone_space", "local"); /* absent: global */
+        cb_json_string(&j, "bone_space", t->local_rows ? "local" : "global"); /* of the .pal */
         cb_json_int(&j, "width", t->width);
         cb_json_int(&j, "height", t->height);
         cb_json_int(&j, "blocks", t->blocks);

@@ -364,7 +364,8 @@ static void html_encodings(FILE *f, const cb_report *r)
     }
     fputs("</table></div>\n", f);
     if (report_has_local_rows(r))
-        fputs("<p>-: local rows (<code>bone_space = \"local\"</code>) are held in qpos with u16 or float only.</p>\n", f);
+        fputs("<p>-: local rows (the default bone space) are held in qpos with u16 or float only; <code>bone_space = "
+              "\"global\"</code> for the others.</p>\n", f);
 }
 
 /* The roster against every built-in target, and the catalog's own when it is not one. */

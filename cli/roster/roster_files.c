@@ -12,6 +12,7 @@
 
 #include "internal/atomic_file.h"
 #include "internal/json.h"
+#include "internal/bake_words.h"
 
 /* mkdir -p: the output directory and any missing parents. */
 cb_status roster_make_directories(const char *dir, cb_error *err)
@@ -268,11 +269,12 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
     if (t->owner != (uint32_t)(t - r->types)) cb_json_string(j, "shares_palette_of", owner->animal->name);
     cb_json_string(j, "layout", cb_layout_name(owner->layout));
     cb_json_string(j, "precision", cb_precision_name(owner->precision));
-    if (roster_local_rows(owner)) { /* absent: global */
-        cb_json_string(j, "bone_space", "local");
-        cb_json_string(j, "bone_space_why", "bone_space = \"local\" (catalog or command line): the .pal's rows in each bone's "
-                       "parent frame, composed by the runtime (.pal version 6); other formats global");
-    }
+    char why[600];
+    bool local = roster_local_rows(owner);
+    cb_bake_bone_space_why(&owner->animal->bake, CB_FORMAT_PAL, local ? CB_BONE_SPACE_LOCAL : CB_BONE_SPACE_GLOBAL,
+                           NULL, why, sizeof why);
+    cb_json_string(j, "bone_space", local ? "local" : "global"); /* of the .pal: other formats hold global rows */
+    cb_json_string(j, "bone_space_why", why);
     cb_json_int(j, "bones", t->bones);
     cb_json_int(j, "texels_per_bone", cb_layout_texels_per_bone(owner->layout));
     cb_json_int(j, "rows", owner->rows);

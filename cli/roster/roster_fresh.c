@@ -2,6 +2,7 @@
  * whether the files on disk are this bake's (the roster's up-to-date check): each format's file
  * read back by its reader, its recorded input hash and rows compared. */
 #include "roster_files.h"
+#include "internal/bake_words.h"
 
 const char *roster_output_path(const cb_roster_type *t, unsigned format)
 {
@@ -21,7 +22,9 @@ const char *roster_palette_path(const cb_roster_type *t)
 
 bool roster_local_rows(const cb_roster_type *t)
 {
-    return t->animal->bake.bone_space == CB_BONE_SPACE_LOCAL && t->layout == CB_LAYOUT_QPOS;
+    const cb_bake_settings *b = &t->animal->bake; /* the bake's own decision; a rig qpos cannot hold bakes global */
+    return (b->formats & CB_FORMAT_PAL) && cb_bake_settings_bone_space(b, CB_FORMAT_PAL) == CB_BONE_SPACE_LOCAL &&
+           t->layout == CB_LAYOUT_QPOS;
 }
 
 /* The rows the file of format f holds for this bake: the palette's, or Babylon's own. */

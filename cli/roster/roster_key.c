@@ -2,6 +2,7 @@
  * pose, the planned clips' keys and the settings). Types with equal keys share one palette. */
 #include <string.h>
 
+#include "internal/bake_words.h"
 #include "crowdbake_pal.h" /* XXH64 */
 #include "roster_files.h"
 
@@ -20,6 +21,7 @@ uint64_t roster_content_key(const cb_model *m, int32_t skin, const cb_clip_plan 
     if (b->plant_feet) hash_str(&h, "plant_feet");   /* (likewise: the legs' rows differ) */
     if (b->row_travel_off) hash_str(&h, "row_travel_off"); /* (likewise: the travel table may go) */
     if (b->timed_rows != CB_TIMED_ROWS_AUTO) hash_str(&h, cb_timed_rows_name(b->timed_rows)); /* (likewise) */
+    if (cb_bake_settings_bone_space(b, CB_FORMAT_PAL) == CB_BONE_SPACE_LOCAL) hash_str(&h, "bone-space=local"); /* (likewise) */
     if (b->allow_over_budget) hash_str(&h, "allow_over_budget"); /* a palette written over budget is not one that met it */
     /* A budget the command line gave (the catalog's own is in the canonical entry): a palette
      * checked against it is not one baked unchecked, nor one checked against another. */

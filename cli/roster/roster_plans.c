@@ -5,6 +5,7 @@
  * (issue 46). Nothing that is written depends on which type worked it out: equal keys give
  * bit-equal plans, the planning being deterministic. */
 #include "roster_files.h"
+#include "internal/bake_words.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -41,8 +42,8 @@ static void hash_settings(cbpal_xxh64_state *h, const cb_bake_settings *b)
                   b->layout, b->precision, b->formats, b->max_texture_size, b->root_motion, b->layout_set,
                   b->precision_set, b->zstd, b->exr_compression, b->fit_rows, b->measure_all,
                   b->from.fps, b->from.max_error, b->from.max_fps, b->from.fit_rows, b->from.root_motion,
-                  b->plant_feet, b->row_travel_off};
-    cbpal_xxh64_update(h, v, sizeof v);
+                  b->plant_feet, b->row_travel_off, cb_bake_settings_bone_space(b, CB_FORMAT_PAL), b->timed_rows};
+    cbpal_xxh64_update(h, v, sizeof v); /* (the bone space: local rows' rates are their own) */
 }
 
 uint64_t roster_plan_key(const cb_model *m, int32_t skin, const cb_clip_plan *plan, const cb_clip_request *requests,

@@ -59,10 +59,12 @@ typedef struct cb_bake_settings {
                                   * CB_FROM_DEFAULT in cb_default_bake_settings) */
     bool row_travel_off;         /* no per-row travel offsets (row_travel.h), where the bake would ship them */
     cb_bone_space bone_space;    /* local: a .pal's rows in each bone's parent frame (.pal version 6; qpos, u16 or
-                                  * float); other formats are baked global. Default global */
+                                  * float); other formats are baked global. Default local, where a .pal can hold it */
     cb_timed_rows timed_rows;    /* an auto rate's rows on its clip's key times (.pal version 7). Local rows: auto
                                   * (default) where that costs fewer bytes, on wherever the keys allow, off never;
                                   * global rows: on where that costs fewer bytes, auto and off never */
+    bool bone_space_set;         /* (API 3.2) bone_space was asked for: local where it cannot be held is refused.
+                                  * Unset: local in a .pal of qpos rows, u16 or float, not fitted; else global */
 } cb_bake_settings;
 
 /* Which settings an override carries (the command line's bake options over a catalog). */
@@ -94,7 +96,8 @@ CROWDBAKE_API bool cb_bake_settings_writable(const cb_bake_settings *settings);
 
 /* The options of the bake for one file format (CB_FORMAT_*): the precision set, else u16 for
  * .pal and float for .exr and .ktx2 (half misses 0.5 mm/m on the samples), so writing several
- * formats gives the bytes of single bakes; the affine fallback unless a layout was set. */
+ * formats gives the bytes of single bakes; the affine fallback unless a layout was set; local rows in a .pal
+ * unless bone_space says global or the settings cannot hold them (qpos, u16 or float, sampled). */
 CROWDBAKE_API cb_bake_options cb_bake_settings_options(const cb_bake_settings *settings, unsigned format,
                                                        const cb_limits *limits, uint32_t threads);
 

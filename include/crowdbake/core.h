@@ -17,7 +17,7 @@
 #define CROWDBAKE_VERSION "0.1.0"
 /* The library's API version: MAJOR changes break callers, MINOR ones add to the API. */
 #define CROWDBAKE_API_VERSION_MAJOR 3
-#define CROWDBAKE_API_VERSION_MINOR 1
+#define CROWDBAKE_API_VERSION_MINOR 2
 #define CROWDBAKE_API_VERSION (CROWDBAKE_API_VERSION_MAJOR * 100 + CROWDBAKE_API_VERSION_MINOR)
 
 #ifdef __cplusplus

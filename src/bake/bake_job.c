@@ -45,6 +45,7 @@ cb_bake_settings cb_default_bake_settings(void)
     s.max_texture_size = 16384;
     s.root_motion = CB_ROOT_MOTION_KEEP;
     s.timed_rows = CB_TIMED_ROWS_AUTO;
+    s.bone_space = CB_BONE_SPACE_LOCAL; /* where a .pal holds it (cb_bake_settings_bone_space) */
     return s;
 }
 
@@ -113,7 +114,7 @@ cb_bake_options cb_bake_settings_options(const cb_bake_settings *s, unsigned for
     if (format == CB_FORMAT_BABYLON) o.layout = CB_LAYOUT_MAT4, o.precision = CB_PRECISION_FLOAT, o.affine_fallback = false;
     /* Local rows go only in a .pal (EXR, KTX2 and Babylon have no place for the parents): every other
      * format is baked global (bake_notes says so). The rate search takes it from here too. */
-    o.bone_space = format == CB_FORMAT_PAL ? s->bone_space : CB_BONE_SPACE_GLOBAL;
+    o.bone_space = cb_bake_settings_bone_space(s, format);
     o.timed_rows = format == CB_FORMAT_PAL ? s->timed_rows : CB_TIMED_ROWS_OFF; /* only a .pal has a map */
     return o;
 }

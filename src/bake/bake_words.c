@@ -59,6 +59,15 @@ static bool timed_not_taken(const cb_rate_choice *r, char *buf, size_t size)
     return r->timed_weighed;
 }
 
+/* The job writes a .pal of local rows (a fixed rate's clip reasons then say so). */
+static bool pal_rows_local(const cb_bake_job *job)
+{
+    for (uint32_t i = 0; i < job->output_count; ++i)
+        if (job->outputs[i].format == CB_FORMAT_PAL)
+            return cb_bake_settings_bone_space(&job->settings, CB_FORMAT_PAL) == CB_BONE_SPACE_LOCAL;
+    return false;
+}
+
 /* An auto clip's rate chosen for local rows (local_rate.c): its key rate's lowest multiple whose
  * rows, blended and composed as the runtime plays them, stay within its budget. */
 static void local_reason(const cb_bake_job *job, uint32_t i, double fps, char *buf, size_t size)
@@ -132,7 +141,7 @@ void cb_bake_clip_reason(const cb_bake_job *job, uint32_t i, char *buf, size_t s
     }
     if (cs->fps_auto && !local_chosen && !c->timed_rows && !c->step) timed_not_taken(r, buf, size); /* global rows, on */
     size_t n = strlen(buf); /* a fixed rate's local rows (an auto rate's said so above) */
-    if (job->settings.bone_space == CB_BONE_SPACE_LOCAL && !c->step && !(cs->fps_auto && local_chosen) && n < size)
+    if (pal_rows_local(job) && !c->step && !(cs->fps_auto && local_chosen) && n < size)
         snprintf(buf + n, size - n, "; baked as local rows, sampled");
 }
 

@@ -1,6 +1,6 @@
 /* bake_words.h (internal) - the bake job's plumbing for its front ends: the parser of --format
- * and a catalog's format, and the sentences that explain a bake's rates and budgets
- * (src/bake/bake_words.c). Linked into the tool from libcrowdbake.a; not exported, not installed. */
+ * and a catalog's format, the sentences that explain a bake's rates and budgets
+ * (src/bake/bake_words.c), and its bone space with its reason (src/bake/bake_local.c). Linked into the tool from libcrowdbake.a; not exported, not installed. */
 #ifndef CB_INTERNAL_BAKE_WORDS_H
 #define CB_INTERNAL_BAKE_WORDS_H
 
@@ -40,6 +40,16 @@ void cb_bake_budget_text(const cb_bake_job *job, const cb_bake_result *result, u
  * the default budget (a goal, cb_clip_budget.goal), or allowed (allow_over_budget). */
 void cb_bake_goal_words(const cb_clip_budget *budget, const char *(*setting_name)(cb_setting), bool allowed, char *buf,
                         size_t size);
+
+/* The bone space of the file of `format` (a CB_FORMAT_* bit), the bake's one decision of it (bake_local.c): as
+ * asked (bone_space_set); else local in a .pal of qpos rows, u16 or float, sampled: the glTF's own interpolation in
+ * fewer rows; global for every other format (no place for the parents) and other settings. */
+cb_bone_space cb_bake_settings_bone_space(const cb_bake_settings *s, unsigned format);
+/* Why the file of `format`, baked with s, holds its bone space `got`, in words: "local rows (the default for a .pal
+ * of qpos rows): ...", "global rows, not the default local: precision half (...)"; fallback_note: the palette's
+ * (cb_palette.fallback_note: why its layout is not qpos), or NULL. */
+void cb_bake_bone_space_why(const cb_bake_settings *s, unsigned format, cb_bone_space got, const char *fallback_note,
+                            char *buf, size_t size);
 
 #ifdef __cplusplus
 }

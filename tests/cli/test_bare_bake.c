@@ -54,8 +54,17 @@ static void test_the_robot_bakes_bare_and_a_stated_budget_is_a_promise(void **st
     static char out[1 << 16];
     char robot[1024];
     shared_path(robot, sizeof robot, "assets/robot-quaternius-raylib/robot.glb");
-    /* Bare: the punch goes past the default max_fps, alone, and says why; no clip over the goal. */
-    int rc = run(out, sizeof out, "%s bake %s -o %s/robot.pal 2>&1", crowdbake_exe(), robot, OUT_DIR);
+    /* Bare (local rows, the default): every clip within 1 mm/m as `verify` measures it, in fewer rows than a 30 fps
+     * bake's (0.82x), no warning. */
+    int rc = run(out, sizeof out, "%s bake %s -o %s/robot-local.pal 2>&1", crowdbake_exe(), robot, OUT_DIR);
+    if (rc != 0) fail_msg("bare bake exit %d:\n%s", rc, out);
+    assert_int_equal(count_of(out, "warning: clip"), 0);
+    rc = run(out, sizeof out, "%s verify %s %s/robot-local.pal --max-error 1 2>&1", crowdbake_exe(), robot, OUT_DIR);
+    if (rc != 0) fail_msg("verify exit %d:\n%s", rc, out);
+    rc = run(out, sizeof out, "%s bake %s --fps 30 -o %s/robot30-local.pal -q 2>&1", crowdbake_exe(), robot, OUT_DIR);
+    assert_true(rc == 0 && texture_rows(OUT_DIR "/robot-local.pal") <= texture_rows(OUT_DIR "/robot30-local.pal"));
+    /* Global rows: the punch goes past the default max_fps, alone, and says why; no clip over the goal. */
+    rc = run(out, sizeof out, "%s bake %s -o %s/robot.pal --bone-space global 2>&1", crowdbake_exe(), robot, OUT_DIR);
     if (rc != 0) fail_msg("bare bake exit %d:\n%s", rc, out);
     assert_int_equal(count_of(out, "warning: clip"), 0);
     assert_int_equal(count_of(out, "above the default max_fps 120: a fast transient"), 1);
@@ -70,14 +79,14 @@ static void test_the_robot_bakes_bare_and_a_stated_budget_is_a_promise(void **st
      * turns a full circle, fitted at 72 fps - its fit across the wrap blends towards the first
      * row's flipped quaternion as the shaders do (before, 2.11x: that fit missed at the wrap's
      * rows, so Dance took 96 fps sampled). */
-    rc = run(out, sizeof out, "%s bake %s --fps 30 -o %s/robot30.pal 2>&1", crowdbake_exe(), robot, OUT_DIR);
+    rc = run(out, sizeof out, "%s bake %s --fps 30 -o %s/robot30.pal --bone-space global 2>&1", crowdbake_exe(), robot, OUT_DIR);
     if (rc != 0) fail_msg("%s", out);
     uint32_t rows = texture_rows(OUT_DIR "/robot.pal"), rows30 = texture_rows(OUT_DIR "/robot30.pal");
     printf("robot: %u rows bare, %u at 30 fps (%.3fx)\n", rows, rows30, (double)rows / rows30);
     assert_int_equal(rows30, 591);
     assert_true(rows <= 2 * rows30);
     /* A max_fps the user gives caps it: one line per clip over the goal, saying what meets it. */
-    rc = run(out, sizeof out, "%s bake %s -o %s/robot120.pal --max-fps 120 2>&1", crowdbake_exe(), robot, OUT_DIR);
+    rc = run(out, sizeof out, "%s bake %s -o %s/robot120.pal --max-fps 120 --bone-space global 2>&1", crowdbake_exe(), robot, OUT_DIR);
     printf("%s", strstr(out, "crowdbake: warning") ? strstr(out, "crowdbake: warning") : out);
     if (rc != 0) fail_msg("--max-fps 120 bake exit %d:\n%s", rc, out);
     assert_true(exists(OUT_DIR "/robot120.pal"));
@@ -87,20 +96,20 @@ static void test_the_robot_bakes_bare_and_a_stated_budget_is_a_promise(void **st
         !strstr(out, "(--max-fps ") || !strstr(out, "the default max_error is a goal; --max-error 1 makes it a promise"))
         fail_msg("%s", out);
     /* Stated on the command line: a promise. */
-    rc = run(out, sizeof out, "%s bake %s -o %s/robot1.pal --max-error 1 2>&1", crowdbake_exe(), robot, OUT_DIR);
+    rc = run(out, sizeof out, "%s bake %s -o %s/robot1.pal --max-error 1 --bone-space global 2>&1", crowdbake_exe(), robot, OUT_DIR);
     assert_int_equal(rc, EXIT_VERIFY);
     assert_false(exists(OUT_DIR "/robot1.pal"));
     if (!strstr(out, "Robot_Punch") || !strstr(out, "nothing was written")) fail_msg("%s", out);
     /* Stated in a catalog: a promise too. */
     char text[PATH_MAX + 128], robot_abs[PATH_MAX]; /* the catalog's folder is deeper in the sanitizer build's tree */
     if (!realpath(robot, robot_abs)) fail_msg("%s: missing", robot);
-    snprintf(text, sizeof text, "[bake]\nout_dir = \"cat-out\"\nmax_error = 1\n[animal.robot]\nmodel = \"%s\"\n", robot_abs);
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"cat-out\"\nmax_error = 1\nbone_space = \"global\"\n[animal.robot]\nmodel = \"%s\"\n", robot_abs);
     write_text(OUT_DIR "/robot.toml", text);
     rc = run(out, sizeof out, "%s bake %s/robot.toml -j 1 2>&1", crowdbake_exe(), OUT_DIR);
     assert_int_equal(rc, EXIT_VERIFY);
     assert_false(exists(OUT_DIR "/cat-out/robot.pal"));
     /* And without it the catalog bakes, the punch past 120 fps as bare, with no warning. */
-    snprintf(text, sizeof text, "[bake]\nout_dir = \"bare-out\"\n[animal.robot]\nmodel = \"%s\"\n", robot_abs);
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"bare-out\"\nbone_space = \"global\"\n[animal.robot]\nmodel = \"%s\"\n", robot_abs);
     write_text(OUT_DIR "/bare.toml", text);
     rc = run(out, sizeof out, "%s bake %s/bare.toml -j 1 2>&1", crowdbake_exe(), OUT_DIR);
     if (rc != 0) fail_msg("%s", out);
@@ -108,7 +117,7 @@ static void test_the_robot_bakes_bare_and_a_stated_budget_is_a_promise(void **st
     assert_null(strstr(out, "warning: clip"));
 }
 
-/* A clip out of reach even past the default cap (the robot's death made to loop: its last pose
+/* A clip of global rows out of reach even past the default cap (the robot's death made to loop: its last pose
  * wraps back to its first) keeps its answer at 120 fps, with one warning line naming the rate
  * that would meet it. That rate is past 240 fps (the search past the cap missed up to there) and
  * meets 1 mm/m as a promise (--max-error 1 --max-fps N: exit 0), where 240 fps cannot (exit 6).
@@ -120,7 +129,7 @@ static void test_a_clip_out_of_reach_says_what_meets_it(void **state)
     static char out[1 << 16];
     char robot[1024];
     shared_path(robot, sizeof robot, "assets/robot-quaternius-raylib/robot.glb");
-    int rc = run(out, sizeof out, "%s bake %s -o %s/death.pal --loop Robot_Death 2>&1", crowdbake_exe(), robot, OUT_DIR);
+    int rc = run(out, sizeof out, "%s bake %s -o %s/death.pal --loop Robot_Death --bone-space global 2>&1", crowdbake_exe(), robot, OUT_DIR);
     if (rc != 0) fail_msg("bare bake exit %d:\n%s", rc, out);
     assert_int_equal(count_of(out, "warning: clip"), 1);
     const char *line = strstr(out, "warning: clip 'Robot_Death' reaches "), *meets = line ? strstr(line, "it meets it at ") : NULL;
@@ -130,9 +139,9 @@ static void test_a_clip_out_of_reach_says_what_meets_it(void **state)
     printf("Robot_Death as a loop: %g fps meets 1 mm/m\n", needed);
     assert_true(needed > 240);
     const char *clip = "--loop Robot_Death --clip Robot_Death --max-error 1";
-    rc = run(out, sizeof out, "%s bake %s -o %s/death_n.pal %s --max-fps %g 2>&1", crowdbake_exe(), robot, OUT_DIR, clip, needed);
+    rc = run(out, sizeof out, "%s bake %s -o %s/death_n.pal %s --max-fps %g --bone-space global 2>&1", crowdbake_exe(), robot, OUT_DIR, clip, needed);
     if (rc != 0) fail_msg("--max-fps %g exit %d:\n%s", needed, rc, out);
-    rc = run(out, sizeof out, "%s bake %s -o %s/death_240.pal %s --max-fps 240 2>&1", crowdbake_exe(), robot, OUT_DIR, clip);
+    rc = run(out, sizeof out, "%s bake %s -o %s/death_240.pal %s --max-fps 240 --bone-space global 2>&1", crowdbake_exe(), robot, OUT_DIR, clip);
     assert_int_equal(rc, EXIT_VERIFY);
 }
 
@@ -253,9 +262,16 @@ static void test_step_keys_are_exact(void **state)
     shared_path(csv, sizeof csv, "reference/gltf_simple_skin_step.fps30.csv");
     int n = read_reference(csv, frames, 400);
     assert_true(n > 100);
-    int rc = run(out, sizeof out, "%s bake %s -o %s/step.pal 2>&1", crowdbake_exe(), model, OUT_DIR);
+    /* The default (local rows) holds them too: exact within 0.01 mm/m, the clip flagged. */
+    int rc = run(out, sizeof out, "%s bake %s -o %s/step-local.pal 2>&1", crowdbake_exe(), model, OUT_DIR);
     if (rc != 0 || !strstr(out, "step rows: keyed with STEP")) fail_msg("%s", out);
-    rc = run(out, sizeof out, "%s bake %s -o %s/blended.pal --fps 30 -q 2>&1", crowdbake_exe(), model, OUT_DIR);
+    rc = run(out, sizeof out, "%s verify %s %s/step-local.pal --max-error 0.01 2>&1", crowdbake_exe(), model, OUT_DIR);
+    if (rc != 0) fail_msg("%s", out);
+    assert_true(worst_against_reference(OUT_DIR "/step-local.pal", frames, n) < 1e-4);
+    /* Global rows: version 4 where a clip is held, older versions' bytes otherwise. */
+    rc = run(out, sizeof out, "%s bake %s -o %s/step.pal --bone-space global 2>&1", crowdbake_exe(), model, OUT_DIR);
+    if (rc != 0 || !strstr(out, "step rows: keyed with STEP")) fail_msg("%s", out);
+    rc = run(out, sizeof out, "%s bake %s -o %s/blended.pal --fps 30 -q --bone-space global 2>&1", crowdbake_exe(), model, OUT_DIR);
     assert_int_equal(rc, 0);
     double held = worst_against_reference(OUT_DIR "/step.pal", frames, n);
     double blended = worst_against_reference(OUT_DIR "/blended.pal", frames, n);
@@ -283,29 +299,38 @@ static void test_step_keys_are_exact(void **state)
 }
 
 /* The rows' bone space is a decision the bake takes for the user, so its summary states it and
- * why: global by default, with local rows named as the choice for runtimes that compose bones
- * where a palette can hold them (qpos, u16 or float); local when asked for, with the cost to a
- * runtime without a bone pass; nothing where local rows are out of reach (an affine layout, half
- * precision: cb_holds_local_rows). */
+ * why: local by default, with the cost to a runtime without a bone pass and the flag for it; global
+ * when asked for; global, saying why, where local rows are out of reach (an affine layout, half
+ * precision); global in the formats that have no place for the parents. */
 static void test_the_bake_states_its_bone_space(void **state)
 {
     (void)state;
     static char out[1 << 14];
     char fox[1024];
     shared_path(fox, sizeof fox, "assets/fox-bevy/Fox.glb");
-    static const char global[] = "  global rows (the default), which any vertex shader skins as they are; "
-                                 "--bone-space local, for runtimes that compose the bones";
-    static const char local[] = "  local rows (--bone-space local): each bone in its parent's frame, composed by the runtime";
+    static const char local[] = "  local rows (the default for a .pal of qpos rows): each bone in its parent's frame";
+    static const char flag[] = "a vertex shader without one at every vertex (--bone-space global, catalog bone_space";
+    static const char global[] = "  global rows (bone space global, asked for), which any vertex shader skins as they are";
     int rc = run(out, sizeof out, "%s bake %s -o %s/fox.pal 2>/dev/null", crowdbake_exe(), fox, OUT_DIR);
-    if (rc != 0 || count_of(out, global) != 1 || count_of(out, local) != 0) fail_msg("exit %d:\n%s", rc, out);
-    rc = run(out, sizeof out, "%s bake %s -o %s/fox-local.pal --bone-space local 2>/dev/null", crowdbake_exe(), fox, OUT_DIR);
-    if (rc != 0 || count_of(out, local) != 1 || count_of(out, global) != 0) fail_msg("exit %d:\n%s", rc, out);
-    static const char *const out_of_reach[] = {"--layout affine", "--precision half"};
+    if (rc != 0 || count_of(out, local) != 1 || count_of(out, flag) != 1 || count_of(out, "global rows (") != 0)
+        fail_msg("exit %d:\n%s", rc, out);
+    rc = run(out, sizeof out, "%s bake %s -o %s/fox-global.pal --bone-space global 2>/dev/null", crowdbake_exe(), fox, OUT_DIR);
+    if (rc != 0 || count_of(out, global) != 1 || count_of(out, "local rows (") != 0) fail_msg("exit %d:\n%s", rc, out);
+    static const char *const out_of_reach[][2] = {{"--layout affine", "a layout other than qpos (local rows need qpos)"},
+                                                  {"--precision half", "precision half (its 2^-11 compounds"}};
     for (int i = 0; i < 2; ++i) {
-        rc = run(out, sizeof out, "%s bake %s -o %s/fox-other.pal %s 2>/dev/null", crowdbake_exe(), fox, OUT_DIR, out_of_reach[i]);
-        if (rc != 0 || count_of(out, "global rows") != 0 || count_of(out, "local rows") != 0 || !strstr(out, "x the bytes)"))
-            fail_msg("%s: exit %d:\n%s", out_of_reach[i], rc, out);
+        rc = run(out, sizeof out, "%s bake %s -o %s/fox-other.pal %s 2>/dev/null", crowdbake_exe(), fox, OUT_DIR,
+                 out_of_reach[i][0]);
+        if (rc != 0 || count_of(out, "  global rows, not the default local: ") != 1 || !strstr(out, out_of_reach[i][1]) ||
+            !strstr(out, "x the bytes)"))
+            fail_msg("%s: exit %d:\n%s", out_of_reach[i][0], rc, out);
     }
+    /* --json: each file's bone space and why; the EXR beside a local .pal is global, saying why. */
+    rc = run(out, sizeof out, "%s bake %s -o %s/fox-both.pal --format pal,exr --json 2>/dev/null", crowdbake_exe(), fox,
+             OUT_DIR);
+    if (rc != 0 || !strstr(out, "\"bone_space\": \"local\"") || !strstr(out, "\"bone_space\": \"global\"") ||
+        !strstr(out, "only a .pal holds local rows (no place for the parents)"))
+        fail_msg("exit %d:\n%s", rc, out);
 }
 
 int main(void)

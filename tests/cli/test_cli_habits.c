@@ -202,8 +202,12 @@ static void test_clip_names_match_by_case_and_part(void **state)
     assert_contains("--clip wak: no clip 'wak'; did you mean 'Walk'?");
     assert_int_equal(crowdbake("preview %s " TMP "/fox.pal -o " TMP "/fox-walk.png --cell 32 --exclude-clip walk", fox), 0);
     assert_contains(": 2 clips x 6 frames (192x138 pixels): Survey / Run (rows, top to bottom)");
-    /* An error-bounded bake's header gives its clips' rates and fitted rows (Fox: Survey 24 fps,
-     * Walk and Run chosen above it, one fitted, as the clip table below says), not the base 30. */
+    /* An error-bounded bake's header gives its clips' rates and fitted rows (Fox's local rows: Survey and Walk
+     * at their 24 fps keys, Run on its keys through a map whose cells make 21.58 fps of rows, none fitted), not
+     * the base 30; global rows: Survey 24 fps, Walk and Run chosen above it, one fitted. */
+    assert_int_equal(crowdbake("inspect " TMP "/fox.pal"), 0);
+    assert_contains("fps 21.5827-24 per clip, 0 of 3 clips fitted, speed reference 105.58 units/s");
+    assert_int_equal(crowdbake("bake %s -o " TMP "/fox.pal -q --bone-space global", fox), 0);
     assert_int_equal(crowdbake("inspect " TMP "/fox.pal"), 0);
     assert_contains("fps 24-120 per clip, 1 of 3 clips fitted, speed reference 105.58 units/s");
     assert_true(!strstr(out, "fps 30,") && !strstr(out, " m/s"));

@@ -77,8 +77,8 @@ static void test_numbers_match_the_formulas(void **state)
     check_numbers("small", "target = \"Mobile GLES 3.0\"\nmax_texture_size = 512", 512);
 }
 
-/* A type baked with local rows says so in each form of the report (its palette "qpos/u16 local", --json's
- * bone_space), and a global one beside it does not. */
+/* A type baked with local rows (the default) says so in each form of the report (its palette "qpos/u16 local",
+ * --json's bone_space), and a global one beside it (bone_space = "global") does not. */
 static void test_local_rows_are_named(void **state)
 {
     (void)state;
@@ -86,7 +86,7 @@ static void test_local_rows_are_named(void **state)
     FILE *f = fopen(TMP "/local.toml", "w");
     assert_non_null(f);
     fprintf(f, "[bake]\nout_dir = \"out-local\"\n\n[animal.goat]\nmodel = \"%s/quadruped.glb\"\nbone_space = \"local\"\n"
-               "[animal.fish]\nmodel = \"%s/fish.glb\"\n", samples_abs, samples_abs);
+               "[animal.fish]\nmodel = \"%s/fish.glb\"\nbone_space = \"global\"\n", samples_abs, samples_abs);
     fclose(f);
     static char out[1 << 16];
     assert_int_equal(run_crowdbake(out, sizeof out, "report " TMP "/local.toml -q"), 0);
@@ -102,15 +102,15 @@ static void test_local_rows_are_named(void **state)
     int dashes = 0;
     for (const char *c = goat_row; (c = strstr(c, " -")); c += 2) dashes += c[2] == ' ' || c[2] == '\0';
     assert_int_equal(dashes, 7);
-    assert_null(strstr(fish_row, " - ")), assert_non_null(strstr(out, "-: local rows (bone_space \"local\") are held in qpos"));
+    assert_null(strstr(fish_row, " - ")), assert_non_null(strstr(out, "-: local rows (the default bone space) are held in qpos"));
     assert_int_equal(run_crowdbake(out, sizeof out, "report " TMP "/local.toml --markdown -q"), 0);
     assert_non_null(strstr(out, "| goat | 41 |")), assert_non_null(strstr(out, "| qpos/u16 local |"));
     assert_int_equal(run_crowdbake(out, sizeof out, "report " TMP "/local.toml --json -q > " TMP "/local.json"), 0);
     char *json = read_whole_file(TMP "/local.json", NULL);
     assert_non_null(json);
-    const char *first = strstr(json, "\"bone_space\": \"local\"");
-    assert_non_null(first);
-    assert_null(strstr(first + 1, "\"bone_space\"")); /* the goat's alone */
+    const char *local = strstr(json, "\"bone_space\": \"local\""), *global = strstr(json, "\"bone_space\": \"global\"");
+    assert_true(local && !strstr(local + 1, "\"bone_space\": \"local\"")); /* the goat's */
+    assert_true(global && !strstr(global + 1, "\"bone_space\": \"global\"")); /* the fish's */
     free(json);
     assert_schema_valid("docs/report.schema.json", TMP "/local.json");
 }

@@ -33,6 +33,35 @@ static cb_bake_job job_for(const cb_model *m)
     return job;
 }
 
+/* The bone space, decided in one place (cb_bake_settings_bone_space) for the options, the notes, the manifest and
+ * the roster's keys: local in a .pal by default; global for the other formats, where the settings cannot hold local
+ * rows (a layout other than qpos, half, fitted rows), and where asked for; local asked for stays local (and the job
+ * refuses what cannot hold it). */
+static void test_bone_space_is_decided_once(void **state)
+{
+    (void)state;
+    cb_bake_settings s = cb_default_bake_settings();
+    assert_int_equal(cb_bake_settings_bone_space(&s, CB_FORMAT_PAL), CB_BONE_SPACE_LOCAL);
+    assert_int_equal(cb_bake_settings_options(&s, CB_FORMAT_PAL, NULL, 1).bone_space, CB_BONE_SPACE_LOCAL);
+    for (unsigned f = CB_FORMAT_EXR; f <= CB_FORMAT_BABYLON; f <<= 1)
+        assert_int_equal(cb_bake_settings_options(&s, f, NULL, 1).bone_space, CB_BONE_SPACE_GLOBAL);
+    cb_bake_settings unfit[3] = {s, s, s};
+    unfit[0].layout = CB_LAYOUT_AFFINE, unfit[1].precision = CB_PRECISION_HALF, unfit[2].fit_rows = true;
+    char why[600];
+    static const char *const reasons[3] = {"a layout other than qpos", "precision half", "fitted rows"};
+    for (int i = 0; i < 3; ++i) {
+        assert_int_equal(cb_bake_settings_bone_space(&unfit[i], CB_FORMAT_PAL), CB_BONE_SPACE_GLOBAL);
+        cb_bake_bone_space_why(&unfit[i], CB_FORMAT_PAL, CB_BONE_SPACE_GLOBAL, NULL, why, sizeof why);
+        assert_non_null(strstr(why, "global rows, not the default local: ")), assert_non_null(strstr(why, reasons[i]));
+        unfit[i].bone_space_set = true; /* asked for: kept, for the job to refuse */
+        assert_int_equal(cb_bake_settings_bone_space(&unfit[i], CB_FORMAT_PAL), CB_BONE_SPACE_LOCAL);
+    }
+    s.bone_space = CB_BONE_SPACE_GLOBAL, s.bone_space_set = true;
+    assert_int_equal(cb_bake_settings_bone_space(&s, CB_FORMAT_PAL), CB_BONE_SPACE_GLOBAL);
+    cb_bake_bone_space_why(&s, CB_FORMAT_PAL, CB_BONE_SPACE_GLOBAL, NULL, why, sizeof why);
+    assert_non_null(strstr(why, "global rows (bone space global, asked for)"));
+}
+
 /* u16 for .pal, half for .ktx2 and float for .exr unless a precision is set; set, it holds for all. */
 static void test_each_format_gets_its_precision(void **state)
 {
@@ -218,11 +247,13 @@ static void test_catalog_out_dir_and_manifest_depfile(void **state)
  * sampled and fitted rows: speed43j) stands in for making them again, bit for bit: the same job
  * with its search released before the bake (cb_bake_job_release_search, as the roster does) bakes
  * every row afresh, and writes the same bytes. Fox's rows come from its joints' similarities,
- * Husky's from their matrices; both default bakes have sampled and fitted answers. */
-static void bake_bytes(const cb_model *m, bool release, const char *path, char **bytes, size_t *size,
+ * Husky's from their matrices; both global bakes have sampled and fitted answers, and their default (local)
+ * bakes keep their searches' poses too. */
+static void bake_bytes(const cb_model *m, cb_bone_space space, bool release, const char *path, char **bytes, size_t *size,
                        uint32_t *fitted)
 {
     cb_bake_job job = job_for(m);
+    job.settings.bone_space = space;
     job.outputs = &(cb_output_path){CB_FORMAT_PAL, path}, job.output_count = 1;
     cb_bake_result r;
     cb_error err = {0};
@@ -243,16 +274,18 @@ static void test_kept_search_bakes_the_same_bytes(void **state)
     static const char *models[] = {"assets/fox-bevy/Fox.glb", "assets/quaternius-husky/Husky.glb"};
     for (int k = 0; k < 2; ++k) {
         cb_model *m = load_shared(models[k]);
-        char *kept, *fresh;
-        size_t kept_size, fresh_size;
-        uint32_t kept_fitted, fresh_fitted;
-        bake_bytes(m, false, TMP "/kept.pal", &kept, &kept_size, &kept_fitted);
-        bake_bytes(m, true, TMP "/fresh.pal", &fresh, &fresh_size, &fresh_fitted);
-        assert_true(kept_fitted > 0); /* a fitted answer, and (fewer than all clips) sampled ones */
-        assert_int_equal(kept_fitted, fresh_fitted);
-        assert_int_equal(kept_size, fresh_size);
-        assert_memory_equal(kept, fresh, kept_size);
-        free(kept), free(fresh);
+        for (int space = CB_BONE_SPACE_GLOBAL; space <= CB_BONE_SPACE_LOCAL; ++space) { /* global, and the default */
+            char *kept, *fresh;
+            size_t kept_size, fresh_size;
+            uint32_t kept_fitted, fresh_fitted;
+            bake_bytes(m, (cb_bone_space)space, false, TMP "/kept.pal", &kept, &kept_size, &kept_fitted);
+            bake_bytes(m, (cb_bone_space)space, true, TMP "/fresh.pal", &fresh, &fresh_size, &fresh_fitted);
+            if (space == CB_BONE_SPACE_GLOBAL) assert_true(kept_fitted > 0); /* a fitted answer, and sampled ones */
+            assert_int_equal(kept_fitted, fresh_fitted);
+            assert_int_equal(kept_size, fresh_size);
+            assert_memory_equal(kept, fresh, kept_size);
+            free(kept), free(fresh);
+        }
         cb_model_free(m);
     }
 }
@@ -277,6 +310,7 @@ static void test_work_beside_the_search_is_the_runs(void **state)
             for (int release = 0; release < 2; ++release) {
                 cb_bake_job job = job_for(m);
                 job.threads = threads;
+                job.settings.bone_space = CB_BONE_SPACE_GLOBAL; /* the work beside a global search */
                 const char *path = release ? TMP "/after.pal" : TMP "/beside.pal";
                 job.outputs = &(cb_output_path){CB_FORMAT_PAL, path}, job.output_count = 1;
                 cb_bake_result r;
@@ -354,6 +388,7 @@ static void test_clip_rows_at_a_rate_are_the_analyses(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_bone_space_is_decided_once),
         cmocka_unit_test(test_each_format_gets_its_precision),
         cmocka_unit_test(test_job_carries_its_size),
         cmocka_unit_test(test_fallback_acts_on_the_status),

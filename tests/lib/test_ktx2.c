@@ -109,7 +109,7 @@ static void test_ktx2_defaults_to_half_beside_a_u16_pal(void **state)
     char quadruped[1024];
     static char out[1 << 16];
     sample_path(quadruped, sizeof quadruped, "quadruped");
-    assert_int_equal(run(out, sizeof out, "%s bake %s --fps 30 -o " TMP "/dflt --format pal,ktx2 2>&1", crowdbake_exe(), quadruped), 0);
+    assert_int_equal(run(out, sizeof out, "%s bake %s --fps 30 -o " TMP "/dflt --format pal,ktx2 --bone-space global 2>&1", crowdbake_exe(), quadruped), 0);
     printf("%s", out);
     assert_non_null(strstr(out, "note: " TMP "/dflt.ktx2 is half (RGBA16F), the float format as wide as the .pal's default u16"));
     assert_non_null(strstr(out, "RGBA16UI, an integer format three.js's KTX2Loader and most engines refuse; --precision float"));
@@ -122,7 +122,7 @@ static void test_ktx2_defaults_to_half_beside_a_u16_pal(void **state)
     assert_non_null(strstr(out, "ok   dflt.ktx2: ktx-parse level 0 is bit-identical to the .pal texels (173840 bytes)"));
     assert_non_null(strstr(out, "dflt.ktx2: three.js KTX2Loader makes a 82x265 RGBA HalfFloatType texture"));
     /* overridden: float texels, no note */
-    assert_int_equal(run(out, sizeof out, "%s bake %s --fps 30 -o " TMP "/fl --format pal,ktx2 --precision float 2>&1",
+    assert_int_equal(run(out, sizeof out, "%s bake %s --fps 30 -o " TMP "/fl --format pal,ktx2 --precision float --bone-space global 2>&1",
                          crowdbake_exe(), quadruped), 0);
     assert_null(strstr(out, "RGBA16F"));
     assert_int_equal(run(out, sizeof out, "node tests/tools/ktx2/check_ktx2.mjs " TMP "/fl.ktx2 " TMP "/fl.pal 2>&1"), 0);

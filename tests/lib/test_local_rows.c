@@ -7,9 +7,12 @@
  *   bake's blend at the same rate; at 30 fps, off the keys, about as much (both measured on every
  *   skinned vertex against exact skinning, cb_verify_clip);
  * - the header says version 6 only with bit 5; a global bake keeps its version;
- * - local rows refuse half, mat4 and an EXR alone with a one-line error and write nothing. */
+ * - local rows refuse half, mat4 and an EXR alone with a one-line error and write nothing;
+ * - they are the default, stated as such, and one catalog may mix them with global rows on one model. */
+#define _DEFAULT_SOURCE /* realpath */
 #include "testutil.h"
 
+#include <limits.h>
 #include <math.h>
 
 #include "crowdbake_pal.h"
@@ -142,7 +145,7 @@ static void between_rows(const char *model, const char *stem, int fps, double *l
     for (int i = 0; i < 2; ++i) {
         cbpal_file f;
         snprintf(path[i], sizeof path[i], TEST_TMP "/local_rows_%s_%s%d.pal", stem, i ? "global" : "local", fps);
-        snprintf(options[i], sizeof options[i], "--fps %d%s", fps, i ? "" : " --bone-space local");
+        snprintf(options[i], sizeof options[i], "--fps %d%s", fps, i ? " --bone-space global" : "");
         bake(model, options[i], path[i], &f);
         assert_int_equal(f.header.version >= 6, i == 0); /* version 6 only with local rows, */
         assert_int_equal((f.header.flags & CBPAL_FLAG_LOCAL_ROWS) != 0, i == 0); /* which bit 5 says */
@@ -216,24 +219,26 @@ static void test_local_rows_refuse_what_cannot_hold_them(void **state)
     }
 }
 
-/* The decision said: inspect's line and range table, bake --json's bone_space and its reason, the log's
- * note; a global bake says none of it. */
+/* The decision said: inspect's line and range table, bake --json's bone_space and its reason (local: the
+ * default; global: asked for); a global bake's inspect says no local rows. */
 static void test_local_rows_are_stated(void **state)
 {
     (void)state;
     char model[1024], log[16384];
     sample_path(model, sizeof model, "quadruped");
-    assert_int_equal(run_crowdbake(log, sizeof log, "bake %s --bone-space local --fps 30 -o " TEST_TMP "/stated.pal --json",
-                                   model), 0);
+    assert_int_equal(run_crowdbake(log, sizeof log, "bake %s --fps 30 -o " TEST_TMP "/stated.pal --json", model), 0);
     assert_non_null(strstr(log, "\"bone_space\": \"local\""));
-    assert_non_null(strstr(log, "bone space local: each row holds every bone's transform in its parent's frame"));
+    assert_non_null(strstr(log, "\"bone_space_why\": \"local rows (the default for a .pal of qpos rows): each bone in its "
+                                "parent's frame"));
     assert_int_equal(run_crowdbake(log, sizeof log, "inspect " TEST_TMP "/stated.pal"), 0);
     assert_non_null(strstr(log, "crowdbake palette v6"));
     assert_non_null(strstr(log, "bones: local (composed by the runtime); range table: 41 bones"));
     assert_int_equal(run_crowdbake(log, sizeof log, "inspect " TEST_TMP "/stated.pal --json"), 0);
     assert_non_null(strstr(log, "\"bone_ranges\""));
-    assert_int_equal(run_crowdbake(log, sizeof log, "bake %s --fps 30 -o " TEST_TMP "/stated.pal --json", model), 0);
-    assert_null(strstr(log, "bone_space"));
+    assert_int_equal(run_crowdbake(log, sizeof log, "bake %s --fps 30 --bone-space global -o " TEST_TMP "/stated.pal --json",
+                                   model), 0);
+    assert_non_null(strstr(log, "\"bone_space\": \"global\""));
+    assert_non_null(strstr(log, "global rows (bone space global, asked for)"));
     assert_int_equal(run_crowdbake(log, sizeof log, "inspect " TEST_TMP "/stated.pal"), 0);
     assert_null(strstr(log, "bones: local"));
 }
@@ -256,6 +261,44 @@ static void test_timed_clips_json_is_valid(void **state)
     assert_schema_valid("docs/bake.schema.json", TEST_TMP "/timed.json");
 }
 
+/* One catalog, one model, two bone spaces: the goat takes the default (local rows), the sheep asks for global. Types
+ * with equal plans share their rate search (roster_plans.c), so the bone space must keep them apart: each .pal holds
+ * its own rows, the manifest says which and why, and a second run finds both up to date. */
+static void catalog_bone_space(const char *name, const char *pal, cbpal_file *f)
+{
+    char path[512], err[256];
+    snprintf(path, sizeof path, TEST_TMP "/spaces/out/%s", pal);
+    if (cbpal_open(path, CBPAL_VERIFY_CHECKSUM, f, err, sizeof err)) fail_msg("%s: %s", name, err);
+}
+
+static void test_a_catalog_mixes_bone_spaces(void **state)
+{
+    (void)state;
+    char model[1024], abs_model[PATH_MAX], text[2 * PATH_MAX + 256], log[1 << 16];
+    sample_path(model, sizeof model, "quadruped");
+    assert_non_null(realpath(model, abs_model));
+    assert_int_equal(system("rm -rf " TEST_TMP "/spaces && mkdir -p " TEST_TMP "/spaces"), 0);
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"out\"\nroot_motion = \"in-place\"\n[animal.goat]\nmodel = \"%s\"\n"
+             "[animal.sheep]\nmodel = \"%s\"\nbone_space = \"global\"\n", abs_model, abs_model);
+    write_text(TEST_TMP "/spaces/herd.toml", text);
+    assert_int_equal(run_crowdbake(log, sizeof log, "bake " TEST_TMP "/spaces/herd.toml -q"), 0);
+    cbpal_file goat, sheep;
+    catalog_bone_space("goat", "goat.pal", &goat), catalog_bone_space("sheep", "sheep.pal", &sheep);
+    assert_true(goat.header.flags & CBPAL_FLAG_LOCAL_ROWS);
+    assert_false(sheep.header.flags & CBPAL_FLAG_LOCAL_ROWS);
+    assert_true(goat.header.rows < sheep.header.rows); /* the same clips within 1 mm/m in fewer local rows */
+    cbpal_close(&goat), cbpal_close(&sheep);
+    char *manifest = read_whole_file(TEST_TMP "/spaces/out/roster.json", NULL);
+    assert_non_null(manifest);
+    const char *g = strstr(manifest, "\"bone_space\": \"local\""), *h = strstr(manifest, "\"bone_space\": \"global\"");
+    assert_true(g && h);
+    assert_non_null(strstr(manifest, "local rows (the default for a .pal of qpos rows)"));
+    assert_non_null(strstr(manifest, "global rows (bone space global, asked for)"));
+    free(manifest);
+    assert_int_equal(run_crowdbake(log, sizeof log, "bake " TEST_TMP "/spaces/herd.toml"), 0);
+    if (!strstr(log, "2 up to date")) fail_msg("%s", log);
+}
+
 int main(void)
 {
     mkdir(TEST_TMP, 0755);
@@ -265,6 +308,7 @@ int main(void)
         cmocka_unit_test(test_local_rows_refuse_what_cannot_hold_them),
         cmocka_unit_test(test_local_rows_are_stated),
         cmocka_unit_test(test_timed_clips_json_is_valid),
+        cmocka_unit_test(test_a_catalog_mixes_bone_spaces),
     };
     return cmocka_run_group_tests_name("local_rows", tests, NULL, NULL);
 }

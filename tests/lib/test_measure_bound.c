@@ -307,13 +307,13 @@ static void test_measure_all_past_the_budget(void **state)
     shared_path(model, sizeof model, rel);
     assert_non_null(realpath(model, model_abs));
     assert_int_equal(system("rm -rf " TEST_TMP "/measure && mkdir -p " TEST_TMP "/measure"), 0);
-    snprintf(cmd, sizeof cmd, "%s bake %s -o " TEST_TMP "/measure/subset.pal --fps 60", crowdbake_exe(), model_abs);
+    snprintf(cmd, sizeof cmd, "%s bake %s -o " TEST_TMP "/measure/subset.pal --fps 60 --bone-space global", crowdbake_exe(), model_abs);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     snprintf(line, sizeof line, "errors measured at %u of the %u rows", subset.error_rows_measured, subset.rows);
     if (!strstr(out, line) || !strstr(out, "--measure-all")) fail_msg("no '%s' in: %s", line, out);
     header_errors(TEST_TMP "/measure/subset.pal", &encoding, &visible);
     assert_true(encoding == (float)subset.max_error && visible == (float)subset.visible_error);
-    snprintf(cmd, sizeof cmd, "%s bake %s -o " TEST_TMP "/measure/all.pal --fps 60 --measure-all", crowdbake_exe(), model_abs);
+    snprintf(cmd, sizeof cmd, "%s bake %s -o " TEST_TMP "/measure/all.pal --fps 60 --measure-all --bone-space global", crowdbake_exe(), model_abs);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     if (strstr(out, "errors measured at")) fail_msg("every row was measured: %s", out);
     header_errors(TEST_TMP "/measure/all.pal", &encoding, &visible);
@@ -321,7 +321,7 @@ static void test_measure_all_past_the_budget(void **state)
 
     /* A catalog: measure_all = true bakes as --measure-all; turning it off re-bakes (the
      * header's errors differ); a value that is not a boolean names its line. */
-    snprintf(text, sizeof text, "[bake]\nout_dir = \"out\"\nfps = 60\nmeasure_all = true\n[animal.cow]\nmodel = \"%s\"\n", model_abs);
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"out\"\nfps = 60\nmeasure_all = true\nbone_space = \"global\"\n[animal.cow]\nmodel = \"%s\"\n", model_abs);
     write_text(TEST_TMP "/measure/c.toml", text);
     snprintf(cmd, sizeof cmd, "%s bake " TEST_TMP "/measure/c.toml 2>&1", crowdbake_exe());
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
@@ -330,7 +330,7 @@ static void test_measure_all_past_the_budget(void **state)
     if (strstr(out, "measured at")) fail_msg("every row was measured: %s", out);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     if (!strstr(out, "1 up to date")) fail_msg("%s", out);
-    snprintf(text, sizeof text, "[bake]\nout_dir = \"out\"\nfps = 60\nmeasure_all = false\n[animal.cow]\nmodel = \"%s\"\n", model_abs);
+    snprintf(text, sizeof text, "[bake]\nout_dir = \"out\"\nfps = 60\nmeasure_all = false\nbone_space = \"global\"\n[animal.cow]\nmodel = \"%s\"\n", model_abs);
     write_text(TEST_TMP "/measure/c.toml", text);
     assert_int_equal(run_command(cmd, out, sizeof out), 0);
     snprintf(line, sizeof line, "measured at %u of %u rows", subset.error_rows_measured, subset.rows);

@@ -372,7 +372,7 @@ static void test_catalog_fps_auto(void **state)
     shared_path(cow, sizeof cow, COW);
     assert_non_null(realpath(cow, cow_abs));
     snprintf(text, sizeof text,
-             "[bake]\nout_dir = \"out-auto\"\nfps = \"auto\"\nmax_error = 1.0\nmax_fps = 120\n\n[animal.cow]\nmodel = \"%s\"\n"
+             "[bake]\nout_dir = \"out-auto\"\nfps = \"auto\"\nmax_error = 1.0\nmax_fps = 120\nbone_space = \"global\"\n\n[animal.cow]\nmodel = \"%s\"\n"
              "clips = [\"AnimalArmature|Idle\", \"AnimalArmature|Walk\", { source = \"AnimalArmature|Death\", fps = 30 },\n"
              "         { source = \"AnimalArmature|Eating\", max_error = 5 }]\n",
              cow_abs);

@@ -38,10 +38,13 @@ static void write_all(const char *path, const unsigned char *d, size_t size)
     fclose(f);
 }
 
+/* Global rows unless extra says otherwise: these files are compared with their EXR and older versions' layouts
+ * (local rows, the default bake's: test_local_rows.c). */
 static void bake(const char *model, const char *out, const char *extra)
 {
     char cmd[2048], log[4096];
-    snprintf(cmd, sizeof cmd, "%s bake %s -o %s -q --fps 30 %s 2>&1", crowdbake_exe(), model, out, extra);
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s -q --fps 30 %s%s 2>&1", crowdbake_exe(), model, out, extra,
+             strstr(extra, "--bone-space") ? "" : " --bone-space global");
     if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s failed: %s", cmd, log);
 }
 

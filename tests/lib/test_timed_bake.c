@@ -258,7 +258,7 @@ static void test_fox_timed_catalog(void **state)
 }
 
 /* Global rows on their keys (--timed-rows on; global_timed.c), as a user bakes them: Cow and Husky's
- * files hold fewer rows than the default bake's, each timed clip's reason says so and each clip
+ * files hold fewer rows than their uniform global bake's, each timed clip's reason says so and each clip
  * that keeps its uniform rate what its keys would take; the file read back verifies within the
  * budget (cb_verify_clip through the file's map, at its rows, halfway and at random times) and
  * its clips' errors are the bake's; -j 1 and -j 4 write the same bytes. */
@@ -269,12 +269,12 @@ static void global_timed_file(const char *asset, uint32_t least_timed)
     const char *threads[2] = {"1", "4"};
     for (int i = 0; i < 2; ++i) {
         snprintf(out[i], sizeof out[i], TEST_TMP "/global_timed_j%s.pal", threads[i]);
-        int rc = run_crowdbake(log, sizeof log, "bake %s -o %s --timed-rows on -j %s", model, out[i], threads[i]);
+        int rc = run_crowdbake(log, sizeof log, "bake %s -o %s --timed-rows on --bone-space global -j %s", model, out[i], threads[i]);
         if (rc) fail_msg("bake failed (%d): %s", rc, log);
     }
     snprintf(dflt, sizeof dflt, TEST_TMP "/global_default.pal");
     char dlog[1 << 14];
-    assert_int_equal(run_crowdbake(dlog, sizeof dlog, "bake %s -o %s -q", model, dflt), 0);
+    assert_int_equal(run_crowdbake(dlog, sizeof dlog, "bake %s -o %s -q --bone-space global", model, dflt), 0);
     size_t a_size, b_size;
     char *a = read_whole_file(out[0], &a_size), *b = read_whole_file(out[1], &b_size);
     assert_non_null(a), assert_non_null(b);
@@ -344,7 +344,7 @@ static void test_global_timed_catalog(void **state)
     snprintf(tmp, sizeof tmp, "%s%s%s", TEST_TMP[0] == '/' ? "" : cwd, TEST_TMP[0] == '/' ? "" : "/", TEST_TMP);
     FILE *f = fopen(TEST_TMP "/global_timed.toml", "w");
     assert_non_null(f);
-    fprintf(f, "[bake]\ntimed_rows = \"on\"\nout_dir = \"%s/global_timed_roster\"\n[animal.cow]\nmodel = \"%s\"\n"
+    fprintf(f, "[bake]\ntimed_rows = \"on\"\nbone_space = \"global\"\nout_dir = \"%s/global_timed_roster\"\n[animal.cow]\nmodel = \"%s\"\n"
                "clips = [\"Death\", \"Idle\"]\n", tmp, model);
     fclose(f);
     int rc = run_crowdbake(log, sizeof log, "bake " TEST_TMP "/global_timed.toml");

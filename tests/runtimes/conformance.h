@@ -132,7 +132,8 @@ static inline void conf_write(const char *dir, const char *name, const char *suf
     fclose(f);
 }
 
-/* Bakes `model` with the command into dir/FILE and opens it; writes its mesh once per stem. */
+/* Bakes `model` with the command into dir/FILE and opens it; writes its mesh once per stem. Global rows unless the
+ * options name a bone space (the local cases: conf_define_local_cases). */
 static inline int conf_bake(conformance *c, const char *model, const char *file, const char *mesh, const char *options)
 {
     conf_palette *p = &c->palettes[c->palette_count];
@@ -140,7 +141,8 @@ static inline int conf_bake(conformance *c, const char *model, const char *file,
     snprintf(p->mesh, sizeof p->mesh, "%s", mesh);
     char cmd[3 * PATH_MAX], path[PATH_MAX], err[512];
     snprintf(path, sizeof path, "%s/%s", c->dir, file);
-    snprintf(cmd, sizeof cmd, "%s bake %s -o %s --root-motion in-place -q %s", crowdbake_exe(), model, path, options);
+    snprintf(cmd, sizeof cmd, "%s bake %s -o %s --root-motion in-place -q %s%s", crowdbake_exe(), model, path, options,
+             strstr(options, "--bone-space") ? "" : " --bone-space global");
     if (system(cmd) != 0) fail_msg("%s failed", cmd);
     p->model = load_or_fail(model);
     if (cbpal_open(path, CBPAL_VERIFY_CHECKSUM, &p->pal, err, sizeof err)) fail_msg("%s", err);

@@ -28,8 +28,9 @@ static int bake_cow_roster(const char *name, const char *bake_keys)
                             "run = [\"AnimalArmature|Gallop\"] }");
 }
 
-/* The addon's tests (check.gd's "addon:" cases) on Cow: a mat4/float and a default qpos/u16 palette at
- * 30 fps with the root motion kept (the reference CSV's frames), a roster of three states, the model
+/* The addon's tests (check.gd's "addon:" cases) on Cow: a mat4/float and a global qpos/u16 palette at
+ * 30 fps with the root motion kept (the reference CSV's frames), a roster of three states (the default's local
+ * rows), the model
  * (its skinned mesh, read by Godot's own glTF importer) and the reference matrices of two clips. */
 static int setup_cow(void)
 {
@@ -41,7 +42,7 @@ static int setup_cow(void)
     snprintf(cmd, sizeof cmd,
              "mkdir -p " TMP "/bakes/cow && cp %s " TMP "/bakes/cow/Cow.glb"
              " && %s bake %s -o " TMP "/bakes/cow/mat4-float.pal --fps 30 --root-motion keep --layout mat4 --precision float -q"
-             " && %s bake %s -o " TMP "/bakes/cow/qpos-u16.pal --fps 30 --root-motion keep -q"
+             " && %s bake %s -o " TMP "/bakes/cow/qpos-u16.pal --fps 30 --root-motion keep --bone-space global -q"
              /* the catalog's palette below as mat4/float: its states' clips, in the model's order, its root motion */
              " && %s bake %s -o " TMP "/bakes/cow/mat4-states.pal --fps 30 --layout mat4 --precision float -q"
              " --clip 'AnimalArmature|Eating,AnimalArmature|Gallop,AnimalArmature|Walk'"
@@ -85,14 +86,15 @@ static int setup(void **state)
     if (!realpath(rel, step)) return -1;
     snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/bakes/step/step.pal -q", crowdbake_exe(), step);
     if (system(cmd)) return -1;
-    /* NAME.pal with NAME = LAYOUT-PRECISION[-zstd], as check.gd expects. */
+    /* NAME.pal with NAME = LAYOUT-PRECISION[-zstd], as check.gd expects: global rows, every layout alike (local rows:
+     * the rosters and the conformance cases). */
     const char *bakes[][3] = {
         {"qpos", "u16", ""},    {"qpos", "float", ""},   {"affine", "u16", ""}, {"affine", "float", ""},
         {"mat4", "u16", ""},    {"mat4", "float", ""},   {"mat4", "half", ""},  {"mat4", "half", "--zstd"},
         {"qpos", "half", ""}, {"affine", "half", ""}, /* version 3: positions relative to each bone's offset */
     };
     for (size_t i = 0; i < COUNT_OF(bakes); ++i) {
-        snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/bakes/%s-%s%s.pal --fps 30 --layout %s --precision %s %s -q",
+        snprintf(cmd, sizeof cmd, "%s bake %s -o " TMP "/bakes/%s-%s%s.pal --fps 30 --layout %s --precision %s %s --bone-space global -q",
                  crowdbake_exe(), model, bakes[i][0], bakes[i][1], bakes[i][2][0] ? "-zstd" : "", bakes[i][0],
                  bakes[i][1], bakes[i][2]);
         if (system(cmd)) return -1;

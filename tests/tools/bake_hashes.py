@@ -2,8 +2,9 @@
 """bake_hashes.py [--write] [--build DIR] [--shared DIR]: the bytes every bake writes, pinned.
 
 Bakes every bundled sample and every shared asset in several formats (.pal, .pal with zstd,
-.exr, mat4/half, affine/float; --fps auto and .pal + .exr + .ktx2 on the samples and Fox; .bvat.json on
-the samples, Fox and Cow; --bone-space local on the samples, Fox, Cow and Husky), `inspect --json` of each
+.exr, mat4/half, affine/float; the default bake (local rows) and its global rows, kept and in place; .pal +
+.exr + .ktx2 on the samples and Fox; .bvat.json on the samples, Fox and Cow; local rows at 30 fps on the samples,
+Fox, Cow and Husky), `inspect --json` of each
 default and local .pal, and the sample catalog (palettes, roster.json, depfile, with a --format pal,exr and a --format pal,babylon
 override too), then compares the sha256 of every file with tests/bake_hashes.txt. A model that
 does not bake is recorded by its exit code. `make check` runs this (normal build only), so a
@@ -19,12 +20,13 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 LIST = os.path.join(ROOT, 'tests', 'bake_hashes.txt')
 
 # Every model bakes in these; the name is the key in the list. They bake at a fixed 30 fps, the
-# default before bakes were error-bounded: their bytes are the ones pinned before (the proof that
-# --fps 30 keeps them).
+# default before bakes were error-bounded, and global rows, the default before local rows were:
+# their bytes are the ones pinned before (the proof that --fps 30 --bone-space global keeps them).
 VARIANTS = [
-    ('default.pal', ['-o', '{out}.pal', '--fps', '30']),
+    ('default.pal', ['-o', '{out}.pal', '--fps', '30', '--bone-space', 'global']),
     ('default.exr', ['-o', '{out}.exr', '--fps', '30']),
-    ('zstd-inplace', ['-o', '{out}.pal', '--format', 'pal,exr', '--zstd', '--root-motion', 'in-place', '--fps', '30']),
+    ('zstd-inplace', ['-o', '{out}.pal', '--format', 'pal,exr', '--zstd', '--root-motion', 'in-place', '--fps', '30',
+                      '--bone-space', 'global']),
     ('mat4-half.pal', ['-o', '{out}.pal', '--layout', 'mat4', '--precision', 'half', '--fps', '30']),
     ('affine-float.exr', ['-o', '{out}.exr', '--layout', 'affine', '--precision', 'float', '--exr-compression', 'zip',
                           '--fps', '30']),
@@ -32,11 +34,12 @@ VARIANTS = [
 KTX2 = ('pal-exr-ktx2', ['-o', '{out}.pal', '--format', 'pal,exr,ktx2', '--precision', 'half', '--fps', '30'])
 BABYLON = ('babylon', ['-o', '{out}.bvat.json', '--fps', '30'])  # Babylon.js's baked vertex animation data
 LOCAL = ('local.pal', ['-o', '{out}.pal', '--fps', '30', '--bone-space', 'local'])  # local rows, .pal version 6
-# The default bake (no --fps: error-bounded within 1 mm/m, rows fitted or sampled per clip), kept
-# and in place; a model whose clips cannot meet the budget is recorded by its exit code (6), and
-# the other variants still run.
-ERROR_BOUNDED = [('auto.pal', ['-o', '{out}.pal', '-q']),
-                 ('auto-inplace.pal', ['-o', '{out}.pal', '-q', '--root-motion', 'in-place'])]
+# The default bake (no --fps: error-bounded within 1 mm/m; local rows, sampled), and its global rows (fitted or
+# sampled per clip, the default before local rows) kept and in place; a model whose clips cannot meet the budget is
+# recorded by its exit code (6), and the other variants still run.
+ERROR_BOUNDED = [('auto-local.pal', ['-o', '{out}.pal', '-q']),
+                 ('auto.pal', ['-o', '{out}.pal', '-q', '--bone-space', 'global']),
+                 ('auto-inplace.pal', ['-o', '{out}.pal', '-q', '--root-motion', 'in-place', '--bone-space', 'global'])]
 
 
 def sha(path):

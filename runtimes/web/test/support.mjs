@@ -18,10 +18,13 @@ export function tmpDir(name) {
 }
 
 // A fixed 30 fps unless args say otherwise: these tests read files, and the quadruped's loops travel
-// (root motion kept), which no rate bakes within the default error budget.
+// (root motion kept), which no rate bakes within the default error budget. Global rows unless args say
+// otherwise: these tests compare texels with the joint matrices `crowdbake sample` gives (local rows, the
+// default bake's: local.test.mjs and timed.test.mjs).
 export function bake(model, out, args = []) {
     const rate = args.includes('--fps') ? [] : ['--fps', '30'];
-    execFileSync(CROWDBAKE, ['bake', model, '-o', out, '-q', ...rate, ...args], { stdio: ['ignore', 'ignore', 'pipe'] });
+    const space = args.includes('--bone-space') ? [] : ['--bone-space', 'global'];
+    execFileSync(CROWDBAKE, ['bake', model, '-o', out, '-q', ...rate, ...space, ...args], { stdio: ['ignore', 'ignore', 'pipe'] });
     return readFileSync(out);
 }
 
