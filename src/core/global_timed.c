@@ -80,7 +80,7 @@ cb_status palette_time_global_rows(cb_sampler *s, const cb_bake_options *o, cons
      * from the poses the search sampled, on the bake's threads. */
     for (uint32_t c = 0; c < p->clip_count; ++c)
         if (p->clips[c].timed) p->error_rows_measured += p->clips[c].frames + p->clips[c].map_rows; /* as the file counts */
-    if (p->layout == CB_LAYOUT_QPOS) return palette_measure_composed(s, plan, facts, probe, o->threads, true, p, err);
+    if (p->layout == CB_LAYOUT_QPOS) return palette_measure_composed(s, plan, facts, probe, o->threads, true, 1, p, err);
     for (uint32_t c = 0; c < p->clip_count; ++c) { /* a rig qpos could not hold after all (baked affine): as `verify` */
         cb_palette_clip *clip = &p->clips[c];
         cb_clip_error e;

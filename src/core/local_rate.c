@@ -603,9 +603,12 @@ static double timed_weight(const cb_palette *p, const cb_palette_clip *pc, doubl
 
 /* The clip's rows (frames 4 c_k of framing: c_k = k, or a timed clip's row_cells) and the quarter
  * points between them (4 c_k + q (c_k+1 - c_k)) measured interval by interval, a batch of four
- * intervals at a time, each row decoded once; a timed clip's weights as its map gives them. */
+ * intervals at a time, each row decoded once; a timed clip's weights as its map gives them. With
+ * stride > 1 (the measuring budget, palette.h) every stride-th batch and the last; the rows measured
+ * into *measured. */
 static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palette_clip *pc, const cb_clip_info *framing,
-                              uint32_t steps, const uint32_t *row_cells, double *at_rows, double *between)
+                              uint32_t steps, const uint32_t *row_cells, uint32_t stride, double *at_rows, double *between,
+                              uint32_t *measured)
 {
     uint32_t row0 = 0, bones = c->k->bones, end_cell = row_cells ? pc->cells : pc->frames;
     const bool all = true;
@@ -615,8 +618,12 @@ static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palett
     sample_frames(c, framing, &row0, 1, &all);
     point start = {c->rows, c->rows, 0, 0, at_rows};
     measure_points(c, p->bind_positions, &start, 1, INFINITY);
+    *measured = 1;
     for (uint32_t first = 0; first < steps; first += INTERVALS_A_BATCH) {
         uint32_t count = steps - first < INTERVALS_A_BATCH ? steps - first : INTERVALS_A_BATCH, frames[CB_SAMPLE_BATCH], n = 0;
+        if ((first / INTERVALS_A_BATCH) % stride && first + count < steps) continue; /* not in the subset */
+        if (stride > 1 && first) decode_row(c, p, pc->first_row + first, c->rows); /* after a gap: its first row */
+        *measured += count - (first + count == pc->frames); /* each interval's end row (a loop's wraps to the first) */
         for (uint32_t i = 0; i < count; ++i) {
             uint32_t k = first + i, from = row_cells ? row_cells[k] : k;
             uint32_t to = k + 1 == pc->frames ? end_cell : row_cells ? row_cells[k + 1] : k + 1;
@@ -643,7 +650,8 @@ static void palette_intervals(probe_ctx *c, const cb_palette *p, const cb_palett
 }
 
 cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, const cb_palette *p, uint32_t clip,
-                               int32_t animation, pose_cache *keep, double *at_rows, double *between, cb_error *err)
+                               int32_t animation, pose_cache *keep, uint32_t stride, double *at_rows, double *between,
+                               uint32_t *measured, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(s);
     const cb_palette_clip *pc = &p->clips[clip];
@@ -660,7 +668,7 @@ cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, c
     for (int k = 0; k < 3; ++k) framing.root_velocity[k] = pc->root_velocity[k];
     local_skeleton k; /* the palette's parents: the same nearest ancestor joints (global rows: roots, composing nothing) */
     probe_ctx c;
-    *at_rows = *between = 0;
+    *at_rows = *between = 0, *measured = 0;
     bool built = p->bone_space == CB_BONE_SPACE_LOCAL ? local_skeleton_build(m, cb_sampler_skin(s), &k)
                                                       : local_skeleton_roots(p->bone_count, &k);
     if (!built ||
@@ -675,7 +683,8 @@ cb_status local_palette_errors(cb_sampler *s, const palette_skin_facts *facts, c
     else
         cb_sampler_set_baked_loop(s, animation, pc->loops, pc->start, pc->duration);
     c.global_rows = false; /* a matrix rig's poses are measured as matrices: its rows are the palette's */
-    palette_intervals(&c, p, pc, &framing, pc->duration > 0 ? steps : 0, row_cells, at_rows, between);
+    palette_intervals(&c, p, pc, &framing, pc->duration > 0 ? steps : 0, row_cells, stride ? stride : 1, at_rows, between,
+                      measured);
     probe_ctx_free(&c);
     free(row_cells);
     local_skeleton_free(&k);

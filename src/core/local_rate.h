@@ -103,9 +103,11 @@ double local_rows_error(cb_sampler *s, const palette_skin_facts *facts, const lo
  * them: at its rows into *at_rows, and at the quarter points between them into *between (held
  * rows: the row alone), where nlerp's lag peaks (a midpoint alone misses it: nlerp equals slerp
  * there). Poses the clip's pose cache `keep` holds (the rows and midpoints a search sampled; or
- * NULL) are read from it; the vertex groups' bounds skip what cannot raise the worst. */
+ * NULL) are read from it; the vertex groups' bounds skip what cannot raise the worst. stride > 1: the measuring
+ * budget's even subset (palette.h), every stride-th batch of intervals and the last; *measured: the rows measured. */
 cb_status local_palette_errors(cb_sampler *sampler, const palette_skin_facts *facts, const cb_palette *p, uint32_t clip,
-                               int32_t animation, pose_cache *keep, double *at_rows, double *between, cb_error *err);
+                               int32_t animation, pose_cache *keep, uint32_t stride, double *at_rows, double *between,
+                               uint32_t *measured, cb_error *err);
 
 /* local_rate_search.c: palette_choose_rates for options->bone_space local (the goals' max_fps
  * checked, the skin's facts settled and skinned): every clip with a goal at local_clip_rate's

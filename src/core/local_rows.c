@@ -227,6 +227,7 @@ static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin,
 /* One clip's errors measured composed (local_palette_errors), in its own slots. */
 typedef struct clip_errors {
     double rows, between;
+    uint32_t measured; /* rows */
     cb_error err;
 } clip_errors;
 
@@ -240,6 +241,7 @@ typedef struct measure_share {
     const palette_probe *probe;
     const cb_palette *p;
     bool timed_only;
+    uint32_t stride; /* the measuring budget's (palette.h) */
     clip_errors *out;
     atomic_uint next;
 } measure_share;
@@ -256,17 +258,18 @@ static void measure_clips(void *arg, uint32_t thread, uint32_t threads)
         clip_errors *e = &ms->out[c];
         pose_cache *kept = ms->probe && ms->probe->clip_poses ? ms->probe->clip_poses[c] : NULL;
         if (!s) e->err = fail;
-        else local_palette_errors(s, ms->facts, ms->p, c, ms->plan ? ms->plan[c].animation : (int32_t)c, kept, &e->rows,
-                                  &e->between, &e->err);
+        else local_palette_errors(s, ms->facts, ms->p, c, ms->plan ? ms->plan[c].animation : (int32_t)c, kept, ms->stride,
+                                  &e->rows, &e->between, &e->measured, &e->err);
     }
     if (thread) cb_sampler_free(s);
 }
 
 cb_status palette_measure_composed(cb_sampler *s, const cb_clip_plan *plan, const palette_skin_facts *facts,
-                                   const palette_probe *probe, uint32_t threads, bool timed_only, cb_palette *p, cb_error *err)
+                                   const palette_probe *probe, uint32_t threads, bool timed_only, uint32_t stride,
+                                   cb_palette *p, cb_error *err)
 {
     measure_share ms = {.s = s, .plan = plan, .facts = facts, .probe = probe, .p = p, .timed_only = timed_only,
-                        .out = calloc(p->clip_count ? p->clip_count : 1, sizeof *ms.out)};
+                        .stride = stride ? stride : 1, .out = calloc(p->clip_count ? p->clip_count : 1, sizeof *ms.out)};
     if (!ms.out) return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory measuring its rows", cb_sampler_model(s)->source);
     atomic_init(&ms.next, 0);
     threads = threads < 1 ? 1 : threads;
@@ -281,6 +284,7 @@ cb_status palette_measure_composed(cb_sampler *s, const cb_clip_plan *plan, cons
         p->max_error = fmax(p->max_error, e->rows);
         p->clips[c].visible_error = fmax(e->rows, e->between);
         p->visible_error = fmax(p->visible_error, p->clips[c].visible_error);
+        if (!timed_only) p->error_rows_measured += e->measured;
     }
     free(ms.out);
     return err->status;
@@ -289,13 +293,18 @@ cb_status palette_measure_composed(cb_sampler *s, const cb_clip_plan *plan, cons
 /* The errors measured composed: at every row (max_error) and at the quarter points between every
  * two (visible_error), on every skinned vertex group that can raise the worst, against the exact
  * pose (local_rate.c: the quarter points, where nlerp's lag peaks; the rows and midpoints the rate
- * search sampled read from its pose caches), on up to `threads` threads. */
+ * search sampled read from its pose caches), on up to `threads` threads. Past the measuring budget
+ * (palette.h: CB_ERROR_ROWS rows and CB_ERROR_BUDGET vertex-rows, as global rows) an even subset,
+ * unless measure_all. */
 static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, const palette_skin_facts *facts,
-                               const palette_probe *probe, uint32_t threads, cb_palette *p, cb_error *err)
+                               const palette_probe *probe, const cb_bake_options *opt, cb_palette *p, cb_error *err)
 {
     p->max_error = p->visible_error = 0;
-    p->error_rows_measured = p->rows;
-    return palette_measure_composed(s, plan, facts, probe, threads, false, p, err);
+    p->error_rows_measured = 0;
+    uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(cb_sampler_model(s), cb_sampler_skin(s));
+    bool subset = p->rows > CB_ERROR_ROWS && work > CB_ERROR_BUDGET && !opt->measure_all;
+    uint32_t stride = subset ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
+    return palette_measure_composed(s, plan, facts, probe, opt->threads, false, stride, p, err);
 }
 
 cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
@@ -337,7 +346,7 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
     if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, err)) && timed) timed_fill_maps(p, plan);
     if (!rc &&
         cb_model_skin_vertex_count(m, cb_sampler_skin(sampler)) > 0)
-        rc = measure_local(sampler, plan, facts, probe, opt->threads, p, err);
+        rc = measure_local(sampler, plan, facts, probe, opt, p, err);
     palette_skin_facts_free(&own);
     if (rc) cb_palette_free(p);
     return rc;

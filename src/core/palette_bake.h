@@ -433,10 +433,12 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
 /* local_rows.c: the clips of p (every one, or its timed ones alone) measured composed as the runtime
  * plays them (local_palette_errors: at every row, and the quarter points between every two, through a
  * timed clip's map; global qpos rows compose nothing), shared out clip by clip over up to `threads`
- * threads: each one's visible_error, and p's max_error and visible_error raised to them. probe: the
- * search's poses, or NULL. */
+ * threads: each one's visible_error, and p's max_error and visible_error raised to them (and, every clip
+ * measured, error_rows_measured raised by the rows measured). probe: the search's poses, or NULL. stride > 1:
+ * an even subset of each clip's intervals (the measuring budget, palette.h). */
 cb_status palette_measure_composed(cb_sampler *s, const cb_clip_plan *plan, const palette_skin_facts *facts,
-                                   const palette_probe *probe, uint32_t threads, bool timed_only, cb_palette *p, cb_error *err);
+                                   const palette_probe *probe, uint32_t threads, bool timed_only, uint32_t stride,
+                                   cb_palette *p, cb_error *err);
 /* local_rows.c: each joint's nearest ancestor joint in the skin (-1: a root), the .pal bone table's parent. */
 void palette_local_parents(const cb_model *m, const cb_skin *skin, int32_t *parents);
 /* local_rows.c: a local palette's bone composed down its chain, as qpos values (q, position, scale: 8

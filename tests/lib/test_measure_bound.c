@@ -496,12 +496,47 @@ static void test_probes_measure_rows_against_their_lanes(void **state)
     cb_model_free(m);
 }
 
+/* Local rows (the default bake's) keep the same measuring budget: Cow at 60 fps (1,483 rows x 4,970 vertices) is
+ * measured composed at an even subset of its rows, which the bake line says; --measure-all measures every row and
+ * finds at least as much, the texels the same; under the budget (30 fps, 744 rows) every row is measured. */
+static void test_local_rows_keep_the_measuring_budget(void **state)
+{
+    (void)state;
+    char model[PATH_MAX], cmd[2 * PATH_MAX];
+    static char out[65536];
+    shared_path(model, sizeof model, "assets/quaternius-cow/Cow.glb");
+    assert_int_equal(system("rm -rf " TEST_TMP "/measure-local && mkdir -p " TEST_TMP "/measure-local"), 0);
+    static const char *const runs[3] = {"--fps 60", "--fps 60 --measure-all", "--fps 30"};
+    float encoding[3], visible[3];
+    cbpal_file f[3];
+    for (int i = 0; i < 3; ++i) {
+        char path[256], err[256];
+        snprintf(path, sizeof path, TEST_TMP "/measure-local/%d.pal", i);
+        snprintf(cmd, sizeof cmd, "%s bake %s -o %s %s 2>&1", crowdbake_exe(), model, path, runs[i]);
+        assert_int_equal(run_command(cmd, out, sizeof out), 0);
+        const char *at = strstr(out, "errors measured at ");
+        unsigned measured = 0, rows = 0;
+        if (at) assert_int_equal(sscanf(at, "errors measured at %u of the %u rows", &measured, &rows), 2);
+        printf("  local rows, %s: %s\n", runs[i], at ? "a subset measured" : "every row measured");
+        if (i == 0) assert_true(at && measured > 0 && measured < rows && rows == 1483);
+        else assert_null(at);
+        header_errors(path, &encoding[i], &visible[i]);
+        if (cbpal_open(path, 0, &f[i], err, sizeof err)) fail_msg("%s", err);
+        assert_true(f[i].header.flags & CBPAL_FLAG_LOCAL_ROWS);
+    }
+    assert_true(encoding[0] <= encoding[1] && visible[0] <= visible[1] && visible[1] > 0);
+    assert_int_equal(f[0].texels_size, f[1].texels_size);
+    assert_memory_equal(f[0].texels, f[1].texels, f[0].texels_size);
+    for (int i = 0; i < 3; ++i) cbpal_close(&f[i]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_group_bounds_hold),
         cmocka_unit_test(test_maxima_equal_every_row_skinned),
         cmocka_unit_test(test_measure_all_past_the_budget),
+        cmocka_unit_test(test_local_rows_keep_the_measuring_budget),
         cmocka_unit_test(test_auto_rates_do_not_depend_on_threads),
         cmocka_unit_test(test_floors_from_the_probes_keep_the_maxima),
         cmocka_unit_test(test_probes_measure_rows_against_their_lanes),
