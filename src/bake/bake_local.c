@@ -36,7 +36,7 @@ void cb_bake_bone_space_why(const cb_bake_settings *s, unsigned format, cb_bone_
                  "once per instance, a vertex shader without one at every vertex (--bone-space global, catalog "
                  "bone_space = \"global\", for such a shader)",
                  s->bone_space_set ? "bone space local, asked for" : "the default for a .pal of qpos rows");
-    else if (s->bone_space_set && s->bone_space == CB_BONE_SPACE_GLOBAL)
+    else if (s->bone_space == CB_BONE_SPACE_GLOBAL) /* set or not: a library caller may set bone_space alone */
         snprintf(buf, size, "global rows (bone space global, asked for), which any vertex shader skins as they are");
     else if (!s->bone_space_set && local_unfit(s))
         snprintf(buf, size, "global rows, not the default local: %s", local_unfit(s));

@@ -294,16 +294,14 @@ cb_status palette_measure_composed(cb_sampler *s, const cb_clip_plan *plan, cons
  * two (visible_error), on every skinned vertex group that can raise the worst, against the exact
  * pose (local_rate.c: the quarter points, where nlerp's lag peaks; the rows and midpoints the rate
  * search sampled read from its pose caches), on up to `threads` threads. Past the measuring budget
- * (palette.h: CB_ERROR_ROWS rows and CB_ERROR_BUDGET vertex-rows, as global rows) an even subset,
- * unless measure_all. */
+ * (palette_error_stride, as for global rows) an even subset, unless measure_all. */
 static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, const palette_skin_facts *facts,
                                const palette_probe *probe, const cb_bake_options *opt, cb_palette *p, cb_error *err)
 {
     p->max_error = p->visible_error = 0;
     p->error_rows_measured = 0;
-    uint64_t work = (uint64_t)p->rows * cb_model_skin_vertex_count(cb_sampler_model(s), cb_sampler_skin(s));
-    bool subset = p->rows > CB_ERROR_ROWS && work > CB_ERROR_BUDGET && !opt->measure_all;
-    uint32_t stride = subset ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
+    uint32_t stride = palette_error_stride(p->rows, cb_model_skin_vertex_count(cb_sampler_model(s), cb_sampler_skin(s)),
+                                           opt->measure_all);
     return palette_measure_composed(s, plan, facts, probe, opt->threads, false, stride, p, err);
 }
 

@@ -296,6 +296,13 @@ static bool lays_out_timed(const cb_bake_options *opt, const cb_clip_plan *plan,
 }
 
 /* The rows the palette will hold: a timed clip's (baked here at its cell rate) its rows on its cells and its map's. */
+uint32_t palette_error_stride(uint32_t rows, uint32_t vertices, bool measure_all)
+{
+    uint64_t work = (uint64_t)rows * vertices;
+    bool subset = rows > CB_ERROR_ROWS && work > CB_ERROR_BUDGET && !measure_all;
+    return subset ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
+}
+
 static uint32_t shipped_rows(const bake_state *st)
 {
     const cb_palette *p = st->p;
@@ -390,12 +397,9 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     for (uint32_t c = 0; c < p->clip_count; ++c) encoded_while_sampling += st.encode_seconds[c];
     encoded_while_sampling /= threads_used(&st, p->clip_count);
     p->model_height = facts->height;
-    /* Past both CB_ERROR_ROWS rows and ~4M vertex-rows (palette.h says why both), an even subset
-     * of rows (always each clip's last) measures the error, unless measure_all. */
-    uint32_t shipped = shipped_rows(&st); /* what the file will hold: a timed clip's rows on its cells and its map */
-    uint64_t work = (uint64_t)shipped * cb_model_skin_vertex_count(m, skin_index);
-    bool subset = shipped > CB_ERROR_ROWS && work > CB_ERROR_BUDGET && !st.opt->measure_all;
-    st.error_stride = subset ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
+    /* what the file will hold: a timed clip's rows on its cells and its map */
+    st.error_stride = palette_error_stride(shipped_rows(&st), cb_model_skin_vertex_count(m, skin_index),
+                                           st.opt->measure_all);
     p->error_rows_measured = 0;
     if (facts->skinned) {
         for_each_clip(&st, palette_measure_job, true, palette_measure_jobs(&st));

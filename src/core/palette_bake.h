@@ -257,6 +257,10 @@ void palette_blend_values(const cb_palette *p, uint32_t bone, const double a[16]
  * the clip's, then the rows' after every clip's); one a clip with an error goal, where the
  * rows only count above the blends. */
 uint32_t palette_measure_jobs(const bake_state *st);
+/* palette.c: the measuring budget (palette.h): 1 (every row measured) up to CB_ERROR_ROWS rows or CB_ERROR_BUDGET
+ * vertex-rows, or with measure_all; past both, every how many rows (or batches of intervals) an even subset measures,
+ * global and local rows alike. */
+uint32_t palette_error_stride(uint32_t rows, uint32_t vertices, bool measure_all);
 /* After every palette_measure_job: the baked rows a job left out as within its clip's blends
  * (their probe's caps) that might still exceed every baked row measured (the palette's
  * max_error), measured by palette_measure_rest_job for each clip; returns whether any is left. */

@@ -1,6 +1,7 @@
 /* bake_words.h (internal) - the bake job's plumbing for its front ends: the parser of --format
  * and a catalog's format, the sentences that explain a bake's rates and budgets
- * (src/bake/bake_words.c), and its bone space with its reason (src/bake/bake_local.c). Linked into the tool from libcrowdbake.a; not exported, not installed. */
+ * (src/bake/bake_words.c), and its bone space with its reason (src/bake/bake_local.c). Linked into the tool
+ * from libcrowdbake.a; not exported, not installed. */
 #ifndef CB_INTERNAL_BAKE_WORDS_H
 #define CB_INTERNAL_BAKE_WORDS_H
 

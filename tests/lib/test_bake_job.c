@@ -56,10 +56,12 @@ static void test_bone_space_is_decided_once(void **state)
         unfit[i].bone_space_set = true; /* asked for: kept, for the job to refuse */
         assert_int_equal(cb_bake_settings_bone_space(&unfit[i], CB_FORMAT_PAL), CB_BONE_SPACE_LOCAL);
     }
-    s.bone_space = CB_BONE_SPACE_GLOBAL, s.bone_space_set = true;
-    assert_int_equal(cb_bake_settings_bone_space(&s, CB_FORMAT_PAL), CB_BONE_SPACE_GLOBAL);
-    cb_bake_bone_space_why(&s, CB_FORMAT_PAL, CB_BONE_SPACE_GLOBAL, NULL, why, sizeof why);
-    assert_non_null(strstr(why, "global rows (bone space global, asked for)"));
+    for (int set = 0; set < 2; ++set) { /* the command line sets both; a library caller may set bone_space alone */
+        s.bone_space = CB_BONE_SPACE_GLOBAL, s.bone_space_set = set;
+        assert_int_equal(cb_bake_settings_bone_space(&s, CB_FORMAT_PAL), CB_BONE_SPACE_GLOBAL);
+        cb_bake_bone_space_why(&s, CB_FORMAT_PAL, CB_BONE_SPACE_GLOBAL, NULL, why, sizeof why);
+        assert_non_null(strstr(why, "global rows (bone space global, asked for)"));
+    }
 }
 
 /* u16 for .pal, half for .ktx2 and float for .exr unless a precision is set; set, it holds for all. */
