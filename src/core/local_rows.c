@@ -284,7 +284,8 @@ cb_status palette_measure_composed(cb_sampler *s, const cb_clip_plan *plan, cons
         p->max_error = fmax(p->max_error, e->rows);
         p->clips[c].visible_error = fmax(e->rows, e->between);
         p->visible_error = fmax(p->visible_error, p->clips[c].visible_error);
-        if (!timed_only) p->error_rows_measured += e->measured;
+        if (!timed_only) /* a timed clip's map rows as the file counts them (global_timed.c alike) */
+            p->error_rows_measured += e->measured + (p->clips[c].timed ? p->clips[c].map_rows : 0);
     }
     free(ms.out);
     return err->status;
