@@ -4,9 +4,10 @@
  * blending global rows cuts a swung child's arc as a chord.
  *
  * A local bake is a global qpos bake in float (the sampled rows, exact to float), converted here
- * row by row in double precision and encoded in the precision asked for, u16 with per-bone
- * ranges; its errors are then measured composed, as the runtime plays it (cb_verify_clip through
- * cb_runtime_matrices, which composes). */
+ * in place, clip by clip on the bake's threads: each bone computed in double from its row's floats
+ * and stored as float over them (the float file's values), then, for u16, those floats encoded in
+ * each bone's ranges. Its errors are then measured composed, as the runtime plays it
+ * (cb_verify_clip through cb_runtime_matrices, which composes). */
 #include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -15,6 +16,7 @@
 #include "cb_math.h"
 #include "crowdbake/runtime.h"
 #include "internal/plumbing.h"
+#include "lanes.h"
 #include "local_pose.h"
 #include "local_rate.h" /* local_palette_errors */
 #include "palette_bake.h"
@@ -105,43 +107,80 @@ bool palette_local_matrices(const cb_palette *p, const void *texels, const palet
     return true;
 }
 
-/* ---- the conversion of a global float qpos palette ---- */
+/* ---- the conversion of a global float qpos palette, in place ---- */
 
-/* Every row's local values (8 doubles a bone), each bone's quaternion kept on the side of the
- * row before within its clip; row: room for a row's decoded values (bones x 16), each row of g
- * decoded once (palette_decode_row_values: cb_palette_decode_values's doubles). */
-static void local_rows(const cb_palette *g, double *row, double *out)
+/* The conversion, shared out clip by clip: each clip's rows localized in place (a float qpos
+ * texel pair holds a bone's 8 values, global before, local after) and its bones' value ranges
+ * kept in its own slots, then, once every clip's ranges are merged, its rows encoded. Each clip
+ * writes only its own rows and slots: the texels depend neither on the thread count nor on the
+ * order taken. */
+typedef struct convert_share {
+    cb_palette *g;              /* float texels, global, then local */
+    unsigned char *out;         /* the encoded texels (u16), or NULL (float: the local floats are the texels) */
+    double *ranges;             /* clip c, bone j: lo[3], hi[3], scale max at ((c * bones) + j) * 7 */
+    unsigned char *out_of_memory; /* a clip's */
+    bool encode;                /* the second run: encoding, not localizing */
+    atomic_uint next;
+} convert_share;
+
+static float *float_bone(const cb_palette *g, uint32_t row, uint32_t bone)
 {
-    for (uint32_t c = 0; c < g->clip_count; ++c)
-        for (uint32_t f = 0; f < g->clips[c].frames; ++f) {
-            uint32_t r = g->clips[c].first_row + f;
-            palette_decode_row_values(g, r, row);
-            for (uint32_t j = 0; j < g->bone_count; ++j) {
-                local_qpos t = qpos_of_values(row + (size_t)j * 16);
-                int32_t a = g->parents[j];
-                if (a >= 0) t = local_qpos_localize(qpos_of_values(row + (size_t)a * 16), bind_of(g, (uint32_t)a), t);
-                double *v = out + ((size_t)r * g->bone_count + j) * 8, *before = v - (size_t)g->bone_count * 8;
-                double w[8] = {t.q.x, t.q.y, t.q.z, t.q.w, t.p.x, t.p.y, t.p.z, t.s};
-                if (f > 0 && w[0] * before[0] + w[1] * before[1] + w[2] * before[2] + w[3] * before[3] < 0)
-                    for (int k = 0; k < 4; ++k) w[k] = -w[k];
-                memcpy(v, w, sizeof w);
-            }
-        }
+    uint32_t x, y;
+    cb_palette_texel_xy(g, row, bone, &x, &y);
+    return (float *)((unsigned char *)g->texels + ((size_t)y * g->width + x) * 16); /* RGBA32F: 16 bytes a texel */
 }
 
-/* Each bone's range table entry (pos_min, scale_max, pos_max, 0) over every row, and the header's
- * informative union of them. */
-static void local_ranges(cb_palette *p, const double *values)
+static local_qpos qpos_of_floats(const float v[8])
+{
+    return (local_qpos){{v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7]};
+}
+
+/* Clip c's rows localized: each bone's global values (a copy of its row's floats, as its children
+ * still need them) in its parent's frame, its quaternion kept on the side of the row before's (in
+ * double, before it is rounded), stored as floats over the global ones, its ranges grown. */
+static bool localize_clip(convert_share *cs, uint32_t c)
+{
+    const cb_palette *g = cs->g;
+    size_t bones = g->bone_count ? g->bone_count : 1;
+    float *global = malloc(bones * 8 * sizeof *global);
+    double *before = malloc(bones * 4 * sizeof *before), *range = cs->ranges + (size_t)c * g->bone_count * 7;
+    if (!global || !before) return free(global), free(before), false;
+    for (uint32_t j = 0; j < g->bone_count; ++j)
+        for (int k = 0; k < 7; ++k) range[j * 7 + k] = k < 3 ? INFINITY : k < 6 ? -INFINITY : 0;
+    for (uint32_t f = 0; f < g->clips[c].frames; ++f) {
+        float *texel = float_bone(g, g->clips[c].first_row + f, 0); /* a row's bones lie side by side */
+        memcpy(global, texel, (size_t)g->bone_count * 8 * sizeof *global);
+        for (uint32_t j = 0; j < g->bone_count; ++j, texel += 8) {
+            local_qpos t = qpos_of_floats(global + (size_t)j * 8);
+            int32_t a = g->parents[j];
+            if (a >= 0) t = local_qpos_localize(qpos_of_floats(global + (size_t)a * 8), bind_of(g, (uint32_t)a), t);
+            double w[8] = {t.q.x, t.q.y, t.q.z, t.q.w, t.p.x, t.p.y, t.p.z, t.s}, *q = before + (size_t)j * 4;
+            if (f > 0 && w[0] * q[0] + w[1] * q[1] + w[2] * q[2] + w[3] * q[3] < 0)
+                for (int k = 0; k < 4; ++k) w[k] = -w[k];
+            memcpy(q, w, 4 * sizeof *w);
+            double *e = range + (size_t)j * 7;
+            for (int k = 0; k < 8; ++k) texel[k] = (float)w[k];
+            for (int k = 0; k < 3; ++k) /* the floats' ranges: comparisons, not fmin's call (they are finite) */
+                e[k] = texel[4 + k] < e[k] ? texel[4 + k] : e[k], e[3 + k] = texel[4 + k] > e[3 + k] ? texel[4 + k] : e[3 + k];
+            e[6] = texel[7] > e[6] ? texel[7] : e[6];
+        }
+    }
+    free(global), free(before);
+    return true;
+}
+
+/* Each bone's range table entry (pos_min, scale_max, pos_max, 0) over every clip's rows, and the
+ * header's informative union of them. */
+static void local_ranges(cb_palette *p, const double *ranges)
 {
     for (uint32_t j = 0; j < p->bone_count; ++j) {
         float *e = p->bone_ranges + (size_t)j * 8;
         double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, smax = 0;
-        for (uint32_t c = 0; c < p->clip_count; ++c) /* the clips' rows: a timed clip's map rows hold no bone */
-            for (uint32_t r = p->clips[c].first_row; r < p->clips[c].first_row + p->clips[c].frames; ++r) {
-                const double *v = values + ((size_t)r * p->bone_count + j) * 8;
-                for (int k = 0; k < 3; ++k) lo[k] = fmin(lo[k], v[4 + k]), hi[k] = fmax(hi[k], v[4 + k]);
-                smax = fmax(smax, v[7]);
-            }
+        for (uint32_t c = 0; c < p->clip_count; ++c) {
+            const double *r = ranges + ((size_t)c * p->bone_count + j) * 7;
+            for (int k = 0; k < 3; ++k) lo[k] = r[k] < lo[k] ? r[k] : lo[k], hi[k] = r[3 + k] > hi[k] ? r[3 + k] : hi[k];
+            smax = r[6] > smax ? r[6] : smax;
+        }
         for (int k = 0; k < 3; ++k) e[k] = p->rows ? (float)lo[k] : 0, e[4 + k] = p->rows ? (float)hi[k] : 0;
         e[3] = smax > 0 ? (float)smax : 1, e[7] = 0;
     }
@@ -155,6 +194,37 @@ static void local_ranges(cb_palette *p, const double *values)
     }
 }
 
+#if defined(__GNUC__) && defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+typedef float v4sf __attribute__((vector_size(16))); /* v4df and v4di: lanes.h */
+typedef int16_t v16hi __attribute__((vector_size(32)));
+typedef int16_t v4hi __attribute__((vector_size(8)));
+#define ROUND_MAGIC 6755399441055744.0 /* 1.5 * 2^52 */
+
+/* One bone's 8 local floats into its two u16 texels, each bone in its own ranges e: the
+ * quaternion snorm16, the position unorm16 over [lo, hi] and the scale over [0, scale max],
+ * four lanes at a time: the scalar version's operations in its order, and lrint's rounding (ties
+ * to even) by adding 1.5 * 2^52, which leaves the integer in the double's low bits. The same
+ * bits. (The floats are loaded as floats and converted: GCC 12 without AVX fails to compile a
+ * double vector built from float elements.) */
+static CB_CLONE_INLINE void encode_bone_u16(const float *v, const float *e, unsigned char *d)
+{
+    v4sf qf, xf, lof, hif;
+    memcpy(&qf, v, sizeof qf), memcpy(&xf, v + 4, sizeof xf), memcpy(&lof, e, sizeof lof), memcpy(&hif, e + 4, sizeof hif);
+    lof[3] = 0, hif[3] = e[3]; /* the scale's range */
+    v4df q = __builtin_convertvector(qf, v4df), x = __builtin_convertvector(xf, v4df);
+    v4df lo = __builtin_convertvector(lof, v4df), hi = __builtin_convertvector(hif, v4df);
+    v4df one = CB_SPLAT4(1.0), minus1 = CB_SPLAT4(-1.0), zero = CB_SPLAT4(0.0);
+    v4di below = q < minus1, above = q > one, spans = hi > lo; /* all ones where true */
+    q = CB_SELECT4(below, minus1, q), q = CB_SELECT4(above, one, q);
+    v4df t = (x - lo) / (hi - lo);
+    x = CB_SELECT4(spans, t, zero);
+    below = x < zero, above = x > one;
+    x = CB_SELECT4(below, zero, x), x = CB_SELECT4(above, one, x);
+    v16hi a = (v16hi)(q * 32767.0 + ROUND_MAGIC), b = (v16hi)(x * 65535.0 + ROUND_MAGIC);
+    v4hi m = __builtin_shufflevector(a, a, 0, 4, 8, 12), n = __builtin_shufflevector(b, b, 0, 4, 8, 12); /* low halves */
+    memcpy(d, &m, 8), memcpy(d + 8, &n, 8);
+}
+#else
 static void put16(unsigned char *d, long v) { d[0] = (unsigned char)(v & 0xff), d[1] = (unsigned char)((v >> 8) & 0xff); }
 
 static long unorm16(double v, double lo, double hi)
@@ -163,65 +233,75 @@ static long unorm16(double v, double lo, double hi)
     return lrint((x < 0 ? 0 : x > 1 ? 1 : x) * 65535);
 }
 
-/* One bone's 8 values into its two texels. */
-static void encode_bone(const cb_palette *p, uint32_t bone, const double *v, unsigned char *d)
+static void encode_bone_u16(const float *v, const float *e, unsigned char *d)
 {
-    if (p->precision == CB_PRECISION_FLOAT) {
-        for (int i = 0; i < 8; ++i) {
-            float f = (float)v[i];
-            memcpy(d + i * 4, &f, 4); /* little-endian hosts (pal_write.c writes the texels as they are) */
-        }
-        return;
-    }
-    const float *e = p->bone_ranges + (size_t)bone * 8;
-    for (int i = 0; i < 4; ++i) put16(d + i * 2, lrint((v[i] < -1 ? -1 : v[i] > 1 ? 1 : v[i]) * 32767));
+    for (int i = 0; i < 4; ++i) put16(d + i * 2, lrint((v[i] < -1 ? -1 : v[i] > 1 ? 1 : (double)v[i]) * 32767));
     for (int k = 0; k < 3; ++k) put16(d + 8 + k * 2, unorm16(v[4 + k], e[k], e[4 + k]));
     put16(d + 14, unorm16(v[7], 0, e[3]));
 }
+#endif
 
-static void encode_local(cb_palette *p, const double *values)
+/* Clip c's local floats encoded u16 into the texels at out. */
+CB_TARGET_CLONES
+static void encode_clip(const convert_share *cs, uint32_t c)
 {
-    uint32_t tb = cb_precision_texel_bytes(p->precision);
-    for (uint32_t c = 0; c < p->clip_count; ++c) /* the clips' rows: a timed clip's map rows hold no bone */
-        for (uint32_t r = p->clips[c].first_row; r < p->clips[c].first_row + p->clips[c].frames; ++r)
-            for (uint32_t j = 0; j < p->bone_count; ++j) {
-                uint32_t x, y;
-                cb_palette_texel_xy(p, r, j, &x, &y);
-                encode_bone(p, j, values + ((size_t)r * p->bone_count + j) * 8,
-                            (unsigned char *)p->texels + ((size_t)y * p->width + x) * tb);
-            }
+    const cb_palette *p = cs->g;
+    for (uint32_t r = p->clips[c].first_row; r < p->clips[c].first_row + p->clips[c].frames; ++r) {
+        const float *v = float_bone(p, r, 0);
+        uint32_t x, y;
+        cb_palette_texel_xy(p, r, 0, &x, &y);
+        unsigned char *d = cs->out + ((size_t)y * p->width + x) * 8; /* RGBA16: 8 bytes a texel */
+        for (uint32_t j = 0; j < p->bone_count; ++j, v += 8, d += 16) encode_bone_u16(v, p->bone_ranges + (size_t)j * 8, d);
+    }
 }
 
-/* The global float palette g converted in place to local rows in `precision`. */
-static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin, cb_precision precision, cb_error *err)
+static void convert_clips(void *arg, uint32_t thread, uint32_t threads)
 {
-    size_t values_size = (size_t)g->rows * g->bone_count * 8 * sizeof(double);
-    double *values = calloc(values_size ? values_size : 1, 1), *row = malloc((g->bone_count ? g->bone_count : 1) * 16 * sizeof *row);
+    (void)thread, (void)threads;
+    convert_share *cs = arg;
+    for (uint32_t c; (c = atomic_fetch_add(&cs->next, 1)) < cs->g->clip_count;) /* (a timed clip's map rows: no bone) */
+        if (cs->encode) encode_clip(cs, c);
+        else cs->out_of_memory[c] = !localize_clip(cs, c);
+}
+
+static void run_convert(convert_share *cs, uint32_t threads)
+{
+    atomic_init(&cs->next, 0);
+    threads = threads < 1 ? 1 : threads;
+    cb_pool_run(threads > cs->g->clip_count ? cs->g->clip_count : threads, convert_clips, cs);
+}
+
+/* The global float palette g converted in place to local rows in `precision`, on up to `threads`
+ * threads. Its texels are its own (palette_bake_local bakes it without texel memory): written
+ * over, and for u16 replaced. */
+static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin, cb_precision precision, uint32_t threads,
+                                 cb_error *err)
+{
+    size_t clips = g->clip_count ? g->clip_count : 1;
+    convert_share cs = {.g = g, .ranges = malloc(clips * (g->bone_count ? g->bone_count : 1) * 7 * sizeof(double)),
+                        .out_of_memory = calloc(clips, 1)};
     g->parents = malloc((size_t)g->bone_count * sizeof *g->parents);
     g->bone_ranges = calloc((size_t)g->bone_count * 8, sizeof *g->bone_ranges);
-    if (!values || !row || !g->parents || !g->bone_ranges) {
-        free(values), free(row);
-        return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for local rows", m->source);
+    bool ok = cs.ranges && cs.out_of_memory && g->parents && g->bone_ranges;
+    if (ok) {
+        palette_local_parents(m, &m->skins[skin], g->parents);
+        run_convert(&cs, threads);
+        for (uint32_t c = 0; c < g->clip_count; ++c) ok = ok && !cs.out_of_memory[c];
     }
-    palette_local_parents(m, &m->skins[skin], g->parents);
-    local_rows(g, row, values);
-    free(row);
-    void *global_texels = g->texels;
-    bool borrowed = g->texels_borrowed;
-    g->precision = precision;
-    g->texel_bytes = (size_t)g->width * g->height * cb_precision_texel_bytes(precision);
-    g->texels = calloc(g->texel_bytes ? g->texel_bytes : 1, 1);
-    g->texels_borrowed = false;
-    if (!borrowed) free(global_texels);
-    if (!g->texels) {
-        free(values);
-        return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for local rows", m->source);
+    size_t out_bytes = (size_t)g->width * g->height * cb_precision_texel_bytes(precision);
+    if (ok && precision != CB_PRECISION_FLOAT) ok = (cs.out = calloc(out_bytes ? out_bytes : 1, 1)) != NULL;
+    if (ok) {
+        local_ranges(g, cs.ranges);
+        if (cs.out) {
+            cs.encode = true;
+            run_convert(&cs, threads);
+            free(g->texels);
+            g->texels = cs.out, g->texel_bytes = out_bytes;
+        }
+        g->precision = precision, g->bone_space = CB_BONE_SPACE_LOCAL;
     }
-    g->bone_space = CB_BONE_SPACE_LOCAL;
-    local_ranges(g, values);
-    encode_local(g, values);
-    free(values);
-    return CB_OK;
+    free(cs.ranges), free(cs.out_of_memory);
+    return ok ? CB_OK : cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for local rows", m->source);
 }
 
 /* One clip's errors measured composed (local_palette_errors), in its own slots. */
@@ -342,7 +422,7 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
         palette_skin_facts_free(&own), cb_palette_free(p);
         return rc;
     }
-    if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, err)) && timed) timed_fill_maps(p, plan);
+    if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, opt->threads, err)) && timed) timed_fill_maps(p, plan);
     if (!rc &&
         cb_model_skin_vertex_count(m, cb_sampler_skin(sampler)) > 0)
         rc = measure_local(sampler, plan, facts, probe, opt, p, err);

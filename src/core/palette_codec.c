@@ -60,16 +60,25 @@ static double decode_u16(const cb_palette *p, int kind, uint16_t u)
 static void store_le16(unsigned char *d, uint16_t v) { d[0] = (unsigned char)v, d[1] = (unsigned char)(v >> 8); }
 static uint16_t load_le16(const unsigned char *d) { return (uint16_t)(d[0] | d[1] << 8); }
 
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define HOST_LITTLE_ENDIAN 1 /* a float's bytes are the texel's: one move, not four shifted bytes (a */
+#else                        /* float palette's encode and decode ran 4x longer byte by byte) */
+#define HOST_LITTLE_ENDIAN 0
+#endif
+
 static void store_le32f(unsigned char *d, float f)
 {
     uint32_t v;
     memcpy(&v, &f, 4);
-    for (int i = 0; i < 4; ++i) d[i] = (unsigned char)(v >> (8 * i));
+    if (HOST_LITTLE_ENDIAN) memcpy(d, &v, 4);
+    else for (int i = 0; i < 4; ++i) d[i] = (unsigned char)(v >> (8 * i));
 }
 
 static float load_le32f(const unsigned char *d)
 {
-    uint32_t v = (uint32_t)d[0] | (uint32_t)d[1] << 8 | (uint32_t)d[2] << 16 | (uint32_t)d[3] << 24;
+    uint32_t v;
+    if (HOST_LITTLE_ENDIAN) memcpy(&v, d, 4);
+    else v = (uint32_t)d[0] | (uint32_t)d[1] << 8 | (uint32_t)d[2] << 16 | (uint32_t)d[3] << 24;
     float f;
     memcpy(&f, &v, 4);
     return f;
@@ -124,7 +133,7 @@ static u16_lanes u16_lanes_of(const u16_slot *slots)
     return q;
 }
 
-#if defined(__GNUC__) && defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#if defined(__GNUC__) && HOST_LITTLE_ENDIAN
 #define GCC_VECTORS 1
 #else
 #define GCC_VECTORS 0
@@ -451,6 +460,11 @@ void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values
     const unsigned char *d = (const unsigned char *)p->texels + ((size_t)y * p->width + x) * tb;
     if (p->precision == CB_PRECISION_U16 && p->layout == CB_LAYOUT_QPOS && p->bone_space == CB_BONE_SPACE_GLOBAL) {
         decode_qpos_u16_row(p, d, values);
+        return;
+    }
+    if (p->precision == CB_PRECISION_FLOAT && !p->positions_relative) { /* decode_bone's floats, as they are */
+        for (uint32_t j = 0, n = p->texels_per_bone * 4; j < p->bone_count; ++j, d += (size_t)n * 4)
+            for (uint32_t i = 0; i < n; ++i) values[(size_t)j * 16 + i] = load_le32f(d + i * 4);
         return;
     }
     for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) decode_bone(p, d, kinds, j, values + (size_t)j * 16);

@@ -8,7 +8,8 @@
  *   skinned vertex against exact skinning, cb_verify_clip);
  * - the header says version 6 only with bit 5; a global bake keeps its version;
  * - local rows refuse half, mat4 and an EXR alone with a one-line error and write nothing;
- * - they are the default, stated as such, and one catalog may mix them with global rows on one model. */
+ * - they are the default, stated as such, and one catalog may mix them with global rows on one model;
+ * - a u16 bake's codes are its float bake's local values encoded by the spec's rule, in the box of them. */
 #define _DEFAULT_SOURCE /* realpath */
 #include "testutil.h"
 
@@ -299,6 +300,76 @@ static void test_a_catalog_mixes_bone_spaces(void **state)
     if (!strstr(log, "2 up to date")) fail_msg("%s", log);
 }
 
+/* The spec's u16 encoding of one local value (docs/pal-format.md "Local rows"): a quaternion
+ * component snorm16, a position unorm16 over its bone's [pos_min, pos_max], the scale over
+ * [0, scale_max]; rounded to nearest, ties to even. */
+static uint16_t spec_code(float v, int i, const cbpal_bone *b)
+{
+    if (i < 4) return (uint16_t)(int16_t)lrint((v < -1 ? -1 : v > 1 ? 1 : (double)v) * 32767);
+    double lo = i < 7 ? b->pos_min[i - 4] : 0, hi = i < 7 ? b->pos_max[i - 4] : b->scale_max;
+    double x = hi > lo ? (v - lo) / (hi - lo) : 0;
+    return (uint16_t)lrint((x < 0 ? 0 : x > 1 ? 1 : x) * 65535);
+}
+
+/* The float bake and the u16 bake at one rate hold the same local rows: every u16 code is the
+ * float bake's value encoded by the spec's rule, and every bone's range table entry is the box of
+ * its float values (the u16 file's own table, which it decodes with). */
+static void check_u16_is_float_encoded(const char *asset, const char *stem)
+{
+    char model[1024], path[2][256];
+    shared_path(model, sizeof model, asset);
+    cbpal_file f[2];
+    for (int i = 0; i < 2; ++i) {
+        snprintf(path[i], sizeof path[i], TEST_TMP "/local_rows_%s_%s.pal", stem, i ? "u16" : "float");
+        char log[8192], err[256];
+        int rc = run_crowdbake(log, sizeof log, "bake %s -o %s --fps 30 --precision %s -q", model, path[i], i ? "u16" : "float");
+        if (rc) fail_msg("bake failed (%d): %s", rc, log);
+        if (cbpal_open(path[i], CBPAL_VERIFY_CHECKSUM, &f[i], err, sizeof err)) fail_msg("%s", err);
+        assert_true(f[i].header.flags & CBPAL_FLAG_LOCAL_ROWS);
+        assert_false(f[i].header.flags & CBPAL_FLAG_TIMED_ROWS); /* a fixed rate: every row holds bones */
+    }
+    assert_int_equal(f[0].header.rows, f[1].header.rows);
+    uint64_t values = 0, codes_off = 0;
+    for (uint32_t j = 0; j < f[1].header.bone_count; ++j) {
+        cbpal_bone b, bf;
+        assert_int_equal(cbpal_get_bone(&f[1], j, &b), 0);
+        assert_int_equal(cbpal_get_bone(&f[0], j, &bf), 0);
+        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, smax = 0;
+        for (uint32_t r = 0; r < f[1].header.rows; ++r) {
+            uint32_t x, y, xf, yf;
+            cbpal_texel_xy(&f[1].header, r, j, &x, &y);
+            cbpal_texel_xy(&f[0].header, r, j, &xf, &yf);
+            const unsigned char *code = (const unsigned char *)f[1].texels + ((size_t)y * f[1].header.width + x) * 8;
+            const unsigned char *vf = (const unsigned char *)f[0].texels + ((size_t)yf * f[0].header.width + xf) * 16;
+            for (int i = 0; i < 8; ++i, ++values) {
+                float v;
+                memcpy(&v, vf + i * 4, 4);
+                uint16_t got = (uint16_t)(code[i * 2] | code[i * 2 + 1] << 8);
+                codes_off += got != spec_code(v, i, &b);
+                if (i >= 4 && i < 7) lo[i - 4] = fminf(lo[i - 4], v), hi[i - 4] = fmaxf(hi[i - 4], v);
+                if (i == 7) smax = fmaxf(smax, v);
+            }
+        }
+        for (int k = 0; k < 3; ++k) { /* the box of the float values, in both files */
+            assert_true(b.pos_min[k] == lo[k] && b.pos_max[k] == hi[k]);
+            assert_true(bf.pos_min[k] == lo[k] && bf.pos_max[k] == hi[k]);
+        }
+        assert_true(b.scale_max == smax && bf.scale_max == smax);
+    }
+    printf("  %s: %llu u16 values, %llu not the float value encoded\n", stem, (unsigned long long)values,
+           (unsigned long long)codes_off);
+    assert_true(values > 0);
+    assert_int_equal(codes_off, 0);
+    cbpal_close(&f[0]), cbpal_close(&f[1]);
+}
+
+static void test_u16_local_rows_are_the_float_rows_encoded(void **state)
+{
+    (void)state;
+    check_u16_is_float_encoded("assets/quaternius-cow/Cow.glb", "cow");
+    check_u16_is_float_encoded("assets/quaternius-husky/Husky.glb", "husky");
+}
+
 int main(void)
 {
     mkdir(TEST_TMP, 0755);
@@ -309,6 +380,7 @@ int main(void)
         cmocka_unit_test(test_local_rows_are_stated),
         cmocka_unit_test(test_timed_clips_json_is_valid),
         cmocka_unit_test(test_a_catalog_mixes_bone_spaces),
+        cmocka_unit_test(test_u16_local_rows_are_the_float_rows_encoded),
     };
     return cmocka_run_group_tests_name("local_rows", tests, NULL, NULL);
 }
