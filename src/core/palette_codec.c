@@ -60,9 +60,11 @@ static double decode_u16(const cb_palette *p, int kind, uint16_t u)
 static void store_le16(unsigned char *d, uint16_t v) { d[0] = (unsigned char)v, d[1] = (unsigned char)(v >> 8); }
 static uint16_t load_le16(const unsigned char *d) { return (uint16_t)(d[0] | d[1] << 8); }
 
+/* On a little-endian host a float's bytes are the texel's: one move, not four shifted bytes (a
+ * float palette's encode and decode ran 4x longer byte by byte). */
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-#define HOST_LITTLE_ENDIAN 1 /* a float's bytes are the texel's: one move, not four shifted bytes (a */
-#else                        /* float palette's encode and decode ran 4x longer byte by byte) */
+#define HOST_LITTLE_ENDIAN 1
+#else
 #define HOST_LITTLE_ENDIAN 0
 #endif
 
