@@ -123,12 +123,16 @@ typedef struct convert_share {
     atomic_uint next;
 } convert_share;
 
-static float *float_bone(const cb_palette *g, uint32_t row, uint32_t bone)
+/* The index of row r's first texel: a row's bones lie side by side from it. */
+static size_t row_texel(const cb_palette *g, uint32_t row)
 {
     uint32_t x, y;
-    cb_palette_texel_xy(g, row, bone, &x, &y);
-    return (float *)((unsigned char *)g->texels + ((size_t)y * g->width + x) * 16); /* RGBA32F: 16 bytes a texel */
+    cb_palette_texel_xy(g, row, 0, &x, &y);
+    return (size_t)y * g->width + x;
 }
+
+/* Row r's float values, 8 a bone (RGBA32F: 16 bytes a texel). */
+static float *float_row(const cb_palette *g, uint32_t row) { return (float *)g->texels + row_texel(g, row) * 4; }
 
 static local_qpos qpos_of_floats(const float v[8])
 {
@@ -148,7 +152,7 @@ static bool localize_clip(convert_share *cs, uint32_t c)
     for (uint32_t j = 0; j < g->bone_count; ++j)
         for (int k = 0; k < 7; ++k) range[j * 7 + k] = k < 3 ? INFINITY : k < 6 ? -INFINITY : 0;
     for (uint32_t f = 0; f < g->clips[c].frames; ++f) {
-        float *texel = float_bone(g, g->clips[c].first_row + f, 0); /* a row's bones lie side by side */
+        float *texel = float_row(g, g->clips[c].first_row + f);
         memcpy(global, texel, (size_t)g->bone_count * 8 * sizeof *global);
         for (uint32_t j = 0; j < g->bone_count; ++j, texel += 8) {
             local_qpos t = qpos_of_floats(global + (size_t)j * 8);
@@ -247,10 +251,8 @@ static void encode_clip(const convert_share *cs, uint32_t c)
 {
     const cb_palette *p = cs->g;
     for (uint32_t r = p->clips[c].first_row; r < p->clips[c].first_row + p->clips[c].frames; ++r) {
-        const float *v = float_bone(p, r, 0);
-        uint32_t x, y;
-        cb_palette_texel_xy(p, r, 0, &x, &y);
-        unsigned char *d = cs->out + ((size_t)y * p->width + x) * 8; /* RGBA16: 8 bytes a texel */
+        const float *v = float_row(p, r);
+        unsigned char *d = cs->out + row_texel(p, r) * 8; /* RGBA16: 8 bytes a texel */
         for (uint32_t j = 0; j < p->bone_count; ++j, v += 8, d += 16) encode_bone_u16(v, p->bone_ranges + (size_t)j * 8, d);
     }
 }

@@ -295,7 +295,6 @@ static bool lays_out_timed(const cb_bake_options *opt, const cb_clip_plan *plan,
     return opt->bone_space == CB_BONE_SPACE_GLOBAL && opt->timed_rows != CB_TIMED_ROWS_OFF && timed_any(plan, plan_count);
 }
 
-/* The rows the palette will hold: a timed clip's (baked here at its cell rate) its rows on its cells and its map's. */
 uint32_t palette_error_stride(uint32_t rows, uint32_t vertices, bool measure_all)
 {
     uint64_t work = (uint64_t)rows * vertices;
@@ -303,6 +302,7 @@ uint32_t palette_error_stride(uint32_t rows, uint32_t vertices, bool measure_all
     return subset ? (uint32_t)((work + CB_ERROR_BUDGET - 1) / CB_ERROR_BUDGET) : 1;
 }
 
+/* The rows the palette will hold: a timed clip's (baked here at its cell rate) its rows on its cells and its map's. */
 static uint32_t shipped_rows(const bake_state *st)
 {
     const cb_palette *p = st->p;
