@@ -144,6 +144,7 @@ static cb_status analyze_clips(const cb_limits *limits, type_work *w, cb_roster_
         c->in_place = cb_root_motion_in_place(w->job.settings.root_motion, &info);
         c->visible_error_mm = -1; /* the bake measures it */
         cb_loop_reason_text(&info, c->loop_reason, sizeof c->loop_reason);
+        cb_bake_clip_reason(&w->job, i, c->rate_reason, sizeof c->rate_reason); /* while its search is at hand */
         cb_measure_ground_speed(s, &info, &c->speed);
         if (row_travel(&w->job, s, &info, &c->travel, err)) break;
         row += c->frames;

@@ -54,6 +54,7 @@ typedef struct cb_roster_clip {
     double visible_error_mm; /* the worst error a player sees in it, mm per metre of model height (the bake's
                               * cb_clip_budget.error_mm, kept in the type's record); -1 where no bake measured it
                               * (a record lost beside an up-to-date palette: the files record only the type's) */
+    char rate_reason[320];   /* why its rate and rows (cb_bake_clip_reason, as `crowdbake bake` says it) */
     bool in_place;         /* its root travel taken out (the job's root motion, cb_root_motion_in_place) */
     cb_ground_speed speed; /* speed.speed is the clip's ground speed */
     cb_plant_clip plant;   /* with plant_feet, what planting its feet changed (plant.planted: it did) */

@@ -10,9 +10,9 @@
 
 #include "crowdbake_pal.h"
 
-static const char magic[8] = "CBPREP8"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by
+static const char magic[8] = "CBPREP9"; /* 2: each clip's stride; 3: its feet's stances, the sockets; 4: feet tracked by
                                         * their soles; 5: the VAT error; 6: each clip's root motion (flag bit 2), loop reason and error;
-                                        * 7: each clip's row travel; 8: the LOD's error */
+                                        * 7: each clip's row travel; 8: the LOD's error; 9: each clip's rate reason */
 
 bool cb_prep_record_path(const cb_catalog_animal *an, char *out, size_t size)
 {
@@ -92,6 +92,7 @@ bool cb_prep_record_encode(const cb_roster_type *t, uint64_t key, unsigned char 
         rec_put_f64(&w, c->fps), rec_put_f64(&w, c->duration);
         rec_put_str(&w, c->loop_reason);
         rec_put_f64(&w, c->visible_error_mm);
+        rec_put_str(&w, c->rate_reason);
         rec_put_f64(&w, c->speed.speed), rec_put_f64(&w, c->speed.root), rec_put_f64(&w, c->speed.feet);
         rec_put_str(&w, c->speed.method);
         rec_put(&w, &c->speed.stride, sizeof c->speed.stride); /* plain numbers and zero-filled strings */
@@ -174,6 +175,7 @@ static void read_clips(record_reader *r, cb_roster_type *t)
         c->fps = rec_get_f64(r), c->duration = rec_get_f64(r);
         rec_get_str(r, c->loop_reason, sizeof c->loop_reason);
         c->visible_error_mm = rec_get_f64(r);
+        rec_get_str(r, c->rate_reason, sizeof c->rate_reason);
         c->speed.speed = rec_get_f64(r), c->speed.root = rec_get_f64(r), c->speed.feet = rec_get_f64(r);
         if (rec_get_str(r, method, sizeof method) && !(c->speed.method = known_method(method))) r->failed = true;
         rec_get(r, &c->speed.stride, sizeof c->speed.stride);

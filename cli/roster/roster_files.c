@@ -306,6 +306,7 @@ static void write_type(cb_json *j, const cb_roster *r, const cb_roster_type *t, 
         cb_json_string(j, "root_motion", cl->in_place ? "in-place" : "keep");
         cb_json_string(j, "root_motion_reason", why);
         if (cl->visible_error_mm >= 0) cb_json_number(j, "visible_error_mm_per_m", cl->visible_error_mm);
+        cb_json_string(j, "rate_reason", cl->rate_reason);
         if (cl->step) cb_json_bool(j, "step_rows", true); /* held, not blended: .pal clip flag bit 2 */
         if (cl->cells) { /* timed rows (.pal clip flag bit 3): the map's cells, rate and rows before first_row */
             cb_json_object(j, "timed_rows");

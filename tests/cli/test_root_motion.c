@@ -74,8 +74,8 @@ static void test_one_shots_keep_their_travel(void **state)
     assert_non_null(strstr(log, "root motion kept: a one-shot keeps its travel"));
 }
 
-/* The roster manifest says per clip what the bake did with its root travel and why, and each
- * clip's visible error; its rates print as the files record them (the shortest decimal that
+/* The roster manifest says per clip what the bake did with its root travel and why, each clip's
+ * visible error, and why its rate and rows (error-bounded, or the catalog's fixed fps); its rates print as the files record them (the shortest decimal that
  * reads back as the .pal's float32, not "24.0000006"). A second run, up to date, writes the
  * same manifest: what it says comes from the type's record, not from a bake. */
 static void test_manifest_says_root_motion_per_clip(void **state)
@@ -87,7 +87,7 @@ static void test_manifest_says_root_motion_per_clip(void **state)
     assert_non_null(realpath(cow, cow_abs));
     snprintf(text, sizeof text,
              "[bake]\nout_dir = \"out\"\n[animal.cow]\nmodel = \"%s\"\nclips = [\"AnimalArmature|Death\", "
-             "{ source = \"AnimalArmature|Jump_toIdle\", loop = true }, \"AnimalArmature|Walk\"]\n", cow_abs);
+             "{ source = \"AnimalArmature|Jump_toIdle\", loop = true, fps = 30 }, \"AnimalArmature|Walk\"]\n", cow_abs);
     assert_int_equal(system("rm -rf " TMP "/out && mkdir -p " TMP), 0);
     write_text(TMP "/cows.toml", text);
     snprintf(cmd, sizeof cmd, "%s bake " TMP "/cows.toml 2>&1 && cp " TMP "/out/roster.json " TMP "/first.json && %s bake "
@@ -96,7 +96,7 @@ static void test_manifest_says_root_motion_per_clip(void **state)
     snprintf(cmd, sizeof cmd,
              "python3 -c \"import json; t = json.load(open('%s/out/roster.json'))['types']['cow']; "
              "[print(c['name'], c['root_motion'], c['visible_error_mm_per_m'] > 0, '|', c['root_motion_reason'], '|', "
-             "c['loop_reason'][:10]) for c in t['clips']]\"", TMP);
+             "c['loop_reason'][:10], '|', c['rate_reason']) for c in t['clips']]\"", TMP);
     if (run_command(cmd, log, sizeof log) != 0) fail_msg("%s", log);
     printf("%s", log);
     assert_non_null(strstr(log, "AnimalArmature|Death keep True | a one-shot keeps its travel"));
@@ -105,6 +105,9 @@ static void test_manifest_says_root_motion_per_clip(void **state)
     assert_non_null(strstr(log, "AnimalArmature|Walk in-place True | in place with the type's loops that travel"));
     assert_non_null(strstr(log, "| loops, set"));      /* Jump_toIdle: the catalog's loop */
     assert_non_null(strstr(log, "| plays once"));       /* Death: decided */
+    /* Each clip's rate with its reason, as the bake says it; from the record the second time (the same file). */
+    assert_non_null(strstr(log, "| 24 fps, local rows (its keys): the fewest within its budget (")); /* Death, Walk */
+    assert_non_null(strstr(log, "| 30 fps, sampled rows: a fixed fps; baked as local rows, sampled")); /* Jump_toIdle */
     /* Each rate: the shortest decimal that reads back as the .pal's float32. */
     char *json = read_whole_file(TMP "/out/roster.json", NULL);
     cbpal_file pal;
