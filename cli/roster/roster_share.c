@@ -32,10 +32,7 @@ bool roster_settle_shared(cb_roster *r, uint32_t i)
     t->layout = o->layout, t->precision = o->precision, t->palette_bytes = o->palette_bytes;
     t->width = o->width, t->height = o->height, t->blocks = o->blocks, t->max_error = o->max_error;
     t->visible_error = o->visible_error;
-    for (uint32_t c = 0; c < t->clip_count && c < o->clip_count; ++c) {
-        t->clips[c].visible_error_mm = o->clips[c].visible_error_mm;
-        memcpy(t->clips[c].rate_reason, o->clips[c].rate_reason, sizeof t->clips[c].rate_reason);
-    }
+    for (uint32_t c = 0; c < t->clip_count && c < o->clip_count; ++c) t->clips[c].visible_error_mm = o->clips[c].visible_error_mm;
     r->shared++;
     return true;
 }
