@@ -3,11 +3,13 @@
  * skeleton. Blending local rows is the glTF's own interpolation (conjugated by constants), where
  * blending global rows cuts a swung child's arc as a chord.
  *
- * A local bake is a global qpos bake in float (the sampled rows, exact to float), converted here
- * in place, clip by clip on the bake's threads: each bone computed in double from its row's floats
- * and stored as float over them (the float file's values), then, for u16, those floats encoded in
- * each bone's ranges. Its errors are then measured composed, as the runtime plays it
- * (cb_verify_clip through cb_runtime_matrices, which composes). */
+ * A local bake is a qpos bake in float whose rows are local: a clip sampled from the sampler's
+ * lanes (a similarity rig's) local at once, each bone computed in double from the double poses
+ * (local_rows_from_lanes); any other (a matrix rig's, a timed clip's kept rows) sampled global
+ * and converted here in place, clip by clip on the bake's threads, each bone computed in double
+ * from its row's floats. Each bone's value is stored as float (the float file's values), then,
+ * for u16, those floats encoded in each bone's ranges. Its errors are then measured composed, as
+ * the runtime plays it (cb_verify_clip through cb_runtime_matrices, which composes). */
 #include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -22,6 +24,8 @@
 #include "palette_bake.h"
 #include "pool.h"
 #include "timed_rows.h"
+
+#define B CB_SAMPLE_BATCH
 
 void palette_local_parents(const cb_model *m, const cb_skin *skin, int32_t *parents)
 {
@@ -107,17 +111,149 @@ bool palette_local_matrices(const cb_palette *p, const void *texels, const palet
     return true;
 }
 
+/* ---- local rows sampled: a batch of joint lanes, local at once ---- */
+
+/* Four of a batch's lanes at a time where GCC's vectors are (one otherwise): the same operations
+ * in the same order either way, so the same bits. Macros, not functions: a function returning a
+ * 32-byte vector changes its calling convention in the clone without AVX. */
+#if defined(__GNUC__)
+typedef v4df lanes4;
+typedef double lanes4_at __attribute__((vector_size(32), aligned(8), may_alias)); /* at any double */
+typedef float floats4 __attribute__((vector_size(16)));
+enum { WIDTH = 4 };
+#define AT(x) ((lanes4)*(const lanes4_at *)(x))
+#define PUT(x, v) (*(lanes4_at *)(x) = (v))
+#define INVERSE(s) CB_SELECT4((s) != CB_SPLAT4(0.0), CB_SPLAT4(1.0) / (s), CB_SPLAT4(0.0))
+/* Floats loaded as floats, then converted (GCC 12 fails to compile the conversion of a float
+ * vector read in place, in the clone without AVX); by pointer, as above. */
+static CB_CLONE_INLINE void at_float(lanes4 *out, const float *x)
+{
+    floats4 f;
+    memcpy(&f, x, sizeof f);
+    *out = __builtin_convertvector(f, lanes4);
+}
+static CB_CLONE_INLINE void put_float(float *x, const lanes4 *v)
+{
+    floats4 f = __builtin_convertvector(*v, floats4);
+    memcpy(x, &f, sizeof f);
+}
+#define MIN4(a, b) CB_SELECT4((a) < (b), (a), (b))
+#define MAX4(a, b) CB_SELECT4((a) > (b), (a), (b))
+#else
+typedef double lanes4;
+enum { WIDTH = 1 };
+#define AT(x) (*(x))
+#define PUT(x, v) (*(x) = (v))
+#define INVERSE(s) ((s) != 0 ? 1 / (s) : 0)
+static void at_float(lanes4 *out, const float *x) { *out = *x; }
+static void put_float(float *x, const lanes4 *v) { *x = (float)*v; }
+#define MIN4(a, b) ((a) < (b) ? (a) : (b))
+#define MAX4(a, b) ((a) > (b) ? (a) : (b))
+#endif
+
+/* One bone's local values over the batch's lanes into l (l[k][i + 1]: value k of lane i) from
+ * its global qpos lanes g (q, the pivot p = t + s rotate(q, b), s) and its parent's pg, pb the
+ * parent's bind position: local_qpos_localize's arithmetic. A root (pg NULL) keeps its own. */
+static CB_CLONE_INLINE void bone_local_lanes(const double (*g)[B], const double (*pg)[B], const float *pb, double (*l)[B + 1])
+{
+    for (int i = 0; i < B; i += WIDTH) {
+        if (!pg) {
+            for (int k = 0; k < 8; ++k) PUT(&l[k][i + 1], AT(&g[k][i]));
+            continue;
+        }
+        /* conj(q_p) rotating p_j - p_p (cb_quat_rotate), over s_p, about the parent's bind position */
+        lanes4 ix = -AT(&pg[0][i]), iy = -AT(&pg[1][i]), iz = -AT(&pg[2][i]), iw = AT(&pg[3][i]), sp = AT(&pg[7][i]);
+        lanes4 k = INVERSE(sp);
+        lanes4 vx = AT(&g[4][i]) - AT(&pg[4][i]), vy = AT(&g[5][i]) - AT(&pg[5][i]), vz = AT(&g[6][i]) - AT(&pg[6][i]);
+        lanes4 wx = iy * vz - iz * vy, wy = iz * vx - ix * vz, wz = ix * vy - iy * vx;
+        lanes4 wwx = iy * wz - iz * wy, wwy = iz * wx - ix * wz, wwz = ix * wy - iy * wx;
+        PUT(&l[4][i + 1], pb[0] + (vx + 2 * (iw * wx + wwx)) * k);
+        PUT(&l[5][i + 1], pb[1] + (vy + 2 * (iw * wy + wwy)) * k);
+        PUT(&l[6][i + 1], pb[2] + (vz + 2 * (iw * wz + wwz)) * k);
+        PUT(&l[7][i + 1], AT(&g[7][i]) * k);
+        /* conj(q_p) q_j (cb_quat_mul) */
+        lanes4 qx = AT(&g[0][i]), qy = AT(&g[1][i]), qz = AT(&g[2][i]), qw = AT(&g[3][i]);
+        PUT(&l[0][i + 1], iw * qx + ix * qw + iy * qz - iz * qy);
+        PUT(&l[1][i + 1], iw * qy - ix * qz + iy * qw + iz * qx);
+        PUT(&l[2][i + 1], iw * qz + ix * qy - iy * qx + iz * qw);
+        PUT(&l[3][i + 1], iw * qw - ix * qx - iy * qy - iz * qz);
+    }
+}
+
+/* Grows a bone's range (lo[3], hi[3], scale max) by its local floats v of the batch's lanes (those
+ * past count repeat the last frame's), WIDTH lanes at once, then folded in lane order. */
+static CB_CLONE_INLINE void grow_range(const float (*v)[B], double *e)
+{
+    lanes4 lo[3], hi[3], smax, x;
+    at_float(&smax, &v[7][0]);
+    for (int k = 0; k < 3; ++k) at_float(&lo[k], &v[4 + k][0]), hi[k] = lo[k];
+    for (int i = WIDTH; i < B; i += WIDTH) {
+        for (int k = 0; k < 3; ++k) {
+            at_float(&x, &v[4 + k][i]);
+            lo[k] = MIN4(x, lo[k]), hi[k] = MAX4(x, hi[k]);
+        }
+        at_float(&x, &v[7][i]);
+        smax = MAX4(x, smax);
+    }
+    double t[WIDTH];
+    for (int k = 0; k < 3; ++k) {
+        PUT(t, lo[k]);
+        for (int m = 0; m < WIDTH; ++m) e[k] = t[m] < e[k] ? t[m] : e[k];
+        PUT(t, hi[k]);
+        for (int m = 0; m < WIDTH; ++m) e[3 + k] = t[m] > e[3 + k] ? t[m] : e[3 + k];
+    }
+    PUT(t, smax);
+    for (int m = 0; m < WIDTH; ++m) e[6] = t[m] > e[6] ? t[m] : e[6];
+}
+
+/* w->prev holds each bone's last local quaternion (the global rows bone_lanes would have stored
+ * are not made: joint_into_local). */
+CB_TARGET_CLONES
+void local_rows_from_lanes(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows)
+{
+    const cb_palette *p = st->p;
+    const local_sampling *ls = st->local;
+    uint32_t bones = p->bone_count;
+    const double(*lanes)[8][B] = (const double(*)[8][B])w->local_lanes;
+    double *range = ls->ranges + (size_t)c * bones * 7;
+    for (uint32_t j = 0; j < bones; ++j) {
+        double l[8][B + 1], dot[B]; /* l: lane i at i + 1, after a zero (dot[0], unused, 0) */
+        float v[8][B], sign[B];
+        int32_t a = ls->parents[j];
+        for (int k = 0; k < 8; ++k) l[k][0] = 0;
+        bone_local_lanes(lanes[j], a >= 0 ? lanes[a] : NULL, a >= 0 ? p->bind_positions + (size_t)a * 3 : NULL, l);
+        for (int i = 0; i < B; i += WIDTH) /* lane i against lane i - 1 as computed (palette_row_signs) */
+            PUT(&dot[i], AT(&l[0][i + 1]) * AT(&l[0][i]) + AT(&l[1][i + 1]) * AT(&l[1][i]) +
+                             AT(&l[2][i + 1]) * AT(&l[2][i]) + AT(&l[3][i + 1]) * AT(&l[3][i]));
+        cb_quat q0 = {l[0][1], l[1][1], l[2][1], l[3][1]};
+        palette_row_signs(dot, f ? cb_quat_dot(q0, w->prev[j]) < 0 : q0.w < 0, sign);
+        for (int i = 0; i < B; i += WIDTH) {
+            lanes4 sg, x;
+            at_float(&sg, &sign[i]);
+            for (int k = 0; k < 8; ++k) x = k < 4 ? sg * AT(&l[k][i + 1]) : AT(&l[k][i + 1]), put_float(&v[k][i], &x);
+        }
+        palette_store_rows((const float(*)[B])v, count, rows + (size_t)j * 8, (size_t)bones * 8);
+        double *e = range + (size_t)j * 7;
+        if (f == 0)
+            for (int k = 0; k < 7; ++k) e[k] = k < 3 ? INFINITY : k < 6 ? -INFINITY : 0;
+        grow_range((const float(*)[B])v, e);
+        float last = sign[count - 1];
+        w->prev[j] = (cb_quat){last * l[0][count], last * l[1][count], last * l[2][count], last * l[3][count]};
+    }
+}
+
 /* ---- the conversion of a global float qpos palette, in place ---- */
 
-/* The conversion, shared out clip by clip: each clip's rows localized in place (a float qpos
- * texel pair holds a bone's 8 values, global before, local after) and its bones' value ranges
- * kept in its own slots, then, once every clip's ranges are merged, its rows encoded. Each clip
- * writes only its own rows and slots: the texels depend neither on the thread count nor on the
- * order taken. */
+/* The conversion, shared out clip by clip: each clip's rows not sampled local localized in place
+ * (a float qpos texel pair holds a bone's 8 values, global before, local after) and its bones'
+ * value ranges kept in its own slots, then, once every clip's ranges are merged, its rows
+ * encoded. Each clip writes only its own rows and slots: the texels depend neither on the thread
+ * count nor on the order taken. */
 typedef struct convert_share {
-    cb_palette *g;              /* float texels, global, then local */
+    cb_palette *g;              /* float texels, global (those not sampled local), then local */
     unsigned char *out;         /* the encoded texels (u16), or NULL (float: the local floats are the texels) */
-    double *ranges;             /* clip c, bone j: lo[3], hi[3], scale max at ((c * bones) + j) * 7 */
+    double *ranges;             /* local_sampling's: clip c, bone j at ((c * bones) + j) * 7 */
+    const unsigned char *sampled; /* local_sampling's: clips already local, their ranges filled */
     unsigned char *out_of_memory; /* a clip's */
     bool encode;                /* the second run: encoding, not localizing */
     atomic_uint next;
@@ -141,7 +277,8 @@ static local_qpos qpos_of_floats(const float v[8])
 
 /* Clip c's rows localized: each bone's global values (a copy of its row's floats, as its children
  * still need them) in its parent's frame, its quaternion kept on the side of the row before's (in
- * double, before it is rounded), stored as floats over the global ones, its ranges grown. */
+ * double, before it is rounded; the clip's first row: w >= 0, as local_rows_from_lanes keeps it),
+ * stored as floats over the global ones, its ranges grown. */
 static bool localize_clip(convert_share *cs, uint32_t c)
 {
     const cb_palette *g = cs->g;
@@ -159,7 +296,7 @@ static bool localize_clip(convert_share *cs, uint32_t c)
             int32_t a = g->parents[j];
             if (a >= 0) t = local_qpos_localize(qpos_of_floats(global + (size_t)a * 8), bind_of(g, (uint32_t)a), t);
             double w[8] = {t.q.x, t.q.y, t.q.z, t.q.w, t.p.x, t.p.y, t.p.z, t.s}, *q = before + (size_t)j * 4;
-            if (f > 0 && w[0] * q[0] + w[1] * q[1] + w[2] * q[2] + w[3] * q[3] < 0)
+            if (f > 0 ? w[0] * q[0] + w[1] * q[1] + w[2] * q[2] + w[3] * q[3] < 0 : w[3] < 0)
                 for (int k = 0; k < 4; ++k) w[k] = -w[k];
             memcpy(q, w, 4 * sizeof *w);
             double *e = range + (size_t)j * 7;
@@ -263,7 +400,7 @@ static void convert_clips(void *arg, uint32_t thread, uint32_t threads)
     convert_share *cs = arg;
     for (uint32_t c; (c = atomic_fetch_add(&cs->next, 1)) < cs->g->clip_count;) /* (a timed clip's map rows: no bone) */
         if (cs->encode) encode_clip(cs, c);
-        else cs->out_of_memory[c] = !localize_clip(cs, c);
+        else if (!cs->sampled[c]) cs->out_of_memory[c] = !localize_clip(cs, c);
 }
 
 static void run_convert(convert_share *cs, uint32_t threads)
@@ -273,20 +410,19 @@ static void run_convert(convert_share *cs, uint32_t threads)
     cb_pool_run(threads > cs->g->clip_count ? cs->g->clip_count : threads, convert_clips, cs);
 }
 
-/* The global float palette g converted in place to local rows in `precision`, on up to `threads`
- * threads. Its texels are its own (palette_bake_local bakes it without texel memory): written
- * over, and for u16 replaced. */
-static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin, cb_precision precision, uint32_t threads,
-                                 cb_error *err)
+/* The float palette g (its clips sampled local and the others global) made local rows in
+ * `precision`, on up to `threads` threads, about the parents it takes (*parents, NULL after). Its
+ * texels are its own (palette_bake_local bakes it without texel memory): written over, and for
+ * u16 replaced. */
+static cb_status convert_palette(cb_palette *g, int32_t **parents, const local_sampling *ls, cb_precision precision,
+                                 uint32_t threads, const char *source, cb_error *err)
 {
-    size_t clips = g->clip_count ? g->clip_count : 1;
-    convert_share cs = {.g = g, .ranges = malloc(clips * (g->bone_count ? g->bone_count : 1) * 7 * sizeof(double)),
-                        .out_of_memory = calloc(clips, 1)};
-    g->parents = malloc((size_t)g->bone_count * sizeof *g->parents);
+    convert_share cs = {.g = g, .ranges = ls->ranges, .sampled = ls->sampled,
+                        .out_of_memory = calloc(g->clip_count ? g->clip_count : 1, 1)};
+    g->parents = *parents, *parents = NULL;
     g->bone_ranges = calloc((size_t)g->bone_count * 8, sizeof *g->bone_ranges);
-    bool ok = cs.ranges && cs.out_of_memory && g->parents && g->bone_ranges;
+    bool ok = cs.out_of_memory && g->bone_ranges;
     if (ok) {
-        palette_local_parents(m, &m->skins[skin], g->parents);
         run_convert(&cs, threads);
         for (uint32_t c = 0; c < g->clip_count; ++c) ok = ok && !cs.out_of_memory[c];
     }
@@ -302,8 +438,8 @@ static cb_status convert_palette(cb_palette *g, const cb_model *m, int32_t skin,
         }
         g->precision = precision, g->bone_space = CB_BONE_SPACE_LOCAL;
     }
-    free(cs.ranges), free(cs.out_of_memory);
-    return ok ? CB_OK : cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for local rows", m->source);
+    free(cs.out_of_memory);
+    return ok ? CB_OK : cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for local rows", source);
 }
 
 /* One clip's errors measured composed (local_palette_errors), in its own slots. */
@@ -388,6 +524,62 @@ static cb_status measure_local(cb_sampler *s, const cb_clip_plan *plan, const pa
     return palette_measure_composed(s, plan, facts, probe, opt->threads, false, stride, p, err);
 }
 
+/* What a local bake's float bake samples local (local_sampling): every clip but a timed one, whose
+ * rows on its keys are kept from its global rows and then converted (timed_keep_rows). The parents
+ * go to the palette (convert_palette); false: out of memory. */
+static bool local_sampling_init(local_sampling *ls, int32_t **parents, const cb_model *m, int32_t skin,
+                                const cb_clip_plan *plan, uint32_t plan_count)
+{
+    size_t clips = plan ? plan_count : m->animation_count, bones = m->skins[skin].joint_count;
+    *parents = malloc((bones ? bones : 1) * sizeof **parents);
+    *ls = (local_sampling){*parents, malloc((clips ? clips : 1) * (bones ? bones : 1) * 7 * sizeof(double)),
+                           calloc(clips ? clips : 1, 1)};
+    if (!*parents || !ls->ranges || !ls->sampled) return false;
+    palette_local_parents(m, &m->skins[skin], *parents);
+    for (size_t c = 0; c < clips; ++c) ls->sampled[c] = !(plan && plan[c].timed_rows);
+    return true;
+}
+
+/* Its float bake, sampled local where it can be, then the rest converted and all encoded in
+ * opt's precision (the affine fallback: global, baked again as asked). */
+static cb_status bake_local_rows(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                                 uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
+                                 cb_palette *p, cb_error *err)
+{
+    const cb_model *m = cb_sampler_model(sampler);
+    cb_bake_options global = *opt;
+    global.bone_space = CB_BONE_SPACE_GLOBAL, global.precision = CB_PRECISION_FLOAT, global.fit = false;
+    global.texel_memory = (cb_texel_memory){0}, global.error_goal = 0;
+    cb_clip_plan *sampled = plan ? malloc(plan_count * sizeof *sampled) : NULL;
+    int32_t *parents = NULL;
+    local_sampling ls;
+    bool room = local_sampling_init(&ls, &parents, m, cb_sampler_skin(sampler), plan, plan_count);
+    if (!room || (plan && !sampled)) {
+        free(sampled), free(parents), free(ls.ranges), free(ls.sampled);
+        return cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for local rows", m->source);
+    }
+    for (uint32_t i = 0; sampled && i < plan_count; ++i) /* uniform: the timed rows are kept below, before converting */
+        sampled[i] = plan[i], sampled[i].fit = false, sampled[i].timed_rows = 0, sampled[i].row_cells = NULL;
+    /* The global rows' own errors are not the local rows': measured composed after, not here. */
+    palette_skin_facts unmeasured = *facts;
+    unmeasured.skinned = false;
+    cb_status rc = palette_bake_sampled_local(sampler, &global, sampled, plan_count, &unmeasured, probe, &ls, p, err);
+    free(sampled);
+    if (!rc && p->layout != CB_LAYOUT_QPOS) { /* fell back to affine: a rig qpos cannot hold stays global, as asked */
+        cb_palette_free(p);
+        global = *opt, global.bone_space = CB_BONE_SPACE_GLOBAL;
+        rc = palette_bake_with_facts(sampler, &global, plan, plan_count, facts, probe, p, err);
+    } else if (!rc) {
+        bool timed = timed_any(plan, plan_count);
+        if (!(rc = timed ? timed_keep_rows(p, plan, opt->max_texture_size, m->source, err) : CB_OK) &&
+            !(rc = convert_palette(p, &parents, &ls, opt->precision, opt->threads, m->source, err)) && timed)
+            timed_fill_maps(p, plan);
+        if (rc) cb_palette_free(p);
+    }
+    free(parents), free(ls.ranges), free(ls.sampled);
+    return rc;
+}
+
 cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
                              uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
                              cb_palette *p, cb_error *err)
@@ -397,38 +589,13 @@ cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, co
         return cb_fail(err, CB_ERR_SETTINGS, "%s: local rows need layout qpos and precision u16 or float (half's "
                        "2^-11 compounds down a chain); use layout qpos with precision u16, or bone space global",
                        m->source);
-    cb_bake_options global = *opt;
-    global.bone_space = CB_BONE_SPACE_GLOBAL, global.precision = CB_PRECISION_FLOAT, global.fit = false;
-    global.texel_memory = (cb_texel_memory){0}, global.error_goal = 0;
-    cb_clip_plan *sampled = plan ? malloc(plan_count * sizeof *sampled) : NULL;
-    if (plan && !sampled) return cb_fail(err, CB_ERR_INTERNAL, "out of memory");
-    for (uint32_t i = 0; sampled && i < plan_count; ++i) /* uniform: the timed rows are kept below, before converting */
-        sampled[i] = plan[i], sampled[i].fit = false, sampled[i].timed_rows = 0, sampled[i].row_cells = NULL;
-    palette_skin_facts own = {0}, unmeasured;
+    palette_skin_facts own = {0};
     cb_status rc = facts ? CB_OK : palette_skin_facts_build(sampler, &own, err);
     if (!facts) facts = &own;
-    /* The global rows' own errors are not the local rows': measured composed below, not here. */
-    unmeasured = *facts, unmeasured.skinned = false;
-    if (!rc) rc = palette_bake_with_facts(sampler, &global, sampled, plan_count, &unmeasured, probe, p, err);
-    if (rc) return free(sampled), palette_skin_facts_free(&own), rc;
-    if (p->layout != CB_LAYOUT_QPOS) { /* fell back to affine: a rig qpos cannot hold stays global, as asked */
+    if (!rc) rc = bake_local_rows(sampler, opt, plan, plan_count, facts, probe, p, err);
+    if (!rc && p->bone_space == CB_BONE_SPACE_LOCAL && cb_model_skin_vertex_count(m, cb_sampler_skin(sampler)) > 0 &&
+        (rc = measure_local(sampler, plan, facts, probe, opt, p, err)))
         cb_palette_free(p);
-        global = *opt, global.bone_space = CB_BONE_SPACE_GLOBAL;
-        rc = palette_bake_with_facts(sampler, &global, plan, plan_count, facts, probe, p, err);
-        free(sampled), palette_skin_facts_free(&own);
-        return rc;
-    }
-    free(sampled);
-    bool timed = timed_any(plan, plan_count);
-    if (timed && (rc = timed_keep_rows(p, plan, opt->max_texture_size, m->source, err))) {
-        palette_skin_facts_free(&own), cb_palette_free(p);
-        return rc;
-    }
-    if (!(rc = convert_palette(p, m, cb_sampler_skin(sampler), opt->precision, opt->threads, err)) && timed) timed_fill_maps(p, plan);
-    if (!rc &&
-        cb_model_skin_vertex_count(m, cb_sampler_skin(sampler)) > 0)
-        rc = measure_local(sampler, plan, facts, probe, opt, p, err);
     palette_skin_facts_free(&own);
-    if (rc) cb_palette_free(p);
     return rc;
 }

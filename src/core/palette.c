@@ -159,6 +159,7 @@ static cb_status sample_clip(bake_state *st, worker *w, uint32_t c, cb_error *er
         emit_rows(st, c, rows, f0, n);
     }
     if (keep) palette_kept_rows_done(st, c, &bounds);
+    if (st->local) st->local->sampled[c] = st->local->sampled[c] && similar && !taken && !fit; /* local_rows_from_lanes' */
     bool empty = !(bounds.lo[0] <= bounds.hi[0]); /* no skinned vertex */
     for (int k = 0; k < 3; ++k) {
         clip->bounds_min[k] = empty ? 0 : (float)bounds.lo[k];
@@ -199,8 +200,9 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
         w.mats = malloc((size_t)st->p->bone_count * 16 * sizeof(double));
         w.prev = malloc((size_t)st->p->bone_count * sizeof(cb_quat));
         w.first = malloc((size_t)st->p->bone_count * 4 * sizeof(float));
+        if (st->local) w.local_lanes = malloc((size_t)st->p->bone_count * 8 * CB_SAMPLE_BATCH * sizeof(double));
     }
-    if (jb->samples && (!w.sampler || !closed || !w.mats || !w.prev || !w.first)) {
+    if (jb->samples && (!w.sampler || !closed || !w.mats || !w.prev || !w.first || (st->local && !w.local_lanes))) {
         cb_fail(err0, CB_ERR_INTERNAL, "out of memory sampling %s", st->model->source);
     } else {
         for (uint32_t c = atomic_fetch_add(&jb->next, 1); c < jb->count; c = atomic_fetch_add(&jb->next, 1))
@@ -213,6 +215,7 @@ static void job_main(void *arg, uint32_t first, uint32_t stride)
     free(w.rows);
     palette_measure_scratch_free(w.measure);
     pose_batch_free(w.batch);
+    free(w.local_lanes);
 }
 
 static uint32_t threads_used(const bake_state *st, uint32_t jobs)
@@ -317,8 +320,8 @@ static uint32_t shipped_rows(const bake_state *st)
 }
 
 static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                           uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe, cb_palette *p,
-                           cb_error *err)
+                           uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
+                           const local_sampling *local, cb_palette *p, cb_error *err)
 {
     const cb_model *m = cb_sampler_model(sampler);
     int32_t skin_index = cb_sampler_skin(sampler);
@@ -335,6 +338,7 @@ static cb_status bake_once(cb_sampler *sampler, const cb_bake_options *opt, cons
     double t0 = seconds_now();
     bake_state st = {0};
     st.p = p, st.model = m, st.skin = skin_index, st.opt = opt, st.plan = lays_out_timed(opt, plan, plan_count) ? plan : NULL;
+    st.local = local;
     cb_clip_info *infos = NULL;
     st.facts = facts, st.radius = facts->reach, st.groups = &facts->groups;
     if (probe && plan && plan_count == 1 && opt->threads <= 1) /* one clip's, one thread's */
@@ -431,15 +435,15 @@ fail:
 }
 
 static cb_status bake_with_fallback(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
-                                    uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe, cb_palette *p,
-                                    cb_error *err)
+                                    uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
+                                    const local_sampling *local, cb_palette *p, cb_error *err)
 {
     cb_error first = {0};
-    cb_status rc = bake_once(sampler, opt, plan, plan_count, facts, probe, p, &first);
+    cb_status rc = bake_once(sampler, opt, plan, plan_count, facts, probe, local, p, &first);
     if (rc == CB_ERR_LAYOUT && opt->affine_fallback && opt->layout == CB_LAYOUT_QPOS) {
         cb_bake_options affine = *opt; /* a rig qpos cannot hold: the next smallest layout */
         affine.layout = CB_LAYOUT_AFFINE;
-        rc = bake_once(sampler, &affine, plan, plan_count, facts, probe, p, err);
+        rc = bake_once(sampler, &affine, plan, plan_count, facts, probe, local, p, err);
         if (!rc) snprintf(p->fallback_note, sizeof p->fallback_note, "%.460s; baked with affine instead", first.message);
         return rc;
     }
@@ -455,10 +459,17 @@ cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *op
     palette_skin_facts own = {0};
     cb_status rc = facts ? CB_OK : palette_skin_facts_build(sampler, &own, err);
     if (!facts) facts = &own;
-    if (!rc) rc = bake_with_fallback(sampler, opt, plan, plan_count, facts, probe, p, err);
+    if (!rc) rc = bake_with_fallback(sampler, opt, plan, plan_count, facts, probe, NULL, p, err);
     /* Timed clips (global_timed.c) were baked uniform at their cell rate: their rows on their cells kept */
     if (!rc && lays_out_timed(opt, plan, plan_count) && (rc = palette_time_global_rows(sampler, opt, plan, plan_count, facts, probe, p, err)))
         cb_palette_free(p);
     palette_skin_facts_free(&own);
     return rc;
+}
+
+cb_status palette_bake_sampled_local(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                                     uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
+                                     const local_sampling *local, cb_palette *p, cb_error *err)
+{
+    return bake_with_fallback(sampler, opt, plan, plan_count, facts, probe, local, p, err);
 }

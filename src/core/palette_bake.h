@@ -78,7 +78,19 @@ typedef struct worker {
     float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
     struct measure_scratch *measure; /* palette_error.c's, made by the worker's first measurement job */
     pose_batch *batch;   /* its batches of poses (palette_prefetch_poses), made when first needed */
+    double *local_lanes; /* a local bake's (st->local): bones x 8 x CB_SAMPLE_BATCH, a batch's joint lanes, made when
+                          * first needed */
 } worker;
+
+/* A local bake's float bake (palette_bake_local): each clip whose rows come from the sampler's
+ * lanes (a similarity rig's) is sampled local at once, from the double poses, where converting
+ * its global floats after cost the local bake twice its sampling (the 200-joint rig at 30 fps);
+ * the others are converted once baked. Owned by palette_bake_local. */
+typedef struct local_sampling {
+    const int32_t *parents; /* bones: each one's nearest ancestor joint, -1 for a root (palette_local_parents) */
+    double *ranges;         /* clip c, bone j: its local floats' lo[3], hi[3] and scale max at ((c * bones) + j) * 7 */
+    unsigned char *sampled; /* clips: 1 where its rows were sampled local (its ranges filled) */
+} local_sampling;
 
 typedef struct bake_state {
     cb_palette *p;
@@ -113,6 +125,7 @@ typedef struct bake_state {
     double baked_worst;     /* palette_measure_rest's: the worst baked row every clip's job measured */
     const cb_clip_plan *plan; /* the bake's plan, or NULL: its timed clips, baked here at their cell rate, are measured
                                * once laid out (global_timed.c), not here */
+    const local_sampling *local; /* a local bake's float bake (its rows local where sampled from lanes), or NULL */
 } bake_state;
 
 /* Whether clip c is timed in the bake's plan: baked at its cell rate, measured once laid out. */
@@ -146,7 +159,8 @@ static inline double row_position(const float *c, const float *b, int r)
 
 /* palette_rows.c: `count` (at most CB_SAMPLE_BATCH) qpos rows of clip c from the joint
  * similarities of frames f, f + 1, ... (each joint's lanes as the sampler makes them), into rows
- * (row f's first); grows the clip's bounds and st->ranges[c]. */
+ * (row f's first); grows the clip's bounds and st->ranges[c]. A local bake's (st->local): the
+ * rows then local (local_rows_from_lanes), the bounds still the global poses'. */
 void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows,
                              extent *clip_bounds);
 
@@ -191,6 +205,15 @@ cb_status palette_mid_rows(bake_state *st, worker *w, uint32_t c, const float *r
  * 1 for CB_SAMPLE_BATCH rows from each row's dot with the one before as stored (dot[0] unused)
  * and whether row 0 is flipped. */
 void palette_row_signs(const double *dot, bool flip, float *sign);
+/* palette_rows.c: the first `count` lanes of a bone's 8 values (v[k][i]: value k of row i) stored
+ * as rows, to out + i * stride. */
+void palette_store_rows(const float (*v)[CB_SAMPLE_BATCH], uint32_t count, float *out, size_t stride);
+/* local_rows.c: a batch of clip c's rows (frames f .. f + count - 1) local, from its joints' lanes
+ * as the sampler made them (w->local_lanes): each bone in its parent's frame, computed in double
+ * (local_qpos_localize's arithmetic), its quaternion on the side of the row before's (a clip's
+ * first row: w >= 0; w->prev holds the batch before's last), stored as floats into rows (row f's
+ * first) and grown into the clip's ranges (st->local). */
+void local_rows_from_lanes(bake_state *st, worker *w, uint32_t c, uint32_t f, uint32_t count, float *rows);
 
 /* Encodes `count` rows of canonical floats into the texels of rows first, first + 1, ... */
 void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint32_t count);
@@ -434,6 +457,11 @@ cb_status palette_bake_with_facts(cb_sampler *sampler, const cb_bake_options *op
 cb_status palette_bake_local(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
                              uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
                              cb_palette *p, cb_error *err);
+/* palette.c: palette_bake_local's float bake of global qpos rows (the affine fallback included),
+ * its clips sampled from lanes sampled local into `local` (local_sampling). */
+cb_status palette_bake_sampled_local(cb_sampler *sampler, const cb_bake_options *opt, const cb_clip_plan *plan,
+                                     uint32_t plan_count, const palette_skin_facts *facts, const palette_probe *probe,
+                                     const local_sampling *local, cb_palette *p, cb_error *err);
 /* local_rows.c: the clips of p (every one, or its timed ones alone) measured composed as the runtime
  * plays them (local_palette_errors: at every row, and the quarter points between every two, through a
  * timed clip's map; global qpos rows compose nothing), shared out clip by clip over up to `threads`

@@ -542,21 +542,13 @@ static CB_CLONE_INLINE void store_rows(const float (*v)[B], uint32_t count, floa
         for (int k = 0; k < 8; ++k) out[first * stride + k] = v[k][first];
 }
 
-/* One bone at frames f .. f + count - 1, its similarities' lanes `sim` (lanes past count repeat
- * the last frame): its position and reach grow the lanes' bounds, its values their range, its 8
- * values go into the rows and its last quaternion into w->prev. */
-static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, uint32_t f, uint32_t count,
-                                       const double (*sim)[B], float *rows, lane_extent *x)
+/* Joint j's pivots over the lanes of its similarities `sim` (e[k][i], k < 3: p = t + s rotate(q,
+ * b), b its bind position) and the reach of its vertices (e[3][i]: |s R| r_j = sqrt(3) s r_j). */
+static CB_CLONE_INLINE void bone_pivots(const bake_state *st, uint32_t j, const double (*sim)[B], double (*e)[B])
 {
-    const cb_palette *p = st->p;
-    uint32_t bones = p->bone_count;
     const double(*q)[B] = sim, (*t)[B] = sim + 4, *s = sim[7];
-    double dot[B], e[4][B];
-    float fq[4][B + 1], v[8][B], (*fp)[B] = v + 4; /* fq: lane i's quaternion as stored at i + 1 (0 at 0); v: the
-                                                   * rows' values, lanes of quaternion (below), position, scale (fp) */
-    const float *b = p->bind_positions + (size_t)j * 3;
+    const float *b = st->p->bind_positions + (size_t)j * 3;
     double bx = b[0], by = b[1], bz = b[2], radius = st->radius[j];
-    fq[0][0] = fq[1][0] = fq[2][0] = fq[3][0] = 0;
     for (int i = 0; i < B; ++i) {
         /* cb_quat_rotate(q, b), written out over the lanes */
         double uvx = q[1][i] * bz - q[2][i] * by, uvy = q[2][i] * bx - q[0][i] * bz, uvz = q[0][i] * by - q[1][i] * bx;
@@ -565,7 +557,38 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
         double rx = bx + 2 * (q[3][i] * uvx + uuvx), ry = by + 2 * (q[3][i] * uvy + uuvy),
                rz = bz + 2 * (q[3][i] * uvz + uuvz);
         e[0][i] = t[0][i] + s[i] * rx, e[1][i] = t[1][i] + s[i] * ry, e[2][i] = t[2][i] + s[i] * rz;
-        e[3][i] = radius * s[i] * sqrt(3.0); /* |s R| = sqrt(3) s */
+        e[3][i] = radius * s[i] * sqrt(3.0);
+    }
+}
+
+/* The lanes' bounds grown by a joint's pivots and reach (bone_pivots): every lane (those past
+ * count repeat the last frame, and fold_lanes reads count). A joint that moves no vertex
+ * (radius < 0) bounds nothing. */
+static CB_CLONE_INLINE void grow_lane_bounds(double radius, const double (*e)[B], lane_extent *x)
+{
+    for (int k = 0; radius >= 0 && k < 3; ++k)
+        for (int i = 0; i < B; ++i) {
+            double lo = e[k][i] - e[3][i], hi = e[k][i] + e[3][i];
+            x->lo[k][i] = lo < x->lo[k][i] ? lo : x->lo[k][i];
+            x->hi[k][i] = hi > x->hi[k][i] ? hi : x->hi[k][i];
+        }
+}
+
+/* One bone at frames f .. f + count - 1, its similarities' lanes `sim` (lanes past count repeat
+ * the last frame): its position and reach grow the lanes' bounds, its values their range, its 8
+ * values go into the rows and its last quaternion into w->prev. */
+static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, uint32_t f, uint32_t count,
+                                       const double (*sim)[B], float *rows, lane_extent *x)
+{
+    const cb_palette *p = st->p;
+    uint32_t bones = p->bone_count;
+    const double(*q)[B] = sim, *s = sim[7];
+    double dot[B], e[4][B];
+    float fq[4][B + 1], v[8][B], (*fp)[B] = v + 4; /* fq: lane i's quaternion as stored at i + 1 (0 at 0); v: the
+                                                   * rows' values, lanes of quaternion (below), position, scale (fp) */
+    bone_pivots(st, j, sim, e);
+    fq[0][0] = fq[1][0] = fq[2][0] = fq[3][0] = 0;
+    for (int i = 0; i < B; ++i) {
         fq[0][i + 1] = (float)q[0][i], fq[1][i + 1] = (float)q[1][i], fq[2][i + 1] = (float)q[2][i];
         fq[3][i + 1] = (float)q[3][i];
         fp[0][i] = (float)e[0][i], fp[1][i] = (float)e[1][i], fp[2][i] = (float)e[2][i], fp[3][i] = (float)s[i];
@@ -582,13 +605,7 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
     for (int c = 0; c < 4; ++c)
         for (int i = 0; i < B; ++i) v[c][i] = sign[i] * fq[c][i + 1];
     store_rows((const float(*)[B])v, count, rows + (size_t)j * 8, (size_t)bones * 8);
-    /* Every lane grown (those past count repeat the last frame, and fold_lanes reads count). */
-    for (int k = 0; radius >= 0 && k < 3; ++k) /* a joint that moves no vertex bounds nothing */
-        for (int i = 0; i < B; ++i) {
-            double lo = e[k][i] - e[3][i], hi = e[k][i] + e[3][i];
-            x->lo[k][i] = lo < x->lo[k][i] ? lo : x->lo[k][i];
-            x->hi[k][i] = hi > x->hi[k][i] ? hi : x->hi[k][i];
-        }
+    grow_lane_bounds(st->radius[j], (const double(*)[B])e, x);
     for (int k = 0; k < 3; ++k)
         for (int i = 0; i < B; ++i) {
             x->vlo[k][i] = fp[k][i] < x->vlo[k][i] ? fp[k][i] : x->vlo[k][i];
@@ -602,6 +619,9 @@ static CB_CLONE_INLINE void bone_lanes(bake_state *st, worker *w, uint32_t j, ui
 CB_TARGET_CLONES
 void palette_row_signs(const double *dot, bool flip, float *sign) { row_signs(dot, flip, sign); }
 
+CB_TARGET_CLONES
+void palette_store_rows(const float (*v)[B], uint32_t count, float *out, size_t stride) { store_rows(v, count, out, stride); }
+
 /* A batch's rows in the making: what bone_lanes takes besides a joint's lanes. */
 typedef struct rows_in_making {
     bake_state *st;
@@ -610,7 +630,20 @@ typedef struct rows_in_making {
     float *rows;
     lane_extent x;
     double *keep; /* where each joint's lanes are kept (palette_row_lanes_keep), or NULL */
+    double *local; /* a local bake's: each joint's global qpos lanes (q, pivot, s) for local_rows_from_lanes, or NULL */
 } rows_in_making;
+
+/* A local bake's joint: its pivots and reach grow the bounds as bone_lanes grows them, and its
+ * global qpos (q, the pivots, s) waits for local_rows_from_lanes, which writes the rows. */
+static CB_CLONE_INLINE void joint_into_local(rows_in_making *r, uint32_t j, const double (*lanes)[B])
+{
+    double e[4][B], *g = r->local + (size_t)j * 8 * B;
+    bone_pivots(r->st, j, lanes, e);
+    grow_lane_bounds(r->st->radius[j], (const double(*)[B])e, &r->x);
+    memcpy(g, lanes, 4 * B * sizeof(double));
+    memcpy(g + 4 * B, e, 3 * B * sizeof(double));
+    memcpy(g + 7 * B, lanes[7], B * sizeof(double));
+}
 
 /* The sampler's sink (cb_clip_frame_lanes_each): each joint into the rows as it is sampled,
  * its lanes still in cache, in joint order as before. */
@@ -618,7 +651,8 @@ CB_TARGET_CLONES
 static void joint_into_rows(void *ctx, uint32_t j, double (*lanes)[B])
 {
     rows_in_making *r = ctx;
-    bone_lanes(r->st, r->w, j, r->f, r->count, (const double(*)[B])lanes, r->rows, &r->x);
+    if (r->local) joint_into_local(r, j, (const double(*)[B])lanes);
+    else bone_lanes(r->st, r->w, j, r->f, r->count, (const double(*)[B])lanes, r->rows, &r->x);
     if (r->keep) memcpy(r->keep + (size_t)j * 8 * B, lanes, 8 * B * sizeof(double));
 }
 
@@ -630,10 +664,12 @@ void palette_similarity_rows(bake_state *st, worker *w, uint32_t c, uint32_t f, 
      * each joint into the rows as soon as it is sampled (joint_into_rows). */
     uint32_t frames[B];
     for (uint32_t i = 0; i < count; ++i) frames[i] = f + i;
-    rows_in_making r = {.st = st, .w = w, .f = f, .count = count, .rows = rows, .keep = palette_row_lanes_keep(st, c, f)};
+    rows_in_making r = {.st = st, .w = w, .f = f, .count = count, .rows = rows, .keep = palette_row_lanes_keep(st, c, f),
+                        .local = st->local && st->local->sampled[c] ? w->local_lanes : NULL};
     lane_extent_reset(&r.x);
     cb_clip_frame_lanes_each(w->sampler, &st->infos[c], frames, count, st->opt->root_motion, joint_into_rows, &r);
     if (r.keep) palette_row_lanes_kept(st, f, count, r.keep);
+    if (r.local) local_rows_from_lanes(st, w, c, f, count, rows);
     /* Bounds and ranges in frame order, as one row at a time grows them (of +0 and -0, the
      * minimum is the one met first). Locals, kept in registers. */
     extent bounds = *clip_bounds;

@@ -9,7 +9,10 @@
  * - the header says version 6 only with bit 5; a global bake keeps its version;
  * - local rows refuse half, mat4 and an EXR alone with a one-line error and write nothing;
  * - they are the default, stated as such, and one catalog may mix them with global rows on one model;
- * - a u16 bake's codes are its float bake's local values encoded by the spec's rule, in the box of them. */
+ * - a u16 bake's codes are its float bake's local values encoded by the spec's rule, in the box of them;
+ * - a float bake's local rows (sampled local from the double poses) are the spec's conversion of the
+ *   global float bake's rows to within their float rounding, each clip's first row with w >= 0 and
+ *   each row's quaternion on the side of the row before's. */
 #define _DEFAULT_SOURCE /* realpath */
 #include "testutil.h"
 
@@ -363,6 +366,86 @@ static void check_u16_is_float_encoded(const char *asset, const char *stem)
     cbpal_close(&f[0]), cbpal_close(&f[1]);
 }
 
+/* A bone's 8 float values at row r (RGBA32F, two texels). */
+static const float *float_values(const cbpal_file *f, uint32_t r, uint32_t j)
+{
+    uint32_t x, y;
+    cbpal_texel_xy(&f->header, r, j, &x, &y);
+    return (const float *)f->texels + ((size_t)y * f->header.width + x) * 4;
+}
+
+/* The local float bake against the spec's conversion (docs/pal-format.md "Row content"), done
+ * here in double from the global float bake's rows at the same rate: the same transforms, to
+ * within the rounding of the global floats the conversion starts from (the bake starts from the
+ * double poses). The quaternion's sign is the bake's own choice, checked as the spec states it. */
+static void check_local_is_global_converted(const char *asset, const char *stem)
+{
+    char model[1024], path[2][256];
+    shared_path(model, sizeof model, asset);
+    cbpal_file f[2]; /* global, local */
+    for (int i = 0; i < 2; ++i) {
+        snprintf(path[i], sizeof path[i], TEST_TMP "/convert_%s_%s.pal", stem, i ? "local" : "global");
+        char log[8192], err[256];
+        int rc = run_crowdbake(log, sizeof log, "bake %s -o %s --fps 30 --precision float --bone-space %s -q", model,
+                               path[i], i ? "local" : "global");
+        if (rc) fail_msg("bake failed (%d): %s", rc, log);
+        if (cbpal_open(path[i], CBPAL_VERIFY_CHECKSUM, &f[i], err, sizeof err)) fail_msg("%s", err);
+    }
+    assert_int_equal(f[0].header.rows, f[1].header.rows);
+    assert_int_equal(f[0].header.clip_count, f[1].header.clip_count);
+    double worst_q = 0, worst_p = 0, worst_s = 0;
+    uint32_t flips = 0, first_w_negative = 0;
+    for (uint32_t c = 0; c < f[1].header.clip_count; ++c) {
+        cbpal_clip clip;
+        assert_int_equal(cbpal_get_clip(&f[1], c, &clip), 0);
+        for (uint32_t r = clip.first_row; r < clip.first_row + clip.frames; ++r)
+            for (uint32_t j = 0; j < f[1].header.bone_count; ++j) {
+                cbpal_bone b;
+                assert_int_equal(cbpal_get_bone(&f[1], j, &b), 0);
+                const float *g = float_values(&f[0], r, j), *l = float_values(&f[1], r, j);
+                double q[4] = {g[0], g[1], g[2], g[3]}, p[3] = {g[4], g[5], g[6]}, s = g[7];
+                if (b.parent >= 0) { /* q_L = conj(q_p) q_j, s_L = s_j / s_p, p_L = b_p + rotate(conj(q_p), p_j - p_p) / s_p */
+                    const float *a = float_values(&f[0], r, (uint32_t)b.parent);
+                    cbpal_bone pb;
+                    assert_int_equal(cbpal_get_bone(&f[1], (uint32_t)b.parent, &pb), 0);
+                    double ix = -a[0], iy = -a[1], iz = -a[2], iw = a[3], v[3] = {g[4] - a[4], g[5] - a[5], g[6] - a[6]};
+                    double qm[4] = {iw * g[0] + ix * g[3] + iy * g[2] - iz * g[1], iw * g[1] - ix * g[2] + iy * g[3] + iz * g[0],
+                                    iw * g[2] + ix * g[1] - iy * g[0] + iz * g[3], iw * g[3] - ix * g[0] - iy * g[1] - iz * g[2]};
+                    double u[3] = {iy * v[2] - iz * v[1], iz * v[0] - ix * v[2], ix * v[1] - iy * v[0]};
+                    double uu[3] = {iy * u[2] - iz * u[1], iz * u[0] - ix * u[2], ix * u[1] - iy * u[0]};
+                    for (int k = 0; k < 3; ++k) p[k] = pb.bind_position[k] + (v[k] + 2 * (iw * u[k] + uu[k])) / a[7];
+                    memcpy(q, qm, sizeof q);
+                    s = g[7] / a[7];
+                }
+                double dot = q[0] * l[0] + q[1] * l[1] + q[2] * l[2] + q[3] * l[3], sign = dot < 0 ? -1 : 1;
+                for (int k = 0; k < 4; ++k) worst_q = fmax(worst_q, fabs(sign * q[k] - l[k]));
+                for (int k = 0; k < 3; ++k) worst_p = fmax(worst_p, fabs(p[k] - l[4 + k]));
+                worst_s = fmax(worst_s, fabs(s - l[7]) / fabs(s));
+                if (r == clip.first_row) first_w_negative += l[3] < 0;
+                else {
+                    const float *before = float_values(&f[1], r - 1, j);
+                    flips += l[0] * before[0] + l[1] * before[1] + l[2] * before[2] + l[3] * before[3] < 0;
+                }
+            }
+    }
+    printf("  %s: local rows against the converted global rows: quaternion %.3g, position %.3g units (model %.3g "
+           "tall), scale %.3g relative; %u first rows with w < 0, %u rows off the side of the row before\n", stem,
+           worst_q, worst_p, f[1].header.model_height, worst_s, first_w_negative, flips);
+    assert_true(worst_q < 1e-6);                             /* a few float steps of a unit quaternion */
+    assert_true(worst_p < 1e-6 * f[1].header.model_height);  /* a micrometre on a metre */
+    assert_true(worst_s < 1e-6);
+    assert_int_equal(first_w_negative, 0);
+    assert_int_equal(flips, 0);
+    cbpal_close(&f[0]), cbpal_close(&f[1]);
+}
+
+static void test_float_local_rows_are_the_global_rows_converted(void **state)
+{
+    (void)state;
+    check_local_is_global_converted("assets/quaternius-cow/Cow.glb", "cow");
+    check_local_is_global_converted("assets/quaternius-husky/Husky.glb", "husky");
+}
+
 static void test_u16_local_rows_are_the_float_rows_encoded(void **state)
 {
     (void)state;
@@ -381,6 +464,7 @@ int main(void)
         cmocka_unit_test(test_timed_clips_json_is_valid),
         cmocka_unit_test(test_a_catalog_mixes_bone_spaces),
         cmocka_unit_test(test_u16_local_rows_are_the_float_rows_encoded),
+        cmocka_unit_test(test_float_local_rows_are_the_global_rows_converted),
     };
     return cmocka_run_group_tests_name("local_rows", tests, NULL, NULL);
 }
