@@ -135,7 +135,6 @@ typedef struct probe_ctx {
     local_qpos *rows;          /* (INTERVALS_A_BATCH + 1) x bones: the local rows that bound a batch's intervals */
     local_qpos *first_row;     /* bones: the clip's first row, where a loop's last interval ends */
     double *composed;         /* bones x 32: four points' blends composed, as lanes (local_points4) */
-    cb_similarity *sims;      /* CB_SAMPLE_BATCH x bones */
     double *diff;             /* 4 x bones x 16: each of four points' exact less blended */
     cb_joint_error *joints;   /* 4 x bones */
     double *values;           /* bones x 16: a palette row's values (palette_decode_row_values) */
@@ -153,7 +152,7 @@ static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts
 {
     size_t n = k->bones ? k->bones : 1;
     size_t sizes[] = {CB_SAMPLE_BATCH * n * sizeof(local_qpos), (INTERVALS_A_BATCH + 1) * n * sizeof(local_qpos),
-                      n * sizeof(local_qpos), n * 32 * sizeof(double), CB_SAMPLE_BATCH * n * sizeof(cb_similarity),
+                      n * sizeof(local_qpos), n * 32 * sizeof(double),
                       4 * n * 16 * sizeof(double), 4 * n * sizeof(cb_joint_error), n * 5 * sizeof(double),
                       (CB_SAMPLE_BATCH + 1) * (n * 16 + 1) * sizeof(double), CB_SAMPLE_BATCH * n * 16 * sizeof(double),
                       n * 16 * sizeof(double)};
@@ -165,7 +164,7 @@ static bool probe_ctx_init(probe_ctx *c, cb_sampler *s, const palette_skin_facts
     if (!c->block) return false;
     char *at = (char *)c->block + (64 - (uintptr_t)c->block % 64) % 64; /* every part 64-byte aligned: lanes */
     void **parts[] = {(void **)&c->poses, (void **)&c->rows, (void **)&c->first_row, (void **)&c->composed,
-                      (void **)&c->sims, (void **)&c->diff, (void **)&c->joints, (void **)&c->qs,
+                      (void **)&c->diff, (void **)&c->joints, (void **)&c->qs,
                       (void **)&c->lanes, (void **)&c->pose_room, (void **)&c->values};
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) *parts[i] = at, at += (sizes[i] + 63) / 64 * 64;
     if (similar) return true;
@@ -199,6 +198,34 @@ static void rows_of_matrices(probe_ctx *c, uint32_t i)
     }
 }
 
+/* A similarity rig's poses as the sampler hands them over, joint by joint (cb_clip_frame_lanes_each):
+ * each joint's global row, its pivot p = t + rotate(q, b) s over the lanes at once, into pose i
+ * of c->poses for its first `count` lanes. */
+typedef struct poses_in_making {
+    probe_ctx *c;
+    uint32_t count;
+} poses_in_making;
+
+CB_TARGET_CLONES
+static void joint_into_poses(void *ctx, uint32_t j, double (*lanes)[CB_SAMPLE_BATCH])
+{
+    const poses_in_making *m = ctx;
+    const float *b = m->c->facts->bind_positions + (size_t)j * 3;
+    const double(*q)[CB_SAMPLE_BATCH] = (const double(*)[CB_SAMPLE_BATCH])lanes, *s = lanes[7];
+    double bx = b[0], by = b[1], bz = b[2], p[3][CB_SAMPLE_BATCH];
+    for (int i = 0; i < CB_SAMPLE_BATCH; ++i) { /* cb_quat_rotate(q, b), written out over the lanes */
+        double uvx = q[1][i] * bz - q[2][i] * by, uvy = q[2][i] * bx - q[0][i] * bz, uvz = q[0][i] * by - q[1][i] * bx;
+        double uuvx = q[1][i] * uvz - q[2][i] * uvy, uuvy = q[2][i] * uvx - q[0][i] * uvz,
+               uuvz = q[0][i] * uvy - q[1][i] * uvx;
+        p[0][i] = lanes[4][i] + (bx + 2 * (q[3][i] * uvx + uuvx)) * s[i];
+        p[1][i] = lanes[5][i] + (by + 2 * (q[3][i] * uvy + uuvy)) * s[i];
+        p[2][i] = lanes[6][i] + (bz + 2 * (q[3][i] * uvz + uuvz)) * s[i];
+    }
+    uint32_t bones = m->c->k->bones;
+    for (uint32_t i = 0; i < m->count; ++i)
+        m->c->poses[(size_t)i * bones + j] = (local_qpos){{q[0][i], q[1][i], q[2][i], q[3][i]}, {p[0][i], p[1][i], p[2][i]}, s[i]};
+}
+
 /* The global rows at `count` increasing frames of `framing` into c->poses, framed as the bake
  * frames them (its root motion). A matrix rig's poses at the frames `kept` says (the bake's rows
  * and the midpoints its measurement reads) go into the bake's pose cache, where the bake finds
@@ -207,17 +234,9 @@ static void sample_frames(probe_ctx *c, const cb_clip_info *framing, const uint3
                           const bool *kept)
 {
     uint32_t bones = c->k->bones;
-    if (c->similar) {
-        cb_clip_frame_similarities(c->s, framing, frames, count, c->root_motion, c->sims);
-        const float *bind = c->facts->bind_positions;
-        for (uint32_t i = 0; i < count; ++i)
-            for (uint32_t j = 0; j < bones; ++j) {
-                const cb_similarity *x = &c->sims[(size_t)i * bones + j];
-                cb_quat q = {x->rotation[0], x->rotation[1], x->rotation[2], x->rotation[3]};
-                cb_vec3 t = {x->translation[0], x->translation[1], x->translation[2]};
-                cb_vec3 p = cb_vec3_add(t, cb_vec3_scale(cb_quat_rotate(q, bind_of(bind, j)), x->scale));
-                c->poses[(size_t)i * bones + j] = (local_qpos){q, p, x->scale};
-            }
+    if (c->similar) { /* count <= CB_SAMPLE_BATCH: one batch */
+        poses_in_making m = {c, count};
+        cb_clip_frame_lanes_each(c->s, framing, frames, count, c->root_motion, joint_into_poses, &m);
         return;
     }
     uint32_t missing[CB_SAMPLE_BATCH], n = 0;

@@ -189,6 +189,10 @@ void palette_encode_rows(cb_palette *p, const float *rows, uint32_t first, uint3
         cb_palette_texel_xy(p, r, 0, &x0, &y);
         unsigned char *d = (unsigned char *)p->texels + ((size_t)y * p->width + x0) * tb;
         const float *row = rows + (size_t)(r - first) * p->bone_count * CANON(p->layout);
+        if (HOST_LITTLE_ENDIAN && p->precision == CB_PRECISION_FLOAT && p->layout == CB_LAYOUT_QPOS && !p->positions_relative) {
+            memcpy(d, row, (size_t)p->bone_count * 8 * sizeof(float)); /* qpos floats are their texels, in order */
+            continue;
+        }
         for (uint32_t j = 0; j < p->bone_count; ++j, d += (size_t)p->texels_per_bone * tb) {
             float vals[16], rel[12];
             const float *c = row + (size_t)j * CANON(p->layout), *o = p->position_offsets + (size_t)j * 3;
@@ -411,15 +415,21 @@ void cb_palette_decode_values(const cb_palette *p, const void *texels, uint32_t 
 }
 
 /* decode_bone's qpos/u16 arithmetic for a whole row, four values at a time (snorm16_decode's
- * and unorm16_decode's operations in their order, so the same doubles), which vectorizes. */
+ * and unorm16_decode's operations in their order, so the same doubles), which vectorizes. Local
+ * rows: each bone in its own ranges (its range table entry). */
 #if GCC_VECTORS
 static CB_CLONE_INLINE void decode_qpos_u16_row(const cb_palette *p, const unsigned char *d, double *values)
 {
     v4df lo = {p->bounds_min[0], p->bounds_min[1], p->bounds_min[2], 0}, minus1 = {-1, -1, -1, -1};
     v4df hi = {p->bounds_max[0], p->bounds_max[1], p->bounds_max[2], p->linear_range}, span = hi - lo;
     v4di keep = hi > lo; /* all ones where the range is not a point */
+    bool local = p->bone_space == CB_BONE_SPACE_LOCAL;
     for (uint32_t j = 0; j < p->bone_count; ++j, d += 16) {
         double *v = values + (size_t)j * 16;
+        if (local) {
+            const float *e = p->bone_ranges + (size_t)j * 8;
+            lo = (v4df){e[0], e[1], e[2], 0}, hi = (v4df){e[4], e[5], e[6], e[3]}, span = hi - lo, keep = hi > lo;
+        }
         v4hi qs;
         v4hu us;
         memcpy(&qs, d, sizeof qs), memcpy(&us, d + 8, sizeof us);
@@ -437,9 +447,14 @@ static CB_CLONE_INLINE void decode_qpos_u16_row(const cb_palette *p, const unsig
 {
     double lo[4] = {p->bounds_min[0], p->bounds_min[1], p->bounds_min[2], 0}, span[4], keep[4];
     double hi[4] = {p->bounds_max[0], p->bounds_max[1], p->bounds_max[2], p->linear_range};
-    for (int i = 0; i < 4; ++i) span[i] = hi[i] - lo[i], keep[i] = hi[i] > lo[i] ? 1 : 0;
     for (uint32_t j = 0; j < p->bone_count; ++j, d += 16) {
         double *v = values + (size_t)j * 16;
+        if (p->bone_space == CB_BONE_SPACE_LOCAL) {
+            const float *e = p->bone_ranges + (size_t)j * 8;
+            double bone_lo[4] = {e[0], e[1], e[2], 0}, bone_hi[4] = {e[4], e[5], e[6], e[3]};
+            memcpy(lo, bone_lo, sizeof lo), memcpy(hi, bone_hi, sizeof hi);
+        }
+        for (int i = 0; i < 4; ++i) span[i] = hi[i] - lo[i], keep[i] = hi[i] > lo[i] ? 1 : 0;
         uint16_t u[8];
         for (int i = 0; i < 8; ++i) u[i] = load_le16(d + i * 2);
         for (int i = 0; i < 4; ++i) {
@@ -460,7 +475,7 @@ void palette_decode_row_values(const cb_palette *p, uint32_t row, double *values
     value_kinds(p->layout, kinds);
     cb_palette_texel_xy(p, row, 0, &x, &y); /* a row's bones lie side by side */
     const unsigned char *d = (const unsigned char *)p->texels + ((size_t)y * p->width + x) * tb;
-    if (p->precision == CB_PRECISION_U16 && p->layout == CB_LAYOUT_QPOS && p->bone_space == CB_BONE_SPACE_GLOBAL) {
+    if (p->precision == CB_PRECISION_U16 && p->layout == CB_LAYOUT_QPOS) {
         decode_qpos_u16_row(p, d, values);
         return;
     }
