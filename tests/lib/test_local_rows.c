@@ -10,9 +10,10 @@
  * - local rows refuse half, mat4 and an EXR alone with a one-line error and write nothing;
  * - they are the default, stated as such, and one catalog may mix them with global rows on one model;
  * - a u16 bake's codes are its float bake's local values encoded by the spec's rule, in the box of them;
- * - a float bake's local rows (sampled local from the double poses) are the spec's conversion of the
- *   global float bake's rows to within their float rounding, each clip's first row with w >= 0 and
- *   each row's quaternion on the side of the row before's. */
+ * - a float bake's local rows (a matrix rig's converted from its global rows, a similarity rig's
+ *   sampled local from the double poses) are the spec's conversion of the global float bake's rows
+ *   to within their float rounding, each clip's first row with w >= 0 and each row's quaternion on
+ *   the side of the row before's. */
 #define _DEFAULT_SOURCE /* realpath */
 #include "testutil.h"
 
@@ -439,11 +440,14 @@ static void check_local_is_global_converted(const char *asset, const char *stem)
     cbpal_close(&f[0]), cbpal_close(&f[1]);
 }
 
+/* Both ways a bake makes local rows: Cow and Husky are matrix rigs (sampled global, then converted:
+ * localize_clip), Fox a similarity rig (sampled local from the sampler's lanes: local_rows_from_lanes). */
 static void test_float_local_rows_are_the_global_rows_converted(void **state)
 {
     (void)state;
     check_local_is_global_converted("assets/quaternius-cow/Cow.glb", "cow");
     check_local_is_global_converted("assets/quaternius-husky/Husky.glb", "husky");
+    check_local_is_global_converted("assets/fox-bevy/Fox.glb", "fox");
 }
 
 static void test_u16_local_rows_are_the_float_rows_encoded(void **state)
