@@ -78,8 +78,8 @@ typedef struct worker {
     float *first;        /* bones * 4: the first row's quaternions (qpos), for the loop's wrap */
     struct measure_scratch *measure; /* palette_error.c's, made by the worker's first measurement job */
     pose_batch *batch;   /* its batches of poses (palette_prefetch_poses), made when first needed */
-    double *local_lanes; /* a local bake's (st->local): bones x 8 x CB_SAMPLE_BATCH, a batch's joint lanes, made when
-                          * first needed */
+    double *local_lanes; /* a local bake's (st->local): bones x 8 x CB_SAMPLE_BATCH, a batch's joints as global qpos
+                          * lanes (joint_into_local), for local_rows_from_lanes */
 } worker;
 
 /* A local bake's float bake (palette_bake_local): each clip whose rows come from the sampler's
