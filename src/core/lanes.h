@@ -175,4 +175,21 @@ static CB_CLONE_INLINE void cb_skin_vertex(const cb_primitive *prim, uint32_t v,
 }
 #endif
 
+/* A joint's pivots over a batch's lanes of its similarities (q, t, s: x -> s rotate(q, x) + t),
+ * b its bind position: p[k][i] = t + s rotate(q, b) (cb_quat_rotate written out), for the bake's
+ * rows (palette_rows.c) and the local measurement's poses (local_rate.c) alike. */
+static CB_CLONE_INLINE void cb_pivot_lanes(const double (*sim)[CB_SAMPLE_BATCH], const float *b, double (*p)[CB_SAMPLE_BATCH])
+{
+    const double(*q)[CB_SAMPLE_BATCH] = sim, (*t)[CB_SAMPLE_BATCH] = sim + 4, *s = sim[7];
+    double bx = b[0], by = b[1], bz = b[2];
+    for (int i = 0; i < CB_SAMPLE_BATCH; ++i) {
+        double uvx = q[1][i] * bz - q[2][i] * by, uvy = q[2][i] * bx - q[0][i] * bz, uvz = q[0][i] * by - q[1][i] * bx;
+        double uuvx = q[1][i] * uvz - q[2][i] * uvy, uuvy = q[2][i] * uvx - q[0][i] * uvz,
+               uuvz = q[0][i] * uvy - q[1][i] * uvx;
+        p[0][i] = t[0][i] + s[i] * (bx + 2 * (q[3][i] * uvx + uuvx));
+        p[1][i] = t[1][i] + s[i] * (by + 2 * (q[3][i] * uvy + uuvy));
+        p[2][i] = t[2][i] + s[i] * (bz + 2 * (q[3][i] * uvz + uuvz));
+    }
+}
+
 #endif

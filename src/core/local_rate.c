@@ -30,6 +30,7 @@
 #include "cb_math.h"
 #include "error_bound.h"
 #include "key_grid.h"
+#include "lanes.h"
 #include "local_lanes.h"
 #include "local_pose.h"
 #include "sampler.h"
@@ -210,17 +211,9 @@ CB_TARGET_CLONES
 static void joint_into_poses(void *ctx, uint32_t j, double (*lanes)[CB_SAMPLE_BATCH])
 {
     const poses_in_making *m = ctx;
-    const float *b = m->c->facts->bind_positions + (size_t)j * 3;
     const double(*q)[CB_SAMPLE_BATCH] = (const double(*)[CB_SAMPLE_BATCH])lanes, *s = lanes[7];
-    double bx = b[0], by = b[1], bz = b[2], p[3][CB_SAMPLE_BATCH];
-    for (int i = 0; i < CB_SAMPLE_BATCH; ++i) { /* cb_quat_rotate(q, b), written out over the lanes */
-        double uvx = q[1][i] * bz - q[2][i] * by, uvy = q[2][i] * bx - q[0][i] * bz, uvz = q[0][i] * by - q[1][i] * bx;
-        double uuvx = q[1][i] * uvz - q[2][i] * uvy, uuvy = q[2][i] * uvx - q[0][i] * uvz,
-               uuvz = q[0][i] * uvy - q[1][i] * uvx;
-        p[0][i] = lanes[4][i] + (bx + 2 * (q[3][i] * uvx + uuvx)) * s[i];
-        p[1][i] = lanes[5][i] + (by + 2 * (q[3][i] * uvy + uuvy)) * s[i];
-        p[2][i] = lanes[6][i] + (bz + 2 * (q[3][i] * uvz + uuvz)) * s[i];
-    }
+    double p[3][CB_SAMPLE_BATCH];
+    cb_pivot_lanes(q, m->c->facts->bind_positions + (size_t)j * 3, p);
     uint32_t bones = m->c->k->bones;
     for (uint32_t i = 0; i < m->count; ++i)
         m->c->poses[(size_t)i * bones + j] = (local_qpos){{q[0][i], q[1][i], q[2][i], q[3][i]}, {p[0][i], p[1][i], p[2][i]}, s[i]};

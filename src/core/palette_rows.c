@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lanes.h"
 #include "palette_bake.h"
 #include "sampler.h"
 
@@ -546,19 +547,9 @@ static CB_CLONE_INLINE void store_rows(const float (*v)[B], uint32_t count, floa
  * b), b its bind position) and the reach of its vertices (e[3][i]: |s R| r_j = sqrt(3) s r_j). */
 static CB_CLONE_INLINE void bone_pivots(const bake_state *st, uint32_t j, const double (*sim)[B], double (*e)[B])
 {
-    const double(*q)[B] = sim, (*t)[B] = sim + 4, *s = sim[7];
-    const float *b = st->p->bind_positions + (size_t)j * 3;
-    double bx = b[0], by = b[1], bz = b[2], radius = st->radius[j];
-    for (int i = 0; i < B; ++i) {
-        /* cb_quat_rotate(q, b), written out over the lanes */
-        double uvx = q[1][i] * bz - q[2][i] * by, uvy = q[2][i] * bx - q[0][i] * bz, uvz = q[0][i] * by - q[1][i] * bx;
-        double uuvx = q[1][i] * uvz - q[2][i] * uvy, uuvy = q[2][i] * uvx - q[0][i] * uvz,
-               uuvz = q[0][i] * uvy - q[1][i] * uvx;
-        double rx = bx + 2 * (q[3][i] * uvx + uuvx), ry = by + 2 * (q[3][i] * uvy + uuvy),
-               rz = bz + 2 * (q[3][i] * uvz + uuvz);
-        e[0][i] = t[0][i] + s[i] * rx, e[1][i] = t[1][i] + s[i] * ry, e[2][i] = t[2][i] + s[i] * rz;
-        e[3][i] = radius * s[i] * sqrt(3.0);
-    }
+    const double *s = sim[7], radius = st->radius[j];
+    cb_pivot_lanes(sim, st->p->bind_positions + (size_t)j * 3, e);
+    for (int i = 0; i < B; ++i) e[3][i] = radius * s[i] * sqrt(3.0);
 }
 
 /* The lanes' bounds grown by a joint's pivots and reach (bone_pivots): every lane (those past
