@@ -344,10 +344,13 @@ demo: all $(if $(shell command -v npm 2>/dev/null),runtimes/web/node_modules/.pa
 # sanitizer passes run side by side.
 TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(TOOL_INC) -Itests $(shell pkg-config --cflags cmocka 2>/dev/null)
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
+# Each test links the static library with its debug information: ~100 programs in each of two builds. Compressed
+# debug sections keep a CI checkout's build to about half the disk (debuggers and the sanitizers' stack traces read them).
+TEST_LDFLAGS = -Wl,--compress-debug-sections=zlib
 $(BUILD)/tests/%: %.c $(wildcard tests/*.h) $(wildcard tests/runtimes/*.h) $(TOOL_A) $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(TEST_CFLAGS) -c $< -o $@.o
-	$(CXX) $(SAN) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(TEST_EXTRA_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
+	$(CXX) $(SAN) $(TEST_LDFLAGS) -o $@ $@.o $(TOOL_A) $(BUILD)/libcrowdbake.a $(PKG_LIBS) $(GL_LIBS) $(TEST_EXTRA_LIBS) $(shell pkg-config --libs cmocka 2>/dev/null)
 # The HLSL runtime's tests drive Vulkan (Mesa's lavapipe) and run glslangValidator and spirv-val; so does the Unity
 # package's (its bone pass kernel).
 $(BUILD)/tests/test_hlsl_vulkan $(BUILD)/tests/test_hlsl_conformance $(BUILD)/tests/test_unreal_shader $(BUILD)/tests/test_unity_cs: TEST_EXTRA_LIBS := -lvulkan
