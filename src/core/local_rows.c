@@ -227,10 +227,13 @@ void local_rows_from_lanes(bake_state *st, worker *w, uint32_t c, uint32_t f, ui
                              AT(&l[2][i + 1]) * AT(&l[2][i]) + AT(&l[3][i + 1]) * AT(&l[3][i]));
         cb_quat q0 = {l[0][1], l[1][1], l[2][1], l[3][1]};
         palette_row_signs(dot, f ? cb_quat_dot(q0, w->prev[j]) < 0 : q0.w < 0, sign);
-        for (int i = 0; i < B; i += WIDTH) {
+        for (int i = 0; i < B; i += WIDTH) { /* unrolled: GCC 12 kept a loop with a branch in it */
             lanes4 sg, x;
             at_float(&sg, &sign[i]);
-            for (int k = 0; k < 8; ++k) x = k < 4 ? sg * AT(&l[k][i + 1]) : AT(&l[k][i + 1]), put_float(&v[k][i], &x);
+            #pragma GCC unroll 4
+            for (int k = 0; k < 4; ++k) x = sg * AT(&l[k][i + 1]), put_float(&v[k][i], &x);
+            #pragma GCC unroll 4
+            for (int k = 4; k < 8; ++k) x = AT(&l[k][i + 1]), put_float(&v[k][i], &x);
         }
         palette_store_rows((const float(*)[B])v, count, rows + (size_t)j * 8, (size_t)bones * 8);
         double *e = range + (size_t)j * 7;
@@ -253,6 +256,8 @@ typedef struct convert_share {
     cb_palette *g;              /* float texels, global (those not sampled local), then local */
     unsigned char *out;         /* the encoded texels (u16), or NULL (float: the local floats are the texels) */
     double *ranges;             /* local_sampling's: clip c, bone j at ((c * bones) + j) * 7 */
+    double *boxes;              /* the encode's, per bone: (pos_min, 0) and (pos_max, scale_max), the range table's
+                                 * floats as doubles once, not at every row */
     const unsigned char *sampled; /* local_sampling's: clips already local, their ranges filled */
     unsigned char *out_of_memory; /* a clip's */
     bool encode;                /* the second run: encoding, not localizing */
@@ -338,22 +343,21 @@ static void local_ranges(cb_palette *p, const double *ranges)
 #if defined(__GNUC__) && defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
 typedef float v4sf __attribute__((vector_size(16))); /* v4df and v4di: lanes.h */
 typedef int16_t v16hi __attribute__((vector_size(32)));
-typedef int16_t v4hi __attribute__((vector_size(8)));
+typedef int16_t v8hi __attribute__((vector_size(16)));
 #define ROUND_MAGIC 6755399441055744.0 /* 1.5 * 2^52 */
 
-/* One bone's 8 local floats into its two u16 texels, each bone in its own ranges e: the
- * quaternion snorm16, the position unorm16 over [lo, hi] and the scale over [0, scale max],
- * four lanes at a time: the scalar version's operations in its order, and lrint's rounding (ties
- * to even) by adding 1.5 * 2^52, which leaves the integer in the double's low bits. The same
- * bits. (The floats are loaded as floats and converted: GCC 12 without AVX fails to compile a
- * double vector built from float elements.) */
-static CB_CLONE_INLINE void encode_bone_u16(const float *v, const float *e, unsigned char *d)
+/* One bone's 8 local floats into its two u16 texels, each bone in its own box (convert_share's
+ * boxes): the quaternion snorm16, the position unorm16 over [lo, hi] and the scale over [0, scale
+ * max], four lanes at a time: the scalar version's operations in its order, and lrint's rounding
+ * (ties to even) by adding 1.5 * 2^52, which leaves the integer in the double's low bits. The
+ * same bits. (The floats are loaded as floats and converted: GCC 12 without AVX fails to compile
+ * a double vector built from float elements.) */
+static CB_CLONE_INLINE void encode_bone_u16(const float *v, const double *box, unsigned char *d)
 {
-    v4sf qf, xf, lof, hif;
-    memcpy(&qf, v, sizeof qf), memcpy(&xf, v + 4, sizeof xf), memcpy(&lof, e, sizeof lof), memcpy(&hif, e + 4, sizeof hif);
-    lof[3] = 0, hif[3] = e[3]; /* the scale's range */
+    v4sf qf, xf;
+    v4df lo, hi;
+    memcpy(&qf, v, sizeof qf), memcpy(&xf, v + 4, sizeof xf), memcpy(&lo, box, sizeof lo), memcpy(&hi, box + 4, sizeof hi);
     v4df q = __builtin_convertvector(qf, v4df), x = __builtin_convertvector(xf, v4df);
-    v4df lo = __builtin_convertvector(lof, v4df), hi = __builtin_convertvector(hif, v4df);
     v4df one = CB_SPLAT4(1.0), minus1 = CB_SPLAT4(-1.0), zero = CB_SPLAT4(0.0);
     v4di below = q < minus1, above = q > one, spans = hi > lo; /* all ones where true */
     q = CB_SELECT4(below, minus1, q), q = CB_SELECT4(above, one, q);
@@ -362,8 +366,8 @@ static CB_CLONE_INLINE void encode_bone_u16(const float *v, const float *e, unsi
     below = x < zero, above = x > one;
     x = CB_SELECT4(below, zero, x), x = CB_SELECT4(above, one, x);
     v16hi a = (v16hi)(q * 32767.0 + ROUND_MAGIC), b = (v16hi)(x * 65535.0 + ROUND_MAGIC);
-    v4hi m = __builtin_shufflevector(a, a, 0, 4, 8, 12), n = __builtin_shufflevector(b, b, 0, 4, 8, 12); /* low halves */
-    memcpy(d, &m, 8), memcpy(d + 8, &n, 8);
+    v8hi m = __builtin_shufflevector(a, b, 0, 4, 8, 12, 16, 20, 24, 28); /* each double's low 16 bits */
+    memcpy(d, &m, sizeof m);
 }
 #else
 static void put16(unsigned char *d, long v) { d[0] = (unsigned char)(v & 0xff), d[1] = (unsigned char)((v >> 8) & 0xff); }
@@ -374,13 +378,22 @@ static long unorm16(double v, double lo, double hi)
     return lrint((x < 0 ? 0 : x > 1 ? 1 : x) * 65535);
 }
 
-static void encode_bone_u16(const float *v, const float *e, unsigned char *d)
+static void encode_bone_u16(const float *v, const double *box, unsigned char *d)
 {
     for (int i = 0; i < 4; ++i) put16(d + i * 2, lrint((v[i] < -1 ? -1 : v[i] > 1 ? 1 : (double)v[i]) * 32767));
-    for (int k = 0; k < 3; ++k) put16(d + 8 + k * 2, unorm16(v[4 + k], e[k], e[4 + k]));
-    put16(d + 14, unorm16(v[7], 0, e[3]));
+    for (int k = 0; k < 4; ++k) put16(d + 8 + k * 2, unorm16(v[4 + k], box[k], box[4 + k]));
 }
 #endif
+
+/* The range table's boxes as the encode reads them (convert_share's boxes). */
+static void encode_boxes(const cb_palette *p, double *box)
+{
+    for (uint32_t j = 0; j < p->bone_count; ++j, box += 8) {
+        const float *e = p->bone_ranges + (size_t)j * 8;
+        for (int k = 0; k < 3; ++k) box[k] = e[k], box[4 + k] = e[4 + k];
+        box[3] = 0, box[7] = e[3]; /* the scale's range: [0, scale max] */
+    }
+}
 
 /* Clip c's local floats encoded u16 into the texels at out. */
 CB_TARGET_CLONES
@@ -390,7 +403,7 @@ static void encode_clip(const convert_share *cs, uint32_t c)
     for (uint32_t r = p->clips[c].first_row; r < p->clips[c].first_row + p->clips[c].frames; ++r) {
         const float *v = float_row(p, r);
         unsigned char *d = cs->out + row_texel(p, r) * 8; /* RGBA16: 8 bytes a texel */
-        for (uint32_t j = 0; j < p->bone_count; ++j, v += 8, d += 16) encode_bone_u16(v, p->bone_ranges + (size_t)j * 8, d);
+        for (uint32_t j = 0; j < p->bone_count; ++j, v += 8, d += 16) encode_bone_u16(v, cs->boxes + (size_t)j * 8, d);
     }
 }
 
@@ -427,18 +440,25 @@ static cb_status convert_palette(cb_palette *g, int32_t **parents, const local_s
         for (uint32_t c = 0; c < g->clip_count; ++c) ok = ok && !cs.out_of_memory[c];
     }
     size_t out_bytes = (size_t)g->width * g->height * cb_precision_texel_bytes(precision);
-    if (ok && precision != CB_PRECISION_FLOAT) ok = (cs.out = calloc(out_bytes ? out_bytes : 1, 1)) != NULL;
+    if (ok && precision != CB_PRECISION_FLOAT) {
+        cs.out = calloc(out_bytes ? out_bytes : 1, 1);
+        cs.boxes = malloc((g->bone_count ? g->bone_count : 1) * 8 * sizeof *cs.boxes);
+        ok = cs.out && cs.boxes;
+    }
     if (ok) {
         local_ranges(g, cs.ranges);
         if (cs.out) {
+            encode_boxes(g, cs.boxes);
             cs.encode = true;
             run_convert(&cs, threads);
             free(g->texels);
             g->texels = cs.out, g->texel_bytes = out_bytes;
         }
         g->precision = precision, g->bone_space = CB_BONE_SPACE_LOCAL;
+    } else {
+        free(cs.out);
     }
-    free(cs.out_of_memory);
+    free(cs.out_of_memory), free(cs.boxes);
     return ok ? CB_OK : cb_fail(err, CB_ERR_INTERNAL, "%s: out of memory for local rows", source);
 }
 
