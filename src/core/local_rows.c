@@ -442,7 +442,7 @@ static cb_status convert_palette(cb_palette *g, int32_t **parents, const local_s
     size_t out_bytes = (size_t)g->width * g->height * cb_precision_texel_bytes(precision);
     if (ok && precision != CB_PRECISION_FLOAT) {
         cs.out = calloc(out_bytes ? out_bytes : 1, 1);
-        cs.boxes = malloc((g->bone_count ? g->bone_count : 1) * 8 * sizeof *cs.boxes);
+        cs.boxes = malloc((size_t)(g->bone_count ? g->bone_count : 1) * 8 * sizeof *cs.boxes);
         ok = cs.out && cs.boxes;
     }
     if (ok) {
