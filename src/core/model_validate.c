@@ -87,8 +87,8 @@ static cb_status validate_skins(const cb_model *m, const cb_limits *limits, cb_e
             while (m->nodes[root].parent >= 0) root = m->nodes[root].parent;
             if (common_root >= 0 && root != common_root)
                 return cb_fail(err, CB_ERR_INPUT,
-                               "%s: skin %u (%s) joints have no common root: joint %u (%s) is under node %d (%s), joint 0 "
-                               "under node %d (%s); parent all joints to one armature",
+                               "%s: skin %u (%s) joints have no common root: joint %u (%s) is in the tree rooted at node "
+                               "%d (%s), joint 0 in the one rooted at node %d (%s); parent all joints to one armature",
                                m->source, s, skin->name, j, m->nodes[skin->joints[j]].name, root, m->nodes[root].name,
                                common_root, m->nodes[common_root].name);
             common_root = root;
