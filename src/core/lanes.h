@@ -11,6 +11,10 @@
 #include "cb_math.h"
 #include "crowdbake/core.h"
 
+/* lrint's rounding (to nearest, ties to even) of an |x| < 2^51 without a call: x + 1.5 * 2^52 leaves
+ * the integer in the double's low bits (the u16 encoders of palette_codec.c and local_rows.c). */
+#define CB_ROUND_MAGIC 6755399441055744.0
+
 #if defined(__GNUC__) /* GCC and clang: vector types and __builtin_shufflevector */
 typedef double v4df __attribute__((vector_size(32)));
 typedef int64_t v4di __attribute__((vector_size(32)));

@@ -344,7 +344,6 @@ static void local_ranges(cb_palette *p, const double *ranges)
 typedef float v4sf __attribute__((vector_size(16))); /* v4df and v4di: lanes.h */
 typedef int16_t v16hi __attribute__((vector_size(32)));
 typedef int16_t v8hi __attribute__((vector_size(16)));
-#define ROUND_MAGIC 6755399441055744.0 /* 1.5 * 2^52 */
 
 /* One bone's 8 local floats into its two u16 texels, each bone in its own box (convert_share's
  * boxes): the quaternion snorm16, the position unorm16 over [lo, hi] and the scale over [0, scale
@@ -365,7 +364,7 @@ static CB_CLONE_INLINE void encode_bone_u16(const float *v, const double *box, u
     x = CB_SELECT4(spans, t, zero);
     below = x < zero, above = x > one;
     x = CB_SELECT4(below, zero, x), x = CB_SELECT4(above, one, x);
-    v16hi a = (v16hi)(q * 32767.0 + ROUND_MAGIC), b = (v16hi)(x * 65535.0 + ROUND_MAGIC);
+    v16hi a = (v16hi)(q * 32767.0 + CB_ROUND_MAGIC), b = (v16hi)(x * 65535.0 + CB_ROUND_MAGIC);
     v8hi m = __builtin_shufflevector(a, b, 0, 4, 8, 12, 16, 20, 24, 28); /* each double's low 16 bits */
     memcpy(d, &m, sizeof m);
 }

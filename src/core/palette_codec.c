@@ -121,7 +121,6 @@ static inline uint16_t quantize(const u16_slot *q, double v)
 /* quantize for four values at once, written to vectorize (one AVX2 operation each): the same
  * operations, and lrint's rounding (to nearest, ties to even) by adding and taking away 1.5 *
  * 2^52, exact for the |x| <= 65535 here; the same bits as quantize. */
-#define ROUND_MAGIC 6755399441055744.0
 typedef struct u16_lanes {
     double offset[4], scale[4], lo[4], hi[4], steps[4];
 } u16_lanes;
@@ -162,7 +161,7 @@ static CB_CLONE_INLINE void quantize4(const u16_lanes *q, const float *v, unsign
     v4di below = x < lo, above = x > hi; /* all ones where true: C has no ?: over vectors */
     x = (v4df)(((v4di)lo & below) | ((v4di)x & ~below));
     x = (v4df)(((v4di)hi & above) | ((v4di)x & ~above));
-    v4si k = __builtin_convertvector((x * steps + ROUND_MAGIC) - ROUND_MAGIC, v4si);
+    v4si k = __builtin_convertvector((x * steps + CB_ROUND_MAGIC) - CB_ROUND_MAGIC, v4si);
     v8hi n = __builtin_shufflevector((v8hi)k, (v8hi)k, 0, 2, 4, 6, 0, 2, 4, 6); /* each low half: (uint16_t) */
     memcpy(d, &n, 8);
 }
@@ -173,7 +172,7 @@ static CB_CLONE_INLINE void quantize4(const u16_lanes *q, const float *v, unsign
         double x = ((double)v[i] - q->offset[i]) * q->scale[i];
         x = x < q->lo[i] ? q->lo[i] : x;
         x = x > q->hi[i] ? q->hi[i] : x;
-        store_le16(d + i * 2, (uint16_t)(int32_t)((x * q->steps[i] + ROUND_MAGIC) - ROUND_MAGIC));
+        store_le16(d + i * 2, (uint16_t)(int32_t)((x * q->steps[i] + CB_ROUND_MAGIC) - CB_ROUND_MAGIC));
     }
 }
 #endif
